@@ -1,0 +1,213 @@
+//! Forward and inverse kinematics of the tip (MODEL.md "Geometry and state").
+//!
+//! `z_t = l (sin theta1 + sin theta2)`, `z_n = -l (cos theta1 + cos theta2)`,
+//! `J = dz/dq = [[l cos theta1, l cos theta2], [l sin theta1, l sin theta2]]`,
+//! `s = J_dot q_dot` (paper eq. 4).
+
+use nalgebra::{Matrix2, Vector2};
+
+use crate::{Real, lit, params::to_f64};
+
+/// Elbow branch of a configuration, by the sign of the relative angle
+/// `theta2 - theta1` (MODEL.md: "elbow up" means `theta2 - theta1 > 0`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+pub enum ElbowBranch {
+    /// `theta2 - theta1 > 0` (e.g. the paper's `x0u`).
+    Up,
+    /// `theta2 - theta1 < 0` (e.g. the paper's `x0d`).
+    Down,
+}
+
+impl ElbowBranch {
+    /// The branch of configuration `q = [theta1, theta2]` (rad); a straight arm
+    /// (`theta2 == theta1`) counts as `Down`.
+    pub fn of<T: Real>(q: &Vector2<T>) -> Self {
+        if q[1] - q[0] > T::zero() { Self::Up } else { Self::Down }
+    }
+
+    /// Lower-case name, as in scenario files and CLI flags (`up`, `down`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Up => "up",
+            Self::Down => "down",
+        }
+    }
+}
+
+/// Why a tip position has no inverse kinematics.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum IkError {
+    /// The target is NaN or infinite.
+    #[error("tip target ({z_t}, {z_n}) m is not finite")]
+    NonFinite {
+        /// Requested `z_t`, m.
+        z_t: f64,
+        /// Requested `z_n`, m.
+        z_n: f64,
+    },
+    /// The target is farther from the base than the arm's reach `2 l`.
+    #[error("tip target ({z_t}, {z_n}) m is out of reach: distance {distance} m > 2 l = {reach} m")]
+    OutOfReach {
+        /// Requested `z_t`, m.
+        z_t: f64,
+        /// Requested `z_n`, m.
+        z_n: f64,
+        /// Distance of the target from the base joint, m.
+        distance: f64,
+        /// The arm's reach `2 l`, m.
+        reach: f64,
+    },
+    /// The target is the base joint itself, where the direction is undefined.
+    #[error("tip target is at the base joint: the arm's direction is undefined")]
+    AtBase,
+}
+
+/// Tip position `z = [z_t, z_n]` (m) of configuration `q = [theta1, theta2]` (rad),
+/// links of length `l` (m). MODEL.md, "Geometry and state".
+#[inline]
+pub fn tip_position<T: Real>(l: T, q: &Vector2<T>) -> Vector2<T> {
+    let (s1, c1) = q[0].sin_cos();
+    let (s2, c2) = q[1].sin_cos();
+    Vector2::new(l * (s1 + s2), -l * (c1 + c2))
+}
+
+/// Tip Jacobian `J(q) = dz/dq` (2x2, m/rad), rows `j1^T` (tangential) and
+/// `j2^T` (normal); paper eq. 1.
+#[inline]
+pub fn jacobian<T: Real>(l: T, q: &Vector2<T>) -> Matrix2<T> {
+    let (s1, c1) = q[0].sin_cos();
+    let (s2, c2) = q[1].sin_cos();
+    Matrix2::new(l * c1, l * c2, l * s1, l * s2)
+}
+
+/// `s = J_dot(q, q_dot) q_dot` (m/s^2), the velocity-product part of the tip
+/// acceleration; paper eq. 4:
+/// `s = [-l (theta1_dot^2 sin theta1 + theta2_dot^2 sin theta2),
+///        l (theta1_dot^2 cos theta1 + theta2_dot^2 cos theta2)]`.
+#[inline]
+pub fn jdot_qdot<T: Real>(l: T, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
+    let (s1, c1) = q[0].sin_cos();
+    let (s2, c2) = q[1].sin_cos();
+    let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
+    Vector2::new(-l * (w1 * s1 + w2 * s2), l * (w1 * c1 + w2 * c2))
+}
+
+/// Inverse kinematics: the configuration `q = [theta1, theta2]` (rad) that puts
+/// the tip at `z = [z_t, z_n]` (m) on the given elbow branch.
+///
+/// For equal links the elbow angle is `delta = theta2 - theta1 = ±acos(|z|^2/(2 l^2) - 1)`
+/// (sign from the branch) and the arm's direction `psi = atan2(z_t, -z_n)` bisects the
+/// links: `theta1 = psi - delta/2`, `theta2 = psi + delta/2`. On the boundary of the
+/// workspace (`|z| = 2 l`) both branches give the straight arm.
+///
+/// # Errors
+/// [`IkError::NonFinite`], [`IkError::OutOfReach`] (`|z| > 2 l`, beyond a relative
+/// rounding margin of `1e-6`), [`IkError::AtBase`] (`z = 0`).
+pub fn inverse_kinematics<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranch) -> Result<Vector2<T>, IkError> {
+    if !(z[0].is_finite() && z[1].is_finite()) {
+        return Err(IkError::NonFinite { z_t: to_f64(z[0]), z_n: to_f64(z[1]) });
+    }
+    let r = z.norm();
+    let reach = l + l;
+    if r > reach * lit::<T>(1.0 + 1e-6) {
+        return Err(IkError::OutOfReach { z_t: to_f64(z[0]), z_n: to_f64(z[1]), distance: to_f64(r), reach: to_f64(reach) });
+    }
+    if r <= l * lit::<T>(1e-9) {
+        return Err(IkError::AtBase);
+    }
+    // cos(delta/2) = r / (2 l): better conditioned near the straight arm than acos of cos(delta).
+    let half = (r / reach).min(T::one()).acos();
+    let delta = match branch {
+        ElbowBranch::Up => half + half,
+        ElbowBranch::Down => -(half + half),
+    };
+    let psi = z[0].atan2(-z[1]);
+    let half_delta = delta * lit(0.5);
+    Ok(Vector2::new(psi - half_delta, psi + half_delta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const L: f64 = 0.21;
+
+    #[test]
+    fn jacobian_matches_finite_differences_of_z() {
+        let h = 1e-6;
+        for i in -6..=6 {
+            for j in -6..=6 {
+                let q = Vector2::new(0.5 * i as f64, 0.45 * j as f64 + 0.1);
+                let jac = jacobian(L, &q);
+                for k in 0..2 {
+                    let mut dq = Vector2::zeros();
+                    dq[k] = h;
+                    let fd = (tip_position(L, &(q + dq)) - tip_position(L, &(q - dq))) / (2.0 * h);
+                    for r in 0..2 {
+                        assert!((fd[r] - jac[(r, k)]).abs() < 1e-9, "q={q:?} row {r} col {k}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn s_equals_jdot_qdot_by_finite_differences() {
+        // d/dt (J(q(t)) q_dot) at constant q_dot equals J_dot q_dot.
+        let h = 1e-6;
+        for i in -4..=4 {
+            let q = Vector2::new(0.4 * i as f64, -0.3 * i as f64 + 0.2);
+            let qd = Vector2::new(1.3 - 0.2 * i as f64, -0.7 + 0.5 * i as f64);
+            let jd = (jacobian(L, &(q + qd * h)) - jacobian(L, &(q - qd * h))) / (2.0 * h);
+            let fd = jd * qd;
+            let s = jdot_qdot(L, &q, &qd);
+            assert!((fd - s).norm() < 1e-8, "q={q:?} qd={qd:?}: {fd:?} vs {s:?}");
+        }
+    }
+
+    #[test]
+    fn inverse_kinematics_round_trips_on_both_branches() {
+        for i in 0..40 {
+            for j in 0..40 {
+                let z = Vector2::new(-0.38 + 0.019 * i as f64, -0.40 + 0.0199 * j as f64);
+                if z.norm() > 2.0 * L || z.norm() < 1e-3 {
+                    continue;
+                }
+                for branch in [ElbowBranch::Up, ElbowBranch::Down] {
+                    let q = inverse_kinematics(L, &z, branch).unwrap();
+                    assert!((tip_position(L, &q) - z).norm() < 1e-12);
+                    let delta = q[1] - q[0];
+                    if delta.abs() > 1e-9 {
+                        assert_eq!(ElbowBranch::of(&q), branch);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn inverse_kinematics_recovers_the_paper_initial_conditions() {
+        // x0d = [-11.4 deg, 0, -35.1 deg, 0] is elbow down; x0u its mirror, elbow up.
+        let qd = Vector2::new((-11.4f64).to_radians(), (-35.1f64).to_radians());
+        let q = inverse_kinematics(L, &tip_position(L, &qd), ElbowBranch::Down).unwrap();
+        assert!((q - qd).norm() < 1e-12);
+        let qu = Vector2::new((-35.1f64).to_radians(), (-11.4f64).to_radians());
+        assert_eq!(ElbowBranch::of(&qu), ElbowBranch::Up);
+        let q = inverse_kinematics(L, &tip_position(L, &qu), ElbowBranch::Up).unwrap();
+        assert!((q - qu).norm() < 1e-12);
+        // Both put the tip at z_t = -0.1624 m (MODEL.md experiment 5), to the paper's rounding.
+        assert!((tip_position(L, &qd)[0] + 0.1624).abs() < 2e-4);
+    }
+
+    #[test]
+    fn inverse_kinematics_errors() {
+        assert!(matches!(inverse_kinematics(L, &Vector2::new(0.0, -0.5), ElbowBranch::Up), Err(IkError::OutOfReach { .. })));
+        assert!(matches!(inverse_kinematics(L, &Vector2::new(f64::NAN, -0.3), ElbowBranch::Up), Err(IkError::NonFinite { .. })));
+        assert_eq!(inverse_kinematics(L, &Vector2::new(0.0, 0.0), ElbowBranch::Up), Err(IkError::AtBase));
+        // f32 works from the same code.
+        let q = inverse_kinematics(0.21f32, &Vector2::new(-0.16f32, -0.3775), ElbowBranch::Down).unwrap();
+        assert!((tip_position(0.21f32, &q) - Vector2::new(-0.16f32, -0.3775)).norm() < 1e-5);
+    }
+}

@@ -1,0 +1,37 @@
+//! The model both sides of the rig share: the two-link arm whose tip slides on a
+//! moving belt, after D. Marchese, M. Coraggio, S. J. Hogan, M. di Bernardo,
+//! "Control of Painlevé Paradox in a Robotic System", ECC 2019 ("the paper"),
+//! with the parameters of Zhao et al. (2008).
+//!
+//! `no_std`, heap-free, and generic over the scalar ([`Real`]): the firmware
+//! evaluates the model in `f32` on the Cortex-M4F, the plant simulator in `f64`,
+//! from the one implementation here.
+//!
+//! Conventions (MODEL.md): angles are absolute, from the downward vertical, in
+//! radians; `q = [theta1, theta2]`; the tip is `z = [z_t, z_n]` (tangential along
+//! the belt, normal upward); the belt surface is `z_n = -H`; SI units throughout.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod contact;
+pub mod kinematics;
+pub mod model;
+pub mod params;
+
+pub use contact::{ContactMode, SlipDirection};
+pub use kinematics::{ElbowBranch, IkError};
+pub use model::Arm;
+pub use params::{ParamError, Params};
+
+/// The scalar the model is generic over: `f32` (firmware) or `f64` (plant).
+///
+/// nalgebra's `RealField` (with `libm` for `no_std` maths) plus `Copy`.
+pub trait Real: nalgebra::RealField + Copy {}
+impl<T: nalgebra::RealField + Copy> Real for T {}
+
+/// Converts an `f64` literal to the scalar `T` (exact for `f64`, rounded for `f32`).
+#[inline(always)]
+pub fn lit<T: Real>(x: f64) -> T {
+    nalgebra::convert(x)
+}
