@@ -1,0 +1,158 @@
+//! Command-line interface of `sil-host` (clap).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Plant simulator and rig for the Painlevé paradox on a two-link arm
+/// (Marchese, Coraggio, Hogan, di Bernardo, ECC 2019).
+///
+/// Every command prints a human summary, or one JSON document with `--json`,
+/// and writes its files under `--out DIR` (default `out/`). Bad input exits
+/// with code 2 and writes nothing; a failure while running exits with 1.
+#[derive(Debug, Parser)]
+#[command(name = "sil-host", version, about, long_about)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Open-loop simulation (u = 0) of the arm on the belt from one of the paper's
+    /// initial conditions; writes trace.csv, events.csv, trace.svg, summary.json.
+    Simulate(SimulateArgs),
+    /// Admissible configurations (MODEL.md experiment 2, paper Table II): the ranges
+    /// of z_t on the belt where p > 0, for elbow up and elbow down.
+    Admissible(AdmissibleArgs),
+    /// Mode map (MODEL.md experiment 1, paper Fig. 2): the contact mode over a grid
+    /// of (theta1, theta1_dot) with the tip on the belt, with the curves b = 0 and p = 0.
+    Modes(ModesArgs),
+}
+
+/// Options shared by every command's output.
+#[derive(Debug, Clone, Args)]
+pub struct OutputArgs {
+    /// Folder for the files the command writes (created if missing).
+    #[arg(long, default_value = "out", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print one JSON document on stdout instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The paper's initial conditions (MODEL.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PaperX0 {
+    /// x0a = [32 deg, 0, 18.27 deg, 0] (experiments 3 and 4).
+    A,
+    /// x0d = [-11.4 deg, 0, -35.1 deg, 0], elbow down (experiments 3, 5, 6).
+    D,
+    /// x0u = [-35.1 deg, 0, -11.4 deg, 0], elbow up (experiments 5 and 6).
+    U,
+}
+
+/// Impact laws at touchdown and for the impact without collision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ImpactLawArg {
+    /// Newton: restitution on the normal velocity, v_n+ = -e_n v_n-.
+    Newton,
+    /// Poisson: restitution on the normal impulse (Darboux-Keller shock dynamics).
+    Poisson,
+}
+
+/// `sil-host simulate`.
+#[derive(Debug, Clone, Args)]
+pub struct SimulateArgs {
+    /// Initial condition: one of the paper's (projected onto the belt).
+    #[arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg")]
+    pub x0: PaperX0,
+    /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
+    /// A tip up to 1 mm inside the belt is projected onto it; deeper is an error.
+    #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
+    pub x0_deg: Option<String>,
+    /// Friction coefficient mu (>= 0).
+    #[arg(long, default_value_t = 0.6)]
+    pub mu: f64,
+    /// Belt speed v_belt, m/s.
+    #[arg(long, default_value_t = -0.4, allow_hyphen_values = true)]
+    pub v_belt: f64,
+    /// Impact law at touchdown and for impacts without collision.
+    #[arg(long, value_enum, default_value = "newton")]
+    pub impact_law: ImpactLawArg,
+    /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse for Poisson).
+    #[arg(long, default_value_t = 0.2)]
+    pub e_n: f64,
+    /// Simulated time, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Sampling period of trace.csv, s (events are written at their exact times in events.csv).
+    #[arg(long, default_value_t = 1e-3)]
+    pub sample_dt: f64,
+    /// Relative tolerance of the integrator.
+    #[arg(long, default_value_t = 1e-9)]
+    pub rtol: f64,
+    /// Absolute tolerance of the integrator.
+    #[arg(long, default_value_t = 1e-11)]
+    pub atol: f64,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `sil-host admissible`.
+#[derive(Debug, Clone, Args)]
+pub struct AdmissibleArgs {
+    /// Friction coefficient mu (>= 0).
+    #[arg(long, default_value_t = 0.6)]
+    pub mu: f64,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `sil-host modes`.
+#[derive(Debug, Clone, Args)]
+pub struct ModesArgs {
+    /// Friction coefficient mu (>= 0).
+    #[arg(long, default_value_t = 0.6)]
+    pub mu: f64,
+    /// Belt speed v_belt, m/s (sets the sign of z_r_dot, hence which p applies).
+    #[arg(long, default_value_t = -0.4, allow_hyphen_values = true)]
+    pub v_belt: f64,
+    /// Elbow branch for theta2 (the tip is put on the belt on this branch).
+    #[arg(long, value_enum, default_value = "down")]
+    pub branch: BranchArg,
+    /// theta1 range in degrees: MIN,MAX.
+    #[arg(long, default_value = "-90,90", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    pub theta1_deg: String,
+    /// theta1_dot range in rad/s: MIN,MAX.
+    #[arg(long, default_value = "-10,10", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    pub theta1_dot: String,
+    /// Grid points along each axis.
+    #[arg(long, default_value_t = 400)]
+    pub grid: usize,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Elbow branch on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BranchArg {
+    /// theta2 - theta1 > 0.
+    Up,
+    /// theta2 - theta1 < 0.
+    Down,
+}
+
+impl From<BranchArg> for shared::ElbowBranch {
+    fn from(b: BranchArg) -> Self {
+        match b {
+            BranchArg::Up => Self::Up,
+            BranchArg::Down => Self::Down,
+        }
+    }
+}

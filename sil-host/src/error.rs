@@ -1,0 +1,47 @@
+//! Errors of the command-line tool and the exit codes they map to.
+
+use std::path::PathBuf;
+
+/// An error that ends a `sil-host` command.
+///
+/// Exit codes: 2 for bad input (unknown flags, out-of-range parameters,
+/// unreachable initial conditions), 1 for failures while running or writing.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// The user asked for something invalid; nothing was written.
+    #[error("invalid input: {0}")]
+    BadInput(String),
+    /// A parameter failed validation.
+    #[error("invalid parameter: {0}")]
+    Param(#[from] shared::ParamError),
+    /// The simulation failed.
+    #[error("simulation failed: {0}")]
+    Sim(#[from] crate::plant::SimError),
+    /// Writing an output file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// Drawing a figure failed.
+    #[error("cannot draw {path}: {message}")]
+    Plot {
+        /// The figure file.
+        path: PathBuf,
+        /// What plotters reported.
+        message: String,
+    },
+}
+
+impl CliError {
+    /// Process exit code: 2 for bad input, 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Self::BadInput(_) | Self::Param(_) => 2,
+            Self::Sim(e) if e.is_bad_input() => 2,
+            _ => 1,
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! Output folders whose files appear whole or not at all.
+//!
+//! Every file is written under a temporary name in the target folder and
+//! renamed into place by [`OutputSet::commit`]; if a command fails before it
+//! commits, the temporary files are removed when the set is dropped, so a bad
+//! run never leaves half-written results (or clobbers a previous run's).
+
+use std::{
+    fs::File,
+    io::{BufWriter, Write},
+    path::{Path, PathBuf},
+};
+
+use crate::error::CliError;
+
+/// A set of output files written into one folder, committed together.
+#[derive(Debug)]
+pub struct OutputSet {
+    dir: PathBuf,
+    pending: Vec<(PathBuf, PathBuf)>,
+    committed: bool,
+}
+
+impl OutputSet {
+    /// Creates the folder `dir` (and its parents) if needed.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the folder cannot be created.
+    pub fn new(dir: &Path) -> Result<Self, CliError> {
+        std::fs::create_dir_all(dir).map_err(|source| CliError::Io { path: dir.to_path_buf(), source })?;
+        Ok(Self { dir: dir.to_path_buf(), pending: Vec::new(), committed: false })
+    }
+
+    /// The folder the files go to.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The final path of output file `name`.
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.dir.join(name)
+    }
+
+    /// Opens `name` for writing (under a temporary name until [`OutputSet::commit`])
+    /// and returns the temporary path with a buffered writer.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be created.
+    pub fn create(&mut self, name: &str) -> Result<(PathBuf, BufWriter<File>), CliError> {
+        let tmp = self.stage(name);
+        let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
+        Ok((tmp, BufWriter::new(file)))
+    }
+
+    /// Reserves a temporary path for `name` (for writers that open files themselves,
+    /// such as plotters' SVG backend).
+    pub fn stage(&mut self, name: &str) -> PathBuf {
+        let final_path = self.dir.join(name);
+        let tmp = self.dir.join(format!(".{name}.partial"));
+        self.pending.push((tmp.clone(), final_path));
+        tmp
+    }
+
+    /// Writes `bytes` as file `name`.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when writing fails.
+    pub fn write_bytes(&mut self, name: &str, bytes: &[u8]) -> Result<(), CliError> {
+        let (tmp, mut w) = self.create(name)?;
+        w.write_all(bytes).and_then(|_| w.flush()).map_err(|source| CliError::Io { path: tmp, source })
+    }
+
+    /// Renames every staged file to its final name.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when a rename fails.
+    pub fn commit(mut self) -> Result<Vec<PathBuf>, CliError> {
+        let mut done = Vec::new();
+        for (tmp, final_path) in std::mem::take(&mut self.pending) {
+            std::fs::rename(&tmp, &final_path).map_err(|source| CliError::Io { path: final_path.clone(), source })?;
+            done.push(final_path);
+        }
+        self.committed = true;
+        Ok(done)
+    }
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        if !self.committed {
+            for (tmp, _) in &self.pending {
+                let _ = std::fs::remove_file(tmp);
+            }
+        }
+    }
+}
+
+/// Maps an I/O error on `path` into a [`CliError`].
+pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> CliError + '_ {
+    move |source| CliError::Io { path: path.to_path_buf(), source }
+}
