@@ -1,0 +1,350 @@
+//! Impact laws: the impulse at touchdown and the impact without collision (IWC).
+//!
+//! Everything here happens at a fixed configuration, so the tip-space inverse
+//! inertia `Q = J M^-1 J^T` (paper eq. 3) is constant during the impact and an
+//! impulse `P = [P_t, P_n]` (N s) changes the tip velocity by `Q P`. Velocities are
+//! `v_r = z_t_dot - v_belt` (relative tangential) and `v_n = z_n_dot`, in m/s.
+//!
+//! Laws (the scenario's `impact_law`, coefficient `e` in [0, 1]):
+//! - **Newton** (restitution of the normal velocity, `v_n+ = -e v_n-`), with the
+//!   Coulomb impulse of Brach (1991) / Glocker (2001): the sticking impulse
+//!   `P = Q^-1 [-v_r, -(1 + e) v_n]` if it lies in the cone `|P_t| <= mu P_n`,
+//!   otherwise the impulse on the cone's edge opposing the slip,
+//!   `P_t = -mu s P_n`, `P_n = -(1 + e) v_n / p(s)` with `s = sign v_r` and
+//!   `p(s) = Q_22 - mu s Q_21` (paper eq. 7). When `p(s) <= 0` the edge impulse
+//!   cannot reverse the normal velocity (the impact analogue of the paradox) and
+//!   the impact is resolved by Darboux-Keller with `e` as Poisson's coefficient.
+//! - **Poisson** (restitution of the normal impulse, `P_n = (1 + e) P_c`, where
+//!   `P_c` ends compression), integrated by Darboux-Keller shock dynamics
+//!   (Keller 1986; Stronge, "Impact Mechanics", 2000, ch. 5): `P_n` is the time-like
+//!   variable, friction stays on the cone's edge while the tip slips and inside it
+//!   while it sticks, and slip stops, sticks or reverses as the velocity demands.
+//!   With `Q` constant the velocities are piecewise linear in `P_n`; this module
+//!   integrates them exactly, phase by phase.
+//!
+//! The IWC (Génot and Brogliato 1998; Zhao et al. 2008): a tip sliding in an
+//! inconsistent state (`p < 0`, `b < 0`) with `v_n = 0`. Darboux-Keller resolves it
+//! with no extra assumption: because `p(s) < 0`, the normal impulse first drives
+//! the tip *into* the belt (compression with `v_n` decreasing from 0) while friction
+//! stops the slip (a tangential impact of maximum dissipation, as Zhao et al.
+//! observed); once the tip sticks, `d v_n / d P_n = det Q / Q_11 > 0` ends the
+//! compression, and restitution throws the tip off the belt. Poisson uses exactly
+//! this. Newton, whose approach velocity is zero here, is applied to the compression
+//! the tangential impact itself creates: after it the tip sticks tangentially with
+//! `v_n+ = -e v_n,min`, `v_n,min` being the deepest normal velocity of the
+//! Darboux-Keller compression (if that sticking impulse leaves the cone, Poisson's
+//! result is used). With `e = 0` both laws leave the tip on the belt, stuck.
+
+use nalgebra::{Matrix2, Vector2};
+use shared::SlipDirection;
+
+/// The impact law, a first-class scenario parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ImpactLaw {
+    /// Restitution of the normal velocity (`e` is Newton's coefficient `e_n`).
+    Newton,
+    /// Restitution of the normal impulse via Darboux-Keller (`e` is Poisson's coefficient).
+    Poisson,
+}
+
+impl ImpactLaw {
+    /// Lower-case name (`newton`, `poisson`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Newton => "newton",
+            Self::Poisson => "poisson",
+        }
+    }
+}
+
+/// How an impulse was obtained (for event logs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resolution {
+    /// Newton's law with the sticking impulse inside the cone.
+    NewtonSticking,
+    /// Newton's law with the impulse on the cone's edge.
+    NewtonSliding,
+    /// Newton's law, impulse from the Darboux-Keller process (edge impulse impossible, `p <= 0`).
+    NewtonDarbouxKeller,
+    /// Poisson's law by Darboux-Keller shock dynamics.
+    PoissonDarbouxKeller,
+}
+
+/// The result of an impact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impulse {
+    /// Impulse on the tip `[P_t, P_n]`, N s.
+    pub p: Vector2<f64>,
+    /// Tip velocity change `Q P`, `[dv_t, dv_n]`, m/s.
+    pub dv: Vector2<f64>,
+    /// Deepest normal velocity reached during compression (m/s; `<= 0`).
+    pub v_n_min: f64,
+    /// Work of the impulse on the relative motion, `W = int v_rel . dP` (J): minus the
+    /// energy the contact dissipates. An admissible impact has `W <= 0`. The belt is
+    /// an infinite mass moving at constant speed, so it may feed the arm's kinetic
+    /// energy (by `v_belt P_t`); only the contact itself must not create energy
+    /// (Stronge 2000, sec. 4.4). For a one-phase impulse `W = P . (v- + v+)/2`;
+    /// Darboux-Keller sums it phase by phase.
+    pub contact_work: f64,
+    /// Which branch of the law produced it.
+    pub resolution: Resolution,
+}
+
+/// Why an impact could not be resolved.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ImpactError {
+    /// Compression never ends: slip continues with `p <= 0` and friction cannot stop it.
+    #[error("impact jam: compression does not end (p = {p}, slip cannot be stopped)")]
+    Jam {
+        /// `p` of the slip phase that never ends, 1/kg.
+        p: f64,
+    },
+    /// A velocity or `Q` entry is not finite.
+    #[error("impact with non-finite input")]
+    NonFinite,
+}
+
+/// Relative slip speed below which the tip counts as not slipping during an impact, m/s.
+const V_EPS: f64 = 1e-12;
+
+/// Darboux-Keller shock dynamics (Poisson restitution `e`) for a tip with relative
+/// tangential velocity `v_r` and normal velocity `v_n` (m/s), friction `mu`, tip
+/// inverse inertia `qm` (1/kg, symmetric positive definite).
+///
+/// Returns the impulse; zero if the tip is not approaching (`v_n >= 0` and the
+/// normal reaction would separate it). Errors: [`ImpactError`].
+pub fn darboux_keller(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) -> Result<Impulse, ImpactError> {
+    if !(v_r.is_finite() && v_n.is_finite() && qm.iter().all(|x| x.is_finite())) {
+        return Err(ImpactError::NonFinite);
+    }
+    let (q11, q12, q22) = (qm[(0, 0)], qm[(0, 1)], qm[(1, 1)]);
+    let det = q11 * q22 - q12 * q12;
+    let can_stick = q12.abs() <= mu * q11;
+    // Phase slopes per unit normal impulse: (d v_r, d v_n, d P_t).
+    let slope = |slip: Option<f64>| match slip {
+        Some(s) => (q12 - mu * s * q11, q22 - mu * s * q12, -mu * s),
+        None => (0.0, det / q11, -q12 / q11),
+    };
+    let start_phase = |v_r: f64| -> Option<f64> {
+        if v_r.abs() > V_EPS {
+            Some(v_r.signum())
+        } else if can_stick {
+            None
+        } else {
+            Some(q12.signum())
+        }
+    };
+    let (mut vr, mut vn, mut pn, mut pt) = (v_r, v_n, 0.0_f64, 0.0_f64);
+    let mut phase = start_phase(vr);
+    let mut v_n_min = vn.min(0.0);
+    // Not approaching and the first phase would separate: no impact.
+    if vn >= 0.0 && slope(phase).1 >= 0.0 {
+        return Ok(Impulse { p: Vector2::zeros(), dv: Vector2::zeros(), v_n_min: 0.0, contact_work: 0.0, resolution: Resolution::PoissonDarbouxKeller });
+    }
+    let mut compression = true;
+    let mut pn_end = f64::INFINITY;
+    let mut work = 0.0;
+    // Each phase ends slip or compression or the impact, so a few phases suffice.
+    for _ in 0..8 {
+        let (dvr, dvn, dpt) = slope(phase);
+        let to_stop = match phase {
+            Some(s) if s * dvr < 0.0 => -vr / dvr,
+            _ => f64::INFINITY,
+        };
+        let to_compressed = if compression && dvn > 0.0 { (-vn / dvn).max(0.0) } else { f64::INFINITY };
+        let to_end = if compression { f64::INFINITY } else { (pn_end - pn).max(0.0) };
+        let step = to_stop.min(to_compressed).min(to_end);
+        if !step.is_finite() {
+            return Err(ImpactError::Jam { p: dvn });
+        }
+        // Velocities are linear in P_n within the phase: trapezoid is exact.
+        work += step * (dpt * (vr + 0.5 * dvr * step) + (vn + 0.5 * dvn * step));
+        vr += dvr * step;
+        vn += dvn * step;
+        pn += step;
+        pt += dpt * step;
+        v_n_min = v_n_min.min(vn);
+        if step == to_end {
+            break;
+        }
+        if step == to_compressed {
+            vn = 0.0;
+            compression = false;
+            pn_end = (1.0 + e) * pn;
+            if e <= 0.0 {
+                break;
+            }
+            continue;
+        }
+        // Slip stopped: stick if the cone allows, otherwise slip the other way.
+        vr = 0.0;
+        phase = start_phase(0.0);
+    }
+    let p = Vector2::new(pt, pn);
+    Ok(Impulse { p, dv: qm * p, v_n_min, contact_work: work, resolution: Resolution::PoissonDarbouxKeller })
+}
+
+/// A one-phase impulse `p` applied to relative velocity `v = [v_r, v_n]`.
+fn one_phase(qm: &Matrix2<f64>, p: Vector2<f64>, v: Vector2<f64>, v_n_min: f64, resolution: Resolution) -> Impulse {
+    let dv = qm * p;
+    Impulse { p, dv, v_n_min, contact_work: p.dot(&(v + v + dv)) * 0.5, resolution }
+}
+
+/// Whether impulse `p = [P_t, P_n]` lies in the friction cone (with a relative slack for rounding).
+fn in_cone(p: &Vector2<f64>, mu: f64) -> bool {
+    p[1] >= 0.0 && p[0].abs() <= mu * p[1] * (1.0 + 1e-12)
+}
+
+/// The impulse at touchdown for a tip arriving with `v_n < 0` (m/s) and relative
+/// tangential velocity `v_r` (m/s), under `law` with coefficient `e`.
+///
+/// Errors: [`ImpactError`] (non-finite input, or a Darboux-Keller jam).
+pub fn touchdown(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, law: ImpactLaw, e: f64) -> Result<Impulse, ImpactError> {
+    match law {
+        ImpactLaw::Poisson => darboux_keller(qm, mu, v_r, v_n, e),
+        ImpactLaw::Newton => {
+            if !(v_r.is_finite() && v_n.is_finite()) {
+                return Err(ImpactError::NonFinite);
+            }
+            let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
+            let p = inv * Vector2::new(-v_r, -(1.0 + e) * v_n);
+            if in_cone(&p, mu) {
+                return Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSticking));
+            }
+            let s = if v_r.abs() > V_EPS { SlipDirection::of(v_r) } else { SlipDirection::of(-p[0]) };
+            let ps = shared::contact::p_of(qm, mu, s);
+            if ps > 0.0 {
+                let pn = -(1.0 + e) * v_n / ps;
+                let p = Vector2::new(-mu * s.sign::<f64>() * pn, pn);
+                Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSliding))
+            } else {
+                let mut dk = darboux_keller(qm, mu, v_r, v_n, e)?;
+                dk.resolution = Resolution::NewtonDarbouxKeller;
+                Ok(dk)
+            }
+        }
+    }
+}
+
+/// The impact without collision for a tip sliding at relative velocity `v_r`
+/// (m/s, nonzero) with `v_n = 0` in an inconsistent state (`p(sign v_r) < 0`).
+/// See the module documentation for how each law resolves it.
+///
+/// Errors: [`ImpactError`].
+pub fn without_collision(qm: &Matrix2<f64>, mu: f64, v_r: f64, law: ImpactLaw, e: f64) -> Result<Impulse, ImpactError> {
+    match law {
+        ImpactLaw::Poisson => darboux_keller(qm, mu, v_r, 0.0, e),
+        ImpactLaw::Newton => {
+            let compression = darboux_keller(qm, mu, v_r, 0.0, 0.0)?;
+            let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
+            let p = inv * Vector2::new(-v_r, -e * compression.v_n_min);
+            if in_cone(&p, mu) {
+                Ok(one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::NewtonDarbouxKeller))
+            } else {
+                let mut dk = darboux_keller(qm, mu, v_r, 0.0, e)?;
+                dk.resolution = Resolution::NewtonDarbouxKeller;
+                Ok(dk)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Kinetic energy change of a one-phase impact seen from a frame moving with
+    /// the belt: `dT = P . (v- + v+) / 2` (exact for an impulse at fixed configuration).
+    fn energy_change(imp: &Impulse, v: Vector2<f64>) -> f64 {
+        imp.p.dot(&(v + v + imp.dv)) * 0.5
+    }
+
+    fn spd(a: f64, b: f64, c: f64) -> Matrix2<f64> {
+        // Q = L L^T with L lower-triangular, positive diagonal.
+        let l = Matrix2::new(a, 0.0, b, c);
+        l * l.transpose()
+    }
+
+    #[test]
+    fn frictionless_poisson_equals_newton() {
+        let qm = spd(3.0, 1.0, 2.0);
+        let n = touchdown(&qm, 0.0, 0.3, -0.5, ImpactLaw::Newton, 0.5).unwrap();
+        let p = touchdown(&qm, 0.0, 0.3, -0.5, ImpactLaw::Poisson, 0.5).unwrap();
+        assert!((n.p - p.p).norm() < 1e-12);
+        assert!((n.dv[1] - 0.75).abs() < 1e-12); // v_n+ = -e v_n- = 0.25
+    }
+
+    #[test]
+    fn head_on_sticking_impact_is_newton_exact() {
+        // Diagonal Q with enough friction: the tip sticks, v_n+ = -e v_n-.
+        let qm = Matrix2::new(2.0, 0.0, 0.0, 1.0);
+        for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
+            let imp = touchdown(&qm, 1.0, 0.1, -1.0, law, 0.3).unwrap();
+            assert!((0.1 + imp.dv[0]).abs() < 1e-12, "{law:?} slip stopped");
+            assert!((-1.0 + imp.dv[1] - 0.3).abs() < 1e-12, "{law:?}: v_n+ = 0.3");
+        }
+    }
+
+    #[test]
+    fn iwc_stops_the_slip_and_lifts_the_tip_off() {
+        // A Q with strong coupling so that p(+) < 0 at mu = 0.8.
+        let qm = spd(2.0, 0.5, 0.1);
+        let s = SlipDirection::Positive;
+        let mu = 0.8;
+        assert!(shared::contact::p_of(&qm, mu, s) < 0.0);
+        for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
+            let imp = without_collision(&qm, mu, 0.4, law, 0.5).unwrap();
+            assert!((0.4 + imp.dv[0]).abs() < 1e-12, "{law:?}: slip stopped");
+            assert!(imp.dv[1] > 0.0, "{law:?}: lifts off");
+            assert!(imp.v_n_min < 0.0, "{law:?}: compression");
+            assert!(imp.contact_work <= 1e-12, "{law:?}: work {}", imp.contact_work);
+            let with_zero = without_collision(&qm, mu, 0.4, law, 0.0).unwrap();
+            assert!(with_zero.dv[1].abs() < 1e-12, "{law:?}: e = 0 leaves the tip on the belt");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn poisson_never_gains_energy_and_respects_the_cone(
+            a in 0.3f64..3.0, b in -2.0f64..2.0, c in 0.3f64..3.0,
+            mu in 0.0f64..1.2, v_r in -1.0f64..1.0, v_n in -1.0f64..-0.01, e in 0.0f64..1.0,
+        ) {
+            let qm = spd(a, b, c);
+            if let Ok(imp) = darboux_keller(&qm, mu, v_r, v_n, e) {
+                prop_assert!(imp.p[1] >= 0.0);
+                prop_assert!(imp.p[0].abs() <= mu * imp.p[1] * (1.0 + 1e-9) + 1e-12);
+                let v_after_n = v_n + imp.dv[1];
+                prop_assert!(v_after_n >= -1e-12, "separates: {}", v_after_n);
+                // Poisson with Coulomb friction can create energy only with slip reversal
+                // (Stronge 2000); the plant reports it. Without reversal it must not.
+                let vr_after = v_r + imp.dv[0];
+                let scale = 1e-9 * (v_r * v_r + v_n * v_n) / qm.norm();
+                if vr_after * v_r >= 0.0 {
+                    prop_assert!(imp.contact_work <= scale, "work {}", imp.contact_work);
+                }
+                // With one phase, the phase-wise work equals P . (v- + v+)/2.
+                if mu == 0.0 {
+                    prop_assert!((imp.contact_work - energy_change(&imp, Vector2::new(v_r, v_n))).abs() <= scale.max(1e-12));
+                }
+            }
+        }
+
+        #[test]
+        fn newton_sticking_and_edge_impulses_restore_normal_velocity(
+            a in 0.3f64..3.0, b in -2.0f64..2.0, c in 0.3f64..3.0,
+            mu in 0.0f64..1.2, v_r in -1.0f64..1.0, v_n in -1.0f64..-0.01, e in 0.0f64..1.0,
+        ) {
+            let qm = spd(a, b, c);
+            if let Ok(imp) = touchdown(&qm, mu, v_r, v_n, ImpactLaw::Newton, e) {
+                if imp.resolution != Resolution::NewtonDarbouxKeller {
+                    prop_assert!((v_n + imp.dv[1] + e * v_n).abs() < 1e-9);
+                    prop_assert!(imp.p[1] >= 0.0);
+                    prop_assert!(imp.p[0].abs() <= mu * imp.p[1] * (1.0 + 1e-9) + 1e-12);
+                }
+            }
+        }
+    }
+}
