@@ -1,1 +1,157 @@
-//! Plots (stub).
+//! Figures: stacked time-series panels drawn with plotters (SVG).
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::error::CliError;
+
+/// One curve of a panel.
+pub struct Series<'a> {
+    /// Legend label.
+    pub label: &'a str,
+    /// Points `(t, value)`.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Draw as a step function (for discrete signals like the contact mode).
+    pub step: bool,
+}
+
+/// One panel: a y-axis label and its curves.
+pub struct Panel<'a> {
+    /// Y-axis description with units.
+    pub y_label: &'a str,
+    /// The curves.
+    pub series: Vec<Series<'a>>,
+    /// Optional fixed y-range.
+    pub y_range: Option<(f64, f64)>,
+}
+
+/// Colours used across figures.
+pub mod colors {
+    use plotters::style::RGBColor;
+    /// Blue.
+    pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+    /// Orange.
+    pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
+    /// Green.
+    pub const GREEN: RGBColor = RGBColor(44, 160, 44);
+    /// Red.
+    pub const RED: RGBColor = RGBColor(214, 39, 40);
+    /// Purple.
+    pub const PURPLE: RGBColor = RGBColor(148, 103, 189);
+    /// Grey.
+    pub const GREY: RGBColor = RGBColor(110, 110, 110);
+}
+
+/// Keeps at most about `max_points` points of a series, preserving each bucket's
+/// minimum and maximum (so spikes such as impacts stay visible).
+pub fn decimate(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
+    if points.len() <= max_points || max_points < 4 {
+        return points.to_vec();
+    }
+    let buckets = max_points / 2;
+    let per = points.len().div_ceil(buckets);
+    let mut out = Vec::with_capacity(max_points + 2);
+    for chunk in points.chunks(per) {
+        let (mut lo, mut hi) = (chunk[0], chunk[0]);
+        for &p in chunk {
+            if p.1 < lo.1 {
+                lo = p;
+            }
+            if p.1 > hi.1 {
+                hi = p;
+            }
+        }
+        if lo.0 <= hi.0 {
+            out.push(lo);
+            out.push(hi);
+        } else {
+            out.push(hi);
+            out.push(lo);
+        }
+    }
+    out
+}
+
+fn finite_range(panel: &Panel) -> (f64, f64) {
+    if let Some(r) = panel.y_range {
+        return r;
+    }
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for s in &panel.series {
+        for &(_, y) in &s.points {
+            if y.is_finite() {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+    }
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let pad = if hi > lo { (hi - lo) * 0.05 } else { 0.5 * hi.abs().max(1.0) };
+    (lo - pad, hi + pad)
+}
+
+/// Draws `panels` stacked vertically against a shared time axis `t_range` (s)
+/// into an SVG file at `path`, with a title.
+///
+/// # Errors
+/// [`CliError::Plot`] when plotters fails (e.g. the file cannot be written).
+pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), CliError> {
+    let err = |e: &dyn std::fmt::Display| CliError::Plot { path: path.to_path_buf(), message: e.to_string() };
+    let height = 60 + 230 * panels.len() as u32;
+    let root = SVGBackend::new(path, (1100, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| err(&e))?;
+    let areas = root.split_evenly((panels.len(), 1));
+    for (i, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
+        let (lo, hi) = finite_range(panel);
+        let mut chart = ChartBuilder::on(area)
+            .margin(8)
+            .x_label_area_size(if i + 1 == panels.len() { 40 } else { 25 })
+            .y_label_area_size(80)
+            .build_cartesian_2d(t_range.0..t_range.1, lo..hi)
+            .map_err(|e| err(&e))?;
+        let mut mesh = chart.configure_mesh();
+        mesh.y_desc(panel.y_label).light_line_style(WHITE.mix(0.0));
+        if i + 1 == panels.len() {
+            mesh.x_desc("t (s)");
+        }
+        mesh.draw().map_err(|e| err(&e))?;
+        for s in &panel.series {
+            let pts = decimate(&s.points, 4000);
+            let color = s.color;
+            let drawn: Vec<(f64, f64)> = if s.step {
+                let mut v = Vec::with_capacity(pts.len() * 2);
+                for w in pts.windows(2) {
+                    v.push(w[0]);
+                    v.push((w[1].0, w[0].1));
+                }
+                if let Some(&last) = pts.last() {
+                    v.push(last);
+                }
+                v
+            } else {
+                pts
+            };
+            chart
+                .draw_series(LineSeries::new(drawn.into_iter().filter(|p| p.1.is_finite()), color.stroke_width(1)))
+                .map_err(|e| err(&e))?
+                .label(s.label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.3))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| err(&e))?;
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}

@@ -3,9 +3,11 @@
 //!
 //! Modes: flight, sliding (`f_n = -b/p`, Coulomb friction opposing the slip),
 //! sticking (`z_r_dot = 0`, `f = -Q^-1 a_free` while `|f_t| <= mu f_n`). Each
-//! mode is a smooth ODE integrated by Dormand-Prince 5(4) with dense output from
-//! the `differential-equations` crate; the events that end a mode are located on
-//! the dense output by Brent's method (to 1e-14 s absolute, 1e-12 relative):
+//! mode is a smooth ODE integrated by an explicit Runge-Kutta method with dense output from
+//! the `differential-equations` crate (DOP853: its 7th-order dense output locates
+//! events two orders more accurately than Dormand-Prince 5(4)'s); the events that
+//! end a mode are located on the dense output by a bracketing root search
+//! ([`segment::EventLocator`], to 1e-14 s + 1e-15 |t|):
 //! touchdown (`z_n = -H`), lift-off (`f_n` reaching 0, i.e. `b = 0` while sliding),
 //! `p` reaching 0 while sliding, slip-to-stick (`z_r_dot = 0`), stick-to-slip
 //! (`|f_t| = mu f_n`).
@@ -28,27 +30,32 @@
 //! the end of every segment, so integration error cannot drift the tip into or
 //! off the belt.
 //!
+//! Slip from rest (after slip-to-stick fails or at stick-to-slip) goes in a
+//! *consistent* direction: one whose sliding solution accelerates the slip that
+//! way, preferring the direction the sticking force points to.
+//!
 //! Corner case: at rest relative to the belt with no consistent contact force
-//! (sticking force outside the cone, slipping inconsistent: `p < 0`, `b < 0`, no
-//! slip for an impact without collision to stop) the tip is held sticking with the
-//! cone ignored until the next event, and an [`EventKind::ConeViolation`] is reported.
+//! (sticking force outside the cone and no consistent slip, the tip pressed on the
+//! belt) the tip is held stuck with the cone ignored until lift-off or the end of
+//! the current `advance` interval, then the contact problem is solved again; one
+//! [`EventKind::ConeViolation`] is reported per episode.
 
 pub mod impact;
 pub mod segment;
 
 use std::cell::Cell;
 
-use differential_equations::{prelude::*, status::Status};
+use differential_equations::prelude::*;
 use nalgebra::Vector2;
 use serde::Serialize;
 use shared::{
     Arm, ContactMode, ElbowBranch, IkError, ParamError, Params, SlipDirection,
-    contact::{classify_slipping, sticking_is_consistent},
+    contact::{classify_slipping, sliding_force, sticking_is_consistent},
     kinematics::{inverse_kinematics, tip_position},
 };
 
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
-use segment::{Boundary, LastPoint, OdeState, Phase, Segment};
+use segment::{Boundary, EventLocator, OdeState, Phase, Segment};
 
 /// A torque law the plant evaluates inside the integration.
 ///
@@ -94,6 +101,10 @@ pub struct SimConfig {
     /// Zeno rule: a bounce whose normal velocity after impact is below this (m/s)
     /// ends the bounce sequence; the tip stays in contact.
     pub zeno_velocity: f64,
+    /// Baumgarte stabilisation rate of the contact constraint in sliding and
+    /// sticking, rad/s (Baumgarte 1972; 0 disables it). The correction vanishes on
+    /// the constraint, so it changes the contact force only by the drift it removes.
+    pub baumgarte: f64,
     /// Events allowed in one `advance` before it fails with [`SimError::EventStorm`]
     /// (a guard against a hang; never reached in normal runs).
     pub max_events_per_advance: usize,
@@ -110,6 +121,7 @@ impl Default for SimConfig {
             e_n: 0.2,
             v_stick: 1e-9,
             zeno_velocity: 1e-4,
+            baumgarte: 50.0,
             max_events_per_advance: 100_000,
             max_steps: 100_000_000,
         }
@@ -132,7 +144,7 @@ impl SimConfig {
         if !(self.e_n.is_finite() && (0.0..=1.0).contains(&self.e_n)) {
             return bad("e_n", self.e_n, "a value in [0, 1]");
         }
-        for (name, v) in [("v_stick", self.v_stick), ("zeno_velocity", self.zeno_velocity)] {
+        for (name, v) in [("v_stick", self.v_stick), ("zeno_velocity", self.zeno_velocity), ("baumgarte", self.baumgarte)] {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(name, v, "a finite value >= 0");
             }
@@ -207,6 +219,14 @@ pub enum SimError {
         t: f64,
         /// Why.
         source: ImpactError,
+    },
+    /// A segment ended outside its mode without the event being located, even with small steps.
+    #[error("event missed at t = {t} s in mode {mode}: the segment left its domain between steps")]
+    MissedEvent {
+        /// Start of the segment, s.
+        t: f64,
+        /// The mode.
+        mode: &'static str,
     },
     /// Too many events in one `advance` (a hang guard).
     #[error("more than {count} events in one interval at t = {t} s: accumulating events the Zeno rule did not end")]
@@ -366,8 +386,10 @@ pub struct Plant {
     y: OdeState,
     phase: Phase,
     cone_relaxed: bool,
+    in_violation: bool,
     last_h: Cell<f64>,
     counters: Counters,
+    startup_events: Vec<PlantEvent>,
 }
 
 /// Largest initial penetration of the tip into the belt that is projected onto it, m.
@@ -400,8 +422,10 @@ impl Plant {
             y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0, 0.0, 0.0],
             phase: Phase::Flight,
             cone_relaxed: false,
+            in_violation: false,
             last_h: Cell::new(1e-4),
             counters: Counters::default(),
+            startup_events: Vec::new(),
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -414,8 +438,15 @@ impl Plant {
             let ctrl = Hold(u0);
             let mut events = Vec::new();
             plant.touch(&ctrl, &mut events)?;
+            plant.startup_events = events;
         }
         Ok(plant)
+    }
+
+    /// Events at `t0` while the initial mode was chosen (e.g. an impact without
+    /// collision from an inconsistent initial state), in order.
+    pub fn startup_events(&self) -> &[PlantEvent] {
+        &self.startup_events
     }
 
     /// The arm (its parameters and model).
@@ -532,12 +563,14 @@ impl Plant {
             }
             // A mode must start strictly inside its domain, or it ends at once.
             let (boundary, g0) = self.segment(ctrl).nearest_boundary(self.t, &self.y);
-            if g0 < 0.0 && self.phase != Phase::Flight {
+            if (g0 < 0.0 && self.phase != Phase::Flight) || self.flight_starts_into_belt(ctrl) {
                 self.cross(ctrl, boundary, &mut events)?;
                 handled += 1;
                 continue;
             }
-            let hit = self.integrate(ctrl, t_end)?;
+            // A relaxed (cone-violating) stick lasts at most to the end of this interval.
+            let seg_end = t_end;
+            let hit = self.integrate(ctrl, seg_end)?;
             self.counters.segments += 1;
             match hit {
                 Some(b) => {
@@ -547,6 +580,11 @@ impl Plant {
                 None => {
                     self.t = t_end;
                     self.project_contact()?;
+                    // Solve the contact problem afresh next interval.
+                    if self.cone_relaxed {
+                        self.cone_relaxed = false;
+                        self.in_violation = true;
+                    }
                     break;
                 }
             }
@@ -559,40 +597,101 @@ impl Plant {
         Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
     }
 
+    /// Flight starting on the belt with the tip not moving away (e.g. after `b`
+    /// touched 0 without changing sign): the crate cannot see a crossing from
+    /// `z_n + H = 0`, so this is handled as a grazing touchdown at once.
+    fn flight_starts_into_belt<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
+        if self.phase != Phase::Flight {
+            return false;
+        }
+        let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 4]);
+        let height = td.z[1] + self.arm.params.h;
+        height <= 1e-12 && (td.z_dot[1] < -self.cfg.zeno_velocity || (td.z_dot[1] <= self.cfg.zeno_velocity && td.b() < 0.0))
+    }
+
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
-        Segment { arm: &self.arm, phase: self.phase, ctrl, cone_relaxed: self.cone_relaxed }
+        Segment { arm: &self.arm, phase: self.phase, ctrl, cone_relaxed: self.cone_relaxed, baumgarte: self.cfg.baumgarte }
     }
 
     /// Integrates the current mode from `self.t` towards `t_end`; returns the
     /// boundary hit, if any (the state is then at the event).
+    ///
+    /// The crate detects an event as a sign change of the event function between
+    /// two accepted steps, starting from its value at `t0`. A segment that starts
+    /// on its boundary (flight right after a bounce: `z_n + H = 0`) would miss a
+    /// return that fits inside the first step, so the first step is kept inside the
+    /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
+    /// segment that ends outside its domain without an event is integrated again
+    /// with steps capped at 1/64 of the interval, and fails if that still misses it.
     fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
-        let h0 = self.last_h.get().min(remaining);
-        let method = ExplicitRungeKutta::dopri5().rtol(self.cfg.rtol).atol(self.cfg.atol).h0(h0).max_steps(self.cfg.max_steps);
+        let mut h0 = self.last_h.get().min(remaining);
+        if self.phase == Phase::Flight {
+            let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 4]);
+            let height = td.z[1] + self.arm.params.h;
+            if height < 1e-9 && td.z_dot[1] > 0.0 && td.b() < 0.0 {
+                h0 = h0.min(td.z_dot[1] / -td.b());
+            }
+        }
+        let start = (self.t, self.y);
+        for h_max in [f64::INFINITY, remaining / 64.0] {
+            let (t1, y1, boundary) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max)?;
+            if boundary.is_none() {
+                let (b, g) = self.segment(ctrl).nearest_boundary(t1, &y1);
+                if g < -1e-9 {
+                    // Missed crossing of `b`: retry with capped steps.
+                    let _ = b;
+                    (self.t, self.y) = start;
+                    continue;
+                }
+            }
+            if std::env::var_os("PLANT_DEBUG").is_some() {
+                let seg = self.segment(ctrl);
+                eprintln!("seg {:?} {:.9} -> {:.9} {:?} comps0 {:?} comps1 {:?}", self.phase, start.0, t1, boundary, seg.components(start.0, &start.1), seg.components(t1, &y1));
+            }
+            self.t = t1;
+            self.y = y1;
+            return Ok(boundary);
+        }
+        Err(SimError::MissedEvent { t: start.0, mode: self.mode().name() })
+    }
+
+    /// One call of the ODE solver over `[self.t, t_end]`, stopping at the first event.
+    fn solve_segment<C: Controller + ?Sized>(&self, ctrl: &C, t_end: f64, h0: f64, h_max: f64) -> Result<(f64, OdeState, Option<Boundary>), SimError> {
+        let method = ExplicitRungeKutta::dop853().rtol(self.cfg.rtol).atol(self.cfg.atol).h0(h0).h_max(h_max).max_steps(self.cfg.max_steps);
         let seg = self.segment(ctrl);
+        let hit = Cell::new(None);
+        let locator = EventLocator { segment: &seg, last_h: &self.last_h, g_prev: None, hit: &hit };
         let solution = IVP::ode(&seg, self.t, t_end, self.y)
-            .solout(LastPoint { last_h: &self.last_h })
-            .event(&seg)
+            .solout(locator)
             .method(method)
             .solve()
             .map_err(|e| SimError::Integrator { t: self.t, message: format!("{e:?}") })?;
-        let interrupted = matches!(solution.status, Status::Interrupted);
-        let (t1, y1) = match (solution.t.last(), solution.y.last()) {
-            (Some(t), Some(y)) => (*t, *y),
-            _ => (t_end, self.y),
-        };
-        if !y1.iter().all(|v| v.is_finite()) {
-            return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
+        if let Some((t1, y1)) = hit.get() {
+            if !y1.iter().all(|v| v.is_finite()) {
+                return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
+            }
+            return Ok((t1, y1, Some(seg.nearest_boundary(t1, &y1).0)));
         }
-        let boundary = if interrupted { Some(seg.nearest_boundary(t1, &y1).0) } else { None };
-        self.t = if interrupted { t1 } else { t_end };
-        self.y = y1;
-        Ok(boundary)
+        let y1 = solution.y.last().copied().unwrap_or(self.y);
+        if !y1.iter().all(|v| v.is_finite()) {
+            return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
+        }
+        Ok((t_end, y1, None))
     }
 
     /// Handles the crossing of a mode boundary at the current time.
     fn cross<C: Controller + ?Sized>(&mut self, ctrl: &C, boundary: Boundary, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
         self.cone_relaxed = false;
+        let result = self.cross_inner(ctrl, boundary, events);
+        // An episode of cone violation ends when another mode is chosen.
+        if !self.cone_relaxed {
+            self.in_violation = false;
+        }
+        result
+    }
+
+    fn cross_inner<C: Controller + ?Sized>(&mut self, ctrl: &C, boundary: Boundary, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
         match boundary {
             Boundary::Touchdown => {
                 self.project_position()?;
@@ -678,7 +777,30 @@ impl Plant {
                 self.push_event(events, EventKind::SlipToStick, before, None, 0.0);
                 return Ok(());
             }
-            SlipDirection::of(-f_stick[0])
+            // Slip from rest: a direction whose sliding solution accelerates the
+            // slip that way (consistent), preferring the one the sticking force points to.
+            let preferred = SlipDirection::of(-f_stick[0]);
+            let consistent = |s: SlipDirection| {
+                if !(td.p(mu, s) > 0.0 && td.b() < 0.0) {
+                    return false;
+                }
+                let f = sliding_force(&td, mu, s);
+                let acc = td.a_free[0] + td.qmat[(0, 0)] * f[0] + td.qmat[(0, 1)] * f[1];
+                s.sign::<f64>() * acc > 0.0
+            };
+            match [preferred, preferred.reversed()].into_iter().find(|&s| consistent(s)) {
+                Some(s) => s,
+                None if td.b() < 0.0 => {
+                    // Neither sticking nor slipping is consistent and the tip is pressed
+                    // on the belt: hold it stuck for a short dwell, then re-evaluate.
+                    self.project_contact_velocity(true)?;
+                    self.phase = Phase::Sticking;
+                    self.cone_relaxed = true;
+                                                            self.enter_violation(events, before);
+                    return Ok(());
+                }
+                None => preferred,
+            }
         } else {
             SlipDirection::of(before[0])
         };
@@ -715,10 +837,18 @@ impl Plant {
                 self.project_contact_velocity(true)?;
                 self.phase = Phase::Sticking;
                 self.cone_relaxed = true;
-                self.counters.cone_violations += 1;
-                self.push_event(events, EventKind::ConeViolation, before, None, 0.0);
+                                                self.enter_violation(events, before);
                 Ok(())
             }
+        }
+    }
+
+    /// Starts (or continues) a cone-violating stick; reported once per episode.
+    fn enter_violation(&mut self, events: &mut Vec<PlantEvent>, before: Vector2<f64>) {
+        if !self.in_violation {
+            self.in_violation = true;
+            self.counters.cone_violations += 1;
+            self.push_event(events, EventKind::ConeViolation, before, None, 0.0);
         }
     }
 

@@ -54,6 +54,8 @@ pub struct Segment<'a, C: ?Sized> {
     pub ctrl: &'a C,
     /// In sticking, ignore the cone (documented corner case: no consistent contact at rest).
     pub cone_relaxed: bool,
+    /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
+    pub baumgarte: f64,
 }
 
 /// Plant state `(q, q_dot)` of an ODE state.
@@ -73,10 +75,31 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
         let td = self.arm.tip_dynamics(&q, &qd, &u);
         let f = match self.phase {
             Phase::Flight => Vector2::zeros(),
-            Phase::Sliding(dir) => sliding_force(&td, self.arm.params.mu, dir),
-            Phase::Sticking => sticking_force(&td),
+            Phase::Sliding(dir) => {
+                // Baumgarte (1972): ask for z_n_ddot = -2 w z_n_dot - w^2 (z_n + H) instead of 0,
+                // so integration drift off the belt decays instead of accumulating.
+                let corr = self.constraint_correction(&td);
+                let mut td_c = td;
+                td_c.a_free[1] += corr[1];
+                sliding_force(&td_c, self.arm.params.mu, dir)
+            }
+            Phase::Sticking => {
+                let corr = self.constraint_correction(&td);
+                let mut td_c = td;
+                td_c.a_free += corr;
+                sticking_force(&td_c)
+            }
         };
         (td, f, Vector2::new(motor[0], motor[1]))
+    }
+
+    /// Baumgarte's constraint acceleration `[2 w z_r_dot, 2 w z_n_dot + w^2 (z_n + H)]`
+    /// (m/s^2): zero on the constraint, so the forces are the exact ones there.
+    #[inline]
+    fn constraint_correction(&self, td: &TipDynamics<f64>) -> Vector2<f64> {
+        let w = self.baumgarte;
+        let p = &self.arm.params;
+        Vector2::new(2.0 * w * (td.z_dot[0] - p.v_belt), 2.0 * w * td.z_dot[1] + w * w * (td.z[1] + p.h))
     }
 
     /// The event components (each positive inside the phase), normalised to be
@@ -129,43 +152,104 @@ impl<C: Controller + ?Sized> ODE<f64, OdeState> for Segment<'_, C> {
     }
 }
 
-impl<C: Controller + ?Sized> Event<f64, OdeState> for Segment<'_, C> {
-    fn config(&self) -> EventConfig {
-        EventConfig::new(CrossingDirection::Negative, Some(1))
-    }
-
-    fn event(&self, t: f64, y: &OdeState) -> f64 {
-        self.nearest_boundary(t, y).1
-    }
-}
-
 /// Output handler that keeps only the latest accepted point (so a solve never
-/// grows a trajectory vector; the event wrapper appends the event point after it)
-/// and remembers the last accepted step size for the next solve.
-pub struct LastPoint<'a> {
+/// grows a trajectory vector), remembers the last accepted step size for the
+/// next solve, and locates this segment's event itself.
+///
+/// Why not the crate's `Event` machinery: its Brent-Dekker search in
+/// `differential-equations` 0.7.0 returns wrong roots (a ballistic hop
+/// `y'' = -10`, `y(0) = 0`, `y'(0) = 1`, reports `y = 0` at 0.05 s to 0.12 s
+/// instead of 0.2 s; see `crate_event_location_is_wrong` in the tests). The
+/// detection here is the standard one: a sign change of the event function from
+/// positive to non-positive across an accepted step, then a bracketing root
+/// search (Illinois regula falsi, safeguarded by bisection) on the
+/// step's dense output, to `1e-14 s + 1e-15 |t|`.
+pub struct EventLocator<'a, 'b, C: ?Sized> {
+    /// The segment (its event function).
+    pub segment: &'b Segment<'a, C>,
     /// Last accepted step size, s (read by the caller after the solve).
-    pub last_h: &'a std::cell::Cell<f64>,
+    pub last_h: &'b std::cell::Cell<f64>,
+    /// Event function at the previous accepted point.
+    pub g_prev: Option<f64>,
+    /// The located event `(t, y)`, if any.
+    pub hit: &'b std::cell::Cell<Option<(f64, OdeState)>>,
 }
 
-impl differential_equations::solout::Solout<f64, OdeState> for LastPoint<'_> {
+impl<C: Controller + ?Sized> differential_equations::solout::Solout<f64, OdeState> for EventLocator<'_, '_, C> {
     fn solout<I>(
         &mut self,
         t_curr: f64,
         t_prev: f64,
         y_curr: &OdeState,
-        _y_prev: &OdeState,
-        _interpolator: &mut I,
+        y_prev: &OdeState,
+        interpolator: &mut I,
         solution: &mut differential_equations::solution::Solution<f64, OdeState>,
     ) -> differential_equations::control::ControlFlag<f64, OdeState>
     where
         I: differential_equations::interpolate::Interpolation<f64, OdeState> + ?Sized,
     {
+        use differential_equations::control::ControlFlag;
         if t_curr > t_prev {
             self.last_h.set(t_curr - t_prev);
         }
+        let g_curr = self.segment.nearest_boundary(t_curr, y_curr).1;
+        let crossed = matches!(self.g_prev, Some(g) if g > 0.0) && g_curr <= 0.0 && t_curr > t_prev;
+        self.g_prev = Some(g_curr);
         solution.t.clear();
         solution.y.clear();
+        if crossed {
+            let g_a = self.segment.nearest_boundary(t_prev, y_prev).1;
+            if let Some((t, y)) = locate_root(self.segment, interpolator, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, *y_curr)) {
+                self.hit.set(Some((t, y)));
+                solution.push(t, y);
+                return ControlFlag::Terminate;
+            }
+        }
         solution.push(t_curr, *y_curr);
-        differential_equations::control::ControlFlag::Continue
+        ControlFlag::Continue
     }
+}
+
+/// Illinois regula falsi with bisection safeguard on the dense output:
+/// the first zero of the event function in `(a, b]`, given `g(a) > 0 >= g(b)`.
+fn locate_root<C, I>(seg: &Segment<'_, C>, interp: &mut I, a: (f64, f64), b: (f64, f64, OdeState)) -> Option<(f64, OdeState)>
+where
+    C: Controller + ?Sized,
+    I: differential_equations::interpolate::Interpolation<f64, OdeState> + ?Sized,
+{
+    let (mut ta, mut ga) = a;
+    let (mut tb, mut gb, mut yb) = b;
+    let tol = 1e-14 + 1e-15 * tb.abs();
+    let mut side = 0i8;
+    for iter in 0..200 {
+        if tb - ta <= tol {
+            break;
+        }
+        // Regula falsi point, kept away from the ends; bisect every 4th iteration
+        // or when the secant falls outside the bracket.
+        let mut t = tb - gb * (tb - ta) / (gb - ga);
+        if !(t > ta && t < tb) || iter % 4 == 3 {
+            t = 0.5 * (ta + tb);
+        }
+        let y = interp.interpolate(t).ok()?;
+        let g = seg.nearest_boundary(t, &y).1;
+        // Illinois rule: an end retained twice in a row has its value halved.
+        if g > 0.0 {
+            ta = t;
+            ga = g;
+            if side == -1 {
+                gb *= 0.5;
+            }
+            side = -1;
+        } else {
+            tb = t;
+            gb = g;
+            yb = y;
+            if side == 1 {
+                ga *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    Some((tb, yb))
 }

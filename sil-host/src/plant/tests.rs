@@ -1,20 +1,304 @@
 use super::*;
-use crate::initial::{X0A, deg_to_state};
+use crate::initial::{X0A, X0D, deg_to_state};
 
-fn x0a_plant(cfg: SimConfig) -> Plant {
-    Plant::new(Params::paper(), cfg, deg_to_state(X0A.deg), 0.0, [0.0, 0.0]).unwrap()
+fn plant_from(params: Params<f64>, cfg: SimConfig, deg: [f64; 4]) -> Plant {
+    Plant::new(params, cfg, deg_to_state(deg), 0.0, [0.0, 0.0]).unwrap()
+}
+
+/// All events of an open-loop run of `duration` s, advanced in `dt` s intervals.
+fn run_events(plant: &mut Plant, duration: f64, dt: f64) -> Vec<PlantEvent> {
+    let mut events = plant.startup_events().to_vec();
+    let n = (duration / dt).round() as usize;
+    for k in 0..n {
+        let r = plant.advance([0.0, 0.0], (k + 1) as f64 * dt - plant.time()).unwrap();
+        events.extend(r.events);
+    }
+    events
+}
+
+/// Free swing high above the belt: sigma = 0, u = 0, weak gravity so the arm,
+/// started pointing up, stays far from the belt; energy is conserved to the
+/// integrator's tolerance, and the drift shrinks when the tolerance does.
+#[test]
+fn free_swing_conserves_energy_to_tolerance() {
+    let mut params = Params::<f64>::paper();
+    params.sigma = 0.0;
+    params.g = 0.05;
+    let drift = |rtol: f64| {
+        let cfg = SimConfig { rtol, atol: rtol * 1e-2, ..SimConfig::default() };
+        let mut p = plant_from(params, cfg, [170.0, 30.0, 200.0, -50.0]);
+        let e0 = p.energy();
+        let mut worst: f64 = 0.0;
+        for _ in 0..100 {
+            let r = p.advance([0.0, 0.0], 0.05).unwrap();
+            assert_eq!(r.mode, ContactMode::Flight);
+            assert!(r.events.is_empty());
+            worst = worst.max((p.energy() - e0).abs());
+        }
+        // Kinetic energy scale of the swing.
+        (worst, e0.abs().max(1e-3))
+    };
+    let (coarse, scale) = drift(1e-7);
+    let (fine, _) = drift(1e-10);
+    eprintln!("energy drift: {coarse:e} J at rtol 1e-7, {fine:e} J at rtol 1e-10, scale {scale:e} J");
+    // Global error over 5 s and 100 restarts: within 1000 x rtol of the energy scale.
+    assert!(coarse / scale < 1e-4, "drift {coarse} J at rtol 1e-7");
+    assert!(fine / scale < 1e-7, "drift {fine} J at rtol 1e-10");
+    assert!(fine < coarse / 100.0, "refining the tolerance 1000x reduces the drift at least 100x: {fine} vs {coarse}");
 }
 
 #[test]
-fn smoke_x0a() {
-    let mut p = x0a_plant(SimConfig::default());
-    println!("mode {:?} tip {:?}", p.mode(), p.tip());
-    for _ in 0..20 {
-        let r = p.advance([0.0, 0.0], 0.5).unwrap();
-        println!("t={:.3} mode={:?} x={:?} f={:?} events={}", r.t, r.mode, r.x, r.f, r.events.len());
-        for e in r.events.iter().take(5) {
-            println!("   {:?}", e);
+fn paper_initial_conditions_are_projected_onto_the_belt() {
+    let params = Params::<f64>::paper();
+    for ic in [X0A, X0D, crate::initial::X0U] {
+        let x = deg_to_state(ic.deg);
+        let info = crate::initial::describe_projection(&params, x);
+        assert!(info.projected, "{}", ic.name);
+        assert!(info.height_above_belt < 0.0 && info.height_above_belt > -1e-3, "{}: {}", ic.name, info.height_above_belt);
+        let p = Plant::new(params, SimConfig::default(), x, 0.0, [0.0, 0.0]).unwrap();
+        // Same z_t, on the belt, same elbow branch, at rest.
+        let z0 = shared::kinematics::tip_position(params.l, &Vector2::new(x[0], x[2]));
+        assert!((p.tip()[0] - z0[0]).abs() < 1e-12);
+        assert!((p.tip()[1] + params.h).abs() < 1e-12 || p.mode() == ContactMode::Flight);
+        assert_eq!(ElbowBranch::of(&Vector2::new(p.state()[0], p.state()[2])), ElbowBranch::of(&Vector2::new(x[0], x[2])));
+    }
+}
+
+#[test]
+fn x0a_is_inconsistent_and_starts_with_an_impact_without_collision() {
+    // x0a sits in the Painlevé region at mu = 0.6, v_belt = -0.4: sliding with p < 0, b < 0.
+    let params = Params::<f64>::paper();
+    let x = deg_to_state(X0A.deg);
+    let arm = Arm::new(params);
+    let q = inverse_kinematics(params.l, &Vector2::new(tip_position(params.l, &Vector2::new(x[0], x[2]))[0], -params.h), ElbowBranch::Down).unwrap();
+    let td = arm.tip_dynamics(&q, &Vector2::zeros(), &Vector2::zeros());
+    assert!(td.p(params.mu, SlipDirection::Positive) < 0.0 && td.b() < 0.0);
+    let p = plant_from(params, SimConfig::default(), X0A.deg);
+    let kinds: Vec<_> = p.startup_events().iter().map(|e| e.kind).collect();
+    assert_eq!(kinds, vec![EventKind::ImpactWithoutCollision]);
+    let e = p.startup_events()[0];
+    assert!(e.v_r_after.abs() < 1e-12, "the IWC stops the slip");
+    assert!(e.v_n_after > 0.0, "and the tip lifts off");
+    assert!(e.contact_work < 0.0);
+    assert_eq!(p.mode(), ContactMode::Flight);
+}
+
+#[test]
+fn contact_modes_keep_the_tip_on_the_belt_and_forces_admissible() {
+    let params = Params::<f64>::paper();
+    for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
+        let cfg = SimConfig { impact_law: law, ..SimConfig::default() };
+        for ic in [X0A, X0D, crate::initial::X0U] {
+            let mut p = plant_from(params, cfg, ic.deg);
+            let mut last_t = 0.0;
+            for _ in 0..3000 {
+                let r = p.advance([0.0, 0.0], 1e-3).unwrap();
+                let z = p.tip();
+                match r.mode {
+                    ContactMode::Flight => assert!(z[1] + params.h > -1e-9, "{law:?} {}: below the belt in flight at t = {}", ic.name, r.t),
+                    _ => {
+                        assert!((z[1] + params.h).abs() < 1e-12);
+                        assert!(p.tip_velocity()[1].abs() < 1e-12);
+                        assert!(r.f[1] >= -1e-9, "f_n = {}", r.f[1]);
+                        assert!(r.f[0].abs() <= params.mu * r.f[1] * (1.0 + 1e-9) + 1e-9, "cone: {:?}", r.f);
+                    }
+                }
+                for e in &r.events {
+                    assert!(e.t >= last_t && e.t <= r.t + 1e-12, "events in time order");
+                    last_t = e.t;
+                    assert!(e.contact_work <= 1e-12, "{law:?} {}: contact created energy at {}: {:?}", ic.name, e.t, e);
+                    if e.kind == EventKind::Touchdown {
+                        assert!(e.v_n_before < 0.0 && e.v_n_after >= -1e-12);
+                    }
+                }
+            }
+            assert_eq!(p.counters().energy_gains, 0);
         }
     }
-    println!("{:?}", p.counters());
+}
+
+/// Convergence: halving the tolerances moves the first 20 event times of a
+/// bouncing run by less than 1e-6 s.
+#[test]
+fn event_times_converge_under_tolerance_refinement() {
+    let params = Params::<f64>::paper();
+    let times = |rtol: f64, atol: f64| {
+        let mut p = plant_from(params, SimConfig { rtol, atol, ..SimConfig::default() }, X0A.deg);
+        let ev = run_events(&mut p, 6.0, 1e-3);
+        ev.iter().filter(|e| e.kind != EventKind::EnergyGain).map(|e| (e.t, e.kind)).take(20).collect::<Vec<_>>()
+    };
+    let base = SimConfig::default();
+    let a = times(base.rtol, base.atol);
+    let b = times(base.rtol / 2.0, base.atol / 2.0);
+    assert_eq!(a.len(), 20, "the run bounces: {} events", a.len());
+    let worst = a.iter().zip(&b).map(|(x, y)| {
+        assert_eq!(x.1, y.1, "same event sequence");
+        (x.0 - y.0).abs()
+    });
+    let worst = worst.fold(0.0, f64::max);
+    assert!(worst < 1e-6, "event times moved by {worst} s");
+}
+
+/// The zero-order-hold interval API and one long interval integrate the same flow.
+#[test]
+fn tick_by_tick_equals_one_long_interval() {
+    let params = Params::<f64>::paper();
+    let u = [0.05, -0.02];
+    let mut a = plant_from(params, SimConfig::default(), X0D.deg);
+    let mut b = a.clone();
+    for _ in 0..500 {
+        a.advance(u, 1e-3).unwrap();
+    }
+    b.advance(u, 0.5).unwrap();
+    assert_eq!(a.mode(), b.mode());
+    let (xa, xb) = (a.state(), b.state());
+    for i in 0..4 {
+        assert!((xa[i] - xb[i]).abs() < 1e-6, "{xa:?} vs {xb:?}");
+    }
+}
+
+/// A continuous-time controller with an internal state: the plant integrates it,
+/// and a zero-order hold of the same law converges to it as the period shrinks.
+#[test]
+fn continuous_controller_hook_and_zoh_convergence() {
+    struct Pd {
+        theta1_ref: f64,
+    }
+    impl Controller for Pd {
+        fn torque(&self, _t: f64, x: &[f64; 4], _xi: &[f64; 4], xi_dot: &mut [f64; 4]) -> [f64; 2] {
+            xi_dot[0] = 1.0; // a clock: xi_0 = elapsed time
+            xi_dot[1] = x[0] - self.theta1_ref; // integral of the error
+            [-0.5 * (x[0] - self.theta1_ref) - 0.05 * x[1], 0.0]
+        }
+    }
+    let params = Params::<f64>::paper();
+    let ctrl = Pd { theta1_ref: -0.25 };
+    let mut ideal = plant_from(params, SimConfig::default(), X0D.deg);
+    let start = ideal.clone();
+    ideal.advance_with(&ctrl, 0.3).unwrap();
+    assert!((ideal.controller_state()[0] - 0.3).abs() < 1e-9, "xi_0 integrates dt");
+    let zoh_error = |dt: f64| {
+        let mut p = start.clone();
+        let n = (0.3 / dt).round() as usize;
+        for _ in 0..n {
+            let mut dummy = [0.0; 4];
+            let u = ctrl.torque(p.time(), &p.state(), &[0.0; 4], &mut dummy);
+            p.advance(u, dt).unwrap();
+        }
+        (p.state()[0] - ideal.state()[0]).abs()
+    };
+    let e1 = zoh_error(1e-3);
+    let e2 = zoh_error(1e-4);
+    assert!(e2 < e1, "ZOH error shrinks with the period: {e1} -> {e2}");
+    assert!(e2 < 1e-3, "{e2}");
+}
+
+/// With alpha0 = 0 the arm is mirror-symmetric: theta -> -theta with v_belt -> -v_belt
+/// gives the mirrored trajectory, contact logic and all.
+#[test]
+fn mirror_symmetry_of_the_hybrid_flow() {
+    let mut params = Params::<f64>::paper();
+    params.alpha0 = 0.0;
+    let mut mirrored = params;
+    mirrored.v_belt = -params.v_belt;
+    for deg in [X0A.deg, X0D.deg] {
+        let mut a = plant_from(params, SimConfig::default(), deg);
+        let mut b = plant_from(mirrored, SimConfig::default(), deg.map(|v| -v));
+        let ea = run_events(&mut a, 2.0, 1e-3);
+        let eb = run_events(&mut b, 2.0, 1e-3);
+        assert_eq!(ea.len(), eb.len());
+        for (x, y) in ea.iter().zip(&eb) {
+            assert_eq!(x.kind, y.kind);
+            assert!((x.t - y.t).abs() < 1e-9);
+            assert!((x.v_r_before + y.v_r_before).abs() < 1e-7);
+        }
+        let (xa, xb) = (a.state(), b.state());
+        for i in 0..4 {
+            assert!((xa[i] + xb[i]).abs() < 1e-6, "{xa:?} vs {xb:?}");
+        }
+    }
+}
+
+/// Accumulating impacts: a tip dropped onto the belt with e = 0.5 bounces a
+/// finite number of times, then the Zeno rule ends the sequence in contact.
+#[test]
+fn zeno_bouncing_ends_in_contact() {
+    let params = Params::<f64>::paper();
+    for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
+        let cfg = SimConfig { impact_law: law, e_n: 0.5, ..SimConfig::default() };
+        // Elbow down near x0d, 1 cm above the belt, falling.
+        let q = inverse_kinematics(params.l, &Vector2::new(-0.16, -params.h + 0.01), ElbowBranch::Down).unwrap();
+        let mut p = Plant::new(params, cfg, [q[0], 0.0, q[1], 0.0], 0.0, [0.0, 0.0]).unwrap();
+        let mut params_belt_still = p.clone();
+        let _ = &mut params_belt_still;
+        let ev = run_events(&mut p, 1.0, 1e-3);
+        let touchdowns = ev.iter().filter(|e| e.kind == EventKind::Touchdown).count();
+        assert!(touchdowns >= 2, "{law:?}: bounced {touchdowns} times");
+        assert!(touchdowns < 60, "{law:?}: a finite sequence, got {touchdowns}");
+        assert!(ev.iter().any(|e| e.kind == EventKind::ZenoEnded), "{law:?}: the Zeno rule ended it");
+    }
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let params = Params::<f64>::paper();
+    let cfg = SimConfig::default();
+    // Tip 5 mm below the belt.
+    let q = inverse_kinematics(params.l, &Vector2::new(-0.1, -params.h - 0.005), ElbowBranch::Down).unwrap();
+    assert!(matches!(Plant::new(params, cfg, [q[0], 0.0, q[1], 0.0], 0.0, [0.0; 2]), Err(SimError::BelowBelt { .. })));
+    assert!(matches!(Plant::new(params, cfg, [f64::NAN, 0.0, 0.0, 0.0], 0.0, [0.0; 2]), Err(SimError::NonFiniteInitialState(_))));
+    let mut bad = params;
+    bad.m = -1.0;
+    assert!(matches!(Plant::new(bad, cfg, [3.0, 0.0, 3.0, 0.0], 0.0, [0.0; 2]), Err(SimError::Params(_))));
+    let bad_cfg = SimConfig { e_n: 1.5, ..cfg };
+    assert!(matches!(Plant::new(params, bad_cfg, [3.0, 0.0, 3.0, 0.0], 0.0, [0.0; 2]), Err(SimError::BadConfig { name: "e_n", .. })));
+    let mut p = plant_from(params, cfg, X0D.deg);
+    assert!(matches!(p.advance([f64::NAN, 0.0], 1e-3), Err(SimError::BadTorque(_))));
+    assert!(matches!(p.advance([0.0, 0.0], -1.0), Err(SimError::BadStep(_))));
+    assert!(p.advance([0.0, 0.0], 1e-3).is_ok(), "a rejected call leaves the plant usable");
+}
+
+#[test]
+#[ignore]
+fn debug_event_sequences() {
+    let params = Params::<f64>::paper();
+    for (rtol, atol) in [(1e-9, 1e-11), (5e-10, 5e-12)] {
+        let mut p = plant_from(params, SimConfig { rtol, atol, ..SimConfig::default() }, X0A.deg);
+        let ev = run_events(&mut p, 6.0, 1e-3);
+        for e in ev.iter().take(22) {
+            println!("{:.12} {:?} vn {:.3e} -> {:.3e} vr {:.3e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before);
+        }
+        println!("---");
+    }
+}
+
+#[test]
+#[ignore]
+fn debug_tick() {
+    let params = Params::<f64>::paper();
+    let u = [0.05, -0.02];
+    let mut a = plant_from(params, SimConfig::default(), X0D.deg);
+    let mut b = a.clone();
+    for _ in 0..500 {
+        for e in a.advance(u, 1e-3).unwrap().events { println!("A {:.12} {:?} vn {:.4e} -> {:.4e} vr {:.4e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before); }
+    }
+    for e in b.advance(u, 0.5).unwrap().events { println!("B {:.12} {:?} vn {:.4e} -> {:.4e} vr {:.4e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before); }
+}
+
+#[test]
+#[ignore]
+fn debug_storm() {
+    let mut params = Params::<f64>::paper();
+    params.alpha0 = 0.0;
+    params.v_belt = -0.4;
+    let mut cfg = SimConfig::default();
+    cfg.max_events_per_advance = 12;
+    let mut a = plant_from(params, cfg, X0D.deg);
+    for e in a.startup_events() { println!("S {:?}", e); }
+    for _ in 0..2000 {
+        match a.advance([0.0, 0.0], 1e-3) {
+            Ok(r) => for e in r.events { println!("{:.12} {:?} {:?} vn {:.4e} -> {:.4e} vr {:.4e} -> {:.4e}", e.t, e.kind, e.mode_after, e.v_n_before, e.v_n_after, e.v_r_before, e.v_r_after); },
+            Err(e) => { println!("ERR {e}"); break; }
+        }
+    }
 }
