@@ -9,7 +9,7 @@ use nalgebra::{Matrix2, Vector2};
 use crate::{
     Real,
     contact::SlipDirection,
-    kinematics::{jacobian, jdot_qdot, tip_position},
+    kinematics::jacobian,
     lit,
     params::Params,
 };
@@ -145,18 +145,43 @@ impl<T: Real> Arm<T> {
 
     /// Everything tip-space at state `(q, q_dot)` under generalised torque `u`
     /// (paper eqs. 2 to 7), sharing one `M^-1`.
+    ///
+    /// This is the hot path of the plant and the firmware, so it evaluates one
+    /// `sin_cos` per angle and derives `cos(theta2 - theta1)` and
+    /// `sin(theta1 - theta2)` from them; the tests check it against the
+    /// one-term-at-a-time functions ([`Arm::mass_matrix`], [`Arm::w`], [`Arm::c`],
+    /// `kinematics::*`).
     pub fn tip_dynamics(&self, q: &Vector2<T>, qd: &Vector2<T>, u: &Vector2<T>) -> TipDynamics<T> {
-        let l = self.params.l;
-        let jac = jacobian(l, q);
-        let m_inv = self.mass_matrix_inverse(q);
-        let qdd_free = m_inv * (u - self.w(q, qd) - self.c(q, qd));
+        let p = &self.params;
+        let (l, half) = (p.l, lit::<T>(0.5));
+        let (s1, c1) = q[0].sin_cos();
+        let (s2, c2) = q[1].sin_cos();
+        let c21 = c1 * c2 + s1 * s2; // cos(theta2 - theta1)
+        let s12 = s1 * c2 - c1 * s2; // sin(theta1 - theta2)
+        let ml2 = p.m * l * l;
+        // M and its inverse (closed form).
+        let (m11, m12, m22) = (ml2 * lit::<T>(4.0 / 3.0), ml2 * half * c21, ml2 * lit::<T>(1.0 / 3.0));
+        let det = m11 * m22 - m12 * m12;
+        let m_inv = Matrix2::new(m22, -m12, -m12, m11) / det;
+        // w + c (paper eq. 1).
+        let mgl2 = p.m * p.g * l * half;
+        let spring = p.k * (q[1] - q[0] + p.alpha0);
+        let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
+        let half_ml2 = ml2 * half;
+        let wc = Vector2::new(
+            mgl2 * lit::<T>(3.0) * s1 - spring - p.sigma * (qd[1] - qd[0] - qd[0]) + half_ml2 * w2 * s12,
+            mgl2 * s2 + spring + p.sigma * (qd[1] - qd[0]) - half_ml2 * w1 * s12,
+        );
+        let qdd_free = m_inv * (u - wc);
+        let jac = Matrix2::new(l * c1, l * c2, l * s1, l * s2);
+        let s = Vector2::new(-l * (w1 * s1 + w2 * s2), l * (w1 * c1 + w2 * c2));
         TipDynamics {
-            z: tip_position(l, q),
+            z: Vector2::new(l * (s1 + s2), -l * (c1 + c2)),
             z_dot: jac * qd,
             jac,
             m_inv,
             qmat: jac * m_inv * jac.transpose(),
-            a_free: jac * qdd_free + jdot_qdot(l, q, qd),
+            a_free: jac * qdd_free + s,
             qdd_free,
         }
     }
@@ -182,6 +207,7 @@ impl<T: Real> Arm<T> {
 mod tests {
     use super::*;
     use crate::contact::SlipDirection;
+    use crate::kinematics::{jacobian, jdot_qdot, tip_position};
 
     fn arm() -> Arm<f64> {
         Arm::new(Params::paper())
@@ -281,6 +307,26 @@ mod tests {
                 p0.mu = 0.0;
                 assert!(Arm::new(p0).p(&q, SlipDirection::Positive) > 0.0);
             }
+        }
+    }
+
+    #[test]
+    fn fused_tip_dynamics_equals_the_term_by_term_model() {
+        let a = arm();
+        for i in -5..=5 {
+            let q = Vector2::new(0.3 * i as f64 - 0.1, -0.25 * i as f64 + 0.4);
+            let qd = Vector2::new(1.1 - 0.3 * i as f64, 0.7 * i as f64);
+            let u = Vector2::new(0.2, -0.3);
+            let td = a.tip_dynamics(&q, &qd, &u);
+            let m_inv = a.mass_matrix(&q).try_inverse().unwrap();
+            let qdd = m_inv * (u - a.w(&q, &qd) - a.c(&q, &qd));
+            let jac = jacobian(a.params.l, &q);
+            assert!((td.qdd_free - qdd).norm() < 1e-10 * qdd.norm().max(1.0));
+            assert!((td.jac - jac).norm() < 1e-15);
+            assert!((td.z - tip_position(a.params.l, &q)).norm() < 1e-15);
+            let a_free = jac * qdd + jdot_qdot(a.params.l, &q, &qd);
+            assert!((td.a_free - a_free).norm() < 1e-10 * a_free.norm().max(1.0));
+            assert!((td.qmat - jac * m_inv * jac.transpose()).norm() < 1e-10 * td.qmat.norm());
         }
     }
 

@@ -1,1 +1,60 @@
-fn main(){}
+//! Plant speed targets (issue 2):
+//! - `advance` over 1 ms intervals in steady sliding: median at most 5 us per interval;
+//! - 300 s of open-loop simulation from x0a (mu = 0.6, v_belt = -0.4): under 0.5 s.
+//!
+//! Run: `cargo bench -p sil-host --bench plant`.
+
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use sil_host::{
+    initial::{X0A, X0D, deg_to_state},
+    plant::{Plant, SimConfig},
+};
+use shared::{ContactMode, Params};
+
+/// A plant in steady sliding: from x0d with mu = 0.3 the tip slides without lifting off.
+fn sliding_plant() -> Plant {
+    let params = Params::new(0.3, -0.4).unwrap();
+    let mut p = Plant::new(params, SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
+    for _ in 0..2000 {
+        p.advance([0.0, 0.0], 1e-3).unwrap();
+    }
+    assert_eq!(p.mode(), ContactMode::Sliding, "benchmark state must be sliding");
+    p
+}
+
+fn bench(c: &mut Criterion) {
+    let base = sliding_plant();
+    c.bench_function("advance_1ms_sliding", |b| {
+        b.iter_batched_ref(
+            || base.clone(),
+            |p| {
+                let r = p.advance([0.0, 0.0], 1e-3).unwrap();
+                assert_eq!(r.mode, ContactMode::Sliding);
+                r.t
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    let mut group = c.benchmark_group("open_loop");
+    group.sample_size(10);
+    group.bench_function("x0a_300s_one_interval", |b| {
+        b.iter(|| {
+            let mut p = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0A.deg), 0.0, [0.0, 0.0]).unwrap();
+            p.advance([0.0, 0.0], 300.0).unwrap();
+            p.counters().touchdowns
+        })
+    });
+    group.bench_function("x0a_300s_1ms_ticks", |b| {
+        b.iter(|| {
+            let mut p = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0A.deg), 0.0, [0.0, 0.0]).unwrap();
+            for k in 0..300_000 {
+                p.advance([0.0, 0.0], (k + 1) as f64 * 1e-3 - p.time()).unwrap();
+            }
+            p.counters().touchdowns
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -61,7 +61,7 @@ use segment::{Boundary, EventLocator, OdeState, Phase, Segment};
 ///
 /// The zero-order hold of a sampled controller is [`Hold`]; the paper's ideal
 /// setting (a continuous-time controller with exact measurements) implements this
-/// trait directly, with up to four internal states `xi` (e.g. an integrator)
+/// trait directly, with up to two internal states `xi` (e.g. integrators)
 /// integrated alongside the plant.
 pub trait Controller {
     /// Motor torques `[u1, u2]` (N m, base joint and elbow) at time `t` (s), plant state
@@ -70,7 +70,7 @@ pub trait Controller {
     ///
     /// The contact force depends on the torque (through `b`), so a law that needs
     /// it computes it from the shared model itself (`shared::contact`).
-    fn torque(&self, t: f64, x: &[f64; 4], xi: &[f64; 4], xi_dot: &mut [f64; 4]) -> [f64; 2];
+    fn torque(&self, t: f64, x: &[f64; 4], xi: &[f64; 2], xi_dot: &mut [f64; 2]) -> [f64; 2];
 }
 
 /// Zero-order hold: motor torques `[u1, u2]` (N m) held constant over the interval.
@@ -79,7 +79,7 @@ pub struct Hold(pub [f64; 2]);
 
 impl Controller for Hold {
     #[inline]
-    fn torque(&self, _t: f64, _x: &[f64; 4], _xi: &[f64; 4], _xi_dot: &mut [f64; 4]) -> [f64; 2] {
+    fn torque(&self, _t: f64, _x: &[f64; 4], _xi: &[f64; 2], _xi_dot: &mut [f64; 2]) -> [f64; 2] {
         self.0
     }
 }
@@ -229,12 +229,14 @@ pub enum SimError {
         mode: &'static str,
     },
     /// Too many events in one `advance` (a hang guard).
-    #[error("more than {count} events in one interval at t = {t} s: accumulating events the Zeno rule did not end")]
+    #[error("more than {count} events in one interval at t = {t} s: accumulating events the Zeno rule did not end (last: {recent})")]
     EventStorm {
         /// Time, s.
         t: f64,
         /// The limit.
         count: usize,
+        /// The last few events, for diagnosis.
+        recent: String,
     },
 }
 
@@ -388,9 +390,28 @@ pub struct Plant {
     cone_relaxed: bool,
     in_violation: bool,
     last_h: Cell<f64>,
+    evals: Cell<u64>,
+    method: Integrator,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
 }
+
+/// The integrator: DOP853 (Hairer, Nørsett and Wanner, "Solving Ordinary
+/// Differential Equations I", sec. II.10) with its 7th-order dense output.
+type Dop853 = ExplicitRungeKutta<differential_equations::methods::Ordinary, differential_equations::methods::DormandPrince, f64, OdeState, 8, 12, 16>;
+
+/// The plant's reusable integrator (interior mutability: `solve_segment` borrows the plant immutably).
+#[derive(Clone)]
+struct Integrator(std::cell::RefCell<Dop853>);
+
+impl std::fmt::Debug for Integrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("DOP853")
+    }
+}
+
+/// Rounding slack on the (dimensionless) event components at the start of a segment.
+const START_SLACK: f64 = 1e-12;
 
 /// Largest initial penetration of the tip into the belt that is projected onto it, m.
 pub const PROJECTION_TOLERANCE: f64 = 1e-3;
@@ -419,11 +440,13 @@ impl Plant {
             arm: Arm::new(params),
             cfg,
             t: t0,
-            y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0, 0.0, 0.0],
+            y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0],
             phase: Phase::Flight,
             cone_relaxed: false,
             in_violation: false,
             last_h: Cell::new(1e-4),
+            evals: Cell::new(0),
+            method: Integrator(std::cell::RefCell::new(ExplicitRungeKutta::dop853().rtol(cfg.rtol).atol(cfg.atol).max_steps(cfg.max_steps))),
             counters: Counters::default(),
             startup_events: Vec::new(),
         };
@@ -470,13 +493,13 @@ impl Plant {
     }
 
     /// Internal states of a continuous-time controller (see [`Controller`]).
-    pub fn controller_state(&self) -> [f64; 4] {
-        [self.y[4], self.y[5], self.y[6], self.y[7]]
+    pub fn controller_state(&self) -> [f64; 2] {
+        [self.y[4], self.y[5]]
     }
 
     /// Sets the internal states of a continuous-time controller.
-    pub fn set_controller_state(&mut self, xi: [f64; 4]) {
-        self.y[4..8].copy_from_slice(&xi);
+    pub fn set_controller_state(&mut self, xi: [f64; 2]) {
+        self.y[4..6].copy_from_slice(&xi);
     }
 
     /// Current contact mode (flight, sliding or sticking).
@@ -511,7 +534,7 @@ impl Plant {
     pub fn contact_force(&self, u: [f64; 2]) -> [f64; 2] {
         let hold = Hold(u);
         let seg = self.segment(&hold);
-        let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 4]);
+        let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 2]);
         [f[0], f[1]]
     }
 
@@ -524,6 +547,11 @@ impl Plant {
     /// Event counts since creation.
     pub fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// Evaluations of the vector field since creation (a cost measure).
+    pub fn rhs_evaluations(&self) -> u64 {
+        self.evals.get()
     }
 
     /// Advances by `dt` (s) with motor torques `u = [u1, u2]` (N m) held constant
@@ -550,7 +578,7 @@ impl Plant {
             return Err(SimError::BadStep(dt));
         }
         let t_end = self.t + dt;
-        let mut events = Vec::new();
+        let mut events: Vec<PlantEvent> = Vec::new();
         let mut handled = 0usize;
         loop {
             let remaining = t_end - self.t;
@@ -559,11 +587,13 @@ impl Plant {
                 break;
             }
             if handled > self.cfg.max_events_per_advance {
-                return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance });
+                let recent = events.iter().rev().take(6).rev().map(|e: &PlantEvent| format!("{} at {:.12} s", e.kind.name(), e.t)).collect::<Vec<String>>().join(", ");
+                return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance, recent });
             }
-            // A mode must start strictly inside its domain, or it ends at once.
+            // A mode must start inside its domain (up to rounding: a slip starting from
+            // rest has s v_r = +-1e-16), or it ends at once.
             let (boundary, g0) = self.segment(ctrl).nearest_boundary(self.t, &self.y);
-            if (g0 < 0.0 && self.phase != Phase::Flight) || self.flight_starts_into_belt(ctrl) {
+            if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(ctrl) {
                 self.cross(ctrl, boundary, &mut events)?;
                 handled += 1;
                 continue;
@@ -591,7 +621,7 @@ impl Plant {
         }
         let f = {
             let seg = self.segment(ctrl);
-            let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 4]);
+            let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 2]);
             [f[0], f[1]]
         };
         Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
@@ -604,13 +634,13 @@ impl Plant {
         if self.phase != Phase::Flight {
             return false;
         }
-        let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 4]);
+        let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
         let height = td.z[1] + self.arm.params.h;
         height <= 1e-12 && (td.z_dot[1] < -self.cfg.zeno_velocity || (td.z_dot[1] <= self.cfg.zeno_velocity && td.b() < 0.0))
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
-        Segment { arm: &self.arm, phase: self.phase, ctrl, cone_relaxed: self.cone_relaxed, baumgarte: self.cfg.baumgarte }
+        Segment { arm: &self.arm, phase: self.phase, ctrl, cone_relaxed: self.cone_relaxed, baumgarte: self.cfg.baumgarte, evals: &self.evals }
     }
 
     /// Integrates the current mode from `self.t` towards `t_end`; returns the
@@ -625,9 +655,9 @@ impl Plant {
     /// with steps capped at 1/64 of the interval, and fails if that still misses it.
     fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
-        let mut h0 = self.last_h.get().min(remaining);
+        let mut h0 = (2.0 * self.last_h.get()).min(remaining);
         if self.phase == Phase::Flight {
-            let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 4]);
+            let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
             let height = td.z[1] + self.arm.params.h;
             if height < 1e-9 && td.z_dot[1] > 0.0 && td.b() < 0.0 {
                 h0 = h0.min(td.z_dot[1] / -td.b());
@@ -635,19 +665,11 @@ impl Plant {
         }
         let start = (self.t, self.y);
         for h_max in [f64::INFINITY, remaining / 64.0] {
-            let (t1, y1, boundary) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max)?;
-            if boundary.is_none() {
-                let (b, g) = self.segment(ctrl).nearest_boundary(t1, &y1);
-                if g < -1e-9 {
-                    // Missed crossing of `b`: retry with capped steps.
-                    let _ = b;
-                    (self.t, self.y) = start;
-                    continue;
-                }
-            }
-            if std::env::var_os("PLANT_DEBUG").is_some() {
-                let seg = self.segment(ctrl);
-                eprintln!("seg {:?} {:.9} -> {:.9} {:?} comps0 {:?} comps1 {:?}", self.phase, start.0, t1, boundary, seg.components(start.0, &start.1), seg.components(t1, &y1));
+            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max)?;
+            if boundary.is_none() && g_end < -1e-9 {
+                // Missed crossing: retry with capped steps.
+                (self.t, self.y) = start;
+                continue;
             }
             self.t = t1;
             self.y = y1;
@@ -657,27 +679,34 @@ impl Plant {
     }
 
     /// One call of the ODE solver over `[self.t, t_end]`, stopping at the first event.
-    fn solve_segment<C: Controller + ?Sized>(&self, ctrl: &C, t_end: f64, h0: f64, h_max: f64) -> Result<(f64, OdeState, Option<Boundary>), SimError> {
-        let method = ExplicitRungeKutta::dop853().rtol(self.cfg.rtol).atol(self.cfg.atol).h0(h0).h_max(h_max).max_steps(self.cfg.max_steps);
+    ///
+    /// The DOP853 solver struct (about 6 KiB of tableau and stages) is built once
+    /// per plant and reused through the crate's low-level `solve_ode`: building it
+    /// or passing it through the by-value builder every millisecond cost a third
+    /// of an `advance`.
+    /// Returns the end time and state, the boundary hit (if any) and the event
+    /// function at the last accepted point.
+    fn solve_segment<C: Controller + ?Sized>(&self, ctrl: &C, t_end: f64, h0: f64, h_max: f64) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
+        let mut method = self.method.0.take().h0(h0);
+        method.h_max = h_max;
         let seg = self.segment(ctrl);
         let hit = Cell::new(None);
-        let locator = EventLocator { segment: &seg, last_h: &self.last_h, g_prev: None, hit: &hit };
-        let solution = IVP::ode(&seg, self.t, t_end, self.y)
-            .solout(locator)
-            .method(method)
-            .solve()
-            .map_err(|e| SimError::Integrator { t: self.t, message: format!("{e:?}") })?;
+        let mut locator = EventLocator { segment: &seg, last_h: &self.last_h, g_prev: None, max_h: 0.0, hit: &hit };
+        let solved = differential_equations::ode::solve_ode(&mut method, &seg, self.t, t_end, &self.y, &mut locator);
+        self.method.0.replace(method);
+        let g_end = locator.g_prev.unwrap_or(f64::INFINITY);
+        let solution = solved.map_err(|e| SimError::Integrator { t: self.t, message: format!("{e:?}") })?;
         if let Some((t1, y1)) = hit.get() {
             if !y1.iter().all(|v| v.is_finite()) {
                 return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
             }
-            return Ok((t1, y1, Some(seg.nearest_boundary(t1, &y1).0)));
+            return Ok((t1, y1, Some(seg.nearest_boundary(t1, &y1).0), 0.0));
         }
         let y1 = solution.y.last().copied().unwrap_or(self.y);
         if !y1.iter().all(|v| v.is_finite()) {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
-        Ok((t_end, y1, None))
+        Ok((t_end, y1, None, g_end))
     }
 
     /// Handles the crossing of a mode boundary at the current time.
@@ -767,7 +796,7 @@ impl Plant {
         let before = self.rel_velocity();
         let mu = self.arm.params.mu;
         self.phase = Phase::Sticking; // evaluate sticking forces
-        let (td, f_stick, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 4]);
+        let (td, f_stick, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
         let at_rest = before[0].abs() <= self.cfg.v_stick || entry != Entry::Settle;
         let dir = if at_rest {
             if entry != Entry::ConeEdge && sticking_is_consistent(&f_stick, mu) {

@@ -1,7 +1,7 @@
 //! One smooth segment of the hybrid system: the vector field of a fixed contact
 //! mode and the event function that ends it, in the form the
 //! `differential-equations` crate integrates (state `[theta1, theta1_dot,
-//! theta2, theta2_dot, xi_0..xi_3]`, the `xi` being a continuous-time
+//! theta2, theta2_dot, xi_0, xi_1]`, the `xi` being a continuous-time
 //! controller's internal states).
 
 use differential_equations::prelude::*;
@@ -15,8 +15,8 @@ use shared::{
 
 use super::Controller;
 
-/// The integrated state: 4 plant states then 4 controller states.
-pub type OdeState = [f64; 8];
+/// The integrated state: 4 plant states then 2 controller states.
+pub type OdeState = [f64; 6];
 
 /// Contact mode the integrator runs in (the plant's discrete state).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,6 +56,8 @@ pub struct Segment<'a, C: ?Sized> {
     pub cone_relaxed: bool,
     /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
     pub baumgarte: f64,
+    /// Count of model evaluations (vector field and event function), for profiling.
+    pub evals: &'a std::cell::Cell<u64>,
 }
 
 /// Plant state `(q, q_dot)` of an ODE state.
@@ -67,9 +69,9 @@ pub fn split(y: &OdeState) -> (Vector2<f64>, Vector2<f64>) {
 impl<C: Controller + ?Sized> Segment<'_, C> {
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
     #[inline]
-    pub fn evaluate(&self, t: f64, y: &OdeState, xi_dot: &mut [f64; 4]) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
+    pub fn evaluate(&self, t: f64, y: &OdeState, xi_dot: &mut [f64; 2]) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
         let (q, qd) = split(y);
-        let xi = [y[4], y[5], y[6], y[7]];
+        let xi = [y[4], y[5]];
         let motor = self.ctrl.torque(t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
         let td = self.arm.tip_dynamics(&q, &qd, &u);
@@ -115,7 +117,7 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
                 [(Boundary::Touchdown, g), (Boundary::Touchdown, f64::INFINITY), (Boundary::Touchdown, f64::INFINITY)]
             }
             Phase::Sliding(dir) => {
-                let mut scratch = [0.0; 4];
+                let mut scratch = [0.0; 2];
                 let (td, _, _) = self.evaluate(t, y, &mut scratch);
                 let v_r = td.z_dot[0] - p.v_belt;
                 [
@@ -125,7 +127,7 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
                 ]
             }
             Phase::Sticking => {
-                let mut scratch = [0.0; 4];
+                let mut scratch = [0.0; 2];
                 let (_, f, _) = self.evaluate(t, y, &mut scratch);
                 let scale = p.m * p.g;
                 let cone = if self.cone_relaxed { f64::INFINITY } else { (p.mu * f[1] - f[0].abs()) / scale };
@@ -142,13 +144,14 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
 
 impl<C: Controller + ?Sized> ODE<f64, OdeState> for Segment<'_, C> {
     fn diff(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
-        let mut xi_dot = [0.0; 4];
+        let mut xi_dot = [0.0; 2];
+        self.evals.set(self.evals.get() + 1);
         let (td, f, _) = self.evaluate(t, y, &mut xi_dot);
         let qdd = match self.phase {
             Phase::Flight => td.qdd_free,
             _ => td.qdd_with_force(&f),
         };
-        *dydt = [y[1], qdd[0], y[3], qdd[1], xi_dot[0], xi_dot[1], xi_dot[2], xi_dot[3]];
+        *dydt = [y[1], qdd[0], y[3], qdd[1], xi_dot[0], xi_dot[1]];
     }
 }
 
@@ -167,10 +170,12 @@ impl<C: Controller + ?Sized> ODE<f64, OdeState> for Segment<'_, C> {
 pub struct EventLocator<'a, 'b, C: ?Sized> {
     /// The segment (its event function).
     pub segment: &'b Segment<'a, C>,
-    /// Last accepted step size, s (read by the caller after the solve).
+    /// Largest accepted step size of the solve, s (read by the caller; the next solve's first step).
     pub last_h: &'b std::cell::Cell<f64>,
     /// Event function at the previous accepted point.
     pub g_prev: Option<f64>,
+    /// Largest accepted step of this solve, s.
+    pub max_h: f64,
     /// The located event `(t, y)`, if any.
     pub hit: &'b std::cell::Cell<Option<(f64, OdeState)>>,
 }
@@ -190,7 +195,10 @@ impl<C: Controller + ?Sized> differential_equations::solout::Solout<f64, OdeStat
     {
         use differential_equations::control::ControlFlag;
         if t_curr > t_prev {
-            self.last_h.set(t_curr - t_prev);
+            // The largest accepted step: the final step is cut short at the end of the
+            // interval, so the last one would underestimate the next interval's step.
+            self.max_h = self.max_h.max(t_curr - t_prev);
+            self.last_h.set(self.max_h);
         }
         let g_curr = self.segment.nearest_boundary(t_curr, y_curr).1;
         let crossed = matches!(self.g_prev, Some(g) if g > 0.0) && g_curr <= 0.0 && t_curr > t_prev;

@@ -165,7 +165,7 @@ fn continuous_controller_hook_and_zoh_convergence() {
         theta1_ref: f64,
     }
     impl Controller for Pd {
-        fn torque(&self, _t: f64, x: &[f64; 4], _xi: &[f64; 4], xi_dot: &mut [f64; 4]) -> [f64; 2] {
+        fn torque(&self, _t: f64, x: &[f64; 4], _xi: &[f64; 2], xi_dot: &mut [f64; 2]) -> [f64; 2] {
             xi_dot[0] = 1.0; // a clock: xi_0 = elapsed time
             xi_dot[1] = x[0] - self.theta1_ref; // integral of the error
             [-0.5 * (x[0] - self.theta1_ref) - 0.05 * x[1], 0.0]
@@ -181,8 +181,8 @@ fn continuous_controller_hook_and_zoh_convergence() {
         let mut p = start.clone();
         let n = (0.3 / dt).round() as usize;
         for _ in 0..n {
-            let mut dummy = [0.0; 4];
-            let u = ctrl.torque(p.time(), &p.state(), &[0.0; 4], &mut dummy);
+            let mut dummy = [0.0; 2];
+            let u = ctrl.torque(p.time(), &p.state(), &[0.0; 2], &mut dummy);
             p.advance(u, dt).unwrap();
         }
         (p.state()[0] - ideal.state()[0]).abs()
@@ -258,47 +258,76 @@ fn bad_inputs_are_errors_not_panics() {
     assert!(p.advance([0.0, 0.0], 1e-3).is_ok(), "a rejected call leaves the plant usable");
 }
 
-#[test]
-#[ignore]
-fn debug_event_sequences() {
-    let params = Params::<f64>::paper();
-    for (rtol, atol) in [(1e-9, 1e-11), (5e-10, 5e-12)] {
-        let mut p = plant_from(params, SimConfig { rtol, atol, ..SimConfig::default() }, X0A.deg);
-        let ev = run_events(&mut p, 6.0, 1e-3);
-        for e in ev.iter().take(22) {
-            println!("{:.12} {:?} vn {:.3e} -> {:.3e} vr {:.3e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before);
-        }
-        println!("---");
-    }
-}
 
+/// Touchdowns are located on the belt: `z_n + H` at the event is at rounding level.
 #[test]
-#[ignore]
-fn debug_tick() {
+fn touchdown_events_are_located_on_the_belt() {
     let params = Params::<f64>::paper();
-    let u = [0.05, -0.02];
-    let mut a = plant_from(params, SimConfig::default(), X0D.deg);
-    let mut b = a.clone();
-    for _ in 0..500 {
-        for e in a.advance(u, 1e-3).unwrap().events { println!("A {:.12} {:?} vn {:.4e} -> {:.4e} vr {:.4e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before); }
-    }
-    for e in b.advance(u, 0.5).unwrap().events { println!("B {:.12} {:?} vn {:.4e} -> {:.4e} vr {:.4e}", e.t, e.kind, e.v_n_before, e.v_n_after, e.v_r_before); }
-}
-
-#[test]
-#[ignore]
-fn debug_storm() {
-    let mut params = Params::<f64>::paper();
-    params.alpha0 = 0.0;
-    params.v_belt = -0.4;
-    let mut cfg = SimConfig::default();
-    cfg.max_events_per_advance = 12;
-    let mut a = plant_from(params, cfg, X0D.deg);
-    for e in a.startup_events() { println!("S {:?}", e); }
+    let mut p = plant_from(params, SimConfig::default(), X0A.deg);
+    let mut checked = 0;
     for _ in 0..2000 {
-        match a.advance([0.0, 0.0], 1e-3) {
-            Ok(r) => for e in r.events { println!("{:.12} {:?} {:?} vn {:.4e} -> {:.4e} vr {:.4e} -> {:.4e}", e.t, e.kind, e.mode_after, e.v_n_before, e.v_n_after, e.v_r_before, e.v_r_after); },
-            Err(e) => { println!("ERR {e}"); break; }
+        // Stop exactly at each event by advancing to it: re-run the interval up to the event time.
+        let before = p.clone();
+        let r = p.advance([0.0, 0.0], 1e-3).unwrap();
+        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::Touchdown) {
+            let mut q = before.clone();
+            // Just before the located time the tip is above the belt; just after (no impact yet) below.
+            let dt = e.t - q.time();
+            let mut probe = before;
+            probe.advance([0.0, 0.0], dt * (1.0 - 1e-9)).unwrap();
+            assert!(probe.tip()[1] + params.h > -1e-12, "above the belt before the event");
+            q.advance([0.0, 0.0], dt).unwrap();
+            assert!((q.tip()[1] + params.h).abs() < 1e-12, "on the belt at the event");
+            checked += 1;
         }
     }
+    assert!(checked > 5);
 }
+
+/// Why the plant locates events itself: `differential-equations` 0.7.0's own
+/// event search returns a wrong root on a ballistic hop (`y'' = -10`, `y(0) = 0`,
+/// `y'(0) = 1`, exact return at 0.2 s). If this test fails, the crate has been
+/// fixed and `segment::EventLocator` could go back to the crate's `Event` trait.
+#[test]
+fn crate_event_location_is_wrong() {
+    struct Hop;
+    impl ODE<f64, [f64; 2]> for Hop {
+        fn diff(&self, _t: f64, y: &[f64; 2], d: &mut [f64; 2]) {
+            d[0] = y[1];
+            d[1] = -10.0;
+        }
+    }
+    impl Event<f64, [f64; 2]> for Hop {
+        fn config(&self) -> EventConfig {
+            EventConfig::new(CrossingDirection::Negative, Some(1))
+        }
+        fn event(&self, _t: f64, y: &[f64; 2]) -> f64 {
+            y[0]
+        }
+    }
+    let sol = IVP::ode(&Hop, 0.0, 1.0, [0.0, 1.0])
+        .event(&Hop)
+        .method(ExplicitRungeKutta::dop853().rtol(1e-9).atol(1e-11).h0(0.05))
+        .solve()
+        .unwrap();
+    let t_event = *sol.t.last().unwrap();
+    assert!((t_event - 0.2).abs() > 1e-3, "the crate now locates the hop's end at {t_event} s");
+}
+
+#[test]
+#[ignore]
+fn cost_of_sliding_advance() {
+    let params = Params::new(0.3, -0.4).unwrap();
+    let rtol: f64 = std::env::var("RTOL").ok().and_then(|v| v.parse().ok()).unwrap_or(1e-9);
+    let cfg = SimConfig { rtol, atol: rtol * 1e-2, ..SimConfig::default() };
+    let mut p = Plant::new(params, cfg, deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
+    for _ in 0..2000 {
+        p.advance([0.0, 0.0], 1e-3).unwrap();
+    }
+    let (e0, s0) = (p.rhs_evaluations(), p.counters().segments);
+    for _ in 0..1000 {
+        p.advance([0.0, 0.0], 1e-3).unwrap();
+    }
+    println!("mode {:?}: {} rhs evals per 1 ms advance, {} segments, last_h {}", p.mode(), (p.rhs_evaluations() - e0) as f64 / 1000.0, p.counters().segments - s0, p.last_h.get());
+}
+
