@@ -23,12 +23,15 @@ pub struct Cli {
 pub enum Command {
     /// Open-loop simulation (u = 0) of the arm on the belt from one of the paper's
     /// initial conditions; writes trace.csv, events.csv, trace.svg, summary.json.
+    #[command(allow_negative_numbers = true)]
     Simulate(SimulateArgs),
     /// Admissible configurations (MODEL.md experiment 2, paper Table II): the ranges
     /// of z_t on the belt where p > 0, for elbow up and elbow down.
+    #[command(allow_negative_numbers = true)]
     Admissible(AdmissibleArgs),
     /// Mode map (MODEL.md experiment 1, paper Fig. 2): the contact mode over a grid
     /// of (theta1, theta1_dot) with the tip on the belt, with the curves b = 0 and p = 0.
+    #[command(allow_negative_numbers = true)]
     Modes(ModesArgs),
 }
 

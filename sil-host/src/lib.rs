@@ -9,3 +9,34 @@ pub mod initial;
 pub mod output;
 pub mod plant;
 pub mod plot;
+
+use clap::Parser;
+
+/// Runs the command line `args` (program name first) and returns the process
+/// exit code: 0 on success, 1 when a run fails, 2 for bad input (unknown flags,
+/// invalid values; nothing is written then). `--help` and `--version` print and return 0.
+pub fn run<I, T>(args: I) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let cli = match cli::Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return e.exit_code();
+        }
+    };
+    let result = match cli.command {
+        cli::Command::Simulate(args) => commands::simulate::run(&args),
+        cli::Command::Admissible(args) => commands::admissible::run(&args),
+        cli::Command::Modes(args) => commands::modes::run(&args),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            e.exit_code()
+        }
+    }
+}

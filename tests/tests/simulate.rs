@@ -1,0 +1,103 @@
+//! End-to-end: `sil-host simulate` through the same entry point as the binary.
+
+use std::path::Path;
+
+fn run(args: &[&str]) -> i32 {
+    let mut full = vec!["sil-host"];
+    full.extend_from_slice(args);
+    sil_host::run(full)
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).map(|it| it.filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).collect()).unwrap_or_default();
+    v.sort();
+    v
+}
+
+#[test]
+fn simulate_writes_trace_events_figure_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let code = run(&["simulate", "--x0", "a", "--duration", "2", "--out", out.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.svg"]);
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "ok");
+    assert_eq!(summary["initial_condition"]["name"], "x0a");
+    assert_eq!(summary["initial_condition"]["projection"]["projected"], true);
+    assert!((summary["simulated_s"].as_f64().unwrap() - 2.0).abs() < 1e-12);
+    // x0a is in the Painlevé region: the run starts with an impact without collision, then bounces.
+    assert_eq!(summary["impacts_without_collision"], 1);
+    assert!(summary["touchdowns"].as_u64().unwrap() > 3);
+    // The trace: one row per millisecond plus t = 0, never below the belt.
+    let h = summary["params"]["h"].as_f64().unwrap();
+    let mut rdr = csv::Reader::from_path(out.join("trace.csv")).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    let zn = headers.iter().position(|c| c == "z_n").unwrap();
+    let fnn = headers.iter().position(|c| c == "f_n").unwrap();
+    let mode = headers.iter().position(|c| c == "mode").unwrap();
+    let mut rows = 0;
+    for rec in rdr.records() {
+        let rec = rec.unwrap();
+        let z_n: f64 = rec[zn].parse().unwrap();
+        let f_n: f64 = rec[fnn].parse().unwrap();
+        assert!(z_n >= -h - 1e-9, "below the belt: {z_n}");
+        if &rec[mode] == "flight" {
+            assert_eq!(f_n, 0.0);
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 2001);
+    // Every touchdown in events.csv is at the belt with a reversal of the normal velocity.
+    let mut rdr = csv::Reader::from_path(out.join("events.csv")).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    let kind = headers.iter().position(|c| c == "kind").unwrap();
+    let before = headers.iter().position(|c| c == "v_n_before").unwrap();
+    let work = headers.iter().position(|c| c == "contact_work").unwrap();
+    let mut touchdowns = 0;
+    for rec in rdr.records() {
+        let rec = rec.unwrap();
+        if &rec[kind] == "touchdown" {
+            touchdowns += 1;
+            assert!(rec[before].parse::<f64>().unwrap() < 0.0);
+        }
+        assert!(rec[work].parse::<f64>().unwrap() <= 1e-12, "an impact created energy");
+    }
+    assert_eq!(touchdowns, summary["touchdowns"].as_u64().unwrap());
+    let svg = std::fs::read_to_string(out.join("trace.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("z_n"));
+}
+
+#[test]
+fn bad_input_exits_2_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bad");
+    let o = out.to_str().unwrap();
+    for args in [
+        vec!["simulate", "--mu", "nan", "--out", o],
+        vec!["simulate", "--mu", "-0.5", "--out", o],
+        vec!["simulate", "--e-n", "1.5", "--out", o],
+        vec!["simulate", "--duration", "-1", "--out", o],
+        vec!["simulate", "--rtol", "0", "--out", o],
+        // Tip 1 cm inside the belt (theta1 = theta2 = 0: the hanging arm reaches 2 l = 0.42 m > H).
+        vec!["simulate", "--x0-deg", "0,0,0,0", "--out", o],
+        vec!["simulate", "--x0-deg", "1,2,3", "--out", o],
+        vec!["simulate", "--no-such-flag", "--out", o],
+        vec!["admissible", "--mu", "-1", "--out", o],
+        vec!["modes", "--mu", "inf", "--out", o],
+    ] {
+        assert_eq!(run(&args), 2, "{args:?}");
+        assert!(files_in(&out).is_empty(), "{args:?} wrote {:?}", files_in(&out));
+    }
+}
+
+#[test]
+fn a_failed_run_does_not_clobber_a_previous_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path();
+    assert_eq!(run(&["simulate", "--duration", "0.05", "--out", out.to_str().unwrap()]), 0);
+    let before = std::fs::read(out.join("summary.json")).unwrap();
+    assert_eq!(run(&["simulate", "--mu", "nan", "--out", out.to_str().unwrap()]), 2);
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
+    assert_eq!(files_in(out), vec!["events.csv", "summary.json", "trace.csv", "trace.svg"]);
+}
