@@ -157,7 +157,7 @@ pub fn classify<T: Real>(td: &TipDynamics<T>, mu: T, z_r_dot: T, v_stick: T) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Arm, Params, kinematics::inverse_kinematics, ElbowBranch};
+    use crate::{Arm, ElbowBranch, Params, kinematics::inverse_kinematics};
 
     #[test]
     fn table_of_modes() {

@@ -6,13 +6,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::{
-    Real,
-    contact::SlipDirection,
-    kinematics::jacobian,
-    lit,
-    params::Params,
-};
+use crate::{Real, contact::SlipDirection, kinematics::jacobian, lit, params::Params};
 
 /// The arm: its parameters and the model evaluated from them.
 ///

@@ -5,11 +5,11 @@
 //! Run: `cargo bench -p sil-host --bench plant`.
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use shared::{ContactMode, Params};
 use sil_host::{
     initial::{X0A, X0D, deg_to_state},
     plant::{Plant, SimConfig},
 };
-use shared::{ContactMode, Params};
 
 /// A plant in steady sliding: from x0d with mu = 0.3 the tip slides without lifting off.
 fn sliding_plant() -> Plant {

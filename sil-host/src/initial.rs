@@ -49,10 +49,5 @@ pub fn describe_projection(params: &Params<f64>, x: [f64; 4]) -> ProjectionInfo 
     let q = Vector2::new(x[0], x[2]);
     let z = tip_position(params.l, &q);
     let height = z[1] + params.h;
-    ProjectionInfo {
-        tip_given: [z[0], z[1]],
-        height_above_belt: height,
-        projected: height <= 1e-12,
-        branch: ElbowBranch::of(&q).name(),
-    }
+    ProjectionInfo { tip_given: [z[0], z[1]], height_above_belt: height, projected: height <= 1e-12, branch: ElbowBranch::of(&q).name() }
 }

@@ -85,7 +85,10 @@ impl From<&PlantEvent> for EventRow {
             impulse_n: e.impulse[1],
             energy_change: e.energy_change,
             contact_work: e.contact_work,
-            resolution: e.resolution.map(|r| serde_json::to_value(r).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()).unwrap_or_default(),
+            resolution: e
+                .resolution
+                .map(|r| serde_json::to_value(r).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default())
+                .unwrap_or_default(),
         }
     }
 }
@@ -212,7 +215,8 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     // Validate everything before touching the output folder.
     let params = Params::new(args.mu, args.v_belt)?;
-    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
+    let sim =
+        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
     let (name, given_deg) = match &args.x0_deg {
@@ -281,7 +285,20 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let mut csv_w = csv::Writer::from_writer(w);
     if events.is_empty() {
         csv_w
-            .write_record(["t", "kind", "mode_after", "v_n_before", "v_n_after", "v_r_before", "v_r_after", "impulse_t", "impulse_n", "energy_change", "contact_work", "resolution"])
+            .write_record([
+                "t",
+                "kind",
+                "mode_after",
+                "v_n_before",
+                "v_n_after",
+                "v_r_before",
+                "v_r_after",
+                "impulse_t",
+                "impulse_n",
+                "energy_change",
+                "contact_work",
+                "resolution",
+            ])
             .map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
     }
     for e in &events {
@@ -332,7 +349,14 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
 fn print_human(s: &Summary, n_events: usize) {
     let ic = &s.initial_condition;
     let mut o = std::io::stdout().lock();
-    let _ = writeln!(o, "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {})", s.params.mu, s.params.v_belt, s.sim.impact_law.name(), s.sim.e_n);
+    let _ = writeln!(
+        o,
+        "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {})",
+        s.params.mu,
+        s.params.v_belt,
+        s.sim.impact_law.name(),
+        s.sim.e_n
+    );
     let _ = writeln!(
         o,
         "initial condition {} = [{:.2} deg, {:.2} deg/s, {:.2} deg, {:.2} deg/s] (elbow {})",
@@ -349,13 +373,29 @@ fn print_human(s: &Summary, n_events: usize) {
             ic.used_deg[2]
         );
     }
-    let _ = writeln!(o, "  initial mode: {}{}", ic.initial_mode, if ic.startup_events.is_empty() { String::new() } else { format!(" (after {} at t = 0)", ic.startup_events.join(", ")) });
-    let _ = writeln!(o, "simulated {:.3} s of {:.3} s in {:.3} s wall ({:.0}x real time)", s.simulated_s, s.duration_s, s.wall_s, s.realtime_factor);
+    let _ = writeln!(
+        o,
+        "  initial mode: {}{}",
+        ic.initial_mode,
+        if ic.startup_events.is_empty() { String::new() } else { format!(" (after {} at t = 0)", ic.startup_events.join(", ")) }
+    );
+    let _ = writeln!(
+        o,
+        "simulated {:.3} s of {:.3} s in {:.3} s wall ({:.0}x real time)",
+        s.simulated_s, s.duration_s, s.wall_s, s.realtime_factor
+    );
     let c = &s.counters;
     let _ = writeln!(
         o,
         "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {} | Zeno stops {} | energy-creating impacts {}",
-        c.lift_offs, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals, c.zeno_stops, c.energy_gains
+        c.lift_offs,
+        c.touchdowns,
+        c.impacts_without_collision,
+        c.stick_phases,
+        c.stick_to_slip,
+        c.slip_reversals,
+        c.zeno_stops,
+        c.energy_gains
     );
     let x = s.final_state;
     let _ = writeln!(
@@ -378,7 +418,11 @@ fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &str, trace: &
     let col = |f: fn(&TraceRow) -> f64| trace.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
     let belt = -params.h;
     let panels = [
-        Panel { y_label: "z_t (m)", series: vec![Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false }], y_range: None },
+        Panel {
+            y_label: "z_t (m)",
+            series: vec![Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false }],
+            y_range: None,
+        },
         Panel {
             y_label: "z_n (m)",
             series: vec![
@@ -387,7 +431,11 @@ fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &str, trace: &
             ],
             y_range: None,
         },
-        Panel { y_label: "f_n (N)", series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }], y_range: None },
+        Panel {
+            y_label: "f_n (N)",
+            series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
+            y_range: None,
+        },
         Panel {
             y_label: "mode (0 flight, 1 sliding, 2 sticking)",
             series: vec![Series {

@@ -176,7 +176,9 @@ pub enum SimError {
     #[error("initial state {0:?} is not finite")]
     NonFiniteInitialState([f64; 4]),
     /// The initial tip position is below the belt by more than the projection tolerance.
-    #[error("initial tip is {depth_mm:.3} mm below the belt (z_n = {z_n:.6} m, belt at -H = {belt:.6} m); at most {tolerance_mm} mm is projected onto it")]
+    #[error(
+        "initial tip is {depth_mm:.3} mm below the belt (z_n = {z_n:.6} m, belt at -H = {belt:.6} m); at most {tolerance_mm} mm is projected onto it"
+    )]
     BelowBelt {
         /// Penetration, mm.
         depth_mm: f64,
@@ -246,7 +248,13 @@ impl SimError {
     pub fn is_bad_input(&self) -> bool {
         matches!(
             self,
-            Self::Params(_) | Self::BadConfig { .. } | Self::NonFiniteInitialState(_) | Self::BelowBelt { .. } | Self::Unreachable(_) | Self::BadStep(_) | Self::BadTorque(_)
+            Self::Params(_)
+                | Self::BadConfig { .. }
+                | Self::NonFiniteInitialState(_)
+                | Self::BelowBelt { .. }
+                | Self::Unreachable(_)
+                | Self::BadStep(_)
+                | Self::BadTorque(_)
         )
     }
 }
@@ -398,7 +406,8 @@ pub struct Plant {
 
 /// The integrator: DOP853 (Hairer, Nørsett and Wanner, "Solving Ordinary
 /// Differential Equations I", sec. II.10) with its 7th-order dense output.
-type Dop853 = ExplicitRungeKutta<differential_equations::methods::Ordinary, differential_equations::methods::DormandPrince, f64, OdeState, 8, 12, 16>;
+type Dop853 =
+    ExplicitRungeKutta<differential_equations::methods::Ordinary, differential_equations::methods::DormandPrince, f64, OdeState, 8, 12, 16>;
 
 /// The plant's reusable integrator (interior mutability: `solve_segment` borrows the plant immutably).
 #[derive(Clone)]
@@ -446,7 +455,9 @@ impl Plant {
             in_violation: false,
             last_h: Cell::new(1e-4),
             evals: Cell::new(0),
-            method: Integrator(std::cell::RefCell::new(ExplicitRungeKutta::dop853().rtol(cfg.rtol).atol(cfg.atol).max_steps(cfg.max_steps))),
+            method: Integrator(std::cell::RefCell::new(
+                ExplicitRungeKutta::dop853().rtol(cfg.rtol).atol(cfg.atol).max_steps(cfg.max_steps),
+            )),
             counters: Counters::default(),
             startup_events: Vec::new(),
         };
@@ -587,7 +598,14 @@ impl Plant {
                 break;
             }
             if handled > self.cfg.max_events_per_advance {
-                let recent = events.iter().rev().take(6).rev().map(|e: &PlantEvent| format!("{} at {:.12} s", e.kind.name(), e.t)).collect::<Vec<String>>().join(", ");
+                let recent = events
+                    .iter()
+                    .rev()
+                    .take(6)
+                    .rev()
+                    .map(|e: &PlantEvent| format!("{} at {:.12} s", e.kind.name(), e.t))
+                    .collect::<Vec<String>>()
+                    .join(", ");
                 return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance, recent });
             }
             // A mode must start inside its domain (up to rounding: a slip starting from
@@ -640,7 +658,14 @@ impl Plant {
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
-        Segment { arm: &self.arm, phase: self.phase, ctrl, cone_relaxed: self.cone_relaxed, baumgarte: self.cfg.baumgarte, evals: &self.evals }
+        Segment {
+            arm: &self.arm,
+            phase: self.phase,
+            ctrl,
+            cone_relaxed: self.cone_relaxed,
+            baumgarte: self.cfg.baumgarte,
+            evals: &self.evals,
+        }
     }
 
     /// Integrates the current mode from `self.t` towards `t_end`; returns the
@@ -686,7 +711,13 @@ impl Plant {
     /// of an `advance`.
     /// Returns the end time and state, the boundary hit (if any) and the event
     /// function at the last accepted point.
-    fn solve_segment<C: Controller + ?Sized>(&self, ctrl: &C, t_end: f64, h0: f64, h_max: f64) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
+    fn solve_segment<C: Controller + ?Sized>(
+        &self,
+        ctrl: &C,
+        t_end: f64,
+        h0: f64,
+        h_max: f64,
+    ) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
         let mut method = self.method.0.take().h0(h0);
         method.h_max = h_max;
         let seg = self.segment(ctrl);
@@ -817,7 +848,13 @@ impl Plant {
                 let acc = td.a_free[0] + td.qmat[(0, 0)] * f[0] + td.qmat[(0, 1)] * f[1];
                 s.sign::<f64>() * acc > 0.0
             };
-            match [preferred, preferred.reversed()].into_iter().find(|&s| consistent(s)) {
+            // At the cone's edge the sliding force in the preferred direction equals the
+            // sticking force, so the slip acceleration is exactly 0 there and its sign
+            // comes from the trend: the edge is crossed, take that direction (standard
+            // stick-to-slip) unless sliding that way is itself inconsistent (p <= 0).
+            let edge = entry == Entry::ConeEdge && td.p(mu, preferred) > 0.0 && td.b() < 0.0;
+            let choice = if edge { Some(preferred) } else { [preferred, preferred.reversed()].into_iter().find(|&s| consistent(s)) };
+            match choice {
                 Some(s) => s,
                 None if td.b() < 0.0 => {
                     // Neither sticking nor slipping is consistent and the tip is pressed
@@ -825,7 +862,7 @@ impl Plant {
                     self.project_contact_velocity(true)?;
                     self.phase = Phase::Sticking;
                     self.cone_relaxed = true;
-                                                            self.enter_violation(events, before);
+                    self.enter_violation(events, before);
                     return Ok(());
                 }
                 None => preferred,
@@ -866,7 +903,7 @@ impl Plant {
                 self.project_contact_velocity(true)?;
                 self.phase = Phase::Sticking;
                 self.cone_relaxed = true;
-                                                self.enter_violation(events, before);
+                self.enter_violation(events, before);
                 Ok(())
             }
         }

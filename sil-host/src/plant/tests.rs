@@ -70,7 +70,8 @@ fn x0a_is_inconsistent_and_starts_with_an_impact_without_collision() {
     let params = Params::<f64>::paper();
     let x = deg_to_state(X0A.deg);
     let arm = Arm::new(params);
-    let q = inverse_kinematics(params.l, &Vector2::new(tip_position(params.l, &Vector2::new(x[0], x[2]))[0], -params.h), ElbowBranch::Down).unwrap();
+    let q = inverse_kinematics(params.l, &Vector2::new(tip_position(params.l, &Vector2::new(x[0], x[2]))[0], -params.h), ElbowBranch::Down)
+        .unwrap();
     let td = arm.tip_dynamics(&q, &Vector2::zeros(), &Vector2::zeros());
     assert!(td.p(params.mu, SlipDirection::Positive) < 0.0 && td.b() < 0.0);
     let p = plant_from(params, SimConfig::default(), X0A.deg);
@@ -258,7 +259,6 @@ fn bad_inputs_are_errors_not_panics() {
     assert!(p.advance([0.0, 0.0], 1e-3).is_ok(), "a rejected call leaves the plant usable");
 }
 
-
 /// Touchdowns are located on the belt: `z_n + H` at the event is at rounding level.
 #[test]
 fn touchdown_events_are_located_on_the_belt() {
@@ -328,6 +328,66 @@ fn cost_of_sliding_advance() {
     for _ in 0..1000 {
         p.advance([0.0, 0.0], 1e-3).unwrap();
     }
-    println!("mode {:?}: {} rhs evals per 1 ms advance, {} segments, last_h {}", p.mode(), (p.rhs_evaluations() - e0) as f64 / 1000.0, p.counters().segments - s0, p.last_h.get());
+    println!(
+        "mode {:?}: {} rhs evals per 1 ms advance, {} segments, last_h {}",
+        p.mode(),
+        (p.rhs_evaluations() - e0) as f64 / 1000.0,
+        p.counters().segments - s0,
+        p.last_h.get()
+    );
 }
 
+/// Robustness over the paper's parameter ranges: every (mu, v_belt) of a coarse grid,
+/// from x0a and x0d, both impact laws, 3 s at 1 ms ticks: no failure, no energy
+/// created at the contact, never below the belt, contact forces admissible.
+#[test]
+fn robust_over_the_paper_parameter_grid() {
+    let mut failures = Vec::new();
+    let mut stats = Counters::default();
+    for mu in [0.1, 0.3, 0.5, 0.6, 0.8, 1.0] {
+        for v_belt in [-1.0, -0.7, -0.4, -0.25, -0.1] {
+            let params = Params::new(mu, v_belt).unwrap();
+            for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
+                for ic in [X0A, X0D] {
+                    let cfg = SimConfig { impact_law: law, ..SimConfig::default() };
+                    let mut p = plant_from(params, cfg, ic.deg);
+                    for _ in 0..3000 {
+                        match p.advance([0.0, 0.0], 1e-3) {
+                            Ok(r) => {
+                                let gap = p.tip()[1] + params.h;
+                                if gap < -1e-9 || (r.mode != ContactMode::Flight && (r.f[1] < -1e-9 || r.f[0].abs() > mu * r.f[1] + 1e-9)) {
+                                    failures.push(format!(
+                                        "mu {mu} v {v_belt} {law:?} {}: bad state at {} ({:?}, gap {gap})",
+                                        ic.name, r.t, r.f
+                                    ));
+                                    break;
+                                }
+                            }
+                            Err(e) => {
+                                failures.push(format!("mu {mu} v {v_belt} {law:?} {}: {e}", ic.name));
+                                break;
+                            }
+                        }
+                    }
+                    let c = p.counters();
+                    stats.touchdowns += c.touchdowns;
+                    stats.lift_offs += c.lift_offs;
+                    stats.zeno_stops += c.zeno_stops;
+                    stats.p_zero += c.p_zero;
+                    stats.slip_reversals += c.slip_reversals;
+                    stats.impacts_without_collision += c.impacts_without_collision;
+                    stats.stick_phases += c.stick_phases;
+                    stats.stick_to_slip += c.stick_to_slip;
+                    stats.energy_gains += c.energy_gains;
+                    stats.cone_violations += c.cone_violations;
+                }
+            }
+        }
+    }
+    eprintln!("grid totals: {stats:?}");
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
+    assert_eq!(stats.energy_gains, 0);
+    // The grid exercises the hybrid machinery, not only smooth sliding.
+    assert!(stats.touchdowns > 100 && stats.lift_offs > 10 && stats.impacts_without_collision > 0 && stats.stick_phases > 0);
+    assert!(stats.stick_to_slip > 0 && stats.zeno_stops > 0);
+}
