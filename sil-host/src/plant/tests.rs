@@ -314,29 +314,6 @@ fn crate_event_location_is_wrong() {
     assert!((t_event - 0.2).abs() > 1e-3, "the crate now locates the hop's end at {t_event} s");
 }
 
-#[test]
-#[ignore]
-fn cost_of_sliding_advance() {
-    let params = Params::new(0.3, -0.4).unwrap();
-    let rtol: f64 = std::env::var("RTOL").ok().and_then(|v| v.parse().ok()).unwrap_or(1e-9);
-    let cfg = SimConfig { rtol, atol: rtol * 1e-2, ..SimConfig::default() };
-    let mut p = Plant::new(params, cfg, deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
-    for _ in 0..2000 {
-        p.advance([0.0, 0.0], 1e-3).unwrap();
-    }
-    let (e0, s0) = (p.rhs_evaluations(), p.counters().segments);
-    for _ in 0..1000 {
-        p.advance([0.0, 0.0], 1e-3).unwrap();
-    }
-    println!(
-        "mode {:?}: {} rhs evals per 1 ms advance, {} segments, last_h {}",
-        p.mode(),
-        (p.rhs_evaluations() - e0) as f64 / 1000.0,
-        p.counters().segments - s0,
-        p.last_h.get()
-    );
-}
-
 /// Robustness over the paper's parameter ranges: every (mu, v_belt) of a coarse grid,
 /// from x0a and x0d, both impact laws, 3 s at 1 ms ticks: no failure, no energy
 /// created at the contact, never below the belt, contact forces admissible.
