@@ -109,7 +109,7 @@ pub struct SimulateArgs {
 #[derive(Debug, Clone, Args)]
 pub struct AdmissibleArgs {
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
     pub mu: f64,
     /// Output options.
     #[command(flatten)]
@@ -120,7 +120,7 @@ pub struct AdmissibleArgs {
 #[derive(Debug, Clone, Args)]
 pub struct ModesArgs {
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
     pub mu: f64,
     /// Belt speed v_belt, m/s (sets the sign of z_r_dot, hence which p applies).
     #[arg(long, default_value_t = -0.4, allow_hyphen_values = true)]
@@ -137,6 +137,14 @@ pub struct ModesArgs {
     /// Grid points along each axis.
     #[arg(long, default_value_t = 400)]
     pub grid: usize,
+    /// Which root of cos(theta2) = H/l - cos(theta1) to use. `auto`: the one on
+    /// `--branch` (minus for down, plus for up); points whose configuration is then
+    /// not on `--branch` are unreachable (theta1 < -25.98 deg for down, > 25.98 deg for up).
+    /// `plus`/`minus`: that root over the whole theta1 range, `--branch` ignored; the
+    /// elbow branch then changes at the straight arm (`plus` holds x0a, `minus` x0u
+    /// and x0d) and is written per point in modes.csv.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub theta2_sign: crate::commands::modes::Theta2Sign,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
