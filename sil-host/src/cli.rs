@@ -142,8 +142,9 @@ pub struct ModesArgs {
     /// not on `--branch` are unreachable (theta1 < -25.98 deg for down, > 25.98 deg for up).
     /// `plus`/`minus`: that root over the whole theta1 range, `--branch` ignored; the
     /// elbow branch then changes at the straight arm (`plus` holds x0a, `minus` x0u
-    /// and x0d) and is written per point in modes.csv.
-    #[arg(long, value_enum, default_value = "auto")]
+    /// and x0d) and is written per point in modes.csv. Default `plus`: the root through
+    /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
+    #[arg(long, value_enum, default_value = "plus")]
     pub theta2_sign: crate::commands::modes::Theta2Sign,
     /// Output options.
     #[command(flatten)]

@@ -92,13 +92,7 @@ pub fn bisect_sign_change<F: FnMut(f64) -> f64>(f: &mut F, mut a: f64, mut b: f6
 /// are then not zeros of `f`). Sign changes closer together than one scan step
 /// may be missed. Returns the intervals in increasing order; empty when `f <= 0`
 /// at every sample, or when `steps == 0` or the range is empty or not finite.
-pub fn positive_intervals<F: FnMut(f64) -> f64>(
-    mut f: F,
-    lo: f64,
-    hi: f64,
-    steps: usize,
-    tol: f64,
-) -> Vec<PositiveInterval> {
+pub fn positive_intervals<F: FnMut(f64) -> f64>(mut f: F, lo: f64, hi: f64, steps: usize, tol: f64) -> Vec<PositiveInterval> {
     let mut out = Vec::new();
     if steps == 0 || !(lo.is_finite() && hi.is_finite()) || lo >= hi {
         return out;
@@ -317,10 +311,7 @@ pub fn human_summary(r: &AdmissibleReport) -> String {
         r.params.mu, r.params.h, r.params.l, -r.reach, r.reach
     );
     s += "Ranges of z_t (m) where p > 0 (* = end of the reachable belt, not a zero of p):\n";
-    let rows = [
-        ("z_r_dot > 0 (paper's case)", SlipDirection::Positive),
-        ("z_r_dot < 0 (mirror image)", SlipDirection::Negative),
-    ];
+    let rows = [("z_r_dot > 0 (paper's case)", SlipDirection::Positive), ("z_r_dot < 0 (mirror image)", SlipDirection::Negative)];
     for (label, dir) in rows {
         s += &format!("  {label}\n");
         s += &format!("    elbow up   : {}\n", fmt_intervals(r.intervals(ElbowBranch::Up, dir)));
@@ -332,9 +323,7 @@ pub fn human_summary(r: &AdmissibleReport) -> String {
         Some(d) if d <= MIRROR_TOL_M => {
             s += &format!("Mirror check (z_t -> -z_t, up <-> down, z_r_dot -> -z_r_dot): ok, ends agree to {d:.1e} m\n")
         }
-        Some(d) => {
-            s += &format!("Mirror check FAILED: ends differ by up to {d:.3e} m (tolerance {MIRROR_TOL_M:e} m)\n")
-        }
+        Some(d) => s += &format!("Mirror check FAILED: ends differ by up to {d:.3e} m (tolerance {MIRROR_TOL_M:e} m)\n"),
         None => s += "Mirror check FAILED: the numbers of intervals differ\n",
     }
     s += &format!("Method: scan of {SCAN_STEPS} steps plus bisection of each sign change of p to {ROOT_TOL_M:e} m.\n");
@@ -379,8 +368,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     // One p range for both panels, so that they compare at a glance; always
     // including p = 0 and capped at +-P_PLOT_MAX (absurd mu gives absurd p, and
     // plotters cannot lay out an infinite axis): values beyond are clamped.
-    let (mut ymin, mut ymax) =
-        panels.iter().flat_map(|(_, c)| c.iter()).fold((0.0f64, 0.0f64), |(a, b), &(_, p)| (a.min(p), b.max(p)));
+    let (mut ymin, mut ymax) = panels.iter().flat_map(|(_, c)| c.iter()).fold((0.0f64, 0.0f64), |(a, b), &(_, p)| (a.min(p), b.max(p)));
     ymin = ymin.max(-P_PLOT_MAX);
     ymax = ymax.min(P_PLOT_MAX);
     let pad = 0.08 * (ymax - ymin).max(1e-9);
@@ -392,10 +380,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let root = SVGBackend::new(path, (960, 780)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| perr(e.to_string()))?;
     let root = root
-        .titled(
-            &format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu),
-            ("sans-serif", 20),
-        )
+        .titled(&format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu), ("sans-serif", 20))
         .map_err(|e| perr(e.to_string()))?;
     let (panels_area, note_area) = root.split_vertically(root.dim_in_pixel().1.saturating_sub(24));
     let areas = panels_area.split_evenly((2, 1));
@@ -424,9 +409,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
         chart
             .draw_series(iv.iter().map(|i| Rectangle::new([(i.lo, ymin), (i.hi, ymax)], shade.filled())))
             .map_err(|e| perr(e.to_string()))?;
-        chart
-            .draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.stroke_width(1)))
-            .map_err(|e| perr(e.to_string()))?;
+        chart.draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.stroke_width(1))).map_err(|e| perr(e.to_string()))?;
         for x in [-r.reach, r.reach] {
             chart
                 .draw_series(DashedLineSeries::new([(x, ymin), (x, ymax)], 4, 4, BLACK.mix(0.5).stroke_width(1)))
@@ -437,9 +420,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
             .map_err(|e| perr(e.to_string()))?;
     }
     let note = "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p";
-    note_area
-        .draw_text(note, &("sans-serif", 12).into_font().color(&BLACK.mix(0.7)), (70, 4))
-        .map_err(|e| perr(e.to_string()))?;
+    note_area.draw_text(note, &("sans-serif", 12).into_font().color(&BLACK.mix(0.7)), (70, 4)).map_err(|e| perr(e.to_string()))?;
     root.present().map_err(|e| perr(e.to_string()))?;
     Ok(())
 }
@@ -464,16 +445,14 @@ pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {
 pub fn run_with<W: Write>(args: &AdmissibleArgs, stdout: &mut W) -> Result<(), CliError> {
     let report = compute(args.mu)?;
     let mut out = OutputSet::new(&args.output.out)?;
-    let files: Vec<String> =
-        ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
+    let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     let json = serde_json::to_string_pretty(&json_report(&report, &files))
         .map_err(|e| CliError::Io { path: out.path("admissible.json"), source: std::io::Error::other(e) })?;
     out.write_bytes("admissible.json", json.as_bytes())?;
     let svg = out.stage("admissible.svg");
     draw_figure(&report, &svg)?;
     out.commit()?;
-    let text =
-        if args.output.json { json + "\n" } else { human_summary(&report) + &format!("wrote {}\n", files.join(", ")) };
+    let text = if args.output.json { json + "\n" } else { human_summary(&report) + &format!("wrote {}\n", files.join(", ")) };
     stdout.write_all(text.as_bytes()).map_err(|source| CliError::Io { path: "<stdout>".into(), source })?;
     Ok(())
 }
@@ -538,11 +517,9 @@ mod tests {
 
     #[test]
     fn z_r_dot_negative_is_the_mirror_image() {
-        for (mu, r) in [
-            (0.3, compute_with_steps(0.3, 5_000).unwrap()),
-            (0.6, paper_report().clone()),
-            (1.0, compute_with_steps(1.0, 5_000).unwrap()),
-        ] {
+        for (mu, r) in
+            [(0.3, compute_with_steps(0.3, 5_000).unwrap()), (0.6, paper_report().clone()), (1.0, compute_with_steps(1.0, 5_000).unwrap())]
+        {
             for (b, o) in [(ElbowBranch::Up, ElbowBranch::Down), (ElbowBranch::Down, ElbowBranch::Up)] {
                 let pos = r.intervals(b, SlipDirection::Positive);
                 let neg = r.intervals(o, SlipDirection::Negative);
@@ -626,13 +603,11 @@ mod tests {
     #[test]
     fn run_writes_json_and_svg() {
         let dir = tempfile::tempdir().unwrap();
-        let args =
-            AdmissibleArgs { mu: 0.6, output: crate::cli::OutputArgs { out: dir.path().to_path_buf(), json: true } };
+        let args = AdmissibleArgs { mu: 0.6, output: crate::cli::OutputArgs { out: dir.path().to_path_buf(), json: true } };
         let mut printed = Vec::new();
         run_with(&args, &mut printed).unwrap();
         let printed: serde_json::Value = serde_json::from_slice(&printed).unwrap();
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.path().join("admissible.json")).unwrap()).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("admissible.json")).unwrap()).unwrap();
         assert_eq!(json["mu"], 0.6);
         assert!(json["z_r_dot_positive"]["elbow_up"].is_array());
         assert_eq!(json["mirror_check"]["ok"], true);

@@ -172,13 +172,7 @@ pub struct ModePoint {
 
 /// Evaluates one point `(theta1 (rad), theta1_dot (rad/s))` of the map (see the
 /// module documentation). Never panics; non-finite input gives an unreachable point.
-pub fn evaluate_point(
-    arm: &Arm<f64>,
-    theta1: f64,
-    theta1_dot: f64,
-    branch: ElbowBranch,
-    sign: Theta2Sign,
-) -> ModePoint {
+pub fn evaluate_point(arm: &Arm<f64>, theta1: f64, theta1_dot: f64, branch: ElbowBranch, sign: Theta2Sign) -> ModePoint {
     let nan = f64::NAN;
     let Some(theta2) = belt_theta2(&arm.params, theta1, branch, sign) else {
         return ModePoint { theta2: nan, theta2_dot: nan, b: nan, p: nan, z_r_dot: nan, mode: PointMode::Unreachable };
@@ -272,11 +266,7 @@ pub struct ModeMap {
 impl ModeMap {
     /// The point at `(theta1[i], theta1_dot[j])`, if the indices are in range.
     pub fn at(&self, i: usize, j: usize) -> Option<&ModePoint> {
-        if i < self.theta1.len() && j < self.theta1_dot.len() {
-            self.points.get(i * self.theta1_dot.len() + j)
-        } else {
-            None
-        }
+        if i < self.theta1.len() && j < self.theta1_dot.len() { self.points.get(i * self.theta1_dot.len() + j) } else { None }
     }
 
     /// Number of points in each mode, in [`PointMode::ALL`] order.
@@ -334,9 +324,7 @@ pub fn compute(
     }
     for (flag, (a, b)) in [("theta1-deg", theta1_deg), ("theta1-dot", theta1_dot)] {
         if !(a.is_finite() && b.is_finite() && a < b && a.abs() <= RANGE_MAX && b.abs() <= RANGE_MAX) {
-            return Err(CliError::BadInput(format!(
-                "--{flag} expects MIN < MAX with |MIN|, |MAX| <= {RANGE_MAX:e}, got {a:?},{b:?}"
-            )));
+            return Err(CliError::BadInput(format!("--{flag} expects MIN < MAX with |MIN|, |MAX| <= {RANGE_MAX:e}, got {a:?},{b:?}")));
         }
     }
     let arm = Arm::new(params);
@@ -358,8 +346,7 @@ pub fn compute(
         .map(|&t1| {
             let g = z_t_rate(&params, t1, branch, sign);
             let w = v_belt / g;
-            let roots =
-                if g.is_finite() && g != 0.0 && w >= theta1_dot.0 && w <= theta1_dot.1 { vec![w] } else { vec![] };
+            let roots = if g.is_finite() && g != 0.0 && w >= theta1_dot.0 && w <= theta1_dot.1 { vec![w] } else { vec![] };
             (t1.to_degrees(), roots)
         })
         .collect();
@@ -378,28 +365,13 @@ pub fn compute(
             if f_prev.is_finite() && fx.is_finite() && (f_prev > 0.0) != (fx > 0.0) {
                 let root = bisect_sign_change(&mut f, x_prev, x, f_prev, 1e-13);
                 let g = z_t_rate(&params, root, branch, sign);
-                p_zero.push(PZero {
-                    dir,
-                    theta1_deg: root.to_degrees(),
-                    theta1_dot_range: dir_window(g, v_belt, dir, theta1_dot),
-                });
+                p_zero.push(PZero { dir, theta1_deg: root.to_degrees(), theta1_dot_range: dir_window(g, v_belt, dir, theta1_dot) });
             }
             x_prev = x;
             f_prev = fx;
         }
     }
-    Ok(ModeMap {
-        params,
-        branch,
-        sign,
-        theta1: th1,
-        theta1_deg: th1_deg,
-        theta1_dot: th1d,
-        points,
-        b_zero,
-        p_zero,
-        zr_zero,
-    })
+    Ok(ModeMap { params, branch, sign, theta1: th1, theta1_deg: th1_deg, theta1_dot: th1d, points, b_zero, p_zero, zr_zero })
 }
 
 /// A grid-cell edge: along `theta1` from node `(i, j)` to `(i + 1, j)` (`along_theta1`),
@@ -459,9 +431,7 @@ fn b_zero_curves(
             match crossing.len() {
                 2 => segments.push((crossing[0], crossing[1])),
                 4 => {
-                    let centre =
-                        evaluate_point(arm, 0.5 * (th1[i] + th1[i + 1]), 0.5 * (th1d[j] + th1d[j + 1]), branch, sign).b
-                            > 0.0;
+                    let centre = evaluate_point(arm, 0.5 * (th1[i] + th1[i + 1]), 0.5 * (th1d[j] + th1d[j + 1]), branch, sign).b > 0.0;
                     let e = [edges[0].0, edges[1].0, edges[2].0, edges[3].0];
                     if centre == c[0] {
                         segments.push((e[0], e[1]));
@@ -680,16 +650,12 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
 
     let zr_style = RGBColor(80, 80, 80).stroke_width(2);
     for line in &map.zr_zero {
-        chart
-            .draw_series(DashedLineSeries::new(line.iter().copied(), 6, 5, zr_style))
-            .map_err(|e| perr(e.to_string()))?;
+        chart.draw_series(DashedLineSeries::new(line.iter().copied(), 6, 5, zr_style)).map_err(|e| perr(e.to_string()))?;
     }
     let b_style = BLACK.stroke_width(2);
     for line in &map.b_zero {
         if line.len() == 1 {
-            chart
-                .draw_series(std::iter::once(Circle::new(line[0], 1, BLACK.filled())))
-                .map_err(|e| perr(e.to_string()))?;
+            chart.draw_series(std::iter::once(Circle::new(line[0], 1, BLACK.filled()))).map_err(|e| perr(e.to_string()))?;
         } else {
             chart.draw_series(LineSeries::new(line.iter().copied(), b_style)).map_err(|e| perr(e.to_string()))?;
         }
@@ -697,16 +663,12 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
     let straight_style = BLACK.mix(0.6).stroke_width(1);
     let straight = straight_arm_theta1(map).map(f64::to_degrees).filter(|d| *d > x0 && *d < x1);
     if let Some(d) = straight {
-        chart
-            .draw_series(DashedLineSeries::new([(d, y0), (d, y1)], 2, 3, straight_style))
-            .map_err(|e| perr(e.to_string()))?;
+        chart.draw_series(DashedLineSeries::new([(d, y0), (d, y1)], 2, 3, straight_style)).map_err(|e| perr(e.to_string()))?;
     }
     let p_style = RGBColor(148, 0, 211).stroke_width(3);
     for z in &map.p_zero {
         if let Some([a, b]) = z.theta1_dot_range {
-            chart
-                .draw_series(LineSeries::new([(z.theta1_deg, a), (z.theta1_deg, b)], p_style))
-                .map_err(|e| perr(e.to_string()))?;
+            chart.draw_series(LineSeries::new([(z.theta1_deg, a), (z.theta1_deg, b)], p_style)).map_err(|e| perr(e.to_string()))?;
         }
     }
 
@@ -718,9 +680,7 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
     right.draw_text(&t, &f, (10, y)).map_err(|e| perr(e.to_string()))?;
     y += 28;
     for (mode, count) in map.counts() {
-        right
-            .draw(&Rectangle::new([(12, y - 2), (32, y + 14)], mode.color().filled()))
-            .map_err(|e| perr(e.to_string()))?;
+        right.draw(&Rectangle::new([(12, y - 2), (32, y + 14)], mode.color().filled())).map_err(|e| perr(e.to_string()))?;
         right.draw(&Rectangle::new([(12, y - 2), (32, y + 14)], BLACK.mix(0.5))).map_err(|e| perr(e.to_string()))?;
         let (t, f) = text(&format!("{} ({count}, {:.1}%)", mode.name(), 100.0 * count as f64 / total as f64), 14);
         right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
@@ -865,10 +825,7 @@ pub fn human_summary(map: &ModeMap) -> String {
         };
         out += &format!("p = 0 for {} at theta1 = {:.4} deg: {w}\n", dir_name(z.dir), z.theta1_deg);
     }
-    out += &format!(
-        "b = 0: {} curve points located (marching squares, bisection along cell edges to 1e-12)\n",
-        s.b_zero_curve_points
-    );
+    out += &format!("b = 0: {} curve points located (marching squares, bisection along cell edges to 1e-12)\n", s.b_zero_curve_points);
     out
 }
 
@@ -924,10 +881,7 @@ mod tests {
         let det = m11 * m22 - m12 * m12;
         let (i11, i12, i22) = (m22 / det, -m12 / det, m11 / det);
         let spring = k * (t2 - t1 + a0);
-        let w = [
-            1.5 * m * g * l * t1.sin() - spring - s * (w2 - 2.0 * w1),
-            0.5 * m * g * l * t2.sin() + spring + s * (w2 - w1),
-        ];
+        let w = [1.5 * m * g * l * t1.sin() - spring - s * (w2 - 2.0 * w1), 0.5 * m * g * l * t2.sin() + spring + s * (w2 - w1)];
         let c = [0.5 * ml2 * w2 * w2 * (t1 - t2).sin(), 0.5 * ml2 * w1 * w1 * (t2 - t1).sin()];
         let r = [w[0] + c[0], w[1] + c[1]];
         let minv_r = [i11 * r[0] + i12 * r[1], i12 * r[0] + i22 * r[1]];
@@ -1043,10 +997,7 @@ mod tests {
                 assert!(b(t, w).abs() < 1e-7, "b({deg}, {w}) = {}", b(t, w));
                 // and b changes sign across it, along theta1 or along theta1_dot.
                 let h = 1e-7;
-                assert!(
-                    b(t - h, w) * b(t + h, w) < 0.0 || b(t, w - h) * b(t, w + h) < 0.0,
-                    "no sign change at ({deg}, {w})"
-                );
+                assert!(b(t - h, w) * b(t + h, w) < 0.0 || b(t, w - h) * b(t, w + h) < 0.0, "no sign change at ({deg}, {w})");
             }
             // The curve separates the grid: neighbours across it have b of opposite signs,
             // and every sign change between on-belt neighbours has a curve point between them.
@@ -1054,13 +1005,9 @@ mod tests {
             for i in 0..m.theta1.len() {
                 for j in 0..n2 - 1 {
                     let (a, c) = (m.at(i, j).unwrap(), m.at(i, j + 1).unwrap());
-                    if matches!(a.mode, PointMode::Contact(_))
-                        && matches!(c.mode, PointMode::Contact(_))
-                        && (a.b > 0.0) != (c.b > 0.0)
-                    {
+                    if matches!(a.mode, PointMode::Contact(_)) && matches!(c.mode, PointMode::Contact(_)) && (a.b > 0.0) != (c.b > 0.0) {
                         let deg = m.theta1[i].to_degrees();
-                        let found =
-                            pts.iter().any(|&&(d, w)| d == deg && w >= m.theta1_dot[j] && w <= m.theta1_dot[j + 1]);
+                        let found = pts.iter().any(|&&(d, w)| d == deg && w >= m.theta1_dot[j] && w <= m.theta1_dot[j + 1]);
                         let border = i == 0
                             || i + 1 == m.theta1.len()
                             || !matches!(m.at(i - 1, j).unwrap().mode, PointMode::Contact(_))
@@ -1128,8 +1075,7 @@ mod tests {
 
     #[test]
     fn polylines_join_equal_root_counts() {
-        let cols =
-            vec![(0.0, vec![1.0]), (1.0, vec![2.0]), (2.0, vec![]), (3.0, vec![1.0, 5.0]), (4.0, vec![2.0, 4.0])];
+        let cols = vec![(0.0, vec![1.0]), (1.0, vec![2.0]), (2.0, vec![]), (3.0, vec![1.0, 5.0]), (4.0, vec![2.0, 4.0])];
         let l = polylines(&cols);
         assert_eq!(l, vec![vec![(0.0, 1.0), (1.0, 2.0)], vec![(3.0, 1.0), (4.0, 2.0)], vec![(3.0, 5.0), (4.0, 4.0)]]);
     }
@@ -1181,10 +1127,7 @@ mod tests {
         assert_eq!(total, 3600);
         let csv = std::fs::read_to_string(dir.path().join("modes.csv")).unwrap();
         let mut lines = csv.lines();
-        assert_eq!(
-            lines.next().unwrap(),
-            "theta1_rad,theta1_deg,theta1_dot,theta2_rad,b,p,z_r_dot,mode,theta2_dot,branch"
-        );
+        assert_eq!(lines.next().unwrap(), "theta1_rad,theta1_deg,theta1_dot,theta2_rad,b,p,z_r_dot,mode,theta2_dot,branch");
         assert_eq!(lines.count(), 60 * 60);
         let svg = std::fs::read_to_string(dir.path().join("modes.svg")).unwrap();
         assert!(svg.contains("theta1 (deg)") && svg.contains("sliding"));

@@ -368,4 +368,3 @@ fn robust_over_the_paper_parameter_grid() {
     assert!(stats.touchdowns > 100 && stats.lift_offs > 10 && stats.impacts_without_collision > 0 && stats.stick_phases > 0);
     assert!(stats.stick_to_slip > 0 && stats.zeno_stops > 0);
 }
-
