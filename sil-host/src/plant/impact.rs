@@ -358,3 +358,38 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod kane {
+    use super::*;
+
+    /// Kane's classic observation (Kane and Levinson, "Dynamics Online", 1985; Stronge
+    /// 2000, sec. 5.4): Newton's restitution with Coulomb friction can create energy
+    /// when the slip reverses during the impact. Our Newton law shows it too, which is
+    /// why every impact is checked; Poisson's (Darboux-Keller) does not here.
+    #[test]
+    fn newton_with_friction_can_create_energy_and_poisson_does_not_here() {
+        let mut found = None;
+        'search: for a in [0.5, 1.0, 2.0] {
+            for b in [-1.5, -1.0, -0.5, 0.5, 1.0, 1.5] {
+                for c in [0.2, 0.5, 1.0] {
+                    let l = Matrix2::new(a, 0.0, b, c);
+                    let qm = l * l.transpose();
+                    for mu in [0.2, 0.5, 0.8] {
+                        for v_r in [-0.5, -0.1, 0.1, 0.5] {
+                            let imp = touchdown(&qm, mu, v_r, -1.0, ImpactLaw::Newton, 0.9).unwrap();
+                            if imp.contact_work > 1e-6 {
+                                found = Some((qm, mu, v_r, imp));
+                                break 'search;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let (qm, mu, v_r, imp) = found.expect("a Newton impact that creates energy");
+        assert_eq!(imp.resolution, Resolution::NewtonSliding);
+        let dk = darboux_keller(&qm, mu, v_r, -1.0, 0.9).unwrap();
+        assert!(dk.contact_work <= 1e-12, "Poisson dissipates at the same impact: {}", dk.contact_work);
+    }
+}
