@@ -11,4 +11,11 @@ echo "== no_std build of shared and firmware for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware --target thumbv7em-none-eabihf
 
 echo "== tests (release: the simulator is numerical)"
-cargo test --workspace --release
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+status=0
+cargo test --workspace --release 2>&1 | tee "$log" || status=$?
+# One closing line over all test binaries (cargo prints one per binary).
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
+exit "$status"
