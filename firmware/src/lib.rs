@@ -1,13 +1,22 @@
 //! The arm's control firmware: `no_std`, heap-free, control maths in `f32`.
 //!
-//! This crate builds for the host and for `thumbv7em-none-eabihf`; it already
-//! evaluates the shared model in `f32` (the same code the plant runs in `f64`).
-//! The controllers, estimation and deadline monitoring arrive with issue 3.
-#![no_std]
+//! One function per control period, time passed in and hardware behind traits:
+//! [`Firmware::step`] takes a [`SensorFrame`] of raw counts and returns an
+//! [`ActuatorCommand`] of torque codes and a status word. The same code runs on
+//! the host (SIL rig, tests) and on the Cortex-M4F (`src/bin/mcu.rs`).
+#![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod board;
+pub mod config;
+pub mod controller;
+
+pub use board::{Board, TickClock};
+pub use config::{Config, ControllerKind};
+pub use controller::Firmware;
 pub use shared;
+pub use shared::wire::{ActuatorCommand, SensorFrame};
 
 /// The model in the firmware's scalar type: the paper's parameters in `f32`.
 pub fn paper_arm() -> shared::Arm<f32> {

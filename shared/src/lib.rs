@@ -18,6 +18,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+pub mod wire;
 
 pub use contact::{ContactMode, SlipDirection};
 pub use kinematics::{ElbowBranch, IkError};

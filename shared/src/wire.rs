@@ -1,0 +1,161 @@
+//! Wire messages between the plant side and the firmware (HARDWARE.md): raw
+//! counts as the hardware gives them, `#[repr(C)]` with fixed layouts so that
+//! shared memory, a USART frame or a C client see the same bytes.
+
+/// Encoder resolution: 14 bit per revolution (HARDWARE.md).
+pub const ENCODER_COUNTS: u32 = 1 << 14;
+/// Load-cell ADC: 12-bit signed codes in `[-2048, 2047]` (HARDWARE.md).
+pub const LOAD_CODE_MIN: i16 = -2048;
+/// Largest load-cell code.
+pub const LOAD_CODE_MAX: i16 = 2047;
+/// Load-cell full scale, N (HARDWARE.md: +-25 N).
+pub const LOAD_FULL_SCALE_N: f32 = 25.0;
+/// Torque command: 12-bit signed codes in `[-2048, 2047]` (HARDWARE.md).
+pub const TORQUE_CODE_MIN: i16 = -2048;
+/// Largest torque code.
+pub const TORQUE_CODE_MAX: i16 = 2047;
+/// Torque full scale per joint, N m (HARDWARE.md: +-5 N m).
+pub const TORQUE_FULL_SCALE_NM: f32 = 5.0;
+/// Belt encoder resolution, m/s per count (HARDWARE.md: 1 mm/s).
+pub const BELT_SPEED_RESOLUTION: f32 = 1e-3;
+
+/// One sample of the sensors, period `seq` (HARDWARE.md "Sensors").
+///
+/// Layout (24 bytes, little-endian on every target we build): `t_us: u64`,
+/// `seq: u32`, `theta1_count: u16`, `elbow_count: u16`, `f_t_code: i16`,
+/// `f_n_code: i16`, `belt_count: i16`, `flags: u16`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[repr(C)]
+pub struct SensorFrame {
+    /// Sample time `t_k = k Ts`, microseconds since the start of the run.
+    pub t_us: u64,
+    /// Period index `k` (increments by one per period).
+    pub seq: u32,
+    /// Base-joint absolute encoder, `theta1` in counts of `2 pi / 2^14`, in `[0, 2^14)`.
+    pub theta1_count: u16,
+    /// Elbow absolute encoder, `theta2 - theta1` in counts of `2 pi / 2^14`, in `[0, 2^14)`.
+    pub elbow_count: u16,
+    /// Tip load cell, tangential force `f_t` in codes of `25/2048 N`, in `[-2048, 2047]`.
+    pub f_t_code: i16,
+    /// Tip load cell, normal force `f_n` in codes of `25/2048 N`, in `[-2048, 2047]`.
+    pub f_n_code: i16,
+    /// Belt speed `v_belt` in mm/s.
+    pub belt_count: i16,
+    /// Sensor-side fault bits (reserved, 0).
+    pub flags: u16,
+}
+
+/// Status word bits of an [`ActuatorCommand`].
+pub mod status {
+    /// The firmware is in its safe state (zero torque); the reason is in bits 24..31.
+    pub const SAFE_STATE: u32 = 1 << 0;
+    /// This frame was rejected (out-of-range counts or bad sequence); not trusted.
+    pub const BAD_FRAME: u32 = 1 << 1;
+    /// This frame repeated or went back in sequence (stale).
+    pub const STALE_FRAME: u32 = 1 << 2;
+    /// One or more periods were skipped before this frame (lost frames).
+    pub const SEQUENCE_GAP: u32 = 1 << 3;
+    /// Lift-off detected (the firmware believes the tip is off the belt).
+    pub const LIFT_OFF: u32 = 1 << 4;
+    /// The base-joint torque `u1` saturated.
+    pub const SATURATED_U1: u32 = 1 << 5;
+    /// The elbow torque `u2` saturated.
+    pub const SATURATED_U2: u32 = 1 << 6;
+    /// The previous step overran its deadline.
+    pub const DEADLINE_MISS: u32 = 1 << 7;
+    /// The load-cell reading is at the end of its range (clipped).
+    pub const LOAD_CLIPPED: u32 = 1 << 8;
+    /// The reference is still moving (before the hold).
+    pub const REFERENCE_MOVING: u32 = 1 << 9;
+    /// Shift of the safe-state reason code (see `SafeReason` in the firmware).
+    pub const REASON_SHIFT: u32 = 24;
+}
+
+/// The firmware's answer to frame `seq` (HARDWARE.md "Actuators").
+///
+/// Layout (20 bytes): `seq: u32`, `u1_code: i16`, `u2_code: i16`, `status: u32`,
+/// `step_ticks: u32`, `overruns: u32`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[repr(C)]
+pub struct ActuatorCommand {
+    /// Echo of the [`SensorFrame::seq`] this command answers.
+    pub seq: u32,
+    /// Base-joint motor torque `u1` in codes of `5/2048 N m`, in `[-2048, 2047]`.
+    pub u1_code: i16,
+    /// Elbow motor torque `u2` in codes of `5/2048 N m`, in `[-2048, 2047]`.
+    pub u2_code: i16,
+    /// Status bits ([`status`]).
+    pub status: u32,
+    /// The step's own execution time, in ticks of the firmware's clock.
+    pub step_ticks: u32,
+    /// Deadline overruns counted since the last reset.
+    pub overruns: u32,
+}
+
+/// Encodes an angle (rad) as a 14-bit absolute encoder count (rounded, wrapped to `[0, 2^14)`).
+pub fn encode_angle(angle: f64) -> u16 {
+    let turns = angle / core::f64::consts::TAU;
+    let frac = turns - libm::floor(turns);
+    let count = libm::round(frac * ENCODER_COUNTS as f64) as u32 % ENCODER_COUNTS;
+    count as u16
+}
+
+/// Encodes a force (N) as a 12-bit load-cell code; saturates at the ends of the range.
+pub fn encode_force(force: f64) -> i16 {
+    let code = libm::round(force / (LOAD_FULL_SCALE_N as f64) * 2048.0);
+    if !code.is_finite() {
+        return 0;
+    }
+    code.clamp(LOAD_CODE_MIN as f64, LOAD_CODE_MAX as f64) as i16
+}
+
+/// Decodes a torque code to N m.
+pub fn decode_torque(code: i16) -> f32 {
+    code as f32 * (TORQUE_FULL_SCALE_NM / 2048.0)
+}
+
+/// Encodes a torque (N m) as a 12-bit code, saturating; returns the code and whether it saturated.
+pub fn encode_torque(torque: f32) -> (i16, bool) {
+    let code = libm::roundf(torque / TORQUE_FULL_SCALE_NM * 2048.0);
+    if !code.is_finite() {
+        return (0, true);
+    }
+    let clamped = code.clamp(TORQUE_CODE_MIN as f32, TORQUE_CODE_MAX as f32);
+    (clamped as i16, clamped != code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_are_fixed() {
+        assert_eq!(core::mem::size_of::<SensorFrame>(), 24);
+        assert_eq!(core::mem::size_of::<ActuatorCommand>(), 20);
+    }
+
+    #[test]
+    fn angle_encoding_round_trips_within_one_count() {
+        let lsb = core::f64::consts::TAU / ENCODER_COUNTS as f64;
+        for i in -2000..2000 {
+            let a = i as f64 * 0.00317;
+            let c = encode_angle(a);
+            let back = c as f64 * lsb;
+            let d = (back - a).rem_euclid(core::f64::consts::TAU);
+            let d = d.min(core::f64::consts::TAU - d);
+            assert!(d <= 0.5 * lsb + 1e-12);
+        }
+    }
+
+    #[test]
+    fn torque_encoding_saturates_and_reports_it() {
+        assert_eq!(encode_torque(10.0), (2047, true));
+        assert_eq!(encode_torque(-10.0), (-2048, true));
+        assert_eq!(encode_torque(f32::NAN), (0, true));
+        let (c, sat) = encode_torque(1.0);
+        assert!(!sat);
+        assert!((decode_torque(c) - 1.0).abs() <= 5.0 / 2048.0 / 2.0 + 1e-6);
+    }
+}
