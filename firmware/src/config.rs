@@ -1,32 +1,180 @@
-//! Firmware configuration: controller choice, gains, references, limits.
+//! Firmware configuration: controller choice, gains, references, estimator,
+//! lift-off detector and fault limits. Defaults: MODEL.md experiments 5 and 6
+//! and HARDWARE.md.
+
+use shared::{ElbowBranch, Params};
 
 /// Which control law runs (MODEL.md experiments 5 and 6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ControllerKind {
-    /// Joint-space PID (paper eq. 8).
+    /// Joint-space PID on `q' = [theta1, theta2 - theta1]` (paper eq. 8).
     Pid,
     /// Hybrid force/motion control (paper eqs. 9 to 11).
     Hybrid,
 }
 
-/// Firmware configuration (defaults: HARDWARE.md and MODEL.md experiment 6).
+/// The friction term `f_t` of the hybrid law (paper eq. 9: `-J^T i_x f_t`).
+///
+/// In sliding, `z_n_ddot = Q_21 (f_t - f_t_hat) + Q_22 (f_n - a_f) = 0` with
+/// `f_t = -mu s f_n`, so `p f_n = Q_22 a_f + Q_21 f_t_hat`. With a one-period-old
+/// measurement `f_t_hat(k) = f_t(k-1) = -mu s f_n(k-1)` this is the discrete loop
+/// `f_n(k) = g f_n(k-1) + ...` with `g = -mu s Q_21 / p`: it is stable only if
+/// `|g| < 1`, i.e. `p > Q_22 / 2` (`mu s Q_21 < Q_22 / 2`), and near the Painlevé
+/// boundary (`p -> 0+`) `|g|` grows without bound and `f_n` flips sign every
+/// period. The same holds for the model-based term with the measured `f_n`.
+/// With the commanded normal force, `f_t_hat = -mu_hat s a_f`, there is no loop
+/// and `f_n = a_f` exactly when `mu_hat = mu`: that is the default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrictionCompensation {
+    /// The measured tangential force (one period old).
+    Measured,
+    /// `-mu_hat sign(z_r_dot) f_n` with the measured normal force (one period old).
+    ModelMeasuredNormal,
+    /// `-mu_hat sign(z_r_dot) a_f` with the commanded normal force (default).
+    ModelCommandedNormal,
+    /// No friction term.
+    None,
+}
+
+/// PID gains per joint of `q' = [theta1, theta2 - theta1]` (paper eq. 8).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PidGains {
+    /// `K_P`, N m/rad.
+    pub kp: [f32; 2],
+    /// `K_I`, N m/(rad s).
+    pub ki: [f32; 2],
+    /// `K_D`, N m s/rad.
+    pub kd: [f32; 2],
+}
+
+/// Hybrid force/motion gains (paper eqs. 10 and 11).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HybridGains {
+    /// `K'_P`, 1/s^2.
+    pub kp: f32,
+    /// `K'_D`, 1/s.
+    pub kd: f32,
+    /// `K'_I`, 1/s (650 from `x0d`, 0 from `x0u` in the paper).
+    pub ki: f32,
+}
+
+/// Firmware configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Config {
+    /// The arm's parameters as the firmware knows them (`mu` is `mu_hat`).
+    pub params: Params<f32>,
     /// Control law.
     pub controller: ControllerKind,
-    /// Control period `Ts`, s (HARDWARE.md: 1 ms; 0.1 ms to 4 ms allowed).
+    /// Control period `Ts`, s (HARDWARE.md: 1 ms, from 0.1 ms to 4 ms).
     pub period_s: f32,
     /// Tangential target `z_t*`, m.
     pub target_z_t: f32,
-    /// Duration of the quintic move to the target, s.
+    /// Duration of the quintic move from the initial tip position to the target, s.
     pub move_time_s: f32,
-    /// Normal force reference `f_n*`, N.
+    /// Normal force reference `f_n*`, N (hybrid law).
     pub f_n_ref: f32,
+    /// PID gains.
+    pub pid: PidGains,
+    /// Hybrid gains.
+    pub hybrid: HybridGains,
+    /// Friction term of the hybrid law.
+    pub friction: FrictionCompensation,
+    /// Torque limit per motor, N m (the command saturates here; HARDWARE.md: 5 N m).
+    pub torque_limit: f32,
+    /// Bandwidth of the joint-velocity observer, rad/s.
+    pub observer_bandwidth: f32,
+    /// Lift-off: normal force below which the tip may be off the belt, N.
+    pub lift_off_force: f32,
+    /// Lift-off: tip height above the belt (from the encoders) that declares lift-off, m.
+    pub lift_off_height: f32,
+    /// Lift-off: consecutive periods of low force needed to declare lift-off.
+    pub lift_off_confirm: u8,
+    /// Touchdown (end of lift-off): normal force above which contact is back, N.
+    pub touchdown_force: f32,
+    /// Consecutive deadline misses that latch the safe state.
+    pub deadline_miss_limit: u16,
+    /// Consecutive bad frames that latch the safe state.
+    pub bad_frame_limit: u16,
+    /// Elbow branch for the PID's inverse kinematics; `None`: the branch of the first frame.
+    pub branch: Option<ElbowBranch>,
 }
 
 impl Default for Config {
     fn default() -> Self {
-        Self { controller: ControllerKind::Hybrid, period_s: 1e-3, target_z_t: 0.10, move_time_s: 2.0, f_n_ref: 10.0 }
+        Self {
+            params: Params::paper(),
+            controller: ControllerKind::Hybrid,
+            period_s: 1e-3,
+            target_z_t: 0.10,
+            move_time_s: 2.0,
+            f_n_ref: 10.0,
+            pid: PidGains { kp: [200.0, 0.0], ki: [25.0, 0.0], kd: [2.0, 0.0] },
+            hybrid: HybridGains { kp: 900.0, kd: 900.0, ki: 650.0 },
+            friction: FrictionCompensation::ModelCommandedNormal,
+            torque_limit: shared::wire::TORQUE_FULL_SCALE_NM,
+            observer_bandwidth: 2.0 * core::f32::consts::PI * 40.0,
+            lift_off_force: 0.5,
+            lift_off_height: 1e-3,
+            lift_off_confirm: 2,
+            touchdown_force: 1.0,
+            deadline_miss_limit: 3,
+            bad_frame_limit: 3,
+            branch: None,
+        }
+    }
+}
+
+/// Why a [`Config`] was rejected.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    /// A parameter of the arm is invalid.
+    #[error(transparent)]
+    Params(#[from] shared::ParamError),
+    /// A setting is out of range.
+    #[error("setting `{name}` = {value} is out of range ({expected})")]
+    OutOfRange {
+        /// Field name.
+        name: &'static str,
+        /// The value.
+        value: f32,
+        /// What is allowed.
+        expected: &'static str,
+    },
+}
+
+impl Config {
+    /// Checks every setting.
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.params.validate()?;
+        let check = |name: &'static str, value: f32, ok: bool, expected: &'static str| {
+            if ok && value.is_finite() { Ok(()) } else { Err(ConfigError::OutOfRange { name, value, expected }) }
+        };
+        check("period_s", self.period_s, (1e-4..=4e-3).contains(&self.period_s), "1e-4 to 4e-3 s (250 Hz to 10 kHz)")?;
+        check("target_z_t", self.target_z_t, self.target_z_t.abs() < 2.0 * self.params.l, "|z_t*| < 2 l")?;
+        check("move_time_s", self.move_time_s, self.move_time_s > 0.0, "> 0")?;
+        check("f_n_ref", self.f_n_ref, self.f_n_ref >= 0.0, ">= 0")?;
+        for (name, v) in [("pid.kp", self.pid.kp), ("pid.ki", self.pid.ki), ("pid.kd", self.pid.kd)] {
+            check(name, v[0], v[0] >= 0.0 && v[1] >= 0.0 && v[1].is_finite(), ">= 0")?;
+        }
+        for (name, v) in [("hybrid.kp", self.hybrid.kp), ("hybrid.kd", self.hybrid.kd), ("hybrid.ki", self.hybrid.ki)] {
+            check(name, v, v >= 0.0, ">= 0")?;
+        }
+        check("torque_limit", self.torque_limit, self.torque_limit > 0.0 && self.torque_limit <= 5.0, "(0, 5] N m")?;
+        check(
+            "observer_bandwidth",
+            self.observer_bandwidth,
+            self.observer_bandwidth > 0.0 && self.observer_bandwidth * self.period_s < 1.0,
+            "> 0 and < 1/Ts",
+        )?;
+        check("lift_off_force", self.lift_off_force, self.lift_off_force >= 0.0, ">= 0")?;
+        check("lift_off_height", self.lift_off_height, self.lift_off_height > 0.0, "> 0")?;
+        check("touchdown_force", self.touchdown_force, self.touchdown_force >= self.lift_off_force, ">= lift_off_force")?;
+        check("lift_off_confirm", self.lift_off_confirm as f32, self.lift_off_confirm >= 1, ">= 1")?;
+        check("deadline_miss_limit", self.deadline_miss_limit as f32, self.deadline_miss_limit >= 1, ">= 1")?;
+        check("bad_frame_limit", self.bad_frame_limit as f32, self.bad_frame_limit >= 1, ">= 1")?;
+        Ok(())
     }
 }

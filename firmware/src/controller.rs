@@ -1,18 +1,145 @@
-//! The per-period step (being written).
+//! The per-period step: decode and check the frame, estimate, detect lift-off,
+//! run the control law, saturate and encode, monitor deadlines, and hold the
+//! safe state.
 
-use crate::{TickClock, config::Config};
-use shared::wire::{ActuatorCommand, SensorFrame};
+use nalgebra::Vector2;
+use shared::{
+    Arm, ElbowBranch,
+    kinematics::{jacobian, tip_position},
+    wire::{self, ActuatorCommand, SensorFrame, status},
+};
 
-/// The firmware's state across periods.
+use crate::{
+    TickClock,
+    config::{Config, ConfigError, ControllerKind},
+    decode::{self, FrameFault, Measurement},
+    estimator::AngleTracker,
+    law::{self, HybridInput, HybridSignals, HybridState, LawError, PidState},
+    liftoff::{LiftOffDetector, LiftOffRule},
+    reference::{Quintic, RefPoint},
+};
+
+/// Why the firmware is in its safe state (zero torque). The code is reported in
+/// bits 24..31 of the status word.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum SafeReason {
+    /// `deadline_miss_limit` consecutive deadline misses.
+    DeadlineMisses = 1,
+    /// `bad_frame_limit` consecutive bad (out-of-range or stale) frames.
+    BadFrames = 2,
+    /// The control law produced a NaN or infinite value.
+    NonFinite = 3,
+    /// The arm reached a singular (straight) configuration.
+    Singular = 4,
+    /// The reference is out of the arm's reach.
+    Unreachable = 5,
+}
+
+impl SafeReason {
+    /// The reason of a status word, if the safe-state bit is set.
+    pub fn from_status(status_word: u32) -> Option<Self> {
+        if status_word & status::SAFE_STATE == 0 {
+            return None;
+        }
+        match (status_word >> status::REASON_SHIFT) as u8 {
+            1 => Some(Self::DeadlineMisses),
+            2 => Some(Self::BadFrames),
+            3 => Some(Self::NonFinite),
+            4 => Some(Self::Singular),
+            5 => Some(Self::Unreachable),
+            _ => None,
+        }
+    }
+}
+
+impl From<LawError> for SafeReason {
+    fn from(e: LawError) -> Self {
+        match e {
+            LawError::Unreachable => Self::Unreachable,
+            LawError::Singular => Self::Singular,
+            LawError::NonFinite => Self::NonFinite,
+        }
+    }
+}
+
+/// What the firmware computed in its last step (for telemetry, SIL traces and tests).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Telemetry {
+    /// Estimated `[theta1, theta2]`, rad.
+    pub q: [f32; 2],
+    /// Estimated `[theta1_dot, theta2_dot]`, rad/s.
+    pub qd: [f32; 2],
+    /// Estimated tip position `[z_t, z_n]`, m.
+    pub z: [f32; 2],
+    /// Estimated tip velocity, m/s.
+    pub z_dot: [f32; 2],
+    /// Reference `[z_t*, z_t_dot*, z_t_ddot*]`.
+    pub reference: [f32; 3],
+    /// Measured `[f_t, f_n]`, N.
+    pub f: [f32; 2],
+    /// Hybrid-law signals (zero under PID).
+    pub hybrid: HybridSignals,
+    /// Motor torques before saturation and quantisation, N m.
+    pub u_raw: [f32; 2],
+    /// Whether lift-off is declared.
+    pub lifted: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Started {
+    seq0: u32,
+    last_seq: u32,
+    trackers: [AngleTracker; 2],
+    quintic: Quintic,
+    branch: ElbowBranch,
+}
+
+/// The firmware's state across periods. Fixed size, no heap.
 #[derive(Debug, Clone)]
 pub struct Firmware {
     cfg: Config,
+    arm: Arm<f32>,
+    started: Option<Started>,
+    liftoff: LiftOffDetector,
+    pid: PidState,
+    hybrid: HybridState,
+    last_codes: [i16; 2],
+    last_saturated: bool,
+    consecutive_bad: u16,
+    consecutive_misses: u16,
+    overruns: u32,
+    safe: Option<SafeReason>,
+    telemetry: Telemetry,
 }
 
 impl Firmware {
     /// A firmware instance with configuration `cfg`.
-    pub fn new(cfg: Config) -> Self {
-        Self { cfg }
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the first invalid setting.
+    pub fn new(cfg: Config) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        Ok(Self::fresh(cfg))
+    }
+
+    /// A fresh state for an already validated configuration.
+    fn fresh(cfg: Config) -> Self {
+        Self {
+            cfg,
+            arm: Arm::new(cfg.params),
+            started: None,
+            liftoff: LiftOffDetector::default(),
+            pid: PidState::default(),
+            hybrid: HybridState::default(),
+            last_codes: [0, 0],
+            last_saturated: false,
+            consecutive_bad: 0,
+            consecutive_misses: 0,
+            overruns: 0,
+            safe: None,
+            telemetry: Telemetry::default(),
+        }
     }
 
     /// The configuration.
@@ -20,10 +147,214 @@ impl Firmware {
         &self.cfg
     }
 
-    /// One control period: decode `frame` (received at `now_us`), estimate, detect
-    /// lift-off, run the control law, encode the command.
+    /// The safe state's reason, if the firmware is in it.
+    pub fn safe_state(&self) -> Option<SafeReason> {
+        self.safe
+    }
+
+    /// Deadline overruns since the last reset.
+    pub fn overruns(&self) -> u32 {
+        self.overruns
+    }
+
+    /// What the last step computed.
+    pub fn telemetry(&self) -> &Telemetry {
+        &self.telemetry
+    }
+
+    /// Leaves the safe state and starts afresh at the next frame (new reference
+    /// from the tip's position then, integrators and counters cleared). The only
+    /// way out of the safe state.
+    pub fn reset(&mut self) {
+        *self = Self::fresh(self.cfg);
+    }
+
+    fn enter_safe(&mut self, reason: SafeReason) {
+        if self.safe.is_none() {
+            self.safe = Some(reason);
+        }
+    }
+
+    /// One control period.
+    ///
+    /// `now_us` is when the step starts, on the clock of `frame.t_us`; `clock`
+    /// measures the step's own execution. The command answers `frame.seq`. It is a
+    /// deadline miss when the command leaves later than `frame.t_us + Ts`
+    /// (`now_us - t_us` plus the step's own time); `deadline_miss_limit`
+    /// consecutive misses latch the safe state.
+    ///
+    /// Bad frames (counts out of range, a repeated or older sequence number) are
+    /// never trusted: the previous command is held and `BAD_FRAME` reported;
+    /// `bad_frame_limit` consecutive ones latch the safe state. A law failure
+    /// (unreachable reference, singular arm, NaN) latches it at once. In the safe
+    /// state the command is zero torque with `SAFE_STATE` and the reason code set,
+    /// until [`Firmware::reset`].
     pub fn step<C: TickClock>(&mut self, now_us: u64, frame: &SensorFrame, clock: &C) -> ActuatorCommand {
-        let _ = (now_us, clock);
-        ActuatorCommand { seq: frame.seq, ..ActuatorCommand::default() }
+        let start = clock.ticks();
+        let mut flags = 0u32;
+        let codes = match self.checked(frame) {
+            Err(fault) => {
+                flags |= fault.status_bits();
+                self.consecutive_bad = self.consecutive_bad.saturating_add(1);
+                if self.consecutive_bad >= self.cfg.bad_frame_limit {
+                    self.enter_safe(SafeReason::BadFrames);
+                }
+                self.last_codes
+            }
+            Ok((m, gap)) => {
+                self.consecutive_bad = 0;
+                if gap {
+                    flags |= status::SEQUENCE_GAP;
+                }
+                match self.control(frame.seq, &m) {
+                    Ok((u, f)) => {
+                        flags |= f;
+                        let (u1, s1) = wire::encode_torque(u[0]);
+                        let (u2, s2) = wire::encode_torque(u[1]);
+                        self.last_saturated = flags & (status::SATURATED_U1 | status::SATURATED_U2) != 0 || s1 || s2;
+                        [u1, u2]
+                    }
+                    Err(reason) => {
+                        self.enter_safe(reason);
+                        [0, 0]
+                    }
+                }
+            }
+        };
+        // Deadline: the command leaves at now + the step's own time.
+        let elapsed_ticks = clock.ticks().wrapping_sub(start);
+        let elapsed_us = elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64;
+        let period_us = (self.cfg.period_s * 1e6) as u64;
+        if now_us.saturating_sub(frame.t_us) + elapsed_us > period_us {
+            flags |= status::DEADLINE_MISS;
+            self.overruns = self.overruns.saturating_add(1);
+            self.consecutive_misses = self.consecutive_misses.saturating_add(1);
+            if self.consecutive_misses >= self.cfg.deadline_miss_limit {
+                self.enter_safe(SafeReason::DeadlineMisses);
+            }
+        } else {
+            self.consecutive_misses = 0;
+        }
+        let codes = match self.safe {
+            Some(reason) => {
+                flags |= status::SAFE_STATE | ((reason as u32) << status::REASON_SHIFT);
+                [0, 0]
+            }
+            None => codes,
+        };
+        self.last_codes = codes;
+        ActuatorCommand {
+            seq: frame.seq,
+            u1_code: codes[0],
+            u2_code: codes[1],
+            status: flags,
+            step_ticks: elapsed_ticks,
+            overruns: self.overruns,
+        }
+    }
+
+    /// Decodes the frame and checks its sequence; returns the measurement and
+    /// whether periods were skipped.
+    fn checked(&self, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
+        let m = decode::decode(frame)?;
+        match &self.started {
+            Some(s) if frame.seq <= s.last_seq => Err(FrameFault::Stale),
+            Some(s) => Ok((m, frame.seq > s.last_seq.wrapping_add(1))),
+            None => Ok((m, false)),
+        }
+    }
+
+    /// Estimation, lift-off detection and the control law for a trusted frame;
+    /// returns the motor torques (N m, saturated) and status bits.
+    fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
+        let cfg = self.cfg;
+        let ts = cfg.period_s;
+        let p = cfg.params;
+        let theta2 = decode::wrap(m.theta1 + m.elbow);
+        // Initialise on the first trusted frame: the reference starts where the tip is.
+        let s = match &mut self.started {
+            Some(s) => {
+                let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
+                s.trackers[0].update(m.theta1, dt);
+                s.trackers[1].update(theta2, dt);
+                s.last_seq = seq;
+                *s
+            }
+            None => {
+                let q = Vector2::new(m.theta1, theta2);
+                let z = tip_position(p.l, &q);
+                let s = Started {
+                    seq0: seq,
+                    last_seq: seq,
+                    trackers: [
+                        AngleTracker::new(m.theta1, cfg.observer_bandwidth, ts),
+                        AngleTracker::new(theta2, cfg.observer_bandwidth, ts),
+                    ],
+                    quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
+                    branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
+                };
+                self.started = Some(s);
+                s
+            }
+        };
+        let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
+        let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
+        let z = tip_position(p.l, &q);
+        let z_dot = jacobian(p.l, &q) * qd;
+        let height = z[1] + p.h;
+        let rule = LiftOffRule {
+            lift_off_force: cfg.lift_off_force,
+            lift_off_height: cfg.lift_off_height,
+            confirm: cfg.lift_off_confirm,
+            touchdown_force: cfg.touchdown_force,
+        };
+        let lifted = self.liftoff.update(&rule, m.f_n, height);
+        let reference: RefPoint = s.quintic.at(seq.wrapping_sub(s.seq0) as f32 * ts);
+        let mut flags = m.flags;
+        if lifted {
+            flags |= status::LIFT_OFF;
+        }
+        if reference.moving {
+            flags |= status::REFERENCE_MOVING;
+        }
+        let mut signals = HybridSignals::default();
+        let u_raw = match cfg.controller {
+            ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
+            ControllerKind::Hybrid => {
+                let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
+                let (u, sig) = law::hybrid(
+                    &self.arm,
+                    &cfg.hybrid,
+                    cfg.friction,
+                    &reference,
+                    cfg.f_n_ref,
+                    &input,
+                    &mut self.hybrid,
+                    ts,
+                    self.last_saturated,
+                )?;
+                signals = sig;
+                u
+            }
+        };
+        let (u, sat) = law::saturate(u_raw, cfg.torque_limit);
+        if sat[0] {
+            flags |= status::SATURATED_U1;
+        }
+        if sat[1] {
+            flags |= status::SATURATED_U2;
+        }
+        self.telemetry = Telemetry {
+            q: [q[0], q[1]],
+            qd: [qd[0], qd[1]],
+            z: [z[0], z[1]],
+            z_dot: [z_dot[0], z_dot[1]],
+            reference: [reference.pos, reference.vel, reference.acc],
+            f: [m.f_t, m.f_n],
+            hybrid: signals,
+            u_raw,
+            lifted,
+        };
+        Ok((u, flags))
     }
 }

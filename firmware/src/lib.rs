@@ -11,10 +11,15 @@
 pub mod board;
 pub mod config;
 pub mod controller;
+pub mod decode;
+pub mod estimator;
+pub mod law;
+pub mod liftoff;
+pub mod reference;
 
 pub use board::{Board, TickClock};
 pub use config::{Config, ControllerKind};
-pub use controller::Firmware;
+pub use controller::{Firmware, SafeReason, Telemetry};
 pub use shared;
 pub use shared::wire::{ActuatorCommand, SensorFrame};
 

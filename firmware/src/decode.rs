@@ -1,0 +1,133 @@
+//! Decoding and checking a sensor frame (HARDWARE.md "Sensors").
+
+use core::f32::consts::{PI, TAU};
+
+use shared::wire::{self, SensorFrame, status};
+
+/// A frame in SI units, after its checks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement {
+    /// `theta1`, rad, in `(-pi, pi]`.
+    pub theta1: f32,
+    /// `theta2 - theta1` (elbow encoder), rad, in `(-pi, pi]`.
+    pub elbow: f32,
+    /// Tangential tip force `f_t`, N.
+    pub f_t: f32,
+    /// Normal tip force `f_n`, N.
+    pub f_n: f32,
+    /// Belt speed `v_belt`, m/s.
+    pub v_belt: f32,
+    /// Status bits raised by decoding (`LOAD_CLIPPED`).
+    pub flags: u32,
+}
+
+/// Why a frame is not trusted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameFault {
+    /// An encoder count is outside `[0, 2^14)`.
+    EncoderOutOfRange,
+    /// A load-cell code is outside `[-2048, 2047]`.
+    LoadOutOfRange,
+    /// The belt speed is beyond +-5 m/s (no belt runs that fast: a corrupt frame).
+    BeltOutOfRange,
+    /// The sequence number repeats or goes back.
+    Stale,
+}
+
+impl FrameFault {
+    /// The status bits that report it.
+    pub fn status_bits(self) -> u32 {
+        match self {
+            Self::Stale => status::BAD_FRAME | status::STALE_FRAME,
+            _ => status::BAD_FRAME,
+        }
+    }
+}
+
+/// Wraps an angle to `(-pi, pi]`.
+#[inline]
+pub fn wrap(angle: f32) -> f32 {
+    let mut a = angle % TAU;
+    if a > PI {
+        a -= TAU;
+    } else if a <= -PI {
+        a += TAU;
+    }
+    a
+}
+
+/// Decodes the counts of `frame` into SI units (HARDWARE.md resolutions: 14-bit
+/// encoders, 12-bit load cell over +-25 N, belt speed in mm/s).
+///
+/// # Errors
+/// [`FrameFault`] when a count is out of range. (The sequence check is the
+/// caller's: it needs the previous frame.)
+pub fn decode(frame: &SensorFrame) -> Result<Measurement, FrameFault> {
+    let counts = wire::ENCODER_COUNTS;
+    if frame.theta1_count as u32 >= counts || frame.elbow_count as u32 >= counts {
+        return Err(FrameFault::EncoderOutOfRange);
+    }
+    let load_ok = |c: i16| (wire::LOAD_CODE_MIN..=wire::LOAD_CODE_MAX).contains(&c);
+    if !load_ok(frame.f_t_code) || !load_ok(frame.f_n_code) {
+        return Err(FrameFault::LoadOutOfRange);
+    }
+    if frame.belt_count.unsigned_abs() > 5000 {
+        return Err(FrameFault::BeltOutOfRange);
+    }
+    let lsb_angle = TAU / counts as f32;
+    let lsb_force = wire::LOAD_FULL_SCALE_N / 2048.0;
+    let clipped = |c: i16| c == wire::LOAD_CODE_MIN || c == wire::LOAD_CODE_MAX;
+    Ok(Measurement {
+        theta1: wrap(frame.theta1_count as f32 * lsb_angle),
+        elbow: wrap(frame.elbow_count as f32 * lsb_angle),
+        f_t: frame.f_t_code as f32 * lsb_force,
+        f_n: frame.f_n_code as f32 * lsb_force,
+        v_belt: frame.belt_count as f32 * wire::BELT_SPEED_RESOLUTION,
+        flags: if clipped(frame.f_t_code) || clipped(frame.f_n_code) { status::LOAD_CLIPPED } else { 0 },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encode_decode_round_trips_within_one_count() {
+        for i in -300..300 {
+            let theta1 = i as f64 * 0.0101;
+            let elbow = -0.4 + i as f64 * 0.002;
+            let f_n = i as f64 * 0.07;
+            let frame = SensorFrame {
+                theta1_count: wire::encode_angle(theta1),
+                elbow_count: wire::encode_angle(elbow),
+                f_t_code: wire::encode_force(-f_n * 0.6),
+                f_n_code: wire::encode_force(f_n),
+                belt_count: -400,
+                ..SensorFrame::default()
+            };
+            let m = decode(&frame).unwrap();
+            let lsb = TAU as f64 / 16384.0;
+            assert!((wrap((m.theta1 as f64 - theta1) as f32) as f64).abs() <= lsb, "theta1");
+            assert!((wrap((m.elbow as f64 - elbow) as f32) as f64).abs() <= lsb, "elbow");
+            let f_lsb = 25.0 / 2048.0;
+            if f_n.abs() < 24.9 {
+                assert!((m.f_n as f64 - f_n).abs() <= f_lsb, "f_n {f_n}");
+                assert_eq!(m.flags & status::LOAD_CLIPPED, 0);
+            } else {
+                assert_ne!(m.flags & status::LOAD_CLIPPED, 0, "saturation is reported");
+            }
+            assert!((m.v_belt + 0.4).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn out_of_range_counts_are_faults() {
+        let ok = SensorFrame::default();
+        assert!(decode(&ok).is_ok());
+        assert_eq!(decode(&SensorFrame { theta1_count: 16384, ..ok }), Err(FrameFault::EncoderOutOfRange));
+        assert_eq!(decode(&SensorFrame { elbow_count: u16::MAX, ..ok }), Err(FrameFault::EncoderOutOfRange));
+        assert_eq!(decode(&SensorFrame { f_n_code: 2048, ..ok }), Err(FrameFault::LoadOutOfRange));
+        assert_eq!(decode(&SensorFrame { f_t_code: i16::MIN, ..ok }), Err(FrameFault::LoadOutOfRange));
+        assert_eq!(decode(&SensorFrame { belt_count: i16::MIN, ..ok }), Err(FrameFault::BeltOutOfRange));
+    }
+}

@@ -1,0 +1,182 @@
+//! The control laws of the paper, in `f32`: the joint-space PID (eq. 8) and the
+//! hybrid force/motion law (eqs. 9 to 11), with anti-windup and saturation.
+
+use nalgebra::{Matrix2, Vector2};
+use shared::{
+    Arm, ElbowBranch,
+    kinematics::{inverse_kinematics, jacobian, jdot_qdot, tip_position},
+};
+
+use crate::{
+    config::{FrictionCompensation, HybridGains, PidGains},
+    reference::RefPoint,
+};
+
+/// Why a law could not produce a torque (the firmware then enters its safe state).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LawError {
+    /// The reference tip position has no inverse kinematics (PID).
+    Unreachable,
+    /// The Jacobian is singular (the arm is straight): `J^-1` does not exist (hybrid).
+    Singular,
+    /// A value became NaN or infinite.
+    NonFinite,
+}
+
+/// Motor torques `[u1, u2]` (N m) saturated at `limit`, and which ones saturated.
+#[inline]
+pub fn saturate(u: [f32; 2], limit: f32) -> ([f32; 2], [bool; 2]) {
+    let s = |x: f32| x.clamp(-limit, limit);
+    ([s(u[0]), s(u[1])], [u[0].abs() > limit, u[1].abs() > limit])
+}
+
+/// Integrator state of the PID (rad s per joint of `q'`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PidState {
+    /// `int (q'* - q') dt`, rad s.
+    pub integral: [f32; 2],
+}
+
+/// The PID of MODEL.md experiment 5 (paper eq. 8) on `q' = [theta1, theta2 - theta1]`:
+/// `u_i = K_P,i e_i + K_I,i int e_i dt + K_D,i (q'*_dot_i - q'_dot_i)`, the motor
+/// torques `[u1, u2]`. The reference `q'*` comes from inverse kinematics of
+/// `z* = [z_t*, -H]` on `branch`, and `q'*_dot` from `J(q*)^-1 [z_t_dot*, 0]`.
+///
+/// Anti-windup by conditional integration: an integrator does not grow while its
+/// output is saturated in the direction of its error.
+///
+/// Inputs: estimated `q = [theta1, theta2]` (rad), `qd` (rad/s), period `dt` (s).
+/// Returns the unsaturated motor torques (N m).
+///
+/// # Errors
+/// [`LawError::Unreachable`] if `z*` is out of reach, [`LawError::Singular`] at a
+/// straight-arm reference, [`LawError::NonFinite`].
+#[allow(clippy::too_many_arguments)]
+pub fn pid(
+    arm: &Arm<f32>,
+    gains: &PidGains,
+    branch: ElbowBranch,
+    reference: &RefPoint,
+    q: Vector2<f32>,
+    qd: Vector2<f32>,
+    state: &mut PidState,
+    dt: f32,
+    limit: f32,
+) -> Result<[f32; 2], LawError> {
+    let p = &arm.params;
+    let q_ref = inverse_kinematics(p.l, &Vector2::new(reference.pos, -p.h), branch).map_err(|_| LawError::Unreachable)?;
+    let j_ref = jacobian(p.l, &q_ref);
+    let qd_ref = j_ref.try_inverse().ok_or(LawError::Singular)? * Vector2::new(reference.vel, 0.0);
+    let to_prime = |v: Vector2<f32>| [v[0], v[1] - v[0]];
+    let (e, ed) = {
+        let (r, m) = (to_prime(q_ref), to_prime(q));
+        let (rd, md) = (to_prime(qd_ref), to_prime(qd));
+        ([r[0] - m[0], r[1] - m[1]], [rd[0] - md[0], rd[1] - md[1]])
+    };
+    let mut u = [0.0f32; 2];
+    for i in 0..2 {
+        let unclamped = gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i];
+        let winding = unclamped.abs() > limit && unclamped.signum() == e[i].signum();
+        if !winding {
+            state.integral[i] += e[i] * dt;
+        }
+        u[i] = gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i];
+    }
+    if u.iter().all(|x| x.is_finite()) { Ok(u) } else { Err(LawError::NonFinite) }
+}
+
+/// State of the hybrid law's force integrator (N s).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct HybridState {
+    /// `int (f_n* - f_n) dt`, N s.
+    pub force_integral: f32,
+}
+
+/// Signals of one evaluation of the hybrid law (for telemetry and tests).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct HybridSignals {
+    /// `a_v`, m/s^2 (paper eq. 10).
+    pub a_v: f32,
+    /// `a_f`, N (paper eq. 11).
+    pub a_f: f32,
+    /// The friction term used, N.
+    pub f_t_hat: f32,
+    /// Generalised torque `u = [u1 - u2, u2]`, N m (paper eq. 9).
+    pub u_gen: [f32; 2],
+}
+
+/// Measured inputs of the hybrid law.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HybridInput {
+    /// Estimated joint angles `[theta1, theta2]`, rad.
+    pub q: Vector2<f32>,
+    /// Estimated joint velocities, rad/s.
+    pub qd: Vector2<f32>,
+    /// Measured tangential force `f_t`, N (from the current frame: one period old in effect).
+    pub f_t: f32,
+    /// Measured normal force `f_n`, N.
+    pub f_n: f32,
+    /// Measured belt speed, m/s.
+    pub v_belt: f32,
+}
+
+/// The hybrid force/motion law of MODEL.md experiment 6 (paper eqs. 9 to 11):
+/// `u = w + c + M J^-1 (-J_dot q_dot + i_x a_v) + J^T (-i_x f_t_hat - i_y a_f)`,
+/// `a_v = z_t_ddot* + K'_P (z_t* - z_t) + K'_D (z_t_dot* - z_t_dot)`,
+/// `a_f = f_n* + K'_I int (f_n* - f_n) dt`. Returns the motor torques
+/// `[u1, u2] = [u_gen_0 + u_gen_1, u_gen_1]` (N m, unsaturated) and the signals.
+///
+/// In sliding with exact model and forces the tip obeys `z_t_ddot = a_v` and
+/// `f_n = a_f` (the decoupling the paper designs for). The friction term
+/// `f_t_hat` follows `comp` (see [`FrictionCompensation`] for the stability of each).
+/// Anti-windup: the force integrator holds while a motor is saturated (`saturated`
+/// from the previous period) and its contribution is clamped to `+-4 f_n*`.
+///
+/// # Errors
+/// [`LawError::Singular`] when `|sin(theta2 - theta1)| < 1e-3` (straight arm),
+/// [`LawError::NonFinite`].
+#[allow(clippy::too_many_arguments)]
+pub fn hybrid(
+    arm: &Arm<f32>,
+    gains: &HybridGains,
+    comp: FrictionCompensation,
+    reference: &RefPoint,
+    f_n_ref: f32,
+    input: &HybridInput,
+    state: &mut HybridState,
+    dt: f32,
+    saturated: bool,
+) -> Result<([f32; 2], HybridSignals), LawError> {
+    let p = &arm.params;
+    let (q, qd) = (input.q, input.qd);
+    let jac = jacobian(p.l, &q);
+    if libm::fabsf(libm::sinf(q[1] - q[0])) < 1e-3 {
+        return Err(LawError::Singular);
+    }
+    let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
+    let z = tip_position(p.l, &q);
+    let z_dot = jac * qd;
+    let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
+    if !saturated {
+        state.force_integral += (f_n_ref - input.f_n) * dt;
+    }
+    let i_max = if gains.ki > 0.0 { 4.0 * f_n_ref.max(1.0) / gains.ki } else { 0.0 };
+    state.force_integral = state.force_integral.clamp(-i_max, i_max);
+    let a_f = f_n_ref + gains.ki * state.force_integral;
+    let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
+    let f_t_hat = match comp {
+        FrictionCompensation::Measured => input.f_t,
+        FrictionCompensation::ModelMeasuredNormal => -p.mu * s * input.f_n,
+        FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
+        FrictionCompensation::None => 0.0,
+    };
+    let wc = arm.w(&q, &qd) + arm.c(&q, &qd);
+    let m = arm.mass_matrix(&q);
+    let s_vec = jdot_qdot(p.l, &q, &qd);
+    let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
+    let motor = [u_gen[0] + u_gen[1], u_gen[1]];
+    if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
+        return Err(LawError::NonFinite);
+    }
+    Ok((motor, HybridSignals { a_v, a_f, f_t_hat, u_gen: [u_gen[0], u_gen[1]] }))
+}
