@@ -180,3 +180,52 @@ pub fn hybrid(
     }
     Ok((motor, HybridSignals { a_v, a_f, f_t_hat, u_gen: [u_gen[0], u_gen[1]] }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use proptest::prelude::*;
+    use shared::{Params, SlipDirection, contact::sliding_force};
+
+    proptest! {
+        /// Paper eqs. 9 to 11: with exact model values and exact forces, in sliding,
+        /// the tip's tangential acceleration is `a_v` and the normal reaction is `a_f`.
+        #[test]
+        fn hybrid_law_decouples_in_sliding(
+            z_t in -0.15f64..0.12, down in proptest::bool::ANY,
+            qd1 in -2.0f64..2.0, ref_pos in -0.15f32..0.15, ref_vel in -0.3f32..0.3, ref_acc in -2.0f32..2.0,
+            integral in -0.01f32..0.01,
+        ) {
+            let params = Params::<f64>::paper();
+            let arm64 = Arm::new(params);
+            let branch = if down { ElbowBranch::Down } else { ElbowBranch::Up };
+            let q = inverse_kinematics(params.l, &Vector2::new(z_t, -params.h), branch).unwrap();
+            // A velocity tangent to the belt: z_n_dot = 0.
+            let j = jacobian(params.l, &q);
+            let qd = Vector2::new(qd1, -j[(1, 0)] * qd1 / j[(1, 1)]);
+            let z_dot = j * qd;
+            let dir = SlipDirection::of(z_dot[0] - params.v_belt);
+            let cfg = Config::default();
+            let arm32 = Arm::new(cfg.params);
+            let reference = RefPoint { pos: ref_pos, vel: ref_vel, acc: ref_acc, moving: true };
+            // The exact friction force is what the law compensates (its `Measured` option).
+            // f_t depends on f_n = a_f; iterate the fixed point once with the law's own a_f.
+            let mut state = HybridState { force_integral: integral };
+            let a_f = cfg.f_n_ref + cfg.hybrid.ki * integral;
+            let f_t_exact = -(params.mu as f32) * dir.sign::<f32>() * a_f;
+            let input = HybridInput { q: q.cast(), qd: qd.cast(), f_t: f_t_exact, f_n: cfg.f_n_ref, v_belt: params.v_belt as f32 };
+            let (motor, sig) = hybrid(&arm32, &cfg.hybrid, FrictionCompensation::Measured, &reference, cfg.f_n_ref, &input, &mut state, 0.0, false).unwrap();
+            prop_assert!((sig.a_f - a_f).abs() < 1e-4);
+            // The plant (f64) under these motor torques, sliding.
+            let u = Arm::generalised_torque(&Vector2::new(motor[0] as f64, motor[1] as f64));
+            let td = arm64.tip_dynamics(&q, &qd, &u);
+            let p = td.p(params.mu, dir);
+            prop_assume!(p > 0.05 * td.qmat[(1, 1)]);
+            let f = sliding_force(&td, params.mu, dir);
+            let z_ddot = td.a_free + td.qmat * f;
+            prop_assert!((f[1] - sig.a_f as f64).abs() < 1e-3 * sig.a_f.abs().max(1.0) as f64, "f_n {} vs a_f {}", f[1], sig.a_f);
+            prop_assert!((z_ddot[0] - sig.a_v as f64).abs() < 2e-3 * (sig.a_v.abs() as f64 + 10.0), "z_t_ddot {} vs a_v {}", z_ddot[0], sig.a_v);
+        }
+    }
+}

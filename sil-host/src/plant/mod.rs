@@ -36,8 +36,10 @@
 //!
 //! Corner case: at rest relative to the belt with no consistent contact force
 //! (sticking force outside the cone and no consistent slip, the tip pressed on the
-//! belt) the tip is held stuck with the cone ignored until lift-off or the end of
-//! the current `advance` interval, then the contact problem is solved again; one
+//! belt), or when the contact mode keeps switching at one instant (slip starting
+//! and stopping at once because the slip acceleration is zero to rounding), the tip
+//! is held stuck with the cone ignored until lift-off or the end of the current
+//! `advance` interval, then the contact problem is solved again; one
 //! [`EventKind::ConeViolation`] is reported per episode.
 
 pub mod impact;
@@ -419,6 +421,9 @@ impl std::fmt::Debug for Integrator {
     }
 }
 
+/// Events at one instant after which the contact is held stuck (module docs, corner case).
+const STALL_LIMIT: usize = 16;
+
 /// Rounding slack on the (dimensionless) event components at the start of a segment.
 const START_SLACK: f64 = 1e-12;
 
@@ -591,6 +596,8 @@ impl Plant {
         let t_end = self.t + dt;
         let mut events: Vec<PlantEvent> = Vec::new();
         let mut handled = 0usize;
+        // Zero-time loops: mode changes that follow each other without time passing.
+        let (mut stall_t, mut stalled) = (f64::NAN, 0usize);
         loop {
             let remaining = t_end - self.t;
             if remaining <= 1e-13 * t_end.abs().max(1.0) {
@@ -612,6 +619,10 @@ impl Plant {
             // rest has s v_r = +-1e-16), or it ends at once.
             let (boundary, g0) = self.segment(ctrl).nearest_boundary(self.t, &self.y);
             if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(ctrl) {
+                if self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
+                    handled += 1;
+                    continue;
+                }
                 self.cross(ctrl, boundary, &mut events)?;
                 handled += 1;
                 continue;
@@ -622,7 +633,9 @@ impl Plant {
             self.counters.segments += 1;
             match hit {
                 Some(b) => {
-                    self.cross(ctrl, b, &mut events)?;
+                    if !self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
+                        self.cross(ctrl, b, &mut events)?;
+                    }
                     handled += 1;
                 }
                 None => {
@@ -643,6 +656,28 @@ impl Plant {
             [f[0], f[1]]
         };
         Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
+    }
+
+    /// Counts mode changes at one instant; after [`STALL_LIMIT`] of them in contact
+    /// (slip starting and stopping at once: the slip acceleration is zero to
+    /// rounding in both directions) holds the tip stuck, cone ignored, to the end of
+    /// the interval (the documented corner case). Returns whether it did.
+    fn note_stall(&mut self, stall_t: &mut f64, stalled: &mut usize, events: &mut Vec<PlantEvent>) -> Result<bool, SimError> {
+        if (self.t - *stall_t).abs() <= 1e-12 * self.t.abs().max(1.0) {
+            *stalled += 1;
+        } else {
+            (*stall_t, *stalled) = (self.t, 0);
+        }
+        if *stalled < STALL_LIMIT || self.phase == Phase::Flight {
+            return Ok(false);
+        }
+        let before = self.rel_velocity();
+        self.project_contact_velocity(true)?;
+        self.phase = Phase::Sticking;
+        self.cone_relaxed = true;
+        self.enter_violation(events, before);
+        (*stall_t, *stalled) = (f64::NAN, 0);
+        Ok(true)
     }
 
     /// Flight starting on the belt with the tip not moving away (e.g. after `b`
@@ -826,9 +861,13 @@ impl Plant {
         let previous_dir = self.slip_direction();
         let before = self.rel_velocity();
         let mu = self.arm.params.mu;
+        let at_rest = before[0].abs() <= self.cfg.v_stick || entry != Entry::Settle;
+        if at_rest {
+            // Start from exactly zero slip, so that the chosen mode starts inside its domain.
+            self.project_contact_velocity(true)?;
+        }
         self.phase = Phase::Sticking; // evaluate sticking forces
         let (td, f_stick, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
-        let at_rest = before[0].abs() <= self.cfg.v_stick || entry != Entry::Settle;
         let dir = if at_rest {
             if entry != Entry::ConeEdge && sticking_is_consistent(&f_stick, mu) {
                 self.project_contact_velocity(true)?;
