@@ -92,6 +92,7 @@ struct Started {
     last_seq: u32,
     trackers: [AngleTracker; 2],
     quintic: Quintic,
+    force_ramp: Quintic,
     branch: ElbowBranch,
 }
 
@@ -105,6 +106,7 @@ pub struct Firmware {
     pid: PidState,
     hybrid: HybridState,
     last_codes: [i16; 2],
+    applied: [f32; 2],
     last_saturated: bool,
     consecutive_bad: u16,
     consecutive_misses: u16,
@@ -133,6 +135,7 @@ impl Firmware {
             pid: PidState::default(),
             hybrid: HybridState::default(),
             last_codes: [0, 0],
+            applied: [0.0, 0.0],
             last_saturated: false,
             consecutive_bad: 0,
             consecutive_misses: 0,
@@ -243,6 +246,7 @@ impl Firmware {
             None => codes,
         };
         self.last_codes = codes;
+        self.applied = [wire::decode_torque(codes[0]), wire::decode_torque(codes[1])];
         ActuatorCommand {
             seq: frame.seq,
             u1_code: codes[0],
@@ -275,8 +279,16 @@ impl Firmware {
         let s = match &mut self.started {
             Some(s) => {
                 let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
-                s.trackers[0].update(m.theta1, dt);
-                s.trackers[1].update(theta2, dt);
+                // Model-based prediction: the joint acceleration under the torque we
+                // commanded and the force we measured (both held over the interval).
+                let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
+                let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
+                let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
+                let td = self.arm.tip_dynamics(&q, &qd, &u);
+                let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
+                let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
+                s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]);
+                s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]);
                 s.last_seq = seq;
                 *s
             }
@@ -291,6 +303,7 @@ impl Firmware {
                         AngleTracker::new(theta2, cfg.observer_bandwidth, ts),
                     ],
                     quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
+                    force_ramp: Quintic { start: m.f_n.clamp(0.0, cfg.f_n_ref), target: cfg.f_n_ref, duration: cfg.force_ramp_s.max(1e-9) },
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
                 };
                 self.started = Some(s);
@@ -309,7 +322,9 @@ impl Firmware {
             touchdown_force: cfg.touchdown_force,
         };
         let lifted = self.liftoff.update(&rule, m.f_n, height);
-        let reference: RefPoint = s.quintic.at(seq.wrapping_sub(s.seq0) as f32 * ts);
+        let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
+        let reference: RefPoint = s.quintic.at(t_run);
+        let f_n_ref = s.force_ramp.at(t_run).pos;
         let mut flags = m.flags;
         if lifted {
             flags |= status::LIFT_OFF;
@@ -327,7 +342,7 @@ impl Firmware {
                     &cfg.hybrid,
                     cfg.friction,
                     &reference,
-                    cfg.f_n_ref,
+                    f_n_ref,
                     &input,
                     &mut self.hybrid,
                     ts,

@@ -8,6 +8,11 @@
 //! about `2 / w` (8 ms at the default 40 Hz). The 14-bit quantisation
 //! (0.38 mrad, `q / sqrt(12)` = 0.11 mrad rms) then gives a velocity noise of a
 //! few hundredths of a rad/s instead of the 0.38 rad/s of a raw difference.
+//!
+//! The firmware drives the prediction with the model's joint acceleration
+//! (`M^-1 (u - w - c + J^T f)` with the torque it commanded and the forces it
+//! measured): the estimate then follows the motion the model explains with no
+//! lag, and the observer only corrects what the model misses.
 
 use crate::decode::wrap;
 
@@ -31,7 +36,15 @@ impl AngleTracker {
 
     /// Folds in measurement `measured` (rad, any turn) taken `dt` s after the previous one.
     pub fn update(&mut self, measured: f32, dt: f32) {
-        let predicted = self.angle + self.rate * dt;
+        self.update_with_acceleration(measured, dt, 0.0);
+    }
+
+    /// As [`AngleTracker::update`], with the prediction driven by a known angular
+    /// acceleration `accel` (rad/s^2) over the interval: a model-based observer,
+    /// whose estimate does not lag the motion the model explains.
+    pub fn update_with_acceleration(&mut self, measured: f32, dt: f32, accel: f32) {
+        let predicted = self.angle + self.rate * dt + 0.5 * accel * dt * dt;
+        self.rate += accel * dt;
         // The residual is taken modulo one turn, so the estimate stays continuous.
         let residual = wrap(measured - predicted);
         self.angle = predicted + self.alpha * residual;

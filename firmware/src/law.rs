@@ -130,7 +130,8 @@ pub struct HybridInput {
 /// `f_n = a_f` (the decoupling the paper designs for). The friction term
 /// `f_t_hat` follows `comp` (see [`FrictionCompensation`] for the stability of each).
 /// Anti-windup: the force integrator holds while a motor is saturated (`saturated`
-/// from the previous period) and its contribution is clamped to `+-4 f_n*`.
+/// from the previous period) and its contribution is clamped to `+-4 f_n*`. The
+/// integral enters `a_f` one period after the error it integrates (forward Euler).
 ///
 /// # Errors
 /// [`LawError::Singular`] when `|sin(theta2 - theta1)| < 1e-3` (straight arm),
@@ -157,12 +158,14 @@ pub fn hybrid(
     let z = tip_position(p.l, &q);
     let z_dot = jac * qd;
     let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
+    // The integral up to the previous sample (forward Euler): a new error acts from
+    // the next period, so the first period does not kick `a_f`.
+    let a_f = f_n_ref + gains.ki * state.force_integral;
     if !saturated {
         state.force_integral += (f_n_ref - input.f_n) * dt;
     }
     let i_max = if gains.ki > 0.0 { 4.0 * f_n_ref.max(1.0) / gains.ki } else { 0.0 };
     state.force_integral = state.force_integral.clamp(-i_max, i_max);
-    let a_f = f_n_ref + gains.ki * state.force_integral;
     let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
     let f_t_hat = match comp {
         FrictionCompensation::Measured => input.f_t,
