@@ -17,6 +17,9 @@ pub mod law;
 pub mod liftoff;
 pub mod reference;
 
+#[cfg(test)]
+mod tests;
+
 pub use board::{Board, TickClock};
 pub use config::{Config, ControllerKind};
 pub use controller::{Firmware, SafeReason, Telemetry};

@@ -1,0 +1,232 @@
+//! Host tests of the step: hand-computed law outputs, deadline monitoring, the
+//! safe state, and hostile frames.
+
+use core::cell::Cell;
+
+use nalgebra::Vector2;
+use proptest::prelude::*;
+use shared::{
+    ElbowBranch,
+    kinematics::{inverse_kinematics, tip_position},
+    wire::{self, SensorFrame, status},
+};
+
+use crate::{
+    config::{Config, ControllerKind, FrictionCompensation},
+    controller::{Firmware, SafeReason},
+    law::{self, HybridInput, HybridState, PidState},
+    reference::RefPoint,
+    TickClock,
+};
+
+/// A clock that advances by `step` ticks (1 tick = 1 us) at every read.
+struct SteppingClock {
+    now: Cell<u32>,
+    step: u32,
+}
+
+impl TickClock for SteppingClock {
+    fn ticks(&self) -> u32 {
+        let t = self.now.get();
+        self.now.set(t.wrapping_add(self.step));
+        t
+    }
+    fn ticks_per_second(&self) -> u32 {
+        1_000_000
+    }
+}
+
+/// A frame of the arm at `q` (rad) with forces `f` (N), period `seq`.
+fn frame(seq: u32, q: [f64; 2], f: [f64; 2]) -> SensorFrame {
+    SensorFrame {
+        t_us: seq as u64 * 1000,
+        seq,
+        theta1_count: wire::encode_angle(q[0]),
+        elbow_count: wire::encode_angle(q[1] - q[0]),
+        f_t_code: wire::encode_force(f[0]),
+        f_n_code: wire::encode_force(f[1]),
+        belt_count: -400,
+        flags: 0,
+    }
+}
+
+fn x0d() -> [f64; 2] {
+    let q = inverse_kinematics(0.21, &Vector2::new(-0.16, -0.3775), ElbowBranch::Down).unwrap();
+    [q[0], q[1]]
+}
+
+#[test]
+fn pid_matches_hand_computed_values() {
+    let cfg = Config::default();
+    let arm = shared::Arm::new(cfg.params);
+    let reference = RefPoint { pos: -0.1, vel: 0.0, acc: 0.0, moving: false };
+    let q_ref = inverse_kinematics(0.21f32, &Vector2::new(-0.1, -0.3775), ElbowBranch::Down).unwrap();
+    // theta1 off by +0.01 rad, theta2 - theta1 unchanged, theta1_dot = 0.5 rad/s.
+    let q = q_ref + Vector2::new(0.01, 0.01);
+    let qd = Vector2::new(0.5, 0.5);
+    let mut st = PidState::default();
+    let u = law::pid(&arm, &cfg.pid, ElbowBranch::Down, &reference, q, qd, &mut st, 1e-3, 5.0).unwrap();
+    // e1 = -0.01, e1_dot = -0.5, int e1 = -1e-5: u1 = 200 (-0.01) + 25 (-1e-5) + 2 (-0.5).
+    assert!((u[0] - (-3.00025)).abs() < 2e-4, "u1 = {}", u[0]);
+    assert_eq!(u[1], 0.0, "joint-2 gains are zero");
+    // Anti-windup: a huge error saturates and the integral stops growing.
+    let mut st = PidState::default();
+    let q_far = q_ref + Vector2::new(0.5, 0.5);
+    for _ in 0..100 {
+        let _ = law::pid(&arm, &cfg.pid, ElbowBranch::Down, &reference, q_far, Vector2::zeros(), &mut st, 1e-3, 5.0).unwrap();
+    }
+    assert_eq!(st.integral[0], 0.0, "no integration while saturated in the error's direction");
+}
+
+#[test]
+fn hybrid_matches_hand_computed_values() {
+    let cfg = Config::default();
+    let arm = shared::Arm::new(cfg.params);
+    let (l, m, g, k, a0) = (0.21f32, 0.12f32, 9.81f32, 1.3f32, 13.72f32.to_radians());
+    let q = Vector2::new(0.3f32, -0.4f32);
+    let z = tip_position(l, &q);
+    // At rest, the reference at the tip (a_v = 0), no friction term, integral 0:
+    // u_gen = w(q, 0) + J^T [0, -f_n*], motor torques [u_gen_0 + u_gen_1, u_gen_1].
+    let reference = RefPoint { pos: z[0], vel: 0.0, acc: 0.0, moving: false };
+    let input = HybridInput { q, qd: Vector2::zeros(), f_t: 0.0, f_n: 10.0, v_belt: -0.4 };
+    let mut st = HybridState::default();
+    let (u, sig) = law::hybrid(&arm, &cfg.hybrid, FrictionCompensation::None, &reference, 10.0, &input, &mut st, 1e-3, false).unwrap();
+    let spring = k * (q[1] - q[0] + a0);
+    let w1 = 1.5 * m * g * l * q[0].sin() - spring;
+    let w2 = 0.5 * m * g * l * q[1].sin() + spring;
+    let g0 = w1 - 10.0 * l * q[0].sin();
+    let g1 = w2 - 10.0 * l * q[1].sin();
+    assert!(sig.a_v.abs() < 1e-3 && (sig.a_f - 10.0).abs() < 1e-6);
+    assert!((u[0] - (g0 + g1)).abs() < 1e-4, "u1 {} vs {}", u[0], g0 + g1);
+    assert!((u[1] - g1).abs() < 1e-4, "u2 {} vs {}", u[1], g1);
+    // The commanded-normal friction term adds J^T [mu s a_f, 0] with s = sign(0 - v_belt) = +1.
+    let mut st = HybridState::default();
+    let (u_c, _) =
+        law::hybrid(&arm, &cfg.hybrid, FrictionCompensation::ModelCommandedNormal, &reference, 10.0, &input, &mut st, 1e-3, false).unwrap();
+    let ft = 0.6 * 10.0;
+    assert!((u_c[1] - (g1 + ft * l * q[1].cos())).abs() < 1e-4);
+    assert!((u_c[0] - (g0 + g1 + ft * l * (q[0].cos() + q[1].cos()))).abs() < 1e-4);
+}
+
+#[test]
+fn deadline_misses_latch_the_safe_state_until_reset() {
+    let cfg = Config { deadline_miss_limit: 3, ..Config::default() };
+    let mut fw = Firmware::new(cfg).unwrap();
+    let q = x0d();
+    let clock = SteppingClock { now: Cell::new(0), step: 50 };
+    // On time: the frame is handled at t_k + 100 us and the step takes 50 us.
+    for k in 0..5 {
+        let c = fw.step(k as u64 * 1000 + 100, &frame(k, q, [-1.0, 2.0]), &clock);
+        assert_eq!(c.status & (status::DEADLINE_MISS | status::SAFE_STATE), 0);
+        assert_eq!(c.step_ticks, 50);
+    }
+    // Two late periods (handled 990 us late: with the step's 50 us, past the deadline).
+    for k in 5..7 {
+        let c = fw.step(k as u64 * 1000 + 990, &frame(k, q, [-1.0, 2.0]), &clock);
+        assert_ne!(c.status & status::DEADLINE_MISS, 0, "miss detected in the period it happens");
+        assert_eq!(c.status & status::SAFE_STATE, 0, "two misses are tolerated");
+    }
+    // An on-time period resets the run of misses.
+    let c = fw.step(7000 + 100, &frame(7, q, [-1.0, 2.0]), &clock);
+    assert_eq!(c.status & status::DEADLINE_MISS, 0);
+    assert_eq!(fw.overruns(), 2);
+    // Three in a row latch the safe state in the third.
+    for k in 8..11 {
+        let c = fw.step(k as u64 * 1000 + 990, &frame(k, q, [-1.0, 2.0]), &clock);
+        assert_eq!(c.status & status::SAFE_STATE != 0, k == 10, "safe state at the 3rd consecutive miss (k = {k})");
+    }
+    // It stays, with zero torque, even when on time again.
+    let c = fw.step(11_000 + 100, &frame(11, q, [-1.0, 2.0]), &clock);
+    assert_eq!((c.u1_code, c.u2_code), (0, 0));
+    assert_eq!(SafeReason::from_status(c.status), Some(SafeReason::DeadlineMisses));
+    assert_eq!(c.overruns, 5);
+    fw.reset();
+    let c = fw.step(12_000 + 100, &frame(12, q, [-1.0, 2.0]), &clock);
+    assert_eq!(c.status & status::SAFE_STATE, 0, "reset leaves the safe state");
+    assert_ne!((c.u1_code, c.u2_code), (0, 0));
+}
+
+#[test]
+fn bad_and_stale_frames_are_never_trusted() {
+    let mut fw = Firmware::new(Config::default()).unwrap();
+    let q = x0d();
+    let clock = crate::board::FrozenClock;
+    let good = fw.step(0, &frame(0, q, [-1.0, 2.0]), &clock);
+    let good = fw.step(1000, &frame(1, q, [-1.0, 2.0]), &clock).u1_code.max(good.u1_code);
+    let _ = good;
+    let held = fw.step(2000, &frame(2, q, [-1.0, 2.0]), &clock);
+    // A repeated sequence number: stale, previous command held.
+    let c = fw.step(2000, &frame(2, q, [-1.0, 2.0]), &clock);
+    assert_ne!(c.status & status::STALE_FRAME, 0);
+    assert_eq!((c.u1_code, c.u2_code), (held.u1_code, held.u2_code));
+    // A skipped period is accepted and reported.
+    let c = fw.step(5000, &frame(5, q, [-1.0, 2.0]), &clock);
+    assert_ne!(c.status & status::SEQUENCE_GAP, 0);
+    assert_eq!(c.status & status::BAD_FRAME, 0);
+    // Three corrupt frames in a row latch the safe state.
+    for k in 6..9 {
+        let mut f = frame(k, q, [-1.0, 2.0]);
+        f.theta1_count = 0xFFFF;
+        let c = fw.step(k as u64 * 1000, &f, &clock);
+        assert_ne!(c.status & status::BAD_FRAME, 0);
+        assert_eq!(c.status & status::SAFE_STATE != 0, k == 8);
+    }
+    assert_eq!(fw.safe_state(), Some(SafeReason::BadFrames));
+}
+
+#[test]
+fn hybrid_near_a_straight_arm_goes_safe_not_nan() {
+    let mut fw = Firmware::new(Config::default()).unwrap();
+    // theta1 = theta2: the arm is straight, J is singular.
+    let c = fw.step(0, &frame(0, [0.2, 0.2], [0.0, 5.0]), &crate::board::FrozenClock);
+    assert_eq!(SafeReason::from_status(c.status), Some(SafeReason::Singular));
+    assert_eq!((c.u1_code, c.u2_code), (0, 0));
+}
+
+#[test]
+fn pid_with_an_unreachable_target_goes_safe() {
+    let cfg = Config { controller: ControllerKind::Pid, target_z_t: 0.3, move_time_s: 0.01, ..Config::default() };
+    let mut fw = Firmware::new(cfg).unwrap();
+    let q = x0d();
+    let mut last = None;
+    for k in 0..20 {
+        last = Some(fw.step(k as u64 * 1000, &frame(k, q, [-1.0, 2.0]), &crate::board::FrozenClock));
+    }
+    assert_eq!(SafeReason::from_status(last.unwrap().status), Some(SafeReason::Unreachable));
+}
+
+#[test]
+fn invalid_configurations_are_rejected_with_the_field_named() {
+    let bad = Config { period_s: 0.1, ..Config::default() };
+    assert!(matches!(Firmware::new(bad), Err(crate::config::ConfigError::OutOfRange { name: "period_s", .. })));
+    let bad = Config { f_n_ref: f32::NAN, ..Config::default() };
+    assert!(matches!(Firmware::new(bad), Err(crate::config::ConfigError::OutOfRange { name: "f_n_ref", .. })));
+}
+
+proptest! {
+    /// Random and hostile frames after a good start: never a panic, codes in range,
+    /// and the safe state means zero torque.
+    #[test]
+    fn hostile_frames_never_panic(frames in proptest::collection::vec(
+        (any::<u32>(), any::<u16>(), any::<u16>(), any::<i16>(), any::<i16>(), any::<i16>(), any::<u64>()), 1..60),
+        controller_is_pid in any::<bool>(),
+    ) {
+        let cfg = Config { controller: if controller_is_pid { ControllerKind::Pid } else { ControllerKind::Hybrid }, ..Config::default() };
+        let mut fw = Firmware::new(cfg).unwrap();
+        let clock = SteppingClock { now: Cell::new(0), step: 7 };
+        let _ = fw.step(0, &frame(0, x0d(), [-1.0, 2.0]), &clock);
+        for (seq, c1, c2, ft, fnn, belt, now) in frames {
+            let f = SensorFrame { t_us: seq as u64 * 1000, seq, theta1_count: c1, elbow_count: c2, f_t_code: ft, f_n_code: fnn, belt_count: belt, flags: 0 };
+            let c = fw.step(now, &f, &clock);
+            prop_assert_eq!(c.seq, seq);
+            prop_assert!((wire::TORQUE_CODE_MIN..=wire::TORQUE_CODE_MAX).contains(&c.u1_code));
+            prop_assert!((wire::TORQUE_CODE_MIN..=wire::TORQUE_CODE_MAX).contains(&c.u2_code));
+            if c.status & status::SAFE_STATE != 0 {
+                prop_assert_eq!((c.u1_code, c.u2_code), (0, 0));
+                prop_assert!(SafeReason::from_status(c.status).is_some());
+            }
+            let t = fw.telemetry();
+            prop_assert!(t.u_raw.iter().all(|u| u.is_finite()));
+        }
+    }
+}
