@@ -12,11 +12,11 @@ use shared::{
 };
 
 use crate::{
+    TickClock,
     config::{Config, ControllerKind, FrictionCompensation},
     controller::{Firmware, SafeReason},
     law::{self, HybridInput, HybridState, PidState},
     reference::RefPoint,
-    TickClock,
 };
 
 /// A clock that advances by `step` ticks (1 tick = 1 us) at every read.
