@@ -230,3 +230,17 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn torque_saturation_is_reported_in_the_status_word() {
+    // A PID reference 10 cm away at once (move time one period): u1 saturates.
+    let cfg = Config { controller: ControllerKind::Pid, target_z_t: -0.06, move_time_s: 1e-3, ..Config::default() };
+    let mut fw = Firmware::new(cfg).unwrap();
+    let q = x0d();
+    let _ = fw.step(0, &frame(0, q, [-1.0, 2.0]), &crate::board::FrozenClock);
+    let c = fw.step(1000, &frame(1, q, [-1.0, 2.0]), &crate::board::FrozenClock);
+    assert_ne!(c.status & status::SATURATED_U1, 0);
+    assert_eq!(c.u1_code.abs().max(2047), 2047);
+    assert!(c.u1_code == wire::TORQUE_CODE_MAX || c.u1_code == wire::TORQUE_CODE_MIN);
+    assert!(fw.telemetry().u_raw[0].abs() > 5.0, "the law asked for more than the motor gives");
+}

@@ -81,3 +81,35 @@ fn commanded_normal_friction_term_gives_f_n_equal_a_f_at_once() {
         }
     }
 }
+
+/// With the force integrator (`K'_I = 650`) and the measured normal force one
+/// period old, the normal force converges to `f_n*` (paper eq. 11), at every
+/// sliding state on the belt.
+#[test]
+fn normal_force_converges_to_the_reference_with_the_integrator() {
+    let params = Params::<f64>::paper();
+    let plant = Arm::new(params);
+    let cfg = Config::default();
+    let law_arm = Arm::new(cfg.params);
+    for i in 0..30 {
+        let z_t = -0.15 + i as f64 * 0.01;
+        let q = inverse_kinematics(params.l, &Vector2::new(z_t, -params.h), ElbowBranch::Down).unwrap();
+        let qd = Vector2::zeros();
+        let td0 = plant.tip_dynamics(&q, &qd, &Vector2::zeros());
+        if td0.p(params.mu, SlipDirection::Positive) <= 0.0 {
+            continue;
+        }
+        let reference = RefPoint { pos: z_t as f32, vel: 0.0, acc: 0.0, moving: false };
+        let mut st = HybridState::default();
+        let mut f_n = 4.0;
+        for _ in 0..200 {
+            let input = HybridInput { q: q.cast(), qd: qd.cast(), f_t: 0.0, f_n: f_n as f32, v_belt: -0.4 };
+            let (motor, _) =
+                law::hybrid(&law_arm, &cfg.hybrid, FrictionCompensation::ModelCommandedNormal, &reference, 10.0, &input, &mut st, 1e-3, false)
+                    .unwrap();
+            let u = Arm::generalised_torque(&Vector2::new(motor[0] as f64, motor[1] as f64));
+            f_n = sliding_force(&plant.tip_dynamics(&q, &qd, &u), params.mu, SlipDirection::Positive)[1];
+        }
+        assert!((f_n - 10.0).abs() < 1e-3, "z_t {z_t}: f_n = {f_n} after 0.2 s");
+    }
+}
