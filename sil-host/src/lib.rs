@@ -9,6 +9,7 @@ pub mod initial;
 pub mod output;
 pub mod plant;
 pub mod plot;
+pub mod sil;
 
 use clap::Parser;
 

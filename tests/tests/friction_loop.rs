@@ -104,9 +104,18 @@ fn normal_force_converges_to_the_reference_with_the_integrator() {
         let mut f_n = 4.0;
         for _ in 0..200 {
             let input = HybridInput { q: q.cast(), qd: qd.cast(), f_t: 0.0, f_n: f_n as f32, v_belt: -0.4 };
-            let (motor, _) =
-                law::hybrid(&law_arm, &cfg.hybrid, FrictionCompensation::ModelCommandedNormal, &reference, 10.0, &input, &mut st, 1e-3, false)
-                    .unwrap();
+            let (motor, _) = law::hybrid(
+                &law_arm,
+                &cfg.hybrid,
+                FrictionCompensation::ModelCommandedNormal,
+                &reference,
+                10.0,
+                &input,
+                &mut st,
+                1e-3,
+                false,
+            )
+            .unwrap();
             let u = Arm::generalised_torque(&Vector2::new(motor[0] as f64, motor[1] as f64));
             f_n = sliding_force(&plant.tip_dynamics(&q, &qd, &u), params.mu, SlipDirection::Positive)[1];
         }
