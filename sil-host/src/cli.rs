@@ -33,6 +33,51 @@ pub enum Command {
     /// of (theta1, theta1_dot) with the tip on the belt, with the curves b = 0 and p = 0.
     #[command(allow_negative_numbers = true)]
     Modes(ModesArgs),
+    /// Closed-loop SIL run of a scenario: the firmware step against the plant, sampled
+    /// at the control rate with quantised sensors and torques and a zero-order hold.
+    /// Writes trace.csv, summary.json and trace.svg. (The iceoryx2 transport and
+    /// real-time mode arrive with the SIL issue; this session's runs are in-process.)
+    #[command(allow_negative_numbers = true)]
+    Run(RunArgs),
+}
+
+/// `sil-host run`.
+#[derive(Debug, Clone, Args)]
+pub struct RunArgs {
+    /// Scenario file (TOML, see scenarios/); default: the embedded default scenario
+    /// (hybrid from x0d, mu 0.6, v_belt -0.4 m/s, f_n* 10 N, z_t* 0.10 m over 2 s, 10 s, 1 kHz).
+    #[arg(long, value_name = "FILE.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Override the controller.
+    #[arg(long, value_enum)]
+    pub controller: Option<ControllerArg>,
+    /// Override the initial condition.
+    #[arg(long, value_enum)]
+    pub x0: Option<PaperX0>,
+    /// Override the tangential target z_t*, m.
+    #[arg(long)]
+    pub target_zt: Option<f64>,
+    /// Override the run length, s.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Override the sensor-noise seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Link the firmware step directly (no IPC). The only transport in this build.
+    #[arg(long)]
+    pub in_process: bool,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Controller choice on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ControllerArg {
+    /// Joint-space PID (MODEL.md experiment 5).
+    Pid,
+    /// Hybrid force/motion control (MODEL.md experiment 6).
+    Hybrid,
 }
 
 /// Options shared by every command's output.

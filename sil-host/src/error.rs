@@ -25,6 +25,12 @@ pub enum CliError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// A scenario file is invalid.
+    #[error("invalid scenario: {0}")]
+    Scenario(#[from] crate::sil::scenario::ScenarioError),
+    /// The closed-loop run failed part way.
+    #[error("run failed: {0}")]
+    Run(#[from] crate::sil::in_process::RunError),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {
@@ -39,7 +45,7 @@ impl CliError {
     /// Process exit code: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Self::BadInput(_) | Self::Param(_) => 2,
+            Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) => 2,
             Self::Sim(e) if e.is_bad_input() => 2,
             _ => 1,
         }

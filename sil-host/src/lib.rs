@@ -32,6 +32,7 @@ where
         cli::Command::Simulate(args) => commands::simulate::run(&args),
         cli::Command::Admissible(args) => commands::admissible::run(&args),
         cli::Command::Modes(args) => commands::modes::run(&args),
+        cli::Command::Run(args) => commands::run::run(&args),
     };
     match result {
         Ok(()) => 0,

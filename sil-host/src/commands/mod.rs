@@ -2,6 +2,7 @@
 
 pub mod admissible;
 pub mod modes;
+pub mod run;
 pub mod simulate;
 
 /// Parses `"MIN,MAX"` into a range, naming the flag in the error.
