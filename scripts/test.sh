@@ -10,6 +10,10 @@ rustup target add thumbv7em-none-eabihf
 echo "== no_std build of shared and firmware for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware --target thumbv7em-none-eabihf
 
+echo "== MCU image (profile mcu) and its budgets (HARDWARE.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
+cargo build -p firmware --profile mcu --target thumbv7em-none-eabihf --bin mcu
+python3 scripts/budgets.py target/thumbv7em-none-eabihf/mcu/mcu
+
 echo "== tests (release: the simulator is numerical)"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT

@@ -6,7 +6,8 @@
 //! `shared::wire::SensorFrame`).
 //!
 //! Run: `cargo run --release -p sil-host --example record_replay_frames -- [PATH] [PERIODS]`
-//! (defaults `firmware/replay/frames.bin`, 1000).
+//! (defaults `firmware/replay/frames.bin`, 500: 12 KB, which keeps the replay image
+//! inside the 64 KiB flash budget).
 
 use std::io::Write;
 
@@ -36,7 +37,7 @@ fn to_le_bytes(f: &SensorFrame) -> [u8; 24] {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args.next().unwrap_or_else(|| "firmware/replay/frames.bin".into());
-    let periods: u32 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(1000);
+    let periods: u32 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(500);
     let params = Params::<f64>::paper();
     let mut plant = Plant::new(params, SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0])?;
     let mut fw = Firmware::new(Config::default()).map_err(|e| e.to_string())?;

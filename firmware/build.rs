@@ -1,0 +1,15 @@
+//! Puts the workspace root's `memory.x` on the linker path for the MCU image
+//! (cortex-m-rt's `link.x` includes it). Host builds need nothing.
+
+use std::{env, fs, path::PathBuf};
+
+fn main() {
+    println!("cargo:rerun-if-changed=../memory.x");
+    println!("cargo:rerun-if-changed=replay/frames.bin");
+    let target = env::var("TARGET").unwrap_or_default();
+    if target.starts_with("thumb") {
+        let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+        fs::copy("../memory.x", out.join("memory.x")).expect("../memory.x (the STM32F405 memory map) is readable");
+        println!("cargo:rustc-link-search={}", out.display());
+    }
+}
