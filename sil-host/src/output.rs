@@ -99,3 +99,28 @@ impl Drop for OutputSet {
 pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> CliError + '_ {
     move |source| CliError::Io { path: path.to_path_buf(), source }
 }
+
+/// Writes `rows` as CSV file `name` of `out` (a header row from the field names).
+///
+/// # Errors
+/// [`CliError::Io`] when writing fails.
+pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T]) -> Result<(), CliError> {
+    let (tmp, w) = out.create(name)?;
+    let mut csv_w = csv::Writer::from_writer(w);
+    for row in rows {
+        csv_w.serialize(row).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+    }
+    csv_w.flush().map_err(io_err(&tmp))
+}
+
+/// A progress bar on stderr with the given message template, hidden when `hidden`
+/// (JSON output) or when stderr is not a terminal.
+pub fn progress_bar(len: u64, what: &str, unit: &str, hidden: bool) -> indicatif::ProgressBar {
+    if hidden {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    let template = format!("{{spinner}} {what} [{{bar:40}}] {{pos}}/{{len}} {unit}, {{elapsed}} elapsed, ETA {{eta}}");
+    bar.set_style(indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    bar
+}

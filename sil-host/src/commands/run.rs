@@ -7,13 +7,12 @@
 
 use std::{io::Write, time::Instant};
 
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use crate::{
     cli::{ControllerArg, PaperX0, RunArgs},
     error::CliError,
-    output::{OutputSet, io_err},
+    output::{OutputSet, progress_bar, write_csv},
     plot::{self, Panel, Series, colors},
     sil::{
         in_process::{self, LiftOffStats, PeriodRecord},
@@ -103,11 +102,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
     let mut out = OutputSet::new(&args.output.out)?;
     let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
-    let progress = if args.output.json { ProgressBar::hidden() } else { ProgressBar::new(n) };
-    progress.set_style(
-        ProgressStyle::with_template("{spinner} SIL run [{bar:40}] {pos}/{len} periods, {elapsed} elapsed, ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let started = Instant::now();
     let (records, failure) = in_process::run(&scenario, |k, _| {
         if k % 500 == 0 {
@@ -117,12 +112,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
 
-    let (tmp, w) = out.create("trace.csv")?;
-    let mut csv_w = csv::Writer::from_writer(w);
-    for r in &records {
-        csv_w.serialize(r).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
-    }
-    csv_w.flush().map_err(io_err(&tmp))?;
+    write_csv(&mut out, "trace.csv", &records)?;
     let svg = out.stage("trace.svg");
     draw(&svg, &scenario, &records)?;
     let rms = if records.is_empty() {

@@ -8,7 +8,6 @@
 
 use std::{io::Write, time::Instant};
 
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use shared::Params;
 
@@ -16,7 +15,7 @@ use crate::{
     cli::{ImpactLawArg, PaperX0, SimulateArgs},
     error::CliError,
     initial::{self, ProjectionInfo},
-    output::{OutputSet, io_err},
+    output::{OutputSet, io_err, progress_bar, write_csv},
     plant::{Counters, Plant, PlantEvent, SimConfig, SimError, impact::ImpactLaw},
     plot::{self, Panel, Series, colors},
 };
@@ -243,11 +242,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     };
 
     let mut out = OutputSet::new(&args.output.out)?;
-    let progress = if args.output.json { ProgressBar::hidden() } else { ProgressBar::new(steps as u64) };
-    progress.set_style(
-        ProgressStyle::with_template("{spinner} simulating [{bar:40}] {pos}/{len} samples, {elapsed} elapsed, ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
     let mut trace = Vec::with_capacity(steps + 1);
     let mut events: Vec<PlantEvent> = plant.startup_events().to_vec();
     trace.push(trace_row(&plant, plant.contact_force([0.0, 0.0])));
@@ -273,13 +268,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
 
-    // trace.csv
-    let (tmp, w) = out.create("trace.csv")?;
-    let mut csv_w = csv::Writer::from_writer(w);
-    for row in &trace {
-        csv_w.serialize(row).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
-    }
-    csv_w.flush().map_err(io_err(&tmp))?;
+    write_csv(&mut out, "trace.csv", &trace)?;
     // events.csv
     let (tmp, w) = out.create("events.csv")?;
     let mut csv_w = csv::Writer::from_writer(w);

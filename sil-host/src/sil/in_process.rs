@@ -115,7 +115,17 @@ pub enum RunError {
 /// Runs the scenario in-process; `on_period(k, n)` is called after each period
 /// (for progress bars). Returns every period's record; on a plant failure the
 /// records so far come back with the error.
-pub fn run(s: &Scenario, mut on_period: impl FnMut(usize, usize)) -> (Vec<PeriodRecord>, Option<RunError>) {
+pub fn run(s: &Scenario, on_period: impl FnMut(usize, usize)) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_recording(s, on_period, |_| {})
+}
+
+/// As [`run`], handing every sensor frame to `on_frame` as it goes on the wire
+/// (the firmware's replay board plays such a recording).
+pub fn run_recording(
+    s: &Scenario,
+    mut on_period: impl FnMut(usize, usize),
+    mut on_frame: impl FnMut(&shared::wire::SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
     let mut records = Vec::new();
     let mut plant = match plant_for(s) {
         Ok(p) => p,
@@ -137,6 +147,7 @@ pub fn run(s: &Scenario, mut on_period: impl FnMut(usize, usize)) -> (Vec<Period
         let x = plant.state();
         let t_us = (t_k * 1e6).round() as u64;
         let frame = sensors.frame(k as u32, t_us, &x, f_now, s.plant.v_belt);
+        on_frame(&frame);
         let cmd = fw.step(t_us, &frame, &FrozenClock);
         let u_new = [wire::decode_torque(cmd.u1_code) as f64, wire::decode_torque(cmd.u2_code) as f64];
         let z = plant.tip();
