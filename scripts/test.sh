@@ -6,6 +6,15 @@ cd "$(dirname "$0")/.."
 
 # The MCU target (rustup does not install it by itself: RUSTUP_AUTO_INSTALL=0).
 rustup target add thumbv7em-none-eabihf
+# QEMU for the MCU image test (Debian's package).
+if ! command -v qemu-system-arm >/dev/null; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update && apt-get install -y qemu-system-arm
+  else
+    echo "qemu-system-arm is missing: sudo apt-get install -y qemu-system-arm" >&2
+    exit 1
+  fi
+fi
 
 echo "== no_std build of shared and firmware for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware --target thumbv7em-none-eabihf
