@@ -34,6 +34,9 @@ pub enum SafeReason {
     Singular = 4,
     /// The reference is out of the arm's reach.
     Unreachable = 5,
+    /// The peer (the plant, or the link to it) is gone: no frames arrive and the
+    /// board reports it dead ([`Firmware::enter_safe_state`] from the board's loop).
+    PeerLost = 6,
 }
 
 impl SafeReason {
@@ -48,6 +51,7 @@ impl SafeReason {
             3 => Some(Self::NonFinite),
             4 => Some(Self::Singular),
             5 => Some(Self::Unreachable),
+            6 => Some(Self::PeerLost),
             _ => None,
         }
     }
@@ -76,6 +80,8 @@ pub struct Telemetry {
     pub z_dot: [f32; 2],
     /// Reference `[z_t*, z_t_dot*, z_t_ddot*]`.
     pub reference: [f32; 3],
+    /// Normal-force reference `f_n*` after the start-up ramp, N.
+    pub f_n_ref: f32,
     /// Measured `[f_t, f_n]`, N.
     pub f: [f32; 2],
     /// Hybrid-law signals (zero under PID).
@@ -178,6 +184,44 @@ impl Firmware {
         }
     }
 
+    /// Latches the safe state (zero torque) for a reason found outside the step,
+    /// such as [`SafeReason::PeerLost`] when the board sees its peer die. A state
+    /// already latched keeps its first reason. Left only by [`Firmware::reset`].
+    pub fn enter_safe_state(&mut self, reason: SafeReason) {
+        self.enter_safe(reason);
+    }
+
+    /// The zero-torque command the safe state sends for frame `seq` at `now_us`
+    /// without a frame to step on (the board's loop uses it when its peer is lost).
+    pub fn safe_command(&self, seq: u32, now_us: u64) -> ActuatorCommand {
+        let reason = self.safe.map_or(0, |r| r as u32);
+        ActuatorCommand {
+            t_sent_us: now_us,
+            seq,
+            u1_code: 0,
+            u2_code: 0,
+            status: status::SAFE_STATE | (reason << status::REASON_SHIFT),
+            step_ticks: 0,
+            overruns: self.overruns,
+            reserved: 0,
+        }
+    }
+
+    /// The telemetry message of the last step, answering `command` (SIL rig).
+    pub fn telemetry_message(&self, command: &ActuatorCommand) -> wire::FirmwareTelemetry {
+        let t = &self.telemetry;
+        wire::FirmwareTelemetry {
+            seq: command.seq,
+            status: command.status,
+            z_t_ref: t.reference[0],
+            f_n_ref: t.f_n_ref,
+            q: t.q,
+            qd: t.qd,
+            f: t.f,
+            u_raw: t.u_raw,
+        }
+    }
+
     /// One control period.
     ///
     /// `now_us` is when the step starts, on the clock of `frame.t_us`; `clock`
@@ -248,12 +292,14 @@ impl Firmware {
         self.last_codes = codes;
         self.applied = [wire::decode_torque(codes[0]), wire::decode_torque(codes[1])];
         ActuatorCommand {
+            t_sent_us: now_us.saturating_add(elapsed_us),
             seq: frame.seq,
             u1_code: codes[0],
             u2_code: codes[1],
             status: flags,
             step_ticks: elapsed_ticks,
             overruns: self.overruns,
+            reserved: 0,
         }
     }
 
@@ -365,6 +411,7 @@ impl Firmware {
             z: [z[0], z[1]],
             z_dot: [z_dot[0], z_dot[1]],
             reference: [reference.pos, reference.vel, reference.acc],
+            f_n_ref,
             f: [m.f_t, m.f_n],
             hybrid: signals,
             u_raw,

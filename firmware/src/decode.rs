@@ -32,6 +32,8 @@ pub enum FrameFault {
     BeltOutOfRange,
     /// The sequence number repeats or goes back.
     Stale,
+    /// A sensor flagged its reading invalid ([`wire::frame_flags`]).
+    SensorInvalid,
 }
 
 impl FrameFault {
@@ -63,6 +65,9 @@ pub fn wrap(angle: f32) -> f32 {
 /// [`FrameFault`] when a count is out of range. (The sequence check is the
 /// caller's: it needs the previous frame.)
 pub fn decode(frame: &SensorFrame) -> Result<Measurement, FrameFault> {
+    if frame.flags & wire::frame_flags::ANY_INVALID != 0 {
+        return Err(FrameFault::SensorInvalid);
+    }
     let counts = wire::ENCODER_COUNTS;
     if frame.theta1_count as u32 >= counts || frame.elbow_count as u32 >= counts {
         return Err(FrameFault::EncoderOutOfRange);
@@ -129,5 +134,7 @@ mod tests {
         assert_eq!(decode(&SensorFrame { f_n_code: 2048, ..ok }), Err(FrameFault::LoadOutOfRange));
         assert_eq!(decode(&SensorFrame { f_t_code: i16::MIN, ..ok }), Err(FrameFault::LoadOutOfRange));
         assert_eq!(decode(&SensorFrame { belt_count: i16::MIN, ..ok }), Err(FrameFault::BeltOutOfRange));
+        let nan_f_n = SensorFrame { flags: wire::frame_flags::F_N_INVALID, ..ok };
+        assert_eq!(decode(&nan_f_n), Err(FrameFault::SensorInvalid));
     }
 }

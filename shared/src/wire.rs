@@ -1,6 +1,20 @@
 //! Wire messages between the plant side and the firmware (HARDWARE.md): raw
 //! counts as the hardware gives them, `#[repr(C)]` with fixed layouts so that
 //! shared memory, a USART frame or a C client see the same bytes.
+//!
+//! With the `iceoryx2` feature (host only) the messages derive iceoryx2's
+//! `ZeroCopySend` with stable type names, so a C, C++ or Python iceoryx2 client
+//! can attach to the rig's services (README "The SIL rig", the layouts below):
+//!
+//! | type | iceoryx2 type name | size |
+//! |---|---|---|
+//! | [`SensorFrame`] | `painleve::SensorFrame` | 24 B |
+//! | [`ActuatorCommand`] | `painleve::ActuatorCommand` | 32 B |
+//! | [`GroundTruth`] | `painleve::GroundTruth` | 96 B |
+//! | [`FirmwareTelemetry`] | `painleve::FirmwareTelemetry` | 48 B |
+
+#[cfg(feature = "iceoryx2")]
+use iceoryx2::prelude::ZeroCopySend;
 
 /// Encoder resolution: 14 bit per revolution (HARDWARE.md).
 pub const ENCODER_COUNTS: u32 = 1 << 14;
@@ -26,6 +40,7 @@ pub const BELT_SPEED_RESOLUTION: f32 = 1e-3;
 /// `f_n_code: i16`, `belt_count: i16`, `flags: u16`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::SensorFrame"))]
 #[repr(C)]
 pub struct SensorFrame {
     /// Sample time `t_k = k Ts`, microseconds since the start of the run.
@@ -42,8 +57,27 @@ pub struct SensorFrame {
     pub f_n_code: i16,
     /// Belt speed `v_belt` in mm/s.
     pub belt_count: i16,
-    /// Sensor-side fault bits (reserved, 0).
+    /// Sensor-side bits ([`frame_flags`]): a sensor that could not produce a
+    /// reading (NaN) says so here and sends count 0; the end of a run.
     pub flags: u16,
+}
+
+/// Bits of [`SensorFrame::flags`].
+pub mod frame_flags {
+    /// The base-joint encoder gave no valid reading.
+    pub const THETA1_INVALID: u16 = 1 << 0;
+    /// The elbow encoder gave no valid reading.
+    pub const ELBOW_INVALID: u16 = 1 << 1;
+    /// The load cell's tangential channel gave no valid reading.
+    pub const F_T_INVALID: u16 = 1 << 2;
+    /// The load cell's normal channel gave no valid reading.
+    pub const F_N_INVALID: u16 = 1 << 3;
+    /// The belt encoder gave no valid reading.
+    pub const BELT_INVALID: u16 = 1 << 4;
+    /// Any sensor invalid.
+    pub const ANY_INVALID: u16 = THETA1_INVALID | ELBOW_INVALID | F_T_INVALID | F_N_INVALID | BELT_INVALID;
+    /// The plant ends the run: no command is expected for this frame (SIL rig only).
+    pub const END_OF_RUN: u16 = 1 << 15;
 }
 
 /// Status word bits of an [`ActuatorCommand`].
@@ -74,12 +108,18 @@ pub mod status {
 
 /// The firmware's answer to frame `seq` (HARDWARE.md "Actuators").
 ///
-/// Layout (20 bytes): `seq: u32`, `u1_code: i16`, `u2_code: i16`, `status: u32`,
-/// `step_ticks: u32`, `overruns: u32`.
+/// Layout (32 bytes): `t_sent_us: u64`, `seq: u32`, `u1_code: i16`, `u2_code: i16`,
+/// `status: u32`, `step_ticks: u32`, `overruns: u32`, `reserved: u32`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::ActuatorCommand"))]
 #[repr(C)]
 pub struct ActuatorCommand {
+    /// When the command left the firmware, microseconds on the clock of
+    /// [`SensorFrame::t_us`] (the step's start plus its own execution time). The
+    /// plant applies it at `max(t_k + delta, t_sent_us)`; later than `t_k + Ts` is a
+    /// deadline miss (HARDWARE.md "Control loop").
+    pub t_sent_us: u64,
     /// Echo of the [`SensorFrame::seq`] this command answers.
     pub seq: u32,
     /// Base-joint motor torque `u1` in codes of `5/2048 N m`, in `[-2048, 2047]`.
@@ -92,6 +132,64 @@ pub struct ActuatorCommand {
     pub step_ticks: u32,
     /// Deadline overruns counted since the last reset.
     pub overruns: u32,
+    /// Reserved (explicit padding), 0.
+    pub reserved: u32,
+}
+
+/// The plant's ground truth of period `seq`, for monitors (SIL rig): what no
+/// sensor measures. Sizes: 96 bytes; `f64` SI units, radians.
+///
+/// Layout: `t: f64`, `seq: u32`, `mode: u8`, `lift_off: u8`, `reserved: u16`,
+/// `x: [f64; 4]`, `z: [f64; 2]`, `f: [f64; 2]`, `u_applied: [f64; 2]`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::GroundTruth"))]
+#[repr(C)]
+pub struct GroundTruth {
+    /// Sample time `t_k`, s.
+    pub t: f64,
+    /// Period index `k`.
+    pub seq: u32,
+    /// Contact mode: 0 flight, 1 sliding, 2 sticking.
+    pub mode: u8,
+    /// 1 when the tip is off the belt (true lift-off), else 0.
+    pub lift_off: u8,
+    /// Reserved (explicit padding), 0.
+    pub reserved: u16,
+    /// State `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s).
+    pub x: [f64; 4],
+    /// Tip position `[z_t, z_n]`, m.
+    pub z: [f64; 2],
+    /// Contact force `[f_t, f_n]`, N.
+    pub f: [f64; 2],
+    /// Motor torques `[u1, u2]` applied at `t_k`, N m.
+    pub u_applied: [f64; 2],
+}
+
+/// What the firmware computed for frame `seq` (its telemetry: the SIL trace
+/// records the reference from it). Sizes: 48 bytes; `f32` SI units, radians.
+///
+/// Layout: `seq: u32`, `status: u32`, `z_t_ref: f32`, `f_n_ref: f32`,
+/// `q: [f32; 2]`, `qd: [f32; 2]`, `f: [f32; 2]`, `u_raw: [f32; 2]`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::FirmwareTelemetry"))]
+#[repr(C)]
+pub struct FirmwareTelemetry {
+    /// The frame this answers.
+    pub seq: u32,
+    /// The command's status word.
+    pub status: u32,
+    /// Tangential reference `z_t*`, m.
+    pub z_t_ref: f32,
+    /// Normal-force reference `f_n*` (after the ramp), N.
+    pub f_n_ref: f32,
+    /// Estimated `[theta1, theta2]`, rad.
+    pub q: [f32; 2],
+    /// Estimated `[theta1_dot, theta2_dot]`, rad/s.
+    pub qd: [f32; 2],
+    /// Measured `[f_t, f_n]`, N.
+    pub f: [f32; 2],
+    /// Motor torques before saturation and quantisation, N m.
+    pub u_raw: [f32; 2],
 }
 
 /// Encodes an angle (rad) as a 14-bit absolute encoder count (rounded, wrapped to `[0, 2^14)`).
@@ -133,7 +231,9 @@ mod tests {
     #[test]
     fn layouts_are_fixed() {
         assert_eq!(core::mem::size_of::<SensorFrame>(), 24);
-        assert_eq!(core::mem::size_of::<ActuatorCommand>(), 20);
+        assert_eq!(core::mem::size_of::<ActuatorCommand>(), 32);
+        assert_eq!(core::mem::size_of::<GroundTruth>(), 96);
+        assert_eq!(core::mem::size_of::<FirmwareTelemetry>(), 48);
     }
 
     #[test]

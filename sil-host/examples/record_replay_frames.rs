@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut scenario = Scenario::default_scenario();
     scenario.timing.duration_s = periods as f64 / scenario.timing.rate_hz;
     let mut bytes = Vec::with_capacity(periods as usize * 24);
-    let (_, failure) = in_process::run_recording(&scenario, |_, _| {}, |f| bytes.extend_from_slice(&to_le_bytes(f)));
+    let (_, failure) = in_process::run_recording(&scenario, |_, _| true, |f| bytes.extend_from_slice(&to_le_bytes(f)));
     if let Some(e) = failure {
         return Err(e.into());
     }

@@ -33,19 +33,33 @@ pub enum Command {
     /// of (theta1, theta1_dot) with the tip on the belt, with the curves b = 0 and p = 0.
     #[command(allow_negative_numbers = true)]
     Modes(ModesArgs),
-    /// Closed-loop SIL run of a scenario: the firmware step against the plant, sampled
-    /// at the control rate with quantised sensors and torques and a zero-order hold.
-    /// Writes trace.csv, summary.json and trace.svg. (The iceoryx2 transport and
-    /// real-time mode arrive with the SIL issue; this session's runs are in-process.)
+    /// Closed-loop SIL run of a scenario: the firmware in its own process (spawned,
+    /// or attached with --attach) against the plant, over iceoryx2 shared memory, in
+    /// lockstep (default) or paced by the wall clock (--realtime); sampled at the
+    /// control rate with quantised sensors and torques and a zero-order hold.
+    /// Writes trace.csv, summary.json and trace.svg.
+    ///
+    /// Exit codes: 0 ok; 1 the run stopped early (firmware in its safe state, firmware
+    /// process dead or stalled, plant failure; everything up to then is written);
+    /// 2 bad input (nothing written).
     #[command(allow_negative_numbers = true)]
     Run(RunArgs),
+    /// The firmware process of the SIL rig: the firmware step answering sensor frames
+    /// over iceoryx2. `sil-host run` spawns it; start it by hand with the same
+    /// scenario and `--rig NAME`, then `sil-host run --attach NAME`.
+    ///
+    /// Exit codes: 0 the plant ended the run; 3 the plant died (the firmware latched
+    /// its safe state, zero torque); 1 transport failure; 2 bad input.
+    #[command(allow_negative_numbers = true)]
+    Firmware(FirmwareArgs),
 }
 
-/// `sil-host run`.
+/// The scenario of a run and its command-line overrides.
 #[derive(Debug, Clone, Args)]
-pub struct RunArgs {
-    /// Scenario file (TOML, see scenarios/); default: the embedded default scenario
-    /// (hybrid from x0d, mu 0.6, v_belt -0.4 m/s, f_n* 10 N, z_t* 0.10 m over 2 s, 10 s, 1 kHz).
+pub struct ScenarioArgs {
+    /// Scenario file (TOML, see scenarios/), `-` for standard input; default: the
+    /// embedded default scenario (hybrid from x0d, mu 0.6, v_belt -0.4 m/s, f_n* 10 N,
+    /// z_t* 0.10 m over 2 s, 10 s, 1 kHz).
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
     /// Override the controller.
@@ -63,9 +77,43 @@ pub struct RunArgs {
     /// Override the sensor-noise seed.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Link the firmware step directly (no IPC). The only transport in this build.
+}
+
+/// `sil-host firmware`.
+#[derive(Debug, Clone, Args)]
+pub struct FirmwareArgs {
+    /// The rig to serve (the plant's `--rig` or `--attach` name).
+    #[arg(long, value_name = "NAME")]
+    pub rig: String,
+    /// Real-time mode: the firmware's clock is the wall clock (the plant runs with --realtime).
     #[arg(long)]
+    pub realtime: bool,
+    /// The scenario (the firmware's configuration and the faults on its side).
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+}
+
+/// `sil-host run`.
+#[derive(Debug, Clone, Args)]
+pub struct RunArgs {
+    /// The scenario.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Link the firmware step directly into this process (no IPC). Same scenario
+    /// and seed give the same trace, bit for bit, as the lockstep iceoryx2 run.
+    #[arg(long, conflicts_with_all = ["realtime", "attach"])]
     pub in_process: bool,
+    /// Pace the periods by the wall clock (1 kHz: 1 ms per period) instead of
+    /// lockstep; reports period jitter and the firmware's step time.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Attach to a firmware process started by hand (`sil-host firmware --rig NAME`)
+    /// instead of spawning one.
+    #[arg(long, value_name = "NAME", conflicts_with = "rig")]
+    pub attach: Option<String>,
+    /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
+    #[arg(long, value_name = "NAME")]
+    pub rig: Option<String>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,

@@ -30,7 +30,7 @@ pub enum CliError {
     Scenario(#[from] crate::sil::scenario::ScenarioError),
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
-    Run(#[from] crate::sil::in_process::RunError),
+    Run(#[from] crate::sil::record::RunError),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

@@ -1,4 +1,5 @@
-//! End-to-end: `sil-host run` (closed loop, in-process) and the shipped scenarios.
+//! End-to-end: `sil-host run` (closed loop, in-process: the iceoryx2 transport is
+//! in `sil_rig.rs`) and the shipped scenarios.
 
 fn run(args: &[&str]) -> i32 {
     let mut full = vec!["sil-host"];
@@ -18,7 +19,7 @@ fn shipped_scenarios_parse_and_the_default_run_tracks() {
     names.sort();
     assert_eq!(names, ["hybrid-x0d", "hybrid-x0d", "hybrid-x0u", "pid-x0d", "pid-x0u"]);
     let dir = tempfile::tempdir().unwrap();
-    assert_eq!(run(&["run", "--duration", "3", "--out", dir.path().to_str().unwrap()]), 0);
+    assert_eq!(run(&["run", "--in-process", "--duration", "3", "--out", dir.path().to_str().unwrap()]), 0);
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["transport"], "in-process");
     assert_eq!(summary["periods"], 3000);

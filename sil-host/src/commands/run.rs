@@ -1,22 +1,38 @@
-//! `sil-host run`: a closed-loop SIL run of a scenario.
+//! `sil-host run`: a closed-loop SIL run of a scenario, and `sil-host firmware`,
+//! the firmware process it talks to.
 //!
 //! Writes `trace.csv` (one row per control period), `summary.json` and
 //! `trace.svg` (tip position against its reference, normal force, torques and
-//! contact mode against time). A run that fails part way still writes every
-//! period up to the failure and exits with code 1.
+//! contact mode against time). A run that stops part way (the firmware in its
+//! safe state or lost, a plant failure, Ctrl-C) still writes every period up to
+//! then and exits with code 1.
 
-use std::{io::Write, time::Instant};
+use std::{
+    io::Write,
+    path::PathBuf,
+    sync::{
+        Arc,
+        atomic::{AtomicBool, Ordering},
+    },
+    time::Instant,
+};
 
 use serde::Serialize;
 
 use crate::{
-    cli::{ControllerArg, PaperX0, RunArgs},
+    cli::{ControllerArg, FirmwareArgs, PaperX0, RunArgs, ScenarioArgs},
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
     plot::{self, Panel, Series, colors},
     sil::{
-        in_process::{self, LiftOffStats, PeriodRecord},
+        firmware_process::{self, Ending},
+        in_process::InProcessLink,
+        ipc::{check_rig_name, default_rig_name},
+        ipc_link::{IpcLink, Percentiles, percentiles},
+        record::{LiftOffStats, PeriodRecord, lift_off_stats},
+        rig::{FirmwareLink, run_loop},
         scenario::Scenario,
+        setup::{firmware_config, plant_for},
     },
 };
 
@@ -25,21 +41,27 @@ use crate::{
 pub struct RunSummary {
     /// `ok` or `failed`.
     pub status: &'static str,
-    /// The error, if the run failed part way.
+    /// Why the run stopped early, if it did.
     pub error: Option<String>,
     /// Scenario name.
     pub scenario: String,
     /// `hybrid` or `pid`.
     pub controller: String,
-    /// `in-process` (the iceoryx2 transport arrives with the SIL issue).
+    /// `iceoryx2` or `in-process`.
     pub transport: &'static str,
+    /// `lockstep` or `realtime` (`in-process` runs are lockstep).
+    pub timing: &'static str,
+    /// The rig's name (its iceoryx2 services); `null` in-process.
+    pub rig: Option<String>,
     /// Control periods run.
     pub periods: usize,
     /// Lift-off statistics.
     #[serde(flatten)]
     pub lift_off: LiftOffStats,
-    /// Deadline misses counted by the firmware.
+    /// Deadline misses seen by the plant (no command, lost, or late past `t_k + Ts`).
     pub deadline_misses: usize,
+    /// Deadline misses the firmware counted itself (its overrun counter at the end).
+    pub firmware_overruns: u32,
     /// RMS of `z_t - z_t*` over the run, m.
     pub rms_tracking_error_m: f64,
     /// `z_t` at the end, m.
@@ -48,12 +70,31 @@ pub struct RunSummary {
     pub wall_s: f64,
     /// Simulated seconds per wall second.
     pub realtime_factor: f64,
+    /// Control periods per wall-clock second.
+    pub periods_per_s: f64,
+    /// iceoryx2 runs: frame published to command received, us.
+    pub ipc_rtt_us: Option<Percentiles>,
+    /// iceoryx2 runs: the firmware's step time as it measured it, us.
+    pub firmware_step_us: Option<Percentiles>,
+    /// Real-time runs: frame publication minus its ideal wall time, us.
+    pub period_jitter_us: Option<Percentiles>,
+    /// iceoryx2 runs: commands that arrived after their period was given up.
+    pub late_answers: u64,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
 }
 
-fn load_scenario(args: &RunArgs) -> Result<Scenario, CliError> {
+/// Loads the scenario and applies the overrides.
+///
+/// # Errors
+/// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
+pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     let mut s = match &args.scenario {
+        Some(path) if path.as_os_str() == "-" => {
+            let text = std::io::read_to_string(std::io::stdin())
+                .map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?;
+            Scenario::from_toml(&text)?
+        }
         Some(path) => {
             let text =
                 std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?;
@@ -89,28 +130,70 @@ fn load_scenario(args: &RunArgs) -> Result<Scenario, CliError> {
     Ok(s)
 }
 
+/// Ctrl-C and SIGTERM set a flag the loop checks each period (so the trace so far is written).
+fn stop_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
+    }
+    flag
+}
+
 /// Runs `sil-host run`.
 ///
 /// # Errors
-/// Bad scenario or overrides (exit 2, nothing written); a failure part way (exit 1,
-/// everything up to it written); I/O or plotting failures.
+/// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
+/// way (exit 1, everything up to then written); I/O or plotting failures.
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
-    let scenario = load_scenario(args)?;
+    let scenario = load_scenario(&args.scenario)?;
     // Check the plant and firmware set-up before touching the output folder.
-    in_process::plant_for(&scenario).map_err(CliError::Sim)?;
-    firmware::Firmware::new(in_process::firmware_config(&scenario))
-        .map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
+    plant_for(&scenario).map_err(CliError::Sim)?;
+    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
+    if args.in_process && scenario.faults.iter().any(|f| f.needs_ipc()) {
+        return Err(CliError::BadInput("the scenario's stall/kill_firmware faults act on the firmware process: drop --in-process".into()));
+    }
+    let rig = match (&args.attach, &args.rig) {
+        (Some(name), _) | (None, Some(name)) => name.clone(),
+        (None, None) => default_rig_name(),
+    };
+    check_rig_name(&rig).map_err(CliError::BadInput)?;
     let mut out = OutputSet::new(&args.output.out)?;
+
+    let mut ipc: Option<IpcLink> = None;
+    let mut in_process: Option<InProcessLink> = None;
+    let link: &mut dyn FirmwareLink = if args.in_process {
+        in_process.insert(InProcessLink::new(&scenario).map_err(CliError::Run)?)
+    } else {
+        let exe = match &args.attach {
+            Some(_) => None,
+            None => Some(
+                std::env::current_exe()
+                    .map_err(|e| CliError::BadInput(format!("cannot find this executable to spawn the firmware: {e}")))?,
+            ),
+        };
+        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime).map_err(CliError::Run)?)
+    };
+    let transport = link.transport();
+
     let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
+    let stop = stop_flag();
     let started = Instant::now();
-    let (records, failure) = in_process::run(&scenario, |k, _| {
-        if k % 500 == 0 {
-            progress.set_position(k as u64);
-        }
-    });
+    let (records, failure) = run_loop(
+        &scenario,
+        link,
+        |k, _| {
+            if k % 500 == 0 {
+                progress.set_position(k as u64);
+            }
+            !stop.load(Ordering::Relaxed)
+        },
+        |_| {},
+    );
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
+    let timings = ipc.as_ref().map(|l| l.timings.clone());
+    drop(ipc);
 
     write_csv(&mut out, "trace.csv", &records)?;
     let svg = out.stage("trace.svg");
@@ -126,14 +209,22 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         error: failure.as_ref().map(|e| e.to_string()),
         scenario: scenario.name.clone(),
         controller: scenario.controller.kind.clone(),
-        transport: "in-process",
+        transport,
+        timing: if args.realtime { "realtime" } else { "lockstep" },
+        rig: (!args.in_process).then(|| rig.clone()),
         periods: records.len(),
-        lift_off: in_process::lift_off_stats(&records),
+        lift_off: lift_off_stats(&records),
         deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
+        firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
         rms_tracking_error_m: rms,
         final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
         wall_s,
         realtime_factor: simulated / wall_s.max(1e-9),
+        periods_per_s: records.len() as f64 / wall_s.max(1e-9),
+        ipc_rtt_us: timings.as_ref().map(|t| percentiles(&t.rtt_us)),
+        firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
+        period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
+        late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
         scenario_used: scenario.clone(),
     };
     let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
@@ -142,33 +233,73 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     if args.output.json {
         println!("{json}");
     } else {
-        let mut o = std::io::stdout().lock();
-        let l = &summary.lift_off;
-        let _ = writeln!(
-            o,
-            "SIL run `{}` ({}, {}): {} periods in {:.2} s wall ({:.0}x real time)",
-            summary.scenario, summary.controller, summary.transport, summary.periods, wall_s, summary.realtime_factor
-        );
-        let _ = writeln!(
-            o,
-            "lift-offs {} (detected {}, missed {}, false alarms {}, max latency {} periods) | deadline misses {}",
-            l.lift_offs, l.lift_offs_detected, l.missed_lift_offs, l.false_alarms, l.max_detection_latency_periods, summary.deadline_misses
-        );
-        let _ = writeln!(
-            o,
-            "tracking: rms error {:.3} mm, final z_t {:.5} m (target {:.5} m)",
-            rms * 1e3,
-            summary.final_z_t_m,
-            scenario.controller.target_z_t
-        );
-        if let Some(e) = &summary.error {
-            let _ = writeln!(o, "FAILED: {e}");
-        }
-        let _ = writeln!(o, "wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+        print_summary(&summary, &scenario, &written);
     }
     match failure {
         Some(e) => Err(CliError::Run(e)),
         None => Ok(()),
+    }
+}
+
+fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
+    let mut o = std::io::stdout().lock();
+    let l = &summary.lift_off;
+    let _ = writeln!(
+        o,
+        "SIL run `{}` ({}, {} {}): {} periods in {:.2} s wall ({:.0}x real time, {:.0} periods/s)",
+        summary.scenario,
+        summary.controller,
+        summary.transport,
+        summary.timing,
+        summary.periods,
+        summary.wall_s,
+        summary.realtime_factor,
+        summary.periods_per_s
+    );
+    let _ = writeln!(
+        o,
+        "lift-offs {} (detected {}, missed {}, false alarms {}, max latency {} periods) | deadline misses {} (firmware counted {})",
+        l.lift_offs,
+        l.lift_offs_detected,
+        l.missed_lift_offs,
+        l.false_alarms,
+        l.max_detection_latency_periods,
+        summary.deadline_misses,
+        summary.firmware_overruns
+    );
+    let _ = writeln!(
+        o,
+        "tracking: rms error {:.3} mm, final z_t {:.5} m (target {:.5} m)",
+        summary.rms_tracking_error_m * 1e3,
+        summary.final_z_t_m,
+        scenario.controller.target_z_t
+    );
+    let fmt = |p: &Percentiles| format!("p50 {:.1}, p99 {:.1}, p999 {:.1}, max {:.1} us", p.p50, p.p99, p.p999, p.max);
+    if let Some(p) = &summary.ipc_rtt_us {
+        let _ = writeln!(o, "iceoryx2 round trip: {}", fmt(p));
+    }
+    if let Some(p) = &summary.firmware_step_us {
+        let _ = writeln!(o, "firmware step: {}", fmt(p));
+    }
+    if let Some(p) = &summary.period_jitter_us {
+        let _ = writeln!(o, "period jitter: {}", fmt(p));
+    }
+    if let Some(e) = &summary.error {
+        let _ = writeln!(o, "STOPPED: {e}");
+    }
+    let _ = writeln!(o, "wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+}
+
+/// Runs `sil-host firmware`: exit 0 when the plant ends the run, 3 when the plant died.
+///
+/// # Errors
+/// Bad scenario (exit 2); transport failures (exit 1).
+pub fn firmware(args: &FirmwareArgs) -> Result<i32, CliError> {
+    let scenario = load_scenario(&args.scenario)?;
+    check_rig_name(&args.rig).map_err(CliError::BadInput)?;
+    match firmware_process::serve(&scenario, &args.rig, args.realtime).map_err(CliError::Run)? {
+        Ending::EndOfRun { .. } => Ok(0),
+        Ending::PeerLost { .. } => Ok(3),
     }
 }
 

@@ -1,6 +1,15 @@
-//! The software-in-the-loop rig: scenarios, sensor models, and the loop that runs
-//! the firmware's step against the plant, sampled and quantised as on hardware.
+//! The software-in-the-loop rig: scenarios, sensor models and faults, the
+//! plant-side loop, and the transports that reach the firmware (in-process, or
+//! iceoryx2 shared memory to the firmware in its own process).
 
+pub mod faults;
+pub mod firmware_process;
+pub mod firmware_side;
 pub mod in_process;
+pub mod ipc;
+pub mod ipc_link;
+pub mod record;
+pub mod rig;
 pub mod scenario;
 pub mod sensors;
+pub mod setup;

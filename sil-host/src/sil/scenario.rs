@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::faults::Fault;
 use crate::plant::impact::ImpactLaw;
 
 /// The embedded default scenario (`scenarios/default.toml`).
@@ -70,6 +71,29 @@ pub struct SensorSection {
     pub load_noise_n: f64,
 }
 
+/// The rig section: how the plant and firmware processes wait for each other.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RigSection {
+    /// Lockstep: wall-clock time the plant waits for a period's command before it
+    /// counts a deadline miss (a stalled or dead firmware), s.
+    pub command_timeout_s: f64,
+    /// Bounded spin before a blocking wait, microseconds of wall time.
+    pub spin_us: f64,
+    /// Wall-clock time without a frame after which the firmware process checks
+    /// whether the plant is alive (and, if not, enters its safe state), s.
+    pub peer_check_s: f64,
+    /// Consecutive command timeouts after which the plant gives the firmware up
+    /// as dead even if its process still runs.
+    pub max_consecutive_timeouts: u32,
+}
+
+impl Default for RigSection {
+    fn default() -> Self {
+        Self { command_timeout_s: 0.05, spin_us: 200.0, peer_check_s: 0.5, max_consecutive_timeouts: 100 }
+    }
+}
+
 /// One run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -84,6 +108,12 @@ pub struct Scenario {
     pub timing: TimingSection,
     /// Sensors.
     pub sensors: SensorSection,
+    /// Rig (inter-process waiting); defaults when absent.
+    #[serde(default)]
+    pub rig: RigSection,
+    /// Injected faults (`[[faults]]` tables); none when absent.
+    #[serde(default)]
+    pub faults: Vec<Fault>,
 }
 
 /// Why a scenario was rejected.
@@ -101,6 +131,14 @@ pub enum ScenarioError {
         value: String,
         /// What is allowed.
         expected: &'static str,
+    },
+    /// A `[[faults]]` entry is invalid.
+    #[error("scenario key `faults[{index}]`: {what}")]
+    Fault {
+        /// Index of the entry (0-based, in file order).
+        index: usize,
+        /// What is wrong, naming the key and value.
+        what: String,
     },
 }
 
@@ -180,6 +218,24 @@ impl Scenario {
         if !(finite(self.sensors.load_noise_n) && self.sensors.load_noise_n >= 0.0) {
             return bad("sensors.load_noise_n", self.sensors.load_noise_n.to_string(), "a finite value >= 0");
         }
+        let r = &self.rig;
+        if !(finite(r.command_timeout_s) && r.command_timeout_s > 0.0 && r.command_timeout_s <= 60.0) {
+            return bad("rig.command_timeout_s", r.command_timeout_s.to_string(), "in (0, 60] s");
+        }
+        if !(finite(r.spin_us) && (0.0..=1e6).contains(&r.spin_us)) {
+            return bad("rig.spin_us", r.spin_us.to_string(), "in [0, 1e6] us");
+        }
+        if !(finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0) {
+            return bad("rig.peer_check_s", r.peer_check_s.to_string(), "in (0, 60] s");
+        }
+        if r.max_consecutive_timeouts == 0 {
+            return bad("rig.max_consecutive_timeouts", "0".into(), ">= 1");
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            if let Err(what) = f.check() {
+                return Err(ScenarioError::Fault { index: i, what });
+            }
+        }
         Ok(())
     }
 }
@@ -207,6 +263,12 @@ mod tests {
         let bad_type = DEFAULT_TOML.replace("e_n = 0.2", "e_n = \"high\"");
         let e = Scenario::from_toml(&bad_type).unwrap_err().to_string();
         assert!(e.contains("e_n"), "{e}");
+        let bad_fault = format!("{DEFAULT_TOML}\n[[faults]]\nkind = \"stuck_sensor\"\nat_s = 1.0\n");
+        let e = Scenario::from_toml(&bad_fault).unwrap_err().to_string();
+        assert!(e.contains("faults[0]") && e.contains("signal"), "{e}");
+        let bad_fault_kind = format!("{DEFAULT_TOML}\n[[faults]]\nkind = \"gremlins\"\nat_s = 1.0\n");
+        let e = Scenario::from_toml(&bad_fault_kind).unwrap_err().to_string();
+        assert!(e.contains("gremlins"), "{e}");
         let bad_kind = DEFAULT_TOML.replace("kind = \"hybrid\"", "kind = \"lqr\"");
         assert!(Scenario::from_toml(&bad_kind).unwrap_err().to_string().contains("controller.kind"));
     }

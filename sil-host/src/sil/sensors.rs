@@ -6,27 +6,89 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use shared::wire::{self, SensorFrame};
+use shared::wire::{self, SensorFrame, frame_flags};
+
+use super::faults::{FaultKind, Signal};
 
 /// The sensor models of one run.
 #[derive(Debug, Clone)]
 pub struct Sensors {
     rng: ChaCha8Rng,
     load_noise: Option<Normal<f64>>,
+    last: SensorFrame,
 }
 
 impl Sensors {
     /// Sensors with load-cell noise `load_noise_n` (N rms, >= 0) from `seed`.
     pub fn new(seed: u64, load_noise_n: f64) -> Self {
         let load_noise = if load_noise_n > 0.0 { Normal::new(0.0, load_noise_n).ok() } else { None };
-        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise }
+        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise, last: SensorFrame::default() }
+    }
+
+    /// As [`Sensors::frame`], then corrupted by the sensor faults of this period
+    /// (`faults.rs`): a stuck sensor repeats its previous count, a NaN one sends
+    /// count 0 with its invalid bit in `flags`, an out-of-range one sends a count
+    /// outside its range. The noise stream is drawn identically with or without
+    /// faults, so a fault changes nothing else.
+    pub fn frame_with_faults(
+        &mut self,
+        seq: u32,
+        t_us: u64,
+        x: &[f64; 4],
+        f: [f64; 2],
+        v_belt: f64,
+        faults: impl Iterator<Item = (FaultKind, Signal)>,
+    ) -> SensorFrame {
+        let mut frame = self.frame(seq, t_us, x, f, v_belt);
+        for (kind, signal) in faults {
+            let last = &self.last;
+            match (kind, signal) {
+                (FaultKind::StuckSensor, Signal::Theta1) => frame.theta1_count = last.theta1_count,
+                (FaultKind::StuckSensor, Signal::Elbow) => frame.elbow_count = last.elbow_count,
+                (FaultKind::StuckSensor, Signal::FT) => frame.f_t_code = last.f_t_code,
+                (FaultKind::StuckSensor, Signal::FN) => frame.f_n_code = last.f_n_code,
+                (FaultKind::StuckSensor, Signal::Belt) => frame.belt_count = last.belt_count,
+                (FaultKind::NanSensor, s) => {
+                    let (bit, zero): (u16, fn(&mut SensorFrame)) = match s {
+                        Signal::Theta1 => (frame_flags::THETA1_INVALID, |f| f.theta1_count = 0),
+                        Signal::Elbow => (frame_flags::ELBOW_INVALID, |f| f.elbow_count = 0),
+                        Signal::FT => (frame_flags::F_T_INVALID, |f| f.f_t_code = 0),
+                        Signal::FN => (frame_flags::F_N_INVALID, |f| f.f_n_code = 0),
+                        Signal::Belt => (frame_flags::BELT_INVALID, |f| f.belt_count = 0),
+                    };
+                    frame.flags |= bit;
+                    zero(&mut frame);
+                }
+                (FaultKind::OutOfRange, Signal::Theta1) => frame.theta1_count = u16::MAX,
+                (FaultKind::OutOfRange, Signal::Elbow) => frame.elbow_count = u16::MAX,
+                (FaultKind::OutOfRange, Signal::FT) => frame.f_t_code = i16::MAX,
+                (FaultKind::OutOfRange, Signal::FN) => frame.f_n_code = i16::MAX,
+                (FaultKind::OutOfRange, Signal::Belt) => frame.belt_count = i16::MIN,
+                _ => {}
+            }
+        }
+        self.last = frame;
+        frame
     }
 
     /// The frame of period `seq` at `t_us`: state `x = [theta1, theta1_dot, theta2,
     /// theta2_dot]` (rad, rad/s), tip force `f = [f_t, f_n]` (N), belt speed (m/s).
+    /// A non-finite reading is sent as count 0 with its invalid bit set in `flags`.
     pub fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
         let mut noise = || self.load_noise.map_or(0.0, |n| n.sample(&mut self.rng));
         let (n_t, n_n) = (noise(), noise());
+        let mut flags = 0;
+        let mut check = |v: f64, bit: u16| {
+            if !v.is_finite() {
+                flags |= bit;
+            }
+        };
+        check(x[0], frame_flags::THETA1_INVALID);
+        check(x[2] - x[0], frame_flags::ELBOW_INVALID);
+        check(f[0], frame_flags::F_T_INVALID);
+        check(f[1], frame_flags::F_N_INVALID);
+        check(v_belt, frame_flags::BELT_INVALID);
+        // `encode_*` map a non-finite value to 0; the flag says it was not a reading.
         SensorFrame {
             t_us,
             seq,
@@ -34,8 +96,8 @@ impl Sensors {
             elbow_count: wire::encode_angle(x[2] - x[0]),
             f_t_code: wire::encode_force(f[0] + n_t),
             f_n_code: wire::encode_force(f[1] + n_n),
-            belt_count: (v_belt * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16,
-            flags: 0,
+            belt_count: if v_belt.is_finite() { (v_belt * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16 } else { 0 },
+            flags,
         }
     }
 }

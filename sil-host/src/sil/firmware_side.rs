@@ -1,0 +1,48 @@
+//! The firmware side of the loop, the same in both transports: the firmware's
+//! step with the faults that act on it (a step that starts late), answering a
+//! frame with a command and the step's telemetry. The in-process link calls it
+//! directly; the firmware process (`sil-host firmware`) calls it for every frame
+//! it receives over iceoryx2, so both produce the same commands bit for bit.
+
+use firmware::{Firmware, TickClock};
+use shared::wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame};
+
+use super::{faults::FaultPlan, record::RunError, scenario::Scenario, setup::firmware_config};
+
+/// The firmware and the faults injected on its side.
+#[derive(Debug, Clone)]
+pub struct FirmwareSide {
+    fw: Firmware,
+    faults: FaultPlan,
+}
+
+impl FirmwareSide {
+    /// The firmware a scenario asks for.
+    ///
+    /// # Errors
+    /// [`RunError::Firmware`] for an invalid configuration.
+    pub fn new(s: &Scenario) -> Result<Self, RunError> {
+        let fw = Firmware::new(firmware_config(s))?;
+        Ok(Self { fw, faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz) })
+    }
+
+    /// The firmware.
+    pub fn firmware(&self) -> &Firmware {
+        &self.fw
+    }
+
+    /// The firmware, mutably (the process loop latches the safe state when its peer dies).
+    pub fn firmware_mut(&mut self) -> &mut Firmware {
+        &mut self.fw
+    }
+
+    /// Answers `frame`. The step starts at `max(frame.t_us + injected delay,
+    /// now_floor_us)` on the frame's clock: `now_floor_us` is what the caller's
+    /// clock says (the newest frame seen in lockstep, the wall clock in real time).
+    pub fn answer<C: TickClock>(&mut self, frame: &SensorFrame, now_floor_us: u64, clock: &C) -> (ActuatorCommand, FirmwareTelemetry) {
+        let delay_us = (self.faults.command_delay(frame.t_us as f64 * 1e-6) * 1e6).round() as u64;
+        let now_us = frame.t_us.saturating_add(delay_us).max(now_floor_us);
+        let command = self.fw.step(now_us, frame, clock);
+        (command, self.fw.telemetry_message(&command))
+    }
+}

@@ -1,0 +1,193 @@
+//! The plant side of the SIL loop, the same for every transport (HARDWARE.md
+//! "Control loop"). Period `k`: the sensors sample the plant at `t_k = k Ts` into
+//! a frame; the frame goes to the firmware over a [`FirmwareLink`] (in-process or
+//! iceoryx2); the command that comes back takes effect at
+//! `max(t_k + delta, t_sent)` (in real-time runs: at `t_k` plus the measured
+//! latency) and is held (zero-order hold) until the next one. A command that is
+//! lost, late past `t_k + Ts`, or not there when the link gives up waiting is a
+//! deadline miss: the previous command stays for the whole period.
+//!
+//! The plant owns time: the loop never reads a clock (real-time pacing is the
+//! link's business), so a run is a function of the scenario and its seed.
+
+use shared::{
+    ContactMode,
+    wire::{self, ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame, status},
+};
+
+use super::{
+    faults::FaultPlan,
+    record::{PeriodRecord, RunError},
+    scenario::Scenario,
+    sensors::Sensors,
+    setup::plant_for,
+};
+
+/// The answer to one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Exchange {
+    /// The firmware answered this period.
+    Answered {
+        /// Its command (echoing the frame's `seq`).
+        command: ActuatorCommand,
+        /// Its telemetry of the same step.
+        telemetry: FirmwareTelemetry,
+        /// Real-time runs: when the command arrived, s after `t_k` (measured on the
+        /// wall clock); `None` in lockstep (the command's `t_sent_us` decides).
+        arrival_s: Option<f64>,
+    },
+    /// No command for this period arrived before the link stopped waiting (the
+    /// wall-clock deadline in real time, the command timeout in lockstep).
+    NoAnswer,
+}
+
+/// A way to reach the firmware: in-process, or over iceoryx2 in another process.
+pub trait FirmwareLink {
+    /// `in-process` or `iceoryx2`.
+    fn transport(&self) -> &'static str;
+
+    /// Sends frame `k` (and the ground truth of the same instant, for monitors)
+    /// and waits for the command that answers it.
+    ///
+    /// # Errors
+    /// [`RunError`] when the firmware is gone (its process died, or it stopped
+    /// answering for `rig.max_consecutive_timeouts` periods) or the transport failed.
+    fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError>;
+
+    /// Called once before period `k`'s exchange (fault injection that acts on the
+    /// firmware process itself, such as killing it).
+    fn before_period(&mut self, _k: usize, _t: f64) {}
+
+    /// Tells the firmware the run is over (no answer expected).
+    fn finish(&mut self, _last_seq: u32) {}
+}
+
+/// Ground-truth mode code of [`GroundTruth::mode`]: 0 flight, 1 sliding, 2 sticking.
+pub fn mode_code(mode: ContactMode) -> u8 {
+    match mode {
+        ContactMode::Sliding => 1,
+        ContactMode::Sticking => 2,
+        _ => 0,
+    }
+}
+
+/// Runs the scenario over `link`; `on_period(k, n)` is called after each period
+/// (progress bars) and stops the run with [`RunError::Interrupted`] when it
+/// returns `false` (Ctrl-C); `on_frame` sees every frame as it goes on the wire
+/// (the firmware's replay board plays such a recording).
+///
+/// Returns every period's record; when the run stops early (plant failure, the
+/// firmware lost or in its safe state) the records up to and including the last
+/// period come back with the error.
+pub fn run_loop(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    mut on_period: impl FnMut(usize, usize) -> bool,
+    mut on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    let mut records = Vec::new();
+    let mut plant = match plant_for(s) {
+        Ok(p) => p,
+        Err(e) => return (records, Some(e.into())),
+    };
+    let mut sensors = Sensors::new(s.sensors.seed, s.sensors.load_noise_n);
+    let ts = 1.0 / s.timing.rate_hz;
+    let ts_us = (ts * 1e6).round() as u64;
+    let delta = s.timing.delta_s;
+    let faults = FaultPlan::new(&s.faults, ts);
+    let n = (s.timing.duration_s * s.timing.rate_hz).round() as usize;
+    records.reserve(n);
+    let mut applied = [0.0f64; 2];
+    let mut f_now = plant.contact_force(applied);
+    let mut failure = None;
+    for k in 0..n {
+        let t_k = k as f64 * ts;
+        let t_us = k as u64 * ts_us;
+        let x = plant.state();
+        let z = plant.tip();
+        let mode = plant.mode();
+        let frame = sensors.frame_with_faults(k as u32, t_us, &x, f_now, s.plant.v_belt, faults.sensor_faults(t_k));
+        on_frame(&frame);
+        let truth = GroundTruth {
+            t: t_k,
+            seq: k as u32,
+            mode: mode_code(mode),
+            lift_off: u8::from(mode == ContactMode::Flight),
+            reserved: 0,
+            x,
+            z: [z[0], z[1]],
+            f: f_now,
+            u_applied: applied,
+        };
+        link.before_period(k, t_k);
+        let exchange = match link.exchange(&frame, &truth) {
+            Ok(e) => e,
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        };
+        // When the new command takes effect (s after t_k), if it does this period.
+        let (switch, command, telemetry) = match exchange {
+            Exchange::Answered { command, telemetry, arrival_s } => {
+                let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
+                let at = arrival_s.unwrap_or(late_s.max(delta));
+                let on_time = at < ts && !faults.drops_command(t_k);
+                (on_time.then_some(at), Some(command), Some(telemetry))
+            }
+            Exchange::NoAnswer => (None, None, None),
+        };
+        let u_new = match (switch, command) {
+            (Some(_), Some(c)) => [wire::decode_torque(c.u1_code) as f64, wire::decode_torque(c.u2_code) as f64],
+            _ => applied,
+        };
+        let fw_status = command.map_or(0, |c| c.status);
+        records.push(PeriodRecord {
+            t: t_k,
+            theta1: x[0],
+            theta1_dot: x[1],
+            theta2: x[2],
+            theta2_dot: x[3],
+            z_t: z[0],
+            z_n: z[1],
+            z_t_ref: telemetry.map_or(f64::NAN, |t| t.z_t_ref as f64),
+            f_t: f_now[0],
+            f_n: f_now[1],
+            mode: mode.name(),
+            u1_cmd: u_new[0],
+            u2_cmd: u_new[1],
+            u1_applied: applied[0],
+            u2_applied: applied[1],
+            lift_off_true: mode == ContactMode::Flight,
+            lift_off_detected: fw_status & status::LIFT_OFF != 0,
+            deadline_miss: switch.is_none(),
+            firmware_deadline_miss: fw_status & status::DEADLINE_MISS != 0,
+            overruns: command.map_or(0, |c| c.overruns),
+            status: fw_status,
+        });
+        if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
+            failure = Some(RunError::SafeState { k, t: t_k, reason });
+            break;
+        }
+        // Zero-order hold: the previous command until the switch, then the new one.
+        let t_next = (k + 1) as f64 * ts;
+        let step = match switch {
+            Some(at) => plant.advance(applied, at).and_then(|_| plant.advance(u_new, t_next - plant.time())),
+            None => plant.advance(applied, t_next - plant.time()),
+        };
+        match step {
+            Ok(r) => f_now = r.f,
+            Err(e) => {
+                failure = Some(e.into());
+                break;
+            }
+        }
+        applied = u_new;
+        if !on_period(k + 1, n) && k + 1 < n {
+            failure = Some(RunError::Interrupted { k: k + 1 });
+            break;
+        }
+    }
+    link.finish(records.len() as u32);
+    (records, failure)
+}

@@ -1,0 +1,230 @@
+//! End-to-end: the SIL rig over iceoryx2 with the firmware in its own process
+//! (`sil-host-e2e` is the `sil-host` command line built in this crate, so it can
+//! spawn itself as the firmware process): bit identity with the in-process loop,
+//! attach mode, and the faults of HARDWARE.md with their documented outcomes.
+
+use std::{
+    path::{Path, PathBuf},
+    process::{Command, Output, Stdio},
+    time::{Duration, Instant},
+};
+
+fn sil_host() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+}
+
+/// A unique rig name per test (tests run in parallel).
+fn rig(tag: &str) -> String {
+    format!("e2e-{tag}-{}", std::process::id())
+}
+
+fn run(args: &[&str], out: &Path) -> Output {
+    let o = sil_host().arg("run").args(args).arg("--out").arg(out).output().unwrap();
+    eprintln!("stdout:\n{}\nstderr:\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn trace(out: &Path) -> Vec<csv::StringRecord> {
+    let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
+    r.records().map(Result::unwrap).collect()
+}
+
+fn column(out: &Path, name: &str) -> usize {
+    let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
+    r.headers().unwrap().iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
+}
+
+/// A scenario file: the default with `extra` appended (faults) and `replace` applied.
+fn scenario(dir: &Path, name: &str, replace: &[(&str, &str)], extra: &str) -> PathBuf {
+    let mut text = sil_host::sil::scenario::DEFAULT_TOML.to_string();
+    for (a, b) in replace {
+        assert!(text.contains(a), "{a}");
+        text = text.replace(a, b);
+    }
+    text.push_str(extra);
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn lockstep_iceoryx2_and_in_process_traces_are_bit_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    // The default scenario, and PID from x0u (which loses contact: flight, impacts).
+    for (tag, extra) in [("hybrid", vec![]), ("pid-x0u", vec!["--controller", "pid", "--x0", "u"])] {
+        let ipc = dir.path().join(format!("{tag}-ipc"));
+        let inp = dir.path().join(format!("{tag}-inp"));
+        let mut a = vec!["--duration", "3", "--seed", "7", "--rig"];
+        let name = rig(tag);
+        a.push(&name);
+        a.extend(&extra);
+        assert!(run(&a, &ipc).status.success());
+        let mut b = vec!["--duration", "3", "--seed", "7", "--in-process"];
+        b.extend(&extra);
+        assert!(run(&b, &inp).status.success());
+        let ta = std::fs::read(ipc.join("trace.csv")).unwrap();
+        let tb = std::fs::read(inp.join("trace.csv")).unwrap();
+        assert_eq!(ta.len(), tb.len(), "{tag}: trace sizes");
+        assert!(ta == tb, "{tag}: the iceoryx2 and in-process traces differ");
+        let (sa, sb) = (summary(&ipc), summary(&inp));
+        assert_eq!(sa["transport"], "iceoryx2");
+        assert_eq!(sb["transport"], "in-process");
+        assert_eq!(sa["periods"], 3000);
+        for key in ["lift_offs", "lift_offs_detected", "deadline_misses", "rms_tracking_error_m", "final_z_t_m"] {
+            assert_eq!(sa[key], sb[key], "{tag}: {key}");
+        }
+        let rtt = &sa["ipc_rtt_us"];
+        assert!(rtt["p50"].as_f64().unwrap() > 0.0 && rtt["p50"].as_f64().unwrap() <= rtt["p99"].as_f64().unwrap());
+        assert!(sb["ipc_rtt_us"].is_null());
+    }
+    // The PID run from x0u does lift off (so the identity covered flight and impacts).
+    assert!(summary(&dir.path().join("pid-x0u-ipc"))["lift_offs"].as_u64().unwrap() >= 1);
+}
+
+#[test]
+fn attach_mode_talks_to_a_firmware_started_by_hand() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = rig("attach");
+    let mut fw = sil_host().args(["firmware", "--rig", &name, "--duration", "1"]).stderr(Stdio::piped()).spawn().unwrap();
+    let out = dir.path().join("attach");
+    let o = run(&["--attach", &name, "--duration", "1"], &out);
+    assert!(o.status.success());
+    let status = fw.wait().unwrap();
+    assert_eq!(status.code(), Some(0), "the firmware exits 0 when the plant ends the run");
+    let inp = dir.path().join("inp");
+    assert!(run(&["--in-process", "--duration", "1"], &inp).status.success());
+    assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), std::fs::read(inp.join("trace.csv")).unwrap());
+}
+
+#[test]
+fn late_and_dropped_commands_are_counted_by_the_right_sides() {
+    let dir = tempfile::tempdir().unwrap();
+    // One late command (the step starts 1.5 ms late, past the 1 ms deadline) at
+    // t = 1.0 s; three commands lost on the wire from t = 2.0 s.
+    let faults = "\n[[faults]]\nkind = \"late_command\"\nat_s = 1.0\ndelay_s = 0.0015\n\n[[faults]]\nkind = \"drop_command\"\nat_s = 2.0\nduration_s = 0.003\n";
+    let s = scenario(dir.path(), "late.toml", &[], faults);
+    for (tag, transport) in [("ipc", None), ("inp", Some("--in-process"))] {
+        let out = dir.path().join(tag);
+        let name = rig("late");
+        let mut a = vec!["--scenario", s.to_str().unwrap(), "--duration", "3"];
+        match transport {
+            Some(t) => a.push(t),
+            None => a.extend(["--rig", name.as_str()]),
+        }
+        assert!(run(&a, &out).status.success(), "{tag}: isolated misses do not stop the run");
+        let rows = trace(&out);
+        let (plant, fw) = (column(&out, "deadline_miss"), column(&out, "firmware_deadline_miss"));
+        let plant_misses: Vec<usize> = (0..rows.len()).filter(|&k| &rows[k][plant] == "true").collect();
+        let fw_misses: Vec<usize> = (0..rows.len()).filter(|&k| &rows[k][fw] == "true").collect();
+        assert_eq!(plant_misses, [1000, 2000, 2001, 2002], "{tag}: the plant sees the late one and the lost ones");
+        assert_eq!(fw_misses, [1000], "{tag}: the firmware sees its own late step, in the period it happens");
+        let sm = summary(&out);
+        assert_eq!(sm["deadline_misses"], 4);
+        assert_eq!(sm["firmware_overruns"], 1);
+        assert_eq!(sm["lift_offs"], 0);
+    }
+}
+
+#[test]
+fn consecutive_late_commands_drive_the_firmware_to_its_safe_state() {
+    let dir = tempfile::tempdir().unwrap();
+    // deadline_miss_limit is 3: three late steps in a row latch the safe state.
+    let s =
+        scenario(dir.path(), "late3.toml", &[], "\n[[faults]]\nkind = \"late_command\"\nat_s = 1.0\nduration_s = 0.01\ndelay_s = 0.002\n");
+    let out = dir.path().join("late3");
+    let name = rig("late3");
+    let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("safe state") && err.contains("DeadlineMisses"), "{err}");
+    let rows = trace(&out);
+    assert_eq!(rows.len(), 1003, "misses at 1000, 1001, 1002: safe state reported in period 1002 (within N+1)");
+    let sm = summary(&out);
+    assert_eq!(sm["status"], "failed");
+    assert_eq!(sm["firmware_overruns"], 3);
+}
+
+#[test]
+fn bad_sensor_readings_latch_the_safe_state_and_the_trace_is_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    for (tag, fault) in [("nan", "nan_sensor\"\nsignal = \"f_n"), ("range", "out_of_range\"\nsignal = \"elbow")] {
+        let extra = format!("\n[[faults]]\nkind = \"{fault}\"\nat_s = 1.5\nduration_s = 0.5\n");
+        let s = scenario(dir.path(), &format!("{tag}.toml"), &[], &extra);
+        let out = dir.path().join(tag);
+        let name = rig(tag);
+        let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
+        assert_eq!(o.status.code(), Some(1), "{tag}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("BadFrames"), "{tag}");
+        // bad_frame_limit is 3: frames 1500, 1501, 1502 are bad, the third latches it.
+        assert_eq!(trace(&out).len(), 1503, "{tag}: every period up to the safe state is written");
+    }
+}
+
+#[test]
+fn a_killed_firmware_process_is_noticed_in_the_period_it_dies() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "kill.toml", &[], "\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 1.0\n");
+    let out = dir.path().join("kill");
+    let name = rig("kill");
+    let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("firmware lost at period 1000") && err.contains("exited"), "{err}");
+    assert_eq!(trace(&out).len(), 1000, "every period before the kill is written");
+    assert_eq!(summary(&out)["status"], "failed");
+    // The in-process transport refuses a fault it cannot inject, before writing anything.
+    let out2 = dir.path().join("kill-inp");
+    assert_eq!(run(&["--scenario", s.to_str().unwrap(), "--in-process"], &out2).status.code(), Some(2));
+    assert!(!out2.join("trace.csv").exists());
+}
+
+#[test]
+fn a_stalled_firmware_misses_deadlines_then_goes_safe() {
+    let dir = tempfile::tempdir().unwrap();
+    // The firmware process stops for 0.3 s of wall time at t = 1.0 s; the plant waits
+    // 0.05 s per period, so about 6 periods pass before the firmware catches up, finds
+    // the queued frames late, and latches the safe state (deadline misses).
+    let s = scenario(dir.path(), "stall.toml", &[], "\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\nduration_s = 0.3\n");
+    let out = dir.path().join("stall");
+    let name = rig("stall");
+    let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("safe state") && err.contains("DeadlineMisses"), "{err}");
+    let rows = trace(&out);
+    let plant = column(&out, "deadline_miss");
+    assert_eq!(&rows[1000][plant], "true", "the plant notices in the period the stall starts");
+    assert!(rows.len() > 1001 && rows.len() < 1000 + 40, "noticed within a bounded number of periods: {}", rows.len());
+    assert!(summary(&out)["firmware_overruns"].as_u64().unwrap() >= 3);
+}
+
+#[test]
+fn a_killed_plant_sends_the_firmware_to_its_safe_state_and_its_rig_can_be_reused() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = rig("plantkill");
+    let fw = sil_host().args(["firmware", "--rig", &name, "--duration", "1000"]).stderr(Stdio::piped()).spawn().unwrap();
+    let mut plant = sil_host()
+        .args(["run", "--attach", &name, "--duration", "1000", "--out"])
+        .arg(dir.path().join("killed"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    plant.kill().unwrap();
+    plant.wait().unwrap();
+    let killed_at = Instant::now();
+    let o = fw.wait_with_output().unwrap();
+    let noticed = killed_at.elapsed();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("plant process is dead") && err.contains("safe state"), "{err}");
+    assert!(noticed < Duration::from_secs(5), "noticed after {noticed:?} (peer_check_s = 0.5)");
+    // The killed run's iceoryx2 resources do not stop the next run on the same rig.
+    let out = dir.path().join("next");
+    assert!(run(&["--rig", &name, "--duration", "0.5"], &out).status.success());
+}
