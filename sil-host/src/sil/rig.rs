@@ -100,6 +100,8 @@ pub fn run_loop(
     let mut applied = [0.0f64; 2];
     let mut f_now = plant.contact_force(applied);
     let mut failure = None;
+    // The firmware's reference, kept over periods without an answer.
+    let mut z_t_ref = f64::NAN;
     for k in 0..n {
         let t_k = k as f64 * ts;
         let t_us = k as u64 * ts_us;
@@ -142,6 +144,9 @@ pub fn run_loop(
             _ => applied,
         };
         let fw_status = command.map_or(0, |c| c.status);
+        if let Some(t) = telemetry {
+            z_t_ref = t.z_t_ref as f64;
+        }
         records.push(PeriodRecord {
             t: t_k,
             theta1: x[0],
@@ -150,7 +155,7 @@ pub fn run_loop(
             theta2_dot: x[3],
             z_t: z[0],
             z_n: z[1],
-            z_t_ref: telemetry.map_or(f64::NAN, |t| t.z_t_ref as f64),
+            z_t_ref,
             f_t: f_now[0],
             f_n: f_now[1],
             mode: mode.name(),
