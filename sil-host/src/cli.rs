@@ -52,6 +52,27 @@ pub enum Command {
     /// its safe state, zero torque); 1 transport failure; 2 bad input.
     #[command(allow_negative_numbers = true)]
     Firmware(FirmwareArgs),
+    /// Speed of the rig on the default scenario: control periods per wall second
+    /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
+    /// percentiles), and optionally a real-time run (jitter, step time, misses).
+    Bench(BenchArgs),
+}
+
+/// `sil-host bench`.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Simulated seconds per run (1 kHz: 1000 periods per second).
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Runs per transport (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeat: usize,
+    /// Length of the real-time run, s (0: none).
+    #[arg(long, default_value_t = 0.0)]
+    pub realtime_s: f64,
+    /// Print one JSON document instead of the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The scenario of a run and its command-line overrides.

@@ -33,6 +33,7 @@ where
         cli::Command::Admissible(args) => commands::admissible::run(&args),
         cli::Command::Modes(args) => commands::modes::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
+        cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

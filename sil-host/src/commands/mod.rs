@@ -1,6 +1,7 @@
 //! One module per `sil-host` command.
 
 pub mod admissible;
+pub mod bench;
 pub mod modes;
 pub mod run;
 pub mod simulate;

@@ -1,0 +1,167 @@
+//! `sil-host bench`: the rig's speed figures (issue targets: in-process at least
+//! 300 000 control periods per wall second, lockstep over iceoryx2 at least
+//! 100 000; real time at 1 kHz with zero deadline misses), measured on the
+//! default scenario in one invocation so that the ratios compare like with like.
+
+use std::{io::Write, time::Instant};
+
+use serde::Serialize;
+
+use crate::{
+    cli::BenchArgs,
+    error::CliError,
+    sil::{
+        in_process::InProcessLink,
+        ipc::default_rig_name,
+        ipc_link::{IpcLink, Percentiles, percentiles},
+        rig::run_loop,
+        scenario::Scenario,
+    },
+};
+
+/// One transport's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct TransportFigures {
+    /// `in-process`, `iceoryx2 lockstep` or `iceoryx2 realtime`.
+    pub transport: String,
+    /// Runs measured.
+    pub runs: usize,
+    /// Periods per run.
+    pub periods: usize,
+    /// Median over the runs of periods per wall second.
+    pub median_periods_per_s: f64,
+    /// Every run's periods per wall second.
+    pub periods_per_s: Vec<f64>,
+    /// iceoryx2: round trip over all runs, us.
+    pub rtt_us: Option<Percentiles>,
+    /// Real time: period jitter, us.
+    pub jitter_us: Option<Percentiles>,
+    /// Real time: the firmware's step time, us.
+    pub step_us: Option<Percentiles>,
+    /// Deadline misses over all runs (plant side).
+    pub deadline_misses: usize,
+    /// The issue's target, periods per wall second (or misses for real time).
+    pub target: f64,
+    /// Whether the median meets it.
+    pub meets_target: bool,
+}
+
+/// The run's deadline misses, or its error.
+fn misses(records: &[crate::sil::record::PeriodRecord], e: Option<crate::sil::record::RunError>) -> Result<usize, CliError> {
+    match e {
+        Some(e) => Err(CliError::Run(e)),
+        None => Ok(records.iter().filter(|r| r.deadline_miss).count()),
+    }
+}
+
+/// Runs `sil-host bench`.
+///
+/// # Errors
+/// A run that fails (exit 1).
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    let mut s = Scenario::default_scenario();
+    s.timing.duration_s = args.duration;
+    s.validate()?;
+    let n = (s.timing.duration_s * s.timing.rate_hz).round() as usize;
+    let exe = std::env::current_exe().map_err(|e| CliError::BadInput(format!("cannot find this executable: {e}")))?;
+    let mut figures = Vec::new();
+
+    // In-process.
+    let mut rates = Vec::new();
+    let mut missed = 0;
+    for _ in 0..args.repeat {
+        let mut link = InProcessLink::new(&s).map_err(CliError::Run)?;
+        let t = Instant::now();
+        let (records, e) = run_loop(&s, &mut link, |_, _| true, |_| {});
+        rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
+        missed += misses(&records, e)?;
+    }
+    figures.push(summarise("in-process", rates, n, missed, None, 300_000.0));
+
+    // Lockstep over iceoryx2 (one firmware process per run, spawned before the clock starts).
+    let mut rates = Vec::new();
+    let mut missed = 0;
+    let mut timings = crate::sil::ipc_link::LinkTimings::default();
+    for _ in 0..args.repeat {
+        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
+        let t = Instant::now();
+        let (records, e) = run_loop(&s, &mut link, |_, _| true, |_| {});
+        rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
+        missed += misses(&records, e)?;
+        timings.rtt_us.extend(&link.timings.rtt_us);
+    }
+    figures.push(summarise("iceoryx2 lockstep", rates, n, missed, Some(&timings), 100_000.0));
+
+    // Real time at 1 kHz.
+    if args.realtime_s > 0.0 {
+        let mut rt = s.clone();
+        rt.timing.duration_s = args.realtime_s;
+        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true).map_err(CliError::Run)?;
+        let t = Instant::now();
+        let (records, e) = run_loop(&rt, &mut link, |_, _| true, |_| {});
+        let rate = records.len() as f64 / t.elapsed().as_secs_f64();
+        let missed = misses(&records, e)?;
+        let mut f = summarise("iceoryx2 realtime", vec![rate], records.len(), missed, Some(&link.timings), 0.0);
+        f.jitter_us = Some(percentiles(&link.timings.jitter_us));
+        f.step_us = Some(percentiles(&link.timings.step_us));
+        f.meets_target = missed == 0;
+        figures.push(f);
+    }
+
+    if args.json {
+        let json = serde_json::to_string_pretty(&figures).map_err(|e| CliError::BadInput(e.to_string()))?;
+        println!("{json}");
+        return Ok(());
+    }
+    let mut o = std::io::stdout().lock();
+    for f in &figures {
+        let _ = writeln!(
+            o,
+            "{:<18} {} runs x {} periods: median {:>9.0} periods/s (runs: {}) target {} -> {}",
+            f.transport,
+            f.runs,
+            f.periods,
+            f.median_periods_per_s,
+            f.periods_per_s.iter().map(|r| format!("{r:.0}")).collect::<Vec<_>>().join(", "),
+            if f.target > 0.0 { format!("{:.0}/s", f.target) } else { "0 misses".into() },
+            if f.meets_target { "met" } else { "NOT met" }
+        );
+        let fmt = |p: &Percentiles| format!("p50 {:.1}, p99 {:.1}, p999 {:.1}, max {:.1} us", p.p50, p.p99, p.p999, p.max);
+        if let Some(p) = &f.rtt_us {
+            let _ = writeln!(o, "{:<18} round trip {}", "", fmt(p));
+        }
+        if let Some(p) = &f.jitter_us {
+            let _ = writeln!(o, "{:<18} period jitter {} | deadline misses {}", "", fmt(p), f.deadline_misses);
+        }
+        if let Some(p) = &f.step_us {
+            let _ = writeln!(o, "{:<18} firmware step {}", "", fmt(p));
+        }
+    }
+    Ok(())
+}
+
+fn summarise(
+    transport: &str,
+    rates: Vec<f64>,
+    periods: usize,
+    deadline_misses: usize,
+    timings: Option<&crate::sil::ipc_link::LinkTimings>,
+    target: f64,
+) -> TransportFigures {
+    let mut sorted = rates.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = if sorted.is_empty() { 0.0 } else { sorted[sorted.len() / 2] };
+    TransportFigures {
+        transport: transport.into(),
+        runs: rates.len(),
+        periods,
+        median_periods_per_s: median,
+        periods_per_s: rates,
+        rtt_us: timings.map(|t| percentiles(&t.rtt_us)),
+        jitter_us: None,
+        step_us: None,
+        deadline_misses,
+        target,
+        meets_target: median >= target,
+    }
+}
