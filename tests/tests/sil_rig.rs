@@ -230,3 +230,33 @@ fn a_killed_plant_sends_the_firmware_to_its_safe_state_and_its_rig_can_be_reused
     let out = dir.path().join("next");
     assert!(run(&["--rig", &name, "--duration", "0.5"], &out).status.success());
 }
+
+#[test]
+fn sigterm_stops_a_run_and_everything_recorded_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("term");
+    let name = rig("term");
+    let child = sil_host()
+        .args(["run", "--rig", &name, "--duration", "1000", "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1000));
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc_kill(child.id() as i32, 15) }, 0);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let sm = summary(&out);
+    assert_eq!(sm["status"], "failed");
+    assert!(sm["error"].as_str().unwrap().contains("interrupted"));
+    let periods = sm["periods"].as_u64().unwrap() as usize;
+    assert!(periods > 0);
+    assert_eq!(trace(&out).len(), periods, "every recorded period is in trace.csv");
+}
+
+unsafe extern "C" {
+    #[link_name = "kill"]
+    fn libc_kill(pid: i32, sig: i32) -> i32;
+}

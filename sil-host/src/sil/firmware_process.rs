@@ -6,7 +6,8 @@
 //! newest sample it has seen, so frames that piled up while it was stalled are
 //! answered late and counted as overruns; the step's wall time is reported in
 //! `step_ticks` (ns) but does not advance simulated time. In real time, its own
-//! wall clock, anchored at the first frame (as an MCU's timer would be).
+//! wall clock, synchronised to the plant's by the earliest frame arrival (a
+//! minimum-delay filter), and it sleeps until just before each frame is due.
 //!
 //! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
 //! iceoryx2's node monitoring says the plant process is dead or gone, the
@@ -77,12 +78,17 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
     let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
     let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
     let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
+    if realtime {
+        super::ipc::tighten_timer_slack();
+    }
     let mut side = FirmwareSide::new(s)?;
     let faults = FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz);
     let peer_check = Duration::from_secs_f64(s.rig.peer_check_s);
     let clock = HostClock::default();
     let started = Instant::now();
-    let mut anchor: Option<(u64, Instant)> = None;
+    // Real time: the wall-clock instant of sample time 0, estimated as the earliest
+    // arrival minus its sample time (a minimum-delay clock sync, as NTP filters).
+    let mut epoch: Option<Instant> = None;
     let mut last_seq: Option<u32> = None;
     let mut answered = 0u64;
     let mut stalled_at: Option<u32> = None;
@@ -92,15 +98,16 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         // Real time: sleep until just before the next frame is due, then spin for it
         // (as an MCU's timer interrupt would wake it): waking a sleeping process on
         // an idle core costs hundreds of microseconds here, a spin costs nothing.
-        if let (true, Some((t_a, i_a)), Some(_)) = (realtime, anchor, last_seq) {
-            let due = i_a + Duration::from_micros((last_t_us + ts_us).saturating_sub(t_a));
+        if let (true, Some(e), Some(_)) = (realtime, epoch, last_seq) {
+            let due = e + Duration::from_micros(last_t_us + ts_us);
             let wake = due.checked_sub(Duration::from_micros(150)).unwrap_or(due);
             let now = Instant::now();
             if wake > now {
                 std::thread::sleep(wake - now);
             }
         }
-        let Some(first) = ports.frames.next_before(Instant::now() + peer_check).map_err(transport)? else {
+        let waited_from = Instant::now();
+        let Some(first) = ports.frames.next_before(waited_from + peer_check).map_err(transport)? else {
             // No frame for a while: is the plant still there?
             match peer_state(Role::Plant, rig) {
                 PeerState::Alive => continue,
@@ -135,6 +142,14 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         }
         // Everything that queued up meanwhile, in order: in lockstep the firmware's
         // clock is the newest sample, so older frames are answered late.
+        if realtime && let Some(e) = Instant::now().checked_sub(Duration::from_micros(first.t_us)) {
+            epoch = Some(epoch.map_or(e, |old| old.min(e)));
+            // The frame was already waiting: the estimate is late (the first arrival
+            // came through a slow wake-up); wake earlier from now on.
+            if waited_from.elapsed() < Duration::from_micros(2) {
+                epoch = epoch.and_then(|e| e.checked_sub(Duration::from_micros(20)));
+            }
+        }
         let mut batch: Vec<SensorFrame> = vec![first];
         while let Some(f) = ports.frames.try_next().map_err(transport)? {
             batch.push(f);
@@ -145,8 +160,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
                 return Ok(Ending::EndOfRun { answered, overruns: side.firmware().overruns() });
             }
             let (command, telemetry) = if realtime {
-                let (t_a, i_a) = *anchor.get_or_insert((frame.t_us, Instant::now()));
-                let now_us = t_a + i_a.elapsed().as_micros() as u64;
+                let now_us = epoch.map_or(frame.t_us, |e| e.elapsed().as_micros() as u64);
                 side.answer(&frame, now_us, &clock)
             } else {
                 let t = Instant::now();

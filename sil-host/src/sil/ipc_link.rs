@@ -82,6 +82,9 @@ impl IpcLink {
     pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
+        if realtime {
+            super::ipc::tighten_timer_slack();
+        }
         let spawned = match firmware_exe {
             Some(exe) => Some(spawn(exe, rig, s, realtime)?),
             None => None,
