@@ -39,8 +39,10 @@ fn column(out: &Path, name: &str) -> usize {
 }
 
 /// A scenario file: the default with `extra` appended (faults) and `replace` applied.
+/// Tests that count misses exactly wait up to 5 s of wall time for each command, so
+/// that a loaded machine (tests run in parallel on 2 cores) never times out a period.
 fn scenario(dir: &Path, name: &str, replace: &[(&str, &str)], extra: &str) -> PathBuf {
-    let mut text = sil_host::sil::scenario::DEFAULT_TOML.to_string();
+    let mut text = sil_host::sil::scenario::DEFAULT_TOML.replace("command_timeout_s = 0.05", "command_timeout_s = 5.0");
     for (a, b) in replace {
         assert!(text.contains(a), "{a}");
         text = text.replace(a, b);
@@ -54,16 +56,18 @@ fn scenario(dir: &Path, name: &str, replace: &[(&str, &str)], extra: &str) -> Pa
 #[test]
 fn lockstep_iceoryx2_and_in_process_traces_are_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
     // The default scenario, and PID from x0u (which loses contact: flight, impacts).
     for (tag, extra) in [("hybrid", vec![]), ("pid-x0u", vec!["--controller", "pid", "--x0", "u"])] {
         let ipc = dir.path().join(format!("{tag}-ipc"));
         let inp = dir.path().join(format!("{tag}-inp"));
-        let mut a = vec!["--duration", "3", "--seed", "7", "--rig"];
+        let mut a = vec!["--scenario", s, "--duration", "3", "--seed", "7", "--rig"];
         let name = rig(tag);
         a.push(&name);
         a.extend(&extra);
         assert!(run(&a, &ipc).status.success());
-        let mut b = vec!["--duration", "3", "--seed", "7", "--in-process"];
+        let mut b = vec!["--scenario", s, "--duration", "3", "--seed", "7", "--in-process"];
         b.extend(&extra);
         assert!(run(&b, &inp).status.success());
         let ta = std::fs::read(ipc.join("trace.csv")).unwrap();
@@ -89,14 +93,16 @@ fn lockstep_iceoryx2_and_in_process_traces_are_bit_identical() {
 fn attach_mode_talks_to_a_firmware_started_by_hand() {
     let dir = tempfile::tempdir().unwrap();
     let name = rig("attach");
-    let mut fw = sil_host().args(["firmware", "--rig", &name, "--duration", "1"]).stderr(Stdio::piped()).spawn().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let mut fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "1"]).stderr(Stdio::piped()).spawn().unwrap();
     let out = dir.path().join("attach");
-    let o = run(&["--attach", &name, "--duration", "1"], &out);
+    let o = run(&["--attach", &name, "--scenario", s, "--duration", "1"], &out);
     assert!(o.status.success());
     let status = fw.wait().unwrap();
     assert_eq!(status.code(), Some(0), "the firmware exits 0 when the plant ends the run");
     let inp = dir.path().join("inp");
-    assert!(run(&["--in-process", "--duration", "1"], &inp).status.success());
+    assert!(run(&["--in-process", "--scenario", s, "--duration", "1"], &inp).status.success());
     assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), std::fs::read(inp.join("trace.csv")).unwrap());
 }
 
@@ -167,7 +173,12 @@ fn bad_sensor_readings_latch_the_safe_state_and_the_trace_is_kept() {
 #[test]
 fn a_killed_firmware_process_is_noticed_in_the_period_it_dies() {
     let dir = tempfile::tempdir().unwrap();
-    let s = scenario(dir.path(), "kill.toml", &[], "\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 1.0\n");
+    let s = scenario(
+        dir.path(),
+        "kill.toml",
+        &[("command_timeout_s = 5.0", "command_timeout_s = 0.05")],
+        "\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 1.0\n",
+    );
     let out = dir.path().join("kill");
     let name = rig("kill");
     let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
@@ -188,7 +199,12 @@ fn a_stalled_firmware_misses_deadlines_then_goes_safe() {
     // The firmware process stops for 0.3 s of wall time at t = 1.0 s; the plant waits
     // 0.05 s per period, so about 6 periods pass before the firmware catches up, finds
     // the queued frames late, and latches the safe state (deadline misses).
-    let s = scenario(dir.path(), "stall.toml", &[], "\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\nduration_s = 0.3\n");
+    let s = scenario(
+        dir.path(),
+        "stall.toml",
+        &[("command_timeout_s = 5.0", "command_timeout_s = 0.05")],
+        "\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\nduration_s = 0.3\n",
+    );
     let out = dir.path().join("stall");
     let name = rig("stall");
     let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--rig", &name], &out);
@@ -259,4 +275,27 @@ fn sigterm_stops_a_run_and_everything_recorded_is_written() {
 unsafe extern "C" {
     #[link_name = "kill"]
     fn libc_kill(pid: i32, sig: i32) -> i32;
+}
+
+#[test]
+fn a_stuck_encoder_is_not_detected_and_the_ground_truth_shows_what_it_does() {
+    // Documented outcome: a stuck count looks like a still arm, so the firmware does
+    // not flag it; frozen mid-move (t = 1 s, 0.5 s long) the base encoder makes the
+    // hybrid law push on and the tip bounces. The rig's ground truth sees the
+    // lift-offs and the firmware's lift-off detector reports them.
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(
+        dir.path(),
+        "stuck.toml",
+        &[],
+        "\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"theta1\"\nat_s = 1.0\nduration_s = 0.5\n",
+    );
+    let out = dir.path().join("stuck");
+    assert!(run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--in-process"], &out).status.success());
+    let sm = summary(&out);
+    let (true_lo, detected) = (sm["lift_offs"].as_u64().unwrap(), sm["lift_offs_detected"].as_u64().unwrap());
+    assert!(true_lo >= 1 && detected >= 1, "{sm}");
+    let rows = trace(&out);
+    let lo = column(&out, "lift_off_true");
+    assert!((0..1000).all(|k| &rows[k][lo] == "false"), "no lift-off before the fault");
 }
