@@ -284,36 +284,6 @@ fn touchdown_events_are_located_on_the_belt() {
     assert!(checked > 5);
 }
 
-/// Why the plant locates events itself: `differential-equations` 0.7.0's own
-/// event search returns a wrong root on a ballistic hop (`y'' = -10`, `y(0) = 0`,
-/// `y'(0) = 1`, exact return at 0.2 s). If this test fails, the crate has been
-/// fixed and `segment::EventLocator` could go back to the crate's `Event` trait.
-#[test]
-fn crate_event_location_is_wrong() {
-    struct Hop;
-    impl ODE<f64, [f64; 2]> for Hop {
-        fn diff(&self, _t: f64, y: &[f64; 2], d: &mut [f64; 2]) {
-            d[0] = y[1];
-            d[1] = -10.0;
-        }
-    }
-    impl Event<f64, [f64; 2]> for Hop {
-        fn config(&self) -> EventConfig {
-            EventConfig::new(CrossingDirection::Negative, Some(1))
-        }
-        fn event(&self, _t: f64, y: &[f64; 2]) -> f64 {
-            y[0]
-        }
-    }
-    let sol = IVP::ode(&Hop, 0.0, 1.0, [0.0, 1.0])
-        .event(&Hop)
-        .method(ExplicitRungeKutta::dop853().rtol(1e-9).atol(1e-11).h0(0.05))
-        .solve()
-        .unwrap();
-    let t_event = *sol.t.last().unwrap();
-    assert!((t_event - 0.2).abs() > 1e-3, "the crate now locates the hop's end at {t_event} s");
-}
-
 /// Robustness over the paper's parameter ranges: every (mu, v_belt) of a coarse grid,
 /// from x0a and x0d, both impact laws, 3 s at 1 ms ticks: no failure, no energy
 /// created at the contact, never below the belt, contact forces admissible.
