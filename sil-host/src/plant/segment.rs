@@ -10,13 +10,14 @@ use nalgebra::Vector2;
 use shared::{
     Arm, SlipDirection,
     contact::{sliding_force, sticking_force},
-    kinematics::tip_position,
+    kinematics::tip_position_trig,
     model::TipDynamics,
 };
 
 use super::{
     Controller,
     dop853::{Control, OdeSystem, StepView},
+    trig::TrigCache,
 };
 
 /// The integrated state: 4 plant states then 2 controller states.
@@ -62,6 +63,8 @@ pub struct Segment<'a, C: ?Sized> {
     pub baumgarte: f64,
     /// Count of model evaluations (vector field and event function), for profiling.
     pub evals: &'a Cell<u64>,
+    /// Sines and cosines of the joint angles (shared with the plant's projections).
+    pub trig: &'a TrigCache,
     /// The nearest boundary at the end of the last accepted step, keyed by `(t, y)`
     /// (the FSAL stage computes the tip dynamics there; the event function reuses them).
     end: Cell<Option<StepEnd>>,
@@ -88,10 +91,18 @@ pub fn split(y: &OdeState) -> (Vector2<f64>, Vector2<f64>) {
 }
 
 impl<'a, C: Controller + ?Sized> Segment<'a, C> {
-    /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`
-    /// and `baumgarte` as the fields; `evals` counts model evaluations.
-    pub fn new(arm: &'a Arm<f64>, phase: Phase, ctrl: &'a C, cone_relaxed: bool, baumgarte: f64, evals: &'a Cell<u64>) -> Self {
-        Self { arm, phase, ctrl, cone_relaxed, baumgarte, evals, end: Cell::new(None) }
+    /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`,
+    /// `baumgarte` and `trig` as the fields; `evals` counts model evaluations.
+    pub fn new(
+        arm: &'a Arm<f64>,
+        phase: Phase,
+        ctrl: &'a C,
+        cone_relaxed: bool,
+        baumgarte: f64,
+        evals: &'a Cell<u64>,
+        trig: &'a TrigCache,
+    ) -> Self {
+        Self { arm, phase, ctrl, cone_relaxed, baumgarte, evals, trig, end: Cell::new(None) }
     }
 
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
@@ -101,7 +112,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         let xi = [y[4], y[5]];
         let motor = self.ctrl.torque(t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
-        let td = self.arm.tip_dynamics(&q, &qd, &u);
+        let td = self.arm.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
         let f = match self.phase {
             Phase::Flight => Vector2::zeros(),
             Phase::Sliding(dir) => {
@@ -153,7 +164,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
             Phase::Flight => {
                 // Only the tip's height: no need for the dynamics.
                 let (q, _) = split(y);
-                let z = tip_position(self.arm.params.l, &q);
+                let z = tip_position_trig(self.arm.params.l, &self.trig.get(&q));
                 self.flight_components(z[1])
             }
             _ => {

@@ -1,5 +1,6 @@
 use super::*;
 use crate::initial::{X0A, X0D, deg_to_state};
+use shared::kinematics::tip_position;
 
 fn plant_from(params: Params<f64>, cfg: SimConfig, deg: [f64; 4]) -> Plant {
     Plant::new(params, cfg, deg_to_state(deg), 0.0, [0.0, 0.0]).unwrap()
