@@ -339,3 +339,26 @@ fn robust_over_the_paper_parameter_grid() {
     assert!(stats.touchdowns > 100 && stats.lift_offs > 10 && stats.impacts_without_collision > 0 && stats.stick_phases > 0);
     assert!(stats.stick_to_slip > 0 && stats.zeno_stops > 0);
 }
+
+/// Cost guard (the SIL loop's budget): in steady sliding each `advance` of the
+/// zero-order-hold pattern (0.2 ms, then 0.8 ms under another torque) is one DOP853
+/// step: the start point, 11 stages and the FSAL stage, 13 model evaluations; no
+/// dense output is evaluated without an event, and the event function at the
+/// step's end reuses the FSAL stage.
+#[test]
+fn steady_sliding_interval_is_one_step() {
+    let params = Params::new(0.3, -0.4).unwrap();
+    let mut p = plant_from(params, SimConfig::default(), X0D.deg);
+    for _ in 0..2000 {
+        p.advance([0.0, 0.0], 1e-3).unwrap();
+    }
+    assert_eq!(p.mode(), ContactMode::Sliding);
+    let e0 = p.rhs_evaluations();
+    for _ in 0..100 {
+        p.advance([0.02, -0.01], 2e-4).unwrap();
+        let r = p.advance([0.03, 0.01], 8e-4).unwrap();
+        assert_eq!(r.mode, ContactMode::Sliding);
+        assert!(r.events.is_empty());
+    }
+    assert_eq!(p.rhs_evaluations() - e0, 100 * 2 * 13);
+}
