@@ -64,22 +64,69 @@ pub enum IkError {
     AtBase,
 }
 
+/// Sines and cosines of the joint angles `q = [theta1, theta2]`: all the
+/// trigonometry of the model (those of `theta2 - theta1` follow from the
+/// angle-difference identities).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointTrig<T> {
+    /// `sin theta1`.
+    pub s1: T,
+    /// `cos theta1`.
+    pub c1: T,
+    /// `sin theta2`.
+    pub s2: T,
+    /// `cos theta2`.
+    pub c2: T,
+}
+
+impl<T: Real> JointTrig<T> {
+    /// The sines and cosines of `q = [theta1, theta2]` (rad): one `sin_cos` per angle.
+    #[inline]
+    pub fn new(q: &Vector2<T>) -> Self {
+        let (s1, c1) = q[0].sin_cos();
+        let (s2, c2) = q[1].sin_cos();
+        Self { s1, c1, s2, c2 }
+    }
+
+    /// `cos(theta2 - theta1) = cos theta1 cos theta2 + sin theta1 sin theta2`.
+    #[inline]
+    pub fn c21(&self) -> T {
+        self.c1 * self.c2 + self.s1 * self.s2
+    }
+
+    /// `sin(theta1 - theta2) = sin theta1 cos theta2 - cos theta1 sin theta2`.
+    #[inline]
+    pub fn s12(&self) -> T {
+        self.s1 * self.c2 - self.c1 * self.s2
+    }
+}
+
+/// Tip position `z = [z_t, z_n]` (m) from the sines and cosines of the angles,
+/// links of length `l` (m): `[l (sin theta1 + sin theta2), -l (cos theta1 + cos theta2)]`.
+#[inline]
+pub fn tip_position_trig<T: Real>(l: T, t: &JointTrig<T>) -> Vector2<T> {
+    Vector2::new(l * (t.s1 + t.s2), -l * (t.c1 + t.c2))
+}
+
+/// Tip Jacobian `J = [[l cos theta1, l cos theta2], [l sin theta1, l sin theta2]]`
+/// (m/rad) from the sines and cosines of the angles; paper eq. 1.
+#[inline]
+pub fn jacobian_trig<T: Real>(l: T, t: &JointTrig<T>) -> Matrix2<T> {
+    Matrix2::new(l * t.c1, l * t.c2, l * t.s1, l * t.s2)
+}
+
 /// Tip position `z = [z_t, z_n]` (m) of configuration `q = [theta1, theta2]` (rad),
 /// links of length `l` (m). MODEL.md, "Geometry and state".
 #[inline]
 pub fn tip_position<T: Real>(l: T, q: &Vector2<T>) -> Vector2<T> {
-    let (s1, c1) = q[0].sin_cos();
-    let (s2, c2) = q[1].sin_cos();
-    Vector2::new(l * (s1 + s2), -l * (c1 + c2))
+    tip_position_trig(l, &JointTrig::new(q))
 }
 
 /// Tip Jacobian `J(q) = dz/dq` (2x2, m/rad), rows `j1^T` (tangential) and
 /// `j2^T` (normal); paper eq. 1.
 #[inline]
 pub fn jacobian<T: Real>(l: T, q: &Vector2<T>) -> Matrix2<T> {
-    let (s1, c1) = q[0].sin_cos();
-    let (s2, c2) = q[1].sin_cos();
-    Matrix2::new(l * c1, l * c2, l * s1, l * s2)
+    jacobian_trig(l, &JointTrig::new(q))
 }
 
 /// `s = J_dot(q, q_dot) q_dot` (m/s^2), the velocity-product part of the tip

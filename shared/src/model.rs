@@ -6,7 +6,13 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::{Real, contact::SlipDirection, kinematics::jacobian, lit, params::Params};
+use crate::{
+    Real,
+    contact::SlipDirection,
+    kinematics::{JointTrig, jacobian},
+    lit,
+    params::Params,
+};
 
 /// The arm: its parameters and the model evaluated from them.
 ///
@@ -60,7 +66,11 @@ impl<T: Real> TipDynamics<T> {
     /// `q_ddot = qdd_free + M^-1 J^T f` (paper eq. 1).
     #[inline]
     pub fn qdd_with_force(&self, f: &Vector2<T>) -> Vector2<T> {
-        self.qdd_free + self.m_inv * (self.jac.transpose() * f)
+        let (j, mi) = (&self.jac, &self.m_inv);
+        // J^T f, then M^-1 (J^T f), written out (the 2x2 products of nalgebra's generic code do not inline fully).
+        let jt0 = j[(0, 0)] * f[0] + j[(1, 0)] * f[1];
+        let jt1 = j[(0, 1)] * f[0] + j[(1, 1)] * f[1];
+        Vector2::new(self.qdd_free[0] + (mi[(0, 0)] * jt0 + mi[(0, 1)] * jt1), self.qdd_free[1] + (mi[(1, 0)] * jt0 + mi[(1, 1)] * jt1))
     }
 }
 
@@ -85,6 +95,17 @@ impl<T: Real> Arm<T> {
         let m = self.mass_matrix(q);
         let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
         Matrix2::new(m[(1, 1)], -m[(0, 1)], -m[(1, 0)], m[(0, 0)]) / det
+    }
+
+    /// [`Arm::mass_matrix_inverse`] from the sines and cosines of the angles
+    /// (`cos(theta2 - theta1)` by the angle-difference identity), 1/(kg m^2).
+    #[inline]
+    pub fn mass_matrix_inverse_trig(&self, trig: &JointTrig<T>) -> Matrix2<T> {
+        let ml2 = self.params.m * self.params.l * self.params.l;
+        let (m11, m12, m22) = (ml2 * lit::<T>(4.0 / 3.0), ml2 * lit::<T>(0.5) * trig.c21(), ml2 * lit::<T>(1.0 / 3.0));
+        let det = m11 * m22 - m12 * m12;
+        let i12 = -m12 / det;
+        Matrix2::new(m22 / det, i12, i12, m11 / det)
     }
 
     /// Gravity, spring and damping torques `w(q, q_dot)` (N m), paper eq. 1:
@@ -145,38 +166,52 @@ impl<T: Real> Arm<T> {
     /// `sin(theta1 - theta2)` from them; the tests check it against the
     /// one-term-at-a-time functions ([`Arm::mass_matrix`], [`Arm::w`], [`Arm::c`],
     /// `kinematics::*`).
+    #[inline]
     pub fn tip_dynamics(&self, q: &Vector2<T>, qd: &Vector2<T>, u: &Vector2<T>) -> TipDynamics<T> {
+        self.tip_dynamics_trig(&JointTrig::new(q), q, qd, u)
+    }
+
+    /// [`Arm::tip_dynamics`] with the sines and cosines of `q` given (`trig` must be
+    /// those of `q`; a caller that already has them saves the two `sin_cos`).
+    ///
+    /// Written out in scalars: the 2x2 products of nalgebra's generic code do not
+    /// inline fully, and this is evaluated 12 times per integration step.
+    #[inline]
+    pub fn tip_dynamics_trig(&self, trig: &JointTrig<T>, q: &Vector2<T>, qd: &Vector2<T>, u: &Vector2<T>) -> TipDynamics<T> {
         let p = &self.params;
         let (l, half) = (p.l, lit::<T>(0.5));
-        let (s1, c1) = q[0].sin_cos();
-        let (s2, c2) = q[1].sin_cos();
-        let c21 = c1 * c2 + s1 * s2; // cos(theta2 - theta1)
-        let s12 = s1 * c2 - c1 * s2; // sin(theta1 - theta2)
+        let JointTrig { s1, c1, s2, c2 } = *trig;
+        let s12 = trig.s12(); // sin(theta1 - theta2)
         let ml2 = p.m * l * l;
-        // M and its inverse (closed form).
-        let (m11, m12, m22) = (ml2 * lit::<T>(4.0 / 3.0), ml2 * half * c21, ml2 * lit::<T>(1.0 / 3.0));
-        let det = m11 * m22 - m12 * m12;
-        let m_inv = Matrix2::new(m22, -m12, -m12, m11) / det;
+        // M^-1 (closed form).
+        let m_inv = self.mass_matrix_inverse_trig(trig);
+        let (i11, i12, i22) = (m_inv[(0, 0)], m_inv[(0, 1)], m_inv[(1, 1)]);
         // w + c (paper eq. 1).
         let mgl2 = p.m * p.g * l * half;
         let spring = p.k * (q[1] - q[0] + p.alpha0);
         let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
         let half_ml2 = ml2 * half;
-        let wc = Vector2::new(
-            mgl2 * lit::<T>(3.0) * s1 - spring - p.sigma * (qd[1] - qd[0] - qd[0]) + half_ml2 * w2 * s12,
-            mgl2 * s2 + spring + p.sigma * (qd[1] - qd[0]) - half_ml2 * w1 * s12,
-        );
-        let qdd_free = m_inv * (u - wc);
-        let jac = Matrix2::new(l * c1, l * c2, l * s1, l * s2);
-        let s = Vector2::new(-l * (w1 * s1 + w2 * s2), l * (w1 * c1 + w2 * c2));
+        let wc0 = mgl2 * lit::<T>(3.0) * s1 - spring - p.sigma * (qd[1] - qd[0] - qd[0]) + half_ml2 * w2 * s12;
+        let wc1 = mgl2 * s2 + spring + p.sigma * (qd[1] - qd[0]) - half_ml2 * w1 * s12;
+        let (v0, v1) = (u[0] - wc0, u[1] - wc1);
+        let (qdd0, qdd1) = (i11 * v0 + i12 * v1, i12 * v0 + i22 * v1);
+        // J = [[l c1, l c2], [l s1, l s2]] (paper eq. 1), s = J_dot q_dot (eq. 4).
+        let (j11, j12, j21, j22) = (l * c1, l * c2, l * s1, l * s2);
+        let s_t = -l * (w1 * s1 + w2 * s2);
+        let s_n = l * (w1 * c1 + w2 * c2);
+        // J M^-1, then Q = (J M^-1) J^T (eq. 3).
+        let (a11, a12) = (j11 * i11 + j12 * i12, j11 * i12 + j12 * i22);
+        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
+        let (q11, q12) = (a11 * j11 + a12 * j12, a11 * j21 + a12 * j22);
+        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
         TipDynamics {
             z: Vector2::new(l * (s1 + s2), -l * (c1 + c2)),
-            z_dot: jac * qd,
-            jac,
+            z_dot: Vector2::new(j11 * qd[0] + j12 * qd[1], j21 * qd[0] + j22 * qd[1]),
+            jac: Matrix2::new(j11, j12, j21, j22),
             m_inv,
-            qmat: jac * m_inv * jac.transpose(),
-            a_free: jac * qdd_free + s,
-            qdd_free,
+            qmat: Matrix2::new(q11, q12, q21, q22),
+            a_free: Vector2::new(j11 * qdd0 + j12 * qdd1 + s_t, j21 * qdd0 + j22 * qdd1 + s_n),
+            qdd_free: Vector2::new(qdd0, qdd1),
         }
     }
 

@@ -1,6 +1,11 @@
 //! Plant speed targets (issue 2):
 //! - `advance` over 1 ms intervals in steady sliding: median at most 5 us per interval;
-//! - 300 s of open-loop simulation from x0a (mu = 0.6, v_belt = -0.4): under 0.5 s.
+//! - 300 s of open-loop simulation from x0a (mu = 0.6, v_belt = -0.4): under 0.5 s;
+//! - the SIL pattern (issue 4): one 1 ms control period as two `advance` calls, 0.2 ms
+//!   under the previous command then 0.8 ms under the new one (the zero-order-hold
+//!   switch at `t_k + delta`): at most 2 us per period, so that the in-process loop
+//!   (plant plus a ~0.4 us firmware step) reaches 300 000 periods per second;
+//! - the default scenario's 10 s closed-loop run (10 000 periods) in-process.
 //!
 //! Run: `cargo bench -p sil-host --bench plant`.
 
@@ -9,6 +14,7 @@ use shared::{ContactMode, Params};
 use sil_host::{
     initial::{X0A, X0D, deg_to_state},
     plant::{Plant, SimConfig},
+    sil::{in_process, scenario::Scenario},
 };
 
 /// A plant in steady sliding: from x0d with mu = 0.3 the tip slides without lifting off.
@@ -35,6 +41,29 @@ fn bench(c: &mut Criterion) {
             BatchSize::SmallInput,
         )
     });
+    c.bench_function("sil_period_0.2ms_0.8ms_sliding", |b| {
+        b.iter_batched_ref(
+            || base.clone(),
+            |p| {
+                p.advance([0.02, -0.01], 2e-4).unwrap();
+                let r = p.advance([0.03, 0.01], 8e-4).unwrap();
+                assert_eq!(r.mode, ContactMode::Sliding);
+                r.f[1]
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    let mut sil = c.benchmark_group("sil");
+    sil.sample_size(10);
+    let scenario = Scenario::default_scenario();
+    sil.bench_function("default_scenario_10s_in_process", |b| {
+        b.iter(|| {
+            let (records, err) = in_process::run(&scenario, |_, _| {});
+            assert!(err.is_none(), "{err:?}");
+            records.len()
+        })
+    });
+    sil.finish();
     let mut group = c.benchmark_group("open_loop");
     group.sample_size(10);
     group.bench_function("x0a_300s_one_interval", |b| {

@@ -3,11 +3,12 @@
 //!
 //! Modes: flight, sliding (`f_n = -b/p`, Coulomb friction opposing the slip),
 //! sticking (`z_r_dot = 0`, `f = -Q^-1 a_free` while `|f_t| <= mu f_n`). Each
-//! mode is a smooth ODE integrated by an explicit Runge-Kutta method with dense output from
-//! the `differential-equations` crate (DOP853: its 7th-order dense output locates
-//! events two orders more accurately than Dormand-Prince 5(4)'s); the events that
-//! end a mode are located on the dense output by a bracketing root search
-//! ([`segment::EventLocator`], to 1e-14 s + 1e-15 |t|):
+//! mode is a smooth ODE integrated by DOP853, the Dormand-Prince 8(5,3) method of
+//! Hairer, Nørsett and Wanner ("Solving Ordinary Differential Equations I",
+//! sec. II.10; [`dop853`], allocation-free on the fixed-size state): its 7th-order
+//! dense output locates events two orders more accurately than Dormand-Prince
+//! 5(4)'s. The events that end a mode are located on the dense output by a
+//! bracketing root search ([`segment::EventLocator`], to 1e-14 s + 1e-15 |t|):
 //! touchdown (`z_n = -H`), lift-off (`f_n` reaching 0, i.e. `b = 0` while sliding),
 //! `p` reaching 0 while sliding, slip-to-stick (`z_r_dot = 0`), stick-to-slip
 //! (`|f_t| = mu f_n`).
@@ -42,22 +43,26 @@
 //! `advance` interval, then the contact problem is solved again; one
 //! [`EventKind::ConeViolation`] is reported per episode.
 
+pub mod dop853;
 pub mod impact;
 pub mod segment;
+pub mod trig;
 
 use std::cell::Cell;
 
-use differential_equations::prelude::*;
 use nalgebra::Vector2;
 use serde::Serialize;
 use shared::{
     Arm, ContactMode, ElbowBranch, IkError, ParamError, Params, SlipDirection,
     contact::{classify_slipping, sliding_force, sticking_is_consistent},
-    kinematics::{inverse_kinematics, tip_position},
+    kinematics::{inverse_kinematics, jacobian_trig, tip_position_trig},
+    model::TipDynamics,
 };
 
+use dop853::Dop853;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
-use segment::{Boundary, EventLocator, OdeState, Phase, Segment};
+use segment::{Boundary, EventLocator, OdeState, Phase, Point, Segment};
+use trig::TrigCache;
 
 /// A torque law the plant evaluates inside the integration.
 ///
@@ -90,9 +95,9 @@ impl Controller for Hold {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
-    /// Relative tolerance of the integrator (Dormand-Prince 5(4)).
+    /// Relative tolerance of the integrator (DOP853, [`dop853::Dop853::rtol`]).
     pub rtol: f64,
-    /// Absolute tolerance of the integrator (rad, rad/s).
+    /// Absolute tolerance of the integrator (rad, rad/s; [`dop853::Dop853::atol`]).
     pub atol: f64,
     /// Impact law at touchdown and for impacts without collision.
     pub impact_law: ImpactLaw,
@@ -205,7 +210,7 @@ pub enum SimError {
     Integrator {
         /// Time, s.
         t: f64,
-        /// The crate's message.
+        /// The integrator's message.
         message: String,
     },
     /// The state became NaN or infinite.
@@ -399,26 +404,14 @@ pub struct Plant {
     phase: Phase,
     cone_relaxed: bool,
     in_violation: bool,
-    last_h: Cell<f64>,
+    /// First step of the next solve, s: the step the controller proposed last.
+    last_h: f64,
     evals: Cell<u64>,
-    method: Integrator,
+    /// Sines and cosines of the joint angles, reused between nearby evaluations.
+    trig: TrigCache,
+    solver: Dop853,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
-}
-
-/// The integrator: DOP853 (Hairer, Nørsett and Wanner, "Solving Ordinary
-/// Differential Equations I", sec. II.10) with its 7th-order dense output.
-type Dop853 =
-    ExplicitRungeKutta<differential_equations::methods::Ordinary, differential_equations::methods::DormandPrince, f64, OdeState, 8, 12, 16>;
-
-/// The plant's reusable integrator (interior mutability: `solve_segment` borrows the plant immutably).
-#[derive(Clone)]
-struct Integrator(std::cell::RefCell<Dop853>);
-
-impl std::fmt::Debug for Integrator {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("DOP853")
-    }
 }
 
 /// Events at one instant after which the contact is held stuck (module docs, corner case).
@@ -458,11 +451,10 @@ impl Plant {
             phase: Phase::Flight,
             cone_relaxed: false,
             in_violation: false,
-            last_h: Cell::new(1e-4),
+            last_h: 2e-4,
             evals: Cell::new(0),
-            method: Integrator(std::cell::RefCell::new(
-                ExplicitRungeKutta::dop853().rtol(cfg.rtol).atol(cfg.atol).max_steps(cfg.max_steps),
-            )),
+            trig: TrigCache::new(),
+            solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
         };
@@ -537,13 +529,13 @@ impl Plant {
 
     /// Tip position `[z_t, z_n]`, m.
     pub fn tip(&self) -> Vector2<f64> {
-        tip_position(self.arm.params.l, &Vector2::new(self.y[0], self.y[2]))
+        tip_position_trig(self.arm.params.l, &self.trig.get(&Vector2::new(self.y[0], self.y[2])))
     }
 
     /// Tip velocity `[z_t_dot, z_n_dot]`, m/s.
     pub fn tip_velocity(&self) -> Vector2<f64> {
         let (q, qd) = segment::split(&self.y);
-        shared::kinematics::jacobian(self.arm.params.l, &q) * qd
+        jacobian_trig(self.arm.params.l, &self.trig.get(&q)) * qd
     }
 
     /// Contact force `[f_t, f_n]` (N) in the current mode under motor torques `u` (N m).
@@ -616,9 +608,15 @@ impl Plant {
                 return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance, recent });
             }
             // A mode must start inside its domain (up to rounding: a slip starting from
-            // rest has s v_r = +-1e-16), or it ends at once.
-            let (boundary, g0) = self.segment(ctrl).nearest_boundary(self.t, &self.y);
-            if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(ctrl) {
+            // rest has s v_r = +-1e-16), or it ends at once. One model evaluation gives
+            // the event function and the integrator's first stage.
+            let (start, (boundary, g0)) = {
+                let seg = self.segment(ctrl);
+                let start = seg.point(self.t, &self.y);
+                let nb = segment::nearest(seg.components_of(&start.td, &start.f));
+                (start, nb)
+            };
+            if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(&start.td) {
                 if self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
                     handled += 1;
                     continue;
@@ -629,7 +627,7 @@ impl Plant {
             }
             // A relaxed (cone-violating) stick lasts at most to the end of this interval.
             let seg_end = t_end;
-            let hit = self.integrate(ctrl, seg_end)?;
+            let hit = self.integrate(ctrl, seg_end, &start, g0)?;
             self.counters.segments += 1;
             match hit {
                 Some(b) => {
@@ -650,10 +648,12 @@ impl Plant {
                 }
             }
         }
-        let f = {
-            let seg = self.segment(ctrl);
-            let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 2]);
-            [f[0], f[1]]
+        let f = match self.phase {
+            Phase::Flight => [0.0, 0.0],
+            _ => {
+                let (_, f, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
+                [f[0], f[1]]
+            }
         };
         Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
     }
@@ -681,98 +681,86 @@ impl Plant {
     }
 
     /// Flight starting on the belt with the tip not moving away (e.g. after `b`
-    /// touched 0 without changing sign): the crate cannot see a crossing from
-    /// `z_n + H = 0`, so this is handled as a grazing touchdown at once.
-    fn flight_starts_into_belt<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
+    /// touched 0 without changing sign): the event detection cannot see a crossing
+    /// from `z_n + H = 0`, so this is handled as a grazing touchdown at once. `td`:
+    /// the tip dynamics at the current state.
+    fn flight_starts_into_belt(&self, td: &TipDynamics<f64>) -> bool {
         if self.phase != Phase::Flight {
             return false;
         }
-        let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
         let height = td.z[1] + self.arm.params.h;
         height <= 1e-12 && (td.z_dot[1] < -self.cfg.zeno_velocity || (td.z_dot[1] <= self.cfg.zeno_velocity && td.b() < 0.0))
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
-        Segment {
-            arm: &self.arm,
-            phase: self.phase,
-            ctrl,
-            cone_relaxed: self.cone_relaxed,
-            baumgarte: self.cfg.baumgarte,
-            evals: &self.evals,
-        }
+        Segment::new(&self.arm, self.phase, ctrl, self.cone_relaxed, self.cfg.baumgarte, &self.evals, &self.trig)
     }
 
     /// Integrates the current mode from `self.t` towards `t_end`; returns the
-    /// boundary hit, if any (the state is then at the event).
+    /// boundary hit, if any (the state is then at the event). `start` is the model
+    /// at the current state and `g0` the event function there.
     ///
-    /// The crate detects an event as a sign change of the event function between
-    /// two accepted steps, starting from its value at `t0`. A segment that starts
+    /// An event is detected as a sign change of the event function between two
+    /// accepted steps, starting from its value at `t0`. A segment that starts
     /// on its boundary (flight right after a bounce: `z_n + H = 0`) would miss a
     /// return that fits inside the first step, so the first step is kept inside the
     /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
     /// segment that ends outside its domain without an event is integrated again
     /// with steps capped at 1/64 of the interval, and fails if that still misses it.
-    fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64) -> Result<Option<Boundary>, SimError> {
+    fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64, start: &Point, g0: f64) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
-        let mut h0 = (2.0 * self.last_h.get()).min(remaining);
+        let mut h0 = self.last_h.min(remaining);
         if self.phase == Phase::Flight {
-            let (td, _, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
+            let td = &start.td;
             let height = td.z[1] + self.arm.params.h;
             if height < 1e-9 && td.z_dot[1] > 0.0 && td.b() < 0.0 {
                 h0 = h0.min(td.z_dot[1] / -td.b());
             }
         }
-        let start = (self.t, self.y);
         for h_max in [f64::INFINITY, remaining / 64.0] {
-            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max)?;
+            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0)?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.
-                (self.t, self.y) = start;
                 continue;
             }
             self.t = t1;
             self.y = y1;
             return Ok(boundary);
         }
-        Err(SimError::MissedEvent { t: start.0, mode: self.mode().name() })
+        Err(SimError::MissedEvent { t: self.t, mode: self.mode().name() })
     }
 
-    /// One call of the ODE solver over `[self.t, t_end]`, stopping at the first event.
-    ///
-    /// The DOP853 solver struct (about 6 KiB of tableau and stages) is built once
-    /// per plant and reused through the crate's low-level `solve_ode`: building it
-    /// or passing it through the by-value builder every millisecond cost a third
-    /// of an `advance`.
-    /// Returns the end time and state, the boundary hit (if any) and the event
-    /// function at the last accepted point.
+    /// One solve over `[self.t, t_end]`, stopping at the first event (the plant's
+    /// state is left unchanged). Returns the end time and state, the boundary hit (if
+    /// any) and the event function at the last accepted point.
     fn solve_segment<C: Controller + ?Sized>(
-        &self,
+        &mut self,
         ctrl: &C,
         t_end: f64,
         h0: f64,
         h_max: f64,
+        start: &Point,
+        g0: f64,
     ) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
-        let mut method = self.method.0.take().h0(h0);
-        method.h_max = h_max;
+        let solver = Dop853 { h_max, ..self.solver };
         let seg = self.segment(ctrl);
-        let hit = Cell::new(None);
-        let mut locator = EventLocator { segment: &seg, last_h: &self.last_h, g_prev: None, max_h: 0.0, hit: &hit };
-        let solved = differential_equations::ode::solve_ode(&mut method, &seg, self.t, t_end, &self.y, &mut locator);
-        self.method.0.replace(method);
-        let g_end = locator.g_prev.unwrap_or(f64::INFINITY);
-        let solution = solved.map_err(|e| SimError::Integrator { t: self.t, message: format!("{e:?}") })?;
-        if let Some((t1, y1)) = hit.get() {
+        let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
+        let solved = solver
+            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| locator.on_step(step))
+            .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
+        let (g_end, hit) = (locator.g_prev, locator.hit);
+        self.last_h = solved.h_next;
+        if let Some((t1, y1)) = hit {
             if !y1.iter().all(|v| v.is_finite()) {
                 return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
             }
-            return Ok((t1, y1, Some(seg.nearest_boundary(t1, &y1).0), 0.0));
+            let boundary = self.segment(ctrl).nearest_boundary(t1, &y1).0;
+            return Ok((t1, y1, Some(boundary), 0.0));
         }
-        let y1 = solution.y.last().copied().unwrap_or(self.y);
-        if !y1.iter().all(|v| v.is_finite()) {
+        if !solved.y.iter().all(|v| v.is_finite()) {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
-        Ok((t_end, y1, None, g_end))
+        Ok((t_end, solved.y, None, g_end))
     }
 
     /// Handles the crossing of a mode boundary at the current time.
@@ -1034,11 +1022,31 @@ impl Plant {
 
     /// Puts the tip exactly on the belt at the same `z_t` and elbow branch,
     /// keeping the angles on the same turn.
+    ///
+    /// The usual drift after an interval (well under a micrometre) is removed by one
+    /// Newton step on `z(q) = [z_t, -H]`, whose error is quadratic in the step:
+    /// with the step at most `1e-8` rad it is below rounding, the same result as
+    /// the inverse kinematics (used otherwise) without its `acos` and `atan2`.
     fn project_position(&mut self) -> Result<(), SimError> {
         let (q, _) = segment::split(&self.y);
-        let z = tip_position(self.arm.params.l, &q);
+        let l = self.arm.params.l;
+        let trig = self.trig.get(&q);
+        let z = tip_position_trig(l, &trig);
+        let gap = z[1] + self.arm.params.h;
+        if gap == 0.0 {
+            return Ok(());
+        }
+        // J dq = [0, -gap]: dq = J^-1 [0, -gap] (Cramer).
+        let jac = jacobian_trig(l, &trig);
+        let det = jac[(0, 0)] * jac[(1, 1)] - jac[(0, 1)] * jac[(1, 0)];
+        let dq = [jac[(0, 1)] * gap / det, -jac[(0, 0)] * gap / det];
+        if dq[0].abs().max(dq[1].abs()) <= 1e-8 {
+            self.y[0] += dq[0];
+            self.y[2] += dq[1];
+            return Ok(());
+        }
         let target = Vector2::new(z[0], -self.arm.params.h);
-        let q_new = inverse_kinematics(self.arm.params.l, &target, ElbowBranch::of(&q))?;
+        let q_new = inverse_kinematics(l, &target, ElbowBranch::of(&q))?;
         let tau = std::f64::consts::TAU;
         self.y[0] = q_new[0] + tau * ((q[0] - q_new[0]) / tau).round();
         self.y[2] = q_new[1] + tau * ((q[1] - q_new[1]) / tau).round();
@@ -1049,8 +1057,9 @@ impl Plant {
     /// correction: `z_n_dot -> 0`, and `z_r_dot -> 0` too when `sticking`.
     fn project_contact_velocity(&mut self, sticking: bool) -> Result<(), SimError> {
         let (q, qd) = segment::split(&self.y);
-        let jac = shared::kinematics::jacobian(self.arm.params.l, &q);
-        let m_inv = self.arm.mass_matrix_inverse(&q);
+        let trig = self.trig.get(&q);
+        let jac = jacobian_trig(self.arm.params.l, &trig);
+        let m_inv = self.arm.mass_matrix_inverse_trig(&trig);
         let qm = jac * m_inv * jac.transpose();
         let v = jac * qd;
         let lambda = if sticking {

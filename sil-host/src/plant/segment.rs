@@ -1,19 +1,24 @@
 //! One smooth segment of the hybrid system: the vector field of a fixed contact
-//! mode and the event function that ends it, in the form the
-//! `differential-equations` crate integrates (state `[theta1, theta1_dot,
-//! theta2, theta2_dot, xi_0, xi_1]`, the `xi` being a continuous-time
-//! controller's internal states).
+//! mode and the event function that ends it, in the form the plant's DOP853
+//! ([`super::dop853`]) integrates (state `[theta1, theta1_dot, theta2,
+//! theta2_dot, xi_0, xi_1]`, the `xi` being a continuous-time controller's
+//! internal states), and the location of that event on the dense output.
 
-use differential_equations::prelude::*;
+use std::cell::Cell;
+
 use nalgebra::Vector2;
 use shared::{
     Arm, SlipDirection,
     contact::{sliding_force, sticking_force},
-    kinematics::tip_position,
+    kinematics::tip_position_trig,
     model::TipDynamics,
 };
 
-use super::Controller;
+use super::{
+    Controller,
+    dop853::{Control, OdeSystem, StepView},
+    trig::TrigCache,
+};
 
 /// The integrated state: 4 plant states then 2 controller states.
 pub type OdeState = [f64; 6];
@@ -57,7 +62,26 @@ pub struct Segment<'a, C: ?Sized> {
     /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
     pub baumgarte: f64,
     /// Count of model evaluations (vector field and event function), for profiling.
-    pub evals: &'a std::cell::Cell<u64>,
+    pub evals: &'a Cell<u64>,
+    /// Sines and cosines of the joint angles (shared with the plant's projections).
+    pub trig: &'a TrigCache,
+    /// The nearest boundary at the end of the last accepted step, keyed by `(t, y)`
+    /// (the FSAL stage computes the tip dynamics there; the event function reuses them).
+    end: Cell<Option<StepEnd>>,
+}
+
+/// `(t, y)` and the nearest boundary there (see [`Segment::nearest_boundary`]).
+type StepEnd = (f64, OdeState, (Boundary, f64));
+
+/// The model at one point `(t, y)` of a segment.
+#[derive(Debug, Clone, Copy)]
+pub struct Point {
+    /// Tip dynamics under the segment's torque law (paper eqs. 2 to 7).
+    pub td: TipDynamics<f64>,
+    /// Contact force `[f_t, f_n]` of the mode, N.
+    pub f: Vector2<f64>,
+    /// The vector field `dy/dt` (rad/s, rad/s^2, and the controller's `xi_dot`).
+    pub dydt: OdeState,
 }
 
 /// Plant state `(q, q_dot)` of an ODE state.
@@ -66,7 +90,21 @@ pub fn split(y: &OdeState) -> (Vector2<f64>, Vector2<f64>) {
     (Vector2::new(y[0], y[2]), Vector2::new(y[1], y[3]))
 }
 
-impl<C: Controller + ?Sized> Segment<'_, C> {
+impl<'a, C: Controller + ?Sized> Segment<'a, C> {
+    /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`,
+    /// `baumgarte` and `trig` as the fields; `evals` counts model evaluations.
+    pub fn new(
+        arm: &'a Arm<f64>,
+        phase: Phase,
+        ctrl: &'a C,
+        cone_relaxed: bool,
+        baumgarte: f64,
+        evals: &'a Cell<u64>,
+        trig: &'a TrigCache,
+    ) -> Self {
+        Self { arm, phase, ctrl, cone_relaxed, baumgarte, evals, trig, end: Cell::new(None) }
+    }
+
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
     #[inline]
     pub fn evaluate(&self, t: f64, y: &OdeState, xi_dot: &mut [f64; 2]) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
@@ -74,7 +112,7 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
         let xi = [y[4], y[5]];
         let motor = self.ctrl.torque(t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
-        let td = self.arm.tip_dynamics(&q, &qd, &u);
+        let td = self.arm.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
         let f = match self.phase {
             Phase::Flight => Vector2::zeros(),
             Phase::Sliding(dir) => {
@@ -104,21 +142,45 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
         Vector2::new(2.0 * w * (td.z_dot[0] - p.v_belt), 2.0 * w * td.z_dot[1] + w * w * (td.z[1] + p.h))
     }
 
+    /// The vector field and what it is made of at `(t, y)` (one model evaluation,
+    /// counted in `evals`).
+    #[inline]
+    pub fn point(&self, t: f64, y: &OdeState) -> Point {
+        self.evals.set(self.evals.get() + 1);
+        let mut xi_dot = [0.0; 2];
+        let (td, f, _) = self.evaluate(t, y, &mut xi_dot);
+        let qdd = match self.phase {
+            Phase::Flight => td.qdd_free,
+            _ => td.qdd_with_force(&f),
+        };
+        Point { td, f, dydt: [y[1], qdd[0], y[3], qdd[1], xi_dot[0], xi_dot[1]] }
+    }
+
     /// The event components (each positive inside the phase), normalised to be
     /// dimensionless: flight `(z_n + H)/l`; sliding `-b/g`, `p/Q_22`, `s v_r / (1 m/s)`;
     /// sticking `f_n/(m g)`, `(mu f_n - |f_t|)/(m g)`.
     pub fn components(&self, t: f64, y: &OdeState) -> [(Boundary, f64); 3] {
-        let p = &self.arm.params;
         match self.phase {
             Phase::Flight => {
+                // Only the tip's height: no need for the dynamics.
                 let (q, _) = split(y);
-                let z = tip_position(p.l, &q);
-                let g = (z[1] + p.h) / p.l;
-                [(Boundary::Touchdown, g), (Boundary::Touchdown, f64::INFINITY), (Boundary::Touchdown, f64::INFINITY)]
+                let z = tip_position_trig(self.arm.params.l, &self.trig.get(&q));
+                self.flight_components(z[1])
             }
+            _ => {
+                let (td, f, _) = self.evaluate(t, y, &mut [0.0; 2]);
+                self.components_of(&td, &f)
+            }
+        }
+    }
+
+    /// [`Segment::components`] from the tip dynamics and contact force at the point.
+    #[inline]
+    pub fn components_of(&self, td: &TipDynamics<f64>, f: &Vector2<f64>) -> [(Boundary, f64); 3] {
+        let p = &self.arm.params;
+        match self.phase {
+            Phase::Flight => self.flight_components(td.z[1]),
             Phase::Sliding(dir) => {
-                let mut scratch = [0.0; 2];
-                let (td, _, _) = self.evaluate(t, y, &mut scratch);
                 let v_r = td.z_dot[0] - p.v_belt;
                 [
                     (Boundary::LiftOff, -td.b() / p.g),
@@ -127,8 +189,6 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
                 ]
             }
             Phase::Sticking => {
-                let mut scratch = [0.0; 2];
-                let (_, f, _) = self.evaluate(t, y, &mut scratch);
                 let scale = p.m * p.g;
                 let cone = if self.cone_relaxed { f64::INFINITY } else { (p.mu * f[1] - f[0].abs()) / scale };
                 [(Boundary::LiftOff, f[1] / scale), (Boundary::ConeEdge, cone), (Boundary::ConeEdge, f64::INFINITY)]
@@ -136,95 +196,85 @@ impl<C: Controller + ?Sized> Segment<'_, C> {
         }
     }
 
-    /// The component closest to its boundary.
+    #[inline]
+    fn flight_components(&self, z_n: f64) -> [(Boundary, f64); 3] {
+        let p = &self.arm.params;
+        let g = (z_n + p.h) / p.l;
+        [(Boundary::Touchdown, g), (Boundary::Touchdown, f64::INFINITY), (Boundary::Touchdown, f64::INFINITY)]
+    }
+
+    /// The component closest to its boundary, and its value.
     pub fn nearest_boundary(&self, t: f64, y: &OdeState) -> (Boundary, f64) {
-        self.components(t, y).into_iter().fold((Boundary::Touchdown, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+        if let Some((te, ye, nearest)) = self.end.get()
+            && te.to_bits() == t.to_bits()
+            && ye.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return nearest;
+        }
+        nearest(self.components(t, y))
     }
 }
 
-impl<C: Controller + ?Sized> ODE<f64, OdeState> for Segment<'_, C> {
-    fn diff(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
-        let mut xi_dot = [0.0; 2];
-        self.evals.set(self.evals.get() + 1);
-        let (td, f, _) = self.evaluate(t, y, &mut xi_dot);
-        let qdd = match self.phase {
-            Phase::Flight => td.qdd_free,
-            _ => td.qdd_with_force(&f),
-        };
-        *dydt = [y[1], qdd[0], y[3], qdd[1], xi_dot[0], xi_dot[1]];
+/// The component closest to its boundary (the smallest).
+#[inline]
+pub fn nearest(components: [(Boundary, f64); 3]) -> (Boundary, f64) {
+    components.into_iter().fold((Boundary::Touchdown, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+}
+
+impl<C: Controller + ?Sized> OdeSystem for Segment<'_, C> {
+    #[inline]
+    fn rhs(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
+        *dydt = self.point(t, y).dydt;
+    }
+
+    /// Also keeps the nearest boundary at the step's end for [`Segment::nearest_boundary`].
+    #[inline]
+    fn rhs_step_end(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
+        let pt = self.point(t, y);
+        *dydt = pt.dydt;
+        self.end.set(Some((t, *y, nearest(self.components_of(&pt.td, &pt.f)))));
     }
 }
 
-/// Output handler that keeps only the latest accepted point (so a solve never
-/// grows a trajectory vector), remembers the last accepted step size for the
-/// next solve, and locates this segment's event itself.
+/// The step callback that locates this segment's event.
 ///
-/// Why not the crate's `Event` machinery: its Brent-Dekker search in
-/// `differential-equations` 0.7.0 returns wrong roots (a ballistic hop
-/// `y'' = -10`, `y(0) = 0`, `y'(0) = 1`, reports `y = 0` at 0.05 s to 0.12 s
-/// instead of 0.2 s; see `crate_event_location_is_wrong` in the tests). The
-/// detection here is the standard one: a sign change of the event function from
-/// positive to non-positive across an accepted step, then a bracketing root
-/// search (Illinois regula falsi, safeguarded by bisection) on the
-/// step's dense output, to `1e-14 s + 1e-15 |t|`.
-pub struct EventLocator<'a, 'b, C: ?Sized> {
+/// The detection is the standard one: a sign change of the event function (the
+/// nearest boundary's component) from positive to non-positive across an accepted
+/// step, then a bracketing root search (Illinois regula falsi, safeguarded by
+/// bisection) on the step's 7th-order dense output, to `1e-14 s + 1e-15 |t|`.
+pub struct EventLocator<'s, 'a, C: ?Sized> {
     /// The segment (its event function).
-    pub segment: &'b Segment<'a, C>,
-    /// Largest accepted step size of the solve, s (read by the caller; the next solve's first step).
-    pub last_h: &'b std::cell::Cell<f64>,
-    /// Event function at the previous accepted point.
-    pub g_prev: Option<f64>,
-    /// Largest accepted step of this solve, s.
-    pub max_h: f64,
+    pub segment: &'s Segment<'a, C>,
+    /// Event function at the previous accepted point (at the start: its value at `t0`).
+    pub g_prev: f64,
     /// The located event `(t, y)`, if any.
-    pub hit: &'b std::cell::Cell<Option<(f64, OdeState)>>,
+    pub hit: Option<(f64, OdeState)>,
 }
 
-impl<C: Controller + ?Sized> differential_equations::solout::Solout<f64, OdeState> for EventLocator<'_, '_, C> {
-    fn solout<I>(
-        &mut self,
-        t_curr: f64,
-        t_prev: f64,
-        y_curr: &OdeState,
-        y_prev: &OdeState,
-        interpolator: &mut I,
-        solution: &mut differential_equations::solution::Solution<f64, OdeState>,
-    ) -> differential_equations::control::ControlFlag<f64, OdeState>
-    where
-        I: differential_equations::interpolate::Interpolation<f64, OdeState> + ?Sized,
-    {
-        use differential_equations::control::ControlFlag;
-        if t_curr > t_prev {
-            // The largest accepted step: the final step is cut short at the end of the
-            // interval, so the last one would underestimate the next interval's step.
-            self.max_h = self.max_h.max(t_curr - t_prev);
-            self.last_h.set(self.max_h);
+impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
+    /// Checks one accepted step for a crossing and locates it; stops the solve at an event.
+    pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>>) -> Control {
+        let (t_prev, t_curr) = (step.t_prev(), step.t_curr());
+        let g_curr = self.segment.nearest_boundary(t_curr, step.y_curr()).1;
+        let g_a = self.g_prev;
+        self.g_prev = g_curr;
+        if g_a > 0.0 && g_curr <= 0.0 && t_curr > t_prev {
+            let y_curr = *step.y_curr();
+            self.hit = Some(locate_root(self.segment, step, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, y_curr)));
+            return Control::Stop;
         }
-        let g_curr = self.segment.nearest_boundary(t_curr, y_curr).1;
-        let crossed = matches!(self.g_prev, Some(g) if g > 0.0) && g_curr <= 0.0 && t_curr > t_prev;
-        self.g_prev = Some(g_curr);
-        solution.t.clear();
-        solution.y.clear();
-        if crossed {
-            let g_a = self.segment.nearest_boundary(t_prev, y_prev).1;
-            if let Some((t, y)) = locate_root(self.segment, interpolator, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, *y_curr)) {
-                self.hit.set(Some((t, y)));
-                solution.push(t, y);
-                return ControlFlag::Terminate;
-            }
-        }
-        solution.push(t_curr, *y_curr);
-        ControlFlag::Continue
+        Control::Continue
     }
 }
 
 /// Illinois regula falsi with bisection safeguard on the dense output:
 /// the first zero of the event function in `(a, b]`, given `g(a) > 0 >= g(b)`.
-fn locate_root<C, I>(seg: &Segment<'_, C>, interp: &mut I, a: (f64, f64), b: (f64, f64, OdeState)) -> Option<(f64, OdeState)>
-where
-    C: Controller + ?Sized,
-    I: differential_equations::interpolate::Interpolation<f64, OdeState> + ?Sized,
-{
+fn locate_root<'a, C: Controller + ?Sized>(
+    seg: &Segment<'a, C>,
+    step: &mut StepView<'_, Segment<'a, C>>,
+    a: (f64, f64),
+    b: (f64, f64, OdeState),
+) -> (f64, OdeState) {
     let (mut ta, mut ga) = a;
     let (mut tb, mut gb, mut yb) = b;
     let tol = 1e-14 + 1e-15 * tb.abs();
@@ -239,7 +289,7 @@ where
         if !(t > ta && t < tb) || iter % 4 == 3 {
             t = 0.5 * (ta + tb);
         }
-        let y = interp.interpolate(t).ok()?;
+        let y = step.interpolate(t);
         let g = seg.nearest_boundary(t, &y).1;
         // Illinois rule: an end retained twice in a row has its value halved.
         if g > 0.0 {
@@ -259,5 +309,5 @@ where
             side = 1;
         }
     }
-    Some((tb, yb))
+    (tb, yb)
 }
