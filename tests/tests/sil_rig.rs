@@ -280,9 +280,9 @@ unsafe extern "C" {
 #[test]
 fn a_stuck_encoder_is_not_detected_and_the_ground_truth_shows_what_it_does() {
     // Documented outcome: a stuck count looks like a still arm, so the firmware does
-    // not flag it; frozen mid-move (t = 1 s, 0.5 s long) the base encoder makes the
-    // hybrid law push on and the tip bounces. The rig's ground truth sees the
-    // lift-offs and the firmware's lift-off detector reports them.
+    // not flag it as a sensor fault; frozen mid-move (t = 1 s, 0.5 s long) the base
+    // encoder makes the hybrid law push on and the tip bounces. The rig's ground
+    // truth sees the lift-offs and the firmware's lift-off detector reports them.
     let dir = tempfile::tempdir().unwrap();
     let s = scenario(
         dir.path(),
@@ -291,7 +291,11 @@ fn a_stuck_encoder_is_not_detected_and_the_ground_truth_shows_what_it_does() {
         "\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"theta1\"\nat_s = 1.0\nduration_s = 0.5\n",
     );
     let out = dir.path().join("stuck");
-    assert!(run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--in-process"], &out).status.success());
+    // What follows is chaotic (bouncing): the run either ends, or the arm reaches
+    // its straight (singular) configuration and the firmware latches its safe state.
+    let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--in-process"], &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() || (o.status.code() == Some(1) && err.contains("safe state")), "{err}");
     let sm = summary(&out);
     let (true_lo, detected) = (sm["lift_offs"].as_u64().unwrap(), sm["lift_offs_detected"].as_u64().unwrap());
     assert!(true_lo >= 1 && detected >= 1, "{sm}");
