@@ -6,8 +6,8 @@
 //! newest sample it has seen, so frames that piled up while it was stalled are
 //! answered late and counted as overruns; the step's wall time is reported in
 //! `step_ticks` (ns) but does not advance simulated time. In real time, its own
-//! wall clock, synchronised to the plant's by the earliest frame arrival (a
-//! minimum-delay filter), and it sleeps until just before each frame is due.
+//! wall clock, locked to the plant's by the frames it catches while spinning, and
+//! it sleeps until just before each frame is due.
 //!
 //! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
 //! iceoryx2's node monitoring says the plant process is dead or gone, the
@@ -76,10 +76,12 @@ impl TickClock for HostClock {
 /// iceoryx2 fails or no plant appears within [`WAIT_FOR_PLANT_S`].
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
-    let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+    let busy = realtime && s.rig.realtime_busy_wait;
+    // Busy real time: spin through a whole period (and more) for the next frame.
+    let spin = Duration::from_secs_f64(if busy { 2.0 / s.timing.rate_hz } else { s.rig.spin_us * 1e-6 });
     let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
     if realtime {
-        super::ipc::tighten_timer_slack();
+        super::ipc::prepare_realtime();
     }
     let mut side = FirmwareSide::new(s)?;
     let faults = FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz);
@@ -98,7 +100,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         // Real time: sleep until just before the next frame is due, then spin for it
         // (as an MCU's timer interrupt would wake it): waking a sleeping process on
         // an idle core costs hundreds of microseconds here, a spin costs nothing.
-        if let (true, Some(e), Some(_)) = (realtime, epoch, last_seq) {
+        if let (true, false, Some(e), Some(_)) = (realtime, busy, epoch, last_seq) {
             let due = e + Duration::from_micros(last_t_us + ts_us);
             let wake = due.checked_sub(Duration::from_micros(150)).unwrap_or(due);
             let now = Instant::now();
@@ -142,13 +144,18 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         }
         // Everything that queued up meanwhile, in order: in lockstep the firmware's
         // clock is the newest sample, so older frames are answered late.
-        if realtime && let Some(e) = Instant::now().checked_sub(Duration::from_micros(first.t_us)) {
-            epoch = Some(epoch.map_or(e, |old| old.min(e)));
-            // The frame was already waiting: the estimate is late (the first arrival
-            // came through a slow wake-up); wake earlier from now on.
-            if waited_from.elapsed() < Duration::from_micros(2) {
-                epoch = epoch.and_then(|e| e.checked_sub(Duration::from_micros(20)));
-            }
+        if realtime && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us)) {
+            // Keep the wake-up locked to the frames: a frame caught while spinning
+            // dates the plant's clock exactly; one already waiting means the estimate
+            // is late, one that needed a blocking wait means it is early.
+            let waited = waited_from.elapsed();
+            let step = Duration::from_micros(20);
+            epoch = Some(match epoch {
+                None => seen,
+                Some(_) if waited >= Duration::from_micros(2) && waited < spin => seen,
+                Some(e) if waited < Duration::from_micros(2) => e.checked_sub(step).unwrap_or(e),
+                Some(e) => e + step,
+            });
         }
         let mut batch: Vec<SensorFrame> = vec![first];
         while let Some(f) = ports.frames.try_next().map_err(transport)? {

@@ -218,7 +218,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Inbox<T> {
                 Some(l) if now - start >= self.spin => {
                     l.timed_wait(|_| {}, deadline - now).map_err(|e| err("wait", e))?;
                 }
-                _ => std::hint::spin_loop(),
+                _ => std::thread::yield_now(),
             }
         }
     }
@@ -340,12 +340,17 @@ impl FirmwarePorts {
 }
 
 /// Real-time runs: asks the kernel for 1 us timer slack instead of the default
-/// 50 us, so that sleeps end when asked (Linux `prctl(PR_SET_TIMERSLACK)`; a no-op
-/// elsewhere).
-pub fn tighten_timer_slack() {
+/// 50 us (sleeps end when asked) and locks the process's memory (no page fault
+/// mid-period). Linux only; elsewhere it does nothing.
+///
+/// Not the FIFO scheduling class: two busy-waiting FIFO processes on a 2-core
+/// machine hit the kernel's real-time throttling (50 ms of every second), which
+/// stalls the rig far worse than the normal scheduler does.
+pub fn prepare_realtime() {
     #[cfg(target_os = "linux")]
-    // SAFETY: PR_SET_TIMERSLACK takes one integer argument and touches no memory.
+    // SAFETY: prctl(PR_SET_TIMERSLACK) takes one integer; mlockall takes flags.
     unsafe {
         libc::prctl(libc::PR_SET_TIMERSLACK, 1000 as libc::c_ulong, 0 as libc::c_ulong, 0 as libc::c_ulong, 0 as libc::c_ulong);
+        libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE);
     }
 }

@@ -59,6 +59,7 @@ pub struct IpcLink {
     rig: String,
     spawned: Option<Spawned>,
     realtime: bool,
+    busy: bool,
     ts: f64,
     timeout: Duration,
     max_timeouts: u32,
@@ -83,7 +84,7 @@ impl IpcLink {
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
         if realtime {
-            super::ipc::tighten_timer_slack();
+            super::ipc::prepare_realtime();
         }
         let spawned = match firmware_exe {
             Some(exe) => Some(spawn(exe, rig, s, realtime)?),
@@ -94,6 +95,7 @@ impl IpcLink {
             rig: rig.to_string(),
             spawned,
             realtime,
+            busy: s.rig.realtime_busy_wait,
             ts: 1.0 / s.timing.rate_hz,
             timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
             max_timeouts: s.rig.max_consecutive_timeouts,
@@ -186,7 +188,7 @@ impl FirmwareLink for IpcLink {
         let deadline = if self.realtime {
             let t0 = *self.t0.get_or_insert_with(Instant::now);
             let ideal = t0 + Duration::from_secs_f64(truth.t);
-            sleep_until(ideal);
+            sleep_until(ideal, self.busy);
             self.timings.jitter_us.push((Instant::now() - ideal).as_secs_f64() as f32 * 1e6);
             ideal + Duration::from_secs_f64(self.ts)
         } else {
@@ -261,15 +263,15 @@ impl Drop for IpcLink {
     }
 }
 
-/// Sleeps until `when`: the OS sleep to 200 us before, then a short spin (sleep
-/// alone overshoots by the scheduler's slack).
-fn sleep_until(when: Instant) {
+/// Waits until `when`: busy, or the OS sleep to 200 us before then a short spin
+/// (sleep alone overshoots by the scheduler's slack).
+fn sleep_until(when: Instant, busy: bool) {
     let now = Instant::now();
-    if when > now + Duration::from_micros(200) {
+    if !busy && when > now + Duration::from_micros(200) {
         std::thread::sleep(when - now - Duration::from_micros(200));
     }
     while Instant::now() < when {
-        std::hint::spin_loop();
+        std::thread::yield_now();
     }
 }
 

@@ -86,11 +86,15 @@ pub struct RigSection {
     /// Consecutive command timeouts after which the plant gives the firmware up
     /// as dead even if its process still runs.
     pub max_consecutive_timeouts: u32,
+    /// Real time: both processes busy-wait between periods instead of sleeping
+    /// (a sleeping process on a virtual machine's idle core can wake up to 2 ms
+    /// late; busy-waiting uses both cores of a 2-core machine for the run).
+    pub realtime_busy_wait: bool,
 }
 
 impl Default for RigSection {
     fn default() -> Self {
-        Self { command_timeout_s: 0.05, spin_us: 200.0, peer_check_s: 0.5, max_consecutive_timeouts: 100 }
+        Self { command_timeout_s: 0.05, spin_us: 200.0, peer_check_s: 0.5, max_consecutive_timeouts: 100, realtime_busy_wait: true }
     }
 }
 
