@@ -28,6 +28,26 @@ pub struct Panel<'a> {
     pub y_range: Option<(f64, f64)>,
 }
 
+/// The contact-mode panel: a step curve of 0 flight, 1 sliding, 2 sticking
+/// against time, from `(t, mode name)` samples.
+pub fn mode_panel<'s>(samples: impl Iterator<Item = (f64, &'s str)>) -> Panel<'static> {
+    let points = samples
+        .map(|(t, mode)| {
+            let code = match mode {
+                "sliding" => 1.0,
+                "sticking" => 2.0,
+                _ => 0.0,
+            };
+            (t, code)
+        })
+        .collect();
+    Panel {
+        y_label: "mode (0 flight, 1 sliding, 2 sticking)",
+        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true }],
+        y_range: Some((-0.2, 2.2)),
+    }
+}
+
 /// Colours used across figures.
 pub mod colors {
     use plotters::style::RGBColor;

@@ -328,20 +328,7 @@ fn draw(path: &std::path::Path, s: &Scenario, records: &[PeriodRecord]) -> Resul
             ],
             y_range: None,
         },
-        Panel {
-            y_label: "mode (0 flight, 1 sliding, 2 sticking)",
-            series: vec![Series {
-                label: "mode",
-                points: col(|r| match r.mode {
-                    "sliding" => 1.0,
-                    "sticking" => 2.0,
-                    _ => 0.0,
-                }),
-                color: colors::PURPLE,
-                step: true,
-            }],
-            y_range: Some((-0.2, 2.2)),
-        },
+        plot::mode_panel(records.iter().map(|r| (r.t, r.mode))),
     ];
     let title = format!("SIL run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
     plot::time_panels(path, &title, (0.0, t_end), &panels)

@@ -425,26 +425,7 @@ fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &str, trace: &
             series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
             y_range: None,
         },
-        Panel {
-            y_label: "mode (0 flight, 1 sliding, 2 sticking)",
-            series: vec![Series {
-                label: "mode",
-                points: trace
-                    .iter()
-                    .map(|r| {
-                        let code = match r.mode {
-                            "sliding" => 1.0,
-                            "sticking" => 2.0,
-                            _ => 0.0,
-                        };
-                        (r.t, code)
-                    })
-                    .collect(),
-                color: colors::PURPLE,
-                step: true,
-            }],
-            y_range: Some((-0.2, 2.2)),
-        },
+        plot::mode_panel(trace.iter().map(|r| (r.t, r.mode))),
     ];
     let title = format!("open loop from {name}: mu = {}, v_belt = {} m/s", params.mu, params.v_belt);
     plot::time_panels(path, &title, (0.0, t_end), &panels)

@@ -95,6 +95,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
     let mut answered = 0u64;
     let mut stalled_at: Option<u32> = None;
     let ts_us = (1e6 / s.timing.rate_hz).round() as u64;
+    let mut batch: Vec<SensorFrame> = Vec::with_capacity(super::ipc::QUEUE_DEPTH);
     let mut last_t_us = 0u64;
     loop {
         // Real time: sleep until just before the next frame is due, then spin for it
@@ -157,12 +158,13 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
                 Some(e) => e + step,
             });
         }
-        let mut batch: Vec<SensorFrame> = vec![first];
+        batch.clear();
+        batch.push(first);
         while let Some(f) = ports.frames.try_next().map_err(transport)? {
             batch.push(f);
         }
         let newest_us = batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
-        for frame in batch {
+        for &frame in &batch {
             if frame.flags & frame_flags::END_OF_RUN != 0 {
                 return Ok(Ending::EndOfRun { answered, overruns: side.firmware().overruns() });
             }
