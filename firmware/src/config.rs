@@ -95,6 +95,23 @@ pub struct Config {
     pub lift_off_confirm: u8,
     /// Touchdown (end of lift-off): normal force above which contact is back, N.
     pub touchdown_force: f32,
+    /// Sensor consistency ([`crate::consistency`]): normal force above which the
+    /// load cell says the tip presses on the belt, N.
+    pub sensor_contact_force: f32,
+    /// Sensor consistency: largest tip height `|z_n + H|` from the encoders still
+    /// on the belt, m (the two 14-bit encoders are good to about 0.2 mm).
+    pub sensor_height_tolerance: f32,
+    /// Sensor consistency: consecutive inconsistent periods that latch the safe
+    /// state ([`crate::SafeReason::SensorFault`]).
+    pub sensor_fault_confirm: u8,
+    /// Innovation check ([`crate::consistency::InnovationMonitor`]): observer
+    /// innovation that counts as unexplained, rad (default 3 encoder counts).
+    pub innovation_threshold: f32,
+    /// Innovation check: consecutive same-sign unexplained periods that latch the
+    /// safe state ([`crate::SafeReason::SensorFault`]).
+    pub innovation_confirm: u16,
+    /// Innovation check: periods after a touchdown during which it is off.
+    pub innovation_settle: u16,
     /// Consecutive deadline misses that latch the safe state.
     pub deadline_miss_limit: u16,
     /// Consecutive bad frames that latch the safe state.
@@ -122,6 +139,12 @@ impl Default for Config {
             lift_off_height: 1e-3,
             lift_off_confirm: 2,
             touchdown_force: 1.0,
+            sensor_contact_force: 2.0,
+            sensor_height_tolerance: 2e-3,
+            sensor_fault_confirm: 3,
+            innovation_threshold: 3.0 * core::f32::consts::TAU / 16384.0,
+            innovation_confirm: 20,
+            innovation_settle: 50,
             deadline_miss_limit: 3,
             bad_frame_limit: 3,
             branch: None,
@@ -179,6 +202,11 @@ impl Config {
         check("lift_off_height", self.lift_off_height, self.lift_off_height > 0.0, "> 0")?;
         check("touchdown_force", self.touchdown_force, self.touchdown_force >= self.lift_off_force, ">= lift_off_force")?;
         check("lift_off_confirm", self.lift_off_confirm as f32, self.lift_off_confirm >= 1, ">= 1")?;
+        check("sensor_contact_force", self.sensor_contact_force, self.sensor_contact_force >= 0.0, ">= 0")?;
+        check("sensor_height_tolerance", self.sensor_height_tolerance, self.sensor_height_tolerance > 0.0, "> 0")?;
+        check("sensor_fault_confirm", self.sensor_fault_confirm as f32, self.sensor_fault_confirm >= 1, ">= 1")?;
+        check("innovation_threshold", self.innovation_threshold, self.innovation_threshold > 0.0, "> 0")?;
+        check("innovation_confirm", self.innovation_confirm as f32, self.innovation_confirm >= 1, ">= 1")?;
         check("deadline_miss_limit", self.deadline_miss_limit as f32, self.deadline_miss_limit >= 1, ">= 1")?;
         check("bad_frame_limit", self.bad_frame_limit as f32, self.bad_frame_limit >= 1, ">= 1")?;
         Ok(())

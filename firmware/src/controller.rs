@@ -12,6 +12,7 @@ use shared::{
 use crate::{
     TickClock,
     config::{Config, ConfigError, ControllerKind},
+    consistency::{ConsistencyMonitor, ConsistencyRule, InnovationMonitor, InnovationRule},
     decode::{self, FrameFault, Measurement},
     estimator::AngleTracker,
     law::{self, HybridInput, HybridSignals, HybridState, LawError, PidState},
@@ -37,6 +38,9 @@ pub enum SafeReason {
     /// The peer (the plant, or the link to it) is gone: no frames arrive and the
     /// board reports it dead ([`Firmware::enter_safe_state`] from the board's loop).
     PeerLost = 6,
+    /// The encoders and the load cell disagree about where the tip is (a stuck or
+    /// failed sensor; [`crate::consistency`]) for `sensor_fault_confirm` periods.
+    SensorFault = 7,
 }
 
 impl SafeReason {
@@ -52,6 +56,7 @@ impl SafeReason {
             4 => Some(Self::Singular),
             5 => Some(Self::Unreachable),
             6 => Some(Self::PeerLost),
+            7 => Some(Self::SensorFault),
             _ => None,
         }
     }
@@ -90,6 +95,8 @@ pub struct Telemetry {
     pub u_raw: [f32; 2],
     /// Whether lift-off is declared.
     pub lifted: bool,
+    /// Observer innovations `[theta1, theta2]` (measured minus predicted angle), rad.
+    pub innovation: [f32; 2],
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -109,6 +116,8 @@ pub struct Firmware {
     arm: Arm<f32>,
     started: Option<Started>,
     liftoff: LiftOffDetector,
+    consistency: ConsistencyMonitor,
+    innovation: InnovationMonitor,
     pid: PidState,
     hybrid: HybridState,
     last_codes: [i16; 2],
@@ -138,6 +147,8 @@ impl Firmware {
             arm: Arm::new(cfg.params),
             started: None,
             liftoff: LiftOffDetector::default(),
+            consistency: ConsistencyMonitor::default(),
+            innovation: InnovationMonitor::default(),
             pid: PidState::default(),
             hybrid: HybridState::default(),
             last_codes: [0, 0],
@@ -321,6 +332,7 @@ impl Firmware {
         let ts = cfg.period_s;
         let p = cfg.params;
         let theta2 = decode::wrap(m.theta1 + m.elbow);
+        let mut innovation = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
         let s = match &mut self.started {
             Some(s) => {
@@ -333,8 +345,10 @@ impl Firmware {
                 let td = self.arm.tip_dynamics(&q, &qd, &u);
                 let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
                 let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
-                s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]);
-                s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]);
+                innovation = [
+                    s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
+                    s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
+                ];
                 s.last_seq = seq;
                 *s
             }
@@ -368,6 +382,23 @@ impl Firmware {
             touchdown_force: cfg.touchdown_force,
         };
         let lifted = self.liftoff.update(&rule, m.f_n, height);
+        // The raw angles (quantisation only, no observer lag) against the load cell.
+        let measured_height = tip_position(p.l, &Vector2::new(m.theta1, theta2))[1] + p.h;
+        let consistency_rule = ConsistencyRule {
+            contact_force: cfg.sensor_contact_force,
+            height_tolerance: cfg.sensor_height_tolerance,
+            confirm: cfg.sensor_fault_confirm,
+        };
+        let innovation_rule =
+            InnovationRule { threshold: cfg.innovation_threshold, confirm: cfg.innovation_confirm, settle: cfg.innovation_settle };
+        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height);
+        // A load cell at full scale under-reads: the prediction made with it is wrong.
+        let full_scale = wire::LOAD_FULL_SCALE_N * (wire::LOAD_CODE_MAX - 1) as f32 / -(wire::LOAD_CODE_MIN as f32);
+        let load_saturated = m.f_n.abs() >= full_scale || m.f_t.abs() >= full_scale;
+        let unexplained = self.innovation.update(&innovation_rule, innovation, lifted, load_saturated);
+        if inconsistent || unexplained {
+            return Err(SafeReason::SensorFault);
+        }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         let reference: RefPoint = s.quintic.at(t_run);
         let f_n_ref = s.force_ramp.at(t_run).pos;
@@ -416,6 +447,7 @@ impl Firmware {
             hybrid: signals,
             u_raw,
             lifted,
+            innovation,
         };
         Ok((u, flags))
     }

@@ -34,21 +34,24 @@ impl AngleTracker {
         Self { angle, rate: 0.0, alpha: 1.0 - r * r, beta_over_ts: (1.0 - r) * (1.0 - r) / ts }
     }
 
-    /// Folds in measurement `measured` (rad, any turn) taken `dt` s after the previous one.
-    pub fn update(&mut self, measured: f32, dt: f32) {
-        self.update_with_acceleration(measured, dt, 0.0);
+    /// Folds in measurement `measured` (rad, any turn) taken `dt` s after the
+    /// previous one; returns the innovation (measured minus predicted angle, rad).
+    pub fn update(&mut self, measured: f32, dt: f32) -> f32 {
+        self.update_with_acceleration(measured, dt, 0.0)
     }
 
     /// As [`AngleTracker::update`], with the prediction driven by a known angular
     /// acceleration `accel` (rad/s^2) over the interval: a model-based observer,
-    /// whose estimate does not lag the motion the model explains.
-    pub fn update_with_acceleration(&mut self, measured: f32, dt: f32, accel: f32) {
+    /// whose estimate does not lag the motion the model explains. Returns the
+    /// innovation (measured minus predicted angle, wrapped to one turn, rad).
+    pub fn update_with_acceleration(&mut self, measured: f32, dt: f32, accel: f32) -> f32 {
         let predicted = self.angle + self.rate * dt + 0.5 * accel * dt * dt;
         self.rate += accel * dt;
         // The residual is taken modulo one turn, so the estimate stays continuous.
         let residual = wrap(measured - predicted);
         self.angle = predicted + self.alpha * residual;
         self.rate += self.beta_over_ts * residual;
+        residual
     }
 }
 

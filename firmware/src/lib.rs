@@ -10,6 +10,7 @@
 
 pub mod board;
 pub mod config;
+pub mod consistency;
 pub mod controller;
 pub mod decode;
 pub mod estimator;

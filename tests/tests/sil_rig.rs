@@ -278,28 +278,46 @@ unsafe extern "C" {
 }
 
 #[test]
-fn a_stuck_encoder_is_not_detected_and_the_ground_truth_shows_what_it_does() {
-    // Documented outcome: a stuck count looks like a still arm, so the firmware does
-    // not flag it as a sensor fault; frozen mid-move (t = 1 s, 0.5 s long) the base
-    // encoder makes the hybrid law push on and the tip bounces. The rig's ground
-    // truth sees the lift-offs and the firmware's lift-off detector reports them.
+fn a_stuck_sensor_mid_move_is_detected_and_the_firmware_goes_safe() {
+    // A stuck count repeats the previous one. Frozen mid-move (t = 1 s), the base
+    // encoder leaves a persistent one-sign observer innovation (the model says the
+    // arm accelerates, the count says it does not): detected in 20 periods. A stuck
+    // normal-force channel reads contact while the encoders see the tip leave the
+    // belt, or its stale force spoils the prediction. A stuck elbow is detected
+    // later (the relative angle moves slowly on this move), when the encoders put
+    // the tip off the belt while the load cell says it presses. Thresholds:
+    // firmware/src/consistency.rs; the healthy scenarios, bounces included, never trip them.
     let dir = tempfile::tempdir().unwrap();
-    let s = scenario(
-        dir.path(),
-        "stuck.toml",
-        &[],
-        "\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"theta1\"\nat_s = 1.0\nduration_s = 0.5\n",
-    );
-    let out = dir.path().join("stuck");
-    // What follows is chaotic (bouncing): the run either ends, or the arm reaches
-    // its straight (singular) configuration and the firmware latches its safe state.
-    let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--in-process"], &out);
+    for (signal, within) in [("theta1", 25), ("f_n", 60), ("elbow", 400)] {
+        let s = scenario(
+            dir.path(),
+            &format!("stuck-{signal}.toml"),
+            &[],
+            &format!("\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"{signal}\"\nat_s = 1.0\nduration_s = 0.5\n"),
+        );
+        let out = dir.path().join(format!("stuck-{signal}"));
+        let o = run(&["--scenario", s.to_str().unwrap(), "--duration", "3", "--in-process"], &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{signal}: {err}");
+        assert!(err.contains("safe state") && err.contains("SensorFault"), "{signal}: {err}");
+        let rows = trace(&out);
+        assert!(rows.len() > 1001 && rows.len() <= 1000 + within, "{signal}: detected after {} periods", rows.len() - 1000);
+        let lo = column(&out, "lift_off_true");
+        assert!(rows.iter().all(|r| &r[lo] == "false"), "{signal}: safe before the tip lifts off");
+    }
+}
+
+#[test]
+fn the_sensor_checks_do_not_trip_in_healthy_runs_with_many_lift_offs() {
+    // Beyond Z_t,sliding the hybrid law from x0d bounces hundreds of times:
+    // impacts (unmeasured impulses) and a load cell at full scale must not read
+    // as a stuck sensor. (This run also hit a plant bug, now fixed: a flight that
+    // starts on the belt and returns within its first step was a MissedEvent.)
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bouncing");
+    let o = run(&["--target-zt", "0.25", "--seed", "3", "--in-process"], &out);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() || (o.status.code() == Some(1) && err.contains("safe state")), "{err}");
-    let sm = summary(&out);
-    let (true_lo, detected) = (sm["lift_offs"].as_u64().unwrap(), sm["lift_offs_detected"].as_u64().unwrap());
-    assert!(true_lo >= 1 && detected >= 1, "{sm}");
-    let rows = trace(&out);
-    let lo = column(&out, "lift_off_true");
-    assert!((0..1000).all(|k| &rows[k][lo] == "false"), "no lift-off before the fault");
+    assert!(!err.contains("SensorFault"), "{err}");
+    assert!(o.status.success(), "{err}");
+    assert!(summary(&out)["lift_offs"].as_u64().unwrap() > 100, "the run bounces");
 }

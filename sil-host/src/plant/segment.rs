@@ -251,6 +251,10 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
     pub hit: Option<(f64, OdeState)>,
 }
 
+/// Event-function magnitude that counts as on the boundary (rounding after a
+/// projection): the same margin [`super::Plant`] allows at a segment's end.
+const ON_BOUNDARY: f64 = 1e-9;
+
 impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
     /// Checks one accepted step for a crossing and locates it; stops the solve at an event.
     pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>>) -> Control {
@@ -258,7 +262,11 @@ impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
         let g_curr = self.segment.nearest_boundary(t_curr, step.y_curr()).1;
         let g_a = self.g_prev;
         self.g_prev = g_curr;
-        if g_a > 0.0 && g_curr <= 0.0 && t_curr > t_prev {
+        // A segment that starts on its boundary (g = 0 to rounding, e.g. flight right
+        // after a lift-off) and leaves its domain in the first step has no sign
+        // change from a positive value: it counts as a crossing near the start.
+        let from_the_boundary = g_a > -ON_BOUNDARY && g_curr < -ON_BOUNDARY;
+        if ((g_a > 0.0 && g_curr <= 0.0) || from_the_boundary) && t_curr > t_prev {
             let y_curr = *step.y_curr();
             self.hit = Some(locate_root(self.segment, step, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, y_curr)));
             return Control::Stop;

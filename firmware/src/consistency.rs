@@ -1,0 +1,212 @@
+//! Sensor-consistency monitor: the encoders and the load cell must agree on where
+//! the tip is.
+//!
+//! The load cell and the two joint encoders measure the same contact from two
+//! sides. While the load cell reads a normal force `f_n` the tip presses on the
+//! belt, so the tip height `z_n + H` from the encoders' forward kinematics must be
+//! zero to within the encoders' quantisation (two 14-bit counts put the tip within
+//! about `2 l q = 0.2 mm` of its true place at `l = 0.5 m`); and the tip can never
+//! be inside the belt, whatever the force. A sensor that sticks (repeats its last
+//! count) while the arm moves breaks one of these within a few periods: a stuck
+//! base or elbow encoder moves the computed tip off the belt line while the tip
+//! still presses, a stuck load cell reads contact while the encoders see the tip
+//! in flight. Neither happens in a healthy run, bounces and impacts included:
+//! forces and angles are sampled at the same instant, and in flight `f_n = 0`.
+//!
+//! A second check watches each angle observer's innovation (measured minus
+//! model-predicted angle, [`crate::estimator::AngleTracker`]). The prediction is
+//! driven by the model's joint acceleration under the commanded torque and the
+//! measured forces, so in a healthy run the innovation is quantisation noise
+//! (within 2 counts on the paper's scenarios). An encoder that sticks while the
+//! arm accelerates leaves a persistent innovation of one sign, of about
+//! `a Ts^2 / beta` (`beta` the observer's gain, 0.05 at 40 Hz and 1 kHz: 2 mrad,
+//! 5 counts, at `a = 100 rad/s^2`). An impact is the one healthy event with a
+//! large innovation (an unmeasured impulse changes the velocity): the check is
+//! off while lift-off is declared and for a settling time after touchdown. It is
+//! off too while the load cell is at full scale (then the measured force, and the
+//! prediction made with it, is wrong: the true force is larger).
+//!
+//! What it cannot see: both encoders stuck while the tip stays on the belt line
+//! (the computed tip is frozen on the belt and consistent with the force), or a
+//! stuck sensor while the arm is at rest (then the reading is right).
+
+/// Thresholds of the monitor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsistencyRule {
+    /// Normal force above which the load cell says the tip presses on the belt, N.
+    pub contact_force: f32,
+    /// Largest `|z_n + H|` from the encoders that is still on the belt, m.
+    pub height_tolerance: f32,
+    /// Consecutive inconsistent periods that declare a sensor fault.
+    pub confirm: u8,
+}
+
+/// The monitor's state across periods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ConsistencyMonitor {
+    inconsistent: u8,
+}
+
+impl ConsistencyMonitor {
+    /// Folds in one period: the measured normal force `f_n` (N) and the tip height
+    /// above the belt from the encoders `height` (`z_n + H`, m). Returns `true`
+    /// once `rule.confirm` consecutive periods were inconsistent (pressing while off
+    /// the belt line, or below the belt by more than the tolerance); a consistent
+    /// period clears the count. Non-finite inputs count as inconsistent.
+    pub fn update(&mut self, rule: &ConsistencyRule, f_n: f32, height: f32) -> bool {
+        let pressing_off_the_belt = f_n > rule.contact_force && height.abs() > rule.height_tolerance;
+        let inside_the_belt = height < -rule.height_tolerance;
+        let inconsistent = pressing_off_the_belt || inside_the_belt || !(f_n.is_finite() && height.is_finite());
+        self.inconsistent = if inconsistent { self.inconsistent.saturating_add(1) } else { 0 };
+        self.inconsistent >= rule.confirm
+    }
+}
+
+/// Thresholds of the innovation check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InnovationRule {
+    /// Innovation magnitude that counts as inconsistent, rad.
+    pub threshold: f32,
+    /// Consecutive periods of one sign above the threshold that declare a sensor fault.
+    pub confirm: u16,
+    /// Periods after a declared touchdown during which the check is off (the
+    /// observer settles after the impact's velocity jump).
+    pub settle: u16,
+}
+
+/// The innovation check's state across periods: per joint, the length of the
+/// current run of same-sign innovations above the threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct InnovationMonitor {
+    run: [u16; 2],
+    sign: [i8; 2],
+    settling: u16,
+    was_lifted: bool,
+}
+
+impl InnovationMonitor {
+    /// Folds in one period's innovations `[theta1, theta2]` (rad), whether
+    /// lift-off is declared, and whether the load cell is at full scale. Returns
+    /// `true` once either joint has had `rule.confirm` consecutive innovations of
+    /// one sign beyond `rule.threshold` outside the impact windows (lift-off, and
+    /// `rule.settle` periods after touchdown) and with the load cell in range.
+    pub fn update(&mut self, rule: &InnovationRule, innovation: [f32; 2], lifted: bool, load_saturated: bool) -> bool {
+        if self.was_lifted && !lifted {
+            self.settling = rule.settle;
+        }
+        self.was_lifted = lifted;
+        if lifted || load_saturated || self.settling > 0 {
+            self.settling = self.settling.saturating_sub(1);
+            *self = Self { run: [0; 2], sign: [0; 2], ..*self };
+            return false;
+        }
+        let mut fault = false;
+        for (j, &r) in innovation.iter().enumerate() {
+            let sign = if r > rule.threshold {
+                1
+            } else if r < -rule.threshold {
+                -1
+            } else {
+                0
+            };
+            self.run[j] = if sign != 0 && sign == self.sign[j] { self.run[j].saturating_add(1) } else { u16::from(sign != 0) };
+            self.sign[j] = sign;
+            fault |= self.run[j] >= rule.confirm;
+        }
+        fault
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RULE: ConsistencyRule = ConsistencyRule { contact_force: 2.0, height_tolerance: 2e-3, confirm: 3 };
+
+    #[test]
+    fn sliding_flight_and_touchdown_are_consistent() {
+        let mut m = ConsistencyMonitor::default();
+        // Sliding with quantisation error, flight with load-cell noise, touchdown.
+        let samples = [(10.0, 2e-4), (10.0, -2e-4), (0.03, 5e-3), (-0.03, 2e-2), (0.0, 1e-3), (25.0, 0.0)];
+        for _ in 0..100 {
+            for (f_n, h) in samples {
+                assert!(!m.update(&RULE, f_n, h));
+            }
+        }
+    }
+
+    #[test]
+    fn pressing_off_the_belt_is_declared_after_confirm_periods_and_a_good_period_clears_it() {
+        let mut m = ConsistencyMonitor::default();
+        assert!(!m.update(&RULE, 10.0, 3e-3));
+        assert!(!m.update(&RULE, 10.0, 3e-3));
+        assert!(!m.update(&RULE, 10.0, 0.0), "a consistent period clears the count");
+        assert!(!m.update(&RULE, 10.0, 3e-3));
+        assert!(!m.update(&RULE, 10.0, -3e-3));
+        assert!(m.update(&RULE, 10.0, 3e-3), "3rd consecutive");
+    }
+
+    #[test]
+    fn inside_the_belt_or_non_finite_is_inconsistent_whatever_the_force() {
+        let mut m = ConsistencyMonitor::default();
+        for _ in 0..2 {
+            assert!(!m.update(&RULE, 0.0, -5e-3));
+        }
+        assert!(m.update(&RULE, 0.0, -5e-3));
+        let mut m = ConsistencyMonitor::default();
+        for _ in 0..2 {
+            assert!(!m.update(&RULE, f32::NAN, 0.0));
+        }
+        assert!(m.update(&RULE, 0.0, f32::INFINITY));
+    }
+}
+
+#[cfg(test)]
+mod innovation_tests {
+    use super::*;
+
+    const RULE: InnovationRule = InnovationRule { threshold: 1e-3, confirm: 4, settle: 5 };
+
+    #[test]
+    fn a_persistent_one_sign_innovation_is_declared_after_confirm_periods() {
+        let mut m = InnovationMonitor::default();
+        for _ in 0..3 {
+            assert!(!m.update(&RULE, [0.0, 2e-3], false, false));
+        }
+        assert!(m.update(&RULE, [0.0, 2e-3], false, false));
+    }
+
+    #[test]
+    fn sign_changes_and_noise_reset_the_run() {
+        let mut m = InnovationMonitor::default();
+        for k in 0..100 {
+            let r = if k % 3 == 0 { -2e-3 } else { 2e-3 };
+            assert!(!m.update(&RULE, [r, 5e-4], false, false));
+        }
+    }
+
+    #[test]
+    fn the_check_is_off_in_flight_and_while_settling_after_touchdown() {
+        let mut m = InnovationMonitor::default();
+        for _ in 0..10 {
+            assert!(!m.update(&RULE, [5e-3, 5e-3], true, false));
+        }
+        // Touchdown: 5 settling periods, then 4 more to confirm.
+        for k in 0..8 {
+            assert!(!m.update(&RULE, [5e-3, 0.0], false, false), "period {k}");
+        }
+        assert!(m.update(&RULE, [5e-3, 0.0], false, false));
+    }
+
+    #[test]
+    fn the_check_is_off_while_the_load_cell_is_at_full_scale() {
+        let mut m = InnovationMonitor::default();
+        for _ in 0..100 {
+            assert!(!m.update(&RULE, [5e-3, 5e-3], false, true));
+        }
+        for _ in 0..3 {
+            assert!(!m.update(&RULE, [5e-3, 5e-3], false, false));
+        }
+        assert!(m.update(&RULE, [5e-3, 5e-3], false, false));
+    }
+}
