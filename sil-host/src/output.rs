@@ -18,6 +18,8 @@ use crate::error::CliError;
 pub struct OutputSet {
     dir: PathBuf,
     pending: Vec<(PathBuf, PathBuf)>,
+    /// Files written as they are produced: renamed on commit, kept otherwise.
+    streamed: Vec<(PathBuf, PathBuf)>,
     committed: bool,
 }
 
@@ -28,7 +30,7 @@ impl OutputSet {
     /// [`CliError::Io`] when the folder cannot be created.
     pub fn new(dir: &Path) -> Result<Self, CliError> {
         std::fs::create_dir_all(dir).map_err(|source| CliError::Io { path: dir.to_path_buf(), source })?;
-        Ok(Self { dir: dir.to_path_buf(), pending: Vec::new(), committed: false })
+        Ok(Self { dir: dir.to_path_buf(), pending: Vec::new(), streamed: Vec::new(), committed: false })
     }
 
     /// The folder the files go to.
@@ -49,6 +51,21 @@ impl OutputSet {
     pub fn create(&mut self, name: &str) -> Result<(PathBuf, BufWriter<File>), CliError> {
         let tmp = self.stage(name);
         let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
+        Ok((tmp, BufWriter::new(file)))
+    }
+
+    /// Opens `name` for writing as it is produced: it is written as
+    /// `name.partial` (visible) until [`OutputSet::commit`] renames it, and unlike
+    /// the other files it is kept if the command fails or is killed, so rows
+    /// already flushed survive even a SIGKILL.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be created.
+    pub fn create_streamed(&mut self, name: &str) -> Result<(PathBuf, BufWriter<File>), CliError> {
+        let final_path = self.dir.join(name);
+        let tmp = self.dir.join(format!("{name}.partial"));
+        let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
+        self.streamed.push((tmp.clone(), final_path));
         Ok((tmp, BufWriter::new(file)))
     }
 
@@ -76,7 +93,9 @@ impl OutputSet {
     /// [`CliError::Io`] when a rename fails.
     pub fn commit(mut self) -> Result<Vec<PathBuf>, CliError> {
         let mut done = Vec::new();
-        for (tmp, final_path) in std::mem::take(&mut self.pending) {
+        let mut all = std::mem::take(&mut self.pending);
+        all.append(&mut self.streamed);
+        for (tmp, final_path) in all {
             std::fs::rename(&tmp, &final_path).map_err(|source| CliError::Io { path: final_path.clone(), source })?;
             done.push(final_path);
         }
@@ -111,6 +130,59 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
         csv_w.serialize(row).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
     }
     csv_w.flush().map_err(io_err(&tmp))
+}
+
+/// A CSV file written row by row as a run produces it ([`OutputSet::create_streamed`]),
+/// flushed to the operating system at least every `flush_every` of wall time: a
+/// process killed outright (SIGKILL) loses at most the rows of that interval.
+pub struct StreamedCsv {
+    path: PathBuf,
+    writer: csv::Writer<BufWriter<File>>,
+    flush_every: std::time::Duration,
+    last_flush: std::time::Instant,
+    error: Option<CliError>,
+}
+
+impl StreamedCsv {
+    /// Starts `name` in `out`, flushed every `flush_every`.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be created.
+    pub fn new(out: &mut OutputSet, name: &str, flush_every: std::time::Duration) -> Result<Self, CliError> {
+        let (path, w) = out.create_streamed(name)?;
+        Ok(Self { path, writer: csv::Writer::from_writer(w), flush_every, last_flush: std::time::Instant::now(), error: None })
+    }
+
+    /// Appends one row. The first write error is kept (and later rows dropped)
+    /// for [`StreamedCsv::finish`] to report: a run is not stopped by its trace.
+    pub fn push<T: serde::Serialize>(&mut self, row: &T) {
+        if self.error.is_some() {
+            return;
+        }
+        let result = self.writer.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() });
+        let result = result.and_then(|()| {
+            if self.last_flush.elapsed() >= self.flush_every {
+                self.last_flush = std::time::Instant::now();
+                self.writer.flush().map_err(io_err(&self.path))
+            } else {
+                Ok(())
+            }
+        });
+        if let Err(e) = result {
+            self.error = Some(e);
+        }
+    }
+
+    /// Flushes the rest.
+    ///
+    /// # Errors
+    /// The first write error, if any.
+    pub fn finish(mut self) -> Result<(), CliError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.writer.flush().map_err(io_err(&self.path))
+    }
 }
 
 /// A progress bar on stderr with the given message template, hidden when `hidden`

@@ -234,6 +234,20 @@ fn a_killed_plant_sends_the_firmware_to_its_safe_state_and_its_rig_can_be_reused
     plant.kill().unwrap();
     plant.wait().unwrap();
     let killed_at = Instant::now();
+    // SIGKILL gives the plant no chance to finish its files: the trace streamed so
+    // far is on disk as trace.csv.partial, every period in order (the last row may
+    // be cut where the kill struck).
+    let partial = std::fs::read_to_string(dir.path().join("killed").join("trace.csv.partial")).unwrap();
+    let mut lines: Vec<&str> = partial.lines().collect();
+    let width = lines[0].split(',').count();
+    if lines.last().is_some_and(|l| l.split(',').count() != width) {
+        lines.pop();
+    }
+    assert!(lines.len() > 1000, "{} rows survived 1.5 s of lockstep", lines.len() - 1);
+    for (k, line) in lines[1..].iter().enumerate() {
+        let t: f64 = line.split(',').next().unwrap().parse().unwrap();
+        assert!((t - k as f64 * 1e-3).abs() < 1e-9, "row {k}: t = {t}");
+    }
     let o = fw.wait_with_output().unwrap();
     let noticed = killed_at.elapsed();
     let err = String::from_utf8_lossy(&o.stderr);

@@ -5,7 +5,9 @@
 //! `trace.svg` (tip position against its reference, normal force, torques and
 //! contact mode against time). A run that stops part way (the firmware in its
 //! safe state or lost, a plant failure, Ctrl-C) still writes every period up to
-//! then and exits with code 1.
+//! then and exits with code 1. The trace is streamed to `trace.csv.partial` while
+//! the run goes (flushed every millisecond of wall time) and renamed at the end,
+//! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
 use std::{
     io::Write,
@@ -22,7 +24,7 @@ use serde::Serialize;
 use crate::{
     cli::{ControllerArg, FirmwareArgs, PaperX0, RunArgs, ScenarioArgs},
     error::CliError,
-    output::{OutputSet, progress_bar, write_csv},
+    output::{OutputSet, StreamedCsv, progress_bar},
     plot::{self, Panel, Series, colors},
     sil::{
         firmware_process::{self, Ending},
@@ -30,7 +32,7 @@ use crate::{
         ipc::{check_rig_name, default_rig_name},
         ipc_link::{IpcLink, Percentiles, percentiles},
         record::{LiftOffStats, PeriodRecord, lift_off_stats},
-        rig::{FirmwareLink, run_loop},
+        rig::{FirmwareLink, run_loop_streaming},
         scenario::Scenario,
         setup::{firmware_config, plant_for},
     },
@@ -178,10 +180,14 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let stop = stop_flag();
+    // Rows go to disk as they are made: a plant killed outright (SIGKILL) leaves
+    // trace.csv.partial with every period up to the last flush (1 ms of wall time).
+    let mut trace = StreamedCsv::new(&mut out, "trace.csv", std::time::Duration::from_millis(1))?;
     let started = Instant::now();
-    let (records, failure) = run_loop(
+    let (records, failure) = run_loop_streaming(
         &scenario,
         link,
+        |r| trace.push(r),
         |k, _| {
             if k % 500 == 0 {
                 progress.set_position(k as u64);
@@ -195,7 +201,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let timings = ipc.as_ref().map(|l| l.timings.clone());
     drop(ipc);
 
-    write_csv(&mut out, "trace.csv", &records)?;
+    trace.finish()?;
     let svg = out.stage("trace.svg");
     draw(&svg, &scenario, &records)?;
     let rms = if records.is_empty() {

@@ -82,6 +82,19 @@ pub fn mode_code(mode: ContactMode) -> u8 {
 pub fn run_loop(
     s: &Scenario,
     link: &mut dyn FirmwareLink,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_streaming(s, link, |_| {}, on_period, on_frame)
+}
+
+/// As [`run_loop`], handing every period's record to `on_record` as soon as it
+/// is made (before the run can stop on it), so a caller can stream the trace to
+/// disk and lose nothing if the process is killed.
+pub fn run_loop_streaming(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    mut on_record: impl FnMut(&PeriodRecord),
     mut on_period: impl FnMut(usize, usize) -> bool,
     mut on_frame: impl FnMut(&SensorFrame),
 ) -> (Vec<PeriodRecord>, Option<RunError>) {
@@ -170,6 +183,7 @@ pub fn run_loop(
             overruns: command.map_or(0, |c| c.overruns),
             status: fw_status,
         });
+        on_record(&records[k]);
         if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
             failure = Some(RunError::SafeState { k, t: t_k, reason });
             break;
