@@ -146,6 +146,45 @@ fn deadline_misses_latch_the_safe_state_until_reset() {
     assert_ne!((c.u1_code, c.u2_code), (0, 0));
 }
 
+proptest! {
+    /// HARDWARE.md: N consecutive misses drive the firmware to its safe state within
+    /// N + 1 periods, for any limit N and any pattern of isolated misses before; the
+    /// overrun counter counts every miss, in the period it happens.
+    #[test]
+    fn n_consecutive_misses_latch_the_safe_state_in_the_nth_and_overruns_count_every_miss(
+        limit in 1u16..12,
+        isolated in proptest::collection::vec(any::<bool>(), 0..30),
+    ) {
+        let mut fw = Firmware::new(Config { deadline_miss_limit: limit, ..Config::default() }).unwrap();
+        let q = x0d();
+        let clock = SteppingClock { now: Cell::new(0), step: 50 };
+        let mut seq = 0u32;
+        let mut misses = 0u32;
+        let mut step = |late: bool, fw: &mut Firmware| {
+            let c = fw.step(seq as u64 * 1000 + if late { 990 } else { 100 }, &frame(seq, q, [-1.0, 2.0]), &clock);
+            seq += 1;
+            c
+        };
+        // Isolated misses (never two in a row when the limit is 2 or more, never one
+        // when it is 1) do not latch it.
+        for (i, &late) in isolated.iter().enumerate() {
+            let late = late && i % 2 == 0 && limit > 1;
+            let c = step(late, &mut fw);
+            misses += u32::from(late);
+            prop_assert_eq!(c.status & status::DEADLINE_MISS != 0, late);
+            prop_assert_eq!(c.overruns, misses);
+            prop_assert_eq!(c.status & status::SAFE_STATE, 0);
+        }
+        step(false, &mut fw);
+        for n in 1..=limit {
+            let c = step(true, &mut fw);
+            misses += 1;
+            prop_assert_eq!(c.overruns, misses);
+            prop_assert_eq!(c.status & status::SAFE_STATE != 0, n == limit, "safe state at miss {} of {}", n, limit);
+        }
+    }
+}
+
 #[test]
 fn bad_and_stale_frames_are_never_trusted() {
     let mut fw = Firmware::new(Config::default()).unwrap();
