@@ -56,6 +56,33 @@ pub enum Command {
     /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
     /// percentiles), and optionally a real-time run (jitter, step time, misses).
     Bench(BenchArgs),
+    /// Every experiment of MODEL.md at a size that finishes in minutes, in one page:
+    /// `report.md` with every figure and table (and `report.json`), each experiment's
+    /// files in a folder of its own. Run it from the repository root.
+    ///
+    /// Exit codes: 0 ok; 1 an experiment failed (the page says which; the rest is
+    /// written); 2 bad input.
+    Report(ReportArgs),
+}
+
+/// How big the report's experiments are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ReportSize {
+    /// Coarse grids and short windows: minutes on a 2-core machine.
+    Quick,
+    /// The paper's grids and windows (hours on a 2-core machine).
+    Paper,
+}
+
+/// `sil-host report`.
+#[derive(Debug, Clone, Args)]
+pub struct ReportArgs {
+    /// Size of the experiments.
+    #[arg(long, value_enum, default_value = "quick")]
+    pub size: ReportSize,
+    /// Output folder and JSON switch (`--out` defaults to `out/`; the page is `report.md` there).
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `sil-host bench`.

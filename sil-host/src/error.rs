@@ -31,6 +31,9 @@ pub enum CliError {
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] crate::sil::record::RunError),
+    /// Some experiments of a report failed (the report itself is written).
+    #[error("{0}")]
+    Report(String),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

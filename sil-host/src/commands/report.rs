@@ -1,0 +1,323 @@
+//! `sil-host report`: every experiment of MODEL.md at a size that finishes in
+//! minutes, gathered in one Markdown page (`report.md`) with every figure and
+//! table, so a researcher sees the whole reproduction at once.
+//!
+//! Each experiment runs as its own `sil-host` command (this executable, with
+//! `--json --out DIR/<id>`), exactly as a user would type it: the page gives the
+//! command line of each, and its files stay next to the page. A failed
+//! experiment does not stop the others; the page says what failed and why, and
+//! the command exits 1 at the end.
+
+use std::{
+    fmt::Write as _,
+    path::{Path, PathBuf},
+    process::{Command, Stdio},
+    time::Instant,
+};
+
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::{
+    cli::{ReportArgs, ReportSize},
+    error::CliError,
+    output::{OutputSet, progress_bar},
+};
+
+/// One command of an experiment.
+#[derive(Debug, Clone)]
+struct Step {
+    /// Sub-folder of the report (and the step's name).
+    id: &'static str,
+    /// Arguments after `sil-host` (without `--out` and `--json`).
+    args: Vec<String>,
+}
+
+/// One section of the report: an experiment of MODEL.md with its commands.
+#[derive(Debug, Clone)]
+struct Section {
+    /// What the paper shows, and where.
+    title: &'static str,
+    /// MODEL.md experiment and paper figure or table.
+    source: &'static str,
+    /// The commands that reproduce it.
+    steps: Vec<Step>,
+}
+
+fn step(id: &'static str, args: &[&str]) -> Step {
+    Step { id, args: args.iter().map(|s| (*s).to_string()).collect() }
+}
+
+/// The experiments, at the size asked for.
+fn sections(size: ReportSize) -> Vec<Section> {
+    let quick = size == ReportSize::Quick;
+    let mut v = vec![
+        Section {
+            title: "Contact modes on the belt",
+            source: "MODEL.md experiment 1, paper Fig. 2",
+            steps: vec![step("modes", &["modes", "--mu", "0.6", "--grid", if quick { "200" } else { "400" }])],
+        },
+        Section {
+            title: "Admissible configurations",
+            source: "MODEL.md experiment 2, paper Table II",
+            steps: vec![step("admissible", &["admissible", "--mu", "0.6"])],
+        },
+        Section {
+            title: "Open-loop bouncing from x0a",
+            source: "MODEL.md experiments 3 and 4 (one run of the open-loop system, u = 0)",
+            steps: vec![step("simulate", &["simulate", "--x0", "a", "--mu", "0.6", "--v-belt", "-0.4", "--duration", "10"])],
+        },
+    ];
+    v.push(Section {
+        title: "PID and hybrid force/motion control in the SIL loop",
+        source: "MODEL.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with HARDWARE.md's sensors",
+        steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]
+            .into_iter()
+            .map(|name| Step {
+                id: name,
+                args: vec!["run".into(), "--in-process".into(), "--scenario".into(), format!("scenarios/{name}.toml")],
+            })
+            .collect(),
+    });
+    v
+}
+
+/// What one step produced.
+#[derive(Debug, Clone, Serialize)]
+struct StepResult {
+    id: String,
+    command: String,
+    exit_code: Option<i32>,
+    wall_s: f64,
+    /// The command's JSON document, if it printed one.
+    summary: Option<Value>,
+    /// The end of its standard error when it failed.
+    error: Option<String>,
+    /// Files it wrote, relative to the report folder.
+    files: Vec<String>,
+}
+
+/// `report.json`: the index of the page.
+#[derive(Debug, Clone, Serialize)]
+struct ReportIndex {
+    size: &'static str,
+    wall_s: f64,
+    failed: usize,
+    steps: Vec<StepResult>,
+}
+
+/// Runs `sil-host report`.
+///
+/// # Errors
+/// [`CliError::BadInput`] when this executable cannot be found or the scenario
+/// folder is missing; [`CliError::Io`] when the report cannot be written;
+/// [`CliError::BadInput`]-free failure of an experiment is reported in the page
+/// and turns into exit code 1 after everything is written.
+pub fn run(args: &ReportArgs) -> Result<(), CliError> {
+    let exe = std::env::current_exe().map_err(|e| CliError::BadInput(format!("cannot find this executable: {e}")))?;
+    if !Path::new("scenarios").is_dir() {
+        return Err(CliError::BadInput("run `sil-host report` from the repository root (it uses scenarios/*.toml)".into()));
+    }
+    let sections = sections(args.size);
+    let mut out = OutputSet::new(&args.output.out)?;
+    let n: usize = sections.iter().map(|s| s.steps.len()).sum();
+    let progress = progress_bar(n as u64, "report", "experiments", args.output.json);
+    let started = Instant::now();
+    let mut results: Vec<Vec<StepResult>> = Vec::new();
+    for section in &sections {
+        let mut rs = Vec::new();
+        for st in &section.steps {
+            progress.set_message(st.id);
+            rs.push(run_step(&exe, out.dir(), st));
+            progress.inc(1);
+        }
+        results.push(rs);
+    }
+    progress.finish_and_clear();
+    let wall_s = started.elapsed().as_secs_f64();
+    let failed = results.iter().flatten().filter(|r| r.exit_code != Some(0)).count();
+    let size = match args.size {
+        ReportSize::Quick => "quick",
+        ReportSize::Paper => "paper",
+    };
+    let page = render_page(&sections, &results, size, wall_s);
+    out.write_bytes("report.md", page.as_bytes())?;
+    let index = ReportIndex { size, wall_s, failed, steps: results.into_iter().flatten().collect() };
+    let json = serde_json::to_string_pretty(&index).map_err(|e| CliError::Io { path: out.path("report.json"), source: e.into() })?;
+    out.write_bytes("report.json", json.as_bytes())?;
+    let dir = out.dir().to_path_buf();
+    out.commit()?;
+    if args.output.json {
+        println!("{json}");
+    } else {
+        println!(
+            "report: {} experiments in {wall_s:.1} s wall, {failed} failed; open {}",
+            index.steps.len(),
+            dir.join("report.md").display()
+        );
+    }
+    if failed > 0 {
+        return Err(CliError::Report(format!("{failed} experiment(s) failed; see {}", dir.join("report.md").display())));
+    }
+    Ok(())
+}
+
+fn run_step(exe: &Path, root: &Path, st: &Step) -> StepResult {
+    let dir = root.join(st.id);
+    let command = format!("sil-host {} --out {}", st.args.join(" "), dir.display());
+    let t = Instant::now();
+    let output = Command::new(exe).args(&st.args).arg("--out").arg(&dir).arg("--json").stdin(Stdio::null()).output();
+    let wall_s = t.elapsed().as_secs_f64();
+    let (exit_code, summary, error) = match output {
+        Ok(o) => {
+            let summary = serde_json::from_slice::<Value>(&o.stdout).ok();
+            let error = (!o.status.success()).then(|| tail(&String::from_utf8_lossy(&o.stderr), 20));
+            (o.status.code(), summary, error)
+        }
+        Err(e) => (None, None, Some(format!("cannot start {}: {e}", exe.display()))),
+    };
+    StepResult { id: st.id.into(), command, exit_code, wall_s, summary, error, files: files_in(root, &dir) }
+}
+
+fn tail(s: &str, lines: usize) -> String {
+    let v: Vec<&str> = s.lines().collect();
+    v[v.len().saturating_sub(lines)..].join("\n")
+}
+
+/// Files of `dir`, relative to `root`, sorted (hidden and partial files left out).
+fn files_in(root: &Path, dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_file() && !p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.')))
+        .filter_map(|p| p.strip_prefix(root).ok().map(PathBuf::from))
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn render_page(sections: &[Section], results: &[Vec<StepResult>], size: &str, wall_s: f64) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# Reproduction of Marchese, Coraggio, Hogan, di Bernardo (ECC 2019)\n");
+    let _ = writeln!(
+        md,
+        "Every experiment of MODEL.md from our own simulation (`sil-host report`, size `{size}`, {wall_s:.0} s of wall time). \
+         Each section gives the command that made it; its files are in the folder of the same name.\n"
+    );
+    let _ = writeln!(md, "| experiment | source | status | wall time |\n|---|---|---|---|");
+    for (s, rs) in sections.iter().zip(results) {
+        for r in rs {
+            let status = if r.exit_code == Some(0) { "ok".to_string() } else { format!("**failed** (exit {:?})", r.exit_code) };
+            let _ = writeln!(md, "| {} ({}) | {} | {} | {:.1} s |", s.title, r.id, s.source, status, r.wall_s);
+        }
+    }
+    for (s, rs) in sections.iter().zip(results) {
+        let _ = writeln!(md, "\n## {}\n\n*{}*\n", s.title, s.source);
+        if rs.len() > 1 {
+            comparison_table(&mut md, rs);
+        }
+        for r in rs {
+            if rs.len() > 1 {
+                let _ = writeln!(md, "\n### {}\n", r.id);
+            }
+            let _ = writeln!(md, "```\n{}\n```\n", r.command);
+            if let Some(e) = &r.error {
+                let _ = writeln!(md, "**Failed** (exit code {:?}):\n\n```\n{e}\n```\n", r.exit_code);
+            }
+            if let Some(v) = &r.summary {
+                scalar_table(&mut md, v);
+            }
+            for f in r.files.iter().filter(|f| f.ends_with(".svg")) {
+                let _ = writeln!(md, "![{f}]({f})\n");
+            }
+            let data: Vec<&String> = r.files.iter().filter(|f| !f.ends_with(".svg")).collect();
+            if !data.is_empty() {
+                let links: Vec<String> = data.iter().map(|f| format!("[{f}]({f})")).collect();
+                let _ = writeln!(md, "Data: {}\n", links.join(", "));
+            }
+        }
+    }
+    md
+}
+
+/// The top-level numbers, strings and booleans of a command's JSON document.
+fn scalar_table(md: &mut String, v: &Value) {
+    let Some(map) = v.as_object() else { return };
+    let rows: Vec<(String, String)> = map.iter().filter_map(|(k, v)| scalar(v).map(|s| (k.clone(), s))).collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "| quantity | value |\n|---|---|");
+    for (k, s) in rows {
+        let _ = writeln!(md, "| `{k}` | {s} |");
+    }
+    md.push('\n');
+}
+
+/// The runs of a section side by side: the scalar fields they share.
+fn comparison_table(md: &mut String, rs: &[StepResult]) {
+    let objects: Vec<&serde_json::Map<String, Value>> = rs.iter().filter_map(|r| r.summary.as_ref()?.as_object()).collect();
+    let Some(first) = objects.first() else { return };
+    let keys: Vec<&String> =
+        first.keys().filter(|k| objects.iter().all(|o| o.get(*k).and_then(scalar).is_some()) && *k != "scenario").collect();
+    let _ = write!(md, "| quantity |");
+    for r in rs.iter().filter(|r| r.summary.is_some()) {
+        let _ = write!(md, " {} |", r.id);
+    }
+    let _ = writeln!(md, "\n|---|{}", "---|".repeat(objects.len()));
+    for k in keys {
+        let _ = write!(md, "| `{k}` |");
+        for o in &objects {
+            let _ = write!(md, " {} |", o.get(k).and_then(scalar).unwrap_or_default());
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+}
+
+fn scalar(v: &Value) -> Option<String> {
+    match v {
+        Value::Number(n) => Some(match n.as_f64() {
+            Some(x) if n.is_f64() => format!("{x:.6}").trim_end_matches('0').trim_end_matches('.').to_string(),
+            _ => n.to_string(),
+        }),
+        Value::String(s) if s.len() <= 200 => Some(s.replace('|', "\\|")),
+        Value::Bool(b) => Some(b.to_string()),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tables_show_scalars_and_escape_pipes() {
+        let v: Value = serde_json::json!({"mu": 0.6, "n": 3, "what": "a|b", "list": [1, 2], "ok": true});
+        let mut md = String::new();
+        scalar_table(&mut md, &v);
+        assert!(md.contains("| `mu` | 0.6 |") && md.contains("| `n` | 3 |") && md.contains("a\\|b") && md.contains("| `ok` | true |"));
+        assert!(!md.contains("list"), "arrays are not scalars");
+    }
+
+    #[test]
+    fn comparison_table_keeps_shared_scalar_keys() {
+        let r = |id: &str, v: Value| StepResult {
+            id: id.into(),
+            command: String::new(),
+            exit_code: Some(0),
+            wall_s: 0.0,
+            summary: Some(v),
+            error: None,
+            files: vec![],
+        };
+        let rs = [r("a", serde_json::json!({"x": 1, "y": 2})), r("b", serde_json::json!({"x": 3, "z": 4}))];
+        let mut md = String::new();
+        comparison_table(&mut md, &rs);
+        assert!(md.contains("| `x` | 1 | 3 |"), "{md}");
+        assert!(!md.contains("`y`") && !md.contains("`z`"), "{md}");
+    }
+}
