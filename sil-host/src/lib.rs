@@ -5,6 +5,7 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod ideal;
 pub mod initial;
 pub mod output;
 pub mod plant;
