@@ -11,6 +11,7 @@ pub mod output;
 pub mod plant;
 pub mod plot;
 pub mod sil;
+pub mod zmax;
 
 use clap::Parser;
 
@@ -35,6 +36,7 @@ where
         cli::Command::Modes(args) => commands::modes::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
+        cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),
