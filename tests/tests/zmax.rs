@@ -19,7 +19,8 @@ fn zmax_writes_its_table_figures_and_summary() {
     let row = &summary["results"][0];
     assert_eq!((row["controller"].as_str(), row["x0"].as_str(), row["setting"].as_str()), (Some("hybrid"), Some("d"), Some("ideal")));
     assert_eq!(row["outcome"], "found");
-    let (z, fail, end) = (row["z_t_sliding_m"].as_f64().unwrap(), row["first_failing_m"].as_f64().unwrap(), row["p_zero_end_m"].as_f64().unwrap());
+    let (z, fail, end) =
+        (row["z_t_sliding_m"].as_f64().unwrap(), row["first_failing_m"].as_f64().unwrap(), row["p_zero_end_m"].as_f64().unwrap());
     assert!(z <= end && end < fail + 1e-4 && fail - z <= 0.005, "{z} {fail} {end}");
     assert!(row["why_failing"].as_str().unwrap().contains("t = "), "{row}");
     let trials = summary["trials"].as_array().unwrap();
