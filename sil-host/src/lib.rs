@@ -5,11 +5,13 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod ideal;
 pub mod initial;
 pub mod output;
 pub mod plant;
 pub mod plot;
 pub mod sil;
+pub mod zmax;
 
 use clap::Parser;
 
@@ -35,6 +37,7 @@ where
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),
+        cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

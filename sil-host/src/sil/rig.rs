@@ -22,6 +22,7 @@ use super::{
     sensors::Sensors,
     setup::plant_for,
 };
+use crate::plant::PlantEvent;
 
 /// The answer to one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,7 +86,7 @@ pub fn run_loop(
     on_period: impl FnMut(usize, usize) -> bool,
     on_frame: impl FnMut(&SensorFrame),
 ) -> (Vec<PeriodRecord>, Option<RunError>) {
-    run_loop_streaming(s, link, |_| {}, on_period, on_frame)
+    run_loop_hooked(s, link, |_| {}, on_period, on_frame, |_| {})
 }
 
 /// As [`run_loop`], handing every period's record to `on_record` as soon as it
@@ -94,15 +95,42 @@ pub fn run_loop(
 pub fn run_loop_streaming(
     s: &Scenario,
     link: &mut dyn FirmwareLink,
+    on_record: impl FnMut(&PeriodRecord),
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_hooked(s, link, on_record, on_period, on_frame, |_| {})
+}
+
+/// As [`run_loop`], handing `on_events` every plant event at its exact time (the
+/// start-up events, then those of each interval): lift-offs between two samples
+/// included, which the per-period records cannot show.
+pub fn run_loop_observed(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+    on_events: impl FnMut(&[PlantEvent]),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_hooked(s, link, |_| {}, on_period, on_frame, on_events)
+}
+
+/// The loop behind [`run_loop`], [`run_loop_streaming`] and [`run_loop_observed`],
+/// with all their hooks.
+pub fn run_loop_hooked(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
     mut on_record: impl FnMut(&PeriodRecord),
     mut on_period: impl FnMut(usize, usize) -> bool,
     mut on_frame: impl FnMut(&SensorFrame),
+    mut on_events: impl FnMut(&[PlantEvent]),
 ) -> (Vec<PeriodRecord>, Option<RunError>) {
     let mut records = Vec::new();
     let mut plant = match plant_for(s) {
         Ok(p) => p,
         Err(e) => return (records, Some(e.into())),
     };
+    on_events(plant.startup_events());
     let mut sensors = Sensors::new(s.sensors.seed, s.sensors.load_noise_n);
     let ts = 1.0 / s.timing.rate_hz;
     let ts_us = (ts * 1e6).round() as u64;
@@ -191,11 +219,17 @@ pub fn run_loop_streaming(
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
         let step = match switch {
-            Some(at) => plant.advance(applied, at).and_then(|_| plant.advance(u_new, t_next - plant.time())),
+            Some(at) => plant.advance(applied, at).and_then(|r| {
+                on_events(&r.events);
+                plant.advance(u_new, t_next - plant.time())
+            }),
             None => plant.advance(applied, t_next - plant.time()),
         };
         match step {
-            Ok(r) => f_now = r.f,
+            Ok(r) => {
+                on_events(&r.events);
+                f_now = r.f;
+            }
             Err(e) => {
                 failure = Some(e.into());
                 break;
