@@ -184,7 +184,10 @@ mod tests {
     fn messages_round_trip_through_the_framing() {
         let msgs = [
             Downlink::Configure(Config::default()),
-            Downlink::Frame { frame: SensorFrame { t_us: 1234, seq: 7, theta1_count: 16000, f_n_code: -5, ..SensorFrame::default() }, start_delay_us: 0 },
+            Downlink::Frame {
+                frame: SensorFrame { t_us: 1234, seq: 7, theta1_count: 16000, f_n_code: -5, ..SensorFrame::default() },
+                start_delay_us: 0,
+            },
             Downlink::End,
         ];
         let mut wire = Vec::new();
@@ -204,7 +207,11 @@ mod tests {
 
     #[test]
     fn a_flipped_bit_is_caught_by_the_crc() {
-        let msg = Uplink::Answer { command: ActuatorCommand { seq: 3, u1_code: 100, ..Default::default() }, telemetry: FirmwareTelemetry::default(), frame_ticks: 99 };
+        let msg = Uplink::Answer {
+            command: ActuatorCommand { seq: 3, u1_code: 100, ..Default::default() },
+            telemetry: FirmwareTelemetry::default(),
+            frame_ticks: 99,
+        };
         let mut buf = [0u8; MAX_FRAME];
         let n = encode(&msg, &mut buf).unwrap().len();
         let (mut caught, mut tried) = (0, 0);

@@ -34,6 +34,7 @@ where
         cli::Command::Modes(args) => commands::modes::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
+        cli::Command::Pil(args) => commands::pil::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

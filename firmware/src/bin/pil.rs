@@ -117,7 +117,11 @@ mod image {
 
     impl TickClock for FreeTicks {
         fn ticks(&self) -> u32 {
-            RELOAD - SYST::get_current().min(RELOAD)
+            // Right after the restart the counter reads 0 until it reloads.
+            match SYST::get_current() {
+                0 => 0,
+                current => RELOAD - current.min(RELOAD),
+            }
         }
         fn ticks_per_second(&self) -> u32 {
             CORE_HZ
