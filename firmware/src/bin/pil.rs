@@ -52,6 +52,8 @@ mod image {
         pub const SR_TXE: u32 = 1 << 7;
         /// CR1: USART enable, transmitter enable, receiver enable.
         pub const CR1_UE_TE_RE: u32 = (1 << 13) | (1 << 3) | (1 << 2);
+        /// CR1: interrupt when a byte is received.
+        pub const CR1_RXNEIE: u32 = 1 << 5;
     }
 
     fn read(addr: usize) -> u32 {
@@ -76,14 +78,26 @@ mod image {
             write(reg::GPIOA_MODER, (read(reg::GPIOA_MODER) & !(0b1111 << 18)) | (0b1010 << 18)); // PA9, PA10: AF
             write(reg::GPIOA_AFRH, (read(reg::GPIOA_AFRH) & !(0xFF << 4)) | (0x77 << 4)); // AF7 = USART1
             write(reg::USART1_BRR, 84_000_000 / 2_000_000);
-            write(reg::USART1_CR1, reg::CR1_UE_TE_RE);
+            write(reg::USART1_CR1, reg::CR1_UE_TE_RE | reg::CR1_RXNEIE);
+            cortex_m::interrupt::disable();
+            // SAFETY: interrupts are masked (PRIMASK) and no handler is needed:
+            // the enabled line only wakes the core from WFI.
+            unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
             Self
         }
 
-        /// Waits for the next received byte.
+        /// Waits for the next received byte, asleep (WFI) until USART1's
+        /// interrupt is pending: interrupts stay masked (PRIMASK), so it only
+        /// wakes the core. Under QEMU a sleeping core lets the emulator deliver
+        /// the socket's bytes at once; polling would hold it up.
         fn read_byte(&mut self) -> u8 {
-            while read(reg::USART1_SR) & reg::SR_RXNE == 0 {}
-            read(reg::USART1_DR) as u8
+            loop {
+                cortex_m::peripheral::NVIC::unpend(Usart1Irq);
+                if read(reg::USART1_SR) & reg::SR_RXNE != 0 {
+                    return read(reg::USART1_DR) as u8;
+                }
+                cortex_m::asm::wfi();
+            }
         }
 
         fn write_all(&mut self, bytes: &[u8]) {
@@ -100,6 +114,17 @@ mod image {
                 Ok(frame) => self.write_all(frame),
                 Err(_) => defmt::error!("uplink message does not fit a frame"),
             }
+        }
+    }
+
+    /// USART1's interrupt line (RM0090 table 61: position 37).
+    #[derive(Clone, Copy)]
+    struct Usart1Irq;
+
+    // SAFETY: 37 is USART1's position in the STM32F405's vector table.
+    unsafe impl cortex_m::interrupt::InterruptNumber for Usart1Irq {
+        fn number(self) -> u16 {
+            37
         }
     }
 
