@@ -54,8 +54,8 @@ pub enum Command {
     Firmware(FirmwareArgs),
     /// Processor in the loop: the MCU image (thumbv7em-none-eabihf, the one that would
     /// be flashed) runs in QEMU's netduinoplus2 (an STM32F405) under -icount shift=0
-    /// and closes the loop with the plant over the emulated USART1 (postcard + CRC-32
-    /// + COBS frames on a local socket), in lockstep with the same scenarios as `run`.
+    /// and closes the loop with the plant over the emulated USART1 (postcard, CRC-32 and
+    /// COBS frames on a local socket), in lockstep with the same scenarios as `run`.
     /// The image's defmt log is decoded and shown (and written to defmt.log); its
     /// SysTick instruction counts per step are reported (worst, median) against the
     /// 8400-instruction budget. Writes trace.csv, summary.json, trace.svg, defmt.log.

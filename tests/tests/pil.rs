@@ -22,7 +22,7 @@ use sil_host::{
         in_process,
         pil_link::{PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
         record::{RunError, lift_off_stats},
-        rig::run_loop,
+        rig::{FirmwareLink, run_loop},
         scenario::Scenario,
     },
 };
@@ -146,9 +146,10 @@ fn pid_through_the_cli_reports_its_instruction_counts_within_the_budget() {
 fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     // QEMU killed at 0.3 s (the kill_firmware fault): every period before is kept.
     let mut s = scenario("hybrid", 1.0);
-    s.faults = Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", sil_host::sil::scenario::DEFAULT_TOML))
-        .unwrap()
-        .faults;
+    s.faults =
+        Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", sil_host::sil::scenario::DEFAULT_TOML))
+            .unwrap()
+            .faults;
     let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
     let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
     match err {
@@ -165,6 +166,7 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     let out = dir.path().join("none");
     let code = sil_host::run(["sil-host", "pil", "--image", "/nonexistent/pil", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 2);
-    let err = PilLink::start(&s, &PilOptions { qemu: "/nonexistent/qemu-system-arm".into(), ..PilOptions::new(image()) }, None).unwrap_err();
+    let err =
+        PilLink::start(&s, &PilOptions { qemu: "/nonexistent/qemu-system-arm".into(), ..PilOptions::new(image()) }, None).unwrap_err();
     assert!(err.to_string().contains("cannot start /nonexistent/qemu-system-arm"), "{err}");
 }
