@@ -5,7 +5,7 @@
 use shared::{ElbowBranch, Params};
 
 /// Which control law runs (MODEL.md experiments 5 and 6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ControllerKind {
     /// Joint-space PID on `q' = [theta1, theta2 - theta1]` (paper eq. 8).
     Pid,
@@ -24,7 +24,7 @@ pub enum ControllerKind {
 /// period. The same holds for the model-based term with the measured `f_n`.
 /// With the commanded normal force, `f_t_hat = -mu_hat s a_f`, there is no loop
 /// and `f_n = a_f` exactly when `mu_hat = mu`: that is the default.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum FrictionCompensation {
     /// The measured tangential force (one period old).
     Measured,
@@ -37,7 +37,7 @@ pub enum FrictionCompensation {
 }
 
 /// PID gains per joint of `q' = [theta1, theta2 - theta1]` (paper eq. 8).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PidGains {
     /// `K_P`, N m/rad.
     pub kp: [f32; 2],
@@ -48,7 +48,7 @@ pub struct PidGains {
 }
 
 /// Hybrid force/motion gains (paper eqs. 10 and 11).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HybridGains {
     /// `K'_P`, 1/s^2.
     pub kp: f32,
@@ -59,7 +59,7 @@ pub struct HybridGains {
 }
 
 /// Firmware configuration.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Config {
     /// The arm's parameters as the firmware knows them (`mu` is `mu_hat`).
     pub params: Params<f32>,

@@ -16,6 +16,7 @@ pub mod decode;
 pub mod estimator;
 pub mod law;
 pub mod liftoff;
+pub mod pil;
 pub mod reference;
 
 #[cfg(test)]

@@ -83,8 +83,8 @@ impl<T: Real> JointTrig<T> {
     /// The sines and cosines of `q = [theta1, theta2]` (rad): one `sin_cos` per angle.
     #[inline]
     pub fn new(q: &Vector2<T>) -> Self {
-        let (s1, c1) = q[0].sin_cos();
-        let (s2, c2) = q[1].sin_cos();
+        let (s1, c1) = q[0].sin_cos_rad();
+        let (s2, c2) = q[1].sin_cos_rad();
         Self { s1, c1, s2, c2 }
     }
 
@@ -135,8 +135,8 @@ pub fn jacobian<T: Real>(l: T, q: &Vector2<T>) -> Matrix2<T> {
 ///        l (theta1_dot^2 cos theta1 + theta2_dot^2 cos theta2)]`.
 #[inline]
 pub fn jdot_qdot<T: Real>(l: T, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
-    let (s1, c1) = q[0].sin_cos();
-    let (s2, c2) = q[1].sin_cos();
+    let (s1, c1) = q[0].sin_cos_rad();
+    let (s2, c2) = q[1].sin_cos_rad();
     let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
     Vector2::new(-l * (w1 * s1 + w2 * s2), l * (w1 * c1 + w2 * c2))
 }

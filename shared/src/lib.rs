@@ -18,6 +18,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+pub mod trig;
 pub mod wire;
 
 pub use contact::{ContactMode, SlipDirection};
@@ -27,9 +28,47 @@ pub use params::{ParamError, Params};
 
 /// The scalar the model is generic over: `f32` (firmware) or `f64` (plant).
 ///
-/// nalgebra's `RealField` (with `libm` for `no_std` maths) plus `Copy`.
-pub trait Real: nalgebra::RealField + Copy {}
-impl<T: nalgebra::RealField + Copy> Real for T {}
+/// nalgebra's `RealField` (with `libm` for `no_std` maths) plus `Copy`, and the
+/// sine and cosine the model uses: `RealField`'s for `f64`, single precision only
+/// for `f32` ([`trig::sin_cos_f32`]: the MCU has no double-precision FPU).
+pub trait Real: nalgebra::RealField + Copy {
+    /// `(sin x, cos x)`, `x` in radians.
+    fn sin_cos_rad(self) -> (Self, Self);
+    /// `sin x`, `x` in radians.
+    fn sin_rad(self) -> Self;
+    /// `cos x`, `x` in radians.
+    fn cos_rad(self) -> Self;
+}
+
+impl Real for f64 {
+    #[inline]
+    fn sin_cos_rad(self) -> (Self, Self) {
+        nalgebra::ComplexField::sin_cos(self)
+    }
+    #[inline]
+    fn sin_rad(self) -> Self {
+        nalgebra::ComplexField::sin(self)
+    }
+    #[inline]
+    fn cos_rad(self) -> Self {
+        nalgebra::ComplexField::cos(self)
+    }
+}
+
+impl Real for f32 {
+    #[inline]
+    fn sin_cos_rad(self) -> (Self, Self) {
+        trig::sin_cos_f32(self)
+    }
+    #[inline]
+    fn sin_rad(self) -> Self {
+        trig::sin_cos_f32(self).0
+    }
+    #[inline]
+    fn cos_rad(self) -> Self {
+        trig::sin_cos_f32(self).1
+    }
+}
 
 /// Converts an `f64` literal to the scalar `T` (exact for `f64`, rounded for `f32`).
 #[inline(always)]

@@ -85,7 +85,7 @@ impl<T: Real> Arm<T> {
     #[inline]
     pub fn mass_matrix(&self, q: &Vector2<T>) -> Matrix2<T> {
         let ml2 = self.params.m * self.params.l * self.params.l;
-        let off = ml2 * lit::<T>(0.5) * (q[1] - q[0]).cos();
+        let off = ml2 * lit::<T>(0.5) * (q[1] - q[0]).cos_rad();
         Matrix2::new(ml2 * lit::<T>(4.0 / 3.0), off, off, ml2 * lit::<T>(1.0 / 3.0))
     }
 
@@ -117,8 +117,8 @@ impl<T: Real> Arm<T> {
         let mgl2 = p.m * p.g * p.l * lit::<T>(0.5);
         let spring = p.k * (q[1] - q[0] + p.alpha0);
         Vector2::new(
-            mgl2 * lit::<T>(3.0) * q[0].sin() - spring - p.sigma * (qd[1] - qd[0] - qd[0]),
-            mgl2 * q[1].sin() + spring + p.sigma * (qd[1] - qd[0]),
+            mgl2 * lit::<T>(3.0) * q[0].sin_rad() - spring - p.sigma * (qd[1] - qd[0] - qd[0]),
+            mgl2 * q[1].sin_rad() + spring + p.sigma * (qd[1] - qd[0]),
         )
     }
 
@@ -127,7 +127,7 @@ impl<T: Real> Arm<T> {
     #[inline]
     pub fn c(&self, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
         let half_ml2 = self.params.m * self.params.l * self.params.l * lit::<T>(0.5);
-        let s = (q[0] - q[1]).sin();
+        let s = (q[0] - q[1]).sin_rad();
         Vector2::new(half_ml2 * qd[1] * qd[1] * s, -half_ml2 * qd[0] * qd[0] * s)
     }
 
@@ -228,7 +228,7 @@ impl<T: Real> Arm<T> {
         let p = &self.params;
         let half = lit::<T>(0.5);
         let spring = q[1] - q[0] + p.alpha0;
-        -p.m * p.g * p.l * (lit::<T>(1.5) * q[0].cos() + half * q[1].cos()) + half * p.k * spring * spring
+        -p.m * p.g * p.l * (lit::<T>(1.5) * q[0].cos_rad() + half * q[1].cos_rad()) + half * p.k * spring * spring
     }
 }
 

@@ -171,6 +171,7 @@ pub struct GroundTruth {
 /// Layout: `seq: u32`, `status: u32`, `z_t_ref: f32`, `f_n_ref: f32`,
 /// `q: [f32; 2]`, `qd: [f32; 2]`, `f: [f32; 2]`, `u_raw: [f32; 2]`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::FirmwareTelemetry"))]
 #[repr(C)]
 pub struct FirmwareTelemetry {

@@ -64,6 +64,21 @@ pub enum Command {
     /// figure per case (the run at the limit).
     #[command(allow_negative_numbers = true)]
     Zmax(ZmaxArgs),
+    /// Processor in the loop: the MCU image (thumbv7em-none-eabihf, the one that would
+    /// be flashed) runs in QEMU's netduinoplus2 (an STM32F405) under -icount shift=0
+    /// and closes the loop with the plant over the emulated USART1 (postcard, CRC-32 and
+    /// COBS frames on a local socket), in lockstep with the same scenarios as `run`.
+    /// The image's defmt log is decoded and shown (and written to defmt.log); its
+    /// SysTick instruction counts per step are reported (worst, median) against the
+    /// 8400-instruction budget. Writes trace.csv, summary.json, trace.svg, defmt.log.
+    ///
+    /// Build the image first: cargo build -p firmware --profile mcu --target
+    /// thumbv7em-none-eabihf --bin pil. Needs qemu-system-arm (Debian's package).
+    ///
+    /// Exit codes: 0 ok; 1 the run stopped early (safe state, QEMU dead or hung,
+    /// plant failure; everything up to then is written); 2 bad input or no image.
+    #[command(allow_negative_numbers = true)]
+    Pil(PilArgs),
     /// Speed of the rig on the default scenario: control periods per wall second
     /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
     /// percentiles), and optionally a real-time run (jitter, step time, misses).
@@ -227,6 +242,30 @@ pub struct RunArgs {
     /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
     #[arg(long, value_name = "NAME")]
     pub rig: Option<String>,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `sil-host pil`.
+#[derive(Debug, Clone, Args)]
+pub struct PilArgs {
+    /// The scenario (as for `run`).
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// The PIL image (ELF); default: the `mcu` profile's build output,
+    /// target/thumbv7em-none-eabihf/mcu/pil.
+    #[arg(long, value_name = "ELF")]
+    pub image: Option<PathBuf>,
+    /// The QEMU executable.
+    #[arg(long, default_value = "qemu-system-arm", value_name = "EXE")]
+    pub qemu: PathBuf,
+    /// Wall time the image gets to answer one frame before the run stops as hung, s.
+    #[arg(long, default_value_t = 5.0)]
+    pub answer_timeout: f64,
+    /// Do not echo the image's defmt log while it runs (it is still written to defmt.log).
+    #[arg(long)]
+    pub quiet: bool,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,

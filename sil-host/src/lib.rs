@@ -38,6 +38,7 @@ where
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),
         cli::Command::Zmax(args) => commands::zmax::run(&args),
+        cli::Command::Pil(args) => commands::pil::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

