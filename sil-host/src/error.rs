@@ -31,6 +31,9 @@ pub enum CliError {
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] crate::sil::record::RunError),
+    /// Part of a sweep failed (everything was written, the failures included).
+    #[error("{0}")]
+    PartFailed(String),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

@@ -3,6 +3,7 @@
 pub mod admissible;
 pub mod bench;
 pub mod modes;
+pub mod poincare;
 pub mod run;
 pub mod simulate;
 
