@@ -205,7 +205,8 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
     // Parameters at both ends of the grid (mu, v_belt finite, ...).
     Params::new(args.mu, v_min)?;
     let params = Params::new(args.mu, v_max)?;
-    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
+    let sim =
+        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
     let (name, given_deg) = match &args.x0_deg {
         Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
@@ -236,7 +237,12 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
         sim,
         transient_s: args.transient,
         record_s: args.record,
-        classify: ClassifyConfig { tol: args.tol, max_period: args.max_period, chaos_threshold: args.chaos_threshold, ..ClassifyConfig::default() },
+        classify: ClassifyConfig {
+            tol: args.tol,
+            max_period: args.max_period,
+            chaos_threshold: args.chaos_threshold,
+            ..ClassifyConfig::default()
+        },
         lyapunov: LyapunovConfig { d0: args.lyap_d0, iterations: args.lyap_iterations, skip: args.lyap_skip, ..LyapunovConfig::default() },
         max_return_s: 10.0,
         section_depth: args.section_depth,
@@ -393,11 +399,7 @@ fn print_human(s: &Summary) {
     for b in &s.bands {
         let _ = writeln!(o, "  {:>8.4} .. {:>8.4} m/s  {:<12} ({} points)", b.v_belt_min, b.v_belt_max, band_name(b), b.points);
     }
-    let _ = writeln!(
-        o,
-        "wall {:.1} s on {} threads (median {:.3} s per belt speed)",
-        s.wall_s, s.threads, s.median_point_wall_s
-    );
+    let _ = writeln!(o, "wall {:.1} s on {} threads (median {:.3} s per belt speed)", s.wall_s, s.threads, s.median_point_wall_s);
     let _ = writeln!(o, "wrote {}", s.files.join(", "));
 }
 
@@ -442,6 +444,11 @@ fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &
     if !lo.is_finite() {
         (lo, hi) = (-1.0, 1.0);
     }
+    // One marker per pixel row and belt speed (the figure is 750 px high): a
+    // periodic orbit repeats its points hundreds of times.
+    let resolution = (hi - lo).max(1e-9) / 1500.0;
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    pts.dedup_by(|b, a| a.0 == b.0 && (b.1 - a.1).abs() < resolution);
     let ypad = ((hi - lo) * 0.05).max(0.5);
     let root = SVGBackend::new(path, (1200, 750)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
@@ -466,11 +473,7 @@ fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &
     for label in labels {
         let color = pts.iter().find(|p| p.3 == label).map_or(BLACK, |p| p.2);
         let series = pts.iter().filter(|p| p.3 == label).map(|p| Circle::new((p.0, p.1), 1, color.filled()));
-        chart
-            .draw_series(series)
-            .map_err(|e| err(&e))?
-            .label(label)
-            .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+        chart.draw_series(series).map_err(|e| err(&e))?.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
     }
     chart
         .configure_series_labels()
@@ -517,9 +520,7 @@ fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointResult]) -> 
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(|e| err(&e))?;
-    chart
-        .draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1)))
-        .map_err(|e| err(&e))?;
+    chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
     let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
     labels.sort_unstable();
     labels.dedup();

@@ -602,7 +602,12 @@ impl Plant {
         self.advance_inner(&Hold(u), dt, Some(watch))
     }
 
-    fn advance_inner<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64, mut watch: Option<&mut SectionWatch>) -> Result<StepReport, SimError> {
+    fn advance_inner<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        mut watch: Option<&mut SectionWatch>,
+    ) -> Result<StepReport, SimError> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(SimError::BadStep(dt));
         }

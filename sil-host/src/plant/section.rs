@@ -164,7 +164,12 @@ impl SectionWatch {
 
     /// Keeps the crossings of a solve that ended at state `y_end`.
     pub(crate) fn commit(&mut self, scan: StepScan, y_end: &OdeState, mode: ContactMode) {
-        self.crossings.extend(scan.found.into_iter().map(|(t, y)| SectionCrossing { t, x: plant_state(&y), kind: CrossingKind::Flow, mode }));
+        self.crossings.extend(scan.found.into_iter().map(|(t, y)| SectionCrossing {
+            t,
+            x: plant_state(&y),
+            kind: CrossingKind::Flow,
+            mode,
+        }));
         self.armed = scan.armed;
         self.last = Some(self.section.value(y_end));
     }
@@ -311,4 +316,78 @@ fn extremum<S: OdeSystem + ?Sized>(sec: &Section, step: &mut StepView<'_, S>, a:
         }
     }
     if sign * g1 > sign * g2 { (x1, g1, y1) } else { (x2, g2, y2) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plant::dop853::{Control, Dop853};
+
+    /// `y = [sin t, cos t, 0, 0, 0, 0]`-like systems: component 1 is `a cos(w t)`.
+    struct Oscillator {
+        a: f64,
+        w: f64,
+    }
+    impl OdeSystem for Oscillator {
+        fn rhs(&self, t: f64, _y: &OdeState, dy: &mut OdeState) {
+            *dy = [self.a * (self.w * t).cos(), -self.a * self.w * (self.w * t).sin(), 0.0, 0.0, 0.0, 0.0];
+        }
+    }
+
+    /// Integrates `sys` from `y0` over `[0, t_end]` and returns the crossings the scan found.
+    fn scan_run(sys: &Oscillator, y0: OdeState, t_end: f64, solver: Dop853, section: Section, depth: f64) -> Vec<f64> {
+        let watch = SectionWatch::with_hysteresis(section, depth);
+        let mut scan = watch.scan();
+        scan.armed = true;
+        solver
+            .solve(sys, 0.0, &y0, None, t_end, 0.0, |step| {
+                scan.on_step(step, None);
+                Control::Continue
+            })
+            .unwrap();
+        scan.found.iter().map(|(t, _)| *t).collect()
+    }
+
+    /// `theta1_dot = cos t` crosses 0 upward at `t = 3 pi / 2 + 2 pi k`, to rounding.
+    #[test]
+    fn crossings_of_a_cosine_are_exact() {
+        let sys = Oscillator { a: 1.0, w: 1.0 };
+        let solver = Dop853::new(1e-10, 1e-12);
+        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], 20.0, solver, Section::THETA1_DOT, 0.0);
+        let pi = std::f64::consts::PI;
+        let exact = [1.5 * pi, 3.5 * pi, 5.5 * pi];
+        assert_eq!(found.len(), exact.len(), "{found:?}");
+        for (t, e) in found.iter().zip(exact) {
+            assert!((t - e).abs() < 1e-9, "{t} vs {e}");
+        }
+    }
+
+    /// A brief rise above the section inside one step (a hump of `cos t` above
+    /// 0.999, 0.09 s wide, inside the step [6, 7] of unit steps: both ends below)
+    /// is found.
+    #[test]
+    fn a_hump_inside_one_step_is_found() {
+        let sys = Oscillator { a: 1.0, w: 1.0 };
+        let section = Section { normal: [0.0, 1.0, 0.0, 0.0], offset: 0.999 };
+        // Loose tolerance: every step is the 1 s cap, so one step holds the whole hump.
+        let solver = Dop853 { h_max: 1.0, ..Dop853::new(1e-3, 1e-3) };
+        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], 7.0, solver, section, 0.0);
+        // cos t = 0.999 going up at t = 2 pi - acos(0.999).
+        let exact = 2.0 * std::f64::consts::PI - 0.999f64.acos();
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!((found[0] - exact).abs() < 1e-5, "{} vs {exact}", found[0]);
+    }
+
+    /// Rounding-size oscillations about the section are not crossings with a
+    /// hysteresis deeper than them, and are without.
+    #[test]
+    fn hysteresis_ignores_noise_on_the_section() {
+        let sys = Oscillator { a: 1e-9, w: 50.0 };
+        let solver = Dop853::new(1e-12, 1e-14);
+        let y0 = [0.0, 1e-9, 0.0, 0.0, 0.0, 0.0];
+        let deep = scan_run(&sys, y0, 1.0, solver, Section::THETA1_DOT, 1e-6);
+        assert!(deep.len() <= 1, "{deep:?}");
+        let plain = scan_run(&sys, y0, 1.0, solver, Section::THETA1_DOT, 0.0);
+        assert_eq!(plain.len(), 8, "{plain:?}");
+    }
 }

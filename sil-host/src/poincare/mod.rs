@@ -22,7 +22,7 @@ use shared::Params;
 
 use crate::plant::{
     Plant, SimConfig, SimError,
-    section::{Section, SectionCrossing, SectionWatch},
+    section::{self, Section, SectionCrossing, SectionWatch},
 };
 use classify::{Class, ClassifyConfig};
 use lyapunov::{LyapunovConfig, LyapunovEstimate, ReturnMap};
@@ -229,4 +229,64 @@ pub fn bands(results: &[PointResult]) -> Vec<Band> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::initial;
+
+    /// Crossings located inside the integration steps agree with an independent
+    /// location: the same trajectory advanced in 1 ms samples, a sign change of
+    /// `theta1_dot` between samples bisected on clones of the plant advanced from
+    /// the earlier sample (jumps at impacts included). Watching does not change
+    /// the trajectory.
+    #[test]
+    fn located_crossings_agree_with_bisection_on_the_plant() {
+        let params = Params::new(0.6, -0.5).unwrap();
+        let x0 = initial::deg_to_state(initial::X0A.deg);
+        let sim = SimConfig::default();
+        let (dt, depth) = (1e-3, 1e-6);
+        let mut watched = Plant::new(params, sim, x0, 0.0, [0.0; 2]).unwrap();
+        let mut plain = watched.clone();
+        let mut watch = SectionWatch::with_hysteresis(Section::THETA1_DOT, depth);
+        let mut bisected: Vec<(f64, [f64; 4])> = Vec::new();
+        let mut armed = false;
+        for k in 1..=3000 {
+            let target = k as f64 * dt;
+            watched.advance_watched([0.0; 2], target - watched.time(), &mut watch).unwrap();
+            let before = plain.clone();
+            plain.advance([0.0; 2], target - plain.time()).unwrap();
+            let (g0, g1) = (before.state()[1], plain.state()[1]);
+            armed |= g0 < -depth;
+            if g0 < 0.0 && g1 >= 0.0 && armed {
+                let (mut lo, mut hi) = (0.0, plain.time() - before.time());
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    let mut c = before.clone();
+                    c.advance([0.0; 2], mid).unwrap();
+                    if c.state()[1] < 0.0 { lo = mid } else { hi = mid }
+                }
+                let mut c = before.clone();
+                c.advance([0.0; 2], hi).unwrap();
+                bisected.push((before.time() + hi, c.state()));
+                armed = false;
+            }
+            armed |= g1 < -depth;
+        }
+        assert_eq!(watched.state(), plain.state(), "watching changed the trajectory");
+        let located = watch.crossings();
+        assert!(located.len() >= 20, "{} crossings", located.len());
+        // Both kinds are exercised (at v_belt = -0.5 about 12 of 30 are impact jumps).
+        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Jump));
+        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Flow));
+        assert_eq!(located.len(), bisected.len());
+        let (mut dt_max, mut dth_max) = (0.0f64, 0.0f64);
+        for (c, (t, x)) in located.iter().zip(&bisected) {
+            dt_max = dt_max.max((c.t - t).abs());
+            dth_max = dth_max.max((c.x[0] - x[0]).abs());
+        }
+        // Measured: 1e-14 s and 4e-14 rad.
+        assert!(dt_max < 1e-12 && dth_max < 1e-12, "time differs by {dt_max:e} s, theta1 by {dth_max:e} rad");
+    }
 }
