@@ -22,7 +22,7 @@ use shared::Params;
 
 use crate::plant::{
     Plant, SimConfig, SimError,
-    section::{self, Section, SectionCrossing, SectionWatch},
+    section::{Section, SectionCrossing, SectionWatch},
 };
 use classify::{Class, ClassifyConfig};
 use lyapunov::{LyapunovConfig, LyapunovEstimate, ReturnMap};
@@ -278,8 +278,8 @@ mod tests {
         let located = watch.crossings();
         assert!(located.len() >= 20, "{} crossings", located.len());
         // Both kinds are exercised (at v_belt = -0.5 about 12 of 30 are impact jumps).
-        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Jump));
-        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Flow));
+        assert!(located.iter().any(|c| c.kind == crate::plant::section::CrossingKind::Jump));
+        assert!(located.iter().any(|c| c.kind == crate::plant::section::CrossingKind::Flow));
         assert_eq!(located.len(), bisected.len());
         let (mut dt_max, mut dth_max) = (0.0f64, 0.0f64);
         for (c, (t, x)) in located.iter().zip(&bisected) {
