@@ -312,12 +312,12 @@ pub struct PoincareArgs {
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
     pub x0_deg: Option<String>,
-    /// Belt-speed range, m/s: MIN,MAX (both ends included). The default covers
+    /// Belt-speed range, m/s: MIN,MAX (both ends included), or one speed. The default covers
     /// the band where the open loop from x0a keeps bouncing at mu = 0.6 (found
     /// with this command over [-1, -0.1] in steps of 0.02, then 0.002: from about
     /// -0.864 to -0.310 m/s, with steady sliding interleaved between -0.864 and
     /// -0.782), with steady sliding at both ends.
-    #[arg(long, default_value = "-0.90,-0.30", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    #[arg(long, default_value = "-0.90,-0.30", value_name = "MIN,MAX|V", allow_hyphen_values = true)]
     pub v_belt: String,
     /// Grid step of v_belt, m/s.
     #[arg(long, default_value_t = 0.002)]

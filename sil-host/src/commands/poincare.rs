@@ -168,7 +168,11 @@ fn grid(min: f64, max: f64, step: f64) -> Vec<f64> {
 
 fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), CliError> {
     let bad = |m: String| Err(CliError::BadInput(m));
-    let (v_min, v_max) = parse_range("v-belt", &args.v_belt)?;
+    // One speed `V`, or a range `MIN,MAX`.
+    let (v_min, v_max) = match args.v_belt.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => (v, v),
+        _ => parse_range("v-belt", &args.v_belt)?,
+    };
     if !(args.v_step.is_finite() && args.v_step > 0.0) {
         return bad(format!("--v-step must be a finite step > 0 m/s, got {}", args.v_step));
     }
