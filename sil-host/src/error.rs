@@ -31,9 +31,9 @@ pub enum CliError {
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] crate::sil::record::RunError),
-    /// Some experiments of a report failed (the report itself is written).
+    /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
-    Report(String),
+    PartFailed(String),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

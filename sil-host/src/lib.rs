@@ -10,6 +10,7 @@ pub mod initial;
 pub mod output;
 pub mod plant;
 pub mod plot;
+pub mod poincare;
 pub mod sil;
 pub mod zmax;
 
@@ -34,6 +35,7 @@ where
         cli::Command::Simulate(args) => commands::simulate::run(&args),
         cli::Command::Admissible(args) => commands::admissible::run(&args),
         cli::Command::Modes(args) => commands::modes::run(&args),
+        cli::Command::Poincare(args) => commands::poincare::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),

@@ -4,6 +4,7 @@ pub mod admissible;
 pub mod bench;
 pub mod modes;
 pub mod pil;
+pub mod poincare;
 pub mod report;
 pub mod run;
 pub mod simulate;

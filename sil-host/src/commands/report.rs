@@ -157,7 +157,7 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
         );
     }
     if failed > 0 {
-        return Err(CliError::Report(format!("{failed} experiment(s) failed; see {}", dir.join("report.md").display())));
+        return Err(CliError::PartFailed(format!("{failed} experiment(s) failed; see {}", dir.join("report.md").display())));
     }
     Ok(())
 }

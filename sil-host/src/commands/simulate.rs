@@ -150,7 +150,8 @@ pub struct Summary {
     pub files: Vec<String>,
 }
 
-fn impact_law(arg: ImpactLawArg) -> ImpactLaw {
+/// The simulator's impact law for the command-line choice.
+pub(crate) fn impact_law(arg: ImpactLawArg) -> ImpactLaw {
     match arg {
         ImpactLawArg::Newton => ImpactLaw::Newton,
         ImpactLawArg::Poisson => ImpactLaw::Poisson,
@@ -158,7 +159,7 @@ fn impact_law(arg: ImpactLawArg) -> ImpactLaw {
 }
 
 /// Parses `--x0-deg th1,th1dot,th2,th2dot`.
-fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
+pub(crate) fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
     let bad = || CliError::BadInput(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
     let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
     match v.as_slice() {

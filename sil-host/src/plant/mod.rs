@@ -45,6 +45,7 @@
 
 pub mod dop853;
 pub mod impact;
+pub mod section;
 pub mod segment;
 pub mod trig;
 
@@ -61,6 +62,7 @@ use shared::{
 
 use dop853::Dop853;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
+use section::{SectionWatch, StepScan};
 pub use segment::Phase;
 use segment::{Boundary, EventLocator, OdeState, Point, Segment};
 use trig::TrigCache;
@@ -602,6 +604,30 @@ impl Plant {
     /// # Errors
     /// As [`Plant::advance`].
     pub fn advance_with<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64) -> Result<StepReport, SimError> {
+        self.advance_inner(ctrl, dt, None)
+    }
+
+    /// [`Plant::advance`] that also watches a Poincaré section: its upward crossings
+    /// in the interval, located inside the integration steps on the dense output or
+    /// at impacts ([`section`]), are appended to `watch`. Successive calls with the
+    /// same `watch` see every crossing once, including a jump across the section
+    /// at an interval's boundary.
+    ///
+    /// # Errors
+    /// As [`Plant::advance`].
+    pub fn advance_watched(&mut self, u: [f64; 2], dt: f64, watch: &mut SectionWatch) -> Result<StepReport, SimError> {
+        if !u.iter().all(|v| v.is_finite()) {
+            return Err(SimError::BadTorque(u));
+        }
+        self.advance_inner(&Hold(u), dt, Some(watch))
+    }
+
+    fn advance_inner<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        mut watch: Option<&mut SectionWatch>,
+    ) -> Result<StepReport, SimError> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(SimError::BadStep(dt));
         }
@@ -647,7 +673,10 @@ impl Plant {
             }
             // A relaxed (cone-violating) stick lasts at most to the end of this interval.
             let seg_end = t_end;
-            let hit = self.integrate(ctrl, seg_end, &start, g0)?;
+            if let Some(w) = watch.as_deref_mut() {
+                w.observe_start(self.t, &self.y, self.mode());
+            }
+            let hit = self.integrate(ctrl, seg_end, &start, g0, watch.as_deref_mut())?;
             self.counters.segments += 1;
             match hit {
                 Some(b) => {
@@ -727,7 +756,14 @@ impl Plant {
     /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
     /// segment that ends outside its domain without an event is integrated again
     /// with steps capped at 1/64 of the interval, and fails if that still misses it.
-    fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64, start: &Point, g0: f64) -> Result<Option<Boundary>, SimError> {
+    fn integrate<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        t_end: f64,
+        start: &Point,
+        g0: f64,
+        mut watch: Option<&mut SectionWatch>,
+    ) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
         let mut h0 = self.last_h.min(remaining);
         if self.phase == Phase::Flight {
@@ -738,10 +774,14 @@ impl Plant {
             }
         }
         for h_max in [f64::INFINITY, remaining / 64.0] {
-            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0)?;
+            let mut scan = watch.as_deref().map(SectionWatch::scan);
+            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, scan.as_mut())?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.
                 continue;
+            }
+            if let (Some(w), Some(scan)) = (watch.as_deref_mut(), scan) {
+                w.commit(scan, &y1, self.mode());
             }
             self.t = t1;
             self.y = y1;
@@ -752,7 +792,9 @@ impl Plant {
 
     /// One solve over `[self.t, t_end]`, stopping at the first event (the plant's
     /// state is left unchanged). Returns the end time and state, the boundary hit (if
-    /// any) and the event function at the last accepted point.
+    /// any) and the event function at the last accepted point. A section `scan`, if
+    /// given, sees every accepted step up to the event.
+    #[allow(clippy::too_many_arguments)]
     fn solve_segment<C: Controller + ?Sized>(
         &mut self,
         ctrl: &C,
@@ -761,12 +803,19 @@ impl Plant {
         h_max: f64,
         start: &Point,
         g0: f64,
+        mut scan: Option<&mut StepScan>,
     ) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
         let solver = Dop853 { h_max, ..self.solver };
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
         let solved = solver
-            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| locator.on_step(step))
+            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
+                let control = locator.on_step(step);
+                if let Some(scan) = scan.as_deref_mut() {
+                    scan.on_step(step, locator.hit);
+                }
+                control
+            })
             .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
         let (g_end, hit) = (locator.g_prev, locator.hit);
         self.last_h = solved.h_next;
