@@ -69,6 +69,23 @@ fn sections(size: ReportSize) -> Vec<Section> {
         },
     ];
     v.push(Section {
+        title: "One-parameter bifurcation diagram (Poincaré section)",
+        source: "MODEL.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
+        steps: vec![step(
+            "poincare",
+            &if quick {
+                vec!["poincare", "--mu", "0.6", "--v-step", "0.004", "--transient", "150", "--record", "50"]
+            } else {
+                vec!["poincare", "--mu", "0.6"]
+            },
+        )],
+    });
+    v.push(Section {
+        title: "Z_t,sliding: how far each controller drives the tip with no lift-off",
+        source: "MODEL.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
+        steps: vec![step("zmax", &["zmax", "--all"])],
+    });
+    v.push(Section {
         title: "PID and hybrid force/motion control in the SIL loop",
         source: "MODEL.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with HARDWARE.md's sensors",
         steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]
@@ -229,6 +246,7 @@ fn render_page(sections: &[Section], results: &[Vec<StepResult>], size: &str, wa
             }
             if let Some(v) = &r.summary {
                 scalar_table(&mut md, v);
+                nested_tables(&mut md, v);
             }
             for f in r.files.iter().filter(|f| f.ends_with(".svg")) {
                 let _ = writeln!(md, "![{f}]({f})\n");
@@ -255,6 +273,44 @@ fn scalar_table(md: &mut String, v: &Value) {
         let _ = writeln!(md, "| `{k}` | {s} |");
     }
     md.push('\n');
+}
+
+/// Rows shown of a table from a JSON array (the files hold the rest).
+const MAX_ROWS: usize = 60;
+
+/// The top-level objects of scalars (one-row tables) and arrays of objects
+/// (tables, one row per element) of a command's JSON document.
+fn nested_tables(md: &mut String, v: &Value) {
+    let Some(map) = v.as_object() else { return };
+    for (key, value) in map {
+        let rows: Vec<&serde_json::Map<String, Value>> = match value {
+            Value::Object(o) if !o.is_empty() && o.values().all(|x| scalar(x).is_some() || x.is_null()) => vec![o],
+            Value::Array(a) if !a.is_empty() && a.iter().all(Value::is_object) => a.iter().filter_map(Value::as_object).collect(),
+            _ => continue,
+        };
+        let mut columns: Vec<&String> = Vec::new();
+        for r in &rows {
+            for (k, x) in r.iter() {
+                if (scalar(x).is_some() || x.is_null()) && !columns.contains(&k) {
+                    columns.push(k);
+                }
+            }
+        }
+        if columns.is_empty() {
+            continue;
+        }
+        let _ = writeln!(md, "`{key}`:\n");
+        let _ =
+            writeln!(md, "| {} |\n|{}", columns.iter().map(|c| c.as_str()).collect::<Vec<_>>().join(" | "), "---|".repeat(columns.len()));
+        for r in rows.iter().take(MAX_ROWS) {
+            let cells: Vec<String> = columns.iter().map(|c| r.get(*c).and_then(scalar).unwrap_or_else(|| "-".into())).collect();
+            let _ = writeln!(md, "| {} |", cells.join(" | "));
+        }
+        if rows.len() > MAX_ROWS {
+            let _ = writeln!(md, "\n({} more rows in the files)", rows.len() - MAX_ROWS);
+        }
+        md.push('\n');
+    }
 }
 
 /// The runs of a section side by side: the scalar fields they share.
@@ -301,6 +357,20 @@ mod tests {
         scalar_table(&mut md, &v);
         assert!(md.contains("| `mu` | 0.6 |") && md.contains("| `n` | 3 |") && md.contains("a\\|b") && md.contains("| `ok` | true |"));
         assert!(!md.contains("list"), "arrays are not scalars");
+    }
+
+    #[test]
+    fn arrays_of_objects_and_objects_of_scalars_become_tables() {
+        let v: Value = serde_json::json!({
+            "counts": {"periodic": 3, "chaotic": 2},
+            "bands": [{"class": "periodic", "period": 2}, {"class": "chaotic", "period": null}],
+            "deep": {"a": {"b": 1}},
+        });
+        let mut md = String::new();
+        nested_tables(&mut md, &v);
+        assert!(md.contains("| chaotic | periodic |") && md.contains("| 2 | 3 |"), "{md}");
+        assert!(md.contains("| class | period |") && md.contains("| periodic | 2 |") && md.contains("| chaotic | - |"), "{md}");
+        assert!(!md.contains("deep"), "objects of objects are left to the files: {md}");
     }
 
     #[test]
