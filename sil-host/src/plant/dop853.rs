@@ -286,6 +286,11 @@ impl<S: OdeSystem + ?Sized> StepView<'_, S> {
         self.y_curr
     }
 
+    /// `f` at the start of the step (its first stage).
+    pub fn f_prev(&self) -> &OdeState {
+        &self.k[0]
+    }
+
     /// `f` at the end of the step (the FSAL stage).
     pub fn f_curr(&self) -> &OdeState {
         self.k_end

@@ -44,6 +44,7 @@
 //! [`EventKind::ConeViolation`] is reported per episode.
 
 pub mod dop853;
+pub mod extrema;
 pub mod impact;
 pub mod segment;
 pub mod trig;
@@ -60,6 +61,7 @@ use shared::{
 };
 
 use dop853::Dop853;
+pub use extrema::Extrema;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
 use segment::{Boundary, EventLocator, OdeState, Phase, Point, Segment};
 use trig::TrigCache;
@@ -412,6 +414,8 @@ pub struct Plant {
     solver: Dop853,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
+    /// Running maxima over the trajectory, when tracking ([`Plant::track_extrema`]).
+    extrema: Option<Extrema>,
 }
 
 /// Events at one instant after which the contact is held stuck (module docs, corner case).
@@ -457,6 +461,7 @@ impl Plant {
             solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
+            extrema: None,
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -557,6 +562,19 @@ impl Plant {
         &self.counters
     }
 
+    /// Starts (or restarts) tracking the maxima of `theta1_dot` and `z_n` over the
+    /// continuous trajectory from now on ([`Extrema`]), counting the current state.
+    pub fn track_extrema(&mut self) {
+        let mut e = Extrema::new();
+        e.observe_point(self.t, &self.y, self.arm.params.l);
+        self.extrema = Some(e);
+    }
+
+    /// The maxima since [`Plant::track_extrema`] was called (`None` if it was not).
+    pub fn extrema(&self) -> Option<&Extrema> {
+        self.extrema.as_ref()
+    }
+
     /// Evaluations of the vector field since creation (a cost measure).
     pub fn rhs_evaluations(&self) -> u64 {
         self.evals.get()
@@ -648,6 +666,11 @@ impl Plant {
                 }
             }
         }
+        // The state after an impact at the very end of the interval belongs to no step.
+        let l = self.arm.params.l;
+        if let Some(e) = self.extrema.as_mut() {
+            e.observe_point(self.t, &self.y, l);
+        }
         let f = match self.phase {
             Phase::Flight => [0.0, 0.0],
             _ => {
@@ -718,13 +741,14 @@ impl Plant {
             }
         }
         for h_max in [f64::INFINITY, remaining / 64.0] {
-            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0)?;
+            let (t1, y1, boundary, g_end, extrema) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0)?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.
                 continue;
             }
             self.t = t1;
             self.y = y1;
+            self.extrema = extrema;
             return Ok(boundary);
         }
         Err(SimError::MissedEvent { t: self.t, mode: self.mode().name() })
@@ -732,7 +756,8 @@ impl Plant {
 
     /// One solve over `[self.t, t_end]`, stopping at the first event (the plant's
     /// state is left unchanged). Returns the end time and state, the boundary hit (if
-    /// any) and the event function at the last accepted point.
+    /// any), the event function at the last accepted point, and the tracked maxima
+    /// updated over the solve (kept only if the solve is).
     fn solve_segment<C: Controller + ?Sized>(
         &mut self,
         ctrl: &C,
@@ -741,12 +766,21 @@ impl Plant {
         h_max: f64,
         start: &Point,
         g0: f64,
-    ) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
+    ) -> Result<(f64, OdeState, Option<Boundary>, f64, Option<Extrema>), SimError> {
         let solver = Dop853 { h_max, ..self.solver };
+        let mut extrema = self.extrema;
+        let (l, flight) = (self.arm.params.l, self.phase == Phase::Flight);
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
         let solved = solver
-            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| locator.on_step(step))
+            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
+                let control = locator.on_step(step);
+                if let Some(e) = extrema.as_mut() {
+                    let (t1, y1) = locator.hit.unwrap_or((step.t_curr(), *step.y_curr()));
+                    e.observe_step(step, t1, &y1, l, flight);
+                }
+                control
+            })
             .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
         let (g_end, hit) = (locator.g_prev, locator.hit);
         self.last_h = solved.h_next;
@@ -755,12 +789,12 @@ impl Plant {
                 return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
             }
             let boundary = self.segment(ctrl).nearest_boundary(t1, &y1).0;
-            return Ok((t1, y1, Some(boundary), 0.0));
+            return Ok((t1, y1, Some(boundary), 0.0, extrema));
         }
         if !solved.y.iter().all(|v| v.is_finite()) {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
-        Ok((t_end, solved.y, None, g_end))
+        Ok((t_end, solved.y, None, g_end, extrema))
     }
 
     /// Handles the crossing of a mode boundary at the current time.
