@@ -31,6 +31,9 @@ pub enum CliError {
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] crate::sil::record::RunError),
+    /// The command was stopped (Ctrl-C, SIGTERM) part way; what it computed is kept.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

@@ -10,6 +10,7 @@ pub mod output;
 pub mod plant;
 pub mod plot;
 pub mod sil;
+pub mod sweep;
 
 use clap::Parser;
 
@@ -34,6 +35,8 @@ where
         cli::Command::Modes(args) => commands::modes::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
+        cli::Command::Sweep(args) => commands::sweep::run(&args),
+        cli::Command::Merge(args) => commands::sweep::merge(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

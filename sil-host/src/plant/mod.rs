@@ -348,6 +348,9 @@ pub struct Counters {
     pub lift_offs: u64,
     /// Touchdowns with an impact.
     pub touchdowns: u64,
+    /// Touchdowns after which the tip flew off again at once (a bounce: the tip
+    /// leaves the belt without a `lift_offs` event).
+    pub bounces: u64,
     /// Impacts without collision.
     pub impacts_without_collision: u64,
     /// Times `p` reached 0 while sliding.
@@ -858,6 +861,7 @@ impl Plant {
             let after = self.rel_velocity();
             if after[1] > self.cfg.zeno_velocity {
                 self.phase = Phase::Flight;
+                self.counters.bounces += 1;
                 self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
                 self.check_energy(events, &imp, de, before);
                 return Ok(());
