@@ -51,6 +51,11 @@ pub struct Timing {
     pub simulated_s: f64,
     /// Simulated seconds per wall second per worker thread.
     pub simulated_s_per_wall_s_per_core: f64,
+    /// CPU time (user + system) of the process during the runs, s.
+    pub cpu_s: f64,
+    /// Simulated seconds per CPU second (what a core does when not shared with
+    /// other work: on a loaded machine the wall-clock rate is lower).
+    pub simulated_s_per_cpu_s: f64,
     /// The paper's full open-loop grid (3620 runs of 300 s) at this rate on
     /// `threads` cores, s (an extrapolation: the cost per simulated second varies
     /// over the grid, bouncing runs costing most).
@@ -186,6 +191,17 @@ fn dedup<T: PartialEq>(it: impl Iterator<Item = T>) -> Vec<T> {
     v
 }
 
+/// User plus system CPU time of this process so far, s (getrusage).
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+        return f64::NAN;
+    }
+    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    tv(u.ru_utime) + tv(u.ru_stime)
+}
+
 /// Ctrl-C and SIGTERM set a flag the workers check between runs and inside them.
 fn stop_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
@@ -241,6 +257,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let failure: Mutex<Option<CliError>> = Mutex::new(None);
     let done = AtomicU64::new(0);
     let started = Instant::now();
+    let cpu_start = cpu_seconds();
     pool.install(|| {
         todo.par_iter().with_max_len(1).for_each(|&index| {
             if stop.load(Ordering::Relaxed) {
@@ -259,6 +276,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
         });
     });
     let wall_s = started.elapsed().as_secs_f64();
+    let cpu_s = cpu_seconds() - cpu_start;
     progress.finish_and_clear();
     drop(writer);
     if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
@@ -273,6 +291,8 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
         wall_s,
         simulated_s,
         simulated_s_per_wall_s_per_core: rate,
+        cpu_s,
+        simulated_s_per_cpu_s: simulated_s / cpu_s.max(1e-9),
         paper_grid_projection_s: if rate > 0.0 { PAPER_GRID_SIMULATED_S / (rate * threads as f64) } else { f64::NAN },
     };
     let interrupted = stop.load(Ordering::Relaxed) && computed < todo.len();
@@ -396,11 +416,12 @@ fn report(s: &SweepSummary, json: bool) {
     {
         let _ = writeln!(
             o,
-            "speed: {} runs in {:.1} s on {} threads: {:.0} simulated s per wall s per core; the paper's full grid (3620 x 300 s) would take {:.1} min at this rate",
+            "speed: {} runs in {:.1} s on {} threads: {:.0} simulated s per wall s per core ({:.0} per CPU s); the paper's full grid (3620 x 300 s) would take {:.1} min at this rate",
             t.runs_computed,
             t.wall_s,
             t.threads,
             t.simulated_s_per_wall_s_per_core,
+            t.simulated_s_per_cpu_s,
             t.paper_grid_projection_s / 60.0
         );
     }

@@ -74,9 +74,10 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
             .build_cartesian_2d(x_range.clone(), y_range.clone())
             .map_err(|e| err(&e))?;
         chart.configure_mesh().x_desc("v_belt (m/s)").y_desc("mu").disable_mesh().draw().map_err(|e| err(&e))?;
-        let cells = rows.iter().filter(|r| r.ic == ic.name).map(|r| {
-            Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv, r.mu + dmu)], outcome_color(r.outcome).filled())
-        });
+        let cells = rows
+            .iter()
+            .filter(|r| r.ic == ic.name)
+            .map(|r| Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv, r.mu + dmu)], outcome_color(r.outcome).filled()));
         chart.draw_series(cells).map_err(|e| err(&e))?;
     }
     root.present().map_err(|e| err(&e))

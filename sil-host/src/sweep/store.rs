@@ -46,8 +46,9 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(CliError::BadInput(format!("cannot read {}: {e}", path.display()))),
     };
-    let m: Manifest = serde_json::from_str(&text)
-        .map_err(|e| CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), super::FORMAT)))?;
+    let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+        CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), super::FORMAT))
+    })?;
     Ok(Some(m))
 }
 
@@ -154,7 +155,11 @@ pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliErro
             return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));
         }
         let key = m.spec.run_at(row.index);
-        if row.mu != key.mu || row.v_belt != key.v_belt || row.e_n != key.e_n || row.impact_law != key.impact_law.name() || row.ic != ics[key.i_ic].name
+        if row.mu != key.mu
+            || row.v_belt != key.v_belt
+            || row.e_n != key.e_n
+            || row.impact_law != key.impact_law.name()
+            || row.ic != ics[key.i_ic].name
         {
             return Err(bad(format!("run {} has other parameters than this sweep's", row.index)));
         }

@@ -1,14 +1,23 @@
 //! What a sweep found: per impact law and `e_n`, and per initial condition (and
 //! for any of them), the critical friction coefficient (the smallest `mu` with
 //! persistent bouncing at some belt speed) and, for each `mu`, the belt-speed
-//! bands of persistent bouncing (maximal runs of neighbouring grid speeds where
-//! the paper's indicator is flagged).
+//! bands of persistent bouncing (maximal runs of neighbouring grid speeds).
+//!
+//! Persistent bouncing at a grid point: the paper's indicator flagged
+//! (`max theta1_dot` over the record window above the threshold) *and* the tip
+//! left the belt in the record window ([`Outcome::Bouncing`]). The indicator alone
+//! also flags an arm that moves on the belt without leaving it (in closed loop the
+//! controller's answers to sensor noise keep `theta1_dot` near 1e-2 rad/s); those
+//! points are counted separately (`indicator_points`).
 
 use std::{collections::BTreeMap, io::Write};
 
 use serde::Serialize;
 
-use super::{SweepSpec, run::RunRow};
+use super::{
+    SweepSpec,
+    run::{Outcome, RunRow},
+};
 
 /// A band of neighbouring grid belt speeds with persistent bouncing, m/s.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -28,6 +37,8 @@ pub struct MuBands {
     pub mu: f64,
     /// Grid points with persistent bouncing.
     pub bouncing_points: usize,
+    /// Grid points where the paper's indicator alone is flagged (with or without lift-off).
+    pub indicator_points: usize,
     /// Grid points with a result.
     pub points: usize,
     /// The bands, by increasing speed.
@@ -79,25 +90,25 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     for r in rows {
         *outcomes.entry(r.outcome.name().to_string()).or_insert(0) += 1;
     }
-    // flags[case][ic][i_mu][i_v]: Some(bouncing) when there is a result.
+    // flags[case][ic][i_mu][i_v]: Some((persistent bouncing, indicator)) when there is a result.
     let n_cases = spec.impact_laws.len() * spec.e_n.len();
-    let mut flags = vec![vec![vec![vec![None::<bool>; vs.len()]; mus.len()]; ics.len()]; n_cases];
+    let mut flags = vec![vec![vec![vec![None::<Flags>; vs.len()]; mus.len()]; ics.len()]; n_cases];
     for r in rows {
         let key = spec.run_at(r.index);
         let case = r.index / (ics.len() * vs.len() * mus.len());
-        flags[case][key.i_ic][key.i_mu][key.i_v] = Some(r.bouncing);
+        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome == Outcome::Bouncing, r.bouncing));
     }
     let mut cases = Vec::new();
     for (case, per_ic) in flags.iter().enumerate() {
         let first = spec.run_at(case * ics.len() * vs.len() * mus.len());
         let mut list: Vec<IcResults> = per_ic.iter().zip(&ics).map(|(grid, ic)| ic_results(&ic.name, grid, &mus, &vs)).collect();
         if ics.len() > 1 {
-            let any: Vec<Vec<Option<bool>>> = (0..mus.len())
+            let any: Vec<Vec<Option<Flags>>> = (0..mus.len())
                 .map(|m| {
                     (0..vs.len())
                         .map(|v| {
-                            let vals: Vec<bool> = per_ic.iter().filter_map(|g| g[m][v]).collect();
-                            (!vals.is_empty()).then(|| vals.iter().any(|&b| b))
+                            let vals: Vec<Flags> = per_ic.iter().filter_map(|g| g[m][v]).collect();
+                            (!vals.is_empty()).then(|| (vals.iter().any(|f| f.0), vals.iter().any(|f| f.1)))
                         })
                         .collect()
                 })
@@ -109,13 +120,16 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     Results { runs: rows.len(), missing, outcomes, threshold: spec.threshold, cases }
 }
 
-fn ic_results(name: &str, grid: &[Vec<Option<bool>>], mus: &[f64], vs: &[f64]) -> IcResults {
+/// Persistent bouncing, and the paper's indicator flagged.
+type Flags = (bool, bool);
+
+fn ic_results(name: &str, grid: &[Vec<Option<Flags>>], mus: &[f64], vs: &[f64]) -> IcResults {
     let mut per_mu = Vec::new();
     for (m, row) in grid.iter().enumerate() {
         let mut bands: Vec<Band> = Vec::new();
         let mut open: Option<usize> = None;
         for v in 0..=row.len() {
-            let on = v < row.len() && row[v] == Some(true);
+            let on = v < row.len() && row[v].is_some_and(|f| f.0);
             match (on, open) {
                 (true, None) => open = Some(v),
                 (false, Some(s)) => {
@@ -127,7 +141,8 @@ fn ic_results(name: &str, grid: &[Vec<Option<bool>>], mus: &[f64], vs: &[f64]) -
         }
         per_mu.push(MuBands {
             mu: mus[m],
-            bouncing_points: row.iter().filter(|f| **f == Some(true)).count(),
+            bouncing_points: row.iter().filter(|f| f.is_some_and(|f| f.0)).count(),
+            indicator_points: row.iter().filter(|f| f.is_some_and(|f| f.1)).count(),
             points: row.iter().filter(|f| f.is_some()).count(),
             bands,
         });
@@ -150,7 +165,7 @@ fn fmt_bands(b: &MuBands) -> String {
 pub fn print_table(o: &mut dyn Write, r: &Results) {
     let _ = writeln!(
         o,
-        "persistent bouncing: max theta1_dot over the record window > {:e} rad/s (the paper's threshold: > 0)",
+        "persistent bouncing: max theta1_dot over the record window > {:e} rad/s (the paper's indicator; its threshold: > 0) with lift-offs in the window",
         r.threshold
     );
     for c in &r.cases {
@@ -158,19 +173,15 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         let crit: Vec<String> =
             c.ics.iter().map(|i| format!("{} {}", i.ic, i.critical_mu.map_or("none".into(), |m| format!("{m}")))).collect();
         let _ = writeln!(o, "  critical mu: {}", crit.join(", "));
-        let width = 30;
-        let _ = write!(o, "  {:>5}", "mu");
-        for i in &c.ics {
-            let _ = write!(o, "  {:<width$}", format!("{} v_belt bands (m/s)", i.ic));
-        }
-        let _ = writeln!(o);
+        let _ =
+            writeln!(o, "  {:>5}  {:<5} {:>9} {:>9}  belt-speed bands of persistent bouncing (m/s)", "mu", "ic", "bouncing", "indicator");
         let n_mu = c.ics.first().map_or(0, |i| i.per_mu.len());
         for m in 0..n_mu {
-            let _ = write!(o, "  {:>5}", c.ics[0].per_mu[m].mu);
-            for i in &c.ics {
-                let _ = write!(o, "  {:<width$}", fmt_bands(&i.per_mu[m]));
+            for (k, i) in c.ics.iter().enumerate() {
+                let b = &i.per_mu[m];
+                let mu = if k == 0 { format!("{}", b.mu) } else { String::new() };
+                let _ = writeln!(o, "  {:>5}  {:<5} {:>9} {:>9}  {}", mu, i.ic, b.bouncing_points, b.indicator_points, fmt_bands(b));
             }
-            let _ = writeln!(o);
         }
     }
     if r.cases.len() > 1 {
@@ -178,19 +189,32 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         for c in &r.cases {
             if let Some(any) = c.ics.last() {
                 let points: usize = any.per_mu.iter().map(|m| m.bouncing_points).sum();
+                let widest = any
+                    .per_mu
+                    .iter()
+                    .flat_map(|m| m.bands.iter().map(move |b| (m.mu, *b)))
+                    .max_by_key(|(_, b)| b.points)
+                    .map_or("-".into(), |(mu, b)| format!("mu {mu}: [{:.3}, {:.3}]", b.v_min, b.v_max));
                 let _ = writeln!(
                     o,
-                    "  {:<8} e_n {:<5} critical mu {:<6} bouncing grid points {}",
+                    "  {:<8} e_n {:<5} critical mu {:<6} bouncing grid points {:<6} widest band {}",
                     c.impact_law,
                     c.e_n,
                     any.critical_mu.map_or("none".into(), |m| format!("{m}")),
-                    points
+                    points,
+                    widest
                 );
             }
         }
     }
     let outcomes: Vec<String> = r.outcomes.iter().map(|(k, v)| format!("{k} {v}")).collect();
-    let _ = writeln!(o, "\nruns: {} ({}){}", r.runs, outcomes.join(", "), if r.missing > 0 { format!(", {} missing", r.missing) } else { String::new() });
+    let _ = writeln!(
+        o,
+        "\nruns: {} ({}){}",
+        r.runs,
+        outcomes.join(", "),
+        if r.missing > 0 { format!(", {} missing", r.missing) } else { String::new() }
+    );
 }
 
 #[cfg(test)]
@@ -200,7 +224,8 @@ mod tests {
     #[test]
     fn bands_are_maximal_runs_of_flagged_speeds() {
         let vs = [-1.0, -0.9, -0.8, -0.7, -0.6];
-        let grid = vec![vec![Some(false); 5], vec![Some(true), Some(true), Some(false), None, Some(true)]];
+        let (on, off) = (Some((true, true)), Some((false, true)));
+        let grid = vec![vec![off; 5], vec![on, on, off, None, on]];
         let r = ic_results("x", &grid, &[0.1, 0.2], &vs);
         assert_eq!(r.critical_mu, Some(0.2));
         assert!(r.per_mu[0].bands.is_empty());
@@ -208,6 +233,7 @@ mod tests {
         assert_eq!(b.len(), 2);
         assert_eq!((b[0].v_min, b[0].v_max, b[0].points), (-1.0, -0.9, 2));
         assert_eq!((b[1].v_min, b[1].v_max, b[1].points), (-0.6, -0.6, 1));
-        assert_eq!((r.per_mu[1].bouncing_points, r.per_mu[1].points), (3, 4));
+        assert_eq!((r.per_mu[1].bouncing_points, r.per_mu[1].indicator_points, r.per_mu[1].points), (3, 4, 4));
+        assert_eq!(r.per_mu[0].indicator_points, 5);
     }
 }
