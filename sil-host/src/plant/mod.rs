@@ -732,7 +732,8 @@ impl Plant {
     /// return that fits inside the first step, so the first step is kept inside the
     /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
     /// segment that ends outside its domain without an event is integrated again
-    /// with steps capped at 1/64 of the interval, and fails if that still misses it.
+    /// with steps capped at 1/64 of the interval and at most 1 ms, then 10 us, and
+    /// fails if that still misses it.
     fn integrate<C: Controller + ?Sized>(&mut self, ctrl: &C, t_end: f64, start: &Point, g0: f64) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
         let mut h0 = self.last_h.min(remaining);
@@ -743,7 +744,11 @@ impl Plant {
                 h0 = h0.min(td.z_dot[1] / -td.b());
             }
         }
-        for h_max in [f64::INFINITY, remaining / 64.0] {
+        // Retries cap the steps at 1/64 of the interval, and also at 1 ms then 10 us:
+        // over a long interval (open-loop runs advance by seconds) 1/64 of it can
+        // still hold a whole excursion out of the domain and back, e.g. a slip from
+        // rest that stops again within milliseconds.
+        for h_max in [f64::INFINITY, (remaining / 64.0).min(1e-3), (remaining / 64.0).min(1e-5)] {
             let (t1, y1, boundary, g_end, extrema) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0)?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.

@@ -394,3 +394,18 @@ fn tracked_maxima_match_a_fine_sampling() {
     assert!(e.z_n_max >= z_n_max - 1e-8 && e.z_n_max - z_n_max < 1e-7, "{} vs {z_n_max}", e.z_n_max);
     assert!(e.interior_refinements > 0);
 }
+
+/// A slip from rest that reverses and stops again within 7 ms (x0d, mu 0.1,
+/// v_belt -0.26 m/s) is found when the plant is advanced by one long interval (the
+/// open-loop sweep's), with the same events as with 1 ms intervals.
+#[test]
+fn short_slip_excursions_are_found_in_long_intervals() {
+    let params = Params::new(0.1, -0.26).unwrap();
+    let kinds = |dt: f64| -> Vec<EventKind> {
+        let mut p = plant_from(params, SimConfig::default(), X0D.deg);
+        run_events(&mut p, 1.0, dt).iter().take(4).map(|e| e.kind).collect()
+    };
+    let long = kinds(1.0);
+    assert_eq!(long, [EventKind::SlipReversal, EventKind::SlipToStick, EventKind::StickToSlip, EventKind::LiftOff]);
+    assert_eq!(long, kinds(1e-3));
+}
