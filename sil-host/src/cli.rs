@@ -73,6 +73,18 @@ pub enum Command {
     /// Exit codes: 0 merged; 2 folders of different sweeps, runs missing (unless
     /// --allow-missing) or conflicting.
     Merge(MergeArgs),
+    /// Z_t,sliding (MODEL.md experiments 5 and 6): the largest tangential target z_t*
+    /// the tip reaches with no lift-off, by bisection on z_t*, for the PID or the
+    /// hybrid controller from x0d or x0u, with the paper's ideal controllers
+    /// (--ideal: continuous time, exact measurements) or the sampled firmware
+    /// (in-process, 1 kHz, quantised sensors and torques). --all: the eight cases
+    /// in parallel. A target is reached when, over the whole run, the tip never
+    /// leaves the belt (no lift-off, not even between samples, no impact without
+    /// collision), the run ends normally, and |z_t - z_t*| <= --settle-tol over the
+    /// last --settle-window s. Writes zmax.csv, trials.csv, summary.json and one
+    /// figure per case (the run at the limit).
+    #[command(allow_negative_numbers = true)]
+    Zmax(ZmaxArgs),
     /// Speed of the rig on the default scenario: control periods per wall second
     /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
     /// percentiles), and optionally a real-time run (jitter, step time, misses).
@@ -94,6 +106,59 @@ pub struct BenchArgs {
     /// Print one JSON document instead of the table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `sil-host zmax`.
+#[derive(Debug, Clone, Args)]
+pub struct ZmaxArgs {
+    /// Controller (ignored with --all).
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub controller: ControllerArg,
+    /// Initial condition (ignored with --all).
+    #[arg(long, value_enum, default_value = "d")]
+    pub x0: ZmaxX0,
+    /// The paper's ideal controllers (continuous time, exact measurements, no
+    /// saturation) instead of the sampled firmware (ignored with --all).
+    #[arg(long)]
+    pub ideal: bool,
+    /// All eight cases (pid/hybrid x x0d/x0u x ideal/sampled), in parallel, as a table.
+    #[arg(long)]
+    pub all: bool,
+    /// Bisection tolerance on z_t*, m.
+    #[arg(long, default_value_t = 1e-3)]
+    pub tol: f64,
+    /// Targets searched, m: LO,HI. Default: from the initial tip position
+    /// (z_t* = start) to 1 mm short of the end of the reachable belt.
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    pub bracket: Option<String>,
+    /// Run length of a trial, s (the move takes the scenario's move_time_s, 2 s).
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Largest |z_t - z_t*| over the settle window for the target to count as reached, m.
+    #[arg(long, default_value_t = 1e-3)]
+    pub settle_tol: f64,
+    /// The last part of the run where the tip must be within --settle-tol, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub settle_window: f64,
+    /// Base scenario of the sampled setting (rate, sensors, mu, v_belt, f_n*, move
+    /// time, ...); its controller, initial condition, K'_I (the paper's: 650 from
+    /// x0d, 0 from x0u), target and run length are set per trial. The ideal setting
+    /// takes mu, v_belt, f_n*, the move time and the plant settings from it.
+    /// Default: the embedded default scenario.
+    #[arg(long, value_name = "FILE.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Initial condition of experiments 5 and 6.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ZmaxX0 {
+    /// x0d = [-11.4 deg, 0, -35.1 deg, 0], elbow down.
+    D,
+    /// x0u = [-35.1 deg, 0, -11.4 deg, 0], elbow up.
+    U,
 }
 
 /// The scenario of a run and its command-line overrides.

@@ -5,12 +5,14 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod ideal;
 pub mod initial;
 pub mod output;
 pub mod plant;
 pub mod plot;
 pub mod sil;
 pub mod sweep;
+pub mod zmax;
 
 use clap::Parser;
 
@@ -37,6 +39,7 @@ where
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Sweep(args) => commands::sweep::run(&args),
         cli::Command::Merge(args) => commands::sweep::merge(&args),
+        cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

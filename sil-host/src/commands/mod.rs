@@ -6,6 +6,7 @@ pub mod modes;
 pub mod run;
 pub mod simulate;
 pub mod sweep;
+pub mod zmax;
 
 /// Parses `"MIN,MAX"` into a range, naming the flag in the error.
 pub fn parse_range(flag: &str, s: &str) -> Result<(f64, f64), crate::error::CliError> {

@@ -63,7 +63,8 @@ use shared::{
 use dop853::Dop853;
 pub use extrema::Extrema;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
-use segment::{Boundary, EventLocator, OdeState, Phase, Point, Segment};
+pub use segment::Phase;
+use segment::{Boundary, EventLocator, OdeState, Point, Segment};
 use trig::TrigCache;
 
 /// A torque law the plant evaluates inside the integration.
@@ -80,6 +81,16 @@ pub trait Controller {
     /// The contact force depends on the torque (through `b`), so a law that needs
     /// it computes it from the shared model itself (`shared::contact`).
     fn torque(&self, t: f64, x: &[f64; 4], xi: &[f64; 2], xi_dot: &mut [f64; 2]) -> [f64; 2];
+
+    /// As [`Controller::torque`], told the contact phase the plant integrates in
+    /// (flight, sliding in a direction, or sticking): what a law with exact contact
+    /// measurements knows (e.g. the paper's hybrid law, whose friction term is the
+    /// true `f_t`, zero in flight). The plant always calls this one; the default
+    /// ignores the phase.
+    fn torque_in(&self, phase: Phase, t: f64, x: &[f64; 4], xi: &[f64; 2], xi_dot: &mut [f64; 2]) -> [f64; 2] {
+        let _ = phase;
+        self.torque(t, x, xi, xi_dot)
+    }
 }
 
 /// Zero-order hold: motor torques `[u1, u2]` (N m) held constant over the interval.
@@ -527,6 +538,11 @@ impl Plant {
         }
     }
 
+    /// The phase the integrator runs in (the contact mode with its slip direction).
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
     /// Slip direction while sliding.
     pub fn slip_direction(&self) -> Option<SlipDirection> {
         match self.phase {
@@ -548,9 +564,13 @@ impl Plant {
 
     /// Contact force `[f_t, f_n]` (N) in the current mode under motor torques `u` (N m).
     pub fn contact_force(&self, u: [f64; 2]) -> [f64; 2] {
-        let hold = Hold(u);
-        let seg = self.segment(&hold);
-        let (_, f, _) = seg.evaluate(self.t, &self.y, &mut [0.0; 2]);
+        self.contact_force_with(&Hold(u))
+    }
+
+    /// Contact force `[f_t, f_n]` (N) in the current mode under the torque law `ctrl`
+    /// (evaluated at the current time, state and controller states).
+    pub fn contact_force_with<C: Controller + ?Sized>(&self, ctrl: &C) -> [f64; 2] {
+        let (_, f, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
         [f[0], f[1]]
     }
 

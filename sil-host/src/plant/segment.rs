@@ -110,7 +110,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     pub fn evaluate(&self, t: f64, y: &OdeState, xi_dot: &mut [f64; 2]) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
         let (q, qd) = split(y);
         let xi = [y[4], y[5]];
-        let motor = self.ctrl.torque(t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
+        let motor = self.ctrl.torque_in(self.phase, t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
         let td = self.arm.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
         let f = match self.phase {

@@ -5,10 +5,12 @@
 use firmware::board::FrozenClock;
 use shared::wire::{GroundTruth, SensorFrame};
 
+use crate::plant::PlantEvent;
+
 use super::{
     firmware_side::FirmwareSide,
     record::{PeriodRecord, RunError},
-    rig::{Exchange, FirmwareLink, run_loop},
+    rig::{Exchange, FirmwareLink, run_loop, run_loop_observed},
     scenario::Scenario,
 };
 
@@ -57,6 +59,19 @@ pub fn run(s: &Scenario, mut on_period: impl FnMut(usize, usize)) -> (Vec<Period
         },
         |_| {},
     )
+}
+
+/// As [`run`], handing every plant event to `on_events` (see
+/// [`super::rig::run_loop_observed`]).
+pub fn run_observed(
+    s: &Scenario,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_events: impl FnMut(&[PlantEvent]),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    match InProcessLink::new(s) {
+        Ok(mut link) => run_loop_observed(s, &mut link, on_period, |_| {}, on_events),
+        Err(e) => (Vec::new(), Some(e)),
+    }
 }
 
 /// As [`run`], handing every sensor frame to `on_frame` as it goes on the wire

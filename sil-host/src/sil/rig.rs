@@ -22,7 +22,7 @@ use super::{
     sensors::Sensors,
     setup::plant_for,
 };
-use crate::plant::Plant;
+use crate::plant::{Plant, PlantEvent};
 
 /// The answer to one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -122,7 +122,8 @@ impl PeriodLoop {
 
     /// Runs one period: samples `plant` into a frame (handed to `on_frame`), gets the
     /// command over `link` and advances the plant to the next sample time under the
-    /// zero-order hold. Returns the period's record.
+    /// zero-order hold, handing `on_events` the plant's events at their exact times.
+    /// Returns the period's record.
     ///
     /// # Errors
     /// The link's failure (no record), or the firmware's safe state or a plant
@@ -132,6 +133,7 @@ impl PeriodLoop {
         plant: &mut Plant,
         link: &mut dyn FirmwareLink,
         on_frame: &mut dyn FnMut(&SensorFrame),
+        on_events: &mut dyn FnMut(&[PlantEvent]),
     ) -> Result<PeriodRecord, (Option<PeriodRecord>, RunError)> {
         let k = self.k;
         let (ts, faults) = (self.ts, &self.faults);
@@ -203,11 +205,17 @@ impl PeriodLoop {
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
         let step = match switch {
-            Some(at) => plant.advance(applied, at).and_then(|_| plant.advance(u_new, t_next - plant.time())),
+            Some(at) => plant.advance(applied, at).and_then(|r| {
+                on_events(&r.events);
+                plant.advance(u_new, t_next - plant.time())
+            }),
             None => plant.advance(applied, t_next - plant.time()),
         };
         match step {
-            Ok(r) => self.f_now = r.f,
+            Ok(r) => {
+                on_events(&r.events);
+                self.f_now = r.f;
+            }
             Err(e) => return Err((Some(record), e.into())),
         }
         self.applied = u_new;
@@ -227,20 +235,34 @@ impl PeriodLoop {
 pub fn run_loop(
     s: &Scenario,
     link: &mut dyn FirmwareLink,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_observed(s, link, on_period, on_frame, |_| {})
+}
+
+/// As [`run_loop`], handing `on_events` every plant event at its exact time (the
+/// start-up events, then those of each interval): lift-offs between two samples
+/// included, which the per-period records cannot show.
+pub fn run_loop_observed(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
     mut on_period: impl FnMut(usize, usize) -> bool,
     mut on_frame: impl FnMut(&SensorFrame),
+    mut on_events: impl FnMut(&[PlantEvent]),
 ) -> (Vec<PeriodRecord>, Option<RunError>) {
     let mut records = Vec::new();
     let mut plant = match plant_for(s) {
         Ok(p) => p,
         Err(e) => return (records, Some(e.into())),
     };
+    on_events(plant.startup_events());
     let mut periods = PeriodLoop::new(s, &plant);
     let n = periods.periods_in(s.timing.duration_s);
     records.reserve(n);
     let mut failure = None;
     for k in 0..n {
-        match periods.period(&mut plant, link, &mut on_frame) {
+        match periods.period(&mut plant, link, &mut on_frame, &mut on_events) {
             Ok(r) => records.push(r),
             Err((r, e)) => {
                 records.extend(r);
