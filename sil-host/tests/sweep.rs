@@ -179,3 +179,21 @@ fn closed_loop_hybrid_keeps_the_tip_on_the_belt() {
     assert_ne!(rows[0]["outcome"], "bouncing");
     assert_eq!(s["results"]["cases"][0]["ics"][0]["critical_mu"], serde_json::Value::Null);
 }
+
+/// The paper's continuous-time hybrid law (--ideal) from x0d and x0u at mu 0.6
+/// holds the tip on the belt across belt speeds (experiment 6's set-up): no
+/// lift-off, no bouncing band.
+#[test]
+fn closed_loop_ideal_hybrid_keeps_the_tip_on_the_belt() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sil_host()
+        .args(["sweep", "--controller", "hybrid", "--ideal", "--ics", "d,u", "--mu", "0.6", "--v-belt=-0.6,-0.2", "--v-belt-step", "0.2"])
+        .args(["--transient", "3", "--record", "1", "--json", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let s = ok(&out);
+    assert_eq!(s["spec"]["ideal"], true);
+    assert_eq!(s["results"]["runs"], 6);
+    assert_eq!(s["results"]["outcomes"]["contact"], 6, "{}", s["results"]);
+}

@@ -173,11 +173,6 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         atol: args.atol,
     };
     spec.validate().map_err(CliError::BadInput)?;
-    if spec.ideal {
-        return Err(CliError::BadInput(
-            "--ideal (the paper's continuous-time controller) is not available in this build: sil-host/src/ideal.rs has not been merged yet".into(),
-        ));
-    }
     Ok(spec)
 }
 

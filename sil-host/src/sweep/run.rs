@@ -5,7 +5,10 @@
 //! in [`CHUNK_S`] intervals only to check for an interruption between them.
 //! Closed loop, the firmware step runs in-process, sampled as on the MCU, through
 //! the SIL rig's [`PeriodLoop`] (sensors, quantisation, zero-order hold, the
-//! scenario's delay).
+//! scenario's delay); with `--ideal`, the paper's continuous-time law with exact
+//! measurements ([`crate::ideal`]) is evaluated inside the plant's integration,
+//! which again takes its own steps (advanced in [`CHUNK_S`] intervals), with the
+//! same references, gains and `f_n*` as the scenario's.
 //!
 //! Measured over the record window:
 //! - `theta1_dot_max`, the paper's indicator, and `z_n_max`, the highest tip
@@ -22,6 +25,7 @@ use shared::{ContactMode, Params};
 
 use super::{InitialCondition, RunKey, SweepController, SweepSpec};
 use crate::{
+    ideal::{self, ControllerKind, IdealLaw, IdealSetup},
     plant::{Counters, Plant, SimConfig},
     sil::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario},
 };
@@ -49,7 +53,9 @@ pub enum Outcome {
     Contact,
     /// Off the belt and at rest (the tip left it and stayed in the air).
     Flight,
-    /// Closed loop: the firmware latched its safe state (the run stops there).
+    /// Closed loop: the firmware latched its safe state (the run stops there), or
+    /// the ideal law met a fault (singular arm, unreachable reference) and output
+    /// zero torque from then on.
     SafeState,
     /// The simulation failed (see `error`).
     Failed,
@@ -151,16 +157,25 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         rhs_evaluations: 0,
         error: String::new(),
     };
-    let mut plant = match Plant::new(params, sim, ic.x0, 0.0, [0.0, 0.0]) {
+    let built = match (spec.ideal, closed_loop_scenario(spec, key, ic)) {
+        (true, Some(s)) => ideal::build(&ideal_setup(&s, ic, sim)).map(|(p, law)| (p, Some(law))),
+        _ => Plant::new(params, sim, ic.x0, 0.0, [0.0, 0.0]).map(|p| (p, None)),
+    };
+    let (mut plant, law) = match built {
         Ok(p) => p,
         Err(e) => {
             row.error = e.to_string();
             return Some(row);
         }
     };
-    let ended = match spec.controller {
-        SweepController::None => open_loop(spec, &mut plant, stop),
+    let ended = match (spec.controller, &law) {
+        (SweepController::None, _) => windows(spec, &mut plant, stop, |p, dt| p.advance([0.0, 0.0], dt).map(drop)),
+        (_, Some(law)) => windows(spec, &mut plant, stop, |p, dt| p.advance_with(law, dt).map(drop)),
         _ => closed_loop(spec, key, ic, &mut plant, stop),
+    };
+    let ended = match (ended, law.as_ref().and_then(IdealLaw::fault)) {
+        (Ended::Done(start), Some(fault)) => Ended::Stopped { start, error: format!("ideal law: {fault}"), safe_state: true },
+        (e, _) => e,
     };
     let (start, error) = match ended {
         Ended::Interrupted => return None,
@@ -207,31 +222,62 @@ enum Ended {
     Interrupted,
 }
 
-/// Advances `plant` by `duration` s in [`CHUNK_S`] intervals under zero torque.
-fn advance_open(plant: &mut Plant, duration: f64, stop: &AtomicBool) -> Result<bool, String> {
+/// Advances `plant` by `duration` s in [`CHUNK_S`] intervals with `advance(plant, dt)`.
+fn advance_by(
+    plant: &mut Plant,
+    duration: f64,
+    stop: &AtomicBool,
+    advance: &mut impl FnMut(&mut Plant, f64) -> Result<(), crate::plant::SimError>,
+) -> Result<bool, String> {
     let t_end = plant.time() + duration;
     while t_end - plant.time() > 1e-12 * t_end.max(1.0) {
         if stop.load(Ordering::Relaxed) {
             return Ok(false);
         }
         let dt = (t_end - plant.time()).min(CHUNK_S);
-        plant.advance([0.0, 0.0], dt).map_err(|e| e.to_string())?;
+        advance(plant, dt).map_err(|e| e.to_string())?;
     }
     Ok(true)
 }
 
-fn open_loop(spec: &SweepSpec, plant: &mut Plant, stop: &AtomicBool) -> Ended {
-    match advance_open(plant, spec.transient_s, stop) {
+/// The transient then the record window, the plant taking its own steps under a
+/// torque law inside `advance` (zero torque, or an ideal controller).
+fn windows(
+    spec: &SweepSpec,
+    plant: &mut Plant,
+    stop: &AtomicBool,
+    mut advance: impl FnMut(&mut Plant, f64) -> Result<(), crate::plant::SimError>,
+) -> Ended {
+    match advance_by(plant, spec.transient_s, stop, &mut advance) {
         Ok(true) => {}
         Ok(false) => return Ended::Interrupted,
         Err(error) => return Ended::Stopped { start: None, error, safe_state: false },
     }
     plant.track_extrema();
     let start = Some(*plant.counters());
-    match advance_open(plant, spec.record_s, stop) {
+    match advance_by(plant, spec.record_s, stop, &mut advance) {
         Ok(true) => Ended::Done(start),
         Ok(false) => Ended::Interrupted,
         Err(error) => Ended::Stopped { start, error, safe_state: false },
+    }
+}
+
+/// The ideal (continuous-time) set-up of a closed-loop run's scenario `s`: its
+/// controller, reference (`z_t*`, move time), `f_n*` and `K'_I`, from `ic`.
+fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetup {
+    IdealSetup {
+        controller: if s.controller.kind == "pid" { ControllerKind::Pid } else { ControllerKind::Hybrid },
+        x0: ic.x0,
+        mu: s.plant.mu,
+        v_belt: s.plant.v_belt,
+        target_z_t: s.controller.target_z_t,
+        move_time_s: s.controller.move_time_s,
+        duration_s: s.timing.duration_s,
+        f_n_ref: s.controller.f_n_ref,
+        hybrid_ki: s.controller.hybrid_ki,
+        sample_dt: 1.0 / s.timing.rate_hz,
+        stop_at_lift_off: false,
+        sim,
     }
 }
 
