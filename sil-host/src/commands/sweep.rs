@@ -411,7 +411,7 @@ fn report(s: &SweepSummary, json: bool) {
     {
         let _ = writeln!(
             o,
-            "speed: {} runs in {:.1} s on {} threads: {:.0} simulated s per wall s per core ({:.0} per CPU s); the paper's full grid (3620 x 300 s) would take {:.1} min at this rate",
+            "speed: {} runs in {:.1} s on {} threads: {:.0} simulated s per wall s per core ({:.0} per CPU s); a grid of the paper's size (3620 runs x 300 s) would take {:.1} min at this rate",
             t.runs_computed,
             t.wall_s,
             t.threads,

@@ -209,7 +209,7 @@ mod tests {
         // Hermite interpolant of a parabola is the parabola.
         let (s, bound) = hermite_max(0.91, 0.51, 0.6, -1.4).unwrap();
         assert!((s - 0.3).abs() < 1e-12, "{s}");
-        assert!(bound >= 1.0 && bound < 1.1, "{bound}");
+        assert!((1.0..1.1).contains(&bound), "{bound}");
     }
 
     #[test]

@@ -432,6 +432,10 @@ pub struct Plant {
     extrema: Option<Extrema>,
 }
 
+/// The end of one solve: time, state, boundary hit, event function at the last
+/// accepted point, and the tracked maxima (see `Plant::solve_segment`).
+type SegmentEnd = (f64, OdeState, Option<Boundary>, f64, Option<Extrema>);
+
 /// Events at one instant after which the contact is held stuck (module docs, corner case).
 const STALL_LIMIT: usize = 16;
 
@@ -794,7 +798,7 @@ impl Plant {
         h_max: f64,
         start: &Point,
         g0: f64,
-    ) -> Result<(f64, OdeState, Option<Boundary>, f64, Option<Extrema>), SimError> {
+    ) -> Result<SegmentEnd, SimError> {
         let solver = Dop853 { h_max, ..self.solver };
         let mut extrema = self.extrema;
         let (l, flight) = (self.arm.params.l, self.phase == Phase::Flight);

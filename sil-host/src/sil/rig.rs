@@ -72,6 +72,15 @@ pub fn mode_code(mode: ContactMode) -> u8 {
     }
 }
 
+/// Why a period of [`PeriodLoop::period`] ended the run.
+#[derive(Debug)]
+pub struct PeriodFailure {
+    /// The period's record, when it got that far (the firmware's safe state, a plant failure).
+    pub record: Option<PeriodRecord>,
+    /// What happened.
+    pub error: RunError,
+}
+
 /// The plant side of a run's control periods: the sensors, the faults, the command
 /// held by the zero-order hold and the last contact force, period after period.
 /// [`run_loop`] drives it over a whole scenario; the closed-loop sweep
@@ -134,7 +143,7 @@ impl PeriodLoop {
         link: &mut dyn FirmwareLink,
         on_frame: &mut dyn FnMut(&SensorFrame),
         on_events: &mut dyn FnMut(&[PlantEvent]),
-    ) -> Result<PeriodRecord, (Option<PeriodRecord>, RunError)> {
+    ) -> Result<PeriodRecord, Box<PeriodFailure>> {
         let k = self.k;
         let (ts, faults) = (self.ts, &self.faults);
         let t_k = k as f64 * ts;
@@ -156,7 +165,7 @@ impl PeriodLoop {
             u_applied: self.applied,
         };
         link.before_period(k, t_k);
-        let exchange = link.exchange(&frame, &truth).map_err(|e| (None, e))?;
+        let exchange = link.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {
             Exchange::Answered { command, telemetry, arrival_s } => {
@@ -200,7 +209,7 @@ impl PeriodLoop {
             status: fw_status,
         };
         if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
-            return Err((Some(record), RunError::SafeState { k, t: t_k, reason }));
+            return Err(Box::new(PeriodFailure { record: Some(record), error: RunError::SafeState { k, t: t_k, reason } }));
         }
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
@@ -216,7 +225,7 @@ impl PeriodLoop {
                 on_events(&r.events);
                 self.f_now = r.f;
             }
-            Err(e) => return Err((Some(record), e.into())),
+            Err(e) => return Err(Box::new(PeriodFailure { record: Some(record), error: e.into() })),
         }
         self.applied = u_new;
         self.k += 1;
@@ -264,9 +273,9 @@ pub fn run_loop_observed(
     for k in 0..n {
         match periods.period(&mut plant, link, &mut on_frame, &mut on_events) {
             Ok(r) => records.push(r),
-            Err((r, e)) => {
-                records.extend(r);
-                failure = Some(e);
+            Err(f) => {
+                records.extend(f.record);
+                failure = Some(f.error);
                 break;
             }
         }

@@ -323,9 +323,9 @@ fn closed_loop(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, plant: &mu
         if k % PERIODS_PER_CHECK == 0 && stop.load(Ordering::Relaxed) {
             return Ended::Interrupted;
         }
-        if let Err((_, e)) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}) {
-            let safe_state = matches!(e, crate::sil::record::RunError::SafeState { .. });
-            return Ended::Stopped { start, error: e.to_string(), safe_state };
+        if let Err(f) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}) {
+            let safe_state = matches!(f.error, crate::sil::record::RunError::SafeState { .. });
+            return Ended::Stopped { start, error: f.error.to_string(), safe_state };
         }
     }
     Ended::Done(start)
