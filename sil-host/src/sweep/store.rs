@@ -10,7 +10,6 @@
 use std::{
     collections::BTreeMap,
     fs::{File, OpenOptions},
-    io::Write,
     path::{Path, PathBuf},
     sync::Mutex,
 };
@@ -253,15 +252,4 @@ impl Journal {
 pub fn missing(m: &Manifest, rows: &[RunRow]) -> Vec<usize> {
     let done: std::collections::HashSet<usize> = rows.iter().map(|r| r.index).collect();
     m.shard.indices(m.spec.n_runs()).filter(|i| !done.contains(i)).collect()
-}
-
-/// Writes `bytes` to `dir/name` directly (for small files written once).
-///
-/// # Errors
-/// [`CliError::Io`].
-pub fn write_file(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, CliError> {
-    let path = dir.join(name);
-    let mut f = File::create(&path).map_err(io_err(&path))?;
-    f.write_all(bytes).map_err(io_err(&path))?;
-    Ok(path)
 }
