@@ -100,6 +100,27 @@ pub enum Command {
     /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
     /// percentiles), and optionally a real-time run (jitter, step time, misses).
     Bench(BenchArgs),
+    /// Two-parameter brute-force bifurcation diagram (MODEL.md experiments 3 and 7,
+    /// paper Figs. 3 and 9): a grid in (mu, v_belt), and optionally in the impact law
+    /// and e_n, from the paper's and random initial conditions; per run a transient,
+    /// then the record window where the paper's indicator max theta1_dot, the
+    /// lift-offs and the highest tip position are measured. Runs in parallel on all
+    /// cores; each finished run is appended to DIR/runs.csv at once, so an
+    /// interrupted sweep (Ctrl-C, kill) resumes when started again with the same
+    /// arguments and --out. Writes sweep.csv (rows by run index), summary.json,
+    /// map_*.svg and slices_*.svg.
+    ///
+    /// Exit codes: 0 done (or --limit reached); 1 interrupted or failed (what was
+    /// computed is kept); 2 bad input, or --out holds a different sweep.
+    #[command(allow_negative_numbers = true)]
+    Sweep(SweepArgs),
+    /// Joins the folders of a sharded sweep (`sweep --shard K/N`) into one: checks
+    /// they belong to the same sweep and that no run is missing or given twice with
+    /// different results, and writes the same outputs as an unsharded sweep.
+    ///
+    /// Exit codes: 0 merged; 2 folders of different sweeps, runs missing (unless
+    /// --allow-missing) or conflicting.
+    Merge(MergeArgs),
     /// Every experiment of MODEL.md at a size that finishes in minutes, in one page:
     /// `report.md` with every figure and table (and `report.json`), each experiment's
     /// files in a folder of its own. Run it from the repository root.
@@ -503,4 +524,105 @@ pub struct PoincareArgs {
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// `sil-host sweep`.
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    /// Friction coefficients: MIN,MAX (or one value), spaced by --mu-step.
+    #[arg(long, default_value = "0.1,1", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    pub mu: String,
+    /// Spacing of --mu.
+    #[arg(long, default_value_t = 0.1)]
+    pub mu_step: f64,
+    /// Belt speeds, m/s: MIN,MAX (or one value), spaced by --v-belt-step.
+    #[arg(long, default_value = "-1,-0.1", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    pub v_belt: String,
+    /// Spacing of --v-belt, m/s.
+    #[arg(long, default_value_t = 0.005)]
+    pub v_belt_step: f64,
+    /// The paper's initial conditions to use (projected onto the belt at the same
+    /// z_t and elbow branch): any of a, d, u, comma-separated; `none` for only random ones.
+    #[arg(long, value_delimiter = ',', default_value = "a,d", value_name = "LIST")]
+    pub ics: Vec<String>,
+    /// Random initial conditions in contact, added to --ics: the tip on the belt at
+    /// z_t uniform within 90 % of the reach, a random elbow branch, at rest; the same
+    /// ones at every grid point.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub random_ics: usize,
+    /// Seed of the random initial conditions.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Transient before the record window, s.
+    #[arg(long, default_value_t = 250.0)]
+    pub transient: f64,
+    /// Record window, s.
+    #[arg(long, default_value_t = 50.0)]
+    pub record: f64,
+    /// What drives the arm: `none` (open loop, u = 0; experiment 3), or the firmware's
+    /// `hybrid` (experiment 7) or `pid` controller run in-process, sampled as on the
+    /// MCU, with the scenario's references (experiment 6's by default).
+    #[arg(long, value_enum, default_value = "none")]
+    pub controller: crate::sweep::SweepController,
+    /// Closed loop: the paper's continuous-time controller with exact measurements
+    /// instead of the sampled firmware.
+    #[arg(long)]
+    pub ideal: bool,
+    /// Closed loop: scenario whose controller, timing and sensor sections are used
+    /// (default: the embedded default, experiment 6's hybrid references). Its plant
+    /// section is replaced per run; mu_hat is set to each run's mu, and K'_I to 0
+    /// from elbow-up initial conditions (the paper's x0u gains).
+    #[arg(long, value_name = "FILE.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Impact laws, comma-separated (each is a sweep dimension).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "newton")]
+    pub impact_law: Vec<ImpactLawArg>,
+    /// Restitution coefficients e_n in [0, 1], comma-separated (each is a sweep dimension).
+    #[arg(long, value_delimiter = ',', default_value = "0.2")]
+    pub e_n: Vec<f64>,
+    /// Persistent bouncing is flagged when max theta1_dot over the record window
+    /// exceeds this, rad/s. The paper's threshold is 0; an arm at rest shows
+    /// theta1_dot ~ 5e-15 rad/s from rounding, hence the small default.
+    #[arg(long, default_value_t = crate::sweep::DEFAULT_THRESHOLD)]
+    pub threshold: f64,
+    /// Relative tolerance of the integrator.
+    #[arg(long, default_value_t = 1e-9)]
+    pub rtol: f64,
+    /// Absolute tolerance of the integrator.
+    #[arg(long, default_value_t = 1e-11)]
+    pub atol: f64,
+    /// Compute only part K/N of the runs (those whose index is K modulo N, 0 <= K < N),
+    /// for a cluster job array; join the folders with `sil-host merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Compute at most N more runs, then write the outputs and stop (exit 0); run
+    /// again to continue. For timing a subset, or sweeping in installments.
+    #[arg(long, value_name = "N")]
+    pub limit: Option<usize>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Folder of the sweep (created if missing; an existing sweep there is resumed).
+    #[arg(long, default_value = "out/sweep", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print one JSON document on stdout instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `sil-host merge`.
+#[derive(Debug, Clone, Args)]
+pub struct MergeArgs {
+    /// The shards' folders.
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Write the outputs even if runs are missing (they are listed in the summary).
+    #[arg(long)]
+    pub allow_missing: bool,
+    /// Folder of the merged sweep (a complete sweep folder, like an unsharded run's).
+    #[arg(long, default_value = "out/sweep-merged", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print one JSON document on stdout instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -34,6 +34,9 @@ pub enum CliError {
     /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
     PartFailed(String),
+    /// The command was stopped (Ctrl-C, SIGTERM) part way; what it computed is kept.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {

@@ -12,6 +12,7 @@ pub mod plant;
 pub mod plot;
 pub mod poincare;
 pub mod sil;
+pub mod sweep;
 pub mod zmax;
 
 use clap::Parser;
@@ -39,6 +40,8 @@ where
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),
+        cli::Command::Sweep(args) => commands::sweep::run(&args),
+        cli::Command::Merge(args) => commands::sweep::merge(&args),
         cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
         cli::Command::Firmware(args) => match commands::run::firmware(&args) {

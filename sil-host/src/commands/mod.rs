@@ -8,6 +8,7 @@ pub mod poincare;
 pub mod report;
 pub mod run;
 pub mod simulate;
+pub mod sweep;
 pub mod zmax;
 
 /// Parses `"MIN,MAX"` into a range, naming the flag in the error.

@@ -44,6 +44,7 @@
 //! [`EventKind::ConeViolation`] is reported per episode.
 
 pub mod dop853;
+pub mod extrema;
 pub mod impact;
 pub mod section;
 pub mod segment;
@@ -61,6 +62,7 @@ use shared::{
 };
 
 use dop853::Dop853;
+pub use extrema::Extrema;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
 use section::{SectionWatch, StepScan};
 pub use segment::Phase;
@@ -359,6 +361,9 @@ pub struct Counters {
     pub lift_offs: u64,
     /// Touchdowns with an impact.
     pub touchdowns: u64,
+    /// Touchdowns after which the tip flew off again at once (a bounce: the tip
+    /// leaves the belt without a `lift_offs` event).
+    pub bounces: u64,
     /// Impacts without collision.
     pub impacts_without_collision: u64,
     /// Times `p` reached 0 while sliding.
@@ -425,7 +430,13 @@ pub struct Plant {
     solver: Dop853,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
+    /// Running maxima over the trajectory, when tracking ([`Plant::track_extrema`]).
+    extrema: Option<Extrema>,
 }
+
+/// The end of one solve: time, state, boundary hit, event function at the last
+/// accepted point, and the tracked maxima (see `Plant::solve_segment`).
+type SegmentEnd = (f64, OdeState, Option<Boundary>, f64, Option<Extrema>);
 
 /// Events at one instant after which the contact is held stuck (module docs, corner case).
 const STALL_LIMIT: usize = 16;
@@ -470,6 +481,7 @@ impl Plant {
             solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
+            extrema: None,
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -577,6 +589,19 @@ impl Plant {
     /// Event counts since creation.
     pub fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// Starts (or restarts) tracking the maxima of `theta1_dot` and `z_n` over the
+    /// continuous trajectory from now on ([`Extrema`]), counting the current state.
+    pub fn track_extrema(&mut self) {
+        let mut e = Extrema::new();
+        e.observe_point(self.t, &self.y, self.arm.params.l);
+        self.extrema = Some(e);
+    }
+
+    /// The maxima since [`Plant::track_extrema`] was called (`None` if it was not).
+    pub fn extrema(&self) -> Option<&Extrema> {
+        self.extrema.as_ref()
     }
 
     /// Evaluations of the vector field since creation (a cost measure).
@@ -697,6 +722,11 @@ impl Plant {
                 }
             }
         }
+        // The state after an impact at the very end of the interval belongs to no step.
+        let l = self.arm.params.l;
+        if let Some(e) = self.extrema.as_mut() {
+            e.observe_point(self.t, &self.y, l);
+        }
         let f = match self.phase {
             Phase::Flight => [0.0, 0.0],
             _ => {
@@ -755,7 +785,8 @@ impl Plant {
     /// return that fits inside the first step, so the first step is kept inside the
     /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
     /// segment that ends outside its domain without an event is integrated again
-    /// with steps capped at 1/64 of the interval, and fails if that still misses it.
+    /// with steps capped at 1/64 of the interval and at most 1 ms, then 10 us, and
+    /// fails if that still misses it.
     fn integrate<C: Controller + ?Sized>(
         &mut self,
         ctrl: &C,
@@ -773,9 +804,13 @@ impl Plant {
                 h0 = h0.min(td.z_dot[1] / -td.b());
             }
         }
-        for h_max in [f64::INFINITY, remaining / 64.0] {
+        // Retries cap the steps at 1/64 of the interval, and also at 1 ms then 10 us:
+        // over a long interval (open-loop runs advance by seconds) 1/64 of it can
+        // still hold a whole excursion out of the domain and back, e.g. a slip from
+        // rest that stops again within milliseconds.
+        for h_max in [f64::INFINITY, (remaining / 64.0).min(1e-3), (remaining / 64.0).min(1e-5)] {
             let mut scan = watch.as_deref().map(SectionWatch::scan);
-            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, scan.as_mut())?;
+            let (t1, y1, boundary, g_end, extrema) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, scan.as_mut())?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.
                 continue;
@@ -785,6 +820,7 @@ impl Plant {
             }
             self.t = t1;
             self.y = y1;
+            self.extrema = extrema;
             return Ok(boundary);
         }
         Err(SimError::MissedEvent { t: self.t, mode: self.mode().name() })
@@ -792,7 +828,8 @@ impl Plant {
 
     /// One solve over `[self.t, t_end]`, stopping at the first event (the plant's
     /// state is left unchanged). Returns the end time and state, the boundary hit (if
-    /// any) and the event function at the last accepted point. A section `scan`, if
+    /// any), the event function at the last accepted point, and the tracked maxima
+    /// updated over the solve (kept only if the solve is). A section `scan`, if
     /// given, sees every accepted step up to the event.
     #[allow(clippy::too_many_arguments)]
     fn solve_segment<C: Controller + ?Sized>(
@@ -804,8 +841,10 @@ impl Plant {
         start: &Point,
         g0: f64,
         mut scan: Option<&mut StepScan>,
-    ) -> Result<(f64, OdeState, Option<Boundary>, f64), SimError> {
+    ) -> Result<SegmentEnd, SimError> {
         let solver = Dop853 { h_max, ..self.solver };
+        let mut extrema = self.extrema;
+        let (l, flight) = (self.arm.params.l, self.phase == Phase::Flight);
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
         let solved = solver
@@ -813,6 +852,10 @@ impl Plant {
                 let control = locator.on_step(step);
                 if let Some(scan) = scan.as_deref_mut() {
                     scan.on_step(step, locator.hit);
+                }
+                if let Some(e) = extrema.as_mut() {
+                    let (t1, y1) = locator.hit.unwrap_or((step.t_curr(), *step.y_curr()));
+                    e.observe_step(step, t1, &y1, l, flight);
                 }
                 control
             })
@@ -824,12 +867,12 @@ impl Plant {
                 return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
             }
             let boundary = self.segment(ctrl).nearest_boundary(t1, &y1).0;
-            return Ok((t1, y1, Some(boundary), 0.0));
+            return Ok((t1, y1, Some(boundary), 0.0, extrema));
         }
         if !solved.y.iter().all(|v| v.is_finite()) {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
-        Ok((t_end, solved.y, None, g_end))
+        Ok((t_end, solved.y, None, g_end, extrema))
     }
 
     /// Handles the crossing of a mode boundary at the current time.
@@ -893,6 +936,7 @@ impl Plant {
             let after = self.rel_velocity();
             if after[1] > self.cfg.zeno_velocity {
                 self.phase = Phase::Flight;
+                self.counters.bounces += 1;
                 self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
                 self.check_energy(events, &imp, de, before);
                 return Ok(());

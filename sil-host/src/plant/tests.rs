@@ -362,3 +362,50 @@ fn steady_sliding_interval_is_one_step() {
     }
     assert_eq!(p.rhs_evaluations() - e0, 100 * 2 * 13);
 }
+
+/// The maxima tracked inside the integrator's own steps agree with the maxima of a
+/// trace of the same motion sampled every 10 us (two independent paths), and are
+/// never below them. The window is short (bouncing is chaotic: over seconds the
+/// two runs' different step sequences would part).
+#[test]
+fn tracked_maxima_match_a_fine_sampling() {
+    let params = Params::new(0.7, -0.5).unwrap();
+    let mut fine = plant_from(params, SimConfig::default(), X0A.deg);
+    fine.advance([0.0, 0.0], 5.2).unwrap();
+    let mut coarse = fine.clone();
+    coarse.track_extrema();
+    coarse.advance([0.0, 0.0], 1.0).unwrap();
+    let (mut th1d_max, mut z_n_max) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for _ in 0..100_000 {
+        fine.advance([0.0, 0.0], 1e-5).unwrap();
+        th1d_max = th1d_max.max(fine.state()[1]);
+        z_n_max = z_n_max.max(fine.tip()[1]);
+    }
+    let e = *coarse.extrema().unwrap();
+    let gap = coarse.state().iter().zip(fine.state()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(gap < 1e-5, "same motion: {gap}");
+    assert!(coarse.counters().touchdowns > 0, "this case bounces");
+    assert!(e.t_z_n_max > 5.2 && e.t_z_n_max < 6.2 && e.z_n_max > -params.h + 1e-3, "an apex inside the window: {e:?}");
+    // Sampling misses up to |theta1_ddot| dt after an impact's jump, the curvature
+    // times (dt/2)^2 at a smooth apex.
+    // The two runs' states agree to ~1e-7 (their steps differ), which bounds how far
+    // the sampled maxima may exceed the tracked ones.
+    assert!(e.theta1_dot_max >= th1d_max - 1e-6 && e.theta1_dot_max - th1d_max < 1e-3, "{} vs {th1d_max}", e.theta1_dot_max);
+    assert!(e.z_n_max >= z_n_max - 1e-8 && e.z_n_max - z_n_max < 1e-7, "{} vs {z_n_max}", e.z_n_max);
+    assert!(e.interior_refinements > 0);
+}
+
+/// A slip from rest that reverses and stops again within 7 ms (x0d, mu 0.1,
+/// v_belt -0.26 m/s) is found when the plant is advanced by one long interval (the
+/// open-loop sweep's), with the same events as with 1 ms intervals.
+#[test]
+fn short_slip_excursions_are_found_in_long_intervals() {
+    let params = Params::new(0.1, -0.26).unwrap();
+    let kinds = |dt: f64| -> Vec<EventKind> {
+        let mut p = plant_from(params, SimConfig::default(), X0D.deg);
+        run_events(&mut p, 1.0, dt).iter().take(4).map(|e| e.kind).collect()
+    };
+    let long = kinds(1.0);
+    assert_eq!(long, [EventKind::SlipReversal, EventKind::SlipToStick, EventKind::StickToSlip, EventKind::LiftOff]);
+    assert_eq!(long, kinds(1e-3));
+}

@@ -22,7 +22,7 @@ use super::{
     sensors::Sensors,
     setup::plant_for,
 };
-use crate::plant::PlantEvent;
+use crate::plant::{Plant, PlantEvent};
 
 /// The answer to one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +69,167 @@ pub fn mode_code(mode: ContactMode) -> u8 {
         ContactMode::Sliding => 1,
         ContactMode::Sticking => 2,
         _ => 0,
+    }
+}
+
+/// Why a period of [`PeriodLoop::period`] ended the run.
+#[derive(Debug)]
+pub struct PeriodFailure {
+    /// The period's record, when it got that far (the firmware's safe state, a plant failure).
+    pub record: Option<PeriodRecord>,
+    /// What happened.
+    pub error: RunError,
+}
+
+/// The plant side of a run's control periods: the sensors, the faults, the command
+/// held by the zero-order hold and the last contact force, period after period.
+/// [`run_loop`] drives it over a whole scenario; the closed-loop sweep
+/// (`sil-host sweep --controller`) drives it from its own initial conditions.
+#[derive(Debug, Clone)]
+pub struct PeriodLoop {
+    sensors: Sensors,
+    faults: FaultPlan,
+    ts: f64,
+    ts_us: u64,
+    delta: f64,
+    v_belt: f64,
+    applied: [f64; 2],
+    f_now: [f64; 2],
+    /// The firmware's reference, kept over periods without an answer.
+    z_t_ref: f64,
+    k: usize,
+}
+
+impl PeriodLoop {
+    /// The loop of scenario `s` starting at period 0 with zero torque on `plant`
+    /// (at `t = 0`).
+    pub fn new(s: &Scenario, plant: &Plant) -> Self {
+        let ts = 1.0 / s.timing.rate_hz;
+        Self {
+            sensors: Sensors::new(s.sensors.seed, s.sensors.load_noise_n),
+            faults: FaultPlan::new(&s.faults, ts),
+            ts,
+            ts_us: (ts * 1e6).round() as u64,
+            delta: s.timing.delta_s,
+            v_belt: s.plant.v_belt,
+            applied: [0.0; 2],
+            f_now: plant.contact_force([0.0; 2]),
+            z_t_ref: f64::NAN,
+            k: 0,
+        }
+    }
+
+    /// Control periods in `duration_s` seconds.
+    pub fn periods_in(&self, duration_s: f64) -> usize {
+        (duration_s / self.ts).round() as usize
+    }
+
+    /// The next period to run.
+    pub fn next_period(&self) -> usize {
+        self.k
+    }
+
+    /// Runs one period: samples `plant` into a frame (handed to `on_frame`), gets the
+    /// command over `link` and advances the plant to the next sample time under the
+    /// zero-order hold, handing `on_events` the plant's events at their exact times.
+    /// Returns the period's record.
+    ///
+    /// # Errors
+    /// The link's failure (no record), or the firmware's safe state or a plant
+    /// failure (with the period's record).
+    pub fn period(
+        &mut self,
+        plant: &mut Plant,
+        link: &mut dyn FirmwareLink,
+        on_frame: &mut dyn FnMut(&SensorFrame),
+        on_events: &mut dyn FnMut(&[PlantEvent]),
+    ) -> Result<PeriodRecord, Box<PeriodFailure>> {
+        let k = self.k;
+        let (ts, faults) = (self.ts, &self.faults);
+        let t_k = k as f64 * ts;
+        let t_us = k as u64 * self.ts_us;
+        let x = plant.state();
+        let z = plant.tip();
+        let mode = plant.mode();
+        let frame = self.sensors.frame_with_faults(k as u32, t_us, &x, self.f_now, self.v_belt, faults.sensor_faults(t_k));
+        on_frame(&frame);
+        let truth = GroundTruth {
+            t: t_k,
+            seq: k as u32,
+            mode: mode_code(mode),
+            lift_off: u8::from(mode == ContactMode::Flight),
+            reserved: 0,
+            x,
+            z: [z[0], z[1]],
+            f: self.f_now,
+            u_applied: self.applied,
+        };
+        link.before_period(k, t_k);
+        let exchange = link.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
+        // When the new command takes effect (s after t_k), if it does this period.
+        let (switch, command, telemetry) = match exchange {
+            Exchange::Answered { command, telemetry, arrival_s } => {
+                let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
+                let at = arrival_s.unwrap_or(late_s.max(self.delta));
+                let on_time = at < ts && !faults.drops_command(t_k);
+                (on_time.then_some(at), Some(command), Some(telemetry))
+            }
+            Exchange::NoAnswer => (None, None, None),
+        };
+        let applied = self.applied;
+        let u_new = match (switch, command) {
+            (Some(_), Some(c)) => [wire::decode_torque(c.u1_code) as f64, wire::decode_torque(c.u2_code) as f64],
+            _ => applied,
+        };
+        let fw_status = command.map_or(0, |c| c.status);
+        if let Some(t) = telemetry {
+            self.z_t_ref = t.z_t_ref as f64;
+        }
+        let record = PeriodRecord {
+            t: t_k,
+            theta1: x[0],
+            theta1_dot: x[1],
+            theta2: x[2],
+            theta2_dot: x[3],
+            z_t: z[0],
+            z_n: z[1],
+            z_t_ref: self.z_t_ref,
+            f_t: self.f_now[0],
+            f_n: self.f_now[1],
+            mode: mode.name(),
+            u1_cmd: u_new[0],
+            u2_cmd: u_new[1],
+            u1_applied: applied[0],
+            u2_applied: applied[1],
+            lift_off_true: mode == ContactMode::Flight,
+            lift_off_detected: fw_status & status::LIFT_OFF != 0,
+            deadline_miss: switch.is_none(),
+            firmware_deadline_miss: fw_status & status::DEADLINE_MISS != 0,
+            overruns: command.map_or(0, |c| c.overruns),
+            status: fw_status,
+        };
+        if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
+            return Err(Box::new(PeriodFailure { record: Some(record), error: RunError::SafeState { k, t: t_k, reason } }));
+        }
+        // Zero-order hold: the previous command until the switch, then the new one.
+        let t_next = (k + 1) as f64 * ts;
+        let step = match switch {
+            Some(at) => plant.advance(applied, at).and_then(|r| {
+                on_events(&r.events);
+                plant.advance(u_new, t_next - plant.time())
+            }),
+            None => plant.advance(applied, t_next - plant.time()),
+        };
+        match step {
+            Ok(r) => {
+                on_events(&r.events);
+                self.f_now = r.f;
+            }
+            Err(e) => return Err(Box::new(PeriodFailure { record: Some(record), error: e.into() })),
+        }
+        self.applied = u_new;
+        self.k += 1;
+        Ok(record)
     }
 }
 
@@ -131,111 +292,25 @@ pub fn run_loop_hooked(
         Err(e) => return (records, Some(e.into())),
     };
     on_events(plant.startup_events());
-    let mut sensors = Sensors::new(s.sensors.seed, s.sensors.load_noise_n);
-    let ts = 1.0 / s.timing.rate_hz;
-    let ts_us = (ts * 1e6).round() as u64;
-    let delta = s.timing.delta_s;
-    let faults = FaultPlan::new(&s.faults, ts);
-    let n = (s.timing.duration_s * s.timing.rate_hz).round() as usize;
+    let mut periods = PeriodLoop::new(s, &plant);
+    let n = periods.periods_in(s.timing.duration_s);
     records.reserve(n);
-    let mut applied = [0.0f64; 2];
-    let mut f_now = plant.contact_force(applied);
     let mut failure = None;
-    // The firmware's reference, kept over periods without an answer.
-    let mut z_t_ref = f64::NAN;
     for k in 0..n {
-        let t_k = k as f64 * ts;
-        let t_us = k as u64 * ts_us;
-        let x = plant.state();
-        let z = plant.tip();
-        let mode = plant.mode();
-        let frame = sensors.frame_with_faults(k as u32, t_us, &x, f_now, s.plant.v_belt, faults.sensor_faults(t_k));
-        on_frame(&frame);
-        let truth = GroundTruth {
-            t: t_k,
-            seq: k as u32,
-            mode: mode_code(mode),
-            lift_off: u8::from(mode == ContactMode::Flight),
-            reserved: 0,
-            x,
-            z: [z[0], z[1]],
-            f: f_now,
-            u_applied: applied,
-        };
-        link.before_period(k, t_k);
-        let exchange = match link.exchange(&frame, &truth) {
-            Ok(e) => e,
-            Err(e) => {
-                failure = Some(e);
-                break;
-            }
-        };
-        // When the new command takes effect (s after t_k), if it does this period.
-        let (switch, command, telemetry) = match exchange {
-            Exchange::Answered { command, telemetry, arrival_s } => {
-                let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
-                let at = arrival_s.unwrap_or(late_s.max(delta));
-                let on_time = at < ts && !faults.drops_command(t_k);
-                (on_time.then_some(at), Some(command), Some(telemetry))
-            }
-            Exchange::NoAnswer => (None, None, None),
-        };
-        let u_new = match (switch, command) {
-            (Some(_), Some(c)) => [wire::decode_torque(c.u1_code) as f64, wire::decode_torque(c.u2_code) as f64],
-            _ => applied,
-        };
-        let fw_status = command.map_or(0, |c| c.status);
-        if let Some(t) = telemetry {
-            z_t_ref = t.z_t_ref as f64;
-        }
-        records.push(PeriodRecord {
-            t: t_k,
-            theta1: x[0],
-            theta1_dot: x[1],
-            theta2: x[2],
-            theta2_dot: x[3],
-            z_t: z[0],
-            z_n: z[1],
-            z_t_ref,
-            f_t: f_now[0],
-            f_n: f_now[1],
-            mode: mode.name(),
-            u1_cmd: u_new[0],
-            u2_cmd: u_new[1],
-            u1_applied: applied[0],
-            u2_applied: applied[1],
-            lift_off_true: mode == ContactMode::Flight,
-            lift_off_detected: fw_status & status::LIFT_OFF != 0,
-            deadline_miss: switch.is_none(),
-            firmware_deadline_miss: fw_status & status::DEADLINE_MISS != 0,
-            overruns: command.map_or(0, |c| c.overruns),
-            status: fw_status,
-        });
-        on_record(&records[k]);
-        if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
-            failure = Some(RunError::SafeState { k, t: t_k, reason });
-            break;
-        }
-        // Zero-order hold: the previous command until the switch, then the new one.
-        let t_next = (k + 1) as f64 * ts;
-        let step = match switch {
-            Some(at) => plant.advance(applied, at).and_then(|r| {
-                on_events(&r.events);
-                plant.advance(u_new, t_next - plant.time())
-            }),
-            None => plant.advance(applied, t_next - plant.time()),
-        };
-        match step {
+        match periods.period(&mut plant, link, &mut on_frame, &mut on_events) {
             Ok(r) => {
-                on_events(&r.events);
-                f_now = r.f;
+                on_record(&r);
+                records.push(r);
             }
-            Err(e) => {
-                failure = Some(e.into());
+            Err(f) => {
+                if let Some(r) = &f.record {
+                    on_record(r);
+                }
+                records.extend(f.record);
+                failure = Some(f.error);
                 break;
             }
         }
-        applied = u_new;
         if !on_period(k + 1, n) && k + 1 < n {
             failure = Some(RunError::Interrupted { k: k + 1 });
             break;

@@ -1,0 +1,168 @@
+//! The sweep's figures (plotters, SVG), one pair per impact law and `e_n`:
+//! - `map_<law>_e<e_n>.svg`: the `(v_belt, mu)` plane, one panel per initial
+//!   condition, each grid cell coloured by the run's outcome (paper Figs. 3 and 9);
+//! - `slices_<law>_e<e_n>.svg`: per `mu`, the indicator `max theta1_dot` over the
+//!   record window against `v_belt`, one curve per initial condition, with the
+//!   threshold.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::{
+    SweepSpec,
+    run::{Outcome, RunRow},
+};
+use crate::{error::CliError, plot::colors};
+
+/// Colour of an outcome on the map.
+pub fn outcome_color(o: Outcome) -> RGBColor {
+    match o {
+        Outcome::Bouncing => colors::RED,
+        Outcome::Oscillating => colors::ORANGE,
+        Outcome::LiftOffOnly => colors::PURPLE,
+        Outcome::Contact => colors::BLUE,
+        Outcome::Flight => colors::GREEN,
+        Outcome::SafeState => RGBColor(40, 40, 40),
+        Outcome::Failed => RGBColor(200, 200, 200),
+    }
+}
+
+/// File-name suffix of a case: `newton_e0.2`.
+pub fn case_suffix(law: &str, e_n: f64) -> String {
+    format!("{law}_e{e_n}")
+}
+
+/// Colours of the initial conditions' curves.
+const IC_COLORS: [RGBColor; 6] = [colors::BLUE, colors::ORANGE, colors::GREEN, colors::RED, colors::PURPLE, colors::GREY];
+
+fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
+    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// Draws the outcome map of the case `(law, e_n)` from its `rows` into `path`.
+///
+/// # Errors
+/// [`CliError::Plot`].
+pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&RunRow]) -> Result<(), CliError> {
+    let err = plot_err(path);
+    let ics = spec.initial_conditions();
+    let cols = ics.len().min(3);
+    let grid_rows = ics.len().div_ceil(cols);
+    let root = SVGBackend::new(path, (560 * cols as u32, 80 + 460 * grid_rows as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let title = format!("Outcome over (v_belt, mu), {} ({law}, e_n = {e_n})", controller_label(spec));
+    let root = root.titled(&title, ("sans-serif", 22)).map_err(|e| err(&e))?;
+    let (legend_area, panels_area) = root.split_vertically(40);
+    // Legend: one coloured box per outcome.
+    for (i, o) in Outcome::ALL.iter().enumerate() {
+        let x = 20 + 150 * i as i32;
+        legend_area.draw(&Rectangle::new([(x, 10), (x + 16, 26)], outcome_color(*o).filled())).map_err(|e| err(&e))?;
+        legend_area.draw(&Text::new(o.name(), (x + 22, 12), ("sans-serif", 15))).map_err(|e| err(&e))?;
+    }
+    let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
+    let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
+    let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
+    let y_range = (mus[0] - dmu)..(mus[mus.len() - 1] + dmu);
+    for (i, area) in panels_area.split_evenly((grid_rows, cols)).iter().enumerate().take(ics.len()) {
+        let ic = &ics[i];
+        let mut chart = ChartBuilder::on(area)
+            .margin(10)
+            .caption(format!("from {} (elbow {})", ic.name, ic.branch), ("sans-serif", 17))
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(x_range.clone(), y_range.clone())
+            .map_err(|e| err(&e))?;
+        chart.configure_mesh().x_desc("v_belt (m/s)").y_desc("mu").disable_mesh().draw().map_err(|e| err(&e))?;
+        let cells = rows
+            .iter()
+            .filter(|r| r.ic == ic.name)
+            .map(|r| Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv, r.mu + dmu)], outcome_color(r.outcome).filled()));
+        chart.draw_series(cells).map_err(|e| err(&e))?;
+    }
+    root.present().map_err(|e| err(&e))
+}
+
+fn half_step(a: &super::Axis) -> f64 {
+    if a.len() > 1 { 0.5 * a.step } else { 0.05_f64.max(a.start.abs() * 0.05) }
+}
+
+fn controller_label(spec: &SweepSpec) -> String {
+    match (spec.controller, spec.ideal) {
+        (super::SweepController::None, _) => "open loop".into(),
+        (c, true) => format!("{} (ideal, continuous time)", c.name()),
+        (c, false) => format!("{} (firmware, sampled)", c.name()),
+    }
+}
+
+/// Draws the per-`mu` indicator slices of the case `(law, e_n)` into `path`.
+///
+/// # Errors
+/// [`CliError::Plot`].
+pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&RunRow]) -> Result<(), CliError> {
+    let err = plot_err(path);
+    let ics = spec.initial_conditions();
+    let mus = spec.mu.values();
+    let cols = if mus.len() > 4 { 2 } else { 1 };
+    let grid_rows = mus.len().div_ceil(cols);
+    let root = SVGBackend::new(path, (620 * cols as u32, 60 + 230 * grid_rows as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let title = format!("max theta1_dot over the record window against v_belt, {} ({law}, e_n = {e_n})", controller_label(spec));
+    let root = root.titled(&title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+    let vs = spec.v_belt.values();
+    let dv = half_step(&spec.v_belt);
+    let (x_lo, x_hi) = (vs[0] - dv, vs[vs.len() - 1] + dv);
+    for (m, area) in root.split_evenly((grid_rows, cols)).iter().enumerate().take(mus.len()) {
+        let mu = mus[m];
+        let at_mu: Vec<&&RunRow> = rows.iter().filter(|r| r.mu == mu).collect();
+        let (mut lo, mut hi) = (spec.threshold, spec.threshold);
+        for r in &at_mu {
+            if r.theta1_dot_max.is_finite() {
+                lo = lo.min(r.theta1_dot_max);
+                hi = hi.max(r.theta1_dot_max);
+            }
+        }
+        let pad = ((hi - lo) * 0.08).max(0.05);
+        let mut chart = ChartBuilder::on(area)
+            .margin(8)
+            .caption(format!("mu = {mu}"), ("sans-serif", 15))
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x_lo..x_hi, (lo - pad)..(hi + pad))
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("v_belt (m/s)")
+            .y_desc("max theta1_dot (rad/s)")
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(|e| err(&e))?;
+        chart
+            .draw_series(DashedLineSeries::new([(x_lo, spec.threshold), (x_hi, spec.threshold)], 5, 4, BLACK.mix(0.6).stroke_width(1)))
+            .map_err(|e| err(&e))?
+            .label("threshold")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.6)));
+        for (i, ic) in ics.iter().enumerate() {
+            let color = IC_COLORS[i % IC_COLORS.len()];
+            let mut pts: Vec<(f64, f64)> =
+                at_mu.iter().filter(|r| r.ic == ic.name && r.theta1_dot_max.is_finite()).map(|r| (r.v_belt, r.theta1_dot_max)).collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1)))
+                .map_err(|e| err(&e))?
+                .label(ic.name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))).map_err(|e| err(&e))?;
+        }
+        if m == 0 {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK.mix(0.3))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| err(&e))?;
+        }
+    }
+    root.present().map_err(|e| err(&e))
+}

@@ -1,0 +1,255 @@
+//! A sweep's folder: `sweep.json` (the [`Manifest`]: spec and shard), the
+//! `runs.csv` journal (one row per finished run, appended and flushed as each run
+//! finishes, in completion order), and the final outputs written from it.
+//!
+//! Resume: a sweep started again with the same arguments and `--out` reads the
+//! journal, drops a last line cut short by a kill (every complete row ends with a
+//! newline), and computes only the runs not in it. A folder whose manifest differs
+//! is refused, naming the differing settings.
+
+use std::{
+    collections::BTreeMap,
+    fs::{File, OpenOptions},
+    path::{Path, PathBuf},
+    sync::Mutex,
+};
+
+use serde::{Deserialize, Serialize};
+
+use super::{Shard, SweepSpec, run::RunRow};
+use crate::{error::CliError, output::io_err};
+
+/// File name of the manifest.
+pub const MANIFEST: &str = "sweep.json";
+/// File name of the journal.
+pub const JOURNAL: &str = "runs.csv";
+
+/// `sweep.json`: what the folder's runs belong to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// The sweep.
+    pub spec: SweepSpec,
+    /// The part of it this folder computes ([`Shard::ALL`] for a whole or merged sweep).
+    pub shard: Shard,
+}
+
+/// Reads `dir/sweep.json`, if there is one.
+///
+/// # Errors
+/// [`CliError::BadInput`] when it cannot be read or is not a manifest of this version.
+pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
+    let path = dir.join(MANIFEST);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(CliError::BadInput(format!("cannot read {}: {e}", path.display()))),
+    };
+    let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+        CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), super::FORMAT))
+    })?;
+    Ok(Some(m))
+}
+
+/// Writes `dir/sweep.json` (through a temporary file and a rename).
+///
+/// # Errors
+/// [`CliError::Io`].
+pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    let path = dir.join(MANIFEST);
+    let tmp = dir.join(format!(".{MANIFEST}.partial"));
+    let json = serde_json::to_string_pretty(m).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
+    std::fs::write(&tmp, json).map_err(io_err(&tmp))?;
+    std::fs::rename(&tmp, &path).map_err(io_err(&path))
+}
+
+/// The top-level settings where two manifests differ, as `name: a vs b`.
+pub fn differences(a: &Manifest, b: &Manifest) -> Vec<String> {
+    let (va, vb) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
+    let mut out = Vec::new();
+    let mut compare = |prefix: &str, x: &serde_json::Value, y: &serde_json::Value| {
+        if let (Some(x), Some(y)) = (x.as_object(), y.as_object()) {
+            for (k, xv) in x {
+                let yv = y.get(k).unwrap_or(&serde_json::Value::Null);
+                if xv != yv {
+                    let show = |v: &serde_json::Value| {
+                        let s = v.to_string();
+                        if s.len() > 60 { format!("{}...", &s[..57]) } else { s }
+                    };
+                    out.push(format!("{prefix}{k}: {} vs {}", show(xv), show(yv)));
+                }
+            }
+        }
+    };
+    compare("", &va["spec"], &vb["spec"]);
+    if a.shard != b.shard {
+        out.push(format!("shard: {}/{} vs {}/{}", a.shard.k, a.shard.n, b.shard.k, b.shard.n));
+    }
+    out
+}
+
+/// Prepares `dir` for the sweep `m`: creates it with its manifest, or checks that
+/// the manifest already there is the same.
+///
+/// # Errors
+/// [`CliError::BadInput`] when the folder holds another sweep (naming the
+/// differing settings); [`CliError::Io`].
+pub fn open(dir: &Path, m: &Manifest) -> Result<(), CliError> {
+    match read_manifest(dir)? {
+        Some(existing) if existing == *m => Ok(()),
+        Some(existing) => Err(CliError::BadInput(format!(
+            "{} holds a different sweep; resuming needs the same arguments (use another --out, or delete the folder). Differences (folder vs now): {}",
+            dir.display(),
+            differences(&existing, m).join("; ")
+        ))),
+        None => {
+            if dir.join(JOURNAL).exists() {
+                return Err(CliError::BadInput(format!("{} has a {JOURNAL} but no {MANIFEST}: not a sweep folder", dir.display())));
+            }
+            write_manifest(dir, m)
+        }
+    }
+}
+
+/// What [`read_journal`] found.
+#[derive(Debug, Default)]
+pub struct JournalContents {
+    /// The rows, in file order, without duplicates (the first kept).
+    pub rows: Vec<RunRow>,
+    /// A last line cut short (by a kill) was dropped.
+    pub dropped_partial_line: bool,
+    /// Rows repeated with the same index (identical ones; ignored).
+    pub duplicates: usize,
+}
+
+/// Reads `dir/runs.csv` of sweep `m` (empty if there is none). A last line without
+/// its newline is dropped; every row must be a run of `m` (its index in the shard,
+/// its parameters those of that index).
+///
+/// # Errors
+/// [`CliError::BadInput`] for a row that does not parse or does not belong, or a
+/// repeated index with different results; [`CliError::Io`].
+pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliError> {
+    let path = dir.join(JOURNAL);
+    let mut bytes = match std::fs::read(&path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(JournalContents::default()),
+        Err(e) => return Err(CliError::Io { path, source: e }),
+    };
+    let mut out = JournalContents::default();
+    if !bytes.is_empty() && bytes.last() != Some(&b'\n') {
+        let keep = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+        bytes.truncate(keep);
+        out.dropped_partial_line = true;
+    }
+    let ics = m.spec.initial_conditions();
+    let n_runs = m.spec.n_runs();
+    let mut seen: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut reader = csv::ReaderBuilder::new().from_reader(bytes.as_slice());
+    for (line, rec) in reader.deserialize::<RunRow>().enumerate() {
+        let bad = |what: String| CliError::BadInput(format!("{} row {}: {what}", path.display(), line + 1));
+        let row = rec.map_err(|e| bad(format!("does not parse: {e}")))?;
+        if row.index >= n_runs || !m.shard.owns(row.index) {
+            return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));
+        }
+        let key = m.spec.run_at(row.index);
+        if row.mu != key.mu
+            || row.v_belt != key.v_belt
+            || row.e_n != key.e_n
+            || row.impact_law != key.impact_law.name()
+            || row.ic != ics[key.i_ic].name
+        {
+            return Err(bad(format!("run {} has other parameters than this sweep's", row.index)));
+        }
+        match seen.get(&row.index) {
+            Some(&at) => {
+                if !same_row(&out.rows[at], &row) {
+                    return Err(bad(format!("run {} appears twice with different results", row.index)));
+                }
+                out.duplicates += 1;
+            }
+            None => {
+                seen.insert(row.index, out.rows.len());
+                out.rows.push(row);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Rows equal field by field, NaN equal to NaN.
+pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
+    let f = |x: f64, y: f64| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+    a.index == b.index
+        && a.outcome == b.outcome
+        && a.bouncing == b.bouncing
+        && f(a.theta1_dot_max, b.theta1_dot_max)
+        && f(a.t_theta1_dot_max, b.t_theta1_dot_max)
+        && f(a.z_n_max, b.z_n_max)
+        && a.lift_offs == b.lift_offs
+        && a.touchdowns == b.touchdowns
+        && a.impacts_without_collision == b.impacts_without_collision
+        && a.final_mode == b.final_mode
+        && a.lift_offs_transient == b.lift_offs_transient
+        && a.rhs_evaluations == b.rhs_evaluations
+        && a.error == b.error
+}
+
+/// Writes `rows` as a CSV file at `path` (through a temporary file and a rename).
+///
+/// # Errors
+/// [`CliError::Io`].
+pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), CliError> {
+    let tmp = path.with_file_name(format!(".{}.partial", path.file_name().and_then(|n| n.to_str()).unwrap_or("rows.csv")));
+    {
+        let mut w = csv::Writer::from_path(&tmp).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+        for r in rows {
+            w.serialize(r).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+        }
+        w.flush().map_err(io_err(&tmp))?;
+    }
+    std::fs::rename(&tmp, path).map_err(io_err(path))
+}
+
+/// The journal open for appending, shared by the worker threads.
+pub struct Journal {
+    path: PathBuf,
+    writer: Mutex<csv::Writer<File>>,
+}
+
+impl Journal {
+    /// Opens `dir/runs.csv` for appending, first rewriting it with `existing` rows
+    /// when `rewrite` (a partial last line was dropped); writes the header into a
+    /// new file.
+    ///
+    /// # Errors
+    /// [`CliError::Io`].
+    pub fn open(dir: &Path, existing: &[RunRow], rewrite: bool) -> Result<Self, CliError> {
+        let path = dir.join(JOURNAL);
+        if rewrite {
+            write_rows(&path, existing)?;
+        }
+        let fresh = std::fs::metadata(&path).map(|m| m.len() == 0).unwrap_or(true);
+        let file = OpenOptions::new().create(true).append(true).open(&path).map_err(io_err(&path))?;
+        let writer = csv::WriterBuilder::new().has_headers(fresh).from_writer(file);
+        Ok(Self { path, writer: Mutex::new(writer) })
+    }
+
+    /// Appends `row` and flushes it to the file.
+    ///
+    /// # Errors
+    /// [`CliError::Io`].
+    pub fn append(&self, row: &RunRow) -> Result<(), CliError> {
+        let mut w = self.writer.lock().unwrap_or_else(|p| p.into_inner());
+        w.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() })?;
+        // Flushes the csv buffer into the (unbuffered) file: one write per row.
+        w.flush().map_err(io_err(&self.path))
+    }
+}
+
+/// The indices of `m`'s runs (in its shard) not in `rows`, ascending.
+pub fn missing(m: &Manifest, rows: &[RunRow]) -> Vec<usize> {
+    let done: std::collections::HashSet<usize> = rows.iter().map(|r| r.index).collect();
+    m.shard.indices(m.spec.n_runs()).filter(|i| !done.contains(i)).collect()
+}

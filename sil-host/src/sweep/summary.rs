@@ -1,0 +1,239 @@
+//! What a sweep found: per impact law and `e_n`, and per initial condition (and
+//! for any of them), the critical friction coefficient (the smallest `mu` with
+//! persistent bouncing at some belt speed) and, for each `mu`, the belt-speed
+//! bands of persistent bouncing (maximal runs of neighbouring grid speeds).
+//!
+//! Persistent bouncing at a grid point: the paper's indicator flagged
+//! (`max theta1_dot` over the record window above the threshold) *and* the tip
+//! left the belt in the record window ([`Outcome::Bouncing`]). The indicator alone
+//! also flags an arm that moves on the belt without leaving it (in closed loop the
+//! controller's answers to sensor noise keep `theta1_dot` near 1e-2 rad/s); those
+//! points are counted separately (`indicator_points`).
+
+use std::{collections::BTreeMap, io::Write};
+
+use serde::Serialize;
+
+use super::{
+    SweepSpec,
+    run::{Outcome, RunRow},
+};
+
+/// A band of neighbouring grid belt speeds with persistent bouncing, m/s.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Band {
+    /// Most negative speed of the band (grid value).
+    pub v_min: f64,
+    /// Least negative speed (grid value).
+    pub v_max: f64,
+    /// Grid points in the band.
+    pub points: usize,
+}
+
+/// The bands at one `mu`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MuBands {
+    /// Friction coefficient.
+    pub mu: f64,
+    /// Grid points with persistent bouncing.
+    pub bouncing_points: usize,
+    /// Grid points where the paper's indicator alone is flagged (with or without lift-off).
+    pub indicator_points: usize,
+    /// Grid points with a result.
+    pub points: usize,
+    /// The bands, by increasing speed.
+    pub bands: Vec<Band>,
+}
+
+/// One initial condition's (or `any`'s) results for one impact law and `e_n`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IcResults {
+    /// Initial condition, or `any` (bouncing from at least one of them).
+    pub ic: String,
+    /// Smallest `mu` with persistent bouncing (`None`: none on the grid).
+    pub critical_mu: Option<f64>,
+    /// Bands per `mu`, by increasing `mu`.
+    pub per_mu: Vec<MuBands>,
+}
+
+/// Results for one impact law and `e_n`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseResults {
+    /// Impact law.
+    pub impact_law: String,
+    /// Restitution coefficient.
+    pub e_n: f64,
+    /// Per initial condition, then `any`.
+    pub ics: Vec<IcResults>,
+}
+
+/// The sweep's results (the deterministic part of `summary.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Results {
+    /// Runs with a result.
+    pub runs: usize,
+    /// Runs of the sweep (or shard) without one.
+    pub missing: usize,
+    /// Runs per outcome.
+    pub outcomes: BTreeMap<String, usize>,
+    /// The indicator's threshold used, rad/s (the paper's: 0).
+    pub threshold: f64,
+    /// Per impact law and `e_n`.
+    pub cases: Vec<CaseResults>,
+}
+
+/// Computes the results from `rows` (any order) of sweep `spec`.
+pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
+    let ics = spec.initial_conditions();
+    let (mus, vs) = (spec.mu.values(), spec.v_belt.values());
+    let mut outcomes = BTreeMap::new();
+    for r in rows {
+        *outcomes.entry(r.outcome.name().to_string()).or_insert(0) += 1;
+    }
+    // flags[case][ic][i_mu][i_v]: Some((persistent bouncing, indicator)) when there is a result.
+    let n_cases = spec.impact_laws.len() * spec.e_n.len();
+    let mut flags = vec![vec![vec![vec![None::<Flags>; vs.len()]; mus.len()]; ics.len()]; n_cases];
+    for r in rows {
+        let key = spec.run_at(r.index);
+        let case = r.index / (ics.len() * vs.len() * mus.len());
+        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome == Outcome::Bouncing, r.bouncing));
+    }
+    let mut cases = Vec::new();
+    for (case, per_ic) in flags.iter().enumerate() {
+        let first = spec.run_at(case * ics.len() * vs.len() * mus.len());
+        let mut list: Vec<IcResults> = per_ic.iter().zip(&ics).map(|(grid, ic)| ic_results(&ic.name, grid, &mus, &vs)).collect();
+        if ics.len() > 1 {
+            let any: Vec<Vec<Option<Flags>>> = (0..mus.len())
+                .map(|m| {
+                    (0..vs.len())
+                        .map(|v| {
+                            let vals: Vec<Flags> = per_ic.iter().filter_map(|g| g[m][v]).collect();
+                            (!vals.is_empty()).then(|| (vals.iter().any(|f| f.0), vals.iter().any(|f| f.1)))
+                        })
+                        .collect()
+                })
+                .collect();
+            list.push(ic_results("any", &any, &mus, &vs));
+        }
+        cases.push(CaseResults { impact_law: first.impact_law.name().into(), e_n: first.e_n, ics: list });
+    }
+    Results { runs: rows.len(), missing, outcomes, threshold: spec.threshold, cases }
+}
+
+/// Persistent bouncing, and the paper's indicator flagged.
+type Flags = (bool, bool);
+
+fn ic_results(name: &str, grid: &[Vec<Option<Flags>>], mus: &[f64], vs: &[f64]) -> IcResults {
+    let mut per_mu = Vec::new();
+    for (m, row) in grid.iter().enumerate() {
+        let mut bands: Vec<Band> = Vec::new();
+        let mut open: Option<usize> = None;
+        for v in 0..=row.len() {
+            let on = v < row.len() && row[v].is_some_and(|f| f.0);
+            match (on, open) {
+                (true, None) => open = Some(v),
+                (false, Some(s)) => {
+                    bands.push(Band { v_min: vs[s], v_max: vs[v - 1], points: v - s });
+                    open = None;
+                }
+                _ => {}
+            }
+        }
+        per_mu.push(MuBands {
+            mu: mus[m],
+            bouncing_points: row.iter().filter(|f| f.is_some_and(|f| f.0)).count(),
+            indicator_points: row.iter().filter(|f| f.is_some_and(|f| f.1)).count(),
+            points: row.iter().filter(|f| f.is_some()).count(),
+            bands,
+        });
+    }
+    let critical_mu = per_mu.iter().find(|m| m.bouncing_points > 0).map(|m| m.mu);
+    IcResults { ic: name.into(), critical_mu, per_mu }
+}
+
+fn fmt_bands(b: &MuBands) -> String {
+    if b.points == 0 {
+        return "(no results)".into();
+    }
+    if b.bands.is_empty() {
+        return "-".into();
+    }
+    b.bands.iter().map(|x| format!("[{:.3}, {:.3}]", x.v_min, x.v_max)).collect::<Vec<_>>().join(" ")
+}
+
+/// Prints the human table of `r` to `o`.
+pub fn print_table(o: &mut dyn Write, r: &Results) {
+    let _ = writeln!(
+        o,
+        "persistent bouncing: max theta1_dot over the record window > {:e} rad/s (the paper's indicator; its threshold: > 0) with lift-offs in the window",
+        r.threshold
+    );
+    for c in &r.cases {
+        let _ = writeln!(o, "\nimpact law {}, e_n = {}", c.impact_law, c.e_n);
+        let crit: Vec<String> =
+            c.ics.iter().map(|i| format!("{} {}", i.ic, i.critical_mu.map_or("none".into(), |m| format!("{m}")))).collect();
+        let _ = writeln!(o, "  critical mu: {}", crit.join(", "));
+        let _ =
+            writeln!(o, "  {:>5}  {:<5} {:>9} {:>9}  belt-speed bands of persistent bouncing (m/s)", "mu", "ic", "bouncing", "indicator");
+        let n_mu = c.ics.first().map_or(0, |i| i.per_mu.len());
+        for m in 0..n_mu {
+            for (k, i) in c.ics.iter().enumerate() {
+                let b = &i.per_mu[m];
+                let mu = if k == 0 { format!("{}", b.mu) } else { String::new() };
+                let _ = writeln!(o, "  {:>5}  {:<5} {:>9} {:>9}  {}", mu, i.ic, b.bouncing_points, b.indicator_points, fmt_bands(b));
+            }
+        }
+    }
+    if r.cases.len() > 1 {
+        let _ = writeln!(o, "\nhow the bouncing region moves with the impact law and e_n (any initial condition):");
+        for c in &r.cases {
+            if let Some(any) = c.ics.last() {
+                let points: usize = any.per_mu.iter().map(|m| m.bouncing_points).sum();
+                let widest = any
+                    .per_mu
+                    .iter()
+                    .flat_map(|m| m.bands.iter().map(move |b| (m.mu, *b)))
+                    .max_by_key(|(_, b)| b.points)
+                    .map_or("-".into(), |(mu, b)| format!("mu {mu}: [{:.3}, {:.3}]", b.v_min, b.v_max));
+                let _ = writeln!(
+                    o,
+                    "  {:<8} e_n {:<5} critical mu {:<6} bouncing grid points {:<6} widest band {}",
+                    c.impact_law,
+                    c.e_n,
+                    any.critical_mu.map_or("none".into(), |m| format!("{m}")),
+                    points,
+                    widest
+                );
+            }
+        }
+    }
+    let outcomes: Vec<String> = r.outcomes.iter().map(|(k, v)| format!("{k} {v}")).collect();
+    let _ = writeln!(
+        o,
+        "\nruns: {} ({}){}",
+        r.runs,
+        outcomes.join(", "),
+        if r.missing > 0 { format!(", {} missing", r.missing) } else { String::new() }
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_are_maximal_runs_of_flagged_speeds() {
+        let vs = [-1.0, -0.9, -0.8, -0.7, -0.6];
+        let (on, off) = (Some((true, true)), Some((false, true)));
+        let grid = vec![vec![off; 5], vec![on, on, off, None, on]];
+        let r = ic_results("x", &grid, &[0.1, 0.2], &vs);
+        assert_eq!(r.critical_mu, Some(0.2));
+        assert!(r.per_mu[0].bands.is_empty());
+        let b = &r.per_mu[1].bands;
+        assert_eq!(b.len(), 2);
+        assert_eq!((b[0].v_min, b[0].v_max, b[0].points), (-1.0, -0.9, 2));
+        assert_eq!((b[1].v_min, b[1].v_max, b[1].points), (-0.6, -0.6, 1));
+        assert_eq!((r.per_mu[1].bouncing_points, r.per_mu[1].indicator_points, r.per_mu[1].points), (3, 4, 4));
+        assert_eq!(r.per_mu[0].indicator_points, 5);
+    }
+}
