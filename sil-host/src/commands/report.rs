@@ -48,8 +48,13 @@ fn step(id: &'static str, args: &[&str]) -> Step {
     Step { id, args: args.iter().map(|s| (*s).to_string()).collect() }
 }
 
+/// The paper's scenario files: `./scenarios`, else the repository's at build time.
+fn scenario_dir() -> Option<PathBuf> {
+    [PathBuf::from("scenarios"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios")].into_iter().find(|p| p.is_dir())
+}
+
 /// The experiments, at the size asked for.
-fn sections(size: ReportSize) -> Vec<Section> {
+fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     let quick = size == ReportSize::Quick;
     let mut v = vec![
         Section {
@@ -68,6 +73,26 @@ fn sections(size: ReportSize) -> Vec<Section> {
             steps: vec![step("simulate", &["simulate", "--x0", "a", "--mu", "0.6", "--v-belt", "-0.4", "--duration", "10"])],
         },
     ];
+    v.push(Section {
+        title: "Open-loop two-parameter bifurcation diagram",
+        source: "MODEL.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d",
+        steps: vec![step(
+            "sweep-open-loop",
+            &if quick { vec!["sweep", "--v-belt-step", "0.01", "--transient", "100", "--record", "30"] } else { vec!["sweep"] },
+        )],
+    });
+    v.push(Section {
+        title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
+        source: "MODEL.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop",
+        steps: vec![step(
+            "sweep-hybrid",
+            &if quick {
+                vec!["sweep", "--controller", "hybrid", "--ics", "d", "--v-belt-step", "0.05", "--transient", "20", "--record", "10"]
+            } else {
+                vec!["sweep", "--controller", "hybrid", "--ics", "d"]
+            },
+        )],
+    });
     v.push(Section {
         title: "One-parameter bifurcation diagram (Poincaré section)",
         source: "MODEL.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
@@ -92,7 +117,12 @@ fn sections(size: ReportSize) -> Vec<Section> {
             .into_iter()
             .map(|name| Step {
                 id: name,
-                args: vec!["run".into(), "--in-process".into(), "--scenario".into(), format!("scenarios/{name}.toml")],
+                args: vec![
+                    "run".into(),
+                    "--in-process".into(),
+                    "--scenario".into(),
+                    scenarios.join(format!("{name}.toml")).to_string_lossy().into_owned(),
+                ],
             })
             .collect(),
     });
@@ -132,10 +162,9 @@ struct ReportIndex {
 /// and turns into exit code 1 after everything is written.
 pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     let exe = std::env::current_exe().map_err(|e| CliError::BadInput(format!("cannot find this executable: {e}")))?;
-    if !Path::new("scenarios").is_dir() {
-        return Err(CliError::BadInput("run `sil-host report` from the repository root (it uses scenarios/*.toml)".into()));
-    }
-    let sections = sections(args.size);
+    let scenarios = scenario_dir()
+        .ok_or_else(|| CliError::BadInput("cannot find the scenarios/ folder: run `sil-host report` from the repository root".into()))?;
+    let sections = sections(args.size, &scenarios);
     let mut out = OutputSet::new(&args.output.out)?;
     let n: usize = sections.iter().map(|s| s.steps.len()).sum();
     let progress = progress_bar(n as u64, "report", "experiments", args.output.json);
