@@ -10,10 +10,9 @@
 //! firmware process still lives, and gives up after
 //! `rig.max_consecutive_timeouts` timeouts in a row.
 //!
-//! Real time (`--realtime`): frame `k` is due at wall time `t0 + t_k` and is
-//! sampled and published when the plant gets there (its lateness is the period
-//! jitter); a command not back within `Ts` of that publication is a deadline
-//! miss; one that is takes effect at `t_k` plus its measured latency.
+//! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k`; a
+//! command not back by `t0 + t_k + Ts` is a deadline miss; one that is takes
+//! effect at `t_k` plus its measured latency.
 
 use std::{
     io::Write,
@@ -186,18 +185,17 @@ impl FirmwareLink for IpcLink {
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
-        if self.realtime {
+        let deadline = if self.realtime {
             let t0 = *self.t0.get_or_insert_with(Instant::now);
             let ideal = t0 + Duration::from_secs_f64(truth.t);
             sleep_until(ideal, self.busy);
             self.timings.jitter_us.push((Instant::now() - ideal).as_secs_f64() as f32 * 1e6);
-        }
+            ideal + Duration::from_secs_f64(self.ts)
+        } else {
+            Instant::now() + self.timeout
+        };
         self.ports.truth.send(*truth).map_err(transport)?;
-        // The sampling instant: on hardware the sample is taken when the timer
-        // fires, however late; the firmware's deadline runs from there. The plant's
-        // own lateness against the wall-clock schedule is the period jitter.
         let published = Instant::now();
-        let deadline = published + if self.realtime { Duration::from_secs_f64(self.ts) } else { self.timeout };
         self.ports.frames.send(*frame).map_err(transport)?;
         loop {
             match self.ports.commands.next_before(deadline).map_err(transport)? {
@@ -207,7 +205,10 @@ impl FirmwareLink for IpcLink {
                     self.timings.rtt_us.push((now - published).as_secs_f64() as f32 * 1e6);
                     self.timings.step_us.push(c.step_ticks as f32 * 1e-3);
                     let telemetry = self.telemetry_for(c.seq)?;
-                    let arrival_s = self.realtime.then(|| (now - published).as_secs_f64());
+                    let arrival_s = self.realtime.then(|| {
+                        let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
+                        (now - ideal).as_secs_f64()
+                    });
                     return Ok(Exchange::Answered { command: c, telemetry, arrival_s });
                 }
                 Some(_) => self.timings.late_answers += 1,
