@@ -28,6 +28,54 @@ pub struct Panel<'a> {
     pub y_range: Option<(f64, f64)>,
 }
 
+/// One sample of a closed-loop time history, for [`history_panels`].
+#[derive(Debug, Clone, Copy)]
+pub struct HistorySample {
+    /// Time, s.
+    pub t: f64,
+    /// Tip position `z_t`, m.
+    pub z_t: f64,
+    /// Its reference `z_t*`, m.
+    pub z_t_ref: f64,
+    /// Normal force `f_n`, N.
+    pub f_n: f64,
+    /// Motor torques `[u1, u2]`, N m.
+    pub u: [f64; 2],
+    /// Contact mode name (`sliding`, `flight`, `sticking`).
+    pub mode: &'static str,
+}
+
+/// The four panels of a closed-loop figure (`run`, `pil`, `zmax`): tip position
+/// against its reference, normal force, torques (drawn as steps when `step_torques`,
+/// a zero-order hold) and contact mode, against time.
+pub fn history_panels(samples: &[HistorySample], step_torques: bool) -> [Panel<'static>; 4] {
+    let col = |f: fn(&HistorySample) -> f64| samples.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
+    [
+        Panel {
+            y_label: "z_t (m)",
+            series: vec![
+                Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false },
+                Series { label: "z_t*", points: col(|r| r.z_t_ref), color: colors::GREY, step: false },
+            ],
+            y_range: None,
+        },
+        Panel {
+            y_label: "f_n (N)",
+            series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
+            y_range: None,
+        },
+        Panel {
+            y_label: "torque (N m)",
+            series: vec![
+                Series { label: "u1", points: col(|r| r.u[0]), color: colors::ORANGE, step: step_torques },
+                Series { label: "u2", points: col(|r| r.u[1]), color: colors::RED, step: step_torques },
+            ],
+            y_range: None,
+        },
+        mode_panel(samples.iter().map(|r| (r.t, r.mode))),
+    ]
+}
+
 /// The contact-mode panel: a step curve of 0 flight, 1 sliding, 2 sticking
 /// against time, from `(t, mode name)` samples.
 pub fn mode_panel<'s>(samples: impl Iterator<Item = (f64, &'s str)>) -> Panel<'static> {

@@ -25,7 +25,7 @@ use crate::{
     cli::{ControllerArg, FirmwareArgs, PaperX0, RunArgs, ScenarioArgs},
     error::CliError,
     output::{OutputSet, StreamedCsv, progress_bar},
-    plot::{self, Panel, Series, colors},
+    plot,
     sil::{
         firmware_process::{self, Ending},
         in_process::InProcessLink,
@@ -320,31 +320,11 @@ pub fn firmware(args: &FirmwareArgs) -> Result<i32, CliError> {
 
 pub(crate) fn draw(path: &std::path::Path, what: &str, s: &Scenario, records: &[PeriodRecord]) -> Result<(), CliError> {
     let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
-    let col = |f: fn(&PeriodRecord) -> f64| records.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
-    let panels = [
-        Panel {
-            y_label: "z_t (m)",
-            series: vec![
-                Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false },
-                Series { label: "z_t*", points: col(|r| r.z_t_ref), color: colors::GREY, step: false },
-            ],
-            y_range: None,
-        },
-        Panel {
-            y_label: "f_n (N)",
-            series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
-            y_range: None,
-        },
-        Panel {
-            y_label: "torque (N m)",
-            series: vec![
-                Series { label: "u1", points: col(|r| r.u1_cmd), color: colors::ORANGE, step: true },
-                Series { label: "u2", points: col(|r| r.u2_cmd), color: colors::RED, step: true },
-            ],
-            y_range: None,
-        },
-        plot::mode_panel(records.iter().map(|r| (r.t, r.mode))),
-    ];
+    let samples: Vec<plot::HistorySample> = records
+        .iter()
+        .map(|r| plot::HistorySample { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u: [r.u1_cmd, r.u2_cmd], mode: r.mode })
+        .collect();
+    let panels = plot::history_panels(&samples, true);
     let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

@@ -20,7 +20,7 @@ use crate::{
     error::CliError,
     ideal::ControllerKind,
     output::{OutputSet, progress_bar, write_csv},
-    plot::{self, Panel, Series, colors},
+    plot,
     sil::scenario::Scenario,
     zmax::{Bisection, Combination, Criteria, Search, Setting, Trial, X0, default_bracket, max_evaluations, sampled_scenario, search},
 };
@@ -347,31 +347,11 @@ fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
 fn draw(path: &std::path::Path, s: &Search) -> Result<(), CliError> {
     let rows = &s.limit_trace;
     let t_end = rows.last().map_or(1.0, |r| r.t).max(1e-9);
-    let col = |f: fn(&crate::zmax::TraceRow) -> f64| rows.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
-    let panels = [
-        Panel {
-            y_label: "z_t (m)",
-            series: vec![
-                Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false },
-                Series { label: "z_t*", points: col(|r| r.z_t_ref), color: colors::GREY, step: false },
-            ],
-            y_range: None,
-        },
-        Panel {
-            y_label: "f_n (N)",
-            series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
-            y_range: None,
-        },
-        Panel {
-            y_label: "torque (N m)",
-            series: vec![
-                Series { label: "u1", points: col(|r| r.u1), color: colors::ORANGE, step: false },
-                Series { label: "u2", points: col(|r| r.u2), color: colors::RED, step: false },
-            ],
-            y_range: None,
-        },
-        plot::mode_panel(rows.iter().map(|r| (r.t, r.mode))),
-    ];
+    let samples: Vec<plot::HistorySample> = rows
+        .iter()
+        .map(|r| plot::HistorySample { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u: [r.u1, r.u2], mode: r.mode })
+        .collect();
+    let panels = plot::history_panels(&samples, false);
     let c = &s.combination;
     let what = match s.bisection {
         Bisection::Found { lo, hi, .. } => format!("at the limit z_t* = {lo:.4} m (fails at {hi:.4} m)"),
