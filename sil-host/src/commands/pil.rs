@@ -16,12 +16,12 @@ use super::run::{RunSummary, draw, load_scenario, print_summary, rms_tracking_er
 use crate::{
     cli::PilArgs,
     error::CliError,
-    output::{OutputSet, progress_bar, write_csv},
+    output::{OutputSet, StreamedCsv, progress_bar},
     plot::{self, Panel, Series, colors},
     sil::{
         pil_link::{self, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
         record::{PeriodRecord, lift_off_stats},
-        rig::run_loop,
+        rig::run_loop_streaming,
         scenario::Scenario,
         setup::{firmware_config, plant_for},
     },
@@ -117,10 +117,13 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
         PilOptions { image: image.clone(), qemu: args.qemu.clone(), answer_timeout_s: args.answer_timeout, ..PilOptions::new(&image) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
     let stop = stop_flag();
+    // As in `run`: rows go to trace.csv.partial as they are made.
+    let mut trace = StreamedCsv::new(&mut out, "trace.csv", std::time::Duration::from_millis(1))?;
     let started = Instant::now();
-    let (records, failure) = run_loop(
+    let (records, failure) = run_loop_streaming(
         &scenario,
         &mut link,
+        |r| trace.push(r),
         |k, _| {
             if k % 100 == 0 {
                 progress.set_position(k as u64);
@@ -137,7 +140,7 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
     let counts = link.counts.clone();
     drop(link);
 
-    write_csv(&mut out, "trace.csv", &records)?;
+    trace.finish()?;
     let svg = out.stage("trace.svg");
     draw(&svg, "PIL", &scenario, &records)?;
     let svg = out.stage("instructions.svg");

@@ -18,10 +18,10 @@ use serde::Serialize;
 use shared::Params;
 
 use crate::{
-    cli::{PaperX0, PoincareArgs},
+    cli::PoincareArgs,
     commands::{
         parse_range,
-        simulate::{InitialCondition, impact_law, parse_x0_deg},
+        simulate::{InitialCondition, chosen_initial_condition, impact_law},
     },
     error::CliError,
     initial,
@@ -212,17 +212,7 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
     let sim =
         SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
-    let (name, given_deg) = match &args.x0_deg {
-        Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
-        None => {
-            let ic = match args.x0 {
-                PaperX0::A => initial::X0A,
-                PaperX0::D => initial::X0D,
-                PaperX0::U => initial::X0U,
-            };
-            (ic.name.to_string(), ic.deg)
-        }
-    };
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);
     let projection = initial::describe_projection(&params, x0);
     // The initial state must be acceptable to the plant (not below the belt, reachable).

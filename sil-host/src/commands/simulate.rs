@@ -158,6 +158,25 @@ pub(crate) fn impact_law(arg: ImpactLawArg) -> ImpactLaw {
     }
 }
 
+/// The initial condition of `--x0` or, when given, `--x0-deg`: its name and
+/// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and degrees per second.
+///
+/// # Errors
+/// [`CliError::BadInput`] for a malformed `--x0-deg`.
+pub(crate) fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
+    Ok(match x0_deg {
+        Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
+        None => {
+            let ic = match x0 {
+                PaperX0::A => initial::X0A,
+                PaperX0::D => initial::X0D,
+                PaperX0::U => initial::X0U,
+            };
+            (ic.name.to_string(), ic.deg)
+        }
+    })
+}
+
 /// Parses `--x0-deg th1,th1dot,th2,th2dot`.
 pub(crate) fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
     let bad = || CliError::BadInput(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
@@ -219,17 +238,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
-    let (name, given_deg) = match &args.x0_deg {
-        Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
-        None => {
-            let ic = match args.x0 {
-                PaperX0::A => initial::X0A,
-                PaperX0::D => initial::X0D,
-                PaperX0::U => initial::X0U,
-            };
-            (ic.name.to_string(), ic.deg)
-        }
-    };
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);
     let projection = initial::describe_projection(&params, x0);
     let mut plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
