@@ -75,10 +75,14 @@ fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     ];
     v.push(Section {
         title: "Open-loop two-parameter bifurcation diagram",
-        source: "MODEL.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d",
+        source: "MODEL.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d, for e_n = 0, 0.2 and 0.5 (how the band moves with the impact law)",
         steps: vec![step(
             "sweep-open-loop",
-            &if quick { vec!["sweep", "--v-belt-step", "0.01", "--transient", "100", "--record", "30"] } else { vec!["sweep"] },
+            &if quick {
+                vec!["sweep", "--v-belt-step", "0.01", "--transient", "100", "--record", "30", "--e-n", "0,0.2,0.5"]
+            } else {
+                vec!["sweep", "--e-n", "0,0.2,0.5"]
+            },
         )],
     });
     v.push(Section {
@@ -276,6 +280,7 @@ fn render_page(sections: &[Section], results: &[Vec<StepResult>], size: &str, wa
             if let Some(v) = &r.summary {
                 scalar_table(&mut md, v);
                 nested_tables(&mut md, v);
+                sweep_bands(&mut md, v);
             }
             for f in r.files.iter().filter(|f| f.ends_with(".svg")) {
                 let _ = writeln!(md, "![{f}]({f})\n");
@@ -342,6 +347,41 @@ fn nested_tables(md: &mut String, v: &Value) {
     }
 }
 
+/// A sweep's summary (`results.cases`): per impact law, `e_n` and initial
+/// condition, the critical `mu` and the belt-speed bands of persistent bouncing for
+/// each `mu`, so the page shows how the band moves with the impact law.
+fn sweep_bands(md: &mut String, v: &Value) {
+    let Some(cases) = v.pointer("/results/cases").and_then(Value::as_array) else { return };
+    let _ = writeln!(md, "Persistent bouncing, by impact law and `e_n`:\n");
+    let _ = writeln!(md, "| impact law | e_n | initial condition | critical mu | bands of v_belt (m/s) per mu |\n|---|---|---|---|---|");
+    for case in cases {
+        let law = case.get("impact_law").and_then(scalar).unwrap_or_default();
+        let e_n = case.get("e_n").and_then(scalar).unwrap_or_default();
+        for ic in case.get("ics").and_then(Value::as_array).into_iter().flatten() {
+            let name = ic.get("ic").and_then(scalar).unwrap_or_default();
+            let critical = ic.get("critical_mu").and_then(scalar).unwrap_or_else(|| "none".into());
+            let per_mu: Vec<String> = ic
+                .get("per_mu")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+                .filter_map(|m| {
+                    let bands: Vec<String> = m
+                        .get("bands")?
+                        .as_array()?
+                        .iter()
+                        .filter_map(|b| Some(format!("[{}, {}]", scalar(b.get("v_min")?)?, scalar(b.get("v_max")?)?)))
+                        .collect();
+                    (!bands.is_empty()).then(|| format!("{}: {}", m.get("mu").and_then(scalar).unwrap_or_default(), bands.join(" ")))
+                })
+                .collect();
+            let bands = if per_mu.is_empty() { "none".to_string() } else { per_mu.join("; ") };
+            let _ = writeln!(md, "| {law} | {e_n} | {name} | {critical} | {bands} |");
+        }
+    }
+    md.push('\n');
+}
+
 /// The runs of a section side by side: the scalar fields they share.
 fn comparison_table(md: &mut String, rs: &[StepResult]) {
     let objects: Vec<&serde_json::Map<String, Value>> = rs.iter().filter_map(|r| r.summary.as_ref()?.as_object()).collect();
@@ -400,6 +440,21 @@ mod tests {
         assert!(md.contains("| chaotic | periodic |") && md.contains("| 2 | 3 |"), "{md}");
         assert!(md.contains("| class | period |") && md.contains("| periodic | 2 |") && md.contains("| chaotic | - |"), "{md}");
         assert!(!md.contains("deep"), "objects of objects are left to the files: {md}");
+    }
+
+    #[test]
+    fn sweep_bands_show_critical_mu_and_bands_per_case() {
+        let v: Value = serde_json::json!({"results": {"cases": [
+            {"impact_law": "newton", "e_n": 0.5, "ics": [{"ic": "x0a", "critical_mu": 0.4, "per_mu": [
+                {"mu": 0.3, "bands": []},
+                {"mu": 0.4, "bands": [{"v_min": -0.96, "v_max": -0.31, "points": 66}]}
+            ]}]},
+            {"impact_law": "newton", "e_n": 0.0, "ics": [{"ic": "x0a", "critical_mu": null, "per_mu": [{"mu": 0.4, "bands": []}]}]}
+        ]}});
+        let mut md = String::new();
+        sweep_bands(&mut md, &v);
+        assert!(md.contains("| newton | 0.5 | x0a | 0.4 | 0.4: [-0.96, -0.31] |"), "{md}");
+        assert!(md.contains("| newton | 0 | x0a | none | none |"), "{md}");
     }
 
     #[test]
