@@ -344,3 +344,46 @@ fn the_sensor_checks_do_not_trip_in_healthy_runs_with_many_lift_offs() {
     assert!(o.status.success(), "{err}");
     assert!(summary(&out)["lift_offs"].as_u64().unwrap() > 100, "the run bounces");
 }
+
+#[test]
+fn a_real_time_run_is_paced_by_the_wall_clock_and_both_sides_judge_the_same_stamp() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rt");
+    let name = rig("rt");
+    let o = run(&["--realtime", "--duration", "1", "--rig", &name], &out);
+    assert_eq!(o.status.code(), Some(0));
+    let s = summary(&out);
+    assert_eq!(s["timing"], "realtime");
+    assert_eq!(s["periods"], 1000);
+    // Paced: 1000 periods of 1 ms take about a second of wall time, never less.
+    let wall = s["wall_s"].as_f64().unwrap();
+    assert!((0.99..3.0).contains(&wall), "wall {wall} s");
+    for key in ["period_jitter_us", "firmware_step_us", "ipc_rtt_us"] {
+        assert!(s[key]["p99"].as_f64().unwrap() >= 0.0, "{key}");
+    }
+    assert!(s["realtime_setup"].is_object());
+    // The plant and the firmware judge a command's lateness by the same send stamp:
+    // whatever this machine's load did, their counts are equal.
+    assert_eq!(s["deadline_misses"].as_u64(), s["firmware_overruns"].as_u64().map(u64::from));
+}
+
+#[test]
+fn a_stalled_firmware_in_real_time_is_noticed_by_both_sides_and_goes_safe() {
+    let dir = tempfile::tempdir().unwrap();
+    // 50 ms of wall time without the firmware: the plant keeps publishing every
+    // period and counts each unanswered one; the firmware then finds the queued
+    // frames late and latches its safe state.
+    let s = scenario(dir.path(), "rt-stall.toml", &[], "\n[[faults]]\nkind = \"stall\"\nat_s = 0.5\nduration_s = 0.05\n");
+    let out = dir.path().join("rt-stall");
+    let name = rig("rtstall");
+    let o = run(&["--scenario", s.to_str().unwrap(), "--realtime", "--duration", "2", "--rig", &name], &out);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("safe state") && err.contains("DeadlineMisses"), "{err}");
+    let rows = trace(&out);
+    let plant = column(&out, "deadline_miss");
+    assert_eq!(&rows[500][plant], "true", "the plant notices in the period the stall starts");
+    assert!(rows[..500].iter().all(|r| &r[plant] == "false"), "no miss before the stall");
+    assert!(rows.len() > 503 && rows.len() < 500 + 200, "noticed within a bounded number of periods: {}", rows.len());
+    assert!(summary(&out)["firmware_overruns"].as_u64().unwrap() >= 3);
+}

@@ -12,7 +12,7 @@ use crate::{
     error::CliError,
     sil::{
         in_process::InProcessLink,
-        ipc::default_rig_name,
+        ipc::{RealtimeSetup, default_rig_name},
         ipc_link::{IpcLink, Percentiles, percentiles},
         rig::run_loop,
         scenario::Scenario,
@@ -38,6 +38,9 @@ pub struct TransportFigures {
     pub jitter_us: Option<Percentiles>,
     /// Real time: the firmware's step time, us.
     pub step_us: Option<Percentiles>,
+    /// Real time: the control loops' CPU and scheduling, and what the kernel refused.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub realtime_setup: Option<RealtimeSetup>,
     /// Deadline misses over all runs (plant side).
     pub deadline_misses: usize,
     /// The target, periods per wall second (or misses for real time).
@@ -104,6 +107,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         let mut f = summarise("iceoryx2 realtime", vec![rate], records.len(), missed, Some(&link.timings), 0.0);
         f.jitter_us = Some(percentiles(&link.timings.jitter_us));
         f.step_us = Some(percentiles(&link.timings.step_us));
+        f.realtime_setup = link.realtime_setup.clone();
         f.meets_target = missed == 0;
         figures.push(f);
     }
@@ -136,6 +140,12 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         if let Some(p) = &f.step_us {
             let _ = writeln!(o, "{:<18} firmware step {}", "", fmt(p));
         }
+        if let Some(r) = &f.realtime_setup {
+            let _ = writeln!(o, "{:<18} control loops on {}", "", r.describe());
+            for w in &r.warnings {
+                let _ = writeln!(o, "{:<18} warning: {w}", "");
+            }
+        }
     }
     Ok(())
 }
@@ -160,6 +170,7 @@ fn summarise(
         rtt_us: timings.map(|t| percentiles(&t.rtt_us)),
         jitter_us: None,
         step_us: None,
+        realtime_setup: None,
         deadline_misses,
         target,
         meets_target: median >= target,

@@ -169,6 +169,7 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
         firmware_step_us: None,
         period_jitter_us: None,
         late_answers: 0,
+        realtime_setup: None,
         pil: Some(figures),
         scenario_used: scenario.clone(),
     };

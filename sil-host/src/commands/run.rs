@@ -29,7 +29,7 @@ use crate::{
     sil::{
         firmware_process::{self, Ending},
         in_process::InProcessLink,
-        ipc::{check_rig_name, default_rig_name},
+        ipc::{RealtimeSetup, check_rig_name, default_rig_name},
         ipc_link::{IpcLink, Percentiles, percentiles},
         record::{LiftOffStats, PeriodRecord, lift_off_stats},
         rig::{FirmwareLink, run_loop_streaming},
@@ -82,6 +82,10 @@ pub struct RunSummary {
     pub period_jitter_us: Option<Percentiles>,
     /// iceoryx2 runs: commands that arrived after their period was given up.
     pub late_answers: u64,
+    /// Real-time iceoryx2 runs: the plant loop's CPU and `SCHED_FIFO` priority,
+    /// and what the kernel refused (`rig.realtime_cpu`, `rig.realtime_fifo_priority`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub realtime_setup: Option<RealtimeSetup>,
     /// PIL runs: the image's instruction counts and log (`sil-host pil`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pil: Option<crate::commands::pil::PilFigures>,
@@ -210,6 +214,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     let timings = ipc.as_ref().map(|l| l.timings.clone());
+    let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     drop(ipc);
 
     trace.finish()?;
@@ -238,6 +243,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
         period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
+        realtime_setup,
         pil: None,
         scenario_used: scenario.clone(),
     };
@@ -298,6 +304,12 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
     }
     if let Some(p) = &summary.period_jitter_us {
         let _ = writeln!(o, "period jitter: {}", fmt(p));
+    }
+    if let Some(r) = &summary.realtime_setup {
+        let _ = writeln!(o, "real-time loops: {}", r.describe());
+        for w in &r.warnings {
+            let _ = writeln!(o, "real-time set-up warning: {w}");
+        }
     }
     if let Some(e) = &summary.error {
         let _ = writeln!(o, "STOPPED: {e}");

@@ -6,8 +6,10 @@
 //! newest sample it has seen, so frames that piled up while it was stalled are
 //! answered late and counted as overruns; the step's wall time is reported in
 //! `step_ticks` (ns) but does not advance simulated time. In real time, its own
-//! wall clock, locked to the plant's by the frames it catches while spinning, and
-//! it sleeps until just before each frame is due.
+//! wall clock, re-anchored at every frame it was waiting for (the frame's arrival
+//! is the sample tick, as a timer interrupt is on the MCU): a frame that was
+//! already queued when it looked is one it is late for, timed from the last
+//! anchor. It blocks between frames on the plant's CPU ([`prepare_realtime`]).
 //!
 //! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
 //! iceoryx2's node monitoring says the plant process is dead or gone, the
@@ -22,7 +24,7 @@ use shared::wire::{SensorFrame, frame_flags};
 use super::{
     faults::FaultPlan,
     firmware_side::FirmwareSide,
-    ipc::{FirmwarePorts, PeerState, Role, peer_state},
+    ipc::{FirmwarePorts, PeerState, Role, peer_state, prepare_realtime},
     record::RunError,
     scenario::Scenario,
 };
@@ -76,41 +78,36 @@ impl TickClock for HostClock {
 /// iceoryx2 fails or no plant appears within [`WAIT_FOR_PLANT_S`].
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
-    let busy = realtime && s.rig.realtime_busy_wait;
-    // Busy real time: spin through a whole period (and more) for the next frame.
-    let spin = Duration::from_secs_f64(if busy { 2.0 / s.timing.rate_hz } else { s.rig.spin_us * 1e-6 });
+    let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
     let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
     if realtime {
-        super::ipc::prepare_realtime();
+        for w in prepare_realtime(&s.rig).warnings {
+            eprintln!("firmware: real-time set-up: {w}");
+        }
     }
     let mut side = FirmwareSide::new(s)?;
     let faults = FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz);
     let peer_check = Duration::from_secs_f64(s.rig.peer_check_s);
     let clock = HostClock::default();
     let started = Instant::now();
-    // Real time: the wall-clock instant of sample time 0, estimated as the earliest
-    // arrival minus its sample time (a minimum-delay clock sync, as NTP filters).
+    // Real time: the wall-clock instant of sample time 0, anchored at the last
+    // frame the firmware was waiting for.
     let mut epoch: Option<Instant> = None;
     let mut last_seq: Option<u32> = None;
     let mut answered = 0u64;
     let mut stalled_at: Option<u32> = None;
-    let ts_us = (1e6 / s.timing.rate_hz).round() as u64;
     let mut batch: Vec<SensorFrame> = Vec::with_capacity(super::ipc::QUEUE_DEPTH);
-    let mut last_t_us = 0u64;
     loop {
-        // Real time: sleep until just before the next frame is due, then spin for it
-        // (as an MCU's timer interrupt would wake it): waking a sleeping process on
-        // an idle core costs hundreds of microseconds here, a spin costs nothing.
-        if let (true, false, Some(e), Some(_)) = (realtime, busy, epoch, last_seq) {
-            let due = e + Duration::from_micros(last_t_us + ts_us);
-            let wake = due.checked_sub(Duration::from_micros(150)).unwrap_or(due);
-            let now = Instant::now();
-            if wake > now {
-                std::thread::sleep(wake - now);
-            }
-        }
+        // A frame already queued is one the firmware is late for; one it waits for
+        // arrives now.
+        let queued = ports.frames.try_next().map_err(transport)?;
+        let was_queued = queued.is_some();
         let waited_from = Instant::now();
-        let Some(first) = ports.frames.next_before(waited_from + peer_check).map_err(transport)? else {
+        let next = match queued {
+            Some(f) => Some(f),
+            None => ports.frames.next_before(waited_from + peer_check).map_err(transport)?,
+        };
+        let Some(first) = next else {
             // No frame for a while: is the plant still there?
             match peer_state(Role::Plant, rig) {
                 PeerState::Alive => continue,
@@ -136,6 +133,12 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
                 }
             }
         };
+        if realtime
+            && (!was_queued || epoch.is_none())
+            && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us))
+        {
+            epoch = Some(seen);
+        }
         // Injected stall: the process stops (wall clock) at the window's first frame.
         if let Some(d) = faults.stall_starting(first.t_us as f64 * 1e-6)
             && stalled_at != Some(first.seq)
@@ -145,19 +148,6 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         }
         // Everything that queued up meanwhile, in order: in lockstep the firmware's
         // clock is the newest sample, so older frames are answered late.
-        if realtime && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us)) {
-            // Keep the wake-up locked to the frames: a frame caught while spinning
-            // dates the plant's clock exactly; one already waiting means the estimate
-            // is late, one that needed a blocking wait means it is early.
-            let waited = waited_from.elapsed();
-            let step = Duration::from_micros(20);
-            epoch = Some(match epoch {
-                None => seen,
-                Some(_) if waited >= Duration::from_micros(2) && waited < spin => seen,
-                Some(e) if waited < Duration::from_micros(2) => e.checked_sub(step).unwrap_or(e),
-                Some(e) => e + step,
-            });
-        }
         batch.clear();
         batch.push(first);
         while let Some(f) = ports.frames.try_next().map_err(transport)? {
@@ -180,7 +170,6 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
             ports.telemetry.send(telemetry).map_err(transport)?;
             ports.commands.send(command).map_err(transport)?;
             last_seq = Some(frame.seq);
-            last_t_us = frame.t_us;
             answered += 1;
         }
     }

@@ -10,9 +10,13 @@
 //! firmware process still lives, and gives up after
 //! `rig.max_consecutive_timeouts` timeouts in a row.
 //!
-//! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k`; a
-//! command not back by `t0 + t_k + Ts` is a deadline miss; one that is takes
-//! effect at `t_k` plus its measured latency.
+//! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k` (or
+//! as soon after as the plant gets the core: the difference is the period
+//! jitter); a command not back within one period of the frame's publication, or
+//! sent later than `t_k + Ts` on the firmware's clock (anchored at the frame's
+//! arrival, as a timer tick), is a deadline miss; one that is takes effect at
+//! `t_k` plus that latency. Both sides judge the same stamp, so they agree.
+//! Both processes run their loop on one CPU ([`prepare_realtime`]).
 
 use std::{
     io::Write,
@@ -25,7 +29,7 @@ use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, frame_flags};
 
 use super::{
     faults::FaultPlan,
-    ipc::{PeerState, PlantPorts, Role, peer_state},
+    ipc::{PeerState, PlantPorts, RealtimeSetup, Role, leave_realtime, peer_state, prepare_realtime},
     record::RunError,
     rig::{Exchange, FirmwareLink},
     scenario::Scenario,
@@ -59,7 +63,9 @@ pub struct IpcLink {
     rig: String,
     spawned: Option<Spawned>,
     realtime: bool,
-    busy: bool,
+    /// Real time: how the plant's loop was set up (CPU, scheduling).
+    pub realtime_setup: Option<RealtimeSetup>,
+    spin: Duration,
     ts: f64,
     timeout: Duration,
     max_timeouts: u32,
@@ -83,9 +89,9 @@ impl IpcLink {
     pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
-        if realtime {
-            super::ipc::prepare_realtime();
-        }
+        // Before spawning: the firmware process inherits nothing from this thread's
+        // set-up, it makes its own from the same scenario.
+        let realtime_setup = realtime.then(|| prepare_realtime(&s.rig));
         let spawned = match firmware_exe {
             Some(exe) => Some(spawn(exe, rig, s, realtime)?),
             None => None,
@@ -95,7 +101,8 @@ impl IpcLink {
             rig: rig.to_string(),
             spawned,
             realtime,
-            busy: s.rig.realtime_busy_wait,
+            realtime_setup,
+            spin,
             ts: 1.0 / s.timing.rate_hz,
             timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
             max_timeouts: s.rig.max_consecutive_timeouts,
@@ -188,15 +195,22 @@ impl FirmwareLink for IpcLink {
         let deadline = if self.realtime {
             let t0 = *self.t0.get_or_insert_with(Instant::now);
             let ideal = t0 + Duration::from_secs_f64(truth.t);
-            sleep_until(ideal, self.busy);
-            self.timings.jitter_us.push((Instant::now() - ideal).as_secs_f64() as f32 * 1e6);
-            ideal + Duration::from_secs_f64(self.ts)
+            sleep_until(ideal, self.spin);
+            None
         } else {
-            Instant::now() + self.timeout
+            Some(Instant::now() + self.timeout)
         };
         self.ports.truth.send(*truth).map_err(transport)?;
         let published = Instant::now();
         self.ports.frames.send(*frame).map_err(transport)?;
+        // Real time: the sample instant is the frame's publication (the hardware's
+        // timer tick); the plant's own lateness against `t0 + t_k` is period jitter,
+        // not the firmware's deadline, which runs one period from publication.
+        let deadline = deadline.unwrap_or_else(|| {
+            let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
+            self.timings.jitter_us.push(published.saturating_duration_since(ideal).as_secs_f64() as f32 * 1e6);
+            published + Duration::from_secs_f64(self.ts)
+        });
         loop {
             match self.ports.commands.next_before(deadline).map_err(transport)? {
                 Some(c) if c.seq == frame.seq => {
@@ -205,10 +219,10 @@ impl FirmwareLink for IpcLink {
                     self.timings.rtt_us.push((now - published).as_secs_f64() as f32 * 1e6);
                     self.timings.step_us.push(c.step_ticks as f32 * 1e-3);
                     let telemetry = self.telemetry_for(c.seq)?;
-                    let arrival_s = self.realtime.then(|| {
-                        let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
-                        (now - ideal).as_secs_f64()
-                    });
+                    // Real time: the command's own send stamp (the firmware's clock,
+                    // anchored at the frame's arrival) dates it; the plant's own view
+                    // (`now`) is late by however long the plant itself was descheduled.
+                    let arrival_s = self.realtime.then(|| c.t_sent_us.saturating_sub(frame.t_us) as f64 * 1e-6);
                     return Ok(Exchange::Answered { command: c, telemetry, arrival_s });
                 }
                 Some(_) => self.timings.late_answers += 1,
@@ -254,6 +268,9 @@ impl FirmwareLink for IpcLink {
 
 impl Drop for IpcLink {
     fn drop(&mut self) {
+        if let Some(setup) = &self.realtime_setup {
+            leave_realtime(setup);
+        }
         if let Some(sp) = &mut self.spawned
             && let Ok(None) = sp.child.try_wait()
         {
@@ -263,12 +280,12 @@ impl Drop for IpcLink {
     }
 }
 
-/// Waits until `when`: busy, or the OS sleep to 200 us before then a short spin
-/// (sleep alone overshoots by the scheduler's slack).
-fn sleep_until(when: Instant, busy: bool) {
+/// Waits until `when`: the OS sleep to `spin` before, then a spin that yields the
+/// core (sleep alone overshoots by the wake-up latency).
+fn sleep_until(when: Instant, spin: Duration) {
     let now = Instant::now();
-    if !busy && when > now + Duration::from_micros(200) {
-        std::thread::sleep(when - now - Duration::from_micros(200));
+    if when > now + spin {
+        std::thread::sleep(when - now - spin);
     }
     while Instant::now() < when {
         std::thread::yield_now();

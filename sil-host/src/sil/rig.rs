@@ -2,8 +2,8 @@
 //! "Control loop"). Period `k`: the sensors sample the plant at `t_k = k Ts` into
 //! a frame; the frame goes to the firmware over a [`FirmwareLink`] (in-process or
 //! iceoryx2); the command that comes back takes effect at
-//! `max(t_k + delta, t_sent)` (in real-time runs: at `t_k` plus the measured
-//! latency) and is held (zero-order hold) until the next one. A command that is
+//! `max(t_k + delta, t_sent)` (in real-time runs: at `t_sent`, the firmware's
+//! wall-clock send stamp) and is held (zero-order hold) until the next one. A command that is
 //! lost, late past `t_k + Ts`, or not there when the link gives up waiting is a
 //! deadline miss: the previous command stays for the whole period.
 //!
@@ -33,8 +33,9 @@ pub enum Exchange {
         command: ActuatorCommand,
         /// Its telemetry of the same step.
         telemetry: FirmwareTelemetry,
-        /// Real-time runs: when the command arrived, s after `t_k` (measured on the
-        /// wall clock); `None` in lockstep (the command's `t_sent_us` decides).
+        /// Real-time runs: when the command takes effect, s after `t_k` (its send
+        /// stamp on the firmware's wall clock, anchored at the frame's arrival);
+        /// `None` in lockstep (its `t_sent_us`, at least `delta` after `t_k`).
         arrival_s: Option<f64>,
     },
     /// No command for this period arrived before the link stopped waiting (the

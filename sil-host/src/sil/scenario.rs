@@ -86,15 +86,57 @@ pub struct RigSection {
     /// Consecutive command timeouts after which the plant gives the firmware up
     /// as dead even if its process still runs.
     pub max_consecutive_timeouts: u32,
-    /// Real time: both processes busy-wait between periods instead of sleeping
-    /// (a sleeping process on a virtual machine's idle core can wake up to 2 ms
-    /// late; busy-waiting uses both cores of a 2-core machine for the run).
-    pub realtime_busy_wait: bool,
+    /// Real time: the CPU both processes run their control loop on: `"last"` (the
+    /// last CPU the process may use), `"none"` (no pinning) or a CPU number. On
+    /// one CPU the plant hands the core to the firmware when it publishes a frame
+    /// and gets it back with the command, so the answer never waits for a sleeping
+    /// core to wake up (on a virtual machine that can take milliseconds).
+    pub realtime_cpu: String,
+    /// Real time: `SCHED_FIFO` priority of both control loops (1 to 99), or 0 for
+    /// the normal scheduler. Neither loop busy-waits for long, so the kernel's
+    /// real-time throttling never applies; without the privilege the run goes on
+    /// under the normal scheduler and says so.
+    pub realtime_fifo_priority: u8,
+}
+
+/// What [`RigSection::realtime_cpu`] accepts.
+pub const REALTIME_CPU_FORMS: &str = "\"last\", \"none\" or a CPU number below 1024";
+
+/// Where a real-time control loop runs ([`RigSection::realtime_cpu`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CpuPin {
+    /// Not pinned.
+    None,
+    /// The last CPU of the process's affinity mask.
+    Last,
+    /// This CPU.
+    Cpu(usize),
+}
+
+impl RigSection {
+    /// The parsed `realtime_cpu`.
+    ///
+    /// # Errors
+    /// A message naming the accepted forms when it is none of them.
+    pub fn realtime_pin(&self) -> Result<CpuPin, &'static str> {
+        match self.realtime_cpu.trim() {
+            "none" => Ok(CpuPin::None),
+            "last" => Ok(CpuPin::Last),
+            n => n.parse::<usize>().ok().filter(|&c| c < 1024).map(CpuPin::Cpu).ok_or(REALTIME_CPU_FORMS),
+        }
+    }
 }
 
 impl Default for RigSection {
     fn default() -> Self {
-        Self { command_timeout_s: 0.05, spin_us: 200.0, peer_check_s: 0.5, max_consecutive_timeouts: 100, realtime_busy_wait: true }
+        Self {
+            command_timeout_s: 0.05,
+            spin_us: 200.0,
+            peer_check_s: 0.5,
+            max_consecutive_timeouts: 100,
+            realtime_cpu: "last".into(),
+            realtime_fifo_priority: 10,
+        }
     }
 }
 
@@ -235,6 +277,12 @@ impl Scenario {
         if r.max_consecutive_timeouts == 0 {
             return bad("rig.max_consecutive_timeouts", "0".into(), ">= 1");
         }
+        if let Err(want) = r.realtime_pin() {
+            return bad("rig.realtime_cpu", format!("{:?}", r.realtime_cpu), want);
+        }
+        if r.realtime_fifo_priority > 99 {
+            return bad("rig.realtime_fifo_priority", r.realtime_fifo_priority.to_string(), "0 (normal scheduler) or 1 to 99");
+        }
         for (i, f) in self.faults.iter().enumerate() {
             if let Err(what) = f.check() {
                 return Err(ScenarioError::Fault { index: i, what });
@@ -275,5 +323,20 @@ mod tests {
         assert!(e.contains("gremlins"), "{e}");
         let bad_kind = DEFAULT_TOML.replace("kind = \"hybrid\"", "kind = \"lqr\"");
         assert!(Scenario::from_toml(&bad_kind).unwrap_err().to_string().contains("controller.kind"));
+        let bad_cpu = DEFAULT_TOML.replace("realtime_cpu = \"last\"", "realtime_cpu = \"first\"");
+        let e = Scenario::from_toml(&bad_cpu).unwrap_err().to_string();
+        assert!(e.contains("rig.realtime_cpu") && e.contains("first"), "{e}");
+        let bad_prio = DEFAULT_TOML.replace("realtime_fifo_priority = 10", "realtime_fifo_priority = 100");
+        let e = Scenario::from_toml(&bad_prio).unwrap_err().to_string();
+        assert!(e.contains("rig.realtime_fifo_priority") && e.contains("100"), "{e}");
+    }
+
+    #[test]
+    fn realtime_cpu_accepts_last_none_and_numbers() {
+        let pin = |v: &str| RigSection { realtime_cpu: v.into(), ..RigSection::default() }.realtime_pin();
+        assert_eq!(pin("last"), Ok(CpuPin::Last));
+        assert_eq!(pin("none"), Ok(CpuPin::None));
+        assert_eq!(pin("3"), Ok(CpuPin::Cpu(3)));
+        assert!(pin("-1").is_err() && pin("1024").is_err() && pin("").is_err());
     }
 }
