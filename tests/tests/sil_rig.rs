@@ -362,9 +362,12 @@ fn a_real_time_run_is_paced_by_the_wall_clock_and_both_sides_judge_the_same_stam
         assert!(s[key]["p99"].as_f64().unwrap() >= 0.0, "{key}");
     }
     assert!(s["realtime_setup"].is_object());
-    // The plant and the firmware judge a command's lateness by the same send stamp:
-    // whatever this machine's load did, their counts are equal.
-    assert_eq!(s["deadline_misses"].as_u64(), s["firmware_overruns"].as_u64());
+    // The plant and the firmware judge a command's lateness by the same send stamp,
+    // so every miss the firmware counts the plant counts too; the plant's only others
+    // are commands it gave up on before they came (each then arrives as a late answer).
+    let (misses, overruns, late) =
+        (s["deadline_misses"].as_u64().unwrap(), s["firmware_overruns"].as_u64().unwrap(), s["late_answers"].as_u64().unwrap());
+    assert!(overruns <= misses && misses <= overruns + late, "misses {misses}, overruns {overruns}, late answers {late}");
 }
 
 #[test]
