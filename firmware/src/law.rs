@@ -207,6 +207,10 @@ mod tests {
             // A velocity tangent to the belt: z_n_dot = 0.
             let j = jacobian(params.l, &q);
             let qd = Vector2::new(qd1, -j[(1, 0)] * qd1 / j[(1, 1)]);
+            // Near the elbow's tangential singularity (J22 -> 0) holding z_n_dot = 0
+            // takes thousands of rad/s and kN m, where f32 rounding of the 1e5 m/s^2
+            // terms moves f_n by 1 %: keep to joint speeds the arm can reach.
+            prop_assume!(qd[1].abs() <= 20.0);
             let z_dot = j * qd;
             let dir = SlipDirection::of(z_dot[0] - params.v_belt);
             let cfg = Config::default();
