@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod board;
+pub mod clock_tree;
 pub mod config;
 pub mod consistency;
 pub mod controller;

@@ -16,7 +16,12 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+#[path = "../mcu_mmio.rs"]
+mod mmio;
+
+#[cfg(target_os = "none")]
 mod image {
+    use super::mmio;
     use core::cell::Cell;
 
     use cortex_m::peripheral::{SYST, syst::SystClkSource};
@@ -117,6 +122,7 @@ mod image {
             defmt::error!("core peripherals already taken");
             semihosting::process::exit(2);
         };
+        firmware::clock_tree::bring_up_or_halt(&mut mmio::Mmio);
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(RELOAD);
         cp.SYST.clear_current();

@@ -21,7 +21,12 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+#[path = "../mcu_mmio.rs"]
+mod mmio;
+
+#[cfg(target_os = "none")]
 mod image {
+    use super::mmio;
     use cortex_m::peripheral::{SYST, syst::SystClkSource};
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
@@ -168,6 +173,7 @@ mod image {
             defmt::error!("core peripherals already taken");
             semihosting::process::exit(2);
         };
+        firmware::clock_tree::bring_up_or_halt(&mut mmio::Mmio);
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(RELOAD);
         cp.SYST.clear_current();
