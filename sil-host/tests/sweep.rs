@@ -197,3 +197,62 @@ fn closed_loop_ideal_hybrid_keeps_the_tip_on_the_belt() {
     assert_eq!(s["results"]["runs"], 6);
     assert_eq!(s["results"]["outcomes"]["contact"], 6, "{}", s["results"]);
 }
+
+/// `scripts/sweep-slurm.sh` under a stand-in for Slurm: each array task runs as
+/// Slurm would start it (its environment variables), a fake `sbatch` records the
+/// merge job the first task queues and runs its `--wrap` command; the merged
+/// folder must equal the unsharded sweep.
+#[test]
+fn the_slurm_job_array_script_shards_and_merges_to_the_unsharded_sweep() {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/sweep-slurm.sh");
+    let whole = tempfile::tempdir().unwrap();
+    ok(&sweep(whole.path(), &[]));
+    let work = tempfile::tempdir().unwrap();
+    let bin = work.path().join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    let log = work.path().join("sbatch.log");
+    let fake = bin.join("sbatch");
+    // The merge job: record the arguments, then run the --wrap command (afterok is
+    // met: the test runs it after both tasks succeeded).
+    std::fs::write(
+        &fake,
+        format!(
+            "#!/usr/bin/env bash\necho \"$@\" >> {log}\nfor a in \"$@\"; do case $a in --wrap) w=1;; *) [ -n \"$w\" ] && cmd=$a && w=;; esac; done\necho \"$cmd\" > {wrap}\n",
+            log = log.display(),
+            wrap = work.path().join("wrap.sh").display()
+        ),
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let sweep_args = TINY[1..].join(" ");
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    for k in 0..2 {
+        let out = Command::new("bash")
+            .arg(&script)
+            .current_dir(work.path())
+            .env("PATH", &path)
+            .env("SIL_HOST", env!("CARGO_BIN_EXE_sil-host"))
+            .env("SWEEP_ARGS", &sweep_args)
+            .env("SWEEP_DIR", "out")
+            .env("SLURM_ARRAY_TASK_ID", k.to_string())
+            .env("SLURM_ARRAY_TASK_COUNT", "2")
+            .env("SLURM_ARRAY_TASK_MIN", "0")
+            .env("SLURM_ARRAY_JOB_ID", "4242")
+            .env("SLURM_CPUS_PER_TASK", "1")
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "task {k}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    // Exactly one merge job, queued by the first task, after the whole array.
+    let queued = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(queued.lines().count(), 1, "{queued}");
+    assert!(queued.contains("--dependency=afterok:4242"), "{queued}");
+    let wrap = std::fs::read_to_string(work.path().join("wrap.sh")).unwrap();
+    let merge = Command::new("bash").arg("-c").arg(wrap.trim()).current_dir(work.path()).output().unwrap();
+    assert!(merge.status.success(), "merge: {}", String::from_utf8_lossy(&merge.stderr));
+    assert_eq!(read(&work.path().join("out/merged"), "sweep.csv"), read(whole.path(), "sweep.csv"));
+    // Outside Slurm the script refuses to run.
+    let bare = Command::new("bash").arg(&script).env_remove("SLURM_ARRAY_TASK_ID").output().unwrap();
+    assert_eq!(bare.status.code(), Some(2));
+}
