@@ -1,10 +1,70 @@
-//! Figures: stacked time-series panels drawn with plotters (SVG).
+//! Figures: stacked time-series panels drawn with plotters (SVG), and the
+//! scaffolding every x-y chart of the commands shares (axes, legend, errors).
 
-use std::path::Path;
+use std::{ops::Range, path::Path};
 
-use plotters::prelude::*;
+use plotters::{coord::Shift, prelude::*};
 
 use crate::error::CliError;
+
+/// The error of drawing the figure at `path`, as a [`CliError::Plot`].
+pub fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
+    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// An x-y chart of `f64` against `f64`.
+pub type XyChart<'a, DB> =
+    ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
+
+/// The axes of an [`xy_chart`].
+pub struct Axes<'s> {
+    /// Caption above the chart and its font size, if any.
+    pub caption: Option<(String, u32)>,
+    /// X range.
+    pub x: Range<f64>,
+    /// Y range.
+    pub y: Range<f64>,
+    /// X-axis description with units.
+    pub x_desc: &'s str,
+    /// Y-axis description with units.
+    pub y_desc: &'s str,
+    /// Height of the x label area, px.
+    pub x_label_area: u32,
+    /// Width of the y label area, px.
+    pub y_label_area: u32,
+    /// Margin around the chart, px.
+    pub margin: u32,
+}
+
+/// A chart on `area` with `axes`, its mesh drawn (axis descriptions, no light
+/// grid lines).
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn xy_chart<'a, DB: DrawingBackend>(area: &'a DrawingArea<DB, Shift>, axes: &Axes) -> Result<XyChart<'a, DB>, String> {
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(axes.margin).x_label_area_size(axes.x_label_area).y_label_area_size(axes.y_label_area);
+    if let Some((text, size)) = &axes.caption {
+        builder.caption(text, ("sans-serif", *size));
+    }
+    let mut chart = builder.build_cartesian_2d(axes.x.clone(), axes.y.clone()).map_err(|e| e.to_string())?;
+    chart.configure_mesh().x_desc(axes.x_desc).y_desc(axes.y_desc).light_line_style(WHITE.mix(0.0)).draw().map_err(|e| e.to_string())?;
+    Ok(chart)
+}
+
+/// Draws the chart's series labels in its upper right corner, on a light box.
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn legend_upper_right<'a, DB: DrawingBackend + 'a>(chart: &mut XyChart<'a, DB>) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())
+}
 
 /// One curve of a panel.
 pub struct Series<'a> {
@@ -170,7 +230,7 @@ fn finite_range(panel: &Panel) -> (f64, f64) {
 /// # Errors
 /// [`CliError::Plot`] when plotters fails (e.g. the file cannot be written).
 pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), CliError> {
-    let err = |e: &dyn std::fmt::Display| CliError::Plot { path: path.to_path_buf(), message: e.to_string() };
+    let err = plot_err(path);
     let height = 60 + 230 * panels.len() as u32;
     let root = SVGBackend::new(path, (1100, height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
@@ -178,18 +238,18 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
     let areas = root.split_evenly((panels.len(), 1));
     for (i, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
         let (lo, hi) = finite_range(panel);
-        let mut chart = ChartBuilder::on(area)
-            .margin(8)
-            .x_label_area_size(if i + 1 == panels.len() { 40 } else { 25 })
-            .y_label_area_size(80)
-            .build_cartesian_2d(t_range.0..t_range.1, lo..hi)
-            .map_err(|e| err(&e))?;
-        let mut mesh = chart.configure_mesh();
-        mesh.y_desc(panel.y_label).light_line_style(WHITE.mix(0.0));
-        if i + 1 == panels.len() {
-            mesh.x_desc("t (s)");
-        }
-        mesh.draw().map_err(|e| err(&e))?;
+        let last = i + 1 == panels.len();
+        let axes = Axes {
+            caption: None,
+            x: t_range.0..t_range.1,
+            y: lo..hi,
+            x_desc: if last { "t (s)" } else { "" },
+            y_desc: panel.y_label,
+            x_label_area: if last { 40 } else { 25 },
+            y_label_area: 80,
+            margin: 8,
+        };
+        let mut chart = xy_chart(area, &axes).map_err(|e| err(&e))?;
         for s in &panel.series {
             let pts = decimate(&s.points, 4000);
             let color = s.color;
@@ -212,13 +272,7 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
                 .label(s.label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| err(&e))?;
+        legend_upper_right(&mut chart).map_err(|e| err(&e))?;
     }
     root.present().map_err(|e| err(&e))?;
     Ok(())

@@ -27,7 +27,7 @@ use crate::{
     initial,
     output::{OutputSet, progress_bar, write_csv},
     plant::{Plant, SimConfig},
-    plot::colors,
+    plot::{self, colors, plot_err},
     poincare::{
         self, Band, PoincareConfig, PointResult,
         classify::{Class, ClassifyConfig},
@@ -412,10 +412,6 @@ fn class_style(r: &PointResult) -> (RGBColor, &'static str) {
     }
 }
 
-fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
-    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
-}
-
 fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &[PointResult]) -> Result<(), CliError> {
     let err = plot_err(path);
     let v_lo = results.first().map_or(-1.0, |r| r.v_belt);
@@ -447,20 +443,17 @@ fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &
     let root = SVGBackend::new(path, (1200, 750)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let title = format!("Poincare section theta1_dot = 0 (upward), open loop, mu = {}, from {x0_name}", cfg.mu);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d((v_lo - pad)..(v_hi + pad), (lo - ypad)..(hi + ypad))
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("v_belt (m/s)")
-        .y_desc("theta1 at the section (deg)")
-        .light_line_style(WHITE.mix(0.0))
-        .draw()
-        .map_err(|e| err(&e))?;
+    let axes = plot::Axes {
+        caption: Some((title, 22)),
+        x: (v_lo - pad)..(v_hi + pad),
+        y: (lo - ypad)..(hi + ypad),
+        x_desc: "v_belt (m/s)",
+        y_desc: "theta1 at the section (deg)",
+        x_label_area: 45,
+        y_label_area: 70,
+        margin: 12,
+    };
+    let mut chart = plot::xy_chart(&root, &axes).map_err(|e| err(&e))?;
     let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
     labels.sort_unstable();
     labels.dedup();
@@ -469,13 +462,7 @@ fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &
         let series = pts.iter().filter(|p| p.3 == label).map(|p| Circle::new((p.0, p.1), 1, color.filled()));
         chart.draw_series(series).map_err(|e| err(&e))?.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| err(&e))?;
+    plot::legend_upper_right(&mut chart).map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
 }
@@ -500,20 +487,17 @@ fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointResult]) -> 
     let root = SVGBackend::new(path, (1200, 500)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let title = format!("largest Lyapunov exponent of the section map, mu = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d((v_lo - pad)..(v_hi + pad), (lo - ypad)..(hi + ypad))
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("v_belt (m/s)")
-        .y_desc("lambda per crossing")
-        .light_line_style(WHITE.mix(0.0))
-        .draw()
-        .map_err(|e| err(&e))?;
+    let axes = plot::Axes {
+        caption: Some((title, 20)),
+        x: (v_lo - pad)..(v_hi + pad),
+        y: (lo - ypad)..(hi + ypad),
+        x_desc: "v_belt (m/s)",
+        y_desc: "lambda per crossing",
+        x_label_area: 45,
+        y_label_area: 70,
+        margin: 12,
+    };
+    let mut chart = plot::xy_chart(&root, &axes).map_err(|e| err(&e))?;
     chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
     let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
     labels.sort_unstable();

@@ -13,7 +13,10 @@ use super::{
     SweepSpec,
     run::{Outcome, RunRow},
 };
-use crate::{error::CliError, plot::colors};
+use crate::{
+    error::CliError,
+    plot::{self, colors, plot_err},
+};
 
 /// Colour of an outcome on the map.
 pub fn outcome_color(o: Outcome) -> RGBColor {
@@ -35,10 +38,6 @@ pub fn case_suffix(law: &str, e_n: f64) -> String {
 
 /// Colours of the initial conditions' curves.
 const IC_COLORS: [RGBColor; 6] = [colors::BLUE, colors::ORANGE, colors::GREEN, colors::RED, colors::PURPLE, colors::GREY];
-
-fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
-    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
-}
 
 /// Draws the outcome map of the case `(law, e_n)` from its `rows` into `path`.
 ///
@@ -123,20 +122,17 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
             }
         }
         let pad = ((hi - lo) * 0.08).max(0.05);
-        let mut chart = ChartBuilder::on(area)
-            .margin(8)
-            .caption(format!("mu = {mu}"), ("sans-serif", 15))
-            .x_label_area_size(30)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x_lo..x_hi, (lo - pad)..(hi + pad))
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc("v_belt (m/s)")
-            .y_desc("max theta1_dot (rad/s)")
-            .light_line_style(WHITE.mix(0.0))
-            .draw()
-            .map_err(|e| err(&e))?;
+        let axes = plot::Axes {
+            caption: Some((format!("mu = {mu}"), 15)),
+            x: x_lo..x_hi,
+            y: (lo - pad)..(hi + pad),
+            x_desc: "v_belt (m/s)",
+            y_desc: "max theta1_dot (rad/s)",
+            x_label_area: 30,
+            y_label_area: 60,
+            margin: 8,
+        };
+        let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         chart
             .draw_series(DashedLineSeries::new([(x_lo, spec.threshold), (x_hi, spec.threshold)], 5, 4, BLACK.mix(0.6).stroke_width(1)))
             .map_err(|e| err(&e))?
@@ -155,13 +151,7 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))).map_err(|e| err(&e))?;
         }
         if m == 0 {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.3))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| err(&e))?;
+            plot::legend_upper_right(&mut chart).map_err(|e| err(&e))?;
         }
     }
     root.present().map_err(|e| err(&e))
