@@ -12,7 +12,7 @@ use std::{io::Write, sync::atomic::Ordering, time::Instant};
 
 use serde::Serialize;
 
-use super::run::{RunSummary, draw, load_scenario, print_summary, rms_tracking_error, stop_flag};
+use super::run::{RunSummary, draw, load_scenario, print_summary, stop_flag};
 use crate::{
     cli::PilArgs,
     error::CliError,
@@ -20,7 +20,7 @@ use crate::{
     plot::{self, Panel, Series, colors},
     sil::{
         pil_link::{self, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
-        record::{PeriodRecord, lift_off_stats},
+        record::PeriodRecord,
         rig::run_loop_streaming,
         scenario::Scenario,
         setup::{firmware_config, plant_for},
@@ -147,31 +147,9 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
     draw_instructions(&svg, &scenario, &records, &counts)?;
     let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
     out.write_bytes("defmt.log", text.as_bytes())?;
-    let simulated = records.len() as f64 / scenario.timing.rate_hz;
     let summary = RunSummary {
-        status: if failure.is_some() { "failed" } else { "ok" },
-        error: failure.as_ref().map(|e| e.to_string()),
-        scenario: scenario.name.clone(),
-        controller: scenario.controller.kind.clone(),
-        transport: "pil-qemu",
-        timing: "lockstep",
-        rig: None,
-        periods: records.len(),
-        lift_off: lift_off_stats(&records),
-        deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
-        firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
-        rms_tracking_error_m: rms_tracking_error(&records),
-        final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
-        wall_s,
-        realtime_factor: simulated / wall_s.max(1e-9),
-        periods_per_s: records.len() as f64 / wall_s.max(1e-9),
-        ipc_rtt_us: None,
-        firmware_step_us: None,
-        period_jitter_us: None,
-        late_answers: 0,
-        realtime_setup: None,
         pil: Some(figures),
-        scenario_used: scenario.clone(),
+        ..RunSummary::from_records(&scenario, &records, failure.as_ref(), "pil-qemu", "lockstep", wall_s)
     };
     let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
     out.write_bytes("summary.json", json.as_bytes())?;

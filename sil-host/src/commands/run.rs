@@ -31,7 +31,7 @@ use crate::{
         in_process::InProcessLink,
         ipc::{RealtimeSetup, check_rig_name, default_rig_name},
         ipc_link::{IpcLink, Percentiles, percentiles},
-        record::{LiftOffStats, PeriodRecord, lift_off_stats},
+        record::{LiftOffStats, PeriodRecord, RunError, lift_off_stats},
         rig::{FirmwareLink, run_loop_streaming},
         scenario::Scenario,
         setup::{firmware_config, plant_for},
@@ -91,6 +91,47 @@ pub struct RunSummary {
     pub pil: Option<crate::commands::pil::PilFigures>,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
+}
+
+impl RunSummary {
+    /// The figures every run has, from its `records` (the trace as recorded, up to
+    /// the failure if there was one) and its wall-clock time `wall_s` (s); the
+    /// transport's own figures (round trip, jitter, step time, PIL counts) empty.
+    pub fn from_records(
+        scenario: &Scenario,
+        records: &[PeriodRecord],
+        failure: Option<&RunError>,
+        transport: &'static str,
+        timing: &'static str,
+        wall_s: f64,
+    ) -> Self {
+        let simulated = records.len() as f64 / scenario.timing.rate_hz;
+        Self {
+            status: if failure.is_some() { "failed" } else { "ok" },
+            error: failure.map(|e| e.to_string()),
+            scenario: scenario.name.clone(),
+            controller: scenario.controller.kind.clone(),
+            transport,
+            timing,
+            rig: None,
+            periods: records.len(),
+            lift_off: lift_off_stats(records),
+            deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
+            firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
+            rms_tracking_error_m: rms_tracking_error(records),
+            final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
+            wall_s,
+            realtime_factor: simulated / wall_s.max(1e-9),
+            periods_per_s: records.len() as f64 / wall_s.max(1e-9),
+            ipc_rtt_us: None,
+            firmware_step_us: None,
+            period_jitter_us: None,
+            late_answers: 0,
+            realtime_setup: None,
+            pil: None,
+            scenario_used: scenario.clone(),
+        }
+    }
 }
 
 /// Loads the scenario and applies the overrides.
@@ -220,32 +261,21 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     trace.finish()?;
     let svg = out.stage("trace.svg");
     draw(&svg, "SIL", &scenario, &records)?;
-    let rms = rms_tracking_error(&records);
-    let simulated = records.len() as f64 / scenario.timing.rate_hz;
     let summary = RunSummary {
-        status: if failure.is_some() { "failed" } else { "ok" },
-        error: failure.as_ref().map(|e| e.to_string()),
-        scenario: scenario.name.clone(),
-        controller: scenario.controller.kind.clone(),
-        transport,
-        timing: if args.realtime { "realtime" } else { "lockstep" },
         rig: (!args.in_process).then(|| rig.clone()),
-        periods: records.len(),
-        lift_off: lift_off_stats(&records),
-        deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
-        firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
-        rms_tracking_error_m: rms,
-        final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
-        wall_s,
-        realtime_factor: simulated / wall_s.max(1e-9),
-        periods_per_s: records.len() as f64 / wall_s.max(1e-9),
         ipc_rtt_us: timings.as_ref().map(|t| percentiles(&t.rtt_us)),
         firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
         period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
         realtime_setup,
-        pil: None,
-        scenario_used: scenario.clone(),
+        ..RunSummary::from_records(
+            &scenario,
+            &records,
+            failure.as_ref(),
+            transport,
+            if args.realtime { "realtime" } else { "lockstep" },
+            wall_s,
+        )
     };
     let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
     out.write_bytes("summary.json", json.as_bytes())?;
