@@ -87,6 +87,17 @@ impl OutputSet {
         w.write_all(bytes).and_then(|_| w.flush()).map_err(|source| CliError::Io { path: tmp, source })
     }
 
+    /// Writes `value` as pretty JSON in file `name` and returns the text (for
+    /// `--json` on standard output).
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when serialising or writing fails.
+    pub fn write_json<T: serde::Serialize>(&mut self, name: &str, value: &T) -> Result<String, CliError> {
+        let json = serde_json::to_string_pretty(value).map_err(|e| CliError::Io { path: self.path(name), source: e.into() })?;
+        self.write_bytes(name, json.as_bytes())?;
+        Ok(json)
+    }
+
     /// Renames every staged file to its final name.
     ///
     /// # Errors

@@ -8,20 +8,19 @@
 //! step, worst and median, against the budget), `trace.svg`, `instructions.svg`
 //! (instructions of each step against time, with the budget) and `defmt.log`.
 
-use std::{io::Write, sync::atomic::Ordering, time::Instant};
+use std::io::Write;
 
 use serde::Serialize;
 
-use super::run::{RunSummary, draw, load_scenario, print_summary, stop_flag};
+use super::run::{RunSummary, draw, load_scenario, print_summary, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,
-    output::{OutputSet, StreamedCsv, progress_bar},
+    output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
     sil::{
         pil_link::{self, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
         record::PeriodRecord,
-        rig::run_loop_streaming,
         scenario::Scenario,
         setup::{firmware_config, plant_for},
     },
@@ -116,31 +115,13 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
     let opts =
         PilOptions { image: image.clone(), qemu: args.qemu.clone(), answer_timeout_s: args.answer_timeout, ..PilOptions::new(&image) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
-    let stop = stop_flag();
-    // As in `run`: rows go to trace.csv.partial as they are made.
-    let mut trace = StreamedCsv::new(&mut out, "trace.csv", std::time::Duration::from_millis(1))?;
-    let started = Instant::now();
-    let (records, failure) = run_loop_streaming(
-        &scenario,
-        &mut link,
-        |r| trace.push(r),
-        |k, _| {
-            if k % 100 == 0 {
-                progress.set_position(k as u64);
-            }
-            !stop.load(Ordering::Relaxed)
-        },
-        |_| {},
-    );
-    let wall_s = started.elapsed().as_secs_f64();
-    progress.finish_and_clear();
+    let (records, failure, wall_s) = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
     let log = link.log();
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&image, &link.counts, scenario.timing.rate_hz, &log, exit);
     let counts = link.counts.clone();
     drop(link);
 
-    trace.finish()?;
     let svg = out.stage("trace.svg");
     draw(&svg, "PIL", &scenario, &records)?;
     let svg = out.stage("instructions.svg");
@@ -151,8 +132,7 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
         pil: Some(figures),
         ..RunSummary::from_records(&scenario, &records, failure.as_ref(), "pil-qemu", "lockstep", wall_s)
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    let json = out.write_json("summary.json", &summary)?;
     let written = out.commit()?;
     if args.output.json {
         println!("{json}");

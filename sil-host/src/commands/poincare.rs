@@ -341,8 +341,7 @@ pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
         median_point_wall_s: point_walls[point_walls.len() / 2],
         files: files.iter().map(|f| out.path(f).display().to_string()).collect(),
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(json_err("summary.json"))?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    let json = out.write_json("summary.json", &summary)?;
     out.commit()?;
 
     if args.output.json {

@@ -197,6 +197,43 @@ pub(crate) fn stop_flag() -> Arc<AtomicBool> {
     flag
 }
 
+/// Runs `scenario` over `link` as `run` and `pil` do: every period's row goes to
+/// `trace.csv` of `out` as it is made (`trace.csv.partial`, flushed every 1 ms of
+/// wall time, so a plant killed outright keeps every period up to the last
+/// flush), the progress bar moves every `every` periods, Ctrl-C or SIGTERM stops
+/// the run. Returns the records, why the run stopped early if it did, and the
+/// loop's wall-clock time (s); the progress bar is cleared.
+///
+/// # Errors
+/// I/O errors of the trace file.
+pub(crate) fn run_streamed(
+    scenario: &Scenario,
+    link: &mut dyn FirmwareLink,
+    out: &mut OutputSet,
+    progress: &indicatif::ProgressBar,
+    every: usize,
+) -> Result<(Vec<PeriodRecord>, Option<RunError>, f64), CliError> {
+    let stop = stop_flag();
+    let mut trace = StreamedCsv::new(out, "trace.csv", std::time::Duration::from_millis(1))?;
+    let started = Instant::now();
+    let (records, failure) = run_loop_streaming(
+        scenario,
+        link,
+        |r| trace.push(r),
+        |k, _| {
+            if k % every == 0 {
+                progress.set_position(k as u64);
+            }
+            !stop.load(Ordering::Relaxed)
+        },
+        |_| {},
+    );
+    let wall_s = started.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+    trace.finish()?;
+    Ok((records, failure, wall_s))
+}
+
 /// Runs `sil-host run`.
 ///
 /// # Errors
@@ -235,30 +272,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
 
     let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let stop = stop_flag();
-    // Rows go to disk as they are made: a plant killed outright (SIGKILL) leaves
-    // trace.csv.partial with every period up to the last flush (1 ms of wall time).
-    let mut trace = StreamedCsv::new(&mut out, "trace.csv", std::time::Duration::from_millis(1))?;
-    let started = Instant::now();
-    let (records, failure) = run_loop_streaming(
-        &scenario,
-        link,
-        |r| trace.push(r),
-        |k, _| {
-            if k % 500 == 0 {
-                progress.set_position(k as u64);
-            }
-            !stop.load(Ordering::Relaxed)
-        },
-        |_| {},
-    );
-    let wall_s = started.elapsed().as_secs_f64();
-    progress.finish_and_clear();
+    let (records, failure, wall_s) = run_streamed(&scenario, link, &mut out, &progress, 500)?;
     let timings = ipc.as_ref().map(|l| l.timings.clone());
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     drop(ipc);
 
-    trace.finish()?;
     let svg = out.stage("trace.svg");
     draw(&svg, "SIL", &scenario, &records)?;
     let summary = RunSummary {
@@ -277,8 +295,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             wall_s,
         )
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    let json = out.write_json("summary.json", &summary)?;
     let written = out.commit()?;
     if args.output.json {
         println!("{json}");

@@ -330,8 +330,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         realtime_factor: simulated_s / wall_s.max(1e-9),
         files: ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect(),
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    let json = out.write_json("summary.json", &summary)?;
     out.commit()?;
 
     if args.output.json {

@@ -358,8 +358,7 @@ fn finish(
         resumed_runs: resumed,
         files: files.iter().map(|p| p.display().to_string()).collect(),
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: dir.join("summary.json"), source: e.into() })?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    out.write_json("summary.json", &summary)?;
     out.commit()?;
     Ok(summary)
 }

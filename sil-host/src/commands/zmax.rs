@@ -239,8 +239,7 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
         base_scenario: base,
         wall_s: started.elapsed().as_secs_f64(),
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| CliError::Io { path: out.path("summary.json"), source: e.into() })?;
-    out.write_bytes("summary.json", json.as_bytes())?;
+    let json = out.write_json("summary.json", &summary)?;
     let written = out.commit()?;
     if args.output.json {
         println!("{json}");

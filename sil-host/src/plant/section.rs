@@ -34,7 +34,7 @@ use shared::ContactMode;
 
 use super::{
     dop853::{OdeSystem, StepView},
-    segment::OdeState,
+    segment::{OdeState, illinois_root},
 };
 
 /// The hyperplane `g(x) = normal . x - offset` of the plant state.
@@ -236,47 +236,19 @@ impl StepScan {
     }
 }
 
-/// Illinois regula falsi with a bisection safeguard on the dense output: the zero
-/// of `g` in `(a, b]` given `g(a) < 0 <= g(b)`, to `1e-14 s + 1e-15 |t|`.
+/// The zero of `g` in `(a, b]` given `g(a) < 0 <= g(b)`, to `1e-14 s + 1e-15 |t|`
+/// (the plant's Illinois root finder on the step's dense output).
 fn refine<S: OdeSystem + ?Sized>(sec: &Section, step: &mut StepView<'_, S>, a: (f64, f64), b: (f64, f64, OdeState)) -> (f64, OdeState) {
-    let (mut ta, mut ga) = a;
-    let (mut tb, mut gb, mut yb) = b;
-    if gb == 0.0 {
-        return (tb, yb);
-    }
-    let tol = 1e-14 + 1e-15 * tb.abs();
-    let mut side = 0i8;
-    for iter in 0..200 {
-        if tb - ta <= tol {
-            break;
-        }
-        let mut t = tb - gb * (tb - ta) / (gb - ga);
-        if !(t > ta && t < tb) || iter % 4 == 3 {
-            t = 0.5 * (ta + tb);
-        }
-        let y = step.interpolate(t);
-        let g = sec.value(&y);
-        if g < 0.0 {
-            ta = t;
-            ga = g;
-            if side == -1 {
-                gb *= 0.5;
-            }
-            side = -1;
-        } else {
-            tb = t;
-            gb = g;
-            yb = y;
-            if g == 0.0 {
-                break;
-            }
-            if side == 1 {
-                ga *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    (tb, yb)
+    illinois_root(
+        a,
+        b,
+        |t| {
+            let y = step.interpolate(t);
+            (sec.value(&y), y)
+        },
+        |g| g < 0.0,
+        true,
+    )
 }
 
 /// Golden-section search on the dense output over `[a, b]` for the maximum of

@@ -283,8 +283,36 @@ fn locate_root<'a, C: Controller + ?Sized>(
     a: (f64, f64),
     b: (f64, f64, OdeState),
 ) -> (f64, OdeState) {
+    illinois_root(
+        a,
+        b,
+        |t| {
+            let y = step.interpolate(t);
+            (seg.nearest_boundary(t, &y).1, y)
+        },
+        |g| g > 0.0,
+        false,
+    )
+}
+
+/// Illinois regula falsi with a bisection safeguard: the crossing of `g` in
+/// `(a.0, b.0]` to `1e-14 s + 1e-15 |t|`, with the state there, where `eval(t)`
+/// gives `g` and the state at `t` (from a step's dense output), `a` is the end on
+/// the `before(g)` side and `b` the other. With `stop_at_zero`, an exact zero
+/// ends the search at once; without, the search goes on towards the first zero.
+/// Used by the plant's event location and by the Poincare section.
+pub(super) fn illinois_root(
+    a: (f64, f64),
+    b: (f64, f64, OdeState),
+    mut eval: impl FnMut(f64) -> (f64, OdeState),
+    before: impl Fn(f64) -> bool,
+    stop_at_zero: bool,
+) -> (f64, OdeState) {
     let (mut ta, mut ga) = a;
     let (mut tb, mut gb, mut yb) = b;
+    if stop_at_zero && gb == 0.0 {
+        return (tb, yb);
+    }
     let tol = 1e-14 + 1e-15 * tb.abs();
     let mut side = 0i8;
     for iter in 0..200 {
@@ -297,10 +325,9 @@ fn locate_root<'a, C: Controller + ?Sized>(
         if !(t > ta && t < tb) || iter % 4 == 3 {
             t = 0.5 * (ta + tb);
         }
-        let y = step.interpolate(t);
-        let g = seg.nearest_boundary(t, &y).1;
+        let (g, y) = eval(t);
         // Illinois rule: an end retained twice in a row has its value halved.
-        if g > 0.0 {
+        if before(g) {
             ta = t;
             ga = g;
             if side == -1 {
@@ -311,6 +338,9 @@ fn locate_root<'a, C: Controller + ?Sized>(
             tb = t;
             gb = g;
             yb = y;
+            if stop_at_zero && g == 0.0 {
+                break;
+            }
             if side == 1 {
                 ga *= 0.5;
             }

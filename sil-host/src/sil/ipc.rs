@@ -389,6 +389,20 @@ pub fn leave_realtime(setup: &RealtimeSetup) {
     let _ = setup;
 }
 
+/// The CPUs the calling thread may run on (its affinity mask).
+#[cfg(target_os = "linux")]
+fn allowed_cpus() -> std::io::Result<Vec<usize>> {
+    // SAFETY: a zeroed cpu_set_t owned here, of the size passed; pid 0 is the
+    // calling thread.
+    unsafe {
+        let mut mask: libc::cpu_set_t = std::mem::zeroed();
+        if libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut mask) != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        Ok((0..libc::CPU_SETSIZE as usize).filter(|&c| libc::CPU_ISSET(c, &mask)).collect())
+    }
+}
+
 /// Real-time runs: sets up the calling thread (the control loop) as the
 /// scenario's `[rig]` asks: 1 us timer slack instead of the default 50 us (sleeps
 /// end when asked), memory locked (no page fault mid-period), pinned to
@@ -416,12 +430,9 @@ pub fn prepare_realtime(rig: &super::scenario::RigSection) -> RealtimeSetup {
             setup.warnings.push(format!("mlockall: {}", std::io::Error::last_os_error()));
         }
         let pin = rig.realtime_pin().unwrap_or(super::scenario::CpuPin::None);
-        let mut mask: libc::cpu_set_t = std::mem::zeroed();
-        let size = std::mem::size_of::<libc::cpu_set_t>();
-        if libc::sched_getaffinity(0, size, &mut mask) == 0 {
-            setup.previous_cpus = (0..libc::CPU_SETSIZE as usize).filter(|&c| libc::CPU_ISSET(c, &mask)).collect();
-        } else {
-            setup.warnings.push(format!("sched_getaffinity: {}", std::io::Error::last_os_error()));
+        match allowed_cpus() {
+            Ok(cpus) => setup.previous_cpus = cpus,
+            Err(e) => setup.warnings.push(format!("sched_getaffinity: {e}")),
         }
         let cpu = match pin {
             super::scenario::CpuPin::None => None,
@@ -429,9 +440,9 @@ pub fn prepare_realtime(rig: &super::scenario::RigSection) -> RealtimeSetup {
             super::scenario::CpuPin::Last => setup.previous_cpus.last().copied(),
         };
         if let Some(c) = cpu {
-            libc::CPU_ZERO(&mut mask);
+            let mut mask: libc::cpu_set_t = std::mem::zeroed();
             libc::CPU_SET(c, &mut mask);
-            if libc::sched_setaffinity(0, size, &mask) == 0 {
+            if libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mask) == 0 {
                 setup.cpu = Some(c);
             } else {
                 setup.warnings.push(format!("cannot pin the control loop to CPU {c}: {}", std::io::Error::last_os_error()));
@@ -463,12 +474,7 @@ mod tests {
     use super::*;
 
     fn cpus() -> Vec<usize> {
-        // SAFETY: a zeroed cpu_set_t owned here, of the size passed.
-        unsafe {
-            let mut mask: libc::cpu_set_t = std::mem::zeroed();
-            assert_eq!(libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut mask), 0);
-            (0..libc::CPU_SETSIZE as usize).filter(|&c| libc::CPU_ISSET(c, &mask)).collect()
-        }
+        allowed_cpus().unwrap()
     }
 
     #[test]

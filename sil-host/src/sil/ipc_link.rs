@@ -222,8 +222,7 @@ impl FirmwareLink for IpcLink {
                     // Real time: the command's own send stamp (the firmware's clock,
                     // anchored at the frame's arrival) dates it; the plant's own view
                     // (`now`) is late by however long the plant itself was descheduled.
-                    let arrival_s = self.realtime.then(|| c.t_sent_us.saturating_sub(frame.t_us) as f64 * 1e-6);
-                    return Ok(Exchange::Answered { command: c, telemetry, arrival_s });
+                    return Ok(Exchange::Answered { command: c, telemetry, at_stamp: self.realtime });
                 }
                 Some(_) => self.timings.late_answers += 1,
                 None => break,

@@ -441,7 +441,7 @@ impl FirmwareLink for PilLink {
                 Some(Uplink::Answer { command, telemetry, frame_ticks }) if command.seq == frame.seq => {
                     self.counts.step_ticks.push(command.step_ticks);
                     self.counts.frame_ticks.push(frame_ticks);
-                    return Ok(Exchange::Answered { command, telemetry, arrival_s: None });
+                    return Ok(Exchange::Answered { command, telemetry, at_stamp: false });
                 }
                 Some(Uplink::Answer { .. }) => {} // an answer to an older frame: cannot happen in lockstep
                 Some(other) => return Err(lost(format!("the image answered frame {k} with {other:?}{}", self.log_tail()))),

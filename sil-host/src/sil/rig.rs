@@ -33,10 +33,10 @@ pub enum Exchange {
         command: ActuatorCommand,
         /// Its telemetry of the same step.
         telemetry: FirmwareTelemetry,
-        /// Real-time runs: when the command takes effect, s after `t_k` (its send
-        /// stamp on the firmware's wall clock, anchored at the frame's arrival);
-        /// `None` in lockstep (its `t_sent_us`, at least `delta` after `t_k`).
-        arrival_s: Option<f64>,
+        /// Real-time runs: the command takes effect at its send stamp
+        /// (`t_sent_us`, the firmware's wall clock anchored at the frame's arrival);
+        /// lockstep: at that stamp but never before `delta` after `t_k`.
+        at_stamp: bool,
     },
     /// No command for this period arrived before the link stopped waiting (the
     /// wall-clock deadline in real time, the command timeout in lockstep).
@@ -169,9 +169,9 @@ impl PeriodLoop {
         let exchange = link.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {
-            Exchange::Answered { command, telemetry, arrival_s } => {
+            Exchange::Answered { command, telemetry, at_stamp } => {
                 let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
-                let at = arrival_s.unwrap_or(late_s.max(self.delta));
+                let at = if at_stamp { late_s } else { late_s.max(self.delta) };
                 let on_time = at < ts && !faults.drops_command(t_k);
                 (on_time.then_some(at), Some(command), Some(telemetry))
             }
