@@ -23,7 +23,7 @@ pub mod reference;
 #[cfg(test)]
 mod tests;
 
-pub use board::{Board, TickClock};
+pub use board::{Board, Event, Outcome, TickClock};
 pub use config::{Config, ControllerKind};
 pub use controller::{Firmware, SafeReason, Telemetry};
 pub use shared;

@@ -9,10 +9,14 @@
 //! whose CRC does not match. Sizes: a frame is at most [`MAX_FRAME`] bytes.
 //!
 //! The exchange (lockstep, the plant owns time): the image says [`Uplink::Hello`]
-//! at boot; the bridge sends [`Downlink::Configure`] and the image answers
+//! at boot and whenever it is asked with [`Downlink::Hello`] (a board that booted
+//! before the bridge opened its serial port); the bridge sends a lone `0x00` (it
+//! ends any partial frame left on the line), asks for the Hello, then sends
+//! [`Downlink::Configure`] and the image answers
 //! [`Uplink::Configured`] (or [`Uplink::Rejected`]); then for each period the
 //! bridge sends [`Downlink::Frame`] and the image answers [`Uplink::Answer`];
-//! [`Downlink::End`] ends the run (the image logs its figures and exits).
+//! [`Downlink::End`] ends the run: the image logs its figures; under QEMU it exits,
+//! on a board it waits for the next configuration.
 
 use crc::{CRC_32_ISCSI, Crc};
 use serde::{Deserialize, Serialize};
@@ -22,7 +26,7 @@ use crate::Config;
 
 /// Version of this protocol, sent in [`Uplink::Hello`]; the bridge refuses an
 /// image that speaks another.
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Largest encoded frame, bytes (COBS overhead, CRC and the terminator included):
 /// room for the largest message, [`Downlink::Configure`] (about 130 bytes).
@@ -30,6 +34,18 @@ pub const MAX_FRAME: usize = 256;
 
 /// The CRC of the wire: CRC-32/ISCSI (Castagnoli), 1 KiB table in flash.
 const CRC: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
+
+/// What the image's tick counter counts (the unit of `step_ticks` and
+/// `frame_ticks`), told in [`Uplink::Hello`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum StepClock {
+    /// SysTick at the core clock under an emulator (QEMU's `netduinoplus2`, whose
+    /// DWT cycle counter reads 0): under `-icount shift=0` one tick is one
+    /// retired instruction, not a cycle.
+    EmulatedSysTick,
+    /// The DWT cycle counter (`CYCCNT`) on silicon: core clock cycles.
+    DwtCycles,
+}
 
 /// Bridge to image.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -44,8 +60,11 @@ pub enum Downlink {
         /// after `frame.t_us` on the frame's clock; 0 normally.
         start_delay_us: u32,
     },
-    /// The run is over: no answer expected; the image logs its figures and exits.
+    /// The run is over: no answer expected; the image logs its figures (and, under
+    /// QEMU, exits).
     End,
+    /// Asks the image to say [`Uplink::Hello`] (it may have booted long before).
+    Hello,
 }
 
 /// Image to bridge.
@@ -56,8 +75,10 @@ pub enum Uplink {
         /// [`PROTOCOL_VERSION`] of the image.
         protocol: u16,
         /// Frequency of the tick counter of `step_ticks` and `frame_ticks`, Hz
-        /// (SysTick at the core clock: 168 MHz on the STM32F405).
+        /// (the core clock: 168 MHz on the STM32F405).
         ticks_per_second: u32,
+        /// What that counter counts: emulated instructions or silicon cycles.
+        clock: StepClock,
     },
     /// The configuration is accepted; frames may come.
     Configured,
@@ -189,6 +210,7 @@ mod tests {
                 start_delay_us: 0,
             },
             Downlink::End,
+            Downlink::Hello,
         ];
         let mut wire = Vec::new();
         for m in &msgs {

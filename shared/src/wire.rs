@@ -74,8 +74,11 @@ pub mod frame_flags {
     pub const F_N_INVALID: u16 = 1 << 3;
     /// The belt encoder gave no valid reading.
     pub const BELT_INVALID: u16 = 1 << 4;
-    /// Any sensor invalid.
-    pub const ANY_INVALID: u16 = THETA1_INVALID | ELBOW_INVALID | F_T_INVALID | F_N_INVALID | BELT_INVALID;
+    /// A motor driver asserts its fault line (reference board): the reading
+    /// "drivers healthy" is invalid, so the frame is not trusted either.
+    pub const DRIVER_FAULT: u16 = 1 << 5;
+    /// Any sensor invalid (the driver fault line included).
+    pub const ANY_INVALID: u16 = THETA1_INVALID | ELBOW_INVALID | F_T_INVALID | F_N_INVALID | BELT_INVALID | DRIVER_FAULT;
     /// The plant ends the run: no command is expected for this frame (SIL rig only).
     pub const END_OF_RUN: u16 = 1 << 15;
 }

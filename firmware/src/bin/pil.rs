@@ -184,7 +184,8 @@ mod image {
         let mut fw: Option<Firmware> = None;
         let mut fig = Figures::default();
         defmt::info!("PIL image up: protocol {=u16}, waiting for the plant on USART1", pil::PROTOCOL_VERSION);
-        usart.send(&Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: CORE_HZ });
+        let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: CORE_HZ, clock: pil::StepClock::EmulatedSysTick };
+        usart.send(&hello);
         loop {
             let byte = usart.read_byte();
             let frame = match rx.push(byte) {
@@ -239,6 +240,7 @@ mod image {
                     defmt::error!("a frame before the configuration");
                     usart.send(&Uplink::Rejected);
                 }
+                (Downlink::Hello, _) => usart.send(&hello),
                 (Downlink::End, _) => {
                     defmt::info!(
                         "end of run: {=u32} frames, worst step {=u32} ticks, worst frame {=u32} ticks, {=u32} garbled",

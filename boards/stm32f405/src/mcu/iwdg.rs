@@ -1,0 +1,33 @@
+//! The independent watchdog (RM0090 21): started once, fed by every completed
+//! control step; a hung step resets the MCU, which comes up with the drivers
+//! disabled (the safe state). Once started it cannot be stopped.
+
+use stm32f4::stm32f405 as pac;
+
+fn iwdg() -> &'static pac::iwdg::RegisterBlock {
+    // SAFETY: the watchdog is started at start-up and fed by the control interrupt only.
+    unsafe { &*pac::IWDG::ptr() }
+}
+
+/// Starts the watchdog with a timeout of at least `timeout_us` ([`crate::timing::watchdog`]).
+pub fn start(timeout_us: u32) {
+    let (pr, rl) = crate::timing::watchdog(timeout_us);
+    let w = iwdg();
+    w.kr().write(|w| unsafe { w.key().bits(0xCCCC) }); // start (and LSI on)
+    w.kr().write(|w| unsafe { w.key().bits(0x5555) }); // unlock PR and RLR
+    w.pr().write(|w| unsafe { w.pr().bits(pr) });
+    w.rlr().write(|w| unsafe { w.rl().bits(rl) });
+    // The new values take a few LSI periods to reach the watchdog's domain:
+    // bounded, the watchdog itself covers a hang here.
+    for _ in 0..100_000 {
+        if w.sr().read().bits() & 0b11 == 0 {
+            break;
+        }
+    }
+    feed();
+}
+
+/// Reloads the counter.
+pub fn feed() {
+    iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
+}

@@ -1,0 +1,108 @@
+//! The control tick's timer settings (RM0090 18.3.1: the update event comes
+//! every `(psc + 1) (arr + 1)` timer clocks) and the independent watchdog's
+//! (RM0090 21.3: LSI / `4 * 2^pr` counted down from `rl`).
+
+/// TIM2's clock on the board: APB1 at 42 MHz, doubled for its timers because
+/// APB1's prescaler is not 1 (RM0090 6.2, figure 21).
+pub const TIM2_CLOCK_HZ: u32 = 2 * crate::clock_tree::PCLK1_HZ;
+
+/// The LSI that clocks the watchdog, Hz (nominal; 17 to 47 kHz over parts and
+/// temperature, DS8626 table 41: the timeout is chosen with that margin).
+pub const LSI_HZ: u32 = 32_000;
+
+/// Prescaler and reload of a timer that overflows at `rate_hz`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TickTimer {
+    /// PSC.
+    pub psc: u16,
+    /// ARR (TIM2 is 32-bit; kept within 16 bits so TIM3 to TIM5 fit too).
+    pub arr: u16,
+}
+
+/// Why a rate cannot be made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum TimingError {
+    /// No integer prescaler and reload give exactly `rate_hz` from `clock_hz`:
+    /// the firmware's period would disagree with the tick's.
+    Inexact {
+        /// The timer clock, Hz.
+        clock_hz: u32,
+        /// The rate asked for, Hz.
+        rate_hz: u32,
+    },
+}
+
+impl TickTimer {
+    /// The settings for exactly `rate_hz` from a timer clock of `clock_hz`, with
+    /// the smallest prescaler (the finest counter).
+    ///
+    /// # Errors
+    /// [`TimingError::Inexact`] when `clock_hz` is not a multiple of `rate_hz`
+    /// or the division does not fit 16 x 16 bits.
+    pub fn for_rate(clock_hz: u32, rate_hz: u32) -> Result<Self, TimingError> {
+        let err = TimingError::Inexact { clock_hz, rate_hz };
+        if rate_hz == 0 || !clock_hz.is_multiple_of(rate_hz) {
+            return Err(err);
+        }
+        let ticks = clock_hz / rate_hz;
+        for psc in 1..=65_536u32 {
+            if ticks.is_multiple_of(psc) && ticks / psc <= 65_536 {
+                return Ok(Self { psc: (psc - 1) as u16, arr: (ticks / psc - 1) as u16 });
+            }
+        }
+        Err(err)
+    }
+
+    /// The tick's rate from `clock_hz`, Hz.
+    pub fn rate_hz(&self, clock_hz: u32) -> f64 {
+        f64::from(clock_hz) / ((f64::from(self.psc) + 1.0) * (f64::from(self.arr) + 1.0))
+    }
+}
+
+/// The watchdog's prescaler code `pr` (divider `4 * 2^pr`) and reload `rl`
+/// (12 bits) for a timeout of at least `timeout_us` at the fastest LSI
+/// (47 kHz), so a slow part never resets a healthy loop; the slowest (17 kHz)
+/// stretches it by less than 3x.
+pub fn watchdog(timeout_us: u32) -> (u8, u16) {
+    const LSI_MAX_HZ: u64 = 47_000;
+    for pr in 0..=6u8 {
+        let div = 4u64 << pr;
+        let counts = (u64::from(timeout_us) * LSI_MAX_HZ).div_ceil(div * 1_000_000);
+        if counts <= 0x0FFF {
+            return (pr, counts.max(1) as u16);
+        }
+    }
+    (6, 0x0FFF)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_supported_rate_is_exact_on_the_board() {
+        // HARDWARE.md: 250 Hz to 10 kHz; 84 MHz divides by every rate that divides 84e6.
+        for rate in [250u32, 500, 1_000, 2_000, 4_000, 5_000, 6_000, 7_000, 8_000, 10_000] {
+            let t = TickTimer::for_rate(TIM2_CLOCK_HZ, rate).unwrap();
+            assert_eq!((u32::from(t.psc) + 1) * (u32::from(t.arr) + 1), TIM2_CLOCK_HZ / rate, "{rate}");
+            assert!((t.rate_hz(TIM2_CLOCK_HZ) - f64::from(rate)).abs() < 1e-9);
+        }
+        assert_eq!(TickTimer::for_rate(84_000_000, 1_000), Ok(TickTimer { psc: 1, arr: 41_999 }));
+        // 84 MHz / 9 kHz is not an integer: refused rather than a drifting tick.
+        assert!(TickTimer::for_rate(TIM2_CLOCK_HZ, 9_000).is_err());
+        assert!(TickTimer::for_rate(TIM2_CLOCK_HZ, 0).is_err());
+    }
+
+    #[test]
+    fn the_watchdog_is_never_shorter_than_asked() {
+        for timeout_us in [500u32, 1_000, 4_000, 5_000, 20_000, 1_000_000, 30_000_000] {
+            let (pr, rl) = watchdog(timeout_us);
+            let fastest_us = f64::from(rl) * f64::from(4u32 << pr) / 47_000.0 * 1e6;
+            assert!(fastest_us >= f64::from(timeout_us) || rl == 0x0FFF, "{timeout_us}: {fastest_us}");
+            assert!(rl <= 0x0FFF && pr <= 6);
+        }
+        // 5 ms: divider 4, 59 counts.
+        assert_eq!(watchdog(5_000), (0, 59));
+    }
+}

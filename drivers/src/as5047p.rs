@@ -1,0 +1,527 @@
+//! AS5047P 14-bit magnetic absolute encoder over SPI (AS5047P datasheet, ams
+//! v1-06, "SPI Interface"; HARDWARE.md "The reference board": two of them, one
+//! chip select each, on one bus).
+//!
+//! The bus is SPI mode 1 with 16-bit frames, one chip-select assertion per frame
+//! (one [`SpiDevice::transfer_in_place`] of one `u16`). The chip answers a read
+//! command in the *next* frame (datasheet "SPI Timing"/"SPI Read"), so every read
+//! here is a command frame followed by a frame whose answer is the register; the
+//! last frame of every operation is a NOP read, which leaves the pipeline with a
+//! harmless command in it.
+//!
+//! Every answer is checked for even parity and for the error flag EF; an EF makes
+//! the driver read (and so clear) ERRFL and report its bits.
+
+use core::fmt;
+
+use embedded_hal::spi::SpiDevice;
+
+/// Register NOP (datasheet "Register Description", address 0x0000): reading it
+/// returns 0 and is used to clock out the previous command's answer.
+pub const REG_NOP: u16 = 0x0000;
+/// Register ERRFL (address 0x0001): error flags, cleared by reading them.
+pub const REG_ERRFL: u16 = 0x0001;
+/// Register DIAAGC (address 0x3FFC): diagnostics and the AGC value.
+pub const REG_DIAAGC: u16 = 0x3FFC;
+/// Register ANGLECOM (address 0x3FFF): the angle with dynamic angle error
+/// compensation, 14 bit per revolution.
+pub const REG_ANGLECOM: u16 = 0x3FFF;
+
+/// ERRFL bit 0 FRERR: framing error (a frame that was not 16 bits long).
+pub const ERRFL_FRERR: u16 = 1 << 0;
+/// ERRFL bit 1 INVCOMM: invalid command (a read or write of a bad address).
+pub const ERRFL_INVCOMM: u16 = 1 << 1;
+/// ERRFL bit 2 PARERR: a command frame had odd parity.
+pub const ERRFL_PARERR: u16 = 1 << 2;
+/// The `errfl` of [`Error::ErrorFlag`] when EF was set but ERRFL itself could not
+/// be read (bus error or bad parity on that read): no 14-bit register reads as
+/// this value.
+pub const ERRFL_UNKNOWN: u16 = 0xFFFF;
+
+/// Bit 15 of every frame: even parity over the whole 16 bits.
+const PARITY: u16 = 1 << 15;
+/// Bit 14 of a command frame: 1 = read.
+const READ: u16 = 1 << 14;
+/// Bit 14 of an answer frame: EF, an error happened in a previous frame.
+const EF: u16 = 1 << 14;
+/// Bits 0..13: address in a command, data in an answer.
+const DATA: u16 = 0x3FFF;
+
+/// DIAAGC bits (datasheet "DIAAGC (0x3FFC)").
+const DIAAGC_LF: u16 = 1 << 8;
+const DIAAGC_COF: u16 = 1 << 9;
+const DIAAGC_MAGH: u16 = 1 << 10;
+const DIAAGC_MAGL: u16 = 1 << 11;
+
+/// The encoder's resolution, counts per revolution (datasheet: 14 bit).
+pub const COUNTS_PER_REV: u16 = 1 << 14;
+
+/// A read command frame for `addr` (datasheet "SPI Command Frame"): bits 0..13
+/// the address (bits 14..15 of `addr` are ignored), bit 14 = 1 (read), bit 15 the
+/// even-parity bit over bits 0..14, so the whole word has even parity.
+pub fn read_command(addr: u16) -> u16 {
+    let w = (addr & DATA) | READ;
+    w | (parity_of(w) << 15)
+}
+
+/// 1 when `w` has an odd number of ones in bits 0..14, else 0.
+fn parity_of(w: u16) -> u16 {
+    ((w & !PARITY).count_ones() & 1) as u16
+}
+
+/// Whether the 16-bit `frame` has even parity (as every valid frame does).
+pub fn has_even_parity(frame: u16) -> bool {
+    frame.count_ones() % 2 == 0
+}
+
+/// Errors of the AS5047P driver. `E` is the SPI device's error type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Error<E> {
+    /// The SPI transfer failed.
+    Bus(E),
+    /// An answer `frame` had odd parity (datasheet "SPI Read Data Frame"): a bit
+    /// was corrupted on MISO.
+    Parity {
+        /// The received 16-bit word.
+        frame: u16,
+    },
+    /// An answer had EF set (an earlier frame went wrong). ERRFL was read, which
+    /// clears it; `errfl` holds its bits ([`ERRFL_FRERR`], [`ERRFL_INVCOMM`],
+    /// [`ERRFL_PARERR`]), or [`ERRFL_UNKNOWN`] if that read failed too. A MISO
+    /// line floating high (answers 0xFFFF) ends here.
+    ErrorFlag {
+        /// ERRFL bits 0..13, or [`ERRFL_UNKNOWN`].
+        errfl: u16,
+    },
+    /// DIAAGC LF = 0: the offset compensation has not finished, the angle is not
+    /// valid yet. A chip missing from the bus (MISO reads all zeros, which pass
+    /// parity and EF) ends here too.
+    NotReady,
+    /// DIAAGC MAGH/MAGL: the magnetic field is out of range (magnet too close,
+    /// too far, or missing).
+    Magnet {
+        /// MAGH: field too strong.
+        too_strong: bool,
+        /// MAGL: field too weak.
+        too_weak: bool,
+    },
+    /// DIAAGC COF: the CORDIC overflowed, the angle is not valid.
+    CordicOverflow,
+}
+
+impl<E: fmt::Debug> fmt::Display for Error<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Bus(e) => write!(f, "AS5047P: SPI error {e:?}"),
+            Error::Parity { frame } => write!(f, "AS5047P: parity error in answer {frame:#06x}"),
+            Error::ErrorFlag { errfl } => write!(f, "AS5047P: error flag set, ERRFL = {errfl:#06x}"),
+            Error::NotReady => write!(f, "AS5047P: offset compensation not finished (or no chip)"),
+            Error::Magnet { too_strong, too_weak } => {
+                write!(f, "AS5047P: magnetic field out of range (too strong: {too_strong}, too weak: {too_weak})")
+            }
+            Error::CordicOverflow => write!(f, "AS5047P: CORDIC overflow"),
+        }
+    }
+}
+
+/// The DIAAGC register decoded (datasheet "DIAAGC (0x3FFC)").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Diagnostics {
+    /// Bits 0..7: the automatic gain control value (0 = strong field, 255 = weak).
+    pub agc: u8,
+    /// Bit 8 LF: the offset compensation has finished (the angle is valid).
+    pub offset_compensation_finished: bool,
+    /// Bit 9 COF: CORDIC overflow.
+    pub cordic_overflow: bool,
+    /// Bit 10 MAGH: magnetic field too strong.
+    pub magnet_too_strong: bool,
+    /// Bit 11 MAGL: magnetic field too weak.
+    pub magnet_too_weak: bool,
+}
+
+impl Diagnostics {
+    /// Decodes a DIAAGC value (bits 12..15 ignored).
+    pub fn from_register(diaagc: u16) -> Self {
+        Self {
+            agc: (diaagc & 0xFF) as u8,
+            offset_compensation_finished: diaagc & DIAAGC_LF != 0,
+            cordic_overflow: diaagc & DIAAGC_COF != 0,
+            magnet_too_strong: diaagc & DIAAGC_MAGH != 0,
+            magnet_too_weak: diaagc & DIAAGC_MAGL != 0,
+        }
+    }
+
+    /// Whether the angle sampled with these diagnostics is valid.
+    ///
+    /// # Errors
+    /// In this order: [`Error::NotReady`] (LF = 0; the other bits mean nothing
+    /// then), [`Error::Magnet`] (MAGH or MAGL), [`Error::CordicOverflow`] (COF).
+    pub fn check<E>(&self) -> Result<(), Error<E>> {
+        if !self.offset_compensation_finished {
+            Err(Error::NotReady)
+        } else if self.magnet_too_strong || self.magnet_too_weak {
+            Err(Error::Magnet { too_strong: self.magnet_too_strong, too_weak: self.magnet_too_weak })
+        } else if self.cordic_overflow {
+            Err(Error::CordicOverflow)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// One AS5047P on its own chip select.
+///
+/// `SPI` is the device (bus plus chip select) configured for mode 1 (CPOL 0,
+/// CPHA 1), 16-bit words, at most 10 MHz, with chip select high for at least
+/// 350 ns between frames (datasheet "SPI Timing", tCSn).
+#[derive(Debug)]
+pub struct As5047p<SPI> {
+    spi: SPI,
+}
+
+impl<SPI: SpiDevice<u16>> As5047p<SPI> {
+    /// Wraps `spi`; talks to nothing yet (call [`As5047p::check_ready`] at start-up).
+    pub fn new(spi: SPI) -> Self {
+        Self { spi }
+    }
+
+    /// Gives the SPI device back.
+    pub fn release(self) -> SPI {
+        self.spi
+    }
+
+    /// One frame: sends `command`, returns the answer (to the previous command)
+    /// after checking its parity. EF is left to the caller.
+    fn frame(&mut self, command: u16) -> Result<u16, Error<SPI::Error>> {
+        let mut word = [command];
+        self.spi.transfer_in_place(&mut word).map_err(Error::Bus)?;
+        let [answer] = word;
+        if has_even_parity(answer) { Ok(answer) } else { Err(Error::Parity { frame: answer }) }
+    }
+
+    /// Sends `commands`, one frame each, and returns their answers: answer `i`
+    /// is the reply to command `i - 1` (answer 0 to whatever came before). Every
+    /// answer is checked for parity, then all of them for EF.
+    fn frames<const N: usize>(&mut self, commands: [u16; N]) -> Result<[u16; N], Error<SPI::Error>> {
+        let mut answers = [0u16; N];
+        for (answer, command) in answers.iter_mut().zip(commands) {
+            *answer = self.frame(command)?;
+        }
+        if answers.iter().any(|a| a & EF != 0) {
+            return Err(Error::ErrorFlag { errfl: self.read_errfl().unwrap_or(ERRFL_UNKNOWN) });
+        }
+        Ok(answers)
+    }
+
+    /// READ ERRFL then READ NOP, ignoring EF in the answers (reading ERRFL is how
+    /// EF is cleared; its own answer may still carry it). Returns bits 0..13.
+    fn read_errfl(&mut self) -> Result<u16, Error<SPI::Error>> {
+        self.frame(read_command(REG_ERRFL))?;
+        Ok(self.frame(read_command(REG_NOP))? & DATA)
+    }
+
+    /// Reads register `addr` (bits 0..13; bits 14..15 ignored): 2 frames, the
+    /// read command then a NOP read whose answer is the register (datasheet "SPI
+    /// Read"). Returns the 14-bit data. For ERRFL use [`As5047p::error_flags`].
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`], [`Error::ErrorFlag`].
+    pub fn read_register(&mut self, addr: u16) -> Result<u16, Error<SPI::Error>> {
+        let [_, value] = self.frames([read_command(addr), read_command(REG_NOP)])?;
+        Ok(value & DATA)
+    }
+
+    /// A fresh angle, sampled now: READ ANGLECOM then READ NOP (2 frames).
+    /// Returns the 14-bit count in `[0, 2^14)`, one count = `2 pi / 2^14` rad.
+    /// Does not look at the diagnostics: use [`As5047p::sample`] in the loop.
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`], [`Error::ErrorFlag`].
+    pub fn angle(&mut self) -> Result<u16, Error<SPI::Error>> {
+        self.read_register(REG_ANGLECOM)
+    }
+
+    /// The angle and the diagnostics of the same sample: READ ANGLECOM, READ
+    /// DIAAGC, READ NOP (3 frames; datasheet "SPI Read", pipelined). Returns the
+    /// 14-bit count in `[0, 2^14)` only if the diagnostics say it is valid.
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`], [`Error::ErrorFlag`], then from
+    /// DIAAGC (see [`Diagnostics::check`]): [`Error::NotReady`],
+    /// [`Error::Magnet`], [`Error::CordicOverflow`].
+    pub fn sample(&mut self) -> Result<u16, Error<SPI::Error>> {
+        let [_, angle, diaagc] = self.frames([read_command(REG_ANGLECOM), read_command(REG_DIAAGC), read_command(REG_NOP)])?;
+        Diagnostics::from_register(diaagc).check()?;
+        Ok(angle & DATA)
+    }
+
+    /// Reads DIAAGC (2 frames) and decodes it, without judging it.
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`], [`Error::ErrorFlag`].
+    pub fn diagnostics(&mut self) -> Result<Diagnostics, Error<SPI::Error>> {
+        self.read_register(REG_DIAAGC).map(Diagnostics::from_register)
+    }
+
+    /// Reads ERRFL, which clears it (2 frames; EF in these answers is expected
+    /// and ignored). Returns its bits 0..13 ([`ERRFL_FRERR`], [`ERRFL_INVCOMM`],
+    /// [`ERRFL_PARERR`]).
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`].
+    pub fn error_flags(&mut self) -> Result<u16, Error<SPI::Error>> {
+        self.read_errfl()
+    }
+
+    /// Start-up check: clears the error flags left from power-up (their value
+    /// is dropped), then reads DIAAGC and requires a finished offset compensation
+    /// and a good field. Returns the diagnostics (AGC for the log). Only LF
+    /// catches a chip missing from the bus (MISO all zeros); MISO floating high
+    /// gives [`Error::ErrorFlag`].
+    ///
+    /// # Errors
+    /// [`Error::Bus`], [`Error::Parity`], [`Error::ErrorFlag`],
+    /// [`Error::NotReady`], [`Error::Magnet`], [`Error::CordicOverflow`].
+    pub fn check_ready(&mut self) -> Result<Diagnostics, Error<SPI::Error>> {
+        self.error_flags()?;
+        let diagnostics = self.diagnostics()?;
+        diagnostics.check()?;
+        Ok(diagnostics)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_hal::spi::{ErrorKind, ErrorType, Operation};
+    use embedded_hal_mock::eh1::spi::{Mock, Transaction as T};
+    use proptest::prelude::*;
+
+    // Command words, parity computed by hand (datasheet examples agree).
+    // READ NOP: 0x4000 has one 1 -> parity 1 -> 0xC000.
+    const RD_NOP: u16 = 0xC000;
+    // READ ANGLECOM: 0x7FFF has fifteen 1s -> parity 1 -> 0xFFFF.
+    const RD_ANGLECOM: u16 = 0xFFFF;
+    // READ DIAAGC: 0x7FFC has thirteen 1s -> parity 1 -> 0xFFFC.
+    const RD_DIAAGC: u16 = 0xFFFC;
+    // READ ERRFL: 0x4001 has two 1s -> parity 0 -> 0x4001.
+    const RD_ERRFL: u16 = 0x4001;
+
+    /// One frame on the mock: CS assert, one word in and out, CS release.
+    fn xfer(out: u16, answer: u16) -> [T<u16>; 3] {
+        [T::transaction_start(), T::transfer_in_place(vec![out], vec![answer]), T::transaction_end()]
+    }
+
+    fn mock(frames: &[(u16, u16)]) -> Mock<u16> {
+        let t: Vec<T<u16>> = frames.iter().flat_map(|&(o, a)| xfer(o, a)).collect();
+        Mock::new(&t)
+    }
+
+    /// An answer word with `data` in bits 0..13, `ef`, and the parity bit set right.
+    fn answer(data: u16, ef: bool) -> u16 {
+        let w = data & DATA | if ef { EF } else { 0 };
+        w | (parity_of(w) << 15)
+    }
+
+    #[test]
+    fn hand_computed_commands() {
+        assert_eq!(read_command(REG_NOP), RD_NOP);
+        assert_eq!(read_command(REG_ANGLECOM), RD_ANGLECOM);
+        assert_eq!(read_command(REG_DIAAGC), RD_DIAAGC);
+        assert_eq!(read_command(REG_ERRFL), RD_ERRFL);
+    }
+
+    #[test]
+    fn angle_reads_anglecom_then_nop() {
+        // Angle 0x1234: bits 12, 9, 5, 4, 2 -> five 1s -> parity 1 -> 0x9234.
+        let mut spi = mock(&[(RD_ANGLECOM, 0x0000), (RD_NOP, 0x9234)]);
+        let mut enc = As5047p::new(spi.clone());
+        assert_eq!(enc.angle(), Ok(0x1234));
+        spi.done();
+    }
+
+    #[test]
+    fn sample_reads_angle_and_diagnostics_of_the_same_sample() {
+        let diag = DIAAGC_LF | 0x40;
+        let mut spi = mock(&[(RD_ANGLECOM, answer(0, false)), (RD_DIAAGC, answer(0x2ABC, false)), (RD_NOP, answer(diag, false))]);
+        let mut enc = As5047p::new(spi.clone());
+        assert_eq!(enc.sample(), Ok(0x2ABC));
+        spi.done();
+    }
+
+    fn sample_with_diag(diag: u16) -> Result<u16, Error<ErrorKind>> {
+        let mut spi = mock(&[(RD_ANGLECOM, answer(0, false)), (RD_DIAAGC, answer(0x0123, false)), (RD_NOP, answer(diag, false))]);
+        let r = As5047p::new(spi.clone()).sample();
+        spi.done();
+        r
+    }
+
+    #[test]
+    fn sample_rejects_bad_diagnostics() {
+        assert_eq!(sample_with_diag(0), Err(Error::NotReady));
+        assert_eq!(sample_with_diag(DIAAGC_LF | DIAAGC_COF), Err(Error::CordicOverflow));
+        assert_eq!(sample_with_diag(DIAAGC_LF | DIAAGC_MAGH), Err(Error::Magnet { too_strong: true, too_weak: false }));
+        assert_eq!(sample_with_diag(DIAAGC_LF | DIAAGC_MAGL | 0xFF), Err(Error::Magnet { too_strong: false, too_weak: true }));
+        // LF = 0 wins over the other bits: they mean nothing before it.
+        assert_eq!(sample_with_diag(DIAAGC_MAGL | DIAAGC_COF), Err(Error::NotReady));
+        assert_eq!(sample_with_diag(DIAAGC_LF | 0x80), Ok(0x0123));
+    }
+
+    #[test]
+    fn parity_error_in_any_answer_is_reported_with_the_frame() {
+        // 0x0001 has one 1 and no parity bit: odd.
+        let mut spi = mock(&[(RD_ANGLECOM, 0x0001)]);
+        assert_eq!(As5047p::new(spi.clone()).angle(), Err(Error::Parity { frame: 0x0001 }));
+        spi.done();
+        let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_NOP, 0x9235)]);
+        assert_eq!(As5047p::new(spi.clone()).angle(), Err(Error::Parity { frame: 0x9235 }));
+        spi.done();
+    }
+
+    #[test]
+    fn error_flag_reads_and_reports_errfl() {
+        // EF in the angle's answer; ERRFL = PARERR: 0x0004 -> one 1 -> 0x8004.
+        let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_NOP, answer(0x1000, true)), (RD_ERRFL, answer(0, true)), (RD_NOP, 0x8004)]);
+        assert_eq!(As5047p::new(spi.clone()).angle(), Err(Error::ErrorFlag { errfl: ERRFL_PARERR }));
+        spi.done();
+        // EF in the first (stale) answer counts too.
+        let mut spi = mock(&[
+            (RD_ANGLECOM, answer(0, true)),
+            (RD_DIAAGC, answer(5, false)),
+            (RD_NOP, answer(DIAAGC_LF, false)),
+            (RD_ERRFL, answer(0, false)),
+            (RD_NOP, answer(ERRFL_FRERR | ERRFL_INVCOMM, false)),
+        ]);
+        assert_eq!(As5047p::new(spi.clone()).sample(), Err(Error::ErrorFlag { errfl: ERRFL_FRERR | ERRFL_INVCOMM }));
+        spi.done();
+    }
+
+    #[test]
+    fn error_flag_with_unreadable_errfl_reports_unknown() {
+        let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_NOP, answer(1, true)), (RD_ERRFL, 0), (RD_NOP, 0x0001)]);
+        assert_eq!(As5047p::new(spi.clone()).angle(), Err(Error::ErrorFlag { errfl: ERRFL_UNKNOWN }));
+        spi.done();
+    }
+
+    #[test]
+    fn miso_high_is_an_error_flag_and_miso_low_is_not_ready() {
+        // Floating high: 0xFFFF has even parity and EF set; ERRFL reads 0x3FFF.
+        let mut spi =
+            mock(&[(RD_ERRFL, 0xFFFF), (RD_NOP, 0xFFFF), (RD_DIAAGC, 0xFFFF), (RD_NOP, 0xFFFF), (RD_ERRFL, 0xFFFF), (RD_NOP, 0xFFFF)]);
+        assert_eq!(As5047p::new(spi.clone()).check_ready(), Err(Error::ErrorFlag { errfl: 0x3FFF }));
+        spi.done();
+        // No chip, MISO pulled low: every check passes but LF.
+        let mut spi = mock(&[(RD_ERRFL, 0), (RD_NOP, 0), (RD_DIAAGC, 0), (RD_NOP, 0)]);
+        assert_eq!(As5047p::new(spi.clone()).check_ready(), Err(Error::NotReady));
+        spi.done();
+    }
+
+    #[test]
+    fn check_ready_clears_errfl_and_returns_diagnostics() {
+        let diag = DIAAGC_LF | 0x5A;
+        let mut spi =
+            mock(&[(RD_ERRFL, answer(0, true)), (RD_NOP, answer(ERRFL_FRERR, true)), (RD_DIAAGC, 0), (RD_NOP, answer(diag, false))]);
+        let d = As5047p::new(spi.clone()).check_ready().unwrap();
+        assert_eq!(
+            d,
+            Diagnostics {
+                agc: 0x5A,
+                offset_compensation_finished: true,
+                cordic_overflow: false,
+                magnet_too_strong: false,
+                magnet_too_weak: false
+            }
+        );
+        spi.done();
+    }
+
+    #[test]
+    fn diagnostics_and_error_flags_and_read_register() {
+        let spi = mock(&[
+            (RD_DIAAGC, 0),
+            (RD_NOP, answer(DIAAGC_COF | DIAAGC_MAGH | DIAAGC_MAGL | 0x12, false)),
+            (RD_ERRFL, 0),
+            (RD_NOP, answer(ERRFL_INVCOMM, true)),
+            (read_command(0x0016), 0),
+            (RD_NOP, answer(0x0ABC, false)),
+        ]);
+        let mut enc = As5047p::new(spi.clone());
+        let d = enc.diagnostics().unwrap();
+        assert_eq!(
+            d,
+            Diagnostics {
+                agc: 0x12,
+                offset_compensation_finished: false,
+                cordic_overflow: true,
+                magnet_too_strong: true,
+                magnet_too_weak: true
+            }
+        );
+        assert_eq!(enc.error_flags(), Ok(ERRFL_INVCOMM));
+        assert_eq!(enc.read_register(0x0016), Ok(0x0ABC));
+        // The released device shares the mock's expectations.
+        enc.release().done();
+    }
+
+    /// A device that fails its `n`-th frame (counting from 0) and otherwise
+    /// forwards to the mock (the 0.11 SPI mock cannot inject errors).
+    struct FailAt {
+        inner: Mock<u16>,
+        n: usize,
+        frames: usize,
+    }
+
+    impl ErrorType for FailAt {
+        type Error = ErrorKind;
+    }
+
+    impl SpiDevice<u16> for FailAt {
+        fn transaction(&mut self, ops: &mut [Operation<'_, u16>]) -> Result<(), ErrorKind> {
+            let k = self.frames;
+            self.frames += 1;
+            if k == self.n { Err(ErrorKind::ModeFault) } else { self.inner.transaction(ops) }
+        }
+    }
+
+    #[test]
+    fn bus_errors_propagate() {
+        // Fails on the first frame.
+        let mut spi = mock(&[]);
+        let mut enc = As5047p::new(FailAt { inner: spi.clone(), n: 0, frames: 0 });
+        assert_eq!(enc.angle(), Err(Error::Bus(ErrorKind::ModeFault)));
+        spi.done();
+        // Fails on the last frame of a sample.
+        let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_DIAAGC, 0)]);
+        let mut enc = As5047p::new(FailAt { inner: spi.clone(), n: 2, frames: 0 });
+        assert_eq!(enc.sample(), Err(Error::Bus(ErrorKind::ModeFault)));
+        spi.done();
+        // EF, then the ERRFL read fails on the bus: EF is still reported.
+        let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_NOP, answer(7, true)), (RD_ERRFL, 0)]);
+        let mut enc = As5047p::new(FailAt { inner: spi.clone(), n: 3, frames: 0 });
+        assert_eq!(enc.angle(), Err(Error::ErrorFlag { errfl: ERRFL_UNKNOWN }));
+        spi.done();
+    }
+
+    #[test]
+    fn display_names_the_problem() {
+        let e: Error<ErrorKind> = Error::Parity { frame: 0x0001 };
+        assert_eq!(format!("{e}"), "AS5047P: parity error in answer 0x0001");
+    }
+
+    proptest! {
+        #[test]
+        fn commands_have_even_parity_and_keep_their_address(addr in any::<u16>()) {
+            let c = read_command(addr);
+            prop_assert!(has_even_parity(c));
+            prop_assert_eq!(c & DATA, addr & DATA);
+            prop_assert_eq!(c & READ, READ);
+        }
+
+        #[test]
+        fn any_angle_round_trips(angle in 0u16..COUNTS_PER_REV) {
+            let mut spi = mock(&[(RD_ANGLECOM, 0), (RD_NOP, answer(angle, false))]);
+            prop_assert_eq!(As5047p::new(spi.clone()).angle(), Ok(angle));
+            spi.done();
+        }
+    }
+}
