@@ -71,7 +71,7 @@ fn parity_of(w: u16) -> u16 {
 
 /// Whether the 16-bit `frame` has even parity (as every valid frame does).
 pub fn has_even_parity(frame: u16) -> bool {
-    frame.count_ones() % 2 == 0
+    frame.count_ones().is_multiple_of(2)
 }
 
 /// Errors of the AS5047P driver. `E` is the SPI device's error type.

@@ -55,7 +55,8 @@ pub struct Readings {
     /// The elbow encoder's raw count, `[0, 2^14)`.
     pub elbow_raw: Option<u16>,
     /// Load-cell codes `[f_t, f_n]` (`LoadCell::read_codes`), codes of
-    /// 25/2048 N in `[-2048, 2047]`.
+    /// 25/2048 N in `[-2048, 2047]`; from that read's result `r`:
+    /// `r.ok().map_or([None; 2], |c| c.map(Some))`.
     pub load_codes: [Option<i16>; 2],
     /// Belt speed (`BeltEncoder::speed_mm_s`), mm/s in `[-5000, 5000]`.
     pub belt_mm_s: Option<i16>,

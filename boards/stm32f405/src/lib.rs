@@ -16,6 +16,7 @@
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 
+pub mod calibration;
 pub mod clock_tree;
 pub mod pins;
 pub mod step_stats;

@@ -6,6 +6,10 @@
 /// APB1's prescaler is not 1 (RM0090 6.2, figure 21).
 pub const TIM2_CLOCK_HZ: u32 = 2 * crate::clock_tree::PCLK1_HZ;
 
+/// QEMU's clock for TIM2 to TIM5 in `netduinoplus2`, Hz: the emulator models no
+/// RCC and runs its timers at this fixed rate (docs/board.md "Under QEMU").
+pub const QEMU_TIMER_HZ: u32 = 1_000_000_000;
+
 /// The LSI that clocks the watchdog, Hz (nominal; 17 to 47 kHz over parts and
 /// temperature, DS8626 table 41: the timeout is chosen with that margin).
 pub const LSI_HZ: u32 = 32_000;

@@ -1,0 +1,57 @@
+//! Building and running the board's images for the end-to-end tests.
+#![allow(dead_code)]
+
+use std::{
+    path::{Path, PathBuf},
+    process::Command,
+    sync::OnceLock,
+};
+
+/// The workspace root.
+pub fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Builds image `bin` of `boards/stm32f405` for QEMU (profile `mcu`, feature
+/// `qemu`) in its own target folder (the outer `cargo test` holds the
+/// workspace's lock), once per test binary; its path.
+pub fn qemu_image(bin: &str) -> PathBuf {
+    static BUILT: OnceLock<()> = OnceLock::new();
+    let root = workspace();
+    let target_dir = root.join("target/mcu-test");
+    BUILT.get_or_init(|| {
+        assert!(
+            Command::new("qemu-system-arm").arg("--version").output().is_ok(),
+            "qemu-system-arm is missing: apt-get install -y qemu-system-arm (CI installs it)"
+        );
+        let build = Command::new(env!("CARGO"))
+            .args(["build", "-p", "board-stm32f405", "--profile", "mcu", "--target", "thumbv7em-none-eabihf"])
+            .args(["--no-default-features", "--features", "qemu", "--bin", "arm", "--bin", "pil"])
+            .env("CARGO_TARGET_DIR", &target_dir)
+            .current_dir(&root)
+            .output()
+            .unwrap();
+        assert!(build.status.success(), "building the images failed:\n{}", String::from_utf8_lossy(&build.stderr));
+    });
+    target_dir.join("thumbv7em-none-eabihf/mcu").join(bin)
+}
+
+/// The defmt lines of `bytes` (an image's semihosting output), decoded with the table of `elf`.
+pub fn decode_defmt(elf: &Path, bytes: &[u8]) -> Vec<String> {
+    let elf = std::fs::read(elf).unwrap();
+    let table = defmt_decoder::Table::parse(&elf).unwrap().expect("the image has a defmt table");
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = Vec::new();
+    loop {
+        match decoder.decode() {
+            Ok(frame) => {
+                let level = frame.level().map_or("println", |l| l.as_str()).to_string();
+                lines.push(format!("[{level}] {}", frame.display_message()));
+            }
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(e) => panic!("corrupt defmt stream: {e}"),
+        }
+    }
+    lines
+}
