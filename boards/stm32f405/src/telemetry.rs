@@ -26,6 +26,8 @@ pub struct ArmTelemetry {
     /// The shortest and longest interval between two control ticks in the
     /// window, ticks (their spread is the tick's jitter plus the handler's latency).
     pub tick_interval: [u32; 2],
+    /// The longest control interrupt of the window (sampling, step, outputs), ticks.
+    pub handler_worst: u32,
     /// The stack's high-water mark, bytes.
     pub stack_high_water_bytes: u32,
 }
@@ -45,6 +47,7 @@ mod tests {
             clock: StepClock::DwtCycles,
             step: WindowSummary { steps: 1000, worst: 6123, median: 4016 },
             tick_interval: [167_900, 168_100],
+            handler_worst: 9000,
             stack_high_water_bytes: 2048,
         };
         let mut buf = [0u8; MAX_FRAME];

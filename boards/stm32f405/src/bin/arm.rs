@@ -86,8 +86,8 @@ mod image {
         load: LoadCell<adc::LoadCellAdc>,
         belt: BeltEncoder<BeltCounter>,
         motors: Motors,
-        button: GpioPin,
         button_low: u16,
+        button_released: bool,
         reset_pending: bool,
         enable_requested: bool,
         period_us: u64,
@@ -95,6 +95,7 @@ mod image {
         tick_mark: u32,
         now_us: u64,
         interval: [u32; 2],
+        handler_worst: u32,
         stats: StepStats,
         invalid_logged: u16,
         safe_logged: bool,
@@ -140,13 +141,23 @@ mod image {
             f
         }
 
+        /// A press: low for [`BUTTON_PERIODS`] after having been seen released
+        /// (a button stuck low, or a pin QEMU does not model, never presses).
         fn button_pressed(&mut self) -> bool {
             if gpio::read(&pins::ENABLE_BUTTON) {
                 self.button_low = 0;
+                self.button_released = true;
+                return false;
+            }
+            if !self.button_released {
                 return false;
             }
             self.button_low = self.button_low.saturating_add(1);
-            self.button_low == BUTTON_PERIODS
+            if self.button_low == BUTTON_PERIODS {
+                self.button_released = false;
+                return true;
+            }
+            false
         }
     }
 
@@ -203,22 +214,25 @@ mod image {
                             clock: self.clock.kind(),
                             step,
                             tick_interval: self.interval,
-                            stack_high_water_bytes: stack::high_water_bytes(),
+                            handler_worst: self.handler_worst,
+                            // Filled in by the idle loop: scanning the stack takes too long here.
+                            stack_high_water_bytes: 0,
                         };
                         defmt::info!(
-                            "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; overruns {=u32}; drivers {=str}; stack {=u32} bytes",
+                            "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; handler worst {=u32} ticks; overruns {=u32}; drivers {=str}",
                             c.seq,
                             step.median,
                             step.worst,
                             step.steps,
                             self.interval[0],
                             self.interval[1],
+                            self.handler_worst,
                             report.overruns,
-                            if report.drivers_enabled { "enabled" } else { "disabled" },
-                            report.stack_high_water_bytes
+                            if report.drivers_enabled { "enabled" } else { "disabled" }
                         );
                         cortex_m::interrupt::free(|cs| REPORT.borrow(cs).set(Some(report)));
                         self.interval = [u32::MAX, 0];
+                        self.handler_worst = 0;
                     }
                 }
                 Outcome::Reset => {
@@ -253,6 +267,7 @@ mod image {
                 }
             }
             b.seq = b.seq.wrapping_add(1);
+            b.handler_worst = b.handler_worst.max(b.clock.ticks().wrapping_sub(b.tick_mark));
         }
     }
 
@@ -337,8 +352,8 @@ mod image {
             load,
             belt,
             motors,
-            button: GpioPin(pins::ENABLE_BUTTON),
             button_low: 0,
+            button_released: false,
             reset_pending: false,
             enable_requested: false,
             period_us,
@@ -346,11 +361,11 @@ mod image {
             tick_mark: clock.mark(),
             now_us: 0,
             interval: [u32::MAX, 0],
+            handler_worst: 0,
             stats: StepStats::default(),
             invalid_logged: 0,
             safe_logged: false,
         };
-        let _ = board.button;
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(Arm { board, firmware: Some(fw) })));
         defmt::info!(
             "arm image up: {=u32} Hz control tick (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
@@ -370,7 +385,9 @@ mod image {
         // Idle: send each window's telemetry (the interrupt preempts this).
         loop {
             cortex_m::asm::wfi();
-            if let Some(report) = cortex_m::interrupt::free(|cs| REPORT.borrow(cs).take()) {
+            if let Some(mut report) = cortex_m::interrupt::free(|cs| REPORT.borrow(cs).take()) {
+                report.stack_high_water_bytes = stack::high_water_bytes();
+                defmt::info!("stack high-water mark {=u32} bytes", report.stack_high_water_bytes);
                 let mut buf = [0u8; MAX_FRAME];
                 if let Ok(frame) = pil::encode(&report, &mut buf) {
                     usart::write_all(frame);
