@@ -16,20 +16,28 @@ if ! command -v qemu-system-arm >/dev/null; then
   fi
 fi
 
-echo "== no_std build of shared and firmware for thumbv7em-none-eabihf"
-cargo build --release -p shared -p firmware --target thumbv7em-none-eabihf
+# flip-link, the MCU images' linker (.cargo/config.toml), from crates.io.
+if ! command -v flip-link >/dev/null; then
+  cargo install flip-link --locked --version 0.1.12
+fi
 
-echo "== MCU image (profile mcu) and its budgets (HARDWARE.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
-cargo build -p firmware --profile mcu --target thumbv7em-none-eabihf --bin mcu --bin pil
-python3 scripts/budgets.py target/thumbv7em-none-eabihf/mcu/mcu
-# The PIL image (the one that would be flashed); tests/tests/pil.rs runs it in QEMU.
-python3 scripts/budgets.py target/thumbv7em-none-eabihf/mcu/pil
+echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
+cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
+
+echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting) and their budgets"
+echo "   (HARDWARE.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
+cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
+cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
+for image in mcu/arm mcu/pil qemu/arm qemu/pil; do
+  echo "-- $image"
+  python3 scripts/budgets.py "target/thumbv7em-none-eabihf/$image"
+done
 
 echo "== tests (release: the simulator is numerical)"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 status=0
-cargo test --workspace --release 2>&1 | tee "$log" || status=$?
+cargo test --workspace --release --no-fail-fast 2>&1 | tee "$log" || status=$?
 # One closing line over all test binaries (cargo prints one per binary).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
      END { printf "tests: %d passed, %d failed\n", p, f }' "$log"

@@ -3,13 +3,13 @@
 //! One function per control period, time passed in and hardware behind traits:
 //! [`Firmware::step`] takes a [`SensorFrame`] of raw counts and returns an
 //! [`ActuatorCommand`] of torque codes and a status word. The same code runs on
-//! the host (SIL rig, tests) and on the Cortex-M4F (`src/bin/mcu.rs`).
+//! the host (SIL rig, tests) and on the Cortex-M4F (`boards/stm32f405`: the
+//! `arm` and `pil` images), every board through [`board::handle`].
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod board;
-pub mod clock_tree;
 pub mod config;
 pub mod consistency;
 pub mod controller;

@@ -82,18 +82,28 @@ pub enum Command {
     #[command(allow_negative_numbers = true)]
     Zmax(ZmaxArgs),
     /// Processor in the loop: the MCU image (thumbv7em-none-eabihf, the one that would
-    /// be flashed) runs in QEMU's netduinoplus2 (an STM32F405) under -icount shift=0
-    /// and closes the loop with the plant over the emulated USART1 (postcard, CRC-32 and
-    /// COBS frames on a local socket), in lockstep with the same scenarios as `run`.
-    /// The image's defmt log is decoded and shown (and written to defmt.log); its
-    /// SysTick instruction counts per step are reported (worst, median) against the
-    /// 8400-instruction budget. Writes trace.csv, summary.json, trace.svg, defmt.log.
+    /// be flashed) closes the loop with the plant over its USART1 (postcard, CRC-32 and
+    /// COBS frames), in lockstep with the same scenarios and outputs as `run`. Two modes:
     ///
-    /// Build the image first: cargo build -p firmware --profile mcu --target
-    /// thumbv7em-none-eabihf --bin pil. Needs qemu-system-arm (Debian's package).
+    /// - QEMU (default): the image (--image) runs in QEMU's netduinoplus2 (an STM32F405,
+    ///   --qemu) under -icount shift=0, its USART1 on a local socket. Step counts are
+    ///   instructions (emulated SysTick); the image's defmt log is decoded and shown
+    ///   (and written to defmt.log). Build the image first: cargo build -p firmware
+    ///   --profile mcu --target thumbv7em-none-eabihf --bin pil. Needs qemu-system-arm.
     ///
-    /// Exit codes: 0 ok; 1 the run stopped early (safe state, QEMU dead or hung,
-    /// plant failure; everything up to then is written); 2 bad input or no image.
+    /// - Hardware in the loop (--serial PATH): the image runs on a board flashed with it,
+    ///   its USART1 (2 Mbaud, --baud) wired to the serial device PATH (a USB-serial
+    ///   adapter), raw 8N1, no flow control. Step counts are what the image reports
+    ///   (DWT cycles on silicon); its defmt log goes over RTT to a debug probe (probe-rs),
+    ///   not over this link; the kill_firmware fault is not available.
+    ///
+    /// The worst and median step are reported against the budget, 5 % of the control
+    /// period at 168 MHz (8400 at 1 kHz). Writes trace.csv, summary.json, trace.svg,
+    /// instructions.svg and (QEMU) defmt.log.
+    ///
+    /// Exit codes: 0 ok; 1 the run stopped early (safe state, QEMU or the board dead or
+    /// hung, plant failure; everything up to then is written); 2 bad input, no image,
+    /// or no such serial device.
     #[command(allow_negative_numbers = true)]
     Pil(PilArgs),
     /// Speed of the rig on the default scenario: control periods per wall second
@@ -291,17 +301,26 @@ pub struct PilArgs {
     /// The scenario (as for `run`).
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// The PIL image (ELF); default: the `mcu` profile's build output,
-    /// target/thumbv7em-none-eabihf/mcu/pil.
+    /// QEMU mode: the PIL image (ELF); default: `cargo build-pil`'s output,
+    /// target/thumbv7em-none-eabihf/qemu/pil.
     #[arg(long, value_name = "ELF")]
     pub image: Option<PathBuf>,
-    /// The QEMU executable.
+    /// QEMU mode: the QEMU executable.
     #[arg(long, default_value = "qemu-system-arm", value_name = "EXE")]
     pub qemu: PathBuf,
+    /// Hardware in the loop: the serial device of a board running the PIL image
+    /// (e.g. /dev/ttyUSB0), instead of spawning QEMU. It must exist.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["image", "qemu"])]
+    pub serial: Option<PathBuf>,
+    /// With --serial: the line rate, baud (8N1, no flow control), 9600 to 12000000;
+    /// the reference board's USART1 runs at 2 Mbaud.
+    #[arg(long, default_value_t = 2_000_000, value_name = "BAUD", requires = "serial")]
+    pub baud: u32,
     /// Wall time the image gets to answer one frame before the run stops as hung, s.
     #[arg(long, default_value_t = 5.0)]
     pub answer_timeout: f64,
-    /// Do not echo the image's defmt log while it runs (it is still written to defmt.log).
+    /// QEMU mode: do not echo the image's defmt log while it runs (it is still
+    /// written to defmt.log).
     #[arg(long)]
     pub quiet: bool,
     /// Output options.

@@ -6,50 +6,40 @@
 //! 1 kHz period at 168 MHz); the image fits its flash and RAM budgets; a dead
 //! QEMU or a missing image ends a run with a clear error, never a hang.
 //!
+//! Hardware in the loop without a board: QEMU started here with its USART1 on a
+//! pseudo-terminal (`-serial pty`) stands for a board behind a USB-serial
+//! adapter, and `sil-host pil --serial` on it gives the outcome of the
+//! Unix-socket PIL path, trace and step counts alike.
+//!
 //! Needs `qemu-system-arm` (Debian's package; `.ci/run` installs it). The image
 //! is built here if needed, in its own target folder (the outer `cargo test`
 //! holds the workspace's).
 
+mod common;
+
 use std::{
+    io::{BufRead, BufReader},
     path::{Path, PathBuf},
-    process::Command,
+    process::{Child, Command, Stdio},
     sync::OnceLock,
 };
 
+use firmware::pil::StepClock;
 use sil_host::{
     commands::run::rms_tracking_error,
     sil::{
         in_process,
-        pil_link::{PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
+        pil_link::{CountUnit, DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS, Spread},
         record::{RunError, lift_off_stats},
         rig::{FirmwareLink, run_loop},
         scenario::Scenario,
     },
 };
 
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// Builds the PIL image once per test binary; its path.
+/// Builds the PIL image (QEMU build) once per test binary; its path.
 fn image() -> &'static Path {
     static IMAGE: OnceLock<PathBuf> = OnceLock::new();
-    IMAGE.get_or_init(|| {
-        assert!(
-            Command::new("qemu-system-arm").arg("--version").output().is_ok(),
-            "qemu-system-arm is missing: apt-get install -y qemu-system-arm (CI installs it)"
-        );
-        let root = workspace();
-        let target_dir = root.join("target/mcu-test");
-        let build = Command::new(env!("CARGO"))
-            .args(["build", "-p", "firmware", "--profile", "mcu", "--target", "thumbv7em-none-eabihf", "--bin", "pil"])
-            .env("CARGO_TARGET_DIR", &target_dir)
-            .current_dir(&root)
-            .output()
-            .unwrap();
-        assert!(build.status.success(), "building the PIL image failed:\n{}", String::from_utf8_lossy(&build.stderr));
-        target_dir.join("thumbv7em-none-eabihf/mcu/pil")
-    })
+    IMAGE.get_or_init(|| common::qemu_image("pil"))
 }
 
 fn scenario(controller: &str, duration_s: f64) -> Scenario {
@@ -61,7 +51,7 @@ fn scenario(controller: &str, duration_s: f64) -> Scenario {
 
 #[test]
 fn the_pil_image_fits_its_flash_and_ram_budgets() {
-    let out = Command::new("python3").arg(workspace().join("scripts/budgets.py")).arg(image()).arg("--json").output().unwrap();
+    let out = Command::new("python3").arg(common::workspace().join("scripts/budgets.py")).arg(image()).arg("--json").output().unwrap();
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("budgets.py prints JSON");
     assert!(out.status.success() && report["ok"] == true, "over budget:\n{report:#}");
     assert!(report["flash_bytes"].as_u64().unwrap() <= 64 * 1024);
@@ -93,6 +83,7 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     let c = &link.counts;
     assert_eq!(c.step_ticks.len(), pil.len());
     assert_eq!(c.ticks_per_second, 168_000_000);
+    assert_eq!((c.clock, c.unit()), (StepClock::EmulatedSysTick, CountUnit::Instructions));
     let step = Spread::of(&c.step_ticks, c.instructions_per_tick());
     let frame = Spread::of(&c.frame_ticks, c.instructions_per_tick());
     assert!(step.worst <= STEP_BUDGET_INSTRUCTIONS, "hybrid: worst step {} instructions > {STEP_BUDGET_INSTRUCTIONS}", step.worst);
@@ -131,10 +122,15 @@ fn pid_through_the_cli_reports_its_instruction_counts_within_the_budget() {
     assert_eq!(summary["controller"], "pid");
     assert_eq!(summary["periods"], 2500);
     let pil = &summary["pil"];
-    let worst = pil["step_instructions"]["worst"].as_f64().unwrap();
+    let worst = pil["step_counts"]["worst"].as_f64().unwrap();
     assert!(worst <= STEP_BUDGET_INSTRUCTIONS && pil["within_budget"] == true, "pid: worst step {worst} instructions");
-    assert!(pil["step_instructions"]["median"].as_f64().unwrap() > 300.0);
-    assert_eq!(pil["qemu_icount_shift"], 0);
+    assert!(pil["step_counts"]["median"].as_f64().unwrap() > 300.0);
+    assert_eq!(pil["step_budget"], STEP_BUDGET_INSTRUCTIONS);
+    assert_eq!(
+        (&pil["count_unit"], &pil["transport"], &pil["qemu_icount_shift"]),
+        (&"instructions".into(), &"qemu-socket".into(), &0.into())
+    );
+    assert!(pil.get("serial_port").is_none() && pil["image"].is_string() && pil["defmt_lines"].as_u64().unwrap() > 0, "{pil:#}");
     let log = std::fs::read_to_string(out.join("defmt.log")).unwrap();
     assert!(log.contains("configured: pid") && log.contains("end of run: 2500 frames"), "{log}");
     for f in ["trace.csv", "trace.svg", "instructions.svg"] {
@@ -166,7 +162,185 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     let out = dir.path().join("none");
     let code = sil_host::run(["sil-host", "pil", "--image", "/nonexistent/pil", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 2);
-    let err =
-        PilLink::start(&s, &PilOptions { qemu: "/nonexistent/qemu-system-arm".into(), ..PilOptions::new(image()) }, None).unwrap_err();
+    let qemu = PilTarget::Qemu { image: image().into(), qemu: "/nonexistent/qemu-system-arm".into() };
+    let err = PilLink::start(&s, &PilOptions::for_target(qemu), None).unwrap_err();
     assert!(err.to_string().contains("cannot start /nonexistent/qemu-system-arm"), "{err}");
+}
+
+/// QEMU on the PIL image with its USART1 on a pseudo-terminal (`-serial pty`),
+/// as a board behind a USB-serial adapter would be: nobody reads the terminal
+/// when the image boots, so its first Hello is lost and the link has to ask.
+/// Killed on drop (the image exits by itself when the run ends).
+struct PtyQemu {
+    child: Child,
+    /// The pseudo-terminal, `/dev/pts/N`.
+    pty: PathBuf,
+}
+
+impl PtyQemu {
+    fn start() -> Self {
+        let mut child = Command::new("qemu-system-arm")
+            .args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
+            .args(["-icount", "shift=0", "-semihosting-config", "enable=on,target=native", "-serial", "pty", "-kernel"])
+            .arg(image())
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("qemu-system-arm starts");
+        // QEMU says `char device redirected to /dev/pts/N (label serial0)`: on its
+        // standard output in 7.2 (ahead of the image's binary defmt stream), on
+        // standard error in other versions. Both are scanned, and drained to the
+        // end so QEMU never blocks on a full pipe.
+        let (tx, rx) = std::sync::mpsc::channel::<PathBuf>();
+        let out: Vec<Box<dyn std::io::Read + Send>> = vec![Box::new(child.stdout.take().unwrap()), Box::new(child.stderr.take().unwrap())];
+        for stream in out {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                const SAID: &[u8] = b"char device redirected to ";
+                let mut reader = BufReader::new(stream);
+                let mut line = Vec::new();
+                while reader.read_until(b'\n', &mut line).is_ok_and(|n| n > 0) {
+                    if let Some(at) = line.windows(SAID.len()).position(|w| w == SAID) {
+                        let rest = String::from_utf8_lossy(&line[at + SAID.len()..]).into_owned();
+                        let _ = tx.send(PathBuf::from(rest.split_whitespace().next().unwrap_or_default()));
+                    }
+                    line.clear();
+                }
+            });
+        }
+        let mut guard = Self { child, pty: PathBuf::new() };
+        guard.pty = rx.recv_timeout(std::time::Duration::from_secs(20)).expect("QEMU names its pseudo-terminal within 20 s");
+        assert!(guard.pty.starts_with("/dev/pts"), "{:?}", guard.pty);
+        guard
+    }
+}
+
+impl Drop for PtyQemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The rows of `trace.csv` without its wall-time columns (if any): the
+/// simulation's columns only.
+fn simulation_rows(dir: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(dir.join("trace.csv")).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let keep: Vec<usize> = (0..header.len()).filter(|&i| !header[i].contains("wall")).collect();
+    let rows = r.records().map(|row| keep.iter().map(|&i| row.as_ref().unwrap()[i].to_string()).collect()).collect();
+    (keep.iter().map(|&i| header[i].clone()).collect(), rows)
+}
+
+#[test]
+fn hil_over_a_serial_port_gives_the_outcome_of_the_socket_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let (via_serial, via_socket) = (dir.path().join("serial"), dir.path().join("socket"));
+    let common = ["--controller", "hybrid", "--duration", "1.5", "--json", "--out"];
+    let qemu = PtyQemu::start();
+    let pty = qemu.pty.to_str().unwrap().to_string();
+    let mut args = vec!["sil-host", "pil", "--serial", &pty];
+    args.extend(common);
+    args.push(via_serial.to_str().unwrap());
+    assert_eq!(sil_host::run(&args), 0, "the HIL run over {pty}");
+    drop(qemu);
+    let mut args = vec!["sil-host", "pil", "--image", image().to_str().unwrap()];
+    args.extend(common);
+    args.push(via_socket.to_str().unwrap());
+    assert_eq!(sil_host::run(&args), 0, "the PIL run over the socket");
+
+    // The same trace, row for row, column for column.
+    let (header_serial, serial) = simulation_rows(&via_serial);
+    let (header_socket, socket) = simulation_rows(&via_socket);
+    assert_eq!(header_serial, header_socket);
+    assert!(header_serial.len() > 10, "{header_serial:?}");
+    assert_eq!(serial.len(), 1500);
+    for (k, (a, b)) in serial.iter().zip(&socket).enumerate() {
+        assert_eq!(a, b, "trace.csv row {k} differs");
+    }
+    assert_eq!(serial.len(), socket.len());
+
+    // The same figures; what differs is how the bytes travelled.
+    let (ser, sock) = (summary(&via_serial), summary(&via_socket));
+    assert_eq!((&ser["transport"], &sock["transport"]), (&"pil-serial".into(), &"pil-qemu".into()));
+    assert_eq!(ser["status"], "ok");
+    for key in ["periods", "lift_offs", "false_alarms", "deadline_misses", "rms_tracking_error_m", "final_z_t_m"] {
+        assert_eq!(ser[key], sock[key], "{key}");
+    }
+    let (p, q) = (&ser["pil"], &sock["pil"]);
+    assert_eq!(p["count_unit"], "instructions");
+    assert_eq!(p["step_clock"], "EmulatedSysTick");
+    assert_eq!((&p["transport"], &p["serial_port"], &p["baud"]), (&"serial".into(), &pty.as_str().into(), &DEFAULT_BAUD.into()));
+    for key in ["count_unit", "ticks_per_second", "counts_per_tick", "step_counts", "frame_counts", "step_budget", "within_budget"] {
+        assert_eq!(p[key], q[key], "pil.{key}");
+    }
+    // No log over a serial port, and the summary says where it is.
+    assert!(p["image"].is_null() && p["qemu_icount_shift"].is_null() && p["defmt_lines"].is_null() && p["qemu_exit"].is_null(), "{p:#}");
+    assert!(p["defmt_log"].as_str().unwrap().contains("RTT"), "{p:#}");
+    assert!(!via_serial.join("defmt.log").exists() && via_socket.join("defmt.log").is_file());
+    for f in ["trace.csv", "trace.svg", "instructions.svg", "summary.json"] {
+        assert!(via_serial.join(f).is_file(), "{f} written");
+    }
+}
+
+#[test]
+fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
+    let s = scenario("hybrid", 1.5);
+    let qemu = PtyQemu::start();
+    let mut serial = PilLink::start(&s, &PilOptions::serial(&qemu.pty, DEFAULT_BAUD), None).unwrap();
+    assert_eq!(serial.transport(), "pil-serial");
+    let (via_serial, err) = run_loop(&s, &mut serial, |_, _| true, |_| {});
+    assert!(err.is_none(), "{err:?}");
+    assert!(!serial.captures_log() && serial.log().is_empty() && serial.exit_status().is_none());
+    drop(qemu);
+
+    let mut socket = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
+    let (via_socket, err) = run_loop(&s, &mut socket, |_, _| true, |_| {});
+    assert!(err.is_none(), "{err:?}");
+
+    assert_eq!(via_serial, via_socket, "the same records");
+    let (a, b) = (&serial.counts, &socket.counts);
+    assert_eq!((a.clock, a.ticks_per_second), (b.clock, b.ticks_per_second));
+    assert_eq!(a.unit(), CountUnit::Instructions);
+    assert_eq!(a.step_ticks.len(), 1500);
+    // Deterministic under -icount: the same ticks, period by period.
+    assert_eq!(a.step_ticks, b.step_ticks, "step ticks per period");
+    assert_eq!(a.frame_ticks, b.frame_ticks, "frame ticks per period");
+}
+
+#[test]
+fn hil_refuses_a_missing_serial_port_and_the_kill_firmware_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("none");
+    let o = out.to_str().unwrap();
+    // No such device: exit 2, nothing written.
+    assert_eq!(sil_host::run(["sil-host", "pil", "--serial", "/nonexistent/ttyUSB9", "--out", o]), 2);
+    assert!(!out.exists());
+    // A baud rate out of range, and --serial with QEMU's flags: exit 2.
+    assert_eq!(sil_host::run(["sil-host", "pil", "--serial", "/dev/null", "--baud", "300", "--out", o]), 2);
+    assert_eq!(sil_host::run(["sil-host", "pil", "--serial", "/dev/null", "--image", "pil", "--out", o]), 2);
+    assert_eq!(sil_host::run(["sil-host", "pil", "--serial", "/dev/null", "--qemu", "qemu", "--out", o]), 2);
+    assert_eq!(sil_host::run(["sil-host", "pil", "--baud", "115200", "--out", o]), 2, "--baud needs --serial");
+    assert!(!out.exists());
+
+    // kill_firmware kills QEMU: over a serial port it is refused before the port is touched.
+    let toml = format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", sil_host::sil::scenario::DEFAULT_TOML);
+    let file = dir.path().join("kill.toml");
+    std::fs::write(&file, &toml).unwrap();
+    let code = sil_host::run(["sil-host", "pil", "--serial", "/dev/null", "--scenario", file.to_str().unwrap(), "--out", o]);
+    assert_eq!(code, 2);
+    assert!(!out.exists());
+    let s = Scenario::from_toml(&toml).unwrap();
+    match PilLink::start(&s, &PilOptions::serial("/dev/null", DEFAULT_BAUD), None) {
+        Err(RunError::Unsupported(m)) => {
+            assert!(m.contains("kill_firmware") && m.contains("not available over a serial port"), "{m}");
+            assert!(!m.contains("QEMU"), "{m}");
+        }
+        other => panic!("expected Unsupported, got {other:?}"),
+    }
 }

@@ -130,7 +130,6 @@ impl PllConfig {
     fn valid(&self) -> bool {
         (2..=63).contains(&self.m) && (50..=432).contains(&self.n) && matches!(self.p, 2 | 4 | 6 | 8) && (2..=15).contains(&self.q)
     }
-
 }
 
 /// Brings the core clock to [`SYSCLK_HZ`] from a crystal of `hse_hz`, polling

@@ -7,7 +7,7 @@
 pub const TIM2_CLOCK_HZ: u32 = 2 * crate::clock_tree::PCLK1_HZ;
 
 /// QEMU's clock for TIM2 to TIM5 in `netduinoplus2`, Hz: the emulator models no
-/// RCC and clocks its timers at a fixed 1 GHz (QEMU 10's `stm32f405_soc`; a
+/// RCC and clocks its timers at a fixed 1 GHz (QEMU 7.2's `stm32f405_soc`; a
 /// proposed patch moves it to 48 MHz). Measured: docs/board.md "Under QEMU".
 pub const QEMU_TIMER_HZ: u32 = 1_000_000_000;
 

@@ -1,12 +1,14 @@
-//! `sil-host pil`: a processor-in-the-loop run. The MCU image runs in QEMU and
-//! closes the loop with the plant over the emulated USART
-//! ([`crate::sil::pil_link`]); the plant, the scenario and the outputs are those
-//! of `sil-host run`, plus the image's instruction counts per step and its defmt
-//! log.
+//! `sil-host pil`: a processor-in-the-loop run. The MCU image runs in QEMU, or
+//! on a board at the end of a serial port (hardware in the loop, `--serial`),
+//! and closes the loop with the plant over its USART1 ([`crate::sil::pil_link`]);
+//! the plant, the scenario and the outputs are those of `sil-host run`, plus the
+//! image's counts per step (instructions under QEMU, cycles on silicon) and, under
+//! QEMU, its defmt log.
 //!
-//! Writes `trace.csv`, `summary.json` (with a `pil` object: instruction counts per
-//! step, worst and median, against the budget), `trace.svg`, `instructions.svg`
-//! (instructions of each step against time, with the budget) and `defmt.log`.
+//! Writes `trace.csv`, `summary.json` (with a `pil` object: counts per step and
+//! per frame, median, p99 and worst, against the budget, in `count_unit`),
+//! `trace.svg`, `instructions.svg` (the counts of each step against time, with the
+//! budget) and, under QEMU, `defmt.log`.
 
 use std::io::Write;
 
@@ -19,82 +21,129 @@ use crate::{
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
     sil::{
-        pil_link::{self, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, STEP_BUDGET_INSTRUCTIONS, Spread},
+        pil_link::{self, BAUD_RANGE, CORE_HZ, CountUnit, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget, Spread},
         record::PeriodRecord,
+        rig::FirmwareLink,
         scenario::Scenario,
         setup::{firmware_config, plant_for},
     },
 };
 
+/// Where a board's log goes, for the summary and the human output: it is not on
+/// the PIL link.
+pub const BOARD_LOG_NOTE: &str = "not captured over a serial port: a board logs defmt over RTT to a debug probe (read it with `probe-rs attach --chip STM32F405RGTx <image ELF>`)";
+
 /// The PIL part of `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct PilFigures {
-    /// The image that ran.
-    pub image: String,
-    /// QEMU's `-icount` shift: one instruction per `2^shift` ns of virtual time.
-    pub qemu_icount_shift: u32,
-    /// The image's tick rate (SysTick at the core clock), Hz.
+    /// How the bytes travelled: `qemu-socket` (QEMU spawned here) or `serial`.
+    pub transport: &'static str,
+    /// Serial runs: the device.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub serial_port: Option<String>,
+    /// Serial runs: the line rate, baud (8N1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub baud: Option<u32>,
+    /// The image that ran under QEMU; `null` over a serial port (it is in the board's flash).
+    pub image: Option<String>,
+    /// QEMU's `-icount` shift (one instruction per `2^shift` ns of virtual time);
+    /// `null` over a serial port.
+    pub qemu_icount_shift: Option<u32>,
+    /// The image's tick rate (its core clock), Hz.
     pub ticks_per_second: u32,
-    /// Instructions per tick under that shift (`1e9 / (ticks_per_second 2^shift)`).
-    pub instructions_per_tick: f64,
-    /// Instructions of `Firmware::step` (sensor decode to command encode): median,
-    /// 99th percentile, worst.
-    pub step_instructions: Spread,
-    /// Instructions from a frame's last byte to its answer ready to send (COBS,
-    /// CRC and postcard decoding plus the step).
-    pub frame_instructions: Spread,
-    /// The budget of a step, instructions (HARDWARE.md: 5 % of 1 ms at 168 MHz).
-    pub step_budget_instructions: f64,
+    /// What the image's tick counter is (its Hello): `EmulatedSysTick` or `DwtCycles`.
+    pub step_clock: firmware::pil::StepClock,
+    /// Unit of `step_counts`, `frame_counts` and `step_budget`: `instructions`
+    /// (emulated SysTick under `-icount`) or `cycles` (DWT on silicon).
+    pub count_unit: CountUnit,
+    /// `count_unit`s per tick: `1e9 / (ticks_per_second 2^shift)` instructions
+    /// under QEMU, 1 cycle on silicon.
+    pub counts_per_tick: f64,
+    /// `Firmware::step` (sensor decode to command encode), in `count_unit`:
+    /// median, 99th percentile, worst.
+    pub step_counts: Spread,
+    /// A frame's last byte to its answer ready to send (COBS, CRC and postcard
+    /// decoding plus the step), in `count_unit`.
+    pub frame_counts: Spread,
+    /// The budget of a step in `count_unit` (HARDWARE.md: 5 % of the control
+    /// period at 168 MHz; 8400 at 1 kHz).
+    pub step_budget: f64,
     /// Whether the worst step is within the budget.
     pub within_budget: bool,
-    /// Worst step as a share of the control period at 168 MHz, if an
-    /// instruction took one cycle (a lower bound on silicon: README "PIL").
+    /// Worst step as a share of the control period at 168 MHz (for instructions:
+    /// if each took one cycle, a lower bound on silicon: README "PIL").
     pub worst_step_period_share: f64,
-    /// QEMU's exit status at the end (`exit status: 0` when the image ended the run).
+    /// QEMU's exit status at the end (`exit status: 0` when the image ended the
+    /// run); `null` over a serial port.
     pub qemu_exit: Option<String>,
-    /// Lines of the image's defmt log (written to `defmt.log`).
-    pub defmt_lines: usize,
-    /// Of which at `warn` or `error` level.
-    pub defmt_warnings: usize,
+    /// Where the image's defmt log is: `defmt.log`, or why it is not captured.
+    pub defmt_log: String,
+    /// Lines of the image's defmt log; `null` when it is not captured.
+    pub defmt_lines: Option<usize>,
+    /// Of which at `warn` or `error` level; `null` when it is not captured.
+    pub defmt_warnings: Option<usize>,
 }
 
 impl PilFigures {
-    /// The figures of a run's counts.
-    pub fn new(image: &std::path::Path, counts: &PilCounts, rate_hz: f64, log: &[LogLine], exit: Option<String>) -> Self {
-        let per_tick = counts.instructions_per_tick();
+    /// The figures of a run's `counts` at `rate_hz` (Hz) over `target`; `log` is
+    /// the image's defmt log when the link captured it, `exit` QEMU's exit status.
+    pub fn new(target: &PilTarget, counts: &PilCounts, rate_hz: f64, log: Option<&[LogLine]>, exit: Option<String>) -> Self {
+        let per_tick = counts.counts_per_tick();
         let step = Spread::of(&counts.step_ticks, per_tick);
+        let budget = pil_link::step_budget(rate_hz);
+        let (image, shift, serial_port, baud) = match target {
+            PilTarget::Qemu { image, .. } => (Some(image.display().to_string()), Some(ICOUNT_SHIFT), None, None),
+            PilTarget::Serial { path, baud } => (None, None, Some(path.display().to_string()), Some(*baud)),
+        };
         Self {
-            image: image.display().to_string(),
-            qemu_icount_shift: ICOUNT_SHIFT,
+            transport: target.transport(),
+            serial_port,
+            baud,
+            image,
+            qemu_icount_shift: shift,
             ticks_per_second: counts.ticks_per_second,
-            instructions_per_tick: per_tick,
-            step_instructions: step,
-            frame_instructions: Spread::of(&counts.frame_ticks, per_tick),
-            step_budget_instructions: STEP_BUDGET_INSTRUCTIONS,
-            within_budget: step.worst <= STEP_BUDGET_INSTRUCTIONS,
-            worst_step_period_share: step.worst / (168e6 / rate_hz),
+            step_clock: counts.clock,
+            count_unit: counts.unit(),
+            counts_per_tick: per_tick,
+            step_counts: step,
+            frame_counts: Spread::of(&counts.frame_ticks, per_tick),
+            step_budget: budget,
+            within_budget: step.worst <= budget,
+            worst_step_period_share: step.worst / (CORE_HZ / rate_hz),
             qemu_exit: exit,
-            defmt_lines: log.len(),
-            defmt_warnings: log.iter().filter(|l| l.level == "warn" || l.level == "error").count(),
+            defmt_log: match log {
+                Some(_) => "defmt.log (decoded from QEMU's semihosting output)".into(),
+                None => BOARD_LOG_NOTE.into(),
+            },
+            defmt_lines: log.map(<[LogLine]>::len),
+            defmt_warnings: log.map(|l| l.iter().filter(|l| l.level == "warn" || l.level == "error").count()),
         }
     }
 }
 
-/// Runs `sil-host pil`.
+/// Checks the arguments that say where the image runs.
 ///
 /// # Errors
-/// Bad scenario, overrides or a missing image (exit 2, nothing written); QEMU
-/// that cannot start or boot, or a run that stopped part way (exit 1, everything
-/// up to then written); I/O or plotting failures.
-pub fn run(args: &PilArgs) -> Result<(), CliError> {
-    let scenario = load_scenario(&args.scenario)?;
-    plant_for(&scenario).map_err(CliError::Sim)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
-    if scenario.faults.iter().any(|f| f.kind == crate::sil::faults::FaultKind::Stall) {
-        return Err(CliError::BadInput("the scenario's stall fault acts on a host process: not available in PIL".into()));
-    }
-    if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {
-        return Err(CliError::BadInput(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
+/// [`CliError::BadInput`] (exit 2): a serial device that does not exist, a baud
+/// rate outside [`BAUD_RANGE`], a missing image.
+fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
+    if let Some(path) = &args.serial {
+        if !path.exists() {
+            return Err(CliError::BadInput(format!(
+                "--serial {}: no such device (is the USB-serial adapter plugged in? `ls /dev/ttyUSB* /dev/ttyACM*` lists them)",
+                path.display()
+            )));
+        }
+        if !BAUD_RANGE.contains(&args.baud) {
+            return Err(CliError::BadInput(format!(
+                "--baud {}: outside {}..={} baud (the reference board's USART1 runs at {})",
+                args.baud,
+                BAUD_RANGE.start(),
+                BAUD_RANGE.end(),
+                pil_link::DEFAULT_BAUD
+            )));
+        }
+        return Ok(PilTarget::Serial { path: path.clone(), baud: args.baud });
     }
     let image = args.image.clone().unwrap_or_else(pil_link::default_image);
     if !image.is_file() {
@@ -104,6 +153,25 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
             pil_link::BUILD_HINT
         )));
     }
+    Ok(PilTarget::Qemu { image, qemu: args.qemu.clone() })
+}
+
+/// Runs `sil-host pil`.
+///
+/// # Errors
+/// Bad scenario or overrides, a missing image or serial device, a bad baud rate,
+/// a fault the target cannot inject (exit 2, nothing written); QEMU that cannot
+/// start or boot, a board that does not answer, or a run that stopped part way
+/// (exit 1, everything up to then written); I/O or plotting failures.
+pub fn run(args: &PilArgs) -> Result<(), CliError> {
+    let scenario = load_scenario(&args.scenario)?;
+    plant_for(&scenario).map_err(CliError::Sim)?;
+    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
+    if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {
+        return Err(CliError::BadInput(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
+    }
+    let target = target_of(args)?;
+    pil_link::check_faults(&scenario, &target).map_err(|e| CliError::BadInput(e.to_string()))?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
@@ -112,26 +180,26 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
         let bar = progress.clone();
         Box::new(move |l: &LogLine| bar.println(format!("[image {}] {}", l.level, l.message))) as pil_link::LogSink
     });
-    let opts =
-        PilOptions { image: image.clone(), qemu: args.qemu.clone(), answer_timeout_s: args.answer_timeout, ..PilOptions::new(&image) };
+    let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
     let (records, failure, wall_s) = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
-    let log = link.log();
+    let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
-    let figures = PilFigures::new(&image, &link.counts, scenario.timing.rate_hz, &log, exit);
+    let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
     let counts = link.counts.clone();
+    let transport = link.transport();
     drop(link);
 
     let svg = out.stage("trace.svg");
-    draw(&svg, "PIL", &scenario, &records)?;
+    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &records)?;
     let svg = out.stage("instructions.svg");
-    draw_instructions(&svg, &scenario, &records, &counts)?;
-    let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
-    out.write_bytes("defmt.log", text.as_bytes())?;
-    let summary = RunSummary {
-        pil: Some(figures),
-        ..RunSummary::from_records(&scenario, &records, failure.as_ref(), "pil-qemu", "lockstep", wall_s)
-    };
+    draw_counts(&svg, &scenario, &records, &counts, &target)?;
+    if let Some(log) = &log {
+        let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
+        out.write_bytes("defmt.log", text.as_bytes())?;
+    }
+    let summary =
+        RunSummary { pil: Some(figures), ..RunSummary::from_records(&scenario, &records, failure.as_ref(), transport, "lockstep", wall_s) };
     let json = out.write_json("summary.json", &summary)?;
     let written = out.commit()?;
     if args.output.json {
@@ -146,54 +214,85 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
     }
 }
 
+/// What counted the ticks, for the human output and the figure.
+fn clock_description(p: &PilFigures) -> String {
+    match (p.count_unit, p.qemu_icount_shift) {
+        (CountUnit::Instructions, Some(shift)) => format!("emulated SysTick, QEMU -icount shift={shift}"),
+        (CountUnit::Instructions, None) => "emulated SysTick, an emulator behind the serial port".into(),
+        (CountUnit::Cycles, _) => "DWT cycle counter on silicon".into(),
+    }
+}
+
 fn print_pil(summary: &RunSummary) {
     let Some(p) = &summary.pil else { return };
     let mut o = std::io::stdout().lock();
+    let unit = p.count_unit.as_str();
     let sp = |s: &Spread| format!("median {:.0}, p99 {:.0}, worst {:.0}", s.median, s.p99, s.worst);
+    let link = match (&p.serial_port, p.baud) {
+        (Some(port), Some(baud)) => format!("serial port {port} at {baud} baud"),
+        _ => "QEMU's USART1 on a Unix socket".into(),
+    };
+    let _ = writeln!(o, "image link: {link}");
+    let share_note = match p.count_unit {
+        CountUnit::Instructions => ", if an instruction took one cycle",
+        CountUnit::Cycles => "",
+    };
     let _ = writeln!(
         o,
-        "image instructions per step (-icount shift={}): {} (budget {:.0}: {}; worst = {:.1} % of the period at 168 MHz)",
-        p.qemu_icount_shift,
-        sp(&p.step_instructions),
-        p.step_budget_instructions,
+        "image {unit} per step ({}): {} (budget {:.0} {unit}: {}; worst = {:.1} % of the period at 168 MHz{share_note})",
+        clock_description(p),
+        sp(&p.step_counts),
+        p.step_budget,
         if p.within_budget { "ok" } else { "EXCEEDED" },
         p.worst_step_period_share * 100.0
     );
-    let _ = writeln!(o, "image instructions per frame (decode + step): {}", sp(&p.frame_instructions));
-    let _ = writeln!(
-        o,
-        "image log: {} defmt lines ({} warnings or errors), QEMU {}",
-        p.defmt_lines,
-        p.defmt_warnings,
-        p.qemu_exit.as_deref().unwrap_or("still running at the end")
-    );
+    let _ = writeln!(o, "image {unit} per frame (decode + step): {}", sp(&p.frame_counts));
+    match (p.defmt_lines, p.defmt_warnings) {
+        (Some(lines), Some(warnings)) => {
+            let _ = writeln!(
+                o,
+                "image log: {lines} defmt lines ({warnings} warnings or errors), QEMU {}",
+                p.qemu_exit.as_deref().unwrap_or("still running at the end")
+            );
+        }
+        _ => {
+            let _ = writeln!(o, "image log: {}", p.defmt_log);
+        }
+    }
 }
 
-fn draw_instructions(path: &std::path::Path, s: &Scenario, records: &[PeriodRecord], counts: &PilCounts) -> Result<(), CliError> {
-    let per_tick = counts.instructions_per_tick();
+fn draw_counts(
+    path: &std::path::Path,
+    s: &Scenario,
+    records: &[PeriodRecord],
+    counts: &PilCounts,
+    target: &PilTarget,
+) -> Result<(), CliError> {
+    let per_tick = counts.counts_per_tick();
+    let unit = counts.unit().as_str();
+    let budget = pil_link::step_budget(s.timing.rate_hz);
     let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
     let series = |ticks: &[u32]| -> Vec<(f64, f64)> {
         let pts: Vec<_> = records.iter().zip(ticks).map(|(r, &n)| (r.t, n as f64 * per_tick)).collect();
         plot::decimate(&pts, 4000)
     };
+    let budget_label = format!("budget (5 % of {:.0} us at 168 MHz)", 1e6 / s.timing.rate_hz);
     let panels = [Panel {
-        y_label: "instructions",
+        y_label: unit,
         series: vec![
             Series { label: "frame (decode + step)", points: series(&counts.frame_ticks), color: colors::ORANGE, step: false },
             Series { label: "step", points: series(&counts.step_ticks), color: colors::BLUE, step: false },
-            Series {
-                label: "budget (5 % of 1 ms at 168 MHz)",
-                points: vec![(0.0, STEP_BUDGET_INSTRUCTIONS), (t_end, STEP_BUDGET_INSTRUCTIONS)],
-                color: colors::RED,
-                step: false,
-            },
+            Series { label: &budget_label, points: vec![(0.0, budget), (t_end, budget)], color: colors::RED, step: false },
         ],
-        y_range: Some((
-            0.0,
-            (counts.frame_ticks.iter().copied().max().unwrap_or(0) as f64 * per_tick).max(STEP_BUDGET_INSTRUCTIONS) * 1.15,
-        )),
+        y_range: Some((0.0, (counts.frame_ticks.iter().copied().max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
     }];
-    let title =
-        format!("PIL run {}: {} image instructions per control step (QEMU -icount shift={ICOUNT_SHIFT})", s.name, s.controller.kind);
+    let source = match (counts.unit(), target) {
+        (CountUnit::Instructions, PilTarget::Qemu { .. }) => format!("QEMU -icount shift={ICOUNT_SHIFT}"),
+        (CountUnit::Instructions, PilTarget::Serial { path, .. }) => format!("emulated SysTick over {}", path.display()),
+        (CountUnit::Cycles, PilTarget::Serial { path, .. }) => format!("DWT on the board at {}", path.display()),
+        (CountUnit::Cycles, PilTarget::Qemu { .. }) => "DWT".into(),
+    };
+    let what = if matches!(target, PilTarget::Serial { .. }) { "HIL" } else { "PIL" };
+    let title = format!("{what} run {}: {} image {unit} per control step ({source})", s.name, s.controller.kind);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

@@ -49,7 +49,7 @@ pub struct RunSummary {
     pub scenario: String,
     /// `hybrid` or `pid`.
     pub controller: String,
-    /// `iceoryx2` or `in-process`.
+    /// `iceoryx2` or `in-process`; `pil-qemu` or `pil-serial` for `sil-host pil`.
     pub transport: &'static str,
     /// `lockstep` or `realtime` (`in-process` runs are lockstep).
     pub timing: &'static str,
@@ -314,7 +314,11 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
     let _ = writeln!(
         o,
         "{} run `{}` ({}, {} {}): {} periods in {:.2} s wall ({:.0}x real time, {:.0} periods/s)",
-        if summary.pil.is_some() { "PIL" } else { "SIL" },
+        match summary.transport {
+            "pil-serial" => "HIL",
+            _ if summary.pil.is_some() => "PIL",
+            _ => "SIL",
+        },
         summary.scenario,
         summary.controller,
         summary.transport,

@@ -75,7 +75,7 @@ pub fn run_observed(
 }
 
 /// As [`run`], handing every sensor frame to `on_frame` as it goes on the wire
-/// (the firmware's replay board plays such a recording).
+/// (a recording of what crossed the wire).
 pub fn run_recording(
     s: &Scenario,
     on_period: impl FnMut(usize, usize) -> bool,

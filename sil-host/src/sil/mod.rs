@@ -1,7 +1,8 @@
 //! The software-in-the-loop rig: scenarios, sensor models and faults, the
 //! plant-side loop, and the transports that reach the firmware (in-process, or
 //! iceoryx2 shared memory to the firmware in its own process, or the MCU image
-//! in QEMU over its emulated USART: processor in the loop).
+//! over its USART, in QEMU or on a board behind a serial port: processor and
+//! hardware in the loop).
 
 pub mod faults;
 pub mod firmware_process;

@@ -237,7 +237,7 @@ impl PeriodLoop {
 /// Runs the scenario over `link`; `on_period(k, n)` is called after each period
 /// (progress bars) and stops the run with [`RunError::Interrupted`] when it
 /// returns `false` (Ctrl-C); `on_frame` sees every frame as it goes on the wire
-/// (the firmware's replay board plays such a recording).
+/// (a recording of what crossed the wire).
 ///
 /// Returns every period's record; when the run stops early (plant failure, the
 /// firmware lost or in its safe state) the records up to and including the last

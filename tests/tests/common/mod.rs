@@ -12,7 +12,7 @@ pub fn workspace() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// Builds image `bin` of `boards/stm32f405` for QEMU (profile `mcu`, feature
+/// Builds image `bin` of `boards/stm32f405` for QEMU (profile `qemu`, feature
 /// `qemu`) in its own target folder (the outer `cargo test` holds the
 /// workspace's lock), once per test binary; its path.
 pub fn qemu_image(bin: &str) -> PathBuf {
@@ -25,7 +25,7 @@ pub fn qemu_image(bin: &str) -> PathBuf {
             "qemu-system-arm is missing: apt-get install -y qemu-system-arm (CI installs it)"
         );
         let build = Command::new(env!("CARGO"))
-            .args(["build", "-p", "board-stm32f405", "--profile", "mcu", "--target", "thumbv7em-none-eabihf"])
+            .args(["build", "-p", "board-stm32f405", "--profile", "qemu", "--target", "thumbv7em-none-eabihf"])
             .args(["--no-default-features", "--features", "qemu", "--bin", "arm", "--bin", "pil"])
             .env("CARGO_TARGET_DIR", &target_dir)
             .current_dir(&root)
@@ -33,7 +33,7 @@ pub fn qemu_image(bin: &str) -> PathBuf {
             .unwrap();
         assert!(build.status.success(), "building the images failed:\n{}", String::from_utf8_lossy(&build.stderr));
     });
-    target_dir.join("thumbv7em-none-eabihf/mcu").join(bin)
+    target_dir.join("thumbv7em-none-eabihf/qemu").join(bin)
 }
 
 /// The defmt lines of `bytes` (an image's semihosting output), decoded with the table of `elf`.

@@ -21,7 +21,9 @@
 
 #[cfg(not(target_os = "none"))]
 fn main() {
-    println!("`arm` is the Cortex-M4F image for the arm: `cargo run -p board-stm32f405 --release --target thumbv7em-none-eabihf --bin arm` (docs/board.md)");
+    println!(
+        "`arm` is the Cortex-M4F image for the arm: `cargo run -p board-stm32f405 --release --target thumbv7em-none-eabihf --bin arm` (docs/board.md)"
+    );
 }
 
 #[cfg(target_os = "none")]
@@ -395,9 +397,7 @@ mod image {
             }
             if exit::UNDER_QEMU && cortex_m::interrupt::free(|cs| PERIODS.borrow(cs).get()) >= QEMU_PERIODS {
                 cortex_m::peripheral::NVIC::mask(Interrupt::TIM2);
-                let drivers = cortex_m::interrupt::free(|cs| {
-                    ARM.borrow(cs).borrow().as_ref().map_or(false, |a| a.board.motors.is_enabled())
-                });
+                let drivers = cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().is_some_and(|a| a.board.motors.is_enabled()));
                 defmt::info!(
                     "qemu run over: {=u32} periods, drivers {=str}, stack high-water mark {=u32} of {=u32} bytes",
                     QEMU_PERIODS,

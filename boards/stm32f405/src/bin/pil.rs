@@ -172,8 +172,7 @@ mod image {
         // enabled line only wakes the core from WFI.
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USART1) };
         let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: clock.ticks_per_second(), clock: clock.kind() };
-        let mut board =
-            PilBoard { clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now_us: 0, fig: Figures::default() };
+        let mut board = PilBoard { clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now_us: 0, fig: Figures::default() };
         defmt::info!("PIL image up: protocol {=u16}, waiting for the plant on USART1", pil::PROTOCOL_VERSION);
         board.send(&hello);
         let mut fw: Option<Firmware> = None;

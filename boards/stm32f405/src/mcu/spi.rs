@@ -76,7 +76,7 @@ fn exchange(word: u16) -> Result<u16, SpiError> {
         let _ = spi().sr().read();
         return Err(SpiError::Overrun);
     }
-    Ok(spi().dr().read().bits() as u16)
+    Ok(spi().dr().read().bits())
 }
 
 /// One encoder on SPI1: its chip select.
