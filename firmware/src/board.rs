@@ -190,8 +190,7 @@ mod tests {
 
     #[test]
     fn run_configures_steps_resets_and_ends_in_script_order() {
-        let mut bad = Config::default();
-        bad.period_s = f32::NAN;
+        let bad = Config { period_s: f32::NAN, ..Config::default() };
         let events = vec![
             Event::Frame(frame(0)),
             Event::Configure(bad),

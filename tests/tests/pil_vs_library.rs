@@ -16,12 +16,14 @@ use sil_host::sil::{
     setup::firmware_config,
 };
 
+/// One period: (seq, image codes, host codes, image status, host status).
+type Pair = (u32, [i16; 2], [i16; 2], u32, u32);
+
 /// A link that forwards to the image and steps the host library beside it.
 struct Compare {
     image: PilLink,
     host: Firmware,
-    /// (seq, image codes, host codes, image status, host status).
-    pairs: Vec<(u32, [i16; 2], [i16; 2], u32, u32)>,
+    pairs: Vec<Pair>,
 }
 
 impl FirmwareLink for Compare {

@@ -13,20 +13,27 @@
 //!
 //! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
 //! iceoryx2's node monitoring says the plant process is dead or gone, the
-//! firmware latches [`SafeReason::PeerLost`], publishes a zero-torque command and
+//! firmware latches `SafeReason::PeerLost`, publishes a zero-torque command and
 //! exits with code 3.
+//!
+//! The loop is `firmware::board::run` over an iceoryx2 board ([`IpcBoard`]), the
+//! same event loop the MCU images run.
 
 use std::time::{Duration, Instant};
 
-use firmware::{SafeReason, TickClock, board::FrozenClock};
+use firmware::{
+    Event, Firmware, Outcome, TickClock,
+    board::{self, Board, FrozenClock},
+};
 use shared::wire::{SensorFrame, frame_flags};
 
 use super::{
     faults::FaultPlan,
-    firmware_side::FirmwareSide,
+    firmware_side::step_start_us,
     ipc::{FirmwarePorts, PeerState, Role, peer_state, prepare_realtime},
     record::RunError,
     scenario::Scenario,
+    setup::firmware_config,
 };
 
 /// How long a firmware started by hand waits for its plant to appear, s.
@@ -70,6 +77,167 @@ impl TickClock for HostClock {
     }
 }
 
+/// The step's clock: the host's in real time; frozen in lockstep (simulated
+/// time does not advance while the firmware computes; the wall time is
+/// reported in `step_ticks` instead).
+#[derive(Debug, Clone, Copy)]
+enum ProcessClock {
+    Host(HostClock),
+    Frozen,
+}
+
+impl TickClock for ProcessClock {
+    fn ticks(&self) -> u32 {
+        match self {
+            Self::Host(c) => c.ticks(),
+            Self::Frozen => FrozenClock.ticks(),
+        }
+    }
+    fn ticks_per_second(&self) -> u32 {
+        match self {
+            Self::Host(c) => c.ticks_per_second(),
+            Self::Frozen => FrozenClock.ticks_per_second(),
+        }
+    }
+}
+
+/// The firmware process's board: frames from the plant's iceoryx2 service,
+/// commands and telemetry back (`firmware::board::run` drives it, as it
+/// drives the MCU images).
+struct IpcBoard<'a> {
+    ports: &'a FirmwarePorts,
+    rig: &'a str,
+    realtime: bool,
+    faults: FaultPlan,
+    peer_check: Duration,
+    started: Instant,
+    /// Real time: the wall-clock instant of sample time 0, anchored at the last
+    /// frame the firmware was waiting for.
+    epoch: Option<Instant>,
+    last_seq: Option<u32>,
+    answered: u64,
+    stalled_at: Option<u32>,
+    /// Frames that queued up, in order, and the newest sample time among them.
+    batch: std::collections::VecDeque<SensorFrame>,
+    newest_us: u64,
+    now_us: u64,
+    step_started: Instant,
+    ending: Option<Ending>,
+}
+
+impl IpcBoard<'_> {
+    /// Waits for frames (and checks on the plant while none come); fills the batch.
+    fn wait_for_frames(&mut self) -> Result<Option<Event>, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        // A frame already queued is one the firmware is late for; one it waits for
+        // arrives now.
+        let queued = self.ports.frames.try_next().map_err(transport)?;
+        let was_queued = queued.is_some();
+        let waited_from = Instant::now();
+        let next = match queued {
+            Some(f) => Some(f),
+            None => self.ports.frames.next_before(waited_from + self.peer_check).map_err(transport)?,
+        };
+        let Some(first) = next else {
+            // No frame for a while: is the plant still there?
+            return match peer_state(Role::Plant, self.rig) {
+                PeerState::Alive => Ok(None),
+                PeerState::Absent if self.last_seq.is_none() => {
+                    if self.started.elapsed().as_secs_f64() > WAIT_FOR_PLANT_S {
+                        return Err(RunError::Transport(format!("no plant connected to rig `{}` within {WAIT_FOR_PLANT_S} s", self.rig)));
+                    }
+                    Ok(None)
+                }
+                state => {
+                    eprintln!(
+                        "firmware: the plant process is {} (no frame for {:.1} s after seq {:?}): safe state, zero torque",
+                        if state == PeerState::Dead { "dead" } else { "gone" },
+                        self.peer_check.as_secs_f64(),
+                        self.last_seq
+                    );
+                    self.ending = Some(Ending::PeerLost { answered: self.answered });
+                    self.now_us = 0;
+                    Ok(Some(Event::PeerLost { seq: self.last_seq.map_or(0, |q| q.wrapping_add(1)) }))
+                }
+            };
+        };
+        if self.realtime
+            && (!was_queued || self.epoch.is_none())
+            && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us))
+        {
+            self.epoch = Some(seen);
+        }
+        // Injected stall: the process stops (wall clock) at the window's first frame.
+        if let Some(d) = self.faults.stall_starting(first.t_us as f64 * 1e-6)
+            && self.stalled_at != Some(first.seq)
+        {
+            self.stalled_at = Some(first.seq);
+            std::thread::sleep(Duration::from_secs_f64(d));
+        }
+        // Everything that queued up meanwhile, in order: in lockstep the firmware's
+        // clock is the newest sample, so older frames are answered late.
+        self.batch.push_back(first);
+        while let Some(f) = self.ports.frames.try_next().map_err(transport)? {
+            self.batch.push_back(f);
+        }
+        self.newest_us = self.batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
+        Ok(None)
+    }
+}
+
+impl Board for IpcBoard<'_> {
+    type Error = RunError;
+
+    fn next_event(&mut self) -> Result<Event, RunError> {
+        loop {
+            if self.ending.is_some() {
+                return Ok(Event::End);
+            }
+            if let Some(frame) = self.batch.pop_front() {
+                if frame.flags & frame_flags::END_OF_RUN != 0 {
+                    return Ok(Event::End);
+                }
+                let floor_us = match (self.realtime, self.epoch) {
+                    (true, Some(e)) => e.elapsed().as_micros() as u64,
+                    (true, None) => frame.t_us,
+                    (false, _) => self.newest_us,
+                };
+                self.now_us = step_start_us(&self.faults, &frame, floor_us);
+                self.step_started = Instant::now();
+                return Ok(Event::Frame(frame));
+            }
+            if let Some(event) = self.wait_for_frames()? {
+                return Ok(event);
+            }
+        }
+    }
+
+    fn now_us(&self) -> u64 {
+        self.now_us
+    }
+
+    fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let Outcome::Command(command) = outcome else { return Ok(()) };
+        if self.ending.is_some() {
+            // The peer is lost: the zero-torque command goes out for whoever listens.
+            let _ = self.ports.commands.send(*command);
+            return Ok(());
+        }
+        let mut command = *command;
+        if !self.realtime {
+            command.step_ticks = self.step_started.elapsed().as_nanos() as u32;
+        }
+        if let Some(fw) = fw {
+            self.ports.telemetry.send(fw.telemetry_message(&command)).map_err(transport)?;
+        }
+        self.ports.commands.send(command).map_err(transport)?;
+        self.last_seq = Some(command.seq);
+        self.answered += 1;
+        Ok(())
+    }
+}
+
 /// Runs the firmware process of rig `rig` for scenario `s` until the plant ends
 /// the run or dies.
 ///
@@ -85,92 +253,25 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
             eprintln!("firmware: real-time set-up: {w}");
         }
     }
-    let mut side = FirmwareSide::new(s)?;
-    let faults = FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz);
-    let peer_check = Duration::from_secs_f64(s.rig.peer_check_s);
-    let clock = HostClock::default();
-    let started = Instant::now();
-    // Real time: the wall-clock instant of sample time 0, anchored at the last
-    // frame the firmware was waiting for.
-    let mut epoch: Option<Instant> = None;
-    let mut last_seq: Option<u32> = None;
-    let mut answered = 0u64;
-    let mut stalled_at: Option<u32> = None;
-    let mut batch: Vec<SensorFrame> = Vec::with_capacity(super::ipc::QUEUE_DEPTH);
-    loop {
-        // A frame already queued is one the firmware is late for; one it waits for
-        // arrives now.
-        let queued = ports.frames.try_next().map_err(transport)?;
-        let was_queued = queued.is_some();
-        let waited_from = Instant::now();
-        let next = match queued {
-            Some(f) => Some(f),
-            None => ports.frames.next_before(waited_from + peer_check).map_err(transport)?,
-        };
-        let Some(first) = next else {
-            // No frame for a while: is the plant still there?
-            match peer_state(Role::Plant, rig) {
-                PeerState::Alive => continue,
-                PeerState::Absent if last_seq.is_none() => {
-                    if started.elapsed().as_secs_f64() > WAIT_FOR_PLANT_S {
-                        return Err(RunError::Transport(format!("no plant connected to rig `{rig}` within {WAIT_FOR_PLANT_S} s")));
-                    }
-                    continue;
-                }
-                state => {
-                    let fw = side.firmware_mut();
-                    fw.enter_safe_state(SafeReason::PeerLost);
-                    let seq = last_seq.map_or(0, |q| q.wrapping_add(1));
-                    let cmd = fw.safe_command(seq, 0);
-                    let _ = ports.commands.send(cmd);
-                    eprintln!(
-                        "firmware: the plant process is {} (no frame for {:.1} s after seq {:?}): safe state, zero torque",
-                        if state == PeerState::Dead { "dead" } else { "gone" },
-                        peer_check.as_secs_f64(),
-                        last_seq
-                    );
-                    return Ok(Ending::PeerLost { answered });
-                }
-            }
-        };
-        if realtime
-            && (!was_queued || epoch.is_none())
-            && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us))
-        {
-            epoch = Some(seen);
-        }
-        // Injected stall: the process stops (wall clock) at the window's first frame.
-        if let Some(d) = faults.stall_starting(first.t_us as f64 * 1e-6)
-            && stalled_at != Some(first.seq)
-        {
-            stalled_at = Some(first.seq);
-            std::thread::sleep(Duration::from_secs_f64(d));
-        }
-        // Everything that queued up meanwhile, in order: in lockstep the firmware's
-        // clock is the newest sample, so older frames are answered late.
-        batch.clear();
-        batch.push(first);
-        while let Some(f) = ports.frames.try_next().map_err(transport)? {
-            batch.push(f);
-        }
-        let newest_us = batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
-        for &frame in &batch {
-            if frame.flags & frame_flags::END_OF_RUN != 0 {
-                return Ok(Ending::EndOfRun { answered, overruns: side.firmware().overruns() });
-            }
-            let (command, telemetry) = if realtime {
-                let now_us = epoch.map_or(frame.t_us, |e| e.elapsed().as_micros() as u64);
-                side.answer(&frame, now_us, &clock)
-            } else {
-                let t = Instant::now();
-                let (mut c, tel) = side.answer(&frame, newest_us, &FrozenClock);
-                c.step_ticks = t.elapsed().as_nanos() as u32;
-                (c, tel)
-            };
-            ports.telemetry.send(telemetry).map_err(transport)?;
-            ports.commands.send(command).map_err(transport)?;
-            last_seq = Some(frame.seq);
-            answered += 1;
-        }
-    }
+    let mut firmware = Some(Firmware::new(firmware_config(s))?);
+    let mut board = IpcBoard {
+        ports: &ports,
+        rig,
+        realtime,
+        faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz),
+        peer_check: Duration::from_secs_f64(s.rig.peer_check_s),
+        started: Instant::now(),
+        epoch: None,
+        last_seq: None,
+        answered: 0,
+        stalled_at: None,
+        batch: std::collections::VecDeque::with_capacity(super::ipc::QUEUE_DEPTH),
+        newest_us: 0,
+        now_us: 0,
+        step_started: Instant::now(),
+        ending: None,
+    };
+    let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
+    board::run(&mut firmware, &mut board, &clock)?;
+    Ok(board.ending.unwrap_or(Ending::EndOfRun { answered: board.answered, overruns: firmware.as_ref().map_or(0, Firmware::overruns) }))
 }

@@ -40,9 +40,15 @@ impl FirmwareSide {
     /// now_floor_us)` on the frame's clock: `now_floor_us` is what the caller's
     /// clock says (the newest frame seen in lockstep, the wall clock in real time).
     pub fn answer<C: TickClock>(&mut self, frame: &SensorFrame, now_floor_us: u64, clock: &C) -> (ActuatorCommand, FirmwareTelemetry) {
-        let delay_us = (self.faults.command_delay(frame.t_us as f64 * 1e-6) * 1e6).round() as u64;
-        let now_us = frame.t_us.saturating_add(delay_us).max(now_floor_us);
+        let now_us = step_start_us(&self.faults, frame, now_floor_us);
         let command = self.fw.step(now_us, frame, clock);
         (command, self.fw.telemetry_message(&command))
     }
+}
+
+/// When the step of `frame` starts, microseconds on the frame's clock:
+/// `max(frame.t_us + injected delay, now_floor_us)` (the `late_command` fault).
+pub fn step_start_us(faults: &FaultPlan, frame: &SensorFrame, now_floor_us: u64) -> u64 {
+    let delay_us = (faults.command_delay(frame.t_us as f64 * 1e-6) * 1e6).round() as u64;
+    frame.t_us.saturating_add(delay_us).max(now_floor_us)
 }
