@@ -97,6 +97,13 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     assert!(log.iter().any(|l| l.message.starts_with("configured: hybrid")), "{log:?}");
     let end = log.iter().find(|l| l.message.starts_with("end of run")).expect("the image logged its end");
     assert!(end.message.contains(&format!("{} frames", pil.len())), "{}", end.message);
+    // The painted-stack probe: the deepest the stack went, in bytes, of a region
+    // that flip-link puts below the statics (most of the 128 KiB).
+    let at = end.message.find("stack high-water mark ").expect("the stack's high-water mark is reported") + 22;
+    let nums: Vec<u64> =
+        end.message[at..].split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()).map(|s| s.parse().unwrap()).collect();
+    assert!((512..16 * 1024).contains(&nums[0]), "{}", end.message);
+    assert!(nums[1] > 100 * 1024, "flip-link's stack region: {}", end.message);
 }
 
 #[test]
