@@ -88,10 +88,11 @@ pub enum Command {
     /// - QEMU (default): the image (--image) runs in QEMU's netduinoplus2 (an STM32F405,
     ///   --qemu) under -icount shift=0, its USART1 on a local socket. Step counts are
     ///   instructions (emulated SysTick); the image's defmt log is decoded and shown
-    ///   (and written to defmt.log). Build the image first: cargo build -p firmware
-    ///   --profile mcu --target thumbv7em-none-eabihf --bin pil. Needs qemu-system-arm.
+    ///   (and written to defmt.log). Build the image first: `cargo build-pil` (its QEMU
+    ///   build, profile qemu; docs/board.md). Needs qemu-system-arm.
     ///
-    /// - Hardware in the loop (--serial PATH): the image runs on a board flashed with it,
+    /// - Hardware in the loop (--serial PATH): the image runs on a board flashed with it
+    ///   (`cargo pil`),
     ///   its USART1 (2 Mbaud, --baud) wired to the serial device PATH (a USB-serial
     ///   adapter), raw 8N1, no flow control. Step counts are what the image reports
     ///   (DWT cycles on silicon); its defmt log goes over RTT to a debug probe (probe-rs),
