@@ -25,6 +25,7 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     let run = Command::new("bash").arg(common::workspace().join("scripts/qemu-run.sh")).arg(&elf).output().unwrap();
     let log = common::decode_defmt(&elf, &run.stdout);
     let text = log.join("\n");
+    eprintln!("{text}");
     assert!(run.status.success(), "QEMU exit {} (101 = panic): {}\n{text}", run.status, String::from_utf8_lossy(&run.stderr));
     assert!(!text.contains("panic") && !text.contains("hard fault"), "{text}");
 
