@@ -13,12 +13,6 @@ use std::process::Command;
 /// Ticks of the emulated core clock (168 MHz) in one 1 kHz period.
 const PERIOD_TICKS: u64 = 168_000;
 
-/// The numbers after `key` in `line` (`key 123`, `key 1..2`).
-fn numbers_after(line: &str, key: &str) -> Vec<u64> {
-    let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
-    rest.trim_start().split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()).map(|s| s.parse().unwrap()).collect()
-}
-
 #[test]
 fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     let elf = common::qemu_image("arm");
@@ -52,15 +46,15 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     let windows: Vec<_> = log.iter().filter(|l| l.contains("step ticks median")).collect();
     assert_eq!(windows.len(), 3, "{text}");
     for w in &windows {
-        assert!(numbers_after(w, "over")[0] == 1000, "{w}");
-        let interval = numbers_after(w, "tick interval");
+        assert!(common::numbers_after(w, "over")[0] == 1000, "{w}");
+        let interval = common::numbers_after(w, "tick interval");
         assert_eq!(interval[0], interval[1], "no jitter under icount: {w}");
         assert!((PERIOD_TICKS..PERIOD_TICKS * 6 / 5).contains(&interval[0]), "one 1 ms period of 168 MHz ticks: {w}");
         // The handler (sampling, step, outputs) is well inside the period.
-        assert!(numbers_after(w, "handler worst")[0] < PERIOD_TICKS / 4, "{w}");
+        assert!(common::numbers_after(w, "handler worst")[0] < PERIOD_TICKS / 4, "{w}");
     }
     // The stack's high-water mark is measured and small.
     let stack = log.iter().rev().find(|l| l.contains("stack high-water mark")).unwrap();
-    let bytes = numbers_after(stack, "stack high-water mark")[0];
+    let bytes = common::numbers_after(stack, "stack high-water mark")[0];
     assert!((256..16 * 1024).contains(&bytes), "{stack}");
 }

@@ -55,3 +55,9 @@ pub fn decode_defmt(elf: &Path, bytes: &[u8]) -> Vec<String> {
     }
     lines
 }
+
+/// The numbers after `key` in a log line (`key 123`, `key 1..2 of 3`).
+pub fn numbers_after(line: &str, key: &str) -> Vec<u64> {
+    let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
+    rest.split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()).map(|s| s.parse().unwrap()).collect()
+}

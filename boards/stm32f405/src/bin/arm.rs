@@ -105,7 +105,6 @@ mod image {
 
     static ARM: Mutex<RefCell<Option<Arm>>> = Mutex::new(RefCell::new(None));
     static REPORT: Mutex<Cell<Option<ArmTelemetry>>> = Mutex::new(Cell::new(None));
-    static PERIODS: Mutex<Cell<u32>> = Mutex::new(Cell::new(0));
 
     impl ArmBoard {
         /// Samples every sensor now (the tick): the frame of period `seq`.
@@ -282,8 +281,6 @@ mod image {
             if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
                 arm.tick();
             }
-            let n = PERIODS.borrow(cs);
-            n.set(n.get() + 1);
         });
     }
 
@@ -395,12 +392,15 @@ mod image {
                     usart::write_all(frame);
                 }
             }
-            if exit::UNDER_QEMU && cortex_m::interrupt::free(|cs| PERIODS.borrow(cs).get()) >= QEMU_PERIODS {
+            // The periods run so far and whether the drivers are on, from the board itself.
+            let (periods, drivers) = cortex_m::interrupt::free(|cs| {
+                ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.board.seq, a.board.motors.is_enabled()))
+            });
+            if exit::UNDER_QEMU && periods >= QEMU_PERIODS {
                 cortex_m::peripheral::NVIC::mask(Interrupt::TIM2);
-                let drivers = cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().is_some_and(|a| a.board.motors.is_enabled()));
                 defmt::info!(
                     "qemu run over: {=u32} periods, drivers {=str}, stack high-water mark {=u32} of {=u32} bytes",
-                    QEMU_PERIODS,
+                    periods,
                     if drivers { "enabled" } else { "disabled" },
                     stack::high_water_bytes(),
                     stack::size_bytes()

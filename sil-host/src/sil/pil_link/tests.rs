@@ -113,6 +113,9 @@ struct Script {
     /// Before its first Hello, it sends what a previous run can leave on the
     /// line: an Answer, a Garbled and a broken frame.
     leftovers: bool,
+    /// Right after its first Hello it sends a Garbled, as for a frame damaged
+    /// before its USART was up: the link sends the configuration again.
+    garbled_after_hello: bool,
     answer: usize,
     then: Then,
 }
@@ -121,6 +124,7 @@ struct Script {
 #[derive(Debug, Default)]
 struct Seen {
     hellos: usize,
+    configures: usize,
     frames: usize,
     ended: bool,
 }
@@ -161,8 +165,12 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                             &mut master,
                             &Uplink::Hello { protocol: script.protocol, ticks_per_second: 168_000_000, clock: StepClock::DwtCycles },
                         );
+                        if script.garbled_after_hello && seen.hellos == 1 {
+                            send(&mut master, &Uplink::Garbled);
+                        }
                     }
                     Ok(Downlink::Configure(cfg)) => {
+                        seen.configures += 1;
                         fw = Firmware::new(cfg).ok();
                         send(&mut master, if fw.is_some() { &Uplink::Configured } else { &Uplink::Rejected });
                     }
@@ -208,7 +216,8 @@ fn board_link(s: &Scenario, script: Script, answer_timeout_s: f64) -> (Result<Pi
 #[test]
 fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftovers() {
     let s = short(0.3);
-    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: true, answer: usize::MAX, then: Then::Silent };
+    let script =
+        Script { protocol: pil::PROTOCOL_VERSION, leftovers: true, garbled_after_hello: false, answer: usize::MAX, then: Then::Silent };
     let (link, board) = board_link(&s, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
@@ -226,9 +235,25 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
 }
 
 #[test]
+fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_goes_on() {
+    let s = short(0.2);
+    let script =
+        Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: true, answer: usize::MAX, then: Then::Silent };
+    let (link, board) = board_link(&s, script, 5.0);
+    let mut link = link.unwrap();
+    // The board answers both configurations; the second `Configured` comes
+    // before the first answer and must not end the run.
+    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    assert!(err.is_none(), "{err:?}");
+    assert_eq!(records.len(), 200);
+    let seen = board.join().unwrap();
+    assert_eq!((seen.configures, seen.frames), (2, 200), "{seen:?}");
+}
+
+#[test]
 fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let s = short(1.0);
-    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, answer: 50, then: Then::Silent };
+    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::Silent };
     let (link, _board) = board_link(&s, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
@@ -248,7 +273,7 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
 #[test]
 fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let s = short(1.0);
-    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, answer: 50, then: Then::HangUp };
+    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::HangUp };
     let (link, _board) = board_link(&s, script, 5.0);
     let mut link = link.unwrap();
     let started = Instant::now();
@@ -268,7 +293,7 @@ fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
 #[test]
 fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let s = short(0.1);
-    let script = Script { protocol: 1, leftovers: false, answer: 0, then: Then::Silent };
+    let script = Script { protocol: 1, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
     let err = board_link(&s, script, 5.0).0.unwrap_err().to_string();
     assert!(err.contains("speaks PIL protocol 1") && err.contains("flash"), "{err}");
 
