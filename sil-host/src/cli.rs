@@ -448,7 +448,7 @@ pub struct ModesArgs {
     /// and x0d) and is written per point in modes.csv. Default `plus`: the root through
     /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
     #[arg(long, value_enum, default_value = "plus")]
-    pub theta2_sign: crate::commands::modes::Theta2Sign,
+    pub theta2_sign: crate::modes::Theta2Sign,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,

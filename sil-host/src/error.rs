@@ -57,3 +57,17 @@ impl CliError {
         }
     }
 }
+
+impl From<crate::analysis_error::AnalysisError> for CliError {
+    /// The same message and exit code as the analysis error.
+    fn from(e: crate::analysis_error::AnalysisError) -> Self {
+        use crate::analysis_error::AnalysisError as A;
+        match e {
+            A::BadInput(m) => Self::BadInput(m),
+            A::Param(e) => Self::Param(e),
+            A::Sim(e) => Self::Sim(e),
+            A::Scenario(e) => Self::Scenario(e),
+            A::Run(e) => Self::Run(e),
+        }
+    }
+}

@@ -2,11 +2,14 @@
 //! (event-driven, nonsmooth), the commands that run it, and their outputs.
 #![warn(missing_docs)]
 
+pub mod admissible;
+pub mod analysis_error;
 pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod ideal;
 pub mod initial;
+pub mod modes;
 pub mod output;
 pub mod plant;
 pub mod plot;
@@ -44,7 +47,7 @@ where
         cli::Command::Merge(args) => commands::sweep::merge(&args),
         cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
-        cli::Command::Firmware(args) => match commands::run::firmware(&args) {
+        cli::Command::Firmware(args) => match commands::firmware::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),
         },

@@ -462,7 +462,7 @@ pub fn default_bracket(base: &Scenario, x0: X0) -> Result<(f64, f64), CliError> 
     params.mu = base.plant.mu;
     params.v_belt = base.plant.v_belt;
     let plant = Plant::new(params, sim_config(base), deg_to_state(x0.paper().deg), 0.0, [0.0; 2])?;
-    let reach = crate::commands::admissible::belt_reach(&params);
+    let reach = crate::admissible::belt_reach(&params);
     Ok((plant.tip()[0], reach - 1e-3))
 }
 

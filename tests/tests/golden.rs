@@ -57,10 +57,7 @@ fn cases() -> Vec<(String, Vec<String>)> {
                 .map(String::from)
                 .collect(),
         ),
-        (
-            "poincare".into(),
-            ["poincare", "--v-belt", "-0.9,-0.3", "--v-step", "0.3"].into_iter().map(String::from).collect(),
-        ),
+        ("poincare".into(), ["poincare", "--v-belt", "-0.9,-0.3", "--v-step", "0.3"].into_iter().map(String::from).collect()),
         ("zmax-all".into(), vec!["zmax".into(), "--all".into()]),
     ];
     for s in ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"] {
@@ -139,12 +136,7 @@ fn outputs_match_the_recorded_digests() {
     let mut actual = BTreeMap::new();
     for (case, args) in cases() {
         let out = actual_root.join(&case);
-        let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
-            .args(&args)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(&args).arg("--out").arg(&out).output().unwrap();
         assert!(o.status.success(), "{case}: {args:?} failed:\n{}", String::from_utf8_lossy(&o.stderr));
         for (file, hash) in digests(&out) {
             actual.insert(format!("{case}/{file}"), hash);
@@ -157,11 +149,8 @@ fn outputs_match_the_recorded_digests() {
         return;
     }
     let recorded = std::fs::read_to_string(&path).expect("tests/golden/digests.txt (GOLDEN=update records it)");
-    let recorded: BTreeMap<String, String> = recorded
-        .lines()
-        .filter_map(|l| l.split_once("  "))
-        .map(|(h, k)| (k.to_string(), h.to_string()))
-        .collect();
+    let recorded: BTreeMap<String, String> =
+        recorded.lines().filter_map(|l| l.split_once("  ")).map(|(h, k)| (k.to_string(), h.to_string())).collect();
     let mut wrong = Vec::new();
     for k in recorded.keys().chain(actual.keys()).collect::<std::collections::BTreeSet<_>>() {
         match (recorded.get(k), actual.get(k)) {

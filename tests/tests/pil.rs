@@ -26,7 +26,7 @@ use std::{
 
 use firmware::pil::StepClock;
 use sil_host::{
-    commands::run::rms_tracking_error,
+    sil::summary::rms_tracking_error,
     sil::{
         in_process,
         pil_link::{CountUnit, DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS, Spread},

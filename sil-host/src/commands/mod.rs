@@ -2,6 +2,8 @@
 
 pub mod admissible;
 pub mod bench;
+pub mod closed_loop;
+pub mod firmware;
 pub mod modes;
 pub mod pil;
 pub mod poincare;

@@ -12,114 +12,21 @@
 
 use std::io::Write;
 
-use serde::Serialize;
-
-use super::run::{RunSummary, draw, load_scenario, print_summary, run_streamed};
+use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
     sil::{
-        pil_link::{self, BAUD_RANGE, CORE_HZ, CountUnit, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget, Spread},
+        pil_link::{self, BAUD_RANGE, CountUnit, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget, Spread},
         record::PeriodRecord,
         rig::FirmwareLink,
         scenario::Scenario,
         setup::{firmware_config, plant_for},
+        summary::{PilFigures, RunSummary},
     },
 };
-
-/// Where a board's log goes, for the summary and the human output: it is not on
-/// the PIL link.
-pub const BOARD_LOG_NOTE: &str = "not captured over a serial port: a board logs defmt over RTT to a debug probe (read it with `probe-rs attach --chip STM32F405RGTx <image ELF>`)";
-
-/// The PIL part of `summary.json`.
-#[derive(Debug, Clone, Serialize)]
-pub struct PilFigures {
-    /// How the bytes travelled: `qemu-socket` (QEMU spawned here) or `serial`.
-    pub transport: &'static str,
-    /// Serial runs: the device.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub serial_port: Option<String>,
-    /// Serial runs: the line rate, baud (8N1).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub baud: Option<u32>,
-    /// The image that ran under QEMU; `null` over a serial port (it is in the board's flash).
-    pub image: Option<String>,
-    /// QEMU's `-icount` shift (one instruction per `2^shift` ns of virtual time);
-    /// `null` over a serial port.
-    pub qemu_icount_shift: Option<u32>,
-    /// The image's tick rate (its core clock), Hz.
-    pub ticks_per_second: u32,
-    /// What the image's tick counter is (its Hello): `EmulatedSysTick` or `DwtCycles`.
-    pub step_clock: firmware::pil::StepClock,
-    /// Unit of `step_counts`, `frame_counts` and `step_budget`: `instructions`
-    /// (emulated SysTick under `-icount`) or `cycles` (DWT on silicon).
-    pub count_unit: CountUnit,
-    /// `count_unit`s per tick: `1e9 / (ticks_per_second 2^shift)` instructions
-    /// under QEMU, 1 cycle on silicon.
-    pub counts_per_tick: f64,
-    /// `Firmware::step` (sensor decode to command encode), in `count_unit`:
-    /// median, 99th percentile, worst.
-    pub step_counts: Spread,
-    /// A frame's last byte to its answer ready to send (COBS, CRC and postcard
-    /// decoding plus the step), in `count_unit`.
-    pub frame_counts: Spread,
-    /// The budget of a step in `count_unit` (HARDWARE.md: 5 % of the control
-    /// period at 168 MHz; 8400 at 1 kHz).
-    pub step_budget: f64,
-    /// Whether the worst step is within the budget.
-    pub within_budget: bool,
-    /// Worst step as a share of the control period at 168 MHz (for instructions:
-    /// if each took one cycle, a lower bound on silicon: README "PIL").
-    pub worst_step_period_share: f64,
-    /// QEMU's exit status at the end (`exit status: 0` when the image ended the
-    /// run); `null` over a serial port.
-    pub qemu_exit: Option<String>,
-    /// Where the image's defmt log is: `defmt.log`, or why it is not captured.
-    pub defmt_log: String,
-    /// Lines of the image's defmt log; `null` when it is not captured.
-    pub defmt_lines: Option<usize>,
-    /// Of which at `warn` or `error` level; `null` when it is not captured.
-    pub defmt_warnings: Option<usize>,
-}
-
-impl PilFigures {
-    /// The figures of a run's `counts` at `rate_hz` (Hz) over `target`; `log` is
-    /// the image's defmt log when the link captured it, `exit` QEMU's exit status.
-    pub fn new(target: &PilTarget, counts: &PilCounts, rate_hz: f64, log: Option<&[LogLine]>, exit: Option<String>) -> Self {
-        let per_tick = counts.counts_per_tick();
-        let step = Spread::of(&counts.step_ticks, per_tick);
-        let budget = pil_link::step_budget(rate_hz);
-        let (image, shift, serial_port, baud) = match target {
-            PilTarget::Qemu { image, .. } => (Some(image.display().to_string()), Some(ICOUNT_SHIFT), None, None),
-            PilTarget::Serial { path, baud } => (None, None, Some(path.display().to_string()), Some(*baud)),
-        };
-        Self {
-            transport: target.transport(),
-            serial_port,
-            baud,
-            image,
-            qemu_icount_shift: shift,
-            ticks_per_second: counts.ticks_per_second,
-            step_clock: counts.clock,
-            count_unit: counts.unit(),
-            counts_per_tick: per_tick,
-            step_counts: step,
-            frame_counts: Spread::of(&counts.frame_ticks, per_tick),
-            step_budget: budget,
-            within_budget: step.worst <= budget,
-            worst_step_period_share: step.worst / (CORE_HZ / rate_hz),
-            qemu_exit: exit,
-            defmt_log: match log {
-                Some(_) => "defmt.log (decoded from QEMU's semihosting output)".into(),
-                None => BOARD_LOG_NOTE.into(),
-            },
-            defmt_lines: log.map(<[LogLine]>::len),
-            defmt_warnings: log.map(|l| l.iter().filter(|l| l.level == "warn" || l.level == "error").count()),
-        }
-    }
-}
 
 /// Checks the arguments that say where the image runs.
 ///

@@ -134,7 +134,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
             }
             None
         }
-        _ => Some(crate::commands::run::load_scenario(&ScenarioArgs {
+        _ => Some(crate::commands::closed_loop::load_scenario(&ScenarioArgs {
             scenario: args.scenario.clone(),
             controller: None,
             x0: None,

@@ -15,8 +15,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::{
+    admissible::{p_on_belt, positive_intervals},
     cli::{ControllerArg, ZmaxArgs, ZmaxX0},
-    commands::admissible::{p_on_belt, positive_intervals},
     error::CliError,
     ideal::ControllerKind,
     output::{OutputSet, progress_bar, write_csv},

@@ -1,6 +1,6 @@
 use super::*;
 use crate::{
-    commands::admissible::{belt_reach, positive_intervals},
+    admissible::{belt_reach, positive_intervals},
     initial::{X0D, X0U, deg_to_state},
 };
 use firmware::{
@@ -160,13 +160,8 @@ fn ideal_hybrid_lifts_off_where_p_vanishes() {
     let arm = Arm::new(params);
     for (x0, branch) in [(X0D, ElbowBranch::Down), (X0U, ElbowBranch::Up)] {
         let reach = belt_reach(&params);
-        let ends = positive_intervals(
-            |z| crate::commands::admissible::p_on_belt(&arm, z, branch, SlipDirection::Positive),
-            -reach,
-            reach,
-            20_000,
-            1e-10,
-        );
+        let ends =
+            positive_intervals(|z| crate::admissible::p_on_belt(&arm, z, branch, SlipDirection::Positive), -reach, reach, 20_000, 1e-10);
         let end = ends.last().unwrap().hi;
         let mut setup = IdealSetup::paper(ControllerKind::Hybrid, deg_to_state(x0.deg), (reach - 5e-4).min(end + 0.01));
         setup.duration_s = 2.5;

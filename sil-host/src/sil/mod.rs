@@ -16,3 +16,4 @@ pub mod rig;
 pub mod scenario;
 pub mod sensors;
 pub mod setup;
+pub mod summary;

@@ -56,8 +56,8 @@ fn coarse_search_brackets_the_first_lift_off() {
             // Where p = 0 on the elbow-down belt with z_r_dot > 0 (`sil-host admissible`).
             let params = shared::Params::<f64>::paper();
             let arm = shared::Arm::new(params);
-            let p = |z| crate::commands::admissible::p_on_belt(&arm, z, shared::ElbowBranch::Down, shared::SlipDirection::Positive);
-            let end = crate::commands::admissible::positive_intervals(p, bracket.0, bracket.1, 10_000, 1e-10)[0].hi;
+            let p = |z| crate::admissible::p_on_belt(&arm, z, shared::ElbowBranch::Down, shared::SlipDirection::Positive);
+            let end = crate::admissible::positive_intervals(p, bracket.0, bracket.1, 10_000, 1e-10)[0].hi;
             assert!(lo <= end && end < hi + 3e-4, "[{lo}, {hi}] vs p = 0 at {end}");
         }
     }

@@ -1,0 +1,189 @@
+//! What `sil-host run` and `sil-host pil` share: the scenario from the command
+//! line, the streamed closed-loop run, its human summary and its figure.
+
+use std::{
+    io::Write,
+    path::PathBuf,
+    sync::{
+        Arc,
+        atomic::{AtomicBool, Ordering},
+    },
+    time::Instant,
+};
+
+use crate::{
+    cli::{ControllerArg, PaperX0, ScenarioArgs},
+    error::CliError,
+    output::{OutputSet, StreamedCsv},
+    plot,
+    sil::{
+        ipc_link::Percentiles,
+        record::{PeriodRecord, RunError},
+        rig::{FirmwareLink, run_loop_streaming},
+        scenario::Scenario,
+        summary::RunSummary,
+    },
+};
+
+/// Loads the scenario and applies the overrides.
+///
+/// # Errors
+/// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
+pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
+    let mut s = match &args.scenario {
+        Some(path) if path.as_os_str() == "-" => {
+            let text = std::io::read_to_string(std::io::stdin())
+                .map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?;
+            Scenario::from_toml(&text)?
+        }
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?;
+            Scenario::from_toml(&text)?
+        }
+        None => Scenario::default_scenario(),
+    };
+    if let Some(c) = args.controller {
+        s.controller.kind = match c {
+            ControllerArg::Pid => "pid",
+            ControllerArg::Hybrid => "hybrid",
+        }
+        .into();
+    }
+    if let Some(x0) = args.x0 {
+        s.plant.x0 = match x0 {
+            PaperX0::A => "a",
+            PaperX0::D => "d",
+            PaperX0::U => "u",
+        }
+        .into();
+    }
+    if let Some(z) = args.target_zt {
+        s.controller.target_z_t = z;
+    }
+    if let Some(d) = args.duration {
+        s.timing.duration_s = d;
+    }
+    if let Some(seed) = args.seed {
+        s.sensors.seed = seed;
+    }
+    s.validate()?;
+    Ok(s)
+}
+
+/// Ctrl-C and SIGTERM set a flag the loop checks each period (so the trace so far is written).
+pub(crate) fn stop_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
+    }
+    flag
+}
+
+/// Runs `scenario` over `link` as `run` and `pil` do: every period's row goes to
+/// `trace.csv` of `out` as it is made (`trace.csv.partial`, flushed every 1 ms of
+/// wall time, so a plant killed outright keeps every period up to the last
+/// flush), the progress bar moves every `every` periods, Ctrl-C or SIGTERM stops
+/// the run. Returns the records, why the run stopped early if it did, and the
+/// loop's wall-clock time (s); the progress bar is cleared.
+///
+/// # Errors
+/// I/O errors of the trace file.
+pub(crate) fn run_streamed(
+    scenario: &Scenario,
+    link: &mut dyn FirmwareLink,
+    out: &mut OutputSet,
+    progress: &indicatif::ProgressBar,
+    every: usize,
+) -> Result<(Vec<PeriodRecord>, Option<RunError>, f64), CliError> {
+    let stop = stop_flag();
+    let mut trace = StreamedCsv::new(out, "trace.csv", std::time::Duration::from_millis(1))?;
+    let started = Instant::now();
+    let (records, failure) = run_loop_streaming(
+        scenario,
+        link,
+        |r| trace.push(r),
+        |k, _| {
+            if k % every == 0 {
+                progress.set_position(k as u64);
+            }
+            !stop.load(Ordering::Relaxed)
+        },
+        |_| {},
+    );
+    let wall_s = started.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+    trace.finish()?;
+    Ok((records, failure, wall_s))
+}
+
+pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
+    let mut o = std::io::stdout().lock();
+    let l = &summary.lift_off;
+    let _ = writeln!(
+        o,
+        "{} run `{}` ({}, {} {}): {} periods in {:.2} s wall ({:.0}x real time, {:.0} periods/s)",
+        match summary.transport {
+            "pil-serial" => "HIL",
+            _ if summary.pil.is_some() => "PIL",
+            _ => "SIL",
+        },
+        summary.scenario,
+        summary.controller,
+        summary.transport,
+        summary.timing,
+        summary.periods,
+        summary.wall_s,
+        summary.realtime_factor,
+        summary.periods_per_s
+    );
+    let _ = writeln!(
+        o,
+        "lift-offs {} (detected {}, missed {}, false alarms {}, max latency {} periods) | deadline misses {} (firmware counted {})",
+        l.lift_offs,
+        l.lift_offs_detected,
+        l.missed_lift_offs,
+        l.false_alarms,
+        l.max_detection_latency_periods,
+        summary.deadline_misses,
+        summary.firmware_overruns
+    );
+    let _ = writeln!(
+        o,
+        "tracking: rms error {:.3} mm, final z_t {:.5} m (target {:.5} m)",
+        summary.rms_tracking_error_m * 1e3,
+        summary.final_z_t_m,
+        scenario.controller.target_z_t
+    );
+    let fmt = |p: &Percentiles| format!("p50 {:.1}, p99 {:.1}, p999 {:.1}, max {:.1} us", p.p50, p.p99, p.p999, p.max);
+    if let Some(p) = &summary.ipc_rtt_us {
+        let _ = writeln!(o, "iceoryx2 round trip: {}", fmt(p));
+    }
+    if let Some(p) = &summary.firmware_step_us {
+        let _ = writeln!(o, "firmware step: {}", fmt(p));
+    }
+    if let Some(p) = &summary.period_jitter_us {
+        let _ = writeln!(o, "period jitter: {}", fmt(p));
+    }
+    if let Some(r) = &summary.realtime_setup {
+        let _ = writeln!(o, "real-time loops: {}", r.describe());
+        for w in &r.warnings {
+            let _ = writeln!(o, "real-time set-up warning: {w}");
+        }
+    }
+    if let Some(e) = &summary.error {
+        let _ = writeln!(o, "STOPPED: {e}");
+    }
+    let _ = writeln!(o, "wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+}
+
+pub(crate) fn draw(path: &std::path::Path, what: &str, s: &Scenario, records: &[PeriodRecord]) -> Result<(), CliError> {
+    let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
+    let samples: Vec<plot::HistorySample> = records
+        .iter()
+        .map(|r| plot::HistorySample { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u: [r.u1_cmd, r.u2_cmd], mode: r.mode })
+        .collect();
+    let panels = plot::history_panels(&samples, true);
+    let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
+    plot::time_panels(path, &title, (0.0, t_end), &panels)
+}
