@@ -10,12 +10,10 @@
 //! Run: `cargo bench -p sil-host --bench plant`.
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use plant::initial::{X0A, X0D, deg_to_state};
+use plant::{Plant, SimConfig};
+use rig::{in_process, scenario::Scenario};
 use shared::{ContactMode, Params};
-use sil_host::{
-    initial::{X0A, X0D, deg_to_state},
-    plant::{Plant, SimConfig},
-    sil::{in_process, scenario::Scenario},
-};
 
 /// A plant in steady sliding: from x0d with mu = 0.3 the tip slides without lifting off.
 fn sliding_plant() -> Plant {

@@ -448,7 +448,7 @@ pub struct ModesArgs {
     /// and x0d) and is written per point in modes.csv. Default `plus`: the root through
     /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
     #[arg(long, value_enum, default_value = "plus")]
-    pub theta2_sign: crate::modes::Theta2Sign,
+    pub theta2_sign: analyses::modes::Theta2Sign,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -583,7 +583,7 @@ pub struct SweepArgs {
     /// `hybrid` (experiment 7) or `pid` controller run in-process, sampled as on the
     /// MCU, with the scenario's references (experiment 6's by default).
     #[arg(long, value_enum, default_value = "none")]
-    pub controller: crate::sweep::SweepController,
+    pub controller: analyses::sweep::SweepController,
     /// Closed loop: the paper's continuous-time controller with exact measurements
     /// instead of the sampled firmware.
     #[arg(long)]
@@ -603,7 +603,7 @@ pub struct SweepArgs {
     /// Persistent bouncing is flagged when max theta1_dot over the record window
     /// exceeds this, rad/s. The paper's threshold is 0; an arm at rest shows
     /// theta1_dot ~ 5e-15 rad/s from rounding, hence the small default.
-    #[arg(long, default_value_t = crate::sweep::DEFAULT_THRESHOLD)]
+    #[arg(long, default_value_t = analyses::sweep::DEFAULT_THRESHOLD)]
     pub threshold: f64,
     /// Relative tolerance of the integrator.
     #[arg(long, default_value_t = 1e-9)]

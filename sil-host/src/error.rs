@@ -16,7 +16,7 @@ pub enum CliError {
     Param(#[from] shared::ParamError),
     /// The simulation failed.
     #[error("simulation failed: {0}")]
-    Sim(#[from] crate::plant::SimError),
+    Sim(#[from] plant::SimError),
     /// Writing an output file failed.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -27,10 +27,10 @@ pub enum CliError {
     },
     /// A scenario file is invalid.
     #[error("invalid scenario: {0}")]
-    Scenario(#[from] crate::sil::scenario::ScenarioError),
+    Scenario(#[from] rig::scenario::ScenarioError),
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
-    Run(#[from] crate::sil::record::RunError),
+    Run(#[from] rig::record::RunError),
     /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
     PartFailed(String),
@@ -58,10 +58,10 @@ impl CliError {
     }
 }
 
-impl From<crate::analysis_error::AnalysisError> for CliError {
+impl From<analyses::AnalysisError> for CliError {
     /// The same message and exit code as the analysis error.
-    fn from(e: crate::analysis_error::AnalysisError) -> Self {
-        use crate::analysis_error::AnalysisError as A;
+    fn from(e: analyses::AnalysisError) -> Self {
+        use analyses::AnalysisError as A;
         match e {
             A::BadInput(m) => Self::BadInput(m),
             A::Param(e) => Self::Param(e),

@@ -1,22 +1,14 @@
-//! The host side of the rig: the plant simulator of the arm on the moving belt
-//! (event-driven, nonsmooth), the commands that run it, and their outputs.
+//! The command line of the rig (`sil-host`): each command parses its flags, calls
+//! the plant ([`plant`]), the rig ([`rig`]) or an analysis ([`analyses`]), and
+//! writes the outputs (CSV, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
-pub mod admissible;
-pub mod analysis_error;
 pub mod cli;
 pub mod commands;
 pub mod error;
-pub mod ideal;
-pub mod initial;
-pub mod modes;
 pub mod output;
-pub mod plant;
 pub mod plot;
-pub mod poincare;
-pub mod sil;
 pub mod sweep;
-pub mod zmax;
 
 use clap::Parser;
 

@@ -3,13 +3,11 @@
 //! the iceoryx2 transport around the same loop).
 
 use firmware::{Config, ControllerKind, Firmware, board::FrozenClock};
+use plant::initial::{X0D, deg_to_state};
+use plant::{Plant, SimConfig};
 use shared::{
     Params,
     wire::{self, SensorFrame},
-};
-use sil_host::{
-    initial::{X0D, deg_to_state},
-    plant::{Plant, SimConfig},
 };
 
 struct Run {

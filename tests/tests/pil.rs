@@ -25,15 +25,14 @@ use std::{
 };
 
 use firmware::pil::StepClock;
-use sil_host::{
-    sil::summary::rms_tracking_error,
-    sil::{
-        in_process,
-        pil_link::{CountUnit, DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS, Spread},
-        record::{RunError, lift_off_stats},
-        rig::{FirmwareLink, run_loop},
-        scenario::Scenario,
-    },
+use rig::summary::rms_tracking_error;
+use rig::{
+    in_process,
+    pil_link::{DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS},
+    summary::{CountUnit, Spread},
+    record::{RunError, lift_off_stats},
+    rig::{FirmwareLink, run_loop},
+    scenario::Scenario,
 };
 
 /// Builds the PIL image (QEMU build) once per test binary; its path.
@@ -149,10 +148,9 @@ fn pid_through_the_cli_reports_its_instruction_counts_within_the_budget() {
 fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     // QEMU killed at 0.3 s (the kill_firmware fault): every period before is kept.
     let mut s = scenario("hybrid", 1.0);
-    s.faults =
-        Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", sil_host::sil::scenario::DEFAULT_TOML))
-            .unwrap()
-            .faults;
+    s.faults = Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", rig::scenario::DEFAULT_TOML))
+        .unwrap()
+        .faults;
     let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
     let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
     match err {
@@ -336,7 +334,7 @@ fn hil_refuses_a_missing_serial_port_and_the_kill_firmware_fault() {
     assert!(!out.exists());
 
     // kill_firmware kills QEMU: over a serial port it is refused before the port is touched.
-    let toml = format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", sil_host::sil::scenario::DEFAULT_TOML);
+    let toml = format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", rig::scenario::DEFAULT_TOML);
     let file = dir.path().join("kill.toml");
     std::fs::write(&file, &toml).unwrap();
     let code = sil_host::run(["sil-host", "pil", "--serial", "/dev/null", "--scenario", file.to_str().unwrap(), "--out", o]);

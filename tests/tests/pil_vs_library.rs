@@ -7,14 +7,14 @@
 mod common;
 
 use firmware::{Firmware, board::FrozenClock};
-use shared::wire::{GroundTruth, SensorFrame, status};
-use sil_host::sil::{
+use rig::{
     pil_link::{PilLink, PilOptions},
     record::RunError,
     rig::{Exchange, FirmwareLink, run_loop},
     scenario::Scenario,
     setup::firmware_config,
 };
+use shared::wire::{GroundTruth, SensorFrame, status};
 
 /// One period: (seq, image codes, host codes, image status, host status).
 type Pair = (u32, [i16; 2], [i16; 2], u32, u32);

@@ -13,7 +13,7 @@ fn shipped_scenarios_parse_and_the_default_run_tracks() {
     let mut names = Vec::new();
     for entry in std::fs::read_dir(&root).unwrap() {
         let path = entry.unwrap().path();
-        let s = sil_host::sil::scenario::Scenario::from_toml(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let s = rig::scenario::Scenario::from_toml(&std::fs::read_to_string(&path).unwrap()).unwrap();
         names.push(s.name);
     }
     names.sort();
@@ -32,11 +32,11 @@ fn shipped_scenarios_parse_and_the_default_run_tracks() {
 fn a_bad_scenario_exits_2_naming_the_key_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.toml");
-    std::fs::write(&bad, sil_host::sil::scenario::DEFAULT_TOML.replace("delta_s = 0.0002", "delta_s = 0.5")).unwrap();
+    std::fs::write(&bad, rig::scenario::DEFAULT_TOML.replace("delta_s = 0.0002", "delta_s = 0.5")).unwrap();
     let out = dir.path().join("out");
     assert_eq!(run(&["run", "--scenario", bad.to_str().unwrap(), "--out", out.to_str().unwrap()]), 2);
     assert!(!out.exists() || std::fs::read_dir(&out).unwrap().count() == 0);
-    let err = sil_host::sil::scenario::Scenario::from_toml(&std::fs::read_to_string(&bad).unwrap()).unwrap_err().to_string();
+    let err = rig::scenario::Scenario::from_toml(&std::fs::read_to_string(&bad).unwrap()).unwrap_err().to_string();
     assert!(err.contains("timing.delta_s") && err.contains("0.5"), "{err}");
     assert_eq!(run(&["run", "--target-zt", "nan", "--out", out.to_str().unwrap()]), 2);
 }

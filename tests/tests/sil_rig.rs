@@ -42,7 +42,7 @@ fn column(out: &Path, name: &str) -> usize {
 /// Tests that count misses exactly wait up to 5 s of wall time for each command, so
 /// that a loaded machine (tests run in parallel on 2 cores) never times out a period.
 fn scenario(dir: &Path, name: &str, replace: &[(&str, &str)], extra: &str) -> PathBuf {
-    let mut text = sil_host::sil::scenario::DEFAULT_TOML.replace("command_timeout_s = 0.05", "command_timeout_s = 5.0");
+    let mut text = rig::scenario::DEFAULT_TOML.replace("command_timeout_s = 0.05", "command_timeout_s = 5.0");
     for (a, b) in replace {
         assert!(text.contains(a), "{a}");
         text = text.replace(a, b);

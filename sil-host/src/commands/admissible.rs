@@ -1,5 +1,5 @@
 //! `sil-host admissible`: the admissible configurations of the tip on the belt
-//! (MODEL.md experiment 2, paper Table II), computed by [`crate::admissible`];
+//! (MODEL.md experiment 2, paper Table II), computed by [`analyses::admissible`];
 //! this command prints them, writes `admissible.json` and draws `admissible.svg`.
 
 use std::io::Write;
@@ -8,12 +8,8 @@ use plotters::prelude::*;
 use serde::Serialize;
 use shared::{Arm, ElbowBranch, SlipDirection};
 
-use crate::{
-    admissible::{AdmissibleReport, MIRROR_TOL_M, PositiveInterval, ROOT_TOL_M, SCAN_STEPS, compute, p_on_belt},
-    cli::AdmissibleArgs,
-    error::CliError,
-    output::OutputSet,
-};
+use crate::{cli::AdmissibleArgs, error::CliError, output::OutputSet};
+use analyses::admissible::{AdmissibleReport, MIRROR_TOL_M, PositiveInterval, ROOT_TOL_M, SCAN_STEPS, compute, p_on_belt};
 
 #[derive(Serialize)]
 struct JsonBranches {

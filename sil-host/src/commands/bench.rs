@@ -7,16 +7,15 @@ use std::{io::Write, time::Instant};
 
 use serde::Serialize;
 
-use crate::{
-    cli::BenchArgs,
-    error::CliError,
-    sil::{
-        in_process::InProcessLink,
-        ipc::{RealtimeSetup, default_rig_name},
-        ipc_link::{IpcLink, Percentiles, percentiles},
-        rig::run_loop,
-        scenario::Scenario,
-    },
+use crate::{cli::BenchArgs, error::CliError};
+use rig::{
+    in_process::InProcessLink,
+    ipc::default_rig_name,
+    ipc_link::IpcLink,
+    realtime::RealtimeSetup,
+    rig::run_loop,
+    scenario::Scenario,
+    summary::{Percentiles, percentiles},
 };
 
 /// One transport's figures.
@@ -50,7 +49,7 @@ pub struct TransportFigures {
 }
 
 /// The run's deadline misses, or its error.
-fn misses(records: &[crate::sil::record::PeriodRecord], e: Option<crate::sil::record::RunError>) -> Result<usize, CliError> {
+fn misses(records: &[rig::record::PeriodRecord], e: Option<rig::record::RunError>) -> Result<usize, CliError> {
     match e {
         Some(e) => Err(CliError::Run(e)),
         None => Ok(records.iter().filter(|r| r.deadline_miss).count()),
@@ -84,7 +83,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
     // Lockstep over iceoryx2 (one firmware process per run, spawned before the clock starts).
     let mut rates = Vec::new();
     let mut missed = 0;
-    let mut timings = crate::sil::ipc_link::LinkTimings::default();
+    let mut timings = rig::ipc_link::LinkTimings::default();
     for _ in 0..args.repeat {
         let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
         let t = Instant::now();
@@ -155,7 +154,7 @@ fn summarise(
     rates: Vec<f64>,
     periods: usize,
     deadline_misses: usize,
-    timings: Option<&crate::sil::ipc_link::LinkTimings>,
+    timings: Option<&rig::ipc_link::LinkTimings>,
     target: f64,
 ) -> TransportFigures {
     let mut sorted = rates.clone();

@@ -16,13 +16,13 @@ use crate::{
     error::CliError,
     output::{OutputSet, StreamedCsv},
     plot,
-    sil::{
-        ipc_link::Percentiles,
-        record::{PeriodRecord, RunError},
-        rig::{FirmwareLink, run_loop_streaming},
-        scenario::Scenario,
-        summary::RunSummary,
-    },
+};
+use rig::{
+    record::{PeriodRecord, RunError},
+    rig::{FirmwareLink, run_loop_streaming},
+    scenario::Scenario,
+    summary::Percentiles,
+    summary::RunSummary,
 };
 
 /// Loads the scenario and applies the overrides.

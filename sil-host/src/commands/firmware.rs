@@ -2,13 +2,10 @@
 //! answering sensor frames over iceoryx2); `sil-host run` spawns it.
 
 use super::closed_loop::load_scenario;
-use crate::{
-    cli::FirmwareArgs,
-    error::CliError,
-    sil::{
-        firmware_process::{self, Ending},
-        ipc::check_rig_name,
-    },
+use crate::{cli::FirmwareArgs, error::CliError};
+use rig::{
+    firmware_process::{self, Ending},
+    ipc::check_rig_name,
 };
 
 /// Runs `sil-host firmware`: exit 0 when the plant ends the run, 3 when the plant died.

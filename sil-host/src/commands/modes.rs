@@ -1,6 +1,6 @@
 //! `sil-host modes`: the map of contact modes over `(theta1, theta1_dot)` with the
 //! tip on the belt (MODEL.md experiment 1, paper Fig. 2), computed by
-//! [`crate::modes`]; this command writes `modes.csv`, draws `modes.svg` and prints
+//! [`analyses::modes`]; this command writes `modes.csv`, draws `modes.svg` and prints
 //! the counts.
 
 use std::{io::Write, path::Path};
@@ -10,7 +10,8 @@ use plotters::prelude::*;
 use serde::Serialize;
 use shared::{ContactMode, ElbowBranch};
 
-use crate::{cli::ModesArgs, commands::parse_range, error::CliError, modes::*, output::OutputSet};
+use crate::{cli::ModesArgs, commands::parse_range, error::CliError, output::OutputSet};
+use analyses::modes::*;
 
 #[derive(Serialize)]
 struct CsvRow {

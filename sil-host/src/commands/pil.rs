@@ -1,6 +1,6 @@
 //! `sil-host pil`: a processor-in-the-loop run. The MCU image runs in QEMU, or
 //! on a board at the end of a serial port (hardware in the loop, `--serial`),
-//! and closes the loop with the plant over its USART1 ([`crate::sil::pil_link`]);
+//! and closes the loop with the plant over its USART1 ([`rig::pil_link`]);
 //! the plant, the scenario and the outputs are those of `sil-host run`, plus the
 //! image's counts per step (instructions under QEMU, cycles on silicon) and, under
 //! QEMU, its defmt log.
@@ -18,14 +18,15 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
-    sil::{
-        pil_link::{self, BAUD_RANGE, CountUnit, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget, Spread},
-        record::PeriodRecord,
-        rig::FirmwareLink,
-        scenario::Scenario,
-        setup::{firmware_config, plant_for},
-        summary::{PilFigures, RunSummary},
-    },
+};
+use rig::{
+    pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
+    record::PeriodRecord,
+    rig::FirmwareLink,
+    scenario::Scenario,
+    setup::{firmware_config, plant_for},
+    summary::{CountUnit, Spread},
+    summary::{PilFigures, RunSummary},
 };
 
 /// Checks the arguments that say where the image runs.

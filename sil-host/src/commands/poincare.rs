@@ -24,16 +24,16 @@ use crate::{
         simulate::{InitialCondition, chosen_initial_condition, impact_law},
     },
     error::CliError,
-    initial,
     output::{OutputSet, progress_bar, write_csv},
-    plant::{Plant, SimConfig},
     plot::{self, colors, plot_err},
-    poincare::{
-        self, Band, PoincareConfig, PointResult,
-        classify::{Class, ClassifyConfig},
-        lyapunov::LyapunovConfig,
-    },
 };
+use analyses::poincare::{
+    self, Band, PoincareConfig, PointResult,
+    classify::{Class, ClassifyConfig},
+    lyapunov::LyapunovConfig,
+};
+use plant::initial;
+use plant::{Plant, SimConfig};
 
 /// One row of `section.csv`.
 #[derive(Debug, Clone, Serialize)]

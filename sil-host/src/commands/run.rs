@@ -13,14 +13,15 @@ use crate::{
     cli::RunArgs,
     error::CliError,
     output::{OutputSet, progress_bar},
-    sil::{
-        in_process::InProcessLink,
-        ipc::{check_rig_name, default_rig_name},
-        ipc_link::{IpcLink, percentiles},
-        rig::FirmwareLink,
-        setup::{firmware_config, plant_for},
-        summary::RunSummary,
-    },
+};
+use rig::{
+    in_process::InProcessLink,
+    ipc::{check_rig_name, default_rig_name},
+    ipc_link::IpcLink,
+    rig::FirmwareLink,
+    setup::{firmware_config, plant_for},
+    summary::RunSummary,
+    summary::percentiles,
 };
 
 /// Runs `sil-host run`.

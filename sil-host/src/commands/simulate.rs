@@ -14,11 +14,11 @@ use shared::Params;
 use crate::{
     cli::{ImpactLawArg, PaperX0, SimulateArgs},
     error::CliError,
-    initial::{self, ProjectionInfo},
     output::{OutputSet, io_err, progress_bar, write_csv},
-    plant::{Counters, Plant, PlantEvent, SimConfig, SimError, impact::ImpactLaw},
     plot::{self, Panel, Series, colors},
 };
+use plant::initial::{self, ProjectionInfo};
+use plant::{Counters, Plant, PlantEvent, SimConfig, SimError, impact::ImpactLaw};
 
 /// One row of `trace.csv`.
 #[derive(Debug, Clone, Serialize)]

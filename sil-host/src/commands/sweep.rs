@@ -26,14 +26,17 @@ use crate::{
     cli::{ImpactLawArg, MergeArgs, ScenarioArgs, SweepArgs},
     error::CliError,
     output::{OutputSet, progress_bar},
-    plant::impact::ImpactLaw,
     sweep::{
-        Axis, InitialCondition, Shard, SweepController, SweepSpec, figures,
-        run::{self, RunRow},
+        figures,
         store::{self, Manifest},
-        summary::{self, Results},
     },
 };
+use analyses::sweep::{
+    Axis, InitialCondition, Shard, SweepController, SweepSpec,
+    run::{self, RunRow},
+    summary::{self, Results},
+};
+use plant::impact::ImpactLaw;
 
 /// The paper's experiment 3: 10 x 181 grid points, two initial conditions, 300 s each.
 const PAPER_GRID_SIMULATED_S: f64 = 10.0 * 181.0 * 2.0 * 300.0;
@@ -144,7 +147,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         })?),
     };
     let spec = SweepSpec {
-        format: crate::sweep::FORMAT,
+        format: analyses::sweep::FORMAT,
         mu: parse_axis("mu", &args.mu, args.mu_step)?,
         v_belt: parse_axis("v-belt", &args.v_belt, args.v_belt_step)?,
         impact_laws: dedup(args.impact_law.iter().map(|l| match l {

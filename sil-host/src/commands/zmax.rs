@@ -1,6 +1,6 @@
 //! `sil-host zmax`: `Z_t,sliding` (MODEL.md experiments 5 and 6), the largest
 //! tangential target the tip reaches with no lift-off, by bisection
-//! ([`crate::zmax`] defines the trial and the criteria), for the PID and the hybrid
+//! ([`analyses::zmax`] defines the trial and the criteria), for the PID and the hybrid
 //! controller from `x0d` and `x0u`, ideal (the paper's setting) or sampled (the
 //! firmware in-process). `--all` runs the eight cases in parallel (rayon).
 //!
@@ -15,15 +15,17 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::{
-    admissible::{p_on_belt, positive_intervals},
     cli::{ControllerArg, ZmaxArgs, ZmaxX0},
     error::CliError,
-    ideal::ControllerKind,
     output::{OutputSet, progress_bar, write_csv},
     plot,
-    sil::scenario::Scenario,
-    zmax::{Bisection, Combination, Criteria, Search, Setting, Trial, X0, default_bracket, max_evaluations, sampled_scenario, search},
 };
+use analyses::admissible::{p_on_belt, positive_intervals};
+use analyses::ideal::ControllerKind;
+use analyses::zmax::{
+    Bisection, Combination, Criteria, Search, Setting, Trial, X0, default_bracket, max_evaluations, sampled_scenario, search,
+};
+use rig::scenario::Scenario;
 
 /// One row of `zmax.csv`.
 #[derive(Debug, Clone, Serialize)]
@@ -172,16 +174,16 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
             None => default_bracket(&base, combo.x0)?,
         };
         sampled_scenario(&base, combo, bracket.1, &criteria)?;
-        crate::ideal::build(&crate::ideal::IdealSetup {
+        analyses::ideal::build(&analyses::ideal::IdealSetup {
             target_z_t: bracket.1,
-            ..crate::ideal::IdealSetup::paper(combo.controller, crate::initial::deg_to_state(combo.x0.paper().deg), bracket.0)
+            ..analyses::ideal::IdealSetup::paper(combo.controller, plant::initial::deg_to_state(combo.x0.paper().deg), bracket.0)
         })
         .map_err(CliError::Sim)?;
         jobs.push((combo, bracket));
     }
     let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_evaluations(b.0, b.1, args.tol))).sum();
     let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
-    let results: Vec<Result<Search, CliError>> = jobs
+    let results: Vec<Result<Search, analyses::AnalysisError>> = jobs
         .par_iter()
         .map(|&(combo, bracket)| {
             let s = search(&base, combo, bracket, args.tol, &criteria, |_| progress.inc(1));

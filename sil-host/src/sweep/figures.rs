@@ -9,13 +9,13 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{
-    SweepSpec,
-    run::{Outcome, RunRow},
-};
 use crate::{
     error::CliError,
     plot::{self, colors, plot_err},
+};
+use analyses::sweep::{
+    SweepSpec,
+    run::{Outcome, RunRow},
 };
 
 /// Colour of an outcome on the map.
@@ -82,13 +82,13 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     root.present().map_err(|e| err(&e))
 }
 
-fn half_step(a: &super::Axis) -> f64 {
+fn half_step(a: &analyses::sweep::Axis) -> f64 {
     if a.len() > 1 { 0.5 * a.step } else { 0.05_f64.max(a.start.abs() * 0.05) }
 }
 
 fn controller_label(spec: &SweepSpec) -> String {
     match (spec.controller, spec.ideal) {
-        (super::SweepController::None, _) => "open loop".into(),
+        (analyses::sweep::SweepController::None, _) => "open loop".into(),
         (c, true) => format!("{} (ideal, continuous time)", c.name()),
         (c, false) => format!("{} (firmware, sampled)", c.name()),
     }

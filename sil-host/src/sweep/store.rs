@@ -16,8 +16,8 @@ use std::{
 
 use serde::{Deserialize, Serialize};
 
-use super::{Shard, SweepSpec, run::RunRow};
 use crate::{error::CliError, output::io_err};
+use analyses::sweep::{Shard, SweepSpec, run::RunRow};
 
 /// File name of the manifest.
 pub const MANIFEST: &str = "sweep.json";
@@ -46,7 +46,7 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
         Err(e) => return Err(CliError::BadInput(format!("cannot read {}: {e}", path.display()))),
     };
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
-        CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), super::FORMAT))
+        CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
     })?;
     Ok(Some(m))
 }

@@ -1,0 +1,459 @@
+//! The two-parameter brute-force bifurcation diagram (MODEL.md experiments 3 and
+//! 7, paper Figs. 3 and 9): a grid in `(mu, v_belt)` (and optionally in the impact
+//! law and its coefficient `e_n`), several initial conditions in contact, a
+//! transient then a record window per run, and the paper's persistent-bouncing
+//! indicator `max theta1_dot > 0` over the record window.
+//!
+//! - [`SweepSpec`]: what a sweep computes (stored as `sweep.json` in its folder);
+//!   the runs are numbered by [`SweepSpec::run_at`] in a fixed order, so shards,
+//!   resumed sweeps and merges agree on every run's index;
+//! - [`run`]: one run (open loop, or closed loop with the firmware step in-process);
+//! - [`summary`]: critical `mu` and belt-speed bands of persistent bouncing.
+//!
+//! The sweep's folder (journal, resume, merge) and its figures are the command
+//! line's (`sil-host`'s `sweep` module).
+
+pub mod run;
+pub mod summary;
+
+use nalgebra::Vector2;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use shared::{ElbowBranch, Params, kinematics::inverse_kinematics};
+
+use plant::impact::ImpactLaw;
+use plant::initial;
+use rig::scenario::Scenario;
+
+/// Version of the `sweep.json` layout; a folder of another version is not resumed.
+pub const FORMAT: u32 = 1;
+
+/// An evenly spaced axis `start, start + step, ..., stop` (both ends included).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Axis {
+    /// First value.
+    pub start: f64,
+    /// Last value (`>= start`).
+    pub stop: f64,
+    /// Spacing (`> 0`; ignored when `start == stop`).
+    pub step: f64,
+}
+
+impl Axis {
+    /// Number of values: `round((stop - start) / step) + 1`.
+    pub fn len(&self) -> usize {
+        if self.stop == self.start { 1 } else { ((self.stop - self.start) / self.step).round() as usize + 1 }
+    }
+
+    /// Whether the axis has no values (never: it has at least `start`).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Value `i`, rounded to 1e-12 so that `0.1 + 2 * 0.1` prints as `0.3`.
+    pub fn value(&self, i: usize) -> f64 {
+        ((self.start + i as f64 * self.step) * 1e12).round() / 1e12
+    }
+
+    /// All values.
+    pub fn values(&self) -> Vec<f64> {
+        (0..self.len()).map(|i| self.value(i)).collect()
+    }
+
+    /// Checks `start <= stop`, `step > 0`, finiteness, that the step divides the
+    /// range (to 1e-6 of a step) and at most `max_len` values; `flag` names the option.
+    ///
+    /// # Errors
+    /// A message naming `flag`.
+    pub fn check(&self, flag: &str, max_len: usize) -> Result<(), String> {
+        if !(self.start.is_finite() && self.stop.is_finite() && self.step.is_finite()) {
+            return Err(format!("--{flag}: values must be finite"));
+        }
+        if self.start > self.stop {
+            return Err(format!("--{flag}: MIN {} > MAX {}", self.start, self.stop));
+        }
+        if self.start == self.stop {
+            return Ok(());
+        }
+        if self.step <= 0.0 {
+            return Err(format!("--{flag}-step must be > 0, got {}", self.step));
+        }
+        let n = (self.stop - self.start) / self.step;
+        if (n - n.round()).abs() > 1e-6 {
+            return Err(format!("--{flag}-step {} does not divide the range {}..{} ({n:.4} steps)", self.step, self.start, self.stop));
+        }
+        if n.round() as usize + 1 > max_len {
+            return Err(format!("--{flag}: {} values, at most {max_len}", n.round() as usize + 1));
+        }
+        Ok(())
+    }
+}
+
+/// What drives the arm during a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum SweepController {
+    /// Open loop, `u = 0` (MODEL.md experiment 3).
+    None,
+    /// The hybrid force/motion controller (experiment 6's; experiment 7).
+    Hybrid,
+    /// The joint-space PID (experiment 5's).
+    Pid,
+}
+
+impl SweepController {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Hybrid => "hybrid",
+            Self::Pid => "pid",
+        }
+    }
+}
+
+/// Everything that determines a sweep's results (`sweep.json`). Two folders with
+/// equal specs hold runs of the same sweep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// Layout version ([`FORMAT`]).
+    pub format: u32,
+    /// Friction coefficients `mu`.
+    pub mu: Axis,
+    /// Belt speeds `v_belt`, m/s.
+    pub v_belt: Axis,
+    /// Impact laws (outermost loop).
+    pub impact_laws: Vec<ImpactLaw>,
+    /// Restitution coefficients `e_n`.
+    pub e_n: Vec<f64>,
+    /// The paper's initial conditions used, by name (`x0a`, `x0d`, `x0u`).
+    pub paper_ics: Vec<String>,
+    /// Number of random initial conditions in contact ([`SweepSpec::initial_conditions`]).
+    pub random_ics: usize,
+    /// Seed of the random initial conditions.
+    pub seed: u64,
+    /// Transient, s (not recorded).
+    pub transient_s: f64,
+    /// Record window after the transient, s.
+    pub record_s: f64,
+    /// What drives the arm.
+    pub controller: SweepController,
+    /// Closed loop: the paper's continuous-time controller with exact measurements
+    /// instead of the firmware sampled as on the MCU.
+    pub ideal: bool,
+    /// Closed loop: the scenario whose controller, timing and sensor sections are
+    /// used (its plant section is replaced per run); `None` in open loop.
+    pub scenario: Option<Scenario>,
+    /// Persistent bouncing is flagged when `max theta1_dot` over the record window
+    /// exceeds this, rad/s (the paper: 0; see [`run`]).
+    pub threshold: f64,
+    /// Integrator relative tolerance.
+    pub rtol: f64,
+    /// Integrator absolute tolerance.
+    pub atol: f64,
+}
+
+/// One initial condition of a sweep.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InitialCondition {
+    /// `x0a`, `x0d`, `x0u`, or `r1`, `r2`, ... for the random ones.
+    pub name: String,
+    /// `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s (before the plant's
+    /// projection onto the belt).
+    pub x0: [f64; 4],
+    /// Elbow branch (`up` or `down`).
+    pub branch: &'static str,
+    /// Height of the tip above the belt as given, m (negative: inside it; the plant
+    /// projects it onto the belt at the same `z_t` and branch).
+    pub height_above_belt: f64,
+}
+
+/// One run: a grid point and an initial condition.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunKey {
+    /// Index in the sweep's order (0-based).
+    pub index: usize,
+    /// Impact law.
+    pub impact_law: ImpactLaw,
+    /// Restitution coefficient.
+    pub e_n: f64,
+    /// Index of `mu` on its axis.
+    pub i_mu: usize,
+    /// Friction coefficient.
+    pub mu: f64,
+    /// Index of `v_belt` on its axis.
+    pub i_v: usize,
+    /// Belt speed, m/s.
+    pub v_belt: f64,
+    /// Index of the initial condition.
+    pub i_ic: usize,
+}
+
+/// Largest belt tangential reach of the tip used for random initial conditions, as a
+/// fraction of the reach `sqrt((2 l)^2 - H^2)` (away from the singular straight arm).
+pub const RANDOM_REACH_FRACTION: f64 = 0.9;
+
+impl SweepSpec {
+    /// The paper's experiment 3 grid: `mu` 0.1 to 1 by 0.1, `v_belt` -1 to -0.1 by
+    /// 0.005, `x0a` and `x0d`, 250 s + 50 s, open loop, Newton with `e_n = 0.2`.
+    pub fn paper() -> Self {
+        Self {
+            format: FORMAT,
+            mu: Axis { start: 0.1, stop: 1.0, step: 0.1 },
+            v_belt: Axis { start: -1.0, stop: -0.1, step: 0.005 },
+            impact_laws: vec![ImpactLaw::Newton],
+            e_n: vec![0.2],
+            paper_ics: vec!["x0a".into(), "x0d".into()],
+            random_ics: 0,
+            seed: 1,
+            transient_s: 250.0,
+            record_s: 50.0,
+            controller: SweepController::None,
+            ideal: false,
+            scenario: None,
+            threshold: DEFAULT_THRESHOLD,
+            rtol: 1e-9,
+            atol: 1e-11,
+        }
+    }
+
+    /// The initial conditions: the paper's named ones, then `random_ics` random ones
+    /// in contact, drawn from `seed` (ChaCha8): the tip on the belt at `z_t` uniform
+    /// within [`RANDOM_REACH_FRACTION`] of the reach, a random elbow branch, at rest
+    /// (like the paper's). The same list is used at every grid point.
+    pub fn initial_conditions(&self) -> Vec<InitialCondition> {
+        let params = Params::<f64>::paper();
+        let mut out: Vec<InitialCondition> = self
+            .paper_ics
+            .iter()
+            .filter_map(|n| [initial::X0A, initial::X0D, initial::X0U].into_iter().find(|ic| ic.name == n))
+            .map(|ic| {
+                let x0 = initial::deg_to_state(ic.deg);
+                let info = initial::describe_projection(&params, x0);
+                InitialCondition { name: ic.name.into(), x0, branch: info.branch, height_above_belt: info.height_above_belt }
+            })
+            .collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let reach = ((2.0 * params.l).powi(2) - params.h * params.h).sqrt() * RANDOM_REACH_FRACTION;
+        for i in 0..self.random_ics {
+            let z_t: f64 = rng.random_range(-reach..reach);
+            let branch = if rng.random_bool(0.5) { ElbowBranch::Up } else { ElbowBranch::Down };
+            // Within the reach by construction, so the inverse kinematics exists.
+            let q = inverse_kinematics(params.l, &Vector2::new(z_t, -params.h), branch).unwrap_or_else(|_| Vector2::zeros());
+            out.push(InitialCondition {
+                name: format!("r{}", i + 1),
+                x0: [q[0], 0.0, q[1], 0.0],
+                branch: branch.name(),
+                height_above_belt: 0.0,
+            });
+        }
+        out
+    }
+
+    /// Number of initial conditions.
+    pub fn n_ics(&self) -> usize {
+        self.paper_ics.len() + self.random_ics
+    }
+
+    /// Number of runs: laws x `e_n` x `mu` x `v_belt` x initial conditions.
+    pub fn n_runs(&self) -> usize {
+        self.impact_laws.len() * self.e_n.len() * self.mu.len() * self.v_belt.len() * self.n_ics()
+    }
+
+    /// Simulated time of one run, s.
+    pub fn run_duration(&self) -> f64 {
+        self.transient_s + self.record_s
+    }
+
+    /// Run `index` (`< n_runs`): the initial condition varies fastest, then `v_belt`,
+    /// `mu`, `e_n`, and the impact law slowest.
+    pub fn run_at(&self, index: usize) -> RunKey {
+        let (n_ic, n_v, n_mu, n_e) = (self.n_ics(), self.v_belt.len(), self.mu.len(), self.e_n.len());
+        let i_ic = index % n_ic;
+        let r = index / n_ic;
+        let i_v = r % n_v;
+        let r = r / n_v;
+        let i_mu = r % n_mu;
+        let r = r / n_mu;
+        let i_e = r % n_e;
+        let i_law = r / n_e;
+        RunKey {
+            index,
+            impact_law: self.impact_laws[i_law],
+            e_n: self.e_n[i_e],
+            i_mu,
+            mu: self.mu.value(i_mu),
+            i_v,
+            v_belt: self.v_belt.value(i_v),
+            i_ic,
+        }
+    }
+
+    /// Checks ranges (axes, lists, windows, tolerances, the initial conditions'
+    /// names, a closed-loop scenario present exactly when closed loop).
+    ///
+    /// # Errors
+    /// A message naming the option.
+    pub fn validate(&self) -> Result<(), String> {
+        self.mu.check("mu", 10_000)?;
+        self.v_belt.check("v-belt", 100_000)?;
+        if self.mu.start < 0.0 {
+            return Err(format!("--mu must be >= 0, got {}", self.mu.start));
+        }
+        if self.v_belt.start < -5.0 || self.v_belt.stop > 5.0 {
+            return Err("--v-belt must lie within +-5 m/s".into());
+        }
+        if self.impact_laws.is_empty() || self.e_n.is_empty() {
+            return Err("--impact-law and --e-n need at least one value".into());
+        }
+        if let Some(e) = self.e_n.iter().find(|e| !(e.is_finite() && (0.0..=1.0).contains(*e))) {
+            return Err(format!("--e-n values must be in [0, 1], got {e}"));
+        }
+        if let Some(n) = self.paper_ics.iter().find(|n| !["x0a", "x0d", "x0u"].contains(&n.as_str())) {
+            return Err(format!("unknown initial condition {n}"));
+        }
+        if self.n_ics() == 0 {
+            return Err("no initial conditions: give --ics or --random-ics".into());
+        }
+        if !(self.transient_s.is_finite() && self.transient_s >= 0.0 && self.record_s.is_finite() && self.record_s > 0.0) {
+            return Err(format!("--transient must be >= 0 and --record > 0, got {} and {}", self.transient_s, self.record_s));
+        }
+        if self.run_duration() > 1e5 {
+            return Err("--transient + --record must be at most 1e5 s".into());
+        }
+        if !(self.threshold.is_finite() && self.threshold >= 0.0) {
+            return Err(format!("--threshold must be finite and >= 0, got {}", self.threshold));
+        }
+        for (name, v) in [("rtol", self.rtol), ("atol", self.atol)] {
+            if !(v.is_finite() && v > 0.0 && v <= 0.1) {
+                return Err(format!("--{name} must be in (0, 0.1], got {v}"));
+            }
+        }
+        if (self.controller == SweepController::None) != self.scenario.is_none() {
+            return Err("a scenario is used exactly in closed loop".into());
+        }
+        if self.ideal && self.controller == SweepController::None {
+            return Err("--ideal needs --controller hybrid or pid".into());
+        }
+        if self.n_runs() > 50_000_000 {
+            return Err(format!("{} runs: at most 5e7", self.n_runs()));
+        }
+        Ok(())
+    }
+}
+
+/// Default indicator threshold, rad/s. The paper flags `max theta1_dot > 0`; in
+/// steady sliding the arm is at rest to rounding and `theta1_dot` sits at about
+/// 5e-15 rad/s, so an exact `> 0` would flag resting arms at random.
+pub const DEFAULT_THRESHOLD: f64 = 1e-6;
+
+/// `K/N` of `--shard`: this process computes the runs whose index is `K` modulo
+/// `N` (`0 <= K < N`; Slurm's `SLURM_ARRAY_TASK_ID` with `--array=0-(N-1)`).
+/// Round robin spreads the costly bouncing region over all shards.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// This shard, `0 <= k < n`.
+    pub k: usize,
+    /// Number of shards, `>= 1`.
+    pub n: usize,
+}
+
+impl Shard {
+    /// The whole sweep.
+    pub const ALL: Shard = Shard { k: 0, n: 1 };
+
+    /// Parses `K/N`.
+    ///
+    /// # Errors
+    /// A message when the text is not `K/N` with `0 <= K < N`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        let bad = || format!("--shard expects K/N with 0 <= K < N (e.g. 0/8), got `{s}`");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (k, n) = (k.trim().parse::<usize>().map_err(|_| bad())?, n.trim().parse::<usize>().map_err(|_| bad())?);
+        if n == 0 || k >= n {
+            return Err(bad());
+        }
+        Ok(Self { k, n })
+    }
+
+    /// Whether run `index` belongs to this shard.
+    pub fn owns(&self, index: usize) -> bool {
+        index % self.n == self.k
+    }
+
+    /// The indices of this shard among `n_runs` runs, ascending.
+    pub fn indices(&self, n_runs: usize) -> impl Iterator<Item = usize> + use<> {
+        (self.k..n_runs).step_by(self.n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn the_paper_grid_has_10_by_181_points() {
+        let s = SweepSpec::paper();
+        assert_eq!((s.mu.len(), s.v_belt.len(), s.n_runs()), (10, 181, 3620));
+        assert_eq!(s.mu.values()[2], 0.3);
+        assert_eq!(s.v_belt.value(180), -0.1);
+        let last = s.run_at(3619);
+        assert_eq!((last.i_mu, last.i_v, last.i_ic, last.mu, last.v_belt), (9, 180, 1, 1.0, -0.1));
+        assert!(s.validate().is_ok());
+    }
+
+    #[test]
+    fn random_initial_conditions_are_on_the_belt_and_reproducible() {
+        let s = SweepSpec { random_ics: 5, ..SweepSpec::paper() };
+        let a = s.initial_conditions();
+        assert_eq!(a, s.initial_conditions());
+        assert_eq!(a.len(), 7);
+        let p = Params::<f64>::paper();
+        for ic in &a[2..] {
+            let z = shared::kinematics::tip_position(p.l, &Vector2::new(ic.x0[0], ic.x0[2]));
+            assert!((z[1] + p.h).abs() < 1e-12, "{ic:?}");
+        }
+        assert_ne!(a[2].x0, a[3].x0);
+    }
+
+    proptest! {
+        /// The shards of a sweep partition its runs: every run in exactly one shard.
+        #[test]
+        fn shards_partition_the_runs(n_runs in 0usize..5000, n in 1usize..40) {
+            let mut owner = vec![0usize; n_runs];
+            for k in 0..n {
+                let shard = Shard { k, n };
+                for i in shard.indices(n_runs) {
+                    prop_assert!(shard.owns(i));
+                    owner[i] += 1;
+                }
+                prop_assert_eq!(shard.indices(n_runs).count(), (0..n_runs).filter(|&i| shard.owns(i)).count());
+            }
+            prop_assert!(owner.iter().all(|&c| c == 1));
+        }
+
+        /// Run indices and grid points correspond one to one.
+        #[test]
+        fn run_index_decodes_every_point_once(n_mu in 1usize..5, n_v in 1usize..7, n_e in 1usize..3, ics in 1usize..4) {
+            let s = SweepSpec {
+                mu: Axis { start: 0.1, stop: 0.1 * n_mu as f64, step: 0.1 },
+                v_belt: Axis { start: -1.0, stop: -1.0 + 0.1 * (n_v - 1) as f64, step: 0.1 },
+                e_n: (0..n_e).map(|i| i as f64 * 0.1).collect(),
+                impact_laws: vec![ImpactLaw::Newton, ImpactLaw::Poisson],
+                paper_ics: vec![],
+                random_ics: ics,
+                ..SweepSpec::paper()
+            };
+            let mut seen = std::collections::HashSet::new();
+            for i in 0..s.n_runs() {
+                let k = s.run_at(i);
+                prop_assert!(seen.insert((k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
+            }
+            prop_assert_eq!(seen.len(), 2 * n_e * n_mu * n_v * ics);
+        }
+    }
+}

@@ -1,0 +1,330 @@
+//! One run of a sweep: a grid point and an initial condition, a transient, then
+//! the record window in which the paper's indicator is measured.
+//!
+//! Open loop (`u = 0`) the plant takes its own integrator steps: it is advanced
+//! in [`CHUNK_S`] intervals only to check for an interruption between them.
+//! Closed loop, the firmware step runs in-process, sampled as on the MCU, through
+//! the SIL rig's [`PeriodLoop`] (sensors, quantisation, zero-order hold, the
+//! scenario's delay); with `--ideal`, the paper's continuous-time law with exact
+//! measurements ([`crate::ideal`]) is evaluated inside the plant's integration,
+//! which again takes its own steps (advanced in [`CHUNK_S`] intervals), with the
+//! same references, gains and `f_n*` as the scenario's.
+//!
+//! Measured over the record window:
+//! - `theta1_dot_max`, the paper's indicator, and `z_n_max`, the highest tip
+//!   position: maxima over the continuous trajectory, taken inside the
+//!   integrator's steps ([`plant::Extrema`]), not at samples;
+//! - lift-offs: every time the tip leaves the belt (a lift-off from sliding or
+//!   sticking, an impact without collision into flight, or a bounce at touchdown);
+//!   touchdowns and impacts without collision are counted too.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use serde::{Deserialize, Serialize};
+use shared::{ContactMode, Params};
+
+use super::{InitialCondition, RunKey, SweepController, SweepSpec};
+use crate::ideal::{self, ControllerKind, IdealLaw, IdealSetup};
+use plant::{Counters, Plant, SimConfig};
+use rig::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario};
+
+/// Open loop: the length of the intervals the plant is advanced by, s (a Ctrl-C
+/// is noticed between them).
+pub const CHUNK_S: f64 = 10.0;
+
+/// Closed loop: control periods between checks for a Ctrl-C.
+const PERIODS_PER_CHECK: usize = 1000;
+
+/// How a run ended up in its record window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Persistent bouncing: the indicator above the threshold and the tip leaving
+    /// the belt in the record window.
+    Bouncing,
+    /// The indicator above the threshold without any lift-off in the record window
+    /// (an oscillation on the belt, or a swing in the air that never lands).
+    Oscillating,
+    /// Lift-offs in the record window with the indicator at or below the threshold.
+    LiftOffOnly,
+    /// At rest in contact (steady sliding or sticking): no bouncing.
+    Contact,
+    /// Off the belt and at rest (the tip left it and stayed in the air).
+    Flight,
+    /// Closed loop: the firmware latched its safe state (the run stops there), or
+    /// the ideal law met a fault (singular arm, unreachable reference) and output
+    /// zero torque from then on.
+    SafeState,
+    /// The simulation failed (see `error`).
+    Failed,
+}
+
+impl Outcome {
+    /// snake_case name, as in the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bouncing => "bouncing",
+            Self::Oscillating => "oscillating",
+            Self::LiftOffOnly => "lift_off_only",
+            Self::Contact => "contact",
+            Self::Flight => "flight",
+            Self::SafeState => "safe_state",
+            Self::Failed => "failed",
+        }
+    }
+
+    /// Every outcome, in legend order.
+    pub const ALL: [Outcome; 7] =
+        [Self::Bouncing, Self::Oscillating, Self::LiftOffOnly, Self::Contact, Self::Flight, Self::SafeState, Self::Failed];
+}
+
+/// One row of `runs.csv` / `sweep.csv`: a run's result. Every field is a function
+/// of the sweep's spec and the run's index (no timings), so a resumed, sharded or
+/// merged sweep gives the same rows as one uninterrupted run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRow {
+    /// Run index ([`SweepSpec::run_at`]).
+    pub index: usize,
+    /// Impact law (`newton`, `poisson`).
+    pub impact_law: String,
+    /// Restitution coefficient.
+    pub e_n: f64,
+    /// Friction coefficient.
+    pub mu: f64,
+    /// Belt speed, m/s.
+    pub v_belt: f64,
+    /// Initial condition.
+    pub ic: String,
+    /// [`Outcome`] name.
+    pub outcome: Outcome,
+    /// The paper's flag: `theta1_dot_max > threshold`.
+    pub bouncing: bool,
+    /// The paper's indicator: largest `theta1_dot` over the record window, rad/s.
+    pub theta1_dot_max: f64,
+    /// When it occurred, s.
+    pub t_theta1_dot_max: f64,
+    /// Times the tip left the belt in the record window.
+    pub lift_offs: u64,
+    /// Touchdowns (impacts) in the record window.
+    pub touchdowns: u64,
+    /// Impacts without collision (the Painlevé resolution) in the record window.
+    pub impacts_without_collision: u64,
+    /// Highest tip position `z_n` over the record window, m.
+    pub z_n_max: f64,
+    /// Highest tip height above the belt, `z_n_max + H`, m.
+    pub tip_height_max: f64,
+    /// Contact mode at the end.
+    pub final_mode: String,
+    /// Times the tip left the belt during the transient.
+    pub lift_offs_transient: u64,
+    /// Model evaluations of the plant (a deterministic cost measure).
+    pub rhs_evaluations: u64,
+    /// Why the run failed (empty if it did not).
+    pub error: String,
+}
+
+/// Lift-offs in `c`: lift-off events (including impacts without collision into
+/// flight) and bounces.
+fn lift_offs(c: &Counters) -> u64 {
+    c.lift_offs + c.bounces
+}
+
+/// Simulates run `key` from initial condition `ic`. Returns `None` when `stop` was
+/// set before the run finished (nothing is recorded for it).
+pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &AtomicBool) -> Option<RunRow> {
+    let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..Params::paper() };
+    let sim = SimConfig { rtol: spec.rtol, atol: spec.atol, impact_law: key.impact_law, e_n: key.e_n, ..SimConfig::default() };
+    let mut row = RunRow {
+        index: key.index,
+        impact_law: key.impact_law.name().into(),
+        e_n: key.e_n,
+        mu: key.mu,
+        v_belt: key.v_belt,
+        ic: ic.name.clone(),
+        outcome: Outcome::Failed,
+        bouncing: false,
+        theta1_dot_max: f64::NAN,
+        t_theta1_dot_max: f64::NAN,
+        lift_offs: 0,
+        touchdowns: 0,
+        impacts_without_collision: 0,
+        z_n_max: f64::NAN,
+        tip_height_max: f64::NAN,
+        final_mode: String::new(),
+        lift_offs_transient: 0,
+        rhs_evaluations: 0,
+        error: String::new(),
+    };
+    let built = match (spec.ideal, closed_loop_scenario(spec, key, ic)) {
+        (true, Some(s)) => ideal::build(&ideal_setup(&s, ic, sim)).map(|(p, law)| (p, Some(law))),
+        _ => Plant::new(params, sim, ic.x0, 0.0, [0.0, 0.0]).map(|p| (p, None)),
+    };
+    let (mut plant, law) = match built {
+        Ok(p) => p,
+        Err(e) => {
+            row.error = e.to_string();
+            return Some(row);
+        }
+    };
+    let ended = match (spec.controller, &law) {
+        (SweepController::None, _) => windows(spec, &mut plant, stop, |p, dt| p.advance([0.0, 0.0], dt).map(drop)),
+        (_, Some(law)) => windows(spec, &mut plant, stop, |p, dt| p.advance_with(law, dt).map(drop)),
+        _ => closed_loop(spec, key, ic, &mut plant, stop),
+    };
+    let ended = match (ended, law.as_ref().and_then(IdealLaw::fault)) {
+        (Ended::Done(start), Some(fault)) => Ended::Stopped { start, error: format!("ideal law: {fault}"), safe_state: true },
+        (e, _) => e,
+    };
+    let (start, error) = match ended {
+        Ended::Interrupted => return None,
+        Ended::Done(start) => (start, None),
+        Ended::Stopped { start, error, safe_state } => (start, Some((error, safe_state))),
+    };
+    let end = *plant.counters();
+    row.lift_offs_transient = start.map_or(lift_offs(&end), |s| lift_offs(&s));
+    row.rhs_evaluations = plant.rhs_evaluations();
+    row.final_mode = plant.mode().name().into();
+    if let Some(s) = start {
+        row.lift_offs = lift_offs(&end) - lift_offs(&s);
+        row.touchdowns = end.touchdowns - s.touchdowns;
+        row.impacts_without_collision = end.impacts_without_collision - s.impacts_without_collision;
+    }
+    if let Some(e) = plant.extrema() {
+        row.theta1_dot_max = e.theta1_dot_max;
+        row.t_theta1_dot_max = e.t_theta1_dot_max;
+        row.z_n_max = e.z_n_max;
+        row.tip_height_max = e.z_n_max + params.h;
+        row.bouncing = e.theta1_dot_max > spec.threshold;
+    }
+    row.outcome = match error {
+        Some((e, safe)) => {
+            row.error = e;
+            if safe { Outcome::SafeState } else { Outcome::Failed }
+        }
+        None => match (row.bouncing, row.lift_offs > 0) {
+            (true, true) => Outcome::Bouncing,
+            (true, false) => Outcome::Oscillating,
+            (false, true) => Outcome::LiftOffOnly,
+            (false, false) if plant.mode() == ContactMode::Flight => Outcome::Flight,
+            (false, false) => Outcome::Contact,
+        },
+    };
+    Some(row)
+}
+
+/// How a run's simulation ended; `start` holds the counters at the start of the
+/// record window (`None` if it was not reached).
+enum Ended {
+    Done(Option<Counters>),
+    Stopped { start: Option<Counters>, error: String, safe_state: bool },
+    Interrupted,
+}
+
+/// Advances `plant` by `duration` s in [`CHUNK_S`] intervals with `advance(plant, dt)`.
+fn advance_by(
+    plant: &mut Plant,
+    duration: f64,
+    stop: &AtomicBool,
+    advance: &mut impl FnMut(&mut Plant, f64) -> Result<(), plant::SimError>,
+) -> Result<bool, String> {
+    let t_end = plant.time() + duration;
+    while t_end - plant.time() > 1e-12 * t_end.max(1.0) {
+        if stop.load(Ordering::Relaxed) {
+            return Ok(false);
+        }
+        let dt = (t_end - plant.time()).min(CHUNK_S);
+        advance(plant, dt).map_err(|e| e.to_string())?;
+    }
+    Ok(true)
+}
+
+/// The transient then the record window, the plant taking its own steps under a
+/// torque law inside `advance` (zero torque, or an ideal controller).
+fn windows(
+    spec: &SweepSpec,
+    plant: &mut Plant,
+    stop: &AtomicBool,
+    mut advance: impl FnMut(&mut Plant, f64) -> Result<(), plant::SimError>,
+) -> Ended {
+    match advance_by(plant, spec.transient_s, stop, &mut advance) {
+        Ok(true) => {}
+        Ok(false) => return Ended::Interrupted,
+        Err(error) => return Ended::Stopped { start: None, error, safe_state: false },
+    }
+    plant.track_extrema();
+    let start = Some(*plant.counters());
+    match advance_by(plant, spec.record_s, stop, &mut advance) {
+        Ok(true) => Ended::Done(start),
+        Ok(false) => Ended::Interrupted,
+        Err(error) => Ended::Stopped { start, error, safe_state: false },
+    }
+}
+
+/// The ideal (continuous-time) set-up of a closed-loop run's scenario `s`: its
+/// controller, reference (`z_t*`, move time), `f_n*` and `K'_I`, from `ic`.
+fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetup {
+    IdealSetup {
+        controller: if s.controller.kind == "pid" { ControllerKind::Pid } else { ControllerKind::Hybrid },
+        x0: ic.x0,
+        mu: s.plant.mu,
+        v_belt: s.plant.v_belt,
+        target_z_t: s.controller.target_z_t,
+        move_time_s: s.controller.move_time_s,
+        duration_s: s.timing.duration_s,
+        f_n_ref: s.controller.f_n_ref,
+        hybrid_ki: s.controller.hybrid_ki,
+        sample_dt: 1.0 / s.timing.rate_hz,
+        stop_at_lift_off: false,
+        sim,
+    }
+}
+
+/// The scenario of a closed-loop run: the spec's, with the run's plant (its
+/// `mu`, `v_belt`, impact law, `e_n`, tolerances), the controller asked for, the
+/// firmware's friction estimate `mu_hat = mu` (the paper's controller knows `mu`),
+/// the run's length, and `K'_I = 0` from an elbow-up initial condition (the
+/// paper's gains from `x0u`, MODEL.md experiment 6).
+pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition) -> Option<Scenario> {
+    let mut s = spec.scenario.clone()?;
+    s.plant.mu = key.mu;
+    s.plant.v_belt = key.v_belt;
+    s.plant.impact_law = key.impact_law;
+    s.plant.e_n = key.e_n;
+    s.plant.rtol = spec.rtol;
+    s.plant.atol = spec.atol;
+    s.controller.kind = spec.controller.name().into();
+    s.controller.mu_hat = key.mu;
+    if ic.branch == "up" {
+        s.controller.hybrid_ki = 0.0;
+    }
+    s.timing.duration_s = spec.run_duration();
+    Some(s)
+}
+
+fn closed_loop(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, plant: &mut Plant, stop: &AtomicBool) -> Ended {
+    let Some(s) = closed_loop_scenario(spec, key, ic) else {
+        return Ended::Stopped { start: None, error: "closed loop without a scenario".into(), safe_state: false };
+    };
+    let mut link = match InProcessLink::new(&s) {
+        Ok(l) => l,
+        Err(e) => return Ended::Stopped { start: None, error: e.to_string(), safe_state: false },
+    };
+    let mut periods = PeriodLoop::new(&s, plant);
+    let n = periods.periods_in(spec.run_duration());
+    let k_record = periods.periods_in(spec.transient_s);
+    let mut start = None;
+    for k in 0..n {
+        if k == k_record {
+            plant.track_extrema();
+            start = Some(*plant.counters());
+        }
+        if k % PERIODS_PER_CHECK == 0 && stop.load(Ordering::Relaxed) {
+            return Ended::Interrupted;
+        }
+        if let Err(f) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}) {
+            let safe_state = matches!(f.error, rig::record::RunError::SafeState { .. });
+            return Ended::Stopped { start, error: f.error.to_string(), safe_state };
+        }
+    }
+    Ended::Done(start)
+}

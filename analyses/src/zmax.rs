@@ -1,0 +1,538 @@
+//! `Z_t,sliding` (MODEL.md experiments 5 and 6): the largest tangential target
+//! `z_t*` the tip reaches with no lift-off, by bisection on the target.
+//!
+//! A *trial* runs one closed loop from the initial condition with the target
+//! `z_t*` (the quintic move over `move_time_s`, then held) for `duration_s`, in one
+//! of two settings:
+//! - ideal: the paper's continuous-time laws with exact measurements ([`crate::ideal`]);
+//! - sampled: the firmware in-process (1 kHz, quantised sensors and torques,
+//!   estimation, HARDWARE.md defaults or a given scenario; [`rig`]).
+//!
+//! The target is *reached with no lift-off* when, over the whole run,
+//! 1. the plant never leaves the belt: no lift-off event (located exactly, between
+//!    samples too), no impact without collision, no sample in flight;
+//! 2. the run ends normally (no plant failure, no firmware safe state, no fault of
+//!    the ideal law); and
+//! 3. the tip settles: `|z_t - z_t*| <= settle_tol_m` at every sample of the last
+//!    `settle_window_s` of the run.
+//!
+//! The bisection assumes this is true below some target and false above it; it
+//! keeps a bracket `[lo, hi]` with `lo` reached and `hi` not, halved until
+//! `hi - lo <= tol`, and reports `lo` (a target verified to be reached). If the
+//! lower end of the bracket already fails there is no limit ([`Bisection::LowerFails`]);
+//! if the upper end is reached the limit is at least that ([`Bisection::UpperReached`]).
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::{
+    error::AnalysisError,
+    ideal::{self, ControllerKind, IdealSetup},
+};
+use plant::initial::{PaperInitialCondition, X0D, X0U, deg_to_state};
+use plant::{EventKind, Plant, SimConfig};
+use rig::{in_process, scenario::Scenario};
+
+/// Where the controller runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Setting {
+    /// Continuous time, exact measurements, no saturation (the paper's).
+    Ideal,
+    /// The firmware, sampled with quantised sensors and torques (HARDWARE.md).
+    Sampled,
+}
+
+impl Setting {
+    /// `ideal` or `sampled`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Ideal => "ideal",
+            Self::Sampled => "sampled",
+        }
+    }
+}
+
+/// The paper's initial conditions of experiments 5 and 6.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum X0 {
+    /// `x0d = [-11.4 deg, 0, -35.1 deg, 0]`, elbow down.
+    D,
+    /// `x0u = [-35.1 deg, 0, -11.4 deg, 0]`, elbow up.
+    U,
+}
+
+impl X0 {
+    /// The initial condition in degrees.
+    pub fn paper(self) -> PaperInitialCondition {
+        match self {
+            Self::D => X0D,
+            Self::U => X0U,
+        }
+    }
+
+    /// `d` or `u` (as in scenario files).
+    pub fn letter(self) -> &'static str {
+        match self {
+            Self::D => "d",
+            Self::U => "u",
+        }
+    }
+
+    /// The paper's `K'_I` of the hybrid law from this initial condition, 1/s.
+    pub fn hybrid_ki(self) -> f64 {
+        match self {
+            Self::D => 650.0,
+            Self::U => 0.0,
+        }
+    }
+}
+
+/// One of the eight cases of `sil-host zmax --all`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+pub struct Combination {
+    /// The controller.
+    pub controller: ControllerKind,
+    /// The initial condition.
+    pub x0: X0,
+    /// Ideal or sampled.
+    pub setting: Setting,
+}
+
+impl Combination {
+    /// All eight: 2 controllers x 2 initial conditions x ideal/sampled.
+    pub fn all() -> Vec<Self> {
+        let mut v = Vec::new();
+        for controller in [ControllerKind::Pid, ControllerKind::Hybrid] {
+            for x0 in [X0::D, X0::U] {
+                for setting in [Setting::Ideal, Setting::Sampled] {
+                    v.push(Self { controller, x0, setting });
+                }
+            }
+        }
+        v
+    }
+
+    /// A file-name stem, e.g. `pid-x0d-ideal`.
+    pub fn stem(&self) -> String {
+        format!("{}-x0{}-{}", self.controller.name(), self.x0.letter(), self.setting.name())
+    }
+}
+
+/// What "reached with no lift-off" means (module docs) and how long a trial runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Criteria {
+    /// Run length, s.
+    pub duration_s: f64,
+    /// Duration of the move of `z_t*` from the initial tip position to the target, s.
+    pub move_time_s: f64,
+    /// Largest `|z_t - z_t*|` allowed over the settle window, m.
+    pub settle_tol_m: f64,
+    /// The last part of the run where the tip must be within `settle_tol_m`, s.
+    pub settle_window_s: f64,
+}
+
+impl Default for Criteria {
+    fn default() -> Self {
+        Self { duration_s: 10.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 1.0 }
+    }
+}
+
+impl Criteria {
+    /// Checks ranges: finite, `duration_s > move_time_s > 0`, `settle_tol_m > 0`,
+    /// `0 < settle_window_s <= duration_s - move_time_s`.
+    ///
+    /// # Errors
+    /// [`AnalysisError::BadInput`] naming the flag.
+    pub fn validate(&self) -> Result<(), AnalysisError> {
+        let bad = |what: String| Err(AnalysisError::BadInput(what));
+        if !(self.move_time_s.is_finite() && self.move_time_s > 0.0) {
+            return bad(format!("move time {} s must be finite and > 0", self.move_time_s));
+        }
+        if !(self.duration_s.is_finite() && self.duration_s > self.move_time_s && self.duration_s <= 1e4) {
+            return bad(format!(
+                "--duration {} s must be longer than the {} s move (and at most 1e4 s)",
+                self.duration_s, self.move_time_s
+            ));
+        }
+        if !(self.settle_tol_m.is_finite() && self.settle_tol_m > 0.0) {
+            return bad(format!("--settle-tol {} m must be finite and > 0", self.settle_tol_m));
+        }
+        if !(self.settle_window_s.is_finite() && self.settle_window_s > 0.0 && self.settle_window_s <= self.duration_s - self.move_time_s) {
+            return bad(format!(
+                "--settle-window {} s must be > 0 and at most the run after the move ({} s)",
+                self.settle_window_s,
+                self.duration_s - self.move_time_s
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One row of a trial's time history (for figures).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TraceRow {
+    /// Time, s.
+    pub t: f64,
+    /// Tip `z_t`, m.
+    pub z_t: f64,
+    /// Reference `z_t*`, m.
+    pub z_t_ref: f64,
+    /// Normal force `f_n`, N (true).
+    pub f_n: f64,
+    /// Motor torque `u1`, N m.
+    pub u1: f64,
+    /// Motor torque `u2`, N m.
+    pub u2: f64,
+    /// Contact mode.
+    pub mode: &'static str,
+}
+
+/// The outcome of one trial.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Trial {
+    /// The case.
+    pub combination: Combination,
+    /// Target `z_t*`, m.
+    pub target_z_t: f64,
+    /// Reached with no lift-off (module docs).
+    pub reached: bool,
+    /// Lift-offs seen (stopped at the first one).
+    pub lift_offs: u64,
+    /// Impacts without collision seen.
+    pub impacts_without_collision: u64,
+    /// Time of the first lift-off or impact without collision, s.
+    pub first_lift_off_s: Option<f64>,
+    /// Largest `|z_t - z_t*|` over the settle window, m (NaN if the run stopped before it).
+    pub settle_error_m: f64,
+    /// Why the run stopped early (failure, safe state, law fault), if it did for
+    /// another reason than a lift-off.
+    pub failure: Option<String>,
+    /// Simulated time, s.
+    pub simulated_s: f64,
+    /// Wall-clock time of the trial, s.
+    pub wall_s: f64,
+}
+
+impl Trial {
+    /// Why the target was not reached (`None` if it was): `lift-off at t = .. s`,
+    /// `impact without collision at ..`, the failure, or `not settled: ..`.
+    pub fn why_not(&self) -> Option<String> {
+        if self.reached {
+            return None;
+        }
+        Some(match (self.first_lift_off_s, &self.failure) {
+            (Some(t), _) if self.lift_offs > 0 => format!("lift-off at t = {t:.3} s"),
+            (Some(t), _) => format!("impact without collision at t = {t:.3} s"),
+            (None, Some(f)) => f.clone(),
+            (None, None) => format!("not settled: |z_t - z_t*| up to {:.2} mm over the settle window", self.settle_error_m * 1e3),
+        })
+    }
+}
+
+fn settle_error(rows: &[TraceRow], target: f64, c: &Criteria) -> f64 {
+    let from = c.duration_s - c.settle_window_s - 1e-9;
+    let last = rows.last().map_or(0.0, |r| r.t);
+    // The sampled run's last record is one period (at most 4 ms) before the end.
+    if last < c.duration_s - 0.01 {
+        return f64::NAN;
+    }
+    rows.iter().filter(|r| r.t >= from).map(|r| (r.z_t - target).abs()).fold(0.0, f64::max)
+}
+
+/// Runs one trial; returns its outcome and time history. `base` is the scenario the
+/// sampled setting starts from (its controller, initial condition, `K'_I` (the
+/// paper's: 650 from `x0d`, 0 from `x0u`), target, move time and run length are set
+/// here); the ideal setting uses the paper's set-up with `base`'s `mu`, `v_belt` and
+/// plant settings. A trial stops at the first lift-off.
+///
+/// # Errors
+/// [`AnalysisError`] for bad input (a target out of reach, an invalid scenario).
+pub fn trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
+    let started = Instant::now();
+    let (mut trial, rows) = match combo.setting {
+        Setting::Ideal => ideal_trial(base, combo, target, c)?,
+        Setting::Sampled => sampled_trial(base, combo, target, c)?,
+    };
+    trial.settle_error_m = settle_error(&rows, target, c);
+    trial.reached = trial.lift_offs == 0
+        && trial.impacts_without_collision == 0
+        && trial.failure.is_none()
+        && rows.iter().all(|r| r.mode != "flight")
+        && trial.settle_error_m <= c.settle_tol_m;
+    trial.simulated_s = rows.last().map_or(0.0, |r| r.t);
+    trial.wall_s = started.elapsed().as_secs_f64();
+    Ok((trial, rows))
+}
+
+fn empty_trial(combo: Combination, target: f64) -> Trial {
+    Trial {
+        combination: combo,
+        target_z_t: target,
+        reached: false,
+        lift_offs: 0,
+        impacts_without_collision: 0,
+        first_lift_off_s: None,
+        settle_error_m: f64::NAN,
+        failure: None,
+        simulated_s: 0.0,
+        wall_s: 0.0,
+    }
+}
+
+fn sim_config(base: &Scenario) -> SimConfig {
+    let p = &base.plant;
+    SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, ..SimConfig::default() }
+}
+
+fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
+    let mut setup = IdealSetup::paper(combo.controller, deg_to_state(combo.x0.paper().deg), target);
+    setup.mu = base.plant.mu;
+    setup.v_belt = base.plant.v_belt;
+    setup.f_n_ref = base.controller.f_n_ref;
+    setup.hybrid_ki = combo.x0.hybrid_ki();
+    setup.move_time_s = c.move_time_s;
+    setup.duration_s = c.duration_s;
+    setup.sample_dt = 1.0 / base.timing.rate_hz;
+    setup.stop_at_lift_off = true;
+    setup.sim = sim_config(base);
+    let run = ideal::simulate(&setup, |_| {}).map_err(AnalysisError::Sim)?;
+    let rows = run
+        .samples
+        .iter()
+        .map(|s| TraceRow { t: s.t, z_t: s.z_t, z_t_ref: s.z_t_ref, f_n: s.f_n, u1: s.u1, u2: s.u2, mode: s.mode })
+        .collect();
+    let mut t = empty_trial(combo, target);
+    t.lift_offs = run.lift_offs;
+    t.impacts_without_collision = run.impacts_without_collision;
+    t.first_lift_off_s = run.first_lift_off_s;
+    let lifted = run.first_lift_off_s.is_some();
+    t.failure = match (&run.error, run.law_fault) {
+        (Some(e), _) if !lifted => Some(format!("plant: {e}")),
+        (_, Some(f)) if !lifted => Some(format!("law: {f}")),
+        _ => None,
+    };
+    Ok((t, rows))
+}
+
+/// The scenario of a sampled trial.
+pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<Scenario, AnalysisError> {
+    let mut s = base.clone();
+    s.name = combo.stem();
+    s.controller.kind = combo.controller.name().into();
+    s.plant.x0 = combo.x0.letter().into();
+    s.controller.hybrid_ki = combo.x0.hybrid_ki();
+    s.controller.target_z_t = target;
+    s.controller.move_time_s = c.move_time_s;
+    s.timing.duration_s = c.duration_s;
+    s.validate()?;
+    Ok(s)
+}
+
+fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
+    let s = sampled_scenario(base, combo, target, c)?;
+    let mut t = empty_trial(combo, target);
+    let lifted = std::cell::Cell::new(false);
+    let (records, failure) = in_process::run_observed(
+        &s,
+        |_, _| !lifted.get(),
+        |events| {
+            for e in events {
+                match e.kind {
+                    EventKind::LiftOff => t.lift_offs += 1,
+                    EventKind::ImpactWithoutCollision => t.impacts_without_collision += 1,
+                    _ => continue,
+                }
+                t.first_lift_off_s.get_or_insert(e.t);
+                lifted.set(true);
+            }
+        },
+    );
+    let rows: Vec<TraceRow> = records
+        .iter()
+        .map(|r| TraceRow { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u1: r.u1_cmd, u2: r.u2_cmd, mode: r.mode })
+        .collect();
+    if t.first_lift_off_s.is_none()
+        && let Some(r) = records.iter().find(|r| r.lift_off_true)
+    {
+        t.first_lift_off_s = Some(r.t);
+        t.lift_offs = t.lift_offs.max(1);
+    }
+    if !lifted.get()
+        && let Some(e) = failure
+    {
+        t.failure = Some(e.to_string());
+    }
+    Ok((t, rows))
+}
+
+/// The outcome of a bisection for the largest `x` with `ok(x)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "outcome", rename_all = "snake_case")]
+pub enum Bisection {
+    /// `ok(lo)` and not `ok(hi)` with `hi - lo <= tol`: the limit is `lo`.
+    Found {
+        /// Largest value found ok.
+        lo: f64,
+        /// Smallest value found not ok.
+        hi: f64,
+        /// Evaluations of the predicate.
+        evaluations: u32,
+    },
+    /// The lower end of the bracket is already not ok: no limit in the bracket.
+    LowerFails {
+        /// The lower end.
+        lo: f64,
+        /// Evaluations.
+        evaluations: u32,
+    },
+    /// The upper end is ok: the limit is at least `hi`.
+    UpperReached {
+        /// The upper end.
+        hi: f64,
+        /// Evaluations.
+        evaluations: u32,
+    },
+}
+
+impl Bisection {
+    /// The largest value verified ok (`None` if the lower end fails).
+    pub fn limit(&self) -> Option<f64> {
+        match *self {
+            Self::Found { lo, .. } => Some(lo),
+            Self::LowerFails { .. } => None,
+            Self::UpperReached { hi, .. } => Some(hi),
+        }
+    }
+
+    /// Evaluations of the predicate.
+    pub fn evaluations(&self) -> u32 {
+        match *self {
+            Self::Found { evaluations, .. } | Self::LowerFails { evaluations, .. } | Self::UpperReached { evaluations, .. } => evaluations,
+        }
+    }
+}
+
+/// Evaluations [`bisect_largest`] makes on `[lo, hi]` to tolerance `tol` at most.
+pub fn max_evaluations(lo: f64, hi: f64, tol: f64) -> u32 {
+    2 + ((hi - lo) / tol).log2().ceil().max(0.0) as u32
+}
+
+/// Bisection for the largest `x` in `[lo, hi]` with `ok(x)`, assuming `ok` is true
+/// below a threshold and false above it: `ok(lo)`, then `ok(hi)`, then halving
+/// until the bracket is at most `tol` wide (`lo < hi`, `tol > 0`, all finite; the
+/// caller checks). For a non-monotone `ok` it returns one switching point.
+///
+/// # Errors
+/// The first error of `ok`.
+pub fn bisect_largest<E>(mut lo: f64, mut hi: f64, tol: f64, mut ok: impl FnMut(f64) -> Result<bool, E>) -> Result<Bisection, E> {
+    let mut evaluations = 1;
+    if !ok(lo)? {
+        return Ok(Bisection::LowerFails { lo, evaluations });
+    }
+    evaluations += 1;
+    if ok(hi)? {
+        return Ok(Bisection::UpperReached { hi, evaluations });
+    }
+    while hi - lo > tol {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        evaluations += 1;
+        if ok(mid)? {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(Bisection::Found { lo, hi, evaluations })
+}
+
+/// The default bracket of targets for an initial condition, m: from the initial
+/// tip position (projected onto the belt; the target equal to the start) to 1 mm
+/// short of the end of the reachable belt (where the arm is straight).
+///
+/// # Errors
+/// [`AnalysisError`] if the plant cannot be set up.
+pub fn default_bracket(base: &Scenario, x0: X0) -> Result<(f64, f64), AnalysisError> {
+    let mut params = shared::Params::<f64>::paper();
+    params.mu = base.plant.mu;
+    params.v_belt = base.plant.v_belt;
+    let plant = Plant::new(params, sim_config(base), deg_to_state(x0.paper().deg), 0.0, [0.0; 2])?;
+    let reach = crate::admissible::belt_reach(&params);
+    Ok((plant.tip()[0], reach - 1e-3))
+}
+
+/// The result of the search for one combination.
+#[derive(Debug, Clone, Serialize)]
+pub struct Search {
+    /// The case.
+    pub combination: Combination,
+    /// Bracket searched, m.
+    pub bracket: (f64, f64),
+    /// The bisection's outcome.
+    pub bisection: Bisection,
+    /// `Z_t,sliding`, m (the largest target verified reached), if any.
+    pub z_t_sliding: Option<f64>,
+    /// Every trial, in order.
+    pub trials: Vec<Trial>,
+    /// The time history of the trial at the limit (the lowest target if none is reached).
+    #[serde(skip)]
+    pub limit_trace: Vec<TraceRow>,
+    /// Wall-clock time of the search, s.
+    pub wall_s: f64,
+}
+
+/// Searches `Z_t,sliding` for one combination on `bracket` to `tol` (m);
+/// `on_trial` is called after each trial (progress).
+///
+/// # Errors
+/// [`AnalysisError::BadInput`] for a bad bracket or tolerance; the first trial's bad-input error.
+pub fn search(
+    base: &Scenario,
+    combo: Combination,
+    bracket: (f64, f64),
+    tol: f64,
+    c: &Criteria,
+    mut on_trial: impl FnMut(&Trial),
+) -> Result<Search, AnalysisError> {
+    let (lo, hi) = bracket;
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(AnalysisError::BadInput(format!("bracket [{lo}, {hi}] m must be finite with LO < HI")));
+    }
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(AnalysisError::BadInput(format!("--tol {tol} m must be finite and > 0")));
+    }
+    let started = Instant::now();
+    let mut trials = Vec::new();
+    let mut best: Option<(f64, Vec<TraceRow>)> = None;
+    let mut first_trace = None;
+    let bisection = bisect_largest(lo, hi, tol, |target| {
+        let (t, rows) = trial(base, combo, target, c)?;
+        on_trial(&t);
+        let reached = t.reached;
+        trials.push(t);
+        if reached && best.as_ref().is_none_or(|(b, _)| target > *b) {
+            best = Some((target, rows));
+        } else if first_trace.is_none() {
+            first_trace = Some(rows);
+        }
+        Ok::<bool, AnalysisError>(reached)
+    })?;
+    let limit_trace = best.map(|(_, r)| r).or(first_trace).unwrap_or_default();
+    Ok(Search {
+        combination: combo,
+        bracket,
+        z_t_sliding: bisection.limit(),
+        bisection,
+        trials,
+        limit_trace,
+        wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests;

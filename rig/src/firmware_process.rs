@@ -1,0 +1,278 @@
+//! The firmware process (`sil-host firmware`): the same `firmware` step as the
+//! MCU image, behind a board made of iceoryx2 ports. It answers every sensor
+//! frame with a command and the step's telemetry until the plant ends the run.
+//!
+//! Its clock: in lockstep the frame's (simulated) time: a step starts at the
+//! newest sample it has seen, so frames that piled up while it was stalled are
+//! answered late and counted as overruns; the step's wall time is reported in
+//! `step_ticks` (ns) but does not advance simulated time. In real time, its own
+//! wall clock, re-anchored at every frame it was waiting for (the frame's arrival
+//! is the sample tick, as a timer interrupt is on the MCU): a frame that was
+//! already queued when it looked is one it is late for, timed from the last
+//! anchor. It blocks between frames on the plant's CPU ([`prepare_realtime`]).
+//!
+//! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
+//! iceoryx2's node monitoring says the plant process is dead or gone, the
+//! firmware latches `SafeReason::PeerLost`, publishes a zero-torque command and
+//! exits with code 3.
+//!
+//! The loop is `firmware::board::run` over an iceoryx2 board ([`IpcBoard`]), the
+//! same event loop the MCU images run.
+
+use std::time::{Duration, Instant};
+
+use firmware::{
+    Event, Firmware, Outcome, TickClock,
+    board::{self, Board, FrozenClock},
+};
+use shared::wire::{SensorFrame, frame_flags};
+
+use super::{
+    faults::FaultPlan,
+    firmware_side::step_start_us,
+    ipc::{FirmwarePorts, PeerState, Role, peer_state},
+    realtime::prepare_realtime,
+    record::RunError,
+    scenario::Scenario,
+    setup::firmware_config,
+};
+
+/// How long a firmware started by hand waits for its plant to appear, s.
+pub const WAIT_FOR_PLANT_S: f64 = 120.0;
+
+/// How the firmware process ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ending {
+    /// The plant ended the run.
+    EndOfRun {
+        /// Frames answered.
+        answered: u64,
+        /// Overruns the firmware counted.
+        overruns: u32,
+    },
+    /// The plant died or vanished: the firmware latched its safe state.
+    PeerLost {
+        /// Frames answered before.
+        answered: u64,
+    },
+}
+
+/// A tick counter on the host's monotonic clock, in nanoseconds (wraps every 4.3 s).
+#[derive(Debug, Clone, Copy)]
+pub struct HostClock {
+    origin: Instant,
+}
+
+impl Default for HostClock {
+    fn default() -> Self {
+        Self { origin: Instant::now() }
+    }
+}
+
+impl TickClock for HostClock {
+    fn ticks(&self) -> u32 {
+        self.origin.elapsed().as_nanos() as u32
+    }
+    fn ticks_per_second(&self) -> u32 {
+        1_000_000_000
+    }
+}
+
+/// The step's clock: the host's in real time; frozen in lockstep (simulated
+/// time does not advance while the firmware computes; the wall time is
+/// reported in `step_ticks` instead).
+#[derive(Debug, Clone, Copy)]
+enum ProcessClock {
+    Host(HostClock),
+    Frozen,
+}
+
+impl TickClock for ProcessClock {
+    fn ticks(&self) -> u32 {
+        match self {
+            Self::Host(c) => c.ticks(),
+            Self::Frozen => FrozenClock.ticks(),
+        }
+    }
+    fn ticks_per_second(&self) -> u32 {
+        match self {
+            Self::Host(c) => c.ticks_per_second(),
+            Self::Frozen => FrozenClock.ticks_per_second(),
+        }
+    }
+}
+
+/// The firmware process's board: frames from the plant's iceoryx2 service,
+/// commands and telemetry back (`firmware::board::run` drives it, as it
+/// drives the MCU images).
+struct IpcBoard<'a> {
+    ports: &'a FirmwarePorts,
+    rig: &'a str,
+    realtime: bool,
+    faults: FaultPlan,
+    peer_check: Duration,
+    started: Instant,
+    /// Real time: the wall-clock instant of sample time 0, anchored at the last
+    /// frame the firmware was waiting for.
+    epoch: Option<Instant>,
+    last_seq: Option<u32>,
+    answered: u64,
+    stalled_at: Option<u32>,
+    /// Frames that queued up, in order, and the newest sample time among them.
+    batch: std::collections::VecDeque<SensorFrame>,
+    newest_us: u64,
+    now_us: u64,
+    step_started: Instant,
+    ending: Option<Ending>,
+}
+
+impl IpcBoard<'_> {
+    /// Waits for frames (and checks on the plant while none come); fills the batch.
+    fn wait_for_frames(&mut self) -> Result<Option<Event>, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        // A frame already queued is one the firmware is late for; one it waits for
+        // arrives now.
+        let queued = self.ports.frames.try_next().map_err(transport)?;
+        let was_queued = queued.is_some();
+        let waited_from = Instant::now();
+        let next = match queued {
+            Some(f) => Some(f),
+            None => self.ports.frames.next_before(waited_from + self.peer_check).map_err(transport)?,
+        };
+        let Some(first) = next else {
+            // No frame for a while: is the plant still there?
+            return match peer_state(Role::Plant, self.rig) {
+                PeerState::Alive => Ok(None),
+                PeerState::Absent if self.last_seq.is_none() => {
+                    if self.started.elapsed().as_secs_f64() > WAIT_FOR_PLANT_S {
+                        return Err(RunError::Transport(format!("no plant connected to rig `{}` within {WAIT_FOR_PLANT_S} s", self.rig)));
+                    }
+                    Ok(None)
+                }
+                state => {
+                    eprintln!(
+                        "firmware: the plant process is {} (no frame for {:.1} s after seq {:?}): safe state, zero torque",
+                        if state == PeerState::Dead { "dead" } else { "gone" },
+                        self.peer_check.as_secs_f64(),
+                        self.last_seq
+                    );
+                    self.ending = Some(Ending::PeerLost { answered: self.answered });
+                    self.now_us = 0;
+                    Ok(Some(Event::PeerLost { seq: self.last_seq.map_or(0, |q| q.wrapping_add(1)) }))
+                }
+            };
+        };
+        if self.realtime
+            && (!was_queued || self.epoch.is_none())
+            && let Some(seen) = Instant::now().checked_sub(Duration::from_micros(first.t_us))
+        {
+            self.epoch = Some(seen);
+        }
+        // Injected stall: the process stops (wall clock) at the window's first frame.
+        if let Some(d) = self.faults.stall_starting(first.t_us as f64 * 1e-6)
+            && self.stalled_at != Some(first.seq)
+        {
+            self.stalled_at = Some(first.seq);
+            std::thread::sleep(Duration::from_secs_f64(d));
+        }
+        // Everything that queued up meanwhile, in order: in lockstep the firmware's
+        // clock is the newest sample, so older frames are answered late.
+        self.batch.push_back(first);
+        while let Some(f) = self.ports.frames.try_next().map_err(transport)? {
+            self.batch.push_back(f);
+        }
+        self.newest_us = self.batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
+        Ok(None)
+    }
+}
+
+impl Board for IpcBoard<'_> {
+    type Error = RunError;
+
+    fn next_event(&mut self) -> Result<Event, RunError> {
+        loop {
+            if self.ending.is_some() {
+                return Ok(Event::End);
+            }
+            if let Some(frame) = self.batch.pop_front() {
+                if frame.flags & frame_flags::END_OF_RUN != 0 {
+                    return Ok(Event::End);
+                }
+                let floor_us = match (self.realtime, self.epoch) {
+                    (true, Some(e)) => e.elapsed().as_micros() as u64,
+                    (true, None) => frame.t_us,
+                    (false, _) => self.newest_us,
+                };
+                self.now_us = step_start_us(&self.faults, &frame, floor_us);
+                self.step_started = Instant::now();
+                return Ok(Event::Frame(frame));
+            }
+            if let Some(event) = self.wait_for_frames()? {
+                return Ok(event);
+            }
+        }
+    }
+
+    fn now_us(&self) -> u64 {
+        self.now_us
+    }
+
+    fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let Outcome::Command(command) = outcome else { return Ok(()) };
+        if self.ending.is_some() {
+            // The peer is lost: the zero-torque command goes out for whoever listens.
+            let _ = self.ports.commands.send(*command);
+            return Ok(());
+        }
+        let mut command = *command;
+        if !self.realtime {
+            command.step_ticks = self.step_started.elapsed().as_nanos() as u32;
+        }
+        if let Some(fw) = fw {
+            self.ports.telemetry.send(fw.telemetry_message(&command)).map_err(transport)?;
+        }
+        self.ports.commands.send(command).map_err(transport)?;
+        self.last_seq = Some(command.seq);
+        self.answered += 1;
+        Ok(())
+    }
+}
+
+/// Runs the firmware process of rig `rig` for scenario `s` until the plant ends
+/// the run or dies.
+///
+/// # Errors
+/// [`RunError::Firmware`] for a bad configuration, [`RunError::Transport`] when
+/// iceoryx2 fails or no plant appears within [`WAIT_FOR_PLANT_S`].
+pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
+    let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+    let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+    let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
+    if realtime {
+        for w in prepare_realtime(&s.rig).warnings {
+            eprintln!("firmware: real-time set-up: {w}");
+        }
+    }
+    let mut firmware = Some(Firmware::new(firmware_config(s))?);
+    let mut board = IpcBoard {
+        ports: &ports,
+        rig,
+        realtime,
+        faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz),
+        peer_check: Duration::from_secs_f64(s.rig.peer_check_s),
+        started: Instant::now(),
+        epoch: None,
+        last_seq: None,
+        answered: 0,
+        stalled_at: None,
+        batch: std::collections::VecDeque::with_capacity(super::ipc::QUEUE_DEPTH),
+        newest_us: 0,
+        now_us: 0,
+        step_started: Instant::now(),
+        ending: None,
+    };
+    let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
+    board::run(&mut firmware, &mut board, &clock)?;
+    Ok(board.ending.unwrap_or(Ending::EndOfRun { answered: board.answered, overruns: firmware.as_ref().map_or(0, Firmware::overruns) }))
+}

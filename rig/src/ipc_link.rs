@@ -1,0 +1,293 @@
+//! The plant's end of the iceoryx2 transport: it spawns the firmware process (or
+//! attaches to one started by hand), exchanges frames and commands in lockstep or
+//! paced by the wall clock, measures round trips, jitter and the firmware's step
+//! time, and notices a dead or stalled firmware.
+//!
+//! Lockstep (default, as PX4 SITL): the plant owns time. It publishes frame `k`
+//! and waits for the command echoing `k`, up to `rig.command_timeout_s` of wall
+//! time; the command's `t_sent_us` (simulated time) decides when it takes effect.
+//! A timeout is a deadline miss; after each timeout the rig checks that the
+//! firmware process still lives, and gives up after
+//! `rig.max_consecutive_timeouts` timeouts in a row.
+//!
+//! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k` (or
+//! as soon after as the plant gets the core: the difference is the period
+//! jitter); a command not back within one period of the frame's publication, or
+//! sent later than `t_k + Ts` on the firmware's clock (anchored at the frame's
+//! arrival, as a timer tick), is a deadline miss; one that is takes effect at
+//! `t_k` plus that latency. Both sides judge the same stamp, so they agree.
+//! Both processes run their loop on one CPU ([`prepare_realtime`]).
+
+use std::{
+    io::Write,
+    path::Path,
+    process::{Child, Command, Stdio},
+    time::{Duration, Instant},
+};
+
+use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, frame_flags};
+
+use super::{
+    faults::FaultPlan,
+    ipc::{PeerState, PlantPorts, Role, peer_state},
+    realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
+    record::RunError,
+    rig::{Exchange, FirmwareLink},
+    scenario::Scenario,
+};
+
+/// How long the plant waits for the firmware to connect, s.
+pub const CONNECT_TIMEOUT_S: f64 = 20.0;
+
+/// The firmware's process, when the rig spawned it.
+#[derive(Debug)]
+pub struct Spawned {
+    child: Child,
+}
+
+/// Wall-clock figures of an iceoryx2 run, microseconds, one sample per period.
+#[derive(Debug, Clone, Default)]
+pub struct LinkTimings {
+    /// Round trip: frame published to its command received.
+    pub rtt_us: Vec<f32>,
+    /// Real time: frame publication minus its ideal wall time `t0 + t_k`.
+    pub jitter_us: Vec<f32>,
+    /// The firmware's own step time (its `step_ticks`, ns ticks on the host).
+    pub step_us: Vec<f32>,
+    /// Commands that arrived after their period was given up (late answers).
+    pub late_answers: u64,
+}
+
+/// The plant's iceoryx2 link to the firmware process.
+pub struct IpcLink {
+    ports: PlantPorts,
+    rig: String,
+    spawned: Option<Spawned>,
+    realtime: bool,
+    /// Real time: how the plant's loop was set up (CPU, scheduling).
+    pub realtime_setup: Option<RealtimeSetup>,
+    spin: Duration,
+    ts: f64,
+    timeout: Duration,
+    max_timeouts: u32,
+    consecutive_timeouts: u32,
+    faults: FaultPlan,
+    t0: Option<Instant>,
+    k: usize,
+    /// Timings measured so far.
+    pub timings: LinkTimings,
+}
+
+impl IpcLink {
+    /// Opens the rig `rig`'s services and, when `firmware_exe` is given, spawns
+    /// `firmware_exe firmware --rig RIG --scenario -` with the scenario on its
+    /// standard input (and `--realtime` in real time); then waits until the
+    /// firmware is connected.
+    ///
+    /// # Errors
+    /// [`RunError::Transport`] when the services cannot be opened, the process
+    /// cannot be started, or no firmware connects within [`CONNECT_TIMEOUT_S`].
+    pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
+        let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+        let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
+        // Before spawning: the firmware process inherits nothing from this thread's
+        // set-up, it makes its own from the same scenario.
+        let realtime_setup = realtime.then(|| prepare_realtime(&s.rig));
+        let spawned = match firmware_exe {
+            Some(exe) => Some(spawn(exe, rig, s, realtime)?),
+            None => None,
+        };
+        let mut link = Self {
+            ports,
+            rig: rig.to_string(),
+            spawned,
+            realtime,
+            realtime_setup,
+            spin,
+            ts: 1.0 / s.timing.rate_hz,
+            timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
+            max_timeouts: s.rig.max_consecutive_timeouts,
+            consecutive_timeouts: 0,
+            faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz),
+            t0: None,
+            k: 0,
+            timings: LinkTimings::default(),
+        };
+        let start = Instant::now();
+        while !link.ports.firmware_connected() {
+            if let Some(what) = link.firmware_gone() {
+                return Err(RunError::Transport(format!("the firmware process {what} before connecting")));
+            }
+            if start.elapsed().as_secs_f64() > CONNECT_TIMEOUT_S {
+                let how = if link.spawned.is_some() {
+                    "the spawned firmware process".to_string()
+                } else {
+                    format!("`sil-host firmware --rig {rig}` (attach mode)")
+                };
+                return Err(RunError::Transport(format!("no firmware connected to rig `{rig}` within {CONNECT_TIMEOUT_S} s: start {how}")));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        Ok(link)
+    }
+
+    /// The rig's name.
+    pub fn rig(&self) -> &str {
+        &self.rig
+    }
+
+    /// Whether the firmware process is gone, and how.
+    fn firmware_gone(&mut self) -> Option<String> {
+        match &mut self.spawned {
+            Some(sp) => match sp.child.try_wait() {
+                Ok(Some(status)) => Some(format!("exited ({status})")),
+                Ok(None) => None,
+                Err(e) => Some(format!("cannot be waited for ({e})")),
+            },
+            None => match peer_state(Role::Firmware, &self.rig) {
+                PeerState::Alive => None,
+                PeerState::Dead => Some("died (its iceoryx2 node is dead)".into()),
+                PeerState::Absent => Some("is gone (no iceoryx2 node)".into()),
+            },
+        }
+    }
+
+    fn telemetry_for(&self, seq: u32) -> Result<FirmwareTelemetry, RunError> {
+        // Published just before the command: it is there, behind older ones.
+        while let Some(t) = self.ports.telemetry.try_next().map_err(|e| RunError::Transport(e.to_string()))? {
+            if t.seq == seq {
+                return Ok(t);
+            }
+        }
+        Ok(FirmwareTelemetry { seq, z_t_ref: f32::NAN, ..FirmwareTelemetry::default() })
+    }
+}
+
+fn spawn(exe: &Path, rig: &str, s: &Scenario, realtime: bool) -> Result<Spawned, RunError> {
+    let toml = toml::to_string(s).map_err(|e| RunError::Transport(format!("cannot serialise the scenario: {e}")))?;
+    let mut cmd = Command::new(exe);
+    cmd.args(["firmware", "--rig", rig, "--scenario", "-"]).stdin(Stdio::piped()).stdout(Stdio::null()).stderr(Stdio::inherit());
+    if realtime {
+        cmd.arg("--realtime");
+    }
+    let mut child = cmd.spawn().map_err(|e| RunError::Transport(format!("cannot start the firmware process {}: {e}", exe.display())))?;
+    let mut stdin = child.stdin.take().ok_or_else(|| RunError::Transport("no stdin to the firmware process".into()))?;
+    stdin.write_all(toml.as_bytes()).map_err(|e| RunError::Transport(format!("cannot send the scenario to the firmware process: {e}")))?;
+    drop(stdin);
+    Ok(Spawned { child })
+}
+
+impl FirmwareLink for IpcLink {
+    fn transport(&self) -> &'static str {
+        "iceoryx2"
+    }
+
+    fn before_period(&mut self, k: usize, t: f64) {
+        self.k = k;
+        if self.faults.kills_firmware_at(t)
+            && let Some(sp) = &mut self.spawned
+        {
+            let _ = sp.child.kill();
+        }
+    }
+
+    fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let deadline = if self.realtime {
+            let t0 = *self.t0.get_or_insert_with(Instant::now);
+            let ideal = t0 + Duration::from_secs_f64(truth.t);
+            sleep_until(ideal, self.spin);
+            None
+        } else {
+            Some(Instant::now() + self.timeout)
+        };
+        self.ports.truth.send(*truth).map_err(transport)?;
+        let published = Instant::now();
+        self.ports.frames.send(*frame).map_err(transport)?;
+        // Real time: the sample instant is the frame's publication (the hardware's
+        // timer tick); the plant's own lateness against `t0 + t_k` is period jitter,
+        // not the firmware's deadline, which runs one period from publication.
+        let deadline = deadline.unwrap_or_else(|| {
+            let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
+            self.timings.jitter_us.push(published.saturating_duration_since(ideal).as_secs_f64() as f32 * 1e6);
+            published + Duration::from_secs_f64(self.ts)
+        });
+        loop {
+            match self.ports.commands.next_before(deadline).map_err(transport)? {
+                Some(c) if c.seq == frame.seq => {
+                    let now = Instant::now();
+                    self.consecutive_timeouts = 0;
+                    self.timings.rtt_us.push((now - published).as_secs_f64() as f32 * 1e6);
+                    self.timings.step_us.push(c.step_ticks as f32 * 1e-3);
+                    let telemetry = self.telemetry_for(c.seq)?;
+                    // Real time: the command's own send stamp (the firmware's clock,
+                    // anchored at the frame's arrival) dates it; the plant's own view
+                    // (`now`) is late by however long the plant itself was descheduled.
+                    return Ok(Exchange::Answered { command: c, telemetry, at_stamp: self.realtime });
+                }
+                Some(_) => self.timings.late_answers += 1,
+                None => break,
+            }
+        }
+        // Nothing this period: a deadline miss, unless the firmware is gone.
+        let k = frame.seq as usize;
+        if let Some(what) = self.firmware_gone() {
+            return Err(RunError::FirmwareLost { k, t: truth.t, what: format!("the firmware process {what}") });
+        }
+        self.consecutive_timeouts += 1;
+        if !self.realtime && self.consecutive_timeouts >= self.max_timeouts {
+            return Err(RunError::FirmwareLost {
+                k,
+                t: truth.t,
+                what: format!(
+                    "no command for {} periods in a row ({} s of wall time each): the firmware process is stalled",
+                    self.consecutive_timeouts,
+                    self.timeout.as_secs_f64()
+                ),
+            });
+        }
+        Ok(Exchange::NoAnswer)
+    }
+
+    fn finish(&mut self, last_seq: u32) {
+        let end = SensorFrame { seq: last_seq, flags: frame_flags::END_OF_RUN, ..SensorFrame::default() };
+        let _ = self.ports.frames.send(end);
+        if let Some(sp) = &mut self.spawned {
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(2) {
+                if let Ok(Some(_)) = sp.child.try_wait() {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            let _ = sp.child.kill();
+            let _ = sp.child.wait();
+        }
+    }
+}
+
+impl Drop for IpcLink {
+    fn drop(&mut self) {
+        if let Some(setup) = &self.realtime_setup {
+            leave_realtime(setup);
+        }
+        if let Some(sp) = &mut self.spawned
+            && let Ok(None) = sp.child.try_wait()
+        {
+            let _ = sp.child.kill();
+            let _ = sp.child.wait();
+        }
+    }
+}
+
+/// Waits until `when`: the OS sleep to `spin` before, then a spin that yields the
+/// core (sleep alone overshoots by the wake-up latency).
+fn sleep_until(when: Instant, spin: Duration) {
+    let now = Instant::now();
+    if when > now + spin {
+        std::thread::sleep(when - now - spin);
+    }
+    while Instant::now() < when {
+        std::thread::yield_now();
+    }
+}

@@ -1,0 +1,29 @@
+//! The software-in-the-loop rig: scenarios, sensor models and faults, the
+//! plant-side loop, and the transports that reach the firmware (in-process, or
+//! iceoryx2 shared memory to the firmware in its own process, or the MCU image
+//! over its USART, in QEMU or on a board behind a serial port: processor and
+//! hardware in the loop).
+//!
+//! Features: `ipc` (iceoryx2: [`ipc`], [`ipc_link`], [`firmware_process`]) and
+//! `pil` ([`pil_link`]), both on by default; without them the rig runs the
+//! firmware in-process only (what the analyses need).
+#![warn(missing_docs)]
+
+pub mod faults;
+#[cfg(feature = "ipc")]
+pub mod firmware_process;
+pub mod firmware_side;
+pub mod in_process;
+#[cfg(feature = "ipc")]
+pub mod ipc;
+#[cfg(feature = "ipc")]
+pub mod ipc_link;
+#[cfg(feature = "pil")]
+pub mod pil_link;
+pub mod realtime;
+pub mod record;
+pub mod rig;
+pub mod scenario;
+pub mod sensors;
+pub mod setup;
+pub mod summary;

@@ -1,0 +1,307 @@
+//! The link over a serial port, against a fake board at the other end of a
+//! pseudo-terminal: the handshake through a previous run's leftovers, the
+//! cycle unit, and a board that goes silent or a port that hangs up.
+
+use std::{
+    cell::Cell,
+    fs::File,
+    io::{Read, Write},
+    os::fd::FromRawFd,
+    thread::JoinHandle,
+};
+
+use firmware::{
+    Firmware, TickClock,
+    pil::{FrameBuffer, Push},
+};
+
+use super::*;
+use crate::rig::run_loop;
+
+#[test]
+fn the_step_budget_is_five_percent_of_the_period_at_168_mhz() {
+    assert_eq!(step_budget(1000.0), STEP_BUDGET_INSTRUCTIONS);
+    assert_eq!(step_budget(10_000.0), 840.0);
+    assert_eq!(step_budget(250.0), 33_600.0);
+}
+
+#[test]
+fn counts_are_instructions_under_qemu_and_cycles_on_silicon() {
+    let mut c = PilCounts { ticks_per_second: 168_000_000, ..PilCounts::default() };
+    assert_eq!(c.unit(), CountUnit::Instructions);
+    assert!((c.counts_per_tick() - 1e9 / 168e6).abs() < 1e-12);
+    c.clock = StepClock::DwtCycles;
+    assert_eq!((c.unit(), c.counts_per_tick()), (CountUnit::Cycles, 1.0));
+    assert_eq!(serde_json::to_value(CountUnit::Cycles).unwrap(), "cycles");
+    assert_eq!(serde_json::to_value(CountUnit::Instructions).unwrap(), "instructions");
+}
+
+fn with_kill_fault() -> Scenario {
+    let toml = format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", crate::scenario::DEFAULT_TOML);
+    Scenario::from_toml(&toml).unwrap()
+}
+
+#[test]
+fn a_serial_link_refuses_kill_firmware_and_bad_settings_before_touching_the_port() {
+    let mut s = with_kill_fault();
+    // The device does not exist either: the fault is what is reported.
+    match PilLink::start(&s, &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None) {
+        Err(RunError::Unsupported(m)) => assert!(m.contains("kill_firmware") && m.contains("serial port") && !m.contains("QEMU"), "{m}"),
+        other => panic!("expected Unsupported, got {other:?}"),
+    }
+    // Under QEMU the fault is fine.
+    assert!(check_faults(&s, &PilTarget::Qemu { image: "pil".into(), qemu: "qemu-system-arm".into() }).is_ok());
+    s.faults.clear();
+    let err = PilLink::start(&s, &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None).unwrap_err().to_string();
+    assert!(err.contains("cannot open the serial port /nonexistent/ttyUSB9 at 2000000 baud"), "{err}");
+    let err = PilLink::start(&s, &PilOptions::serial("/dev/null", 300), None).unwrap_err().to_string();
+    assert!(err.contains("outside 9600..=12000000 baud"), "{err}");
+    for bad in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
+        let opts = PilOptions { answer_timeout_s: bad, ..PilOptions::serial("/dev/null", DEFAULT_BAUD) };
+        let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
+        assert!(err.contains("answer timeout") && err.contains("positive number of seconds"), "{err}");
+    }
+}
+
+/// A pseudo-terminal: the fake board holds the master, the link opens `path`.
+struct Pty {
+    master: File,
+    /// Held until the link has opened the port: with no slave open, reads of the
+    /// master fail (EIO) and the fake board would stop.
+    slave: File,
+    path: PathBuf,
+}
+
+fn pty() -> Pty {
+    let (mut master, mut slave) = (-1, -1);
+    // SAFETY: openpty only writes the two descriptors; no name buffer, default settings.
+    let rc = unsafe { libc::openpty(&mut master, &mut slave, std::ptr::null_mut(), std::ptr::null(), std::ptr::null()) };
+    assert_eq!(rc, 0, "openpty: {}", std::io::Error::last_os_error());
+    let path = std::fs::read_link(format!("/proc/self/fd/{slave}")).unwrap();
+    // SAFETY: two fresh descriptors that nothing else owns.
+    let (master, slave) = unsafe { (File::from_raw_fd(master), File::from_raw_fd(slave)) };
+    Pty { master, slave, path }
+}
+
+/// A tick counter that advances 700 ticks per reading.
+struct Counting(Cell<u32>);
+
+impl TickClock for Counting {
+    fn ticks(&self) -> u32 {
+        let t = self.0.get();
+        self.0.set(t.wrapping_add(700));
+        t
+    }
+    fn ticks_per_second(&self) -> u32 {
+        168_000_000
+    }
+}
+
+/// What the fake board does once it has answered `answer` frames.
+#[derive(Debug, Clone, Copy)]
+enum Then {
+    /// It keeps reading but never answers again (a hung board).
+    Silent,
+    /// It drops its end of the line (a USB adapter pulled out).
+    HangUp,
+}
+
+/// The fake board's behaviour.
+#[derive(Debug, Clone, Copy)]
+struct Script {
+    protocol: u16,
+    /// Before its first Hello, it sends what a previous run can leave on the
+    /// line: an Answer, a Garbled and a broken frame.
+    leftovers: bool,
+    /// Right after its first Hello it sends a Garbled, as for a frame damaged
+    /// before its USART was up: the link sends the configuration again.
+    garbled_after_hello: bool,
+    answer: usize,
+    then: Then,
+}
+
+/// What the fake board saw.
+#[derive(Debug, Default)]
+struct Seen {
+    hellos: usize,
+    configures: usize,
+    frames: usize,
+    ended: bool,
+}
+
+fn send(to: &mut File, msg: &Uplink) {
+    let mut buf = [0u8; MAX_FRAME];
+    let _ = to.write_all(pil::encode(msg, &mut buf).unwrap());
+}
+
+/// A board speaking the PIL protocol with real firmware steps and DWT-cycle counts.
+fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
+    std::thread::spawn(move || {
+        let clock = Counting(Cell::new(0));
+        let mut rx = FrameBuffer::default();
+        let mut fw: Option<Firmware> = None;
+        let mut seen = Seen::default();
+        let mut buf = [0u8; 512];
+        loop {
+            let n = match master.read(&mut buf) {
+                Ok(0) | Err(_) => return seen, // the link closed the port
+                Ok(n) => n,
+            };
+            for &byte in &buf[..n] {
+                let Push::Frame(frame) = rx.push(byte) else { continue };
+                match pil::decode::<Downlink>(frame) {
+                    Err(_) => send(&mut master, &Uplink::Garbled),
+                    Ok(Downlink::Hello) => {
+                        seen.hellos += 1;
+                        if script.leftovers && seen.hellos == 1 {
+                            let mut old = Firmware::new(firmware_config(&Scenario::default_scenario())).unwrap();
+                            let command = old.step(0, &SensorFrame::default(), &clock);
+                            let telemetry = old.telemetry_message(&command);
+                            send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 1 });
+                            send(&mut master, &Uplink::Garbled);
+                            let _ = master.write_all(&[7, 1, 2, 3, 0]);
+                        }
+                        send(
+                            &mut master,
+                            &Uplink::Hello { protocol: script.protocol, ticks_per_second: 168_000_000, clock: StepClock::DwtCycles },
+                        );
+                        if script.garbled_after_hello && seen.hellos == 1 {
+                            send(&mut master, &Uplink::Garbled);
+                        }
+                    }
+                    Ok(Downlink::Configure(cfg)) => {
+                        seen.configures += 1;
+                        fw = Firmware::new(cfg).ok();
+                        send(&mut master, if fw.is_some() { &Uplink::Configured } else { &Uplink::Rejected });
+                    }
+                    Ok(Downlink::Frame { frame, start_delay_us }) => {
+                        if seen.frames == script.answer {
+                            match script.then {
+                                Then::Silent => continue,
+                                Then::HangUp => return seen,
+                            }
+                        }
+                        seen.frames += 1;
+                        let Some(f) = fw.as_mut() else { return seen };
+                        let command = f.step(frame.t_us + start_delay_us as u64, &frame, &clock);
+                        let telemetry = f.telemetry_message(&command);
+                        send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 2 * command.step_ticks });
+                    }
+                    Ok(Downlink::End) => {
+                        seen.ended = true;
+                        return seen;
+                    }
+                }
+            }
+        }
+    })
+}
+
+fn short(duration_s: f64) -> Scenario {
+    let mut s = Scenario::default_scenario();
+    s.timing.duration_s = duration_s;
+    s
+}
+
+/// Starts a link to a fake board with `script`; the board's thread.
+fn board_link(s: &Scenario, script: Script, answer_timeout_s: f64) -> (Result<PilLink, RunError>, JoinHandle<Seen>) {
+    let Pty { master, slave, path } = pty();
+    let board = fake_board(master, script);
+    let opts = PilOptions { boot_timeout_s: 5.0, answer_timeout_s, ..PilOptions::serial(path, DEFAULT_BAUD) };
+    let link = PilLink::start(s, &opts, None);
+    drop(slave);
+    (link, board)
+}
+
+#[test]
+fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftovers() {
+    let s = short(0.3);
+    let script =
+        Script { protocol: pil::PROTOCOL_VERSION, leftovers: true, garbled_after_hello: false, answer: usize::MAX, then: Then::Silent };
+    let (link, board) = board_link(&s, script, 5.0);
+    let mut link = link.unwrap();
+    assert_eq!(link.transport(), "pil-serial");
+    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    assert!(err.is_none(), "{err:?}");
+    assert_eq!(records.len(), 300);
+    let c = &link.counts;
+    assert_eq!((c.unit(), c.clock, c.ticks_per_second), (CountUnit::Cycles, StepClock::DwtCycles, 168_000_000));
+    assert_eq!(c.step_ticks.len(), 300);
+    assert!(c.step_ticks.iter().all(|&t| t > 0), "the step measured itself");
+    // No log and no exit status over a serial port.
+    assert!(!link.captures_log() && link.log().is_empty() && link.exit_status().is_none());
+    let seen = board.join().unwrap();
+    assert!(seen.hellos >= 1 && seen.frames == 300 && seen.ended, "{seen:?}");
+}
+
+#[test]
+fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_goes_on() {
+    let s = short(0.2);
+    let script =
+        Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: true, answer: usize::MAX, then: Then::Silent };
+    let (link, board) = board_link(&s, script, 5.0);
+    let mut link = link.unwrap();
+    // The board answers both configurations; the second `Configured` comes
+    // before the first answer and must not end the run.
+    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    assert!(err.is_none(), "{err:?}");
+    assert_eq!(records.len(), 200);
+    let seen = board.join().unwrap();
+    assert_eq!((seen.configures, seen.frames), (2, 200), "{seen:?}");
+}
+
+#[test]
+fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
+    let s = short(1.0);
+    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::Silent };
+    let (link, _board) = board_link(&s, script, 0.3);
+    let mut link = link.unwrap();
+    let started = Instant::now();
+    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    assert!(started.elapsed() < Duration::from_secs(3), "no hang: {:?}", started.elapsed());
+    match err {
+        Some(RunError::FirmwareLost { k, what, .. }) => {
+            assert_eq!(k, 50);
+            assert!(what.contains("no answer within 0.3 s") && what.contains("is the board powered"), "{what}");
+            assert!(!what.contains("QEMU"), "{what}");
+        }
+        other => panic!("expected FirmwareLost, got {other:?}"),
+    }
+    assert_eq!(records.len(), 50);
+}
+
+#[test]
+fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
+    let s = short(1.0);
+    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::HangUp };
+    let (link, _board) = board_link(&s, script, 5.0);
+    let mut link = link.unwrap();
+    let started = Instant::now();
+    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    assert!(started.elapsed() < Duration::from_secs(2), "noticed at once, not after the timeout: {:?}", started.elapsed());
+    match err {
+        Some(RunError::FirmwareLost { k, what, .. }) => {
+            assert!((50..=51).contains(&k), "{k}");
+            assert!(what.contains("unplugged?") && what.contains("the serial port /dev/pts/"), "{what}");
+            assert!(!what.contains("QEMU"), "{what}");
+        }
+        other => panic!("expected FirmwareLost, got {other:?}"),
+    }
+    assert!((50..=51).contains(&records.len()));
+}
+
+#[test]
+fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
+    let s = short(0.1);
+    let script = Script { protocol: 1, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
+    let err = board_link(&s, script, 5.0).0.unwrap_err().to_string();
+    assert!(err.contains("speaks PIL protocol 1") && err.contains("flash"), "{err}");
+
+    // Nobody at the other end: no Hello within the boot timeout.
+    let Pty { master: _master, slave: _slave, path } = pty();
+    let opts = PilOptions { boot_timeout_s: 0.5, ..PilOptions::serial(&path, DEFAULT_BAUD) };
+    let started = Instant::now();
+    let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
+    assert!(started.elapsed() < Duration::from_secs(2));
+    assert!(err.contains("the image did not say Hello within 0.5 s: nothing from /dev/pts/") && !err.contains("QEMU"), "{err}");
+}

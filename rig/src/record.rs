@@ -1,0 +1,207 @@
+//! What a SIL run records: one row per control period (`trace.csv`), why a run
+//! stopped early, and the lift-off detection statistics (HARDWARE.md "Lift-off
+//! detection").
+
+use serde::Serialize;
+
+use plant::SimError;
+
+/// One control period of a run (a row of `trace.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PeriodRecord {
+    /// Sample time `t_k`, s.
+    pub t: f64,
+    /// True state at `t_k` (rad, rad/s).
+    pub theta1: f64,
+    /// `theta1_dot`, rad/s.
+    pub theta1_dot: f64,
+    /// `theta2`, rad.
+    pub theta2: f64,
+    /// `theta2_dot`, rad/s.
+    pub theta2_dot: f64,
+    /// Tip `z_t`, m.
+    pub z_t: f64,
+    /// Tip `z_n`, m.
+    pub z_n: f64,
+    /// Reference `z_t*` (the firmware's), m.
+    pub z_t_ref: f64,
+    /// True tangential contact force at `t_k`, N.
+    pub f_t: f64,
+    /// True normal contact force at `t_k`, N.
+    pub f_n: f64,
+    /// True contact mode at `t_k`.
+    pub mode: &'static str,
+    /// Motor torques that take effect in period `k`, N m (after quantisation; the
+    /// previous command again when this period's was missed).
+    pub u1_cmd: f64,
+    /// Commanded `u2`, N m.
+    pub u2_cmd: f64,
+    /// Torques applied at `t_k` (the previous command), N m.
+    pub u1_applied: f64,
+    /// Applied `u2`, N m.
+    pub u2_applied: f64,
+    /// True lift-off (the tip in flight at `t_k`).
+    pub lift_off_true: bool,
+    /// Lift-off as the firmware reports it.
+    pub lift_off_detected: bool,
+    /// Deadline miss seen by the plant: no command, a lost one, or one that left
+    /// after `t_k + Ts`; the previous command was held.
+    pub deadline_miss: bool,
+    /// Deadline miss counted by the firmware itself (`DEADLINE_MISS` in its status).
+    pub firmware_deadline_miss: bool,
+    /// The firmware's overrun counter, as its command reported it (0 without a command).
+    pub overruns: u32,
+    /// The firmware's status word (0 without a command).
+    pub status: u32,
+}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The plant failed.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// The firmware configuration is invalid.
+    #[error("firmware configuration: {0}")]
+    Firmware(#[from] firmware::config::ConfigError),
+    /// The firmware latched its safe state (zero torque).
+    #[error("the firmware entered its safe state at period {k} (t = {t:.3} s): {reason:?}")]
+    SafeState {
+        /// Period.
+        k: usize,
+        /// Sample time, s.
+        t: f64,
+        /// The reason it reported.
+        reason: firmware::SafeReason,
+    },
+    /// The firmware process is gone or no longer answers.
+    #[error("firmware lost at period {k} (t = {t:.3} s): {what}")]
+    FirmwareLost {
+        /// Period.
+        k: usize,
+        /// Sample time, s.
+        t: f64,
+        /// What the rig saw.
+        what: String,
+    },
+    /// The transport failed (iceoryx2).
+    #[error("transport: {0}")]
+    Transport(String),
+    /// The scenario needs something this transport cannot do.
+    #[error("{0}")]
+    Unsupported(String),
+    /// The run was interrupted (SIGINT or SIGTERM).
+    #[error("interrupted at period {k}")]
+    Interrupted {
+        /// Period.
+        k: usize,
+    },
+}
+
+/// Lift-off detection statistics of a run (HARDWARE.md "Lift-off detection").
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct LiftOffStats {
+    /// True lift-offs (contact to flight transitions at the samples).
+    pub lift_offs: u32,
+    /// True lift-offs the firmware detected before the tip was back in contact.
+    pub lift_offs_detected: u32,
+    /// True lift-offs it did not detect.
+    pub missed_lift_offs: u32,
+    /// Detections with the tip in contact throughout.
+    pub false_alarms: u32,
+    /// Largest detection latency, periods.
+    pub max_detection_latency_periods: u32,
+}
+
+/// Matches true and detected lift-offs period by period: a true flight episode is
+/// detected if the firmware declares lift-off during it or within 5 periods after
+/// it ends (a short hop may end before the confirmation); a detection episode that
+/// overlaps no true flight (nor starts within 5 periods after one) is a false alarm.
+pub fn lift_off_stats(records: &[PeriodRecord]) -> LiftOffStats {
+    const GRACE: usize = 5;
+    let mut st = LiftOffStats::default();
+    let n = records.len();
+    let mut k = 0;
+    while k < n {
+        if records[k].lift_off_true && (k == 0 || !records[k - 1].lift_off_true) {
+            st.lift_offs += 1;
+            let start = k;
+            let mut end = k;
+            while end + 1 < n && records[end + 1].lift_off_true {
+                end += 1;
+            }
+            match (start..n.min(end + 1 + GRACE)).find(|&j| records[j].lift_off_detected) {
+                Some(j) => {
+                    st.lift_offs_detected += 1;
+                    st.max_detection_latency_periods = st.max_detection_latency_periods.max((j - start) as u32);
+                }
+                None => st.missed_lift_offs += 1,
+            }
+            k = end + 1;
+        } else {
+            k += 1;
+        }
+    }
+    let mut k = 0;
+    while k < n {
+        if records[k].lift_off_detected && (k == 0 || !records[k - 1].lift_off_detected) {
+            let start = k;
+            let mut end = k;
+            while end + 1 < n && records[end + 1].lift_off_detected {
+                end += 1;
+            }
+            let lo = start.saturating_sub(GRACE);
+            if !(lo..=end).any(|j| records[j].lift_off_true) {
+                st.false_alarms += 1;
+            }
+            k = end + 1;
+        } else {
+            k += 1;
+        }
+    }
+    st
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_match_hand_made_sequences() {
+        let base = PeriodRecord {
+            t: 0.0,
+            theta1: 0.0,
+            theta1_dot: 0.0,
+            theta2: 0.0,
+            theta2_dot: 0.0,
+            z_t: 0.0,
+            z_n: 0.0,
+            z_t_ref: 0.0,
+            f_t: 0.0,
+            f_n: 0.0,
+            mode: "sliding",
+            u1_cmd: 0.0,
+            u2_cmd: 0.0,
+            u1_applied: 0.0,
+            u2_applied: 0.0,
+            lift_off_true: false,
+            lift_off_detected: false,
+            deadline_miss: false,
+            firmware_deadline_miss: false,
+            overruns: 0,
+            status: 0,
+        };
+        let seq = |truth: &str, det: &str| -> Vec<PeriodRecord> {
+            truth
+                .chars()
+                .zip(det.chars())
+                .map(|(t, d)| PeriodRecord { lift_off_true: t == '1', lift_off_detected: d == '1', ..base })
+                .collect()
+        };
+        // One hop detected 2 periods late, one missed, one false alarm.
+        let r = seq("0011110000000000011000000000000000", "0000111100000000000000000000011000");
+        let st = lift_off_stats(&r);
+        assert_eq!((st.lift_offs, st.lift_offs_detected, st.missed_lift_offs, st.false_alarms), (2, 1, 1, 1));
+        assert_eq!(st.max_detection_latency_periods, 2);
+    }
+}

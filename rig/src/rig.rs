@@ -1,0 +1,322 @@
+//! The plant side of the SIL loop, the same for every transport (HARDWARE.md
+//! "Control loop"). Period `k`: the sensors sample the plant at `t_k = k Ts` into
+//! a frame; the frame goes to the firmware over a [`FirmwareLink`] (in-process or
+//! iceoryx2); the command that comes back takes effect at
+//! `max(t_k + delta, t_sent)` (in real-time runs: at `t_sent`, the firmware's
+//! wall-clock send stamp) and is held (zero-order hold) until the next one. A command that is
+//! lost, late past `t_k + Ts`, or not there when the link gives up waiting is a
+//! deadline miss: the previous command stays for the whole period.
+//!
+//! The plant owns time: the loop never reads a clock (real-time pacing is the
+//! link's business), so a run is a function of the scenario and its seed.
+
+use shared::{
+    ContactMode,
+    wire::{self, ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame, status},
+};
+
+use super::{
+    faults::FaultPlan,
+    record::{PeriodRecord, RunError},
+    scenario::Scenario,
+    sensors::Sensors,
+    setup::plant_for,
+};
+use plant::{Plant, PlantEvent};
+
+/// The answer to one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Exchange {
+    /// The firmware answered this period.
+    Answered {
+        /// Its command (echoing the frame's `seq`).
+        command: ActuatorCommand,
+        /// Its telemetry of the same step.
+        telemetry: FirmwareTelemetry,
+        /// Real-time runs: the command takes effect at its send stamp
+        /// (`t_sent_us`, the firmware's wall clock anchored at the frame's arrival);
+        /// lockstep: at that stamp but never before `delta` after `t_k`.
+        at_stamp: bool,
+    },
+    /// No command for this period arrived before the link stopped waiting (the
+    /// wall-clock deadline in real time, the command timeout in lockstep).
+    NoAnswer,
+}
+
+/// A way to reach the firmware: in-process, or over iceoryx2 in another process.
+pub trait FirmwareLink {
+    /// `in-process` or `iceoryx2`.
+    fn transport(&self) -> &'static str;
+
+    /// Sends frame `k` (and the ground truth of the same instant, for monitors)
+    /// and waits for the command that answers it.
+    ///
+    /// # Errors
+    /// [`RunError`] when the firmware is gone (its process died, or it stopped
+    /// answering for `rig.max_consecutive_timeouts` periods) or the transport failed.
+    fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError>;
+
+    /// Called once before period `k`'s exchange (fault injection that acts on the
+    /// firmware process itself, such as killing it).
+    fn before_period(&mut self, _k: usize, _t: f64) {}
+
+    /// Tells the firmware the run is over (no answer expected).
+    fn finish(&mut self, _last_seq: u32) {}
+}
+
+/// Ground-truth mode code of [`GroundTruth::mode`]: 0 flight, 1 sliding, 2 sticking.
+pub fn mode_code(mode: ContactMode) -> u8 {
+    match mode {
+        ContactMode::Sliding => 1,
+        ContactMode::Sticking => 2,
+        _ => 0,
+    }
+}
+
+/// Why a period of [`PeriodLoop::period`] ended the run.
+#[derive(Debug)]
+pub struct PeriodFailure {
+    /// The period's record, when it got that far (the firmware's safe state, a plant failure).
+    pub record: Option<PeriodRecord>,
+    /// What happened.
+    pub error: RunError,
+}
+
+/// The plant side of a run's control periods: the sensors, the faults, the command
+/// held by the zero-order hold and the last contact force, period after period.
+/// [`run_loop`] drives it over a whole scenario; the closed-loop sweep
+/// (`sil-host sweep --controller`) drives it from its own initial conditions.
+#[derive(Debug, Clone)]
+pub struct PeriodLoop {
+    sensors: Sensors,
+    faults: FaultPlan,
+    ts: f64,
+    ts_us: u64,
+    delta: f64,
+    v_belt: f64,
+    applied: [f64; 2],
+    f_now: [f64; 2],
+    /// The firmware's reference, kept over periods without an answer.
+    z_t_ref: f64,
+    k: usize,
+}
+
+impl PeriodLoop {
+    /// The loop of scenario `s` starting at period 0 with zero torque on `plant`
+    /// (at `t = 0`).
+    pub fn new(s: &Scenario, plant: &Plant) -> Self {
+        let ts = 1.0 / s.timing.rate_hz;
+        Self {
+            sensors: Sensors::new(s.sensors.seed, s.sensors.load_noise_n),
+            faults: FaultPlan::new(&s.faults, ts),
+            ts,
+            ts_us: (ts * 1e6).round() as u64,
+            delta: s.timing.delta_s,
+            v_belt: s.plant.v_belt,
+            applied: [0.0; 2],
+            f_now: plant.contact_force([0.0; 2]),
+            z_t_ref: f64::NAN,
+            k: 0,
+        }
+    }
+
+    /// Control periods in `duration_s` seconds.
+    pub fn periods_in(&self, duration_s: f64) -> usize {
+        (duration_s / self.ts).round() as usize
+    }
+
+    /// The next period to run.
+    pub fn next_period(&self) -> usize {
+        self.k
+    }
+
+    /// Runs one period: samples `plant` into a frame (handed to `on_frame`), gets the
+    /// command over `link` and advances the plant to the next sample time under the
+    /// zero-order hold, handing `on_events` the plant's events at their exact times.
+    /// Returns the period's record.
+    ///
+    /// # Errors
+    /// The link's failure (no record), or the firmware's safe state or a plant
+    /// failure (with the period's record).
+    pub fn period(
+        &mut self,
+        plant: &mut Plant,
+        link: &mut dyn FirmwareLink,
+        on_frame: &mut dyn FnMut(&SensorFrame),
+        on_events: &mut dyn FnMut(&[PlantEvent]),
+    ) -> Result<PeriodRecord, Box<PeriodFailure>> {
+        let k = self.k;
+        let (ts, faults) = (self.ts, &self.faults);
+        let t_k = k as f64 * ts;
+        let t_us = k as u64 * self.ts_us;
+        let x = plant.state();
+        let z = plant.tip();
+        let mode = plant.mode();
+        let frame = self.sensors.frame_with_faults(k as u32, t_us, &x, self.f_now, self.v_belt, faults.sensor_faults(t_k));
+        on_frame(&frame);
+        let truth = GroundTruth {
+            t: t_k,
+            seq: k as u32,
+            mode: mode_code(mode),
+            lift_off: u8::from(mode == ContactMode::Flight),
+            reserved: 0,
+            x,
+            z: [z[0], z[1]],
+            f: self.f_now,
+            u_applied: self.applied,
+        };
+        link.before_period(k, t_k);
+        let exchange = link.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
+        // When the new command takes effect (s after t_k), if it does this period.
+        let (switch, command, telemetry) = match exchange {
+            Exchange::Answered { command, telemetry, at_stamp } => {
+                let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
+                let at = if at_stamp { late_s } else { late_s.max(self.delta) };
+                let on_time = at < ts && !faults.drops_command(t_k);
+                (on_time.then_some(at), Some(command), Some(telemetry))
+            }
+            Exchange::NoAnswer => (None, None, None),
+        };
+        let applied = self.applied;
+        let u_new = match (switch, command) {
+            (Some(_), Some(c)) => [wire::decode_torque(c.u1_code) as f64, wire::decode_torque(c.u2_code) as f64],
+            _ => applied,
+        };
+        let fw_status = command.map_or(0, |c| c.status);
+        if let Some(t) = telemetry {
+            self.z_t_ref = t.z_t_ref as f64;
+        }
+        let record = PeriodRecord {
+            t: t_k,
+            theta1: x[0],
+            theta1_dot: x[1],
+            theta2: x[2],
+            theta2_dot: x[3],
+            z_t: z[0],
+            z_n: z[1],
+            z_t_ref: self.z_t_ref,
+            f_t: self.f_now[0],
+            f_n: self.f_now[1],
+            mode: mode.name(),
+            u1_cmd: u_new[0],
+            u2_cmd: u_new[1],
+            u1_applied: applied[0],
+            u2_applied: applied[1],
+            lift_off_true: mode == ContactMode::Flight,
+            lift_off_detected: fw_status & status::LIFT_OFF != 0,
+            deadline_miss: switch.is_none(),
+            firmware_deadline_miss: fw_status & status::DEADLINE_MISS != 0,
+            overruns: command.map_or(0, |c| c.overruns),
+            status: fw_status,
+        };
+        if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
+            return Err(Box::new(PeriodFailure { record: Some(record), error: RunError::SafeState { k, t: t_k, reason } }));
+        }
+        // Zero-order hold: the previous command until the switch, then the new one.
+        let t_next = (k + 1) as f64 * ts;
+        let step = match switch {
+            Some(at) => plant.advance(applied, at).and_then(|r| {
+                on_events(&r.events);
+                plant.advance(u_new, t_next - plant.time())
+            }),
+            None => plant.advance(applied, t_next - plant.time()),
+        };
+        match step {
+            Ok(r) => {
+                on_events(&r.events);
+                self.f_now = r.f;
+            }
+            Err(e) => return Err(Box::new(PeriodFailure { record: Some(record), error: e.into() })),
+        }
+        self.applied = u_new;
+        self.k += 1;
+        Ok(record)
+    }
+}
+
+/// Runs the scenario over `link`; `on_period(k, n)` is called after each period
+/// (progress bars) and stops the run with [`RunError::Interrupted`] when it
+/// returns `false` (Ctrl-C); `on_frame` sees every frame as it goes on the wire
+/// (a recording of what crossed the wire).
+///
+/// Returns every period's record; when the run stops early (plant failure, the
+/// firmware lost or in its safe state) the records up to and including the last
+/// period come back with the error.
+pub fn run_loop(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_hooked(s, link, |_| {}, on_period, on_frame, |_| {})
+}
+
+/// As [`run_loop`], handing every period's record to `on_record` as soon as it
+/// is made (before the run can stop on it), so a caller can stream the trace to
+/// disk and lose nothing if the process is killed.
+pub fn run_loop_streaming(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    on_record: impl FnMut(&PeriodRecord),
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_hooked(s, link, on_record, on_period, on_frame, |_| {})
+}
+
+/// As [`run_loop`], handing `on_events` every plant event at its exact time (the
+/// start-up events, then those of each interval): lift-offs between two samples
+/// included, which the per-period records cannot show.
+pub fn run_loop_observed(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    on_period: impl FnMut(usize, usize) -> bool,
+    on_frame: impl FnMut(&SensorFrame),
+    on_events: impl FnMut(&[PlantEvent]),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_loop_hooked(s, link, |_| {}, on_period, on_frame, on_events)
+}
+
+/// The loop behind [`run_loop`], [`run_loop_streaming`] and [`run_loop_observed`],
+/// with all their hooks.
+pub fn run_loop_hooked(
+    s: &Scenario,
+    link: &mut dyn FirmwareLink,
+    mut on_record: impl FnMut(&PeriodRecord),
+    mut on_period: impl FnMut(usize, usize) -> bool,
+    mut on_frame: impl FnMut(&SensorFrame),
+    mut on_events: impl FnMut(&[PlantEvent]),
+) -> (Vec<PeriodRecord>, Option<RunError>) {
+    let mut records = Vec::new();
+    let mut plant = match plant_for(s) {
+        Ok(p) => p,
+        Err(e) => return (records, Some(e.into())),
+    };
+    on_events(plant.startup_events());
+    let mut periods = PeriodLoop::new(s, &plant);
+    let n = periods.periods_in(s.timing.duration_s);
+    records.reserve(n);
+    let mut failure = None;
+    for k in 0..n {
+        match periods.period(&mut plant, link, &mut on_frame, &mut on_events) {
+            Ok(r) => {
+                on_record(&r);
+                records.push(r);
+            }
+            Err(f) => {
+                if let Some(r) = &f.record {
+                    on_record(r);
+                }
+                records.extend(f.record);
+                failure = Some(f.error);
+                break;
+            }
+        }
+        if !on_period(k + 1, n) && k + 1 < n {
+            failure = Some(RunError::Interrupted { k: k + 1 });
+            break;
+        }
+    }
+    link.finish(records.len() as u32);
+    (records, failure)
+}

@@ -1,0 +1,243 @@
+//! The typed summary of a closed-loop run (`summary.json` of `sil-host run` and
+//! `sil-host pil`): what every run reports, and the PIL figures of the image.
+
+use serde::Serialize;
+
+use firmware::pil::StepClock;
+
+use super::{
+    realtime::RealtimeSetup,
+    record::{LiftOffStats, PeriodRecord, RunError, lift_off_stats},
+    scenario::Scenario,
+};
+
+/// `summary.json` of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// `ok` or `failed`.
+    pub status: &'static str,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+    /// Scenario name.
+    pub scenario: String,
+    /// `hybrid` or `pid`.
+    pub controller: String,
+    /// `iceoryx2` or `in-process`; `pil-qemu` or `pil-serial` for `sil-host pil`.
+    pub transport: &'static str,
+    /// `lockstep` or `realtime` (`in-process` runs are lockstep).
+    pub timing: &'static str,
+    /// The rig's name (its iceoryx2 services); `null` in-process.
+    pub rig: Option<String>,
+    /// Control periods run.
+    pub periods: usize,
+    /// Lift-off statistics.
+    #[serde(flatten)]
+    pub lift_off: LiftOffStats,
+    /// Deadline misses seen by the plant (no command, lost, or late past `t_k + Ts`).
+    pub deadline_misses: usize,
+    /// Deadline misses the firmware counted itself (its overrun counter at the end).
+    pub firmware_overruns: u32,
+    /// RMS of `z_t - z_t*` over the run, m.
+    pub rms_tracking_error_m: f64,
+    /// `z_t` at the end, m.
+    pub final_z_t_m: f64,
+    /// Wall-clock time of the loop, s.
+    pub wall_s: f64,
+    /// Simulated seconds per wall second.
+    pub realtime_factor: f64,
+    /// Control periods per wall-clock second.
+    pub periods_per_s: f64,
+    /// iceoryx2 runs: frame published to command received, us.
+    pub ipc_rtt_us: Option<Percentiles>,
+    /// iceoryx2 runs: the firmware's step time as it measured it, us.
+    pub firmware_step_us: Option<Percentiles>,
+    /// Real-time runs: frame publication minus its ideal wall time, us.
+    pub period_jitter_us: Option<Percentiles>,
+    /// iceoryx2 runs: commands that arrived after their period was given up.
+    pub late_answers: u64,
+    /// Real-time iceoryx2 runs: the plant loop's CPU and `SCHED_FIFO` priority,
+    /// and what the kernel refused (`rig.realtime_cpu`, `rig.realtime_fifo_priority`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub realtime_setup: Option<RealtimeSetup>,
+    /// PIL runs: the image's instruction counts and log (`sil-host pil`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pil: Option<PilFigures>,
+    /// The scenario as run (after command-line overrides).
+    pub scenario_used: Scenario,
+}
+
+impl RunSummary {
+    /// The figures every run has, from its `records` (the trace as recorded, up to
+    /// the failure if there was one) and its wall-clock time `wall_s` (s); the
+    /// transport's own figures (round trip, jitter, step time, PIL counts) empty.
+    pub fn from_records(
+        scenario: &Scenario,
+        records: &[PeriodRecord],
+        failure: Option<&RunError>,
+        transport: &'static str,
+        timing: &'static str,
+        wall_s: f64,
+    ) -> Self {
+        let simulated = records.len() as f64 / scenario.timing.rate_hz;
+        Self {
+            status: if failure.is_some() { "failed" } else { "ok" },
+            error: failure.map(|e| e.to_string()),
+            scenario: scenario.name.clone(),
+            controller: scenario.controller.kind.clone(),
+            transport,
+            timing,
+            rig: None,
+            periods: records.len(),
+            lift_off: lift_off_stats(records),
+            deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
+            firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
+            rms_tracking_error_m: rms_tracking_error(records),
+            final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
+            wall_s,
+            realtime_factor: simulated / wall_s.max(1e-9),
+            periods_per_s: records.len() as f64 / wall_s.max(1e-9),
+            ipc_rtt_us: None,
+            firmware_step_us: None,
+            period_jitter_us: None,
+            late_answers: 0,
+            realtime_setup: None,
+            pil: None,
+            scenario_used: scenario.clone(),
+        }
+    }
+}
+
+/// RMS of `z_t - z_t*` over `records`, m (0 when empty).
+pub fn rms_tracking_error(records: &[PeriodRecord]) -> f64 {
+    if records.is_empty() {
+        return 0.0;
+    }
+    (records.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / records.len() as f64).sqrt()
+}
+
+/// The PIL part of `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct PilFigures {
+    /// How the bytes travelled: `qemu-socket` (QEMU spawned here) or `serial`.
+    pub transport: &'static str,
+    /// Serial runs: the device.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub serial_port: Option<String>,
+    /// Serial runs: the line rate, baud (8N1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub baud: Option<u32>,
+    /// The image that ran under QEMU; `null` over a serial port (it is in the board's flash).
+    pub image: Option<String>,
+    /// QEMU's `-icount` shift (one instruction per `2^shift` ns of virtual time);
+    /// `null` over a serial port.
+    pub qemu_icount_shift: Option<u32>,
+    /// The image's tick rate (its core clock), Hz.
+    pub ticks_per_second: u32,
+    /// What the image's tick counter is (its Hello): `EmulatedSysTick` or `DwtCycles`.
+    pub step_clock: firmware::pil::StepClock,
+    /// Unit of `step_counts`, `frame_counts` and `step_budget`: `instructions`
+    /// (emulated SysTick under `-icount`) or `cycles` (DWT on silicon).
+    pub count_unit: CountUnit,
+    /// `count_unit`s per tick: `1e9 / (ticks_per_second 2^shift)` instructions
+    /// under QEMU, 1 cycle on silicon.
+    pub counts_per_tick: f64,
+    /// `Firmware::step` (sensor decode to command encode), in `count_unit`:
+    /// median, 99th percentile, worst.
+    pub step_counts: Spread,
+    /// A frame's last byte to its answer ready to send (COBS, CRC and postcard
+    /// decoding plus the step), in `count_unit`.
+    pub frame_counts: Spread,
+    /// The budget of a step in `count_unit` (HARDWARE.md: 5 % of the control
+    /// period at 168 MHz; 8400 at 1 kHz).
+    pub step_budget: f64,
+    /// Whether the worst step is within the budget.
+    pub within_budget: bool,
+    /// Worst step as a share of the control period at 168 MHz (for instructions:
+    /// if each took one cycle, a lower bound on silicon: README "PIL").
+    pub worst_step_period_share: f64,
+    /// QEMU's exit status at the end (`exit status: 0` when the image ended the
+    /// run); `null` over a serial port.
+    pub qemu_exit: Option<String>,
+    /// Where the image's defmt log is: `defmt.log`, or why it is not captured.
+    pub defmt_log: String,
+    /// Lines of the image's defmt log; `null` when it is not captured.
+    pub defmt_lines: Option<usize>,
+    /// Of which at `warn` or `error` level; `null` when it is not captured.
+    pub defmt_warnings: Option<usize>,
+}
+
+/// Percentiles of a sample (p50, p99, p999, max), in the sample's unit; zeros when empty.
+pub fn percentiles(samples: &[f32]) -> Percentiles {
+    if samples.is_empty() {
+        return Percentiles::default();
+    }
+    let mut v = samples.to_vec();
+    v.sort_by(f32::total_cmp);
+    let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64;
+    Percentiles { p50: at(0.5), p99: at(0.99), p999: at(0.999), max: v[v.len() - 1] as f64 }
+}
+
+/// Percentiles of a timing, microseconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Percentiles {
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 99.9th percentile.
+    pub p999: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// What the step counts of a run are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CountUnit {
+    /// Instructions retired (QEMU under `-icount`; a lower bound of cycles).
+    Instructions,
+    /// Core clock cycles (silicon).
+    Cycles,
+}
+
+impl CountUnit {
+    /// The unit of an image's tick counter.
+    pub fn of(clock: StepClock) -> Self {
+        match clock {
+            StepClock::EmulatedSysTick => Self::Instructions,
+            StepClock::DwtCycles => Self::Cycles,
+        }
+    }
+
+    /// `instructions` or `cycles`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Instructions => "instructions",
+            Self::Cycles => "cycles",
+        }
+    }
+}
+
+/// Median, 99th percentile and worst of a sample.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Spread {
+    /// Median.
+    pub median: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Largest.
+    pub worst: f64,
+}
+
+impl Spread {
+    /// The spread of `samples` scaled by `scale`; zeros when empty.
+    pub fn of(samples: &[u32], scale: f64) -> Self {
+        if samples.is_empty() {
+            return Self::default();
+        }
+        let mut v = samples.to_vec();
+        v.sort_unstable();
+        let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64 * scale;
+        Self { median: at(0.5), p99: at(0.99), worst: v[v.len() - 1] as f64 * scale }
+    }
+}
