@@ -21,6 +21,10 @@ if ! command -v flip-link >/dev/null; then
   cargo install flip-link --locked --version 0.1.12
 fi
 
+echo "== format and lints (rustfmt.toml; clippy, warnings are errors)"
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets -- -D warnings
+
 echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
 

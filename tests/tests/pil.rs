@@ -29,10 +29,10 @@ use rig::summary::rms_tracking_error;
 use rig::{
     in_process,
     pil_link::{DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS},
-    summary::{CountUnit, Spread},
     record::{RunError, lift_off_stats},
     rig::{FirmwareLink, run_loop},
     scenario::Scenario,
+    summary::{CountUnit, Spread},
 };
 
 /// Builds the PIL image (QEMU build) once per test binary; its path.
