@@ -47,6 +47,7 @@ use shared::{
     kinematics::{inverse_kinematics, jacobian, jdot_qdot, tip_position},
 };
 
+use firmware::ControllerKind;
 use plant::{Controller, Counters, EventKind, Phase, Plant, SimConfig, SimError};
 
 /// One point of the tangential reference: `z_t*` (m), `z_t_dot*` (m/s), `z_t_ddot*` (m/s^2).
@@ -327,26 +328,6 @@ impl Controller for IdealHybrid {
                 out.motor
             }
             Err(f) => safe(&self.fault, f, xi_dot),
-        }
-    }
-}
-
-/// Which of the paper's controllers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ControllerKind {
-    /// Joint-space PID (paper eq. 8, MODEL.md experiment 5).
-    Pid,
-    /// Hybrid force/motion control (paper eqs. 9 to 11, MODEL.md experiment 6).
-    Hybrid,
-}
-
-impl ControllerKind {
-    /// `pid` or `hybrid` (as in scenario files).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Pid => "pid",
-            Self::Hybrid => "hybrid",
         }
     }
 }

@@ -28,9 +28,10 @@ use serde::Serialize;
 
 use crate::{
     error::AnalysisError,
-    ideal::{self, ControllerKind, IdealSetup},
+    ideal::{self, IdealSetup},
 };
-use plant::initial::{PaperInitialCondition, X0D, X0U, deg_to_state};
+use firmware::ControllerKind;
+use plant::initial::{PaperX0, deg_to_state};
 use plant::{EventKind, Plant, SimConfig};
 use rig::{in_process, scenario::Scenario};
 
@@ -54,39 +55,23 @@ impl Setting {
     }
 }
 
-/// The paper's initial conditions of experiments 5 and 6.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum X0 {
-    /// `x0d = [-11.4 deg, 0, -35.1 deg, 0]`, elbow down.
-    D,
-    /// `x0u = [-35.1 deg, 0, -11.4 deg, 0]`, elbow up.
-    U,
+/// Z_t,sliding starts from `x0d` or `x0u` (experiments 5 and 6).
+///
+/// # Errors
+/// [`AnalysisError::BadInput`] for `x0a`.
+pub fn check_x0(x0: PaperX0) -> Result<(), AnalysisError> {
+    match x0 {
+        PaperX0::D | PaperX0::U => Ok(()),
+        PaperX0::A => Err(AnalysisError::BadInput("--x0 a: Z_t,sliding starts from x0d or x0u (experiments 5 and 6)".into())),
+    }
 }
 
-impl X0 {
-    /// The initial condition in degrees.
-    pub fn paper(self) -> PaperInitialCondition {
-        match self {
-            Self::D => X0D,
-            Self::U => X0U,
-        }
-    }
-
-    /// `d` or `u` (as in scenario files).
-    pub fn letter(self) -> &'static str {
-        match self {
-            Self::D => "d",
-            Self::U => "u",
-        }
-    }
-
-    /// The paper's `K'_I` of the hybrid law from this initial condition, 1/s.
-    pub fn hybrid_ki(self) -> f64 {
-        match self {
-            Self::D => 650.0,
-            Self::U => 0.0,
-        }
+/// The paper's `K'_I` of the hybrid law from initial condition `x0`, 1/s:
+/// 0 from `x0u`, 650 otherwise (docs/model.md, experiment 6).
+pub fn paper_hybrid_ki(x0: PaperX0) -> f64 {
+    match x0 {
+        PaperX0::U => 0.0,
+        PaperX0::A | PaperX0::D => 650.0,
     }
 }
 
@@ -96,7 +81,7 @@ pub struct Combination {
     /// The controller.
     pub controller: ControllerKind,
     /// The initial condition.
-    pub x0: X0,
+    pub x0: PaperX0,
     /// Ideal or sampled.
     pub setting: Setting,
 }
@@ -106,7 +91,7 @@ impl Combination {
     pub fn all() -> Vec<Self> {
         let mut v = Vec::new();
         for controller in [ControllerKind::Pid, ControllerKind::Hybrid] {
-            for x0 in [X0::D, X0::U] {
+            for x0 in [PaperX0::D, PaperX0::U] {
                 for setting in [Setting::Ideal, Setting::Sampled] {
                     v.push(Self { controller, x0, setting });
                 }
@@ -288,11 +273,11 @@ fn sim_config(base: &Scenario) -> SimConfig {
 }
 
 fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
-    let mut setup = IdealSetup::paper(combo.controller, deg_to_state(combo.x0.paper().deg), target);
+    let mut setup = IdealSetup::paper(combo.controller, deg_to_state(combo.x0.condition().deg), target);
     setup.mu = base.plant.mu;
     setup.v_belt = base.plant.v_belt;
     setup.f_n_ref = base.controller.f_n_ref;
-    setup.hybrid_ki = combo.x0.hybrid_ki();
+    setup.hybrid_ki = paper_hybrid_ki(combo.x0);
     setup.move_time_s = c.move_time_s;
     setup.duration_s = c.duration_s;
     setup.sample_dt = 1.0 / base.timing.rate_hz;
@@ -321,9 +306,9 @@ fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -
 pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<Scenario, AnalysisError> {
     let mut s = base.clone();
     s.name = combo.stem();
-    s.controller.kind = combo.controller.name().into();
-    s.plant.x0 = combo.x0.letter().into();
-    s.controller.hybrid_ki = combo.x0.hybrid_ki();
+    s.controller.kind = combo.controller;
+    s.plant.x0 = combo.x0;
+    s.controller.hybrid_ki = paper_hybrid_ki(combo.x0);
     s.controller.target_z_t = target;
     s.controller.move_time_s = c.move_time_s;
     s.timing.duration_s = c.duration_s;
@@ -457,11 +442,11 @@ pub fn bisect_largest<E>(mut lo: f64, mut hi: f64, tol: f64, mut ok: impl FnMut(
 ///
 /// # Errors
 /// [`AnalysisError`] if the plant cannot be set up.
-pub fn default_bracket(base: &Scenario, x0: X0) -> Result<(f64, f64), AnalysisError> {
+pub fn default_bracket(base: &Scenario, x0: PaperX0) -> Result<(f64, f64), AnalysisError> {
     let mut params = shared::Params::<f64>::paper();
     params.mu = base.plant.mu;
     params.v_belt = base.plant.v_belt;
-    let plant = Plant::new(params, sim_config(base), deg_to_state(x0.paper().deg), 0.0, [0.0; 2])?;
+    let plant = Plant::new(params, sim_config(base), deg_to_state(x0.condition().deg), 0.0, [0.0; 2])?;
     let reach = crate::admissible::belt_reach(&params);
     Ok((plant.tip()[0], reach - 1e-3))
 }
@@ -500,6 +485,7 @@ pub fn search(
     mut on_trial: impl FnMut(&Trial),
 ) -> Result<Search, AnalysisError> {
     let (lo, hi) = bracket;
+    check_x0(combo.x0)?;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return Err(AnalysisError::BadInput(format!("bracket [{lo}, {hi}] m must be finite with LO < HI")));
     }

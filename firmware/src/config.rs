@@ -4,13 +4,34 @@
 
 use shared::{ElbowBranch, Params};
 
-/// Which control law runs (MODEL.md experiments 5 and 6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// Which control law runs (MODEL.md experiments 5 and 6): the firmware's
+/// configuration, scenario files (`controller.kind = "pid" | "hybrid"`), the
+/// analyses and the command line (`--controller`) all use this one type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ControllerKind {
     /// Joint-space PID on `q' = [theta1, theta2 - theta1]` (paper eq. 8).
     Pid,
     /// Hybrid force/motion control (paper eqs. 9 to 11).
     Hybrid,
+}
+
+impl core::fmt::Display for ControllerKind {
+    /// [`Self::name`].
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl ControllerKind {
+    /// `pid` or `hybrid` (as in scenario files, JSON and on the command line).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pid => "pid",
+            Self::Hybrid => "hybrid",
+        }
+    }
 }
 
 /// The friction term `f_t` of the hybrid law (paper eq. 9: `-J^T i_x f_t`).
@@ -24,15 +45,25 @@ pub enum ControllerKind {
 /// period. The same holds for the model-based term with the measured `f_n`.
 /// With the commanded normal force, `f_t_hat = -mu_hat s a_f`, there is no loop
 /// and `f_n = a_f` exactly when `mu_hat = mu`: that is the default.
+///
+/// Scenario files name it `controller.friction`: `measured`, `measured_normal`,
+/// `commanded` or `none`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum FrictionCompensation {
     /// The measured tangential force (one period old).
+    #[serde(rename = "measured")]
     Measured,
     /// `-mu_hat sign(z_r_dot) f_n` with the measured normal force (one period old).
+    #[serde(rename = "measured_normal")]
+    #[cfg_attr(feature = "clap", value(name = "measured_normal"))]
     ModelMeasuredNormal,
     /// `-mu_hat sign(z_r_dot) a_f` with the commanded normal force (default).
+    #[serde(rename = "commanded")]
+    #[cfg_attr(feature = "clap", value(name = "commanded"))]
     ModelCommandedNormal,
     /// No friction term.
+    #[serde(rename = "none")]
     None,
 }
 

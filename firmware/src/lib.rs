@@ -9,6 +9,10 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+// clap's derives name `::std` (host-only feature).
+#[cfg(all(feature = "clap", not(test)))]
+extern crate std;
+
 pub mod board;
 pub mod config;
 pub mod consistency;

@@ -38,9 +38,11 @@
 use nalgebra::{Matrix2, Vector2};
 use shared::SlipDirection;
 
-/// The impact law, a first-class scenario parameter.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// The impact law, a first-class scenario parameter (`plant.impact_law`) and
+/// command-line option (`--impact-law newton|poisson`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ImpactLaw {
     /// Restitution of the normal velocity (`e` is Newton's coefficient `e_n`).
     Newton,

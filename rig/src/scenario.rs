@@ -3,8 +3,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use firmware::{ControllerKind, config::FrictionCompensation};
+use plant::{impact::ImpactLaw, initial::PaperX0};
+
 use super::faults::Fault;
-use plant::impact::ImpactLaw;
 
 /// The embedded default scenario (`scenarios/default.toml`).
 pub const DEFAULT_TOML: &str = include_str!("../../scenarios/default.toml");
@@ -18,7 +20,7 @@ pub struct PlantSection {
     /// Belt speed, m/s.
     pub v_belt: f64,
     /// Initial condition: `a`, `d` or `u`.
-    pub x0: String,
+    pub x0: PaperX0,
     /// Impact law.
     pub impact_law: ImpactLaw,
     /// Restitution coefficient.
@@ -34,7 +36,7 @@ pub struct PlantSection {
 #[serde(deny_unknown_fields)]
 pub struct ControllerSection {
     /// `hybrid` or `pid`.
-    pub kind: String,
+    pub kind: ControllerKind,
     /// Tangential target `z_t*`, m.
     pub target_z_t: f64,
     /// Duration of the move, s.
@@ -44,7 +46,7 @@ pub struct ControllerSection {
     /// Hybrid force-integral gain `K'_I`, 1/s.
     pub hybrid_ki: f64,
     /// Friction term: `commanded`, `measured_normal`, `measured` or `none`.
-    pub friction: String,
+    pub friction: FrictionCompensation,
     /// The firmware's friction estimate `mu_hat`.
     pub mu_hat: f64,
 }
@@ -201,7 +203,17 @@ impl Scenario {
     /// [`ScenarioError::Parse`] (with the key and line from the TOML parser) or
     /// [`ScenarioError::OutOfRange`] naming the key and value.
     pub fn from_toml(text: &str) -> Result<Self, ScenarioError> {
-        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
+        // The path names the key of a bad value (`controller.kind`), the TOML error its line.
+        let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
+        let s: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            if path == "." {
+                ScenarioError::Parse(inner.to_string())
+            } else {
+                ScenarioError::Parse(format!("scenario key `{path}`: {inner}"))
+            }
+        })?;
         s.validate()?;
         Ok(s)
     }
@@ -220,9 +232,6 @@ impl Scenario {
         if !finite(p.v_belt) || p.v_belt.abs() > 5.0 {
             return bad("plant.v_belt", p.v_belt.to_string(), "a finite speed within +-5 m/s");
         }
-        if !["a", "d", "u"].contains(&p.x0.as_str()) {
-            return bad("plant.x0", format!("{:?}", p.x0), "one of \"a\", \"d\", \"u\"");
-        }
         if !(finite(p.e_n) && (0.0..=1.0).contains(&p.e_n)) {
             return bad("plant.e_n", p.e_n.to_string(), "a value in [0, 1]");
         }
@@ -232,12 +241,6 @@ impl Scenario {
             }
         }
         let c = &self.controller;
-        if !["hybrid", "pid"].contains(&c.kind.as_str()) {
-            return bad("controller.kind", format!("{:?}", c.kind), "\"hybrid\" or \"pid\"");
-        }
-        if !["commanded", "measured_normal", "measured", "none"].contains(&c.friction.as_str()) {
-            return bad("controller.friction", format!("{:?}", c.friction), "\"commanded\", \"measured_normal\", \"measured\" or \"none\"");
-        }
         if !(finite(c.target_z_t) && c.target_z_t.abs() < 0.42) {
             return bad("controller.target_z_t", c.target_z_t.to_string(), "a finite position within the arm's reach (|z_t*| < 2 l)");
         }
@@ -299,8 +302,8 @@ mod tests {
     #[test]
     fn the_embedded_default_parses_and_matches_the_issue() {
         let s = Scenario::from_toml(DEFAULT_TOML).unwrap();
-        assert_eq!((s.plant.mu, s.plant.v_belt, s.plant.x0.as_str()), (0.6, -0.4, "d"));
-        assert_eq!((s.controller.kind.as_str(), s.controller.target_z_t, s.controller.f_n_ref), ("hybrid", 0.10, 10.0));
+        assert_eq!((s.plant.mu, s.plant.v_belt, s.plant.x0), (0.6, -0.4, PaperX0::D));
+        assert_eq!((s.controller.kind, s.controller.target_z_t, s.controller.f_n_ref), (ControllerKind::Hybrid, 0.10, 10.0));
         assert_eq!((s.timing.rate_hz, s.timing.duration_s), (1000.0, 10.0));
     }
 

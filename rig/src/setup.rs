@@ -1,10 +1,7 @@
 //! From a scenario to the two sides of the loop: the plant at `t = 0` and the
 //! firmware's configuration.
 
-use firmware::{
-    Config, ControllerKind,
-    config::{FrictionCompensation, HybridGains},
-};
+use firmware::{Config, config::HybridGains};
 use shared::Params;
 
 use super::scenario::Scenario;
@@ -19,18 +16,13 @@ pub fn firmware_config(s: &Scenario) -> Config {
     let base = Config::default();
     Config {
         params,
-        controller: if c.kind == "pid" { ControllerKind::Pid } else { ControllerKind::Hybrid },
+        controller: c.kind,
         period_s: (1.0 / s.timing.rate_hz) as f32,
         target_z_t: c.target_z_t as f32,
         move_time_s: c.move_time_s as f32,
         f_n_ref: c.f_n_ref as f32,
         hybrid: HybridGains { ki: c.hybrid_ki as f32, ..base.hybrid },
-        friction: match c.friction.as_str() {
-            "measured" => FrictionCompensation::Measured,
-            "measured_normal" => FrictionCompensation::ModelMeasuredNormal,
-            "none" => FrictionCompensation::None,
-            _ => FrictionCompensation::ModelCommandedNormal,
-        },
+        friction: c.friction,
         ..base
     }
 }
@@ -43,10 +35,5 @@ pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
     let params = Params::new(s.plant.mu, s.plant.v_belt)?;
     let sim =
         SimConfig { rtol: s.plant.rtol, atol: s.plant.atol, impact_law: s.plant.impact_law, e_n: s.plant.e_n, ..SimConfig::default() };
-    let ic = match s.plant.x0.as_str() {
-        "a" => initial::X0A,
-        "u" => initial::X0U,
-        _ => initial::X0D,
-    };
-    Plant::new(params, sim, initial::deg_to_state(ic.deg), 0.0, [0.0, 0.0])
+    Plant::new(params, sim, initial::deg_to_state(s.plant.x0.condition().deg), 0.0, [0.0, 0.0])
 }

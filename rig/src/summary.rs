@@ -21,7 +21,7 @@ pub struct RunSummary {
     /// Scenario name.
     pub scenario: String,
     /// `hybrid` or `pid`.
-    pub controller: String,
+    pub controller: firmware::ControllerKind,
     /// `iceoryx2` or `in-process`; `pil-qemu` or `pil-serial` for `sil-host pil`.
     pub transport: &'static str,
     /// `lockstep` or `realtime` (`in-process` runs are lockstep).
@@ -83,7 +83,7 @@ impl RunSummary {
             status: if failure.is_some() { "failed" } else { "ok" },
             error: failure.map(|e| e.to_string()),
             scenario: scenario.name.clone(),
-            controller: scenario.controller.kind.clone(),
+            controller: scenario.controller.kind,
             transport,
             timing,
             rig: None,

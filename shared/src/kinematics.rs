@@ -13,6 +13,7 @@ use crate::{Real, lit, params::to_f64};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ElbowBranch {
     /// `theta2 - theta1 > 0` (e.g. the paper's `x0u`).
     Up,

@@ -14,6 +14,10 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+// clap's derives name `::std` (host-only feature).
+#[cfg(feature = "clap")]
+extern crate std;
+
 pub mod contact;
 pub mod kinematics;
 pub mod model;

@@ -183,10 +183,10 @@ pub struct BenchArgs {
 pub struct ZmaxArgs {
     /// Controller (ignored with --all).
     #[arg(long, value_enum, default_value = "hybrid")]
-    pub controller: ControllerArg,
+    pub controller: firmware::ControllerKind,
     /// Initial condition (ignored with --all).
     #[arg(long, value_enum, default_value = "d")]
-    pub x0: ZmaxX0,
+    pub x0: plant::initial::PaperX0,
     /// The paper's ideal controllers (continuous time, exact measurements, no
     /// saturation) instead of the sampled firmware (ignored with --all).
     #[arg(long)]
@@ -222,15 +222,6 @@ pub struct ZmaxArgs {
     pub output: OutputArgs,
 }
 
-/// Initial condition of experiments 5 and 6.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ZmaxX0 {
-    /// x0d = [-11.4 deg, 0, -35.1 deg, 0], elbow down.
-    D,
-    /// x0u = [-35.1 deg, 0, -11.4 deg, 0], elbow up.
-    U,
-}
-
 /// The scenario of a run and its command-line overrides.
 #[derive(Debug, Clone, Args)]
 pub struct ScenarioArgs {
@@ -241,10 +232,10 @@ pub struct ScenarioArgs {
     pub scenario: Option<PathBuf>,
     /// Override the controller.
     #[arg(long, value_enum)]
-    pub controller: Option<ControllerArg>,
+    pub controller: Option<firmware::ControllerKind>,
     /// Override the initial condition.
     #[arg(long, value_enum)]
-    pub x0: Option<PaperX0>,
+    pub x0: Option<plant::initial::PaperX0>,
     /// Override the tangential target z_t*, m.
     #[arg(long)]
     pub target_zt: Option<f64>,
@@ -329,15 +320,6 @@ pub struct PilArgs {
     pub output: OutputArgs,
 }
 
-/// Controller choice on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ControllerArg {
-    /// Joint-space PID (MODEL.md experiment 5).
-    Pid,
-    /// Hybrid force/motion control (MODEL.md experiment 6).
-    Hybrid,
-}
-
 /// Options shared by every command's output.
 #[derive(Debug, Clone, Args)]
 pub struct OutputArgs {
@@ -349,32 +331,12 @@ pub struct OutputArgs {
     pub json: bool,
 }
 
-/// The paper's initial conditions (MODEL.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PaperX0 {
-    /// x0a = [32 deg, 0, 18.27 deg, 0] (experiments 3 and 4).
-    A,
-    /// x0d = [-11.4 deg, 0, -35.1 deg, 0], elbow down (experiments 3, 5, 6).
-    D,
-    /// x0u = [-35.1 deg, 0, -11.4 deg, 0], elbow up (experiments 5 and 6).
-    U,
-}
-
-/// Impact laws at touchdown and for the impact without collision.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ImpactLawArg {
-    /// Newton: restitution on the normal velocity, v_n+ = -e_n v_n-.
-    Newton,
-    /// Poisson: restitution on the normal impulse (Darboux-Keller shock dynamics).
-    Poisson,
-}
-
 /// `sil-host simulate`.
 #[derive(Debug, Clone, Args)]
 pub struct SimulateArgs {
     /// Initial condition: one of the paper's (projected onto the belt).
     #[arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg")]
-    pub x0: PaperX0,
+    pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     /// A tip up to 1 mm inside the belt is projected onto it; deeper is an error.
     #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
@@ -387,7 +349,7 @@ pub struct SimulateArgs {
     pub v_belt: f64,
     /// Impact law at touchdown and for impacts without collision.
     #[arg(long, value_enum, default_value = "newton")]
-    pub impact_law: ImpactLawArg,
+    pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse for Poisson).
     #[arg(long, default_value_t = 0.2)]
     pub e_n: f64,
@@ -430,7 +392,7 @@ pub struct ModesArgs {
     pub v_belt: f64,
     /// Elbow branch for theta2 (the tip is put on the belt on this branch).
     #[arg(long, value_enum, default_value = "down")]
-    pub branch: BranchArg,
+    pub branch: shared::ElbowBranch,
     /// theta1 range in degrees: MIN,MAX.
     #[arg(long, default_value = "-90,90", value_name = "MIN,MAX", allow_hyphen_values = true)]
     pub theta1_deg: String,
@@ -454,24 +416,6 @@ pub struct ModesArgs {
     pub output: OutputArgs,
 }
 
-/// Elbow branch on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BranchArg {
-    /// theta2 - theta1 > 0.
-    Up,
-    /// theta2 - theta1 < 0.
-    Down,
-}
-
-impl From<BranchArg> for shared::ElbowBranch {
-    fn from(b: BranchArg) -> Self {
-        match b {
-            BranchArg::Up => Self::Up,
-            BranchArg::Down => Self::Down,
-        }
-    }
-}
-
 /// `sil-host poincare`.
 #[derive(Debug, Clone, Args)]
 pub struct PoincareArgs {
@@ -480,7 +424,7 @@ pub struct PoincareArgs {
     pub mu: f64,
     /// Initial condition: one of the paper's (projected onto the belt).
     #[arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg")]
-    pub x0: PaperX0,
+    pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
     pub x0_deg: Option<String>,
@@ -528,7 +472,7 @@ pub struct PoincareArgs {
     pub lyap_d0: f64,
     /// Impact law at touchdown and for impacts without collision.
     #[arg(long, value_enum, default_value = "newton")]
-    pub impact_law: ImpactLawArg,
+    pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1].
     #[arg(long, default_value_t = 0.2)]
     pub e_n: f64,
@@ -596,7 +540,7 @@ pub struct SweepArgs {
     pub scenario: Option<PathBuf>,
     /// Impact laws, comma-separated (each is a sweep dimension).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "newton")]
-    pub impact_law: Vec<ImpactLawArg>,
+    pub impact_law: Vec<plant::impact::ImpactLaw>,
     /// Restitution coefficients e_n in [0, 1], comma-separated (each is a sweep dimension).
     #[arg(long, value_delimiter = ',', default_value = "0.2")]
     pub e_n: Vec<f64>,

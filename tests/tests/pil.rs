@@ -24,7 +24,7 @@ use std::{
     sync::OnceLock,
 };
 
-use firmware::pil::StepClock;
+use firmware::{ControllerKind, pil::StepClock};
 use rig::summary::rms_tracking_error;
 use rig::{
     in_process,
@@ -41,9 +41,9 @@ fn image() -> &'static Path {
     IMAGE.get_or_init(|| common::qemu_image("pil"))
 }
 
-fn scenario(controller: &str, duration_s: f64) -> Scenario {
+fn scenario(controller: ControllerKind, duration_s: f64) -> Scenario {
     let mut s = Scenario::default_scenario();
-    s.controller.kind = controller.into();
+    s.controller.kind = controller;
     s.timing.duration_s = duration_s;
     s
 }
@@ -61,7 +61,7 @@ fn the_pil_image_fits_its_flash_and_ram_budgets() {
 #[test]
 fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     // 4 s: the 2 s move and the hold after it (the default runs 10 s).
-    let s = scenario("hybrid", 4.0);
+    let s = scenario(ControllerKind::Hybrid, 4.0);
     let (sil, err) = in_process::run(&s, |_, _| {});
     assert!(err.is_none(), "{err:?}");
 
@@ -147,7 +147,7 @@ fn pid_through_the_cli_reports_its_instruction_counts_within_the_budget() {
 #[test]
 fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     // QEMU killed at 0.3 s (the kill_firmware fault): every period before is kept.
-    let mut s = scenario("hybrid", 1.0);
+    let mut s = scenario(ControllerKind::Hybrid, 1.0);
     s.faults = Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", rig::scenario::DEFAULT_TOML))
         .unwrap()
         .faults;
@@ -295,7 +295,7 @@ fn hil_over_a_serial_port_gives_the_outcome_of_the_socket_path() {
 
 #[test]
 fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
-    let s = scenario("hybrid", 1.5);
+    let s = scenario(ControllerKind::Hybrid, 1.5);
     let qemu = PtyQemu::start();
     let mut serial = PilLink::start(&s, &PilOptions::serial(&qemu.pty, DEFAULT_BAUD), None).unwrap();
     assert_eq!(serial.transport(), "pil-serial");

@@ -16,6 +16,7 @@
 pub mod run;
 pub mod summary;
 
+use firmware::ControllerKind;
 use nalgebra::Vector2;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -104,6 +105,15 @@ pub enum SweepController {
 }
 
 impl SweepController {
+    /// The controller that drives the arm; `None` in open loop.
+    pub fn kind(self) -> Option<ControllerKind> {
+        match self {
+            Self::None => None,
+            Self::Hybrid => Some(ControllerKind::Hybrid),
+            Self::Pid => Some(ControllerKind::Pid),
+        }
+    }
+
     /// Lower-case name.
     pub fn name(self) -> &'static str {
         match self {
@@ -165,7 +175,7 @@ pub struct InitialCondition {
     /// projection onto the belt).
     pub x0: [f64; 4],
     /// Elbow branch (`up` or `down`).
-    pub branch: &'static str,
+    pub branch: ElbowBranch,
     /// Height of the tip above the belt as given, m (negative: inside it; the plant
     /// projects it onto the belt at the same `z_t` and branch).
     pub height_above_belt: f64,
@@ -246,7 +256,7 @@ impl SweepSpec {
             out.push(InitialCondition {
                 name: format!("r{}", i + 1),
                 x0: [q[0], 0.0, q[1], 0.0],
-                branch: branch.name(),
+                branch,
                 height_above_belt: 0.0,
             });
         }

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use shared::{ContactMode, Params};
 
 use super::{InitialCondition, RunKey, SweepController, SweepSpec};
-use crate::ideal::{self, ControllerKind, IdealLaw, IdealSetup};
+use crate::ideal::{self, IdealLaw, IdealSetup};
 use plant::{Counters, Plant, SimConfig};
 use rig::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario};
 
@@ -264,7 +264,7 @@ fn windows(
 /// controller, reference (`z_t*`, move time), `f_n*` and `K'_I`, from `ic`.
 fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetup {
     IdealSetup {
-        controller: if s.controller.kind == "pid" { ControllerKind::Pid } else { ControllerKind::Hybrid },
+        controller: s.controller.kind,
         x0: ic.x0,
         mu: s.plant.mu,
         v_belt: s.plant.v_belt,
@@ -292,9 +292,9 @@ pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialConditio
     s.plant.e_n = key.e_n;
     s.plant.rtol = spec.rtol;
     s.plant.atol = spec.atol;
-    s.controller.kind = spec.controller.name().into();
+    s.controller.kind = spec.controller.kind()?;
     s.controller.mu_hat = key.mu;
-    if ic.branch == "up" {
+    if ic.branch == shared::ElbowBranch::Up {
         s.controller.hybrid_ki = 0.0;
     }
     s.timing.duration_s = spec.run_duration();

@@ -41,8 +41,8 @@ fn coarse_search_brackets_the_first_lift_off() {
     let c = Criteria { duration_s: 3.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 0.5 };
     let tol = 4e-3;
     for setting in [Setting::Ideal, Setting::Sampled] {
-        let combo = Combination { controller: ControllerKind::Hybrid, x0: X0::D, setting };
-        let bracket = default_bracket(&base, X0::D).unwrap();
+        let combo = Combination { controller: ControllerKind::Hybrid, x0: PaperX0::D, setting };
+        let bracket = default_bracket(&base, PaperX0::D).unwrap();
         let s = search(&base, combo, bracket, tol, &c, |_| {}).unwrap();
         let Bisection::Found { lo, hi, .. } = s.bisection else { panic!("{:?}", s.bisection) };
         assert!(hi - lo <= tol);

@@ -12,7 +12,7 @@ use std::{
 };
 
 use crate::{
-    cli::{ControllerArg, PaperX0, ScenarioArgs},
+    cli::ScenarioArgs,
     error::CliError,
     output::{OutputSet, StreamedCsv},
     plot,
@@ -44,19 +44,10 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
         None => Scenario::default_scenario(),
     };
     if let Some(c) = args.controller {
-        s.controller.kind = match c {
-            ControllerArg::Pid => "pid",
-            ControllerArg::Hybrid => "hybrid",
-        }
-        .into();
+        s.controller.kind = c;
     }
     if let Some(x0) = args.x0 {
-        s.plant.x0 = match x0 {
-            PaperX0::A => "a",
-            PaperX0::D => "d",
-            PaperX0::U => "u",
-        }
-        .into();
+        s.plant.x0 = x0;
     }
     if let Some(z) = args.target_zt {
         s.controller.target_z_t = z;

@@ -373,7 +373,7 @@ pub fn run(args: &ModesArgs) -> Result<(), CliError> {
 pub fn run_with<W: Write>(args: &ModesArgs, stdout: &mut W) -> Result<(), CliError> {
     let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
     let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
-    let map = compute(args.mu, args.v_belt, args.branch.into(), args.theta2_sign, t1, t1d, args.grid)?;
+    let map = compute(args.mu, args.v_belt, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let files: Vec<String> = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     let (tmp, w) = out.create("modes.csv")?;
@@ -402,7 +402,7 @@ mod tests {
         ModesArgs {
             mu: MU,
             v_belt: V,
-            branch: crate::cli::BranchArg::Down,
+            branch: shared::ElbowBranch::Down,
             theta1_deg: "-40,40".into(),
             theta1_dot: "-10,10".into(),
             grid: 60,

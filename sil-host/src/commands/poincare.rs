@@ -21,7 +21,7 @@ use crate::{
     cli::PoincareArgs,
     commands::{
         parse_range,
-        simulate::{InitialCondition, chosen_initial_condition, impact_law},
+        simulate::{InitialCondition, chosen_initial_condition},
     },
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
@@ -209,8 +209,7 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
     // Parameters at both ends of the grid (mu, v_belt finite, ...).
     Params::new(args.mu, v_min)?;
     let params = Params::new(args.mu, v_max)?;
-    let sim =
-        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
+    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);

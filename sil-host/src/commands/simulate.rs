@@ -12,13 +12,13 @@ use serde::Serialize;
 use shared::Params;
 
 use crate::{
-    cli::{ImpactLawArg, PaperX0, SimulateArgs},
+    cli::SimulateArgs,
     error::CliError,
     output::{OutputSet, io_err, progress_bar, write_csv},
     plot::{self, Panel, Series, colors},
 };
-use plant::initial::{self, ProjectionInfo};
-use plant::{Counters, Plant, PlantEvent, SimConfig, SimError, impact::ImpactLaw};
+use plant::initial::{self, PaperX0, ProjectionInfo};
+use plant::{Counters, Plant, PlantEvent, SimConfig, SimError};
 
 /// One row of `trace.csv`.
 #[derive(Debug, Clone, Serialize)]
@@ -150,14 +150,6 @@ pub struct Summary {
     pub files: Vec<String>,
 }
 
-/// The simulator's impact law for the command-line choice.
-pub(crate) fn impact_law(arg: ImpactLawArg) -> ImpactLaw {
-    match arg {
-        ImpactLawArg::Newton => ImpactLaw::Newton,
-        ImpactLawArg::Poisson => ImpactLaw::Poisson,
-    }
-}
-
 /// The initial condition of `--x0` or, when given, `--x0-deg`: its name and
 /// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and degrees per second.
 ///
@@ -167,11 +159,7 @@ pub(crate) fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Res
     Ok(match x0_deg {
         Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
         None => {
-            let ic = match x0 {
-                PaperX0::A => initial::X0A,
-                PaperX0::D => initial::X0D,
-                PaperX0::U => initial::X0U,
-            };
+            let ic = x0.condition();
             (ic.name.to_string(), ic.deg)
         }
     })
@@ -234,8 +222,7 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     // Validate everything before touching the output folder.
     let params = Params::new(args.mu, args.v_belt)?;
-    let sim =
-        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: impact_law(args.impact_law), e_n: args.e_n, ..SimConfig::default() };
+    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
@@ -358,7 +345,7 @@ fn print_human(s: &Summary, n_events: usize) {
     let _ = writeln!(
         o,
         "initial condition {} = [{:.2} deg, {:.2} deg/s, {:.2} deg, {:.2} deg/s] (elbow {})",
-        ic.name, ic.given_deg[0], ic.given_deg[1], ic.given_deg[2], ic.given_deg[3], ic.projection.branch
+        ic.name, ic.given_deg[0], ic.given_deg[1], ic.given_deg[2], ic.given_deg[3], ic.projection.branch.name()
     );
     if ic.projection.projected {
         let _ = writeln!(

@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::{
-    cli::{ImpactLawArg, MergeArgs, ScenarioArgs, SweepArgs},
+    cli::{MergeArgs, ScenarioArgs, SweepArgs},
     error::CliError,
     output::{OutputSet, progress_bar},
     sweep::{
@@ -36,7 +36,6 @@ use analyses::sweep::{
     run::{self, RunRow},
     summary::{self, Results},
 };
-use plant::impact::ImpactLaw;
 
 /// The paper's experiment 3: 10 x 181 grid points, two initial conditions, 300 s each.
 const PAPER_GRID_SIMULATED_S: f64 = 10.0 * 181.0 * 2.0 * 300.0;
@@ -150,10 +149,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         format: analyses::sweep::FORMAT,
         mu: parse_axis("mu", &args.mu, args.mu_step)?,
         v_belt: parse_axis("v-belt", &args.v_belt, args.v_belt_step)?,
-        impact_laws: dedup(args.impact_law.iter().map(|l| match l {
-            ImpactLawArg::Newton => ImpactLaw::Newton,
-            ImpactLawArg::Poisson => ImpactLaw::Poisson,
-        })),
+        impact_laws: dedup(args.impact_law.iter().copied()),
         e_n: {
             let mut v: Vec<f64> = Vec::new();
             for e in &args.e_n {
@@ -401,7 +397,7 @@ fn report(s: &SweepSummary, json: bool) {
             deg[1],
             deg[2],
             deg[3],
-            ic.branch,
+            ic.branch.name(),
             ic.height_above_belt.abs() * 1e3,
             if ic.height_above_belt < 0.0 { "inside" } else { "above" },
             if ic.height_above_belt <= 1e-12 { ": projected onto it" } else { "" }

@@ -15,16 +15,16 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::{
-    cli::{ControllerArg, ZmaxArgs, ZmaxX0},
+    cli::ZmaxArgs,
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
     plot,
 };
 use analyses::admissible::{p_on_belt, positive_intervals};
-use analyses::ideal::ControllerKind;
 use analyses::zmax::{
-    Bisection, Combination, Criteria, Search, Setting, Trial, X0, default_bracket, max_evaluations, sampled_scenario, search,
+    Bisection, Combination, Criteria, Search, Setting, Trial, default_bracket, max_evaluations, sampled_scenario, search,
 };
+use plant::initial::PaperX0;
 use rig::scenario::Scenario;
 
 /// One row of `zmax.csv`.
@@ -94,14 +94,7 @@ fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
     if args.all {
         return Combination::all();
     }
-    let controller = match args.controller {
-        ControllerArg::Pid => ControllerKind::Pid,
-        ControllerArg::Hybrid => ControllerKind::Hybrid,
-    };
-    let x0 = match args.x0 {
-        ZmaxX0::D => X0::D,
-        ZmaxX0::U => X0::U,
-    };
+    let (controller, x0) = (args.controller, args.x0);
     let setting = if args.ideal { Setting::Ideal } else { Setting::Sampled };
     vec![Combination { controller, x0, setting }]
 }
@@ -118,27 +111,21 @@ fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
 }
 
 /// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
-fn p_zero_end(base: &Scenario, x0: X0, bracket: (f64, f64)) -> Option<f64> {
+fn p_zero_end(base: &Scenario, x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
     let mut params = shared::Params::<f64>::paper();
     params.mu = base.plant.mu;
     params.v_belt = base.plant.v_belt;
     let arm = shared::Arm::new(params);
-    let branch = match x0 {
-        X0::D => shared::ElbowBranch::Down,
-        X0::U => shared::ElbowBranch::Up,
-    };
+    let branch = x0.branch();
     let p = |z| p_on_belt(&arm, z, branch, shared::SlipDirection::Positive);
     positive_intervals(p, bracket.0, bracket.1 + 1e-3 - 1e-9, 20_000, 1e-9).iter().find(|i| i.hi_is_root).map(|i| i.hi)
 }
 
 /// The `z_t` (m) of the largest `theta1` on the belt on the initial condition's
 /// branch, by a scan of 20 000 steps over the bracket; `None` at an end of it.
-fn theta1_fold(x0: X0, bracket: (f64, f64)) -> Option<f64> {
+fn theta1_fold(x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
     let params = shared::Params::<f64>::paper();
-    let branch = match x0 {
-        X0::D => shared::ElbowBranch::Down,
-        X0::U => shared::ElbowBranch::Up,
-    };
+    let branch = x0.branch();
     let n = 20_000;
     let z_at = |i: usize| bracket.0 + (bracket.1 - bracket.0) * i as f64 / n as f64;
     let theta1 = |z: f64| {
@@ -166,6 +153,9 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
         return Err(CliError::BadInput(format!("--tol {} m must be finite and > 0", args.tol)));
     }
     let combos = combinations(args);
+    for c in &combos {
+        analyses::zmax::check_x0(c.x0)?;
+    }
     // Check every set-up before the output folder is touched.
     let mut jobs = Vec::new();
     for combo in combos {
@@ -176,7 +166,7 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
         sampled_scenario(&base, combo, bracket.1, &criteria)?;
         analyses::ideal::build(&analyses::ideal::IdealSetup {
             target_z_t: bracket.1,
-            ..analyses::ideal::IdealSetup::paper(combo.controller, plant::initial::deg_to_state(combo.x0.paper().deg), bracket.0)
+            ..analyses::ideal::IdealSetup::paper(combo.controller, plant::initial::deg_to_state(combo.x0.condition().deg), bracket.0)
         })
         .map_err(CliError::Sim)?;
         jobs.push((combo, bracket));

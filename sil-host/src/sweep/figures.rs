@@ -67,7 +67,7 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
         let ic = &ics[i];
         let mut chart = ChartBuilder::on(area)
             .margin(10)
-            .caption(format!("from {} (elbow {})", ic.name, ic.branch), ("sans-serif", 17))
+            .caption(format!("from {} (elbow {})", ic.name, ic.branch.name()), ("sans-serif", 17))
             .x_label_area_size(40)
             .y_label_area_size(50)
             .build_cartesian_2d(x_range.clone(), y_range.clone())
