@@ -253,12 +253,7 @@ impl SweepSpec {
             let branch = if rng.random_bool(0.5) { ElbowBranch::Up } else { ElbowBranch::Down };
             // Within the reach by construction, so the inverse kinematics exists.
             let q = inverse_kinematics(params.l, &Vector2::new(z_t, -params.h), branch).unwrap_or_else(|_| Vector2::zeros());
-            out.push(InitialCondition {
-                name: format!("r{}", i + 1),
-                x0: [q[0], 0.0, q[1], 0.0],
-                branch,
-                height_above_belt: 0.0,
-            });
+            out.push(InitialCondition { name: format!("r{}", i + 1), x0: [q[0], 0.0, q[1], 0.0], branch, height_above_belt: 0.0 });
         }
         out
     }

@@ -345,7 +345,12 @@ fn print_human(s: &Summary, n_events: usize) {
     let _ = writeln!(
         o,
         "initial condition {} = [{:.2} deg, {:.2} deg/s, {:.2} deg, {:.2} deg/s] (elbow {})",
-        ic.name, ic.given_deg[0], ic.given_deg[1], ic.given_deg[2], ic.given_deg[3], ic.projection.branch.name()
+        ic.name,
+        ic.given_deg[0],
+        ic.given_deg[1],
+        ic.given_deg[2],
+        ic.given_deg[3],
+        ic.projection.branch.name()
     );
     if ic.projection.projected {
         let _ = writeln!(
