@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Flash and static-RAM budgets of the MCU image (HARDWARE.md: flash <= 64 KiB,
+"""Flash and static-RAM budgets of the MCU image (docs/hardware.md: flash <= 64 KiB,
 static RAM <= 16 KiB, no heap). Reads the ELF's section headers and symbol table
 with the standard library only. Usage: scripts/budgets.py ELF [--json]
 Exit status 1 when a budget is exceeded or an allocator is linked."""

@@ -29,7 +29,7 @@ echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
 
 echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting) and their budgets"
-echo "   (HARDWARE.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
+echo "   (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
 cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
 cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
 for image in mcu/arm mcu/pil qemu/arm qemu/pil; do

@@ -1,5 +1,5 @@
 //! The admissible configurations of the tip on the belt
-//! (MODEL.md experiment 2, paper Table II).
+//! (docs/model.md experiment 2, paper Table II).
 //!
 //! With the tip on the belt (`z_n = -H`) at tangential position `z_t`, the arm's
 //! configuration `q(z_t)` on each elbow branch comes from inverse kinematics, and
@@ -119,7 +119,7 @@ pub fn positive_intervals<F: FnMut(f64) -> f64>(mut f: F, lo: f64, hi: f64, step
 }
 
 /// Half-length of the reachable segment of the belt, m:
-/// `sqrt((2 l)^2 - H^2)` (MODEL.md geometry). Zero if the belt is out of reach
+/// `sqrt((2 l)^2 - H^2)` (docs/model.md geometry). Zero if the belt is out of reach
 /// (invalid parameters; see [`Params::validate`]).
 pub fn belt_reach(params: &Params<f64>) -> f64 {
     let reach = 2.0 * params.l;
@@ -204,7 +204,8 @@ pub fn compute_with_steps(mu: f64, steps: usize) -> Result<AdmissibleReport, Par
 
 /// Mirror check: the arm mirrored about the vertical (`theta -> -theta`) swaps
 /// the elbow branches, maps `z_t -> -z_t` and reverses the slip direction, and
-/// keeps `p` (MODEL.md: "the case z_r_dot < 0 is the mirror image"). So the
+/// keeps `p` (docs/model.md, experiment 2: the slip direction `z_r_dot < 0` mirrors
+/// `z_r_dot > 0`). So the
 /// intervals of (branch, `z_r_dot > 0`) must be those of (other branch,
 /// `z_r_dot < 0`) with `z_t -> -z_t`. Returns the largest end mismatch (m), or
 /// `None` if the numbers of intervals differ.
@@ -332,7 +333,7 @@ mod tests {
 
     #[test]
     fn p_matches_an_independent_computation_from_model_md() {
-        // Q = J M^-1 J^T written out from MODEL.md, against the shared model via IK.
+        // Q = J M^-1 J^T written out from docs/model.md, against the shared model via IK.
         let a = arm(0.6);
         let pr = a.params;
         for &(z_t, branch) in &[(-0.15, ElbowBranch::Up), (0.05, ElbowBranch::Down), (0.17, ElbowBranch::Down)] {

@@ -1,5 +1,5 @@
 //! The paper's controllers in its own setting: continuous time, exact
-//! measurements, no saturation (MODEL.md experiments 5 and 6), as torque laws the
+//! measurements, no saturation (docs/model.md experiments 5 and 6), as torque laws the
 //! plant evaluates inside its integration ([`Controller`]), and a closed-loop run
 //! of them ([`simulate`]).
 //!
@@ -135,7 +135,7 @@ fn jacobian_inverse(l: f64, q: &Vector2<f64>, t: f64) -> Result<(Matrix2<f64>, M
     Ok((jac, inv))
 }
 
-/// The PID of MODEL.md experiment 5 (paper eq. 8) in continuous time:
+/// The PID of docs/model.md experiment 5 (paper eq. 8) in continuous time:
 /// `u_i = K_P,i e_i + K_I,i xi_i + K_D,i e_dot_i`, `e = q'* - q'`,
 /// `q' = [theta1, theta2 - theta1]`, `xi_dot = e`; `u = [u1, u2]` are the motor
 /// torques (N m). `q'*` is the inverse kinematics of `[z_t*(t), -H]` on `branch`
@@ -236,7 +236,7 @@ pub struct HybridOutput {
     pub xi_dot: f64,
 }
 
-/// The hybrid force/motion law of MODEL.md experiment 6 (paper eqs. 9 to 11) in
+/// The hybrid force/motion law of docs/model.md experiment 6 (paper eqs. 9 to 11) in
 /// continuous time with exact model and contact forces (module docs):
 /// `u = w + c + M J^-1 (-J_dot q_dot + i_x a_v) + J^T (-i_x f_t - i_y a_f)`,
 /// `a_v = z_t_ddot* + K'_P (z_t* - z_t) + K'_D (z_t_dot* - z_t_dot)`,

@@ -1,5 +1,5 @@
 //! The map of contact modes over `(theta1, theta1_dot)` with the
-//! tip on the belt (MODEL.md experiment 1, paper Fig. 2).
+//! tip on the belt (docs/model.md experiment 1, paper Fig. 2).
 //!
 //! At each grid point the configuration is completed so that the tip is on the
 //! belt and moves along it:
@@ -80,7 +80,7 @@ impl Theta2Sign {
 }
 
 /// `theta2` (rad) that puts the tip on the belt (`z_n = -H`) for `theta1` (rad):
-/// `theta2 = s acos(H/l - cos theta1)` with `s = sign.sign(branch)` (MODEL.md
+/// `theta2 = s acos(H/l - cos theta1)` with `s = sign.sign(branch)` (docs/model.md
 /// geometry), if it exists and, for [`Theta2Sign::Auto`], the configuration is on
 /// `branch` (`theta2 - theta1 > 0` for up, `< 0` for down; the straight arm,
 /// within `1e-12` rad, counts as both). `None` otherwise (also for non-finite input).
@@ -494,7 +494,7 @@ mod tests {
     const MU: f64 = 0.6;
     const V: f64 = -0.4;
 
-    /// `b` and `p` recomputed from MODEL.md's formulas, without the shared model.
+    /// `b` and `p` recomputed from docs/model.md's formulas, without the shared model.
     fn independent_b_p(pr: &Params<f64>, t1: f64, t2: f64, w1: f64, w2: f64, dir_sign: f64) -> (f64, f64) {
         let (m, l, g, k, s, a0) = (pr.m, pr.l, pr.g, pr.k, pr.sigma, pr.alpha0);
         let ml2 = m * l * l;
@@ -551,7 +551,7 @@ mod tests {
                     let (b, p) = independent_b_p(&pr, t1, t2, w1, w2, if zr < 0.0 { -1.0 } else { 1.0 });
                     assert!((b - pt.b).abs() < 1e-9 * (1.0 + b.abs()), "b {b} vs {}", pt.b);
                     assert!((p - pt.p).abs() < 1e-9 * (1.0 + p.abs()), "p {p} vs {}", pt.p);
-                    // The mode follows MODEL.md's table of signs.
+                    // The mode follows docs/model.md's table of signs.
                     match mode {
                         ContactMode::Sliding => assert!(p > 0.0 && b < 0.0),
                         ContactMode::Flight => assert!(p > 0.0 && b >= 0.0),
@@ -580,7 +580,7 @@ mod tests {
             }
         }
         // The paper's initial conditions sit on the sheets the docs say. They are
-        // rounded (MODEL.md: the tip is a fraction of a millimetre inside the belt), and
+        // rounded (docs/model.md: the tip is a fraction of a millimetre inside the belt), and
         // near theta2 = 0, theta2 is sensitive to theta1 (x0u: -11.63 deg here), so the
         // tolerance is 0.5 deg; the tips then agree to about a millimetre.
         let d = |x: f64| x.to_radians();

@@ -1,4 +1,4 @@
-//! `Z_t,sliding` (MODEL.md experiments 5 and 6): the largest tangential target
+//! `Z_t,sliding` (docs/model.md experiments 5 and 6): the largest tangential target
 //! `z_t*` the tip reaches with no lift-off, by bisection on the target.
 //!
 //! A *trial* runs one closed loop from the initial condition with the target
@@ -6,7 +6,7 @@
 //! of two settings:
 //! - ideal: the paper's continuous-time laws with exact measurements ([`crate::ideal`]);
 //! - sampled: the firmware in-process (1 kHz, quantised sensors and torques,
-//!   estimation, HARDWARE.md defaults or a given scenario; [`rig`]).
+//!   estimation, docs/hardware.md defaults or a given scenario; [`rig`]).
 //!
 //! The target is *reached with no lift-off* when, over the whole run,
 //! 1. the plant never leaves the belt: no lift-off event (located exactly, between
@@ -41,7 +41,7 @@ use rig::{in_process, scenario::Scenario};
 pub enum Setting {
     /// Continuous time, exact measurements, no saturation (the paper's).
     Ideal,
-    /// The firmware, sampled with quantised sensors and torques (HARDWARE.md).
+    /// The firmware, sampled with quantised sensors and torques (docs/hardware.md).
     Sampled,
 }
 

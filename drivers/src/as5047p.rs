@@ -1,5 +1,5 @@
 //! AS5047P 14-bit magnetic absolute encoder over SPI (AS5047P datasheet, ams
-//! v1-06, "SPI Interface"; HARDWARE.md "The reference board": two of them, one
+//! v1-06, "SPI Interface"; docs/hardware.md "Reference board": two of them, one
 //! chip select each, on one bus).
 //!
 //! The bus is SPI mode 1 with 16-bit frames, one chip-select assertion per frame

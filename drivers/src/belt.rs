@@ -1,6 +1,6 @@
 //! The belt drive's quadrature encoder on a timer in encoder mode (RM0090
 //! "Encoder interface mode": the counter counts the A/B edges up or down with the
-//! direction; HARDWARE.md "The reference board": speed = counts per period, 1 mm/s
+//! direction; docs/hardware.md "Reference board": speed = counts per period, 1 mm/s
 //! resolution on the wire).
 //!
 //! embedded-hal 1.0 has no encoder-counter trait, so the board implements

@@ -1,5 +1,5 @@
 //! Assembling the period's [`SensorFrame`] from what the drivers read
-//! (HARDWARE.md "Sensors": raw counts cross the wire, as on hardware).
+//! (docs/hardware.md "Sensors": raw counts cross the wire, as on hardware).
 //!
 //! A reading that failed (any driver error) or is out of its field's range is
 //! sent as count 0 with its `frame_flags::*_INVALID` bit set, exactly as the host

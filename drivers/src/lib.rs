@@ -1,4 +1,4 @@
-//! Drivers for the reference board's parts (HARDWARE.md "The reference board"),
+//! Drivers for the reference board's parts (docs/hardware.md "Reference board"),
 //! written against embedded-hal 1.0 traits so that they run on any MCU (the board
 //! crate passes STM32F405 peripherals) and are tested on the host against
 //! `embedded-hal-mock`. `no_std`, no heap, no `unsafe`; no driver panics on what a

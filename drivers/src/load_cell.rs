@@ -1,6 +1,6 @@
 //! The two-axis tip load cell: two instrumentation amplifiers into ADC1, 12 bit,
 //! conversions triggered by the control timer so the sample instant is the
-//! period's start (HARDWARE.md "The reference board", "Sensors": +-25 N full
+//! period's start (docs/hardware.md "Reference board", "Sensors": +-25 N full
 //! scale, 12-bit codes on the wire).
 //!
 //! embedded-hal 1.0 has no ADC trait, so the board implements [`LoadCellAdc`].

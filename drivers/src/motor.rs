@@ -1,4 +1,4 @@
-//! The two current-mode motor drivers (HARDWARE.md "The reference board",
+//! The two current-mode motor drivers (docs/hardware.md "Reference board",
 //! "Actuators"): per joint a 20 kHz PWM whose duty is the torque magnitude and a
 //! direction pin; one enable pin shared by both; one active-low fault input
 //! (nFAULT) shared by both. Disabled is the safe state: zero duty, enable low.
@@ -173,7 +173,7 @@ where
         Ok(())
     }
 
-    /// The safe state (HARDWARE.md: zero torque, drivers off): both duties 0,
+    /// The safe state (docs/hardware.md: zero torque, drivers off): both duties 0,
     /// then enable low. Every write is attempted; the stage counts as disabled
     /// afterwards whatever happens.
     ///

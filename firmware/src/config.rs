@@ -1,10 +1,10 @@
 //! Firmware configuration: controller choice, gains, references, estimator,
-//! lift-off detector and fault limits. Defaults: MODEL.md experiments 5 and 6
-//! and HARDWARE.md.
+//! lift-off detector and fault limits. Defaults: docs/model.md experiments 5 and 6
+//! and docs/hardware.md.
 
 use shared::{ElbowBranch, Params};
 
-/// Which control law runs (MODEL.md experiments 5 and 6): the firmware's
+/// Which control law runs (docs/model.md experiments 5 and 6): the firmware's
 /// configuration, scenario files (`controller.kind = "pid" | "hybrid"`), the
 /// analyses and the command line (`--controller`) all use this one type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -96,7 +96,7 @@ pub struct Config {
     pub params: Params<f32>,
     /// Control law.
     pub controller: ControllerKind,
-    /// Control period `Ts`, s (HARDWARE.md: 1 ms, from 0.1 ms to 4 ms).
+    /// Control period `Ts`, s (docs/hardware.md: 1 ms, from 0.1 ms to 4 ms).
     pub period_s: f32,
     /// Tangential target `z_t*`, m.
     pub target_z_t: f32,
@@ -114,7 +114,7 @@ pub struct Config {
     pub hybrid: HybridGains,
     /// Friction term of the hybrid law.
     pub friction: FrictionCompensation,
-    /// Torque limit per motor, N m (the command saturates here; HARDWARE.md: 5 N m).
+    /// Torque limit per motor, N m (the command saturates here; docs/hardware.md: 5 N m).
     pub torque_limit: f32,
     /// Bandwidth of the joint-velocity observer, rad/s.
     pub observer_bandwidth: f32,

@@ -1,4 +1,4 @@
-//! Decoding and checking a sensor frame (HARDWARE.md "Sensors").
+//! Decoding and checking a sensor frame (docs/hardware.md "Sensors").
 
 use core::f32::consts::{PI, TAU};
 
@@ -58,7 +58,7 @@ pub fn wrap(angle: f32) -> f32 {
     a
 }
 
-/// Decodes the counts of `frame` into SI units (HARDWARE.md resolutions: 14-bit
+/// Decodes the counts of `frame` into SI units (docs/hardware.md resolutions: 14-bit
 /// encoders, 12-bit load cell over +-25 N, belt speed in mm/s).
 ///
 /// # Errors

@@ -37,7 +37,7 @@ pub struct PidState {
     pub integral: [f32; 2],
 }
 
-/// The PID of MODEL.md experiment 5 (paper eq. 8) on `q' = [theta1, theta2 - theta1]`:
+/// The PID of docs/model.md experiment 5 (paper eq. 8) on `q' = [theta1, theta2 - theta1]`:
 /// `u_i = K_P,i e_i + K_I,i int e_i dt + K_D,i (q'*_dot_i - q'_dot_i)`, the motor
 /// torques `[u1, u2]`. The reference `q'*` comes from inverse kinematics of
 /// `z* = [z_t*, -H]` on `branch`, and `q'*_dot` from `J(q*)^-1 [z_t_dot*, 0]`.
@@ -120,7 +120,7 @@ pub struct HybridInput {
     pub v_belt: f32,
 }
 
-/// The hybrid force/motion law of MODEL.md experiment 6 (paper eqs. 9 to 11):
+/// The hybrid force/motion law of docs/model.md experiment 6 (paper eqs. 9 to 11):
 /// `u = w + c + M J^-1 (-J_dot q_dot + i_x a_v) + J^T (-i_x f_t_hat - i_y a_f)`,
 /// `a_v = z_t_ddot* + K'_P (z_t* - z_t) + K'_D (z_t_dot* - z_t_dot)`,
 /// `a_f = f_n* + K'_I int (f_n* - f_n) dt`. Returns the motor torques

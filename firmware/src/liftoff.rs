@@ -1,4 +1,4 @@
-//! Lift-off detection from what is measured (HARDWARE.md "Lift-off detection").
+//! Lift-off detection from what is measured (docs/hardware.md "Lift-off detection").
 //!
 //! Rule: lift-off is declared when the measured normal force stays below
 //! `lift_off_force` (default 0.5 N, 25 times the load cell's 20 mN noise) for

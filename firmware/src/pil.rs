@@ -1,5 +1,5 @@
 //! The processor-in-the-loop wire: what crosses the USART between the plant's
-//! bridge (`sil-host pil`) and the MCU image (`src/bin/pil.rs`), and its framing.
+//! bridge (`sil-host pil`) and the MCU image (`boards/stm32f405/src/bin/pil.rs`), and its framing.
 //!
 //! A message is a [`Downlink`] (bridge to image) or an [`Uplink`] (image to
 //! bridge), serialised with postcard (varint integers, little-endian floats),

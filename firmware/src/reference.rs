@@ -1,5 +1,5 @@
 //! The tangential reference `z_t*(t)`: a quintic move from the initial tip
-//! position to the target over a set time, then a hold (MODEL.md leaves the
+//! position to the target over a set time, then a hold (docs/model.md leaves the
 //! reference to us). The quintic `s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5` has zero
 //! velocity and acceleration at both ends (minimum-jerk; Flash and Hogan 1985).
 

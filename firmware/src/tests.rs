@@ -147,8 +147,8 @@ fn deadline_misses_latch_the_safe_state_until_reset() {
 }
 
 proptest! {
-    /// HARDWARE.md: N consecutive misses drive the firmware to its safe state within
-    /// N + 1 periods, for any limit N and any pattern of isolated misses before; the
+    /// Our rule for docs/hardware.md "Faults" (which leaves the count open): N consecutive
+    /// misses drive the firmware to its safe state within N + 1 periods, for any limit N and any pattern of isolated misses before; the
     /// overrun counter counts every miss, in the period it happens.
     #[test]
     fn n_consecutive_misses_latch_the_safe_state_in_the_nth_and_overruns_count_every_miss(

@@ -1,6 +1,6 @@
 //! Running maxima of `theta1_dot` and of the tip height `z_n` over the continuous
 //! trajectory (not only at sample times): the paper's persistent-bouncing
-//! indicator `max theta1_dot` (MODEL.md experiment 3) and the largest tip height.
+//! indicator `max theta1_dot` (docs/model.md experiment 3) and the largest tip height.
 //!
 //! Every accepted integrator step contributes its two ends. A maximum inside a
 //! step shows as a sign change of the component's derivative across the step
@@ -156,7 +156,7 @@ fn refine_max<S: OdeSystem + ?Sized>(
     if v > best.1 { (t, v) } else { best }
 }
 
-/// Tip normal position `z_n = -l (cos theta1 + cos theta2)`, m (MODEL.md).
+/// Tip normal position `z_n = -l (cos theta1 + cos theta2)`, m (docs/model.md).
 #[inline]
 fn z_n(y: &OdeState, l: f64) -> f64 {
     -l * (y[0].cos() + y[2].cos())

@@ -1,4 +1,4 @@
-//! The paper's initial conditions (MODEL.md) and their projection onto the belt.
+//! The paper's initial conditions (docs/model.md) and their projection onto the belt.
 //!
 //! The paper gives `x0a`, `x0d`, `x0u` in degrees rounded to 0.01 or 0.1; at
 //! those values the tip sits a fraction of a millimetre inside the belt. The plant
@@ -18,11 +18,11 @@ pub struct PaperInitialCondition {
     pub deg: [f64; 4],
 }
 
-/// `x0a = [32 deg, 0, 18.27 deg, 0]` (MODEL.md experiments 3 and 4).
+/// `x0a = [32 deg, 0, 18.27 deg, 0]` (docs/model.md experiments 3 and 4).
 pub const X0A: PaperInitialCondition = PaperInitialCondition { name: "x0a", deg: [32.0, 0.0, 18.27, 0.0] };
-/// `x0d = [-11.4 deg, 0, -35.1 deg, 0]`, elbow down (MODEL.md experiments 3, 5, 6).
+/// `x0d = [-11.4 deg, 0, -35.1 deg, 0]`, elbow down (docs/model.md experiments 3, 5, 6).
 pub const X0D: PaperInitialCondition = PaperInitialCondition { name: "x0d", deg: [-11.4, 0.0, -35.1, 0.0] };
-/// `x0u = [-35.1 deg, 0, -11.4 deg, 0]`, elbow up (MODEL.md experiments 5 and 6).
+/// `x0u = [-35.1 deg, 0, -11.4 deg, 0]`, elbow up (docs/model.md experiments 5 and 6).
 pub const X0U: PaperInitialCondition = PaperInitialCondition { name: "x0u", deg: [-35.1, 0.0, -11.4, 0.0] };
 
 /// One of the paper's initial conditions, by its letter: scenario files

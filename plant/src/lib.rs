@@ -1,5 +1,5 @@
 //! The plant simulator: the arm on the moving belt as an event-driven hybrid
-//! system (MODEL.md; paper eqs. 1 to 7), in `f64`.
+//! system (docs/model.md; paper eqs. 1 to 7), in `f64`.
 //!
 //! Modes: flight, sliding (`f_n = -b/p`, Coulomb friction opposing the slip),
 //! sticking (`z_r_dot = 0`, `f = -Q^-1 a_free` while `|f_t| <= mu f_n`). Each
@@ -18,7 +18,7 @@
 //!   normal velocity after the impact exceeds `zeno_velocity`, otherwise the bounce
 //!   sequence is ended (*Zeno rule*: the remaining normal velocity is removed, a
 //!   completely inelastic last impact, and the tip stays in contact);
-//! - in contact with `z_n_dot = 0` the mode follows MODEL.md's table; the
+//! - in contact with `z_n_dot = 0` the mode follows docs/model.md's table; the
 //!   indeterminate case resolves to flight; the inconsistent case (the Painlevé
 //!   paradox) is an impact without collision ([`impact::without_collision`]);
 //! - every impact is checked for energy: the contact may never create energy
@@ -455,7 +455,7 @@ impl Plant {
     ///
     /// A tip up to [`PROJECTION_TOLERANCE`] inside the belt is projected onto it (same
     /// `z_t`, same elbow branch); on the belt the normal velocity decides: approaching
-    /// gives an impact, separating gives flight, zero gives the contact mode of MODEL.md.
+    /// gives an impact, separating gives flight, zero gives the contact mode of docs/model.md.
     ///
     /// # Errors
     /// [`SimError::Params`], [`SimError::BadConfig`], [`SimError::NonFiniteInitialState`],
@@ -957,7 +957,7 @@ impl Plant {
         self.enter_contact(ctrl, Entry::Settle, events)
     }
 
-    /// Chooses the contact mode of a tip on the belt with `z_n_dot = 0` (MODEL.md's
+    /// Chooses the contact mode of a tip on the belt with `z_n_dot = 0` (docs/model.md's
     /// table, plus sticking), resolving the paradox by an impact without collision.
     fn enter_contact<C: Controller + ?Sized>(&mut self, ctrl: &C, entry: Entry, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
         let was_sliding = matches!(self.phase, Phase::Sliding(_));

@@ -48,7 +48,7 @@ pub struct Section {
 
 impl Section {
     /// `theta1_dot = 0`, crossed from negative to positive: the section of the
-    /// paper's Fig. 4 (MODEL.md experiment 4).
+    /// paper's Fig. 4 (docs/model.md experiment 4).
     pub const THETA1_DOT: Self = Self { normal: [0.0, 1.0, 0.0, 0.0], offset: 0.0 };
 
     /// `g(x)` of a state whose first four components are the plant state.

@@ -1,4 +1,4 @@
-//! Faults the rig injects (HARDWARE.md "Faults the rig must be able to inject"),
+//! Faults the rig injects (docs/hardware.md "Faults"),
 //! as listed in a scenario's `[[faults]]` tables. Each fault acts over a window
 //! of sample times `[at_s, at_s + duration_s)`; where it acts (plant side, wire,
 //! firmware side) is part of its definition, so that the in-process and the

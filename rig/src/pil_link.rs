@@ -1,4 +1,4 @@
-//! The processor-in-the-loop bridge: the MCU image (`firmware/src/bin/pil.rs`)
+//! The processor-in-the-loop bridge: the MCU image (`boards/stm32f405/src/bin/pil.rs`)
 //! runs in QEMU's `netduinoplus2` (an STM32F405) or on a board, and this link
 //! joins its USART1 to the rig's lockstep loop, so the plant, the scenarios and
 //! the outputs are those of the SIL rig.
@@ -10,7 +10,7 @@
 //!   standard output (semihosting) and is decoded here with `defmt-decoder` from
 //!   the image's own ELF.
 //! - **A serial port** (hardware in the loop): the board's USART1 at 2 Mbaud
-//!   through a USB-serial adapter (HARDWARE.md "The reference board"), raw 8N1,
+//!   through a USB-serial adapter (docs/hardware.md "Reference board"), raw 8N1,
 //!   no flow control. Nothing is spawned and no log is captured: a board logs
 //!   defmt over RTT to a debug probe (probe-rs).
 //!
@@ -55,12 +55,12 @@ use super::{
 /// virtual time (`-icount shift=0`: 1 ns each).
 pub const ICOUNT_SHIFT: u32 = 0;
 
-/// Core clock of the reference board, Hz (HARDWARE.md: 168 MHz): the clock the
+/// Core clock of the reference board, Hz (docs/hardware.md: 168 MHz): the clock the
 /// step budget is counted in.
 pub const CORE_HZ: f64 = 168e6;
 
 /// Budget of a control step at the default 1 kHz rate: 5 % of 1 ms at 168 MHz
-/// (HARDWARE.md "Budgets"), 8400 cycles, or instructions under QEMU (each at
+/// (docs/hardware.md "Budgets"), 8400 cycles, or instructions under QEMU (each at
 /// least one cycle). Other rates: [`step_budget`].
 pub const STEP_BUDGET_INSTRUCTIONS: f64 = 8_400.0;
 

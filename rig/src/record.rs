@@ -1,5 +1,5 @@
 //! What a SIL run records: one row per control period (`trace.csv`), why a run
-//! stopped early, and the lift-off detection statistics (HARDWARE.md "Lift-off
+//! stopped early, and the lift-off detection statistics (docs/hardware.md "Lift-off
 //! detection").
 
 use serde::Serialize;
@@ -98,7 +98,7 @@ pub enum RunError {
     },
 }
 
-/// Lift-off detection statistics of a run (HARDWARE.md "Lift-off detection").
+/// Lift-off detection statistics of a run (docs/hardware.md "Lift-off detection").
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct LiftOffStats {
     /// True lift-offs (contact to flight transitions at the samples).

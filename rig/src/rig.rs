@@ -1,4 +1,4 @@
-//! The plant side of the SIL loop, the same for every transport (HARDWARE.md
+//! The plant side of the SIL loop, the same for every transport (docs/hardware.md
 //! "Control loop"). Period `k`: the sensors sample the plant at `t_k = k Ts` into
 //! a frame; the frame goes to the firmware over a [`FirmwareLink`] (in-process or
 //! iceoryx2); the command that comes back takes effect at

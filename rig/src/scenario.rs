@@ -256,7 +256,7 @@ impl Scenario {
         }
         let t = &self.timing;
         if !(finite(t.rate_hz) && (250.0..=10_000.0).contains(&t.rate_hz)) {
-            return bad("timing.rate_hz", t.rate_hz.to_string(), "250 to 10000 Hz (HARDWARE.md)");
+            return bad("timing.rate_hz", t.rate_hz.to_string(), "250 to 10000 Hz (docs/hardware.md)");
         }
         if !(finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < 1.0 / t.rate_hz) {
             return bad("timing.delta_s", t.delta_s.to_string(), "in [0, one period)");

@@ -1,4 +1,4 @@
-//! Sensor models between the plant and the wire (HARDWARE.md "Sensors"):
+//! Sensor models between the plant and the wire (docs/hardware.md "Sensors"):
 //! 14-bit encoders (the elbow's sees `theta2 - theta1`), a 12-bit two-axis load
 //! cell over +-25 N with white noise, the belt encoder at 1 mm/s. Noise is seeded
 //! (ChaCha8), so a run is reproducible bit for bit.

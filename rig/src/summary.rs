@@ -147,13 +147,13 @@ pub struct PilFigures {
     /// A frame's last byte to its answer ready to send (COBS, CRC and postcard
     /// decoding plus the step), in `count_unit`.
     pub frame_counts: Spread,
-    /// The budget of a step in `count_unit` (HARDWARE.md: 5 % of the control
+    /// The budget of a step in `count_unit` (docs/hardware.md: 5 % of the control
     /// period at 168 MHz; 8400 at 1 kHz).
     pub step_budget: f64,
     /// Whether the worst step is within the budget.
     pub within_budget: bool,
     /// Worst step as a share of the control period at 168 MHz (for instructions:
-    /// if each took one cycle, a lower bound on silicon: README "PIL").
+    /// if each took one cycle, a lower bound on silicon: docs/rig.md).
     pub worst_step_period_share: f64,
     /// QEMU's exit status at the end (`exit status: 0` when the image ended the
     /// run); `null` over a serial port.

@@ -1,4 +1,4 @@
-//! Contact modes of the tip on the belt (MODEL.md "Contact modes"; paper eqs. 5 to 7).
+//! Contact modes of the tip on the belt (docs/model.md "Contact modes"; paper eqs. 5 to 7).
 //!
 //! While the tip touches the belt (`z_n = -H`, `z_n_dot = 0`), its normal
 //! acceleration is `z_n_ddot = b + p f_n` (paper eq. 5). Sliding needs `f_n = -b/p >= 0`
@@ -38,7 +38,7 @@ impl SlipDirection {
         if z_r_dot < T::zero() { Self::Negative } else { Self::Positive }
     }
 
-    /// The opposite direction (the mirror image of the arm, MODEL.md).
+    /// The opposite direction (the mirror image of the arm, docs/model.md).
     #[inline]
     pub fn reversed(self) -> Self {
         match self {
@@ -54,7 +54,7 @@ pub fn p_of<T: Real>(qmat: &Matrix2<T>, mu: T, dir: SlipDirection) -> T {
     qmat[(1, 1)] - mu * dir.sign::<T>() * qmat[(1, 0)]
 }
 
-/// Contact mode of the tip (MODEL.md "Contact modes").
+/// Contact mode of the tip (docs/model.md "Contact modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
@@ -97,7 +97,7 @@ impl ContactMode {
 }
 
 /// The contact mode of a slipping tip from the signs of `b` (m/s^2) and `p`
-/// (1/kg), MODEL.md's table. Boundaries: `b = 0` counts as flight (the reaction
+/// (1/kg), docs/model.md's table. Boundaries: `b = 0` counts as flight (the reaction
 /// has vanished: lift-off), `p = 0` with `b < 0` as inconsistent (`f_n` unbounded).
 #[inline]
 pub fn classify_slipping<T: Real>(b: T, p: T) -> ContactMode {

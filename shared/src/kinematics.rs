@@ -1,4 +1,4 @@
-//! Forward and inverse kinematics of the tip (MODEL.md "Geometry and state").
+//! Forward and inverse kinematics of the tip (docs/model.md "Geometry and state").
 //!
 //! `z_t = l (sin theta1 + sin theta2)`, `z_n = -l (cos theta1 + cos theta2)`,
 //! `J = dz/dq = [[l cos theta1, l cos theta2], [l sin theta1, l sin theta2]]`,
@@ -9,7 +9,7 @@ use nalgebra::{Matrix2, Vector2};
 use crate::{Real, lit, params::to_f64};
 
 /// Elbow branch of a configuration, by the sign of the relative angle
-/// `theta2 - theta1` (MODEL.md: "elbow up" means `theta2 - theta1 > 0`).
+/// `theta2 - theta1` (docs/model.md: "elbow up" means `theta2 - theta1 > 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
@@ -117,7 +117,7 @@ pub fn jacobian_trig<T: Real>(l: T, t: &JointTrig<T>) -> Matrix2<T> {
 }
 
 /// Tip position `z = [z_t, z_n]` (m) of configuration `q = [theta1, theta2]` (rad),
-/// links of length `l` (m). MODEL.md, "Geometry and state".
+/// links of length `l` (m). docs/model.md, "Geometry and state".
 #[inline]
 pub fn tip_position<T: Real>(l: T, q: &Vector2<T>) -> Vector2<T> {
     tip_position_trig(l, &JointTrig::new(q))
@@ -245,7 +245,7 @@ mod tests {
         assert_eq!(ElbowBranch::of(&qu), ElbowBranch::Up);
         let q = inverse_kinematics(L, &tip_position(L, &qu), ElbowBranch::Up).unwrap();
         assert!((q - qu).norm() < 1e-12);
-        // Both put the tip at z_t = -0.1624 m (MODEL.md experiment 5), to the paper's rounding.
+        // Both put the tip at z_t = -0.1624 m (docs/model.md experiment 5), to the paper's rounding.
         assert!((tip_position(L, &qd)[0] + 0.1624).abs() < 2e-4);
     }
 

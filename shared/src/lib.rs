@@ -7,7 +7,7 @@
 //! evaluates the model in `f32` on the Cortex-M4F, the plant simulator in `f64`,
 //! from the one implementation here.
 //!
-//! Conventions (MODEL.md): angles are absolute, from the downward vertical, in
+//! Conventions (docs/model.md): angles are absolute, from the downward vertical, in
 //! radians; `q = [theta1, theta2]`; the tip is `z = [z_t, z_n]` (tangential along
 //! the belt, normal upward); the belt surface is `z_n = -H`; SI units throughout.
 #![no_std]

@@ -22,7 +22,7 @@ use crate::{
 /// (non-finite inputs give non-finite outputs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Arm<T> {
-    /// The parameters (MODEL.md Table I).
+    /// The parameters (docs/model.md Table I).
     pub params: Params<T>,
 }
 
@@ -132,7 +132,7 @@ impl<T: Real> Arm<T> {
     }
 
     /// Generalised torque `u = [u1 - u2, u2]` (N m) from the motor torques
-    /// `[u1, u2]` at the base joint and the elbow (MODEL.md, paper eq. 1).
+    /// `[u1, u2]` at the base joint and the elbow (docs/model.md, paper eq. 1).
     #[inline]
     pub fn generalised_torque(motor: &Vector2<T>) -> Vector2<T> {
         Vector2::new(motor[0] - motor[1], motor[1])

@@ -1,4 +1,4 @@
-//! Physical parameters of the arm and the belt (MODEL.md, Table I of the paper).
+//! Physical parameters of the arm and the belt (docs/model.md, Table I of the paper).
 
 use crate::{Real, lit};
 

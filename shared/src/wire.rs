@@ -1,10 +1,10 @@
-//! Wire messages between the plant side and the firmware (HARDWARE.md): raw
+//! Wire messages between the plant side and the firmware (docs/hardware.md): raw
 //! counts as the hardware gives them, `#[repr(C)]` with fixed layouts so that
 //! shared memory, a USART frame or a C client see the same bytes.
 //!
 //! With the `iceoryx2` feature (host only) the messages derive iceoryx2's
 //! `ZeroCopySend` with stable type names, so a C, C++ or Python iceoryx2 client
-//! can attach to the rig's services (README "The SIL rig", the layouts below):
+//! can attach to the rig's services (docs/wire.md, the layouts below):
 //!
 //! | type | iceoryx2 type name | size |
 //! |---|---|---|
@@ -16,24 +16,24 @@
 #[cfg(feature = "iceoryx2")]
 use iceoryx2::prelude::ZeroCopySend;
 
-/// Encoder resolution: 14 bit per revolution (HARDWARE.md).
+/// Encoder resolution: 14 bit per revolution (docs/hardware.md).
 pub const ENCODER_COUNTS: u32 = 1 << 14;
-/// Load-cell ADC: 12-bit signed codes in `[-2048, 2047]` (HARDWARE.md).
+/// Load-cell ADC: 12-bit signed codes in `[-2048, 2047]` (docs/hardware.md).
 pub const LOAD_CODE_MIN: i16 = -2048;
 /// Largest load-cell code.
 pub const LOAD_CODE_MAX: i16 = 2047;
-/// Load-cell full scale, N (HARDWARE.md: +-25 N).
+/// Load-cell full scale, N (docs/hardware.md: +-25 N).
 pub const LOAD_FULL_SCALE_N: f32 = 25.0;
-/// Torque command: 12-bit signed codes in `[-2048, 2047]` (HARDWARE.md).
+/// Torque command: 12-bit signed codes in `[-2048, 2047]` (docs/hardware.md).
 pub const TORQUE_CODE_MIN: i16 = -2048;
 /// Largest torque code.
 pub const TORQUE_CODE_MAX: i16 = 2047;
-/// Torque full scale per joint, N m (HARDWARE.md: +-5 N m).
+/// Torque full scale per joint, N m (docs/hardware.md: +-5 N m).
 pub const TORQUE_FULL_SCALE_NM: f32 = 5.0;
-/// Belt encoder resolution, m/s per count (HARDWARE.md: 1 mm/s).
+/// Belt encoder resolution, m/s per count (docs/hardware.md: 1 mm/s).
 pub const BELT_SPEED_RESOLUTION: f32 = 1e-3;
 
-/// One sample of the sensors, period `seq` (HARDWARE.md "Sensors").
+/// One sample of the sensors, period `seq` (docs/hardware.md "Sensors").
 ///
 /// Layout (24 bytes, little-endian on every target we build): `t_us: u64`,
 /// `seq: u32`, `theta1_count: u16`, `elbow_count: u16`, `f_t_code: i16`,
@@ -109,7 +109,7 @@ pub mod status {
     pub const REASON_SHIFT: u32 = 24;
 }
 
-/// The firmware's answer to frame `seq` (HARDWARE.md "Actuators").
+/// The firmware's answer to frame `seq` (docs/hardware.md "Actuators").
 ///
 /// Layout (32 bytes): `t_sent_us: u64`, `seq: u32`, `u1_code: i16`, `u2_code: i16`,
 /// `status: u32`, `step_ticks: u32`, `overruns: u32`, `reserved: u32`.
@@ -121,7 +121,7 @@ pub struct ActuatorCommand {
     /// When the command left the firmware, microseconds on the clock of
     /// [`SensorFrame::t_us`] (the step's start plus its own execution time). The
     /// plant applies it at `max(t_k + delta, t_sent_us)`; later than `t_k + Ts` is a
-    /// deadline miss (HARDWARE.md "Control loop").
+    /// deadline miss (docs/hardware.md "Timing").
     pub t_sent_us: u64,
     /// Echo of the [`SensorFrame::seq`] this command answers.
     pub seq: u32,

@@ -25,15 +25,15 @@ pub enum Command {
     /// initial conditions; writes trace.csv, events.csv, trace.svg, summary.json.
     #[command(allow_negative_numbers = true)]
     Simulate(SimulateArgs),
-    /// Admissible configurations (MODEL.md experiment 2, paper Table II): the ranges
+    /// Admissible configurations (docs/model.md experiment 2, paper Table II): the ranges
     /// of z_t on the belt where p > 0, for elbow up and elbow down.
     #[command(allow_negative_numbers = true)]
     Admissible(AdmissibleArgs),
-    /// Mode map (MODEL.md experiment 1, paper Fig. 2): the contact mode over a grid
+    /// Mode map (docs/model.md experiment 1, paper Fig. 2): the contact mode over a grid
     /// of (theta1, theta1_dot) with the tip on the belt, with the curves b = 0 and p = 0.
     #[command(allow_negative_numbers = true)]
     Modes(ModesArgs),
-    /// One-parameter bifurcation diagram (MODEL.md experiment 4, paper Fig. 4): open
+    /// One-parameter bifurcation diagram (docs/model.md experiment 4, paper Fig. 4): open
     /// loop (u = 0) from x0a at mu = 0.6 over a fine grid of v_belt; after a transient,
     /// theta1 at every upward crossing of theta1_dot = 0 (located inside the
     /// integration steps), and each v_belt classified as equilibrium, periodic (with
@@ -69,7 +69,7 @@ pub enum Command {
     /// its safe state, zero torque); 1 transport failure; 2 bad input.
     #[command(allow_negative_numbers = true)]
     Firmware(FirmwareArgs),
-    /// Z_t,sliding (MODEL.md experiments 5 and 6): the largest tangential target z_t*
+    /// Z_t,sliding (docs/model.md experiments 5 and 6): the largest tangential target z_t*
     /// the tip reaches with no lift-off, by bisection on z_t*, for the PID or the
     /// hybrid controller from x0d or x0u, with the paper's ideal controllers
     /// (--ideal: continuous time, exact measurements) or the sampled firmware
@@ -111,7 +111,7 @@ pub enum Command {
     /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
     /// percentiles), and optionally a real-time run (jitter, step time, misses).
     Bench(BenchArgs),
-    /// Two-parameter brute-force bifurcation diagram (MODEL.md experiments 3 and 7,
+    /// Two-parameter brute-force bifurcation diagram (docs/model.md experiments 3 and 7,
     /// paper Figs. 3 and 9): a grid in (mu, v_belt), and optionally in the impact law
     /// and e_n, from the paper's and random initial conditions; per run a transient,
     /// then the record window where the paper's indicator max theta1_dot, the
@@ -132,7 +132,7 @@ pub enum Command {
     /// Exit codes: 0 merged; 2 folders of different sweeps, runs missing (unless
     /// --allow-missing) or conflicting.
     Merge(MergeArgs),
-    /// Every experiment of MODEL.md at a size that finishes in minutes, in one page:
+    /// Every experiment of docs/model.md at a size that finishes in minutes, in one page:
     /// `report.md` with every figure and table (and `report.json`), each experiment's
     /// files in a folder of its own. Run it from the repository root.
     ///

@@ -1,4 +1,4 @@
-//! `sil-host poincare` end to end on a few belt speeds (MODEL.md experiment 4):
+//! `sil-host poincare` end to end on a few belt speeds (docs/model.md experiment 4):
 //! the classes, the files and their agreement, exit codes.
 
 use std::process::Command;

@@ -27,7 +27,7 @@ fn read(dir: &Path, name: &str) -> String {
 }
 
 /// With mu = 0.1, p > 0 on the whole belt (no Painlevé paradox: the admissible
-/// region covers every configuration, MODEL.md experiment 2), so the arm settles to
+/// region covers every configuration, docs/model.md experiment 2), so the arm settles to
 /// steady sliding from both initial conditions: no bouncing, no lift-off in the
 /// record window. At mu = 0.6 the arm bounces from x0a over this band.
 #[test]

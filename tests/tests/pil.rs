@@ -2,7 +2,7 @@
 //! would be flashed) in QEMU's netduinoplus2 closes the loop with the plant over
 //! the emulated USART. Checks: the default scenario gives the SIL outcome (no
 //! lift-off, tracking error within 1 % of the in-process run); the worst step of
-//! each controller is within the 8400-instruction budget (HARDWARE.md: 5 % of a
+//! each controller is within the 8400-instruction budget (docs/hardware.md: 5 % of a
 //! 1 kHz period at 168 MHz); the image fits its flash and RAM budgets; a dead
 //! QEMU or a missing image ends a run with a clear error, never a hang.
 //!

@@ -1,7 +1,7 @@
 //! End-to-end: the SIL rig over iceoryx2 with the firmware in its own process
 //! (`sil-host-e2e` is the `sil-host` command line built in this crate, so it can
 //! spawn itself as the firmware process): bit identity with the in-process loop,
-//! attach mode, and the faults of HARDWARE.md with their documented outcomes.
+//! attach mode, and the faults of docs/hardware.md with their documented outcomes.
 
 use std::{
     path::{Path, PathBuf},

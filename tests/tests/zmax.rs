@@ -1,4 +1,4 @@
-//! End-to-end: `sil-host zmax` (Z_t,sliding, MODEL.md experiments 5 and 6).
+//! End-to-end: `sil-host zmax` (Z_t,sliding, docs/model.md experiments 5 and 6).
 
 fn run(args: &[&str]) -> i32 {
     let mut full = vec!["sil-host"];

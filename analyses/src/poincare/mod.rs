@@ -1,4 +1,4 @@
-//! One-parameter bifurcation diagram of the open-loop arm (MODEL.md experiment 4,
+//! One-parameter bifurcation diagram of the open-loop arm (docs/model.md experiment 4,
 //! the paper's Fig. 4): for each belt speed `v_belt`, the Poincaré section
 //! `theta1_dot = 0` crossed upward, recorded after a transient, and the class of
 //! the motion (equilibrium, periodic and its period, chaotic).

@@ -1,4 +1,4 @@
-//! The two-parameter brute-force bifurcation diagram (MODEL.md experiments 3 and
+//! The two-parameter brute-force bifurcation diagram (docs/model.md experiments 3 and
 //! 7, paper Figs. 3 and 9): a grid in `(mu, v_belt)` (and optionally in the impact
 //! law and its coefficient `e_n`), several initial conditions in contact, a
 //! transient then a record window per run, and the paper's persistent-bouncing
@@ -96,7 +96,7 @@ impl Axis {
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SweepController {
-    /// Open loop, `u = 0` (MODEL.md experiment 3).
+    /// Open loop, `u = 0` (docs/model.md experiment 3).
     None,
     /// The hybrid force/motion controller (experiment 6's; experiment 7).
     Hybrid,

@@ -283,7 +283,7 @@ fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetu
 /// `mu`, `v_belt`, impact law, `e_n`, tolerances), the controller asked for, the
 /// firmware's friction estimate `mu_hat = mu` (the paper's controller knows `mu`),
 /// the run's length, and `K'_I = 0` from an elbow-up initial condition (the
-/// paper's gains from `x0u`, MODEL.md experiment 6).
+/// paper's gains from `x0u`, docs/model.md experiment 6).
 pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition) -> Option<Scenario> {
     let mut s = spec.scenario.clone()?;
     s.plant.mu = key.mu;

@@ -16,9 +16,9 @@ pub const ENCODERS: FrameCalibration = FrameCalibration {
 };
 
 /// The load cell's front end: zero force at mid-scale, 25 N over 2048 counts
-/// (the wire's scale, HARDWARE.md: +-25 N on 12 bits).
+/// (the wire's scale, docs/hardware.md: +-25 N on 12 bits).
 pub const LOAD_CELL: Calibration = Calibration { zero_counts: [2048.0; 2], newtons_per_count: [25.0 / 2048.0; 2] };
 
 /// Belt travel per quadrature count, m: at the default 1 kHz one count per
-/// period is 1 mm/s, the resolution HARDWARE.md asks for.
+/// period is 1 mm/s, the resolution docs/hardware.md asks for.
 pub const BELT_METRES_PER_COUNT: f32 = 1e-6;

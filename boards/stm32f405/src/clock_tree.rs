@@ -1,8 +1,8 @@
 //! Clock-tree bring-up of the STM32F405 (RM0090 rev 19, section 6 "RCC" and
 //! section 3.5.1 "Relation between CPU clock frequency and flash read time"):
-//! the external crystal (HSE) through the main PLL to a 168 MHz core clock
-//! (HARDWARE.md), AHB at 168 MHz, APB1 at 42 MHz, APB2 at 84 MHz, 48 MHz for
-//! USB, five flash wait states with prefetch and both caches on.
+//! the 25 MHz crystal (HSE) through the main PLL to a 168 MHz core clock (both
+//! from docs/hardware.md), then, by RM0090's limits, AHB at 168 MHz, APB1 at
+//! 42 MHz, APB2 at 84 MHz, 48 MHz for USB, five flash wait states with prefetch and both caches on.
 //!
 //! The sequence is written once, over [`ClockControl`] (one method per step of
 //! RM0090 6.3), so it runs on the host against a model of the RCC in the tests
@@ -17,7 +17,7 @@
 
 /// HSI, the internal RC oscillator the chip starts on, Hz (RM0090 6.2.2).
 pub const HSI_HZ: u32 = 16_000_000;
-/// The core clock this firmware is written for, Hz (HARDWARE.md).
+/// The core clock this firmware is written for, Hz (docs/hardware.md).
 pub const SYSCLK_HZ: u32 = 168_000_000;
 /// APB1's clock after [`bring_up`] (AHB / 4), Hz; its timers run at twice it.
 pub const PCLK1_HZ: u32 = SYSCLK_HZ / 4;

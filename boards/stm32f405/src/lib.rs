@@ -1,4 +1,4 @@
-//! The reference board (HARDWARE.md "The reference board"): an STM32F405RG with
+//! The reference board (docs/hardware.md "Reference board"): an STM32F405RG with
 //! a 25 MHz crystal, two AS5047P encoders, a load cell, a belt encoder and two
 //! motor drivers. Everything specific to the chip and the board lives here:
 //! start-up, the clock tree, the pin map ([`pins`]: a different board changes

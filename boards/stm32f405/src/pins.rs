@@ -1,4 +1,4 @@
-//! The pin map: every pin the images use, in one place (HARDWARE.md "The
+//! The pin map: every pin the images use, in one place (docs/hardware.md "The
 //! reference board": pin assignments are the firmware's choice; a different
 //! board changes this file only). Alternate-function numbers are those of the
 //! STM32F405 datasheet (DS8626, table 9 "Alternate function mapping").

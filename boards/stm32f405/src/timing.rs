@@ -87,7 +87,7 @@ mod tests {
 
     #[test]
     fn every_supported_rate_is_exact_on_the_board() {
-        // HARDWARE.md: 250 Hz to 10 kHz; 84 MHz divides by every rate that divides 84e6.
+        // docs/hardware.md: 250 Hz to 10 kHz; 84 MHz divides by every rate that divides 84e6.
         for rate in [250u32, 500, 1_000, 2_000, 4_000, 5_000, 6_000, 7_000, 8_000, 10_000] {
             let t = TickTimer::for_rate(TIM2_CLOCK_HZ, rate).unwrap();
             assert_eq!((u32::from(t.psc) + 1) * (u32::from(t.arr) + 1), TIM2_CLOCK_HZ / rate, "{rate}");

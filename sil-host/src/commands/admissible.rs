@@ -1,5 +1,5 @@
 //! `sil-host admissible`: the admissible configurations of the tip on the belt
-//! (MODEL.md experiment 2, paper Table II), computed by [`analyses::admissible`];
+//! (docs/model.md experiment 2, paper Table II), computed by [`analyses::admissible`];
 //! this command prints them, writes `admissible.json` and draws `admissible.svg`.
 
 use std::io::Write;
@@ -48,7 +48,7 @@ fn json_report<'a>(r: &AdmissibleReport, files: &'a [String]) -> JsonReport<'a> 
     let pairs = |b, d| r.intervals(b, d).iter().map(|i| [i.lo, i.hi]).collect::<Vec<_>>();
     let branches = |d| JsonBranches { elbow_up: pairs(ElbowBranch::Up, d), elbow_down: pairs(ElbowBranch::Down, d) };
     JsonReport {
-        experiment: "MODEL.md experiment 2 (paper Table II): ranges of z_t (m) on the belt (z_n = -H) where p > 0",
+        experiment: "docs/model.md experiment 2 (paper Table II): ranges of z_t (m) on the belt (z_n = -H) where p > 0",
         mu: r.params.mu,
         h_m: r.params.h,
         l_m: r.params.l,
@@ -85,7 +85,7 @@ fn fmt_intervals(iv: &[PositiveInterval]) -> String {
 /// The human summary printed by the command.
 pub fn human_summary(r: &AdmissibleReport) -> String {
     let mut s = String::new();
-    s += "Admissible configurations on the belt (MODEL.md experiment 2, paper Table II)\n";
+    s += "Admissible configurations on the belt (docs/model.md experiment 2, paper Table II)\n";
     s += &format!(
         "mu = {}, H = {} m, l = {} m; reachable belt: z_t in [{:.4}, {:.4}] m\n",
         r.params.mu, r.params.h, r.params.l, -r.reach, r.reach
@@ -205,7 +205,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     Ok(())
 }
 
-/// Runs `sil-host admissible` (MODEL.md experiment 2): computes the admissible
+/// Runs `sil-host admissible` (docs/model.md experiment 2): computes the admissible
 /// intervals for `--mu`, prints them (human table, or one JSON document with
 /// `--json`), and writes `admissible.json` and `admissible.svg` under `--out`,
 /// all or nothing.

@@ -1,5 +1,5 @@
 //! `sil-host modes`: the map of contact modes over `(theta1, theta1_dot)` with the
-//! tip on the belt (MODEL.md experiment 1, paper Fig. 2), computed by
+//! tip on the belt (docs/model.md experiment 1, paper Fig. 2), computed by
 //! [`analyses::modes`]; this command writes `modes.csv`, draws `modes.svg` and prints
 //! the counts.
 
@@ -288,7 +288,7 @@ fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
     let on_belt: usize = counts.iter().filter(|(m, _)| matches!(m, PointMode::Contact(_))).map(|(_, c)| c).sum();
     let total = map.points.len();
     JsonSummary {
-        experiment: "MODEL.md experiment 1 (paper Fig. 2): contact mode over (theta1, theta1_dot), tip on the belt, z_n_dot = 0, u = 0",
+        experiment: "docs/model.md experiment 1 (paper Fig. 2): contact mode over (theta1, theta1_dot), tip on the belt, z_n_dot = 0, u = 0",
         mu: map.params.mu,
         v_belt: map.params.v_belt,
         branch: (map.sign == Theta2Sign::Auto).then(|| map.branch.name()),
@@ -322,7 +322,7 @@ pub fn human_summary(map: &ModeMap) -> String {
     let files: [String; 0] = [];
     let s = summary(map, &files);
     let mut out = String::new();
-    out += "Contact modes on the belt (MODEL.md experiment 1, paper Fig. 2)\n";
+    out += "Contact modes on the belt (docs/model.md experiment 1, paper Fig. 2)\n";
     out += &format!("mu = {}, v_belt = {} m/s, u = 0, {}\n", s.mu, s.v_belt, s.theta2_rule);
     out += &format!(
         "grid {} x {}: theta1 in [{}, {}] deg, theta1_dot in [{}, {}] rad/s; {} of {} points have the tip on the belt\n",
@@ -354,7 +354,7 @@ pub fn human_summary(map: &ModeMap) -> String {
     out
 }
 
-/// Runs `sil-host modes` (MODEL.md experiment 1): computes the map, prints the
+/// Runs `sil-host modes` (docs/model.md experiment 1): computes the map, prints the
 /// counts per mode (human table, or one JSON document with `--json`) and writes
 /// `modes.csv` and `modes.svg` under `--out`, all or nothing.
 ///

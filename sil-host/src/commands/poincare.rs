@@ -1,5 +1,5 @@
 //! `sil-host poincare`: the one-parameter bifurcation diagram of the open loop
-//! (MODEL.md experiment 4, the paper's Fig. 4), with each belt speed classified.
+//! (docs/model.md experiment 4, the paper's Fig. 4), with each belt speed classified.
 //!
 //! Writes under `--out`: `section.csv` (every section point: `v_belt`, crossing
 //! time, state), `classes.csv` and `classes.json` (per `v_belt`: class, period,

@@ -1,4 +1,4 @@
-//! `sil-host report`: every experiment of MODEL.md at a size that finishes in
+//! `sil-host report`: every experiment of docs/model.md at a size that finishes in
 //! minutes, gathered in one Markdown page (`report.md`) with every figure and
 //! table, so a researcher sees the whole reproduction at once.
 //!
@@ -33,12 +33,12 @@ struct Step {
     args: Vec<String>,
 }
 
-/// One section of the report: an experiment of MODEL.md with its commands.
+/// One section of the report: an experiment of docs/model.md with its commands.
 #[derive(Debug, Clone)]
 struct Section {
     /// What the paper shows, and where.
     title: &'static str,
-    /// MODEL.md experiment and paper figure or table.
+    /// docs/model.md experiment and paper figure or table.
     source: &'static str,
     /// The commands that reproduce it.
     steps: Vec<Step>,
@@ -59,23 +59,23 @@ fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     let mut v = vec![
         Section {
             title: "Contact modes on the belt",
-            source: "MODEL.md experiment 1, paper Fig. 2",
+            source: "docs/model.md experiment 1, paper Fig. 2",
             steps: vec![step("modes", &["modes", "--mu", "0.6", "--grid", if quick { "200" } else { "400" }])],
         },
         Section {
             title: "Admissible configurations",
-            source: "MODEL.md experiment 2, paper Table II",
+            source: "docs/model.md experiment 2, paper Table II",
             steps: vec![step("admissible", &["admissible", "--mu", "0.6"])],
         },
         Section {
             title: "Open-loop bouncing from x0a",
-            source: "MODEL.md experiments 3 and 4 (one run of the open-loop system, u = 0)",
+            source: "docs/model.md experiments 3 and 4 (one run of the open-loop system, u = 0)",
             steps: vec![step("simulate", &["simulate", "--x0", "a", "--mu", "0.6", "--v-belt", "-0.4", "--duration", "10"])],
         },
     ];
     v.push(Section {
         title: "Open-loop two-parameter bifurcation diagram",
-        source: "MODEL.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d, for e_n = 0, 0.2 and 0.5 (how the band moves with the impact law)",
+        source: "docs/model.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d, for e_n = 0, 0.2 and 0.5 (how the band moves with the impact law)",
         steps: vec![step(
             "sweep-open-loop",
             &if quick {
@@ -87,7 +87,7 @@ fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     });
     v.push(Section {
         title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
-        source: "MODEL.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop",
+        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop",
         steps: vec![step(
             "sweep-hybrid",
             &if quick {
@@ -99,7 +99,7 @@ fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     });
     v.push(Section {
         title: "One-parameter bifurcation diagram (Poincaré section)",
-        source: "MODEL.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
+        source: "docs/model.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
         steps: vec![step(
             "poincare",
             &if quick {
@@ -111,12 +111,12 @@ fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     });
     v.push(Section {
         title: "Z_t,sliding: how far each controller drives the tip with no lift-off",
-        source: "MODEL.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
+        source: "docs/model.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
         steps: vec![step("zmax", &["zmax", "--all"])],
     });
     v.push(Section {
         title: "PID and hybrid force/motion control in the SIL loop",
-        source: "MODEL.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with HARDWARE.md's sensors",
+        source: "docs/model.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with docs/hardware.md's sensors",
         steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]
             .into_iter()
             .map(|name| Step {
@@ -254,7 +254,7 @@ fn render_page(sections: &[Section], results: &[Vec<StepResult>], size: &str, wa
     let _ = writeln!(md, "# Reproduction of Marchese, Coraggio, Hogan, di Bernardo (ECC 2019)\n");
     let _ = writeln!(
         md,
-        "Every experiment of MODEL.md from our own simulation (`sil-host report`, size `{size}`, {wall_s:.0} s of wall time). \
+        "Every experiment of docs/model.md from our own simulation (`sil-host report`, size `{size}`, {wall_s:.0} s of wall time). \
          Each section gives the command that made it; its files are in the folder of the same name.\n"
     );
     let _ = writeln!(md, "| experiment | source | status | wall time |\n|---|---|---|---|");

@@ -1,4 +1,4 @@
-//! `sil-host sweep` (the brute-force bifurcation diagram, MODEL.md experiments 3
+//! `sil-host sweep` (the brute-force bifurcation diagram, docs/model.md experiments 3
 //! and 7) and `sil-host merge` (joining a sharded sweep). See [`crate::sweep`].
 //!
 //! Files in the sweep's folder: `sweep.json` (the spec and shard, checked on

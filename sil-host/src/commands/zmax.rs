@@ -1,4 +1,4 @@
-//! `sil-host zmax`: `Z_t,sliding` (MODEL.md experiments 5 and 6), the largest
+//! `sil-host zmax`: `Z_t,sliding` (docs/model.md experiments 5 and 6), the largest
 //! tangential target the tip reaches with no lift-off, by bisection
 //! ([`analyses::zmax`] defines the trial and the criteria), for the PID and the hybrid
 //! controller from `x0d` and `x0u`, ideal (the paper's setting) or sampled (the
@@ -74,7 +74,7 @@ pub struct ZmaxSummary {
     pub tol_m: f64,
     /// What a trial checks.
     pub definition: &'static str,
-    /// The paper's figures (MODEL.md gives none).
+    /// The paper's figures (docs/model.md gives none).
     pub paper: &'static str,
     /// The base scenario of the sampled setting (its target, run length, controller
     /// and initial condition are set per trial).
@@ -88,7 +88,7 @@ the tip never leaves the belt (no lift-off event, located exactly between sample
 the run ends normally (no plant failure, firmware safe state or ideal-law fault); and |z_t - z_t*| <= settle_tol_m at every sample of the last settle_window_s. \
 Z_t,sliding is the largest target verified reached by bisection on [lo, hi] to tol_m; lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi.";
 
-const PAPER: &str = "MODEL.md gives no value for Z_t,sliding: these are ours.";
+const PAPER: &str = "docs/model.md gives no value for Z_t,sliding: these are ours.";
 
 fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
     if args.all {
@@ -282,7 +282,7 @@ fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
     let c = &s.criteria;
     let _ = writeln!(
         o,
-        "Z_t,sliding (MODEL.md experiments 5 and 6): largest z_t* reached with no lift-off; mu {}, v_belt {} m/s, move {} s, run {} s, settle within {} mm over the last {} s, bisection to {} mm",
+        "Z_t,sliding (docs/model.md experiments 5 and 6): largest z_t* reached with no lift-off; mu {}, v_belt {} m/s, move {} s, run {} s, settle within {} mm over the last {} s, bisection to {} mm",
         s.base_scenario.plant.mu,
         s.base_scenario.plant.v_belt,
         c.move_time_s,

@@ -1,4 +1,4 @@
-//! The arm image: the controller on the arm (HARDWARE.md "The reference board").
+//! The arm image: the controller on the arm (docs/hardware.md "Reference board").
 //!
 //! TIM2's update interrupt at the control rate runs one period: the sensors
 //! are sampled at the tick (encoders over SPI1, the load cell's conversions

@@ -1,6 +1,6 @@
 //! ADC1 for the load cell (RM0090 13): the two channels of the map in the
 //! injected group, converted on TIM2's TRGO (the control tick), so the sample
-//! instant is the period's start (HARDWARE.md). ADC clock APB2 / 4 = 21 MHz,
+//! instant is the period's start (docs/hardware.md). ADC clock APB2 / 4 = 21 MHz,
 //! 15-cycle sampling: both conversions take about 1.4 us.
 
 use stm32f4::stm32f405 as pac;

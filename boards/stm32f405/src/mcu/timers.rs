@@ -8,7 +8,7 @@ use stm32f4::stm32f405 as pac;
 use super::gpio;
 use crate::{pins, timing::TickTimer};
 
-/// PWM frequency of the motor drivers, Hz (HARDWARE.md).
+/// PWM frequency of the motor drivers, Hz (docs/hardware.md).
 pub const PWM_HZ: u32 = 20_000;
 
 fn tim2() -> &'static pac::tim2::RegisterBlock {

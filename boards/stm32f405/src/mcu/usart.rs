@@ -7,7 +7,7 @@ use stm32f4::stm32f405 as pac;
 use super::gpio;
 use crate::pins;
 
-/// The link's rate, baud (HARDWARE.md).
+/// The link's rate, baud (docs/hardware.md).
 pub const BAUD: u32 = 2_000_000;
 
 fn usart() -> &'static pac::usart1::RegisterBlock {
