@@ -36,7 +36,7 @@ where
         cli::Command::Bench(args) => commands::bench::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),
         cli::Command::Sweep(args) => commands::sweep::run(&args),
-        cli::Command::Merge(args) => commands::sweep::merge(&args),
+        cli::Command::Merge(args) => commands::sweep::merge::merge(&args),
         cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
         cli::Command::Firmware(args) => match commands::firmware::firmware(&args) {

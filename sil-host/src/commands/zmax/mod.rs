@@ -9,16 +9,14 @@
 //! history of the run at the limit (tip position and reference, normal force,
 //! torques, contact mode).
 
-use std::{io::Write, time::Instant};
+use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
 
 use crate::{
     cli::ZmaxArgs,
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
-    plot,
 };
 use analyses::admissible::{p_on_belt, positive_intervals};
 use analyses::zmax::{
@@ -27,68 +25,10 @@ use analyses::zmax::{
 use plant::initial::PaperX0;
 use rig::scenario::Scenario;
 
-/// One row of `zmax.csv`.
-#[derive(Debug, Clone, Serialize)]
-pub struct ZmaxRow {
-    /// `pid` or `hybrid`.
-    pub controller: &'static str,
-    /// `d` or `u`.
-    pub x0: &'static str,
-    /// `ideal` or `sampled`.
-    pub setting: &'static str,
-    /// `found`, `lower_fails` or `upper_reached`.
-    pub outcome: &'static str,
-    /// `Z_t,sliding`, m (empty when the lower end already fails).
-    pub z_t_sliding_m: Option<f64>,
-    /// Smallest target found to fail, m (empty unless found).
-    pub first_failing_m: Option<f64>,
-    /// Why that target (or, for `lower_fails`, the lower end) failed.
-    pub why_failing: Option<String>,
-    /// Bracket searched, m.
-    pub bracket_lo_m: f64,
-    /// Bracket searched, m.
-    pub bracket_hi_m: f64,
-    /// End of the admissible range (`p = 0` on the belt, `z_r_dot > 0`) on the
-    /// initial condition's elbow branch, m (paper Table II).
-    pub p_zero_end_m: Option<f64>,
-    /// Where `theta1` is largest along the belt on the initial condition's branch, m
-    /// (empty if at the end of the bracket): the PID acts on `theta1` alone, and
-    /// `theta1*(z_t*)` past this fold is also the `theta1` of a point before it.
-    pub theta1_fold_m: Option<f64>,
-    /// Trials run.
-    pub trials: u32,
-    /// Wall-clock time of the search, s.
-    pub wall_s: f64,
-}
-
-/// `summary.json`.
-#[derive(Debug, Clone, Serialize)]
-pub struct ZmaxSummary {
-    /// One row per case.
-    pub results: Vec<ZmaxRow>,
-    /// Every trial of every case.
-    pub trials: Vec<Trial>,
-    /// The criteria of a trial.
-    pub criteria: Criteria,
-    /// Bisection tolerance, m.
-    pub tol_m: f64,
-    /// What a trial checks.
-    pub definition: &'static str,
-    /// The paper's figures (docs/model.md gives none).
-    pub paper: &'static str,
-    /// The base scenario of the sampled setting (its target, run length, controller
-    /// and initial condition are set per trial).
-    pub base_scenario: Scenario,
-    /// Wall-clock time of the whole command, s.
-    pub wall_s: f64,
-}
-
-const DEFINITION: &str = "z_t* is reached with no lift-off when, over the whole run (the quintic move of z_t* over move_time_s, then held until duration_s): \
-the tip never leaves the belt (no lift-off event, located exactly between samples too; no impact without collision; no sample in flight); \
-the run ends normally (no plant failure, firmware safe state or ideal-law fault); and |z_t - z_t*| <= settle_tol_m at every sample of the last settle_window_s. \
-Z_t,sliding is the largest target verified reached by bisection on [lo, hi] to tol_m; lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi.";
-
-const PAPER: &str = "docs/model.md gives no value for Z_t,sliding: these are ours.";
+pub mod figures;
+pub mod summary;
+use figures::*;
+use summary::*;
 
 fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
     if args.all {
@@ -239,116 +179,4 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
         print_table(&summary, &written);
     }
     Ok(())
-}
-
-/// A flat row of `trials.csv`.
-#[derive(Debug, Clone, Serialize)]
-struct TrialRow {
-    controller: &'static str,
-    x0: &'static str,
-    setting: &'static str,
-    target_z_t_m: f64,
-    reached: bool,
-    lift_offs: u64,
-    impacts_without_collision: u64,
-    first_lift_off_s: Option<f64>,
-    settle_error_m: f64,
-    failure: Option<String>,
-    simulated_s: f64,
-    wall_s: f64,
-}
-
-impl From<&Trial> for TrialRow {
-    fn from(t: &Trial) -> Self {
-        Self {
-            controller: t.combination.controller.name(),
-            x0: t.combination.x0.letter(),
-            setting: t.combination.setting.name(),
-            target_z_t_m: t.target_z_t,
-            reached: t.reached,
-            lift_offs: t.lift_offs,
-            impacts_without_collision: t.impacts_without_collision,
-            first_lift_off_s: t.first_lift_off_s,
-            settle_error_m: t.settle_error_m,
-            failure: t.failure.clone(),
-            simulated_s: t.simulated_s,
-            wall_s: t.wall_s,
-        }
-    }
-}
-
-fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
-    let mut o = std::io::stdout().lock();
-    let c = &s.criteria;
-    let _ = writeln!(
-        o,
-        "Z_t,sliding (docs/model.md experiments 5 and 6): largest z_t* reached with no lift-off; mu {}, v_belt {} m/s, move {} s, run {} s, settle within {} mm over the last {} s, bisection to {} mm",
-        s.base_scenario.plant.mu,
-        s.base_scenario.plant.v_belt,
-        c.move_time_s,
-        c.duration_s,
-        c.settle_tol_m * 1e3,
-        c.settle_window_s,
-        s.tol_m * 1e3
-    );
-    let _ = writeln!(
-        o,
-        "{:<8} {:<4} {:<8} {:>16} {:>15} {:>13} {:>16} {:>7} {:>8}",
-        "control", "x0", "setting", "Z_t,sliding (m)", "first fail (m)", "p = 0 at (m)", "theta1 max at (m)", "trials", "wall (s)"
-    );
-    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
-    for r in &s.results {
-        let z = match r.outcome {
-            "lower_fails" => format!("< {:.4}", r.bracket_lo_m),
-            "upper_reached" => format!(">= {:.4}", r.bracket_hi_m),
-            _ => f(r.z_t_sliding_m),
-        };
-        let _ = writeln!(
-            o,
-            "{:<8} {:<4} {:<8} {:>16} {:>15} {:>13} {:>16} {:>7} {:>8.2}",
-            r.controller,
-            format!("x0{}", r.x0),
-            r.setting,
-            z,
-            f(r.first_failing_m),
-            f(r.p_zero_end_m),
-            f(r.theta1_fold_m),
-            r.trials,
-            r.wall_s
-        );
-    }
-    for r in &s.results {
-        if let Some(why) = &r.why_failing {
-            let _ = writeln!(o, "{} x0{} {}: first failing target {}", r.controller, r.x0, r.setting, why);
-        }
-    }
-    let _ = writeln!(
-        o,
-        "p = 0 at: end of the admissible range on the branch (paper Table II); theta1 max at: the fold of theta1 along the belt, which the PID (on theta1 alone) cannot pass"
-    );
-    let _ = writeln!(o, "{}", s.paper);
-    let _ = writeln!(
-        o,
-        "wall time {:.1} s; wrote {}",
-        s.wall_s,
-        written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-    );
-}
-
-fn draw(path: &std::path::Path, s: &Search) -> Result<(), CliError> {
-    let rows = &s.limit_trace;
-    let t_end = rows.last().map_or(1.0, |r| r.t).max(1e-9);
-    let samples: Vec<plot::HistorySample> = rows
-        .iter()
-        .map(|r| plot::HistorySample { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u: [r.u1, r.u2], mode: r.mode })
-        .collect();
-    let panels = plot::history_panels(&samples, false);
-    let c = &s.combination;
-    let what = match s.bisection {
-        Bisection::Found { lo, hi, .. } => format!("at the limit z_t* = {lo:.4} m (fails at {hi:.4} m)"),
-        Bisection::LowerFails { lo, .. } => format!("lifts off already at the lowest target {lo:.4} m"),
-        Bisection::UpperReached { hi, .. } => format!("reaches the highest target {hi:.4} m"),
-    };
-    let title = format!("Z_t,sliding: {} from x0{}, {}: {what}", c.controller.name(), c.x0.letter(), c.setting.name());
-    plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

@@ -1,0 +1,102 @@
+//! The figure of `sil-host admissible`: `p(z_t)` on the belt per elbow branch (`admissible.svg`).
+
+use super::summary::fmt_intervals;
+use crate::error::CliError;
+use analyses::admissible::{AdmissibleReport, p_on_belt};
+use plotters::prelude::*;
+use shared::{Arm, ElbowBranch, SlipDirection};
+
+/// Tick label with two decimals and no "-0.00".
+pub(crate) fn tick_label(x: &f64) -> String {
+    let x = if x.abs() < 1e-9 { 0.0 } else { *x };
+    format!("{x:.2}")
+}
+
+/// Largest `|p|` (1/kg) shown in `admissible.svg`; larger values are clamped.
+pub(crate) const P_PLOT_MAX: f64 = 1e6;
+
+pub(crate) fn plot_err(path: &std::path::Path) -> impl Fn(String) -> CliError + '_ {
+    move |message| CliError::Plot { path: path.to_path_buf(), message }
+}
+
+/// Draws `p(z_t)` for `z_r_dot > 0` as an SVG at `path` (a staged file): one
+/// panel per elbow branch (up on top, down below) sharing the `z_t` axis (m),
+/// each with the line `p = 0`, the ends of the reachable belt (dashed) and the
+/// admissible intervals (`p > 0`) shaded.
+///
+/// # Errors
+/// [`CliError::Plot`] when plotters fails (including writing the file).
+pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), CliError> {
+    let perr = plot_err(path);
+    let arm = Arm::new(r.params);
+    let dir = SlipDirection::Positive;
+    let n = 2000;
+    let curve = |branch| {
+        (0..=n)
+            .map(|i| {
+                let z = -r.reach + 2.0 * r.reach * (i as f64) / (n as f64);
+                (z, p_on_belt(&arm, z, branch, dir))
+            })
+            .filter(|(_, p)| p.is_finite())
+            .collect::<Vec<_>>()
+    };
+    let panels = [(ElbowBranch::Up, curve(ElbowBranch::Up)), (ElbowBranch::Down, curve(ElbowBranch::Down))];
+    // One p range for both panels, so that they compare at a glance; always
+    // including p = 0 and capped at +-P_PLOT_MAX (absurd mu gives absurd p, and
+    // plotters cannot lay out an infinite axis): values beyond are clamped.
+    let (mut ymin, mut ymax) = panels.iter().flat_map(|(_, c)| c.iter()).fold((0.0f64, 0.0f64), |(a, b), &(_, p)| (a.min(p), b.max(p)));
+    ymin = ymin.max(-P_PLOT_MAX);
+    ymax = ymax.min(P_PLOT_MAX);
+    let pad = 0.08 * (ymax - ymin).max(1e-9);
+    ymin -= pad;
+    ymax += pad;
+    let clamp = |p: f64| p.clamp(ymin, ymax);
+    let (x0, x1) = (-r.reach * 1.03, r.reach * 1.03);
+
+    let root = SVGBackend::new(path, (960, 780)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| perr(e.to_string()))?;
+    let root = root
+        .titled(&format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu), ("sans-serif", 20))
+        .map_err(|e| perr(e.to_string()))?;
+    let (panels_area, note_area) = root.split_vertically(root.dim_in_pixel().1.saturating_sub(24));
+    let areas = panels_area.split_evenly((2, 1));
+    let line_color = RGBColor(31, 119, 180);
+    let shade = RGBColor(44, 160, 44).mix(0.22);
+    for ((branch, pts), area) in panels.iter().zip(areas.iter()) {
+        let iv = r.intervals(*branch, dir);
+        let caption = format!("elbow {}: p > 0 (shaded) for z_t in {} m", branch.name(), fmt_intervals(iv));
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, ymin..ymax)
+            .map_err(|e| perr(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .max_light_lines(0)
+            .x_label_formatter(&tick_label)
+            .x_desc("z_t (m)")
+            .y_desc("p (1/kg)")
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| perr(e.to_string()))?;
+        chart
+            .draw_series(iv.iter().map(|i| Rectangle::new([(i.lo, ymin), (i.hi, ymax)], shade.filled())))
+            .map_err(|e| perr(e.to_string()))?;
+        chart.draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.stroke_width(1))).map_err(|e| perr(e.to_string()))?;
+        for x in [-r.reach, r.reach] {
+            chart
+                .draw_series(DashedLineSeries::new([(x, ymin), (x, ymax)], 4, 4, BLACK.mix(0.5).stroke_width(1)))
+                .map_err(|e| perr(e.to_string()))?;
+        }
+        chart
+            .draw_series(LineSeries::new(pts.iter().map(|&(z, p)| (z, clamp(p))), line_color.stroke_width(2)))
+            .map_err(|e| perr(e.to_string()))?;
+    }
+    let note = "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p";
+    note_area.draw_text(note, &("sans-serif", 12).into_font().color(&BLACK.mix(0.7)), (70, 4)).map_err(|e| perr(e.to_string()))?;
+    root.present().map_err(|e| perr(e.to_string()))?;
+    Ok(())
+}

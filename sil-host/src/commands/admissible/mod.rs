@@ -1,0 +1,88 @@
+//! `sil-host admissible`: the admissible configurations of the tip on the belt
+//! (docs/model.md experiment 2, paper Table II), computed by [`analyses::admissible`];
+//! this command prints them, writes `admissible.json` and draws `admissible.svg`.
+
+use std::io::Write;
+
+use crate::{cli::AdmissibleArgs, error::CliError, output::OutputSet};
+use analyses::admissible::compute;
+
+pub mod figures;
+pub mod summary;
+use figures::*;
+use summary::*;
+
+/// Runs `sil-host admissible` (docs/model.md experiment 2): computes the admissible
+/// intervals for `--mu`, prints them (human table, or one JSON document with
+/// `--json`), and writes `admissible.json` and `admissible.svg` under `--out`,
+/// all or nothing.
+///
+/// # Errors
+/// [`CliError::Param`] (exit 2) for a negative or non-finite `--mu`, before
+/// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
+/// (nothing is left half-written).
+pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {
+    run_with(args, &mut std::io::stdout().lock())
+}
+
+/// [`run`], printing to `stdout` instead of the process's standard output.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with<W: Write>(args: &AdmissibleArgs, stdout: &mut W) -> Result<(), CliError> {
+    let report = compute(args.mu)?;
+    let mut out = OutputSet::new(&args.output.out)?;
+    let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
+    let json = serde_json::to_string_pretty(&json_report(&report, &files))
+        .map_err(|e| CliError::Io { path: out.path("admissible.json"), source: std::io::Error::other(e) })?;
+    out.write_bytes("admissible.json", json.as_bytes())?;
+    let svg = out.stage("admissible.svg");
+    draw_figure(&report, &svg)?;
+    out.commit()?;
+    let text = if args.output.json { json + "\n" } else { human_summary(&report) + &format!("wrote {}\n", files.join(", ")) };
+    stdout.write_all(text.as_bytes()).map_err(|source| CliError::Io { path: "<stdout>".into(), source })?;
+    Ok(())
+}
+
+#[cfg(test)]
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_mu_is_rejected_with_exit_code_2_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        for mu in [-0.1, f64::NAN, f64::INFINITY] {
+            let args = AdmissibleArgs { mu, output: crate::cli::OutputArgs { out: dir.path().join("o"), json: true } };
+            let e = run_with(&args, &mut Vec::new()).unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains("mu"), "{e}");
+            if mu.is_finite() {
+                assert!(e.to_string().contains("-0.1"), "{e}");
+            }
+            assert!(!dir.path().join("o").exists());
+        }
+    }
+
+    #[test]
+    fn run_writes_json_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let args = AdmissibleArgs { mu: 0.6, output: crate::cli::OutputArgs { out: dir.path().to_path_buf(), json: true } };
+        let mut printed = Vec::new();
+        run_with(&args, &mut printed).unwrap();
+        let printed: serde_json::Value = serde_json::from_slice(&printed).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("admissible.json")).unwrap()).unwrap();
+        assert_eq!(json["mu"], 0.6);
+        assert!(json["z_r_dot_positive"]["elbow_up"].is_array());
+        assert_eq!(json["mirror_check"]["ok"], true);
+        assert_eq!(printed, json, "--json prints the document written to admissible.json");
+        let svg = std::fs::read_to_string(dir.path().join("admissible.svg")).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("z_t (m)"));
+        let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".partial"))
+            .collect();
+        assert!(leftovers.is_empty());
+    }
+}

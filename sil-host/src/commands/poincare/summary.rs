@@ -1,0 +1,167 @@
+//! The outputs of `sil-host poincare` other than the figures: the rows of `section.csv` and `classes.csv`, `summary.json` and the human summary.
+
+use crate::commands::simulate::summary::InitialCondition;
+use analyses::poincare::{
+    Band, PointResult,
+    classify::{Class, ClassifyConfig},
+    lyapunov::LyapunovConfig,
+};
+use plant::SimConfig;
+use serde::Serialize;
+use std::io::Write;
+
+/// One row of `section.csv`.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct SectionRow {
+    pub(crate) v_belt: f64,
+    pub(crate) t: f64,
+    pub(crate) theta1: f64,
+    pub(crate) theta1_deg: f64,
+    pub(crate) theta1_dot: f64,
+    pub(crate) theta2: f64,
+    pub(crate) theta2_dot: f64,
+    pub(crate) kind: &'static str,
+    pub(crate) mode: &'static str,
+}
+
+/// One row of `classes.csv`.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct ClassRow {
+    pub(crate) v_belt: f64,
+    pub(crate) class: &'static str,
+    pub(crate) period: Option<usize>,
+    pub(crate) n_crossings: usize,
+    pub(crate) distinct_points: usize,
+    pub(crate) lyapunov_per_crossing: Option<f64>,
+    pub(crate) lyapunov_per_s: Option<f64>,
+    pub(crate) lyapunov_std_error: Option<f64>,
+    pub(crate) lyapunov_iterations: Option<usize>,
+    pub(crate) lyapunov_collapsed: Option<usize>,
+    pub(crate) final_mode: &'static str,
+    pub(crate) final_theta1: f64,
+    pub(crate) lift_offs: u64,
+    pub(crate) touchdowns: u64,
+    pub(crate) error: String,
+    pub(crate) wall_s: f64,
+}
+
+impl From<&PointResult> for ClassRow {
+    fn from(r: &PointResult) -> Self {
+        Self {
+            v_belt: r.v_belt,
+            class: r.class.name(),
+            period: r.period,
+            n_crossings: r.n_crossings,
+            distinct_points: r.distinct_points,
+            lyapunov_per_crossing: r.lyapunov.map(|l| l.per_iteration),
+            lyapunov_per_s: r.lyapunov.map(|l| l.per_second),
+            lyapunov_std_error: r.lyapunov.map(|l| l.std_error),
+            lyapunov_iterations: r.lyapunov.map(|l| l.iterations),
+            lyapunov_collapsed: r.lyapunov.map(|l| l.collapsed),
+            final_mode: r.final_mode,
+            final_theta1: r.final_theta1,
+            lift_offs: r.lift_offs,
+            touchdowns: r.touchdowns,
+            error: r.error.clone().unwrap_or_default(),
+            wall_s: r.wall_s,
+        }
+    }
+}
+
+/// Count of grid points per class.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ClassCounts {
+    /// No crossings.
+    pub equilibrium: usize,
+    /// Too few crossings.
+    pub settling: usize,
+    /// Periodic, any period.
+    pub periodic: usize,
+    /// Chaotic.
+    pub chaotic: usize,
+    /// Aperiodic without a positive exponent.
+    pub aperiodic: usize,
+    /// Failed simulations.
+    pub failed: usize,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// `ok`, or `failed` when some belt speed failed.
+    pub status: &'static str,
+    /// Friction coefficient.
+    pub mu: f64,
+    /// The initial condition and its projection onto the belt.
+    pub initial_condition: InitialCondition,
+    /// Belt-speed grid: `[min, max]`, m/s.
+    pub v_belt_range: [f64; 2],
+    /// Grid step, m/s.
+    pub v_step: f64,
+    /// Grid points.
+    pub grid_points: usize,
+    /// Transient, s.
+    pub transient_s: f64,
+    /// Record window, s.
+    pub record_s: f64,
+    /// Simulator settings.
+    pub sim: SimConfig,
+    /// Classification settings.
+    pub classify: ClassifyConfig,
+    /// Lyapunov settings.
+    pub lyapunov: LyapunovConfig,
+    /// Hysteresis of the section, rad/s.
+    pub section_depth: f64,
+    /// Longest wait of the section map for a return, s.
+    pub max_return_s: f64,
+    /// Grid points per class.
+    pub counts: ClassCounts,
+    /// Runs of neighbouring belt speeds with equal class and period.
+    pub bands: Vec<Band>,
+    /// Section points written.
+    pub section_points: usize,
+    /// Worker threads.
+    pub threads: usize,
+    /// Wall time of the sweep (without writing files), s.
+    pub wall_s: f64,
+    /// Median wall time of one belt speed (one thread), s.
+    pub median_point_wall_s: f64,
+    /// Files written.
+    pub files: Vec<String>,
+}
+
+pub(crate) fn band_name(b: &Band) -> String {
+    match (b.class, b.period) {
+        (Class::Periodic, Some(p)) => format!("period-{p}"),
+        (c, _) => c.name().to_string(),
+    }
+}
+
+pub(crate) fn print_human(s: &Summary) {
+    let mut o = std::io::stdout().lock();
+    let ic = &s.initial_condition;
+    let _ = writeln!(
+        o,
+        "Poincare section theta1_dot = 0 (upward), open loop u = 0, mu = {}, from {} (tip {}), v_belt in [{}, {}] m/s step {} ({} points)",
+        s.mu,
+        ic.name,
+        if ic.projection.projected { "projected onto the belt" } else { "as given" },
+        s.v_belt_range[0],
+        s.v_belt_range[1],
+        s.v_step,
+        s.grid_points
+    );
+    let _ = writeln!(o, "transient {} s, record {} s; {} section points", s.transient_s, s.record_s, s.section_points);
+    let c = &s.counts;
+    let _ = writeln!(
+        o,
+        "classes: periodic {} | chaotic {} | aperiodic {} | settling {} | equilibrium {} | failed {}",
+        c.periodic, c.chaotic, c.aperiodic, c.settling, c.equilibrium, c.failed
+    );
+    let _ = writeln!(o, "bands (v_belt from, to, points):");
+    for b in &s.bands {
+        let _ = writeln!(o, "  {:>8.4} .. {:>8.4} m/s  {:<12} ({} points)", b.v_belt_min, b.v_belt_max, band_name(b), b.points);
+    }
+    let _ = writeln!(o, "wall {:.1} s on {} threads (median {:.3} s per belt speed)", s.wall_s, s.threads, s.median_point_wall_s);
+    let _ = writeln!(o, "wrote {}", s.files.join(", "));
+}

@@ -1,0 +1,205 @@
+//! `sil-host simulate`: an open-loop run (`u = 0`) of the arm on the belt.
+//!
+//! Writes under `--out`: `trace.csv` (one row per `--sample-dt`), `events.csv`
+//! (every event at its located time), `trace.svg` (`z_t`, `z_n`, `f_n` and the
+//! contact mode against time) and `summary.json`. If the simulation fails part
+//! way, everything up to the failure is still written (with the error in the
+//! summary) and the command exits with code 1.
+
+use std::time::Instant;
+
+use shared::Params;
+
+use crate::{
+    cli::SimulateArgs,
+    error::CliError,
+    output::{OutputSet, io_err, progress_bar, write_csv},
+};
+use plant::initial::{self, PaperX0};
+use plant::{Plant, PlantEvent, SimConfig, SimError};
+
+pub mod figures;
+pub mod summary;
+use figures::*;
+use summary::*;
+
+/// The initial condition of `--x0` or, when given, `--x0-deg`: its name and
+/// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and degrees per second.
+///
+/// # Errors
+/// [`CliError::BadInput`] for a malformed `--x0-deg`.
+pub(crate) fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
+    Ok(match x0_deg {
+        Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
+        None => {
+            let ic = x0.condition();
+            (ic.name.to_string(), ic.deg)
+        }
+    })
+}
+
+/// Parses `--x0-deg th1,th1dot,th2,th2dot`.
+pub(crate) fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
+    let bad = || CliError::BadInput(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    match v.as_slice() {
+        [a, b, c, d] if v.iter().all(|x| x.is_finite()) => Ok([*a, *b, *c, *d]),
+        _ => Err(bad()),
+    }
+}
+
+/// Checks the run-length options.
+fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
+    if !(duration.is_finite() && duration > 0.0 && duration <= 1e6) {
+        return Err(CliError::BadInput(format!("--duration must be in (0, 1e6] s, got {duration}")));
+    }
+    if !(sample_dt.is_finite() && sample_dt > 0.0 && sample_dt <= duration) {
+        return Err(CliError::BadInput(format!("--sample-dt must be in (0, duration] s, got {sample_dt}")));
+    }
+    let n = (duration / sample_dt).round();
+    if n > 5e7 {
+        return Err(CliError::BadInput(format!("--duration / --sample-dt gives {n} trace rows (at most 5e7); raise --sample-dt")));
+    }
+    Ok((n as usize).max(1))
+}
+
+fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
+    let x = plant.state();
+    let z = plant.tip();
+    let v = plant.tip_velocity();
+    TraceRow {
+        t: plant.time(),
+        theta1: x[0],
+        theta1_dot: x[1],
+        theta2: x[2],
+        theta2_dot: x[3],
+        z_t: z[0],
+        z_n: z[1],
+        z_t_dot: v[0],
+        z_n_dot: v[1],
+        z_r_dot: v[0] - plant.arm().params.v_belt,
+        f_t: f[0],
+        f_n: f[1],
+        mode: plant.mode().name(),
+        energy: plant.energy(),
+    }
+}
+
+/// Runs `sil-host simulate`.
+///
+/// # Errors
+/// [`CliError::BadInput`]/[`CliError::Param`]/[`CliError::Sim`] (exit 2) for bad
+/// options or initial conditions, before anything is written; [`CliError::Sim`]
+/// (exit 1) when the simulation fails part way (outputs up to then are written);
+/// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
+pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+    // Validate everything before touching the output folder.
+    let params = Params::new(args.mu, args.v_belt)?;
+    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
+    sim.validate()?;
+    let steps = check_times(args.duration, args.sample_dt)?;
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
+    let x0 = initial::deg_to_state(given_deg);
+    let projection = initial::describe_projection(&params, x0);
+    let mut plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
+    let initial_condition = InitialCondition {
+        name,
+        given_deg,
+        projection,
+        used_deg: plant.state().map(f64::to_degrees),
+        initial_mode: plant.mode().name(),
+        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
+    };
+
+    let mut out = OutputSet::new(&args.output.out)?;
+    let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
+    let mut trace = Vec::with_capacity(steps + 1);
+    let mut events: Vec<PlantEvent> = plant.startup_events().to_vec();
+    trace.push(trace_row(&plant, plant.contact_force([0.0, 0.0])));
+    let started = Instant::now();
+    let mut failure: Option<SimError> = None;
+    for k in 0..steps {
+        // Advance to an exact multiple of the sample period (no accumulated drift).
+        let target = (k + 1) as f64 * args.sample_dt;
+        match plant.advance([0.0, 0.0], target - plant.time()) {
+            Ok(report) => {
+                events.extend_from_slice(&report.events);
+                trace.push(trace_row(&plant, report.f));
+            }
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+        if k % 256 == 0 {
+            progress.set_position(k as u64);
+        }
+    }
+    let wall_s = started.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+
+    write_csv(&mut out, "trace.csv", &trace)?;
+    // events.csv
+    let (tmp, w) = out.create("events.csv")?;
+    let mut csv_w = csv::Writer::from_writer(w);
+    if events.is_empty() {
+        csv_w
+            .write_record([
+                "t",
+                "kind",
+                "mode_after",
+                "v_n_before",
+                "v_n_after",
+                "v_r_before",
+                "v_r_after",
+                "impulse_t",
+                "impulse_n",
+                "energy_change",
+                "contact_work",
+                "resolution",
+            ])
+            .map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+    }
+    for e in &events {
+        csv_w.serialize(EventRow::from(e)).map_err(|err| CliError::Io { path: tmp.clone(), source: err.into() })?;
+    }
+    csv_w.flush().map_err(io_err(&tmp))?;
+    // trace.svg
+    let svg = out.stage("trace.svg");
+    draw_trace(&svg, &params, &initial_condition.name, &trace)?;
+
+    let counters = *plant.counters();
+    let simulated_s = plant.time();
+    let summary = Summary {
+        status: if failure.is_some() { "failed" } else { "ok" },
+        error: failure.as_ref().map(|e| e.to_string()),
+        params,
+        sim,
+        initial_condition,
+        duration_s: args.duration,
+        simulated_s,
+        lift_offs: counters.lift_offs,
+        touchdowns: counters.touchdowns,
+        impacts_without_collision: counters.impacts_without_collision,
+        stick_phases: counters.stick_phases,
+        counters,
+        final_state: plant.state(),
+        final_tip: [plant.tip()[0], plant.tip()[1]],
+        final_mode: plant.mode().name(),
+        wall_s,
+        realtime_factor: simulated_s / wall_s.max(1e-9),
+        files: ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect(),
+    };
+    let json = out.write_json("summary.json", &summary)?;
+    out.commit()?;
+
+    if args.output.json {
+        println!("{json}");
+    } else {
+        print_human(&summary, events.len());
+    }
+    match failure {
+        Some(e) => Err(CliError::Sim(e)),
+        None => Ok(()),
+    }
+}

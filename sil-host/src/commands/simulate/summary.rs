@@ -1,0 +1,209 @@
+//! The outputs of `sil-host simulate` other than the figure: the rows of `trace.csv` and `events.csv`, `summary.json` and the human summary.
+
+use plant::initial::ProjectionInfo;
+use plant::{Counters, PlantEvent, SimConfig};
+use serde::Serialize;
+use shared::Params;
+use std::io::Write;
+
+/// One row of `trace.csv`.
+#[derive(Debug, Clone, Serialize)]
+pub struct TraceRow {
+    /// Time, s.
+    pub t: f64,
+    /// `theta1`, rad.
+    pub theta1: f64,
+    /// `theta1_dot`, rad/s.
+    pub theta1_dot: f64,
+    /// `theta2`, rad.
+    pub theta2: f64,
+    /// `theta2_dot`, rad/s.
+    pub theta2_dot: f64,
+    /// Tip tangential position `z_t`, m.
+    pub z_t: f64,
+    /// Tip normal position `z_n`, m.
+    pub z_n: f64,
+    /// `z_t_dot`, m/s.
+    pub z_t_dot: f64,
+    /// `z_n_dot`, m/s.
+    pub z_n_dot: f64,
+    /// Relative tangential velocity `z_r_dot = z_t_dot - v_belt`, m/s.
+    pub z_r_dot: f64,
+    /// Tangential contact force `f_t`, N.
+    pub f_t: f64,
+    /// Normal contact force `f_n`, N.
+    pub f_n: f64,
+    /// Contact mode (`flight`, `sliding`, `sticking`).
+    pub mode: &'static str,
+    /// Mechanical energy (kinetic + gravity + spring), J.
+    pub energy: f64,
+}
+
+/// One row of `events.csv`.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct EventRow {
+    pub(crate) t: f64,
+    pub(crate) kind: &'static str,
+    pub(crate) mode_after: &'static str,
+    pub(crate) v_n_before: f64,
+    pub(crate) v_n_after: f64,
+    pub(crate) v_r_before: f64,
+    pub(crate) v_r_after: f64,
+    pub(crate) impulse_t: f64,
+    pub(crate) impulse_n: f64,
+    pub(crate) energy_change: f64,
+    pub(crate) contact_work: f64,
+    pub(crate) resolution: String,
+}
+
+impl From<&PlantEvent> for EventRow {
+    fn from(e: &PlantEvent) -> Self {
+        Self {
+            t: e.t,
+            kind: e.kind.name(),
+            mode_after: e.mode_after.name(),
+            v_n_before: e.v_n_before,
+            v_n_after: e.v_n_after,
+            v_r_before: e.v_r_before,
+            v_r_after: e.v_r_after,
+            impulse_t: e.impulse[0],
+            impulse_n: e.impulse[1],
+            energy_change: e.energy_change,
+            contact_work: e.contact_work,
+            resolution: e
+                .resolution
+                .map(|r| serde_json::to_value(r).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default())
+                .unwrap_or_default(),
+        }
+    }
+}
+
+/// The initial condition as resolved.
+#[derive(Debug, Clone, Serialize)]
+pub struct InitialCondition {
+    /// `x0a`, `x0d`, `x0u` or `custom`.
+    pub name: String,
+    /// As given: `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and deg/s.
+    pub given_deg: [f64; 4],
+    /// Where the tip sat relative to the belt and whether it was projected onto it.
+    pub projection: ProjectionInfo,
+    /// After projection: `[theta1, theta1_dot, theta2, theta2_dot]`, degrees and deg/s.
+    pub used_deg: [f64; 4],
+    /// Contact mode chosen at t = 0 (after any initial impact).
+    pub initial_mode: &'static str,
+    /// Events at t = 0 while the initial mode was chosen (e.g. an impact without collision).
+    pub startup_events: Vec<&'static str>,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// `ok`, or `failed` with `error`.
+    pub status: &'static str,
+    /// The error, when the run failed part way.
+    pub error: Option<String>,
+    /// Parameters used.
+    pub params: Params<f64>,
+    /// Simulator settings used.
+    pub sim: SimConfig,
+    /// The initial condition.
+    pub initial_condition: InitialCondition,
+    /// Requested simulated time, s.
+    pub duration_s: f64,
+    /// Simulated time reached, s.
+    pub simulated_s: f64,
+    /// Lift-offs.
+    pub lift_offs: u64,
+    /// Touchdowns (impacts at touchdown).
+    pub touchdowns: u64,
+    /// Impacts without collision.
+    pub impacts_without_collision: u64,
+    /// Sticking phases.
+    pub stick_phases: u64,
+    /// All event counters.
+    pub counters: Counters,
+    /// Final state `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s.
+    pub final_state: [f64; 4],
+    /// Final tip position `[z_t, z_n]`, m.
+    pub final_tip: [f64; 2],
+    /// Final contact mode.
+    pub final_mode: &'static str,
+    /// Wall-clock time of the simulation (without writing files), s.
+    pub wall_s: f64,
+    /// Simulated seconds per wall second.
+    pub realtime_factor: f64,
+    /// Files written.
+    pub files: Vec<String>,
+}
+
+pub(crate) fn print_human(s: &Summary, n_events: usize) {
+    let ic = &s.initial_condition;
+    let mut o = std::io::stdout().lock();
+    let _ = writeln!(
+        o,
+        "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {})",
+        s.params.mu,
+        s.params.v_belt,
+        s.sim.impact_law.name(),
+        s.sim.e_n
+    );
+    let _ = writeln!(
+        o,
+        "initial condition {} = [{:.2} deg, {:.2} deg/s, {:.2} deg, {:.2} deg/s] (elbow {})",
+        ic.name,
+        ic.given_deg[0],
+        ic.given_deg[1],
+        ic.given_deg[2],
+        ic.given_deg[3],
+        ic.projection.branch.name()
+    );
+    if ic.projection.projected {
+        let _ = writeln!(
+            o,
+            "  tip was {:.4} mm {} the belt: projected onto it at the same z_t = {:.5} m and elbow branch -> [{:.4} deg, {:.4} deg]",
+            ic.projection.height_above_belt.abs() * 1e3,
+            if ic.projection.height_above_belt < 0.0 { "inside" } else { "on" },
+            ic.projection.tip_given[0],
+            ic.used_deg[0],
+            ic.used_deg[2]
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  initial mode: {}{}",
+        ic.initial_mode,
+        if ic.startup_events.is_empty() { String::new() } else { format!(" (after {} at t = 0)", ic.startup_events.join(", ")) }
+    );
+    let _ = writeln!(
+        o,
+        "simulated {:.3} s of {:.3} s in {:.3} s wall ({:.0}x real time)",
+        s.simulated_s, s.duration_s, s.wall_s, s.realtime_factor
+    );
+    let c = &s.counters;
+    let _ = writeln!(
+        o,
+        "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {} | Zeno stops {} | energy-creating impacts {}",
+        c.lift_offs,
+        c.touchdowns,
+        c.impacts_without_collision,
+        c.stick_phases,
+        c.stick_to_slip,
+        c.slip_reversals,
+        c.zeno_stops,
+        c.energy_gains
+    );
+    let x = s.final_state;
+    let _ = writeln!(
+        o,
+        "final: mode {}, theta1 = {:.3} deg, theta2 = {:.3} deg, tip = ({:.5}, {:.5}) m",
+        s.final_mode,
+        x[0].to_degrees(),
+        x[2].to_degrees(),
+        s.final_tip[0],
+        s.final_tip[1]
+    );
+    if let Some(e) = &s.error {
+        let _ = writeln!(o, "FAILED: {e}");
+    }
+    let _ = writeln!(o, "wrote {}", s.files.join(", "));
+}

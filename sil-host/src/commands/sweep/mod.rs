@@ -1,0 +1,230 @@
+//! `sil-host sweep` (the brute-force bifurcation diagram, docs/model.md experiments 3
+//! and 7) and `sil-host merge` (joining a sharded sweep). See [`crate::sweep`].
+//!
+//! Files in the sweep's folder: `sweep.json` (the spec and shard, checked on
+//! resume), `runs.csv` (the journal, one flushed row per finished run, in
+//! completion order), and, written at the end of every invocation from the
+//! journal: `sweep.csv` (the same rows by run index: identical for an
+//! uninterrupted, a resumed and a merged sweep), `summary.json`, and per impact
+//! law and `e_n` the figures `map_<law>_e<e_n>.svg` and `slices_<law>_e<e_n>.svg`.
+
+use std::{
+    sync::{
+        Arc, Mutex,
+        atomic::{AtomicBool, AtomicU64, Ordering},
+    },
+    time::Instant,
+};
+
+use rayon::prelude::*;
+
+use crate::{
+    cli::{ScenarioArgs, SweepArgs},
+    error::CliError,
+    output::progress_bar,
+    sweep::store::{self, Manifest},
+};
+use analyses::sweep::{
+    Axis, Shard, SweepController, SweepSpec,
+    run::{self},
+};
+
+pub mod merge;
+pub mod outputs;
+use outputs::*;
+
+fn parse_axis(flag: &str, s: &str, step: f64) -> Result<Axis, CliError> {
+    let bad = || CliError::BadInput(format!("--{flag} expects MIN,MAX or one value (finite numbers), got `{s}`"));
+    let vals: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let axis = match vals.as_slice() {
+        [a] => Axis { start: *a, stop: *a, step },
+        [a, b] => Axis { start: *a, stop: *b, step },
+        _ => return Err(bad()),
+    };
+    Ok(axis)
+}
+
+fn paper_ic_names(list: &[String]) -> Result<Vec<String>, CliError> {
+    let mut out: Vec<String> = Vec::new();
+    for item in list {
+        let name = match item.trim() {
+            "a" | "x0a" => "x0a",
+            "d" | "x0d" => "x0d",
+            "u" | "x0u" => "x0u",
+            "none" | "" => continue,
+            other => return Err(CliError::BadInput(format!("--ics: unknown initial condition `{other}` (a, d, u or none)"))),
+        };
+        if !out.iter().any(|n| n == name) {
+            out.push(name.into());
+        }
+    }
+    Ok(out)
+}
+
+/// The spec of `sil-host sweep`'s arguments.
+///
+/// # Errors
+/// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
+pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
+    let scenario = match args.controller {
+        SweepController::None => {
+            if args.scenario.is_some() {
+                return Err(CliError::BadInput("--scenario is for closed-loop sweeps (--controller hybrid or pid)".into()));
+            }
+            None
+        }
+        _ => Some(crate::commands::closed_loop::load_scenario(&ScenarioArgs {
+            scenario: args.scenario.clone(),
+            controller: None,
+            x0: None,
+            target_zt: None,
+            duration: None,
+            seed: None,
+        })?),
+    };
+    let spec = SweepSpec {
+        format: analyses::sweep::FORMAT,
+        mu: parse_axis("mu", &args.mu, args.mu_step)?,
+        v_belt: parse_axis("v-belt", &args.v_belt, args.v_belt_step)?,
+        impact_laws: dedup(args.impact_law.iter().copied()),
+        e_n: {
+            let mut v: Vec<f64> = Vec::new();
+            for e in &args.e_n {
+                if !v.contains(e) {
+                    v.push(*e);
+                }
+            }
+            v
+        },
+        paper_ics: paper_ic_names(&args.ics)?,
+        random_ics: args.random_ics,
+        seed: args.seed,
+        transient_s: args.transient,
+        record_s: args.record,
+        controller: args.controller,
+        ideal: args.ideal,
+        scenario,
+        threshold: args.threshold,
+        rtol: args.rtol,
+        atol: args.atol,
+    };
+    spec.validate().map_err(CliError::BadInput)?;
+    Ok(spec)
+}
+
+fn dedup<T: PartialEq>(it: impl Iterator<Item = T>) -> Vec<T> {
+    let mut v = Vec::new();
+    for x in it {
+        if !v.contains(&x) {
+            v.push(x);
+        }
+    }
+    v
+}
+
+/// Ctrl-C and SIGTERM set a flag the workers check between runs and inside them.
+fn stop_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
+    }
+    flag
+}
+
+/// Runs `sil-host sweep`.
+///
+/// # Errors
+/// Bad arguments or a folder holding another sweep (exit 2); an interruption or
+/// an I/O failure (exit 1; finished runs are kept in the journal).
+pub fn run(args: &SweepArgs) -> Result<(), CliError> {
+    let spec = spec_of(args)?;
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s).map_err(CliError::BadInput)?,
+        None => Shard::ALL,
+    };
+    if args.threads == Some(0) {
+        return Err(CliError::BadInput("--threads must be >= 1".into()));
+    }
+    let manifest = Manifest { spec: spec.clone(), shard };
+    store::open(&args.out, &manifest)?;
+    let journal = store::read_journal(&args.out, &manifest)?;
+    let resumed = journal.rows.len();
+    let mut todo = store::missing(&manifest, &journal.rows);
+    if let Some(limit) = args.limit {
+        todo.truncate(limit);
+    }
+    let writer = store::Journal::open(&args.out, &journal.rows, journal.dropped_partial_line)?;
+    let ics = spec.initial_conditions();
+    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if !args.json {
+        let in_shard = shard.indices(spec.n_runs()).count();
+        eprintln!(
+            "sweep of {} runs{} in {}: {resumed} done already{}, computing {} on {threads} threads",
+            in_shard,
+            if shard.n > 1 { format!(" (shard {}/{} of {})", shard.k, shard.n, spec.n_runs()) } else { String::new() },
+            args.out.display(),
+            if journal.dropped_partial_line { " (a cut-off last line was dropped)" } else { "" },
+            todo.len()
+        );
+    }
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::BadInput(format!("cannot start {threads} threads: {e}")))?;
+    let stop = stop_flag();
+    let progress = progress_bar(todo.len() as u64, "sweep", "runs", args.json);
+    let failure: Mutex<Option<CliError>> = Mutex::new(None);
+    let done = AtomicU64::new(0);
+    let started = Instant::now();
+    let cpu_start = cpu_seconds();
+    pool.install(|| {
+        todo.par_iter().with_max_len(1).for_each(|&index| {
+            if stop.load(Ordering::Relaxed) {
+                return;
+            }
+            let key = spec.run_at(index);
+            if let Some(row) = run::simulate(&spec, &key, &ics[key.i_ic], &stop) {
+                if let Err(e) = writer.append(&row) {
+                    stop.store(true, Ordering::Relaxed);
+                    failure.lock().unwrap_or_else(|p| p.into_inner()).get_or_insert(e);
+                    return;
+                }
+                done.fetch_add(1, Ordering::Relaxed);
+                progress.inc(1);
+            }
+        });
+    });
+    let wall_s = started.elapsed().as_secs_f64();
+    let cpu_s = cpu_seconds() - cpu_start;
+    progress.finish_and_clear();
+    drop(writer);
+    if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
+    let computed = done.load(Ordering::Relaxed) as usize;
+    let simulated_s = computed as f64 * spec.run_duration();
+    let rate = simulated_s / (wall_s.max(1e-9) * threads as f64);
+    let timing = Timing {
+        runs_computed: computed,
+        threads,
+        wall_s,
+        simulated_s,
+        simulated_s_per_wall_s_per_core: rate,
+        cpu_s,
+        simulated_s_per_cpu_s: simulated_s / cpu_s.max(1e-9),
+        paper_grid_projection_s: if rate > 0.0 { PAPER_GRID_SIMULATED_S / (rate * threads as f64) } else { f64::NAN },
+    };
+    let interrupted = stop.load(Ordering::Relaxed) && computed < todo.len();
+    let rows = store::read_journal(&args.out, &manifest)?.rows;
+    let summary = finish(&args.out, &manifest, rows, Some(timing), resumed, interrupted)?;
+    report(&summary, args.json);
+    if interrupted {
+        return Err(CliError::Interrupted(format!(
+            "{} of {} runs done; run the same command again to resume",
+            summary.results.runs,
+            summary.results.runs + summary.results.missing
+        )));
+    }
+    Ok(())
+}
