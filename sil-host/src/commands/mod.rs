@@ -13,6 +13,35 @@ pub mod simulate;
 pub mod sweep;
 pub mod zmax;
 
+/// What a command computed and wrote: its typed result, the files it wrote, and
+/// why it stopped early when it did (everything up to then is written). Each
+/// command's `execute` returns one, its `run` prints it; `sil-host report` calls
+/// the `execute`s directly.
+#[derive(Debug)]
+pub struct Done<T> {
+    /// The command's result (its JSON document's type, or the analysis result).
+    pub result: T,
+    /// The files written, in the order the command lists them.
+    pub files: Vec<std::path::PathBuf>,
+    /// Why the command stopped early or part of it failed; `None` when it finished.
+    pub failure: Option<crate::error::CliError>,
+}
+
+impl<T> Done<T> {
+    /// A finished command.
+    pub fn ok(result: T, files: Vec<std::path::PathBuf>) -> Self {
+        Self { result, files, failure: None }
+    }
+
+    /// The command's outcome: `Err` with the failure, if any.
+    ///
+    /// # Errors
+    /// The failure.
+    pub fn into_result(self) -> Result<(), crate::error::CliError> {
+        self.failure.map_or(Ok(()), Err)
+    }
+}
+
 /// Parses `"MIN,MAX"` into a range, naming the flag in the error.
 pub fn parse_range(flag: &str, s: &str) -> Result<(f64, f64), crate::error::CliError> {
     let bad = || crate::error::CliError::BadInput(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"));

@@ -9,6 +9,8 @@
 //! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
 use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
+use crate::commands::Done;
+use rig::scenario::Scenario;
 use crate::{
     cli::RunArgs,
     error::CliError,
@@ -29,7 +31,7 @@ use rig::{
 /// # Errors
 /// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
 /// way (exit 1, everything up to then written); I/O or plotting failures.
-pub fn run(args: &RunArgs) -> Result<(), CliError> {
+pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     let scenario = load_scenario(&args.scenario)?;
     // Check the plant and firmware set-up before touching the output folder.
     plant_for(&scenario).map_err(CliError::Sim)?;
@@ -85,15 +87,23 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             wall_s,
         )
     };
-    let json = out.write_json("summary.json", &summary)?;
-    let written = out.commit()?;
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) })
+}
+
+/// Runs `sil-host run`: [`execute`], then prints the summary (human, or the
+/// JSON document with `--json`).
+///
+/// # Errors
+/// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
+pub fn run(args: &RunArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
+    let (summary, scenario) = &done.result;
     if args.output.json {
-        println!("{json}");
+        println!("{}", serde_json::to_string_pretty(summary).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
     } else {
-        print_summary(&summary, &scenario, &written);
+        print_summary(summary, scenario, &done.files);
     }
-    match failure {
-        Some(e) => Err(CliError::Run(e)),
-        None => Ok(()),
-    }
+    done.into_result()
 }

@@ -4,13 +4,37 @@
 
 use std::io::Write;
 
+use crate::commands::Done;
 use crate::{cli::AdmissibleArgs, error::CliError, output::OutputSet};
-use analyses::admissible::compute;
+use analyses::admissible::{AdmissibleReport, compute};
 
 pub mod figures;
 pub mod summary;
 use figures::*;
 use summary::*;
+
+/// Computes the admissible configurations and writes `admissible.json` and
+/// `admissible.svg`; prints nothing.
+///
+/// # Errors
+/// [`CliError::Param`] (exit 2) for a bad `mu`, before anything is written;
+/// [`CliError::Io`] / [`CliError::Plot`] when writing fails.
+pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError> {
+    let report = compute(args.mu)?;
+    let mut out = OutputSet::new(&args.output.out)?;
+    let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
+    out.write_bytes("admissible.json", document(&report, &files)?.as_bytes())?;
+    let svg = out.stage("admissible.svg");
+    draw_figure(&report, &svg)?;
+    out.commit()?;
+    Ok(Done::ok(report, files.into_iter().map(Into::into).collect()))
+}
+
+/// `admissible.json` (also what `--json` prints).
+fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, CliError> {
+    serde_json::to_string_pretty(&json_report(report, files))
+        .map_err(|e| CliError::Io { path: "admissible.json".into(), source: std::io::Error::other(e) })
+}
 
 /// Runs `sil-host admissible` (docs/model.md experiment 2): computes the admissible
 /// intervals for `--mu`, prints them (human table, or one JSON document with
@@ -30,16 +54,13 @@ pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {
 /// # Errors
 /// As [`run`].
 pub fn run_with<W: Write>(args: &AdmissibleArgs, stdout: &mut W) -> Result<(), CliError> {
-    let report = compute(args.mu)?;
-    let mut out = OutputSet::new(&args.output.out)?;
-    let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
-    let json = serde_json::to_string_pretty(&json_report(&report, &files))
-        .map_err(|e| CliError::Io { path: out.path("admissible.json"), source: std::io::Error::other(e) })?;
-    out.write_bytes("admissible.json", json.as_bytes())?;
-    let svg = out.stage("admissible.svg");
-    draw_figure(&report, &svg)?;
-    out.commit()?;
-    let text = if args.output.json { json + "\n" } else { human_summary(&report) + &format!("wrote {}\n", files.join(", ")) };
+    let done = execute(args)?;
+    let files: Vec<String> = done.files.iter().map(|f| f.display().to_string()).collect();
+    let text = if args.output.json {
+        document(&done.result, &files)? + "\n"
+    } else {
+        human_summary(&done.result) + &format!("wrote {}\n", files.join(", "))
+    };
     stdout.write_all(text.as_bytes()).map_err(|source| CliError::Io { path: "<stdout>".into(), source })?;
     Ok(())
 }

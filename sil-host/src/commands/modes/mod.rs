@@ -5,6 +5,7 @@
 
 use std::io::Write;
 
+use crate::commands::Done;
 use crate::{cli::ModesArgs, commands::parse_range, error::CliError, output::OutputSet};
 use analyses::modes::*;
 
@@ -12,6 +13,26 @@ pub mod figures;
 pub mod summary;
 use figures::*;
 use summary::*;
+
+/// Computes the mode map and writes `modes.csv` and `modes.svg`; prints nothing.
+///
+/// # Errors
+/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, grid
+/// size, `mu` or `v_belt`, before anything is written; [`CliError::Io`] /
+/// [`CliError::Plot`] when writing fails.
+pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
+    let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
+    let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
+    let map = compute(args.mu, args.v_belt, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
+    let mut out = OutputSet::new(&args.output.out)?;
+    let files = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f)).collect();
+    let (tmp, w) = out.create("modes.csv")?;
+    write_csv(&map, w, &tmp)?;
+    let svg = out.stage("modes.svg");
+    draw_figure(&map, &svg)?;
+    out.commit()?;
+    Ok(Done::ok(map, files))
+}
 
 /// Runs `sil-host modes` (docs/model.md experiment 1): computes the map, prints the
 /// counts per mode (human table, or one JSON document with `--json`) and writes
@@ -30,22 +51,14 @@ pub fn run(args: &ModesArgs) -> Result<(), CliError> {
 /// # Errors
 /// As [`run`].
 pub fn run_with<W: Write>(args: &ModesArgs, stdout: &mut W) -> Result<(), CliError> {
-    let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
-    let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
-    let map = compute(args.mu, args.v_belt, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
-    let mut out = OutputSet::new(&args.output.out)?;
-    let files: Vec<String> = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
-    let (tmp, w) = out.create("modes.csv")?;
-    write_csv(&map, w, &tmp)?;
-    let svg = out.stage("modes.svg");
-    draw_figure(&map, &svg)?;
-    out.commit()?;
+    let done = execute(args)?;
+    let (map, files) = (&done.result, done.files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>());
     let text = if args.output.json {
-        serde_json::to_string_pretty(&summary(&map, &files))
+        serde_json::to_string_pretty(&summary(map, &files))
             .map_err(|e| CliError::Io { path: "<stdout>".into(), source: std::io::Error::other(e) })?
             + "\n"
     } else {
-        human_summary(&map) + &format!("wrote {}\n", files.join(", "))
+        human_summary(map) + &format!("wrote {}\n", files.join(", "))
     };
     stdout.write_all(text.as_bytes()).map_err(|source| CliError::Io { path: "<stdout>".into(), source })
 }

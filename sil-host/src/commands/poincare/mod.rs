@@ -15,6 +15,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use shared::Params;
 
+use crate::commands::Done;
 use crate::{
     cli::PoincareArgs,
     commands::{
@@ -132,7 +133,7 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
 /// options or initial conditions, before anything is written; [`CliError::Sim`]
 /// (exit 1) when some belt speed failed (everything is written first);
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
-pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
+pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let (cfg, grid, ic) = validated(args)?;
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = rayon::ThreadPoolBuilder::new()
@@ -222,21 +223,30 @@ pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
         median_point_wall_s: point_walls[point_walls.len() / 2],
         files: files.iter().map(|f| out.path(f).display().to_string()).collect(),
     };
-    let json = out.write_json("summary.json", &summary)?;
-    out.commit()?;
-
-    if args.output.json {
-        println!("{json}");
-    } else {
-        print_human(&summary);
-    }
-    match results.iter().find(|r| r.class == Class::Failed) {
-        Some(r) => Err(CliError::PartFailed(format!(
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    let failure = results.iter().find(|r| r.class == Class::Failed).map(|r| {
+        CliError::PartFailed(format!(
             "{} belt speed(s) failed (written with class `failed`), the first at v_belt = {} m/s: {}",
             summary.counts.failed,
             r.v_belt,
             r.error.as_deref().unwrap_or("")
-        ))),
-        None => Ok(()),
+        ))
+    });
+    Ok(Done { result: summary, files, failure })
+}
+
+/// Runs `sil-host poincare`: [`execute`], then prints the summary (human, or the
+/// serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })? document with `--json`).
+///
+/// # Errors
+/// As [`execute`]; belt speeds that failed (after writing).
+pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
+    if args.output.json {
+        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
+    } else {
+        print_human(&done.result);
     }
+    done.into_result()
 }

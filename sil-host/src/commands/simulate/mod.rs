@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use shared::Params;
 
+use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
@@ -92,7 +93,7 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 /// options or initial conditions, before anything is written; [`CliError::Sim`]
 /// (exit 1) when the simulation fails part way (outputs up to then are written);
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
-pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Validate everything before touching the output folder.
     let params = Params::new(args.mu, args.v_belt)?;
     let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
@@ -189,17 +190,24 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         wall_s,
         realtime_factor: simulated_s / wall_s.max(1e-9),
         files: ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect(),
+        events: events.len(),
     };
-    let json = out.write_json("summary.json", &summary)?;
-    out.commit()?;
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) })
+}
 
+/// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the
+/// serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })? document with `--json`).
+///
+/// # Errors
+/// As [`execute`]; a simulation that failed part way (after writing).
+pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
     if args.output.json {
-        println!("{json}");
+        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
     } else {
-        print_human(&summary, events.len());
+        print_human(&done.result);
     }
-    match failure {
-        Some(e) => Err(CliError::Sim(e)),
-        None => Ok(()),
-    }
+    done.into_result()
 }

@@ -134,9 +134,13 @@ pub struct Summary {
     pub realtime_factor: f64,
     /// Files written.
     pub files: Vec<String>,
+    /// Events written to `events.csv` (the human summary's count; not in the JSON).
+    #[serde(skip)]
+    pub events: usize,
 }
 
-pub(crate) fn print_human(s: &Summary, n_events: usize) {
+pub(crate) fn print_human(s: &Summary) {
+    let n_events = s.events;
     let ic = &s.initial_condition;
     let mut o = std::io::stdout().lock();
     let _ = writeln!(

@@ -18,6 +18,7 @@ use std::{
 
 use rayon::prelude::*;
 
+use crate::commands::Done;
 use crate::{
     cli::{ScenarioArgs, SweepArgs},
     error::CliError,
@@ -136,7 +137,7 @@ fn stop_flag() -> Arc<AtomicBool> {
 /// # Errors
 /// Bad arguments or a folder holding another sweep (exit 2); an interruption or
 /// an I/O failure (exit 1; finished runs are kept in the journal).
-pub fn run(args: &SweepArgs) -> Result<(), CliError> {
+pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     let spec = spec_of(args)?;
     let shard = match &args.shard {
         Some(s) => Shard::parse(s).map_err(CliError::BadInput)?,
@@ -218,13 +219,24 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let interrupted = stop.load(Ordering::Relaxed) && computed < todo.len();
     let rows = store::read_journal(&args.out, &manifest)?.rows;
     let summary = finish(&args.out, &manifest, rows, Some(timing), resumed, interrupted)?;
-    report(&summary, args.json);
-    if interrupted {
-        return Err(CliError::Interrupted(format!(
+    let failure = interrupted.then(|| {
+        CliError::Interrupted(format!(
             "{} of {} runs done; run the same command again to resume",
             summary.results.runs,
             summary.results.runs + summary.results.missing
-        )));
-    }
-    Ok(())
+        ))
+    });
+    let files = summary.files.iter().map(std::path::PathBuf::from).collect();
+    Ok(Done { result: summary, files, failure })
+}
+
+/// Runs `sil-host sweep`: [`execute`], then prints the summary (human, or the
+/// JSON document with `--json`).
+///
+/// # Errors
+/// As [`execute`]; an interrupted sweep (what was computed is kept).
+pub fn run(args: &SweepArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
+    report(&done.result, args.json);
+    done.into_result()
 }

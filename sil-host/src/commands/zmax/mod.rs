@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::commands::Done;
 use crate::{
     cli::ZmaxArgs,
     error::CliError,
@@ -79,7 +80,7 @@ fn theta1_fold(x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
 ///
 /// # Errors
 /// Bad input (exit 2, nothing written); I/O or plotting failures (exit 1).
-pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
+pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let started = Instant::now();
     let base = base_scenario(args)?;
     let criteria = Criteria {
@@ -171,12 +172,22 @@ pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
         base_scenario: base,
         wall_s: started.elapsed().as_secs_f64(),
     };
-    let json = out.write_json("summary.json", &summary)?;
-    let written = out.commit()?;
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    Ok(Done::ok(summary, files))
+}
+
+/// Runs `sil-host zmax`: [`execute`], then prints the table (or the serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?
+/// document with `--json`).
+///
+/// # Errors
+/// As [`execute`].
+pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
     if args.output.json {
-        println!("{json}");
+        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
     } else {
-        print_table(&summary, &written);
+        print_table(&done.result, &done.files);
     }
-    Ok(())
+    done.into_result()
 }
