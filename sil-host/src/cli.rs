@@ -156,6 +156,10 @@ pub struct ReportArgs {
     /// Size of the experiments.
     #[arg(long, value_enum, default_value = "quick")]
     pub size: ReportSize,
+    /// Also write the page's tables (no figures), stamped with date, commit and
+    /// machine, to this Markdown file (the repository keeps them in docs/results.md).
+    #[arg(long, value_name = "FILE.md")]
+    pub results: Option<PathBuf>,
     /// Output folder and JSON switch (`--out` defaults to `out/`; the page is `report.md` there).
     #[command(flatten)]
     pub output: OutputArgs,

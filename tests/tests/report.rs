@@ -6,7 +6,14 @@ use std::process::Command;
 fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
-    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(["report", "--json", "--out"]).arg(&out).output().unwrap();
+    let results = dir.path().join("results.md");
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["report", "--json", "--out"])
+        .arg(&out)
+        .arg("--results")
+        .arg(&results)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let index: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(index["failed"], 0);
@@ -29,7 +36,15 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     }
     assert!(figures >= 10, "{figures} figures");
     // The controller comparison of the paper: the hybrid law slides from x0d, PID from x0u lifts off.
-    let summary = |id: &str| steps.iter().find(|s| s["id"] == id).unwrap()["summary"].clone();
+    let summary = |id: &str| steps.iter().find(|s| s["id"] == id).unwrap()["result"].clone();
     assert_eq!(summary("hybrid-x0d")["lift_offs"], 0);
     assert!(summary("pid-x0u")["lift_offs"].as_u64().unwrap() >= 1);
+    // Numbers keep their digits: the integrator's tolerances are not rounded to 0.
+    assert!(page.contains("| rtol, atol | 1e-9, 1e-11 |"), "tolerances not shown as 1e-9, 1e-11");
+    assert!(!page.contains("| rtol, atol | 0, 0 |"));
+    // The results page: the same tables, stamped, without figures.
+    let results = std::fs::read_to_string(&results).unwrap();
+    assert!(results.contains("commit `") && results.contains("UTC") && results.contains("CPUs"), "no stamp");
+    assert!(results.contains("| hybrid-x0d |") || results.contains(" hybrid-x0d |"), "no run comparison");
+    assert!(!results.contains("!["), "figures in the results page");
 }

@@ -56,11 +56,12 @@ fn misses(records: &[rig::record::PeriodRecord], e: Option<rig::record::RunError
     }
 }
 
-/// Runs `sil-host bench`.
+/// Measures the rig's speed (in-process and iceoryx2 lockstep, and a real-time
+/// run when asked); prints nothing.
 ///
 /// # Errors
-/// A run that fails (exit 1).
-pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+/// A failing run or the firmware process (exit 1); bad arguments (exit 2).
+pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = args.duration;
     s.validate()?;
@@ -111,6 +112,15 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         figures.push(f);
     }
 
+    Ok(figures)
+}
+
+/// Runs `sil-host bench`.
+///
+/// # Errors
+/// A run that fails (exit 1).
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    let figures = execute(args)?;
     if args.json {
         let json = serde_json::to_string_pretty(&figures).map_err(|e| CliError::BadInput(e.to_string()))?;
         println!("{json}");

@@ -13,6 +13,7 @@
 use std::io::Write;
 
 use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
+use crate::commands::Done;
 use crate::{
     cli::PilArgs,
     error::CliError,
@@ -64,14 +65,14 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
     Ok(PilTarget::Qemu { image, qemu: args.qemu.clone() })
 }
 
-/// Runs `sil-host pil`.
+/// Runs the PIL (or HIL) loop and writes its files; prints nothing.
 ///
 /// # Errors
 /// Bad scenario or overrides, a missing image or serial device, a bad baud rate,
 /// a fault the target cannot inject (exit 2, nothing written); QEMU that cannot
 /// start or boot, a board that does not answer, or a run that stopped part way
 /// (exit 1, everything up to then written); I/O or plotting failures.
-pub fn run(args: &PilArgs) -> Result<(), CliError> {
+pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     let scenario = load_scenario(&args.scenario)?;
     plant_for(&scenario).map_err(CliError::Sim)?;
     firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
@@ -108,18 +109,26 @@ pub fn run(args: &PilArgs) -> Result<(), CliError> {
     }
     let summary =
         RunSummary { pil: Some(figures), ..RunSummary::from_records(&scenario, &records, failure.as_ref(), transport, "lockstep", wall_s) };
-    let json = out.write_json("summary.json", &summary)?;
-    let written = out.commit()?;
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) })
+}
+
+/// Runs `sil-host pil`: [`execute`], then prints the summary (human, or the
+/// JSON document with `--json`).
+///
+/// # Errors
+/// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
+pub fn run(args: &PilArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
+    let (summary, scenario) = &done.result;
     if args.output.json {
-        println!("{json}");
+        println!("{}", serde_json::to_string_pretty(summary).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
     } else {
-        print_pil(&summary);
-        print_summary(&summary, &scenario, &written);
+        print_pil(summary);
+        print_summary(summary, scenario, &done.files);
     }
-    match failure {
-        Some(e) => Err(CliError::Run(e)),
-        None => Ok(()),
-    }
+    done.into_result()
 }
 
 /// What counted the ticks, for the human output and the figure.

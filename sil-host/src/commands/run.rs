@@ -10,12 +10,12 @@
 
 use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
 use crate::commands::Done;
-use rig::scenario::Scenario;
 use crate::{
     cli::RunArgs,
     error::CliError,
     output::{OutputSet, progress_bar},
 };
+use rig::scenario::Scenario;
 use rig::{
     in_process::InProcessLink,
     ipc::{check_rig_name, default_rig_name},

@@ -1,0 +1,138 @@
+//! The experiments of the report: each a section with the commands (argument
+//! lists, exactly as a user would type them) that reproduce it.
+
+use std::path::{Path, PathBuf};
+
+use crate::cli::ReportSize;
+
+/// One command of an experiment.
+#[derive(Debug, Clone)]
+pub struct Step {
+    /// Sub-folder of the report (and the step's name).
+    pub id: &'static str,
+    /// Arguments after `sil-host` (without `--out` and `--json`).
+    pub args: Vec<String>,
+    /// Whether the command writes files (takes `--out`).
+    pub writes: bool,
+}
+
+/// One section of the report: an experiment of docs/model.md with its commands.
+#[derive(Debug, Clone)]
+pub struct Section {
+    /// What the paper shows, and where.
+    pub title: &'static str,
+    /// docs/model.md experiment and paper figure or table.
+    pub source: &'static str,
+    /// The commands that reproduce it.
+    pub steps: Vec<Step>,
+}
+
+fn step(id: &'static str, args: &[&str]) -> Step {
+    Step { id, args: args.iter().map(|s| (*s).to_string()).collect(), writes: true }
+}
+
+/// The paper's scenario files: `./scenarios`, else the repository's at build time.
+pub fn scenario_dir() -> Option<PathBuf> {
+    [PathBuf::from("scenarios"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios")].into_iter().find(|p| p.is_dir())
+}
+
+/// The experiments, at the size asked for.
+pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
+    let quick = size == ReportSize::Quick;
+    let mut v = vec![
+        Section {
+            title: "Contact modes on the belt",
+            source: "docs/model.md experiment 1, paper Fig. 2",
+            steps: vec![step("modes", &["modes", "--mu", "0.6", "--grid", if quick { "200" } else { "400" }])],
+        },
+        Section {
+            title: "Admissible configurations",
+            source: "docs/model.md experiment 2, paper Table II",
+            steps: vec![step("admissible", &["admissible", "--mu", "0.6"])],
+        },
+        Section {
+            title: "Open-loop bouncing from x0a",
+            source: "docs/model.md experiments 3 and 4 (one run of the open-loop system, u = 0)",
+            steps: vec![step("simulate", &["simulate", "--x0", "a", "--mu", "0.6", "--v-belt", "-0.4", "--duration", "10"])],
+        },
+    ];
+    v.push(Section {
+        title: "Open-loop two-parameter bifurcation diagram",
+        source: "docs/model.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d, for e_n = 0, 0.2 and 0.5 (how the band moves with the impact law)",
+        steps: vec![step(
+            "sweep-open-loop",
+            &if quick {
+                vec!["sweep", "--v-belt-step", "0.01", "--transient", "100", "--record", "30", "--e-n", "0,0.2,0.5"]
+            } else {
+                vec!["sweep", "--e-n", "0,0.2,0.5"]
+            },
+        )],
+    });
+    v.push(Section {
+        title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
+        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop",
+        steps: vec![step(
+            "sweep-hybrid",
+            &if quick {
+                vec!["sweep", "--controller", "hybrid", "--ics", "d", "--v-belt-step", "0.05", "--transient", "20", "--record", "10"]
+            } else {
+                vec!["sweep", "--controller", "hybrid", "--ics", "d"]
+            },
+        )],
+    });
+    v.push(Section {
+        title: "One-parameter bifurcation diagram (Poincaré section)",
+        source: "docs/model.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
+        steps: vec![step(
+            "poincare",
+            &if quick {
+                vec!["poincare", "--mu", "0.6", "--v-step", "0.004", "--transient", "150", "--record", "50"]
+            } else {
+                vec!["poincare", "--mu", "0.6"]
+            },
+        )],
+    });
+    v.push(Section {
+        title: "Z_t,sliding: how far each controller drives the tip with no lift-off",
+        source: "docs/model.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
+        steps: vec![step("zmax", &["zmax", "--all"])],
+    });
+    v.push(Section {
+        title: "PID and hybrid force/motion control in the SIL loop",
+        source: "docs/model.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with docs/hardware.md's sensors",
+        steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]
+            .into_iter()
+            .map(|name| Step {
+                id: name,
+                writes: true,
+                args: vec![
+                    "run".into(),
+                    "--in-process".into(),
+                    "--scenario".into(),
+                    scenarios.join(format!("{name}.toml")).to_string_lossy().into_owned(),
+                ],
+            })
+            .collect(),
+    });
+    v.push(Section {
+        title: "Speed of the rig",
+        source: "control periods per wall second on the default scenario, in-process and in lockstep over iceoryx2 (sil-host bench)",
+        steps: vec![Step {
+            writes: false,
+            ..step(
+                "bench",
+                &if quick { vec!["bench", "--repeat", "3", "--duration", "2"] } else { vec!["bench", "--repeat", "5", "--duration", "10"] },
+            )
+        }],
+    });
+    // The MCU image in QEMU, when it is built and QEMU is here (docs/board.md).
+    let qemu = std::process::Command::new("qemu-system-arm").arg("--version").output().is_ok_and(|o| o.status.success());
+    if qemu && rig::pil_link::default_image().is_file() {
+        v.push(Section {
+            title: "The firmware on the MCU (processor in the loop)",
+            source: "the default scenario with the Cortex-M4F image in QEMU; instructions per control step against docs/hardware.md \"Budgets\"",
+            steps: vec![step("pil", &["pil", "--duration", if quick { "2" } else { "10" }])],
+        });
+    }
+    v
+}
