@@ -280,7 +280,7 @@ fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -
     setup.hybrid_ki = paper_hybrid_ki(combo.x0);
     setup.move_time_s = c.move_time_s;
     setup.duration_s = c.duration_s;
-    setup.sample_dt = 1.0 / base.timing.rate_hz;
+    setup.sample_dt = base.timing.period().as_secs_f64();
     setup.stop_at_lift_off = true;
     setup.sim = sim_config(base);
     let run = ideal::simulate(&setup, |_| {}).map_err(AnalysisError::Sim)?;

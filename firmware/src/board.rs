@@ -190,7 +190,7 @@ mod tests {
 
     #[test]
     fn run_configures_steps_resets_and_ends_in_script_order() {
-        let bad = Config { period_s: f32::NAN, ..Config::default() };
+        let bad = Config { period: shared::Period::from_us(10).unwrap(), ..Config::default() };
         let events = vec![
             Event::Frame(frame(0)),
             Event::Configure(bad),

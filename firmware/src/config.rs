@@ -2,7 +2,7 @@
 //! lift-off detector and fault limits. Defaults: docs/model.md experiments 5 and 6
 //! and docs/hardware.md.
 
-use shared::{ElbowBranch, Params};
+use shared::{ElbowBranch, Params, Period};
 
 /// Which control law runs (docs/model.md experiments 5 and 6): the firmware's
 /// configuration, scenario files (`controller.kind = "pid" | "hybrid"`), the
@@ -96,8 +96,9 @@ pub struct Config {
     pub params: Params<f32>,
     /// Control law.
     pub controller: ControllerKind,
-    /// Control period `Ts`, s (docs/hardware.md: 1 ms, from 0.1 ms to 4 ms).
-    pub period_s: f32,
+    /// Control period `Ts`, whole microseconds (docs/hardware.md "Timing": 1 ms,
+    /// from 0.1 ms to 4 ms); the firmware derives its `f32` step from it once.
+    pub period: Period,
     /// Tangential target `z_t*`, m.
     pub target_z_t: f32,
     /// Duration of the quintic move from the initial tip position to the target, s.
@@ -156,7 +157,7 @@ impl Default for Config {
         Self {
             params: Params::paper(),
             controller: ControllerKind::Hybrid,
-            period_s: 1e-3,
+            period: Period::MILLISECOND,
             target_z_t: 0.10,
             move_time_s: 2.0,
             f_n_ref: 10.0,
@@ -211,7 +212,8 @@ impl Config {
         let check = |name: &'static str, value: f32, ok: bool, expected: &'static str| {
             if ok && value.is_finite() { Ok(()) } else { Err(ConfigError::OutOfRange { name, value, expected }) }
         };
-        check("period_s", self.period_s, (1e-4..=4e-3).contains(&self.period_s), "1e-4 to 4e-3 s (250 Hz to 10 kHz)")?;
+        let us = self.period.as_us();
+        check("period_us", us as f32, (100..=4000).contains(&us), "100 to 4000 us (250 Hz to 10 kHz)")?;
         check("target_z_t", self.target_z_t, self.target_z_t.abs() < 2.0 * self.params.l, "|z_t*| < 2 l")?;
         check("move_time_s", self.move_time_s, self.move_time_s > 0.0, "> 0")?;
         check("f_n_ref", self.f_n_ref, self.f_n_ref >= 0.0, ">= 0")?;
@@ -226,7 +228,7 @@ impl Config {
         check(
             "observer_bandwidth",
             self.observer_bandwidth,
-            self.observer_bandwidth > 0.0 && self.observer_bandwidth * self.period_s <= 3.0,
+            self.observer_bandwidth > 0.0 && self.observer_bandwidth * self.period.as_secs_f32() <= 3.0,
             "> 0 and <= 3/Ts",
         )?;
         check("lift_off_force", self.lift_off_force, self.lift_off_force >= 0.0, ">= 0")?;

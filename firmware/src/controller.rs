@@ -128,6 +128,8 @@ pub struct Firmware {
     overruns: u32,
     safe: Option<SafeReason>,
     telemetry: Telemetry,
+    /// The period in seconds, `f32`, derived once from `cfg.period`.
+    dt: f32,
 }
 
 impl Firmware {
@@ -159,6 +161,7 @@ impl Firmware {
             overruns: 0,
             safe: None,
             telemetry: Telemetry::default(),
+            dt: cfg.period.as_secs_f32(),
         }
     }
 
@@ -279,11 +282,12 @@ impl Firmware {
                 }
             }
         };
-        // Deadline: the command leaves at now + the step's own time.
+        // Deadline: the command leaves at now + the step's own time; leaving at
+        // t_k + Ts or later it cannot act in period k (the plant's rule too).
         let elapsed_ticks = clock.ticks().wrapping_sub(start);
         let elapsed_us = elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64;
-        let period_us = (self.cfg.period_s * 1e6) as u64;
-        if now_us.saturating_sub(frame.t_us) + elapsed_us > period_us {
+        let period_us = self.cfg.period.as_us();
+        if now_us.saturating_sub(frame.t_us) + elapsed_us >= period_us {
             flags |= status::DEADLINE_MISS;
             self.overruns = self.overruns.saturating_add(1);
             self.consecutive_misses = self.consecutive_misses.saturating_add(1);
@@ -329,7 +333,7 @@ impl Firmware {
     /// returns the motor torques (N m, saturated) and status bits.
     fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
         let cfg = self.cfg;
-        let ts = cfg.period_s;
+        let ts = self.dt;
         let p = cfg.params;
         let theta2 = decode::wrap(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];

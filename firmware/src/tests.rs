@@ -236,8 +236,8 @@ fn pid_with_an_unreachable_target_goes_safe() {
 
 #[test]
 fn invalid_configurations_are_rejected_with_the_field_named() {
-    let bad = Config { period_s: 0.1, ..Config::default() };
-    assert!(matches!(Firmware::new(bad), Err(crate::config::ConfigError::OutOfRange { name: "period_s", .. })));
+    let bad = Config { period: shared::Period::from_us(100_000).unwrap(), ..Config::default() };
+    assert!(matches!(Firmware::new(bad), Err(crate::config::ConfigError::OutOfRange { name: "period_us", .. })));
     let bad = Config { f_n_ref: f32::NAN, ..Config::default() };
     assert!(matches!(Firmware::new(bad), Err(crate::config::ConfigError::OutOfRange { name: "f_n_ref", .. })));
 }

@@ -259,7 +259,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         ports: &ports,
         rig,
         realtime,
-        faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz),
+        faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
         peer_check: Duration::from_secs_f64(s.rig.peer_check_s),
         started: Instant::now(),
         epoch: None,

@@ -23,7 +23,7 @@ impl FirmwareSide {
     /// [`RunError::Firmware`] for an invalid configuration.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
         let fw = Firmware::new(firmware_config(s))?;
-        Ok(Self { fw, faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz) })
+        Ok(Self { fw, faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()) })
     }
 
     /// The firmware.

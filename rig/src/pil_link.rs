@@ -522,7 +522,7 @@ impl PilLink {
             qemu,
             inbox: Vec::new(),
             answer_timeout,
-            faults: FaultPlan::new(&s.faults, 1.0 / s.timing.rate_hz),
+            faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
             log,
             counts: PilCounts::default(),
         };

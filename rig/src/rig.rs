@@ -91,7 +91,7 @@ pub struct PeriodLoop {
     sensors: Sensors,
     faults: FaultPlan,
     ts: f64,
-    ts_us: u64,
+    period: shared::Period,
     delta: f64,
     v_belt: f64,
     applied: [f64; 2],
@@ -105,12 +105,13 @@ impl PeriodLoop {
     /// The loop of scenario `s` starting at period 0 with zero torque on `plant`
     /// (at `t = 0`).
     pub fn new(s: &Scenario, plant: &Plant) -> Self {
-        let ts = 1.0 / s.timing.rate_hz;
+        let period = s.timing.period();
+        let ts = period.as_secs_f64();
         Self {
             sensors: Sensors::new(s.sensors.seed, s.sensors.load_noise_n),
             faults: FaultPlan::new(&s.faults, ts),
             ts,
-            ts_us: (ts * 1e6).round() as u64,
+            period,
             delta: s.timing.delta_s,
             v_belt: s.plant.v_belt,
             applied: [0.0; 2],
@@ -148,7 +149,8 @@ impl PeriodLoop {
         let k = self.k;
         let (ts, faults) = (self.ts, &self.faults);
         let t_k = k as f64 * ts;
-        let t_us = k as u64 * self.ts_us;
+        // The frame's stamp: k whole periods (shared::time); t_k is the same instant in s.
+        let t_us = self.period.sample(k as u64).as_us();
         let x = plant.state();
         let z = plant.tip();
         let mode = plant.mode();

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use firmware::{ControllerKind, config::FrictionCompensation};
 use plant::{impact::ImpactLaw, initial::PaperX0};
+use shared::Period;
 
 use super::faults::Fault;
 
@@ -61,6 +62,28 @@ pub struct TimingSection {
     pub delta_s: f64,
     /// Run length, s.
     pub duration_s: f64,
+}
+
+impl TimingSection {
+    /// The lowest and highest control rates, Hz (docs/hardware.md "Timing").
+    pub const RATE_RANGE_HZ: (f64, f64) = (250.0, 10_000.0);
+
+    /// The control period both sides of the wire use: `rate_hz` rounded once to
+    /// whole microseconds ([`Period::from_rate_hz`]; 6 kHz runs at 167 us). A
+    /// rate outside [`Self::RATE_RANGE_HZ`], which [`Scenario::validate`]
+    /// rejects, is first clamped into it (NaN to the lowest rate), so the loop
+    /// never runs on an unvalidated period.
+    pub fn period(&self) -> Period {
+        let (lo, hi) = Self::RATE_RANGE_HZ;
+        let rate = if self.rate_hz.is_nan() { lo } else { self.rate_hz.clamp(lo, hi) };
+        // Within the range the period is 100 to 4000 us: always a Period.
+        Period::from_rate_hz(rate).unwrap_or(Period::MILLISECOND)
+    }
+
+    /// Control periods in the run: `duration_s / period`, rounded.
+    pub fn periods(&self) -> u64 {
+        (self.duration_s / self.period().as_secs_f64()).round() as u64
+    }
 }
 
 /// The sensor-model section.
@@ -255,10 +278,10 @@ impl Scenario {
             }
         }
         let t = &self.timing;
-        if !(finite(t.rate_hz) && (250.0..=10_000.0).contains(&t.rate_hz)) {
+        if !(finite(t.rate_hz) && (TimingSection::RATE_RANGE_HZ.0..=TimingSection::RATE_RANGE_HZ.1).contains(&t.rate_hz)) {
             return bad("timing.rate_hz", t.rate_hz.to_string(), "250 to 10000 Hz (docs/hardware.md)");
         }
-        if !(finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < 1.0 / t.rate_hz) {
+        if !(finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < t.period().as_secs_f64()) {
             return bad("timing.delta_s", t.delta_s.to_string(), "in [0, one period)");
         }
         if !(finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5) {

@@ -17,7 +17,7 @@ pub fn firmware_config(s: &Scenario) -> Config {
     Config {
         params,
         controller: c.kind,
-        period_s: (1.0 / s.timing.rate_hz) as f32,
+        period: s.timing.period(),
         target_z_t: c.target_z_t as f32,
         move_time_s: c.move_time_s as f32,
         f_n_ref: c.f_n_ref as f32,

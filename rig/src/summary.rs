@@ -78,7 +78,7 @@ impl RunSummary {
         timing: &'static str,
         wall_s: f64,
     ) -> Self {
-        let simulated = records.len() as f64 / scenario.timing.rate_hz;
+        let simulated = records.len() as f64 * scenario.timing.period().as_secs_f64();
         Self {
             status: if failure.is_some() { "failed" } else { "ok" },
             error: failure.map(|e| e.to_string()),

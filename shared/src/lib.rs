@@ -22,6 +22,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+pub mod time;
 pub mod trig;
 pub mod wire;
 
@@ -29,6 +30,7 @@ pub use contact::{ContactMode, SlipDirection};
 pub use kinematics::{ElbowBranch, IkError};
 pub use model::Arm;
 pub use params::{ParamError, Params};
+pub use time::{Instant, Period};
 
 /// The scalar the model is generic over: `f32` (firmware) or `f64` (plant).
 ///

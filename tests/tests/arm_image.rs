@@ -25,7 +25,7 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
 
     // Start-up: the clocks (QEMU has no RCC), the tick, the encoders' check.
     assert!(text.contains("no RCC model (emulator)"), "{text}");
-    assert!(text.contains("arm image up: 1000 Hz control tick"), "{text}");
+    assert!(text.contains("arm image up: 1000 us control period"), "{text}");
     assert!(text.contains("drivers disabled until the enable button"), "{text}");
     assert!(text.contains("encoder theta1: not ready") && text.contains("encoder elbow: not ready"), "{text}");
 

@@ -273,7 +273,7 @@ fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetu
         duration_s: s.timing.duration_s,
         f_n_ref: s.controller.f_n_ref,
         hybrid_ki: s.controller.hybrid_ki,
-        sample_dt: 1.0 / s.timing.rate_hz,
+        sample_dt: s.timing.period().as_secs_f64(),
         stop_at_lift_off: false,
         sim,
     }

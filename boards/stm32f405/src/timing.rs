@@ -11,11 +11,13 @@ pub const TIM2_CLOCK_HZ: u32 = 2 * crate::clock_tree::PCLK1_HZ;
 /// proposed patch moves it to 48 MHz). Measured: docs/board.md "Under QEMU".
 pub const QEMU_TIMER_HZ: u32 = 1_000_000_000;
 
+use shared::Period;
+
 /// The LSI that clocks the watchdog, Hz (nominal; 17 to 47 kHz over parts and
 /// temperature, DS8626 table 41: the timeout is chosen with that margin).
 pub const LSI_HZ: u32 = 32_000;
 
-/// Prescaler and reload of a timer that overflows at `rate_hz`.
+/// Prescaler and reload of a timer that overflows once per control period.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TickTimer {
     /// PSC.
@@ -28,29 +30,31 @@ pub struct TickTimer {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub enum TimingError {
-    /// No integer prescaler and reload give exactly `rate_hz` from `clock_hz`:
+    /// No integer prescaler and reload give exactly `period_us` from `clock_hz`:
     /// the firmware's period would disagree with the tick's.
     Inexact {
         /// The timer clock, Hz.
         clock_hz: u32,
-        /// The rate asked for, Hz.
-        rate_hz: u32,
+        /// The period asked for, us.
+        period_us: u32,
     },
 }
 
 impl TickTimer {
-    /// The settings for exactly `rate_hz` from a timer clock of `clock_hz`, with
-    /// the smallest prescaler (the finest counter).
+    /// The settings for exactly `period` (whole microseconds, `shared::time`)
+    /// from a timer clock of `clock_hz`, with the smallest prescaler (the finest
+    /// counter).
     ///
     /// # Errors
-    /// [`TimingError::Inexact`] when `clock_hz` is not a multiple of `rate_hz`
-    /// or the division does not fit 16 x 16 bits.
-    pub fn for_rate(clock_hz: u32, rate_hz: u32) -> Result<Self, TimingError> {
-        let err = TimingError::Inexact { clock_hz, rate_hz };
-        if rate_hz == 0 || !clock_hz.is_multiple_of(rate_hz) {
+    /// [`TimingError::Inexact`] when `clock_hz` is not a whole number of MHz (no
+    /// whole count of ticks per microsecond) or the count does not fit 16 x 16 bits.
+    pub fn for_period(clock_hz: u32, period: Period) -> Result<Self, TimingError> {
+        let period_us = period.as_us() as u32;
+        let err = TimingError::Inexact { clock_hz, period_us };
+        if !clock_hz.is_multiple_of(1_000_000) {
             return Err(err);
         }
-        let ticks = clock_hz / rate_hz;
+        let Some(ticks) = (clock_hz / 1_000_000).checked_mul(period_us) else { return Err(err) };
         for psc in 1..=65_536u32 {
             if ticks.is_multiple_of(psc) && ticks / psc <= 65_536 {
                 return Ok(Self { psc: (psc - 1) as u16, arr: (ticks / psc - 1) as u16 });
@@ -86,17 +90,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_supported_rate_is_exact_on_the_board() {
-        // docs/hardware.md: 250 Hz to 10 kHz; 84 MHz divides by every rate that divides 84e6.
-        for rate in [250u32, 500, 1_000, 2_000, 4_000, 5_000, 6_000, 7_000, 8_000, 10_000] {
-            let t = TickTimer::for_rate(TIM2_CLOCK_HZ, rate).unwrap();
-            assert_eq!((u32::from(t.psc) + 1) * (u32::from(t.arr) + 1), TIM2_CLOCK_HZ / rate, "{rate}");
-            assert!((t.rate_hz(TIM2_CLOCK_HZ) - f64::from(rate)).abs() < 1e-9);
+    fn every_supported_period_is_exact_on_the_board_and_in_qemu() {
+        // docs/hardware.md: 250 Hz to 10 kHz, each rounded once to whole microseconds
+        // (shared::time): the tick then runs at exactly the firmware's period.
+        for rate in [250.0, 500.0, 1_000.0, 2_000.0, 3_000.0, 4_000.0, 5_000.0, 6_000.0, 7_000.0, 9_000.0, 10_000.0] {
+            let period = Period::from_rate_hz(rate).unwrap();
+            for clock in [TIM2_CLOCK_HZ, QEMU_TIMER_HZ] {
+                let t = TickTimer::for_period(clock, period).unwrap();
+                let ticks = u64::from(u32::from(t.psc) + 1) * u64::from(u32::from(t.arr) + 1);
+                assert_eq!(ticks, u64::from(clock / 1_000_000) * period.as_us(), "{rate} Hz at {clock} Hz");
+                assert!((t.rate_hz(clock) - period.rate_hz()).abs() < 1e-9);
+            }
         }
-        assert_eq!(TickTimer::for_rate(84_000_000, 1_000), Ok(TickTimer { psc: 1, arr: 41_999 }));
-        // 84 MHz / 9 kHz is not an integer: refused rather than a drifting tick.
-        assert!(TickTimer::for_rate(TIM2_CLOCK_HZ, 9_000).is_err());
-        assert!(TickTimer::for_rate(TIM2_CLOCK_HZ, 0).is_err());
+        let ms = Period::from_us(1000).unwrap();
+        assert_eq!(TickTimer::for_period(84_000_000, ms), Ok(TickTimer { psc: 1, arr: 41_999 }));
+        // A clock with no whole number of ticks per microsecond is refused rather than drifting.
+        assert!(TickTimer::for_period(84_000_001, ms).is_err());
     }
 
     #[test]

@@ -65,7 +65,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = args.duration;
     s.validate()?;
-    let n = (s.timing.duration_s * s.timing.rate_hz).round() as usize;
+    let n = s.timing.periods() as usize;
     let exe = std::env::current_exe().map_err(|e| CliError::BadInput(format!("cannot find this executable: {e}")))?;
     let mut figures = Vec::new();
 

@@ -83,7 +83,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     pil_link::check_faults(&scenario, &target).map_err(|e| CliError::BadInput(e.to_string()))?;
     let mut out = OutputSet::new(&args.output.out)?;
 
-    let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
+    let n = scenario.timing.periods();
     let progress = progress_bar(n, "PIL run", "periods", args.output.json);
     let sink: Option<pil_link::LogSink> = (!args.quiet && !args.output.json).then(|| {
         let bar = progress.clone();

@@ -62,7 +62,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     let transport = link.transport();
 
-    let n = (scenario.timing.duration_s * scenario.timing.rate_hz).round() as u64;
+    let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let (records, failure, wall_s) = run_streamed(&scenario, link, &mut out, &progress, 500)?;
     let timings = ipc.as_ref().map(|l| l.timings.clone());

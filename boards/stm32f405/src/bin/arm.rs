@@ -315,8 +315,7 @@ mod image {
             defmt::error!("invalid firmware configuration");
             exit::exit(2);
         };
-        let rate_hz = libm::roundf(1.0 / cfg.period_s) as u32;
-        let tick = match TickTimer::for_rate(timer_hz, rate_hz) {
+        let tick = match TickTimer::for_period(timer_hz, cfg.period) {
             Ok(t) => t,
             Err(e) => {
                 defmt::error!("control rate: {}", e);
@@ -339,11 +338,11 @@ mod image {
             defmt::error!("invalid load-cell calibration");
             exit::exit(2);
         };
-        let Ok(belt) = BeltEncoder::new(BeltCounter, calibration::BELT_METRES_PER_COUNT, cfg.period_s) else {
+        let Ok(belt) = BeltEncoder::new(BeltCounter, calibration::BELT_METRES_PER_COUNT, cfg.period.as_secs_f32()) else {
             defmt::error!("invalid belt calibration");
             exit::exit(2);
         };
-        let period_us = libm::roundf(cfg.period_s * 1e6) as u64;
+        let period_us = cfg.period.as_us();
         let board = ArmBoard {
             clock,
             theta1,
@@ -367,8 +366,8 @@ mod image {
         };
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(Arm { board, firmware: Some(fw) })));
         defmt::info!(
-            "arm image up: {=u32} Hz control tick (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
-            rate_hz,
+            "arm image up: {=u64} us control period (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
+            period_us,
             tick.psc,
             tick.arr,
             timer_hz,

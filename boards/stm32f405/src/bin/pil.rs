@@ -127,7 +127,7 @@ mod image {
                 (Outcome::Configured, Some(fw)) => {
                     let cfg = fw.config();
                     let pid = matches!(cfg.controller, firmware::ControllerKind::Pid);
-                    defmt::info!("configured: {=str} controller, period {=f32} s", if pid { "pid" } else { "hybrid" }, cfg.period_s);
+                    defmt::info!("configured: {=str} controller, period {=u64} us", if pid { "pid" } else { "hybrid" }, cfg.period.as_us());
                     self.fig = Figures::default();
                     self.send(&Uplink::Configured);
                 }
