@@ -4,30 +4,28 @@
 //! Nonstiff Problems", 2nd ed., Springer 1993, sec. II.10 (and their Fortran code
 //! `dop853`, whose coefficients, error norm and step-size control this follows).
 //!
-//! Written for the plant's fixed-size state ([`OdeState`], six components): the
-//! stages live on the stack, nothing is allocated per step or per solve, the last
+//! Generic over the size `N` of a fixed-size state ([`State`]`<N>`; the plant's
+//! has six components) and free of any plant type: the stages live on the stack, nothing is allocated per step or per solve, the last
 //! stage of an accepted step (the derivative at its end) is the first stage of the
 //! next one (FSAL), and the three extra stages of the dense output are evaluated
 //! only when [`StepView::interpolate`] is first called for a step (most steps of
 //! the plant have no event to locate). The stiffness detection of `dop853` is
 //! omitted. Integration runs forward in time only.
 
-use super::segment::OdeState;
+/// A state of `N` components (the plant's: `N = 6`).
+pub type State<const N: usize> = [f64; N];
 
-/// Number of components of the state.
-const N: usize = 6;
-
-/// A system `y' = f(t, y)` on [`OdeState`].
-pub trait OdeSystem {
+/// A system `y' = f(t, y)` on [`State`]`<N>`.
+pub trait OdeSystem<const N: usize> {
     /// Writes `f(t, y)` into `dy` (`t` in s; units of `y` per second).
-    fn rhs(&self, t: f64, y: &OdeState, dy: &mut OdeState);
+    fn rhs(&self, t: f64, y: &State<N>, dy: &mut State<N>);
 
     /// `f(t, y)` at the end of an accepted step (the FSAL stage, evaluated just
     /// before [`Dop853::solve`] reports the step). The same value as
     /// [`OdeSystem::rhs`]; a system may override it to keep by-products for its
     /// event functions at that point.
     #[inline]
-    fn rhs_step_end(&self, t: f64, y: &OdeState, dy: &mut OdeState) {
+    fn rhs_step_end(&self, t: f64, y: &State<N>, dy: &mut State<N>) {
         self.rhs(t, y, dy);
     }
 }
@@ -64,11 +62,11 @@ pub enum SolveError {
 
 /// The end of a solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Solved {
+pub struct Solved<const N: usize> {
     /// Time of the last accepted step's end, s (`t_end` unless the callback stopped the solve).
     pub t: f64,
     /// State at [`Solved::t`].
-    pub y: OdeState,
+    pub y: State<N>,
     /// Whether the callback stopped the solve.
     pub stopped: bool,
     /// The step size the controller proposes after the last accepted step, s
@@ -127,19 +125,19 @@ impl Dop853 {
     /// [`SolveError::MaxSteps`], [`SolveError::StepSizeTooSmall`] (also what a
     /// non-finite derivative leads to: its steps are rejected until then).
     #[allow(clippy::too_many_arguments)]
-    pub fn solve<S, F>(
+    pub fn solve<const N: usize, S, F>(
         &self,
         sys: &S,
         t0: f64,
-        y0: &OdeState,
-        f0: Option<&OdeState>,
+        y0: &State<N>,
+        f0: Option<&State<N>>,
         t_end: f64,
         h0: f64,
         mut on_step: F,
-    ) -> Result<Solved, SolveError>
+    ) -> Result<Solved<N>, SolveError>
     where
-        S: OdeSystem + ?Sized,
-        F: FnMut(&mut StepView<'_, S>) -> Control,
+        S: OdeSystem<N> + ?Sized,
+        F: FnMut(&mut StepView<'_, S, N>) -> Control,
     {
         let mut t = t0;
         let mut y = *y0;
@@ -225,7 +223,7 @@ impl Dop853 {
 
     /// Hairer's `HINIT` (sec. II.4): a first step from the sizes of `y0`, `f0` and
     /// a difference estimate of `y''`, for an order-8 method.
-    fn initial_step<S: OdeSystem + ?Sized>(&self, sys: &S, t0: f64, y0: &OdeState, f0: &OdeState, h_max: f64) -> f64 {
+    fn initial_step<const N: usize, S: OdeSystem<N> + ?Sized>(&self, sys: &S, t0: f64, y0: &State<N>, f0: &State<N>, h_max: f64) -> f64 {
         let mut dnf = 0.0;
         let mut dny = 0.0;
         let mut sk = [0.0; N];
@@ -250,22 +248,22 @@ impl Dop853 {
 }
 
 /// One accepted step, as [`Dop853::solve`] reports it: its ends and its dense output.
-pub struct StepView<'a, S: ?Sized> {
+pub struct StepView<'a, S: ?Sized, const N: usize> {
     sys: &'a S,
     t_prev: f64,
     t_curr: f64,
     h: f64,
-    y_prev: &'a OdeState,
-    y_curr: &'a OdeState,
+    y_prev: &'a State<N>,
+    y_curr: &'a State<N>,
     /// Stages 1 to 12 (`k[0]` = f at the start).
-    k: &'a [OdeState],
+    k: &'a [State<N>],
     /// Stage 13: f at the end.
-    k_end: &'a OdeState,
+    k_end: &'a State<N>,
     /// The dense output's coefficients, once computed.
-    cont: Option<[OdeState; 8]>,
+    cont: Option<[State<N>; 8]>,
 }
 
-impl<S: OdeSystem + ?Sized> StepView<'_, S> {
+impl<S: OdeSystem<N> + ?Sized, const N: usize> StepView<'_, S, N> {
     /// Start of the step, s.
     pub fn t_prev(&self) -> f64 {
         self.t_prev
@@ -277,22 +275,22 @@ impl<S: OdeSystem + ?Sized> StepView<'_, S> {
     }
 
     /// State at the start.
-    pub fn y_prev(&self) -> &OdeState {
+    pub fn y_prev(&self) -> &State<N> {
         self.y_prev
     }
 
     /// State at the end.
-    pub fn y_curr(&self) -> &OdeState {
+    pub fn y_curr(&self) -> &State<N> {
         self.y_curr
     }
 
     /// `f` at the start of the step (its first stage).
-    pub fn f_prev(&self) -> &OdeState {
+    pub fn f_prev(&self) -> &State<N> {
         &self.k[0]
     }
 
     /// `f` at the end of the step (the FSAL stage).
-    pub fn f_curr(&self) -> &OdeState {
+    pub fn f_curr(&self) -> &State<N> {
         self.k_end
     }
 
@@ -300,7 +298,7 @@ impl<S: OdeSystem + ?Sized> StepView<'_, S> {
     /// and Wanner, sec. II.10, `dop853`'s `CONTD8`): `y(t)` to `O(h^8)`.
     ///
     /// The first call for a step evaluates its three extra stages.
-    pub fn interpolate(&mut self, t: f64) -> OdeState {
+    pub fn interpolate(&mut self, t: f64) -> State<N> {
         if self.cont.is_none() {
             self.cont = Some(dense_coefficients(self.sys, self.t_prev, self.h, self.y_prev, self.y_curr, self.k, self.k_end));
         }
@@ -318,7 +316,7 @@ impl<S: OdeSystem + ?Sized> StepView<'_, S> {
 
 /// `y + h sum_j a_j k_j` over the given `(a_j, k_j)`.
 #[inline(always)]
-fn combine<const M: usize>(y: &OdeState, h: f64, terms: [(f64, &OdeState); M]) -> OdeState {
+fn combine<const M: usize, const N: usize>(y: &State<N>, h: f64, terms: [(f64, &State<N>); M]) -> State<N> {
     let mut out = [0.0; N];
     for i in 0..N {
         let mut acc = 0.0;
@@ -334,15 +332,15 @@ fn combine<const M: usize>(y: &OdeState, h: f64, terms: [(f64, &OdeState); M]) -
 /// writes the 8th-order solution into `y_new` and returns the error norm.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn stages<S: OdeSystem + ?Sized>(
+fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
     sys: &S,
     t: f64,
-    y: &OdeState,
+    y: &State<N>,
     h: f64,
-    k: &mut [OdeState; 13],
+    k: &mut [State<N>; 13],
     atol: f64,
     rtol: f64,
-    y_new: &mut OdeState,
+    y_new: &mut State<N>,
 ) -> f64 {
     use tableau::*;
     let mut s = combine(y, h, [(A21, &k[0])]);
@@ -413,15 +411,15 @@ fn stages<S: OdeSystem + ?Sized>(
 
 /// The eight coefficient vectors of the dense output of a step (`dop853`'s `CONT`),
 /// evaluating stages 14 to 16.
-fn dense_coefficients<S: OdeSystem + ?Sized>(
+fn dense_coefficients<const N: usize, S: OdeSystem<N> + ?Sized>(
     sys: &S,
     t: f64,
     h: f64,
-    y: &OdeState,
-    y_new: &OdeState,
-    k: &[OdeState],
-    k13: &OdeState,
-) -> [OdeState; 8] {
+    y: &State<N>,
+    y_new: &State<N>,
+    k: &[State<N>],
+    k13: &State<N>,
+) -> [State<N>; 8] {
     use tableau::*;
     let s = combine(
         y,
@@ -446,7 +444,7 @@ fn dense_coefficients<S: OdeSystem + ?Sized>(
     sys.rhs(t + C16 * h, &s, &mut k16);
     let mut c = [[0.0; N]; 8];
     // Stages 1, 6..16 in the order of the rows of D.
-    let ks: [&OdeState; 12] = [&k[0], &k[5], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], k13, &k14, &k15, &k16];
+    let ks: [&State<N>; 12] = [&k[0], &k[5], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], k13, &k14, &k15, &k16];
     for i in 0..N {
         let ydiff = y_new[i] - y[i];
         let bspl = h * k[0][i] - ydiff;
@@ -659,18 +657,18 @@ mod tests {
         evals: Cell<usize>,
     }
 
-    impl OdeSystem for Test {
-        fn rhs(&self, _t: f64, y: &OdeState, dy: &mut OdeState) {
+    impl OdeSystem<6> for Test {
+        fn rhs(&self, _t: f64, y: &State<6>, dy: &mut State<6>) {
             self.evals.set(self.evals.get() + 1);
             *dy = [y[1], -y[0], y[3], -4.0 * y[2], -y[4], 1.0];
         }
     }
 
-    fn exact(t: f64) -> OdeState {
+    fn exact(t: f64) -> State<6> {
         [t.cos(), -t.sin(), (2.0 * t).sin(), 2.0 * (2.0 * t).cos(), (-t).exp(), t]
     }
 
-    fn max_err(a: &OdeState, b: &OdeState) -> f64 {
+    fn max_err(a: &State<6>, b: &State<6>) -> f64 {
         a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
     }
 
@@ -795,8 +793,8 @@ mod tests {
     #[test]
     fn stop_and_locate_a_ballistic_hop() {
         struct Hop;
-        impl OdeSystem for Hop {
-            fn rhs(&self, _t: f64, y: &OdeState, d: &mut OdeState) {
+        impl OdeSystem<6> for Hop {
+            fn rhs(&self, _t: f64, y: &State<6>, d: &mut State<6>) {
                 *d = [y[1], -10.0, 0.0, 0.0, 0.0, 0.0];
             }
         }
@@ -836,13 +834,29 @@ mod tests {
         assert!(matches!(m.solve(&s, 0.0, &exact(0.0), None, 100.0, 0.0, |_| Control::Continue), Err(SolveError::MaxSteps { .. })));
         // A derivative that is NaN: every step is rejected until the step is too small.
         struct Bad;
-        impl OdeSystem for Bad {
-            fn rhs(&self, _t: f64, _y: &OdeState, d: &mut OdeState) {
+        impl OdeSystem<6> for Bad {
+            fn rhs(&self, _t: f64, _y: &State<6>, d: &mut State<6>) {
                 *d = [f64::NAN; 6];
             }
         }
         let m = Dop853::new(1e-9, 1e-9);
         let r = m.solve(&Bad, 1.0, &[0.0; 6], None, 2.0, 0.1, |_| Control::Continue);
         assert!(matches!(r, Err(SolveError::StepSizeTooSmall { .. })), "{r:?}");
+    }
+
+    /// The integrator is generic over the state's size: a 2-component harmonic
+    /// oscillator keeps its energy and phase to the tolerance over ten periods.
+    #[test]
+    fn any_state_size() {
+        struct Oscillator;
+        impl OdeSystem<2> for Oscillator {
+            fn rhs(&self, _t: f64, y: &State<2>, dy: &mut State<2>) {
+                *dy = [y[1], -y[0]];
+            }
+        }
+        let end = 20.0 * std::f64::consts::PI;
+        let solved = Dop853::new(1e-11, 1e-13).solve(&Oscillator, 0.0, &[1.0, 0.0], None, end, 0.0, |_| Control::Continue).unwrap();
+        assert_eq!(solved.t, end);
+        assert!((solved.y[0] - 1.0).abs() < 1e-8 && solved.y[1].abs() < 1e-8, "{:?}", solved.y);
     }
 }

@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use super::{
     dop853::{OdeSystem, StepView},
-    segment::OdeState,
+    segment::{OdeState, STATE_LEN},
 };
 
 /// The running maxima since tracking started.
@@ -79,7 +79,14 @@ impl Extrema {
     /// where the state is `y_end`. `l`: link length, m. `flight`: whether the tip
     /// is off the belt in this segment (in contact `z_n = -H`, held by the
     /// constraint, so only its end values are counted).
-    pub fn observe_step<S: OdeSystem + ?Sized>(&mut self, step: &mut StepView<'_, S>, t_end: f64, y_end: &OdeState, l: f64, flight: bool) {
+    pub fn observe_step<S: OdeSystem<STATE_LEN> + ?Sized>(
+        &mut self,
+        step: &mut StepView<'_, S, STATE_LEN>,
+        t_end: f64,
+        y_end: &OdeState,
+        l: f64,
+        flight: bool,
+    ) {
         let (t0, t1) = (step.t_prev(), step.t_curr());
         let (y0, y1) = (*step.y_prev(), *step.y_curr());
         let (f0, f1) = (*step.f_prev(), *step.f_curr());
@@ -122,8 +129,8 @@ impl Extrema {
 /// two Newton steps on its slope, both taken from central differences over
 /// `delta = 1e-3 h` (the vertex of the parabola through three points), kept inside
 /// `[lo, hi]`; returns the best `(t, value)` seen.
-fn refine_max<S: OdeSystem + ?Sized>(
-    step: &mut StepView<'_, S>,
+fn refine_max<S: OdeSystem<STATE_LEN> + ?Sized>(
+    step: &mut StepView<'_, S, STATE_LEN>,
     t: f64,
     (lo, hi): (f64, f64),
     value: impl Fn(&OdeState) -> f64,

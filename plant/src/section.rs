@@ -34,7 +34,7 @@ use shared::ContactMode;
 
 use super::{
     dop853::{OdeSystem, StepView},
-    segment::{OdeState, illinois_root},
+    segment::{OdeState, STATE_LEN, illinois_root},
 };
 
 /// The hyperplane `g(x) = normal . x - offset` of the plant state.
@@ -191,7 +191,11 @@ pub(crate) struct StepScan {
 impl StepScan {
     /// Looks for an upward crossing in one accepted step, up to `stop` (the time and
     /// state of the event that ends the segment inside this step) or its end.
-    pub(crate) fn on_step<S: OdeSystem + ?Sized>(&mut self, step: &mut StepView<'_, S>, stop: Option<(f64, OdeState)>) {
+    pub(crate) fn on_step<S: OdeSystem<STATE_LEN> + ?Sized>(
+        &mut self,
+        step: &mut StepView<'_, S, STATE_LEN>,
+        stop: Option<(f64, OdeState)>,
+    ) {
         let sec = self.section;
         let t_a = step.t_prev();
         let g_a = sec.value(step.y_prev());
@@ -238,7 +242,12 @@ impl StepScan {
 
 /// The zero of `g` in `(a, b]` given `g(a) < 0 <= g(b)`, to `1e-14 s + 1e-15 |t|`
 /// (the plant's Illinois root finder on the step's dense output).
-fn refine<S: OdeSystem + ?Sized>(sec: &Section, step: &mut StepView<'_, S>, a: (f64, f64), b: (f64, f64, OdeState)) -> (f64, OdeState) {
+fn refine<S: OdeSystem<STATE_LEN> + ?Sized>(
+    sec: &Section,
+    step: &mut StepView<'_, S, STATE_LEN>,
+    a: (f64, f64),
+    b: (f64, f64, OdeState),
+) -> (f64, OdeState) {
     illinois_root(
         a,
         b,
@@ -254,7 +263,13 @@ fn refine<S: OdeSystem + ?Sized>(sec: &Section, step: &mut StepView<'_, S>, a: (
 /// Golden-section search on the dense output over `[a, b]` for the maximum of
 /// `g` (`sign = 1`) or its minimum (`sign = -1`), assumed single; stopped early
 /// once `g` is on the other side of the section (`>= 0` for a maximum, `< 0` for a minimum).
-fn extremum<S: OdeSystem + ?Sized>(sec: &Section, step: &mut StepView<'_, S>, a: f64, b: f64, sign: f64) -> (f64, f64, OdeState) {
+fn extremum<S: OdeSystem<STATE_LEN> + ?Sized>(
+    sec: &Section,
+    step: &mut StepView<'_, S, STATE_LEN>,
+    a: f64,
+    b: f64,
+    sign: f64,
+) -> (f64, f64, OdeState) {
     const INV_PHI: f64 = 0.618_033_988_749_894_8;
     let across = |g: f64| if sign > 0.0 { g >= 0.0 } else { g < 0.0 };
     let (mut lo, mut hi) = (a, b);
@@ -300,7 +315,7 @@ mod tests {
         a: f64,
         w: f64,
     }
-    impl OdeSystem for Oscillator {
+    impl OdeSystem<STATE_LEN> for Oscillator {
         fn rhs(&self, t: f64, _y: &OdeState, dy: &mut OdeState) {
             *dy = [self.a * (self.w * t).cos(), -self.a * self.w * (self.w * t).sin(), 0.0, 0.0, 0.0, 0.0];
         }

@@ -20,8 +20,11 @@ use super::{
     trig::TrigCache,
 };
 
+/// Components of the plant's integrated state.
+pub const STATE_LEN: usize = 6;
+
 /// The integrated state: 4 plant states then 2 controller states.
-pub type OdeState = [f64; 6];
+pub type OdeState = super::dop853::State<STATE_LEN>;
 
 /// Contact mode the integrator runs in (the plant's discrete state).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -221,7 +224,7 @@ pub fn nearest(components: [(Boundary, f64); 3]) -> (Boundary, f64) {
     components.into_iter().fold((Boundary::Touchdown, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
 }
 
-impl<C: Controller + ?Sized> OdeSystem for Segment<'_, C> {
+impl<C: Controller + ?Sized> OdeSystem<STATE_LEN> for Segment<'_, C> {
     #[inline]
     fn rhs(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
         *dydt = self.point(t, y).dydt;
@@ -257,7 +260,7 @@ const ON_BOUNDARY: f64 = 1e-9;
 
 impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
     /// Checks one accepted step for a crossing and locates it; stops the solve at an event.
-    pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>>) -> Control {
+    pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>, STATE_LEN>) -> Control {
         let (t_prev, t_curr) = (step.t_prev(), step.t_curr());
         let g_curr = self.segment.nearest_boundary(t_curr, step.y_curr()).1;
         let g_a = self.g_prev;
@@ -279,7 +282,7 @@ impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
 /// the first zero of the event function in `(a, b]`, given `g(a) > 0 >= g(b)`.
 fn locate_root<'a, C: Controller + ?Sized>(
     seg: &Segment<'a, C>,
-    step: &mut StepView<'_, Segment<'a, C>>,
+    step: &mut StepView<'_, Segment<'a, C>, STATE_LEN>,
     a: (f64, f64),
     b: (f64, f64, OdeState),
 ) -> (f64, OdeState) {
