@@ -549,7 +549,7 @@ pub fn simulate(setup: &IdealSetup, mut on_sample: impl FnMut(f64)) -> Result<Id
     run.samples.push(sample(&plant, &law));
     for k in 1..=n {
         let dt = k as f64 * setup.sample_dt - plant.time();
-        match plant.advance_with(&law, dt) {
+        match plant.advance(&law, dt, &mut plant::NoObserver) {
             Ok(report) => note(&mut run, &report.events),
             Err(e) => {
                 // The plant stops at the failure: events of the interval are lost, the counts are not.

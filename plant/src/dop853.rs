@@ -314,6 +314,49 @@ impl<S: OdeSystem<N> + ?Sized, const N: usize> StepView<'_, S, N> {
     }
 }
 
+/// One accepted step with its dense output, as an object: what an observer of a
+/// solve sees ([`StepView`] without its system type).
+pub trait DenseStep<const N: usize> {
+    /// Start of the step, s.
+    fn t_prev(&self) -> f64;
+    /// End of the step, s.
+    fn t_curr(&self) -> f64;
+    /// State at the start.
+    fn y_prev(&self) -> &State<N>;
+    /// State at the end.
+    fn y_curr(&self) -> &State<N>;
+    /// Derivative at the start.
+    fn f_prev(&self) -> &State<N>;
+    /// Derivative at the end.
+    fn f_curr(&self) -> &State<N>;
+    /// The 7th-order dense output at `t` within the step.
+    fn interpolate(&mut self, t: f64) -> State<N>;
+}
+
+impl<S: OdeSystem<N> + ?Sized, const N: usize> DenseStep<N> for StepView<'_, S, N> {
+    fn t_prev(&self) -> f64 {
+        StepView::t_prev(self)
+    }
+    fn t_curr(&self) -> f64 {
+        StepView::t_curr(self)
+    }
+    fn y_prev(&self) -> &State<N> {
+        StepView::y_prev(self)
+    }
+    fn y_curr(&self) -> &State<N> {
+        StepView::y_curr(self)
+    }
+    fn f_prev(&self) -> &State<N> {
+        StepView::f_prev(self)
+    }
+    fn f_curr(&self) -> &State<N> {
+        StepView::f_curr(self)
+    }
+    fn interpolate(&mut self, t: f64) -> State<N> {
+        StepView::interpolate(self, t)
+    }
+}
+
 /// `y + h sum_j a_j k_j` over the given `(a_j, k_j)`.
 #[inline(always)]
 fn combine<const M: usize, const N: usize>(y: &State<N>, h: f64, terms: [(f64, &State<N>); M]) -> State<N> {

@@ -45,10 +45,9 @@
 #![warn(missing_docs)]
 
 pub mod dop853;
-pub mod extrema;
 pub mod impact;
 pub mod initial;
-pub mod section;
+pub mod observer;
 pub mod segment;
 pub mod trig;
 
@@ -64,9 +63,8 @@ use shared::{
 };
 
 use dop853::Dop853;
-pub use extrema::Extrema;
 use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
-use section::{SectionWatch, StepScan};
+pub use observer::{NoObserver, Observer};
 pub use segment::Phase;
 use segment::{Boundary, EventLocator, OdeState, Point, Segment};
 use trig::TrigCache;
@@ -95,6 +93,12 @@ pub trait Controller {
         let _ = phase;
         self.torque(t, x, xi, xi_dot)
     }
+
+    /// The torques `[u1, u2]` (N m) if this law holds them constant over the
+    /// interval (a zero-order hold, [`Hold`]), for [`Plant::advance`]'s check.
+    fn held(&self) -> Option<[f64; 2]> {
+        None
+    }
 }
 
 /// Zero-order hold: motor torques `[u1, u2]` (N m) held constant over the interval.
@@ -105,6 +109,10 @@ impl Controller for Hold {
     #[inline]
     fn torque(&self, _t: f64, _x: &[f64; 4], _xi: &[f64; 2], _xi_dot: &mut [f64; 2]) -> [f64; 2] {
         self.0
+    }
+
+    fn held(&self) -> Option<[f64; 2]> {
+        Some(self.0)
     }
 }
 
@@ -432,13 +440,11 @@ pub struct Plant {
     solver: Dop853,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
-    /// Running maxima over the trajectory, when tracking ([`Plant::track_extrema`]).
-    extrema: Option<Extrema>,
 }
 
 /// The end of one solve: time, state, boundary hit, event function at the last
 /// accepted point, and the tracked maxima (see `Plant::solve_segment`).
-type SegmentEnd = (f64, OdeState, Option<Boundary>, f64, Option<Extrema>);
+type SegmentEnd = (f64, OdeState, Option<Boundary>, f64);
 
 /// Events at one instant after which the contact is held stuck (module docs, corner case).
 const STALL_LIMIT: usize = 16;
@@ -483,7 +489,6 @@ impl Plant {
             solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
-            extrema: None,
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -593,68 +598,29 @@ impl Plant {
         &self.counters
     }
 
-    /// Starts (or restarts) tracking the maxima of `theta1_dot` and `z_n` over the
-    /// continuous trajectory from now on ([`Extrema`]), counting the current state.
-    pub fn track_extrema(&mut self) {
-        let mut e = Extrema::new();
-        e.observe_point(self.t, &self.y, self.arm.params.l);
-        self.extrema = Some(e);
-    }
-
-    /// The maxima since [`Plant::track_extrema`] was called (`None` if it was not).
-    pub fn extrema(&self) -> Option<&Extrema> {
-        self.extrema.as_ref()
-    }
-
     /// Evaluations of the vector field since creation (a cost measure).
     pub fn rhs_evaluations(&self) -> u64 {
         self.evals.get()
     }
 
-    /// Advances by `dt` (s) with motor torques `u = [u1, u2]` (N m) held constant
-    /// (zero-order hold), as a sampled controller drives the arm.
+    /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`]`(u)` for the
+    /// motor torques `u = [u1, u2]` (N m) held constant (zero-order hold, as a
+    /// sampled controller drives the arm), or a law evaluated inside the
+    /// integration (the paper's continuous-time setting; the report's force then
+    /// uses the law's torque at the end of the interval). `obs` sees the
+    /// trajectory: every accepted step with its dense output, the start of each
+    /// smooth segment, the events ([`Observer`]; [`NoObserver`] for none).
     ///
     /// # Errors
-    /// [`SimError::BadStep`], [`SimError::BadTorque`], or a failure during the interval
-    /// (the plant is then left at the failure time).
-    pub fn advance(&mut self, u: [f64; 2], dt: f64) -> Result<StepReport, SimError> {
-        if !u.iter().all(|v| v.is_finite()) {
+    /// [`SimError::BadStep`], [`SimError::BadTorque`] (a held torque that is not
+    /// finite), or a failure during the interval (the plant is then left at the
+    /// failure time).
+    pub fn advance<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64, obs: &mut dyn Observer) -> Result<StepReport, SimError> {
+        if let Some(u) = ctrl.held()
+            && !u.iter().all(|v| v.is_finite())
+        {
             return Err(SimError::BadTorque(u));
         }
-        self.advance_with(&Hold(u), dt)
-    }
-
-    /// Advances by `dt` (s) with a torque law evaluated inside the integration
-    /// (the paper's continuous-time setting). The report's force is computed with
-    /// the law's torque at the end of the interval.
-    ///
-    /// # Errors
-    /// As [`Plant::advance`].
-    pub fn advance_with<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64) -> Result<StepReport, SimError> {
-        self.advance_inner(ctrl, dt, None)
-    }
-
-    /// [`Plant::advance`] that also watches a Poincaré section: its upward crossings
-    /// in the interval, located inside the integration steps on the dense output or
-    /// at impacts ([`section`]), are appended to `watch`. Successive calls with the
-    /// same `watch` see every crossing once, including a jump across the section
-    /// at an interval's boundary.
-    ///
-    /// # Errors
-    /// As [`Plant::advance`].
-    pub fn advance_watched(&mut self, u: [f64; 2], dt: f64, watch: &mut SectionWatch) -> Result<StepReport, SimError> {
-        if !u.iter().all(|v| v.is_finite()) {
-            return Err(SimError::BadTorque(u));
-        }
-        self.advance_inner(&Hold(u), dt, Some(watch))
-    }
-
-    fn advance_inner<C: Controller + ?Sized>(
-        &mut self,
-        ctrl: &C,
-        dt: f64,
-        mut watch: Option<&mut SectionWatch>,
-    ) -> Result<StepReport, SimError> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(SimError::BadStep(dt));
         }
@@ -700,10 +666,8 @@ impl Plant {
             }
             // A relaxed (cone-violating) stick lasts at most to the end of this interval.
             let seg_end = t_end;
-            if let Some(w) = watch.as_deref_mut() {
-                w.observe_start(self.t, &self.y, self.mode());
-            }
-            let hit = self.integrate(ctrl, seg_end, &start, g0, watch.as_deref_mut())?;
+            obs.on_segment_start(self.t, &self.y, self.mode());
+            let hit = self.integrate(ctrl, seg_end, &start, g0, obs)?;
             self.counters.segments += 1;
             match hit {
                 Some(b) => {
@@ -725,9 +689,9 @@ impl Plant {
             }
         }
         // The state after an impact at the very end of the interval belongs to no step.
-        let l = self.arm.params.l;
-        if let Some(e) = self.extrema.as_mut() {
-            e.observe_point(self.t, &self.y, l);
+        obs.on_advanced(self.t, &self.y);
+        for e in &events {
+            obs.on_event(e);
         }
         let f = match self.phase {
             Phase::Flight => [0.0, 0.0],
@@ -795,7 +759,7 @@ impl Plant {
         t_end: f64,
         start: &Point,
         g0: f64,
-        mut watch: Option<&mut SectionWatch>,
+        obs: &mut dyn Observer,
     ) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
         let mut h0 = self.last_h.min(remaining);
@@ -811,18 +775,15 @@ impl Plant {
         // still hold a whole excursion out of the domain and back, e.g. a slip from
         // rest that stops again within milliseconds.
         for h_max in [f64::INFINITY, (remaining / 64.0).min(1e-3), (remaining / 64.0).min(1e-5)] {
-            let mut scan = watch.as_deref().map(SectionWatch::scan);
-            let (t1, y1, boundary, g_end, extrema) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, scan.as_mut())?;
+            obs.on_attempt();
+            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, obs)?;
             if boundary.is_none() && g_end < -1e-9 {
                 // Missed crossing: retry with capped steps.
                 continue;
             }
-            if let (Some(w), Some(scan)) = (watch.as_deref_mut(), scan) {
-                w.commit(scan, &y1, self.mode());
-            }
+            obs.on_kept(&y1, self.mode());
             self.t = t1;
             self.y = y1;
-            self.extrema = extrema;
             return Ok(boundary);
         }
         Err(SimError::MissedEvent { t: self.t, mode: self.mode().name() })
@@ -842,23 +803,16 @@ impl Plant {
         h_max: f64,
         start: &Point,
         g0: f64,
-        mut scan: Option<&mut StepScan>,
+        obs: &mut dyn Observer,
     ) -> Result<SegmentEnd, SimError> {
         let solver = Dop853 { h_max, ..self.solver };
-        let mut extrema = self.extrema;
-        let (l, flight) = (self.arm.params.l, self.phase == Phase::Flight);
+        let mode = self.mode();
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
         let solved = solver
             .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
                 let control = locator.on_step(step);
-                if let Some(scan) = scan.as_deref_mut() {
-                    scan.on_step(step, locator.hit);
-                }
-                if let Some(e) = extrema.as_mut() {
-                    let (t1, y1) = locator.hit.unwrap_or((step.t_curr(), *step.y_curr()));
-                    e.observe_step(step, t1, &y1, l, flight);
-                }
+                obs.on_step(step, locator.hit, mode);
                 control
             })
             .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
@@ -869,12 +823,12 @@ impl Plant {
                 return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
             }
             let boundary = self.segment(ctrl).nearest_boundary(t1, &y1).0;
-            return Ok((t1, y1, Some(boundary), 0.0, extrema));
+            return Ok((t1, y1, Some(boundary), 0.0));
         }
         if !solved.y.iter().all(|v| v.is_finite()) {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
-        Ok((t_end, solved.y, None, g_end, extrema))
+        Ok((t_end, solved.y, None, g_end))
     }
 
     /// Handles the crossing of a mode boundary at the current time.

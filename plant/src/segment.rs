@@ -304,7 +304,7 @@ fn locate_root<'a, C: Controller + ?Sized>(
 /// the `before(g)` side and `b` the other. With `stop_at_zero`, an exact zero
 /// ends the search at once; without, the search goes on towards the first zero.
 /// Used by the plant's event location and by the Poincare section.
-pub(super) fn illinois_root(
+pub fn illinois_root(
     a: (f64, f64),
     b: (f64, f64, OdeState),
     mut eval: impl FnMut(f64) -> (f64, OdeState),

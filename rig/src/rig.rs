@@ -22,7 +22,7 @@ use super::{
     sensors::Sensors,
     setup::plant_for,
 };
-use plant::{Plant, PlantEvent};
+use plant::{Hold, NoObserver, Observer, Plant, PlantEvent};
 
 /// The answer to one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -133,8 +133,9 @@ impl PeriodLoop {
 
     /// Runs one period: samples `plant` into a frame (handed to `on_frame`), gets the
     /// command over `link` and advances the plant to the next sample time under the
-    /// zero-order hold, handing `on_events` the plant's events at their exact times.
-    /// Returns the period's record.
+    /// zero-order hold, handing `on_events` the plant's events at their exact times
+    /// and `obs` the continuous trajectory ([`plant::Observer`]). Returns the
+    /// period's record.
     ///
     /// # Errors
     /// The link's failure (no record), or the firmware's safe state or a plant
@@ -145,6 +146,7 @@ impl PeriodLoop {
         link: &mut dyn FirmwareLink,
         on_frame: &mut dyn FnMut(&SensorFrame),
         on_events: &mut dyn FnMut(&[PlantEvent]),
+        obs: &mut dyn Observer,
     ) -> Result<PeriodRecord, Box<PeriodFailure>> {
         let k = self.k;
         let (ts, faults) = (self.ts, &self.faults);
@@ -217,11 +219,11 @@ impl PeriodLoop {
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
         let step = match switch {
-            Some(at) => plant.advance(applied, at).and_then(|r| {
+            Some(at) => plant.advance(&Hold(applied), at, obs).and_then(|r| {
                 on_events(&r.events);
-                plant.advance(u_new, t_next - plant.time())
+                plant.advance(&Hold(u_new), t_next - plant.time(), obs)
             }),
-            None => plant.advance(applied, t_next - plant.time()),
+            None => plant.advance(&Hold(applied), t_next - plant.time(), obs),
         };
         match step {
             Ok(r) => {
@@ -300,7 +302,7 @@ pub fn run_loop_hooked(
     records.reserve(n);
     let mut failure = None;
     for k in 0..n {
-        match periods.period(&mut plant, link, &mut on_frame, &mut on_events) {
+        match periods.period(&mut plant, link, &mut on_frame, &mut on_events, &mut NoObserver) {
             Ok(r) => {
                 on_record(&r);
                 records.push(r);

@@ -20,7 +20,7 @@ fn sliding_plant() -> Plant {
     let params = Params::new(0.3, -0.4).unwrap();
     let mut p = Plant::new(params, SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
     for _ in 0..2000 {
-        p.advance([0.0, 0.0], 1e-3).unwrap();
+        p.advance(&plant::Hold([0.0, 0.0]), 1e-3, &mut plant::NoObserver).unwrap();
     }
     assert_eq!(p.mode(), ContactMode::Sliding, "benchmark state must be sliding");
     p
@@ -32,7 +32,7 @@ fn bench(c: &mut Criterion) {
         b.iter_batched_ref(
             || base.clone(),
             |p| {
-                let r = p.advance([0.0, 0.0], 1e-3).unwrap();
+                let r = p.advance(&plant::Hold([0.0, 0.0]), 1e-3, &mut plant::NoObserver).unwrap();
                 assert_eq!(r.mode, ContactMode::Sliding);
                 r.t
             },
@@ -43,8 +43,8 @@ fn bench(c: &mut Criterion) {
         b.iter_batched_ref(
             || base.clone(),
             |p| {
-                p.advance([0.02, -0.01], 2e-4).unwrap();
-                let r = p.advance([0.03, 0.01], 8e-4).unwrap();
+                p.advance(&plant::Hold([0.02, -0.01]), 2e-4, &mut plant::NoObserver).unwrap();
+                let r = p.advance(&plant::Hold([0.03, 0.01]), 8e-4, &mut plant::NoObserver).unwrap();
                 assert_eq!(r.mode, ContactMode::Sliding);
                 r.f[1]
             },
@@ -67,7 +67,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("x0a_300s_one_interval", |b| {
         b.iter(|| {
             let mut p = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0A.deg), 0.0, [0.0, 0.0]).unwrap();
-            p.advance([0.0, 0.0], 300.0).unwrap();
+            p.advance(&plant::Hold([0.0, 0.0]), 300.0, &mut plant::NoObserver).unwrap();
             p.counters().touchdowns
         })
     });
@@ -75,7 +75,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let mut p = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0A.deg), 0.0, [0.0, 0.0]).unwrap();
             for k in 0..300_000 {
-                p.advance([0.0, 0.0], (k + 1) as f64 * 1e-3 - p.time()).unwrap();
+                p.advance(&plant::Hold([0.0, 0.0]), (k + 1) as f64 * 1e-3 - p.time(), &mut plant::NoObserver).unwrap();
             }
             p.counters().touchdowns
         })

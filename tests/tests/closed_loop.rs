@@ -52,8 +52,8 @@ fn run(cfg: Config, target: f32, duration: f64) -> Run {
         };
         let cmd = fw.step(k as u64 * 1000, &frame, &FrozenClock);
         let u_new = [wire::decode_torque(cmd.u1_code) as f64, wire::decode_torque(cmd.u2_code) as f64];
-        plant.advance(u_applied, delta).unwrap();
-        let r = plant.advance(u_new, ts - delta).unwrap();
+        plant.advance(&plant::Hold(u_applied), delta, &mut plant::NoObserver).unwrap();
+        let r = plant.advance(&plant::Hold(u_new), ts - delta, &mut plant::NoObserver).unwrap();
         u_applied = u_new;
         f_prev = r.f;
         let t = plant.time();

@@ -201,7 +201,7 @@ fn singular_and_unreachable_give_errors_and_zero_torque_not_panics() {
 fn hybrid_phase_from_geometry_matches_the_plant() {
     let setup = IdealSetup::paper(ControllerKind::Hybrid, deg_to_state(X0D.deg), 0.0);
     let (mut plant, law) = build(&setup).unwrap();
-    plant.advance_with(&law, 0.5).unwrap();
+    plant.advance(&law, 0.5, &mut plant::NoObserver).unwrap();
     let IdealLaw::Hybrid(h) = &law else { unreachable!() };
     assert_eq!(h.phase_from_geometry(&plant.state()), plant.phase());
     let xi = plant.controller_state();

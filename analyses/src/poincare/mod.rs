@@ -3,7 +3,7 @@
 //! `theta1_dot = 0` crossed upward, recorded after a transient, and the class of
 //! the motion (equilibrium, periodic and its period, chaotic).
 //!
-//! - Section points: [`plant::section`] locates each crossing inside the
+//! - Section points: [`section`] locates each crossing inside the
 //!   integrator's steps on the dense output (or at the impact whose velocity jump
 //!   crosses the section); the point is the state there.
 //! - Classification: [`classify`] (period by repetition within a tolerance).
@@ -14,6 +14,7 @@
 
 pub mod classify;
 pub mod lyapunov;
+pub mod section;
 
 use std::time::Instant;
 
@@ -22,10 +23,8 @@ use shared::Params;
 
 use classify::{Class, ClassifyConfig};
 use lyapunov::{LyapunovConfig, LyapunovEstimate, ReturnMap};
-use plant::{
-    Plant, SimConfig, SimError,
-    section::{Section, SectionCrossing, SectionWatch},
-};
+use plant::{Plant, SimConfig, SimError};
+use section::{Section, SectionCrossing, SectionWatch};
 
 /// Length of one `advance` call while sweeping, s (the section is located inside
 /// the integration steps, so this only sets how often the run is checked).
@@ -52,7 +51,7 @@ pub struct PoincareConfig {
     /// Longest time the return map waits for the next crossing, s.
     pub max_return_s: f64,
     /// Hysteresis of the section, rad/s: a crossing counts only after `theta1_dot`
-    /// went below minus this ([`plant::section`]), so rounding noise in
+    /// went below minus this ([`section`]), so rounding noise in
     /// steady sliding is not taken for motion.
     pub section_depth: f64,
 }
@@ -118,7 +117,7 @@ impl ReturnMap<4> for PlantReturnMap {
         let mut plant = Plant::new(self.params, self.sim, *x, 0.0, [0.0, 0.0])?;
         let mut watch = SectionWatch::with_hysteresis(Section::THETA1_DOT, self.section_depth);
         while plant.time() < self.max_return_s {
-            plant.advance_watched([0.0, 0.0], (self.max_return_s - plant.time()).min(0.25), &mut watch)?;
+            plant.advance(&plant::Hold([0.0, 0.0]), (self.max_return_s - plant.time()).min(0.25), &mut watch)?;
             if let Some(c) = watch.crossings().iter().find(|c| c.t > 1e-6) {
                 return Ok(Some((c.x, c.t)));
             }
@@ -163,7 +162,7 @@ fn run_into(v_belt: f64, cfg: &PoincareConfig, r: &mut PointResult) -> Result<()
     let mut k = 1.0;
     while plant.time() < cfg.transient_s {
         let target = (k * CHUNK_S).min(cfg.transient_s);
-        plant.advance([0.0, 0.0], target - plant.time())?;
+        plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver)?;
         k += 1.0;
     }
     let before = *plant.counters();
@@ -172,7 +171,7 @@ fn run_into(v_belt: f64, cfg: &PoincareConfig, r: &mut PointResult) -> Result<()
     let mut k = 1.0;
     while plant.time() < end {
         let target = (cfg.transient_s + k * CHUNK_S).min(end);
-        let step = plant.advance_watched([0.0, 0.0], target - plant.time(), &mut watch);
+        let step = plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut watch);
         r.crossings.extend(watch.take());
         step?;
         k += 1.0;
@@ -254,9 +253,9 @@ mod tests {
         let mut armed = false;
         for k in 1..=3000 {
             let target = k as f64 * dt;
-            watched.advance_watched([0.0; 2], target - watched.time(), &mut watch).unwrap();
+            watched.advance(&plant::Hold([0.0; 2]), target - watched.time(), &mut watch).unwrap();
             let before = plain.clone();
-            plain.advance([0.0; 2], target - plain.time()).unwrap();
+            plain.advance(&plant::Hold([0.0; 2]), target - plain.time(), &mut plant::NoObserver).unwrap();
             let (g0, g1) = (before.state()[1], plain.state()[1]);
             armed |= g0 < -depth;
             if g0 < 0.0 && g1 >= 0.0 && armed {
@@ -264,11 +263,11 @@ mod tests {
                 for _ in 0..60 {
                     let mid = 0.5 * (lo + hi);
                     let mut c = before.clone();
-                    c.advance([0.0; 2], mid).unwrap();
+                    c.advance(&plant::Hold([0.0; 2]), mid, &mut plant::NoObserver).unwrap();
                     if c.state()[1] < 0.0 { lo = mid } else { hi = mid }
                 }
                 let mut c = before.clone();
-                c.advance([0.0; 2], hi).unwrap();
+                c.advance(&plant::Hold([0.0; 2]), hi, &mut plant::NoObserver).unwrap();
                 bisected.push((before.time() + hi, c.state()));
                 armed = false;
             }
@@ -278,8 +277,8 @@ mod tests {
         let located = watch.crossings();
         assert!(located.len() >= 20, "{} crossings", located.len());
         // Both kinds are exercised (at v_belt = -0.5 about 12 of 30 are impact jumps).
-        assert!(located.iter().any(|c| c.kind == plant::section::CrossingKind::Jump));
-        assert!(located.iter().any(|c| c.kind == plant::section::CrossingKind::Flow));
+        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Jump));
+        assert!(located.iter().any(|c| c.kind == section::CrossingKind::Flow));
         assert_eq!(located.len(), bisected.len());
         let (mut dt_max, mut dth_max) = (0.0f64, 0.0f64);
         for (c, (t, x)) in located.iter().zip(&bisected) {

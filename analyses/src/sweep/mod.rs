@@ -13,6 +13,7 @@
 //! The sweep's folder (journal, resume, merge) and its figures are the command
 //! line's (`sil-host`'s `sweep` module).
 
+pub mod extrema;
 pub mod run;
 pub mod summary;
 

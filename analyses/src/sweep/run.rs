@@ -23,9 +23,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use serde::{Deserialize, Serialize};
 use shared::{ContactMode, Params};
 
+use super::extrema::ExtremaWatch;
 use super::{InitialCondition, RunKey, SweepController, SweepSpec};
 use crate::ideal::{self, IdealLaw, IdealSetup};
 use plant::{Counters, Plant, SimConfig};
+use plant::{Hold, NoObserver, Observer};
 use rig::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario};
 
 /// Open loop: the length of the intervals the plant is advanced by, s (a Ctrl-C
@@ -166,10 +168,12 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
             return Some(row);
         }
     };
+    // The maxima over the record window (from its start on).
+    let mut watch: Option<ExtremaWatch> = None;
     let ended = match (spec.controller, &law) {
-        (SweepController::None, _) => windows(spec, &mut plant, stop, |p, dt| p.advance([0.0, 0.0], dt).map(drop)),
-        (_, Some(law)) => windows(spec, &mut plant, stop, |p, dt| p.advance_with(law, dt).map(drop)),
-        _ => closed_loop(spec, key, ic, &mut plant, stop),
+        (SweepController::None, _) => windows(spec, &mut plant, stop, &mut watch, |p, dt, o| p.advance(&Hold([0.0, 0.0]), dt, o).map(drop)),
+        (_, Some(law)) => windows(spec, &mut plant, stop, &mut watch, |p, dt, o| p.advance(law, dt, o).map(drop)),
+        _ => closed_loop(spec, key, ic, &mut plant, stop, &mut watch),
     };
     let ended = match (ended, law.as_ref().and_then(IdealLaw::fault)) {
         (Ended::Done(start), Some(fault)) => Ended::Stopped { start, error: format!("ideal law: {fault}"), safe_state: true },
@@ -189,7 +193,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         row.touchdowns = end.touchdowns - s.touchdowns;
         row.impacts_without_collision = end.impacts_without_collision - s.impacts_without_collision;
     }
-    if let Some(e) = plant.extrema() {
+    if let Some(e) = watch.as_ref().map(ExtremaWatch::extrema) {
         row.theta1_dot_max = e.theta1_dot_max;
         row.t_theta1_dot_max = e.t_theta1_dot_max;
         row.z_n_max = e.z_n_max;
@@ -225,7 +229,8 @@ fn advance_by(
     plant: &mut Plant,
     duration: f64,
     stop: &AtomicBool,
-    advance: &mut impl FnMut(&mut Plant, f64) -> Result<(), plant::SimError>,
+    obs: &mut dyn Observer,
+    advance: &mut impl FnMut(&mut Plant, f64, &mut dyn Observer) -> Result<(), plant::SimError>,
 ) -> Result<bool, String> {
     let t_end = plant.time() + duration;
     while t_end - plant.time() > 1e-12 * t_end.max(1.0) {
@@ -233,7 +238,7 @@ fn advance_by(
             return Ok(false);
         }
         let dt = (t_end - plant.time()).min(CHUNK_S);
-        advance(plant, dt).map_err(|e| e.to_string())?;
+        advance(plant, dt, obs).map_err(|e| e.to_string())?;
     }
     Ok(true)
 }
@@ -244,16 +249,17 @@ fn windows(
     spec: &SweepSpec,
     plant: &mut Plant,
     stop: &AtomicBool,
-    mut advance: impl FnMut(&mut Plant, f64) -> Result<(), plant::SimError>,
+    watch: &mut Option<ExtremaWatch>,
+    mut advance: impl FnMut(&mut Plant, f64, &mut dyn Observer) -> Result<(), plant::SimError>,
 ) -> Ended {
-    match advance_by(plant, spec.transient_s, stop, &mut advance) {
+    match advance_by(plant, spec.transient_s, stop, &mut NoObserver, &mut advance) {
         Ok(true) => {}
         Ok(false) => return Ended::Interrupted,
         Err(error) => return Ended::Stopped { start: None, error, safe_state: false },
     }
-    plant.track_extrema();
+    let w = watch.insert(ExtremaWatch::start(plant.time(), plant.state(), plant.arm().params.l));
     let start = Some(*plant.counters());
-    match advance_by(plant, spec.record_s, stop, &mut advance) {
+    match advance_by(plant, spec.record_s, stop, w, &mut advance) {
         Ok(true) => Ended::Done(start),
         Ok(false) => Ended::Interrupted,
         Err(error) => Ended::Stopped { start, error, safe_state: false },
@@ -301,7 +307,14 @@ pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialConditio
     Some(s)
 }
 
-fn closed_loop(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, plant: &mut Plant, stop: &AtomicBool) -> Ended {
+fn closed_loop(
+    spec: &SweepSpec,
+    key: &RunKey,
+    ic: &InitialCondition,
+    plant: &mut Plant,
+    stop: &AtomicBool,
+    watch: &mut Option<ExtremaWatch>,
+) -> Ended {
     let Some(s) = closed_loop_scenario(spec, key, ic) else {
         return Ended::Stopped { start: None, error: "closed loop without a scenario".into(), safe_state: false };
     };
@@ -315,13 +328,17 @@ fn closed_loop(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, plant: &mu
     let mut start = None;
     for k in 0..n {
         if k == k_record {
-            plant.track_extrema();
+            *watch = Some(ExtremaWatch::start(plant.time(), plant.state(), plant.arm().params.l));
             start = Some(*plant.counters());
         }
         if k % PERIODS_PER_CHECK == 0 && stop.load(Ordering::Relaxed) {
             return Ended::Interrupted;
         }
-        if let Err(f) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}) {
+        let obs: &mut dyn Observer = match watch.as_mut() {
+            Some(w) => w,
+            None => &mut NoObserver,
+        };
+        if let Err(f) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}, obs) {
             let safe_state = matches!(f.error, rig::record::RunError::SafeState { .. });
             return Ended::Stopped { start, error: f.error.to_string(), safe_state };
         }

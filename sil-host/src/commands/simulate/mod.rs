@@ -122,7 +122,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     for k in 0..steps {
         // Advance to an exact multiple of the sample period (no accumulated drift).
         let target = (k + 1) as f64 * args.sample_dt;
-        match plant.advance([0.0, 0.0], target - plant.time()) {
+        match plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver) {
             Ok(report) => {
                 events.extend_from_slice(&report.events);
                 trace.push(trace_row(&plant, report.f));

@@ -32,8 +32,9 @@
 use serde::Serialize;
 use shared::ContactMode;
 
-use super::{
-    dop853::{OdeSystem, StepView},
+use plant::{
+    Observer,
+    dop853::DenseStep,
     segment::{OdeState, STATE_LEN, illinois_root},
 };
 
@@ -97,7 +98,8 @@ pub struct SectionCrossing {
     pub mode: ContactMode,
 }
 
-/// A section and the crossings found so far (see [`super::Plant::advance_watched`]).
+/// A section and the crossings found so far: an [`Observer`] of the plant's
+/// advances (`plant.advance(&Hold(u), dt, &mut watch)`).
 #[derive(Debug, Clone)]
 pub struct SectionWatch {
     section: Section,
@@ -108,6 +110,30 @@ pub struct SectionWatch {
     /// `g` went below `-depth` since the last counted crossing.
     armed: bool,
     crossings: Vec<SectionCrossing>,
+    /// The scan of the current attempt (kept by [`Observer::on_kept`]).
+    pending: Option<StepScan>,
+}
+
+impl Observer for SectionWatch {
+    fn on_segment_start(&mut self, t: f64, y: &OdeState, mode: ContactMode) {
+        self.observe_start(t, y, mode);
+    }
+
+    fn on_attempt(&mut self) {
+        self.pending = Some(self.scan());
+    }
+
+    fn on_step(&mut self, step: &mut dyn DenseStep<STATE_LEN>, stop: Option<(f64, OdeState)>, _mode: ContactMode) {
+        if let Some(scan) = self.pending.as_mut() {
+            scan.on_step(step, stop);
+        }
+    }
+
+    fn on_kept(&mut self, y_end: &OdeState, mode: ContactMode) {
+        if let Some(scan) = self.pending.take() {
+            self.commit(scan, y_end, mode);
+        }
+    }
 }
 
 impl SectionWatch {
@@ -119,7 +145,7 @@ impl SectionWatch {
     /// Watches `section` with hysteresis depth `depth` (>= 0, units of `g`; see the
     /// module docs): the first crossing counts only after `g < -depth` has been seen.
     pub fn with_hysteresis(section: Section, depth: f64) -> Self {
-        Self { section, last: None, depth: depth.max(0.0), armed: false, crossings: Vec::new() }
+        Self { section, last: None, depth: depth.max(0.0), armed: false, crossings: Vec::new(), pending: None }
     }
 
     /// The watched section.
@@ -144,7 +170,7 @@ impl SectionWatch {
 
     /// Sees the state at the start of a smooth segment: a crossing if `g` was
     /// negative at the last point seen and is non-negative now (a jump).
-    pub(crate) fn observe_start(&mut self, t: f64, y: &OdeState, mode: ContactMode) {
+    pub(super) fn observe_start(&mut self, t: f64, y: &OdeState, mode: ContactMode) {
         let g = self.section.value(y);
         if let Some(last) = self.last {
             self.armed |= last < -self.depth;
@@ -158,12 +184,12 @@ impl SectionWatch {
     }
 
     /// A scan for one solve (its crossings are kept only by [`SectionWatch::commit`]).
-    pub(crate) fn scan(&self) -> StepScan {
+    pub(super) fn scan(&self) -> StepScan {
         StepScan { section: self.section, depth: self.depth, armed: self.armed, found: Vec::new() }
     }
 
     /// Keeps the crossings of a solve that ended at state `y_end`.
-    pub(crate) fn commit(&mut self, scan: StepScan, y_end: &OdeState, mode: ContactMode) {
+    pub(super) fn commit(&mut self, scan: StepScan, y_end: &OdeState, mode: ContactMode) {
         self.crossings.extend(scan.found.into_iter().map(|(t, y)| SectionCrossing {
             t,
             x: plant_state(&y),
@@ -180,8 +206,8 @@ fn plant_state(y: &OdeState) -> [f64; 4] {
 }
 
 /// The crossings found in the accepted steps of one solve.
-#[derive(Debug)]
-pub(crate) struct StepScan {
+#[derive(Debug, Clone)]
+pub(super) struct StepScan {
     section: Section,
     depth: f64,
     armed: bool,
@@ -191,11 +217,7 @@ pub(crate) struct StepScan {
 impl StepScan {
     /// Looks for an upward crossing in one accepted step, up to `stop` (the time and
     /// state of the event that ends the segment inside this step) or its end.
-    pub(crate) fn on_step<S: OdeSystem<STATE_LEN> + ?Sized>(
-        &mut self,
-        step: &mut StepView<'_, S, STATE_LEN>,
-        stop: Option<(f64, OdeState)>,
-    ) {
+    pub(super) fn on_step(&mut self, step: &mut dyn DenseStep<STATE_LEN>, stop: Option<(f64, OdeState)>) {
         let sec = self.section;
         let t_a = step.t_prev();
         let g_a = sec.value(step.y_prev());
@@ -242,12 +264,7 @@ impl StepScan {
 
 /// The zero of `g` in `(a, b]` given `g(a) < 0 <= g(b)`, to `1e-14 s + 1e-15 |t|`
 /// (the plant's Illinois root finder on the step's dense output).
-fn refine<S: OdeSystem<STATE_LEN> + ?Sized>(
-    sec: &Section,
-    step: &mut StepView<'_, S, STATE_LEN>,
-    a: (f64, f64),
-    b: (f64, f64, OdeState),
-) -> (f64, OdeState) {
+fn refine(sec: &Section, step: &mut dyn DenseStep<STATE_LEN>, a: (f64, f64), b: (f64, f64, OdeState)) -> (f64, OdeState) {
     illinois_root(
         a,
         b,
@@ -263,13 +280,7 @@ fn refine<S: OdeSystem<STATE_LEN> + ?Sized>(
 /// Golden-section search on the dense output over `[a, b]` for the maximum of
 /// `g` (`sign = 1`) or its minimum (`sign = -1`), assumed single; stopped early
 /// once `g` is on the other side of the section (`>= 0` for a maximum, `< 0` for a minimum).
-fn extremum<S: OdeSystem<STATE_LEN> + ?Sized>(
-    sec: &Section,
-    step: &mut StepView<'_, S, STATE_LEN>,
-    a: f64,
-    b: f64,
-    sign: f64,
-) -> (f64, f64, OdeState) {
+fn extremum(sec: &Section, step: &mut dyn DenseStep<STATE_LEN>, a: f64, b: f64, sign: f64) -> (f64, f64, OdeState) {
     const INV_PHI: f64 = 0.618_033_988_749_894_8;
     let across = |g: f64| if sign > 0.0 { g >= 0.0 } else { g < 0.0 };
     let (mut lo, mut hi) = (a, b);
@@ -308,7 +319,7 @@ fn extremum<S: OdeSystem<STATE_LEN> + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dop853::{Control, Dop853};
+    use plant::dop853::{Control, Dop853, OdeSystem};
 
     /// `y = [sin t, cos t, 0, 0, 0, 0]`-like systems: component 1 is `a cos(w t)`.
     struct Oscillator {
