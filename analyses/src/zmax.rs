@@ -32,8 +32,8 @@ use crate::{
 };
 use firmware::ControllerKind;
 use plant::initial::{PaperX0, deg_to_state};
-use plant::{EventKind, Plant, SimConfig};
-use rig::{in_process, scenario::Scenario};
+use plant::{EventKind, Plant, PlantEvent, SimConfig};
+use rig::{in_process, rig::RunObserver, scenario::Scenario};
 
 /// Where the controller runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -319,22 +319,28 @@ pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Cr
 fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
     let s = sampled_scenario(base, combo, target, c)?;
     let mut t = empty_trial(combo, target);
-    let lifted = std::cell::Cell::new(false);
-    let (records, failure) = in_process::run_observed(
-        &s,
-        |_, _| !lifted.get(),
-        |events| {
+    /// Counts the lift-offs and impacts without collision and stops at the first.
+    struct LiftOffs<'a>(&'a mut Trial, bool);
+    impl RunObserver for LiftOffs<'_> {
+        fn on_events(&mut self, events: &[PlantEvent]) {
             for e in events {
                 match e.kind {
-                    EventKind::LiftOff => t.lift_offs += 1,
-                    EventKind::ImpactWithoutCollision => t.impacts_without_collision += 1,
+                    EventKind::LiftOff => self.0.lift_offs += 1,
+                    EventKind::ImpactWithoutCollision => self.0.impacts_without_collision += 1,
                     _ => continue,
                 }
-                t.first_lift_off_s.get_or_insert(e.t);
-                lifted.set(true);
+                self.0.first_lift_off_s.get_or_insert(e.t);
+                self.1 = true;
             }
-        },
-    );
+        }
+
+        fn on_period(&mut self, _k: usize, _n: usize) -> bool {
+            !self.1
+        }
+    }
+    let mut seen = LiftOffs(&mut t, false);
+    let (records, failure) = in_process::run(&s, &mut seen);
+    let lifted = seen.1;
     let rows: Vec<TraceRow> = records
         .iter()
         .map(|r| TraceRow { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u1: r.u1_cmd, u2: r.u2_cmd, mode: r.mode })
@@ -345,9 +351,7 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
         t.first_lift_off_s = Some(r.t);
         t.lift_offs = t.lift_offs.max(1);
     }
-    if !lifted.get()
-        && let Some(e) = failure
-    {
+    if !lifted && let Some(e) = failure {
         t.failure = Some(e.to_string());
     }
     Ok((t, rows))

@@ -6,6 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::record::RunError;
+
 /// A sensor whose counts a fault corrupts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -92,11 +94,6 @@ impl Fault {
         }
         Ok(())
     }
-
-    /// Whether the fault needs the firmware in its own process.
-    pub fn needs_ipc(&self) -> bool {
-        matches!(self.kind, FaultKind::Stall | FaultKind::KillFirmware)
-    }
 }
 
 /// The faults of a run, queried per period.
@@ -144,10 +141,57 @@ impl FaultPlan {
             _ => None,
         })
     }
+}
 
-    /// Whether any fault needs the iceoryx2 transport.
-    pub fn needs_ipc(&self) -> bool {
-        self.faults.iter().any(Fault::needs_ipc)
+/// The kinds of link to the firmware, for the faults each can inject (checked
+/// in one place, [`LinkKind::check`], by the links' constructors and by the
+/// commands before they write anything).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkKind {
+    /// The firmware step linked into the plant's process.
+    InProcess,
+    /// The firmware in its own process over iceoryx2.
+    Ipc,
+    /// The MCU image in QEMU over a socket.
+    PilQemu,
+    /// The MCU image on a board behind a serial port (HIL).
+    PilSerial,
+}
+
+impl LinkKind {
+    /// Every fault this link can inject. Sensor, late and dropped commands act on
+    /// the plant's side or the firmware's start time and work everywhere;
+    /// `stall` needs a host process to stop, `kill_firmware` a process to kill
+    /// (the firmware's, or QEMU).
+    pub fn injectable(self) -> &'static [FaultKind] {
+        use FaultKind::*;
+        const EVERYWHERE: [FaultKind; 5] = [LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange];
+        match self {
+            Self::Ipc => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, Stall, KillFirmware],
+            Self::PilQemu => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, KillFirmware],
+            Self::InProcess | Self::PilSerial => &EVERYWHERE,
+        }
+    }
+
+    /// Refuses a scenario fault this link cannot inject.
+    ///
+    /// # Errors
+    /// [`RunError::Unsupported`] naming the first such fault, why, and what to use instead.
+    pub fn check(self, faults: &[Fault]) -> Result<(), RunError> {
+        let Some(f) = faults.iter().find(|f| !self.injectable().contains(&f.kind)) else { return Ok(()) };
+        Err(RunError::Unsupported(match (f.kind, self) {
+            (FaultKind::Stall | FaultKind::KillFirmware, Self::InProcess) => {
+                format!("fault {:?} acts on the firmware process: run over iceoryx2 (without --in-process)", f.kind)
+            }
+            (FaultKind::Stall, Self::PilQemu) => "fault stall stalls a host process: not available in PIL (kill_firmware is)".into(),
+            (FaultKind::Stall, _) => "fault stall stalls a host process: not available over a serial port".into(),
+            (FaultKind::KillFirmware, _) => {
+                "fault kill_firmware kills the emulator that runs the image: not available over a serial port; \
+                 to test a lost board, cut its power or unplug it during a run"
+                    .into()
+            }
+            (kind, link) => format!("fault {kind:?} cannot be injected over the {link:?} link"),
+        }))
     }
 }
 
@@ -172,5 +216,29 @@ mod tests {
         assert!(f.check().unwrap_err().contains("signal"));
         let f = Fault { kind: FaultKind::LateCommand, at_s: 1.0, duration_s: 0.0, delay_s: f64::NAN, signal: None };
         assert!(f.check().unwrap_err().contains("delay_s"));
+    }
+
+    /// Each link refuses exactly the faults it cannot inject, in one table: the
+    /// firmware in its own process takes them all; QEMU can be killed but not
+    /// stalled; in-process and a board behind a serial port take neither.
+    #[test]
+    fn links_refuse_exactly_what_they_cannot_inject() {
+        use FaultKind::*;
+        let all = [LateCommand, DropCommand, Stall, KillFirmware, StuckSensor, NanSensor, OutOfRange];
+        let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
+        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial] {
+            for kind in all {
+                let refused = link.check(&[fault(kind)]).is_err();
+                let process_fault = matches!(kind, Stall | KillFirmware);
+                let expected = match link {
+                    LinkKind::Ipc => false,
+                    LinkKind::PilQemu => kind == Stall,
+                    LinkKind::InProcess | LinkKind::PilSerial => process_fault,
+                };
+                assert_eq!(refused, expected, "{link:?} {kind:?}");
+            }
+        }
+        let e = LinkKind::InProcess.check(&[fault(Stall)]).unwrap_err().to_string();
+        assert!(e.contains("Stall") && e.contains("--in-process"), "{e}");
     }
 }

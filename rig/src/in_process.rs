@@ -2,15 +2,14 @@
 //! process, no IPC (`sil-host run --in-process`). The firmware's clock is the
 //! frame's: its step takes no simulated time.
 
+use crate::faults::LinkKind;
 use firmware::board::FrozenClock;
 use shared::wire::{GroundTruth, SensorFrame};
-
-use plant::PlantEvent;
 
 use super::{
     firmware_side::FirmwareSide,
     record::{PeriodRecord, RunError},
-    rig::{Exchange, FirmwareLink, run_loop, run_loop_observed},
+    rig::{Exchange, FirmwareLink, RunObserver, run_loop},
     scenario::Scenario,
 };
 
@@ -27,12 +26,7 @@ impl InProcessLink {
     /// [`RunError::Firmware`] for an invalid configuration; [`RunError::Unsupported`]
     /// when the scenario injects a fault that needs the firmware in its own process.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
-        if let Some(f) = s.faults.iter().find(|f| f.needs_ipc()) {
-            return Err(RunError::Unsupported(format!(
-                "fault {:?} acts on the firmware process: run over iceoryx2 (without --in-process)",
-                f.kind
-            )));
-        }
+        LinkKind::InProcess.check(&s.faults)?;
         Ok(Self { side: FirmwareSide::new(s)? })
     }
 }
@@ -48,41 +42,12 @@ impl FirmwareLink for InProcessLink {
     }
 }
 
-/// Runs the scenario in-process; `on_period(k, n)` is called after each period.
-/// Returns every period's record, and the error if the run stopped early.
-pub fn run(s: &Scenario, mut on_period: impl FnMut(usize, usize)) -> (Vec<PeriodRecord>, Option<RunError>) {
-    run_recording(
-        s,
-        |k, n| {
-            on_period(k, n);
-            true
-        },
-        |_| {},
-    )
-}
-
-/// As [`run`], handing every plant event to `on_events` (see
-/// [`super::rig::run_loop_observed`]).
-pub fn run_observed(
-    s: &Scenario,
-    on_period: impl FnMut(usize, usize) -> bool,
-    on_events: impl FnMut(&[PlantEvent]),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
+/// Runs the scenario in-process ([`run_loop`] over an [`InProcessLink`]),
+/// telling `run` what happens. Returns every period's record, and the error if
+/// the run stopped early.
+pub fn run(s: &Scenario, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
     match InProcessLink::new(s) {
-        Ok(mut link) => run_loop_observed(s, &mut link, on_period, |_| {}, on_events),
-        Err(e) => (Vec::new(), Some(e)),
-    }
-}
-
-/// As [`run`], handing every sensor frame to `on_frame` as it goes on the wire
-/// (a recording of what crossed the wire).
-pub fn run_recording(
-    s: &Scenario,
-    on_period: impl FnMut(usize, usize) -> bool,
-    on_frame: impl FnMut(&SensorFrame),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
-    match InProcessLink::new(s) {
-        Ok(mut link) => run_loop(s, &mut link, on_period, on_frame),
+        Ok(mut link) => run_loop(s, &mut link, run),
         Err(e) => (Vec::new(), Some(e)),
     }
 }
@@ -96,9 +61,9 @@ mod tests {
     fn default_scenario_tracks_without_lift_off_and_is_reproducible() {
         let mut s = Scenario::default_scenario();
         s.timing.duration_s = 4.0;
-        let (a, err) = run(&s, |_, _| {});
+        let (a, err) = run(&s, &mut ());
         assert!(err.is_none(), "{err:?}");
-        let (b, _) = run(&s, |_, _| {});
+        let (b, _) = run(&s, &mut ());
         assert_eq!(a, b, "same scenario and seed: identical records");
         let st = lift_off_stats(&a);
         assert_eq!(st.lift_offs, 0, "{st:?}");

@@ -28,7 +28,7 @@ use std::{
 use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, frame_flags};
 
 use super::{
-    faults::FaultPlan,
+    faults::{FaultPlan, LinkKind},
     ipc::{PeerState, PlantPorts, Role, peer_state},
     realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
     record::RunError,
@@ -88,6 +88,7 @@ impl IpcLink {
     /// [`RunError::Transport`] when the services cannot be opened, the process
     /// cannot be started, or no firmware connects within [`CONNECT_TIMEOUT_S`].
     pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
+        LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
         // Before spawning: the firmware process inherits nothing from this thread's

@@ -43,7 +43,7 @@ use serde::Serialize;
 use shared::wire::{GroundTruth, SensorFrame};
 
 use super::{
-    faults::{FaultKind, FaultPlan},
+    faults::{FaultPlan, LinkKind},
     record::RunError,
     rig::{Exchange, FirmwareLink},
     scenario::Scenario,
@@ -199,31 +199,16 @@ impl PilCounts {
     }
 }
 
-/// Refuses the faults a target cannot inject: `stall` acts on a host process
-/// (never available in PIL); `kill_firmware` kills QEMU, so it needs QEMU.
+/// Refuses the faults `target` cannot inject ([`LinkKind::check`]).
 ///
 /// # Errors
 /// [`RunError::Unsupported`] naming the fault and why.
 pub fn check_faults(s: &Scenario, target: &PilTarget) -> Result<(), RunError> {
-    for f in &s.faults {
-        match (f.kind, target) {
-            (FaultKind::Stall, PilTarget::Qemu { .. }) => {
-                return Err(RunError::Unsupported("fault stall stalls a host process: not available in PIL (kill_firmware is)".into()));
-            }
-            (FaultKind::Stall, PilTarget::Serial { .. }) => {
-                return Err(RunError::Unsupported("fault stall stalls a host process: not available over a serial port".into()));
-            }
-            (FaultKind::KillFirmware, PilTarget::Serial { path, .. }) => {
-                return Err(RunError::Unsupported(format!(
-                    "fault kill_firmware kills the emulator that runs the image: not available over a serial port ({}); \
-                     to test a lost board, cut its power or unplug it during a run",
-                    path.display()
-                )));
-            }
-            _ => {}
-        }
-    }
-    Ok(())
+    let kind = match target {
+        PilTarget::Qemu { .. } => LinkKind::PilQemu,
+        PilTarget::Serial { .. } => LinkKind::PilSerial,
+    };
+    kind.check(&s.faults)
 }
 
 /// The byte stream to the image's USART1, with a read timeout.

@@ -131,11 +131,11 @@ impl PeriodLoop {
         self.k
     }
 
-    /// Runs one period: samples `plant` into a frame (handed to `on_frame`), gets the
-    /// command over `link` and advances the plant to the next sample time under the
-    /// zero-order hold, handing `on_events` the plant's events at their exact times
-    /// and `obs` the continuous trajectory ([`plant::Observer`]). Returns the
-    /// period's record.
+    /// Runs one period: samples `plant` into a frame (handed to `run`'s
+    /// [`RunObserver::on_frame`]), gets the command over `link` and advances the
+    /// plant to the next sample time under the zero-order hold, handing `run` the
+    /// plant's events at their exact times and `obs` the continuous trajectory
+    /// ([`plant::Observer`]). Returns the period's record.
     ///
     /// # Errors
     /// The link's failure (no record), or the firmware's safe state or a plant
@@ -144,8 +144,7 @@ impl PeriodLoop {
         &mut self,
         plant: &mut Plant,
         link: &mut dyn FirmwareLink,
-        on_frame: &mut dyn FnMut(&SensorFrame),
-        on_events: &mut dyn FnMut(&[PlantEvent]),
+        run: &mut dyn RunObserver,
         obs: &mut dyn Observer,
     ) -> Result<PeriodRecord, Box<PeriodFailure>> {
         let k = self.k;
@@ -157,7 +156,7 @@ impl PeriodLoop {
         let z = plant.tip();
         let mode = plant.mode();
         let frame = self.sensors.frame_with_faults(k as u32, t_us, &x, self.f_now, self.v_belt, faults.sensor_faults(t_k));
-        on_frame(&frame);
+        run.on_frame(&frame);
         let truth = GroundTruth {
             t: t_k,
             seq: k as u32,
@@ -220,14 +219,14 @@ impl PeriodLoop {
         let t_next = (k + 1) as f64 * ts;
         let step = match switch {
             Some(at) => plant.advance(&Hold(applied), at, obs).and_then(|r| {
-                on_events(&r.events);
+                run.on_events(&r.events);
                 plant.advance(&Hold(u_new), t_next - plant.time(), obs)
             }),
             None => plant.advance(&Hold(applied), t_next - plant.time(), obs),
         };
         match step {
             Ok(r) => {
-                on_events(&r.events);
+                run.on_events(&r.events);
                 self.f_now = r.f;
             }
             Err(e) => return Err(Box::new(PeriodFailure { record: Some(record), error: e.into() })),
@@ -238,85 +237,63 @@ impl PeriodLoop {
     }
 }
 
-/// Runs the scenario over `link`; `on_period(k, n)` is called after each period
-/// (progress bars) and stops the run with [`RunError::Interrupted`] when it
-/// returns `false` (Ctrl-C); `on_frame` sees every frame as it goes on the wire
-/// (a recording of what crossed the wire).
+/// Sees a closed-loop run as it goes; every method defaults to doing nothing
+/// (and going on). `()` is the quiet run.
+pub trait RunObserver {
+    /// A frame as it goes on the wire (a recording of what crossed it).
+    fn on_frame(&mut self, _frame: &SensorFrame) {}
+
+    /// Plant events at their exact times (the start-up events, then those of each
+    /// interval): lift-offs between two samples included, which the records cannot show.
+    fn on_events(&mut self, _events: &[PlantEvent]) {}
+
+    /// A period's record as soon as it is made (before the run can stop on it), so
+    /// a caller can stream the trace to disk and lose nothing if killed.
+    fn on_record(&mut self, _record: &PeriodRecord) {}
+
+    /// After period `k` of `n` (progress); `false` stops the run with
+    /// [`RunError::Interrupted`] (Ctrl-C).
+    fn on_period(&mut self, _k: usize, _n: usize) -> bool {
+        true
+    }
+}
+
+impl RunObserver for () {}
+
+/// Runs the scenario over `link` (the one closed-loop loop: in-process,
+/// iceoryx2 and PIL runs, sweeps and `Z_t,sliding` trials all go through it),
+/// telling `run` what happens.
 ///
 /// Returns every period's record; when the run stops early (plant failure, the
-/// firmware lost or in its safe state) the records up to and including the last
-/// period come back with the error.
-pub fn run_loop(
-    s: &Scenario,
-    link: &mut dyn FirmwareLink,
-    on_period: impl FnMut(usize, usize) -> bool,
-    on_frame: impl FnMut(&SensorFrame),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
-    run_loop_hooked(s, link, |_| {}, on_period, on_frame, |_| {})
-}
-
-/// As [`run_loop`], handing every period's record to `on_record` as soon as it
-/// is made (before the run can stop on it), so a caller can stream the trace to
-/// disk and lose nothing if the process is killed.
-pub fn run_loop_streaming(
-    s: &Scenario,
-    link: &mut dyn FirmwareLink,
-    on_record: impl FnMut(&PeriodRecord),
-    on_period: impl FnMut(usize, usize) -> bool,
-    on_frame: impl FnMut(&SensorFrame),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
-    run_loop_hooked(s, link, on_record, on_period, on_frame, |_| {})
-}
-
-/// As [`run_loop`], handing `on_events` every plant event at its exact time (the
-/// start-up events, then those of each interval): lift-offs between two samples
-/// included, which the per-period records cannot show.
-pub fn run_loop_observed(
-    s: &Scenario,
-    link: &mut dyn FirmwareLink,
-    on_period: impl FnMut(usize, usize) -> bool,
-    on_frame: impl FnMut(&SensorFrame),
-    on_events: impl FnMut(&[PlantEvent]),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
-    run_loop_hooked(s, link, |_| {}, on_period, on_frame, on_events)
-}
-
-/// The loop behind [`run_loop`], [`run_loop_streaming`] and [`run_loop_observed`],
-/// with all their hooks.
-pub fn run_loop_hooked(
-    s: &Scenario,
-    link: &mut dyn FirmwareLink,
-    mut on_record: impl FnMut(&PeriodRecord),
-    mut on_period: impl FnMut(usize, usize) -> bool,
-    mut on_frame: impl FnMut(&SensorFrame),
-    mut on_events: impl FnMut(&[PlantEvent]),
-) -> (Vec<PeriodRecord>, Option<RunError>) {
+/// firmware lost or in its safe state, `on_period` said stop) the records up to
+/// and including the last period come back with the error.
+pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
     let mut records = Vec::new();
     let mut plant = match plant_for(s) {
         Ok(p) => p,
         Err(e) => return (records, Some(e.into())),
     };
-    on_events(plant.startup_events());
+    run.on_events(plant.startup_events());
     let mut periods = PeriodLoop::new(s, &plant);
     let n = periods.periods_in(s.timing.duration_s);
     records.reserve(n);
     let mut failure = None;
     for k in 0..n {
-        match periods.period(&mut plant, link, &mut on_frame, &mut on_events, &mut NoObserver) {
+        match periods.period(&mut plant, link, run, &mut NoObserver) {
             Ok(r) => {
-                on_record(&r);
+                run.on_record(&r);
                 records.push(r);
             }
             Err(f) => {
                 if let Some(r) = &f.record {
-                    on_record(r);
+                    run.on_record(r);
                 }
                 records.extend(f.record);
                 failure = Some(f.error);
                 break;
             }
         }
-        if !on_period(k + 1, n) && k + 1 < n {
+        if !run.on_period(k + 1, n) && k + 1 < n {
             failure = Some(RunError::Interrupted { k: k + 1 });
             break;
         }

@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
     let scenario = Scenario::default_scenario();
     sil.bench_function("default_scenario_10s_in_process", |b| {
         b.iter(|| {
-            let (records, err) = in_process::run(&scenario, |_, _| {});
+            let (records, err) = in_process::run(&scenario, &mut ());
             assert!(err.is_none(), "{err:?}");
             records.len()
         })

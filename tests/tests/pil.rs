@@ -62,11 +62,11 @@ fn the_pil_image_fits_its_flash_and_ram_budgets() {
 fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     // 4 s: the 2 s move and the hold after it (the default runs 10 s).
     let s = scenario(ControllerKind::Hybrid, 4.0);
-    let (sil, err) = in_process::run(&s, |_, _| {});
+    let (sil, err) = in_process::run(&s, &mut ());
     assert!(err.is_none(), "{err:?}");
 
     let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
-    let (pil, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (pil, err) = run_loop(&s, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(pil.len(), sil.len());
     for (name, records) in [("SIL", &sil), ("PIL", &pil)] {
@@ -152,7 +152,7 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
         .unwrap()
         .faults;
     let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
             assert_eq!(k, 300);
@@ -299,13 +299,13 @@ fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
     let qemu = PtyQemu::start();
     let mut serial = PilLink::start(&s, &PilOptions::serial(&qemu.pty, DEFAULT_BAUD), None).unwrap();
     assert_eq!(serial.transport(), "pil-serial");
-    let (via_serial, err) = run_loop(&s, &mut serial, |_, _| true, |_| {});
+    let (via_serial, err) = run_loop(&s, &mut serial, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert!(!serial.captures_log() && serial.log().is_empty() && serial.exit_status().is_none());
     drop(qemu);
 
     let mut socket = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
-    let (via_socket, err) = run_loop(&s, &mut socket, |_, _| true, |_| {});
+    let (via_socket, err) = run_loop(&s, &mut socket, &mut ());
     assert!(err.is_none(), "{err:?}");
 
     assert_eq!(via_serial, via_socket, "the same records");

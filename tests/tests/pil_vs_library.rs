@@ -50,7 +50,7 @@ fn the_pil_image_sends_the_commands_of_the_host_library() {
     s.timing.duration_s = 2.5; // the move (2 s) and the hold after it
     let image = PilLink::start(&s, &PilOptions::new(common::qemu_image("pil")), None).unwrap();
     let mut link = Compare { image, host: Firmware::new(firmware_config(&s)).unwrap(), pairs: Vec::new() };
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(link.pairs.len(), records.len());
     assert_eq!(link.pairs.len(), 2500);

@@ -46,7 +46,7 @@ fn both_sides_agree_on_every_deadline_and_no_stamp_drifts_at_6_and_7_khz() {
         assert_eq!(cfg.period, period);
         Firmware::new(cfg).unwrap();
 
-        let (records, failure) = in_process::run(&s, |_, _| {});
+        let (records, failure) = in_process::run(&s, &mut ());
         assert!(failure.is_none(), "{rate} Hz: {failure:?}");
         assert_eq!(records.len() as u64, s.timing.periods());
         let mut misses = 0;

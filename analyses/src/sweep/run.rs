@@ -338,7 +338,7 @@ fn closed_loop(
             Some(w) => w,
             None => &mut NoObserver,
         };
-        if let Err(f) = periods.period(plant, &mut link, &mut |_| {}, &mut |_| {}, obs) {
+        if let Err(f) = periods.period(plant, &mut link, &mut (), obs) {
             let safe_state = matches!(f.error, rig::record::RunError::SafeState { .. });
             return Ended::Stopped { start, error: f.error.to_string(), safe_state };
         }

@@ -221,7 +221,7 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
     let (link, board) = board_link(&s, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 300);
     let c = &link.counts;
@@ -243,7 +243,7 @@ fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_g
     let mut link = link.unwrap();
     // The board answers both configurations; the second `Configured` comes
     // before the first answer and must not end the run.
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 200);
     let seen = board.join().unwrap();
@@ -257,7 +257,7 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let (link, _board) = board_link(&s, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     assert!(started.elapsed() < Duration::from_secs(3), "no hang: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
@@ -277,7 +277,7 @@ fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let (link, _board) = board_link(&s, script, 5.0);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&s, &mut link, |_, _| true, |_| {});
+    let (records, err) = run_loop(&s, &mut link, &mut ());
     assert!(started.elapsed() < Duration::from_secs(2), "noticed at once, not after the timeout: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {

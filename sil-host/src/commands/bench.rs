@@ -75,7 +75,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     for _ in 0..args.repeat {
         let mut link = InProcessLink::new(&s).map_err(CliError::Run)?;
         let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, |_, _| true, |_| {});
+        let (records, e) = run_loop(&s, &mut link, &mut ());
         rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
         missed += misses(&records, e)?;
     }
@@ -88,7 +88,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     for _ in 0..args.repeat {
         let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
         let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, |_, _| true, |_| {});
+        let (records, e) = run_loop(&s, &mut link, &mut ());
         rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
         missed += misses(&records, e)?;
         timings.rtt_us.extend(&link.timings.rtt_us);
@@ -101,7 +101,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
         rt.timing.duration_s = args.realtime_s;
         let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true).map_err(CliError::Run)?;
         let t = Instant::now();
-        let (records, e) = run_loop(&rt, &mut link, |_, _| true, |_| {});
+        let (records, e) = run_loop(&rt, &mut link, &mut ());
         let rate = records.len() as f64 / t.elapsed().as_secs_f64();
         let missed = misses(&records, e)?;
         let mut f = summarise("iceoryx2 realtime", vec![rate], records.len(), missed, Some(&link.timings), 0.0);

@@ -19,7 +19,7 @@ use crate::{
 };
 use rig::{
     record::{PeriodRecord, RunError},
-    rig::{FirmwareLink, run_loop_streaming},
+    rig::{FirmwareLink, RunObserver, run_loop},
     scenario::Scenario,
     summary::Percentiles,
     summary::RunSummary,
@@ -90,18 +90,27 @@ pub(crate) fn run_streamed(
     let stop = stop_flag();
     let mut trace = StreamedCsv::new(out, "trace.csv", std::time::Duration::from_millis(1))?;
     let started = Instant::now();
-    let (records, failure) = run_loop_streaming(
-        scenario,
-        link,
-        |r| trace.push(r),
-        |k, _| {
-            if k % every == 0 {
-                progress.set_position(k as u64);
+    /// Streams each record, moves the bar, stops on Ctrl-C.
+    struct Streamed<'a> {
+        trace: &'a mut StreamedCsv,
+        progress: &'a indicatif::ProgressBar,
+        every: usize,
+        stop: &'a AtomicBool,
+    }
+    impl RunObserver for Streamed<'_> {
+        fn on_record(&mut self, r: &PeriodRecord) {
+            self.trace.push(r);
+        }
+
+        fn on_period(&mut self, k: usize, _n: usize) -> bool {
+            if k.is_multiple_of(self.every) {
+                self.progress.set_position(k as u64);
             }
-            !stop.load(Ordering::Relaxed)
-        },
-        |_| {},
-    );
+            !self.stop.load(Ordering::Relaxed)
+        }
+    }
+    let mut observer = Streamed { trace: &mut trace, progress, every, stop: &stop };
+    let (records, failure) = run_loop(scenario, link, &mut observer);
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;

@@ -15,6 +15,7 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
 };
+use rig::faults::LinkKind;
 use rig::scenario::Scenario;
 use rig::{
     in_process::InProcessLink,
@@ -36,9 +37,8 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     // Check the plant and firmware set-up before touching the output folder.
     plant_for(&scenario).map_err(CliError::Sim)?;
     firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
-    if args.in_process && scenario.faults.iter().any(|f| f.needs_ipc()) {
-        return Err(CliError::BadInput("the scenario's stall/kill_firmware faults act on the firmware process: drop --in-process".into()));
-    }
+    let kind = if args.in_process { LinkKind::InProcess } else { LinkKind::Ipc };
+    kind.check(&scenario.faults).map_err(|e| CliError::BadInput(e.to_string()))?;
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
         (None, None) => default_rig_name(),
