@@ -17,7 +17,7 @@
 //! arm.
 //!
 //! The root finders here ([`positive_intervals`], [`bisect_sign_change`]) are
-//! also used by the mode map ([`crate::modes`]) for the curve `p = 0`.
+//! also used by the mode map (the `modes` module) for the curve `p = 0`.
 
 use nalgebra::Vector2;
 use serde::Serialize;

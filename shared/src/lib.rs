@@ -22,6 +22,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+pub mod slip;
 pub mod time;
 pub mod trig;
 pub mod wire;

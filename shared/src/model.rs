@@ -8,10 +8,10 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::{
     Real,
-    contact::SlipDirection,
     kinematics::{JointTrig, jacobian},
     lit,
     params::Params,
+    slip::{SlipDirection, p_of},
 };
 
 /// The arm: its parameters and the model evaluated from them.
@@ -59,7 +59,7 @@ impl<T: Real> TipDynamics<T> {
     /// `p = Q_22 - mu sign(z_r_dot) Q_21`.
     #[inline]
     pub fn p(&self, mu: T, dir: SlipDirection) -> T {
-        crate::contact::p_of(&self.qmat, mu, dir)
+        p_of(&self.qmat, mu, dir)
     }
 
     /// Joint acceleration (rad/s^2) under tip force `f = [f_t, f_n]` (N):
@@ -155,7 +155,7 @@ impl<T: Real> Arm<T> {
     /// `p(q, mu, sign z_r_dot)` (1/kg), paper eq. 7, with `mu` from the parameters.
     #[inline]
     pub fn p(&self, q: &Vector2<T>, dir: SlipDirection) -> T {
-        crate::contact::p_of(&self.q_matrix(q), self.params.mu, dir)
+        p_of(&self.q_matrix(q), self.params.mu, dir)
     }
 
     /// Everything tip-space at state `(q, q_dot)` under generalised torque `u`
