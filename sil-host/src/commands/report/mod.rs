@@ -11,8 +11,11 @@
 //! page's tables (no figures), stamped with date, commit and machine, to FILE
 //! (docs/results.md in the repository).
 
+mod experiments;
 mod format;
+mod outcome;
 mod page;
+mod runs;
 mod sections;
 mod stamp;
 
@@ -21,78 +24,18 @@ use std::{
     time::Instant,
 };
 
-use analyses::{admissible::AdmissibleReport, modes::ModeMap};
 use clap::Parser;
-use rig::summary::RunSummary;
 use serde::Serialize;
 
 use crate::{
     cli::{Cli, Command, ReportArgs, ReportSize},
-    commands::bench::TransportFigures,
-    commands::{
-        self, Done, poincare::summary::Summary as PoincareSummary, simulate::summary::Summary as SimulateSummary,
-        sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
-    },
+    commands::{self, Done},
     error::CliError,
     output::{OutputSet, progress_bar},
 };
+use outcome::{Outcome, StepResult};
 use sections::{Step, scenario_dir};
 use stamp::Stamp;
-
-/// The typed result of one experiment.
-#[derive(Debug)]
-pub enum Outcome {
-    /// `modes`.
-    Modes(ModeMap),
-    /// `admissible`.
-    Admissible(AdmissibleReport),
-    /// `simulate`.
-    Simulate(SimulateSummary),
-    /// `sweep`.
-    Sweep(SweepSummary),
-    /// `poincare`.
-    Poincare(PoincareSummary),
-    /// `zmax`.
-    Zmax(ZmaxSummary),
-    /// `run` and `pil`.
-    Run(Box<RunSummary>),
-    /// `bench`.
-    Bench(Vec<TransportFigures>),
-}
-
-impl Outcome {
-    /// The command's JSON document (what `--json` prints), for `report.json`.
-    fn document(&self, files: &[String]) -> serde_json::Value {
-        let v = match self {
-            Self::Modes(m) => serde_json::to_value(commands::modes::summary::summary(m, files)),
-            Self::Admissible(a) => serde_json::to_value(commands::admissible::summary::json_report(a, files)),
-            Self::Simulate(s) => serde_json::to_value(s),
-            Self::Sweep(s) => serde_json::to_value(s),
-            Self::Poincare(p) => serde_json::to_value(p),
-            Self::Zmax(z) => serde_json::to_value(z),
-            Self::Run(r) => serde_json::to_value(r),
-            Self::Bench(b) => serde_json::to_value(b),
-        };
-        v.unwrap_or(serde_json::Value::Null)
-    }
-}
-
-/// What one step produced.
-#[derive(Debug)]
-pub struct StepResult {
-    /// The step's id (its folder).
-    pub id: &'static str,
-    /// The command line that reproduces it.
-    pub command: String,
-    /// Wall-clock time, s.
-    pub wall_s: f64,
-    /// The typed result; `None` when the command failed before producing one.
-    pub outcome: Option<Outcome>,
-    /// Why it failed, if it did.
-    pub error: Option<String>,
-    /// Files it wrote, relative to the report folder.
-    pub files: Vec<String>,
-}
 
 /// One step of `report.json`.
 #[derive(Debug, Serialize)]

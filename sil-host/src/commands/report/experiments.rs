@@ -1,0 +1,155 @@
+//! The tables of the experiments' sections: each drawn from its typed result.
+
+use super::format::{cell, number, opt};
+use super::page::{MAX_ROWS, pairs};
+use crate::commands::{
+    admissible::summary::fmt_intervals, poincare::summary::Summary as PoincareSummary, simulate::summary::Summary as SimulateSummary,
+    sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
+};
+use analyses::{admissible::AdmissibleReport, modes::ModeMap};
+use shared::{ElbowBranch, SlipDirection};
+use std::fmt::Write as _;
+
+pub(crate) fn modes(md: &mut String, m: &ModeMap) {
+    let total = m.points.len().max(1);
+    let _ = writeln!(md, "| mode | grid points | share |\n|---|---|---|");
+    for (mode, n) in m.counts() {
+        let _ = writeln!(md, "| {} | {n} | {} % |", mode.name(), number(100.0 * n as f64 / total as f64));
+    }
+    md.push('\n');
+    for z in &m.p_zero {
+        let dir = analyses::modes::dir_name(z.dir);
+        let _ = writeln!(md, "- `p = 0` for {dir} at theta1 = {} deg", number(z.theta1_deg));
+    }
+    md.push('\n');
+}
+
+pub(crate) fn admissible(md: &mut String, a: &AdmissibleReport) {
+    let _ = writeln!(
+        md,
+        "`z_t` (m) on the belt where `p > 0` (`*`: end of the reachable belt, |z_t| <= {} m), mu = {}:\n",
+        number(a.reach),
+        number(a.params.mu)
+    );
+    let _ = writeln!(md, "| slip direction | elbow up | elbow down |\n|---|---|---|");
+    for (label, dir) in
+        [("z_r_dot > 0 (the paper's Table II)", SlipDirection::Positive), ("z_r_dot < 0 (mirror image)", SlipDirection::Negative)]
+    {
+        let _ = writeln!(
+            md,
+            "| {label} | {} | {} |",
+            fmt_intervals(a.intervals(ElbowBranch::Up, dir)),
+            fmt_intervals(a.intervals(ElbowBranch::Down, dir))
+        );
+    }
+    let _ = writeln!(md, "\nMirror check: largest end mismatch {} m.\n", opt(a.mirror_max_diff));
+}
+
+pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
+    let c = &s.counters;
+    pairs(
+        md,
+        &[
+            ("status", s.status.to_string()),
+            ("initial condition", s.initial_condition.name.clone()),
+            ("mu, v_belt (m/s)", format!("{}, {}", number(s.params.mu), number(s.params.v_belt))),
+            ("impact law, e_n", format!("{}, {}", s.sim.impact_law.name(), number(s.sim.e_n))),
+            ("rtol, atol", format!("{}, {}", number(s.sim.rtol), number(s.sim.atol))),
+            ("simulated (s)", number(s.simulated_s)),
+            ("lift-offs", c.lift_offs.to_string()),
+            ("touchdowns (bounces)", format!("{} ({})", c.touchdowns, c.bounces)),
+            ("impacts without collision", c.impacts_without_collision.to_string()),
+            ("stick phases, stick-to-slip", format!("{}, {}", c.stick_phases, c.stick_to_slip)),
+            ("Zeno stops", c.zeno_stops.to_string()),
+            ("energy-creating impacts (largest gain, J)", format!("{} ({})", c.energy_gains, number(c.max_energy_gain))),
+            ("friction-cone violations", c.cone_violations.to_string()),
+            ("final mode, z_t (m)", format!("{}, {}", s.final_mode, number(s.final_tip[0]))),
+        ],
+    );
+}
+
+pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
+    let r = &s.results;
+    let outcomes: Vec<String> = r.outcomes.iter().map(|(k, v)| format!("{k} {v}")).collect();
+    pairs(
+        md,
+        &[
+            ("runs (missing)", format!("{} ({})", r.runs, r.missing)),
+            ("outcomes", outcomes.join(", ")),
+            ("indicator threshold (rad/s)", number(r.threshold)),
+            ("rtol, atol", format!("{}, {}", number(s.spec.rtol), number(s.spec.atol))),
+        ],
+    );
+    let _ = writeln!(md, "Persistent bouncing, by impact law and `e_n`:\n");
+    let _ = writeln!(md, "| impact law | e_n | initial condition | critical mu | bands of v_belt (m/s) per mu |\n|---|---|---|---|---|");
+    for case in &r.cases {
+        for ic in &case.ics {
+            let per_mu: Vec<String> = ic
+                .per_mu
+                .iter()
+                .filter(|m| !m.bands.is_empty())
+                .map(|m| {
+                    let bands: Vec<String> = m.bands.iter().map(|b| format!("[{}, {}]", number(b.v_min), number(b.v_max))).collect();
+                    format!("{}: {}", number(m.mu), bands.join(" "))
+                })
+                .collect();
+            let bands = if per_mu.is_empty() { "none".to_string() } else { per_mu.join("; ") };
+            let critical = ic.critical_mu.map_or_else(|| "none".to_string(), number);
+            let _ = writeln!(md, "| {} | {} | {} | {critical} | {bands} |", case.impact_law, number(case.e_n), ic.ic);
+        }
+    }
+    md.push('\n');
+}
+
+pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
+    let c = &p.counts;
+    pairs(
+        md,
+        &[
+            ("mu, initial condition", format!("{}, {}", number(p.mu), p.initial_condition.name)),
+            ("v_belt (m/s)", format!("{} to {} in steps of {}", number(p.v_belt_range[0]), number(p.v_belt_range[1]), number(p.v_step))),
+            ("transient, record (s)", format!("{}, {}", number(p.transient_s), number(p.record_s))),
+            ("rtol, atol", format!("{}, {}", number(p.sim.rtol), number(p.sim.atol))),
+            (
+                "classes",
+                format!(
+                    "equilibrium {}, settling {}, periodic {}, chaotic {}, aperiodic {}, failed {}",
+                    c.equilibrium, c.settling, c.periodic, c.chaotic, c.aperiodic, c.failed
+                ),
+            ),
+            ("section points", p.section_points.to_string()),
+        ],
+    );
+    let _ = writeln!(md, "| class | period | v_belt from (m/s) | to (m/s) | points |\n|---|---|---|---|---|");
+    for b in p.bands.iter().take(MAX_ROWS) {
+        let period = b.period.map_or_else(|| "-".into(), |n| n.to_string());
+        let _ = writeln!(md, "| {} | {period} | {} | {} | {} |", b.class.name(), number(b.v_belt_min), number(b.v_belt_max), b.points);
+    }
+    if p.bands.len() > MAX_ROWS {
+        let _ = writeln!(md, "\n({} more bands in the files)", p.bands.len() - MAX_ROWS);
+    }
+    md.push('\n');
+}
+
+pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
+    let _ = writeln!(md, "{}\n", z.definition);
+    let _ = writeln!(
+        md,
+        "| controller | x0 | setting | outcome | Z_t,sliding (m) | first failing (m) | why it fails | trials |\n|---|---|---|---|---|---|---|---|"
+    );
+    for r in &z.results {
+        let _ = writeln!(
+            md,
+            "| {} | x0{} | {} | {} | {} | {} | {} | {} |",
+            r.controller,
+            r.x0,
+            r.setting,
+            r.outcome,
+            opt(r.z_t_sliding_m),
+            opt(r.first_failing_m),
+            cell(r.why_failing.as_deref().unwrap_or("-")),
+            r.trials
+        );
+    }
+    let _ = writeln!(md, "\nBisection tolerance {} m. {}\n", number(z.tol_m), z.paper);
+}

@@ -1,0 +1,82 @@
+//! The tables of the closed-loop sections: runs side by side, the rig's speed, the MCU image's step counts.
+
+use super::format::{cell, mm, number};
+use crate::commands::bench::TransportFigures;
+use rig::summary::{PilFigures, RunSummary};
+use std::fmt::Write as _;
+
+pub(crate) fn bench(md: &mut String, figures: &[TransportFigures]) {
+    let _ = writeln!(
+        md,
+        "| transport | runs x periods | median periods/s | round trip p50 / p99 (us) | deadline misses | target |\n|---|---|---|---|---|---|"
+    );
+    for f in figures {
+        let rtt = f.rtt_us.map_or_else(|| "-".into(), |p| format!("{} / {}", number(p.p50), number(p.p99)));
+        let target = if f.target > 0.0 { format!("{} /s", number(f.target)) } else { "0 misses".into() };
+        let met = if f.meets_target { "met" } else { "**not met**" };
+        let _ = writeln!(
+            md,
+            "| {} | {} x {} | {} | {rtt} | {} | {target}: {met} |",
+            f.transport,
+            f.runs,
+            f.periods,
+            number(f.median_periods_per_s.round()),
+            f.deadline_misses
+        );
+    }
+    md.push('\n');
+}
+
+pub(crate) fn pil(md: &mut String, p: &PilFigures) {
+    let unit = p.count_unit.as_str();
+    let _ = writeln!(md, "| {unit} per | median | p99 | worst | budget |\n|---|---|---|---|---|");
+    for (what, s) in [("control step", &p.step_counts), ("frame (decode + step)", &p.frame_counts)] {
+        let _ = writeln!(
+            md,
+            "| {what} | {} | {} | {} | {} |",
+            number(s.median.round()),
+            number(s.p99.round()),
+            number(s.worst.round()),
+            number(p.step_budget)
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\nWorst step: {} % of the control period at 168 MHz; within the budget: {}.\n",
+        number(100.0 * p.worst_step_period_share),
+        p.within_budget
+    );
+}
+
+/// Closed-loop runs side by side.
+pub(crate) fn run_comparison(md: &mut String, runs: &[(&str, &RunSummary)]) {
+    let _ = write!(md, "| quantity |");
+    for (id, _) in runs {
+        let _ = write!(md, " {id} |");
+    }
+    let _ = writeln!(md, "\n|---|{}", "---|".repeat(runs.len()));
+    type Row = (&'static str, fn(&RunSummary) -> String);
+    let rows: [Row; 13] = [
+        ("status", |s| s.status.to_string()),
+        ("controller", |s| s.controller.to_string()),
+        ("transport, timing", |s| format!("{}, {}", s.transport, s.timing)),
+        ("periods", |s| s.periods.to_string()),
+        ("lift-offs", |s| s.lift_off.lift_offs.to_string()),
+        ("detected", |s| s.lift_off.lift_offs_detected.to_string()),
+        ("missed", |s| s.lift_off.missed_lift_offs.to_string()),
+        ("false alarms", |s| s.lift_off.false_alarms.to_string()),
+        ("deadline misses", |s| s.deadline_misses.to_string()),
+        ("firmware overruns", |s| s.firmware_overruns.to_string()),
+        ("rms tracking error (mm)", |s| mm(s.rms_tracking_error_m)),
+        ("final z_t (m)", |s| number(s.final_z_t_m)),
+        ("stopped because", |s| s.error.clone().unwrap_or_else(|| "-".into())),
+    ];
+    for (name, f) in rows {
+        let _ = write!(md, "| {name} |");
+        for (_, s) in runs {
+            let _ = write!(md, " {} |", cell(&f(s)));
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+}
