@@ -1,7 +1,6 @@
 //! The tables of the experiments' sections: each drawn from its typed result.
 
-use super::format::{cell, number, opt};
-use super::page::{MAX_ROWS, pairs};
+use super::format::{MAX_ROWS, cell, number, opt, pairs};
 use crate::commands::{
     admissible::summary::fmt_intervals, poincare::summary::Summary as PoincareSummary, simulate::summary::Summary as SimulateSummary,
     sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,

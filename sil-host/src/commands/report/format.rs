@@ -1,5 +1,8 @@
 //! Numbers in the report: every value with its significant digits, whatever its
-//! magnitude (a tolerance of `1e-9` prints as `1e-9`, never as `0`).
+//! magnitude (a tolerance of `1e-9` prints as `1e-9`, never as `0`), and the
+//! small tables they sit in.
+
+use std::fmt::Write as _;
 
 /// `x` with up to 6 significant digits: fixed notation for `1e-3 <= |x| < 1e6`,
 /// scientific otherwise (`1e-9`, `2.5e7`); `0`, `NaN`, `inf` and `-inf` as such.
@@ -56,6 +59,18 @@ fn trim(s: &str) -> String {
 /// A Markdown table cell: `|` escaped, newlines as spaces.
 pub fn cell(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
+}
+
+/// Rows shown of a long table (the files hold the rest).
+pub const MAX_ROWS: usize = 60;
+
+/// A two-column table of named values.
+pub fn pairs(md: &mut String, rows: &[(&str, String)]) {
+    let _ = writeln!(md, "| quantity | value |\n|---|---|");
+    for (k, v) in rows {
+        let _ = writeln!(md, "| {k} | {} |", cell(v));
+    }
+    md.push('\n');
 }
 
 #[cfg(test)]

@@ -17,9 +17,6 @@ use super::{
     stamp::Stamp,
 };
 
-/// Rows shown of a long table (the files hold the rest).
-pub(super) const MAX_ROWS: usize = 60;
-
 /// The page: a heading with the stamp, the index table, then each section with
 /// its command lines, results, figures (when `figures`) and data links.
 pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wall_s: f64, stamp: &Stamp, figures: bool) -> String {
@@ -87,13 +84,4 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
         }
     }
     md
-}
-
-/// A two-column table of named values.
-pub(super) fn pairs(md: &mut String, rows: &[(&str, String)]) {
-    let _ = writeln!(md, "| quantity | value |\n|---|---|");
-    for (k, v) in rows {
-        let _ = writeln!(md, "| {k} | {} |", cell(v));
-    }
-    md.push('\n');
 }
