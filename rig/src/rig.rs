@@ -19,7 +19,7 @@ use super::{
     faults::FaultPlan,
     record::{PeriodRecord, RunError},
     scenario::Scenario,
-    sensors::Sensors,
+    sensors::{SensorFaults, SensorModel, Sensors},
     setup::plant_for,
 };
 use plant::{Hold, NoObserver, Observer, Plant, PlantEvent};
@@ -88,7 +88,7 @@ pub struct PeriodFailure {
 /// (`sil-host sweep --controller`) drives it from its own initial conditions.
 #[derive(Debug, Clone)]
 pub struct PeriodLoop {
-    sensors: Sensors,
+    sensors: SensorFaults<Sensors>,
     faults: FaultPlan,
     ts: f64,
     period: shared::Period,
@@ -108,7 +108,7 @@ impl PeriodLoop {
         let period = s.timing.period();
         let ts = period.as_secs_f64();
         Self {
-            sensors: Sensors::new(s.sensors.seed, s.sensors.load_noise_n),
+            sensors: SensorFaults::new(Sensors::new(s.sensors.seed, s.sensors.load_noise_n), FaultPlan::new(&s.faults, ts)),
             faults: FaultPlan::new(&s.faults, ts),
             ts,
             period,
@@ -155,7 +155,7 @@ impl PeriodLoop {
         let x = plant.state();
         let z = plant.tip();
         let mode = plant.mode();
-        let frame = self.sensors.frame_with_faults(k as u32, t_us, &x, self.f_now, self.v_belt, faults.sensor_faults(t_k));
+        let frame = self.sensors.frame(k as u32, t_us, &x, self.f_now, self.v_belt);
         run.on_frame(&frame);
         let truth = GroundTruth {
             t: t_k,

@@ -8,39 +8,48 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use shared::wire::{self, SensorFrame, frame_flags};
 
-use super::faults::{FaultKind, Signal};
+use super::faults::{FaultKind, FaultPlan, Signal};
 
-/// The sensor models of one run.
+/// A model of the sensors between the plant and the wire: one frame per period.
+pub trait SensorModel {
+    /// The frame of period `seq` at `t_us` (us): state `x = [theta1, theta1_dot,
+    /// theta2, theta2_dot]` (rad, rad/s), tip force `f = [f_t, f_n]` (N), belt
+    /// speed `v_belt` (m/s).
+    fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame;
+}
+
+/// The sensor models of one run (docs/hardware.md "Sensors").
 #[derive(Debug, Clone)]
 pub struct Sensors {
     rng: ChaCha8Rng,
     load_noise: Option<Normal<f64>>,
+}
+
+/// The sensor faults of a scenario wrapped around any sensor model (the way
+/// smoltcp's `FaultInjector` wraps a device): the inner model makes the frame,
+/// then this period's faults corrupt it. A stuck sensor repeats its previous
+/// count, a NaN one sends count 0 with its invalid bit in `flags`, an
+/// out-of-range one sends a count outside its range. The inner model runs the
+/// same with or without faults (its noise stream is drawn identically), so a
+/// fault changes nothing else.
+#[derive(Debug, Clone)]
+pub struct SensorFaults<S> {
+    inner: S,
+    plan: FaultPlan,
     last: SensorFrame,
 }
 
-impl Sensors {
-    /// Sensors with load-cell noise `load_noise_n` (N rms, >= 0) from `seed`.
-    pub fn new(seed: u64, load_noise_n: f64) -> Self {
-        let load_noise = if load_noise_n > 0.0 { Normal::new(0.0, load_noise_n).ok() } else { None };
-        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise, last: SensorFrame::default() }
+impl<S: SensorModel> SensorFaults<S> {
+    /// `inner` with the sensor faults of `plan`.
+    pub fn new(inner: S, plan: FaultPlan) -> Self {
+        Self { inner, plan, last: SensorFrame::default() }
     }
+}
 
-    /// As [`Sensors::frame`], then corrupted by the sensor faults of this period
-    /// (`faults.rs`): a stuck sensor repeats its previous count, a NaN one sends
-    /// count 0 with its invalid bit in `flags`, an out-of-range one sends a count
-    /// outside its range. The noise stream is drawn identically with or without
-    /// faults, so a fault changes nothing else.
-    pub fn frame_with_faults(
-        &mut self,
-        seq: u32,
-        t_us: u64,
-        x: &[f64; 4],
-        f: [f64; 2],
-        v_belt: f64,
-        faults: impl Iterator<Item = (FaultKind, Signal)>,
-    ) -> SensorFrame {
-        let mut frame = self.frame(seq, t_us, x, f, v_belt);
-        for (kind, signal) in faults {
+impl<S: SensorModel> SensorModel for SensorFaults<S> {
+    fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
+        let mut frame = self.inner.frame(seq, t_us, x, f, v_belt);
+        for (kind, signal) in self.plan.sensor_faults(shared::Instant(t_us).as_secs_f64()) {
             let last = &self.last;
             match (kind, signal) {
                 (FaultKind::StuckSensor, Signal::Theta1) => frame.theta1_count = last.theta1_count,
@@ -70,11 +79,20 @@ impl Sensors {
         self.last = frame;
         frame
     }
+}
 
-    /// The frame of period `seq` at `t_us`: state `x = [theta1, theta1_dot, theta2,
-    /// theta2_dot]` (rad, rad/s), tip force `f = [f_t, f_n]` (N), belt speed (m/s).
-    /// A non-finite reading is sent as count 0 with its invalid bit set in `flags`.
-    pub fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
+impl Sensors {
+    /// Sensors with load-cell noise `load_noise_n` (N rms, >= 0) from `seed`.
+    pub fn new(seed: u64, load_noise_n: f64) -> Self {
+        let load_noise = if load_noise_n > 0.0 { Normal::new(0.0, load_noise_n).ok() } else { None };
+        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise }
+    }
+}
+
+impl SensorModel for Sensors {
+    /// Quantised encoders and load cell with seeded noise, the belt encoder in
+    /// mm/s. A non-finite reading is sent as count 0 with its invalid bit set in `flags`.
+    fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
         let mut noise = || self.load_noise.map_or(0.0, |n| n.sample(&mut self.rng));
         let (n_t, n_n) = (noise(), noise());
         let mut flags = 0;
@@ -122,5 +140,34 @@ mod tests {
         // Noise 20 mN rms plus quantisation (12.2 mN lsb, 3.5 mN rms) in quadrature.
         let rms = (sum2 / n as f64).sqrt();
         assert!((rms - (0.02f64.powi(2) + (25.0 / 2048.0f64).powi(2) / 12.0).sqrt()).abs() < 0.002, "rms {rms}");
+    }
+
+    /// The fault wrapper changes only the faulted signal in its window and nothing
+    /// when there is no fault (same noise, same frames as the bare model).
+    #[test]
+    fn faults_wrap_any_sensor_model() {
+        use crate::faults::Fault;
+        let x = [0.1, 0.0, -0.3, 0.0];
+        let frames = |faults: &[Fault]| -> Vec<SensorFrame> {
+            let mut s = SensorFaults::new(Sensors::new(3, 0.02), FaultPlan::new(faults, 1e-3));
+            (0..10u32).map(|k| s.frame(k, u64::from(k) * 1000, &[x[0] + 1e-3 * f64::from(k), 0.0, x[2], 0.0], [0.0, 10.0], -0.4)).collect()
+        };
+        let mut bare = Sensors::new(3, 0.02);
+        let plain: Vec<_> = (0..10u32)
+            .map(|k| bare.frame(k, u64::from(k) * 1000, &[x[0] + 1e-3 * f64::from(k), 0.0, x[2], 0.0], [0.0, 10.0], -0.4))
+            .collect();
+        assert_eq!(frames(&[]), plain);
+        let stuck = Fault { kind: FaultKind::StuckSensor, at_s: 0.005, duration_s: 0.003, delay_s: 0.0, signal: Some(Signal::Theta1) };
+        let got = frames(&[stuck]);
+        for k in 0..10 {
+            let faulted = (5..8).contains(&k);
+            let want_theta1 = if faulted { plain[4].theta1_count } else { plain[k].theta1_count };
+            assert_eq!(got[k].theta1_count, want_theta1, "period {k}");
+            assert_eq!((got[k].f_n_code, got[k].elbow_count), (plain[k].f_n_code, plain[k].elbow_count), "period {k}");
+        }
+        let nan = Fault { kind: FaultKind::NanSensor, at_s: 0.002, duration_s: 0.0, delay_s: 0.0, signal: Some(Signal::FN) };
+        let got = frames(&[nan]);
+        assert_eq!(got[2].flags & frame_flags::F_N_INVALID, frame_flags::F_N_INVALID);
+        assert_eq!(got[3], plain[3]);
     }
 }
