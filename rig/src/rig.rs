@@ -41,6 +41,47 @@ pub enum Exchange {
     /// No command for this period arrived before the link stopped waiting (the
     /// wall-clock deadline in real time, the command timeout in lockstep).
     NoAnswer,
+    /// The firmware answered but the wire lost the command (the `drop_command`
+    /// fault, [`DropCommands`]): it is recorded, not applied.
+    Dropped {
+        /// The command that was lost.
+        command: ActuatorCommand,
+        /// Its telemetry.
+        telemetry: FirmwareTelemetry,
+    },
+}
+
+/// The `drop_command` faults of a plan wrapped around any link (the way
+/// smoltcp's `FaultInjector` wraps a device): in their windows an answer is lost
+/// on the wire, so the plant holds the previous command (a deadline miss).
+pub struct DropCommands<'a, L: ?Sized> {
+    /// The link.
+    pub inner: &'a mut L,
+    /// The faults (only `drop_command` acts here).
+    pub plan: &'a FaultPlan,
+}
+
+impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
+    fn transport(&self) -> &'static str {
+        self.inner.transport()
+    }
+
+    fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
+        Ok(match self.inner.exchange(frame, truth)? {
+            Exchange::Answered { command, telemetry, .. } if self.plan.drops_command(shared::Instant(frame.t_us).as_secs_f64()) => {
+                Exchange::Dropped { command, telemetry }
+            }
+            other => other,
+        })
+    }
+
+    fn before_period(&mut self, k: usize, t: f64) {
+        self.inner.before_period(k, t);
+    }
+
+    fn finish(&mut self, last_seq: u32) {
+        self.inner.finish(last_seq);
+    }
 }
 
 /// A way to reach the firmware: in-process, or over iceoryx2 in another process.
@@ -169,15 +210,16 @@ impl PeriodLoop {
             u_applied: self.applied,
         };
         link.before_period(k, t_k);
-        let exchange = link.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
+        let mut wire = DropCommands { inner: link, plan: faults };
+        let exchange = wire.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {
             Exchange::Answered { command, telemetry, at_stamp } => {
                 let late_s = command.t_sent_us.saturating_sub(t_us) as f64 * 1e-6;
                 let at = if at_stamp { late_s } else { late_s.max(self.delta) };
-                let on_time = at < ts && !faults.drops_command(t_k);
-                (on_time.then_some(at), Some(command), Some(telemetry))
+                ((at < ts).then_some(at), Some(command), Some(telemetry))
             }
+            Exchange::Dropped { command, telemetry } => (None, Some(command), Some(telemetry)),
             Exchange::NoAnswer => (None, None, None),
         };
         let applied = self.applied;
