@@ -45,6 +45,13 @@ pub enum Setting {
     Sampled,
 }
 
+impl std::fmt::Display for Setting {
+    /// [`Setting::name`].
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl Setting {
     /// `ideal` or `sampled`.
     pub fn name(self) -> &'static str {

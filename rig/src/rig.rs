@@ -129,8 +129,8 @@ pub struct PeriodFailure {
 /// (`sil-host sweep --controller`) drives it from its own initial conditions.
 #[derive(Debug, Clone)]
 pub struct PeriodLoop {
+    /// The sensor models with the run's faults (its plan also drives [`DropCommands`]).
     sensors: SensorFaults<Sensors>,
-    faults: FaultPlan,
     ts: f64,
     period: shared::Period,
     delta: f64,
@@ -150,7 +150,6 @@ impl PeriodLoop {
         let ts = period.as_secs_f64();
         Self {
             sensors: SensorFaults::new(Sensors::new(s.sensors.seed, s.sensors.load_noise_n), FaultPlan::new(&s.faults, ts)),
-            faults: FaultPlan::new(&s.faults, ts),
             ts,
             period,
             delta: s.timing.delta_s,
@@ -189,7 +188,7 @@ impl PeriodLoop {
         obs: &mut dyn Observer,
     ) -> Result<PeriodRecord, Box<PeriodFailure>> {
         let k = self.k;
-        let (ts, faults) = (self.ts, &self.faults);
+        let ts = self.ts;
         let t_k = k as f64 * ts;
         // The frame's stamp: k whole periods (shared::time); t_k is the same instant in s.
         let t_us = self.period.sample(k as u64).as_us();
@@ -210,7 +209,7 @@ impl PeriodLoop {
             u_applied: self.applied,
         };
         link.before_period(k, t_k);
-        let mut wire = DropCommands { inner: link, plan: faults };
+        let mut wire = DropCommands { inner: link, plan: self.sensors.plan() };
         let exchange = wire.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {

@@ -44,6 +44,11 @@ impl<S: SensorModel> SensorFaults<S> {
     pub fn new(inner: S, plan: FaultPlan) -> Self {
         Self { inner, plan, last: SensorFrame::default() }
     }
+
+    /// The run's faults (all of them: the link's act elsewhere).
+    pub fn plan(&self) -> &FaultPlan {
+        &self.plan
+    }
 }
 
 impl<S: SensorModel> SensorModel for SensorFaults<S> {

@@ -42,6 +42,16 @@ impl<T> Done<T> {
     }
 }
 
+/// Prints `value` as the command's one JSON document (`--json`).
+///
+/// # Errors
+/// [`crate::error::CliError::Io`] when it cannot be serialised.
+pub fn print_json<T: serde::Serialize + ?Sized>(value: &T) -> Result<(), crate::error::CliError> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| crate::error::CliError::Io { path: "<stdout>".into(), source: e.into() })?;
+    println!("{json}");
+    Ok(())
+}
+
 /// Parses `"MIN,MAX"` into a range, naming the flag in the error.
 pub fn parse_range(flag: &str, s: &str) -> Result<(f64, f64), crate::error::CliError> {
     let bad = || crate::error::CliError::BadInput(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"));

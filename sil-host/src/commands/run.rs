@@ -101,7 +101,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let done = execute(args)?;
     let (summary, scenario) = &done.result;
     if args.output.json {
-        println!("{}", serde_json::to_string_pretty(summary).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
+        crate::commands::print_json(summary)?;
     } else {
         print_summary(summary, scenario, &done.files);
     }

@@ -237,14 +237,14 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
 }
 
 /// Runs `sil-host poincare`: [`execute`], then prints the summary (human, or the
-/// serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })? document with `--json`).
+/// JSON document with `--json`).
 ///
 /// # Errors
 /// As [`execute`]; belt speeds that failed (after writing).
 pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
     let done = execute(args)?;
     if args.output.json {
-        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
+        crate::commands::print_json(&done.result)?;
     } else {
         print_human(&done.result);
     }

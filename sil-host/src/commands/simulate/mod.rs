@@ -198,14 +198,14 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
 }
 
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the
-/// serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })? document with `--json`).
+/// JSON document with `--json`).
 ///
 /// # Errors
 /// As [`execute`]; a simulation that failed part way (after writing).
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let done = execute(args)?;
     if args.output.json {
-        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
+        crate::commands::print_json(&done.result)?;
     } else {
         print_human(&done.result);
     }

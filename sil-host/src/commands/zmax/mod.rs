@@ -139,9 +139,9 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
             };
             let why_failing = failing_target.and_then(|x| s.trials.iter().find(|t| t.target_z_t == x)).and_then(Trial::why_not);
             ZmaxRow {
-                controller: s.combination.controller.name(),
-                x0: s.combination.x0.letter(),
-                setting: s.combination.setting.name(),
+                controller: s.combination.controller,
+                x0: s.combination.x0,
+                setting: s.combination.setting,
                 outcome,
                 z_t_sliding_m: s.z_t_sliding,
                 first_failing_m: first_failing,
@@ -177,7 +177,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     Ok(Done::ok(summary, files))
 }
 
-/// Runs `sil-host zmax`: [`execute`], then prints the table (or the serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?
+/// Runs `sil-host zmax`: [`execute`], then prints the table (or the JSON
 /// document with `--json`).
 ///
 /// # Errors
@@ -185,7 +185,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
 pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
     let done = execute(args)?;
     if args.output.json {
-        println!("{}", serde_json::to_string_pretty(&done.result).map_err(|e| CliError::Io { path: "<stdout>".into(), source: e.into() })?);
+        crate::commands::print_json(&done.result)?;
     } else {
         print_table(&done.result, &done.files);
     }

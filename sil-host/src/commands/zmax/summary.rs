@@ -1,6 +1,9 @@
 //! The outputs of `sil-host zmax` other than the figures: the rows of `zmax.csv` and `trials.csv`, `summary.json` and the human table.
 
+use analyses::zmax::Setting;
 use analyses::zmax::{Criteria, Trial};
+use firmware::ControllerKind;
+use plant::initial::PaperX0;
 use rig::scenario::Scenario;
 use serde::Serialize;
 use std::io::Write;
@@ -9,11 +12,11 @@ use std::io::Write;
 #[derive(Debug, Clone, Serialize)]
 pub struct ZmaxRow {
     /// `pid` or `hybrid`.
-    pub controller: &'static str,
+    pub controller: ControllerKind,
     /// `d` or `u`.
-    pub x0: &'static str,
+    pub x0: PaperX0,
     /// `ideal` or `sampled`.
-    pub setting: &'static str,
+    pub setting: Setting,
     /// `found`, `lower_fails` or `upper_reached`.
     pub outcome: &'static str,
     /// `Z_t,sliding`, m (empty when the lower end already fails).
@@ -71,9 +74,9 @@ pub(crate) const PAPER: &str = "docs/model.md gives no value for Z_t,sliding: th
 /// A flat row of `trials.csv`.
 #[derive(Debug, Clone, Serialize)]
 pub(crate) struct TrialRow {
-    pub(crate) controller: &'static str,
-    pub(crate) x0: &'static str,
-    pub(crate) setting: &'static str,
+    pub(crate) controller: ControllerKind,
+    pub(crate) x0: PaperX0,
+    pub(crate) setting: Setting,
     pub(crate) target_z_t_m: f64,
     pub(crate) reached: bool,
     pub(crate) lift_offs: u64,
@@ -88,9 +91,9 @@ pub(crate) struct TrialRow {
 impl From<&Trial> for TrialRow {
     fn from(t: &Trial) -> Self {
         Self {
-            controller: t.combination.controller.name(),
-            x0: t.combination.x0.letter(),
-            setting: t.combination.setting.name(),
+            controller: t.combination.controller,
+            x0: t.combination.x0,
+            setting: t.combination.setting,
             target_z_t_m: t.target_z_t,
             reached: t.reached,
             lift_offs: t.lift_offs,
