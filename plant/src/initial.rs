@@ -41,6 +41,14 @@ pub enum PaperX0 {
 }
 
 impl PaperX0 {
+    /// The three, in the paper's order.
+    pub const ALL: [PaperX0; 3] = [PaperX0::A, PaperX0::D, PaperX0::U];
+
+    /// The condition named `a`/`x0a`, `d`/`x0d` or `u`/`x0u`; `None` otherwise.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|x| name == x.letter() || name == x.condition().name)
+    }
+
     /// The initial condition in degrees ([`X0A`], [`X0D`] or [`X0U`]).
     pub fn condition(self) -> PaperInitialCondition {
         match self {
@@ -99,4 +107,21 @@ pub fn describe_projection(params: &Params<f64>, x: [f64; 4]) -> ProjectionInfo 
     let z = tip_position(params.l, &q);
     let height = z[1] + params.h;
     ProjectionInfo { tip_given: [z[0], z[1]], height_above_belt: height, projected: height <= 1e-12, branch: ElbowBranch::of(&q) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_letters_parse_back() {
+        for x in PaperX0::ALL {
+            assert_eq!(PaperX0::parse(x.letter()), Some(x));
+            assert_eq!(PaperX0::parse(x.condition().name), Some(x));
+        }
+        assert_eq!(PaperX0::parse("x0b"), None);
+        assert_eq!(PaperX0::parse(""), None);
+        // x0d is elbow down, x0u elbow up (docs/model.md, "Initial conditions").
+        assert_eq!((PaperX0::D.branch(), PaperX0::U.branch()), (ElbowBranch::Down, ElbowBranch::Up));
+    }
 }

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use shared::{ElbowBranch, Params, kinematics::inverse_kinematics};
 
 use plant::impact::ImpactLaw;
-use plant::initial;
+use plant::initial::{self, PaperX0};
 use rig::scenario::Scenario;
 
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
@@ -140,8 +140,9 @@ pub struct SweepSpec {
     pub impact_laws: Vec<ImpactLaw>,
     /// Restitution coefficients `e_n`.
     pub e_n: Vec<f64>,
-    /// The paper's initial conditions used, by name (`x0a`, `x0d`, `x0u`).
-    pub paper_ics: Vec<String>,
+    /// The paper's initial conditions used (written by name: `x0a`, `x0d`, `x0u`).
+    #[serde(with = "ic_names")]
+    pub paper_ics: Vec<PaperX0>,
     /// Number of random initial conditions in contact ([`SweepSpec::initial_conditions`]).
     pub random_ics: usize,
     /// Seed of the random initial conditions.
@@ -217,7 +218,7 @@ impl SweepSpec {
             v_belt: Axis { start: -1.0, stop: -0.1, step: 0.005 },
             impact_laws: vec![ImpactLaw::Newton],
             e_n: vec![0.2],
-            paper_ics: vec!["x0a".into(), "x0d".into()],
+            paper_ics: vec![PaperX0::A, PaperX0::D],
             random_ics: 0,
             seed: 1,
             transient_s: 250.0,
@@ -240,7 +241,7 @@ impl SweepSpec {
         let mut out: Vec<InitialCondition> = self
             .paper_ics
             .iter()
-            .filter_map(|n| [initial::X0A, initial::X0D, initial::X0U].into_iter().find(|ic| ic.name == n))
+            .map(|x| x.condition())
             .map(|ic| {
                 let x0 = initial::deg_to_state(ic.deg);
                 let info = initial::describe_projection(&params, x0);
@@ -318,9 +319,6 @@ impl SweepSpec {
         if let Some(e) = self.e_n.iter().find(|e| !(e.is_finite() && (0.0..=1.0).contains(*e))) {
             return Err(format!("--e-n values must be in [0, 1], got {e}"));
         }
-        if let Some(n) = self.paper_ics.iter().find(|n| !["x0a", "x0d", "x0u"].contains(&n.as_str())) {
-            return Err(format!("unknown initial condition {n}"));
-        }
         if self.n_ics() == 0 {
             return Err("no initial conditions: give --ics or --random-ics".into());
         }
@@ -393,6 +391,24 @@ impl Shard {
     /// The indices of this shard among `n_runs` runs, ascending.
     pub fn indices(&self, n_runs: usize) -> impl Iterator<Item = usize> + use<> {
         (self.k..n_runs).step_by(self.n)
+    }
+}
+
+/// `sweep.json` names the paper's initial conditions `x0a`, `x0d`, `x0u`
+/// ([`PaperX0::parse`] reads them back; an unknown name is an error).
+mod ic_names {
+    use plant::initial::PaperX0;
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub fn serialize<S: Serializer>(ics: &[PaperX0], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(ics.iter().map(|x| x.condition().name))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<PaperX0>, D::Error> {
+        Vec::<String>::deserialize(d)?
+            .iter()
+            .map(|n| PaperX0::parse(n).ok_or_else(|| D::Error::custom(format!("unknown initial condition `{n}` (x0a, x0d or x0u)"))))
+            .collect()
     }
 }
 

@@ -29,6 +29,7 @@ use analyses::sweep::{
     Axis, Shard, SweepController, SweepSpec,
     run::{self},
 };
+use plant::initial::PaperX0;
 
 pub mod merge;
 pub mod outputs;
@@ -45,18 +46,13 @@ fn parse_axis(flag: &str, s: &str, step: f64) -> Result<Axis, CliError> {
     Ok(axis)
 }
 
-fn paper_ic_names(list: &[String]) -> Result<Vec<String>, CliError> {
-    let mut out: Vec<String> = Vec::new();
-    for item in list {
-        let name = match item.trim() {
-            "a" | "x0a" => "x0a",
-            "d" | "x0d" => "x0d",
-            "u" | "x0u" => "x0u",
-            "none" | "" => continue,
-            other => return Err(CliError::BadInput(format!("--ics: unknown initial condition `{other}` (a, d, u or none)"))),
-        };
-        if !out.iter().any(|n| n == name) {
-            out.push(name.into());
+fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, CliError> {
+    let mut out = Vec::new();
+    for item in list.iter().map(|s| s.trim()).filter(|s| !matches!(*s, "none" | "")) {
+        let x = PaperX0::parse(item)
+            .ok_or_else(|| CliError::BadInput(format!("--ics: unknown initial condition `{item}` (a, d, u or none)")))?;
+        if !out.contains(&x) {
+            out.push(x);
         }
     }
     Ok(out)
@@ -97,7 +93,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
             }
             v
         },
-        paper_ics: paper_ic_names(&args.ics)?,
+        paper_ics: paper_ics(&args.ics)?,
         random_ics: args.random_ics,
         seed: args.seed,
         transient_s: args.transient,
