@@ -449,7 +449,15 @@ fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
     if deno <= 0.0 {
         deno = 1.0;
     }
-    h.abs() * err5 * (1.0 / (N as f64 * deno)).sqrt()
+    let inv = 1.0 / (N as f64 * deno);
+    if inv.is_finite() {
+        h.abs() * err5 * inv.sqrt()
+    } else {
+        // `deno` underflowed to a subnormal (a state at rest: every stage equal to
+        // within ~1e-160); `0 * inf` would make the error NaN and reject every step.
+        // err5 <= deno, so this quotient is finite.
+        h.abs() * err5 / (N as f64 * deno).sqrt()
+    }
 }
 
 /// The eight coefficient vectors of the dense output of a step (`dop853`'s `CONT`),

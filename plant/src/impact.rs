@@ -21,6 +21,24 @@
 //!   while it sticks, and slip stops, sticks or reverses as the velocity demands.
 //!   With `Q` constant the velocities are piecewise linear in `P_n`; this module
 //!   integrates them exactly, phase by phase.
+//! - **Energetic** (Stronge's energetic restitution, "Impact Mechanics", 2000,
+//!   sec. 5.3 and ch. 5; Stronge 1990): the same Darboux-Keller process, ended when
+//!   the work of the normal impulse in restitution equals `e^2` times its work in
+//!   compression (`W_n(P_f) = (1 - e^2) W_n(P_c)`). The normal work then never
+//!   exceeds zero and friction on the cone's edge opposes the slip, so the contact
+//!   does no positive work whatever the slip does (Stronge 2000, sec. 5.3): the one
+//!   law that is energetically consistent by construction.
+//!
+//! **Fallback.** Newton's law with friction can create energy on a multibody
+//! system (Kane and Levinson 1985; Stronge 2000, sec. 5.4), and Poisson's can when
+//! the slip stops or reverses in restitution (Stronge 1991). Where either law's
+//! impulse would do positive work on the relative motion ([`work_tolerance`]), the
+//! impact is resolved by the energetic law with the same coefficient instead and
+//! marked ([`Resolution::NewtonFallback`], [`Resolution::PoissonFallback`]); the
+//! plant counts these. Where the law is consistent its own definition is kept.
+//! For a frictionless impact, or one that sticks throughout, the three
+//! coefficients coincide (Stronge 2000, sec. 5.3), so the fallback changes the
+//! coefficient's meaning least where it is needed.
 //!
 //! The IWC (Génot and Brogliato 1998; Zhao et al. 2008): a tip sliding in an
 //! inconsistent state (`p < 0`, `b < 0`) with `v_n = 0`. Darboux-Keller resolves it
@@ -34,29 +52,85 @@
 //! `v_n+ = -e v_n,min`, `v_n,min` being the deepest normal velocity of the
 //! Darboux-Keller compression (if that sticking impulse leaves the cone, Poisson's
 //! result is used). With `e = 0` both laws leave the tip on the belt, stuck.
+//! This is the *restitution* IWC rule ([`IwcRule::Restitution`], the default).
+//! The *plastic* rule ([`IwcRule::Plastic`]; Moreau-Jean time-steppers with
+//! Newton's law, and event-driven codes that apply Newton's law to the zero
+//! approach velocity, e.g. Acary and Brogliato 2008, ch. 10) leaves the tip stuck
+//! tangentially with `v_n = 0` whatever the law and `e`: the sticking impulse
+//! `P = Q^-1 [-v_r, 0]`, which lies in the cone exactly when `p(s) <= 0`.
 
 use nalgebra::{Matrix2, Vector2};
 use shared::SlipDirection;
 
 /// The impact law, a first-class scenario parameter (`plant.impact_law`) and
-/// command-line option (`--impact-law newton|poisson`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+/// command-line option (`--impact-law newton|poisson|energetic`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ImpactLaw {
-    /// Restitution of the normal velocity (`e` is Newton's coefficient `e_n`).
+    /// Restitution of the normal velocity (`e` is Newton's coefficient `e_n`);
+    /// falls back to [`ImpactLaw::Energetic`] where it would create energy.
     Newton,
-    /// Restitution of the normal impulse via Darboux-Keller (`e` is Poisson's coefficient).
+    /// Restitution of the normal impulse via Darboux-Keller (`e` is Poisson's
+    /// coefficient); falls back to [`ImpactLaw::Energetic`] where it would create energy.
     Poisson,
+    /// Stronge's energetic restitution via Darboux-Keller (`e` is the energetic
+    /// coefficient `e_*`): never creates energy.
+    Energetic,
 }
 
 impl ImpactLaw {
-    /// Lower-case name (`newton`, `poisson`).
+    /// Every law, in documentation order.
+    pub const ALL: [ImpactLaw; 3] = [Self::Newton, Self::Poisson, Self::Energetic];
+
+    /// Lower-case name (`newton`, `poisson`, `energetic`).
     pub fn name(self) -> &'static str {
         match self {
             Self::Newton => "newton",
             Self::Poisson => "poisson",
+            Self::Energetic => "energetic",
         }
+    }
+}
+
+impl std::fmt::Display for ImpactLaw {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What the impact without collision leaves behind (scenario `plant.iwc`,
+/// command-line `--iwc restitution|plastic`; module documentation).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum IwcRule {
+    /// The impact law's restitution acts on the compression the tangential impact
+    /// creates: the tip leaves the belt (`v_n = -e v_n,min > 0` for Newton), as the
+    /// paper's "z_n_dot turns from zero to positive" describes.
+    #[default]
+    Restitution,
+    /// The tip is left stuck tangentially with `v_n = 0` (Newton's law applied to the
+    /// zero approach velocity; Moreau-Jean time-steppers).
+    Plastic,
+}
+
+impl IwcRule {
+    /// Both rules.
+    pub const ALL: [IwcRule; 2] = [Self::Restitution, Self::Plastic];
+
+    /// Lower-case name (`restitution`, `plastic`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Restitution => "restitution",
+            Self::Plastic => "plastic",
+        }
+    }
+}
+
+impl std::fmt::Display for IwcRule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -72,6 +146,22 @@ pub enum Resolution {
     NewtonDarbouxKeller,
     /// Poisson's law by Darboux-Keller shock dynamics.
     PoissonDarbouxKeller,
+    /// Stronge's energetic law by Darboux-Keller shock dynamics.
+    EnergeticDarbouxKeller,
+    /// Newton's impulse would have created energy: resolved by the energetic law.
+    NewtonFallback,
+    /// Poisson's impulse would have created energy: resolved by the energetic law.
+    PoissonFallback,
+    /// An impact without collision under [`IwcRule::Plastic`]: the sticking impulse.
+    PlasticIwc,
+}
+
+impl Resolution {
+    /// Whether the law's own impulse would have created energy and the energetic
+    /// law was used instead.
+    pub fn is_fallback(self) -> bool {
+        matches!(self, Self::NewtonFallback | Self::PoissonFallback)
+    }
 }
 
 /// The result of an impact.
@@ -111,6 +201,24 @@ pub enum ImpactError {
 /// Relative slip speed below which the tip counts as not slipping during an impact, m/s.
 const V_EPS: f64 = 1e-12;
 
+/// How the Darboux-Keller process ends its restitution phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Termination {
+    /// Poisson: at the normal impulse `(1 + e) P_c`.
+    Poisson(f64),
+    /// Stronge: when the normal work reaches `(1 - e^2) W_n(P_c)`.
+    Energetic(f64),
+}
+
+/// Largest contact work (J) counted as rounding for an impact with relative
+/// velocity `[v_r, v_n]` (m/s) and tip inverse inertia `qm` (1/kg): `1e-12` of the
+/// kinetic-energy scale `(v_r^2 + v_n^2) / (2 |Q|)`, `|Q|` the Frobenius norm.
+/// A larger positive [`Impulse::contact_work`] is an energy-creating impact.
+pub fn work_tolerance(qm: &Matrix2<f64>, v_r: f64, v_n: f64) -> f64 {
+    let q = qm.norm();
+    if q > 0.0 { 0.5e-12 * (v_r * v_r + v_n * v_n) / q } else { 0.0 }
+}
+
 /// Darboux-Keller shock dynamics (Poisson restitution `e`) for a tip with relative
 /// tangential velocity `v_r` and normal velocity `v_n` (m/s), friction `mu`, tip
 /// inverse inertia `qm` (1/kg, symmetric positive definite).
@@ -118,6 +226,36 @@ const V_EPS: f64 = 1e-12;
 /// Returns the impulse; zero if the tip is not approaching (`v_n >= 0` and the
 /// normal reaction would separate it). Errors: [`ImpactError`].
 pub fn darboux_keller(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) -> Result<Impulse, ImpactError> {
+    shock(qm, mu, v_r, v_n, Termination::Poisson(e))
+}
+
+/// Darboux-Keller shock dynamics ended by Stronge's energetic restitution `e`
+/// (module documentation); arguments, result and errors as [`darboux_keller`].
+/// The contact work is `<= 0` up to rounding for any `Q`, `mu` and slip process.
+pub fn energetic(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) -> Result<Impulse, ImpactError> {
+    let mut imp = shock(qm, mu, v_r, v_n, Termination::Energetic(e))?;
+    imp.resolution = Resolution::EnergeticDarbouxKeller;
+    Ok(imp)
+}
+
+/// Normal impulse (N s) after which the normal work `v P + dv P^2 / 2` of a phase
+/// starting at normal velocity `v >= 0` with slope `dv` reaches `r >= 0` (J); where
+/// the phase cannot deliver it (`dv < 0`), the impulse at which `v_n` reaches 0.
+fn energetic_step(v: f64, dv: f64, r: f64) -> f64 {
+    if r <= 0.0 {
+        return 0.0;
+    }
+    let disc = v * v + 2.0 * dv * r;
+    if disc < 0.0 {
+        return (-v / dv).max(0.0);
+    }
+    // The root of dv x^2 / 2 + v x - r = 0 in its cancellation-free form.
+    let den = v + disc.sqrt();
+    if den > 0.0 { 2.0 * r / den } else { f64::INFINITY }
+}
+
+/// The Darboux-Keller process (module documentation) ended by `term`.
+fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termination) -> Result<Impulse, ImpactError> {
     if !(v_r.is_finite() && v_n.is_finite() && qm.iter().all(|x| x.is_finite())) {
         return Err(ImpactError::NonFinite);
     }
@@ -153,6 +291,8 @@ pub fn darboux_keller(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) ->
     }
     let mut compression = true;
     let mut pn_end = f64::INFINITY;
+    // Normal work int v_n dP_n so far, and its target at the end (energetic law).
+    let (mut w_n, mut w_n_end) = (0.0_f64, 0.0_f64);
     let mut work = 0.0;
     // Each phase ends slip or compression or the impact, so a few phases suffice.
     for _ in 0..8 {
@@ -162,13 +302,18 @@ pub fn darboux_keller(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) ->
             _ => f64::INFINITY,
         };
         let to_compressed = if compression && dvn > 0.0 { (-vn / dvn).max(0.0) } else { f64::INFINITY };
-        let to_end = if compression { f64::INFINITY } else { (pn_end - pn).max(0.0) };
+        let to_end = match (compression, term) {
+            (true, _) => f64::INFINITY,
+            (false, Termination::Poisson(_)) => (pn_end - pn).max(0.0),
+            (false, Termination::Energetic(_)) => energetic_step(vn, dvn, w_n_end - w_n),
+        };
         let step = to_stop.min(to_compressed).min(to_end);
         if !step.is_finite() {
             return Err(ImpactError::Jam { p: dvn });
         }
         // Velocities are linear in P_n within the phase: trapezoid is exact.
         work += step * (dpt * (vr + 0.5 * dvr * step) + (vn + 0.5 * dvn * step));
+        w_n += step * (vn + 0.5 * dvn * step);
         vr += dvr * step;
         vn += dvn * step;
         pn += step;
@@ -180,7 +325,16 @@ pub fn darboux_keller(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) ->
         if step == to_compressed {
             vn = 0.0;
             compression = false;
-            pn_end = (1.0 + e) * pn;
+            let e = match term {
+                Termination::Poisson(e) => {
+                    pn_end = (1.0 + e) * pn;
+                    e
+                }
+                Termination::Energetic(e) => {
+                    w_n_end = (1.0 - e * e) * w_n;
+                    e
+                }
+            };
             if e <= 0.0 {
                 break;
             }
@@ -205,56 +359,104 @@ fn in_cone(p: &Vector2<f64>, mu: f64) -> bool {
     p[1] >= 0.0 && p[0].abs() <= mu * p[1] * (1.0 + 1e-12)
 }
 
+/// `imp` if it does no positive work on the relative motion `[v_r, v_n]`;
+/// otherwise the energetic law's impulse with the same `e`, marked `fallback`.
+fn consistent_or_energetic(
+    imp: Impulse,
+    qm: &Matrix2<f64>,
+    mu: f64,
+    v_r: f64,
+    v_n: f64,
+    e: f64,
+    fallback: Resolution,
+) -> Result<Impulse, ImpactError> {
+    if imp.contact_work <= work_tolerance(qm, v_r, v_n) {
+        return Ok(imp);
+    }
+    let mut en = shock(qm, mu, v_r, v_n, Termination::Energetic(e))?;
+    en.resolution = fallback;
+    Ok(en)
+}
+
+/// Newton's impulse at touchdown (module documentation), before the energy check.
+fn newton_touchdown(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) -> Result<Impulse, ImpactError> {
+    if !(v_r.is_finite() && v_n.is_finite()) {
+        return Err(ImpactError::NonFinite);
+    }
+    let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
+    let p = inv * Vector2::new(-v_r, -(1.0 + e) * v_n);
+    if in_cone(&p, mu) {
+        return Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSticking));
+    }
+    let s = if v_r.abs() > V_EPS { SlipDirection::of(v_r) } else { SlipDirection::of(-p[0]) };
+    let ps = shared::contact::p_of(qm, mu, s);
+    if ps > 0.0 {
+        let pn = -(1.0 + e) * v_n / ps;
+        let p = Vector2::new(-mu * s.sign::<f64>() * pn, pn);
+        Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSliding))
+    } else {
+        let mut dk = darboux_keller(qm, mu, v_r, v_n, e)?;
+        dk.resolution = Resolution::NewtonDarbouxKeller;
+        Ok(dk)
+    }
+}
+
 /// The impulse at touchdown for a tip arriving with `v_n < 0` (m/s) and relative
-/// tangential velocity `v_r` (m/s), under `law` with coefficient `e`.
+/// tangential velocity `v_r` (m/s), under `law` with coefficient `e` in [0, 1].
+/// Newton's and Poisson's impulses that would create energy are replaced by the
+/// energetic law's (module documentation, "Fallback").
 ///
 /// Errors: [`ImpactError`] (non-finite input, or a Darboux-Keller jam).
 pub fn touchdown(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, law: ImpactLaw, e: f64) -> Result<Impulse, ImpactError> {
     match law {
-        ImpactLaw::Poisson => darboux_keller(qm, mu, v_r, v_n, e),
-        ImpactLaw::Newton => {
-            if !(v_r.is_finite() && v_n.is_finite()) {
-                return Err(ImpactError::NonFinite);
-            }
-            let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
-            let p = inv * Vector2::new(-v_r, -(1.0 + e) * v_n);
-            if in_cone(&p, mu) {
-                return Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSticking));
-            }
-            let s = if v_r.abs() > V_EPS { SlipDirection::of(v_r) } else { SlipDirection::of(-p[0]) };
-            let ps = shared::contact::p_of(qm, mu, s);
-            if ps > 0.0 {
-                let pn = -(1.0 + e) * v_n / ps;
-                let p = Vector2::new(-mu * s.sign::<f64>() * pn, pn);
-                Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSliding))
-            } else {
-                let mut dk = darboux_keller(qm, mu, v_r, v_n, e)?;
-                dk.resolution = Resolution::NewtonDarbouxKeller;
-                Ok(dk)
-            }
+        ImpactLaw::Poisson => {
+            let imp = darboux_keller(qm, mu, v_r, v_n, e)?;
+            consistent_or_energetic(imp, qm, mu, v_r, v_n, e, Resolution::PoissonFallback)
         }
+        ImpactLaw::Newton => {
+            let imp = newton_touchdown(qm, mu, v_r, v_n, e)?;
+            consistent_or_energetic(imp, qm, mu, v_r, v_n, e, Resolution::NewtonFallback)
+        }
+        ImpactLaw::Energetic => energetic(qm, mu, v_r, v_n, e),
     }
 }
 
 /// The impact without collision for a tip sliding at relative velocity `v_r`
-/// (m/s, nonzero) with `v_n = 0` in an inconsistent state (`p(sign v_r) < 0`).
-/// See the module documentation for how each law resolves it.
+/// (m/s, nonzero) with `v_n = 0` in an inconsistent state (`p(sign v_r) < 0`),
+/// under `law` with coefficient `e` and the IWC rule `rule`. See the module
+/// documentation for how each law and rule resolves it.
 ///
 /// Errors: [`ImpactError`].
-pub fn without_collision(qm: &Matrix2<f64>, mu: f64, v_r: f64, law: ImpactLaw, e: f64) -> Result<Impulse, ImpactError> {
+pub fn without_collision(qm: &Matrix2<f64>, mu: f64, v_r: f64, law: ImpactLaw, e: f64, rule: IwcRule) -> Result<Impulse, ImpactError> {
+    if rule == IwcRule::Plastic {
+        // The compression the tangential impact creates, for v_n,min; its e = 0 end
+        // state is the same stuck tip whenever compression ends after the slip stops.
+        let compression = darboux_keller(qm, mu, v_r, 0.0, 0.0)?;
+        let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
+        let p = inv * Vector2::new(-v_r, 0.0);
+        if in_cone(&p, mu) {
+            return Ok(one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::PlasticIwc));
+        }
+        return Ok(Impulse { resolution: Resolution::PlasticIwc, ..compression });
+    }
     match law {
-        ImpactLaw::Poisson => darboux_keller(qm, mu, v_r, 0.0, e),
+        ImpactLaw::Poisson => {
+            let imp = darboux_keller(qm, mu, v_r, 0.0, e)?;
+            consistent_or_energetic(imp, qm, mu, v_r, 0.0, e, Resolution::PoissonFallback)
+        }
+        ImpactLaw::Energetic => energetic(qm, mu, v_r, 0.0, e),
         ImpactLaw::Newton => {
             let compression = darboux_keller(qm, mu, v_r, 0.0, 0.0)?;
             let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
             let p = inv * Vector2::new(-v_r, -e * compression.v_n_min);
-            if in_cone(&p, mu) {
-                Ok(one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::NewtonDarbouxKeller))
+            let imp = if in_cone(&p, mu) {
+                one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::NewtonDarbouxKeller)
             } else {
                 let mut dk = darboux_keller(qm, mu, v_r, 0.0, e)?;
                 dk.resolution = Resolution::NewtonDarbouxKeller;
-                Ok(dk)
-            }
+                dk
+            };
+            consistent_or_energetic(imp, qm, mu, v_r, 0.0, e, Resolution::NewtonFallback)
         }
     }
 }
@@ -303,18 +505,91 @@ mod tests {
         let s = SlipDirection::Positive;
         let mu = 0.8;
         assert!(shared::contact::p_of(&qm, mu, s) < 0.0);
-        for law in [ImpactLaw::Newton, ImpactLaw::Poisson] {
-            let imp = without_collision(&qm, mu, 0.4, law, 0.5).unwrap();
+        for law in ImpactLaw::ALL {
+            let imp = without_collision(&qm, mu, 0.4, law, 0.5, IwcRule::Restitution).unwrap();
             assert!((0.4 + imp.dv[0]).abs() < 1e-12, "{law:?}: slip stopped");
             assert!(imp.dv[1] > 0.0, "{law:?}: lifts off");
             assert!(imp.v_n_min < 0.0, "{law:?}: compression");
             assert!(imp.contact_work <= 1e-12, "{law:?}: work {}", imp.contact_work);
-            let with_zero = without_collision(&qm, mu, 0.4, law, 0.0).unwrap();
+            let with_zero = without_collision(&qm, mu, 0.4, law, 0.0, IwcRule::Restitution).unwrap();
             assert!(with_zero.dv[1].abs() < 1e-12, "{law:?}: e = 0 leaves the tip on the belt");
+            // The plastic rule: stuck tangentially, v_n = 0, whatever the law and e.
+            for e in [0.0, 0.5, 1.0] {
+                let plastic = without_collision(&qm, mu, 0.4, law, e, IwcRule::Plastic).unwrap();
+                assert_eq!(plastic.resolution, Resolution::PlasticIwc);
+                assert!((0.4 + plastic.dv[0]).abs() < 1e-12 && plastic.dv[1].abs() < 1e-12, "{law:?} e {e}: {:?}", plastic.dv);
+                assert!(plastic.contact_work < 0.0 && in_cone(&plastic.p, mu));
+                assert!((plastic.p - with_zero.p).norm() < 1e-12, "the e = 0 restitution result");
+            }
         }
     }
 
+    #[test]
+    fn without_friction_the_three_laws_agree() {
+        // mu = 0: one phase, and Stronge's, Poisson's and Newton's coefficients coincide.
+        let qm = spd(1.5, -0.7, 0.9);
+        for e in [0.0, 0.3, 1.0] {
+            let v: Vec<Impulse> = ImpactLaw::ALL.iter().map(|&law| touchdown(&qm, 0.0, 0.2, -0.8, law, e).unwrap()).collect();
+            for imp in &v {
+                assert!((-0.8 + imp.dv[1] - 0.8 * e).abs() < 1e-12, "v_n+ = -e v_n-: {imp:?}");
+                assert!((imp.p - v[0].p).norm() < 1e-12);
+            }
+            assert_eq!(v[2].resolution, Resolution::EnergeticDarbouxKeller);
+        }
+    }
+
+    #[test]
+    fn energetic_work_is_the_restitution_fraction_of_compression() {
+        // A slip that does not stop: the normal work in restitution is e^2 of
+        // compression's, W_n = (1 - e^2) W_c, checked against P_n and v_n directly.
+        let qm = spd(1.0, 0.3, 1.2);
+        let (mu, v_r, v_n, e) = (0.2, 2.0, -0.5, 0.6);
+        let imp = energetic(&qm, mu, v_r, v_n, e).unwrap();
+        let s = 1.0;
+        let dvn = qm[(1, 1)] - mu * s * qm[(1, 0)];
+        // One phase: v_n(P) = v_n + dvn P; W_n(P) = v_n P + dvn P^2 / 2.
+        let w = |p: f64| v_n * p + 0.5 * dvn * p * p;
+        let p_c = -v_n / dvn;
+        assert!(v_r + (qm[(0, 1)] - mu * s * qm[(0, 0)]) * imp.p[1] > 0.0, "still slipping");
+        assert!((w(imp.p[1]) - (1.0 - e * e) * w(p_c)).abs() < 1e-12, "{} vs {}", w(imp.p[1]), (1.0 - e * e) * w(p_c));
+        // Its final normal velocity: v_n+^2 = e^2 v_n-^2 for a single phase.
+        assert!(((v_n + imp.dv[1]) - e * v_n.abs()).abs() < 1e-12);
+    }
+
     proptest! {
+        /// No law does positive work at a touchdown or an impact without collision
+        /// (after the fallback), every impulse lies in the cone and pushes, and the
+        /// tip leaves the impact not approaching the belt.
+        #[test]
+        fn no_impact_creates_energy(
+            a in 0.3f64..3.0, b in -2.0f64..2.0, c in 0.05f64..3.0,
+            mu in 0.0f64..1.5, v_r in -1.0f64..1.0, v_n in -1.0f64..0.0, e in 0.0f64..=1.0,
+        ) {
+            let qm = spd(a, b, c);
+            for law in ImpactLaw::ALL {
+                let imp = touchdown(&qm, mu, v_r, v_n, law, e);
+                prop_assert!(imp.is_ok(), "{:?}", imp);
+                let imp = imp.unwrap();
+                prop_assert!(imp.contact_work <= work_tolerance(&qm, v_r, v_n), "{law:?}: work {} ({:?})", imp.contact_work, imp.resolution);
+                prop_assert!(imp.p[1] >= 0.0);
+                prop_assert!(imp.p[0].abs() <= mu * imp.p[1] * (1.0 + 1e-9) + 1e-12);
+                prop_assert!(v_n + imp.dv[1] >= -1e-12, "{law:?} separates: {}", v_n + imp.dv[1]);
+                if law == ImpactLaw::Energetic {
+                    prop_assert_eq!(imp.resolution, Resolution::EnergeticDarbouxKeller);
+                }
+                // The impact without collision, where the state is inconsistent.
+                if shared::contact::p_of(&qm, mu, SlipDirection::of(v_r)) < 0.0 && v_r.abs() > 1e-6 {
+                    for rule in IwcRule::ALL {
+                        let iwc = without_collision(&qm, mu, v_r, law, e, rule);
+                        prop_assert!(iwc.is_ok(), "{:?}", iwc);
+                        let iwc = iwc.unwrap();
+                        prop_assert!(iwc.contact_work <= work_tolerance(&qm, v_r, 0.0), "{law:?}/{rule:?}: work {}", iwc.contact_work);
+                        prop_assert!(iwc.dv[1] >= -1e-12);
+                    }
+                }
+            }
+        }
+
         #[test]
         fn poisson_never_gains_energy_and_respects_the_cone(
             a in 0.3f64..3.0, b in -2.0f64..2.0, c in 0.3f64..3.0,
@@ -352,7 +627,7 @@ mod tests {
             let imp = touchdown(&qm, mu, v_r, v_n, ImpactLaw::Newton, e);
             prop_assert!(imp.is_ok(), "{:?}", imp);
             let imp = imp.unwrap();
-            if imp.resolution != Resolution::NewtonDarbouxKeller {
+            if matches!(imp.resolution, Resolution::NewtonSticking | Resolution::NewtonSliding) {
                 prop_assert!((v_n + imp.dv[1] + e * v_n).abs() < 1e-9);
                 prop_assert!(imp.p[1] >= 0.0);
                 prop_assert!(imp.p[0].abs() <= mu * imp.p[1] * (1.0 + 1e-9) + 1e-12);
@@ -367,10 +642,10 @@ mod kane {
 
     /// Kane's classic observation (Kane and Levinson, "Dynamics Online", 1985; Stronge
     /// 2000, sec. 5.4): Newton's restitution with Coulomb friction can create energy
-    /// when the slip reverses during the impact. Our Newton law shows it too, which is
-    /// why every impact is checked; Poisson's (Darboux-Keller) does not here.
+    /// when the slip reverses during the impact. Newton's own impulse shows it; the
+    /// law then falls back to the energetic one, and Poisson's does not create it here.
     #[test]
-    fn newton_with_friction_can_create_energy_and_poisson_does_not_here() {
+    fn newton_with_friction_can_create_energy_and_falls_back() {
         let mut found = None;
         'search: for a in [0.5, 1.0, 2.0] {
             for b in [-1.5, -1.0, -0.5, 0.5, 1.0, 1.5] {
@@ -379,7 +654,7 @@ mod kane {
                     let qm = l * l.transpose();
                     for mu in [0.2, 0.5, 0.8] {
                         for v_r in [-0.5, -0.1, 0.1, 0.5] {
-                            let imp = touchdown(&qm, mu, v_r, -1.0, ImpactLaw::Newton, 0.9).unwrap();
+                            let imp = newton_touchdown(&qm, mu, v_r, -1.0, 0.9).unwrap();
                             if imp.contact_work > 1e-6 {
                                 found = Some((qm, mu, v_r, imp));
                                 break 'search;
@@ -393,5 +668,9 @@ mod kane {
         assert_eq!(imp.resolution, Resolution::NewtonSliding);
         let dk = darboux_keller(&qm, mu, v_r, -1.0, 0.9).unwrap();
         assert!(dk.contact_work <= 1e-12, "Poisson dissipates at the same impact: {}", dk.contact_work);
+        let used = touchdown(&qm, mu, v_r, -1.0, ImpactLaw::Newton, 0.9).unwrap();
+        assert_eq!(used.resolution, Resolution::NewtonFallback);
+        assert_eq!(used.p, energetic(&qm, mu, v_r, -1.0, 0.9).unwrap().p);
+        assert!(used.contact_work <= 0.0, "{}", used.contact_work);
     }
 }

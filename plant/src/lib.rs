@@ -63,7 +63,7 @@ use shared::{
 };
 
 use dop853::Dop853;
-use impact::{ImpactError, ImpactLaw, Impulse, Resolution};
+use impact::{ImpactError, ImpactLaw, Impulse, IwcRule, Resolution};
 pub use observer::{NoObserver, Observer};
 pub use segment::Phase;
 use segment::{Boundary, EventLocator, OdeState, Point, Segment};
@@ -126,8 +126,11 @@ pub struct SimConfig {
     pub atol: f64,
     /// Impact law at touchdown and for impacts without collision.
     pub impact_law: ImpactLaw,
-    /// Restitution coefficient `e_n` in [0, 1] (Newton's or Poisson's, per `impact_law`).
+    /// Restitution coefficient `e_n` in [0, 1] (Newton's, Poisson's or Stronge's energetic
+    /// coefficient, per `impact_law`).
     pub e_n: f64,
+    /// What an impact without collision leaves behind ([`impact::IwcRule`]).
+    pub iwc: IwcRule,
     /// Relative tangential speed (m/s) below which the tip counts as at rest on the belt.
     pub v_stick: f64,
     /// Zeno rule: a bounce whose normal velocity after impact is below this (m/s)
@@ -151,6 +154,7 @@ impl Default for SimConfig {
             atol: 1e-11,
             impact_law: ImpactLaw::Newton,
             e_n: 0.2,
+            iwc: IwcRule::Restitution,
             v_stick: 1e-9,
             zeno_velocity: 1e-4,
             baumgarte: 50.0,
@@ -384,10 +388,18 @@ pub struct Counters {
     pub stick_to_slip: u64,
     /// Slip reversals.
     pub slip_reversals: u64,
-    /// Bounce sequences ended by the Zeno rule.
+    /// Bounce sequences ended by the Zeno rule: a touchdown that left (or arrived
+    /// with) a normal velocity below `zeno_velocity` but above rounding, removed.
     pub zeno_stops: u64,
-    /// Impacts whose contact work was positive (energy created at the contact).
+    /// Impacts whose contact work was positive (energy created at the contact):
+    /// 0 unless an impact law is broken, since the laws fall back to the energetic one.
     pub energy_gains: u64,
+    /// Newton impacts whose impulse would have created energy, resolved by the
+    /// energetic law instead ([`impact::Resolution::NewtonFallback`]).
+    pub newton_fallbacks: u64,
+    /// Poisson impacts whose impulse would have created energy, resolved by the
+    /// energetic law instead ([`impact::Resolution::PoissonFallback`]).
+    pub poisson_fallbacks: u64,
     /// Largest positive contact work in one impact, J.
     pub max_energy_gain: f64,
     /// Cone violations (module docs).
@@ -414,8 +426,11 @@ pub struct StepReport {
 /// Why a contact mode is being (re)chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Entry {
-    /// Generic: initial state, end of a bounce sequence, after an IWC.
+    /// The initial state, or a tip that reached the belt with no normal velocity.
     Settle,
+    /// After a touchdown (an impact that left the tip on the belt, or a grazing
+    /// contact): a departure is a lift-off.
+    Landed,
     /// Sliding reached `z_r_dot = 0`.
     SlipStopped,
     /// Sticking reached the cone's edge.
@@ -500,7 +515,7 @@ impl Plant {
             plant.project_position()?;
             let ctrl = Hold(u0);
             let mut events = Vec::new();
-            plant.touch(&ctrl, &mut events)?;
+            plant.touch(&ctrl, &mut events, true)?;
             plant.startup_events = events;
         }
         Ok(plant)
@@ -846,7 +861,7 @@ impl Plant {
         match boundary {
             Boundary::Touchdown => {
                 self.project_position()?;
-                self.touch(ctrl, events)
+                self.touch(ctrl, events, false)
             }
             Boundary::LiftOff => {
                 let before = self.rel_velocity();
@@ -874,8 +889,9 @@ impl Plant {
     }
 
     /// The tip is on the belt (position projected): impact if approaching, flight if
-    /// separating, otherwise choose the contact mode.
-    fn touch<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+    /// separating, otherwise choose the contact mode. `initial`: the plant's initial
+    /// state (a departure from it is not a lift-off).
+    fn touch<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>, initial: bool) -> Result<(), SimError> {
         let before = self.rel_velocity();
         let v_n = before[1];
         if v_n > self.cfg.zeno_velocity {
@@ -894,21 +910,39 @@ impl Plant {
                 self.phase = Phase::Flight;
                 self.counters.bounces += 1;
                 self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
-                self.check_energy(events, &imp, de, before);
+                self.check_impact(events, &imp, &qm, de, before);
                 return Ok(());
             }
             self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
-            self.check_energy(events, &imp, de, before);
+            self.check_impact(events, &imp, &qm, de, before);
         }
         // Grazing contact or the end of a bounce sequence: remove what is left of
-        // the normal velocity and stay on the belt.
+        // the normal velocity and stay on the belt. A residue at rounding level (a
+        // plastic impact leaves ~1e-17 m/s) is removed without counting a Zeno stop.
         let residual = self.rel_velocity();
+        let mut zeno = None;
         if residual[1] != 0.0 {
-            self.counters.zeno_stops += 1;
+            let rounding = 1e-12 + 1e-9 * before.norm();
+            if residual[1].abs() > rounding {
+                self.counters.zeno_stops += 1;
+                zeno = Some(events.len());
+            }
             self.project_contact_velocity(false)?;
-            self.push_event(events, EventKind::ZenoEnded, residual, None, 0.0);
+            if zeno.is_some() {
+                self.push_event(events, EventKind::ZenoEnded, residual, None, 0.0);
+            }
         }
-        self.enter_contact(ctrl, Entry::Settle, events)
+        // A departure is a lift-off after a real arrival (an impact, or a residue the
+        // Zeno rule removed); not from the initial state, nor after a zero-velocity
+        // "touchdown" of a tip that never left the belt (flight starting into it).
+        let landed = !initial && (v_n < -self.cfg.zeno_velocity || zeno.is_some());
+        let entry = if landed { Entry::Landed } else { Entry::Settle };
+        let chosen = self.enter_contact(ctrl, entry, events);
+        // The Zeno event records the mode chosen after it.
+        if let Some(i) = zeno {
+            events[i].mode_after = self.mode();
+        }
+        chosen
     }
 
     /// Chooses the contact mode of a tip on the belt with `z_n_dot = 0` (docs/model.md's
@@ -918,7 +952,7 @@ impl Plant {
         let previous_dir = self.slip_direction();
         let before = self.rel_velocity();
         let mu = self.arm.params.mu;
-        let at_rest = before[0].abs() <= self.cfg.v_stick || entry != Entry::Settle;
+        let at_rest = before[0].abs() <= self.cfg.v_stick || matches!(entry, Entry::SlipStopped | Entry::ConeEdge);
         if at_rest {
             // Start from exactly zero slip, so that the chosen mode starts inside its domain.
             self.project_contact_velocity(true)?;
@@ -985,6 +1019,8 @@ impl Plant {
             ContactMode::Flight | ContactMode::Indeterminate => {
                 self.phase = Phase::Flight;
                 if entry != Entry::Settle || was_sliding {
+                    // Leaving the belt after a touchdown, a stop of the slip or from
+                    // sliding: a lift-off (a departure from the initial state is not).
                     self.counters.lift_offs += 1;
                     self.push_event(events, EventKind::LiftOff, before, None, 0.0);
                 }
@@ -1019,7 +1055,7 @@ impl Plant {
         let before = self.rel_velocity();
         let (q, _) = segment::split(&self.y);
         let qm = self.arm.q_matrix(&q);
-        let imp = impact::without_collision(&qm, self.arm.params.mu, before[0], self.cfg.impact_law, self.cfg.e_n)
+        let imp = impact::without_collision(&qm, self.arm.params.mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc)
             .map_err(|source| SimError::Impact { t: self.t, source })?;
         let de = self.apply_impulse(&imp);
         self.counters.impacts_without_collision += 1;
@@ -1028,11 +1064,11 @@ impl Plant {
             self.phase = Phase::Flight;
             self.counters.lift_offs += 1;
             self.push_event(events, EventKind::ImpactWithoutCollision, before, Some(&imp), de);
-            self.check_energy(events, &imp, de, before);
+            self.check_impact(events, &imp, &qm, de, before);
             return Ok(());
         }
         self.push_event(events, EventKind::ImpactWithoutCollision, before, Some(&imp), de);
-        self.check_energy(events, &imp, de, before);
+        self.check_impact(events, &imp, &qm, de, before);
         self.project_contact_velocity(false)?;
         // The slip has been stopped (v_r = 0): choose stick or slip from rest.
         self.enter_contact(ctrl, Entry::SlipStopped, events)
@@ -1050,12 +1086,16 @@ impl Plant {
         self.arm.kinetic_energy(&q, &qd) - before
     }
 
-    /// Reports an impact whose contact work is positive (it created energy).
-    fn check_energy(&mut self, events: &mut Vec<PlantEvent>, imp: &Impulse, de: f64, before: Vector2<f64>) {
-        // Rounding allowance relative to the energy moved by the impulse.
-        let (q, qd) = segment::split(&self.y);
-        let scale = self.arm.kinetic_energy(&q, &qd).abs() + de.abs();
-        if imp.contact_work > 1e-12 * scale.max(1e-12) {
+    /// Counts a law's fallback to the energetic one, and reports an impact whose
+    /// contact work is positive (it created energy: a broken law, never expected).
+    fn check_impact(&mut self, events: &mut Vec<PlantEvent>, imp: &Impulse, qm: &nalgebra::Matrix2<f64>, de: f64, before: Vector2<f64>) {
+        match imp.resolution {
+            Resolution::NewtonFallback => self.counters.newton_fallbacks += 1,
+            Resolution::PoissonFallback => self.counters.poisson_fallbacks += 1,
+            _ => {}
+        }
+        // The same rounding allowance the laws' fallback uses.
+        if imp.contact_work > impact::work_tolerance(qm, before[0], before[1]) {
             self.counters.energy_gains += 1;
             self.counters.max_energy_gain = self.counters.max_energy_gain.max(imp.contact_work);
             events.push(self.make_event(EventKind::EnergyGain, before, Some(imp), de));
