@@ -32,7 +32,7 @@ use crate::{
 };
 use firmware::ControllerKind;
 use plant::initial::{PaperX0, deg_to_state};
-use plant::{EventKind, Plant, PlantEvent, SimConfig};
+use plant::{EventKind, Plant, PlantEvent, SimConfig, Validity};
 use rig::{in_process, rig::RunObserver, scenario::Scenario};
 
 /// Where the controller runs.
@@ -206,6 +206,11 @@ pub struct Trial {
     pub simulated_s: f64,
     /// Wall-clock time of the trial, s.
     pub wall_s: f64,
+    /// The plant's validity counters over the trial; a trial with a violation is
+    /// never reached. A plant failure after the first lift-off (the ideal hybrid
+    /// law's documented event storm beyond `p = 0`) is not counted: the trial's
+    /// answer, a lift-off, is already known.
+    pub validity: Validity,
 }
 
 impl Trial {
@@ -214,6 +219,9 @@ impl Trial {
     pub fn why_not(&self) -> Option<String> {
         if self.reached {
             return None;
+        }
+        if !self.validity.is_valid() {
+            return Some(format!("the trajectory violates the model: {}", self.validity.describe_violations()));
         }
         Some(match (self.first_lift_off_s, &self.failure) {
             (Some(t), _) if self.lift_offs > 0 => format!("lift-off at t = {t:.3} s"),
@@ -252,6 +260,7 @@ pub fn trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> 
     trial.reached = trial.lift_offs == 0
         && trial.impacts_without_collision == 0
         && trial.failure.is_none()
+        && trial.validity.is_valid()
         && rows.iter().all(|r| r.mode != "flight")
         && trial.settle_error_m <= c.settle_tol_m;
     trial.simulated_s = rows.last().map_or(0.0, |r| r.t);
@@ -271,12 +280,13 @@ fn empty_trial(combo: Combination, target: f64) -> Trial {
         failure: None,
         simulated_s: 0.0,
         wall_s: 0.0,
+        validity: Validity::default(),
     }
 }
 
 fn sim_config(base: &Scenario) -> SimConfig {
     let p = &base.plant;
-    SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, ..SimConfig::default() }
+    SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, iwc: p.iwc, ..SimConfig::default() }
 }
 
 fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
@@ -301,6 +311,7 @@ fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -
     t.impacts_without_collision = run.impacts_without_collision;
     t.first_lift_off_s = run.first_lift_off_s;
     let lifted = run.first_lift_off_s.is_some();
+    t.validity = Validity::of(&run.counters, run.error.as_ref().filter(|_| !lifted));
     t.failure = match (&run.error, run.law_fault) {
         (Some(e), _) if !lifted => Some(format!("plant: {e}")),
         (_, Some(f)) if !lifted => Some(format!("law: {f}")),
@@ -329,6 +340,10 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
     /// Counts the lift-offs and impacts without collision and stops at the first.
     struct LiftOffs<'a>(&'a mut Trial, bool);
     impl RunObserver for LiftOffs<'_> {
+        fn on_finished(&mut self, validity: &Validity) {
+            self.0.validity = *validity;
+        }
+
         fn on_events(&mut self, events: &[PlantEvent]) {
             for e in events {
                 match e.kind {
@@ -357,6 +372,9 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
     {
         t.first_lift_off_s = Some(r.t);
         t.lift_offs = t.lift_offs.max(1);
+    }
+    if lifted {
+        t.validity.integrator_failures = 0;
     }
     if !lifted && let Some(e) = failure {
         t.failure = Some(e.to_string());

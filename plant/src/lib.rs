@@ -50,6 +50,7 @@ pub mod initial;
 pub mod observer;
 pub mod segment;
 pub mod trig;
+pub mod validity;
 
 use std::cell::Cell;
 
@@ -68,6 +69,7 @@ pub use observer::{NoObserver, Observer};
 pub use segment::Phase;
 use segment::{Boundary, EventLocator, OdeState, Point, Segment};
 use trig::TrigCache;
+pub use validity::Validity;
 
 /// A torque law the plant evaluates inside the integration.
 ///
@@ -279,6 +281,15 @@ pub enum SimError {
 }
 
 impl SimError {
+    /// Whether the run failed in the integrator or the event handling (as opposed
+    /// to bad input): counted as [`Validity::integrator_failures`].
+    pub fn is_integrator_failure(&self) -> bool {
+        matches!(
+            self,
+            Self::Integrator { .. } | Self::NonFinite { .. } | Self::Impact { .. } | Self::MissedEvent { .. } | Self::EventStorm { .. }
+        )
+    }
+
     /// Whether the error comes from the caller's input (parameters, settings,
     /// initial state), as opposed to a failure during the run.
     pub fn is_bad_input(&self) -> bool {
@@ -611,6 +622,11 @@ impl Plant {
     /// Event counts since creation.
     pub fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// The validity counters since creation, for a run that ended with `failure`.
+    pub fn validity(&self, failure: Option<&SimError>) -> Validity {
+        Validity::of(&self.counters, failure)
     }
 
     /// Evaluations of the vector field since creation (a cost measure).

@@ -22,7 +22,7 @@ use super::{
     sensors::{SensorFaults, SensorModel, Sensors},
     setup::plant_for,
 };
-use plant::{Hold, NoObserver, Observer, Plant, PlantEvent};
+use plant::{Hold, NoObserver, Observer, Plant, PlantEvent, Validity};
 
 /// The answer to one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -297,6 +297,11 @@ pub trait RunObserver {
     fn on_period(&mut self, _k: usize, _n: usize) -> bool {
         true
     }
+
+    /// At the end of the run (also after a failure): the plant's validity counters
+    /// (energy-creating impacts, fallbacks, cone violations, Zeno stops, integrator
+    /// failures; [`Validity`]).
+    fn on_finished(&mut self, _validity: &Validity) {}
 }
 
 impl RunObserver for () {}
@@ -340,5 +345,10 @@ pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObse
         }
     }
     link.finish(records.len() as u32);
+    let sim_error = match &failure {
+        Some(RunError::Sim(e)) => Some(e),
+        _ => None,
+    };
+    run.on_finished(&plant.validity(sim_error));
     (records, failure)
 }

@@ -4,7 +4,10 @@
 use serde::{Deserialize, Serialize};
 
 use firmware::{ControllerKind, config::FrictionCompensation};
-use plant::{impact::ImpactLaw, initial::PaperX0};
+use plant::{
+    impact::{ImpactLaw, IwcRule},
+    initial::PaperX0,
+};
 use shared::Period;
 
 use super::faults::Fault;
@@ -26,6 +29,10 @@ pub struct PlantSection {
     pub impact_law: ImpactLaw,
     /// Restitution coefficient.
     pub e_n: f64,
+    /// What an impact without collision leaves behind: `restitution` (default) or
+    /// `plastic` (docs/plant.md "Impact without collision").
+    #[serde(default)]
+    pub iwc: IwcRule,
     /// Integrator relative tolerance.
     pub rtol: f64,
     /// Integrator absolute tolerance.

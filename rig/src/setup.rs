@@ -33,7 +33,13 @@ pub fn firmware_config(s: &Scenario) -> Config {
 /// [`SimError`] for bad parameters or initial conditions.
 pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
     let params = Params::new(s.plant.mu, s.plant.v_belt)?;
-    let sim =
-        SimConfig { rtol: s.plant.rtol, atol: s.plant.atol, impact_law: s.plant.impact_law, e_n: s.plant.e_n, ..SimConfig::default() };
+    let sim = SimConfig {
+        rtol: s.plant.rtol,
+        atol: s.plant.atol,
+        impact_law: s.plant.impact_law,
+        e_n: s.plant.e_n,
+        iwc: s.plant.iwc,
+        ..SimConfig::default()
+    };
     Plant::new(params, sim, initial::deg_to_state(s.plant.x0.condition().deg), 0.0, [0.0, 0.0])
 }

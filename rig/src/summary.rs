@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use firmware::pil::StepClock;
+use plant::Validity;
 
 use super::{
     realtime::RealtimeSetup,
@@ -33,6 +34,9 @@ pub struct RunSummary {
     /// Lift-off statistics.
     #[serde(flatten)]
     pub lift_off: LiftOffStats,
+    /// The plant's validity counters (energy-creating impacts, fallbacks, cone
+    /// violations, Zeno stops, integrator failures; `plant::Validity`).
+    pub validity: Validity,
     /// Deadline misses seen by the plant (no command, lost, or late past `t_k + Ts`).
     pub deadline_misses: usize,
     /// Deadline misses the firmware counted itself (its overrun counter at the end).
@@ -77,6 +81,7 @@ impl RunSummary {
         transport: &'static str,
         timing: &'static str,
         wall_s: f64,
+        validity: Validity,
     ) -> Self {
         let simulated = records.len() as f64 * scenario.timing.period().as_secs_f64();
         Self {
@@ -89,6 +94,7 @@ impl RunSummary {
             rig: None,
             periods: records.len(),
             lift_off: lift_off_stats(records),
+            validity,
             deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
             firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
             rms_tracking_error_m: rms_tracking_error(records),

@@ -160,6 +160,9 @@ pub struct ReportArgs {
     /// machine, to this Markdown file (the repository keeps them in docs/results.md).
     #[arg(long, value_name = "FILE.md")]
     pub results: Option<PathBuf>,
+    /// Exit status on model violations in any experiment.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output folder and JSON switch (`--out` defaults to `out/`; the page is `report.md` there).
     #[command(flatten)]
     pub output: OutputArgs,
@@ -221,6 +224,9 @@ pub struct ZmaxArgs {
     /// Default: the embedded default scenario.
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -249,6 +255,20 @@ pub struct ScenarioArgs {
     /// Override the sensor-noise seed.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Override the impact-without-collision rule (scenario `plant.iwc`):
+    /// `restitution` (the tip is thrown off the belt) or `plastic` (left stuck, v_n = 0).
+    #[arg(long, value_enum)]
+    pub iwc: Option<plant::impact::IwcRule>,
+}
+
+/// `--strict`, on every command that simulates.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct StrictArgs {
+    /// Exit 1 if any result violates the model (an energy-creating impact, a
+    /// friction-cone violation, an integrator failure); everything is still written
+    /// and the violations are listed. Without it they are reported, and exit is 0.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// `sil-host firmware`.
@@ -286,6 +306,9 @@ pub struct RunArgs {
     /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
     #[arg(long, value_name = "NAME")]
     pub rig: Option<String>,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -319,6 +342,9 @@ pub struct PilArgs {
     /// written to defmt.log).
     #[arg(long)]
     pub quiet: bool,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -354,7 +380,8 @@ pub struct SimulateArgs {
     /// Impact law at touchdown and for impacts without collision.
     #[arg(long, value_enum, default_value = "newton")]
     pub impact_law: plant::impact::ImpactLaw,
-    /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse for Poisson).
+    /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse
+    /// for Poisson, of the normal work for energetic).
     #[arg(long, default_value_t = 0.2)]
     pub e_n: f64,
     /// Simulated time, s.
@@ -369,6 +396,13 @@ pub struct SimulateArgs {
     /// Absolute tolerance of the integrator.
     #[arg(long, default_value_t = 1e-11)]
     pub atol: f64,
+    /// Impact-without-collision rule: `restitution` (the law's restitution throws the
+    /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
+    #[arg(long, value_enum, default_value = "restitution")]
+    pub iwc: plant::impact::IwcRule,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -489,6 +523,13 @@ pub struct PoincareArgs {
     /// Worker threads (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Impact-without-collision rule: `restitution` (the law's restitution throws the
+    /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
+    #[arg(long, value_enum, default_value = "restitution")]
+    pub iwc: plant::impact::IwcRule,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -548,6 +589,10 @@ pub struct SweepArgs {
     /// Restitution coefficients e_n in [0, 1], comma-separated (each is a sweep dimension).
     #[arg(long, value_delimiter = ',', default_value = "0.2")]
     pub e_n: Vec<f64>,
+    /// Impact-without-collision rules, comma-separated (each is a sweep dimension):
+    /// `restitution` (the tip is thrown off the belt), `plastic` (left stuck, v_n = 0).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "restitution")]
+    pub iwc: Vec<plant::impact::IwcRule>,
     /// Persistent bouncing is flagged when max theta1_dot over the record window
     /// exceeds this, rad/s. The paper's threshold is 0; an arm at rest shows
     /// theta1_dot ~ 5e-15 rad/s from rounding, hence the small default.
@@ -570,6 +615,9 @@ pub struct SweepArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
     /// Folder of the sweep (created if missing; an existing sweep there is resumed).
     #[arg(long, default_value = "out/sweep", value_name = "DIR")]
     pub out: PathBuf,

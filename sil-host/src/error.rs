@@ -34,6 +34,10 @@ pub enum CliError {
     /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
     PartFailed(String),
+    /// `--strict`: a result violates the model (energy-creating impact, friction-cone
+    /// violation, integrator failure); everything was written, the violations listed.
+    #[error("results violate the model (--strict): {0}")]
+    Invalid(String),
     /// The command was stopped (Ctrl-C, SIGTERM) part way; what it computed is kept.
     #[error("interrupted: {0}")]
     Interrupted(String),

@@ -57,6 +57,9 @@ pub enum Class {
     Aperiodic,
     /// The simulation failed.
     Failed,
+    /// The simulation finished but its trajectory violates the model (an
+    /// energy-creating impact or a friction-cone violation; [`plant::Validity`]).
+    Invalid,
 }
 
 impl Class {
@@ -69,6 +72,7 @@ impl Class {
             Self::Chaotic => "chaotic",
             Self::Aperiodic => "aperiodic",
             Self::Failed => "failed",
+            Self::Invalid => "invalid",
         }
     }
 }

@@ -23,7 +23,7 @@ use shared::Params;
 
 use classify::{Class, ClassifyConfig};
 use lyapunov::{LyapunovConfig, LyapunovEstimate, ReturnMap};
-use plant::{Plant, SimConfig, SimError};
+use plant::{Plant, SimConfig, SimError, Validity};
 use section::{Section, SectionCrossing, SectionWatch};
 
 /// Length of one `advance` call while sweeping, s (the section is located inside
@@ -84,6 +84,10 @@ pub struct PointResult {
     pub touchdowns: u64,
     /// Why the simulation failed, if it did.
     pub error: Option<String>,
+    /// The plant's validity counters over the transient and the record (the
+    /// Lyapunov estimate's own short runs are not included); a violation makes the
+    /// class [`Class::Invalid`].
+    pub validity: Validity,
     /// Wall time of this point, s.
     pub wall_s: f64,
 }
@@ -145,11 +149,19 @@ pub fn analyse(v_belt: f64, cfg: &PoincareConfig) -> PointResult {
         lift_offs: 0,
         touchdowns: 0,
         error: None,
+        validity: Validity::default(),
         wall_s: 0.0,
     };
-    if let Err(e) = run_into(v_belt, cfg, &mut result) {
-        result.class = Class::Failed;
-        result.error = Some(e.to_string());
+    match run_into(v_belt, cfg, &mut result) {
+        Err(e) => {
+            result.class = Class::Failed;
+            result.error = Some(e.to_string());
+        }
+        Ok(()) if !result.validity.is_valid() => {
+            result.class = Class::Invalid;
+            result.period = None;
+        }
+        Ok(()) => {}
     }
     result.wall_s = started.elapsed().as_secs_f64();
     result
@@ -158,6 +170,13 @@ pub fn analyse(v_belt: f64, cfg: &PoincareConfig) -> PointResult {
 fn run_into(v_belt: f64, cfg: &PoincareConfig, r: &mut PointResult) -> Result<(), SimError> {
     let params = Params::new(cfg.mu, v_belt)?;
     let mut plant = Plant::new(params, cfg.sim, cfg.x0, 0.0, [0.0, 0.0])?;
+    let result = record(&mut plant, params, cfg, r);
+    r.validity = plant.validity(result.as_ref().err());
+    result
+}
+
+/// The transient, the record and its classification, for [`run_into`].
+fn record(plant: &mut Plant, params: Params<f64>, cfg: &PoincareConfig, r: &mut PointResult) -> Result<(), SimError> {
     // Transient on exact multiples of the chunk, then the record.
     let mut k = 1.0;
     while plant.time() < cfg.transient_s {

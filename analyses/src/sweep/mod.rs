@@ -24,12 +24,14 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use shared::{ElbowBranch, Params, kinematics::inverse_kinematics};
 
-use plant::impact::ImpactLaw;
+use plant::impact::{ImpactLaw, IwcRule};
 use plant::initial::{self, PaperX0};
 use rig::scenario::Scenario;
 
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
-pub const FORMAT: u32 = 1;
+/// Version 2: the IWC rule as a dimension, validity counters and the `invalid`
+/// outcome in every row.
+pub const FORMAT: u32 = 2;
 
 /// An evenly spaced axis `start, start + step, ..., stop` (both ends included).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -136,7 +138,9 @@ pub struct SweepSpec {
     pub mu: Axis,
     /// Belt speeds `v_belt`, m/s.
     pub v_belt: Axis,
-    /// Impact laws (outermost loop).
+    /// Impact-without-collision rules (outermost loop).
+    pub iwc_rules: Vec<IwcRule>,
+    /// Impact laws.
     pub impact_laws: Vec<ImpactLaw>,
     /// Restitution coefficients `e_n`.
     pub e_n: Vec<f64>,
@@ -188,6 +192,8 @@ pub struct InitialCondition {
 pub struct RunKey {
     /// Index in the sweep's order (0-based).
     pub index: usize,
+    /// Impact-without-collision rule.
+    pub iwc: IwcRule,
     /// Impact law.
     pub impact_law: ImpactLaw,
     /// Restitution coefficient.
@@ -216,6 +222,7 @@ impl SweepSpec {
             format: FORMAT,
             mu: Axis { start: 0.1, stop: 1.0, step: 0.1 },
             v_belt: Axis { start: -1.0, stop: -0.1, step: 0.005 },
+            iwc_rules: vec![IwcRule::Restitution],
             impact_laws: vec![ImpactLaw::Newton],
             e_n: vec![0.2],
             paper_ics: vec![PaperX0::A, PaperX0::D],
@@ -265,9 +272,9 @@ impl SweepSpec {
         self.paper_ics.len() + self.random_ics
     }
 
-    /// Number of runs: laws x `e_n` x `mu` x `v_belt` x initial conditions.
+    /// Number of runs: IWC rules x laws x `e_n` x `mu` x `v_belt` x initial conditions.
     pub fn n_runs(&self) -> usize {
-        self.impact_laws.len() * self.e_n.len() * self.mu.len() * self.v_belt.len() * self.n_ics()
+        self.iwc_rules.len() * self.impact_laws.len() * self.e_n.len() * self.mu.len() * self.v_belt.len() * self.n_ics()
     }
 
     /// Simulated time of one run, s.
@@ -276,9 +283,11 @@ impl SweepSpec {
     }
 
     /// Run `index` (`< n_runs`): the initial condition varies fastest, then `v_belt`,
-    /// `mu`, `e_n`, and the impact law slowest.
+    /// `mu`, `e_n`, the impact law, and the IWC rule slowest (so a sweep with one
+    /// rule numbers its runs as before the rule was a dimension).
     pub fn run_at(&self, index: usize) -> RunKey {
         let (n_ic, n_v, n_mu, n_e) = (self.n_ics(), self.v_belt.len(), self.mu.len(), self.e_n.len());
+        let n_law = self.impact_laws.len();
         let i_ic = index % n_ic;
         let r = index / n_ic;
         let i_v = r % n_v;
@@ -286,9 +295,12 @@ impl SweepSpec {
         let i_mu = r % n_mu;
         let r = r / n_mu;
         let i_e = r % n_e;
-        let i_law = r / n_e;
+        let r = r / n_e;
+        let i_law = r % n_law;
+        let i_iwc = r / n_law;
         RunKey {
             index,
+            iwc: self.iwc_rules[i_iwc],
             impact_law: self.impact_laws[i_law],
             e_n: self.e_n[i_e],
             i_mu,
@@ -313,8 +325,8 @@ impl SweepSpec {
         if self.v_belt.start < -5.0 || self.v_belt.stop > 5.0 {
             return Err("--v-belt must lie within +-5 m/s".into());
         }
-        if self.impact_laws.is_empty() || self.e_n.is_empty() {
-            return Err("--impact-law and --e-n need at least one value".into());
+        if self.impact_laws.is_empty() || self.e_n.is_empty() || self.iwc_rules.is_empty() {
+            return Err("--impact-law, --e-n and --iwc need at least one value".into());
         }
         if let Some(e) = self.e_n.iter().find(|e| !(e.is_finite() && (0.0..=1.0).contains(*e))) {
             return Err(format!("--e-n values must be in [0, 1], got {e}"));
@@ -466,6 +478,7 @@ mod tests {
                 v_belt: Axis { start: -1.0, stop: -1.0 + 0.1 * (n_v - 1) as f64, step: 0.1 },
                 e_n: (0..n_e).map(|i| i as f64 * 0.1).collect(),
                 impact_laws: vec![ImpactLaw::Newton, ImpactLaw::Poisson],
+                iwc_rules: IwcRule::ALL.to_vec(),
                 paper_ics: vec![],
                 random_ics: ics,
                 ..SweepSpec::paper()
@@ -473,9 +486,9 @@ mod tests {
             let mut seen = std::collections::HashSet::new();
             for i in 0..s.n_runs() {
                 let k = s.run_at(i);
-                prop_assert!(seen.insert((k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
+                prop_assert!(seen.insert((k.iwc, k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
             }
-            prop_assert_eq!(seen.len(), 2 * n_e * n_mu * n_v * ics);
+            prop_assert_eq!(seen.len(), 2 * 2 * n_e * n_mu * n_v * ics);
         }
     }
 }

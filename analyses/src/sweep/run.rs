@@ -26,7 +26,7 @@ use shared::{ContactMode, Params};
 use super::extrema::ExtremaWatch;
 use super::{InitialCondition, RunKey, SweepController, SweepSpec};
 use crate::ideal::{self, IdealLaw, IdealSetup};
-use plant::{Counters, Plant, SimConfig};
+use plant::{Counters, Plant, SimConfig, SimError, Validity, impact::IwcRule};
 use plant::{Hold, NoObserver, Observer};
 use rig::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario};
 
@@ -59,6 +59,10 @@ pub enum Outcome {
     SafeState,
     /// The simulation failed (see `error`).
     Failed,
+    /// The run finished but its trajectory violates the model (an energy-creating
+    /// impact or a friction-cone violation; see the validity columns): never
+    /// counted as bouncing or contact.
+    Invalid,
 }
 
 impl Outcome {
@@ -72,12 +76,13 @@ impl Outcome {
             Self::Flight => "flight",
             Self::SafeState => "safe_state",
             Self::Failed => "failed",
+            Self::Invalid => "invalid",
         }
     }
 
     /// Every outcome, in legend order.
-    pub const ALL: [Outcome; 7] =
-        [Self::Bouncing, Self::Oscillating, Self::LiftOffOnly, Self::Contact, Self::Flight, Self::SafeState, Self::Failed];
+    pub const ALL: [Outcome; 8] =
+        [Self::Bouncing, Self::Oscillating, Self::LiftOffOnly, Self::Contact, Self::Flight, Self::SafeState, Self::Failed, Self::Invalid];
 }
 
 /// One row of `runs.csv` / `sweep.csv`: a run's result. Every field is a function
@@ -87,10 +92,12 @@ impl Outcome {
 pub struct RunRow {
     /// Run index ([`SweepSpec::run_at`]).
     pub index: usize,
-    /// Impact law (`newton`, `poisson`).
+    /// Impact law (`newton`, `poisson`, `energetic`).
     pub impact_law: String,
     /// Restitution coefficient.
     pub e_n: f64,
+    /// Impact-without-collision rule (`restitution`, `plastic`).
+    pub iwc: IwcRule,
     /// Friction coefficient.
     pub mu: f64,
     /// Belt speed, m/s.
@@ -121,6 +128,18 @@ pub struct RunRow {
     pub lift_offs_transient: u64,
     /// Model evaluations of the plant (a deterministic cost measure).
     pub rhs_evaluations: u64,
+    /// Over the whole run: impacts that created energy (a violation).
+    pub energy_gains: u64,
+    /// Over the whole run: Newton impacts resolved by the energetic law.
+    pub newton_fallbacks: u64,
+    /// Over the whole run: Poisson impacts resolved by the energetic law.
+    pub poisson_fallbacks: u64,
+    /// Over the whole run: contacts held with the friction cone ignored (a violation).
+    pub cone_violations: u64,
+    /// Over the whole run: bounce sequences ended by the Zeno rule.
+    pub zeno_stops: u64,
+    /// 1 if the integrator or the event handling failed (a violation; outcome `failed`).
+    pub integrator_failures: u64,
     /// Why the run failed (empty if it did not).
     pub error: String,
 }
@@ -135,11 +154,13 @@ fn lift_offs(c: &Counters) -> u64 {
 /// set before the run finished (nothing is recorded for it).
 pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &AtomicBool) -> Option<RunRow> {
     let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..Params::paper() };
-    let sim = SimConfig { rtol: spec.rtol, atol: spec.atol, impact_law: key.impact_law, e_n: key.e_n, ..SimConfig::default() };
+    let sim =
+        SimConfig { rtol: spec.rtol, atol: spec.atol, impact_law: key.impact_law, e_n: key.e_n, iwc: key.iwc, ..SimConfig::default() };
     let mut row = RunRow {
         index: key.index,
         impact_law: key.impact_law.name().into(),
         e_n: key.e_n,
+        iwc: key.iwc,
         mu: key.mu,
         v_belt: key.v_belt,
         ic: ic.name.clone(),
@@ -155,6 +176,12 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         final_mode: String::new(),
         lift_offs_transient: 0,
         rhs_evaluations: 0,
+        energy_gains: 0,
+        newton_fallbacks: 0,
+        poisson_fallbacks: 0,
+        cone_violations: 0,
+        zeno_stops: 0,
+        integrator_failures: 0,
         error: String::new(),
     };
     let built = match (spec.ideal, closed_loop_scenario(spec, key, ic)) {
@@ -176,14 +203,23 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         _ => closed_loop(spec, key, ic, &mut plant, stop, &mut watch),
     };
     let ended = match (ended, law.as_ref().and_then(IdealLaw::fault)) {
-        (Ended::Done(start), Some(fault)) => Ended::Stopped { start, error: format!("ideal law: {fault}"), safe_state: true },
+        (Ended::Done(start), Some(fault)) => {
+            Ended::Stopped { start, error: format!("ideal law: {fault}"), safe_state: true, sim_failed: false }
+        }
         (e, _) => e,
     };
-    let (start, error) = match ended {
+    let (start, error, sim_failed) = match ended {
         Ended::Interrupted => return None,
-        Ended::Done(start) => (start, None),
-        Ended::Stopped { start, error, safe_state } => (start, Some((error, safe_state))),
+        Ended::Done(start) => (start, None, false),
+        Ended::Stopped { start, error, safe_state, sim_failed } => (start, Some((error, safe_state)), sim_failed),
     };
+    let v = plant.validity(None);
+    row.energy_gains = v.energy_gains;
+    row.newton_fallbacks = v.newton_fallbacks;
+    row.poisson_fallbacks = v.poisson_fallbacks;
+    row.cone_violations = v.cone_violations;
+    row.zeno_stops = v.zeno_stops;
+    row.integrator_failures = u64::from(sim_failed);
     let end = *plant.counters();
     row.lift_offs_transient = start.map_or(lift_offs(&end), |s| lift_offs(&s));
     row.rhs_evaluations = plant.rhs_evaluations();
@@ -205,6 +241,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
             row.error = e;
             if safe { Outcome::SafeState } else { Outcome::Failed }
         }
+        None if !row.validity().is_valid() => Outcome::Invalid,
         None => match (row.bouncing, row.lift_offs > 0) {
             (true, true) => Outcome::Bouncing,
             (true, false) => Outcome::Oscillating,
@@ -220,8 +257,28 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
 /// record window (`None` if it was not reached).
 enum Ended {
     Done(Option<Counters>),
-    Stopped { start: Option<Counters>, error: String, safe_state: bool },
+    /// `sim_failed`: the plant's integrator or event handling failed.
+    Stopped {
+        start: Option<Counters>,
+        error: String,
+        safe_state: bool,
+        sim_failed: bool,
+    },
     Interrupted,
+}
+
+impl RunRow {
+    /// The run's validity counters ([`plant::Validity`]).
+    pub fn validity(&self) -> Validity {
+        Validity {
+            energy_gains: self.energy_gains,
+            newton_fallbacks: self.newton_fallbacks,
+            poisson_fallbacks: self.poisson_fallbacks,
+            cone_violations: self.cone_violations,
+            zeno_stops: self.zeno_stops,
+            integrator_failures: self.integrator_failures,
+        }
+    }
 }
 
 /// Advances `plant` by `duration` s in [`CHUNK_S`] intervals with `advance(plant, dt)`.
@@ -231,14 +288,14 @@ fn advance_by(
     stop: &AtomicBool,
     obs: &mut dyn Observer,
     advance: &mut impl FnMut(&mut Plant, f64, &mut dyn Observer) -> Result<(), plant::SimError>,
-) -> Result<bool, String> {
+) -> Result<bool, SimError> {
     let t_end = plant.time() + duration;
     while t_end - plant.time() > 1e-12 * t_end.max(1.0) {
         if stop.load(Ordering::Relaxed) {
             return Ok(false);
         }
         let dt = (t_end - plant.time()).min(CHUNK_S);
-        advance(plant, dt, obs).map_err(|e| e.to_string())?;
+        advance(plant, dt, obs)?;
     }
     Ok(true)
 }
@@ -255,14 +312,14 @@ fn windows(
     match advance_by(plant, spec.transient_s, stop, &mut NoObserver, &mut advance) {
         Ok(true) => {}
         Ok(false) => return Ended::Interrupted,
-        Err(error) => return Ended::Stopped { start: None, error, safe_state: false },
+        Err(e) => return Ended::Stopped { start: None, error: e.to_string(), safe_state: false, sim_failed: e.is_integrator_failure() },
     }
     let w = watch.insert(ExtremaWatch::start(plant.time(), plant.state(), plant.arm().params.l));
     let start = Some(*plant.counters());
     match advance_by(plant, spec.record_s, stop, w, &mut advance) {
         Ok(true) => Ended::Done(start),
         Ok(false) => Ended::Interrupted,
-        Err(error) => Ended::Stopped { start, error, safe_state: false },
+        Err(e) => Ended::Stopped { start, error: e.to_string(), safe_state: false, sim_failed: e.is_integrator_failure() },
     }
 }
 
@@ -316,11 +373,11 @@ fn closed_loop(
     watch: &mut Option<ExtremaWatch>,
 ) -> Ended {
     let Some(s) = closed_loop_scenario(spec, key, ic) else {
-        return Ended::Stopped { start: None, error: "closed loop without a scenario".into(), safe_state: false };
+        return Ended::Stopped { start: None, error: "closed loop without a scenario".into(), safe_state: false, sim_failed: false };
     };
     let mut link = match InProcessLink::new(&s) {
         Ok(l) => l,
-        Err(e) => return Ended::Stopped { start: None, error: e.to_string(), safe_state: false },
+        Err(e) => return Ended::Stopped { start: None, error: e.to_string(), safe_state: false, sim_failed: false },
     };
     let mut periods = PeriodLoop::new(&s, plant);
     let n = periods.periods_in(spec.run_duration());
@@ -340,7 +397,8 @@ fn closed_loop(
         };
         if let Err(f) = periods.period(plant, &mut link, &mut (), obs) {
             let safe_state = matches!(f.error, rig::record::RunError::SafeState { .. });
-            return Ended::Stopped { start, error: f.error.to_string(), safe_state };
+            let sim_failed = matches!(&f.error, rig::record::RunError::Sim(e) if e.is_integrator_failure());
+            return Ended::Stopped { start, error: f.error.to_string(), safe_state, sim_failed };
         }
     }
     Ended::Done(start)

@@ -12,6 +12,7 @@
 
 use std::{collections::BTreeMap, io::Write};
 
+use plant::{Validity, impact::IwcRule};
 use serde::Serialize;
 
 use super::{
@@ -59,6 +60,8 @@ pub struct IcResults {
 /// Results for one impact law and `e_n`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CaseResults {
+    /// Impact-without-collision rule.
+    pub iwc: IwcRule,
     /// Impact law.
     pub impact_law: String,
     /// Restitution coefficient.
@@ -78,8 +81,34 @@ pub struct Results {
     pub outcomes: BTreeMap<String, usize>,
     /// The indicator's threshold used, rad/s (the paper's: 0).
     pub threshold: f64,
-    /// Per impact law and `e_n`.
+    /// Validity counters summed over the runs.
+    pub validity: Validity,
+    /// The runs whose trajectory violates the model (outcome `invalid` or an
+    /// integrator failure), in index order: left out of the bands and counts below.
+    pub invalid: Vec<InvalidRun>,
+    /// Per IWC rule, impact law and `e_n`.
     pub cases: Vec<CaseResults>,
+}
+
+/// A run with a violation, as listed in `summary.json` and the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InvalidRun {
+    /// Run index.
+    pub index: usize,
+    /// Impact-without-collision rule.
+    pub iwc: IwcRule,
+    /// Impact law.
+    pub impact_law: String,
+    /// Restitution coefficient.
+    pub e_n: f64,
+    /// Friction coefficient.
+    pub mu: f64,
+    /// Belt speed, m/s.
+    pub v_belt: f64,
+    /// Initial condition.
+    pub ic: String,
+    /// The violations in words.
+    pub violations: String,
 }
 
 /// Computes the results from `rows` (any order) of sweep `spec`.
@@ -87,13 +116,32 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     let ics = spec.initial_conditions();
     let (mus, vs) = (spec.mu.values(), spec.v_belt.values());
     let mut outcomes = BTreeMap::new();
-    for r in rows {
+    let mut validity = Validity::default();
+    let mut sorted: Vec<&RunRow> = rows.iter().collect();
+    sorted.sort_by_key(|r| r.index);
+    let mut invalid = Vec::new();
+    for r in &sorted {
         *outcomes.entry(r.outcome.name().to_string()).or_insert(0) += 1;
+        let v = r.validity();
+        validity.add(&v);
+        if !v.is_valid() {
+            invalid.push(InvalidRun {
+                index: r.index,
+                iwc: r.iwc,
+                impact_law: r.impact_law.clone(),
+                e_n: r.e_n,
+                mu: r.mu,
+                v_belt: r.v_belt,
+                ic: r.ic.clone(),
+                violations: v.describe_violations(),
+            });
+        }
     }
-    // flags[case][ic][i_mu][i_v]: Some((persistent bouncing, indicator)) when there is a result.
-    let n_cases = spec.impact_laws.len() * spec.e_n.len();
+    // flags[case][ic][i_mu][i_v]: Some((persistent bouncing, indicator)) when there is
+    // a valid result (an invalid run counts as no result).
+    let n_cases = spec.iwc_rules.len() * spec.impact_laws.len() * spec.e_n.len();
     let mut flags = vec![vec![vec![vec![None::<Flags>; vs.len()]; mus.len()]; ics.len()]; n_cases];
-    for r in rows {
+    for r in rows.iter().filter(|r| r.outcome != Outcome::Invalid) {
         let key = spec.run_at(r.index);
         let case = r.index / (ics.len() * vs.len() * mus.len());
         flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome == Outcome::Bouncing, r.bouncing));
@@ -115,9 +163,9 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
                 .collect();
             list.push(ic_results("any", &any, &mus, &vs));
         }
-        cases.push(CaseResults { impact_law: first.impact_law.name().into(), e_n: first.e_n, ics: list });
+        cases.push(CaseResults { iwc: first.iwc, impact_law: first.impact_law.name().into(), e_n: first.e_n, ics: list });
     }
-    Results { runs: rows.len(), missing, outcomes, threshold: spec.threshold, cases }
+    Results { runs: rows.len(), missing, outcomes, threshold: spec.threshold, validity, invalid, cases }
 }
 
 /// Persistent bouncing, and the paper's indicator flagged.
@@ -169,7 +217,7 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         r.threshold
     );
     for c in &r.cases {
-        let _ = writeln!(o, "\nimpact law {}, e_n = {}", c.impact_law, c.e_n);
+        let _ = writeln!(o, "\nimpact law {}, e_n = {}, IWC {}", c.impact_law, c.e_n, c.iwc);
         let crit: Vec<String> =
             c.ics.iter().map(|i| format!("{} {}", i.ic, i.critical_mu.map_or("none".into(), |m| format!("{m}")))).collect();
         let _ = writeln!(o, "  critical mu: {}", crit.join(", "));
@@ -185,7 +233,7 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         }
     }
     if r.cases.len() > 1 {
-        let _ = writeln!(o, "\nhow the bouncing region moves with the impact law and e_n (any initial condition):");
+        let _ = writeln!(o, "\nhow the bouncing region moves with the impact law, e_n and the IWC rule (any initial condition):");
         for c in &r.cases {
             if let Some(any) = c.ics.last() {
                 let points: usize = any.per_mu.iter().map(|m| m.bouncing_points).sum();
@@ -197,9 +245,10 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
                     .map_or("-".into(), |(mu, b)| format!("mu {mu}: [{:.3}, {:.3}]", b.v_min, b.v_max));
                 let _ = writeln!(
                     o,
-                    "  {:<8} e_n {:<5} critical mu {:<6} bouncing grid points {:<6} widest band {}",
+                    "  {:<9} e_n {:<5} IWC {:<11} critical mu {:<6} bouncing grid points {:<6} widest band {}",
                     c.impact_law,
                     c.e_n,
+                    c.iwc,
                     any.critical_mu.map_or("none".into(), |m| format!("{m}")),
                     points,
                     widest
@@ -215,6 +264,20 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         outcomes.join(", "),
         if r.missing > 0 { format!(", {} missing", r.missing) } else { String::new() }
     );
+    let _ = writeln!(o, "validity: {}", r.validity);
+    if !r.invalid.is_empty() {
+        let _ = writeln!(o, "INVALID: {} runs violate the model (left out of the bands above):", r.invalid.len());
+        for i in r.invalid.iter().take(10) {
+            let _ = writeln!(
+                o,
+                "  run {}: {} e_n {} IWC {}, mu {}, v_belt {}, {}: {}",
+                i.index, i.impact_law, i.e_n, i.iwc, i.mu, i.v_belt, i.ic, i.violations
+            );
+        }
+        if r.invalid.len() > 10 {
+            let _ = writeln!(o, "  ... and {} more (summary.json lists them all)", r.invalid.len() - 10);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ use crate::{
     output::{OutputSet, StreamedCsv},
     plot,
 };
+use plant::Validity;
 use rig::{
     record::{PeriodRecord, RunError},
     rig::{FirmwareLink, RunObserver, run_loop},
@@ -58,6 +59,9 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     if let Some(seed) = args.seed {
         s.sensors.seed = seed;
     }
+    if let Some(iwc) = args.iwc {
+        s.plant.iwc = iwc;
+    }
     s.validate()?;
     Ok(s)
 }
@@ -75,8 +79,8 @@ pub(crate) fn stop_flag() -> Arc<AtomicBool> {
 /// `trace.csv` of `out` as it is made (`trace.csv.partial`, flushed every 1 ms of
 /// wall time, so a plant killed outright keeps every period up to the last
 /// flush), the progress bar moves every `every` periods, Ctrl-C or SIGTERM stops
-/// the run. Returns the records, why the run stopped early if it did, and the
-/// loop's wall-clock time (s); the progress bar is cleared.
+/// the run. Returns the records, why the run stopped early if it did, the loop's
+/// wall-clock time (s) and the plant's validity counters; the progress bar is cleared.
 ///
 /// # Errors
 /// I/O errors of the trace file.
@@ -86,18 +90,23 @@ pub(crate) fn run_streamed(
     out: &mut OutputSet,
     progress: &indicatif::ProgressBar,
     every: usize,
-) -> Result<(Vec<PeriodRecord>, Option<RunError>, f64), CliError> {
+) -> Result<Streamed, CliError> {
     let stop = stop_flag();
     let mut trace = StreamedCsv::new(out, "trace.csv", std::time::Duration::from_millis(1))?;
     let started = Instant::now();
-    /// Streams each record, moves the bar, stops on Ctrl-C.
-    struct Streamed<'a> {
+    /// Streams each record, moves the bar, stops on Ctrl-C, keeps the validity.
+    struct Streaming<'a> {
         trace: &'a mut StreamedCsv,
         progress: &'a indicatif::ProgressBar,
         every: usize,
         stop: &'a AtomicBool,
+        validity: Validity,
     }
-    impl RunObserver for Streamed<'_> {
+    impl RunObserver for Streaming<'_> {
+        fn on_finished(&mut self, validity: &Validity) {
+            self.validity = *validity;
+        }
+
         fn on_record(&mut self, r: &PeriodRecord) {
             self.trace.push(r);
         }
@@ -109,12 +118,25 @@ pub(crate) fn run_streamed(
             !self.stop.load(Ordering::Relaxed)
         }
     }
-    let mut observer = Streamed { trace: &mut trace, progress, every, stop: &stop };
+    let mut observer = Streaming { trace: &mut trace, progress, every, stop: &stop, validity: Validity::default() };
     let (records, failure) = run_loop(scenario, link, &mut observer);
+    let validity = observer.validity;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;
-    Ok((records, failure, wall_s))
+    Ok(Streamed { records, failure, wall_s, validity })
+}
+
+/// What [`run_streamed`] returns.
+pub(crate) struct Streamed {
+    /// Every period's record, up to the failure if there was one.
+    pub records: Vec<PeriodRecord>,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<RunError>,
+    /// Wall-clock time of the loop, s.
+    pub wall_s: f64,
+    /// The plant's validity counters at the end.
+    pub validity: Validity,
 }
 
 pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
@@ -170,6 +192,10 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
         for w in &r.warnings {
             let _ = writeln!(o, "real-time set-up warning: {w}");
         }
+    }
+    let _ = writeln!(o, "validity: {}", summary.validity);
+    if !summary.validity.is_valid() {
+        let _ = writeln!(o, "INVALID: {} (the trajectory violates the model)", summary.validity.describe_violations());
     }
     if let Some(e) = &summary.error {
         let _ = writeln!(o, "STOPPED: {e}");

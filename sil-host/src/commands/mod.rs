@@ -33,6 +33,16 @@ impl<T> Done<T> {
         Self { result, files, failure: None }
     }
 
+    /// With `strict`, a command that finished but whose results have violations
+    /// (`validity`, summed over its runs) fails with [`crate::error::CliError::Invalid`]
+    /// (exit 1); an earlier failure is kept.
+    pub fn strict(mut self, strict: bool, validity: &plant::Validity) -> Self {
+        if strict && self.failure.is_none() && !validity.is_valid() {
+            self.failure = Some(crate::error::CliError::Invalid(validity.describe_violations()));
+        }
+        self
+    }
+
     /// The command's outcome: `Err` with the failure, if any.
     ///
     /// # Errors

@@ -12,7 +12,7 @@
 
 use std::io::Write;
 
-use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
+use super::closed_loop::{Streamed, draw, load_scenario, print_summary, run_streamed};
 use crate::commands::Done;
 use crate::{
     cli::PilArgs,
@@ -91,7 +91,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
-    let (records, failure, wall_s) = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
+    let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -107,11 +107,13 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
         out.write_bytes("defmt.log", text.as_bytes())?;
     }
-    let summary =
-        RunSummary { pil: Some(figures), ..RunSummary::from_records(&scenario, &records, failure.as_ref(), transport, "lockstep", wall_s) };
+    let summary = RunSummary {
+        pil: Some(figures),
+        ..RunSummary::from_records(&scenario, &records, failure.as_ref(), transport, "lockstep", wall_s, validity)
+    };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) })
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host pil`: [`execute`], then prints the summary (human, or the

@@ -8,7 +8,7 @@
 //! the run goes (flushed every millisecond of wall time) and renamed at the end,
 //! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
-use super::closed_loop::{draw, load_scenario, print_summary, run_streamed};
+use super::closed_loop::{Streamed, draw, load_scenario, print_summary, run_streamed};
 use crate::commands::Done;
 use crate::{
     cli::RunArgs,
@@ -64,7 +64,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let (records, failure, wall_s) = run_streamed(&scenario, link, &mut out, &progress, 500)?;
+    let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
     let timings = ipc.as_ref().map(|l| l.timings.clone());
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     drop(ipc);
@@ -85,11 +85,12 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
             transport,
             if args.realtime { "realtime" } else { "lockstep" },
             wall_s,
+            validity,
         )
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) })
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host run`: [`execute`], then prints the summary (human, or the

@@ -28,6 +28,7 @@ pub fn outcome_color(o: Outcome) -> RGBColor {
         Outcome::Flight => colors::GREEN,
         Outcome::SafeState => RGBColor(40, 40, 40),
         Outcome::Failed => RGBColor(200, 200, 200),
+        Outcome::Invalid => RGBColor(0, 0, 0),
     }
 }
 

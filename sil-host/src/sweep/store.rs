@@ -193,6 +193,8 @@ pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
         && a.final_mode == b.final_mode
         && a.lift_offs_transient == b.lift_offs_transient
         && a.rhs_evaluations == b.rhs_evaluations
+        && a.iwc == b.iwc
+        && a.validity() == b.validity()
         && a.error == b.error
 }
 

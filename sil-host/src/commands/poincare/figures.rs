@@ -20,6 +20,7 @@ pub(crate) fn class_style(r: &PointResult) -> (RGBColor, &'static str) {
         (Class::Settling, _) => (RGBColor(190, 190, 190), "settling"),
         (Class::Equilibrium, _) => (BLACK, "equilibrium (final theta1)"),
         (Class::Failed, _) => (RGBColor(255, 0, 255), "failed"),
+        (Class::Invalid, _) => (RGBColor(0, 160, 160), "invalid (violates the model)"),
     }
 }
 

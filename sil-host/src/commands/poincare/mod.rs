@@ -92,7 +92,8 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
     // Parameters at both ends of the grid (mu, v_belt finite, ...).
     Params::new(args.mu, v_min)?;
     let params = Params::new(args.mu, v_max)?;
-    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
+    let sim =
+        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
     sim.validate()?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);
@@ -196,7 +197,12 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
             Class::Chaotic => &mut counts.chaotic,
             Class::Aperiodic => &mut counts.aperiodic,
             Class::Failed => &mut counts.failed,
+            Class::Invalid => &mut counts.invalid,
         } += 1;
+    }
+    let mut validity = plant::Validity::default();
+    for r in &results {
+        validity.add(&r.validity);
     }
     let mut point_walls: Vec<f64> = results.iter().map(|r| r.wall_s).collect();
     point_walls.sort_by(f64::total_cmp);
@@ -216,6 +222,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
         section_depth: cfg.section_depth,
         max_return_s: cfg.max_return_s,
         counts,
+        validity,
         bands: poincare::bands(&results),
         section_points: section.len(),
         threads,
@@ -233,7 +240,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
             r.error.as_deref().unwrap_or("")
         ))
     });
-    Ok(Done { result: summary, files, failure })
+    Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host poincare`: [`execute`], then prints the summary (human, or the

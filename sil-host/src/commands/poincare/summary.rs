@@ -43,6 +43,12 @@ pub(crate) struct ClassRow {
     pub(crate) touchdowns: u64,
     pub(crate) error: String,
     pub(crate) wall_s: f64,
+    pub(crate) energy_gains: u64,
+    pub(crate) newton_fallbacks: u64,
+    pub(crate) poisson_fallbacks: u64,
+    pub(crate) cone_violations: u64,
+    pub(crate) zeno_stops: u64,
+    pub(crate) integrator_failures: u64,
 }
 
 impl From<&PointResult> for ClassRow {
@@ -64,6 +70,12 @@ impl From<&PointResult> for ClassRow {
             touchdowns: r.touchdowns,
             error: r.error.clone().unwrap_or_default(),
             wall_s: r.wall_s,
+            energy_gains: r.validity.energy_gains,
+            newton_fallbacks: r.validity.newton_fallbacks,
+            poisson_fallbacks: r.validity.poisson_fallbacks,
+            cone_violations: r.validity.cone_violations,
+            zeno_stops: r.validity.zeno_stops,
+            integrator_failures: r.validity.integrator_failures,
         }
     }
 }
@@ -83,6 +95,8 @@ pub struct ClassCounts {
     pub aperiodic: usize,
     /// Failed simulations.
     pub failed: usize,
+    /// Simulations whose trajectory violates the model.
+    pub invalid: usize,
 }
 
 /// `summary.json`.
@@ -116,6 +130,8 @@ pub struct Summary {
     pub max_return_s: f64,
     /// Grid points per class.
     pub counts: ClassCounts,
+    /// Validity counters summed over the belt speeds (`classes.csv` has them per speed).
+    pub validity: plant::Validity,
     /// Runs of neighbouring belt speeds with equal class and period.
     pub bands: Vec<Band>,
     /// Section points written.
@@ -155,9 +171,13 @@ pub(crate) fn print_human(s: &Summary) {
     let c = &s.counts;
     let _ = writeln!(
         o,
-        "classes: periodic {} | chaotic {} | aperiodic {} | settling {} | equilibrium {} | failed {}",
-        c.periodic, c.chaotic, c.aperiodic, c.settling, c.equilibrium, c.failed
+        "classes: periodic {} | chaotic {} | aperiodic {} | settling {} | equilibrium {} | failed {} | invalid {}",
+        c.periodic, c.chaotic, c.aperiodic, c.settling, c.equilibrium, c.failed, c.invalid
     );
+    let _ = writeln!(o, "validity: {}", s.validity);
+    if c.invalid > 0 {
+        let _ = writeln!(o, "INVALID: {} belt speeds violate the model (class `invalid` in classes.csv)", c.invalid);
+    }
     let _ = writeln!(o, "bands (v_belt from, to, points):");
     for b in &s.bands {
         let _ = writeln!(o, "  {:>8.4} .. {:>8.4} m/s  {:<12} ({} points)", b.v_belt_min, b.v_belt_max, band_name(b), b.points);

@@ -59,12 +59,20 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
             ("touchdowns (bounces)", format!("{} ({})", c.touchdowns, c.bounces)),
             ("impacts without collision", c.impacts_without_collision.to_string()),
             ("stick phases, stick-to-slip", format!("{}, {}", c.stick_phases, c.stick_to_slip)),
-            ("Zeno stops", c.zeno_stops.to_string()),
-            ("energy-creating impacts (largest gain, J)", format!("{} ({})", c.energy_gains, number(c.max_energy_gain))),
-            ("friction-cone violations", c.cone_violations.to_string()),
+            ("impact without collision rule", s.sim.iwc.to_string()),
+            ("validity", validity_cell(&s.validity)),
             ("final mode, z_t (m)", format!("{}, {}", s.final_mode, number(s.final_tip[0]))),
         ],
     );
+}
+
+/// A validity line for a table cell: every counter, violations first in words.
+pub(crate) fn validity_cell(v: &plant::Validity) -> String {
+    let counts = format!(
+        "energy gains {}, Newton fallbacks {}, Poisson fallbacks {}, cone violations {}, Zeno stops {}, integrator failures {}",
+        v.energy_gains, v.newton_fallbacks, v.poisson_fallbacks, v.cone_violations, v.zeno_stops, v.integrator_failures
+    );
+    if v.is_valid() { format!("valid ({counts})") } else { format!("**INVALID: {}** ({counts})", v.describe_violations()) }
 }
 
 pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
@@ -75,12 +83,41 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
         &[
             ("runs (missing)", format!("{} ({})", r.runs, r.missing)),
             ("outcomes", outcomes.join(", ")),
+            ("validity (all runs)", validity_cell(&r.validity)),
             ("indicator threshold (rad/s)", number(r.threshold)),
             ("rtol, atol", format!("{}, {}", number(s.spec.rtol), number(s.spec.atol))),
         ],
     );
-    let _ = writeln!(md, "Persistent bouncing, by impact law and `e_n`:\n");
-    let _ = writeln!(md, "| impact law | e_n | initial condition | critical mu | bands of v_belt (m/s) per mu |\n|---|---|---|---|---|");
+    if !r.invalid.is_empty() {
+        let _ = writeln!(md, "Runs that violate the model (outcome `invalid`, left out of the bands below):\n");
+        let _ = writeln!(
+            md,
+            "| run | impact law | e_n | IWC | mu | v_belt (m/s) | initial condition | violations |\n|---|---|---|---|---|---|---|---|"
+        );
+        for i in r.invalid.iter().take(MAX_ROWS) {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                i.index,
+                i.impact_law,
+                number(i.e_n),
+                i.iwc,
+                number(i.mu),
+                number(i.v_belt),
+                i.ic,
+                cell(&i.violations)
+            );
+        }
+        if r.invalid.len() > MAX_ROWS {
+            let _ = writeln!(md, "\n({} more in summary.json)", r.invalid.len() - MAX_ROWS);
+        }
+        md.push('\n');
+    }
+    let _ = writeln!(md, "Persistent bouncing, by impact law, `e_n` and IWC rule:\n");
+    let _ = writeln!(
+        md,
+        "| impact law | e_n | IWC | initial condition | critical mu | bands of v_belt (m/s) per mu |\n|---|---|---|---|---|---|"
+    );
     for case in &r.cases {
         for ic in &case.ics {
             let per_mu: Vec<String> = ic
@@ -94,7 +131,7 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
                 .collect();
             let bands = if per_mu.is_empty() { "none".to_string() } else { per_mu.join("; ") };
             let critical = ic.critical_mu.map_or_else(|| "none".to_string(), number);
-            let _ = writeln!(md, "| {} | {} | {} | {critical} | {bands} |", case.impact_law, number(case.e_n), ic.ic);
+            let _ = writeln!(md, "| {} | {} | {} | {} | {critical} | {bands} |", case.impact_law, number(case.e_n), case.iwc, ic.ic);
         }
     }
     md.push('\n');
@@ -112,11 +149,12 @@ pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
             (
                 "classes",
                 format!(
-                    "equilibrium {}, settling {}, periodic {}, chaotic {}, aperiodic {}, failed {}",
-                    c.equilibrium, c.settling, c.periodic, c.chaotic, c.aperiodic, c.failed
+                    "equilibrium {}, settling {}, periodic {}, chaotic {}, aperiodic {}, failed {}, invalid {}",
+                    c.equilibrium, c.settling, c.periodic, c.chaotic, c.aperiodic, c.failed, c.invalid
                 ),
             ),
             ("section points", p.section_points.to_string()),
+            ("validity (all belt speeds)", validity_cell(&p.validity)),
         ],
     );
     let _ = writeln!(md, "| class | period | v_belt from (m/s) | to (m/s) | points |\n|---|---|---|---|---|");
@@ -151,4 +189,5 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
         );
     }
     let _ = writeln!(md, "\nBisection tolerance {} m. {}\n", number(z.tol_m), z.paper);
+    let _ = writeln!(md, "Validity over every trial: {}.\n", validity_cell(&z.validity));
 }

@@ -127,7 +127,14 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     if failed > 0 {
         return Err(CliError::PartFailed(format!("{failed} experiment(s) failed; see {}", dir.join("report.md").display())));
     }
-    Ok(())
+    let mut validity = plant::Validity::default();
+    for v in results.iter().flatten().filter_map(|r| r.outcome.as_ref().and_then(Outcome::validity)) {
+        validity.add(&v);
+    }
+    if !validity.is_valid() {
+        eprintln!("report: results violate the model: {} (the page lists them)", validity.describe_violations());
+    }
+    Done::ok((), Vec::new()).strict(args.strict.strict, &validity).into_result()
 }
 
 /// Runs one step in this process: its command line parsed by the command line's

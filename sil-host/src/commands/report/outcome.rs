@@ -44,6 +44,19 @@ impl Outcome {
         };
         v.unwrap_or(serde_json::Value::Null)
     }
+
+    /// The plant's validity counters of the experiment (summed over its runs);
+    /// `None` for those that do not simulate (modes, admissible, bench).
+    pub fn validity(&self) -> Option<plant::Validity> {
+        match self {
+            Self::Simulate(s) => Some(s.validity),
+            Self::Sweep(s) => Some(s.results.validity),
+            Self::Poincare(p) => Some(p.validity),
+            Self::Zmax(z) => Some(z.validity),
+            Self::Run(r) => Some(r.validity),
+            Self::Modes(_) | Self::Admissible(_) | Self::Bench(_) => None,
+        }
+    }
 }
 
 /// What one step produced.

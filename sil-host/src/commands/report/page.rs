@@ -29,11 +29,16 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
         number(wall_s.round()),
         stamp.line()
     );
-    let _ = writeln!(md, "| experiment | source | status | wall time |\n|---|---|---|---|");
+    let _ = writeln!(md, "| experiment | source | status | model violations | wall time |\n|---|---|---|---|---|");
     for (s, rs) in sections.iter().zip(results) {
         for r in rs {
             let status = if r.error.is_none() { "ok".to_string() } else { "**failed**".to_string() };
-            let _ = writeln!(md, "| {} ({}) | {} | {} | {} s |", s.title, r.id, cell(s.source), status, short(r.wall_s));
+            let violations = match r.outcome.as_ref().and_then(Outcome::validity) {
+                None => "-".to_string(),
+                Some(v) if v.is_valid() => "none".to_string(),
+                Some(v) => format!("**{}**", v.describe_violations()),
+            };
+            let _ = writeln!(md, "| {} ({}) | {} | {} | {} | {} s |", s.title, r.id, cell(s.source), status, violations, short(r.wall_s));
         }
     }
     for (s, rs) in sections.iter().zip(results) {

@@ -56,7 +56,7 @@ pub(crate) fn run_comparison(md: &mut String, runs: &[(&str, &RunSummary)]) {
     }
     let _ = writeln!(md, "\n|---|{}", "---|".repeat(runs.len()));
     type Row = (&'static str, fn(&RunSummary) -> String);
-    let rows: [Row; 13] = [
+    let rows: [Row; 14] = [
         ("status", |s| s.status.to_string()),
         ("controller", |s| s.controller.to_string()),
         ("transport, timing", |s| format!("{}, {}", s.transport, s.timing)),
@@ -70,6 +70,7 @@ pub(crate) fn run_comparison(md: &mut String, runs: &[(&str, &RunSummary)]) {
         ("rms tracking error (mm)", |s| mm(s.rms_tracking_error_m)),
         ("final z_t (m)", |s| number(s.final_z_t_m)),
         ("stopped because", |s| s.error.clone().unwrap_or_else(|| "-".into())),
+        ("model violations", |s| if s.validity.is_valid() { "none".into() } else { s.validity.describe_violations() }),
     ];
     for (name, f) in rows {
         let _ = write!(md, "| {name} |");

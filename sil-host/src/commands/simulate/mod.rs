@@ -96,7 +96,8 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Validate everything before touching the output folder.
     let params = Params::new(args.mu, args.v_belt)?;
-    let sim = SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, ..SimConfig::default() };
+    let sim =
+        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
@@ -183,6 +184,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         touchdowns: counters.touchdowns,
         impacts_without_collision: counters.impacts_without_collision,
         stick_phases: counters.stick_phases,
+        validity: plant.validity(failure.as_ref()),
         counters,
         final_state: plant.state(),
         final_tip: [plant.tip()[0], plant.tip()[1]],
@@ -194,7 +196,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) })
+    let validity = summary.validity;
+    Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the

@@ -1,7 +1,7 @@
 //! The outputs of `sil-host simulate` other than the figure: the rows of `trace.csv` and `events.csv`, `summary.json` and the human summary.
 
 use plant::initial::ProjectionInfo;
-use plant::{Counters, PlantEvent, SimConfig};
+use plant::{Counters, PlantEvent, SimConfig, Validity};
 use serde::Serialize;
 use shared::Params;
 use std::io::Write;
@@ -120,6 +120,8 @@ pub struct Summary {
     pub impacts_without_collision: u64,
     /// Sticking phases.
     pub stick_phases: u64,
+    /// Validity counters; any violation is printed as INVALID (and fails `--strict`).
+    pub validity: Validity,
     /// All event counters.
     pub counters: Counters,
     /// Final state `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s.
@@ -145,11 +147,12 @@ pub(crate) fn print_human(s: &Summary) {
     let mut o = std::io::stdout().lock();
     let _ = writeln!(
         o,
-        "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {})",
+        "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {}), impact without collision: {}",
         s.params.mu,
         s.params.v_belt,
         s.sim.impact_law.name(),
-        s.sim.e_n
+        s.sim.e_n,
+        s.sim.iwc
     );
     let _ = writeln!(
         o,
@@ -186,16 +189,13 @@ pub(crate) fn print_human(s: &Summary) {
     let c = &s.counters;
     let _ = writeln!(
         o,
-        "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {} | Zeno stops {} | energy-creating impacts {}",
-        c.lift_offs,
-        c.touchdowns,
-        c.impacts_without_collision,
-        c.stick_phases,
-        c.stick_to_slip,
-        c.slip_reversals,
-        c.zeno_stops,
-        c.energy_gains
+        "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {}",
+        c.lift_offs, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals,
     );
+    let _ = writeln!(o, "validity: {}", s.validity);
+    if !s.validity.is_valid() {
+        let _ = writeln!(o, "INVALID: {} (the trajectory violates the model)", s.validity.describe_violations());
+    }
     let x = s.final_state;
     let _ = writeln!(
         o,

@@ -77,12 +77,14 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
             target_zt: None,
             duration: None,
             seed: None,
+            iwc: None,
         })?),
     };
     let spec = SweepSpec {
         format: analyses::sweep::FORMAT,
         mu: parse_axis("mu", &args.mu, args.mu_step)?,
         v_belt: parse_axis("v-belt", &args.v_belt, args.v_belt_step)?,
+        iwc_rules: dedup(args.iwc.iter().copied()),
         impact_laws: dedup(args.impact_law.iter().copied()),
         e_n: {
             let mut v: Vec<f64> = Vec::new();
@@ -223,7 +225,8 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
         ))
     });
     let files = summary.files.iter().map(std::path::PathBuf::from).collect();
-    Ok(Done { result: summary, files, failure })
+    let validity = summary.results.validity;
+    Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host sweep`: [`execute`], then prints the summary (human, or the

@@ -151,6 +151,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
                 p_zero_end_m: p_zero_end(&base, s.combination.x0, s.bracket),
                 theta1_fold_m: theta1_fold(s.combination.x0, s.bracket),
                 trials: s.trials.len() as u32,
+                invalid_trials: s.trials.iter().filter(|t| !t.validity.is_valid()).count() as u32,
                 wall_s: s.wall_s,
             }
         })
@@ -170,11 +171,22 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         definition: DEFINITION,
         paper: PAPER,
         base_scenario: base,
+        validity: trials_validity(&searches),
         wall_s: started.elapsed().as_secs_f64(),
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done::ok(summary, files))
+    let validity = summary.validity;
+    Ok(Done::ok(summary, files).strict(args.strict.strict, &validity))
+}
+
+/// The validity counters summed over every trial of every search.
+fn trials_validity(searches: &[Search]) -> plant::Validity {
+    let mut v = plant::Validity::default();
+    for t in searches.iter().flat_map(|s| &s.trials) {
+        v.add(&t.validity);
+    }
+    v
 }
 
 /// Runs `sil-host zmax`: [`execute`], then prints the table (or the JSON

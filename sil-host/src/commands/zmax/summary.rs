@@ -3,7 +3,7 @@
 use analyses::zmax::Setting;
 use analyses::zmax::{Criteria, Trial};
 use firmware::ControllerKind;
-use plant::initial::PaperX0;
+use plant::{Validity, initial::PaperX0};
 use rig::scenario::Scenario;
 use serde::Serialize;
 use std::io::Write;
@@ -38,6 +38,8 @@ pub struct ZmaxRow {
     pub theta1_fold_m: Option<f64>,
     /// Trials run.
     pub trials: u32,
+    /// Trials whose trajectory violated the model (never counted as reached).
+    pub invalid_trials: u32,
     /// Wall-clock time of the search, s.
     pub wall_s: f64,
 }
@@ -60,13 +62,15 @@ pub struct ZmaxSummary {
     /// The base scenario of the sampled setting (its target, run length, controller
     /// and initial condition are set per trial).
     pub base_scenario: Scenario,
+    /// Validity counters summed over every trial.
+    pub validity: Validity,
     /// Wall-clock time of the whole command, s.
     pub wall_s: f64,
 }
 
 pub(crate) const DEFINITION: &str = "z_t* is reached with no lift-off when, over the whole run (the quintic move of z_t* over move_time_s, then held until duration_s): \
 the tip never leaves the belt (no lift-off event, located exactly between samples too; no impact without collision; no sample in flight); \
-the run ends normally (no plant failure, firmware safe state or ideal-law fault); and |z_t - z_t*| <= settle_tol_m at every sample of the last settle_window_s. \
+the run ends normally (no plant failure, firmware safe state or ideal-law fault) with no model violation (energy-creating impact, friction-cone violation); and |z_t - z_t*| <= settle_tol_m at every sample of the last settle_window_s. \
 Z_t,sliding is the largest target verified reached by bisection on [lo, hi] to tol_m; lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi.";
 
 pub(crate) const PAPER: &str = "docs/model.md gives no value for Z_t,sliding: these are ours.";
@@ -86,6 +90,12 @@ pub(crate) struct TrialRow {
     pub(crate) failure: Option<String>,
     pub(crate) simulated_s: f64,
     pub(crate) wall_s: f64,
+    pub(crate) energy_gains: u64,
+    pub(crate) newton_fallbacks: u64,
+    pub(crate) poisson_fallbacks: u64,
+    pub(crate) cone_violations: u64,
+    pub(crate) zeno_stops: u64,
+    pub(crate) integrator_failures: u64,
 }
 
 impl From<&Trial> for TrialRow {
@@ -103,6 +113,12 @@ impl From<&Trial> for TrialRow {
             failure: t.failure.clone(),
             simulated_s: t.simulated_s,
             wall_s: t.wall_s,
+            energy_gains: t.validity.energy_gains,
+            newton_fallbacks: t.validity.newton_fallbacks,
+            poisson_fallbacks: t.validity.poisson_fallbacks,
+            cone_violations: t.validity.cone_violations,
+            zeno_stops: t.validity.zeno_stops,
+            integrator_failures: t.validity.integrator_failures,
         }
     }
 }
@@ -157,6 +173,11 @@ pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
         "p = 0 at: end of the admissible range on the branch (paper Table II); theta1 max at: the fold of theta1 along the belt, which the PID (on theta1 alone) cannot pass"
     );
     let _ = writeln!(o, "{}", s.paper);
+    let _ = writeln!(o, "validity (all trials): {}", s.validity);
+    let invalid: u32 = s.results.iter().map(|r| r.invalid_trials).sum();
+    if invalid > 0 {
+        let _ = writeln!(o, "INVALID: {invalid} trials violate the model (counted as not reached; trials.csv lists them)");
+    }
     let _ = writeln!(
         o,
         "wall time {:.1} s; wrote {}",
