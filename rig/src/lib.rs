@@ -23,6 +23,7 @@ pub mod pil_link;
 pub mod realtime;
 pub mod record;
 pub mod rig;
+pub mod overrides;
 pub mod scenario;
 pub mod sensors;
 pub mod setup;

@@ -53,9 +53,7 @@ fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
 
 /// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
 fn p_zero_end(base: &Scenario, x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
-    let mut params = shared::Params::<f64>::paper();
-    params.mu = base.plant.mu;
-    params.v_belt = base.plant.v_belt;
+    let params = base.plant.params();
     let arm = shared::Arm::new(params);
     let branch = x0.branch();
     let p = |z| p_on_belt(&arm, z, branch, shared::SlipDirection::Positive);
@@ -105,11 +103,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
             None => default_bracket(&base, combo.x0)?,
         };
         sampled_scenario(&base, combo, bracket.1, &criteria)?;
-        analyses::ideal::build(&analyses::ideal::IdealSetup {
-            target_z_t: bracket.1,
-            ..analyses::ideal::IdealSetup::paper(combo.controller, plant::initial::deg_to_state(combo.x0.condition().deg), bracket.0)
-        })
-        .map_err(CliError::Sim)?;
+        analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::Sim)?;
         jobs.push((combo, bracket));
     }
     let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_evaluations(b.0, b.1, args.tol))).sum();
