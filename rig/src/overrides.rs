@@ -232,7 +232,9 @@ pub fn arm_keys(names: &[&str]) -> Vec<String> {
 /// The arm's parameters for a command without a scenario file: paper Table I
 /// ([`Params::paper`]) with the `--set plant.KEY=VALUE` overrides of the arm's
 /// keys in `allowed` (full dotted keys, from [`arm_keys`]), and the command's
-/// `mu` and `v_belt`; validated with the scenario's key-named checks.
+/// `mu` and `v_belt`. The arm's keys are checked as in a scenario file (errors
+/// name the key); `mu` and `v_belt` are the caller's to check
+/// ([`Params::validate`]).
 ///
 /// # Errors
 /// [`ScenarioError`] naming the key: not allowed here ([`OverrideError::NotHere`]),
@@ -240,9 +242,7 @@ pub fn arm_keys(names: &[&str]) -> Vec<String> {
 pub fn arm_params(overrides: &[Override], allowed: &[String], command: &str, mu: f64, v_belt: f64) -> Result<Params<f64>, ScenarioError> {
     check_allowed(overrides, allowed, command)?;
     let s = Scenario::from_toml_with(DEFAULT_TOML, overrides)?;
-    let p = Params { mu, v_belt, ..s.plant.params() };
-    p.validate().map_err(|e| ScenarioError::Parse(e.to_string()))?;
-    Ok(p)
+    Ok(Params { mu, v_belt, ..s.plant.params() })
 }
 
 #[cfg(test)]

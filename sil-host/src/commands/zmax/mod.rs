@@ -40,15 +40,18 @@ fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
     vec![Combination { controller, x0, setting }]
 }
 
+/// The keys each trial sets: `--set` of one of them is refused.
+const TRIAL_KEYS: [(&str, &str); 4] = [
+    ("controller.kind", "--controller (or --all)"),
+    ("plant.x0", "--x0 (or --all)"),
+    ("controller.target_z_t", "the bisection"),
+    ("timing.duration_s", "--duration"),
+];
+
+/// The base scenario (`--scenario` or the embedded default) with the `--set` overrides.
 fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
-    match &args.scenario {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?;
-            Ok(Scenario::from_toml(&text)?)
-        }
-        None => Ok(Scenario::default_scenario()),
-    }
+    rig::overrides::check_keys(&args.set, &TRIAL_KEYS).map_err(rig::scenario::ScenarioError::from)?;
+    crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)
 }
 
 /// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
@@ -163,6 +166,14 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         tol_m: args.tol,
         definition: DEFINITION,
         paper: PAPER,
+        plant_params: base.plant.params(),
+        gains: ZmaxGains {
+            pid: base.controller.pid,
+            hybrid_kp: base.controller.hybrid.kp,
+            hybrid_kd: base.controller.hybrid.kd,
+            hybrid_ki_x0d: base.controller.hybrid_ki(PaperX0::D),
+            hybrid_ki_x0u: base.controller.hybrid_ki(PaperX0::U),
+        },
         base_scenario: base,
         wall_s: started.elapsed().as_secs_f64(),
     };
