@@ -476,13 +476,16 @@ impl Scenario {
     /// ([`ScenarioError::Override`], or the key and value of the bad key).
     pub fn from_toml_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
         let mut doc: toml::Table = toml::from_str(text).map_err(|e: toml::de::Error| ScenarioError::Parse(e.to_string()))?;
-        let migrated = overrides::migrate_legacy(&mut doc)?;
+        // The file's old key first (an override of `controller.hybrid.ki` then
+        // wins over it), then an override's.
+        let mut migrated = overrides::migrate_legacy(&mut doc)?;
+        overrides::apply(&mut doc, overrides)?;
+        migrated |= overrides::migrate_legacy(&mut doc)?;
         let s: Scenario = if overrides.is_empty() && !migrated {
             // The text itself: the TOML errors give the line.
             let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
             read(de, &[])?
         } else {
-            overrides::apply(&mut doc, overrides)?;
             read(toml::Value::Table(doc), overrides)?
         };
         s.validate()?;
@@ -507,6 +510,7 @@ impl Scenario {
         }
         let mut doc = self.to_table()?;
         overrides::apply(&mut doc, overrides)?;
+        overrides::migrate_legacy(&mut doc)?;
         let s: Scenario = read(toml::Value::Table(doc), overrides)?;
         s.validate()?;
         Ok(s)
@@ -594,7 +598,9 @@ where
 {
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
-        let inner = e.into_inner();
+        let inner = e.into_inner().to_string();
+        // Errors from a document (not a text) repeat the key on a line of their own.
+        let inner = if overrides.is_empty() { inner.as_str() } else { inner.lines().next().unwrap_or_default() };
         let msg = if path == "." { inner.to_string() } else { format!("scenario key `{path}`: {inner}") };
         match overrides::culprit(overrides, &path) {
             Some(o) => ScenarioError::Parse(format!("{msg} (from --set {o})")),
