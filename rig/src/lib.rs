@@ -9,6 +9,7 @@
 //! firmware in-process only (what the analyses need).
 #![warn(missing_docs)]
 
+pub mod arm;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
@@ -18,12 +19,12 @@ pub mod in_process;
 pub mod ipc;
 #[cfg(feature = "ipc")]
 pub mod ipc_link;
+pub mod overrides;
 #[cfg(feature = "pil")]
 pub mod pil_link;
 pub mod realtime;
 pub mod record;
 pub mod rig;
-pub mod overrides;
 pub mod scenario;
 pub mod sensors;
 pub mod setup;

@@ -11,13 +11,9 @@
 //!
 //! Commands without a scenario file (`simulate`, `admissible`, `modes`,
 //! `poincare`, open-loop `sweep`) take only the arm's keys of `[plant]` (paper
-//! Table I) and get their [`Params`] from [`arm_params`].
+//! Table I) and get their parameters from [`crate::arm::arm_params`].
 
 use std::str::FromStr;
-
-use shared::Params;
-
-use super::scenario::{ARM_KEYS, DEFAULT_TOML, Scenario, ScenarioError};
 
 /// One `--set KEY=VALUE`.
 #[derive(Debug, Clone, PartialEq)]
@@ -189,30 +185,6 @@ pub fn apply(doc: &mut toml::Table, overrides: &[Override]) -> Result<(), Overri
     Ok(())
 }
 
-/// Reads the old key `controller.hybrid_ki` as `controller.hybrid.ki` (scenario
-/// files written before the gains were opened). Returns whether it did.
-///
-/// # Errors
-/// [`ScenarioError::Parse`] when both are given.
-pub fn migrate_legacy(doc: &mut toml::Table) -> Result<bool, ScenarioError> {
-    let Some(toml::Value::Table(controller)) = doc.get_mut("controller") else {
-        return Ok(false);
-    };
-    let Some(ki) = controller.remove("hybrid_ki") else {
-        return Ok(false);
-    };
-    let hybrid = controller.entry("hybrid").or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    match hybrid {
-        toml::Value::Table(h) if !h.contains_key("ki") => {
-            h.insert("ki".into(), ki);
-            Ok(true)
-        }
-        _ => Err(ScenarioError::Parse(
-            "scenario keys `controller.hybrid_ki` and `controller.hybrid.ki` are the same gain K'_I: give one (controller.hybrid.ki)".into(),
-        )),
-    }
-}
-
 /// The override behind an error at key path `path` (serde's, e.g. `plant` for an
 /// unknown key of `[plant]`, `controller.pid.kp` for a bad value), if any.
 pub fn culprit<'a>(overrides: &'a [Override], path: &str) -> Option<&'a Override> {
@@ -221,28 +193,6 @@ pub fn culprit<'a>(overrides: &'a [Override], path: &str) -> Option<&'a Override
         .rev()
         .find(|o| o.key == path)
         .or_else(|| overrides.iter().rev().find(|o| o.key.starts_with(path) || path.starts_with(o.key.as_str())))
-}
-
-/// The dotted keys of the arm's parameters in `[plant]` (`plant.m`, ...), those of
-/// [`ARM_KEYS`] named in `names` (all when `names` is empty).
-pub fn arm_keys(names: &[&str]) -> Vec<String> {
-    ARM_KEYS.iter().filter(|k| names.is_empty() || names.contains(k)).map(|k| format!("plant.{k}")).collect()
-}
-
-/// The arm's parameters for a command without a scenario file: paper Table I
-/// ([`Params::paper`]) with the `--set plant.KEY=VALUE` overrides of the arm's
-/// keys in `allowed` (full dotted keys, from [`arm_keys`]), and the command's
-/// `mu` and `v_belt`. The arm's keys are checked as in a scenario file (errors
-/// name the key); `mu` and `v_belt` are the caller's to check
-/// ([`Params::validate`]).
-///
-/// # Errors
-/// [`ScenarioError`] naming the key: not allowed here ([`OverrideError::NotHere`]),
-/// given twice, a bad value or out of range.
-pub fn arm_params(overrides: &[Override], allowed: &[String], command: &str, mu: f64, v_belt: f64) -> Result<Params<f64>, ScenarioError> {
-    check_allowed(overrides, allowed, command)?;
-    let s = Scenario::from_toml_with(DEFAULT_TOML, overrides)?;
-    Ok(Params { mu, v_belt, ..s.plant.params() })
 }
 
 #[cfg(test)]
@@ -266,46 +216,21 @@ mod tests {
     }
 
     #[test]
-    fn overrides_reach_the_scenario_and_errors_name_the_key() {
-        let s = Scenario::from_toml_with(DEFAULT_TOML, &[set("plant.m=0.24"), set("controller.pid.kp=[150,1]")]).unwrap();
-        assert_eq!((s.plant.m, s.controller.pid.kp), (0.24, [150.0, 1.0]));
-        let err = |args: &[&str]| {
-            let o: Vec<Override> = args.iter().map(|a| set(a)).collect();
-            Scenario::from_toml_with(DEFAULT_TOML, &o).unwrap_err().to_string()
-        };
-        let e = err(&["plant.m=-1"]);
-        assert!(e.contains("`plant.m` = -1") && e.contains("> 0"), "{e}");
-        let e = err(&["plant.m=nan"]);
-        assert!(e.contains("`plant.m` = NaN"), "{e}");
-        let e = err(&["plant.mass=1"]);
-        assert!(e.contains("mass") && e.contains("plant.mass=1"), "{e}");
-        let e = err(&["controller.pid.kp=[1]"]);
-        assert!(e.contains("controller.pid.kp"), "{e}");
-        let e = err(&["controller.hybrid.kd=-3"]);
-        assert!(e.contains("controller.hybrid.kd") && e.contains("-3"), "{e}");
-        let e = err(&["plant.m=1", "plant.m=2"]);
-        assert!(e.contains("twice"), "{e}");
-        let e = err(&["plant.m.x=1"]);
-        assert!(e.contains("`plant.m` is not a table"), "{e}");
-        let e = err(&["controller.model.l=0.1"]);
-        assert!(e.contains("controller.model.h"), "{e}");
-    }
-
-    #[test]
-    fn the_legacy_hybrid_ki_key_is_read_as_hybrid_ki() {
-        let old = DEFAULT_TOML.replace("[controller]\n", "[controller]\nhybrid_ki = 321.0\n");
-        assert_eq!(Scenario::from_toml(&old).unwrap().controller.hybrid.ki, Some(321.0));
-        let both = old.replace("kd = 900.0 ", "ki = 1.0\nkd = 900.0 ");
-        assert!(Scenario::from_toml(&both).is_err());
+    fn apply_sets_values_and_creates_tables() {
+        let mut doc: toml::Table = toml::from_str("[plant]\nm = 0.12\n[[faults]]\nkind = \"stall\"\n").unwrap();
+        apply(&mut doc, &[set("plant.m=0.2"), set("controller.model.l=0.3")]).unwrap();
+        assert_eq!(doc["plant"]["m"].as_float(), Some(0.2));
+        assert_eq!(doc["controller"]["model"]["l"].as_float(), Some(0.3));
+        assert!(matches!(apply(&mut doc, &[set("plant.m.x=1")]), Err(OverrideError::NotATable { .. })));
+        assert!(matches!(apply(&mut doc, &[set("faults=1")]), Err(OverrideError::NotATable { .. })));
+        assert!(matches!(apply(&mut doc, &[set("plant.m=1"), set("plant.m=2")]), Err(OverrideError::Twice { .. })));
     }
 
     #[test]
     fn flags_own_their_keys() {
         let e = check_keys(&[set("plant.mu=0.3")], &[("plant.mu", "--mu")]).unwrap_err().to_string();
         assert!(e.contains("--mu") && e.contains("plant.mu"), "{e}");
-        let e = arm_params(&[set("controller.pid.kp=[1,0]")], &arm_keys(&[]), "simulate", 0.6, -0.4).unwrap_err().to_string();
-        assert!(e.contains("controller.pid.kp") && e.contains("simulate"), "{e}");
-        let p = arm_params(&[set("plant.m=0.24")], &arm_keys(&[]), "simulate", 0.5, -0.3).unwrap();
-        assert_eq!(p, Params { m: 0.24, mu: 0.5, v_belt: -0.3, ..Params::paper() });
+        let e = check_allowed(&[set("plant.m=1")], &["plant.l".into()], "admissible").unwrap_err().to_string();
+        assert!(e.contains("plant.m") && e.contains("admissible") && e.contains("plant.l"), "{e}");
     }
 }

@@ -478,9 +478,9 @@ impl Scenario {
         let mut doc: toml::Table = toml::from_str(text).map_err(|e: toml::de::Error| ScenarioError::Parse(e.to_string()))?;
         // The file's old key first (an override of `controller.hybrid.ki` then
         // wins over it), then an override's.
-        let mut migrated = overrides::migrate_legacy(&mut doc)?;
+        let mut migrated = migrate_legacy(&mut doc)?;
         overrides::apply(&mut doc, overrides)?;
-        migrated |= overrides::migrate_legacy(&mut doc)?;
+        migrated |= migrate_legacy(&mut doc)?;
         let s: Scenario = if overrides.is_empty() && !migrated {
             // The text itself: the TOML errors give the line.
             let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
@@ -510,7 +510,7 @@ impl Scenario {
         }
         let mut doc = self.to_table()?;
         overrides::apply(&mut doc, overrides)?;
-        overrides::migrate_legacy(&mut doc)?;
+        migrate_legacy(&mut doc)?;
         let s: Scenario = read(toml::Value::Table(doc), overrides)?;
         s.validate()?;
         Ok(s)
@@ -563,8 +563,18 @@ impl Scenario {
         let t = &self.timing;
         let (lo, hi) = TimingSection::RATE_RANGE_HZ;
         check(finite(t.rate_hz) && (lo..=hi).contains(&t.rate_hz), "timing.rate_hz", t.rate_hz, "250 to 10000 Hz (docs/hardware.md)")?;
-        check(finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < t.period().as_secs_f64(), "timing.delta_s", t.delta_s, "a value in [0, one period)")?;
-        check(finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5, "timing.duration_s", t.duration_s, "a value in (0, 1e5] s")?;
+        check(
+            finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < t.period().as_secs_f64(),
+            "timing.delta_s",
+            t.delta_s,
+            "a value in [0, one period)",
+        )?;
+        check(
+            finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5,
+            "timing.duration_s",
+            t.duration_s,
+            "a value in (0, 1e5] s",
+        )?;
         let noise = self.sensors.load_noise_n;
         check(finite(noise) && noise >= 0.0, "sensors.load_noise_n", noise, "a finite value >= 0")?;
         let r = &self.rig;
@@ -575,7 +585,12 @@ impl Scenario {
             "a value in (0, 60] s",
         )?;
         check(finite(r.spin_us) && (0.0..=1e6).contains(&r.spin_us), "rig.spin_us", r.spin_us, "a value in [0, 1e6] us")?;
-        check(finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0, "rig.peer_check_s", r.peer_check_s, "a value in (0, 60] s")?;
+        check(
+            finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0,
+            "rig.peer_check_s",
+            r.peer_check_s,
+            "a value in (0, 60] s",
+        )?;
         check(r.max_consecutive_timeouts >= 1, "rig.max_consecutive_timeouts", r.max_consecutive_timeouts, ">= 1")?;
         if let Err(want) = r.realtime_pin() {
             check(false, "rig.realtime_cpu", format!("{:?}", r.realtime_cpu), want)?;
@@ -587,6 +602,31 @@ impl Scenario {
             }
         }
         Ok(())
+    }
+}
+
+/// Reads the old key `controller.hybrid_ki` as `controller.hybrid.ki` (scenario
+/// files written before the gains were opened). Returns whether it did.
+///
+/// # Errors
+/// [`ScenarioError::Parse`] when both are given.
+fn migrate_legacy(doc: &mut toml::Table) -> Result<bool, ScenarioError> {
+    let Some(toml::Value::Table(controller)) = doc.get_mut("controller") else {
+        return Ok(false);
+    };
+    let Some(ki) = controller.remove("hybrid_ki") else {
+        return Ok(false);
+    };
+    let hybrid = controller.entry("hybrid").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    match hybrid {
+        toml::Value::Table(h) if !h.contains_key("ki") => {
+            h.insert("ki".into(), ki);
+            Ok(true)
+        }
+        _ => Err(ScenarioError::Parse(
+            "scenario keys `controller.hybrid_ki` and `controller.hybrid.ki` are the same gain K'_I: give one (controller.hybrid.ki)"
+                .into(),
+        )),
     }
 }
 
@@ -646,6 +686,48 @@ mod tests {
         let bad_prio = DEFAULT_TOML.replace("realtime_fifo_priority = 10", "realtime_fifo_priority = 100");
         let e = Scenario::from_toml(&bad_prio).unwrap_err().to_string();
         assert!(e.contains("rig.realtime_fifo_priority") && e.contains("100"), "{e}");
+    }
+
+    fn set(arg: &str) -> Override {
+        arg.parse().unwrap()
+    }
+
+    #[test]
+    fn overrides_reach_the_scenario_and_errors_name_the_key() {
+        let s = Scenario::from_toml_with(DEFAULT_TOML, &[set("plant.m=0.24"), set("controller.pid.kp=[150,1]")]).unwrap();
+        assert_eq!((s.plant.m, s.controller.pid.kp), (0.24, [150.0, 1.0]));
+        assert_eq!(s, Scenario::default_scenario().with_overrides(&[set("plant.m=0.24"), set("controller.pid.kp=[150,1]")]).unwrap());
+        let err = |args: &[&str]| {
+            let o: Vec<Override> = args.iter().map(|a| set(a)).collect();
+            Scenario::from_toml_with(DEFAULT_TOML, &o).unwrap_err().to_string()
+        };
+        let e = err(&["plant.m=-1"]);
+        assert!(e.contains("`plant.m` = -1") && e.contains("> 0"), "{e}");
+        let e = err(&["plant.m=nan"]);
+        assert!(e.contains("`plant.m` = NaN"), "{e}");
+        let e = err(&["plant.mass=1"]);
+        assert!(e.contains("mass") && e.contains("plant.mass=1"), "{e}");
+        let e = err(&["controller.pid.kp=[1]"]);
+        assert!(e.contains("controller.pid.kp"), "{e}");
+        let e = err(&["controller.hybrid.kd=-3"]);
+        assert!(e.contains("controller.hybrid.kd") && e.contains("-3"), "{e}");
+        let e = err(&["plant.m=1", "plant.m=2"]);
+        assert!(e.contains("twice"), "{e}");
+        let e = err(&["plant.m.x=1"]);
+        assert!(e.contains("`plant.m` is not a table"), "{e}");
+        let e = err(&["controller.model.l=0.1"]);
+        assert!(e.contains("controller.model.h"), "{e}");
+    }
+
+    #[test]
+    fn the_legacy_hybrid_ki_key_is_read_as_hybrid_ki() {
+        let old = DEFAULT_TOML.replace("[controller]\n", "[controller]\nhybrid_ki = 321.0\n");
+        assert_eq!(Scenario::from_toml(&old).unwrap().controller.hybrid.ki, Some(321.0));
+        let both = old.replace("kd = 900.0 ", "ki = 1.0\nkd = 900.0 ");
+        assert!(Scenario::from_toml(&both).is_err());
+        // An override of the new key wins over the file's old one.
+        assert_eq!(Scenario::from_toml_with(&old, &[set("controller.hybrid.ki=5")]).unwrap().controller.hybrid.ki, Some(5.0));
+        assert_eq!(Scenario::from_toml_with(DEFAULT_TOML, &[set("controller.hybrid_ki=7")]).unwrap().controller.hybrid.ki, Some(7.0));
     }
 
     #[test]

@@ -84,8 +84,7 @@ fn the_firmware_models_the_plant_unless_told_otherwise() {
     // The gains and the PIL configuration message carry them.
     let s = Scenario::from_toml_with(
         rig::scenario::DEFAULT_TOML,
-        &["controller.pid.kp=[150, 1]", "controller.hybrid.kd=700", "controller.hybrid.ki=300", "plant.g=9.7"]
-            .map(|a| a.parse().unwrap()),
+        &["controller.pid.kp=[150, 1]", "controller.hybrid.kd=700", "controller.hybrid.ki=300", "plant.g=9.7"].map(|a| a.parse().unwrap()),
     )
     .unwrap();
     let cfg = setup::firmware_config(&s);
@@ -119,8 +118,19 @@ fn k_prime_i_defaults_to_the_papers_by_initial_condition() {
 fn simulate_with_set_equals_the_plant_built_directly() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sim");
-    let (code, err) =
-        sil_host(&["simulate", "--x0", "d", "--duration", "0.5", "--set", "plant.m=0.24", "--set", "plant.k=2", "--out", out.to_str().unwrap()]);
+    let (code, err) = sil_host(&[
+        "simulate",
+        "--x0",
+        "d",
+        "--duration",
+        "0.5",
+        "--set",
+        "plant.m=0.24",
+        "--set",
+        "plant.k=2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     let params = Params::<f64> { m: 0.24, k: 2.0, ..Params::paper() };
     assert_eq!(json(&out.join("summary.json"))["params"]["m"], 0.24);
@@ -200,13 +210,39 @@ fn the_open_loop_analyses_take_the_arm_keys() {
     assert_eq!(a1["z_r_dot_positive"]["elbow_up"], serde_json::json!(up));
     ok(&["modes", "--grid", "20", "--set", "plant.g=5", "--json", "--out", o("m").to_str().unwrap()]);
     ok(&[
-        "sweep", "--mu", "0.6", "--v-belt", "-0.4", "--ics", "d", "--transient", "1", "--record", "1", "--set", "plant.m=0.2", "--out",
+        "sweep",
+        "--mu",
+        "0.6",
+        "--v-belt",
+        "-0.4",
+        "--ics",
+        "d",
+        "--transient",
+        "1",
+        "--record",
+        "1",
+        "--set",
+        "plant.m=0.2",
+        "--out",
         o("s").to_str().unwrap(),
     ]);
     assert_eq!(json(&o("s").join("sweep.json"))["spec"]["params"]["m"], 0.2);
     // Resuming with other parameters is another sweep: refused.
     let (code, _) = sil_host(&[
-        "sweep", "--mu", "0.6", "--v-belt", "-0.4", "--ics", "d", "--transient", "1", "--record", "1", "--set", "plant.m=0.3", "--out",
+        "sweep",
+        "--mu",
+        "0.6",
+        "--v-belt",
+        "-0.4",
+        "--ics",
+        "d",
+        "--transient",
+        "1",
+        "--record",
+        "1",
+        "--set",
+        "plant.m=0.3",
+        "--out",
         o("s").to_str().unwrap(),
     ]);
     assert_eq!(code, 2);
@@ -221,9 +257,19 @@ fn the_ideal_laws_use_the_opened_gains() {
     )
     .unwrap();
     let c = Criteria { duration_s: 3.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 1.0 };
-    let pid = ideal_setup(&base, Combination { controller: firmware::ControllerKind::Pid, x0: plant::initial::PaperX0::D, setting: Setting::Ideal }, 0.05, &c);
+    let pid = ideal_setup(
+        &base,
+        Combination { controller: firmware::ControllerKind::Pid, x0: plant::initial::PaperX0::D, setting: Setting::Ideal },
+        0.05,
+        &c,
+    );
     assert_eq!((pid.pid.kp, pid.hybrid_kp, pid.params.m), ([150.0, 0.0], 400.0, 0.2));
-    let u = ideal_setup(&base, Combination { controller: firmware::ControllerKind::Hybrid, x0: plant::initial::PaperX0::U, setting: Setting::Ideal }, 0.05, &c);
+    let u = ideal_setup(
+        &base,
+        Combination { controller: firmware::ControllerKind::Hybrid, x0: plant::initial::PaperX0::U, setting: Setting::Ideal },
+        0.05,
+        &c,
+    );
     assert_eq!(u.hybrid_ki, 0.0);
     // The gains change the ideal run.
     let paper = ideal_setup(

@@ -34,9 +34,8 @@ use rig::{
 /// the key (exit 2).
 pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result<Scenario, CliError> {
     let text = match path {
-        Some(path) if path.as_os_str() == "-" => {
-            std::io::read_to_string(std::io::stdin()).map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?
-        }
+        Some(path) if path.as_os_str() == "-" => std::io::read_to_string(std::io::stdin())
+            .map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?,
         Some(path) => {
             std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?
         }

@@ -73,7 +73,7 @@ pub fn arm_params(
 ) -> Result<shared::Params<f64>, crate::error::CliError> {
     use rig::{overrides, scenario::ScenarioError};
     overrides::check_keys(set, &PLANT_FLAGS).map_err(ScenarioError::from)?;
-    let params = overrides::arm_params(set, &overrides::arm_keys(arm), command, mu, v_belt)?;
+    let params = rig::arm::arm_params(set, &rig::arm::arm_keys(arm), command, mu, v_belt)?;
     params.validate()?;
     Ok(params)
 }

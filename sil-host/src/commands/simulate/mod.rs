@@ -8,7 +8,6 @@
 
 use std::time::Instant;
 
-
 use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
