@@ -214,11 +214,12 @@ pub struct ZmaxArgs {
     /// The last part of the run where the tip must be within --settle-tol, s.
     #[arg(long, default_value_t = 1.0)]
     pub settle_window: f64,
-    /// Base scenario of the sampled setting (rate, sensors, mu, v_belt, f_n*, move
-    /// time, ...); its controller, initial condition, K'_I (the paper's: 650 from
-    /// x0d, 0 from x0u), target and run length are set per trial. The ideal setting
-    /// takes mu, v_belt, f_n*, the move time and the plant settings from it.
-    /// Default: the embedded default scenario.
+    /// Base scenario of the sampled setting (rate, sensors, the arm's parameters,
+    /// mu, v_belt, gains, f_n*, move time, ...); its controller, initial condition,
+    /// target and run length are set per trial, and K'_I when it does not give
+    /// controller.hybrid.ki (the paper's: 650 from x0d, 0 from x0u). The ideal
+    /// setting takes the plant's parameters, the gains, f_n*, the move time and the
+    /// plant settings from it. Default: the embedded default scenario.
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
     /// Change one key of the base scenario, e.g. `--set plant.m=0.24
@@ -577,8 +578,9 @@ pub struct SweepArgs {
     pub ideal: bool,
     /// Closed loop: scenario whose controller, timing and sensor sections are used
     /// (default: the embedded default, experiment 6's hybrid references). Its plant
-    /// section is replaced per run; mu_hat is set to each run's mu, and K'_I to 0
-    /// from elbow-up initial conditions (the paper's x0u gains).
+    /// section is replaced per run (except the arm's parameters); mu_hat is set to
+    /// each run's mu, and, unless it gives controller.hybrid.ki, K'_I to 0 from
+    /// elbow-up initial conditions and 650 otherwise (the paper's gains).
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
     /// Impact laws, comma-separated (each is a sweep dimension).
