@@ -403,7 +403,7 @@ pub struct AdmissibleArgs {
     #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
     pub mu: f64,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
-    /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.l, plant.h. Repeatable;
+    /// `--set plant.l=0.25 --set plant.h=0.35`: KEYS plant.l, plant.h. Repeatable;
     /// the defaults are the paper's. Only these change where p > 0 (m scales p; the rest do not enter it). Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
     #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
