@@ -186,7 +186,16 @@ pub fn compute(mu: f64) -> Result<AdmissibleReport, ParamError> {
 /// # Errors
 /// As [`compute`].
 pub fn compute_with_steps(mu: f64, steps: usize) -> Result<AdmissibleReport, ParamError> {
-    let params = Params { mu, ..Params::<f64>::paper() };
+    compute_for(Params { mu, ..Params::<f64>::paper() }, steps)
+}
+
+/// [`compute_with_steps`] for an arm with `params` (paper Table I as given, with
+/// its `mu`; only `l`, `H` and `mu` change where `p > 0`: `m` scales `p` and the
+/// other parameters do not enter it).
+///
+/// # Errors
+/// [`ParamError`] when `params` are invalid.
+pub fn compute_for(params: Params<f64>, steps: usize) -> Result<AdmissibleReport, ParamError> {
     params.validate()?;
     let arm = Arm::new(params);
     let reach = belt_reach(&params);

@@ -49,6 +49,7 @@ use shared::{
 
 use firmware::ControllerKind;
 use plant::{Controller, Counters, EventKind, Phase, Plant, SimConfig, SimError};
+use rig::scenario::{HybridSection, PidSection};
 
 /// One point of the tangential reference: `z_t*` (m), `z_t_dot*` (m/s), `z_t_ddot*` (m/s^2).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -375,10 +376,9 @@ pub struct IdealSetup {
     /// Initial state `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s); a tip
     /// up to 1 mm inside the belt is projected onto it (same `z_t` and branch).
     pub x0: [f64; 4],
-    /// Friction coefficient `mu`.
-    pub mu: f64,
-    /// Belt speed, m/s.
-    pub v_belt: f64,
+    /// The plant's parameters (paper Table I, `mu`, `v_belt`); the ideal laws
+    /// model the arm exactly with them.
+    pub params: Params<f64>,
     /// Tangential target `z_t*`, m.
     pub target_z_t: f64,
     /// Duration of the quintic move from the initial tip position, s (> 0).
@@ -387,7 +387,13 @@ pub struct IdealSetup {
     pub duration_s: f64,
     /// `f_n*`, N (hybrid).
     pub f_n_ref: f64,
-    /// `K'_I`, 1/s (hybrid).
+    /// PID gains (paper eq. 8), per joint of `q' = [theta1, theta2 - theta1]`.
+    pub pid: PidSection,
+    /// `K'_P`, 1/s^2 (hybrid, paper eq. 10).
+    pub hybrid_kp: f64,
+    /// `K'_D`, 1/s (hybrid, paper eq. 10).
+    pub hybrid_kd: f64,
+    /// `K'_I`, 1/s (hybrid, paper eq. 11).
     pub hybrid_ki: f64,
     /// Sampling period of the trace, s (the law itself is continuous).
     pub sample_dt: f64,
@@ -398,20 +404,24 @@ pub struct IdealSetup {
 }
 
 impl IdealSetup {
-    /// The paper's set-up of experiments 5 and 6: `mu = 0.6`, `v_belt = -0.4 m/s`,
-    /// `f_n* = 10 N`, `K'_I` = 650 from an elbow-down initial state (`x0d`) and 0
-    /// from an elbow-up one (`x0u`), a 2 s move, 10 s, sampled every 1 ms.
+    /// The paper's set-up of experiments 5 and 6: paper Table I with `mu = 0.6`,
+    /// `v_belt = -0.4 m/s`, `f_n* = 10 N`, the paper's gains (eqs. 8 to 11) with
+    /// `K'_I` = 650 from an elbow-down initial state (`x0d`) and 0 from an
+    /// elbow-up one (`x0u`), a 2 s move, 10 s, sampled every 1 ms.
     pub fn paper(controller: ControllerKind, x0: [f64; 4], target_z_t: f64) -> Self {
         let down = ElbowBranch::of(&Vector2::new(x0[0], x0[2])) == ElbowBranch::Down;
+        let hybrid = HybridSection::default();
         Self {
             controller,
             x0,
-            mu: 0.6,
-            v_belt: -0.4,
+            params: Params::paper(),
             target_z_t,
             move_time_s: 2.0,
             duration_s: 10.0,
             f_n_ref: 10.0,
+            pid: PidSection::default(),
+            hybrid_kp: hybrid.kp,
+            hybrid_kd: hybrid.kd,
             hybrid_ki: if down { 650.0 } else { 0.0 },
             sample_dt: 1e-3,
             stop_at_lift_off: false,
@@ -482,9 +492,7 @@ impl IdealRun {
 /// reach ([`SimError::Unreachable`]), a non-positive move time or sample period
 /// ([`SimError::BadStep`]).
 pub fn build(setup: &IdealSetup) -> Result<(Plant, IdealLaw), SimError> {
-    let mut params = Params::<f64>::paper();
-    params.mu = setup.mu;
-    params.v_belt = setup.v_belt;
+    let params = setup.params;
     params.validate()?;
     for v in [setup.move_time_s, setup.sample_dt] {
         if !(v.is_finite() && v > 0.0) {
@@ -494,7 +502,20 @@ pub fn build(setup: &IdealSetup) -> Result<(Plant, IdealLaw), SimError> {
     if !(setup.duration_s.is_finite() && setup.duration_s >= 0.0) {
         return Err(SimError::BadStep(setup.duration_s));
     }
-    for (name, v) in [("f_n_ref", setup.f_n_ref), ("hybrid_ki", setup.hybrid_ki)] {
+    let pid = &setup.pid;
+    let gains = [
+        ("f_n_ref", setup.f_n_ref),
+        ("pid.kp[0]", pid.kp[0]),
+        ("pid.kp[1]", pid.kp[1]),
+        ("pid.ki[0]", pid.ki[0]),
+        ("pid.ki[1]", pid.ki[1]),
+        ("pid.kd[0]", pid.kd[0]),
+        ("pid.kd[1]", pid.kd[1]),
+        ("hybrid_kp", setup.hybrid_kp),
+        ("hybrid_kd", setup.hybrid_kd),
+        ("hybrid_ki", setup.hybrid_ki),
+    ];
+    for (name, v) in gains {
         if !(v.is_finite() && v >= 0.0) {
             return Err(SimError::BadConfig { name, value: v, expected: "a finite value >= 0" });
         }
@@ -506,8 +527,12 @@ pub fn build(setup: &IdealSetup) -> Result<(Plant, IdealLaw), SimError> {
     inverse_kinematics(params.l, &Vector2::new(setup.target_z_t, -params.h), branch)?;
     let reference = Reference { start: probe.tip()[0], target: setup.target_z_t, duration: setup.move_time_s };
     let law = match setup.controller {
-        ControllerKind::Pid => IdealLaw::Pid(IdealPid::paper(params, branch, reference)),
-        ControllerKind::Hybrid => IdealLaw::Hybrid(IdealHybrid::paper(params, reference, setup.f_n_ref, setup.hybrid_ki)),
+        ControllerKind::Pid => IdealLaw::Pid(IdealPid { kp: pid.kp, ki: pid.ki, kd: pid.kd, ..IdealPid::paper(params, branch, reference) }),
+        ControllerKind::Hybrid => IdealLaw::Hybrid(IdealHybrid {
+            kp: setup.hybrid_kp,
+            kd: setup.hybrid_kd,
+            ..IdealHybrid::paper(params, reference, setup.f_n_ref, setup.hybrid_ki)
+        }),
     };
     // Choose the initial contact mode under the law's own initial torque.
     let phase = if probe.mode() == shared::ContactMode::Flight { probe.phase() } else { Phase::Sliding(SlipDirection::Positive) };

@@ -303,8 +303,24 @@ pub fn compute(
     theta1_dot: (f64, f64),
     grid: usize,
 ) -> Result<ModeMap, AnalysisError> {
-    let params = Params { mu, v_belt, ..Params::<f64>::paper() };
+    compute_for(Params { mu, v_belt, ..Params::<f64>::paper() }, branch, sign, theta1_deg, theta1_dot, grid)
+}
+
+/// [`compute`] for an arm with `params` (paper Table I as given, with its `mu`
+/// and `v_belt`).
+///
+/// # Errors
+/// As [`compute`], for any invalid parameter.
+pub fn compute_for(
+    params: Params<f64>,
+    branch: ElbowBranch,
+    sign: Theta2Sign,
+    theta1_deg: (f64, f64),
+    theta1_dot: (f64, f64),
+    grid: usize,
+) -> Result<ModeMap, AnalysisError> {
     params.validate()?;
+    let v_belt = params.v_belt;
     if !(2..=GRID_MAX).contains(&grid) {
         return Err(AnalysisError::BadInput(format!("--grid must be between 2 and {GRID_MAX}, got {grid}")));
     }

@@ -74,12 +74,10 @@ pub fn check_x0(x0: PaperX0) -> Result<(), AnalysisError> {
 }
 
 /// The paper's `K'_I` of the hybrid law from initial condition `x0`, 1/s:
-/// 0 from `x0u`, 650 otherwise (docs/model.md, experiment 6).
+/// 0 from `x0u`, 650 otherwise (docs/model.md, experiment 6); the default of the
+/// scenario key `controller.hybrid.ki` ([`rig::scenario::paper_hybrid_ki`]).
 pub fn paper_hybrid_ki(x0: PaperX0) -> f64 {
-    match x0 {
-        PaperX0::U => 0.0,
-        PaperX0::A | PaperX0::D => 650.0,
-    }
+    rig::scenario::paper_hybrid_ki(x0)
 }
 
 /// One of the eight cases of `sil-host zmax --all`.
@@ -289,17 +287,30 @@ fn sim_config(base: &Scenario) -> SimConfig {
     SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, iwc: p.iwc, ..SimConfig::default() }
 }
 
+/// The set-up of an ideal trial: the paper's ideal law for `combo` with `base`'s
+/// plant (paper Table I, `mu`, `v_belt`, impact law, tolerances), gains (paper
+/// eqs. 8 to 11; `K'_I` as the scenario gives it, else the paper's for
+/// `combo.x0`) and `f_n*`, the target `target` and `c`'s move and run lengths.
+pub fn ideal_setup(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> IdealSetup {
+    let g = &base.controller;
+    IdealSetup {
+        params: base.plant.params(),
+        f_n_ref: g.f_n_ref,
+        pid: g.pid,
+        hybrid_kp: g.hybrid.kp,
+        hybrid_kd: g.hybrid.kd,
+        hybrid_ki: g.hybrid_ki(combo.x0),
+        move_time_s: c.move_time_s,
+        duration_s: c.duration_s,
+        sample_dt: base.timing.period().as_secs_f64(),
+        stop_at_lift_off: true,
+        sim: sim_config(base),
+        ..IdealSetup::paper(combo.controller, deg_to_state(combo.x0.condition().deg), target)
+    }
+}
+
 fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
-    let mut setup = IdealSetup::paper(combo.controller, deg_to_state(combo.x0.condition().deg), target);
-    setup.mu = base.plant.mu;
-    setup.v_belt = base.plant.v_belt;
-    setup.f_n_ref = base.controller.f_n_ref;
-    setup.hybrid_ki = paper_hybrid_ki(combo.x0);
-    setup.move_time_s = c.move_time_s;
-    setup.duration_s = c.duration_s;
-    setup.sample_dt = base.timing.period().as_secs_f64();
-    setup.stop_at_lift_off = true;
-    setup.sim = sim_config(base);
+    let setup = ideal_setup(base, combo, target, c);
     let run = ideal::simulate(&setup, |_| {}).map_err(AnalysisError::Sim)?;
     let rows = run
         .samples
@@ -326,7 +337,7 @@ pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Cr
     s.name = combo.stem();
     s.controller.kind = combo.controller;
     s.plant.x0 = combo.x0;
-    s.controller.hybrid_ki = paper_hybrid_ki(combo.x0);
+    s.controller.hybrid.ki = Some(base.controller.hybrid_ki(combo.x0));
     s.controller.target_z_t = target;
     s.controller.move_time_s = c.move_time_s;
     s.timing.duration_s = c.duration_s;
@@ -472,9 +483,7 @@ pub fn bisect_largest<E>(mut lo: f64, mut hi: f64, tol: f64, mut ok: impl FnMut(
 /// # Errors
 /// [`AnalysisError`] if the plant cannot be set up.
 pub fn default_bracket(base: &Scenario, x0: PaperX0) -> Result<(f64, f64), AnalysisError> {
-    let mut params = shared::Params::<f64>::paper();
-    params.mu = base.plant.mu;
-    params.v_belt = base.plant.v_belt;
+    let params = base.plant.params();
     let plant = Plant::new(params, sim_config(base), deg_to_state(x0.condition().deg), 0.0, [0.0; 2])?;
     let reach = crate::admissible::belt_reach(&params);
     Ok((plant.tip()[0], reach - 1e-3))

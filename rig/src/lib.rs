@@ -9,6 +9,7 @@
 //! firmware in-process only (what the analyses need).
 #![warn(missing_docs)]
 
+pub mod arm;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
@@ -18,6 +19,7 @@ pub mod in_process;
 pub mod ipc;
 #[cfg(feature = "ipc")]
 pub mod ipc_link;
+pub mod overrides;
 #[cfg(feature = "pil")]
 pub mod pil_link;
 pub mod realtime;

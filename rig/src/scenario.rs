@@ -1,5 +1,11 @@
 //! Scenario files (TOML): the plant, the controller, timing and sensor models of
 //! one run. Unknown keys and out-of-range values are errors naming the key.
+//!
+//! The arm's parameters (paper Table I) and the controller's gains (paper eqs. 8
+//! to 11) are optional keys whose defaults are the paper's values
+//! ([`shared::Params::paper`], [`firmware::Config::default`]). A scenario can be
+//! changed key by key before it is read ([`Scenario::from_toml_with`] and
+//! [`crate::overrides`], the command line's `--set KEY=VALUE`).
 
 use serde::{Deserialize, Serialize};
 
@@ -8,9 +14,10 @@ use plant::{
     impact::{ImpactLaw, IwcRule},
     initial::PaperX0,
 };
-use shared::Period;
+use shared::{Params, Period};
 
 use super::faults::Fault;
+use super::overrides::{self, Override};
 
 /// The embedded default scenario (`scenarios/default.toml`).
 pub const DEFAULT_TOML: &str = include_str!("../../scenarios/default.toml");
@@ -37,6 +44,184 @@ pub struct PlantSection {
     pub rtol: f64,
     /// Integrator absolute tolerance.
     pub atol: f64,
+    /// Mass of each link `m`, kg (paper Table I: 0.12; optional).
+    #[serde(default = "paper::m")]
+    pub m: f64,
+    /// Length of each link `l`, m (paper Table I: 0.21; optional).
+    #[serde(default = "paper::l")]
+    pub l: f64,
+    /// Joint damping `sigma`, N m s/rad (paper Table I: 0.005; optional).
+    #[serde(default = "paper::sigma")]
+    pub sigma: f64,
+    /// Stiffness of the spring between the links `k`, N m/rad (paper Table I: 1.3; optional).
+    #[serde(default = "paper::k")]
+    pub k: f64,
+    /// Height of the base joint above the belt `H`, m (paper Table I: 0.3775; optional).
+    #[serde(default = "paper::h")]
+    pub h: f64,
+    /// Spring rest angle `alpha0`, radians (paper Table I: 13.72 degrees; optional).
+    #[serde(default = "paper::alpha0")]
+    pub alpha0: f64,
+    /// Gravity `g`, m/s^2 (paper Table I: 9.81; optional).
+    #[serde(default = "paper::g")]
+    pub g: f64,
+}
+
+/// The keys of `[plant]` (and `[controller.model]`) that hold the arm's
+/// parameters of paper Table I, in [`Params`] order: `m`, `l`, `sigma`, `k`, `h`,
+/// `alpha0`, `g`.
+pub const ARM_KEYS: [&str; 7] = ["m", "l", "sigma", "k", "h", "alpha0", "g"];
+
+/// Defaults of the optional keys: paper Table I ([`Params::paper`]) and the
+/// paper's gains ([`firmware::Config::default`], eqs. 8 to 11).
+mod paper {
+    use shared::Params;
+
+    fn p() -> Params<f64> {
+        Params::paper()
+    }
+    pub(super) fn m() -> f64 {
+        p().m
+    }
+    pub(super) fn l() -> f64 {
+        p().l
+    }
+    pub(super) fn sigma() -> f64 {
+        p().sigma
+    }
+    pub(super) fn k() -> f64 {
+        p().k
+    }
+    pub(super) fn h() -> f64 {
+        p().h
+    }
+    pub(super) fn alpha0() -> f64 {
+        p().alpha0
+    }
+    pub(super) fn g() -> f64 {
+        p().g
+    }
+}
+
+impl PlantSection {
+    /// The plant's parameters: paper Table I as the scenario sets it, with its
+    /// `mu` and `v_belt` (not validated; [`Scenario::validate`] checks them).
+    pub fn params(&self) -> Params<f64> {
+        Params {
+            m: self.m,
+            l: self.l,
+            sigma: self.sigma,
+            k: self.k,
+            h: self.h,
+            alpha0: self.alpha0,
+            g: self.g,
+            mu: self.mu,
+            v_belt: self.v_belt,
+        }
+    }
+}
+
+/// `[controller.model]`: the arm as the firmware models it, when it is not the
+/// plant (a deliberate mismatch). Every key is optional and defaults to the
+/// plant's value (`[plant]`); the firmware's `mu` is always `controller.mu_hat`
+/// and its `v_belt` the plant's. Units as in `[plant]` (SI, radians).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSection {
+    /// Mass of each link `m`, kg (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub m: Option<f64>,
+    /// Length of each link `l`, m (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub l: Option<f64>,
+    /// Joint damping `sigma`, N m s/rad (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// Spring stiffness `k`, N m/rad (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// Base height `H`, m (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub h: Option<f64>,
+    /// Spring rest angle `alpha0`, radians (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha0: Option<f64>,
+    /// Gravity `g`, m/s^2 (paper Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub g: Option<f64>,
+}
+
+impl ModelSection {
+    /// `plant` with the keys this section sets replaced.
+    pub fn over(&self, plant: Params<f64>) -> Params<f64> {
+        Params {
+            m: self.m.unwrap_or(plant.m),
+            l: self.l.unwrap_or(plant.l),
+            sigma: self.sigma.unwrap_or(plant.sigma),
+            k: self.k.unwrap_or(plant.k),
+            h: self.h.unwrap_or(plant.h),
+            alpha0: self.alpha0.unwrap_or(plant.alpha0),
+            g: self.g.unwrap_or(plant.g),
+            ..plant
+        }
+    }
+}
+
+/// `[controller.pid]`: the PID's gains per joint of `q' = [theta1, theta2 - theta1]`
+/// (paper eq. 8), each `[joint 1, joint 2]`. Optional; the defaults are the
+/// paper's (`K_P,1 = 200`, `K_I,1 = 25`, `K_D,1 = 2`, joint-2 gains 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PidSection {
+    /// `[K_P,1, K_P,2]`, N m/rad.
+    pub kp: [f64; 2],
+    /// `[K_I,1, K_I,2]`, N m/(rad s).
+    pub ki: [f64; 2],
+    /// `[K_D,1, K_D,2]`, N m s/rad.
+    pub kd: [f64; 2],
+}
+
+impl Default for PidSection {
+    /// The paper's gains (eq. 8), as in [`firmware::Config::default`].
+    fn default() -> Self {
+        let g = firmware::Config::default().pid;
+        let f = |v: [f32; 2]| v.map(f64::from);
+        Self { kp: f(g.kp), ki: f(g.ki), kd: f(g.kd) }
+    }
+}
+
+/// `[controller.hybrid]`: the hybrid force/motion law's gains (paper eqs. 9 to
+/// 11). Optional; the defaults are the paper's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HybridSection {
+    /// `K'_P`, 1/s^2 (paper eq. 10: 900).
+    pub kp: f64,
+    /// `K'_D`, 1/s (paper eq. 10: 900).
+    pub kd: f64,
+    /// `K'_I`, 1/s (paper eq. 11). Absent: the paper's, which depends on the
+    /// initial condition ([`paper_hybrid_ki`]: 650 from `x0a` and `x0d`, 0 from
+    /// `x0u`). The old key `controller.hybrid_ki` is read as this one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ki: Option<f64>,
+}
+
+impl Default for HybridSection {
+    /// The paper's `K'_P` and `K'_D` ([`firmware::Config::default`]); `K'_I` by initial condition.
+    fn default() -> Self {
+        let g = firmware::Config::default().hybrid;
+        Self { kp: f64::from(g.kp), kd: f64::from(g.kd), ki: None }
+    }
+}
+
+/// The paper's `K'_I` of the hybrid law from initial condition `x0`, 1/s: 0 from
+/// `x0u`, 650 otherwise (docs/model.md, experiment 6). The default of
+/// `controller.hybrid.ki`.
+pub fn paper_hybrid_ki(x0: PaperX0) -> f64 {
+    match x0 {
+        PaperX0::U => 0.0,
+        PaperX0::A | PaperX0::D => f64::from(firmware::Config::default().hybrid.ki),
+    }
 }
 
 /// The controller section (the firmware's configuration).
@@ -51,12 +236,28 @@ pub struct ControllerSection {
     pub move_time_s: f64,
     /// Normal force reference, N.
     pub f_n_ref: f64,
-    /// Hybrid force-integral gain `K'_I`, 1/s.
-    pub hybrid_ki: f64,
     /// Friction term: `commanded`, `measured_normal`, `measured` or `none`.
     pub friction: FrictionCompensation,
     /// The firmware's friction estimate `mu_hat`.
     pub mu_hat: f64,
+    /// PID gains (paper eq. 8); the paper's when absent.
+    #[serde(default)]
+    pub pid: PidSection,
+    /// Hybrid gains (paper eqs. 9 to 11); the paper's when absent.
+    #[serde(default)]
+    pub hybrid: HybridSection,
+    /// The arm as the firmware models it, when it differs from the plant
+    /// (`[controller.model]`); absent: the firmware knows the plant's parameters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelSection>,
+}
+
+impl ControllerSection {
+    /// `K'_I` as run from initial condition `x0`, 1/s: `hybrid.ki`, or the paper's
+    /// ([`paper_hybrid_ki`]) when it is absent.
+    pub fn hybrid_ki(&self, x0: PaperX0) -> f64 {
+        self.hybrid.ki.unwrap_or_else(|| paper_hybrid_ki(x0))
+    }
 }
 
 /// The timing section.
@@ -201,14 +402,14 @@ pub enum ScenarioError {
     #[error("{0}")]
     Parse(String),
     /// A value out of range.
-    #[error("scenario key `{key}` = {value}: {expected}")]
+    #[error("scenario key `{key}` = {value} is out of range: expected {expected}")]
     OutOfRange {
         /// Dotted key.
-        key: &'static str,
+        key: String,
         /// The value as written.
         value: String,
         /// What is allowed.
-        expected: &'static str,
+        expected: String,
     },
     /// A `[[faults]]` entry is invalid.
     #[error("scenario key `faults[{index}]`: {what}")]
@@ -218,6 +419,42 @@ pub enum ScenarioError {
         /// What is wrong, naming the key and value.
         what: String,
     },
+    /// A `--set KEY=VALUE` override is malformed, names no key this command
+    /// takes, or contradicts a flag ([`crate::overrides`]).
+    #[error("{0}")]
+    Override(#[from] overrides::OverrideError),
+}
+
+/// `Err(OutOfRange)` for `key` unless `ok`.
+fn check(ok: bool, key: &str, value: impl std::fmt::Display, expected: &str) -> Result<(), ScenarioError> {
+    if ok { Ok(()) } else { Err(ScenarioError::OutOfRange { key: key.into(), value: value.to_string(), expected: expected.into() }) }
+}
+
+/// Checks the arm's parameters of paper Table I under the key prefix `prefix`
+/// (`plant` or `controller.model`): `m`, `l`, `h`, `g` finite and > 0; `sigma`,
+/// `k` finite and >= 0; `alpha0` finite; `h < 2 l` (the belt within reach); then
+/// [`Params::validate`].
+///
+/// # Errors
+/// [`ScenarioError::OutOfRange`] naming the first bad key (`plant.m`) and its value.
+pub fn validate_arm(prefix: &str, p: &Params<f64>) -> Result<(), ScenarioError> {
+    let key = |name: &str| format!("{prefix}.{name}");
+    for (name, v) in [("m", p.m), ("l", p.l), ("h", p.h), ("g", p.g)] {
+        check(v.is_finite() && v > 0.0, &key(name), v, "a finite value > 0")?;
+    }
+    for (name, v) in [("sigma", p.sigma), ("k", p.k)] {
+        check(v.is_finite() && v >= 0.0, &key(name), v, "a finite value >= 0")?;
+    }
+    check(p.alpha0.is_finite(), &key("alpha0"), p.alpha0, "a finite angle, rad")?;
+    check(p.h < 2.0 * p.l, &key("h"), p.h, &format!("a base height below the arm's reach 2 l = {} m", 2.0 * p.l))?;
+    p.validate().map_err(|e| ScenarioError::Parse(format!("scenario key `{prefix}`: {e}")))
+}
+
+/// Checks gains: each finite and >= 0, named `key`.
+fn validate_gains(key: &str, v: &[f64]) -> Result<(), ScenarioError> {
+    let ok = v.iter().all(|g| g.is_finite() && *g >= 0.0);
+    let shown = if v.len() == 1 { v[0].to_string() } else { format!("[{}]", v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ")) };
+    check(ok, key, shown, if v.len() == 1 { "a finite gain >= 0" } else { "finite gains >= 0" })
 }
 
 impl Scenario {
@@ -233,17 +470,55 @@ impl Scenario {
     /// [`ScenarioError::Parse`] (with the key and line from the TOML parser) or
     /// [`ScenarioError::OutOfRange`] naming the key and value.
     pub fn from_toml(text: &str) -> Result<Self, ScenarioError> {
-        // The path names the key of a bad value (`controller.kind`), the TOML error its line.
-        let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
-        let s: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            if path == "." {
-                ScenarioError::Parse(inner.to_string())
-            } else {
-                ScenarioError::Parse(format!("scenario key `{path}`: {inner}"))
-            }
-        })?;
+        Self::from_toml_with(text, &[])
+    }
+
+    /// Parses a scenario, applies `overrides` to its TOML document (each
+    /// `--set KEY=VALUE` replaces or adds the value at its dotted key path), then
+    /// reads and validates it. The old key `controller.hybrid_ki` is read as
+    /// `controller.hybrid.ki`.
+    ///
+    /// # Errors
+    /// As [`Self::from_toml`]; an error caused by an override names it
+    /// ([`ScenarioError::Override`], or the key and value of the bad key).
+    pub fn from_toml_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        let mut doc: toml::Table = toml::from_str(text).map_err(|e: toml::de::Error| ScenarioError::Parse(e.to_string()))?;
+        // The file's old key first (an override of `controller.hybrid.ki` then
+        // wins over it), then an override's.
+        let mut migrated = migrate_legacy(&mut doc)?;
+        overrides::apply(&mut doc, overrides)?;
+        migrated |= migrate_legacy(&mut doc)?;
+        let s: Scenario = if overrides.is_empty() && !migrated {
+            // The text itself: the TOML errors give the line.
+            let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
+            read(de, &[])?
+        } else {
+            read(toml::Value::Table(doc), overrides)?
+        };
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// The scenario as a TOML table (for [`overrides::apply`]).
+    ///
+    /// # Errors
+    /// [`ScenarioError::Parse`] if it cannot be written as TOML.
+    pub fn to_table(&self) -> Result<toml::Table, ScenarioError> {
+        toml::Table::try_from(self).map_err(|e| ScenarioError::Parse(format!("cannot write the scenario as TOML: {e}")))
+    }
+
+    /// This scenario with `overrides` applied, validated.
+    ///
+    /// # Errors
+    /// As [`Self::from_toml_with`].
+    pub fn with_overrides(&self, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        if overrides.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut doc = self.to_table()?;
+        overrides::apply(&mut doc, overrides)?;
+        migrate_legacy(&mut doc)?;
+        let s: Scenario = read(toml::Value::Table(doc), overrides)?;
         s.validate()?;
         Ok(s)
     }
@@ -253,69 +528,81 @@ impl Scenario {
     /// # Errors
     /// [`ScenarioError::OutOfRange`] naming the first bad key.
     pub fn validate(&self) -> Result<(), ScenarioError> {
-        let bad = |key: &'static str, value: String, expected: &'static str| Err(ScenarioError::OutOfRange { key, value, expected });
         let finite = |x: f64| x.is_finite();
         let p = &self.plant;
-        if !(finite(p.mu) && p.mu >= 0.0) {
-            return bad("plant.mu", p.mu.to_string(), "a finite value >= 0");
-        }
-        if !finite(p.v_belt) || p.v_belt.abs() > 5.0 {
-            return bad("plant.v_belt", p.v_belt.to_string(), "a finite speed within +-5 m/s");
-        }
-        if !(finite(p.e_n) && (0.0..=1.0).contains(&p.e_n)) {
-            return bad("plant.e_n", p.e_n.to_string(), "a value in [0, 1]");
-        }
+        check(finite(p.mu) && p.mu >= 0.0, "plant.mu", p.mu, "a finite value >= 0")?;
+        check(finite(p.v_belt) && p.v_belt.abs() <= 5.0, "plant.v_belt", p.v_belt, "a finite speed within +-5 m/s")?;
+        validate_arm("plant", &p.params())?;
+        check(finite(p.e_n) && (0.0..=1.0).contains(&p.e_n), "plant.e_n", p.e_n, "a value in [0, 1]")?;
         for (key, v) in [("plant.rtol", p.rtol), ("plant.atol", p.atol)] {
-            if !(finite(v) && v > 0.0 && v <= 0.1) {
-                return bad(key, v.to_string(), "a value in (0, 0.1]");
-            }
+            check(finite(v) && v > 0.0 && v <= 0.1, key, v, "a value in (0, 0.1]")?;
         }
         let c = &self.controller;
-        if !(finite(c.target_z_t) && c.target_z_t.abs() < 0.42) {
-            return bad("controller.target_z_t", c.target_z_t.to_string(), "a finite position within the arm's reach (|z_t*| < 2 l)");
+        let reach = 2.0 * p.l;
+        check(
+            finite(c.target_z_t) && c.target_z_t.abs() < reach,
+            "controller.target_z_t",
+            c.target_z_t,
+            &format!("a finite position within the arm's reach (|z_t*| < 2 l = {reach} m)"),
+        )?;
+        check(finite(c.move_time_s) && c.move_time_s > 0.0, "controller.move_time_s", c.move_time_s, "a finite value > 0")?;
+        for (key, v) in [("controller.f_n_ref", c.f_n_ref), ("controller.mu_hat", c.mu_hat)] {
+            check(finite(v) && v >= 0.0, key, v, "a finite value >= 0")?;
         }
-        for (key, v) in [("controller.move_time_s", c.move_time_s)] {
-            if !(finite(v) && v > 0.0) {
-                return bad(key, v.to_string(), "a finite value > 0");
-            }
+        validate_gains("controller.pid.kp", &c.pid.kp)?;
+        validate_gains("controller.pid.ki", &c.pid.ki)?;
+        validate_gains("controller.pid.kd", &c.pid.kd)?;
+        validate_gains("controller.hybrid.kp", &[c.hybrid.kp])?;
+        validate_gains("controller.hybrid.kd", &[c.hybrid.kd])?;
+        if let Some(ki) = c.hybrid.ki {
+            validate_gains("controller.hybrid.ki", &[ki])?;
         }
-        for (key, v) in [("controller.f_n_ref", c.f_n_ref), ("controller.hybrid_ki", c.hybrid_ki), ("controller.mu_hat", c.mu_hat)] {
-            if !(finite(v) && v >= 0.0) {
-                return bad(key, v.to_string(), "a finite value >= 0");
-            }
+        if let Some(model) = &c.model {
+            let m = model.over(p.params());
+            validate_arm("controller.model", &m)?;
+            check(
+                c.target_z_t.abs() < 2.0 * m.l,
+                "controller.target_z_t",
+                c.target_z_t,
+                &format!("a position within the modelled arm's reach (|z_t*| < 2 controller.model.l = {} m)", 2.0 * m.l),
+            )?;
         }
         let t = &self.timing;
-        if !(finite(t.rate_hz) && (TimingSection::RATE_RANGE_HZ.0..=TimingSection::RATE_RANGE_HZ.1).contains(&t.rate_hz)) {
-            return bad("timing.rate_hz", t.rate_hz.to_string(), "250 to 10000 Hz (docs/hardware.md)");
-        }
-        if !(finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < t.period().as_secs_f64()) {
-            return bad("timing.delta_s", t.delta_s.to_string(), "in [0, one period)");
-        }
-        if !(finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5) {
-            return bad("timing.duration_s", t.duration_s.to_string(), "in (0, 1e5] s");
-        }
-        if !(finite(self.sensors.load_noise_n) && self.sensors.load_noise_n >= 0.0) {
-            return bad("sensors.load_noise_n", self.sensors.load_noise_n.to_string(), "a finite value >= 0");
-        }
+        let (lo, hi) = TimingSection::RATE_RANGE_HZ;
+        check(finite(t.rate_hz) && (lo..=hi).contains(&t.rate_hz), "timing.rate_hz", t.rate_hz, "250 to 10000 Hz (docs/hardware.md)")?;
+        check(
+            finite(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < t.period().as_secs_f64(),
+            "timing.delta_s",
+            t.delta_s,
+            "a value in [0, one period)",
+        )?;
+        check(
+            finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5,
+            "timing.duration_s",
+            t.duration_s,
+            "a value in (0, 1e5] s",
+        )?;
+        let noise = self.sensors.load_noise_n;
+        check(finite(noise) && noise >= 0.0, "sensors.load_noise_n", noise, "a finite value >= 0")?;
         let r = &self.rig;
-        if !(finite(r.command_timeout_s) && r.command_timeout_s > 0.0 && r.command_timeout_s <= 60.0) {
-            return bad("rig.command_timeout_s", r.command_timeout_s.to_string(), "in (0, 60] s");
-        }
-        if !(finite(r.spin_us) && (0.0..=1e6).contains(&r.spin_us)) {
-            return bad("rig.spin_us", r.spin_us.to_string(), "in [0, 1e6] us");
-        }
-        if !(finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0) {
-            return bad("rig.peer_check_s", r.peer_check_s.to_string(), "in (0, 60] s");
-        }
-        if r.max_consecutive_timeouts == 0 {
-            return bad("rig.max_consecutive_timeouts", "0".into(), ">= 1");
-        }
+        check(
+            finite(r.command_timeout_s) && r.command_timeout_s > 0.0 && r.command_timeout_s <= 60.0,
+            "rig.command_timeout_s",
+            r.command_timeout_s,
+            "a value in (0, 60] s",
+        )?;
+        check(finite(r.spin_us) && (0.0..=1e6).contains(&r.spin_us), "rig.spin_us", r.spin_us, "a value in [0, 1e6] us")?;
+        check(
+            finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0,
+            "rig.peer_check_s",
+            r.peer_check_s,
+            "a value in (0, 60] s",
+        )?;
+        check(r.max_consecutive_timeouts >= 1, "rig.max_consecutive_timeouts", r.max_consecutive_timeouts, ">= 1")?;
         if let Err(want) = r.realtime_pin() {
-            return bad("rig.realtime_cpu", format!("{:?}", r.realtime_cpu), want);
+            check(false, "rig.realtime_cpu", format!("{:?}", r.realtime_cpu), want)?;
         }
-        if r.realtime_fifo_priority > 99 {
-            return bad("rig.realtime_fifo_priority", r.realtime_fifo_priority.to_string(), "0 (normal scheduler) or 1 to 99");
-        }
+        check(r.realtime_fifo_priority <= 99, "rig.realtime_fifo_priority", r.realtime_fifo_priority, "0 (normal scheduler) or 1 to 99")?;
         for (i, f) in self.faults.iter().enumerate() {
             if let Err(what) = f.check() {
                 return Err(ScenarioError::Fault { index: i, what });
@@ -323,6 +610,50 @@ impl Scenario {
         }
         Ok(())
     }
+}
+
+/// Reads the old key `controller.hybrid_ki` as `controller.hybrid.ki` (scenario
+/// files written before the gains were opened). Returns whether it did.
+///
+/// # Errors
+/// [`ScenarioError::Parse`] when both are given.
+fn migrate_legacy(doc: &mut toml::Table) -> Result<bool, ScenarioError> {
+    let Some(toml::Value::Table(controller)) = doc.get_mut("controller") else {
+        return Ok(false);
+    };
+    let Some(ki) = controller.remove("hybrid_ki") else {
+        return Ok(false);
+    };
+    let hybrid = controller.entry("hybrid").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    match hybrid {
+        toml::Value::Table(h) if !h.contains_key("ki") => {
+            h.insert("ki".into(), ki);
+            Ok(true)
+        }
+        _ => Err(ScenarioError::Parse(
+            "scenario keys `controller.hybrid_ki` and `controller.hybrid.ki` are the same gain K'_I: give one (controller.hybrid.ki)"
+                .into(),
+        )),
+    }
+}
+
+/// Deserialises a scenario; the error names the key path (`controller.kind`) and,
+/// when an override touched that key, the override.
+fn read<'de, D: serde::Deserializer<'de>>(de: D, overrides: &[Override]) -> Result<Scenario, ScenarioError>
+where
+    D::Error: std::fmt::Display,
+{
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner().to_string();
+        // Errors from a document (not a text) repeat the key on a line of their own.
+        let inner = if overrides.is_empty() { inner.as_str() } else { inner.lines().next().unwrap_or_default() };
+        let msg = if path == "." { inner.to_string() } else { format!("scenario key `{path}`: {inner}") };
+        match overrides::culprit(overrides, &path) {
+            Some(o) => ScenarioError::Parse(format!("{msg} (from --set {o})")),
+            None => ScenarioError::Parse(msg),
+        }
+    })
 }
 
 #[cfg(test)]
@@ -362,6 +693,48 @@ mod tests {
         let bad_prio = DEFAULT_TOML.replace("realtime_fifo_priority = 10", "realtime_fifo_priority = 100");
         let e = Scenario::from_toml(&bad_prio).unwrap_err().to_string();
         assert!(e.contains("rig.realtime_fifo_priority") && e.contains("100"), "{e}");
+    }
+
+    fn set(arg: &str) -> Override {
+        arg.parse().unwrap()
+    }
+
+    #[test]
+    fn overrides_reach_the_scenario_and_errors_name_the_key() {
+        let s = Scenario::from_toml_with(DEFAULT_TOML, &[set("plant.m=0.24"), set("controller.pid.kp=[150,1]")]).unwrap();
+        assert_eq!((s.plant.m, s.controller.pid.kp), (0.24, [150.0, 1.0]));
+        assert_eq!(s, Scenario::default_scenario().with_overrides(&[set("plant.m=0.24"), set("controller.pid.kp=[150,1]")]).unwrap());
+        let err = |args: &[&str]| {
+            let o: Vec<Override> = args.iter().map(|a| set(a)).collect();
+            Scenario::from_toml_with(DEFAULT_TOML, &o).unwrap_err().to_string()
+        };
+        let e = err(&["plant.m=-1"]);
+        assert!(e.contains("`plant.m` = -1") && e.contains("> 0"), "{e}");
+        let e = err(&["plant.m=nan"]);
+        assert!(e.contains("`plant.m` = NaN"), "{e}");
+        let e = err(&["plant.mass=1"]);
+        assert!(e.contains("mass") && e.contains("plant.mass=1"), "{e}");
+        let e = err(&["controller.pid.kp=[1]"]);
+        assert!(e.contains("controller.pid.kp"), "{e}");
+        let e = err(&["controller.hybrid.kd=-3"]);
+        assert!(e.contains("controller.hybrid.kd") && e.contains("-3"), "{e}");
+        let e = err(&["plant.m=1", "plant.m=2"]);
+        assert!(e.contains("twice"), "{e}");
+        let e = err(&["plant.m.x=1"]);
+        assert!(e.contains("`plant.m` is not a table"), "{e}");
+        let e = err(&["controller.model.l=0.1"]);
+        assert!(e.contains("controller.model.h"), "{e}");
+    }
+
+    #[test]
+    fn the_legacy_hybrid_ki_key_is_read_as_hybrid_ki() {
+        let old = DEFAULT_TOML.replace("[controller]\n", "[controller]\nhybrid_ki = 321.0\n");
+        assert_eq!(Scenario::from_toml(&old).unwrap().controller.hybrid.ki, Some(321.0));
+        let both = old.replace("kd = 900.0 ", "ki = 1.0\nkd = 900.0 ");
+        assert!(Scenario::from_toml(&both).is_err());
+        // An override of the new key wins over the file's old one.
+        assert_eq!(Scenario::from_toml_with(&old, &[set("controller.hybrid.ki=5")]).unwrap().controller.hybrid.ki, Some(5.0));
+        assert_eq!(Scenario::from_toml_with(DEFAULT_TOML, &[set("controller.hybrid_ki=7")]).unwrap().controller.hybrid.ki, Some(7.0));
     }
 
     #[test]

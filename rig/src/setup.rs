@@ -1,27 +1,47 @@
 //! From a scenario to the two sides of the loop: the plant at `t = 0` and the
 //! firmware's configuration.
 
-use firmware::{Config, config::HybridGains};
+use firmware::{
+    Config,
+    config::{HybridGains, PidGains},
+};
 use shared::Params;
 
 use super::scenario::Scenario;
 use plant::{Plant, SimConfig, SimError, initial};
 
-/// The firmware configuration a scenario asks for.
+/// The plant's parameters (paper Table I, `mu`, `v_belt`) a scenario asks for:
+/// its `[plant]` section.
+pub fn plant_params(s: &Scenario) -> Params<f64> {
+    s.plant.params()
+}
+
+/// The parameters the firmware models the arm with, in `f64`: the plant's
+/// (`[plant]`), with the keys of `[controller.model]` replacing theirs when that
+/// table is given (a deliberate mismatch), `mu = controller.mu_hat` and the
+/// plant's `v_belt`.
+pub fn firmware_params(s: &Scenario) -> Params<f64> {
+    let plant = plant_params(s);
+    let model = s.controller.model.map_or(plant, |m| m.over(plant));
+    Params { mu: s.controller.mu_hat, ..model }
+}
+
+/// The firmware configuration a scenario asks for: the model of
+/// [`firmware_params`] in `f32`, the controller, the period, the references and
+/// the gains (paper eqs. 8 to 11; `K'_I` by [`crate::scenario::ControllerSection::hybrid_ki`]).
 pub fn firmware_config(s: &Scenario) -> Config {
     let c = &s.controller;
-    let mut params = Params::<f32>::paper();
-    params.mu = c.mu_hat as f32;
-    params.v_belt = s.plant.v_belt as f32;
+    let f = |v: [f64; 2]| v.map(|x| x as f32);
     let base = Config::default();
     Config {
-        params,
+        params: firmware_params(s).cast(),
         controller: c.kind,
         period: s.timing.period(),
         target_z_t: c.target_z_t as f32,
         move_time_s: c.move_time_s as f32,
         f_n_ref: c.f_n_ref as f32,
-        hybrid: HybridGains { ki: c.hybrid_ki as f32, ..base.hybrid },
+        pid: PidGains { kp: f(c.pid.kp), ki: f(c.pid.ki), kd: f(c.pid.kd) },
+        hybrid: HybridGains { kp: c.hybrid.kp as f32, kd: c.hybrid.kd as f32, ki: c.hybrid_ki(s.plant.x0) as f32 },
         friction: c.friction,
         ..base
     }
@@ -32,7 +52,8 @@ pub fn firmware_config(s: &Scenario) -> Config {
 /// # Errors
 /// [`SimError`] for bad parameters or initial conditions.
 pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
-    let params = Params::new(s.plant.mu, s.plant.v_belt)?;
+    let params = plant_params(s);
+    params.validate()?;
     let sim = SimConfig {
         rtol: s.plant.rtol,
         atol: s.plant.atol,

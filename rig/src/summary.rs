@@ -68,6 +68,13 @@ pub struct RunSummary {
     pub pil: Option<PilFigures>,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
+    /// The plant's parameters as run: paper Table I, `mu`, `v_belt` (SI, radians;
+    /// [`crate::setup::plant_params`]).
+    pub plant_params: shared::Params<f64>,
+    /// The firmware's configuration as run ([`crate::setup::firmware_config`]): its
+    /// model of the arm (`params`, `mu` = `mu_hat`), the PID gains (paper eq. 8),
+    /// the hybrid gains (eqs. 9 to 11, `K'_I` resolved), references and limits.
+    pub firmware_config: firmware::Config,
 }
 
 impl RunSummary {
@@ -109,6 +116,8 @@ impl RunSummary {
             realtime_setup: None,
             pil: None,
             scenario_used: scenario.clone(),
+            plant_params: crate::setup::plant_params(scenario),
+            firmware_config: crate::setup::firmware_config(scenario),
         }
     }
 }

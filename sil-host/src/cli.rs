@@ -217,16 +217,25 @@ pub struct ZmaxArgs {
     /// The last part of the run where the tip must be within --settle-tol, s.
     #[arg(long, default_value_t = 1.0)]
     pub settle_window: f64,
-    /// Base scenario of the sampled setting (rate, sensors, mu, v_belt, f_n*, move
-    /// time, ...); its controller, initial condition, K'_I (the paper's: 650 from
-    /// x0d, 0 from x0u), target and run length are set per trial. The ideal setting
-    /// takes mu, v_belt, f_n*, the move time and the plant settings from it.
-    /// Default: the embedded default scenario.
+    /// Base scenario of the sampled setting (rate, sensors, the arm's parameters,
+    /// mu, v_belt, gains, f_n*, move time, ...); its controller, initial condition,
+    /// target and run length are set per trial, and K'_I when it does not give
+    /// controller.hybrid.ki (the paper's: 650 from x0d, 0 from x0u). The ideal
+    /// setting takes the plant's parameters, the gains, f_n*, the move time and the
+    /// plant settings from it. Default: the embedded default scenario.
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,
+    /// Change one key of the base scenario, e.g. `--set plant.m=0.24
+    /// --set controller.hybrid.kp=800 --set controller.hybrid.ki=300` (repeatable;
+    /// KEY=VALUE as for `run`). The ideal and the sampled trials use the plant's
+    /// parameters and the gains it gives; without `controller.hybrid.ki` K'_I is
+    /// the paper's per initial condition. Refused: the keys each trial sets
+    /// (controller.kind, plant.x0, controller.target_z_t, timing.duration_s).
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -259,6 +268,13 @@ pub struct ScenarioArgs {
     /// `restitution` (the tip is thrown off the belt) or `plastic` (left stuck, v_n = 0).
     #[arg(long, value_enum)]
     pub iwc: Option<plant::impact::IwcRule>,
+    /// Change one scenario key, e.g. `--set plant.m=0.24 --set controller.pid.kp=[150,0]`
+    /// (repeatable). KEY is the scenario file's dotted key path (docs/rig.md), VALUE a
+    /// TOML value (a bare word such as `pid` is a string). Applied to the file before
+    /// it is read, so a bad key or value is an error naming it (exit 2). A key also
+    /// set by a flag here (`--x0` and `plant.x0`, ...) is refused.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
 }
 
 /// `--strict`, on every command that simulates.
@@ -403,6 +419,12 @@ pub struct SimulateArgs {
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,
+    /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
+    /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
+    /// the defaults are the paper's. Keys set by a flag of this command
+    /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -414,6 +436,12 @@ pub struct AdmissibleArgs {
     /// Friction coefficient mu (>= 0).
     #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
     pub mu: f64,
+    /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
+    /// `--set plant.l=0.25 --set plant.h=0.35`: KEYS plant.l, plant.h. Repeatable;
+    /// the defaults are the paper's. Only these change where p > 0 (m scales p; the rest do not enter it). Keys set by a flag of this command
+    /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -449,6 +477,12 @@ pub struct ModesArgs {
     /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
     #[arg(long, value_enum, default_value = "plus")]
     pub theta2_sign: analyses::modes::Theta2Sign,
+    /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
+    /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
+    /// the defaults are the paper's. Keys set by a flag of this command
+    /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -530,6 +564,12 @@ pub struct PoincareArgs {
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,
+    /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
+    /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
+    /// the defaults are the paper's. Keys set by a flag of this command
+    /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -579,8 +619,9 @@ pub struct SweepArgs {
     pub ideal: bool,
     /// Closed loop: scenario whose controller, timing and sensor sections are used
     /// (default: the embedded default, experiment 6's hybrid references). Its plant
-    /// section is replaced per run; mu_hat is set to each run's mu, and K'_I to 0
-    /// from elbow-up initial conditions (the paper's x0u gains).
+    /// section is replaced per run (except the arm's parameters); mu_hat is set to
+    /// each run's mu, and, unless it gives controller.hybrid.ki, K'_I to 0 from
+    /// elbow-up initial conditions and 650 otherwise (the paper's gains).
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
     /// Impact laws, comma-separated (each is a sweep dimension).
@@ -604,6 +645,15 @@ pub struct SweepArgs {
     /// Absolute tolerance of the integrator.
     #[arg(long, default_value_t = 1e-11)]
     pub atol: f64,
+    /// Change one key, e.g. `--set plant.m=0.24` (repeatable; KEY=VALUE as for
+    /// `run`). Open loop: only the arm's parameters (paper Table I: plant.m,
+    /// plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g). Closed loop:
+    /// any key of the scenario except those the sweep sets per run (plant.mu,
+    /// plant.v_belt, plant.x0, plant.impact_law, plant.e_n, plant.rtol, plant.atol,
+    /// controller.kind, controller.mu_hat, timing.duration_s). Part of the sweep's
+    /// identity (sweep.json).
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
     /// Compute only part K/N of the runs (those whose index is K modulo N, 0 <= K < N),
     /// for a cluster job array; join the folders with `sil-host merge`.
     #[arg(long, value_name = "K/N")]

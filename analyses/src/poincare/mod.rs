@@ -35,6 +35,9 @@ const CHUNK_S: f64 = 1.0;
 pub struct PoincareConfig {
     /// Friction coefficient `mu`.
     pub mu: f64,
+    /// The arm's parameters (paper Table I); `mu` and each point's `v_belt`
+    /// replace its `mu` and `v_belt`.
+    pub params: Params<f64>,
     /// Initial state `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s (the
     /// plant projects a tip slightly inside the belt onto it).
     pub x0: [f64; 4],
@@ -168,7 +171,8 @@ pub fn analyse(v_belt: f64, cfg: &PoincareConfig) -> PointResult {
 }
 
 fn run_into(v_belt: f64, cfg: &PoincareConfig, r: &mut PointResult) -> Result<(), SimError> {
-    let params = Params::new(cfg.mu, v_belt)?;
+    let params = Params { mu: cfg.mu, v_belt, ..cfg.params };
+    params.validate()?;
     let mut plant = Plant::new(params, cfg.sim, cfg.x0, 0.0, [0.0, 0.0])?;
     let result = record(&mut plant, params, cfg, r);
     r.validity = plant.validity(result.as_ref().err());

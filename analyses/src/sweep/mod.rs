@@ -170,6 +170,12 @@ pub struct SweepSpec {
     pub rtol: f64,
     /// Integrator absolute tolerance.
     pub atol: f64,
+    /// The arm's parameters (paper Table I: `m`, `l`, `sigma`, `k`, `h`,
+    /// `alpha0`, `g`); each run's `mu` and `v_belt` replace these. In closed loop
+    /// they equal the scenario's `[plant]`. Absent from older `sweep.json`
+    /// files: the paper's.
+    #[serde(default = "Params::paper")]
+    pub params: Params<f64>,
 }
 
 /// One initial condition of a sweep.
@@ -236,6 +242,7 @@ impl SweepSpec {
             threshold: DEFAULT_THRESHOLD,
             rtol: 1e-9,
             atol: 1e-11,
+            params: Params::paper(),
         }
     }
 
@@ -244,7 +251,7 @@ impl SweepSpec {
     /// within [`RANDOM_REACH_FRACTION`] of the reach, a random elbow branch, at rest
     /// (like the paper's). The same list is used at every grid point.
     pub fn initial_conditions(&self) -> Vec<InitialCondition> {
-        let params = Params::<f64>::paper();
+        let params = self.params;
         let mut out: Vec<InitialCondition> = self
             .paper_ics
             .iter()
@@ -350,6 +357,13 @@ impl SweepSpec {
         }
         if (self.controller == SweepController::None) != self.scenario.is_none() {
             return Err("a scenario is used exactly in closed loop".into());
+        }
+        rig::scenario::validate_arm("plant", &Params { mu: 0.0, v_belt: 0.0, ..self.params }).map_err(|e| e.to_string())?;
+        if let Some(s) = &self.scenario {
+            let arm = |p: Params<f64>| Params { mu: 0.0, v_belt: 0.0, ..p };
+            if arm(s.plant.params()) != arm(self.params) {
+                return Err("the sweep's arm parameters differ from its scenario's [plant] section".into());
+            }
         }
         if self.ideal && self.controller == SweepController::None {
             return Err("--ideal needs --controller hybrid or pid".into());

@@ -153,7 +153,7 @@ fn lift_offs(c: &Counters) -> u64 {
 /// Simulates run `key` from initial condition `ic`. Returns `None` when `stop` was
 /// set before the run finished (nothing is recorded for it).
 pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &AtomicBool) -> Option<RunRow> {
-    let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..Params::paper() };
+    let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..spec.params };
     let sim =
         SimConfig { rtol: spec.rtol, atol: spec.atol, impact_law: key.impact_law, e_n: key.e_n, iwc: key.iwc, ..SimConfig::default() };
     let mut row = RunRow {
@@ -324,18 +324,23 @@ fn windows(
 }
 
 /// The ideal (continuous-time) set-up of a closed-loop run's scenario `s`: its
-/// controller, reference (`z_t*`, move time), `f_n*` and `K'_I`, from `ic`.
+/// plant's parameters, controller, reference (`z_t*`, move time), `f_n*` and
+/// gains (paper eqs. 8 to 11), from `ic`.
 fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetup {
+    let g = &s.controller;
     IdealSetup {
-        controller: s.controller.kind,
+        controller: g.kind,
         x0: ic.x0,
-        mu: s.plant.mu,
-        v_belt: s.plant.v_belt,
-        target_z_t: s.controller.target_z_t,
-        move_time_s: s.controller.move_time_s,
+        params: s.plant.params(),
+        target_z_t: g.target_z_t,
+        move_time_s: g.move_time_s,
         duration_s: s.timing.duration_s,
-        f_n_ref: s.controller.f_n_ref,
-        hybrid_ki: s.controller.hybrid_ki,
+        f_n_ref: g.f_n_ref,
+        pid: g.pid,
+        hybrid_kp: g.hybrid.kp,
+        hybrid_kd: g.hybrid.kd,
+        // `closed_loop_scenario` has set it for the run's initial condition.
+        hybrid_ki: g.hybrid_ki(s.plant.x0),
         sample_dt: s.timing.period().as_secs_f64(),
         stop_at_lift_off: false,
         sim,
@@ -343,22 +348,27 @@ fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetu
 }
 
 /// The scenario of a closed-loop run: the spec's, with the run's plant (its
-/// `mu`, `v_belt`, impact law, `e_n`, tolerances), the controller asked for, the
+/// `mu`, `v_belt`, impact law, `e_n`, IWC rule, tolerances), the controller asked for, the
 /// firmware's friction estimate `mu_hat = mu` (the paper's controller knows `mu`),
-/// the run's length, and `K'_I = 0` from an elbow-up initial condition (the
-/// paper's gains from `x0u`, docs/model.md experiment 6).
+/// the run's length, and, unless the scenario gives `controller.hybrid.ki`, the
+/// paper's `K'_I`: 0 from an elbow-up initial condition, 650 otherwise (the
+/// paper's gains from `x0u` and `x0d`, docs/model.md experiment 6). The arm's
+/// parameters (paper Table I) are the scenario's, which the sweep's spec
+/// records in [`SweepSpec::params`].
 pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition) -> Option<Scenario> {
     let mut s = spec.scenario.clone()?;
     s.plant.mu = key.mu;
     s.plant.v_belt = key.v_belt;
     s.plant.impact_law = key.impact_law;
     s.plant.e_n = key.e_n;
+    s.plant.iwc = key.iwc;
     s.plant.rtol = spec.rtol;
     s.plant.atol = spec.atol;
     s.controller.kind = spec.controller.kind()?;
     s.controller.mu_hat = key.mu;
-    if ic.branch == shared::ElbowBranch::Up {
-        s.controller.hybrid_ki = 0.0;
+    if s.controller.hybrid.ki.is_none() {
+        let x0 = if ic.branch == shared::ElbowBranch::Up { plant::initial::PaperX0::U } else { plant::initial::PaperX0::D };
+        s.controller.hybrid.ki = Some(rig::scenario::paper_hybrid_ki(x0));
     }
     s.timing.duration_s = spec.run_duration();
     Some(s)

@@ -19,6 +19,7 @@ use crate::{
 };
 use plant::Validity;
 use rig::{
+    overrides::{self, Override},
     record::{PeriodRecord, RunError},
     rig::{FirmwareLink, RunObserver, run_loop},
     scenario::Scenario,
@@ -26,24 +27,41 @@ use rig::{
     summary::RunSummary,
 };
 
-/// Loads the scenario and applies the overrides.
+/// Reads a scenario (`path`; `-` is standard input; `None`: the embedded
+/// default) with the `--set` overrides applied to its TOML document.
+///
+/// # Errors
+/// [`CliError::BadInput`] (an unreadable file) or [`CliError::Scenario`] naming
+/// the key (exit 2).
+pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result<Scenario, CliError> {
+    let text = match path {
+        Some(path) if path.as_os_str() == "-" => std::io::read_to_string(std::io::stdin())
+            .map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?,
+        Some(path) => {
+            std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?
+        }
+        None => return Ok(Scenario::from_toml_with(rig::scenario::DEFAULT_TOML, set)?),
+    };
+    Ok(Scenario::from_toml_with(&text, set)?)
+}
+
+/// Loads the scenario, applies the `--set` overrides, then the flags. A key set
+/// both by a flag and by `--set` is refused (exit 2): a key is set in one place.
 ///
 /// # Errors
 /// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
 pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
-    let mut s = match &args.scenario {
-        Some(path) if path.as_os_str() == "-" => {
-            let text = std::io::read_to_string(std::io::stdin())
-                .map_err(|e| CliError::BadInput(format!("cannot read the scenario from stdin: {e}")))?;
-            Scenario::from_toml(&text)?
-        }
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?;
-            Scenario::from_toml(&text)?
-        }
-        None => Scenario::default_scenario(),
-    };
+    let flags = [
+        ("controller.kind", "--controller", args.controller.is_some()),
+        ("plant.x0", "--x0", args.x0.is_some()),
+        ("controller.target_z_t", "--target-zt", args.target_zt.is_some()),
+        ("timing.duration_s", "--duration", args.duration.is_some()),
+        ("sensors.seed", "--seed", args.seed.is_some()),
+        ("plant.iwc", "--iwc", args.iwc.is_some()),
+    ];
+    let given: Vec<(&str, &str)> = flags.iter().filter(|f| f.2).map(|f| (f.0, f.1)).collect();
+    overrides::check_keys(&args.set, &given).map_err(rig::scenario::ScenarioError::from)?;
+    let mut s = read_scenario(args.scenario.as_deref(), &args.set)?;
     if let Some(c) = args.controller {
         s.controller.kind = c;
     }

@@ -52,6 +52,43 @@ impl<T> Done<T> {
     }
 }
 
+/// The keys of `[plant]` each open-loop command sets with a flag of its own:
+/// `--set` of one of them is refused (use the flag).
+pub const PLANT_FLAGS: [(&str, &str); 8] = [
+    ("plant.mu", "--mu"),
+    ("plant.v_belt", "--v-belt"),
+    ("plant.x0", "--x0 or --x0-deg"),
+    ("plant.impact_law", "--impact-law"),
+    ("plant.e_n", "--e-n"),
+    ("plant.rtol", "--rtol"),
+    ("plant.atol", "--atol"),
+    ("plant.iwc", "--iwc"),
+];
+
+/// The parameters of a command without a scenario file (`simulate`,
+/// `admissible`, `modes`, `poincare`): paper Table I with the `--set` overrides
+/// of the arm's keys named in `arm` (all seven when empty), and the command's
+/// `mu` and `v_belt`, validated. Precedence: a key a flag of the command sets
+/// ([`PLANT_FLAGS`]) cannot be given with `--set`, whether or not the flag is
+/// given (its default is a value too).
+///
+/// # Errors
+/// [`crate::error::CliError::Scenario`] naming the key (exit 2), or
+/// [`crate::error::CliError::Param`] for a bad `mu` or `v_belt`.
+pub fn arm_params(
+    set: &[rig::overrides::Override],
+    command: &str,
+    arm: &[&str],
+    mu: f64,
+    v_belt: f64,
+) -> Result<shared::Params<f64>, crate::error::CliError> {
+    use rig::{overrides, scenario::ScenarioError};
+    overrides::check_keys(set, &PLANT_FLAGS).map_err(ScenarioError::from)?;
+    let params = rig::arm::arm_params(set, &rig::arm::arm_keys(arm), command, mu, v_belt)?;
+    params.validate()?;
+    Ok(params)
+}
+
 /// Prints `value` as the command's one JSON document (`--json`).
 ///
 /// # Errors

@@ -6,7 +6,7 @@ use std::io::Write;
 
 use crate::commands::Done;
 use crate::{cli::AdmissibleArgs, error::CliError, output::OutputSet};
-use analyses::admissible::{AdmissibleReport, compute};
+use analyses::admissible::{AdmissibleReport, compute_for};
 
 pub mod figures;
 pub mod summary;
@@ -20,7 +20,8 @@ use summary::*;
 /// [`CliError::Param`] (exit 2) for a bad `mu`, before anything is written;
 /// [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError> {
-    let report = compute(args.mu)?;
+    let params = super::arm_params(&args.set, "admissible", &["l", "h"], args.mu, shared::Params::<f64>::paper().v_belt)?;
+    let report = compute_for(params, analyses::admissible::SCAN_STEPS)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     out.write_bytes("admissible.json", document(&report, &files)?.as_bytes())?;
@@ -74,7 +75,7 @@ mod tests {
     fn bad_mu_is_rejected_with_exit_code_2_and_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
         for mu in [-0.1, f64::NAN, f64::INFINITY] {
-            let args = AdmissibleArgs { mu, output: crate::cli::OutputArgs { out: dir.path().join("o"), json: true } };
+            let args = AdmissibleArgs { mu, set: vec![], output: crate::cli::OutputArgs { out: dir.path().join("o"), json: true } };
             let e = run_with(&args, &mut Vec::new()).unwrap_err();
             assert_eq!(e.exit_code(), 2);
             assert!(e.to_string().contains("mu"), "{e}");
@@ -88,7 +89,7 @@ mod tests {
     #[test]
     fn run_writes_json_and_svg() {
         let dir = tempfile::tempdir().unwrap();
-        let args = AdmissibleArgs { mu: 0.6, output: crate::cli::OutputArgs { out: dir.path().to_path_buf(), json: true } };
+        let args = AdmissibleArgs { mu: 0.6, set: vec![], output: crate::cli::OutputArgs { out: dir.path().to_path_buf(), json: true } };
         let mut printed = Vec::new();
         run_with(&args, &mut printed).unwrap();
         let printed: serde_json::Value = serde_json::from_slice(&printed).unwrap();

@@ -31,6 +31,8 @@ pub(crate) struct JsonReport<'a> {
     pub(crate) paper_direction: &'static str,
     pub(crate) mirror_check: JsonMirror,
     pub(crate) files: &'a [String],
+    /// The parameters used (paper Table I with `--set`, `mu`; SI, radians).
+    pub(crate) params: shared::Params<f64>,
 }
 
 pub(crate) const PAPER_DIRECTION: &str = "The paper's experiments have v_belt < 0 with the tip at rest or moving slower than the belt, \
@@ -58,6 +60,7 @@ pub(crate) fn json_report<'a>(r: &AdmissibleReport, files: &'a [String]) -> Json
             max_endpoint_difference_m: r.mirror_max_diff,
             tolerance_m: MIRROR_TOL_M,
         },
+        params: r.params,
         files,
     }
 }

@@ -23,7 +23,8 @@ use summary::*;
 pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
     let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
-    let map = compute(args.mu, args.v_belt, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
+    let params = super::arm_params(&args.set, "modes", &[], args.mu, args.v_belt)?;
+    let map = compute_for(params, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let files = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f)).collect();
     let (tmp, w) = out.create("modes.csv")?;
@@ -80,6 +81,7 @@ mod tests {
             theta1_dot: "-10,10".into(),
             grid: 60,
             theta2_sign: Theta2Sign::Auto,
+            set: vec![],
             output: crate::cli::OutputArgs { out: out.to_path_buf(), json: true },
         }
     }

@@ -84,6 +84,8 @@ pub(crate) struct JsonSummary<'a> {
     pub(crate) p_zero: &'a [PZero],
     pub(crate) b_zero_curve_points: usize,
     pub(crate) files: &'a [String],
+    /// The parameters used (paper Table I with `--set`, `mu`, `v_belt`; SI, radians).
+    pub(crate) params: shared::Params<f64>,
 }
 
 pub(crate) fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
@@ -116,6 +118,7 @@ pub(crate) fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<
             .collect(),
         p_zero: &map.p_zero,
         b_zero_curve_points: map.b_zero.iter().map(Vec::len).sum(),
+        params: map.params,
         files,
     }
 }

@@ -13,7 +13,6 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
-use shared::Params;
 
 use crate::commands::Done;
 use crate::{
@@ -90,8 +89,8 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
         return bad("--threads must be at least 1".into());
     }
     // Parameters at both ends of the grid (mu, v_belt finite, ...).
-    Params::new(args.mu, v_min)?;
-    let params = Params::new(args.mu, v_max)?;
+    super::arm_params(&args.set, "poincare", &[], args.mu, v_min)?;
+    let params = super::arm_params(&args.set, "poincare", &[], args.mu, v_max)?;
     let sim =
         SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
     sim.validate()?;
@@ -110,6 +109,7 @@ fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCo
     };
     let cfg = PoincareConfig {
         mu: args.mu,
+        params,
         x0,
         sim,
         transient_s: args.transient,
@@ -210,6 +210,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let summary = Summary {
         status: if counts.failed > 0 { "failed" } else { "ok" },
         mu: cfg.mu,
+        params: cfg.params,
         initial_condition: ic,
         v_belt_range: [grid[0], grid[grid.len() - 1]],
         v_step: args.v_step,

@@ -106,6 +106,9 @@ pub struct Summary {
     pub status: &'static str,
     /// Friction coefficient.
     pub mu: f64,
+    /// The parameters used: paper Table I with `--set`, and `mu` (SI, radians);
+    /// `v_belt` here is the grid's upper end, each point runs at its own.
+    pub params: shared::Params<f64>,
     /// The initial condition and its projection onto the belt.
     pub initial_condition: InitialCondition,
     /// Belt-speed grid: `[min, max]`, m/s.

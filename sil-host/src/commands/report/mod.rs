@@ -169,7 +169,7 @@ fn execute(command: Command) -> Result<(Outcome, Option<CliError>), CliError> {
         Command::Modes(a) => typed(commands::modes::execute(&a)?, Outcome::Modes),
         Command::Admissible(a) => typed(commands::admissible::execute(&a)?, Outcome::Admissible),
         Command::Simulate(a) => typed(commands::simulate::execute(&a)?, Outcome::Simulate),
-        Command::Sweep(a) => typed(commands::sweep::execute(&a)?, Outcome::Sweep),
+        Command::Sweep(a) => typed(commands::sweep::execute(&a)?, |s| Outcome::Sweep(Box::new(s))),
         Command::Poincare(a) => typed(commands::poincare::execute(&a)?, Outcome::Poincare),
         Command::Zmax(a) => typed(commands::zmax::execute(&a)?, Outcome::Zmax),
         Command::Run(a) => typed(commands::run::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),

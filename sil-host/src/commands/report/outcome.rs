@@ -18,7 +18,7 @@ pub enum Outcome {
     /// `simulate`.
     Simulate(SimulateSummary),
     /// `sweep`.
-    Sweep(SweepSummary),
+    Sweep(Box<SweepSummary>),
     /// `poincare`.
     Poincare(PoincareSummary),
     /// `zmax`.

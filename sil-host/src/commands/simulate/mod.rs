@@ -8,8 +8,6 @@
 
 use std::time::Instant;
 
-use shared::Params;
-
 use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
@@ -95,7 +93,7 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
 pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Validate everything before touching the output folder.
-    let params = Params::new(args.mu, args.v_belt)?;
+    let params = super::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
     let sim =
         SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
     sim.validate()?;

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 use crate::commands::Done;
 use crate::{
-    cli::{ScenarioArgs, SweepArgs},
+    cli::SweepArgs,
     error::CliError,
     output::progress_bar,
     sweep::store::{self, Manifest},
@@ -58,27 +58,41 @@ fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, CliError> {
     Ok(out)
 }
 
+/// The keys a sweep sets per run or by its flags: `--set` of one of them is refused.
+const RUN_KEYS: [(&str, &str); 11] = [
+    ("plant.mu", "--mu"),
+    ("plant.v_belt", "--v-belt"),
+    ("plant.x0", "--ics"),
+    ("plant.impact_law", "--impact-law"),
+    ("plant.e_n", "--e-n"),
+    ("plant.rtol", "--rtol"),
+    ("plant.atol", "--atol"),
+    ("plant.iwc", "--iwc"),
+    ("controller.kind", "--controller"),
+    ("controller.mu_hat", "the sweep (mu_hat = each run's mu)"),
+    ("timing.duration_s", "--transient and --record"),
+];
+
 /// The spec of `sil-host sweep`'s arguments.
 ///
 /// # Errors
 /// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
 pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
-    let scenario = match args.controller {
+    use rig::{overrides, scenario::ScenarioError};
+    overrides::check_keys(&args.set, &RUN_KEYS).map_err(ScenarioError::from)?;
+    let (scenario, params) = match args.controller {
         SweepController::None => {
             if args.scenario.is_some() {
                 return Err(CliError::BadInput("--scenario is for closed-loop sweeps (--controller hybrid or pid)".into()));
             }
-            None
+            let p = shared::Params::<f64>::paper();
+            (None, crate::commands::arm_params(&args.set, "sweep (open loop)", &[], p.mu, p.v_belt)?)
         }
-        _ => Some(crate::commands::closed_loop::load_scenario(&ScenarioArgs {
-            scenario: args.scenario.clone(),
-            controller: None,
-            x0: None,
-            target_zt: None,
-            duration: None,
-            seed: None,
-            iwc: None,
-        })?),
+        _ => {
+            let s = crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)?;
+            let params = s.plant.params();
+            (Some(s), params)
+        }
     };
     let spec = SweepSpec {
         format: analyses::sweep::FORMAT,
@@ -106,6 +120,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         threshold: args.threshold,
         rtol: args.rtol,
         atol: args.atol,
+        params,
     };
     spec.validate().map_err(CliError::BadInput)?;
     Ok(spec)

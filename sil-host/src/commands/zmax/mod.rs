@@ -40,22 +40,23 @@ fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
     vec![Combination { controller, x0, setting }]
 }
 
+/// The keys each trial sets: `--set` of one of them is refused.
+const TRIAL_KEYS: [(&str, &str); 4] = [
+    ("controller.kind", "--controller (or --all)"),
+    ("plant.x0", "--x0 (or --all)"),
+    ("controller.target_z_t", "the bisection"),
+    ("timing.duration_s", "--duration"),
+];
+
+/// The base scenario (`--scenario` or the embedded default) with the `--set` overrides.
 fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
-    match &args.scenario {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| CliError::BadInput(format!("cannot read scenario {}: {e}", path.display())))?;
-            Ok(Scenario::from_toml(&text)?)
-        }
-        None => Ok(Scenario::default_scenario()),
-    }
+    rig::overrides::check_keys(&args.set, &TRIAL_KEYS).map_err(rig::scenario::ScenarioError::from)?;
+    crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)
 }
 
 /// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
 fn p_zero_end(base: &Scenario, x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
-    let mut params = shared::Params::<f64>::paper();
-    params.mu = base.plant.mu;
-    params.v_belt = base.plant.v_belt;
+    let params = base.plant.params();
     let arm = shared::Arm::new(params);
     let branch = x0.branch();
     let p = |z| p_on_belt(&arm, z, branch, shared::SlipDirection::Positive);
@@ -105,11 +106,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
             None => default_bracket(&base, combo.x0)?,
         };
         sampled_scenario(&base, combo, bracket.1, &criteria)?;
-        analyses::ideal::build(&analyses::ideal::IdealSetup {
-            target_z_t: bracket.1,
-            ..analyses::ideal::IdealSetup::paper(combo.controller, plant::initial::deg_to_state(combo.x0.condition().deg), bracket.0)
-        })
-        .map_err(CliError::Sim)?;
+        analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::Sim)?;
         jobs.push((combo, bracket));
     }
     let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_evaluations(b.0, b.1, args.tol))).sum();
@@ -170,6 +167,14 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         tol_m: args.tol,
         definition: DEFINITION,
         paper: PAPER,
+        plant_params: base.plant.params(),
+        gains: ZmaxGains {
+            pid: base.controller.pid,
+            hybrid_kp: base.controller.hybrid.kp,
+            hybrid_kd: base.controller.hybrid.kd,
+            hybrid_ki_x0d: base.controller.hybrid_ki(PaperX0::D),
+            hybrid_ki_x0u: base.controller.hybrid_ki(PaperX0::U),
+        },
         base_scenario: base,
         validity: trials_validity(&searches),
         wall_s: started.elapsed().as_secs_f64(),

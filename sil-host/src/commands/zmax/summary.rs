@@ -44,6 +44,21 @@ pub struct ZmaxRow {
     pub wall_s: f64,
 }
 
+/// The gains of `sil-host zmax`'s trials (paper eqs. 8 to 11), ideal and sampled alike.
+#[derive(Debug, Clone, Serialize)]
+pub struct ZmaxGains {
+    /// PID gains per joint (eq. 8).
+    pub pid: rig::scenario::PidSection,
+    /// `K'_P`, 1/s^2 (eq. 10).
+    pub hybrid_kp: f64,
+    /// `K'_D`, 1/s (eq. 10).
+    pub hybrid_kd: f64,
+    /// `K'_I` from `x0d`, 1/s (eq. 11).
+    pub hybrid_ki_x0d: f64,
+    /// `K'_I` from `x0u`, 1/s (eq. 11).
+    pub hybrid_ki_x0u: f64,
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct ZmaxSummary {
@@ -64,6 +79,12 @@ pub struct ZmaxSummary {
     pub base_scenario: Scenario,
     /// Validity counters summed over every trial.
     pub validity: Validity,
+    /// The plant's parameters of every trial (paper Table I, `mu`, `v_belt`; SI,
+    /// radians), from the base scenario.
+    pub plant_params: shared::Params<f64>,
+    /// The gains of every trial (paper eqs. 8 to 11), `K'_I` resolved per
+    /// initial condition.
+    pub gains: ZmaxGains,
     /// Wall-clock time of the whole command, s.
     pub wall_s: f64,
 }
