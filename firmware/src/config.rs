@@ -150,6 +150,10 @@ pub struct Config {
     pub bad_frame_limit: u16,
     /// Elbow branch for the PID's inverse kinematics; `None`: the branch of the first frame.
     pub branch: Option<ElbowBranch>,
+    /// Resolution of both joint encoders, bits per revolution (docs/hardware.md: 14 on
+    /// the reference board; 10 to 16, `shared::wire::ENCODER_BITS_RANGE`). The sensor
+    /// side must send counts of the same resolution.
+    pub encoder_bits: u8,
 }
 
 impl Default for Config {
@@ -180,6 +184,7 @@ impl Default for Config {
             deadline_miss_limit: 3,
             bad_frame_limit: 3,
             branch: None,
+            encoder_bits: shared::wire::ENCODER_BITS,
         }
     }
 }
@@ -242,6 +247,8 @@ impl Config {
         check("innovation_confirm", self.innovation_confirm as f32, self.innovation_confirm >= 1, ">= 1")?;
         check("deadline_miss_limit", self.deadline_miss_limit as f32, self.deadline_miss_limit >= 1, ">= 1")?;
         check("bad_frame_limit", self.bad_frame_limit as f32, self.bad_frame_limit >= 1, ">= 1")?;
+        let (lo, hi) = shared::wire::ENCODER_BITS_RANGE;
+        check("encoder_bits", f32::from(self.encoder_bits), (lo..=hi).contains(&self.encoder_bits), "10 to 16 bits")?;
         Ok(())
     }
 }

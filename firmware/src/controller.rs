@@ -321,7 +321,7 @@ impl Firmware {
     /// Decodes the frame and checks its sequence; returns the measurement and
     /// whether periods were skipped.
     fn checked(&self, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
-        let m = decode::decode(frame)?;
+        let m = decode::decode_bits(frame, self.cfg.encoder_bits)?;
         match &self.started {
             Some(s) if frame.seq <= s.last_seq => Err(FrameFault::Stale),
             Some(s) => Ok((m, frame.seq > s.last_seq.wrapping_add(1))),

@@ -65,10 +65,19 @@ pub fn wrap(angle: f32) -> f32 {
 /// [`FrameFault`] when a count is out of range. (The sequence check is the
 /// caller's: it needs the previous frame.)
 pub fn decode(frame: &SensorFrame) -> Result<Measurement, FrameFault> {
+    decode_bits(frame, wire::ENCODER_BITS)
+}
+
+/// As [`decode`], for `encoder_bits`-bit encoders (counts in `[0, 2^bits)`;
+/// `Config::encoder_bits`, clamped to `wire::ENCODER_BITS_RANGE`).
+///
+/// # Errors
+/// As [`decode`].
+pub fn decode_bits(frame: &SensorFrame, encoder_bits: u8) -> Result<Measurement, FrameFault> {
     if frame.flags & wire::frame_flags::ANY_INVALID != 0 {
         return Err(FrameFault::SensorInvalid);
     }
-    let counts = wire::ENCODER_COUNTS;
+    let counts = 1u32 << encoder_bits.clamp(wire::ENCODER_BITS_RANGE.0, wire::ENCODER_BITS_RANGE.1);
     if frame.theta1_count as u32 >= counts || frame.elbow_count as u32 >= counts {
         return Err(FrameFault::EncoderOutOfRange);
     }

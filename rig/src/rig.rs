@@ -149,7 +149,10 @@ impl PeriodLoop {
         let period = s.timing.period();
         let ts = period.as_secs_f64();
         Self {
-            sensors: SensorFaults::new(Sensors::new(s.sensors.seed, s.sensors.load_noise_n), FaultPlan::new(&s.faults, ts)),
+            sensors: SensorFaults::new(
+                Sensors::new(s.sensors.seed, s.sensors.load_noise_n).with_encoder_bits(s.sensors.encoder_bits),
+                FaultPlan::new(&s.faults, ts),
+            ),
             ts,
             period,
             delta: s.timing.delta_s,

@@ -302,6 +302,14 @@ pub struct SensorSection {
     pub seed: u64,
     /// Load-cell white noise, N rms.
     pub load_noise_n: f64,
+    /// Resolution of both joint encoders, bits per revolution (10 to 16; the
+    /// reference board's 14 by default). The firmware is configured with the same.
+    #[serde(default = "default_encoder_bits")]
+    pub encoder_bits: u8,
+}
+
+fn default_encoder_bits() -> u8 {
+    shared::wire::ENCODER_BITS
 }
 
 /// The rig section: how the plant and firmware processes wait for each other.
@@ -584,6 +592,9 @@ impl Scenario {
         )?;
         let noise = self.sensors.load_noise_n;
         check(finite(noise) && noise >= 0.0, "sensors.load_noise_n", noise, "a finite value >= 0")?;
+        let bits = self.sensors.encoder_bits;
+        let (lo, hi) = shared::wire::ENCODER_BITS_RANGE;
+        check((lo..=hi).contains(&bits), "sensors.encoder_bits", f64::from(bits), "10 to 16 bits")?;
         let r = &self.rig;
         check(
             finite(r.command_timeout_s) && r.command_timeout_s > 0.0 && r.command_timeout_s <= 60.0,

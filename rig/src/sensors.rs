@@ -23,6 +23,8 @@ pub trait SensorModel {
 pub struct Sensors {
     rng: ChaCha8Rng,
     load_noise: Option<Normal<f64>>,
+    /// Joint encoder resolution, bits per revolution.
+    encoder_bits: u8,
 }
 
 /// The sensor faults of a scenario wrapped around any sensor model (the way
@@ -87,10 +89,16 @@ impl<S: SensorModel> SensorModel for SensorFaults<S> {
 }
 
 impl Sensors {
-    /// Sensors with load-cell noise `load_noise_n` (N rms, >= 0) from `seed`.
+    /// Sensors with load-cell noise `load_noise_n` (N rms, >= 0) from `seed`, and
+    /// the reference board's 14-bit encoders.
     pub fn new(seed: u64, load_noise_n: f64) -> Self {
         let load_noise = if load_noise_n > 0.0 { Normal::new(0.0, load_noise_n).ok() } else { None };
-        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise }
+        Self { rng: ChaCha8Rng::seed_from_u64(seed), load_noise, encoder_bits: wire::ENCODER_BITS }
+    }
+
+    /// The same with `bits`-bit joint encoders (10 to 16, `wire::ENCODER_BITS_RANGE`).
+    pub fn with_encoder_bits(self, bits: u8) -> Self {
+        Self { encoder_bits: bits, ..self }
     }
 }
 
@@ -115,8 +123,8 @@ impl SensorModel for Sensors {
         SensorFrame {
             t_us,
             seq,
-            theta1_count: wire::encode_angle(x[0]),
-            elbow_count: wire::encode_angle(x[2] - x[0]),
+            theta1_count: wire::encode_angle_bits(x[0], self.encoder_bits),
+            elbow_count: wire::encode_angle_bits(x[2] - x[0], self.encoder_bits),
             f_t_code: wire::encode_force(f[0] + n_t),
             f_n_code: wire::encode_force(f[1] + n_n),
             belt_count: if v_belt.is_finite() { (v_belt * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16 } else { 0 },
@@ -145,6 +153,24 @@ mod tests {
         // Noise 20 mN rms plus quantisation (12.2 mN lsb, 3.5 mN rms) in quadrature.
         let rms = (sum2 / n as f64).sqrt();
         assert!((rms - (0.02f64.powi(2) + (25.0 / 2048.0f64).powi(2) / 12.0).sqrt()).abs() < 0.002, "rms {rms}");
+    }
+
+    /// The encoder resolution is the sensor model's: counts stay below `2^bits` and
+    /// decode (at the same resolution, as the firmware does) to within half a count;
+    /// the default is the reference board's 14 bits.
+    #[test]
+    fn encoder_resolution_sets_the_counts() {
+        let x = [0.3217, 0.0, -0.2711, 0.0];
+        let default = Sensors::new(1, 0.0).frame(0, 0, &x, [0.0, 5.0], -0.4);
+        assert_eq!(default, Sensors::new(1, 0.0).with_encoder_bits(14).frame(0, 0, &x, [0.0, 5.0], -0.4));
+        for bits in 10..=16u8 {
+            let f = Sensors::new(1, 0.0).with_encoder_bits(bits).frame(0, 0, &x, [0.0, 5.0], -0.4);
+            let lsb = std::f64::consts::TAU / f64::from(1u32 << bits);
+            assert!(u32::from(f.theta1_count) < 1u32 << bits);
+            let m = firmware::decode::decode_bits(&f, bits).unwrap();
+            assert!((f64::from(m.theta1) - x[0]).abs() <= 0.5 * lsb + 1e-6, "{bits} bits");
+            assert!((f64::from(m.elbow) - (x[2] - x[0])).abs() <= 0.5 * lsb + 1e-6, "{bits} bits");
+        }
     }
 
     /// The fault wrapper changes only the faulted signal in its window and nothing

@@ -16,8 +16,14 @@
 #[cfg(feature = "iceoryx2")]
 use iceoryx2::prelude::ZeroCopySend;
 
-/// Encoder resolution: 14 bit per revolution (docs/hardware.md).
-pub const ENCODER_COUNTS: u32 = 1 << 14;
+/// Encoder resolution of the reference board: 14 bit per revolution (docs/hardware.md).
+pub const ENCODER_BITS: u8 = 14;
+/// Encoder counts per revolution at [`ENCODER_BITS`].
+pub const ENCODER_COUNTS: u32 = 1 << ENCODER_BITS;
+/// Encoder resolutions a configuration may give (bits per revolution): the wire's
+/// `u16` counts hold up to 16 bits. Both sides of the wire must use the same one
+/// (the scenario's `sensors.encoder_bits`, the firmware's `Config::encoder_bits`).
+pub const ENCODER_BITS_RANGE: (u8, u8) = (10, 16);
 /// Load-cell ADC: 12-bit signed codes in `[-2048, 2047]` (docs/hardware.md).
 pub const LOAD_CODE_MIN: i16 = -2048;
 /// Largest load-cell code.
@@ -198,9 +204,16 @@ pub struct FirmwareTelemetry {
 
 /// Encodes an angle (rad) as a 14-bit absolute encoder count (rounded, wrapped to `[0, 2^14)`).
 pub fn encode_angle(angle: f64) -> u16 {
+    encode_angle_bits(angle, ENCODER_BITS)
+}
+
+/// Encodes an angle (rad) as the count of a `bits`-bit absolute encoder (rounded,
+/// wrapped to `[0, 2^bits)`; `bits` is clamped to [`ENCODER_BITS_RANGE`]).
+pub fn encode_angle_bits(angle: f64, bits: u8) -> u16 {
+    let counts = 1u32 << bits.clamp(ENCODER_BITS_RANGE.0, ENCODER_BITS_RANGE.1);
     let turns = angle / core::f64::consts::TAU;
     let frac = turns - libm::floor(turns);
-    let count = libm::round(frac * ENCODER_COUNTS as f64) as u32 % ENCODER_COUNTS;
+    let count = libm::round(frac * counts as f64) as u32 % counts;
     count as u16
 }
 

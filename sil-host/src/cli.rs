@@ -217,6 +217,11 @@ pub struct ZmaxArgs {
     /// The last part of the run where the tip must be within --settle-tol, s.
     #[arg(long, default_value_t = 1.0)]
     pub settle_window: f64,
+    /// Lift-off criterion, m: 0 counts any departure from the belt (located exactly);
+    /// a gap > 0 counts a lift-off only when the tip rises more than this above the
+    /// belt at a sample (0 to 0.1 m).
+    #[arg(long, default_value_t = 0.0)]
+    pub lift_off_gap: f64,
     /// Base scenario of the sampled setting (rate, sensors, the arm's parameters,
     /// mu, v_belt, gains, f_n*, move time, ...); its controller, initial condition,
     /// target and run length are set per trial, and K'_I when it does not give

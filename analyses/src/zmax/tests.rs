@@ -38,7 +38,7 @@ fn bisection_reports_the_bracket_ends_and_errors() {
 #[test]
 fn coarse_search_brackets_the_first_lift_off() {
     let base = Scenario::default_scenario();
-    let c = Criteria { duration_s: 3.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 0.5 };
+    let c = Criteria { duration_s: 3.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 0.5, lift_off_gap_m: 0.0 };
     let tol = 4e-3;
     for setting in [Setting::Ideal, Setting::Sampled] {
         let combo = Combination { controller: ControllerKind::Hybrid, x0: PaperX0::D, setting };

@@ -89,6 +89,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         move_time_s: base.controller.move_time_s,
         settle_tol_m: args.settle_tol,
         settle_window_s: args.settle_window,
+        lift_off_gap_m: args.lift_off_gap,
     };
     criteria.validate()?;
     if !(args.tol.is_finite() && args.tol > 0.0) {
