@@ -20,4 +20,7 @@ pub enum AnalysisError {
     /// A closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] rig::record::RunError),
+    /// The analysis was stopped (Ctrl-C, SIGTERM) before it finished.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
 }

@@ -18,6 +18,7 @@ pub mod error;
 pub mod ideal;
 pub mod modes;
 pub mod poincare;
+pub mod sensitivity;
 pub mod sweep;
 pub mod zmax;
 

@@ -81,6 +81,17 @@ pub enum Command {
     /// figure per case (the run at the limit).
     #[command(allow_negative_numbers = true)]
     Zmax(ZmaxArgs),
+    /// Sensitivity study (issue 14): the paper's headline results (critical mu, the
+    /// bouncing band at mu = 0.6 from x0a, whether x0d bounces, Z_t,sliding for the
+    /// four paper cases ideal and sampled, whether the hybrid closed loop bounces)
+    /// recomputed under each open choice, one at a time from the defaults: impact law
+    /// and e_n, the IWC rule, the hybrid law's friction term, the move time, the
+    /// lift-off criterion, and for the sampled firmware the rate, the encoder bits,
+    /// the load-cell noise and the mu_hat mismatch. Writes sensitivity.csv (choice,
+    /// value, result), summary.json and one figure per headline result. --size quick
+    /// takes a few minutes on 2 cores; --size paper uses the paper's resolution.
+    #[command(allow_negative_numbers = true)]
+    Sensitivity(SensitivityArgs),
     /// Processor in the loop: the MCU image (thumbv7em-none-eabihf, the one that would
     /// be flashed) closes the loop with the plant over its USART1 (postcard, CRC-32 and
     /// COBS frames), in lockstep with the same scenarios and outputs as `run`. Two modes:
@@ -183,6 +194,32 @@ pub struct BenchArgs {
     /// Print one JSON document instead of the table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `sil-host sensitivity`.
+#[derive(Debug, Clone, Args)]
+pub struct SensitivityArgs {
+    /// Size of the study: `quick` (coarse grids, short windows, Z_t,sliding to 4 mm)
+    /// or `paper` (experiment 3's grid, 250 s + 50 s, Z_t,sliding to 1 mm).
+    #[arg(long, value_enum, default_value = "quick")]
+    pub size: analyses::sensitivity::Size,
+    /// Base scenario (the arm's parameters, gains, f_n*, mu, v_belt for Z_t,sliding;
+    /// the sampled firmware's settings); default: the embedded default scenario.
+    #[arg(long, value_name = "FILE.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Change one key of the base scenario (repeatable; as for `run`). Refused: the
+    /// keys the study varies or sets per run.
+    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<rig::overrides::Override>,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Exit status on model violations.
+    #[command(flatten)]
+    pub strict: StrictArgs,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// `sil-host zmax`.

@@ -72,6 +72,7 @@ impl From<analyses::AnalysisError> for CliError {
             A::Sim(e) => Self::Sim(e),
             A::Scenario(e) => Self::Scenario(e),
             A::Run(e) => Self::Run(e),
+            A::Interrupted(m) => Self::Interrupted(m),
         }
     }
 }

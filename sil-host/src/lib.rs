@@ -38,6 +38,7 @@ where
         cli::Command::Sweep(args) => commands::sweep::run(&args),
         cli::Command::Merge(args) => commands::sweep::merge::merge(&args),
         cli::Command::Zmax(args) => commands::zmax::run(&args),
+        cli::Command::Sensitivity(args) => commands::sensitivity::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
         cli::Command::Firmware(args) => match commands::firmware::firmware(&args) {
             Ok(code) => return code,

@@ -176,6 +176,11 @@ pub struct SweepSpec {
     /// files: the paper's.
     #[serde(default = "Params::paper")]
     pub params: Params<f64>,
+    /// Closed loop: the firmware's friction estimate as a multiple of each run's
+    /// `mu` (`mu_hat = mu_hat_factor mu`; 1, the default, is the paper's controller,
+    /// which knows `mu`). `sil-host sensitivity` varies it.
+    #[serde(default = "unit", skip_serializing_if = "is_unit")]
+    pub mu_hat_factor: f64,
 }
 
 /// One initial condition of a sweep.
@@ -243,6 +248,7 @@ impl SweepSpec {
             rtol: 1e-9,
             atol: 1e-11,
             params: Params::paper(),
+            mu_hat_factor: 1.0,
         }
     }
 
@@ -365,6 +371,9 @@ impl SweepSpec {
                 return Err("the sweep's arm parameters differ from its scenario's [plant] section".into());
             }
         }
+        if !(self.mu_hat_factor.is_finite() && (0.5..=2.0).contains(&self.mu_hat_factor)) {
+            return Err(format!("mu_hat factor {} must be in [0.5, 2]", self.mu_hat_factor));
+        }
         if self.ideal && self.controller == SweepController::None {
             return Err("--ideal needs --controller hybrid or pid".into());
         }
@@ -373,6 +382,14 @@ impl SweepSpec {
         }
         Ok(())
     }
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+fn is_unit(x: &f64) -> bool {
+    *x == 1.0
 }
 
 /// Default indicator threshold, rad/s. The paper flags `max theta1_dot > 0`; in

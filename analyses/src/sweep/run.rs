@@ -365,7 +365,7 @@ pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialConditio
     s.plant.rtol = spec.rtol;
     s.plant.atol = spec.atol;
     s.controller.kind = spec.controller.kind()?;
-    s.controller.mu_hat = key.mu;
+    s.controller.mu_hat = key.mu * spec.mu_hat_factor;
     if s.controller.hybrid.ki.is_none() {
         let x0 = if ic.branch == shared::ElbowBranch::Up { plant::initial::PaperX0::U } else { plant::initial::PaperX0::D };
         s.controller.hybrid.ki = Some(rig::scenario::paper_hybrid_ki(x0));

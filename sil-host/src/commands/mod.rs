@@ -9,6 +9,7 @@ pub mod pil;
 pub mod poincare;
 pub mod report;
 pub mod run;
+pub mod sensitivity;
 pub mod simulate;
 pub mod sweep;
 pub mod zmax;

@@ -121,6 +121,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         rtol: args.rtol,
         atol: args.atol,
         params,
+        mu_hat_factor: 1.0,
     };
     spec.validate().map_err(CliError::BadInput)?;
     Ok(spec)

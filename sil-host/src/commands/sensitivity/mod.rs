@@ -1,0 +1,186 @@
+//! `sil-host sensitivity`: the paper's headline results under each open choice,
+//! one at a time from the defaults ([`analyses::sensitivity`]). Writes
+//! `sensitivity.csv` (choice, value, result), `summary.json` (the typed study) and
+//! one figure per headline result.
+
+use std::io::Write;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use analyses::sensitivity::{self, Study};
+use serde::Serialize;
+
+use crate::commands::Done;
+use crate::{
+    cli::SensitivityArgs,
+    error::CliError,
+    output::{OutputSet, progress_bar, write_csv},
+};
+
+pub mod figures;
+
+/// The keys the study varies or sets per run: `--set` of one of them is refused.
+const STUDY_KEYS: [(&str, &str); 13] = [
+    ("plant.impact_law", "the study (impact law)"),
+    ("plant.e_n", "the study (e_n)"),
+    ("plant.iwc", "the study (IWC rule)"),
+    ("controller.friction", "the study (friction term)"),
+    ("controller.move_time_s", "the study (move time)"),
+    ("controller.mu_hat", "the study (mu_hat mismatch)"),
+    ("timing.rate_hz", "the study (control rate)"),
+    ("sensors.encoder_bits", "the study (encoder bits)"),
+    ("sensors.load_noise_n", "the study (load-cell noise)"),
+    ("plant.x0", "the study (each experiment's initial conditions)"),
+    ("controller.kind", "the study (each experiment's controller)"),
+    ("controller.target_z_t", "the study (Z_t,sliding's bisection)"),
+    ("timing.duration_s", "the study (each experiment's windows)"),
+];
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// The study.
+    pub study: Study,
+    /// The base scenario.
+    pub base_scenario: rig::scenario::Scenario,
+    /// Wall-clock time, s.
+    pub wall_s: f64,
+    /// Worker threads.
+    pub threads: usize,
+    /// Files written.
+    pub files: Vec<String>,
+}
+
+/// Runs the study and writes its files; prints nothing.
+///
+/// # Errors
+/// Bad input (exit 2) before anything is written; an interruption (exit 1, nothing
+/// written); I/O and figure errors.
+pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
+    rig::overrides::check_keys(&args.set, &STUDY_KEYS).map_err(rig::scenario::ScenarioError::from)?;
+    let base = crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)?;
+    base.validate()?;
+    if args.threads == Some(0) {
+        return Err(CliError::BadInput("--threads must be >= 1".into()));
+    }
+    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::BadInput(format!("cannot start {threads} worker threads: {e}")))?;
+    let stop = stop_flag();
+    let progress = progress_bar(1, "sensitivity", "jobs", args.output.json);
+    let started = Instant::now();
+    let study = pool.install(|| {
+        sensitivity::run(&base, args.size, &stop, &|done, total| {
+            progress.set_length(total);
+            progress.set_position(done);
+        })
+    })?;
+    let wall_s = started.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+
+    let mut out = OutputSet::new(&args.output.out)?;
+    write_csv(&mut out, "sensitivity.csv", &study.rows())?;
+    let mut names = vec!["sensitivity.csv".to_string(), "summary.json".to_string()];
+    for fig in figures::FIGURES {
+        let path = out.stage(fig.file);
+        figures::draw(&path, &study, &fig)?;
+        names.push(fig.file.to_string());
+    }
+    let summary = Summary {
+        study,
+        base_scenario: base,
+        wall_s,
+        threads,
+        files: names.iter().map(|f| out.path(f).display().to_string()).collect(),
+    };
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    let validity = summary.study.validity;
+    Ok(Done::ok(summary, files).strict(args.strict.strict, &validity))
+}
+
+/// Ctrl-C and SIGTERM set a flag the workers check between jobs.
+fn stop_flag() -> std::sync::Arc<AtomicBool> {
+    let flag = std::sync::Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, std::sync::Arc::clone(&flag));
+    }
+    flag
+}
+
+/// Runs `sil-host sensitivity`: [`execute`], then prints the table (or the JSON
+/// document with `--json`).
+///
+/// # Errors
+/// As [`execute`].
+pub fn run(args: &SensitivityArgs) -> Result<(), CliError> {
+    let done = execute(args)?;
+    if args.output.json {
+        crate::commands::print_json(&done.result)?;
+    } else {
+        print_table(&done.result);
+    }
+    done.into_result()
+}
+
+/// The human table: per dimension and value, the headline results.
+pub(crate) fn print_table(s: &Summary) {
+    let mut o = std::io::stdout().lock();
+    let st = &s.study;
+    let _ = writeln!(
+        o,
+        "sensitivity study ({:?}): each open choice varied alone from the defaults; '.' = the choice does not enter that result",
+        st.size
+    );
+    let _ = writeln!(
+        o,
+        "{:<24} {:<22} {:>8} {:>8} {:>17} {:>5} | Z_t,sliding (mm): pid d/u, hybrid d/u, ideal | sampled | {:>6}",
+        "choice", "value", "mu* x0a", "mu* x0d", "band mu=.6 x0a", "x0d", "closed"
+    );
+    for r in &st.results {
+        let c = &r.choice;
+        let f = |x: Option<f64>| x.map_or("none".to_string(), |v| format!("{v}"));
+        let (a, d, band, x0d) = match &r.open_loop {
+            Some(ol) => (
+                f(ol.critical_mu_x0a),
+                f(ol.critical_mu_x0d),
+                ol.band_x0a_mu06.map_or("none".into(), |b| format!("[{:.3}, {:.3}]", b[0], b[1])),
+                if ol.x0d_bounces { "yes".to_string() } else { "no".to_string() },
+            ),
+            None => (".".to_string(), ".".to_string(), ".".to_string(), ".".to_string()),
+        };
+        let z = |setting: analyses::zmax::Setting| {
+            analyses::zmax::Combination::all()
+                .into_iter()
+                .filter(|k| k.setting == setting)
+                .map(|k| match r.zmax.iter().find(|z| z.combination == k) {
+                    Some(z) => z.z_t_sliding.map_or("<lo".into(), |v| format!("{:.0}", v * 1e3)),
+                    None => ".".into(),
+                })
+                .collect::<Vec<String>>()
+                .join("/")
+        };
+        let closed = r.closed_loop.as_ref().map_or(".".into(), |cl| if cl.bounces { format!("yes {}", cl.bouncing_points) } else { "no".into() });
+        let _ = writeln!(
+            o,
+            "{:<24} {:<22} {:>8} {:>8} {:>17} {:>5} | {:>17} | {:>17} | {:>6}",
+            c.dimension.label(),
+            format!("{}{}", c.value, if c.is_default { " *" } else { "" }),
+            a,
+            d,
+            band,
+            x0d,
+            z(analyses::zmax::Setting::Ideal),
+            z(analyses::zmax::Setting::Sampled),
+            closed
+        );
+    }
+    let _ = writeln!(o, "* the default; mu*: critical mu; band: the extent of persistent bouncing (m/s); closed: the hybrid closed loop from x0d at mu = 0.6");
+    let _ = writeln!(o, "validity (everything simulated): {}", st.validity);
+    if !st.validity.is_valid() {
+        let _ = writeln!(o, "INVALID: {} (left out of the results; summary.json has them per choice)", st.validity.describe_violations());
+    }
+    let _ = writeln!(o, "{:.1} s on {} threads; wrote {}", s.wall_s, s.threads, s.files.join(", "));
+}
