@@ -592,9 +592,7 @@ fn open_results(spec: &SweepSpec, rows: &[RunRow], gap: f64) -> OpenLoop {
     for r in rows {
         validity.add(&r.validity());
     }
-    let critical = |ic: &str| {
-        spec.mu.values().into_iter().find(|&mu| valid.iter().any(|r| r.ic == ic && r.mu == mu && bounces(r, gap)))
-    };
+    let critical = |ic: &str| spec.mu.values().into_iter().find(|&mu| valid.iter().any(|r| r.ic == ic && r.mu == mu && bounces(r, gap)));
     let at06: Vec<f64> = valid.iter().filter(|r| r.ic == "x0a" && (r.mu - 0.6).abs() < 1e-9 && bounces(r, gap)).map(|r| r.v_belt).collect();
     let band = (!at06.is_empty()).then(|| [at06.iter().cloned().fold(f64::MAX, f64::min), at06.iter().cloned().fold(f64::MIN, f64::max)]);
     OpenLoop {

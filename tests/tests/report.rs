@@ -19,7 +19,7 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     assert_eq!(index["failed"], 0);
     let steps = index["steps"].as_array().unwrap();
     let ids: Vec<&str> = steps.iter().map(|s| s["id"].as_str().unwrap()).collect();
-    for id in ["modes", "admissible", "sweep-open-loop", "sweep-hybrid", "poincare", "zmax", "pid-x0u", "hybrid-x0d"] {
+    for id in ["modes", "admissible", "sweep-open-loop", "sweep-hybrid", "poincare", "zmax", "sensitivity", "pid-x0u", "hybrid-x0d"] {
         assert!(ids.contains(&id), "{id} missing from {ids:?}");
     }
     let page = std::fs::read_to_string(out.join("report.md")).unwrap();
@@ -42,9 +42,59 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     // Numbers keep their digits: the integrator's tolerances are not rounded to 0.
     assert!(page.contains("| rtol, atol | 1e-9, 1e-11 |"), "tolerances not shown as 1e-9, 1e-11");
     assert!(!page.contains("| rtol, atol | 0, 0 |"));
+    sensitivity_properties(&summary("sensitivity")["study"]);
+    assert!(page.contains("Sensitivity to the choices the paper leaves open"));
     // The results page: the same tables, stamped, without figures.
     let results = std::fs::read_to_string(&results).unwrap();
     assert!(results.contains("commit `") && results.contains("UTC") && results.contains("CPUs"), "no stamp");
     assert!(results.contains("| hybrid-x0d |") || results.contains(" hybrid-x0d |"), "no run comparison");
     assert!(!results.contains("!["), "figures in the results page");
+}
+
+/// Properties of the sensitivity study (issue 14) that do not depend on its numbers:
+/// every dimension's default gives the same results (each is computed on its own);
+/// the bouncing band at mu = 0.6 from x0a grows with e_n for every impact law
+/// (more restitution, more bouncing); a choice that does not enter a result leaves
+/// it uncomputed; nothing simulated violates the model.
+fn sensitivity_properties(study: &serde_json::Value) {
+    let results = study["results"].as_array().unwrap();
+    let defaults: Vec<&serde_json::Value> = results.iter().filter(|r| r["choice"]["is_default"] == true).collect();
+    assert_eq!(defaults.len(), 9, "one default per dimension");
+    let zmax_of = |r: &serde_json::Value| -> Vec<(String, serde_json::Value)> {
+        r["zmax"].as_array().unwrap().iter().map(|z| (z["combination"].to_string(), z["z_t_sliding"].clone())).collect()
+    };
+    let reference = defaults.iter().find(|r| r["choice"]["dimension"] == "impact_law").unwrap();
+    for d in &defaults {
+        for (k, v) in zmax_of(d) {
+            let want = zmax_of(reference).into_iter().find(|(rk, _)| *rk == k).map(|(_, v)| v);
+            assert_eq!(Some(v), want, "{}: Z_t,sliding of {k}", d["choice"]["dimension"]);
+        }
+        if !d["open_loop"].is_null() {
+            assert_eq!(d["open_loop"], reference["open_loop"], "{}", d["choice"]["dimension"]);
+        }
+        if !d["closed_loop"].is_null() {
+            assert_eq!(d["closed_loop"]["bounces"], reference["closed_loop"]["bounces"], "{}", d["choice"]["dimension"]);
+        }
+    }
+    for law in ["newton", "poisson", "energetic"] {
+        let width = |e: &str| {
+            let r = results.iter().find(|r| r["choice"]["value"] == format!("{law}, e_n = {e}")).unwrap();
+            let b = &r["open_loop"]["band_x0a_mu06"];
+            if b.is_null() { 0.0 } else { b[1].as_f64().unwrap() - b[0].as_f64().unwrap() }
+        };
+        assert!(width("0") <= width("0.2") && width("0.2") <= width("0.5"), "{law}: {} {} {}", width("0"), width("0.2"), width("0.5"));
+        assert!(width("0.5") > 0.0, "{law} bounces at e_n = 0.5");
+    }
+    for r in results {
+        let dim = r["choice"]["dimension"].as_str().unwrap();
+        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction", "move_time"].contains(&dim) {
+            assert!(r["open_loop"].is_null(), "{dim} does not enter the open loop");
+        }
+        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction"].contains(&dim) {
+            assert!(r["zmax"].as_array().unwrap().iter().all(|z| z["combination"]["setting"] == "sampled"), "{dim}: sampled only");
+        }
+    }
+    for k in ["energy_gains", "cone_violations", "integrator_failures"] {
+        assert_eq!(study["validity"][k], 0, "{k}");
+    }
 }

@@ -191,3 +191,55 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
     let _ = writeln!(md, "\nBisection tolerance {} m. {}\n", number(z.tol_m), z.paper);
     let _ = writeln!(md, "Validity over every trial: {}.\n", validity_cell(&z.validity));
 }
+
+pub(crate) fn sensitivity(md: &mut String, st: &analyses::sensitivity::Study) {
+    use analyses::zmax::{Combination, Setting};
+    let _ = writeln!(
+        md,
+        "Each open choice varied alone from the defaults (starred). `.`: the choice does not enter that result; `< lo`: the bracket's lower end already fails. \
+         Z_t,sliding in mm, in the order PID x0d, PID x0u, hybrid x0d, hybrid x0u. Validity over everything simulated: {}.\n",
+        validity_cell(&st.validity)
+    );
+    let _ = writeln!(
+        md,
+        "| choice | value | critical mu x0a | critical mu x0d | bouncing at mu = 0.6 from x0a (m/s) | x0d bounces | Z_t,sliding ideal | Z_t,sliding sampled | hybrid closed loop bounces |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    let opt_num = |x: Option<f64>| x.map_or_else(|| "none".to_string(), number);
+    for r in &st.results {
+        let c = &r.choice;
+        let (a, d, band, x0d) = match &r.open_loop {
+            Some(o) => (
+                opt_num(o.critical_mu_x0a),
+                opt_num(o.critical_mu_x0d),
+                o.band_x0a_mu06.map_or_else(|| "none".to_string(), |b| format!("[{}, {}]", number(b[0]), number(b[1]))),
+                if o.x0d_bounces { "yes".to_string() } else { "no".to_string() },
+            ),
+            None => (".".to_string(), ".".to_string(), ".".to_string(), ".".to_string()),
+        };
+        let z = |setting: Setting| {
+            Combination::all()
+                .into_iter()
+                .filter(|k| k.setting == setting)
+                .map(|k| match r.zmax.iter().find(|z| z.combination == k) {
+                    Some(z) => z.z_t_sliding.map_or_else(|| "< lo".to_string(), |v| format!("{:.0}", v * 1e3)),
+                    None => ".".to_string(),
+                })
+                .collect::<Vec<String>>()
+                .join(", ")
+        };
+        let closed = r.closed_loop.as_ref().map_or_else(
+            || ".".to_string(),
+            |cl| if cl.bounces { format!("yes ({} of {} speeds)", cl.bouncing_points, cl.points) } else { "no".to_string() },
+        );
+        let _ = writeln!(
+            md,
+            "| {} | {}{} | {a} | {d} | {band} | {x0d} | {} | {} | {closed} |",
+            c.dimension.label(),
+            cell(&c.value),
+            if c.is_default { " *" } else { "" },
+            z(Setting::Ideal),
+            z(Setting::Sampled)
+        );
+    }
+    md.push('\n');
+}

@@ -175,6 +175,7 @@ fn execute(command: Command) -> Result<(Outcome, Option<CliError>), CliError> {
         Command::Run(a) => typed(commands::run::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Pil(a) => typed(commands::pil::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Bench(a) => (Outcome::Bench(commands::bench::execute(&a)?), None),
+        Command::Sensitivity(a) => typed(commands::sensitivity::execute(&a)?, |s| Outcome::Sensitivity(Box::new(s))),
         other => return Err(CliError::BadInput(format!("the report has no page for {other:?}"))),
     })
 }

@@ -4,8 +4,8 @@ use analyses::{admissible::AdmissibleReport, modes::ModeMap};
 use rig::summary::RunSummary;
 
 use crate::commands::{
-    self, bench::TransportFigures, poincare::summary::Summary as PoincareSummary, simulate::summary::Summary as SimulateSummary,
-    sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
+    self, bench::TransportFigures, poincare::summary::Summary as PoincareSummary, sensitivity::Summary as SensitivitySummary,
+    simulate::summary::Summary as SimulateSummary, sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
 };
 
 /// The typed result of one experiment.
@@ -27,6 +27,8 @@ pub enum Outcome {
     Run(Box<RunSummary>),
     /// `bench`.
     Bench(Vec<TransportFigures>),
+    /// `sensitivity`.
+    Sensitivity(Box<SensitivitySummary>),
 }
 
 impl Outcome {
@@ -41,6 +43,7 @@ impl Outcome {
             Self::Zmax(z) => serde_json::to_value(z),
             Self::Run(r) => serde_json::to_value(r),
             Self::Bench(b) => serde_json::to_value(b),
+            Self::Sensitivity(s) => serde_json::to_value(s),
         };
         v.unwrap_or(serde_json::Value::Null)
     }
@@ -54,6 +57,7 @@ impl Outcome {
             Self::Poincare(p) => Some(p.validity),
             Self::Zmax(z) => Some(z.validity),
             Self::Run(r) => Some(r.validity),
+            Self::Sensitivity(s) => Some(s.study.validity),
             Self::Modes(_) | Self::Admissible(_) | Self::Bench(_) => None,
         }
     }

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use rig::summary::RunSummary;
 
 use super::{
-    experiments::{admissible, modes, poincare, simulate, sweep, zmax},
+    experiments::{admissible, modes, poincare, sensitivity, simulate, sweep, zmax},
     runs::{bench, pil, run_comparison},
 };
 use super::{
@@ -75,6 +75,7 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
                     }
                 }
                 Some(Outcome::Bench(b)) => bench(&mut md, b),
+                Some(Outcome::Sensitivity(s)) => sensitivity(&mut md, &s.study),
                 _ => {}
             }
             if figures {

@@ -98,6 +98,11 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
         steps: vec![step("zmax", &["zmax", "--all"])],
     });
     v.push(Section {
+        title: "Sensitivity to the choices the paper leaves open",
+        source: "docs/model.md \"What the paper leaves open\": the headline results under each open choice, one at a time from the defaults (sil-host sensitivity)",
+        steps: vec![step("sensitivity", &["sensitivity", "--size", if quick { "quick" } else { "paper" }])],
+    });
+    v.push(Section {
         title: "PID and hybrid force/motion control in the SIL loop",
         source: "docs/model.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with docs/hardware.md's sensors",
         steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]

@@ -101,10 +101,15 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
     let colors = [RED, BLUE, GREEN, MAGENTA, CYAN, RGBColor(200, 120, 0), RGBColor(90, 90, 90), BLACK];
     for (dim, area) in dims.iter().zip(panels.iter()) {
         let of: Vec<&ChoiceResult> = study.results.iter().filter(|r| r.choice.dimension == *dim).collect();
-        let values: Vec<f64> =
-            of.iter().flat_map(|r| series.iter().filter_map(|(_, f, i)| f(r, *i))).filter(|v| v.is_finite()).collect();
+        let values: Vec<f64> = of.iter().flat_map(|r| series.iter().filter_map(|(_, f, i)| f(r, *i))).filter(|v| v.is_finite()).collect();
         let (lo, hi) = values.iter().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-        let (lo, hi) = if values.is_empty() { (0.0, 1.0) } else if hi - lo < 1e-9 { (lo - 0.5 * lo.abs().max(0.1), hi + 0.5 * hi.abs().max(0.1)) } else { (lo - 0.08 * (hi - lo), hi + 0.08 * (hi - lo)) };
+        let (lo, hi) = if values.is_empty() {
+            (0.0, 1.0)
+        } else if hi - lo < 1e-9 {
+            (lo - 0.5 * lo.abs().max(0.1), hi + 0.5 * hi.abs().max(0.1))
+        } else {
+            (lo - 0.08 * (hi - lo), hi + 0.08 * (hi - lo))
+        };
         let n = of.len() as f64;
         let axes = Axes {
             caption: Some((dim.label().to_string(), 16)),
@@ -126,7 +131,8 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         }
         for (s, (name, f, i)) in series.iter().enumerate() {
             let color = colors[s % colors.len()];
-            let pts: Vec<(f64, f64)> = of.iter().enumerate().filter_map(|(k, r)| f(r, *i).filter(|v| v.is_finite()).map(|v| (k as f64, v))).collect();
+            let pts: Vec<(f64, f64)> =
+                of.iter().enumerate().filter_map(|(k, r)| f(r, *i).filter(|v| v.is_finite()).map(|v| (k as f64, v))).collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), color.stroke_width(1)))
                 .map_err(|e| err(&e))?

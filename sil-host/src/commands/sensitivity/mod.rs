@@ -88,13 +88,8 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
         figures::draw(&path, &study, &fig)?;
         names.push(fig.file.to_string());
     }
-    let summary = Summary {
-        study,
-        base_scenario: base,
-        wall_s,
-        threads,
-        files: names.iter().map(|f| out.path(f).display().to_string()).collect(),
-    };
+    let summary =
+        Summary { study, base_scenario: base, wall_s, threads, files: names.iter().map(|f| out.path(f).display().to_string()).collect() };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
     let validity = summary.study.validity;
@@ -162,7 +157,8 @@ pub(crate) fn print_table(s: &Summary) {
                 .collect::<Vec<String>>()
                 .join("/")
         };
-        let closed = r.closed_loop.as_ref().map_or(".".into(), |cl| if cl.bounces { format!("yes {}", cl.bouncing_points) } else { "no".into() });
+        let closed =
+            r.closed_loop.as_ref().map_or(".".into(), |cl| if cl.bounces { format!("yes {}", cl.bouncing_points) } else { "no".into() });
         let _ = writeln!(
             o,
             "{:<24} {:<22} {:>8} {:>8} {:>17} {:>5} | {:>17} | {:>17} | {:>6}",
@@ -177,7 +173,10 @@ pub(crate) fn print_table(s: &Summary) {
             closed
         );
     }
-    let _ = writeln!(o, "* the default; mu*: critical mu; band: the extent of persistent bouncing (m/s); closed: the hybrid closed loop from x0d at mu = 0.6");
+    let _ = writeln!(
+        o,
+        "* the default; mu*: critical mu; band: the extent of persistent bouncing (m/s); closed: the hybrid closed loop from x0d at mu = 0.6"
+    );
     let _ = writeln!(o, "validity (everything simulated): {}", st.validity);
     if !st.validity.is_valid() {
         let _ = writeln!(o, "INVALID: {} (left out of the results; summary.json has them per choice)", st.validity.describe_violations());
