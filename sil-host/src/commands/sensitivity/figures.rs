@@ -10,6 +10,10 @@ use plotters::prelude::*;
 use crate::error::CliError;
 use crate::plot::{Axes, legend_upper_right, plot_err, xy_chart};
 
+/// A series of a figure: its label, its value under a choice (given the series'
+/// index), and that index.
+pub type SeriesOf = (String, fn(&ChoiceResult, usize) -> Option<f64>, usize);
+
 /// One figure: its file, title, y label, and its series (name and value under a choice).
 pub struct Figure {
     /// File name.
@@ -19,7 +23,7 @@ pub struct Figure {
     /// Y-axis label with units.
     pub y_desc: &'static str,
     /// The series: a label and the value under a choice (`None`: not computed, or no value).
-    pub series: fn() -> Vec<(String, fn(&ChoiceResult, usize) -> Option<f64>, usize)>,
+    pub series: fn() -> Vec<SeriesOf>,
 }
 
 fn open<T>(r: &ChoiceResult, f: impl Fn(&analyses::sensitivity::OpenLoop) -> T) -> Option<T> {
