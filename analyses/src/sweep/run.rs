@@ -236,21 +236,56 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         row.tip_height_max = e.z_n_max + params.h;
         row.bouncing = e.theta1_dot_max > spec.threshold;
     }
-    row.outcome = match error {
-        Some((e, safe)) => {
-            row.error = e;
-            if safe { Outcome::SafeState } else { Outcome::Failed }
-        }
-        None if !row.validity().is_valid() => Outcome::Invalid,
-        None => match (row.bouncing, row.lift_offs > 0) {
-            (true, true) => Outcome::Bouncing,
-            (true, false) => Outcome::Oscillating,
-            (false, true) => Outcome::LiftOffOnly,
-            (false, false) if plant.mode() == ContactMode::Flight => Outcome::Flight,
-            (false, false) => Outcome::Contact,
-        },
-    };
+    let stopped = error.as_ref().map(|(_, safe)| *safe);
+    row.outcome = Outcome::of(stopped, &row.validity(), row.bouncing, row.lift_offs, plant.mode());
+    if let Some((e, _)) = error {
+        row.error = e;
+    }
     Some(row)
+}
+
+impl Outcome {
+    /// The outcome of a run: `stopped` says whether it stopped early (`Some(true)`
+    /// in the firmware's safe state or an ideal-law fault, `Some(false)` on a
+    /// failure); a finished run with a model violation (`validity`) is
+    /// [`Outcome::Invalid`] whatever it did; otherwise the paper's flag
+    /// (`bouncing`), the lift-offs in the record window and the final `mode` decide.
+    pub fn of(stopped: Option<bool>, validity: &Validity, bouncing: bool, lift_offs: u64, mode: ContactMode) -> Self {
+        match stopped {
+            Some(true) => Self::SafeState,
+            Some(false) => Self::Failed,
+            None if !validity.is_valid() => Self::Invalid,
+            None => match (bouncing, lift_offs > 0) {
+                (true, true) => Self::Bouncing,
+                (true, false) => Self::Oscillating,
+                (false, true) => Self::LiftOffOnly,
+                (false, false) if mode == ContactMode::Flight => Self::Flight,
+                (false, false) => Self::Contact,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_violation_is_invalid_never_bouncing_or_contact() {
+        let clean = Validity { zeno_stops: 3, newton_fallbacks: 2, ..Validity::default() };
+        let cone = Validity { cone_violations: 1, ..Validity::default() };
+        let energy = Validity { energy_gains: 1, ..Validity::default() };
+        assert_eq!(Outcome::of(None, &clean, true, 4, ContactMode::Flight), Outcome::Bouncing);
+        assert_eq!(Outcome::of(None, &clean, false, 0, ContactMode::Sliding), Outcome::Contact);
+        for v in [cone, energy] {
+            assert_eq!(Outcome::of(None, &v, true, 4, ContactMode::Flight), Outcome::Invalid);
+            assert_eq!(Outcome::of(None, &v, false, 0, ContactMode::Sliding), Outcome::Invalid);
+        }
+        // A run that stopped keeps its own outcome (its failure is the violation).
+        let failed = Validity { integrator_failures: 1, ..Validity::default() };
+        assert_eq!(Outcome::of(Some(false), &failed, false, 0, ContactMode::Sliding), Outcome::Failed);
+        assert_eq!(Outcome::of(Some(true), &clean, false, 0, ContactMode::Sliding), Outcome::SafeState);
+    }
 }
 
 /// How a run's simulation ended; `start` holds the counters at the start of the

@@ -284,6 +284,56 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
 mod tests {
     use super::*;
 
+    /// An invalid run is listed, summed into the validity, and left out of the
+    /// bands and counts: a grid point whose only run is invalid has no result.
+    #[test]
+    fn invalid_runs_are_listed_and_left_out_of_the_bands() {
+        let spec = SweepSpec {
+            mu: crate::sweep::Axis { start: 0.6, stop: 0.6, step: 0.1 },
+            v_belt: crate::sweep::Axis { start: -0.6, stop: -0.5, step: 0.1 },
+            paper_ics: vec![plant::initial::PaperX0::A],
+            ..SweepSpec::paper()
+        };
+        let row = |index: usize, outcome: Outcome, cone: u64| RunRow {
+            index,
+            impact_law: "newton".into(),
+            e_n: 0.2,
+            iwc: IwcRule::Restitution,
+            mu: 0.6,
+            v_belt: spec.v_belt.value(index),
+            ic: "x0a".into(),
+            outcome,
+            bouncing: true,
+            theta1_dot_max: 1.0,
+            t_theta1_dot_max: 0.0,
+            lift_offs: 3,
+            touchdowns: 3,
+            impacts_without_collision: 0,
+            z_n_max: 0.0,
+            tip_height_max: 0.01,
+            final_mode: "flight".into(),
+            lift_offs_transient: 0,
+            rhs_evaluations: 0,
+            energy_gains: 0,
+            newton_fallbacks: 1,
+            poisson_fallbacks: 0,
+            cone_violations: cone,
+            zeno_stops: 2,
+            integrator_failures: 0,
+            error: String::new(),
+        };
+        let rows = [row(0, Outcome::Bouncing, 0), row(1, Outcome::Invalid, 1)];
+        let r = results(&spec, &rows, 0);
+        assert_eq!(r.invalid.len(), 1);
+        assert_eq!((r.invalid[0].index, r.invalid[0].violations.as_str()), (1, "1 friction-cone violation"));
+        assert_eq!((r.validity.cone_violations, r.validity.newton_fallbacks, r.validity.zeno_stops), (1, 2, 4));
+        let mu = &r.cases[0].ics[0].per_mu[0];
+        assert_eq!((mu.points, mu.bouncing_points, mu.indicator_points), (1, 1, 1), "the invalid run is no result");
+        assert_eq!(mu.bands.len(), 1);
+        assert_eq!((mu.bands[0].v_min, mu.bands[0].v_max), (-0.6, -0.6));
+        assert_eq!(r.outcomes.get("invalid"), Some(&1));
+    }
+
     #[test]
     fn bands_are_maximal_runs_of_flagged_speeds() {
         let vs = [-1.0, -0.9, -0.8, -0.7, -0.6];

@@ -109,3 +109,23 @@ pub fn parse_range(flag: &str, s: &str) -> Result<(f64, f64), crate::error::CliE
         _ => Err(bad()),
     }
 }
+
+#[cfg(test)]
+mod strict_tests {
+    use super::Done;
+
+    /// `--strict` turns a violation into exit 1, keeps an earlier failure, and
+    /// leaves clean results and non-strict runs alone.
+    #[test]
+    fn strict_fails_only_on_violations() {
+        let cone = plant::Validity { cone_violations: 2, ..plant::Validity::default() };
+        let rules = plant::Validity { zeno_stops: 5, newton_fallbacks: 1, ..plant::Validity::default() };
+        let e = Done::ok((), vec![]).strict(true, &cone).into_result().unwrap_err();
+        assert_eq!(e.exit_code(), 1);
+        assert!(e.to_string().contains("2 friction-cone violations"), "{e}");
+        assert!(Done::ok((), vec![]).strict(false, &cone).into_result().is_ok());
+        assert!(Done::ok((), vec![]).strict(true, &rules).into_result().is_ok(), "fallbacks and Zeno stops are not violations");
+        let earlier = Done { result: (), files: vec![], failure: Some(crate::error::CliError::BadInput("x".into())) };
+        assert_eq!(earlier.strict(true, &cone).into_result().unwrap_err().exit_code(), 2);
+    }
+}
