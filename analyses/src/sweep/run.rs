@@ -266,28 +266,6 @@ impl Outcome {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_violation_is_invalid_never_bouncing_or_contact() {
-        let clean = Validity { zeno_stops: 3, newton_fallbacks: 2, ..Validity::default() };
-        let cone = Validity { cone_violations: 1, ..Validity::default() };
-        let energy = Validity { energy_gains: 1, ..Validity::default() };
-        assert_eq!(Outcome::of(None, &clean, true, 4, ContactMode::Flight), Outcome::Bouncing);
-        assert_eq!(Outcome::of(None, &clean, false, 0, ContactMode::Sliding), Outcome::Contact);
-        for v in [cone, energy] {
-            assert_eq!(Outcome::of(None, &v, true, 4, ContactMode::Flight), Outcome::Invalid);
-            assert_eq!(Outcome::of(None, &v, false, 0, ContactMode::Sliding), Outcome::Invalid);
-        }
-        // A run that stopped keeps its own outcome (its failure is the violation).
-        let failed = Validity { integrator_failures: 1, ..Validity::default() };
-        assert_eq!(Outcome::of(Some(false), &failed, false, 0, ContactMode::Sliding), Outcome::Failed);
-        assert_eq!(Outcome::of(Some(true), &clean, false, 0, ContactMode::Sliding), Outcome::SafeState);
-    }
-}
-
 /// How a run's simulation ended; `start` holds the counters at the start of the
 /// record window (`None` if it was not reached).
 enum Ended {
@@ -447,4 +425,26 @@ fn closed_loop(
         }
     }
     Ended::Done(start)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_violation_is_invalid_never_bouncing_or_contact() {
+        let clean = Validity { zeno_stops: 3, newton_fallbacks: 2, ..Validity::default() };
+        let cone = Validity { cone_violations: 1, ..Validity::default() };
+        let energy = Validity { energy_gains: 1, ..Validity::default() };
+        assert_eq!(Outcome::of(None, &clean, true, 4, ContactMode::Flight), Outcome::Bouncing);
+        assert_eq!(Outcome::of(None, &clean, false, 0, ContactMode::Sliding), Outcome::Contact);
+        for v in [cone, energy] {
+            assert_eq!(Outcome::of(None, &v, true, 4, ContactMode::Flight), Outcome::Invalid);
+            assert_eq!(Outcome::of(None, &v, false, 0, ContactMode::Sliding), Outcome::Invalid);
+        }
+        // A run that stopped keeps its own outcome (its failure is the violation).
+        let failed = Validity { integrator_failures: 1, ..Validity::default() };
+        assert_eq!(Outcome::of(Some(false), &failed, false, 0, ContactMode::Sliding), Outcome::Failed);
+        assert_eq!(Outcome::of(Some(true), &clean, false, 0, ContactMode::Sliding), Outcome::SafeState);
+    }
 }
