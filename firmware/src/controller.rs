@@ -287,7 +287,9 @@ impl Firmware {
         let elapsed_ticks = clock.ticks().wrapping_sub(start);
         let elapsed_us = elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64;
         let period_us = self.cfg.period.as_us();
-        if now_us.saturating_sub(frame.t_us) + elapsed_us >= period_us {
+        // Saturating: a clock near u64::MAX (or a frame stamped far in the past)
+        // must read as late, never wrap round to on time.
+        if now_us.saturating_sub(frame.t_us).saturating_add(elapsed_us) >= period_us {
             flags |= status::DEADLINE_MISS;
             self.overruns = self.overruns.saturating_add(1);
             self.consecutive_misses = self.consecutive_misses.saturating_add(1);

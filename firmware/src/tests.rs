@@ -185,6 +185,29 @@ proptest! {
     }
 }
 
+proptest! {
+    /// The deadline rule at the edges of the `u64` clock (issue 15): a command is a
+    /// miss exactly when `(now - t_k) + elapsed >= Ts`, computed without overflow
+    /// (here in `u128`); a clock read before the frame's stamp counts as on time.
+    #[test]
+    fn the_deadline_rule_holds_at_the_u64_edges(
+        t_us in prop_oneof![Just(0u64), Just(u64::MAX), Just(u64::MAX - 999), any::<u64>()],
+        late in prop_oneof![Just(0u64), Just(u64::MAX), 0u64..5000, any::<u64>()],
+        step in prop_oneof![Just(0u32), Just(u32::MAX), 0u32..3000],
+    ) {
+        let mut fw = Firmware::new(Config::default()).unwrap();
+        let clock = SteppingClock { now: Cell::new(0), step };
+        let now_us = t_us.saturating_add(late);
+        let f = SensorFrame { t_us, ..frame(1, x0d(), [-1.0, 2.0]) };
+        let c = fw.step(now_us, &f, &clock);
+        let elapsed = u128::from(step) * 1_000_000 / 1_000_000;
+        let lateness = u128::from(now_us.saturating_sub(t_us));
+        let miss = lateness + elapsed >= u128::from(Config::default().period.as_us());
+        prop_assert_eq!(c.status & status::DEADLINE_MISS != 0, miss, "t {} now {} step {}", t_us, now_us, step);
+        prop_assert_eq!(fw.overruns(), u32::from(miss));
+    }
+}
+
 #[test]
 fn bad_and_stale_frames_are_never_trusted() {
     let mut fw = Firmware::new(Config::default()).unwrap();
