@@ -86,7 +86,8 @@ impl IpcLink {
     ///
     /// # Errors
     /// [`RunError::Transport`] when the services cannot be opened, the process
-    /// cannot be started, or no firmware connects within [`CONNECT_TIMEOUT_S`].
+    /// cannot be started, or no firmware connects within the scenario's
+    /// `rig.connect_timeout_s` ([`CONNECT_TIMEOUT_S`] by default).
     pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
@@ -115,17 +116,24 @@ impl IpcLink {
             timings: LinkTimings::default(),
         };
         let start = Instant::now();
+        let limit = s.rig.connect_timeout_s;
         while !link.ports.firmware_connected() {
-            if let Some(what) = link.firmware_gone() {
+            // Attach mode: a firmware not started yet is waited for, like a spawned one
+            // still starting; only one that started and died is a failure now.
+            let gone = match link.firmware_gone() {
+                Some(_) if link.spawned.is_none() && peer_state(Role::Firmware, rig) == PeerState::Absent => None,
+                other => other,
+            };
+            if let Some(what) = gone {
                 return Err(RunError::Transport(format!("the firmware process {what} before connecting")));
             }
-            if start.elapsed().as_secs_f64() > CONNECT_TIMEOUT_S {
+            if start.elapsed().as_secs_f64() > limit {
                 let how = if link.spawned.is_some() {
-                    "the spawned firmware process".to_string()
+                    "the spawned firmware process did not connect; see its messages above".to_string()
                 } else {
-                    format!("`sil-host firmware --rig {rig}` (attach mode)")
+                    format!("start `sil-host firmware --rig {rig}` with the same scenario (attach mode), or raise rig.connect_timeout_s")
                 };
-                return Err(RunError::Transport(format!("no firmware connected to rig `{rig}` within {CONNECT_TIMEOUT_S} s: start {how}")));
+                return Err(RunError::Transport(format!("no firmware connected to rig `{rig}` within {limit} s: {how}")));
             }
             std::thread::sleep(Duration::from_millis(2));
         }

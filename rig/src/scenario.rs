@@ -338,6 +338,10 @@ pub struct RigSection {
     /// real-time throttling never applies; without the privilege the run goes on
     /// under the normal scheduler and says so.
     pub realtime_fifo_priority: u8,
+    /// Wall-clock time the plant waits for the firmware to connect before the run
+    /// fails with a hint (a spawned firmware, or one started by hand for
+    /// `--attach`), s (0 to 600).
+    pub connect_timeout_s: f64,
 }
 
 /// What [`RigSection::realtime_cpu`] accepts.
@@ -377,6 +381,7 @@ impl Default for RigSection {
             max_consecutive_timeouts: 100,
             realtime_cpu: "last".into(),
             realtime_fifo_priority: 10,
+            connect_timeout_s: 20.0,
         }
     }
 }
@@ -596,6 +601,12 @@ impl Scenario {
         let (lo, hi) = shared::wire::ENCODER_BITS_RANGE;
         check((lo..=hi).contains(&bits), "sensors.encoder_bits", f64::from(bits), "10 to 16 bits")?;
         let r = &self.rig;
+        check(
+            finite(r.connect_timeout_s) && r.connect_timeout_s > 0.0 && r.connect_timeout_s <= 600.0,
+            "rig.connect_timeout_s",
+            r.connect_timeout_s,
+            "a value in (0, 600] s",
+        )?;
         check(
             finite(r.command_timeout_s) && r.command_timeout_s > 0.0 && r.command_timeout_s <= 60.0,
             "rig.command_timeout_s",

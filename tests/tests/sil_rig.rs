@@ -106,6 +106,34 @@ fn attach_mode_talks_to_a_firmware_started_by_hand() {
     assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), std::fs::read(inp.join("trace.csv")).unwrap());
 }
 
+/// Issue 15: `run --attach` waits for a firmware started after it (as for a
+/// spawned one), and with no firmware at all it fails after `rig.connect_timeout_s`
+/// with the hint, writing nothing.
+#[test]
+fn attach_waits_for_the_firmware_and_writes_nothing_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let name = rig("attach-first");
+    let out = dir.path().join("first");
+    let plant = sil_host().args(["run", "--attach", &name, "--scenario", s, "--duration", "0.5", "--out"]).arg(&out).spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let mut fw =
+        sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
+    let o = plant.wait_with_output().unwrap();
+    assert!(o.status.success(), "the plant waited for the firmware");
+    assert_eq!(fw.wait().unwrap().code(), Some(0));
+    assert_eq!(trace(&out).len(), 500);
+    let none = dir.path().join("none");
+    let started = Instant::now();
+    let o = run(&["--attach", &rig("attach-none"), "--scenario", s, "--set", "rig.connect_timeout_s=1"], &none);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(started.elapsed() >= Duration::from_secs(1), "it waited");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no firmware connected") && err.contains("sil-host firmware --rig"), "{err}");
+    assert!(!none.exists(), "nothing written");
+}
+
 #[test]
 fn late_and_dropped_commands_are_counted_by_the_right_sides() {
     let dir = tempfile::tempdir().unwrap();

@@ -44,7 +44,6 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         (None, None) => default_rig_name(),
     };
     check_rig_name(&rig).map_err(CliError::BadInput)?;
-    let mut out = OutputSet::new(&args.output.out)?;
 
     let mut ipc: Option<IpcLink> = None;
     let mut in_process: Option<InProcessLink> = None;
@@ -61,6 +60,8 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime).map_err(CliError::Run)?)
     };
     let transport = link.transport();
+    // Only once the firmware is there: a run that cannot start writes nothing.
+    let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
