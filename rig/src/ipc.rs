@@ -218,9 +218,12 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Inbox<T> {
                 return self.try_next();
             }
             match &self.listener {
-                Some(l) if now - start >= self.spin => {
-                    l.timed_wait(|_| {}, deadline - now).map_err(|e| err("wait", e))?;
-                }
+                Some(l) if now - start >= self.spin => match l.timed_wait(|_| {}, deadline - now) {
+                    // A signal (SIGSTOP then SIGCONT: Ctrl-Z and `fg`, a debugger)
+                    // interrupts the wait: not an error, wait again (issue 15).
+                    Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
+                    Err(e) => return Err(err("wait", e)),
+                },
                 _ => std::thread::yield_now(),
             }
         }

@@ -134,6 +134,31 @@ fn attach_waits_for_the_firmware_and_writes_nothing_without_one() {
     assert!(!none.exists(), "nothing written");
 }
 
+/// Issue 15: Ctrl-Z and `fg` (SIGSTOP, SIGCONT) of a firmware waiting for its
+/// plant are ordinary: its interrupted wait is retried, and the run then works.
+#[test]
+fn a_stopped_and_continued_firmware_keeps_waiting() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let name = rig("sigstop");
+    let mut fw =
+        sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
+    let pid = fw.id().to_string();
+    std::thread::sleep(Duration::from_millis(500));
+    for _ in 0..3 {
+        assert!(Command::new("kill").args(["-STOP", &pid]).status().unwrap().success());
+        std::thread::sleep(Duration::from_millis(200));
+        assert!(Command::new("kill").args(["-CONT", &pid]).status().unwrap().success());
+        std::thread::sleep(Duration::from_millis(200));
+        assert!(fw.try_wait().unwrap().is_none(), "the firmware survived SIGSTOP/SIGCONT");
+    }
+    let out = dir.path().join("after");
+    assert!(run(&["--attach", &name, "--scenario", s, "--duration", "0.5"], &out).status.success());
+    assert_eq!(fw.wait().unwrap().code(), Some(0));
+    assert_eq!(trace(&out).len(), 500);
+}
+
 #[test]
 fn late_and_dropped_commands_are_counted_by_the_right_sides() {
     let dir = tempfile::tempdir().unwrap();
