@@ -175,8 +175,8 @@ impl SimConfig {
     pub fn validate(&self) -> Result<(), SimError> {
         let bad = |name: &'static str, value: f64, expected: &'static str| Err(SimError::BadConfig { name, value, expected });
         for (name, v) in [("rtol", self.rtol), ("atol", self.atol)] {
-            if !(v.is_finite() && v > 0.0 && v <= 0.1) {
-                return bad(name, v, "a finite value in (0, 0.1]");
+            if !(v.is_finite() && (1e-14..=0.1).contains(&v)) {
+                return bad(name, v, "a value in [1e-14, 0.1] (below 1e-14 a step cannot meet it in f64)");
             }
         }
         if !(self.e_n.is_finite() && (0.0..=1.0).contains(&self.e_n)) {
@@ -213,6 +213,12 @@ pub enum SimError {
     /// The initial state is not finite.
     #[error("initial state {0:?} is not finite")]
     NonFiniteInitialState([f64; 4]),
+    /// The initial state is finite but not a state of the arm: an angle beyond
+    /// [`MAX_ANGLE`] or a rate beyond [`MAX_RATE`].
+    #[error(
+        "initial state {0:?} (rad, rad/s) is not a state of the arm: angles within +-{MAX_ANGLE} rad (10 turns), rates within +-{MAX_RATE} rad/s"
+    )]
+    NonPhysicalInitialState([f64; 4]),
     /// The initial tip position is below the belt by more than the projection tolerance.
     #[error(
         "initial tip is {depth_mm:.3} mm below the belt (z_n = {z_n:.6} m, belt at -H = {belt:.6} m); at most {tolerance_mm} mm is projected onto it"
@@ -298,6 +304,7 @@ impl SimError {
             Self::Params(_)
                 | Self::BadConfig { .. }
                 | Self::NonFiniteInitialState(_)
+                | Self::NonPhysicalInitialState(_)
                 | Self::BelowBelt { .. }
                 | Self::Unreachable(_)
                 | Self::BadStep(_)
@@ -478,6 +485,12 @@ const STALL_LIMIT: usize = 16;
 /// Rounding slack on the (dimensionless) event components at the start of a segment.
 const START_SLACK: f64 = 1e-12;
 
+/// Largest initial joint angle magnitude, rad (10 turns): beyond it the state is refused.
+pub const MAX_ANGLE: f64 = 20.0 * std::f64::consts::PI;
+
+/// Largest initial joint rate magnitude, rad/s.
+pub const MAX_RATE: f64 = 1e3;
+
 /// Largest initial penetration of the tip into the belt that is projected onto it, m.
 pub const PROJECTION_TOLERANCE: f64 = 1e-3;
 
@@ -497,6 +510,11 @@ impl Plant {
         cfg.validate()?;
         if !x0.iter().all(|v| v.is_finite()) || !t0.is_finite() {
             return Err(SimError::NonFiniteInitialState(x0));
+        }
+        // Finite but not a state of the arm: angles beyond a few turns lose their
+        // precision in f64 trigonometry, and rates beyond this are no motion of it.
+        if x0[0].abs() > MAX_ANGLE || x0[2].abs() > MAX_ANGLE || x0[1].abs() > MAX_RATE || x0[3].abs() > MAX_RATE {
+            return Err(SimError::NonPhysicalInitialState(x0));
         }
         if !u0.iter().all(|v| v.is_finite()) {
             return Err(SimError::BadTorque(u0));

@@ -79,8 +79,8 @@ impl Fault {
         if !(self.at_s.is_finite() && self.at_s >= 0.0) {
             return Err(format!("at_s = {}: a finite time >= 0", self.at_s));
         }
-        if !(self.duration_s.is_finite() && self.duration_s >= 0.0) {
-            return Err(format!("duration_s = {}: a finite duration >= 0", self.duration_s));
+        if !(self.duration_s.is_finite() && (0.0..=1e5).contains(&self.duration_s)) {
+            return Err(format!("duration_s = {}: a duration in [0, 1e5] s", self.duration_s));
         }
         let sensor = matches!(self.kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange);
         if sensor && self.signal.is_none() {

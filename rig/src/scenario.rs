@@ -471,6 +471,13 @@ fn validate_gains(key: &str, v: &[f64]) -> Result<(), ScenarioError> {
 }
 
 impl Scenario {
+    /// Longest scenario name, characters (it names files and the rig's outputs).
+    pub const MAX_NAME_CHARS: usize = 64;
+    /// Most `[[faults]]` in one scenario.
+    pub const MAX_FAULTS: usize = 1000;
+}
+
+impl Scenario {
     /// The embedded default scenario.
     pub fn default_scenario() -> Self {
         // The embedded file is checked by a test; a parse failure here is a build defect.
@@ -542,13 +549,20 @@ impl Scenario {
     /// [`ScenarioError::OutOfRange`] naming the first bad key.
     pub fn validate(&self) -> Result<(), ScenarioError> {
         let finite = |x: f64| x.is_finite();
+        check(
+            !self.name.is_empty() && self.name.chars().count() <= Self::MAX_NAME_CHARS,
+            "name",
+            format!("{:?}", self.name.chars().take(40).collect::<String>()),
+            "1 to 64 characters",
+        )?;
+        check(self.faults.len() <= Self::MAX_FAULTS, "faults", self.faults.len(), "at most 1000 [[faults]]")?;
         let p = &self.plant;
-        check(finite(p.mu) && p.mu >= 0.0, "plant.mu", p.mu, "a finite value >= 0")?;
+        check(finite(p.mu) && (0.0..=10.0).contains(&p.mu), "plant.mu", p.mu, "a value in [0, 10]")?;
         check(finite(p.v_belt) && p.v_belt.abs() <= 5.0, "plant.v_belt", p.v_belt, "a finite speed within +-5 m/s")?;
         validate_arm("plant", &p.params())?;
         check(finite(p.e_n) && (0.0..=1.0).contains(&p.e_n), "plant.e_n", p.e_n, "a value in [0, 1]")?;
         for (key, v) in [("plant.rtol", p.rtol), ("plant.atol", p.atol)] {
-            check(finite(v) && v > 0.0 && v <= 0.1, key, v, "a value in (0, 0.1]")?;
+            check(finite(v) && (1e-14..=0.1).contains(&v), key, v, "a value in [1e-14, 0.1]")?;
         }
         let c = &self.controller;
         let reach = 2.0 * p.l;
@@ -558,10 +572,19 @@ impl Scenario {
             c.target_z_t,
             &format!("a finite position within the arm's reach (|z_t*| < 2 l = {reach} m)"),
         )?;
-        check(finite(c.move_time_s) && c.move_time_s > 0.0, "controller.move_time_s", c.move_time_s, "a finite value > 0")?;
-        for (key, v) in [("controller.f_n_ref", c.f_n_ref), ("controller.mu_hat", c.mu_hat)] {
-            check(finite(v) && v >= 0.0, key, v, "a finite value >= 0")?;
-        }
+        check(
+            finite(c.move_time_s) && c.move_time_s > 0.0 && c.move_time_s <= 1e5,
+            "controller.move_time_s",
+            c.move_time_s,
+            "a value in (0, 1e5] s",
+        )?;
+        check(
+            finite(c.f_n_ref) && (0.0..=25.0).contains(&c.f_n_ref),
+            "controller.f_n_ref",
+            c.f_n_ref,
+            "a value in [0, 25] N (the load cell's range)",
+        )?;
+        check(finite(c.mu_hat) && (0.0..=10.0).contains(&c.mu_hat), "controller.mu_hat", c.mu_hat, "a value in [0, 10]")?;
         validate_gains("controller.pid.kp", &c.pid.kp)?;
         validate_gains("controller.pid.ki", &c.pid.ki)?;
         validate_gains("controller.pid.kd", &c.pid.kd)?;
@@ -596,7 +619,7 @@ impl Scenario {
             "a value in (0, 1e5] s",
         )?;
         let noise = self.sensors.load_noise_n;
-        check(finite(noise) && noise >= 0.0, "sensors.load_noise_n", noise, "a finite value >= 0")?;
+        check(finite(noise) && (0.0..=25.0).contains(&noise), "sensors.load_noise_n", noise, "a value in [0, 25] N rms")?;
         let bits = self.sensors.encoder_bits;
         let (lo, hi) = shared::wire::ENCODER_BITS_RANGE;
         check((lo..=hi).contains(&bits), "sensors.encoder_bits", f64::from(bits), "10 to 16 bits")?;
@@ -627,6 +650,10 @@ impl Scenario {
         check(r.realtime_fifo_priority <= 99, "rig.realtime_fifo_priority", r.realtime_fifo_priority, "0 (normal scheduler) or 1 to 99")?;
         for (i, f) in self.faults.iter().enumerate() {
             if let Err(what) = f.check() {
+                return Err(ScenarioError::Fault { index: i, what });
+            }
+            if f.at_s >= t.duration_s {
+                let what = format!("at_s = {} starts at or after the end of the run ({} s): it would never fire", f.at_s, t.duration_s);
                 return Err(ScenarioError::Fault { index: i, what });
             }
         }

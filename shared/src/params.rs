@@ -29,6 +29,16 @@ pub enum ParamError {
         /// The offending value, as `f64`.
         value: f64,
     },
+    /// A parameter is beyond its upper bound (`mu <= 10`, `|v_belt| <= 5 m/s`).
+    #[error("parameter `{name}` must be at most {max}, got {value}")]
+    TooLarge {
+        /// Field name, as in [`Params`].
+        name: &'static str,
+        /// The offending value, as `f64`.
+        value: f64,
+        /// The bound.
+        max: f64,
+    },
     /// The belt is out of reach: the base height `H` must be below the arm's reach `2 l`.
     #[error("belt out of reach: H = {h} m must be < 2 l = {reach} m")]
     BeltOutOfReach {
@@ -104,7 +114,7 @@ impl<T: Real> Params<T> {
     }
 
     /// Checks the parameters: all finite; `m`, `l`, `h`, `g` > 0; `mu`, `sigma`,
-    /// `k` >= 0; `h < 2 l` (the belt within reach).
+    /// `k` >= 0; `mu <= 10`, `|v_belt| <= 5 m/s`; `h < 2 l` (the belt within reach).
     ///
     /// # Errors
     /// The first violation found, as a [`ParamError`] naming the field.
@@ -134,6 +144,13 @@ impl<T: Real> Params<T> {
             if value < T::zero() {
                 return Err(ParamError::Negative { name, value: to_f64(value) });
             }
+        }
+        // Upper bounds: a friction coefficient, not a lock; the belts of docs/hardware.md.
+        if self.mu > lit(10.0) {
+            return Err(ParamError::TooLarge { name: "mu", value: to_f64(self.mu), max: 10.0 });
+        }
+        if self.v_belt.abs() > lit(5.0) {
+            return Err(ParamError::TooLarge { name: "|v_belt|", value: to_f64(self.v_belt), max: 5.0 });
         }
         let reach = self.l + self.l;
         if self.h >= reach {
