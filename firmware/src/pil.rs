@@ -131,10 +131,14 @@ pub fn encode<'a, T: Serialize>(msg: &T, buf: &'a mut [u8]) -> Result<&'a [u8], 
 /// Decodes one frame (its bytes without the `0x00` terminator), in place.
 ///
 /// # Errors
-/// [`WireError::Cobs`] or [`WireError::Message`] (CRC mismatch included).
+/// [`WireError::Cobs`] or [`WireError::Message`] (CRC mismatch included, and bytes
+/// left over after a valid message and its CRC: a frame is exactly one message).
 pub fn decode<'a, T: Deserialize<'a>>(frame: &'a mut [u8]) -> Result<T, WireError> {
     let n = cobs::decode_in_place(frame).map_err(|_| WireError::Cobs)?;
-    postcard::from_bytes_crc32(&frame[..n], CRC.digest()).map_err(|_| WireError::Message)
+    match postcard::take_from_bytes_crc32(&frame[..n], CRC.digest()) {
+        Ok((msg, [])) => Ok(msg),
+        _ => Err(WireError::Message),
+    }
 }
 
 /// Collects received bytes into frames: fixed size, no heap.
@@ -225,6 +229,31 @@ mod tests {
         for (mut f, m) in frames.into_iter().zip(&msgs) {
             assert_eq!(decode::<Downlink>(&mut f).unwrap(), *m);
         }
+    }
+
+    /// A frame is exactly one message: bytes after a valid message and its CRC are
+    /// refused, not ignored (issue 15).
+    #[test]
+    fn trailing_bytes_after_a_valid_message_are_refused() {
+        let msg = Downlink::Frame { frame: SensorFrame { seq: 9, ..SensorFrame::default() }, start_delay_us: 3 };
+        let mut buf = [0u8; MAX_FRAME];
+        let framed = encode(&msg, &mut buf).unwrap().to_vec();
+        // The raw message and CRC, without COBS and terminator.
+        let mut raw = framed[..framed.len() - 1].to_vec();
+        let n = cobs::decode_in_place(&mut raw).unwrap();
+        raw.truncate(n);
+        for junk in [&[0x01u8][..], &[0xff, 0x00, 0x7f], &[0u8; 5]] {
+            let mut with = raw.clone();
+            with.extend_from_slice(junk);
+            let mut enc = vec![0u8; cobs::max_encoding_length(with.len())];
+            let m = cobs::encode(&with, &mut enc);
+            enc.truncate(m);
+            assert_eq!(decode::<Downlink>(&mut enc), Err(WireError::Message), "junk {junk:?}");
+        }
+        let mut enc = vec![0u8; cobs::max_encoding_length(raw.len())];
+        let m = cobs::encode(&raw, &mut enc);
+        enc.truncate(m);
+        assert_eq!(decode::<Downlink>(&mut enc), Ok(msg), "the message alone decodes");
     }
 
     #[test]
