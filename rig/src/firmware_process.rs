@@ -248,6 +248,9 @@ impl Board for IpcBoard<'_> {
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
     let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+    if let Some(pid) = super::ipc::live_owner(super::ipc::Role::Firmware, rig) {
+        return Err(RunError::RigInUse { rig: rig.to_string(), role: "firmware", pid });
+    }
     let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
     if realtime {
         for w in prepare_realtime(&s.rig).warnings {

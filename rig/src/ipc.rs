@@ -106,6 +106,29 @@ pub enum PeerState {
     Absent,
 }
 
+/// The process id of a live node `role` of rig `rig` other than this process's,
+/// if there is one: the rig is then in use in that role (issue 15: one plant and
+/// one firmware per rig). Two processes starting within the same instant can both
+/// see it free; a rig name per run (the default) avoids that.
+pub fn live_owner(role: Role, rig: &str) -> Option<i64> {
+    let wanted = role.node_name(rig);
+    let me = i64::from(std::process::id());
+    let mut owner = None;
+    let _ = Node::<ipc::Service>::list(Config::global_config(), |node| {
+        if let NodeState::Alive(v) = &node
+            && v.details().as_ref().is_some_and(|d| d.name().as_str() == wanted)
+        {
+            let pid = v.id().pid::<ipc::Service>().map_or(-1, |p| i64::from(p.value()));
+            if pid != me {
+                owner = Some(pid);
+                return CallbackProgression::Stop;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    owner
+}
+
 /// The state of the node `role` of rig `rig`.
 pub fn peer_state(role: Role, rig: &str) -> PeerState {
     let wanted = role.node_name(rig);

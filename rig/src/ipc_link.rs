@@ -91,6 +91,9 @@ impl IpcLink {
     pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+        if let Some(pid) = super::ipc::live_owner(Role::Plant, rig) {
+            return Err(RunError::RigInUse { rig: rig.to_string(), role: "plant", pid });
+        }
         let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
         // Before spawning: the firmware process inherits nothing from this thread's
         // set-up, it makes its own from the same scenario.

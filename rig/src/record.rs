@@ -87,6 +87,17 @@ pub enum RunError {
     /// The transport failed (iceoryx2).
     #[error("transport: {0}")]
     Transport(String),
+    /// Another live process already holds this rig in this role (one plant and one
+    /// firmware per rig name).
+    #[error("rig `{rig}` is in use by process {pid} (its {role}); pick another --rig name, or stop that process")]
+    RigInUse {
+        /// The rig name.
+        rig: String,
+        /// `plant` or `firmware`.
+        role: &'static str,
+        /// The owner's process id (-1 if unknown).
+        pid: i64,
+    },
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),

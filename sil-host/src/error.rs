@@ -57,6 +57,7 @@ impl CliError {
         match self {
             Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) => 2,
             Self::Sim(e) if e.is_bad_input() => 2,
+            Self::Run(rig::record::RunError::RigInUse { .. }) => 2,
             _ => 1,
         }
     }

@@ -159,6 +159,43 @@ fn a_stopped_and_continued_firmware_keeps_waiting() {
     assert_eq!(trace(&out).len(), 500);
 }
 
+/// Issue 15: one plant and one firmware per rig. A second firmware, or a second
+/// plant, on a live rig is refused at start (exit 2, naming the owner's process),
+/// writes nothing, and leaves the first run unharmed.
+#[test]
+fn a_second_plant_or_firmware_on_a_live_rig_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let name = rig("exclusive");
+    let mut fw =
+        sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    let second = sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).output().unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("in use by process {}", fw.id())), "{err}");
+    // The first plant waits for the firmware; a second plant on the rig is refused.
+    let name2 = rig("exclusive-plant");
+    let out1 = dir.path().join("first");
+    let plant = sil_host().args(["run", "--attach", &name2, "--scenario", s, "--duration", "0.5", "--out"]).arg(&out1).spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    let out2 = dir.path().join("second");
+    let o = run(&["--attach", &name2, "--scenario", s, "--duration", "0.5"], &out2);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains(&format!("in use by process {}", plant.id())));
+    assert!(!out2.exists(), "nothing written");
+    // Both first runs are unharmed.
+    let mut fw2 =
+        sil_host().args(["firmware", "--rig", &name2, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
+    assert!(plant.wait_with_output().unwrap().status.success());
+    assert_eq!(fw2.wait().unwrap().code(), Some(0));
+    assert_eq!(trace(&out1).len(), 500);
+    let out3 = dir.path().join("third");
+    assert!(run(&["--attach", &name, "--scenario", s, "--duration", "0.5"], &out3).status.success());
+    assert_eq!(fw.wait().unwrap().code(), Some(0));
+}
+
 #[test]
 fn late_and_dropped_commands_are_counted_by_the_right_sides() {
     let dir = tempfile::tempdir().unwrap();
