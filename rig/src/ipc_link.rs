@@ -123,9 +123,14 @@ impl IpcLink {
         while !link.ports.firmware_connected() {
             // Attach mode: a firmware not started yet is waited for, like a spawned one
             // still starting; only one that started and died is a failure now.
-            let gone = match link.firmware_gone() {
-                Some(_) if link.spawned.is_none() && peer_state(Role::Firmware, rig) == PeerState::Absent => None,
-                other => other,
+            let gone = if link.spawned.is_some() {
+                link.firmware_gone()
+            } else {
+                // One look at the node: absent (not started yet) or alive (starting) is waited for.
+                match peer_state(Role::Firmware, rig) {
+                    PeerState::Dead => Some("died (its iceoryx2 node is dead)".to_string()),
+                    PeerState::Alive | PeerState::Absent => None,
+                }
             };
             if let Some(what) = gone {
                 return Err(RunError::Transport(format!("the firmware process {what} before connecting")));
