@@ -418,7 +418,7 @@ impl Study {
 /// A unit of work: one sweep run, or one `Z_t,sliding` search.
 enum Job {
     Sweep { spec: usize, index: usize },
-    Search { choice: usize, combination: Combination },
+    Search(usize),
 }
 
 /// Runs the study from `base` (the sampled setting's scenario and the arm's
@@ -459,14 +459,23 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
     for (s, spec) in specs.iter().enumerate() {
         jobs.extend((0..spec.n_runs()).map(|index| Job::Sweep { spec: s, index }));
     }
+    // Distinct searches: the defaults of every dimension (and any other choice that
+    // gives the same knobs) share one search per case.
+    let mut wanted: Vec<(Knobs, Combination)> = Vec::new();
+    let mut search_of: Vec<Vec<usize>> = vec![Vec::new(); choices.len()];
     for (i, c) in choices.iter().enumerate() {
         for combination in combinations(c) {
-            jobs.push(Job::Search { choice: i, combination });
+            let at = wanted.iter().position(|w| *w == (c.knobs, combination)).unwrap_or_else(|| {
+                wanted.push((c.knobs, combination));
+                wanted.len() - 1
+            });
+            search_of[i].push(at);
         }
     }
+    jobs.extend((0..wanted.len()).map(Job::Search));
     // The costly jobs first, so that the pool ends together.
     jobs.sort_by_key(|j| match j {
-        Job::Search { .. } => 0,
+        Job::Search(_) => 0,
         Job::Sweep { spec, .. } => usize::from(specs[*spec].controller == SweepController::None) + 1,
     });
     let total = jobs.len() as u64;
@@ -488,8 +497,9 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
                     let key = specs[*spec].run_at(*index);
                     run::simulate(&specs[*spec], &key, &ics[*spec][key.i_ic], stop).map(|r| Ok(Out::Row(*spec, r)))
                 }
-                Job::Search { choice, combination } => {
-                    Some(search(base, &grids, &choices[*choice].knobs, *combination).map(|z| Out::Search(*choice, z)))
+                Job::Search(w) => {
+                    let (knobs, combination) = &wanted[*w];
+                    Some(search(base, &grids, knobs, *combination).map(|z| Out::Search(*w, z)))
                 }
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
@@ -500,11 +510,11 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
         return Err(AnalysisError::Interrupted("sensitivity study stopped".into()));
     }
     let mut rows: Vec<Vec<RunRow>> = vec![Vec::new(); specs.len()];
-    let mut searches: Vec<Vec<Zmax>> = vec![Vec::new(); choices.len()];
+    let mut found: Vec<Option<Zmax>> = vec![None; wanted.len()];
     for o in outs {
         match o? {
             Out::Row(s, r) => rows[s].push(r),
-            Out::Search(c, z) => searches[c].push(z),
+            Out::Search(w, z) => found[w] = Some(z),
         }
     }
     let mut validity = Validity::default();
@@ -515,8 +525,8 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
             let gap = choice.knobs.lift_off_gap_m;
             let open_loop = open_of[i].map(|s| open_results(&specs[s], &rows[s], gap));
             let closed_loop = closed_of[i].map(|s| closed_results(&rows[s], gap));
-            let mut zmax = std::mem::take(&mut searches[i]);
-            zmax.sort_by_key(|z| Combination::all().iter().position(|c| *c == z.combination));
+            // In Combination::all()'s order, as combinations() gives them.
+            let zmax = search_of[i].iter().filter_map(|&w| found[w].clone()).collect();
             ChoiceResult { choice, open_loop, zmax, closed_loop }
         })
         .collect();
@@ -525,10 +535,8 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
             validity.add(&row.validity());
         }
     }
-    for r in &results {
-        for z in &r.zmax {
-            validity.add(&z.validity);
-        }
+    for z in found.iter().flatten() {
+        validity.add(&z.validity);
     }
     Ok(Study { size, grids, defaults: Knobs::default(), results, validity })
 }

@@ -387,6 +387,7 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
     let mut seen = LiftOffs(&mut t, false, c.lift_off_gap_m == 0.0);
     let (records, failure) = in_process::run(&s, &mut seen);
     let lifted = seen.1;
+    let h = s.plant.params().h;
     let rows: Vec<TraceRow> = records
         .iter()
         .map(|r| TraceRow {
@@ -397,7 +398,7 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
             u1: r.u1_cmd,
             u2: r.u2_cmd,
             mode: r.mode,
-            height: r.z_n + s.plant.params().h,
+            height: r.z_n + h,
         })
         .collect();
     if t.first_lift_off_s.is_none()

@@ -200,7 +200,8 @@ proptest! {
         let now_us = t_us.saturating_add(late);
         let f = SensorFrame { t_us, ..frame(1, x0d(), [-1.0, 2.0]) };
         let c = fw.step(now_us, &f, &clock);
-        let elapsed = u128::from(step) * 1_000_000 / 1_000_000;
+        // The clock ticks at 1 MHz: one tick is one microsecond.
+        let elapsed = u128::from(step);
         let lateness = u128::from(now_us.saturating_sub(t_us));
         let miss = lateness + elapsed >= u128::from(Config::default().period.as_us());
         prop_assert_eq!(c.status & status::DEADLINE_MISS != 0, miss, "t {} now {} step {}", t_us, now_us, step);

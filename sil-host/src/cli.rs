@@ -254,6 +254,10 @@ pub struct ZmaxArgs {
     /// The last part of the run where the tip must be within --settle-tol, s.
     #[arg(long, default_value_t = 1.0)]
     pub settle_window: f64,
+    /// Impact-without-collision rule of the base scenario (`plant.iwc`): `restitution`
+    /// or `plastic`; default: the scenario's.
+    #[arg(long, value_enum)]
+    pub iwc: Option<plant::impact::IwcRule>,
     /// Lift-off criterion, m: 0 counts any departure from the belt (located exactly);
     /// a gap > 0 counts a lift-off only when the tip rises more than this above the
     /// belt at a sample (0 to 0.1 m).

@@ -244,6 +244,19 @@ fn closed_loop_summaries_carry_validity() {
     assert_eq!(code, 0);
     let s = json(&out.join("summary.json"));
     assert_validity(&s["validity"], "zmax");
+    assert_eq!(s["base_scenario"]["plant"]["iwc"], "restitution");
+    // zmax takes the IWC rule too, in one place only.
+    let plastic = dir.path().join("zmax-plastic");
+    let args = ["zmax", "--controller", "hybrid", "--x0", "d", "--ideal", "--duration", "3", "--bracket=0.0,0.05", "--tol", "0.02"];
+    let mut a = args.to_vec();
+    a.extend(["--iwc", "plastic", "--json", "--out", plastic.to_str().unwrap()]);
+    assert_eq!(run(&a), 0);
+    assert_eq!(json(&plastic.join("summary.json"))["base_scenario"]["plant"]["iwc"], "plastic");
+    let both = dir.path().join("zmax-both");
+    let mut a = args.to_vec();
+    a.extend(["--iwc", "plastic", "--set", "plant.iwc=plastic", "--out", both.to_str().unwrap()]);
+    assert_eq!(run(&a), 2);
+    assert!(!both.exists());
     for t in s["trials"].as_array().unwrap() {
         assert_validity(&t["validity"], "zmax trial");
     }

@@ -48,10 +48,18 @@ const TRIAL_KEYS: [(&str, &str); 4] = [
     ("timing.duration_s", "--duration"),
 ];
 
-/// The base scenario (`--scenario` or the embedded default) with the `--set` overrides.
+/// The base scenario (`--scenario` or the embedded default) with the `--set`
+/// overrides and `--iwc` (a key is set in one place: `--set plant.iwc` with `--iwc` is refused).
 fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
     rig::overrides::check_keys(&args.set, &TRIAL_KEYS).map_err(rig::scenario::ScenarioError::from)?;
-    crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)
+    if args.iwc.is_some() {
+        rig::overrides::check_keys(&args.set, &[("plant.iwc", "--iwc")]).map_err(rig::scenario::ScenarioError::from)?;
+    }
+    let mut s = crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)?;
+    if let Some(iwc) = args.iwc {
+        s.plant.iwc = iwc;
+    }
+    Ok(s)
 }
 
 /// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
