@@ -13,6 +13,7 @@
 #[cfg(all(feature = "clap", not(test)))]
 extern crate std;
 
+pub mod announce;
 pub mod board;
 pub mod config;
 pub mod consistency;

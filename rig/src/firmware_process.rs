@@ -25,7 +25,7 @@ use firmware::{
     Event, Firmware, Outcome, TickClock,
     board::{self, Board, FrozenClock},
 };
-use shared::wire::{SensorFrame, frame_flags};
+use shared::wire::{FirmwareAnnouncement, SensorFrame, WIRE_VERSION, frame_flags};
 
 use super::{
     faults::FaultPlan,
@@ -124,9 +124,28 @@ struct IpcBoard<'a> {
     now_us: u64,
     step_started: Instant,
     ending: Option<Ending>,
+    /// What it answers the plant's handshake frame with.
+    announcement: FirmwareAnnouncement,
 }
 
 impl IpcBoard<'_> {
+    /// Answers a handshake frame ([`frame_flags::HELLO`]) with the announcement;
+    /// `false` for any other frame. A plant of another wire version is told ours
+    /// (it refuses us) and we say so here; we stay for a plant of our own version.
+    fn answer_hello(&self, frame: &SensorFrame) -> Result<bool, RunError> {
+        if frame.flags & frame_flags::HELLO == 0 {
+            return Ok(false);
+        }
+        if frame.t_us != u64::from(WIRE_VERSION) {
+            eprintln!(
+                "firmware: the plant on rig `{}` speaks wire version {}, this firmware {WIRE_VERSION}: refused (rebuild both from the same sources)",
+                self.rig, frame.t_us
+            );
+        }
+        self.ports.announcement.send(self.announcement).map_err(|e| RunError::Transport(e.to_string()))?;
+        Ok(true)
+    }
+
     /// Waits for frames (and checks on the plant while none come); fills the batch.
     fn wait_for_frames(&mut self) -> Result<Option<Event>, RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
@@ -139,6 +158,11 @@ impl IpcBoard<'_> {
             Some(f) => Some(f),
             None => self.ports.frames.next_before(waited_from + self.peer_check).map_err(transport)?,
         };
+        if let Some(f) = &next
+            && self.answer_hello(f)?
+        {
+            return Ok(None);
+        }
         let Some(first) = next else {
             // No frame for a while: is the plant still there?
             return match peer_state(Role::Plant, self.rig) {
@@ -179,7 +203,9 @@ impl IpcBoard<'_> {
         // clock is the newest sample, so older frames are answered late.
         self.batch.push_back(first);
         while let Some(f) = self.ports.frames.try_next().map_err(transport)? {
-            self.batch.push_back(f);
+            if !self.answer_hello(&f)? {
+                self.batch.push_back(f);
+            }
         }
         self.newest_us = self.batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
         Ok(None)
@@ -257,7 +283,9 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
             eprintln!("firmware: real-time set-up: {w}");
         }
     }
-    let mut firmware = Some(Firmware::new(firmware_config(s))?);
+    let config = firmware_config(s);
+    let announcement = firmware::announce::announce(&config)?;
+    let mut firmware = Some(Firmware::new(config)?);
     let mut board = IpcBoard {
         ports: &ports,
         rig,
@@ -274,6 +302,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         now_us: 0,
         step_started: Instant::now(),
         ending: None,
+        announcement,
     };
     let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
     board::run(&mut firmware, &mut board, &clock)?;

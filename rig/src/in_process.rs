@@ -17,6 +17,7 @@ use super::{
 #[derive(Debug, Clone)]
 pub struct InProcessLink {
     side: FirmwareSide,
+    announced: crate::handshake::Announced,
 }
 
 impl InProcessLink {
@@ -27,13 +28,19 @@ impl InProcessLink {
     /// when the scenario injects a fault that needs the firmware in its own process.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
         LinkKind::InProcess.check(&s.faults)?;
-        Ok(Self { side: FirmwareSide::new(s)? })
+        let side = FirmwareSide::new(s)?;
+        let announced = crate::handshake::of_config(side.firmware().config())?;
+        Ok(Self { side, announced })
     }
 }
 
 impl FirmwareLink for InProcessLink {
     fn transport(&self) -> &'static str {
         "in-process"
+    }
+
+    fn announcement(&self) -> Option<&crate::handshake::Announced> {
+        Some(&self.announced)
     }
 
     fn exchange(&mut self, frame: &SensorFrame, _truth: &GroundTruth) -> Result<Exchange, RunError> {

@@ -10,6 +10,7 @@
 //! | `painleve/R/actuator_commands` | `painleve::ActuatorCommand` | firmware -> plant |
 //! | `painleve/R/firmware_telemetry` | `painleve::FirmwareTelemetry` | firmware -> plant, monitors |
 //! | `painleve/R/ground_truth` | `painleve::GroundTruth` | plant -> monitors |
+//! | `painleve/R/firmware_announcement` | `painleve::FirmwareAnnouncement` | firmware -> plant (handshake) |
 //! | `painleve/R/frame_ready`, `painleve/R/command_ready` | events | wake a blocked peer |
 //!
 //! Waiting: a bounded spin on the subscriber (cheap while the peer answers within
@@ -27,7 +28,7 @@ use iceoryx2::{
     port::{listener::Listener, notifier::Notifier, publisher::Publisher, subscriber::Subscriber},
     prelude::*,
 };
-use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
+use shared::wire::{ActuatorCommand, FirmwareAnnouncement, FirmwareTelemetry, GroundTruth, SensorFrame};
 
 /// Queue depth of every subscriber: a peer that stalls for this many periods
 /// finds them all on waking (older ones are overwritten: safe overflow).
@@ -75,13 +76,18 @@ pub fn check_rig_name(rig: &str) -> Result<(), String> {
     if ok { Ok(()) } else { Err(format!("rig name {rig:?}: use 1 to 40 letters, digits, '-' or '_'")) }
 }
 
+/// The rig reports its own errors; iceoryx2's warnings (no config file: defaults
+/// used) are noise here.
+fn quiet() {
+    set_log_level(LogLevel::Error);
+}
+
 /// A process's iceoryx2 node, after removing the stale resources of dead nodes.
 ///
 /// # Errors
 /// [`IpcError`] when the node cannot be created.
 pub fn node(role: Role, rig: &str) -> Result<Node<ipc::Service>, IpcError> {
-    // The rig reports its own errors; iceoryx2's warnings (no config file: defaults used) are noise here.
-    set_log_level(LogLevel::Error);
+    quiet();
     let name = NodeName::new(&role.node_name(rig)).map_err(|e| err("node name", e))?;
     let node = NodeBuilder::new()
         .name(&name)
@@ -111,6 +117,7 @@ pub enum PeerState {
 /// one firmware per rig). Two processes starting within the same instant can both
 /// see it free; a rig name per run (the default) avoids that.
 pub fn live_owner(role: Role, rig: &str) -> Option<i64> {
+    quiet();
     let wanted = role.node_name(rig);
     let me = i64::from(std::process::id());
     let mut owner = None;
@@ -131,6 +138,7 @@ pub fn live_owner(role: Role, rig: &str) -> Option<i64> {
 
 /// The state of the node `role` of rig `rig`.
 pub fn peer_state(role: Role, rig: &str) -> PeerState {
+    quiet();
     let wanted = role.node_name(rig);
     let mut state = PeerState::Absent;
     let _ = Node::<ipc::Service>::list(Config::global_config(), |node| {
@@ -289,6 +297,8 @@ pub struct PlantPorts {
     pub commands: Inbox<ActuatorCommand>,
     /// Telemetry from the firmware.
     pub telemetry: Inbox<FirmwareTelemetry>,
+    /// The firmware's announcement (the handshake before period 0).
+    pub announcements: Inbox<FirmwareAnnouncement>,
 }
 
 impl PlantPorts {
@@ -318,6 +328,7 @@ impl PlantPorts {
                 spin,
             },
             telemetry: Inbox { subscriber: subscriber(&node, rig, "firmware_telemetry")?, listener: None, spin },
+            announcements: Inbox { subscriber: subscriber(&node, rig, "firmware_announcement")?, listener: None, spin },
             frames_service,
             commands_service,
             node,
@@ -341,6 +352,8 @@ pub struct FirmwarePorts {
     pub commands: Outbox<ActuatorCommand>,
     /// Telemetry to the plant and monitors.
     pub telemetry: Outbox<FirmwareTelemetry>,
+    /// Its announcement, sent when the plant's handshake frame arrives.
+    pub announcement: Outbox<FirmwareAnnouncement>,
 }
 
 impl FirmwarePorts {
@@ -363,6 +376,7 @@ impl FirmwarePorts {
                 notifier: Some(command_ready.notifier_builder().create().map_err(|e| err("notifier", e))?),
             },
             telemetry: Outbox { publisher: publisher(&node, rig, "firmware_telemetry")?, notifier: None },
+            announcement: Outbox { publisher: publisher(&node, rig, "firmware_announcement")?, notifier: None },
             node,
         })
     }

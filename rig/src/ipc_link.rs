@@ -25,10 +25,11 @@ use std::{
     time::{Duration, Instant},
 };
 
-use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, frame_flags};
+use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, WIRE_VERSION, frame_flags};
 
 use super::{
     faults::{FaultPlan, LinkKind},
+    handshake::{self, Announced},
     ipc::{PeerState, PlantPorts, Role, peer_state},
     realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
     record::RunError,
@@ -76,6 +77,8 @@ pub struct IpcLink {
     k: usize,
     /// Timings measured so far.
     pub timings: LinkTimings,
+    /// The firmware's announcement, checked against the scenario (the handshake).
+    announced: Option<Announced>,
 }
 
 impl IpcLink {
@@ -117,6 +120,7 @@ impl IpcLink {
             t0: None,
             k: 0,
             timings: LinkTimings::default(),
+            announced: None,
         };
         let start = Instant::now();
         let limit = s.rig.connect_timeout_s;
@@ -145,7 +149,38 @@ impl IpcLink {
             }
             std::thread::sleep(Duration::from_millis(2));
         }
+        link.announced = Some(link.handshake(s, start + Duration::from_secs_f64(limit))?);
         Ok(link)
+    }
+
+    /// The handshake before period 0: asks the connected firmware for its
+    /// announcement (a [`frame_flags::HELLO`] frame carrying our wire version,
+    /// repeated every 50 ms until it answers or `deadline`) and checks it against
+    /// the configuration the scenario asks for ([`handshake::check`]).
+    fn handshake(&mut self, s: &Scenario, deadline: Instant) -> Result<Announced, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let hello = SensorFrame { t_us: u64::from(WIRE_VERSION), flags: frame_flags::HELLO, ..SensorFrame::default() };
+        let mut asked: Option<Instant> = None;
+        loop {
+            if asked.is_none_or(|t| t.elapsed() >= Duration::from_millis(50)) {
+                self.ports.frames.send(hello).map_err(transport)?;
+                asked = Some(Instant::now());
+            }
+            if let Some(a) = self.ports.announcements.try_next().map_err(transport)? {
+                return handshake::check(&a, &super::setup::firmware_config(s), &self.rig);
+            }
+            if let Some(what) = self.firmware_gone() {
+                return Err(RunError::Transport(format!("the firmware process {what} before announcing its configuration")));
+            }
+            if Instant::now() >= deadline {
+                return Err(RunError::Transport(format!(
+                    "the firmware on rig `{}` connected but did not announce its configuration within rig.connect_timeout_s = {} s: \
+                     it may be an older build without the handshake (rebuild both sides from the same sources)",
+                    self.rig, s.rig.connect_timeout_s
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 
     /// The rig's name.
@@ -197,6 +232,10 @@ fn spawn(exe: &Path, rig: &str, s: &Scenario, realtime: bool) -> Result<Spawned,
 impl FirmwareLink for IpcLink {
     fn transport(&self) -> &'static str {
         "iceoryx2"
+    }
+
+    fn announcement(&self) -> Option<&Announced> {
+        self.announced.as_ref()
     }
 
     fn before_period(&mut self, k: usize, t: f64) {

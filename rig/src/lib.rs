@@ -14,6 +14,7 @@ pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
 pub mod firmware_side;
+pub mod handshake;
 pub mod in_process;
 #[cfg(feature = "ipc")]
 pub mod ipc;

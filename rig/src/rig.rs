@@ -79,6 +79,10 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
         self.inner.before_period(k, t);
     }
 
+    fn announcement(&self) -> Option<&crate::handshake::Announced> {
+        self.inner.announcement()
+    }
+
     fn finish(&mut self, last_seq: u32) {
         self.inner.finish(last_seq);
     }
@@ -103,6 +107,13 @@ pub trait FirmwareLink {
 
     /// Tells the firmware the run is over (no answer expected).
     fn finish(&mut self, _last_seq: u32) {}
+
+    /// The firmware's own announcement of its configuration, checked against the
+    /// scenario before period 0 (the handshake, [`crate::handshake`]); `None` for a
+    /// link without one (the PIL image, which checks its protocol version instead).
+    fn announcement(&self) -> Option<&crate::handshake::Announced> {
+        None
+    }
 }
 
 /// Ground-truth mode code of [`GroundTruth::mode`]: 0 flight, 1 sliding, 2 sticking.

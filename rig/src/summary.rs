@@ -75,6 +75,11 @@ pub struct RunSummary {
     /// model of the arm (`params`, `mu` = `mu_hat`), the PID gains (paper eq. 8),
     /// the hybrid gains (eqs. 9 to 11, `K'_I` resolved), references and limits.
     pub firmware_config: firmware::Config,
+    /// The firmware's own announcement of what it runs (the handshake before
+    /// period 0, [`crate::handshake`]): equal to `firmware_config` or the run
+    /// would have been refused; `null` for PIL runs (the image checks its
+    /// protocol version instead).
+    pub firmware_announcement: Option<crate::handshake::Announced>,
 }
 
 impl RunSummary {
@@ -118,6 +123,7 @@ impl RunSummary {
             scenario_used: scenario.clone(),
             plant_params: crate::setup::plant_params(scenario),
             firmware_config: crate::setup::firmware_config(scenario),
+            firmware_announcement: None,
         }
     }
 }

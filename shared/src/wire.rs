@@ -12,9 +12,23 @@
 //! | [`ActuatorCommand`] | `painleve::ActuatorCommand` | 32 B |
 //! | [`GroundTruth`] | `painleve::GroundTruth` | 96 B |
 //! | [`FirmwareTelemetry`] | `painleve::FirmwareTelemetry` | 48 B |
+//! | [`FirmwareAnnouncement`] | `painleve::FirmwareAnnouncement` | 400 B |
+//!
+//! [`WIRE_VERSION`] names these layouts: a plant and a firmware built from
+//! different layouts refuse each other at the handshake (docs/rig.md).
 
 #[cfg(feature = "iceoryx2")]
 use iceoryx2::prelude::ZeroCopySend;
+
+/// Version of the shared-memory layouts above (the iceoryx2 rig's wire). It goes
+/// up whenever one of them changes; the plant sends its version in the handshake
+/// frame ([`frame_flags::HELLO`]) and the firmware its own in its
+/// [`FirmwareAnnouncement`], and each side refuses a different one. The PIL
+/// serial protocol has its own version (`firmware::pil::PROTOCOL_VERSION`).
+pub const WIRE_VERSION: u32 = 1;
+
+/// Bytes a [`FirmwareAnnouncement`] holds for the firmware's encoded configuration.
+pub const ANNOUNCEMENT_CONFIG_BYTES: usize = 384;
 
 /// Encoder resolution of the reference board: 14 bit per revolution (docs/hardware.md).
 pub const ENCODER_BITS: u8 = 14;
@@ -87,6 +101,10 @@ pub mod frame_flags {
     pub const ANY_INVALID: u16 = THETA1_INVALID | ELBOW_INVALID | F_T_INVALID | F_N_INVALID | BELT_INVALID | DRIVER_FAULT;
     /// The plant ends the run: no command is expected for this frame (SIL rig only).
     pub const END_OF_RUN: u16 = 1 << 15;
+    /// The handshake before period 0 (SIL rig only): the plant asks the firmware
+    /// to announce its configuration ([`super::FirmwareAnnouncement`]); `t_us`
+    /// carries the plant's [`super::WIRE_VERSION`]. No command answers it.
+    pub const HELLO: u16 = 1 << 14;
 }
 
 /// Status word bits of an [`ActuatorCommand`].
@@ -202,6 +220,36 @@ pub struct FirmwareTelemetry {
     pub u_raw: [f32; 2],
 }
 
+/// The firmware's answer to the handshake frame ([`frame_flags::HELLO`]): its wire
+/// version and its whole configuration as it will run, so the plant can refuse a
+/// firmware configured differently from its scenario before period 0 (SIL rig,
+/// docs/rig.md "Handshake"). Size: 400 bytes.
+///
+/// Layout: `wire_version: u32`, `config_len: u32`, `config_hash: u64`,
+/// `config: [u8; 384]`. `config[..config_len]` is the firmware's `Config` in
+/// postcard's encoding (`firmware::announce`); `config_hash` is the CRC-64/XZ of
+/// those bytes, the short name of a configuration in logs and `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::FirmwareAnnouncement"))]
+#[repr(C)]
+pub struct FirmwareAnnouncement {
+    /// The firmware's [`WIRE_VERSION`].
+    pub wire_version: u32,
+    /// Bytes of `config` used.
+    pub config_len: u32,
+    /// CRC-64/XZ of `config[..config_len]`.
+    pub config_hash: u64,
+    /// The encoded configuration, zero-padded.
+    pub config: [u8; ANNOUNCEMENT_CONFIG_BYTES],
+}
+
+impl Default for FirmwareAnnouncement {
+    /// This wire version, an empty configuration.
+    fn default() -> Self {
+        Self { wire_version: WIRE_VERSION, config_len: 0, config_hash: 0, config: [0; ANNOUNCEMENT_CONFIG_BYTES] }
+    }
+}
+
 /// Encodes an angle (rad) as a 14-bit absolute encoder count (rounded, wrapped to `[0, 2^14)`).
 pub fn encode_angle(angle: f64) -> u16 {
     encode_angle_bits(angle, ENCODER_BITS)
@@ -251,6 +299,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<ActuatorCommand>(), 32);
         assert_eq!(core::mem::size_of::<GroundTruth>(), 96);
         assert_eq!(core::mem::size_of::<FirmwareTelemetry>(), 48);
+        assert_eq!(core::mem::size_of::<FirmwareAnnouncement>(), 400);
     }
 
     #[test]

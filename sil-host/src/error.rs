@@ -57,7 +57,11 @@ impl CliError {
         match self {
             Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) => 2,
             Self::Sim(e) if e.is_bad_input() => 2,
-            Self::Run(rig::record::RunError::RigInUse { .. }) => 2,
+            Self::Run(
+                rig::record::RunError::RigInUse { .. }
+                | rig::record::RunError::ConfigMismatch { .. }
+                | rig::record::RunError::Announcement(_),
+            ) => 2,
             _ => 1,
         }
     }

@@ -106,6 +106,43 @@ fn attach_mode_talks_to_a_firmware_started_by_hand() {
     assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), std::fs::read(inp.join("trace.csv")).unwrap());
 }
 
+/// Issue 15, the handshake: a firmware started by hand with other settings (a
+/// PID law, another gain) is refused before period 0 (exit 2, every differing
+/// setting named with both values, nothing written) and stays up for a plant with
+/// its own settings, which then runs and records the firmware's announcement.
+#[test]
+fn a_firmware_configured_differently_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = rig("handshake");
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let fw_args = ["--controller", "pid", "--set", "controller.hybrid.kp=800"];
+    let mut fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s]).args(fw_args).stderr(Stdio::piped()).spawn().unwrap();
+    let refused = dir.path().join("refused");
+    let o = run(&["--attach", &name, "--scenario", s, "--duration", "0.5"], &refused);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(r#"controller: firmware "pid", scenario "hybrid""#), "{err}");
+    assert!(err.contains("hybrid.kp: firmware 800.0, scenario 900.0"), "{err}");
+    assert!(!refused.exists(), "a refused run writes nothing");
+    // The firmware is still there for a plant that agrees with it.
+    let out = dir.path().join("agreed");
+    let o = run(&["--attach", &name, "--scenario", s, "--duration", "0.5", "--controller", "pid", "--set", "controller.hybrid.kp=800"], &out);
+    assert!(o.status.success());
+    assert_eq!(fw.wait().unwrap().code(), Some(0));
+    let sum = summary(&out);
+    let announced = &sum["firmware_announcement"];
+    assert_eq!(announced["config"], sum["firmware_config"], "the firmware's own words equal the scenario's configuration");
+    assert_eq!(announced["config"]["controller"], "pid");
+    assert_eq!(announced["wire_version"], shared::wire::WIRE_VERSION);
+    // A spawned firmware agrees by construction; its hash names the configuration.
+    let spawned = dir.path().join("spawned");
+    assert!(run(&["--scenario", s, "--duration", "0.2"], &spawned).status.success());
+    let h = summary(&spawned)["firmware_announcement"]["config_hash"].as_str().unwrap().to_string();
+    assert_eq!(h.len(), 16);
+    assert_ne!(h, announced["config_hash"].as_str().unwrap(), "another configuration, another hash");
+}
+
 /// Issue 15: `run --attach` waits for a firmware started after it (as for a
 /// spawned one), and with no firmware at all it fails after `rig.connect_timeout_s`
 /// with the hint, writing nothing.

@@ -66,6 +66,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
+    let firmware_announcement = link.announcement().cloned();
     let timings = ipc.as_ref().map(|l| l.timings.clone());
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     drop(ipc);
@@ -79,6 +80,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
         realtime_setup,
+        firmware_announcement,
         ..RunSummary::from_records(
             &scenario,
             &records,
