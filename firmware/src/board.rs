@@ -38,6 +38,14 @@ pub enum Event {
         /// The sequence number the safe command answers.
         seq: u32,
     },
+    /// The board missed `periods` control ticks: it woke to frames it never
+    /// answered (a stall) and dropped them as stale, to answer only the newest,
+    /// which comes next as [`Event::Frame`]. Counted as overruns
+    /// ([`Firmware::missed_periods`]).
+    Missed {
+        /// Control periods missed.
+        periods: u32,
+    },
     /// The run is over: [`run`] returns.
     End,
 }
@@ -60,6 +68,11 @@ pub enum Outcome {
     },
     /// The firmware left the safe state ([`Event::Reset`]).
     Reset,
+    /// Missed periods were counted ([`Event::Missed`]); nothing to write.
+    Missed {
+        /// Control periods missed.
+        periods: u32,
+    },
     /// The run ended ([`Event::End`]).
     Ended,
 }
@@ -121,6 +134,12 @@ pub fn handle<B: Board, C: TickClock>(
             }
             None => Outcome::NotConfigured { seq },
         },
+        (Event::Missed { periods }, fw) => {
+            if let Some(fw) = fw {
+                fw.missed_periods(periods);
+            }
+            Outcome::Missed { periods }
+        }
         (Event::End, _) => Outcome::Ended,
     };
     board.apply(&outcome, firmware.as_ref())?;
@@ -221,6 +240,31 @@ mod tests {
         assert_eq!(o[6], Outcome::Reset);
         assert_eq!(fw.as_ref().unwrap().safe_state(), None, "reset leaves the safe state");
         assert_eq!(o[7], Outcome::Ended);
+    }
+
+    /// Missed ticks count as overruns and consecutive misses: fewer than the limit
+    /// and a step on time clears the streak; the limit latches the safe state.
+    #[test]
+    fn missed_periods_count_as_overruns_and_latch_at_the_limit() {
+        let limit = Config::default().deadline_miss_limit;
+        let events = vec![
+            Event::Frame(frame(0)),
+            Event::Missed { periods: u32::from(limit) - 1 },
+            Event::Frame(frame(u32::from(limit))),
+            Event::Missed { periods: 500 },
+            Event::Frame(frame(u32::from(limit) + 501)),
+            Event::End,
+        ];
+        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now_us: 0 };
+        let mut fw = Some(Firmware::new(Config::default()).unwrap());
+        run(&mut fw, &mut board, &FrozenClock).unwrap();
+        let o = &board.outcomes;
+        let Outcome::Command(c) = o[2] else { panic!("{:?}", o[2]) };
+        assert_eq!((c.overruns, c.status & status::SAFE_STATE), (u32::from(limit) - 1, 0), "below the limit: counted, not safe");
+        let Outcome::Command(c) = o[4] else { panic!("{:?}", o[4]) };
+        assert_eq!(c.overruns, u32::from(limit) - 1 + 500);
+        assert_eq!(SafeReason::from_status(c.status), Some(SafeReason::DeadlineMisses));
+        assert_eq!((c.u1_code, c.u2_code), (0, 0));
     }
 
     #[test]

@@ -205,6 +205,24 @@ impl Firmware {
         self.enter_safe(reason);
     }
 
+    /// Counts `periods` control ticks that passed without a step: the board woke
+    /// (a stalled process, a core held by something else) to frames it never
+    /// answered and dropped as stale, answering only the newest. Each is an
+    /// overrun and a consecutive deadline miss, as if its step had run late, so
+    /// the firmware's count equals what its peer saw; `deadline_miss_limit`
+    /// consecutive misses latch [`SafeReason::DeadlineMisses`]. The next step on
+    /// time clears the consecutive count, as usual. Saturating.
+    pub fn missed_periods(&mut self, periods: u32) {
+        if periods == 0 {
+            return;
+        }
+        self.overruns = self.overruns.saturating_add(periods);
+        self.consecutive_misses = self.consecutive_misses.saturating_add(u16::try_from(periods).unwrap_or(u16::MAX));
+        if self.consecutive_misses >= self.cfg.deadline_miss_limit {
+            self.enter_safe(SafeReason::DeadlineMisses);
+        }
+    }
+
     /// The zero-torque command the safe state sends for frame `seq` at `now_us`
     /// without a frame to step on (the board's loop uses it when its peer is lost).
     pub fn safe_command(&self, seq: u32, now_us: u64) -> ActuatorCommand {

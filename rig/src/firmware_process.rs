@@ -3,13 +3,19 @@
 //! frame with a command and the step's telemetry until the plant ends the run.
 //!
 //! Its clock: in lockstep the frame's (simulated) time: a step starts at the
-//! newest sample it has seen, so frames that piled up while it was stalled are
-//! answered late and counted as overruns; the step's wall time is reported in
+//! newest sample it has seen; the step's wall time is reported in
 //! `step_ticks` (ns) but does not advance simulated time. In real time, its own
 //! wall clock, re-anchored at every frame it was waiting for (the frame's arrival
 //! is the sample tick, as a timer interrupt is on the MCU): a frame that was
 //! already queued when it looked is one it is late for, timed from the last
 //! anchor. It blocks between frames on the plant's CPU ([`prepare_realtime`]).
+//!
+//! After a stall (frames queued up while it did not run, in either timing) it
+//! answers only the newest frame and counts every period it missed as an overrun
+//! (`Event::Missed`), so its count equals the plant's misses (docs/rig.md "Stalls").
+//!
+//! Before period 0 it answers the plant's handshake frame with its announcement
+//! (docs/rig.md "Handshake").
 //!
 //! Safe state on a lost peer: when no frame has come for `rig.peer_check_s` and
 //! iceoryx2's node monitoring says the plant process is dead or gone, the
@@ -126,6 +132,8 @@ struct IpcBoard<'a> {
     ending: Option<Ending>,
     /// What it answers the plant's handshake frame with.
     announcement: FirmwareAnnouncement,
+    /// Periods missed in a stall, to count before the newest frame ([`Event::Missed`]).
+    missed: u32,
 }
 
 impl IpcBoard<'_> {
@@ -207,8 +215,34 @@ impl IpcBoard<'_> {
                 self.batch.push_back(f);
             }
         }
+        self.drop_stale();
         self.newest_us = self.batch.iter().map(|f| f.t_us).max().unwrap_or(first.t_us);
         Ok(None)
+    }
+}
+
+impl IpcBoard<'_> {
+    /// After a stall (frames queued up while the process did not run, in either
+    /// timing): answers only the newest frame and counts every period between the
+    /// last one answered and it as missed, the frames dropped here and any the
+    /// queue's safe overflow overwrote alike. The plant counted a deadline miss for
+    /// each of those periods, so both counts agree (issue 15). The end of the run
+    /// is never dropped.
+    fn drop_stale(&mut self) {
+        let Some(&newest) = self.batch.back() else { return };
+        if self.batch.iter().any(|f| f.flags & frame_flags::END_OF_RUN != 0) {
+            return;
+        }
+        let skipped = match self.last_seq {
+            Some(last) => newest.seq.wrapping_sub(last).saturating_sub(1),
+            None => (self.batch.len() - 1) as u32,
+        };
+        // A sequence that went back is the firmware's to judge (a stale frame), not a stall.
+        if skipped < u32::MAX / 2 {
+            self.missed = self.missed.saturating_add(skipped);
+        }
+        self.batch.clear();
+        self.batch.push_back(newest);
     }
 }
 
@@ -219,6 +253,9 @@ impl Board for IpcBoard<'_> {
         loop {
             if self.ending.is_some() {
                 return Ok(Event::End);
+            }
+            if self.missed > 0 {
+                return Ok(Event::Missed { periods: std::mem::take(&mut self.missed) });
             }
             if let Some(frame) = self.batch.pop_front() {
                 if frame.flags & frame_flags::END_OF_RUN != 0 {
@@ -303,6 +340,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         step_started: Instant::now(),
         ending: None,
         announcement,
+        missed: 0,
     };
     let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
     board::run(&mut firmware, &mut board, &clock)?;

@@ -12,10 +12,13 @@
 //!
 //! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k` (or
 //! as soon after as the plant gets the core: the difference is the period
-//! jitter); a command not back within one period of the frame's publication, or
-//! sent later than `t_k + Ts` on the firmware's clock (anchored at the frame's
-//! arrival, as a timer tick), is a deadline miss; one that is takes effect at
-//! `t_k` plus that latency. Both sides judge the same stamp, so they agree.
+//! jitter); a command not back by the next sample instant `t0 + t_{k+1}` (at
+//! least half a period after the frame's publication), or sent later than
+//! `t_k + Ts` on the firmware's clock (anchored at the frame's arrival, as a
+//! timer tick), is a deadline miss; one that is takes effect at `t_k` plus that
+//! latency. Both sides judge the same stamp, so they agree. A stalled firmware
+//! costs the plant one period per missed period, and is given up after
+//! `rig.max_consecutive_timeouts` periods in a row, as in lockstep.
 //! Both processes run their loop on one CPU ([`prepare_realtime`]).
 
 use std::{
@@ -79,6 +82,8 @@ pub struct IpcLink {
     pub timings: LinkTimings,
     /// The firmware's announcement, checked against the scenario (the handshake).
     announced: Option<Announced>,
+    /// When the attached firmware's node was last looked up.
+    last_peer_check: Option<Instant>,
 }
 
 impl IpcLink {
@@ -121,6 +126,7 @@ impl IpcLink {
             k: 0,
             timings: LinkTimings::default(),
             announced: None,
+            last_peer_check: None,
         };
         let start = Instant::now();
         let limit = s.rig.connect_timeout_s;
@@ -186,6 +192,22 @@ impl IpcLink {
     /// The rig's name.
     pub fn rig(&self) -> &str {
         &self.rig
+    }
+
+    /// [`Self::firmware_gone`], for a period without an answer. A spawned process
+    /// is asked every time (a `waitpid`, microseconds); a firmware started by hand
+    /// through iceoryx2's node listing, which reads the node directory and takes
+    /// milliseconds, at most every 20 ms of wall time, so a stalled firmware never
+    /// costs the plant more than its period per missed period in real time.
+    fn firmware_gone_checked(&mut self) -> Option<String> {
+        if self.spawned.is_none() {
+            let now = Instant::now();
+            if self.last_peer_check.is_some_and(|t| now - t < Duration::from_millis(20)) {
+                return None;
+            }
+            self.last_peer_check = Some(now);
+        }
+        self.firmware_gone()
     }
 
     /// Whether the firmware process is gone, and how.
@@ -262,11 +284,15 @@ impl FirmwareLink for IpcLink {
         self.ports.frames.send(*frame).map_err(transport)?;
         // Real time: the sample instant is the frame's publication (the hardware's
         // timer tick); the plant's own lateness against `t0 + t_k` is period jitter,
-        // not the firmware's deadline, which runs one period from publication.
+        // not the firmware's deadline. The plant stops waiting at the next sample
+        // instant `t0 + t_{k+1}`, so a firmware that does not answer never puts it
+        // behind the wall clock (one period per missed period at most); if the
+        // plant itself published late, the firmware still gets half a period.
         let deadline = deadline.unwrap_or_else(|| {
             let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
             self.timings.jitter_us.push(published.saturating_duration_since(ideal).as_secs_f64() as f32 * 1e6);
-            published + Duration::from_secs_f64(self.ts)
+            let ts = Duration::from_secs_f64(self.ts);
+            (ideal + ts).max(published + ts / 2)
         });
         loop {
             match self.ports.commands.next_before(deadline).map_err(transport)? {
@@ -287,18 +313,24 @@ impl FirmwareLink for IpcLink {
         }
         // Nothing this period: a deadline miss, unless the firmware is gone.
         let k = frame.seq as usize;
-        if let Some(what) = self.firmware_gone() {
+        if let Some(what) = self.firmware_gone_checked() {
             return Err(RunError::FirmwareLost { k, t: truth.t, what: format!("the firmware process {what}") });
         }
         self.consecutive_timeouts += 1;
-        if !self.realtime && self.consecutive_timeouts >= self.max_timeouts {
+        // In both timings: a firmware that does not answer for this many periods in
+        // a row is given up (exit 1, the trace kept), stalled or not.
+        if self.consecutive_timeouts >= self.max_timeouts {
+            let each = if self.realtime {
+                format!("one period of {} s of wall time each", self.ts)
+            } else {
+                format!("{} s of wall time each", self.timeout.as_secs_f64())
+            };
             return Err(RunError::FirmwareLost {
                 k,
                 t: truth.t,
                 what: format!(
-                    "no command for {} periods in a row ({} s of wall time each): the firmware process is stalled",
-                    self.consecutive_timeouts,
-                    self.timeout.as_secs_f64()
+                    "no command for {} periods in a row ({each}; rig.max_consecutive_timeouts): the firmware process is stalled",
+                    self.consecutive_timeouts
                 ),
             });
         }
