@@ -535,7 +535,7 @@ fn a_firmware_stopped_in_real_time_is_counted_alike_by_both_sides() {
         let name = rig(tag);
         let mut fw = sil_host().args(["firmware", "--realtime", "--rig", &name, "--scenario", s]).args(extra).spawn().unwrap();
         let out = dir.path().join(tag);
-        let mut plant = sil_host()
+        let plant = sil_host()
             .args(["run", "--realtime", "--attach", &name, "--scenario", s, "--duration", "3"])
             .args(extra)
             .arg("--out")
