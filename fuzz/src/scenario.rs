@@ -246,7 +246,8 @@ const BOUNDS: &[f64] = &[
     9_223_372_036_854_775_808.0,
     18_446_744_073_709_551_616.0,
     f32::MAX as f64,
-    3.402_823_677_973_366_6e38,
+    // The midpoint between f32::MAX and 2^128: from here up, f32 rounds to infinity.
+    3.402_823_567_797_336_6e38,
     1e39,
     1e300,
     f64::MAX,
