@@ -78,6 +78,9 @@ pub enum OverrideError {
     },
 }
 
+/// Most dot-separated parts a `--set` key may have (scenario keys have at most 3).
+pub const MAX_KEY_PARTS: usize = 16;
+
 /// Whether `word` is a bare word read as a string (`pid`, `x0d`), not a TOML
 /// keyword (`true`, `false`, `nan`, `inf`).
 fn bare_word(word: &str) -> bool {
@@ -98,6 +101,13 @@ impl FromStr for Override {
         let text = text.trim();
         if key.is_empty() || key.split('.').any(|part| part.is_empty() || part.contains(char::is_whitespace)) {
             return Err(malformed("the key must be a dotted scenario key, e.g. plant.m"));
+        }
+        // A key thousands of parts deep would build as many nested tables, whose
+        // recursive drop overflows the stack (found by the `scenario` fuzzing
+        // harness, docs/fuzzing.md): refused here.
+        let parts = key.split('.').count();
+        if parts > MAX_KEY_PARTS {
+            return Err(malformed(&format!("the key has {parts} parts; scenario keys have at most 3 (e.g. controller.model.l)")));
         }
         if text.is_empty() {
             return Err(malformed("no value after `=`"));
@@ -213,6 +223,19 @@ mod tests {
         for bad in ["plant.m", "=1", "plant..m=1", "plant.m=", "plant.m=[1"] {
             assert!(bad.parse::<Override>().is_err(), "{bad}");
         }
+    }
+
+    /// Regression (fuzzing, docs/fuzzing.md): a key 60 000 parts deep overflowed the
+    /// stack when the scenario was read; it is refused as malformed, naming the count.
+    #[test]
+    fn very_deep_keys_are_refused_not_a_stack_overflow() {
+        let deep = format!("plant{}=1", ".x".repeat(60_000));
+        let e = deep.parse::<Override>().unwrap_err().to_string();
+        assert!(e.starts_with("--set plant.x.x") && e.contains("60001 parts"), "{}", &e[e.len() - 80..]);
+        let at_limit = format!("plant{}=1", ".x".repeat(MAX_KEY_PARTS - 1));
+        let o = at_limit.parse::<Override>().unwrap();
+        let err = crate::scenario::Scenario::from_toml_with(crate::scenario::DEFAULT_TOML, &[o]).unwrap_err().to_string();
+        assert!(err.contains("plant.x") || err.contains("`x`"), "{err}");
     }
 
     #[test]

@@ -14,7 +14,7 @@ use plant::{
     impact::{ImpactLaw, IwcRule},
     initial::PaperX0,
 };
-use shared::{Params, Period};
+use shared::{ParamError, Params, Period};
 
 use super::faults::Fault;
 use super::overrides::{self, Override};
@@ -152,6 +152,11 @@ pub struct ModelSection {
 }
 
 impl ModelSection {
+    /// The keys' values in [`ARM_KEYS`] order (`None`: not set).
+    pub fn values(&self) -> [Option<f64>; 7] {
+        [self.m, self.l, self.sigma, self.k, self.h, self.alpha0, self.g]
+    }
+
     /// `plant` with the keys this section sets replaced.
     pub fn over(&self, plant: Params<f64>) -> Params<f64> {
         Params {
@@ -463,11 +468,12 @@ pub fn validate_arm(prefix: &str, p: &Params<f64>) -> Result<(), ScenarioError> 
     p.validate().map_err(|e| ScenarioError::Parse(format!("scenario key `{prefix}`: {e}")))
 }
 
-/// Checks gains: each finite and >= 0, named `key`.
+/// Checks gains: each finite and >= 0, and finite in the firmware's f32 (at most
+/// 3.4e38), named `key`.
 fn validate_gains(key: &str, v: &[f64]) -> Result<(), ScenarioError> {
-    let ok = v.iter().all(|g| g.is_finite() && *g >= 0.0);
+    let ok = v.iter().all(|g| g.is_finite() && *g >= 0.0 && (*g as f32).is_finite());
     let shown = if v.len() == 1 { v[0].to_string() } else { format!("[{}]", v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ")) };
-    check(ok, key, shown, if v.len() == 1 { "a finite gain >= 0" } else { "finite gains >= 0" })
+    check(ok, key, shown, if v.len() == 1 { "a finite gain >= 0, at most 3.4e38" } else { "finite gains >= 0, at most 3.4e38" })
 }
 
 impl Scenario {
@@ -502,7 +508,7 @@ impl Scenario {
     /// As [`Self::from_toml`]; an error caused by an override names it
     /// ([`ScenarioError::Override`], or the key and value of the bad key).
     pub fn from_toml_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
-        let mut doc: toml::Table = toml::from_str(text).map_err(|e: toml::de::Error| ScenarioError::Parse(e.to_string()))?;
+        let mut doc: toml::Table = toml::from_str(text).map_err(|e| toml_error(&e))?;
         // The file's old key first (an override of `controller.hybrid.ki` then
         // wins over it), then an override's.
         let mut migrated = migrate_legacy(&mut doc)?;
@@ -510,7 +516,7 @@ impl Scenario {
         migrated |= migrate_legacy(&mut doc)?;
         let s: Scenario = if overrides.is_empty() && !migrated {
             // The text itself: the TOML errors give the line.
-            let de = toml::de::Deserializer::parse(text).map_err(|e| ScenarioError::Parse(e.to_string()))?;
+            let de = toml::de::Deserializer::parse(text).map_err(|e| toml_error(&e))?;
             read(de, &[])?
         } else {
             read(toml::Value::Table(doc), overrides)?
@@ -603,6 +609,37 @@ impl Scenario {
                 &format!("a position within the modelled arm's reach (|z_t*| < 2 controller.model.l = {} m)", 2.0 * m.l),
             )?;
         }
+        // The firmware reads its model, the reference and the gains in f32
+        // (crate::setup::firmware_config): they must hold there too, or a run would
+        // stop at the firmware's configuration (found by the `scenario` fuzzing
+        // harness, docs/fuzzing.md): beyond 3.4e38 is infinite in f32, a positive
+        // value below 1.4e-45 is 0, and `h` or `z_t*` just under `2 l` round onto it.
+        let model_section = c.model.unwrap_or_default();
+        let model = model_section.over(p.params());
+        let fw: Params<f32> = Params { mu: c.mu_hat, ..model }.cast();
+        if let Err(e) = fw.validate() {
+            let name = match e {
+                ParamError::NonFinite { name, .. } | ParamError::NotPositive { name, .. } | ParamError::Negative { name, .. } => name,
+                ParamError::TooLarge { name, .. } => name.trim_matches('|'),
+                ParamError::BeltOutOfReach { .. } => "h",
+            };
+            let at = ARM_KEYS.iter().position(|k| *k == name);
+            let from_model = at.is_some_and(|i| model_section.values()[i].is_some());
+            let key = match (name, from_model) {
+                ("mu", _) => "controller.mu_hat".to_string(),
+                (_, true) => format!("controller.model.{name}"),
+                (_, false) => format!("plant.{name}"),
+            };
+            let all = [model.m, model.l, model.sigma, model.k, model.h, model.alpha0, model.g];
+            check(false, &key, at.map_or(c.mu_hat, |i| all[i]), &format!("a value the firmware's f32 model holds ({e})"))?;
+        }
+        check(
+            (c.target_z_t as f32).abs() < 2.0 * fw.l,
+            "controller.target_z_t",
+            c.target_z_t,
+            "a position within the reach in the firmware's f32 (|z_t*| < 2 l)",
+        )?;
+        check((c.move_time_s as f32) > 0.0, "controller.move_time_s", c.move_time_s, "a value the firmware's f32 holds (>= 1.4e-45 s)")?;
         let t = &self.timing;
         let (lo, hi) = TimingSection::RATE_RANGE_HZ;
         check(finite(t.rate_hz) && (lo..=hi).contains(&t.rate_hz), "timing.rate_hz", t.rate_hz, "250 to 10000 Hz (docs/hardware.md)")?;
@@ -659,6 +696,23 @@ impl Scenario {
         }
         Ok(())
     }
+}
+
+/// A TOML syntax error as a scenario error. The reader's errors give the line and
+/// column, except its nesting limit's (keys, tables or arrays 80 levels deep), which
+/// says only "recursion limit": that one is said here (found by the `scenario`
+/// fuzzing harness, docs/fuzzing.md).
+fn toml_error(e: &toml::de::Error) -> ScenarioError {
+    let msg = e.to_string();
+    if e.span().is_some() {
+        return ScenarioError::Parse(msg);
+    }
+    let why = if msg.trim() == "recursion limit" {
+        "keys, tables or arrays nested 80 levels deep or more (scenario keys are at most 3 deep)".to_string()
+    } else {
+        msg.trim().to_string()
+    };
+    ScenarioError::Parse(format!("the scenario is not valid TOML: {why}"))
 }
 
 /// Reads the old key `controller.hybrid_ki` as `controller.hybrid.ki` (scenario
@@ -773,6 +827,42 @@ mod tests {
         assert!(e.contains("`plant.m` is not a table"), "{e}");
         let e = err(&["controller.model.l=0.1"]);
         assert!(e.contains("controller.model.h"), "{e}");
+    }
+
+    /// Regression (the `scenario` fuzzing harness, docs/fuzzing.md): values the
+    /// firmware's f32 cannot hold were accepted, then refused by the firmware at the
+    /// start of a run (or of every zmax and sweep trial); they are refused here,
+    /// naming the key. Accepted values give a configuration the firmware accepts.
+    #[test]
+    fn values_beyond_the_firmwares_f32_are_refused_naming_the_key() {
+        let h_onto_2l = format!("plant.h={:?}", (2.0f64 * 0.21).next_down());
+        let z_onto_2l = format!("controller.target_z_t={:?}", (2.0f64 * 0.21).next_down());
+        for (arg, key) in [
+            ("controller.hybrid.kp=1e39", "controller.hybrid.kp"),
+            ("controller.pid.ki=[1e39, 0]", "controller.pid.ki"),
+            ("plant.m=1e-50", "plant.m"),
+            ("plant.alpha0=-1e39", "plant.alpha0"),
+            ("controller.model.g=1e-46", "controller.model.g"),
+            ("controller.move_time_s=1e-300", "controller.move_time_s"),
+            (h_onto_2l.as_str(), "plant.h"),
+            (z_onto_2l.as_str(), "controller.target_z_t"),
+        ] {
+            let e = Scenario::from_toml_with(DEFAULT_TOML, &[set(arg)]).unwrap_err().to_string();
+            assert!(e.contains(&format!("`{key}`")), "{arg}: {e}");
+        }
+        for arg in ["controller.hybrid.kp=3.4e38", "plant.m=1e-44", "controller.move_time_s=1e-44", "controller.model.l=0.19"] {
+            let s = Scenario::from_toml_with(DEFAULT_TOML, &[set(arg)]).unwrap_or_else(|e| panic!("{arg}: {e}"));
+            firmware::Firmware::new(crate::setup::firmware_config(&s)).unwrap_or_else(|e| panic!("{arg}: {e}"));
+        }
+    }
+
+    /// Regression (the `scenario` fuzzing harness): the TOML reader's nesting limit
+    /// said only "recursion limit", neither where nor what; the error says what.
+    #[test]
+    fn nesting_beyond_the_toml_readers_limit_is_said() {
+        let deep = format!("{}\n[zz{}]\na = 1\n", DEFAULT_TOML, ".x".repeat(90));
+        let e = Scenario::from_toml(&deep).unwrap_err().to_string();
+        assert!(e.starts_with("the scenario is not valid TOML: keys, tables or arrays nested 80 levels"), "{e}");
     }
 
     #[test]
