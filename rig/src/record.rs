@@ -128,49 +128,11 @@ pub struct LiftOffStats {
 /// detected if the firmware declares lift-off during it or within 5 periods after
 /// it ends (a short hop may end before the confirmation); a detection episode that
 /// overlaps no true flight (nor starts within 5 periods after one) is a false alarm.
+/// The same numbers as [`crate::stats::LiftOffTracker`] fed the records one by one.
 pub fn lift_off_stats(records: &[PeriodRecord]) -> LiftOffStats {
-    const GRACE: usize = 5;
-    let mut st = LiftOffStats::default();
-    let n = records.len();
-    let mut k = 0;
-    while k < n {
-        if records[k].lift_off_true && (k == 0 || !records[k - 1].lift_off_true) {
-            st.lift_offs += 1;
-            let start = k;
-            let mut end = k;
-            while end + 1 < n && records[end + 1].lift_off_true {
-                end += 1;
-            }
-            match (start..n.min(end + 1 + GRACE)).find(|&j| records[j].lift_off_detected) {
-                Some(j) => {
-                    st.lift_offs_detected += 1;
-                    st.max_detection_latency_periods = st.max_detection_latency_periods.max((j - start) as u32);
-                }
-                None => st.missed_lift_offs += 1,
-            }
-            k = end + 1;
-        } else {
-            k += 1;
-        }
-    }
-    let mut k = 0;
-    while k < n {
-        if records[k].lift_off_detected && (k == 0 || !records[k - 1].lift_off_detected) {
-            let start = k;
-            let mut end = k;
-            while end + 1 < n && records[end + 1].lift_off_detected {
-                end += 1;
-            }
-            let lo = start.saturating_sub(GRACE);
-            if !(lo..=end).any(|j| records[j].lift_off_true) {
-                st.false_alarms += 1;
-            }
-            k = end + 1;
-        } else {
-            k += 1;
-        }
-    }
-    st
+    let mut t = crate::stats::LiftOffTracker::default();
+    records.iter().for_each(|r| t.push(r.lift_off_true, r.lift_off_detected));
+    t.stats()
 }
 
 #[cfg(test)]

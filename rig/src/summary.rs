@@ -8,8 +8,9 @@ use plant::Validity;
 
 use super::{
     realtime::RealtimeSetup,
-    record::{LiftOffStats, PeriodRecord, RunError, lift_off_stats},
+    record::{LiftOffStats, PeriodRecord, RunError},
     scenario::Scenario,
+    stats::RunStats,
 };
 
 /// `summary.json` of a run.
@@ -81,6 +82,7 @@ impl RunSummary {
     /// The figures every run has, from its `records` (the trace as recorded, up to
     /// the failure if there was one) and its wall-clock time `wall_s` (s); the
     /// transport's own figures (round trip, jitter, step time, PIL counts) empty.
+    /// [`RunSummary::from_stats`] of [`RunStats::of`] the records.
     pub fn from_records(
         scenario: &Scenario,
         records: &[PeriodRecord],
@@ -90,7 +92,24 @@ impl RunSummary {
         wall_s: f64,
         validity: Validity,
     ) -> Self {
-        let simulated = records.len() as f64 * scenario.timing.period().as_secs_f64();
+        Self::from_stats(scenario, &RunStats::of(records), failure, transport, timing, wall_s, validity)
+    }
+
+    /// The figures every run has, from its streamed statistics `stats` (every
+    /// period recorded, up to the failure if there was one) and its wall-clock
+    /// time `wall_s` (s); the transport's own figures (round trip, jitter, step
+    /// time, PIL counts) empty.
+    pub fn from_stats(
+        scenario: &Scenario,
+        stats: &RunStats,
+        failure: Option<&RunError>,
+        transport: &'static str,
+        timing: &'static str,
+        wall_s: f64,
+        validity: Validity,
+    ) -> Self {
+        let periods = stats.periods();
+        let simulated = periods as f64 * scenario.timing.period().as_secs_f64();
         Self {
             status: if failure.is_some() { "failed" } else { "ok" },
             error: failure.map(|e| e.to_string()),
@@ -99,16 +118,16 @@ impl RunSummary {
             transport,
             timing,
             rig: None,
-            periods: records.len(),
-            lift_off: lift_off_stats(records),
+            periods,
+            lift_off: stats.lift_off(),
             validity,
-            deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
-            firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
-            rms_tracking_error_m: rms_tracking_error(records),
-            final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
+            deadline_misses: stats.deadline_misses(),
+            firmware_overruns: stats.max_overruns(),
+            rms_tracking_error_m: stats.rms_tracking_error(),
+            final_z_t_m: stats.final_z_t(),
             wall_s,
             realtime_factor: simulated / wall_s.max(1e-9),
-            periods_per_s: records.len() as f64 / wall_s.max(1e-9),
+            periods_per_s: periods as f64 / wall_s.max(1e-9),
             ipc_rtt_us: None,
             firmware_step_us: None,
             period_jitter_us: None,
@@ -122,12 +141,9 @@ impl RunSummary {
     }
 }
 
-/// RMS of `z_t - z_t*` over `records`, m (0 when empty).
+/// RMS of `z_t - z_t*` over `records`, m (0 when empty; [`RunStats::rms_tracking_error`]).
 pub fn rms_tracking_error(records: &[PeriodRecord]) -> f64 {
-    if records.is_empty() {
-        return 0.0;
-    }
-    (records.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / records.len() as f64).sqrt()
+    RunStats::of(records).rms_tracking_error()
 }
 
 /// The PIL part of `summary.json`.
@@ -181,7 +197,9 @@ pub struct PilFigures {
     pub defmt_warnings: Option<usize>,
 }
 
-/// Percentiles of a sample (p50, p99, p999, max), in the sample's unit; zeros when empty.
+/// Percentiles of a sample (p50, p99, p999, max; rank `round(q (n - 1))` of the
+/// sorted sample), in the sample's unit; zeros when empty. Runs of any length use
+/// [`crate::stats::TimingHistogram`] instead (fixed memory).
 pub fn percentiles(samples: &[f32]) -> Percentiles {
     if samples.is_empty() {
         return Percentiles::default();

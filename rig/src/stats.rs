@@ -1,0 +1,423 @@
+//! Streaming statistics of a run: what `summary.json` reports, accumulated
+//! period by period in fixed memory (a run of any length is summarised without
+//! keeping its records). Counts, sums, the RMS tracking error and the lift-off
+//! statistics are exact (the same numbers as over the whole list of records);
+//! wall-clock timings go to an HDR histogram (3 significant digits), the
+//! image's integer step counts to an exact distribution of distinct values.
+
+use std::collections::BTreeMap;
+
+use super::{
+    record::{LiftOffStats, PeriodRecord},
+    summary::{Percentiles, Spread},
+};
+
+/// Periods after a true flight ends during which a detection still counts for
+/// it, and before a detection starts during which a flight excuses it
+/// (docs/hardware.md "Lift-off detection").
+pub const DETECTION_GRACE_PERIODS: usize = 5;
+
+/// The lift-off detection statistics ([`LiftOffStats`]) of a run fed one period
+/// at a time: a true flight episode is detected if the firmware declares
+/// lift-off during it or within [`DETECTION_GRACE_PERIODS`] periods after it
+/// ends; a detection episode that overlaps no true flight (nor starts within
+/// that many periods after one) is a false alarm. Memory: a handful of open
+/// episodes (those whose window is still open), whatever the run's length.
+#[derive(Debug, Clone, Default)]
+pub struct LiftOffTracker {
+    /// Periods seen.
+    k: usize,
+    prev_true: bool,
+    prev_detected: bool,
+    /// Flight episodes not matched yet: their first period and, once the flight
+    /// has ended, the first period past their window.
+    pending: Vec<(usize, Option<usize>)>,
+    /// The last period in true flight.
+    last_true: Option<usize>,
+    /// The first period of the detection episode under way.
+    alarm_start: Option<usize>,
+    stats: LiftOffStats,
+}
+
+impl LiftOffTracker {
+    /// Feeds the next period: whether the tip was truly in flight and whether
+    /// the firmware declared lift-off.
+    pub fn push(&mut self, lift_off_true: bool, lift_off_detected: bool) {
+        const GRACE: usize = DETECTION_GRACE_PERIODS;
+        let k = self.k;
+        if !lift_off_true && self.prev_true {
+            // The flight ended at k - 1: its window closes GRACE periods later.
+            for p in self.pending.iter_mut().filter(|p| p.1.is_none()) {
+                p.1 = Some(k + GRACE);
+            }
+        }
+        let before = self.pending.len();
+        self.pending.retain(|p| p.1.is_none_or(|end| end > k));
+        self.stats.missed_lift_offs += (before - self.pending.len()) as u32;
+        if lift_off_true && !self.prev_true {
+            self.stats.lift_offs += 1;
+            self.pending.push((k, None));
+        }
+        if lift_off_detected {
+            for (start, _) in self.pending.drain(..) {
+                self.stats.lift_offs_detected += 1;
+                self.stats.max_detection_latency_periods = self.stats.max_detection_latency_periods.max((k - start) as u32);
+            }
+        }
+        if lift_off_true {
+            self.last_true = Some(k);
+        }
+        match (lift_off_detected, self.prev_detected) {
+            (true, false) => self.alarm_start = Some(k),
+            (false, true) => self.close_alarm(),
+            _ => {}
+        }
+        self.prev_true = lift_off_true;
+        self.prev_detected = lift_off_detected;
+        self.k += 1;
+    }
+
+    /// Ends the detection episode under way: a false alarm unless a true flight
+    /// was seen from [`DETECTION_GRACE_PERIODS`] before its start to its end.
+    fn close_alarm(&mut self) {
+        if let Some(start) = self.alarm_start.take()
+            && !self.last_true.is_some_and(|t| t + DETECTION_GRACE_PERIODS >= start)
+        {
+            self.stats.false_alarms += 1;
+        }
+    }
+
+    /// The statistics of the periods fed so far, as if the run ended here
+    /// (flights still unmatched are missed, a detection under way is judged).
+    pub fn stats(&self) -> LiftOffStats {
+        let mut end = self.clone();
+        end.stats.missed_lift_offs += end.pending.len() as u32;
+        end.close_alarm();
+        end.stats
+    }
+}
+
+/// The figures of `summary.json` every closed-loop run has, accumulated one
+/// [`PeriodRecord`] at a time in fixed memory; each is exactly what the whole
+/// list of records gives.
+#[derive(Debug, Clone)]
+pub struct RunStats {
+    periods: usize,
+    deadline_misses: usize,
+    max_overruns: u32,
+    /// Sum of `(z_t - z_t*)^2`, m^2, in record order (as `Iterator::sum`).
+    sum_sq_tracking: f64,
+    /// The last record's `t` (s) and `z_t` (m).
+    last: Option<(f64, f64)>,
+    lift_off: LiftOffTracker,
+}
+
+impl Default for RunStats {
+    fn default() -> Self {
+        // -0.0: the neutral element `Iterator::sum` starts from, so the sums agree to the bit.
+        Self { periods: 0, deadline_misses: 0, max_overruns: 0, sum_sq_tracking: -0.0, last: None, lift_off: LiftOffTracker::default() }
+    }
+}
+
+impl RunStats {
+    /// The statistics of `records` (a whole run).
+    pub fn of(records: &[PeriodRecord]) -> Self {
+        let mut s = Self::default();
+        records.iter().for_each(|r| s.push(r));
+        s
+    }
+
+    /// Adds the next period's record.
+    pub fn push(&mut self, r: &PeriodRecord) {
+        self.periods += 1;
+        self.deadline_misses += usize::from(r.deadline_miss);
+        self.max_overruns = self.max_overruns.max(r.overruns);
+        self.sum_sq_tracking += (r.z_t - r.z_t_ref).powi(2);
+        self.last = Some((r.t, r.z_t));
+        self.lift_off.push(r.lift_off_true, r.lift_off_detected);
+    }
+
+    /// Periods recorded.
+    pub fn periods(&self) -> usize {
+        self.periods
+    }
+
+    /// Deadline misses seen by the plant.
+    pub fn deadline_misses(&self) -> usize {
+        self.deadline_misses
+    }
+
+    /// The firmware's overrun counter at its highest, i.e. at the end.
+    pub fn max_overruns(&self) -> u32 {
+        self.max_overruns
+    }
+
+    /// RMS of `z_t - z_t*`, m (0 when empty).
+    pub fn rms_tracking_error(&self) -> f64 {
+        if self.periods == 0 {
+            return 0.0;
+        }
+        (self.sum_sq_tracking / self.periods as f64).sqrt()
+    }
+
+    /// The last record's sample time, s (`None` when empty).
+    pub fn last_t(&self) -> Option<f64> {
+        self.last.map(|l| l.0)
+    }
+
+    /// The last record's `z_t`, m (NaN when empty).
+    pub fn final_z_t(&self) -> f64 {
+        self.last.map_or(f64::NAN, |l| l.1)
+    }
+
+    /// The lift-off detection statistics.
+    pub fn lift_off(&self) -> LiftOffStats {
+        self.lift_off.stats()
+    }
+}
+
+/// A wall-clock timing (round trip, jitter, step time) in fixed memory: an HDR
+/// histogram of nanoseconds at 3 significant digits (`hdrhistogram`; about
+/// 8 KB per factor of two of range, some 100 KB for 1 ns to an hour), plus
+/// the exact maximum.
+///
+/// Resolution: a percentile is hdrhistogram's (the nearest rank `ceil(q n)`),
+/// reported as the highest value equivalent to it, so at most 0.1 % (and below
+/// 2.048 us at most 1 ns) above the sample's value; the maximum is exact.
+#[derive(Debug, Clone)]
+pub struct TimingHistogram {
+    hist: hdrhistogram::Histogram<u64>,
+    max_ns: u64,
+}
+
+impl Default for TimingHistogram {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl TimingHistogram {
+    /// An empty histogram (auto-resizing from 1 ns up to whatever is recorded).
+    pub fn new() -> Self {
+        // 3 significant digits are always valid: `new` cannot fail here.
+        let hist = hdrhistogram::Histogram::new(3).unwrap_or_else(|_| unreachable!("3 significant digits are valid"));
+        Self { hist, max_ns: 0 }
+    }
+
+    /// Records one sample, ns.
+    pub fn record_ns(&mut self, ns: u64) {
+        self.hist.saturating_record(ns);
+        self.max_ns = self.max_ns.max(ns);
+    }
+
+    /// Records one sample of `d`.
+    pub fn record(&mut self, d: std::time::Duration) {
+        self.record_ns(u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+    }
+
+    /// Samples recorded.
+    pub fn len(&self) -> u64 {
+        self.hist.len()
+    }
+
+    /// Whether nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.hist.is_empty()
+    }
+
+    /// Adds every sample of `other`.
+    pub fn merge(&mut self, other: &Self) {
+        // Both auto-resize: adding cannot run out of range.
+        let _ = self.hist.add(&other.hist);
+        self.max_ns = self.max_ns.max(other.max_ns);
+    }
+
+    /// p50, p99, p999 and max, microseconds; zeros when empty.
+    pub fn percentiles(&self) -> Percentiles {
+        if self.hist.is_empty() {
+            return Percentiles::default();
+        }
+        let us = |q: f64| self.hist.value_at_quantile(q) as f64 * 1e-3;
+        Percentiles { p50: us(0.5), p99: us(0.99), p999: us(0.999), max: self.max_ns as f64 * 1e-3 }
+    }
+}
+
+/// An exact distribution of integer counts (the image's instruction or cycle
+/// counts per step): how many times each distinct value occurred. Memory is one
+/// map entry per distinct value, bounded by the spread of the counts (a step's
+/// path lengths), not by the number of samples.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct CountDistribution {
+    counts: BTreeMap<u32, u64>,
+    n: u64,
+}
+
+impl CountDistribution {
+    /// Records one sample.
+    pub fn record(&mut self, value: u32) {
+        *self.counts.entry(value).or_insert(0) += 1;
+        self.n += 1;
+    }
+
+    /// Samples recorded.
+    pub fn len(&self) -> u64 {
+        self.n
+    }
+
+    /// Whether nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Distinct values recorded (the map's size).
+    pub fn distinct(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// The smallest sample (`None` when empty).
+    pub fn min(&self) -> Option<u32> {
+        self.counts.keys().next().copied()
+    }
+
+    /// The largest sample (`None` when empty).
+    pub fn max(&self) -> Option<u32> {
+        self.counts.keys().next_back().copied()
+    }
+
+    /// The sample of rank `r` (0-based) in ascending order.
+    fn at_rank(&self, r: u64) -> u32 {
+        let mut seen = 0;
+        for (&v, &c) in &self.counts {
+            seen += c;
+            if seen > r {
+                return v;
+            }
+        }
+        self.max().unwrap_or(0)
+    }
+
+    /// Median, 99th percentile and worst, scaled by `scale`: exactly
+    /// [`Spread::of`] over the samples (rank `round(q (n - 1))`); zeros when empty.
+    pub fn spread(&self, scale: f64) -> Spread {
+        if self.n == 0 {
+            return Spread::default();
+        }
+        let at = |q: f64| {
+            let r = ((q * (self.n - 1) as f64).round() as u64).min(self.n - 1);
+            self.at_rank(r) as f64 * scale
+        };
+        Spread { median: at(0.5), p99: at(0.99), worst: self.max().unwrap_or(0) as f64 * scale }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::percentiles;
+    use proptest::prelude::*;
+
+    /// The lift-off statistics over a whole list (the definition, kept as the
+    /// reference the streaming tracker must reproduce).
+    fn reference(truth: &[bool], det: &[bool]) -> LiftOffStats {
+        const GRACE: usize = DETECTION_GRACE_PERIODS;
+        let mut st = LiftOffStats::default();
+        let n = truth.len();
+        let mut k = 0;
+        while k < n {
+            if truth[k] && (k == 0 || !truth[k - 1]) {
+                st.lift_offs += 1;
+                let start = k;
+                let mut end = k;
+                while end + 1 < n && truth[end + 1] {
+                    end += 1;
+                }
+                match (start..n.min(end + 1 + GRACE)).find(|&j| det[j]) {
+                    Some(j) => {
+                        st.lift_offs_detected += 1;
+                        st.max_detection_latency_periods = st.max_detection_latency_periods.max((j - start) as u32);
+                    }
+                    None => st.missed_lift_offs += 1,
+                }
+                k = end + 1;
+            } else {
+                k += 1;
+            }
+        }
+        let mut k = 0;
+        while k < n {
+            if det[k] && (k == 0 || !det[k - 1]) {
+                let start = k;
+                let mut end = k;
+                while end + 1 < n && det[end + 1] {
+                    end += 1;
+                }
+                if !(start.saturating_sub(GRACE)..=end).any(|j| truth[j]) {
+                    st.false_alarms += 1;
+                }
+                k = end + 1;
+            } else {
+                k += 1;
+            }
+        }
+        st
+    }
+
+    /// Runs of random lengths (hops and detections of a few periods, like a run's).
+    fn runs() -> impl Strategy<Value = Vec<bool>> {
+        proptest::collection::vec((any::<bool>(), 1usize..12), 0..40)
+            .prop_map(|runs| runs.into_iter().flat_map(|(b, len)| std::iter::repeat_n(b, len)).collect())
+    }
+
+    proptest! {
+        #[test]
+        fn streaming_lift_off_stats_equal_the_reference(truth in runs(), det in runs()) {
+            let n = truth.len().min(det.len());
+            let (truth, det) = (&truth[..n], &det[..n]);
+            let mut t = LiftOffTracker::default();
+            for k in 0..n {
+                t.push(truth[k], det[k]);
+                // Also as if the run stopped at every period.
+                prop_assert_eq!(t.stats(), reference(&truth[..=k], &det[..=k]));
+            }
+            prop_assert!(t.pending.len() <= 4, "pending {:?}", t.pending);
+        }
+
+        #[test]
+        fn count_spread_equals_sorting(v in proptest::collection::vec(0u32..50, 1..500), scale in 0.1f64..10.0) {
+            let mut d = CountDistribution::default();
+            v.iter().for_each(|&x| d.record(x));
+            prop_assert_eq!(d.spread(scale), Spread::of(&v, scale));
+            prop_assert!(d.distinct() <= 50);
+        }
+
+        #[test]
+        fn timing_percentiles_within_a_thousandth(v in proptest::collection::vec(1u64..50_000_000, 1..2000)) {
+            let mut h = TimingHistogram::new();
+            v.iter().for_each(|&ns| h.record_ns(ns));
+            let got = h.percentiles();
+            let mut sorted = v.clone();
+            sorted.sort_unstable();
+            let n = sorted.len();
+            // hdrhistogram's rank: the smallest sample with at least ceil(q n) samples at or below it.
+            let exact = |q: f64| sorted[((q * n as f64).ceil() as usize).clamp(1, n) - 1] as f64 * 1e-3;
+            for (q, p) in [(0.5, got.p50), (0.99, got.p99), (0.999, got.p999)] {
+                let e = exact(q);
+                prop_assert!(p >= e && p <= e * 1.001 + 1e-3, "q {}: {} vs exact {}", q, p, e);
+            }
+            prop_assert_eq!(got.max, sorted[n - 1] as f64 * 1e-3);
+        }
+    }
+
+    #[test]
+    fn timing_percentiles_agree_with_the_sorted_ones_on_a_typical_spread() {
+        // Round trips of ~10 us with a tail: the histogram's figures within 0.1 % of sorting's.
+        let ns: Vec<u64> = (0..100_000u64).map(|k| 8_000 + (k * 7919) % 4_000 + if k % 500 == 0 { 50_000 } else { 0 }).collect();
+        let mut h = TimingHistogram::new();
+        ns.iter().for_each(|&x| h.record_ns(x));
+        let us: Vec<f32> = ns.iter().map(|&x| x as f32 * 1e-3).collect();
+        let (a, b) = (h.percentiles(), percentiles(&us));
+        for (x, y) in [(a.p50, b.p50), (a.p99, b.p99), (a.p999, b.p999), (a.max, b.max)] {
+            assert!((x - y).abs() <= 1e-3 * y + 2e-3, "{a:?} vs {b:?}");
+        }
+    }
+}
