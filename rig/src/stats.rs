@@ -64,13 +64,15 @@ impl LiftOffTracker {
                 self.stats.max_detection_latency_periods = self.stats.max_detection_latency_periods.max((k - start) as u32);
             }
         }
+        if !lift_off_detected && self.prev_detected {
+            // The detection ended at k - 1: judged on the flights up to then.
+            self.close_alarm();
+        }
         if lift_off_true {
             self.last_true = Some(k);
         }
-        match (lift_off_detected, self.prev_detected) {
-            (true, false) => self.alarm_start = Some(k),
-            (false, true) => self.close_alarm(),
-            _ => {}
+        if lift_off_detected && !self.prev_detected {
+            self.alarm_start = Some(k);
         }
         self.prev_true = lift_off_true;
         self.prev_detected = lift_off_detected;
@@ -206,7 +208,11 @@ impl TimingHistogram {
 
     /// Records one sample, ns.
     pub fn record_ns(&mut self, ns: u64) {
-        self.hist.saturating_record(ns);
+        // `record` grows the histogram to the value (`saturating_record` would clamp
+        // it to the current range); it fails only past its largest trackable value.
+        if self.hist.record(ns).is_err() {
+            self.hist.saturating_record(ns);
+        }
         self.max_ns = self.max_ns.max(ns);
     }
 
