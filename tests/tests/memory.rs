@@ -92,3 +92,9 @@ fn run_in_process_memory_is_flat_in_the_run_length() {
 fn simulate_memory_is_flat_in_the_run_length() {
     check_flat("simulate", &["simulate", "--x0", "d"], 1000);
 }
+
+#[test]
+fn run_over_iceoryx2_memory_is_flat_in_the_run_length() {
+    // Both processes: wait4 reports the larger of the plant's and the firmware's peaks.
+    check_flat("run-iceoryx2", &["run"], 1000);
+}
