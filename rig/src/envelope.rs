@@ -146,7 +146,13 @@ mod tests {
     fn a_spike_survives_a_million_samples() {
         let mut e = Envelope::with_capacity(64);
         for k in 0..1_000_000u32 {
-            let y = if k == 765_432 { 5.0 } else if k == 123_457 { -3.0 } else { 0.0 };
+            let y = if k == 765_432 {
+                5.0
+            } else if k == 123_457 {
+                -3.0
+            } else {
+                0.0
+            };
             e.push(k as f64 * 1e-3, y);
         }
         assert_eq!(e.len(), 1_000_000);

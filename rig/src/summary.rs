@@ -13,6 +13,9 @@ use super::{
     stats::RunStats,
 };
 
+// Their home is `stats` (the accumulators that make them); here for `summary.json`'s readers.
+pub use super::stats::{Percentiles, Spread, percentiles};
+
 /// `summary.json` of a run.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
@@ -197,32 +200,6 @@ pub struct PilFigures {
     pub defmt_warnings: Option<usize>,
 }
 
-/// Percentiles of a sample (p50, p99, p999, max; rank `round(q (n - 1))` of the
-/// sorted sample), in the sample's unit; zeros when empty. Runs of any length use
-/// [`crate::stats::TimingHistogram`] instead (fixed memory).
-pub fn percentiles(samples: &[f32]) -> Percentiles {
-    if samples.is_empty() {
-        return Percentiles::default();
-    }
-    let mut v = samples.to_vec();
-    v.sort_by(f32::total_cmp);
-    let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64;
-    Percentiles { p50: at(0.5), p99: at(0.99), p999: at(0.999), max: v[v.len() - 1] as f64 }
-}
-
-/// Percentiles of a timing, microseconds.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct Percentiles {
-    /// Median.
-    pub p50: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// 99.9th percentile.
-    pub p999: f64,
-    /// Largest.
-    pub max: f64,
-}
-
 /// What the step counts of a run are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -248,29 +225,5 @@ impl CountUnit {
             Self::Instructions => "instructions",
             Self::Cycles => "cycles",
         }
-    }
-}
-
-/// Median, 99th percentile and worst of a sample.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct Spread {
-    /// Median.
-    pub median: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// Largest.
-    pub worst: f64,
-}
-
-impl Spread {
-    /// The spread of `samples` scaled by `scale`; zeros when empty.
-    pub fn of(samples: &[u32], scale: f64) -> Self {
-        if samples.is_empty() {
-            return Self::default();
-        }
-        let mut v = samples.to_vec();
-        v.sort_unstable();
-        let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64 * scale;
-        Self { median: at(0.5), p99: at(0.99), worst: v[v.len() - 1] as f64 * scale }
     }
 }

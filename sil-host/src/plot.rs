@@ -128,11 +128,7 @@ fn panels_of_columns(columns: [Vec<(f64, f64)>; 6], step_torques: bool) -> [Pane
             ],
             y_range: None,
         },
-        Panel {
-            y_label: "f_n (N)",
-            series: vec![Series { label: "f_n", points: f_n, color: colors::GREEN, step: false }],
-            y_range: None,
-        },
+        Panel { y_label: "f_n (N)", series: vec![Series { label: "f_n", points: f_n, color: colors::GREEN, step: false }], y_range: None },
         Panel {
             y_label: "torque (N m)",
             series: vec![

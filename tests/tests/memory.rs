@@ -33,6 +33,7 @@ fn peak_rss(args: &[&str], out: &Path) -> (u64, f64) {
     let err_path = out.with_extension("stderr");
     let err = std::fs::File::create(&err_path).unwrap();
     let started = Instant::now();
+    #[allow(clippy::zombie_processes, reason = "reaped by wait4 below, which also gives its peak RSS")]
     let child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
         .args(args)
         .arg("--out")

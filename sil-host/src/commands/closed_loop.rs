@@ -249,7 +249,13 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
 
 /// Draws the closed-loop figure of a run (`trace.svg`) from its decimated
 /// `history`, on a time axis ending at `t_end` (s; the last record's, or 1 s).
-pub(crate) fn draw(path: &std::path::Path, what: &str, s: &Scenario, history: &plot::HistoryEnvelope, t_end: Option<f64>) -> Result<(), CliError> {
+pub(crate) fn draw(
+    path: &std::path::Path,
+    what: &str,
+    s: &Scenario,
+    history: &plot::HistoryEnvelope,
+    t_end: Option<f64>,
+) -> Result<(), CliError> {
     let t_end = t_end.unwrap_or(1.0).max(1e-9);
     let panels = history.panels(true);
     let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
