@@ -82,7 +82,20 @@ impl Envelope {
     }
 
     /// Appends sample `(t, y)` (`t` not before the previous sample's).
+    #[inline]
     pub fn push(&mut self, t: f64, y: f64) {
+        // Every sample kept so far and room for this one: the common case of a
+        // run up to the capacity, a few instructions per sample.
+        if self.per == 1 && self.buckets.len() < self.capacity {
+            self.buckets.push(Bucket::one((t, y)));
+            return;
+        }
+        self.push_into_buckets(t, y);
+    }
+
+    /// [`Envelope::push`] once buckets hold more than one sample (or are about to).
+    #[cold]
+    fn push_into_buckets(&mut self, t: f64, y: f64) {
         let p = Bucket::one((t, y));
         let b = match self.open.take() {
             Some(open) => open.merge(p),

@@ -163,9 +163,11 @@ impl LiftOffTracker {
                 p.1 = Some(k + GRACE);
             }
         }
-        let before = self.pending.len();
-        self.pending.retain(|p| p.1.is_none_or(|end| end > k));
-        self.stats.missed_lift_offs += (before - self.pending.len()) as u32;
+        if !self.pending.is_empty() {
+            let before = self.pending.len();
+            self.pending.retain(|p| p.1.is_none_or(|end| end > k));
+            self.stats.missed_lift_offs += (before - self.pending.len()) as u32;
+        }
         if lift_off_true && !self.prev_true {
             self.stats.lift_offs += 1;
             self.pending.push((k, None));

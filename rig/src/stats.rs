@@ -42,6 +42,7 @@ impl RunStats {
     }
 
     /// Adds the next period's record.
+    #[inline]
     pub fn push(&mut self, r: &PeriodRecord) {
         self.periods += 1;
         self.deadline_misses += usize::from(r.deadline_miss);

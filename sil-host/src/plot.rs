@@ -153,6 +153,7 @@ pub struct HistoryEnvelope {
 
 impl HistoryEnvelope {
     /// Adds the next sample (in time order).
+    #[inline]
     pub fn push(&mut self, s: &HistorySample) {
         let values = [s.z_t, s.z_t_ref, s.f_n, s.u[0], s.u[1], mode_code(s.mode)];
         for (curve, y) in self.curves.iter_mut().zip(values) {
