@@ -38,6 +38,7 @@ use super::{
     record::RunError,
     rig::{Exchange, FirmwareLink},
     scenario::Scenario,
+    stats::TimingHistogram,
 };
 
 /// How long the plant waits for the firmware to connect, s.
@@ -49,15 +50,16 @@ pub struct Spawned {
     child: Child,
 }
 
-/// Wall-clock figures of an iceoryx2 run, microseconds, one sample per period.
+/// Wall-clock figures of an iceoryx2 run, one sample per period, in fixed
+/// memory (HDR histograms at 3 significant digits: [`TimingHistogram`]).
 #[derive(Debug, Clone, Default)]
 pub struct LinkTimings {
     /// Round trip: frame published to its command received.
-    pub rtt_us: Vec<f32>,
+    pub rtt: TimingHistogram,
     /// Real time: frame publication minus its ideal wall time `t0 + t_k`.
-    pub jitter_us: Vec<f32>,
+    pub jitter: TimingHistogram,
     /// The firmware's own step time (its `step_ticks`, ns ticks on the host).
-    pub step_us: Vec<f32>,
+    pub step: TimingHistogram,
     /// Commands that arrived after their period was given up (late answers).
     pub late_answers: u64,
 }
@@ -290,7 +292,7 @@ impl FirmwareLink for IpcLink {
         // plant itself published late, the firmware still gets half a period.
         let deadline = deadline.unwrap_or_else(|| {
             let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
-            self.timings.jitter_us.push(published.saturating_duration_since(ideal).as_secs_f64() as f32 * 1e6);
+            self.timings.jitter.record(published.saturating_duration_since(ideal));
             let ts = Duration::from_secs_f64(self.ts);
             (ideal + ts).max(published + ts / 2)
         });
@@ -299,8 +301,8 @@ impl FirmwareLink for IpcLink {
                 Some(c) if c.seq == frame.seq => {
                     let now = Instant::now();
                     self.consecutive_timeouts = 0;
-                    self.timings.rtt_us.push((now - published).as_secs_f64() as f32 * 1e6);
-                    self.timings.step_us.push(c.step_ticks as f32 * 1e-3);
+                    self.timings.rtt.record(now - published);
+                    self.timings.step.record_ns(u64::from(c.step_ticks));
                     let telemetry = self.telemetry_for(c.seq)?;
                     // Real time: the command's own send stamp (the firmware's clock,
                     // anchored at the frame's arrival) dates it; the plant's own view

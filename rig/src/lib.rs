@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
@@ -29,4 +30,5 @@ pub mod rig;
 pub mod scenario;
 pub mod sensors;
 pub mod setup;
+pub mod stats;
 pub mod summary;

@@ -24,7 +24,6 @@ use rig::{
     rig::FirmwareLink,
     setup::{firmware_config, plant_for},
     summary::RunSummary,
-    summary::percentiles,
 };
 
 /// Runs `sil-host run`.
@@ -65,25 +64,25 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
+    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
     let firmware_announcement = link.announcement().cloned();
-    let timings = ipc.as_ref().map(|l| l.timings.clone());
+    let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     drop(ipc);
 
     let svg = out.stage("trace.svg");
-    draw(&svg, "SIL", &scenario, &records)?;
+    draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
     let summary = RunSummary {
         rig: (!args.in_process).then(|| rig.clone()),
-        ipc_rtt_us: timings.as_ref().map(|t| percentiles(&t.rtt_us)),
-        firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
-        period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
+        ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),
+        firmware_step_us: timings.as_ref().map(|t| t.step.percentiles()),
+        period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| t.jitter.percentiles()),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
         realtime_setup,
         firmware_announcement,
-        ..RunSummary::from_records(
+        ..RunSummary::from_stats(
             &scenario,
-            &records,
+            &stats,
             failure.as_ref(),
             transport,
             if args.realtime { "realtime" } else { "lockstep" },
