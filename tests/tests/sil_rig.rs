@@ -127,7 +127,8 @@ fn a_firmware_configured_differently_is_refused_by_name() {
     assert!(!refused.exists(), "a refused run writes nothing");
     // The firmware is still there for a plant that agrees with it.
     let out = dir.path().join("agreed");
-    let o = run(&["--attach", &name, "--scenario", s, "--duration", "0.5", "--controller", "pid", "--set", "controller.hybrid.kp=800"], &out);
+    let o =
+        run(&["--attach", &name, "--scenario", s, "--duration", "0.5", "--controller", "pid", "--set", "controller.hybrid.kp=800"], &out);
     assert!(o.status.success());
     assert_eq!(fw.wait().unwrap().code(), Some(0));
     let sum = summary(&out);

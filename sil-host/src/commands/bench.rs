@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::{cli::BenchArgs, error::CliError};
 use rig::{
     in_process::InProcessLink,
-    ipc::default_rig_name,
+    ipc::{MonitorPolicy, default_rig_name},
     ipc_link::IpcLink,
     realtime::RealtimeSetup,
     rig::run_loop,
@@ -86,7 +86,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut missed = 0;
     let mut timings = rig::ipc_link::LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
+        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::Run)?;
         let t = Instant::now();
         let (records, e) = run_loop(&s, &mut link, &mut ());
         rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
@@ -99,7 +99,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     if args.realtime_s > 0.0 {
         let mut rt = s.clone();
         rt.timing.duration_s = args.realtime_s;
-        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true).map_err(CliError::Run)?;
+        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::Run)?;
         let t = Instant::now();
         let (records, e) = run_loop(&rt, &mut link, &mut ());
         let rate = records.len() as f64 / t.elapsed().as_secs_f64();
