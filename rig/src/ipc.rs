@@ -400,6 +400,8 @@ pub struct PlantPorts {
     /// The firmware's announcement (the handshake before period 0).
     pub announcements: Inbox<FirmwareAnnouncement>,
     truth_service: PubSub<GroundTruth>,
+    /// Kept open so that the event exists as long as the service does.
+    _telemetry_event: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
     monitors: Arc<Mutex<MonitorState>>,
 }
 
@@ -416,6 +418,9 @@ impl PlantPorts {
         let node = node(Role::Plant, rig)?;
         let frames_service = pubsub::<SensorFrame>(&node, rig, Topic::SensorFrames)?;
         let commands_service = pubsub::<ActuatorCommand>(&node, rig, Topic::ActuatorCommands)?;
+        // The telemetry's wake-up event before its service (the firmware notifies it):
+        // a monitor that finds the service finds the event too.
+        let telemetry_event = open_event(&node, rig, Topic::FirmwareTelemetry.name(), &MONITOR_EVENT)?;
         let telemetry_service = pubsub::<FirmwareTelemetry>(&node, rig, Topic::FirmwareTelemetry)?;
         let announcement_service = pubsub::<FirmwareAnnouncement>(&node, rig, Topic::FirmwareAnnouncement)?;
         let truth_needs = Needs {
@@ -424,6 +429,8 @@ impl PlantPorts {
             min_nodes: monitors.wait_for + 1,
             ..Topic::GroundTruth.needs()
         };
+        // The event first: a monitor that finds the service finds its event too.
+        let truth_wake = Wake::Monitors(notifier(&node, rig, Topic::GroundTruth.name(), &MONITOR_EVENT)?);
         let who = if monitors.lossless { "`run --monitors` in lockstep" } else { "`run --monitors`" };
         let truth_service = open_pubsub::<GroundTruth>(&node, rig, Topic::GroundTruth, &truth_needs, who)?;
         let state = Arc::new(Mutex::new(MonitorState::default()));
@@ -437,10 +444,7 @@ impl PlantPorts {
                 publisher: publisher(&frames_service, Topic::SensorFrames)?,
                 wake: Wake::Peer(notifier(&node, rig, "frame_ready", &LINK_EVENT)?),
             },
-            truth: Outbox {
-                publisher: truth_publisher,
-                wake: Wake::Monitors(notifier(&node, rig, Topic::GroundTruth.name(), &MONITOR_EVENT)?),
-            },
+            truth: Outbox { publisher: truth_publisher, wake: truth_wake },
             commands: Inbox {
                 subscriber: subscriber(&commands_service, Topic::ActuatorCommands)?,
                 listener: Some(listener(&node, rig, "command_ready")?),
@@ -451,6 +455,7 @@ impl PlantPorts {
             frames_service,
             commands_service,
             truth_service,
+            _telemetry_event: telemetry_event,
             monitors: state,
             node,
         })
@@ -496,6 +501,7 @@ impl FirmwarePorts {
     /// port cannot be created.
     pub fn open(rig: &str, spin: Duration) -> Result<Self, IpcError> {
         let node = node(Role::Firmware, rig)?;
+        let telemetry_wake = Wake::Monitors(notifier(&node, rig, Topic::FirmwareTelemetry.name(), &MONITOR_EVENT)?);
         let frames_service = pubsub::<SensorFrame>(&node, rig, Topic::SensorFrames)?;
         let commands_service = pubsub::<ActuatorCommand>(&node, rig, Topic::ActuatorCommands)?;
         let telemetry_service = pubsub::<FirmwareTelemetry>(&node, rig, Topic::FirmwareTelemetry)?;
@@ -510,10 +516,7 @@ impl FirmwarePorts {
                 publisher: publisher(&commands_service, Topic::ActuatorCommands)?,
                 wake: Wake::Peer(notifier(&node, rig, "command_ready", &LINK_EVENT)?),
             },
-            telemetry: Outbox {
-                publisher: publisher(&telemetry_service, Topic::FirmwareTelemetry)?,
-                wake: Wake::Monitors(notifier(&node, rig, Topic::FirmwareTelemetry.name(), &MONITOR_EVENT)?),
-            },
+            telemetry: Outbox { publisher: publisher(&telemetry_service, Topic::FirmwareTelemetry)?, wake: telemetry_wake },
             announcement: Outbox { publisher: publisher(&announcement_service, Topic::FirmwareAnnouncement)?, wake: Wake::Nobody },
             node,
         })
