@@ -33,7 +33,7 @@ use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, WIRE_VERSION, fr
 use super::{
     faults::{FaultPlan, LinkKind},
     handshake::{self, Announced},
-    ipc::{PeerState, PlantPorts, Role, peer_state},
+    ipc::{IpcError, MonitorCounts, MonitorPolicy, PeerState, PlantPorts, Role, peer_state},
     realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
     record::RunError,
     rig::{Exchange, FirmwareLink},
@@ -92,19 +92,28 @@ impl IpcLink {
     /// Opens the rig `rig`'s services and, when `firmware_exe` is given, spawns
     /// `firmware_exe firmware --rig RIG --scenario -` with the scenario on its
     /// standard input (and `--realtime` in real time); then waits until the
-    /// firmware is connected.
+    /// firmware is connected and has announced its configuration, and then until
+    /// `monitors.wait_for` monitors subscribe to `ground_truth` (each wait up to
+    /// the scenario's `rig.connect_timeout_s`, [`CONNECT_TIMEOUT_S`] by default).
     ///
     /// # Errors
-    /// [`RunError::Transport`] when the services cannot be opened, the process
-    /// cannot be started, or no firmware connects within the scenario's
-    /// `rig.connect_timeout_s` ([`CONNECT_TIMEOUT_S`] by default).
-    pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
+    /// [`RunError::IncompatibleService`] when a service another process created
+    /// lacks what the run needs; [`RunError::Transport`] when the services cannot
+    /// be opened, the process cannot be started, or no firmware (or fewer
+    /// monitors than asked) connects in time.
+    pub fn connect(
+        s: &Scenario,
+        rig: &str,
+        firmware_exe: Option<&Path>,
+        realtime: bool,
+        monitors: &MonitorPolicy,
+    ) -> Result<Self, RunError> {
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         if let Some(pid) = super::ipc::live_owner(Role::Plant, rig) {
             return Err(RunError::RigInUse { rig: rig.to_string(), role: "plant", pid });
         }
-        let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
+        let ports = PlantPorts::open(rig, spin, monitors).map_err(open_error)?;
         // Before spawning: the firmware process inherits nothing from this thread's
         // set-up, it makes its own from the same scenario.
         let realtime_setup = realtime.then(|| prepare_realtime(&s.rig));
@@ -158,7 +167,40 @@ impl IpcLink {
             std::thread::sleep(Duration::from_millis(2));
         }
         link.announced = Some(link.handshake(s, start + Duration::from_secs_f64(limit))?);
+        link.wait_for_monitors(monitors.wait_for, limit)?;
         Ok(link)
+    }
+
+    /// Waits until `count` monitors subscribe to `ground_truth`, up to `limit_s`.
+    fn wait_for_monitors(&mut self, count: usize, limit_s: f64) -> Result<(), RunError> {
+        if count == 0 {
+            return Ok(());
+        }
+        let service = super::services::service_name(&self.rig, "ground_truth");
+        if self.ports.monitors() < count {
+            eprintln!("rig: waiting for {count} monitor(s) to subscribe to {service} (up to {limit_s} s)");
+        }
+        let start = Instant::now();
+        while self.ports.monitors() < count {
+            if let Some(what) = self.firmware_gone() {
+                return Err(RunError::Transport(format!("the firmware process {what} while the rig waited for monitors")));
+            }
+            if start.elapsed().as_secs_f64() > limit_s {
+                return Err(RunError::Transport(format!(
+                    "{} of {count} monitor(s) subscribed to {service} within rig.connect_timeout_s = {limit_s} s: start them \
+                     (`python3 examples/python/monitor.py --rig {}`), or run without --monitors",
+                    self.ports.monitors(),
+                    self.rig
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        Ok(())
+    }
+
+    /// What monitors cost the run so far (lossless runs: monitors given up, samples dropped).
+    pub fn monitor_counts(&self) -> MonitorCounts {
+        self.ports.monitor_counts()
     }
 
     /// The handshake before period 0: asks the connected firmware for its
@@ -236,6 +278,15 @@ impl IpcLink {
             }
         }
         Ok(FirmwareTelemetry { seq, z_t_ref: f32::NAN, ..FirmwareTelemetry::default() })
+    }
+}
+
+/// A service that lacks what the run needs is bad set-up (exit 2); anything else
+/// is the transport failing.
+pub(crate) fn open_error(e: IpcError) -> RunError {
+    match e {
+        IpcError::Incompatible(i) => RunError::IncompatibleService(i.to_string()),
+        IpcError::Transport(m) => RunError::Transport(format!("iceoryx2: {m}")),
     }
 }
 

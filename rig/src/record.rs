@@ -117,6 +117,11 @@ pub enum RunError {
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),
+    /// An iceoryx2 service of the rig, created by another process (a monitor
+    /// started first), lacks what this run needs: the message names the service,
+    /// the attribute, its value and the value to use (docs/rig.md, "Monitors").
+    #[error("{0}")]
+    IncompatibleService(String),
     /// The run was interrupted (SIGINT or SIGTERM).
     #[error("interrupted at period {k}")]
     Interrupted {

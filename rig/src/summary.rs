@@ -70,6 +70,9 @@ pub struct RunSummary {
     /// PIL runs: the image's instruction counts and log (`sil-host pil`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pil: Option<PilFigures>,
+    /// Runs with `--monitors`: what the plant did for monitors (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monitors: Option<MonitorSummary>,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
     /// The plant's parameters as run: paper Table I, `mu`, `v_belt` (SI, radians;
@@ -142,12 +145,30 @@ impl RunSummary {
             late_answers: 0,
             realtime_setup: None,
             pil: None,
+            monitors: None,
             scenario_used: scenario.clone(),
             plant_params: crate::setup::plant_params(scenario),
             firmware_config: crate::setup::firmware_config(scenario),
             firmware_announcement: None,
         }
     }
+}
+
+/// The `monitors` part of `summary.json` (`sil-host run --monitors N`; docs/rig.md,
+/// "Monitors").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MonitorSummary {
+    /// Monitors (subscribers of `ground_truth`) the plant waited for before period 0.
+    pub waited_for: usize,
+    /// Whether the plant waited for a monitor whose buffer was full (lockstep)
+    /// rather than discarding the sample for it (real time).
+    pub lossless: bool,
+    /// How long one sample waited for a full monitor before it was given up, s.
+    pub timeout_s: f64,
+    /// Monitors given up (dead, stopped or too slow); they then lost samples.
+    pub given_up: u32,
+    /// Samples not delivered to given-up monitors (one per monitor per sample).
+    pub samples_dropped: u64,
 }
 
 /// RMS of `z_t - z_t*` over `records`, m (0 when empty; [`RunStats::rms_tracking_error`]).

@@ -368,6 +368,16 @@ pub struct RunArgs {
     /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
     #[arg(long, value_name = "NAME")]
     pub rig: Option<String>,
+    /// Wait for N monitors (subscribers of painleve/RIG/ground_truth, such as
+    /// examples/python/monitor.py) before period 0, up to rig.connect_timeout_s;
+    /// in lockstep the plant then also waits for a monitor whose buffer is full,
+    /// so every monitor receives every sample (docs/rig.md, "Monitors").
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=8), conflicts_with = "in_process")]
+    pub monitors: u16,
+    /// With --monitors in lockstep: how long one sample waits for a full monitor
+    /// before that monitor is given up (not waited for again), s, in (0, 600].
+    #[arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors")]
+    pub monitor_timeout: f64,
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::{cli::BenchArgs, error::CliError};
 use rig::{
     in_process::InProcessLink,
-    ipc::default_rig_name,
+    ipc::{MonitorPolicy, default_rig_name},
     ipc_link::IpcLink,
     realtime::RealtimeSetup,
     rig::{RunObserver, stream_loop},
@@ -100,7 +100,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut missed = 0;
     let mut timings = rig::ipc_link::LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
+        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::Run)?;
         let (_, rate, misses) = timed(&s, &mut link)?;
         rates.push(rate);
         missed += misses;
@@ -112,7 +112,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     if args.realtime_s > 0.0 {
         let mut rt = s.clone();
         rt.timing.duration_s = args.realtime_s;
-        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true).map_err(CliError::Run)?;
+        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::Run)?;
         let (periods, rate, missed) = timed(&rt, &mut link)?;
         let mut f = summarise("iceoryx2 realtime", vec![rate], periods, missed, Some(&link.timings), 0.0);
         f.jitter_us = Some(link.timings.jitter.percentiles());
