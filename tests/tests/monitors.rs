@@ -39,6 +39,9 @@ fn summary(out: &Path) -> serde_json::Value {
 enum Start {
     /// Before the rig, with `open_or_create()` and no settings: iceoryx2's defaults.
     First,
+    /// Before the rig, creating the service with the attributes the rig would
+    /// give it (docs/rig.md, "Monitors").
+    FirstLikeTheRig,
     /// After the rig: `open()` until the rig has created the service.
     AfterRig,
 }
@@ -87,6 +90,19 @@ fn spawn_client(rig: &str, c: Client) -> JoinHandle<Received> {
         let gt = name(&rig, "ground_truth");
         let service = match c.start {
             Start::First => node.service_builder(&gt).publish_subscribe::<GroundTruth>().open_or_create().unwrap(),
+            Start::FirstLikeTheRig => {
+                let a = rig::services::Topic::GroundTruth.attributes();
+                node.service_builder(&gt)
+                    .publish_subscribe::<GroundTruth>()
+                    .subscriber_max_buffer_size(a.subscriber_max_buffer_size)
+                    .history_size(a.history_size)
+                    .enable_safe_overflow(a.enable_safe_overflow)
+                    .max_publishers(a.max_publishers)
+                    .max_subscribers(a.max_subscribers)
+                    .max_nodes(a.max_nodes)
+                    .create()
+                    .unwrap()
+            }
             Start::AfterRig => {
                 let until = Instant::now() + Duration::from_secs(60);
                 loop {
@@ -248,22 +264,19 @@ fn with_monitors_a_slow_client_after_the_rig_receives_every_sample_in_lockstep()
     assert_eq!((m["waited_for"].as_u64(), m["lossless"].as_bool()), (Some(1), Some(true)));
     assert_eq!((m["given_up"].as_u64(), m["samples_dropped"].as_u64()), (Some(0), Some(0)));
 
-    // The same client without --monitors: the plant never waits, so it loses the
-    // samples that find its buffer full (what it receives is still right).
+    // A slower client without --monitors: the plant never waits, so it loses the
+    // samples that find its buffer full (what it receives is still right). It makes
+    // the service itself, with the rig's attributes, so it has subscribed before
+    // the run starts.
+    let slower = Client { start: Start::FirstLikeTheRig, per_sample: Duration::from_millis(1), ..slow };
     let name = rig("lossy");
     let out = dir.path().join("lossy");
-    let plant = std::thread::spawn({
-        let (name, out) = (name.clone(), out.clone());
-        move || {
-            // Give the client time to subscribe (nothing waits for it now).
-            std::thread::sleep(Duration::from_millis(300));
-            run(&["--rig", &name, "--duration", "2"], &out)
-        }
-    });
-    let client = spawn_client(&name, slow);
-    assert!(plant.join().unwrap().status.success());
+    let client = spawn_client(&name, slower);
+    assert!(run(&["--rig", &name, "--duration", "2"], &out).status.success());
     let got = client.join().unwrap();
-    assert!(!got.samples.is_empty() && got.samples.len() < 2000, "{} samples", got.samples.len());
+    // Its first 4 at least; at 1 ms a sample, far fewer than the run's 2000.
+    assert!(got.samples.len() >= 4 && got.samples.len() < 2000, "{} samples", got.samples.len());
+    assert_eq!(seqs(&got.samples[..4]), [0, 1, 2, 3], "the plant discards the new sample, not the queued ones");
     assert_eq!(check_against_trace(&got.samples, &out), 2000);
     assert!(summary(&out).get("monitors").is_none());
 }
