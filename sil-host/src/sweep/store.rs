@@ -150,7 +150,7 @@ pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliErro
     for (line, rec) in reader.deserialize::<RunRow>().enumerate() {
         let bad = |what: String| CliError::BadInput(format!("{} row {}: {what}", path.display(), line + 1));
         let row = rec.map_err(|e| bad(format!("does not parse: {e}")))?;
-        if row.index >= n_runs || !m.shard.owns(row.index) {
+        if row.index >= n_runs || !m.shard.owns(&m.spec, row.index) {
             return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));
         }
         let key = m.spec.run_at(row.index);
@@ -253,5 +253,5 @@ impl Journal {
 /// The indices of `m`'s runs (in its shard) not in `rows`, ascending.
 pub fn missing(m: &Manifest, rows: &[RunRow]) -> Vec<usize> {
     let done: std::collections::HashSet<usize> = rows.iter().map(|r| r.index).collect();
-    m.shard.indices(m.spec.n_runs()).filter(|i| !done.contains(i)).collect()
+    m.shard.indices(&m.spec).into_iter().filter(|i| !done.contains(i)).collect()
 }

@@ -172,7 +172,7 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     let ics = spec.initial_conditions();
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if !args.json {
-        let in_shard = shard.indices(spec.n_runs()).count();
+        let in_shard = shard.indices(&spec).len();
         eprintln!(
             "sweep of {} runs{} in {}: {resumed} done already{}, computing {} on {threads} threads",
             in_shard,
