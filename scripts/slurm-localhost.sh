@@ -69,7 +69,7 @@ start() {
   chmod 0700 "$d/munge"
 
   local host cpus port
-  host=$(hostname -s)
+  host=$(uname -n | cut -d. -f1)
   cpus=${SLURM_LOCALHOST_CPUS:-2}
   port=${SLURM_LOCALHOST_PORT:-16817}
 
@@ -89,7 +89,8 @@ SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
 CredType=cred/munge
-AuthInfo=socket=$d/munge/munge.socket
+# cred_expire: a requeued job waits this long before it starts again (default 120 s).
+AuthInfo=socket=$d/munge/munge.socket,cred_expire=10
 StateSaveLocation=$d/state
 SlurmdSpoolDir=$d/spool
 SlurmctldPidFile=$d/slurmctld.pid
@@ -108,6 +109,9 @@ SwitchType=switch/none
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 SchedulerType=sched/backfill
+# Start jobs at once (defaults: batch jobs wait up to 3 s, the scheduler runs at most
+# every 2 s): a test's jobs last about a second.
+SchedulerParameters=batch_sched_delay=0,sched_min_interval=100000,sched_interval=1
 ReturnToService=2
 # Finished jobs stay visible (scontrol show job) for 10 minutes.
 MinJobAge=600

@@ -226,6 +226,38 @@ fn sharded_sweep_on_a_real_slurm_merges_to_the_unsharded_sweep() {
     assert_eq!((m[0].1.as_str(), m[0].2.as_str()), ("COMPLETED", "0:0"), "merge job:\n{}", read_merge_log(&b, merge));
     assert_eq!(shard_of(&b.join("shard-0")), (0, 3));
     assert_same_sweep(&b.join("merged"), &whole);
+
+    // 4. Pre-emption: a task requeued part way (as PreemptMode=REQUEUE does) starts
+    // again (after the cluster's cred_expire, 10 s), resumes its folder, and the
+    // merge job waits for it. A longer sweep: 2 x 276 runs of 300 s, a few seconds each.
+    let c = work.path().join("c");
+    let long = ["--mu", "0.5,1.0", "--mu-step", "0.1", "--v-belt=-1,-0.1", "--v-belt-step", "0.02"];
+    let (array, merge) = cluster.submit(work.path(), &[("SWEEP_DIR", "c")], &[SBATCH, &["--array=0-1", "--"], &long].concat());
+    let journal = c.join("shard-0/runs.csv");
+    let start = Instant::now();
+    while std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count()) < 6 {
+        assert!(start.elapsed() < JOB_TIMEOUT, "task 0 wrote no runs:\n{}", cluster.logs());
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let o = cluster.client("scontrol").args(["requeue", &format!("{array}_0")]).output().unwrap();
+    assert!(o.status.success(), "requeue:\n{}", text(&o));
+    let tasks = cluster.wait(array);
+    assert!(tasks.iter().all(|(_, s, c)| s == "COMPLETED" && c == "0:0"), "{tasks:?}");
+    let m = cluster.wait(merge);
+    assert_eq!((m[0].1.as_str(), m[0].2.as_str()), ("COMPLETED", "0:0"), "merge job:\n{}", read_merge_log(&c, merge));
+    let task0 = cluster.jobs(array).into_iter().find(|j| j.get("ArrayTaskId").map(String::as_str) == Some("0")).unwrap();
+    assert_eq!(task0["Restarts"], "1");
+    // The second start resumed the first's runs (the task's log is rewritten on requeue).
+    let log = std::fs::read_to_string(work.path().join(format!("slurm-{array}_0.out"))).unwrap();
+    assert!(log.contains("(restart 1)"), "{log}");
+    // "sweep of 276 runs (shard 0/2 of 552) in DIR: 12 done already, computing 264 on 1 threads"
+    let line = log.lines().find(|l| l.contains("done already")).unwrap_or_else(|| panic!("{log}"));
+    let done: u64 = line.rsplit_once(": ").and_then(|(_, r)| r.split_whitespace().next()).and_then(|n| n.parse().ok()).unwrap();
+    let total = 276;
+    assert!(log.contains(&format!("sweep of {total} runs")), "{log}");
+    assert!(done > 0 && done < total, "resumed {done} of {total}:\n{log}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(c.join("merged/summary.json")).unwrap()).unwrap();
+    assert_eq!((summary["status"].as_str(), summary["results"]["runs"].as_u64()), (Some("complete"), Some(552)));
 }
 
 fn read_merge_log(dir: &Path, job: u64) -> String {
