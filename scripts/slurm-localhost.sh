@@ -142,7 +142,11 @@ EOF
 case $action in
   start)
     # A start that fails half way leaves nothing running.
-    trap 'status=$?; [ $status = 0 ] || stop "$dir"' EXIT
+    on_exit() {
+      local status=$?
+      [ "$status" = 0 ] || stop "$dir"
+    }
+    trap on_exit EXIT
     start "$dir"
     ;;
   stop) stop "$dir" ;;

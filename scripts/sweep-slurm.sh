@@ -64,7 +64,8 @@ array_ids() {
 # among the array's ids; `shards:N`: the task id itself), or without it from
 # Slurm's variables (a single range: (ID - MIN) / STEP of COUNT).
 shard_of_task() {
-  local sharding=$1 id=${SLURM_ARRAY_TASK_ID:?}
+  local sharding=$1 id=${SLURM_ARRAY_TASK_ID:-}
+  [[ $id =~ ^[0-9]+$ ]] || die "not an array task (SLURM_ARRAY_TASK_ID is '$id'): submit with scripts/sweep-slurm.sh submit --array=..."
   case $sharding in
     array:*)
       local ids
@@ -80,8 +81,9 @@ shard_of_task() {
       ;;
     "")
       local min=${SLURM_ARRAY_TASK_MIN:-} step=${SLURM_ARRAY_TASK_STEP:-} count=${SLURM_ARRAY_TASK_COUNT:-} max=${SLURM_ARRAY_TASK_MAX:-}
-      [ -n "$min" ] && [ -n "$step" ] && [ -n "$count" ] && [ -n "$max" ] ||
-        die "cannot tell this task's shard: SLURM_ARRAY_TASK_MIN/STEP/COUNT/MAX are not all set (submit with $0 submit)"
+      if [ -z "$min" ] || [ -z "$step" ] || [ -z "$count" ] || [ -z "$max" ]; then
+        die "cannot tell this task's shard: SLURM_ARRAY_TASK_MIN/STEP/COUNT/MAX are not all set (submit with scripts/sweep-slurm.sh submit)"
+      fi
       if ((step < 1 || (id - min) % step != 0 || min + (count - 1) * step != max)); then
         die "cannot tell this task's shard: the array (ids $min..$max, $count tasks, step $step) is not one range A-B[:S]; submit with scripts/sweep-slurm.sh submit, which reads any --array"
       fi
@@ -129,7 +131,7 @@ merge() {
     echo "sweep-slurm: the merge failed (exit $status). To finish the sweep, re-run the shards with missing runs (their finished runs are kept) and merge again:" >&2
     printf '  SWEEP_SHARDS=%s SWEEP_DIR=%q SIL_HOST=%q %s submit --array=%s [the same sbatch options] --' \
       "$n" "$dir" "$sil_host" "scripts/sweep-slurm.sh" "${missing:-K1,K2,...}" >&2
-    printf ' %q' "$@" >&2
+    (($# == 0)) || printf ' %q' "$@" >&2
     echo >&2
   fi
   rm -f "$log"
@@ -223,8 +225,9 @@ case ${1:-} in
       shift
       merge "$@"
     else
-      # shellcheck disable=SC2206
-      merge "$2" "${SIL_HOST:-target/release/sil-host}" "${SWEEP_DIR:-sweep-out}" ${SWEEP_ARGS:-}
+      # shellcheck disable=SC2206  # SWEEP_ARGS is a list of words
+      sweep_args=(${SWEEP_ARGS:-})
+      merge "$2" "${SIL_HOST:-target/release/sil-host}" "${SWEEP_DIR:-sweep-out}" "${sweep_args[@]}"
     fi
     ;;
   "")

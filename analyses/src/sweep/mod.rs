@@ -480,7 +480,7 @@ impl Shard {
                 // (rule, law, e_n, mu), mu fastest.
                 let outer = rest / n_v;
                 let row = ((outer / n_mu) * n_ic + i_ic) * n_mu + outer % n_mu;
-                let offset = ((row as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) as u128 * n_v as u128 >> 64) as usize;
+                let offset = (((row as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) as u128 * n_v as u128) >> 64) as usize;
                 (row * n_v + (i_v + offset) % n_v) % self.n
             }
         }
