@@ -135,6 +135,41 @@ fn merged_shards_equal_the_unsharded_sweep() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("threshold"));
 }
 
+/// Shard folders written before the balanced assignment (`sweep.json` without
+/// `assignment`: run i in shard i mod N) still resume and merge that way.
+#[test]
+fn modulo_shard_folders_of_earlier_versions_resume_and_merge() {
+    let whole = tempfile::tempdir().unwrap();
+    ok(&sweep(whole.path(), &[]));
+    let manifest: serde_json::Value = serde_json::from_str(&read(whole.path(), "sweep.json")).unwrap();
+    let journal = read(whole.path(), "runs.csv");
+    let (header, rows) = journal.split_once('\n').unwrap();
+    let old = tempfile::tempdir().unwrap();
+    let dirs: Vec<std::path::PathBuf> = (0..2).map(|k| old.path().join(format!("shard-{k}"))).collect();
+    for (k, dir) in dirs.iter().enumerate() {
+        std::fs::create_dir(dir).unwrap();
+        let mut m = manifest.clone();
+        m["shard"] = serde_json::json!({ "k": k, "n": 2 });
+        std::fs::write(dir.join("sweep.json"), serde_json::to_string_pretty(&m).unwrap()).unwrap();
+        // Run i in shard i mod 2, the first of them left to compute.
+        let mine: Vec<&str> = rows.lines().filter(|r| r.split(',').next().unwrap().parse::<usize>().unwrap() % 2 == k).collect();
+        std::fs::write(dir.join("runs.csv"), format!("{header}\n{}\n", mine[1..].join("\n"))).unwrap();
+    }
+    let resumed = ok(&sweep(&dirs[1], &["--shard", "1/2"]));
+    assert_eq!(resumed["resumed_runs"], 5);
+    assert_eq!(resumed["timing"]["runs_computed"], 1);
+    // The other one is missing a run: the merge names it and its (modulo) shard.
+    let out = sil_host().args(["merge", "--out"]).arg(old.path().join("m")).args(&dirs).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("1 of 12 runs are missing") && err.contains("shard 0/2)") && err.contains("shards with missing runs: 0."),
+        "{err}"
+    );
+    let m = sil_host().args(["merge", "--allow-missing", "--json", "--out"]).arg(old.path().join("m")).args(&dirs).output().unwrap();
+    assert_eq!(ok(&m)["results"]["missing"], 1);
+}
+
 #[test]
 fn bad_arguments_exit_with_2() {
     let dir = tempfile::tempdir().unwrap();

@@ -532,7 +532,7 @@ mod tests {
     }
 
     /// The paper's grid in 16 shards: 113 or 114 runs from `x0a` in every shard
-    /// (modulo: 226 in each even shard, none in the odd ones).
+    /// (modulo: 226 or 227 in each even shard, none in the odd ones).
     #[test]
     fn balanced_shards_spread_the_costly_initial_condition() {
         let s = SweepSpec::paper();

@@ -84,7 +84,9 @@ pub fn differences(a: &Manifest, b: &Manifest) -> Vec<String> {
     };
     compare("", &va["spec"], &vb["spec"]);
     if a.shard != b.shard {
-        out.push(format!("shard: {}/{} vs {}/{}", a.shard.k, a.shard.n, b.shard.k, b.shard.n));
+        let show =
+            |s: &Shard| format!("{}/{}{}", s.k, s.n, if s.n > 1 { format!(" ({:?})", s.assignment).to_lowercase() } else { String::new() });
+        out.push(format!("shard: {} vs {}", show(&a.shard), show(&b.shard)));
     }
     out
 }

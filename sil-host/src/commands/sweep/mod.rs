@@ -160,7 +160,14 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     if args.threads == Some(0) {
         return Err(CliError::BadInput("--threads must be >= 1".into()));
     }
-    let manifest = Manifest { spec: spec.clone(), shard };
+    let mut manifest = Manifest { spec: spec.clone(), shard };
+    // A shard folder of an earlier version (modulo assignment) resumes as it began.
+    if let Some(existing) = store::read_manifest(&args.out)? {
+        if existing.spec == spec && (existing.shard.k, existing.shard.n) == (shard.k, shard.n) {
+            manifest.shard = existing.shard;
+        }
+    }
+    let shard = manifest.shard;
     store::open(&args.out, &manifest)?;
     let journal = store::read_journal(&args.out, &manifest)?;
     let resumed = journal.rows.len();
