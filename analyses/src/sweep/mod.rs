@@ -463,8 +463,8 @@ impl Shard {
     /// positions, and so does every block of rows: every shard gets the same
     /// number of runs (to one), of every initial condition and of every row, and
     /// neighbouring belt speeds go to different shards. The cost of a run depends
-    /// on its row (the initial condition and `mu`: bouncing runs from `x0a` cost
-    /// about five times others) and, along the row, on the band of speeds that
+    /// on its row (the initial condition and `mu`: on the paper's grid a run from
+    /// `x0a` costs 5 to 6 times one from `x0d`) and, along the row, on the band of speeds that
     /// bounce; both are spread evenly without a cost model. Within a row the
     /// speeds are rotated by `floor(frac(r phi) n_v)` (`r` the row's number, `phi`
     /// the golden ratio; Fibonacci hashing, integer arithmetic), so that when `n_v`

@@ -37,7 +37,8 @@ pub struct Manifest {
 /// Reads `dir/sweep.json`, if there is one.
 ///
 /// # Errors
-/// [`CliError::BadInput`] when it cannot be read or is not a manifest of this version.
+/// [`CliError::BadInput`] when it cannot be read, is not a manifest of this
+/// version, holds an invalid spec or names an impossible shard.
 pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let path = dir.join(MANIFEST);
     let text = match std::fs::read_to_string(&path) {
@@ -48,6 +49,10 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
         CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
     })?;
+    m.spec.validate().map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))?;
+    if m.shard.n == 0 || m.shard.k >= m.shard.n {
+        return Err(CliError::BadInput(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
+    }
     Ok(Some(m))
 }
 

@@ -162,10 +162,11 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     }
     let mut manifest = Manifest { spec: spec.clone(), shard };
     // A shard folder of an earlier version (modulo assignment) resumes as it began.
-    if let Some(existing) = store::read_manifest(&args.out)? {
-        if existing.spec == spec && (existing.shard.k, existing.shard.n) == (shard.k, shard.n) {
-            manifest.shard = existing.shard;
-        }
+    if let Some(existing) = store::read_manifest(&args.out)?
+        && existing.spec == spec
+        && (existing.shard.k, existing.shard.n) == (shard.k, shard.n)
+    {
+        manifest.shard = existing.shard;
     }
     let shard = manifest.shard;
     store::open(&args.out, &manifest)?;
