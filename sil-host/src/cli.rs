@@ -710,8 +710,10 @@ pub struct SweepArgs {
     /// identity (sweep.json).
     #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
     pub set: Vec<rig::overrides::Override>,
-    /// Compute only part K/N of the runs (those whose index is K modulo N, 0 <= K < N),
-    /// for a cluster job array; join the folders with `sil-host merge`.
+    /// Compute only shard K of N (0 <= K < N), for a cluster job array; join the
+    /// shards' folders with `sil-host merge`. The runs are dealt to the shards so
+    /// that each gets an equal share of every initial condition and `mu`
+    /// (docs/analyses.md, "Cluster").
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
     /// Compute at most N more runs, then write the outputs and stop (exit 0); run
