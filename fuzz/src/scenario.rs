@@ -995,10 +995,8 @@ pub fn violations(s: &Scenario) -> Vec<String> {
         need(within(f.duration_s, 0.0, 1e5), &format!("faults[{i}].duration_s in [0, 1e5]"));
         let sensor = matches!(f.kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange);
         need(!sensor || f.signal.is_some(), &format!("faults[{i}]: a sensor fault has a signal"));
-        need(
-            f.kind != FaultKind::LateCommand || (fin(f.delay_s) && f.delay_s > 0.0 && f.delay_s < 10.0),
-            &format!("faults[{i}].delay_s in (0, 10)"),
-        );
+        need(fin(f.delay_s) && f.delay_s >= 0.0 && f.delay_s < 10.0, &format!("faults[{i}].delay_s in [0, 10)"));
+        need(f.kind != FaultKind::LateCommand || f.delay_s > 0.0, &format!("faults[{i}].delay_s of a late_command in (0, 10)"));
         need(
             f.kind != FaultKind::Stall || (f.duration_s > 0.0 && f.duration_s <= 60.0),
             &format!("faults[{i}].duration_s of a stall in (0, 60]"),
