@@ -339,13 +339,7 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
         let start = first + i * slot + rng.random_range(0..=slot - spec.span_periods(kind) - 2);
         let signal = matches!(kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange)
             .then(|| SIGNALS[rng.random_range(0..SIGNALS.len())]);
-        faults.push(Fault {
-            kind,
-            at_s: start as f64 * ts,
-            duration_s: duration_s.unwrap_or(f64::from(periods) * ts),
-            delay_s,
-            signal,
-        });
+        faults.push(Fault { kind, at_s: start as f64 * ts, duration_s: duration_s.unwrap_or(f64::from(periods) * ts), delay_s, signal });
     }
     Ok(faults)
 }
