@@ -142,21 +142,24 @@ struct Expect {
 /// | `drop_command` | each period | none (it cannot know) | as usual | unchanged |
 /// | `late_command`, `delay_s >= Ts` | each period | each period | `DEADLINE_MISS` | +1 each period |
 /// | `late_command`, `delay_s < Ts` | none | none | as usual | unchanged |
-/// | `stall` of `(m + 1/2)` timeouts | `k0..k0+m` (no command: status 0) | in its process, not in the trace | at `k0+m` as usual | `+m` at `k0+m` |
+/// | `stall` of `(m + 1/2)` timeouts | `k0..k0+m` (no command: status 0) | counted, not in the trace | `SEQUENCE_GAP` at `k0+m` if `m > 0` | `+m` at `k0+m` |
 /// | `nan_sensor`, `out_of_range` | none | none | `BAD_FRAME` each period; `SEQUENCE_GAP` at `k0+n` (recovery) | unchanged |
 /// | `stuck_sensor` | none | none | as usual (the arm holds still: the count is right) | unchanged |
 ///
 /// A stall: the firmware sleeps at frame `k0`; the plant times out on `k0`, then
 /// publishes and times out on the next, `m` times in all; the firmware wakes
-/// while the plant waits for `k0+m`, finds frames `k0..=k0+m` queued, and steps
-/// each at the newest one's time: `k0..k0+m` late (its misses; their commands reach
-/// the plant as `late_answers`), `k0+m` on time.
+/// while the plant waits for `k0+m`, finds frames `k0..=k0+m` queued, counts the
+/// `m` periods it missed as overruns (`firmware::board::Event::Missed`, docs/rig.md
+/// "Stalls") and answers only the newest, `k0+m`, on time, past a gap in the
+/// sequence (`SEQUENCE_GAP`: it skipped `m` frames). `m` is at most
+/// `deadline_miss_limit - 1`, so the answer clears the streak.
 ///
 /// Outside the windows: no miss on either side, no `BAD_FRAME`, `SEQUENCE_GAP`,
 /// `STALE_FRAME` or `SAFE_STATE`. In `summary.json`: `deadline_misses` is the
 /// plant's misses; `firmware_overruns` (the firmware's final counter) is its own
-/// misses, every plant miss but the dropped commands; `late_answers` is the
-/// stalls' misses.
+/// misses, every plant miss but the dropped commands; `late_answers` (commands
+/// that came after the plant gave their period up) is 0: a stalled firmware
+/// answers only the newest frame.
 fn expected(faults: &[Fault], ts: f64, command_timeout_s: f64, periods: usize) -> Vec<Expect> {
     let mut e = vec![Expect::default(); periods];
     for f in faults {
@@ -181,7 +184,7 @@ fn expected(faults: &[Fault], ts: f64, command_timeout_s: f64, periods: usize) -
             FaultKind::Stall => {
                 let m = (f.duration_s / command_timeout_s - 0.5).round() as usize;
                 (k0..k0 + m).for_each(|k| set(k, Expect { plant_miss: true, no_command: true, ..Expect::default() }));
-                set(k0 + m, Expect { overruns_added: m as u32, ..Expect::default() });
+                set(k0 + m, Expect { overruns_added: m as u32, gap: m > 0, ..Expect::default() });
             }
             FaultKind::KillFirmware => {}
         }
@@ -637,7 +640,7 @@ fn check_counts(rows: &[Row], expect: &[Expect], ts: f64, sm: &serde_json::Value
     assert_eq!(overruns, late + stall_misses, "the firmware's final overrun count: its late steps and the stalls' misses");
     assert_eq!(overruns, misses - dropped, "the firmware's overruns are the plant's misses but the dropped commands");
     assert_eq!(firmware_bits, late, "DEADLINE_MISS bits the plant received");
-    assert_eq!(late_answers, stall_misses, "commands that came after their period was given up: the stalls'");
+    assert_eq!(late_answers, 0, "commands that came after their period was given up (a stalled firmware answers only the newest frame)");
     serde_json::json!({
         "plant_deadline_misses": misses,
         "firmware_overruns": overruns,
@@ -772,8 +775,8 @@ fn the_count_checks_catch_each_disagreement() {
     ];
     let expect = expected(&faults, ts, COMMAND_TIMEOUT_S, 20);
     // The trace the rig gives when it agrees: a miss at 2, 3 (dropped), 6 (late), 9
-    // (stalled, no command); overruns 1 from 6, 2 from the answer at 10; bad
-    // frames at 13, 14 and the gap at 15.
+    // (stalled, no command); overruns 1 from 6, 2 from the answer at 10, which
+    // skipped frame 9 (a gap); bad frames at 13, 14 and the gap at 15.
     let good = || -> Vec<Row> {
         (0..20)
             .map(|k| Row {
@@ -788,8 +791,8 @@ fn the_count_checks_catch_each_disagreement() {
                 status: match k {
                     6 => status::DEADLINE_MISS,
                     9 => 0,
+                    10 | 15 => status::SEQUENCE_GAP,
                     13 | 14 => status::BAD_FRAME,
-                    15 => status::SEQUENCE_GAP,
                     _ => status::REFERENCE_MOVING,
                 },
                 held: true,
