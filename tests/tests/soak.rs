@@ -710,6 +710,7 @@ fn a_long_lockstep_run_with_random_faults_counts_them_all_leaks_nothing_and_stay
             "before": ran.leaks.before.len(), "after": ran.leaks.after.len(),
             "dev_shm_before": in_shm(&ran.leaks.before), "dev_shm_after": in_shm(&ran.leaks.after), "rig_files_seen": ran.leaks.rig_files_seen,
             "rig_files_left": ran.leaks.left.len(), "other_processes_active": ran.leaks.foreign_activity,
+            "same_set_before_and_after": ran.leaks.before == ran.leaks.after,
         },
         "temp_folder": { "before": ran.leaks.temp_before, "after": ran.leaks.temp_after, "rig_entries_left": ran.leaks.temp_left.len() },
     });
