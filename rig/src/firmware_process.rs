@@ -322,7 +322,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         }
     }
     let config = firmware_config(s);
-    let announcement = firmware::announce::announce(&config)?;
+    let announcement = firmware::announce::announce(&config).map_err(crate::handshake::HandshakeError::from)?;
     let mut firmware = Some(Firmware::new(config)?);
     let mut board = IpcBoard {
         ports: &ports,

@@ -10,8 +10,6 @@ use firmware::{Config, announce::configuration};
 use serde::Serialize;
 use shared::wire::FirmwareAnnouncement;
 
-use crate::record::RunError;
-
 /// The firmware's announcement as the run records it (`firmware_announcement` in
 /// `summary.json`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -22,6 +20,27 @@ pub struct Announced {
     pub config_hash: String,
     /// The configuration the firmware runs.
     pub config: Config,
+}
+
+/// Why the plant refuses the firmware at the handshake (exit 2 from `sil-host run`).
+#[derive(Debug, thiserror::Error)]
+pub enum HandshakeError {
+    /// The announcement cannot be read: another wire version, or a configuration
+    /// this build cannot decode.
+    #[error("handshake: {0}")]
+    Announcement(#[from] firmware::announce::AnnounceError),
+    /// The firmware runs another configuration than the scenario asks for: every
+    /// differing setting.
+    #[error(
+        "the firmware on rig `{rig}` is configured differently from this scenario: {}; start it with the same scenario and flags",
+        differences.iter().map(ToString::to_string).collect::<Vec<_>>().join("; ")
+    )]
+    ConfigMismatch {
+        /// The rig name.
+        rig: String,
+        /// What differs.
+        differences: Vec<Difference>,
+    },
 }
 
 /// One setting on which the firmware and the scenario differ.
@@ -69,13 +88,13 @@ pub fn differences(firmware: &Config, scenario: &Config) -> Vec<Difference> {
 /// asks for.
 ///
 /// # Errors
-/// [`RunError::Announcement`] for another wire version or an undecodable
-/// configuration; [`RunError::ConfigMismatch`] naming every differing setting.
-pub fn check(announcement: &FirmwareAnnouncement, scenario: &Config, rig: &str) -> Result<Announced, RunError> {
+/// [`HandshakeError::Announcement`] for another wire version or an undecodable
+/// configuration; [`HandshakeError::ConfigMismatch`] naming every differing setting.
+pub fn check(announcement: &FirmwareAnnouncement, scenario: &Config, rig: &str) -> Result<Announced, HandshakeError> {
     let config = configuration(announcement)?;
     let differences = differences(&config, scenario);
     if !differences.is_empty() {
-        return Err(RunError::ConfigMismatch { rig: rig.to_string(), differences });
+        return Err(HandshakeError::ConfigMismatch { rig: rig.to_string(), differences });
     }
     Ok(Announced { wire_version: announcement.wire_version, config_hash: format!("{:016x}", announcement.config_hash), config })
 }
@@ -83,8 +102,8 @@ pub fn check(announcement: &FirmwareAnnouncement, scenario: &Config, rig: &str) 
 /// The announcement of a firmware linked in (in-process runs): its own configuration.
 ///
 /// # Errors
-/// [`RunError::Announcement`] if the configuration does not fit the message (a build error).
-pub fn of_config(config: &Config) -> Result<Announced, RunError> {
+/// [`HandshakeError::Announcement`] if the configuration does not fit the message (a build error).
+pub fn of_config(config: &Config) -> Result<Announced, HandshakeError> {
     let a = firmware::announce::announce(config)?;
     Ok(Announced { wire_version: a.wire_version, config_hash: format!("{:016x}", a.config_hash), config: *config })
 }
@@ -114,7 +133,7 @@ mod tests {
         fw.hybrid = HybridGains { kp: 800.0, ..scenario.hybrid };
         fw.params.mu = 0.3;
         fw.pid.kp[1] = 1.0;
-        let Err(RunError::ConfigMismatch { differences, rig }) = check(&announce(&fw).unwrap(), &scenario, "lab") else {
+        let Err(HandshakeError::ConfigMismatch { differences, rig }) = check(&announce(&fw).unwrap(), &scenario, "lab") else {
             panic!("a mismatch passed");
         };
         assert_eq!(rig, "lab");
@@ -132,6 +151,6 @@ mod tests {
         let mut a = announce(&Config::default()).unwrap();
         a.wire_version += 1;
         let e = check(&a, &Config::default(), "r").unwrap_err();
-        assert!(matches!(e, RunError::Announcement(AnnounceError::WireVersion { .. })), "{e}");
+        assert!(matches!(e, HandshakeError::Announcement(AnnounceError::WireVersion { .. })), "{e}");
     }
 }

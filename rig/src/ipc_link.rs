@@ -217,7 +217,7 @@ impl IpcLink {
                 asked = Some(Instant::now());
             }
             if let Some(a) = self.ports.announcements.try_next().map_err(transport)? {
-                return handshake::check(&a, &super::setup::firmware_config(s), &self.rig);
+                return Ok(handshake::check(&a, &super::setup::firmware_config(s), &self.rig)?);
             }
             if let Some(what) = self.firmware_gone() {
                 return Err(RunError::Transport(format!("the firmware process {what} before announcing its configuration")));

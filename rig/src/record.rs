@@ -98,22 +98,10 @@ pub enum RunError {
         /// The owner's process id (-1 if unknown).
         pid: i64,
     },
-    /// The firmware's announcement cannot be read: another wire version, or a
-    /// configuration this build cannot decode (the handshake, docs/rig.md).
-    #[error("handshake: {0}")]
-    Announcement(#[from] firmware::announce::AnnounceError),
-    /// The firmware runs another configuration than the scenario asks for (the
-    /// handshake before period 0, docs/rig.md): every differing setting.
-    #[error(
-        "the firmware on rig `{rig}` is configured differently from this scenario: {}; start it with the same scenario and flags",
-        differences.iter().map(ToString::to_string).collect::<Vec<_>>().join("; ")
-    )]
-    ConfigMismatch {
-        /// The rig name.
-        rig: String,
-        /// What differs.
-        differences: Vec<crate::handshake::Difference>,
-    },
+    /// The handshake before period 0 refused the firmware: another wire version,
+    /// an undecodable announcement, or another configuration (docs/rig.md).
+    #[error(transparent)]
+    Handshake(#[from] crate::handshake::HandshakeError),
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),

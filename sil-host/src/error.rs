@@ -59,8 +59,7 @@ impl CliError {
             Self::Sim(e) if e.is_bad_input() => 2,
             Self::Run(
                 rig::record::RunError::RigInUse { .. }
-                | rig::record::RunError::ConfigMismatch { .. }
-                | rig::record::RunError::Announcement(_)
+                | rig::record::RunError::Handshake(_)
                 | rig::record::RunError::IncompatibleService(_),
             ) => 2,
             _ => 1,
