@@ -405,7 +405,7 @@ pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObse
         }
     }
     // One allocation up front (capped: a scenario that is not validated may ask for anything).
-    let capacity = usize::try_from(s.timing.periods()).unwrap_or(0).min(1 << 24);
+    let capacity = usize::try_from(s.timing.periods()).unwrap_or(0).min(1 << 20);
     let mut keep = Keep { inner: run, records: Vec::with_capacity(capacity) };
     let (_, failure) = stream_loop(s, link, &mut keep);
     (keep.records, failure)

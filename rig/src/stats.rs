@@ -156,8 +156,9 @@ impl TimingHistogram {
         if self.hist.is_empty() {
             return Percentiles::default();
         }
-        let us = |q: f64| self.hist.value_at_quantile(q) as f64 * 1e-3;
-        Percentiles { p50: us(0.5), p99: us(0.99), p999: us(0.999), max: self.max_ns as f64 * 1e-3 }
+        // Divided (not multiplied by 1e-3): the nearest f64 to the microseconds, so 6975 ns prints as 6.975.
+        let us = |q: f64| self.hist.value_at_quantile(q) as f64 / 1000.0;
+        Percentiles { p50: us(0.5), p99: us(0.99), p999: us(0.999), max: self.max_ns as f64 / 1000.0 }
     }
 }
 
@@ -302,12 +303,12 @@ mod tests {
             sorted.sort_unstable();
             let n = sorted.len();
             // hdrhistogram's rank: the smallest sample with at least ceil(q n) samples at or below it.
-            let exact = |q: f64| sorted[((q * n as f64).ceil() as usize).clamp(1, n) - 1] as f64 * 1e-3;
+            let exact = |q: f64| sorted[((q * n as f64).ceil() as usize).clamp(1, n) - 1] as f64 / 1000.0;
             for (q, p) in [(0.5, got.p50), (0.99, got.p99), (0.999, got.p999)] {
                 let e = exact(q);
                 prop_assert!(p >= e && p <= e * 1.001 + 1e-3, "q {}: {} vs exact {}", q, p, e);
             }
-            prop_assert_eq!(got.max, sorted[n - 1] as f64 * 1e-3);
+            prop_assert_eq!(got.max, sorted[n - 1] as f64 / 1000.0);
         }
     }
 
