@@ -40,8 +40,8 @@ use rig::{
 };
 use shared::wire::status;
 
-/// Simulated seconds of the CI run (release): about a minute of wall time on 2
-/// cores (the stalls take most of it), and short enough that the iceoryx2 link's
+/// Simulated seconds of the CI run (release): about 80 s of wall time on 2 cores
+/// (the stalls take most of it), and short enough that the iceoryx2 link's
 /// per-period timing samples (8 B a period, 0.5 MB per simulated minute: see the
 /// plant's memory check) stay well under [`FLAT_MB`].
 const DEFAULT_SECONDS: f64 = 300.0;
@@ -50,7 +50,7 @@ const FLAT_MB: f64 = 4.0;
 /// The plant's lockstep command timeout in these runs, s. Stalls last
 /// `(n + 1/2)` of it, so each is half a timeout (0.5 s) of wall time from a
 /// boundary, and a period outside a window would need the firmware process held
-/// /// off the CPU for a whole second to time out. (At 0.25 s, one period of about
+/// off the CPU for a whole second to time out. (At 0.25 s, one period of about
 /// 9 million timed out so, on this 2-core machine at a load average of 10.)
 const COMMAND_TIMEOUT_S: f64 = 1.0;
 /// Longest window of the faults the firmware tolerates any number of, periods.
