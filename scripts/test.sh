@@ -21,6 +21,25 @@ if ! command -v flip-link >/dev/null; then
   cargo install flip-link --locked --version 0.1.12
 fi
 
+# The Python monitor's environment (tests/tests/python_monitor.rs): a virtual environment
+# with examples/python/requirements.txt (iceoryx2 from PyPI, pinned to the crate's version).
+# An existing PAINLEVE_PYTHON (a Python with those packages) is used as it is.
+if [ -z "${PAINLEVE_PYTHON:-}" ]; then
+  # Debian's python3 has no ensurepip (so no venv) without python3-venv.
+  if ! command -v python3 >/dev/null || ! python3 -c "import ensurepip, venv" 2>/dev/null; then
+    if [ "$(id -u)" = 0 ]; then
+      apt-get update && apt-get install -y python3 python3-venv
+    else
+      echo "python3 with venv is missing: sudo apt-get install -y python3-venv" >&2
+      exit 1
+    fi
+  fi
+  venv="target/venv-monitor"
+  [ -x "$venv/bin/pip" ] || { rm -rf "$venv" && python3 -m venv "$venv"; }
+  "$venv/bin/pip" install --quiet --disable-pip-version-check -r examples/python/requirements.txt
+  export PAINLEVE_PYTHON="$PWD/$venv/bin/python"
+fi
+
 echo "== format, lints (rustfmt.toml; clippy, warnings are errors) and no import cycle between files"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings

@@ -995,10 +995,8 @@ pub fn violations(s: &Scenario) -> Vec<String> {
         need(within(f.duration_s, 0.0, 1e5), &format!("faults[{i}].duration_s in [0, 1e5]"));
         let sensor = matches!(f.kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange);
         need(!sensor || f.signal.is_some(), &format!("faults[{i}]: a sensor fault has a signal"));
-        need(
-            f.kind != FaultKind::LateCommand || (fin(f.delay_s) && f.delay_s > 0.0 && f.delay_s < 10.0),
-            &format!("faults[{i}].delay_s in (0, 10)"),
-        );
+        need(fin(f.delay_s) && f.delay_s >= 0.0 && f.delay_s < 10.0, &format!("faults[{i}].delay_s in [0, 10)"));
+        need(f.kind != FaultKind::LateCommand || f.delay_s > 0.0, &format!("faults[{i}].delay_s of a late_command in (0, 10)"));
         need(
             f.kind != FaultKind::Stall || (f.duration_s > 0.0 && f.duration_s <= 60.0),
             &format!("faults[{i}].duration_s of a stall in (0, 60]"),
@@ -1018,6 +1016,16 @@ pub fn error_names_its_place(msg: &str) -> bool {
     !msg.trim().is_empty() && (backticked || located || said || msg.contains("--set "))
 }
 
+/// The paths of the non-finite floats in `v`.
+fn non_finite(v: &Value, at: &str, out: &mut Vec<String>) {
+    match v {
+        Value::Float(x) if !x.is_finite() => out.push(at.to_string()),
+        Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| non_finite(x, &format!("{at}[{i}]"), out)),
+        Value::Table(t) => t.iter().for_each(|(k, x)| non_finite(x, &format!("{at}.{k}"), out)),
+        _ => {}
+    }
+}
+
 /// Checks an accepted scenario: bounds, firmware configuration, round trip.
 ///
 /// # Errors
@@ -1025,6 +1033,11 @@ pub fn error_names_its_place(msg: &str) -> bool {
 pub fn check_accepted(s: &Scenario) -> Result<(), String> {
     let v = violations(s);
     ensure(v.is_empty(), || format!("accepted a scenario that breaks documented bounds: {v:?}"))?;
+    // Every number, used or not (a NaN in an unused field reads back as `null` from summary.json).
+    let table = toml::Table::try_from(s).map_err(|e| format!("an accepted scenario is not a TOML table: {e}"))?;
+    let mut odd = Vec::new();
+    non_finite(&Value::Table(table), "", &mut odd);
+    ensure(odd.is_empty(), || format!("accepted a scenario with non-finite numbers at {odd:?}"))?;
     Firmware::new(firmware_config(s)).map_err(|e| format!("accepted a scenario whose firmware configuration the firmware refuses: {e}"))?;
     let written = toml::to_string(s).map_err(|e| format!("an accepted scenario cannot be written as TOML: {e}"))?;
     match Scenario::from_toml(&written) {

@@ -82,6 +82,11 @@ impl Fault {
         if !(self.duration_s.is_finite() && (0.0..=1e5).contains(&self.duration_s)) {
             return Err(format!("duration_s = {}: a duration in [0, 1e5] s", self.duration_s));
         }
+        // Every kind: a NaN or huge delay on a fault that does not use it was accepted
+        // and written as `null` in summary.json (found by fuzzing, docs/fuzzing.md).
+        if !(self.delay_s.is_finite() && (0.0..10.0).contains(&self.delay_s)) {
+            return Err(format!("delay_s = {}: a delay in [0, 10) s (late_command: in (0, 10))", self.delay_s));
+        }
         let sensor = matches!(self.kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange);
         if sensor && self.signal.is_none() {
             return Err("a sensor fault needs `signal` (theta1, elbow, f_t, f_n or belt)".into());
@@ -365,6 +370,13 @@ mod tests {
         assert!(f.check().unwrap_err().contains("signal"));
         let f = Fault { kind: FaultKind::LateCommand, at_s: 1.0, duration_s: 0.0, delay_s: f64::NAN, signal: None };
         assert!(f.check().unwrap_err().contains("delay_s"));
+        // Regression (fuzzing): a fault that does not use its delay still gets a sane one.
+        for delay_s in [f64::NAN, f64::INFINITY, -1.0, 10.0] {
+            let f = Fault { kind: FaultKind::StuckSensor, at_s: 1.0, duration_s: 0.0, delay_s, signal: Some(Signal::FN) };
+            assert!(f.check().unwrap_err().contains("delay_s"), "{delay_s}");
+        }
+        let f = Fault { kind: FaultKind::StuckSensor, at_s: 1.0, duration_s: 0.0, delay_s: 0.0, signal: Some(Signal::FN) };
+        assert_eq!(f.check(), Ok(()));
     }
 
     /// Each link refuses exactly the faults it cannot inject, in one table: the

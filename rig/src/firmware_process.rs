@@ -306,15 +306,16 @@ impl Board for IpcBoard<'_> {
 /// the run or dies.
 ///
 /// # Errors
-/// [`RunError::Firmware`] for a bad configuration, [`RunError::Transport`] when
-/// iceoryx2 fails or no plant appears within [`WAIT_FOR_PLANT_S`].
+/// [`RunError::Firmware`] for a bad configuration, [`RunError::IncompatibleService`]
+/// when a service another process created lacks what the firmware needs,
+/// [`RunError::Transport`] when iceoryx2 fails or no plant appears within
+/// [`WAIT_FOR_PLANT_S`].
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
-    let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
     let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
     if let Some(pid) = super::ipc::live_owner(super::ipc::Role::Firmware, rig) {
         return Err(RunError::RigInUse { rig: rig.to_string(), role: "firmware", pid });
     }
-    let ports = FirmwarePorts::open(rig, spin).map_err(transport)?;
+    let ports = FirmwarePorts::open(rig, spin).map_err(super::ipc_link::open_error)?;
     if realtime {
         for w in prepare_realtime(&s.rig).warnings {
             eprintln!("firmware: real-time set-up: {w}");

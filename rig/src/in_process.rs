@@ -78,6 +78,11 @@ mod tests {
         assert!(a.iter().all(|r| !r.deadline_miss && !r.firmware_deadline_miss));
         let last = a.last().unwrap();
         assert!((last.z_t - 0.10).abs() < 1e-3, "final z_t {}", last.z_t);
+        // The streamed statistics are those of the whole list, to the bit.
+        let st = crate::stats::RunStats::of(&a);
+        let direct = (a.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+        assert_eq!(st.rms_tracking_error().to_bits(), direct.to_bits());
+        assert_eq!((st.periods(), st.deadline_misses(), st.final_z_t(), st.last_t()), (a.len(), 0, last.z_t, Some(last.t)));
         let settled: Vec<_> = a.iter().filter(|r| r.t > 2.5).collect();
         assert!(settled.iter().all(|r| (r.f_n - 10.0).abs() < 0.5), "f_n held near 10 N");
     }

@@ -12,35 +12,60 @@
 //! | `painleve/R/ground_truth` | `painleve::GroundTruth` | plant -> monitors |
 //! | `painleve/R/firmware_announcement` | `painleve::FirmwareAnnouncement` | firmware -> plant (handshake) |
 //! | `painleve/R/frame_ready`, `painleve/R/command_ready` | events | wake a blocked peer |
+//! | `painleve/R/ground_truth`, `painleve/R/firmware_telemetry` | events | wake monitors |
 //!
 //! Waiting: a bounded spin on the subscriber (cheap while the peer answers within
 //! microseconds), then a blocking wait on the event service (so two processes
 //! never both busy-wait on a 2-core machine). Every send notifies.
 //!
+//! Monitors (any iceoryx2 client that subscribes to `ground_truth` or
+//! `firmware_telemetry`) may start before or after the rig: the services'
+//! attributes and what the rig needs of them are in [`crate::services`]. The
+//! plant never waits for a monitor unless the run asks for it ([`MonitorPolicy`]);
+//! the firmware never does.
+//!
 //! Node names are `painleve-plant-R` and `painleve-firmware-R`; each side finds
 //! out whether its peer died from iceoryx2's node monitoring, and removes the
 //! stale resources of dead nodes (a killed run) before it opens the services.
 
-use std::time::{Duration, Instant};
+use std::{
+    sync::{Arc, Mutex, PoisonError},
+    time::{Duration, Instant},
+};
 
 use iceoryx2::{
     node::NodeView,
-    port::{listener::Listener, notifier::Notifier, publisher::Publisher, subscriber::Subscriber},
+    port::{BackpressureAction, BackpressureInfo, listener::Listener, notifier::Notifier, publisher::Publisher, subscriber::Subscriber},
     prelude::*,
 };
 use shared::wire::{ActuatorCommand, FirmwareAnnouncement, FirmwareTelemetry, GroundTruth, SensorFrame};
 
-/// Queue depth of every subscriber: a peer that stalls for this many periods
-/// finds them all on waking (older ones are overwritten: safe overflow).
-pub const QUEUE_DEPTH: usize = 64;
+pub use super::services::QUEUE_DEPTH;
+use super::services::{Incompatible, LINK_EVENT, MONITOR_EVENT, Needs, ServiceError, Topic, open_event, open_pubsub, service_name};
 
 /// A transport failure, with what was being done.
 #[derive(Debug, thiserror::Error)]
-#[error("iceoryx2: {0}")]
-pub struct IpcError(pub String);
+pub enum IpcError {
+    /// iceoryx2 failed.
+    #[error("iceoryx2: {0}")]
+    Transport(String),
+    /// A service another process created lacks what this run needs (bad set-up,
+    /// not a fault of the link: the message names the attribute and the value).
+    #[error(transparent)]
+    Incompatible(#[from] Incompatible),
+}
+
+impl From<ServiceError> for IpcError {
+    fn from(e: ServiceError) -> Self {
+        match e {
+            ServiceError::Incompatible(i) => Self::Incompatible(i),
+            ServiceError::Other(m) => Self::Transport(m),
+        }
+    }
+}
 
 fn err(what: &str, e: impl std::fmt::Debug) -> IpcError {
-    IpcError(format!("{what}: {e:?}"))
+    IpcError::Transport(format!("{what}: {e:?}"))
 }
 
 /// Which end of the link a process is.
@@ -158,59 +183,42 @@ pub fn peer_state(role: Role, rig: &str) -> PeerState {
     state
 }
 
-fn service_name(rig: &str, topic: &str) -> Result<ServiceName, IpcError> {
-    ServiceName::new(&format!("painleve/{rig}/{topic}")).map_err(|e| err("service name", e))
+fn pubsub<T: std::fmt::Debug + ZeroCopySend + 'static>(node: &Node<ipc::Service>, rig: &str, topic: Topic) -> Result<PubSub<T>, IpcError> {
+    Ok(open_pubsub::<T>(node, rig, topic, &topic.needs(), "the rig")?)
 }
 
-fn pubsub<T: std::fmt::Debug + ZeroCopySend + 'static>(
-    node: &Node<ipc::Service>,
-    rig: &str,
-    topic: &str,
-) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcError> {
-    node.service_builder(&service_name(rig, topic)?)
-        .publish_subscribe::<T>()
-        .subscriber_max_buffer_size(QUEUE_DEPTH)
-        .history_size(0)
-        .enable_safe_overflow(true)
-        .max_publishers(2)
-        .max_subscribers(4)
-        .max_nodes(6)
-        .open_or_create()
-        .map_err(|e| err(&format!("open service {topic}"), e))
-}
-
+/// A publisher that never waits for a full subscriber: on a service without safe
+/// overflow it discards the sample for that subscriber (with safe overflow the
+/// service overwrites the subscriber's oldest one).
 fn publisher<T: std::fmt::Debug + ZeroCopySend + 'static>(
-    node: &Node<ipc::Service>,
-    rig: &str,
-    topic: &str,
+    service: &PubSub<T>,
+    topic: Topic,
 ) -> Result<Publisher<ipc::Service, T, ()>, IpcError> {
-    pubsub::<T>(node, rig, topic)?.publisher_builder().create().map_err(|e| err(&format!("publisher {topic}"), e))
+    service
+        .publisher_builder()
+        .backpressure_strategy(BackpressureStrategy::DiscardData)
+        .create()
+        .map_err(|e| err(&format!("publisher {}", topic.name()), e))
 }
 
 fn subscriber<T: std::fmt::Debug + ZeroCopySend + 'static>(
-    node: &Node<ipc::Service>,
-    rig: &str,
-    topic: &str,
+    service: &PubSub<T>,
+    topic: Topic,
 ) -> Result<Subscriber<ipc::Service, T, ()>, IpcError> {
-    pubsub::<T>(node, rig, topic)?
-        .subscriber_builder()
-        .buffer_size(QUEUE_DEPTH)
-        .create()
-        .map_err(|e| err(&format!("subscriber {topic}"), e))
+    service.subscriber_builder().buffer_size(QUEUE_DEPTH).create().map_err(|e| err(&format!("subscriber {}", topic.name()), e))
 }
 
-fn event(
+fn notifier(
     node: &Node<ipc::Service>,
     rig: &str,
-    topic: &str,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, IpcError> {
-    node.service_builder(&service_name(rig, topic)?)
-        .event()
-        .max_notifiers(2)
-        .max_listeners(2)
-        .max_nodes(6)
-        .open_or_create()
-        .map_err(|e| err(&format!("open event {topic}"), e))
+    name: &str,
+    attributes: &super::services::EventAttributes,
+) -> Result<Notifier<ipc::Service>, IpcError> {
+    open_event(node, rig, name, attributes)?.notifier_builder().create().map_err(|e| err(&format!("notifier {name}"), e))
+}
+
+fn listener(node: &Node<ipc::Service>, rig: &str, name: &str) -> Result<Listener<ipc::Service>, IpcError> {
+    open_event(node, rig, name, &LINK_EVENT)?.listener_builder().create().map_err(|e| err(&format!("listener {name}"), e))
 }
 
 /// A subscriber with its wake-up listener: bounded spin, then a blocking wait.
@@ -292,24 +300,116 @@ fn wait_readable(listener: &Listener<ipc::Service>, timeout: Duration) -> Result
     Ok(())
 }
 
-/// A publisher with the notifier that wakes its peer.
+/// Whom an [`Outbox`]'s notifier wakes.
+enum Wake {
+    /// Nobody (the message always precedes another one that wakes).
+    Nobody,
+    /// The peer process: a failed notification is a transport failure.
+    Peer(Notifier<ipc::Service>),
+    /// Monitors: best effort (a monitor that died must not stop the run).
+    Monitors(Notifier<ipc::Service>),
+}
+
+/// A publisher with the notifier that wakes its peer or its monitors.
 pub struct Outbox<T: std::fmt::Debug + ZeroCopySend + 'static> {
     publisher: Publisher<ipc::Service, T, ()>,
-    notifier: Option<Notifier<ipc::Service>>,
+    wake: Wake,
 }
 
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Outbox<T> {
-    /// Publishes `value` (a copy into shared memory) and wakes the peer.
+    /// Publishes `value` (a copy into shared memory) and wakes the peer or the
+    /// monitors. On `ground_truth` with [`MonitorPolicy::lossless`] this waits
+    /// while a monitor's buffer is full, up to [`MonitorPolicy::timeout`].
     ///
     /// # Errors
-    /// [`IpcError`] when sending fails.
+    /// [`IpcError`] when sending, or waking the peer, fails.
     pub fn send(&self, value: T) -> Result<(), IpcError> {
         self.publisher.send_copy(value).map_err(|e| err("send", e))?;
-        if let Some(n) = &self.notifier {
-            n.notify().map_err(|e| err("notify", e))?;
+        match &self.wake {
+            Wake::Nobody => {}
+            Wake::Peer(n) => {
+                n.notify().map_err(|e| err("notify", e))?;
+            }
+            Wake::Monitors(n) => {
+                let _ = n.notify();
+            }
         }
         Ok(())
     }
+}
+
+/// What the plant does for monitors, the subscribers of `ground_truth`
+/// (`sil-host run --monitors N`; docs/rig.md, "Monitors").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MonitorPolicy {
+    /// Monitors to wait for before period 0 (up to `rig.connect_timeout_s`).
+    pub wait_for: usize,
+    /// Lockstep: a sample that finds a monitor's buffer full waits for room
+    /// instead of being discarded for that monitor, so a monitor receives every
+    /// sample; the run goes at the pace of the slowest monitor.
+    pub lossless: bool,
+    /// How long one sample waits for a full monitor before that monitor is given
+    /// up (never waited for again: it then loses what finds its buffer full).
+    pub timeout: Duration,
+}
+
+impl Default for MonitorPolicy {
+    /// No monitor waited for, none ever waits the plant, 2 s.
+    fn default() -> Self {
+        Self { wait_for: 0, lossless: false, timeout: Duration::from_secs(2) }
+    }
+}
+
+/// What monitors cost the run so far (with [`MonitorPolicy::lossless`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct MonitorCounts {
+    /// Monitors given up: a sample waited [`MonitorPolicy::timeout`] for room in
+    /// their buffer (dead, stopped, or too slow).
+    pub given_up: u32,
+    /// Samples not delivered to given-up monitors (one per monitor per sample).
+    pub samples_dropped: u64,
+}
+
+#[derive(Debug, Default)]
+struct MonitorState {
+    given_up_ports: Vec<u128>,
+    counts: MonitorCounts,
+}
+
+/// The `ground_truth` publisher of a lossless run: iceoryx2 retries a full
+/// subscriber (yielding, then sleeping) and asks this handler each time whether
+/// to go on; past the timeout the monitor is given up, and from then on a sample
+/// that finds its buffer full is discarded for it at once.
+fn lossless_publisher(
+    service: &PubSub<GroundTruth>,
+    full_name: String,
+    timeout: Duration,
+    state: Arc<Mutex<MonitorState>>,
+) -> Result<Publisher<ipc::Service, GroundTruth, ()>, IpcError> {
+    service
+        .publisher_builder()
+        .backpressure_strategy(BackpressureStrategy::RetryUntilDelivered)
+        .set_backpressure_handler(move |info: &BackpressureInfo| {
+            let mut st = state.lock().unwrap_or_else(PoisonError::into_inner);
+            if st.given_up_ports.contains(&info.receiver_port_id) {
+                st.counts.samples_dropped += 1;
+                return BackpressureAction::DiscardData;
+            }
+            if info.elapsed_time < timeout {
+                return BackpressureAction::Retry;
+            }
+            st.given_up_ports.push(info.receiver_port_id);
+            st.counts.given_up += 1;
+            st.counts.samples_dropped += 1;
+            eprintln!(
+                "rig: a monitor of {full_name} took no sample for {} s with its buffer full (dead, stopped or too slow): \
+                 it is no longer waited for, and loses the samples that find its buffer full",
+                timeout.as_secs_f64()
+            );
+            BackpressureAction::DiscardData
+        })
+        .create()
+        .map_err(|e| err("publisher ground_truth", e))
 }
 
 type PubSub<T> = iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>;
@@ -330,40 +430,76 @@ pub struct PlantPorts {
     pub telemetry: Inbox<FirmwareTelemetry>,
     /// The firmware's announcement (the handshake before period 0).
     pub announcements: Inbox<FirmwareAnnouncement>,
+    truth_service: PubSub<GroundTruth>,
+    /// Kept open so that the event exists as long as the service does.
+    _telemetry_event: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+    monitors: Arc<Mutex<MonitorState>>,
 }
 
 impl PlantPorts {
-    /// Opens (or creates) the rig's services for the plant; `spin` is the bounded spin.
+    /// Opens (or creates) the rig's services for the plant; `spin` is the bounded
+    /// spin; `monitors` says what a full monitor costs.
     ///
     /// # Errors
-    /// [`IpcError`] when a node, service or port cannot be created.
-    pub fn open(rig: &str, spin: Duration) -> Result<Self, IpcError> {
+    /// [`IpcError::Incompatible`] when a service another process created lacks
+    /// what the plant needs (with `monitors.lossless`: `ground_truth` without safe
+    /// overflow); [`IpcError::Transport`] when a node, service or port cannot be
+    /// created.
+    pub fn open(rig: &str, spin: Duration, monitors: &MonitorPolicy) -> Result<Self, IpcError> {
         let node = node(Role::Plant, rig)?;
-        let frame_ready = event(&node, rig, "frame_ready")?;
-        let command_ready = event(&node, rig, "command_ready")?;
-        let frames_service = pubsub::<SensorFrame>(&node, rig, "sensor_frames")?;
-        let commands_service = pubsub::<ActuatorCommand>(&node, rig, "actuator_commands")?;
+        let frames_service = pubsub::<SensorFrame>(&node, rig, Topic::SensorFrames)?;
+        let commands_service = pubsub::<ActuatorCommand>(&node, rig, Topic::ActuatorCommands)?;
+        // The telemetry's wake-up event before its service (the firmware notifies it):
+        // a monitor that finds the service finds the event too.
+        let telemetry_event = open_event(&node, rig, Topic::FirmwareTelemetry.name(), &MONITOR_EVENT)?;
+        let telemetry_service = pubsub::<FirmwareTelemetry>(&node, rig, Topic::FirmwareTelemetry)?;
+        let announcement_service = pubsub::<FirmwareAnnouncement>(&node, rig, Topic::FirmwareAnnouncement)?;
+        let truth_needs = Needs {
+            no_safe_overflow: monitors.lossless,
+            min_subscribers: monitors.wait_for,
+            min_nodes: monitors.wait_for + 1,
+            ..Topic::GroundTruth.needs()
+        };
+        // The event first: a monitor that finds the service finds its event too.
+        let truth_wake = Wake::Monitors(notifier(&node, rig, Topic::GroundTruth.name(), &MONITOR_EVENT)?);
+        let who = if monitors.lossless { "`run --monitors` in lockstep" } else { "`run --monitors`" };
+        let truth_service = open_pubsub::<GroundTruth>(&node, rig, Topic::GroundTruth, &truth_needs, who)?;
+        let state = Arc::new(Mutex::new(MonitorState::default()));
+        let truth_publisher = if monitors.lossless {
+            lossless_publisher(&truth_service, service_name(rig, Topic::GroundTruth.name()), monitors.timeout, Arc::clone(&state))?
+        } else {
+            publisher(&truth_service, Topic::GroundTruth)?
+        };
         Ok(Self {
             frames: Outbox {
-                publisher: frames_service.publisher_builder().create().map_err(|e| err("publisher sensor_frames", e))?,
-                notifier: Some(frame_ready.notifier_builder().create().map_err(|e| err("notifier", e))?),
+                publisher: publisher(&frames_service, Topic::SensorFrames)?,
+                wake: Wake::Peer(notifier(&node, rig, "frame_ready", &LINK_EVENT)?),
             },
-            truth: Outbox { publisher: publisher(&node, rig, "ground_truth")?, notifier: None },
+            truth: Outbox { publisher: truth_publisher, wake: truth_wake },
             commands: Inbox {
-                subscriber: commands_service
-                    .subscriber_builder()
-                    .buffer_size(QUEUE_DEPTH)
-                    .create()
-                    .map_err(|e| err("subscriber actuator_commands", e))?,
-                listener: Some(command_ready.listener_builder().create().map_err(|e| err("listener", e))?),
+                subscriber: subscriber(&commands_service, Topic::ActuatorCommands)?,
+                listener: Some(listener(&node, rig, "command_ready")?),
                 spin,
             },
-            telemetry: Inbox { subscriber: subscriber(&node, rig, "firmware_telemetry")?, listener: None, spin },
-            announcements: Inbox { subscriber: subscriber(&node, rig, "firmware_announcement")?, listener: None, spin },
+            telemetry: Inbox { subscriber: subscriber(&telemetry_service, Topic::FirmwareTelemetry)?, listener: None, spin },
+            announcements: Inbox { subscriber: subscriber(&announcement_service, Topic::FirmwareAnnouncement)?, listener: None, spin },
             frames_service,
             commands_service,
+            truth_service,
+            _telemetry_event: telemetry_event,
+            monitors: state,
             node,
         })
+    }
+
+    /// Monitors subscribed to `ground_truth` now.
+    pub fn monitors(&self) -> usize {
+        self.truth_service.dynamic_config().number_of_subscribers()
+    }
+
+    /// What monitors cost the run so far.
+    pub fn monitor_counts(&self) -> MonitorCounts {
+        self.monitors.lock().unwrap_or_else(PoisonError::into_inner).counts.clone()
     }
 
     /// Whether a firmware is connected: it subscribes to the frames and publishes commands.
@@ -391,23 +527,28 @@ impl FirmwarePorts {
     /// Opens (or creates) the rig's services for the firmware.
     ///
     /// # Errors
-    /// [`IpcError`] when a node, service or port cannot be created.
+    /// [`IpcError::Incompatible`] when a service another process created lacks
+    /// what the firmware needs; [`IpcError::Transport`] when a node, service or
+    /// port cannot be created.
     pub fn open(rig: &str, spin: Duration) -> Result<Self, IpcError> {
         let node = node(Role::Firmware, rig)?;
-        let frame_ready = event(&node, rig, "frame_ready")?;
-        let command_ready = event(&node, rig, "command_ready")?;
+        let telemetry_wake = Wake::Monitors(notifier(&node, rig, Topic::FirmwareTelemetry.name(), &MONITOR_EVENT)?);
+        let frames_service = pubsub::<SensorFrame>(&node, rig, Topic::SensorFrames)?;
+        let commands_service = pubsub::<ActuatorCommand>(&node, rig, Topic::ActuatorCommands)?;
+        let telemetry_service = pubsub::<FirmwareTelemetry>(&node, rig, Topic::FirmwareTelemetry)?;
+        let announcement_service = pubsub::<FirmwareAnnouncement>(&node, rig, Topic::FirmwareAnnouncement)?;
         Ok(Self {
             frames: Inbox {
-                subscriber: subscriber(&node, rig, "sensor_frames")?,
-                listener: Some(frame_ready.listener_builder().create().map_err(|e| err("listener", e))?),
+                subscriber: subscriber(&frames_service, Topic::SensorFrames)?,
+                listener: Some(listener(&node, rig, "frame_ready")?),
                 spin,
             },
             commands: Outbox {
-                publisher: publisher(&node, rig, "actuator_commands")?,
-                notifier: Some(command_ready.notifier_builder().create().map_err(|e| err("notifier", e))?),
+                publisher: publisher(&commands_service, Topic::ActuatorCommands)?,
+                wake: Wake::Peer(notifier(&node, rig, "command_ready", &LINK_EVENT)?),
             },
-            telemetry: Outbox { publisher: publisher(&node, rig, "firmware_telemetry")?, notifier: None },
-            announcement: Outbox { publisher: publisher(&node, rig, "firmware_announcement")?, notifier: None },
+            telemetry: Outbox { publisher: publisher(&telemetry_service, Topic::FirmwareTelemetry)?, wake: telemetry_wake },
+            announcement: Outbox { publisher: publisher(&announcement_service, Topic::FirmwareAnnouncement)?, wake: Wake::Nobody },
             node,
         })
     }

@@ -33,11 +33,12 @@ use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, WIRE_VERSION, fr
 use super::{
     faults::{FaultPlan, LinkKind},
     handshake::{self, Announced},
-    ipc::{PeerState, PlantPorts, Role, peer_state},
+    ipc::{IpcError, MonitorCounts, MonitorPolicy, PeerState, PlantPorts, Role, peer_state},
     realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
     record::RunError,
     rig::{Exchange, FirmwareLink},
     scenario::Scenario,
+    stats::TimingHistogram,
 };
 
 /// How long the plant waits for the firmware to connect, s.
@@ -49,15 +50,16 @@ pub struct Spawned {
     child: Child,
 }
 
-/// Wall-clock figures of an iceoryx2 run, microseconds, one sample per period.
+/// Wall-clock figures of an iceoryx2 run, one sample per period, in fixed
+/// memory (HDR histograms at 3 significant digits: [`TimingHistogram`]).
 #[derive(Debug, Clone, Default)]
 pub struct LinkTimings {
     /// Round trip: frame published to its command received.
-    pub rtt_us: Vec<f32>,
+    pub rtt: TimingHistogram,
     /// Real time: frame publication minus its ideal wall time `t0 + t_k`.
-    pub jitter_us: Vec<f32>,
+    pub jitter: TimingHistogram,
     /// The firmware's own step time (its `step_ticks`, ns ticks on the host).
-    pub step_us: Vec<f32>,
+    pub step: TimingHistogram,
     /// Commands that arrived after their period was given up (late answers).
     pub late_answers: u64,
 }
@@ -90,19 +92,28 @@ impl IpcLink {
     /// Opens the rig `rig`'s services and, when `firmware_exe` is given, spawns
     /// `firmware_exe firmware --rig RIG --scenario -` with the scenario on its
     /// standard input (and `--realtime` in real time); then waits until the
-    /// firmware is connected.
+    /// firmware is connected and has announced its configuration, and then until
+    /// `monitors.wait_for` monitors subscribe to `ground_truth` (each wait up to
+    /// the scenario's `rig.connect_timeout_s`, [`CONNECT_TIMEOUT_S`] by default).
     ///
     /// # Errors
-    /// [`RunError::Transport`] when the services cannot be opened, the process
-    /// cannot be started, or no firmware connects within the scenario's
-    /// `rig.connect_timeout_s` ([`CONNECT_TIMEOUT_S`] by default).
-    pub fn connect(s: &Scenario, rig: &str, firmware_exe: Option<&Path>, realtime: bool) -> Result<Self, RunError> {
+    /// [`RunError::IncompatibleService`] when a service another process created
+    /// lacks what the run needs; [`RunError::Transport`] when the services cannot
+    /// be opened, the process cannot be started, or no firmware (or fewer
+    /// monitors than asked) connects in time.
+    pub fn connect(
+        s: &Scenario,
+        rig: &str,
+        firmware_exe: Option<&Path>,
+        realtime: bool,
+        monitors: &MonitorPolicy,
+    ) -> Result<Self, RunError> {
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         if let Some(pid) = super::ipc::live_owner(Role::Plant, rig) {
             return Err(RunError::RigInUse { rig: rig.to_string(), role: "plant", pid });
         }
-        let ports = PlantPorts::open(rig, spin).map_err(|e| RunError::Transport(e.to_string()))?;
+        let ports = PlantPorts::open(rig, spin, monitors).map_err(open_error)?;
         // Before spawning: the firmware process inherits nothing from this thread's
         // set-up, it makes its own from the same scenario.
         let realtime_setup = realtime.then(|| prepare_realtime(&s.rig));
@@ -156,7 +167,40 @@ impl IpcLink {
             std::thread::sleep(Duration::from_millis(2));
         }
         link.announced = Some(link.handshake(s, start + Duration::from_secs_f64(limit))?);
+        link.wait_for_monitors(monitors.wait_for, limit)?;
         Ok(link)
+    }
+
+    /// Waits until `count` monitors subscribe to `ground_truth`, up to `limit_s`.
+    fn wait_for_monitors(&mut self, count: usize, limit_s: f64) -> Result<(), RunError> {
+        if count == 0 {
+            return Ok(());
+        }
+        let service = super::services::service_name(&self.rig, "ground_truth");
+        if self.ports.monitors() < count {
+            eprintln!("rig: waiting for {count} monitor(s) to subscribe to {service} (up to {limit_s} s)");
+        }
+        let start = Instant::now();
+        while self.ports.monitors() < count {
+            if let Some(what) = self.firmware_gone() {
+                return Err(RunError::Transport(format!("the firmware process {what} while the rig waited for monitors")));
+            }
+            if start.elapsed().as_secs_f64() > limit_s {
+                return Err(RunError::Transport(format!(
+                    "{} of {count} monitor(s) subscribed to {service} within rig.connect_timeout_s = {limit_s} s: start them \
+                     (`python3 examples/python/monitor.py --rig {}`), or run without --monitors",
+                    self.ports.monitors(),
+                    self.rig
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        Ok(())
+    }
+
+    /// What monitors cost the run so far (lossless runs: monitors given up, samples dropped).
+    pub fn monitor_counts(&self) -> MonitorCounts {
+        self.ports.monitor_counts()
     }
 
     /// The handshake before period 0: asks the connected firmware for its
@@ -237,6 +281,15 @@ impl IpcLink {
     }
 }
 
+/// A service that lacks what the run needs is bad set-up (exit 2); anything else
+/// is the transport failing.
+pub(crate) fn open_error(e: IpcError) -> RunError {
+    match e {
+        IpcError::Incompatible(i) => RunError::IncompatibleService(i.to_string()),
+        IpcError::Transport(m) => RunError::Transport(format!("iceoryx2: {m}")),
+    }
+}
+
 fn spawn(exe: &Path, rig: &str, s: &Scenario, realtime: bool) -> Result<Spawned, RunError> {
     let toml = toml::to_string(s).map_err(|e| RunError::Transport(format!("cannot serialise the scenario: {e}")))?;
     let mut cmd = Command::new(exe);
@@ -290,7 +343,7 @@ impl FirmwareLink for IpcLink {
         // plant itself published late, the firmware still gets half a period.
         let deadline = deadline.unwrap_or_else(|| {
             let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
-            self.timings.jitter_us.push(published.saturating_duration_since(ideal).as_secs_f64() as f32 * 1e6);
+            self.timings.jitter.record(published.saturating_duration_since(ideal));
             let ts = Duration::from_secs_f64(self.ts);
             (ideal + ts).max(published + ts / 2)
         });
@@ -299,8 +352,8 @@ impl FirmwareLink for IpcLink {
                 Some(c) if c.seq == frame.seq => {
                     let now = Instant::now();
                     self.consecutive_timeouts = 0;
-                    self.timings.rtt_us.push((now - published).as_secs_f64() as f32 * 1e6);
-                    self.timings.step_us.push(c.step_ticks as f32 * 1e-3);
+                    self.timings.rtt.record(now - published);
+                    self.timings.step.record_ns(u64::from(c.step_ticks));
                     let telemetry = self.telemetry_for(c.seq)?;
                     // Real time: the command's own send stamp (the firmware's clock,
                     // anchored at the frame's arrival) dates it; the plant's own view

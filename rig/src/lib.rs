@@ -4,12 +4,13 @@
 //! over its USART, in QEMU or on a board behind a serial port: processor and
 //! hardware in the loop).
 //!
-//! Features: `ipc` (iceoryx2: [`ipc`], [`ipc_link`], [`firmware_process`]) and
+//! Features: `ipc` (iceoryx2: [`ipc`], [`services`], [`ipc_link`], [`firmware_process`]) and
 //! `pil` ([`pil_link`]), both on by default; without them the rig runs the
 //! firmware in-process only (what the analyses need).
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
@@ -28,5 +29,8 @@ pub mod record;
 pub mod rig;
 pub mod scenario;
 pub mod sensors;
+#[cfg(feature = "ipc")]
+pub mod services;
 pub mod setup;
+pub mod stats;
 pub mod summary;

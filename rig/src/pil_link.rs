@@ -43,12 +43,14 @@ use serde::Serialize;
 use shared::wire::{GroundTruth, SensorFrame};
 
 use super::{
+    envelope::Envelope,
     faults::{FaultPlan, LinkKind},
     record::RunError,
     rig::{Exchange, FirmwareLink},
     scenario::Scenario,
     setup::firmware_config,
-    summary::{CountUnit, PilFigures, Spread},
+    stats::CountDistribution,
+    summary::{CountUnit, PilFigures},
 };
 
 /// QEMU's instruction-count shift: one instruction per `2^ICOUNT_SHIFT` ns of
@@ -125,6 +127,10 @@ pub struct PilOptions {
     pub boot_timeout_s: f64,
     /// Wall time the image gets to answer one frame before it counts as hung, s; positive.
     pub answer_timeout_s: f64,
+    /// Keep every period's tick counts ([`PilCounts::step_ticks`], 8 bytes a
+    /// period: short runs that compare them period by period); off, the counts
+    /// are summarised in fixed memory only.
+    pub keep_ticks: bool,
 }
 
 impl PilOptions {
@@ -140,7 +146,7 @@ impl PilOptions {
 
     /// `target` with 20 s / 5 s timeouts.
     pub fn for_target(target: PilTarget) -> Self {
-        Self { target, boot_timeout_s: 20.0, answer_timeout_s: 5.0 }
+        Self { target, boot_timeout_s: 20.0, answer_timeout_s: 5.0, keep_ticks: false }
     }
 }
 
@@ -156,13 +162,26 @@ pub struct LogLine {
 /// Called for every defmt line as it arrives (on the log reader's thread).
 pub type LogSink = Box<dyn Fn(&LogLine) + Send>;
 
-/// What the image measured, one sample per answered frame, in its tick unit.
+/// What the image measured, one sample per answered frame, in its tick unit:
+/// exact distributions and decimated series against time in fixed memory, and
+/// every sample only when asked ([`PilOptions::keep_ticks`]).
 #[derive(Debug, Clone)]
 pub struct PilCounts {
-    /// `step_ticks` of each command: [`firmware::Firmware::step`]'s own time.
+    /// Answered frames.
+    pub answers: u64,
+    /// `step_ticks` of each command ([`firmware::Firmware::step`]'s own time): their distribution.
+    pub step: CountDistribution,
+    /// The frame's time (decoding: COBS, CRC, postcard; plus the step): its distribution.
+    pub frame: CountDistribution,
+    /// `step_ticks` against the frame's sample time `t_k` (s), decimated ([`Envelope`]) for figures.
+    pub step_series: Envelope,
+    /// Frame ticks against `t_k` (s), decimated for figures.
+    pub frame_series: Envelope,
+    /// Every `step_ticks`, in period order; empty unless [`PilOptions::keep_ticks`].
     pub step_ticks: Vec<u32>,
-    /// The frame's time: decoding (COBS, CRC, postcard) plus the step.
+    /// Every frame's ticks, in period order; empty unless [`PilOptions::keep_ticks`].
     pub frame_ticks: Vec<u32>,
+    keep_ticks: bool,
     /// The image's tick rate (its `Hello`), Hz.
     pub ticks_per_second: u32,
     /// What its ticks count (its `Hello`): emulated SysTick or DWT cycles
@@ -172,11 +191,35 @@ pub struct PilCounts {
 
 impl Default for PilCounts {
     fn default() -> Self {
-        Self { step_ticks: Vec::new(), frame_ticks: Vec::new(), ticks_per_second: 0, clock: StepClock::EmulatedSysTick }
+        Self {
+            answers: 0,
+            step: CountDistribution::default(),
+            frame: CountDistribution::default(),
+            step_series: Envelope::new(),
+            frame_series: Envelope::new(),
+            step_ticks: Vec::new(),
+            frame_ticks: Vec::new(),
+            keep_ticks: false,
+            ticks_per_second: 0,
+            clock: StepClock::EmulatedSysTick,
+        }
     }
 }
 
 impl PilCounts {
+    /// Adds one answer's counts, of the frame sampled at `t` (s).
+    pub fn record(&mut self, t: f64, step_ticks: u32, frame_ticks: u32) {
+        self.answers += 1;
+        self.step.record(step_ticks);
+        self.frame.record(frame_ticks);
+        self.step_series.push(t, f64::from(step_ticks));
+        self.frame_series.push(t, f64::from(frame_ticks));
+        if self.keep_ticks {
+            self.step_ticks.push(step_ticks);
+            self.frame_ticks.push(frame_ticks);
+        }
+    }
+
     /// Instructions retired per tick under `-icount shift=ICOUNT_SHIFT`: QEMU's
     /// SysTick runs at the core clock of *virtual* time, and virtual time is
     /// `2^shift` ns per instruction. Meaningful for [`StepClock::EmulatedSysTick`] only.
@@ -509,7 +552,7 @@ impl PilLink {
             answer_timeout,
             faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
             log,
-            counts: PilCounts::default(),
+            counts: PilCounts { keep_ticks: opts.keep_ticks, ..PilCounts::default() },
         };
         link.handshake(s, boot)?;
         Ok(link)
@@ -771,15 +814,14 @@ impl FirmwareLink for PilLink {
         loop {
             match self.recv_before(deadline).map_err(|e| lost(e.to_string()))? {
                 Received::Msg(Uplink::Answer { command, telemetry, frame_ticks }) if command.seq == frame.seq => {
-                    self.counts.step_ticks.push(command.step_ticks);
-                    self.counts.frame_ticks.push(frame_ticks);
+                    self.counts.record(truth.t, command.step_ticks, frame_ticks);
                     return Ok(Exchange::Answered { command, telemetry, at_stamp: false });
                 }
                 Received::Msg(Uplink::Answer { .. }) => {} // an answer to an older frame: cannot happen in lockstep
                 // Before the first answer: the handshake's leftovers (a configuration
                 // sent again after a `Garbled` is answered twice; every one of them
                 // reached the image before frame 0, so the firmware is the configured one).
-                Received::Msg(Uplink::Configured | Uplink::Hello { .. }) if self.counts.step_ticks.is_empty() => {}
+                Received::Msg(Uplink::Configured | Uplink::Hello { .. }) if self.counts.answers == 0 => {}
                 Received::Msg(other) => return Err(lost(format!("the image answered frame {k} with {other:?}{}", self.log_tail()))),
                 Received::Undecodable(e) => return Err(lost(format!("the image's answer to frame {k} does not decode: {e}"))),
                 Received::Nothing => {
@@ -829,7 +871,7 @@ impl PilFigures {
     /// the image's defmt log when the link captured it, `exit` QEMU's exit status.
     pub fn new(target: &PilTarget, counts: &PilCounts, rate_hz: f64, log: Option<&[LogLine]>, exit: Option<String>) -> Self {
         let per_tick = counts.counts_per_tick();
-        let step = Spread::of(&counts.step_ticks, per_tick);
+        let step = counts.step.spread(per_tick);
         let budget = step_budget(rate_hz);
         let (image, shift, serial_port, baud) = match target {
             PilTarget::Qemu { image, .. } => (Some(image.display().to_string()), Some(ICOUNT_SHIFT), None, None),
@@ -846,7 +888,7 @@ impl PilFigures {
             count_unit: counts.unit(),
             counts_per_tick: per_tick,
             step_counts: step,
-            frame_counts: Spread::of(&counts.frame_ticks, per_tick),
+            frame_counts: counts.frame.spread(per_tick),
             step_budget: budget,
             within_budget: step.worst <= budget,
             worst_step_period_share: step.worst / (CORE_HZ / rate_hz),

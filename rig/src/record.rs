@@ -117,6 +117,11 @@ pub enum RunError {
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),
+    /// An iceoryx2 service of the rig, created by another process (a monitor
+    /// started first), lacks what this run needs: the message names the service,
+    /// the attribute, its value and the value to use (docs/rig.md, "Monitors").
+    #[error("{0}")]
+    IncompatibleService(String),
     /// The run was interrupted (SIGINT or SIGTERM).
     #[error("interrupted at period {k}")]
     Interrupted {
@@ -140,58 +145,178 @@ pub struct LiftOffStats {
     pub max_detection_latency_periods: u32,
 }
 
+/// Periods after a true flight ends during which a detection still counts for
+/// it, and before a detection starts during which a flight excuses it
+/// (docs/hardware.md "Lift-off detection").
+pub const DETECTION_GRACE_PERIODS: usize = 5;
+
+/// The lift-off detection statistics ([`LiftOffStats`]) of a run fed one period
+/// at a time: a true flight episode is detected if the firmware declares
+/// lift-off during it or within [`DETECTION_GRACE_PERIODS`] periods after it
+/// ends; a detection episode that overlaps no true flight (nor starts within
+/// that many periods after one) is a false alarm. Memory: a handful of open
+/// episodes (those whose window is still open), whatever the run's length.
+#[derive(Debug, Clone, Default)]
+pub struct LiftOffTracker {
+    /// Periods seen.
+    k: usize,
+    prev_true: bool,
+    prev_detected: bool,
+    /// Flight episodes not matched yet: their first period and, once the flight
+    /// has ended, the first period past their window.
+    pending: Vec<(usize, Option<usize>)>,
+    /// The last period in true flight.
+    last_true: Option<usize>,
+    /// The first period of the detection episode under way.
+    alarm_start: Option<usize>,
+    stats: LiftOffStats,
+}
+
+impl LiftOffTracker {
+    /// Feeds the next period: whether the tip was truly in flight and whether
+    /// the firmware declared lift-off.
+    pub fn push(&mut self, lift_off_true: bool, lift_off_detected: bool) {
+        const GRACE: usize = DETECTION_GRACE_PERIODS;
+        let k = self.k;
+        if !lift_off_true && self.prev_true {
+            // The flight ended at k - 1: its window closes GRACE periods later.
+            for p in self.pending.iter_mut().filter(|p| p.1.is_none()) {
+                p.1 = Some(k + GRACE);
+            }
+        }
+        if !self.pending.is_empty() {
+            let before = self.pending.len();
+            self.pending.retain(|p| p.1.is_none_or(|end| end > k));
+            self.stats.missed_lift_offs += (before - self.pending.len()) as u32;
+        }
+        if lift_off_true && !self.prev_true {
+            self.stats.lift_offs += 1;
+            self.pending.push((k, None));
+        }
+        if lift_off_detected {
+            for (start, _) in self.pending.drain(..) {
+                self.stats.lift_offs_detected += 1;
+                self.stats.max_detection_latency_periods = self.stats.max_detection_latency_periods.max((k - start) as u32);
+            }
+        }
+        if !lift_off_detected && self.prev_detected {
+            // The detection ended at k - 1: judged on the flights up to then.
+            self.close_alarm();
+        }
+        if lift_off_true {
+            self.last_true = Some(k);
+        }
+        if lift_off_detected && !self.prev_detected {
+            self.alarm_start = Some(k);
+        }
+        self.prev_true = lift_off_true;
+        self.prev_detected = lift_off_detected;
+        self.k += 1;
+    }
+
+    /// Ends the detection episode under way: a false alarm unless a true flight
+    /// was seen from [`DETECTION_GRACE_PERIODS`] before its start to its end.
+    fn close_alarm(&mut self) {
+        if let Some(start) = self.alarm_start.take()
+            && self.last_true.is_none_or(|t| t + DETECTION_GRACE_PERIODS < start)
+        {
+            self.stats.false_alarms += 1;
+        }
+    }
+
+    /// The statistics of the periods fed so far, as if the run ended here
+    /// (flights still unmatched are missed, a detection under way is judged).
+    pub fn stats(&self) -> LiftOffStats {
+        let mut end = self.clone();
+        end.stats.missed_lift_offs += end.pending.len() as u32;
+        end.close_alarm();
+        end.stats
+    }
+}
+
 /// Matches true and detected lift-offs period by period: a true flight episode is
 /// detected if the firmware declares lift-off during it or within 5 periods after
 /// it ends (a short hop may end before the confirmation); a detection episode that
 /// overlaps no true flight (nor starts within 5 periods after one) is a false alarm.
+/// The same numbers as [`LiftOffTracker`] fed the records one by one.
 pub fn lift_off_stats(records: &[PeriodRecord]) -> LiftOffStats {
-    const GRACE: usize = 5;
-    let mut st = LiftOffStats::default();
-    let n = records.len();
-    let mut k = 0;
-    while k < n {
-        if records[k].lift_off_true && (k == 0 || !records[k - 1].lift_off_true) {
-            st.lift_offs += 1;
-            let start = k;
-            let mut end = k;
-            while end + 1 < n && records[end + 1].lift_off_true {
-                end += 1;
-            }
-            match (start..n.min(end + 1 + GRACE)).find(|&j| records[j].lift_off_detected) {
-                Some(j) => {
-                    st.lift_offs_detected += 1;
-                    st.max_detection_latency_periods = st.max_detection_latency_periods.max((j - start) as u32);
-                }
-                None => st.missed_lift_offs += 1,
-            }
-            k = end + 1;
-        } else {
-            k += 1;
-        }
-    }
-    let mut k = 0;
-    while k < n {
-        if records[k].lift_off_detected && (k == 0 || !records[k - 1].lift_off_detected) {
-            let start = k;
-            let mut end = k;
-            while end + 1 < n && records[end + 1].lift_off_detected {
-                end += 1;
-            }
-            let lo = start.saturating_sub(GRACE);
-            if !(lo..=end).any(|j| records[j].lift_off_true) {
-                st.false_alarms += 1;
-            }
-            k = end + 1;
-        } else {
-            k += 1;
-        }
-    }
-    st
+    let mut t = LiftOffTracker::default();
+    records.iter().for_each(|r| t.push(r.lift_off_true, r.lift_off_detected));
+    t.stats()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The lift-off statistics over a whole list (the definition, kept as the
+    /// reference the streaming tracker must reproduce).
+    fn reference(truth: &[bool], det: &[bool]) -> LiftOffStats {
+        const GRACE: usize = DETECTION_GRACE_PERIODS;
+        let mut st = LiftOffStats::default();
+        let n = truth.len();
+        let mut k = 0;
+        while k < n {
+            if truth[k] && (k == 0 || !truth[k - 1]) {
+                st.lift_offs += 1;
+                let start = k;
+                let mut end = k;
+                while end + 1 < n && truth[end + 1] {
+                    end += 1;
+                }
+                match (start..n.min(end + 1 + GRACE)).find(|&j| det[j]) {
+                    Some(j) => {
+                        st.lift_offs_detected += 1;
+                        st.max_detection_latency_periods = st.max_detection_latency_periods.max((j - start) as u32);
+                    }
+                    None => st.missed_lift_offs += 1,
+                }
+                k = end + 1;
+            } else {
+                k += 1;
+            }
+        }
+        let mut k = 0;
+        while k < n {
+            if det[k] && (k == 0 || !det[k - 1]) {
+                let start = k;
+                let mut end = k;
+                while end + 1 < n && det[end + 1] {
+                    end += 1;
+                }
+                if !(start.saturating_sub(GRACE)..=end).any(|j| truth[j]) {
+                    st.false_alarms += 1;
+                }
+                k = end + 1;
+            } else {
+                k += 1;
+            }
+        }
+        st
+    }
+
+    /// Runs of random lengths (hops and detections of a few periods, like a run's).
+    fn runs() -> impl Strategy<Value = Vec<bool>> {
+        proptest::collection::vec((any::<bool>(), 1usize..12), 0..40)
+            .prop_map(|runs| runs.into_iter().flat_map(|(b, len)| std::iter::repeat_n(b, len)).collect())
+    }
+
+    proptest! {
+        #[test]
+        fn streaming_lift_off_stats_equal_the_reference(truth in runs(), det in runs()) {
+            let n = truth.len().min(det.len());
+            let (truth, det) = (&truth[..n], &det[..n]);
+            let mut t = LiftOffTracker::default();
+            for k in 0..n {
+                t.push(truth[k], det[k]);
+                // Also as if the run stopped at every period.
+                prop_assert_eq!(t.stats(), reference(&truth[..=k], &det[..=k]));
+            }
+            prop_assert!(t.pending.len() <= 4, "pending {:?}", t.pending);
+        }
+
+    }
 
     #[test]
     fn stats_match_hand_made_sequences() {

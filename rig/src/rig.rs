@@ -322,33 +322,35 @@ impl RunObserver for () {}
 
 /// Runs the scenario over `link` (the one closed-loop loop: in-process,
 /// iceoryx2 and PIL runs, sweeps and `Z_t,sliding` trials all go through it),
-/// telling `run` what happens.
+/// telling `run` what happens, and keeps nothing itself: memory stays flat
+/// in the run's length (`run` streams or summarises each record as
+/// [`RunObserver::on_record`] hands it over; `sil-host run` and `pil`).
 ///
-/// Returns every period's record; when the run stops early (plant failure, the
-/// firmware lost or in its safe state, `on_period` said stop) the records up to
-/// and including the last period come back with the error.
-pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
-    let mut records = Vec::new();
+/// Returns the number of periods recorded and, when the run stopped early
+/// (plant failure, the firmware lost or in its safe state, `on_period` said
+/// stop), why; the last period's record is handed to `run` before the error
+/// when it was made.
+pub fn stream_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (usize, Option<RunError>) {
     let mut plant = match plant_for(s) {
         Ok(p) => p,
-        Err(e) => return (records, Some(e.into())),
+        Err(e) => return (0, Some(e.into())),
     };
     run.on_events(plant.startup_events());
     let mut periods = PeriodLoop::new(s, &plant);
     let n = periods.periods_in(s.timing.duration_s);
-    records.reserve(n);
+    let mut recorded = 0;
     let mut failure = None;
     for k in 0..n {
         match periods.period(&mut plant, link, run, &mut NoObserver) {
             Ok(r) => {
                 run.on_record(&r);
-                records.push(r);
+                recorded += 1;
             }
             Err(f) => {
                 if let Some(r) = &f.record {
                     run.on_record(r);
+                    recorded += 1;
                 }
-                records.extend(f.record);
                 failure = Some(f.error);
                 break;
             }
@@ -358,11 +360,53 @@ pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObse
             break;
         }
     }
-    link.finish(records.len() as u32);
+    link.finish(recorded as u32);
     let sim_error = match &failure {
         Some(RunError::Sim(e)) => Some(e),
         _ => None,
     };
     run.on_finished(&plant.validity(sim_error));
-    (records, failure)
+    (recorded, failure)
+}
+
+/// [`stream_loop`] keeping every period's record, for short runs whose caller
+/// needs them (tests, sweeps, `Z_t,sliding` trials): memory grows with the run
+/// (about 150 bytes per period).
+///
+/// Returns every period's record; when the run stops early (plant failure, the
+/// firmware lost or in its safe state, `on_period` said stop) the records up to
+/// and including the last period come back with the error.
+pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
+    /// Forwards everything to `inner` and keeps the records.
+    struct Keep<'a> {
+        inner: &'a mut dyn RunObserver,
+        records: Vec<PeriodRecord>,
+    }
+    impl RunObserver for Keep<'_> {
+        fn on_frame(&mut self, frame: &SensorFrame) {
+            self.inner.on_frame(frame);
+        }
+
+        fn on_events(&mut self, events: &[PlantEvent]) {
+            self.inner.on_events(events);
+        }
+
+        fn on_record(&mut self, record: &PeriodRecord) {
+            self.inner.on_record(record);
+            self.records.push(*record);
+        }
+
+        fn on_period(&mut self, k: usize, n: usize) -> bool {
+            self.inner.on_period(k, n)
+        }
+
+        fn on_finished(&mut self, validity: &Validity) {
+            self.inner.on_finished(validity);
+        }
+    }
+    // One allocation up front (capped: a scenario that is not validated may ask for anything).
+    let capacity = usize::try_from(s.timing.periods()).unwrap_or(0).min(1 << 24);
+    let mut keep = Keep { inner: run, records: Vec::with_capacity(capacity) };
+    let (_, failure) = stream_loop(s, link, &mut keep);
+    (keep.records, failure)
 }

@@ -8,9 +8,13 @@ use plant::Validity;
 
 use super::{
     realtime::RealtimeSetup,
-    record::{LiftOffStats, PeriodRecord, RunError, lift_off_stats},
+    record::{LiftOffStats, PeriodRecord, RunError},
     scenario::Scenario,
+    stats::RunStats,
 };
+
+// Their home is `stats` (the accumulators that make them); here for `summary.json`'s readers.
+pub use super::stats::{Percentiles, Spread, percentiles};
 
 /// `summary.json` of a run.
 #[derive(Debug, Clone, Serialize)]
@@ -66,6 +70,9 @@ pub struct RunSummary {
     /// PIL runs: the image's instruction counts and log (`sil-host pil`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pil: Option<PilFigures>,
+    /// Runs with `--monitors`: what the plant did for monitors (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monitors: Option<MonitorSummary>,
     /// The scenario as run (after command-line overrides).
     pub scenario_used: Scenario,
     /// The plant's parameters as run: paper Table I, `mu`, `v_belt` (SI, radians;
@@ -86,6 +93,7 @@ impl RunSummary {
     /// The figures every run has, from its `records` (the trace as recorded, up to
     /// the failure if there was one) and its wall-clock time `wall_s` (s); the
     /// transport's own figures (round trip, jitter, step time, PIL counts) empty.
+    /// [`RunSummary::from_stats`] of [`RunStats::of`] the records.
     pub fn from_records(
         scenario: &Scenario,
         records: &[PeriodRecord],
@@ -95,7 +103,24 @@ impl RunSummary {
         wall_s: f64,
         validity: Validity,
     ) -> Self {
-        let simulated = records.len() as f64 * scenario.timing.period().as_secs_f64();
+        Self::from_stats(scenario, &RunStats::of(records), failure, transport, timing, wall_s, validity)
+    }
+
+    /// The figures every run has, from its streamed statistics `stats` (every
+    /// period recorded, up to the failure if there was one) and its wall-clock
+    /// time `wall_s` (s); the transport's own figures (round trip, jitter, step
+    /// time, PIL counts) empty.
+    pub fn from_stats(
+        scenario: &Scenario,
+        stats: &RunStats,
+        failure: Option<&RunError>,
+        transport: &'static str,
+        timing: &'static str,
+        wall_s: f64,
+        validity: Validity,
+    ) -> Self {
+        let periods = stats.periods();
+        let simulated = periods as f64 * scenario.timing.period().as_secs_f64();
         Self {
             status: if failure.is_some() { "failed" } else { "ok" },
             error: failure.map(|e| e.to_string()),
@@ -104,22 +129,23 @@ impl RunSummary {
             transport,
             timing,
             rig: None,
-            periods: records.len(),
-            lift_off: lift_off_stats(records),
+            periods,
+            lift_off: stats.lift_off(),
             validity,
-            deadline_misses: records.iter().filter(|r| r.deadline_miss).count(),
-            firmware_overruns: records.iter().map(|r| r.overruns).max().unwrap_or(0),
-            rms_tracking_error_m: rms_tracking_error(records),
-            final_z_t_m: records.last().map_or(f64::NAN, |r| r.z_t),
+            deadline_misses: stats.deadline_misses(),
+            firmware_overruns: stats.max_overruns(),
+            rms_tracking_error_m: stats.rms_tracking_error(),
+            final_z_t_m: stats.final_z_t(),
             wall_s,
             realtime_factor: simulated / wall_s.max(1e-9),
-            periods_per_s: records.len() as f64 / wall_s.max(1e-9),
+            periods_per_s: periods as f64 / wall_s.max(1e-9),
             ipc_rtt_us: None,
             firmware_step_us: None,
             period_jitter_us: None,
             late_answers: 0,
             realtime_setup: None,
             pil: None,
+            monitors: None,
             scenario_used: scenario.clone(),
             plant_params: crate::setup::plant_params(scenario),
             firmware_config: crate::setup::firmware_config(scenario),
@@ -128,12 +154,26 @@ impl RunSummary {
     }
 }
 
-/// RMS of `z_t - z_t*` over `records`, m (0 when empty).
+/// The `monitors` part of `summary.json` (`sil-host run --monitors N`; docs/rig.md,
+/// "Monitors").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MonitorSummary {
+    /// Monitors (subscribers of `ground_truth`) the plant waited for before period 0.
+    pub waited_for: usize,
+    /// Whether the plant waited for a monitor whose buffer was full (lockstep)
+    /// rather than discarding the sample for it (real time).
+    pub lossless: bool,
+    /// How long one sample waited for a full monitor before it was given up, s.
+    pub timeout_s: f64,
+    /// Monitors given up (dead, stopped or too slow); they then lost samples.
+    pub given_up: u32,
+    /// Samples not delivered to given-up monitors (one per monitor per sample).
+    pub samples_dropped: u64,
+}
+
+/// RMS of `z_t - z_t*` over `records`, m (0 when empty; [`RunStats::rms_tracking_error`]).
 pub fn rms_tracking_error(records: &[PeriodRecord]) -> f64 {
-    if records.is_empty() {
-        return 0.0;
-    }
-    (records.iter().map(|r| (r.z_t - r.z_t_ref).powi(2)).sum::<f64>() / records.len() as f64).sqrt()
+    RunStats::of(records).rms_tracking_error()
 }
 
 /// The PIL part of `summary.json`.
@@ -187,30 +227,6 @@ pub struct PilFigures {
     pub defmt_warnings: Option<usize>,
 }
 
-/// Percentiles of a sample (p50, p99, p999, max), in the sample's unit; zeros when empty.
-pub fn percentiles(samples: &[f32]) -> Percentiles {
-    if samples.is_empty() {
-        return Percentiles::default();
-    }
-    let mut v = samples.to_vec();
-    v.sort_by(f32::total_cmp);
-    let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64;
-    Percentiles { p50: at(0.5), p99: at(0.99), p999: at(0.999), max: v[v.len() - 1] as f64 }
-}
-
-/// Percentiles of a timing, microseconds.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct Percentiles {
-    /// Median.
-    pub p50: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// 99.9th percentile.
-    pub p999: f64,
-    /// Largest.
-    pub max: f64,
-}
-
 /// What the step counts of a run are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -236,29 +252,5 @@ impl CountUnit {
             Self::Instructions => "instructions",
             Self::Cycles => "cycles",
         }
-    }
-}
-
-/// Median, 99th percentile and worst of a sample.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct Spread {
-    /// Median.
-    pub median: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// Largest.
-    pub worst: f64,
-}
-
-impl Spread {
-    /// The spread of `samples` scaled by `scale`; zeros when empty.
-    pub fn of(samples: &[u32], scale: f64) -> Self {
-        if samples.is_empty() {
-            return Self::default();
-        }
-        let mut v = samples.to_vec();
-        v.sort_unstable();
-        let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)] as f64 * scale;
-        Self { median: at(0.5), p99: at(0.99), worst: v[v.len() - 1] as f64 * scale }
     }
 }

@@ -368,6 +368,16 @@ pub struct RunArgs {
     /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
     #[arg(long, value_name = "NAME")]
     pub rig: Option<String>,
+    /// Wait for N monitors (subscribers of painleve/RIG/ground_truth, such as
+    /// examples/python/monitor.py) before period 0, up to rig.connect_timeout_s;
+    /// in lockstep the plant then also waits for a monitor whose buffer is full,
+    /// so every monitor receives every sample (docs/rig.md, "Monitors").
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=8), conflicts_with = "in_process")]
+    pub monitors: u16,
+    /// With --monitors in lockstep: how long one sample waits for a full monitor
+    /// before that monitor is given up (not waited for again), s, in (0, 600].
+    #[arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors")]
+    pub monitor_timeout: f64,
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,
@@ -700,8 +710,10 @@ pub struct SweepArgs {
     /// identity (sweep.json).
     #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
     pub set: Vec<rig::overrides::Override>,
-    /// Compute only part K/N of the runs (those whose index is K modulo N, 0 <= K < N),
-    /// for a cluster job array; join the folders with `sil-host merge`.
+    /// Compute only shard K of N (0 <= K < N), for a cluster job array; join the
+    /// shards' folders with `sil-host merge`. The runs are dealt to the shards so
+    /// that each gets an equal share of every initial condition and `mu`
+    /// (docs/analyses.md, "Cluster").
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
     /// Compute at most N more runs, then write the outputs and stop (exit 0); run

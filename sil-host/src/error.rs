@@ -60,7 +60,8 @@ impl CliError {
             Self::Run(
                 rig::record::RunError::RigInUse { .. }
                 | rig::record::RunError::ConfigMismatch { .. }
-                | rig::record::RunError::Announcement(_),
+                | rig::record::RunError::Announcement(_)
+                | rig::record::RunError::IncompatibleService(_),
             ) => 2,
             _ => 1,
         }

@@ -135,6 +135,41 @@ fn merged_shards_equal_the_unsharded_sweep() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("threshold"));
 }
 
+/// Shard folders written before the balanced assignment (`sweep.json` without
+/// `assignment`: run i in shard i mod N) still resume and merge that way.
+#[test]
+fn modulo_shard_folders_of_earlier_versions_resume_and_merge() {
+    let whole = tempfile::tempdir().unwrap();
+    ok(&sweep(whole.path(), &[]));
+    let manifest: serde_json::Value = serde_json::from_str(&read(whole.path(), "sweep.json")).unwrap();
+    let journal = read(whole.path(), "runs.csv");
+    let (header, rows) = journal.split_once('\n').unwrap();
+    let old = tempfile::tempdir().unwrap();
+    let dirs: Vec<std::path::PathBuf> = (0..2).map(|k| old.path().join(format!("shard-{k}"))).collect();
+    for (k, dir) in dirs.iter().enumerate() {
+        std::fs::create_dir(dir).unwrap();
+        let mut m = manifest.clone();
+        m["shard"] = serde_json::json!({ "k": k, "n": 2 });
+        std::fs::write(dir.join("sweep.json"), serde_json::to_string_pretty(&m).unwrap()).unwrap();
+        // Run i in shard i mod 2, the first of them left to compute.
+        let mine: Vec<&str> = rows.lines().filter(|r| r.split(',').next().unwrap().parse::<usize>().unwrap() % 2 == k).collect();
+        std::fs::write(dir.join("runs.csv"), format!("{header}\n{}\n", mine[1..].join("\n"))).unwrap();
+    }
+    let resumed = ok(&sweep(&dirs[1], &["--shard", "1/2"]));
+    assert_eq!(resumed["resumed_runs"], 5);
+    assert_eq!(resumed["timing"]["runs_computed"], 1);
+    // The other one is missing a run: the merge names it and its (modulo) shard.
+    let out = sil_host().args(["merge", "--out"]).arg(old.path().join("m")).args(&dirs).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("1 of 12 runs are missing") && err.contains("shard 0/2)") && err.contains("shards with missing runs: 0."),
+        "{err}"
+    );
+    let m = sil_host().args(["merge", "--allow-missing", "--json", "--out"]).arg(old.path().join("m")).args(&dirs).output().unwrap();
+    assert_eq!(ok(&m)["results"]["missing"], 1);
+}
+
 #[test]
 fn bad_arguments_exit_with_2() {
     let dir = tempfile::tempdir().unwrap();
@@ -198,61 +233,188 @@ fn closed_loop_ideal_hybrid_keeps_the_tip_on_the_belt() {
     assert_eq!(s["results"]["outcomes"]["contact"], 6, "{}", s["results"]);
 }
 
-/// `scripts/sweep-slurm.sh` under a stand-in for Slurm: each array task runs as
-/// Slurm would start it (its environment variables), a fake `sbatch` records the
-/// merge job the first task queues and runs its `--wrap` command; the merged
-/// folder must equal the unsharded sweep.
+/// `scripts/sweep-slurm.sh` under a stand-in for Slurm (the real one:
+/// tests/tests/slurm.rs, with PAINLEVE_SLURM=1): `submit` through a fake `sbatch`
+/// that records its arguments, then the array's tasks and the merge job run as
+/// Slurm would start them. The merged folder must equal the unsharded sweep; a
+/// merge without one shard's folder fails naming it and the command to re-run it.
 #[test]
-fn the_slurm_job_array_script_shards_and_merges_to_the_unsharded_sweep() {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/sweep-slurm.sh");
+fn the_slurm_script_submits_the_array_and_the_merge_and_merges_to_the_unsharded_sweep() {
     let whole = tempfile::tempdir().unwrap();
     ok(&sweep(whole.path(), &[]));
     let work = tempfile::tempdir().unwrap();
-    let bin = work.path().join("bin");
-    std::fs::create_dir(&bin).unwrap();
-    let log = work.path().join("sbatch.log");
+    let bin = fake_sbatch(work.path());
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let out = Command::new("bash")
+        .arg(slurm_script())
+        .args(["submit", "--array=1-3", "-p", "short", "--"])
+        .args(&TINY[1..])
+        .current_dir(work.path())
+        .env("PATH", &path)
+        .env("SIL_HOST", env!("CARGO_BIN_EXE_sil-host"))
+        .env("SWEEP_DIR", "out")
+        .env_remove("SWEEP_ARGS")
+        .env_remove("SWEEP_SHARDS")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "submit: {}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "101 102");
+    let calls = sbatch_calls(work.path());
+    assert_eq!(calls.len(), 2, "{calls:?}");
+    let (array, merge) = (&calls[0], &calls[1]);
+    // The array: the user's options, the array, then the script's task arguments.
+    let script_at = array.iter().position(|a| a.ends_with("sweep-slurm.sh")).unwrap();
+    assert_eq!(array[..script_at], ["--parsable", "-p", "short", "--array=1-3"]);
+    assert_eq!(array[script_at + 1..script_at + 3], ["task", "array:1-3"]);
+    // The merge: after the array whatever its outcome (its job id without the cluster name).
+    assert!(merge.contains(&"--dependency=afterany:101".to_string()) && merge.contains(&"-p".to_string()), "{merge:?}");
+    assert!(!merge.iter().any(|a| a.starts_with("--array")), "{merge:?}");
+    let merge_at = merge.iter().position(|a| a.ends_with("sweep-slurm.sh")).unwrap();
+    assert_eq!(merge[merge_at + 1..merge_at + 3], ["merge", "3"]);
+
+    // Slurm runs the tasks (ids 1, 2, 3: shards 0, 1, 2 of 3), then the merge.
+    for id in 1..=3 {
+        let o = Command::new("bash")
+            .args(&array[script_at..])
+            .current_dir(work.path())
+            .env("SLURM_ARRAY_TASK_ID", id.to_string())
+            .env("SLURM_ARRAY_JOB_ID", "101")
+            .env("SLURM_CPUS_PER_TASK", "1")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "task {id}: {}", String::from_utf8_lossy(&o.stderr));
+        let m: serde_json::Value = serde_json::from_str(&read(&work.path().join(format!("out/shard-{}", id - 1)), "sweep.json")).unwrap();
+        assert_eq!((m["shard"]["k"].as_u64(), m["shard"]["n"].as_u64()), (Some(id - 1), Some(3)));
+        assert_eq!(m["shard"]["assignment"], "balanced");
+    }
+    let o = Command::new("bash").args(&merge[merge_at..]).current_dir(work.path()).output().unwrap();
+    assert!(o.status.success(), "merge: {}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read(&work.path().join("out/merged"), "sweep.csv"), read(whole.path(), "sweep.csv"));
+
+    // Shard 1's folder lost: the merge fails, naming it and the re-run.
+    std::fs::remove_dir_all(work.path().join("out/merged")).unwrap();
+    std::fs::remove_dir_all(work.path().join("out/shard-1")).unwrap();
+    let o = Command::new("bash").args(&merge[merge_at..]).current_dir(work.path()).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no folder for shards 1 of 3"), "{err}");
+    assert!(err.contains("shards with missing runs: 1."), "{err}");
+    assert!(err.contains("SWEEP_SHARDS=3 ") && err.contains(" submit --array=1 "), "{err}");
+    assert!(!work.path().join("out/merged").exists());
+}
+
+/// Which shard an array task computes, for the array forms: its position among the
+/// array's task ids (any form, through `submit`), the task id itself (`SWEEP_SHARDS`),
+/// or Slurm's variables for a plain `sbatch --array=A-B[:S]`; a clear refusal
+/// (exit 2) when it cannot be told.
+#[test]
+fn the_slurm_script_takes_the_shard_from_the_array() {
+    let work = tempfile::tempdir().unwrap();
+    // A stand-in for sil-host that prints its arguments.
+    let fake = work.path().join("sil-host");
+    std::fs::write(&fake, "#!/usr/bin/env bash\necho \"$@\"\n").unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let task = |sharding: Option<&str>, id: u32, vars: &[(&str, &str)]| {
+        let mut c = Command::new("bash");
+        c.arg(slurm_script());
+        if let Some(s) = sharding {
+            c.args(["task", s]).arg(&fake).arg("out").arg("--mu=0.5");
+        } else {
+            c.env("SIL_HOST", &fake).env("SWEEP_DIR", "out").env("SWEEP_ARGS", "--mu=0.5");
+        }
+        c.env("SLURM_ARRAY_TASK_ID", id.to_string()).env("SLURM_CPUS_PER_TASK", "2").env_remove("SWEEP_SHARDS");
+        for (k, v) in vars {
+            c.env(k, v);
+        }
+        c.output().unwrap()
+    };
+    let shard = |o: std::process::Output| -> String {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let args = String::from_utf8_lossy(&o.stdout).trim().to_string();
+        assert!(args.starts_with("sweep --mu=0.5 --shard ") && args.contains("--threads 2"), "{args}");
+        args.split_whitespace().nth(3).unwrap().to_string()
+    };
+    for (sharding, id, want) in [
+        ("array:1-16", 1, "0/16"),
+        ("array:1-16", 16, "15/16"),
+        ("array:0-30:2", 30, "15/16"),
+        ("array:0-30:2%4", 6, "3/16"),
+        ("array:1,5,9", 9, "2/3"),
+        ("array:7,1-3", 7, "3/4"),
+        ("shards:16", 3, "3/16"),
+    ] {
+        assert_eq!(shard(task(Some(sharding), id, &[])), want, "{sharding} task {id}");
+    }
+    let range =
+        [("SLURM_ARRAY_TASK_MIN", "0"), ("SLURM_ARRAY_TASK_STEP", "2"), ("SLURM_ARRAY_TASK_COUNT", "16"), ("SLURM_ARRAY_TASK_MAX", "30")];
+    assert_eq!(shard(task(None, 4, &range)), "2/16");
+    // A list array seen through Slurm's variables only (1,4,9: min 1, step 1, 3 tasks).
+    let list =
+        [("SLURM_ARRAY_TASK_MIN", "1"), ("SLURM_ARRAY_TASK_STEP", "1"), ("SLURM_ARRAY_TASK_COUNT", "3"), ("SLURM_ARRAY_TASK_MAX", "9")];
+    for (sharding, id, vars, says) in [
+        (None, 4, &list[..], "not one range"),
+        (None, 4, &[][..], "not all set"),
+        (Some("array:1-3"), 4, &[][..], "not in --array"),
+        (Some("array:1-x"), 1, &[][..], "cannot read 1-x"),
+        (Some("shards:3"), 3, &[][..], "not a shard"),
+    ] {
+        let o = task(sharding, id, vars);
+        assert_eq!(o.status.code(), Some(2), "{sharding:?} {id}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains(says), "{sharding:?}: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    // Outside Slurm, and bad submissions: refused before anything is queued.
+    let bare = Command::new("bash").arg(slurm_script()).env_remove("SLURM_ARRAY_TASK_ID").output().unwrap();
+    assert_eq!(bare.status.code(), Some(2));
+    let bin = fake_sbatch(work.path());
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    for (args, env, says) in [
+        (&["submit", "-p", "short"][..], None, "needs --array"),
+        (&["submit", "--array=0-3", "--", "--e-n", "1.5"], None, "e-n"),
+        (&["submit", "--array=2-5"], Some("4"), "within 0-3"),
+    ] {
+        let mut c = Command::new("bash");
+        c.arg(slurm_script()).args(args).current_dir(work.path()).env("PATH", &path);
+        c.env("SIL_HOST", env!("CARGO_BIN_EXE_sil-host")).env("SWEEP_DIR", work.path().join("refused")).env_remove("SWEEP_ARGS");
+        match env {
+            Some(n) => c.env("SWEEP_SHARDS", n),
+            None => c.env_remove("SWEEP_SHARDS"),
+        };
+        let o = c.output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains(says), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert!(sbatch_calls(work.path()).is_empty(), "nothing submitted");
+}
+
+fn slurm_script() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/sweep-slurm.sh")
+}
+
+/// A fake `sbatch` in `dir/bin`: writes its arguments, one a line, to
+/// `dir/sbatch-N.args` and answers `--parsable` with job id 100 + N (and a cluster name).
+fn fake_sbatch(dir: &Path) -> std::path::PathBuf {
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
     let fake = bin.join("sbatch");
-    // The merge job: record the arguments, then run the --wrap command (afterok is
-    // met: the test runs it after both tasks succeeded).
     std::fs::write(
         &fake,
         format!(
-            "#!/usr/bin/env bash\necho \"$@\" >> {log}\nfor a in \"$@\"; do case $a in --wrap) w=1;; *) [ -n \"$w\" ] && cmd=$a && w=;; esac; done\necho \"$cmd\" > {wrap}\n",
-            log = log.display(),
-            wrap = work.path().join("wrap.sh").display()
+            "#!/usr/bin/env bash\nn=$(ls {d} | grep -c '^sbatch-.*\\.args$')\nn=$((n + 1))\nprintf '%s\\n' \"$@\" > {d}/sbatch-$n.args\necho \"$((100 + n));cluster\"\n",
+            d = dir.display()
         ),
     )
     .unwrap();
     use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let sweep_args = TINY[1..].join(" ");
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
-    for k in 0..2 {
-        let out = Command::new("bash")
-            .arg(&script)
-            .current_dir(work.path())
-            .env("PATH", &path)
-            .env("SIL_HOST", env!("CARGO_BIN_EXE_sil-host"))
-            .env("SWEEP_ARGS", &sweep_args)
-            .env("SWEEP_DIR", "out")
-            .env("SLURM_ARRAY_TASK_ID", k.to_string())
-            .env("SLURM_ARRAY_TASK_COUNT", "2")
-            .env("SLURM_ARRAY_TASK_MIN", "0")
-            .env("SLURM_ARRAY_JOB_ID", "4242")
-            .env("SLURM_CPUS_PER_TASK", "1")
-            .output()
-            .unwrap();
-        assert!(out.status.success(), "task {k}: {}", String::from_utf8_lossy(&out.stderr));
-    }
-    // Exactly one merge job, queued by the first task, after the whole array.
-    let queued = std::fs::read_to_string(&log).unwrap();
-    assert_eq!(queued.lines().count(), 1, "{queued}");
-    assert!(queued.contains("--dependency=afterok:4242"), "{queued}");
-    let wrap = std::fs::read_to_string(work.path().join("wrap.sh")).unwrap();
-    let merge = Command::new("bash").arg("-c").arg(wrap.trim()).current_dir(work.path()).output().unwrap();
-    assert!(merge.status.success(), "merge: {}", String::from_utf8_lossy(&merge.stderr));
-    assert_eq!(read(&work.path().join("out/merged"), "sweep.csv"), read(whole.path(), "sweep.csv"));
-    // Outside Slurm the script refuses to run.
-    let bare = Command::new("bash").arg(&script).env_remove("SLURM_ARRAY_TASK_ID").output().unwrap();
-    assert_eq!(bare.status.code(), Some(2));
+    bin
+}
+
+/// The recorded `sbatch` calls, in order.
+fn sbatch_calls(dir: &Path) -> Vec<Vec<String>> {
+    (1..)
+        .map(|n| dir.join(format!("sbatch-{n}.args")))
+        .take_while(|p| p.exists())
+        .map(|p| std::fs::read_to_string(p).unwrap().lines().map(String::from).collect())
+        .collect()
 }

@@ -65,7 +65,8 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     let (sil, err) = in_process::run(&s, &mut ());
     assert!(err.is_none(), "{err:?}");
 
-    let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
+    let opts = PilOptions { keep_ticks: true, ..PilOptions::new(image()) };
+    let mut link = PilLink::start(&s, &opts, None).unwrap();
     let (pil, err) = run_loop(&s, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(pil.len(), sil.len());
@@ -85,6 +86,8 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     assert_eq!((c.clock, c.unit()), (StepClock::EmulatedSysTick, CountUnit::Instructions));
     let step = Spread::of(&c.step_ticks, c.instructions_per_tick());
     let frame = Spread::of(&c.frame_ticks, c.instructions_per_tick());
+    // The fixed-memory distributions give exactly the figures of the kept samples.
+    assert_eq!((c.step.spread(c.instructions_per_tick()), c.frame.spread(c.instructions_per_tick())), (step, frame));
     assert!(step.worst <= STEP_BUDGET_INSTRUCTIONS, "hybrid: worst step {} instructions > {STEP_BUDGET_INSTRUCTIONS}", step.worst);
     assert!(step.median > 500.0, "a hybrid step is not free: {step:?}");
     assert!(frame.median > step.median, "the frame includes the step: {frame:?} vs {step:?}");
@@ -297,14 +300,15 @@ fn hil_over_a_serial_port_gives_the_outcome_of_the_socket_path() {
 fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
     let s = scenario(ControllerKind::Hybrid, 1.5);
     let qemu = PtyQemu::start();
-    let mut serial = PilLink::start(&s, &PilOptions::serial(&qemu.pty, DEFAULT_BAUD), None).unwrap();
+    let opts = PilOptions { keep_ticks: true, ..PilOptions::serial(&qemu.pty, DEFAULT_BAUD) };
+    let mut serial = PilLink::start(&s, &opts, None).unwrap();
     assert_eq!(serial.transport(), "pil-serial");
     let (via_serial, err) = run_loop(&s, &mut serial, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert!(!serial.captures_log() && serial.log().is_empty() && serial.exit_status().is_none());
     drop(qemu);
 
-    let mut socket = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
+    let mut socket = PilLink::start(&s, &PilOptions { keep_ticks: true, ..PilOptions::new(image()) }, None).unwrap();
     let (via_socket, err) = run_loop(&s, &mut socket, &mut ());
     assert!(err.is_none(), "{err:?}");
 

@@ -10,12 +10,12 @@ use serde::Serialize;
 use crate::{cli::BenchArgs, error::CliError};
 use rig::{
     in_process::InProcessLink,
-    ipc::default_rig_name,
+    ipc::{MonitorPolicy, default_rig_name},
     ipc_link::IpcLink,
     realtime::RealtimeSetup,
-    rig::run_loop,
+    rig::{RunObserver, stream_loop},
     scenario::Scenario,
-    summary::{Percentiles, percentiles},
+    summary::Percentiles,
 };
 
 /// One transport's figures.
@@ -48,11 +48,26 @@ pub struct TransportFigures {
     pub meets_target: bool,
 }
 
-/// The run's deadline misses, or its error.
-fn misses(records: &[rig::record::PeriodRecord], e: Option<rig::record::RunError>) -> Result<usize, CliError> {
+/// Counts the plant's deadline misses as the run goes (the bench keeps no records, as `run`).
+#[derive(Default)]
+struct Misses(usize);
+
+impl RunObserver for Misses {
+    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
+        self.0 += usize::from(r.deadline_miss);
+    }
+}
+
+/// Runs `s` over `link` ([`stream_loop`]): periods run, periods per wall second
+/// and deadline misses, or the run's error.
+fn timed(s: &Scenario, link: &mut dyn rig::rig::FirmwareLink) -> Result<(usize, f64, usize), CliError> {
+    let mut misses = Misses::default();
+    let t = Instant::now();
+    let (periods, e) = stream_loop(s, link, &mut misses);
+    let rate = periods as f64 / t.elapsed().as_secs_f64();
     match e {
         Some(e) => Err(CliError::Run(e)),
-        None => Ok(records.iter().filter(|r| r.deadline_miss).count()),
+        None => Ok((periods, rate, misses.0)),
     }
 }
 
@@ -74,10 +89,9 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut missed = 0;
     for _ in 0..args.repeat {
         let mut link = InProcessLink::new(&s).map_err(CliError::Run)?;
-        let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, &mut ());
-        rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
-        missed += misses(&records, e)?;
+        let (_, rate, misses) = timed(&s, &mut link)?;
+        rates.push(rate);
+        missed += misses;
     }
     figures.push(summarise("in-process", rates, n, missed, None, 300_000.0));
 
@@ -86,12 +100,11 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     let mut missed = 0;
     let mut timings = rig::ipc_link::LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false).map_err(CliError::Run)?;
-        let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, &mut ());
-        rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
-        missed += misses(&records, e)?;
-        timings.rtt_us.extend(&link.timings.rtt_us);
+        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::Run)?;
+        let (_, rate, misses) = timed(&s, &mut link)?;
+        rates.push(rate);
+        missed += misses;
+        timings.rtt.merge(&link.timings.rtt);
     }
     figures.push(summarise("iceoryx2 lockstep", rates, n, missed, Some(&timings), 100_000.0));
 
@@ -99,14 +112,11 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<TransportFigures>, CliError> {
     if args.realtime_s > 0.0 {
         let mut rt = s.clone();
         rt.timing.duration_s = args.realtime_s;
-        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true).map_err(CliError::Run)?;
-        let t = Instant::now();
-        let (records, e) = run_loop(&rt, &mut link, &mut ());
-        let rate = records.len() as f64 / t.elapsed().as_secs_f64();
-        let missed = misses(&records, e)?;
-        let mut f = summarise("iceoryx2 realtime", vec![rate], records.len(), missed, Some(&link.timings), 0.0);
-        f.jitter_us = Some(percentiles(&link.timings.jitter_us));
-        f.step_us = Some(percentiles(&link.timings.step_us));
+        let mut link = IpcLink::connect(&rt, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::Run)?;
+        let (periods, rate, missed) = timed(&rt, &mut link)?;
+        let mut f = summarise("iceoryx2 realtime", vec![rate], periods, missed, Some(&link.timings), 0.0);
+        f.jitter_us = Some(link.timings.jitter.percentiles());
+        f.step_us = Some(link.timings.step.percentiles());
         f.realtime_setup = link.realtime_setup.clone();
         f.meets_target = missed == 0;
         figures.push(f);
@@ -176,7 +186,7 @@ fn summarise(
         periods,
         median_periods_per_s: median,
         periods_per_s: rates,
-        rtt_us: timings.map(|t| percentiles(&t.rtt_us)),
+        rtt_us: timings.map(|t| t.rtt.percentiles()),
         jitter_us: None,
         step_us: None,
         realtime_setup: None,

@@ -21,8 +21,9 @@ use plant::Validity;
 use rig::{
     overrides::{self, Override},
     record::{PeriodRecord, RunError},
-    rig::{FirmwareLink, RunObserver, run_loop},
+    rig::{FirmwareLink, RunObserver, stream_loop},
     scenario::Scenario,
+    stats::RunStats,
     summary::Percentiles,
     summary::RunSummary,
 };
@@ -93,12 +94,15 @@ pub(crate) fn stop_flag() -> Arc<AtomicBool> {
     flag
 }
 
-/// Runs `scenario` over `link` as `run` and `pil` do: every period's row goes to
-/// `trace.csv` of `out` as it is made (`trace.csv.partial`, flushed every 1 ms of
-/// wall time, so a plant killed outright keeps every period up to the last
-/// flush), the progress bar moves every `every` periods, Ctrl-C or SIGTERM stops
-/// the run. Returns the records, why the run stopped early if it did, the loop's
-/// wall-clock time (s) and the plant's validity counters; the progress bar is cleared.
+/// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
+/// with the run: every period's row goes to `trace.csv` of `out` as it is made
+/// (`trace.csv.partial`, flushed every 1 ms of wall time, so a plant killed
+/// outright keeps every period up to the last flush), the summary's figures are
+/// accumulated ([`RunStats`]) and the figure's curves decimated
+/// ([`plot::HistoryEnvelope`]); the progress bar moves every `every` periods,
+/// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
+/// it did, the loop's wall-clock time (s) and the plant's validity counters; the
+/// progress bar is cleared.
 ///
 /// # Errors
 /// I/O errors of the trace file.
@@ -112,12 +116,15 @@ pub(crate) fn run_streamed(
     let stop = stop_flag();
     let mut trace = StreamedCsv::new(out, "trace.csv", std::time::Duration::from_millis(1))?;
     let started = Instant::now();
-    /// Streams each record, moves the bar, stops on Ctrl-C, keeps the validity.
+    /// Streams each record, summarises it, keeps a decimated copy, moves the
+    /// bar, stops on Ctrl-C, keeps the validity.
     struct Streaming<'a> {
         trace: &'a mut StreamedCsv,
         progress: &'a indicatif::ProgressBar,
         every: usize,
         stop: &'a AtomicBool,
+        stats: RunStats,
+        history: plot::HistoryEnvelope,
         validity: Validity,
     }
     impl RunObserver for Streaming<'_> {
@@ -127,6 +134,15 @@ pub(crate) fn run_streamed(
 
         fn on_record(&mut self, r: &PeriodRecord) {
             self.trace.push(r);
+            self.stats.push(r);
+            self.history.push(&plot::HistorySample {
+                t: r.t,
+                z_t: r.z_t,
+                z_t_ref: r.z_t_ref,
+                f_n: r.f_n,
+                u: [r.u1_cmd, r.u2_cmd],
+                mode: r.mode,
+            });
         }
 
         fn on_period(&mut self, k: usize, _n: usize) -> bool {
@@ -136,19 +152,29 @@ pub(crate) fn run_streamed(
             !self.stop.load(Ordering::Relaxed)
         }
     }
-    let mut observer = Streaming { trace: &mut trace, progress, every, stop: &stop, validity: Validity::default() };
-    let (records, failure) = run_loop(scenario, link, &mut observer);
-    let validity = observer.validity;
+    let mut observer = Streaming {
+        trace: &mut trace,
+        progress,
+        every,
+        stop: &stop,
+        stats: RunStats::default(),
+        history: plot::HistoryEnvelope::default(),
+        validity: Validity::default(),
+    };
+    let (_, failure) = stream_loop(scenario, link, &mut observer);
+    let Streaming { stats, history, validity, .. } = observer;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;
-    Ok(Streamed { records, failure, wall_s, validity })
+    Ok(Streamed { stats, history, failure, wall_s, validity })
 }
 
-/// What [`run_streamed`] returns.
+/// What [`run_streamed`] returns: nothing in it grows with the run's length.
 pub(crate) struct Streamed {
-    /// Every period's record, up to the failure if there was one.
-    pub records: Vec<PeriodRecord>,
+    /// The summary's figures over every period, up to the failure if there was one.
+    pub stats: RunStats,
+    /// The figure's curves, decimated.
+    pub history: plot::HistoryEnvelope,
     /// Why the run stopped early, if it did.
     pub failure: Option<RunError>,
     /// Wall-clock time of the loop, s.
@@ -221,13 +247,17 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
     let _ = writeln!(o, "wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
 }
 
-pub(crate) fn draw(path: &std::path::Path, what: &str, s: &Scenario, records: &[PeriodRecord]) -> Result<(), CliError> {
-    let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
-    let samples: Vec<plot::HistorySample> = records
-        .iter()
-        .map(|r| plot::HistorySample { t: r.t, z_t: r.z_t, z_t_ref: r.z_t_ref, f_n: r.f_n, u: [r.u1_cmd, r.u2_cmd], mode: r.mode })
-        .collect();
-    let panels = plot::history_panels(&samples, true);
+/// Draws the closed-loop figure of a run (`trace.svg`) from its decimated
+/// `history`, on a time axis ending at `t_end` (s; the last record's, or 1 s).
+pub(crate) fn draw(
+    path: &std::path::Path,
+    what: &str,
+    s: &Scenario,
+    history: &plot::HistoryEnvelope,
+    t_end: Option<f64>,
+) -> Result<(), CliError> {
+    let t_end = t_end.unwrap_or(1.0).max(1e-9);
+    let panels = history.panels(true);
     let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

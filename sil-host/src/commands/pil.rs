@@ -22,7 +22,6 @@ use crate::{
 };
 use rig::{
     pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
-    record::PeriodRecord,
     rig::FirmwareLink,
     scenario::Scenario,
     setup::{firmware_config, plant_for},
@@ -91,25 +90,25 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
-    let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
+    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
-    let counts = link.counts.clone();
+    let counts = std::mem::take(&mut link.counts);
     let transport = link.transport();
     drop(link);
 
     let svg = out.stage("trace.svg");
-    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &records)?;
+    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &history, stats.last_t())?;
     let svg = out.stage("instructions.svg");
-    draw_counts(&svg, &scenario, &records, &counts, &target)?;
+    draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
         let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
         out.write_bytes("defmt.log", text.as_bytes())?;
     }
     let summary = RunSummary {
         pil: Some(figures),
-        ..RunSummary::from_records(&scenario, &records, failure.as_ref(), transport, "lockstep", wall_s, validity)
+        ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
@@ -180,30 +179,27 @@ fn print_pil(summary: &RunSummary) {
     }
 }
 
-fn draw_counts(
-    path: &std::path::Path,
-    s: &Scenario,
-    records: &[PeriodRecord],
-    counts: &PilCounts,
-    target: &PilTarget,
-) -> Result<(), CliError> {
+/// Draws `instructions.svg`: the image's counts per step and per frame against
+/// time (their decimated series), with the budget, on a time axis ending at
+/// `t_end` (s; the last record's, or 1 s).
+fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts: &PilCounts, target: &PilTarget) -> Result<(), CliError> {
     let per_tick = counts.counts_per_tick();
     let unit = counts.unit().as_str();
     let budget = pil_link::step_budget(s.timing.rate_hz);
-    let t_end = records.last().map_or(1.0, |r| r.t).max(1e-9);
-    let series = |ticks: &[u32]| -> Vec<(f64, f64)> {
-        let pts: Vec<_> = records.iter().zip(ticks).map(|(r, &n)| (r.t, n as f64 * per_tick)).collect();
+    let t_end = t_end.unwrap_or(1.0).max(1e-9);
+    let series = |ticks: &rig::envelope::Envelope| -> Vec<(f64, f64)> {
+        let pts: Vec<_> = ticks.points().into_iter().map(|(t, n)| (t, n * per_tick)).collect();
         plot::decimate(&pts, 4000)
     };
     let budget_label = format!("budget (5 % of {:.0} us at 168 MHz)", 1e6 / s.timing.rate_hz);
     let panels = [Panel {
         y_label: unit,
         series: vec![
-            Series { label: "frame (decode + step)", points: series(&counts.frame_ticks), color: colors::ORANGE, step: false },
-            Series { label: "step", points: series(&counts.step_ticks), color: colors::BLUE, step: false },
+            Series { label: "frame (decode + step)", points: series(&counts.frame_series), color: colors::ORANGE, step: false },
+            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false },
             Series { label: &budget_label, points: vec![(0.0, budget), (t_end, budget)], color: colors::RED, step: false },
         ],
-        y_range: Some((0.0, (counts.frame_ticks.iter().copied().max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
+        y_range: Some((0.0, (counts.frame.max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
     }];
     let source = match (counts.unit(), target) {
         (CountUnit::Instructions, PilTarget::Qemu { .. }) => format!("QEMU -icount shift={ICOUNT_SHIFT}"),

@@ -19,12 +19,11 @@ use rig::faults::LinkKind;
 use rig::scenario::Scenario;
 use rig::{
     in_process::InProcessLink,
-    ipc::{check_rig_name, default_rig_name},
+    ipc::{MonitorPolicy, check_rig_name, default_rig_name},
     ipc_link::IpcLink,
     rig::FirmwareLink,
     setup::{firmware_config, plant_for},
-    summary::RunSummary,
-    summary::percentiles,
+    summary::{MonitorSummary, RunSummary},
 };
 
 /// Runs `sil-host run`.
@@ -44,6 +43,15 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         (None, None) => default_rig_name(),
     };
     check_rig_name(&rig).map_err(CliError::BadInput)?;
+    if !(args.monitor_timeout > 0.0 && args.monitor_timeout <= 600.0) {
+        return Err(CliError::BadInput(format!("--monitor-timeout {}: expected seconds in (0, 600]", args.monitor_timeout)));
+    }
+    // Real time never waits for a monitor: the wall clock paces the periods.
+    let monitors = MonitorPolicy {
+        wait_for: usize::from(args.monitors),
+        lossless: args.monitors > 0 && !args.realtime,
+        timeout: std::time::Duration::from_secs_f64(args.monitor_timeout),
+    };
 
     let mut ipc: Option<IpcLink> = None;
     let mut in_process: Option<InProcessLink> = None;
@@ -57,7 +65,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
                     .map_err(|e| CliError::BadInput(format!("cannot find this executable to spawn the firmware: {e}")))?,
             ),
         };
-        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime).map_err(CliError::Run)?)
+        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime, &monitors).map_err(CliError::Run)?)
     };
     let transport = link.transport();
     // Only once the firmware is there: a run that cannot start writes nothing.
@@ -65,25 +73,33 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { records, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
+    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
     let firmware_announcement = link.announcement().cloned();
-    let timings = ipc.as_ref().map(|l| l.timings.clone());
+    let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
+    let monitor_counts = ipc.as_ref().filter(|_| monitors.wait_for > 0).map(IpcLink::monitor_counts);
     drop(ipc);
 
     let svg = out.stage("trace.svg");
-    draw(&svg, "SIL", &scenario, &records)?;
+    draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
     let summary = RunSummary {
         rig: (!args.in_process).then(|| rig.clone()),
-        ipc_rtt_us: timings.as_ref().map(|t| percentiles(&t.rtt_us)),
-        firmware_step_us: timings.as_ref().map(|t| percentiles(&t.step_us)),
-        period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| percentiles(&t.jitter_us)),
+        ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),
+        firmware_step_us: timings.as_ref().map(|t| t.step.percentiles()),
+        period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| t.jitter.percentiles()),
         late_answers: timings.as_ref().map_or(0, |t| t.late_answers),
         realtime_setup,
+        monitors: monitor_counts.map(|c| MonitorSummary {
+            waited_for: monitors.wait_for,
+            lossless: monitors.lossless,
+            timeout_s: args.monitor_timeout,
+            given_up: c.given_up,
+            samples_dropped: c.samples_dropped,
+        }),
         firmware_announcement,
-        ..RunSummary::from_records(
+        ..RunSummary::from_stats(
             &scenario,
-            &records,
+            &stats,
             failure.as_ref(),
             transport,
             if args.realtime { "realtime" } else { "lockstep" },

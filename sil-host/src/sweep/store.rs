@@ -37,7 +37,8 @@ pub struct Manifest {
 /// Reads `dir/sweep.json`, if there is one.
 ///
 /// # Errors
-/// [`CliError::BadInput`] when it cannot be read or is not a manifest of this version.
+/// [`CliError::BadInput`] when it cannot be read, is not a manifest of this
+/// version, holds an invalid spec or names an impossible shard.
 pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let path = dir.join(MANIFEST);
     let text = match std::fs::read_to_string(&path) {
@@ -48,6 +49,10 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
         CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
     })?;
+    m.spec.validate().map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))?;
+    if m.shard.n == 0 || m.shard.k >= m.shard.n {
+        return Err(CliError::BadInput(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
+    }
     Ok(Some(m))
 }
 
@@ -84,7 +89,9 @@ pub fn differences(a: &Manifest, b: &Manifest) -> Vec<String> {
     };
     compare("", &va["spec"], &vb["spec"]);
     if a.shard != b.shard {
-        out.push(format!("shard: {}/{} vs {}/{}", a.shard.k, a.shard.n, b.shard.k, b.shard.n));
+        let show =
+            |s: &Shard| format!("{}/{}{}", s.k, s.n, if s.n > 1 { format!(" ({:?})", s.assignment).to_lowercase() } else { String::new() });
+        out.push(format!("shard: {} vs {}", show(&a.shard), show(&b.shard)));
     }
     out
 }
@@ -150,7 +157,7 @@ pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliErro
     for (line, rec) in reader.deserialize::<RunRow>().enumerate() {
         let bad = |what: String| CliError::BadInput(format!("{} row {}: {what}", path.display(), line + 1));
         let row = rec.map_err(|e| bad(format!("does not parse: {e}")))?;
-        if row.index >= n_runs || !m.shard.owns(row.index) {
+        if row.index >= n_runs || !m.shard.owns(&m.spec, row.index) {
             return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));
         }
         let key = m.spec.run_at(row.index);
@@ -253,5 +260,5 @@ impl Journal {
 /// The indices of `m`'s runs (in its shard) not in `rows`, ascending.
 pub fn missing(m: &Manifest, rows: &[RunRow]) -> Vec<usize> {
     let done: std::collections::HashSet<usize> = rows.iter().map(|r| r.index).collect();
-    m.shard.indices(m.spec.n_runs()).filter(|i| !done.contains(i)).collect()
+    m.shard.indices(&m.spec).into_iter().filter(|i| !done.contains(i)).collect()
 }

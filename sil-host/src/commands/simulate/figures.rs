@@ -1,36 +1,49 @@
-//! The figure of `sil-host simulate`: the trace against time (`trace.svg`).
+//! The figure of `sil-host simulate`: the trace against time (`trace.svg`), drawn
+//! from a decimated copy kept in fixed memory while the trace is streamed.
 
 use super::summary::TraceRow;
 use crate::{
     error::CliError,
     plot::{self, Panel, Series, colors},
 };
+use rig::envelope::Envelope;
 use shared::Params;
 
-pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &str, trace: &[TraceRow]) -> Result<(), CliError> {
-    let t_end = trace.last().map_or(1.0, |r| r.t).max(1e-9);
-    let col = |f: fn(&TraceRow) -> f64| trace.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
+/// The curves of `trace.svg` (`z_t`, `z_n`, `f_n`, the mode code) against time,
+/// each an [`Envelope`]: every row up to [`Envelope::DEFAULT_CAPACITY`], then the
+/// minimum and maximum of even buckets of rows (bounces stay visible).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct TraceCurves {
+    curves: [Envelope; 4],
+    t_end: Option<f64>,
+}
+
+impl TraceCurves {
+    /// Adds the next row (in time order).
+    pub(crate) fn push(&mut self, r: &TraceRow) {
+        for (curve, y) in self.curves.iter_mut().zip([r.z_t, r.z_n, r.f_n, plot::mode_code(r.mode)]) {
+            curve.push(r.t, y);
+        }
+        self.t_end = Some(r.t);
+    }
+}
+
+pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &str, trace: &TraceCurves) -> Result<(), CliError> {
+    let t_end = trace.t_end.unwrap_or(1.0).max(1e-9);
+    let [z_t, z_n, f_n, mode] = trace.curves.each_ref().map(Envelope::points);
     let belt = -params.h;
     let panels = [
-        Panel {
-            y_label: "z_t (m)",
-            series: vec![Series { label: "z_t", points: col(|r| r.z_t), color: colors::BLUE, step: false }],
-            y_range: None,
-        },
+        Panel { y_label: "z_t (m)", series: vec![Series { label: "z_t", points: z_t, color: colors::BLUE, step: false }], y_range: None },
         Panel {
             y_label: "z_n (m)",
             series: vec![
-                Series { label: "z_n", points: col(|r| r.z_n), color: colors::ORANGE, step: false },
+                Series { label: "z_n", points: z_n, color: colors::ORANGE, step: false },
                 Series { label: "belt -H", points: vec![(0.0, belt), (t_end, belt)], color: colors::GREY, step: false },
             ],
             y_range: None,
         },
-        Panel {
-            y_label: "f_n (N)",
-            series: vec![Series { label: "f_n", points: col(|r| r.f_n), color: colors::GREEN, step: false }],
-            y_range: None,
-        },
-        plot::mode_panel(trace.iter().map(|r| (r.t, r.mode))),
+        Panel { y_label: "f_n (N)", series: vec![Series { label: "f_n", points: f_n, color: colors::GREEN, step: false }], y_range: None },
+        plot::mode_panel_of_points(mode),
     ];
     let title = format!("open loop from {name}: mu = {}, v_belt = {} m/s", params.mu, params.v_belt);
     plot::time_panels(path, &title, (0.0, t_end), &panels)

@@ -12,10 +12,10 @@ use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
-    output::{OutputSet, io_err, progress_bar, write_csv},
+    output::{OutputSet, io_err, progress_bar},
 };
 use plant::initial::{self, PaperX0};
-use plant::{Plant, PlantEvent, SimConfig, SimError};
+use plant::{Plant, SimConfig, SimError};
 
 pub mod figures;
 pub mod summary;
@@ -113,60 +113,63 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
 
     let mut out = OutputSet::new(&args.output.out)?;
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
-    let mut trace = Vec::with_capacity(steps + 1);
-    let mut events: Vec<PlantEvent> = plant.startup_events().to_vec();
-    trace.push(trace_row(&plant, plant.contact_force([0.0, 0.0])));
-    let started = Instant::now();
+    // Streamed: rows and events go to their files as they come (buffered), the
+    // figure keeps a decimated copy; nothing grows with the run but the files.
+    let mut trace = CsvOut::create(&mut out, "trace.csv", None)?;
+    let mut events = CsvOut::create(&mut out, "events.csv", Some(&EVENT_COLUMNS))?;
+    let mut curves = TraceCurves::default();
+    let mut n_events = 0;
+    for e in plant.startup_events() {
+        events.row(&EventRow::from(e))?;
+        n_events += 1;
+    }
+    let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
+    trace.row(&row)?;
+    curves.push(&row);
+    // The simulation's own wall time, without writing files: rows wait in a
+    // chunk of at most CHUNK samples (bounded memory) while the clock runs.
+    const CHUNK: usize = 1024;
+    let mut rows: Vec<TraceRow> = Vec::with_capacity(CHUNK);
+    let mut new_events: Vec<plant::PlantEvent> = Vec::new();
+    let mut wall = std::time::Duration::ZERO;
     let mut failure: Option<SimError> = None;
-    for k in 0..steps {
-        // Advance to an exact multiple of the sample period (no accumulated drift).
-        let target = (k + 1) as f64 * args.sample_dt;
-        match plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver) {
-            Ok(report) => {
-                events.extend_from_slice(&report.events);
-                trace.push(trace_row(&plant, report.f));
+    let mut k = 0;
+    while k < steps && failure.is_none() {
+        let started = Instant::now();
+        let end = steps.min(k + CHUNK);
+        while k < end {
+            // Advance to an exact multiple of the sample period (no accumulated drift).
+            let target = (k + 1) as f64 * args.sample_dt;
+            match plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver) {
+                Ok(report) => {
+                    new_events.extend_from_slice(&report.events);
+                    rows.push(trace_row(&plant, report.f));
+                }
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
             }
-            Err(e) => {
-                failure = Some(e);
-                break;
-            }
+            k += 1;
         }
-        if k % 256 == 0 {
-            progress.set_position(k as u64);
+        wall += started.elapsed();
+        for e in new_events.drain(..) {
+            events.row(&EventRow::from(&e))?;
+            n_events += 1;
         }
+        for row in rows.drain(..) {
+            trace.row(&row)?;
+            curves.push(&row);
+        }
+        progress.set_position(k as u64);
     }
-    let wall_s = started.elapsed().as_secs_f64();
+    let wall_s = wall.as_secs_f64();
     progress.finish_and_clear();
-
-    write_csv(&mut out, "trace.csv", &trace)?;
-    // events.csv
-    let (tmp, w) = out.create("events.csv")?;
-    let mut csv_w = csv::Writer::from_writer(w);
-    if events.is_empty() {
-        csv_w
-            .write_record([
-                "t",
-                "kind",
-                "mode_after",
-                "v_n_before",
-                "v_n_after",
-                "v_r_before",
-                "v_r_after",
-                "impulse_t",
-                "impulse_n",
-                "energy_change",
-                "contact_work",
-                "resolution",
-            ])
-            .map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
-    }
-    for e in &events {
-        csv_w.serialize(EventRow::from(e)).map_err(|err| CliError::Io { path: tmp.clone(), source: err.into() })?;
-    }
-    csv_w.flush().map_err(io_err(&tmp))?;
+    trace.finish()?;
+    events.finish()?;
     // trace.svg
     let svg = out.stage("trace.svg");
-    draw_trace(&svg, &params, &initial_condition.name, &trace)?;
+    draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
     let counters = *plant.counters();
     let simulated_s = plant.time();
@@ -190,12 +193,56 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         wall_s,
         realtime_factor: simulated_s / wall_s.max(1e-9),
         files: ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect(),
-        events: events.len(),
+        events: n_events,
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
     let validity = summary.validity;
     Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) }.strict(args.strict.strict, &validity))
+}
+
+/// The columns of `events.csv` ([`EventRow`]'s fields), written first so that a
+/// run without events still has its header.
+const EVENT_COLUMNS: [&str; 12] = [
+    "t",
+    "kind",
+    "mode_after",
+    "v_n_before",
+    "v_n_after",
+    "v_r_before",
+    "v_r_after",
+    "impulse_t",
+    "impulse_n",
+    "energy_change",
+    "contact_work",
+    "resolution",
+];
+
+/// A CSV file of `out` written row by row (buffered) as the simulation goes.
+struct CsvOut {
+    path: std::path::PathBuf,
+    writer: csv::Writer<std::io::BufWriter<std::fs::File>>,
+}
+
+impl CsvOut {
+    /// Starts `name` in `out` (renamed into place when `out` commits); with
+    /// `header`, that header row is written now and none is derived from the rows.
+    fn create(out: &mut OutputSet, name: &str, header: Option<&[&str]>) -> Result<Self, CliError> {
+        let (path, w) = out.create(name)?;
+        let mut writer = csv::WriterBuilder::new().has_headers(header.is_none()).from_writer(w);
+        if let Some(h) = header {
+            writer.write_record(h).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
+        }
+        Ok(Self { path, writer })
+    }
+
+    fn row<T: serde::Serialize>(&mut self, row: &T) -> Result<(), CliError> {
+        self.writer.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() })
+    }
+
+    fn finish(mut self) -> Result<(), CliError> {
+        self.writer.flush().map_err(io_err(&self.path))
+    }
 }
 
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the

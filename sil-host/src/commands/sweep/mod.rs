@@ -160,7 +160,15 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     if args.threads == Some(0) {
         return Err(CliError::BadInput("--threads must be >= 1".into()));
     }
-    let manifest = Manifest { spec: spec.clone(), shard };
+    let mut manifest = Manifest { spec: spec.clone(), shard };
+    // A shard folder of an earlier version (modulo assignment) resumes as it began.
+    if let Some(existing) = store::read_manifest(&args.out)?
+        && existing.spec == spec
+        && (existing.shard.k, existing.shard.n) == (shard.k, shard.n)
+    {
+        manifest.shard = existing.shard;
+    }
+    let shard = manifest.shard;
     store::open(&args.out, &manifest)?;
     let journal = store::read_journal(&args.out, &manifest)?;
     let resumed = journal.rows.len();
@@ -172,7 +180,7 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     let ics = spec.initial_conditions();
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if !args.json {
-        let in_shard = shard.indices(spec.n_runs()).count();
+        let in_shard = shard.indices(&spec).len();
         eprintln!(
             "sweep of {} runs{} in {}: {resumed} done already{}, computing {} on {threads} threads",
             in_shard,
