@@ -205,13 +205,8 @@ fn the_scenario_properties_catch_out_of_bounds_scenarios_and_placeless_errors() 
     let e = check_accepted(&f32_gain).unwrap_err();
     assert!(e.contains("breaks documented bounds"), "{e}");
     let mut unused_nan = ok.clone();
-    unused_nan.faults = vec![rig::faults::Fault {
-        kind: rig::faults::FaultKind::DropCommand,
-        at_s: 1.0,
-        duration_s: 0.0,
-        delay_s: f64::NAN,
-        signal: None,
-    }];
+    unused_nan.faults =
+        vec![rig::faults::Fault { kind: rig::faults::FaultKind::DropCommand, at_s: 1.0, duration_s: 0.0, delay_s: f64::NAN, signal: None }];
     let e = check_accepted(&unused_nan).unwrap_err();
     assert!(e.contains("delay_s"), "{e}");
     let mut blank = ok;
