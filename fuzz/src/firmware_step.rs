@@ -353,13 +353,13 @@ pub enum Op {
 pub struct Case {
     /// The configuration.
     pub knobs: Knobs,
-    /// Where the tip starts along the belt, as a fraction of 0.3 m, and its branch.
+    /// Where the tip starts along the belt for plausible frames, as a fraction of 0.3 m.
     pub z_t0: f32,
     /// Elbow up for plausible frames.
     pub elbow_up: bool,
-    /// The first frame's sequence number and stamp before the first move.
+    /// The first frame's sequence number.
     pub seq0: u32,
-    /// The first stamp.
+    /// The first frame's stamp `t_us`.
     pub t0: u64,
     /// The script.
     pub ops: Vec<Op>,

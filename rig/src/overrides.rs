@@ -50,6 +50,16 @@ pub enum OverrideError {
         /// The key.
         key: String,
     },
+    /// A key inside another given key (`plant.m` and `plant`).
+    #[error("--set {given}: `{inner}` is inside `{outer}`, both given; set one of them")]
+    Overlap {
+        /// `KEY=VALUE` as given (the later of the two).
+        given: String,
+        /// The inner key.
+        inner: String,
+        /// The table key that holds it.
+        outer: String,
+    },
     /// A key this command does not take.
     #[error("--set {given}: {why}")]
     NotHere {
@@ -123,14 +133,25 @@ impl FromStr for Override {
     }
 }
 
-/// Every key given at most once.
+/// Whether key `inner` is inside table key `outer` (`plant.m` in `plant`).
+fn inside(inner: &str, outer: &str) -> bool {
+    inner.strip_prefix(outer).is_some_and(|rest| rest.starts_with('.'))
+}
+
+/// Every key given at most once, and no key inside another given one (`plant.m`
+/// and `plant`: the later would silently replace the earlier, or merge into it,
+/// depending on their order; found by fuzzing, docs/fuzzing.md).
 ///
 /// # Errors
-/// [`OverrideError::Twice`].
+/// [`OverrideError::Twice`], [`OverrideError::Overlap`].
 pub fn check_unique(overrides: &[Override]) -> Result<(), OverrideError> {
     for (i, o) in overrides.iter().enumerate() {
         if overrides[..i].iter().any(|p| p.key == o.key) {
             return Err(OverrideError::Twice { key: o.key.clone() });
+        }
+        if let Some(p) = overrides[..i].iter().find(|p| inside(&o.key, &p.key) || inside(&p.key, &o.key)) {
+            let (inner, outer) = if inside(&o.key, &p.key) { (&o.key, &p.key) } else { (&p.key, &o.key) };
+            return Err(OverrideError::Overlap { given: o.to_string(), inner: inner.clone(), outer: outer.clone() });
         }
     }
     Ok(())
@@ -247,6 +268,14 @@ mod tests {
         assert!(matches!(apply(&mut doc, &[set("plant.m.x=1")]), Err(OverrideError::NotATable { .. })));
         assert!(matches!(apply(&mut doc, &[set("faults=1")]), Err(OverrideError::NotATable { .. })));
         assert!(matches!(apply(&mut doc, &[set("plant.m=1"), set("plant.m=2")]), Err(OverrideError::Twice { .. })));
+        // Regression (fuzzing): a key and the table holding it, in either order.
+        for pair in [["faults.0.kind=stall", "faults=[]"], ["plant={m=1}", "plant.m=2"]] {
+            let e = apply(&mut doc, &[set(pair[0]), set(pair[1])]).unwrap_err();
+            assert!(matches!(e, OverrideError::Overlap { .. }), "{pair:?}: {e}");
+        }
+        let e = apply(&mut doc, &[set("plant.m=1"), set("plant=5")]).unwrap_err().to_string();
+        assert!(e.contains("`plant.m` is inside `plant`"), "{e}");
+        apply(&mut doc, &[set("plant.m=1"), set("plant.mu=0.5"), set("plantx.m=2")]).unwrap();
     }
 
     #[test]
