@@ -118,9 +118,11 @@ pub enum Command {
     /// or no such serial device.
     #[command(allow_negative_numbers = true)]
     Pil(PilArgs),
-    /// Speed of the rig on the default scenario: control periods per wall second
-    /// in-process and in lockstep over iceoryx2 (median of --repeat runs, round-trip
-    /// percentiles), and optionally a real-time run (jitter, step time, misses).
+    /// Every speed and size figure against its target: the worst control step in PIL
+    /// (instructions), the image's flash, the closed loop in-process and over
+    /// iceoryx2, PIL periods per wall second, simulate 300 s with its trace, the
+    /// closed-loop hybrid sweep (estimated), and optionally real time at 1 kHz
+    /// (docs/measurements.md "Speed and scale"); --json for scripts.
     Bench(BenchArgs),
     /// Two-parameter brute-force bifurcation diagram (docs/model.md experiments 3 and 7,
     /// paper Figs. 3 and 9): a grid in (mu, v_belt), and optionally in the impact law
@@ -182,16 +184,43 @@ pub struct ReportArgs {
 /// `sil-host bench`.
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
-    /// Simulated seconds per run (1 kHz: 1000 periods per second).
+    /// Figure groups to measure, comma-separated (default: all but realtime): step
+    /// (worst control step in PIL, instructions), flash (the PIL image's size),
+    /// in-process, lockstep (iceoryx2), pil (PIL periods per wall second), simulate
+    /// (300 s with its 1 ms trace), sweep (closed-loop hybrid grid, estimated),
+    /// realtime (needs --realtime-s).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub only: Vec<String>,
+    /// Simulated seconds per in-process and lockstep run (1 kHz: 1000 periods per second).
     #[arg(long, default_value_t = 10.0)]
     pub duration: f64,
-    /// Runs per transport (the median is reported).
+    /// Runs per wall-clock figure (the median is reported; PIL: at most 3 hybrid runs, then one PID).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
+    /// Simulated seconds per PIL run.
+    #[arg(long, default_value_t = 2.0)]
+    pub pil_s: f64,
+    /// The PIL image (ELF); default: `cargo build-pil`'s output in the target folder.
+    #[arg(long, value_name = "ELF")]
+    pub image: Option<PathBuf>,
+    /// QEMU's executable.
+    #[arg(long, default_value = "qemu-system-arm", value_name = "EXE")]
+    pub qemu: PathBuf,
+    /// The cargo target folder holding the MCU images (default: the one this
+    /// executable was built in).
+    #[arg(long, value_name = "DIR")]
+    pub target_dir: Option<PathBuf>,
+    /// Runs of the closed-loop sweep to time (one balanced shard, scaled to the
+    /// grid); the grid's size or more runs it whole (1810 runs).
+    #[arg(long, default_value_t = 40, value_name = "N")]
+    pub sweep_runs: usize,
     /// Length of the real-time run, s (0: none).
     #[arg(long, default_value_t = 0.0)]
     pub realtime_s: f64,
-    /// Print one JSON document instead of the table.
+    /// Exit 1 when a measured figure misses its target (skipped ones do not count).
+    #[arg(long)]
+    pub check: bool,
+    /// Print one JSON document (an array of figures) instead of the table.
     #[arg(long)]
     pub json: bool,
 }

@@ -4,7 +4,7 @@ use analyses::{admissible::AdmissibleReport, modes::ModeMap};
 use rig::summary::RunSummary;
 
 use crate::commands::{
-    self, bench::TransportFigures, poincare::summary::Summary as PoincareSummary, sensitivity::Summary as SensitivitySummary,
+    self, bench::Figure as BenchFigure, poincare::summary::Summary as PoincareSummary, sensitivity::Summary as SensitivitySummary,
     simulate::summary::Summary as SimulateSummary, sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
 };
 
@@ -26,7 +26,7 @@ pub enum Outcome {
     /// `run` and `pil`.
     Run(Box<RunSummary>),
     /// `bench`.
-    Bench(Vec<TransportFigures>),
+    Bench(Vec<BenchFigure>),
     /// `sensitivity`.
     Sensitivity(Box<SensitivitySummary>),
 }

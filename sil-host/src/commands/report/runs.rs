@@ -1,28 +1,25 @@
 //! The tables of the closed-loop sections: runs side by side, the rig's speed, the MCU image's step counts.
 
 use super::format::{cell, mm, number};
-use crate::commands::bench::TransportFigures;
+use crate::commands::bench::{Figure, Goal, Status};
 use rig::summary::{PilFigures, RunSummary};
 use std::fmt::Write as _;
 
-pub(crate) fn bench(md: &mut String, figures: &[TransportFigures]) {
-    let _ = writeln!(
-        md,
-        "| transport | runs x periods | median periods/s | round trip p50 / p99 (us) | deadline misses | target |\n|---|---|---|---|---|---|"
-    );
+pub(crate) fn bench(md: &mut String, figures: &[Figure]) {
+    let _ = writeln!(md, "| figure | value | target | status | details |\n|---|---|---|---|---|");
     for f in figures {
-        let rtt = f.rtt_us.map_or_else(|| "-".into(), |p| format!("{} / {}", number(p.p50), number(p.p99)));
-        let target = if f.target > 0.0 { format!("{} /s", number(f.target)) } else { "0 misses".into() };
-        let met = if f.meets_target { "met" } else { "**not met**" };
-        let _ = writeln!(
-            md,
-            "| {} | {} x {} | {} | {rtt} | {} | {target}: {met} |",
-            f.transport,
-            f.runs,
-            f.periods,
-            number(f.median_periods_per_s.round()),
-            f.deadline_misses
-        );
+        let goal = match f.goal {
+            Goal::AtMost => "<=",
+            Goal::AtLeast => ">=",
+        };
+        let value = f.value.map_or_else(|| "-".into(), |v| format!("{} {}", number(v.round()), f.unit));
+        let status = match &f.status {
+            Status::Met => "met".to_string(),
+            Status::NotMet => "**not met**".into(),
+            Status::Skipped(why) => format!("skipped: {}", cell(why)),
+        };
+        let _ =
+            writeln!(md, "| {} | {value} | {goal} {} {} | {status} | {} |", f.name, number(f.target), f.unit, cell(&f.detail.join("; ")));
     }
     md.push('\n');
 }

@@ -126,7 +126,11 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
             writes: false,
             ..step(
                 "bench",
-                &if quick { vec!["bench", "--repeat", "3", "--duration", "2"] } else { vec!["bench", "--repeat", "5", "--duration", "10"] },
+                &if quick {
+                    vec!["bench", "--only", "in-process,lockstep", "--repeat", "3", "--duration", "2"]
+                } else {
+                    vec!["bench", "--only", "in-process,lockstep", "--repeat", "5", "--duration", "10"]
+                },
             )
         }],
     });

@@ -1,0 +1,355 @@
+//! `sil-host bench`: every speed and size figure of the tool against its target
+//! (issue 16's table, docs/measurements.md "Speed and scale"), measured in one
+//! invocation so that ratios compare like with like:
+//!
+//! | figure | group | target |
+//! |---|---|---|
+//! | worst control step in PIL, hybrid and PID (QEMU `-icount`, instructions) | `step` | <= [`STEP_INSTRUCTIONS_TARGET`] |
+//! | PIL image flash, profile `mcu` / plain `--release` | `flash` | <= 32 KiB / <= 64 KiB |
+//! | in-process closed loop | `in-process` | >= 1 000 000 periods/s |
+//! | lockstep over iceoryx2 | `lockstep` | >= 350 000 periods/s |
+//! | PIL periods per wall second | `pil` | >= 1 000 |
+//! | `simulate` 300 s with its 1 ms trace | `simulate` | <= 0.1 s |
+//! | closed-loop hybrid sweep, paper grid from x0d | `sweep` | <= 180 s |
+//! | real time at 1 kHz (with `--realtime-s`) | `realtime` | 0 deadline misses |
+//!
+//! Wall-clock figures are medians of `--repeat` runs; instruction counts and
+//! sizes are exact. A figure that cannot be measured here (no image built, no
+//! QEMU) is reported as skipped, with the reason and the command that fixes it.
+
+mod mcu;
+mod outputs;
+mod rig_loop;
+
+use std::{io::Write, path::PathBuf};
+
+use serde::Serialize;
+
+use crate::{cli::BenchArgs, error::CliError};
+
+/// Target of the worst control step under QEMU, instructions (issue 16; 5 % of
+/// the period at 168 MHz is 8 400 at 1 kHz, 840 at 10 kHz: docs/hardware.md "Budgets").
+pub const STEP_INSTRUCTIONS_TARGET: f64 = 2_000.0;
+
+/// Which way a figure's target points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Goal {
+    /// The value must be at most the target (times, sizes, counts).
+    AtMost,
+    /// The value must be at least the target (rates).
+    AtLeast,
+}
+
+/// Whether a figure meets its target.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "status", content = "reason")]
+pub enum Status {
+    /// Measured, and within the target.
+    Met,
+    /// Measured, and outside the target.
+    NotMet,
+    /// Not measured here; why, and what to do about it.
+    Skipped(String),
+}
+
+/// One figure: a measured value (median of the runs for wall-clock figures,
+/// exact for counts and sizes) against its target.
+#[derive(Debug, Clone, Serialize)]
+pub struct Figure {
+    /// Stable identifier for scripts, e.g. `control_step_hybrid`, `in_process`.
+    pub id: &'static str,
+    /// The group `--only` selects it by (`step`, `flash`, `in-process`, ...).
+    pub group: &'static str,
+    /// What it is, in words.
+    pub name: String,
+    /// The value (`None` when skipped).
+    pub value: Option<f64>,
+    /// Its unit: `instructions`, `bytes`, `periods/s`, `s`, `misses`.
+    pub unit: &'static str,
+    /// The target, in `unit`.
+    pub target: f64,
+    /// Which way the target points.
+    pub goal: Goal,
+    /// Met, not met, or skipped (with the reason).
+    #[serde(flatten)]
+    pub status: Status,
+    /// Every run's value, in `unit` (one entry for exact figures).
+    pub runs: Vec<f64>,
+    /// Further figures in words (percentiles, the other controller, estimates).
+    pub detail: Vec<String>,
+    /// A command that measures this figure alone.
+    pub command: String,
+}
+
+impl Figure {
+    /// A measured figure; its status follows from `value`, `target` and `goal`.
+    pub fn measured(
+        id: &'static str,
+        group: &'static str,
+        name: impl Into<String>,
+        value: f64,
+        unit: &'static str,
+        target: f64,
+        goal: Goal,
+    ) -> Self {
+        let met = match goal {
+            Goal::AtMost => value <= target,
+            Goal::AtLeast => value >= target,
+        };
+        Self {
+            id,
+            group,
+            name: name.into(),
+            value: Some(value),
+            unit,
+            target,
+            goal,
+            status: if met { Status::Met } else { Status::NotMet },
+            runs: vec![value],
+            detail: Vec::new(),
+            command: format!("sil-host bench --only {group}"),
+        }
+    }
+
+    /// A figure that could not be measured, and why.
+    pub fn skipped(
+        id: &'static str,
+        group: &'static str,
+        name: impl Into<String>,
+        unit: &'static str,
+        target: f64,
+        goal: Goal,
+        why: String,
+    ) -> Self {
+        Self {
+            id,
+            group,
+            name: name.into(),
+            value: None,
+            unit,
+            target,
+            goal,
+            status: Status::Skipped(why),
+            runs: Vec::new(),
+            detail: Vec::new(),
+            command: format!("sil-host bench --only {group}"),
+        }
+    }
+
+    /// With every run's value (the figure's value is their median).
+    fn with_runs(mut self, runs: Vec<f64>) -> Self {
+        self.runs = runs;
+        self
+    }
+
+    /// With one more line of detail.
+    fn note(mut self, line: impl Into<String>) -> Self {
+        self.detail.push(line.into());
+        self
+    }
+}
+
+/// The median of `v` (the upper one of an even count); 0 when empty.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// The figure groups, in the order of the issue's table, and what each measures.
+pub const GROUPS: [(&str, &str); 8] = [
+    ("step", "the worst control step of each controller in PIL (QEMU -icount: instructions)"),
+    ("flash", "the PIL image's flash, profiles mcu and release (ELF sections)"),
+    ("in-process", "the closed loop with the firmware step in this process"),
+    ("lockstep", "the closed loop over iceoryx2, firmware in its own process"),
+    ("pil", "PIL periods per wall second (the image in QEMU)"),
+    ("simulate", "sil-host simulate, 300 s with its 1 ms trace.csv"),
+    ("sweep", "the closed-loop hybrid sweep of the paper's grid from x0d (estimated from a balanced shard)"),
+    ("realtime", "a real-time run at 1 kHz over iceoryx2 (--realtime-s)"),
+];
+
+/// The groups `args` selects: `--only`, else all but `realtime` unless
+/// `--realtime-s` is positive.
+///
+/// # Errors
+/// [`CliError::BadInput`] naming an unknown group and listing the known ones.
+fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
+    if args.only.is_empty() {
+        return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "realtime" || args.realtime_s > 0.0).collect());
+    }
+    let mut out = Vec::new();
+    for name in &args.only {
+        let Some((g, _)) = GROUPS.iter().find(|(g, _)| g == name) else {
+            let known: Vec<_> = GROUPS.iter().map(|g| g.0).collect();
+            return Err(CliError::BadInput(format!("--only {name}: unknown figure group (known: {})", known.join(", "))));
+        };
+        if !out.contains(g) {
+            out.push(*g);
+        }
+    }
+    if out.contains(&"realtime") && args.realtime_s <= 0.0 {
+        return Err(CliError::BadInput("--only realtime needs --realtime-s S > 0 (the length of the real-time run)".into()));
+    }
+    Ok(out)
+}
+
+/// Checks the numbers of `args`.
+///
+/// # Errors
+/// [`CliError::BadInput`] (exit 2) naming the flag.
+fn check(args: &BenchArgs) -> Result<(), CliError> {
+    if args.repeat == 0 || args.repeat > 1000 {
+        return Err(CliError::BadInput(format!("--repeat {}: between 1 and 1000", args.repeat)));
+    }
+    for (flag, v, max) in [("--duration", args.duration, 3600.0), ("--pil-s", args.pil_s, 600.0)] {
+        if !(v.is_finite() && v > 0.0 && v <= max) {
+            return Err(CliError::BadInput(format!("{flag} {v}: in (0, {max}] s")));
+        }
+    }
+    if !(args.realtime_s.is_finite() && (0.0..=3600.0).contains(&args.realtime_s)) {
+        return Err(CliError::BadInput(format!("--realtime-s {}: in [0, 3600] s", args.realtime_s)));
+    }
+    Ok(())
+}
+
+/// Where the images and this build live: `--target-dir`, else the folder two
+/// levels above this executable (`target/release/sil-host` -> `target`).
+fn target_dir(args: &BenchArgs) -> PathBuf {
+    if let Some(d) = &args.target_dir {
+        return d.clone();
+    }
+    std::env::current_exe()
+        .ok()
+        .and_then(|e| e.parent().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf))
+        .unwrap_or_else(|| PathBuf::from("target"))
+}
+
+/// Measures the selected figures; prints progress on stderr unless `--json`.
+///
+/// # Errors
+/// Bad arguments (exit 2); a run that fails where it should not (the rig's own
+/// error, exit 1). A figure that cannot be measured here is skipped, not an error.
+pub fn execute(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
+    check(args)?;
+    let groups = selected(args)?;
+    let say = |g: &str| {
+        if !args.json {
+            let what = GROUPS.iter().find(|x| x.0 == g).map_or("", |x| x.1);
+            eprintln!("measuring {g}: {what}");
+        }
+    };
+    let mut figures = Vec::new();
+    let target = target_dir(args);
+    let mut pil_runs = None;
+    for g in groups {
+        say(g);
+        match g {
+            "step" | "pil" => {
+                if pil_runs.is_none() {
+                    pil_runs = Some(mcu::pil_runs(args, &target)?);
+                }
+                if let Some(runs) = &pil_runs {
+                    if g == "step" {
+                        figures.extend(mcu::step_figures(runs));
+                    } else {
+                        figures.push(mcu::rate_figure(runs));
+                    }
+                }
+            }
+            "flash" => figures.extend(mcu::flash_figures(&target)),
+            "in-process" => figures.push(rig_loop::in_process(args)?),
+            "lockstep" => figures.push(rig_loop::lockstep(args)?),
+            "realtime" => figures.push(rig_loop::realtime(args)?),
+            "simulate" => figures.push(outputs::simulate(args)?),
+            "sweep" => figures.push(outputs::sweep(args)?),
+            _ => unreachable!("selected() returns known groups only"),
+        }
+    }
+    Ok(figures)
+}
+
+/// A value in its unit, for people: thousands separated, KiB for sizes.
+fn show(v: f64, unit: &str) -> String {
+    match unit {
+        "bytes" => format!("{:.1} KiB", v / 1024.0),
+        "s" if v < 10.0 => format!("{v:.3} s"),
+        "s" => format!("{v:.0} s"),
+        _ => {
+            let digits = format!("{:.0}", v.abs());
+            let mut grouped = String::new();
+            for (i, c) in digits.chars().enumerate() {
+                if i > 0 && (digits.len() - i) % 3 == 0 {
+                    grouped.push(' ');
+                }
+                grouped.push(c);
+            }
+            format!("{}{grouped} {unit}", if v < 0.0 { "-" } else { "" })
+        }
+    }
+}
+
+/// Runs `sil-host bench`: [`execute`], then the table (or `--json`).
+///
+/// # Errors
+/// As [`execute`]; with `--check`, a measured figure that misses its target
+/// ([`CliError::PartFailed`], exit 1, after the table is printed).
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    let figures = execute(args)?;
+    if args.json {
+        crate::commands::print_json(&figures)?;
+    } else {
+        let mut o = std::io::stdout().lock();
+        for f in &figures {
+            let goal = match f.goal {
+                Goal::AtMost => "<=",
+                Goal::AtLeast => ">=",
+            };
+            let (value, status) = match (&f.status, f.value) {
+                (Status::Skipped(why), _) => ("-".to_string(), format!("skipped: {why}")),
+                (s, Some(v)) => (show(v, f.unit), if *s == Status::Met { "met".into() } else { "NOT met".into() }),
+                (_, None) => ("-".into(), "-".into()),
+            };
+            let _ = writeln!(o, "{:<58} {:>18}  target {goal} {:<16} {status}", f.name, value, show(f.target, f.unit));
+            for d in &f.detail {
+                let _ = writeln!(o, "    {d}");
+            }
+        }
+    }
+    let missed: Vec<_> = figures.iter().filter(|f| f.status == Status::NotMet).map(|f| f.id).collect();
+    if args.check && !missed.is_empty() {
+        return Err(CliError::PartFailed(format!("targets not met: {}", missed.join(", "))));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_figure_meets_its_target_only_on_the_right_side() {
+        let f = |v, goal| Figure::measured("x", "step", "x", v, "s", 1.0, goal).status;
+        assert_eq!(f(1.0, Goal::AtMost), Status::Met);
+        assert_eq!(f(1.0 + 1e-12, Goal::AtMost), Status::NotMet);
+        assert_eq!(f(1.0, Goal::AtLeast), Status::Met);
+        assert_eq!(f(1.0 - 1e-12, Goal::AtLeast), Status::NotMet);
+        assert_eq!(f(f64::NAN, Goal::AtLeast), Status::NotMet, "NaN never meets a target");
+        assert_eq!(f(f64::NAN, Goal::AtMost), Status::NotMet);
+    }
+
+    #[test]
+    fn the_median_is_the_middle_run() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 3.0);
+        assert_eq!(median(&[]), 0.0);
+    }
+
+    #[test]
+    fn values_are_grouped_by_thousands() {
+        assert_eq!(show(1_234_567.4, "periods/s"), "1 234 567 periods/s");
+        assert_eq!(show(999.0, "instructions"), "999 instructions");
+        assert_eq!(show(32.0 * 1024.0, "bytes"), "32.0 KiB");
+        assert_eq!(show(0.0431, "s"), "0.043 s");
+    }
+}

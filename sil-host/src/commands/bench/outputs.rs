@@ -1,0 +1,96 @@
+//! The analyses' figures, measured through the commands themselves (their
+//! `execute`, into a scratch folder): `simulate` 300 s with its 1 ms trace, and
+//! the closed-loop hybrid sweep of the paper's grid (experiment 7: x0d, 10 mu x
+//! 181 v_belt, 300 s per run), estimated from one balanced shard.
+
+use std::time::Instant;
+
+use clap::Parser;
+
+use super::{Figure, Goal, median};
+use crate::{
+    cli::{BenchArgs, Cli, Command},
+    error::CliError,
+};
+
+/// Target of `simulate` 300 s with its 1 ms trace, wall seconds (issue 16).
+pub const SIMULATE_TARGET_S: f64 = 0.1;
+/// Target of the closed-loop hybrid sweep of the paper's grid, wall seconds (issue 16).
+pub const SWEEP_TARGET_S: f64 = 180.0;
+
+/// The simulate command the figure times (issue 16's case: the bouncing arm).
+pub const SIMULATE_ARGS: [&str; 10] = ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300", "--json"];
+
+/// The sweep command the figure times (experiment 7; the default grid and window).
+pub const SWEEP_ARGS: [&str; 6] = ["sweep", "--controller", "hybrid", "--ics", "d", "--json"];
+
+/// `sil-host ARGS --out DIR` parsed as the command line would be.
+fn parse(args: &[&str], out: &std::path::Path) -> Result<Command, CliError> {
+    let out = out.to_string_lossy();
+    let argv = std::iter::once("sil-host").chain(args.iter().copied()).chain(["--out", &out]);
+    Cli::try_parse_from(argv).map(|c| c.command).map_err(|e| CliError::BadInput(format!("bench: {e}")))
+}
+
+fn scratch() -> Result<tempfile::TempDir, CliError> {
+    tempfile::tempdir().map_err(|e| CliError::Io { path: std::env::temp_dir(), source: e })
+}
+
+/// `simulate` 300 s with its trace, `--repeat` times into fresh folders: median wall time.
+///
+/// # Errors
+/// The simulation failing (exit 1); a scratch folder that cannot be made.
+pub fn simulate(args: &BenchArgs) -> Result<Figure, CliError> {
+    let mut times = Vec::new();
+    let mut bytes = 0;
+    for _ in 0..args.repeat {
+        let dir = scratch()?;
+        let Command::Simulate(sim) = parse(&SIMULATE_ARGS, dir.path())? else { unreachable!("SIMULATE_ARGS is a simulate command") };
+        let t = Instant::now();
+        let done = crate::commands::simulate::execute(&sim)?;
+        times.push(t.elapsed().as_secs_f64());
+        done.into_result()?;
+        bytes = std::fs::metadata(dir.path().join("trace.csv")).map_or(0, |m| m.len());
+    }
+    let name = "simulate 300 s from x0a, v_belt -0.5, 1 ms trace.csv";
+    Ok(Figure::measured("simulate_300s", "simulate", name, median(&times), "s", SIMULATE_TARGET_S, Goal::AtMost)
+        .note(format!(
+            "{} runs of `sil-host {} --out DIR`; trace.csv {:.1} MB, every file and figure written",
+            times.len(),
+            SIMULATE_ARGS.join(" "),
+            bytes as f64 / 1e6
+        ))
+        .with_runs(times))
+}
+
+/// The closed-loop hybrid sweep: shard 0 of N, N chosen so that it holds about
+/// `--sweep-runs` runs (balanced: an equal share of every `mu` row), timed and
+/// scaled to the whole grid; `--sweep-runs` at least the grid's size runs it whole.
+///
+/// # Errors
+/// A run failing (exit 1); a scratch folder that cannot be made.
+pub fn sweep(args: &BenchArgs) -> Result<Figure, CliError> {
+    let dir = scratch()?;
+    let Command::Sweep(whole) = parse(&SWEEP_ARGS, dir.path())? else { unreachable!("SWEEP_ARGS is a sweep command") };
+    let total = crate::commands::sweep::spec_of(&whole)?.n_runs();
+    let shards = total.div_ceil(args.sweep_runs.clamp(1, total.max(1))).max(1);
+    let mut sweep = whole;
+    if shards > 1 {
+        sweep.shard = Some(format!("0/{shards}"));
+    }
+    let t = Instant::now();
+    let done = crate::commands::sweep::execute(&sweep)?;
+    let wall = t.elapsed().as_secs_f64();
+    let computed = done.result.timing.as_ref().map_or(0, |t| t.runs_computed);
+    let threads = done.result.timing.as_ref().map_or(0, |t| t.threads);
+    done.into_result()?;
+    let estimate = if computed == 0 { f64::NAN } else { wall * total as f64 / computed as f64 };
+    let name = "closed-loop hybrid sweep, paper grid from x0d";
+    let how = if shards > 1 {
+        format!("estimated from shard 0/{shards}: {computed} of {total} runs in {wall:.1} s on {threads} threads")
+    } else {
+        format!("all {total} runs in {wall:.1} s on {threads} threads")
+    };
+    Ok(Figure::measured("sweep_hybrid", "sweep", name, estimate, "s", SWEEP_TARGET_S, Goal::AtMost)
+        .note(format!("{how} (`sil-host {} --out DIR`)", SWEEP_ARGS.join(" ")))
+        .note(format!("{:.3} s per run per thread", wall * threads as f64 / computed.max(1) as f64)))
+}
