@@ -9,13 +9,14 @@
 //!   - **semihosting FIFOs** (the default): the link makes two named pipes
 //!     `PREFIX.down` and `PREFIX.up` and passes `pil-fifo PREFIX` as QEMU's
 //!     semihosting command line; the image reads and writes them with
-//!     semihosting calls, a whole frame per call (3 000+ periods per wall second
-//!     on a 2-core machine, against 430 through the USART);
+//!     semihosting calls, a whole frame per call (a median 8 500 periods per
+//!     wall second on a shared 2-core machine, against 330 through the USART;
+//!     docs/measurements.md);
 //!   - **the emulated USART1**: the link listens on a Unix socket and QEMU's
 //!     `-chardev socket,path=SOCK -serial chardev:plant` joins it to USART1.
 //!     QEMU's USART model takes a byte only once the image has read the last
-//!     one, one emulator main-loop turn and two thread hand-overs per byte: about
-//!     430 periods per wall second. It exercises the board's USART driver.
+//!     one, one emulator main-loop turn and two thread hand-overs per byte: 300
+//!     to 450 periods per wall second. It exercises the board's USART driver.
 //!
 //!   Either way the image's defmt log arrives on QEMU's standard output
 //!   (semihosting) and is decoded here with `defmt-decoder` from the image's own ELF.

@@ -79,6 +79,8 @@ mod image {
 
     /// Where the frames travel: USART1 (a board, or QEMU's emulated USART), or
     /// under QEMU the host's FIFOs through semihosting.
+    // One per image and no heap to box it in: the FIFO's buffer stays inline.
+    #[allow(clippy::large_enum_variant)]
     enum Link {
         Usart,
         #[cfg(feature = "qemu")]
