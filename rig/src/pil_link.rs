@@ -9,8 +9,8 @@
 //!   - **semihosting FIFOs** (the default): the link makes two named pipes
 //!     `PREFIX.down` and `PREFIX.up` and passes `pil-fifo PREFIX` as QEMU's
 //!     semihosting command line; the image reads and writes them with
-//!     semihosting calls, a whole frame per call (a median 8 500 periods per
-//!     wall second on a shared 2-core machine, against 330 through the USART;
+//!     semihosting calls, a whole frame per call (a median 7 600 periods per
+//!     wall second on a shared 2-core machine, against 290 through the USART;
 //!     docs/measurements.md);
 //!   - **the emulated USART1**: the link listens on a Unix socket and QEMU's
 //!     `-chardev socket,path=SOCK -serial chardev:plant` joins it to USART1.
