@@ -4,11 +4,22 @@
 //! the outputs are those of the SIL rig.
 //!
 //! Two transports carry the same byte stream ([`PilTarget`]):
-//! - **QEMU** (PIL): the link listens on a Unix socket, starts `qemu-system-arm
-//!   -machine netduinoplus2 -icount shift=0 ... -chardev socket,path=SOCK -serial
-//!   chardev:plant -kernel IMAGE`; the image's defmt log arrives on QEMU's
-//!   standard output (semihosting) and is decoded here with `defmt-decoder` from
-//!   the image's own ELF.
+//! - **QEMU** (PIL): `qemu-system-arm -machine netduinoplus2 -icount shift=0 ...
+//!   -kernel IMAGE`, the bytes through one of two paths ([`QemuLink`]):
+//!   - **semihosting FIFOs** (the default): the link makes two named pipes
+//!     `PREFIX.down` and `PREFIX.up` and passes `pil-fifo PREFIX` as QEMU's
+//!     semihosting command line; the image reads and writes them with
+//!     semihosting calls, a whole frame per call (a median 7 600 periods per
+//!     wall second on a shared 2-core machine, against 290 through the USART;
+//!     docs/measurements.md);
+//!   - **the emulated USART1**: the link listens on a Unix socket and QEMU's
+//!     `-chardev socket,path=SOCK -serial chardev:plant` joins it to USART1.
+//!     QEMU's USART model takes a byte only once the image has read the last
+//!     one, one emulator main-loop turn and two thread hand-overs per byte: 300
+//!     to 450 periods per wall second. It exercises the board's USART driver.
+//!
+//!   Either way the image's defmt log arrives on QEMU's standard output
+//!   (semihosting) and is decoded here with `defmt-decoder` from the image's own ELF.
 //! - **A serial port** (hardware in the loop): the board's USART1 at 2 Mbaud
 //!   through a USB-serial adapter (docs/hardware.md "Reference board"), raw 8N1,
 //!   no flow control. Nothing is spawned and no log is captured: a board logs
@@ -87,15 +98,31 @@ pub const BAUD_RANGE: RangeInclusive<u32> = 9_600..=12_000_000;
 /// notices its reader up to a second late).
 const HELLO_EVERY: Duration = Duration::from_millis(200);
 
+/// How the bytes reach an image under QEMU. The frames, their checks and the
+/// image's instruction counts are the same over both (`tests/tests/pil.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum QemuLink {
+    /// Two host FIFOs the image reads and writes through semihosting, a whole
+    /// frame per call: the fast path (real time at 1 kHz and beyond).
+    #[default]
+    Semihosting,
+    /// The emulated USART1 on a Unix socket (`-chardev socket`): one byte per
+    /// emulator main-loop turn, about 0.4x real time at 1 kHz; it runs the
+    /// board's USART driver.
+    Usart,
+}
+
 /// Where the image runs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum PilTarget {
-    /// Spawn QEMU's `netduinoplus2` on an image, its USART1 on a Unix socket.
+    /// Spawn QEMU's `netduinoplus2` on an image.
     Qemu {
         /// The PIL image (ELF for thumbv7em-none-eabihf).
         image: PathBuf,
         /// The QEMU executable (`qemu-system-arm`).
         qemu: PathBuf,
+        /// How the bytes reach the image.
+        link: QemuLink,
     },
     /// Whatever answers at the other end of a serial device: a board flashed with
     /// the PIL image (hardware in the loop), or QEMU's `-serial pty`.
@@ -108,10 +135,12 @@ pub enum PilTarget {
 }
 
 impl PilTarget {
-    /// How the bytes travel: `qemu-socket` or `serial` (`summary.json`'s `pil.transport`).
+    /// How the bytes travel: `qemu-semihosting`, `qemu-socket` (the emulated
+    /// USART) or `serial` (`summary.json`'s `pil.transport`).
     pub fn transport(&self) -> &'static str {
         match self {
-            Self::Qemu { .. } => "qemu-socket",
+            Self::Qemu { link: QemuLink::Semihosting, .. } => "qemu-semihosting",
+            Self::Qemu { link: QemuLink::Usart, .. } => "qemu-socket",
             Self::Serial { .. } => "serial",
         }
     }
@@ -134,9 +163,10 @@ pub struct PilOptions {
 }
 
 impl PilOptions {
-    /// QEMU on `image`, with `qemu-system-arm` from `PATH` and 20 s / 5 s timeouts.
+    /// QEMU on `image` over the semihosting FIFOs, with `qemu-system-arm` from
+    /// `PATH` and 20 s / 5 s timeouts.
     pub fn new(image: impl Into<PathBuf>) -> Self {
-        Self::for_target(PilTarget::Qemu { image: image.into(), qemu: "qemu-system-arm".into() })
+        Self::for_target(PilTarget::Qemu { image: image.into(), qemu: "qemu-system-arm".into(), link: QemuLink::Semihosting })
     }
 
     /// The serial device `path` at `baud`, with 20 s / 5 s timeouts.
@@ -254,10 +284,14 @@ pub fn check_faults(s: &Scenario, target: &PilTarget) -> Result<(), RunError> {
     kind.check(&s.faults)
 }
 
-/// The byte stream to the image's USART1, with a read timeout.
+/// The byte stream to the image, with a read timeout.
 enum Pipe {
     /// QEMU's `-chardev socket`, connected to our listener.
     Socket(UnixStream),
+    /// The semihosting FIFOs: `down` (ours to write, opened read-write so it
+    /// opens before QEMU's end and never blocks), `up` (ours to read); both
+    /// non-blocking, waited on with `poll`.
+    Fifo { down: std::fs::File, up: std::fs::File },
     /// A serial device.
     Serial { port: Box<dyn serialport::SerialPort>, path: PathBuf, baud: u32 },
 }
@@ -295,6 +329,7 @@ impl Pipe {
     fn name(&self) -> String {
         match self {
             Self::Socket(_) => "QEMU's USART socket".into(),
+            Self::Fifo { .. } => "QEMU's semihosting FIFO".into(),
             Self::Serial { path, .. } => format!("the serial port {}", path.display()),
         }
     }
@@ -307,11 +342,13 @@ impl Pipe {
         let wait = wait.max(Duration::from_millis(1));
         let got = match self {
             Self::Socket(s) => s.set_read_timeout(Some(wait)).and_then(|()| s.read(buf)),
+            Self::Fifo { up, .. } => read_fifo_within(up, buf, wait),
             Self::Serial { port, .. } => port.set_timeout(wait).map_err(std::io::Error::from).and_then(|()| port.read(buf)),
         };
         match got {
             Ok(0) => Err(match self {
                 Self::Socket(_) => "QEMU closed the USART socket".into(),
+                Self::Fifo { .. } => "QEMU closed its semihosting FIFO".into(),
                 Self::Serial { path, .. } => format!("the serial port {} closed (unplugged?)", path.display()),
             }),
             Ok(n) => Ok(Got::Bytes(n)),
@@ -332,11 +369,14 @@ impl Pipe {
     fn write_all(&mut self, bytes: &[u8], timeout: Duration) -> Result<(), String> {
         let done = match self {
             Self::Socket(s) => s.write_all(bytes),
+            // Non-blocking: a full pipe (64 KiB the image has not read) is an error, not a hang.
+            Self::Fifo { down, .. } => down.write_all(bytes),
             Self::Serial { port, .. } => port.set_timeout(timeout).map_err(std::io::Error::from).and_then(|()| port.write_all(bytes)),
         };
         let (name, serial) = (self.name(), matches!(self, Self::Serial { .. }));
         done.map_err(|e| match e.kind() {
             std::io::ErrorKind::TimedOut => format!("cannot write to {name}: no room within {} s", timeout.as_secs_f64()),
+            std::io::ErrorKind::WouldBlock => format!("cannot write to {name}: full (the image reads nothing)"),
             _ if serial => format!("cannot write to {name}: {e} (unplugged?)"),
             _ => format!("cannot write to {name}: {e}"),
         })
@@ -346,53 +386,126 @@ impl Pipe {
 /// QEMU running the image, and the readers of its outputs.
 struct Qemu {
     child: Child,
-    socket: PathBuf,
+    /// The socket or FIFOs made for it, removed on drop.
+    files: Vec<PathBuf>,
     stderr: Arc<Mutex<String>>,
     log_thread: Option<JoinHandle<Result<(), String>>>,
     exit: Option<ExitStatus>,
 }
 
-/// A socket path of our own in the temporary folder (Unix socket paths are short).
-fn socket_path() -> PathBuf {
+/// A path prefix of our own in the temporary folder (Unix socket paths are short).
+fn temp_prefix() -> PathBuf {
     use std::sync::atomic::{AtomicU32, Ordering};
     static N: AtomicU32 = AtomicU32::new(0);
-    std::env::temp_dir().join(format!("painleve-pil-{}-{}.sock", std::process::id(), N.fetch_add(1, Ordering::Relaxed)))
+    std::env::temp_dir().join(format!("painleve-pil-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed)))
+}
+
+/// `prefix` with `ext` appended (`/tmp/x` and `.up`: `/tmp/x.up`).
+fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
+    let mut p = prefix.as_os_str().to_owned();
+    p.push(ext);
+    PathBuf::from(p)
+}
+
+/// Makes the FIFO `path` (mode 0600) and opens it non-blocking, read-only or
+/// read-write (a FIFO opened read-write on Linux opens without waiting for the
+/// other end and never blocks a writer's open).
+fn open_fifo(path: &Path, read_write: bool) -> Result<std::fs::File, String> {
+    use std::os::unix::{ffi::OsStrExt, fs::OpenOptionsExt};
+    let _ = std::fs::remove_file(path);
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).map_err(|e| e.to_string())?;
+    // SAFETY: `c` is a valid NUL-terminated path for the call's duration.
+    if unsafe { libc::mkfifo(c.as_ptr(), 0o600) } != 0 {
+        return Err(format!("cannot make the FIFO {}: {}", path.display(), std::io::Error::last_os_error()));
+    }
+    std::fs::OpenOptions::new()
+        .read(true)
+        .write(read_write)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| format!("cannot open the FIFO {}: {e}", path.display()))
+}
+
+/// Reads what arrives on the FIFO `up` within `wait` (`poll`, then a
+/// non-blocking read): `Ok(0)` once QEMU closed its end (the pipe hangs up only
+/// after a writer came and went, so a QEMU still booting is just silent).
+fn read_fifo_within(up: &mut std::fs::File, buf: &mut [u8], wait: Duration) -> std::io::Result<usize> {
+    use std::os::fd::AsRawFd;
+    let mut fd = libc::pollfd { fd: up.as_raw_fd(), events: libc::POLLIN, revents: 0 };
+    let ms = libc::c_int::try_from(wait.as_millis().max(1)).unwrap_or(libc::c_int::MAX);
+    // SAFETY: one valid pollfd for the call's duration.
+    let n = unsafe { libc::poll(&mut fd, 1, ms) };
+    if n < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    if n == 0 {
+        return Err(std::io::ErrorKind::TimedOut.into());
+    }
+    // POLLHUP without data reads as the end of file (0) below.
+    up.read(buf)
+}
+
+/// `path` written as one value of a QEMU option (`,` doubled).
+fn qemu_opt_value(path: &Path) -> Result<String, String> {
+    let s = path.to_str().ok_or_else(|| format!("{}: not UTF-8", path.display()))?;
+    Ok(s.replace(',', ",,"))
 }
 
 impl Qemu {
-    /// Starts QEMU on `image` and waits up to `boot` for it to connect to the
-    /// plant's socket; its defmt lines go to `log` (and `on_log`).
+    /// Starts QEMU on `image` with the byte stream over `link`: for the USART,
+    /// waits up to `boot` for it to connect to the plant's socket; for the
+    /// semihosting FIFOs, makes and opens them first (the handshake then waits
+    /// for the image). Its defmt lines go to `log` (and `on_log`).
     fn spawn(
         image: &Path,
         qemu: &Path,
+        link: QemuLink,
         boot: Duration,
         log: &Arc<Mutex<Vec<LogLine>>>,
         on_log: Option<LogSink>,
-    ) -> Result<(Self, UnixStream), RunError> {
+    ) -> Result<(Self, Pipe), RunError> {
         let elf = std::fs::read(image).map_err(|e| RunError::Transport(format!("cannot read the PIL image {}: {e}", image.display())))?;
         let table = defmt_decoder::Table::parse(&elf)
             .map_err(|e| RunError::Transport(format!("{}: not a defmt image: {e}", image.display())))?
             .ok_or_else(|| RunError::Transport(format!("{}: no defmt table (is it the `pil` image?)", image.display())))?;
-        let socket = socket_path();
-        let _ = std::fs::remove_file(&socket);
-        let listener =
-            UnixListener::bind(&socket).map_err(|e| RunError::Transport(format!("cannot listen on {}: {e}", socket.display())))?;
-        let child = Command::new(qemu)
-            .args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
-            .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-chardev")
-            .arg(format!("socket,id=plant,path={}", socket.display()))
-            .args(["-serial", "chardev:plant", "-kernel"])
-            .arg(image)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn();
+        let prefix = temp_prefix();
+        let mut cmd = Command::new(qemu);
+        cmd.args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
+            .args(["-icount", &format!("shift={ICOUNT_SHIFT}")]);
+        let (files, listener, fifo) = match link {
+            QemuLink::Usart => {
+                let socket = with_ext(&prefix, ".sock");
+                let _ = std::fs::remove_file(&socket);
+                let listener =
+                    UnixListener::bind(&socket).map_err(|e| RunError::Transport(format!("cannot listen on {}: {e}", socket.display())))?;
+                cmd.args(["-semihosting-config", "enable=on,target=native"])
+                    .arg("-chardev")
+                    .arg(format!("socket,id=plant,path={}", socket.display()))
+                    .args(["-serial", "chardev:plant"]);
+                (vec![socket], Some(listener), None)
+            }
+            QemuLink::Semihosting => {
+                let files = vec![with_ext(&prefix, ".down"), with_ext(&prefix, ".up")];
+                let opened = qemu_opt_value(&prefix).and_then(|arg| {
+                    // The image opens `.up` to write first: our read end is open by then.
+                    let down = open_fifo(&files[0], true)?;
+                    let up = open_fifo(&files[1], false)?;
+                    Ok((arg, down, up))
+                });
+                let (arg, down, up) = opened.map_err(|e| {
+                    files.iter().for_each(|f| drop(std::fs::remove_file(f)));
+                    RunError::Transport(e)
+                })?;
+                // `pil-fifo PREFIX` is the image's semihosting command line (args joined by a space).
+                cmd.args(["-semihosting-config", &format!("enable=on,target=native,arg=pil-fifo,arg={arg}")]).args(["-serial", "null"]);
+                (files, None, Some(Pipe::Fifo { down, up }))
+            }
+        };
+        let child = cmd.arg("-kernel").arg(image).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn();
         let mut child = match child {
             Ok(c) => c,
             Err(e) => {
-                let _ = std::fs::remove_file(&socket);
+                files.iter().for_each(|f| drop(std::fs::remove_file(f)));
                 let hint = if e.kind() == std::io::ErrorKind::NotFound { " (install it: apt-get install -y qemu-system-arm)" } else { "" };
                 return Err(RunError::Transport(format!("cannot start {}: {e}{hint}", qemu.display())));
             }
@@ -414,16 +527,24 @@ impl Qemu {
                 }
             });
         }
-        let mut q = Self { child, socket, stderr, log_thread, exit: None };
+        let mut q = Self { child, files, stderr, log_thread, exit: None };
+        let (Some(listener), None) = (listener, &fifo) else {
+            return Ok((q, fifo.expect("the FIFO link made its pipe")));
+        };
         let accepted = accept_before(&listener, &mut q.child, Instant::now() + boot);
-        let _ = std::fs::remove_file(&q.socket);
+        q.remove_files();
         match accepted {
-            Ok(stream) => Ok((q, stream)),
+            Ok(stream) => Ok((q, Pipe::Socket(stream))),
             Err(what) => {
                 q.kill();
                 Err(RunError::Transport(format!("QEMU did not connect to the plant's socket: {what}{}", q.stderr_tail())))
             }
         }
+    }
+
+    /// Removes the socket or FIFOs from the file system (once QEMU has them open).
+    fn remove_files(&mut self) {
+        self.files.drain(..).for_each(|f| drop(std::fs::remove_file(f)));
     }
 
     /// Kills QEMU (if it still runs) and reaps it.
@@ -474,7 +595,7 @@ impl Qemu {
 impl Drop for Qemu {
     fn drop(&mut self) {
         self.kill();
-        let _ = std::fs::remove_file(&self.socket);
+        self.remove_files();
     }
 }
 
@@ -539,9 +660,9 @@ impl PilLink {
         let answer_timeout = seconds("answer timeout", opts.answer_timeout_s)?;
         let log = Arc::new(Mutex::new(Vec::new()));
         let (pipe, qemu) = match &opts.target {
-            PilTarget::Qemu { image, qemu } => {
-                let (q, stream) = Qemu::spawn(image, qemu, boot, &log, on_log)?;
-                (Pipe::Socket(stream), Some(q))
+            PilTarget::Qemu { image, qemu, link } => {
+                let (q, pipe) = Qemu::spawn(image, qemu, *link, boot, &log, on_log)?;
+                (pipe, Some(q))
             }
             PilTarget::Serial { path, baud } => (Pipe::open_serial(path, *baud)?, None),
         };
@@ -568,7 +689,13 @@ impl PilLink {
         loop {
             let now = Instant::now();
             if now >= deadline {
-                return Err(self.lost_or("the image did not say Hello", boot));
+                let what = match self.pipe {
+                    Pipe::Fifo { .. } => {
+                        "the image did not say Hello on the semihosting FIFOs (an image older than this sil-host? rebuild it: cargo build-pil)"
+                    }
+                    _ => "the image did not say Hello",
+                };
+                return Err(self.lost_or(what, boot));
             }
             if now >= ask_at {
                 self.send(&Downlink::Hello)?;
@@ -585,6 +712,10 @@ impl PilLink {
                     }
                     self.counts.ticks_per_second = ticks_per_second;
                     self.counts.clock = clock;
+                    // The image has both FIFOs open before its Hello: their names can go.
+                    if let Some(q) = &mut self.qemu {
+                        q.remove_files();
+                    }
                     break;
                 }
                 // Answers, Garbled or broken frames of a previous run still on the line.
@@ -706,7 +837,7 @@ impl PilLink {
                 path.display(),
                 pil::PROTOCOL_VERSION
             ),
-            (None, Pipe::Socket(_)) => tail,
+            (None, Pipe::Socket(_) | Pipe::Fifo { .. }) => tail,
         }
     }
 
@@ -789,7 +920,7 @@ fn decode_defmt(
 impl FirmwareLink for PilLink {
     fn transport(&self) -> &'static str {
         match self.pipe {
-            Pipe::Socket(_) => "pil-qemu",
+            Pipe::Socket(_) | Pipe::Fifo { .. } => "pil-qemu",
             Pipe::Serial { .. } => "pil-serial",
         }
     }
@@ -841,6 +972,72 @@ impl FirmwareLink for PilLink {
             q.wind_down(Duration::from_secs(3), &self.log);
         }
     }
+}
+
+/// What [`measure_rate`] measured: how fast a PIL run goes in wall time.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PilRate {
+    /// `summary.json`'s `pil.transport` of the run: `qemu-semihosting`, `qemu-socket` or `serial`.
+    pub transport: &'static str,
+    /// Periods run (all of the scenario's).
+    pub periods: usize,
+    /// Wall time from spawning QEMU (or opening the port) to the image configured, s.
+    pub start_s: f64,
+    /// Wall time of the periods, from the first frame sent to the last record, s.
+    pub loop_s: f64,
+    /// `periods / loop_s`: periods per wall second (1000 is real time at 1 kHz).
+    pub periods_per_s: f64,
+}
+
+/// Runs the whole scenario `s` in PIL over `opts` (lockstep, nothing written,
+/// the image's log dropped) and measures its speed in wall time: the figure
+/// `sil-host pil` prints as periods per wall second, without the files. For the
+/// default scenario (10 000 periods at 1 kHz) see [`measure_default_rate`].
+///
+/// # Errors
+/// As [`PilLink::start`]; the run's own failure ([`RunError::FirmwareLost`] and
+/// the rest) when it stopped before its end.
+pub fn measure_rate(s: &Scenario, opts: &PilOptions) -> Result<PilRate, RunError> {
+    /// Notes when each record is made.
+    struct LastRecord(Option<Instant>);
+    impl super::rig::RunObserver for LastRecord {
+        fn on_record(&mut self, _record: &super::record::PeriodRecord) {
+            self.0 = Some(Instant::now());
+        }
+    }
+    let t0 = Instant::now();
+    let mut link = PilLink::start(s, opts, None)?;
+    let started = Instant::now();
+    let mut last = LastRecord(None);
+    let (periods, failure) = super::rig::stream_loop(s, &mut link, &mut last);
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    let loop_s = last.0.map_or(0.0, |t| (t - started).as_secs_f64());
+    Ok(PilRate {
+        transport: opts.target.transport(),
+        periods,
+        start_s: (started - t0).as_secs_f64(),
+        loop_s,
+        periods_per_s: if loop_s > 0.0 { periods as f64 / loop_s } else { 0.0 },
+    })
+}
+
+/// [`measure_rate`] on the default scenario (hybrid from x0d, 1 kHz) cut to
+/// `periods` periods (10 000: the whole default run), the image at `image` in
+/// `qemu-system-arm` from `PATH` over `link`. `sil-host bench`'s PIL figure:
+/// `measure_default_rate(&default_image(), 10_000, QemuLink::Semihosting)`.
+///
+/// # Errors
+/// As [`measure_rate`]; [`RunError::Transport`] for `periods` 0.
+pub fn measure_default_rate(image: &Path, periods: u32, link: QemuLink) -> Result<PilRate, RunError> {
+    if periods == 0 {
+        return Err(RunError::Transport("a PIL rate needs at least one period".into()));
+    }
+    let mut s = Scenario::default_scenario();
+    s.timing.duration_s = f64::from(periods) / s.timing.rate_hz;
+    let target = PilTarget::Qemu { image: image.to_path_buf(), qemu: "qemu-system-arm".into(), link };
+    measure_rate(&s, &PilOptions::for_target(target))
 }
 
 /// The default place of the PIL image: the `mcu` profile's output next to this

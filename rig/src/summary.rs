@@ -179,7 +179,9 @@ pub fn rms_tracking_error(records: &[PeriodRecord]) -> f64 {
 /// The PIL part of `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct PilFigures {
-    /// How the bytes travelled: `qemu-socket` (QEMU spawned here) or `serial`.
+    /// How the bytes travelled: `qemu-semihosting` (QEMU spawned here, host FIFOs
+    /// through semihosting), `qemu-socket` (QEMU spawned here, its emulated USART1
+    /// on a Unix socket) or `serial`.
     pub transport: &'static str,
     /// Serial runs: the device.
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -97,7 +97,9 @@ pub enum Command {
     /// COBS frames), in lockstep with the same scenarios and outputs as `run`. Two modes:
     ///
     /// - QEMU (default): the image (--image) runs in QEMU's netduinoplus2 (an STM32F405,
-    ///   --qemu) under -icount shift=0, its USART1 on a local socket. Step counts are
+    ///   --qemu) under -icount shift=0, the frames through semihosting and two host
+    ///   FIFOs (--qemu-link semihosting, real time and faster) or its USART1 on a local
+    ///   socket (--qemu-link usart, about 0.4x real time at 1 kHz). Step counts are
     ///   instructions (emulated SysTick); the image's defmt log is decoded and shown
     ///   (and written to defmt.log). Build the image first: `cargo build-pil` (its QEMU
     ///   build, profile qemu; docs/board.md). Needs qemu-system-arm.
@@ -415,6 +417,24 @@ pub struct RunArgs {
     pub output: OutputArgs,
 }
 
+/// `sil-host pil --qemu-link` ([`rig::pil_link::QemuLink`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum QemuLinkArg {
+    /// Host FIFOs through semihosting, a frame per call.
+    Semihosting,
+    /// The emulated USART1 on a Unix socket, a byte per emulator main-loop turn.
+    Usart,
+}
+
+impl From<QemuLinkArg> for rig::pil_link::QemuLink {
+    fn from(a: QemuLinkArg) -> Self {
+        match a {
+            QemuLinkArg::Semihosting => Self::Semihosting,
+            QemuLinkArg::Usart => Self::Usart,
+        }
+    }
+}
+
 /// `sil-host pil`.
 #[derive(Debug, Clone, Args)]
 pub struct PilArgs {
@@ -428,6 +448,13 @@ pub struct PilArgs {
     /// QEMU mode: the QEMU executable.
     #[arg(long, default_value = "qemu-system-arm", value_name = "EXE")]
     pub qemu: PathBuf,
+    /// QEMU mode: how the frames reach the image. `semihosting` (default): two
+    /// host FIFOs the image reads and writes through semihosting, a frame per
+    /// call (faster than real time at 1 kHz). `usart`: the emulated USART1 on a
+    /// socket, the board's own driver, one byte per emulator main-loop turn
+    /// (about 0.4x real time). The same frames, trace and instruction counts.
+    #[arg(long, value_enum, default_value_t = QemuLinkArg::Semihosting, value_name = "LINK", conflicts_with = "serial")]
+    pub qemu_link: QemuLinkArg,
     /// Hardware in the loop: the serial device of a board running the PIL image
     /// (e.g. /dev/ttyUSB0), instead of spawning QEMU. It must exist.
     #[arg(long, value_name = "PATH", conflicts_with_all = ["image", "qemu"])]

@@ -28,7 +28,7 @@ use firmware::{ControllerKind, pil::StepClock};
 use rig::summary::rms_tracking_error;
 use rig::{
     in_process,
-    pil_link::{DEFAULT_BAUD, PilLink, PilOptions, PilTarget, STEP_BUDGET_INSTRUCTIONS},
+    pil_link::{DEFAULT_BAUD, PilLink, PilOptions, PilTarget, QemuLink, STEP_BUDGET_INSTRUCTIONS, measure_default_rate},
     record::{RunError, lift_off_stats},
     rig::{FirmwareLink, run_loop},
     scenario::Scenario,
@@ -137,7 +137,7 @@ fn pid_through_the_cli_reports_its_instruction_counts_within_the_budget() {
     assert_eq!(pil["step_budget"], STEP_BUDGET_INSTRUCTIONS);
     assert_eq!(
         (&pil["count_unit"], &pil["transport"], &pil["qemu_icount_shift"]),
-        (&"instructions".into(), &"qemu-socket".into(), &0.into())
+        (&"instructions".into(), &"qemu-semihosting".into(), &0.into())
     );
     assert!(pil.get("serial_port").is_none() && pil["image"].is_string() && pil["defmt_lines"].as_u64().unwrap() > 0, "{pil:#}");
     let log = std::fs::read_to_string(out.join("defmt.log")).unwrap();
@@ -170,7 +170,7 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     let out = dir.path().join("none");
     let code = sil_host::run(["sil-host", "pil", "--image", "/nonexistent/pil", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 2);
-    let qemu = PilTarget::Qemu { image: image().into(), qemu: "/nonexistent/qemu-system-arm".into() };
+    let qemu = PilTarget::Qemu { image: image().into(), qemu: "/nonexistent/qemu-system-arm".into(), link: QemuLink::Semihosting };
     let err = PilLink::start(&s, &PilOptions::for_target(qemu), None).unwrap_err();
     assert!(err.to_string().contains("cannot start /nonexistent/qemu-system-arm"), "{err}");
 }
@@ -352,4 +352,46 @@ fn hil_refuses_a_missing_serial_port_and_the_kill_firmware_fault() {
         }
         other => panic!("expected Unsupported, got {other:?}"),
     }
+}
+
+#[test]
+fn the_usart_and_semihosting_links_give_the_same_run_and_counts_and_semihosting_is_faster() {
+    let s = scenario(ControllerKind::Hybrid, 1.0);
+    let mut runs = Vec::new();
+    for link in [QemuLink::Usart, QemuLink::Semihosting] {
+        let target = PilTarget::Qemu { image: image().into(), qemu: "qemu-system-arm".into(), link };
+        let mut l = PilLink::start(&s, &PilOptions { keep_ticks: true, ..PilOptions::for_target(target) }, None).unwrap();
+        let (records, err) = run_loop(&s, &mut l, &mut ());
+        assert!(err.is_none(), "{link:?}: {err:?}");
+        assert_eq!(records.len(), 1000);
+        runs.push((records, l.counts.step_ticks.clone(), l.counts.frame_ticks.clone()));
+    }
+    assert_eq!(runs[0].0, runs[1].0, "the same records");
+    assert_eq!(runs[0].1, runs[1].1, "step ticks per period");
+    assert_eq!(runs[0].2, runs[1].2, "frame ticks per period");
+
+    // The rate `sil-host bench` reports: periods per wall second of the loop.
+    let fast = measure_default_rate(image(), 2000, QemuLink::Semihosting).unwrap();
+    let slow = measure_default_rate(image(), 300, QemuLink::Usart).unwrap();
+    assert_eq!((fast.periods, fast.transport, slow.periods, slow.transport), (2000, "qemu-semihosting", 300, "qemu-socket"));
+    assert!(fast.loop_s > 0.0 && (fast.periods_per_s - 2000.0 / fast.loop_s).abs() < 1e-9 && fast.start_s > 0.0, "{fast:?}");
+    // About 20x on an idle 2-core machine (docs/measurements.md); 3x leaves room for a loaded one.
+    assert!(fast.periods_per_s > 3.0 * slow.periods_per_s, "semihosting {fast:?} vs USART {slow:?}");
+    assert!(measure_default_rate(image(), 0, QemuLink::Semihosting).is_err());
+}
+
+#[test]
+fn an_image_that_never_opens_the_fifos_is_reported_within_the_boot_timeout() {
+    // A stand-in for QEMU that runs nothing (an old image would ignore the FIFOs the same way).
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("fake-qemu");
+    std::fs::write(&fake, "#!/bin/sh\nexec sleep 30\n").unwrap();
+    std::fs::set_permissions(&fake, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let s = scenario(ControllerKind::Hybrid, 0.1);
+    let target = PilTarget::Qemu { image: image().into(), qemu: fake, link: QemuLink::Semihosting };
+    let t = std::time::Instant::now();
+    let err = PilLink::start(&s, &PilOptions { boot_timeout_s: 0.5, ..PilOptions::for_target(target) }, None).unwrap_err().to_string();
+    assert!(t.elapsed() < std::time::Duration::from_secs(5), "{:?}", t.elapsed());
+    assert!(err.contains("did not say Hello on the semihosting FIFOs") && err.contains("cargo build-pil"), "{err}");
+    assert!(err.contains("QEMU still runs"), "{err}");
 }

@@ -50,7 +50,9 @@ fn a_serial_link_refuses_kill_firmware_and_bad_settings_before_touching_the_port
         other => panic!("expected Unsupported, got {other:?}"),
     }
     // Under QEMU the fault is fine.
-    assert!(check_faults(&s, &PilTarget::Qemu { image: "pil".into(), qemu: "qemu-system-arm".into() }).is_ok());
+    assert!(
+        check_faults(&s, &PilTarget::Qemu { image: "pil".into(), qemu: "qemu-system-arm".into(), link: QemuLink::Semihosting }).is_ok()
+    );
     s.faults.clear();
     let err = PilLink::start(&s, &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None).unwrap_err().to_string();
     assert!(err.contains("cannot open the serial port /nonexistent/ttyUSB9 at 2000000 baud"), "{err}");
@@ -306,4 +308,45 @@ fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
     assert!(started.elapsed() < Duration::from_secs(2));
     assert!(err.contains("the image did not say Hello within 0.5 s: nothing from /dev/pts/") && !err.contains("QEMU"), "{err}");
+}
+
+#[test]
+fn the_fifo_pipe_waits_for_a_booting_image_reads_its_bytes_and_sees_it_close() {
+    use std::{fs::OpenOptions, io::Write as _};
+    let dir = std::env::temp_dir().join(format!("painleve-fifo-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir(&dir).unwrap();
+    let (down_path, up_path) = (dir.join("x.down"), dir.join("x.up"));
+    let down = open_fifo(&down_path, true).unwrap();
+    let up = open_fifo(&up_path, false).unwrap();
+    let mut pipe = Pipe::Fifo { down, up };
+    let mut buf = [0u8; 64];
+    // No writer yet (QEMU still booting): silence, not the end of the file.
+    let t = Instant::now();
+    assert!(matches!(pipe.read_within(&mut buf, Duration::from_millis(30)), Ok(Got::Nothing)));
+    assert!(t.elapsed() >= Duration::from_millis(25), "the read waited: {:?}", t.elapsed());
+    // The image's ends: it reads `down` and writes `up`.
+    let mut image_up = OpenOptions::new().write(true).open(&up_path).unwrap();
+    let mut image_down = OpenOptions::new().read(true).open(&down_path).unwrap();
+    image_up.write_all(&[1, 2, 3, 0]).unwrap();
+    match pipe.read_within(&mut buf, Duration::from_secs(5)) {
+        Ok(Got::Bytes(4)) => assert_eq!(&buf[..4], &[1, 2, 3, 0]),
+        _ => panic!("the image's frame arrives whole"),
+    }
+    pipe.write_all(&[9, 8, 0], Duration::from_secs(1)).unwrap();
+    let mut got = [0u8; 3];
+    image_down.read_exact(&mut got).unwrap();
+    assert_eq!(got, [9, 8, 0]);
+    // The image gone (QEMU exited or killed): the end of the file, at once.
+    drop(image_up);
+    let t = Instant::now();
+    let err = pipe.read_within(&mut buf, Duration::from_secs(5)).err().expect("a closed FIFO is an error");
+    assert!(err.contains("QEMU closed its semihosting FIFO"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(1));
+    // A pipe the image never reads fills up: an error, never a hang.
+    let big = vec![1u8; 1 << 20];
+    let err = pipe.write_all(&big, Duration::from_secs(1)).unwrap_err();
+    assert!(err.contains("full"), "{err}");
+    assert_eq!(qemu_opt_value(Path::new("/tmp/a,b")).unwrap(), "/tmp/a,,b");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

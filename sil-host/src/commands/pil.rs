@@ -61,7 +61,7 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
             pil_link::BUILD_HINT
         )));
     }
-    Ok(PilTarget::Qemu { image, qemu: args.qemu.clone() })
+    Ok(PilTarget::Qemu { image, qemu: args.qemu.clone(), link: args.qemu_link.into() })
 }
 
 /// Runs the PIL (or HIL) loop and writes its files; prints nothing.
@@ -146,8 +146,9 @@ fn print_pil(summary: &RunSummary) {
     let mut o = std::io::stdout().lock();
     let unit = p.count_unit.as_str();
     let sp = |s: &Spread| format!("median {:.0}, p99 {:.0}, worst {:.0}", s.median, s.p99, s.worst);
-    let link = match (&p.serial_port, p.baud) {
-        (Some(port), Some(baud)) => format!("serial port {port} at {baud} baud"),
+    let link = match (&p.serial_port, p.baud, p.transport) {
+        (Some(port), Some(baud), _) => format!("serial port {port} at {baud} baud"),
+        (_, _, "qemu-semihosting") => "QEMU's semihosting, a frame per call through two host FIFOs".into(),
         _ => "QEMU's USART1 on a Unix socket".into(),
     };
     let _ = writeln!(o, "image link: {link}");

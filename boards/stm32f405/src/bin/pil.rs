@@ -10,6 +10,13 @@
 //! carries the step's ticks and the frame's (decode plus step, from its last byte).
 //! At `End` the image logs its figures and the stack's high-water mark; under
 //! QEMU it then exits, on a board it waits for the next run.
+//!
+//! Under QEMU the same frames can bypass the emulated USART: when QEMU's
+//! semihosting command line is `pil-fifo PREFIX`, the image reads and writes the
+//! host FIFOs `PREFIX.down` and `PREFIX.up` through semihosting (one trap per
+//! chunk instead of one emulator main-loop turn per byte: QEMU's USART model
+//! takes a byte only once the last was read). `sil-host pil` does this by default
+//! (docs/board.md, "PIL in real time").
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
@@ -40,6 +47,7 @@ mod image {
 
     /// The board of the PIL image: frames from USART1, answers back.
     struct PilBoard {
+        link: Link,
         clock: CycleClock,
         rx: FrameBuffer,
         hello: Uplink,
@@ -53,22 +61,61 @@ mod image {
         fn send(&mut self, msg: &Uplink) {
             let mut buf = [0u8; MAX_FRAME];
             match pil::encode(msg, &mut buf) {
-                Ok(frame) => usart::write_all(frame),
+                Ok(frame) => self.link.write_all(frame),
                 Err(_) => defmt::error!("uplink message does not fit a frame"),
             }
         }
 
-        /// Waits for the next received byte, asleep until USART1's interrupt is
-        /// pending: interrupts stay masked (PRIMASK), so it only wakes the core.
-        /// Under QEMU a sleeping core lets the emulator deliver bytes at once.
+        /// Waits for the next received byte (USART1, or the downlink FIFO under QEMU).
+        #[inline(never)]
         fn read_byte(&mut self) -> u8 {
-            loop {
-                cortex_m::peripheral::NVIC::unpend(Interrupt::USART1);
-                if let Some(b) = usart::try_read() {
-                    return b;
-                }
-                cortex_m::asm::wfi();
+            #[cfg(feature = "qemu")]
+            if let Link::Fifo(f) = &mut self.link {
+                return f.read_byte();
             }
+            usart_read_byte()
+        }
+    }
+
+    /// Where the frames travel: USART1 (a board, or QEMU's emulated USART), or
+    /// under QEMU the host's FIFOs through semihosting.
+    // One per image and no heap to box it in: the FIFO's buffer stays inline.
+    #[allow(clippy::large_enum_variant)]
+    enum Link {
+        Usart,
+        #[cfg(feature = "qemu")]
+        Fifo(fifo::Fifo),
+    }
+
+    impl Link {
+        /// The link QEMU's semihosting command line asks for, else USART1.
+        fn choose() -> Self {
+            #[cfg(feature = "qemu")]
+            if let Some(f) = fifo::Fifo::from_cmdline() {
+                return Self::Fifo(f);
+            }
+            Self::Usart
+        }
+
+        fn write_all(&mut self, bytes: &[u8]) {
+            match self {
+                Self::Usart => usart::write_all(bytes),
+                #[cfg(feature = "qemu")]
+                Self::Fifo(f) => f.write_all(bytes),
+            }
+        }
+    }
+
+    /// Waits for the next byte of USART1, asleep until its interrupt is
+    /// pending: interrupts stay masked (PRIMASK), so it only wakes the core.
+    /// Under QEMU a sleeping core lets the emulator deliver bytes at once.
+    fn usart_read_byte() -> u8 {
+        loop {
+            cortex_m::peripheral::NVIC::unpend(Interrupt::USART1);
+            if let Some(b) = usart::try_read() {
+                return b;
+            }
+            cortex_m::asm::wfi();
         }
     }
 
@@ -159,6 +206,87 @@ mod image {
         }
     }
 
+    /// The PIL byte stream through two host FIFOs by semihosting (QEMU only):
+    /// the same COBS frames as on USART1, a chunk per trap.
+    #[cfg(feature = "qemu")]
+    mod fifo {
+        use board_stm32f405::mcu::exit;
+        use firmware::pil::MAX_FRAME;
+        use semihosting::{
+            fd::{AsFd, OwnedFd},
+            sys::arm_compat::{OpenMode, sys_get_cmdline_uninit, sys_open, sys_read_orig, sys_write_orig},
+        };
+
+        /// The semihosting command line that asks for this link: `pil-fifo PREFIX`.
+        const ASK: &[u8] = b"pil-fifo ";
+
+        pub struct Fifo {
+            down: OwnedFd,
+            up: OwnedFd,
+            buf: [u8; MAX_FRAME],
+            at: usize,
+            len: usize,
+        }
+
+        impl Fifo {
+            /// Opens `PREFIX.down` (to read) and `PREFIX.up` (to write) when QEMU's
+            /// semihosting command line is `pil-fifo PREFIX`; `None` otherwise (no
+            /// such line, a path too long or FIFOs that do not open: USART1 then).
+            pub fn from_cmdline() -> Option<Self> {
+                let mut line = [core::mem::MaybeUninit::<u8>::uninit(); 240];
+                let line = sys_get_cmdline_uninit(&mut line).ok()?;
+                let prefix = line.strip_prefix(ASK)?;
+                let open = |ext: &[u8], mode: OpenMode| {
+                    let mut path = [0u8; 256];
+                    let n = prefix.len() + ext.len();
+                    if n >= path.len() {
+                        return None;
+                    }
+                    path[..prefix.len()].copy_from_slice(prefix);
+                    path[prefix.len()..n].copy_from_slice(ext);
+                    let path = core::ffi::CStr::from_bytes_until_nul(&path).ok()?;
+                    sys_open(path, mode).ok()
+                };
+                let up = open(b".up", OpenMode::WRONLY_TRUNC_BINARY)?;
+                let down = open(b".down", OpenMode::RDONLY_BINARY)?;
+                Some(Self { down, up, buf: [0; MAX_FRAME], at: 0, len: 0 })
+            }
+
+            /// The next byte, waiting for the host (the emulator blocks in the
+            /// read: virtual time stands still). The plant gone (end of file) or a
+            /// failed read ends the image: nobody is left to answer.
+            pub fn read_byte(&mut self) -> u8 {
+                if self.at == self.len {
+                    let not_read = match sys_read_orig(self.down.as_fd(), &mut self.buf) {
+                        Ok(n) => n,
+                        Err(_) => self.buf.len(),
+                    };
+                    let got = self.buf.len().saturating_sub(not_read);
+                    if got == 0 {
+                        defmt::warn!("the plant closed the PIL FIFO: exiting");
+                        exit::exit(3);
+                    }
+                    (self.at, self.len) = (0, got);
+                }
+                self.at += 1;
+                self.buf[self.at - 1]
+            }
+
+            /// Writes a whole frame (one trap for all of it).
+            pub fn write_all(&mut self, mut bytes: &[u8]) {
+                while !bytes.is_empty() {
+                    match sys_write_orig(self.up.as_fd(), bytes) {
+                        Ok(not_written) if not_written < bytes.len() => bytes = &bytes[bytes.len() - not_written..],
+                        _ => {
+                            defmt::warn!("the plant closed the PIL FIFO: exiting");
+                            exit::exit(3);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[entry]
     fn main() -> ! {
         let Some(mut core) = cortex_m::Peripherals::take() else {
@@ -172,8 +300,14 @@ mod image {
         // enabled line only wakes the core from WFI.
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USART1) };
         let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: clock.ticks_per_second(), clock: clock.kind() };
-        let mut board = PilBoard { clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now_us: 0, fig: Figures::default() };
-        defmt::info!("PIL image up: protocol {=u16}, waiting for the plant on USART1", pil::PROTOCOL_VERSION);
+        let link = Link::choose();
+        let mut board = PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now_us: 0, fig: Figures::default() };
+        let on = match board.link {
+            Link::Usart => "USART1",
+            #[cfg(feature = "qemu")]
+            Link::Fifo(_) => "QEMU's semihosting FIFOs",
+        };
+        defmt::info!("PIL image up: protocol {=u16}, waiting for the plant on {=str}", pil::PROTOCOL_VERSION, on);
         board.send(&hello);
         let mut fw: Option<Firmware> = None;
         loop {
