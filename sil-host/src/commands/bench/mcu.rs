@@ -13,7 +13,7 @@ use super::{Figure, Goal, STEP_INSTRUCTIONS_TARGET, median};
 use crate::{cli::BenchArgs, error::CliError};
 use firmware::ControllerKind;
 use rig::{
-    pil_link::{self, CORE_HZ, PilLink, PilOptions, PilTarget},
+    pil_link::{self, CORE_HZ, PilLink, PilOptions, PilTarget, QemuLink},
     rig::{RunObserver, stream_loop},
     scenario::Scenario,
     summary::Spread,
@@ -74,7 +74,7 @@ pub fn pil_runs(args: &BenchArgs, target: &Path) -> Result<PilRuns, CliError> {
         s.controller.kind = kind;
         s.timing.duration_s = args.pil_s;
         s.validate()?;
-        let opts = PilOptions::for_target(PilTarget::Qemu { image: image.clone(), qemu: args.qemu.clone() });
+        let opts = PilOptions::for_target(PilTarget::Qemu { image: image.clone(), qemu: args.qemu.clone(), link: QemuLink::default() });
         let t = Instant::now();
         let mut link = match PilLink::start(&s, &opts, None) {
             Ok(l) => l,
@@ -147,7 +147,7 @@ pub fn rate_figure(runs: &PilRuns) -> Figure {
             let boot = median(&runs.iter().map(|r| r.boot_s).collect::<Vec<_>>());
             Figure::measured("pil_rate", "pil", name, median(&rates), "periods/s", PIL_RATE_TARGET, Goal::AtLeast)
                 .note(format!(
-                    "{} runs (hybrid, then PID) of {} periods; QEMU start and boot {boot:.2} s, not counted",
+                    "{} runs (hybrid, then PID) of {} periods; QEMU start and boot {boot:.2} s, not counted; frames over semihosting FIFOs (`pil --qemu-link semihosting`)",
                     runs.len(),
                     runs[0].periods
                 ))
