@@ -12,7 +12,8 @@ use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
-    output::{OutputSet, io_err, progress_bar},
+    fastcsv::CsvRow,
+    output::{OutputSet, progress_bar},
 };
 use plant::initial::{self, PaperX0};
 use plant::{Plant, SimConfig, SimError};
@@ -115,8 +116,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
     // Streamed: rows and events go to their files as they come (buffered), the
     // figure keeps a decimated copy; nothing grows with the run but the files.
-    let mut trace = CsvOut::create(&mut out, "trace.csv", None)?;
-    let mut events = CsvOut::create(&mut out, "events.csv", Some(&EVENT_COLUMNS))?;
+    let mut trace = out.create_csv("trace.csv", TraceRow::HEADER)?;
+    let mut events = out.create_csv("events.csv", EventRow::HEADER)?;
     let mut curves = TraceCurves::default();
     let mut n_events = 0;
     for e in plant.startup_events() {
@@ -199,50 +200,6 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let files = out.commit()?;
     let validity = summary.validity;
     Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) }.strict(args.strict.strict, &validity))
-}
-
-/// The columns of `events.csv` ([`EventRow`]'s fields), written first so that a
-/// run without events still has its header.
-const EVENT_COLUMNS: [&str; 12] = [
-    "t",
-    "kind",
-    "mode_after",
-    "v_n_before",
-    "v_n_after",
-    "v_r_before",
-    "v_r_after",
-    "impulse_t",
-    "impulse_n",
-    "energy_change",
-    "contact_work",
-    "resolution",
-];
-
-/// A CSV file of `out` written row by row (buffered) as the simulation goes.
-struct CsvOut {
-    path: std::path::PathBuf,
-    writer: csv::Writer<std::io::BufWriter<std::fs::File>>,
-}
-
-impl CsvOut {
-    /// Starts `name` in `out` (renamed into place when `out` commits); with
-    /// `header`, that header row is written now and none is derived from the rows.
-    fn create(out: &mut OutputSet, name: &str, header: Option<&[&str]>) -> Result<Self, CliError> {
-        let (path, w) = out.create(name)?;
-        let mut writer = csv::WriterBuilder::new().has_headers(header.is_none()).from_writer(w);
-        if let Some(h) = header {
-            writer.write_record(h).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
-        }
-        Ok(Self { path, writer })
-    }
-
-    fn row<T: serde::Serialize>(&mut self, row: &T) -> Result<(), CliError> {
-        self.writer.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() })
-    }
-
-    fn finish(mut self) -> Result<(), CliError> {
-        self.writer.flush().map_err(io_err(&self.path))
-    }
 }
 
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the
