@@ -40,12 +40,12 @@ pub fn push_f64(buf: &mut Vec<u8>, v: f64) {
     // zmij and ryu agree on the digits and on where plain notation stops
     // (checked in the tests); they differ only in zmij's `e+` for positive
     // exponents (`1e+30`, ryu `1e30`), which only a number >= 1e16 has.
-    if v.abs() >= 1e16 {
-        if let Some(p) = s.iter().position(|&c| c == b'+') {
-            buf.extend_from_slice(&s[..p]);
-            buf.extend_from_slice(&s[p + 1..]);
-            return;
-        }
+    if v.abs() >= 1e16
+        && let Some(p) = s.iter().position(|&c| c == b'+')
+    {
+        buf.extend_from_slice(&s[..p]);
+        buf.extend_from_slice(&s[p + 1..]);
+        return;
     }
     buf.extend_from_slice(s);
 }
@@ -198,6 +198,88 @@ impl CsvFile {
     }
 }
 
+/// A [`CsvFile`] written by a thread of its own: the caller hands over chunks
+/// of rows and goes on (the simulation) while they are formatted and written,
+/// so on two cores the trace costs little more than the simulation alone.
+/// At most `DEPTH` chunks wait in the channel (bounded memory); emptied chunks
+/// come back for reuse.
+pub struct CsvThread<T: CsvRow + Send + 'static> {
+    to_writer: Option<std::sync::mpsc::SyncSender<Vec<T>>>,
+    from_writer: std::sync::mpsc::Receiver<Vec<T>>,
+    writer: Option<std::thread::JoinHandle<Result<(), CliError>>>,
+    path: PathBuf,
+}
+
+impl<T: CsvRow + Send + 'static> CsvThread<T> {
+    /// Chunks waiting in the channel at most.
+    const DEPTH: usize = 4;
+
+    /// Starts the thread that writes `csv`.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the thread cannot be started.
+    pub fn spawn(mut csv: CsvFile) -> Result<Self, CliError> {
+        let (to_writer, rx) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH);
+        let (back, from_writer) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH + 2);
+        let path = csv.path.clone();
+        let writer = std::thread::Builder::new()
+            .name("csv-writer".into())
+            .spawn(move || {
+                for mut rows in rx {
+                    for r in &rows {
+                        csv.row(r)?;
+                    }
+                    rows.clear();
+                    // The caller may have stopped taking them back: then drop it.
+                    let _ = back.try_send(rows);
+                }
+                csv.finish()
+            })
+            .map_err(io_err(&path))?;
+        Ok(Self { to_writer: Some(to_writer), from_writer, writer: Some(writer), path })
+    }
+
+    /// Hands `rows` to the writer and returns an empty chunk to fill next (one
+    /// the writer is done with, or a new one of the same capacity).
+    ///
+    /// # Errors
+    /// The writer's [`CliError::Io`] if it has stopped on one.
+    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, CliError> {
+        let capacity = rows.capacity();
+        let sent = self.to_writer.as_ref().is_some_and(|tx| tx.send(rows).is_ok());
+        if !sent {
+            // The writer only hangs up on an error: report it.
+            self.join()?;
+        }
+        Ok(self.from_writer.try_recv().unwrap_or_else(|_| Vec::with_capacity(capacity)))
+    }
+
+    /// Waits for the writer to write everything and close the file.
+    ///
+    /// # Errors
+    /// The writer's [`CliError::Io`], if any.
+    pub fn finish(mut self) -> Result<(), CliError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<(), CliError> {
+        self.to_writer = None;
+        match self.writer.take() {
+            Some(h) => h.join().unwrap_or_else(|_| {
+                Err(CliError::Io { path: self.path.clone(), source: std::io::Error::other("the CSV writer thread panicked") })
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<T: CsvRow + Send + 'static> Drop for CsvThread<T> {
+    fn drop(&mut self) {
+        // Unwinding or an early return: let the writer finish its rows, ignore errors.
+        let _ = self.join();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -258,6 +340,57 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[derive(Debug, Clone, serde::Serialize)]
+    struct Row {
+        a: f64,
+        b: &'static str,
+        c: bool,
+        d: u32,
+    }
+    crate::csv_row!(Row { a: f64, b: str, c: bool, d: int });
+
+    #[test]
+    fn the_writer_thread_writes_every_row_in_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let rows: Vec<Row> = (0..5000).map(|i| Row { a: f64::from(i) * 0.1, b: "x,y", c: i % 3 == 0, d: i }).collect();
+        let csv = CsvFile::new(path.clone(), File::create(&path).unwrap(), Row::HEADER);
+        let mut t = CsvThread::spawn(csv).unwrap();
+        let mut chunk = Vec::with_capacity(7);
+        for r in &rows {
+            chunk.push(r.clone());
+            if chunk.len() == 7 {
+                chunk = t.send(chunk).unwrap();
+                assert!(chunk.is_empty());
+            }
+        }
+        t.send(chunk).unwrap();
+        t.finish().unwrap();
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for r in &rows {
+            w.serialize(r).unwrap();
+        }
+        assert_eq!(std::fs::read(&path).unwrap(), w.into_inner().unwrap());
+    }
+
+    #[test]
+    fn a_write_error_of_the_thread_is_reported() {
+        // /dev/full: every write fails with ENOSPC.
+        let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else { return };
+        let csv = CsvFile::new("/dev/full".into(), full, Row::HEADER);
+        let mut t = CsvThread::spawn(csv).unwrap();
+        let mut failed = false;
+        // Enough rows to fill the 1 MiB buffer and more.
+        for _ in 0..200 {
+            let chunk: Vec<Row> = (0..1000).map(|d| Row { a: 1.0, b: "flight", c: true, d }).collect();
+            if t.send(chunk).is_err() {
+                failed = true;
+                break;
+            }
+        }
+        assert!(failed || t.finish().is_err());
     }
 
     proptest! {

@@ -12,7 +12,7 @@ use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
-    fastcsv::CsvRow,
+    fastcsv::{CsvRow, CsvThread},
     output::{OutputSet, progress_bar},
 };
 use plant::initial::{self, PaperX0};
@@ -116,6 +116,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
     // Streamed: rows and events go to their files as they come (buffered), the
     // figure keeps a decimated copy; nothing grows with the run but the files.
+    // Rows are formatted and written by a thread of their own (fastcsv::CsvThread)
+    // while the simulation goes on; events (few) are written here.
     let mut trace = out.create_csv("trace.csv", TraceRow::HEADER)?;
     let mut events = out.create_csv("events.csv", EventRow::HEADER)?;
     let mut curves = TraceCurves::default();
@@ -127,6 +129,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
     trace.row(&row)?;
     curves.push(&row);
+    let mut trace = CsvThread::spawn(trace)?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of at most CHUNK samples (bounded memory) while the clock runs.
     const CHUNK: usize = 1024;
@@ -158,10 +161,10 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
             events.row(&EventRow::from(&e))?;
             n_events += 1;
         }
-        for row in rows.drain(..) {
-            trace.row(&row)?;
-            curves.push(&row);
+        for row in &rows {
+            curves.push(row);
         }
+        rows = trace.send(rows)?;
         progress.set_position(k as u64);
     }
     let wall_s = wall.as_secs_f64();
@@ -215,4 +218,43 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         print_human(&done.result);
     }
     done.into_result()
+}
+
+/// The flags of the issue-16 trace figure: 300 s from `x0a`, `v_belt = -0.5`
+/// m/s, `e_n = 0.2`, with the default 1 ms `trace.csv` (without `--out`).
+pub const BENCH_TRACE_ARGS: [&str; 9] = ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300"];
+
+/// Wall times of `sil-host simulate` with [`BENCH_TRACE_ARGS`] (target <= 0.1 s,
+/// docs/measurements.md "Speed and scale (issue 16)"): runs the whole command
+/// (simulation, `trace.csv` of 300,001 rows, `events.csv`, `trace.svg`,
+/// `summary.json`) `runs` times in this process, each into a fresh folder
+/// under the system's temporary folder (removed afterwards), and returns the
+/// wall time of each run in s (the caller takes the median).
+///
+/// # Errors
+/// [`CliError::BadInput`] for `runs == 0`; the errors of [`execute`] (a failed
+/// simulation, an I/O error of the temporary folder).
+pub fn bench_trace(runs: usize) -> Result<Vec<f64>, CliError> {
+    use clap::Parser;
+    if runs == 0 {
+        return Err(CliError::BadInput("bench_trace: runs must be >= 1".into()));
+    }
+    let dir = std::env::temp_dir().join(format!("sil-host-bench-trace-{}", std::process::id()));
+    let mut times = Vec::with_capacity(runs);
+    let result = (|| {
+        for _ in 0..runs {
+            let argv = ["sil-host"].iter().chain(&BENCH_TRACE_ARGS).chain(&["--json", "--out"]).map(std::ffi::OsString::from);
+            let cli = crate::cli::Cli::try_parse_from(argv.chain([dir.clone().into_os_string()]))
+                .map_err(|e| CliError::BadInput(e.to_string()))?;
+            let crate::cli::Command::Simulate(args) = cli.command else {
+                return Err(CliError::BadInput("BENCH_TRACE_ARGS is not a simulate command".into()));
+            };
+            let started = Instant::now();
+            execute(&args)?.into_result()?;
+            times.push(started.elapsed().as_secs_f64());
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&dir);
+    result.map(|()| times)
 }
