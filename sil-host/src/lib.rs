@@ -6,6 +6,7 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod fastcsv;
 pub mod output;
 pub mod plot;
 pub mod sweep;

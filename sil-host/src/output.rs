@@ -11,7 +11,7 @@ use std::{
     path::{Path, PathBuf},
 };
 
-use crate::error::CliError;
+use crate::{error::CliError, fastcsv::CsvFile};
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -49,9 +49,28 @@ impl OutputSet {
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
     pub fn create(&mut self, name: &str) -> Result<(PathBuf, BufWriter<File>), CliError> {
+        let (tmp, file) = self.create_unbuffered(name)?;
+        Ok((tmp, BufWriter::new(file)))
+    }
+
+    /// As [`OutputSet::create`], for writers that buffer themselves
+    /// ([`crate::fastcsv::CsvFile`]).
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be created.
+    pub fn create_unbuffered(&mut self, name: &str) -> Result<(PathBuf, File), CliError> {
         let tmp = self.stage(name);
         let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
-        Ok((tmp, BufWriter::new(file)))
+        Ok((tmp, file))
+    }
+
+    /// Starts the CSV file `name` ([`crate::fastcsv::CsvFile`]) with its header row `header`.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be created.
+    pub fn create_csv(&mut self, name: &str, header: &[&str]) -> Result<CsvFile, CliError> {
+        let (tmp, file) = self.create_unbuffered(name)?;
+        Ok(CsvFile::new(tmp, file, header))
     }
 
     /// Opens `name` for writing as it is produced: it is written as
@@ -61,12 +80,12 @@ impl OutputSet {
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
-    pub fn create_streamed(&mut self, name: &str) -> Result<(PathBuf, BufWriter<File>), CliError> {
+    pub fn create_streamed(&mut self, name: &str) -> Result<(PathBuf, File), CliError> {
         let final_path = self.dir.join(name);
         let tmp = self.dir.join(format!("{name}.partial"));
         let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
         self.streamed.push((tmp.clone(), final_path));
-        Ok((tmp, BufWriter::new(file)))
+        Ok((tmp, file))
     }
 
     /// Reserves a temporary path for `name` (for writers that open files themselves,
@@ -146,39 +165,35 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 /// A CSV file written row by row as a run produces it ([`OutputSet::create_streamed`]),
 /// flushed to the operating system at least every `flush_every` of wall time: a
 /// process killed outright (SIGKILL) loses at most the rows of that interval.
+/// Rows are formatted by [`crate::fastcsv`] (the bytes of the `csv` crate's serde path).
 pub struct StreamedCsv {
-    path: PathBuf,
-    writer: csv::Writer<BufWriter<File>>,
+    csv: CsvFile,
     flush_every: std::time::Duration,
     last_flush: std::time::Instant,
     error: Option<CliError>,
 }
 
 impl StreamedCsv {
-    /// Starts `name` in `out`, flushed every `flush_every`.
+    /// Starts `name` in `out` with the header row `header`, flushed every `flush_every`.
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
-    pub fn new(out: &mut OutputSet, name: &str, flush_every: std::time::Duration) -> Result<Self, CliError> {
-        let (path, w) = out.create_streamed(name)?;
-        Ok(Self { path, writer: csv::Writer::from_writer(w), flush_every, last_flush: std::time::Instant::now(), error: None })
+    pub fn new(out: &mut OutputSet, name: &str, header: &[&str], flush_every: std::time::Duration) -> Result<Self, CliError> {
+        let (path, file) = out.create_streamed(name)?;
+        Ok(Self { csv: CsvFile::new(path, file, header), flush_every, last_flush: std::time::Instant::now(), error: None })
     }
 
     /// Appends one row. The first write error is kept (and later rows dropped)
     /// for [`StreamedCsv::finish`] to report: a run is not stopped by its trace.
-    pub fn push<T: serde::Serialize>(&mut self, row: &T) {
+    pub fn push<T: crate::fastcsv::CsvRow>(&mut self, row: &T) {
         if self.error.is_some() {
             return;
         }
-        let result = self.writer.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() });
-        let result = result.and_then(|()| {
-            if self.last_flush.elapsed() >= self.flush_every {
-                self.last_flush = std::time::Instant::now();
-                self.writer.flush().map_err(io_err(&self.path))
-            } else {
-                Ok(())
-            }
-        });
+        let mut result = self.csv.row(row);
+        if result.is_ok() && self.last_flush.elapsed() >= self.flush_every {
+            self.last_flush = std::time::Instant::now();
+            result = self.csv.flush();
+        }
         if let Err(e) = result {
             self.error = Some(e);
         }
@@ -192,7 +207,7 @@ impl StreamedCsv {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        self.writer.flush().map_err(io_err(&self.path))
+        self.csv.finish()
     }
 }
 

@@ -12,7 +12,8 @@ use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
-    output::{OutputSet, io_err, progress_bar},
+    fastcsv::{CsvRow, CsvThread},
+    output::{OutputSet, progress_bar},
 };
 use plant::initial::{self, PaperX0};
 use plant::{Plant, SimConfig, SimError};
@@ -115,8 +116,10 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
     // Streamed: rows and events go to their files as they come (buffered), the
     // figure keeps a decimated copy; nothing grows with the run but the files.
-    let mut trace = CsvOut::create(&mut out, "trace.csv", None)?;
-    let mut events = CsvOut::create(&mut out, "events.csv", Some(&EVENT_COLUMNS))?;
+    // Rows are formatted and written by a thread of their own (fastcsv::CsvThread)
+    // while the simulation goes on; events (few) are written here.
+    let mut trace = out.create_csv("trace.csv", TraceRow::HEADER)?;
+    let mut events = out.create_csv("events.csv", EventRow::HEADER)?;
     let mut curves = TraceCurves::default();
     let mut n_events = 0;
     for e in plant.startup_events() {
@@ -126,6 +129,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
     trace.row(&row)?;
     curves.push(&row);
+    let mut trace = CsvThread::spawn(trace)?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of at most CHUNK samples (bounded memory) while the clock runs.
     const CHUNK: usize = 1024;
@@ -157,10 +161,10 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
             events.row(&EventRow::from(&e))?;
             n_events += 1;
         }
-        for row in rows.drain(..) {
-            trace.row(&row)?;
-            curves.push(&row);
+        for row in &rows {
+            curves.push(row);
         }
+        rows = trace.send(rows)?;
         progress.set_position(k as u64);
     }
     let wall_s = wall.as_secs_f64();
@@ -201,50 +205,6 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) }.strict(args.strict.strict, &validity))
 }
 
-/// The columns of `events.csv` ([`EventRow`]'s fields), written first so that a
-/// run without events still has its header.
-const EVENT_COLUMNS: [&str; 12] = [
-    "t",
-    "kind",
-    "mode_after",
-    "v_n_before",
-    "v_n_after",
-    "v_r_before",
-    "v_r_after",
-    "impulse_t",
-    "impulse_n",
-    "energy_change",
-    "contact_work",
-    "resolution",
-];
-
-/// A CSV file of `out` written row by row (buffered) as the simulation goes.
-struct CsvOut {
-    path: std::path::PathBuf,
-    writer: csv::Writer<std::io::BufWriter<std::fs::File>>,
-}
-
-impl CsvOut {
-    /// Starts `name` in `out` (renamed into place when `out` commits); with
-    /// `header`, that header row is written now and none is derived from the rows.
-    fn create(out: &mut OutputSet, name: &str, header: Option<&[&str]>) -> Result<Self, CliError> {
-        let (path, w) = out.create(name)?;
-        let mut writer = csv::WriterBuilder::new().has_headers(header.is_none()).from_writer(w);
-        if let Some(h) = header {
-            writer.write_record(h).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
-        }
-        Ok(Self { path, writer })
-    }
-
-    fn row<T: serde::Serialize>(&mut self, row: &T) -> Result<(), CliError> {
-        self.writer.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() })
-    }
-
-    fn finish(mut self) -> Result<(), CliError> {
-        self.writer.flush().map_err(io_err(&self.path))
-    }
-}
-
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the
 /// JSON document with `--json`).
 ///
@@ -258,4 +218,43 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         print_human(&done.result);
     }
     done.into_result()
+}
+
+/// The flags of the issue-16 trace figure: 300 s from `x0a`, `v_belt = -0.5`
+/// m/s, `e_n = 0.2`, with the default 1 ms `trace.csv` (without `--out`).
+pub const BENCH_TRACE_ARGS: [&str; 9] = ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300"];
+
+/// Wall times of `sil-host simulate` with [`BENCH_TRACE_ARGS`] (target <= 0.1 s,
+/// docs/measurements.md "Speed and scale (issue 16)"): runs the whole command
+/// (simulation, `trace.csv` of 300,001 rows, `events.csv`, `trace.svg`,
+/// `summary.json`) `runs` times in this process, each into a fresh folder
+/// under the system's temporary folder (removed afterwards), and returns the
+/// wall time of each run in s (the caller takes the median).
+///
+/// # Errors
+/// [`CliError::BadInput`] for `runs == 0`; the errors of [`execute`] (a failed
+/// simulation, an I/O error of the temporary folder).
+pub fn bench_trace(runs: usize) -> Result<Vec<f64>, CliError> {
+    use clap::Parser;
+    if runs == 0 {
+        return Err(CliError::BadInput("bench_trace: runs must be >= 1".into()));
+    }
+    let dir = std::env::temp_dir().join(format!("sil-host-bench-trace-{}", std::process::id()));
+    let mut times = Vec::with_capacity(runs);
+    let result = (|| {
+        for _ in 0..runs {
+            let argv = ["sil-host"].iter().chain(&BENCH_TRACE_ARGS).chain(&["--json", "--out"]).map(std::ffi::OsString::from);
+            let cli = crate::cli::Cli::try_parse_from(argv.chain([dir.clone().into_os_string()]))
+                .map_err(|e| CliError::BadInput(e.to_string()))?;
+            let crate::cli::Command::Simulate(args) = cli.command else {
+                return Err(CliError::BadInput("BENCH_TRACE_ARGS is not a simulate command".into()));
+            };
+            let started = Instant::now();
+            execute(&args)?.into_result()?;
+            times.push(started.elapsed().as_secs_f64());
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&dir);
+    result.map(|()| times)
 }

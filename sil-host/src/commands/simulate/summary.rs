@@ -78,6 +78,39 @@ impl From<&PlantEvent> for EventRow {
     }
 }
 
+// The CSV columns, in the structs' field order (the header the `csv` crate
+// derived from them): the tests at the end check the bytes against it.
+crate::csv_row!(TraceRow {
+    t: f64,
+    theta1: f64,
+    theta1_dot: f64,
+    theta2: f64,
+    theta2_dot: f64,
+    z_t: f64,
+    z_n: f64,
+    z_t_dot: f64,
+    z_n_dot: f64,
+    z_r_dot: f64,
+    f_t: f64,
+    f_n: f64,
+    mode: str,
+    energy: f64,
+});
+crate::csv_row!(EventRow {
+    t: f64,
+    kind: str,
+    mode_after: str,
+    v_n_before: f64,
+    v_n_after: f64,
+    v_r_before: f64,
+    v_r_after: f64,
+    impulse_t: f64,
+    impulse_n: f64,
+    energy_change: f64,
+    contact_work: f64,
+    resolution: str,
+});
+
 /// The initial condition as resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct InitialCondition {
@@ -210,4 +243,56 @@ pub(crate) fn print_human(s: &Summary) {
         let _ = writeln!(o, "FAILED: {e}");
     }
     let _ = writeln!(o, "wrote {}", s.files.join(", "));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fastcsv::{CsvRow, push_header, push_row};
+    use proptest::prelude::*;
+
+    /// `rows` through the old path (`csv::Writer::serialize`, header derived) and through [`crate::fastcsv`].
+    fn both<T: serde::Serialize + CsvRow>(rows: &[T]) -> (Vec<u8>, Vec<u8>) {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for r in rows {
+            w.serialize(r).unwrap();
+        }
+        let old = w.into_inner().unwrap();
+        let mut new = Vec::new();
+        push_header(&mut new, T::HEADER);
+        for r in rows {
+            push_row(&mut new, r);
+        }
+        (old, new)
+    }
+
+    fn float() -> impl Strategy<Value = f64> {
+        prop_oneof![any::<u64>().prop_map(f64::from_bits), -10.0..10.0f64, Just(0.0), Just(-0.0)]
+    }
+
+    proptest! {
+        #[test]
+        fn trace_rows_match_the_csv_crate(v in proptest::collection::vec((proptest::array::uniform13(float()), 0..3usize), 1..6)) {
+            let rows: Vec<TraceRow> = v
+                .iter()
+                .map(|(f, m)| TraceRow {
+                    t: f[0], theta1: f[1], theta1_dot: f[2], theta2: f[3], theta2_dot: f[4], z_t: f[5], z_n: f[6],
+                    z_t_dot: f[7], z_n_dot: f[8], z_r_dot: f[9], f_t: f[10], f_n: f[11],
+                    mode: ["flight", "sliding", "sticking"][*m], energy: f[12],
+                })
+                .collect();
+            let (old, new) = both(&rows);
+            prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
+        }
+
+        #[test]
+        fn event_rows_match_the_csv_crate(f in proptest::array::uniform10(float()), resolution in "[a-z_, \"]{0,20}") {
+            let row = EventRow {
+                t: f[0], kind: "touchdown", mode_after: "sticking", v_n_before: f[1], v_n_after: f[2], v_r_before: f[3],
+                v_r_after: f[4], impulse_t: f[5], impulse_n: f[6], energy_change: f[7], contact_work: f[8], resolution,
+            };
+            let (old, new) = both(&[row]);
+            prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
+        }
+    }
 }
