@@ -273,8 +273,8 @@ impl PeriodLoop {
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
         let step = match switch {
-            Some(at) => plant.advance(&Hold(applied), at, obs).and_then(|r| {
-                run.on_events(&r.events);
+            Some(at) => plant.advance_events(&Hold(applied), at, obs).and_then(|events| {
+                run.on_events(&events);
                 plant.advance(&Hold(u_new), t_next - plant.time(), obs)
             }),
             None => plant.advance(&Hold(applied), t_next - plant.time(), obs),
