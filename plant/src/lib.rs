@@ -477,6 +477,23 @@ pub struct Plant {
     end_point: Option<EndPoint>,
 }
 
+/// What [`Plant::advance`] changes in a plant: a plant restored to it
+/// ([`Plant::restore`]) goes on exactly as from the instant it was taken
+/// ([`Plant::checkpoint`]), counters and the model's caches included.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    t: f64,
+    y: OdeState,
+    phase: Phase,
+    cone_relaxed: bool,
+    in_violation: bool,
+    last_h: f64,
+    evals: u64,
+    trig: TrigCache,
+    counters: Counters,
+    end_point: Option<EndPoint>,
+}
+
 /// The model at the end of an interval, under the held torque `u` (N m) of that
 /// interval: the report's contact force came from it, and the next interval, when
 /// it starts from the same time, state and mode under the same held torque (the
@@ -671,6 +688,32 @@ impl Plant {
     /// Evaluations of the vector field since creation (a cost measure).
     pub fn rhs_evaluations(&self) -> u64 {
         self.evals.get()
+    }
+
+    /// The plant's state now, to go back to with [`Plant::restore`] (e.g. after
+    /// advancing ahead of a decision that turned out otherwise).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t: self.t,
+            y: self.y,
+            phase: self.phase,
+            cone_relaxed: self.cone_relaxed,
+            in_violation: self.in_violation,
+            last_h: self.last_h,
+            evals: self.evals.get(),
+            trig: self.trig.clone(),
+            counters: self.counters,
+            end_point: self.end_point,
+        }
+    }
+
+    /// Goes back to `c`, a [`Plant::checkpoint`] of this plant: what follows is
+    /// bit for bit what would have followed the checkpoint.
+    pub fn restore(&mut self, c: Checkpoint) {
+        let Checkpoint { t, y, phase, cone_relaxed, in_violation, last_h, evals, trig, counters, end_point } = c;
+        (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.last_h) = (t, y, phase, cone_relaxed, in_violation, last_h);
+        self.evals.set(evals);
+        (self.trig, self.counters, self.end_point) = (trig, counters, end_point);
     }
 
     /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`]`(u)` for the
