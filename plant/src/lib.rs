@@ -473,6 +473,43 @@ pub struct Plant {
     solver: Dop853,
     counters: Counters,
     startup_events: Vec<PlantEvent>,
+    /// The model at the end of the last interval under a held torque (see [`EndPoint`]).
+    end_point: Option<EndPoint>,
+}
+
+/// What [`Plant::advance`] changes in a plant: a plant restored to it
+/// ([`Plant::restore`]) goes on exactly as from the instant it was taken
+/// ([`Plant::checkpoint`]), counters and the model's caches included.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    t: f64,
+    y: OdeState,
+    phase: Phase,
+    cone_relaxed: bool,
+    in_violation: bool,
+    last_h: f64,
+    evals: u64,
+    trig: TrigCache,
+    counters: Counters,
+    end_point: Option<EndPoint>,
+}
+
+/// The model at the end of an interval, under the held torque `u` (N m) of that
+/// interval: the report's contact force came from it, and the next interval, when
+/// it starts from the same time, state and mode under the same held torque (the
+/// first part of the next control period holds the last command), starts from it
+/// instead of evaluating the model again. The values are those a new evaluation
+/// would give, to the bit: the model is a function of these keys (the sine and
+/// cosine cache gives the same values for the same angles, whatever happened in
+/// between at those angles).
+#[derive(Debug, Clone, Copy)]
+struct EndPoint {
+    t: f64,
+    y: OdeState,
+    u: [f64; 2],
+    phase: Phase,
+    cone_relaxed: bool,
+    point: Point,
 }
 
 /// The end of one solve: time, state, boundary hit, event function at the last
@@ -533,6 +570,7 @@ impl Plant {
             solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
+            end_point: None,
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -652,6 +690,32 @@ impl Plant {
         self.evals.get()
     }
 
+    /// The plant's state now, to go back to with [`Plant::restore`] (e.g. after
+    /// advancing ahead of a decision that turned out otherwise).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t: self.t,
+            y: self.y,
+            phase: self.phase,
+            cone_relaxed: self.cone_relaxed,
+            in_violation: self.in_violation,
+            last_h: self.last_h,
+            evals: self.evals.get(),
+            trig: self.trig.clone(),
+            counters: self.counters,
+            end_point: self.end_point,
+        }
+    }
+
+    /// Goes back to `c`, a [`Plant::checkpoint`] of this plant: what follows is
+    /// bit for bit what would have followed the checkpoint.
+    pub fn restore(&mut self, c: Checkpoint) {
+        let Checkpoint { t, y, phase, cone_relaxed, in_violation, last_h, evals, trig, counters, end_point } = c;
+        (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.last_h) = (t, y, phase, cone_relaxed, in_violation, last_h);
+        self.evals.set(evals);
+        (self.trig, self.counters, self.end_point) = (trig, counters, end_point);
+    }
+
     /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`]`(u)` for the
     /// motor torques `u = [u1, u2]` (N m) held constant (zero-order hold, as a
     /// sampled controller drives the arm), or a law evaluated inside the
@@ -665,6 +729,41 @@ impl Plant {
     /// finite), or a failure during the interval (the plant is then left at the
     /// failure time).
     pub fn advance<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64, obs: &mut dyn Observer) -> Result<StepReport, SimError> {
+        let events = self.advance_events(ctrl, dt, obs)?;
+        let f = match self.phase {
+            Phase::Flight => [0.0, 0.0],
+            _ => {
+                let seg = self.segment(ctrl);
+                let f = match ctrl.held() {
+                    // Kept for the next interval's start (see `EndPoint`); counted when used there.
+                    Some(u) => {
+                        let point = seg.point_uncounted(self.t, &self.y);
+                        let (t, y, phase, cone_relaxed) = (self.t, self.y, self.phase, self.cone_relaxed);
+                        self.end_point = Some(EndPoint { t, y, u, phase, cone_relaxed, point });
+                        point.f
+                    }
+                    None => seg.evaluate(self.t, &self.y, &mut [0.0; 2]).1,
+                };
+                [f[0], f[1]]
+            }
+        };
+        Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
+    }
+
+    /// [`Plant::advance`] without its report: the events of the interval only, in
+    /// time order (the contact force at its end is not evaluated: the SIL loop's
+    /// first part of a period, up to the zero-order-hold switch, needs only these).
+    ///
+    /// # Errors
+    /// As [`Plant::advance`].
+    pub fn advance_events<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<Vec<PlantEvent>, SimError> {
+        // Kept only for an interval that starts where it was made.
+        let end_point = self.end_point.take();
         if let Some(u) = ctrl.held()
             && !u.iter().all(|v| v.is_finite())
         {
@@ -700,7 +799,13 @@ impl Plant {
             // the event function and the integrator's first stage.
             let (start, (boundary, g0)) = {
                 let seg = self.segment(ctrl);
-                let start = seg.point(self.t, &self.y);
+                let start = match &end_point {
+                    Some(e) if self.starts_from(e, ctrl) => {
+                        seg.count_evaluation();
+                        e.point
+                    }
+                    _ => seg.point(self.t, &self.y),
+                };
                 let nb = segment::nearest(seg.components_of(&start.td, &start.f));
                 (start, nb)
             };
@@ -742,14 +847,18 @@ impl Plant {
         for e in &events {
             obs.on_event(e);
         }
-        let f = match self.phase {
-            Phase::Flight => [0.0, 0.0],
-            _ => {
-                let (_, f, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
-                [f[0], f[1]]
-            }
-        };
-        Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
+        Ok(events)
+    }
+
+    /// Whether `e` is the model at the current time, state and mode under `ctrl`
+    /// (a held torque equal to `e`'s, bit for bit).
+    fn starts_from<C: Controller + ?Sized>(&self, e: &EndPoint, ctrl: &C) -> bool {
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+        ctrl.held().is_some_and(|u| same(u[0], e.u[0]) && same(u[1], e.u[1]))
+            && same(e.t, self.t)
+            && e.y.iter().zip(&self.y).all(|(a, b)| same(*a, *b))
+            && e.phase == self.phase
+            && e.cone_relaxed == self.cone_relaxed
     }
 
     /// Counts mode changes at one instant; after [`STALL_LIMIT`] of them in contact

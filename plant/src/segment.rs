@@ -149,7 +149,19 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     /// counted in `evals`).
     #[inline]
     pub fn point(&self, t: f64, y: &OdeState) -> Point {
+        self.count_evaluation();
+        self.point_uncounted(t, y)
+    }
+
+    /// Counts one model evaluation in `evals` (one made earlier and used now).
+    #[inline]
+    pub fn count_evaluation(&self) {
         self.evals.set(self.evals.get() + 1);
+    }
+
+    /// [`Segment::point`] without counting it.
+    #[inline]
+    pub fn point_uncounted(&self, t: f64, y: &OdeState) -> Point {
         let mut xi_dot = [0.0; 2];
         let (td, f, _) = self.evaluate(t, y, &mut xi_dot);
         let qdd = match self.phase {

@@ -24,9 +24,18 @@ use shared::kinematics::JointTrig;
 const D_MAX: f64 = 0.0625;
 
 /// The joint angles last evaluated by `sin_cos` and their sines and cosines.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct TrigCache {
-    base: Cell<Option<([f64; 2], JointTrig<f64>)>>,
+    /// The angles (rad); NaN while empty, so that no angle is near them.
+    base: Cell<[f64; 2]>,
+    /// Their sines and cosines.
+    trig: Cell<JointTrig<f64>>,
+}
+
+impl Default for TrigCache {
+    fn default() -> Self {
+        Self { base: Cell::new([f64::NAN; 2]), trig: Cell::new(JointTrig { s1: f64::NAN, c1: f64::NAN, s2: f64::NAN, c2: f64::NAN }) }
+    }
 }
 
 impl TrigCache {
@@ -40,20 +49,23 @@ impl TrigCache {
     /// (which then becomes the cache).
     #[inline]
     pub fn get(&self, q: &Vector2<f64>) -> JointTrig<f64> {
-        if let Some((qb, tb)) = self.base.get() {
-            let (d1, d2) = (q[0] - qb[0], q[1] - qb[1]);
+        // Two plain cells (no `Option` to unpack): this runs at every model evaluation.
+        let qb = self.base.get();
+        let (d1, d2) = (q[0] - qb[0], q[1] - qb[1]);
+        // NaN (empty cache or non-finite angles) fails both tests.
+        if d1.abs() <= D_MAX && d2.abs() <= D_MAX {
+            let tb = self.trig.get();
             if d1 == 0.0 && d2 == 0.0 {
                 return tb;
             }
-            if d1.abs() <= D_MAX && d2.abs() <= D_MAX {
-                let (s1, c1) = rotate(tb.s1, tb.c1, d1);
-                let (s2, c2) = rotate(tb.s2, tb.c2, d2);
-                return JointTrig { s1, c1, s2, c2 };
-            }
+            let (s1, c1) = rotate(tb.s1, tb.c1, d1);
+            let (s2, c2) = rotate(tb.s2, tb.c2, d2);
+            return JointTrig { s1, c1, s2, c2 };
         }
         let trig = JointTrig::new(q);
         if trig.s1.is_finite() && trig.s2.is_finite() {
-            self.base.set(Some(([q[0], q[1]], trig)));
+            self.base.set([q[0], q[1]]);
+            self.trig.set(trig);
         }
         trig
     }
@@ -112,7 +124,7 @@ mod tests {
                     worst = worst.max((x - y).abs());
                 }
                 // The base stays: the series was used.
-                assert_eq!(cache.base.get().unwrap().0, [base[0], base[1]]);
+                assert_eq!(cache.base.get(), [base[0], base[1]]);
             }
         }
         eprintln!("worst deviation from sin_cos: {worst:e}");
@@ -129,11 +141,11 @@ mod tests {
         assert_eq!(cache.get(&q), t);
         let far = Vector2::new(0.3 + 0.2, -1.2);
         assert_eq!(cache.get(&far), JointTrig::new(&far));
-        assert_eq!(cache.base.get().unwrap().0, [far[0], far[1]]);
+        assert_eq!(cache.base.get(), [far[0], far[1]]);
         // Non-finite angles give NaN and are not cached.
         let nan = cache.get(&Vector2::new(f64::NAN, 0.0));
         assert!(nan.s1.is_nan());
-        assert_eq!(cache.base.get().unwrap().0, [far[0], far[1]]);
+        assert_eq!(cache.base.get(), [far[0], far[1]]);
     }
 
     /// Mirror symmetry: `q -> -q` gives `sin -> -sin`, `cos -> cos` exactly.

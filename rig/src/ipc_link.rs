@@ -86,6 +86,9 @@ pub struct IpcLink {
     announced: Option<Announced>,
     /// When the attached firmware's node was last looked up.
     last_peer_check: Option<Instant>,
+    /// Lockstep: the frame sent ahead of its exchange ([`FirmwareLink::send_ahead`]),
+    /// and when it was published.
+    sent_ahead: Option<(u32, Instant)>,
 }
 
 impl IpcLink {
@@ -138,6 +141,7 @@ impl IpcLink {
             timings: LinkTimings::default(),
             announced: None,
             last_peer_check: None,
+            sent_ahead: None,
         };
         let start = Instant::now();
         let limit = s.rig.connect_timeout_s;
@@ -270,6 +274,15 @@ impl IpcLink {
         }
     }
 
+    /// Publishes `truth` (to monitors) and `frame` (to the firmware); returns when the frame went out.
+    fn publish(&self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Instant, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        self.ports.publish_truth(*truth).map_err(transport)?;
+        let published = Instant::now();
+        self.ports.frames.send(*frame).map_err(transport)?;
+        Ok(published)
+    }
+
     fn telemetry_for(&self, seq: u32) -> Result<FirmwareTelemetry, RunError> {
         // Published just before the command: it is there, behind older ones.
         while let Some(t) = self.ports.telemetry.try_next().map_err(|e| RunError::Transport(e.to_string()))? {
@@ -322,6 +335,18 @@ impl FirmwareLink for IpcLink {
         }
     }
 
+    /// Lockstep only: publishes the frame now; [`FirmwareLink::exchange`] then
+    /// waits for its answer (its round trip then runs to when the plant takes the
+    /// command, after the plant's own work in between).
+    fn send_ahead(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<bool, RunError> {
+        if self.realtime {
+            return Ok(false);
+        }
+        let published = self.publish(frame, truth)?;
+        self.sent_ahead = Some((frame.seq, published));
+        Ok(true)
+    }
+
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
         let deadline = if self.realtime {
@@ -332,9 +357,10 @@ impl FirmwareLink for IpcLink {
         } else {
             Some(Instant::now() + self.timeout)
         };
-        self.ports.truth.send(*truth).map_err(transport)?;
-        let published = Instant::now();
-        self.ports.frames.send(*frame).map_err(transport)?;
+        let published = match self.sent_ahead.take() {
+            Some((seq, published)) if seq == frame.seq => published,
+            _ => self.publish(frame, truth)?,
+        };
         // Real time: the sample instant is the frame's publication (the hardware's
         // timer tick); the plant's own lateness against `t0 + t_k` is period jitter,
         // not the firmware's deadline. The plant stops waiting at the next sample

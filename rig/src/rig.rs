@@ -75,6 +75,10 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
         })
     }
 
+    fn send_ahead(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<bool, RunError> {
+        self.inner.send_ahead(frame, truth)
+    }
+
     fn before_period(&mut self, k: usize, t: f64) {
         self.inner.before_period(k, t);
     }
@@ -100,6 +104,17 @@ pub trait FirmwareLink {
     /// [`RunError`] when the firmware is gone (its process died, or it stopped
     /// answering for `rig.max_consecutive_timeouts` periods) or the transport failed.
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError>;
+
+    /// Sends frame `k` (and its ground truth) ahead of [`FirmwareLink::exchange`],
+    /// which then only waits for the answer, so that the plant can work while the
+    /// firmware computes (lockstep over another process). `Ok(false)`: this link
+    /// does not (the default), and `exchange` sends.
+    ///
+    /// # Errors
+    /// As [`FirmwareLink::exchange`].
+    fn send_ahead(&mut self, _frame: &SensorFrame, _truth: &GroundTruth) -> Result<bool, RunError> {
+        Ok(false)
+    }
 
     /// Called once before period `k`'s exchange (fault injection that acts on the
     /// firmware process itself, such as killing it).
@@ -151,6 +166,8 @@ pub struct PeriodLoop {
     /// The firmware's reference, kept over periods without an answer.
     z_t_ref: f64,
     k: usize,
+    /// Whether the period's first part may run while the firmware computes ([`PeriodLoop::overlapping`]).
+    overlap: bool,
 }
 
 impl PeriodLoop {
@@ -172,7 +189,21 @@ impl PeriodLoop {
             f_now: plant.contact_force([0.0; 2]),
             z_t_ref: f64::NAN,
             k: 0,
+            overlap: false,
         }
+    }
+
+    /// Lets the plant run the period's first part, under the held command up to
+    /// `t_k + delta`, while the firmware computes, on links that send ahead
+    /// ([`FirmwareLink::send_ahead`]: lockstep over iceoryx2). Only for a caller
+    /// whose trajectory observer is [`NoObserver`] (the first part runs before the
+    /// answer is known, unobserved). When the answer takes effect at `t_k + delta`
+    /// (every period of a lockstep run without a late or lost command) the result
+    /// is that first part; otherwise the plant goes back to `t_k`
+    /// ([`Plant::restore`]) and the period runs as without overlap: the trace is
+    /// the same to the bit either way.
+    pub fn overlapping(self, overlap: bool) -> Self {
+        Self { overlap, ..self }
     }
 
     /// Control periods in `duration_s` seconds.
@@ -224,7 +255,24 @@ impl PeriodLoop {
         };
         link.before_period(k, t_k);
         let mut wire = DropCommands { inner: link, plan: self.sensors.plan() };
-        let exchange = wire.exchange(&frame, &truth).map_err(|error| Box::new(PeriodFailure { record: None, error }))?;
+        let fail = |error| Box::new(PeriodFailure { record: None, error });
+        // The first part of the period, run while the firmware computes (see
+        // `overlapping`), with the plant's state before it.
+        let ahead = if self.overlap && self.delta > 0.0 && self.delta < ts && wire.send_ahead(&frame, &truth).map_err(fail)? {
+            let before = plant.checkpoint();
+            Some((before, plant.advance_events(&Hold(self.applied), self.delta, &mut NoObserver)))
+        } else {
+            None
+        };
+        let exchange = match wire.exchange(&frame, &truth) {
+            Ok(e) => e,
+            Err(error) => {
+                if let Some((before, _)) = ahead {
+                    plant.restore(before);
+                }
+                return Err(fail(error));
+            }
+        };
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {
             Exchange::Answered { command, telemetry, at_stamp } => {
@@ -267,17 +315,34 @@ impl PeriodLoop {
             overruns: command.map_or(0, |c| c.overruns),
             status: fw_status,
         };
+        // The first part run ahead is the period's when the switch is at `t_k + delta`.
+        let (first_part, before) = match ahead {
+            Some((before, part)) if switch.is_some_and(|at| at.to_bits() == self.delta.to_bits()) => (Some(part), Some(before)),
+            Some((before, _)) => {
+                plant.restore(before);
+                (None, None)
+            }
+            None => (None, None),
+        };
         if let Some(reason) = firmware::SafeReason::from_status(fw_status) {
+            // The plant stays at `t_k`, as without overlap.
+            if let Some(before) = before {
+                plant.restore(before);
+            }
             return Err(Box::new(PeriodFailure { record: Some(record), error: RunError::SafeState { k, t: t_k, reason } }));
         }
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
-        let step = match switch {
-            Some(at) => plant.advance(&Hold(applied), at, obs).and_then(|r| {
-                run.on_events(&r.events);
+        let step = match (switch, first_part) {
+            (Some(_), Some(part)) => part.and_then(|events| {
+                run.on_events(&events);
                 plant.advance(&Hold(u_new), t_next - plant.time(), obs)
             }),
-            None => plant.advance(&Hold(applied), t_next - plant.time(), obs),
+            (Some(at), None) => plant.advance_events(&Hold(applied), at, obs).and_then(|events| {
+                run.on_events(&events);
+                plant.advance(&Hold(u_new), t_next - plant.time(), obs)
+            }),
+            (None, _) => plant.advance(&Hold(applied), t_next - plant.time(), obs),
         };
         match step {
             Ok(r) => {
@@ -336,7 +401,8 @@ pub fn stream_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunO
         Err(e) => return (0, Some(e.into())),
     };
     run.on_events(plant.startup_events());
-    let mut periods = PeriodLoop::new(s, &plant);
+    // No trajectory observer here: the period's first part may overlap the firmware's step.
+    let mut periods = PeriodLoop::new(s, &plant).overlapping(true);
     let n = periods.periods_in(s.timing.duration_s);
     let mut recorded = 0;
     let mut failure = None;

@@ -1,8 +1,9 @@
 //! Plant speed targets (issue 2):
 //! - `advance` over 1 ms intervals in steady sliding: median at most 5 us per interval;
 //! - 300 s of open-loop simulation from x0a (mu = 0.6, v_belt = -0.4): under 0.5 s;
-//! - the SIL pattern (issue 4): one 1 ms control period as two `advance` calls, 0.2 ms
-//!   under the previous command then 0.8 ms under the new one (the zero-order-hold
+//! - the SIL pattern (issue 4): one 1 ms control period as the rig runs it, 0.2 ms
+//!   under the previous command (`advance_events`: no force report) then 0.8 ms under
+//!   the new one (`advance`; the zero-order-hold
 //!   switch at `t_k + delta`): at most 2 us per period, so that the in-process loop
 //!   (plant plus a ~0.4 us firmware step) reaches 300 000 periods per second;
 //! - the default scenario's 10 s closed-loop run (10 000 periods) in-process.
@@ -43,7 +44,7 @@ fn bench(c: &mut Criterion) {
         b.iter_batched_ref(
             || base.clone(),
             |p| {
-                p.advance(&plant::Hold([0.02, -0.01]), 2e-4, &mut plant::NoObserver).unwrap();
+                p.advance_events(&plant::Hold([0.02, -0.01]), 2e-4, &mut plant::NoObserver).unwrap();
                 let r = p.advance(&plant::Hold([0.03, 0.01]), 8e-4, &mut plant::NoObserver).unwrap();
                 assert_eq!(r.mode, ContactMode::Sliding);
                 r.f[1]
