@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 use shared::{
     Arm, ElbowBranch,
-    kinematics::{jacobian, tip_position},
+    kinematics::{JointTrig, jacobian_trig, tip_position, tip_position_trig},
     wire::{self, ActuatorCommand, SensorFrame, status},
 };
 
@@ -352,13 +352,14 @@ impl Firmware {
     /// Estimation, lift-off detection and the control law for a trusted frame;
     /// returns the motor torques (N m, saturated) and status bits.
     fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
-        let cfg = self.cfg;
+        // Borrowed, not copied: the configuration is most of the firmware's state.
+        let cfg = &self.cfg;
         let ts = self.dt;
-        let p = cfg.params;
+        let p = &cfg.params;
         let theta2 = decode::wrap(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
-        let s = match &mut self.started {
+        let s: &Started = match &mut self.started {
             Some(s) => {
                 let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
                 // Model-based prediction: the joint acceleration under the torque we
@@ -374,7 +375,7 @@ impl Firmware {
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
                 ];
                 s.last_seq = seq;
-                *s
+                s
             }
             None => {
                 let q = Vector2::new(m.theta1, theta2);
@@ -390,14 +391,15 @@ impl Firmware {
                     force_ramp: Quintic { start: m.f_n.clamp(0.0, cfg.f_n_ref), target: cfg.f_n_ref, duration: cfg.force_ramp_s.max(1e-9) },
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
                 };
-                self.started = Some(s);
-                s
+                self.started.insert(s)
             }
         };
         let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
         let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
-        let z = tip_position(p.l, &q);
-        let z_dot = jacobian(p.l, &q) * qd;
+        // One sin_cos per angle for the tip estimate and the hybrid law.
+        let trig = JointTrig::new(&q);
+        let z = tip_position_trig(p.l, &trig);
+        let z_dot = jacobian_trig(p.l, &trig) * qd;
         let height = z[1] + p.h;
         let rule = LiftOffRule {
             lift_off_force: cfg.lift_off_force,
@@ -438,13 +440,14 @@ impl Firmware {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, sig) = law::hybrid(
+                let (u, sig) = law::hybrid_trig(
                     &self.arm,
                     &cfg.hybrid,
                     cfg.friction,
                     &reference,
                     f_n_ref,
                     &input,
+                    &trig,
                     &mut self.hybrid,
                     ts,
                     self.last_saturated,

@@ -49,13 +49,23 @@ impl FrameFault {
 /// Wraps an angle to `(-pi, pi]`.
 #[inline]
 pub fn wrap(angle: f32) -> f32 {
-    let mut a = angle % TAU;
+    // `%` is a software `fmodf` on the MCU; within one turn it returns `angle`
+    // itself (fmod is exact), so only larger angles pay for it.
+    let mut a = if angle.abs() < TAU { angle } else { rem_turn(angle) };
     if a > PI {
         a -= TAU;
     } else if a <= -PI {
         a += TAU;
     }
     a
+}
+
+/// `angle % TAU`, out of line: LLVM would otherwise compute the remainder on
+/// both branches of [`wrap`] (a select), calling `fmodf` every time.
+#[cold]
+#[inline(never)]
+fn rem_turn(angle: f32) -> f32 {
+    angle % TAU
 }
 
 /// Decodes the counts of `frame` into SI units (docs/hardware.md resolutions: 14-bit

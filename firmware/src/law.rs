@@ -3,8 +3,8 @@
 
 use nalgebra::{Matrix2, Vector2};
 use shared::{
-    Arm, ElbowBranch,
-    kinematics::{inverse_kinematics, jacobian, jdot_qdot, tip_position},
+    Arm, ElbowBranch, Real,
+    kinematics::{JointTrig, inverse_kinematics, jacobian, jacobian_trig, jdot_qdot_trig, tip_position_trig},
 };
 
 use crate::{
@@ -148,14 +148,42 @@ pub fn hybrid(
     dt: f32,
     saturated: bool,
 ) -> Result<([f32; 2], HybridSignals), LawError> {
+    hybrid_trig(arm, gains, comp, reference, f_n_ref, input, &JointTrig::new(&input.q), state, dt, saturated)
+}
+
+/// [`hybrid`] with the sines and cosines of `input.q` given (`trig` must be
+/// `JointTrig::new(&input.q)`): the firmware's step computes them once for the
+/// tip estimate and the law. The same torques and signals as [`hybrid`].
+///
+/// One more `sin_cos`, of `theta1 - theta2`, gives the singularity test, the
+/// centripetal torque and the mass matrix (the cosine is even, exactly), so the
+/// law costs three `sin_cos` in all (docs/measurements.md "Speed and scale").
+///
+/// # Errors
+/// As [`hybrid`].
+#[allow(clippy::too_many_arguments)]
+pub fn hybrid_trig(
+    arm: &Arm<f32>,
+    gains: &HybridGains,
+    comp: FrictionCompensation,
+    reference: &RefPoint,
+    f_n_ref: f32,
+    input: &HybridInput,
+    trig: &JointTrig<f32>,
+    state: &mut HybridState,
+    dt: f32,
+    saturated: bool,
+) -> Result<([f32; 2], HybridSignals), LawError> {
     let p = &arm.params;
     let (q, qd) = (input.q, input.qd);
-    let jac = jacobian(p.l, &q);
-    if libm::fabsf(libm::sinf(q[1] - q[0])) < 1e-3 {
+    let jac = jacobian_trig(p.l, trig);
+    // sin(theta1 - theta2) and cos(theta1 - theta2) = cos(theta2 - theta1).
+    let (s12, c21) = (q[0] - q[1]).sin_cos_rad();
+    if s12.abs() < 1e-3 {
         return Err(LawError::Singular);
     }
     let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
-    let z = tip_position(p.l, &q);
+    let z = tip_position_trig(p.l, trig);
     let z_dot = jac * qd;
     let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
     // The integral up to the previous sample (forward Euler): a new error acts from
@@ -173,9 +201,9 @@ pub fn hybrid(
         FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
         FrictionCompensation::None => 0.0,
     };
-    let wc = arm.w(&q, &qd) + arm.c(&q, &qd);
-    let m = arm.mass_matrix(&q);
-    let s_vec = jdot_qdot(p.l, &q, &qd);
+    let wc = arm.w_sin(trig.s1, trig.s2, &q, &qd) + arm.c_sin(s12, &qd);
+    let m = arm.mass_matrix_cos(c21);
+    let s_vec = jdot_qdot_trig(p.l, trig, &qd);
     let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
     if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
