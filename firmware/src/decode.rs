@@ -145,6 +145,25 @@ mod tests {
     }
 
     #[test]
+    fn wrap_gives_the_bits_of_the_remainder_it_skips_within_a_turn() {
+        let by_rem = |angle: f32| {
+            let mut a = angle % TAU;
+            if a > PI {
+                a -= TAU;
+            } else if a <= -PI {
+                a += TAU;
+            }
+            a
+        };
+        let edges = [0.0, -0.0, PI, -PI, TAU, -TAU, f32::from_bits(TAU.to_bits() - 1), 3.0 * TAU, 1e6, f32::INFINITY, f32::NAN];
+        let sweep = (-40_000..40_000).map(|i| i as f32 * 7.3e-4 + (i % 7) as f32 * 1e-9);
+        for a in edges.into_iter().chain(edges.map(|e| -e)).chain(sweep) {
+            let (w, r) = (wrap(a), by_rem(a));
+            assert!(w.to_bits() == r.to_bits() || (w.is_nan() && r.is_nan()), "{a}: {w} vs {r}");
+        }
+    }
+
+    #[test]
     fn out_of_range_counts_are_faults() {
         let ok = SensorFrame::default();
         assert!(decode(&ok).is_ok());
