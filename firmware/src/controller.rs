@@ -107,6 +107,9 @@ struct Started {
     quintic: Quintic,
     force_ramp: Quintic,
     branch: ElbowBranch,
+    /// Sines and cosines of the trackers' angles as the last step left them: the
+    /// next step's prediction starts from those angles (two `sin_cos` saved).
+    trig: JointTrig<f32>,
 }
 
 /// The firmware's state across periods. Fixed size, no heap.
@@ -359,7 +362,7 @@ impl Firmware {
         let theta2 = decode::wrap(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
-        let s: &Started = match &mut self.started {
+        let s: &mut Started = match &mut self.started {
             Some(s) => {
                 let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
                 // Model-based prediction: the joint acceleration under the torque we
@@ -367,7 +370,7 @@ impl Firmware {
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let td = self.arm.tip_dynamics(&q, &qd, &u);
+                let td = self.arm.tip_dynamics_trig(&s.trig, &q, &qd, &u);
                 let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
                 let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
                 innovation = [
@@ -379,7 +382,8 @@ impl Firmware {
             }
             None => {
                 let q = Vector2::new(m.theta1, theta2);
-                let z = tip_position(p.l, &q);
+                let trig = JointTrig::new(&q);
+                let z = tip_position_trig(p.l, &trig);
                 let s = Started {
                     seq0: seq,
                     last_seq: seq,
@@ -390,14 +394,17 @@ impl Firmware {
                     quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
                     force_ramp: Quintic { start: m.f_n.clamp(0.0, cfg.f_n_ref), target: cfg.f_n_ref, duration: cfg.force_ramp_s.max(1e-9) },
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
+                    trig,
                 };
                 self.started.insert(s)
             }
         };
         let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
         let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
-        // One sin_cos per angle for the tip estimate and the hybrid law.
+        // One sin_cos per angle for the tip estimate, the hybrid law and the next
+        // step's prediction.
         let trig = JointTrig::new(&q);
+        s.trig = trig;
         let z = tip_position_trig(p.l, &trig);
         let z_dot = jacobian_trig(p.l, &trig) * qd;
         let height = z[1] + p.h;
