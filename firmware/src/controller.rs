@@ -133,6 +133,9 @@ pub struct Firmware {
     telemetry: Telemetry,
     /// The period in seconds, `f32`, derived once from `cfg.period`.
     dt: f32,
+    /// The observer's gains for `cfg` (at angle 0): the first frame's trackers
+    /// start from it, so no step pays for the `expf` of the gains.
+    tracker: AngleTracker,
 }
 
 impl Firmware {
@@ -165,6 +168,7 @@ impl Firmware {
             safe: None,
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
+            tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
         }
     }
 
@@ -387,10 +391,7 @@ impl Firmware {
                 let s = Started {
                     seq0: seq,
                     last_seq: seq,
-                    trackers: [
-                        AngleTracker::new(m.theta1, cfg.observer_bandwidth, ts),
-                        AngleTracker::new(theta2, cfg.observer_bandwidth, ts),
-                    ],
+                    trackers: [self.tracker.restarted_at(m.theta1), self.tracker.restarted_at(theta2)],
                     quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
                     force_ramp: Quintic { start: m.f_n.clamp(0.0, cfg.f_n_ref), target: cfg.f_n_ref, duration: cfg.force_ramp_s.max(1e-9) },
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
