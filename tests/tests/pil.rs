@@ -36,8 +36,8 @@ use rig::{
 };
 
 /// Issue 16's ceiling on the worst control step of either controller, QEMU
-/// instructions (`-icount shift=0`): measured 1589 (hybrid) and 1827 (PID) on
-/// 2026-11-22 (docs/measurements.md "Speed and scale"), from 3857 and 2286. A
+/// instructions (`-icount shift=0`): measured 1512 (hybrid, 10 s) and 1726 (PID, 2.5 s)
+/// on 2026-11-22 (docs/measurements.md "Speed and scale"), from 3857 and 2286. A
 /// cycle estimate of the same steps is `scripts/cycles.py` (gated in scripts/test.sh).
 const STEP_CEILING_INSTRUCTIONS: f64 = 2_000.0;
 
