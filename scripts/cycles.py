@@ -393,7 +393,7 @@ def main():
         for c in over:
             print(
                 f"cycles: the worst {c} step is estimated at {reports[c]['cycles_max']['worst']} cycles, over the ceiling of "
-                f"{args.max_cycles:.0f} (scripts/cycles.py --profile {c} shows where they go)",
+                f"{args.max_cycles:.0f} (scripts/cycles.py --profile --controller {c} shows where they go)",
                 file=sys.stderr,
             )
         sys.exit(1)
