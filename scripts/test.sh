@@ -21,6 +21,17 @@ if ! command -v flip-link >/dev/null; then
   cargo install flip-link --locked --version 0.1.12
 fi
 
+# LLVM's objdump, nm and addr2line for the step's cycle estimate (scripts/cycles.py;
+# Debian 12's llvm-14, the version this gate was measured with).
+if ! command -v llvm-addr2line >/dev/null && ! command -v llvm-addr2line-14 >/dev/null; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update && apt-get install -y llvm-14
+  else
+    echo "llvm-addr2line is missing: sudo apt-get install -y llvm-14" >&2
+    exit 1
+  fi
+fi
+
 # The Python monitor's environment (tests/tests/python_monitor.rs): a virtual environment
 # with examples/python/requirements.txt (iceoryx2 from PyPI, pinned to the crate's version).
 # An existing PAINLEVE_PYTHON (a Python with those packages) is used as it is.
@@ -56,6 +67,11 @@ for image in mcu/arm mcu/pil qemu/arm qemu/pil; do
   echo "-- $image"
   python3 scripts/budgets.py "target/thumbv7em-none-eabihf/$image"
 done
+
+echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
+echo "   ceiling 3500 cycles per worst step, either controller (5 % of a 2.4 kHz period at 168 MHz)"
+cargo build --release -p sil-host
+python3 scripts/cycles.py --duration 1 --max-cycles 3500
 
 echo "== tests (release: the simulator is numerical)"
 log="$(mktemp)"

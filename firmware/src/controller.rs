@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 use shared::{
     Arm, ElbowBranch,
-    kinematics::{jacobian, tip_position},
+    kinematics::{JointTrig, jacobian_trig, tip_position, tip_position_trig},
     wire::{self, ActuatorCommand, SensorFrame, status},
 };
 
@@ -107,6 +107,9 @@ struct Started {
     quintic: Quintic,
     force_ramp: Quintic,
     branch: ElbowBranch,
+    /// Sines and cosines of the trackers' angles as the last step left them: the
+    /// next step's prediction starts from those angles (two `sin_cos` saved).
+    trig: JointTrig<f32>,
 }
 
 /// The firmware's state across periods. Fixed size, no heap.
@@ -130,6 +133,9 @@ pub struct Firmware {
     telemetry: Telemetry,
     /// The period in seconds, `f32`, derived once from `cfg.period`.
     dt: f32,
+    /// The observer's gains for `cfg` (at angle 0): the first frame's trackers
+    /// start from it, so no step pays for the `expf` of the gains.
+    tracker: AngleTracker,
 }
 
 impl Firmware {
@@ -162,6 +168,7 @@ impl Firmware {
             safe: None,
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
+            tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
         }
     }
 
@@ -352,13 +359,14 @@ impl Firmware {
     /// Estimation, lift-off detection and the control law for a trusted frame;
     /// returns the motor torques (N m, saturated) and status bits.
     fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
-        let cfg = self.cfg;
+        // Borrowed, not copied: the configuration is most of the firmware's state.
+        let cfg = &self.cfg;
         let ts = self.dt;
-        let p = cfg.params;
+        let p = &cfg.params;
         let theta2 = decode::wrap(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
-        let s = match &mut self.started {
+        let s: &mut Started = match &mut self.started {
             Some(s) => {
                 let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
                 // Model-based prediction: the joint acceleration under the torque we
@@ -366,7 +374,7 @@ impl Firmware {
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let td = self.arm.tip_dynamics(&q, &qd, &u);
+                let td = self.arm.tip_dynamics_trig(&s.trig, &q, &qd, &u);
                 let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
                 let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
                 innovation = [
@@ -374,30 +382,32 @@ impl Firmware {
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
                 ];
                 s.last_seq = seq;
-                *s
+                s
             }
             None => {
                 let q = Vector2::new(m.theta1, theta2);
-                let z = tip_position(p.l, &q);
+                let trig = JointTrig::new(&q);
+                let z = tip_position_trig(p.l, &trig);
                 let s = Started {
                     seq0: seq,
                     last_seq: seq,
-                    trackers: [
-                        AngleTracker::new(m.theta1, cfg.observer_bandwidth, ts),
-                        AngleTracker::new(theta2, cfg.observer_bandwidth, ts),
-                    ],
+                    trackers: [self.tracker.restarted_at(m.theta1), self.tracker.restarted_at(theta2)],
                     quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
                     force_ramp: Quintic { start: m.f_n.clamp(0.0, cfg.f_n_ref), target: cfg.f_n_ref, duration: cfg.force_ramp_s.max(1e-9) },
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
+                    trig,
                 };
-                self.started = Some(s);
-                s
+                self.started.insert(s)
             }
         };
         let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
         let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
-        let z = tip_position(p.l, &q);
-        let z_dot = jacobian(p.l, &q) * qd;
+        // One sin_cos per angle for the tip estimate, the hybrid law and the next
+        // step's prediction.
+        let trig = JointTrig::new(&q);
+        s.trig = trig;
+        let z = tip_position_trig(p.l, &trig);
+        let z_dot = jacobian_trig(p.l, &trig) * qd;
         let height = z[1] + p.h;
         let rule = LiftOffRule {
             lift_off_force: cfg.lift_off_force,
@@ -438,13 +448,14 @@ impl Firmware {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, sig) = law::hybrid(
+                let (u, sig) = law::hybrid_trig(
                     &self.arm,
                     &cfg.hybrid,
                     cfg.friction,
                     &reference,
                     f_n_ref,
                     &input,
+                    &trig,
                     &mut self.hybrid,
                     ts,
                     self.last_saturated,

@@ -49,13 +49,23 @@ impl FrameFault {
 /// Wraps an angle to `(-pi, pi]`.
 #[inline]
 pub fn wrap(angle: f32) -> f32 {
-    let mut a = angle % TAU;
+    // `%` is a software `fmodf` on the MCU; within one turn it returns `angle`
+    // itself (fmod is exact), so only larger angles pay for it.
+    let mut a = if angle.abs() < TAU { angle } else { rem_turn(angle) };
     if a > PI {
         a -= TAU;
     } else if a <= -PI {
         a += TAU;
     }
     a
+}
+
+/// `angle % TAU`, out of line: LLVM would otherwise compute the remainder on
+/// both branches of [`wrap`] (a select), calling `fmodf` every time.
+#[cold]
+#[inline(never)]
+fn rem_turn(angle: f32) -> f32 {
+    angle % TAU
 }
 
 /// Decodes the counts of `frame` into SI units (docs/hardware.md resolutions: 14-bit
@@ -131,6 +141,25 @@ mod tests {
                 assert_ne!(m.flags & status::LOAD_CLIPPED, 0, "saturation is reported");
             }
             assert!((m.v_belt + 0.4).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn wrap_gives_the_bits_of_the_remainder_it_skips_within_a_turn() {
+        let by_rem = |angle: f32| {
+            let mut a = angle % TAU;
+            if a > PI {
+                a -= TAU;
+            } else if a <= -PI {
+                a += TAU;
+            }
+            a
+        };
+        let edges = [0.0, -0.0, PI, -PI, TAU, -TAU, f32::from_bits(TAU.to_bits() - 1), 3.0 * TAU, 1e6, f32::INFINITY, f32::NAN];
+        let sweep = (-40_000..40_000).map(|i| i as f32 * 7.3e-4 + (i % 7) as f32 * 1e-9);
+        for a in edges.into_iter().chain(edges.map(|e| -e)).chain(sweep) {
+            let (w, r) = (wrap(a), by_rem(a));
+            assert!(w.to_bits() == r.to_bits() || (w.is_nan() && r.is_nan()), "{a}: {w} vs {r}");
         }
     }
 

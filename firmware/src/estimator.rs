@@ -34,6 +34,12 @@ impl AngleTracker {
         Self { angle, rate: 0.0, alpha: 1.0 - r * r, beta_over_ts: (1.0 - r) * (1.0 - r) / ts }
     }
 
+    /// A tracker with this one's gains, at `angle` (rad) and at rest: the same as
+    /// [`AngleTracker::new`] with this one's bandwidth and period, without its `expf`.
+    pub fn restarted_at(&self, angle: f32) -> Self {
+        Self { angle, rate: 0.0, ..*self }
+    }
+
     /// Folds in measurement `measured` (rad, any turn) taken `dt` s after the
     /// previous one; returns the innovation (measured minus predicted angle, rad).
     pub fn update(&mut self, measured: f32, dt: f32) -> f32 {

@@ -3,8 +3,8 @@
 
 use nalgebra::{Matrix2, Vector2};
 use shared::{
-    Arm, ElbowBranch,
-    kinematics::{inverse_kinematics, jacobian, jdot_qdot, tip_position},
+    Arm, ElbowBranch, Real,
+    kinematics::{JointTrig, inverse_kinematics, jacobian, jacobian_trig, jdot_qdot_trig, tip_position_trig},
 };
 
 use crate::{
@@ -148,14 +148,42 @@ pub fn hybrid(
     dt: f32,
     saturated: bool,
 ) -> Result<([f32; 2], HybridSignals), LawError> {
+    hybrid_trig(arm, gains, comp, reference, f_n_ref, input, &JointTrig::new(&input.q), state, dt, saturated)
+}
+
+/// [`hybrid`] with the sines and cosines of `input.q` given (`trig` must be
+/// `JointTrig::new(&input.q)`): the firmware's step computes them once for the
+/// tip estimate and the law. The same torques and signals as [`hybrid`].
+///
+/// One more `sin_cos`, of `theta1 - theta2`, gives the singularity test, the
+/// centripetal torque and the mass matrix (the cosine is even, exactly), so the
+/// law costs three `sin_cos` in all (docs/measurements.md "Speed and scale").
+///
+/// # Errors
+/// As [`hybrid`].
+#[allow(clippy::too_many_arguments)]
+pub fn hybrid_trig(
+    arm: &Arm<f32>,
+    gains: &HybridGains,
+    comp: FrictionCompensation,
+    reference: &RefPoint,
+    f_n_ref: f32,
+    input: &HybridInput,
+    trig: &JointTrig<f32>,
+    state: &mut HybridState,
+    dt: f32,
+    saturated: bool,
+) -> Result<([f32; 2], HybridSignals), LawError> {
     let p = &arm.params;
     let (q, qd) = (input.q, input.qd);
-    let jac = jacobian(p.l, &q);
-    if libm::fabsf(libm::sinf(q[1] - q[0])) < 1e-3 {
+    let jac = jacobian_trig(p.l, trig);
+    // sin(theta1 - theta2) and cos(theta1 - theta2) = cos(theta2 - theta1).
+    let (s12, c21) = (q[0] - q[1]).sin_cos_rad();
+    if s12.abs() < 1e-3 {
         return Err(LawError::Singular);
     }
     let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
-    let z = tip_position(p.l, &q);
+    let z = tip_position_trig(p.l, trig);
     let z_dot = jac * qd;
     let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
     // The integral up to the previous sample (forward Euler): a new error acts from
@@ -173,9 +201,9 @@ pub fn hybrid(
         FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
         FrictionCompensation::None => 0.0,
     };
-    let wc = arm.w(&q, &qd) + arm.c(&q, &qd);
-    let m = arm.mass_matrix(&q);
-    let s_vec = jdot_qdot(p.l, &q, &qd);
+    let wc = arm.w_sin(trig.s1, trig.s2, &q, &qd) + arm.c_sin(s12, &qd);
+    let m = arm.mass_matrix_cos(c21);
+    let s_vec = jdot_qdot_trig(p.l, trig, &qd);
     let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
     if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
@@ -191,7 +219,87 @@ mod tests {
     use proptest::prelude::*;
     use shared::{Params, SlipDirection, contact::sliding_force};
 
+    /// The law as written before the shared trigonometry (issue 16): every term
+    /// from its own `sin_cos`, the singularity test from `libm::sinf`.
+    #[allow(clippy::too_many_arguments)]
+    fn hybrid_unshared(
+        arm: &Arm<f32>,
+        gains: &HybridGains,
+        comp: FrictionCompensation,
+        reference: &RefPoint,
+        f_n_ref: f32,
+        input: &HybridInput,
+        state: &mut HybridState,
+        dt: f32,
+        saturated: bool,
+    ) -> Result<([f32; 2], HybridSignals), LawError> {
+        use shared::kinematics::{jdot_qdot, tip_position};
+        let p = &arm.params;
+        let (q, qd) = (input.q, input.qd);
+        let jac = jacobian(p.l, &q);
+        if libm::fabsf(libm::sinf(q[1] - q[0])) < 1e-3 {
+            return Err(LawError::Singular);
+        }
+        let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
+        let z = tip_position(p.l, &q);
+        let z_dot = jac * qd;
+        let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
+        let a_f = f_n_ref + gains.ki * state.force_integral;
+        if !saturated {
+            state.force_integral += (f_n_ref - input.f_n) * dt;
+        }
+        let i_max = if gains.ki > 0.0 { 4.0 * f_n_ref.max(1.0) / gains.ki } else { 0.0 };
+        state.force_integral = state.force_integral.clamp(-i_max, i_max);
+        let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
+        let f_t_hat = match comp {
+            FrictionCompensation::Measured => input.f_t,
+            FrictionCompensation::ModelMeasuredNormal => -p.mu * s * input.f_n,
+            FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
+            FrictionCompensation::None => 0.0,
+        };
+        let wc = arm.w(&q, &qd) + arm.c(&q, &qd);
+        let m = arm.mass_matrix(&q);
+        let s_vec = jdot_qdot(p.l, &q, &qd);
+        let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
+        let motor = [u_gen[0] + u_gen[1], u_gen[1]];
+        if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
+            return Err(LawError::NonFinite);
+        }
+        Ok((motor, HybridSignals { a_v, a_f, f_t_hat, u_gen: [u_gen[0], u_gen[1]] }))
+    }
+
     proptest! {
+        /// Sharing the trigonometry changes no bit of the law's output (the PIL
+        /// trace must stay byte-identical): the same torques, signals and integrator
+        /// as the term-by-term law over the arm's whole range of states, every
+        /// friction option, saturated or not. Away from the singularity test's
+        /// threshold only, where `sinf` and `sin_cos_f32` may round to different sides.
+        #[test]
+        fn shared_trigonometry_gives_the_same_bits(
+            q0 in -7.0f32..7.0, q1 in -7.0f32..7.0, qd0 in -30.0f32..30.0, qd1 in -30.0f32..30.0,
+            ref_pos in -0.3f32..0.3, ref_vel in -1.0f32..1.0, ref_acc in -20.0f32..20.0,
+            f_t in -25.0f32..25.0, f_n in -25.0f32..25.0, v_belt in -2.0f32..2.0, integral in -0.1f32..0.1,
+            comp in 0usize..4, saturated in proptest::bool::ANY,
+        ) {
+            prop_assume!(libm::fabsf(libm::sinf(q1 - q0)) > 2e-3);
+            let cfg = Config::default();
+            let arm = Arm::new(cfg.params);
+            let comp = [
+                FrictionCompensation::Measured,
+                FrictionCompensation::ModelMeasuredNormal,
+                FrictionCompensation::ModelCommandedNormal,
+                FrictionCompensation::None,
+            ][comp];
+            let reference = RefPoint { pos: ref_pos, vel: ref_vel, acc: ref_acc, moving: true };
+            let input = HybridInput { q: Vector2::new(q0, q1), qd: Vector2::new(qd0, qd1), f_t, f_n, v_belt };
+            let (mut a, mut b) = (HybridState { force_integral: integral }, HybridState { force_integral: integral });
+            let new = hybrid(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut a, 1e-3, saturated).unwrap();
+            let old = hybrid_unshared(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut b, 1e-3, saturated).unwrap();
+            let bits = |(m, s): ([f32; 2], HybridSignals)| [m[0], m[1], s.a_v, s.a_f, s.f_t_hat, s.u_gen[0], s.u_gen[1]].map(f32::to_bits);
+            prop_assert_eq!(bits(new), bits(old));
+            prop_assert_eq!(a.force_integral.to_bits(), b.force_integral.to_bits());
+        }
+
         /// Paper eqs. 9 to 11: with exact model values and exact forces, in sliding,
         /// the tip's tangential acceleration is `a_v` and the normal reaction is `a_f`.
         #[test]

@@ -136,10 +136,14 @@ pub fn jacobian<T: Real>(l: T, q: &Vector2<T>) -> Matrix2<T> {
 ///        l (theta1_dot^2 cos theta1 + theta2_dot^2 cos theta2)]`.
 #[inline]
 pub fn jdot_qdot<T: Real>(l: T, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
-    let (s1, c1) = q[0].sin_cos_rad();
-    let (s2, c2) = q[1].sin_cos_rad();
+    jdot_qdot_trig(l, &JointTrig::new(q), qd)
+}
+
+/// [`jdot_qdot`] (m/s^2) from the sines and cosines of the angles.
+#[inline]
+pub fn jdot_qdot_trig<T: Real>(l: T, t: &JointTrig<T>, qd: &Vector2<T>) -> Vector2<T> {
     let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
-    Vector2::new(-l * (w1 * s1 + w2 * s2), l * (w1 * c1 + w2 * c2))
+    Vector2::new(-l * (w1 * t.s1 + w2 * t.s2), l * (w1 * t.c1 + w2 * t.c2))
 }
 
 /// Inverse kinematics: the configuration `q = [theta1, theta2]` (rad) that puts

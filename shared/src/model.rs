@@ -84,8 +84,15 @@ impl<T: Real> Arm<T> {
     /// `[[4/3 m l^2, m l^2/2 cos(theta2 - theta1)], [m l^2/2 cos(theta2 - theta1), m l^2/3]]`.
     #[inline]
     pub fn mass_matrix(&self, q: &Vector2<T>) -> Matrix2<T> {
+        self.mass_matrix_cos((q[1] - q[0]).cos_rad())
+    }
+
+    /// [`Arm::mass_matrix`] from `c21 = cos(theta2 - theta1)` (kg m^2): a caller
+    /// that has the cosine saves a sine and cosine; the same value for the same cosine.
+    #[inline]
+    pub fn mass_matrix_cos(&self, c21: T) -> Matrix2<T> {
         let ml2 = self.params.m * self.params.l * self.params.l;
-        let off = ml2 * lit::<T>(0.5) * (q[1] - q[0]).cos_rad();
+        let off = ml2 * lit::<T>(0.5) * c21;
         Matrix2::new(ml2 * lit::<T>(4.0 / 3.0), off, off, ml2 * lit::<T>(1.0 / 3.0))
     }
 
@@ -113,22 +120,31 @@ impl<T: Real> Arm<T> {
     ///   m g l/2 sin theta2 + k (theta2 - theta1 + alpha0) + sigma (theta2_dot - theta1_dot)]`.
     #[inline]
     pub fn w(&self, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
+        self.w_sin(q[0].sin_rad(), q[1].sin_rad(), q, qd)
+    }
+
+    /// [`Arm::w`] (N m) with `s1 = sin theta1` and `s2 = sin theta2` given (those
+    /// of `q`, e.g. from a [`JointTrig`]); the same value for the same sines.
+    #[inline]
+    pub fn w_sin(&self, s1: T, s2: T, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
         let p = &self.params;
         let mgl2 = p.m * p.g * p.l * lit::<T>(0.5);
         let spring = p.k * (q[1] - q[0] + p.alpha0);
-        Vector2::new(
-            mgl2 * lit::<T>(3.0) * q[0].sin_rad() - spring - p.sigma * (qd[1] - qd[0] - qd[0]),
-            mgl2 * q[1].sin_rad() + spring + p.sigma * (qd[1] - qd[0]),
-        )
+        Vector2::new(mgl2 * lit::<T>(3.0) * s1 - spring - p.sigma * (qd[1] - qd[0] - qd[0]), mgl2 * s2 + spring + p.sigma * (qd[1] - qd[0]))
     }
 
     /// Centripetal torques `c(q, q_dot)` (N m), paper eq. 1:
     /// `[m l^2/2 theta2_dot^2 sin(theta1 - theta2), m l^2/2 theta1_dot^2 sin(theta2 - theta1)]`.
     #[inline]
     pub fn c(&self, q: &Vector2<T>, qd: &Vector2<T>) -> Vector2<T> {
+        self.c_sin((q[0] - q[1]).sin_rad(), qd)
+    }
+
+    /// [`Arm::c`] (N m) from `s12 = sin(theta1 - theta2)`; the same value for the same sine.
+    #[inline]
+    pub fn c_sin(&self, s12: T, qd: &Vector2<T>) -> Vector2<T> {
         let half_ml2 = self.params.m * self.params.l * self.params.l * lit::<T>(0.5);
-        let s = (q[0] - q[1]).sin_rad();
-        Vector2::new(half_ml2 * qd[1] * qd[1] * s, -half_ml2 * qd[0] * qd[0] * s)
+        Vector2::new(half_ml2 * qd[1] * qd[1] * s12, -half_ml2 * qd[0] * qd[0] * s12)
     }
 
     /// Generalised torque `u = [u1 - u2, u2]` (N m) from the motor torques
