@@ -162,7 +162,8 @@ pub fn hybrid(
     let p = &arm.params;
     let (q, qd) = (input.q, input.qd);
     let jac = jacobian(p.l, &q);
-    if libm::fabsf(libm::sinf(q[1] - q[0])) < 1e-3 {
+    // `sin_cos_f32`, not `libm::sinf`: that one works in software f64 (docs/measurements.md).
+    if libm::fabsf(shared::trig::sin_cos_f32(q[1] - q[0]).0) < 1e-3 {
         return Err(LawError::Singular);
     }
     let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
