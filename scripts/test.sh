@@ -59,14 +59,13 @@ python3 scripts/import_cycles.py shared/src firmware/src drivers/src boards/stm3
 echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
 
-echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting) and their budgets"
-echo "   (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap)"
+echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting; plain --release)"
+echo "   and their budgets (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap) and"
+echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 32 KiB; docs/board.md \"Budgets\")"
 cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
 cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
-for image in mcu/arm mcu/pil qemu/arm qemu/pil; do
-  echo "-- $image"
-  python3 scripts/budgets.py "target/thumbv7em-none-eabihf/$image"
-done
+cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin arm --bin pil
+python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
 echo "   ceiling 3500 cycles per worst step, either controller (5 % of a 2.4 kHz period at 168 MHz)"

@@ -23,10 +23,21 @@ pub enum LawError {
     NonFinite,
 }
 
+/// `x` limited to `[lo, hi]`: `f32::clamp` without its panic when `lo > hi` or
+/// either is NaN (then the comparisons that are false leave `x`); NaN `x` stays
+/// NaN. Equal to `f32::clamp` wherever that does not panic. Why: the panic's
+/// message formats both bounds, and that pulls `core::fmt`'s float formatting
+/// (about 14 KiB) into the MCU images (docs/measurements.md "Speed and scale").
+#[inline]
+pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    let x = if x < lo { lo } else { x };
+    if x > hi { hi } else { x }
+}
+
 /// Motor torques `[u1, u2]` (N m) saturated at `limit`, and which ones saturated.
 #[inline]
 pub fn saturate(u: [f32; 2], limit: f32) -> ([f32; 2], [bool; 2]) {
-    let s = |x: f32| x.clamp(-limit, limit);
+    let s = |x: f32| clamp(x, -limit, limit);
     ([s(u[0]), s(u[1])], [u[0].abs() > limit, u[1].abs() > limit])
 }
 
@@ -193,7 +204,7 @@ pub fn hybrid_trig(
         state.force_integral += (f_n_ref - input.f_n) * dt;
     }
     let i_max = if gains.ki > 0.0 { 4.0 * f_n_ref.max(1.0) / gains.ki } else { 0.0 };
-    state.force_integral = state.force_integral.clamp(-i_max, i_max);
+    state.force_integral = clamp(state.force_integral, -i_max, i_max);
     let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
     let f_t_hat = match comp {
         FrictionCompensation::Measured => input.f_t,

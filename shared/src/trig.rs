@@ -8,8 +8,14 @@
 //! three parts (Cody and Waite) so that `k * part` is exact for `|k| < 2^16`, then
 //! the Cephes minimax polynomials for `sin r` and `cos r` on `[-pi/4, pi/4]` and
 //! the quadrant `k mod 4`. Error: within 2.5e-7 of the true value for
-//! `|x| <= 2^13` rad (test below); beyond that (never an arm angle) it falls back
-//! to `libm`.
+//! `|x| <= 2^13` rad (test below). Beyond that (never an arm angle) `x` is first
+//! reduced modulo `2 pi` in `f32` (`x % TAU`, exact for the `f32` value of
+//! `TAU`, which is 1.75e-7 above `2 pi`): the result is then the sine and cosine,
+//! within 2.5e-7, of an angle within half an ulp of `x` (the error of that
+//! reduction, `|x| 2.8e-8`, is below `|x| 2^-25`), that is of a value `x` could
+//! have been rounded from. Not `libm`'s `sinf`/`cosf` there: they would bring
+//! their `f64` software arithmetic and large-argument reduction, about 6 KiB of
+//! the MCU image's flash (docs/measurements.md "Speed and scale").
 
 // The constants are written as published (Cephes); f32 rounds them.
 #![allow(clippy::excessive_precision)]
@@ -25,9 +31,11 @@ const REDUCE_MAX: f32 = 8192.0;
 /// infinite `x`.
 #[inline]
 pub fn sin_cos_f32(x: f32) -> (f32, f32) {
-    if x.is_nan() || x.abs() > REDUCE_MAX {
-        return if x.is_finite() { (libm::sinf(x), libm::cosf(x)) } else { (f32::NAN, f32::NAN) };
+    if !x.is_finite() {
+        return (f32::NAN, f32::NAN);
     }
+    // `%` is exact (fmodf); `|x % TAU| < TAU` is then in the range below.
+    let x = if x.abs() > REDUCE_MAX { x % core::f32::consts::TAU } else { x };
     let t = x * core::f32::consts::FRAC_2_PI;
     let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
     let kf = k as f32;
@@ -78,7 +86,26 @@ mod tests {
         assert!(s.is_nan() && c.is_nan());
         let (s, c) = sin_cos_f32(f32::INFINITY);
         assert!(s.is_nan() && c.is_nan());
-        let (s, c) = sin_cos_f32(1e9);
-        assert!((s as f64 - 1e9f64.sin()).abs() < 1e-6 && (c as f64 - 1e9f64.cos()).abs() < 1e-6);
+    }
+
+    /// Beyond `2^13` rad: the sine and cosine of an angle within half an ulp of
+    /// `x` (the reduction's error `|x| 2.8e-8` is below it), within 2.5e-7 plus
+    /// the slope times that distance.
+    #[test]
+    fn large_arguments_are_the_values_of_an_angle_within_half_an_ulp() {
+        let tau_excess = core::f32::consts::TAU as f64 - 2.0 * core::f64::consts::PI;
+        for x in [8192.5f32, -8193.0, 1.0e4, -3.3e5, 1.234_567e6, 7.0e7, -1.0e9, 3.0e38, f32::MAX, f32::MIN] {
+            let (s, c) = sin_cos_f32(x);
+            let xd = x as f64;
+            let half_ulp = (x.abs() as f64) * f64::powi(2.0, -24) / 2.0;
+            let shift = (xd / (core::f32::consts::TAU as f64)).trunc() * tau_excess;
+            assert!(shift.abs() <= half_ulp, "x = {x}: reduction error {shift:e} > half an ulp {half_ulp:e}");
+            // `x % TAU`, exact in f64 as in f32: the angle whose values these are.
+            let r = xd % (core::f32::consts::TAU as f64);
+            assert!((s as f64 - r.sin()).abs() < 3e-7 && (c as f64 - r.cos()).abs() < 3e-7, "x = {x}: ({s}, {c}) against r = {r}");
+            assert!((s * s + c * c - 1.0).abs() < 5e-7, "x = {x}");
+        }
+        let (s, c) = sin_cos_f32(f32::NEG_INFINITY);
+        assert!(s.is_nan() && c.is_nan());
     }
 }
