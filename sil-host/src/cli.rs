@@ -186,8 +186,10 @@ pub struct ReportArgs {
 /// `sil-host bench`.
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
-    /// Figure groups to measure, comma-separated (default: all but realtime): step
-    /// (worst control step in PIL, instructions), flash (the PIL image's size),
+    /// Figure groups to measure, comma-separated (default: all but cycles and
+    /// realtime): step (worst control step in PIL, instructions), cycles (its
+    /// Cortex-M4 cycle estimate and the highest rate it allows, scripts/cycles.py,
+    /// about 2 min), flash (the PIL image's size),
     /// in-process, lockstep (iceoryx2), pil (PIL periods per wall second), simulate
     /// (300 s with its 1 ms trace), sweep (closed-loop hybrid grid, estimated),
     /// realtime (needs --realtime-s).

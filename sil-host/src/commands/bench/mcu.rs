@@ -156,6 +156,78 @@ pub fn rate_figure(runs: &PilRuns) -> Figure {
     }
 }
 
+/// The aim for the highest control rate at which the worst step fits 5 % of the
+/// period: 10 kHz, 840 cycles at 168 MHz (issue 16).
+pub const RATE_AIM_HZ: f64 = 10_000.0;
+
+/// The worst step's Cortex-M4 cycle estimate and the highest control rate at
+/// which it fits 5 % of the period, per controller, from `scripts/cycles.py`
+/// (QEMU's exec trace of the first second, TRM timings on the executed path;
+/// docs/board.md "The control step's cost"). Needs the repository's script,
+/// Python 3 and LLVM's objdump, nm and addr2line; skipped without them.
+///
+/// # Errors
+/// None: a failing script is a skipped figure with its message.
+pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/cycles.py");
+    let name = |k: &str| format!("highest control rate, worst {k} step within 5 % (cycle estimate)");
+    let skip = |why: String| -> Vec<Figure> {
+        [("max_rate_hybrid", "hybrid"), ("max_rate_pid", "PID")]
+            .into_iter()
+            .map(|(id, k)| Figure::skipped(id, "cycles", name(k), "Hz", RATE_AIM_HZ, Goal::AtLeast, why.clone()))
+            .collect()
+    };
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => return skip(format!("cannot find this executable: {e}")),
+    };
+    let out = std::process::Command::new("python3")
+        .arg(&script)
+        .args(["--duration", "1", "--json", "--image"])
+        .arg(image(args, target))
+        .arg("--sil-host")
+        .arg(exe)
+        .output();
+    let out = match out {
+        Ok(o) if o.status.success() => o,
+        Ok(o) => return skip(format!("scripts/cycles.py failed: {}", String::from_utf8_lossy(&o.stderr).trim())),
+        Err(e) => return skip(format!("cannot run python3 {}: {e}", script.display())),
+    };
+    let v: serde_json::Value = match serde_json::from_slice(&out.stdout) {
+        Ok(v) => v,
+        Err(e) => return skip(format!("scripts/cycles.py printed no JSON: {e}")),
+    };
+    let mut figures = Vec::new();
+    for (id, key, label) in [("max_rate_hybrid", "hybrid", "hybrid"), ("max_rate_pid", "pid", "PID")] {
+        let r = &v[key];
+        let (Some(rate), Some(hi), Some(lo), Some(instr)) = (
+            r["max_rate_hz"].as_f64(),
+            r["cycles_max"]["worst"].as_f64(),
+            r["cycles_min"]["worst"].as_f64(),
+            r["instructions"]["worst"].as_f64(),
+        ) else {
+            figures.push(Figure::skipped(
+                id,
+                "cycles",
+                name(label),
+                "Hz",
+                RATE_AIM_HZ,
+                Goal::AtLeast,
+                format!("scripts/cycles.py gave no {key} figures"),
+            ));
+            continue;
+        };
+        figures.push(
+            Figure::measured(id, "cycles", name(label), rate, "Hz", RATE_AIM_HZ, Goal::AtLeast)
+                .note(format!(
+                    "worst step: {instr:.0} instructions (exact), {lo:.0} to {hi:.0} cycles (Cortex-M4 TRM; the rate uses {hi:.0}); 10 kHz needs <= 840"
+                ))
+                .note(format!("{} steps of the first second", r["steps"])),
+        );
+    }
+    figures
+}
+
 /// Flash and static RAM of an ELF image, bytes: the loaded sections
 /// `.vector_table`, `.text`, `.rodata`, `.data` (its initial values are in
 /// flash); RAM `.data`, `.bss`, `.uninit` (the stack and the defmt buffers are

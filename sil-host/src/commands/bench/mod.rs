@@ -5,6 +5,7 @@
 //! | figure | group | target |
 //! |---|---|---|
 //! | worst control step in PIL, hybrid and PID (QEMU `-icount`, instructions) | `step` | <= [`STEP_INSTRUCTIONS_TARGET`] |
+//! | highest rate at which the worst step fits 5 % (cycle estimate; with `--only cycles`) | `cycles` | >= 10 kHz |
 //! | PIL image flash, profile `mcu` / plain `--release` | `flash` | <= 32 KiB / <= 64 KiB |
 //! | in-process closed loop | `in-process` | >= 1 000 000 periods/s |
 //! | lockstep over iceoryx2 | `lockstep` | >= 350 000 periods/s |
@@ -158,8 +159,9 @@ pub fn median(v: &[f64]) -> f64 {
 }
 
 /// The figure groups, in the order of the table, and what each measures.
-pub const GROUPS: [(&str, &str); 8] = [
+pub const GROUPS: [(&str, &str); 9] = [
     ("step", "the worst control step of each controller in PIL (QEMU -icount: instructions)"),
+    ("cycles", "the worst step's Cortex-M4 cycle estimate and the highest rate it allows (scripts/cycles.py, about 2 min)"),
     ("flash", "the PIL image's flash, profiles mcu and release (ELF sections)"),
     ("in-process", "the closed loop with the firmware step in this process"),
     ("lockstep", "the closed loop over iceoryx2, firmware in its own process"),
@@ -169,14 +171,14 @@ pub const GROUPS: [(&str, &str); 8] = [
     ("realtime", "a real-time run at 1 kHz over iceoryx2 (--realtime-s)"),
 ];
 
-/// The groups `args` selects: `--only`, else all but `realtime` unless
-/// `--realtime-s` is positive.
+/// The groups `args` selects: `--only`, else all but `cycles` (minutes of QEMU
+/// tracing) and `realtime` unless `--realtime-s` is positive.
 ///
 /// # Errors
 /// [`CliError::BadInput`] naming an unknown group and listing the known ones.
 fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
     if args.only.is_empty() {
-        return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "realtime" || args.realtime_s > 0.0).collect());
+        return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "cycles" && (*g != "realtime" || args.realtime_s > 0.0)).collect());
     }
     let mut out = Vec::new();
     for name in &args.only {
@@ -257,6 +259,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
                     }
                 }
             }
+            "cycles" => figures.extend(mcu::cycle_figures(args, &target)),
             "flash" => figures.extend(mcu::flash_figures(&target)),
             "in-process" => figures.push(rig_loop::in_process(args)?),
             "lockstep" => figures.push(rig_loop::lockstep(args)?),
