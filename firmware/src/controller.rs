@@ -275,6 +275,9 @@ impl Firmware {
     /// (unreachable reference, singular arm, NaN) latches it at once. In the safe
     /// state the command is zero torque with `SAFE_STATE` and the reason code set,
     /// until [`Firmware::reset`].
+    // Never inlined: the step's code (and its instruction count, a CI gate) must not
+    // depend on the board loop it is called from (docs/board.md "The control step's cost").
+    #[inline(never)]
     pub fn step<C: TickClock>(&mut self, now_us: u64, frame: &SensorFrame, clock: &C) -> ActuatorCommand {
         let start = clock.ticks();
         let mut flags = 0u32;

@@ -27,6 +27,14 @@ const PIO2_3: f32 = 7.549_789_954_891_882e-8;
 /// Largest `|x|` reduced in single precision.
 const REDUCE_MAX: f32 = 8192.0;
 
+/// `x % TAU` (exact: fmodf), out of line and cold: never an arm angle, and kept
+/// out of the control step's code (its instruction count is a CI gate).
+#[cold]
+#[inline(never)]
+fn reduce_large(x: f32) -> f32 {
+    x % core::f32::consts::TAU
+}
+
 /// `(sin x, cos x)` for `x` in radians, in `f32` arithmetic only; NaN for NaN or
 /// infinite `x`.
 #[inline]
@@ -35,7 +43,7 @@ pub fn sin_cos_f32(x: f32) -> (f32, f32) {
         return (f32::NAN, f32::NAN);
     }
     // `%` is exact (fmodf); `|x % TAU| < TAU` is then in the range below.
-    let x = if x.abs() > REDUCE_MAX { x % core::f32::consts::TAU } else { x };
+    let x = if x.abs() > REDUCE_MAX { reduce_large(x) } else { x };
     let t = x * core::f32::consts::FRAC_2_PI;
     let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
     let kf = k as f32;
