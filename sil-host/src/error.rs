@@ -51,6 +51,11 @@ pub enum CliError {
     },
 }
 
+/// Maps an I/O error on `path` into a [`CliError::Io`].
+pub fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> CliError + '_ {
+    move |source| CliError::Io { path: path.to_path_buf(), source }
+}
+
 impl CliError {
     /// Process exit code: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {

@@ -13,7 +13,7 @@
 
 use std::{fs::File, io::Write, path::PathBuf};
 
-use crate::{error::CliError, output::io_err};
+use crate::error::{CliError, io_err};
 
 /// Bytes buffered before they go to the file (one `write` system call each).
 pub const FLUSH_BYTES: usize = 1 << 20;

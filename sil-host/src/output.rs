@@ -144,10 +144,7 @@ impl Drop for OutputSet {
     }
 }
 
-/// Maps an I/O error on `path` into a [`CliError`].
-pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> CliError + '_ {
-    move |source| CliError::Io { path: path.to_path_buf(), source }
-}
+pub use crate::error::io_err;
 
 /// Writes `rows` as CSV file `name` of `out` (a header row from the field names).
 ///
