@@ -324,7 +324,17 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Outbox<T> {
     /// # Errors
     /// [`IpcError`] when sending, or waking the peer, fails.
     pub fn send(&self, value: T) -> Result<(), IpcError> {
-        self.publisher.send_copy(value).map_err(|e| err("send", e))?;
+        self.send_counted(value).map(|_| ())
+    }
+
+    /// [`Outbox::send`], returning the number of subscribers whose buffer took
+    /// the sample (iceoryx2's count of recipients: a subscriber whose full buffer
+    /// discarded it is not one).
+    ///
+    /// # Errors
+    /// As [`Outbox::send`].
+    fn send_counted(&self, value: T) -> Result<usize, IpcError> {
+        let delivered = self.publisher.send_copy(value).map_err(|e| err("send", e))?;
         match &self.wake {
             Wake::Nobody => {}
             Wake::Peer(n) => {
@@ -334,7 +344,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Outbox<T> {
                 let _ = n.notify();
             }
         }
-        Ok(())
+        Ok(delivered)
     }
 }
 
@@ -360,19 +370,29 @@ impl Default for MonitorPolicy {
     }
 }
 
-/// What monitors cost the run so far (with [`MonitorPolicy::lossless`]).
+/// What monitors cost the run so far.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct MonitorCounts {
-    /// Monitors given up: a sample waited [`MonitorPolicy::timeout`] for room in
-    /// their buffer (dead, stopped, or too slow).
+    /// Monitors given up ([`MonitorPolicy::lossless`] only): a sample waited
+    /// [`MonitorPolicy::timeout`] for room in their buffer (dead, stopped, or too
+    /// slow), or found the buffer of a monitor not yet connected to the plant's
+    /// publisher full (see [`PlantPorts::publish_truth`]).
     pub given_up: u32,
-    /// Samples not delivered to given-up monitors (one per monitor per sample).
+    /// Samples a subscribed monitor did not receive (one per monitor per
+    /// sample): discarded for a given-up monitor, or (real time) for a monitor
+    /// whose buffer was full. Exact when `ground_truth` has no safe overflow, as
+    /// the rig creates it; with safe overflow (a service a monitor created with
+    /// iceoryx2's defaults) the oldest queued sample is replaced unseen, which no
+    /// count can know.
     pub samples_dropped: u64,
 }
 
 #[derive(Debug, Default)]
 struct MonitorState {
     given_up_ports: Vec<u128>,
+    /// The most subscribers found unreached by one sample so far: monitors that
+    /// subscribed before the plant's publisher existed and have not received since.
+    unreached_max: usize,
     counts: MonitorCounts,
 }
 
@@ -437,6 +457,10 @@ pub struct PlantPorts {
     /// Kept open so that the event exists as long as the service does.
     _telemetry_event: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
     monitors: Arc<Mutex<MonitorState>>,
+    /// [`MonitorPolicy::lossless`].
+    lossless: bool,
+    /// `ground_truth`'s full service name, for messages.
+    truth_name: String,
 }
 
 impl PlantPorts {
@@ -492,6 +516,8 @@ impl PlantPorts {
             truth_service,
             _telemetry_event: telemetry_event,
             monitors: state,
+            lossless: monitors.lossless,
+            truth_name: service_name(rig, Topic::GroundTruth.name()),
             node,
         })
     }
@@ -505,11 +531,45 @@ impl PlantPorts {
     ///
     /// # Errors
     /// As [`Outbox::send`].
+    ///
+    /// Every subscriber the sample did not reach is counted in
+    /// [`MonitorCounts::samples_dropped`]. Besides a given-up monitor (counted by
+    /// the lossless publisher's handler) and, in real time, a full buffer, that is
+    /// a monitor that subscribed in the instant between the rig's creating the
+    /// service and its publisher, and has not called `receive` since: iceoryx2
+    /// connects a subscriber to a publisher that appeared later only in its next
+    /// `receive`, and discards for an unconnected subscriber whose buffer is full
+    /// at once, without asking the lossless handler. Such a monitor, when
+    /// [`MonitorPolicy::lossless`], is given up at once: it has taken no sample
+    /// since it subscribed, and the plant cannot wait for it.
     pub fn publish_truth(&self, truth: GroundTruth) -> Result<(), IpcError> {
-        if !self.truth_history && self.truth_service.dynamic_config().number_of_subscribers() == 0 {
+        let subscribers = self.truth_service.dynamic_config().number_of_subscribers();
+        if !self.truth_history && subscribers == 0 {
             return Ok(());
         }
-        self.truth.send(truth)
+        let handled_before = self.monitor_counts().samples_dropped;
+        let delivered = self.truth.send_counted(truth)?;
+        // A subscriber that left during the send must not count as unreached (one
+        // that came during it may have been reached or not: not counted either).
+        let subscribers = subscribers.min(self.truth_service.dynamic_config().number_of_subscribers());
+        let mut st = self.monitors.lock().unwrap_or_else(PoisonError::into_inner);
+        let discarded_by_handler = usize::try_from(st.counts.samples_dropped - handled_before).unwrap_or(usize::MAX);
+        let unreached = subscribers.saturating_sub(delivered.saturating_add(discarded_by_handler));
+        if unreached > 0 {
+            st.counts.samples_dropped += unreached as u64;
+            if self.lossless && unreached > st.unreached_max {
+                let new = unreached - st.unreached_max;
+                st.unreached_max = unreached;
+                st.counts.given_up += u32::try_from(new).unwrap_or(u32::MAX);
+                eprintln!(
+                    "rig: {new} monitor(s) of {} subscribed before the plant's publisher existed and have taken no sample \
+                     since, and their buffer is full: they are no longer waited for, and lose the samples that find \
+                     their buffer full",
+                    self.truth_name
+                );
+            }
+        }
+        Ok(())
     }
 
     /// Monitors subscribed to `ground_truth` now.

@@ -295,11 +295,36 @@ fn a_stalled_monitor_is_given_up_after_the_timeout_and_the_run_goes_on() {
     let o = plant.join().unwrap();
     assert!(o.status.success());
     assert!(started.elapsed() < Duration::from_secs(30), "the stall costs one timeout, not one per sample");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no longer waited for"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no longer waited for"), "{err}");
     let m = &summary(&out)["monitors"];
     assert_eq!(m["given_up"].as_u64(), Some(1));
     // Its buffer of 4 holds the first four samples; the other 996 were dropped for it.
     assert_eq!(m["samples_dropped"].as_u64(), Some(996));
+    drop(client);
+}
+
+/// The race behind issue 27's loaded-machine failure of the test above, made
+/// certain: a monitor that subscribes before the plant's publisher exists (here
+/// it creates the service itself; under load, one that opens the rig's service in
+/// the instant before the plant creates its publisher) is connected to that
+/// publisher only by its next `receive`. A stalled one never is, and iceoryx2
+/// then discards for it without asking the lossless handler: the run used to end
+/// with `given_up: 0, samples_dropped: 0`, though the monitor lost 996 samples.
+#[test]
+fn a_stalled_monitor_that_subscribed_before_the_publisher_is_given_up_and_its_losses_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = rig("stalled-first");
+    let out = dir.path().join("out");
+    let client = spawn_client(&name, Client { buffer: Some(4), stalled: true, ..Client::new(Start::FirstLikeTheRig) });
+    let o = run(&["--rig", &name, "--duration", "1", "--monitors", "1", "--monitor-timeout", "0.2"], &out);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("subscribed before the plant's publisher existed"), "{err}");
+    assert!(err.contains("no longer waited for"), "{err}");
+    let m = &summary(&out)["monitors"];
+    assert_eq!(m["given_up"].as_u64(), Some(1));
+    assert_eq!(m["samples_dropped"].as_u64(), Some(996), "4 in its buffer, the other 996 lost");
     drop(client);
 }
 
