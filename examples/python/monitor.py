@@ -165,6 +165,8 @@ def run(a: argparse.Namespace) -> int:
     service = open_until(
         f"painleve/{a.rig}/ground_truth", lambda: node.service_builder(name).publish_subscribe(GroundTruth).open(), a.timeout, a.rig
     )
+    # The plant creates the event after its publisher: subscribing once the event is
+    # there connects the subscriber to the publisher at once (docs/rig.md, "Monitors").
     event = open_until(f"the event painleve/{a.rig}/ground_truth", lambda: node.service_builder(name).event().open(), a.timeout, a.rig)
     subscriber = service.subscriber_builder().create()
     listener = event.listener_builder().create()

@@ -26,6 +26,12 @@
 //! off too while the load cell is at full scale (then the measured force, and the
 //! prediction made with it, is wrong: the true force is larger).
 //!
+//! A belt can only push: a normal force below `-contact_force` is inconsistent
+//! wherever the tip is. Noise and quantisation stay within tens of mN of zero in
+//! flight, so only a load cell of the wrong sign (its normal axis mounted or
+//! calibrated the other way) or a zero offset of several newtons reads it
+//! (issue 23: a wrong calibration must never drive the arm away).
+//!
 //! What it cannot see: both encoders stuck while the tip stays on the belt line
 //! (the computed tip is frozen on the belt and consistent with the force), or a
 //! stuck sensor while the arm is at rest (then the reading is right).
@@ -52,11 +58,13 @@ impl ConsistencyMonitor {
     /// above the belt from the encoders `height` (`z_n + H`, m). Returns `true`
     /// once `rule.confirm` consecutive periods were inconsistent (pressing while off
     /// the belt line, or below the belt by more than the tolerance); a consistent
-    /// period clears the count. Non-finite inputs count as inconsistent.
+    /// period clears the count. Non-finite inputs count as inconsistent, and so
+    /// does a pulling belt (`f_n < -contact_force`).
     pub fn update(&mut self, rule: &ConsistencyRule, f_n: f32, height: f32) -> bool {
         let pressing_off_the_belt = f_n > rule.contact_force && height.abs() > rule.height_tolerance;
         let inside_the_belt = height < -rule.height_tolerance;
-        let inconsistent = pressing_off_the_belt || inside_the_belt || !(f_n.is_finite() && height.is_finite());
+        let pulling = f_n < -rule.contact_force;
+        let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !(f_n.is_finite() && height.is_finite());
         self.inconsistent = if inconsistent { self.inconsistent.saturating_add(1) } else { 0 };
         self.inconsistent >= rule.confirm
     }
@@ -133,6 +141,19 @@ mod tests {
                 assert!(!m.update(&RULE, f_n, h));
             }
         }
+    }
+
+    #[test]
+    fn a_belt_that_pulls_is_a_load_cell_of_the_wrong_sign() {
+        let mut m = ConsistencyMonitor::default();
+        // Flight noise and a light touch pass; a pulling belt on the belt line is
+        // declared after `confirm` periods.
+        for f_n in [-0.05, -1.9, 0.0] {
+            assert!(!m.update(&RULE, f_n, 0.0), "{f_n}");
+        }
+        assert!(!m.update(&RULE, -10.0, 0.0));
+        assert!(!m.update(&RULE, -10.0, 0.0));
+        assert!(m.update(&RULE, -10.0, 0.0));
     }
 
     #[test]

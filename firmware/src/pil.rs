@@ -45,6 +45,9 @@ pub enum StepClock {
     EmulatedSysTick,
     /// The DWT cycle counter (`CYCCNT`) on silicon: core clock cycles.
     DwtCycles,
+    /// No clock: a host simulation of the board (the board twin) whose steps take
+    /// no time; every count is 0.
+    Simulated,
 }
 
 /// Bridge to image.

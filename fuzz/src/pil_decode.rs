@@ -258,7 +258,7 @@ fn downlink() -> impl Strategy<Value = Downlink> {
 }
 
 fn uplink() -> impl Strategy<Value = Uplink> {
-    let clock = prop_oneof![Just(StepClock::EmulatedSysTick), Just(StepClock::DwtCycles)];
+    let clock = prop_oneof![Just(StepClock::EmulatedSysTick), Just(StepClock::DwtCycles), Just(StepClock::Simulated)];
     let command = (any_u64(), any_u32(), any::<[i16; 2]>(), vec(any_u32(), 4)).prop_map(|(t_sent_us, seq, u, w)| ActuatorCommand {
         t_sent_us,
         seq,

@@ -47,6 +47,26 @@ pub enum FaultKind {
     NanSensor,
     /// Plant side: the sensor's count is out of its range (a corrupt frame).
     OutOfRange,
+    /// Board twin only, bus: every SPI transfer to the encoder (`signal` theta1
+    /// or elbow) fails.
+    SpiError,
+    /// Board twin only, bus: a data bit of every answer of the encoder (`signal`
+    /// theta1 or elbow) flips on MISO (odd parity).
+    ParityError,
+    /// Board twin only: the encoder's magnet (`signal` theta1 or elbow) is gone
+    /// (DIAAGC MAGL).
+    MagnetLost,
+    /// Board twin only: the load cell's ADC conversion is missing (both channels).
+    MissingConversion,
+    /// Board twin only: the motor drivers assert their shared fault line (nFAULT).
+    DriverFault,
+}
+
+impl FaultKind {
+    /// Whether the fault acts on the board's bus or devices (the board twin).
+    pub fn is_bus_fault(self) -> bool {
+        matches!(self, Self::SpiError | Self::ParityError | Self::MagnetLost | Self::MissingConversion | Self::DriverFault)
+    }
 }
 
 /// One fault of a scenario.
@@ -90,6 +110,16 @@ impl Fault {
         let sensor = matches!(self.kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange);
         if sensor && self.signal.is_none() {
             return Err("a sensor fault needs `signal` (theta1, elbow, f_t, f_n or belt)".into());
+        }
+        let encoder = matches!(self.kind, FaultKind::SpiError | FaultKind::ParityError | FaultKind::MagnetLost);
+        if encoder && !matches!(self.signal, Some(Signal::Theta1 | Signal::Elbow)) {
+            return Err("an encoder's bus fault needs `signal` theta1 or elbow".into());
+        }
+        if matches!(self.kind, FaultKind::MissingConversion | FaultKind::DriverFault) && self.signal.is_some() {
+            return Err(
+                "missing_conversion and driver_fault take no `signal` (the conversion is both channels', the fault line the drivers')"
+                    .into(),
+            );
         }
         if self.kind == FaultKind::LateCommand && !(self.delay_s.is_finite() && self.delay_s > 0.0 && self.delay_s < 10.0) {
             return Err(format!("delay_s = {}: a delay in (0, 10) s", self.delay_s));
@@ -139,6 +169,15 @@ impl FaultPlan {
         self.faults.iter().any(|f| f.kind == FaultKind::KillFirmware && (t - f.at_s).abs() < 0.5 * self.ts)
     }
 
+    /// The board twin's faults active at sample time `t`: the bus faults
+    /// ([`FaultKind::is_bus_fault`]) and the stuck sensors, with their signals.
+    pub fn board_faults(&self, t: f64) -> impl Iterator<Item = (FaultKind, Option<Signal>)> {
+        self.faults
+            .iter()
+            .filter(move |f| f.active(t, self.ts) && (f.kind.is_bus_fault() || f.kind == FaultKind::StuckSensor))
+            .map(|f| (f.kind, f.signal))
+    }
+
     /// The sensor faults active at sample time `t`.
     pub fn sensor_faults(&self, t: f64) -> impl Iterator<Item = (FaultKind, Signal)> {
         self.faults.iter().filter(move |f| f.active(t, self.ts)).filter_map(|f| match f.kind {
@@ -161,6 +200,8 @@ pub enum LinkKind {
     PilQemu,
     /// The MCU image on a board behind a serial port (HIL).
     PilSerial,
+    /// The arm application on the board twin (bus-level device models).
+    Twin,
 }
 
 impl LinkKind {
@@ -175,6 +216,10 @@ impl LinkKind {
             Self::Ipc => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, Stall, KillFirmware],
             Self::PilQemu => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, KillFirmware],
             Self::InProcess | Self::PilSerial => &EVERYWHERE,
+            // The twin makes its readings on the bus: the plant side's frame
+            // faults (nan_sensor, out_of_range) do not reach it; a late step needs
+            // a clock, which the twin's steps do not take.
+            Self::Twin => &[DropCommand, StuckSensor, SpiError, ParityError, MagnetLost, MissingConversion, DriverFault],
         }
     }
 
@@ -185,6 +230,11 @@ impl LinkKind {
     pub fn check(self, faults: &[Fault]) -> Result<(), RunError> {
         let Some(f) = faults.iter().find(|f| !self.injectable().contains(&f.kind)) else { return Ok(()) };
         Err(RunError::Unsupported(match (f.kind, self) {
+            (FaultKind::Stall | FaultKind::KillFirmware, Self::Twin) => format!(
+                "fault {:?} acts on a firmware process, and the board twin runs the application in this one: \
+                 run over iceoryx2 (without --link twin)",
+                f.kind
+            ),
             (FaultKind::Stall | FaultKind::KillFirmware, Self::InProcess) => {
                 format!("fault {:?} acts on the firmware process: run over iceoryx2 (without --in-process)", f.kind)
             }
@@ -195,6 +245,15 @@ impl LinkKind {
                  to test a lost board, cut its power or unplug it during a run"
                     .into()
             }
+            (kind, link) if kind.is_bus_fault() => {
+                format!(
+                    "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`), not the {link:?} link"
+                )
+            }
+            (kind @ (FaultKind::NanSensor | FaultKind::OutOfRange | FaultKind::LateCommand), Self::Twin) => format!(
+                "fault {kind:?} acts on the wire-level frame or the step's clock, which the board twin does not have: \
+                 use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault) or stuck_sensor"
+            ),
             (kind, link) => format!("fault {kind:?} cannot be injected over the {link:?} link"),
         }))
     }
@@ -380,27 +439,48 @@ mod tests {
     }
 
     /// Each link refuses exactly the faults it cannot inject, in one table: the
-    /// firmware in its own process takes them all; QEMU can be killed but not
-    /// stalled; in-process and a board behind a serial port take neither.
+    /// firmware in its own process takes every wire and process fault; QEMU can be
+    /// killed but not stalled; in-process and a board behind a serial port take
+    /// neither; only the board twin takes the bus faults, and it refuses the
+    /// wire-level frame's faults, the late step and the process faults.
     #[test]
     fn links_refuse_exactly_what_they_cannot_inject() {
         use FaultKind::*;
-        let all = [LateCommand, DropCommand, Stall, KillFirmware, StuckSensor, NanSensor, OutOfRange];
+        let all = [
+            LateCommand,
+            DropCommand,
+            Stall,
+            KillFirmware,
+            StuckSensor,
+            NanSensor,
+            OutOfRange,
+            SpiError,
+            ParityError,
+            MagnetLost,
+            MissingConversion,
+            DriverFault,
+        ];
         let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
-        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial] {
+        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin] {
             for kind in all {
                 let refused = link.check(&[fault(kind)]).is_err();
                 let process_fault = matches!(kind, Stall | KillFirmware);
+                let bus = kind.is_bus_fault();
                 let expected = match link {
-                    LinkKind::Ipc => false,
-                    LinkKind::PilQemu => kind == Stall,
-                    LinkKind::InProcess | LinkKind::PilSerial => process_fault,
+                    LinkKind::Ipc => bus,
+                    LinkKind::PilQemu => kind == Stall || bus,
+                    LinkKind::InProcess | LinkKind::PilSerial => process_fault || bus,
+                    LinkKind::Twin => process_fault || matches!(kind, LateCommand | NanSensor | OutOfRange),
                 };
                 assert_eq!(refused, expected, "{link:?} {kind:?}");
             }
         }
         let e = LinkKind::InProcess.check(&[fault(Stall)]).unwrap_err().to_string();
         assert!(e.contains("Stall") && e.contains("--in-process"), "{e}");
+        let e = LinkKind::InProcess.check(&[fault(MagnetLost)]).unwrap_err().to_string();
+        assert!(e.contains("--link twin"), "{e}");
+        let e = LinkKind::Twin.check(&[fault(NanSensor)]).unwrap_err().to_string();
+        assert!(e.contains("spi_error") && e.contains("stuck_sensor"), "{e}");
     }
 
     fn soak_spec(seed: u64) -> RandomSchedule {
@@ -468,7 +548,7 @@ mod tests {
                     assert!(n <= 20 && (f.kind == DropCommand) != f.signal.is_some(), "{f:?}");
                     n
                 }
-                KillFirmware => unreachable!(),
+                KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault => unreachable!(),
             };
             end_prev = k0 + reach - 1;
             assert!(((end_prev + 3) as f64) * ts <= 600.0 + 1e-9, "{f:?} ends inside the span");

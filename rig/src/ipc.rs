@@ -487,8 +487,6 @@ impl PlantPorts {
             min_nodes: monitors.wait_for + 1,
             ..Topic::GroundTruth.needs()
         };
-        // The event first: a monitor that finds the service finds its event too.
-        let truth_wake = Wake::Monitors(notifier(&node, rig, Topic::GroundTruth.name(), &MONITOR_EVENT)?);
         let who = if monitors.lossless { "`run --monitors` in lockstep" } else { "`run --monitors`" };
         let truth_service = open_pubsub::<GroundTruth>(&node, rig, Topic::GroundTruth, &truth_needs, who)?;
         let state = Arc::new(Mutex::new(MonitorState::default()));
@@ -497,6 +495,12 @@ impl PlantPorts {
         } else {
             publisher(&truth_service, Topic::GroundTruth)?
         };
+        // The event last, after the publisher: a monitor that waits for the event
+        // before it subscribes (docs/rig.md, "Monitors") subscribes to a service
+        // whose publisher exists, and is connected to it at once. One that
+        // subscribed earlier is connected only by its next `receive` (iceoryx2), and
+        // may lose what finds its buffer full until then ([`Self::publish_truth`]).
+        let truth_wake = Wake::Monitors(notifier(&node, rig, Topic::GroundTruth.name(), &MONITOR_EVENT)?);
         Ok(Self {
             frames: Outbox {
                 publisher: publisher(&frames_service, Topic::SensorFrames)?,

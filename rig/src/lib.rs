@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod calibration;
 pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]
@@ -34,3 +35,4 @@ pub mod services;
 pub mod setup;
 pub mod stats;
 pub mod summary;
+pub mod twin_link;

@@ -267,7 +267,7 @@ impl PilCounts {
     pub fn counts_per_tick(&self) -> f64 {
         match self.clock {
             StepClock::EmulatedSysTick => self.instructions_per_tick(),
-            StepClock::DwtCycles => 1.0,
+            StepClock::DwtCycles | StepClock::Simulated => 1.0,
         }
     }
 }

@@ -105,6 +105,10 @@ pub enum RunError {
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),
+    /// The board twin refused its board description or calibration, or its
+    /// application did not start.
+    #[error("board twin: {0}")]
+    Board(String),
     /// An iceoryx2 service of the rig, created by another process (a monitor
     /// started first), lacks what this run needs: the message names the service,
     /// the attribute, its value and the value to use (docs/rig.md, "Monitors").

@@ -90,6 +90,10 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
     fn finish(&mut self, last_seq: u32) {
         self.inner.finish(last_seq);
     }
+
+    fn actuator_torque(&self, command: &ActuatorCommand) -> [f64; 2] {
+        self.inner.actuator_torque(command)
+    }
 }
 
 /// A way to reach the firmware: in-process, or over iceoryx2 in another process.
@@ -122,6 +126,14 @@ pub trait FirmwareLink {
 
     /// Tells the firmware the run is over (no answer expected).
     fn finish(&mut self, _last_seq: u32) {}
+
+    /// The joint torques `[u1, u2]` (N m) that `command`, just answered, makes
+    /// at the joints: by default its codes decoded (`wire::decode_torque`: the
+    /// wire's 5/2048 N m per code); the board twin's motor stage instead
+    /// (duty quantisation, full scales, wiring, enable and fault line).
+    fn actuator_torque(&self, command: &ActuatorCommand) -> [f64; 2] {
+        [wire::decode_torque(command.u1_code) as f64, wire::decode_torque(command.u2_code) as f64]
+    }
 
     /// The firmware's own announcement of its configuration, checked against the
     /// scenario before period 0 (the handshake, [`crate::handshake`]); `None` for a
@@ -285,7 +297,7 @@ impl PeriodLoop {
         };
         let applied = self.applied;
         let u_new = match (switch, command) {
-            (Some(_), Some(c)) => [wire::decode_torque(c.u1_code) as f64, wire::decode_torque(c.u2_code) as f64],
+            (Some(_), Some(c)) => wire.actuator_torque(&c),
             _ => applied,
         };
         let fw_status = command.map_or(0, |c| c.status);

@@ -411,6 +411,19 @@ pub struct Scenario {
     /// Injected faults (`[[faults]]` tables); none when absent.
     #[serde(default)]
     pub faults: Vec<Fault>,
+    /// The board twin's physical truth (`run --link twin`): the reference board
+    /// when absent (and then not written back, so that outputs of scenarios
+    /// without it are unchanged).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub board: board_twin::BoardDescription,
+    /// The firmware's calibration of the board (`run --link twin`): the reference
+    /// board's when absent (not written back then).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub calibration: crate::calibration::CalibrationSection,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
 }
 
 /// Why a scenario was rejected.
@@ -429,6 +442,9 @@ pub enum ScenarioError {
         /// What is allowed.
         expected: String,
     },
+    /// The `[board]` or `[calibration]` table is invalid (the message names the key).
+    #[error("scenario key {0}")]
+    Board(String),
     /// A `[[faults]]` entry is invalid.
     #[error("scenario key `faults[{index}]`: {what}")]
     Fault {
@@ -694,6 +710,8 @@ impl Scenario {
                 return Err(ScenarioError::Fault { index: i, what });
             }
         }
+        self.board.check().map_err(ScenarioError::Board)?;
+        self.calibration.check().map_err(ScenarioError::Board)?;
         Ok(())
     }
 }

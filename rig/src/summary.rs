@@ -244,7 +244,7 @@ impl CountUnit {
     pub fn of(clock: StepClock) -> Self {
         match clock {
             StepClock::EmulatedSysTick => Self::Instructions,
-            StepClock::DwtCycles => Self::Cycles,
+            StepClock::DwtCycles | StepClock::Simulated => Self::Cycles,
         }
     }
 

@@ -380,6 +380,17 @@ pub struct FirmwareArgs {
     pub scenario: ScenarioArgs,
 }
 
+/// The link of `sil-host run --link`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RunLink {
+    /// The firmware process over iceoryx2 shared memory.
+    Iceoryx2,
+    /// The firmware step in the plant's process.
+    InProcess,
+    /// The arm application on the board twin, in the plant's process.
+    Twin,
+}
+
 /// `sil-host run`.
 #[derive(Debug, Clone, Args)]
 pub struct RunArgs {
@@ -388,8 +399,16 @@ pub struct RunArgs {
     pub scenario: ScenarioArgs,
     /// Link the firmware step directly into this process (no IPC). Same scenario
     /// and seed give the same trace, bit for bit, as the lockstep iceoryx2 run.
+    /// Short for `--link in-process`.
     #[arg(long, conflicts_with_all = ["realtime", "attach"])]
     pub in_process: bool,
+    /// How the plant reaches the firmware: `iceoryx2` (the default: the firmware
+    /// process in lockstep), `in-process` (the step linked in), or `twin` (the
+    /// `arm` image's application on the board twin: bus-level device models of
+    /// the reference board, with the scenario's `[board]` and `[calibration]`;
+    /// docs/board.md "The board twin").
+    #[arg(long, value_enum, value_name = "LINK", conflicts_with = "in_process")]
+    pub link: Option<RunLink>,
     /// Pace the periods by the wall clock (1 kHz: 1 ms per period) instead of
     /// lockstep; reports period jitter and the firmware's step time.
     #[arg(long)]

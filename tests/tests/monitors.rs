@@ -117,13 +117,26 @@ fn spawn_client(rig: &str, c: Client) -> JoinHandle<Received> {
                 }
             }
         };
+        // After the rig: the event comes last, after the plant's publisher (docs/rig.md,
+        // "Monitors"), and a monitor subscribes once it is there.
+        let listener = (c.start == Start::AfterRig).then(|| {
+            let until = Instant::now() + Duration::from_secs(60);
+            let event = loop {
+                match node.service_builder(&gt).event().open() {
+                    Ok(e) => break e,
+                    Err(e) if Instant::now() < until => {
+                        let _ = e;
+                        std::thread::sleep(Duration::from_millis(2));
+                    }
+                    Err(e) => panic!("no ground_truth event: {e:?}"),
+                }
+            };
+            event.listener_builder().create().unwrap()
+        });
         let subscriber = match c.buffer {
             Some(b) => service.subscriber_builder().buffer_size(b).create().unwrap(),
             None => service.subscriber_builder().create().unwrap(),
         };
-        // The rig creates the wake-up event before the service.
-        let listener = (c.start == Start::AfterRig)
-            .then(|| node.service_builder(&gt).event().open().expect("the event before the service").listener_builder().create().unwrap());
         ready.send(()).unwrap();
         let mut samples = Vec::new();
         let mut wake_ups = 0;

@@ -24,6 +24,17 @@ fn run(args: &[&str], out: &Path) -> Output {
     o
 }
 
+/// Waits until process `pid` holds rig `rig` in `role` (its iceoryx2 node is
+/// listed alive: what a second process's exclusivity check sees), up to 60 s
+/// however loaded the machine is: driven by the event, not by a sleep.
+fn wait_until_held(role: rig::ipc::Role, rig: &str, pid: u32) {
+    let start = Instant::now();
+    while rig::ipc::live_owner(role, rig) != Some(i64::from(pid)) {
+        assert!(start.elapsed() < Duration::from_secs(60), "process {pid} never took rig {rig} as {role:?}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 fn summary(out: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
@@ -208,7 +219,7 @@ fn a_second_plant_or_firmware_on_a_live_rig_is_refused() {
     let name = rig("exclusive");
     let mut fw =
         sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
-    std::thread::sleep(Duration::from_millis(700));
+    wait_until_held(rig::ipc::Role::Firmware, &name, fw.id());
     let second = sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).output().unwrap();
     let err = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(2), "{err}");
@@ -217,7 +228,7 @@ fn a_second_plant_or_firmware_on_a_live_rig_is_refused() {
     let name2 = rig("exclusive-plant");
     let out1 = dir.path().join("first");
     let plant = sil_host().args(["run", "--attach", &name2, "--scenario", s, "--duration", "0.5", "--out"]).arg(&out1).spawn().unwrap();
-    std::thread::sleep(Duration::from_millis(700));
+    wait_until_held(rig::ipc::Role::Plant, &name2, plant.id());
     let out2 = dir.path().join("second");
     let o = run(&["--attach", &name2, "--scenario", s, "--duration", "0.5"], &out2);
     assert_eq!(o.status.code(), Some(2));
@@ -543,12 +554,22 @@ fn a_firmware_stopped_in_real_time_is_counted_alike_by_both_sides() {
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        std::thread::sleep(Duration::from_millis(1200));
+        // Stop it once the run has streamed 1000 periods (however long the start
+        // took on a loaded machine): the periods before are free of misses.
+        let partial = out.join("trace.csv.partial");
+        let rows_on_disk = || std::fs::read_to_string(&partial).map_or(0, |t| t.lines().count().saturating_sub(1));
+        let waited = Instant::now();
+        while rows_on_disk() < 1000 && waited.elapsed() < Duration::from_secs(60) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
         let pid = fw.id() as i32;
+        let before = rows_on_disk();
         // SAFETY: signals to our own child.
         assert_eq!(unsafe { libc_kill(pid, 19) }, 0, "SIGSTOP");
+        let stopped = Instant::now();
         std::thread::sleep(Duration::from_millis(500));
         assert_eq!(unsafe { libc_kill(pid, 18) }, 0, "SIGCONT");
+        let stopped_ms = stopped.elapsed().as_millis() as u64;
         let o = plant.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr).to_string();
         let start = Instant::now();
@@ -556,23 +577,27 @@ fn a_firmware_stopped_in_real_time_is_counted_alike_by_both_sides() {
             assert!(start.elapsed() < Duration::from_secs(10), "the firmware ends after the plant");
             std::thread::sleep(Duration::from_millis(20));
         }
-        (o.status.code(), err, out)
+        (o.status.code(), err, out, before, stopped_ms)
     };
 
-    let (code, err, out) = stop("rtstop", &["--set", "rig.max_consecutive_timeouts=5000"]);
+    let (code, err, out, before, stopped_ms) = stop("rtstop", &["--set", "rig.max_consecutive_timeouts=5000"]);
     assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("safe state") && err.contains("DeadlineMisses"), "{err}");
     let sum = summary(&out);
     let (misses, overruns) = (sum["deadline_misses"].as_u64().unwrap(), sum["firmware_overruns"].as_u64().unwrap());
     assert_eq!(misses, overruns, "both sides count the same missed periods");
-    assert!((350..=650).contains(&misses), "about one miss per period of the 0.5 s stop: {misses}");
+    // One miss per 1 ms period of the stop, as the test measured it between its two
+    // signals (500 ms, longer on a loaded machine); the signals' own delivery, and
+    // a plant descheduled at either end, move it by some periods: 30 % down, and
+    // up to 150 periods up.
+    assert!(misses * 10 >= stopped_ms * 7 && misses <= stopped_ms + 150, "about one miss per period of the {stopped_ms} ms stop: {misses}");
     let rows = trace(&out);
     let miss = column(&out, "deadline_miss");
     let first = rows.iter().position(|r| &r[miss] == "true").unwrap();
     assert!(rows[first..rows.len() - 1].iter().all(|r| &r[miss] == "true"), "one streak, up to the safe state");
-    assert!(first > 900, "no miss before the stop: first at {first}");
+    assert!(first >= before, "no miss before the stop ({before} periods on disk then): first at {first}");
 
-    let (code, err, out) = stop("rtgiveup", &[]);
+    let (code, err, out, _, _) = stop("rtgiveup", &[]);
     assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("no command for 100 periods in a row"), "{err}");
     let rows = trace(&out);

@@ -10,17 +10,17 @@
 //! - `pil` (`src/bin/pil.rs`): the controller against the PC's plant over
 //!   USART1 (processor in the loop under QEMU, hardware in the loop on a board).
 //!
-//! Both run the portable firmware through [`firmware::board::handle`]. The
-//! modules here that do not touch the chip ([`clock_tree`], [`pins`],
-//! [`timing`], [`step_stats`], [`telemetry`]) are tested on the host.
+//! Both run the portable firmware through [`firmware::board::handle`]; the
+//! `arm` image's per-tick application is the hardware-independent crate
+//! `arm-app` (its step statistics and telemetry too), which this crate feeds
+//! with the chip's peripherals. The modules here that do not touch the chip
+//! ([`clock_tree`], [`pins`], [`timing`]) are tested on the host.
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 
 pub mod calibration;
 pub mod clock_tree;
 pub mod pins;
-pub mod step_stats;
-pub mod telemetry;
 pub mod timing;
 
 #[cfg(target_os = "none")]

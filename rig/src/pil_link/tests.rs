@@ -262,7 +262,9 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let mut link = link.unwrap();
     let started = Instant::now();
     let (records, err) = run_loop(&s, &mut link, &mut ());
-    assert!(started.elapsed() < Duration::from_secs(3), "no hang: {:?}", started.elapsed());
+    // 50 periods and one 0.3 s answer timeout: a bound of 20 s tells a hang from a
+    // loaded machine.
+    assert!(started.elapsed() < Duration::from_secs(20), "no hang: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
             assert_eq!(k, 50);
@@ -278,11 +280,13 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
 fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let s = short(1.0);
     let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::HangUp };
-    let (link, _board) = board_link(&s, script, 5.0);
+    // An answer timeout of 60 s: noticed in under half of it is noticed by the
+    // hang-up, not by the timeout, however loaded the machine is.
+    let (link, _board) = board_link(&s, script, 60.0);
     let mut link = link.unwrap();
     let started = Instant::now();
     let (records, err) = run_loop(&s, &mut link, &mut ());
-    assert!(started.elapsed() < Duration::from_secs(2), "noticed at once, not after the timeout: {:?}", started.elapsed());
+    assert!(started.elapsed() < Duration::from_secs(30), "noticed at once, not after the timeout: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
             assert!((50..=51).contains(&k), "{k}");
@@ -306,7 +310,7 @@ fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let opts = PilOptions { boot_timeout_s: 0.5, ..PilOptions::serial(&path, DEFAULT_BAUD) };
     let started = Instant::now();
     let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
-    assert!(started.elapsed() < Duration::from_secs(2));
+    assert!(started.elapsed() < Duration::from_secs(20), "the boot timeout ends the wait: {:?}", started.elapsed());
     assert!(err.contains("the image did not say Hello within 0.5 s: nothing from /dev/pts/") && !err.contains("QEMU"), "{err}");
 }
 
@@ -340,9 +344,9 @@ fn the_fifo_pipe_waits_for_a_booting_image_reads_its_bytes_and_sees_it_close() {
     // The image gone (QEMU exited or killed): the end of the file, at once.
     drop(image_up);
     let t = Instant::now();
-    let err = pipe.read_within(&mut buf, Duration::from_secs(5)).err().expect("a closed FIFO is an error");
+    let err = pipe.read_within(&mut buf, Duration::from_secs(60)).err().expect("a closed FIFO is an error");
     assert!(err.contains("QEMU closed its semihosting FIFO"), "{err}");
-    assert!(t.elapsed() < Duration::from_secs(1));
+    assert!(t.elapsed() < Duration::from_secs(30), "the end of the file, not the 60 s wait: {:?}", t.elapsed());
     // A pipe the image never reads fills up: an error, never a hang.
     let big = vec![1u8; 1 << 20];
     let err = pipe.write_all(&big, Duration::from_secs(1)).unwrap_err();

@@ -11,7 +11,7 @@
 use super::closed_loop::{Streamed, draw, load_scenario, print_summary, run_streamed};
 use crate::commands::Done;
 use crate::{
-    cli::RunArgs,
+    cli::{RunArgs, RunLink},
     error::CliError,
     output::{OutputSet, progress_bar},
 };
@@ -24,6 +24,7 @@ use rig::{
     rig::FirmwareLink,
     setup::{firmware_config, plant_for},
     summary::{MonitorSummary, RunSummary},
+    twin_link::TwinLink,
 };
 
 /// Runs `sil-host run`.
@@ -36,7 +37,25 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     // Check the plant and firmware set-up before touching the output folder.
     plant_for(&scenario).map_err(CliError::Sim)?;
     firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
-    let kind = if args.in_process { LinkKind::InProcess } else { LinkKind::Ipc };
+    let chosen = if args.in_process { RunLink::InProcess } else { args.link.unwrap_or(RunLink::Iceoryx2) };
+    let kind = match chosen {
+        RunLink::InProcess => LinkKind::InProcess,
+        RunLink::Iceoryx2 => LinkKind::Ipc,
+        RunLink::Twin => LinkKind::Twin,
+    };
+    if chosen != RunLink::Iceoryx2 {
+        let what = if chosen == RunLink::Twin { "--link twin" } else { "--in-process" };
+        for (given, flag) in [
+            (args.realtime, "--realtime"),
+            (args.attach.is_some(), "--attach"),
+            (args.rig.is_some(), "--rig"),
+            (args.monitors > 0, "--monitors"),
+        ] {
+            if given {
+                return Err(CliError::BadInput(format!("{flag} needs the firmware process over iceoryx2: not with {what}")));
+            }
+        }
+    }
     kind.check(&scenario.faults).map_err(|e| CliError::BadInput(e.to_string()))?;
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
@@ -55,8 +74,11 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let mut ipc: Option<IpcLink> = None;
     let mut in_process: Option<InProcessLink> = None;
-    let link: &mut dyn FirmwareLink = if args.in_process {
+    let mut twin: Option<TwinLink> = None;
+    let link: &mut dyn FirmwareLink = if chosen == RunLink::InProcess {
         in_process.insert(InProcessLink::new(&scenario).map_err(CliError::Run)?)
+    } else if chosen == RunLink::Twin {
+        twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::BadInput(e.to_string()))?)
     } else {
         let exe = match &args.attach {
             Some(_) => None,
@@ -79,11 +101,16 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
     let monitor_counts = ipc.as_ref().filter(|_| monitors.wait_for > 0).map(IpcLink::monitor_counts);
     drop(ipc);
+    if let Some(t) = &twin {
+        for (k, n) in &t.notices {
+            eprintln!("twin: period {k}: {}", rig::twin_link::describe(n));
+        }
+    }
 
     let svg = out.stage("trace.svg");
     draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
     let summary = RunSummary {
-        rig: (!args.in_process).then(|| rig.clone()),
+        rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),
         ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),
         firmware_step_us: timings.as_ref().map(|t| t.step.percentiles()),
         period_jitter_us: timings.as_ref().filter(|_| args.realtime).map(|t| t.jitter.percentiles()),

@@ -1,10 +1,12 @@
 //! The arm image: the controller on the arm (docs/hardware.md "Reference board").
 //!
-//! TIM2's update interrupt at the control rate runs one period: the sensors
-//! are sampled at the tick (encoders over SPI1, the load cell's conversions
-//! that the tick itself started, the belt's quadrature count), the firmware
-//! steps through `firmware::board::handle`, the torques are written to the
-//! PWM, and the independent watchdog is fed. The safe state disables the
+//! This file only creates the peripherals and hands them to the arm application
+//! (`arm_app::ArmApp`, hardware-independent, the same code the board twin runs
+//! on the host), whose `tick` runs from TIM2's update interrupt at the control
+//! rate: the sensors are sampled at the tick (encoders over SPI1, the load
+//! cell's conversions that the tick itself started, the belt's quadrature
+//! count), the firmware steps through `firmware::board::handle`, the torques are
+//! written to the PWM, and the independent watchdog is fed. The safe state disables the
 //! drivers. A reset (or a watchdog reset) comes up with them disabled until the
 //! enable button (PC13 to ground, held 20 ms) resets the firmware; they are
 //! enabled at the next command that is not the safe state.
@@ -30,6 +32,7 @@ fn main() {
 mod image {
     use core::cell::{Cell, RefCell};
 
+    use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, StartError, telemetry::ArmTelemetry};
     use board_stm32f405::{
         calibration,
         clock_tree::ClockOutcome,
@@ -38,237 +41,91 @@ mod image {
             cycles::CycleClock,
             exit,
             gpio::{self, GpioPin},
-            iwdg, rcc, spi, stack,
+            iwdg::{self, Iwdg},
+            rcc, spi, stack,
             timers::{self, BeltCounter, PwmChannel},
             usart,
         },
         pins,
-        step_stats::StepStats,
-        telemetry::ArmTelemetry,
         timing::{TIM2_CLOCK_HZ, TickTimer},
     };
     use cortex_m::interrupt::Mutex;
     use cortex_m_rt::entry;
-    use drivers::{
-        as5047p::As5047p,
-        belt::BeltEncoder,
-        frame::{self, Readings},
-        load_cell::LoadCell,
-        motor::{Motor, MotorStage},
-    };
+    use drivers::motor::{Motor, MotorStage};
     use firmware::{
-        Config, Event, Firmware, Outcome, SafeReason, TickClock,
-        board::{self, Board},
+        Config,
         pil::{self, MAX_FRAME},
     };
-    use shared::wire::{frame_flags, status};
+    use shared::wire::frame_flags;
     use stm32f4::stm32f405::{Interrupt, interrupt};
 
     /// Periods the QEMU build runs before it exits (3 windows).
-    const QEMU_PERIODS: u32 = 3 * board_stm32f405::step_stats::WINDOW;
-    /// Periods the button must read pressed (20 ms at 1 kHz).
-    const BUTTON_PERIODS: u16 = 20;
+    const QEMU_PERIODS: u32 = 3 * arm_app::step_stats::WINDOW;
     /// QEMU's timer clock for TIM2 to TIM5, Hz: the emulator has no RCC and
     /// clocks its timers at a fixed rate (measured: docs/board.md).
     const QEMU_TIMER_HZ: u32 = board_stm32f405::timing::QEMU_TIMER_HZ;
 
-    type Encoder = As5047p<spi::Spi1Device>;
-    type Motors = MotorStage<PwmChannel, GpioPin, PwmChannel, GpioPin, GpioPin, GpioPin>;
+    /// The reference board's parts, as the arm application sees them.
+    struct Stm32f405;
 
-    /// Everything the control interrupt owns.
-    struct Arm {
-        board: ArmBoard,
-        firmware: Option<Firmware>,
+    impl ArmIo for Stm32f405 {
+        type Spi = spi::Spi1Device;
+        type Adc = adc::LoadCellAdc;
+        type Counter = BeltCounter;
+        type Pwm = PwmChannel;
+        type Out = GpioPin;
+        type In = GpioPin;
+        type Watchdog = Iwdg;
+        type Clock = CycleClock;
     }
 
-    struct ArmBoard {
-        clock: CycleClock,
-        theta1: Encoder,
-        elbow: Encoder,
-        load: LoadCell<adc::LoadCellAdc>,
-        belt: BeltEncoder<BeltCounter>,
-        motors: Motors,
-        button_low: u16,
-        button_released: bool,
-        reset_pending: bool,
-        enable_requested: bool,
-        period_us: u64,
-        seq: u32,
-        tick_mark: u32,
-        now_us: u64,
-        interval: [u32; 2],
-        handler_worst: u32,
-        stats: StepStats,
-        invalid_logged: u16,
-        safe_logged: bool,
-    }
-
-    static ARM: Mutex<RefCell<Option<Arm>>> = Mutex::new(RefCell::new(None));
+    static ARM: Mutex<RefCell<Option<ArmApp<Stm32f405>>>> = Mutex::new(RefCell::new(None));
     static REPORT: Mutex<Cell<Option<ArmTelemetry>>> = Mutex::new(Cell::new(None));
 
-    impl ArmBoard {
-        /// Samples every sensor now (the tick): the frame of period `seq`.
-        fn sample(&mut self) -> shared::wire::SensorFrame {
-            let readings = Readings {
-                theta1_raw: self.theta1.sample().ok(),
-                elbow_raw: self.elbow.sample().ok(),
-                load_codes: match self.load.read_codes() {
-                    Ok([t, n]) => [Some(t), Some(n)],
-                    Err(_) => [None, None],
-                },
-                belt_mm_s: self.belt.speed_mm_s().ok(),
-                driver_fault: self.motors.fault_asserted().ok(),
-            };
-            let f = frame::assemble(self.seq as u64 * self.period_us, self.seq, readings, &calibration::ENCODERS);
-            let invalid = f.flags & frame_flags::ANY_INVALID;
-            if invalid != self.invalid_logged {
-                if invalid == 0 {
-                    defmt::info!("period {=u32}: every sensor reads again", self.seq);
-                } else {
-                    defmt::warn!(
-                        "period {=u32}: invalid readings (frame flags {=u16:#x}: theta1 {=bool}, elbow {=bool}, f_t {=bool}, f_n {=bool}, belt {=bool}, driver fault {=bool})",
-                        self.seq,
-                        invalid,
-                        invalid & frame_flags::THETA1_INVALID != 0,
-                        invalid & frame_flags::ELBOW_INVALID != 0,
-                        invalid & frame_flags::F_T_INVALID != 0,
-                        invalid & frame_flags::F_N_INVALID != 0,
-                        invalid & frame_flags::BELT_INVALID != 0,
-                        invalid & frame_flags::DRIVER_FAULT != 0
-                    );
-                }
-                self.invalid_logged = invalid;
+    /// What the application tells the operator, in the defmt log; a window's
+    /// report also goes to the idle loop, which sends it on USART1.
+    fn log(n: Notice) {
+        match n {
+            Notice::EncoderReady { joint, agc } => defmt::info!("encoder {=str}: ready, AGC {=u8}", joint.name(), agc),
+            Notice::EncoderNotReady { joint, fault } => {
+                defmt::error!("encoder {=str}: not ready ({=str}): its readings will be invalid", joint.name(), fault.describe())
             }
-            f
-        }
-
-        /// A press: low for [`BUTTON_PERIODS`] after having been seen released
-        /// (a button stuck low, or a pin QEMU does not model, never presses).
-        fn button_pressed(&mut self) -> bool {
-            if gpio::read(&pins::ENABLE_BUTTON) {
-                self.button_low = 0;
-                self.button_released = true;
-                return false;
+            Notice::ReadingsBack { seq } => defmt::info!("period {=u32}: every sensor reads again", seq),
+            Notice::InvalidReadings { seq, flags } => defmt::warn!(
+                "period {=u32}: invalid readings (frame flags {=u16:#x}: theta1 {=bool}, elbow {=bool}, f_t {=bool}, f_n {=bool}, belt {=bool}, driver fault {=bool})",
+                seq,
+                flags,
+                flags & frame_flags::THETA1_INVALID != 0,
+                flags & frame_flags::ELBOW_INVALID != 0,
+                flags & frame_flags::F_T_INVALID != 0,
+                flags & frame_flags::F_N_INVALID != 0,
+                flags & frame_flags::BELT_INVALID != 0,
+                flags & frame_flags::DRIVER_FAULT != 0
+            ),
+            Notice::SafeState { seq, reason } => defmt::error!(
+                "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault): drivers disabled; press the enable button to reset",
+                seq,
+                reason
+            ),
+            Notice::DriversDidNotDisable => defmt::error!("the drivers did not disable"),
+            Notice::DriversEnabled { seq } => defmt::info!("period {=u32}: drivers enabled", seq),
+            Notice::DriversRefused { seq } => defmt::error!("period {=u32}: the drivers refuse to enable (fault line asserted)", seq),
+            Notice::FirmwareReset => defmt::info!("enable button: firmware reset; the drivers enable at the next command"),
+            Notice::Window(report) => {
+                defmt::info!(
+                    "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; handler worst {=u32} ticks; overruns {=u32}; drivers {=str}",
+                    report.seq,
+                    report.step.median,
+                    report.step.worst,
+                    report.step.steps,
+                    report.tick_interval[0],
+                    report.tick_interval[1],
+                    report.handler_worst,
+                    report.overruns,
+                    if report.drivers_enabled { "enabled" } else { "disabled" }
+                );
+                cortex_m::interrupt::free(|cs| REPORT.borrow(cs).set(Some(report)));
             }
-            if !self.button_released {
-                return false;
-            }
-            self.button_low = self.button_low.saturating_add(1);
-            if self.button_low == BUTTON_PERIODS {
-                self.button_released = false;
-                return true;
-            }
-            false
-        }
-    }
-
-    impl Board for ArmBoard {
-        type Error = core::convert::Infallible;
-
-        fn next_event(&mut self) -> Result<Event, Self::Error> {
-            if core::mem::take(&mut self.reset_pending) {
-                return Ok(Event::Reset);
-            }
-            let frame = self.sample();
-            // The step starts now: the tick plus the sampling.
-            let us = self.clock.ticks().wrapping_sub(self.tick_mark) / (self.clock.ticks_per_second() / 1_000_000);
-            self.now_us = frame.t_us + u64::from(us);
-            Ok(Event::Frame(frame))
-        }
-
-        fn now_us(&self) -> u64 {
-            self.now_us
-        }
-
-        fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {
-            match outcome {
-                Outcome::Command(c) => {
-                    if c.status & status::SAFE_STATE != 0 {
-                        if self.motors.disable().is_err() {
-                            defmt::error!("the drivers did not disable");
-                        }
-                        self.enable_requested = false;
-                        if !self.safe_logged {
-                            let reason = SafeReason::from_status(c.status).map_or(0, |r| r as u8);
-                            defmt::error!(
-                                "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault): drivers disabled; press the enable button to reset",
-                                c.seq,
-                                reason
-                            );
-                            self.safe_logged = true;
-                        }
-                    } else if core::mem::take(&mut self.enable_requested) {
-                        match self.motors.enable() {
-                            Ok(()) => defmt::info!("period {=u32}: drivers enabled", c.seq),
-                            Err(_) => defmt::error!("period {=u32}: the drivers refuse to enable (fault line asserted)", c.seq),
-                        }
-                    }
-                    // Disabled drivers get zero duty whatever the codes.
-                    let _ = self.motors.apply([c.u1_code, c.u2_code]);
-                    iwdg::feed();
-                    if let Some(step) = self.stats.record(c.step_ticks) {
-                        let report = ArmTelemetry {
-                            seq: c.seq,
-                            status: c.status,
-                            overruns: fw.map_or(0, Firmware::overruns),
-                            drivers_enabled: self.motors.is_enabled(),
-                            clock: self.clock.kind(),
-                            step,
-                            tick_interval: self.interval,
-                            handler_worst: self.handler_worst,
-                            // Filled in by the idle loop: scanning the stack takes too long here.
-                            stack_high_water_bytes: 0,
-                        };
-                        defmt::info!(
-                            "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; handler worst {=u32} ticks; overruns {=u32}; drivers {=str}",
-                            c.seq,
-                            step.median,
-                            step.worst,
-                            step.steps,
-                            self.interval[0],
-                            self.interval[1],
-                            self.handler_worst,
-                            report.overruns,
-                            if report.drivers_enabled { "enabled" } else { "disabled" }
-                        );
-                        cortex_m::interrupt::free(|cs| REPORT.borrow(cs).set(Some(report)));
-                        self.interval = [u32::MAX, 0];
-                        self.handler_worst = 0;
-                    }
-                }
-                Outcome::Reset => {
-                    defmt::info!("enable button: firmware reset; the drivers enable at the next command");
-                    self.enable_requested = true;
-                    self.safe_logged = false;
-                }
-                _ => {}
-            }
-            Ok(())
-        }
-    }
-
-    impl Arm {
-        /// One control period (in TIM2's interrupt).
-        fn tick(&mut self) {
-            let b = &mut self.board;
-            let interval = b.clock.ticks().wrapping_sub(b.tick_mark);
-            b.tick_mark = b.clock.mark();
-            if b.seq > 0 {
-                b.interval = [b.interval[0].min(interval), b.interval[1].max(interval)];
-            }
-            if b.button_pressed() {
-                b.reset_pending = true;
-            }
-            let clock = b.clock;
-            loop {
-                let Ok(event) = b.next_event();
-                let _ = board::handle(&mut self.firmware, event, b, &clock);
-                if matches!(event, Event::Frame(_)) {
-                    break;
-                }
-            }
-            b.seq = b.seq.wrapping_add(1);
-            b.handler_worst = b.handler_worst.max(b.clock.ticks().wrapping_sub(b.tick_mark));
         }
     }
 
@@ -279,7 +136,7 @@ mod image {
         }
         cortex_m::interrupt::free(|cs| {
             if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
-                arm.tick();
+                arm.tick(&mut log);
             }
         });
     }
@@ -311,10 +168,6 @@ mod image {
             defmt::warn!("reset by the watchdog (a step hung): drivers disabled until the enable button");
         }
         let cfg = Config::default();
-        let Ok(fw) = Firmware::new(cfg) else {
-            defmt::error!("invalid firmware configuration");
-            exit::exit(2);
-        };
         let tick = match TickTimer::for_period(timer_hz, cfg.period) {
             Ok(t) => t,
             Err(e) => {
@@ -326,45 +179,38 @@ mod image {
         adc::init();
         timers::start_belt_encoder();
         usart::init(false);
-        let mut theta1 = As5047p::new(spi::Spi1Device::new(pins::CS_THETA1));
-        let mut elbow = As5047p::new(spi::Spi1Device::new(pins::CS_ELBOW));
-        for (name, enc) in [("theta1", &mut theta1), ("elbow", &mut elbow)] {
-            match enc.check_ready() {
-                Ok(d) => defmt::info!("encoder {=str}: ready, AGC {=u8}", name, d.agc),
-                Err(e) => defmt::error!("encoder {=str}: not ready ({=str}): its readings will be invalid", name, encoder_error(&e)),
-            }
-        }
-        let Ok(load) = LoadCell::new(adc::LoadCellAdc, calibration::LOAD_CELL) else {
-            defmt::error!("invalid load-cell calibration");
-            exit::exit(2);
+        let parts = ArmParts::<Stm32f405> {
+            theta1: spi::Spi1Device::new(pins::CS_THETA1),
+            elbow: spi::Spi1Device::new(pins::CS_ELBOW),
+            adc: adc::LoadCellAdc,
+            belt: BeltCounter,
+            motors,
+            button: GpioPin(pins::ENABLE_BUTTON),
+            watchdog: Iwdg,
+            clock,
         };
-        let Ok(belt) = BeltEncoder::new(BeltCounter, calibration::BELT_METRES_PER_COUNT, cfg.period.as_secs_f32()) else {
-            defmt::error!("invalid belt calibration");
-            exit::exit(2);
+        let cal = ArmCalibration {
+            encoders: calibration::ENCODERS,
+            load_cell: calibration::LOAD_CELL,
+            belt_metres_per_count: calibration::BELT_METRES_PER_COUNT,
+        };
+        let app = match ArmApp::new(parts, cfg, &cal, &mut log) {
+            Ok(app) => app,
+            Err(StartError::Config(_)) => {
+                defmt::error!("invalid firmware configuration");
+                exit::exit(2);
+            }
+            Err(StartError::LoadCell(_)) => {
+                defmt::error!("invalid load-cell calibration");
+                exit::exit(2);
+            }
+            Err(StartError::Belt(_)) => {
+                defmt::error!("invalid belt calibration");
+                exit::exit(2);
+            }
         };
         let period_us = cfg.period.as_us();
-        let board = ArmBoard {
-            clock,
-            theta1,
-            elbow,
-            load,
-            belt,
-            motors,
-            button_low: 0,
-            button_released: false,
-            reset_pending: false,
-            enable_requested: false,
-            period_us,
-            seq: 0,
-            tick_mark: clock.mark(),
-            now_us: 0,
-            interval: [u32::MAX, 0],
-            handler_worst: 0,
-            stats: StepStats::default(),
-            invalid_logged: 0,
-            safe_logged: false,
-        };
-        cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(Arm { board, firmware: Some(fw) })));
+        cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(app)));
         defmt::info!(
             "arm image up: {=u64} us control period (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
             period_us,
@@ -374,6 +220,7 @@ mod image {
             match clock.kind() {
                 pil::StepClock::DwtCycles => "DWT cycles",
                 pil::StepClock::EmulatedSysTick => "SysTick (emulated: instructions)",
+                pil::StepClock::Simulated => "none (simulated)",
             }
         );
         iwdg::start(5 * period_us as u32);
@@ -391,10 +238,9 @@ mod image {
                     usart::write_all(frame);
                 }
             }
-            // The periods run so far and whether the drivers are on, from the board itself.
-            let (periods, drivers) = cortex_m::interrupt::free(|cs| {
-                ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.board.seq, a.board.motors.is_enabled()))
-            });
+            // The periods run so far and whether the drivers are on, from the application itself.
+            let (periods, drivers) =
+                cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.periods(), a.drivers_enabled())));
             if exit::UNDER_QEMU && periods >= QEMU_PERIODS {
                 cortex_m::peripheral::NVIC::mask(Interrupt::TIM2);
                 defmt::info!(
@@ -406,18 +252,6 @@ mod image {
                 );
                 exit::exit(0);
             }
-        }
-    }
-
-    fn encoder_error<E>(e: &drivers::as5047p::Error<E>) -> &'static str {
-        use drivers::as5047p::Error;
-        match e {
-            Error::Bus(_) => "SPI bus error",
-            Error::Parity { .. } => "parity error",
-            Error::ErrorFlag { .. } => "error flag",
-            Error::NotReady => "offset compensation not finished, or no chip on the bus",
-            Error::Magnet { .. } => "magnetic field out of range",
-            Error::CordicOverflow => "CORDIC overflow",
         }
     }
 }

@@ -46,7 +46,7 @@ impl CycleClock {
     /// bounds an interval); the DWT runs on (its differences wrap in 25 s).
     pub fn mark(&self) -> u32 {
         match self.kind {
-            StepClock::DwtCycles => DWT::cycle_count(),
+            StepClock::DwtCycles | StepClock::Simulated => DWT::cycle_count(),
             StepClock::EmulatedSysTick => {
                 // SAFETY: a write of any value clears the current-value register
                 // (it then reloads); SysTick belongs to this clock.
@@ -60,7 +60,7 @@ impl CycleClock {
 impl TickClock for CycleClock {
     fn ticks(&self) -> u32 {
         match self.kind {
-            StepClock::DwtCycles => DWT::cycle_count(),
+            StepClock::DwtCycles | StepClock::Simulated => DWT::cycle_count(),
             // Right after the restart the counter reads 0 until it reloads.
             StepClock::EmulatedSysTick => match SYST::get_current() {
                 0 => 0,
@@ -70,5 +70,14 @@ impl TickClock for CycleClock {
     }
     fn ticks_per_second(&self) -> u32 {
         SYSCLK_HZ
+    }
+}
+
+impl arm_app::IntervalClock for CycleClock {
+    fn mark(&self) -> u32 {
+        CycleClock::mark(self)
+    }
+    fn kind(&self) -> StepClock {
+        CycleClock::kind(self)
     }
 }

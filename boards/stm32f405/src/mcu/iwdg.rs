@@ -31,3 +31,13 @@ pub fn start(timeout_us: u32) {
 pub fn feed() {
     iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
 }
+
+/// The watchdog as the arm application's [`arm_app::Watchdog`] (started with [`start`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Iwdg;
+
+impl arm_app::Watchdog for Iwdg {
+    fn feed(&mut self) {
+        feed();
+    }
+}

@@ -171,7 +171,7 @@ fn execute(command: Command) -> Result<(Outcome, Option<CliError>), CliError> {
         Command::Simulate(a) => typed(commands::simulate::execute(&a)?, Outcome::Simulate),
         Command::Sweep(a) => typed(commands::sweep::execute(&a)?, |s| Outcome::Sweep(Box::new(s))),
         Command::Poincare(a) => typed(commands::poincare::execute(&a)?, Outcome::Poincare),
-        Command::Zmax(a) => typed(commands::zmax::execute(&a)?, Outcome::Zmax),
+        Command::Zmax(a) => typed(commands::zmax::execute(&a)?, |z| Outcome::Zmax(Box::new(z))),
         Command::Run(a) => typed(commands::run::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Pil(a) => typed(commands::pil::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Bench(a) => (Outcome::Bench(commands::bench::execute(&a)?), None),

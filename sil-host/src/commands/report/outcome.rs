@@ -22,7 +22,7 @@ pub enum Outcome {
     /// `poincare`.
     Poincare(PoincareSummary),
     /// `zmax`.
-    Zmax(ZmaxSummary),
+    Zmax(Box<ZmaxSummary>),
     /// `run` and `pil`.
     Run(Box<RunSummary>),
     /// `bench`.

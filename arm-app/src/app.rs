@@ -1,0 +1,357 @@
+//! The arm application: what the `arm` image does at every control tick, on any
+//! board that gives its parts ([`ArmIo`]).
+//!
+//! At the tick (TIM2's update interrupt on the reference board):
+//! 1. the interval since the previous tick is recorded (its spread is the tick's
+//!    jitter plus the handler's latency);
+//! 2. the enable button is read (a press: low for [`BUTTON_PERIODS`] periods after
+//!    having been seen released);
+//! 3. the sensors are sampled now: both encoders (`As5047p::sample`), the load
+//!    cell's conversions, the belt's counter, the drivers' fault line, into the
+//!    period's `SensorFrame` ([`drivers::frame::assemble`] with the encoders'
+//!    calibration);
+//! 4. the firmware steps on it through `firmware::board::handle`, the one path
+//!    every image and the host take;
+//! 5. the command is written: a safe state disables the drivers (enable low, zero
+//!    duty); after the button's reset the drivers enable at the first command that
+//!    is not the safe state; the duties follow the torque codes
+//!    (`drivers::motor::duty_for`; disabled drivers get zero duty);
+//! 6. the watchdog is fed, and the step's ticks are recorded; every
+//!    `step_stats::WINDOW` periods a [`Notice::Window`] carries the window's report.
+//!
+//! A reset (or a watchdog reset) comes up with the drivers disabled until the
+//! enable button resets the firmware.
+
+use drivers::{
+    As5047p, BeltEncoder, LoadCell, MotorStage,
+    belt::BeltError,
+    frame::{self, FrameCalibration, Readings},
+    load_cell::{Calibration, CalibrationError},
+};
+use embedded_hal::digital::InputPin;
+use firmware::{
+    Config, Event, Firmware, Outcome, SafeReason, TickClock,
+    board::{self, Board},
+    config::ConfigError,
+};
+use shared::wire::{ActuatorCommand, SensorFrame, frame_flags, status};
+
+use crate::{
+    io::{ArmIo, IntervalClock, Watchdog},
+    notice::{EncoderFault, Joint, Notice},
+    step_stats::StepStats,
+    telemetry::ArmTelemetry,
+};
+
+/// Periods the button must read pressed (20 ms at 1 kHz).
+pub const BUTTON_PERIODS: u16 = 20;
+
+/// The motor stage of a board's parts.
+pub type Motors<H> =
+    MotorStage<<H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Out, <H as ArmIo>::In>;
+
+/// The arm's calibration: what turns raw readings into the wire's units
+/// (docs/board.md "Calibration").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmCalibration {
+    /// The encoders' zeros and directions.
+    pub encoders: FrameCalibration,
+    /// The load cell's front end (zero counts, N per count, per axis).
+    pub load_cell: Calibration,
+    /// Belt travel per quadrature count, m (negative flips the direction).
+    pub belt_metres_per_count: f32,
+}
+
+/// A board's parts, handed to [`ArmApp::new`]. The motor stage comes built: a
+/// board makes it first, so that the drivers are disabled before anything else
+/// can fail.
+pub struct ArmParts<H: ArmIo> {
+    /// The base joint's encoder (`theta1`).
+    pub theta1: H::Spi,
+    /// The elbow's encoder (`theta2 - theta1`).
+    pub elbow: H::Spi,
+    /// The load cell's ADC.
+    pub adc: H::Adc,
+    /// The belt's counter.
+    pub belt: H::Counter,
+    /// Both motor drivers, disabled.
+    pub motors: Motors<H>,
+    /// The enable button (low = pressed).
+    pub button: H::In,
+    /// The independent watchdog (already started by the board).
+    pub watchdog: H::Watchdog,
+    /// The step's clock.
+    pub clock: H::Clock,
+}
+
+/// Why the application did not start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StartError {
+    /// The firmware's configuration is invalid.
+    Config(ConfigError),
+    /// The load cell's calibration is invalid.
+    LoadCell(CalibrationError),
+    /// The belt's scale (or the control period) is invalid.
+    Belt(BeltError),
+}
+
+/// The sensors, the drivers and the per-tick bookkeeping: the board side of
+/// `firmware::board::handle`.
+struct Hardware<H: ArmIo> {
+    theta1: As5047p<H::Spi>,
+    elbow: As5047p<H::Spi>,
+    load: LoadCell<H::Adc>,
+    belt: BeltEncoder<H::Counter>,
+    motors: Motors<H>,
+    button: H::In,
+    watchdog: H::Watchdog,
+    encoders: FrameCalibration,
+    button_low: u16,
+    button_released: bool,
+    reset_pending: bool,
+    enable_requested: bool,
+    period_us: u64,
+    seq: u32,
+    tick_mark: u32,
+    now_us: u64,
+    interval: [u32; 2],
+    handler_worst: u32,
+    stats: StepStats,
+    invalid_logged: u16,
+    safe_logged: bool,
+    last_command: Option<ActuatorCommand>,
+}
+
+/// The arm application: the firmware and the board it runs on.
+pub struct ArmApp<H: ArmIo> {
+    hw: Hardware<H>,
+    firmware: Option<Firmware>,
+    clock: H::Clock,
+}
+
+impl<H: ArmIo> ArmApp<H> {
+    /// Starts the application on `parts` with the firmware's `config` and the
+    /// arm's calibration `cal`: checks both encoders (start-up notices: ready with
+    /// the AGC, or not ready and why: their readings will then be invalid), then
+    /// the load cell's calibration and the belt's scale. The drivers stay
+    /// disabled until the enable button.
+    ///
+    /// # Errors
+    /// [`StartError`]: an invalid configuration, load-cell calibration or belt scale.
+    pub fn new(parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
+        let firmware = Firmware::new(config).map_err(StartError::Config)?;
+        let mut theta1 = As5047p::new(parts.theta1);
+        let mut elbow = As5047p::new(parts.elbow);
+        for (joint, enc) in [(Joint::Theta1, &mut theta1), (Joint::Elbow, &mut elbow)] {
+            log(match enc.check_ready() {
+                Ok(d) => Notice::EncoderReady { joint, agc: d.agc },
+                Err(e) => Notice::EncoderNotReady { joint, fault: EncoderFault::of(&e) },
+            });
+        }
+        let load = LoadCell::new(parts.adc, cal.load_cell).map_err(StartError::LoadCell)?;
+        let belt = BeltEncoder::new(parts.belt, cal.belt_metres_per_count, config.period.as_secs_f32()).map_err(StartError::Belt)?;
+        let clock = parts.clock;
+        let tick_mark = clock.mark();
+        let hw = Hardware {
+            theta1,
+            elbow,
+            load,
+            belt,
+            motors: parts.motors,
+            button: parts.button,
+            watchdog: parts.watchdog,
+            encoders: cal.encoders,
+            button_low: 0,
+            button_released: false,
+            reset_pending: false,
+            enable_requested: false,
+            period_us: config.period.as_us(),
+            seq: 0,
+            tick_mark,
+            now_us: 0,
+            interval: [u32::MAX, 0],
+            handler_worst: 0,
+            stats: StepStats::default(),
+            invalid_logged: 0,
+            safe_logged: false,
+            last_command: None,
+        };
+        Ok(Self { hw, firmware: Some(firmware), clock })
+    }
+
+    /// One control period (the tick's interrupt): see the module's documentation.
+    /// `log` receives what the operator should know.
+    pub fn tick(&mut self, log: &mut impl FnMut(Notice)) {
+        let Self { hw, firmware, clock } = self;
+        let interval = clock.ticks().wrapping_sub(hw.tick_mark);
+        hw.tick_mark = clock.mark();
+        if hw.seq > 0 {
+            hw.interval = [hw.interval[0].min(interval), hw.interval[1].max(interval)];
+        }
+        if hw.button_pressed() {
+            hw.reset_pending = true;
+        }
+        let mut board = TickBoard { hw, clock, log };
+        loop {
+            let Ok(event) = board.next_event();
+            let _ = board::handle(firmware, event, &mut board, clock);
+            if matches!(event, Event::Frame(_)) {
+                break;
+            }
+        }
+        hw.seq = hw.seq.wrapping_add(1);
+        hw.handler_worst = hw.handler_worst.max(clock.ticks().wrapping_sub(hw.tick_mark));
+    }
+
+    /// Periods run so far.
+    pub fn periods(&self) -> u32 {
+        self.hw.seq
+    }
+
+    /// Whether the motor drivers are enabled.
+    pub fn drivers_enabled(&self) -> bool {
+        self.hw.motors.is_enabled()
+    }
+
+    /// The command of the last tick (`None` before the first).
+    pub fn last_command(&self) -> Option<&ActuatorCommand> {
+        self.hw.last_command.as_ref()
+    }
+
+    /// The firmware (its counters, its estimate).
+    pub fn firmware(&self) -> Option<&Firmware> {
+        self.firmware.as_ref()
+    }
+}
+
+impl<H: ArmIo> Hardware<H> {
+    /// Samples every sensor now (the tick): the frame of period `seq`, with a
+    /// notice when the set of invalid readings changes.
+    fn sample(&mut self, log: &mut impl FnMut(Notice)) -> SensorFrame {
+        let readings = Readings {
+            theta1_raw: self.theta1.sample().ok(),
+            elbow_raw: self.elbow.sample().ok(),
+            load_codes: match self.load.read_codes() {
+                Ok([t, n]) => [Some(t), Some(n)],
+                Err(_) => [None, None],
+            },
+            belt_mm_s: self.belt.speed_mm_s().ok(),
+            driver_fault: self.motors.fault_asserted().ok(),
+        };
+        let f = frame::assemble(u64::from(self.seq) * self.period_us, self.seq, readings, &self.encoders);
+        let invalid = f.flags & frame_flags::ANY_INVALID;
+        if invalid != self.invalid_logged {
+            log(if invalid == 0 {
+                Notice::ReadingsBack { seq: self.seq }
+            } else {
+                Notice::InvalidReadings { seq: self.seq, flags: invalid }
+            });
+            self.invalid_logged = invalid;
+        }
+        f
+    }
+
+    /// A press: low for [`BUTTON_PERIODS`] after having been seen released (a
+    /// button stuck low, a pin that cannot be read, or one QEMU does not model,
+    /// never presses).
+    fn button_pressed(&mut self) -> bool {
+        match self.button.is_high() {
+            Ok(true) => {
+                self.button_low = 0;
+                self.button_released = true;
+                return false;
+            }
+            Ok(false) => {}
+            Err(_) => return false,
+        }
+        if !self.button_released {
+            return false;
+        }
+        self.button_low = self.button_low.saturating_add(1);
+        if self.button_low == BUTTON_PERIODS {
+            self.button_released = false;
+            return true;
+        }
+        false
+    }
+}
+
+/// The board of one tick: the hardware, the clock and the notice sink.
+struct TickBoard<'a, H: ArmIo, L: FnMut(Notice)> {
+    hw: &'a mut Hardware<H>,
+    clock: &'a H::Clock,
+    log: &'a mut L,
+}
+
+impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
+    type Error = core::convert::Infallible;
+
+    fn next_event(&mut self) -> Result<Event, Self::Error> {
+        if core::mem::take(&mut self.hw.reset_pending) {
+            return Ok(Event::Reset);
+        }
+        let frame = self.hw.sample(self.log);
+        // The step starts now: the tick plus the sampling.
+        let per_us = (self.clock.ticks_per_second() / 1_000_000).max(1);
+        let us = self.clock.ticks().wrapping_sub(self.hw.tick_mark) / per_us;
+        self.hw.now_us = frame.t_us + u64::from(us);
+        Ok(Event::Frame(frame))
+    }
+
+    fn now_us(&self) -> u64 {
+        self.hw.now_us
+    }
+
+    fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {
+        let hw = &mut *self.hw;
+        match outcome {
+            Outcome::Command(c) => {
+                hw.last_command = Some(*c);
+                if c.status & status::SAFE_STATE != 0 {
+                    if hw.motors.disable().is_err() {
+                        (self.log)(Notice::DriversDidNotDisable);
+                    }
+                    hw.enable_requested = false;
+                    if !hw.safe_logged {
+                        let reason = SafeReason::from_status(c.status).map_or(0, |r| r as u8);
+                        (self.log)(Notice::SafeState { seq: c.seq, reason });
+                        hw.safe_logged = true;
+                    }
+                } else if core::mem::take(&mut hw.enable_requested) {
+                    (self.log)(match hw.motors.enable() {
+                        Ok(()) => Notice::DriversEnabled { seq: c.seq },
+                        Err(_) => Notice::DriversRefused { seq: c.seq },
+                    });
+                }
+                // Disabled drivers get zero duty whatever the codes.
+                let _ = hw.motors.apply([c.u1_code, c.u2_code]);
+                hw.watchdog.feed();
+                if let Some(step) = hw.stats.record(c.step_ticks) {
+                    let report = ArmTelemetry {
+                        seq: c.seq,
+                        status: c.status,
+                        overruns: fw.map_or(0, Firmware::overruns),
+                        drivers_enabled: hw.motors.is_enabled(),
+                        clock: self.clock.kind(),
+                        step,
+                        tick_interval: hw.interval,
+                        handler_worst: hw.handler_worst,
+                        // Filled in by the board's idle loop: scanning the stack
+                        // takes too long in the tick.
+                        stack_high_water_bytes: 0,
+                    };
+                    (self.log)(Notice::Window(report));
+                    hw.interval = [u32::MAX, 0];
+                    hw.handler_worst = 0;
+                }
+            }
+            Outcome::Reset => {
+                (self.log)(Notice::FirmwareReset);
+                hw.enable_requested = true;
+                hw.safe_logged = false;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}

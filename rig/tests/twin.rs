@@ -1,0 +1,177 @@
+//! The board twin's closed loop (issue 23): the `arm` image's application on
+//! bus-level device models, against the wire-level rig (in-process link).
+//!
+//! What the twin adds to the wire-level loop is the buses (SPI frames, ADC
+//! codes, the belt's counter, duty and direction and enable) and one physical
+//! quantisation the wire does not have: the PWM's duty. With one duty count per
+//! torque code (`board.pwm_max_duty = 2048`) the duty is exact, so every other
+//! path must reproduce the wire-level run bit for bit. With the reference
+//! board's 4200 counts, the torque differs from the code's by at most
+//! `FS / (2 * 4200) = 0.6 mN m` per joint: an input disturbance 35 times below
+//! the torque the load cell's noise (20 mN rms at the tip) makes through the
+//! force loop, and the contact loop amplifies either alike. So the bound: the
+//! twin's trace lies as close to the wire-level run as wire-level runs that
+//! differ only in their noise seed lie to it (the envelope of four seeds, with
+//! a factor of 1.5 for the tail beyond the largest of four draws).
+
+use board_twin::BoardDescription;
+use rig::{
+    in_process,
+    record::{PeriodRecord, RunError},
+    rig::run_loop,
+    scenario::{DEFAULT_TOML, Scenario},
+    twin_link::TwinLink,
+};
+
+fn scenario(text: &str) -> Scenario {
+    Scenario::from_toml(text).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+fn paper(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/../scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+fn twin_run(s: &Scenario) -> (Vec<PeriodRecord>, Option<RunError>, TwinLink) {
+    let mut link = TwinLink::new(s).unwrap();
+    let (records, err) = run_loop(s, &mut link, &mut ());
+    (records, err, link)
+}
+
+fn wire_run(s: &Scenario) -> (Vec<PeriodRecord>, Option<RunError>) {
+    in_process::run(s, &mut ())
+}
+
+fn with_duration(text: &str, s: f64) -> String {
+    let mut t = text.to_string();
+    let start = t.find("duration_s = ").unwrap();
+    let end = start + t[start..].find('\n').unwrap();
+    t.replace_range(start..end, &format!("duration_s = {s}"));
+    t
+}
+
+#[test]
+fn with_one_duty_count_per_code_the_twin_is_the_wire_level_run_bit_for_bit() {
+    for name in ["default", "hybrid-x0d", "hybrid-x0u", "pid-x0d", "pid-x0u"] {
+        let text = with_duration(&paper(name), 4.0);
+        let wire = wire_run(&scenario(&text));
+        let mut s = scenario(&text);
+        s.board = BoardDescription { pwm_max_duty: 2048, ..BoardDescription::default() };
+        let (records, err, _) = twin_run(&s);
+        assert_eq!(format!("{err:?}"), format!("{:?}", wire.1), "{name}");
+        assert_eq!(records.len(), wire.0.len(), "{name}");
+        for (k, (a, b)) in records.iter().zip(&wire.0).enumerate() {
+            assert_eq!(format!("{a:?}"), format!("{b:?}"), "{name}: period {k}");
+        }
+    }
+}
+
+/// One column of a record.
+type Column = fn(&PeriodRecord) -> f64;
+
+/// The largest absolute difference of `column` between two runs (same length).
+fn deviation(a: &[PeriodRecord], b: &[PeriodRecord], column: Column) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| (column(x) - column(y)).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn on_the_reference_board_the_twin_agrees_within_the_noise_envelope_and_in_outcome() {
+    let base = scenario(DEFAULT_TOML);
+    let (wire, wire_err) = wire_run(&base);
+    assert!(wire_err.is_none());
+    let (twin, twin_err, link) = twin_run(&base);
+    assert!(twin_err.is_none(), "{twin_err:?}");
+    let lift_offs = |r: &[PeriodRecord]| r.iter().filter(|p| p.lift_off_true).count();
+    assert_eq!((lift_offs(&twin), lift_offs(&wire)), (0, 0), "hybrid from x0d never lifts off");
+    let seeds: Vec<Vec<PeriodRecord>> = (2..6)
+        .map(|seed| {
+            let mut s = base.clone();
+            s.sensors.seed = seed;
+            wire_run(&s).0
+        })
+        .collect();
+    let columns: [(&str, Column); 5] =
+        [("z_t", |p| p.z_t), ("f_n", |p| p.f_n), ("f_t", |p| p.f_t), ("theta1", |p| p.theta1), ("theta2", |p| p.theta2)];
+    for (name, column) in columns {
+        let envelope = seeds.iter().map(|s| deviation(s, &wire, column)).fold(0.0, f64::max);
+        let got = deviation(&twin, &wire, column);
+        assert!(got <= 1.5 * envelope, "{name}: twin {got:e} against the seeds' envelope {envelope:e}");
+    }
+    // Every torque the twin applied is a duty of the 4200-count PWM, within half a
+    // duty count of a wire torque code (the command it came from).
+    let (fs, max) = (5.0, 4200.0);
+    for p in &twin {
+        for u in [p.u1_cmd, p.u2_cmd] {
+            let duty = u.abs() / fs * max;
+            assert!((duty - duty.round()).abs() < 1e-9, "{u} is a whole duty");
+            let code = (u / fs * 2048.0).round();
+            assert!((u - code * fs / 2048.0).abs() <= 0.5 * fs / max + 1e-12, "{u}: within half a duty count of code {code}");
+        }
+    }
+    let (ticks, feeds) = link.twin().ticks_and_feeds();
+    assert_eq!(ticks, feeds, "the watchdog is fed every tick");
+    assert_eq!(ticks, 10_000 + 20, "the run's periods and the enable button's 20 ticks");
+}
+
+#[test]
+fn pid_from_x0u_lifts_off_on_the_twin_as_on_the_wire() {
+    let text = with_duration(&paper("pid-x0u"), 3.0);
+    let (wire, _) = wire_run(&scenario(&text));
+    let (twin, _, _) = twin_run(&scenario(&text));
+    let first = |r: &[PeriodRecord]| r.iter().position(|p| p.lift_off_true);
+    let (a, b) = (first(&twin).expect("the twin lifts off"), first(&wire).expect("the wire-level run lifts off"));
+    assert!(a.abs_diff(b) <= 2, "first lift-off at period {a} (twin) and {b} (wire)");
+}
+
+/// A fault at the bus, as a scenario's `[[faults]]` entry at 3 s.
+fn with_fault(fault: &str, duration_s: f64) -> Scenario {
+    scenario(&format!("{DEFAULT_TOML}\n[[faults]]\n{fault}\nat_s = 3.0\nduration_s = {duration_s}\n"))
+}
+
+#[test]
+fn each_bus_fault_is_held_one_period_then_ends_in_the_safe_state_with_the_drivers_disabled() {
+    for fault in [
+        "kind = \"spi_error\"\nsignal = \"theta1\"",
+        "kind = \"parity_error\"\nsignal = \"elbow\"",
+        "kind = \"magnet_lost\"\nsignal = \"theta1\"",
+        "kind = \"missing_conversion\"",
+        "kind = \"driver_fault\"",
+    ] {
+        // One period: the firmware holds, and the run goes on to its end.
+        let (records, err, link) = twin_run(&with_fault(fault, 0.001));
+        assert!(err.is_none(), "{fault}: {err:?}");
+        assert_eq!(records.len(), 10_000, "{fault}");
+        assert!(link.twin().drivers_enabled(), "{fault}");
+        // Longer: bad_frame_limit (3) bad frames latch the safe state, and the
+        // application disables the drivers: no torque from then on.
+        let (records, err, link) = twin_run(&with_fault(fault, 0.1));
+        match err {
+            Some(RunError::SafeState { k, reason: firmware::SafeReason::BadFrames, .. }) => assert_eq!(k, 3002, "{fault}"),
+            other => panic!("{fault}: {other:?}"),
+        }
+        assert_eq!(records.len(), 3003, "{fault}");
+        assert!(!link.twin().drivers_enabled(), "{fault}: drivers disabled");
+        assert_eq!(link.twin().app().last_command().map(|c| (c.u1_code, c.u2_code)), Some((0, 0)), "{fault}");
+    }
+    // A stuck encoder during the move: the firmware's cross-checks latch SensorFault.
+    for signal in ["theta1", "elbow"] {
+        let s = scenario(&format!(
+            "{DEFAULT_TOML}\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"{signal}\"\nat_s = 1.0\nduration_s = 0.5\n"
+        ));
+        let (_, err, link) = twin_run(&s);
+        assert!(matches!(err, Some(RunError::SafeState { reason: firmware::SafeReason::SensorFault, .. })), "{signal}: {err:?}");
+        assert!(!link.twin().drivers_enabled());
+    }
+}
+
+#[test]
+fn the_twin_refuses_faults_it_cannot_make_and_bad_boards() {
+    let nan = with_fault("kind = \"nan_sensor\"\nsignal = \"f_n\"", 0.1);
+    assert!(TwinLink::new(&nan).err().unwrap().to_string().contains("spi_error"));
+    let bad = format!("{DEFAULT_TOML}\n[board]\npwm_max_duty = 1\n");
+    assert!(Scenario::from_toml(&bad).unwrap_err().to_string().contains("board.pwm_max_duty"));
+    let bad = format!("{DEFAULT_TOML}\n[board.theta1_encoder]\nzero_count = 16384.0\n");
+    assert!(Scenario::from_toml(&bad).unwrap_err().to_string().contains("board.theta1_encoder.zero_count"));
+    let bad = format!("{DEFAULT_TOML}\n[calibration]\nload_newtons_per_count = [0.0, 0.01]\n");
+    assert!(Scenario::from_toml(&bad).is_err());
+}
