@@ -9,6 +9,7 @@
 //! | PIL image flash, profile `mcu` / plain `--release` | `flash` | <= 32 KiB / <= 64 KiB |
 //! | in-process closed loop | `in-process` | >= 1 000 000 periods/s |
 //! | lockstep over iceoryx2 | `lockstep` | >= 350 000 periods/s |
+//! | the board twin's closed loop (`run --link twin`) | `twin` | >= 100 000 periods/s |
 //! | PIL periods per wall second | `pil` | >= 1 000 |
 //! | `simulate` 300 s with its 1 ms trace | `simulate` | <= 0.1 s |
 //! | closed-loop hybrid sweep, paper grid from x0d | `sweep` | <= 180 s |
@@ -159,12 +160,13 @@ pub fn median(v: &[f64]) -> f64 {
 }
 
 /// The figure groups, in the order of the table, and what each measures.
-pub const GROUPS: [(&str, &str); 9] = [
+pub const GROUPS: [(&str, &str); 10] = [
     ("step", "the worst control step of each controller in PIL (QEMU -icount: instructions)"),
     ("cycles", "the worst step's Cortex-M4 cycle estimate and the highest rate it allows (scripts/cycles.py, about 2 min)"),
     ("flash", "the PIL image's flash, profiles mcu and release (ELF sections)"),
     ("in-process", "the closed loop with the firmware step in this process"),
     ("lockstep", "the closed loop over iceoryx2, firmware in its own process"),
+    ("twin", "the closed loop on the board twin (the arm application on bus-level device models)"),
     ("pil", "PIL periods per wall second (the image in QEMU)"),
     ("simulate", "sil-host simulate, 300 s with its 1 ms trace.csv"),
     ("sweep", "the closed-loop hybrid sweep of the paper's grid from x0d (estimated from a balanced shard)"),
@@ -263,6 +265,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             "flash" => figures.extend(mcu::flash_figures(&target)),
             "in-process" => figures.push(rig_loop::in_process(args)?),
             "lockstep" => figures.push(rig_loop::lockstep(args)?),
+            "twin" => figures.push(rig_loop::twin(args)?),
             "realtime" => figures.push(rig_loop::realtime(args)?),
             "simulate" => figures.push(outputs::simulate(args)?),
             "sweep" => figures.push(outputs::sweep(args)?),

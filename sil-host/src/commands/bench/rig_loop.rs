@@ -13,12 +13,15 @@ use rig::{
     rig::{FirmwareLink, RunObserver, stream_loop},
     scenario::Scenario,
     summary::Percentiles,
+    twin_link::TwinLink,
 };
 
 /// Target of the in-process loop, periods per wall second (issue 16).
 pub const IN_PROCESS_TARGET: f64 = 1_000_000.0;
 /// Target of lockstep over iceoryx2, periods per wall second (issue 16).
 pub const LOCKSTEP_TARGET: f64 = 350_000.0;
+/// Target of the board twin's closed loop, periods per wall second (issue 23).
+pub const TWIN_TARGET: f64 = 100_000.0;
 
 /// Counts the plant's deadline misses as the run goes.
 #[derive(Default)]
@@ -75,6 +78,27 @@ pub fn in_process(args: &BenchArgs) -> Result<Figure, CliError> {
     }
     let name = "in-process closed loop (default scenario)";
     Ok(Figure::measured("in_process", "in-process", name, median(&rates), "periods/s", IN_PROCESS_TARGET, Goal::AtLeast)
+        .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), s.timing.periods()))
+        .with_runs(rates))
+}
+
+/// The board twin's closed loop (`run --link twin`): median periods per wall
+/// second over `--repeat` runs.
+///
+/// # Errors
+/// A run that fails (exit 1).
+pub fn twin(args: &BenchArgs) -> Result<Figure, CliError> {
+    let s = scenario(args.duration)?;
+    let mut rates = Vec::new();
+    let mut misses = 0;
+    for _ in 0..args.repeat {
+        let mut link = TwinLink::new(&s).map_err(CliError::Run)?;
+        let (_, rate, m) = timed(&s, &mut link)?;
+        rates.push(rate);
+        misses += m;
+    }
+    let name = "board twin closed loop (default scenario)";
+    Ok(Figure::measured("twin", "twin", name, median(&rates), "periods/s", TWIN_TARGET, Goal::AtLeast)
         .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), s.timing.periods()))
         .with_runs(rates))
 }
