@@ -23,32 +23,28 @@
 //! enable button resets the firmware.
 
 use drivers::{
-    As5047p, BeltEncoder, LoadCell, MotorStage,
+    As5047p, BeltEncoder, LoadCell,
     belt::BeltError,
-    frame::{self, FrameCalibration, Readings},
+    frame::FrameCalibration,
     load_cell::{Calibration, CalibrationError},
 };
-use embedded_hal::digital::InputPin;
 use firmware::{
     Config, Event, Firmware, Outcome, SafeReason, TickClock,
     board::{self, Board},
     config::ConfigError,
 };
-use shared::wire::{ActuatorCommand, SensorFrame, frame_flags, status};
+use shared::wire::{ActuatorCommand, status};
 
 use crate::{
+    bringup::{CalibrationRecord, RawReadings},
+    hardware::{CODES_FULL_SCALE, Hardware},
+    io::Motors,
     io::{ArmIo, IntervalClock, Watchdog},
-    notice::{EncoderFault, Joint, Notice},
+    joint::{EncoderFault, Joint},
+    notice::Notice,
     step_stats::StepStats,
     telemetry::ArmTelemetry,
 };
-
-/// Periods the button must read pressed (20 ms at 1 kHz).
-pub const BUTTON_PERIODS: u16 = 20;
-
-/// The motor stage of a board's parts.
-pub type Motors<H> =
-    MotorStage<<H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Out, <H as ArmIo>::In>;
 
 /// The arm's calibration: what turns raw readings into the wire's units
 /// (docs/board.md "Calibration").
@@ -95,37 +91,10 @@ pub enum StartError {
     Belt(BeltError),
 }
 
-/// The sensors, the drivers and the per-tick bookkeeping: the board side of
-/// `firmware::board::handle`.
-struct Hardware<H: ArmIo> {
-    theta1: As5047p<H::Spi>,
-    elbow: As5047p<H::Spi>,
-    load: LoadCell<H::Adc>,
-    belt: BeltEncoder<H::Counter>,
-    motors: Motors<H>,
-    button: H::In,
-    watchdog: H::Watchdog,
-    encoders: FrameCalibration,
-    button_low: u16,
-    button_released: bool,
-    reset_pending: bool,
-    enable_requested: bool,
-    period_us: u64,
-    seq: u32,
-    tick_mark: u32,
-    now_us: u64,
-    interval: [u32; 2],
-    handler_worst: u32,
-    stats: StepStats,
-    invalid_logged: u16,
-    safe_logged: bool,
-    last_command: Option<ActuatorCommand>,
-}
-
 /// The arm application: the firmware and the board it runs on.
 pub struct ArmApp<H: ArmIo> {
-    hw: Hardware<H>,
-    firmware: Option<Firmware>,
+    pub(crate) hw: Hardware<H>,
+    pub(crate) firmware: Option<Firmware>,
     clock: H::Clock,
 }
 
@@ -161,6 +130,28 @@ impl<H: ArmIo> ArmApp<H> {
             button: parts.button,
             watchdog: parts.watchdog,
             encoders: cal.encoders,
+            cal: CalibrationRecord {
+                zero_counts: [cal.encoders.theta1.zero_count, cal.encoders.elbow.zero_count],
+                reversed: [cal.encoders.theta1.reversed, cal.encoders.elbow.reversed],
+                load_zero_counts: cal.load_cell.zero_counts,
+                load_newtons_per_count: cal.load_cell.newtons_per_count,
+                belt_metres_per_count: cal.belt_metres_per_count,
+                directions_checked: true,
+            },
+            config,
+            raw: RawReadings {
+                seq: 0,
+                encoder_counts: [Err(EncoderFault::NotReady); 2],
+                encoder_agc: [None; 2],
+                adc_counts: None,
+                belt_count: 0,
+                driver_fault: false,
+            },
+            torque_limit: CODES_FULL_SCALE,
+            zeros_set: true,
+            directions_checked: [true; 2],
+            jog: None,
+            last_jog: None,
             button_low: 0,
             button_released: false,
             reset_pending: false,
@@ -224,58 +215,6 @@ impl<H: ArmIo> ArmApp<H> {
     }
 }
 
-impl<H: ArmIo> Hardware<H> {
-    /// Samples every sensor now (the tick): the frame of period `seq`, with a
-    /// notice when the set of invalid readings changes.
-    fn sample(&mut self, log: &mut impl FnMut(Notice)) -> SensorFrame {
-        let readings = Readings {
-            theta1_raw: self.theta1.sample().ok(),
-            elbow_raw: self.elbow.sample().ok(),
-            load_codes: match self.load.read_codes() {
-                Ok([t, n]) => [Some(t), Some(n)],
-                Err(_) => [None, None],
-            },
-            belt_mm_s: self.belt.speed_mm_s().ok(),
-            driver_fault: self.motors.fault_asserted().ok(),
-        };
-        let f = frame::assemble(u64::from(self.seq) * self.period_us, self.seq, readings, &self.encoders);
-        let invalid = f.flags & frame_flags::ANY_INVALID;
-        if invalid != self.invalid_logged {
-            log(if invalid == 0 {
-                Notice::ReadingsBack { seq: self.seq }
-            } else {
-                Notice::InvalidReadings { seq: self.seq, flags: invalid }
-            });
-            self.invalid_logged = invalid;
-        }
-        f
-    }
-
-    /// A press: low for [`BUTTON_PERIODS`] after having been seen released (a
-    /// button stuck low, a pin that cannot be read, or one QEMU does not model,
-    /// never presses).
-    fn button_pressed(&mut self) -> bool {
-        match self.button.is_high() {
-            Ok(true) => {
-                self.button_low = 0;
-                self.button_released = true;
-                return false;
-            }
-            Ok(false) => {}
-            Err(_) => return false,
-        }
-        if !self.button_released {
-            return false;
-        }
-        self.button_low = self.button_low.saturating_add(1);
-        if self.button_low == BUTTON_PERIODS {
-            self.button_released = false;
-            return true;
-        }
-        false
-    }
-}
-
 /// The board of one tick: the hardware, the clock and the notice sink.
 struct TickBoard<'a, H: ArmIo, L: FnMut(Notice)> {
     hw: &'a mut Hardware<H>,
@@ -307,6 +246,13 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
         match outcome {
             Outcome::Command(c) => {
                 hw.last_command = Some(*c);
+                if hw.jog.is_some() {
+                    if let Some(n) = crate::jog::jog_tick(hw) {
+                        (self.log)(n);
+                    }
+                    hw.watchdog.feed();
+                    return Ok(());
+                }
                 if c.status & status::SAFE_STATE != 0 {
                     if hw.motors.disable().is_err() {
                         (self.log)(Notice::DriversDidNotDisable);
@@ -323,8 +269,10 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
                         Err(_) => Notice::DriversRefused { seq: c.seq },
                     });
                 }
-                // Disabled drivers get zero duty whatever the codes.
-                let _ = hw.motors.apply([c.u1_code, c.u2_code]);
+                // Disabled drivers get zero duty whatever the codes; the torque
+                // limit of a fresh calibration caps the rest.
+                let limit = hw.torque_limit;
+                let _ = hw.motors.apply([c.u1_code, c.u2_code].map(|u| u.clamp(-limit, limit)));
                 hw.watchdog.feed();
                 if let Some(step) = hw.stats.record(c.step_ticks) {
                     let report = ArmTelemetry {

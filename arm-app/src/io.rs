@@ -6,7 +6,7 @@
 //! by the simulated arm (copper-rs's sim mode: the same application, its sources
 //! and sinks swapped).
 
-use drivers::{LoadCellAdc, QuadratureCounter};
+use drivers::{LoadCellAdc, MotorStage, QuadratureCounter};
 use embedded_hal::{
     digital::{InputPin, OutputPin},
     pwm::SetDutyCycle,
@@ -53,3 +53,7 @@ pub trait ArmIo {
     /// The step's clock.
     type Clock: IntervalClock;
 }
+
+/// The motor stage of a board's parts.
+pub type Motors<H> =
+    MotorStage<<H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Pwm, <H as ArmIo>::Out, <H as ArmIo>::Out, <H as ArmIo>::In>;

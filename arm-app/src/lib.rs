@@ -10,7 +10,10 @@
 //! |---|---|
 //! | [`io`] | the traits a board implements |
 //! | [`app`] | [`ArmApp`]: start-up and the control tick |
+//! | [`joint`] | the encoders by name, and their faults |
 //! | [`notice`] | what the application tells the operator, as values |
+//! | [`bringup`] | the bring-up protocol on USART1: requests, replies, refusals |
+//! | `service` | [`ArmApp::serve`]: the bring-up requests, and the jog the ticks run |
 //! | [`step_stats`] | the step's execution time per window |
 //! | [`telemetry`] | the window's report on USART1 |
 #![cfg_attr(not(test), no_std)]
@@ -18,11 +21,18 @@
 #![warn(missing_docs)]
 
 pub mod app;
+pub mod bringup;
+pub mod hardware;
 pub mod io;
+mod jog;
+pub mod joint;
 pub mod notice;
+mod service;
 pub mod step_stats;
 pub mod telemetry;
 
-pub use app::{ArmApp, ArmCalibration, ArmParts, BUTTON_PERIODS, Motors, StartError};
-pub use io::{ArmIo, IntervalClock, Watchdog};
-pub use notice::{EncoderFault, Joint, Notice};
+pub use app::{ArmApp, ArmCalibration, ArmParts, StartError};
+pub use hardware::{BUTTON_PERIODS, CODES_FULL_SCALE};
+pub use io::{ArmIo, IntervalClock, Motors, Watchdog};
+pub use joint::{EncoderFault, Joint};
+pub use notice::Notice;

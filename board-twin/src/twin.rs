@@ -218,6 +218,11 @@ impl BoardTwin {
         self.bench.borrow_mut().button_held = false;
     }
 
+    /// Serves a bring-up request between two ticks, as the image's idle loop does.
+    pub fn serve(&mut self, request: arm_app::bringup::Request) -> arm_app::bringup::Reply {
+        self.app.serve(request)
+    }
+
     /// What the application said since the last call.
     pub fn take_notices(&mut self) -> Vec<Notice> {
         std::mem::take(&mut self.notices)

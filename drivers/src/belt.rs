@@ -43,6 +43,17 @@ impl fmt::Display for BeltError {
     }
 }
 
+/// mm/s per count of change over one period of `period_s`, at `metres_per_count`.
+///
+/// # Errors
+/// [`BeltError::InvalidScale`] when either is NaN, infinite or zero (the period
+/// negative), or a 16-bit count delta would overflow: no speed is ever inf or NaN.
+fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
+    let mm_s_per_count = metres_per_count * 1000.0 / period_s;
+    let valid = period_s > 0.0 && metres_per_count != 0.0 && mm_s_per_count != 0.0;
+    if valid && (mm_s_per_count * 32768.0).is_finite() { Ok(mm_s_per_count) } else { Err(BeltError::InvalidScale) }
+}
+
 /// The belt's speed from a quadrature counter read once per control period.
 #[derive(Debug)]
 pub struct BeltEncoder<C> {
@@ -63,12 +74,7 @@ impl<C: QuadratureCounter> BeltEncoder<C> {
     /// # Errors
     /// [`BeltError::InvalidScale`].
     pub fn new(mut counter: C, metres_per_count: f32, period_s: f32) -> Result<Self, BeltError> {
-        let mm_s_per_count = metres_per_count * 1000.0 / period_s;
-        let valid = period_s > 0.0 && metres_per_count != 0.0 && mm_s_per_count != 0.0;
-        // Finite for the largest delta too, so no speed is ever inf or NaN.
-        if !(valid && (mm_s_per_count * 32768.0).is_finite()) {
-            return Err(BeltError::InvalidScale);
-        }
+        let mm_s_per_count = scale(metres_per_count, period_s)?;
         let last = counter.count();
         Ok(Self { counter, last, mm_s_per_count })
     }
@@ -76,6 +82,20 @@ impl<C: QuadratureCounter> BeltEncoder<C> {
     /// Gives the counter back.
     pub fn release(self) -> C {
         self.counter
+    }
+
+    /// The counter's value at the last read (bring-up: raw readings).
+    pub fn last_count(&self) -> u16 {
+        self.last
+    }
+
+    /// Replaces the scale (bring-up), as [`BeltEncoder::new`] checks it.
+    ///
+    /// # Errors
+    /// [`BeltError::InvalidScale`]; the old scale stays.
+    pub fn set_scale(&mut self, metres_per_count: f32, period_s: f32) -> Result<(), BeltError> {
+        self.mm_s_per_count = scale(metres_per_count, period_s)?;
+        Ok(())
     }
 
     /// The belt speed over the period since the previous call (or [`BeltEncoder::new`]),

@@ -9,6 +9,9 @@ use core::fmt;
 
 use shared::wire::{LOAD_CODE_MAX, LOAD_CODE_MIN, LOAD_FULL_SCALE_N};
 
+/// One conversion's raw counts `[tangential, normal]` and their wire codes.
+pub type CountsAndCodes = ([u16; 2], [i16; 2]);
+
 /// Largest 12-bit right-aligned ADC count.
 pub const ADC_MAX_COUNT: u16 = 4095;
 
@@ -199,6 +202,28 @@ impl<ADC: LoadCellAdc> LoadCell<ADC> {
     /// As [`LoadCell::read_newtons`].
     pub fn read_codes(&mut self) -> Result<[i16; 2], Error<ADC::Error>> {
         self.read_newtons().map(|f| f.map(encode_force_f32))
+    }
+
+    /// This period's raw conversions `[tangential, normal]`, counts in `0..=4095`
+    /// (bring-up: tare and span), and their wire codes as [`LoadCell::read_codes`]
+    /// gives them: one read of the ADC for both.
+    ///
+    /// # Errors
+    /// As [`LoadCell::read_newtons`].
+    pub fn read_counts_and_codes(&mut self) -> Result<CountsAndCodes, Error<ADC::Error>> {
+        let [t, n] = self.adc.read().map_err(Error::Adc)?;
+        let forces = [self.force(Axis::Tangential, t)?, self.force(Axis::Normal, n)?];
+        Ok(([t, n], forces.map(encode_force_f32)))
+    }
+
+    /// Replaces the calibration (bring-up).
+    ///
+    /// # Errors
+    /// [`CalibrationError`] from [`Calibration::validate`]; the old one stays.
+    pub fn set_calibration(&mut self, cal: Calibration) -> Result<(), CalibrationError> {
+        cal.validate()?;
+        self.cal = cal;
+        Ok(())
     }
 }
 

@@ -160,6 +160,7 @@ pub fn describe(n: &Notice) -> String {
         Notice::DriversEnabled { .. } => "drivers enabled".into(),
         Notice::DriversRefused { .. } => "the drivers refuse to enable (fault line asserted)".into(),
         Notice::FirmwareReset => "enable button: firmware reset".into(),
+        Notice::Jogged(j) => format!("jog of {} at code {}: moved {:?} counts: {:?}", j.joint.name(), j.code, j.moved_counts, j.verdict),
         Notice::Window(w) => format!("window: step worst {} ticks, drivers enabled {}", w.step.worst, w.drivers_enabled),
     }
 }

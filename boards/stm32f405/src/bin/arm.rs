@@ -111,6 +111,14 @@ mod image {
             Notice::DriversEnabled { seq } => defmt::info!("period {=u32}: drivers enabled", seq),
             Notice::DriversRefused { seq } => defmt::error!("period {=u32}: the drivers refuse to enable (fault line asserted)", seq),
             Notice::FirmwareReset => defmt::info!("enable button: firmware reset; the drivers enable at the next command"),
+            Notice::Jogged(j) => defmt::info!(
+                "jog of {=str} at code {=i16}: moved {=i32} / {=i32} counts, {=str}; drivers disabled",
+                j.joint.name(),
+                j.code,
+                j.moved_counts[0],
+                j.moved_counts[1],
+                if j.verdict.is_ok() { "direction right" } else { "refused" }
+            ),
             Notice::Window(report) => {
                 defmt::info!(
                     "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; handler worst {=u32} ticks; overruns {=u32}; drivers {=str}",

@@ -1,0 +1,242 @@
+//! The bring-up protocol (issue 23; docs/board.md "Bring-up"): what an engineer
+//! asks of the `arm` image over USART1, in the PIL wire's framing (postcard with
+//! CRC-32C, COBS-framed: `firmware::pil::encode` and `decode`), and what it
+//! answers. ODrive's `odrivetool` is the model: read the state and raw readings,
+//! calibrate with the drivers off or at low torque, send a configuration, save.
+//!
+//! One request, one reply. A request that would move the arm (a jog) is
+//! refused unless the drivers are disabled and the arm is not running; every
+//! refusal says why ([`Refusal`]).
+
+use firmware::Config;
+use serde::{Deserialize, Serialize};
+
+use crate::joint::{EncoderFault, Joint};
+
+/// The protocol's version, told in [`Reply::Hello`].
+pub const BRINGUP_PROTOCOL: u16 = 1;
+
+/// The torque limit after a calibration, until the operator lifts it
+/// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
+pub const REDUCED_TORQUE_CODES: i16 = 410;
+
+/// The largest jog: 0.5 N m (205 codes) for at most 0.5 s (500 periods at 1 kHz).
+pub const MAX_JOG_CODES: i16 = 205;
+/// The longest jog, periods.
+pub const MAX_JOG_PERIODS: u16 = 500;
+
+/// The firmware's calibration as it crosses the wire and sits in flash.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationRecord {
+    /// Each encoder's raw count at its joint's zero `[theta1, elbow]`.
+    pub zero_counts: [u16; 2],
+    /// Each encoder counts against its joint `[theta1, elbow]`.
+    pub reversed: [bool; 2],
+    /// The load cell's ADC count at zero force `[f_t, f_n]`.
+    pub load_zero_counts: [f32; 2],
+    /// The load cell's gain `[f_t, f_n]`, N per count.
+    pub load_newtons_per_count: [f32; 2],
+    /// Belt travel per quadrature count, m.
+    pub belt_metres_per_count: f32,
+    /// Both joints' directions were checked by a jog with these zeros.
+    pub directions_checked: bool,
+}
+
+/// What the image is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Activity {
+    /// The drivers are disabled; the firmware steps (a press of the enable
+    /// button, or [`Request::Enable`], starts the closed loop).
+    Idle,
+    /// The closed loop runs with the drivers enabled.
+    Running,
+    /// A jog is under way.
+    Jogging,
+}
+
+/// The image's state, for `sil-host board status`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Status {
+    /// What it is doing.
+    pub activity: Activity,
+    /// Periods run since power-up.
+    pub periods: u32,
+    /// The drivers are enabled.
+    pub drivers_enabled: bool,
+    /// The last command's status word (`shared::wire::status`).
+    pub status: u32,
+    /// Deadline overruns since the last reset.
+    pub overruns: u32,
+    /// The torque limit in force, codes (2048 = full scale).
+    pub torque_limit_codes: i16,
+    /// The encoders' zeros have been set since power-up or loaded from flash.
+    pub zeros_set: bool,
+    /// Both joints' directions were checked by a jog since power-up, or the
+    /// record in flash says they were.
+    pub directions_checked: bool,
+}
+
+/// Raw readings, the drivers disabled or not (`sil-host board watch`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RawReadings {
+    /// The period they were sampled in.
+    pub seq: u32,
+    /// Each encoder's raw ANGLECOM count, or why it gave none.
+    pub encoder_counts: [Result<u16, EncoderFault>; 2],
+    /// Each encoder's AGC (field strength: 0 strong, 255 weak), if readable.
+    pub encoder_agc: [Option<u8>; 2],
+    /// The ADC's raw counts `[f_t, f_n]`, if this period's conversion is there.
+    pub adc_counts: Option<[u16; 2]>,
+    /// The belt's counter.
+    pub belt_count: u16,
+    /// The drivers assert nFAULT.
+    pub driver_fault: bool,
+}
+
+/// A request from the host.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Request {
+    /// Which protocol the image speaks.
+    Hello,
+    /// The image's state.
+    Status,
+    /// The last period's raw readings.
+    Raw,
+    /// The calibration in force.
+    GetCalibration,
+    /// Sets the encoders' zeros so that the arm's current pose reads
+    /// `pose_counts` (`[theta1, theta2 - theta1]` in counts of 2^14 per turn,
+    /// in `[0, 2^14)`): the arm must stand at that pose (docs/board.md
+    /// "Bring-up": the calibration pose, held by its jig). Drivers disabled only.
+    SetZeros {
+        /// The pose's joint counts.
+        pose_counts: [u16; 2],
+    },
+    /// Jogs `joint` with torque `code` (at most [`MAX_JOG_CODES`]) for
+    /// `periods` (at most [`MAX_JOG_PERIODS`]), the other joint at zero torque,
+    /// then disables the drivers. Drivers disabled and zeros set only. The
+    /// reply comes with [`Request::JogResult`].
+    Jog {
+        /// The joint.
+        joint: Joint,
+        /// The torque code (sign: the direction to move).
+        code: i16,
+        /// How long.
+        periods: u16,
+    },
+    /// The last jog's result.
+    JogResult,
+    /// Sets the load cell's zero counts to the current counts (nothing on the
+    /// load cell). Drivers disabled only.
+    Tare,
+    /// Sets the gain of `axis` (0: f_t, 1: f_n) from a known force `newtons` on
+    /// it now: `gain = newtons / (count - zero)`. Drivers disabled only.
+    Span {
+        /// 0: tangential, 1: normal.
+        axis: u8,
+        /// The force applied, N (a weight: `m g`).
+        newtons: f32,
+    },
+    /// Takes a whole calibration (a saved one, restored). Drivers disabled only.
+    SetCalibration(CalibrationRecord),
+    /// Takes a firmware configuration (controller, gains, rate, limits), which
+    /// the firmware validates. Drivers disabled only; the control rate must be
+    /// the one the image's timer runs.
+    Configure(Config),
+    /// Lifts the reduced torque limit a calibration set.
+    LiftTorqueLimit,
+    /// The enable button: resets the firmware and enables the drivers at the next
+    /// command that is not the safe state.
+    Enable,
+    /// Disables the drivers now (the firmware goes on stepping).
+    Disable,
+}
+
+/// A jog's result: how far each joint moved, in counts of the calibrated joint
+/// angle (signed: the joint's positive direction), and the verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct JogOutcome {
+    /// The joint jogged.
+    pub joint: Joint,
+    /// The torque code applied.
+    pub code: i16,
+    /// Change of `[theta1, theta2 - theta1]` over the jog, counts (2^14 per turn).
+    pub moved_counts: [i32; 2],
+    /// `Ok` when the jogged joint moved the way its torque pushed, by at least
+    /// [`MIN_JOG_COUNTS`] and at most [`MAX_JOG_COUNTS`]; else why not.
+    pub verdict: Result<(), JogFault>,
+}
+
+/// The least movement a jog must show, counts (0.7 degrees).
+pub const MIN_JOG_COUNTS: i32 = 32;
+/// The most a jog may move a joint, counts (30 degrees): the jog stops there.
+pub const MAX_JOG_COUNTS: i32 = 1365;
+
+/// Why a jog failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum JogFault {
+    /// The joint moved against its torque: the motor is wired the other way or
+    /// the encoder counts the other way (swap one, or set `reversed`).
+    WrongDirection,
+    /// The joint did not move (less than [`MIN_JOG_COUNTS`]): motor, driver or
+    /// encoder not connected, or the arm is blocked.
+    NoMotion,
+    /// The joint moved more than [`MAX_JOG_COUNTS`]: the jog was stopped there.
+    TooFar,
+    /// An encoder gave no reading during the jog.
+    EncoderFault,
+    /// The drivers refused to enable (nFAULT asserted).
+    DriversRefused,
+}
+
+/// Why a request was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Refusal {
+    /// The drivers are enabled, or the closed loop runs: disable first.
+    DriversEnabled,
+    /// A jog needs the encoders' zeros set first.
+    ZerosNotSet,
+    /// A value is out of its range (the jog's torque or length, the span's axis
+    /// or force, a zero count).
+    OutOfRange,
+    /// The encoders gave no reading.
+    EncoderFault(EncoderFault),
+    /// The ADC gave no conversion this period.
+    NoConversion,
+    /// The span's force gives no count difference (nothing on the load cell?).
+    NoSpan,
+    /// The configuration is invalid (`firmware::Config::validate` says why: the
+    /// host checks it before sending).
+    InvalidConfig,
+    /// The configuration's control rate is not the image's.
+    Rate,
+    /// No jog has run since power-up.
+    NoJog,
+    /// A jog is under way: ask again.
+    Busy,
+    /// Lifting the reduced torque limit needs both joints' directions checked
+    /// by a jog first.
+    DirectionsNotChecked,
+}
+
+/// A reply to a [`Request`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Reply {
+    /// [`BRINGUP_PROTOCOL`].
+    Hello {
+        /// The protocol version.
+        protocol: u16,
+    },
+    /// The state.
+    Status(Status),
+    /// Raw readings.
+    Raw(RawReadings),
+    /// The calibration in force (after a change: the new one).
+    Calibration(CalibrationRecord),
+    /// A jog's result.
+    Jogged(JogOutcome),
+    /// Done.
+    Done,
+    /// Refused, and why.
+    Refused(Refusal),
+}

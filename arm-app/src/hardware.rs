@@ -1,0 +1,147 @@
+//! The arm's sensors, drivers and per-tick bookkeeping: the board side of
+//! `firmware::board::handle` (the tick, `crate::app`) and of the bring-up
+//! requests (`crate::service`).
+
+use drivers::{
+    As5047p, BeltEncoder, LoadCell,
+    frame::{self, FrameCalibration, Readings},
+};
+use embedded_hal::digital::InputPin;
+use firmware::Config;
+use shared::wire::{ActuatorCommand, SensorFrame, frame_flags};
+
+use crate::{
+    bringup::{CalibrationRecord, JogOutcome, RawReadings},
+    io::{ArmIo, Motors},
+    joint::{EncoderFault, Joint},
+    notice::Notice,
+    step_stats::StepStats,
+};
+
+/// Periods the button must read pressed (20 ms at 1 kHz).
+pub const BUTTON_PERIODS: u16 = 20;
+
+/// Torque codes of full scale (the wire's: 2048 = 5 N m); the torque limit when
+/// none is set.
+pub const CODES_FULL_SCALE: i16 = 2048;
+
+/// A jog under way (`Request::Jog`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Jog {
+    pub(crate) joint: Joint,
+    pub(crate) code: i16,
+    pub(crate) left: u16,
+    /// The calibrated joint counts when it started `[theta1, elbow]`.
+    pub(crate) start: [u16; 2],
+    pub(crate) started: bool,
+}
+
+/// The sensors, the drivers and the per-tick bookkeeping: the board side of
+/// `firmware::board::handle` (and of the bring-up requests, `crate::service`).
+pub(crate) struct Hardware<H: ArmIo> {
+    pub(crate) theta1: As5047p<H::Spi>,
+    pub(crate) elbow: As5047p<H::Spi>,
+    pub(crate) load: LoadCell<H::Adc>,
+    pub(crate) belt: BeltEncoder<H::Counter>,
+    pub(crate) motors: Motors<H>,
+    pub(crate) button: H::In,
+    pub(crate) watchdog: H::Watchdog,
+    pub(crate) encoders: FrameCalibration,
+    /// The calibration in force, as the bring-up protocol shows it.
+    pub(crate) cal: CalibrationRecord,
+    /// The firmware's configuration in force.
+    pub(crate) config: Config,
+    /// This period's raw readings.
+    pub(crate) raw: RawReadings,
+    /// The torque limit on the codes written to the drivers (2048: none).
+    pub(crate) torque_limit: i16,
+    /// The encoders' zeros are set (loaded, or by `SetZeros`).
+    pub(crate) zeros_set: bool,
+    /// Each joint's direction was checked by a jog with these zeros.
+    pub(crate) directions_checked: [bool; 2],
+    /// The jog under way.
+    pub(crate) jog: Option<Jog>,
+    /// The last jog's outcome.
+    pub(crate) last_jog: Option<JogOutcome>,
+    pub(crate) button_low: u16,
+    pub(crate) button_released: bool,
+    pub(crate) reset_pending: bool,
+    pub(crate) enable_requested: bool,
+    pub(crate) period_us: u64,
+    pub(crate) seq: u32,
+    pub(crate) tick_mark: u32,
+    pub(crate) now_us: u64,
+    pub(crate) interval: [u32; 2],
+    pub(crate) handler_worst: u32,
+    pub(crate) stats: StepStats,
+    pub(crate) invalid_logged: u16,
+    pub(crate) safe_logged: bool,
+    pub(crate) last_command: Option<ActuatorCommand>,
+}
+
+impl<H: ArmIo> Hardware<H> {
+    /// Samples every sensor now (the tick): the frame of period `seq`, with a
+    /// notice when the set of invalid readings changes.
+    pub(crate) fn sample(&mut self, log: &mut impl FnMut(Notice)) -> SensorFrame {
+        let encoder = |r: Result<u16, drivers::as5047p::Error<_>>| r.map_err(|e| EncoderFault::of(&e));
+        let encoder_counts = [encoder(self.theta1.sample()), encoder(self.elbow.sample())];
+        let load = self.load.read_counts_and_codes().ok();
+        let readings = Readings {
+            theta1_raw: encoder_counts[0].ok(),
+            elbow_raw: encoder_counts[1].ok(),
+            load_codes: load.map_or([None, None], |(_, [t, n])| [Some(t), Some(n)]),
+            belt_mm_s: self.belt.speed_mm_s().ok(),
+            driver_fault: self.motors.fault_asserted().ok(),
+        };
+        self.raw = RawReadings {
+            seq: self.seq,
+            encoder_counts,
+            encoder_agc: self.raw.encoder_agc,
+            adc_counts: load.map(|(counts, _)| counts),
+            belt_count: self.belt.last_count(),
+            driver_fault: readings.driver_fault != Some(false),
+        };
+        let f = frame::assemble(u64::from(self.seq) * self.period_us, self.seq, readings, &self.encoders);
+        let invalid = f.flags & frame_flags::ANY_INVALID;
+        if invalid != self.invalid_logged {
+            log(if invalid == 0 {
+                Notice::ReadingsBack { seq: self.seq }
+            } else {
+                Notice::InvalidReadings { seq: self.seq, flags: invalid }
+            });
+            self.invalid_logged = invalid;
+        }
+        f
+    }
+
+    /// A press: low for [`BUTTON_PERIODS`] after having been seen released (a
+    /// button stuck low, a pin that cannot be read, or one QEMU does not model,
+    /// never presses).
+    pub(crate) fn button_pressed(&mut self) -> bool {
+        match self.button.is_high() {
+            Ok(true) => {
+                self.button_low = 0;
+                self.button_released = true;
+                return false;
+            }
+            Ok(false) => {}
+            Err(_) => return false,
+        }
+        if !self.button_released {
+            return false;
+        }
+        self.button_low = self.button_low.saturating_add(1);
+        if self.button_low == BUTTON_PERIODS {
+            self.button_released = false;
+            return true;
+        }
+        false
+    }
+
+    /// The encoders' calibrated joint counts `[theta1, elbow]` of this period,
+    /// or the first encoder's fault.
+    pub(crate) fn joint_counts(&self) -> Result<[u16; 2], EncoderFault> {
+        let [a, b] = self.raw.encoder_counts;
+        Ok([self.encoders.theta1.apply(a?), self.encoders.elbow.apply(b?)])
+    }
+}

@@ -1,0 +1,187 @@
+//! The bring-up requests ([`crate::bringup`]) served by the application: on the
+//! MCU from the idle loop (inside a critical section, between two ticks), on the
+//! board twin between two ticks. A jog is started here and run by the ticks
+//! (`crate::jog`), one period at a time, the firmware's command set aside.
+
+use drivers::{EncoderCalibration, frame::FrameCalibration, load_cell::Calibration};
+use firmware::Firmware;
+
+use crate::{
+    ArmApp, ArmIo,
+    bringup::{
+        Activity, BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, REDUCED_TORQUE_CODES, Refusal,
+        Reply, Request, Status,
+    },
+    hardware::{CODES_FULL_SCALE, Hardware, Jog},
+    joint::Joint,
+};
+
+/// Counts per turn of the joints' encoders.
+const COUNTS: u16 = 1 << 14;
+
+impl<H: ArmIo> ArmApp<H> {
+    /// Answers one bring-up request (see [`Request`] for each).
+    pub fn serve(&mut self, request: Request) -> Reply {
+        let hw = &mut self.hw;
+        let busy = hw.motors.is_enabled() || hw.jog.is_some() || hw.enable_requested || hw.reset_pending;
+        match request {
+            Request::Hello => Reply::Hello { protocol: BRINGUP_PROTOCOL },
+            Request::Status => Reply::Status(status(hw)),
+            Request::Raw => {
+                // The field strength needs DIAAGC: two more frames per encoder.
+                let agc = [hw.theta1.diagnostics().ok().map(|d| d.agc), hw.elbow.diagnostics().ok().map(|d| d.agc)];
+                hw.raw.encoder_agc = agc;
+                Reply::Raw(hw.raw)
+            }
+            Request::GetCalibration => Reply::Calibration(hw.cal),
+            _ if busy && !matches!(request, Request::JogResult | Request::Disable | Request::LiftTorqueLimit) => {
+                Reply::Refused(if hw.jog.is_some() { Refusal::Busy } else { Refusal::DriversEnabled })
+            }
+            Request::SetZeros { pose_counts } => set_zeros(hw, pose_counts),
+            Request::Jog { joint, code, periods } => start_jog(hw, joint, code, periods),
+            Request::JogResult => match (hw.jog, hw.last_jog) {
+                (Some(_), _) => Reply::Refused(Refusal::Busy),
+                (None, Some(j)) => Reply::Jogged(j),
+                (None, None) => Reply::Refused(Refusal::NoJog),
+            },
+            Request::Tare => match hw.raw.adc_counts {
+                Some(counts) => {
+                    let mut cal = hw.cal;
+                    cal.load_zero_counts = counts.map(f32::from);
+                    apply_calibration(hw, cal)
+                }
+                None => Reply::Refused(Refusal::NoConversion),
+            },
+            Request::Span { axis, newtons } => span(hw, axis, newtons),
+            Request::SetCalibration(cal) => apply_calibration(hw, cal),
+            Request::Configure(config) => {
+                if config.period != hw.config.period {
+                    return Reply::Refused(Refusal::Rate);
+                }
+                match Firmware::new(config) {
+                    Ok(fw) => {
+                        self.firmware = Some(fw);
+                        self.hw.config = config;
+                        Reply::Done
+                    }
+                    Err(_) => Reply::Refused(Refusal::InvalidConfig),
+                }
+            }
+            Request::LiftTorqueLimit => {
+                if hw.directions_checked == [true; 2] {
+                    hw.torque_limit = CODES_FULL_SCALE;
+                    Reply::Done
+                } else {
+                    Reply::Refused(Refusal::DirectionsNotChecked)
+                }
+            }
+            Request::Enable => {
+                hw.reset_pending = true;
+                Reply::Done
+            }
+            Request::Disable => {
+                let _ = hw.motors.disable();
+                hw.enable_requested = false;
+                hw.reset_pending = false;
+                if let Some(j) = hw.jog.take() {
+                    hw.last_jog = Some(JogOutcome { joint: j.joint, code: j.code, moved_counts: [0; 2], verdict: Err(JogFault::NoMotion) });
+                }
+                Reply::Done
+            }
+        }
+    }
+}
+
+fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
+    let activity = if hw.jog.is_some() {
+        Activity::Jogging
+    } else if hw.motors.is_enabled() {
+        Activity::Running
+    } else {
+        Activity::Idle
+    };
+    Status {
+        activity,
+        periods: hw.seq,
+        drivers_enabled: hw.motors.is_enabled(),
+        status: hw.last_command.map_or(0, |c| c.status),
+        overruns: hw.last_command.map_or(0, |c| c.overruns),
+        torque_limit_codes: hw.torque_limit,
+        zeros_set: hw.zeros_set,
+        directions_checked: hw.directions_checked == [true; 2],
+    }
+}
+
+fn set_zeros<H: ArmIo>(hw: &mut Hardware<H>, pose: [u16; 2]) -> Reply {
+    if pose.iter().any(|&p| p >= COUNTS) {
+        return Reply::Refused(Refusal::OutOfRange);
+    }
+    let raw = match hw.raw.encoder_counts {
+        [Ok(a), Ok(b)] => [a, b],
+        [Err(e), _] | [_, Err(e)] => return Reply::Refused(Refusal::EncoderFault(e)),
+    };
+    let mut cal = hw.cal;
+    for j in 0..2 {
+        // apply(): (raw - zero) or, reversed, (zero - raw), mod 2^14, is the pose.
+        cal.zero_counts[j] =
+            if cal.reversed[j] { raw[j].wrapping_add(pose[j]) & (COUNTS - 1) } else { raw[j].wrapping_sub(pose[j]) & (COUNTS - 1) };
+    }
+    cal.directions_checked = false;
+    apply_calibration(hw, cal)
+}
+
+fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
+    let i = usize::from(axis);
+    if i > 1 || !(newtons.is_finite() && newtons != 0.0 && newtons.abs() <= 25.0) {
+        return Reply::Refused(Refusal::OutOfRange);
+    }
+    let Some(counts) = hw.raw.adc_counts else { return Reply::Refused(Refusal::NoConversion) };
+    let diff = f32::from(counts[i]) - hw.cal.load_zero_counts[i];
+    if diff.abs() < 1.0 {
+        return Reply::Refused(Refusal::NoSpan);
+    }
+    let mut cal = hw.cal;
+    cal.load_newtons_per_count[i] = newtons / diff;
+    apply_calibration(hw, cal)
+}
+
+/// Puts `cal` in force in every driver, or refuses it whole.
+fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> Reply {
+    if cal.zero_counts.iter().any(|&z| z >= COUNTS) {
+        return Reply::Refused(Refusal::OutOfRange);
+    }
+    let load = Calibration { zero_counts: cal.load_zero_counts, newtons_per_count: cal.load_newtons_per_count };
+    if load.validate().is_err() || hw.belt.set_scale(cal.belt_metres_per_count, hw.config.period.as_secs_f32()).is_err() {
+        return Reply::Refused(Refusal::OutOfRange);
+    }
+    let _ = hw.load.set_calibration(load);
+    hw.encoders = FrameCalibration {
+        theta1: EncoderCalibration { zero_count: cal.zero_counts[0], reversed: cal.reversed[0] },
+        elbow: EncoderCalibration { zero_count: cal.zero_counts[1], reversed: cal.reversed[1] },
+    };
+    // A new calibration runs at the reduced torque limit until both directions are
+    // checked and the operator lifts it.
+    if cal != hw.cal {
+        hw.torque_limit = hw.torque_limit.min(REDUCED_TORQUE_CODES);
+    }
+    hw.directions_checked = [cal.directions_checked; 2];
+    hw.zeros_set = true;
+    hw.cal = cal;
+    Reply::Calibration(cal)
+}
+
+fn start_jog<H: ArmIo>(hw: &mut Hardware<H>, joint: Joint, code: i16, periods: u16) -> Reply {
+    if !hw.zeros_set {
+        return Reply::Refused(Refusal::ZerosNotSet);
+    }
+    if code == 0 || code.unsigned_abs() > MAX_JOG_CODES.unsigned_abs() || periods == 0 || periods > MAX_JOG_PERIODS {
+        return Reply::Refused(Refusal::OutOfRange);
+    }
+    match hw.joint_counts() {
+        Ok(start) => {
+            hw.jog = Some(Jog { joint, code, left: periods, start, started: false });
+            Reply::Done
+        }
+        Err(e) => Reply::Refused(Refusal::EncoderFault(e)),
+    }
+}
