@@ -27,10 +27,12 @@ RAM_BUDGET = 16 * 1024
 # images at their size of 2026-11-22 (docs/measurements.md) plus 1.2 to 1.5 KiB.
 CEILINGS = {
     "mcu/pil": 32 * 1024,  # target; 30 756 B measured
-    "mcu/arm": 32 * 1024,  # 31 320 B measured
-    "qemu/arm": 32 * 1024,  # 31 288 B measured
+    # The arm image carries the bring-up protocol since issue 23 (the requests'
+    # and replies' serde, the configuration sent over the line, the settings
+    # record in flash): 32 152 B before, 52 612 B (mcu) / 52 768 B (qemu) after.
+    "mcu/arm": 54 * 1024,  # 52 612 B measured
+    "qemu/arm": 54 * 1024,  # 52 768 B measured
     "qemu/pil": 31 * 1024,  # 30 464 B measured
-    "release/arm": FLASH_BUDGET,  # 41 828 B measured
     "release/pil": FLASH_BUDGET,  # 43 468 B measured
 }
 FLASH_SECTIONS = (".vector_table", ".text", ".rodata", ".data", ".defmt")
@@ -138,7 +140,10 @@ def main():
     if "--all" in args:
         root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", TARGET)
         for profile in ("mcu", "qemu", "release"):
-            for b in ("arm", "pil"):
+            # The arm image is flashed with --profile mcu (`cargo arm`); since the
+            # bring-up protocol (issue 23) its plain --release build (no LTO) no
+            # longer fits the 64 KiB of memory.x, and the linker refuses it.
+            for b in ("arm", "pil") if profile != "release" else ("pil",):
                 p = os.path.normpath(os.path.join(root, profile, b))
                 if os.path.isfile(p):
                     paths.append(p)

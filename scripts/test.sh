@@ -59,12 +59,13 @@ python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src
 echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
 
-echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting; plain --release)"
+echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting; plain --release: pil only,"
+echo "   the arm image is flashed with profile mcu and its no-LTO build exceeds memory.x's 64 KiB)"
 echo "   and their budgets (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap) and"
 echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 32 KiB; docs/board.md \"Budgets\")"
 cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
 cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
-cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin arm --bin pil
+cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pil
 python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"

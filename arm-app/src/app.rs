@@ -36,12 +36,13 @@ use firmware::{
 use shared::wire::{ActuatorCommand, status};
 
 use crate::{
-    bringup::{CalibrationRecord, RawReadings},
+    bringup::{CalibrationRecord, REDUCED_TORQUE_CODES, RawReadings},
     hardware::{CODES_FULL_SCALE, Hardware},
     io::Motors,
     io::{ArmIo, IntervalClock, Watchdog},
     joint::{EncoderFault, Joint},
     notice::Notice,
+    record::{self, RecordFault, Settings, Stored},
     step_stats::StepStats,
     telemetry::ArmTelemetry,
 };
@@ -56,6 +57,16 @@ pub struct ArmCalibration {
     pub load_cell: Calibration,
     /// Belt travel per quadrature count, m (negative flips the direction).
     pub belt_metres_per_count: f32,
+}
+
+/// Whether a stored record's values would be taken: its configuration, its
+/// load-cell calibration, its belt scale at its control period.
+fn stored_is_valid(s: &Stored) -> bool {
+    let c = s.calibration;
+    Firmware::new(s.config).is_ok()
+        && c.zero_counts.iter().all(|&z| z < 1 << 14)
+        && Calibration { zero_counts: c.load_zero_counts, newtons_per_count: c.load_newtons_per_count }.validate().is_ok()
+        && drivers::belt::scale(c.belt_metres_per_count, s.config.period.as_secs_f32()).is_ok()
 }
 
 /// A board's parts, handed to [`ArmApp::new`]. The motor stage comes built: a
@@ -78,6 +89,8 @@ pub struct ArmParts<H: ArmIo> {
     pub watchdog: H::Watchdog,
     /// The step's clock.
     pub clock: H::Clock,
+    /// The settings record's flash sector.
+    pub flash: H::Flash,
 }
 
 /// Why the application did not start.
@@ -99,15 +112,28 @@ pub struct ArmApp<H: ArmIo> {
 }
 
 impl<H: ArmIo> ArmApp<H> {
-    /// Starts the application on `parts` with the firmware's `config` and the
-    /// arm's calibration `cal`: checks both encoders (start-up notices: ready with
-    /// the AGC, or not ready and why: their readings will then be invalid), then
-    /// the load cell's calibration and the belt's scale. The drivers stay
-    /// disabled until the enable button.
+    /// Starts the application on `parts`: loads the settings record from the
+    /// flash (`crate::record`; a [`Notice::Settings`] says what was found), and
+    /// when there is none or it is refused, falls back to the compiled-in
+    /// `config` and `cal` with the drivers locked out; checks both encoders
+    /// (start-up notices: ready with the AGC, or not ready and why: their
+    /// readings will then be invalid), then the load cell's calibration and the
+    /// belt's scale. The drivers stay disabled until the enable button.
     ///
     /// # Errors
-    /// [`StartError`]: an invalid configuration, load-cell calibration or belt scale.
-    pub fn new(parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
+    /// [`StartError`]: an invalid fallback configuration, load-cell calibration
+    /// or belt scale (a stored record with invalid values is refused instead:
+    /// `Settings::Corrupt(RecordFault::Content)`).
+    pub fn new(mut parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
+        let (settings, config, cal, directions_checked) = match record::load(&mut parts.flash) {
+            Ok(Some(s)) if stored_is_valid(&s) => {
+                (Settings::Saved, s.config, s.calibration.arm_calibration(), s.calibration.directions_checked)
+            }
+            Ok(Some(_)) => (Settings::Corrupt(RecordFault::Content), config, *cal, false),
+            Ok(None) => (Settings::Missing, config, *cal, false),
+            Err(e) => (Settings::Corrupt(e), config, *cal, false),
+        };
+        log(Notice::Settings(settings));
         let firmware = Firmware::new(config).map_err(StartError::Config)?;
         let mut theta1 = As5047p::new(parts.theta1);
         let mut elbow = As5047p::new(parts.elbow);
@@ -130,14 +156,9 @@ impl<H: ArmIo> ArmApp<H> {
             button: parts.button,
             watchdog: parts.watchdog,
             encoders: cal.encoders,
-            cal: CalibrationRecord {
-                zero_counts: [cal.encoders.theta1.zero_count, cal.encoders.elbow.zero_count],
-                reversed: [cal.encoders.theta1.reversed, cal.encoders.elbow.reversed],
-                load_zero_counts: cal.load_cell.zero_counts,
-                load_newtons_per_count: cal.load_cell.newtons_per_count,
-                belt_metres_per_count: cal.belt_metres_per_count,
-                directions_checked: true,
-            },
+            cal: CalibrationRecord::of(&cal, directions_checked),
+            flash: parts.flash,
+            settings,
             config,
             raw: RawReadings {
                 seq: 0,
@@ -147,9 +168,10 @@ impl<H: ArmIo> ArmApp<H> {
                 belt_count: 0,
                 driver_fault: false,
             },
-            torque_limit: CODES_FULL_SCALE,
-            zeros_set: true,
-            directions_checked: [true; 2],
+            torque_limit: if directions_checked { CODES_FULL_SCALE } else { REDUCED_TORQUE_CODES },
+            zeros_set: settings == Settings::Saved,
+            directions_checked: [directions_checked; 2],
+            last_report: None,
             jog: None,
             last_jog: None,
             button_low: 0,
@@ -180,7 +202,11 @@ impl<H: ArmIo> ArmApp<H> {
             hw.interval = [hw.interval[0].min(interval), hw.interval[1].max(interval)];
         }
         if hw.button_pressed() {
-            hw.reset_pending = true;
+            if hw.settings.allows_enable() {
+                hw.reset_pending = true;
+            } else {
+                log(Notice::LockedOut(hw.settings));
+            }
         }
         let mut board = TickBoard { hw, clock, log };
         loop {
@@ -288,6 +314,7 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
                         // takes too long in the tick.
                         stack_high_water_bytes: 0,
                     };
+                    hw.last_report = Some(report);
                     (self.log)(Notice::Window(report));
                     hw.interval = [u32::MAX, 0];
                     hw.handler_worst = 0;

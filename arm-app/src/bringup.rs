@@ -11,10 +11,15 @@
 use firmware::Config;
 use serde::{Deserialize, Serialize};
 
-use crate::joint::{EncoderFault, Joint};
+pub use crate::record::CalibrationRecord;
+use crate::{
+    joint::{EncoderFault, Joint},
+    record::{RecordFault, Settings},
+    telemetry::ArmTelemetry,
+};
 
 /// The protocol's version, told in [`Reply::Hello`].
-pub const BRINGUP_PROTOCOL: u16 = 1;
+pub const BRINGUP_PROTOCOL: u16 = 2;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
@@ -24,23 +29,6 @@ pub const REDUCED_TORQUE_CODES: i16 = 410;
 pub const MAX_JOG_CODES: i16 = 205;
 /// The longest jog, periods.
 pub const MAX_JOG_PERIODS: u16 = 500;
-
-/// The firmware's calibration as it crosses the wire and sits in flash.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct CalibrationRecord {
-    /// Each encoder's raw count at its joint's zero `[theta1, elbow]`.
-    pub zero_counts: [u16; 2],
-    /// Each encoder counts against its joint `[theta1, elbow]`.
-    pub reversed: [bool; 2],
-    /// The load cell's ADC count at zero force `[f_t, f_n]`.
-    pub load_zero_counts: [f32; 2],
-    /// The load cell's gain `[f_t, f_n]`, N per count.
-    pub load_newtons_per_count: [f32; 2],
-    /// Belt travel per quadrature count, m.
-    pub belt_metres_per_count: f32,
-    /// Both joints' directions were checked by a jog with these zeros.
-    pub directions_checked: bool,
-}
 
 /// What the image is doing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -74,6 +62,9 @@ pub struct Status {
     /// Both joints' directions were checked by a jog since power-up, or the
     /// record in flash says they were.
     pub directions_checked: bool,
+    /// The settings in force against the record in flash: the drivers enable
+    /// only when `Saved` (else the lockout, and why).
+    pub settings: Settings,
 }
 
 /// Raw readings, the drivers disabled or not (`sil-host board watch`).
@@ -150,6 +141,15 @@ pub enum Request {
     Enable,
     /// Disables the drivers now (the firmware goes on stepping).
     Disable,
+    /// The last window's telemetry (`step_stats::WINDOW` periods: the step's
+    /// ticks, the tick's interval, overruns).
+    Telemetry,
+    /// Saves the calibration and configuration in force to the flash record
+    /// (`crate::record`), then reads it back. Drivers disabled only. The
+    /// control loop pauses while the sector erases (about 1 s on the STM32F405).
+    Save,
+    /// The firmware configuration in force.
+    GetConfig,
 }
 
 /// A jog's result: how far each joint moved, in counts of the calibrated joint
@@ -171,6 +171,11 @@ pub struct JogOutcome {
 pub const MIN_JOG_COUNTS: i32 = 32;
 /// The most a jog may move a joint, counts (30 degrees): the jog stops there.
 pub const MAX_JOG_COUNTS: i32 = 1365;
+
+/// The least count difference a span takes: below it the ADC's noise and
+/// quantisation (about 2 counts rms on the reference board) would make the gain
+/// wrong by more than 5 %.
+pub const MIN_SPAN_COUNTS: u16 = 40;
 
 /// Why a jog failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -203,7 +208,8 @@ pub enum Refusal {
     EncoderFault(EncoderFault),
     /// The ADC gave no conversion this period.
     NoConversion,
-    /// The span's force gives no count difference (nothing on the load cell?).
+    /// The span's force gives less than `MIN_SPAN_COUNTS` (40) counts of
+    /// difference from the tare (nothing on the load cell? too light a weight?).
     NoSpan,
     /// The configuration is invalid (`firmware::Config::validate` says why: the
     /// host checks it before sending).
@@ -217,6 +223,11 @@ pub enum Refusal {
     /// Lifting the reduced torque limit needs both joints' directions checked
     /// by a jog first.
     DirectionsNotChecked,
+    /// The drivers are locked out: the settings in force are not the record in
+    /// flash (missing, corrupt, or changed and not saved).
+    LockedOut(Settings),
+    /// The save failed, and why.
+    Flash(RecordFault),
 }
 
 /// A reply to a [`Request`].
@@ -235,6 +246,10 @@ pub enum Reply {
     Calibration(CalibrationRecord),
     /// A jog's result.
     Jogged(JogOutcome),
+    /// The last window's telemetry (`None` before the first window closes).
+    Telemetry(Option<ArmTelemetry>),
+    /// The firmware configuration in force.
+    Config(Config),
     /// Done.
     Done,
     /// Refused, and why.

@@ -15,7 +15,9 @@ use crate::{
     io::{ArmIo, Motors},
     joint::{EncoderFault, Joint},
     notice::Notice,
+    record::Settings,
     step_stats::StepStats,
+    telemetry::ArmTelemetry,
 };
 
 /// Periods the button must read pressed (20 ms at 1 kHz).
@@ -51,6 +53,12 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) cal: CalibrationRecord,
     /// The firmware's configuration in force.
     pub(crate) config: Config,
+    /// The settings record's flash.
+    pub(crate) flash: H::Flash,
+    /// The settings in force against the record.
+    pub(crate) settings: Settings,
+    /// The last window's telemetry.
+    pub(crate) last_report: Option<ArmTelemetry>,
     /// This period's raw readings.
     pub(crate) raw: RawReadings,
     /// The torque limit on the codes written to the drivers (2048: none).

@@ -12,6 +12,7 @@ use embedded_hal::{
     pwm::SetDutyCycle,
     spi::SpiDevice,
 };
+use embedded_storage::nor_flash::NorFlash;
 use firmware::{TickClock, pil::StepClock};
 
 /// An independent watchdog: not fed within its timeout, it resets the MCU (the
@@ -52,6 +53,8 @@ pub trait ArmIo {
     type Watchdog: Watchdog;
     /// The step's clock.
     type Clock: IntervalClock;
+    /// The flash sector of the settings record (`crate::record`), addressed from 0.
+    type Flash: NorFlash;
 }
 
 /// The motor stage of a board's parts.

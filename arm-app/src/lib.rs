@@ -13,6 +13,7 @@
 //! | [`joint`] | the encoders by name, and their faults |
 //! | [`notice`] | what the application tells the operator, as values |
 //! | [`bringup`] | the bring-up protocol on USART1: requests, replies, refusals |
+//! | [`record`] | the settings record in flash: format, load, save, and the lockout it drives |
 //! | `service` | [`ArmApp::serve`]: the bring-up requests, and the jog the ticks run |
 //! | [`step_stats`] | the step's execution time per window |
 //! | [`telemetry`] | the window's report on USART1 |
@@ -27,6 +28,7 @@ pub mod io;
 mod jog;
 pub mod joint;
 pub mod notice;
+pub mod record;
 mod service;
 pub mod step_stats;
 pub mod telemetry;
@@ -36,3 +38,4 @@ pub use hardware::{BUTTON_PERIODS, CODES_FULL_SCALE};
 pub use io::{ArmIo, IntervalClock, Motors, Watchdog};
 pub use joint::{EncoderFault, Joint};
 pub use notice::Notice;
+pub use record::Settings;

@@ -61,6 +61,12 @@ pub enum Notice {
     FirmwareReset,
     /// A jog (bring-up) ended: its outcome; the drivers are disabled.
     Jogged(crate::bringup::JogOutcome),
+    /// At start-up: the settings found in flash (`Saved`: the record was loaded;
+    /// otherwise the drivers are locked out, and why).
+    Settings(crate::record::Settings),
+    /// The enable button was pressed while the drivers are locked out (the
+    /// settings, and why).
+    LockedOut(crate::record::Settings),
     /// A window of `step_stats::WINDOW` periods closed: its report (the image sends
     /// it on USART1 and logs it).
     Window(ArmTelemetry),

@@ -9,11 +9,12 @@ use firmware::Firmware;
 use crate::{
     ArmApp, ArmIo,
     bringup::{
-        Activity, BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, REDUCED_TORQUE_CODES, Refusal,
-        Reply, Request, Status,
+        Activity, BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, MIN_SPAN_COUNTS,
+        REDUCED_TORQUE_CODES, Refusal, Reply, Request, Status,
     },
     hardware::{CODES_FULL_SCALE, Hardware, Jog},
     joint::Joint,
+    record::{self, Settings, Stored},
 };
 
 /// Counts per turn of the joints' encoders.
@@ -34,6 +35,8 @@ impl<H: ArmIo> ArmApp<H> {
                 Reply::Raw(hw.raw)
             }
             Request::GetCalibration => Reply::Calibration(hw.cal),
+            Request::GetConfig => Reply::Config(hw.config),
+            Request::Telemetry => Reply::Telemetry(hw.last_report),
             _ if busy && !matches!(request, Request::JogResult | Request::Disable | Request::LiftTorqueLimit) => {
                 Reply::Refused(if hw.jog.is_some() { Refusal::Busy } else { Refusal::DriversEnabled })
             }
@@ -61,6 +64,9 @@ impl<H: ArmIo> ArmApp<H> {
                 match Firmware::new(config) {
                     Ok(fw) => {
                         self.firmware = Some(fw);
+                        if config != self.hw.config {
+                            self.hw.settings = Settings::Unsaved;
+                        }
                         self.hw.config = config;
                         Reply::Done
                     }
@@ -75,10 +81,18 @@ impl<H: ArmIo> ArmApp<H> {
                     Reply::Refused(Refusal::DirectionsNotChecked)
                 }
             }
+            Request::Enable if !hw.settings.allows_enable() => Reply::Refused(Refusal::LockedOut(hw.settings)),
             Request::Enable => {
                 hw.reset_pending = true;
                 Reply::Done
             }
+            Request::Save => match record::save(&mut hw.flash, &Stored { calibration: hw.cal, config: hw.config }) {
+                Ok(()) => {
+                    hw.settings = Settings::Saved;
+                    Reply::Done
+                }
+                Err(e) => Reply::Refused(Refusal::Flash(e)),
+            },
             Request::Disable => {
                 let _ = hw.motors.disable();
                 hw.enable_requested = false;
@@ -109,6 +123,7 @@ fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
         torque_limit_codes: hw.torque_limit,
         zeros_set: hw.zeros_set,
         directions_checked: hw.directions_checked == [true; 2],
+        settings: hw.settings,
     }
 }
 
@@ -137,7 +152,7 @@ fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
     }
     let Some(counts) = hw.raw.adc_counts else { return Reply::Refused(Refusal::NoConversion) };
     let diff = f32::from(counts[i]) - hw.cal.load_zero_counts[i];
-    if diff.abs() < 1.0 {
+    if diff.abs() < f32::from(MIN_SPAN_COUNTS) {
         return Reply::Refused(Refusal::NoSpan);
     }
     let mut cal = hw.cal;
@@ -163,6 +178,7 @@ fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> 
     // checked and the operator lifts it.
     if cal != hw.cal {
         hw.torque_limit = hw.torque_limit.min(REDUCED_TORQUE_CODES);
+        hw.settings = Settings::Unsaved;
     }
     hw.directions_checked = [cal.directions_checked; 2];
     hw.zeros_set = true;

@@ -11,6 +11,7 @@
 //! | [`as5047p`] | the AS5047P's SPI side: 16-bit frames, parity, the one-frame pipeline, ERRFL, DIAAGC |
 //! | [`adc`] | the load cell's amplifiers into 12-bit ADC codes |
 //! | [`counter`] | the belt's quadrature counter, 16-bit wrap |
+//! | [`flash`] | the settings record's flash sector: erase to `0xFF`, program clears bits, word writes |
 //! | [`motor_stage`] | PWM, direction, enable, nFAULT, the button; duty to joint torque |
 //! | [`twin`] | [`BoardTwin`]: the application on the models, one tick at a time |
 //!
@@ -24,9 +25,11 @@ pub mod as5047p;
 pub mod bench;
 pub mod counter;
 pub mod description;
+pub mod flash;
 pub mod motor_stage;
 pub mod twin;
 
 pub use bench::EncoderFaults;
 pub use description::{BoardDescription, EncoderMounting, LoadCellFrontEnd, MotorWiring};
+pub use flash::FlashModel;
 pub use twin::{ArmState, BoardTwin, BusFaults, TwinError, TwinIo};

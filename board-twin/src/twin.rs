@@ -7,7 +7,11 @@
 //! step, the motor stage), and returns the joint torques the drivers make from
 //! the duties, directions and enable it left on the pins.
 
-use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog};
+use arm_app::{
+    ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog,
+    bringup::CalibrationRecord,
+    record::{RecordFault, Stored},
+};
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
 use rand::SeedableRng;
@@ -20,6 +24,7 @@ use crate::{
     bench::{Bench, EncoderFaults, Shared},
     counter::{CounterModel, belt_count},
     description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
+    flash::FlashModel,
     motor_stage::{PinModel, PwmModel, Wire, joint_torques},
 };
 
@@ -72,6 +77,7 @@ impl ArmIo for TwinIo {
     type In = PinModel;
     type Watchdog = WatchdogModel;
     type Clock = TwinClock;
+    type Flash = FlashModel;
 }
 
 /// What the arm is doing at a tick, as the board's devices sense it.
@@ -110,6 +116,9 @@ pub enum TwinError {
     /// The motor stage did not come up disabled.
     #[error("the motor stage did not come up disabled")]
     MotorStage,
+    /// The settings record could not be written to the flash model.
+    #[error("the settings record could not be written: {0:?}")]
+    Flash(RecordFault),
     /// The application refused its configuration or calibration.
     #[error("the arm application did not start: {0:?}")]
     Start(StartError),
@@ -130,16 +139,37 @@ pub struct BoardTwin {
 }
 
 impl BoardTwin {
-    /// A powered board: the devices of `board`, the application started with the
-    /// firmware's `config` and calibration `cal`; load-cell noise of
+    /// A powered board that was brought up: its flash holds the settings record
+    /// of the firmware's `config` and calibration `cal` (directions checked),
+    /// which the application loads at power-up; load-cell noise of
     /// `load_noise_n` N rms (white, seeded by `seed`, drawn `[f_t, f_n]` per tick
     /// as the wire-level sensor model draws it). The drivers are disabled until
     /// the enable button ([`BoardTwin::press_enable`]).
     ///
     /// # Errors
-    /// [`TwinError`]: a bad description, a motor stage that does not disable, an
-    /// application that refuses the configuration or calibration.
+    /// [`TwinError`]: a bad description, a record that cannot be written, a
+    /// motor stage that does not disable, an application that refuses the
+    /// configuration or calibration.
     pub fn new(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
+        let flash = FlashModel::saved(&Stored { calibration: CalibrationRecord::of(cal, true), config }).map_err(TwinError::Flash)?;
+        Self::with_flash(board, flash, config, cal, seed, load_noise_n)
+    }
+
+    /// A powered board whose settings sector is `flash` (erased: a board fresh
+    /// from the factory; or a record a test damaged). `config` and `cal` are
+    /// the image's compiled-in fallback, in force (drivers locked out) when the
+    /// flash holds no valid record. Otherwise as [`BoardTwin::new`].
+    ///
+    /// # Errors
+    /// As [`BoardTwin::new`].
+    pub fn with_flash(
+        board: BoardDescription,
+        flash: FlashModel,
+        config: Config,
+        cal: &ArmCalibration,
+        seed: u64,
+        load_noise_n: f64,
+    ) -> Result<Self, TwinError> {
         board.check().map_err(TwinError::Board)?;
         let bench: Shared = std::rc::Rc::new(std::cell::RefCell::new(Bench::default()));
         let feeds = std::rc::Rc::new(std::cell::Cell::new(0));
@@ -156,6 +186,7 @@ impl BoardTwin {
             button: pin(Wire::Button),
             watchdog: WatchdogModel { feeds: feeds.clone() },
             clock: TwinClock,
+            flash,
         };
         // At power-up the ADC has converted nothing yet.
         bench.borrow_mut().adc_counts = Some([0; 2]);
@@ -211,6 +242,11 @@ impl BoardTwin {
         for _ in 1..BUTTON_PERIODS {
             self.tick(arm, faults, false);
         }
+    }
+
+    /// Holds the enable button down (`true`) or lets it go, from the next tick on.
+    pub fn press_button(&mut self, held: bool) {
+        self.bench.borrow_mut().button_held = held;
     }
 
     /// Lets the enable button go.

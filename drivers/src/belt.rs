@@ -48,7 +48,7 @@ impl fmt::Display for BeltError {
 /// # Errors
 /// [`BeltError::InvalidScale`] when either is NaN, infinite or zero (the period
 /// negative), or a 16-bit count delta would overflow: no speed is ever inf or NaN.
-fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
+pub fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
     let mm_s_per_count = metres_per_count * 1000.0 / period_s;
     let valid = period_s > 0.0 && metres_per_count != 0.0 && mm_s_per_count != 0.0;
     if valid && (mm_s_per_count * 32768.0).is_finite() { Ok(mm_s_per_count) } else { Err(BeltError::InvalidScale) }

@@ -10,12 +10,15 @@
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod bringup_line;
+pub mod bringup_procedure;
 pub mod calibration;
 pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
 pub mod firmware_side;
+pub mod free_arm;
 pub mod handshake;
 pub mod in_process;
 #[cfg(feature = "ipc")]

@@ -296,6 +296,26 @@ enum Pipe {
     Serial { port: Box<dyn serialport::SerialPort>, path: PathBuf, baud: u32 },
 }
 
+/// Opens the serial device `path` raw 8N1 at `baud`, no flow control, reads
+/// timing out after `timeout`, and drops what was queued before (bytes of a
+/// previous run or session). The PIL link and the bring-up client share it.
+///
+/// # Errors
+/// The reason, without the port's name (the caller names it).
+pub fn open_port(path: &Path, baud: u32, timeout: Duration) -> Result<Box<dyn serialport::SerialPort>, String> {
+    let name = path.to_str().ok_or_else(|| "the path is not UTF-8".to_string())?;
+    let port = serialport::new(name, baud)
+        .data_bits(serialport::DataBits::Eight)
+        .parity(serialport::Parity::None)
+        .stop_bits(serialport::StopBits::One)
+        .flow_control(serialport::FlowControl::None)
+        .timeout(timeout)
+        .open()
+        .map_err(|e| e.to_string())?;
+    let _ = port.clear(serialport::ClearBuffer::Input);
+    Ok(port)
+}
+
 /// What one read of a [`Pipe`] gave.
 enum Got {
     /// Bytes (at least one).
@@ -312,16 +332,7 @@ impl Pipe {
         if !BAUD_RANGE.contains(&baud) {
             return Err(cannot(format!("outside {}..={} baud", BAUD_RANGE.start(), BAUD_RANGE.end())));
         }
-        let name = path.to_str().ok_or_else(|| cannot("the path is not UTF-8".into()))?;
-        let port = serialport::new(name, baud)
-            .data_bits(serialport::DataBits::Eight)
-            .parity(serialport::Parity::None)
-            .stop_bits(serialport::StopBits::One)
-            .flow_control(serialport::FlowControl::None)
-            .timeout(Duration::from_millis(100))
-            .open()
-            .map_err(|e| cannot(e.to_string()))?;
-        let _ = port.clear(serialport::ClearBuffer::Input);
+        let port = open_port(path, baud, Duration::from_millis(100)).map_err(cannot)?;
         Ok(Self::Serial { port, path: path.to_path_buf(), baud })
     }
 

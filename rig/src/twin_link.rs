@@ -162,5 +162,7 @@ pub fn describe(n: &Notice) -> String {
         Notice::FirmwareReset => "enable button: firmware reset".into(),
         Notice::Jogged(j) => format!("jog of {} at code {}: moved {:?} counts: {:?}", j.joint.name(), j.code, j.moved_counts, j.verdict),
         Notice::Window(w) => format!("window: step worst {} ticks, drivers enabled {}", w.step.worst, w.drivers_enabled),
+        Notice::Settings(s) => format!("settings: {}", s.describe()),
+        Notice::LockedOut(s) => format!("enable button ignored: {}", s.describe()),
     }
 }

@@ -31,6 +31,9 @@ pub enum CliError {
     /// The closed-loop run failed part way.
     #[error("run failed: {0}")]
     Run(#[from] rig::record::RunError),
+    /// The board refused a bring-up request, or a bring-up check failed.
+    #[error("{0}")]
+    Board(String),
     /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
     PartFailed(String),

@@ -41,6 +41,8 @@ where
         cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Sensitivity(args) => commands::sensitivity::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
+        cli::Command::Board(args) => commands::board::run(&args),
+        cli::Command::BoardTwin(args) => commands::board::twin(&args),
         cli::Command::Firmware(args) => match commands::firmware::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

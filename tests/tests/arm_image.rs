@@ -28,6 +28,9 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     assert!(text.contains("arm image up: 1000 us control period"), "{text}");
     assert!(text.contains("drivers disabled until the enable button"), "{text}");
     assert!(text.contains("encoder theta1: not ready") && text.contains("encoder elbow: not ready"), "{text}");
+    // QEMU's flash holds no settings record (sector 4 reads zeros, not erased
+    // flash): refused, the drivers locked out, and said.
+    assert!(text.contains("[error] settings: the settings sector holds something else"), "{text}");
 
     // No sensor reads: the frames are invalid from the first period, the
     // firmware latches "bad frames" (reason 2) after bad_frame_limit = 3 of them,

@@ -2,6 +2,7 @@
 
 pub mod admissible;
 pub mod bench;
+pub mod board;
 pub mod closed_loop;
 pub mod firmware;
 pub mod modes;

@@ -24,15 +24,19 @@
 #[cfg(not(target_os = "none"))]
 fn main() {
     println!(
-        "`arm` is the Cortex-M4F image for the arm: `cargo run -p board-stm32f405 --release --target thumbv7em-none-eabihf --bin arm` (docs/board.md)"
+        "`arm` is the Cortex-M4F image for the arm: `cargo arm` (= cargo run -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm) (docs/board.md)"
     );
 }
 
 #[cfg(target_os = "none")]
 mod image {
-    use core::cell::{Cell, RefCell};
+    use core::cell::RefCell;
 
-    use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, StartError, telemetry::ArmTelemetry};
+    use arm_app::{
+        ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, Settings, StartError,
+        bringup::{Reply, Request},
+        record::RecordFault,
+    };
     use board_stm32f405::{
         calibration,
         clock_tree::ClockOutcome,
@@ -40,6 +44,7 @@ mod image {
             self, adc,
             cycles::CycleClock,
             exit,
+            flash::SettingsFlash,
             gpio::{self, GpioPin},
             iwdg::{self, Iwdg},
             rcc, spi, stack,
@@ -54,8 +59,9 @@ mod image {
     use drivers::motor::{Motor, MotorStage};
     use firmware::{
         Config,
-        pil::{self, MAX_FRAME},
+        pil::{self, FrameBuffer, MAX_FRAME, Push},
     };
+    use heapless::Deque;
     use shared::wire::frame_flags;
     use stm32f4::stm32f405::{Interrupt, interrupt};
 
@@ -77,10 +83,19 @@ mod image {
         type In = GpioPin;
         type Watchdog = Iwdg;
         type Clock = CycleClock;
+        type Flash = SettingsFlash;
     }
 
     static ARM: Mutex<RefCell<Option<ArmApp<Stm32f405>>>> = Mutex::new(RefCell::new(None));
-    static REPORT: Mutex<Cell<Option<ArmTelemetry>>> = Mutex::new(Cell::new(None));
+    /// Bytes received on USART1, filled by its interrupt, emptied by the idle loop.
+    static RX: Mutex<RefCell<Deque<u8, RX_BYTES>>> = Mutex::new(RefCell::new(Deque::new()));
+    /// Room for two whole requests.
+    const RX_BYTES: usize = 2 * MAX_FRAME;
+    /// Priorities (lower is more urgent): a received byte must be taken within
+    /// a character time (5 us at 2 Mbaud), shorter than a step: USART1 preempts
+    /// TIM2 (its handler moves one byte: tens of cycles).
+    const USART1_PRIORITY: u8 = 0x00;
+    const TIM2_PRIORITY: u8 = 0x40;
 
     /// What the application tells the operator, in the defmt log; a window's
     /// report also goes to the idle loop, which sends it on USART1.
@@ -132,8 +147,15 @@ mod image {
                     report.overruns,
                     if report.drivers_enabled { "enabled" } else { "disabled" }
                 );
-                cortex_m::interrupt::free(|cs| REPORT.borrow(cs).set(Some(report)));
             }
+            Notice::Settings(s) => match s {
+                Settings::Saved => defmt::info!("settings: loaded from flash"),
+                Settings::Corrupt(RecordFault::Version(v)) => {
+                    defmt::error!("settings: record of format version {=u16}: {=str}", v, s.describe())
+                }
+                _ => defmt::error!("settings: {=str}", s.describe()),
+            },
+            Notice::LockedOut(s) => defmt::warn!("enable button ignored: {=str}", s.describe()),
         }
     }
 
@@ -147,6 +169,41 @@ mod image {
                 arm.tick(&mut log);
             }
         });
+    }
+
+    #[interrupt]
+    fn USART1() {
+        cortex_m::interrupt::free(|cs| {
+            let mut rx = RX.borrow(cs).borrow_mut();
+            while let Some(b) = usart::try_read() {
+                // A full buffer drops the byte: the frame's CRC fails and the
+                // host asks again.
+                let _ = rx.push_back(b);
+            }
+        });
+    }
+
+    /// Serves the bring-up requests received so far (docs/board.md "Bring-up"):
+    /// each request between two ticks, its reply on USART1 TX.
+    fn serve_requests(frames: &mut FrameBuffer) {
+        while let Some(b) = cortex_m::interrupt::free(|cs| RX.borrow(cs).borrow_mut().pop_front()) {
+            let Push::Frame(f) = frames.push(b) else { continue };
+            let Ok(request) = pil::decode::<Request>(f) else {
+                defmt::warn!("bring-up: a frame that does not decode was dropped");
+                continue;
+            };
+            let mut reply = cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow_mut().as_mut().map(|a| a.serve(request)));
+            // The stack's scan takes too long for the tick: done here.
+            if let Some(Reply::Telemetry(Some(t))) = reply.as_mut() {
+                t.stack_high_water_bytes = stack::high_water_bytes();
+            }
+            let mut buf = [0u8; MAX_FRAME];
+            if let Some(reply) = reply
+                && let Ok(frame) = pil::encode(&reply, &mut buf)
+            {
+                usart::write_all(frame);
+            }
+        }
     }
 
     #[entry]
@@ -186,7 +243,7 @@ mod image {
         spi::init();
         adc::init();
         timers::start_belt_encoder();
-        usart::init(false);
+        usart::init(true);
         let parts = ArmParts::<Stm32f405> {
             theta1: spi::Spi1Device::new(pins::CS_THETA1),
             elbow: spi::Spi1Device::new(pins::CS_ELBOW),
@@ -196,6 +253,7 @@ mod image {
             button: GpioPin(pins::ENABLE_BUTTON),
             watchdog: Iwdg,
             clock,
+            flash: SettingsFlash::default(),
         };
         let cal = ArmCalibration {
             encoders: calibration::ENCODERS,
@@ -233,19 +291,18 @@ mod image {
         );
         iwdg::start(5 * period_us as u32);
         timers::start_tick(tick);
-        // SAFETY: the handler's state is in place; nothing else uses TIM2's line.
-        unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::TIM2) };
-        // Idle: send each window's telemetry (the interrupt preempts this).
+        // SAFETY: the handlers' state is in place; nothing else uses these lines.
+        unsafe {
+            core.NVIC.set_priority(Interrupt::USART1, USART1_PRIORITY);
+            core.NVIC.set_priority(Interrupt::TIM2, TIM2_PRIORITY);
+            cortex_m::peripheral::NVIC::unmask(Interrupt::USART1);
+            cortex_m::peripheral::NVIC::unmask(Interrupt::TIM2);
+        }
+        let mut frames = FrameBuffer::default();
+        // Idle: serve the bring-up requests (the interrupts preempt this).
         loop {
             cortex_m::asm::wfi();
-            if let Some(mut report) = cortex_m::interrupt::free(|cs| REPORT.borrow(cs).take()) {
-                report.stack_high_water_bytes = stack::high_water_bytes();
-                defmt::info!("stack high-water mark {=u32} bytes", report.stack_high_water_bytes);
-                let mut buf = [0u8; MAX_FRAME];
-                if let Ok(frame) = pil::encode(&report, &mut buf) {
-                    usart::write_all(frame);
-                }
-            }
+            serve_requests(&mut frames);
             // The periods run so far and whether the drivers are on, from the application itself.
             let (periods, drivers) =
                 cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.periods(), a.drivers_enabled())));

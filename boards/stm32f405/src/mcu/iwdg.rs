@@ -2,6 +2,8 @@
 //! control step; a hung step resets the MCU, which comes up with the drivers
 //! disabled (the safe state). Once started it cannot be stopped.
 
+use core::sync::atomic::{AtomicU32, Ordering};
+
 use stm32f4::stm32f405 as pac;
 
 fn iwdg() -> &'static pac::iwdg::RegisterBlock {
@@ -9,11 +11,34 @@ fn iwdg() -> &'static pac::iwdg::RegisterBlock {
     unsafe { &*pac::IWDG::ptr() }
 }
 
+/// The timeout [`start`] set, us (restored after [`stretched`]).
+static TIMEOUT_US: AtomicU32 = AtomicU32::new(0);
+
 /// Starts the watchdog with a timeout of at least `timeout_us` ([`crate::timing::watchdog`]).
 pub fn start(timeout_us: u32) {
+    TIMEOUT_US.store(timeout_us, Ordering::Relaxed);
+    iwdg().kr().write(|w| unsafe { w.key().bits(0xCCCC) }); // start (and LSI on)
+    set_timeout(timeout_us);
+}
+
+/// Runs `f` with the watchdog's timeout lengthened to at least `timeout_us`
+/// (a flash sector erase stalls the core for up to 1.1 s: DS8626 "Flash
+/// memory programming"), then restores [`start`]'s timeout. PR and RLR can be
+/// rewritten while the watchdog runs (RM0090 21.3.5).
+pub fn stretched<T>(timeout_us: u32, f: impl FnOnce() -> T) -> T {
+    set_timeout(timeout_us);
+    let out = f();
+    let normal = TIMEOUT_US.load(Ordering::Relaxed);
+    if normal != 0 {
+        set_timeout(normal);
+    }
+    out
+}
+
+fn set_timeout(timeout_us: u32) {
     let (pr, rl) = crate::timing::watchdog(timeout_us);
     let w = iwdg();
-    w.kr().write(|w| unsafe { w.key().bits(0xCCCC) }); // start (and LSI on)
+    feed();
     w.kr().write(|w| unsafe { w.key().bits(0x5555) }); // unlock PR and RLR
     w.pr().write(|w| unsafe { w.pr().bits(pr) });
     w.rlr().write(|w| unsafe { w.rl().bits(rl) });

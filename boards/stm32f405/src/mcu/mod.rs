@@ -4,6 +4,7 @@
 pub mod adc;
 pub mod cycles;
 pub mod exit;
+pub mod flash;
 pub mod gpio;
 pub mod iwdg;
 pub mod rcc;

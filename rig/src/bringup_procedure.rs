@@ -1,0 +1,223 @@
+//! The bring-up steps the host runs over the line (docs/board.md "Bring-up";
+//! `sil-host board`), as a library: each step one or more requests
+//! (`arm_app::bringup`), each refusal and each failed check said in words.
+
+use std::{
+    io::{Read, Write},
+    time::Duration,
+};
+
+use arm_app::{
+    Joint,
+    bringup::{BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_COUNTS, MIN_JOG_COUNTS, Refusal, Reply, Request, Status},
+};
+use serde::Serialize;
+
+use crate::bringup_line::Client;
+
+/// How long a request may wait for its reply (a save erases a flash sector:
+/// about 1 s on the STM32F405).
+pub const REPLY_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// A step that did not go through: refused by the board, a failed check, or the line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// The line failed or the board did not answer (exit 2: nothing done).
+    #[error("{0}")]
+    Line(String),
+    /// The board refused the request, or a check failed (exit 1).
+    #[error("{0}")]
+    Refused(String),
+}
+
+/// A refusal in words, with what to do.
+pub fn describe_refusal(r: &Refusal) -> String {
+    match r {
+        Refusal::DriversEnabled => "the drivers are enabled or the closed loop runs: `sil-host board disable` first".into(),
+        Refusal::ZerosNotSet => "the encoders' zeros are not set: run `sil-host board calibrate` first".into(),
+        Refusal::OutOfRange => "a value is out of its range".into(),
+        Refusal::EncoderFault(e) => format!("an encoder gives no reading ({}): check its wiring and magnet", e.describe()),
+        Refusal::NoConversion => "the ADC gave no conversion this period: check the load cell's amplifier".into(),
+        Refusal::NoSpan => {
+            "the force gives less than 40 counts of difference from the tare: is the weight on the load cell, and heavy enough?".into()
+        }
+        Refusal::InvalidConfig => "the configuration is invalid".into(),
+        Refusal::Rate => "the configuration's control rate is not the image's timer rate".into(),
+        Refusal::NoJog => "no jog has run since power-up".into(),
+        Refusal::Busy => "a jog is under way".into(),
+        Refusal::DirectionsNotChecked => "both joints' directions must be checked by `sil-host board calibrate` first".into(),
+        Refusal::LockedOut(s) => s.describe().into(),
+        Refusal::Flash(f) => format!("the save failed: {}", f.describe()),
+    }
+}
+
+/// A jog's verdict in words.
+pub fn describe_jog(j: &JogOutcome) -> String {
+    let i = usize::from(j.joint == Joint::Elbow);
+    let moved = j.moved_counts[i];
+    let deg = f64::from(moved) * 360.0 / 16384.0;
+    let what = match j.verdict {
+        Ok(()) => "moved its torque's way".to_string(),
+        Err(JogFault::WrongDirection) => {
+            "moved AGAINST its torque: its motor is wired the other way or its encoder counts the other way; swap the motor's leads, or \
+             flip the encoder's direction (`sil-host board calibrate --reversed JOINT`)"
+                .into()
+        }
+        Err(JogFault::NoMotion) => format!(
+            "did not move (less than {MIN_JOG_COUNTS} counts): check the motor, its driver and its encoder, and that the arm is free"
+        ),
+        Err(JogFault::TooFar) => format!("moved more than {MAX_JOG_COUNTS} counts: the jog was stopped; check the torque full scale"),
+        Err(JogFault::EncoderFault) => "an encoder gave no reading during the jog".into(),
+        Err(JogFault::DriversRefused) => "the drivers refused to enable: the fault line (nFAULT) is asserted".into(),
+    };
+    format!("jog of {} at code {:+}: {moved:+} counts ({deg:+.2} deg): {what}", j.joint.name(), j.code)
+}
+
+/// Sends `request` and returns the reply, a refusal as [`StepError::Refused`].
+///
+/// # Errors
+/// [`StepError`].
+pub fn ask<S: Read + Write>(c: &mut Client<S>, request: Request) -> Result<Reply, StepError> {
+    match c.request(&request, REPLY_TIMEOUT).map_err(StepError::Line)? {
+        Reply::Refused(r) => Err(StepError::Refused(format!("{}: refused: {}", request_name(&request), describe_refusal(&r)))),
+        reply => Ok(reply),
+    }
+}
+
+fn request_name(r: &Request) -> &'static str {
+    match r {
+        Request::Hello => "hello",
+        Request::Status => "status",
+        Request::Raw => "raw readings",
+        Request::GetCalibration => "get calibration",
+        Request::GetConfig => "get configuration",
+        Request::SetZeros { .. } => "set zeros",
+        Request::Jog { .. } => "jog",
+        Request::JogResult => "jog result",
+        Request::Tare => "tare",
+        Request::Span { .. } => "span",
+        Request::SetCalibration(_) => "set calibration",
+        Request::Configure(_) => "configure",
+        Request::LiftTorqueLimit => "lift the torque limit",
+        Request::Enable => "enable",
+        Request::Disable => "disable",
+        Request::Telemetry => "telemetry",
+        Request::Save => "save",
+    }
+}
+
+/// Checks that the board speaks this protocol.
+///
+/// # Errors
+/// [`StepError::Line`] when it does not answer or speaks another version.
+pub fn hello<S: Read + Write>(c: &mut Client<S>) -> Result<(), StepError> {
+    match ask(c, Request::Hello)? {
+        Reply::Hello { protocol } if protocol == BRINGUP_PROTOCOL => Ok(()),
+        Reply::Hello { protocol } => Err(StepError::Line(format!(
+            "the board speaks bring-up protocol {protocol}, this sil-host {BRINGUP_PROTOCOL}: flash the matching image"
+        ))),
+        other => Err(StepError::Line(format!("unexpected reply to hello: {other:?}"))),
+    }
+}
+
+/// The board's status.
+///
+/// # Errors
+/// [`StepError`].
+pub fn status<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
+    match ask(c, Request::Status)? {
+        Reply::Status(s) => Ok(s),
+        other => Err(StepError::Line(format!("unexpected reply to status: {other:?}"))),
+    }
+}
+
+/// What `calibrate` asks for.
+#[derive(Debug, Clone, Copy)]
+pub struct CalibrateOptions {
+    /// The calibration pose's joint counts `[theta1, theta2 - theta1]` (2^14 per
+    /// turn): the jig's drawing (docs/board.md "Bring-up").
+    pub pose_counts: [u16; 2],
+    /// Encoders to count the other way from now on `[theta1, elbow]`.
+    pub reversed: [bool; 2],
+    /// The jog's torque code (at most `MAX_JOG_CODES`).
+    pub jog_code: i16,
+    /// The jog's length, periods.
+    pub jog_periods: u16,
+    /// Rest between jogs, so that the arm hangs still again.
+    pub settle: Duration,
+    /// Tare the load cell at the end (nothing on it).
+    pub tare: bool,
+}
+
+/// What `calibrate` tells its operator, and the one thing it asks.
+pub trait Operator {
+    /// A step done.
+    fn say(&mut self, line: &str);
+    /// The zeros are set: the jig must come off before the jogs. Returns when
+    /// it is off.
+    fn remove_jig(&mut self);
+}
+
+/// What `calibrate` did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrateReport {
+    /// Every jog, in order.
+    pub jogs: Vec<JogOutcome>,
+    /// The calibration in force at the end.
+    pub calibration: CalibrationRecord,
+}
+
+/// The guided calibration: the drivers must be disabled; the encoders'
+/// directions as asked, their zeros set at the pose (held by the jig, which the
+/// operator then removes); each joint jogged both ways
+/// at low torque, which must move it its torque's way by a bounded angle;
+/// then the tare. Stops at the first failed step.
+///
+/// # Errors
+/// [`StepError::Refused`] naming the joint and why, or the refused request.
+pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &mut impl Operator) -> Result<CalibrateReport, StepError> {
+    hello(c)?;
+    let st = status(c)?;
+    if st.drivers_enabled {
+        return Err(StepError::Refused("the drivers are enabled: `sil-host board disable` first".into()));
+    }
+    if o.reversed != [false; 2] {
+        let Reply::Calibration(mut cal) = ask(c, Request::GetCalibration)? else {
+            return Err(StepError::Line("unexpected reply to get calibration".into()));
+        };
+        cal.reversed = o.reversed;
+        ask(c, Request::SetCalibration(cal))?;
+    }
+    ask(c, Request::SetZeros { pose_counts: o.pose_counts })?;
+    op.say(&format!("zeros set at the pose {:?} counts", o.pose_counts));
+    op.remove_jig();
+    let mut jogs = Vec::new();
+    for joint in [Joint::Theta1, Joint::Elbow] {
+        for code in [o.jog_code, -o.jog_code] {
+            ask(c, Request::Jog { joint, code, periods: o.jog_periods })?;
+            let outcome = loop {
+                std::thread::sleep(Duration::from_millis(20));
+                match c.request(&Request::JogResult, REPLY_TIMEOUT).map_err(StepError::Line)? {
+                    Reply::Refused(Refusal::Busy) => {}
+                    Reply::Jogged(j) => break j,
+                    Reply::Refused(r) => return Err(StepError::Refused(format!("jog result: refused: {}", describe_refusal(&r)))),
+                    other => return Err(StepError::Line(format!("unexpected reply to jog result: {other:?}"))),
+                }
+            };
+            op.say(&describe_jog(&outcome));
+            jogs.push(outcome);
+            if outcome.verdict.is_err() {
+                return Err(StepError::Refused(format!("calibration stopped: {}", describe_jog(&outcome))));
+            }
+            std::thread::sleep(o.settle);
+        }
+    }
+    if o.tare {
+        ask(c, Request::Tare)?;
+        op.say("load cell tared (nothing on it)");
+    }
+    let Reply::Calibration(calibration) = ask(c, Request::GetCalibration)? else {
+        return Err(StepError::Line("unexpected reply to get calibration".into()));
+    };
+    Ok(CalibrateReport { jogs, calibration })
+}

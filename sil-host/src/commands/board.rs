@@ -1,0 +1,290 @@
+//! `sil-host board` (bring-up over the board's serial port) and `sil-host
+//! board-twin` (the board twin serving the same protocol on a pseudo-terminal):
+//! thin commands over `rig::bringup_procedure` and `rig::bringup_line`.
+
+use std::{
+    io::Write,
+    sync::{Arc, atomic::AtomicBool},
+    time::Duration,
+};
+
+use arm_app::{
+    bringup::{CalibrationRecord, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
+    record::Stored,
+    telemetry::ArmTelemetry,
+};
+use board_twin::{BusFaults, FlashModel};
+use rig::{
+    bringup_line::{self, Client, Pty},
+    bringup_procedure::{self as bp, CalibrateOptions, StepError},
+    free_arm::FreeArm,
+    setup::firmware_config,
+};
+use serde::Serialize;
+
+use crate::{
+    cli::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg, JointArg},
+    commands::closed_loop::load_scenario,
+    error::CliError,
+};
+
+impl From<StepError> for CliError {
+    fn from(e: StepError) -> Self {
+        match e {
+            StepError::Line(m) => Self::BadInput(m),
+            StepError::Refused(m) => Self::Board(m),
+        }
+    }
+}
+
+/// Everything `status` reads.
+#[derive(Debug, Serialize)]
+struct Snapshot {
+    status: Status,
+    raw: RawReadings,
+    calibration: CalibrationRecord,
+    telemetry: Option<ArmTelemetry>,
+}
+
+fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Snapshot, StepError> {
+    let status = bp::status(c)?;
+    let Reply::Raw(raw) = bp::ask(c, Request::Raw)? else { return Err(StepError::Line("unexpected reply to raw".into())) };
+    let Reply::Calibration(calibration) = bp::ask(c, Request::GetCalibration)? else {
+        return Err(StepError::Line("unexpected reply to get calibration".into()));
+    };
+    let Reply::Telemetry(telemetry) = bp::ask(c, Request::Telemetry)? else {
+        return Err(StepError::Line("unexpected reply to telemetry".into()));
+    };
+    Ok(Snapshot { status, raw, calibration, telemetry })
+}
+
+fn print_snapshot(s: &Snapshot) {
+    let st = &s.status;
+    println!(
+        "state: {:?}, period {}, drivers {}, firmware status {:#x}, overruns {}",
+        st.activity,
+        st.periods,
+        if st.drivers_enabled { "enabled" } else { "disabled" },
+        st.status,
+        st.overruns
+    );
+    println!(
+        "settings: {:?} ({}); zeros set {}, directions checked {}, torque limit {} codes of 2048",
+        st.settings,
+        st.settings.describe(),
+        st.zeros_set,
+        st.directions_checked,
+        st.torque_limit_codes
+    );
+    let r = &s.raw;
+    for (i, name) in ["theta1", "elbow"].iter().enumerate() {
+        match r.encoder_counts[i] {
+            Ok(n) => println!(
+                "encoder {name}: raw count {n} of 16384, AGC {}",
+                r.encoder_agc[i].map_or_else(|| "unreadable".into(), |a| a.to_string())
+            ),
+            Err(e) => println!("encoder {name}: no reading ({})", e.describe()),
+        }
+    }
+    match r.adc_counts {
+        Some([t, n]) => println!("load cell ADC: f_t {t}, f_n {n} of 4095"),
+        None => println!("load cell ADC: no conversion this period"),
+    }
+    println!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
+    let c = &s.calibration;
+    println!(
+        "calibration: zeros {:?} reversed {:?}; load cell zeros {:?} N/count {:?}; belt {} m/count",
+        c.zero_counts, c.reversed, c.load_zero_counts, c.load_newtons_per_count, c.belt_metres_per_count
+    );
+    match &s.telemetry {
+        Some(t) => println!(
+            "last window (period {}): step median {} worst {} ticks, overruns {}, stack high-water {} B",
+            t.seq, t.step.median, t.step.worst, t.overruns, t.stack_high_water_bytes
+        ),
+        None => println!("telemetry: no window closed yet"),
+    }
+}
+
+fn emit<T: Serialize>(json: bool, value: &T, human: impl FnOnce()) {
+    if json {
+        println!("{}", serde_json::to_string_pretty(value).unwrap_or_default());
+    } else {
+        human();
+    }
+}
+
+/// The operator at a terminal: the steps printed (not with `--json`), and the
+/// jig's removal waited for with Enter when standard input is a terminal (a
+/// script's or the twin's calibration goes on at once).
+struct Terminal {
+    json: bool,
+}
+
+impl bp::Operator for Terminal {
+    fn say(&mut self, line: &str) {
+        if !self.json {
+            println!("{line}");
+        }
+    }
+
+    fn remove_jig(&mut self) {
+        use std::io::IsTerminal;
+        if std::io::stdin().is_terminal() {
+            eprint!("remove the calibration jig (the arm must hang free), then press Enter: ");
+            let _ = std::io::stdin().read_line(&mut String::new());
+        }
+    }
+}
+
+/// `sil-host board`.
+///
+/// # Errors
+/// [`CliError::BadInput`] (exit 2) for bad input, a port that does not open or a
+/// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
+/// failed check.
+pub fn run(args: &BoardArgs) -> Result<(), CliError> {
+    let mut c = Client::open(&args.port, args.baud).map_err(CliError::BadInput)?;
+    bp::hello(&mut c)?;
+    let json = args.json;
+    let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || println!("{what}: done"));
+    match &args.command {
+        BoardCommand::Status => {
+            let s = snapshot(&mut c)?;
+            emit(json, &s, || print_snapshot(&s));
+        }
+        BoardCommand::Watch { interval_ms, count } => {
+            let stop = Arc::new(AtomicBool::new(false));
+            for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+                let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
+            }
+            let mut n = 0;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) && count.is_none_or(|k| n < k) {
+                let s = snapshot(&mut c)?;
+                if json {
+                    println!("{}", serde_json::to_string(&s).unwrap_or_default());
+                } else {
+                    print_snapshot(&s);
+                    println!();
+                }
+                n += 1;
+                std::thread::sleep(Duration::from_millis(*interval_ms));
+            }
+        }
+        BoardCommand::Calibrate { pose_deg, reversed, jog_nm, no_tare } => {
+            let [t1, el] = pose_deg[..] else {
+                return Err(CliError::BadInput("--pose-deg needs THETA1,ELBOW in degrees (the jig's drawing)".into()));
+            };
+            if !(t1.is_finite() && el.is_finite()) {
+                return Err(CliError::BadInput(format!("--pose-deg {t1},{el}: not finite")));
+            }
+            let max_nm = f64::from(MAX_JOG_CODES) * 5.0 / 2048.0;
+            if !(jog_nm.is_finite() && *jog_nm > 0.0 && *jog_nm <= max_nm) {
+                return Err(CliError::BadInput(format!("--jog-nm {jog_nm}: must be in (0, {max_nm:.2}] N m")));
+            }
+            let o = CalibrateOptions {
+                pose_counts: [t1, el].map(|d| shared::wire::encode_angle(d.to_radians())),
+                reversed: [JointArg::Theta1, JointArg::Elbow].map(|j| reversed.contains(&j)),
+                jog_code: (jog_nm / 5.0 * 2048.0).round() as i16,
+                jog_periods: 100,
+                settle: Duration::from_millis(300),
+                tare: !no_tare,
+            };
+            let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;
+            emit(json, &report, || {
+                println!("calibration in force (not yet saved): {:?}", report.calibration);
+                println!("next: `sil-host board span` with a known weight, `configure`, `save`, `enable`");
+            });
+        }
+        BoardCommand::Span { axis, newtons } => {
+            if !newtons.is_finite() {
+                return Err(CliError::BadInput(format!("--newtons {newtons}: not finite")));
+            }
+            let axis = match axis {
+                AxisArg::Tangential => 0,
+                AxisArg::Normal => 1,
+            };
+            let Reply::Calibration(cal) = bp::ask(&mut c, Request::Span { axis, newtons: *newtons as f32 })? else {
+                return Err(CliError::BadInput("unexpected reply to span".into()));
+            };
+            emit(json, &cal, || println!("span set: N per count {:?}", cal.load_newtons_per_count));
+        }
+        BoardCommand::Configure { scenario } => {
+            let s = load_scenario(scenario)?;
+            bp::ask(&mut c, Request::Configure(firmware_config(&s)))?;
+            done("configure");
+        }
+        BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Enable | BoardCommand::Disable => {
+            let (request, name) = match args.command {
+                BoardCommand::Save => (Request::Save, "save"),
+                BoardCommand::LiftTorqueLimit => (Request::LiftTorqueLimit, "lift the torque limit"),
+                BoardCommand::Enable => (Request::Enable, "enable"),
+                _ => (Request::Disable, "disable"),
+            };
+            bp::ask(&mut c, request)?;
+            done(name);
+        }
+    }
+    Ok(())
+}
+
+/// `sil-host board-twin --pty`.
+///
+/// # Errors
+/// [`CliError`]: a bad scenario or board description (exit 2), a pseudo-terminal
+/// that does not open, a plant failure.
+pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
+    let s = load_scenario(&args.scenario)?;
+    if let Some(t) = args.serve_for
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(CliError::BadInput(format!("--serve-for {t}: must be a positive number of seconds")));
+    }
+    let flash = if args.flash == FlashArg::Erased {
+        FlashModel::erased()
+    } else {
+        let stored = Stored { calibration: CalibrationRecord::of(&s.calibration.arm_calibration(), true), config: firmware_config(&s) };
+        FlashModel::saved(&stored).map_err(|e| CliError::BadInput(format!("the settings record: {}", e.describe())))?
+    };
+    if args.flash == FlashArg::Corrupt {
+        // One bit of the record's frame: its CRC-32C no longer matches.
+        flash.bytes().borrow_mut()[12] ^= 0x10;
+    }
+    let mut arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::BadInput(e.to_string()))?;
+    if args.fault_line {
+        arm.set_faults(BusFaults { driver_fault: true, ..BusFaults::default() });
+    }
+    let mut pty = Pty::open().map_err(CliError::BadInput)?;
+    let pose = arm.pose_counts();
+    let pose_deg = pose.map(|c| {
+        let d = f64::from(c) * 360.0 / 16384.0;
+        if d > 180.0 { d - 360.0 } else { d }
+    });
+    let flash_name = format!("{:?}", args.flash).to_lowercase();
+    if args.json {
+        println!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
+    } else {
+        println!(
+            "board twin on {}: the arm hangs at theta1 {:.6} deg, elbow {:.6} deg (counts {:?}: the jig's pose); flash {flash_name}{}",
+            pty.path.display(),
+            pose_deg[0],
+            pose_deg[1],
+            pose,
+            if args.fault_line { "; fault line asserted" } else { "" }
+        );
+    }
+    let _ = std::io::stdout().flush();
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
+    }
+    if let Some(t) = args.serve_for {
+        let stop = Arc::clone(&stop);
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_secs_f64(t));
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        });
+    }
+    let ts = Duration::from_secs_f64(s.timing.period().as_secs_f64());
+    bringup_line::serve(&mut arm, &mut pty.master, ts, &stop).map_err(CliError::Board)?;
+    Ok(())
+}

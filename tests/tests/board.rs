@@ -1,0 +1,145 @@
+//! `sil-host board` end to end against `sil-host board-twin --pty` (issue 23;
+//! docs/board.md "Bring-up"): every bring-up step of the procedure over a
+//! pseudo-terminal, in the PIL framing, against the `arm` image's application
+//! on the simulated board, the arm hanging free; and the refusals: a reversed
+//! encoder, a corrupt stored record, an asserted fault line.
+
+use std::{
+    io::{BufRead, BufReader},
+    process::{Child, Command, Stdio},
+};
+
+/// A board twin serving on a pseudo-terminal; killed when dropped.
+struct Twin {
+    child: Child,
+    port: String,
+    /// The arm's pose as the jig would hold it, degrees, `THETA1,ELBOW`.
+    pose: String,
+}
+
+impl Drop for Twin {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn twin(extra: &[&str]) -> Twin {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board-twin", "--pty", "--json", "--serve-for", "600"])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .unwrap();
+    // The first line comes once the port is open (after the arm has settled).
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line:?}"));
+    let pose = v["pose_deg"].as_array().unwrap().iter().map(|d| d.as_f64().unwrap().to_string()).collect::<Vec<_>>().join(",");
+    Twin { child, port: v["port"].as_str().unwrap().to_string(), pose }
+}
+
+/// Runs `sil-host board --port PORT ARGS`: exit code, stdout, stderr.
+fn board(t: &Twin, args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(["board", "--port", &t.port]).args(args).output().unwrap();
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+fn status(t: &Twin) -> serde_json::Value {
+    let (code, out, err) = board(t, &["--json", "status"]);
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one() {
+    // The theta1 encoder's magnet glued anywhere: the zeros come from the jig.
+    let t = twin(&["--set", "board.theta1_encoder.zero_count=5000.4"]);
+    // A new board: nothing in flash, the drivers locked out, and said why.
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"], "Missing", "{s}");
+    assert_eq!(s["raw"]["encoder_counts"][0]["Ok"].as_u64().map(|c| c < 16384), Some(true), "raw counts are read: {s}");
+    let (code, _, err) = board(&t, &["enable"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no settings in flash"), "{err}");
+
+    // Calibration: zeros at the jig's pose, four jogs the right way, the tare.
+    let pose = format!("--pose-deg={}", t.pose);
+    let (code, out, err) = board(&t, &["calibrate", &pose]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(out.matches("moved its torque's way").count(), 4, "{out}");
+    assert!(out.contains("load cell tared"), "{out}");
+    // The zeros found are the board's mounting (theta1's magnet at 5000.4 counts,
+    // the elbow's at 0), to the encoder's quantisation.
+    let s = status(&t);
+    let zeros = &s["calibration"]["zero_counts"];
+    assert!((zeros[0].as_f64().unwrap() - 5000.4).abs() <= 1.0, "{s}");
+    assert!(zeros[1].as_i64().unwrap().min(16384 - zeros[1].as_i64().unwrap()) <= 1, "{s}");
+    assert_eq!(s["status"]["directions_checked"], true, "{s}");
+    assert_eq!(s["status"]["torque_limit_codes"], 410, "a new calibration runs at the reduced limit: {s}");
+    assert_eq!(s["status"]["settings"], "Unsaved", "{s}");
+
+    // Configuration, save, the reduced limit lifted, enable and disable.
+    assert_eq!(board(&t, &["configure"]).0, 0);
+    let (code, _, err) = board(&t, &["enable"]);
+    assert!(code == 1 && err.contains("save"), "unsaved settings keep the drivers locked out: {err}");
+    assert_eq!(board(&t, &["save"]).0, 0);
+    assert_eq!(status(&t)["status"]["settings"], "Saved");
+    assert_eq!(board(&t, &["lift-torque-limit"]).0, 0);
+    assert_eq!(status(&t)["status"]["torque_limit_codes"], 2048);
+    assert_eq!(board(&t, &["enable"]).0, 0);
+    assert_eq!(board(&t, &["disable"]).0, 0);
+    // Watch: one JSON document per reading.
+    let (code, out, err) = board(&t, &["--json", "watch", "--count", "2", "--interval-ms", "10"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.lines().filter(|l| l.starts_with('{')).count(), 2, "{out}");
+    // The span refuses a force it cannot see (nothing on the load cell).
+    let (code, _, err) = board(&t, &["span", "--axis", "normal", "--newtons", "5"]);
+    assert!(code == 1 && err.contains("is the weight on the load cell"), "{err}");
+}
+
+#[test]
+fn a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declared() {
+    let t = twin(&["--set", "board.elbow_encoder.reversed=true"]);
+    let pose = format!("--pose-deg={}", t.pose);
+    let (code, out, err) = board(&t, &["calibrate", &pose]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(err.contains("jog of elbow") && err.contains("AGAINST its torque"), "{err}");
+    assert_eq!(status(&t)["status"]["directions_checked"], false);
+    // Declared reversed, the same encoder passes (the zeros are set again at the pose).
+    let (code, out, err) = board(&t, &["calibrate", &pose, "--reversed", "elbow"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(out.matches("moved its torque's way").count(), 4, "{out}");
+}
+
+#[test]
+fn a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded() {
+    let t = twin(&["--flash", "corrupt"]);
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"]["Corrupt"], "Crc", "{s}");
+    let (code, _, err) = board(&t, &["enable"]);
+    assert!(code == 1 && err.contains("damaged (CRC-32C"), "{err}");
+    drop(t);
+    let t = twin(&["--flash", "saved"]);
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"], "Saved", "{s}");
+    assert_eq!(board(&t, &["enable"]).0, 0);
+}
+
+#[test]
+fn an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings() {
+    let t = twin(&["--fault-line"]);
+    assert_eq!(status(&t)["raw"]["driver_fault"], true);
+    let pose = format!("--pose-deg={}", t.pose);
+    let (code, out, err) = board(&t, &["calibrate", &pose]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(err.contains("jog of theta1") && err.contains("fault line (nFAULT) is asserted"), "{err}");
+}
+
+#[test]
+fn a_port_that_does_not_exist_is_bad_input() {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(["board", "--port", "/nonexistent/tty", "status"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot open the serial port /nonexistent/tty"));
+}
