@@ -120,6 +120,14 @@ impl IpcLink {
         // Before spawning: the firmware process inherits nothing from this thread's
         // set-up, it makes its own from the same scenario.
         let realtime_setup = realtime.then(|| prepare_realtime(&s.rig));
+        // A firmware already on the rig (started by hand) would answer the handshake
+        // and run the whole scenario while the one spawned here is refused: refuse
+        // the run instead, before any period (run `--attach` to use that firmware).
+        if firmware_exe.is_some()
+            && let Some(pid) = super::ipc::live_owner(Role::Firmware, rig)
+        {
+            return Err(RunError::RigInUse { rig: rig.to_string(), role: "firmware", pid });
+        }
         let spawned = match firmware_exe {
             Some(exe) => Some(spawn(exe, rig, s, realtime)?),
             None => None,
@@ -171,6 +179,15 @@ impl IpcLink {
             std::thread::sleep(Duration::from_millis(2));
         }
         link.announced = Some(link.handshake(s, start + Duration::from_secs_f64(limit))?);
+        // The answer must have come from the process spawned here: a firmware started
+        // by hand between the check above and the spawn holds the rig's firmware node
+        // (the spawned one then refuses to start), and is refused here by its pid.
+        if let Some(spawned) = &link.spawned {
+            let child = i64::from(spawned.child.id());
+            if let Some(pid) = super::ipc::live_owner(Role::Firmware, rig).filter(|&pid| pid != child) {
+                return Err(RunError::RigInUse { rig: rig.to_string(), role: "firmware", pid });
+            }
+        }
         link.wait_for_monitors(monitors.wait_for, limit)?;
         Ok(link)
     }

@@ -402,6 +402,8 @@ struct Qemu {
     stderr: Arc<Mutex<String>>,
     log_thread: Option<JoinHandle<Result<(), String>>>,
     exit: Option<ExitStatus>,
+    /// The rig killed it for the scenario's `kill_firmware` fault.
+    killed_by_fault: bool,
 }
 
 /// A path prefix of our own in the temporary folder (Unix socket paths are short).
@@ -538,7 +540,7 @@ impl Qemu {
                 }
             });
         }
-        let mut q = Self { child, files, stderr, log_thread, exit: None };
+        let mut q = Self { child, files, stderr, log_thread, exit: None, killed_by_fault: false };
         let (Some(listener), None) = (listener, &fifo) else {
             return Ok((q, fifo.expect("the FIFO link made its pipe")));
         };
@@ -574,6 +576,28 @@ impl Qemu {
             self.exit = Some(status);
         }
         self.exit
+    }
+
+    /// QEMU's exit status, waiting up to `within` for it: a QEMU that was killed
+    /// closes its pipes before the kernel reports its exit, so the link sees the
+    /// silence first.
+    fn exited_within(&mut self, within: Duration) -> Option<ExitStatus> {
+        let until = Instant::now() + within;
+        while self.exited().is_none() && Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        self.exited()
+    }
+
+    /// Why QEMU is gone, from its exit status: its own exit, the scenario's
+    /// `kill_firmware` fault, or a signal from outside the rig.
+    fn describe_exit(&self, status: ExitStatus) -> String {
+        use std::os::unix::process::ExitStatusExt;
+        match status.signal() {
+            Some(_) if self.killed_by_fault => format!(": QEMU was killed by the scenario's kill_firmware fault ({status})"),
+            Some(_) => format!(": QEMU was killed ({status}) by something outside this run (a user, a job scheduler, the OOM killer)"),
+            None => format!(": QEMU exited ({status})"),
+        }
     }
 
     /// `; QEMU said: <its last lines>` or nothing.
@@ -837,8 +861,8 @@ impl PilLink {
         let tail = self.log_tail();
         match (&mut self.qemu, &self.pipe) {
             (Some(q), _) => {
-                let state = match q.exited() {
-                    Some(status) => format!(": QEMU exited ({status})"),
+                let state = match q.exited_within(Duration::from_millis(500)) {
+                    Some(status) => q.describe_exit(status),
                     None => ": QEMU still runs (the image hangs?)".into(),
                 };
                 format!("{state}{}{tail}", q.stderr_tail())
@@ -941,6 +965,7 @@ impl FirmwareLink for PilLink {
         if self.faults.kills_firmware_at(t)
             && let Some(q) = &mut self.qemu
         {
+            q.killed_by_fault = true;
             let _ = q.child.kill();
         }
     }

@@ -572,10 +572,11 @@ impl Scenario {
     pub fn validate(&self) -> Result<(), ScenarioError> {
         let finite = |x: f64| x.is_finite();
         check(
-            !self.name.is_empty() && self.name.chars().count() <= Self::MAX_NAME_CHARS,
+            !self.name.is_empty() && self.name.chars().count() <= Self::MAX_NAME_CHARS && !self.name.chars().any(char::is_control),
             "name",
+            // Debug-quoted: a control character shows as an escape, never reaches the terminal raw.
             format!("{:?}", self.name.chars().take(40).collect::<String>()),
-            "1 to 64 characters",
+            "1 to 64 characters, none a control character (it titles figures and terminal lines)",
         )?;
         check(self.faults.len() <= Self::MAX_FAULTS, "faults", self.faults.len(), "at most 1000 [[faults]]")?;
         let p = &self.plant;
@@ -816,8 +817,35 @@ mod tests {
         assert!(e.contains("rig.realtime_fifo_priority") && e.contains("100"), "{e}");
     }
 
+    /// Issue 27: a NUL or ESC in the name made `trace.svg` ill-formed XML and reached
+    /// the terminal raw. Refused, and the refusal shows it escaped.
+    #[test]
+    fn control_characters_in_the_name_are_refused_and_shown_escaped() {
+        for bad in ["a\u{0}b", "run\u{1b}[2J", "tab\there", "line\nbreak", "del\u{7f}"] {
+            let toml = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", &format!("name = {}", toml::Value::from(bad)), 1);
+            assert_ne!(toml, DEFAULT_TOML, "the default scenario names itself `hybrid-x0d`");
+            let e = Scenario::from_toml(&toml).unwrap_err().to_string();
+            assert!(e.contains("name") && e.contains("control character"), "{e}");
+            assert!(!e.chars().any(char::is_control), "the message carries no control character: {e:?}");
+        }
+        let fine = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", "name = \"Zürich run — 2\"", 1);
+        assert_eq!(Scenario::from_toml(&fine).unwrap().name, "Zürich run — 2");
+    }
+
     fn set(arg: &str) -> Override {
         arg.parse().unwrap()
+    }
+
+    /// docs/rig.md "Overrides": `--set faults=[...]` replaces the file's faults and
+    /// is validated as in a file.
+    #[test]
+    fn faults_can_be_set_and_are_validated() {
+        let s = Scenario::from_toml_with(DEFAULT_TOML, &[set("faults=[{kind=\"stall\",at_s=0.5,duration_s=0.05}]")]).unwrap();
+        assert_eq!(s.faults.len(), 1);
+        let with_two = format!("{DEFAULT_TOML}\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\n[[faults]]\nkind = \"stall\"\nat_s = 2.0\n");
+        assert_eq!(Scenario::from_toml_with(&with_two, &[set("faults=[]")]).unwrap().faults.len(), 0);
+        let e = Scenario::from_toml_with(DEFAULT_TOML, &[set("faults=[{kind=\"gremlin\",at_s=0.5}]")]).unwrap_err().to_string();
+        assert!(e.contains("faults[0].kind") && e.contains("gremlin") && e.contains("--set"), "{e}");
     }
 
     #[test]

@@ -44,6 +44,15 @@ pub enum CliError {
     /// The command was stopped (Ctrl-C, SIGTERM) part way; what it computed is kept.
     #[error("interrupted: {0}")]
     Interrupted(String),
+    /// Another process writes into the output folder ([`crate::folder_lock`]);
+    /// nothing was written.
+    #[error("{} is in use by {owner}: wait for it to finish, or write to another --out", path.display())]
+    FolderInUse {
+        /// The folder.
+        path: PathBuf,
+        /// The holder, as its owner file names it (pid and command line).
+        owner: String,
+    },
     /// Drawing a figure failed.
     #[error("cannot draw {path}: {message}")]
     Plot {
@@ -63,7 +72,7 @@ impl CliError {
     /// Process exit code: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) => 2,
+            Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) | Self::FolderInUse { .. } => 2,
             Self::Sim(e) if e.is_bad_input() => 2,
             Self::Run(
                 rig::record::RunError::RigInUse { .. }

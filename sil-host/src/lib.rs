@@ -3,10 +3,12 @@
 //! writes the outputs (CSV, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
+pub mod cancel;
 pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod fastcsv;
+pub mod folder_lock;
 pub mod output;
 pub mod plot;
 pub mod sweep;
@@ -15,7 +17,8 @@ use clap::Parser;
 
 /// Runs the command line `args` (program name first) and returns the process
 /// exit code: 0 on success, 1 when a run fails, 2 for bad input (unknown flags,
-/// invalid values; nothing is written then). `--help` and `--version` print and return 0.
+/// invalid values; nothing is written then), 130 or 143 when stopped by Ctrl-C or
+/// SIGTERM (what was finished is kept: [`cancel`]). `--help` and `--version` print and return 0.
 pub fn run<I, T>(args: I) -> i32
 where
     I: IntoIterator<Item = T>,
@@ -52,7 +55,8 @@ where
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
-            e.exit_code()
+            // Stopped by Ctrl-C or SIGTERM: the shell's 128 + signal (130, 143).
+            cancel::exit_code().unwrap_or_else(|| e.exit_code())
         }
     }
 }

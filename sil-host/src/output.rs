@@ -11,7 +11,7 @@ use std::{
     path::{Path, PathBuf},
 };
 
-use crate::{error::CliError, fastcsv::CsvFile};
+use crate::{error::CliError, fastcsv::CsvFile, folder_lock::FolderLock};
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -21,16 +21,20 @@ pub struct OutputSet {
     /// Files written as they are produced: renamed on commit, kept otherwise.
     streamed: Vec<(PathBuf, PathBuf)>,
     committed: bool,
+    /// The folder's lock, held until the set is dropped.
+    _lock: FolderLock,
 }
 
 impl OutputSet {
-    /// Creates the folder `dir` (and its parents) if needed.
+    /// Creates the folder `dir` (and its parents) if needed and locks it
+    /// ([`FolderLock`]) until the set is dropped.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the folder cannot be created.
+    /// [`CliError::Io`] when the folder cannot be created;
+    /// [`CliError::FolderInUse`] (exit 2) when another process writes into it.
     pub fn new(dir: &Path) -> Result<Self, CliError> {
-        std::fs::create_dir_all(dir).map_err(|source| CliError::Io { path: dir.to_path_buf(), source })?;
-        Ok(Self { dir: dir.to_path_buf(), pending: Vec::new(), streamed: Vec::new(), committed: false })
+        let lock = FolderLock::acquire(dir)?;
+        Ok(Self { dir: dir.to_path_buf(), pending: Vec::new(), streamed: Vec::new(), committed: false, _lock: lock })
     }
 
     /// The folder the files go to.

@@ -418,3 +418,85 @@ fn sbatch_calls(dir: &Path) -> Vec<Vec<String>> {
         .map(|p| std::fs::read_to_string(p).unwrap().lines().map(String::from).collect())
         .collect()
 }
+
+/// Waits until process `pid` holds `dir` (its owner file names it), up to 60 s on a
+/// loaded machine: driven by the event, not a sleep.
+fn wait_until_locked(dir: &Path, pid: u32) {
+    let start = std::time::Instant::now();
+    let owner = dir.join(sil_host::folder_lock::OWNER_FILE);
+    while !std::fs::read_to_string(&owner).is_ok_and(|s| s.starts_with(&format!("pid {pid}:"))) {
+        assert!(start.elapsed() < std::time::Duration::from_secs(60), "process {pid} never locked {}", dir.display());
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+/// Issue 27: two sweeps into one folder interleaved their rows and destroyed it.
+/// A sweep holding its folder (stopped with SIGSTOP while it holds it, so the
+/// test does not depend on how long it runs) refuses a second sweep, a merge, a
+/// report and a run into that folder with exit 2 and the owner's pid; continued,
+/// it finishes unharmed, to the rows of a sweep run alone.
+#[test]
+fn a_second_command_into_a_held_folder_is_refused_and_the_first_finishes_unharmed() {
+    let alone = tempfile::tempdir().unwrap();
+    ok(&sweep(alone.path(), &[]));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shared");
+    let first =
+        sil_host().args(TINY).args(["--json", "--threads", "1", "--out"]).arg(&out).stdout(std::process::Stdio::piped()).spawn().unwrap();
+    wait_until_locked(&out, first.id());
+    // SAFETY: signals to our own child.
+    assert_eq!(unsafe { libc::kill(first.id() as i32, libc::SIGSTOP) }, 0);
+    let shard = tempfile::tempdir().unwrap();
+    ok(&sweep(shard.path(), &["--shard", "0/2"]));
+    let o = shard.path().to_str().unwrap();
+    let refused: [(&str, Vec<&str>); 4] = [
+        ("sweep", TINY.to_vec()),
+        ("merge", vec!["merge", "--allow-missing", o]),
+        ("report", vec!["report"]),
+        ("run", vec!["run", "--in-process", "--duration", "0.1"]),
+    ];
+    for (what, args) in refused {
+        let second = sil_host().args(&args).arg("--out").arg(&out).output().unwrap();
+        let err = String::from_utf8_lossy(&second.stderr);
+        assert_eq!(second.status.code(), Some(2), "{what}: {err}");
+        assert!(err.contains("is in use by pid") && err.contains(&format!("pid {}", first.id())), "{what}: {err}");
+        assert!(!out.join("summary.json").exists() && !out.join("trace.csv").exists(), "{what} wrote nothing");
+    }
+    assert_eq!(unsafe { libc::kill(first.id() as i32, libc::SIGCONT) }, 0);
+    let s = ok(&first.wait_with_output().unwrap());
+    assert_eq!(s["status"], "complete");
+    assert_eq!(read(&out, "sweep.csv"), read(alone.path(), "sweep.csv"));
+    assert_eq!(read(&out, "runs.csv").lines().count(), 13, "header and 12 rows, none twice");
+    assert!(!out.join(sil_host::folder_lock::OWNER_FILE).exists(), "the owner file goes with the lock");
+}
+
+/// The audit's trial: two identical sweeps started together into one new folder.
+/// Whichever takes the folder first computes the grid; the other is refused (exit
+/// 2) or, started after the first finished, finds the sweep complete (exit 0). The
+/// folder always ends as a sweep run alone.
+#[test]
+fn two_sweeps_started_together_leave_one_whole_sweep() {
+    let alone = tempfile::tempdir().unwrap();
+    ok(&sweep(alone.path(), &[]));
+    for trial in 0..3 {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("together");
+        let start = || {
+            sil_host()
+                .args(TINY)
+                .arg("--out")
+                .arg(&out)
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (start(), start());
+        let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+        let codes = (a.status.code(), b.status.code());
+        let why = format!("trial {trial}: {codes:?}: {} | {}", String::from_utf8_lossy(&a.stderr), String::from_utf8_lossy(&b.stderr));
+        assert!(matches!(codes, (Some(0), Some(0)) | (Some(0), Some(2)) | (Some(2), Some(0))), "{why}");
+        assert_eq!(read(&out, "sweep.csv"), read(alone.path(), "sweep.csv"), "{why}");
+        assert_eq!(read(&out, "runs.csv").lines().count(), 13, "{why}");
+    }
+}

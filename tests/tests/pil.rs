@@ -174,7 +174,9 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
             assert_eq!(k, 300);
-            assert!(what.contains("QEMU"), "{what}");
+            // Issue 27: it said "QEMU still runs (the image hangs?)" next to a SIGKILL.
+            assert!(what.contains("QEMU was killed by the scenario's kill_firmware fault") && what.contains("SIGKILL"), "{what}");
+            assert!(!what.contains("still runs"), "{what}");
         }
         other => panic!("expected FirmwareLost, got {other:?}"),
     }
@@ -188,6 +190,53 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     let qemu = PilTarget::Qemu { image: image().into(), qemu: "/nonexistent/qemu-system-arm".into(), link: QemuLink::Semihosting };
     let err = PilLink::start(&s, &PilOptions::for_target(qemu), None).unwrap_err();
     assert!(err.to_string().contains("cannot start /nonexistent/qemu-system-arm"), "{err}");
+}
+
+/// The children of process `pid` (every thread's `children` file, Linux 3.5+).
+fn children_of(pid: u32) -> Vec<u32> {
+    let tasks = std::fs::read_dir(format!("/proc/{pid}/task")).into_iter().flatten().flatten();
+    tasks
+        .filter_map(|t| std::fs::read_to_string(t.path().join("children")).ok())
+        .flat_map(|c| c.split_whitespace().filter_map(|p| p.parse().ok()).collect::<Vec<u32>>())
+        .collect()
+}
+
+/// Issue 27: QEMU killed by something outside the run (here this test, with
+/// SIGKILL) was reported as "QEMU still runs (the image hangs?)" next to
+/// `qemu_exit: signal 9`. The run now says it was killed, and by whom it was not.
+#[test]
+fn a_qemu_killed_from_outside_is_reported_as_killed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("killed");
+    let run = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["pil", "--image"])
+        .arg(image())
+        .args(["--duration", "600", "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the loop runs (rows on disk), however long QEMU took to boot.
+    let partial = out.join("trace.csv.partial");
+    let start = std::time::Instant::now();
+    while std::fs::read_to_string(&partial).map_or(0, |t| t.lines().count()) < 50 {
+        assert!(start.elapsed() < std::time::Duration::from_secs(120), "the PIL run never started");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let qemu: Vec<u32> = children_of(run.id())
+        .into_iter()
+        .filter(|p| std::fs::read_to_string(format!("/proc/{p}/comm")).is_ok_and(|c| c.trim() == "qemu-system-arm"))
+        .collect();
+    assert_eq!(qemu.len(), 1, "one QEMU under the run");
+    assert!(Command::new("kill").args(["-KILL", &qemu[0].to_string()]).status().unwrap().success());
+    let o = run.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("QEMU was killed") && err.contains("SIGKILL") && err.contains("outside this run"), "{err}");
+    assert!(!err.contains("still runs"), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["pil"]["qemu_exit"], "signal: 9 (SIGKILL)", "{summary}");
 }
 
 /// QEMU on the PIL image with its USART1 on a pseudo-terminal (`-serial pty`),

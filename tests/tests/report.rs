@@ -98,3 +98,47 @@ fn sensitivity_properties(study: &serde_json::Value) {
         assert_eq!(study["validity"][k], 0, "{k}");
     }
 }
+
+/// Issue 27: a signal stopped only the sweep running at that moment, and the report
+/// went on (161 s in one trial). One cancellation now reaches every step: the
+/// running experiment stops (a sweep within a run), the later ones are not run,
+/// the page is written with what finished, and the exit code is the shell's 130.
+#[test]
+fn ctrl_c_stops_the_whole_report_and_keeps_what_finished() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["report", "--json", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the open-loop sweep holds its folder (it runs), however loaded the machine.
+    let owner = out.join("sweep-open-loop").join(".sil-host.owner");
+    let start = std::time::Instant::now();
+    while !owner.exists() {
+        assert!(start.elapsed() < std::time::Duration::from_secs(300), "the report never reached its sweep");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let signalled = std::time::Instant::now();
+    let o = child.wait_with_output().unwrap();
+    let took = signalled.elapsed();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted") && err.contains("experiments finished"), "{err}");
+    // The stop takes the sweep's current run and the 0.5 s grace; 30 s leaves room
+    // for a loaded machine and is still far from the report's remaining minutes.
+    assert!(took < std::time::Duration::from_secs(30), "stopped after {took:?}");
+    let index: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let step = |id: &str| index["steps"].as_array().unwrap().iter().find(|s| s["id"] == id).unwrap().clone();
+    for id in ["modes", "admissible", "simulate"] {
+        assert_eq!(step(id)["ok"], true, "{id} finished before the signal");
+    }
+    assert!(step("sweep-open-loop")["error"].as_str().unwrap().contains("interrupted"), "{}", step("sweep-open-loop"));
+    for id in ["sweep-hybrid", "zmax", "sensitivity", "hybrid-x0d"] {
+        assert!(step(id)["error"].as_str().unwrap().starts_with("not run: the report was interrupted"), "{}", step(id));
+    }
+    assert!(std::fs::read_to_string(out.join("report.md")).unwrap().contains("not run: the report was interrupted"));
+}

@@ -245,6 +245,31 @@ fn a_second_plant_or_firmware_on_a_live_rig_is_refused() {
     assert_eq!(fw.wait().unwrap().code(), Some(0));
 }
 
+/// Issue 27: `run --rig X` while a firmware started by hand holds X. The spawned
+/// firmware was refused, yet the plant ran the whole scenario against the other
+/// one and exited 0. Now the run is refused before any period, naming the owner,
+/// and the firmware that holds the rig still serves an attached run.
+#[test]
+fn a_spawned_run_on_a_rig_held_by_another_firmware_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let name = rig("held");
+    let mut fw =
+        sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "0.5"]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_until_held(rig::ipc::Role::Firmware, &name, fw.id());
+    let out = dir.path().join("spawned");
+    let o = run(&["--rig", &name, "--scenario", s, "--duration", "0.5"], &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("in use by process {} (its firmware)", fw.id())), "{err}");
+    assert!(!out.exists(), "nothing written");
+    let attached = dir.path().join("attached");
+    assert!(run(&["--attach", &name, "--scenario", s, "--duration", "0.5"], &attached).status.success());
+    assert_eq!(trace(&attached).len(), 500);
+    assert_eq!(fw.wait().unwrap().code(), Some(0));
+}
+
 #[test]
 fn late_and_dropped_commands_are_counted_by_the_right_sides() {
     let dir = tempfile::tempdir().unwrap();
@@ -421,11 +446,18 @@ fn sigterm_stops_a_run_and_everything_recorded_is_written() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(1000));
+    // Once the run streams periods (however long the start takes on a loaded machine).
+    let partial = out.join("trace.csv.partial");
+    let started = Instant::now();
+    while std::fs::read_to_string(&partial).map_or(0, |t| t.lines().count()) < 10 {
+        assert!(started.elapsed() < Duration::from_secs(60), "the run never started");
+        std::thread::sleep(Duration::from_millis(5));
+    }
     // SAFETY: kill(2) on our own child's pid.
     assert_eq!(unsafe { libc_kill(child.id() as i32, 15) }, 0);
     let o = child.wait_with_output().unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    // The shell's code for SIGTERM (128 + 15), as for every command (sil-host's cancel).
+    assert_eq!(o.status.code(), Some(143), "{}", String::from_utf8_lossy(&o.stderr));
     let sm = summary(&out);
     assert_eq!(sm["status"], "failed");
     assert!(sm["error"].as_str().unwrap().contains("interrupted"));

@@ -2,11 +2,7 @@
 //! board-twin` (the board twin serving the same protocol on a pseudo-terminal):
 //! thin commands over `rig::bringup_procedure` and `rig::bringup_line`.
 
-use std::{
-    io::Write,
-    sync::{Arc, atomic::AtomicBool},
-    time::Duration,
-};
+use std::{io::Write, sync::Arc, time::Duration};
 
 use arm_app::{
     bringup::{CalibrationRecord, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
@@ -153,10 +149,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             emit(json, &s, || print_snapshot(&s));
         }
         BoardCommand::Watch { interval_ms, count } => {
-            let stop = Arc::new(AtomicBool::new(false));
-            for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-                let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
-            }
+            let stop = crate::cancel::stop_flag();
             let mut n = 0;
             while !stop.load(std::sync::atomic::Ordering::Relaxed) && count.is_none_or(|k| n < k) {
                 let s = snapshot(&mut c)?;
@@ -273,10 +266,9 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
         );
     }
     let _ = std::io::stdout().flush();
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
-    }
+    // Until Ctrl-C or SIGTERM, or --serve-for's time (which sets the same flag,
+    // without a signal: the exit code stays 0).
+    let stop = crate::cancel::stop_flag();
     if let Some(t) = args.serve_for {
         let stop = Arc::clone(&stop);
         std::thread::spawn(move || {

@@ -4,10 +4,7 @@
 use std::{
     io::Write,
     path::PathBuf,
-    sync::{
-        Arc,
-        atomic::{AtomicBool, Ordering},
-    },
+    sync::atomic::{AtomicBool, Ordering},
     time::Instant,
 };
 
@@ -112,15 +109,6 @@ crate::csv_row!(PeriodRecord {
     status: int,
 });
 
-/// Ctrl-C and SIGTERM set a flag the loop checks each period (so the trace so far is written).
-pub(crate) fn stop_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
-    }
-    flag
-}
-
 /// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
 /// with the run: every period's row goes to `trace.csv` of `out` as it is made
 /// (`trace.csv.partial`, flushed every 1 ms of wall time, so a plant killed
@@ -140,7 +128,7 @@ pub(crate) fn run_streamed(
     progress: &indicatif::ProgressBar,
     every: usize,
 ) -> Result<Streamed, CliError> {
-    let stop = stop_flag();
+    let stop = crate::cancel::stop_flag();
     let mut trace = StreamedCsv::new(out, "trace.csv", <PeriodRecord as CsvRow>::HEADER, std::time::Duration::from_millis(1))?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the

@@ -79,3 +79,18 @@ pub struct StepResult {
     /// Files it wrote, relative to the report folder.
     pub files: Vec<String>,
 }
+
+impl StepResult {
+    /// The result of step `st` that produced nothing: not run, or abandoned,
+    /// with `why`; the files it left in its folder are listed.
+    pub fn not_run(root: &std::path::Path, st: &super::sections::Step, why: &str) -> Self {
+        Self {
+            id: st.id,
+            command: super::command_line(root, st),
+            wall_s: 0.0,
+            outcome: None,
+            error: Some(why.to_string()),
+            files: super::files_in(root, &root.join(st.id)),
+        }
+    }
+}

@@ -4,7 +4,6 @@
 //! one figure per headline result.
 
 use std::io::Write;
-use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use analyses::sensitivity::{self, Study};
@@ -68,7 +67,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::BadInput(format!("cannot start {threads} worker threads: {e}")))?;
-    let stop = stop_flag();
+    let stop = crate::cancel::stop_flag();
     let progress = progress_bar(1, "sensitivity", "jobs", args.output.json);
     let started = Instant::now();
     let study = pool.install(|| {
@@ -94,15 +93,6 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
     let files = out.commit()?;
     let validity = summary.study.validity;
     Ok(Done::ok(summary, files).strict(args.strict.strict, &validity))
-}
-
-/// Ctrl-C and SIGTERM set a flag the workers check between jobs.
-fn stop_flag() -> std::sync::Arc<AtomicBool> {
-    let flag = std::sync::Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let _ = signal_hook::flag::register(sig, std::sync::Arc::clone(&flag));
-    }
-    flag
 }
 
 /// Runs `sil-host sensitivity`: [`execute`], then prints the table (or the JSON

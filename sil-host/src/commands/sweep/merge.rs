@@ -4,6 +4,7 @@ use super::outputs::{finish, report};
 use crate::{
     cli::MergeArgs,
     error::CliError,
+    folder_lock::FolderLock,
     sweep::store::{self, Manifest},
 };
 use analyses::sweep::{Shard, SweepSpec, run::RunRow};
@@ -14,7 +15,8 @@ use std::{collections::BTreeMap, path::PathBuf};
 /// # Errors
 /// Folders of different sweeps, conflicting duplicates, missing runs without
 /// --allow-missing (exit 2, naming a few missing runs, the shards that miss runs
-/// and how to finish); I/O failures (exit 1).
+/// and how to finish); `--out` in use by another command ([`CliError::FolderInUse`],
+/// exit 2); I/O failures (exit 1).
 pub fn merge(args: &MergeArgs) -> Result<(), CliError> {
     let mut first: Option<(PathBuf, Manifest)> = None;
     let mut rows: BTreeMap<usize, (RunRow, PathBuf)> = BTreeMap::new();
@@ -68,6 +70,8 @@ pub fn merge(args: &MergeArgs) -> Result<(), CliError> {
     if args.dirs.iter().any(|d| d == &args.out) {
         return Err(CliError::BadInput("--out must not be one of the merged folders".into()));
     }
+    // One writer per folder: a second merge or a sweep into --out is refused.
+    let _lock = FolderLock::acquire(&args.out)?;
     store::open(&args.out, &merged)?;
     store::write_rows(&args.out.join(store::JOURNAL), &rows)?;
     if !args.json && duplicates > 0 {

@@ -10,8 +10,8 @@
 
 use std::{
     sync::{
-        Arc, Mutex,
-        atomic::{AtomicBool, AtomicU64, Ordering},
+        Mutex,
+        atomic::{AtomicU64, Ordering},
     },
     time::Instant,
 };
@@ -22,6 +22,7 @@ use crate::commands::Done;
 use crate::{
     cli::SweepArgs,
     error::CliError,
+    folder_lock::FolderLock,
     output::progress_bar,
     sweep::store::{self, Manifest},
 };
@@ -137,19 +138,11 @@ fn dedup<T: PartialEq>(it: impl Iterator<Item = T>) -> Vec<T> {
     v
 }
 
-/// Ctrl-C and SIGTERM set a flag the workers check between runs and inside them.
-fn stop_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
-    }
-    flag
-}
-
 /// Runs `sil-host sweep`.
 ///
 /// # Errors
-/// Bad arguments or a folder holding another sweep (exit 2); an interruption or
+/// Bad arguments, a folder holding another sweep, or a folder another command
+/// writes into ([`CliError::FolderInUse`]) (exit 2); an interruption or
 /// an I/O failure (exit 1; finished runs are kept in the journal).
 pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     let spec = spec_of(args)?;
@@ -160,6 +153,10 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     if args.threads == Some(0) {
         return Err(CliError::BadInput("--threads must be >= 1".into()));
     }
+    // One writer per folder, from before the manifest is read to the last figure:
+    // a second sweep started into the same --out is refused here (exit 2), and the
+    // first finishes unharmed.
+    let _lock = FolderLock::acquire(&args.out)?;
     let mut manifest = Manifest { spec: spec.clone(), shard };
     // A shard folder of an earlier version (modulo assignment) resumes as it began.
     if let Some(existing) = store::read_manifest(&args.out)?
@@ -195,7 +192,7 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::BadInput(format!("cannot start {threads} threads: {e}")))?;
-    let stop = stop_flag();
+    let stop = crate::cancel::stop_flag();
     let progress = progress_bar(todo.len() as u64, "sweep", "runs", args.json);
     let failure: Mutex<Option<CliError>> = Mutex::new(None);
     let done = AtomicU64::new(0);
