@@ -1,10 +1,15 @@
 //! Faults the rig injects (docs/hardware.md "Faults"),
 //! as listed in a scenario's `[[faults]]` tables. Each fault acts over a window
-//! of sample times `[at_s, at_s + duration_s)`; where it acts (plant side, wire,
-//! firmware side) is part of its definition, so that the in-process and the
-//! iceoryx2 loops inject it at the same place.
+//! of sample times `[at_s, at_s + duration_s)`, compiled once into a range of
+//! period indices by one rounding rule ([`Fault::periods`]) and checked at load
+//! (a fault none of whose periods is in the run is refused); where it acts
+//! (plant side, wire, firmware side) is part of its definition, so that the
+//! in-process and the iceoryx2 loops inject it at the same place.
+
+use std::ops::Range;
 
 use serde::{Deserialize, Serialize};
+use shared::time::{Duration, Period};
 
 use crate::record::RunError;
 
@@ -89,9 +94,18 @@ pub struct Fault {
 }
 
 impl Fault {
-    /// Whether sample time `t` (s) is in the window (at least the period at `at_s`).
-    pub fn active(&self, t: f64, ts: f64) -> bool {
-        t >= self.at_s - 0.5 * ts && t < self.at_s + self.duration_s.max(ts) - 0.5 * ts
+    /// The periods the fault acts in, by index: period `k` (sample time
+    /// `t_k = k Ts`) is in the window when `at_s <= t_k < at_s + max(duration_s,
+    /// Ts)`, with `at_s` and `duration_s` first rounded to whole microseconds (the
+    /// wire's resolution, [`shared::time`]). So a window of at least one period
+    /// holds at least one sample time, a fault at `at_s = 3.0005` with `Ts = 1 ms`
+    /// acts from period 3001 whatever its kind, and one at an exact sample time acts
+    /// from that sample. The one rounding rule of every fault (docs/rig.md "Faults").
+    pub fn periods(&self, period: Period) -> Range<u64> {
+        let ts = period.as_us();
+        let at = (self.at_s * 1e6).round().max(0.0) as u64;
+        let len = ((self.duration_s * 1e6).round().max(0.0) as u64).max(ts);
+        at.div_ceil(ts)..(at + len).div_ceil(ts)
     }
 
     /// Checks the fault's fields; returns what is wrong.
@@ -131,56 +145,58 @@ impl Fault {
     }
 }
 
-/// The faults of a run, queried per period.
+/// The faults of a run, each compiled once into the periods it acts in
+/// ([`Fault::periods`]), queried by period index.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FaultPlan {
-    faults: Vec<Fault>,
-    ts: f64,
+    faults: Vec<(Fault, Range<u64>)>,
 }
 
 impl FaultPlan {
-    /// The plan of `faults` at sampling period `ts` (s).
-    pub fn new(faults: &[Fault], ts: f64) -> Self {
-        Self { faults: faults.to_vec(), ts }
+    /// The plan of `faults` at control period `period`.
+    pub fn new(faults: &[Fault], period: Period) -> Self {
+        Self { faults: faults.iter().map(|f| (*f, f.periods(period))).collect() }
     }
 
-    /// Faults of `kind` active at sample time `t`.
-    pub fn active(&self, kind: FaultKind, t: f64) -> impl Iterator<Item = &Fault> {
-        self.faults.iter().filter(move |f| f.kind == kind && f.active(t, self.ts))
+    /// Faults of `kind` acting in period `k`.
+    pub fn active(&self, kind: FaultKind, k: u64) -> impl Iterator<Item = &Fault> {
+        self.faults.iter().filter(move |(f, w)| f.kind == kind && w.contains(&k)).map(|(f, _)| f)
     }
 
-    /// How late the firmware's step starts at sample time `t`, s (0 when on time).
-    pub fn command_delay(&self, t: f64) -> f64 {
-        self.active(FaultKind::LateCommand, t).map(|f| f.delay_s).fold(0.0, f64::max)
+    /// How late the firmware's step of period `k` starts (zero when on time),
+    /// rounded to the microsecond.
+    pub fn command_delay(&self, k: u64) -> Duration {
+        let s = self.active(FaultKind::LateCommand, k).map(|f| f.delay_s).fold(0.0, f64::max);
+        Duration((s * 1e6).round() as u64)
     }
 
-    /// Whether the command of sample time `t` is lost on the wire.
-    pub fn drops_command(&self, t: f64) -> bool {
-        self.active(FaultKind::DropCommand, t).next().is_some()
+    /// Whether the command of period `k` is lost on the wire.
+    pub fn drops_command(&self, k: u64) -> bool {
+        self.active(FaultKind::DropCommand, k).next().is_some()
     }
 
-    /// The wall-clock stall (s) that starts at sample time `t`, if one does.
-    pub fn stall_starting(&self, t: f64) -> Option<f64> {
-        self.faults.iter().find(|f| f.kind == FaultKind::Stall && (t - f.at_s).abs() < 0.5 * self.ts).map(|f| f.duration_s)
+    /// The wall-clock stall (s) that starts in period `k`, the first of its window, if one does.
+    pub fn stall_starting(&self, k: u64) -> Option<f64> {
+        self.faults.iter().find(|(f, w)| f.kind == FaultKind::Stall && w.start == k).map(|(f, _)| f.duration_s)
     }
 
-    /// Whether the firmware process is killed at sample time `t`.
-    pub fn kills_firmware_at(&self, t: f64) -> bool {
-        self.faults.iter().any(|f| f.kind == FaultKind::KillFirmware && (t - f.at_s).abs() < 0.5 * self.ts)
+    /// Whether the firmware process is killed before period `k`, the first of the fault's window.
+    pub fn kills_firmware_at(&self, k: u64) -> bool {
+        self.faults.iter().any(|(f, w)| f.kind == FaultKind::KillFirmware && w.start == k)
     }
 
-    /// The board twin's faults active at sample time `t`: the bus faults
+    /// The board twin's faults acting in period `k`: the bus faults
     /// ([`FaultKind::is_bus_fault`]) and the stuck sensors, with their signals.
-    pub fn board_faults(&self, t: f64) -> impl Iterator<Item = (FaultKind, Option<Signal>)> {
+    pub fn board_faults(&self, k: u64) -> impl Iterator<Item = (FaultKind, Option<Signal>)> {
         self.faults
             .iter()
-            .filter(move |f| f.active(t, self.ts) && (f.kind.is_bus_fault() || f.kind == FaultKind::StuckSensor))
-            .map(|f| (f.kind, f.signal))
+            .filter(move |(f, w)| w.contains(&k) && (f.kind.is_bus_fault() || f.kind == FaultKind::StuckSensor))
+            .map(|(f, _)| (f.kind, f.signal))
     }
 
-    /// The sensor faults active at sample time `t`.
-    pub fn sensor_faults(&self, t: f64) -> impl Iterator<Item = (FaultKind, Signal)> {
-        self.faults.iter().filter(move |f| f.active(t, self.ts)).filter_map(|f| match f.kind {
+    /// The sensor faults acting in period `k`.
+    pub fn sensor_faults(&self, k: u64) -> impl Iterator<Item = (FaultKind, Signal)> {
+        self.faults.iter().filter(move |(_, w)| w.contains(&k)).filter_map(|(f, _)| match f.kind {
             FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange => f.signal.map(|s| (f.kind, s)),
             _ => None,
         })
@@ -415,12 +431,48 @@ mod tests {
     #[test]
     fn windows_cover_whole_periods() {
         let f = Fault { kind: FaultKind::DropCommand, at_s: 0.5, duration_s: 0.003, delay_s: 0.0, signal: None };
-        let ts = 1e-3;
-        let hits: Vec<u32> = (0..1000).filter(|k| f.active(*k as f64 * ts, ts)).collect();
-        assert_eq!(hits, [500, 501, 502]);
-        let one = Fault { duration_s: 0.0, ..f };
-        let hits: Vec<u32> = (0..1000).filter(|k| one.active(*k as f64 * ts, ts)).collect();
-        assert_eq!(hits, [500]);
+        let ms = Period::MILLISECOND;
+        assert_eq!(f.periods(ms), 500..503);
+        assert_eq!(Fault { duration_s: 0.0, ..f }.periods(ms), 500..501, "at least the period at at_s");
+        assert_eq!(Fault { at_s: 0.0, duration_s: 0.0, ..f }.periods(ms), 0..1);
+        // Inexact products of the period round to the microsecond first.
+        assert_eq!(Fault { at_s: 3.0 * 0.1, duration_s: 7.0 * 0.001, ..f }.periods(ms), 300..307);
+        // At 6 kHz (167 us): the first sample time at or after 1 s is period 5989 (1.000163 s).
+        let p6 = Period::from_rate_hz(6000.0).unwrap();
+        assert_eq!(Fault { at_s: 1.0, duration_s: 0.0, ..f }.periods(p6), 5989..5990);
+    }
+
+    /// Issue 27: a fault at `at_s = 3.0005` fired in period 3000 for four kinds and
+    /// 3001 for the others. Every query now reads the same compiled window.
+    #[test]
+    fn every_kind_acts_from_the_same_period() {
+        let at = |kind, signal| Fault { kind, at_s: 3.0005, duration_s: 0.0, delay_s: 0.0, signal };
+        let faults = [
+            at(FaultKind::DropCommand, None),
+            Fault { delay_s: 2e-4, ..at(FaultKind::LateCommand, None) },
+            Fault { duration_s: 0.05, ..at(FaultKind::Stall, None) },
+            at(FaultKind::KillFirmware, None),
+            at(FaultKind::StuckSensor, Some(Signal::Theta1)),
+            at(FaultKind::NanSensor, Some(Signal::FN)),
+            at(FaultKind::OutOfRange, Some(Signal::Belt)),
+            at(FaultKind::SpiError, Some(Signal::Elbow)),
+            at(FaultKind::MissingConversion, None),
+            at(FaultKind::DriverFault, None),
+        ];
+        let plan = FaultPlan::new(&faults, Period::MILLISECOND);
+        let first = |acts: &dyn Fn(u64) -> bool| (2990..3010).find(|&k| acts(k));
+        assert_eq!(first(&|k| plan.drops_command(k)), Some(3001));
+        assert_eq!(first(&|k| plan.command_delay(k) == Duration(200)), Some(3001));
+        assert_eq!(first(&|k| plan.stall_starting(k) == Some(0.05)), Some(3001));
+        assert_eq!(first(&|k| plan.kills_firmware_at(k)), Some(3001));
+        for kind in [FaultKind::StuckSensor, FaultKind::NanSensor, FaultKind::OutOfRange] {
+            assert_eq!(first(&|k| plan.sensor_faults(k).any(|(f, _)| f == kind)), Some(3001), "{kind:?}");
+        }
+        for kind in [FaultKind::SpiError, FaultKind::MissingConversion, FaultKind::DriverFault, FaultKind::StuckSensor] {
+            assert_eq!(first(&|k| plan.board_faults(k).any(|(f, _)| f == kind)), Some(3001), "{kind:?}");
+        }
+        // One period each (duration 0), the stall's and kill's at their first only.
+        assert!(!plan.drops_command(3002) && plan.stall_starting(3002).is_none() && !plan.kills_firmware_at(3002));
     }
 
     #[test]

@@ -201,7 +201,7 @@ impl IpcBoard<'_> {
             self.epoch = Some(seen);
         }
         // Injected stall: the process stops (wall clock) at the window's first frame.
-        if let Some(d) = self.faults.stall_starting(first.t_us as f64 * 1e-6)
+        if let Some(d) = self.faults.stall_starting(u64::from(first.seq))
             && self.stalled_at != Some(first.seq)
         {
             self.stalled_at = Some(first.seq);
@@ -328,7 +328,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         ports: &ports,
         rig,
         realtime,
-        faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
+        faults: FaultPlan::new(&s.faults, s.timing.period()),
         peer_check: Duration::from_secs_f64(s.rig.peer_check_s),
         started: Instant::now(),
         epoch: None,

@@ -23,7 +23,7 @@ impl FirmwareSide {
     /// [`RunError::Firmware`] for an invalid configuration.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
         let fw = Firmware::new(firmware_config(s))?;
-        Ok(Self { fw, faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()) })
+        Ok(Self { fw, faults: FaultPlan::new(&s.faults, s.timing.period()) })
     }
 
     /// The firmware.
@@ -49,6 +49,6 @@ impl FirmwareSide {
 /// When the step of `frame` starts, microseconds on the frame's clock:
 /// `max(frame.t_us + injected delay, now_floor_us)` (the `late_command` fault).
 pub fn step_start_us(faults: &FaultPlan, frame: &SensorFrame, now_floor_us: u64) -> u64 {
-    let delay_us = (faults.command_delay(frame.t_us as f64 * 1e-6) * 1e6).round() as u64;
-    frame.t_us.saturating_add(delay_us).max(now_floor_us)
+    let delay = faults.command_delay(u64::from(frame.seq));
+    frame.t_us.saturating_add(delay.as_us()).max(now_floor_us)
 }

@@ -79,7 +79,7 @@ pub struct IpcLink {
     consecutive_timeouts: u32,
     faults: FaultPlan,
     t0: Option<Instant>,
-    k: usize,
+    k: u64,
     /// Timings measured so far.
     pub timings: LinkTimings,
     /// The firmware's announcement, checked against the scenario (the handshake).
@@ -143,7 +143,7 @@ impl IpcLink {
             timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
             max_timeouts: s.rig.max_consecutive_timeouts,
             consecutive_timeouts: 0,
-            faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
+            faults: FaultPlan::new(&s.faults, s.timing.period()),
             t0: None,
             k: 0,
             timings: LinkTimings::default(),
@@ -343,9 +343,9 @@ impl FirmwareLink for IpcLink {
         self.announced.as_ref()
     }
 
-    fn before_period(&mut self, k: usize, t: f64) {
+    fn before_period(&mut self, k: u64) {
         self.k = k;
-        if self.faults.kills_firmware_at(t)
+        if self.faults.kills_firmware_at(k)
             && let Some(sp) = &mut self.spawned
         {
             let _ = sp.child.kill();

@@ -706,7 +706,7 @@ impl PilLink {
             qemu,
             inbox: Vec::new(),
             answer_timeout,
-            faults: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
+            faults: FaultPlan::new(&s.faults, s.timing.period()),
             log,
             counts: PilCounts { keep_ticks: opts.keep_ticks, ..PilCounts::default() },
         };
@@ -960,9 +960,9 @@ impl FirmwareLink for PilLink {
         }
     }
 
-    fn before_period(&mut self, _k: usize, t: f64) {
+    fn before_period(&mut self, k: u64) {
         // Only QEMU can be killed: `start` refuses the fault over a serial port.
-        if self.faults.kills_firmware_at(t)
+        if self.faults.kills_firmware_at(k)
             && let Some(q) = &mut self.qemu
         {
             q.killed_by_fault = true;
@@ -972,7 +972,7 @@ impl FirmwareLink for PilLink {
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         let k = frame.seq as usize;
-        let start_delay_us = (self.faults.command_delay(truth.t) * 1e6).round() as u32;
+        let start_delay_us = u32::try_from(self.faults.command_delay(u64::from(frame.seq)).as_us()).unwrap_or(u32::MAX);
         let lost = |what: String| RunError::FirmwareLost { k, t: truth.t, what };
         if let Err(e) = self.send(&Downlink::Frame { frame: *frame, start_delay_us }) {
             return Err(lost(format!("{e}{}", self.why_pipe_failed())));

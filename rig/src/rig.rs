@@ -68,7 +68,7 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         Ok(match self.inner.exchange(frame, truth)? {
-            Exchange::Answered { command, telemetry, .. } if self.plan.drops_command(shared::Instant(frame.t_us).as_secs_f64()) => {
+            Exchange::Answered { command, telemetry, .. } if self.plan.drops_command(u64::from(frame.seq)) => {
                 Exchange::Dropped { command, telemetry }
             }
             other => other,
@@ -79,8 +79,8 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
         self.inner.send_ahead(frame, truth)
     }
 
-    fn before_period(&mut self, k: usize, t: f64) {
-        self.inner.before_period(k, t);
+    fn before_period(&mut self, k: u64) {
+        self.inner.before_period(k);
     }
 
     fn announcement(&self) -> Option<&crate::handshake::Announced> {
@@ -120,9 +120,10 @@ pub trait FirmwareLink {
         Ok(false)
     }
 
-    /// Called once before period `k`'s exchange (fault injection that acts on the
-    /// firmware process itself, such as killing it).
-    fn before_period(&mut self, _k: usize, _t: f64) {}
+    /// Called once before the exchange of period `k` (its index: sample time
+    /// `k Ts`), for fault injection that acts on the firmware process itself, such
+    /// as killing it ([`FaultPlan::kills_firmware_at`]).
+    fn before_period(&mut self, _k: u64) {}
 
     /// Tells the firmware the run is over (no answer expected).
     fn finish(&mut self, _last_seq: u32) {}
@@ -191,7 +192,7 @@ impl PeriodLoop {
         Self {
             sensors: SensorFaults::new(
                 Sensors::new(s.sensors.seed, s.sensors.load_noise_n).with_encoder_bits(s.sensors.encoder_bits),
-                FaultPlan::new(&s.faults, ts),
+                FaultPlan::new(&s.faults, period),
             ),
             ts,
             period,
@@ -265,7 +266,7 @@ impl PeriodLoop {
             f: self.f_now,
             u_applied: self.applied,
         };
-        link.before_period(k, t_k);
+        link.before_period(k as u64);
         let mut wire = DropCommands { inner: link, plan: self.sensors.plan() };
         let fail = |error| Box::new(PeriodFailure { record: None, error });
         // The first part of the period, run while the firmware computes (see

@@ -706,8 +706,19 @@ impl Scenario {
             if let Err(what) = f.check() {
                 return Err(ScenarioError::Fault { index: i, what });
             }
-            if f.at_s >= t.duration_s {
-                let what = format!("at_s = {} starts at or after the end of the run ({} s): it would never fire", f.at_s, t.duration_s);
+            // The rule the run applies (Fault::periods): a fault whose first period
+            // is past the run's last never acts, even one within the run's last half
+            // period in seconds.
+            let (first, periods) = (f.periods(t.period()).start, t.periods());
+            if first >= periods {
+                let what = format!(
+                    "at_s = {} acts from period {first} (t = {} s, the first sample time at or after at_s), but the run's last \
+                     period is {} (t = {} s): it would never act",
+                    f.at_s,
+                    t.period().sample(first).as_secs_f64(),
+                    periods.saturating_sub(1),
+                    t.period().sample(periods.saturating_sub(1)).as_secs_f64()
+                );
                 return Err(ScenarioError::Fault { index: i, what });
             }
         }
@@ -834,6 +845,19 @@ mod tests {
 
     fn set(arg: &str) -> Override {
         arg.parse().unwrap()
+    }
+
+    /// Issue 27: a fault in the run's last half period was accepted and never acted.
+    /// The load applies the run's own rule (`Fault::periods`).
+    #[test]
+    fn a_fault_that_cannot_act_is_refused_at_load() {
+        let fault = |at_s: f64| format!("{DEFAULT_TOML}\n[[faults]]\nkind = \"drop_command\"\nat_s = {at_s}\n");
+        // The default runs 10 s at 1 kHz: periods 0 to 9999, the last at 9.999 s.
+        assert!(Scenario::from_toml(&fault(9.999)).is_ok());
+        for never in [9.9993, 9.9995, 10.0, 11.0] {
+            let e = Scenario::from_toml(&fault(never)).unwrap_err().to_string();
+            assert!(e.contains("faults[0]") && e.contains("never act") && e.contains("last period is 9999"), "{never}: {e}");
+        }
     }
 
     /// docs/rig.md "Overrides": `--set faults=[...]` replaces the file's faults and

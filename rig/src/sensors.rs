@@ -56,7 +56,7 @@ impl<S: SensorModel> SensorFaults<S> {
 impl<S: SensorModel> SensorModel for SensorFaults<S> {
     fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
         let mut frame = self.inner.frame(seq, t_us, x, f, v_belt);
-        for (kind, signal) in self.plan.sensor_faults(shared::Instant(t_us).as_secs_f64()) {
+        for (kind, signal) in self.plan.sensor_faults(u64::from(seq)) {
             let last = &self.last;
             match (kind, signal) {
                 (FaultKind::StuckSensor, Signal::Theta1) => frame.theta1_count = last.theta1_count,
@@ -180,7 +180,7 @@ mod tests {
         use crate::faults::Fault;
         let x = [0.1, 0.0, -0.3, 0.0];
         let frames = |faults: &[Fault]| -> Vec<SensorFrame> {
-            let mut s = SensorFaults::new(Sensors::new(3, 0.02), FaultPlan::new(faults, 1e-3));
+            let mut s = SensorFaults::new(Sensors::new(3, 0.02), FaultPlan::new(faults, shared::Period::MILLISECOND));
             (0..10u32).map(|k| s.frame(k, u64::from(k) * 1000, &[x[0] + 1e-3 * f64::from(k), 0.0, x[2], 0.0], [0.0, 10.0], -0.4)).collect()
         };
         let mut bare = Sensors::new(3, 0.02);

@@ -55,7 +55,7 @@ impl TwinLink {
             .map_err(|e| RunError::Board(e.to_string()))?;
         Ok(Self {
             twin,
-            plan: FaultPlan::new(&s.faults, s.timing.period().as_secs_f64()),
+            plan: FaultPlan::new(&s.faults, s.timing.period()),
             v_belt: s.plant.v_belt,
             period_us: s.timing.period().as_us(),
             started: false,
@@ -70,10 +70,10 @@ impl TwinLink {
         &self.twin
     }
 
-    /// The bus faults of sample time `t`.
-    fn faults_at(&self, t: f64) -> BusFaults {
+    /// The bus faults of period `k`.
+    fn faults_at(&self, k: u64) -> BusFaults {
         let mut b = BusFaults::default();
-        for (kind, signal) in self.plan.board_faults(t) {
+        for (kind, signal) in self.plan.board_faults(k) {
             let encoder = match signal {
                 Some(Signal::Theta1) => Some(0),
                 Some(Signal::Elbow) => Some(1),
@@ -106,7 +106,7 @@ impl FirmwareLink for TwinLink {
     }
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
-        let faults = self.faults_at(truth.t);
+        let faults = self.faults_at(u64::from(frame.seq));
         let arm = ArmState { x: truth.x, f: truth.f, belt_travel_m: self.v_belt * truth.t };
         if !self.started {
             self.twin.press_enable(&arm, &faults);
