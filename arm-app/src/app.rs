@@ -33,7 +33,10 @@ use firmware::{
     board::{self, Board},
     config::ConfigError,
 };
-use shared::wire::{ActuatorCommand, status};
+use shared::{
+    time::{Duration, Instant},
+    wire::{ActuatorCommand, status},
+};
 
 use crate::{
     bringup::{CalibrationRecord, REDUCED_TORQUE_CODES, RawReadings},
@@ -181,7 +184,7 @@ impl<H: ArmIo> ArmApp<H> {
             period_us: config.period.as_us(),
             seq: 0,
             tick_mark,
-            now_us: 0,
+            now: Instant(0),
             interval: [u32::MAX, 0],
             handler_worst: 0,
             stats: StepStats::default(),
@@ -259,12 +262,12 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
         // The step starts now: the tick plus the sampling.
         let per_us = (self.clock.ticks_per_second() / 1_000_000).max(1);
         let us = self.clock.ticks().wrapping_sub(self.hw.tick_mark) / per_us;
-        self.hw.now_us = frame.t_us + u64::from(us);
+        self.hw.now = frame.sampled_at().saturating_add(Duration(u64::from(us)));
         Ok(Event::Frame(frame))
     }
 
-    fn now_us(&self) -> u64 {
-        self.hw.now_us
+    fn now(&self) -> Instant {
+        self.hw.now
     }
 
     fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {

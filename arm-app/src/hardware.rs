@@ -8,7 +8,10 @@ use drivers::{
 };
 use embedded_hal::digital::InputPin;
 use firmware::Config;
-use shared::wire::{ActuatorCommand, SensorFrame, frame_flags};
+use shared::{
+    time::Instant,
+    wire::{ActuatorCommand, SensorFrame, frame_flags},
+};
 
 use crate::{
     bringup::{CalibrationRecord, JogOutcome, RawReadings},
@@ -78,7 +81,7 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) period_us: u64,
     pub(crate) seq: u32,
     pub(crate) tick_mark: u32,
-    pub(crate) now_us: u64,
+    pub(crate) now: Instant,
     pub(crate) interval: [u32; 2],
     pub(crate) handler_worst: u32,
     pub(crate) stats: StepStats,

@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
                 }
                 let f = &frames[k];
                 k += 1;
-                fw.step(f.t_us, f, &FrozenClock)
+                fw.step(f.sampled_at(), f, &FrozenClock)
             })
         });
     }

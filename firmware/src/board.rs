@@ -10,7 +10,10 @@
 //! command to write (torques, or the safe state's zero torque and disabled
 //! drivers), a configuration accepted or rejected.
 
-use shared::wire::{ActuatorCommand, SensorFrame};
+use shared::{
+    time::Instant,
+    wire::{ActuatorCommand, SensorFrame},
+};
 
 use crate::{Config, Firmware, SafeReason, config::ConfigError};
 
@@ -86,10 +89,10 @@ pub trait Board {
     /// # Errors
     /// The board's error (peer gone, link broken).
     fn next_event(&mut self) -> Result<Event, Self::Error>;
-    /// When the step of the frame just received starts, microseconds on the
-    /// clock of [`SensorFrame::t_us`] (the frame's sample time plus whatever
-    /// delayed the start).
-    fn now_us(&self) -> u64;
+    /// When the step of the frame just received starts, on the clock of
+    /// [`SensorFrame::t_us`] (the frame's sample time plus whatever delayed the
+    /// start).
+    fn now(&self) -> Instant;
     /// Acts on an outcome; `firmware` is the state after it (telemetry).
     ///
     /// # Errors
@@ -112,7 +115,7 @@ pub fn handle<B: Board, C: TickClock>(
     clock: &C,
 ) -> Result<Outcome, B::Error> {
     let outcome = match (event, firmware.as_mut()) {
-        (Event::Frame(frame), Some(fw)) => Outcome::Command(fw.step(board.now_us(), &frame, clock)),
+        (Event::Frame(frame), Some(fw)) => Outcome::Command(fw.step(board.now(), &frame, clock)),
         (Event::Frame(frame), None) => Outcome::NotConfigured { seq: frame.seq },
         (Event::Configure(cfg), _) => match Firmware::new(cfg) {
             Ok(fw) => {
@@ -130,7 +133,7 @@ pub fn handle<B: Board, C: TickClock>(
         (Event::PeerLost { seq }, fw) => match fw {
             Some(fw) => {
                 fw.enter_safe_state(SafeReason::PeerLost);
-                Outcome::Command(fw.safe_command(seq, board.now_us()))
+                Outcome::Command(fw.safe_command(seq, board.now()))
             }
             None => Outcome::NotConfigured { seq },
         },
@@ -181,7 +184,7 @@ mod tests {
     struct Script {
         events: std::vec::IntoIter<Event>,
         outcomes: Vec<Outcome>,
-        now_us: u64,
+        now: Instant,
     }
 
     impl Board for Script {
@@ -189,12 +192,12 @@ mod tests {
         fn next_event(&mut self) -> Result<Event, Self::Error> {
             let e = self.events.next().ok_or("script exhausted")?;
             if let Event::Frame(f) = e {
-                self.now_us = f.t_us;
+                self.now = f.sampled_at();
             }
             Ok(e)
         }
-        fn now_us(&self) -> u64 {
-            self.now_us
+        fn now(&self) -> Instant {
+            self.now
         }
         fn apply(&mut self, outcome: &Outcome, _: Option<&Firmware>) -> Result<(), Self::Error> {
             self.outcomes.push(*outcome);
@@ -220,7 +223,7 @@ mod tests {
             Event::Reset,
             Event::End,
         ];
-        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now_us: 0 };
+        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant(0) };
         let mut fw = None;
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
@@ -255,7 +258,7 @@ mod tests {
             Event::Frame(frame(u32::from(limit) + 501)),
             Event::End,
         ];
-        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now_us: 0 };
+        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant(0) };
         let mut fw = Some(Firmware::new(Config::default()).unwrap());
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
@@ -269,7 +272,7 @@ mod tests {
 
     #[test]
     fn a_board_error_stops_the_loop() {
-        let mut board = Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now_us: 0 };
+        let mut board = Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now: Instant(0) };
         assert_eq!(run(&mut None, &mut board, &FrozenClock), Err("script exhausted"));
     }
 }

@@ -6,6 +6,7 @@ use nalgebra::Vector2;
 use shared::{
     Arm, ElbowBranch,
     kinematics::{JointTrig, jacobian_trig, tip_position, tip_position_trig},
+    time::{Duration, Instant},
     wire::{self, ActuatorCommand, SensorFrame, status},
 };
 
@@ -230,12 +231,13 @@ impl Firmware {
         }
     }
 
-    /// The zero-torque command the safe state sends for frame `seq` at `now_us`
-    /// without a frame to step on (the board's loop uses it when its peer is lost).
-    pub fn safe_command(&self, seq: u32, now_us: u64) -> ActuatorCommand {
+    /// The zero-torque command the safe state sends for frame `seq` at `now` (on
+    /// the clock of [`SensorFrame::t_us`]) without a frame to step on (the board's
+    /// loop uses it when its peer is lost).
+    pub fn safe_command(&self, seq: u32, now: Instant) -> ActuatorCommand {
         let reason = self.safe.map_or(0, |r| r as u32);
         ActuatorCommand {
-            t_sent_us: now_us,
+            t_sent_us: now.as_us(),
             seq,
             u1_code: 0,
             u2_code: 0,
@@ -263,10 +265,10 @@ impl Firmware {
 
     /// One control period.
     ///
-    /// `now_us` is when the step starts, on the clock of `frame.t_us`; `clock`
+    /// `now` is when the step starts, on the clock of `frame.t_us`; `clock`
     /// measures the step's own execution. The command answers `frame.seq`. It is a
     /// deadline miss when the command leaves later than `frame.t_us + Ts`
-    /// (`now_us - t_us` plus the step's own time); `deadline_miss_limit`
+    /// (`now - t_us` plus the step's own time); `deadline_miss_limit`
     /// consecutive misses latch the safe state.
     ///
     /// Bad frames (counts out of range, a repeated or older sequence number) are
@@ -278,7 +280,7 @@ impl Firmware {
     // Never inlined: the step's code (and its instruction count, a CI gate) must not
     // depend on the board loop it is called from (docs/board.md "The control step's cost").
     #[inline(never)]
-    pub fn step<C: TickClock>(&mut self, now_us: u64, frame: &SensorFrame, clock: &C) -> ActuatorCommand {
+    pub fn step<C: TickClock>(&mut self, now: Instant, frame: &SensorFrame, clock: &C) -> ActuatorCommand {
         let start = clock.ticks();
         let mut flags = 0u32;
         let codes = match self.checked(frame) {
@@ -313,11 +315,11 @@ impl Firmware {
         // Deadline: the command leaves at now + the step's own time; leaving at
         // t_k + Ts or later it cannot act in period k (the plant's rule too).
         let elapsed_ticks = clock.ticks().wrapping_sub(start);
-        let elapsed_us = elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64;
+        let elapsed = Duration(elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64);
         let period_us = self.cfg.period.as_us();
         // Saturating: a clock near u64::MAX (or a frame stamped far in the past)
         // must read as late, never wrap round to on time.
-        if now_us.saturating_sub(frame.t_us).saturating_add(elapsed_us) >= period_us {
+        if now.saturating_since(frame.sampled_at()).saturating_add(elapsed).as_us() >= period_us {
             flags |= status::DEADLINE_MISS;
             self.overruns = self.overruns.saturating_add(1);
             self.consecutive_misses = self.consecutive_misses.saturating_add(1);
@@ -337,7 +339,7 @@ impl Firmware {
         self.last_codes = codes;
         self.applied = [wire::decode_torque(codes[0]), wire::decode_torque(codes[1])];
         ActuatorCommand {
-            t_sent_us: now_us.saturating_add(elapsed_us),
+            t_sent_us: now.saturating_add(elapsed).as_us(),
             seq: frame.seq,
             u1_code: codes[0],
             u2_code: codes[1],

@@ -93,7 +93,7 @@ fn a_wrong_command_fails_the_firmware_property() {
         for k in 0..3 {
             let frame = good_frame(k);
             let now_us = frame.t_us + 100;
-            let mut cmd = fw.step(now_us, &frame, &FrozenClock);
+            let mut cmd = fw.step(shared::time::Instant(now_us), &frame, &FrozenClock);
             let seen_clock = Clock { start: 0, elapsed: 0, tps: 1_000_000 };
             if k == 2 {
                 cmd_change(&mut cmd);
@@ -131,7 +131,7 @@ fn a_wrong_command_fails_the_firmware_property() {
     let low = Config { torque_limit: 1.0, ..cfg };
     let mut model = ModelState::default();
     let frame = good_frame(0);
-    let mut cmd = Firmware::new(low).unwrap().step(frame.t_us, &frame, &FrozenClock);
+    let mut cmd = Firmware::new(low).unwrap().step(frame.sampled_at(), &frame, &FrozenClock);
     cmd.u2_code = 820;
     let seen = Observed {
         frame: &frame,

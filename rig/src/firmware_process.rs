@@ -31,11 +31,14 @@ use firmware::{
     Event, Firmware, Outcome, TickClock,
     board::{self, Board, FrozenClock},
 };
-use shared::wire::{FirmwareAnnouncement, SensorFrame, WIRE_VERSION, frame_flags};
+use shared::{
+    time,
+    wire::{FirmwareAnnouncement, SensorFrame, WIRE_VERSION, frame_flags},
+};
 
 use super::{
     faults::FaultPlan,
-    firmware_side::step_start_us,
+    firmware_side::step_start,
     ipc::{FirmwarePorts, PeerState, Role, peer_state},
     realtime::prepare_realtime,
     record::RunError,
@@ -127,7 +130,7 @@ struct IpcBoard<'a> {
     /// Frames that queued up, in order, and the newest sample time among them.
     batch: std::collections::VecDeque<SensorFrame>,
     newest_us: u64,
-    now_us: u64,
+    now: time::Instant,
     step_started: Instant,
     ending: Option<Ending>,
     /// What it answers the plant's handshake frame with.
@@ -189,7 +192,7 @@ impl IpcBoard<'_> {
                         self.last_seq
                     );
                     self.ending = Some(Ending::PeerLost { answered: self.answered });
-                    self.now_us = 0;
+                    self.now = time::Instant(0);
                     Ok(Some(Event::PeerLost { seq: self.last_seq.map_or(0, |q| q.wrapping_add(1)) }))
                 }
             };
@@ -261,12 +264,12 @@ impl Board for IpcBoard<'_> {
                 if frame.flags & frame_flags::END_OF_RUN != 0 {
                     return Ok(Event::End);
                 }
-                let floor_us = match (self.realtime, self.epoch) {
-                    (true, Some(e)) => e.elapsed().as_micros() as u64,
-                    (true, None) => frame.t_us,
-                    (false, _) => self.newest_us,
+                let floor = match (self.realtime, self.epoch) {
+                    (true, Some(e)) => time::Instant(e.elapsed().as_micros() as u64),
+                    (true, None) => frame.sampled_at(),
+                    (false, _) => time::Instant(self.newest_us),
                 };
-                self.now_us = step_start_us(&self.faults, &frame, floor_us);
+                self.now = step_start(&self.faults, &frame, floor);
                 self.step_started = Instant::now();
                 return Ok(Event::Frame(frame));
             }
@@ -276,8 +279,8 @@ impl Board for IpcBoard<'_> {
         }
     }
 
-    fn now_us(&self) -> u64 {
-        self.now_us
+    fn now(&self) -> time::Instant {
+        self.now
     }
 
     fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), RunError> {
@@ -337,7 +340,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         stalled_at: None,
         batch: std::collections::VecDeque::with_capacity(super::ipc::QUEUE_DEPTH),
         newest_us: 0,
-        now_us: 0,
+        now: time::Instant(0),
         step_started: Instant::now(),
         ending: None,
         announcement,

@@ -5,7 +5,10 @@
 //! it receives over iceoryx2, so both produce the same commands bit for bit.
 
 use firmware::{Firmware, TickClock};
-use shared::wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame};
+use shared::{
+    time::Instant,
+    wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame},
+};
 
 use super::{faults::FaultPlan, record::RunError, scenario::Scenario, setup::firmware_config};
 
@@ -37,18 +40,18 @@ impl FirmwareSide {
     }
 
     /// Answers `frame`. The step starts at `max(frame.t_us + injected delay,
-    /// now_floor_us)` on the frame's clock: `now_floor_us` is what the caller's
-    /// clock says (the newest frame seen in lockstep, the wall clock in real time).
-    pub fn answer<C: TickClock>(&mut self, frame: &SensorFrame, now_floor_us: u64, clock: &C) -> (ActuatorCommand, FirmwareTelemetry) {
-        let now_us = step_start_us(&self.faults, frame, now_floor_us);
-        let command = self.fw.step(now_us, frame, clock);
+    /// now_floor)` on the frame's clock: `now_floor` is what the caller's clock
+    /// says (the newest frame seen in lockstep, the wall clock in real time).
+    pub fn answer<C: TickClock>(&mut self, frame: &SensorFrame, now_floor: Instant, clock: &C) -> (ActuatorCommand, FirmwareTelemetry) {
+        let now = step_start(&self.faults, frame, now_floor);
+        let command = self.fw.step(now, frame, clock);
         (command, self.fw.telemetry_message(&command))
     }
 }
 
-/// When the step of `frame` starts, microseconds on the frame's clock:
-/// `max(frame.t_us + injected delay, now_floor_us)` (the `late_command` fault).
-pub fn step_start_us(faults: &FaultPlan, frame: &SensorFrame, now_floor_us: u64) -> u64 {
+/// When the step of `frame` starts, on the frame's clock:
+/// `max(frame.t_us + injected delay, now_floor)` (the `late_command` fault).
+pub fn step_start(faults: &FaultPlan, frame: &SensorFrame, now_floor: Instant) -> Instant {
     let delay = faults.command_delay(u64::from(frame.seq));
-    frame.t_us.saturating_add(delay.as_us()).max(now_floor_us)
+    frame.sampled_at().saturating_add(delay).max(now_floor)
 }

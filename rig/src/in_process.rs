@@ -44,7 +44,7 @@ impl FirmwareLink for InProcessLink {
     }
 
     fn exchange(&mut self, frame: &SensorFrame, _truth: &GroundTruth) -> Result<Exchange, RunError> {
-        let (command, telemetry) = self.side.answer(frame, frame.t_us, &FrozenClock);
+        let (command, telemetry) = self.side.answer(frame, frame.sampled_at(), &FrozenClock);
         Ok(Exchange::Answered { command, telemetry, at_stamp: false })
     }
 }

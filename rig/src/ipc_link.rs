@@ -28,7 +28,10 @@ use std::{
     time::{Duration, Instant},
 };
 
-use shared::wire::{FirmwareTelemetry, GroundTruth, SensorFrame, WIRE_VERSION, frame_flags};
+use shared::{
+    Period,
+    wire::{FirmwareTelemetry, GroundTruth, SensorFrame, WIRE_VERSION, frame_flags},
+};
 
 use super::{
     faults::{FaultPlan, LinkKind},
@@ -73,7 +76,7 @@ pub struct IpcLink {
     /// Real time: how the plant's loop was set up (CPU, scheduling).
     pub realtime_setup: Option<RealtimeSetup>,
     spin: Duration,
-    ts: f64,
+    period: Period,
     timeout: Duration,
     max_timeouts: u32,
     consecutive_timeouts: u32,
@@ -139,7 +142,7 @@ impl IpcLink {
             realtime,
             realtime_setup,
             spin,
-            ts: s.timing.period().as_secs_f64(),
+            period: s.timing.period(),
             timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
             max_timeouts: s.rig.max_consecutive_timeouts,
             consecutive_timeouts: 0,
@@ -368,7 +371,7 @@ impl FirmwareLink for IpcLink {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
         let deadline = if self.realtime {
             let t0 = *self.t0.get_or_insert_with(Instant::now);
-            let ideal = t0 + Duration::from_secs_f64(truth.t);
+            let ideal = t0 + Duration::from_micros(frame.sampled_at().as_us());
             sleep_until(ideal, self.spin);
             None
         } else {
@@ -385,9 +388,9 @@ impl FirmwareLink for IpcLink {
         // behind the wall clock (one period per missed period at most); if the
         // plant itself published late, the firmware still gets half a period.
         let deadline = deadline.unwrap_or_else(|| {
-            let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_secs_f64(truth.t));
+            let ideal = self.t0.map_or(published, |t0| t0 + Duration::from_micros(frame.sampled_at().as_us()));
             self.timings.jitter.record(published.saturating_duration_since(ideal));
-            let ts = Duration::from_secs_f64(self.ts);
+            let ts = Duration::from_micros(self.period.as_us());
             (ideal + ts).max(published + ts / 2)
         });
         loop {
@@ -417,7 +420,7 @@ impl FirmwareLink for IpcLink {
         // a row is given up (exit 1, the trace kept), stalled or not.
         if self.consecutive_timeouts >= self.max_timeouts {
             let each = if self.realtime {
-                format!("one period of {} s of wall time each", self.ts)
+                format!("one period of {} s of wall time each", self.period.as_secs_f64())
             } else {
                 format!("{} s of wall time each", self.timeout.as_secs_f64())
             };

@@ -114,12 +114,23 @@ impl Instant {
     pub const fn saturating_since(self, earlier: Instant) -> Duration {
         Duration(self.0.saturating_sub(earlier.0))
     }
+
+    /// `self + d`, saturating at `u64::MAX` us (a clock that far reads as late,
+    /// never wraps round to early).
+    pub const fn saturating_add(self, d: Duration) -> Instant {
+        Instant(self.0.saturating_add(d.0))
+    }
 }
 
 impl Duration {
     /// Microseconds.
     pub const fn as_us(self) -> u64 {
         self.0
+    }
+
+    /// `self + other`, saturating at `u64::MAX` us.
+    pub const fn saturating_add(self, other: Duration) -> Duration {
+        Duration(self.0.saturating_add(other.0))
     }
 }
 

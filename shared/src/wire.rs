@@ -133,6 +133,13 @@ pub mod status {
     pub const REASON_SHIFT: u32 = 24;
 }
 
+impl SensorFrame {
+    /// The sample time [`SensorFrame::t_us`] as an [`Instant`](crate::time::Instant).
+    pub const fn sampled_at(&self) -> crate::time::Instant {
+        crate::time::Instant(self.t_us)
+    }
+}
+
 /// The firmware's answer to frame `seq` (docs/hardware.md "Actuators").
 ///
 /// Layout (32 bytes): `t_sent_us: u64`, `seq: u32`, `u1_code: i16`, `u2_code: i16`,

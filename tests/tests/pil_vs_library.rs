@@ -33,7 +33,7 @@ impl FirmwareLink for Compare {
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         let answer = self.image.exchange(frame, truth)?;
         // The image's step starts at the frame's sample time (no injected delay).
-        let host = self.host.step(frame.t_us, frame, &FrozenClock);
+        let host = self.host.step(frame.sampled_at(), frame, &FrozenClock);
         if let Exchange::Answered { command, .. } = &answer {
             self.pairs.push((command.seq, [command.u1_code, command.u2_code], [host.u1_code, host.u2_code], command.status, host.status));
         }

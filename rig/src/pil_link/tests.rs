@@ -157,7 +157,7 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                         seen.hellos += 1;
                         if script.leftovers && seen.hellos == 1 {
                             let mut old = Firmware::new(firmware_config(&Scenario::default_scenario())).unwrap();
-                            let command = old.step(0, &SensorFrame::default(), &clock);
+                            let command = old.step(shared::time::Instant(0), &SensorFrame::default(), &clock);
                             let telemetry = old.telemetry_message(&command);
                             send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 1 });
                             send(&mut master, &Uplink::Garbled);
@@ -185,7 +185,8 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                         }
                         seen.frames += 1;
                         let Some(f) = fw.as_mut() else { return seen };
-                        let command = f.step(frame.t_us + start_delay_us as u64, &frame, &clock);
+                        let command =
+                            f.step(frame.sampled_at().saturating_add(shared::time::Duration(u64::from(start_delay_us))), &frame, &clock);
                         let telemetry = f.telemetry_message(&command);
                         send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 2 * command.step_ticks });
                     }

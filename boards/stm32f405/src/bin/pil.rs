@@ -34,6 +34,7 @@ mod image {
         config::ConfigError,
         pil::{self, Downlink, FrameBuffer, MAX_FRAME, Push, Uplink},
     };
+    use shared::time::{Duration, Instant};
     use stm32f4::stm32f405::Interrupt;
 
     /// Running figures of a run.
@@ -53,7 +54,7 @@ mod image {
         hello: Uplink,
         /// Start of the current frame's interval (its last byte), ticks.
         frame_mark: u32,
-        now_us: u64,
+        now: Instant,
         fig: Figures,
     }
 
@@ -149,7 +150,7 @@ mod image {
                     }
                     Ok(Downlink::Configure(cfg)) => return Ok(Event::Configure(cfg)),
                     Ok(Downlink::Frame { frame, start_delay_us }) => {
-                        self.now_us = frame.t_us.saturating_add(u64::from(start_delay_us));
+                        self.now = frame.sampled_at().saturating_add(Duration(u64::from(start_delay_us)));
                         return Ok(Event::Frame(frame));
                     }
                     Ok(Downlink::End) => return Ok(Event::End),
@@ -157,8 +158,8 @@ mod image {
             }
         }
 
-        fn now_us(&self) -> u64 {
-            self.now_us
+        fn now(&self) -> Instant {
+            self.now
         }
 
         fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {
@@ -301,7 +302,8 @@ mod image {
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USART1) };
         let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: clock.ticks_per_second(), clock: clock.kind() };
         let link = Link::choose();
-        let mut board = PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now_us: 0, fig: Figures::default() };
+        let mut board =
+            PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now: Instant(0), fig: Figures::default() };
         let on = match board.link {
             Link::Usart => "USART1",
             #[cfg(feature = "qemu")]
