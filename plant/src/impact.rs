@@ -6,14 +6,24 @@
 //! `v_r = z_t_dot - v_belt` (relative tangential) and `v_n = z_n_dot`, in m/s.
 //!
 //! Laws (the scenario's `impact_law`, coefficient `e` in [0, 1]):
-//! - **Newton** (restitution of the normal velocity, `v_n+ = -e v_n-`), with the
-//!   Coulomb impulse of Brach (1991) / Glocker (2001): the sticking impulse
-//!   `P = Q^-1 [-v_r, -(1 + e) v_n]` if it lies in the cone `|P_t| <= mu P_n`,
-//!   otherwise the impulse on the cone's edge opposing the slip,
-//!   `P_t = -mu s P_n`, `P_n = -(1 + e) v_n / p(s)` with `s = sign v_r` and
-//!   `p(s) = Q_22 - mu s Q_21` (paper eq. 7). When `p(s) <= 0` the edge impulse
-//!   cannot reverse the normal velocity (the impact analogue of the paradox) and
-//!   the impact is resolved by Darboux-Keller with `e` as Poisson's coefficient.
+//! - **Newton** (restitution of the normal velocity, `v_n+ = -e v_n-`), with
+//!   Coulomb's law at the impulse level, a complementarity problem in the
+//!   post-impact velocity (Moreau 1988; Glocker and Pfeiffer 1995; Glocker 2001;
+//!   Brogliato, "Nonsmooth Mechanics", 3rd ed., 2016, ch. 4): `P_n >= 0` with
+//!   `v_n+ = -e v_n-`, and `P_t` in the cone `|P_t| <= mu P_n`, opposing the slip
+//!   *after* the impact, `P_t = -mu sign(v_r+) P_n` when `v_r+ != 0`. Its solution is
+//!   the sticking impulse `P = Q^-1 [-v_r, -(1 + e) v_n]` if that lies in the cone,
+//!   otherwise the impulse on the edge the sticking impulse leaves the cone by,
+//!   `P_t = -mu s P_n`, `P_n = -(1 + e) v_n / p(s)` with `s = -sign P_t,stick` and
+//!   `p(s) = Q_22 - mu s Q_21` (paper eq. 7). It exists and is unique for one
+//!   contact with `Q` positive definite: on the line of impulses with
+//!   `v_n+ = -e v_n-`, which passes through the cone's interior at `P_t = 0`, `v_r+`
+//!   grows with `P_t` at the rate `det Q / Q_22 > 0`, so the edge crossed on the way
+//!   to the sticking impulse has `p(s) > 0` and leaves `sign v_r+ = s`. Taking `s`
+//!   from the slip *before* the impact instead is wrong exactly when the normal
+//!   impulse reverses the slip through `Q_12`: friction then points along the slip
+//!   it leaves. (Darboux-Keller with `e` as Poisson's coefficient remains as a
+//!   guard for `p(s) <= 0`, which rounding alone could produce.)
 //! - **Poisson** (restitution of the normal impulse, `P_n = (1 + e) P_c`, where
 //!   `P_c` ends compression), integrated by Darboux-Keller shock dynamics
 //!   (Keller 1986; Stronge, "Impact Mechanics", 2000, ch. 5): `P_n` is the time-like
@@ -388,7 +398,14 @@ fn newton_touchdown(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, e: f64) -> R
     if in_cone(&p, mu) {
         return Ok(one_phase(qm, p, Vector2::new(v_r, v_n), v_n.min(0.0), Resolution::NewtonSticking));
     }
-    let s = if v_r.abs() > V_EPS { SlipDirection::of(v_r) } else { SlipDirection::of(-p[0]) };
+    // The slip after the impact: the side of the cone the sticking impulse leaves
+    // by (module documentation, "Newton"). Along the line of impulses that give
+    // `v_n+ = -e v_n-`, `v_r+` grows with `P_t` (slope `det Q / Q_22 > 0`) and is 0 at
+    // the sticking impulse, so the edge it crosses to leave the cone is the one
+    // whose friction opposes the slip it leaves behind; the edge opposing the slip
+    // *before* the impact would, when the normal impulse reverses the slip
+    // (through `Q_12`), push along the slip after it.
+    let s = SlipDirection::of(-p[0]);
     let ps = shared::contact::p_of(qm, mu, s);
     if ps > 0.0 {
         let pn = -(1.0 + e) * v_n / ps;
@@ -615,6 +632,38 @@ mod tests {
                 if mu == 0.0 {
                     prop_assert!((imp.contact_work - energy_change(&imp, Vector2::new(v_r, v_n))).abs() <= scale.max(1e-12));
                 }
+            }
+        }
+
+        /// Newton-Coulomb at the impulse level (module documentation, "Newton"):
+        /// the impulse sticks the tip inside the cone, or lies on the cone's edge
+        /// whose friction opposes the slip the impact leaves; the edge always exists
+        /// for an approaching tip (`p(s) > 0` on the side the sticking impulse
+        /// leaves by), so Darboux-Keller is never needed at a touchdown. Only an
+        /// impact that would create energy (a slip reversed by friction itself,
+        /// Kane and Levinson 1985) falls back to the energetic law.
+        #[test]
+        fn newton_friction_never_points_along_the_slip_it_leaves(
+            a in 0.3f64..3.0, b in -2.0f64..2.0, c in 0.05f64..3.0,
+            mu in 0.0f64..1.5, v_r in -1.0f64..1.0, v_n in -1.0f64..-1e-3, e in 0.0f64..=1.0,
+        ) {
+            let qm = spd(a, b, c);
+            let imp = newton_touchdown(&qm, mu, v_r, v_n, e).unwrap();
+            let v_r_after = v_r + imp.dv[0];
+            let scale = v_r.abs().max(v_n.abs());
+            match imp.resolution {
+                Resolution::NewtonSticking => prop_assert!(v_r_after.abs() <= 1e-9 * scale, "sticks: v_r+ {}", v_r_after),
+                Resolution::NewtonSliding => {
+                    prop_assert!(imp.p[0] * v_r_after <= 0.0, "P_t {} along v_r+ {}", imp.p[0], v_r_after);
+                    prop_assert!((imp.p[0].abs() - mu * imp.p[1]).abs() <= 1e-9 * mu * imp.p[1] + 1e-15, "on the edge");
+                }
+                other => prop_assert!(false, "{:?} at a touchdown", other),
+            }
+            let used = touchdown(&qm, mu, v_r, v_n, ImpactLaw::Newton, e).unwrap();
+            if used.resolution != Resolution::NewtonFallback {
+                prop_assert_eq!(used, imp);
+            } else {
+                prop_assert!(imp.contact_work > work_tolerance(&qm, v_r, v_n));
             }
         }
 
