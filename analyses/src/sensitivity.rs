@@ -550,10 +550,10 @@ fn combinations(c: &Choice) -> Vec<Combination> {
         .collect()
 }
 
-/// Persistent bouncing under a lift-off gap: the sweep's outcome, and the tip
-/// above the gap in the record window.
+/// Persistent bouncing under a lift-off gap: the sweep's outcome (open loop's
+/// bouncing, closed loop's lift-off), and the tip above the gap in the record window.
 fn bounces(r: &RunRow, gap: f64) -> bool {
-    r.outcome == Outcome::Bouncing && (gap == 0.0 || r.tip_height_max > gap)
+    r.outcome.is_bouncing() && (gap == 0.0 || r.tip_height_max > gap)
 }
 
 fn open_spec(base: &Scenario, g: &Grids, k: &Knobs) -> SweepSpec {

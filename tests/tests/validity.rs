@@ -213,7 +213,7 @@ fn the_iwc_rule_and_the_energetic_law_are_sweep_dimensions() {
         .collect();
     assert_eq!(cases.len(), 4);
     assert!(cases.contains(&("plastic".into(), "energetic".into())));
-    assert_eq!(s["spec"]["format"], 2);
+    assert_eq!(s["spec"]["format"], analyses::sweep::FORMAT);
 }
 
 /// `run` and `zmax` summaries carry the validity counters too.

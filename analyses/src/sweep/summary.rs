@@ -5,7 +5,8 @@
 //!
 //! Persistent bouncing at a grid point: the paper's indicator flagged
 //! (`max theta1_dot` over the record window above the threshold) *and* the tip
-//! left the belt in the record window ([`Outcome::Bouncing`]). The indicator alone
+//! left the belt in the record window ([`Outcome::Bouncing`]); in closed loop, a
+//! lift-off in the record window ([`Outcome::LiftOff`]). The indicator alone
 //! also flags an arm that moves on the belt without leaving it (in closed loop the
 //! controller's answers to sensor noise keep `theta1_dot` near 1e-2 rad/s); those
 //! points are counted separately (`indicator_points`).
@@ -144,7 +145,7 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     for r in rows.iter().filter(|r| r.outcome != Outcome::Invalid) {
         let key = spec.run_at(r.index);
         let case = r.index / (ics.len() * vs.len() * mus.len());
-        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome == Outcome::Bouncing, r.bouncing));
+        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome.is_bouncing(), r.bouncing));
     }
     let mut cases = Vec::new();
     for (case, per_ic) in flags.iter().enumerate() {
@@ -312,6 +313,7 @@ mod tests {
             z_n_max: 0.0,
             tip_height_max: 0.01,
             final_mode: "flight".into(),
+            target_error_m: f64::NAN,
             lift_offs_transient: 0,
             rhs_evaluations: 0,
             energy_gains: 0,

@@ -24,6 +24,8 @@ pub fn outcome_color(o: Outcome) -> RGBColor {
         Outcome::Bouncing => colors::RED,
         Outcome::Oscillating => colors::ORANGE,
         Outcome::LiftOffOnly => colors::PURPLE,
+        Outcome::LiftOff => RGBColor(140, 20, 20),
+        Outcome::TargetNotReached => colors::GREY,
         Outcome::Contact => colors::BLUE,
         Outcome::Flight => colors::GREEN,
         Outcome::SafeState => RGBColor(40, 40, 40),
@@ -49,16 +51,32 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let ics = spec.initial_conditions();
     let cols = ics.len().min(3);
     let grid_rows = ics.len().div_ceil(cols);
-    let root = SVGBackend::new(path, (560 * cols as u32, 80 + 460 * grid_rows as u32)).into_drawing_area();
+    let width = 560 * cols as u32;
+    // The legend: one coloured box and name per outcome the sweep can give, packed
+    // into as many lines as the figure's width needs (15 px sans-serif: about 8.5 px
+    // a character).
+    let legend: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
+    let mut placed = Vec::with_capacity(legend.len());
+    let (mut x, mut line) = (20i32, 0i32);
+    for o in legend {
+        let w = 22 + (8.5 * o.name().len() as f64).ceil() as i32 + 28;
+        if x > 20 && x + w > width as i32 - 10 {
+            (x, line) = (20, line + 1);
+        }
+        placed.push((*o, x, 10 + 26 * line));
+        x += w;
+    }
+    let legend_h = 40 + 26 * line as u32;
+    let root = SVGBackend::new(path, (width, 80 + legend_h - 40 + 460 * grid_rows as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let title = format!("Outcome over (v_belt, mu), {} ({law}, e_n = {e_n})", controller_label(spec));
-    let root = root.titled(&title, ("sans-serif", 22)).map_err(|e| err(&e))?;
-    let (legend_area, panels_area) = root.split_vertically(40);
-    // Legend: one coloured box per outcome.
-    for (i, o) in Outcome::ALL.iter().enumerate() {
-        let x = 20 + 150 * i as i32;
-        legend_area.draw(&Rectangle::new([(x, 10), (x + 16, 26)], outcome_color(*o).filled())).map_err(|e| err(&e))?;
-        legend_area.draw(&Text::new(o.name(), (x + 22, 12), ("sans-serif", 15))).map_err(|e| err(&e))?;
+    // A title that fits the width (22 px, or smaller for a one-panel figure).
+    let title_px = (22.0f64).min(width as f64 / (0.56 * title.len() as f64)).floor();
+    let root = root.titled(&title, ("sans-serif", title_px)).map_err(|e| err(&e))?;
+    let (legend_area, panels_area) = root.split_vertically(legend_h);
+    for (o, x, y) in placed {
+        legend_area.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], outcome_color(o).filled())).map_err(|e| err(&e))?;
+        legend_area.draw(&Text::new(o.name(), (x + 22, y + 2), ("sans-serif", 15))).map_err(|e| err(&e))?;
     }
     let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
     let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
