@@ -27,7 +27,8 @@
 //!
 //! Over either, one protocol implementation speaks [`firmware::pil`] (postcard,
 //! CRC-32, COBS): a lone `0x00` (it ends any partial frame left on the line),
-//! [`Downlink::Hello`] until the image says [`Uplink::Hello`] (a board may have
+//! [`Downlink::Hello`](firmware::pil::Downlink::Hello) until the image says
+//! [`Uplink::Hello`](firmware::pil::Uplink::Hello) (a board may have
 //! booted long before the port was opened), the protocol version check, the
 //! configuration, then each period's frame and its answer.
 //!
@@ -35,7 +36,8 @@
 //! sample time, so the command's `t_sent_us` (the image's own clock) decides when
 //! it takes effect, as in-process. Wall time only guards against a hung or dead
 //! image: no answer within the answer timeout, QEMU exiting, its socket closing
-//! or the serial port going away end the run with [`RunError::FirmwareLost`],
+//! or the serial port going away end the run with
+//! [`RunError::FirmwareLost`](crate::record::RunError::FirmwareLost),
 //! never a hang.
 
 mod counts;
