@@ -33,7 +33,7 @@ use crate::{
 use firmware::ControllerKind;
 use plant::initial::{PaperX0, deg_to_state};
 use plant::{EventKind, Plant, PlantEvent, SimConfig, Validity};
-use rig::{in_process, rig::RunObserver, scenario::Scenario};
+use rig::{RunObserver, Scenario, in_process};
 
 /// Where the controller runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]

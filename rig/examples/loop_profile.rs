@@ -6,11 +6,12 @@
 //! iceoryx2 in lockstep, the firmware in its own process.
 
 use rig::{
+    FirmwareLink,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, default_rig_name},
     ipc_link::IpcLink,
-    rig::{FirmwareLink, stream_loop},
     scenario::Scenario,
+    stream_loop,
 };
 
 fn main() {

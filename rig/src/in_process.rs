@@ -8,8 +8,9 @@ use shared::wire::{GroundTruth, SensorFrame};
 
 use super::{
     firmware_side::FirmwareSide,
+    link::{Exchange, FirmwareLink},
+    period_loop::{RunObserver, run_loop},
     record::{PeriodRecord, RunError},
-    rig::{Exchange, FirmwareLink, RunObserver, run_loop},
     scenario::Scenario,
 };
 

@@ -37,9 +37,9 @@ use super::{
     faults::{FaultPlan, LinkKind},
     handshake::{self, Announced},
     ipc::{IpcError, MonitorCounts, MonitorPolicy, PeerState, PlantPorts, Role, peer_state},
+    link::{Exchange, FirmwareLink},
     realtime::{RealtimeSetup, leave_realtime, prepare_realtime},
     record::RunError,
-    rig::{Exchange, FirmwareLink},
     scenario::Scenario,
     stats::TimingHistogram,
 };

@@ -25,12 +25,13 @@ pub mod in_process;
 pub mod ipc;
 #[cfg(feature = "ipc")]
 pub mod ipc_link;
+pub mod link;
 pub mod overrides;
+pub mod period_loop;
 #[cfg(feature = "pil")]
 pub mod pil_link;
 pub mod realtime;
 pub mod record;
-pub mod rig;
 pub mod scenario;
 pub mod sensors;
 #[cfg(feature = "ipc")]
@@ -39,3 +40,24 @@ pub mod setup;
 pub mod stats;
 pub mod summary;
 pub mod twin_link;
+
+// The API callers use most, at the crate root (`rig::Scenario`, `rig::run_loop`);
+// every item keeps its module path too (`rig::scenario::Scenario`).
+pub use envelope::Envelope;
+pub use faults::{Fault, FaultKind, FaultPlan, LinkKind};
+pub use in_process::InProcessLink;
+#[cfg(feature = "ipc")]
+pub use ipc::MonitorPolicy;
+#[cfg(feature = "ipc")]
+pub use ipc_link::IpcLink;
+pub use link::{Exchange, FirmwareLink};
+pub use overrides::Override;
+pub use period_loop::{PeriodFailure, PeriodLoop, RunObserver, run_loop, stream_loop};
+#[cfg(feature = "pil")]
+pub use pil_link::{PilLink, PilOptions, PilTarget, QemuLink};
+pub use record::{PeriodRecord, RunError};
+pub use scenario::{DEFAULT_TOML, Scenario, ScenarioError};
+pub use setup::{firmware_config, plant_for};
+pub use stats::RunStats;
+pub use summary::{PilFigures, RunSummary};
+pub use twin_link::TwinLink;

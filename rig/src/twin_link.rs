@@ -19,8 +19,8 @@ use shared::wire::{ActuatorCommand, GroundTruth, SensorFrame};
 
 use crate::{
     faults::{FaultKind, FaultPlan, LinkKind, Signal},
+    link::{Exchange, FirmwareLink},
     record::RunError,
-    rig::{Exchange, FirmwareLink},
     scenario::Scenario,
     setup::firmware_config,
 };

@@ -18,7 +18,7 @@ use board_twin::BoardDescription;
 use rig::{
     in_process,
     record::{PeriodRecord, RunError},
-    rig::run_loop,
+    run_loop,
     scenario::{DEFAULT_TOML, Scenario},
     twin_link::TwinLink,
 };

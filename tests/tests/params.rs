@@ -6,7 +6,7 @@
 use std::{path::Path, process::Command};
 
 use plant::{Hold, NoObserver, Plant, SimConfig, initial};
-use rig::{in_process::InProcessLink, rig::run_loop, scenario::Scenario, setup};
+use rig::{InProcessLink, Scenario, run_loop, setup};
 use shared::Params;
 
 /// Runs the binary; returns the exit code and standard error.

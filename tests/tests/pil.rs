@@ -27,10 +27,10 @@ use std::{
 use firmware::{ControllerKind, pil::StepClock};
 use rig::summary::rms_tracking_error;
 use rig::{
-    in_process,
+    FirmwareLink, in_process,
     pil_link::{DEFAULT_BAUD, PilLink, PilOptions, PilTarget, QemuLink, STEP_BUDGET_INSTRUCTIONS, measure_default_rate},
     record::{RunError, lift_off_stats},
-    rig::{FirmwareLink, run_loop},
+    run_loop,
     scenario::Scenario,
     summary::{CountUnit, Spread},
 };

@@ -8,9 +8,10 @@ mod common;
 
 use firmware::{Firmware, board::FrozenClock};
 use rig::{
+    Exchange, FirmwareLink,
     pil_link::{PilLink, PilOptions},
     record::RunError,
-    rig::{Exchange, FirmwareLink, run_loop},
+    run_loop,
     scenario::Scenario,
     setup::firmware_config,
 };

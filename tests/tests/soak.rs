@@ -125,14 +125,14 @@ struct Expect {
 
 /// Per period, what each fault implies, worked out from the code:
 ///
-/// - The plant (`rig::rig::PeriodLoop::period`) counts a miss when the period's
+/// - The plant (`rig::period_loop::PeriodLoop::period`) counts a miss when the period's
 ///   command does not take effect: no answer within `rig.command_timeout_s` of wall
 ///   time, a command lost on the wire, or one sent at or after `t_k + Ts`. It then
 ///   holds the previous command (`u_cmd == u_applied`).
 /// - The firmware (`firmware::Firmware::step`) counts a miss (the `DEADLINE_MISS`
 ///   bit, `overruns + 1`) when its command leaves at or after `t_k + Ts` on its
 ///   clock. In lockstep that clock is frozen during the step and the step starts at
-///   `max(t_k + delay_s, newest frame seen)` (`rig::firmware_side::step_start_us`,
+///   `max(t_k + delay_s, newest frame seen)` (`rig::firmware_side::step_start`,
 ///   `rig::firmware_process`).
 ///
 /// So, for a window at periods `k0..k0+n`:

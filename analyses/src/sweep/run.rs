@@ -28,7 +28,7 @@ use super::{InitialCondition, RunKey, SweepController, SweepSpec};
 use crate::ideal::{self, IdealLaw, IdealSetup};
 use plant::{Counters, Plant, SimConfig, SimError, Validity, impact::IwcRule};
 use plant::{Hold, NoObserver, Observer};
-use rig::{in_process::InProcessLink, rig::PeriodLoop, scenario::Scenario};
+use rig::{InProcessLink, PeriodLoop, Scenario};
 
 /// Open loop: the length of the intervals the plant is advanced by, s (a Ctrl-C
 /// is noticed between them).

@@ -7,16 +7,23 @@ use std::{
     fs::File,
     io::{Read, Write},
     os::fd::FromRawFd,
+    path::{Path, PathBuf},
     thread::JoinHandle,
+    time::{Duration, Instant},
 };
 
 use firmware::{
     Firmware, TickClock,
-    pil::{FrameBuffer, Push},
+    pil::{self, Downlink, FrameBuffer, MAX_FRAME, Push, StepClock, Uplink},
 };
+use shared::wire::SensorFrame;
 
-use super::*;
-use crate::rig::run_loop;
+use super::{
+    pipe::{Got, Pipe, open_fifo},
+    qemu::qemu_opt_value,
+    *,
+};
+use crate::{link::FirmwareLink, period_loop::run_loop, record::RunError, scenario::Scenario, setup::firmware_config, summary::CountUnit};
 
 #[test]
 fn the_step_budget_is_five_percent_of_the_period_at_168_mhz() {

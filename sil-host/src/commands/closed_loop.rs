@@ -17,11 +17,12 @@ use crate::{
 };
 use plant::Validity;
 use rig::{
+    FirmwareLink, RunObserver,
     overrides::{self, Override},
     record::{PeriodRecord, RunError},
-    rig::{FirmwareLink, RunObserver, stream_loop},
     scenario::Scenario,
     stats::RunStats,
+    stream_loop,
     summary::Percentiles,
     summary::RunSummary,
 };

@@ -21,8 +21,8 @@ use crate::{
     plot::{self, Panel, Series, colors},
 };
 use rig::{
+    FirmwareLink,
     pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
-    rig::FirmwareLink,
     scenario::Scenario,
     setup::{firmware_config, plant_for},
     summary::{CountUnit, Spread},

@@ -18,10 +18,10 @@ use crate::{
 use rig::faults::LinkKind;
 use rig::scenario::Scenario;
 use rig::{
+    FirmwareLink,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
     ipc_link::IpcLink,
-    rig::FirmwareLink,
     setup::{firmware_config, plant_for},
     summary::{MonitorSummary, RunSummary},
     twin_link::TwinLink,

@@ -13,9 +13,10 @@ use super::{Figure, Goal, STEP_INSTRUCTIONS_TARGET, median};
 use crate::{cli::BenchArgs, error::CliError};
 use firmware::ControllerKind;
 use rig::{
+    RunObserver,
     pil_link::{self, CORE_HZ, PilLink, PilOptions, PilTarget, QemuLink},
-    rig::{RunObserver, stream_loop},
     scenario::Scenario,
+    stream_loop,
     summary::Spread,
 };
 

@@ -7,11 +7,12 @@ use std::time::Instant;
 use super::{Figure, Goal, median};
 use crate::{cli::BenchArgs, error::CliError};
 use rig::{
+    FirmwareLink, RunObserver,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, default_rig_name},
     ipc_link::{IpcLink, LinkTimings},
-    rig::{FirmwareLink, RunObserver, stream_loop},
     scenario::Scenario,
+    stream_loop,
     summary::Percentiles,
     twin_link::TwinLink,
 };

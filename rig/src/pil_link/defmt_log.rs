@@ -1,0 +1,79 @@
+//! The image's defmt log: QEMU's standard output (semihosting) decoded with
+//! `defmt-decoder` from the image's own ELF, line by line as it arrives.
+
+use std::{io::Read, path::Path, sync::Mutex};
+
+use serde::Serialize;
+
+use crate::record::RunError;
+
+/// One decoded line of the image's defmt log.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct LogLine {
+    /// `trace`, `debug`, `info`, `warn`, `error` (or `println`).
+    pub level: String,
+    /// The formatted message.
+    pub message: String,
+}
+
+/// Called for every defmt line as it arrives (on the log reader's thread).
+pub type LogSink = Box<dyn Fn(&LogLine) + Send>;
+
+/// The defmt table of the image at `image` (its ELF), to decode its log with.
+///
+/// # Errors
+/// [`RunError::Transport`] when the image cannot be read, is not a defmt image,
+/// or has no defmt table.
+pub(super) fn table_of(image: &Path) -> Result<defmt_decoder::Table, RunError> {
+    let elf = std::fs::read(image).map_err(|e| RunError::Transport(format!("cannot read the PIL image {}: {e}", image.display())))?;
+    defmt_decoder::Table::parse(&elf)
+        .map_err(|e| RunError::Transport(format!("{}: not a defmt image: {e}", image.display())))?
+        .ok_or_else(|| RunError::Transport(format!("{}: no defmt table (is it the `pil` image?)", image.display())))
+}
+
+/// Decodes the defmt stream from QEMU's standard output until it closes.
+pub(super) fn decode_defmt(
+    table: &defmt_decoder::Table,
+    mut out: impl Read,
+    log: &Mutex<Vec<LogLine>>,
+    on_log: Option<&(dyn Fn(&LogLine) + Send)>,
+) -> Result<(), String> {
+    let mut decoder = table.new_stream_decoder();
+    let mut chunk = [0u8; 1024];
+    loop {
+        let n = out.read(&mut chunk).map_err(|e| e.to_string())?;
+        if n == 0 {
+            return Ok(());
+        }
+        decoder.received(&chunk[..n]);
+        loop {
+            match decoder.decode() {
+                Ok(frame) => {
+                    let line = LogLine {
+                        level: frame.level().map_or("println", |l| l.as_str()).to_string(),
+                        message: frame.display_message().to_string(),
+                    };
+                    if let Some(f) = on_log {
+                        f(&line);
+                    }
+                    if let Ok(mut l) = log.lock() {
+                        l.push(line);
+                    }
+                }
+                Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+                Err(defmt_decoder::DecodeError::Malformed) => {
+                    return Err("the defmt stream is corrupt (an image built from other sources?)".into());
+                }
+            }
+        }
+    }
+}
+
+/// `; image log: <its last three lines>`, or nothing for an empty log.
+pub(super) fn tail(log: &[LogLine]) -> String {
+    if log.is_empty() {
+        return String::new();
+    }
+    let last: Vec<String> = log.iter().rev().take(3).rev().map(|l| format!("[{}] {}", l.level, l.message)).collect();
+    format!("; image log: {}", last.join(" | "))
+}

@@ -1,0 +1,137 @@
+//! Reading a scenario: the embedded default, TOML text with `--set` overrides
+//! applied to its document, the old key `controller.hybrid_ki`, and errors that
+//! name the key, the line or the override.
+
+use super::{error::ScenarioError, sections::Scenario};
+use crate::overrides::{self, Override};
+
+/// The embedded default scenario (`scenarios/default.toml`).
+pub const DEFAULT_TOML: &str = include_str!("../../../scenarios/default.toml");
+
+impl Scenario {
+    /// The embedded default scenario.
+    pub fn default_scenario() -> Self {
+        // The embedded file is checked by a test; a parse failure here is a build defect.
+        Self::from_toml(DEFAULT_TOML).unwrap_or_else(|e| panic!("embedded default scenario is invalid: {e}"))
+    }
+
+    /// Parses and validates a scenario.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Parse`] (with the key and line from the TOML parser) or
+    /// [`ScenarioError::OutOfRange`] naming the key and value.
+    pub fn from_toml(text: &str) -> Result<Self, ScenarioError> {
+        Self::from_toml_with(text, &[])
+    }
+
+    /// Parses a scenario, applies `overrides` to its TOML document (each
+    /// `--set KEY=VALUE` replaces or adds the value at its dotted key path), then
+    /// reads and validates it. The old key `controller.hybrid_ki` is read as
+    /// `controller.hybrid.ki`.
+    ///
+    /// # Errors
+    /// As [`Self::from_toml`]; an error caused by an override names it
+    /// ([`ScenarioError::Override`], or the key and value of the bad key).
+    pub fn from_toml_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        let mut doc: toml::Table = toml::from_str(text).map_err(|e| toml_error(&e))?;
+        // The file's old key first (an override of `controller.hybrid.ki` then
+        // wins over it), then an override's.
+        let mut migrated = migrate_legacy(&mut doc)?;
+        overrides::apply(&mut doc, overrides)?;
+        migrated |= migrate_legacy(&mut doc)?;
+        let s: Scenario = if overrides.is_empty() && !migrated {
+            // The text itself: the TOML errors give the line.
+            let de = toml::de::Deserializer::parse(text).map_err(|e| toml_error(&e))?;
+            read(de, &[])?
+        } else {
+            read(toml::Value::Table(doc), overrides)?
+        };
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// The scenario as a TOML table (for [`overrides::apply`]).
+    ///
+    /// # Errors
+    /// [`ScenarioError::Parse`] if it cannot be written as TOML.
+    pub fn to_table(&self) -> Result<toml::Table, ScenarioError> {
+        toml::Table::try_from(self).map_err(|e| ScenarioError::Parse(format!("cannot write the scenario as TOML: {e}")))
+    }
+
+    /// This scenario with `overrides` applied, validated.
+    ///
+    /// # Errors
+    /// As [`Self::from_toml_with`].
+    pub fn with_overrides(&self, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        if overrides.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut doc = self.to_table()?;
+        overrides::apply(&mut doc, overrides)?;
+        migrate_legacy(&mut doc)?;
+        let s: Scenario = read(toml::Value::Table(doc), overrides)?;
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// A TOML syntax error as a scenario error. The reader's errors give the line and
+/// column, except its nesting limit's (keys, tables or arrays 80 levels deep), which
+/// says only "recursion limit": that one is said here (found by the `scenario`
+/// fuzzing harness, docs/fuzzing.md).
+fn toml_error(e: &toml::de::Error) -> ScenarioError {
+    let msg = e.to_string();
+    if e.span().is_some() {
+        return ScenarioError::Parse(msg);
+    }
+    let why = if msg.trim() == "recursion limit" {
+        "keys, tables or arrays nested 80 levels deep or more (scenario keys are at most 3 deep)".to_string()
+    } else {
+        msg.trim().to_string()
+    };
+    ScenarioError::Parse(format!("the scenario is not valid TOML: {why}"))
+}
+
+/// Reads the old key `controller.hybrid_ki` as `controller.hybrid.ki` (scenario
+/// files written before the gains were opened). Returns whether it did.
+///
+/// # Errors
+/// [`ScenarioError::Parse`] when both are given.
+fn migrate_legacy(doc: &mut toml::Table) -> Result<bool, ScenarioError> {
+    let Some(toml::Value::Table(controller)) = doc.get_mut("controller") else {
+        return Ok(false);
+    };
+    let Some(ki) = controller.remove("hybrid_ki") else {
+        return Ok(false);
+    };
+    let hybrid = controller.entry("hybrid").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    match hybrid {
+        toml::Value::Table(h) if !h.contains_key("ki") => {
+            h.insert("ki".into(), ki);
+            Ok(true)
+        }
+        _ => Err(ScenarioError::Parse(
+            "scenario keys `controller.hybrid_ki` and `controller.hybrid.ki` are the same gain K'_I: give one (controller.hybrid.ki)"
+                .into(),
+        )),
+    }
+}
+
+/// Deserialises a scenario; the error names the key path (`controller.kind`) and,
+/// when an override touched that key, the override.
+fn read<'de, D: serde::Deserializer<'de>>(de: D, overrides: &[Override]) -> Result<Scenario, ScenarioError>
+where
+    D::Error: std::fmt::Display,
+{
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner().to_string();
+        // Errors from a document (not a text) repeat the key on a line of their own.
+        let inner = if overrides.is_empty() { inner.as_str() } else { inner.lines().next().unwrap_or_default() };
+        let msg = if path == "." { inner.to_string() } else { format!("scenario key `{path}`: {inner}") };
+        match overrides::culprit(overrides, &path) {
+            Some(o) => ScenarioError::Parse(format!("{msg} (from --set {o})")),
+            None => ScenarioError::Parse(msg),
+        }
+    })
+}
