@@ -12,8 +12,8 @@
 use shared::ContactMode;
 
 use crate::{
-    PlantEvent,
     dop853::DenseStep,
+    events::PlantEvent,
     segment::{OdeState, STATE_LEN},
 };
 

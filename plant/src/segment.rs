@@ -8,14 +8,15 @@ use std::cell::Cell;
 
 use nalgebra::Vector2;
 use shared::{
-    Arm, SlipDirection,
+    Arm,
     contact::{sliding_force, sticking_force},
     kinematics::tip_position_trig,
     model::TipDynamics,
 };
 
-use super::{
-    Controller,
+pub use crate::phase::Phase;
+use crate::{
+    controller::Controller,
     dop853::{Control, OdeSystem, StepView},
     trig::TrigCache,
 };
@@ -25,17 +26,6 @@ pub const STATE_LEN: usize = 6;
 
 /// The integrated state: 4 plant states then 2 controller states.
 pub type OdeState = super::dop853::State<STATE_LEN>;
-
-/// Contact mode the integrator runs in (the plant's discrete state).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Phase {
-    /// Off the belt: `f = 0`.
-    Flight,
-    /// Slipping on the belt in a fixed direction: `f_n = -b/p`, `f_t = -mu s f_n`.
-    Sliding(SlipDirection),
-    /// Carried by the belt: `z_ddot = 0`, `f = -Q^-1 a_free`.
-    Sticking,
-}
 
 /// Which boundary of the current phase an event function component crossed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,6 +1,13 @@
 use super::*;
-use crate::initial::{X0A, X0D, deg_to_state};
-use shared::kinematics::tip_position;
+use crate::{
+    impact::{ImpactLaw, IwcRule, Resolution},
+    initial::{X0A, X0D, deg_to_state},
+};
+use nalgebra::Vector2;
+use shared::{
+    Arm, ContactMode, ElbowBranch, Params, SlipDirection,
+    kinematics::{inverse_kinematics, tip_position},
+};
 
 fn plant_from(params: Params<f64>, cfg: SimConfig, deg: [f64; 4]) -> Plant {
     Plant::new(params, cfg, deg_to_state(deg), 0.0, [0.0, 0.0]).unwrap()

@@ -10,7 +10,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Counters, SimError};
+use crate::{error::SimError, events::Counters};
 
 /// Validity counters of one run (or a sum over runs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]

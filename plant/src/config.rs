@@ -1,0 +1,85 @@
+//! The simulator's numerical and modelling settings ([`SimConfig`], a scenario's
+//! `[plant]` settings besides the physical parameters), with their ranges.
+
+use serde::Serialize;
+
+use crate::{
+    error::SimError,
+    impact::{ImpactLaw, IwcRule},
+};
+
+/// Numerical and modelling settings of the simulator (scenario parameters).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// Relative tolerance of the integrator (DOP853, [`dop853::Dop853::rtol`](crate::dop853::Dop853::rtol)).
+    pub rtol: f64,
+    /// Absolute tolerance of the integrator (rad, rad/s; [`dop853::Dop853::atol`](crate::dop853::Dop853::atol)).
+    pub atol: f64,
+    /// Impact law at touchdown and for impacts without collision.
+    pub impact_law: ImpactLaw,
+    /// Restitution coefficient `e_n` in [0, 1] (Newton's, Poisson's or Stronge's energetic
+    /// coefficient, per `impact_law`).
+    pub e_n: f64,
+    /// What an impact without collision leaves behind ([`impact::IwcRule`](crate::impact::IwcRule)).
+    pub iwc: IwcRule,
+    /// Relative tangential speed (m/s) below which the tip counts as at rest on the belt.
+    pub v_stick: f64,
+    /// Zeno rule: a bounce whose normal velocity after impact is below this (m/s)
+    /// ends the bounce sequence; the tip stays in contact.
+    pub zeno_velocity: f64,
+    /// Baumgarte stabilisation rate of the contact constraint in sliding and
+    /// sticking, rad/s (Baumgarte 1972; 0 disables it). The correction vanishes on
+    /// the constraint, so it changes the contact force only by the drift it removes.
+    pub baumgarte: f64,
+    /// Events allowed in one `advance` before it fails with [`SimError::EventStorm`]
+    /// (a guard against a hang; never reached in normal runs).
+    pub max_events_per_advance: usize,
+    /// Integrator steps allowed in one smooth segment.
+    pub max_steps: usize,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            rtol: 1e-9,
+            atol: 1e-11,
+            impact_law: ImpactLaw::Newton,
+            e_n: 0.2,
+            iwc: IwcRule::Restitution,
+            v_stick: 1e-9,
+            zeno_velocity: 1e-4,
+            baumgarte: 50.0,
+            max_events_per_advance: 100_000,
+            max_steps: 100_000_000,
+        }
+    }
+}
+
+impl SimConfig {
+    /// Checks ranges: tolerances finite and in (0, 0.1]; `e_n` in [0, 1];
+    /// `v_stick`, `zeno_velocity` finite and >= 0; limits > 0.
+    ///
+    /// # Errors
+    /// [`SimError::BadConfig`] naming the field.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let bad = |name: &'static str, value: f64, expected: &'static str| Err(SimError::BadConfig { name, value, expected });
+        for (name, v) in [("rtol", self.rtol), ("atol", self.atol)] {
+            if !(v.is_finite() && (1e-14..=0.1).contains(&v)) {
+                return bad(name, v, "a value in [1e-14, 0.1] (below 1e-14 a step cannot meet it in f64)");
+            }
+        }
+        if !(self.e_n.is_finite() && (0.0..=1.0).contains(&self.e_n)) {
+            return bad("e_n", self.e_n, "a value in [0, 1]");
+        }
+        for (name, v) in [("v_stick", self.v_stick), ("zeno_velocity", self.zeno_velocity), ("baumgarte", self.baumgarte)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, v, "a finite value >= 0");
+            }
+        }
+        if self.max_events_per_advance == 0 || self.max_steps == 0 {
+            return bad("max_events_per_advance/max_steps", 0.0, "a positive count");
+        }
+        Ok(())
+    }
+}

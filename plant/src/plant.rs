@@ -1,0 +1,282 @@
+//! The simulated arm on the belt ([`Plant`]): its state, construction, accessors
+//! and checkpoints. Advancing it is in `advance` (the event loop and the smooth
+//! segments), the mode changes at events in `transitions`, the projections onto
+//! the contact constraint in `projection` (see the crate docs).
+
+use std::cell::Cell;
+
+use nalgebra::Vector2;
+use shared::{
+    Arm, ContactMode, Params, SlipDirection,
+    kinematics::{jacobian_trig, tip_position_trig},
+};
+
+use crate::{
+    bounds::{MAX_ANGLE, MAX_RATE, PROJECTION_TOLERANCE},
+    config::SimConfig,
+    controller::{Controller, Hold},
+    dop853::Dop853,
+    error::SimError,
+    events::{Counters, PlantEvent},
+    phase::Phase,
+    segment::{self, OdeState, Point, Segment},
+    trig::TrigCache,
+    validity::Validity,
+};
+
+mod advance;
+mod projection;
+mod transitions;
+
+/// The simulated arm on the belt.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    arm: Arm<f64>,
+    cfg: SimConfig,
+    t: f64,
+    y: OdeState,
+    phase: Phase,
+    cone_relaxed: bool,
+    in_violation: bool,
+    /// First step of the next solve, s: the step the controller proposed last.
+    last_h: f64,
+    evals: Cell<u64>,
+    /// Sines and cosines of the joint angles, reused between nearby evaluations.
+    trig: TrigCache,
+    solver: Dop853,
+    counters: Counters,
+    startup_events: Vec<PlantEvent>,
+    /// The model at the end of the last interval under a held torque (see [`EndPoint`]).
+    end_point: Option<EndPoint>,
+}
+
+/// What [`Plant::advance`] changes in a plant: a plant restored to it
+/// ([`Plant::restore`]) goes on exactly as from the instant it was taken
+/// ([`Plant::checkpoint`]), counters and the model's caches included.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    t: f64,
+    y: OdeState,
+    phase: Phase,
+    cone_relaxed: bool,
+    in_violation: bool,
+    last_h: f64,
+    evals: u64,
+    trig: TrigCache,
+    counters: Counters,
+    end_point: Option<EndPoint>,
+}
+
+/// The model at the end of an interval, under the held torque `u` (N m) of that
+/// interval: the report's contact force came from it, and the next interval, when
+/// it starts from the same time, state and mode under the same held torque (the
+/// first part of the next control period holds the last command), starts from it
+/// instead of evaluating the model again. The values are those a new evaluation
+/// would give, to the bit: the model is a function of these keys (the sine and
+/// cosine cache gives the same values for the same angles, whatever happened in
+/// between at those angles).
+#[derive(Debug, Clone, Copy)]
+struct EndPoint {
+    t: f64,
+    y: OdeState,
+    u: [f64; 2],
+    phase: Phase,
+    cone_relaxed: bool,
+    point: Point,
+}
+
+impl Plant {
+    /// A plant at time `t0` (s) in state `x0 = [theta1, theta1_dot, theta2, theta2_dot]`
+    /// (rad, rad/s), under motor torques `u0` (N m) for choosing the initial mode.
+    ///
+    /// A tip up to [`PROJECTION_TOLERANCE`] inside the belt is projected onto it (same
+    /// `z_t`, same elbow branch); on the belt the normal velocity decides: approaching
+    /// gives an impact, separating gives flight, zero gives the contact mode of docs/model.md.
+    ///
+    /// # Errors
+    /// [`SimError::Params`], [`SimError::BadConfig`], [`SimError::NonFiniteInitialState`],
+    /// [`SimError::BelowBelt`], [`SimError::Unreachable`], or an impact failure.
+    pub fn new(params: Params<f64>, cfg: SimConfig, x0: [f64; 4], t0: f64, u0: [f64; 2]) -> Result<Self, SimError> {
+        params.validate()?;
+        cfg.validate()?;
+        if !x0.iter().all(|v| v.is_finite()) || !t0.is_finite() {
+            return Err(SimError::NonFiniteInitialState(x0));
+        }
+        // Finite but not a state of the arm: angles beyond a few turns lose their
+        // precision in f64 trigonometry, and rates beyond this are no motion of it.
+        if x0[0].abs() > MAX_ANGLE || x0[2].abs() > MAX_ANGLE || x0[1].abs() > MAX_RATE || x0[3].abs() > MAX_RATE {
+            return Err(SimError::NonPhysicalInitialState(x0));
+        }
+        if !u0.iter().all(|v| v.is_finite()) {
+            return Err(SimError::BadTorque(u0));
+        }
+        let mut plant = Self {
+            arm: Arm::new(params),
+            cfg,
+            t: t0,
+            y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0],
+            phase: Phase::Flight,
+            cone_relaxed: false,
+            in_violation: false,
+            last_h: 2e-4,
+            evals: Cell::new(0),
+            trig: TrigCache::new(),
+            solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
+            counters: Counters::default(),
+            startup_events: Vec::new(),
+            end_point: None,
+        };
+        let z = plant.tip();
+        let belt = -params.h;
+        let depth = belt - z[1];
+        if depth > PROJECTION_TOLERANCE {
+            return Err(SimError::BelowBelt { depth_mm: depth * 1e3, z_n: z[1], belt, tolerance_mm: PROJECTION_TOLERANCE * 1e3 });
+        }
+        if depth >= -1e-12 {
+            plant.project_position()?;
+            let ctrl = Hold(u0);
+            let mut events = Vec::new();
+            plant.touch(&ctrl, &mut events, true)?;
+            plant.startup_events = events;
+        }
+        Ok(plant)
+    }
+
+    /// Events at `t0` while the initial mode was chosen (e.g. an impact without
+    /// collision from an inconsistent initial state), in order.
+    pub fn startup_events(&self) -> &[PlantEvent] {
+        &self.startup_events
+    }
+
+    /// The arm (its parameters and model).
+    pub fn arm(&self) -> &Arm<f64> {
+        &self.arm
+    }
+
+    /// The simulator settings.
+    pub fn config(&self) -> &SimConfig {
+        &self.cfg
+    }
+
+    /// Current time, s.
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s).
+    pub fn state(&self) -> [f64; 4] {
+        [self.y[0], self.y[1], self.y[2], self.y[3]]
+    }
+
+    /// Internal states of a continuous-time controller (see [`Controller`]).
+    pub fn controller_state(&self) -> [f64; 2] {
+        [self.y[4], self.y[5]]
+    }
+
+    /// Sets the internal states of a continuous-time controller.
+    pub fn set_controller_state(&mut self, xi: [f64; 2]) {
+        self.y[4..6].copy_from_slice(&xi);
+    }
+
+    /// Current contact mode (flight, sliding or sticking).
+    pub fn mode(&self) -> ContactMode {
+        match self.phase {
+            Phase::Flight => ContactMode::Flight,
+            Phase::Sliding(_) => ContactMode::Sliding,
+            Phase::Sticking => ContactMode::Sticking,
+        }
+    }
+
+    /// The phase the integrator runs in (the contact mode with its slip direction).
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Slip direction while sliding.
+    pub fn slip_direction(&self) -> Option<SlipDirection> {
+        match self.phase {
+            Phase::Sliding(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// Tip position `[z_t, z_n]`, m.
+    pub fn tip(&self) -> Vector2<f64> {
+        tip_position_trig(self.arm.params.l, &self.trig.get(&Vector2::new(self.y[0], self.y[2])))
+    }
+
+    /// Tip velocity `[z_t_dot, z_n_dot]`, m/s.
+    pub fn tip_velocity(&self) -> Vector2<f64> {
+        let (q, qd) = segment::split(&self.y);
+        jacobian_trig(self.arm.params.l, &self.trig.get(&q)) * qd
+    }
+
+    /// `[z_r_dot, z_n_dot]`, m/s.
+    fn rel_velocity(&self) -> Vector2<f64> {
+        let v = self.tip_velocity();
+        Vector2::new(v[0] - self.arm.params.v_belt, v[1])
+    }
+
+    /// Contact force `[f_t, f_n]` (N) in the current mode under motor torques `u` (N m).
+    pub fn contact_force(&self, u: [f64; 2]) -> [f64; 2] {
+        self.contact_force_with(&Hold(u))
+    }
+
+    /// Contact force `[f_t, f_n]` (N) in the current mode under the torque law `ctrl`
+    /// (evaluated at the current time, state and controller states).
+    pub fn contact_force_with<C: Controller + ?Sized>(&self, ctrl: &C) -> [f64; 2] {
+        let (_, f, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
+        [f[0], f[1]]
+    }
+
+    /// Mechanical energy (kinetic + gravity + spring), J.
+    pub fn energy(&self) -> f64 {
+        let (q, qd) = segment::split(&self.y);
+        self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q)
+    }
+
+    /// Event counts since creation.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// The validity counters since creation, for a run that ended with `failure`.
+    pub fn validity(&self, failure: Option<&SimError>) -> Validity {
+        Validity::of(&self.counters, failure)
+    }
+
+    /// Evaluations of the vector field since creation (a cost measure).
+    pub fn rhs_evaluations(&self) -> u64 {
+        self.evals.get()
+    }
+
+    /// The plant's state now, to go back to with [`Plant::restore`] (e.g. after
+    /// advancing ahead of a decision that turned out otherwise).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t: self.t,
+            y: self.y,
+            phase: self.phase,
+            cone_relaxed: self.cone_relaxed,
+            in_violation: self.in_violation,
+            last_h: self.last_h,
+            evals: self.evals.get(),
+            trig: self.trig.clone(),
+            counters: self.counters,
+            end_point: self.end_point,
+        }
+    }
+
+    /// Goes back to `c`, a [`Plant::checkpoint`] of this plant: what follows is
+    /// bit for bit what would have followed the checkpoint.
+    pub fn restore(&mut self, c: Checkpoint) {
+        let Checkpoint { t, y, phase, cone_relaxed, in_violation, last_h, evals, trig, counters, end_point } = c;
+        (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.last_h) = (t, y, phase, cone_relaxed, in_violation, last_h);
+        self.evals.set(evals);
+        (self.trig, self.counters, self.end_point) = (trig, counters, end_point);
+    }
+
+    fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
+        Segment::new(&self.arm, self.phase, ctrl, self.cone_relaxed, self.cfg.baumgarte, &self.evals, &self.trig)
+    }
+}

@@ -1,0 +1,299 @@
+//! Advancing the plant over an interval ([`Plant::advance`]): the loop over smooth
+//! segments and the events that end them, the integration of one segment with its
+//! retries, and the guard against mode changes that repeat at one instant.
+
+use shared::model::TipDynamics;
+
+use super::{EndPoint, Plant};
+use crate::{
+    controller::Controller,
+    dop853::Dop853,
+    error::SimError,
+    events::{PlantEvent, StepReport},
+    observer::Observer,
+    phase::Phase,
+    segment::{self, Boundary, EventLocator, OdeState, Point},
+};
+
+/// The end of one solve: end time, state, the boundary hit (if any), and the event
+/// function at the last accepted point (0 at a hit; see `Plant::solve_segment`).
+type SegmentEnd = (f64, OdeState, Option<Boundary>, f64);
+
+/// Events at one instant after which the contact is held stuck (crate docs, corner case).
+const STALL_LIMIT: usize = 16;
+
+/// Rounding slack on the (dimensionless) event components at the start of a segment.
+const START_SLACK: f64 = 1e-12;
+
+impl Plant {
+    /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`](crate::Hold)`(u)` for the
+    /// motor torques `u = [u1, u2]` (N m) held constant (zero-order hold, as a
+    /// sampled controller drives the arm), or a law evaluated inside the
+    /// integration (the paper's continuous-time setting; the report's force then
+    /// uses the law's torque at the end of the interval). `obs` sees the
+    /// trajectory: every accepted step with its dense output, the start of each
+    /// smooth segment, the events ([`Observer`]; [`NoObserver`](crate::NoObserver) for none).
+    ///
+    /// # Errors
+    /// [`SimError::BadStep`], [`SimError::BadTorque`] (a held torque that is not
+    /// finite), or a failure during the interval (the plant is then left at the
+    /// failure time).
+    pub fn advance<C: Controller + ?Sized>(&mut self, ctrl: &C, dt: f64, obs: &mut dyn Observer) -> Result<StepReport, SimError> {
+        let events = self.advance_events(ctrl, dt, obs)?;
+        let f = match self.phase {
+            Phase::Flight => [0.0, 0.0],
+            _ => {
+                let seg = self.segment(ctrl);
+                let f = match ctrl.held() {
+                    // Kept for the next interval's start (see `EndPoint`); counted when used there.
+                    Some(u) => {
+                        let point = seg.point_uncounted(self.t, &self.y);
+                        let (t, y, phase, cone_relaxed) = (self.t, self.y, self.phase, self.cone_relaxed);
+                        self.end_point = Some(EndPoint { t, y, u, phase, cone_relaxed, point });
+                        point.f
+                    }
+                    None => seg.evaluate(self.t, &self.y, &mut [0.0; 2]).1,
+                };
+                [f[0], f[1]]
+            }
+        };
+        Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
+    }
+
+    /// [`Plant::advance`] without its report: the events of the interval only, in
+    /// time order (the contact force at its end is not evaluated: the SIL loop's
+    /// first part of a period, up to the zero-order-hold switch, needs only these).
+    ///
+    /// # Errors
+    /// As [`Plant::advance`].
+    pub fn advance_events<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<Vec<PlantEvent>, SimError> {
+        // Kept only for an interval that starts where it was made.
+        let end_point = self.end_point.take();
+        if let Some(u) = ctrl.held()
+            && !u.iter().all(|v| v.is_finite())
+        {
+            return Err(SimError::BadTorque(u));
+        }
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(SimError::BadStep(dt));
+        }
+        let t_end = self.t + dt;
+        let mut events: Vec<PlantEvent> = Vec::new();
+        let mut handled = 0usize;
+        // Zero-time loops: mode changes that follow each other without time passing.
+        let (mut stall_t, mut stalled) = (f64::NAN, 0usize);
+        loop {
+            let remaining = t_end - self.t;
+            if remaining <= 1e-13 * t_end.abs().max(1.0) {
+                self.t = t_end;
+                break;
+            }
+            if handled > self.cfg.max_events_per_advance {
+                let recent = events
+                    .iter()
+                    .rev()
+                    .take(6)
+                    .rev()
+                    .map(|e: &PlantEvent| format!("{} at {:.12} s", e.kind.name(), e.t))
+                    .collect::<Vec<String>>()
+                    .join(", ");
+                return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance, recent });
+            }
+            // A mode must start inside its domain (up to rounding: a slip starting from
+            // rest has s v_r = +-1e-16), or it ends at once. One model evaluation gives
+            // the event function and the integrator's first stage.
+            let (start, (boundary, g0)) = {
+                let seg = self.segment(ctrl);
+                let start = match &end_point {
+                    Some(e) if self.starts_from(e, ctrl) => {
+                        seg.count_evaluation();
+                        e.point
+                    }
+                    _ => seg.point(self.t, &self.y),
+                };
+                let nb = segment::nearest(seg.components_of(&start.td, &start.f));
+                (start, nb)
+            };
+            if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(&start.td) {
+                if self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
+                    handled += 1;
+                    continue;
+                }
+                self.cross(ctrl, boundary, &mut events)?;
+                handled += 1;
+                continue;
+            }
+            // A relaxed (cone-violating) stick lasts at most to the end of this interval.
+            let seg_end = t_end;
+            obs.on_segment_start(self.t, &self.y, self.mode());
+            let hit = self.integrate(ctrl, seg_end, &start, g0, obs)?;
+            self.counters.segments += 1;
+            match hit {
+                Some(b) => {
+                    if !self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
+                        self.cross(ctrl, b, &mut events)?;
+                    }
+                    handled += 1;
+                }
+                None => {
+                    self.t = t_end;
+                    self.project_contact()?;
+                    // Solve the contact problem afresh next interval.
+                    if self.cone_relaxed {
+                        self.cone_relaxed = false;
+                        self.in_violation = true;
+                    }
+                    break;
+                }
+            }
+        }
+        // The state after an impact at the very end of the interval belongs to no step.
+        obs.on_advanced(self.t, &self.y);
+        for e in &events {
+            obs.on_event(e);
+        }
+        Ok(events)
+    }
+
+    /// Whether `e` is the model at the current time, state and mode under `ctrl`
+    /// (a held torque equal to `e`'s, bit for bit).
+    fn starts_from<C: Controller + ?Sized>(&self, e: &EndPoint, ctrl: &C) -> bool {
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+        ctrl.held().is_some_and(|u| same(u[0], e.u[0]) && same(u[1], e.u[1]))
+            && same(e.t, self.t)
+            && e.y.iter().zip(&self.y).all(|(a, b)| same(*a, *b))
+            && e.phase == self.phase
+            && e.cone_relaxed == self.cone_relaxed
+    }
+
+    /// Counts mode changes at one instant; after [`STALL_LIMIT`] of them in contact
+    /// (slip starting and stopping at once: the slip acceleration is zero to
+    /// rounding in both directions) holds the tip stuck, cone ignored, to the end of
+    /// the interval (the documented corner case). Returns whether it did.
+    fn note_stall(&mut self, stall_t: &mut f64, stalled: &mut usize, events: &mut Vec<PlantEvent>) -> Result<bool, SimError> {
+        if (self.t - *stall_t).abs() <= 1e-12 * self.t.abs().max(1.0) {
+            *stalled += 1;
+        } else {
+            (*stall_t, *stalled) = (self.t, 0);
+        }
+        if *stalled < STALL_LIMIT || self.phase == Phase::Flight {
+            return Ok(false);
+        }
+        let before = self.rel_velocity();
+        self.project_contact_velocity(true)?;
+        self.phase = Phase::Sticking;
+        self.cone_relaxed = true;
+        self.enter_violation(events, before);
+        (*stall_t, *stalled) = (f64::NAN, 0);
+        Ok(true)
+    }
+
+    /// Flight starting on the belt with the tip not moving away (e.g. after `b`
+    /// touched 0 without changing sign): the event detection cannot see a crossing
+    /// from `z_n + H = 0`, so this is handled as a grazing touchdown at once. `td`:
+    /// the tip dynamics at the current state.
+    fn flight_starts_into_belt(&self, td: &TipDynamics<f64>) -> bool {
+        if self.phase != Phase::Flight {
+            return false;
+        }
+        let height = td.z[1] + self.arm.params.h;
+        height <= 1e-12 && (td.z_dot[1] < -self.cfg.zeno_velocity || (td.z_dot[1] <= self.cfg.zeno_velocity && td.b() < 0.0))
+    }
+
+    /// Integrates the current mode from `self.t` towards `t_end`; returns the
+    /// boundary hit, if any (the state is then at the event). `start` is the model
+    /// at the current state and `g0` the event function there.
+    ///
+    /// An event is detected as a sign change of the event function between two
+    /// accepted steps, starting from its value at `t0`. A segment that starts
+    /// on its boundary (flight right after a bounce: `z_n + H = 0`) would miss a
+    /// return that fits inside the first step, so the first step is kept inside the
+    /// hop (`h0 <= v_n / |b|`, half the ballistic hop time). As a last guard, a
+    /// segment that ends outside its domain without an event is integrated again
+    /// with steps capped at 1/64 of the interval and at most 1 ms, then 10 us, and
+    /// fails if that still misses it.
+    fn integrate<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        t_end: f64,
+        start: &Point,
+        g0: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<Option<Boundary>, SimError> {
+        let remaining = t_end - self.t;
+        let mut h0 = self.last_h.min(remaining);
+        if self.phase == Phase::Flight {
+            let td = &start.td;
+            let height = td.z[1] + self.arm.params.h;
+            if height < 1e-9 && td.z_dot[1] > 0.0 && td.b() < 0.0 {
+                h0 = h0.min(td.z_dot[1] / -td.b());
+            }
+        }
+        // Retries cap the steps at 1/64 of the interval, and also at 1 ms then 10 us:
+        // over a long interval (open-loop runs advance by seconds) 1/64 of it can
+        // still hold a whole excursion out of the domain and back, e.g. a slip from
+        // rest that stops again within milliseconds.
+        for h_max in [f64::INFINITY, (remaining / 64.0).min(1e-3), (remaining / 64.0).min(1e-5)] {
+            obs.on_attempt();
+            let (t1, y1, boundary, g_end) = self.solve_segment(ctrl, t_end, h0.min(h_max), h_max, start, g0, obs)?;
+            if boundary.is_none() && g_end < -1e-9 {
+                // Missed crossing: retry with capped steps.
+                continue;
+            }
+            obs.on_kept(&y1, self.mode());
+            self.t = t1;
+            self.y = y1;
+            return Ok(boundary);
+        }
+        Err(SimError::MissedEvent { t: self.t, mode: self.mode().name() })
+    }
+
+    /// One solve over `[self.t, t_end]`, stopping at the first event (the plant's
+    /// time and state are left unchanged; `last_h` takes the step the integrator
+    /// proposes next). Returns the end time and state (the event's, if one was
+    /// located), the boundary hit (if any), and the event function at the last
+    /// accepted point (0 at a hit; `Plant::integrate` retries a solve that ends
+    /// outside its domain without one). `obs` sees every accepted step, with its
+    /// dense output, up to the event ([`Observer::on_step`]).
+    #[allow(clippy::too_many_arguments)]
+    fn solve_segment<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        t_end: f64,
+        h0: f64,
+        h_max: f64,
+        start: &Point,
+        g0: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<SegmentEnd, SimError> {
+        let solver = Dop853 { h_max, ..self.solver };
+        let mode = self.mode();
+        let seg = self.segment(ctrl);
+        let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
+        let solved = solver
+            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
+                let control = locator.on_step(step);
+                obs.on_step(step, locator.hit, mode);
+                control
+            })
+            .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
+        let (g_end, hit) = (locator.g_prev, locator.hit);
+        self.last_h = solved.h_next;
+        if let Some((t1, y1)) = hit {
+            if !y1.iter().all(|v| v.is_finite()) {
+                return Err(SimError::NonFinite { t: t1, mode: self.mode().name() });
+            }
+            let boundary = self.segment(ctrl).nearest_boundary(t1, &y1).0;
+            return Ok((t1, y1, Some(boundary), 0.0));
+        }
+        if !solved.y.iter().all(|v| v.is_finite()) {
+            return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
+        }
+        Ok((t_end, solved.y, None, g_end))
+    }
+}

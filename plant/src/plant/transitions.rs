@@ -1,0 +1,320 @@
+//! The discrete transitions of the plant at an event (crate docs): touchdown with
+//! its impact and the Zeno rule, lift-off, `p` reaching 0, the choice of the
+//! contact mode of a tip on the belt (sticking, sliding in a consistent direction,
+//! flight), the impact without collision of the Painlevé paradox, the cone-violating
+//! stick of the corner case, and the events and counts each one reports.
+
+use nalgebra::Vector2;
+use shared::{
+    ContactMode, SlipDirection,
+    contact::{classify_slipping, sliding_force, sticking_is_consistent},
+};
+
+use super::Plant;
+use crate::{
+    controller::Controller,
+    error::SimError,
+    events::{EventKind, PlantEvent},
+    impact::{self, Impulse, Resolution},
+    phase::Phase,
+    segment::{self, Boundary},
+};
+
+/// Why a contact mode is being (re)chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Entry {
+    /// The initial state, or a tip that reached the belt with no normal velocity.
+    Settle,
+    /// After a touchdown (an impact that left the tip on the belt, or a grazing
+    /// contact): a departure is a lift-off.
+    Landed,
+    /// Sliding reached `z_r_dot = 0`.
+    SlipStopped,
+    /// Sticking reached the cone's edge.
+    ConeEdge,
+}
+
+impl Plant {
+    /// Handles the crossing of a mode boundary at the current time.
+    pub(super) fn cross<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        boundary: Boundary,
+        events: &mut Vec<PlantEvent>,
+    ) -> Result<(), SimError> {
+        self.cone_relaxed = false;
+        let result = self.cross_inner(ctrl, boundary, events);
+        // An episode of cone violation ends when another mode is chosen.
+        if !self.cone_relaxed {
+            self.in_violation = false;
+        }
+        result
+    }
+
+    fn cross_inner<C: Controller + ?Sized>(&mut self, ctrl: &C, boundary: Boundary, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        match boundary {
+            Boundary::Touchdown => {
+                self.project_position()?;
+                self.touch(ctrl, events, false)
+            }
+            Boundary::LiftOff => {
+                let before = self.rel_velocity();
+                self.phase = Phase::Flight;
+                self.counters.lift_offs += 1;
+                self.push_event(events, EventKind::LiftOff, before, None, 0.0);
+                Ok(())
+            }
+            Boundary::PZero => {
+                self.counters.p_zero += 1;
+                let before = self.rel_velocity();
+                self.push_event(events, EventKind::PZero, before, None, 0.0);
+                self.project_contact()?;
+                self.impact_without_collision(ctrl, events)
+            }
+            Boundary::SlipStops => {
+                self.project_contact()?;
+                self.enter_contact(ctrl, Entry::SlipStopped, events)
+            }
+            Boundary::ConeEdge => {
+                self.project_contact()?;
+                self.enter_contact(ctrl, Entry::ConeEdge, events)
+            }
+        }
+    }
+
+    /// The tip is on the belt (position projected): impact if approaching, flight if
+    /// separating, otherwise choose the contact mode. `initial`: the plant's initial
+    /// state (a departure from it is not a lift-off).
+    pub(super) fn touch<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>, initial: bool) -> Result<(), SimError> {
+        let before = self.rel_velocity();
+        let v_n = before[1];
+        if v_n > self.cfg.zeno_velocity {
+            self.phase = Phase::Flight;
+            return Ok(());
+        }
+        if v_n < -self.cfg.zeno_velocity {
+            let (q, _) = segment::split(&self.y);
+            let qm = self.arm.q_matrix(&q);
+            let imp = impact::touchdown(&qm, self.arm.params.mu, before[0], v_n, self.cfg.impact_law, self.cfg.e_n)
+                .map_err(|source| SimError::Impact { t: self.t, source })?;
+            let de = self.apply_impulse(&imp);
+            self.counters.touchdowns += 1;
+            let after = self.rel_velocity();
+            if after[1] > self.cfg.zeno_velocity {
+                self.phase = Phase::Flight;
+                self.counters.bounces += 1;
+                self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
+                self.check_impact(events, &imp, &qm, de, before);
+                return Ok(());
+            }
+            self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
+            self.check_impact(events, &imp, &qm, de, before);
+        }
+        // Grazing contact or the end of a bounce sequence: remove what is left of
+        // the normal velocity and stay on the belt. A residue at rounding level (a
+        // plastic impact leaves ~1e-17 m/s) is removed without counting a Zeno stop.
+        let residual = self.rel_velocity();
+        let mut zeno = None;
+        if residual[1] != 0.0 {
+            let rounding = 1e-12 + 1e-9 * before.norm();
+            if residual[1].abs() > rounding {
+                self.counters.zeno_stops += 1;
+                zeno = Some(events.len());
+            }
+            self.project_contact_velocity(false)?;
+            if zeno.is_some() {
+                self.push_event(events, EventKind::ZenoEnded, residual, None, 0.0);
+            }
+        }
+        // A departure is a lift-off after a real arrival (an impact, or a residue the
+        // Zeno rule removed); not from the initial state, nor after a zero-velocity
+        // "touchdown" of a tip that never left the belt (flight starting into it).
+        let landed = !initial && (v_n < -self.cfg.zeno_velocity || zeno.is_some());
+        let entry = if landed { Entry::Landed } else { Entry::Settle };
+        let chosen = self.enter_contact(ctrl, entry, events);
+        // The Zeno event records the mode chosen after it.
+        if let Some(i) = zeno {
+            events[i].mode_after = self.mode();
+        }
+        chosen
+    }
+
+    /// Chooses the contact mode of a tip on the belt with `z_n_dot = 0` (docs/model.md's
+    /// table, plus sticking), resolving the paradox by an impact without collision.
+    fn enter_contact<C: Controller + ?Sized>(&mut self, ctrl: &C, entry: Entry, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        let was_sliding = matches!(self.phase, Phase::Sliding(_));
+        let previous_dir = self.slip_direction();
+        let before = self.rel_velocity();
+        let mu = self.arm.params.mu;
+        let at_rest = before[0].abs() <= self.cfg.v_stick || matches!(entry, Entry::SlipStopped | Entry::ConeEdge);
+        if at_rest {
+            // Start from exactly zero slip, so that the chosen mode starts inside its domain.
+            self.project_contact_velocity(true)?;
+        }
+        self.phase = Phase::Sticking; // evaluate sticking forces
+        let (td, f_stick, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
+        let dir = if at_rest {
+            if entry != Entry::ConeEdge && sticking_is_consistent(&f_stick, mu) {
+                self.project_contact_velocity(true)?;
+                self.phase = Phase::Sticking;
+                self.counters.stick_phases += 1;
+                self.push_event(events, EventKind::SlipToStick, before, None, 0.0);
+                return Ok(());
+            }
+            // Slip from rest: a direction whose sliding solution accelerates the
+            // slip that way (consistent), preferring the one the sticking force points to.
+            let preferred = SlipDirection::of(-f_stick[0]);
+            let consistent = |s: SlipDirection| {
+                if !(td.p(mu, s) > 0.0 && td.b() < 0.0) {
+                    return false;
+                }
+                let f = sliding_force(&td, mu, s);
+                let acc = td.a_free[0] + td.qmat[(0, 0)] * f[0] + td.qmat[(0, 1)] * f[1];
+                s.sign::<f64>() * acc > 0.0
+            };
+            // At the cone's edge the sliding force in the preferred direction equals the
+            // sticking force, so the slip acceleration is exactly 0 there and its sign
+            // comes from the trend: the edge is crossed, take that direction (standard
+            // stick-to-slip) unless sliding that way is itself inconsistent (p <= 0).
+            let edge = entry == Entry::ConeEdge && td.p(mu, preferred) > 0.0 && td.b() < 0.0;
+            let choice = if edge { Some(preferred) } else { [preferred, preferred.reversed()].into_iter().find(|&s| consistent(s)) };
+            match choice {
+                Some(s) => s,
+                None if td.b() < 0.0 => {
+                    // Neither sticking nor slipping is consistent and the tip is pressed
+                    // on the belt: hold it stuck, cone ignored, until lift-off or the end of the
+                    // interval, then solve the contact problem again (crate docs, corner case).
+                    self.project_contact_velocity(true)?;
+                    self.phase = Phase::Sticking;
+                    self.cone_relaxed = true;
+                    self.enter_violation(events, before);
+                    return Ok(());
+                }
+                None => preferred,
+            }
+        } else {
+            SlipDirection::of(before[0])
+        };
+        match classify_slipping(td.b(), td.p(mu, dir)) {
+            ContactMode::Sliding => {
+                self.phase = Phase::Sliding(dir);
+                match entry {
+                    Entry::ConeEdge => {
+                        self.counters.stick_to_slip += 1;
+                        self.push_event(events, EventKind::StickToSlip, before, None, 0.0);
+                    }
+                    Entry::SlipStopped if was_sliding && previous_dir != Some(dir) => {
+                        self.counters.slip_reversals += 1;
+                        self.push_event(events, EventKind::SlipReversal, before, None, 0.0);
+                    }
+                    _ => {}
+                }
+                Ok(())
+            }
+            ContactMode::Flight | ContactMode::Indeterminate => {
+                self.phase = Phase::Flight;
+                if entry != Entry::Settle || was_sliding {
+                    // Leaving the belt after a touchdown, a stop of the slip or from
+                    // sliding: a lift-off (a departure from the initial state is not).
+                    self.counters.lift_offs += 1;
+                    self.push_event(events, EventKind::LiftOff, before, None, 0.0);
+                }
+                Ok(())
+            }
+            _ if !at_rest => {
+                self.phase = Phase::Sliding(dir);
+                self.impact_without_collision(ctrl, events)
+            }
+            _ => {
+                // No slip to stop and no consistent force: documented corner case.
+                self.project_contact_velocity(true)?;
+                self.phase = Phase::Sticking;
+                self.cone_relaxed = true;
+                self.enter_violation(events, before);
+                Ok(())
+            }
+        }
+    }
+
+    /// Starts (or continues) a cone-violating stick; reported once per episode.
+    pub(super) fn enter_violation(&mut self, events: &mut Vec<PlantEvent>, before: Vector2<f64>) {
+        if !self.in_violation {
+            self.in_violation = true;
+            self.counters.cone_violations += 1;
+            self.push_event(events, EventKind::ConeViolation, before, None, 0.0);
+        }
+    }
+
+    /// The Painlevé resolution: an impact without collision from sliding.
+    fn impact_without_collision<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        let before = self.rel_velocity();
+        let (q, _) = segment::split(&self.y);
+        let qm = self.arm.q_matrix(&q);
+        let imp = impact::without_collision(&qm, self.arm.params.mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc)
+            .map_err(|source| SimError::Impact { t: self.t, source })?;
+        let de = self.apply_impulse(&imp);
+        self.counters.impacts_without_collision += 1;
+        let after = self.rel_velocity();
+        if after[1] > self.cfg.zeno_velocity {
+            self.phase = Phase::Flight;
+            self.counters.lift_offs += 1;
+            self.push_event(events, EventKind::ImpactWithoutCollision, before, Some(&imp), de);
+            self.check_impact(events, &imp, &qm, de, before);
+            return Ok(());
+        }
+        self.push_event(events, EventKind::ImpactWithoutCollision, before, Some(&imp), de);
+        self.check_impact(events, &imp, &qm, de, before);
+        self.project_contact_velocity(false)?;
+        // The slip has been stopped (v_r = 0): choose stick or slip from rest.
+        self.enter_contact(ctrl, Entry::SlipStopped, events)
+    }
+
+    /// Applies a tip impulse: `q_dot += M^-1 J^T P`; returns the kinetic energy change (J).
+    fn apply_impulse(&mut self, imp: &Impulse) -> f64 {
+        let (q, qd) = segment::split(&self.y);
+        let before = self.arm.kinetic_energy(&q, &qd);
+        let jac = shared::kinematics::jacobian(self.arm.params.l, &q);
+        let dqd = self.arm.mass_matrix_inverse(&q) * (jac.transpose() * imp.p);
+        self.y[1] += dqd[0];
+        self.y[3] += dqd[1];
+        let (q, qd) = segment::split(&self.y);
+        self.arm.kinetic_energy(&q, &qd) - before
+    }
+
+    /// Counts a law's fallback to the energetic one, and reports an impact whose
+    /// contact work is positive (it created energy: a broken law, never expected).
+    fn check_impact(&mut self, events: &mut Vec<PlantEvent>, imp: &Impulse, qm: &nalgebra::Matrix2<f64>, de: f64, before: Vector2<f64>) {
+        match imp.resolution {
+            Resolution::NewtonFallback => self.counters.newton_fallbacks += 1,
+            Resolution::PoissonFallback => self.counters.poisson_fallbacks += 1,
+            _ => {}
+        }
+        // The same rounding allowance the laws' fallback uses.
+        if imp.contact_work > impact::work_tolerance(qm, before[0], before[1]) {
+            self.counters.energy_gains += 1;
+            self.counters.max_energy_gain = self.counters.max_energy_gain.max(imp.contact_work);
+            events.push(self.make_event(EventKind::EnergyGain, before, Some(imp), de));
+        }
+    }
+
+    fn make_event(&self, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) -> PlantEvent {
+        let after = self.rel_velocity();
+        PlantEvent {
+            t: self.t,
+            kind,
+            mode_after: self.mode(),
+            v_n_before: before[1],
+            v_n_after: after[1],
+            v_r_before: before[0],
+            v_r_after: after[0],
+            impulse: imp.map_or([0.0; 2], |i| [i.p[0], i.p[1]]),
+            energy_change: de,
+            contact_work: imp.map_or(0.0, |i| i.contact_work),
+            resolution: imp.map(|i| i.resolution),
+        }
+    }
+
+    fn push_event(&self, events: &mut Vec<PlantEvent>, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) {
+        events.push(self.make_event(kind, before, imp, de));
+    }
+}
