@@ -1,6 +1,7 @@
 //! The error of the analyses (admissible configurations, mode map, Z_t,sliding,
-//! sweeps, bifurcation diagrams); the command line maps each variant onto its
-//! own error with the same message and exit code.
+//! sweeps, bifurcation diagrams); the command line keeps it typed
+//! (`CliError::Analysis`), with its message, and decides the exit code from the
+//! variant.
 
 /// An error that ends an analysis.
 #[derive(Debug, thiserror::Error)]

@@ -61,6 +61,10 @@ pub enum CliError {
         /// What plotters reported.
         message: String,
     },
+    /// An analysis failed ([`analyses::AnalysisError`], kept typed); its message is
+    /// the analysis error's, its exit code follows the variant ([`CliError::exit_code`]).
+    #[error(transparent)]
+    Analysis(#[from] analyses::AnalysisError),
 }
 
 /// Maps an I/O error on `path` into a [`CliError::Io`].
@@ -69,32 +73,53 @@ pub fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> CliError
 }
 
 impl CliError {
-    /// Process exit code: 2 for bad input, 1 otherwise.
+    /// Process exit code: 2 for bad input, 1 otherwise. An analysis error counts
+    /// as the error it holds: bad input, a parameter or a scenario 2, a simulation
+    /// or a run as [`CliError::Sim`] and [`CliError::Run`], an interruption 1.
     pub fn exit_code(&self) -> i32 {
+        use analyses::AnalysisError as A;
         match self {
             Self::BadInput(_) | Self::Param(_) | Self::Scenario(_) | Self::FolderInUse { .. } => 2,
-            Self::Sim(e) if e.is_bad_input() => 2,
-            Self::Run(
-                rig::record::RunError::RigInUse { .. }
-                | rig::record::RunError::Handshake(_)
-                | rig::record::RunError::IncompatibleService(_),
-            ) => 2,
+            Self::Analysis(A::BadInput(_) | A::Param(_) | A::Scenario(_)) => 2,
+            Self::Sim(e) | Self::Analysis(A::Sim(e)) if e.is_bad_input() => 2,
+            Self::Run(e) | Self::Analysis(A::Run(e)) if run_is_bad_input(e) => 2,
             _ => 1,
         }
     }
 }
 
-impl From<analyses::AnalysisError> for CliError {
-    /// The same message and exit code as the analysis error.
-    fn from(e: analyses::AnalysisError) -> Self {
-        use analyses::AnalysisError as A;
-        match e {
-            A::BadInput(m) => Self::BadInput(m),
-            A::Param(e) => Self::Param(e),
-            A::Sim(e) => Self::Sim(e),
-            A::Scenario(e) => Self::Scenario(e),
-            A::Run(e) => Self::Run(e),
-            A::Interrupted(m) => Self::Interrupted(m),
+/// Whether a run failed on its input rather than while running: the rig is
+/// another's, or the firmware process or a service does not fit (exit 2).
+fn run_is_bad_input(e: &rig::record::RunError) -> bool {
+    matches!(
+        e,
+        rig::record::RunError::RigInUse { .. } | rig::record::RunError::Handshake(_) | rig::record::RunError::IncompatibleService(_)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use analyses::AnalysisError as A;
+    use rig::record::RunError;
+
+    #[test]
+    fn an_analysis_error_keeps_its_message_and_exit_code() {
+        let param = || shared::ParamError::NonFinite { name: "mu", value: f64::NAN };
+        let in_use = || RunError::RigInUse { rig: "r".into(), role: "plant", pid: 1 };
+        let cases: [(A, CliError); 6] = [
+            (A::BadInput("--grid".into()), CliError::BadInput("--grid".into())),
+            (A::Param(param()), CliError::Param(param())),
+            (A::Sim(plant::SimError::BadStep(-1.0)), CliError::Sim(plant::SimError::BadStep(-1.0))),
+            (A::Run(in_use()), CliError::Run(in_use())),
+            (A::Run(RunError::Transport("gone".into())), CliError::Run(RunError::Transport("gone".into()))),
+            (A::Interrupted("sweep stopped".into()), CliError::Interrupted("sweep stopped".into())),
+        ];
+        for (analysis, own) in cases {
+            let typed = CliError::from(analysis);
+            assert!(matches!(typed, CliError::Analysis(_)), "{typed:?}");
+            assert_eq!(typed.to_string(), own.to_string());
+            assert_eq!(typed.exit_code(), own.exit_code(), "{typed}");
         }
     }
 }

@@ -3,6 +3,7 @@
 //! writes the outputs (CSV, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod cancel;
 pub mod cli;
 pub mod commands;
@@ -11,6 +12,7 @@ pub mod fastcsv;
 pub mod folder_lock;
 pub mod output;
 pub mod plot;
+pub mod streamed_run;
 pub mod sweep;
 
 use clap::Parser;

@@ -1,11 +1,18 @@
 use super::*;
 use crate::admissible::{belt_reach, positive_intervals};
+use firmware::ControllerKind;
 use firmware::{
     config::FrictionCompensation,
     law::{HybridInput, HybridState, PidState, hybrid, pid},
     reference::{Quintic, RefPoint as FwRef},
 };
+use nalgebra::Vector2;
 use plant::initial::{X0D, X0U, deg_to_state};
+use plant::{Controller, Phase};
+use shared::{
+    Arm, ElbowBranch, Params, SlipDirection,
+    kinematics::{inverse_kinematics, jacobian},
+};
 
 fn on_belt(z_t: f64, branch: ElbowBranch, qd1: f64) -> [f64; 4] {
     let p = Params::<f64>::paper();

@@ -1,28 +1,13 @@
 //! What `sil-host run` and `sil-host pil` share: the scenario from the command
-//! line, the streamed closed-loop run, its human summary and its figure.
+//! line, the run's human summary and its figure (the streamed run itself is
+//! [`crate::streamed_run`]).
 
-use std::{
-    io::Write,
-    path::PathBuf,
-    sync::atomic::{AtomicBool, Ordering},
-    time::Instant,
-};
+use std::{io::Write, path::PathBuf};
 
-use crate::{
-    cli::ScenarioArgs,
-    error::CliError,
-    fastcsv::CsvRow,
-    output::{OutputSet, StreamedCsv},
-    plot,
-};
-use plant::Validity;
+use crate::{cli::ScenarioArgs, error::CliError, plot};
 use rig::{
-    FirmwareLink, RunObserver,
     overrides::{self, Override},
-    record::{PeriodRecord, RunError},
     scenario::Scenario,
-    stats::RunStats,
-    stream_loop,
     summary::Percentiles,
     summary::RunSummary,
 };
@@ -82,121 +67,6 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     }
     s.validate()?;
     Ok(s)
-}
-
-// `trace.csv` of `run` and `pil`: [`PeriodRecord`]'s fields in order (the header
-// the `csv` crate derived from them); the test below checks the bytes against it.
-crate::csv_row!(PeriodRecord {
-    t: f64,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    z_t: f64,
-    z_n: f64,
-    z_t_ref: f64,
-    f_t: f64,
-    f_n: f64,
-    mode: str,
-    u1_cmd: f64,
-    u2_cmd: f64,
-    u1_applied: f64,
-    u2_applied: f64,
-    lift_off_true: bool,
-    lift_off_detected: bool,
-    deadline_miss: bool,
-    firmware_deadline_miss: bool,
-    overruns: int,
-    status: int,
-});
-
-/// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
-/// with the run: every period's row goes to `trace.csv` of `out` as it is made
-/// (`trace.csv.partial`, flushed every 1 ms of wall time, so a plant killed
-/// outright keeps every period up to the last flush), the summary's figures are
-/// accumulated ([`RunStats`]) and the figure's curves decimated
-/// ([`plot::HistoryEnvelope`]); the progress bar moves every `every` periods,
-/// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
-/// it did, the loop's wall-clock time (s) and the plant's validity counters; the
-/// progress bar is cleared.
-///
-/// # Errors
-/// I/O errors of the trace file.
-pub(crate) fn run_streamed(
-    scenario: &Scenario,
-    link: &mut dyn FirmwareLink,
-    out: &mut OutputSet,
-    progress: &indicatif::ProgressBar,
-    every: usize,
-) -> Result<Streamed, CliError> {
-    let stop = crate::cancel::stop_flag();
-    let mut trace = StreamedCsv::new(out, "trace.csv", <PeriodRecord as CsvRow>::HEADER, std::time::Duration::from_millis(1))?;
-    let started = Instant::now();
-    /// Streams each record, summarises it, keeps a decimated copy, moves the
-    /// bar, stops on Ctrl-C, keeps the validity.
-    struct Streaming<'a> {
-        trace: &'a mut StreamedCsv,
-        progress: &'a indicatif::ProgressBar,
-        every: usize,
-        stop: &'a AtomicBool,
-        stats: RunStats,
-        history: plot::HistoryEnvelope,
-        validity: Validity,
-    }
-    impl RunObserver for Streaming<'_> {
-        fn on_finished(&mut self, validity: &Validity) {
-            self.validity = *validity;
-        }
-
-        fn on_record(&mut self, r: &PeriodRecord) {
-            self.trace.push(r);
-            self.stats.push(r);
-            self.history.push(&plot::HistorySample {
-                t: r.t,
-                z_t: r.z_t,
-                z_t_ref: r.z_t_ref,
-                f_n: r.f_n,
-                u: [r.u1_cmd, r.u2_cmd],
-                mode: r.mode,
-            });
-        }
-
-        fn on_period(&mut self, k: usize, _n: usize) -> bool {
-            if k.is_multiple_of(self.every) {
-                self.progress.set_position(k as u64);
-            }
-            !self.stop.load(Ordering::Relaxed)
-        }
-    }
-    let mut observer = Streaming {
-        trace: &mut trace,
-        progress,
-        every,
-        stop: &stop,
-        stats: RunStats::default(),
-        history: plot::HistoryEnvelope::default(),
-        validity: Validity::default(),
-    };
-    let (_, failure) = stream_loop(scenario, link, &mut observer);
-    let Streaming { stats, history, validity, .. } = observer;
-    let wall_s = started.elapsed().as_secs_f64();
-    progress.finish_and_clear();
-    trace.finish()?;
-    Ok(Streamed { stats, history, failure, wall_s, validity })
-}
-
-/// What [`run_streamed`] returns: nothing in it grows with the run's length.
-pub(crate) struct Streamed {
-    /// The summary's figures over every period, up to the failure if there was one.
-    pub stats: RunStats,
-    /// The figure's curves, decimated.
-    pub history: plot::HistoryEnvelope,
-    /// Why the run stopped early, if it did.
-    pub failure: Option<RunError>,
-    /// Wall-clock time of the loop, s.
-    pub wall_s: f64,
-    /// The plant's validity counters at the end.
-    pub validity: Validity,
 }
 
 pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
@@ -276,42 +146,4 @@ pub(crate) fn draw(
     let panels = history.panels(true);
     let title = format!("{what} run {}: {} from x0{}, z_t* = {} m", s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fastcsv::{push_header, push_row};
-    use proptest::prelude::*;
-
-    fn float() -> impl Strategy<Value = f64> {
-        prop_oneof![any::<u64>().prop_map(f64::from_bits), -10.0..10.0f64, Just(0.0), Just(-0.0)]
-    }
-
-    proptest! {
-        /// `trace.csv` of `run`/`pil`: the bytes of the old path (`csv::Writer::serialize`, header derived).
-        #[test]
-        fn period_records_match_the_csv_crate(
-            f in proptest::array::uniform14(float()),
-            b in proptest::array::uniform4(any::<bool>()),
-            n in any::<(u32, u32)>(),
-            m in 0..3usize,
-        ) {
-            let r = PeriodRecord {
-                t: f[0], theta1: f[1], theta1_dot: f[2], theta2: f[3], theta2_dot: f[4], z_t: f[5], z_n: f[6], z_t_ref: f[7],
-                f_t: f[8], f_n: f[9], mode: ["flight", "sliding", "sticking"][m], u1_cmd: f[10], u2_cmd: f[11],
-                u1_applied: f[12], u2_applied: f[13], lift_off_true: b[0], lift_off_detected: b[1], deadline_miss: b[2],
-                firmware_deadline_miss: b[3], overruns: n.0, status: n.1,
-            };
-            let mut w = csv::Writer::from_writer(Vec::new());
-            w.serialize(r).unwrap();
-            w.serialize(r).unwrap();
-            let old = w.into_inner().unwrap();
-            let mut new = Vec::new();
-            push_header(&mut new, <PeriodRecord as CsvRow>::HEADER);
-            push_row(&mut new, &r);
-            push_row(&mut new, &r);
-            prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
-        }
-    }
 }

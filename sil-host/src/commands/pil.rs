@@ -12,8 +12,9 @@
 
 use std::io::Write;
 
-use super::closed_loop::{Streamed, draw, load_scenario, print_summary, run_streamed};
+use super::closed_loop::{draw, load_scenario, print_summary};
 use crate::commands::Done;
+use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,

@@ -8,8 +8,9 @@
 //! the run goes (flushed every millisecond of wall time) and renamed at the end,
 //! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
-use super::closed_loop::{Streamed, draw, load_scenario, print_summary, run_streamed};
+use super::closed_loop::{draw, load_scenario, print_summary};
 use crate::commands::Done;
+use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::{RunArgs, RunLink},
     error::CliError,

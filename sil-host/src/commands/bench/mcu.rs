@@ -1,28 +1,18 @@
 //! The MCU figures: the worst control step of each controller and PIL periods per
-//! wall second, from PIL runs of the image in QEMU (`-icount shift=0`: the step's
-//! ticks count retired instructions, the same on every run); the image's flash
-//! and static RAM, read from the ELF's section headers as `scripts/budgets.py`
-//! does (docs/hardware.md "Budgets").
+//! wall second, from PIL runs of the image in QEMU ([`crate::bench::pil`]); the
+//! image's flash and static RAM ([`crate::bench::elf`]); the worst step's cycle
+//! estimate (`scripts/cycles.py`).
 
-use std::{
-    path::{Path, PathBuf},
-    time::Instant,
+use std::path::{Path, PathBuf};
+
+use super::STEP_INSTRUCTIONS_TARGET;
+use crate::bench::{
+    elf::image_size,
+    figure::{Figure, Goal, median},
+    pil::{self, PilRuns, highest_rate},
 };
-
-use super::{Figure, Goal, STEP_INSTRUCTIONS_TARGET, median};
 use crate::{cli::BenchArgs, error::CliError};
 use firmware::ControllerKind;
-use rig::{
-    RunObserver,
-    pil_link::{self, CORE_HZ, PilLink, PilOptions, PilTarget, QemuLink},
-    scenario::Scenario,
-    stream_loop,
-    summary::Spread,
-};
-
-/// Keeps nothing: the bench wants the link's counts and the loop's speed.
-struct Discard;
-impl RunObserver for Discard {}
 
 /// Target of PIL periods per wall second (real time at 1 kHz; issue 16).
 pub const PIL_RATE_TARGET: f64 = 1_000.0;
@@ -32,81 +22,19 @@ pub const FLASH_MCU_TARGET: f64 = 32.0 * 1024.0;
 /// (docs/hardware.md: 64 KiB).
 pub const FLASH_RELEASE_TARGET: f64 = 64.0 * 1024.0;
 
-/// One PIL run of the default scenario with one controller.
-#[derive(Debug, Clone)]
-pub struct PilRun {
-    /// The controller the image ran.
-    pub controller: ControllerKind,
-    /// Control steps, instructions (median, p99, worst).
-    pub step: Spread,
-    /// Frames (decode + step), instructions.
-    pub frame: Spread,
-    /// Periods run.
-    pub periods: usize,
-    /// Periods per wall second of the loop (QEMU's boot excluded).
-    pub rate: f64,
-    /// QEMU's start and the image's boot, s.
-    pub boot_s: f64,
-}
-
-/// The PIL runs, or why there are none.
-pub type PilRuns = Result<Vec<PilRun>, String>;
-
 /// The PIL image the bench runs: `--image`, else `target/thumbv7em-none-eabihf/qemu/pil`.
 fn image(args: &BenchArgs, target: &Path) -> PathBuf {
     args.image.clone().unwrap_or_else(|| target.join("thumbv7em-none-eabihf/qemu/pil"))
 }
 
-/// Runs the image in QEMU: `--repeat` (at most 3) runs of the hybrid controller,
-/// then one of PID, each `--pil-s` long. No image or no QEMU: `Err` with the
-/// reason and the fix (the figures are skipped).
+/// Runs the image ([`image`]) in QEMU: `--repeat` (at most 3) runs of the hybrid
+/// controller, then one of PID, each `--pil-s` long ([`pil::pil_runs`]). No image
+/// or no QEMU: `Err` with the reason and the fix (the figures are skipped).
 ///
 /// # Errors
 /// A run that fails once started (exit 1).
 pub fn pil_runs(args: &BenchArgs, target: &Path) -> Result<PilRuns, CliError> {
-    let image = image(args, target);
-    if !image.is_file() {
-        return Ok(Err(format!("no PIL image at {}: build it with `{}`", image.display(), pil_link::BUILD_HINT)));
-    }
-    let mut runs = Vec::new();
-    let kinds = std::iter::repeat_n(ControllerKind::Hybrid, args.repeat.min(3)).chain([ControllerKind::Pid]);
-    for kind in kinds {
-        let mut s = Scenario::default_scenario();
-        s.controller.kind = kind;
-        s.timing.duration_s = args.pil_s;
-        s.validate()?;
-        let opts = PilOptions::for_target(PilTarget::Qemu { image: image.clone(), qemu: args.qemu.clone(), link: QemuLink::default() });
-        let t = Instant::now();
-        let mut link = match PilLink::start(&s, &opts, None) {
-            Ok(l) => l,
-            // QEMU missing or the image not booting is a set-up matter: the figure is skipped.
-            Err(e) if runs.is_empty() => return Ok(Err(format!("cannot start the image in QEMU: {e}"))),
-            Err(e) => return Err(CliError::Run(e)),
-        };
-        let boot_s = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let (periods, e) = stream_loop(&s, &mut link, &mut Discard);
-        let rate = periods as f64 / t.elapsed().as_secs_f64();
-        if let Some(e) = e {
-            return Err(CliError::Run(e));
-        }
-        let per_tick = link.counts.counts_per_tick();
-        runs.push(PilRun {
-            controller: kind,
-            step: link.counts.step.spread(per_tick),
-            frame: link.counts.frame.spread(per_tick),
-            periods,
-            rate,
-            boot_s,
-        });
-    }
-    Ok(Ok(runs))
-}
-
-/// The highest control rate (Hz) at which a step of `cycles` fits 5 % of the
-/// period at 168 MHz (docs/hardware.md "Budgets").
-pub fn highest_rate(cycles: f64) -> f64 {
-    CORE_HZ / 20.0 / cycles
+    pil::pil_runs(&image(args, target), &args.qemu, args.repeat, args.pil_s)
 }
 
 /// The worst control step of each controller, instructions, against
@@ -229,21 +157,6 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
     figures
 }
 
-/// Flash and static RAM of an ELF image, bytes: the loaded sections
-/// `.vector_table`, `.text`, `.rodata`, `.data` (its initial values are in
-/// flash); RAM `.data`, `.bss`, `.uninit` (the stack and the defmt buffers are
-/// counted by the image's own checks).
-///
-/// # Errors
-/// The file cannot be read or is not an ELF file.
-pub fn image_size(path: &Path) -> Result<(u64, u64), String> {
-    use object::{Object, ObjectSection};
-    let data = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let elf = object::File::parse(&*data).map_err(|e| format!("{}: not an ELF image: {e}", path.display()))?;
-    let size = |names: &[&str]| -> u64 { elf.sections().filter(|s| s.name().is_ok_and(|n| names.contains(&n))).map(|s| s.size()).sum() };
-    Ok((size(&[".vector_table", ".text", ".rodata", ".data"]), size(&[".data", ".bss", ".uninit"])))
-}
-
 /// The PIL image's flash in profiles `mcu` and `release` against their targets.
 pub fn flash_figures(target: &Path) -> Vec<Figure> {
     let base = target.join("thumbv7em-none-eabihf");
@@ -287,37 +200,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ten_kilohertz_is_840_cycles() {
-        assert!((highest_rate(840.0) - 10_000.0).abs() < 1e-9);
-        assert!((highest_rate(8_400.0) - 1_000.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn a_file_that_is_not_elf_is_a_clear_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("pil");
-        std::fs::write(&p, b"not an image").unwrap();
-        let e = image_size(&p).unwrap_err();
-        assert!(e.contains("not an ELF image"), "{e}");
-        let e = image_size(&dir.path().join("missing")).unwrap_err();
-        assert!(e.contains("cannot read"), "{e}");
-    }
-
-    #[test]
-    fn sizes_are_read_from_the_section_headers() {
-        // This test's own executable is an ELF file with .text, .rodata and .data.
-        let (flash, ram) = image_size(&std::env::current_exe().unwrap()).unwrap();
-        assert!(flash > 100_000 && ram > 0, "flash {flash}, ram {ram}");
-    }
-
-    #[test]
     fn missing_images_are_skipped_with_the_build_command() {
         let dir = tempfile::tempdir().unwrap();
         let f = flash_figures(dir.path());
         assert_eq!(f.len(), 2);
         for f in f {
             match &f.status {
-                super::super::Status::Skipped(why) => assert!(why.contains("cargo build -p board-stm32f405"), "{why}"),
+                crate::bench::figure::Status::Skipped(why) => assert!(why.contains("cargo build -p board-stm32f405"), "{why}"),
                 s => panic!("{s:?}"),
             }
         }

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Parser;
 
-use super::{Figure, Goal, median};
+use crate::bench::figure::{Figure, Goal, median};
 use crate::{
     cli::{BenchArgs, Cli, Command},
     error::CliError,

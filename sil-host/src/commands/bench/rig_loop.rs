@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use super::{Figure, Goal, median};
+use crate::bench::figure::{Figure, Goal, median};
 use crate::{cli::BenchArgs, error::CliError};
 use rig::{
     FirmwareLink, RunObserver,

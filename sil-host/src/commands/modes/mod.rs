@@ -17,9 +17,9 @@ use summary::*;
 /// Computes the mode map and writes `modes.csv` and `modes.svg`; prints nothing.
 ///
 /// # Errors
-/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, grid
-/// size, `mu` or `v_belt`, before anything is written; [`CliError::Io`] /
-/// [`CliError::Plot`] when writing fails.
+/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
+/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
+/// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
     let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
@@ -40,9 +40,10 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
 /// `modes.csv` and `modes.svg` under `--out`, all or nothing.
 ///
 /// # Errors
-/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, grid
-/// size, `mu` or `v_belt`, before anything is written; [`CliError::Io`] /
-/// [`CliError::Plot`] when writing fails (nothing is left half-written).
+/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
+/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
+/// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
+/// (nothing is left half-written).
 pub fn run(args: &ModesArgs) -> Result<(), CliError> {
     run_with(args, &mut std::io::stdout().lock())
 }

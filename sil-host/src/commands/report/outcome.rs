@@ -3,8 +3,9 @@
 use analyses::{admissible::AdmissibleReport, modes::ModeMap};
 use rig::summary::RunSummary;
 
+use crate::bench::figure::Figure as BenchFigure;
 use crate::commands::{
-    self, bench::Figure as BenchFigure, poincare::summary::Summary as PoincareSummary, sensitivity::Summary as SensitivitySummary,
+    self, poincare::summary::Summary as PoincareSummary, sensitivity::Summary as SensitivitySummary,
     simulate::summary::Summary as SimulateSummary, sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
 };
 

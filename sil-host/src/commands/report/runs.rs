@@ -1,7 +1,7 @@
 //! The tables of the closed-loop sections: runs side by side, the rig's speed, the MCU image's step counts.
 
 use super::format::{cell, mm, number};
-use crate::commands::bench::{Figure, Goal, Status};
+use crate::bench::figure::{Figure, Goal, Status};
 use rig::summary::{PilFigures, RunSummary};
 use std::fmt::Write as _;
 

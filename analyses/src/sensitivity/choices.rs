@@ -1,0 +1,243 @@
+//! The open choices of the sensitivity study: the knobs every choice sets, the
+//! dimensions they vary, and the list of choices, each dimension with its
+//! default among them.
+
+use firmware::{ControllerKind, config::FrictionCompensation};
+use plant::impact::{ImpactLaw, IwcRule};
+use rig::scenario::Scenario;
+use serde::Serialize;
+
+/// Every open choice at one value: the defaults (the paper's set-up and ours,
+/// docs/model.md and docs/hardware.md) or one of them changed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Knobs {
+    /// Impact law.
+    pub impact_law: ImpactLaw,
+    /// Restitution coefficient.
+    pub e_n: f64,
+    /// Impact-without-collision rule.
+    pub iwc: IwcRule,
+    /// The hybrid law's friction term (sampled firmware).
+    pub friction: FrictionCompensation,
+    /// Duration of the reference's move, s.
+    pub move_time_s: f64,
+    /// Lift-off criterion: 0 for any departure, else the gap the tip must exceed, m.
+    pub lift_off_gap_m: f64,
+    /// Control rate of the sampled firmware, Hz.
+    pub rate_hz: f64,
+    /// Joint encoder resolution, bits per revolution.
+    pub encoder_bits: u8,
+    /// Load-cell white noise, N rms.
+    pub load_noise_n: f64,
+    /// Relative error of the firmware's friction estimate: `mu_hat = (1 + m) mu`.
+    pub mu_hat_mismatch: f64,
+}
+
+impl Default for Knobs {
+    fn default() -> Self {
+        Self {
+            impact_law: ImpactLaw::Newton,
+            e_n: 0.2,
+            iwc: IwcRule::Restitution,
+            friction: FrictionCompensation::ModelCommandedNormal,
+            move_time_s: 2.0,
+            lift_off_gap_m: 0.0,
+            rate_hz: 1000.0,
+            encoder_bits: 14,
+            load_noise_n: 0.02,
+            mu_hat_mismatch: 0.0,
+        }
+    }
+}
+
+impl Knobs {
+    /// `base` with these knobs: the plant's impact law, `e_n` and IWC rule, the
+    /// controller's friction term, move time and `mu_hat`, the rate (the delay
+    /// from sampling to the command, `delta_s`, kept the same fraction of the
+    /// period), the encoders and the load-cell noise.
+    pub fn scenario(&self, base: &Scenario) -> Scenario {
+        let mut s = base.clone();
+        s.plant.impact_law = self.impact_law;
+        s.plant.e_n = self.e_n;
+        s.plant.iwc = self.iwc;
+        s.controller.friction = self.friction;
+        s.controller.move_time_s = self.move_time_s;
+        s.controller.mu_hat = base.plant.mu * (1.0 + self.mu_hat_mismatch);
+        s.timing.delta_s = base.timing.delta_s * base.timing.rate_hz / self.rate_hz;
+        s.timing.rate_hz = self.rate_hz;
+        s.sensors.encoder_bits = self.encoder_bits;
+        s.sensors.load_noise_n = self.load_noise_n;
+        s
+    }
+}
+
+/// Which open choice a [`Choice`] varies (the study's dimensions).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dimension {
+    /// Impact law and `e_n`.
+    ImpactLaw,
+    /// The IWC rule.
+    Iwc,
+    /// The hybrid law's friction compensation.
+    Friction,
+    /// The reference's move time.
+    MoveTime,
+    /// The lift-off criterion.
+    LiftOff,
+    /// The sampled firmware's rate.
+    Rate,
+    /// Encoder resolution.
+    EncoderBits,
+    /// Load-cell noise.
+    LoadNoise,
+    /// `mu_hat` mismatch.
+    MuHat,
+}
+
+impl Dimension {
+    /// Every dimension, in the study's order.
+    pub const ALL: [Dimension; 9] = [
+        Self::ImpactLaw,
+        Self::Iwc,
+        Self::Friction,
+        Self::MoveTime,
+        Self::LiftOff,
+        Self::Rate,
+        Self::EncoderBits,
+        Self::LoadNoise,
+        Self::MuHat,
+    ];
+
+    /// A label for tables and figures.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::ImpactLaw => "impact law, e_n",
+            Self::Iwc => "IWC rule",
+            Self::Friction => "hybrid friction term",
+            Self::MoveTime => "move time (s)",
+            Self::LiftOff => "lift-off criterion",
+            Self::Rate => "control rate (Hz)",
+            Self::EncoderBits => "encoder bits",
+            Self::LoadNoise => "load-cell noise (N rms)",
+            Self::MuHat => "mu_hat mismatch",
+        }
+    }
+
+    /// Whether the choice enters the open-loop results (no controller).
+    pub fn in_open_loop(self) -> bool {
+        matches!(self, Self::ImpactLaw | Self::Iwc | Self::LiftOff)
+    }
+
+    /// Whether the choice enters the ideal (continuous-time, exact) controllers.
+    pub fn in_ideal(self) -> bool {
+        matches!(self, Self::ImpactLaw | Self::Iwc | Self::MoveTime | Self::LiftOff)
+    }
+
+    /// Whether the choice enters the controller `kind` (the friction term is the hybrid law's).
+    pub fn in_controller(self, kind: ControllerKind) -> bool {
+        self != Self::Friction || kind == ControllerKind::Hybrid
+    }
+}
+
+/// One value of one open choice (the others at their defaults).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Choice {
+    /// The dimension varied.
+    pub dimension: Dimension,
+    /// The value, as text (`poisson, e_n = 0.5`, `plastic`, `0.5`, ...).
+    pub value: String,
+    /// The value as a number where it is one (for figures), else the index in its dimension.
+    pub x: f64,
+    /// Whether this is the default value.
+    pub is_default: bool,
+    /// All knobs.
+    pub knobs: Knobs,
+}
+
+/// The choices of the study, dimension by dimension, each with its default among them.
+pub fn choices() -> Vec<Choice> {
+    let d = Knobs::default();
+    let mut v = Vec::new();
+    let mut push = |dimension, value: String, x: f64, knobs: Knobs| {
+        v.push(Choice { dimension, value, x, is_default: knobs == d, knobs });
+    };
+    let mut i = 0.0;
+    for law in ImpactLaw::ALL {
+        for e_n in [0.0, 0.2, 0.5] {
+            push(Dimension::ImpactLaw, format!("{law}, e_n = {e_n}"), i, Knobs { impact_law: law, e_n, ..d });
+            i += 1.0;
+        }
+    }
+    for (k, iwc) in IwcRule::ALL.into_iter().enumerate() {
+        push(Dimension::Iwc, iwc.to_string(), k as f64, Knobs { iwc, ..d });
+    }
+    let frictions = [
+        (FrictionCompensation::ModelCommandedNormal, "commanded"),
+        (FrictionCompensation::ModelMeasuredNormal, "measured_normal"),
+        (FrictionCompensation::Measured, "measured"),
+        (FrictionCompensation::None, "none"),
+    ];
+    for (k, (friction, name)) in frictions.into_iter().enumerate() {
+        push(Dimension::Friction, name.into(), k as f64, Knobs { friction, ..d });
+    }
+    for t in [0.1, 0.25, 0.5, 1.0, 2.0] {
+        push(Dimension::MoveTime, format!("{t}"), t, Knobs { move_time_s: t, ..d });
+    }
+    for (gap, name) in [(0.0, "any departure"), (1e-6, "gap > 1 um"), (1e-4, "gap > 0.1 mm")] {
+        push(Dimension::LiftOff, name.into(), gap, Knobs { lift_off_gap_m: gap, ..d });
+    }
+    for r in [250.0, 500.0, 1000.0, 2000.0, 5000.0, 10_000.0] {
+        push(Dimension::Rate, format!("{r}"), r, Knobs { rate_hz: r, ..d });
+    }
+    for b in 12..=16u8 {
+        push(Dimension::EncoderBits, format!("{b}"), f64::from(b), Knobs { encoder_bits: b, ..d });
+    }
+    for n in [0.0, 0.01, 0.02, 0.05, 0.1] {
+        push(Dimension::LoadNoise, format!("{n}"), n, Knobs { load_noise_n: n, ..d });
+    }
+    for m in [-0.2, -0.1, 0.0, 0.1, 0.2] {
+        push(Dimension::MuHat, format!("{:+}%", (m * 100.0f64).round()), m, Knobs { mu_hat_mismatch: m, ..d });
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_dimension_has_its_default_once_and_only_one_knob_changes() {
+        let all = choices();
+        let d = Knobs::default();
+        for dim in Dimension::ALL {
+            let of: Vec<&Choice> = all.iter().filter(|c| c.dimension == dim).collect();
+            assert!(of.len() >= 2, "{dim:?}");
+            assert_eq!(of.iter().filter(|c| c.is_default).count(), 1, "{dim:?}: one default");
+        }
+        // Each choice differs from the defaults in at most one knob (the impact
+        // dimension moves the law and e_n together).
+        for c in &all {
+            let k = c.knobs;
+            let changed = [
+                k.impact_law != d.impact_law || k.e_n != d.e_n,
+                k.iwc != d.iwc,
+                k.friction != d.friction,
+                k.move_time_s != d.move_time_s,
+                k.lift_off_gap_m != d.lift_off_gap_m,
+                k.rate_hz != d.rate_hz,
+                k.encoder_bits != d.encoder_bits,
+                k.load_noise_n != d.load_noise_n,
+                k.mu_hat_mismatch != d.mu_hat_mismatch,
+            ];
+            assert!(changed.iter().filter(|x| **x).count() <= 1, "{c:?}");
+        }
+    }
+
+    #[test]
+    fn the_default_knobs_are_the_default_scenario() {
+        let base = Scenario::default_scenario();
+        let s = Knobs::default().scenario(&base);
+        assert_eq!(s, base, "the defaults reproduce the embedded scenario");
+    }
+}

@@ -1,0 +1,147 @@
+//! The arguments of `board` (a board's bring-up, step by step) and `board-twin`
+//! (the simulated board serving it).
+
+use std::path::PathBuf;
+
+use clap::{Args, Subcommand, ValueEnum};
+
+use super::common::ScenarioArgs;
+
+/// `sil-host board`.
+#[derive(Debug, Clone, Args)]
+pub struct BoardArgs {
+    /// The board's serial port: a USB-serial adapter on USART1 (PA9/PA10), or the
+    /// path `sil-host board-twin --pty` printed.
+    #[arg(long, value_name = "PATH")]
+    pub port: PathBuf,
+    /// The line rate, baud (8N1, no flow control).
+    #[arg(long, default_value_t = rig::bringup_line::DEFAULT_BAUD, value_name = "BAUD")]
+    pub baud: u32,
+    /// Print one JSON document instead of the human summary.
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: BoardCommand,
+}
+
+/// The `sil-host board` steps, in the order of docs/board.md "Bring-up".
+#[derive(Debug, Clone, Subcommand)]
+pub enum BoardCommand {
+    /// The firmware's state, its raw readings (encoder counts and field strength,
+    /// ADC codes, belt count, fault line), its calibration and last telemetry.
+    Status,
+    /// Status and raw readings every --interval-ms, until Ctrl-C or --count.
+    Watch {
+        /// Milliseconds between two readings.
+        #[arg(long, default_value_t = 200)]
+        interval_ms: u64,
+        /// Readings to take (default: until Ctrl-C).
+        #[arg(long)]
+        count: Option<u64>,
+    },
+    /// The guided calibration, drivers disabled, the arm free and held at the
+    /// calibration pose by its jig: the encoders' zeros set at the pose, then each
+    /// joint jogged both ways at low torque (it must move its torque's way, by 0.7 to
+    /// 30 degrees, or the command stops and says which joint and why), then the load
+    /// cell's tare (nothing on it). Then: `span` with a known weight, `configure`,
+    /// `save`.
+    Calibrate {
+        /// The calibration pose, degrees: theta1 (from straight down, positive
+        /// counter-clockwise) and the elbow's angle theta2 - theta1, as the jig's
+        /// drawing gives them (the twin prints its pose).
+        #[arg(long, value_name = "THETA1,ELBOW", value_delimiter = ',', required = true, allow_hyphen_values = true)]
+        pose_deg: Vec<f64>,
+        /// An encoder that counts against its joint (repeatable): theta1 or elbow.
+        #[arg(long, value_name = "JOINT")]
+        reversed: Vec<JointArg>,
+        /// The jog's torque, N m (at most 0.5).
+        #[arg(long, default_value_t = 0.1)]
+        jog_nm: f64,
+        /// Skip the load cell's tare.
+        #[arg(long)]
+        no_tare: bool,
+    },
+    /// The load cell's span: with a known force on one axis now (a weight: m g),
+    /// gain = force / (count - tare).
+    Span {
+        /// The axis: tangential (f_t) or normal (f_n).
+        #[arg(long, value_enum)]
+        axis: AxisArg,
+        /// The force, N.
+        #[arg(long)]
+        newtons: f64,
+    },
+    /// Sends the firmware configuration of a scenario (controller, gains, rate,
+    /// limits); the firmware validates it. The rate must be the image's.
+    Configure {
+        /// The scenario.
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+    },
+    /// Saves the calibration and configuration in force to flash (version and
+    /// CRC-32C); they are loaded at every reset. Until saved the drivers stay locked out.
+    Save,
+    /// Lifts the reduced torque limit a new calibration runs at (both joints'
+    /// directions must have been checked).
+    LiftTorqueLimit,
+    /// Enables the drivers: resets the firmware, which closes the loop.
+    Enable,
+    /// Disables the drivers now.
+    Disable,
+}
+
+/// A joint, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum JointArg {
+    /// The base joint.
+    Theta1,
+    /// The elbow.
+    Elbow,
+}
+
+/// A load-cell axis, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AxisArg {
+    /// f_t.
+    Tangential,
+    /// f_n.
+    Normal,
+}
+
+/// `sil-host board-twin`.
+#[derive(Debug, Clone, Args)]
+pub struct BoardTwinArgs {
+    /// Serve on a new pseudo-terminal (the only transport).
+    #[arg(long, required = true)]
+    pub pty: bool,
+    /// The scenario: its `[board]` (the board's physical truth: mountings, wiring),
+    /// its firmware configuration and `[calibration]` (the image's compiled-in
+    /// fallback, and the saved record with --flash saved).
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// The settings sector at power-up: erased (a new board), saved (the scenario's
+    /// settings), or corrupt (a record with a damaged byte).
+    #[arg(long, value_enum, default_value_t = FlashArg::Erased)]
+    pub flash: FlashArg,
+    /// Hold the drivers' fault line (nFAULT) asserted.
+    #[arg(long)]
+    pub fault_line: bool,
+    /// Stop after this many seconds of wall time (default: until Ctrl-C or SIGTERM).
+    #[arg(long, value_name = "S")]
+    pub serve_for: Option<f64>,
+    /// Print the first line as JSON (port, pose).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The twin's settings sector at power-up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FlashArg {
+    /// Nothing stored.
+    Erased,
+    /// The scenario's settings stored.
+    Saved,
+    /// The scenario's settings stored, one byte damaged.
+    Corrupt,
+}

@@ -1,0 +1,34 @@
+//! The arguments of `report` (every experiment in one page).
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use super::common::{OutputArgs, StrictArgs};
+
+/// How big the report's experiments are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ReportSize {
+    /// Coarse grids and short windows: minutes on a 2-core machine.
+    Quick,
+    /// The paper's grids and windows (hours on a 2-core machine).
+    Paper,
+}
+
+/// `sil-host report`.
+#[derive(Debug, Clone, Args)]
+pub struct ReportArgs {
+    /// Size of the experiments.
+    #[arg(long, value_enum, default_value = "quick")]
+    pub size: ReportSize,
+    /// Also write the page's tables (no figures), stamped with date, commit and
+    /// machine, to this Markdown file (the repository keeps them in docs/results.md).
+    #[arg(long, value_name = "FILE.md")]
+    pub results: Option<PathBuf>,
+    /// Exit status on model violations in any experiment.
+    #[command(flatten)]
+    pub strict: StrictArgs,
+    /// Output folder and JSON switch (`--out` defaults to `out/`; the page is `report.md` there).
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
