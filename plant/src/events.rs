@@ -15,7 +15,9 @@ pub enum EventKind {
     Touchdown,
     /// The normal reaction vanished; the tip leaves the belt.
     LiftOff,
-    /// `p` reached 0 while sliding with `b < 0` (the reaction would grow without bound).
+    /// A dynamic jam: `p` fell to 0+ (to `jam_p` of `Q_22`) while sliding with
+    /// `b < 0`, the reaction growing without bound; resolved by a tangential impact
+    /// ([`crate::impact::jam`], resolution `tangential_impact`).
     PZero,
     /// An impact without collision from an inconsistent sliding state.
     ImpactWithoutCollision,
@@ -92,7 +94,8 @@ pub struct Counters {
     pub bounces: u64,
     /// Impacts without collision.
     pub impacts_without_collision: u64,
-    /// Times `p` reached 0 while sliding.
+    /// Dynamic jams: times `p` fell to 0+ while sliding, each resolved by a
+    /// tangential impact ([`EventKind::PZero`]).
     pub p_zero: u64,
     /// Sticking phases entered.
     pub stick_phases: u64,

@@ -164,6 +164,8 @@ pub enum Resolution {
     PoissonFallback,
     /// An impact without collision under [`IwcRule::Plastic`]: the sticking impulse.
     PlasticIwc,
+    /// The tangential impact that resolves a dynamic jam ([`jam`]).
+    TangentialImpact,
 }
 
 impl Resolution {
@@ -356,6 +358,38 @@ fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termination) -> R
     }
     let p = Vector2::new(pt, pn);
     Ok(Impulse { p, dv: qm * p, v_n_min, contact_work: work, resolution: Resolution::PoissonDarbouxKeller })
+}
+
+/// The tangential impact that resolves a dynamic jam (docs/plant.md "The jam
+/// corner"): a tip sliding with relative velocity `v_r` (m/s) whose `p` has fallen
+/// to 0+ with `b < 0`, so that `f_n = -b / p` grows without bound. In the limit the
+/// normal force acts as an impulse at a fixed configuration that leaves `v_n`
+/// unchanged (`d v_n / d P_n = p = 0`) while friction on the cone's edge stops the
+/// slip (Génot and Brogliato 1999; Zhao et al. 2008 measured such a tangential
+/// impact on this arm; Or and Rimon 2012): `P_t = -mu s P_n`,
+/// `P_n = -v_r / (Q_12 - mu s Q_11)`, `s = sign v_r`. The plant applies it at
+/// `p / Q_22 = jam_p`, where it changes `v_n` by `p P_n >= 0` (which vanishes with
+/// `jam_p`).
+///
+/// Errors: [`ImpactError::NonFinite`]; [`ImpactError::Jam`] when friction on the
+/// cone's edge cannot stop the slip (`s (Q_12 - mu s Q_11) >= 0`: the slip would
+/// grow under the normal impulse, and no impulse ends the jam).
+pub fn jam(qm: &Matrix2<f64>, mu: f64, v_r: f64) -> Result<Impulse, ImpactError> {
+    if !(v_r.is_finite() && qm.iter().all(|x| x.is_finite())) {
+        return Err(ImpactError::NonFinite);
+    }
+    let (q11, q12, q22) = (qm[(0, 0)], qm[(0, 1)], qm[(1, 1)]);
+    if v_r.abs() <= V_EPS {
+        return Ok(one_phase(qm, Vector2::zeros(), Vector2::new(v_r, 0.0), 0.0, Resolution::TangentialImpact));
+    }
+    let s = v_r.signum();
+    let dvr = q12 - mu * s * q11;
+    if s * dvr >= 0.0 {
+        return Err(ImpactError::Jam { p: q22 - mu * s * q12 });
+    }
+    let pn = -v_r / dvr;
+    let p = Vector2::new(-mu * s * pn, pn);
+    Ok(one_phase(qm, p, Vector2::new(v_r, 0.0), 0.0, Resolution::TangentialImpact))
 }
 
 /// A one-phase impulse `p` applied to relative velocity `v = [v_r, v_n]`.

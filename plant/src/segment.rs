@@ -54,6 +54,8 @@ pub struct Segment<'a, C: ?Sized> {
     pub cone_relaxed: bool,
     /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
     pub baumgarte: f64,
+    /// The jam threshold on `p / Q_22` ([`crate::SimConfig::jam_p`]).
+    pub jam_p: f64,
     /// Count of model evaluations (vector field and event function), for profiling.
     pub evals: &'a Cell<u64>,
     /// Sines and cosines of the joint angles (shared with the plant's projections).
@@ -92,10 +94,11 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         ctrl: &'a C,
         cone_relaxed: bool,
         baumgarte: f64,
+        jam_p: f64,
         evals: &'a Cell<u64>,
         trig: &'a TrigCache,
     ) -> Self {
-        Self { arm, phase, ctrl, cone_relaxed, baumgarte, evals, trig, end: Cell::new(None) }
+        Self { arm, phase, ctrl, cone_relaxed, baumgarte, jam_p, evals, trig, end: Cell::new(None) }
     }
 
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
@@ -162,7 +165,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     }
 
     /// The event components (each positive inside the phase), normalised to be
-    /// dimensionless: flight `(z_n + H)/l`; sliding `-b/g`, `p/Q_22`, `s v_r / (1 m/s)`;
+    /// dimensionless: flight `(z_n + H)/l`; sliding `-b/g`, `p/Q_22 - jam_p`, `s v_r / (1 m/s)`;
     /// sticking `f_n/(m g)`, `(mu f_n - |f_t|)/(m g)`.
     pub fn components(&self, t: f64, y: &OdeState) -> [(Boundary, f64); 3] {
         match self.phase {
@@ -189,7 +192,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
                 let v_r = td.z_dot[0] - p.v_belt;
                 [
                     (Boundary::LiftOff, -td.b() / p.g),
-                    (Boundary::PZero, td.p(p.mu, dir) / td.qmat[(1, 1)]),
+                    (Boundary::PZero, td.p(p.mu, dir) / td.qmat[(1, 1)] - self.jam_p),
                     (Boundary::SlipStops, dir.sign::<f64>() * v_r),
                 ]
             }

@@ -65,11 +65,8 @@ impl Plant {
                 Ok(())
             }
             Boundary::PZero => {
-                self.counters.p_zero += 1;
-                let before = self.rel_velocity();
-                self.push_event(events, EventKind::PZero, before, None, 0.0);
                 self.project_contact()?;
-                self.impact_without_collision(ctrl, events)
+                self.resolve_jam(ctrl, events)
             }
             Boundary::SlipStops => {
                 self.project_contact()?;
@@ -266,6 +263,28 @@ impl Plant {
         self.check_impact(events, &imp, &qm, de, before);
         self.project_contact_velocity(false)?;
         // The slip has been stopped (v_r = 0): choose stick or slip from rest.
+        self.enter_contact(ctrl, Entry::SlipStopped, events)
+    }
+
+    /// The dynamic jam (`p / Q_22` down to `jam_p` while sliding with `b < 0`): the
+    /// tangential impact ([`impact::jam`]) stops the slip, then the contact mode is
+    /// chosen from rest, or the tip leaves the belt if the impulse left it moving off.
+    fn resolve_jam<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        let before = self.rel_velocity();
+        let (q, _) = segment::split(&self.y);
+        let qm = self.arm.q_matrix(&q);
+        let imp = impact::jam(&qm, self.arm.params.mu, before[0]).map_err(|source| SimError::Impact { t: self.t, source })?;
+        let de = self.apply_impulse(&imp);
+        self.counters.p_zero += 1;
+        let after = self.rel_velocity();
+        self.push_event(events, EventKind::PZero, before, Some(&imp), de);
+        self.check_impact(events, &imp, &qm, de, before);
+        if after[1] > self.cfg.zeno_velocity {
+            self.phase = Phase::Flight;
+            self.counters.lift_offs += 1;
+            return Ok(());
+        }
+        self.project_contact_velocity(false)?;
         self.enter_contact(ctrl, Entry::SlipStopped, events)
     }
 
