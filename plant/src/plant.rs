@@ -277,6 +277,6 @@ impl Plant {
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
-        Segment::new(&self.arm, self.phase, ctrl, self.cone_relaxed, self.cfg.baumgarte, self.cfg.jam_p, &self.evals, &self.trig)
+        Segment::new(&self.arm, self.phase, ctrl, self.cone_relaxed, &self.cfg, &self.evals, &self.trig)
     }
 }

@@ -86,19 +86,19 @@ pub fn split(y: &OdeState) -> (Vector2<f64>, Vector2<f64>) {
 }
 
 impl<'a, C: Controller + ?Sized> Segment<'a, C> {
-    /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`,
-    /// `baumgarte` and `trig` as the fields; `evals` counts model evaluations.
+    /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`
+    /// and `trig` as the fields, `baumgarte` and `jam_p` from `cfg`; `evals` counts
+    /// model evaluations.
     pub fn new(
         arm: &'a Arm<f64>,
         phase: Phase,
         ctrl: &'a C,
         cone_relaxed: bool,
-        baumgarte: f64,
-        jam_p: f64,
+        cfg: &crate::SimConfig,
         evals: &'a Cell<u64>,
         trig: &'a TrigCache,
     ) -> Self {
-        Self { arm, phase, ctrl, cone_relaxed, baumgarte, jam_p, evals, trig, end: Cell::new(None) }
+        Self { arm, phase, ctrl, cone_relaxed, baumgarte: cfg.baumgarte, jam_p: cfg.jam_p, evals, trig, end: Cell::new(None) }
     }
 
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
