@@ -37,17 +37,17 @@ pub struct SimConfig {
     pub max_events_per_advance: usize,
     /// Integrator steps allowed in one smooth segment.
     pub max_steps: usize,
-    /// The dynamic jam (docs/plant.md "The jam corner"): a slide whose `p / Q_22`
-    /// falls to this value (dimensionless, in (0, 1e-3]) is resolved by a tangential
-    /// impact before the normal force `f_n = -b / p` outgrows what the integrator can
-    /// follow. Written in summaries only when it is not the default.
-    #[serde(skip_serializing_if = "SimConfig::is_default_jam_p")]
-    pub jam_p: f64,
+    /// The dynamic jam (docs/plant.md "The jam corner"): a slide whose normal force
+    /// `f_n = -b / p` grows to this many times `m g` as `p -> 0+` (dimensionless, in
+    /// [1e3, 1e12]) is resolved by a tangential impact before it outgrows what the
+    /// integrator can follow. Written in summaries only when it is not the default.
+    #[serde(skip_serializing_if = "SimConfig::is_default_jam_load")]
+    pub jam_load: f64,
 }
 
-/// The default [`SimConfig::jam_p`]: small enough that the outcome no longer moves
-/// with it (`plant::tests::the_jam_outcome_converges_as_its_threshold_shrinks`).
-pub const JAM_P: f64 = 1e-7;
+/// The default [`SimConfig::jam_load`]: large enough that the outcome no longer
+/// moves with it (`plant::tests::the_jam_outcome_converges_as_its_threshold_grows`).
+pub const JAM_LOAD: f64 = 1e7;
 
 impl Default for SimConfig {
     fn default() -> Self {
@@ -62,14 +62,14 @@ impl Default for SimConfig {
             baumgarte: 50.0,
             max_events_per_advance: 100_000,
             max_steps: 100_000_000,
-            jam_p: JAM_P,
+            jam_load: JAM_LOAD,
         }
     }
 }
 
 impl SimConfig {
-    fn is_default_jam_p(v: &f64) -> bool {
-        v.to_bits() == JAM_P.to_bits()
+    fn is_default_jam_load(v: &f64) -> bool {
+        v.to_bits() == JAM_LOAD.to_bits()
     }
 
     /// Checks ranges: tolerances finite and in (0, 0.1]; `e_n` in [0, 1];
@@ -92,8 +92,8 @@ impl SimConfig {
                 return bad(name, v, "a finite value >= 0");
             }
         }
-        if !(self.jam_p.is_finite() && self.jam_p > 0.0 && self.jam_p <= 1e-3) {
-            return bad("jam_p", self.jam_p, "a value in (0, 1e-3]");
+        if !(self.jam_load.is_finite() && (1e3..=1e12).contains(&self.jam_load)) {
+            return bad("jam_load", self.jam_load, "a value in [1e3, 1e12]");
         }
         if self.max_events_per_advance == 0 || self.max_steps == 0 {
             return bad("max_events_per_advance/max_steps", 0.0, "a positive count");

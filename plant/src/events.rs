@@ -15,10 +15,13 @@ pub enum EventKind {
     Touchdown,
     /// The normal reaction vanished; the tip leaves the belt.
     LiftOff,
-    /// A dynamic jam: `p` fell to 0+ (to `jam_p` of `Q_22`) while sliding with
-    /// `b < 0`, the reaction growing without bound; resolved by a tangential impact
-    /// ([`crate::impact::jam`], resolution `tangential_impact`).
+    /// `p` reached 0 while sliding with the reaction finite (`b` reaching 0 with it);
+    /// an impact without collision follows.
     PZero,
+    /// A dynamic jam: `p` fell to 0+ while sliding with `b < 0`, the reaction growing
+    /// without bound (to `jam_load m g`); resolved by a tangential impact
+    /// ([`crate::impact::jam`], resolution `tangential_impact`).
+    Jam,
     /// An impact without collision from an inconsistent sliding state.
     ImpactWithoutCollision,
     /// The slip stopped and the tip sticks to the belt.
@@ -42,6 +45,7 @@ impl EventKind {
             Self::Touchdown => "touchdown",
             Self::LiftOff => "lift_off",
             Self::PZero => "p_zero",
+            Self::Jam => "jam",
             Self::ImpactWithoutCollision => "impact_without_collision",
             Self::SlipToStick => "slip_to_stick",
             Self::SlipReversal => "slip_reversal",
@@ -94,9 +98,11 @@ pub struct Counters {
     pub bounces: u64,
     /// Impacts without collision.
     pub impacts_without_collision: u64,
-    /// Dynamic jams: times `p` fell to 0+ while sliding, each resolved by a
-    /// tangential impact ([`EventKind::PZero`]).
+    /// Times `p` reached 0 while sliding with the reaction finite.
     pub p_zero: u64,
+    /// Dynamic jams: times the reaction grew without bound as `p -> 0+` while
+    /// sliding, each resolved by a tangential impact ([`EventKind::Jam`]).
+    pub jams: u64,
     /// Sticking phases entered.
     pub stick_phases: u64,
     /// Stick-to-slip transitions.

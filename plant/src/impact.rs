@@ -367,9 +367,9 @@ fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termination) -> R
 /// unchanged (`d v_n / d P_n = p = 0`) while friction on the cone's edge stops the
 /// slip (Génot and Brogliato 1999; Zhao et al. 2008 measured such a tangential
 /// impact on this arm; Or and Rimon 2012): `P_t = -mu s P_n`,
-/// `P_n = -v_r / (Q_12 - mu s Q_11)`, `s = sign v_r`. The plant applies it at
-/// `p / Q_22 = jam_p`, where it changes `v_n` by `p P_n >= 0` (which vanishes with
-/// `jam_p`).
+/// `P_n = -v_r / (Q_12 - mu s Q_11)`, `s = sign v_r`. The plant applies it when
+/// `f_n` reaches `jam_load m g`, where it changes `v_n` by `p P_n >= 0` (which
+/// vanishes as `jam_load` grows).
 ///
 /// Errors: [`ImpactError::NonFinite`]; [`ImpactError::Jam`] when friction on the
 /// cone's edge cannot stop the slip (`s (Q_12 - mu s Q_11) >= 0`: the slip would

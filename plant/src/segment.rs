@@ -34,8 +34,12 @@ pub enum Boundary {
     Touchdown,
     /// Sliding or sticking: the normal reaction reached 0 (`b = 0` while sliding).
     LiftOff,
-    /// Sliding: `p` reached 0 with `b < 0` (the reaction grows without bound).
+    /// Sliding: `p` reached 0 with the reaction finite (`b` reaching 0 with it, the
+    /// controlled corner): an impact without collision follows.
     PZero,
+    /// Sliding: the normal reaction reached `jam_load` times `m g` as `p -> 0+` with
+    /// `b < 0` (the dynamic jam): a tangential impact follows.
+    Jam,
     /// Sliding: the relative velocity reached 0.
     SlipStops,
     /// Sticking: the friction force reached the cone's edge.
@@ -54,8 +58,8 @@ pub struct Segment<'a, C: ?Sized> {
     pub cone_relaxed: bool,
     /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
     pub baumgarte: f64,
-    /// The jam threshold on `p / Q_22` ([`crate::SimConfig::jam_p`]).
-    pub jam_p: f64,
+    /// The jam threshold on `f_n / (m g)` ([`crate::SimConfig::jam_load`]).
+    pub jam_load: f64,
     /// Count of model evaluations (vector field and event function), for profiling.
     pub evals: &'a Cell<u64>,
     /// Sines and cosines of the joint angles (shared with the plant's projections).
@@ -87,7 +91,7 @@ pub fn split(y: &OdeState) -> (Vector2<f64>, Vector2<f64>) {
 
 impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     /// The segment of mode `phase` of `arm` under torque law `ctrl`; `cone_relaxed`
-    /// and `trig` as the fields, `baumgarte` and `jam_p` from `cfg`; `evals` counts
+    /// and `trig` as the fields, `baumgarte` and `jam_load` from `cfg`; `evals` counts
     /// model evaluations.
     pub fn new(
         arm: &'a Arm<f64>,
@@ -98,7 +102,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         evals: &'a Cell<u64>,
         trig: &'a TrigCache,
     ) -> Self {
-        Self { arm, phase, ctrl, cone_relaxed, baumgarte: cfg.baumgarte, jam_p: cfg.jam_p, evals, trig, end: Cell::new(None) }
+        Self { arm, phase, ctrl, cone_relaxed, baumgarte: cfg.baumgarte, jam_load: cfg.jam_load, evals, trig, end: Cell::new(None) }
     }
 
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
@@ -165,9 +169,9 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     }
 
     /// The event components (each positive inside the phase), normalised to be
-    /// dimensionless: flight `(z_n + H)/l`; sliding `-b/g`, `p/Q_22 - jam_p`, `s v_r / (1 m/s)`;
-    /// sticking `f_n/(m g)`, `(mu f_n - |f_t|)/(m g)`.
-    pub fn components(&self, t: f64, y: &OdeState) -> [(Boundary, f64); 3] {
+    /// dimensionless: flight `(z_n + H)/l`; sliding `-b/g`, `p/Q_22`, `s v_r / (1 m/s)`,
+    /// `1 - f_n / (jam_load m g)`; sticking `f_n/(m g)`, `(mu f_n - |f_t|)/(m g)`.
+    pub fn components(&self, t: f64, y: &OdeState) -> [(Boundary, f64); 4] {
         match self.phase {
             Phase::Flight => {
                 // Only the tip's height: no need for the dynamics.
@@ -184,7 +188,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
 
     /// [`Segment::components`] from the tip dynamics and contact force at the point.
     #[inline]
-    pub fn components_of(&self, td: &TipDynamics<f64>, f: &Vector2<f64>) -> [(Boundary, f64); 3] {
+    pub fn components_of(&self, td: &TipDynamics<f64>, f: &Vector2<f64>) -> [(Boundary, f64); 4] {
         let p = &self.arm.params;
         match self.phase {
             Phase::Flight => self.flight_components(td.z[1]),
@@ -192,23 +196,34 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
                 let v_r = td.z_dot[0] - p.v_belt;
                 [
                     (Boundary::LiftOff, -td.b() / p.g),
-                    (Boundary::PZero, td.p(p.mu, dir) / td.qmat[(1, 1)] - self.jam_p),
+                    (Boundary::PZero, td.p(p.mu, dir) / td.qmat[(1, 1)]),
                     (Boundary::SlipStops, dir.sign::<f64>() * v_r),
+                    (Boundary::Jam, 1.0 - f[1] / (self.jam_load * p.m * p.g)),
                 ]
             }
             Phase::Sticking => {
                 let scale = p.m * p.g;
                 let cone = if self.cone_relaxed { f64::INFINITY } else { (p.mu * f[1] - f[0].abs()) / scale };
-                [(Boundary::LiftOff, f[1] / scale), (Boundary::ConeEdge, cone), (Boundary::ConeEdge, f64::INFINITY)]
+                [
+                    (Boundary::LiftOff, f[1] / scale),
+                    (Boundary::ConeEdge, cone),
+                    (Boundary::ConeEdge, f64::INFINITY),
+                    (Boundary::ConeEdge, f64::INFINITY),
+                ]
             }
         }
     }
 
     #[inline]
-    fn flight_components(&self, z_n: f64) -> [(Boundary, f64); 3] {
+    fn flight_components(&self, z_n: f64) -> [(Boundary, f64); 4] {
         let p = &self.arm.params;
         let g = (z_n + p.h) / p.l;
-        [(Boundary::Touchdown, g), (Boundary::Touchdown, f64::INFINITY), (Boundary::Touchdown, f64::INFINITY)]
+        [
+            (Boundary::Touchdown, g),
+            (Boundary::Touchdown, f64::INFINITY),
+            (Boundary::Touchdown, f64::INFINITY),
+            (Boundary::Touchdown, f64::INFINITY),
+        ]
     }
 
     /// The component closest to its boundary, and its value.
@@ -225,7 +240,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
 
 /// The component closest to its boundary (the smallest).
 #[inline]
-pub fn nearest(components: [(Boundary, f64); 3]) -> (Boundary, f64) {
+pub fn nearest(components: [(Boundary, f64); 4]) -> (Boundary, f64) {
     components.into_iter().fold((Boundary::Touchdown, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
 }
 

@@ -65,6 +65,13 @@ impl Plant {
                 Ok(())
             }
             Boundary::PZero => {
+                self.counters.p_zero += 1;
+                let before = self.rel_velocity();
+                self.push_event(events, EventKind::PZero, before, None, 0.0);
+                self.project_contact()?;
+                self.impact_without_collision(ctrl, events)
+            }
+            Boundary::Jam => {
                 self.project_contact()?;
                 self.resolve_jam(ctrl, events)
             }
@@ -266,7 +273,7 @@ impl Plant {
         self.enter_contact(ctrl, Entry::SlipStopped, events)
     }
 
-    /// The dynamic jam (`p / Q_22` down to `jam_p` while sliding with `b < 0`): the
+    /// The dynamic jam (`f_n` up to `jam_load m g` as `p -> 0+` with `b < 0`): the
     /// tangential impact ([`impact::jam`]) stops the slip, then the contact mode is
     /// chosen from rest, or the tip leaves the belt if the impulse left it moving off.
     fn resolve_jam<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
@@ -275,9 +282,9 @@ impl Plant {
         let qm = self.arm.q_matrix(&q);
         let imp = impact::jam(&qm, self.arm.params.mu, before[0]).map_err(|source| SimError::Impact { t: self.t, source })?;
         let de = self.apply_impulse(&imp);
-        self.counters.p_zero += 1;
+        self.counters.jams += 1;
         let after = self.rel_velocity();
-        self.push_event(events, EventKind::PZero, before, Some(&imp), de);
+        self.push_event(events, EventKind::Jam, before, Some(&imp), de);
         self.check_impact(events, &imp, &qm, de, before);
         if after[1] > self.cfg.zeno_velocity {
             self.phase = Phase::Flight;
