@@ -17,6 +17,7 @@ pub mod admissible;
 pub mod error;
 pub mod ideal;
 pub mod modes;
+pub mod paper;
 pub mod poincare;
 pub mod sensitivity;
 pub mod sweep;

@@ -1,5 +1,7 @@
 //! `Z_t,sliding` (docs/model.md experiments 5 and 6): the largest tangential target
-//! `z_t*` the tip reaches with no lift-off, by bisection on the target.
+//! `z_t*` the tip is driven to with no lift-off (the paper's definition), and apart
+//! from it the tracking limit, the largest target also tracked within the settle
+//! tolerance; both by bisection on the target.
 //!
 //! A *trial* runs one closed loop from the initial condition with the target
 //! `z_t*` (the quintic move over `move_time_s`, then held) for `duration_s`, in one
@@ -8,19 +10,31 @@
 //! - sampled: the firmware in-process (1 kHz, quantised sensors and torques,
 //!   estimation, docs/hardware.md defaults or a given scenario; [`rig`]).
 //!
-//! The target is *reached with no lift-off* when, over the whole run,
+//! The tip *slides to the target* ([`Trial::slides_to_target`]) when, over the whole run,
 //! 1. the plant never leaves the belt: no lift-off event (located exactly, between
 //!    samples too), no impact without collision, no sample in flight;
 //! 2. the run ends normally (no plant failure, no firmware safe state, no fault of
-//!    the ideal law); and
-//! 3. the tip settles: `|z_t - z_t*| <= settle_tol_m` at every sample of the last
+//!    the ideal law) with no model violation; and
+//! 3. the tip gets there: `|z_t - z_t*| <= reach_tol_m` (5 mm, the closed-loop
+//!    sweep's [`crate::sweep::run::TARGET_TOL_M`]) at every sample of the last
 //!    `settle_window_s` of the run.
 //!
-//! The bisection assumes this is true below some target and false above it; it
-//! keeps a bracket `[lo, hi]` with `lo` reached and `hi` not, halved until
-//! `hi - lo <= tol`, and reports `lo` (a target verified to be reached). If the
-//! lower end of the bracket already fails there is no limit ([`Bisection::LowerFails`]);
-//! if the upper end is reached the limit is at least that ([`Bisection::UpperReached`]).
+//! The target is *tracked* ([`Trial::tracked`]) when, in addition,
+//! 4. the tip settles: `|z_t - z_t*| <= settle_tol_m` (1 mm) over the same window.
+//!
+//! Each trial says why it stopped ([`StopReason`]). `Z_t,sliding` is the largest
+//! target the tip slides to (the paper's "largest value of `z_t` such that no
+//! lift-off occurs": a value of `z_t` the tip attains, which a PID stopped at the
+//! fold of `theta1` does not); the tracking limit is the largest target tracked. A
+//! PID whose steady error is about the settle tolerance has a tracking limit far
+//! below its lift-off limit; a search reports both ([`Search`]).
+//!
+//! Each bisection assumes its predicate is true below some target and false above
+//! it; it keeps a bracket `[lo, hi]` with `lo` true and `hi` not, halved until
+//! `hi - lo <= tol`, and reports `lo` (a target verified). If the lower end of the
+//! bracket already fails there is no limit ([`Bisection::LowerFails`]); if the upper
+//! end passes the limit is at least that ([`Bisection::UpperReached`]). The tracking
+//! bisection runs on `[lo, Z_t,sliding]` and reuses the trials of the first.
 
 use std::time::Instant;
 
@@ -59,6 +73,53 @@ impl Setting {
             Self::Ideal => "ideal",
             Self::Sampled => "sampled",
         }
+    }
+}
+
+/// Why a trial ended the way it did, in the order checked (the first that applies).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The trajectory violates the model (an energy-creating impact, a friction-cone
+    /// violation, an integrator failure): never counted as free of lift-off.
+    Invalid,
+    /// The tip left the belt: a lift-off, an impact without collision or a sample
+    /// in flight (with a lift-off gap: a sample above it). The trial stops there.
+    LiftOff,
+    /// The sampled firmware latched its safe state (zero torque).
+    SafeState,
+    /// The run stopped early otherwise: a plant failure, a fault of the ideal law.
+    Failure,
+    /// No lift-off, but `|z_t - z_t*|` exceeded the reach tolerance in the settle
+    /// window: the tip did not get to the target.
+    NotReached,
+    /// Slid to the target, but `|z_t - z_t*|` exceeded the settle tolerance in the
+    /// settle window.
+    NotSettled,
+    /// Slid to the target and settled: the target is tracked.
+    Tracked,
+}
+
+impl StopReason {
+    /// The name in CSV and JSON: `invalid`, `lift_off`, `safe_state`, `failure`,
+    /// `not_reached`, `not_settled` or `tracked`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Invalid => "invalid",
+            Self::LiftOff => "lift_off",
+            Self::SafeState => "safe_state",
+            Self::Failure => "failure",
+            Self::NotReached => "not_reached",
+            Self::NotSettled => "not_settled",
+            Self::Tracked => "tracked",
+        }
+    }
+}
+
+impl std::fmt::Display for StopReason {
+    /// [`StopReason::name`].
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -111,14 +172,18 @@ impl Combination {
     }
 }
 
-/// What "reached with no lift-off" means (module docs) and how long a trial runs.
+/// What "slides to the target" and "tracked" mean (module docs) and how long a trial runs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Criteria {
     /// Run length, s.
     pub duration_s: f64,
     /// Duration of the move of `z_t*` from the initial tip position to the target, s.
     pub move_time_s: f64,
-    /// Largest `|z_t - z_t*|` allowed over the settle window, m.
+    /// Largest `|z_t - z_t*|` over the settle window for the tip to count as having
+    /// got to the target (`Z_t,sliding`), m.
+    pub reach_tol_m: f64,
+    /// Largest `|z_t - z_t*|` over the settle window for the target to count as
+    /// tracked (the tracking limit), m; at most `reach_tol_m`.
     pub settle_tol_m: f64,
     /// The last part of the run where the tip must be within `settle_tol_m`, s.
     pub settle_window_s: f64,
@@ -132,12 +197,19 @@ pub struct Criteria {
 
 impl Default for Criteria {
     fn default() -> Self {
-        Self { duration_s: 10.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 1.0, lift_off_gap_m: 0.0 }
+        Self {
+            duration_s: 10.0,
+            move_time_s: 2.0,
+            reach_tol_m: crate::sweep::run::TARGET_TOL_M,
+            settle_tol_m: 1e-3,
+            settle_window_s: 1.0,
+            lift_off_gap_m: 0.0,
+        }
     }
 }
 
 impl Criteria {
-    /// Checks ranges: finite, `duration_s > move_time_s > 0`, `settle_tol_m > 0`,
+    /// Checks ranges: finite, `duration_s > move_time_s > 0`, `reach_tol_m >= settle_tol_m > 0`,
     /// `0 < settle_window_s <= duration_s - move_time_s`.
     ///
     /// # Errors
@@ -158,6 +230,9 @@ impl Criteria {
         }
         if !(self.settle_tol_m.is_finite() && self.settle_tol_m > 0.0) {
             return bad(format!("--settle-tol {} m must be finite and > 0", self.settle_tol_m));
+        }
+        if !(self.reach_tol_m.is_finite() && self.reach_tol_m >= self.settle_tol_m) {
+            return bad(format!("--reach-tol {} m must be finite and at least --settle-tol ({} m)", self.reach_tol_m, self.settle_tol_m));
         }
         if !(self.settle_window_s.is_finite() && self.settle_window_s > 0.0 && self.settle_window_s <= self.duration_s - self.move_time_s) {
             return bad(format!(
@@ -198,8 +273,14 @@ pub struct Trial {
     pub combination: Combination,
     /// Target `z_t*`, m.
     pub target_z_t: f64,
-    /// Reached with no lift-off (module docs).
-    pub reached: bool,
+    /// Why the trial ended the way it did (module docs).
+    pub stop: StopReason,
+    /// No lift-off, a normal end, no model violation and the tip within
+    /// `reach_tol_m` of the target (module docs, 1 to 3): the predicate of `Z_t,sliding`.
+    pub slides_to_target: bool,
+    /// Slides to the target and settles within `settle_tol_m` (module docs, 1 to 4):
+    /// the predicate of the tracking limit.
+    pub tracked: bool,
     /// Lift-offs seen (stopped at the first one).
     pub lift_offs: u64,
     /// Impacts without collision seen.
@@ -211,33 +292,47 @@ pub struct Trial {
     /// Why the run stopped early (failure, safe state, law fault), if it did for
     /// another reason than a lift-off.
     pub failure: Option<String>,
+    /// Whether `failure` is the firmware's safe state (sampled setting).
+    #[serde(skip)]
+    pub safe_state: bool,
     /// Simulated time, s.
     pub simulated_s: f64,
     /// Wall-clock time of the trial, s.
     pub wall_s: f64,
     /// The plant's validity counters over the trial; a trial with a violation is
-    /// never reached. A plant failure after the first lift-off (the ideal hybrid
+    /// never counted as sliding. A plant failure after the first lift-off (the ideal hybrid
     /// law's documented event storm beyond `p = 0`) is not counted: the trial's
     /// answer, a lift-off, is already known.
     pub validity: Validity,
 }
 
 impl Trial {
-    /// Why the target was not reached (`None` if it was): `lift-off at t = .. s`,
-    /// `impact without collision at ..`, the failure, or `not settled: ..`.
+    /// Why the target was not tracked (`None` if it was), in words: `lift-off at
+    /// t = .. s`, `impact without collision at ..`, `above the lift-off gap`, the
+    /// failure or safe state, the model violation, or `not settled: ..`.
     pub fn why_not(&self) -> Option<String> {
-        if self.reached {
-            return None;
-        }
-        if !self.validity.is_valid() {
-            return Some(format!("the trajectory violates the model: {}", self.validity.describe_violations()));
-        }
-        Some(match (self.first_lift_off_s, &self.failure) {
-            (Some(t), _) if self.lift_offs > 0 => format!("lift-off at t = {t:.3} s"),
-            (Some(t), _) => format!("impact without collision at t = {t:.3} s"),
-            (None, Some(f)) => f.clone(),
-            (None, None) => format!("not settled: |z_t - z_t*| up to {:.2} mm over the settle window", self.settle_error_m * 1e3),
+        Some(match self.stop {
+            StopReason::Tracked => return None,
+            StopReason::Invalid => format!("the trajectory violates the model: {}", self.validity.describe_violations()),
+            StopReason::LiftOff => match self.first_lift_off_s {
+                Some(t) if self.lift_offs > 0 => format!("lift-off at t = {t:.3} s"),
+                Some(t) => format!("impact without collision at t = {t:.3} s"),
+                None => "the tip rose above the lift-off gap".to_string(),
+            },
+            StopReason::SafeState | StopReason::Failure => self.failure.clone().unwrap_or_default(),
+            StopReason::NotReached => {
+                format!("not reached: |z_t - z_t*| up to {:.2} mm over the settle window", self.settle_error_m * 1e3)
+            }
+            StopReason::NotSettled => {
+                format!("not settled: |z_t - z_t*| up to {:.2} mm over the settle window", self.settle_error_m * 1e3)
+            }
         })
+    }
+
+    /// Why the tip did not slide to the target (`None` if it did): as
+    /// [`Trial::why_not`], `None` for a trial that only failed to settle.
+    pub fn why_not_sliding(&self) -> Option<String> {
+        if self.slides_to_target { None } else { self.why_not() }
     }
 }
 
@@ -271,7 +366,23 @@ pub fn trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> 
     } else {
         trial.lift_offs == 0 && trial.impacts_without_collision == 0 && rows.iter().all(|r| r.mode != "flight")
     };
-    trial.reached = stayed_on && trial.failure.is_none() && trial.validity.is_valid() && trial.settle_error_m <= c.settle_tol_m;
+    let settled = trial.settle_error_m <= c.settle_tol_m;
+    let got_there = trial.settle_error_m <= c.reach_tol_m;
+    trial.stop = if !trial.validity.is_valid() {
+        StopReason::Invalid
+    } else if !stayed_on {
+        StopReason::LiftOff
+    } else if trial.failure.is_some() {
+        if trial.safe_state { StopReason::SafeState } else { StopReason::Failure }
+    } else if !got_there {
+        StopReason::NotReached
+    } else if !settled {
+        StopReason::NotSettled
+    } else {
+        StopReason::Tracked
+    };
+    trial.slides_to_target = matches!(trial.stop, StopReason::NotSettled | StopReason::Tracked);
+    trial.tracked = trial.stop == StopReason::Tracked;
     trial.simulated_s = rows.last().map_or(0.0, |r| r.t);
     trial.wall_s = started.elapsed().as_secs_f64();
     Ok((trial, rows))
@@ -281,12 +392,15 @@ fn empty_trial(combo: Combination, target: f64) -> Trial {
     Trial {
         combination: combo,
         target_z_t: target,
-        reached: false,
+        stop: StopReason::Failure,
+        slides_to_target: false,
+        tracked: false,
         lift_offs: 0,
         impacts_without_collision: 0,
         first_lift_off_s: None,
         settle_error_m: f64::NAN,
         failure: None,
+        safe_state: false,
         simulated_s: 0.0,
         wall_s: 0.0,
         validity: Validity::default(),
@@ -411,6 +525,7 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
         t.validity.integrator_failures = 0;
     }
     if !lifted && let Some(e) = failure {
+        t.safe_state = matches!(e, rig::RunError::SafeState { .. });
         t.failure = Some(e.to_string());
     }
     Ok((t, rows))
@@ -455,6 +570,15 @@ impl Bisection {
         }
     }
 
+    /// The outcome's name in tables: `found`, `lower_fails` or `upper_reached`.
+    pub fn outcome_name(&self) -> &'static str {
+        match self {
+            Self::Found { .. } => "found",
+            Self::LowerFails { .. } => "lower_fails",
+            Self::UpperReached { .. } => "upper_reached",
+        }
+    }
+
     /// Evaluations of the predicate.
     pub fn evaluations(&self) -> u32 {
         match *self {
@@ -466,6 +590,12 @@ impl Bisection {
 /// Evaluations [`bisect_largest`] makes on `[lo, hi]` to tolerance `tol` at most.
 pub fn max_evaluations(lo: f64, hi: f64, tol: f64) -> u32 {
     2 + ((hi - lo) / tol).log2().ceil().max(0.0) as u32
+}
+
+/// Trials a [`search`] on `[lo, hi]` to `tol` runs at most: the lift-off
+/// bisection, then the tracking bisection inside its bracket (whose ends it reuses).
+pub fn max_trials(lo: f64, hi: f64, tol: f64) -> u32 {
+    2 * max_evaluations(lo, hi, tol) - 2
 }
 
 /// Bisection for the largest `x` in `[lo, hi]` with `ok(x)`, assuming `ok` is true
@@ -519,21 +649,46 @@ pub struct Search {
     pub combination: Combination,
     /// Bracket searched, m.
     pub bracket: (f64, f64),
-    /// The bisection's outcome.
+    /// The `Z_t,sliding` bisection's outcome (predicate [`Trial::slides_to_target`]).
     pub bisection: Bisection,
-    /// `Z_t,sliding`, m (the largest target verified reached), if any.
+    /// `Z_t,sliding`, m: the largest target the tip was verified to slide to (the
+    /// paper's definition), if any.
     pub z_t_sliding: Option<f64>,
-    /// Every trial, in order.
+    /// The tracking bisection's outcome (predicate [`Trial::tracked`]), on
+    /// `[bracket.0, Z_t,sliding]`; its `hi` is the smallest target found not
+    /// tracked, which may be the `Z_t,sliding` bisection's.
+    pub tracking: Bisection,
+    /// The tracking limit, m: the largest target verified tracked, if any.
+    pub z_t_tracking: Option<f64>,
+    /// Every trial, in the order run (each target once).
     pub trials: Vec<Trial>,
-    /// The time history of the trial at the limit (the lowest target if none is reached).
+    /// The time history of the trial at `Z_t,sliding` (the lowest target if the tip
+    /// slides to none).
     #[serde(skip)]
     pub limit_trace: Vec<TraceRow>,
     /// Wall-clock time of the search, s.
     pub wall_s: f64,
 }
 
-/// Searches `Z_t,sliding` for one combination on `bracket` to `tol` (m);
-/// `on_trial` is called after each trial (progress).
+impl Search {
+    /// The trial at `target`, m, if the search ran one there.
+    pub fn trial_at(&self, target: f64) -> Option<&Trial> {
+        self.trials.iter().find(|t| t.target_z_t == target)
+    }
+
+    /// The trial that bounds a bisection from above: the smallest target found to
+    /// fail (`Found`), or the lower end (`LowerFails`); `None` for `UpperReached`.
+    pub fn failing_trial(&self, b: &Bisection) -> Option<&Trial> {
+        match *b {
+            Bisection::Found { hi, .. } => self.trial_at(hi),
+            Bisection::LowerFails { lo, .. } => self.trial_at(lo),
+            Bisection::UpperReached { .. } => None,
+        }
+    }
+}
+
+/// Searches `Z_t,sliding` and the tracking limit for one combination on
+/// `bracket` to `tol` (m); `on_trial` is called after each trial (progress).
 ///
 /// # Errors
 /// [`AnalysisError::BadInput`] for a bad bracket or tolerance; the first trial's bad-input error.
@@ -554,27 +709,46 @@ pub fn search(
         return Err(AnalysisError::BadInput(format!("--tol {tol} m must be finite and > 0")));
     }
     let started = Instant::now();
-    let mut trials = Vec::new();
-    let mut best: Option<(f64, Vec<TraceRow>)> = None;
-    let mut first_trace = None;
-    let bisection = bisect_largest(lo, hi, tol, |target| {
+    let mut trials: Vec<Trial> = Vec::new();
+    let mut traces: Vec<Vec<TraceRow>> = Vec::new();
+    // One trial per target: the tracking bisection reuses the lift-off one's.
+    let mut run = |target: f64| -> Result<Trial, AnalysisError> {
+        if let Some(t) = trials.iter().find(|t| t.target_z_t == target) {
+            return Ok(t.clone());
+        }
         let (t, rows) = trial(base, combo, target, c)?;
         on_trial(&t);
-        let reached = t.reached;
-        trials.push(t);
-        if reached && best.as_ref().is_none_or(|(b, _)| target > *b) {
-            best = Some((target, rows));
-        } else if first_trace.is_none() {
-            first_trace = Some(rows);
+        trials.push(t.clone());
+        traces.push(rows);
+        Ok(t)
+    };
+    let bisection = bisect_largest(lo, hi, tol, |target| run(target).map(|t| t.slides_to_target))?;
+    let tracking = match bisection {
+        Bisection::LowerFails { lo, .. } => Bisection::LowerFails { lo, evaluations: 1 },
+        Bisection::Found { lo: top, hi: first_failing, .. } if top == lo => {
+            if run(lo)?.tracked {
+                Bisection::Found { lo, hi: first_failing, evaluations: 1 }
+            } else {
+                Bisection::LowerFails { lo, evaluations: 1 }
+            }
         }
-        Ok::<bool, AnalysisError>(reached)
-    })?;
-    let limit_trace = best.map(|(_, r)| r).or(first_trace).unwrap_or_default();
+        Bisection::Found { lo: top, hi: first_failing, .. } => {
+            match bisect_largest(lo, top, tol, |target| run(target).map(|t| t.tracked))? {
+                Bisection::UpperReached { evaluations, .. } => Bisection::Found { lo: top, hi: first_failing, evaluations },
+                other => other,
+            }
+        }
+        Bisection::UpperReached { hi: top, .. } => bisect_largest(lo, top, tol, |target| run(target).map(|t| t.tracked))?,
+    };
+    let limit = bisection.limit().unwrap_or(lo);
+    let limit_trace = trials.iter().position(|t| t.target_z_t == limit).map(|i| traces[i].clone()).unwrap_or_default();
     Ok(Search {
         combination: combo,
         bracket,
         z_t_sliding: bisection.limit(),
         bisection,
+        z_t_tracking: tracking.limit(),
+        tracking,
         trials,
         limit_trace,
         wall_s: started.elapsed().as_secs_f64(),

@@ -44,6 +44,15 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     assert!(!page.contains("| rtol, atol | 0, 0 |"));
     sensitivity_properties(&summary("sensitivity")["study"]);
     assert!(page.contains("Sensitivity to the choices the paper leaves open"));
+    // The paper side by side: every printed number with ours next to it.
+    let side = page.split("## The paper side by side").nth(1).expect("the side-by-side section").split("\n## ").next().unwrap();
+    for printed in ["0.183 m", "0.168 m", "[-0.575, -0.3] m/s", "0.0375 m", "0.148 m", "0.163 m", "none (lifts off)"] {
+        assert!(side.contains(printed), "the paper's {printed} is in the table");
+    }
+    assert!(side.lines().filter(|l| l.starts_with("| ")).count() >= 12, "{side}");
+    assert!(!side.contains("did not run"), "every row has ours: {side}");
+    // The closed loop: the sampled firmware beside the ideal law, per mu.
+    assert!(page.contains("sweep-hybrid-ideal: lift-off / not reached / contact / safe state / other"));
     // The results page: the same tables, stamped, without figures.
     let results = std::fs::read_to_string(&results).unwrap();
     assert!(results.contains("commit `") && results.contains("UTC") && results.contains("CPUs"), "no stamp");
@@ -59,9 +68,19 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
 fn sensitivity_properties(study: &serde_json::Value) {
     let results = study["results"].as_array().unwrap();
     let defaults: Vec<&serde_json::Value> = results.iter().filter(|r| r["choice"]["is_default"] == true).collect();
-    assert_eq!(defaults.len(), 9, "one default per dimension");
+    assert_eq!(defaults.len(), 11, "one default per dimension");
     let zmax_of = |r: &serde_json::Value| -> Vec<(String, serde_json::Value)> {
-        r["zmax"].as_array().unwrap().iter().map(|z| (z["combination"].to_string(), z["z_t_sliding"].clone())).collect()
+        r["zmax"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|z| {
+                [
+                    (format!("{} sliding", z["combination"]), z["z_t_sliding"].clone()),
+                    (format!("{} tracking", z["combination"]), z["z_t_tracking"].clone()),
+                ]
+            })
+            .collect()
     };
     let reference = defaults.iter().find(|r| r["choice"]["dimension"] == "impact_law").unwrap();
     for d in &defaults {
@@ -73,7 +92,7 @@ fn sensitivity_properties(study: &serde_json::Value) {
             assert_eq!(d["open_loop"], reference["open_loop"], "{}", d["choice"]["dimension"]);
         }
         if !d["closed_loop"].is_null() {
-            assert_eq!(d["closed_loop"]["bounces"], reference["closed_loop"]["bounces"], "{}", d["choice"]["dimension"]);
+            assert_eq!(d["closed_loop"], reference["closed_loop"], "{}", d["choice"]["dimension"]);
         }
     }
     for law in ["newton", "poisson", "energetic"] {
@@ -87,10 +106,10 @@ fn sensitivity_properties(study: &serde_json::Value) {
     }
     for r in results {
         let dim = r["choice"]["dimension"].as_str().unwrap();
-        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction", "move_time"].contains(&dim) {
+        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction", "move_time", "torque_limit", "delay"].contains(&dim) {
             assert!(r["open_loop"].is_null(), "{dim} does not enter the open loop");
         }
-        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction"].contains(&dim) {
+        if ["rate", "encoder_bits", "load_noise", "mu_hat", "friction", "torque_limit", "delay"].contains(&dim) {
             assert!(r["zmax"].as_array().unwrap().iter().all(|z| z["combination"]["setting"] == "sampled"), "{dim}: sampled only");
         }
     }

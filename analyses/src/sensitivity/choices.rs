@@ -31,6 +31,12 @@ pub struct Knobs {
     pub load_noise_n: f64,
     /// Relative error of the firmware's friction estimate: `mu_hat = (1 + m) mu`.
     pub mu_hat_mismatch: f64,
+    /// The firmware's torque limit per joint, N m (`None`: the base scenario's, 5 N m
+    /// by default).
+    pub torque_limit_nm: Option<f64>,
+    /// Delay from sampling to the command taking effect, s (`None`: the base
+    /// scenario's, the same fraction of the period at every rate).
+    pub delay_s: Option<f64>,
 }
 
 impl Default for Knobs {
@@ -46,15 +52,17 @@ impl Default for Knobs {
             encoder_bits: 14,
             load_noise_n: 0.02,
             mu_hat_mismatch: 0.0,
+            torque_limit_nm: None,
+            delay_s: None,
         }
     }
 }
 
 impl Knobs {
     /// `base` with these knobs: the plant's impact law, `e_n` and IWC rule, the
-    /// controller's friction term, move time and `mu_hat`, the rate (the delay
-    /// from sampling to the command, `delta_s`, kept the same fraction of the
-    /// period), the encoders and the load-cell noise.
+    /// controller's friction term, move time, `mu_hat` and torque limit, the rate
+    /// (the delay from sampling to the command, `delta_s`, kept the same fraction of
+    /// the period unless `delay_s` sets it), the encoders and the load-cell noise.
     pub fn scenario(&self, base: &Scenario) -> Scenario {
         let mut s = base.clone();
         s.plant.impact_law = self.impact_law;
@@ -63,7 +71,10 @@ impl Knobs {
         s.controller.friction = self.friction;
         s.controller.move_time_s = self.move_time_s;
         s.controller.mu_hat = base.plant.mu * (1.0 + self.mu_hat_mismatch);
-        s.timing.delta_s = base.timing.delta_s * base.timing.rate_hz / self.rate_hz;
+        s.timing.delta_s = self.delay_s.unwrap_or(base.timing.delta_s * base.timing.rate_hz / self.rate_hz);
+        if let Some(limit) = self.torque_limit_nm {
+            s.controller.torque_limit_nm = Some(limit);
+        }
         s.timing.rate_hz = self.rate_hz;
         s.sensors.encoder_bits = self.encoder_bits;
         s.sensors.load_noise_n = self.load_noise_n;
@@ -93,11 +104,15 @@ pub enum Dimension {
     LoadNoise,
     /// `mu_hat` mismatch.
     MuHat,
+    /// The firmware's torque limit.
+    TorqueLimit,
+    /// Delay from sampling to the command.
+    Delay,
 }
 
 impl Dimension {
     /// Every dimension, in the study's order.
-    pub const ALL: [Dimension; 9] = [
+    pub const ALL: [Dimension; 11] = [
         Self::ImpactLaw,
         Self::Iwc,
         Self::Friction,
@@ -107,6 +122,8 @@ impl Dimension {
         Self::EncoderBits,
         Self::LoadNoise,
         Self::MuHat,
+        Self::TorqueLimit,
+        Self::Delay,
     ];
 
     /// A label for tables and figures.
@@ -121,6 +138,8 @@ impl Dimension {
             Self::EncoderBits => "encoder bits",
             Self::LoadNoise => "load-cell noise (N rms)",
             Self::MuHat => "mu_hat mismatch",
+            Self::TorqueLimit => "torque limit (N m)",
+            Self::Delay => "delay (ms)",
         }
     }
 
@@ -155,8 +174,9 @@ pub struct Choice {
     pub knobs: Knobs,
 }
 
-/// The choices of the study, dimension by dimension, each with its default among them.
-pub fn choices() -> Vec<Choice> {
+/// The choices of the study from `base` (the defaults' torque limit and delay are
+/// its), dimension by dimension, each with its default among them.
+pub fn choices(base: &Scenario) -> Vec<Choice> {
     let d = Knobs::default();
     let mut v = Vec::new();
     let mut push = |dimension, value: String, x: f64, knobs: Knobs| {
@@ -199,6 +219,22 @@ pub fn choices() -> Vec<Choice> {
     for m in [-0.2, -0.1, 0.0, 0.1, 0.2] {
         push(Dimension::MuHat, format!("{:+}%", (m * 100.0f64).round()), m, Knobs { mu_hat_mismatch: m, ..d });
     }
+    // Below the default's 5 N m only: the wire and the drivers stop there.
+    for t in [2.0, 3.0, 4.0] {
+        push(Dimension::TorqueLimit, format!("{t}"), t, Knobs { torque_limit_nm: Some(t), ..d });
+    }
+    let limit = base.controller.torque_limit_nm.unwrap_or(f64::from(shared::wire::TORQUE_FULL_SCALE_NM));
+    push(Dimension::TorqueLimit, format!("{limit}"), limit, d);
+    // The scenario's (0.2 ms by default) among others below the 1 ms period.
+    let mut delays: Vec<f64> = [0.0, 0.5e-3, 0.9e-3].into_iter().filter(|&x| x < base.timing.period().as_secs_f64()).collect();
+    delays.push(base.timing.delta_s);
+    delays.sort_by(f64::total_cmp);
+    delays.dedup();
+    for delay in delays {
+        let knobs = if delay == base.timing.delta_s { d } else { Knobs { delay_s: Some(delay), ..d } };
+        let ms = (delay * 1e6).round() / 1e3;
+        push(Dimension::Delay, format!("{ms}"), ms, knobs);
+    }
     v
 }
 
@@ -208,7 +244,7 @@ mod tests {
 
     #[test]
     fn every_dimension_has_its_default_once_and_only_one_knob_changes() {
-        let all = choices();
+        let all = choices(&Scenario::default_scenario());
         let d = Knobs::default();
         for dim in Dimension::ALL {
             let of: Vec<&Choice> = all.iter().filter(|c| c.dimension == dim).collect();
@@ -229,6 +265,8 @@ mod tests {
                 k.encoder_bits != d.encoder_bits,
                 k.load_noise_n != d.load_noise_n,
                 k.mu_hat_mismatch != d.mu_hat_mismatch,
+                k.torque_limit_nm != d.torque_limit_nm,
+                k.delay_s != d.delay_s,
             ];
             assert!(changed.iter().filter(|x| **x).count() <= 1, "{c:?}");
         }

@@ -6,7 +6,8 @@
 //! Choices ([`Choice`]): the impact law and `e_n`; the IWC rule; the hybrid law's
 //! friction compensation; the reference's move time; the lift-off criterion; and
 //! for the sampled firmware the control rate, the encoder resolution, the
-//! load-cell noise and the mismatch of its friction estimate `mu_hat`.
+//! load-cell noise, the mismatch of its friction estimate `mu_hat`, its torque
+//! limit and the delay from sampling to the command.
 //!
 //! Headline results ([`ChoiceResult`]):
 //! - open loop (the brute-force sweep of experiment 3 from `x0a` and `x0d`): the
@@ -14,8 +15,9 @@
 //!   bouncing at `mu = 0.6` from `x0a`, and whether `x0d` ever bounces;
 //! - `Z_t,sliding` (experiments 5 and 6) for the four paper cases (PID and hybrid
 //!   from `x0d` and `x0u`), ideal and sampled;
-//! - whether the hybrid closed loop (experiment 7, the sampled firmware from `x0d`
-//!   at `mu = 0.6`) ever bounces over the belt speeds.
+//! - how the hybrid closed loop (experiment 7, the sampled firmware from `x0d` at
+//!   `mu = 0.6`) ends over the belt speeds: lift-offs above the lift-off criterion
+//!   (and how high), the safe state, the target not reached.
 //!
 //! A choice that does not enter a result (the controller's settings in open loop,
 //! the sampled firmware's in the ideal setting, the hybrid law's friction term for
@@ -39,7 +41,7 @@ use crate::sweep::{
     Axis, SweepController, SweepSpec,
     run::{self, RunRow},
 };
-use crate::zmax::{self, Bisection, Combination, Criteria, Setting};
+use crate::zmax::{self, Combination, Criteria, Setting};
 use plant::{Validity, initial::PaperX0};
 use rig::scenario::Scenario;
 
@@ -64,7 +66,7 @@ enum Job {
 pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Study, AnalysisError> {
     base.validate()?;
     let grids = size.grids();
-    let choices = choices();
+    let choices = choices(base);
     for c in &choices {
         c.knobs.scenario(base).validate()?;
     }
@@ -235,12 +237,16 @@ fn search(base: &Scenario, g: &Grids, k: &Knobs, combination: Combination) -> Re
     for t in &found.trials {
         validity.add(&t.validity);
     }
-    let outcome = match found.bisection {
-        Bisection::Found { .. } => "found",
-        Bisection::LowerFails { .. } => "lower_fails",
-        Bisection::UpperReached { .. } => "upper_reached",
-    };
-    Ok(Zmax { combination, z_t_sliding: found.z_t_sliding, outcome, validity })
+    Ok(Zmax {
+        combination,
+        z_t_sliding: found.z_t_sliding,
+        outcome: found.bisection.outcome_name(),
+        stop_above: found.failing_trial(&found.bisection).map(|t| t.stop),
+        z_t_tracking: found.z_t_tracking,
+        tracking_outcome: found.tracking.outcome_name(),
+        tracking_stop_above: found.failing_trial(&found.tracking).map(|t| t.stop),
+        validity,
+    })
 }
 
 #[cfg(test)]
@@ -250,7 +256,7 @@ mod tests {
 
     #[test]
     fn choices_enter_only_the_results_they_change() {
-        let all = choices();
+        let all = choices(&Scenario::default_scenario());
         let rate = all.iter().find(|c| c.dimension == Dimension::Rate && !c.is_default).unwrap();
         assert!(!rate.dimension.in_open_loop());
         assert!(combinations(rate).iter().all(|k| k.setting == Setting::Sampled));

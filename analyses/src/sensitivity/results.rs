@@ -13,7 +13,7 @@ use crate::sweep::{
     SweepSpec,
     run::{Outcome, RunRow},
 };
-use crate::zmax::Combination;
+use crate::zmax::{Combination, StopReason};
 
 /// The open-loop headline results under one choice.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -22,9 +22,15 @@ pub struct OpenLoop {
     pub critical_mu_x0a: Option<f64>,
     /// Critical `mu` from `x0d`.
     pub critical_mu_x0d: Option<f64>,
-    /// Extent `[v_min, v_max]` (m/s) of persistent bouncing at `mu = 0.6` from `x0a`.
+    /// The main interval `[v_min, v_max]` (m/s) of persistent bouncing at `mu = 0.6`
+    /// from `x0a`: the longest run of neighbouring grid speeds that bounce (the
+    /// lower one on a tie).
     pub band_x0a_mu06: Option<[f64; 2]>,
-    /// Grid speeds with persistent bouncing at `mu = 0.6` from `x0a`.
+    /// The other grid speeds (m/s) that bounce at `mu = 0.6` from `x0a`, listed
+    /// apart so that an isolated island does not move an edge of the band.
+    pub band_outside: Vec<f64>,
+    /// Grid speeds with persistent bouncing at `mu = 0.6` from `x0a` (in the main
+    /// interval or outside it).
     pub band_points: usize,
     /// Whether `x0d` bounces persistently anywhere on the grid.
     pub x0d_bounces: bool,
@@ -34,32 +40,109 @@ pub struct OpenLoop {
     pub validity: Validity,
 }
 
-/// `Z_t,sliding` of one case under one choice.
+/// `Z_t,sliding` and the tracking limit of one case under one choice
+/// ([`crate::zmax`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Zmax {
     /// The case.
     pub combination: Combination,
-    /// `Z_t,sliding`, m (`None` when the bracket's lower end already fails).
+    /// `Z_t,sliding`, m: the largest target the tip slides to with no lift-off
+    /// (`None` when the bracket's lower end already fails).
     pub z_t_sliding: Option<f64>,
     /// `found`, `lower_fails` or `upper_reached`.
     pub outcome: &'static str,
+    /// Why the first target above `Z_t,sliding` (or the lower end) failed: a lift-off,
+    /// the safe state, a failure, not reached, a model violation (`None` for
+    /// `upper_reached`).
+    pub stop_above: Option<StopReason>,
+    /// The tracking limit, m: the largest target also settled within the settle
+    /// tolerance (`None` when the lower end is not tracked).
+    pub z_t_tracking: Option<f64>,
+    /// The tracking bisection's `found`, `lower_fails` or `upper_reached`.
+    pub tracking_outcome: &'static str,
+    /// Why the first target above the tracking limit was not tracked.
+    pub tracking_stop_above: Option<StopReason>,
     /// Validity summed over the trials.
     pub validity: Validity,
 }
 
-/// The hybrid closed loop's headline under one choice.
+/// The hybrid closed loop's headline under one choice: how its runs over the belt
+/// speeds ended ([`crate::sweep::run::Outcome`]'s closed-loop classes).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClosedLoop {
-    /// Whether it bounces persistently at any belt speed.
+    /// Whether the tip lifts off above the lift-off criterion at any belt speed.
     pub bounces: bool,
-    /// Belt speeds with persistent bouncing.
-    pub bouncing_points: usize,
-    /// Belt speeds with a result.
+    /// Belt speeds where the tip lifts off in the record window, above the
+    /// lift-off criterion.
+    pub lift_off_points: usize,
+    /// The highest the tip rose above the belt in those runs' record windows, m.
+    pub highest_lift_off_m: Option<f64>,
+    /// Belt speeds where the firmware latched its safe state.
+    pub safe_state_points: usize,
+    /// Belt speeds where the tip stayed on the belt but ended away from its target.
+    pub target_not_reached_points: usize,
+    /// Belt speeds whose simulation failed.
+    pub failed_points: usize,
+    /// Belt speeds with a result (all but the invalid runs).
     pub points: usize,
-    /// Runs that stopped early (failure or safe state).
-    pub stopped_runs: usize,
     /// Validity summed over the runs.
     pub validity: Validity,
+}
+
+impl OpenLoop {
+    /// The band at `mu = 0.6` from `x0a` for tables: `[from, to]` (m/s, to 3
+    /// decimals), then `+ v` for each bouncing speed outside it; `none`.
+    pub fn band_text(&self) -> String {
+        let Some(b) = self.band_x0a_mu06 else { return "none".into() };
+        let mut t = format!("[{}, {}]", round3(b[0]), round3(b[1]));
+        for v in &self.band_outside {
+            t.push_str(&format!(" + {}", round3(*v)));
+        }
+        t
+    }
+}
+
+fn round3(x: f64) -> f64 {
+    (x * 1e3).round() / 1e3 + 0.0
+}
+
+impl Zmax {
+    /// `Z_t,sliding` (or with `tracking` the tracking limit) for tables, in mm: the
+    /// value to 0.1 mm (`>= v` when the bracket's upper end passes), or `< lo` with
+    /// the lower end's stop reason (`< lo: lift_off`).
+    pub fn cell_text(&self, tracking: bool) -> String {
+        let (value, outcome, stop) = if tracking {
+            (self.z_t_tracking, self.tracking_outcome, self.tracking_stop_above)
+        } else {
+            (self.z_t_sliding, self.outcome, self.stop_above)
+        };
+        match (outcome, value) {
+            ("lower_fails", _) | (_, None) => format!("< lo: {}", stop.map_or("?", StopReason::name)),
+            ("upper_reached", Some(v)) => format!(">= {:.0}", v * 1e3),
+            (_, Some(v)) => format!("{:.0}", v * 1e3),
+        }
+    }
+}
+
+impl ClosedLoop {
+    /// How the runs ended, for tables: `lift-off k (up to h mm)`, `safe state k`,
+    /// `not reached k`, `failed k`, each when not 0, then `of n`; `contact, all n`
+    /// when every run stayed on the belt at its target.
+    pub fn text(&self) -> String {
+        let mut parts = Vec::new();
+        if self.lift_off_points > 0 {
+            let h = self.highest_lift_off_m.map_or(String::new(), |h| format!(" (up to {} mm)", (h * 1e5).round() / 1e2));
+            parts.push(format!("lift-off {}{h}", self.lift_off_points));
+        }
+        for (n, what) in
+            [(self.safe_state_points, "safe state"), (self.target_not_reached_points, "not reached"), (self.failed_points, "failed")]
+        {
+            if n > 0 {
+                parts.push(format!("{what} {n}"));
+            }
+        }
+        if parts.is_empty() { format!("contact, all {}", self.points) } else { format!("{} of {}", parts.join(", "), self.points) }
+    }
 }
 
 /// The headline results under one choice (`None`: the choice does not enter that result).
@@ -120,14 +203,26 @@ impl Study {
                 push("critical_mu_x0d".into(), num(o.critical_mu_x0d));
                 push("band_mu0.6_x0a_from".into(), num(o.band_x0a_mu06.map(|b| b[0])));
                 push("band_mu0.6_x0a_to".into(), num(o.band_x0a_mu06.map(|b| b[1])));
+                push(
+                    "band_mu0.6_x0a_outside".into(),
+                    if o.band_outside.is_empty() {
+                        "none".into()
+                    } else {
+                        o.band_outside.iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(" ")
+                    },
+                );
                 push("x0d_bounces".into(), o.x0d_bounces.to_string());
             }
             for z in &r.zmax {
                 let k = z.combination;
                 push(format!("zt_sliding_{}_x0{}_{}", k.controller, k.x0, k.setting), num(z.z_t_sliding));
+                push(format!("zt_tracking_{}_x0{}_{}", k.controller, k.x0, k.setting), num(z.z_t_tracking));
             }
             if let Some(cl) = &r.closed_loop {
                 push("hybrid_closed_loop_bounces".into(), cl.bounces.to_string());
+                push("hybrid_closed_loop_lift_off_speeds".into(), cl.lift_off_points.to_string());
+                push("hybrid_closed_loop_safe_state_speeds".into(), cl.safe_state_points.to_string());
+                push("hybrid_closed_loop_not_reached_speeds".into(), cl.target_not_reached_points.to_string());
             }
         }
         rows
@@ -149,13 +244,16 @@ pub(super) fn open_results(spec: &SweepSpec, rows: &[RunRow], gap: f64) -> OpenL
         validity.add(&r.validity());
     }
     let critical = |ic: &str| spec.mu.values().into_iter().find(|&mu| valid.iter().any(|r| r.ic == ic && r.mu == mu && bounces(r, gap)));
-    let at06: Vec<f64> = valid.iter().filter(|r| r.ic == "x0a" && (r.mu - 0.6).abs() < 1e-9 && bounces(r, gap)).map(|r| r.v_belt).collect();
-    let band = (!at06.is_empty()).then(|| [at06.iter().cloned().fold(f64::MAX, f64::min), at06.iter().cloned().fold(f64::MIN, f64::max)]);
+    let speeds = spec.v_belt.values();
+    let bouncing_at = |v: f64| valid.iter().any(|r| r.ic == "x0a" && (r.mu - 0.6).abs() < 1e-9 && r.v_belt == v && bounces(r, gap));
+    let flags: Vec<bool> = speeds.iter().map(|&v| bouncing_at(v)).collect();
+    let (band, band_outside) = main_interval(&speeds, &flags);
     OpenLoop {
         critical_mu_x0a: critical("x0a"),
         critical_mu_x0d: critical("x0d"),
         band_x0a_mu06: band,
-        band_points: at06.len(),
+        band_outside,
+        band_points: flags.iter().filter(|&&f| f).count(),
         x0d_bounces: valid.iter().any(|r| r.ic == "x0d" && bounces(r, gap)),
         invalid_runs: rows.len() - valid.len(),
         validity,
@@ -168,12 +266,58 @@ pub(super) fn closed_results(rows: &[RunRow], gap: f64) -> ClosedLoop {
     for r in rows {
         validity.add(&r.validity());
     }
-    let bouncing = rows.iter().filter(|r| bounces(r, gap)).count();
+    let lifted: Vec<&RunRow> = rows.iter().filter(|r| bounces(r, gap)).collect();
+    let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
     ClosedLoop {
-        bounces: bouncing > 0,
-        bouncing_points: bouncing,
+        bounces: !lifted.is_empty(),
+        lift_off_points: lifted.len(),
+        highest_lift_off_m: lifted.iter().map(|r| r.tip_height_max).filter(|h| h.is_finite()).reduce(f64::max),
+        safe_state_points: count(Outcome::SafeState),
+        target_not_reached_points: count(Outcome::TargetNotReached),
+        failed_points: count(Outcome::Failed),
         points: rows.iter().filter(|r| r.outcome != Outcome::Invalid).count(),
-        stopped_runs: rows.iter().filter(|r| matches!(r.outcome, Outcome::Failed | Outcome::SafeState)).count(),
         validity,
+    }
+}
+
+/// The longest run of neighbouring `speeds` (in grid order) whose `flags` are set, as
+/// `[min, max]` (the first such run on a tie), and the flagged speeds outside it.
+pub(super) fn main_interval(speeds: &[f64], flags: &[bool]) -> (Option<[f64; 2]>, Vec<f64>) {
+    let mut best: Option<(usize, usize)> = None;
+    let mut i = 0;
+    while i < flags.len() {
+        if !flags[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < flags.len() && flags[i] {
+            i += 1;
+        }
+        if best.is_none_or(|(a, b)| i - start > b - a) {
+            best = Some((start, i));
+        }
+    }
+    let Some((a, b)) = best else { return (None, Vec::new()) };
+    let (lo, hi) = (speeds[a].min(speeds[b - 1]), speeds[a].max(speeds[b - 1]));
+    let outside = (0..flags.len()).filter(|&k| flags[k] && !(a..b).contains(&k)).map(|k| speeds[k]).collect();
+    (Some([lo, hi]), outside)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_isolated_bouncing_speed_is_listed_apart_and_does_not_move_the_band() {
+        let speeds = [-1.0, -0.95, -0.9, -0.85, -0.8, -0.75, -0.7, -0.65];
+        let flags = [false, true, false, false, true, true, true, false];
+        assert_eq!(main_interval(&speeds, &flags), (Some([-0.8, -0.7]), vec![-0.95]));
+        // A tie keeps the first run; nothing flagged gives no band.
+        let flags = [true, true, false, true, true, false, false, false];
+        assert_eq!(main_interval(&speeds, &flags), (Some([-1.0, -0.95]), vec![-0.85, -0.8]));
+        assert_eq!(main_interval(&speeds, &[false; 8]), (None, vec![]));
+        // The whole grid.
+        assert_eq!(main_interval(&speeds, &[true; 8]), (Some([-1.0, -0.65]), vec![]));
     }
 }

@@ -31,8 +31,9 @@ use rig::scenario::Scenario;
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
 /// Version 2: the IWC rule as a dimension, validity counters and the `invalid`
 /// outcome in every row. Version 3: closed-loop outcomes (`lift_off`,
-/// `target_not_reached`) and the `target_error_m` column.
-pub const FORMAT: u32 = 3;
+/// `target_not_reached`) and the `target_error_m` column. Version 4: the `jams`
+/// column (issue 24's dynamic jams, resolved by a tangential impact).
+pub const FORMAT: u32 = 4;
 
 /// An evenly spaced axis `start, start + step, ..., stop` (both ends included).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

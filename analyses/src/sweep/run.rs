@@ -192,6 +192,9 @@ pub struct RunRow {
     pub cone_violations: u64,
     /// Over the whole run: bounce sequences ended by the Zeno rule.
     pub zeno_stops: u64,
+    /// Over the whole run: dynamic jams (`p -> 0+` with `b < 0` while sliding)
+    /// resolved by a tangential impact (docs/plant.md "The jam corner"; not a violation).
+    pub jams: u64,
     /// 1 if the integrator or the event handling failed (a violation; outcome `failed`).
     pub integrator_failures: u64,
     /// Why the run failed (empty if it did not).
@@ -236,6 +239,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         poisson_fallbacks: 0,
         cone_violations: 0,
         zeno_stops: 0,
+        jams: 0,
         integrator_failures: 0,
         error: String::new(),
     };
@@ -276,6 +280,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
     row.zeno_stops = v.zeno_stops;
     row.integrator_failures = u64::from(sim_failed);
     let end = *plant.counters();
+    row.jams = end.jams;
     row.lift_offs_transient = start.map_or(lift_offs(&end), |s| lift_offs(&s));
     row.rhs_evaluations = plant.rhs_evaluations();
     row.final_mode = plant.mode().name().into();

@@ -80,15 +80,30 @@ pub struct Results {
     pub missing: usize,
     /// Runs per outcome.
     pub outcomes: BTreeMap<String, usize>,
+    /// Runs per outcome at each `mu` of the grid (every impact law, `e_n`, IWC rule
+    /// and initial condition together), by increasing `mu`.
+    pub outcomes_per_mu: Vec<MuOutcomes>,
     /// The indicator's threshold used, rad/s (the paper's: 0).
     pub threshold: f64,
     /// Validity counters summed over the runs.
     pub validity: Validity,
+    /// Dynamic jams resolved by a tangential impact, summed over the runs (a corner
+    /// of the model, not a violation; docs/plant.md "The jam corner").
+    pub jams: u64,
     /// The runs whose trajectory violates the model (outcome `invalid` or an
     /// integrator failure), in index order: left out of the bands and counts below.
     pub invalid: Vec<InvalidRun>,
     /// Per IWC rule, impact law and `e_n`.
     pub cases: Vec<CaseResults>,
+}
+
+/// Runs per outcome at one `mu`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MuOutcomes {
+    /// Friction coefficient.
+    pub mu: f64,
+    /// Runs per outcome name ([`Outcome::name`]).
+    pub outcomes: BTreeMap<String, usize>,
 }
 
 /// A run with a violation, as listed in `summary.json` and the report.
@@ -121,8 +136,13 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     let mut sorted: Vec<&RunRow> = rows.iter().collect();
     sorted.sort_by_key(|r| r.index);
     let mut invalid = Vec::new();
+    let mut outcomes_per_mu: Vec<MuOutcomes> = mus.iter().map(|&mu| MuOutcomes { mu, outcomes: BTreeMap::new() }).collect();
+    let jams = sorted.iter().map(|r| r.jams).sum();
     for r in &sorted {
         *outcomes.entry(r.outcome.name().to_string()).or_insert(0) += 1;
+        if let Some(m) = outcomes_per_mu.iter_mut().find(|m| m.mu == r.mu) {
+            *m.outcomes.entry(r.outcome.name().to_string()).or_insert(0) += 1;
+        }
         let v = r.validity();
         validity.add(&v);
         if !v.is_valid() {
@@ -166,7 +186,7 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
         }
         cases.push(CaseResults { iwc: first.iwc, impact_law: first.impact_law.name().into(), e_n: first.e_n, ics: list });
     }
-    Results { runs: rows.len(), missing, outcomes, threshold: spec.threshold, validity, invalid, cases }
+    Results { runs: rows.len(), missing, outcomes, outcomes_per_mu, threshold: spec.threshold, validity, jams, invalid, cases }
 }
 
 /// Persistent bouncing, and the paper's indicator flagged.
@@ -266,6 +286,7 @@ pub fn print_table(o: &mut dyn Write, r: &Results) {
         if r.missing > 0 { format!(", {} missing", r.missing) } else { String::new() }
     );
     let _ = writeln!(o, "validity: {}", r.validity);
+    let _ = writeln!(o, "dynamic jams (resolved by a tangential impact): {}", r.jams);
     if !r.invalid.is_empty() {
         let _ = writeln!(o, "INVALID: {} runs violate the model (left out of the bands above):", r.invalid.len());
         for i in r.invalid.iter().take(10) {
@@ -321,6 +342,7 @@ mod tests {
             poisson_fallbacks: 0,
             cone_violations: cone,
             zeno_stops: 2,
+            jams: 0,
             integrator_failures: 0,
             error: String::new(),
         };

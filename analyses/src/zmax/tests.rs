@@ -38,7 +38,8 @@ fn bisection_reports_the_bracket_ends_and_errors() {
 #[test]
 fn coarse_search_brackets_the_first_lift_off() {
     let base = Scenario::default_scenario();
-    let c = Criteria { duration_s: 3.0, move_time_s: 2.0, settle_tol_m: 1e-3, settle_window_s: 0.5, lift_off_gap_m: 0.0 };
+    let c =
+        Criteria { duration_s: 3.0, move_time_s: 2.0, reach_tol_m: 5e-3, settle_tol_m: 1e-3, settle_window_s: 0.5, lift_off_gap_m: 0.0 };
     let tol = 4e-3;
     for setting in [Setting::Ideal, Setting::Sampled] {
         let combo = Combination { controller: ControllerKind::Hybrid, x0: PaperX0::D, setting };
@@ -47,10 +48,14 @@ fn coarse_search_brackets_the_first_lift_off() {
         let Bisection::Found { lo, hi, .. } = s.bisection else { panic!("{:?}", s.bisection) };
         assert!(hi - lo <= tol);
         let (below, _) = trial(&base, combo, lo, &c).unwrap();
-        assert!(below.reached && below.lift_offs == 0 && below.impacts_without_collision == 0, "{below:?}");
+        assert!(below.tracked && below.lift_offs == 0 && below.impacts_without_collision == 0, "{below:?}");
+        assert_eq!(below.stop, StopReason::Tracked);
         assert!(below.settle_error_m <= 1e-3);
         let (above, _) = trial(&base, combo, hi, &c).unwrap();
-        assert!(!above.reached && above.first_lift_off_s.is_some(), "{above:?}");
+        assert!(!above.slides_to_target && above.first_lift_off_s.is_some(), "{above:?}");
+        assert_eq!(above.stop, StopReason::LiftOff);
+        // The hybrid law tracks every target it slides to: both limits agree.
+        assert_eq!(s.z_t_tracking, s.z_t_sliding, "{:?}", s.tracking);
         assert!(!s.limit_trace.is_empty() && s.limit_trace.iter().all(|r| r.mode != "flight"));
         if setting == Setting::Ideal {
             // Where p = 0 on the elbow-down belt with z_r_dot > 0 (`sil-host admissible`).
@@ -61,4 +66,35 @@ fn coarse_search_brackets_the_first_lift_off() {
             assert!(lo <= end && end < hi + 3e-4, "[{lo}, {hi}] vs p = 0 at {end}");
         }
     }
+}
+
+/// The PID from `x0d` never lifts off, but its steady error grows with the target:
+/// `Z_t,sliding` (slides to within 5 mm) lies above the tracking limit (within
+/// 1 mm), each bound by a trial that says why (not reached, not settled), and the
+/// tracking bisection reuses the first one's trials.
+#[test]
+fn the_pid_s_lift_off_limit_and_tracking_limit_are_apart() {
+    let base = Scenario::default_scenario();
+    let c =
+        Criteria { duration_s: 6.0, move_time_s: 2.0, reach_tol_m: 5e-3, settle_tol_m: 1e-3, settle_window_s: 1.0, lift_off_gap_m: 0.0 };
+    let combo = Combination { controller: ControllerKind::Pid, x0: PaperX0::D, setting: Setting::Ideal };
+    let bracket = default_bracket(&base, PaperX0::D).unwrap();
+    let tol = 4e-3;
+    let s = search(&base, combo, bracket, tol, &c, |_| {}).unwrap();
+    let (Some(sliding), Some(tracking)) = (s.z_t_sliding, s.z_t_tracking) else { panic!("{s:?}") };
+    assert!(tracking + tol < sliding, "tracking {tracking} vs Z_t,sliding {sliding}");
+    assert!(s.trials.iter().all(|t| t.lift_offs == 0 && t.impacts_without_collision == 0), "the PID from x0d never lifts off");
+    let above_sliding = s.failing_trial(&s.bisection).unwrap();
+    assert_eq!(above_sliding.stop, StopReason::NotReached, "{above_sliding:?}");
+    assert!(above_sliding.settle_error_m > 5e-3);
+    let above_tracking = s.failing_trial(&s.tracking).unwrap();
+    assert_eq!(above_tracking.stop, StopReason::NotSettled, "{above_tracking:?}");
+    assert!(above_tracking.why_not().unwrap().starts_with("not settled"));
+    assert!(s.trial_at(tracking).unwrap().tracked && s.trial_at(sliding).unwrap().slides_to_target);
+    // Each target once; at most the two bisections' evaluations.
+    let mut targets: Vec<f64> = s.trials.iter().map(|t| t.target_z_t).collect();
+    targets.sort_by(f64::total_cmp);
+    targets.dedup();
+    assert_eq!(targets.len(), s.trials.len());
+    assert!(s.trials.len() as u32 <= max_trials(bracket.0, bracket.1, tol));
 }

@@ -236,6 +236,11 @@ pub struct ControllerSection {
     pub friction: FrictionCompensation,
     /// The firmware's friction estimate `mu_hat`.
     pub mu_hat: f64,
+    /// The firmware's torque limit per joint, N m, in (0, 5] (docs/hardware.md: the
+    /// wire's and the drivers' full scale, 5 N m, when absent): commands beyond it are
+    /// saturated and flagged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_limit_nm: Option<f64>,
     /// PID gains (paper eq. 8); the paper's when absent.
     #[serde(default)]
     pub pid: PidSection,

@@ -93,6 +93,14 @@ impl Scenario {
             "a value in [0, 25] N (the load cell's range)",
         )?;
         check(finite(c.mu_hat) && (0.0..=10.0).contains(&c.mu_hat), "controller.mu_hat", c.mu_hat, "a value in [0, 10]")?;
+        if let Some(limit) = c.torque_limit_nm {
+            check(
+                finite(limit) && limit > 0.0 && limit <= f64::from(shared::wire::TORQUE_FULL_SCALE_NM),
+                "controller.torque_limit_nm",
+                limit,
+                "a value in (0, 5] N m (the wire's and the drivers' full scale)",
+            )?;
+        }
         validate_gains("controller.pid.kp", &c.pid.kp)?;
         validate_gains("controller.pid.ki", &c.pid.ki)?;
         validate_gains("controller.pid.kd", &c.pid.kd)?;

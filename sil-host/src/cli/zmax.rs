@@ -32,10 +32,16 @@ pub struct ZmaxArgs {
     /// Run length of a trial, s (the move takes the scenario's move_time_s, 2 s).
     #[arg(long, default_value_t = 10.0)]
     pub duration: f64,
-    /// Largest |z_t - z_t*| over the settle window for the target to count as reached, m.
+    /// Largest |z_t - z_t*| over the settle window for the tip to count as having got
+    /// to the target, m: Z_t,sliding is the largest target the tip slides to, within
+    /// this, with no lift-off (5 mm, the closed-loop sweep's target tolerance).
+    #[arg(long, default_value_t = 5e-3)]
+    pub reach_tol: f64,
+    /// Largest |z_t - z_t*| over the settle window for the target to count as
+    /// tracked, m: the tracking limit is the largest target tracked (at most --reach-tol).
     #[arg(long, default_value_t = 1e-3)]
     pub settle_tol: f64,
-    /// The last part of the run where the tip must be within --settle-tol, s.
+    /// The last part of the run where the tip must be within --reach-tol and --settle-tol, s.
     #[arg(long, default_value_t = 1.0)]
     pub settle_window: f64,
     /// Impact-without-collision rule of the base scenario (`plant.iwc`): `restitution`

@@ -84,6 +84,7 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
             ("runs (missing)", format!("{} ({})", r.runs, r.missing)),
             ("outcomes", outcomes.join(", ")),
             ("validity (all runs)", validity_cell(&r.validity)),
+            ("dynamic jams (tangential impacts)", r.jams.to_string()),
             ("indicator threshold (rad/s)", number(r.threshold)),
             ("rtol, atol", format!("{}, {}", number(s.spec.rtol), number(s.spec.atol))),
         ],
@@ -169,26 +170,44 @@ pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
 }
 
 pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
+    use crate::commands::zmax::summary::limit_text;
     let _ = writeln!(md, "{}\n", z.definition);
     let _ = writeln!(
         md,
-        "| controller | x0 | setting | outcome | Z_t,sliding (m) | first failing (m) | why it fails | trials |\n|---|---|---|---|---|---|---|---|"
+        "| controller | x0 | setting | Z_t,sliding (m) | paper (m) | error there (mm) | first with lift-off (m) | why | tracking limit (m) | first not reached (m) | why | trials |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in &z.results {
+        let paper = match analyses::paper::z_t_sliding(r.controller, r.x0) {
+            Some(Some(v)) => number(v),
+            Some(None) => "none (lifts off)".into(),
+            None => "-".into(),
+        };
         let _ = writeln!(
             md,
-            "| {} | x0{} | {} | {} | {} | {} | {} | {} |",
+            "| {} | x0{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             r.controller,
             r.x0,
             r.setting,
-            r.outcome,
-            opt(r.z_t_sliding_m),
+            limit_text(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m),
+            paper,
+            r.error_at_limit_m.map_or("-".into(), |e| number(e * 1e3)),
             opt(r.first_failing_m),
             cell(r.why_failing.as_deref().unwrap_or("-")),
+            limit_text(r.tracking_outcome, r.z_t_tracking_m, r.bracket_lo_m, r.bracket_hi_m),
+            opt(r.tracking_first_failing_m),
+            cell(r.tracking_why_failing.as_deref().unwrap_or("-")),
             r.trials
         );
     }
-    let _ = writeln!(md, "\nBisection tolerance {} m. {}\n", number(z.tol_m), z.paper);
+    let _ = writeln!(
+        md,
+        "\nBisection tolerance {} m; settle tolerance {} mm over the last {} s of a {} s run. Compare with {}.\n",
+        number(z.tol_m),
+        number(z.criteria.settle_tol_m * 1e3),
+        number(z.criteria.settle_window_s),
+        number(z.criteria.duration_s),
+        z.paper
+    );
     let _ = writeln!(md, "Validity over every trial: {}.\n", validity_cell(&z.validity));
 }
 
@@ -196,13 +215,18 @@ pub(crate) fn sensitivity(md: &mut String, st: &analyses::sensitivity::Study) {
     use analyses::zmax::{Combination, Setting};
     let _ = writeln!(
         md,
-        "Each open choice varied alone from the defaults (starred). `.`: the choice does not enter that result; `< lo`: the bracket's lower end already fails. \
-         Z_t,sliding in mm, in the order PID x0d, PID x0u, hybrid x0d, hybrid x0u. Validity over everything simulated: {}.\n",
+        "Each open choice varied alone from the defaults (starred). `.`: the choice does not enter that result. \
+         Bouncing band: the longest run of neighbouring belt speeds that bounce, then `+ v` for each other speed that does. \
+         Z_t,sliding (the largest target the tip slides to within 5 mm with no lift-off) and the tracking limit (also settled within 1 mm), in mm, \
+         in the order PID x0d, PID x0u, hybrid x0d, hybrid x0u; `< lo: why`: the bracket's lower end already fails, and why \
+         (`lift_off`, `safe_state`, `failure`, `not_reached`, `not_settled`, `invalid`). \
+         Closed loop: how the hybrid firmware's runs from x0d at mu = 0.6 ended over the belt speeds (a lift-off counts only above the lift-off criterion). \
+         Validity over everything simulated: {}.\n",
         validity_cell(&st.validity)
     );
     let _ = writeln!(
         md,
-        "| choice | value | critical mu x0a | critical mu x0d | bouncing at mu = 0.6 from x0a (m/s) | x0d bounces | Z_t,sliding ideal | Z_t,sliding sampled | hybrid closed loop bounces |\n|---|---|---|---|---|---|---|---|---|"
+        "| choice | value | critical mu x0a | critical mu x0d | bouncing at mu = 0.6 from x0a (m/s) | x0d bounces | Z_t,sliding ideal | Z_t,sliding sampled | tracking limit sampled | hybrid closed loop |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     let opt_num = |x: Option<f64>| x.map_or_else(|| "none".to_string(), number);
     for r in &st.results {
@@ -211,34 +235,34 @@ pub(crate) fn sensitivity(md: &mut String, st: &analyses::sensitivity::Study) {
             Some(o) => (
                 opt_num(o.critical_mu_x0a),
                 opt_num(o.critical_mu_x0d),
-                o.band_x0a_mu06.map_or_else(|| "none".to_string(), |b| format!("[{}, {}]", number(b[0]), number(b[1]))),
+                o.band_text(),
                 if o.x0d_bounces { "yes".to_string() } else { "no".to_string() },
             ),
             None => (".".to_string(), ".".to_string(), ".".to_string(), ".".to_string()),
         };
-        let z = |setting: Setting| {
+        let z = |setting: Setting, tracking: bool| {
             Combination::all()
                 .into_iter()
                 .filter(|k| k.setting == setting)
                 .map(|k| match r.zmax.iter().find(|z| z.combination == k) {
-                    Some(z) => z.z_t_sliding.map_or_else(|| "< lo".to_string(), |v| format!("{:.0}", v * 1e3)),
+                    Some(z) => z.cell_text(tracking),
                     None => ".".to_string(),
                 })
                 .collect::<Vec<String>>()
                 .join(", ")
         };
-        let closed = r.closed_loop.as_ref().map_or_else(
-            || ".".to_string(),
-            |cl| if cl.bounces { format!("yes ({} of {} speeds)", cl.bouncing_points, cl.points) } else { "no".to_string() },
-        );
+        let closed = r.closed_loop.as_ref().map_or_else(|| ".".to_string(), |cl| cl.text());
         let _ = writeln!(
             md,
-            "| {} | {}{} | {a} | {d} | {band} | {x0d} | {} | {} | {closed} |",
+            "| {} | {}{} | {a} | {d} | {} | {x0d} | {} | {} | {} | {} |",
             c.dimension.label(),
             cell(&c.value),
             if c.is_default { " *" } else { "" },
-            z(Setting::Ideal),
-            z(Setting::Sampled)
+            cell(&band),
+            cell(&z(Setting::Ideal, false)),
+            cell(&z(Setting::Sampled, false)),
+            cell(&z(Setting::Sampled, true)),
+            cell(&closed)
         );
     }
     md.push('\n');

@@ -11,10 +11,12 @@
 //! page's tables (no figures), stamped with date, commit and machine, to FILE
 //! (docs/results.md in the repository).
 
+mod closed_loop;
 mod experiments;
 mod format;
 mod outcome;
 mod page;
+mod paper;
 mod runs;
 mod sections;
 mod stamp;

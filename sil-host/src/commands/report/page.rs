@@ -6,7 +6,10 @@ use std::fmt::Write as _;
 
 use rig::summary::RunSummary;
 
+use crate::commands::sweep::outputs::SweepSummary;
+
 use super::{
+    closed_loop,
     experiments::{admissible, modes, poincare, sensitivity, simulate, sweep, zmax},
     runs::{bench, pil, run_comparison},
 };
@@ -41,6 +44,7 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
             let _ = writeln!(md, "| {} ({}) | {} | {} | {} | {} s |", s.title, r.id, cell(s.source), status, violations, short(r.wall_s));
         }
     }
+    super::paper::side_by_side(&mut md, results);
     for (s, rs) in sections.iter().zip(results) {
         let _ = writeln!(md, "\n## {}\n\n*{}*\n", s.title, s.source);
         let runs: Vec<(&str, &RunSummary)> = rs
@@ -52,6 +56,16 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
             .collect();
         if runs.len() > 1 {
             run_comparison(&mut md, &runs);
+        }
+        let sweeps: Vec<(&str, &SweepSummary, &[String])> = rs
+            .iter()
+            .filter_map(|r| match &r.outcome {
+                Some(Outcome::Sweep(s)) => Some((r.id, s.as_ref(), r.files.as_slice())),
+                _ => None,
+            })
+            .collect();
+        if sweeps.len() > 1 {
+            closed_loop::compare(&mut md, &sweeps, figures);
         }
         for r in rs {
             if rs.len() > 1 {
@@ -79,7 +93,7 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
                 _ => {}
             }
             if figures {
-                for f in r.files.iter().filter(|f| f.ends_with(".svg")) {
+                for f in r.files.iter().filter(|f| f.ends_with(".svg") && !(sweeps.len() > 1 && closed_loop::is_map(f))) {
                     let _ = writeln!(md, "![{f}]({f})\n");
                 }
             }

@@ -70,15 +70,15 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     });
     v.push(Section {
         title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
-        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop",
-        steps: vec![step(
-            "sweep-hybrid",
-            &if quick {
+        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop, beside the paper's ideal law",
+        steps: {
+            let args = if quick {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d", "--v-belt-step", "0.05", "--transient", "20", "--record", "10"]
             } else {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d"]
-            },
-        )],
+            };
+            vec![step("sweep-hybrid", &args), step("sweep-hybrid-ideal", &[&args[..], &["--ideal"]].concat())]
+        },
     });
     v.push(Section {
         title: "One-parameter bifurcation diagram (Poincaré section)",

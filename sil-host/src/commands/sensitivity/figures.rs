@@ -45,7 +45,7 @@ pub const FIGURES: [Figure; 5] = [
     },
     Figure {
         file: "band_mu06_x0a.svg",
-        title: "persistent bouncing at mu = 0.6 from x0a: extent (open loop)",
+        title: "persistent bouncing at mu = 0.6 from x0a: main interval (open loop)",
         y_desc: "v_belt (m/s)",
         series: || {
             vec![
@@ -78,9 +78,15 @@ pub const FIGURES: [Figure; 5] = [
     },
     Figure {
         file: "hybrid_closed_loop.svg",
-        title: "hybrid closed loop from x0d at mu = 0.6: belt speeds with persistent bouncing",
-        y_desc: "bouncing belt speeds",
-        series: || vec![("sampled firmware".into(), |r, _| r.closed_loop.as_ref().map(|c| c.bouncing_points as f64), 0)],
+        title: "hybrid closed loop from x0d at mu = 0.6: how the belt speeds' runs ended",
+        y_desc: "belt speeds",
+        series: || {
+            vec![
+                ("lift-off".into(), |r, _| r.closed_loop.as_ref().map(|c| c.lift_off_points as f64), 0),
+                ("safe state".into(), |r, _| r.closed_loop.as_ref().map(|c| c.safe_state_points as f64), 0),
+                ("target not reached".into(), |r, _| r.closed_loop.as_ref().map(|c| c.target_not_reached_points as f64), 0),
+            ]
+        },
     },
 ];
 

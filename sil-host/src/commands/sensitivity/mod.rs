@@ -131,7 +131,7 @@ pub(crate) fn print_table(s: &Summary) {
             Some(ol) => (
                 f(ol.critical_mu_x0a),
                 f(ol.critical_mu_x0d),
-                ol.band_x0a_mu06.map_or("none".into(), |b| format!("[{:.3}, {:.3}]", b[0], b[1])),
+                ol.band_text(),
                 if ol.x0d_bounces { "yes".to_string() } else { "no".to_string() },
             ),
             None => (".".to_string(), ".".to_string(), ".".to_string(), ".".to_string()),
@@ -141,14 +141,13 @@ pub(crate) fn print_table(s: &Summary) {
                 .into_iter()
                 .filter(|k| k.setting == setting)
                 .map(|k| match r.zmax.iter().find(|z| z.combination == k) {
-                    Some(z) => z.z_t_sliding.map_or("<lo".into(), |v| format!("{:.0}", v * 1e3)),
+                    Some(z) => z.cell_text(false),
                     None => ".".into(),
                 })
                 .collect::<Vec<String>>()
                 .join("/")
         };
-        let closed =
-            r.closed_loop.as_ref().map_or(".".into(), |cl| if cl.bounces { format!("yes {}", cl.bouncing_points) } else { "no".into() });
+        let closed = r.closed_loop.as_ref().map_or(".".into(), |cl| cl.text());
         let _ = writeln!(
             o,
             "{:<24} {:<22} {:>8} {:>8} {:>17} {:>5} | {:>17} | {:>17} | {:>6}",
@@ -165,7 +164,7 @@ pub(crate) fn print_table(s: &Summary) {
     }
     let _ = writeln!(
         o,
-        "* the default; mu*: critical mu; band: the extent of persistent bouncing (m/s); closed: the hybrid closed loop from x0d at mu = 0.6"
+        "* the default; mu*: critical mu; band: the longest run of neighbouring bouncing belt speeds (m/s), + the others; Z_t,sliding: largest target slid to with no lift-off (< lo: why the lowest fails); closed: how the hybrid closed loop from x0d at mu = 0.6 ended over the belt speeds"
     );
     let _ = writeln!(o, "validity (everything simulated): {}", st.validity);
     if !st.validity.is_valid() {

@@ -20,9 +20,7 @@ use crate::{
     output::{OutputSet, progress_bar, write_csv},
 };
 use analyses::admissible::{p_on_belt, positive_intervals};
-use analyses::zmax::{
-    Bisection, Combination, Criteria, Search, Setting, Trial, default_bracket, max_evaluations, sampled_scenario, search,
-};
+use analyses::zmax::{Combination, Criteria, Search, Setting, Trial, default_bracket, max_trials, sampled_scenario, search};
 use plant::initial::PaperX0;
 use rig::scenario::Scenario;
 
@@ -95,6 +93,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let criteria = Criteria {
         duration_s: args.duration,
         move_time_s: base.controller.move_time_s,
+        reach_tol_m: args.reach_tol,
         settle_tol_m: args.settle_tol,
         settle_window_s: args.settle_window,
         lift_off_gap_m: args.lift_off_gap,
@@ -118,7 +117,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::Sim)?;
         jobs.push((combo, bracket));
     }
-    let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_evaluations(b.0, b.1, args.tol))).sum();
+    let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
     let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
     let results: Vec<Result<Search, analyses::AnalysisError>> = jobs
         .par_iter()
@@ -126,7 +125,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
             let s = search(&base, combo, bracket, args.tol, &criteria, |_| progress.inc(1));
             // A search that ends early (a bracket end decides) frees its share of the bar.
             if let Ok(s) = &s {
-                progress.inc(u64::from(max_evaluations(bracket.0, bracket.1, args.tol).saturating_sub(s.bisection.evaluations())));
+                progress.inc(u64::from(max_trials(bracket.0, bracket.1, args.tol)).saturating_sub(s.trials.len() as u64));
             }
             s
         })
@@ -137,30 +136,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let mut out = OutputSet::new(&args.output.out)?;
     let rows: Vec<ZmaxRow> = searches
         .iter()
-        .map(|s| {
-            let (outcome, first_failing, failing_target) = match s.bisection {
-                Bisection::Found { hi, .. } => ("found", Some(hi), Some(hi)),
-                Bisection::LowerFails { lo, .. } => ("lower_fails", None, Some(lo)),
-                Bisection::UpperReached { .. } => ("upper_reached", None, None),
-            };
-            let why_failing = failing_target.and_then(|x| s.trials.iter().find(|t| t.target_z_t == x)).and_then(Trial::why_not);
-            ZmaxRow {
-                controller: s.combination.controller,
-                x0: s.combination.x0,
-                setting: s.combination.setting,
-                outcome,
-                z_t_sliding_m: s.z_t_sliding,
-                first_failing_m: first_failing,
-                why_failing,
-                bracket_lo_m: s.bracket.0,
-                bracket_hi_m: s.bracket.1,
-                p_zero_end_m: p_zero_end(&base, s.combination.x0, s.bracket),
-                theta1_fold_m: theta1_fold(s.combination.x0, s.bracket),
-                trials: s.trials.len() as u32,
-                invalid_trials: s.trials.iter().filter(|t| !t.validity.is_valid()).count() as u32,
-                wall_s: s.wall_s,
-            }
-        })
+        .map(|s| ZmaxRow::of(s, p_zero_end(&base, s.combination.x0, s.bracket), theta1_fold(s.combination.x0, s.bracket)))
         .collect();
     write_csv(&mut out, "zmax.csv", &rows)?;
     let trials: Vec<Trial> = searches.iter().flat_map(|s| s.trials.iter().cloned()).collect();

@@ -1,7 +1,7 @@
 //! The outputs of `sil-host zmax` other than the figures: the rows of `zmax.csv` and `trials.csv`, `summary.json` and the human table.
 
 use analyses::zmax::Setting;
-use analyses::zmax::{Criteria, Trial};
+use analyses::zmax::{Bisection, Criteria, Search, StopReason, Trial};
 use firmware::ControllerKind;
 use plant::{Validity, initial::PaperX0};
 use rig::scenario::Scenario;
@@ -17,14 +17,36 @@ pub struct ZmaxRow {
     pub x0: PaperX0,
     /// `ideal` or `sampled`.
     pub setting: Setting,
-    /// `found`, `lower_fails` or `upper_reached`.
+    /// The lift-off bisection: `found`, `lower_fails` or `upper_reached`.
     pub outcome: &'static str,
-    /// `Z_t,sliding`, m (empty when the lower end already fails).
+    /// `Z_t,sliding`, m: the largest target the tip was verified to slide to (the
+    /// paper's definition; empty when the lower end already fails).
     pub z_t_sliding_m: Option<f64>,
-    /// Smallest target found to fail, m (empty unless found).
+    /// `max |z_t - z_t*|` over the settle window of the trial at `Z_t,sliding`, m:
+    /// how far from its target the tip was there (a PID past the fold of `theta1`
+    /// stays free of lift-off without getting near its target).
+    pub error_at_limit_m: Option<f64>,
+    /// Smallest target found that the tip does not slide to, m (empty unless found).
     pub first_failing_m: Option<f64>,
-    /// Why that target (or, for `lower_fails`, the lower end) failed.
+    /// That trial's (or, for `lower_fails`, the lower end's) stop reason:
+    /// `lift_off`, `safe_state`, `failure`, `not_reached` or `invalid`.
+    pub stop_failing: Option<StopReason>,
+    /// Why it failed, in words.
     pub why_failing: Option<String>,
+    /// The paper's `Z_t,sliding` for this case, m (empty where it found none).
+    pub paper_z_t_sliding_m: Option<f64>,
+    /// The tracking bisection (on `[lo, Z_t,sliding]`): `found`, `lower_fails` or
+    /// `upper_reached`.
+    pub tracking_outcome: &'static str,
+    /// The tracking limit, m: the largest target verified tracked (slid to and
+    /// settled within the settle tolerance).
+    pub z_t_tracking_m: Option<f64>,
+    /// Smallest target found not tracked, m.
+    pub tracking_first_failing_m: Option<f64>,
+    /// That trial's stop reason (`not_settled`, or a reason above).
+    pub tracking_stop_failing: Option<StopReason>,
+    /// Why it was not tracked, in words.
+    pub tracking_why_failing: Option<String>,
     /// Bracket searched, m.
     pub bracket_lo_m: f64,
     /// Bracket searched, m.
@@ -72,7 +94,7 @@ pub struct ZmaxSummary {
     pub tol_m: f64,
     /// What a trial checks.
     pub definition: &'static str,
-    /// The paper's figures (docs/model.md gives none).
+    /// The paper's figures and definition (docs/model.md "What the paper reports").
     pub paper: &'static str,
     /// The base scenario of the sampled setting (its target, run length, controller
     /// and initial condition are set per trial).
@@ -89,12 +111,53 @@ pub struct ZmaxSummary {
     pub wall_s: f64,
 }
 
-pub(crate) const DEFINITION: &str = "z_t* is reached with no lift-off when, over the whole run (the quintic move of z_t* over move_time_s, then held until duration_s): \
-the tip never leaves the belt (no lift-off event, located exactly between samples too; no impact without collision; no sample in flight); \
-the run ends normally (no plant failure, firmware safe state or ideal-law fault) with no model violation (energy-creating impact, friction-cone violation); and |z_t - z_t*| <= settle_tol_m at every sample of the last settle_window_s. \
-Z_t,sliding is the largest target verified reached by bisection on [lo, hi] to tol_m; lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi.";
+pub(crate) const DEFINITION: &str = "A trial drives z_t* from the initial tip position by a quintic move over move_time_s, then holds it until duration_s. \
+The tip slides to the target when it never leaves the belt (no lift-off event, located exactly between samples too; no impact without collision; no sample in flight), \
+the run ends normally (no plant failure, firmware safe state or ideal-law fault) with no model violation (energy-creating impact, friction-cone violation), \
+and |z_t - z_t*| <= reach_tol_m at every sample of the last settle_window_s. The target is tracked when, in addition, |z_t - z_t*| <= settle_tol_m there. \
+Z_t,sliding (the paper's definition, the largest z_t such that no lift-off occurs) is the largest target the tip was verified to slide to, by bisection on [lo, hi] to tol_m; \
+the tracking limit is the largest target verified tracked, by bisection on [lo, Z_t,sliding]. \
+lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi. \
+Each trial's stop reason (the first that applies): invalid, lift_off, safe_state, failure, not_reached, not_settled or tracked.";
 
-pub(crate) const PAPER: &str = "docs/model.md gives no value for Z_t,sliding: these are ours.";
+pub(crate) const PAPER: &str = analyses::paper::Z_T_SLIDING_SUMMARY;
+
+impl ZmaxRow {
+    /// The row of one search; `p_zero_end_m` and `theta1_fold_m` as computed by the command.
+    pub(crate) fn of(s: &Search, p_zero_end_m: Option<f64>, theta1_fold_m: Option<f64>) -> Self {
+        let first = |b: &Bisection| match *b {
+            Bisection::Found { hi, .. } => Some(hi),
+            _ => None,
+        };
+        let lift = s.failing_trial(&s.bisection);
+        let track = s.failing_trial(&s.tracking);
+        let c = s.combination;
+        Self {
+            controller: c.controller,
+            x0: c.x0,
+            setting: c.setting,
+            outcome: s.bisection.outcome_name(),
+            z_t_sliding_m: s.z_t_sliding,
+            error_at_limit_m: s.z_t_sliding.and_then(|z| s.trial_at(z)).map(|t| t.settle_error_m),
+            first_failing_m: first(&s.bisection),
+            stop_failing: lift.map(|t| t.stop),
+            why_failing: lift.and_then(Trial::why_not),
+            paper_z_t_sliding_m: analyses::paper::z_t_sliding(c.controller, c.x0).flatten(),
+            tracking_outcome: s.tracking.outcome_name(),
+            z_t_tracking_m: s.z_t_tracking,
+            tracking_first_failing_m: first(&s.tracking),
+            tracking_stop_failing: track.map(|t| t.stop),
+            tracking_why_failing: track.and_then(Trial::why_not),
+            bracket_lo_m: s.bracket.0,
+            bracket_hi_m: s.bracket.1,
+            p_zero_end_m,
+            theta1_fold_m,
+            trials: s.trials.len() as u32,
+            invalid_trials: s.trials.iter().filter(|t| t.stop == StopReason::Invalid).count() as u32,
+            wall_s: s.wall_s,
+        }
+    }
+}
 
 /// A flat row of `trials.csv`.
 #[derive(Debug, Clone, Serialize)]
@@ -103,7 +166,9 @@ pub(crate) struct TrialRow {
     pub(crate) x0: PaperX0,
     pub(crate) setting: Setting,
     pub(crate) target_z_t_m: f64,
-    pub(crate) reached: bool,
+    pub(crate) stop: StopReason,
+    pub(crate) slides_to_target: bool,
+    pub(crate) tracked: bool,
     pub(crate) lift_offs: u64,
     pub(crate) impacts_without_collision: u64,
     pub(crate) first_lift_off_s: Option<f64>,
@@ -126,7 +191,9 @@ impl From<&Trial> for TrialRow {
             x0: t.combination.x0,
             setting: t.combination.setting,
             target_z_t_m: t.target_z_t,
-            reached: t.reached,
+            stop: t.stop,
+            slides_to_target: t.slides_to_target,
+            tracked: t.tracked,
             lift_offs: t.lift_offs,
             impacts_without_collision: t.impacts_without_collision,
             first_lift_off_s: t.first_lift_off_s,
@@ -144,40 +211,70 @@ impl From<&Trial> for TrialRow {
     }
 }
 
+/// A limit for tables: `< lo` when the lower end fails, `>= hi` when the upper end
+/// passes, else the value, m to 4 decimals.
+pub(crate) fn limit_text(outcome: &str, value: Option<f64>, lo: f64, hi: f64) -> String {
+    match (outcome, value) {
+        ("lower_fails", _) => format!("< {lo:.4}"),
+        ("upper_reached", Some(v)) => format!(">= {v:.4}"),
+        ("upper_reached", None) => format!(">= {hi:.4}"),
+        (_, Some(v)) => format!("{v:.4}"),
+        (_, None) => "-".into(),
+    }
+}
+
 pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
     let mut o = std::io::stdout().lock();
     let c = &s.criteria;
     let _ = writeln!(
         o,
-        "Z_t,sliding (docs/model.md experiments 5 and 6): largest z_t* reached with no lift-off; mu {}, v_belt {} m/s, move {} s, run {} s, settle within {} mm over the last {} s, bisection to {} mm",
+        "Z_t,sliding (docs/model.md experiments 5 and 6): largest z_t* the tip slides to (within {} mm) with no lift-off (the paper's definition); tracking: largest z_t* also settled within {} mm over the last {} s; mu {}, v_belt {} m/s, move {} s, run {} s, bisection to {} mm",
+        c.reach_tol_m * 1e3,
+        c.settle_tol_m * 1e3,
+        c.settle_window_s,
         s.base_scenario.plant.mu,
         s.base_scenario.plant.v_belt,
         c.move_time_s,
         c.duration_s,
-        c.settle_tol_m * 1e3,
-        c.settle_window_s,
         s.tol_m * 1e3
     );
     let _ = writeln!(
         o,
-        "{:<8} {:<4} {:<8} {:>16} {:>15} {:>13} {:>16} {:>7} {:>8}",
-        "control", "x0", "setting", "Z_t,sliding (m)", "first fail (m)", "p = 0 at (m)", "theta1 max at (m)", "trials", "wall (s)"
+        "{:<8} {:<4} {:<8} {:>16} {:>10} {:>12} {:>8} {:>14} {:>12} {:>13} {:>16} {:>7} {:>8}",
+        "control",
+        "x0",
+        "setting",
+        "Z_t,sliding (m)",
+        "error (mm)",
+        "stop above",
+        "paper",
+        "tracking (m)",
+        "stop above",
+        "p = 0 at (m)",
+        "theta1 max at (m)",
+        "trials",
+        "wall (s)"
     );
     let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+    let reason = |r: Option<StopReason>| r.map_or("-".to_string(), |r| r.name().to_string());
     for r in &s.results {
-        let z = match r.outcome {
-            "lower_fails" => format!("< {:.4}", r.bracket_lo_m),
-            "upper_reached" => format!(">= {:.4}", r.bracket_hi_m),
-            _ => f(r.z_t_sliding_m),
+        let paper = match analyses::paper::z_t_sliding(r.controller, r.x0) {
+            Some(Some(v)) => format!("{v}"),
+            Some(None) => "none".into(),
+            None => "-".into(),
         };
         let _ = writeln!(
             o,
-            "{:<8} {:<4} {:<8} {:>16} {:>15} {:>13} {:>16} {:>7} {:>8.2}",
+            "{:<8} {:<4} {:<8} {:>16} {:>10} {:>12} {:>8} {:>14} {:>12} {:>13} {:>16} {:>7} {:>8.2}",
             r.controller,
             format!("x0{}", r.x0),
             r.setting,
-            z,
-            f(r.first_failing_m),
+            limit_text(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m),
+            r.error_at_limit_m.map_or("-".into(), |e| format!("{:.1}", e * 1e3)),
+            reason(r.stop_failing),
+            paper,
+            limit_text(r.tracking_outcome, r.z_t_tracking_m, r.bracket_lo_m, r.bracket_hi_m),
+            reason(r.tracking_stop_failing),
             f(r.p_zero_end_m),
             f(r.theta1_fold_m),
             r.trials,
@@ -185,10 +282,19 @@ pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
         );
     }
     for r in &s.results {
-        if let Some(why) = &r.why_failing {
-            let _ = writeln!(o, "{} x0{} {}: first failing target {}", r.controller, r.x0, r.setting, why);
+        if let (Some(why), Some(at)) = (&r.why_failing, r.first_failing_m.or(Some(r.bracket_lo_m))) {
+            let _ = writeln!(o, "{} x0{} {}: Z_t,sliding fails at {at:.4} m: {why}", r.controller, r.x0, r.setting);
+        }
+        if let (Some(why), Some(at)) = (&r.tracking_why_failing, r.tracking_first_failing_m.or(Some(r.bracket_lo_m)))
+            && r.tracking_first_failing_m != r.first_failing_m
+        {
+            let _ = writeln!(o, "{} x0{} {}: tracking fails at {at:.4} m: {why}", r.controller, r.x0, r.setting);
         }
     }
+    let _ = writeln!(
+        o,
+        "error: max |z_t - z_t*| over the settle window at Z_t,sliding; stop above: why the first target above the limit failed"
+    );
     let _ = writeln!(
         o,
         "p = 0 at: end of the admissible range on the branch (paper Table II); theta1 max at: the fold of theta1 along the belt, which the PID (on theta1 alone) cannot pass"
@@ -197,7 +303,7 @@ pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
     let _ = writeln!(o, "validity (all trials): {}", s.validity);
     let invalid: u32 = s.results.iter().map(|r| r.invalid_trials).sum();
     if invalid > 0 {
-        let _ = writeln!(o, "INVALID: {invalid} trials violate the model (counted as not reached; trials.csv lists them)");
+        let _ = writeln!(o, "INVALID: {invalid} trials violate the model (counted as not free of lift-off; trials.csv lists them)");
     }
     let _ = writeln!(
         o,
