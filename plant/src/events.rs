@@ -103,6 +103,10 @@ pub struct Counters {
     /// Dynamic jams: times the reaction grew without bound as `p -> 0+` while
     /// sliding, each resolved by a tangential impact ([`EventKind::Jam`]).
     pub jams: u64,
+    /// Of [`Counters::jams`], those detected where the integrator's step size
+    /// collapsed before `f_n` reached `jam_load m g` (the slide already jamming:
+    /// `p > 0`, `b < 0`, `f_n >= 10 m g`).
+    pub jams_at_collapse: u64,
     /// Sticking phases entered.
     pub stick_phases: u64,
     /// Stick-to-slip transitions.

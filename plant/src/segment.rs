@@ -186,6 +186,20 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         }
     }
 
+    /// Whether a slide at `(t, y)` is running into the dynamic jam: `p > 0`, `b < 0`
+    /// and a normal reaction `f_n = -b/p` of at least [`JAM_ONSET_LOAD`] times `m g`.
+    /// Where the step size collapses there before `f_n` reaches `jam_load m g`, the
+    /// plant resolves the jam from the last accepted point (docs/plant.md "The jam
+    /// corner").
+    pub fn jamming(&self, t: f64, y: &OdeState) -> bool {
+        if !matches!(self.phase, Phase::Sliding(_)) {
+            return false;
+        }
+        let c = self.components(t, y);
+        let f_n_over_mg = (1.0 - c[3].1) * self.jam_load;
+        c[0].1 > 0.0 && c[1].1 > 0.0 && f_n_over_mg >= JAM_ONSET_LOAD
+    }
+
     /// [`Segment::components`] from the tip dynamics and contact force at the point.
     #[inline]
     pub fn components_of(&self, td: &TipDynamics<f64>, f: &Vector2<f64>) -> [(Boundary, f64); 4] {
@@ -272,7 +286,16 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
     pub g_prev: f64,
     /// The located event `(t, y)`, if any.
     pub hit: Option<(f64, OdeState)>,
+    /// The last accepted point `(t, y)` (none before the first step).
+    pub last: Option<(f64, OdeState)>,
 }
+
+/// The normal reaction, in units of `m g`, above which a slide whose step size
+/// collapses with `p > 0` and `b < 0` is taken to be the dynamic jam ([`Segment::jamming`]):
+/// ten times the arm's weight, far above any steady slide of the paper's experiments
+/// (`f_n* = 10 N` is about 8.5 `m g`) and far below where the collapse happens (at
+/// 1e4 to 1e6 `m g` in the cases of issue 24's search).
+pub const JAM_ONSET_LOAD: f64 = 10.0;
 
 /// Event-function magnitude that counts as on the boundary (rounding after a
 /// projection): the same margin [`super::Plant`] allows at a segment's end.
@@ -282,6 +305,7 @@ impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
     /// Checks one accepted step for a crossing and locates it; stops the solve at an event.
     pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>, STATE_LEN>) -> Control {
         let (t_prev, t_curr) = (step.t_prev(), step.t_curr());
+        self.last = Some((t_curr, *step.y_curr()));
         let g_curr = self.segment.nearest_boundary(t_curr, step.y_curr()).1;
         let g_a = self.g_prev;
         self.g_prev = g_curr;

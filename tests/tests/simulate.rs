@@ -164,3 +164,50 @@ fn a_newton_impact_whose_slip_reverses_settles_into_sliding() {
         assert!(last_touchdown < 250.0, "{law}: still bouncing at {last_touchdown} s");
     }
 }
+
+/// Issue 24: a `mu` scan across the bouncing band of a perturbed arm (found by a
+/// search: Table I's `m` +11 %, `l` +4 %, `sigma` +19 %, `k` -16 %, `alpha0` -17 %,
+/// `h` set so that `x0a` is on the belt; Poisson, `e_n = 0.1`, `v_belt` -0.984 m/s)
+/// completes every run under both IWC rules, the dynamic jams counted. Before the
+/// jam was resolved where the step size collapses, `mu` 0.41 and 0.42 failed
+/// ("step size 1.4e-13 s too small") under both rules, with `f_n` only 40 to 450 N.
+#[test]
+fn a_mu_scan_across_a_bouncing_band_of_a_perturbed_arm_completes_with_its_jams_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let arm = [
+        "plant.m=0.13288317384683318",
+        "plant.l=0.21762723339408532",
+        "plant.sigma=0.005932199636113795",
+        "plant.k=1.0920241576528966",
+        "plant.h=0.3912149518771235",
+        "plant.alpha0=0.19777060647993205",
+    ];
+    for iwc in ["plastic", "restitution"] {
+        let (mut jams, mut bouncing, mut settled) = (0, 0, 0);
+        for k in 0..=10 {
+            let mu = format!("{:.2}", 0.36 + 0.01 * f64::from(k));
+            let out = dir.path().join(format!("{iwc}-{mu}"));
+            let mut args = vec!["simulate", "--x0", "a", "--mu", &mu, "--v-belt=-0.9839901853524298", "--duration", "130"];
+            args.extend(["--iwc", iwc, "--impact-law", "poisson", "--e-n", "0.1", "--sample-dt", "0.01", "--out", out.to_str().unwrap()]);
+            for a in &arm {
+                args.extend(["--set", a]);
+            }
+            assert_eq!(run(&args), 0, "{iwc}, mu {mu}");
+            let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+            assert_eq!(s["status"], "ok", "{iwc}, mu {mu}");
+            assert_eq!(s["validity"]["integrator_failures"], 0, "{iwc}, mu {mu}");
+            assert!((s["simulated_s"].as_f64().unwrap() - 130.0).abs() < 1e-9);
+            let c = &s["counters"];
+            jams += c["jams"].as_u64().unwrap();
+            let touchdowns = c["touchdowns"].as_u64().unwrap();
+            if touchdowns > 500 {
+                bouncing += 1;
+            }
+            if touchdowns < 20 && s["final_mode"] == "sliding" {
+                settled += 1;
+            }
+        }
+        assert!(bouncing >= 2 && settled >= 1, "{iwc}: the scan crosses the band: {bouncing} bouncing, {settled} settled");
+        assert!(jams >= 10, "{iwc}: the corner is met and counted: {jams} jams");
+    }
+}

@@ -7,7 +7,7 @@ use shared::model::TipDynamics;
 use super::{EndPoint, Plant};
 use crate::{
     controller::Controller,
-    dop853::Dop853,
+    dop853::{Dop853, SolveError},
     error::SimError,
     events::{PlantEvent, StepReport},
     observer::Observer,
@@ -226,12 +226,18 @@ impl Plant {
         obs: &mut dyn Observer,
     ) -> Result<Option<Boundary>, SimError> {
         let remaining = t_end - self.t;
-        let mut h0 = self.last_h.min(remaining);
+        // The integrator's floor is 10 |t| u: a step proposed at it (after a solve
+        // whose steps shrank towards a jam) would fail at once.
+        let floor = 100.0 * f64::EPSILON * self.t.abs();
+        let mut h0 = self.last_h.max(floor).min(remaining);
         if self.phase == Phase::Flight {
             let td = &start.td;
             let height = td.z[1] + self.arm.params.h;
             if height < 1e-9 && td.z_dot[1] > 0.0 && td.b() < 0.0 {
-                h0 = h0.min(td.z_dot[1] / -td.b());
+                // No shorter than the integrator can take at this t (its floor is
+                // 10 |t| u): a flight shorter than that ends at the first step's
+                // touchdown, located inside it (e.g. after a jam's kick).
+                h0 = h0.min(td.z_dot[1] / -td.b()).max(floor.min(remaining));
             }
         }
         // Retries cap the steps at 1/64 of the interval, and also at 1 ms then 10 us:
@@ -274,14 +280,26 @@ impl Plant {
         let solver = Dop853 { h_max, ..self.solver };
         let mode = self.mode();
         let seg = self.segment(ctrl);
-        let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None };
-        let solved = solver
-            .solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
-                let control = locator.on_step(step);
-                obs.on_step(step, locator.hit, mode);
-                control
-            })
-            .map_err(|e| SimError::Integrator { t: self.t, message: e.to_string() })?;
+        let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None, last: None };
+        let solved = match solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
+            let control = locator.on_step(step);
+            obs.on_step(step, locator.hit, mode);
+            control
+        }) {
+            Ok(s) => s,
+            // The dynamic jam whose step size collapsed before f_n reached jam_load m g:
+            // resolved from the last accepted point (the solve's start if it accepted
+            // none), where the slide was already jamming.
+            Err(SolveError::StepSizeTooSmall { .. })
+                if let (t1, y1) = locator.last.unwrap_or((self.t, self.y))
+                    && y1.iter().all(|v| v.is_finite())
+                    && seg.jamming(t1, &y1) =>
+            {
+                self.counters.jams_at_collapse += 1;
+                return Ok((t1, y1, Some(Boundary::Jam), 0.0));
+            }
+            Err(e) => return Err(SimError::Integrator { t: self.t, message: e.to_string() }),
+        };
         let (g_end, hit) = (locator.g_prev, locator.hit);
         self.last_h = solved.h_next;
         if let Some((t1, y1)) = hit {
