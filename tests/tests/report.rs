@@ -14,7 +14,13 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
         .arg(&results)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    if !o.status.success() {
+        // Name the failed experiments and why (the folder goes with the test).
+        let page = std::fs::read_to_string(out.join("report.md")).unwrap_or_default();
+        let failed: Vec<&str> = page.lines().filter(|l| l.contains("**failed**") || l.starts_with("**Failed**")).collect();
+        let why: Vec<&str> = page.split("**Failed**:").skip(1).map(|s| s.split("```").nth(1).unwrap_or("")).collect();
+        panic!("{}\nfailed: {failed:#?}\nwhy: {why:#?}", String::from_utf8_lossy(&o.stderr));
+    }
     let index: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(index["failed"], 0);
     let steps = index["steps"].as_array().unwrap();

@@ -360,14 +360,17 @@ fn a_killed_firmware_process_is_noticed_in_the_period_it_dies() {
 #[test]
 fn a_stalled_firmware_misses_deadlines_then_goes_safe() {
     let dir = tempfile::tempdir().unwrap();
-    // The firmware process stops for 0.3 s of wall time at t = 1.0 s; the plant waits
-    // 0.05 s per period, so about 6 periods pass before the firmware catches up, finds
-    // the queued frames late, and latches the safe state (deadline misses).
+    // The firmware process stops for 2 s of wall time at t = 1.0 s; the plant waits
+    // 0.05 s per period, so up to 40 periods time out before the firmware catches up,
+    // finds the queued frames late, and latches the safe state (3 deadline misses in a
+    // row). A loaded machine only stretches the plant's waits: fewer periods pass, never
+    // more than 40, and 3 of them need only 0.15 s of the plant's 2 s (a 0.3 s stall
+    // gave fewer than 3 on a machine at load 8, issue 27).
     let s = scenario(
         dir.path(),
         "stall.toml",
         &[("command_timeout_s = 5.0", "command_timeout_s = 0.05")],
-        "\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\nduration_s = 0.3\n",
+        "\n[[faults]]\nkind = \"stall\"\nat_s = 1.0\nduration_s = 2.0\n",
     );
     let out = dir.path().join("stall");
     let name = rig("stall");
@@ -378,7 +381,8 @@ fn a_stalled_firmware_misses_deadlines_then_goes_safe() {
     let rows = trace(&out);
     let plant = column(&out, "deadline_miss");
     assert_eq!(&rows[1000][plant], "true", "the plant notices in the period the stall starts");
-    assert!(rows.len() > 1001 && rows.len() < 1000 + 40, "noticed within a bounded number of periods: {}", rows.len());
+    // At most 40 timed-out periods, then the safe state within a few more.
+    assert!(rows.len() > 1001 && rows.len() <= 1000 + 40 + 5, "noticed within a bounded number of periods: {}", rows.len());
     assert!(summary(&out)["firmware_overruns"].as_u64().unwrap() >= 3);
 }
 

@@ -47,10 +47,14 @@ fn timed(s: &Scenario, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize
     }
 }
 
-/// The default scenario, `duration_s` long.
+/// The default scenario, `duration_s` long, with a 1 s command timeout (the
+/// default's 50 ms guards against a stalled firmware; a benchmark on a loaded
+/// machine (issue 27) must measure a slow loop, not latch the firmware's safe state
+/// after three descheduled waits in a row).
 fn scenario(duration_s: f64) -> Result<Scenario, CliError> {
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = duration_s;
+    s.rig.command_timeout_s = 1.0;
     s.validate()?;
     Ok(s)
 }
