@@ -194,14 +194,16 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
         plot::decimate(&pts, 4000)
     };
     let budget_label = format!("budget (5 % of {:.0} us at 168 MHz)", 1e6 / s.timing.rate_hz);
+    let y_label = format!("{unit} per step");
     let panels = [Panel {
-        y_label: unit,
+        y_label: &y_label,
         series: vec![
             Series { label: "frame (decode + step)", points: series(&counts.frame_series), color: colors::ORANGE, step: false },
             Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false },
             Series { label: &budget_label, points: vec![(0.0, budget), (t_end, budget)], color: colors::RED, step: false },
         ],
         y_range: Some((0.0, (counts.frame.max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
+        categories: None,
     }];
     let source = match (counts.unit(), target) {
         (CountUnit::Instructions, PilTarget::Qemu { .. }) => format!("QEMU -icount shift={ICOUNT_SHIFT}"),

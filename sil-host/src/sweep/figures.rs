@@ -11,7 +11,11 @@ use plotters::prelude::*;
 
 use crate::{
     error::CliError,
-    plot::{self, colors, plot_err},
+    plot::{
+        self, colors,
+        legend::{Legend, Swatch},
+        plot_err,
+    },
 };
 use analyses::sweep::{
     SweepSpec,
@@ -53,45 +57,26 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let grid_rows = ics.len().div_ceil(cols);
     let width = 560 * cols as u32;
     // The legend: one coloured box and name per outcome the sweep can give, packed
-    // into as many lines as the figure's width needs (15 px sans-serif: about 8.5 px
-    // a character).
-    let legend: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
-    let mut placed = Vec::with_capacity(legend.len());
-    let (mut x, mut line) = (20i32, 0i32);
-    for o in legend {
-        let w = 22 + (8.5 * o.name().len() as f64).ceil() as i32 + 28;
-        if x > 20 && x + w > width as i32 - 10 {
-            (x, line) = (20, line + 1);
-        }
-        placed.push((*o, x, 10 + 26 * line));
-        x += w;
-    }
-    let legend_h = 40 + 26 * line as u32;
-    let root = SVGBackend::new(path, (width, 80 + legend_h - 40 + 460 * grid_rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    // in rows across the width (measured with the figures' font).
+    let outcomes: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
+    let legend = Legend::new(outcomes.iter().map(|o| (o.name().to_string(), Swatch::Box(outcome_color(*o)))).collect());
+    let legend_h = legend.rows_height(width);
+    let title_h = 40;
+    let root = plot::svg_canvas(path, (width, title_h + legend_h + 470 * grid_rows as u32)).map_err(|e| err(&e))?;
     let title = format!("Outcome over (v_belt, mu), {} ({law}, e_n = {e_n})", controller_label(spec));
-    // A title that fits the width (22 px, or smaller for a one-panel figure).
-    let title_px = (22.0f64).min(width as f64 / (0.56 * title.len() as f64)).floor();
-    let root = root.titled(&title, ("sans-serif", title_px)).map_err(|e| err(&e))?;
-    let (legend_area, panels_area) = root.split_vertically(legend_h);
-    for (o, x, y) in placed {
-        legend_area.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], outcome_color(o).filled())).map_err(|e| err(&e))?;
-        legend_area.draw(&Text::new(o.name(), (x + 22, y + 2), ("sans-serif", 15))).map_err(|e| err(&e))?;
-    }
+    let (top, rest) = root.split_vertically(title_h);
+    plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
+    let (legend_area, panels_area) = rest.split_vertically(legend_h);
+    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
     let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
     let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
     let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
     let y_range = (mus[0] - dmu)..(mus[mus.len() - 1] + dmu);
     for (i, area) in panels_area.split_evenly((grid_rows, cols)).iter().enumerate().take(ics.len()) {
         let ic = &ics[i];
-        let mut chart = ChartBuilder::on(area)
-            .margin(10)
-            .caption(format!("from {} (elbow {})", ic.name, ic.branch.name()), ("sans-serif", 17))
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(x_range.clone(), y_range.clone())
-            .map_err(|e| err(&e))?;
-        chart.configure_mesh().x_desc("v_belt (m/s)").y_desc("mu").disable_mesh().draw().map_err(|e| err(&e))?;
+        let caption = format!("from {} (elbow {})", ic.name, ic.branch.name());
+        let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: "v_belt (m/s)", y_desc: "mu (-)" };
+        let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         let cells = rows
             .iter()
             .filter(|r| r.ic == ic.name)
@@ -123,14 +108,22 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     let mus = spec.mu.values();
     let cols = if mus.len() > 4 { 2 } else { 1 };
     let grid_rows = mus.len().div_ceil(cols);
-    let root = SVGBackend::new(path, (620 * cols as u32, 60 + 230 * grid_rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let width = 620 * cols as u32;
+    let mut legend = Legend::new(vec![(format!("threshold ({} rad/s)", spec.threshold), Swatch::Dashed(BLACK))]);
+    for (i, ic) in ics.iter().enumerate() {
+        legend.entries.push((format!("from {}", ic.name), Swatch::Line(IC_COLORS[i % IC_COLORS.len()])));
+    }
+    let (title_h, legend_h) = (40, legend.rows_height(width));
+    let root = plot::svg_canvas(path, (width, title_h + legend_h + 240 * grid_rows as u32)).map_err(|e| err(&e))?;
     let title = format!("max theta1_dot over the record window against v_belt, {} ({law}, e_n = {e_n})", controller_label(spec));
-    let root = root.titled(&title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+    let (top, rest) = root.split_vertically(title_h);
+    plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
+    let (legend_area, panels) = rest.split_vertically(legend_h);
+    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
     let vs = spec.v_belt.values();
     let dv = half_step(&spec.v_belt);
     let (x_lo, x_hi) = (vs[0] - dv, vs[vs.len() - 1] + dv);
-    for (m, area) in root.split_evenly((grid_rows, cols)).iter().enumerate().take(mus.len()) {
+    for (m, area) in panels.split_evenly((grid_rows, cols)).iter().enumerate().take(mus.len()) {
         let mu = mus[m];
         let at_mu: Vec<&&RunRow> = rows.iter().filter(|r| r.mu == mu).collect();
         let (mut lo, mut hi) = (spec.threshold, spec.threshold);
@@ -141,36 +134,25 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
             }
         }
         let pad = ((hi - lo) * 0.08).max(0.05);
+        let caption = format!("mu = {mu}");
         let axes = plot::Axes {
-            caption: Some((format!("mu = {mu}"), 15)),
+            caption: Some(&caption),
             x: x_lo..x_hi,
             y: (lo - pad)..(hi + pad),
             x_desc: "v_belt (m/s)",
             y_desc: "max theta1_dot (rad/s)",
-            x_label_area: 30,
-            y_label_area: 60,
-            margin: 8,
         };
         let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         chart
-            .draw_series(DashedLineSeries::new([(x_lo, spec.threshold), (x_hi, spec.threshold)], 5, 4, BLACK.mix(0.6).stroke_width(1)))
-            .map_err(|e| err(&e))?
-            .label("threshold")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.6)));
+            .draw_series(DashedLineSeries::new([(x_lo, spec.threshold), (x_hi, spec.threshold)], 5, 4, BLACK.stroke_width(1)))
+            .map_err(|e| err(&e))?;
         for (i, ic) in ics.iter().enumerate() {
             let color = IC_COLORS[i % IC_COLORS.len()];
             let mut pts: Vec<(f64, f64)> =
                 at_mu.iter().filter(|r| r.ic == ic.name && r.theta1_dot_max.is_finite()).map(|r| (r.v_belt, r.theta1_dot_max)).collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart
-                .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1)))
-                .map_err(|e| err(&e))?
-                .label(ic.name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1))).map_err(|e| err(&e))?;
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))).map_err(|e| err(&e))?;
-        }
-        if m == 0 {
-            plot::legend_upper_right(&mut chart).map_err(|e| err(&e))?;
         }
     }
     root.present().map_err(|e| err(&e))

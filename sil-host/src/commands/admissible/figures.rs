@@ -2,15 +2,13 @@
 
 use super::summary::fmt_intervals;
 use crate::error::CliError;
+use crate::plot::{
+    axis::NiceAxis,
+    chart::{Frame, frame_chart},
+};
 use analyses::admissible::{AdmissibleReport, p_on_belt};
 use plotters::prelude::*;
 use shared::{Arm, ElbowBranch, SlipDirection};
-
-/// Tick label with two decimals and no "-0.00".
-pub(crate) fn tick_label(x: &f64) -> String {
-    let x = if x.abs() < 1e-9 { 0.0 } else { *x };
-    format!("{x:.2}")
-}
 
 /// Largest `|p|` (1/kg) shown in `admissible.svg`; larger values are clamped.
 pub(crate) const P_PLOT_MAX: f64 = 1e6;
@@ -53,11 +51,15 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let clamp = |p: f64| p.clamp(ymin, ymax);
     let (x0, x1) = (-r.reach * 1.03, r.reach * 1.03);
 
-    let root = SVGBackend::new(path, (960, 780)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| perr(e.to_string()))?;
-    let root = root
-        .titled(&format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu), ("sans-serif", 20))
-        .map_err(|e| perr(e.to_string()))?;
+    let root = crate::plot::svg_canvas(path, (960, 780)).map_err(&perr)?;
+    let (top, root) = root.split_vertically(40);
+    crate::plot::draw_title(
+        &top,
+        &format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu),
+        20.0,
+        10,
+    )
+    .map_err(&perr)?;
     let (panels_area, note_area) = root.split_vertically(root.dim_in_pixel().1.saturating_sub(24));
     let areas = panels_area.split_evenly((2, 1));
     let line_color = RGBColor(31, 119, 180);
@@ -65,23 +67,9 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     for ((branch, pts), area) in panels.iter().zip(areas.iter()) {
         let iv = r.intervals(*branch, dir);
         let caption = format!("elbow {}: p > 0 (shaded) for z_t in {} m", branch.name(), fmt_intervals(iv));
-        let mut chart = ChartBuilder::on(area)
-            .caption(caption, ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, ymin..ymax)
-            .map_err(|e| perr(e.to_string()))?;
-        chart
-            .configure_mesh()
-            .max_light_lines(0)
-            .x_label_formatter(&tick_label)
-            .x_desc("z_t (m)")
-            .y_desc("p (1/kg)")
-            .label_style(("sans-serif", 13))
-            .axis_desc_style(("sans-serif", 15))
-            .draw()
-            .map_err(|e| perr(e.to_string()))?;
+        let frame =
+            Frame { x_desc: "z_t (m)", y_desc: "p (1/kg)", x_tick_labels: true, caption: Some(&caption), margin_top: 6, y_area: None };
+        let mut chart = frame_chart(area, NiceAxis::new(x0..x1, 9), NiceAxis::new(ymin..ymax, 6), &frame).map_err(&perr)?;
         chart
             .draw_series(iv.iter().map(|i| Rectangle::new([(i.lo, ymin), (i.hi, ymax)], shade.filled())))
             .map_err(|e| perr(e.to_string()))?;

@@ -1,6 +1,12 @@
 //! The figure of `sil-host modes`: the mode map with the curves `b = 0`, `p = 0` and `z_r_dot = 0` (`modes.svg`).
 
-use crate::error::CliError;
+use crate::{
+    error::CliError,
+    plot::{
+        axis::NiceAxis,
+        chart::{Frame, frame_chart},
+    },
+};
 use analyses::modes::*;
 use plotters::prelude::*;
 use shared::ContactMode;
@@ -75,22 +81,19 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
         }
     };
 
-    let root = SVGBackend::new(path, (1100, 700)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| perr(e.to_string()))?;
+    let root = crate::plot::svg_canvas(path, (1100, 700)).map_err(|e| perr(e.to_string()))?;
     let title = format!(
         "Contact modes on the belt (paper Fig. 2): mu = {}, v_belt = {} m/s, u = 0, {}",
         map.params.mu,
         map.params.v_belt,
         branch_label(map)
     );
-    let root = root.titled(&title, ("sans-serif", 18)).map_err(|e| perr(e.to_string()))?;
-    let (left, right) = root.split_horizontally(800);
-    let mut chart = ChartBuilder::on(&left)
-        .margin(10)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(|e| perr(e.to_string()))?;
+    let (top, root) = root.split_vertically(36);
+    crate::plot::draw_title(&top, &title, 18.0, 8).map_err(|e| perr(e.to_string()))?;
+    let (left, right) = root.split_horizontally(790);
+    let frame =
+        Frame { x_desc: "theta1 (deg)", y_desc: "theta1_dot (rad/s)", x_tick_labels: true, caption: None, margin_top: 8, y_area: None };
+    let mut chart = frame_chart(&left, NiceAxis::new(x0..x1, 9), NiceAxis::new(y0..y1, 11), &frame).map_err(|e| perr(e.to_string()))?;
 
     // Cells, run-length merged along theta1 within each theta1_dot row.
     let mut rects = Vec::new();
@@ -107,15 +110,6 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
         }
     }
     chart.draw_series(rects).map_err(|e| perr(e.to_string()))?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc("theta1 (deg)")
-        .y_desc("theta1_dot (rad/s)")
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .draw()
-        .map_err(|e| perr(e.to_string()))?;
 
     let zr_style = RGBColor(80, 80, 80).stroke_width(2);
     for line in &map.zr_zero {

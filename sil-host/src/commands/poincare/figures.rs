@@ -2,7 +2,11 @@
 
 use crate::{
     error::CliError,
-    plot::{self, colors, plot_err},
+    plot::{
+        self, colors,
+        legend::{Legend, Swatch},
+        plot_err,
+    },
 };
 use analyses::poincare::{PoincareConfig, PointResult, classify::Class};
 use plotters::prelude::*;
@@ -24,6 +28,68 @@ pub(crate) fn class_style(r: &PointResult) -> (RGBColor, &'static str) {
     }
 }
 
+/// The y range a diagram shows: all its points, except a few at either end set
+/// apart from the rest by a gap wider than a fifth of the whole span (within the
+/// lowest or highest 5 % of the points: an equilibrium far below a chaotic band),
+/// padded by 5 %. Points outside it are drawn at its edge as triangles.
+pub(crate) fn bulk_range(values: &[f64]) -> (f64, f64) {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (-1.0, 1.0);
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let span = v[n - 1] - v[0];
+    let tail = ((n as f64) * 0.05).ceil() as usize;
+    let (mut lo, mut hi) = (v[0], v[n - 1]);
+    for i in 0..tail.min(n - 1) {
+        if v[i + 1] - v[i] > 0.2 * span {
+            lo = v[i + 1];
+        }
+        let j = n - 1 - i;
+        if v[j] - v[j - 1] > 0.2 * span {
+            hi = v[j - 1];
+        }
+    }
+    let pad = ((hi - lo) * 0.05).max(0.5);
+    (lo - pad, hi + pad)
+}
+
+/// Draws the points `(x, y, colour, label)` on `chart`, one series per label, and
+/// those outside `y_range` as triangles at its edge; returns the legend.
+fn draw_classes<DB: DrawingBackend>(
+    chart: &mut plot::XyChart<'_, DB>,
+    pts: &[(f64, f64, RGBColor, &'static str)],
+    y_range: (f64, f64),
+    radius: i32,
+) -> Result<Legend, String> {
+    let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    let mut legend = Legend::default();
+    let inside = |y: f64| y >= y_range.0 && y <= y_range.1;
+    for label in labels {
+        let color = pts.iter().find(|p| p.3 == label).map_or(BLACK, |p| p.2);
+        let series = pts.iter().filter(|p| p.3 == label && inside(p.1)).map(|p| Circle::new((p.0, p.1), radius, color.filled()));
+        chart.draw_series(series).map_err(|e| e.to_string())?;
+        legend.entries.push((label.to_string(), Swatch::Marker(color)));
+    }
+    let outside: Vec<_> = pts.iter().filter(|p| !inside(p.1)).collect();
+    if !outside.is_empty() {
+        let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        // A triangle 8 px wide, pointing out of the axis, its tip on the edge.
+        let marks = outside.iter().map(|p| {
+            let below = p.1 < y_range.0;
+            let edge = if below { y_range.0 } else { y_range.1 };
+            EmptyElement::at((p.0, edge))
+                + Polygon::new(if below { vec![(-4, -7), (4, -7), (0, 0)] } else { vec![(-4, 7), (4, 7), (0, 0)] }, p.2.filled())
+        });
+        chart.draw_series(marks).map_err(|e| e.to_string())?;
+        legend.entries.push((format!("{} outside the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), Swatch::Triangle(BLACK)));
+    }
+    Ok(legend)
+}
+
 pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &[PointResult]) -> Result<(), CliError> {
     let err = plot_err(path);
     let v_lo = results.first().map_or(-1.0, |r| r.v_belt);
@@ -42,41 +108,45 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
             pts.extend(r.crossings.iter().map(|x| (r.v_belt, x.x[0].to_degrees(), c, label)));
         }
     }
-    let (mut lo, mut hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
-    if !lo.is_finite() {
-        (lo, hi) = (-1.0, 1.0);
-    }
+    let (lo, hi) = bulk_range(&pts.iter().map(|p| p.1).collect::<Vec<_>>());
     // One marker per pixel row and belt speed (the figure is 750 px high): a
     // periodic orbit repeats its points hundreds of times.
     let resolution = (hi - lo).max(1e-9) / 1500.0;
     pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     pts.dedup_by(|b, a| a.0 == b.0 && (b.1 - a.1).abs() < resolution);
-    let ypad = ((hi - lo) * 0.05).max(0.5);
-    let root = SVGBackend::new(path, (1200, 750)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let root = plot::svg_canvas(path, (1200, 750)).map_err(|e| err(&e))?;
+    let (top, body) = root.split_vertically(44);
     let title = format!("Poincare section theta1_dot = 0 (upward), open loop, mu = {}, from {x0_name}", cfg.mu);
+    plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
+    // The legend's width is known only once the classes are: lay it out from them.
+    let probe = legend_of(&pts, (lo, hi));
+    let (chart_area, legend_area) = body.split_horizontally(1200 - probe.column_width() - 10);
     let axes = plot::Axes {
-        caption: Some((title, 22)),
+        caption: None,
         x: (v_lo - pad)..(v_hi + pad),
-        y: (lo - ypad)..(hi + ypad),
+        y: lo..hi,
         x_desc: "v_belt (m/s)",
         y_desc: "theta1 at the section (deg)",
-        x_label_area: 45,
-        y_label_area: 70,
-        margin: 12,
     };
-    let mut chart = plot::xy_chart(&root, &axes).map_err(|e| err(&e))?;
+    let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
+    let legend = draw_classes(&mut chart, &pts, (lo, hi), 1).map_err(|e| err(&e))?;
+    legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// The legend [`draw_classes`] will give for `pts` in `y_range`, to size its column.
+fn legend_of(pts: &[(f64, f64, RGBColor, &'static str)], y_range: (f64, f64)) -> Legend {
     let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
     labels.sort_unstable();
     labels.dedup();
-    for label in labels {
-        let color = pts.iter().find(|p| p.3 == label).map_or(BLACK, |p| p.2);
-        let series = pts.iter().filter(|p| p.3 == label).map(|p| Circle::new((p.0, p.1), 1, color.filled()));
-        chart.draw_series(series).map_err(|e| err(&e))?.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+    let mut legend = Legend::new(labels.into_iter().map(|l| (l.to_string(), Swatch::Marker(BLACK))).collect());
+    let outside: Vec<f64> = pts.iter().map(|p| p.1).filter(|y| *y < y_range.0 || *y > y_range.1).collect();
+    if !outside.is_empty() {
+        let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
+        legend.entries.push((format!("{} outside the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), Swatch::Triangle(BLACK)));
     }
-    plot::legend_upper_right(&mut chart).map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    legend
 }
 
 pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointResult]) -> Result<(), CliError> {
@@ -96,39 +166,36 @@ pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointR
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
     let ypad = (hi - lo) * 0.05;
-    let root = SVGBackend::new(path, (1200, 500)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let (lo, hi) = (lo - ypad, hi + ypad);
+    let root = plot::svg_canvas(path, (1200, 500)).map_err(|e| err(&e))?;
+    let (top, body) = root.split_vertically(40);
     let title = format!("largest Lyapunov exponent of the section map, mu = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
-    let axes = plot::Axes {
-        caption: Some((title, 20)),
-        x: (v_lo - pad)..(v_hi + pad),
-        y: (lo - ypad)..(hi + ypad),
-        x_desc: "v_belt (m/s)",
-        y_desc: "lambda per crossing",
-        x_label_area: 45,
-        y_label_area: 70,
-        margin: 12,
-    };
-    let mut chart = plot::xy_chart(&root, &axes).map_err(|e| err(&e))?;
+    plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
+    let probe = legend_of(&pts, (lo, hi));
+    let (chart_area, legend_area) = body.split_horizontally(1200 - probe.column_width() - 10);
+    let axes =
+        plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: "v_belt (m/s)", y_desc: "lambda per crossing (-)" };
+    let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
-    let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
-    labels.sort_unstable();
-    labels.dedup();
-    for label in labels {
-        let color = pts.iter().find(|p| p.3 == label).map_or(BLACK, |p| p.2);
-        chart
-            .draw_series(pts.iter().filter(|p| p.3 == label).map(|p| Circle::new((p.0, p.1), 2, color.filled())))
-            .map_err(|e| err(&e))?
-            .label(label)
-            .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(|e| err(&e))?;
+    let legend = draw_classes(&mut chart, &pts, (lo, hi), 2).map_err(|e| err(&e))?;
+    legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bulk_range;
+
+    #[test]
+    fn a_few_points_far_from_the_rest_fall_outside_and_a_continuous_band_stays_whole() {
+        // A chaotic band from 28 to 68 deg and three equilibria at -17 deg.
+        let mut v: Vec<f64> = (0..400).map(|i| 28.0 + 40.0 * i as f64 / 399.0).collect();
+        v.extend([-17.4, -17.3, -17.2]);
+        let (lo, hi) = bulk_range(&v);
+        assert!(lo > -17.0 && lo < 28.0 && hi >= 68.0, "{lo} {hi}");
+        // Without the outliers the whole band is shown.
+        let (lo, hi) = bulk_range(&v[..400]);
+        assert!(lo <= 28.0 && hi >= 68.0);
+    }
 }

@@ -5,23 +5,34 @@ use std::path::Path;
 
 use analyses::sensitivity::{ChoiceResult, Dimension, Study};
 use analyses::zmax::Combination;
-use plotters::prelude::*;
+use plotters::{coord::Shift, prelude::*};
 
 use crate::error::CliError;
-use crate::plot::{Axes, legend_upper_right, plot_err, xy_chart};
+use crate::plot::{
+    self,
+    axis::{CategoryAxis, NiceAxis},
+    chart::{Frame, frame_chart},
+    colors,
+    legend::{Legend, Swatch},
+    plot_err,
+};
 
 /// A series of a figure: its label, its value under a choice (given the series'
 /// index), and that index.
 pub type SeriesOf = (String, fn(&ChoiceResult, usize) -> Option<f64>, usize);
 
-/// One figure: its file, title, y label, and its series (name and value under a choice).
+/// One figure: its file, title, value axis, and its series (name and value under a choice).
 pub struct Figure {
     /// File name.
     pub file: &'static str,
     /// Title.
     pub title: &'static str,
-    /// Y-axis label with units.
-    pub y_desc: &'static str,
+    /// The value axis's description with units.
+    pub value_desc: &'static str,
+    /// A value that is a category (`0` no, `1` yes): its names by value.
+    pub value_names: Option<&'static [&'static str]>,
+    /// Whether the value counts something (ticks on whole numbers).
+    pub count: bool,
     /// The series: a label and the value under a choice (`None`: not computed, or no value).
     pub series: fn() -> Vec<SeriesOf>,
 }
@@ -35,7 +46,9 @@ pub const FIGURES: [Figure; 5] = [
     Figure {
         file: "critical_mu.svg",
         title: "critical mu (open loop)",
-        y_desc: "critical mu",
+        value_desc: "critical mu (-)",
+        value_names: None,
+        count: false,
         series: || {
             vec![
                 ("x0a".into(), |r, _| open(r, |o| o.critical_mu_x0a).flatten().or(r.open_loop.as_ref().map(|_| f64::NAN)), 0),
@@ -46,7 +59,9 @@ pub const FIGURES: [Figure; 5] = [
     Figure {
         file: "band_mu06_x0a.svg",
         title: "persistent bouncing at mu = 0.6 from x0a: main interval (open loop)",
-        y_desc: "v_belt (m/s)",
+        value_desc: "v_belt (m/s)",
+        value_names: None,
+        count: false,
         series: || {
             vec![
                 ("from".into(), |r, _| open(r, |o| o.band_x0a_mu06.map(|b| b[0])).flatten(), 0),
@@ -56,14 +71,18 @@ pub const FIGURES: [Figure; 5] = [
     },
     Figure {
         file: "x0d_bounces.svg",
-        title: "does x0d ever bounce? (open loop; 1 = yes)",
-        y_desc: "bounces (0/1)",
+        title: "does x0d ever bounce? (open loop)",
+        value_desc: "x0d bounces at some (v_belt, mu)",
+        value_names: Some(&["no", "yes"]),
+        count: false,
         series: || vec![("x0d".into(), |r, _| open(r, |o| if o.x0d_bounces { 1.0 } else { 0.0 }), 0)],
     },
     Figure {
         file: "zt_sliding.svg",
         title: "Z_t,sliding of the four paper cases, ideal and sampled",
-        y_desc: "Z_t,sliding (m)",
+        value_desc: "Z_t,sliding (m)",
+        value_names: None,
+        count: false,
         series: || {
             Combination::all()
                 .into_iter()
@@ -79,7 +98,9 @@ pub const FIGURES: [Figure; 5] = [
     Figure {
         file: "hybrid_closed_loop.svg",
         title: "hybrid closed loop from x0d at mu = 0.6: how the belt speeds' runs ended",
-        y_desc: "belt speeds",
+        value_desc: "belt speeds (of the sweep's)",
+        value_names: None,
+        count: true,
         series: || {
             vec![
                 ("lift-off".into(), |r, _| r.closed_loop.as_ref().map(|c| c.lift_off_points as f64), 0),
@@ -90,7 +111,9 @@ pub const FIGURES: [Figure; 5] = [
     },
 ];
 
-/// Draws `fig` of `study` at `path`: a panel per dimension with at least one value.
+/// Draws `fig` of `study` at `path`: a panel per dimension with at least one
+/// value, its choices on a categorical axis (the default starred, top down), the
+/// result on the other; series side by side in each row, one legend above.
 ///
 /// # Errors
 /// [`CliError::Plot`].
@@ -101,59 +124,87 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         .into_iter()
         .filter(|d| study.results.iter().filter(|r| r.choice.dimension == *d).any(|r| series.iter().any(|(_, f, i)| f(r, *i).is_some())))
         .collect();
-    let cols = 3usize;
-    let rows = dims.len().div_ceil(cols).max(1);
-    let root = SVGBackend::new(path, (1500, 60 + 330 * rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let (title, body) = root.split_vertically(50);
-    title.titled(fig.title, ("sans-serif", 24)).map_err(|e| err(&e))?;
-    let panels = body.split_evenly((rows, cols));
-    let colors = [RED, BLUE, GREEN, MAGENTA, CYAN, RGBColor(200, 120, 0), RGBColor(90, 90, 90), BLACK];
-    for (dim, area) in dims.iter().zip(panels.iter()) {
-        let of: Vec<&ChoiceResult> = study.results.iter().filter(|r| r.choice.dimension == *dim).collect();
-        let values: Vec<f64> = of.iter().flat_map(|r| series.iter().filter_map(|(_, f, i)| f(r, *i))).filter(|v| v.is_finite()).collect();
-        let (lo, hi) = values.iter().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-        let (lo, hi) = if values.is_empty() {
-            (0.0, 1.0)
-        } else if hi - lo < 1e-9 {
-            (lo - 0.5 * lo.abs().max(0.1), hi + 0.5 * hi.abs().max(0.1))
-        } else {
-            (lo - 0.08 * (hi - lo), hi + 0.08 * (hi - lo))
-        };
-        let n = of.len() as f64;
-        let axes = Axes {
-            caption: Some((dim.label().to_string(), 16)),
-            x: -0.5..n - 0.5,
-            y: lo..hi,
-            x_desc: "",
-            y_desc: fig.y_desc,
-            x_label_area: 60,
-            y_label_area: 60,
-            margin: 8,
-        };
-        let mut chart = xy_chart(area, &axes).map_err(|e| err(&e))?;
-        // The values' names under the axis, the default starred.
-        for (k, r) in of.iter().enumerate() {
-            let label = format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" });
-            chart
-                .draw_series(std::iter::once(Text::new(label, (k as f64 - 0.3, lo), ("sans-serif", 11).into_font())))
-                .map_err(|e| err(&e))?;
-        }
-        for (s, (name, f, i)) in series.iter().enumerate() {
-            let color = colors[s % colors.len()];
-            let pts: Vec<(f64, f64)> =
-                of.iter().enumerate().filter_map(|(k, r)| f(r, *i).filter(|v| v.is_finite()).map(|v| (k as f64, v))).collect();
-            chart
-                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(1)))
-                .map_err(|e| err(&e))?
-                .label(name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2)));
-            chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, color.filled()))).map_err(|e| err(&e))?;
-        }
-        if series.len() > 1 && dims.first() == Some(dim) {
-            legend_upper_right(&mut chart).map_err(|e| err(&e))?;
+    let cols = 2usize;
+    let width = 1400u32;
+    let legend =
+        Legend::new(series.iter().enumerate().map(|(s, (name, _, _))| (name.clone(), Swatch::Marker(colors::CYCLE[s % 10]))).collect());
+    let legend_h = if series.len() > 1 { legend.rows_height(width) } else { 0 };
+    // Each row of panels as high as its longest list of choices.
+    let choices_of = |d: &Dimension| study.results.iter().filter(|r| r.choice.dimension == *d).count() as u32;
+    let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 90 + 24 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
+    let title_h = 44;
+    let height = title_h + legend_h + row_heights.iter().sum::<u32>().max(100);
+    let root = plot::svg_canvas(path, (width, height)).map_err(|e| err(&e))?;
+    let (top, rest) = root.split_vertically(title_h);
+    plot::draw_title(&top, fig.title, 24.0, 10).map_err(|e| err(&e))?;
+    let (legend_area, body) = rest.split_vertically(legend_h);
+    if series.len() > 1 {
+        legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    }
+    let mut breaks = Vec::new();
+    let mut y = 0;
+    for h in &row_heights {
+        y += h;
+        breaks.push(y);
+    }
+    breaks.pop();
+    let rows = body.split_by_breakpoints([] as [u32; 0], breaks);
+    for (row_dims, row_area) in dims.chunks(cols).zip(rows.iter()) {
+        let halves = row_area.split_evenly((1, cols));
+        for (dim, area) in row_dims.iter().zip(halves.iter()) {
+            draw_panel(area, study, fig, &series, *dim).map_err(|e| err(&e))?;
         }
     }
     root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// One dimension's panel: its choices top down, each series' value as a marker,
+/// the series dodged vertically within a choice's row.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    study: &Study,
+    fig: &Figure,
+    series: &[SeriesOf],
+    dim: Dimension,
+) -> Result<(), String> {
+    let of: Vec<&ChoiceResult> = study.results.iter().filter(|r| r.choice.dimension == dim).collect();
+    let names: Vec<String> = of.iter().map(|r| format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" })).collect();
+    let y = CategoryAxis::top_down(names);
+    let frame = Frame { x_desc: fig.value_desc, y_desc: "", x_tick_labels: true, caption: Some(dim.label()), margin_top: 6, y_area: None };
+    let n = series.len() as f64;
+    let dodge = |s: usize| if n > 1.0 { (s as f64 - (n - 1.0) / 2.0) * (0.6 / n) } else { 0.0 };
+    // Rows are drawn top down: a later series sits lower, so the dodge is negated.
+    let points = |s: usize, f: &fn(&ChoiceResult, usize) -> Option<f64>, i: usize| -> Vec<(f64, f64)> {
+        of.iter().enumerate().filter_map(|(k, r)| f(r, i).filter(|v| v.is_finite()).map(|v| (v, k as f64 - dodge(s)))).collect()
+    };
+    let all: Vec<(f64, f64)> = series.iter().enumerate().flat_map(|(s, (_, f, i))| points(s, f, *i)).collect();
+    let marker = |chart_points: Vec<(f64, f64)>, color: RGBColor| chart_points.into_iter().map(move |p| Circle::new(p, 5, color.filled()));
+    if let Some(value_names) = fig.value_names {
+        let x = CategoryAxis::new(value_names.iter().map(|s| s.to_string()).collect());
+        let mut chart = frame_chart(area, x, y, &frame)?;
+        for (s, (_, f, i)) in series.iter().enumerate() {
+            chart.draw_series(marker(points(s, f, *i), colors::CYCLE[s % 10])).map_err(|e| e.to_string())?;
+        }
+        return Ok(());
+    }
+    let (lo, hi) = all.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (lo, hi) = if all.is_empty() {
+        (0.0, 1.0)
+    } else if hi - lo < 1e-9 {
+        (lo - 0.5 * lo.abs().max(0.1), hi + 0.5 * hi.abs().max(0.1))
+    } else {
+        (lo - 0.08 * (hi - lo), hi + 0.08 * (hi - lo))
+    };
+    let (lo, hi) = if fig.count { (lo.min(-0.5), hi.max(1.5)) } else { (lo, hi) };
+    let (w, _) = area.dim_in_pixel();
+    let mut x = NiceAxis::new(lo..hi, (w / 90).clamp(3, 8) as usize);
+    if fig.count {
+        x = x.with_min_step(1.0);
+    }
+    let mut chart = frame_chart(area, x, y, &frame)?;
+    for (s, (_, f, i)) in series.iter().enumerate() {
+        chart.draw_series(marker(points(s, f, *i), colors::CYCLE[s % 10])).map_err(|e| e.to_string())?;
+    }
     Ok(())
 }

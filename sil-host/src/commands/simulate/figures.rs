@@ -33,16 +33,12 @@ pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &st
     let [z_t, z_n, f_n, mode] = trace.curves.each_ref().map(Envelope::points);
     let belt = -params.h;
     let panels = [
-        Panel { y_label: "z_t (m)", series: vec![Series { label: "z_t", points: z_t, color: colors::BLUE, step: false }], y_range: None },
-        Panel {
-            y_label: "z_n (m)",
-            series: vec![
-                Series { label: "z_n", points: z_n, color: colors::ORANGE, step: false },
-                Series { label: "belt -H", points: vec![(0.0, belt), (t_end, belt)], color: colors::GREY, step: false },
-            ],
-            y_range: None,
-        },
-        Panel { y_label: "f_n (N)", series: vec![Series { label: "f_n", points: f_n, color: colors::GREEN, step: false }], y_range: None },
+        Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE)]),
+        Panel::numeric(
+            "z_n (m)",
+            vec![Series::line("z_n", z_n, colors::ORANGE), Series::line("belt -H", vec![(0.0, belt), (t_end, belt)], colors::GREY)],
+        ),
+        Panel::numeric("f_n (N)", vec![Series::line("f_n", f_n, colors::GREEN)]),
         plot::mode_panel_of_points(mode),
     ];
     let title = format!("open loop from {name}: mu = {}, v_belt = {} m/s", params.mu, params.v_belt);

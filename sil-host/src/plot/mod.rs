@@ -1,0 +1,95 @@
+//! Figures fit for a paper, drawn with plotters into SVG files: the canvas and
+//! its font, axes with round ticks or category names, legends outside the data,
+//! stacked time-series panels, and the frame every x-y chart of the commands
+//! shares.
+//!
+//! Why plotters: it is pure Rust, writes SVG without a runtime, and is the most
+//! used plotting crate on crates.io; what it lacks for a paper (round tick labels,
+//! categorical axes, legends that measure their text) is here, on its public
+//! traits. The rules every figure keeps (no text outside the canvas, no two texts
+//! overlapping, no `-0.0`, units on every numeric axis) are checked by
+//! `tests/tests/figures.rs` on every figure `sil-host report` writes.
+
+pub mod axis;
+pub mod chart;
+pub mod colors;
+pub mod font;
+pub mod history;
+pub mod legend;
+pub mod time_panels;
+
+use std::{ops::Range, path::Path};
+
+use plotters::{coord::Shift, prelude::*};
+
+pub use history::{HistoryEnvelope, HistorySample, MODE_NAMES, history_panels, mode_code, mode_panel, mode_panel_of_points};
+pub use time_panels::{Panel, Series, decimate, time_panels};
+
+use crate::error::CliError;
+use axis::NiceAxis;
+use chart::{Frame, frame_chart};
+use font::FAMILY;
+use legend::text_size;
+
+/// The error of drawing the figure at `path`, as a [`CliError::Plot`].
+pub fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
+    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// A white SVG canvas of `size` px (width, height) writing to `path`, with the
+/// figures' font registered ([`font::register`]).
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn svg_canvas(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
+    font::register();
+    let root = SVGBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    Ok(root)
+}
+
+/// Draws `title` centred at the top of `area`, `top` px down, at plotters' font
+/// size `px` or smaller so that it fits the width with 10 px either side.
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn draw_title<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, px: f64, top: i32) -> Result<(), String> {
+    let width = area.dim_in_pixel().0 as f64 - 20.0;
+    let mut size = px;
+    while size > 8.0 && text_size(title, size).0 as f64 > width {
+        size -= 1.0;
+    }
+    let style = TextStyle::from((FAMILY, size).into_font())
+        .pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Center, plotters::style::text_anchor::VPos::Top));
+    area.draw_text(title, &style, (area.dim_in_pixel().0 as i32 / 2, top)).map_err(|e| e.to_string())
+}
+
+/// An x-y chart of `f64` against `f64` on round-valued axes.
+pub type XyChart<'a, DB> = chart::Chart<'a, DB, NiceAxis>;
+
+/// The axes of an [`xy_chart`].
+pub struct Axes<'s> {
+    /// Caption above the chart, if any.
+    pub caption: Option<&'s str>,
+    /// X range, in the x unit.
+    pub x: Range<f64>,
+    /// Y range, in the y unit.
+    pub y: Range<f64>,
+    /// X-axis description with units.
+    pub x_desc: &'s str,
+    /// Y-axis description with units.
+    pub y_desc: &'s str,
+}
+
+/// A chart on `area` with `axes` (round ticks, about one per 90 px across and 40 px
+/// up), its mesh drawn.
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn xy_chart<'a, DB: DrawingBackend>(area: &'a DrawingArea<DB, Shift>, axes: &Axes) -> Result<XyChart<'a, DB>, String> {
+    let (w, h) = area.dim_in_pixel();
+    let x = NiceAxis::new(axes.x.clone(), (w / 90).clamp(3, 12) as usize);
+    let y = NiceAxis::new(axes.y.clone(), (h / 40).clamp(3, 10) as usize);
+    let frame = Frame { x_desc: axes.x_desc, y_desc: axes.y_desc, x_tick_labels: true, caption: axes.caption, margin_top: 8, y_area: None };
+    frame_chart(area, x, y, &frame)
+}

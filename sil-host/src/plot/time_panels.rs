@@ -1,0 +1,256 @@
+//! Stacked time-series panels against a shared time axis (`simulate`, `run`,
+//! `pil`, `zmax`): one chart per signal, its legend in a column beside it, the
+//! time axis labelled under the last panel only. A panel whose curves are all one
+//! constant (an open-loop bounce has `f_n = 0` and flight between instantaneous
+//! impacts) carries no picture: it is left out and said in a note under the title.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::{
+    axis::{CategoryAxis, NiceAxis},
+    chart::{Frame, TickLabels, frame_chart, y_label_area},
+    font::FAMILY,
+    legend::{Legend, Swatch},
+    plot_err, svg_canvas,
+};
+use crate::error::CliError;
+
+/// One curve of a panel.
+pub struct Series<'a> {
+    /// Legend label.
+    pub label: &'a str,
+    /// Points `(t, value)`: t in s, value in the panel's unit.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Draw as a step function (a zero-order hold, a discrete signal such as the contact mode).
+    pub step: bool,
+}
+
+/// One panel: a y-axis label and its curves.
+pub struct Panel<'a> {
+    /// Y-axis description with units, `name (unit)`.
+    pub y_label: &'a str,
+    /// The curves.
+    pub series: Vec<Series<'a>>,
+    /// Optional fixed y-range (in the panel's unit).
+    pub y_range: Option<(f64, f64)>,
+    /// A categorical y axis: the value `i` is drawn as `categories[i]`.
+    pub categories: Option<&'static [&'static str]>,
+}
+
+impl<'a> Panel<'a> {
+    /// A numeric panel of `series` under `y_label` (`name (unit)`), its y range from the data.
+    pub fn numeric(y_label: &'a str, series: Vec<Series<'a>>) -> Self {
+        Self { y_label, series, y_range: None, categories: None }
+    }
+}
+
+impl<'a> Series<'a> {
+    /// A curve drawn as a line between its points.
+    pub fn line(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label, points, color, step: false }
+    }
+}
+
+/// Keeps at most about `max_points` points of a series, preserving each bucket's
+/// minimum and maximum (so spikes such as impacts stay visible).
+pub fn decimate(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
+    if points.len() <= max_points || max_points < 4 {
+        return points.to_vec();
+    }
+    let buckets = max_points / 2;
+    let per = points.len().div_ceil(buckets);
+    let mut out = Vec::with_capacity(max_points + 2);
+    for chunk in points.chunks(per) {
+        let (mut lo, mut hi) = (chunk[0], chunk[0]);
+        for &p in chunk {
+            if p.1 < lo.1 {
+                lo = p;
+            }
+            if p.1 > hi.1 {
+                hi = p;
+            }
+        }
+        if lo.0 <= hi.0 {
+            out.push(lo);
+            out.push(hi);
+        } else {
+            out.push(hi);
+            out.push(lo);
+        }
+    }
+    out
+}
+
+/// The finite values' range of a panel's curves, `None` when it has none.
+fn value_range(panel: &Panel) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for s in &panel.series {
+        for &(_, y) in &s.points {
+            if y.is_finite() {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+    }
+    lo.is_finite().then_some((lo, hi))
+}
+
+/// The panel's y range: its fixed range, or its values' range padded by 5 %
+/// (a constant curve gets a unit around it).
+fn y_range(panel: &Panel) -> (f64, f64) {
+    if let Some(r) = panel.y_range {
+        return r;
+    }
+    let Some((lo, hi)) = value_range(panel) else { return (-1.0, 1.0) };
+    let pad = if hi > lo { (hi - lo) * 0.05 } else { 0.5 * hi.abs().max(1.0) };
+    (lo - pad, hi + pad)
+}
+
+/// What a constant panel says in the note: `f_n = 0 N throughout`, `contact mode:
+/// flight throughout`; `None` when the panel's curves vary.
+fn constant_note(panel: &Panel) -> Option<String> {
+    let (lo, hi) = match value_range(panel) {
+        Some(r) => r,
+        None => return Some(format!("{}: no finite value", panel.y_label)),
+    };
+    if hi > lo {
+        return None;
+    }
+    if let Some(names) = panel.categories {
+        let name = names.get(lo.round().max(0.0) as usize).copied().unwrap_or("?");
+        return Some(format!("{}: {name} throughout", panel.y_label));
+    }
+    let (name, unit) = match panel.y_label.split_once(" (") {
+        Some((n, u)) => (n, format!(" {}", u.trim_end_matches(')'))),
+        None => (panel.y_label, String::new()),
+    };
+    let v = if lo == 0.0 { "0".to_string() } else { format!("{lo:.4}") };
+    Some(format!("{name} = {v}{unit} throughout"))
+}
+
+/// The points drawn for a series: decimated, as steps when asked, finite only.
+fn drawn_points(s: &Series) -> Vec<(f64, f64)> {
+    let pts = decimate(&s.points, 4000);
+    let drawn = if s.step {
+        let mut v = Vec::with_capacity(pts.len() * 2);
+        for w in pts.windows(2) {
+            v.push(w[0]);
+            v.push((w[1].0, w[0].1));
+        }
+        if let Some(&last) = pts.last() {
+            v.push(last);
+        }
+        v
+    } else {
+        pts
+    };
+    drawn.into_iter().filter(|p| p.1.is_finite()).collect()
+}
+
+/// Draws `panels` stacked vertically against a shared time axis `t_range` (s)
+/// into an SVG file at `path`, under `title`. Constant panels are left out and
+/// named in a note under the title (at least one panel is drawn).
+///
+/// # Errors
+/// [`CliError::Plot`] when plotters fails (e.g. the file cannot be written).
+pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), CliError> {
+    let err = plot_err(path);
+    let notes: Vec<Option<String>> = panels.iter().map(constant_note).collect();
+    let mut shown: Vec<&Panel> = panels.iter().zip(&notes).filter(|(_, n)| n.is_none()).map(|(p, _)| p).collect();
+    if shown.is_empty() {
+        shown = panels.iter().take(1).collect();
+    }
+    let note: Vec<&str> = notes.iter().flatten().map(String::as_str).collect();
+    let legends: Vec<Legend> =
+        shown.iter().map(|p| Legend::new(p.series.iter().map(|s| (s.label.to_string(), Swatch::Line(s.color))).collect())).collect();
+    let legend_w = legends.iter().map(Legend::column_width).max().unwrap_or(0) + 10;
+    let width = 1100u32;
+    let head = 48 + if note.is_empty() { 0 } else { 24 };
+    let panel_h = 210u32;
+    let height = head + panel_h * shown.len() as u32 + 30;
+    let root = svg_canvas(path, (width, height)).map_err(|e| err(&e))?;
+    let (top, body) = root.split_vertically(head);
+    super::draw_title(&top, title, 22.0, 8).map_err(|e| err(&e))?;
+    if !note.is_empty() {
+        let text = format!("not drawn, constant: {}", note.join("; "));
+        let grey = BLACK.mix(0.75);
+        let style = TextStyle::from((FAMILY, 14.0).into_font()).color(&grey);
+        top.draw_text(&text, &style, (16, 44)).map_err(|e| err(&e.to_string()))?;
+    }
+    let mut heights: Vec<u32> = vec![panel_h; shown.len()];
+    if let Some(last) = heights.last_mut() {
+        *last += 30;
+    }
+    let mut breaks = Vec::with_capacity(heights.len());
+    let mut y = 0u32;
+    for h in &heights[..heights.len() - 1] {
+        y += h;
+        breaks.push(y);
+    }
+    let areas = body.split_by_breakpoints([] as [u32; 0], breaks);
+    // One y label area for all panels, so that their time axes line up.
+    let y_area = shown
+        .iter()
+        .map(|p| {
+            let labels = match y_axis(p) {
+                YAxis::Categories(y) => y.tick_labels(),
+                YAxis::Numeric(y) => y.tick_labels(),
+            };
+            y_label_area(&labels, p.y_label)
+        })
+        .max()
+        .unwrap_or(0);
+    for (i, ((panel, legend), area)) in shown.iter().zip(&legends).zip(areas.iter()).enumerate() {
+        let last = i + 1 == shown.len();
+        let (chart_area, legend_area) = area.split_horizontally(width - legend_w);
+        let frame = Frame {
+            x_desc: if last { "t (s)" } else { "" },
+            y_desc: panel.y_label,
+            x_tick_labels: last,
+            caption: None,
+            margin_top: 8,
+            y_area: Some(y_area),
+        };
+        let x = NiceAxis::new(t_range.0..t_range.1, 12);
+        let drawn = match y_axis(panel) {
+            YAxis::Categories(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
+            YAxis::Numeric(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
+        };
+        drawn.map_err(|e| err(&e))?;
+        legend.draw_column(&legend_area.margin(8, 0, 0, 0)).map_err(|e| err(&e))?;
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// A panel's y axis.
+enum YAxis {
+    Numeric(NiceAxis),
+    Categories(CategoryAxis),
+}
+
+fn y_axis(panel: &Panel) -> YAxis {
+    match panel.categories {
+        Some(names) => YAxis::Categories(CategoryAxis::new(names.iter().map(|s| s.to_string()).collect())),
+        None => {
+            let (lo, hi) = y_range(panel);
+            YAxis::Numeric(NiceAxis::new(lo..hi, 6))
+        }
+    }
+}
+
+fn draw_series<DB: DrawingBackend, Y>(mut chart: super::chart::Chart<'_, DB, Y>, panel: &Panel) -> Result<(), String>
+where
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    for s in &panel.series {
+        let color = s.color;
+        chart.draw_series(LineSeries::new(drawn_points(s), color.stroke_width(1))).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
