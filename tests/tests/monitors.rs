@@ -285,13 +285,16 @@ fn with_monitors_a_slow_client_after_the_rig_receives_every_sample_in_lockstep()
     // samples that find its buffer full (what it receives is still right). It makes
     // the service itself, with the rig's attributes, so it has subscribed before
     // the run starts.
-    let slower = Client { start: Start::FirstLikeTheRig, per_sample: Duration::from_millis(1), ..slow };
+    // It takes 0.5 s a sample: it loses samples as long as the plant runs faster than
+    // 2 periods a second, 500 times slower than real time (a loaded 2-core machine ran
+    // it at 132 periods a second, faster than a client of 1 ms a sample: issue 27).
+    let slower = Client { start: Start::FirstLikeTheRig, per_sample: Duration::from_millis(500), ..slow };
     let name = rig("lossy");
     let out = dir.path().join("lossy");
     let client = spawn_client(&name, slower);
     assert!(run(&["--rig", &name, "--duration", "2"], &out).status.success());
     let got = client.join().unwrap();
-    // Its first 4 at least; at 1 ms a sample, far fewer than the run's 2000.
+    // Its first 4 at least; at 0.5 s a sample, far fewer than the run's 2000.
     assert!(got.samples.len() >= 4 && got.samples.len() < 2000, "{} samples", got.samples.len());
     assert_eq!(seqs(&got.samples[..4]), [0, 1, 2, 3], "the plant discards the new sample, not the queued ones");
     assert_eq!(check_against_trace(&got.samples, &out), 2000);
