@@ -64,11 +64,6 @@ impl Legend {
         self.entries.iter().map(|(l, _)| Self::entry_width(l)).max().map_or(0, |w| (w + 2 * GAP) as u32)
     }
 
-    /// Height of the legend drawn as a column, px.
-    pub fn column_height(&self) -> u32 {
-        (self.entries.len() as i32 * LINE_H + GAP) as u32
-    }
-
     /// The entries' positions `(x, y)` when packed in rows `width` px wide, from
     /// `(GAP, GAP)`, and the height they take, px.
     fn rows_layout(&self, width: u32) -> (Vec<(i32, i32)>, u32) {

@@ -56,38 +56,25 @@ pub(crate) fn bulk_range(values: &[f64]) -> (f64, f64) {
 }
 
 /// Draws the points `(x, y, colour, label)` on `chart`, one series per label, and
-/// those outside `y_range` as triangles at its edge; returns the legend.
+/// those outside `y_range` as triangles at its edge (their legend: [`legend_of`]).
 fn draw_classes<DB: DrawingBackend>(
     chart: &mut plot::XyChart<'_, DB>,
     pts: &[(f64, f64, RGBColor, &'static str)],
     y_range: (f64, f64),
     radius: i32,
-) -> Result<Legend, String> {
-    let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
-    labels.sort_unstable();
-    labels.dedup();
-    let mut legend = Legend::default();
+) -> Result<(), String> {
     let inside = |y: f64| y >= y_range.0 && y <= y_range.1;
-    for label in labels {
-        let color = pts.iter().find(|p| p.3 == label).map_or(BLACK, |p| p.2);
-        let series = pts.iter().filter(|p| p.3 == label && inside(p.1)).map(|p| Circle::new((p.0, p.1), radius, color.filled()));
-        chart.draw_series(series).map_err(|e| e.to_string())?;
-        legend.entries.push((label.to_string(), Swatch::Marker(color)));
-    }
-    let outside: Vec<_> = pts.iter().filter(|p| !inside(p.1)).collect();
-    if !outside.is_empty() {
-        let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
-        // A triangle 8 px wide, pointing out of the axis, its tip on the edge.
-        let marks = outside.iter().map(|p| {
-            let below = p.1 < y_range.0;
-            let edge = if below { y_range.0 } else { y_range.1 };
-            EmptyElement::at((p.0, edge))
-                + Polygon::new(if below { vec![(-4, -7), (4, -7), (0, 0)] } else { vec![(-4, 7), (4, 7), (0, 0)] }, p.2.filled())
-        });
-        chart.draw_series(marks).map_err(|e| e.to_string())?;
-        legend.entries.push((format!("{} outside the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), Swatch::Triangle(BLACK)));
-    }
-    Ok(legend)
+    let dots = pts.iter().filter(|p| inside(p.1)).map(|p| Circle::new((p.0, p.1), radius, p.2.filled()));
+    chart.draw_series(dots).map_err(|e| e.to_string())?;
+    // A triangle 8 px wide, pointing out of the axis, its tip on the edge.
+    let marks = pts.iter().filter(|p| !inside(p.1)).map(|p| {
+        let below = p.1 < y_range.0;
+        let edge = if below { y_range.0 } else { y_range.1 };
+        EmptyElement::at((p.0, edge))
+            + Polygon::new(if below { vec![(-4, -7), (4, -7), (0, 0)] } else { vec![(-4, 7), (4, 7), (0, 0)] }, p.2.filled())
+    });
+    chart.draw_series(marks).map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str, results: &[PointResult]) -> Result<(), CliError> {
@@ -118,9 +105,8 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
     let (top, body) = root.split_vertically(44);
     let title = format!("Poincare section theta1_dot = 0 (upward), open loop, mu = {}, from {x0_name}", cfg.mu);
     plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
-    // The legend's width is known only once the classes are: lay it out from them.
-    let probe = legend_of(&pts, (lo, hi));
-    let (chart_area, legend_area) = body.split_horizontally(1200 - probe.column_width() - 10);
+    let legend = legend_of(&pts, (lo, hi));
+    let (chart_area, legend_area) = body.split_horizontally(1200 - legend.column_width() - 10);
     let axes = plot::Axes {
         caption: None,
         x: (v_lo - pad)..(v_hi + pad),
@@ -129,18 +115,19 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
         y_desc: "theta1 at the section (deg)",
     };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
-    let legend = draw_classes(&mut chart, &pts, (lo, hi), 1).map_err(|e| err(&e))?;
+    draw_classes(&mut chart, &pts, (lo, hi), 1).map_err(|e| err(&e))?;
     legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
 }
 
-/// The legend [`draw_classes`] will give for `pts` in `y_range`, to size its column.
+/// The legend of [`draw_classes`] for `pts` in `y_range`: each class with its
+/// colour, and how many points lie outside the axis.
 fn legend_of(pts: &[(f64, f64, RGBColor, &'static str)], y_range: (f64, f64)) -> Legend {
-    let mut labels: Vec<&'static str> = pts.iter().map(|p| p.3).collect();
-    labels.sort_unstable();
-    labels.dedup();
-    let mut legend = Legend::new(labels.into_iter().map(|l| (l.to_string(), Swatch::Marker(BLACK))).collect());
+    let mut classes: Vec<(&'static str, RGBColor)> = pts.iter().map(|p| (p.3, p.2)).collect();
+    classes.sort_unstable_by_key(|c| c.0);
+    classes.dedup_by_key(|c| c.0);
+    let mut legend = Legend::new(classes.into_iter().map(|(l, c)| (l.to_string(), Swatch::Marker(c))).collect());
     let outside: Vec<f64> = pts.iter().map(|p| p.1).filter(|y| *y < y_range.0 || *y > y_range.1).collect();
     if !outside.is_empty() {
         let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
@@ -171,13 +158,13 @@ pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointR
     let (top, body) = root.split_vertically(40);
     let title = format!("largest Lyapunov exponent of the section map, mu = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
     plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
-    let probe = legend_of(&pts, (lo, hi));
-    let (chart_area, legend_area) = body.split_horizontally(1200 - probe.column_width() - 10);
+    let legend = legend_of(&pts, (lo, hi));
+    let (chart_area, legend_area) = body.split_horizontally(1200 - legend.column_width() - 10);
     let axes =
         plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: "v_belt (m/s)", y_desc: "lambda per crossing (-)" };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
-    let legend = draw_classes(&mut chart, &pts, (lo, hi), 2).map_err(|e| err(&e))?;
+    draw_classes(&mut chart, &pts, (lo, hi), 2).map_err(|e| err(&e))?;
     legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
