@@ -34,14 +34,16 @@ pub fn cli_error(py: Python<'_>, e: &CliError) -> PyErr {
 ///
 /// # Errors
 /// `PainleveError` with clap's message (what the CLI prints, less its leading
-/// `error: `) and its exit code (2).
+/// `error: ` and the usage and help lines that follow the message's paragraph,
+/// which name the command line's flags) and its exit code (2).
 pub fn parse(py: Python<'_>, command: &str, tokens: &[String]) -> PyResult<Command> {
     let argv = ["sil-host", command].into_iter().map(String::from).chain(tokens.iter().cloned());
     match Cli::try_parse_from(argv) {
         Ok(cli) => Ok(cli.command),
         Err(e) => {
             let text = e.to_string();
-            let text = text.trim_end().strip_prefix("error: ").unwrap_or(text.trim_end()).to_string();
+            let text = text.trim_end().strip_prefix("error: ").unwrap_or(text.trim_end());
+            let text = text.split("\n\n").next().unwrap_or(text).trim_end().to_string();
             Err(error(py, text, e.exit_code()))
         }
     }

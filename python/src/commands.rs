@@ -87,8 +87,8 @@ pub fn admissible<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'
     let args = args_of!(py, "admissible", &tokens, Admissible);
     let report = py.detach(|| cmd::admissible::compute(&args)).map_err(|e| cli_error(py, &e))?;
     let document = cmd::admissible::document(&report, &[]).map_err(|e| cli_error(py, &e))?;
-    let value: serde_json::Value = serde_json::from_str(&document).map_err(|e| cli_error(py, &CliError::BadInput(e.to_string())))?;
-    Outcome::new(py, "admissible", crate::convert::json_to_py(py, &value)?).map(Outcome::done)
+    let document = py.import("json")?.call_method1("loads", (document,))?;
+    Outcome::new(py, "admissible", document).map(Outcome::done)
 }
 
 /// `painleve.modes`: `sil-host modes`.

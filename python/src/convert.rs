@@ -12,42 +12,11 @@ use serde::Serialize;
 
 use crate::columns::{Column, Table};
 
-/// A JSON value as Python objects (`null` is `None`; the CLI's JSON writes NaN
-/// and infinities as `null` too).
-pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
-    use serde_json::Value;
-    Ok(match v {
-        Value::Null => py.None().into_bound(py),
-        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
-        Value::Number(n) => {
-            if let Some(i) = n.as_i64() {
-                i.into_pyobject(py)?.into_any()
-            } else if let Some(u) = n.as_u64() {
-                u.into_pyobject(py)?.into_any()
-            } else {
-                n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any()
-            }
-        }
-        Value::String(s) => s.into_pyobject(py)?.into_any(),
-        Value::Array(a) => {
-            let items = a.iter().map(|x| json_to_py(py, x)).collect::<PyResult<Vec<_>>>()?;
-            PyList::new(py, items)?.into_any()
-        }
-        Value::Object(o) => {
-            let d = PyDict::new(py);
-            for (k, x) in o {
-                d.set_item(k, json_to_py(py, x)?)?;
-            }
-            d.into_any()
-        }
-    })
-}
-
-/// Any serialisable value as Python objects, through its JSON form (what the
-/// CLI writes to its JSON files).
+/// Any serialisable value as Python objects, through its JSON text (what the
+/// CLI writes to its JSON files, in its fields' order), read by Python's `json`.
 pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, v: &T) -> PyResult<Bound<'py, PyAny>> {
-    let value = serde_json::to_value(v).map_err(|e| PyRuntimeError::new_err(format!("cannot convert a result: {e}")))?;
-    json_to_py(py, &value)
+    let text = serde_json::to_string(v).map_err(|e| PyRuntimeError::new_err(format!("cannot convert a result: {e}")))?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// A table as `{column: array}`: float64, int64, uint64 or bool NumPy arrays, and

@@ -42,9 +42,37 @@ fn toml_to_json(py: Python<'_>, text: &str) -> PyResult<String> {
 /// top level that is not a table, mixed arrays TOML cannot hold).
 #[pyfunction]
 fn json_to_toml(py: Python<'_>, text: &str) -> PyResult<String> {
-    let table: toml::Table = serde_json::from_str(text)
-        .map_err(|e| cli::error(py, format!("invalid scenario: a scenario dict must be a TOML table: {e}"), 2))?;
-    toml::to_string(&table).map_err(|e| cli::error(py, format!("invalid scenario: {e}"), 2))
+    let bad = |m: String| cli::error(py, format!("invalid scenario: {m}"), 2);
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    match toml_of(&value, "").map_err(bad)? {
+        toml::Value::Table(table) => toml::to_string(&table).map_err(|e| bad(e.to_string())),
+        _ => Err(bad("a scenario must be a table (a dict)".into())),
+    }
+}
+
+/// A JSON value as a TOML value (a JSON integer is a TOML integer, any other
+/// number a float); `at` is its dotted key, for the error.
+fn toml_of(v: &serde_json::Value, at: &str) -> Result<toml::Value, String> {
+    use serde_json::Value as J;
+    Ok(match v {
+        J::Null => return Err(format!("`{at}` is None, which TOML cannot hold")),
+        J::Bool(b) => toml::Value::Boolean(*b),
+        J::Number(n) => match (n.as_i64(), n.as_f64()) {
+            (Some(i), _) => toml::Value::Integer(i),
+            (None, Some(x)) => toml::Value::Float(x),
+            (None, None) => return Err(format!("`{at}`: {n} is not a number TOML can hold")),
+        },
+        J::String(s) => toml::Value::String(s.clone()),
+        J::Array(a) => toml::Value::Array(a.iter().enumerate().map(|(i, x)| toml_of(x, &format!("{at}[{i}]"))).collect::<Result<_, _>>()?),
+        J::Object(o) => {
+            let mut t = toml::Table::new();
+            for (k, x) in o {
+                let key = if at.is_empty() { k.clone() } else { format!("{at}.{k}") };
+                t.insert(k.clone(), toml_of(x, &key)?);
+            }
+            toml::Value::Table(t)
+        }
+    })
 }
 
 #[pymodule]
