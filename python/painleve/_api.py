@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from typing import Any, Callable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Tuple, Union, cast
 
 from . import _args, _painleve
 from ._result import PainleveWarning, Result
@@ -439,11 +439,11 @@ def sensitivity(
     return _finish(_args.call("sensitivity", sensitivity, dict(locals()), progress, scenario), strict)
 
 
-def default_scenario() -> dict:
+def default_scenario() -> Dict[str, Any]:
     """The embedded default scenario (``scenarios/default.toml``) as a dict of its
     TOML tables, to change and pass to :func:`run` (or ``scenario=`` of
     :func:`sweep`, :func:`zmax`, :func:`sensitivity`)."""
-    return json.loads(_painleve.toml_to_json(_painleve.default_scenario_toml()))
+    return cast(Dict[str, Any], json.loads(_painleve.toml_to_json(_painleve.default_scenario_toml())))
 
 
 def scenario_toml(scenario: Mapping[str, Any]) -> str:

@@ -50,7 +50,7 @@ def value(v: Any) -> str:
     if isinstance(v, (numbers.Real,)):
         return number(v)
     if isinstance(v, os.PathLike):
-        return os.fspath(v)
+        return str(os.fspath(v))
     if isinstance(v, str):
         return v
     if hasattr(v, "__iter__"):

@@ -8,7 +8,7 @@ import json
 import os
 import re
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Union
+from typing import Any, Dict, List, Optional, Set, Union
 
 import numpy as np
 
@@ -40,7 +40,7 @@ def _infer(cells: List[str]) -> np.ndarray:
         return np.array(cells, dtype=str)
 
 
-def read_csv(path: Union[str, os.PathLike]) -> Table:
+def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
     """One CSV file the CLI wrote, as a :class:`Table` (column types as
     :class:`Table` describes them). A file with only a header gives empty
     ``float64`` columns."""
@@ -71,7 +71,7 @@ _VALIDITY_AT = {
 }
 
 
-def _detect(files: set, summary: Any) -> str:
+def _detect(files: Set[str], summary: Any) -> str:
     """The command that wrote a folder, from its files."""
     if "report.json" in files:
         return "report"
@@ -94,7 +94,7 @@ def _detect(files: set, summary: Any) -> str:
     return "unknown"
 
 
-def _validity(command: str, summary: Any) -> Optional[dict]:
+def _validity(command: str, summary: Any) -> Optional[Dict[str, Any]]:
     node = summary
     for key in _VALIDITY_AT.get(command, ()):
         if not isinstance(node, dict) or key not in node:
@@ -113,7 +113,7 @@ def _failure(command: str, summary: Any) -> Optional[str]:
     return None
 
 
-def load(path: Union[str, os.PathLike]) -> Result:
+def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     """Reads an output folder of ``sil-host`` (any command's ``--out DIR``).
 
     Every ``*.csv`` becomes a :class:`Table` named as the file without ``.csv``

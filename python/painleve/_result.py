@@ -3,7 +3,7 @@ summary document, its tables, its validity counters and how it ended)."""
 
 from __future__ import annotations
 
-from typing import Any, Dict, Iterator, Mapping, Optional
+from typing import Any, Dict, Iterator, List, Mapping, Optional, cast
 
 import numpy as np
 
@@ -50,7 +50,7 @@ class Table(Dict[str, np.ndarray]):
             self[key] = _column(values)
 
     @property
-    def columns(self) -> list:
+    def columns(self) -> List[str]:
         """The column names, in order."""
         return list(self.keys())
 
@@ -104,7 +104,7 @@ def describe_violations(validity: Optional[Mapping[str, Any]]) -> Optional[str]:
 
 def _intervals(doc: Mapping[str, Any]) -> Table:
     """The admissible intervals of ``admissible.json`` as a table (paper Table II)."""
-    cols: Dict[str, list] = {"direction": [], "branch": [], "lo_m": [], "hi_m": []}
+    cols: Dict[str, List[Any]] = {"direction": [], "branch": [], "lo_m": [], "hi_m": []}
     for direction in ("z_r_dot_positive", "z_r_dot_negative"):
         for branch in ("elbow_up", "elbow_down"):
             for lo, hi in (doc.get(direction) or {}).get(branch) or []:
@@ -198,8 +198,8 @@ class Result:
         returns the result otherwise."""
         if self.failure is not None:
             err = PainleveError(self.failure)
-            err.exit_code = self.exit_code or 1  # type: ignore[attr-defined]
-            err.result = self  # type: ignore[attr-defined]
+            err.exit_code = self.exit_code or 1
+            err.result = self
             raise err
         return self
 
@@ -209,13 +209,13 @@ class Result:
     def __getattr__(self, name: str) -> Table:
         tables = self.__dict__.get("tables", {})
         if name in tables:
-            return tables[name]
+            return cast(Table, tables[name])
         raise AttributeError(f"{type(self).__name__} of {self.__dict__.get('command')!r} has no attribute or table {name!r}")
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.tables)
 
-    def __dir__(self) -> list:
+    def __dir__(self) -> List[str]:
         return sorted(set(super().__dir__()) | set(self.tables))
 
     def _table(self, table: Optional[str]) -> Table:

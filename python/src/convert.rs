@@ -6,9 +6,10 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::{
     exceptions::PyRuntimeError,
     prelude::*,
-    types::{PyDict, PyList},
+    types::{PyDict, PyList, PyString},
 };
 use serde::Serialize;
+use std::collections::HashMap;
 
 use crate::columns::{Column, Table};
 
@@ -29,7 +30,13 @@ pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict
             Column::I64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
             Column::U64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
             Column::Bool(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Column::Str(v) => d.set_item(name, PyList::new(py, v)?)?,
+            Column::Str(v) => {
+                // One Python string per distinct value (a mode, a kind: a few per
+                // column), shared by its rows.
+                let mut seen: HashMap<String, Bound<'py, PyString>> = HashMap::new();
+                let items = v.into_iter().map(|s| seen.entry(s).or_insert_with_key(|k| PyString::new(py, k)).clone()).collect::<Vec<_>>();
+                d.set_item(name, PyList::new(py, items)?)?
+            }
         }
     }
     Ok(d)
