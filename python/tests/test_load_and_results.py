@@ -86,3 +86,17 @@ def test_result_repr_and_attributes():
     with pytest.raises(AttributeError):
         r.no_such_table
     assert "trace" in dir(r)
+
+
+def test_load_a_report_folder_loads_its_experiments(tmp_path):
+    """A report's folder: report.json, report.md and one folder per experiment
+    (here one, made by the CLI), each loaded as a Result."""
+    root = tmp_path / "report"
+    cli("simulate", ["--duration", "1"], root / "simulate")
+    (root / "report.json").write_text('{"experiments": [{"id": "simulate", "status": "ok"}]}')
+    (root / "report.md").write_text("# report\n")
+    r = painleve.load(root)
+    assert r.command == "report" and r.summary["experiments"][0]["id"] == "simulate"
+    assert r.extras["report"] == "# report\n"
+    sim = r.extras["experiments"]["simulate"]
+    assert sim.command == "simulate" and sim.trace.nrows == 1001 and sim.valid
