@@ -92,14 +92,30 @@ impl Reporter {
                     String::new()
                 };
                 let end = if last { "\n" } else { "" };
-                let line = format!("\r{label}: {of}, {elapsed:.1} s{eta}   {end}");
-                let stderr = py.import("sys")?.getattr("stderr")?;
-                stderr.call_method1("write", (line,))?;
-                stderr.call_method0("flush")?;
-                Ok(())
+                write_stderr(py, &format!("\r{label}: {of}, {elapsed:.1} s{eta}   {end}"))
             }
         }
     }
+
+    /// Ends a progress line left open by an interrupted call (so that the traceback
+    /// starts on a line of its own).
+    fn interrupted(&self, py: Python<'_>) {
+        if let Self::Text { shown: true, .. } = self {
+            let _ = write_stderr(py, "\n");
+        }
+    }
+}
+
+/// Writes to Python's `sys.stderr` (where Jupyter shows it under the cell);
+/// nothing when there is none (`pythonw`).
+fn write_stderr(py: Python<'_>, text: &str) -> PyResult<()> {
+    let stderr = py.import("sys")?.getattr("stderr")?;
+    if stderr.is_none() {
+        return Ok(());
+    }
+    stderr.call_method1("write", (text,))?;
+    stderr.call_method0("flush")?;
+    Ok(())
 }
 
 /// Runs `work` on a thread of its own, without the GIL, while this thread waits,
@@ -161,6 +177,7 @@ where
         }
         let out = py.detach(|| worker.join()).unwrap_or_else(Err);
         if let Some(e) = raised {
+            reporter.interrupted(py);
             return Err(e);
         }
         reporter.report(py, control, started, true)?;
