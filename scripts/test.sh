@@ -78,7 +78,18 @@ echo "   target/venv-python, pip install ./python (maturin, the workspace's targ
 echo "   target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
 pystarted=$SECONDS
 pyvenv="target/venv-python"
-[ -x "$pyvenv/bin/pip" ] || { rm -rf "$pyvenv" && python3 -m venv "$pyvenv"; }
+if [ ! -x "$pyvenv/bin/pip" ]; then
+  # Debian's python3 has no ensurepip (so no venv) without python3-venv.
+  if ! python3 -c "import ensurepip, venv" 2>/dev/null; then
+    if [ "$(id -u)" = 0 ]; then
+      apt-get update && apt-get install -y python3-venv
+    else
+      echo "python3 with venv is missing: sudo apt-get install -y python3-venv" >&2
+      exit 1
+    fi
+  fi
+  rm -rf "$pyvenv" && python3 -m venv "$pyvenv"
+fi
 "$pyvenv/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-dev.txt
 # pip fetches maturin itself (build isolation) and builds the extension with cargo; the
 # release profile's artifacts of the workspace are reused, only the pyo3 crates rebuild.
