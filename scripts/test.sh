@@ -73,12 +73,40 @@ echo "   ceiling 3500 cycles per worst step, either controller (5 % of a 2.4 kHz
 cargo build --release -p sil-host
 python3 scripts/cycles.py --duration 1 --max-cycles 3500
 
-echo "== tests (release: the simulator is numerical)"
+echo "== the Python package (python/, docs/python.md): pinned tools from python/requirements-dev.txt in"
+echo "   target/venv-python, pip install ./python (maturin, the workspace's target dir), pytest against"
+echo "   target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
+pystarted=$SECONDS
+pyvenv="target/venv-python"
+if [ ! -x "$pyvenv/bin/pip" ]; then
+  # Debian's python3 has no ensurepip (so no venv) without python3-venv.
+  if ! python3 -c "import ensurepip, venv" 2>/dev/null; then
+    if [ "$(id -u)" = 0 ]; then
+      apt-get update && apt-get install -y python3-venv
+    else
+      echo "python3 with venv is missing: sudo apt-get install -y python3-venv" >&2
+      exit 1
+    fi
+  fi
+  rm -rf "$pyvenv" && python3 -m venv "$pyvenv"
+fi
+"$pyvenv/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-dev.txt
+# pip fetches maturin itself (build isolation) and builds the extension with cargo; the
+# release profile's artifacts of the workspace are reused, only the pyo3 crates rebuild.
+"$pyvenv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps ./python
 log="$(mktemp)"
-trap 'rm -f "$log"' EXIT
+pylog="$(mktemp)"
+trap 'rm -f "$log" "$pylog"' EXIT
+pystatus=0
+PAINLEVE_SIL_HOST="$PWD/target/release/sil-host" "$pyvenv/bin/python" -m pytest python/tests -q -p no:cacheprovider 2>&1 | tee "$pylog" || pystatus=$?
+echo "python package: $((SECONDS - pystarted)) s (install and tests)"
+
+echo "== tests (release: the simulator is numerical)"
 status=0
 cargo test --workspace --release --no-fail-fast 2>&1 | tee "$log" || status=$?
-# One closing line over all test binaries (cargo prints one per binary).
-awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
-     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
-exit "$status"
+# One closing line over all test binaries (cargo prints one per binary) and pytest's.
+awk -v py="$pylog" '/^test result:/ || (FILENAME == py && /(passed|failed)/ && / in [0-9.]+s/) {
+       for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^(failed|error)/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log" "$pylog"
+[ "$status" -ne 0 ] && exit "$status"
+exit "$pystatus"

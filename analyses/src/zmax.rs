@@ -36,6 +36,7 @@
 //! end passes the limit is at least that ([`Bisection::UpperReached`]). The tracking
 //! bisection runs on `[lo, Z_t,sliding]` and reuses the trials of the first.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -698,6 +699,23 @@ pub fn search(
     bracket: (f64, f64),
     tol: f64,
     c: &Criteria,
+    on_trial: impl FnMut(&Trial),
+) -> Result<Search, AnalysisError> {
+    search_until(base, combo, bracket, tol, c, &AtomicBool::new(false), on_trial)
+}
+
+/// [`search`], stopped before its next trial once `stop` is set (Ctrl-C in an
+/// embedding: the Python package): then [`AnalysisError::Interrupted`].
+///
+/// # Errors
+/// As [`search`]; [`AnalysisError::Interrupted`] when stopped.
+pub fn search_until(
+    base: &Scenario,
+    combo: Combination,
+    bracket: (f64, f64),
+    tol: f64,
+    c: &Criteria,
+    stop: &AtomicBool,
     mut on_trial: impl FnMut(&Trial),
 ) -> Result<Search, AnalysisError> {
     let (lo, hi) = bracket;
@@ -715,6 +733,15 @@ pub fn search(
     let mut run = |target: f64| -> Result<Trial, AnalysisError> {
         if let Some(t) = trials.iter().find(|t| t.target_z_t == target) {
             return Ok(t.clone());
+        }
+        if stop.load(Ordering::Relaxed) {
+            return Err(AnalysisError::Interrupted(format!(
+                "Z_t,sliding search ({} x0{} {}) stopped after {} trials",
+                combo.controller,
+                combo.x0,
+                combo.setting.name(),
+                trials.len()
+            )));
         }
         let (t, rows) = trial(base, combo, target, c)?;
         on_trial(&t);

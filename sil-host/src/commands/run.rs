@@ -28,12 +28,14 @@ use rig::{
     twin_link::TwinLink,
 };
 
-/// Runs `sil-host run`.
+/// Checks `sil-host run`'s scenario and options before any link is made: the
+/// scenario with its overrides, the plant and firmware set-up, the link
+/// (`--in-process`, `--link`) with the options it allows and the faults it can
+/// inject. Returns the scenario and the link.
 ///
 /// # Errors
-/// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
-/// way (exit 1, everything up to then written); I/O or plotting failures.
-pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
+/// Bad scenario, overrides or options (exit 2).
+pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
     let scenario = load_scenario(&args.scenario)?;
     // Check the plant and firmware set-up before touching the output folder.
     plant_for(&scenario).map_err(CliError::Sim)?;
@@ -58,6 +60,16 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         }
     }
     kind.check(&scenario.faults).map_err(|e| CliError::BadInput(e.to_string()))?;
+    Ok((scenario, chosen))
+}
+
+/// Runs `sil-host run`.
+///
+/// # Errors
+/// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
+/// way (exit 1, everything up to then written); I/O or plotting failures.
+pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
+    let (scenario, chosen) = prepare(args)?;
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
         (None, None) => default_rig_name(),

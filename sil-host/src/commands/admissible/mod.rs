@@ -20,8 +20,7 @@ use summary::*;
 /// [`CliError::Param`] (exit 2) for a bad `mu`, before anything is written;
 /// [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError> {
-    let params = super::arm_params(&args.set, "admissible", &["l", "h"], args.mu, shared::Params::<f64>::paper().v_belt)?;
-    let report = compute_for(params, analyses::admissible::SCAN_STEPS)?;
+    let report = compute(args)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     out.write_bytes("admissible.json", document(&report, &files)?.as_bytes())?;
@@ -31,8 +30,21 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
     Ok(Done::ok(report, files.into_iter().map(Into::into).collect()))
 }
 
-/// `admissible.json` (also what `--json` prints).
-fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, CliError> {
+/// Checks the options and computes the admissible configurations (what
+/// [`execute`] writes), without writing anything.
+///
+/// # Errors
+/// [`CliError::Param`] or [`CliError::Scenario`] (exit 2) for a bad `mu` or `--set`.
+pub fn compute(args: &AdmissibleArgs) -> Result<AdmissibleReport, CliError> {
+    let params = super::arm_params(&args.set, "admissible", &["l", "h"], args.mu, shared::Params::<f64>::paper().v_belt)?;
+    Ok(compute_for(params, analyses::admissible::SCAN_STEPS)?)
+}
+
+/// `admissible.json` (also what `--json` prints), listing `files`.
+///
+/// # Errors
+/// [`CliError::Io`] when it cannot be serialised.
+pub fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, CliError> {
     serde_json::to_string_pretty(&json_report(report, files))
         .map_err(|e| CliError::Io { path: "admissible.json".into(), source: std::io::Error::other(e) })
 }

@@ -21,10 +21,7 @@ use summary::*;
 /// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
-    let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
-    let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
-    let params = super::arm_params(&args.set, "modes", &[], args.mu, args.v_belt)?;
-    let map = compute_for(params, args.branch, args.theta2_sign, t1, t1d, args.grid)?;
+    let map = compute(args)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let files = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f)).collect();
     let (tmp, w) = out.create("modes.csv")?;
@@ -33,6 +30,19 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     draw_figure(&map, &svg)?;
     out.commit()?;
     Ok(Done::ok(map, files))
+}
+
+/// Checks the options and computes the mode map (what [`execute`] writes),
+/// without writing anything.
+///
+/// # Errors
+/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
+/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size.
+pub fn compute(args: &ModesArgs) -> Result<ModeMap, CliError> {
+    let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
+    let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
+    let params = super::arm_params(&args.set, "modes", &[], args.mu, args.v_belt)?;
+    Ok(compute_for(params, args.branch, args.theta2_sign, t1, t1d, args.grid)?)
 }
 
 /// Runs `sil-host modes` (docs/model.md experiment 1): computes the map, prints the

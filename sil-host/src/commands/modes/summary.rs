@@ -8,18 +8,30 @@ use serde::Serialize;
 use shared::ElbowBranch;
 use std::{io::Write, path::Path};
 
-#[derive(Serialize)]
-pub(crate) struct CsvRow {
-    pub(crate) theta1_rad: f64,
-    pub(crate) theta1_deg: f64,
-    pub(crate) theta1_dot: f64,
-    pub(crate) theta2_rad: Option<f64>,
-    pub(crate) b: Option<f64>,
-    pub(crate) p: Option<f64>,
-    pub(crate) z_r_dot: Option<f64>,
-    pub(crate) mode: &'static str,
-    pub(crate) theta2_dot: Option<f64>,
-    pub(crate) branch: Option<&'static str>,
+/// One row of `modes.csv`: a grid point; quantities that do not exist for the
+/// point (unreachable, singular) are `None` (empty in the CSV).
+#[derive(Debug, Clone, Serialize)]
+pub struct CsvRow {
+    /// `theta1`, rad.
+    pub theta1_rad: f64,
+    /// `theta1`, degrees.
+    pub theta1_deg: f64,
+    /// `theta1_dot`, rad/s.
+    pub theta1_dot: f64,
+    /// `theta2` putting the tip on the belt, rad.
+    pub theta2_rad: Option<f64>,
+    /// `b` (paper eq. 6), m/s^2.
+    pub b: Option<f64>,
+    /// `p` (paper eq. 7) for the slip direction of `z_r_dot`, 1/kg.
+    pub p: Option<f64>,
+    /// `z_r_dot = z_t_dot - v_belt`, m/s.
+    pub z_r_dot: Option<f64>,
+    /// `sliding`, `flight`, `indeterminate`, `inconsistent`, `unreachable` or `singular`.
+    pub mode: &'static str,
+    /// `theta2_dot` keeping the tip on the belt, rad/s.
+    pub theta2_dot: Option<f64>,
+    /// Elbow branch of the configuration (`up`, `down`).
+    pub branch: Option<&'static str>,
 }
 
 pub(crate) fn finite(x: f64) -> Option<f64> {
@@ -37,10 +49,18 @@ pub(crate) fn finite(x: f64) -> Option<f64> {
 pub fn write_csv<W: Write>(map: &ModeMap, w: W, path: &Path) -> Result<(), CliError> {
     let ioe = |e: csv::Error| CliError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
     let mut wr = csv::Writer::from_writer(w);
+    for row in csv_rows(map) {
+        wr.serialize(row).map_err(ioe)?;
+    }
+    wr.flush().map_err(|source| CliError::Io { path: path.to_path_buf(), source })
+}
+
+/// The rows of `modes.csv`, one per grid point, `theta1` outer, `theta1_dot` inner.
+pub fn csv_rows(map: &ModeMap) -> impl Iterator<Item = CsvRow> + '_ {
     let n2 = map.theta1_dot.len();
-    for (k, pt) in map.points.iter().enumerate() {
+    map.points.iter().enumerate().map(move |(k, pt)| {
         let (t1, w1) = (map.theta1[k / n2], map.theta1_dot[k % n2]);
-        wr.serialize(CsvRow {
+        CsvRow {
             theta1_rad: t1,
             theta1_deg: map.theta1_deg[k / n2],
             theta1_dot: w1,
@@ -51,10 +71,8 @@ pub fn write_csv<W: Write>(map: &ModeMap, w: W, path: &Path) -> Result<(), CliEr
             mode: pt.mode.name(),
             theta2_dot: finite(pt.theta2_dot),
             branch: pt.theta2.is_finite().then(|| ElbowBranch::of(&Vector2::new(t1, pt.theta2)).name()),
-        })
-        .map_err(ioe)?;
-    }
-    wr.flush().map_err(|source| CliError::Io { path: path.to_path_buf(), source })
+        }
+    })
 }
 
 #[derive(Serialize)]
@@ -88,7 +106,12 @@ pub(crate) struct JsonSummary<'a> {
     pub(crate) params: shared::Params<f64>,
 }
 
-pub(crate) fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
+/// The JSON document of `--json` for the map, listing `files`.
+pub fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> impl Serialize + 'a {
+    json_summary(map, files)
+}
+
+pub(crate) fn json_summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
     let counts = map.counts();
     let on_belt: usize = counts.iter().filter(|(m, _)| matches!(m, PointMode::Contact(_))).map(|(_, c)| c).sum();
     let total = map.points.len();
@@ -126,7 +149,7 @@ pub(crate) fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<
 /// The human summary printed by the command.
 pub fn human_summary(map: &ModeMap) -> String {
     let files: [String; 0] = [];
-    let s = summary(map, &files);
+    let s = json_summary(map, &files);
     let mut out = String::new();
     out += "Contact modes on the belt (docs/model.md experiment 1, paper Fig. 2)\n";
     out += &format!("mu = {}, v_belt = {} m/s, u = 0, {}\n", s.mu, s.v_belt, s.theta2_rule);

@@ -48,7 +48,13 @@ fn grid(min: f64, max: f64, step: f64) -> Vec<f64> {
     v
 }
 
-fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), CliError> {
+/// Checks `sil-host poincare`'s options: the analysis's configuration, the
+/// belt-speed grid (m/s) and the initial condition as given and used.
+///
+/// # Errors
+/// [`CliError::BadInput`]/[`CliError::Param`]/[`CliError::Sim`]/[`CliError::Scenario`]
+/// (exit 2) for bad options or initial conditions.
+pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), CliError> {
     let bad = |m: String| Err(CliError::BadInput(m));
     // One speed `V`, or a range `MIN,MAX`.
     let (v_min, v_max) = match args.v_belt.trim().parse::<f64>() {
@@ -157,22 +163,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
 
-    let section: Vec<SectionRow> = results
-        .iter()
-        .flat_map(|r| {
-            r.crossings.iter().map(move |c| SectionRow {
-                v_belt: r.v_belt,
-                t: c.t,
-                theta1: c.x[0],
-                theta1_deg: c.x[0].to_degrees(),
-                theta1_dot: c.x[1],
-                theta2: c.x[2],
-                theta2_dot: c.x[3],
-                kind: c.kind.name(),
-                mode: c.mode.name(),
-            })
-        })
-        .collect();
+    let section = section_rows(&results);
     write_csv(&mut out, "section.csv", &section)?;
     let rows: Vec<ClassRow> = results.iter().map(ClassRow::from).collect();
     write_csv(&mut out, "classes.csv", &rows)?;
@@ -188,8 +179,50 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let svg = out.stage("lyapunov.svg");
     draw_lyapunov(&svg, &cfg, &results)?;
 
+    let files = ["section.csv", "classes.csv", "classes.json", "bifurcation.svg", "lyapunov.svg", "summary.json"];
+    let files = files.iter().map(|f| out.path(f).display().to_string()).collect();
+    let summary = summary(args, (cfg, &grid, ic), &results, threads, wall_s, files);
+    out.write_json("summary.json", &summary)?;
+    let files = out.commit()?;
+    let failure = failure(&summary, &results);
+    let validity = summary.validity;
+    Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
+}
+
+/// The rows of `section.csv`: every crossing of every belt speed, in grid order.
+pub fn section_rows(results: &[PointResult]) -> Vec<SectionRow> {
+    results
+        .iter()
+        .flat_map(|r| {
+            r.crossings.iter().map(move |c| SectionRow {
+                v_belt: r.v_belt,
+                t: c.t,
+                theta1: c.x[0],
+                theta1_deg: c.x[0].to_degrees(),
+                theta1_dot: c.x[1],
+                theta2: c.x[2],
+                theta2_dot: c.x[3],
+                kind: c.kind.name(),
+                mode: c.mode.name(),
+            })
+        })
+        .collect()
+}
+
+/// `summary.json` of the analysed `results` (one per speed of the grid, in
+/// order) for the validated set-up (`cfg`, the grid, the initial condition),
+/// computed on `threads` threads in `wall_s` s, listing `files`.
+pub fn summary(
+    args: &PoincareArgs,
+    setup: (PoincareConfig, &[f64], InitialCondition),
+    results: &[PointResult],
+    threads: usize,
+    wall_s: f64,
+    files: Vec<String>,
+) -> Summary {
+    let (cfg, grid, ic) = setup;
     let mut counts = ClassCounts::default();
-    for r in &results {
+    for r in results {
         *match r.class {
             Class::Equilibrium => &mut counts.equilibrium,
             Class::Settling => &mut counts.settling,
@@ -201,13 +234,12 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
         } += 1;
     }
     let mut validity = plant::Validity::default();
-    for r in &results {
+    for r in results {
         validity.add(&r.validity);
     }
     let mut point_walls: Vec<f64> = results.iter().map(|r| r.wall_s).collect();
     point_walls.sort_by(f64::total_cmp);
-    let files = ["section.csv", "classes.csv", "classes.json", "bifurcation.svg", "lyapunov.svg", "summary.json"];
-    let summary = Summary {
+    Summary {
         status: if counts.failed > 0 { "failed" } else { "ok" },
         mu: cfg.mu,
         params: cfg.params,
@@ -224,24 +256,26 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
         max_return_s: cfg.max_return_s,
         counts,
         validity,
-        bands: poincare::bands(&results),
-        section_points: section.len(),
+        bands: poincare::bands(results),
+        section_points: results.iter().map(|r| r.crossings.len()).sum(),
         threads,
         wall_s,
-        median_point_wall_s: point_walls[point_walls.len() / 2],
-        files: files.iter().map(|f| out.path(f).display().to_string()).collect(),
-    };
-    out.write_json("summary.json", &summary)?;
-    let files = out.commit()?;
-    let failure = results.iter().find(|r| r.class == Class::Failed).map(|r| {
+        median_point_wall_s: point_walls.get(point_walls.len() / 2).copied().unwrap_or(f64::NAN),
+        files,
+    }
+}
+
+/// The command's failure when some belt speed failed (class `failed`): exit 1
+/// after writing everything.
+pub fn failure(summary: &Summary, results: &[PointResult]) -> Option<CliError> {
+    results.iter().find(|r| r.class == Class::Failed).map(|r| {
         CliError::PartFailed(format!(
             "{} belt speed(s) failed (written with class `failed`), the first at v_belt = {} m/s: {}",
             summary.counts.failed,
             r.v_belt,
             r.error.as_deref().unwrap_or("")
         ))
-    });
-    Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
+    })
 }
 
 /// Runs `sil-host poincare`: [`execute`], then prints the summary (human, or the

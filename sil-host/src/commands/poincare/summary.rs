@@ -10,45 +10,77 @@ use plant::SimConfig;
 use serde::Serialize;
 use std::io::Write;
 
-/// One row of `section.csv`.
+/// One row of `section.csv`: an upward crossing of `theta1_dot = 0`.
 #[derive(Debug, Clone, Serialize)]
-pub(crate) struct SectionRow {
-    pub(crate) v_belt: f64,
-    pub(crate) t: f64,
-    pub(crate) theta1: f64,
-    pub(crate) theta1_deg: f64,
-    pub(crate) theta1_dot: f64,
-    pub(crate) theta2: f64,
-    pub(crate) theta2_dot: f64,
-    pub(crate) kind: &'static str,
-    pub(crate) mode: &'static str,
+pub struct SectionRow {
+    /// Belt speed, m/s.
+    pub v_belt: f64,
+    /// Time of the crossing, s (from the start of the run, transient included).
+    pub t: f64,
+    /// `theta1`, rad.
+    pub theta1: f64,
+    /// `theta1`, degrees.
+    pub theta1_deg: f64,
+    /// `theta1_dot`, rad/s (0 up to the location's tolerance; the velocity after
+    /// the jump for a crossing at an impact).
+    pub theta1_dot: f64,
+    /// `theta2`, rad.
+    pub theta2: f64,
+    /// `theta2_dot`, rad/s.
+    pub theta2_dot: f64,
+    /// `smooth` (located on the dense output) or `jump` (at an impact).
+    pub kind: &'static str,
+    /// Contact mode at the crossing.
+    pub mode: &'static str,
 }
 
-/// One row of `classes.csv`.
+/// One row of `classes.csv`: a belt speed classified, with its validity counters.
 #[derive(Debug, Clone, Serialize)]
-pub(crate) struct ClassRow {
-    pub(crate) v_belt: f64,
-    pub(crate) class: &'static str,
-    pub(crate) period: Option<usize>,
-    pub(crate) n_crossings: usize,
-    pub(crate) distinct_points: usize,
-    pub(crate) lyapunov_per_crossing: Option<f64>,
-    pub(crate) lyapunov_per_s: Option<f64>,
-    pub(crate) lyapunov_std_error: Option<f64>,
-    pub(crate) lyapunov_iterations: Option<usize>,
-    pub(crate) lyapunov_collapsed: Option<usize>,
-    pub(crate) final_mode: &'static str,
-    pub(crate) final_theta1: f64,
-    pub(crate) lift_offs: u64,
-    pub(crate) touchdowns: u64,
-    pub(crate) error: String,
-    pub(crate) wall_s: f64,
-    pub(crate) energy_gains: u64,
-    pub(crate) newton_fallbacks: u64,
-    pub(crate) poisson_fallbacks: u64,
-    pub(crate) cone_violations: u64,
-    pub(crate) zeno_stops: u64,
-    pub(crate) integrator_failures: u64,
+pub struct ClassRow {
+    /// Belt speed, m/s.
+    pub v_belt: f64,
+    /// `equilibrium`, `settling`, `periodic`, `chaotic`, `aperiodic`, `failed` or `invalid`.
+    pub class: &'static str,
+    /// Period in crossings, when periodic.
+    pub period: Option<usize>,
+    /// Section crossings in the record window.
+    pub n_crossings: usize,
+    /// Distinct section points (greedy clustering at the tolerance).
+    pub distinct_points: usize,
+    /// Largest Lyapunov exponent of the section map, per crossing.
+    pub lyapunov_per_crossing: Option<f64>,
+    /// The same per second, 1/s.
+    pub lyapunov_per_s: Option<f64>,
+    /// Its standard error, per crossing.
+    pub lyapunov_std_error: Option<f64>,
+    /// Crossings averaged in the estimate.
+    pub lyapunov_iterations: Option<usize>,
+    /// Renormalisations whose separation collapsed (floored).
+    pub lyapunov_collapsed: Option<usize>,
+    /// Contact mode at the end of the record.
+    pub final_mode: &'static str,
+    /// `theta1` at the end of the record, rad.
+    pub final_theta1: f64,
+    /// Lift-offs in the record window.
+    pub lift_offs: u64,
+    /// Touchdowns in the record window.
+    pub touchdowns: u64,
+    /// The simulation's error (empty when none).
+    pub error: String,
+    /// Wall-clock time of this speed, s.
+    pub wall_s: f64,
+    /// Validity: energy-creating impacts.
+    pub energy_gains: u64,
+    /// Validity: Newton-law fallbacks.
+    pub newton_fallbacks: u64,
+    /// Validity: Poisson-law fallbacks.
+    pub poisson_fallbacks: u64,
+    /// Validity: friction-cone violations.
+    pub cone_violations: u64,
+    /// Validity: Zeno stops.
+    pub zeno_stops: u64,
+    /// Validity: integrator failures.
+    pub integrator_failures: u64,
 }
 
 impl From<&PointResult> for ClassRow {

@@ -50,12 +50,13 @@ pub struct Summary {
     pub files: Vec<String>,
 }
 
-/// Runs the study and writes its files; prints nothing.
+/// Checks `sil-host sensitivity`'s options: the base scenario (`--scenario` or
+/// the embedded default, with `--set`) and the worker threads (`--threads`, one
+/// per core by default).
 ///
 /// # Errors
-/// Bad input (exit 2) before anything is written; an interruption (exit 1, nothing
-/// written); I/O and figure errors.
-pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
+/// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
+pub fn prepare(args: &SensitivityArgs) -> Result<(rig::scenario::Scenario, usize), CliError> {
     rig::overrides::check_keys(&args.set, &STUDY_KEYS).map_err(rig::scenario::ScenarioError::from)?;
     let base = crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)?;
     base.validate()?;
@@ -63,6 +64,16 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
         return Err(CliError::BadInput("--threads must be >= 1".into()));
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    Ok((base, threads))
+}
+
+/// Runs the study and writes its files; prints nothing.
+///
+/// # Errors
+/// Bad input (exit 2) before anything is written; an interruption (exit 1, nothing
+/// written); I/O and figure errors.
+pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
+    let (base, threads) = prepare(args)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -28,7 +28,7 @@ use summary::*;
 ///
 /// # Errors
 /// [`CliError::BadInput`] for a malformed `--x0-deg`.
-pub(crate) fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
+pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
     Ok(match x0_deg {
         Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
         None => {
@@ -39,7 +39,10 @@ pub(crate) fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Res
 }
 
 /// Parses `--x0-deg th1,th1dot,th2,th2dot`.
-pub(crate) fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
+///
+/// # Errors
+/// [`CliError::BadInput`] unless it is four finite numbers.
+pub fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
     let bad = || CliError::BadInput(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
     let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
     match v.as_slice() {
@@ -48,8 +51,12 @@ pub(crate) fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
     }
 }
 
-/// Checks the run-length options.
-fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
+/// Checks the run-length options (`--duration`, `--sample-dt`) and returns the
+/// number of samples after the first, `round(duration / sample_dt)` (at least 1).
+///
+/// # Errors
+/// [`CliError::BadInput`] naming the option.
+pub fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
     if !(duration.is_finite() && duration > 0.0 && duration <= 1e6) {
         return Err(CliError::BadInput(format!("--duration must be in (0, 1e6] s, got {duration}")));
     }
@@ -63,7 +70,9 @@ fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
     Ok((n as usize).max(1))
 }
 
-fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
+/// The `trace.csv` row of the plant's current state, with the contact force `f`
+/// (`[f_t, f_n]`, N) of the step that led there.
+pub fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
     let x = plant.state();
     let z = plant.tip();
     let v = plant.tip_velocity();
@@ -85,6 +94,96 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
     }
 }
 
+/// A simulation checked and set up, before anything is written: what
+/// [`prepare`] returns.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The arm's parameters (paper Table I with `--set`, `--mu`, `--v-belt`).
+    pub params: shared::Params<f64>,
+    /// The simulator's settings.
+    pub sim: SimConfig,
+    /// Samples after the first ([`check_times`]).
+    pub steps: usize,
+    /// The initial condition as given and as used.
+    pub initial_condition: InitialCondition,
+    /// The plant at `t = 0` (projected onto the belt, initial mode chosen).
+    pub plant: Plant,
+}
+
+/// Checks `sil-host simulate`'s options and sets the plant up at `t = 0`.
+///
+/// # Errors
+/// [`CliError::BadInput`]/[`CliError::Param`]/[`CliError::Sim`]/[`CliError::Scenario`]
+/// (exit 2) for bad options or initial conditions.
+pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
+    let params = super::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
+    let sim =
+        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
+    sim.validate()?;
+    let steps = check_times(args.duration, args.sample_dt)?;
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
+    let x0 = initial::deg_to_state(given_deg);
+    let projection = initial::describe_projection(&params, x0);
+    let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
+    let initial_condition = InitialCondition {
+        name,
+        given_deg,
+        projection,
+        used_deg: plant.state().map(f64::to_degrees),
+        initial_mode: plant.mode().name(),
+        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
+    };
+    Ok(Prepared { params, sim, steps, initial_condition, plant })
+}
+
+/// Advances the open loop (`u = 0`) to sample `k + 1`, at exactly
+/// `(k + 1) sample_dt` s (no accumulated drift): one row of `trace.csv`.
+///
+/// # Errors
+/// The plant's [`SimError`] when the step fails.
+pub fn sample_step(plant: &mut Plant, k: usize, sample_dt: f64) -> Result<plant::StepReport, SimError> {
+    let target = (k + 1) as f64 * sample_dt;
+    plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver)
+}
+
+/// `summary.json` of a simulation that ended with `plant` (after `failure`, if it
+/// failed), which took `wall_s` s and wrote `files` with `events` events.
+pub fn summary(
+    args: &SimulateArgs,
+    prepared: (shared::Params<f64>, SimConfig, InitialCondition),
+    plant: &Plant,
+    failure: Option<&SimError>,
+    wall_s: f64,
+    files: Vec<String>,
+    events: usize,
+) -> Summary {
+    let (params, sim, initial_condition) = prepared;
+    let counters = *plant.counters();
+    let simulated_s = plant.time();
+    Summary {
+        status: if failure.is_some() { "failed" } else { "ok" },
+        error: failure.map(|e| e.to_string()),
+        params,
+        sim,
+        initial_condition,
+        duration_s: args.duration,
+        simulated_s,
+        lift_offs: counters.lift_offs,
+        touchdowns: counters.touchdowns,
+        impacts_without_collision: counters.impacts_without_collision,
+        stick_phases: counters.stick_phases,
+        validity: plant.validity(failure),
+        counters,
+        final_state: plant.state(),
+        final_tip: [plant.tip()[0], plant.tip()[1]],
+        final_mode: plant.mode().name(),
+        wall_s,
+        realtime_factor: simulated_s / wall_s.max(1e-9),
+        files,
+        events,
+    }
+}
+
 /// Runs `sil-host simulate`.
 ///
 /// # Errors
@@ -94,23 +193,7 @@ fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
 pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Validate everything before touching the output folder.
-    let params = super::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
-    let sim =
-        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
-    sim.validate()?;
-    let steps = check_times(args.duration, args.sample_dt)?;
-    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
-    let x0 = initial::deg_to_state(given_deg);
-    let projection = initial::describe_projection(&params, x0);
-    let mut plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
-    let initial_condition = InitialCondition {
-        name,
-        given_deg,
-        projection,
-        used_deg: plant.state().map(f64::to_degrees),
-        initial_mode: plant.mode().name(),
-        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
-    };
+    let Prepared { params, sim, steps, initial_condition, mut plant } = prepare(args)?;
 
     let mut out = OutputSet::new(&args.output.out)?;
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
@@ -142,9 +225,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         let started = Instant::now();
         let end = steps.min(k + CHUNK);
         while k < end {
-            // Advance to an exact multiple of the sample period (no accumulated drift).
-            let target = (k + 1) as f64 * args.sample_dt;
-            match plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver) {
+            match sample_step(&mut plant, k, args.sample_dt) {
                 Ok(report) => {
                     new_events.extend_from_slice(&report.events);
                     rows.push(trace_row(&plant, report.f));
@@ -175,30 +256,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let svg = out.stage("trace.svg");
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
-    let counters = *plant.counters();
-    let simulated_s = plant.time();
-    let summary = Summary {
-        status: if failure.is_some() { "failed" } else { "ok" },
-        error: failure.as_ref().map(|e| e.to_string()),
-        params,
-        sim,
-        initial_condition,
-        duration_s: args.duration,
-        simulated_s,
-        lift_offs: counters.lift_offs,
-        touchdowns: counters.touchdowns,
-        impacts_without_collision: counters.impacts_without_collision,
-        stick_phases: counters.stick_phases,
-        validity: plant.validity(failure.as_ref()),
-        counters,
-        final_state: plant.state(),
-        final_tip: [plant.tip()[0], plant.tip()[1]],
-        final_mode: plant.mode().name(),
-        wall_s,
-        realtime_factor: simulated_s / wall_s.max(1e-9),
-        files: ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect(),
-        events: n_events,
-    };
+    let files = ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect();
+    let summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
     let validity = summary.validity;

@@ -39,21 +39,33 @@ pub struct TraceRow {
     pub energy: f64,
 }
 
-/// One row of `events.csv`.
+/// One row of `events.csv`: a plant event at its located time.
 #[derive(Debug, Clone, Serialize)]
-pub(crate) struct EventRow {
-    pub(crate) t: f64,
-    pub(crate) kind: &'static str,
-    pub(crate) mode_after: &'static str,
-    pub(crate) v_n_before: f64,
-    pub(crate) v_n_after: f64,
-    pub(crate) v_r_before: f64,
-    pub(crate) v_r_after: f64,
-    pub(crate) impulse_t: f64,
-    pub(crate) impulse_n: f64,
-    pub(crate) energy_change: f64,
-    pub(crate) contact_work: f64,
-    pub(crate) resolution: String,
+pub struct EventRow {
+    /// Time of the event, s.
+    pub t: f64,
+    /// The event (`touchdown`, `lift_off`, `p_zero`, `jam`, `slip_to_stick`, ...).
+    pub kind: &'static str,
+    /// Contact mode after it (`flight`, `sliding`, `sticking`).
+    pub mode_after: &'static str,
+    /// Normal velocity of the tip before the event, m/s.
+    pub v_n_before: f64,
+    /// Normal velocity of the tip after the event, m/s.
+    pub v_n_after: f64,
+    /// Relative tangential velocity `z_r_dot` before the event, m/s.
+    pub v_r_before: f64,
+    /// Relative tangential velocity `z_r_dot` after the event, m/s.
+    pub v_r_after: f64,
+    /// Tangential impulse of an impact, N s.
+    pub impulse_t: f64,
+    /// Normal impulse of an impact, N s.
+    pub impulse_n: f64,
+    /// Change of mechanical energy at the event, J.
+    pub energy_change: f64,
+    /// Work of the contact impulse, J.
+    pub contact_work: f64,
+    /// How an impact was resolved (empty when not an impact).
+    pub resolution: String,
 }
 
 impl From<&PlantEvent> for EventRow {

@@ -128,6 +128,25 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
     Ok(spec)
 }
 
+/// Checks `sil-host sweep`'s arguments: the sweep's spec ([`spec_of`]), the
+/// shard of it to compute (`--shard`, all by default) and the worker threads
+/// (`--threads`, one per core by default).
+///
+/// # Errors
+/// [`CliError::BadInput`] or [`CliError::Scenario`] (exit 2).
+pub fn plan(args: &SweepArgs) -> Result<(SweepSpec, Shard, usize), CliError> {
+    let spec = spec_of(args)?;
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s).map_err(CliError::BadInput)?,
+        None => Shard::ALL,
+    };
+    if args.threads == Some(0) {
+        return Err(CliError::BadInput("--threads must be >= 1".into()));
+    }
+    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    Ok((spec, shard, threads))
+}
+
 fn dedup<T: PartialEq>(it: impl Iterator<Item = T>) -> Vec<T> {
     let mut v = Vec::new();
     for x in it {
@@ -145,14 +164,7 @@ fn dedup<T: PartialEq>(it: impl Iterator<Item = T>) -> Vec<T> {
 /// writes into ([`CliError::FolderInUse`]) (exit 2); an interruption or
 /// an I/O failure (exit 1; finished runs are kept in the journal).
 pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
-    let spec = spec_of(args)?;
-    let shard = match &args.shard {
-        Some(s) => Shard::parse(s).map_err(CliError::BadInput)?,
-        None => Shard::ALL,
-    };
-    if args.threads == Some(0) {
-        return Err(CliError::BadInput("--threads must be >= 1".into()));
-    }
+    let (spec, shard, threads) = plan(args)?;
     // One writer per folder, from before the manifest is read to the last figure:
     // a second sweep started into the same --out is refused here (exit 2), and the
     // first finishes unharmed.
@@ -175,7 +187,6 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     }
     let writer = store::Journal::open(&args.out, &journal.rows, journal.dropped_partial_line)?;
     let ics = spec.initial_conditions();
-    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if !args.json {
         let in_shard = shard.indices(&spec).len();
         eprintln!(
@@ -223,18 +234,7 @@ pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
         return Err(e);
     }
     let computed = done.load(Ordering::Relaxed) as usize;
-    let simulated_s = computed as f64 * spec.run_duration();
-    let rate = simulated_s / (wall_s.max(1e-9) * threads as f64);
-    let timing = Timing {
-        runs_computed: computed,
-        threads,
-        wall_s,
-        simulated_s,
-        simulated_s_per_wall_s_per_core: rate,
-        cpu_s,
-        simulated_s_per_cpu_s: simulated_s / cpu_s.max(1e-9),
-        paper_grid_projection_s: if rate > 0.0 { PAPER_GRID_SIMULATED_S / (rate * threads as f64) } else { f64::NAN },
-    };
+    let timing = Timing::of(&spec, computed, threads, wall_s, cpu_s);
     let interrupted = stop.load(Ordering::Relaxed) && computed < todo.len();
     let rows = store::read_journal(&args.out, &manifest)?.rows;
     let summary = finish(&args.out, &manifest, rows, Some(timing), resumed, interrupted)?;

@@ -43,6 +43,25 @@ pub struct Timing {
     pub paper_grid_projection_s: f64,
 }
 
+impl Timing {
+    /// The timing of `computed` runs of `spec` on `threads` threads in `wall_s`
+    /// s of wall-clock time and `cpu_s` s of CPU time.
+    pub fn of(spec: &SweepSpec, computed: usize, threads: usize, wall_s: f64, cpu_s: f64) -> Self {
+        let simulated_s = computed as f64 * spec.run_duration();
+        let rate = simulated_s / (wall_s.max(1e-9) * threads as f64);
+        Self {
+            runs_computed: computed,
+            threads,
+            wall_s,
+            simulated_s,
+            simulated_s_per_wall_s_per_core: rate,
+            cpu_s,
+            simulated_s_per_cpu_s: simulated_s / cpu_s.max(1e-9),
+            paper_grid_projection_s: if rate > 0.0 { PAPER_GRID_SIMULATED_S / (rate * threads as f64) } else { f64::NAN },
+        }
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct SweepSummary {
@@ -77,7 +96,7 @@ pub(crate) const MAXIMA_NOTE: &str = "maxima over the continuous trajectory of t
      and maxima inside steps located where the slope changes sign and read from the step's 7th-order dense output";
 
 /// User plus system CPU time of this process so far, s (getrusage).
-pub(crate) fn cpu_seconds() -> f64 {
+pub fn cpu_seconds() -> f64 {
     // SAFETY: getrusage only writes the struct it is given.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
     if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
@@ -123,7 +142,26 @@ pub(crate) fn finish(
         }
     }
     files.push(dir.join("summary.json"));
-    let summary = SweepSummary {
+    let files = files.iter().map(|p| p.display().to_string()).collect();
+    let summary = summary_of(m, results, missing, timing, resumed, interrupted, files);
+    out.write_json("summary.json", &summary)?;
+    out.commit()?;
+    Ok(summary)
+}
+
+/// `summary.json` of the sweep `m` from its `results` (with `missing` runs not
+/// in its folder), this invocation's `timing` (`None` for a merge), the runs
+/// `resumed` from the journal, whether it was `interrupted`, and the `files` written.
+pub fn summary_of(
+    m: &Manifest,
+    results: Results,
+    missing: usize,
+    timing: Option<Timing>,
+    resumed: usize,
+    interrupted: bool,
+    files: Vec<String>,
+) -> SweepSummary {
+    SweepSummary {
         status: if interrupted {
             "interrupted"
         } else if missing > 0 {
@@ -139,11 +177,8 @@ pub(crate) fn finish(
         results,
         timing,
         resumed_runs: resumed,
-        files: files.iter().map(|p| p.display().to_string()).collect(),
-    };
-    out.write_json("summary.json", &summary)?;
-    out.commit()?;
-    Ok(summary)
+        files,
+    }
 }
 
 pub(crate) fn report(s: &SweepSummary, json: bool) {

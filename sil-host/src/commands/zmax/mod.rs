@@ -20,7 +20,7 @@ use crate::{
     output::{OutputSet, progress_bar, write_csv},
 };
 use analyses::admissible::{p_on_belt, positive_intervals};
-use analyses::zmax::{Combination, Criteria, Search, Setting, Trial, default_bracket, max_trials, sampled_scenario, search};
+use analyses::zmax::{Combination, Criteria, Search, Setting, default_bracket, max_trials, sampled_scenario, search};
 use plant::initial::PaperX0;
 use rig::scenario::Scenario;
 
@@ -83,12 +83,23 @@ fn theta1_fold(x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
     (best > 0 && best < n).then(|| z_at(best))
 }
 
-/// Runs `sil-host zmax`.
+/// A `Z_t,sliding` search checked and set up, before anything runs: what [`plan`] returns.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// The base scenario (`--scenario` or the embedded default, with `--set` and `--iwc`).
+    pub base: Scenario,
+    /// The trial's criteria.
+    pub criteria: Criteria,
+    /// The searches: each case with its bracket of targets, m.
+    pub jobs: Vec<(Combination, (f64, f64))>,
+}
+
+/// Checks `sil-host zmax`'s options and every case's set-up (the sampled
+/// scenario and the ideal law at the top of its bracket).
 ///
 /// # Errors
-/// Bad input (exit 2, nothing written); I/O or plotting failures (exit 1).
-pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
-    let started = Instant::now();
+/// Bad input (exit 2).
+pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
     let base = base_scenario(args)?;
     let criteria = Criteria {
         duration_s: args.duration,
@@ -106,7 +117,6 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     for c in &combos {
         analyses::zmax::check_x0(c.x0)?;
     }
-    // Check every set-up before the output folder is touched.
     let mut jobs = Vec::new();
     for combo in combos {
         let bracket = match &args.bracket {
@@ -117,37 +127,20 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
         analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::Sim)?;
         jobs.push((combo, bracket));
     }
-    let total: u64 = jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
-    let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
-    let results: Vec<Result<Search, analyses::AnalysisError>> = jobs
-        .par_iter()
-        .map(|&(combo, bracket)| {
-            let s = search(&base, combo, bracket, args.tol, &criteria, |_| progress.inc(1));
-            // A search that ends early (a bracket end decides) frees its share of the bar.
-            if let Ok(s) = &s {
-                progress.inc(u64::from(max_trials(bracket.0, bracket.1, args.tol)).saturating_sub(s.trials.len() as u64));
-            }
-            s
-        })
-        .collect();
-    progress.finish_and_clear();
-    let searches = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    Ok(Plan { base, criteria, jobs })
+}
 
-    let mut out = OutputSet::new(&args.output.out)?;
+/// `summary.json` (with `zmax.csv`'s rows) of the `searches` of `plan`, which
+/// took `wall_s` s.
+pub fn summary(args: &ZmaxArgs, plan: Plan, searches: &[Search], wall_s: f64) -> ZmaxSummary {
+    let Plan { base, criteria, .. } = plan;
     let rows: Vec<ZmaxRow> = searches
         .iter()
         .map(|s| ZmaxRow::of(s, p_zero_end(&base, s.combination.x0, s.bracket), theta1_fold(s.combination.x0, s.bracket)))
         .collect();
-    write_csv(&mut out, "zmax.csv", &rows)?;
-    let trials: Vec<Trial> = searches.iter().flat_map(|s| s.trials.iter().cloned()).collect();
-    write_csv(&mut out, "trials.csv", &trials.iter().map(TrialRow::from).collect::<Vec<_>>())?;
-    for s in &searches {
-        let path = out.stage(&format!("zmax-{}.svg", s.combination.stem()));
-        draw(&path, s)?;
-    }
-    let summary = ZmaxSummary {
+    ZmaxSummary {
         results: rows,
-        trials,
+        trials: searches.iter().flat_map(|s| s.trials.iter().cloned()).collect(),
         criteria,
         tol_m: args.tol,
         definition: DEFINITION,
@@ -161,9 +154,50 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
             hybrid_ki_x0u: base.controller.hybrid_ki(PaperX0::U),
         },
         base_scenario: base,
-        validity: trials_validity(&searches),
-        wall_s: started.elapsed().as_secs_f64(),
-    };
+        validity: trials_validity(searches),
+        wall_s,
+    }
+}
+
+/// The rows of `trials.csv`: every trial of every search, in order.
+pub fn trial_rows(summary: &ZmaxSummary) -> Vec<TrialRow> {
+    summary.trials.iter().map(TrialRow::from).collect()
+}
+
+/// Runs `sil-host zmax`.
+///
+/// # Errors
+/// Bad input (exit 2, nothing written); I/O or plotting failures (exit 1).
+pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
+    let started = Instant::now();
+    // Check every set-up before the output folder is touched.
+    let plan = plan(args)?;
+    let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
+    let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
+    let results: Vec<Result<Search, analyses::AnalysisError>> = plan
+        .jobs
+        .par_iter()
+        .map(|&(combo, bracket)| {
+            let s = search(&plan.base, combo, bracket, args.tol, &plan.criteria, |_| progress.inc(1));
+            // A search that ends early (a bracket end decides) frees its share of the bar.
+            if let Ok(s) = &s {
+                progress.inc(u64::from(max_trials(bracket.0, bracket.1, args.tol)).saturating_sub(s.trials.len() as u64));
+            }
+            s
+        })
+        .collect();
+    progress.finish_and_clear();
+    let searches = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+
+    let mut out = OutputSet::new(&args.output.out)?;
+    let summary = summary(args, plan, &searches, f64::NAN);
+    write_csv(&mut out, "zmax.csv", &summary.results)?;
+    write_csv(&mut out, "trials.csv", &trial_rows(&summary))?;
+    for s in &searches {
+        let path = out.stage(&format!("zmax-{}.svg", s.combination.stem()));
+        draw(&path, s)?;
+    }
+    let summary = ZmaxSummary { wall_s: started.elapsed().as_secs_f64(), ..summary };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
     let validity = summary.validity;

@@ -159,29 +159,49 @@ impl ZmaxRow {
     }
 }
 
-/// A flat row of `trials.csv`.
+/// A flat row of `trials.csv`: one trial, with its validity counters.
 #[derive(Debug, Clone, Serialize)]
-pub(crate) struct TrialRow {
-    pub(crate) controller: ControllerKind,
-    pub(crate) x0: PaperX0,
-    pub(crate) setting: Setting,
-    pub(crate) target_z_t_m: f64,
-    pub(crate) stop: StopReason,
-    pub(crate) slides_to_target: bool,
-    pub(crate) tracked: bool,
-    pub(crate) lift_offs: u64,
-    pub(crate) impacts_without_collision: u64,
-    pub(crate) first_lift_off_s: Option<f64>,
-    pub(crate) settle_error_m: f64,
-    pub(crate) failure: Option<String>,
-    pub(crate) simulated_s: f64,
-    pub(crate) wall_s: f64,
-    pub(crate) energy_gains: u64,
-    pub(crate) newton_fallbacks: u64,
-    pub(crate) poisson_fallbacks: u64,
-    pub(crate) cone_violations: u64,
-    pub(crate) zeno_stops: u64,
-    pub(crate) integrator_failures: u64,
+pub struct TrialRow {
+    /// `pid` or `hybrid`.
+    pub controller: ControllerKind,
+    /// Initial condition (`d` or `u`).
+    pub x0: PaperX0,
+    /// `ideal` or `sampled`.
+    pub setting: Setting,
+    /// The target `z_t*`, m.
+    pub target_z_t_m: f64,
+    /// Why the trial ended as it did.
+    pub stop: StopReason,
+    /// The tip slid to the target with no lift-off (the `Z_t,sliding` predicate).
+    pub slides_to_target: bool,
+    /// It also settled within the settle tolerance (the tracking predicate).
+    pub tracked: bool,
+    /// Lift-offs seen (the trial stops at the first one).
+    pub lift_offs: u64,
+    /// Impacts without collision seen.
+    pub impacts_without_collision: u64,
+    /// Time of the first lift-off, s.
+    pub first_lift_off_s: Option<f64>,
+    /// Largest `|z_t - z_t*|` over the settle window, m (NaN if the run stopped before it).
+    pub settle_error_m: f64,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<String>,
+    /// Simulated time, s.
+    pub simulated_s: f64,
+    /// Wall-clock time, s.
+    pub wall_s: f64,
+    /// Validity: energy-creating impacts.
+    pub energy_gains: u64,
+    /// Validity: Newton-law fallbacks.
+    pub newton_fallbacks: u64,
+    /// Validity: Poisson-law fallbacks.
+    pub poisson_fallbacks: u64,
+    /// Validity: friction-cone violations.
+    pub cone_violations: u64,
+    /// Validity: Zeno stops.
+    pub zeno_stops: u64,
+    /// Validity: integrator failures.
+    pub integrator_failures: u64,
 }
 
 impl From<&Trial> for TrialRow {

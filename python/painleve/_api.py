@@ -1,0 +1,451 @@
+"""The package's functions: one per ``sil-host`` command that computes, with the
+command's arguments and defaults as keyword arguments (``--v-belt`` is
+``v_belt``), computed in this process by the workspace's libraries, returning a
+:class:`painleve.Result`. See docs/python.md."""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Tuple, Union, cast
+
+from . import _args, _painleve
+from ._result import PainleveWarning, Result
+
+__all__ = [
+    "simulate",
+    "admissible",
+    "modes",
+    "poincare",
+    "sweep",
+    "zmax",
+    "run",
+    "sensitivity",
+    "default_scenario",
+    "scenario_toml",
+]
+
+Number = Union[int, float]
+Range = Union[str, Number, Tuple[Number, Number], Sequence[Number]]
+Progress = Union[bool, None, Callable[[int, int], Any]]
+Scenario = Union[None, str, "os.PathLike[str]", Mapping[str, Any]]
+
+
+def _finish(raw: Mapping[str, Any], strict: bool) -> Result:
+    """The result, raising with ``strict`` and warning otherwise when the CLI
+    would have exited with an error after writing."""
+    result = Result._from_raw(raw)
+    if result.failure is not None:
+        if strict:
+            result.check()
+        warnings.warn(f"{result.command}: {result.failure}", PainleveWarning, stacklevel=3)
+    return result
+
+
+def simulate(
+    *,
+    x0: str = "a",
+    x0_deg: Optional[Union[str, Sequence[Number]]] = None,
+    mu: float = 0.6,
+    v_belt: float = -0.4,
+    impact_law: str = "newton",
+    e_n: float = 0.2,
+    duration: float = 10.0,
+    sample_dt: float = 1e-3,
+    rtol: float = 1e-9,
+    atol: float = 1e-11,
+    iwc: str = "restitution",
+    set: _args.Overrides = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """Open-loop simulation (``u = 0``) of the arm on the belt: ``sil-host simulate``.
+
+    Args:
+        x0: the paper's initial condition ``"a"``, ``"d"`` or ``"u"`` (projected
+            onto the belt).
+        x0_deg: instead, ``(theta1, theta1_dot, theta2, theta2_dot)`` in degrees
+            and deg/s (a tip up to 1 mm inside the belt is projected onto it).
+        mu: friction coefficient (>= 0).
+        v_belt: belt speed, m/s.
+        impact_law: ``"newton"``, ``"poisson"`` or ``"energetic"``.
+        e_n: restitution coefficient in [0, 1].
+        duration: simulated time, s.
+        sample_dt: sampling period of the trace, s (events at their exact times).
+        rtol, atol: the integrator's tolerances.
+        iwc: impact-without-collision rule, ``"restitution"`` or ``"plastic"``.
+        set: the arm's parameters (paper Table I, SI, radians): ``{"plant.m":
+            0.24}`` or ``["plant.m=0.24"]``; keys ``plant.m``, ``plant.l``,
+            ``plant.sigma``, ``plant.k``, ``plant.h``, ``plant.alpha0``, ``plant.g``.
+        strict: raise :class:`PainleveError` (exit code 1) on a model violation.
+        progress: ``True`` a progress line on stderr, ``False`` none, or a
+            callable ``f(done, total)`` (samples).
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: parameters,
+        initial condition, ``counters``, ``validity``, final state) and tables:
+
+        ``trace`` (one row per sample): ``t`` s, ``theta1`` rad, ``theta1_dot``
+        rad/s, ``theta2`` rad, ``theta2_dot`` rad/s, ``z_t`` m, ``z_n`` m,
+        ``z_t_dot`` m/s, ``z_n_dot`` m/s, ``z_r_dot`` m/s (``z_t_dot - v_belt``),
+        ``f_t`` N, ``f_n`` N, ``mode`` (``flight``, ``sliding``, ``sticking``),
+        ``energy`` J.
+
+        ``events`` (every event at its located time): ``t`` s, ``kind``,
+        ``mode_after``, ``v_n_before``, ``v_n_after``, ``v_r_before``,
+        ``v_r_after`` m/s, ``impulse_t``, ``impulse_n`` N s, ``energy_change``,
+        ``contact_work`` J, ``resolution``.
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (the simulation stops within its sample).
+
+    A simulation that fails part way returns what it computed up to then, with
+    ``failure`` set and a :class:`PainleveWarning` (``strict=True`` raises).
+    """
+    return _finish(_args.call("simulate", simulate, dict(locals()), progress), strict)
+
+
+def admissible(*, mu: float = 0.6, set: _args.Overrides = None) -> Result:
+    """Admissible configurations (paper Table II): the ranges of ``z_t`` on the
+    belt where ``p > 0``, per elbow branch and slip direction: ``sil-host admissible``.
+
+    Args:
+        mu: friction coefficient (>= 0).
+        set: ``plant.l`` and ``plant.h`` (m), the only parameters that move the ranges.
+
+    Returns:
+        :class:`Result` with ``summary`` = ``admissible.json``:
+        ``z_r_dot_positive`` (the paper's case) and ``z_r_dot_negative``, each
+        ``{"elbow_up": [[lo, hi], ...], "elbow_down": [...]}`` in m; ``reach_m``,
+        ``mirror_check``, ``params``; and the table ``intervals``: ``direction``
+        (``z_r_dot_positive``/``z_r_dot_negative``), ``branch`` (``elbow_up``/
+        ``elbow_down``), ``lo_m``, ``hi_m``. No simulation: ``validity`` is ``None``.
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+    """
+    return _finish(_args.call("admissible", admissible, dict(locals())), False)
+
+
+def modes(
+    *,
+    mu: float = 0.6,
+    v_belt: float = -0.4,
+    branch: str = "down",
+    theta1_deg: Range = (-90.0, 90.0),
+    theta1_dot: Range = (-10.0, 10.0),
+    grid: int = 400,
+    theta2_sign: str = "plus",
+    set: _args.Overrides = None,
+) -> Result:
+    """Mode map (paper Fig. 2): the contact mode over a grid of ``(theta1,
+    theta1_dot)`` with the tip on the belt: ``sil-host modes``.
+
+    Args:
+        mu: friction coefficient (>= 0).
+        v_belt: belt speed, m/s (sets the sign of ``z_r_dot``).
+        branch: elbow branch ``"down"`` or ``"up"`` (with ``theta2_sign="auto"``).
+        theta1_deg: ``(min, max)`` of ``theta1``, degrees.
+        theta1_dot: ``(min, max)`` of ``theta1_dot``, rad/s.
+        grid: points per axis (2 to 1000).
+        theta2_sign: ``"plus"``, ``"minus"`` or ``"auto"`` (see ``sil-host modes --help``).
+        set: the arm's parameters (paper Table I), as for :func:`simulate`.
+
+    Returns:
+        :class:`Result` with ``summary`` (the ``--json`` document: counts per
+        mode, ``p_zero``, ranges) and the table ``modes`` (``grid**2`` rows,
+        ``theta1`` outer): ``theta1_rad``, ``theta1_deg``, ``theta1_dot`` rad/s,
+        ``theta2_rad``, ``b`` m/s^2, ``p`` 1/kg, ``z_r_dot`` m/s, ``mode``
+        (``sliding``, ``flight``, ``indeterminate``, ``inconsistent``,
+        ``unreachable``, ``singular``), ``theta2_dot`` rad/s, ``branch``;
+        NaN where a quantity does not exist. ``extras``: ``theta1_deg`` and
+        ``theta1_dot`` (the axes), ``b_zero`` and ``zr_zero`` (curves ``b = 0``
+        and ``z_r_dot = 0``, lists of ``(n, 2)`` arrays of ``(theta1 deg,
+        theta1_dot rad/s)``). No simulation: ``validity`` is ``None``.
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+    """
+    return _finish(_args.call("modes", modes, dict(locals())), False)
+
+
+def poincare(
+    *,
+    mu: float = 0.6,
+    x0: str = "a",
+    x0_deg: Optional[Union[str, Sequence[Number]]] = None,
+    v_belt: Range = (-0.9, -0.3),
+    v_step: float = 0.002,
+    transient: float = 250.0,
+    record: float = 50.0,
+    tol: float = 1e-4,
+    max_period: int = 32,
+    section_depth: float = 1e-6,
+    chaos_threshold: float = 0.01,
+    lyap_iterations: int = 200,
+    lyap_skip: int = 20,
+    lyap_d0: float = 1e-7,
+    impact_law: str = "newton",
+    e_n: float = 0.2,
+    rtol: float = 1e-9,
+    atol: float = 1e-11,
+    threads: Optional[int] = None,
+    iwc: str = "restitution",
+    set: _args.Overrides = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """One-parameter bifurcation diagram (paper Fig. 4): ``theta1`` at the upward
+    crossings of ``theta1_dot = 0`` over a grid of belt speeds, each classified:
+    ``sil-host poincare``. Runs in parallel (``threads``, one per core by default).
+
+    Args:
+        v_belt: ``(min, max)`` (both ends included) or one speed, m/s.
+        v_step: grid step, m/s.
+        transient, record: discarded transient and record window, s.
+        tol, max_period: the period test on section points (rad).
+        section_depth: hysteresis of the section, rad/s.
+        chaos_threshold, lyap_iterations, lyap_skip, lyap_d0: the Lyapunov estimate.
+        The others as for :func:`simulate`.
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: counts, bands,
+        ``validity``) and tables:
+
+        ``section``: ``v_belt`` m/s, ``t`` s, ``theta1`` rad, ``theta1_deg``,
+        ``theta1_dot`` rad/s, ``theta2`` rad, ``theta2_dot`` rad/s, ``kind``
+        (``smooth``/``jump``), ``mode``.
+
+        ``classes`` (per belt speed): ``v_belt``, ``class``, ``period``,
+        ``n_crossings``, ``distinct_points``, ``lyapunov_per_crossing``,
+        ``lyapunov_per_s`` 1/s, ``lyapunov_std_error``, ``lyapunov_iterations``,
+        ``lyapunov_collapsed``, ``final_mode``, ``final_theta1`` rad,
+        ``lift_offs``, ``touchdowns``, ``error``, ``wall_s``, and the validity
+        counters ``energy_gains``, ``newton_fallbacks``, ``poisson_fallbacks``,
+        ``cone_violations``, ``zeno_stops``, ``integrator_failures``.
+
+        ``extras["classes"]``: ``classes.json`` (per speed, with its crossings).
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (stops before the next belt speed).
+    """
+    return _finish(_args.call("poincare", poincare, dict(locals()), progress), strict)
+
+
+def sweep(
+    *,
+    mu: Range = (0.1, 1.0),
+    mu_step: float = 0.1,
+    v_belt: Range = (-1.0, -0.1),
+    v_belt_step: float = 0.005,
+    ics: Union[str, Sequence[str]] = ("a", "d"),
+    random_ics: int = 0,
+    seed: int = 1,
+    transient: float = 250.0,
+    record: float = 50.0,
+    controller: str = "none",
+    ideal: bool = False,
+    scenario: Scenario = None,
+    impact_law: Union[str, Sequence[str]] = ("newton",),
+    e_n: Union[float, Sequence[float]] = (0.2,),
+    iwc: Union[str, Sequence[str]] = ("restitution",),
+    threshold: float = 1e-6,
+    rtol: float = 1e-9,
+    atol: float = 1e-11,
+    set: _args.Overrides = None,
+    shard: Optional[str] = None,
+    limit: Optional[int] = None,
+    threads: Optional[int] = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """Two-parameter brute-force bifurcation diagram (paper Figs. 3 and 9): a grid
+    in ``(mu, v_belt)`` (and impact law, ``e_n``, IWC rule), each run a transient
+    then a record window: ``sil-host sweep``, in memory (no folder, no journal:
+    nothing to resume). Runs in parallel (``threads``, all cores by default).
+
+    Args:
+        mu: ``(min, max)`` or one value, spaced by ``mu_step``.
+        v_belt: ``(min, max)`` or one value, m/s, spaced by ``v_belt_step``.
+        ics: the paper's initial conditions (``"a"``, ``"d"``, ``"u"``), or ``"none"``.
+        random_ics, seed: random initial conditions in contact, and their seed.
+        transient, record: the windows, s.
+        controller: ``"none"`` (open loop), ``"hybrid"`` or ``"pid"`` (the
+            firmware in-process, sampled), with ``ideal=True`` the paper's
+            continuous-time law.
+        scenario: closed loop: a scenario path or dict (:func:`run`).
+        impact_law, e_n, iwc: sweep dimensions (lists).
+        threshold: bouncing when ``max theta1_dot`` over the record exceeds it, rad/s.
+        set: open loop: the arm's parameters; closed loop: any scenario key but
+            those the sweep sets.
+        shard: ``"K/N"``, this shard's runs only; limit: at most this many runs.
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: ``spec``,
+        ``results`` with the critical ``mu``, the bands, outcome counts and
+        ``validity``, ``timing``) and the table ``sweep`` (one row per run, by
+        index; ``sweep.csv``): ``index``, ``impact_law``, ``e_n``, ``iwc``,
+        ``mu``, ``v_belt`` m/s, ``ic``, ``outcome``, ``bouncing``,
+        ``theta1_dot_max`` rad/s, ``t_theta1_dot_max`` s, ``lift_offs``,
+        ``touchdowns``, ``impacts_without_collision``, ``z_n_max`` m,
+        ``tip_height_max`` m, ``final_mode``, ``target_error_m`` m (closed
+        loop), ``lift_offs_transient``, ``rhs_evaluations``, the validity
+        counters ``energy_gains``, ``newton_fallbacks``, ``poisson_fallbacks``,
+        ``cone_violations``, ``zeno_stops``, ``jams``, ``integrator_failures``,
+        and ``error``.
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (every run stops within 10 s of simulated time).
+    """
+    return _finish(_args.call("sweep", sweep, dict(locals()), progress, scenario), strict)
+
+
+def zmax(
+    *,
+    controller: str = "hybrid",
+    x0: str = "d",
+    ideal: bool = False,
+    all: bool = False,
+    tol: float = 1e-3,
+    bracket: Optional[Range] = None,
+    duration: float = 10.0,
+    reach_tol: float = 5e-3,
+    settle_tol: float = 1e-3,
+    settle_window: float = 1.0,
+    iwc: Optional[str] = None,
+    lift_off_gap: float = 0.0,
+    scenario: Scenario = None,
+    set: _args.Overrides = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """``Z_t,sliding`` by bisection (experiments 5 and 6): the largest target the
+    tip slides to with no lift-off, and the tracking limit: ``sil-host zmax``.
+
+    Args:
+        controller: ``"pid"`` or ``"hybrid"``; x0: ``"d"`` or ``"u"``;
+            ideal: the paper's ideal law instead of the sampled firmware;
+            all: the eight cases, in parallel.
+        tol: bisection tolerance, m; bracket: ``(lo, hi)`` targets, m.
+        duration: trial length, s; reach_tol, settle_tol: m; settle_window: s.
+        iwc: the base scenario's IWC rule; lift_off_gap: lift-off criterion, m.
+        scenario: base scenario (path or dict); set: its overrides.
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: ``results``,
+        ``trials``, ``criteria``, ``validity``, gains) and tables:
+
+        ``zmax`` (one row per case): ``controller``, ``x0``, ``setting``,
+        ``outcome``, ``z_t_sliding_m``, ``error_at_limit_m``,
+        ``first_failing_m``, ``stop_failing``, ``why_failing``,
+        ``paper_z_t_sliding_m``, ``tracking_outcome``, ``z_t_tracking_m``,
+        ``tracking_first_failing_m``, ``tracking_stop_failing``,
+        ``tracking_why_failing``, ``bracket_lo_m``, ``bracket_hi_m``,
+        ``p_zero_end_m``, ``theta1_fold_m`` (all m), ``trials``,
+        ``invalid_trials``, ``wall_s``.
+
+        ``trials`` (every trial): ``controller``, ``x0``, ``setting``,
+        ``target_z_t_m``, ``stop``, ``slides_to_target``, ``tracked``,
+        ``lift_offs``, ``impacts_without_collision``, ``first_lift_off_s``,
+        ``settle_error_m``, ``failure``, ``simulated_s``, ``wall_s`` and the
+        validity counters.
+
+        ``extras["limit_traces"]``: ``{case: Table}``, the run at the limit
+        (``t`` s, ``z_t``, ``z_t_ref`` m, ``f_n`` N, torques N m, ``mode``).
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (each search stops before its next trial).
+    """
+    return _finish(_args.call("zmax", zmax, dict(locals()), progress, scenario), strict)
+
+
+def run(
+    scenario: Scenario = None,
+    *,
+    controller: Optional[str] = None,
+    x0: Optional[str] = None,
+    target_zt: Optional[float] = None,
+    duration: Optional[float] = None,
+    seed: Optional[int] = None,
+    iwc: Optional[str] = None,
+    set: _args.Overrides = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """Closed-loop SIL run of a scenario with the firmware step linked into this
+    process, in lockstep: ``sil-host run --in-process`` (the same trace, bit for
+    bit, as the iceoryx2 run of the same scenario and seed).
+
+    Args:
+        scenario: ``None`` (the embedded default: hybrid from ``x0d``, ``mu =
+            0.6``, ``v_belt = -0.4 m/s``, ``z_t* = 0.10 m``, 10 s at 1 kHz), the
+            path of a TOML file (``scenarios/pid-x0u.toml``), or a dict of its
+            tables (:func:`default_scenario` gives one to change).
+        controller, x0, target_zt (m), duration (s), seed, iwc: override the
+            scenario (``--controller``, ...).
+        set: scenario keys, ``{"plant.m": 0.24, "controller.pid.kp": [150, 0]}``
+            or ``["plant.m=0.24"]`` (a key set by a flag too is refused).
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: lift-off
+        statistics, deadline misses, tracking error, ``validity``, the
+        firmware's announcement), the table ``trace`` (one row per period):
+        ``t`` s, ``theta1`` rad, ``theta1_dot`` rad/s, ``theta2`` rad,
+        ``theta2_dot`` rad/s, ``z_t``, ``z_n``, ``z_t_ref`` m, ``f_t``, ``f_n``
+        N, ``mode``, ``u1_cmd``, ``u2_cmd``, ``u1_applied``, ``u2_applied`` N m,
+        ``lift_off_true``, ``lift_off_detected``, ``deadline_miss``,
+        ``firmware_deadline_miss``, ``overruns``, ``status`` (the firmware's
+        status word), and ``extras["scenario"]``, the scenario as run.
+
+    Raises:
+        PainleveError: bad scenario or overrides, with the CLI's message
+            (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (the run stops within its period).
+
+    A run that stops early (safe state, plant failure) returns its periods up to
+    then, with ``failure`` set and a :class:`PainleveWarning`.
+    """
+    return _finish(_args.call("run", run, dict(locals()), progress, scenario), strict)
+
+
+def sensitivity(
+    *,
+    size: str = "quick",
+    scenario: Scenario = None,
+    set: _args.Overrides = None,
+    threads: Optional[int] = None,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """The headline results under each open modelling and firmware choice, one at
+    a time: ``sil-host sensitivity`` (``size="quick"``: about a minute on 2
+    cores; ``"paper"``: hours).
+
+    Returns:
+        :class:`Result` with ``summary`` (``summary.json``: ``study`` with
+        per choice its results and ``validity``, ``base_scenario``) and the
+        table ``sensitivity``: ``choice``, ``value``, ``is_default``,
+        ``result``, ``outcome``.
+
+    Raises:
+        PainleveError: bad input, with the CLI's message (``exit_code`` 2).
+        KeyboardInterrupt: Ctrl-C (stops within the running jobs).
+    """
+    return _finish(_args.call("sensitivity", sensitivity, dict(locals()), progress, scenario), strict)
+
+
+def default_scenario() -> Dict[str, Any]:
+    """The embedded default scenario (``scenarios/default.toml``) as a dict of its
+    TOML tables, to change and pass to :func:`run` (or ``scenario=`` of
+    :func:`sweep`, :func:`zmax`, :func:`sensitivity`)."""
+    return cast(Dict[str, Any], json.loads(_painleve.toml_to_json(_painleve.default_scenario_toml())))
+
+
+def scenario_toml(scenario: Mapping[str, Any]) -> str:
+    """A scenario dict as the TOML text of a scenario file."""
+    return _args.scenario_toml(scenario)

@@ -1,0 +1,185 @@
+"""``painleve.load``: any output folder ``sil-host`` writes, read back with the
+standard library and NumPy only (no compiled code)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Set, Union
+
+import numpy as np
+
+from ._result import Result, Table, describe_violations
+
+__all__ = ["load", "read_csv"]
+
+_INT = re.compile(r"^[+-]?\d+$")
+
+
+def _infer(cells: List[str]) -> np.ndarray:
+    """One CSV column as a typed array: ``bool`` (all ``true``/``false``),
+    ``int64`` (all integers, none empty), ``float64`` (numbers, ``NaN``/``inf``;
+    an empty cell is NaN; a column of empty cells is NaN), else text (``""`` for
+    an empty cell)."""
+    nonempty = [c for c in cells if c != ""]
+    if not nonempty:
+        return np.full(len(cells), np.nan)
+    if len(nonempty) == len(cells) and all(c in ("true", "false") for c in cells):
+        return np.array([c == "true" for c in cells], dtype=bool)
+    if len(nonempty) == len(cells) and all(_INT.match(c) for c in cells):
+        try:
+            return np.array([int(c) for c in cells], dtype=np.int64)
+        except OverflowError:
+            return np.array([int(c) for c in cells], dtype=np.uint64)
+    try:
+        return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
+    except ValueError:
+        return np.array(cells, dtype=str)
+
+
+def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
+    """One CSV file the CLI wrote, as a :class:`Table` (column types as
+    :class:`Table` describes them). A file with only a header gives empty
+    ``float64`` columns."""
+    path = Path(path)
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.reader(f)
+        try:
+            header = next(reader)
+        except StopIteration:
+            return Table({}, path.stem)
+        rows = [r for r in reader if r]
+    columns: Dict[str, Any] = {}
+    for i, name in enumerate(header):
+        cells = [r[i] if i < len(r) else "" for r in rows]
+        columns[name] = _infer(cells) if rows else np.array([], dtype=np.float64)
+    return Table(columns, path.stem)
+
+
+# Where each command's summary keeps the validity counters summed over its runs.
+_VALIDITY_AT = {
+    "simulate": ("validity",),
+    "run": ("validity",),
+    "pil": ("validity",),
+    "poincare": ("validity",),
+    "zmax": ("validity",),
+    "sweep": ("results", "validity"),
+    "sensitivity": ("study", "validity"),
+}
+
+
+def _detect(files: Set[str], summary: Any) -> str:
+    """The command that wrote a folder, from its files."""
+    if "report.json" in files:
+        return "report"
+    if "admissible.json" in files:
+        return "admissible"
+    if "modes.csv" in files:
+        return "modes"
+    if "sweep.csv" in files or "sweep.json" in files:
+        return "sweep"
+    if "section.csv" in files or "classes.csv" in files:
+        return "poincare"
+    if "zmax.csv" in files:
+        return "zmax"
+    if "sensitivity.csv" in files:
+        return "sensitivity"
+    if "events.csv" in files:
+        return "simulate"
+    if "trace.csv" in files:
+        return "pil" if isinstance(summary, dict) and summary.get("pil") else "run"
+    return "unknown"
+
+
+def _validity(command: str, summary: Any) -> Optional[Dict[str, Any]]:
+    node = summary
+    for key in _VALIDITY_AT.get(command, ()):
+        if not isinstance(node, dict) or key not in node:
+            return None
+        node = node[key]
+    return node if command in _VALIDITY_AT and isinstance(node, dict) else None
+
+
+def _failure(command: str, summary: Any) -> Optional[str]:
+    """What a folder's summary says about a failure (the CLI exited with 1)."""
+    if not isinstance(summary, dict):
+        return None
+    status = summary.get("status")
+    if status in ("failed", "interrupted"):
+        return summary.get("error") or f"{command} {status}"
+    return None
+
+
+def load(path: Union[str, "os.PathLike[str]"]) -> Result:
+    """Reads an output folder of ``sil-host`` (any command's ``--out DIR``).
+
+    Every ``*.csv`` becomes a :class:`Table` named as the file without ``.csv``
+    (``trace``, ``events``, ``sweep``, ``runs``, ``section``, ``classes``,
+    ``zmax``, ``trials``, ``modes``, ``sensitivity``), ``summary.json`` the
+    result's ``summary`` (``admissible.json`` for ``admissible``,
+    ``report.json`` for ``report``), every other ``*.json`` an entry of
+    ``extras`` (``classes`` of ``poincare``, ``sweep`` of a sweep's spec), and
+    text files (``defmt.log``, ``report.md``) entries of ``extras`` as strings.
+    A report's experiment folders are loaded too, into ``extras["experiments"]``
+    (``{id: Result}``). SVG figures are listed in ``extras["figures"]`` (paths).
+
+    The command is recognised from the files; the validity counters come from the
+    summary where the command keeps them (``validity``, ``results.validity`` of a
+    sweep, ``study.validity`` of a sensitivity study), ``violations`` in the
+    CLI's words, and ``failure`` from a summary whose ``status`` is ``failed``
+    or ``interrupted``.
+
+    Raises:
+        FileNotFoundError: ``path`` is not a folder.
+        ValueError: a JSON file does not parse (the message names it).
+    """
+    root = Path(path)
+    if not root.is_dir():
+        raise FileNotFoundError(f"no output folder {root}")
+    entries = sorted(p for p in root.iterdir() if not p.name.startswith("."))
+    files = {p.name for p in entries if p.is_file()}
+    tables: Dict[str, Table] = {}
+    docs: Dict[str, Any] = {}
+    extras: Dict[str, Any] = {}
+    figures: List[str] = []
+    for p in entries:
+        if not p.is_file():
+            continue
+        if p.suffix == ".csv":
+            tables[p.stem] = read_csv(p)
+        elif p.suffix == ".json":
+            try:
+                docs[p.stem] = json.loads(p.read_text(encoding="utf-8"))
+            except json.JSONDecodeError as e:
+                raise ValueError(f"{p}: not JSON: {e}") from e
+        elif p.suffix == ".svg":
+            figures.append(str(p))
+        elif p.suffix in (".log", ".md", ".txt"):
+            extras[p.stem] = p.read_text(encoding="utf-8", errors="replace")
+    main = "summary"
+    if "summary" not in docs:
+        main = "admissible" if "admissible" in docs else "report" if "report" in docs else main
+    summary = docs.pop(main, None)
+    command = _detect(files, summary)
+    if command == "report":
+        summary = docs.pop("report", summary)
+        extras["experiments"] = {p.name: load(p) for p in entries if p.is_dir() and any(q.is_file() for q in p.iterdir())}
+    extras.update(docs)
+    if figures:
+        extras["figures"] = figures
+    validity = _validity(command, summary)
+    failure = _failure(command, summary)
+    return Result(
+        command=command,
+        summary=summary,
+        tables=tables,
+        extras=extras,
+        validity=validity,
+        violations=describe_violations(validity),
+        failure=failure,
+        exit_code=1 if failure else 0,
+        path=str(root),
+    )

@@ -1,0 +1,244 @@
+"""Results: :class:`Table` (named NumPy columns) and :class:`Result` (a command's
+summary document, its tables, its validity counters and how it ended)."""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Iterator, List, Mapping, Optional, cast
+
+import numpy as np
+
+from ._painleve import PainleveError
+
+__all__ = ["Table", "Result", "PainleveWarning", "describe_violations"]
+
+
+class PainleveWarning(UserWarning):
+    """A call that finished but would make ``sil-host`` exit with code 1: a run
+    that failed part way (its results up to then are returned), a belt speed
+    that failed, or (only with ``strict=True``, which raises instead) a model
+    violation. The message is the CLI's."""
+
+
+def _column(values: Any) -> np.ndarray:
+    """A column as a 1-D NumPy array; text columns (lists of ``str``) become NumPy
+    string arrays."""
+    if isinstance(values, np.ndarray):
+        return values
+    if isinstance(values, list) and (not values or isinstance(values[0], str)):
+        return np.array(values, dtype=str)
+    return np.asarray(values)
+
+
+class Table(Dict[str, np.ndarray]):
+    """One table of a result: ``{column name: 1-D NumPy array}``, every column of
+    the same length, in the order of the CSV file the CLI writes for it (the
+    table ``trace`` is ``trace.csv``).
+
+    Column types follow the CSV's cells: ``float64`` for numbers with a fraction
+    or an exponent (NaN for an empty cell), ``int64`` for integer counts,
+    ``bool`` for ``true``/``false``, NumPy ``str`` arrays for text. An integer
+    column with an empty cell is ``float64`` with NaN there, and a column whose
+    cells are all empty is ``float64`` NaN (as ``pandas.read_csv`` reads them).
+    Units are SI (s, m, m/s, N, N m, rad, rad/s) unless a column's name says
+    otherwise (``theta1_deg``); each function's docstring lists its columns.
+    """
+
+    def __init__(self, columns: Optional[Mapping[str, Any]] = None, name: str = "") -> None:
+        super().__init__()
+        self.name = name
+        for key, values in (columns or {}).items():
+            self[key] = _column(values)
+
+    @property
+    def columns(self) -> List[str]:
+        """The column names, in order."""
+        return list(self.keys())
+
+    @property
+    def nrows(self) -> int:
+        """The number of rows (0 for a table without columns)."""
+        return len(next(iter(self.values()))) if self else 0
+
+    def to_pandas(self) -> Any:
+        """The table as a ``pandas.DataFrame`` (needs pandas installed)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Table.to_pandas needs pandas: pip install pandas") from e
+        return pd.DataFrame({k: v for k, v in self.items()})
+
+    def to_polars(self) -> Any:
+        """The table as a ``polars.DataFrame`` (needs polars installed)."""
+        try:
+            import polars as pl
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Table.to_polars needs polars: pip install polars") from e
+        return pl.DataFrame({k: v for k, v in self.items()})
+
+    def __repr__(self) -> str:
+        cols = ", ".join(self.columns[:8]) + (", ..." if len(self) > 8 else "")
+        return f"<Table {self.name!r}: {self.nrows} rows x {len(self)} columns [{cols}]>"
+
+
+_VIOLATION_WORDS = (
+    ("energy_gains", "energy-creating impact", "energy-creating impacts"),
+    ("cone_violations", "friction-cone violation", "friction-cone violations"),
+    ("integrator_failures", "integrator failure", "integrator failures"),
+)
+
+
+def describe_violations(validity: Optional[Mapping[str, Any]]) -> Optional[str]:
+    """The model violations of validity counters in words, as ``sil-host`` prints
+    them (``"2 friction-cone violations, 1 integrator failure"``); ``None`` when
+    there are none (fallbacks and Zeno stops are modelling rules, not
+    violations) or no counters."""
+    if not validity:
+        return None
+    parts = []
+    for key, one, many in _VIOLATION_WORDS:
+        n = int(validity.get(key) or 0)
+        if n > 0:
+            parts.append(f"{n} {one if n == 1 else many}")
+    return ", ".join(parts) or None
+
+
+def _intervals(doc: Mapping[str, Any]) -> Table:
+    """The admissible intervals of ``admissible.json`` as a table (paper Table II)."""
+    cols: Dict[str, List[Any]] = {"direction": [], "branch": [], "lo_m": [], "hi_m": []}
+    for direction in ("z_r_dot_positive", "z_r_dot_negative"):
+        for branch in ("elbow_up", "elbow_down"):
+            for lo, hi in (doc.get(direction) or {}).get(branch) or []:
+                cols["direction"].append(direction)
+                cols["branch"].append(branch)
+                cols["lo_m"].append(float(lo))
+                cols["hi_m"].append(float(hi))
+    return Table(
+        {
+            "direction": np.array(cols["direction"], dtype=str),
+            "branch": np.array(cols["branch"], dtype=str),
+            "lo_m": np.array(cols["lo_m"], dtype=np.float64),
+            "hi_m": np.array(cols["hi_m"], dtype=np.float64),
+        },
+        "intervals",
+    )
+
+
+class Result:
+    """What a command computed (or, from :func:`painleve.load`, wrote).
+
+    Attributes:
+        command: the ``sil-host`` command (``"simulate"``, ``"sweep"``, ...).
+        summary: the command's summary document, the dict of its ``summary.json``
+            (``admissible.json`` for ``admissible``, the ``--json`` document for
+            ``modes``, which writes no summary file); in memory ``files`` is empty.
+        tables: ``{name: Table}``, named as the CLI's CSV files without ``.csv``.
+        extras: everything else: other JSON documents (``classes`` of
+            ``poincare``), curves (``b_zero`` of ``modes``), time histories
+            (``limit_traces`` of ``zmax``), the scenario run (``scenario`` of ``run``).
+        validity: the validity counters summed over everything simulated
+            (``energy_gains``, ``newton_fallbacks``, ``poisson_fallbacks``,
+            ``cone_violations``, ``zeno_stops``, ``integrator_failures``), or
+            ``None`` for the analyses that simulate nothing (``admissible``, ``modes``).
+        violations: the model violations in words, ``None`` when there are none.
+        failure: the CLI's error message when it would exit with code 1 after
+            writing its files (a run that failed part way, with ``strict`` a
+            violation), else ``None``.
+        exit_code: the CLI's exit code for this result: 0, or 1 with a failure.
+        path: the folder a loaded result was read from (``None`` in memory).
+    """
+
+    def __init__(
+        self,
+        command: str,
+        summary: Any,
+        tables: Optional[Mapping[str, Mapping[str, Any]]] = None,
+        extras: Optional[Mapping[str, Any]] = None,
+        validity: Optional[Mapping[str, Any]] = None,
+        violations: Optional[str] = None,
+        failure: Optional[str] = None,
+        exit_code: int = 0,
+        path: Optional[str] = None,
+    ) -> None:
+        self.command = command
+        self.summary = summary
+        self.tables: Dict[str, Table] = {k: v if isinstance(v, Table) else Table(v, k) for k, v in (tables or {}).items()}
+        self.extras: Dict[str, Any] = dict(extras or {})
+        self.validity = dict(validity) if validity is not None else None
+        self.violations = violations
+        self.failure = failure
+        self.exit_code = exit_code
+        self.path = path
+        if command == "admissible" and "intervals" not in self.tables and isinstance(summary, dict):
+            self.tables["intervals"] = _intervals(summary)
+
+    @classmethod
+    def _from_raw(cls, raw: Mapping[str, Any]) -> "Result":
+        extras = dict(raw["extras"])
+        if "limit_traces" in extras:
+            extras["limit_traces"] = {k: Table(v, k) for k, v in extras["limit_traces"].items()}
+        return cls(
+            command=raw["command"],
+            summary=raw["summary"],
+            tables=raw["tables"],
+            extras=extras,
+            validity=raw["validity"],
+            violations=raw["violations"],
+            failure=raw["failure"],
+            exit_code=int(raw["exit_code"]),
+        )
+
+    @property
+    def valid(self) -> bool:
+        """``True`` when the result has no model violation."""
+        return self.violations is None
+
+    def check(self) -> "Result":
+        """Raises :class:`painleve.PainleveError` (with ``exit_code`` and this
+        result as ``result``) when the CLI would have exited with an error;
+        returns the result otherwise."""
+        if self.failure is not None:
+            err = PainleveError(self.failure)
+            err.exit_code = self.exit_code or 1
+            err.result = self
+            raise err
+        return self
+
+    def __getitem__(self, name: str) -> Table:
+        return self.tables[name]
+
+    def __getattr__(self, name: str) -> Table:
+        tables = self.__dict__.get("tables", {})
+        if name in tables:
+            return cast(Table, tables[name])
+        raise AttributeError(f"{type(self).__name__} of {self.__dict__.get('command')!r} has no attribute or table {name!r}")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.tables)
+
+    def __dir__(self) -> List[str]:
+        return sorted(set(super().__dir__()) | set(self.tables))
+
+    def _table(self, table: Optional[str]) -> Table:
+        if table is None:
+            if not self.tables:
+                raise KeyError(f"the {self.command} result has no table")
+            return next(iter(self.tables.values()))
+        return self.tables[table]
+
+    def to_pandas(self, table: Optional[str] = None) -> Any:
+        """A table (by default the first: ``trace``, ``sweep``, ...) as a
+        ``pandas.DataFrame``."""
+        return self._table(table).to_pandas()
+
+    def to_polars(self, table: Optional[str] = None) -> Any:
+        """A table (by default the first) as a ``polars.DataFrame``."""
+        return self._table(table).to_polars()
+
+    def __repr__(self) -> str:
+        tables = ", ".join(f"{k}: {t.nrows}x{len(t)}" for k, t in self.tables.items())
+        state = "valid" if self.valid else f"INVALID ({self.violations})"
+        if self.validity is None:
+            state = "no simulation"
+        failed = f", failure: {self.failure!r}" if self.failure else ""
+        where = f", from {self.path}" if self.path else ""
+        return f"<painleve.Result {self.command}: tables [{tables}], {state}{failed}{where}>"

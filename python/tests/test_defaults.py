@@ -1,0 +1,69 @@
+"""Every keyword argument of the package's functions is a flag of the CLI
+command, and its default is the CLI's (from the CLI's own clap definitions)."""
+
+import inspect
+
+import pytest
+
+import painleve
+from painleve import _painleve
+
+# Options of the CLI the functions leave out, and why.
+NOT_IN_PYTHON = {
+    "out": "results are returned, not written",
+    "json": "results are returned, not printed",
+    "in-process": "run is always in-process",
+    "link": "run is always in-process",
+    "realtime": "needs the firmware process over iceoryx2",
+    "attach": "needs the firmware process over iceoryx2",
+    "rig": "needs the firmware process over iceoryx2",
+    "monitors": "needs the firmware process over iceoryx2",
+    "monitor-timeout": "needs the firmware process over iceoryx2",
+}
+# Arguments of the functions that are not flags.
+NOT_FLAGS = {"progress"}
+
+FUNCTIONS = ["simulate", "admissible", "modes", "poincare", "sweep", "zmax", "run", "sensitivity"]
+
+
+def parse(v):
+    """A default as the CLI parses it: numbers (a list of them for ranges and
+    lists), or text."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return [float(v)]
+    if isinstance(v, (tuple, list)):
+        return [y for x in v for y in parse(x)]
+    items = str(v).split(",")
+    try:
+        return [float(x) for x in items]
+    except ValueError:
+        return [x.strip() for x in items]
+
+
+@pytest.mark.parametrize("name", FUNCTIONS)
+def test_arguments_are_the_cli_options_with_its_defaults(name):
+    cli = _painleve.cli_defaults(name)
+    params = inspect.signature(getattr(painleve, name)).parameters
+    for p in params.values():
+        if p.name in NOT_FLAGS:
+            continue
+        flag = p.name.replace("_", "-")
+        assert flag in cli, f"{name}({p.name}=...) is not an option of sil-host {name}"
+        defaults = cli[flag]
+        if p.default is None:
+            assert defaults == [], f"{name}: {p.name} has no default here but {defaults} in the CLI"
+        elif p.default is False:
+            assert defaults in ([], ["false"]), f"{name}: {p.name}"
+        else:
+            expected = [y for d in defaults for y in parse(d)]
+            assert parse(p.default) == expected, f"{name}: {p.name}={p.default!r}, the CLI's default is {defaults}"
+    missing = set(cli) - {p.name.replace("_", "-") for p in params.values()} - set(NOT_IN_PYTHON)
+    assert not missing, f"sil-host {name} options without an argument: {sorted(missing)}"
+
+
+def test_every_function_has_a_docstring_naming_its_columns():
+    for name in FUNCTIONS:
+        doc = getattr(painleve, name).__doc__
+        assert doc and "Returns:" in doc and "Raises:" in doc, name

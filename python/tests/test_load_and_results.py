@@ -1,0 +1,102 @@
+"""`painleve.load` and the result objects: column types, pandas, failures,
+strict, and the folders of other commands."""
+
+import numpy as np
+import pytest
+
+import painleve
+from conftest import cli
+
+
+def test_read_csv_types(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("a,b,c,d,e,f,g\n1,1.5,true,x,,2,\n2,NaN,false,,,,\n")
+    t = painleve.read_csv(p)
+    assert t.columns == list("abcdefg")
+    assert t["a"].dtype == np.int64 and list(t["a"]) == [1, 2]
+    assert t["b"].dtype == np.float64 and np.isnan(t["b"][1])
+    assert t["c"].dtype == bool and list(t["c"]) == [True, False]
+    assert t["d"].dtype.kind == "U" and list(t["d"]) == ["x", ""]
+    assert t["e"].dtype == np.float64 and np.isnan(t["e"]).all(), "an all-empty column is NaN"
+    assert t["f"].dtype == np.float64 and t["f"][0] == 2 and np.isnan(t["f"][1]), "an integer column with an empty cell is float"
+
+
+def test_to_pandas():
+    pd = pytest.importorskip("pandas")
+    r = painleve.simulate(duration=1.0, progress=False)
+    df = r.to_pandas()
+    assert isinstance(df, pd.DataFrame)
+    assert list(df.columns) == r.trace.columns and len(df) == r.trace.nrows
+    assert np.array_equal(df["z_t"].to_numpy(), r.trace["z_t"])
+    assert r.to_pandas("events").shape == (r.events.nrows, len(r.events))
+
+
+def test_to_polars():
+    pl = pytest.importorskip("polars")
+    r = painleve.simulate(duration=1.0, progress=False)
+    assert r.to_polars().shape == (r.trace.nrows, len(r.trace))
+    assert isinstance(r.to_polars(), pl.DataFrame)
+
+
+def test_a_failure_warns_and_strict_raises_it():
+    """A result the CLI would exit 1 for (written, then failed): a warning with
+    the CLI's message, or with strict=True the PainleveError carrying the result."""
+    from painleve._api import _finish
+
+    raw = {
+        "command": "simulate",
+        "summary": {"status": "failed"},
+        "tables": {},
+        "extras": {},
+        "validity": {"cone_violations": 2},
+        "violations": "2 friction-cone violations",
+        "failure": "results violate the model (--strict): 2 friction-cone violations",
+        "exit_code": 1,
+    }
+    with pytest.warns(painleve.PainleveWarning, match="friction-cone"):
+        r = _finish(raw, strict=False)
+    assert not r.valid and r.exit_code == 1
+    with pytest.raises(painleve.PainleveError) as e:
+        _finish(raw, strict=True)
+    assert e.value.exit_code == 1 and e.value.result.failure == raw["failure"]
+    ok = painleve.simulate(duration=0.5, progress=False, strict=True)
+    assert ok.check() is ok and ok.failure is None
+
+
+def test_load_a_sweep_folder_has_the_journal_and_the_spec(tmp_path):
+    out = tmp_path / "s"
+    cli("sweep", ["--mu", "0.6", "--v-belt", "-0.5,-0.4", "--v-belt-step", "0.1", "--transient", "5", "--record", "5"], out)
+    r = painleve.load(out)
+    assert r.command == "sweep" and set(r.tables) == {"runs", "sweep"}
+    assert r.extras["sweep"]["spec"]["mu"]["start"] == 0.6
+    assert r.validity == r.summary["results"]["validity"] and r.valid
+    assert any(f.endswith(".svg") for f in r.extras["figures"])
+    assert sorted(r["runs"]["index"]) == list(r["sweep"]["index"])
+
+
+def test_load_rejects_a_missing_folder(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        painleve.load(tmp_path / "nothing")
+
+
+def test_result_repr_and_attributes():
+    r = painleve.simulate(duration=0.5, progress=False)
+    assert "simulate" in repr(r) and "valid" in repr(r)
+    assert r.trace is r["trace"]
+    with pytest.raises(AttributeError):
+        r.no_such_table
+    assert "trace" in dir(r)
+
+
+def test_load_a_report_folder_loads_its_experiments(tmp_path):
+    """A report's folder: report.json, report.md and one folder per experiment
+    (here one, made by the CLI), each loaded as a Result."""
+    root = tmp_path / "report"
+    cli("simulate", ["--duration", "1"], root / "simulate")
+    (root / "report.json").write_text('{"experiments": [{"id": "simulate", "status": "ok"}]}')
+    (root / "report.md").write_text("# report\n")
+    r = painleve.load(root)
+    assert r.command == "report" and r.summary["experiments"][0]["id"] == "simulate"
+    assert r.extras["report"] == "# report\n"
+    sim = r.extras["experiments"]["simulate"]
+    assert sim.command == "simulate" and sim.trace.nrows == 1001 and sim.valid

@@ -1,0 +1,67 @@
+"""`painleve.simulate` against `sil-host simulate`: the same trace, events and
+summary for the same arguments; bad input raises with the CLI's message."""
+
+import pytest
+
+import painleve
+from conftest import assert_docs_equal, assert_tables_equal, cli, cli_error
+
+CASES = [
+    # (keyword arguments, the same on the command line)
+    ({"duration": 5.0}, ["--duration", "5"]),
+    ({"x0": "d", "duration": 3.0, "sample_dt": 0.002}, ["--x0", "d", "--duration", "3", "--sample-dt", "0.002"]),
+    (
+        {"x0_deg": (32, 0, 18.27, 0), "impact_law": "poisson", "e_n": 0.5, "mu": 0.45, "v_belt": -0.37, "duration": 4.0},
+        ["--x0-deg", "32,0,18.27,0", "--impact-law", "poisson", "--e-n", "0.5", "--mu", "0.45", "--v-belt", "-0.37", "--duration", "4"],
+    ),
+    (
+        {"duration": 3.0, "iwc": "plastic", "set": {"plant.m": 0.24}},
+        ["--duration", "3", "--iwc", "plastic", "--set", "plant.m=0.24"],
+    ),
+]
+
+
+@pytest.mark.parametrize("kwargs,argv", CASES)
+def test_simulate_equals_the_cli(kwargs, argv, out):
+    mine = painleve.simulate(progress=False, **kwargs)
+    cli("simulate", argv, out)
+    theirs = painleve.load(out)
+    assert theirs.command == "simulate"
+    assert_tables_equal(mine["trace"], theirs["trace"])
+    assert_tables_equal(mine["events"], theirs["events"])
+    assert_docs_equal(mine.summary, theirs.summary)
+    assert mine.validity == theirs.validity == mine.summary["validity"]
+    assert mine.trace.nrows == round(kwargs["duration"] / kwargs.get("sample_dt", 1e-3)) + 1
+    assert mine.failure is None and mine.exit_code == 0
+
+
+def test_counters_and_validity_are_carried():
+    r = painleve.simulate(duration=10.0, progress=False)
+    assert set(r.validity) == {"energy_gains", "newton_fallbacks", "poisson_fallbacks", "cone_violations", "zeno_stops", "integrator_failures"}
+    assert r.summary["counters"]["lift_offs"] == r.summary["lift_offs"] > 0, "x0a at mu 0.6, v_belt -0.4 bounces"
+    assert r.valid and r.violations is None
+    assert (r.trace["mode"] == "flight").any()
+
+
+@pytest.mark.parametrize(
+    "kwargs,argv",
+    [
+        ({"mu": -1.0}, ["--mu", "-1"]),
+        ({"duration": 0.0}, ["--duration", "0"]),
+        ({"sample_dt": 20.0}, ["--sample-dt", "20"]),
+        ({"x0_deg": (1, 2, 3)}, ["--x0-deg", "1,2,3"]),
+        ({"impact_law": "elastic"}, ["--impact-law", "elastic"]),
+        ({"e_n": 1.5}, ["--e-n", "1.5"]),
+        ({"set": {"plant.mu": 0.3}}, ["--set", "plant.mu=0.3"]),
+        ({"set": ["plant.nope=1"]}, ["--set", "plant.nope=1"]),
+        ({"set": {"plant.m": -2}}, ["--set", "plant.m=-2"]),
+        ({"x0": "d", "x0_deg": (32, 0, 18.27, 0)}, ["--x0", "d", "--x0-deg", "32,0,18.27,0"]),
+    ],
+)
+def test_bad_input_raises_the_cli_message(kwargs, argv):
+    message, code = cli_error("simulate", argv)
+    with pytest.raises(painleve.PainleveError) as e:
+        painleve.simulate(progress=False, **kwargs)
+    assert str(e.value) == message
+    assert e.value.exit_code == code == 2
+    assert isinstance(e.value, ValueError)
