@@ -198,9 +198,15 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
     let panels = [Panel {
         y_label: &y_label,
         series: vec![
-            Series { label: "frame (decode + step)", points: series(&counts.frame_series), color: colors::ORANGE, step: false },
-            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false },
-            Series { label: &budget_label, points: vec![(0.0, budget), (t_end, budget)], color: colors::RED, step: false },
+            Series {
+                label: "frame (decode + step)",
+                points: series(&counts.frame_series),
+                color: colors::ORANGE,
+                step: false,
+                dashed: false,
+            },
+            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false, dashed: false },
+            Series::reference(&budget_label, vec![(0.0, budget), (t_end, budget)], colors::RED),
         ],
         y_range: Some((0.0, (counts.frame.max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
         categories: None,

@@ -39,13 +39,13 @@ pub fn history_panels(samples: &[HistorySample], step_torques: bool) -> [Panel<'
 fn panels_of_columns(columns: [Vec<(f64, f64)>; 6], step_torques: bool) -> [Panel<'static>; 4] {
     let [z_t, z_t_ref, f_n, u1, u2, mode] = columns;
     [
-        Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE), Series::line("z_t*", z_t_ref, colors::GREY)]),
+        Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE), Series::reference("z_t*", z_t_ref, colors::GREY)]),
         Panel::numeric("f_n (N)", vec![Series::line("f_n", f_n, colors::GREEN)]),
         Panel::numeric(
             "torque (N m)",
             vec![
-                Series { label: "u1", points: u1, color: colors::ORANGE, step: step_torques },
-                Series { label: "u2", points: u2, color: colors::RED, step: step_torques },
+                Series { label: "u1", points: u1, color: colors::ORANGE, step: step_torques, dashed: false },
+                Series { label: "u2", points: u2, color: colors::RED, step: step_torques, dashed: false },
             ],
         ),
         mode_panel_of_points(mode),
@@ -101,7 +101,7 @@ pub const MODE_NAMES: [&str; 3] = ["flight", "sliding", "sticking"];
 pub fn mode_panel_of_points(points: Vec<(f64, f64)>) -> Panel<'static> {
     Panel {
         y_label: "contact mode",
-        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true }],
+        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true, dashed: false }],
         y_range: None,
         categories: Some(&MODE_NAMES),
     }

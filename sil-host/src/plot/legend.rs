@@ -15,6 +15,8 @@ pub enum Swatch {
     Dashed(RGBColor),
     /// A filled round marker of this colour.
     Marker(RGBColor),
+    /// A hollow round marker of this colour (a result with no value, at an axis's edge).
+    Ring(RGBColor),
     /// A filled square of this colour (a map's cell).
     Box(RGBColor),
     /// A filled triangle of this colour (points outside an axis, marked at its edge).
@@ -123,6 +125,7 @@ fn draw_entry<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, (x, y): (i32, i
             }
         }
         Swatch::Marker(c) => area.draw(&Circle::new((x + SWATCH_W / 2, mid), 4, c.filled())).map_err(e)?,
+        Swatch::Ring(c) => area.draw(&Circle::new((x + SWATCH_W / 2, mid), 4, c.stroke_width(2))).map_err(e)?,
         Swatch::Box(c) => area.draw(&Rectangle::new([(x + 3, mid - 8), (x + 19, mid + 8)], c.filled())).map_err(e)?,
         Swatch::Triangle(c) => {
             let cx = x + SWATCH_W / 2;

@@ -27,6 +27,9 @@ pub struct Series<'a> {
     pub color: RGBColor,
     /// Draw as a step function (a zero-order hold, a discrete signal such as the contact mode).
     pub step: bool,
+    /// Draw dashed: a reference or a limit (`z_t*`, the belt, a budget), so that a
+    /// measured curve under it stays visible.
+    pub dashed: bool,
 }
 
 /// One panel: a y-axis label and its curves.
@@ -51,7 +54,12 @@ impl<'a> Panel<'a> {
 impl<'a> Series<'a> {
     /// A curve drawn as a line between its points.
     pub fn line(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false }
+        Self { label, points, color, step: false, dashed: false }
+    }
+
+    /// A reference or a limit, dashed, drawn over the measured curves.
+    pub fn reference(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label, points, color, step: false, dashed: true }
     }
 }
 
@@ -167,7 +175,7 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
     }
     let note: Vec<&str> = notes.iter().flatten().map(String::as_str).collect();
     let legends: Vec<Legend> =
-        shown.iter().map(|p| Legend::new(p.series.iter().map(|s| (s.label.to_string(), Swatch::Line(s.color))).collect())).collect();
+        shown.iter().map(|p| Legend::new(p.series.iter().map(|s| (s.label.to_string(), swatch(s))).collect())).collect();
     let legend_w = legends.iter().map(Legend::column_width).max().unwrap_or(0) + 10;
     let width = 1100u32;
     let head = 48 + if note.is_empty() { 0 } else { 24 };
@@ -248,9 +256,17 @@ fn draw_series<DB: DrawingBackend, Y>(mut chart: super::chart::Chart<'_, DB, Y>,
 where
     Y: plotters::coord::ranged1d::Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
 {
-    for s in &panel.series {
-        let color = s.color;
-        chart.draw_series(LineSeries::new(drawn_points(s), color.stroke_width(1))).map_err(|e| e.to_string())?;
+    // Measured curves first, references and limits dashed over them.
+    for s in panel.series.iter().filter(|s| !s.dashed) {
+        chart.draw_series(LineSeries::new(drawn_points(s), s.color.stroke_width(1))).map_err(|e| e.to_string())?;
+    }
+    for s in panel.series.iter().filter(|s| s.dashed) {
+        chart.draw_series(DashedLineSeries::new(drawn_points(s), 6, 4, s.color.stroke_width(2))).map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+/// A series' legend swatch: a line, dashed for a reference.
+fn swatch(s: &Series) -> Swatch {
+    if s.dashed { Swatch::Dashed(s.color) } else { Swatch::Line(s.color) }
 }

@@ -63,7 +63,7 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let legend_h = legend.rows_height(width);
     let title_h = 40;
     let root = plot::svg_canvas(path, (width, title_h + legend_h + 470 * grid_rows as u32)).map_err(|e| err(&e))?;
-    let title = format!("Outcome over (v_belt, mu), {} ({law}, e_n = {e_n})", controller_label(spec));
+    let title = format!("Outcome over (v_belt, mu){}, {} ({law}, e_n = {e_n})", paper_figure(spec), controller_label(spec));
     let (top, rest) = root.split_vertically(title_h);
     plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
     let (legend_area, panels_area) = rest.split_vertically(legend_h);
@@ -88,6 +88,16 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
 
 fn half_step(a: &analyses::sweep::Axis) -> f64 {
     if a.len() > 1 { 0.5 * a.step } else { 0.05_f64.max(a.start.abs() * 0.05) }
+}
+
+/// The paper's counterpart of a sweep's figures: Fig. 3 in open loop, Fig. 9 with
+/// the hybrid controller (docs/model.md experiments 3 and 7); the PID's sweep has none.
+fn paper_figure(spec: &SweepSpec) -> &'static str {
+    match spec.controller {
+        analyses::sweep::SweepController::None => " (paper Fig. 3)",
+        analyses::sweep::SweepController::Hybrid => " (paper Fig. 9)",
+        analyses::sweep::SweepController::Pid => "",
+    }
 }
 
 fn controller_label(spec: &SweepSpec) -> String {
@@ -115,7 +125,11 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     }
     let (title_h, legend_h) = (40, legend.rows_height(width));
     let root = plot::svg_canvas(path, (width, title_h + legend_h + 240 * grid_rows as u32)).map_err(|e| err(&e))?;
-    let title = format!("max theta1_dot over the record window against v_belt, {} ({law}, e_n = {e_n})", controller_label(spec));
+    let title = format!(
+        "max theta1_dot over the record window against v_belt{}, {} ({law}, e_n = {e_n})",
+        paper_figure(spec),
+        controller_label(spec)
+    );
     let (top, rest) = root.split_vertically(title_h);
     plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
     let (legend_area, panels) = rest.split_vertically(legend_h);

@@ -7,6 +7,7 @@ use crate::plot::{
     chart::{Frame, frame_chart},
 };
 use analyses::admissible::{AdmissibleReport, p_on_belt};
+use analyses::paper;
 use plotters::prelude::*;
 use shared::{Arm, ElbowBranch, SlipDirection};
 
@@ -20,7 +21,8 @@ pub(crate) fn plot_err(path: &std::path::Path) -> impl Fn(String) -> CliError + 
 /// Draws `p(z_t)` for `z_r_dot > 0` as an SVG at `path` (a staged file): one
 /// panel per elbow branch (up on top, down below) sharing the `z_t` axis (m),
 /// each with the line `p = 0`, the ends of the reachable belt (dashed) and the
-/// admissible intervals (`p > 0`) shaded.
+/// admissible intervals (`p > 0`) shaded; at the paper's `mu` (0.6) the ends of
+/// its Table II as red triangles on `p = 0` and in each panel's caption.
 ///
 /// # Errors
 /// [`CliError::Plot`] when plotters fails (including writing the file).
@@ -55,7 +57,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let (top, root) = root.split_vertically(40);
     crate::plot::draw_title(
         &top,
-        &format!("Admissible configurations on the belt: p(z_t) for z_r_dot > 0, mu = {}", r.params.mu),
+        &format!("Admissible configurations on the belt (paper Table II): p(z_t) for z_r_dot > 0, mu = {}", r.params.mu),
         20.0,
         10,
     )
@@ -64,9 +66,22 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let areas = panels_area.split_evenly((2, 1));
     let line_color = RGBColor(31, 119, 180);
     let shade = RGBColor(44, 160, 44).mix(0.22);
+    // The paper's Table II, side by side, where its mu is ours.
+    let paper_of = |branch| {
+        (r.params.mu == paper::TABLE_II_MU).then_some(match branch {
+            ElbowBranch::Up => paper::TABLE_II_ELBOW_UP_M,
+            ElbowBranch::Down => paper::TABLE_II_ELBOW_DOWN_M,
+        })
+    };
     for ((branch, pts), area) in panels.iter().zip(areas.iter()) {
         let iv = r.intervals(*branch, dir);
-        let caption = format!("elbow {}: p > 0 (shaded) for z_t in {} m", branch.name(), fmt_intervals(iv));
+        let paper = paper_of(*branch);
+        let caption = match paper {
+            Some([from, to]) => {
+                format!("elbow {}: p > 0 (shaded) for z_t in {} m; paper: [{from}, {to}) m", branch.name(), fmt_intervals(iv))
+            }
+            None => format!("elbow {}: p > 0 (shaded) for z_t in {} m", branch.name(), fmt_intervals(iv)),
+        };
         let frame =
             Frame { x_desc: "z_t (m)", y_desc: "p (1/kg)", x_tick_labels: true, caption: Some(&caption), margin_top: 6, y_area: None };
         let mut chart = frame_chart(area, NiceAxis::new(x0..x1, 9), NiceAxis::new(ymin..ymax, 6), &frame).map_err(&perr)?;
@@ -82,8 +97,22 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
         chart
             .draw_series(LineSeries::new(pts.iter().map(|&(z, p)| (z, clamp(p))), line_color.stroke_width(2)))
             .map_err(|e| perr(e.to_string()))?;
+        // The paper's ends on the line p = 0, as triangles pointing up at it.
+        let paper_red = RGBColor(214, 39, 40);
+        chart
+            .draw_series(
+                paper
+                    .into_iter()
+                    .flatten()
+                    .map(|z| EmptyElement::at((z, 0.0)) + Polygon::new(vec![(0, 0), (-6, 11), (6, 11)], paper_red.filled())),
+            )
+            .map_err(|e| perr(e.to_string()))?;
     }
-    let note = "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p";
+    let note = if r.params.mu == paper::TABLE_II_MU {
+        "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p; red triangles: the paper's ends"
+    } else {
+        "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p"
+    };
     note_area.draw_text(note, &("sans-serif", 12).into_font().color(&BLACK.mix(0.7)), (70, 4)).map_err(|e| perr(e.to_string()))?;
     root.present().map_err(|e| perr(e.to_string()))?;
     Ok(())

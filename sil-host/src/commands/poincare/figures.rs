@@ -103,7 +103,8 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
     pts.dedup_by(|b, a| a.0 == b.0 && (b.1 - a.1).abs() < resolution);
     let root = plot::svg_canvas(path, (1200, 750)).map_err(|e| err(&e))?;
     let (top, body) = root.split_vertically(44);
-    let title = format!("Poincare section theta1_dot = 0 (upward), open loop, mu = {}, from {x0_name}", cfg.mu);
+    let title =
+        format!("Poincare section theta1_dot = 0 (upward) against v_belt (paper Fig. 4), open loop, mu = {}, from {x0_name}", cfg.mu);
     plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
     let legend = legend_of(&pts, (lo, hi));
     let (chart_area, legend_area) = body.split_horizontally(1200 - legend.column_width() - 10);

@@ -33,8 +33,27 @@ pub struct Figure {
     pub value_names: Option<&'static [&'static str]>,
     /// Whether the value counts something (ticks on whole numbers).
     pub count: bool,
-    /// The series: a label and the value under a choice (`None`: not computed, or no value).
+    /// The series: a label and the value under a choice (`None`: not computed; NaN:
+    /// computed, with no value, drawn as [`Figure::none`] says).
     pub series: fn() -> Vec<SeriesOf>,
+    /// What a computed result with no value means, and the panel edge its hollow
+    /// marker is drawn at.
+    pub none: Option<NoValue>,
+}
+
+/// A result computed with no value (no critical `mu` on the grid, no bouncing band,
+/// a `Z_t,sliding` below the bisection's bracket): a hollow marker at one edge of
+/// its panel, explained in the legend.
+pub struct NoValue {
+    /// The legend's text.
+    pub desc: &'static str,
+    /// Drawn at the value axis's lower end (else its upper end).
+    pub at_low_end: bool,
+}
+
+/// `Some(v)`, or NaN when the result was computed and has no value.
+fn or_none(computed: bool, v: Option<f64>) -> Option<f64> {
+    if computed { Some(v.unwrap_or(f64::NAN)) } else { None }
 }
 
 fn open<T>(r: &ChoiceResult, f: impl Fn(&analyses::sensitivity::OpenLoop) -> T) -> Option<T> {
@@ -51,10 +70,11 @@ pub const FIGURES: [Figure; 5] = [
         count: false,
         series: || {
             vec![
-                ("x0a".into(), |r, _| open(r, |o| o.critical_mu_x0a).flatten().or(r.open_loop.as_ref().map(|_| f64::NAN)), 0),
-                ("x0d".into(), |r, _| open(r, |o| o.critical_mu_x0d).flatten().or(r.open_loop.as_ref().map(|_| f64::NAN)), 0),
+                ("x0a".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.critical_mu_x0a).flatten()), 0),
+                ("x0d".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.critical_mu_x0d).flatten()), 0),
             ]
         },
+        none: Some(NoValue { desc: "none: no persistent bouncing at any mu of the grid", at_low_end: false }),
     },
     Figure {
         file: "band_mu06_x0a.svg",
@@ -64,10 +84,11 @@ pub const FIGURES: [Figure; 5] = [
         count: false,
         series: || {
             vec![
-                ("from".into(), |r, _| open(r, |o| o.band_x0a_mu06.map(|b| b[0])).flatten(), 0),
-                ("to".into(), |r, _| open(r, |o| o.band_x0a_mu06.map(|b| b[1])).flatten(), 0),
+                ("from".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.band_x0a_mu06.map(|b| b[0])).flatten()), 0),
+                ("to".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.band_x0a_mu06.map(|b| b[1])).flatten()), 0),
             ]
         },
+        none: Some(NoValue { desc: "none: no persistent bouncing at mu = 0.6", at_low_end: false }),
     },
     Figure {
         file: "x0d_bounces.svg",
@@ -76,6 +97,7 @@ pub const FIGURES: [Figure; 5] = [
         value_names: Some(&["no", "yes"]),
         count: false,
         series: || vec![("x0d".into(), |r, _| open(r, |o| if o.x0d_bounces { 1.0 } else { 0.0 }), 0)],
+        none: None,
     },
     Figure {
         file: "zt_sliding.svg",
@@ -89,16 +111,17 @@ pub const FIGURES: [Figure; 5] = [
                 .enumerate()
                 .map(|(i, k)| {
                     let f: fn(&ChoiceResult, usize) -> Option<f64> =
-                        |r, i| r.zmax.iter().find(|z| z.combination == Combination::all()[i]).and_then(|z| z.z_t_sliding);
+                        |r, i| r.zmax.iter().find(|z| z.combination == Combination::all()[i]).map(|z| z.z_t_sliding.unwrap_or(f64::NAN));
                     (format!("{} x0{} {}", k.controller, k.x0, k.setting), f, i)
                 })
                 .collect()
         },
+        none: Some(NoValue { desc: "none: fails already at the bisection's lower end", at_low_end: true }),
     },
     Figure {
         file: "hybrid_closed_loop.svg",
         title: "hybrid closed loop from x0d at mu = 0.6: how the belt speeds' runs ended",
-        value_desc: "belt speeds (of the sweep's)",
+        value_desc: "belt speeds of the sweep (count)",
         value_names: None,
         count: true,
         series: || {
@@ -108,6 +131,7 @@ pub const FIGURES: [Figure; 5] = [
                 ("target not reached".into(), |r, _| r.closed_loop.as_ref().map(|c| c.target_not_reached_points as f64), 0),
             ]
         },
+        none: None,
     },
 ];
 
@@ -126,9 +150,15 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         .collect();
     let cols = 2usize;
     let width = 1400u32;
-    let legend =
-        Legend::new(series.iter().enumerate().map(|(s, (name, _, _))| (name.clone(), Swatch::Marker(colors::CYCLE[s % 10]))).collect());
-    let legend_h = if series.len() > 1 { legend.rows_height(width) } else { 0 };
+    let mut entries: Vec<(String, Swatch)> =
+        series.iter().enumerate().map(|(s, (name, _, _))| (name.clone(), Swatch::Marker(colors::CYCLE[s % 10]))).collect();
+    let any_none = study.results.iter().any(|r| series.iter().any(|(_, f, i)| f(r, *i).is_some_and(f64::is_nan)));
+    if let (Some(none), true) = (&fig.none, any_none) {
+        let edge = if none.at_low_end { "left" } else { "right" };
+        entries.push((format!("{} (hollow, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
+    }
+    let legend = Legend::new(entries);
+    let legend_h = if legend.entries.len() > 1 { legend.rows_height(width) } else { 0 };
     // Each row of panels as high as its longest list of choices.
     let choices_of = |d: &Dimension| study.results.iter().filter(|r| r.choice.dimension == *d).count() as u32;
     let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 90 + 24 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
@@ -138,7 +168,7 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
     let (top, rest) = root.split_vertically(title_h);
     plot::draw_title(&top, fig.title, 24.0, 10).map_err(|e| err(&e))?;
     let (legend_area, body) = rest.split_vertically(legend_h);
-    if series.len() > 1 {
+    if legend.entries.len() > 1 {
         legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
     }
     let mut breaks = Vec::new();
@@ -160,7 +190,8 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
 }
 
 /// One dimension's panel: its choices top down, each series' value as a marker,
-/// the series dodged vertically within a choice's row.
+/// the series dodged vertically within a choice's row; a result with no value
+/// (NaN) as a hollow marker at the edge [`Figure::none`] names.
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     study: &Study,
@@ -178,8 +209,13 @@ fn draw_panel<DB: DrawingBackend>(
     let points = |s: usize, f: &fn(&ChoiceResult, usize) -> Option<f64>, i: usize| -> Vec<(f64, f64)> {
         of.iter().enumerate().filter_map(|(k, r)| f(r, i).filter(|v| v.is_finite()).map(|v| (v, k as f64 - dodge(s)))).collect()
     };
+    // The rows of a series' results with no value.
+    let nones = |s: usize, f: &fn(&ChoiceResult, usize) -> Option<f64>, i: usize| -> Vec<f64> {
+        of.iter().enumerate().filter(|(_, r)| f(r, i).is_some_and(f64::is_nan)).map(|(k, _)| k as f64 - dodge(s)).collect()
+    };
     let all: Vec<(f64, f64)> = series.iter().enumerate().flat_map(|(s, (_, f, i))| points(s, f, *i)).collect();
     let marker = |chart_points: Vec<(f64, f64)>, color: RGBColor| chart_points.into_iter().map(move |p| Circle::new(p, 5, color.filled()));
+    let ring = |rows: Vec<f64>, x: f64, color: RGBColor| rows.into_iter().map(move |y| Circle::new((x, y), 5, color.stroke_width(2)));
     if let Some(value_names) = fig.value_names {
         let x = CategoryAxis::new(value_names.iter().map(|s| s.to_string()).collect());
         let mut chart = frame_chart(area, x, y, &frame)?;
@@ -197,6 +233,11 @@ fn draw_panel<DB: DrawingBackend>(
         (lo - 0.08 * (hi - lo), hi + 0.08 * (hi - lo))
     };
     let (lo, hi) = if fig.count { (lo.min(-0.5), hi.max(1.5)) } else { (lo, hi) };
+    // Hollow markers sit a little inside the edge they are drawn at.
+    let none_x = match &fig.none {
+        Some(none) if none.at_low_end => lo + 0.02 * (hi - lo),
+        _ => hi - 0.02 * (hi - lo),
+    };
     let (w, _) = area.dim_in_pixel();
     let mut x = NiceAxis::new(lo..hi, (w / 90).clamp(3, 8) as usize);
     if fig.count {
@@ -204,7 +245,9 @@ fn draw_panel<DB: DrawingBackend>(
     }
     let mut chart = frame_chart(area, x, y, &frame)?;
     for (s, (_, f, i)) in series.iter().enumerate() {
-        chart.draw_series(marker(points(s, f, *i), colors::CYCLE[s % 10])).map_err(|e| e.to_string())?;
+        let color = colors::CYCLE[s % 10];
+        chart.draw_series(marker(points(s, f, *i), color)).map_err(|e| e.to_string())?;
+        chart.draw_series(ring(nones(s, f, *i), none_x, color)).map_err(|e| e.to_string())?;
     }
     Ok(())
 }

@@ -36,7 +36,7 @@ pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &st
         Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE)]),
         Panel::numeric(
             "z_n (m)",
-            vec![Series::line("z_n", z_n, colors::ORANGE), Series::line("belt -H", vec![(0.0, belt), (t_end, belt)], colors::GREY)],
+            vec![Series::line("z_n", z_n, colors::ORANGE), Series::reference("belt -H", vec![(0.0, belt), (t_end, belt)], colors::GREY)],
         ),
         Panel::numeric("f_n (N)", vec![Series::line("f_n", f_n, colors::GREEN)]),
         plot::mode_panel_of_points(mode),
