@@ -1,0 +1,298 @@
+//! The accuracy contract (docs/architecture.md "The accuracy contract"): a
+//! numerical change may move the last bits of the outputs only if every case stays
+//! as close to its tight-tolerance reference as the code recorded in
+//! `tests/accuracy/contract.json` did (no worse than twice, or [`compare::FLOOR`]
+//! tolerances), with the same events, and if the paper-level results do not move
+//! (Table II to 5 decimals, `Z_t,sliding` within 0.1 mm, the sweep's outcomes).
+//!
+//! Each case runs twice through the command line: at the default tolerances
+//! (rtol 1e-9, atol 1e-11) and as its reference at rtol 1e-12, atol 1e-14 (events
+//! are located to rounding in both: plant/src/segment.rs). The reference is
+//! recomputed by the same binary, so a change to the integrator moves both.
+//!
+//! `ACCURACY=record cargo test --release -p e2e --test accuracy` records the
+//! contract again: only with a change that is meant to move it, said in the commit.
+
+use std::{collections::BTreeMap, path::Path, process::Command};
+
+use serde_json::{Value, json};
+
+mod common;
+#[path = "accuracy/compare.rs"]
+mod compare;
+
+use compare::{Comparison, Table, breaches, kinds_before};
+
+/// The reference's tolerances: three decades below the default.
+const REFERENCE_TOL: (&str, &str) = ("1e-12", "1e-14");
+
+/// A case: its name, the command line (after `sil-host`), and how to ask it for the
+/// reference tolerances.
+struct Case {
+    name: &'static str,
+    args: Vec<String>,
+    reference: Vec<String>,
+    /// Arguments of the measured run only (empty: the default tolerances).
+    measured: Vec<String>,
+}
+
+fn cases() -> Vec<Case> {
+    let root = common::workspace();
+    let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let simulate_ref = strings(&["--rtol", REFERENCE_TOL.0, "--atol", REFERENCE_TOL.1]);
+    let run_ref = vec![
+        "--set".to_string(),
+        format!("plant.rtol={}", REFERENCE_TOL.0),
+        "--set".to_string(),
+        format!("plant.atol={}", REFERENCE_TOL.1),
+    ];
+    let mut cases = vec![
+        Case { name: "simulate-x0a", args: strings(&["simulate", "--x0", "a"]), reference: simulate_ref.clone(), measured: vec![] },
+        Case { name: "simulate-x0d", args: strings(&["simulate", "--x0", "d"]), reference: simulate_ref.clone(), measured: vec![] },
+        // The bench's case (issue 16): 300 s of open-loop bouncing, a 1 ms trace.
+        Case {
+            name: "simulate-x0a-300s",
+            args: strings(&["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "300"]),
+            reference: simulate_ref.clone(),
+            measured: vec![],
+        },
+        // The same with 1 s samples: here the tolerance, not the samples, sets the steps.
+        Case {
+            name: "simulate-x0a-300s-1s-samples",
+            args: strings(&["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "300", "--sample-dt", "1"]),
+            reference: simulate_ref,
+            measured: vec![],
+        },
+    ];
+    for (name, s) in
+        [("run-pid-x0d", "pid-x0d"), ("run-pid-x0u", "pid-x0u"), ("run-hybrid-x0d", "hybrid-x0d"), ("run-hybrid-x0u", "hybrid-x0u")]
+    {
+        let scenario = root.join("scenarios").join(format!("{s}.toml")).display().to_string();
+        cases.push(Case {
+            name,
+            args: vec!["run".into(), "--in-process".into(), "--scenario".into(), scenario],
+            reference: run_ref.clone(),
+            measured: vec![],
+        });
+    }
+    cases
+}
+
+/// Runs `sil-host args` into `out`.
+fn sil_host(args: &[String], out: &Path) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(args).arg("--out").arg(out).output().unwrap();
+    assert!(o.status.success(), "{args:?} failed:\n{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn read_table(path: &Path) -> Option<Table> {
+    std::fs::read_to_string(path).ok().map(|t| Table::parse(&t))
+}
+
+/// Run-length form of a kind sequence: `[["touchdown", 3], ...]`.
+fn run_lengths(kinds: &[String]) -> Value {
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for k in kinds {
+        match out.last_mut() {
+            Some((last, n)) if last == k => *n += 1,
+            _ => out.push((k.clone(), 1)),
+        }
+    }
+    json!(out)
+}
+
+fn envelope_json(env: &BTreeMap<String, Vec<f64>>) -> Value {
+    // Three significant digits: the rule compares within a factor of 2.
+    let round = |v: f64| if v == 0.0 { 0.0 } else { format!("{v:.3e}").parse::<f64>().unwrap() };
+    Value::Object(env.iter().map(|(k, v)| (k.clone(), json!(v.iter().map(|&x| round(x)).collect::<Vec<_>>()))).collect())
+}
+
+fn envelope_of(v: &Value) -> BTreeMap<String, Vec<f64>> {
+    v.as_object()
+        .map(|m| m.iter().map(|(k, v)| (k.clone(), v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect())).collect())
+        .unwrap_or_default()
+}
+
+/// One case measured now: its trace's and events' comparisons with the reference.
+struct Measured {
+    trace: Comparison,
+    events: Option<(Table, Table)>,
+}
+
+fn measure(case: &Case, dir: &Path) -> Measured {
+    let (default_dir, reference_dir) = (dir.join(case.name).join("default"), dir.join(case.name).join("reference"));
+    sil_host(&case.args.iter().chain(&case.measured).cloned().collect::<Vec<_>>(), &default_dir);
+    sil_host(&case.args.iter().chain(&case.reference).cloned().collect::<Vec<_>>(), &reference_dir);
+    let trace = Comparison::of(
+        &read_table(&default_dir.join("trace.csv")).expect("trace.csv"),
+        &read_table(&reference_dir.join("trace.csv")).expect("reference trace.csv"),
+    );
+    let events = read_table(&default_dir.join("events.csv")).zip(read_table(&reference_dir.join("events.csv")));
+    Measured { trace, events }
+}
+
+/// The case as recorded: the horizon, the envelopes, the events' kinds before it.
+fn record_case(m: &Measured) -> Value {
+    let h = m.trace.horizon_s;
+    let mut v = json!({
+        "horizon_s": h,
+        "departed": m.trace.departed,
+        "trace": envelope_json(&m.trace.envelope(h)),
+    });
+    if let Some((events, reference)) = &m.events {
+        v["events"] = envelope_json(&Comparison::of(events, reference).envelope(h));
+        v["event_kinds"] = run_lengths(&kinds_before(reference, h));
+    }
+    v
+}
+
+/// Where the case breaks its recorded contract.
+fn check_case(name: &str, m: &Measured, recorded: &Value) -> Vec<String> {
+    let h = recorded["horizon_s"].as_f64().expect("horizon_s");
+    let mut wrong: Vec<String> =
+        breaches(&envelope_of(&recorded["trace"]), &m.trace.envelope(h)).into_iter().map(|b| format!("{name}: trace.csv {b}")).collect();
+    if let Some((events, reference)) = &m.events {
+        let now = Comparison::of(events, reference).envelope(h);
+        wrong.extend(breaches(&envelope_of(&recorded["events"]), &now).into_iter().map(|b| format!("{name}: events.csv {b}")));
+        let (kinds, reference_kinds) = (kinds_before(events, h), kinds_before(reference, h));
+        if kinds != reference_kinds {
+            wrong.push(format!(
+                "{name}: the events before {h} s differ from the reference's ({} against {})",
+                kinds.len(),
+                reference_kinds.len()
+            ));
+        }
+        if run_lengths(&reference_kinds) != recorded["event_kinds"] {
+            wrong.push(format!("{name}: the reference's events before {h} s are not the recorded ones"));
+        }
+    }
+    wrong
+}
+
+/// The paper-level results: Table II to 5 decimals, `Z_t,sliding` of the eight
+/// cases, the small sweep's outcomes and the critical `mu` on its grid.
+fn paper_level(dir: &Path) -> Value {
+    let read = |p: &Path| -> Value { serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap() };
+    let admissible = dir.join("admissible");
+    sil_host(&["admissible".into()], &admissible);
+    let a = read(&admissible.join("admissible.json"));
+    let round5 = |v: &Value| -> Value {
+        json!(
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|iv| iv.as_array().unwrap().iter().map(|x| format!("{:.5}", x.as_f64().unwrap())).collect::<Vec<_>>())
+                .collect::<Vec<_>>()
+        )
+    };
+    let table_ii = json!({
+        "elbow_up": round5(&a["z_r_dot_positive"]["elbow_up"]),
+        "elbow_down": round5(&a["z_r_dot_positive"]["elbow_down"]),
+    });
+    let zmax = dir.join("zmax");
+    sil_host(&["zmax".into(), "--all".into()], &zmax);
+    let z = read(&zmax.join("summary.json"));
+    let z_t_sliding: serde_json::Map<String, Value> = z["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let key = format!("{}-x0{}-{}", r["controller"].as_str().unwrap(), r["x0"].as_str().unwrap(), r["setting"].as_str().unwrap());
+            (key, json!({"outcome": r["outcome"], "z_t_sliding_m": r["z_t_sliding_m"]}))
+        })
+        .collect();
+    let sweep = dir.join("sweep");
+    let sweep_args = ["sweep", "--mu", "0.1,1", "--mu-step", "0.1", "--v-belt", "-1,-0.1", "--v-belt-step", "0.1"];
+    sil_host(&sweep_args.iter().map(|s| s.to_string()).collect::<Vec<_>>(), &sweep);
+    let runs = read_table(&sweep.join("runs.csv")).expect("runs.csv");
+    let col = |n: &str| runs.column(n).unwrap_or_else(|| panic!("runs.csv has {n}"));
+    let (mu, v, ic, outcome) = (col("mu"), col("v_belt"), col("ic"), col("outcome"));
+    let mut outcomes: Vec<String> = runs.rows.iter().map(|r| format!("{} {} {} {}", r[ic], r[mu], r[v], r[outcome])).collect();
+    outcomes.sort();
+    let critical_mu = |x0: &str| -> Value {
+        let bouncing = runs.rows.iter().filter(|r| r[ic] == x0 && r[col("bouncing")] == "true").filter_map(|r| r[mu].parse::<f64>().ok());
+        bouncing.fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.min(x)))).map_or(Value::Null, |m| json!(m))
+    };
+    json!({
+        "table_ii_m": table_ii,
+        "z_t_sliding": z_t_sliding,
+        "sweep": {"args": sweep_args, "critical_mu_x0a": critical_mu("x0a"), "critical_mu_x0d": critical_mu("x0d"), "outcomes": outcomes},
+    })
+}
+
+/// Where the paper-level results moved from the recorded ones.
+fn check_paper(now: &Value, recorded: &Value) -> Vec<String> {
+    let mut wrong = Vec::new();
+    if now["table_ii_m"] != recorded["table_ii_m"] {
+        wrong.push(format!("Table II moved: {} (recorded {})", now["table_ii_m"], recorded["table_ii_m"]));
+    }
+    for (key, r) in recorded["z_t_sliding"].as_object().unwrap() {
+        let n = &now["z_t_sliding"][key];
+        let (a, b) = (n["z_t_sliding_m"].as_f64(), r["z_t_sliding_m"].as_f64());
+        let close = match (a, b) {
+            (Some(a), Some(b)) => (a - b).abs() <= 1e-4,
+            (None, None) => true,
+            _ => false,
+        };
+        if n["outcome"] != r["outcome"] || !close {
+            wrong.push(format!("Z_t,sliding {key}: {n} (recorded {r}; within 0.1 mm)"));
+        }
+    }
+    for key in ["critical_mu_x0a", "critical_mu_x0d"] {
+        if now["sweep"][key] != recorded["sweep"][key] {
+            wrong.push(format!("{key} on the sweep's grid: {} (recorded {})", now["sweep"][key], recorded["sweep"][key]));
+        }
+    }
+    let (a, b) = (now["sweep"]["outcomes"].as_array().unwrap(), recorded["sweep"]["outcomes"].as_array().unwrap());
+    let flipped: Vec<String> = a.iter().zip(b).filter(|(x, y)| x != y).map(|(x, y)| format!("{y} -> {x}")).collect();
+    if !flipped.is_empty() || a.len() != b.len() {
+        wrong.push(format!("sweep outcomes moved ({} of {}): {}", flipped.len(), b.len(), flipped.join("; ")));
+    }
+    wrong
+}
+
+#[test]
+fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_hold() {
+    let root = common::workspace();
+    let dir = root.join("target/accuracy");
+    let _ = std::fs::remove_dir_all(&dir);
+    let measured: Vec<(&'static str, Measured)> = cases().iter().map(|c| (c.name, measure(c, &dir))).collect();
+    let paper = paper_level(&dir);
+    let path = root.join("tests/accuracy/contract.json");
+    if std::env::var("ACCURACY").as_deref() == Ok("record") {
+        let cases: serde_json::Map<String, Value> = measured.iter().map(|(n, m)| (n.to_string(), record_case(m))).collect();
+        let contract = json!({
+            "rule": "per case and column, the scaled error |x - x_ref| / (1e-11 + 1e-9 |x_ref|) up to each of 20 checkpoints over [0, horizon_s] may grow to max(2 x recorded, 100); the events' kinds before horizon_s equal the reference's and the recorded ones; the paper-level results equal (Z_t,sliding within 0.1 mm)",
+            "reference": {"rtol": REFERENCE_TOL.0, "atol": REFERENCE_TOL.1},
+            "cases": cases,
+            "paper": paper,
+        });
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, serde_json::to_string_pretty(&contract).unwrap() + "\n").unwrap();
+        return;
+    }
+    let recorded: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("tests/accuracy/contract.json (ACCURACY=record records it)")).unwrap();
+    let mut wrong = Vec::new();
+    for (name, m) in &measured {
+        match recorded["cases"].get(*name) {
+            Some(r) => wrong.extend(check_case(name, m, r)),
+            None => wrong.push(format!("{name}: not in the contract")),
+        }
+    }
+    wrong.extend(check_paper(&paper, &recorded["paper"]));
+    assert!(wrong.is_empty(), "the accuracy contract is broken (outputs in {}):\n{}", dir.display(), wrong.join("\n"));
+}
+
+/// The contract can fail: the 1 s-sample case (whose steps the tolerance sets) run
+/// at a tolerance 100 times looser than the default breaks it.
+#[test]
+fn a_looser_tolerance_breaks_the_contract() {
+    let root = common::workspace();
+    let recorded: Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("tests/accuracy/contract.json")).expect("contract.json")).unwrap();
+    let case = cases().into_iter().find(|c| c.name == "simulate-x0a-300s-1s-samples").unwrap();
+    let loose = Case { measured: ["--rtol", "1e-7", "--atol", "1e-9"].map(String::from).to_vec(), ..case };
+    let m = measure(&loose, &root.join("target/accuracy-loose"));
+    let wrong = check_case(loose.name, &m, &recorded["cases"][loose.name]);
+    assert!(!wrong.is_empty(), "a 100 times looser tolerance kept the contract");
+}

@@ -1,0 +1,235 @@
+//! How far a trace lies from its tight-tolerance reference: the error envelope of
+//! the accuracy contract (docs/architecture.md "The accuracy contract").
+//!
+//! Errors are scaled as the integrator scales them, by `ATOL + RTOL |x_ref|` with
+//! the default tolerances (DOP853's error norm: Hairer, Nørsett, Wanner, *Solving
+//! Ordinary Differential Equations I*, II.4, eq. 4.10), so 1 means "one tolerance".
+//! The envelope of a column at time `t` is the largest scaled error at or before
+//! `t`. A trace is compared on `[0, T]`, `T` the recorded horizon: the first sample
+//! where any column is more than [`DEPARTED`] tolerances away, or where a discrete
+//! column (the contact mode, a flag, the firmware's status) differs. Beyond it a
+//! chaotic orbit (open-loop bouncing) or a closed loop whose quantised sensors
+//! flipped one level is a different trajectory, and only the paper-level results
+//! say whether it is still right.
+
+use std::collections::BTreeMap;
+
+/// The default relative tolerance of the plant (`plant::SimConfig::default`).
+pub const RTOL: f64 = 1e-9;
+/// The default absolute tolerance of the plant.
+pub const ATOL: f64 = 1e-11;
+/// Scaled error beyond which a trace has left its reference (tolerances).
+pub const DEPARTED: f64 = 1e3;
+/// Checkpoints of an envelope over `[0, T]`: at `T k / CHECKPOINTS`, `k = 1..=CHECKPOINTS`.
+pub const CHECKPOINTS: usize = 20;
+/// The rule's floor (tolerances): a change may bring a column's error up to
+/// `max(2 e_today, FLOOR)`. Today some steps end at every 1 ms sample, far inside
+/// the tolerance, and those traces equal their reference bit for bit; a change
+/// that lets the tolerance set the steps there may leave a global error of a few
+/// tens of tolerances over a run (the global error of an embedded pair is a
+/// small multiple of its tolerance over a smooth stretch: Hairer, Nørsett,
+/// Wanner I, II.4 and II.10).
+pub const FLOOR: f64 = 100.0;
+
+/// A CSV table: its header and its rows as text cells.
+#[derive(Debug, Clone)]
+pub struct Table {
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows of cells (no quoted commas in the rig's traces and events).
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// Parses `text` (a header line, then rows).
+    pub fn parse(text: &str) -> Self {
+        let mut lines = text.lines();
+        let header = lines.next().unwrap_or("").split(',').map(str::to_string).collect();
+        let rows = lines.filter(|l| !l.is_empty()).map(|l| l.split(',').map(str::to_string).collect()).collect();
+        Self { header, rows }
+    }
+
+    /// The index of column `name`.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+}
+
+/// A cell as a number (`None`: a word, such as a mode or a flag).
+fn number(cell: &str) -> Option<f64> {
+    if cell == "true" || cell == "false" { None } else { cell.parse().ok() }
+}
+
+/// `|x - r| / (ATOL + RTOL |r|)`; equal non-finite values count as 0.
+pub fn scaled(x: f64, r: f64) -> f64 {
+    if x.to_bits() == r.to_bits() || (x.is_nan() && r.is_nan()) {
+        return 0.0;
+    }
+    let e = (x - r).abs() / (ATOL + RTOL * r.abs());
+    if e.is_nan() { f64::INFINITY } else { e }
+}
+
+/// A trace against its reference: rows are matched by index (both sample at the
+/// same instants; a different row count is a departure at the shorter's end).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Comparison {
+    /// Time of the first sample where the trace has departed (see the module), or
+    /// the last sample's time when it never does.
+    pub horizon_s: f64,
+    /// What departed first (`column` or `column (discrete)`), `None` when nothing did.
+    pub departed: Option<String>,
+    /// Per numeric column: `(t, scaled error)` at every row, for envelopes.
+    errors: BTreeMap<String, Vec<(f64, f64)>>,
+}
+
+impl Comparison {
+    /// Compares `trace` with `reference`; the time column is `t`.
+    ///
+    /// # Panics
+    /// When a table has no `t` column (a malformed output: the test fails).
+    pub fn of(trace: &Table, reference: &Table) -> Self {
+        let t_col = trace.column("t").expect("a column t");
+        let n = trace.rows.len().min(reference.rows.len());
+        let mut errors: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+        let mut departed = None;
+        let mut horizon_s = trace.rows.get(n.saturating_sub(1)).and_then(|r| number(&r[t_col])).unwrap_or(0.0);
+        for i in 0..n {
+            let (row, reference_row) = (&trace.rows[i], &reference.rows[i]);
+            let t = number(&reference_row[t_col]).unwrap_or(f64::NAN);
+            for (c, name) in trace.header.iter().enumerate() {
+                let Some(rc) = reference.column(name) else { continue };
+                let (a, b) = (&row[c], &reference_row[rc]);
+                match (number(a), number(b)) {
+                    (Some(x), Some(r)) => {
+                        let e = scaled(x, r);
+                        errors.entry(name.clone()).or_default().push((t, e));
+                        if e > DEPARTED && departed.is_none() {
+                            departed = Some(name.clone());
+                            horizon_s = t;
+                        }
+                    }
+                    _ if a != b && departed.is_none() => {
+                        departed = Some(format!("{name} (discrete)"));
+                        horizon_s = t;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if departed.is_none() && trace.rows.len() != reference.rows.len() {
+            departed = Some(format!("row count {} against {}", trace.rows.len(), reference.rows.len()));
+        }
+        Self { horizon_s, departed, errors }
+    }
+
+    /// The envelope of each numeric column at the checkpoints over `[0, horizon_s]`:
+    /// the largest scaled error at or before `horizon_s k / CHECKPOINTS`.
+    pub fn envelope(&self, horizon_s: f64) -> BTreeMap<String, Vec<f64>> {
+        self.errors
+            .iter()
+            .map(|(name, errs)| {
+                let mut env = Vec::with_capacity(CHECKPOINTS);
+                let (mut i, mut max) = (0, 0.0f64);
+                for k in 1..=CHECKPOINTS {
+                    let at = horizon_s * k as f64 / CHECKPOINTS as f64;
+                    while i < errs.len() && errs[i].0 <= at * (1.0 + 1e-12) {
+                        max = max.max(errs[i].1);
+                        i += 1;
+                    }
+                    env.push(max);
+                }
+                (name.clone(), env)
+            })
+            .collect()
+    }
+}
+
+/// The events' kinds (column `kind`) at times before `horizon_s`.
+pub fn kinds_before(events: &Table, horizon_s: f64) -> Vec<String> {
+    let (Some(t), Some(k)) = (events.column("t"), events.column("kind")) else { return Vec::new() };
+    events.rows.iter().filter(|r| number(&r[t]).is_some_and(|v| v < horizon_s)).map(|r| r[k].clone()).collect()
+}
+
+/// Where `now` breaks the rule against the recorded envelope `then`: a column
+/// whose envelope exceeds `max(2 then, FLOOR)` at a checkpoint, or is missing.
+pub fn breaches(then: &BTreeMap<String, Vec<f64>>, now: &BTreeMap<String, Vec<f64>>) -> Vec<String> {
+    let mut out = Vec::new();
+    for (name, env) in then {
+        let Some(got) = now.get(name) else {
+            out.push(format!("{name}: missing"));
+            continue;
+        };
+        for (k, (&a, &b)) in env.iter().zip(got).enumerate() {
+            let limit = (2.0 * a).max(FLOOR);
+            if b > limit {
+                out.push(format!("{name}: {b:.3e} tolerances at checkpoint {} of {CHECKPOINTS} (today {a:.3e}, limit {limit:.3e})", k + 1));
+                break;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(rows: &[(f64, f64, &str)]) -> Table {
+        let mut text = String::from("t,x,mode\n");
+        for (t, x, m) in rows {
+            text.push_str(&format!("{t},{x},{m}\n"));
+        }
+        Table::parse(&text)
+    }
+
+    #[test]
+    fn a_trace_equal_to_its_reference_has_no_error_and_never_departs() {
+        let a = table(&[(0.0, 1.0, "sliding"), (0.5, 2.0, "sliding"), (1.0, 3.0, "flight")]);
+        let c = Comparison::of(&a, &a.clone());
+        assert_eq!(c.departed, None);
+        assert_eq!(c.horizon_s, 1.0);
+        assert!(c.envelope(1.0)["x"].iter().all(|&e| e == 0.0));
+    }
+
+    #[test]
+    fn errors_are_scaled_by_the_tolerance_and_the_envelope_only_grows() {
+        // 1e-9 off a value of 1: one RTOL, over ATOL + RTOL = 1.01e-9.
+        let r = table(&[(0.0, 1.0, "s"), (0.5, 1.0, "s"), (1.0, 1.0, "s")]);
+        let a = table(&[(0.0, 1.0, "s"), (0.5, 1.0 + 1e-9, "s"), (1.0, 1.0, "s")]);
+        let env = Comparison::of(&a, &r).envelope(1.0);
+        let e = scaled(1.0 + 1e-9, 1.0);
+        assert!((e - 1e-9 / 1.01e-9).abs() < 1e-6, "{e}");
+        assert_eq!(env["x"][CHECKPOINTS / 2 - 1], e, "the checkpoint at t = 0.5 includes that row");
+        assert_eq!(env["x"][CHECKPOINTS - 1], e, "and it stays the envelope afterwards");
+        assert_eq!(env["x"][0], 0.0);
+    }
+
+    #[test]
+    fn the_horizon_is_the_first_departure_in_value_or_in_a_discrete_column() {
+        let r = table(&[(0.0, 1.0, "s"), (0.5, 1.0, "s"), (1.0, 1.0, "s")]);
+        let far = table(&[(0.0, 1.0, "s"), (0.5, 1.0 + 1e-3, "s"), (1.0, 1.0, "s")]);
+        let c = Comparison::of(&far, &r);
+        assert_eq!((c.horizon_s, c.departed.as_deref()), (0.5, Some("x")));
+        let flipped = table(&[(0.0, 1.0, "s"), (0.5, 1.0, "s"), (1.0, 1.0, "flight")]);
+        let c = Comparison::of(&flipped, &r);
+        assert_eq!((c.horizon_s, c.departed.as_deref()), (1.0, Some("mode (discrete)")));
+    }
+
+    #[test]
+    fn the_rule_allows_twice_today_or_the_floor_and_nothing_more() {
+        let then: BTreeMap<String, Vec<f64>> = [("x".to_string(), vec![0.0, 500.0])].into();
+        let ok: BTreeMap<String, Vec<f64>> = [("x".to_string(), vec![FLOOR, 1000.0])].into();
+        assert!(breaches(&then, &ok).is_empty());
+        let worse: BTreeMap<String, Vec<f64>> = [("x".to_string(), vec![FLOOR * 1.01, 10.0])].into();
+        assert_eq!(breaches(&then, &worse).len(), 1);
+        let worse_late: BTreeMap<String, Vec<f64>> = [("x".to_string(), vec![0.0, 1000.1])].into();
+        assert_eq!(breaches(&then, &worse_late).len(), 1);
+        assert_eq!(breaches(&then, &BTreeMap::new()), vec!["x: missing".to_string()]);
+    }
+
+    #[test]
+    fn kinds_before_keeps_the_events_inside_the_horizon() {
+        let e = Table::parse("t,kind\n0.0,touchdown\n0.4,lift_off\n0.9,touchdown\n");
+        assert_eq!(kinds_before(&e, 0.5), vec!["touchdown", "lift_off"]);
+    }
+}
