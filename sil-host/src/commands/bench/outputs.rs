@@ -1,5 +1,6 @@
 //! The analyses' figures, measured through the commands themselves (their
-//! `execute`, into a scratch folder): `simulate` 300 s with its 1 ms trace, and
+//! `execute`, into a scratch folder): `simulate` 300 s with its 1 ms trace and
+//! with 1 s samples, and
 //! the closed-loop hybrid sweep of the paper's grid (experiment 7: x0d, 10 mu x
 //! 181 v_belt, 300 s per run), estimated from one balanced shard.
 
@@ -15,11 +16,20 @@ use crate::{
 
 /// Target of `simulate` 300 s with its 1 ms trace, wall seconds (issue 16).
 pub const SIMULATE_TARGET_S: f64 = 0.1;
+/// Target of `simulate` 300 s with 1 s samples, wall seconds (issue 26: 500 times
+/// faster than an event-driven SciPy peer, 12.6 s on the reference machine).
+pub const SIMULATE_SPARSE_TARGET_S: f64 = 0.02;
+/// The SciPy peer's time for the sparse case, s (issue 26's measurement), for the ratio.
+pub const SCIPY_PEER_S: f64 = 12.6;
 /// Target of the closed-loop hybrid sweep of the paper's grid, wall seconds (issue 16).
 pub const SWEEP_TARGET_S: f64 = 180.0;
 
 /// The simulate command the figure times (issue 16's case: the bouncing arm).
 pub const SIMULATE_ARGS: [&str; 10] = ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300", "--json"];
+
+/// The same case with 1 s samples: the tolerance, not the samples, sets the steps.
+pub const SIMULATE_SPARSE_ARGS: [&str; 12] =
+    ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300", "--sample-dt", "1", "--json"];
 
 /// The sweep command the figure times (experiment 7; the default grid and window).
 pub const SWEEP_ARGS: [&str; 6] = ["sweep", "--controller", "hybrid", "--ics", "d", "--json"];
@@ -35,31 +45,52 @@ fn scratch() -> Result<tempfile::TempDir, CliError> {
     tempfile::tempdir().map_err(|e| CliError::Io { path: std::env::temp_dir(), source: e })
 }
 
-/// `simulate` 300 s with its trace, `--repeat` times into fresh folders: median wall time.
-///
-/// # Errors
-/// The simulation failing (exit 1); a scratch folder that cannot be made.
-pub fn simulate(args: &BenchArgs) -> Result<Figure, CliError> {
+/// `sil-host ARGS --out DIR`, `--repeat` times into fresh folders: the wall times
+/// and the size of the last `trace.csv`, bytes.
+fn time_simulate(args: &BenchArgs, argv: &[&str]) -> Result<(Vec<f64>, u64), CliError> {
     let mut times = Vec::new();
     let mut bytes = 0;
     for _ in 0..args.repeat {
         let dir = scratch()?;
-        let Command::Simulate(sim) = parse(&SIMULATE_ARGS, dir.path())? else { unreachable!("SIMULATE_ARGS is a simulate command") };
+        let Command::Simulate(sim) = parse(argv, dir.path())? else {
+            unreachable!("the bench's simulate arguments are a simulate command")
+        };
         let t = Instant::now();
         let done = crate::commands::simulate::execute(&sim)?;
         times.push(t.elapsed().as_secs_f64());
         done.into_result()?;
         bytes = std::fs::metadata(dir.path().join("trace.csv")).map_or(0, |m| m.len());
     }
+    Ok((times, bytes))
+}
+
+/// `simulate` 300 s with its 1 ms trace, then with 1 s samples, `--repeat` times
+/// each into fresh folders: median wall times.
+///
+/// # Errors
+/// The simulation failing (exit 1); a scratch folder that cannot be made.
+pub fn simulate(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
+    let (times, bytes) = time_simulate(args, &SIMULATE_ARGS)?;
     let name = "simulate 300 s from x0a, v_belt -0.5, 1 ms trace.csv";
-    Ok(Figure::measured("simulate_300s", "simulate", name, median(&times), "s", SIMULATE_TARGET_S, Goal::AtMost)
+    let traced = Figure::measured("simulate_300s", "simulate", name, median(&times), "s", SIMULATE_TARGET_S, Goal::AtMost)
         .note(format!(
             "{} runs of `sil-host {} --out DIR`; trace.csv {:.1} MB, every file and figure written",
             times.len(),
             SIMULATE_ARGS.join(" "),
             bytes as f64 / 1e6
         ))
-        .with_runs(times))
+        .with_runs(times);
+    let (times, _) = time_simulate(args, &SIMULATE_SPARSE_ARGS)?;
+    let m = median(&times);
+    let name = "simulate 300 s from x0a, v_belt -0.5, 1 s samples";
+    let sparse = Figure::measured("simulate_300s_sparse", "simulate", name, m, "s", SIMULATE_SPARSE_TARGET_S, Goal::AtMost)
+        .note(format!("{} runs of `sil-host {} --out DIR`", times.len(), SIMULATE_SPARSE_ARGS.join(" ")))
+        .note(format!(
+            "{:.0} times faster than the event-driven SciPy peer's {SCIPY_PEER_S} s (issue 26, measured on this machine class; target 500)",
+            SCIPY_PEER_S / m
+        ))
+        .with_runs(times);
+    Ok(vec![traced, sparse])
 }
 
 /// The closed-loop hybrid sweep: shard 0 of N, N chosen so that it holds about
