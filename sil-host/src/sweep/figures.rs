@@ -55,7 +55,8 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let ics = spec.initial_conditions();
     let cols = ics.len().min(3);
     let grid_rows = ics.len().div_ceil(cols);
-    let width = 560 * cols as u32;
+    // At least 760 px, so that a one-panel map keeps a readable title.
+    let width = (560 * cols as u32).max(760);
     // The legend: one coloured box and name per outcome the sweep can give, packed
     // in rows across the width (measured with the figures' font).
     let outcomes: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
