@@ -38,16 +38,19 @@ pub const FLOOR: f64 = 100.0;
 pub struct Table {
     /// Column names.
     pub header: Vec<String>,
-    /// Rows of cells (no quoted commas in the rig's traces and events).
+    /// Rows of cells.
     pub rows: Vec<Vec<String>>,
 }
 
 impl Table {
-    /// Parses `text` (a header line, then rows).
+    /// Parses `text` (a header line, then rows) with the `csv` crate.
+    ///
+    /// # Panics
+    /// On a malformed table (the test fails, naming the error).
     pub fn parse(text: &str) -> Self {
-        let mut lines = text.lines();
-        let header = lines.next().unwrap_or("").split(',').map(str::to_string).collect();
-        let rows = lines.filter(|l| !l.is_empty()).map(|l| l.split(',').map(str::to_string).collect()).collect();
+        let mut reader = csv::Reader::from_reader(text.as_bytes());
+        let header = reader.headers().expect("a CSV header").iter().map(str::to_string).collect();
+        let rows = reader.records().map(|r| r.expect("a CSV row").iter().map(str::to_string).collect()).collect();
         Self { header, rows }
     }
 
