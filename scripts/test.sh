@@ -78,7 +78,9 @@ echo "   target/venv-python, pip install ./python (maturin, the workspace's targ
 echo "   target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
 pystarted=$SECONDS
 pyvenv="target/venv-python"
-if [ ! -x "$pyvenv/bin/pip" ]; then
+# A virtual environment holds its own absolute path: one whose target folder was
+# moved or copied (a cache restored elsewhere) no longer runs, and is made afresh.
+if [ ! -x "$pyvenv/bin/pip" ] || ! "$pyvenv/bin/pip" --version >/dev/null 2>&1; then
   # Debian's python3 has no ensurepip (so no venv) without python3-venv.
   if ! python3 -c "import ensurepip, venv" 2>/dev/null; then
     if [ "$(id -u)" = 0 ]; then
