@@ -43,11 +43,21 @@ pub struct SimConfig {
     /// integrator can follow. Written in summaries only when it is not the default.
     #[serde(skip_serializing_if = "SimConfig::is_default_jam_load")]
     pub jam_load: f64,
+    /// Largest integrator step, s (none: no cap; DOP853's `h_max`, Hairer, Nørsett
+    /// and Wanner's `HMAX`). The tolerances set the steps; a cap makes a run take
+    /// steps that neither the samples nor the zero-order hold impose, as the
+    /// accuracy contract's reference runs do (docs/architecture.md). Written in
+    /// summaries only when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
 }
 
 /// The default [`SimConfig::jam_load`]: large enough that the outcome no longer
 /// moves with it (`plant::tests::the_jam_outcome_converges_as_its_threshold_grows`).
 pub const JAM_LOAD: f64 = 1e7;
+
+/// The smallest [`SimConfig::max_step`], s: 1e7 steps per simulated second.
+pub const MAX_STEP_MIN: f64 = 1e-7;
 
 impl Default for SimConfig {
     fn default() -> Self {
@@ -63,6 +73,7 @@ impl Default for SimConfig {
             max_events_per_advance: 100_000,
             max_steps: 100_000_000,
             jam_load: JAM_LOAD,
+            max_step: None,
         }
     }
 }
@@ -73,7 +84,8 @@ impl SimConfig {
     }
 
     /// Checks ranges: tolerances finite and in (0, 0.1]; `e_n` in [0, 1];
-    /// `v_stick`, `zeno_velocity` finite and >= 0; limits > 0.
+    /// `v_stick`, `zeno_velocity` finite and >= 0; limits > 0; `max_step`, when set,
+    /// in [1e-7, 1e3] s.
     ///
     /// # Errors
     /// [`SimError::BadConfig`] naming the field.
@@ -94,6 +106,11 @@ impl SimConfig {
         }
         if !(self.jam_load.is_finite() && (1e3..=1e12).contains(&self.jam_load)) {
             return bad("jam_load", self.jam_load, "a value in [1e3, 1e12]");
+        }
+        if let Some(h) = self.max_step
+            && !(h.is_finite() && (MAX_STEP_MIN..=1e3).contains(&h))
+        {
+            return bad("max_step", h, "a step in [1e-7, 1e3] s");
         }
         if self.max_events_per_advance == 0 || self.max_steps == 0 {
             return bad("max_events_per_advance/max_steps", 0.0, "a positive count");

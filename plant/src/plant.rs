@@ -121,7 +121,7 @@ impl Plant {
             last_h: 2e-4,
             evals: Cell::new(0),
             trig: TrigCache::new(),
-            solver: Dop853 { max_steps: cfg.max_steps, ..Dop853::new(cfg.rtol, cfg.atol) },
+            solver: Dop853 { max_steps: cfg.max_steps, h_max: cfg.max_step.unwrap_or(f64::INFINITY), ..Dop853::new(cfg.rtol, cfg.atol) },
             counters: Counters::default(),
             startup_events: Vec::new(),
             end_point: None,

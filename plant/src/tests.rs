@@ -609,3 +609,30 @@ fn the_jam_outcome_converges_as_its_threshold_grows() {
     let (p, _) = jam_case(crate::config::JAM_LOAD);
     assert!(dist(&p.state(), &ends[4].0) < 1e-5, "the default is the limit's to 1e-5");
 }
+
+/// `max_step` caps the steps (at least 12 evaluations per cap-length of free swing)
+/// and the capped run, shorter-stepped, agrees with the uncapped one to the
+/// tolerance; a cap out of range is refused.
+#[test]
+fn max_step_caps_the_steps_and_keeps_the_solution() {
+    let mut params = Params::<f64>::paper();
+    params.g = 0.05;
+    let swing = |max_step: Option<f64>| {
+        let cfg = SimConfig { max_step, ..SimConfig::default() };
+        let mut p = plant_from(params, cfg, [170.0, 30.0, 200.0, -50.0]);
+        let r = p.advance(&Hold([0.0, 0.0]), 1.0, &mut NoObserver).unwrap();
+        assert_eq!(r.mode, ContactMode::Flight);
+        (p.state(), p.rhs_evaluations())
+    };
+    let (free, free_evals) = swing(None);
+    let (capped, capped_evals) = swing(Some(1e-3));
+    assert!(capped_evals >= 11 * 1000, "1 s in steps of at most 1 ms: {capped_evals} evaluations");
+    assert!(capped_evals > 5 * free_evals, "{capped_evals} against {free_evals} uncapped (about 180 steps)");
+    for (a, b) in free.iter().zip(&capped) {
+        assert!((a - b).abs() <= 1e-7 * b.abs().max(1.0), "{free:?} against {capped:?}");
+    }
+    for bad in [0.0, -1e-3, 5e-8, 2e3, f64::NAN, f64::INFINITY] {
+        let cfg = SimConfig { max_step: Some(bad), ..SimConfig::default() };
+        assert!(matches!(cfg.validate(), Err(SimError::BadConfig { name: "max_step", .. })), "max_step {bad} accepted");
+    }
+}

@@ -55,6 +55,7 @@ def simulate(
     sample_dt: float = 1e-3,
     rtol: float = 1e-9,
     atol: float = 1e-11,
+    max_step: Optional[float] = None,
     iwc: str = "restitution",
     set: _args.Overrides = None,
     strict: bool = False,
@@ -74,6 +75,8 @@ def simulate(
         duration: simulated time, s.
         sample_dt: sampling period of the trace, s (events at their exact times).
         rtol, atol: the integrator's tolerances.
+        max_step: the largest integrator step, s (``None``: the tolerances and the
+            samples set the steps; a cap gives a reference run whose steps differ).
         iwc: impact-without-collision rule, ``"restitution"`` or ``"plastic"``.
         set: the arm's parameters (paper Table I, SI, radians): ``{"plant.m":
             0.24}`` or ``["plant.m=0.24"]``; keys ``plant.m``, ``plant.l``,

@@ -65,6 +65,7 @@ pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
         impact_law: s.plant.impact_law,
         e_n: s.plant.e_n,
         iwc: s.plant.iwc,
+        max_step: s.plant.max_step,
         ..SimConfig::default()
     };
     Plant::new(params, sim, initial::deg_to_state(s.plant.x0.condition().deg), 0.0, [0.0, 0.0])

@@ -5,10 +5,13 @@
 //! tolerances), with the same events, and if the paper-level results do not move
 //! (Table II to 5 decimals, `Z_t,sliding` within 0.1 mm, the sweep's outcomes).
 //!
-//! Each case runs twice through the command line: at the default tolerances
-//! (rtol 1e-9, atol 1e-11) and as its reference at rtol 1e-12, atol 1e-14 (events
-//! are located to rounding in both: plant/src/segment.rs). The reference is
-//! recomputed by the same binary, so a change to the integrator moves both.
+//! Each case runs through the command line at the default tolerances (rtol 1e-9,
+//! atol 1e-11) and as its reference at rtol 1e-12, atol 1e-14, with steps of at
+//! most 0.1 ms (events are located to rounding in both: plant/src/segment.rs). The
+//! cap matters: where the samples (simulate's 1 ms trace) or the zero-order hold
+//! (a closed loop's 0.2 and 0.8 ms segments) set the steps, a reference at a tighter
+//! tolerance alone takes the very same steps, and would measure the run against
+//! itself. The reference is recomputed by the same binary.
 //!
 //! `ACCURACY=record cargo test --release -p e2e --test accuracy` records the
 //! contract again: only with a change that is meant to move it, said in the commit.
@@ -23,19 +26,21 @@ mod compare;
 
 use compare::{Comparison, Table, breaches, kinds_before};
 
-/// The reference's tolerances: three decades below the default.
-const REFERENCE_TOL: (&str, &str) = ("1e-12", "1e-14");
-/// The second reference's (a decade tighter again: another step sequence), for
-/// the predictability horizon.
-const REFERENCE_2_TOL: (&str, &str) = ("1e-13", "1e-14");
+/// The reference's tolerances `(rtol, atol, max_step)`: three decades below the
+/// default, and steps of at most 0.1 ms (none of the steps the samples or the
+/// zero-order hold impose on the measured run: those are 0.2 ms or longer).
+const REFERENCE_TOL: (&str, &str, &str) = ("1e-12", "1e-14", "1e-4");
+/// The second reference's (a decade tighter again, steps of at most 70 us:
+/// another step sequence), for the predictability horizon.
+const REFERENCE_2_TOL: (&str, &str, &str) = ("1e-13", "1e-14", "7e-5");
 
 /// A case: its name, the command line (after `sil-host`), and how to ask it for the
 /// reference tolerances.
 struct Case {
     name: &'static str,
     args: Vec<String>,
-    /// How to ask for a tolerance `(rtol, atol)`.
-    tolerance: fn((&str, &str)) -> Vec<String>,
+    /// How to ask for a reference's `(rtol, atol, max_step)`.
+    tolerance: fn((&str, &str, &str)) -> Vec<String>,
     /// Arguments of the measured run only (empty: the default tolerances).
     measured: Vec<String>,
 }
@@ -43,9 +48,18 @@ struct Case {
 fn cases() -> Vec<Case> {
     let root = common::workspace();
     let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    let simulate_ref: fn((&str, &str)) -> Vec<String> = |(r, a)| vec!["--rtol".into(), r.into(), "--atol".into(), a.into()];
-    let run_ref: fn((&str, &str)) -> Vec<String> =
-        |(r, a)| vec!["--set".into(), format!("plant.rtol={r}"), "--set".into(), format!("plant.atol={a}")];
+    let simulate_ref: fn((&str, &str, &str)) -> Vec<String> =
+        |(r, a, h)| vec!["--rtol".into(), r.into(), "--atol".into(), a.into(), "--max-step".into(), h.into()];
+    let run_ref: fn((&str, &str, &str)) -> Vec<String> = |(r, a, h)| {
+        vec![
+            "--set".into(),
+            format!("plant.rtol={r}"),
+            "--set".into(),
+            format!("plant.atol={a}"),
+            "--set".into(),
+            format!("plant.max_step={h}"),
+        ]
+    };
     let mut cases = vec![
         Case { name: "simulate-x0a", args: strings(&["simulate", "--x0", "a"]), tolerance: simulate_ref, measured: vec![] },
         Case { name: "simulate-x0d", args: strings(&["simulate", "--x0", "d"]), tolerance: simulate_ref, measured: vec![] },
@@ -290,7 +304,8 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
         let cases: serde_json::Map<String, Value> = measured.iter().map(|(n, m)| (n.to_string(), record_case(m))).collect();
         let contract = json!({
             "rule": "per case and column, the scaled error |x - x_ref| / (1e-11 + 1e-9 |x_ref|) up to each of 20 checkpoints over [0, horizon_s] may grow to max(2 x recorded, 100); the events' kinds before horizon_s equal the reference's and the recorded ones; the paper-level results equal (Z_t,sliding within 0.1 mm)",
-            "reference": {"rtol": REFERENCE_TOL.0, "atol": REFERENCE_TOL.1},
+            "reference": {"rtol": REFERENCE_TOL.0, "atol": REFERENCE_TOL.1, "max_step": REFERENCE_TOL.2},
+            "second_reference": {"rtol": REFERENCE_2_TOL.0, "atol": REFERENCE_2_TOL.1, "max_step": REFERENCE_2_TOL.2},
             "cases": cases,
             "paper": paper,
         });
@@ -302,6 +317,10 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
         serde_json::from_str(&std::fs::read_to_string(&path).expect("tests/accuracy/contract.json (ACCURACY=record records it)")).unwrap();
     let mut wrong = Vec::new();
     for (name, m) in &measured {
+        // A reference that is the measured run itself (the same steps) measures nothing.
+        if m.trace.envelope(m.trace.horizon_s).values().all(|e| e.iter().all(|&x| x == 0.0)) {
+            wrong.push(format!("{name}: the trace equals its reference to the bit: the reference takes the run's own steps"));
+        }
         match recorded["cases"].get(*name) {
             Some(r) => wrong.extend(check_case(name, m, r)),
             None => wrong.push(format!("{name}: not in the contract")),

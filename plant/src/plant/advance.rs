@@ -277,7 +277,7 @@ impl Plant {
         g0: f64,
         obs: &mut dyn Observer,
     ) -> Result<SegmentEnd, SimError> {
-        let solver = Dop853 { h_max, ..self.solver };
+        let solver = Dop853 { h_max: h_max.min(self.solver.h_max), ..self.solver };
         let mode = self.mode();
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None, last: None };

@@ -35,6 +35,10 @@ pub struct PlantSection {
     pub rtol: f64,
     /// Integrator absolute tolerance.
     pub atol: f64,
+    /// Largest integrator step, s (optional; none: the tolerances and the
+    /// zero-order hold set the steps). `plant::SimConfig::max_step`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
     /// Mass of each link `m`, kg (paper Table I: 0.12; optional).
     #[serde(default = "paper::m")]
     pub m: f64,

@@ -40,6 +40,11 @@ pub struct SimulateArgs {
     /// Absolute tolerance of the integrator.
     #[arg(long, default_value_t = 1e-11)]
     pub atol: f64,
+    /// Largest integrator step, s (default: none; the tolerances and the samples set
+    /// the steps). A cap gives a reference whose steps differ from the samples' (the
+    /// accuracy contract, docs/architecture.md).
+    #[arg(long, value_name = "S")]
+    pub max_step: Option<f64>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the
     /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
     #[arg(long, value_enum, default_value = "restitution")]

@@ -25,12 +25,11 @@ pub const DEPARTED: f64 = 1e3;
 /// Checkpoints of an envelope over `[0, T]`: at `T k / CHECKPOINTS`, `k = 1..=CHECKPOINTS`.
 pub const CHECKPOINTS: usize = 20;
 /// The rule's floor (tolerances): a change may bring a column's error up to
-/// `max(2 e_today, FLOOR)`. Today some steps end at every 1 ms sample, far inside
-/// the tolerance, and those traces equal their reference bit for bit; a change
-/// that lets the tolerance set the steps there may leave a global error of a few
-/// tens of tolerances over a run (the global error of an embedded pair is a
-/// small multiple of its tolerance over a smooth stretch: Hairer, Nørsett,
-/// Wanner I, II.4 and II.10).
+/// `max(2 e_today, FLOOR)`. Where the 1 ms samples or the zero-order hold set the
+/// steps, far inside the tolerance, today's error is that of rounding; the floor
+/// leaves a change room for a global error of a few tens of tolerances over a
+/// smooth stretch (the global error of an embedded pair is a small multiple of its
+/// tolerance there: Hairer, Nørsett, Wanner I, II.4 and II.10).
 pub const FLOOR: f64 = 100.0;
 
 /// A CSV table: its header and its rows as text cells.

@@ -117,8 +117,15 @@ pub struct Prepared {
 /// (exit 2) for bad options or initial conditions.
 pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
     let params = super::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
-    let sim =
-        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
+    let sim = SimConfig {
+        rtol: args.rtol,
+        atol: args.atol,
+        impact_law: args.impact_law,
+        e_n: args.e_n,
+        iwc: args.iwc,
+        max_step: args.max_step,
+        ..SimConfig::default()
+    };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
