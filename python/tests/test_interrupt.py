@@ -51,7 +51,14 @@ def test_ctrl_c_stops_a_long_call_promptly(call):
     time.sleep(1.5)
     sent = time.monotonic()
     p.send_signal(signal.SIGINT)
-    out, err = (x.decode() for x in p.communicate(timeout=60))
+    try:
+        out, err = (x.decode() for x in p.communicate(timeout=60))
+    except subprocess.TimeoutExpired:
+        # Say where it hung: the last progress line and whether the exception came.
+        p.kill()
+        out, err = (x.decode(errors="replace") for x in p.communicate())
+        last = err.replace("\r", "\n").strip().splitlines()[-3:]
+        pytest.fail(f"{call}: still running 60 s after SIGINT; stdout {out!r}; stderr ends {last}")
     elapsed = time.monotonic() - sent
     assert p.returncode == 0, err
     assert out.startswith("KeyboardInterrupt"), (out, err)
