@@ -56,8 +56,9 @@ pub struct SimConfig {
 /// moves with it (`plant::tests::the_jam_outcome_converges_as_its_threshold_grows`).
 pub const JAM_LOAD: f64 = 1e7;
 
-/// The smallest [`SimConfig::max_step`], s: 1e7 steps per simulated second.
-pub const MAX_STEP_MIN: f64 = 1e-7;
+/// The allowed [`SimConfig::max_step`], s: from 1e7 steps per simulated second to
+/// one step per 1000 s (the scenario's `plant.max_step` is checked against it too).
+pub const MAX_STEP_RANGE: std::ops::RangeInclusive<f64> = 1e-7..=1e3;
 
 impl Default for SimConfig {
     fn default() -> Self {
@@ -108,7 +109,7 @@ impl SimConfig {
             return bad("jam_load", self.jam_load, "a value in [1e3, 1e12]");
         }
         if let Some(h) = self.max_step
-            && !(h.is_finite() && (MAX_STEP_MIN..=1e3).contains(&h))
+            && !(h.is_finite() && MAX_STEP_RANGE.contains(&h))
         {
             return bad("max_step", h, "a step in [1e-7, 1e3] s");
         }

@@ -61,7 +61,7 @@ mod phase;
 mod plant;
 
 pub use bounds::{MAX_ANGLE, MAX_RATE, PROJECTION_TOLERANCE};
-pub use config::{MAX_STEP_MIN, SimConfig};
+pub use config::{MAX_STEP_RANGE, SimConfig};
 pub use controller::{Controller, Hold};
 pub use error::SimError;
 pub use events::{Counters, EventKind, PlantEvent, StepReport};

@@ -73,7 +73,7 @@ impl Scenario {
             check(finite(v) && (1e-14..=0.1).contains(&v), key, v, "a value in [1e-14, 0.1]")?;
         }
         if let Some(h) = p.max_step {
-            check(finite(h) && (plant::MAX_STEP_MIN..=1e3).contains(&h), "plant.max_step", h, "a step in [1e-7, 1e3] s")?;
+            check(finite(h) && plant::MAX_STEP_RANGE.contains(&h), "plant.max_step", h, "a step in [1e-7, 1e3] s")?;
         }
         let c = &self.controller;
         let reach = 2.0 * p.l;
