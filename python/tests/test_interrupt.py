@@ -15,7 +15,12 @@ import painleve
 LONG_SWEEP = "painleve.sweep(mu=(0.1, 1.0), v_belt=(-1.0, -0.1), v_belt_step=0.001, progress=True)"
 SCRIPT = textwrap.dedent(
     """
-    import sys, time, resource
+    import signal, sys, time, resource
+    # What a user at a terminal has: Python's own SIGINT handler. A test suite
+    # started as a background job (`cmd &` in a script) hands its children SIGINT
+    # ignored, and Python keeps a disposition it inherits ignored: without this
+    # line the call below would run to its end, deaf to the signal.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import painleve
     print("started", flush=True)
     t0 = time.monotonic()
