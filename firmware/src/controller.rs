@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 use shared::{
     Arm, ElbowBranch,
-    kinematics::{JointTrig, jacobian_trig, tip_position, tip_position_trig},
+    kinematics::{JointTrig, jacobian_trig, tip_position_trig},
     time::{Duration, Instant},
     wire::{self, ActuatorCommand, SensorFrame, status},
 };
@@ -426,7 +426,8 @@ impl Firmware {
         };
         let lifted = self.liftoff.update(&rule, m.f_n, height);
         // The raw angles (quantisation only, no observer lag) against the load cell.
-        let measured_height = tip_position(p.l, &Vector2::new(m.theta1, theta2))[1] + p.h;
+        // Their sines and cosines from the estimate's (a few milliradians away).
+        let measured_height = tip_position_trig(p.l, &trig.near(&q, &Vector2::new(m.theta1, theta2)))[1] + p.h;
         let consistency_rule = ConsistencyRule {
             contact_force: cfg.sensor_contact_force,
             height_tolerance: cfg.sensor_height_tolerance,

@@ -203,7 +203,10 @@ pub fn hybrid_trig(
     if !saturated {
         state.force_integral += (f_n_ref - input.f_n) * dt;
     }
-    let i_max = if gains.ki > 0.0 { 4.0 * f_n_ref.max(1.0) / gains.ki } else { 0.0 };
+    // `f_n_ref.max(1.0)` as a comparison: core's `f32::max` is a call to `fmaxf` on
+    // the MCU (no VMAXNM before ARMv8). The same value, 1 for a NaN too.
+    let f_floor = if f_n_ref > 1.0 { f_n_ref } else { 1.0 };
+    let i_max = if gains.ki > 0.0 { 4.0 * f_floor / gains.ki } else { 0.0 };
     state.force_integral = clamp(state.force_integral, -i_max, i_max);
     let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
     let f_t_hat = match comp {

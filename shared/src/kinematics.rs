@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::{Real, lit, params::to_f64};
+use crate::{Real, lit, params::to_f64, trig};
 
 /// Elbow branch of a configuration, by the sign of the relative angle
 /// `theta2 - theta1` (docs/model.md: "elbow up" means `theta2 - theta1 > 0`).
@@ -88,7 +88,23 @@ impl<T: Real> JointTrig<T> {
         let (s2, c2) = q[1].sin_cos_rad();
         Self { s1, c1, s2, c2 }
     }
+}
 
+impl JointTrig<f32> {
+    /// The sines and cosines at `q` (rad) from these, taken at `base` (rad), when
+    /// `q` is within 1/16 rad of `base` in both angles ([`trig::rotate_f32`]: a
+    /// dozen instructions per angle on the MCU against fifty), else
+    /// [`JointTrig::new`]`(q)`. The firmware's raw angles against its estimate.
+    #[inline]
+    pub fn near(&self, base: &Vector2<f32>, q: &Vector2<f32>) -> Self {
+        match (trig::rotate_f32(self.s1, self.c1, q[0] - base[0]), trig::rotate_f32(self.s2, self.c2, q[1] - base[1])) {
+            (Some((s1, c1)), Some((s2, c2))) => Self { s1, c1, s2, c2 },
+            _ => Self::new(q),
+        }
+    }
+}
+
+impl<T: Real> JointTrig<T> {
     /// `cos(theta2 - theta1) = cos theta1 cos theta2 + sin theta1 sin theta2`.
     #[inline]
     pub fn c21(&self) -> T {
@@ -161,7 +177,9 @@ pub fn inverse_kinematics<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranch) ->
     if !(z[0].is_finite() && z[1].is_finite()) {
         return Err(IkError::NonFinite { z_t: to_f64(z[0]), z_n: to_f64(z[1]) });
     }
-    let r = z.norm();
+    // |z| with the scalar's own square root (nalgebra's `norm` would call libm's
+    // `sqrtf` on the MCU: 150 instructions against one VSQRT.F32, the same bits).
+    let r = (z[0] * z[0] + z[1] * z[1]).square_root();
     let reach = l + l;
     if r > reach * lit::<T>(1.0 + 1e-6) {
         return Err(IkError::OutOfReach { z_t: to_f64(z[0]), z_n: to_f64(z[1]), distance: to_f64(r), reach: to_f64(reach) });
@@ -185,6 +203,24 @@ mod tests {
     use super::*;
 
     const L: f64 = 0.21;
+
+    /// `near` gives the sines and cosines of `q` to a few f32 roundings from those
+    /// of a base within 1/16 rad, and `new(q)` itself beyond it.
+    #[test]
+    fn near_rotates_small_steps_and_recomputes_large_ones() {
+        let base = Vector2::new(-0.2f32, -0.61);
+        let t = JointTrig::new(&base);
+        for (d1, d2) in [(0.0f32, 0.0f32), (0.01, -0.003), (-0.0625, 0.0625), (0.03, 0.0)] {
+            let q = Vector2::new(base[0] + d1, base[1] + d2);
+            let n = t.near(&base, &q);
+            let e = JointTrig::new(&Vector2::new(q[0] as f64, q[1] as f64));
+            for (a, b) in [(n.s1, e.s1), (n.c1, e.c1), (n.s2, e.s2), (n.c2, e.c2)] {
+                assert!((a as f64 - b).abs() <= 4e-7, "d = ({d1}, {d2}): {a} against {b}");
+            }
+        }
+        let far = Vector2::new(base[0] + 0.07, base[1]);
+        assert_eq!(t.near(&base, &far), JointTrig::new(&far));
+    }
 
     #[test]
     fn jacobian_matches_finite_differences_of_z() {

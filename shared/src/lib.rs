@@ -11,7 +11,9 @@
 //! radians; `q = [theta1, theta2]`; the tip is `z = [z_t, z_n]` (tangential along
 //! the belt, normal upward); the belt surface is `z_n = -H`; SI units throughout.
 #![no_std]
-#![forbid(unsafe_code)]
+// No unsafe code but one instruction of inline assembly, the FPU's square root
+// ([`sqrt::sqrt_f32`]: no stable Rust exposes it in `no_std`).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 // clap's derives name `::std` (host-only feature).
@@ -23,6 +25,7 @@ pub mod kinematics;
 pub mod model;
 pub mod params;
 pub mod slip;
+pub mod sqrt;
 pub mod time;
 pub mod trig;
 pub mod wire;
@@ -45,6 +48,9 @@ pub trait Real: nalgebra::RealField + Copy {
     fn sin_rad(self) -> Self;
     /// `cos x`, `x` in radians.
     fn cos_rad(self) -> Self;
+    /// `sqrt x`, correctly rounded (NaN for `x < 0`): `RealField`'s for `f64`,
+    /// [`sqrt::sqrt_f32`] for `f32` (the FPU's `VSQRT.F32` on the MCU, the same bits).
+    fn square_root(self) -> Self;
 }
 
 impl Real for f64 {
@@ -60,6 +66,10 @@ impl Real for f64 {
     fn cos_rad(self) -> Self {
         nalgebra::ComplexField::cos(self)
     }
+    #[inline]
+    fn square_root(self) -> Self {
+        nalgebra::ComplexField::sqrt(self)
+    }
 }
 
 impl Real for f32 {
@@ -74,6 +84,10 @@ impl Real for f32 {
     #[inline]
     fn cos_rad(self) -> Self {
         trig::sin_cos_f32(self).1
+    }
+    #[inline]
+    fn square_root(self) -> Self {
+        sqrt::sqrt_f32(self)
     }
 }
 

@@ -288,17 +288,62 @@ pub fn decode_torque(code: i16) -> f32 {
 
 /// Encodes a torque (N m) as a 12-bit code, saturating; returns the code and whether it saturated.
 pub fn encode_torque(torque: f32) -> (i16, bool) {
-    let code = libm::roundf(torque / TORQUE_FULL_SCALE_NM * 2048.0);
-    if !code.is_finite() {
+    let x = torque / TORQUE_FULL_SCALE_NM * 2048.0;
+    if !x.is_finite() {
         return (0, true);
     }
+    // Beyond twice the code range the result (a saturated code) is the same.
+    let code = round_half_away(x.clamp(-4096.0, 4096.0));
     let clamped = code.clamp(TORQUE_CODE_MIN as f32, TORQUE_CODE_MAX as f32);
-    (clamped as i16, clamped != code)
+    // In range already: through i32 (one VCVT) rather than `as i16`'s saturating compares.
+    (clamped as i32 as i16, clamped != code)
+}
+
+/// `x` rounded to the nearest integer, halfway cases away from zero (`roundf`),
+/// for `|x| <= 2^22`: the truncation (one `VCVT`) and the exact remainder `x - trunc x`,
+/// about 8 instructions on the MCU against `libm::roundf`'s bit manipulation.
+/// The same value as `libm::roundf` (test below) but for the sign of a zero.
+#[inline]
+fn round_half_away(x: f32) -> f32 {
+    let t = x as i32 as f32;
+    let f = x - t;
+    if f >= 0.5 {
+        t + 1.0
+    } else if f <= -0.5 {
+        t - 1.0
+    } else {
+        t
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `round_half_away` equals `libm::roundf` on every f32 in [-2^22, 2^22] (a
+    /// stride through their bits, and every halfway case near the code range), so
+    /// the torque codes did not change; torques beyond the range saturate as before.
+    #[test]
+    fn rounding_equals_roundf_and_codes_saturate() {
+        let mut bits: u32 = 0;
+        while bits <= 0x4a80_0000 {
+            for x in [f32::from_bits(bits), -f32::from_bits(bits)] {
+                assert!(round_half_away(x) == libm::roundf(x), "x = {x:e}");
+            }
+            bits += 997;
+        }
+        for k in -4200..4200 {
+            let x = k as f32 + 0.5;
+            for y in [x, f32::from_bits(x.to_bits() + 1), f32::from_bits(x.to_bits() - 1)] {
+                assert!(round_half_away(y) == libm::roundf(y), "x = {y:e}");
+            }
+        }
+        assert_eq!(encode_torque(1e30), (TORQUE_CODE_MAX, true));
+        assert_eq!(encode_torque(-1e30), (TORQUE_CODE_MIN, true));
+        assert_eq!(encode_torque(f32::NAN), (0, true));
+        assert_eq!(encode_torque(5.0 * 2047.0 / 2048.0), (2047, false));
+        assert_eq!(encode_torque(5.0 * 2047.6 / 2048.0), (2047, true));
+    }
 
     #[test]
     fn layouts_are_fixed() {
