@@ -4,7 +4,7 @@
 use nalgebra::{Matrix2, Vector2};
 use shared::{
     Arm, ElbowBranch, Real,
-    kinematics::{JointTrig, inverse_kinematics, jacobian, jacobian_trig, jdot_qdot_trig, tip_position_trig},
+    kinematics::{JointTrig, inverse_kinematics_trig, jacobian_trig, jdot_qdot_trig, tip_position_trig},
 };
 
 use crate::{
@@ -75,8 +75,8 @@ pub fn pid(
     limit: f32,
 ) -> Result<[f32; 2], LawError> {
     let p = &arm.params;
-    let q_ref = inverse_kinematics(p.l, &Vector2::new(reference.pos, -p.h), branch).map_err(|_| LawError::Unreachable)?;
-    let j_ref = jacobian(p.l, &q_ref);
+    let (q_ref, trig_ref) = inverse_kinematics_trig(p.l, &Vector2::new(reference.pos, -p.h), branch).map_err(|_| LawError::Unreachable)?;
+    let j_ref = jacobian_trig(p.l, &trig_ref);
     let qd_ref = j_ref.try_inverse().ok_or(LawError::Singular)? * Vector2::new(reference.vel, 0.0);
     let to_prime = |v: Vector2<f32>| [v[0], v[1] - v[0]];
     let (e, ed) = {
@@ -231,6 +231,7 @@ mod tests {
     use super::*;
     use crate::config::Config;
     use proptest::prelude::*;
+    use shared::kinematics::{inverse_kinematics, jacobian};
     use shared::{Params, SlipDirection, contact::sliding_force};
 
     /// The law as written before the shared trigonometry (issue 16): every term

@@ -174,6 +174,20 @@ pub fn jdot_qdot_trig<T: Real>(l: T, t: &JointTrig<T>, qd: &Vector2<T>) -> Vecto
 /// [`IkError::NonFinite`], [`IkError::OutOfReach`] (`|z| > 2 l`, beyond a relative
 /// rounding margin of `1e-6`), [`IkError::AtBase`] (`z = 0`).
 pub fn inverse_kinematics<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranch) -> Result<Vector2<T>, IkError> {
+    inverse_kinematics_trig(l, z, branch).map(|(q, _)| q)
+}
+
+/// [`inverse_kinematics`] (the same angles, to the bit) with their sines and
+/// cosines, from the construction's own geometry rather than `sin_cos`: with
+/// `sin psi = z_t / |z|`, `cos psi = -z_n / |z|`, `cos(delta/2) = |z| / 2l` and
+/// `sin(delta/2) = sqrt((1 - cos)(1 + cos))`, the angle-sum identities for
+/// `psi -+ delta/2`. Within a few roundings of `JointTrig::new` of the angles (test
+/// below); the firmware's PID takes its reference Jacobian from them (two `sin_cos`
+/// fewer a step on the MCU).
+///
+/// # Errors
+/// As [`inverse_kinematics`].
+pub fn inverse_kinematics_trig<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranch) -> Result<(Vector2<T>, JointTrig<T>), IkError> {
     if !(z[0].is_finite() && z[1].is_finite()) {
         return Err(IkError::NonFinite { z_t: to_f64(z[0]), z_n: to_f64(z[1]) });
     }
@@ -188,14 +202,26 @@ pub fn inverse_kinematics<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranch) ->
         return Err(IkError::AtBase);
     }
     // cos(delta/2) = r / (2 l): better conditioned near the straight arm than acos of cos(delta).
-    let half = (r / reach).min(T::one()).acos();
-    let delta = match branch {
-        ElbowBranch::Up => half + half,
-        ElbowBranch::Down => -(half + half),
+    let c_half = (r / reach).min(T::one());
+    let half = c_half.acos();
+    // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
+    let sign = match branch {
+        ElbowBranch::Up => T::one(),
+        ElbowBranch::Down => -T::one(),
     };
+    let delta = sign * (half + half);
     let psi = z[0].atan2(-z[1]);
     let half_delta = delta * lit(0.5);
-    Ok(Vector2::new(psi - half_delta, psi + half_delta))
+    let q = Vector2::new(psi - half_delta, psi + half_delta);
+    let (s_psi, c_psi) = (z[0] / r, -z[1] / r);
+    let s_half = sign * ((T::one() - c_half) * (T::one() + c_half)).square_root();
+    let trig = JointTrig {
+        s1: s_psi * c_half - c_psi * s_half,
+        c1: c_psi * c_half + s_psi * s_half,
+        s2: s_psi * c_half + c_psi * s_half,
+        c2: c_psi * c_half - s_psi * s_half,
+    };
+    Ok((q, trig))
 }
 
 #[cfg(test)]
@@ -203,6 +229,33 @@ mod tests {
     use super::*;
 
     const L: f64 = 0.21;
+
+    /// The geometry's sines and cosines are those of the angles, to a few roundings,
+    /// on both branches over the workspace, in f32 and f64.
+    #[test]
+    fn inverse_kinematics_trig_gives_the_angles_sines_and_cosines() {
+        let mut worst = (0.0f64, 0.0f64);
+        for i in -20..=20 {
+            for j in 1..=20 {
+                let z = Vector2::new(0.02 * i as f64, -0.021 * j as f64);
+                for branch in [ElbowBranch::Up, ElbowBranch::Down] {
+                    let Ok((q, t)) = inverse_kinematics_trig(L, &z, branch) else { continue };
+                    assert_eq!(q, inverse_kinematics(L, &z, branch).unwrap(), "the same angles");
+                    let e = JointTrig::new(&q);
+                    for (a, b) in [(t.s1, e.s1), (t.c1, e.c1), (t.s2, e.s2), (t.c2, e.c2)] {
+                        worst.0 = worst.0.max((a - b).abs());
+                    }
+                    let zf = Vector2::new(z[0] as f32, z[1] as f32);
+                    let (qf, tf) = inverse_kinematics_trig(L as f32, &zf, branch).unwrap();
+                    let ef = JointTrig::new(&Vector2::new(qf[0] as f64, qf[1] as f64));
+                    for (a, b) in [(tf.s1, ef.s1), (tf.c1, ef.c1), (tf.s2, ef.s2), (tf.c2, ef.c2)] {
+                        worst.1 = worst.1.max((a as f64 - b).abs());
+                    }
+                }
+            }
+        }
+        assert!(worst.0 < 1e-14 && worst.1 < 2e-6, "worst differences {worst:?}");
+    }
 
     /// `near` gives the sines and cosines of `q` to a few f32 roundings from those
     /// of a base within 1/16 rad, and `new(q)` itself beyond it.
