@@ -69,9 +69,9 @@ cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pi
 python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
-echo "   ceiling 2750 cycles per worst step, either controller (5 % of a 3.05 kHz period at 168 MHz)"
+echo "   ceiling 2650 cycles per worst step, either controller (5 % of a 3.17 kHz period at 168 MHz)"
 cargo build --release -p sil-host
-python3 scripts/cycles.py --duration 1 --max-cycles 2750
+python3 scripts/cycles.py --duration 1 --max-cycles 2650
 
 echo "== the Python package (python/, docs/python.md): pinned tools from python/requirements-dev.txt in"
 echo "   target/venv-python, pip install ./python (maturin, the workspace's target dir), pytest against"

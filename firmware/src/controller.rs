@@ -397,12 +397,8 @@ impl Firmware {
                     seq0: seq,
                     last_seq: seq,
                     trackers: [self.tracker.restarted_at(m.theta1), self.tracker.restarted_at(theta2)],
-                    quintic: Quintic { start: z[0], target: cfg.target_z_t, duration: cfg.move_time_s },
-                    force_ramp: Quintic {
-                        start: law::clamp(m.f_n, 0.0, cfg.f_n_ref),
-                        target: cfg.f_n_ref,
-                        duration: cfg.force_ramp_s.max(1e-9),
-                    },
+                    quintic: Quintic::new(z[0], cfg.target_z_t, cfg.move_time_s),
+                    force_ramp: Quintic::new(law::clamp(m.f_n, 0.0, cfg.f_n_ref), cfg.f_n_ref, cfg.force_ramp_s.max(1e-9)),
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
                     trig,
                 };

@@ -16,30 +16,38 @@ pub struct RefPoint {
     pub moving: bool,
 }
 
-/// A quintic move from `start` to `target` (m) over `duration` (s).
+/// A quintic move from `start` to `target` (m) over `duration` (s), made by
+/// [`Quintic::new`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quintic {
-    /// Start, m.
-    pub start: f32,
-    /// Target, m.
-    pub target: f32,
-    /// Duration, s (> 0).
-    pub duration: f32,
+    start: f32,
+    target: f32,
+    duration: f32,
+    /// `1 / duration`, 1/s: the step multiplies by it (a `VDIV.F32` is 14 cycles on
+    /// the Cortex-M4F, a multiply 1; exact for a power-of-two duration such as
+    /// the defaults, 2 s and 0.25 s).
+    rate: f32,
 }
 
 impl Quintic {
+    /// The move from `start` to `target` (m) over `duration` (s, > 0: the
+    /// configuration checks it).
+    pub fn new(start: f32, target: f32, duration: f32) -> Self {
+        Self { start, target, duration, rate: 1.0 / duration }
+    }
+
     /// The reference `t` s after the start of the move (holds at the target after `duration`).
     pub fn at(&self, t: f32) -> RefPoint {
         let d = self.target - self.start;
         if t >= self.duration {
             return RefPoint { pos: self.target, vel: 0.0, acc: 0.0, moving: false };
         }
-        let tau = if t > 0.0 { t / self.duration } else { 0.0 };
+        let tau = if t > 0.0 { t * self.rate } else { 0.0 };
         let (t2, t3) = (tau * tau, tau * tau * tau);
         let s = t3 * (10.0 - 15.0 * tau + 6.0 * t2);
         let ds = 30.0 * t2 * (1.0 - 2.0 * tau + t2);
         let dds = 60.0 * tau * (1.0 - 3.0 * tau + 2.0 * t2);
-        RefPoint { pos: self.start + d * s, vel: d * ds / self.duration, acc: d * dds / (self.duration * self.duration), moving: true }
+        RefPoint { pos: self.start + d * s, vel: d * ds * self.rate, acc: d * dds * (self.rate * self.rate), moving: true }
     }
 }
 
@@ -49,7 +57,7 @@ mod tests {
 
     #[test]
     fn derivatives_match_finite_differences_and_ends_are_at_rest() {
-        let q = Quintic { start: -0.16, target: 0.1, duration: 2.0 };
+        let q = Quintic::new(-0.16, 0.1, 2.0);
         let h = 1e-3;
         for i in 1..199 {
             let t = i as f32 * 0.01;
@@ -62,5 +70,32 @@ mod tests {
         let e = q.at(2.0);
         assert_eq!((e.pos, e.vel, e.acc, e.moving), (0.1, 0.0, 0.0, false));
         assert!((q.at(1.0).pos + 0.03).abs() < 1e-6, "midpoint is halfway");
+    }
+
+    /// Multiplying by `1 / duration` agrees with dividing by it to a few roundings
+    /// of the peak velocity, and exactly for a power-of-two duration.
+    #[test]
+    fn the_rate_is_the_division_to_rounding() {
+        let exact = |q: &Quintic, t: f32| {
+            let tau = t / q.duration;
+            let d = q.target - q.start;
+            let t2 = tau * tau;
+            let ds = 30.0 * t2 * (1.0 - 2.0 * tau + t2);
+            d * ds / q.duration
+        };
+        for duration in [2.0f32, 0.25, 0.3, 1.7] {
+            let q = Quintic::new(0.05, -0.12, duration);
+            for i in 1..100 {
+                let t = duration * i as f32 / 100.0;
+                let (v, e) = (q.at(t).vel, exact(&q, t));
+                if duration == 2.0 || duration == 0.25 {
+                    assert_eq!(v.to_bits(), e.to_bits(), "duration {duration}, t {t}");
+                } else {
+                    // Both within a few roundings of the peak velocity 1.875 |d| / duration.
+                    let peak = 1.875 * 0.17 / duration;
+                    assert!((v - e).abs() <= 16.0 * f32::EPSILON * peak, "duration {duration}, t {t}: {v} against {e}");
+                }
+            }
+        }
     }
 }

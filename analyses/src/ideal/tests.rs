@@ -28,7 +28,7 @@ fn fw_ref(r: &Quintic, t: f64) -> FwRef {
 
 #[test]
 fn reference_mirrors_the_firmware_quintic() {
-    let fw = Quintic { start: -0.1624, target: 0.12, duration: 2.0 };
+    let fw = Quintic::new(-0.1624, 0.12, 2.0);
     let ours = Reference { start: -0.1624, target: 0.12, duration: 2.0 };
     for i in -5..=300 {
         let t = i as f64 * 0.01;
@@ -47,7 +47,7 @@ fn ideal_and_firmware_pid_agree_at_the_same_state() {
     let params = Params::<f64>::paper();
     let cfg = firmware::Config::default();
     let arm32 = Arm::new(cfg.params);
-    let fw_q = Quintic { start: -0.16, target: 0.1, duration: 2.0 };
+    let fw_q = Quintic::new(-0.16, 0.1, 2.0);
     let reference = Reference { start: -0.16, target: 0.1, duration: 2.0 };
     let mut checked = 0;
     for (i, branch) in [ElbowBranch::Down, ElbowBranch::Up].into_iter().enumerate() {
@@ -82,7 +82,7 @@ fn ideal_and_firmware_hybrid_agree_at_the_same_state() {
     let params = Params::<f64>::paper();
     let cfg = firmware::Config::default();
     let arm32 = Arm::new(cfg.params);
-    let fw_q = Quintic { start: -0.16, target: 0.1, duration: 2.0 };
+    let fw_q = Quintic::new(-0.16, 0.1, 2.0);
     let reference = Reference { start: -0.16, target: 0.1, duration: 2.0 };
     let ideal = IdealHybrid::paper(params, reference, 10.0, 650.0);
     for branch in [ElbowBranch::Down, ElbowBranch::Up] {
