@@ -88,6 +88,18 @@ impl<T: Real> JointTrig<T> {
         let (s2, c2) = q[1].sin_cos_rad();
         Self { s1, c1, s2, c2 }
     }
+
+    /// `cos(theta2 - theta1) = cos theta1 cos theta2 + sin theta1 sin theta2`.
+    #[inline]
+    pub fn c21(&self) -> T {
+        self.c1 * self.c2 + self.s1 * self.s2
+    }
+
+    /// `sin(theta1 - theta2) = sin theta1 cos theta2 - cos theta1 sin theta2`.
+    #[inline]
+    pub fn s12(&self) -> T {
+        self.s1 * self.c2 - self.c1 * self.s2
+    }
 }
 
 impl JointTrig<f32> {
@@ -101,20 +113,6 @@ impl JointTrig<f32> {
             (Some((s1, c1)), Some((s2, c2))) => Self { s1, c1, s2, c2 },
             _ => Self::new(q),
         }
-    }
-}
-
-impl<T: Real> JointTrig<T> {
-    /// `cos(theta2 - theta1) = cos theta1 cos theta2 + sin theta1 sin theta2`.
-    #[inline]
-    pub fn c21(&self) -> T {
-        self.c1 * self.c2 + self.s1 * self.s2
-    }
-
-    /// `sin(theta1 - theta2) = sin theta1 cos theta2 - cos theta1 sin theta2`.
-    #[inline]
-    pub fn s12(&self) -> T {
-        self.s1 * self.c2 - self.c1 * self.s2
     }
 }
 
