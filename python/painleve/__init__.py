@@ -39,7 +39,7 @@ from ._api import (
     sweep,
     zmax,
 )
-from ._load import load, read_csv
+from ._load import load, read_arrow, read_csv
 from ._result import PainleveWarning, Result, Table, describe_violations
 
 __all__ = [
@@ -54,6 +54,7 @@ __all__ = [
     "load",
     "modes",
     "poincare",
+    "read_arrow",
     "read_csv",
     "run",
     "scenario_toml",

@@ -1,5 +1,6 @@
 """``painleve.load``: any output folder ``sil-host`` writes, read back with the
-standard library and NumPy only (no compiled code)."""
+standard library and NumPy (CSV, JSON, text), and the compiled module's Arrow
+reader for the tables of ``--format arrow`` (no pyarrow needed)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from ._result import Result, Table, describe_violations
 
-__all__ = ["load", "read_csv"]
+__all__ = ["load", "read_arrow", "read_csv"]
 
 _INT = re.compile(r"^[+-]?\d+$")
 
@@ -59,6 +60,24 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
     return Table(columns, path.stem)
 
 
+def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
+    """One Arrow IPC table the CLI wrote (``simulate --format arrow``:
+    ``trace.arrow``, ``events.arrow``), as a :class:`Table` with the columns,
+    types and values :func:`read_csv` gives for the same table as CSV (floats
+    with their exact bits). pandas (``pandas.read_feather``, with pyarrow) and
+    polars (``polars.read_ipc``) read the same files directly.
+
+    Raises:
+        PainleveError: the file cannot be read, is not an Arrow IPC file (or was
+            cut off before its footer), or holds a column of another type than
+            Float64, Int64, Boolean or Utf8.
+    """
+    from ._painleve import read_arrow as _read
+
+    path = Path(path)
+    return Table(_read(os.fspath(path)), path.stem)
+
+
 # Where each command's summary keeps the validity counters summed over its runs.
 _VALIDITY_AT = {
     "simulate": ("validity",),
@@ -87,7 +106,7 @@ def _detect(files: Set[str], summary: Any) -> str:
         return "zmax"
     if "sensitivity.csv" in files:
         return "sensitivity"
-    if "events.csv" in files:
+    if "events.csv" in files or "events.arrow" in files:
         return "simulate"
     if "trace.csv" in files:
         return "pil" if isinstance(summary, dict) and summary.get("pil") else "run"
@@ -116,7 +135,8 @@ def _failure(command: str, summary: Any) -> Optional[str]:
 def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     """Reads an output folder of ``sil-host`` (any command's ``--out DIR``).
 
-    Every ``*.csv`` becomes a :class:`Table` named as the file without ``.csv``
+    Every ``*.csv`` (and ``*.arrow``, :func:`read_arrow`) becomes a :class:`Table`
+    named as the file without its extension
     (``trace``, ``events``, ``sweep``, ``runs``, ``section``, ``classes``,
     ``zmax``, ``trials``, ``modes``, ``sensitivity``), ``summary.json`` the
     result's ``summary`` (``admissible.json`` for ``admissible``,
@@ -150,6 +170,8 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
             continue
         if p.suffix == ".csv":
             tables[p.stem] = read_csv(p)
+        elif p.suffix == ".arrow":
+            tables[p.stem] = read_arrow(p)
         elif p.suffix == ".json":
             try:
                 docs[p.stem] = json.loads(p.read_text(encoding="utf-8"))

@@ -23,8 +23,16 @@ pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, v: &T) -> PyResult<Bou
 /// A table as `{column: array}`: float64, int64, uint64 or bool NumPy arrays, and
 /// lists of `str` for text columns (the Python layer makes them NumPy string arrays).
 pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
+    columns_to_py(py, t.into_columns())
+}
+
+/// Named columns as `{column: array}`, as [`table_to_py`] makes them.
+pub fn columns_to_py<'py, N: IntoPyObject<'py>>(
+    py: Python<'py>,
+    columns: impl IntoIterator<Item = (N, Column)>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (name, col) in t.into_columns() {
+    for (name, col) in columns {
         match col {
             Column::F64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
             Column::I64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,

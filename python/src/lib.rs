@@ -9,6 +9,7 @@
 //! returns a dict (`convert::Outcome`) the Python layer wraps in
 //! `painleve.Result`. See docs/python.md.
 
+mod arrow;
 mod cli;
 mod columns;
 mod commands;
@@ -87,6 +88,7 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::zmax, m)?)?;
     m.add_function(wrap_pyfunction!(commands::run, m)?)?;
     m.add_function(wrap_pyfunction!(commands::sensitivity, m)?)?;
+    m.add_function(wrap_pyfunction!(arrow::read_arrow, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(default_scenario_toml, m)?)?;
     m.add_function(wrap_pyfunction!(toml_to_json, m)?)?;

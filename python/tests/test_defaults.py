@@ -12,6 +12,7 @@ from painleve import _painleve
 NOT_IN_PYTHON = {
     "out": "results are returned, not written",
     "json": "results are returned, not printed",
+    "format": "tables are returned as arrays, not written (painleve.load reads either format)",
     "in-process": "run is always in-process",
     "link": "run is always in-process",
     "realtime": "needs the firmware process over iceoryx2",

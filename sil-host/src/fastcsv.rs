@@ -126,8 +126,10 @@ fn end_record(buf: &mut Vec<u8>, n_fields: usize) {
     }
 }
 
-/// Implements [`CsvRow`] for a struct from its fields, each with the function
-/// that appends it (`f64`, `str`, `bool`, `int`).
+/// Implements [`CsvRow`] and [`crate::arrow_table::ArrowRow`] for a struct from
+/// its fields, each with its kind: `f64`, `str` (a `&str` or `String` field),
+/// `bool`, `int` (an integer that converts to `i64` without loss). The CSV
+/// header and the Arrow schema list the same columns in the same order.
 #[macro_export]
 macro_rules! csv_row {
     ($ty:ty { $($field:ident : $kind:ident),+ $(,)? }) => {
@@ -141,7 +143,19 @@ macro_rules! csv_row {
                 )+
             }
         }
+        impl $crate::arrow_table::ArrowRow for $ty {
+            fn schema() -> $crate::arrow_table::arrow_schema::Schema {
+                $crate::arrow_table::arrow_schema::Schema::new(vec![$($crate::arrow_table::field(stringify!($field), stringify!($kind))),+])
+            }
+            fn columns(rows: &[Self]) -> Vec<$crate::arrow_table::arrow_array::ArrayRef> {
+                vec![$($crate::csv_row!(@column rows, $kind, $field)),+]
+            }
+        }
     };
+    (@column $rows:ident, f64, $f:ident) => { $crate::arrow_table::f64_column($rows.iter().map(|r| r.$f)) };
+    (@column $rows:ident, str, $f:ident) => { $crate::arrow_table::str_column($rows.iter().map(|r| -> &str { &r.$f })) };
+    (@column $rows:ident, bool, $f:ident) => { $crate::arrow_table::bool_column($rows.iter().map(|r| r.$f)) };
+    (@column $rows:ident, int, $f:ident) => { $crate::arrow_table::int_column($rows.iter().map(|r| i64::from(r.$f))) };
     (@push $buf:ident, f64, $v:expr) => { $crate::fastcsv::push_f64($buf, $v) };
     (@push $buf:ident, str, $v:expr) => { $crate::fastcsv::push_str($buf, &$v) };
     (@push $buf:ident, bool, $v:expr) => { $crate::fastcsv::push_bool($buf, $v) };

@@ -3,6 +3,7 @@
 //! writes the outputs (CSV, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
+pub mod arrow_table;
 pub mod bench;
 pub mod cancel;
 pub mod cli;
@@ -14,6 +15,7 @@ pub mod output;
 pub mod plot;
 pub mod streamed_run;
 pub mod sweep;
+pub mod table_out;
 
 use clap::Parser;
 

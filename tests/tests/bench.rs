@@ -54,8 +54,8 @@ fn the_loop_and_simulate_figures_are_measured_against_their_targets() {
     let (code, out, err) = bench(&["--only", "in-process,simulate", "--repeat", "2", "--duration", "0.5", "--json"]);
     assert_eq!(code, 0, "{err}");
     let f = figures(&out);
-    assert_eq!(f.len(), 3);
-    let (loop_, sim, sparse) = (&f[0], &f[1], &f[2]);
+    assert_eq!(f.len(), 4);
+    let (loop_, sim, arrow, sparse) = (&f[0], &f[1], &f[2], &f[3]);
     assert_eq!(
         (loop_["id"].as_str(), loop_["unit"].as_str(), loop_["goal"].as_str()),
         (Some("in_process"), Some("periods/s"), Some("at_least"))
@@ -70,6 +70,12 @@ fn the_loop_and_simulate_figures_are_measured_against_their_targets() {
     assert_eq!(loop_["status"], if met { "met" } else { "not_met" });
     assert_eq!((sim["id"].as_str(), sim["unit"].as_str(), sim["target"].as_f64()), (Some("simulate_300s"), Some("s"), Some(0.1)));
     assert!(sim["value"].as_f64().unwrap() > 0.0);
+    assert_eq!(
+        (arrow["id"].as_str(), arrow["unit"].as_str(), arrow["target"].as_f64()),
+        (Some("simulate_300s_arrow"), Some("s"), Some(0.05))
+    );
+    assert!(arrow["value"].as_f64().unwrap() > 0.0);
+    assert!(arrow["detail"].to_string().contains("trace.arrow"), "{}", arrow["detail"]);
     assert_eq!(
         (sparse["id"].as_str(), sparse["unit"].as_str(), sparse["target"].as_f64()),
         (Some("simulate_300s_sparse"), Some("s"), Some(0.02))

@@ -31,9 +31,14 @@ pub struct SimulateArgs {
     /// Simulated time, s.
     #[arg(long, default_value_t = 10.0)]
     pub duration: f64,
-    /// Sampling period of trace.csv, s (events are written at their exact times in events.csv).
+    /// Sampling period of the trace, s (events are written at their exact times in the events table).
     #[arg(long, default_value_t = 1e-3)]
     pub sample_dt: f64,
+    /// Format of the trace and events tables: `csv` (trace.csv, events.csv) or `arrow`
+    /// (trace.arrow, events.arrow: Arrow IPC files, typed columns with the floats'
+    /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads both).
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: crate::table_out::TableFormat,
     /// Relative tolerance of the integrator.
     #[arg(long, default_value_t = 1e-9)]
     pub rtol: f64,

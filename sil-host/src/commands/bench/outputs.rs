@@ -1,6 +1,6 @@
 //! The analyses' figures, measured through the commands themselves (their
-//! `execute`, into a scratch folder): `simulate` 300 s with its 1 ms trace and
-//! with 1 s samples, and
+//! `execute`, into a scratch folder): `simulate` 300 s with its 1 ms trace (CSV,
+//! then Arrow IPC) and with 1 s samples, and
 //! the closed-loop hybrid sweep of the paper's grid (experiment 7: x0d, 10 mu x
 //! 181 v_belt, 300 s per run), estimated from one balanced shard.
 
@@ -16,6 +16,9 @@ use crate::{
 
 /// Target of `simulate` 300 s with its 1 ms trace, wall seconds (issue 16).
 pub const SIMULATE_TARGET_S: f64 = 0.1;
+/// Target of `simulate` 300 s with its 1 ms trace as an Arrow IPC file, wall
+/// seconds (issue 26: a columnar format).
+pub const SIMULATE_ARROW_TARGET_S: f64 = 0.05;
 /// Target of `simulate` 300 s with 1 s samples, wall seconds (issue 26: 500 times
 /// faster than an event-driven SciPy peer, 12.6 s on the reference machine).
 pub const SIMULATE_SPARSE_TARGET_S: f64 = 0.02;
@@ -26,6 +29,10 @@ pub const SWEEP_TARGET_S: f64 = 180.0;
 
 /// The simulate command the figure times (issue 16's case: the bouncing arm).
 pub const SIMULATE_ARGS: [&str; 10] = ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300", "--json"];
+
+/// The same case with its tables as Arrow IPC files (`trace.arrow`, `events.arrow`).
+pub const SIMULATE_ARROW_ARGS: [&str; 12] =
+    ["simulate", "--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "300", "--format", "arrow", "--json"];
 
 /// The same case with 1 s samples: the tolerance, not the samples, sets the steps.
 pub const SIMULATE_SPARSE_ARGS: [&str; 12] =
@@ -46,8 +53,8 @@ fn scratch() -> Result<tempfile::TempDir, CliError> {
 }
 
 /// `sil-host ARGS --out DIR`, `--repeat` times into fresh folders: the wall times
-/// and the size of the last `trace.csv`, bytes.
-fn time_simulate(args: &BenchArgs, argv: &[&str]) -> Result<(Vec<f64>, u64), CliError> {
+/// and the size of the last trace file (`trace` with the extension `ext`), bytes.
+fn time_simulate(args: &BenchArgs, argv: &[&str], ext: &str) -> Result<(Vec<f64>, u64), CliError> {
     let mut times = Vec::new();
     let mut bytes = 0;
     for _ in 0..args.repeat {
@@ -59,28 +66,35 @@ fn time_simulate(args: &BenchArgs, argv: &[&str]) -> Result<(Vec<f64>, u64), Cli
         let done = crate::commands::simulate::execute(&sim)?;
         times.push(t.elapsed().as_secs_f64());
         done.into_result()?;
-        bytes = std::fs::metadata(dir.path().join("trace.csv")).map_or(0, |m| m.len());
+        bytes = std::fs::metadata(dir.path().join(format!("trace.{ext}"))).map_or(0, |m| m.len());
     }
     Ok((times, bytes))
 }
 
-/// `simulate` 300 s with its 1 ms trace, then with 1 s samples, `--repeat` times
-/// each into fresh folders: median wall times.
+/// The figure `id` of `simulate` 300 s with its 1 ms trace as `trace.EXT`
+/// (`kind` describes the format in the note), against `target` s.
+fn traced_figure(args: &BenchArgs, id: &'static str, argv: &[&str], ext: &str, kind: &str, target: f64) -> Result<Figure, CliError> {
+    let (times, bytes) = time_simulate(args, argv, ext)?;
+    let name = format!("simulate 300 s from x0a, v_belt -0.5, 1 ms trace.{ext}");
+    Ok(Figure::measured(id, "simulate", name, median(&times), "s", target, Goal::AtMost)
+        .note(format!(
+            "{} runs of `sil-host {} --out DIR`; trace.{ext} {:.1} MB{kind}, every file and figure written",
+            times.len(),
+            argv.join(" "),
+            bytes as f64 / 1e6
+        ))
+        .with_runs(times))
+}
+
+/// `simulate` 300 s with its 1 ms trace as CSV, then as Arrow IPC, then with 1 s
+/// samples, `--repeat` times each into fresh folders: median wall times.
 ///
 /// # Errors
 /// The simulation failing (exit 1); a scratch folder that cannot be made.
 pub fn simulate(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
-    let (times, bytes) = time_simulate(args, &SIMULATE_ARGS)?;
-    let name = "simulate 300 s from x0a, v_belt -0.5, 1 ms trace.csv";
-    let traced = Figure::measured("simulate_300s", "simulate", name, median(&times), "s", SIMULATE_TARGET_S, Goal::AtMost)
-        .note(format!(
-            "{} runs of `sil-host {} --out DIR`; trace.csv {:.1} MB, every file and figure written",
-            times.len(),
-            SIMULATE_ARGS.join(" "),
-            bytes as f64 / 1e6
-        ))
-        .with_runs(times);
-    let (times, _) = time_simulate(args, &SIMULATE_SPARSE_ARGS)?;
+    let traced = traced_figure(args, "simulate_300s", &SIMULATE_ARGS, "csv", "", SIMULATE_TARGET_S)?;
+    let columnar = traced_figure(args, "simulate_300s_arrow", &SIMULATE_ARROW_ARGS, "arrow", " (Arrow IPC)", SIMULATE_ARROW_TARGET_S)?;
+    let (times, _) = time_simulate(args, &SIMULATE_SPARSE_ARGS, "csv")?;
     let m = median(&times);
     let name = "simulate 300 s from x0a, v_belt -0.5, 1 s samples";
     let sparse = Figure::measured("simulate_300s_sparse", "simulate", name, m, "s", SIMULATE_SPARSE_TARGET_S, Goal::AtMost)
@@ -90,7 +104,7 @@ pub fn simulate(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             SCIPY_PEER_S / m
         ))
         .with_runs(times);
-    Ok(vec![traced, sparse])
+    Ok(vec![traced, columnar, sparse])
 }
 
 /// The closed-loop hybrid sweep: shard 0 of N, N chosen so that it holds about

@@ -2,7 +2,8 @@
 //!
 //! Writes under `--out`: `trace.csv` (one row per `--sample-dt`), `events.csv`
 //! (every event at its located time), `trace.svg` (`z_t`, `z_n`, `f_n` and the
-//! contact mode against time) and `summary.json`. If the simulation fails part
+//! contact mode against time) and `summary.json`; with `--format arrow` the two
+//! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns). If the simulation fails part
 //! way, everything up to the failure is still written (with the error in the
 //! summary) and the command exits with code 1.
 
@@ -12,8 +13,8 @@ use crate::commands::Done;
 use crate::{
     cli::SimulateArgs,
     error::CliError,
-    fastcsv::{CsvRow, CsvThread},
     output::{OutputSet, progress_bar},
+    table_out::TableOut,
 };
 use plant::initial::{self, PaperX0};
 use plant::{Plant, SimConfig, SimError};
@@ -204,27 +205,23 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
 
     let mut out = OutputSet::new(&args.output.out)?;
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
-    // Streamed: rows and events go to their files as they come (buffered), the
-    // figure keeps a decimated copy; nothing grows with the run but the files.
-    // Rows are formatted and written by a thread of their own (fastcsv::CsvThread)
-    // while the simulation goes on; events (few) are written here.
-    let mut trace = out.create_csv("trace.csv", TraceRow::HEADER)?;
-    let mut events = out.create_csv("events.csv", EventRow::HEADER)?;
+    // Streamed: rows and events go to their files as they come, the figure keeps
+    // a decimated copy; nothing grows with the run but the files. CSV rows are
+    // formatted and written by a thread of their own (fastcsv::CsvThread) while
+    // the simulation goes on; Arrow rows are batched (arrow_table::ArrowFile).
+    let mut trace = TableOut::<TraceRow>::create(&mut out, "trace", args.format)?;
+    let mut events = TableOut::<EventRow>::create(&mut out, "events", args.format)?;
     let mut curves = TraceCurves::default();
-    let mut n_events = 0;
-    for e in plant.startup_events() {
-        events.row(&EventRow::from(e))?;
-        n_events += 1;
-    }
+    let mut n_events = plant.startup_events().len();
+    events.send(plant.startup_events().iter().map(EventRow::from).collect())?;
     let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
-    trace.row(&row)?;
     curves.push(&row);
-    let mut trace = CsvThread::spawn(trace)?;
+    trace.send(vec![row])?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of at most CHUNK samples (bounded memory) while the clock runs.
     const CHUNK: usize = 1024;
     let mut rows: Vec<TraceRow> = Vec::with_capacity(CHUNK);
-    let mut new_events: Vec<plant::PlantEvent> = Vec::new();
+    let mut new_events: Vec<EventRow> = Vec::new();
     let mut wall = std::time::Duration::ZERO;
     let mut failure: Option<SimError> = None;
     let mut k = 0;
@@ -234,7 +231,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         while k < end {
             match sample_step(&mut plant, k, args.sample_dt) {
                 Ok(report) => {
-                    new_events.extend_from_slice(&report.events);
+                    new_events.extend(report.events.iter().map(EventRow::from));
                     rows.push(trace_row(&plant, report.f));
                 }
                 Err(e) => {
@@ -245,10 +242,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
             k += 1;
         }
         wall += started.elapsed();
-        for e in new_events.drain(..) {
-            events.row(&EventRow::from(&e))?;
-            n_events += 1;
-        }
+        n_events += new_events.len();
+        new_events = events.send(new_events)?;
         for row in &rows {
             curves.push(row);
         }
@@ -263,7 +258,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let svg = out.stage("trace.svg");
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
-    let files = ["trace.csv", "events.csv", "trace.svg", "summary.json"].iter().map(|f| out.path(f).display().to_string()).collect();
+    let tables = [args.format.file("trace"), args.format.file("events")];
+    let files = tables.iter().map(String::as_str).chain(["trace.svg", "summary.json"]).map(|f| out.path(f).display().to_string()).collect();
     let summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;

@@ -1,0 +1,80 @@
+"""``simulate --format arrow``: the Arrow IPC tables hold what the CSV tables
+hold, bit for bit, and ``painleve.load``, pandas and polars read them."""
+
+import numpy as np
+import pytest
+
+import painleve
+from conftest import assert_columns_equal, cli
+
+# A bouncing run from x0a (touchdowns and an impact without collision), so the
+# events table has several kinds and resolutions.
+ARGS = ["--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "2"]
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    root = tmp_path_factory.mktemp("arrow")
+    cli("simulate", ARGS + ["--format", "csv"], root / "csv")
+    cli("simulate", ARGS + ["--format", "arrow"], root / "arrow")
+    return root / "csv", root / "arrow"
+
+
+def test_the_arrow_folder_has_the_csv_tables_with_the_same_bits(folders):
+    csv_dir, arrow_dir = folders
+    assert sorted(p.name for p in arrow_dir.iterdir()) == ["events.arrow", "summary.json", "trace.arrow", "trace.svg"]
+    a, c = painleve.load(arrow_dir), painleve.load(csv_dir)
+    assert a.command == c.command == "simulate"
+    assert sorted(a.tables) == sorted(c.tables) == ["events", "trace"]
+    assert a.events.nrows > 5 and len(set(a.events["kind"])) >= 2
+    for name in ("trace", "events"):
+        assert a.tables[name].columns == c.tables[name].columns, name
+        for col in c.tables[name].columns:
+            x, y = a.tables[name][col], c.tables[name][col]
+            assert_columns_equal(x, y, f"{name}.{col}")
+            if x.dtype.kind == "f":
+                # The CSV's shortest round-trip digits read back to the same bits.
+                assert np.array_equal(x.view(np.int64), y.view(np.int64)), f"{name}.{col}"
+    files = a.summary["files"]
+    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.arrow", "events.arrow", "trace.svg", "summary.json"]
+
+
+def test_pandas_and_polars_read_the_arrow_tables(folders):
+    pd = pytest.importorskip("pandas")
+    pl = pytest.importorskip("polars")
+    _, arrow_dir = folders
+    r = painleve.load(arrow_dir)
+    for name in ("trace", "events"):
+        df = pd.read_feather(arrow_dir / f"{name}.arrow")
+        assert list(df.columns) == r.tables[name].columns
+        assert len(df) == r.tables[name].nrows
+        pf = pl.read_ipc(arrow_dir / f"{name}.arrow")
+        assert pf.columns == r.tables[name].columns
+        for col in r.tables[name].columns:
+            want = r.tables[name][col]
+            got = df[col].to_numpy()
+            if want.dtype.kind == "f":
+                assert df[col].dtype == np.float64 and pf[col].dtype == pl.Float64, col
+                assert np.array_equal(got.view(np.int64), want.view(np.int64)), col
+                assert np.array_equal(pf[col].to_numpy().view(np.int64), want.view(np.int64)), col
+            else:
+                assert list(got) == list(want), col
+                assert pf[col].to_list() == list(want), col
+
+
+def test_a_cut_arrow_file_is_an_error_naming_it(folders, tmp_path):
+    _, arrow_dir = folders
+    bad = tmp_path / "trace.arrow"
+    bad.write_bytes((arrow_dir / "trace.arrow").read_bytes()[:-40])
+    with pytest.raises(painleve.PainleveError, match="trace.arrow"):
+        painleve.read_arrow(bad)
+    bad.write_text("t,z_t\n0,1\n")
+    with pytest.raises(painleve.PainleveError, match="trace.arrow"):
+        painleve.read_arrow(bad)
+
+
+def test_an_unknown_format_is_refused():
+    from conftest import cli_error
+
+    message, code = cli_error("simulate", ["--format", "parquet"])
+    assert code == 2 and "parquet" in message and "arrow" in message
