@@ -1,0 +1,62 @@
+//! `simulate --format arrow` against `--format csv`: the same tables, column for
+//! column, every float with the same bits (the CSV's shortest round-trip digits
+//! read back by the `csv` crate and Rust's parser, the Arrow columns by
+//! `arrow_table::read_arrow`: two independent paths).
+
+use std::{path::Path, process::Command};
+
+use sil_host::arrow_table::{ArrowColumn, read_arrow};
+
+fn simulate(format: &str, out: &Path) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+        .args(["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "2", "--format", format, "--json", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// The CSV table's header and its cells by column.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let mut cols = vec![Vec::new(); header.len()];
+    for rec in r.records() {
+        for (c, cell) in cols.iter_mut().zip(rec.unwrap().iter()) {
+            c.push(cell.to_string());
+        }
+    }
+    (header, cols)
+}
+
+#[test]
+fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, a) = (dir.path().join("csv"), dir.path().join("arrow"));
+    simulate("csv", &c);
+    simulate("arrow", &a);
+    for table in ["trace", "events"] {
+        let (header, cells) = read_csv(&c.join(format!("{table}.csv")));
+        let columns = read_arrow(&a.join(format!("{table}.arrow"))).unwrap();
+        assert_eq!(columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), header, "{table}");
+        assert!(cells[0].len() > 1, "{table}: rows");
+        for ((name, col), cells) in columns.iter().zip(&cells) {
+            assert_eq!(col.len(), cells.len(), "{table}.{name}");
+            match col {
+                ArrowColumn::F64(v) => {
+                    for (x, cell) in v.iter().zip(cells) {
+                        let y: f64 = cell.parse().unwrap();
+                        assert_eq!(x.to_bits(), y.to_bits(), "{table}.{name}: {x:e} against `{cell}`");
+                    }
+                }
+                ArrowColumn::Str(v) => assert_eq!(v, cells, "{table}.{name}"),
+                other => panic!("{table}.{name}: unexpected column type {other:?}"),
+            }
+        }
+    }
+    // The summary names the files written.
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join("summary.json")).unwrap()).unwrap();
+    let files: Vec<String> =
+        summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
+    assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "summary.json"]);
+}
