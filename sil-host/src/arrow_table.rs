@@ -103,11 +103,6 @@ impl<T: ArrowRow> ArrowFile<T> {
         Ok(())
     }
 
-    /// The path written to.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Writes the rows still waiting, the footer, and closes the file.
     ///
     /// # Errors
