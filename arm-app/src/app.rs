@@ -39,7 +39,7 @@ use shared::{
 };
 
 use crate::{
-    bringup::{CalibrationRecord, REDUCED_TORQUE_CODES, RawReadings},
+    bringup::{CalibrationRecord, EnableOutcome, REDUCED_TORQUE_CODES, RawReadings},
     hardware::{CODES_FULL_SCALE, Hardware},
     io::Motors,
     io::{ArmIo, IntervalClock, Watchdog},
@@ -128,14 +128,18 @@ impl<H: ArmIo> ArmApp<H> {
     /// or belt scale (a stored record with invalid values is refused instead:
     /// `Settings::Corrupt(RecordFault::Content)`).
     pub fn new(mut parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
-        let (settings, config, cal, directions_checked) = match record::load(&mut parts.flash) {
-            Ok(Some(s)) if stored_is_valid(&s) => {
-                (Settings::Saved, s.config, s.calibration.arm_calibration(), s.calibration.directions_checked)
+        let fallback = CalibrationRecord::uncalibrated(cal);
+        let (settings, config, record) = match record::load(&mut parts.flash) {
+            Ok(Some(s)) if !stored_is_valid(&s) => (Settings::Corrupt(RecordFault::Content), config, fallback),
+            Ok(Some(s)) if !s.calibration.missing().is_empty() => {
+                (Settings::Corrupt(RecordFault::Incomplete(s.calibration.missing())), config, fallback)
             }
-            Ok(Some(_)) => (Settings::Corrupt(RecordFault::Content), config, *cal, false),
-            Ok(None) => (Settings::Missing, config, *cal, false),
-            Err(e) => (Settings::Corrupt(e), config, *cal, false),
+            Ok(Some(s)) => (Settings::Saved, s.config, s.calibration),
+            Ok(None) => (Settings::Missing, config, fallback),
+            Err(e) => (Settings::Corrupt(e), config, fallback),
         };
+        let cal = record.arm_calibration();
+        let directions_checked = record.directions_checked;
         log(Notice::Settings(settings));
         let firmware = Firmware::new(config).map_err(StartError::Config)?;
         let mut theta1 = As5047p::new(parts.theta1);
@@ -159,7 +163,7 @@ impl<H: ArmIo> ArmApp<H> {
             button: parts.button,
             watchdog: parts.watchdog,
             encoders: cal.encoders,
-            cal: CalibrationRecord::of(&cal, directions_checked),
+            cal: record,
             flash: parts.flash,
             settings,
             config,
@@ -172,7 +176,6 @@ impl<H: ArmIo> ArmApp<H> {
                 driver_fault: false,
             },
             torque_limit: if directions_checked { CODES_FULL_SCALE } else { REDUCED_TORQUE_CODES },
-            zeros_set: settings == Settings::Saved,
             directions_checked: [directions_checked; 2],
             last_report: None,
             jog: None,
@@ -181,6 +184,7 @@ impl<H: ArmIo> ArmApp<H> {
             button_released: false,
             reset_pending: false,
             enable_requested: false,
+            last_enable: EnableOutcome::NotAsked,
             period_us: config.period.as_us(),
             seq: 0,
             tick_mark,
@@ -205,8 +209,9 @@ impl<H: ArmIo> ArmApp<H> {
             hw.interval = [hw.interval[0].min(interval), hw.interval[1].max(interval)];
         }
         if hw.button_pressed() {
-            if hw.settings.allows_enable() {
+            if hw.enable_lockout().is_none() {
                 hw.reset_pending = true;
+                hw.last_enable = EnableOutcome::Pending;
             } else {
                 log(Notice::LockedOut(hw.settings));
             }
@@ -286,17 +291,21 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
                     if hw.motors.disable().is_err() {
                         (self.log)(Notice::DriversDidNotDisable);
                     }
-                    hw.enable_requested = false;
+                    if core::mem::take(&mut hw.enable_requested) {
+                        hw.last_enable = EnableOutcome::SafeState { seq: c.seq, status: c.status };
+                    }
                     if !hw.safe_logged {
                         let reason = SafeReason::from_status(c.status).map_or(0, |r| r as u8);
                         (self.log)(Notice::SafeState { seq: c.seq, reason });
                         hw.safe_logged = true;
                     }
                 } else if core::mem::take(&mut hw.enable_requested) {
-                    (self.log)(match hw.motors.enable() {
-                        Ok(()) => Notice::DriversEnabled { seq: c.seq },
-                        Err(_) => Notice::DriversRefused { seq: c.seq },
-                    });
+                    let (notice, outcome) = match hw.motors.enable() {
+                        Ok(()) => (Notice::DriversEnabled { seq: c.seq }, EnableOutcome::Enabled { seq: c.seq }),
+                        Err(_) => (Notice::DriversRefused { seq: c.seq }, EnableOutcome::DriversRefused { seq: c.seq }),
+                    };
+                    hw.last_enable = outcome;
+                    (self.log)(notice);
                 }
                 // Disabled drivers get zero duty whatever the codes; the torque
                 // limit of a fresh calibration caps the rest.

@@ -11,7 +11,7 @@
 use firmware::Config;
 use serde::{Deserialize, Serialize};
 
-pub use crate::record::CalibrationRecord;
+pub use crate::record::{CalibrationRecord, Missing, SpanStep};
 use crate::{
     joint::{EncoderFault, Joint},
     record::{RecordFault, Settings},
@@ -19,7 +19,7 @@ use crate::{
 };
 
 /// The protocol's version, told in [`Reply::Hello`].
-pub const BRINGUP_PROTOCOL: u16 = 2;
+pub const BRINGUP_PROTOCOL: u16 = 3;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
@@ -40,6 +40,37 @@ pub enum Activity {
     Running,
     /// A jog is under way.
     Jogging,
+}
+
+/// What became of the last enable (`Request::Enable` or the button), so that
+/// the host can say whether the drivers came on, and if not why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum EnableOutcome {
+    /// No enable since power-up.
+    NotAsked,
+    /// Asked: the firmware resets at the next tick and the drivers enable at its
+    /// first command that is not the safe state.
+    Pending,
+    /// The drivers came on at period `seq`.
+    Enabled {
+        /// The period.
+        seq: u32,
+    },
+    /// The drivers refused to enable at period `seq` (nFAULT asserted, or a pin failed).
+    DriversRefused {
+        /// The period.
+        seq: u32,
+    },
+    /// The firmware's command after its reset was the safe state: the drivers
+    /// stayed off.
+    SafeState {
+        /// The period.
+        seq: u32,
+        /// The command's status word (`shared::wire::status`, the reason in bits 24..31).
+        status: u32,
+    },
+    /// A `Disable` came before the drivers enabled.
+    Cancelled,
 }
 
 /// The image's state, for `sil-host board status`.
@@ -65,6 +96,11 @@ pub struct Status {
     /// The settings in force against the record in flash: the drivers enable
     /// only when `Saved` (else the lockout, and why).
     pub settings: Settings,
+    /// The bring-up steps the calibration in force lacks (`save` refuses it
+    /// until none).
+    pub missing: Missing,
+    /// What became of the last enable.
+    pub last_enable: EnableOutcome,
 }
 
 /// Raw readings, the drivers disabled or not (`sil-host board watch`).
@@ -121,14 +157,23 @@ pub enum Request {
     /// load cell). Drivers disabled only.
     Tare,
     /// Sets the gain of `axis` (0: f_t, 1: f_n) from a known force `newtons` on
-    /// it now: `gain = newtons / (count - zero)`. Drivers disabled only.
+    /// it now: `gain = newtons / (count - zero)`. Drivers disabled and the load
+    /// cell tared only.
     Span {
         /// 0: tangential, 1: normal.
         axis: u8,
         /// The force applied, N (a weight: `m g`).
         newtons: f32,
     },
-    /// Takes a whole calibration (a saved one, restored). Drivers disabled only.
+    /// Keeps the nominal gain of `axis` (0: f_t, 1: f_n) instead of measuring
+    /// its span (no known weight at hand); the record says so. Drivers disabled only.
+    SkipSpan {
+        /// 0: tangential, 1: normal.
+        axis: u8,
+    },
+    /// Takes a whole calibration (a saved one, restored), its bring-up steps as
+    /// it says, except that new encoder zeros or directions clear its direction
+    /// checks. Drivers disabled only.
     SetCalibration(CalibrationRecord),
     /// Takes a firmware configuration (controller, gains, rate, limits), which
     /// the firmware validates. Drivers disabled only; the control rate must be
@@ -145,7 +190,8 @@ pub enum Request {
     /// ticks, the tick's interval, overruns).
     Telemetry,
     /// Saves the calibration and configuration in force to the flash record
-    /// (`crate::record`), then reads it back. Drivers disabled only. The
+    /// (`crate::record`), then reads it back. Drivers disabled and a complete
+    /// calibration only (`CalibrationRecord::missing` empty). The
     /// control loop pauses while the sector erases (about 1 s on the STM32F405).
     Save,
     /// The firmware configuration in force.
@@ -228,6 +274,9 @@ pub enum Refusal {
     LockedOut(Settings),
     /// The save failed, and why.
     Flash(RecordFault),
+    /// The calibration lacks these bring-up steps: `Save` refuses it (and
+    /// `Span` refuses before the tare).
+    Incomplete(Missing),
 }
 
 /// A reply to a [`Request`].

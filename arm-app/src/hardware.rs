@@ -66,8 +66,6 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) raw: RawReadings,
     /// The torque limit on the codes written to the drivers (2048: none).
     pub(crate) torque_limit: i16,
-    /// The encoders' zeros are set (loaded, or by `SetZeros`).
-    pub(crate) zeros_set: bool,
     /// Each joint's direction was checked by a jog with these zeros.
     pub(crate) directions_checked: [bool; 2],
     /// The jog under way.
@@ -78,6 +76,8 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) button_released: bool,
     pub(crate) reset_pending: bool,
     pub(crate) enable_requested: bool,
+    /// What became of the last enable.
+    pub(crate) last_enable: crate::bringup::EnableOutcome,
     pub(crate) period_us: u64,
     pub(crate) seq: u32,
     pub(crate) tick_mark: u32,
@@ -123,6 +123,20 @@ impl<H: ArmIo> Hardware<H> {
             self.invalid_logged = invalid;
         }
         f
+    }
+
+    /// Why the drivers may not be enabled now, if they may not: settings in
+    /// force that are not the saved record, or a calibration that lacks a
+    /// bring-up step (a saved record never does: `Save` refuses it).
+    pub(crate) fn enable_lockout(&self) -> Option<crate::bringup::Refusal> {
+        use crate::bringup::Refusal;
+        if !self.settings.allows_enable() {
+            Some(Refusal::LockedOut(self.settings))
+        } else if !self.cal.missing().is_empty() {
+            Some(Refusal::Incomplete(self.cal.missing()))
+        } else {
+            None
+        }
     }
 
     /// A press: low for [`BUTTON_PERIODS`] after having been seen released (a

@@ -56,7 +56,12 @@ pub(crate) fn jog_tick<H: ArmIo>(hw: &mut Hardware<H>) -> Option<Notice> {
             let _ = hw.motors.disable();
             hw.jog = None;
             hw.directions_checked[j] = verdict.is_ok();
-            hw.cal.directions_checked = hw.directions_checked == [true; 2];
+            let checked = hw.directions_checked == [true; 2];
+            if checked != hw.cal.directions_checked {
+                // The calibration in force is no longer the saved one.
+                hw.cal.directions_checked = checked;
+                hw.settings = crate::record::Settings::Unsaved;
+            }
             let outcome = JogOutcome { joint: jog.joint, code: jog.code, moved_counts: moved.unwrap_or([0; 2]), verdict };
             hw.last_jog = Some(outcome);
             Some(Notice::Jogged(outcome))

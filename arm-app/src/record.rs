@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 
 /// The record's format version: a record of another version is refused as
 /// corrupt (re-run the bring-up's calibration and save).
-pub const RECORD_VERSION: u16 = 1;
+pub const RECORD_VERSION: u16 = 2;
 
 /// The record's magic.
 pub const MAGIC: [u8; 4] = *b"PLVS";
@@ -34,7 +34,59 @@ pub const MAX_RECORD: usize = 256;
 
 const HEADER: usize = 8;
 
-/// The firmware's calibration as it crosses the wire and sits in flash.
+/// How a load-cell axis's gain was set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SpanStep {
+    /// Not yet: the gain is the compiled-in nominal one and nobody said to keep it.
+    NotDone,
+    /// Measured with a known force (`Request::Span`).
+    Measured,
+    /// The operator kept the nominal gain (`Request::SkipSpan`: no weight at hand);
+    /// the record says so.
+    Skipped,
+}
+
+/// The bring-up steps a calibration still lacks, as a bit set: the drivers
+/// unlock only with a saved calibration that lacks none (docs/board.md
+/// "Bring-up").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Missing(pub u8);
+
+impl Missing {
+    /// The encoders' zeros were never set (`Request::SetZeros`).
+    pub const ZEROS: u8 = 1 << 0;
+    /// Not both joints' directions were checked by a jog with these zeros.
+    pub const DIRECTIONS: u8 = 1 << 1;
+    /// The load cell was never tared (`Request::Tare`).
+    pub const TARE: u8 = 1 << 2;
+    /// The tangential axis's span was neither measured nor skipped.
+    pub const SPAN_T: u8 = 1 << 3;
+    /// The normal axis's span was neither measured nor skipped.
+    pub const SPAN_N: u8 = 1 << 4;
+
+    /// Nothing is missing.
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Each missing step's name with the command that does it, in bring-up
+    /// order (no `core::fmt` on the image: the host joins them).
+    pub fn names(self) -> impl Iterator<Item = &'static str> {
+        [
+            (Self::ZEROS, "the encoders' zeros (`sil-host board calibrate`)"),
+            (Self::DIRECTIONS, "both joints' direction checks (`sil-host board calibrate`)"),
+            (Self::TARE, "the load cell's tare (`sil-host board calibrate`, without --no-tare)"),
+            (Self::SPAN_T, "the tangential span (`sil-host board span --axis tangential`, or --skip)"),
+            (Self::SPAN_N, "the normal span (`sil-host board span --axis normal`, or --skip)"),
+        ]
+        .into_iter()
+        .filter(move |(bit, _)| self.0 & bit != 0)
+        .map(|(_, name)| name)
+    }
+}
+
+/// The firmware's calibration as it crosses the wire and sits in flash, with
+/// the bring-up steps it went through.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationRecord {
     /// Each encoder's raw count at its joint's zero `[theta1, elbow]`.
@@ -47,21 +99,56 @@ pub struct CalibrationRecord {
     pub load_newtons_per_count: [f32; 2],
     /// Belt travel per quadrature count, m.
     pub belt_metres_per_count: f32,
+    /// The encoders' zeros were set at the calibration pose (or restored).
+    pub zeros_set: bool,
     /// Both joints' directions were checked by a jog with these zeros.
     pub directions_checked: bool,
+    /// The load cell's zero counts come from a tare (nothing on it).
+    pub tared: bool,
+    /// How each axis's gain was set `[f_t, f_n]`.
+    pub span: [SpanStep; 2],
 }
 
 impl CalibrationRecord {
-    /// The record of calibration `cal`, its directions checked or not.
-    pub fn of(cal: &crate::ArmCalibration, directions_checked: bool) -> Self {
+    /// The record of calibration `cal` with no bring-up step done: what a board
+    /// runs with before its bring-up (the compiled-in defaults).
+    pub fn uncalibrated(cal: &crate::ArmCalibration) -> Self {
         Self {
             zero_counts: [cal.encoders.theta1.zero_count, cal.encoders.elbow.zero_count],
             reversed: [cal.encoders.theta1.reversed, cal.encoders.elbow.reversed],
             load_zero_counts: cal.load_cell.zero_counts,
             load_newtons_per_count: cal.load_cell.newtons_per_count,
             belt_metres_per_count: cal.belt_metres_per_count,
-            directions_checked,
+            zeros_set: false,
+            directions_checked: false,
+            tared: false,
+            span: [SpanStep::NotDone; 2],
         }
+    }
+
+    /// The record of calibration `cal` with every bring-up step done and both
+    /// spans measured: a board brought up before (the twin's `--flash saved`,
+    /// tests).
+    pub fn brought_up(cal: &crate::ArmCalibration) -> Self {
+        Self { zeros_set: true, directions_checked: true, tared: true, span: [SpanStep::Measured; 2], ..Self::uncalibrated(cal) }
+    }
+
+    /// The bring-up steps this calibration lacks (empty: it may be saved and
+    /// unlock the drivers).
+    pub fn missing(&self) -> Missing {
+        let mut m = 0;
+        for (lacks, bit) in [
+            (!self.zeros_set, Missing::ZEROS),
+            (!self.directions_checked, Missing::DIRECTIONS),
+            (!self.tared, Missing::TARE),
+            (self.span[0] == SpanStep::NotDone, Missing::SPAN_T),
+            (self.span[1] == SpanStep::NotDone, Missing::SPAN_N),
+        ] {
+            if lacks {
+                m |= bit;
+            }
+        }
+        Missing(m)
     }
 
     /// The calibration this record holds.
@@ -106,6 +193,8 @@ pub enum RecordFault {
     Flash,
     /// After a save the record read back differs from what was written.
     Verify,
+    /// The record's calibration lacks bring-up steps (`CalibrationRecord::missing`).
+    Incomplete(Missing),
 }
 
 /// The settings in force, against the record in flash: the drivers enable only
@@ -152,6 +241,7 @@ impl RecordFault {
             Self::Content => "the settings record's values are invalid: drivers locked out",
             Self::Flash => "the flash failed",
             Self::Verify => "the settings record read back differs from what was written",
+            Self::Incomplete(_) => "the calibration lacks bring-up steps: drivers locked out; finish the bring-up and save",
         }
     }
 }
@@ -246,7 +336,10 @@ mod tests {
                 load_zero_counts: [2048.0, 2047.5],
                 load_newtons_per_count: [0.01, -0.012],
                 belt_metres_per_count: 1e-6,
+                zeros_set: true,
                 directions_checked: true,
+                tared: true,
+                span: [SpanStep::Measured, SpanStep::Skipped],
             },
             config: Config::default(),
         }

@@ -9,8 +9,8 @@ use firmware::Firmware;
 use crate::{
     ArmApp, ArmIo,
     bringup::{
-        Activity, BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, MIN_SPAN_COUNTS,
-        REDUCED_TORQUE_CODES, Refusal, Reply, Request, Status,
+        Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS,
+        MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
     },
     hardware::{CODES_FULL_SCALE, Hardware, Jog},
     joint::Joint,
@@ -51,11 +51,22 @@ impl<H: ArmIo> ArmApp<H> {
                 Some(counts) => {
                     let mut cal = hw.cal;
                     cal.load_zero_counts = counts.map(f32::from);
+                    cal.tared = true;
                     apply_calibration(hw, cal)
                 }
                 None => Reply::Refused(Refusal::NoConversion),
             },
             Request::Span { axis, newtons } => span(hw, axis, newtons),
+            Request::SkipSpan { axis } => {
+                let Some(i) = [0, 1].into_iter().find(|&i| i == usize::from(axis)) else {
+                    return Reply::Refused(Refusal::OutOfRange);
+                };
+                let mut cal = hw.cal;
+                if cal.span[i] == SpanStep::NotDone {
+                    cal.span[i] = SpanStep::Skipped;
+                }
+                apply_calibration(hw, cal)
+            }
             Request::SetCalibration(cal) => apply_calibration(hw, cal),
             Request::Configure(config) => {
                 if config.period != hw.config.period {
@@ -81,11 +92,15 @@ impl<H: ArmIo> ArmApp<H> {
                     Reply::Refused(Refusal::DirectionsNotChecked)
                 }
             }
-            Request::Enable if !hw.settings.allows_enable() => Reply::Refused(Refusal::LockedOut(hw.settings)),
-            Request::Enable => {
-                hw.reset_pending = true;
-                Reply::Done
-            }
+            Request::Enable => match hw.enable_lockout() {
+                Some(why) => Reply::Refused(why),
+                None => {
+                    hw.reset_pending = true;
+                    hw.last_enable = EnableOutcome::Pending;
+                    Reply::Done
+                }
+            },
+            Request::Save if !hw.cal.missing().is_empty() => Reply::Refused(Refusal::Incomplete(hw.cal.missing())),
             Request::Save => match record::save(&mut hw.flash, &Stored { calibration: hw.cal, config: hw.config }) {
                 Ok(()) => {
                     hw.settings = Settings::Saved;
@@ -95,6 +110,9 @@ impl<H: ArmIo> ArmApp<H> {
             },
             Request::Disable => {
                 let _ = hw.motors.disable();
+                if hw.last_enable == EnableOutcome::Pending {
+                    hw.last_enable = EnableOutcome::Cancelled;
+                }
                 hw.enable_requested = false;
                 hw.reset_pending = false;
                 if let Some(j) = hw.jog.take() {
@@ -121,9 +139,11 @@ fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
         status: hw.last_command.map_or(0, |c| c.status),
         overruns: hw.last_command.map_or(0, |c| c.overruns),
         torque_limit_codes: hw.torque_limit,
-        zeros_set: hw.zeros_set,
+        zeros_set: hw.cal.zeros_set,
         directions_checked: hw.directions_checked == [true; 2],
         settings: hw.settings,
+        missing: hw.cal.missing(),
+        last_enable: hw.last_enable,
     }
 }
 
@@ -141,6 +161,7 @@ fn set_zeros<H: ArmIo>(hw: &mut Hardware<H>, pose: [u16; 2]) -> Reply {
         cal.zero_counts[j] =
             if cal.reversed[j] { raw[j].wrapping_add(pose[j]) & (COUNTS - 1) } else { raw[j].wrapping_sub(pose[j]) & (COUNTS - 1) };
     }
+    cal.zeros_set = true;
     cal.directions_checked = false;
     apply_calibration(hw, cal)
 }
@@ -150,6 +171,9 @@ fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
     if i > 1 || !(newtons.is_finite() && newtons != 0.0 && newtons.abs() <= 25.0) {
         return Reply::Refused(Refusal::OutOfRange);
     }
+    if !hw.cal.tared {
+        return Reply::Refused(Refusal::Incomplete(Missing(Missing::TARE)));
+    }
     let Some(counts) = hw.raw.adc_counts else { return Reply::Refused(Refusal::NoConversion) };
     let diff = f32::from(counts[i]) - hw.cal.load_zero_counts[i];
     if diff.abs() < f32::from(MIN_SPAN_COUNTS) {
@@ -157,11 +181,18 @@ fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
     }
     let mut cal = hw.cal;
     cal.load_newtons_per_count[i] = newtons / diff;
+    cal.span[i] = SpanStep::Measured;
     apply_calibration(hw, cal)
 }
 
-/// Puts `cal` in force in every driver, or refuses it whole.
-fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> Reply {
+/// Puts `cal` in force in every driver, or refuses it whole. New encoder zeros
+/// or directions clear the direction checks unless they come from `SetZeros`
+/// (which clears them itself).
+fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord) -> Reply {
+    let encoders_changed = (cal.zero_counts, cal.reversed) != (hw.cal.zero_counts, hw.cal.reversed);
+    if encoders_changed {
+        cal.directions_checked = false;
+    }
     if cal.zero_counts.iter().any(|&z| z >= COUNTS) {
         return Reply::Refused(Refusal::OutOfRange);
     }
@@ -180,14 +211,15 @@ fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> 
         hw.torque_limit = hw.torque_limit.min(REDUCED_TORQUE_CODES);
         hw.settings = Settings::Unsaved;
     }
-    hw.directions_checked = [cal.directions_checked; 2];
-    hw.zeros_set = true;
+    if encoders_changed || cal.directions_checked != hw.cal.directions_checked {
+        hw.directions_checked = [cal.directions_checked; 2];
+    }
     hw.cal = cal;
     Reply::Calibration(cal)
 }
 
 fn start_jog<H: ArmIo>(hw: &mut Hardware<H>, joint: Joint, code: i16, periods: u16) -> Reply {
-    if !hw.zeros_set {
+    if !hw.cal.zeros_set {
         return Reply::Refused(Refusal::ZerosNotSet);
     }
     if code == 0 || code.unsigned_abs() > MAX_JOG_CODES.unsigned_abs() || periods == 0 || periods > MAX_JOG_PERIODS {

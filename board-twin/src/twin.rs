@@ -151,7 +151,7 @@ impl BoardTwin {
     /// motor stage that does not disable, an application that refuses the
     /// configuration or calibration.
     pub fn new(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
-        let flash = FlashModel::saved(&Stored { calibration: CalibrationRecord::of(cal, true), config }).map_err(TwinError::Flash)?;
+        let flash = FlashModel::saved(&Stored { calibration: CalibrationRecord::brought_up(cal), config }).map_err(TwinError::Flash)?;
         Self::with_flash(board, flash, config, cal, seed, load_noise_n)
     }
 

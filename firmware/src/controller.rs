@@ -61,6 +61,19 @@ impl SafeReason {
             _ => None,
         }
     }
+
+    /// The reason in a few words, for the operator (no `core::fmt` on the image).
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::DeadlineMisses => "too many consecutive deadline misses",
+            Self::BadFrames => "too many consecutive bad or stale sensor frames",
+            Self::NonFinite => "the control law produced a NaN or infinite value",
+            Self::Singular => "the arm reached a singular (straight) configuration",
+            Self::Unreachable => "the reference is out of the arm's reach",
+            Self::PeerLost => "the plant or the link to it is gone",
+            Self::SensorFault => "the encoders and the load cell disagree about the tip (a stuck or failed sensor, or a driver fault)",
+        }
+    }
 }
 
 impl From<LawError> for SafeReason {

@@ -9,11 +9,14 @@ use std::{
 
 use arm_app::{
     Joint,
-    bringup::{BRINGUP_PROTOCOL, CalibrationRecord, JogFault, JogOutcome, MAX_JOG_COUNTS, MIN_JOG_COUNTS, Refusal, Reply, Request, Status},
+    bringup::{
+        BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_COUNTS, MIN_JOG_COUNTS, Missing, Refusal, Reply,
+        Request, Status,
+    },
 };
 use serde::Serialize;
 
-use crate::bringup_line::Client;
+use crate::{bringup_line::Client, status_words::describe_status};
 
 /// How long a request may wait for its reply (a save erases a flash sector:
 /// about 1 s on the STM32F405).
@@ -48,6 +51,32 @@ pub fn describe_refusal(r: &Refusal) -> String {
         Refusal::DirectionsNotChecked => "both joints' directions must be checked by `sil-host board calibrate` first".into(),
         Refusal::LockedOut(s) => s.describe().into(),
         Refusal::Flash(f) => format!("the save failed: {}", f.describe()),
+        Refusal::Incomplete(m) => format!("the calibration lacks {}", describe_missing(*m)),
+    }
+}
+
+/// The bring-up steps a calibration lacks, in words ("nothing" when none).
+pub fn describe_missing(m: Missing) -> String {
+    let names: Vec<&str> = m.names().collect();
+    if names.is_empty() { "nothing".into() } else { names.join("; ") }
+}
+
+/// Why the drivers are off after an enable, or that they came on, in words.
+pub fn describe_enable(e: &EnableOutcome) -> String {
+    match e {
+        EnableOutcome::NotAsked => "no enable since power-up".into(),
+        EnableOutcome::Pending => "the enable is still pending".into(),
+        EnableOutcome::Enabled { seq } => format!("drivers enabled at period {seq}"),
+        EnableOutcome::DriversRefused { seq } => {
+            format!(
+                "the drivers refused to enable at period {seq}: their fault line (nFAULT) is asserted; check the motor supply and wiring"
+            )
+        }
+        EnableOutcome::SafeState { seq, status } => format!(
+            "the firmware went to its safe state at period {seq} ({}, status {status:#x}): drivers left disabled",
+            describe_status(*status)
+        ),
+        EnableOutcome::Cancelled => "a disable came before the drivers enabled".into(),
     }
 }
 
@@ -96,6 +125,7 @@ fn request_name(r: &Request) -> &'static str {
         Request::JogResult => "jog result",
         Request::Tare => "tare",
         Request::Span { .. } => "span",
+        Request::SkipSpan { .. } => "skip span",
         Request::SetCalibration(_) => "set calibration",
         Request::Configure(_) => "configure",
         Request::LiftTorqueLimit => "lift the torque limit",
@@ -220,4 +250,43 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
         return Err(StepError::Line("unexpected reply to get calibration".into()));
     };
     Ok(CalibrateReport { jogs, calibration })
+}
+
+/// How long `enable` waits for the drivers to come on: the firmware resets at
+/// the next tick and the drivers enable at its first command, two periods at
+/// 1 kHz; the rest is the line's and a loaded host's slack.
+pub const ENABLE_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// Enables the drivers and reads the state back until the enable has an outcome.
+///
+/// # Errors
+/// [`StepError::Refused`] when the board refuses (locked out, incomplete
+/// calibration: saying why), when the drivers did not come on (their fault
+/// line, the firmware's safe state with its reason in words) or are off again
+/// at once, or when no outcome came within [`ENABLE_TIMEOUT`];
+/// [`StepError::Line`] for the line.
+pub fn enable<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
+    ask(c, Request::Enable)?;
+    let start = std::time::Instant::now();
+    loop {
+        let st = status(c)?;
+        match st.last_enable {
+            EnableOutcome::Pending if start.elapsed() < ENABLE_TIMEOUT => std::thread::sleep(Duration::from_millis(5)),
+            EnableOutcome::Pending => {
+                return Err(StepError::Refused(format!(
+                    "enable: no outcome within {} s: the control loop is not ticking (period {})",
+                    ENABLE_TIMEOUT.as_secs(),
+                    st.periods
+                )));
+            }
+            EnableOutcome::Enabled { .. } if st.drivers_enabled => return Ok(st),
+            EnableOutcome::Enabled { seq } => {
+                return Err(StepError::Refused(format!(
+                    "enable: the drivers came on at period {seq} and are off again: {}",
+                    describe_status(st.status)
+                )));
+            }
+            other => return Err(StepError::Refused(format!("enable: the drivers are off: {}", describe_enable(&other)))),
+        }
+    }
 }

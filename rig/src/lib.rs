@@ -38,6 +38,7 @@ pub mod sensors;
 pub mod services;
 pub mod setup;
 pub mod stats;
+pub mod status_words;
 pub mod summary;
 pub mod twin_link;
 

@@ -147,14 +147,15 @@ pub fn describe(n: &Notice) -> String {
     match n {
         Notice::EncoderReady { joint, agc } => format!("encoder {}: ready, AGC {agc}", joint.name()),
         Notice::EncoderNotReady { joint, fault } => format!("encoder {}: not ready ({})", joint.name(), fault.describe()),
-        Notice::InvalidReadings { flags, .. } => format!("invalid readings (frame flags {flags:#x})"),
+        Notice::InvalidReadings { flags, .. } => {
+            format!("invalid readings: {} (frame flags {flags:#x})", crate::status_words::describe_frame_flags(*flags))
+        }
         Notice::ReadingsBack { .. } => "every sensor reads again".into(),
         Notice::SafeState { reason, .. } => format!(
-            "safe state ({}): drivers disabled",
-            firmware::SafeReason::from_status(
+            "{}: drivers disabled",
+            crate::status_words::describe_status(
                 shared::wire::status::SAFE_STATE | (u32::from(*reason) << shared::wire::status::REASON_SHIFT)
             )
-            .map_or_else(|| format!("reason {reason}"), |r| format!("{r:?}"))
         ),
         Notice::DriversDidNotDisable => "the drivers did not disable".into(),
         Notice::DriversEnabled { .. } => "drivers enabled".into(),

@@ -8,7 +8,7 @@
 
 use arm_app::{
     Joint, Notice, Settings,
-    bringup::{JogFault, Refusal, Reply, Request},
+    bringup::{CalibrationRecord, JogFault, Missing, Refusal, Reply, Request, SpanStep},
     record::RecordFault,
 };
 use board_twin::{BoardDescription, FlashModel, MotorWiring};
@@ -105,6 +105,15 @@ fn a_saved_calibration_survives_a_power_cycle_and_a_damaged_or_missing_one_locks
     );
     let pose = b.pose_counts();
     let Reply::Calibration(cal) = b.twin_mut().serve(Request::SetZeros { pose_counts: pose }) else { panic!() };
+    // Zeros alone are no calibration: the save names every step still missing.
+    assert_eq!(
+        b.twin_mut().serve(Request::Save),
+        Reply::Refused(Refusal::Incomplete(Missing(Missing::DIRECTIONS | Missing::TARE | Missing::SPAN_T | Missing::SPAN_N)))
+    );
+    // The rest restored from a record (the encoders' zeros unchanged, so the
+    // direction checks it claims are kept).
+    let cal = CalibrationRecord { directions_checked: true, tared: true, span: [SpanStep::Measured, SpanStep::Skipped], ..cal };
+    assert_eq!(b.twin_mut().serve(Request::SetCalibration(cal)), Reply::Calibration(cal));
     assert_eq!(b.twin_mut().serve(Request::Save), Reply::Done);
     match b.twin_mut().serve(Request::Status) {
         Reply::Status(st) => assert_eq!(st.settings, Settings::Saved),

@@ -80,15 +80,30 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one() {
     assert_eq!(s["status"]["torque_limit_codes"], 410, "a new calibration runs at the reduced limit: {s}");
     assert_eq!(s["status"]["settings"], "Unsaved", "{s}");
 
-    // Configuration, save, the reduced limit lifted, enable and disable.
+    // Configuration; a save refused until both spans are measured or skipped.
     assert_eq!(board(&t, &["configure"]).0, 0);
     let (code, _, err) = board(&t, &["enable"]);
     assert!(code == 1 && err.contains("save"), "unsaved settings keep the drivers locked out: {err}");
+    let (code, _, err) = board(&t, &["save"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("tangential span") && err.contains("normal span") && !err.contains("tare"), "{err}");
+    let (code, out, err) = board(&t, &["span", "--axis", "tangential", "--skip"]);
+    assert!(code == 0 && out.contains("span skipped"), "{out}{err}");
+    assert_eq!(board(&t, &["span", "--axis", "normal", "--skip"]).0, 0);
+    assert_eq!(status(&t)["status"]["missing"], 0);
     assert_eq!(board(&t, &["save"]).0, 0);
     assert_eq!(status(&t)["status"]["settings"], "Saved");
     assert_eq!(board(&t, &["lift-torque-limit"]).0, 0);
     assert_eq!(status(&t)["status"]["torque_limit_codes"], 2048);
-    assert_eq!(board(&t, &["enable"]).0, 0);
+    let (code, out, err) = board(&t, &["enable"]);
+    assert!(code == 0 && out.contains("enable: done: drivers enabled at period"), "{out}{err}");
+    // After calibration the joints read in degrees too.
+    let (_, out, _) = board(&t, &["status"]);
+    assert!(out.contains(" deg), AGC"), "{out}");
+    // The arm hangs free (no belt under it): the closed loop's consistency check
+    // stops it, and status says so in words.
+    assert!(out.contains("safe state: the encoders and the load cell disagree"), "{out}");
+    assert!(out.contains("off again"), "{out}");
     assert_eq!(board(&t, &["disable"]).0, 0);
     // Watch: one JSON document per reading.
     let (code, out, err) = board(&t, &["--json", "watch", "--count", "2", "--interval-ms", "10"]);
@@ -97,6 +112,47 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one() {
     // The span refuses a force it cannot see (nothing on the load cell).
     let (code, _, err) = board(&t, &["span", "--axis", "normal", "--newtons", "5"]);
     assert!(code == 1 && err.contains("is the weight on the load cell"), "{err}");
+}
+
+#[test]
+fn a_never_calibrated_board_cannot_be_saved_into_an_enabled_one() {
+    // The audit's reproducer (issue 39, 1): `save` on a fresh board lifted the
+    // lockout and `enable` then drove an arm whose zeros were never set.
+    let t = twin(&[]);
+    let (code, _, err) = board(&t, &["save"]);
+    assert_eq!(code, 1, "{err}");
+    for step in ["encoders' zeros", "direction checks", "tare", "tangential span", "normal span"] {
+        assert!(err.contains(step), "save names {step:?}: {err}");
+    }
+    let (code, _, err) = board(&t, &["enable"]);
+    assert!(code == 1 && err.contains("no settings in flash"), "{err}");
+    // A tare alone sets no zeros, and a span needs the tare first.
+    let (code, _, err) = board(&t, &["span", "--axis", "normal", "--newtons", "5"]);
+    assert!(code == 1 && err.contains("tare"), "{err}");
+    let s = status(&t);
+    assert_eq!(s["status"]["zeros_set"], false, "{s}");
+    assert_eq!(s["status"]["settings"], "Missing", "{s}");
+    let (code, _, err) = board(&t, &["lift-torque-limit"]);
+    assert_eq!(code, 1, "{err}");
+}
+
+#[test]
+fn enable_says_why_the_drivers_stayed_off_and_status_words_are_in_words() {
+    // The audit's reproducer (issue 39, 2): a brought-up board whose drivers
+    // assert their fault line; `enable` said "done".
+    let t = twin(&["--flash", "saved", "--fault-line"]);
+    let (code, out, err) = board(&t, &["enable"]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(err.contains("the drivers are off") && err.contains("fault line (nFAULT) is asserted"), "{err}");
+    let s = status(&t);
+    assert_eq!(s["status"]["drivers_enabled"], false, "{s}");
+    assert!(s["status"]["last_enable"]["DriversRefused"].is_object(), "{s}");
+    // The human status decodes the word.
+    let (code, out, _) = board(&t, &["status"]);
+    assert_eq!(code, 0);
+    let line = out.lines().find(|l| l.starts_with("firmware status")).unwrap_or_default();
+    assert!(line.contains(": ") && !line.ends_with(": "), "{out}");
+    assert!(out.contains("last enable: the drivers refused to enable"), "{out}");
 }
 
 #[test]

@@ -63,14 +63,19 @@ pub enum BoardCommand {
         no_tare: bool,
     },
     /// The load cell's span: with a known force on one axis now (a weight: m g),
-    /// gain = force / (count - tare).
+    /// gain = force / (count - tare). Needs the tare first (`calibrate`). With
+    /// --skip, keeps the nominal gain instead and the record says the span was
+    /// skipped; `save` needs each axis spanned or skipped.
     Span {
         /// The axis: tangential (f_t) or normal (f_n).
         #[arg(long, value_enum)]
         axis: AxisArg,
-        /// The force, N.
+        /// The force, N (|F| <= 25).
+        #[arg(long, required_unless_present = "skip", conflicts_with = "skip", allow_hyphen_values = true)]
+        newtons: Option<f64>,
+        /// Keep the axis's nominal gain (no known weight at hand).
         #[arg(long)]
-        newtons: f64,
+        skip: bool,
     },
     /// Sends the firmware configuration of a scenario (controller, gains, rate,
     /// limits); the firmware validates it. The rate must be the image's.
@@ -80,12 +85,17 @@ pub enum BoardCommand {
         scenario: ScenarioArgs,
     },
     /// Saves the calibration and configuration in force to flash (version and
-    /// CRC-32C); they are loaded at every reset. Until saved the drivers stay locked out.
+    /// CRC-32C); they are loaded at every reset. Until saved the drivers stay
+    /// locked out. Refused (exit 1, naming what is missing) unless the
+    /// calibration is complete: zeros set, both directions checked, tared, each
+    /// axis spanned or skipped.
     Save,
     /// Lifts the reduced torque limit a new calibration runs at (both joints'
     /// directions must have been checked).
     LiftTorqueLimit,
-    /// Enables the drivers: resets the firmware, which closes the loop.
+    /// Enables the drivers: resets the firmware, which closes the loop; then reads
+    /// the state back until the drivers are on. Exit 1 naming why when they are
+    /// not (locked out, their fault line, the firmware's safe state).
     Enable,
     /// Disables the drivers now.
     Disable,

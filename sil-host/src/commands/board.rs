@@ -5,7 +5,7 @@
 use std::{io::Write, sync::Arc, time::Duration};
 
 use arm_app::{
-    bringup::{CalibrationRecord, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
+    bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
     record::Stored,
     telemetry::ArmTelemetry,
 };
@@ -15,6 +15,7 @@ use rig::{
     bringup_procedure::{self as bp, CalibrateOptions, StepError},
     free_arm::FreeArm,
     setup::firmware_config,
+    status_words::describe_status,
 };
 use serde::Serialize;
 
@@ -57,12 +58,18 @@ fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Snapshot, Ste
 fn print_snapshot(s: &Snapshot) {
     let st = &s.status;
     println!(
-        "state: {:?}, period {}, drivers {}, firmware status {:#x}, overruns {}",
+        "state: {:?}, period {}, drivers {}, overruns {}",
         st.activity,
         st.periods,
         if st.drivers_enabled { "enabled" } else { "disabled" },
-        st.status,
         st.overruns
+    );
+    println!("firmware status {:#x}: {}", st.status, describe_status(st.status));
+    let off_again = matches!(st.last_enable, EnableOutcome::Enabled { .. }) && !st.drivers_enabled;
+    println!(
+        "last enable: {}{}",
+        bp::describe_enable(&st.last_enable),
+        if off_again { "; off again since (the firmware status above says why)" } else { "" }
     );
     println!(
         "settings: {:?} ({}); zeros set {}, directions checked {}, torque limit {} codes of 2048",
@@ -72,11 +79,15 @@ fn print_snapshot(s: &Snapshot) {
         st.directions_checked,
         st.torque_limit_codes
     );
+    if !st.missing.is_empty() {
+        println!("calibration lacks: {}", bp::describe_missing(st.missing));
+    }
     let r = &s.raw;
     for (i, name) in ["theta1", "elbow"].iter().enumerate() {
         match r.encoder_counts[i] {
             Ok(n) => println!(
-                "encoder {name}: raw count {n} of 16384, AGC {}",
+                "encoder {name}: raw count {n} of 16384{}, AGC {}",
+                joint_degrees(n, &s.calibration, i).map_or_else(String::new, |d| format!(" ({d:+.3} deg)")),
                 r.encoder_agc[i].map_or_else(|| "unreadable".into(), |a| a.to_string())
             ),
             Err(e) => println!("encoder {name}: no reading ({})", e.describe()),
@@ -99,6 +110,18 @@ fn print_snapshot(s: &Snapshot) {
         ),
         None => println!("telemetry: no window closed yet"),
     }
+}
+
+/// Joint `i`'s calibrated angle from its raw count, degrees in (-180, 180]
+/// (`[theta1, theta2 - theta1]`), once the zeros are set.
+fn joint_degrees(raw: u16, cal: &CalibrationRecord, i: usize) -> Option<f64> {
+    if !cal.zeros_set {
+        return None;
+    }
+    let (raw, zero) = (i32::from(raw), i32::from(cal.zero_counts[i]));
+    let counts = if cal.reversed[i] { zero - raw } else { raw - zero }.rem_euclid(1 << 14);
+    let deg = f64::from(counts) * 360.0 / 16384.0;
+    Some(if deg > 180.0 { deg - 360.0 } else { deg })
 }
 
 fn emit<T: Serialize>(json: bool, value: &T, human: impl FnOnce()) {
@@ -188,29 +211,43 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 println!("next: `sil-host board span` with a known weight, `configure`, `save`, `enable`");
             });
         }
-        BoardCommand::Span { axis, newtons } => {
-            if !newtons.is_finite() {
-                return Err(CliError::BadInput(format!("--newtons {newtons}: not finite")));
-            }
+        BoardCommand::Span { axis, newtons, skip } => {
             let axis = match axis {
                 AxisArg::Tangential => 0,
                 AxisArg::Normal => 1,
             };
-            let Reply::Calibration(cal) = bp::ask(&mut c, Request::Span { axis, newtons: *newtons as f32 })? else {
+            let request = match newtons {
+                _ if *skip => Request::SkipSpan { axis },
+                Some(n) if n.is_finite() && *n != 0.0 && n.abs() <= 25.0 => Request::Span { axis, newtons: *n as f32 },
+                Some(n) => return Err(CliError::BadInput(format!("--newtons {n}: must be a non-zero force of at most 25 N"))),
+                None => return Err(CliError::BadInput("span needs --newtons or --skip".into())),
+            };
+            let Reply::Calibration(cal) = bp::ask(&mut c, request)? else {
                 return Err(CliError::BadInput("unexpected reply to span".into()));
             };
-            emit(json, &cal, || println!("span set: N per count {:?}", cal.load_newtons_per_count));
+            emit(json, &cal, || {
+                if *skip {
+                    println!("span skipped: the nominal gain {} N per count is kept", cal.load_newtons_per_count[usize::from(axis)]);
+                } else {
+                    println!("span set: N per count {:?}", cal.load_newtons_per_count);
+                }
+            });
         }
         BoardCommand::Configure { scenario } => {
             let s = load_scenario(scenario)?;
             bp::ask(&mut c, Request::Configure(firmware_config(&s)))?;
             done("configure");
         }
-        BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Enable | BoardCommand::Disable => {
+        BoardCommand::Enable => {
+            let st = bp::enable(&mut c)?;
+            emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
+                println!("enable: done: {}", bp::describe_enable(&st.last_enable));
+            });
+        }
+        BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Disable => {
             let (request, name) = match args.command {
                 BoardCommand::Save => (Request::Save, "save"),
                 BoardCommand::LiftTorqueLimit => (Request::LiftTorqueLimit, "lift the torque limit"),
-                BoardCommand::Enable => (Request::Enable, "enable"),
                 _ => (Request::Disable, "disable"),
             };
             bp::ask(&mut c, request)?;
@@ -235,7 +272,7 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     let flash = if args.flash == FlashArg::Erased {
         FlashModel::erased()
     } else {
-        let stored = Stored { calibration: CalibrationRecord::of(&s.calibration.arm_calibration(), true), config: firmware_config(&s) };
+        let stored = Stored { calibration: CalibrationRecord::brought_up(&s.calibration.arm_calibration()), config: firmware_config(&s) };
         FlashModel::saved(&stored).map_err(|e| CliError::BadInput(format!("the settings record: {}", e.describe())))?
     };
     if args.flash == FlashArg::Corrupt {
