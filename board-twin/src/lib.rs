@@ -13,6 +13,7 @@
 //! | [`counter`] | the belt's quadrature counter, 16-bit wrap |
 //! | [`flash`] | the settings record's flash sector: erase to `0xFF`, program clears bits, word writes |
 //! | [`motor_stage`] | PWM, direction, enable, nFAULT, the button; duty to joint torque |
+//! | [`physics`] | the arm into what the devices sense, the pins' outputs into joint torques: shared by the twin and the emulated `arm` ELF |
 //! | [`twin`] | [`BoardTwin`]: the application on the models, one tick at a time |
 //!
 //! What it does not model: SPI and ADC timing (transfers are instant), the
@@ -27,9 +28,11 @@ pub mod counter;
 pub mod description;
 pub mod flash;
 pub mod motor_stage;
+pub mod physics;
 pub mod twin;
 
 pub use bench::EncoderFaults;
 pub use description::{BoardDescription, EncoderMounting, LoadCellFrontEnd, MotorWiring};
 pub use flash::FlashModel;
-pub use twin::{ArmState, BoardTwin, BusFaults, TwinError, TwinIo};
+pub use physics::{ArmState, BoardPhysics, BusFaults};
+pub use twin::{BoardTwin, TwinError, TwinIo};

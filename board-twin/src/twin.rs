@@ -7,6 +7,16 @@
 //! step, the motor stage), and returns the joint torques the drivers make from
 //! the duties, directions and enable it left on the pins.
 
+pub use crate::physics::{ArmState, BusFaults};
+use crate::{
+    adc::AdcModel,
+    as5047p::As5047pModel,
+    counter::CounterModel,
+    description::BoardDescription,
+    flash::FlashModel,
+    motor_stage::{PinModel, PwmModel, Wire},
+    physics::BoardPhysics,
+};
 use arm_app::{
     ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog,
     bringup::CalibrationRecord,
@@ -14,19 +24,6 @@ use arm_app::{
 };
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
-
-use crate::{
-    adc::{AdcModel, adc_count},
-    as5047p::As5047pModel,
-    bench::{Bench, EncoderFaults, Shared},
-    counter::{CounterModel, belt_count},
-    description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
-    flash::FlashModel,
-    motor_stage::{PinModel, PwmModel, Wire, joint_torques},
-};
 
 /// The watchdog: counts its feeds on the bench's side (a tick that did not
 /// feed it is a hung step).
@@ -80,33 +77,6 @@ impl ArmIo for TwinIo {
     type Flash = FlashModel;
 }
 
-/// What the arm is doing at a tick, as the board's devices sense it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ArmState {
-    /// `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s (paper eq. 1).
-    pub x: [f64; 4],
-    /// Tip force `[f_t, f_n]` on the load cell, N.
-    pub f: [f64; 2],
-    /// The belt's travel since its counter read 0, m.
-    pub belt_travel_m: f64,
-}
-
-/// Faults on the bus this tick (docs/hardware.md "Faults").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct BusFaults {
-    /// Each encoder's bus and magnet, `[theta1, elbow]`.
-    pub encoders: [EncoderFaults; 2],
-    /// The ADC's conversion is missing.
-    pub missing_conversion: bool,
-    /// A load-cell channel's reading stays where it was `[f_t, f_n]` (a seized
-    /// amplifier output, a sample-and-hold that no longer samples).
-    pub adc_stuck: [bool; 2],
-    /// The belt's counter stops counting (a broken encoder wire).
-    pub belt_stuck: bool,
-    /// The drivers assert nFAULT.
-    pub driver_fault: bool,
-}
-
 /// Why the twin did not start.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TwinError {
@@ -127,15 +97,10 @@ pub enum TwinError {
 /// The reference board, simulated at the bus level, running the arm application.
 pub struct BoardTwin {
     app: ArmApp<TwinIo>,
-    bench: Shared,
-    board: BoardDescription,
+    physics: BoardPhysics,
     feeds: std::rc::Rc<std::cell::Cell<u64>>,
-    rng: ChaCha8Rng,
-    noise: Option<Normal<f64>>,
     notices: Vec<Notice>,
     ticks: u64,
-    /// The amplifiers' last counts (a stuck channel keeps its own).
-    last_adc: [u16; 2],
 }
 
 impl BoardTwin {
@@ -170,8 +135,8 @@ impl BoardTwin {
         seed: u64,
         load_noise_n: f64,
     ) -> Result<Self, TwinError> {
-        board.check().map_err(TwinError::Board)?;
-        let bench: Shared = std::rc::Rc::new(std::cell::RefCell::new(Bench::default()));
+        let physics = BoardPhysics::new(board, seed, load_noise_n).map_err(TwinError::Board)?;
+        let bench = physics.bench().clone();
         let feeds = std::rc::Rc::new(std::cell::Cell::new(0));
         let pin = |w| PinModel::new(bench.clone(), w);
         let m1 = Motor::new(PwmModel::new(bench.clone(), 0, board.pwm_max_duty), pin(Wire::Dir1));
@@ -188,45 +153,20 @@ impl BoardTwin {
             clock: TwinClock,
             flash,
         };
-        // At power-up the ADC has converted nothing yet.
-        bench.borrow_mut().adc_counts = Some([0; 2]);
         let mut notices = Vec::new();
         let app = ArmApp::new(parts, config, cal, &mut |n| notices.push(n)).map_err(TwinError::Start)?;
-        let noise = (load_noise_n > 0.0).then(|| Normal::new(0.0, load_noise_n).ok()).flatten();
-        Ok(Self { app, bench, board, feeds, rng: ChaCha8Rng::seed_from_u64(seed), noise, notices, ticks: 0, last_adc: [0; 2] })
+        Ok(Self { app, physics, feeds, notices, ticks: 0 })
     }
 
     /// Sets the devices from `arm` and `faults` (with load-cell noise when
     /// `noisy`), then runs one control tick. Returns the joint torques `[u1, u2]`
     /// (N m) the drivers apply until the next tick (zero-order hold).
     pub fn tick(&mut self, arm: &ArmState, faults: &BusFaults, noisy: bool) -> [f64; 2] {
-        let (n_t, n_n) = match (noisy, self.noise) {
-            (true, Some(n)) => (n.sample(&mut self.rng), n.sample(&mut self.rng)),
-            _ => (0.0, 0.0),
-        };
-        {
-            let mut b = self.bench.borrow_mut();
-            let d = &self.board;
-            b.magnet_counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
-            b.encoder_faults = faults.encoders;
-            let lc = &d.load_cell;
-            let fresh = [
-                adc_count(lc.zero_counts[0], lc.counts_per_newton[0], arm.f[0] + n_t),
-                adc_count(lc.zero_counts[1], lc.counts_per_newton[1], arm.f[1] + n_n),
-            ];
-            let held = self.last_adc;
-            let counts = [0, 1].map(|i| if faults.adc_stuck[i] { held[i] } else { fresh[i] });
-            self.last_adc = counts;
-            b.adc_counts = (!faults.missing_conversion).then_some(counts);
-            if !faults.belt_stuck {
-                b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
-            }
-            b.driver_fault = faults.driver_fault;
-        }
+        self.physics.sense(arm, faults, noisy);
         let notices = &mut self.notices;
         self.app.tick(&mut |n| notices.push(n));
         self.ticks += 1;
-        joint_torques(&self.bench, &self.board)
+        self.physics.torques(self.physics.board().pwm_max_duty)
     }
 
     /// The operator's enable, timed so that the firmware's reset lands on the
@@ -236,9 +176,9 @@ impl BoardTwin {
     /// first after the reset (the drivers enable at its command), and is released
     /// after it by [`BoardTwin::release_button`].
     pub fn press_enable(&mut self, arm: &ArmState, faults: &BusFaults) {
-        self.bench.borrow_mut().button_held = false;
+        self.physics.hold_button(false);
         self.tick(arm, faults, false);
-        self.bench.borrow_mut().button_held = true;
+        self.physics.hold_button(true);
         for _ in 1..BUTTON_PERIODS {
             self.tick(arm, faults, false);
         }
@@ -246,12 +186,12 @@ impl BoardTwin {
 
     /// Holds the enable button down (`true`) or lets it go, from the next tick on.
     pub fn press_button(&mut self, held: bool) {
-        self.bench.borrow_mut().button_held = held;
+        self.physics.hold_button(held);
     }
 
     /// Lets the enable button go.
     pub fn release_button(&mut self) {
-        self.bench.borrow_mut().button_held = false;
+        self.physics.hold_button(false);
     }
 
     /// Serves a bring-up request between two ticks, as the image's idle loop does.
@@ -281,13 +221,6 @@ impl BoardTwin {
 
     /// The board description.
     pub fn board(&self) -> &BoardDescription {
-        &self.board
+        self.physics.board()
     }
-}
-
-/// The magnet's angle of a joint at `angle` (rad) through `mounting`, chip counts.
-fn magnet_counts(angle: f64, mounting: &EncoderMounting) -> f64 {
-    let counts = angle / std::f64::consts::TAU * ENCODER_COUNTS;
-    let signed = if mounting.reversed { -counts } else { counts };
-    signed + mounting.zero_count
 }

@@ -1,0 +1,131 @@
+//! The board's physics around its MCU, for any MCU model (the twin's
+//! application on device models, or the `arm` ELF in an emulator): before a
+//! tick, what the devices sense from the simulated arm (the magnets' angles
+//! through each encoder's mounting, the forces through the load cell's front
+//! end and its seeded noise, the belt's travel, the faults on the bus); after
+//! it, the joint torques the motor stage makes from the outputs the MCU left
+//! on its pins ([`crate::motor_stage::joint_torques`]).
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use crate::{
+    adc::adc_count,
+    bench::{Bench, EncoderFaults, Shared},
+    counter::belt_count,
+    description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
+    motor_stage::joint_torques,
+};
+
+/// What the arm is doing at a tick, as the board's devices sense it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmState {
+    /// `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s (paper eq. 1).
+    pub x: [f64; 4],
+    /// Tip force `[f_t, f_n]` on the load cell, N.
+    pub f: [f64; 2],
+    /// The belt's travel since its counter read 0, m.
+    pub belt_travel_m: f64,
+}
+
+/// Faults on the bus this tick (docs/hardware.md "Faults").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct BusFaults {
+    /// Each encoder's bus and magnet, `[theta1, elbow]`.
+    pub encoders: [EncoderFaults; 2],
+    /// The ADC's conversion is missing.
+    pub missing_conversion: bool,
+    /// A load-cell channel's reading stays where it was `[f_t, f_n]` (a seized
+    /// amplifier output, a sample-and-hold that no longer samples).
+    pub adc_stuck: [bool; 2],
+    /// The belt's counter stops counting (a broken encoder wire).
+    pub belt_stuck: bool,
+    /// The drivers assert nFAULT.
+    pub driver_fault: bool,
+}
+
+/// The board's devices as the arm drives them: the shared bench, the board's
+/// description, the load cell's noise.
+#[derive(Debug)]
+pub struct BoardPhysics {
+    bench: Shared,
+    board: BoardDescription,
+    rng: ChaCha8Rng,
+    noise: Option<Normal<f64>>,
+    /// The amplifiers' last counts (a stuck channel keeps its own).
+    last_adc: [u16; 2],
+}
+
+impl BoardPhysics {
+    /// The devices of `board` on a fresh bench, with load-cell noise of
+    /// `load_noise_n` N rms (white, seeded by `seed`, drawn `[f_t, f_n]` per
+    /// tick as the wire-level sensor model draws it). At power-up the ADC has
+    /// converted nothing yet (both counts 0).
+    ///
+    /// # Errors
+    /// The description's own check ([`BoardDescription::check`]), in words.
+    pub fn new(board: BoardDescription, seed: u64, load_noise_n: f64) -> Result<Self, String> {
+        board.check()?;
+        let bench: Shared = std::rc::Rc::new(std::cell::RefCell::new(Bench::default()));
+        bench.borrow_mut().adc_counts = Some([0; 2]);
+        let noise = (load_noise_n > 0.0).then(|| Normal::new(0.0, load_noise_n).ok()).flatten();
+        Ok(Self { bench, board, rng: ChaCha8Rng::seed_from_u64(seed), noise, last_adc: [0; 2] })
+    }
+
+    /// The bench the device models hold.
+    pub fn bench(&self) -> &Shared {
+        &self.bench
+    }
+
+    /// The board description.
+    pub fn board(&self) -> &BoardDescription {
+        &self.board
+    }
+
+    /// Sets what the devices sense from `arm` and `faults` (with load-cell noise
+    /// when `noisy`): the magnets' chip counts, the ADC's conversions, the belt's
+    /// count (held while stuck), the fault line.
+    pub fn sense(&mut self, arm: &ArmState, faults: &BusFaults, noisy: bool) {
+        let (n_t, n_n) = match (noisy, self.noise) {
+            (true, Some(n)) => (n.sample(&mut self.rng), n.sample(&mut self.rng)),
+            _ => (0.0, 0.0),
+        };
+        let mut b = self.bench.borrow_mut();
+        let d = &self.board;
+        b.magnet_counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
+        b.encoder_faults = faults.encoders;
+        let lc = &d.load_cell;
+        let fresh = [
+            adc_count(lc.zero_counts[0], lc.counts_per_newton[0], arm.f[0] + n_t),
+            adc_count(lc.zero_counts[1], lc.counts_per_newton[1], arm.f[1] + n_n),
+        ];
+        let held = self.last_adc;
+        let counts = [0, 1].map(|i| if faults.adc_stuck[i] { held[i] } else { fresh[i] });
+        self.last_adc = counts;
+        b.adc_counts = (!faults.missing_conversion).then_some(counts);
+        if !faults.belt_stuck {
+            b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
+        }
+        b.driver_fault = faults.driver_fault;
+    }
+
+    /// The joint torques `[u1, u2]` (N m) the drivers make from the outputs on
+    /// the bench now, with full-scale duty `max_duty` counts (the twin's
+    /// description; an emulated TIM3's ARR + 1).
+    pub fn torques(&self, max_duty: u16) -> [f64; 2] {
+        joint_torques(&self.bench, &BoardDescription { pwm_max_duty: max_duty, ..self.board })
+    }
+
+    /// Holds the enable button down (`true`) or lets it go.
+    pub fn hold_button(&self, held: bool) {
+        self.bench.borrow_mut().button_held = held;
+    }
+}
+
+/// The magnet's angle of a joint at `angle` (rad) through `mounting`, chip counts.
+fn magnet_counts(angle: f64, mounting: &EncoderMounting) -> f64 {
+    let counts = angle / std::f64::consts::TAU * ENCODER_COUNTS;
+    let signed = if mounting.reversed { -counts } else { counts };
+    signed + mounting.zero_count
+}
