@@ -30,8 +30,10 @@ CEILINGS = {
     # The arm image carries the bring-up protocol since issue 23 (the requests'
     # and replies' serde, the configuration sent over the line, the settings
     # record in flash): 32 152 B before, 52 612 B (mcu) / 52 768 B (qemu) after.
-    "mcu/arm": 54 * 1024,  # 52 612 B measured
-    "qemu/arm": 54 * 1024,  # 52 768 B measured
+    # Issue 39 (the record's bring-up steps) and issue 38 (the monitor block the
+    # emulator reads): 55 464 B (mcu) / 55 412 B (qemu).
+    "mcu/arm": 57 * 1024,  # 55 464 B measured
+    "qemu/arm": 57 * 1024,  # 55 412 B measured
     "qemu/pil": 31 * 1024,  # 30 464 B measured
     "release/pil": FLASH_BUDGET,  # 43 468 B measured
 }

@@ -11,6 +11,7 @@
 //! | [`io`] | the traits a board implements |
 //! | [`app`] | [`ArmApp`]: start-up and the control tick |
 //! | [`joint`] | the encoders by name, and their faults |
+//! | [`monitor`] | the block the image publishes in RAM each tick for a debugger or the emulator |
 //! | [`notice`] | what the application tells the operator, as values |
 //! | [`bringup`] | the bring-up protocol on USART1: requests, replies, refusals |
 //! | [`record`] | the settings record in flash: format, load, save, and the lockout it drives |
@@ -27,6 +28,7 @@ pub mod hardware;
 pub mod io;
 mod jog;
 pub mod joint;
+pub mod monitor;
 pub mod notice;
 pub mod record;
 mod service;

@@ -32,7 +32,7 @@ impl LoadCellAdc for AdcModel {
     type Error = AdcError;
 
     fn read(&mut self) -> Result<[u16; 2], AdcError> {
-        self.bench.borrow().adc_counts.ok_or(AdcError::Missing)
+        crate::bench::lock(&self.bench).adc_counts.ok_or(AdcError::Missing)
     }
 }
 

@@ -65,14 +65,14 @@ impl As5047pModel {
     }
 
     fn faults(&self) -> EncoderFaults {
-        self.bench.borrow().encoder_faults[self.index]
+        crate::bench::lock(&self.bench).encoder_faults[self.index]
     }
 
     /// The angle register now: the magnet's angle quantised to 14 bits.
     fn angle(&mut self) -> u16 {
         let f = self.faults();
         if !(f.magnet_lost || f.stuck) {
-            let counts = self.bench.borrow().magnet_counts[self.index];
+            let counts = crate::bench::lock(&self.bench).magnet_counts[self.index];
             if counts.is_finite() {
                 self.last_angle = (counts.round().rem_euclid(16384.0) as u32 % 16384) as u16;
             }

@@ -3,13 +3,19 @@
 //! travel) and the faults acting on the bus, and the outputs the motor stage's
 //! pins and PWM hold after it. The device models ([`crate::as5047p`],
 //! [`crate::adc`], [`crate::counter`], [`crate::motor_stage`]) each hold a
-//! handle to it: on the host, in one thread, a shared `Rc<RefCell<_>>` is the
-//! bus and the wires.
+//! handle to it: a shared `Arc<Mutex<_>>` is the bus and the wires (the twin
+//! runs in one thread; the emulator's device classes must be `Send + Sync`).
 
-use std::{cell::RefCell, rc::Rc};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 /// A handle on the board's shared state.
-pub type Shared = Rc<RefCell<Bench>>;
+pub type Shared = Arc<Mutex<Bench>>;
+
+/// The bench behind `shared`, locked (a poisoned lock is taken as it is: the
+/// bench is plain data, always consistent between two statements).
+pub fn lock(shared: &Shared) -> MutexGuard<'_, Bench> {
+    shared.lock().unwrap_or_else(PoisonError::into_inner)
+}
 
 /// Faults on one AS5047P's bus or magnet, this period.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

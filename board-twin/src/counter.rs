@@ -22,7 +22,7 @@ impl CounterModel {
 
 impl QuadratureCounter for CounterModel {
     fn count(&mut self) -> u16 {
-        self.bench.borrow().belt_count
+        crate::bench::lock(&self.bench).belt_count
     }
 }
 

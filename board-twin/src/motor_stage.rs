@@ -53,7 +53,7 @@ impl SetDutyCycle for PwmModel {
         if duty > self.max_duty {
             return Err(DutyOutOfRange);
         }
-        self.bench.borrow_mut().outputs.duty[self.index] = duty;
+        crate::bench::lock(&self.bench).outputs.duty[self.index] = duty;
         Ok(())
     }
 }
@@ -87,7 +87,7 @@ impl PinModel {
     }
 
     fn level(&self) -> bool {
-        let b = self.bench.borrow();
+        let b = crate::bench::lock(&self.bench);
         match self.wire {
             Wire::Dir1 => b.outputs.dir_high[0],
             Wire::Dir2 => b.outputs.dir_high[1],
@@ -98,7 +98,7 @@ impl PinModel {
     }
 
     fn drive(&mut self, high: bool) {
-        let mut b = self.bench.borrow_mut();
+        let mut b = crate::bench::lock(&self.bench);
         match self.wire {
             Wire::Dir1 => b.outputs.dir_high[0] = high,
             Wire::Dir2 => b.outputs.dir_high[1] = high,
@@ -139,7 +139,7 @@ impl InputPin for PinModel {
 /// direction pin and the motor's wiring. Saturates at full scale (a duty
 /// above it is refused by the PWM).
 pub fn joint_torques(bench: &Shared, board: &BoardDescription) -> [f64; 2] {
-    let b = bench.borrow();
+    let b = crate::bench::lock(&bench);
     if !b.outputs.enable || b.driver_fault {
         return [0.0; 2];
     }

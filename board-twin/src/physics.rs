@@ -67,8 +67,8 @@ impl BoardPhysics {
     /// The description's own check ([`BoardDescription::check`]), in words.
     pub fn new(board: BoardDescription, seed: u64, load_noise_n: f64) -> Result<Self, String> {
         board.check()?;
-        let bench: Shared = std::rc::Rc::new(std::cell::RefCell::new(Bench::default()));
-        bench.borrow_mut().adc_counts = Some([0; 2]);
+        let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+        crate::bench::lock(&bench).adc_counts = Some([0; 2]);
         let noise = (load_noise_n > 0.0).then(|| Normal::new(0.0, load_noise_n).ok()).flatten();
         Ok(Self { bench, board, rng: ChaCha8Rng::seed_from_u64(seed), noise, last_adc: [0; 2] })
     }
@@ -91,7 +91,7 @@ impl BoardPhysics {
             (true, Some(n)) => (n.sample(&mut self.rng), n.sample(&mut self.rng)),
             _ => (0.0, 0.0),
         };
-        let mut b = self.bench.borrow_mut();
+        let mut b = crate::bench::lock(&self.bench);
         let d = &self.board;
         b.magnet_counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
         b.encoder_faults = faults.encoders;
@@ -119,7 +119,7 @@ impl BoardPhysics {
 
     /// Holds the enable button down (`true`) or lets it go.
     pub fn hold_button(&self, held: bool) {
-        self.bench.borrow_mut().button_held = held;
+        crate::bench::lock(&self.bench).button_held = held;
     }
 }
 

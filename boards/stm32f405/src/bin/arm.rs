@@ -167,9 +167,45 @@ mod image {
         cortex_m::interrupt::free(|cs| {
             if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
                 arm.tick(&mut log);
+                if let Some(m) = arm.monitor() {
+                    // SAFETY: written here only, inside the critical section;
+                    // read by a debugger or the emulator, never by the image.
+                    unsafe { core::ptr::write_volatile(&raw mut PAINLEVE_MONITOR, m) };
+                }
             }
         });
     }
+
+    /// The monitor block (`arm_app::monitor`): the last tick's command and
+    /// telemetry, for probe-rs's live watch and the emulator's lockstep link.
+    #[unsafe(no_mangle)]
+    #[used]
+    static mut PAINLEVE_MONITOR: arm_app::monitor::Monitor = arm_app::monitor::Monitor {
+        magic: 0,
+        version: 0,
+        ticks: 0,
+        drivers_enabled: 0,
+        command: shared::wire::ActuatorCommand {
+            seq: 0,
+            t_sent_us: 0,
+            u1_code: 0,
+            u2_code: 0,
+            status: 0,
+            step_ticks: 0,
+            overruns: 0,
+            reserved: 0,
+        },
+        telemetry: shared::wire::FirmwareTelemetry {
+            seq: 0,
+            status: 0,
+            z_t_ref: 0.0,
+            f_n_ref: 0.0,
+            q: [0.0; 2],
+            qd: [0.0; 2],
+            f: [0.0; 2],
+            u_raw: [0.0; 2],
+        },
+    };
 
     #[interrupt]
     fn USART1() {
