@@ -139,7 +139,7 @@ impl InputPin for PinModel {
 /// direction pin and the motor's wiring. Saturates at full scale (a duty
 /// above it is refused by the PWM).
 pub fn joint_torques(bench: &Shared, board: &BoardDescription) -> [f64; 2] {
-    let b = crate::bench::lock(&bench);
+    let b = crate::bench::lock(bench);
     if !b.outputs.enable || b.driver_fault {
         return [0.0; 2];
     }

@@ -218,6 +218,8 @@ pub enum LinkKind {
     PilSerial,
     /// The arm application on the board twin (bus-level device models).
     Twin,
+    /// The `arm` ELF on the emulated board (register-level models).
+    Emulator,
 }
 
 impl LinkKind {
@@ -235,7 +237,7 @@ impl LinkKind {
             // The twin makes its readings on the bus: the plant side's frame
             // faults (nan_sensor, out_of_range) do not reach it; a late step needs
             // a clock, which the twin's steps do not take.
-            Self::Twin => &[DropCommand, StuckSensor, SpiError, ParityError, MagnetLost, MissingConversion, DriverFault],
+            Self::Twin | Self::Emulator => &[DropCommand, StuckSensor, SpiError, ParityError, MagnetLost, MissingConversion, DriverFault],
         }
     }
 
@@ -246,10 +248,10 @@ impl LinkKind {
     pub fn check(self, faults: &[Fault]) -> Result<(), RunError> {
         let Some(f) = faults.iter().find(|f| !self.injectable().contains(&f.kind)) else { return Ok(()) };
         Err(RunError::Unsupported(match (f.kind, self) {
-            (FaultKind::Stall | FaultKind::KillFirmware, Self::Twin) => format!(
-                "fault {:?} acts on a firmware process, and the board twin runs the application in this one: \
-                 run over iceoryx2 (without --link twin)",
-                f.kind
+            (FaultKind::Stall | FaultKind::KillFirmware, Self::Twin | Self::Emulator) => format!(
+                "fault {:?} acts on a firmware process, and the board {} runs in this one: run over iceoryx2 (without --link)",
+                f.kind,
+                if self == Self::Twin { "twin" } else { "emulator" }
             ),
             (FaultKind::Stall | FaultKind::KillFirmware, Self::InProcess) => {
                 format!("fault {:?} acts on the firmware process: run over iceoryx2 (without --in-process)", f.kind)
@@ -266,7 +268,7 @@ impl LinkKind {
                     "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`), not the {link:?} link"
                 )
             }
-            (kind @ (FaultKind::NanSensor | FaultKind::OutOfRange | FaultKind::LateCommand), Self::Twin) => format!(
+            (kind @ (FaultKind::NanSensor | FaultKind::OutOfRange | FaultKind::LateCommand), Self::Twin | Self::Emulator) => format!(
                 "fault {kind:?} acts on the wire-level frame or the step's clock, which the board twin does not have: \
                  use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault) or stuck_sensor"
             ),
@@ -513,7 +515,7 @@ mod tests {
             DriverFault,
         ];
         let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
-        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin] {
+        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin, LinkKind::Emulator] {
             for kind in all {
                 let refused = link.check(&[fault(kind)]).is_err();
                 let process_fault = matches!(kind, Stall | KillFirmware);
@@ -522,7 +524,7 @@ mod tests {
                     LinkKind::Ipc => bus,
                     LinkKind::PilQemu => kind == Stall || bus,
                     LinkKind::InProcess | LinkKind::PilSerial => process_fault || bus,
-                    LinkKind::Twin => process_fault || matches!(kind, LateCommand | NanSensor | OutOfRange),
+                    LinkKind::Twin | LinkKind::Emulator => process_fault || matches!(kind, LateCommand | NanSensor | OutOfRange),
                 };
                 assert_eq!(refused, expected, "{link:?} {kind:?}");
             }

@@ -13,6 +13,7 @@ pub mod arm;
 pub mod bringup_line;
 pub mod bringup_procedure;
 pub mod calibration;
+pub mod emulator_link;
 pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]

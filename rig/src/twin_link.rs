@@ -69,31 +69,6 @@ impl TwinLink {
     pub fn twin(&self) -> &BoardTwin {
         &self.twin
     }
-
-    /// The bus faults of period `k`.
-    fn faults_at(&self, k: u64) -> BusFaults {
-        let mut b = BusFaults::default();
-        for (kind, signal) in self.plan.board_faults(k) {
-            let encoder = match signal {
-                Some(Signal::Theta1) => Some(0),
-                Some(Signal::Elbow) => Some(1),
-                _ => None,
-            };
-            match (kind, encoder, signal) {
-                (FaultKind::SpiError, Some(i), _) => b.encoders[i].spi_error = true,
-                (FaultKind::ParityError, Some(i), _) => b.encoders[i].parity_error = true,
-                (FaultKind::MagnetLost, Some(i), _) => b.encoders[i].magnet_lost = true,
-                (FaultKind::StuckSensor, Some(i), _) => b.encoders[i].stuck = true,
-                (FaultKind::StuckSensor, None, Some(Signal::FT)) => b.adc_stuck[0] = true,
-                (FaultKind::StuckSensor, None, Some(Signal::FN)) => b.adc_stuck[1] = true,
-                (FaultKind::StuckSensor, None, Some(Signal::Belt)) => b.belt_stuck = true,
-                (FaultKind::MissingConversion, ..) => b.missing_conversion = true,
-                (FaultKind::DriverFault, ..) => b.driver_fault = true,
-                _ => {}
-            }
-        }
-        b
-    }
 }
 
 impl FirmwareLink for TwinLink {
@@ -106,7 +81,7 @@ impl FirmwareLink for TwinLink {
     }
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
-        let faults = self.faults_at(u64::from(frame.seq));
+        let faults = bus_faults(&self.plan, u64::from(frame.seq));
         let arm = ArmState { x: truth.x, f: truth.f, belt_travel_m: self.v_belt * truth.t };
         if !self.started {
             self.twin.press_enable(&arm, &faults);
@@ -140,6 +115,32 @@ impl FirmwareLink for TwinLink {
     fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
         self.torque
     }
+}
+
+/// The bus faults of period `k` of `plan` (the board twin's and the emulated
+/// board's: the same devices).
+pub fn bus_faults(plan: &FaultPlan, k: u64) -> BusFaults {
+    let mut b = BusFaults::default();
+    for (kind, signal) in plan.board_faults(k) {
+        let encoder = match signal {
+            Some(Signal::Theta1) => Some(0),
+            Some(Signal::Elbow) => Some(1),
+            _ => None,
+        };
+        match (kind, encoder, signal) {
+            (FaultKind::SpiError, Some(i), _) => b.encoders[i].spi_error = true,
+            (FaultKind::ParityError, Some(i), _) => b.encoders[i].parity_error = true,
+            (FaultKind::MagnetLost, Some(i), _) => b.encoders[i].magnet_lost = true,
+            (FaultKind::StuckSensor, Some(i), _) => b.encoders[i].stuck = true,
+            (FaultKind::StuckSensor, None, Some(Signal::FT)) => b.adc_stuck[0] = true,
+            (FaultKind::StuckSensor, None, Some(Signal::FN)) => b.adc_stuck[1] = true,
+            (FaultKind::StuckSensor, None, Some(Signal::Belt)) => b.belt_stuck = true,
+            (FaultKind::MissingConversion, ..) => b.missing_conversion = true,
+            (FaultKind::DriverFault, ..) => b.driver_fault = true,
+            _ => {}
+        }
+    }
+    b
 }
 
 /// A notice of the application as its log line (the image's defmt lines, in words).

@@ -16,6 +16,8 @@ pub enum RunLink {
     InProcess,
     /// The arm application on the board twin, in the plant's process.
     Twin,
+    /// The unmodified `arm` ELF on the emulated reference board (register level), in the plant's process.
+    Emulator,
 }
 
 /// `sil-host run`.
@@ -33,9 +35,16 @@ pub struct RunArgs {
     /// process in lockstep), `in-process` (the step linked in), or `twin` (the
     /// `arm` image's application on the board twin: bus-level device models of
     /// the reference board, with the scenario's `[board]` and `[calibration]`;
-    /// docs/board.md "The board twin").
+    /// docs/board.md "The board twin"), or `emulator` (the unmodified `arm` ELF,
+    /// the bytes flashed, on the emulated STM32F405 whose SPI1, ADC1, timers and
+    /// pins drive the same device models; docs/board.md "The emulated image").
     #[arg(long, value_enum, value_name = "LINK", conflicts_with = "in_process")]
     pub link: Option<RunLink>,
+    /// With --link emulator: the `arm` ELF to run (default
+    /// target/thumbv7em-none-eabihf/mcu/arm, built by `cargo build -p
+    /// board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm`).
+    #[arg(long, value_name = "PATH")]
+    pub elf: Option<std::path::PathBuf>,
     /// Pace the periods by the wall clock (1 kHz: 1 ms per period) instead of
     /// lockstep; reports period jitter and the firmware's step time.
     #[arg(long)]

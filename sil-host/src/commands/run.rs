@@ -20,6 +20,7 @@ use rig::faults::LinkKind;
 use rig::scenario::Scenario;
 use rig::{
     FirmwareLink,
+    emulator_link::EmulatorLink,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
     ipc_link::IpcLink,
@@ -45,9 +46,17 @@ pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
         RunLink::InProcess => LinkKind::InProcess,
         RunLink::Iceoryx2 => LinkKind::Ipc,
         RunLink::Twin => LinkKind::Twin,
+        RunLink::Emulator => LinkKind::Emulator,
     };
+    if args.elf.is_some() && chosen != RunLink::Emulator {
+        return Err(CliError::BadInput("--elf names the image for --link emulator only".into()));
+    }
     if chosen != RunLink::Iceoryx2 {
-        let what = if chosen == RunLink::Twin { "--link twin" } else { "--in-process" };
+        let what = match chosen {
+            RunLink::Twin => "--link twin",
+            RunLink::Emulator => "--link emulator",
+            _ => "--in-process",
+        };
         for (given, flag) in [
             (args.realtime, "--realtime"),
             (args.attach.is_some(), "--attach"),
@@ -88,10 +97,14 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let mut ipc: Option<IpcLink> = None;
     let mut in_process: Option<InProcessLink> = None;
     let mut twin: Option<TwinLink> = None;
+    let mut emulator: Option<EmulatorLink> = None;
     let link: &mut dyn FirmwareLink = if chosen == RunLink::InProcess {
         in_process.insert(InProcessLink::new(&scenario).map_err(CliError::Run)?)
     } else if chosen == RunLink::Twin {
         twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::BadInput(e.to_string()))?)
+    } else if chosen == RunLink::Emulator {
+        let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
+        emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::BadInput(e.to_string()))?)
     } else {
         let exe = match &args.attach {
             Some(_) => None,

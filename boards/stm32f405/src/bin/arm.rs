@@ -250,9 +250,12 @@ mod image {
         };
         let (clocks, clock) = mcu::start(&mut core);
         let watchdog_reset = rcc::take_watchdog_reset_flag();
-        // The drivers first: disabled, before anything can fail.
-        let m1 = Motor::new(PwmChannel(0), GpioPin(pins::DIR_U1));
-        let m2 = Motor::new(PwmChannel(1), GpioPin(pins::DIR_U2));
+        // The drivers first: disabled (the enable pin an output, low), before
+        // anything can fail. Then the PWM at 20 kHz with zero duty, and only then
+        // the motors, which read their full-scale duty (TIM3's ARR + 1) once:
+        // made before `start_pwm` they read the reset value of ARR (or 0 with
+        // TIM3's clock off), and every duty was wrong (found by the emulated
+        // image, issue 38: no torque at all there, 15.6 times too much on silicon).
         for p in [pins::DIR_U1, pins::DIR_U2, pins::DRIVER_ENABLE, pins::DRIVER_FAULT, pins::ENABLE_BUTTON] {
             gpio::configure(&p);
         }
@@ -261,6 +264,8 @@ mod image {
             ClockOutcome::NoClockModel => QEMU_TIMER_HZ,
         };
         timers::start_pwm(timer_hz);
+        let m1 = Motor::new(PwmChannel(0), GpioPin(pins::DIR_U1));
+        let m2 = Motor::new(PwmChannel(1), GpioPin(pins::DIR_U2));
         let Ok(motors) = MotorStage::new(m1, m2, GpioPin(pins::DRIVER_ENABLE), GpioPin(pins::DRIVER_FAULT)) else {
             defmt::error!("the motor stage did not come up disabled");
             exit::exit(3);

@@ -1,0 +1,369 @@
+//! [`EmulatedBoard`]: the unmodified `arm` ELF on the emulated reference
+//! board, driven by the simulated arm one control period at a time, as
+//! `board_twin::BoardTwin` drives the application: before each tick the board's
+//! physics (`board_twin::BoardPhysics`, the same models) set what the devices
+//! sense; the machine runs through the tick (TIM2's interrupt: SPI frames to
+//! the encoders, the ADC's conversions, the step, the PWM); after it the
+//! torques come from TIM3's duty, the direction pins and the enable pin.
+//!
+//! Time: the machine's clock is the board's. Period `k`'s tick is TIM2's
+//! update at `t0 + k Ts`; [`EmulatedBoard::tick`] runs the machine to
+//! `t0 + (k + 0.9) Ts`, past the handler and before the next tick, so that
+//! what the host sets between two calls is what the next tick samples.
+
+use arm_app::monitor::{MONITOR_BYTES, MONITOR_MAGIC, Monitor};
+use board_twin::{ArmState, BoardDescription, BoardPhysics, BusFaults, as5047p::As5047pModel, bench::lock};
+use rsemu::core::{space::MemAttrs, value::Width};
+use shared::wire::{ActuatorCommand, FirmwareTelemetry};
+
+use crate::{
+    adc1::Adc1,
+    checks::{self, peek},
+    device::{BoardError, RegisterModel},
+    image::{ArmImage, FLASH_BASE, RECORD_SECTOR},
+    machine::{BoardMachine, BuildError, input, out},
+    spi1::{Spi1, SpiFaults},
+    usart1::Usart1,
+};
+
+/// Why the emulated board stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EmuError {
+    /// The machine could not be built.
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// The board description is invalid.
+    #[error("{0}")]
+    Board(String),
+    /// The image configured a part as the board cannot work with, or used a
+    /// register the models do not implement.
+    #[error("the image misconfigures the board: {0}")]
+    Misconfigured(BoardError),
+    /// The image touched an address nothing answers (a bus fault on the part).
+    #[error("the image accessed {address:#010x}, where the emulated board has nothing (a bus fault); pc {pc:#010x}")]
+    BusFault {
+        /// The address.
+        address: u32,
+        /// The core's program counter when the run stopped.
+        pc: u32,
+    },
+    /// The core locked up (a fault in a fault handler).
+    #[error("the core locked up at pc {pc:#010x}")]
+    LockedUp {
+        /// The program counter.
+        pc: u32,
+    },
+    /// The image did not start its control tick.
+    #[error("the image did not start its control tick within {ms} ms of machine time (pc {pc:#010x})")]
+    NoTick {
+        /// How long was waited.
+        ms: u64,
+        /// Where the core was.
+        pc: u32,
+    },
+    /// The independent watchdog reset the image.
+    #[error("the independent watchdog reset the image (RCC_CSR.IWDGRSTF) before period {period}")]
+    WatchdogReset {
+        /// The period.
+        period: u64,
+    },
+    /// rsemu refused to go on.
+    #[error("the emulator stopped: {0}")]
+    Emulator(String),
+}
+
+/// The emulated board.
+pub struct EmulatedBoard {
+    m: BoardMachine,
+    physics: BoardPhysics,
+    image: ArmImage,
+    period_ns: u64,
+    /// TIM2's next update (the next tick), ns of machine time.
+    next_tick_ns: u64,
+    ticks: u64,
+    belt: crate::belt::Quadrature,
+    rtt: Vec<u8>,
+}
+
+/// How far into a period a tick's run goes (a fraction of the period): past
+/// the handler (tens of microseconds), a scheduler round (50 us at most: TIM3's
+/// 20 kHz) before the next tick.
+const RUN_TO: f64 = 0.9;
+
+impl EmulatedBoard {
+    /// The board `board` running `image`, its settings sector holding
+    /// `record_sector` (the bytes of `board_twin::FlashModel`: a record saved,
+    /// erased, or damaged), its load cell's noise as the twin's (`seed`,
+    /// `load_noise_n`), the control period `period_ns`, the core run in `mode`.
+    /// Nothing runs yet.
+    ///
+    /// # Errors
+    /// [`EmuError::Board`] for a bad description, [`EmuError::Build`].
+    pub fn new(
+        image: ArmImage,
+        board: BoardDescription,
+        record_sector: &[u8],
+        period_ns: u64,
+        seed: u64,
+        load_noise_n: f64,
+        mode: crate::core_clock::Mode,
+    ) -> Result<Self, EmuError> {
+        let physics = BoardPhysics::new(board, seed, load_noise_n).map_err(EmuError::Board)?;
+        let bench = physics.bench().clone();
+        let mut flash = image.flash.clone();
+        let record_at = (RECORD_SECTOR - FLASH_BASE) as usize;
+        flash.resize(record_at, 0xFF);
+        // Up to the record's end: the rest of the sector is erased anyway.
+        let used = record_sector.iter().rposition(|&b| b != 0xFF).map_or(0, |i| i + 1);
+        flash.extend_from_slice(&record_sector[..used.div_ceil(4) * 4]);
+        let models: Vec<(&'static str, Box<dyn RegisterModel>)> = vec![
+            ("spi1", Box::new(Spi1::new([As5047pModel::new(bench.clone(), 0), As5047pModel::new(bench.clone(), 1)]))),
+            ("adc1", Box::new(Adc1::new(bench))),
+            ("usart1", Box::new(Usart1::default())),
+        ];
+        let m = BoardMachine::build(flash, models, mode)?;
+        Ok(Self { m, physics, image, period_ns, next_tick_ns: 0, ticks: 0, belt: crate::belt::Quadrature::default(), rtt: Vec::new() })
+    }
+
+    /// Powers the board up with the arm at `arm` and runs the image until its
+    /// control tick runs: start-up (clocks, pins, the settings record, the
+    /// encoders' check), then TIM2's first update. Returns the machine time of
+    /// the next tick, ns.
+    ///
+    /// # Errors
+    /// [`EmuError::NoTick`] when no tick comes within 200 ms; the board's errors.
+    pub fn boot(&mut self, arm: &ArmState) -> Result<u64, EmuError> {
+        self.physics.sense(arm, &BusFaults::default(), false);
+        self.drive_pins();
+        let step = 1_000_000;
+        for ms in 1..=200u64 {
+            self.run_to(ms * step)?;
+            if self.monitor().is_some() {
+                // The tick's phase from TIM2's counter: the last update was CNT
+                // timer counts ago.
+                let psc = peek(&self.m.machine, 0x4000_0028) + 1;
+                let cnt = peek(&self.m.machine, 0x4000_0024);
+                let since = u64::from(cnt) * u64::from(psc) * 1_000_000_000 / u64::from(checks::APB1_TIMER_HZ);
+                let last = self.m.now_ns() - since;
+                self.next_tick_ns = last + self.period_ns;
+                self.check_configuration()?;
+                return Ok(self.next_tick_ns);
+            }
+        }
+        Err(EmuError::NoTick { ms: 200, pc: self.m.core.cpu.pc() })
+    }
+
+    /// Sets the devices from `arm` and `faults` (load-cell noise when `noisy`),
+    /// runs the machine through the next tick, and returns the joint torques
+    /// `[u1, u2]` (N m) the drivers make until the next tick.
+    ///
+    /// # Errors
+    /// The board's errors ([`EmuError`]), the watchdog's reset among them.
+    pub fn tick(&mut self, arm: &ArmState, faults: &BusFaults, spi: SpiFaults, noisy: bool) -> Result<[f64; 2], EmuError> {
+        self.physics.sense(arm, faults, noisy);
+        self.drive_pins();
+        if let Some(w) = self.m.hub.window("spi1") {
+            w.with(|m| {
+                if let Some(s) = as_spi(m) {
+                    s.faults = spi;
+                }
+            });
+        }
+        let target = lock(self.physics.bench()).belt_count;
+        let next_tick = self.next_tick_ns * u64::from(checks::SYSCLK_HZ) / 1_000_000_000;
+        self.belt.drive_to(&mut self.m, target, next_tick)?;
+        let to = self.next_tick_ns + (RUN_TO * self.period_ns as f64) as u64;
+        self.run_to(to)?;
+        if peek(&self.m.machine, 0x4002_3874) & (1 << 29) != 0 {
+            return Err(EmuError::WatchdogReset { period: self.ticks });
+        }
+        self.next_tick_ns += self.period_ns;
+        self.ticks += 1;
+        if self.ticks % 1000 == 1 {
+            self.check_configuration()?;
+        }
+        Ok(self.torques())
+    }
+
+    /// The torques from TIM3's duty, the direction pins and the enable pin.
+    fn torques(&mut self) -> [f64; 2] {
+        let mm = &self.m.machine;
+        let arr = peek(mm, 0x4000_042C);
+        let max_duty = (arr + 1).min(u32::from(u16::MAX)) as u16;
+        let duty = [peek(mm, 0x4000_0434), peek(mm, 0x4000_0438)].map(|c| c.min(u32::from(max_duty)) as u16);
+        let pins = self.m.hub.pins();
+        let level = |l| pins.as_ref().is_some_and(|p| p.level(l));
+        {
+            let mut b = lock(self.physics.bench());
+            b.outputs.duty = duty;
+            b.outputs.dir_high = [level(input::DIR1), level(input::DIR2)];
+            b.outputs.enable = level(input::ENABLE);
+        }
+        self.physics.torques(max_duty)
+    }
+
+    /// Drives the fault line and the button from the bench.
+    fn drive_pins(&self) {
+        let (fault, held) = {
+            let b = lock(self.physics.bench());
+            (b.driver_fault, b.button_held)
+        };
+        if let Some(p) = self.m.hub.pins() {
+            p.drive(out::FAULT, !fault);
+            p.drive(out::BUTTON, !held);
+        }
+    }
+
+    fn run_to(&mut self, ns: u64) -> Result<(), EmuError> {
+        self.m.run_until(ns).map_err(EmuError::Emulator)?;
+        self.drain_rtt();
+        if let Some(e) = self.m.errors.first() {
+            return Err(EmuError::Misconfigured(e));
+        }
+        let (faults, address) = self.m.core.cpu.bus_faults();
+        if faults > 0 {
+            return Err(EmuError::BusFault { address, pc: self.m.core.cpu.pc() });
+        }
+        if self.m.core.cpu.is_locked_up() {
+            return Err(EmuError::LockedUp { pc: self.m.core.cpu.pc() });
+        }
+        Ok(())
+    }
+
+    fn check_configuration(&self) -> Result<(), EmuError> {
+        let m = &self.m.machine;
+        let period_s = self.period_ns as f64 * 1e-9;
+        checks::clock_tree(m)
+            .and_then(|()| checks::pins(m))
+            .and_then(|()| checks::timers(m, 1.0 / period_s))
+            .and_then(|()| checks::watchdog(m, period_s))
+            .map_err(EmuError::Misconfigured)
+    }
+
+    /// Holds the enable button (`true`) or lets it go, from the next tick on.
+    pub fn hold_button(&mut self, held: bool) {
+        self.physics.hold_button(held);
+    }
+
+    /// The image's monitor block after the last tick (`None` before its first).
+    pub fn monitor(&self) -> Option<Monitor> {
+        let space = self.m.machine.space("mem")?;
+        let mut b = [0u8; MONITOR_BYTES];
+        for (i, chunk) in b.chunks_exact_mut(4).enumerate() {
+            let w = space.read(u64::from(self.image.monitor) + 4 * i as u64, Width::U32, MemAttrs::DEBUG).ok()? as u32;
+            chunk.copy_from_slice(&w.to_le_bytes());
+        }
+        let u32_at = |o: usize| u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+        let f32_at = |o: usize| f32::from_bits(u32_at(o));
+        let i16_at = |o: usize| i16::from_le_bytes([b[o], b[o + 1]]);
+        if u32_at(0) != MONITOR_MAGIC {
+            return None;
+        }
+        Some(Monitor {
+            magic: u32_at(0),
+            version: u32_at(4),
+            ticks: u32_at(8),
+            drivers_enabled: u32_at(12),
+            command: ActuatorCommand {
+                t_sent_us: u64::from(u32_at(16)) | (u64::from(u32_at(20)) << 32),
+                seq: u32_at(24),
+                u1_code: i16_at(28),
+                u2_code: i16_at(30),
+                status: u32_at(32),
+                step_ticks: u32_at(36),
+                overruns: u32_at(40),
+                reserved: u32_at(44),
+            },
+            telemetry: FirmwareTelemetry {
+                seq: u32_at(48),
+                status: u32_at(52),
+                z_t_ref: f32_at(56),
+                f_n_ref: f32_at(60),
+                q: [f32_at(64), f32_at(68)],
+                qd: [f32_at(72), f32_at(76)],
+                f: [f32_at(80), f32_at(84)],
+                u_raw: [f32_at(88), f32_at(92)],
+            },
+        })
+    }
+
+    /// Bytes to the image's USART1 (the host's side of the bring-up line).
+    pub fn send(&self, bytes: &[u8]) {
+        if let Some(w) = self.m.hub.window("usart1") {
+            w.with(|m| {
+                if let Some(u) = as_usart(m) {
+                    u.rx.extend(bytes.iter().copied());
+                    let _ = u.deliver();
+                }
+            });
+        }
+    }
+
+    /// Bytes the image sent on USART1 since the last call.
+    pub fn take_sent(&self) -> Vec<u8> {
+        self.m
+            .hub
+            .window("usart1")
+            .map(|w| w.with(|m| as_usart(m).map(|u| std::mem::take(&mut u.tx)).unwrap_or_default()))
+            .unwrap_or_default()
+    }
+
+    /// The defmt frames the image wrote to RTT so far (probe-rs's view), taken.
+    pub fn take_rtt(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.rtt)
+    }
+
+    /// Copies defmt's RTT up-channel 0 out of RAM and frees it, as probe-rs does.
+    fn drain_rtt(&mut self) {
+        let Some(cb) = self.image.rtt else { return };
+        let Some(space) = self.m.machine.space("mem") else { return };
+        let rd32 = |a: u32| space.read(u64::from(a), Width::U32, MemAttrs::DEBUG).map(|v| v as u32).unwrap_or(0);
+        // SEGGER RTT: a 16-byte id, two counts, then the up buffers (24 bytes each).
+        let up = cb + 24;
+        let (buf, size, wr, rd) = (rd32(up + 4), rd32(up + 8), rd32(up + 12), rd32(up + 16));
+        if size == 0 || wr >= size || rd >= size {
+            return;
+        }
+        let mut r = rd;
+        while r != wr {
+            self.rtt.push(space.read(u64::from(buf + r), Width::U8, MemAttrs::DEBUG).unwrap_or(0) as u8);
+            r = (r + 1) % size;
+        }
+        let _ = space.write(u64::from(up + 16), Width::U32, u64::from(wr), MemAttrs::DEBUG);
+    }
+
+    /// The stack's high-water mark, bytes: from the stack's top down to the
+    /// lowest word no longer holding the image's paint (`0xC0FFEE11`).
+    pub fn stack_high_water_bytes(&self) -> u32 {
+        const PAINT: u32 = 0xC0FF_EE11;
+        let (low, top) = self.image.stack;
+        let mut p = low;
+        while p < top && peek(&self.m.machine, p) == PAINT {
+            p += 4;
+        }
+        top - p
+    }
+
+    /// The core (its counters).
+    pub fn core(&self) -> &crate::core_clock::Core {
+        &self.m.core
+    }
+
+    /// Periods run since boot.
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+
+    /// The board description.
+    pub fn board(&self) -> &BoardDescription {
+        self.physics.board()
+    }
+}
+
+fn as_spi(m: &mut dyn RegisterModel) -> Option<&mut Spi1> {
+    (m as &mut dyn std::any::Any).downcast_mut()
+}
+
+fn as_usart(m: &mut dyn RegisterModel) -> Option<&mut Usart1> {
+    (m as &mut dyn std::any::Any).downcast_mut()
+}

@@ -1,0 +1,150 @@
+//! The emulated reference board as an rsemu machine: rsemu's STM32F407
+//! description (the F405's die and memory map: the Cortex-M4F core with its
+//! NVIC and DWT, RCC, flash and its interface, SRAM, TIM1 to TIM14, GPIO, IWDG)
+//! from its catalog, with our own parts added in the machine's language: SPI1,
+//! ADC1 and USART1 ([`crate::spi1`], [`crate::adc1`], [`crate::usart1`]), the
+//! board's side of the pins ([`crate::device::PinsDevice`]), and the wires
+//! between them as the board's copper runs (docs/board.md "Pin map"). Every
+//! access to an address nothing answers is logged (`log-unassigned`) and is a
+//! bus fault in the image, as on the part.
+
+use std::sync::Arc;
+
+use rsemu::{
+    core::clock::GlobalTime,
+    machine::{Machine, catalog},
+};
+
+use crate::{
+    core_clock::{self, Core, Mode},
+    device::{self, ErrorLog, Hub, PIN_LINES},
+};
+
+/// The board's wires from our parts to rsemu's, in its machine language.
+const BOARD: &str = r#"
+  # ---- the painleve reference board (board-emulator/src/machine.rs) ----
+  object spi1   "painleve.regs" { role = "spi1" }
+  object adc1   "painleve.regs" { role = "adc1" }
+  object usart1 "painleve.regs" { role = "usart1" }
+  object board  "painleve.pins" { }
+  map mem apb2-base + 0x3000 size 0x400 = spi1
+  map mem apb2-base + 0x2000 size 0x400 = adc1
+  map mem apb2-base + 0x1000 size 0x400 = usart1
+  wire spi1.irq   -> cpu.irq35      # SPI1
+  wire adc1.irq   -> cpu.irq18      # ADC
+  wire usart1.irq -> cpu.irq37      # USART1
+  wire tim2.trgo  -> adc1.in0       # the control tick starts the injected conversions
+  wire gpioa.p4   -> spi1.in0       # PA4: the theta1 encoder's CSn
+  wire gpiob.p0   -> spi1.in1       # PB0: the elbow encoder's CSn
+  wire gpiob.p12  -> board.in0      # PB12: motor 1's direction
+  wire gpiob.p13  -> board.in1      # PB13: motor 2's direction
+  wire gpiob.p14  -> board.in2      # PB14: the drivers' enable
+  wire board.out0 -> gpiob.in15     # PB15: the drivers' nFAULT (pulled up)
+  wire board.out1 -> gpioc.in13     # PC13: the enable button (pulled up)
+  wire board.out2 -> tim4.ti1       # PB6: the belt encoder's A
+  wire board.out3 -> tim4.ti2       # PB7: the belt encoder's B
+}
+"#;
+
+/// The pins device's output lines.
+pub mod out {
+    /// The drivers' nFAULT (high: no fault).
+    pub const FAULT: usize = 0;
+    /// The enable button (high: released).
+    pub const BUTTON: usize = 1;
+    /// The belt encoder's A.
+    pub const BELT_A: usize = 2;
+    /// The belt encoder's B.
+    pub const BELT_B: usize = 3;
+}
+
+/// The pins device's input lines.
+pub mod input {
+    /// Motor 1's direction pin.
+    pub const DIR1: usize = 0;
+    /// Motor 2's direction pin.
+    pub const DIR2: usize = 1;
+    /// The drivers' enable pin.
+    pub const ENABLE: usize = 2;
+}
+
+/// Why the machine was not built.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("the emulated board could not be built: {0}")]
+pub struct BuildError(pub String);
+
+/// The machine and the handles the host drives it by.
+pub struct BoardMachine {
+    /// rsemu's machine.
+    pub machine: Machine,
+    /// The core, wrapped (sleep skipping, the handler's instructions).
+    pub core: Arc<Core>,
+    /// Our parts, by role.
+    pub hub: Arc<Hub>,
+    /// What the parts found wrong.
+    pub errors: ErrorLog,
+}
+
+impl BoardMachine {
+    /// Builds the board with `flash` as the flash's content from `0x0800_0000`
+    /// and `models` offered under their roles (`spi1`, `adc1`, `usart1`), the
+    /// core run in `mode`.
+    ///
+    /// # Errors
+    /// [`BuildError`] with rsemu's message.
+    pub fn build(flash: Vec<u8>, models: Vec<(&'static str, Box<dyn device::RegisterModel>)>, mode: Mode) -> Result<Self, BuildError> {
+        let e = |x: rsemu::core::error::Error| BuildError(x.to_string());
+        let entry = catalog::machine("stm32f407").ok_or_else(|| BuildError("rsemu has no stm32f407 machine in this build".into()))?;
+        let mut text = entry.source.to_string();
+        text = text.replacen("space mem    { width = 32 }", "space mem    { width = 32, log-unassigned = true }", 1);
+        let end = text.rfind('}').ok_or_else(|| BuildError("the stm32f407 description has no closing brace".into()))?;
+        text.truncate(end);
+        text.push_str(BOARD);
+        let errors = ErrorLog::default();
+        let mut idle = [false; PIN_LINES];
+        idle[out::FAULT] = true;
+        idle[out::BUTTON] = true;
+        let hub = Arc::new(Hub::new(errors.clone(), idle));
+        for (role, m) in models {
+            hub.offer(role, m);
+        }
+        let mut reg = catalog::registry().map_err(e)?;
+        let mut opts = catalog::build_options().map_err(e)?;
+        let slot = core_clock::bind(&mut opts.bindings, mode);
+        crate::widen::widen_class(&mut opts.bindings, "st.iwdg");
+        if mode == Mode::Functional {
+            // The core alone runnable on its crystal: rsemu then arms live
+            // positions (the belt's edges need them). The image never enables
+            // DMA (checked: `checks::dma_unused`).
+            crate::widen::not_runnable_class(&mut opts.bindings, "st.dma");
+        }
+        device::install(&mut reg, &mut opts.bindings, &mut opts.classes, Arc::clone(&hub)).map_err(e)?;
+        opts.realize.media.insert("firmware", flash);
+        let machine = rsemu::machine::build("painleve-f405.machine", &text, &reg, &opts).map_err(e)?;
+        let core =
+            slot.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone().ok_or_else(|| BuildError("no core was built".into()))?;
+        Ok(Self { machine, core, hub, errors })
+    }
+
+    /// The machine's time, ns.
+    pub fn now_ns(&self) -> u64 {
+        self.machine.now().as_nanos()
+    }
+
+    /// Runs the machine to `ns` of machine time, cutting the scheduler's
+    /// round there (rsemu's `step_until`: for host events between rounds).
+    ///
+    /// # Errors
+    /// rsemu's, in words.
+    pub fn step_until(&mut self, ns: u64) -> Result<(), String> {
+        self.machine.step_until(GlobalTime::from_nanos(ns)).map_err(|e| e.to_string())
+    }
+
+    /// Runs the machine until `ns` of machine time.
+    ///
+    /// # Errors
+    /// rsemu's, in words.
+    pub fn run_until(&mut self, ns: u64) -> Result<(), String> {
+        self.machine.run_until(GlobalTime::from_nanos(ns)).map_err(|e| e.to_string())
+    }
+}

@@ -1,0 +1,191 @@
+//! The emulated image as a link (`sil-host run --link emulator`; docs/board.md
+//! "The emulated image"): the unmodified `arm` ELF (profile `mcu`, the bytes an
+//! engineer flashes) on the emulated reference board (`board_emulator`), the
+//! plant in lockstep. As on the board twin ([`crate::twin_link`]) the plant's
+//! true state drives the board's devices (the same models), but here the
+//! image's own register code samples them (SPI1 frames, ADC1's injected
+//! conversions on TIM2's TRGO, TIM4's quadrature count) and its PWM, direction
+//! and enable pins make the joint torques.
+//!
+//! Before period 0 the image boots (its clock tree, pins, the settings record
+//! from flash, the encoders' check) and the operator presses the enable button
+//! as on the twin: 20 ticks with the arm standing at its initial state, so
+//! that the firmware's reset lands on period 0. The command and telemetry of
+//! each tick are read from the image's monitor block (`arm_app::monitor`), as a
+//! debug probe reads them.
+
+use std::path::{Path, PathBuf};
+
+use arm_app::{BUTTON_PERIODS, bringup::CalibrationRecord, record::Stored};
+use board_emulator::{ArmImage, EmuError, EmulatedBoard, SpiFaults, core_clock::Mode};
+use board_twin::{ArmState, BusFaults, FlashModel};
+use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
+
+use crate::{
+    faults::{FaultPlan, LinkKind},
+    link::{Exchange, FirmwareLink},
+    record::RunError,
+    scenario::Scenario,
+    setup::firmware_config,
+    twin_link::bus_faults,
+};
+
+/// The `arm` image's control period, compiled in (`firmware::Config::default`:
+/// TIM2 is set from it at start-up; a configuration of another rate is refused).
+pub const IMAGE_PERIOD_US: u64 = 1000;
+
+/// Where `run --link emulator` looks for the image by default: the `mcu`
+/// profile's output next to this executable's target folder, else in the
+/// workspace this crate was built from.
+pub fn default_image() -> PathBuf {
+    let rel = Path::new("thumbv7em-none-eabihf/mcu/arm");
+    if let Ok(exe) = std::env::current_exe()
+        && let Some(target) = exe.parent().and_then(Path::parent)
+    {
+        let p = target.join(rel);
+        if p.exists() {
+            return p;
+        }
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target").join(rel)
+}
+
+/// How to build the image (for error messages).
+pub const BUILD_HINT: &str = "cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm";
+
+/// The emulated board behind the rig's link.
+pub struct EmulatorLink {
+    board: EmulatedBoard,
+    plan: FaultPlan,
+    v_belt: f64,
+    period_us: u64,
+    started: bool,
+    torque: [f64; 2],
+    announced: crate::handshake::Announced,
+    /// The image's ticks counted by its monitor block at the last exchange.
+    last_ticks: Option<u32>,
+    /// The image's defmt frames (RTT), for its log.
+    pub rtt: Vec<u8>,
+    /// The image's path.
+    pub image: PathBuf,
+}
+
+fn board_error(e: EmuError) -> RunError {
+    RunError::Board(e.to_string())
+}
+
+impl EmulatorLink {
+    /// The emulated board of scenario `s` running the image at `image`: the
+    /// scenario's `[board]`, its calibration and firmware configuration saved
+    /// in the flash record (a board brought up), its sensors' seed and
+    /// load-cell noise.
+    ///
+    /// # Errors
+    /// [`RunError::Unsupported`] for a fault the emulator cannot inject;
+    /// [`RunError::Board`] for an image that cannot be read, a rate other than
+    /// the image's, a board or calibration refused.
+    pub fn new(s: &Scenario, image: &Path) -> Result<Self, RunError> {
+        LinkKind::Emulator.check(&s.faults)?;
+        s.calibration.check().map_err(RunError::Board)?;
+        let period_us = s.timing.period().as_us();
+        if period_us != IMAGE_PERIOD_US {
+            return Err(RunError::Board(format!(
+                "the `arm` image's control tick is compiled at {IMAGE_PERIOD_US} us (1 kHz); the scenario's period is {period_us} us"
+            )));
+        }
+        let config = firmware_config(s);
+        let announced = crate::handshake::of_config(&config)?;
+        let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
+        let stored = Stored { calibration: CalibrationRecord::brought_up(&s.calibration.arm_calibration()), config };
+        let flash = FlashModel::saved(&stored).map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;
+        let sector = flash.bytes().borrow().clone();
+        let board =
+            EmulatedBoard::new(arm_image, s.board, &sector, period_us * 1000, s.sensors.seed, s.sensors.load_noise_n, Mode::Functional)
+                .map_err(board_error)?;
+        Ok(Self {
+            board,
+            plan: FaultPlan::new(&s.faults, s.timing.period()),
+            v_belt: s.plant.v_belt,
+            period_us,
+            started: false,
+            torque: [0.0; 2],
+            announced,
+            last_ticks: None,
+            rtt: Vec::new(),
+            image: image.into(),
+        })
+    }
+
+    /// The emulated board.
+    pub fn board(&self) -> &EmulatedBoard {
+        &self.board
+    }
+
+    fn tick(&mut self, arm: &ArmState, faults: &BusFaults, noisy: bool) -> Result<[f64; 2], RunError> {
+        let u = self.board.tick(arm, faults, SpiFaults::default(), noisy).map_err(board_error)?;
+        self.rtt.extend(self.board.take_rtt());
+        Ok(u)
+    }
+
+    /// Boots the image and presses the enable button so that the firmware's
+    /// reset lands on the next tick (as `board_twin::BoardTwin::press_enable`).
+    fn start(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<(), RunError> {
+        self.board.boot(arm).map_err(board_error)?;
+        self.board.hold_button(false);
+        self.tick(arm, faults, false)?;
+        self.board.hold_button(true);
+        for _ in 1..BUTTON_PERIODS {
+            self.tick(arm, faults, false)?;
+        }
+        Ok(())
+    }
+}
+
+impl FirmwareLink for EmulatorLink {
+    fn transport(&self) -> &'static str {
+        "emulator"
+    }
+
+    fn announcement(&self) -> Option<&crate::handshake::Announced> {
+        Some(&self.announced)
+    }
+
+    fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
+        let faults = bus_faults(&self.plan, u64::from(frame.seq));
+        let arm = ArmState { x: truth.x, f: truth.f, belt_travel_m: self.v_belt * truth.t };
+        if !self.started {
+            self.start(&arm, &faults)?;
+        }
+        self.torque = self.tick(&arm, &faults, true)?;
+        if !self.started {
+            self.board.hold_button(false);
+            self.started = true;
+        }
+        let Some(m) = self.board.monitor() else {
+            return Ok(Exchange::NoAnswer);
+        };
+        if let Some(last) = self.last_ticks
+            && m.ticks != last.wrapping_add(1)
+        {
+            return Err(RunError::Board(format!(
+                "the image ran {} ticks in one period (its monitor block went from tick {last} to {})",
+                m.ticks.wrapping_sub(last),
+                m.ticks
+            )));
+        }
+        self.last_ticks = Some(m.ticks);
+        let app_command = m.command;
+        // As the twin's: the application numbers its frames from its power-up,
+        // the plant from period 0; the command left when its step ended.
+        let app_frame_us = u64::from(app_command.seq) * self.period_us;
+        let command =
+            ActuatorCommand { seq: frame.seq, t_sent_us: frame.t_us + app_command.t_sent_us.saturating_sub(app_frame_us), ..app_command };
+        Ok(Exchange::Answered { command, telemetry: FirmwareTelemetry { seq: frame.seq, ..m.telemetry }, at_stamp: false })
+    }
+
+    /// The torques the motor stage makes from TIM3's duty, the direction pins
+    /// and the enable pin the image left.
+    fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
+        self.torque
+    }
+}
