@@ -344,6 +344,24 @@ impl EmulatedBoard {
         top - p
     }
 
+    /// The machine's time, ns.
+    pub fn now_ns(&self) -> u64 {
+        self.m.now_ns()
+    }
+
+    /// Runs the machine to `ns`, cutting the scheduler's round there (a debugger's step).
+    ///
+    /// # Errors
+    /// rsemu's, in words.
+    pub fn step_to(&mut self, ns: u64) -> Result<(), String> {
+        self.m.step_until(ns)
+    }
+
+    /// The rsemu machine (a debugger's reads: `checks::peek`).
+    pub fn machine(&self) -> &rsemu::machine::Machine {
+        &self.m.machine
+    }
+
     /// The core (its counters).
     pub fn core(&self) -> &crate::core_clock::Core {
         &self.m.core

@@ -13,7 +13,7 @@ use std::{
 use arm_app::bringup::{Reply, Request};
 use firmware::pil::{FrameBuffer, MAX_FRAME, Push, decode, encode};
 
-use crate::free_arm::FreeArm;
+use crate::free_arm::{ArmBoard, FreeArm};
 
 /// The host's end of the line.
 pub struct Client<S> {
@@ -129,13 +129,12 @@ impl<S: Read + Write> Client<S> {
 ///
 /// # Errors
 /// A message when the line fails or the plant fails.
-pub fn serve(arm: &mut FreeArm, line: &mut (impl Read + Write), ts: Duration, stop: &AtomicBool) -> Result<(), String> {
-    let mut frames = FrameBuffer::default();
+pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), ts: Duration, stop: &AtomicBool) -> Result<(), String> {
     let mut next = Instant::now();
-    let mut byte = [0u8; 64];
-    let mut out = [0u8; MAX_FRAME];
+    let mut byte = [0u8; 256];
     while !stop.load(Ordering::Relaxed) {
-        arm.tick().map_err(|e| format!("plant: {e}"))?;
+        arm.tick().map_err(|e| e.to_string())?;
+        let mut received = Vec::new();
         loop {
             let n = match line.read(&mut byte) {
                 Ok(0) => return Ok(()),
@@ -145,16 +144,11 @@ pub fn serve(arm: &mut FreeArm, line: &mut (impl Read + Write), ts: Duration, st
                 Err(e) if e.raw_os_error() == Some(libc::EIO) => break,
                 Err(e) => return Err(format!("read: {e}")),
             };
-            for &b in &byte[..n] {
-                if let Push::Frame(f) = frames.push(b)
-                    && let Ok(request) = decode::<Request>(f)
-                {
-                    let reply = arm.twin_mut().serve(request);
-                    if let Ok(bytes) = encode(&reply, &mut out) {
-                        line.write_all(bytes).map_err(|e| format!("write: {e}"))?;
-                    }
-                }
-            }
+            received.extend_from_slice(&byte[..n]);
+        }
+        let reply = arm.line(&received);
+        if !reply.is_empty() {
+            line.write_all(&reply).map_err(|e| format!("write: {e}"))?;
         }
         next += ts;
         let now = Instant::now();

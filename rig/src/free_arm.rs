@@ -1,11 +1,16 @@
-//! The arm hanging free over a lowered belt, sensed and driven by the board
-//! twin: what bring-up runs against in CI (docs/board.md "Bring-up"). The
+//! The arm hanging free over a lowered belt, sensed and driven by its board
+//! (the board twin, [`TwinBench`], or the emulated `arm` image,
+//! `board_emulator::EmulatedBoard`: [`ArmBoard`]): what bring-up runs against
+//! in CI (docs/board.md "Bring-up"). The
 //! procedure asks for the belt lowered below the hanging tip; here the base
 //! stands 0.4199 m above it (within the arm's 0.42 m reach, so the simulator
 //! takes it), and the arm at rest, its elbow bent by the spring between the
 //! links, clears it by a few millimetres; a jog lifts the tip.
 
+use arm_app::bringup::Request;
+use board_emulator::{ArmImage, EmulatedBoard, SpiFaults, core_clock::Mode};
 use board_twin::{ArmState, BoardDescription, BoardTwin, BusFaults, FlashModel, TwinError};
+use firmware::pil::{FrameBuffer, MAX_FRAME, Push, decode, encode};
 use plant::{Hold, NoObserver, Plant, SimConfig, SimError};
 use shared::wire::encode_angle;
 
@@ -30,19 +35,106 @@ pub enum FreeArmError {
     /// The twin did not start.
     #[error(transparent)]
     Twin(#[from] TwinError),
+    /// The emulated board stopped (an image misconfiguring the board, a bus fault, ...).
+    #[error("the emulated board: {0}")]
+    Emulated(String),
 }
 
-/// The arm, its board, and the twin on it.
-pub struct FreeArm {
-    plant: Plant,
+/// What the hanging arm is wired to: a board that senses it and drives its
+/// joints every period, and serves the bring-up line between two ticks.
+pub trait ArmBoard {
+    /// One control tick: the devices sense `arm` (with `faults` on the bus);
+    /// returns the joint torques `[u1, u2]`, N m, until the next tick.
+    ///
+    /// # Errors
+    /// The board's failure, in words.
+    fn tick(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<[f64; 2], String>;
+    /// Bytes from the host on USART1; returns the bytes the board sent since.
+    fn line(&mut self, from_host: &[u8]) -> Vec<u8>;
+}
+
+/// The board twin with the image's idle loop: requests out of the line's frames.
+pub struct TwinBench {
     twin: BoardTwin,
+    frames: FrameBuffer,
+    replies: Vec<u8>,
+}
+
+impl ArmBoard for TwinBench {
+    fn tick(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<[f64; 2], String> {
+        Ok(self.twin.tick(arm, faults, true))
+    }
+
+    fn line(&mut self, from_host: &[u8]) -> Vec<u8> {
+        let mut out = [0u8; MAX_FRAME];
+        for &b in from_host {
+            if let Push::Frame(f) = self.frames.push(b)
+                && let Ok(request) = decode::<Request>(f)
+            {
+                let reply = self.twin.serve(request);
+                if let Ok(bytes) = encode(&reply, &mut out) {
+                    self.replies.extend_from_slice(bytes);
+                }
+            }
+        }
+        std::mem::take(&mut self.replies)
+    }
+}
+
+impl ArmBoard for EmulatedBoard {
+    fn tick(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<[f64; 2], String> {
+        EmulatedBoard::tick(self, arm, faults, SpiFaults::default(), true).map_err(|e| e.to_string())
+    }
+
+    fn line(&mut self, from_host: &[u8]) -> Vec<u8> {
+        self.send(from_host);
+        self.take_sent()
+    }
+}
+
+/// The arm, its board, and the board's application or image.
+pub struct FreeArm<B: ArmBoard = TwinBench> {
+    plant: Plant,
+    board: B,
     u: [f64; 2],
     ts: f64,
     sensed: [f64; 4],
     faults: BusFaults,
 }
 
-impl FreeArm {
+/// The plant of the hanging arm of scenario `s`, from an elbow bent clear of the belt.
+fn hanging_plant(s: &Scenario) -> Result<Plant, SimError> {
+    let params = shared::Params { h: LOWERED_BELT_H, ..plant_params(s) };
+    Plant::new(params, SimConfig::default(), [0.0, 0.0, 0.3, 0.0], 0.0, [0.0; 2])
+}
+
+impl FreeArm<EmulatedBoard> {
+    /// The arm of scenario `s` on the emulated board `board` running the `arm`
+    /// ELF at `image`, its settings sector `flash`. The arm first comes to rest
+    /// for [`SETTLE_S`] with the board unpowered (no torque: as the twin's
+    /// drivers, disabled until an enable), then the image boots.
+    ///
+    /// # Errors
+    /// [`FreeArmError`]: the plant, an image that cannot be read, a board that
+    /// does not boot.
+    pub fn emulated(s: &Scenario, board: BoardDescription, flash: &FlashModel, image: &std::path::Path) -> Result<Self, FreeArmError> {
+        let arm_image = ArmImage::load(image).map_err(|e| FreeArmError::Emulated(e.to_string()))?;
+        let sector = flash.bytes().borrow().clone();
+        let period_ns = s.timing.period().as_us() * 1000;
+        let mut emulated =
+            EmulatedBoard::new(arm_image, board, &sector, period_ns, s.sensors.seed, s.sensors.load_noise_n, Mode::Functional)
+                .map_err(|e| FreeArmError::Emulated(e.to_string()))?;
+        let mut plant = hanging_plant(s)?;
+        let ts = s.timing.period().as_secs_f64();
+        plant.advance(&Hold([0.0; 2]), SETTLE_S, &mut NoObserver)?;
+        let sensed = plant.state();
+        let arm = ArmState { x: sensed, f: plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
+        emulated.boot(&arm).map_err(|e| FreeArmError::Emulated(e.to_string()))?;
+        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default() })
+    }
+}
+
+impl FreeArm<TwinBench> {
     /// The arm of scenario `s` (its parameters, its firmware configuration and
     /// sensors' seed) on board `board` with the firmware's calibration `cal`,
     /// hanging over the lowered belt, after [`SETTLE_S`] of rest.
@@ -67,23 +159,34 @@ impl FreeArm {
     }
 
     fn start(s: &Scenario, twin: BoardTwin) -> Result<Self, FreeArmError> {
-        let params = shared::Params { h: LOWERED_BELT_H, ..plant_params(s) };
-        // From an elbow bent clear of the belt.
-        let plant = Plant::new(params, SimConfig::default(), [0.0, 0.0, 0.3, 0.0], 0.0, [0.0; 2])?;
+        let plant = hanging_plant(s)?;
         let ts = s.timing.period().as_secs_f64();
-        let mut arm = Self { plant, twin, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default() };
+        let board = TwinBench { twin, frames: FrameBuffer::default(), replies: Vec::new() };
+        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default() };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
     }
 
+    /// The twin.
+    pub fn twin(&self) -> &BoardTwin {
+        &self.board.twin
+    }
+
+    /// The twin, to serve requests between ticks.
+    pub fn twin_mut(&mut self) -> &mut BoardTwin {
+        &mut self.board.twin
+    }
+}
+
+impl<B: ArmBoard> FreeArm<B> {
     /// One period: the devices sense the arm, the tick runs, the arm moves.
     ///
     /// # Errors
-    /// [`SimError`] when the plant fails.
-    pub fn tick(&mut self) -> Result<(), SimError> {
+    /// [`FreeArmError`] when the plant or the board fails.
+    pub fn tick(&mut self) -> Result<(), FreeArmError> {
         self.sensed = self.plant.state();
         let arm = ArmState { x: self.sensed, f: self.plant.contact_force(self.u), belt_travel_m: 0.0 };
-        self.u = self.twin.tick(&arm, &self.faults, true);
+        self.u = self.board.tick(&arm, &self.faults).map_err(FreeArmError::Emulated)?;
         self.plant.advance(&Hold(self.u), self.ts, &mut NoObserver)?;
         Ok(())
     }
@@ -92,8 +195,23 @@ impl FreeArm {
     ///
     /// # Errors
     /// As [`FreeArm::tick`].
-    pub fn ticks(&mut self, n: usize) -> Result<(), SimError> {
+    pub fn ticks(&mut self, n: usize) -> Result<(), FreeArmError> {
         (0..n).try_for_each(|_| self.tick())
+    }
+
+    /// Bytes from the host on the bring-up line; the board's bytes since.
+    pub fn line(&mut self, from_host: &[u8]) -> Vec<u8> {
+        self.board.line(from_host)
+    }
+
+    /// The board.
+    pub fn board(&self) -> &B {
+        &self.board
+    }
+
+    /// The board, mutable.
+    pub fn board_mut(&mut self) -> &mut B {
+        &mut self.board
     }
 
     /// The pose's joint counts `[theta1, theta2 - theta1]` at the last tick (2^14
@@ -107,15 +225,5 @@ impl FreeArm {
     /// a magnet lost, ...).
     pub fn set_faults(&mut self, faults: BusFaults) {
         self.faults = faults;
-    }
-
-    /// The twin.
-    pub fn twin(&self) -> &BoardTwin {
-        &self.twin
-    }
-
-    /// The twin, to serve requests between ticks.
-    pub fn twin_mut(&mut self) -> &mut BoardTwin {
-        &mut self.twin
     }
 }

@@ -201,14 +201,14 @@ pub fn inverse_kinematics_trig<T: Real>(l: T, z: &Vector2<T>, branch: ElbowBranc
     }
     // cos(delta/2) = r / (2 l): better conditioned near the straight arm than acos of cos(delta).
     let c_half = (r / reach).min(T::one());
-    let half = c_half.acos();
+    let half = c_half.arc_cos();
     // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
     let sign = match branch {
         ElbowBranch::Up => T::one(),
         ElbowBranch::Down => -T::one(),
     };
     let delta = sign * (half + half);
-    let psi = z[0].atan2(-z[1]);
+    let psi = z[0].arc_tan2(-z[1]);
     let half_delta = delta * lit(0.5);
     let q = Vector2::new(psi - half_delta, psi + half_delta);
     let (s_psi, c_psi) = (z[0] / r, -z[1] / r);

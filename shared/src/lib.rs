@@ -51,6 +51,13 @@ pub trait Real: nalgebra::RealField + Copy {
     /// `sqrt x`, correctly rounded (NaN for `x < 0`): `RealField`'s for `f64`,
     /// [`sqrt::sqrt_f32`] for `f32` (the FPU's `VSQRT.F32` on the MCU, the same bits).
     fn square_root(self) -> Self;
+    /// `acos x`, radians: `RealField`'s for `f64`; `libm::acosf` for `f32` on
+    /// every target, so that the firmware's f32 computes the same bits on the
+    /// host (where `RealField` would take the C library's `acosf` once a crate
+    /// of the workspace enables nalgebra's `std`) as on the MCU (issue 38).
+    fn arc_cos(self) -> Self;
+    /// `atan2(self, x)`, radians, in `(-pi, pi]`: as [`Real::arc_cos`], `libm::atan2f` for `f32`.
+    fn arc_tan2(self, x: Self) -> Self;
 }
 
 impl Real for f64 {
@@ -70,6 +77,14 @@ impl Real for f64 {
     fn square_root(self) -> Self {
         nalgebra::ComplexField::sqrt(self)
     }
+    #[inline]
+    fn arc_cos(self) -> Self {
+        nalgebra::ComplexField::acos(self)
+    }
+    #[inline]
+    fn arc_tan2(self, x: Self) -> Self {
+        nalgebra::RealField::atan2(self, x)
+    }
 }
 
 impl Real for f32 {
@@ -88,6 +103,14 @@ impl Real for f32 {
     #[inline]
     fn square_root(self) -> Self {
         sqrt::sqrt_f32(self)
+    }
+    #[inline]
+    fn arc_cos(self) -> Self {
+        libm::acosf(self)
+    }
+    #[inline]
+    fn arc_tan2(self, x: Self) -> Self {
+        libm::atan2f(self, x)
     }
 }
 

@@ -143,6 +143,14 @@ pub struct BoardTwinArgs {
     /// Print the first line as JSON (port, pose).
     #[arg(long)]
     pub json: bool,
+    /// Serve the unmodified `arm` ELF on the emulated board instead of the twin's
+    /// application (docs/board.md "The emulated image"): the bring-up protocol
+    /// then runs through the image's own USART1, flash and timers.
+    #[arg(long)]
+    pub emulated: bool,
+    /// With --emulated: the `arm` ELF (default target/thumbv7em-none-eabihf/mcu/arm).
+    #[arg(long, value_name = "PATH", requires = "emulated")]
+    pub elf: Option<std::path::PathBuf>,
 }
 
 /// The twin's settings sector at power-up.

@@ -13,7 +13,7 @@ use board_twin::{BusFaults, FlashModel};
 use rig::{
     bringup_line::{self, Client, Pty},
     bringup_procedure::{self as bp, CalibrateOptions, StepError},
-    free_arm::FreeArm,
+    free_arm::{ArmBoard, FreeArm},
     setup::firmware_config,
     status_words::describe_status,
 };
@@ -279,7 +279,18 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
         // One bit of the record's frame: its CRC-32C no longer matches.
         flash.bytes().borrow_mut()[12] ^= 0x10;
     }
-    let mut arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::BadInput(e.to_string()))?;
+    if args.emulated {
+        let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
+        let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::BadInput(e.to_string()))?;
+        serve_arm(args, &s, arm, "emulated arm image")
+    } else {
+        let arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::BadInput(e.to_string()))?;
+        serve_arm(args, &s, arm, "board twin")
+    }
+}
+
+/// Announces the port and the pose, then serves `arm` until stopped.
+fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut arm: FreeArm<B>, what: &str) -> Result<(), CliError> {
     if args.fault_line {
         arm.set_faults(BusFaults { driver_fault: true, ..BusFaults::default() });
     }
@@ -294,7 +305,7 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
         println!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
     } else {
         println!(
-            "board twin on {}: the arm hangs at theta1 {:.6} deg, elbow {:.6} deg (counts {:?}: the jig's pose); flash {flash_name}{}",
+            "{what} on {}: the arm hangs at theta1 {:.6} deg, elbow {:.6} deg (counts {:?}: the jig's pose); flash {flash_name}{}",
             pty.path.display(),
             pose_deg[0],
             pose_deg[1],

@@ -118,7 +118,11 @@ impl NorFlash for SettingsFlash {
         }
         super::iwdg::stretched(ERASE_WATCHDOG_US, || {
             unlocked(|f| {
-                f.cr().write(|w| unsafe { w.psize().bits(0b10).ser().set_bit().snb().bits(SECTOR) });
+                // LOCK written 0 (no effect): `write` starts from CR's reset value,
+                // which has LOCK set, and writing LOCK 1 locks CR at once (RM0090
+                // 3.9.7) so that STRT and PG would be ignored and the save fail on
+                // silicon (found by the emulated image, issue 38).
+                f.cr().write(|w| unsafe { w.psize().bits(0b10).ser().set_bit().snb().bits(SECTOR) }.lock().clear_bit());
                 f.cr().modify(|_, w| w.strt().set_bit());
                 let r = wait_ready();
                 f.cr().modify(|_, w| w.ser().clear_bit());
@@ -130,7 +134,8 @@ impl NorFlash for SettingsFlash {
     fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), FlashError> {
         check_write(self, offset, data.len()).map_err(FlashError::Access)?;
         unlocked(|f| {
-            f.cr().write(|w| unsafe { w.psize().bits(0b10).pg().set_bit() });
+            // LOCK written 0, as in `erase`.
+            f.cr().write(|w| unsafe { w.psize().bits(0b10) }.pg().set_bit().lock().clear_bit());
             let mut r = Ok(());
             for (i, word) in data.chunks_exact(4).enumerate() {
                 let addr = SECTOR_ADDR + offset + 4 * i as u32;
