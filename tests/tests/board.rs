@@ -2,7 +2,10 @@
 //! docs/board.md "Bring-up"): every bring-up step of the procedure over a
 //! pseudo-terminal, in the PIL framing, against the `arm` image's application
 //! on the simulated board, the arm hanging free; and the refusals: a reversed
-//! encoder, a corrupt stored record, an asserted fault line.
+//! encoder, a corrupt stored record, an asserted fault line. Every test runs
+//! twice: on the board twin (the application compiled for the PC) and on the
+//! emulated image (`board-twin --emulated`: the unmodified `arm` ELF, its own
+//! USART1, flash and timers; issue 38), with the same commands and results.
 
 use std::{
     io::{BufRead, BufReader},
@@ -24,9 +27,38 @@ impl Drop for Twin {
     }
 }
 
-fn twin(extra: &[&str]) -> Twin {
+/// Which board serves: the twin's application, or the emulated `arm` ELF.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Board {
+    Twin,
+    Emulated,
+}
+
+/// Two tests of one body: on the twin and on the emulated image.
+macro_rules! on_both {
+    ($($name:ident),* $(,)?) => {
+        mod twin {
+            $(#[test] fn $name() { super::$name(super::Board::Twin) })*
+        }
+        mod emulated {
+            $(#[test] fn $name() { super::$name(super::Board::Emulated) })*
+        }
+    };
+}
+
+on_both!(
+    the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one,
+    a_never_calibrated_board_cannot_be_saved_into_an_enabled_one,
+    enable_says_why_the_drivers_stayed_off_and_status_words_are_in_words,
+    a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declared,
+    a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded,
+    an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings,
+);
+
+fn twin(on: Board, extra: &[&str]) -> Twin {
     let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
         .args(["board-twin", "--pty", "--json", "--serve-for", "600"])
+        .args(if on == Board::Emulated { &["--emulated"][..] } else { &[][..] })
         .args(extra)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
@@ -52,10 +84,9 @@ fn status(t: &Twin) -> serde_json::Value {
     serde_json::from_str(&out).unwrap()
 }
 
-#[test]
-fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one() {
+fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on: Board) {
     // The theta1 encoder's magnet glued anywhere: the zeros come from the jig.
-    let t = twin(&["--set", "board.theta1_encoder.zero_count=5000.4"]);
+    let t = twin(on, &["--set", "board.theta1_encoder.zero_count=5000.4"]);
     // A new board: nothing in flash, the drivers locked out, and said why.
     let s = status(&t);
     assert_eq!(s["status"]["settings"], "Missing", "{s}");
@@ -114,11 +145,10 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one() {
     assert!(code == 1 && err.contains("is the weight on the load cell"), "{err}");
 }
 
-#[test]
-fn a_never_calibrated_board_cannot_be_saved_into_an_enabled_one() {
+fn a_never_calibrated_board_cannot_be_saved_into_an_enabled_one(on: Board) {
     // The audit's reproducer (issue 39, 1): `save` on a fresh board lifted the
     // lockout and `enable` then drove an arm whose zeros were never set.
-    let t = twin(&[]);
+    let t = twin(on, &[]);
     let (code, _, err) = board(&t, &["save"]);
     assert_eq!(code, 1, "{err}");
     for step in ["encoders' zeros", "direction checks", "tare", "tangential span", "normal span"] {
@@ -136,11 +166,10 @@ fn a_never_calibrated_board_cannot_be_saved_into_an_enabled_one() {
     assert_eq!(code, 1, "{err}");
 }
 
-#[test]
-fn enable_says_why_the_drivers_stayed_off_and_status_words_are_in_words() {
+fn enable_says_why_the_drivers_stayed_off_and_status_words_are_in_words(on: Board) {
     // The audit's reproducer (issue 39, 2): a brought-up board whose drivers
     // assert their fault line; `enable` said "done".
-    let t = twin(&["--flash", "saved", "--fault-line"]);
+    let t = twin(on, &["--flash", "saved", "--fault-line"]);
     let (code, out, err) = board(&t, &["enable"]);
     assert_eq!(code, 1, "{out}{err}");
     assert!(err.contains("the drivers are off") && err.contains("fault line (nFAULT) is asserted"), "{err}");
@@ -155,9 +184,8 @@ fn enable_says_why_the_drivers_stayed_off_and_status_words_are_in_words() {
     assert!(out.contains("last enable: the drivers refused to enable"), "{out}");
 }
 
-#[test]
-fn a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declared() {
-    let t = twin(&["--set", "board.elbow_encoder.reversed=true"]);
+fn a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declared(on: Board) {
+    let t = twin(on, &["--set", "board.elbow_encoder.reversed=true"]);
     let pose = format!("--pose-deg={}", t.pose);
     let (code, out, err) = board(&t, &["calibrate", &pose]);
     assert_eq!(code, 1, "{out}{err}");
@@ -169,23 +197,21 @@ fn a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declare
     assert_eq!(out.matches("moved its torque's way").count(), 4, "{out}");
 }
 
-#[test]
-fn a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded() {
-    let t = twin(&["--flash", "corrupt"]);
+fn a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded(on: Board) {
+    let t = twin(on, &["--flash", "corrupt"]);
     let s = status(&t);
     assert_eq!(s["status"]["settings"]["Corrupt"], "Crc", "{s}");
     let (code, _, err) = board(&t, &["enable"]);
     assert!(code == 1 && err.contains("damaged (CRC-32C"), "{err}");
     drop(t);
-    let t = twin(&["--flash", "saved"]);
+    let t = twin(on, &["--flash", "saved"]);
     let s = status(&t);
     assert_eq!(s["status"]["settings"], "Saved", "{s}");
     assert_eq!(board(&t, &["enable"]).0, 0);
 }
 
-#[test]
-fn an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings() {
-    let t = twin(&["--fault-line"]);
+fn an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings(on: Board) {
+    let t = twin(on, &["--fault-line"]);
     assert_eq!(status(&t)["raw"]["driver_fault"], true);
     let pose = format!("--pose-deg={}", t.pose);
     let (code, out, err) = board(&t, &["calibrate", &pose]);
