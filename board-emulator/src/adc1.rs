@@ -222,3 +222,63 @@ fn unmodelled(offset: u32) -> BoardError {
         "a register the ADC1 model does not implement (ADC1's and the common CCR/CSR only; nothing is wired to ADC2 or ADC3)",
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use board_twin::bench::Bench;
+
+    use super::*;
+
+    /// The image's configuration (`mcu/adc.rs`), in its order.
+    fn configured() -> Adc1 {
+        let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+        lock(&bench).adc_counts = Some([1000, 3000]);
+        let mut a = Adc1::new(bench);
+        a.write(CCR, 0b01 << 16).unwrap();
+        a.write(JSQR, (1 << 20) | (0 << 10) | (1 << 15)).unwrap();
+        a.write(SMPR2, 0b001 | (0b001 << 3)).unwrap();
+        a.write(CR1, SCAN).unwrap();
+        a.write(CR2, (JEXTSEL_TIM2_TRGO << 16) | (0b01 << 20) | ADON).unwrap();
+        a
+    }
+
+    #[test]
+    fn tim2s_trgo_converts_f_t_then_f_n_into_jdr1_and_jdr2() {
+        let mut a = configured();
+        assert_eq!(a.read(SR).unwrap() & JEOC, 0);
+        a.input(0, true).unwrap();
+        assert_ne!(a.read(SR).unwrap() & JEOC, 0);
+        assert_eq!((a.read(JDR1).unwrap(), a.read(JDR1 + 4).unwrap()), (1000, 3000));
+        // A missing conversion (a fault) sets no JEOC.
+        a.write(SR, 0).unwrap();
+        lock(&a.bench).adc_counts = None;
+        a.input(0, false).unwrap();
+        a.input(0, true).unwrap();
+        assert_eq!(a.read(SR).unwrap() & JEOC, 0);
+    }
+
+    #[test]
+    fn a_wrong_channel_trigger_sampling_time_or_clock_is_an_error_naming_the_register() {
+        let cases: [(u32, u32, &str, &str); 6] = [
+            (JSQR, (1 << 20) | (5 << 10) | (1 << 15), "ADC1_JSQR", "IN0 (PA0)"),
+            (JSQR, (1 << 20) | (1 << 10) | (0 << 15), "ADC1_JSQR", "in that order"),
+            (SMPR2, 0, "ADC1_SMPR2", "3 cycles"),
+            (CR1, 0, "ADC1_CR1", "SCAN"),
+            (CCR, 0, "ADC1_CCR", "42.0 MHz"),
+            (CR2, (0b0100 << 16) | (0b01 << 20) | ADON, "ADC1_CR2", "TIM2's TRGO"),
+        ];
+        for (reg, value, name, why) in cases {
+            let mut a = configured();
+            let r = a.write(reg, value).and_then(|()| a.input(0, true));
+            let e = r.unwrap_err();
+            assert!(e.register.starts_with(name) && e.why.contains(why), "{name} = {value:#x}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_software_start_is_refused_and_adc2_is_not_there() {
+        let mut a = configured();
+        assert!(a.write(CR2, ADON | (1 << 22)).unwrap_err().why.contains("JSWSTART"));
+        assert!(a.read(0x100).unwrap_err().why.contains("ADC2"));
+    }
+}

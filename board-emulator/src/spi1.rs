@@ -279,3 +279,108 @@ fn unmodelled(offset: u32) -> BoardError {
         "a register the SPI1 model does not implement (CR1, CR2, SR, DR, CRCPR only): the image uses more of SPI1 than the board was checked for",
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use board_twin::bench::{Bench, Shared, lock};
+
+    use super::*;
+
+    /// The image's configuration (`mcu/spi.rs`): master, mode 1, /16, SSM and SSI, 16-bit, enabled.
+    const GOOD: u32 = CPHA | MSTR | (0b011 << 3) | SSI | SSM | DFF | SPE;
+
+    fn spi() -> (Spi1, Shared) {
+        let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+        lock(&bench).magnet_counts = [1234.0, 4321.0];
+        (Spi1::new([As5047pModel::new(bench.clone(), 0), As5047pModel::new(bench.clone(), 1)]), bench)
+    }
+
+    /// One frame to encoder `cs` (0 or 1) the way the image sends it: CS low,
+    /// DR, RXNE, DR read, CS high.
+    fn frame(s: &mut Spi1, cs: u32, word: u16) -> Result2<u16> {
+        s.input(cs, false)?;
+        s.write(DR, u32::from(word))?;
+        assert_ne!(s.read(SR)? & RXNE, 0, "RXNE after a frame");
+        let r = s.read(DR)? as u16;
+        s.input(cs, true)?;
+        Ok(r)
+    }
+
+    #[test]
+    fn the_images_configuration_reads_each_encoder_on_its_own_chip_select() {
+        let (mut s, _) = spi();
+        s.write(CR1, GOOD).unwrap();
+        // ANGLECOM read (0x3FFF | read bit, even parity: 0xFFFF), answered in the next frame.
+        frame(&mut s, 0, 0xFFFF).unwrap();
+        let a = frame(&mut s, 0, 0xC000).unwrap();
+        frame(&mut s, 1, 0xFFFF).unwrap();
+        let b = frame(&mut s, 1, 0xC000).unwrap();
+        assert_eq!((a & 0x3FFF, b & 0x3FFF), (1234, 4321));
+        assert_eq!(s.frames, [2, 2]);
+    }
+
+    #[test]
+    fn every_configuration_the_as5047p_cannot_speak_is_an_error_naming_cr1() {
+        for (bad, why) in [
+            (GOOD & !CPHA, "mode 1"),
+            (GOOD | CPOL, "mode 1"),
+            (GOOD & !DFF, "16 bits"),
+            (GOOD | LSBFIRST, "MSB first"),
+            (GOOD & !(0b111 << 3) | (0b010 << 3), "10 MHz"),
+            (GOOD & !MSTR, "master"),
+            (GOOD & !SSM, "NSS"),
+            (GOOD & !SSI, "mode fault"),
+        ] {
+            let (mut s, _) = spi();
+            s.write(CR1, bad).unwrap();
+            let e = frame(&mut s, 0, 0xFFFF).unwrap_err();
+            assert!(e.register.starts_with("SPI1_CR1") && e.value == bad && e.why.contains(why), "{bad:#x}: {e}");
+        }
+    }
+
+    #[test]
+    fn chip_selects_must_frame_exactly_one_word_for_one_encoder() {
+        let (mut s, _) = spi();
+        s.write(CR1, GOOD).unwrap();
+        let e = s.write(DR, 0xFFFF).unwrap_err();
+        assert!(e.why.contains("no chip select"), "{e}");
+        s.input(0, false).unwrap();
+        s.input(1, false).unwrap();
+        assert!(s.write(DR, 0xFFFF).unwrap_err().why.contains("both chip selects"));
+        s.input(1, true).unwrap();
+        s.write(DR, 0xFFFF).unwrap();
+        let _ = s.read(DR);
+        assert!(s.write(DR, 0xFFFF).unwrap_err().why.contains("CSn high between frames"));
+    }
+
+    #[test]
+    fn an_injected_overrun_sets_ovr_cleared_by_dr_then_sr_and_a_mode_fault_disables_spi1() {
+        let (mut s, _) = spi();
+        s.write(CR1, GOOD).unwrap();
+        s.faults.overrun = true;
+        s.input(0, false).unwrap();
+        s.write(DR, 0xFFFF).unwrap();
+        assert_ne!(s.read(SR).unwrap() & OVR, 0);
+        let _ = s.read(DR).unwrap();
+        let _ = s.read(SR).unwrap();
+        assert_eq!(s.read(SR).unwrap() & OVR, 0, "DR then SR clears OVR (RM0090 28.4.8)");
+        s.input(0, true).unwrap();
+        s.faults.mode_fault = true;
+        s.input(0, false).unwrap();
+        s.write(DR, 0xFFFF).unwrap();
+        assert_ne!(s.read(SR).unwrap() & MODF, 0);
+        assert_eq!(s.read(CR1).unwrap() & (SPE | MSTR), 0, "MODF clears SPE and MSTR");
+        // A disabled SPI sends nothing: no RXNE, no error.
+        s.input(0, true).unwrap();
+        s.input(0, false).unwrap();
+        s.write(DR, 0xFFFF).unwrap();
+        assert_eq!(s.read(SR).unwrap() & RXNE, 0);
+    }
+
+    #[test]
+    fn a_register_the_model_lacks_is_an_error_with_its_address() {
+        let (mut s, _) = spi();
+        let e = s.read(0x1C).unwrap_err();
+        assert!(e.register.contains("0x4001301c"), "{e}");
+    }
+}

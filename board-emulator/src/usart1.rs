@@ -190,3 +190,38 @@ fn unmodelled(offset: u32) -> BoardError {
         "a register the USART1 model does not implement (SR, DR, BRR, CR1 to CR3, GTPR only)",
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_line_carries_bytes_both_ways_at_2_mbaud_8n1() {
+        let mut u = Usart1::default();
+        u.write(BRR, 42).unwrap();
+        u.write(CR1, UE | TE | RE | RXNEIE).unwrap();
+        u.write(DR, 0x55).unwrap();
+        assert_eq!(u.tx, [0x55]);
+        u.rx.extend([1, 2]);
+        u.deliver().unwrap();
+        assert!(u.irq(), "RXNE with RXNEIE raises the interrupt");
+        assert_eq!((u.read(DR).unwrap(), u.read(DR).unwrap()), (1, 2));
+        assert!(!u.irq());
+    }
+
+    #[test]
+    fn another_rate_or_frame_format_is_an_error_naming_the_register() {
+        for (reg, value, name) in [(BRR, 56, "USART1_BRR"), (CR1, UE | TE | RE | M, "USART1_CR1"), (CR1, UE | RE, "USART1_CR1")] {
+            let mut u = Usart1::default();
+            u.write(BRR, 42).unwrap();
+            u.write(CR1, UE | TE | RE).unwrap();
+            u.write(reg, value).unwrap();
+            let e = u.write(DR, 0x55).unwrap_err();
+            assert!(e.register.starts_with(name) && e.value == value, "{name}: {e}");
+        }
+        let mut u = Usart1::default();
+        u.write(BRR, 56).unwrap();
+        u.write(CR1, UE | TE | RE).unwrap();
+        assert!(u.write(DR, 1).unwrap_err().why.contains("1500000 baud"));
+    }
+}
