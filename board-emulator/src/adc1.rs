@@ -235,7 +235,7 @@ mod tests {
         lock(&bench).adc_counts = Some([1000, 3000]);
         let mut a = Adc1::new(bench);
         a.write(CCR, 0b01 << 16).unwrap();
-        a.write(JSQR, (1 << 20) | (0 << 10) | (1 << 15)).unwrap();
+        a.write(JSQR, (1 << 20) | (1 << 15)).unwrap(); // JL 1: JSQ3 = IN0, JSQ4 = IN1
         a.write(SMPR2, 0b001 | (0b001 << 3)).unwrap();
         a.write(CR1, SCAN).unwrap();
         a.write(CR2, (JEXTSEL_TIM2_TRGO << 16) | (0b01 << 20) | ADON).unwrap();
@@ -261,7 +261,7 @@ mod tests {
     fn a_wrong_channel_trigger_sampling_time_or_clock_is_an_error_naming_the_register() {
         let cases: [(u32, u32, &str, &str); 6] = [
             (JSQR, (1 << 20) | (5 << 10) | (1 << 15), "ADC1_JSQR", "IN0 (PA0)"),
-            (JSQR, (1 << 20) | (1 << 10) | (0 << 15), "ADC1_JSQR", "in that order"),
+            (JSQR, (1 << 20) | (1 << 10), "ADC1_JSQR", "in that order"),
             (SMPR2, 0, "ADC1_SMPR2", "3 cycles"),
             (CR1, 0, "ADC1_CR1", "SCAN"),
             (CCR, 0, "ADC1_CCR", "42.0 MHz"),

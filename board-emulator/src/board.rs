@@ -83,6 +83,20 @@ pub struct EmulatedBoard {
     ticks: u64,
     belt: crate::belt::Quadrature,
     rtt: Vec<u8>,
+    /// The image's ticks (monitor block) after the last period, to see a reset.
+    last_image_ticks: Option<u32>,
+    /// SPI1's faults for the next tick ([`EmulatedBoard::set_spi_faults`]).
+    pending_spi: SpiFaults,
+}
+
+/// A fault at the register level that the host injects into the machine
+/// (issue 38, "faults at the register level"), beside the devices' faults
+/// (`board_twin::BusFaults`) and SPI1's ([`SpiFaults`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RegisterFault {
+    /// TIM2's update interrupt is lost (DIER.UIE cleared behind the image's
+    /// back): no more ticks, no more watchdog feeds; the IWDG must reset the MCU.
+    TickLost,
 }
 
 /// How far into a period a tick's run goes (a fraction of the period): past
@@ -122,7 +136,18 @@ impl EmulatedBoard {
             ("usart1", Box::new(Usart1::default())),
         ];
         let m = BoardMachine::build(flash, models, mode)?;
-        Ok(Self { m, physics, image, period_ns, next_tick_ns: 0, ticks: 0, belt: crate::belt::Quadrature::default(), rtt: Vec::new() })
+        Ok(Self {
+            m,
+            physics,
+            image,
+            period_ns,
+            next_tick_ns: 0,
+            ticks: 0,
+            belt: crate::belt::Quadrature::default(),
+            rtt: Vec::new(),
+            last_image_ticks: None,
+            pending_spi: SpiFaults::default(),
+        })
     }
 
     /// Powers the board up with the arm at `arm` and runs the image until its
@@ -146,6 +171,7 @@ impl EmulatedBoard {
                 let since = u64::from(cnt) * u64::from(psc) * 1_000_000_000 / u64::from(checks::APB1_TIMER_HZ);
                 let last = self.m.now_ns() - since;
                 self.next_tick_ns = last + self.period_ns;
+                self.last_image_ticks = self.monitor().map(|m| m.ticks);
                 self.check_configuration()?;
                 return Ok(self.next_tick_ns);
             }
@@ -162,6 +188,8 @@ impl EmulatedBoard {
     pub fn tick(&mut self, arm: &ArmState, faults: &BusFaults, spi: SpiFaults, noisy: bool) -> Result<[f64; 2], EmuError> {
         self.physics.sense(arm, faults, noisy);
         self.drive_pins();
+        let pending = std::mem::take(&mut self.pending_spi);
+        let spi = SpiFaults { overrun: spi.overrun || pending.overrun, mode_fault: spi.mode_fault || pending.mode_fault };
         if let Some(w) = self.m.hub.window("spi1") {
             w.with(|m| {
                 if let Some(s) = as_spi(m) {
@@ -174,9 +202,19 @@ impl EmulatedBoard {
         self.belt.drive_to(&mut self.m, target, next_tick)?;
         let to = self.next_tick_ns + (RUN_TO * self.period_ns as f64) as u64;
         self.run_to(to)?;
-        if peek(&self.m.machine, 0x4002_3874) & (1 << 29) != 0 {
+        // A reset: RCC_CSR's watchdog flag (until the image takes it at boot),
+        // or the monitor block's ticks going back (the image zeroes it at start-up).
+        let ticks = self.monitor().map(|m| m.ticks);
+        let went_back = match (self.last_image_ticks, ticks) {
+            (Some(last), Some(now)) => now < last,
+            (Some(_), None) => true,
+            _ => false,
+        };
+        if went_back || peek(&self.m.machine, 0x4002_3874) & (1 << 29) != 0 {
+            self.last_image_ticks = None;
             return Err(EmuError::WatchdogReset { period: self.ticks });
         }
+        self.last_image_ticks = ticks;
         self.next_tick_ns += self.period_ns;
         self.ticks += 1;
         if self.ticks % 1000 == 1 {
@@ -238,6 +276,42 @@ impl EmulatedBoard {
             .and_then(|()| checks::timers(m, 1.0 / period_s))
             .and_then(|()| checks::watchdog(m, period_s))
             .map_err(EmuError::Misconfigured)
+    }
+
+    /// SPI1's faults for the next tick only.
+    pub fn set_spi_faults(&mut self, faults: SpiFaults) {
+        self.pending_spi = faults;
+    }
+
+    /// Injects `fault` now.
+    pub fn inject(&mut self, fault: RegisterFault) {
+        let Some(space) = self.m.machine.space("mem") else { return };
+        match fault {
+            // A bus master's write (not a debugger's): TIM2_DIER = 0.
+            RegisterFault::TickLost => {
+                let _ = space.write(0x4000_000C, Width::U32, 0, MemAttrs::default());
+            }
+        }
+    }
+
+    /// Runs the machine for `ns` without touching the devices (a stalled or
+    /// resetting image), then, when the image ticks again, realigns the next
+    /// tick. Returns whether it ticks.
+    ///
+    /// # Errors
+    /// The board's errors but a watchdog reset (which is what this waits through).
+    pub fn run_for(&mut self, ns: u64) -> Result<bool, EmuError> {
+        let to = self.m.now_ns() + ns;
+        self.run_to(to)?;
+        self.last_image_ticks = self.monitor().map(|m| m.ticks);
+        if self.last_image_ticks.is_none() {
+            return Ok(false);
+        }
+        let psc = peek(&self.m.machine, 0x4000_0028) + 1;
+        let cnt = peek(&self.m.machine, 0x4000_0024);
+        let since = u64::from(cnt) * u64::from(psc) * 1_000_000_000 / u64::from(checks::APB1_TIMER_HZ);
+        self.next_tick_ns = self.m.now_ns() - since + self.period_ns;
+        Ok(peek(&self.m.machine, 0x4000_000C) & 1 != 0)
     }
 
     /// Holds the enable button (`true`) or lets it go, from the next tick on.

@@ -45,7 +45,7 @@ use rsemu::{
         sched::{Budget, Consumed, LazyHandle, TickCursor},
         space::RegionRef,
         state::{ChunkReader, ChunkWriter},
-        wire::{DmaPeripheral, IntAck, LocalController, WireId, WireSource},
+        wire::{DmaPeripheral, IntAck, LocalController, WireId, WireSink, WireSource},
     },
     cpu::arm::v7m::{ArmV7m, sys::Exception},
     machine::{BindCtx, Bindings, Instance},
@@ -115,6 +115,32 @@ pub struct Core {
     pub late_edges: AtomicU64,
     track: Mutex<Track>,
     handlers: Mutex<Vec<HandlerRun>>,
+    /// A reset arrived on the core's reset input (the IWDG's, NRST): the core
+    /// must step to take it (rsemu latches it where only a step sees it).
+    reset_seen: Arc<std::sync::atomic::AtomicBool>,
+    /// The watch on the reset input, held here: a net holds its sinks weakly.
+    reset_watch: Mutex<Option<Arc<ResetWatch>>>,
+}
+
+/// The core's reset input, watched: forwards the level, notes a rise.
+struct ResetWatch {
+    inner: Arc<dyn WireSink>,
+    seen: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl std::fmt::Debug for ResetWatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ResetWatch")
+    }
+}
+
+impl WireSink for ResetWatch {
+    fn set_level(&self, src: WireId, line: u32, level: rsemu::core::wire::Level) {
+        if level.is_high() {
+            self.seen.store(true, Relaxed);
+        }
+        self.inner.set_level(src, line, level);
+    }
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -136,6 +162,8 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
             late_edges: AtomicU64::new(0),
             track: Mutex::default(),
             handlers: Mutex::default(),
+            reset_seen: Arc::default(),
+            reset_watch: Mutex::new(None),
         });
         *lock(&s) = Some(Arc::clone(&core));
         Ok(core as Arc<dyn Instance>)
@@ -174,6 +202,10 @@ impl Core {
     /// step): the core sleeps, owes nothing, nothing is pending or could pend.
     fn sleepable(&self, ticks: u64) -> u64 {
         let c = &*self.cpu;
+        if self.reset_seen.swap(false, Relaxed) {
+            // The next step takes the reset.
+            return 0;
+        }
         if !c.is_asleep() || c.cycle_debt() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
             return 0;
         }
@@ -364,7 +396,13 @@ impl Device for Core {
         Device::set_spin_detector(&*self.cpu, cpu, d)
     }
     fn sink(&self, port: &str, sources: &[WireId]) -> Option<SinkPin> {
-        Device::sink(&*self.cpu, port, sources)
+        let pin = Device::sink(&*self.cpu, port, sources)?;
+        if port != "reset" {
+            return Some(pin);
+        }
+        let watch = Arc::new(ResetWatch { inner: pin.sink, seen: Arc::clone(&self.reset_seen) });
+        *lock(&self.reset_watch) = Some(Arc::clone(&watch));
+        Some(SinkPin { sink: watch, line: pin.line })
     }
     fn export(&self, which: ExportId) -> Option<Export> {
         Device::export(&*self.cpu, which)

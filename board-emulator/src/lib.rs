@@ -38,7 +38,7 @@ pub mod spi1;
 pub mod usart1;
 mod widen;
 
-pub use board::{EmuError, EmulatedBoard};
+pub use board::{EmuError, EmulatedBoard, RegisterFault};
 pub use device::BoardError;
 pub use image::{ArmImage, ImageError};
 pub use spi1::SpiFaults;

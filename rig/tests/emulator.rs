@@ -42,7 +42,11 @@ fn image() -> std::path::PathBuf {
     p
 }
 
-fn runs(name: &str) -> ((Vec<PeriodRecord>, Option<RunError>), (Vec<PeriodRecord>, Option<RunError>)) {
+/// A run's records and how it ended.
+type Run = (Vec<PeriodRecord>, Option<RunError>);
+
+/// The twin's run and the emulated image's, of scenario `name`.
+fn runs(name: &str) -> (Run, Run) {
     let s = scenario(name);
     let mut twin = TwinLink::new(&s).unwrap();
     let t = run_loop(&s, &mut twin, &mut ());

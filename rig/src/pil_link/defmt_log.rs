@@ -69,6 +69,19 @@ pub(super) fn decode_defmt(
     }
 }
 
+/// The defmt log in `bytes` (an RTT buffer's content, or QEMU's output) of the
+/// image at `image`, decoded whole: what probe-rs prints for a board.
+///
+/// # Errors
+/// [`RunError::Transport`] for an image without a defmt table, or a stream
+/// that does not decode with it.
+pub fn decode_log(image: &Path, bytes: &[u8]) -> Result<Vec<LogLine>, RunError> {
+    let table = table_of(image)?;
+    let log = Mutex::new(Vec::new());
+    decode_defmt(&table, bytes, &log, None).map_err(RunError::Transport)?;
+    Ok(log.into_inner().unwrap_or_default())
+}
+
 /// `; image log: <its last three lines>`, or nothing for an empty log.
 pub(super) fn tail(log: &[LogLine]) -> String {
     if log.is_empty() {

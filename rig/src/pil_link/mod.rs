@@ -50,7 +50,7 @@ mod rate;
 mod target;
 
 pub use counts::{CORE_HZ, PilCounts, STEP_BUDGET_INSTRUCTIONS, step_budget};
-pub use defmt_log::{LogLine, LogSink};
+pub use defmt_log::{LogLine, LogSink, decode_log};
 pub use figures::BOARD_LOG_NOTE;
 pub use link::PilLink;
 pub use pipe::open_port;
