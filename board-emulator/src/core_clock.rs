@@ -209,23 +209,15 @@ impl Core {
         if !c.is_asleep() || c.cycle_debt() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
             return 0;
         }
-        let mut lines = [0u32; (IRQS / 32) as usize];
-        for i in 0..IRQS {
-            if c.irq_asserted(i) {
-                lines[(i / 32) as usize] |= 1 << (i % 32);
-            }
-        }
         c.with_sys(|s| {
-            // As Exec::step's merge_external: an asserted line pends unless active.
-            for (w, word) in lines.iter().enumerate() {
-                let mut bits = *word;
-                while bits != 0 {
-                    let b = bits.trailing_zeros();
-                    bits &= bits - 1;
-                    let e = Exception((w * 32 + b as usize + 16) as u16);
-                    if !s.is_active(e) {
-                        s.set_pending(e, true);
-                    }
+            // As Exec::step's merge_external: an asserted line pends unless
+            // active. Only enabled lines can wake the core; a disabled line's
+            // pending bit is folded in by the next step, which nothing reads
+            // before (the image reads no NVIC pending bits).
+            for irq in 0..IRQS {
+                let e = Exception(irq + 16);
+                if s.is_enabled(e) && c.irq_asserted(irq) && !s.is_active(e) {
+                    s.set_pending(e, true);
                 }
             }
             if s.highest_pending().is_some() {

@@ -173,10 +173,39 @@ pub struct CalibrateOptions {
     pub jog_code: i16,
     /// The jog's length, periods.
     pub jog_periods: u16,
-    /// Rest between jogs, so that the arm hangs still again.
-    pub settle: Duration,
+    /// Rest between jogs, so that the arm hangs still again, in the board's
+    /// control periods (counted by its raw readings' period, not the host's
+    /// clock: a board or an emulated image slower than real time rests as long).
+    pub settle_periods: u32,
     /// Tare the load cell at the end (nothing on it).
     pub tare: bool,
+}
+
+/// Waits until the board has run `periods` control periods more (its raw
+/// readings' period counter), polling every 10 ms.
+///
+/// # Errors
+/// [`StepError`] for the line; [`StepError::Refused`] when the board's period
+/// does not advance for 5 s (its control tick stopped).
+fn settle<S: Read + Write>(c: &mut Client<S>, periods: u32) -> Result<(), StepError> {
+    let seq = |c: &mut Client<S>| match ask(c, Request::Raw)? {
+        Reply::Raw(r) => Ok(r.seq),
+        other => Err(StepError::Line(format!("unexpected reply to raw readings: {other:?}"))),
+    };
+    let start = seq(c)?;
+    let (mut last, mut since) = (start, std::time::Instant::now());
+    loop {
+        let now = seq(c)?;
+        if now.wrapping_sub(start) >= periods {
+            return Ok(());
+        }
+        if now != last {
+            (last, since) = (now, std::time::Instant::now());
+        } else if since.elapsed() > Duration::from_secs(5) {
+            return Err(StepError::Refused(format!("the board's control tick stopped at period {now}")));
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
 }
 
 /// What `calibrate` tells its operator, and the one thing it asks.
@@ -239,7 +268,7 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
             if outcome.verdict.is_err() {
                 return Err(StepError::Refused(format!("calibration stopped: {}", describe_jog(&outcome))));
             }
-            std::thread::sleep(o.settle);
+            settle(c, o.settle_periods)?;
         }
     }
     if o.tare {

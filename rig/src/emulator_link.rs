@@ -17,7 +17,10 @@
 use std::path::{Path, PathBuf};
 
 use arm_app::{BUTTON_PERIODS, bringup::CalibrationRecord, record::Stored};
-use board_emulator::{ArmImage, EmuError, EmulatedBoard, SpiFaults, core_clock::Mode};
+use board_emulator::{
+    ArmImage, EmuError, EmulatedBoard, SpiFaults,
+    core_clock::{HandlerRun, Mode},
+};
 use board_twin::{ArmState, BusFaults, FlashModel};
 use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
 
@@ -68,6 +71,8 @@ pub struct EmulatorLink {
     pub rtt: Vec<u8>,
     /// The image's path.
     pub image: PathBuf,
+    /// Every run of TIM2's handler from period 0 on ([`Mode::Counted`]).
+    pub handlers: Vec<HandlerRun>,
 }
 
 fn board_error(e: EmuError) -> RunError {
@@ -85,6 +90,16 @@ impl EmulatorLink {
     /// [`RunError::Board`] for an image that cannot be read, a rate other than
     /// the image's, a board or calibration refused.
     pub fn new(s: &Scenario, image: &Path) -> Result<Self, RunError> {
+        Self::with_mode(s, image, Mode::Functional)
+    }
+
+    /// As [`EmulatorLink::new`], the core run in `mode`: [`Mode::Counted`]
+    /// counts every instruction of TIM2's handler ([`EmulatorLink::handlers`];
+    /// about 3 times slower), with the same trace.
+    ///
+    /// # Errors
+    /// As [`EmulatorLink::new`].
+    pub fn with_mode(s: &Scenario, image: &Path, mode: Mode) -> Result<Self, RunError> {
         LinkKind::Emulator.check(&s.faults)?;
         s.calibration.check().map_err(RunError::Board)?;
         let period_us = s.timing.period().as_us();
@@ -99,9 +114,8 @@ impl EmulatorLink {
         let stored = Stored { calibration: CalibrationRecord::brought_up(&s.calibration.arm_calibration()), config };
         let flash = FlashModel::saved(&stored).map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;
         let sector = flash.bytes().borrow().clone();
-        let board =
-            EmulatedBoard::new(arm_image, s.board, &sector, period_us * 1000, s.sensors.seed, s.sensors.load_noise_n, Mode::Functional)
-                .map_err(board_error)?;
+        let board = EmulatedBoard::new(arm_image, s.board, &sector, period_us * 1000, s.sensors.seed, s.sensors.load_noise_n, mode)
+            .map_err(board_error)?;
         Ok(Self {
             board,
             plan: FaultPlan::new(&s.faults, s.timing.period()),
@@ -113,6 +127,7 @@ impl EmulatorLink {
             last_ticks: None,
             rtt: Vec::new(),
             image: image.into(),
+            handlers: Vec::new(),
         })
     }
 
@@ -124,6 +139,7 @@ impl EmulatorLink {
     fn tick(&mut self, arm: &ArmState, faults: &BusFaults, noisy: bool) -> Result<[f64; 2], RunError> {
         let u = self.board.tick(arm, faults, SpiFaults::default(), noisy).map_err(board_error)?;
         self.rtt.extend(self.board.take_rtt());
+        self.handlers.extend(self.board.core().take_handlers());
         Ok(u)
     }
 
@@ -155,6 +171,8 @@ impl FirmwareLink for EmulatorLink {
         let arm = ArmState { x: truth.x, f: truth.f, belt_travel_m: self.v_belt * truth.t };
         if !self.started {
             self.start(&arm, &faults)?;
+            // The timing counts from period 0's handler on.
+            self.handlers.clear();
         }
         self.torque = self.tick(&arm, &faults, true)?;
         if !self.started {
@@ -187,5 +205,62 @@ impl FirmwareLink for EmulatorLink {
     /// and the enable pin the image left.
     fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
         self.torque
+    }
+}
+
+/// The flashed image's timing over a run ([`Mode::Counted`]), as the issue's
+/// timing table gives it: TIM2's handler per period, and the stack.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ImageTiming {
+    /// Handler runs measured.
+    pub runs: usize,
+    /// Instructions of one handler: median and worst.
+    pub instructions: [u64; 2],
+    /// Core cycles of one handler (rsemu's Cortex-M4 cost model: 1 an
+    /// instruction, +1 a data access, +2 a taken branch, 12 to enter, 10 to
+    /// return; flash at zero wait states, the ART accelerator hitting): median and worst.
+    pub cycles: [u64; 2],
+    /// Cycles from TIM2's interrupt line rising to the handler's first instruction: least and most.
+    pub latency_cycles: [u64; 2],
+    /// The spread of the interval between two handlers' starts around the
+    /// period, cycles: least and most of (interval - period).
+    pub jitter_cycles: [i64; 2],
+    /// The stack's high-water mark at the end, bytes (the painted-stack probe).
+    pub stack_high_water_bytes: u32,
+    /// The core clock the cycles count, Hz.
+    pub core_hz: u32,
+}
+
+impl ImageTiming {
+    /// The timing of `runs` (consecutive handler runs), the stack's mark
+    /// `stack`, at `period_us`.
+    pub fn of(runs: &[HandlerRun], stack: u32, period_us: u64) -> Option<Self> {
+        if runs.is_empty() {
+            return None;
+        }
+        let median_max = |mut v: Vec<u64>| {
+            v.sort_unstable();
+            [v[v.len() / 2], v[v.len() - 1]]
+        };
+        let min_max = |v: &[u64]| [v.iter().copied().min().unwrap_or(0), v.iter().copied().max().unwrap_or(0)];
+        let core_hz = board_emulator::checks::SYSCLK_HZ;
+        let period = (u64::from(core_hz) / 1_000_000 * period_us) as i64;
+        let spread: Vec<i64> = runs.windows(2).map(|w| (w[1].started_at - w[0].started_at) as i64 - period).collect();
+        Some(Self {
+            runs: runs.len(),
+            instructions: median_max(runs.iter().map(|r| r.instructions).collect()),
+            cycles: median_max(runs.iter().map(|r| r.cycles).collect()),
+            latency_cycles: min_max(&runs.iter().map(|r| r.latency_cycles).collect::<Vec<_>>()),
+            jitter_cycles: [spread.iter().copied().min().unwrap_or(0), spread.iter().copied().max().unwrap_or(0)],
+            stack_high_water_bytes: stack,
+            core_hz,
+        })
+    }
+}
+
+impl EmulatorLink {
+    /// The timing of the run so far ([`Mode::Counted`]; `None` otherwise or before period 0).
+    pub fn timing(&self) -> Option<ImageTiming> {
+        ImageTiming::of(&self.handlers, self.board.stack_high_water_bytes(), self.period_us)
     }
 }

@@ -111,3 +111,36 @@ fn an_image_that_is_not_an_elf_is_refused_by_name() {
     let _ = std::fs::remove_file(&bad);
     assert!(e.contains("not an ARM ELF"), "{e}");
 }
+
+#[test]
+fn counting_the_handlers_instructions_changes_no_bit_of_the_run_and_measures_them() {
+    // The counted mode steps the awake core one budget tick at a time and
+    // drives the belt between scheduler rounds: another path through rsemu's
+    // scheduler, the same machine. Two seconds of the PID from x0u (the
+    // lift-off, the longest steps).
+    let mut s = scenario("pid-x0u");
+    s.timing.duration_s = 2.0;
+    let mut fast = EmulatorLink::new(&s, &image()).unwrap();
+    let a = run_loop(&s, &mut fast, &mut ());
+    let mut counted = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+    let b = run_loop(&s, &mut counted, &mut ());
+    assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1));
+    for (k, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
+        assert_eq!(format!("{x:?}"), format!("{y:?}"), "period {k}");
+    }
+    assert!(fast.timing().is_none(), "the functional mode counts nothing");
+    let t = counted.timing().expect("handlers counted");
+    eprintln!("{t:?}");
+    assert_eq!(t.runs, b.0.len(), "one handler run a period");
+    // The handler holds the step (its own DWT count, the monitor's step_ticks,
+    // is part of it), so it takes more cycles than the longest step.
+    let step_worst = u64::from(counted.board().monitor().unwrap().command.step_ticks);
+    assert!(t.cycles[1] > step_worst && t.instructions[1] > 500, "{t:?}");
+    // The Cortex-M4 takes an interrupt in 12 cycles from a sleeping core;
+    // rsemu's model charges 12 to enter plus the wake-up.
+    assert!(t.latency_cycles[0] >= 12 && t.latency_cycles[1] < 200, "{t:?}");
+    // TIM2 ticks on its own clock: the handler starts one period after the
+    // last, within the latency's spread.
+    assert!(t.jitter_cycles[0] >= -200 && t.jitter_cycles[1] <= 200, "{t:?}");
+    assert!(t.stack_high_water_bytes > 1000 && t.stack_high_water_bytes < 16 * 1024, "{t:?}");
+}

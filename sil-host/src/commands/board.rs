@@ -202,7 +202,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 reversed: [JointArg::Theta1, JointArg::Elbow].map(|j| reversed.contains(&j)),
                 jog_code: (jog_nm / 5.0 * 2048.0).round() as i16,
                 jog_periods: 100,
-                settle: Duration::from_millis(300),
+                settle_periods: 300,
                 tare: !no_tare,
             };
             let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;

@@ -21,6 +21,7 @@
 //! sizes are exact. A figure that cannot be measured here (no image built, no
 //! QEMU) is reported as skipped, with the reason and the command that fixes it.
 
+mod emulated;
 mod mcu;
 mod outputs;
 mod rig_loop;
@@ -35,13 +36,17 @@ use crate::{cli::BenchArgs, error::CliError};
 pub const STEP_INSTRUCTIONS_TARGET: f64 = 2_000.0;
 
 /// The figure groups, in the order of the table, and what each measures.
-pub const GROUPS: [(&str, &str); 10] = [
+pub const GROUPS: [(&str, &str); 11] = [
     ("step", "the worst control step of each controller in PIL (QEMU -icount: instructions)"),
     ("cycles", "the worst step's Cortex-M4 cycle estimate and the highest rate it allows (scripts/cycles.py, about 2 min)"),
     ("flash", "the PIL image's flash, profiles mcu and release (ELF sections)"),
     ("in-process", "the closed loop with the firmware step in this process"),
     ("lockstep", "the closed loop over iceoryx2, firmware in its own process"),
     ("twin", "the closed loop on the board twin (the arm application on bus-level device models)"),
+    (
+        "emulator",
+        "the flashed arm image on the emulated board: its closed loop's rate; TIM2's handler (instructions, cycles, latency, jitter) and the stack over the paper scenarios",
+    ),
     ("pil", "PIL periods per wall second (the image in QEMU)"),
     ("simulate", "sil-host simulate, 300 s with its 1 ms trace.csv, trace.arrow, and with 1 s samples"),
     ("sweep", "the closed-loop hybrid sweep of the paper's grid from x0d (estimated from a balanced shard)"),
@@ -141,6 +146,7 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             "in-process" => figures.push(rig_loop::in_process(args)?),
             "lockstep" => figures.push(rig_loop::lockstep(args)?),
             "twin" => figures.push(rig_loop::twin(args)?),
+            "emulator" => figures.extend(emulated::figures(args)?),
             "realtime" => figures.push(rig_loop::realtime(args)?),
             "simulate" => figures.extend(outputs::simulate(args)?),
             "sweep" => figures.push(outputs::sweep(args)?),
