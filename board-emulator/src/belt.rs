@@ -21,6 +21,11 @@ use crate::{
 /// Core ticks between two edges (one on A, the next on B): the same input's
 /// edges are 20 core ticks (119 ns at 168 MHz) apart, above the filter's 95 ns.
 pub const EDGE_SPACING_TICKS: u64 = 10;
+/// The same between scheduler rounds ([`Mode::Counted`]): TIM4 then sees an
+/// edge only where a round is cut, and at 60 ns some were lost; 200 ns apart
+/// none are (the counted run equals the functional one bit for bit:
+/// `rig/tests/emulator.rs`).
+pub const ROUND_EDGE_SPACING_TICKS: u64 = 34;
 /// Core ticks from the end of a period's run to the first edge.
 const LEAD_TICKS: u64 = 168;
 
@@ -59,18 +64,22 @@ impl Quadrature {
         let up = delta > 0;
         let n = u64::from(delta.unsigned_abs());
         let Some(pins) = m.hub.pins() else { return Ok(()) };
+        let spacing = match m.core.mode() {
+            Mode::Functional => EDGE_SPACING_TICKS,
+            Mode::Counted => ROUND_EDGE_SPACING_TICKS,
+        };
         let start = m.core.end_tick() + LEAD_TICKS;
-        if start + n * EDGE_SPACING_TICKS >= next_tick {
+        if start + n * spacing >= next_tick {
             return Err(EmuError::Board(format!(
                 "the belt moves {n} quadrature counts in one period: more than the emulated encoder's {} edges before the next tick",
-                next_tick.saturating_sub(start) / EDGE_SPACING_TICKS
+                next_tick.saturating_sub(start) / spacing
             )));
         }
         let mut edges = Vec::with_capacity(n as usize);
         for i in 0..n {
             let line = self.next(up);
             let (line, high) = if line == 0 { (out::BELT_A, self.a) } else { (out::BELT_B, self.b) };
-            edges.push(Edge { at: start + i * EDGE_SPACING_TICKS, line, high });
+            edges.push(Edge { at: start + i * spacing, line, high });
         }
         self.count = target;
         match m.core.mode() {

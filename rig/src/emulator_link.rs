@@ -208,6 +208,17 @@ impl FirmwareLink for EmulatorLink {
     }
 }
 
+/// The ceiling of TIM2's handler's worst instructions on the paper scenarios
+/// (8 933 measured on `pid-x0d`; the worst periods log a window's telemetry
+/// with defmt): CI's gate (`rig/tests/emulator.rs`), `sil-host bench --only emulator`.
+pub const HANDLER_INSTRUCTIONS_CEILING: u64 = 10_000;
+/// The ceiling of the handler's worst core cycles: a tenth of the 1 kHz period
+/// at 168 MHz, the rest left to USART1's interrupt and the idle loop's
+/// bring-up service (the step alone has 5 %: docs/hardware.md "Budgets").
+pub const HANDLER_CYCLES_CEILING: u64 = 16_800;
+/// The ceiling of the flashed image's stack high-water mark, bytes (4 040 measured).
+pub const STACK_CEILING_BYTES: u32 = 6 * 1024;
+
 /// The flashed image's timing over a run ([`Mode::Counted`]), as the issue's
 /// timing table gives it: TIM2's handler per period, and the stack.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

@@ -117,30 +117,53 @@ fn counting_the_handlers_instructions_changes_no_bit_of_the_run_and_measures_the
     // The counted mode steps the awake core one budget tick at a time and
     // drives the belt between scheduler rounds: another path through rsemu's
     // scheduler, the same machine. Two seconds of the PID from x0u (the
-    // lift-off, the longest steps).
-    let mut s = scenario("pid-x0u");
-    s.timing.duration_s = 2.0;
-    let mut fast = EmulatorLink::new(&s, &image()).unwrap();
-    let a = run_loop(&s, &mut fast, &mut ());
-    let mut counted = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
-    let b = run_loop(&s, &mut counted, &mut ());
-    assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1));
-    for (k, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
-        assert_eq!(format!("{x:?}"), format!("{y:?}"), "period {k}");
+    // lift-off, the longest steps) and of the hybrid law from x0d (which reads
+    // the belt's speed: every quadrature edge must count).
+    for name in ["pid-x0u", "hybrid-x0d"] {
+        let mut s = scenario(name);
+        s.timing.duration_s = 2.0;
+        let mut fast = EmulatorLink::new(&s, &image()).unwrap();
+        let a = run_loop(&s, &mut fast, &mut ());
+        let mut counted = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let b = run_loop(&s, &mut counted, &mut ());
+        assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1), "{name}");
+        assert_eq!(a.0.len(), b.0.len(), "{name}");
+        for (k, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
+            assert_eq!(format!("{x:?}"), format!("{y:?}"), "{name}: period {k}");
+        }
+        assert!(fast.timing().is_none(), "the functional mode counts nothing");
+        let t = counted.timing().expect("handlers counted");
+        eprintln!("{name}: {t:?}");
+        assert_eq!(t.runs, b.0.len(), "one handler run a period");
+        // The handler holds the step (its own DWT count, the monitor's
+        // step_ticks, is part of it), so it takes more cycles than the step.
+        let step = u64::from(counted.board().monitor().unwrap().command.step_ticks);
+        assert!(t.cycles[1] > step && t.instructions[1] > 500, "{t:?}");
+        // The Cortex-M4 takes an interrupt in 12 cycles from a sleeping core;
+        // rsemu's model charges 12 to enter plus the wake-up.
+        assert!(t.latency_cycles[0] >= 12 && t.latency_cycles[1] < 200, "{t:?}");
+        // TIM2 ticks on its own clock: the handler starts one period after the
+        // last, within the latency's spread.
+        assert!(t.jitter_cycles[0] >= -200 && t.jitter_cycles[1] <= 200, "{t:?}");
+        assert!(t.stack_high_water_bytes > 1000 && t.stack_high_water_bytes < 16 * 1024, "{t:?}");
     }
-    assert!(fast.timing().is_none(), "the functional mode counts nothing");
-    let t = counted.timing().expect("handlers counted");
-    eprintln!("{t:?}");
-    assert_eq!(t.runs, b.0.len(), "one handler run a period");
-    // The handler holds the step (its own DWT count, the monitor's step_ticks,
-    // is part of it), so it takes more cycles than the longest step.
-    let step_worst = u64::from(counted.board().monitor().unwrap().command.step_ticks);
-    assert!(t.cycles[1] > step_worst && t.instructions[1] > 500, "{t:?}");
-    // The Cortex-M4 takes an interrupt in 12 cycles from a sleeping core;
-    // rsemu's model charges 12 to enter plus the wake-up.
-    assert!(t.latency_cycles[0] >= 12 && t.latency_cycles[1] < 200, "{t:?}");
-    // TIM2 ticks on its own clock: the handler starts one period after the
-    // last, within the latency's spread.
-    assert!(t.jitter_cycles[0] >= -200 && t.jitter_cycles[1] <= 200, "{t:?}");
-    assert!(t.stack_high_water_bytes > 1000 && t.stack_high_water_bytes < 16 * 1024, "{t:?}");
+}
+
+#[test]
+fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every_paper_scenario() {
+    // CI's gate on the bytes that are flashed (counts, not times: the same on
+    // any host): two seconds of each paper scenario, the move and its end.
+    use rig::emulator_link::{HANDLER_CYCLES_CEILING, HANDLER_INSTRUCTIONS_CEILING, STACK_CEILING_BYTES};
+    for name in ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"] {
+        let mut s = scenario(name);
+        s.timing.duration_s = 2.0;
+        let mut link = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let (records, e) = run_loop(&s, &mut link, &mut ());
+        assert!(e.is_none() && records.len() == 2000, "{name}: {e:?} after {} periods", records.len());
+        let t = link.timing().expect("handlers counted");
+        eprintln!("{name}: {t:?}");
+        assert!(t.instructions[1] <= HANDLER_INSTRUCTIONS_CEILING, "{name}: {t:?}");
+        assert!(t.cycles[1] <= HANDLER_CYCLES_CEILING, "{name}: {t:?}");
+        assert!(t.stack_high_water_bytes <= STACK_CEILING_BYTES, "{name}: {t:?}");
+    }
 }

@@ -21,14 +21,10 @@ use crate::{
 
 /// The emulated closed loop's target: real time at 1 kHz (issue 38).
 pub const RATE_TARGET: f64 = 1_000.0;
-/// The handler's worst instructions (issue 38's gate; 8 904 measured on pid-x0u).
-pub const HANDLER_INSTRUCTIONS_CEILING: f64 = 10_000.0;
-/// The handler's worst cycles: a tenth of the 1 kHz period at 168 MHz, which
-/// leaves the rest to USART1's interrupt and the idle loop's bring-up service
-/// (the step alone has 5 %: docs/hardware.md "Budgets").
-pub const HANDLER_CYCLES_CEILING: f64 = 16_800.0;
-/// The stack's high-water mark's ceiling, bytes (4 040 measured).
-pub const STACK_CEILING: f64 = 6.0 * 1024.0;
+/// The gates' ceilings (`rig::emulator_link`), as figures' targets.
+const HANDLER_INSTRUCTIONS_CEILING: f64 = rig::emulator_link::HANDLER_INSTRUCTIONS_CEILING as f64;
+const HANDLER_CYCLES_CEILING: f64 = rig::emulator_link::HANDLER_CYCLES_CEILING as f64;
+const STACK_CEILING: f64 = rig::emulator_link::STACK_CEILING_BYTES as f64;
 
 /// The paper's four closed-loop scenarios (docs/model.md experiments 5 and 6).
 const PAPER: [(&str, &str); 4] = [
