@@ -2,13 +2,13 @@
 //! drivers' own tests hold them to transaction lists from the datasheets; here
 //! the models are held to the drivers, and to the datasheets' numbers).
 
-use std::{cell::RefCell, rc::Rc};
+use std::sync::{Arc, Mutex};
 
 use board_twin::{
     BoardDescription,
     adc::adc_count,
     as5047p::As5047pModel,
-    bench::{Bench, Shared},
+    bench::{Bench, Shared, lock},
     counter::{CounterModel, belt_count},
     motor_stage::{PinModel, PwmModel, Wire, joint_torques},
 };
@@ -20,13 +20,13 @@ use embedded_hal::spi::SpiDevice;
 use proptest::prelude::*;
 
 fn bench() -> Shared {
-    Rc::new(RefCell::new(Bench::default()))
+    Arc::new(Mutex::new(Bench::default()))
 }
 
 #[test]
 fn the_encoder_answers_in_the_next_frame_with_even_parity() {
     let b = bench();
-    b.borrow_mut().magnet_counts[0] = 1234.4;
+    lock(&b).magnet_counts[0] = 1234.4;
     let mut spi = As5047pModel::new(b.clone(), 0);
     let mut w = [read_command(0x3FFF)];
     spi.transfer_in_place(&mut w).unwrap();
@@ -43,7 +43,7 @@ proptest! {
     #[test]
     fn the_driver_reads_the_quantised_angle(counts in -1e6f64..1e6) {
         let b = bench();
-        b.borrow_mut().magnet_counts[1] = counts;
+        lock(&b).magnet_counts[1] = counts;
         let mut enc = As5047p::new(As5047pModel::new(b, 1));
         prop_assert!(enc.check_ready().is_ok());
         let want = (counts.round().rem_euclid(16384.0)) as u16;
@@ -54,18 +54,18 @@ proptest! {
 #[test]
 fn bus_faults_reach_the_driver_as_its_errors_and_clear_when_they_end() {
     let b = bench();
-    b.borrow_mut().magnet_counts[0] = 100.0;
+    lock(&b).magnet_counts[0] = 100.0;
     let mut enc = As5047p::new(As5047pModel::new(b.clone(), 0));
     enc.check_ready().unwrap();
-    b.borrow_mut().encoder_faults[0].spi_error = true;
+    lock(&b).encoder_faults[0].spi_error = true;
     assert!(matches!(enc.sample(), Err(Error::Bus(_))));
-    b.borrow_mut().encoder_faults[0].spi_error = false;
-    b.borrow_mut().encoder_faults[0].parity_error = true;
+    lock(&b).encoder_faults[0].spi_error = false;
+    lock(&b).encoder_faults[0].parity_error = true;
     assert!(matches!(enc.sample(), Err(Error::Parity { .. })));
-    b.borrow_mut().encoder_faults[0].parity_error = false;
-    b.borrow_mut().encoder_faults[0].magnet_lost = true;
+    lock(&b).encoder_faults[0].parity_error = false;
+    lock(&b).encoder_faults[0].magnet_lost = true;
     assert_eq!(enc.sample(), Err(Error::Magnet { too_strong: false, too_weak: true }));
-    b.borrow_mut().encoder_faults[0].magnet_lost = false;
+    lock(&b).encoder_faults[0].magnet_lost = false;
     assert_eq!(enc.sample(), Ok(100), "the next sample after the faults is good");
     // A command of odd parity latches PARERR; the next answer carries EF and the
     // driver reads (and so clears) ERRFL.
@@ -79,13 +79,13 @@ fn bus_faults_reach_the_driver_as_its_errors_and_clear_when_they_end() {
 #[test]
 fn a_stuck_encoder_repeats_its_angle() {
     let b = bench();
-    b.borrow_mut().magnet_counts[0] = 500.0;
+    lock(&b).magnet_counts[0] = 500.0;
     let mut enc = As5047p::new(As5047pModel::new(b.clone(), 0));
     assert_eq!(enc.sample(), Ok(500));
-    b.borrow_mut().encoder_faults[0].stuck = true;
-    b.borrow_mut().magnet_counts[0] = 900.0;
+    lock(&b).encoder_faults[0].stuck = true;
+    lock(&b).magnet_counts[0] = 900.0;
     assert_eq!(enc.sample(), Ok(500));
-    b.borrow_mut().encoder_faults[0].stuck = false;
+    lock(&b).encoder_faults[0].stuck = false;
     assert_eq!(enc.sample(), Ok(900));
 }
 
@@ -100,9 +100,9 @@ fn the_adc_saturates_at_its_rails_and_the_counter_wraps_at_16_bits() {
     assert_eq!(belt_count(0.065536, 1e6), 0, "2^16 counts is a full wrap");
     // The driver's speed across the wrap: 400 counts in one 1 ms period is 400 mm/s.
     let b = bench();
-    b.borrow_mut().belt_count = 0xFF00;
+    lock(&b).belt_count = 0xFF00;
     let mut enc = BeltEncoder::new(CounterModel::new(b.clone()), 1e-6, 1e-3).unwrap();
-    b.borrow_mut().belt_count = 0xFF00u16.wrapping_add(400);
+    lock(&b).belt_count = 0xFF00u16.wrapping_add(400);
     assert_eq!(enc.speed_mm_s(), Ok(400));
 }
 
@@ -120,7 +120,7 @@ fn the_motor_stage_makes_signed_torque_only_when_enabled_and_healthy() {
     assert_eq!(joint_torques(&b, &board), [2.5, -5.0], "half and full scale, signed by the direction pin");
     let reversed = BoardDescription { motor2: board_twin::MotorWiring { reversed: true, ..board.motor2 }, ..board };
     assert_eq!(joint_torques(&b, &reversed), [2.5, 5.0], "a motor wired the other way");
-    b.borrow_mut().driver_fault = true;
+    lock(&b).driver_fault = true;
     assert_eq!(joint_torques(&b, &board), [0.0, 0.0], "nFAULT: the drivers make nothing");
     assert!(stage.fault_asserted().unwrap());
     stage.disable().unwrap();
