@@ -13,10 +13,25 @@
 //! rounds (`step_until`, about 8 us an edge).
 
 use crate::{
-    board::EmuError,
     core_clock::{Edge, Mode},
     machine::{BoardMachine, out},
 };
+
+/// Why the edges could not be driven.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum BeltError {
+    /// More edges than fit before the next tick.
+    #[error("the belt moves {edges} quadrature counts in one period: more than the emulated encoder's {room} edges before the next tick")]
+    TooFast {
+        /// The edges this period needs.
+        edges: u64,
+        /// The edges that fit.
+        room: u64,
+    },
+    /// The emulator refused to step.
+    #[error("the emulator stopped: {0}")]
+    Emulator(String),
+}
 
 /// Core ticks between two edges (one on A, the next on B): the same input's
 /// edges are 20 core ticks (119 ns at 168 MHz) apart, above the filter's 95 ns.
@@ -53,10 +68,10 @@ impl Quadrature {
     /// the next tick at core tick `next_tick`.
     ///
     /// # Errors
-    /// [`EmuError::Board`] when the edges do not fit before the next tick (a
+    /// [`BeltError::TooFast`] when the edges do not fit before the next tick (a
     /// belt faster than the emulated encoder can count: over 1.4 m/s at 1 kHz
-    /// and 1e6 counts per metre); the machine's errors.
-    pub fn drive_to(&mut self, m: &mut BoardMachine, target: u16, next_tick: u64) -> Result<(), EmuError> {
+    /// and 1e6 counts per metre); [`BeltError::Emulator`].
+    pub fn drive_to(&mut self, m: &mut BoardMachine, target: u16, next_tick: u64) -> Result<(), BeltError> {
         let delta = target.wrapping_sub(self.count) as i16;
         if delta == 0 {
             return Ok(());
@@ -70,10 +85,7 @@ impl Quadrature {
         };
         let start = m.core.end_tick() + LEAD_TICKS;
         if start + n * spacing >= next_tick {
-            return Err(EmuError::Board(format!(
-                "the belt moves {n} quadrature counts in one period: more than the emulated encoder's {} edges before the next tick",
-                next_tick.saturating_sub(start) / spacing
-            )));
+            return Err(BeltError::TooFast { edges: n, room: next_tick.saturating_sub(start) / spacing });
         }
         let mut edges = Vec::with_capacity(n as usize);
         for i in 0..n {
@@ -88,7 +100,7 @@ impl Quadrature {
                 let ns_per_tick = 1e9 / f64::from(crate::checks::SYSCLK_HZ);
                 for e in edges {
                     let at = (e.at as f64 * ns_per_tick).ceil() as u64;
-                    m.step_until(at).map_err(EmuError::Emulator)?;
+                    m.step_until(at).map_err(BeltError::Emulator)?;
                     pins.drive(e.line, e.high);
                 }
             }

@@ -199,7 +199,10 @@ impl EmulatedBoard {
         }
         let target = lock(self.physics.bench()).belt_count;
         let next_tick = self.next_tick_ns * u64::from(checks::SYSCLK_HZ) / 1_000_000_000;
-        self.belt.drive_to(&mut self.m, target, next_tick)?;
+        self.belt.drive_to(&mut self.m, target, next_tick).map_err(|e| match e {
+            crate::belt::BeltError::Emulator(m) => EmuError::Emulator(m),
+            too_fast => EmuError::Board(too_fast.to_string()),
+        })?;
         let to = self.next_tick_ns + (RUN_TO * self.period_ns as f64) as u64;
         self.run_to(to)?;
         // A reset: RCC_CSR's watchdog flag (until the image takes it at boot),
