@@ -15,6 +15,7 @@ NOT_IN_PYTHON = {
     "format": "tables are returned as arrays, not written (painleve.load reads either format)",
     "in-process": "run is always in-process",
     "link": "run is always in-process",
+    "elf": "the image of --link emulator: run is always in-process",
     "realtime": "needs the firmware process over iceoryx2",
     "attach": "needs the firmware process over iceoryx2",
     "rig": "needs the firmware process over iceoryx2",
