@@ -100,7 +100,13 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     ts: f64,
     sensed: [f64; 4],
     faults: BusFaults,
+    /// A known load hung on the load cell `[f_t, f_n]`, N (a weight for the span).
+    load: Load,
 }
+
+/// A known load on the load cell `[f_t, f_n]`, N, shared with whoever hangs it
+/// (the twin's operator on its standard input).
+pub type Load = std::sync::Arc<std::sync::Mutex<[f64; 2]>>;
 
 /// The plant of the hanging arm of scenario `s`, from an elbow bent clear of the belt.
 fn hanging_plant(s: &Scenario) -> Result<Plant, SimError> {
@@ -130,7 +136,7 @@ impl FreeArm<EmulatedBoard> {
         let sensed = plant.state();
         let arm = ArmState { x: sensed, f: plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
         emulated.boot(&arm).map_err(|e| FreeArmError::Emulated(e.to_string()))?;
-        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default() })
+        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default(), load: Load::default() })
     }
 }
 
@@ -162,7 +168,7 @@ impl FreeArm<TwinBench> {
         let plant = hanging_plant(s)?;
         let ts = s.timing.period().as_secs_f64();
         let board = TwinBench { twin, frames: FrameBuffer::default(), replies: Vec::new() };
-        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default() };
+        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default(), load: Load::default() };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
     }
@@ -185,7 +191,9 @@ impl<B: ArmBoard> FreeArm<B> {
     /// [`FreeArmError`] when the plant or the board fails.
     pub fn tick(&mut self) -> Result<(), FreeArmError> {
         self.sensed = self.plant.state();
-        let arm = ArmState { x: self.sensed, f: self.plant.contact_force(self.u), belt_travel_m: 0.0 };
+        let load = *self.load.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let f = self.plant.contact_force(self.u);
+        let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: 0.0 };
         self.u = self.board.tick(&arm, &self.faults).map_err(FreeArmError::Emulated)?;
         self.plant.advance(&Hold(self.u), self.ts, &mut NoObserver)?;
         Ok(())
@@ -219,6 +227,13 @@ impl<B: ArmBoard> FreeArm<B> {
     pub fn pose_counts(&self) -> [u16; 2] {
         let x = self.sensed;
         [x[0], x[2] - x[0]].map(encode_angle)
+    }
+
+    /// The load on the load cell, to hang a known weight for the span
+    /// (`[f_t, f_n]`, N; the arm itself is not moved by it: the weight hangs on
+    /// the cell's hook, as docs/board.md "Bring-up" step 4 asks).
+    pub fn load(&self) -> Load {
+        self.load.clone()
     }
 
     /// Holds `faults` on the bus from the next tick on (an asserted fault line,

@@ -289,6 +289,28 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     }
 }
 
+/// A line of the twin's standard input: `weight AXIS NEWTONS` or `weight off`;
+/// the load `[f_t, f_n]` it hangs, N.
+fn weight_command(line: &str) -> Result<[f64; 2], String> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let usage = || format!("`{line}`: expected `weight normal|tangential NEWTONS` or `weight off`");
+    match words[..] {
+        ["weight", "off"] => Ok([0.0; 2]),
+        ["weight", axis, n] => {
+            let n: f64 = n.parse().map_err(|_| usage())?;
+            if !(n.is_finite() && n.abs() <= 25.0) {
+                return Err(format!("`{line}`: the load cell takes at most 25 N"));
+            }
+            match axis {
+                "normal" => Ok([0.0, n]),
+                "tangential" => Ok([n, 0.0]),
+                _ => Err(usage()),
+            }
+        }
+        _ => Err(usage()),
+    }
+}
+
 /// Announces the port and the pose, then serves `arm` until stopped.
 fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut arm: FreeArm<B>, what: &str) -> Result<(), CliError> {
     if args.fault_line {
@@ -314,6 +336,20 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
         );
     }
     let _ = std::io::stdout().flush();
+    // The operator's weight on the load cell, from standard input: `weight
+    // normal 4.905`, `weight tangential -2`, `weight off` (one a line).
+    let load = arm.load();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lines().map_while(Result::ok) {
+            match weight_command(&line) {
+                Ok(w) => {
+                    *load.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = w;
+                    eprintln!("load cell: f_t {} N, f_n {} N hung", w[0], w[1]);
+                }
+                Err(e) => eprintln!("{e}"),
+            }
+        }
+    });
     // Until Ctrl-C or SIGTERM, or --serve-for's time (which sets the same flag,
     // without a signal: the exit code stays 0).
     let stop = crate::cancel::stop_flag();
