@@ -254,3 +254,32 @@ fn a_port_that_does_not_exist_is_bad_input() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot open the serial port /nonexistent/tty"));
 }
+
+#[test]
+fn a_pose_out_of_range_or_another_rate_is_refused_naming_the_values() {
+    let t = twin(Board::Twin, &[]);
+    for pose in ["--pose-deg=1e308,5", "--pose-deg=400,5", "--pose-deg=0,-180"] {
+        let (code, _, err) = board(&t, &["calibrate", pose]);
+        assert!(code == 2 && err.contains("(-180, 180] degrees"), "{pose}: {err}");
+    }
+    let (code, _, err) = board(&t, &["configure", "--set", "timing.rate_hz=2000"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("500 us (2000 Hz)") && err.contains("1000 us (1000 Hz)"), "{err}");
+}
+
+#[test]
+fn watch_and_the_twin_stopped_by_a_signal_exit_with_the_shells_code() {
+    let mut t = twin(Board::Twin, &[]);
+    let mut watch = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board", "--port", &t.port, "--json", "watch", "--interval-ms", "20"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    // SAFETY: a signal to our own child.
+    unsafe { libc::kill(watch.id() as i32, libc::SIGINT) };
+    assert_eq!(watch.wait().unwrap().code(), Some(130));
+    unsafe { libc::kill(t.child.id() as i32, libc::SIGTERM) };
+    assert_eq!(t.child.wait().unwrap().code(), Some(143));
+}

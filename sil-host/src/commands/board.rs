@@ -185,13 +185,19 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 n += 1;
                 std::thread::sleep(Duration::from_millis(*interval_ms));
             }
+            if crate::cancel::exit_code().is_some() {
+                // Ctrl-C or SIGTERM: the shell's 130 or 143, as every command.
+                return Err(CliError::Interrupted(format!("watch stopped after {n} readings")));
+            }
         }
         BoardCommand::Calibrate { pose_deg, reversed, jog_nm, no_tare } => {
             let [t1, el] = pose_deg[..] else {
                 return Err(CliError::BadInput("--pose-deg needs THETA1,ELBOW in degrees (the jig's drawing)".into()));
             };
-            if !(t1.is_finite() && el.is_finite()) {
-                return Err(CliError::BadInput(format!("--pose-deg {t1},{el}: not finite")));
+            if ![t1, el].iter().all(|d| d.is_finite() && *d > -180.0 && *d <= 180.0) {
+                return Err(CliError::BadInput(format!(
+                    "--pose-deg {t1},{el}: each angle in (-180, 180] degrees (theta1 from straight down, the elbow's theta2 - theta1)"
+                )));
             }
             let max_nm = f64::from(MAX_JOG_CODES) * 5.0 / 2048.0;
             if !(jog_nm.is_finite() && *jog_nm > 0.0 && *jog_nm <= max_nm) {
@@ -235,7 +241,20 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         }
         BoardCommand::Configure { scenario } => {
             let s = load_scenario(scenario)?;
-            bp::ask(&mut c, Request::Configure(firmware_config(&s)))?;
+            let config = firmware_config(&s);
+            // The image's timer runs one rate: say both when they differ.
+            if let Ok(Reply::Config(now)) = bp::ask(&mut c, Request::GetConfig)
+                && now.period != config.period
+            {
+                return Err(CliError::Board(format!(
+                    "configure: refused: the scenario's control period is {} us ({:.0} Hz) and the image's timer runs {} us ({:.0} Hz); set timing.rate_hz to the image's",
+                    config.period.as_us(),
+                    1e6 / config.period.as_us() as f64,
+                    now.period.as_us(),
+                    1e6 / now.period.as_us() as f64
+                )));
+            }
+            bp::ask(&mut c, Request::Configure(config))?;
             done("configure");
         }
         BoardCommand::Enable => {
@@ -362,5 +381,9 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     }
     let ts = Duration::from_secs_f64(s.timing.period().as_secs_f64());
     bringup_line::serve(&mut arm, &mut pty.master, ts, &stop).map_err(CliError::Board)?;
+    if crate::cancel::exit_code().is_some() {
+        // Ctrl-C or SIGTERM (not --serve-for's end): 130 or 143.
+        return Err(CliError::Interrupted(format!("{what} stopped")));
+    }
     Ok(())
 }
