@@ -22,7 +22,7 @@ use board_emulator::{
     core_clock::{HandlerRun, Mode},
 };
 use board_twin::{ArmState, BusFaults, FlashModel};
-use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
+use shared::wire::{ActuatorCommand, GroundTruth, SensorFrame};
 
 use crate::{
     faults::{FaultPlan, LinkKind},
@@ -41,16 +41,7 @@ pub const IMAGE_PERIOD_US: u64 = 1000;
 /// profile's output next to this executable's target folder, else in the
 /// workspace this crate was built from.
 pub fn default_image() -> PathBuf {
-    let rel = Path::new("thumbv7em-none-eabihf/mcu/arm");
-    if let Ok(exe) = std::env::current_exe()
-        && let Some(target) = exe.parent().and_then(Path::parent)
-    {
-        let p = target.join(rel);
-        if p.exists() {
-            return p;
-        }
-    }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target").join(rel)
+    crate::image_path::beside_this_executable(Path::new("thumbv7em-none-eabihf/mcu/arm"))
 }
 
 /// How to build the image (for error messages).
@@ -192,13 +183,7 @@ impl FirmwareLink for EmulatorLink {
             )));
         }
         self.last_ticks = Some(m.ticks);
-        let app_command = m.command;
-        // As the twin's: the application numbers its frames from its power-up,
-        // the plant from period 0; the command left when its step ended.
-        let app_frame_us = u64::from(app_command.seq) * self.period_us;
-        let command =
-            ActuatorCommand { seq: frame.seq, t_sent_us: frame.t_us + app_command.t_sent_us.saturating_sub(app_frame_us), ..app_command };
-        Ok(Exchange::Answered { command, telemetry: FirmwareTelemetry { seq: frame.seq, ..m.telemetry }, at_stamp: false })
+        Ok(crate::twin_link::answer(frame, &m.command, m.telemetry, self.period_us))
     }
 
     /// The torques the motor stage makes from TIM3's duty, the direction pins

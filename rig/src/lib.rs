@@ -21,6 +21,7 @@ pub mod firmware_process;
 pub mod firmware_side;
 pub mod free_arm;
 pub mod handshake;
+pub mod image_path;
 pub mod in_process;
 #[cfg(feature = "ipc")]
 pub mod ipc;

@@ -99,13 +99,7 @@ impl FirmwareLink for TwinLink {
             return Ok(Exchange::NoAnswer);
         };
         let telemetry = self.twin.app().firmware().map(|fw| fw.telemetry_message(&app_command)).unwrap_or_default();
-        // The application's tick numbers its frames from its power-up; the plant's
-        // from period 0. The command answers this frame, sent when its step ended
-        // (no time passes in a twin's step).
-        let app_frame_us = u64::from(app_command.seq) * self.period_us;
-        let command =
-            ActuatorCommand { seq: frame.seq, t_sent_us: frame.t_us + app_command.t_sent_us.saturating_sub(app_frame_us), ..app_command };
-        Ok(Exchange::Answered { command, telemetry: shared::wire::FirmwareTelemetry { seq: frame.seq, ..telemetry }, at_stamp: false })
+        Ok(answer(frame, &app_command, telemetry, self.period_us))
     }
 
     /// The torques the motor stage makes from the duties, directions and enable
@@ -115,6 +109,18 @@ impl FirmwareLink for TwinLink {
     fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
         self.torque
     }
+}
+
+/// The exchange of `frame` answered by the application's last command
+/// `app_command` and `telemetry` (the twin's, or the emulated image's monitor
+/// block): the application numbers its frames from its power-up, the plant from
+/// period 0, so the command is renumbered to the frame and its send time taken
+/// relative to the frame's (`period_us` between two).
+pub fn answer(frame: &SensorFrame, app_command: &ActuatorCommand, telemetry: shared::wire::FirmwareTelemetry, period_us: u64) -> Exchange {
+    let app_frame_us = u64::from(app_command.seq) * period_us;
+    let command =
+        ActuatorCommand { seq: frame.seq, t_sent_us: frame.t_us + app_command.t_sent_us.saturating_sub(app_frame_us), ..*app_command };
+    Exchange::Answered { command, telemetry: shared::wire::FirmwareTelemetry { seq: frame.seq, ..telemetry }, at_stamp: false }
 }
 
 /// The bus faults of period `k` of `plan` (the board twin's and the emulated

@@ -116,16 +116,7 @@ pub fn check_faults(s: &Scenario, target: &PilTarget) -> Result<(), RunError> {
 /// executable's target folder (`target/thumbv7em-none-eabihf/qemu/pil`), else in
 /// the workspace this `sil-host` was built from.
 pub fn default_image() -> PathBuf {
-    let rel = Path::new("thumbv7em-none-eabihf/qemu/pil");
-    if let Ok(exe) = std::env::current_exe()
-        && let Some(target) = exe.parent().and_then(Path::parent)
-    {
-        let p = target.join(rel);
-        if p.exists() {
-            return p;
-        }
-    }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target").join(rel)
+    crate::image_path::beside_this_executable(Path::new("thumbv7em-none-eabihf/qemu/pil"))
 }
 
 /// How to build the image (for error messages).
