@@ -122,16 +122,54 @@ impl<S: Read + Write> Client<S> {
     }
 }
 
+/// The most reply bytes kept for a client that does not read (64 KiB: some
+/// 3 000 replies); beyond it the oldest are dropped.
+pub const OUTBOX_LIMIT: usize = 64 * 1024;
+
+/// Writes what `line` takes of `outbox` now; drops the oldest bytes beyond
+/// [`OUTBOX_LIMIT`].
+///
+/// # Errors
+/// A message when the line fails otherwise than by being full.
+fn flush_what_fits(line: &mut impl Write, outbox: &mut std::collections::VecDeque<u8>) -> Result<(), String> {
+    while !outbox.is_empty() {
+        let (front, _) = outbox.as_slices();
+        match line.write(front) {
+            Ok(0) => break,
+            Ok(n) => {
+                outbox.drain(..n);
+            }
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => break,
+            // The other end not open (a client gone): nobody to reply to.
+            Err(e) if e.raw_os_error() == Some(libc::EIO) => {
+                outbox.clear();
+                break;
+            }
+            Err(e) => return Err(format!("write: {e}")),
+        }
+    }
+    if outbox.len() > OUTBOX_LIMIT {
+        let excess = outbox.len() - OUTBOX_LIMIT;
+        outbox.drain(..excess);
+    }
+    Ok(())
+}
+
 /// Serves the bring-up protocol on `line` for `arm`, one tick per period of
 /// wall time (`ts`), until `stop` is set or the line is closed. Requests are
 /// answered between ticks. `line` must not block on reads (a pseudo-terminal
-/// master in non-blocking mode).
+/// master in non-blocking mode). A client that writes faster than it reads is
+/// served what the line takes (the rest waits, up to [`OUTBOX_LIMIT`] bytes).
 ///
 /// # Errors
 /// A message when the line fails or the plant fails.
 pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), ts: Duration, stop: &AtomicBool) -> Result<(), String> {
     let mut next = Instant::now();
     let mut byte = [0u8; 256];
+    // Replies the line has not taken yet (a client that writes faster than it
+    // reads fills the pseudo-terminal): kept up to OUTBOX_LIMIT, then the oldest
+    // are dropped, as a UART drops what nobody reads.
+    let mut outbox: std::collections::VecDeque<u8> = std::collections::VecDeque::new();
     while !stop.load(Ordering::Relaxed) {
         arm.tick().map_err(|e| e.to_string())?;
         let mut received = Vec::new();
@@ -146,10 +184,8 @@ pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), 
             };
             received.extend_from_slice(&byte[..n]);
         }
-        let reply = arm.line(&received);
-        if !reply.is_empty() {
-            line.write_all(&reply).map_err(|e| format!("write: {e}"))?;
-        }
+        outbox.extend(arm.line(&received));
+        flush_what_fits(line, &mut outbox)?;
         next += ts;
         let now = Instant::now();
         if next > now {

@@ -283,3 +283,34 @@ fn watch_and_the_twin_stopped_by_a_signal_exit_with_the_shells_code() {
     unsafe { libc::kill(t.child.id() as i32, libc::SIGTERM) };
     assert_eq!(t.child.wait().unwrap().code(), Some(143));
 }
+
+#[test]
+fn a_client_that_writes_faster_than_it_reads_does_not_kill_the_twin() {
+    // The audit's reproducer (issue 39, 4): 3 000 requests at once, no reply
+    // read; the twin's writes found the pseudo-terminal full and it exited.
+    use std::io::{Read, Write};
+    let mut t = twin(Board::Twin, &[]);
+    let mut flood = std::fs::OpenOptions::new().read(true).write(true).open(&t.port).unwrap();
+    let mut buf = [0u8; 64];
+    let hello = firmware::pil::encode(&arm_app::bringup::Request::Hello, &mut buf).unwrap().to_vec();
+    let frames: Vec<u8> = std::iter::repeat_n(hello, 3000).flatten().collect();
+    flood.write_all(&frames).unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert!(t.child.try_wait().unwrap().is_none(), "the twin is still serving");
+    // The client that did not read now reads what waited for it, then goes.
+    let fd = std::os::fd::AsRawFd::as_raw_fd(&flood);
+    // SAFETY: our own descriptor.
+    unsafe { libc::fcntl(fd, libc::F_SETFL, libc::fcntl(fd, libc::F_GETFL) | libc::O_NONBLOCK) };
+    let mut got = 0;
+    let mut chunk = [0u8; 4096];
+    for _ in 0..200 {
+        match flood.read(&mut chunk) {
+            Ok(n) if n > 0 => got += n,
+            _ => std::thread::sleep(std::time::Duration::from_millis(10)),
+        }
+    }
+    assert!(got > 0, "replies were kept for the slow reader");
+    drop(flood);
+    let (code, out, err) = board(&t, &["status"]);
+    assert_eq!(code, 0, "{out}{err}");
+}
