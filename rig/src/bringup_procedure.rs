@@ -249,6 +249,22 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
     }
     ask(c, Request::SetZeros { pose_counts: o.pose_counts })?;
     op.say(&format!("zeros set at the pose {:?} counts", o.pose_counts));
+    // From here the board has changed: a line that fails is no longer "nothing
+    // done" (exit 2) but a calibration left half done (exit 1).
+    calibrate_after_zeros(c, o, op).map_err(|e| match e {
+        StepError::Line(m) => StepError::Refused(format!(
+            "the line failed after the encoders' zeros were set ({m}): the calibration is half done and not saved; run calibrate again"
+        )),
+        refused => refused,
+    })
+}
+
+/// `calibrate`'s steps after the zeros: the jogs and the tare.
+fn calibrate_after_zeros<S: Read + Write>(
+    c: &mut Client<S>,
+    o: &CalibrateOptions,
+    op: &mut impl Operator,
+) -> Result<CalibrateReport, StepError> {
     op.remove_jig();
     let mut jogs = Vec::new();
     for joint in [Joint::Theta1, Joint::Elbow] {

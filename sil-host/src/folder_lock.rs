@@ -50,9 +50,17 @@ impl FolderLock {
     ///
     /// # Errors
     /// [`CliError::FolderInUse`] (exit 2) when another process holds the folder,
-    /// with the holder as its owner file names it; [`CliError::Io`] when the
-    /// folder cannot be created or opened.
+    /// with the holder as its owner file names it; [`CliError::BadInput`] (exit
+    /// 2) when `dir` is a file; [`CliError::Io`] when the folder cannot be
+    /// created or opened.
     pub fn acquire(dir: &Path) -> Result<Self, CliError> {
+        if dir.exists() && !dir.is_dir() {
+            // Bad input (exit 2), nothing written: the user named a file.
+            return Err(CliError::BadInput(format!(
+                "--out {}: a file, not a folder; name a folder (it is made if missing)",
+                dir.display()
+            )));
+        }
         std::fs::create_dir_all(dir).map_err(io_err(dir))?;
         let canonical = dir.canonicalize().map_err(io_err(dir))?;
         let mut table = held().lock().unwrap_or_else(|p| p.into_inner());
@@ -161,5 +169,17 @@ mod tests {
         assert!(msg.contains("pid 4242") && msg.contains("in use"), "{msg}");
         // The refused command removed nothing of the holder's.
         assert!(dir.path().join(OWNER_FILE).exists());
+    }
+
+    #[test]
+    fn an_out_that_names_a_file_is_bad_input_and_the_file_is_left() {
+        // Issue 39: it exited 1 (an I/O error) where bad input is 2.
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("results.txt");
+        std::fs::write(&file, "mine").unwrap();
+        let err = FolderLock::acquire(&file).unwrap_err();
+        assert_eq!(err.exit_code(), 2, "{err}");
+        assert!(err.to_string().contains("a file, not a folder"), "{err}");
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
     }
 }

@@ -314,3 +314,25 @@ fn a_client_that_writes_faster_than_it_reads_does_not_kill_the_twin() {
     let (code, out, err) = board(&t, &["status"]);
     assert_eq!(code, 0, "{out}{err}");
 }
+
+#[test]
+fn a_twin_killed_during_calibrate_leaves_exit_1_saying_the_calibration_is_half_done() {
+    // Issue 39: it said "invalid input: write: Broken pipe", exit 2, though the
+    // zeros had been set. The calibration's four jogs and rests take over a
+    // second of the board's periods; the zeros are its first request.
+    let mut t = twin(Board::Twin, &[]);
+    let pose = format!("--pose-deg={}", t.pose);
+    let cal = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board", "--port", &t.port, "calibrate", &pose])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(600));
+    t.child.kill().unwrap();
+    let o = cal.wait_with_output().unwrap();
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("zeros set"), "{out}{err}");
+    assert_eq!(o.status.code(), Some(1), "{out}{err}");
+    assert!(err.contains("half done"), "{err}");
+}
