@@ -336,3 +336,22 @@ fn a_twin_killed_during_calibrate_leaves_exit_1_saying_the_calibration_is_half_d
     assert_eq!(o.status.code(), Some(1), "{out}{err}");
     assert!(err.contains("half done"), "{err}");
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_board_status_quietly_as_sigpipe_ends_cat() {
+    // Issue 39: `sil-host board ... status | true` panicked on the broken pipe (exit 101).
+    use std::os::unix::process::ExitStatusExt;
+    let t = twin(Board::Twin, &[]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board", "--port", &t.port, "watch", "--interval-ms", "5"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes away at once.
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.signal(), Some(libc::SIGPIPE), "{:?}: {err}", o.status);
+    assert!(!err.contains("panicked"), "{err}");
+}

@@ -162,6 +162,12 @@ impl bp::Operator for Terminal {
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
+    // A reader that goes away (`board status | head -1`) ends the command as it
+    // ends `cat`: by SIGPIPE, silently. Rust ignores SIGPIPE and `println!`
+    // panicked (exit 101). The line to the board is a terminal, where a write
+    // never raises SIGPIPE, so only standard output is concerned.
+    // SAFETY: restoring a signal's default disposition, before any thread.
+    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     let mut c = Client::open(&args.port, args.baud).map_err(CliError::BadInput)?;
     bp::hello(&mut c)?;
     let json = args.json;
