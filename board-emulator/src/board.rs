@@ -87,6 +87,8 @@ pub struct EmulatedBoard {
     last_image_ticks: Option<u32>,
     /// SPI1's faults for the next tick ([`EmulatedBoard::set_spi_faults`]).
     pending_spi: SpiFaults,
+    /// The image's monitor block as the last run left it (read once a run).
+    monitor: Option<Monitor>,
 }
 
 /// A fault at the register level that the host injects into the machine
@@ -147,6 +149,7 @@ impl EmulatedBoard {
             rtt: Vec::new(),
             last_image_ticks: None,
             pending_spi: SpiFaults::default(),
+            monitor: None,
         })
     }
 
@@ -258,6 +261,7 @@ impl EmulatedBoard {
     fn run_to(&mut self, ns: u64) -> Result<(), EmuError> {
         self.m.run_until(ns).map_err(EmuError::Emulator)?;
         self.drain_rtt();
+        self.monitor = self.read_monitor();
         if let Some(e) = self.m.errors.first() {
             return Err(EmuError::Misconfigured(e));
         }
@@ -322,8 +326,14 @@ impl EmulatedBoard {
         self.physics.hold_button(held);
     }
 
-    /// The image's monitor block after the last tick (`None` before its first).
+    /// The image's monitor block after the last tick (`None` before its first),
+    /// as the last run left it.
     pub fn monitor(&self) -> Option<Monitor> {
+        self.monitor
+    }
+
+    /// Reads the monitor block from RAM, as a debug probe does.
+    fn read_monitor(&self) -> Option<Monitor> {
         let space = self.m.machine.space("mem")?;
         let mut b = [0u8; MONITOR_BYTES];
         for (i, chunk) in b.chunks_exact_mut(4).enumerate() {
@@ -431,7 +441,9 @@ impl EmulatedBoard {
     /// # Errors
     /// rsemu's, in words.
     pub fn step_to(&mut self, ns: u64) -> Result<(), String> {
-        self.m.step_until(ns)
+        self.m.step_until(ns)?;
+        self.monitor = self.read_monitor();
+        Ok(())
     }
 
     /// The rsemu machine (a debugger's reads: `checks::peek`).

@@ -263,13 +263,16 @@ impl RegisterModel for Spi1 {
     }
 
     fn reset(&mut self) {
-        let encoders = core::mem::replace(&mut self.encoders, [dummy(), dummy()]);
-        *self = Self { cs_high: self.cs_high, faults: self.faults, frames: self.frames, ..Self::new(encoders) };
+        // The MCU's registers only: the chip selects' levels are the GPIO's, the
+        // encoders are chips of their own, the faults and counts the host's.
+        self.cr1 = 0;
+        self.cr2 = 0;
+        self.rx = None;
+        self.ovr = false;
+        self.ovr_dr_read = false;
+        self.modf = false;
+        self.frames_in_assertion = [0; 2];
     }
-}
-
-fn dummy() -> As5047pModel {
-    As5047pModel::new(std::sync::Arc::default(), 0)
 }
 
 fn unmodelled(offset: u32) -> BoardError {
