@@ -16,8 +16,12 @@ use board_twin::{ArmState, BoardDescription, BoardPhysics, BusFaults, as5047p::A
 use rsemu::core::{space::MemAttrs, value::Width};
 use shared::wire::{ActuatorCommand, FirmwareTelemetry};
 
+use std::sync::Arc;
+
 use crate::{
+    accelerator::Acr,
     adc1::Adc1,
+    core_clock::Mode,
     checks::{self, peek},
     device::{BoardError, RegisterModel},
     image::{ArmImage, FLASH_BASE, RECORD_SECTOR},
@@ -176,6 +180,10 @@ impl EmulatedBoard {
                 self.next_tick_ns = last + self.period_ns;
                 self.last_image_ticks = self.monitor().map(|m| m.ticks);
                 self.check_configuration()?;
+                if self.m.core.mode() == Mode::Counted {
+                    let acr = Acr::from_bits(peek(&self.m.machine, 0x4002_3C00));
+                    self.m.core.set_accelerator(acr, Arc::from(self.image.flash.as_slice()));
+                }
                 return Ok(self.next_tick_ns);
             }
         }
@@ -451,7 +459,13 @@ impl EmulatedBoard {
         &self.m.machine
     }
 
-    /// The core (its counters).
+    /// Every configuration or sequence error the board's models found so far
+    /// (the run stops at the first: [`EmuError::Misconfigured`]).
+    pub fn board_errors(&self) -> Vec<BoardError> {
+        self.m.errors.all()
+    }
+
+    /// The wrapped core.
     pub fn core(&self) -> &crate::core_clock::Core {
         &self.m.core
     }

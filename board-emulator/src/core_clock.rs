@@ -51,7 +51,11 @@ use rsemu::{
     machine::{BindCtx, Bindings, Instance},
 };
 
-use crate::device::PinsDevice;
+use crate::{
+    accelerator::{Accelerator, Acr, FLASH},
+    device::PinsDevice,
+    flash_reads,
+};
 
 /// External interrupt inputs folded in (the STM32F405 has 82; three words).
 const IRQS: u16 = 96;
@@ -86,8 +90,12 @@ pub struct HandlerRun {
     pub latency_cycles: u64,
     /// Instructions executed in the handler (preempting handlers excluded).
     pub instructions: u64,
-    /// Core cycles from the first instruction to the end of the return (rsemu's cost model).
+    /// Core cycles from the first instruction to the end of the return (rsemu's
+    /// cost model: the Cortex-M4 TRM's figures with flash at zero wait states).
     pub cycles: u64,
+    /// The cycles the flash's wait states add behind the ART accelerator
+    /// ([`crate::accelerator`]; 0 until [`Core::set_accelerator`]).
+    pub wait_cycles: u64,
     /// The core tick of its first instruction.
     pub started_at: u64,
 }
@@ -98,6 +106,16 @@ struct Track {
     irq_seen: Option<u64>,
     first: Option<u64>,
     instructions: u64,
+    wait: u64,
+    accel: Option<Accel>,
+}
+
+/// The accelerator model and the code it decodes.
+#[derive(Debug)]
+struct Accel {
+    art: Accelerator,
+    code: Arc<[u8]>,
+    reads: Vec<u32>,
 }
 
 /// The wrapped core.
@@ -191,6 +209,13 @@ impl Core {
     /// Edges queued and not yet driven.
     pub fn pending_edges(&self) -> usize {
         lock(&self.edges).len()
+    }
+
+    /// Costs the flash's wait states from now on ([`Mode::Counted`]): a cold
+    /// accelerator configured by `acr` (`FLASH_ACR`), `code` the flash's
+    /// content from its base. Called at each boot (a reset clears the caches).
+    pub fn set_accelerator(&self, acr: Acr, code: Arc<[u8]>) {
+        lock(&self.track).accel = Some(Accel { art: Accelerator::new(acr), code, reads: Vec::new() });
     }
 
     /// The handler runs counted since the last call ([`Mode::Counted`]).
@@ -310,12 +335,29 @@ impl Core {
             }
             let debt = c.cycle_debt();
             let before = c.current_exception().0;
+            let now = tr.tick;
+            let stall = match (debt, tr.accel.as_mut()) {
+                (0, Some(a)) => {
+                    let r = c.regs().r;
+                    let pc = r[15];
+                    match flash_reads::instruction_at(&a.code, FLASH.start, pc) {
+                        Some((width, insn)) => {
+                            a.reads.clear();
+                            flash_reads::data_reads(&insn, pc, &r, &mut a.reads);
+                            a.art.instruction(pc, width, &a.reads, now)
+                        }
+                        None => 0,
+                    }
+                }
+                _ => 0,
+            };
             let n = c.run_budget(1);
             if n == 0 {
                 break;
             }
             if debt == 0 && before == TIM2_EXCEPTION {
                 tr.instructions += 1;
+                tr.wait += stall;
                 let tick = tr.tick;
                 let start = *tr.first.get_or_insert(tick);
                 if !c.with_sys(|s| s.is_active(Exception(TIM2_EXCEPTION))) {
@@ -326,6 +368,7 @@ impl Core {
                         latency_cycles: latency,
                         instructions: std::mem::take(&mut tr.instructions),
                         cycles: end - start,
+                        wait_cycles: std::mem::take(&mut tr.wait),
                         started_at: start,
                     };
                     tr.first = None;

@@ -22,16 +22,21 @@
 //! | [`spi1`], [`adc1`], [`usart1`] | the peripherals we model, each strict |
 //! | [`checks`] | the board's checks of the peripherals rsemu models (clock tree, pins, timers, IWDG) |
 //! | [`core_clock`] | the core wrapped: a sleeping core skips to the next event; the tick handler's instructions, latency and cycles |
+//! | [`accelerator`], [`flash_reads`] | the flash's wait states behind the ART accelerator, costed on the executed instructions |
 //! | [`belt`] | the belt encoder's quadrature edges into TIM4 |
 //! | [`board`] | [`EmulatedBoard`]: one control period at a time, against the board's physics |
+//! | [`flash_sequence`] | the flash interface's programming sequence, checked |
 //! | `widen` | narrow writes for rsemu's word-only windows (the IWDG) |
 
+pub mod accelerator;
 pub mod adc1;
 pub mod belt;
 pub mod board;
 pub mod checks;
 pub mod core_clock;
 pub mod device;
+pub mod flash_reads;
+pub mod flash_sequence;
 pub mod image;
 pub mod machine;
 pub mod spi1;

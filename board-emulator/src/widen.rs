@@ -2,7 +2,9 @@
 //! STM32F4's APB peripherals take 8- and 16-bit accesses (the halfword reaches
 //! the register zero-extended), and the image writes `IWDG_KR` with a `STRH`;
 //! rsemu 0.0.7's `st.iwdg` answers anything but a word with a bus fault
-//! (`dev/stm32/iwdg.rs`). [`widen_class`] replaces a class's constructor with
+//! (`dev/stm32/iwdg.rs`). The same wrapper checks the flash interface's
+//! programming sequence ([`check_flash_class`], [`crate::flash_sequence`]).
+//! [`widen_class`] replaces a class's constructor with
 //! one that wraps its instances, every `Device` method passed through but the
 //! register window's width. To be raised upstream.
 use std::sync::{Arc, Weak};
@@ -17,6 +19,8 @@ use rsemu::core::state::{ChunkReader, ChunkWriter};
 use rsemu::core::value::{Endian, Width};
 use rsemu::core::wire::{DmaPeripheral, IntAck, LocalController, WireId, WireSource};
 use rsemu::machine::{BindCtx, Bindings, Instance};
+
+use crate::{device::ErrorLog, flash_sequence::FlashSequence};
 
 #[derive(Debug)]
 struct WidenOps(Arc<dyn MemOps>);
@@ -46,16 +50,33 @@ impl MemOps for WidenOps {
     }
 }
 
-/// An rsemu instance whose register windows take narrow writes.
-/// An rsemu instance passed through, its register windows taking narrow
-/// writes (`.1`), runnable or not (`.2`).
+/// What a wrapper does to an instance's register windows.
+#[derive(Debug, Clone)]
+pub enum Windows {
+    /// Passed through.
+    Unchanged,
+    /// Narrow writes taken ([`WidenOps`]).
+    Narrow,
+    /// The flash interface's sequence checked ([`crate::flash_sequence`]).
+    FlashSequence(ErrorLog),
+}
+
+/// An rsemu instance passed through, its register windows as `.1` says,
+/// runnable or not (`.2`).
 #[derive(Debug)]
-pub struct Widen(pub Arc<dyn Instance>, pub bool, pub bool);
+pub struct Widen(pub Arc<dyn Instance>, pub Windows, pub bool);
 
 /// Wraps every instance of `class` in [`Widen`] (nothing when the class is not bound).
 pub fn widen_class(b: &mut Bindings, class: &'static str) {
     let Some(inner) = b.get(class) else { return };
-    b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, true, true)) as Arc<dyn Instance>));
+    b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, Windows::Narrow, true)) as Arc<dyn Instance>));
+}
+
+/// Wraps every instance of `class` (`st.flash`) so that its register window
+/// checks the programming sequence, reporting into `errors`.
+pub fn check_flash_class(b: &mut Bindings, class: &'static str, errors: ErrorLog) {
+    let Some(inner) = b.get(class) else { return };
+    b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, Windows::FlashSequence(errors.clone()), true)) as Arc<dyn Instance>));
 }
 
 /// Binds every instance of `class` as not runnable (a lazily advanced device
@@ -64,7 +85,7 @@ pub fn widen_class(b: &mut Bindings, class: &'static str) {
 /// positions.
 pub fn not_runnable_class(b: &mut Bindings, class: &'static str) {
     let Some(inner) = b.get(class) else { return };
-    b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, false, false)) as Arc<dyn Instance>));
+    b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, Windows::Unchanged, false)) as Arc<dyn Instance>));
 }
 
 impl Instance for Widen {
@@ -99,13 +120,14 @@ impl Device for Widen {
     }
     fn region(&self, name: &str) -> Option<RegionRef> {
         let r = self.0.region(name)?;
-        if !self.1 {
-            return Some(r);
-        }
-        match r.kind() {
-            RegionKind::Io(ops) => Some(Arc::new(Region::io(r.name().to_string(), r.len(), Arc::new(WidenOps(Arc::clone(ops)))))),
-            _ => Some(r),
-        }
+        let ops: Arc<dyn MemOps> = match (&self.1, r.kind()) {
+            (Windows::Narrow, RegionKind::Io(ops)) => Arc::new(WidenOps(Arc::clone(ops))),
+            (Windows::FlashSequence(errors), RegionKind::Io(ops)) if matches!(name, "" | "regs") => {
+                Arc::new(FlashSequence::new(Arc::clone(ops), errors.clone()))
+            }
+            _ => return Some(r),
+        };
+        Some(Arc::new(Region::io(r.name().to_string(), r.len(), ops)))
     }
     fn set_spin_detector(&self, cpu: u32, d: Option<Arc<SpinDetector>>) -> bool {
         self.0.set_spin_detector(cpu, d)
