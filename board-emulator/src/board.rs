@@ -168,8 +168,9 @@ impl EmulatedBoard {
         self.physics.sense(arm, &BusFaults::default(), false);
         self.drive_pins();
         let step = 1_000_000;
+        let t0 = self.m.now_ns();
         for ms in 1..=200u64 {
-            self.run_to(ms * step)?;
+            self.run_to(t0 + ms * step)?;
             if self.monitor().is_some() {
                 // The tick's phase from TIM2's counter: the last update was CNT
                 // timer counts ago.
@@ -291,6 +292,25 @@ impl EmulatedBoard {
             .and_then(|()| checks::timers(m, 1.0 / period_s))
             .and_then(|()| checks::watchdog(m, period_s))
             .map_err(EmuError::Misconfigured)
+    }
+
+    /// The reset button (NRST) pressed and released: every device returns to
+    /// its reset state but the flash, whose array survives (rsemu's `Warm`
+    /// reset); the image starts again from its vector table, loads its record
+    /// from the emulated flash, and is booted as [`EmulatedBoard::boot`] does.
+    /// SRAM keeps its content on the part; the monitor block's magic is
+    /// cleared first so that the boot waits for the new image's first tick.
+    ///
+    /// # Errors
+    /// As [`EmulatedBoard::boot`].
+    pub fn reset(&mut self, arm: &ArmState) -> Result<u64, EmuError> {
+        if let Some(space) = self.m.machine.space("mem") {
+            let _ = space.write(u64::from(self.image.monitor), Width::U32, 0, MemAttrs::DEBUG);
+        }
+        self.m.machine.reset(rsemu::core::device::ResetKind::Warm);
+        self.monitor = None;
+        self.last_image_ticks = None;
+        self.boot(arm)
     }
 
     /// SPI1's faults for the next tick only.

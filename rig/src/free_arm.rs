@@ -51,11 +51,20 @@ pub trait ArmBoard {
     fn tick(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<[f64; 2], String>;
     /// Bytes from the host on USART1; returns the bytes the board sent since.
     fn line(&mut self, from_host: &[u8]) -> Vec<u8>;
+    /// The reset button (NRST) pressed and released: the MCU starts again
+    /// from its flash, the saved record reloaded (the drivers locked out until
+    /// an enable), the devices sensing `arm`.
+    ///
+    /// # Errors
+    /// The board's failure to come back, in words.
+    fn reset(&mut self, arm: &ArmState) -> Result<(), String>;
 }
 
 /// The board twin with the image's idle loop: requests out of the line's frames.
 pub struct TwinBench {
     twin: BoardTwin,
+    /// The twin again from the same flash (its reset).
+    restart: Box<dyn Fn() -> Result<BoardTwin, TwinError>>,
     frames: FrameBuffer,
     replies: Vec<u8>,
 }
@@ -79,6 +88,13 @@ impl ArmBoard for TwinBench {
         }
         std::mem::take(&mut self.replies)
     }
+
+    fn reset(&mut self, _arm: &ArmState) -> Result<(), String> {
+        self.twin = (self.restart)().map_err(|e| e.to_string())?;
+        self.frames = FrameBuffer::default();
+        self.replies.clear();
+        Ok(())
+    }
 }
 
 impl ArmBoard for EmulatedBoard {
@@ -89,6 +105,10 @@ impl ArmBoard for EmulatedBoard {
     fn line(&mut self, from_host: &[u8]) -> Vec<u8> {
         self.send(from_host);
         self.take_sent()
+    }
+
+    fn reset(&mut self, arm: &ArmState) -> Result<(), String> {
+        EmulatedBoard::reset(self, arm).map(|_| ()).map_err(|e| e.to_string())
     }
 }
 
@@ -102,7 +122,13 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     faults: BusFaults,
     /// A known load hung on the load cell `[f_t, f_n]`, N (a weight for the span).
     load: Load,
+    /// The reset button, pressed by whoever holds it: the next tick resets first.
+    reset_button: ResetButton,
 }
+
+/// The reset button (NRST), shared with whoever presses it (the twin's
+/// operator on its standard input): `true` until the next tick takes it.
+pub type ResetButton = std::sync::Arc<std::sync::atomic::AtomicBool>;
 
 /// A known load on the load cell `[f_t, f_n]`, N, shared with whoever hangs it
 /// (the twin's operator on its standard input).
@@ -136,7 +162,7 @@ impl FreeArm<EmulatedBoard> {
         let sensed = plant.state();
         let arm = ArmState { x: sensed, f: plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
         emulated.boot(&arm).map_err(|e| FreeArmError::Emulated(e.to_string()))?;
-        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default(), load: Load::default() })
+        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default(), load: Load::default(), reset_button: ResetButton::default() })
     }
 }
 
@@ -148,8 +174,13 @@ impl FreeArm<TwinBench> {
     /// # Errors
     /// [`FreeArmError`] when the plant or the twin refuses its set-up.
     pub fn new(s: &Scenario, board: BoardDescription, cal: &CalibrationSection) -> Result<Self, FreeArmError> {
-        let twin = BoardTwin::new(board, firmware_config(s), &cal.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)?;
-        Self::start(s, twin)
+        // As BoardTwin::new: the record of a board that was brought up.
+        let stored = arm_app::record::Stored {
+            calibration: arm_app::bringup::CalibrationRecord::brought_up(&cal.arm_calibration()),
+            config: firmware_config(s),
+        };
+        let flash = FlashModel::saved(&stored).map_err(TwinError::Flash)?;
+        Self::with_flash(s, board, cal, flash)
     }
 
     /// As [`FreeArm::new`], the board's settings sector being `flash` (erased:
@@ -160,15 +191,14 @@ impl FreeArm<TwinBench> {
     /// # Errors
     /// As [`FreeArm::new`].
     pub fn with_flash(s: &Scenario, board: BoardDescription, cal: &CalibrationSection, flash: FlashModel) -> Result<Self, FreeArmError> {
-        let twin = BoardTwin::with_flash(board, flash, firmware_config(s), &cal.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)?;
-        Self::start(s, twin)
-    }
-
-    fn start(s: &Scenario, twin: BoardTwin) -> Result<Self, FreeArmError> {
+        let (config, arm_cal, seed, noise) = (firmware_config(s), cal.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n);
+        // The flash's bytes are shared: a reset reads what the last save wrote.
+        let restart = move || BoardTwin::with_flash(board, flash.clone(), config, &arm_cal, seed, noise);
+        let twin = restart()?;
         let plant = hanging_plant(s)?;
         let ts = s.timing.period().as_secs_f64();
-        let board = TwinBench { twin, frames: FrameBuffer::default(), replies: Vec::new() };
-        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default(), load: Load::default() };
+        let board = TwinBench { twin, restart: Box::new(restart), frames: FrameBuffer::default(), replies: Vec::new() };
+        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default(), load: Load::default(), reset_button: ResetButton::default() };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
     }
@@ -190,6 +220,9 @@ impl<B: ArmBoard> FreeArm<B> {
     /// # Errors
     /// [`FreeArmError`] when the plant or the board fails.
     pub fn tick(&mut self) -> Result<(), FreeArmError> {
+        if self.reset_button.swap(false, std::sync::atomic::Ordering::Relaxed) {
+            self.reset()?;
+        }
         self.sensed = self.plant.state();
         let load = *self.load.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let f = self.plant.contact_force(self.u);
@@ -234,6 +267,24 @@ impl<B: ArmBoard> FreeArm<B> {
     /// the cell's hook, as docs/board.md "Bring-up" step 4 asks).
     pub fn load(&self) -> Load {
         self.load.clone()
+    }
+
+    /// The reset button, to press from another thread: the next tick resets
+    /// the board first ([`FreeArm::reset`]).
+    pub fn reset_button(&self) -> ResetButton {
+        self.reset_button.clone()
+    }
+
+    /// The reset button (NRST): the board restarts from its flash
+    /// ([`ArmBoard::reset`]), the arm where it hangs.
+    ///
+    /// # Errors
+    /// [`FreeArmError::Emulated`] with the board's failure to come back.
+    pub fn reset(&mut self) -> Result<(), FreeArmError> {
+        self.sensed = self.plant.state();
+        let arm = ArmState { x: self.sensed, f: self.plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
+        self.u = [0.0; 2];
+        self.board.reset(&arm).map_err(FreeArmError::Emulated)
     }
 
     /// Holds `faults` on the bus from the next tick on (an asserted fault line,

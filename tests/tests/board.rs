@@ -55,6 +55,7 @@ on_both!(
     a_reversed_encoder_stops_the_calibration_naming_the_joint_until_it_is_declared,
     a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded,
     an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings,
+    a_record_saved_over_the_line_is_reloaded_after_the_reset_button,
 );
 
 fn twin(on: Board, extra: &[&str]) -> Twin {
@@ -237,6 +238,44 @@ fn a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded(on: Board) {
     let s = status(&t);
     assert_eq!(s["status"]["settings"], "Saved", "{s}");
     assert_eq!(board(&t, &["enable"]).0, 0);
+}
+
+fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
+    // Issue 38, "a reset that reloads the saved record from the emulated
+    // flash", over the pseudo-terminal: a new board calibrated and saved, the
+    // reset button pressed (`reset` on the twin's standard input), and the
+    // record is what the board comes back with.
+    use std::io::Write;
+    let mut t = twin(on, &[]);
+    let pose = format!("--pose-deg={}", t.pose);
+    assert_eq!(board(&t, &["calibrate", &pose]).0, 0);
+    assert_eq!(board(&t, &["configure"]).0, 0);
+    for axis in ["tangential", "normal"] {
+        assert_eq!(board(&t, &["span", "--axis", axis, "--skip"]).0, 0);
+    }
+    assert_eq!(board(&t, &["save"]).0, 0);
+    let before = status(&t);
+    let zeros = before["calibration"]["zero_counts"].clone();
+    let periods = before["status"]["periods"].as_u64().unwrap();
+    writeln!(t.stdin, "reset").unwrap();
+    t.stdin.flush().unwrap();
+    // The board's period count starts again at the reset.
+    let mut after = status(&t);
+    for _ in 0..400 {
+        if after["status"]["periods"].as_u64().unwrap() < periods {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+        after = status(&t);
+    }
+    assert!(after["status"]["periods"].as_u64().unwrap() < periods, "no reset: {after}");
+    assert_eq!(after["status"]["settings"], "Saved", "{after}");
+    assert_eq!(after["status"]["zeros_set"], true, "{after}");
+    assert_eq!(after["status"]["directions_checked"], true, "{after}");
+    assert_eq!(after["calibration"]["zero_counts"], zeros, "{after}");
+    assert_eq!(after["status"]["drivers_enabled"], false, "a reset comes back with the drivers off: {after}");
+    let (code, out, err) = board(&t, &["enable"]);
+    assert!(code == 0 && out.contains("enable: done"), "{out}{err}");
 }
 
 fn an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings(on: Board) {

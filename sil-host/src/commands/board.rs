@@ -314,11 +314,27 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     }
 }
 
-/// A line of the twin's standard input: `weight AXIS NEWTONS` or `weight off`;
-/// the load `[f_t, f_n]` it hangs, N.
+/// What the twin's operator does, from a line of its standard input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Operator {
+    /// Hangs the load `[f_t, f_n]`, N, on the load cell (`weight AXIS NEWTONS`, `weight off`).
+    Weight([f64; 2]),
+    /// Presses the reset button (`reset`).
+    Reset,
+}
+
+/// A line of the twin's standard input: `weight AXIS NEWTONS`, `weight off` or `reset`.
+fn operator_command(line: &str) -> Result<Operator, String> {
+    if line.split_whitespace().collect::<Vec<_>>() == ["reset"] {
+        return Ok(Operator::Reset);
+    }
+    weight_command(line).map(Operator::Weight)
+}
+
+/// `weight AXIS NEWTONS` or `weight off`: the load `[f_t, f_n]` it hangs, N.
 fn weight_command(line: &str) -> Result<[f64; 2], String> {
     let words: Vec<&str> = line.split_whitespace().collect();
-    let usage = || format!("`{line}`: expected `weight normal|tangential NEWTONS` or `weight off`");
+    let usage = || format!("`{line}`: expected `weight normal|tangential NEWTONS`, `weight off` or `reset`");
     match words[..] {
         ["weight", "off"] => Ok([0.0; 2]),
         ["weight", axis, n] => {
@@ -361,15 +377,21 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
         );
     }
     let _ = std::io::stdout().flush();
-    // The operator's weight on the load cell, from standard input: `weight
-    // normal 4.905`, `weight tangential -2`, `weight off` (one a line).
+    // The operator, from standard input (one a line): a weight on the load
+    // cell (`weight normal 4.905`, `weight tangential -2`, `weight off`), or
+    // the reset button (`reset`).
     let load = arm.load();
+    let reset = arm.reset_button();
     std::thread::spawn(move || {
         for line in std::io::stdin().lines().map_while(Result::ok) {
-            match weight_command(&line) {
-                Ok(w) => {
+            match operator_command(&line) {
+                Ok(Operator::Weight(w)) => {
                     *load.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = w;
                     eprintln!("load cell: f_t {} N, f_n {} N hung", w[0], w[1]);
+                }
+                Ok(Operator::Reset) => {
+                    reset.store(true, std::sync::atomic::Ordering::Relaxed);
+                    eprintln!("reset: the board restarts from its flash");
                 }
                 Err(e) => eprintln!("{e}"),
             }
