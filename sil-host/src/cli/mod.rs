@@ -155,7 +155,10 @@ pub enum Command {
     /// board, the arm hanging free over a lowered belt) serving the bring-up protocol
     /// on a pseudo-terminal, so that every `sil-host board` command runs without a
     /// board (CI). Prints the port's path (and the pose the jig would hold) on its
-    /// first line, then serves in real time until Ctrl-C, SIGTERM or --duration.
+    /// first line, then serves in real time until Ctrl-C, SIGTERM or --serve-for. Its
+    /// standard input takes the operator's hands, one a line: `weight normal|tangential
+    /// NEWTONS` hangs a weight on the load cell, `weight off` takes it off, `reset`
+    /// presses the reset button (the board restarts from its flash).
     #[command(allow_negative_numbers = true, name = "board-twin")]
     BoardTwin(BoardTwinArgs),
     /// Every speed and size figure against its target: the worst control step in PIL
