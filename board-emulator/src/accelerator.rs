@@ -109,14 +109,7 @@ pub struct Accelerator {
 impl Accelerator {
     /// A cold accelerator configured by `acr`.
     pub fn new(acr: Acr) -> Self {
-        Accelerator {
-            acr,
-            icache: Lines::new(ICACHE_LINES),
-            dcache: Lines::new(DCACHE_LINES),
-            current: None,
-            prefetch_ready: 0,
-            stalls: 0,
-        }
+        Accelerator { acr, icache: Lines::new(ICACHE_LINES), dcache: Lines::new(DCACHE_LINES), current: None, prefetch_ready: 0, stalls: 0 }
     }
 
     /// The configuration it models.

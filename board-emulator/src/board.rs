@@ -21,8 +21,8 @@ use std::sync::Arc;
 use crate::{
     accelerator::Acr,
     adc1::Adc1,
-    core_clock::Mode,
     checks::{self, peek},
+    core_clock::Mode,
     device::{BoardError, RegisterModel},
     image::{ArmImage, FLASH_BASE, RECORD_SECTOR},
     machine::{BoardMachine, BuildError, input, out},

@@ -129,7 +129,11 @@ impl FlashSequence {
                 let sector = (value >> 3) & 0xF;
                 let starting = value & CR_STRT != 0 && cr & CR_STRT == 0;
                 if (starting || value & CR_PG != 0) && self.word(SR) & SR_BSY != 0 {
-                    return Some(BoardError::new(name(offset), value, "an operation started while FLASH_SR.BSY is set: poll BSY clear first (RM0090 3.6.3)"));
+                    return Some(BoardError::new(
+                        name(offset),
+                        value,
+                        "an operation started while FLASH_SR.BSY is set: poll BSY clear first (RM0090 3.6.3)",
+                    ));
                 }
                 if (starting || value & CR_PG != 0) && psize == 0b11 {
                     return Some(BoardError::new(
@@ -139,7 +143,11 @@ impl FlashSequence {
                     ));
                 }
                 if starting && value & CR_MER != 0 {
-                    return Some(BoardError::new(name(offset), value, "a mass erase: it would erase the image (the record is sector 4 alone, docs/hardware.md)"));
+                    return Some(BoardError::new(
+                        name(offset),
+                        value,
+                        "a mass erase: it would erase the image (the record is sector 4 alone, docs/hardware.md)",
+                    ));
                 }
                 if starting && value & CR_SER == 0 {
                     return Some(BoardError::new(name(offset), value, "STRT without SER or MER: no erase is selected (RM0090 3.6.3)"));
@@ -148,7 +156,9 @@ impl FlashSequence {
                     return Some(BoardError::new(
                         name(offset),
                         value,
-                        format!("erases sector {sector}: the image lives in sectors 0 to 3, the record in sector {RECORD_SECTOR_NUMBER} (docs/hardware.md)"),
+                        format!(
+                            "erases sector {sector}: the image lives in sectors 0 to 3, the record in sector {RECORD_SECTOR_NUMBER} (docs/hardware.md)"
+                        ),
                     ));
                 }
                 None

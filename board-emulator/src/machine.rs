@@ -51,7 +51,8 @@ const BOARD: &str = r#"
 /// a synchronisation (a fifth of the run's time with all fourteen timers). An
 /// access to one is then an access where the board has nothing: an error with
 /// its address, as for any other unused address.
-pub const LEFT_OUT: [&str; 13] = ["tim1", "tim5", "tim6", "tim7", "tim8", "tim9", "tim10", "tim11", "tim12", "tim13", "tim14", "wwdg", "rtc"];
+pub const LEFT_OUT: [&str; 13] =
+    ["tim1", "tim5", "tim6", "tim7", "tim8", "tim9", "tim10", "tim11", "tim12", "tim13", "tim14", "wwdg", "rtc"];
 
 /// The description without the objects of [`LEFT_OUT`]: their `object` lines
 /// and every `map` and `wire` line naming one.

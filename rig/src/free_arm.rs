@@ -162,7 +162,16 @@ impl FreeArm<EmulatedBoard> {
         let sensed = plant.state();
         let arm = ArmState { x: sensed, f: plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
         emulated.boot(&arm).map_err(|e| FreeArmError::Emulated(e.to_string()))?;
-        Ok(Self { plant, board: emulated, u: [0.0; 2], ts, sensed, faults: BusFaults::default(), load: Load::default(), reset_button: ResetButton::default() })
+        Ok(Self {
+            plant,
+            board: emulated,
+            u: [0.0; 2],
+            ts,
+            sensed,
+            faults: BusFaults::default(),
+            load: Load::default(),
+            reset_button: ResetButton::default(),
+        })
     }
 }
 
@@ -198,7 +207,16 @@ impl FreeArm<TwinBench> {
         let plant = hanging_plant(s)?;
         let ts = s.timing.period().as_secs_f64();
         let board = TwinBench { twin, restart: Box::new(restart), frames: FrameBuffer::default(), replies: Vec::new() };
-        let mut arm = Self { plant, board, u: [0.0; 2], ts, sensed: [0.0; 4], faults: BusFaults::default(), load: Load::default(), reset_button: ResetButton::default() };
+        let mut arm = Self {
+            plant,
+            board,
+            u: [0.0; 2],
+            ts,
+            sensed: [0.0; 4],
+            faults: BusFaults::default(),
+            load: Load::default(),
+            reset_button: ResetButton::default(),
+        };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
     }
