@@ -468,6 +468,9 @@ pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Cr
     s.controller.target_z_t = target;
     s.controller.move_time_s = c.move_time_s;
     s.timing.duration_s = c.duration_s;
+    // The paper's controller: the board's runaway limits off, as in the sweeps
+    // (`Z_t,sliding` is decided at the first lift-off, before any of them would trip).
+    s.controller.runaway_limits = false;
     s.validate()?;
     Ok(s)
 }

@@ -19,7 +19,7 @@ use crate::{
 };
 
 /// The protocol's version, told in [`Reply::Hello`].
-pub const BRINGUP_PROTOCOL: u16 = 3;
+pub const BRINGUP_PROTOCOL: u16 = 4;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).

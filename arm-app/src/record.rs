@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 
 /// The record's format version: a record of another version is refused as
 /// corrupt (re-run the bring-up's calibration and save).
-pub const RECORD_VERSION: u16 = 2;
+pub const RECORD_VERSION: u16 = 3;
 
 /// The record's magic.
 pub const MAGIC: [u8; 4] = *b"PLVS";

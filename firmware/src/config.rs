@@ -144,6 +144,11 @@ pub struct Config {
     pub innovation_confirm: u16,
     /// Innovation check: periods after a touchdown during which it is off.
     pub innovation_settle: u16,
+    /// The runaway limits ([`crate::runaway`]: a joint's speed past 20 rad/s, the
+    /// load cell at full scale for 10 ms) latch the safe state. On by default and
+    /// on every board; off only to study what the arm would do without them (the
+    /// paper's persistent bouncing beyond `Z_t,sliding`).
+    pub runaway_limits: bool,
     /// Consecutive deadline misses that latch the safe state.
     pub deadline_miss_limit: u16,
     /// Consecutive bad frames that latch the safe state.
@@ -181,6 +186,7 @@ impl Default for Config {
             innovation_threshold: 3.0 * core::f32::consts::TAU / 16384.0,
             innovation_confirm: 20,
             innovation_settle: 50,
+            runaway_limits: true,
             deadline_miss_limit: 3,
             bad_frame_limit: 3,
             branch: None,

@@ -19,6 +19,7 @@ use crate::{
     law::{self, HybridInput, HybridSignals, HybridState, LawError, PidState},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
+    runaway::{Runaway, RunawayMonitor, RunawayRule},
 };
 
 /// Why the firmware is in its safe state (zero torque). The code is reported in
@@ -42,6 +43,11 @@ pub enum SafeReason {
     /// The encoders and the load cell disagree about where the tip is (a stuck or
     /// failed sensor; [`crate::consistency`]) for `sensor_fault_confirm` periods.
     SensorFault = 7,
+    /// A joint's speed past [`crate::runaway::SPEED_LIMIT`] ([`crate::runaway`]).
+    Runaway = 8,
+    /// The load cell at full scale for [`crate::runaway::OVERLOAD_S`]: the force
+    /// loop is blind ([`crate::runaway`]).
+    Overload = 9,
 }
 
 impl SafeReason {
@@ -58,6 +64,8 @@ impl SafeReason {
             5 => Some(Self::Unreachable),
             6 => Some(Self::PeerLost),
             7 => Some(Self::SensorFault),
+            8 => Some(Self::Runaway),
+            9 => Some(Self::Overload),
             _ => None,
         }
     }
@@ -72,6 +80,10 @@ impl SafeReason {
             Self::Unreachable => "the reference is out of the arm's reach",
             Self::PeerLost => "the plant or the link to it is gone",
             Self::SensorFault => "the encoders and the load cell disagree about the tip (a stuck or failed sensor, or a driver fault)",
+            Self::Runaway => "a joint ran away: its speed passed 20 rad/s (a reversed motor, or motors that cannot hold the arm)",
+            Self::Overload => {
+                "the load cell stayed at full scale for 10 ms: the force ran away (a reversed motor, or the tip driven into the belt)"
+            }
         }
     }
 }
@@ -135,6 +147,9 @@ pub struct Firmware {
     liftoff: LiftOffDetector,
     consistency: ConsistencyMonitor,
     innovation: InnovationMonitor,
+    runaway: RunawayMonitor,
+    /// The runaway limits at this rate, derived once.
+    runaway_rule: RunawayRule,
     pid: PidState,
     hybrid: HybridState,
     last_codes: [i16; 2],
@@ -171,6 +186,8 @@ impl Firmware {
             liftoff: LiftOffDetector::default(),
             consistency: ConsistencyMonitor::default(),
             innovation: InnovationMonitor::default(),
+            runaway: RunawayMonitor::default(),
+            runaway_rule: RunawayRule::at_period(cfg.period.as_secs_f32()),
             pid: PidState::default(),
             hybrid: HybridState::default(),
             last_codes: [0, 0],
@@ -451,6 +468,13 @@ impl Firmware {
         let unexplained = self.innovation.update(&innovation_rule, innovation, lifted, load_saturated);
         if inconsistent || unexplained {
             return Err(SafeReason::SensorFault);
+        }
+        if cfg.runaway_limits {
+            match self.runaway.update(&self.runaway_rule, [qd[0], qd[1]], load_saturated) {
+                Some(Runaway::Speed) => return Err(SafeReason::Runaway),
+                Some(Runaway::Overload) => return Err(SafeReason::Overload),
+                None => {}
+            }
         }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         let reference: RefPoint = s.quintic.at(t_run);

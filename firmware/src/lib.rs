@@ -24,6 +24,7 @@ pub mod law;
 pub mod liftoff;
 pub mod pil;
 pub mod reference;
+pub mod runaway;
 
 #[cfg(test)]
 mod tests;

@@ -26,7 +26,7 @@ use crate::Config;
 
 /// Version of this protocol, sent in [`Uplink::Hello`]; the bridge refuses an
 /// image that speaks another.
-pub const PROTOCOL_VERSION: u16 = 4;
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Largest encoded frame, bytes (COBS overhead, CRC and the terminator included):
 /// room for the largest message, [`Downlink::Configure`] (about 130 bytes).

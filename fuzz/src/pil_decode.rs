@@ -240,6 +240,7 @@ fn config() -> impl Strategy<Value = Config> {
             innovation_threshold: f[29],
             innovation_confirm: w[0],
             innovation_settle: w[1],
+            runaway_limits: b[3] & 1 == 0,
             deadline_miss_limit: w[2],
             bad_frame_limit: w[3],
             branch,

@@ -44,6 +44,7 @@ pub fn firmware_config(s: &Scenario) -> Config {
         hybrid: HybridGains { kp: c.hybrid.kp as f32, kd: c.hybrid.kd as f32, ki: c.hybrid_ki(s.plant.x0) as f32 },
         friction: c.friction,
         torque_limit: c.torque_limit_nm.map_or(base.torque_limit, |t| t as f32),
+        runaway_limits: c.runaway_limits,
         encoder_bits: s.sensors.encoder_bits,
         // The innovation check's threshold is 3 encoder counts (docs/hardware.md).
         innovation_threshold: base.innovation_threshold * (1u32 << shared::wire::ENCODER_BITS) as f32

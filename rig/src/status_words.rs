@@ -72,7 +72,7 @@ mod tests {
         assert!(s.starts_with("safe state: the encoders and the load cell disagree"), "{s}");
         assert_eq!(describe_status(0), "running, no flag");
         assert_eq!(describe_status(status::LIFT_OFF | status::SATURATED_U2), "lift-off detected; u2 saturated");
-        assert_eq!(describe_status(status::SAFE_STATE | (9 << status::REASON_SHIFT)), "safe state: unknown reason 9");
+        assert_eq!(describe_status(status::SAFE_STATE | (10 << status::REASON_SHIFT)), "safe state: unknown reason 10");
         assert_eq!(describe_status(1 << 12), "unknown bits 0x1000");
     }
 

@@ -174,3 +174,28 @@ fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every
         assert!(t.stack_high_water_bytes <= STACK_CEILING_BYTES, "{name}: {t:?}");
     }
 }
+
+#[test]
+fn the_flashed_image_stops_a_reversed_motor_as_the_twin_does() {
+    // Issue 39's reproducer on the bytes that are flashed: motor 2 wired
+    // reversed; the image latches its overload or runaway safe state within
+    // 0.25 s, at the twin's period, the tip under 30 mm from its start.
+    let mut s = scenario("default");
+    s.timing.duration_s = 1.0;
+    s.board.motor2.reversed = true;
+    let mut link = EmulatorLink::new(&s, &image()).unwrap();
+    let (records, e) = run_loop(&s, &mut link, &mut ());
+    let mut twin = rig::twin_link::TwinLink::new(&s).unwrap();
+    let (twin_records, twin_e) = run_loop(&s, &mut twin, &mut ());
+    assert_eq!(format!("{e:?}"), format!("{twin_e:?}"));
+    match e {
+        Some(rig::record::RunError::SafeState { k, reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. }) => {
+            assert!(k <= 250, "stopped at period {k}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(records.len(), twin_records.len());
+    let (z0, n0) = (records[0].z_t, records[0].z_n);
+    let travel = records.iter().map(|r| (r.z_t - z0).hypot(r.z_n - n0)).fold(0.0, f64::max);
+    assert!(travel < 0.030, "the tip moved {:.1} mm", travel * 1e3);
+}

@@ -175,3 +175,69 @@ fn the_twin_refuses_faults_it_cannot_make_and_bad_boards() {
     let bad = format!("{DEFAULT_TOML}\n[calibration]\nload_newtons_per_count = [0.0, 0.01]\n");
     assert!(Scenario::from_toml(&bad).is_err());
 }
+
+/// The tip's largest distance from where it started, m, over `records`.
+fn tip_travel(records: &[PeriodRecord]) -> f64 {
+    let (z0, n0) = (records[0].z_t, records[0].z_n);
+    records.iter().map(|r| (r.z_t - z0).hypot(r.z_n - n0)).fold(0.0, f64::max)
+}
+
+#[test]
+fn a_reversed_motor_is_stopped_as_a_runaway_within_a_quarter_second_and_30_mm() {
+    // The audit's reproducer (issue 39, 3): `run --link twin --set
+    // board.motor2.reversed=true` drove the tip 0.4 m away for 1.6 s. Each
+    // motor reversed, under either law: the runaway limits stop the arm within
+    // 0.25 s, the tip less than 30 mm from where it started.
+    for (motor, kind) in [("motor2", "hybrid"), ("motor1", "hybrid"), ("motor1", "pid")] {
+        let text = with_duration(&paper("default"), 2.0).replace("kind = \"hybrid\"", &format!("kind = \"{kind}\""));
+        let mut s = scenario(&text);
+        match motor {
+            "motor1" => s.board.motor1.reversed = true,
+            _ => s.board.motor2.reversed = true,
+        }
+        let (records, err, link) = twin_run(&s);
+        match err {
+            Some(RunError::SafeState { k, reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. }) => {
+                assert!(k <= 250, "{motor} {kind}: stopped at period {k}");
+            }
+            other => panic!("{motor} {kind}: {other:?}"),
+        }
+        let travel = tip_travel(&records);
+        assert!(travel < 0.030, "{motor} {kind}: the tip moved {:.1} mm", travel * 1e3);
+        assert!(!link.twin().drivers_enabled(), "{motor} {kind}: drivers disabled");
+    }
+}
+
+#[test]
+fn the_runaway_limits_never_trip_on_the_paper_scenarios_or_their_neighbours() {
+    // No false alarm: the default and the four paper scenarios on the twin, and
+    // 40 neighbours of the default (mu, v_belt, f_n*, the target and the seed
+    // moved within the paper's ranges, below Z_t,sliding) on the wire-level loop.
+    for name in ["default", "hybrid-x0d", "hybrid-x0u", "pid-x0d", "pid-x0u"] {
+        let (_, err, _) = twin_run(&scenario(&with_duration(&paper(name), 4.0)));
+        assert!(err.is_none(), "{name}: {err:?}");
+    }
+    let mut completed = 0;
+    for i in 0..40u32 {
+        let f = |k: u32| f64::from((i * 7 + k * 13) % 10) / 9.0;
+        let sets = [
+            format!("plant.mu={}", 0.3 + 0.5 * f(1)),
+            format!("plant.v_belt={}", -1.0 + 0.9 * f(2)),
+            format!("controller.f_n_ref={}", 3.0 + 7.0 * f(3)),
+            format!("controller.target_z_t={}", -0.05 + 0.2 * f(4)),
+            format!("sensors.seed={}", 100 + i),
+            "timing.duration_s=3".to_string(),
+        ];
+        let overrides: Vec<_> = sets.iter().map(|a| a.parse().unwrap()).collect();
+        let mut s = Scenario::from_toml_with(DEFAULT_TOML, &overrides).unwrap();
+        s.controller.mu_hat = s.plant.mu;
+        let (records, err) = wire_run(&s);
+        assert!(
+            !matches!(err, Some(RunError::SafeState { reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. })),
+            "{sets:?}: {err:?}"
+        );
+        completed += usize::from(err.is_none() && records.len() == 3000);
+    }
+    // The set is one of healthy runs: nearly all of them run to their end.
+    assert!(completed >= 36, "{completed} of 40 completed");
+}

@@ -511,13 +511,22 @@ fn the_sensor_checks_do_not_trip_in_healthy_runs_with_many_lift_offs() {
     // impacts (unmeasured impulses) and a load cell at full scale must not read
     // as a stuck sensor. (This run also hit a plant bug, now fixed: a flight that
     // starts on the belt and returns within its first step was a MissedEvent.)
+    // The bouncing is the paper's, without the board's runaway limits.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bouncing");
-    let o = run(&["--target-zt", "0.25", "--seed", "3", "--in-process"], &out);
+    let o = run(&["--target-zt", "0.25", "--seed", "3", "--in-process", "--set", "controller.runaway_limits=false"], &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("SensorFault"), "{err}");
     assert!(o.status.success(), "{err}");
     assert!(summary(&out)["lift_offs"].as_u64().unwrap() > 100, "the run bounces");
+    // With them (the default), the arm whipped by the bouncing is stopped as a
+    // runaway, after its first lift-off and never as a sensor fault.
+    let out = dir.path().join("limited");
+    let o = run(&["--target-zt", "0.25", "--seed", "3", "--in-process"], &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("Runaway") || err.contains("Overload"), "{err}");
+    assert!(summary(&out)["lift_offs"].as_u64().unwrap() >= 1, "it lifted off first");
 }
 
 #[test]

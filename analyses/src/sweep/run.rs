@@ -470,6 +470,11 @@ pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialConditio
         s.controller.hybrid.ki = Some(rig::scenario::paper_hybrid_ki(x0));
     }
     s.timing.duration_s = spec.run_duration();
+    // The paper's experiments run the paper's controller: the board's runaway
+    // limits off (they stop a loop that whips the arm, where the paper's
+    // persistent bouncing is the result; docs/analyses.md, docs/board.md
+    // "Runaway limits").
+    s.controller.runaway_limits = false;
     Some(s)
 }
 

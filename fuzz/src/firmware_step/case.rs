@@ -163,6 +163,9 @@ pub struct Case {
     pub z_t0: f32,
     /// Elbow up for plausible frames.
     pub elbow_up: bool,
+    /// Plausible frames read the load cell at full scale (the tip driven into
+    /// the belt: the firmware's overload limit, `firmware::runaway`).
+    pub pressed: bool,
     /// The first frame's sequence number.
     pub seq0: u32,
     /// The first frame's stamp `t_us`.

@@ -28,7 +28,15 @@ fn edge_i16(i: u8) -> i16 {
 }
 
 impl FrameMaker {
-    pub(super) fn frame(&mut self, cfg: &Config, elbow_up: bool, counts: &Counts, flags: u16, seq: &SeqMove, t: &TimeMove) -> SensorFrame {
+    pub(super) fn frame(
+        &mut self,
+        cfg: &Config,
+        (elbow_up, pressed): (bool, bool),
+        counts: &Counts,
+        flags: u16,
+        seq: &SeqMove,
+        t: &TimeMove,
+    ) -> SensorFrame {
         let period = cfg.period.as_us();
         if self.first {
             self.first = false;
@@ -56,10 +64,10 @@ impl FrameMaker {
                 let p = cfg.params;
                 let (l, h) = (f64::from(p.l), f64::from(p.h));
                 self.z_t = (self.z_t + f64::from(dz_t) * 1e-5).clamp(-1.9 * l, 1.9 * l);
-                let z = Vector2::new(self.z_t, -h + f64::from(dz_n) * 2e-5);
+                let z = Vector2::new(self.z_t, -h + if pressed { 0.0 } else { f64::from(dz_n) * 2e-5 });
                 let branch = if elbow_up { ElbowBranch::Up } else { ElbowBranch::Down };
                 let q = inverse_kinematics(l, &z, branch).map(|q| [q[0], q[1]]).unwrap_or([0.0, 0.0]);
-                let f_n_n = 10.0 + f64::from(f_n) * 0.05;
+                let f_n_n = if pressed { 30.0 } else { 10.0 + f64::from(f_n) * 0.05 };
                 let f_t_n = -f64::from(p.mu) * f_n_n + f64::from(f_t) * 0.02;
                 (
                     wire::encode_angle_bits(q[0], bits),

@@ -125,6 +125,20 @@ fn op() -> impl Strategy<Value = Op> {
 pub fn strategy() -> impl Strategy<Value = Case> {
     let seq0 = prop_oneof![Just(0u32), any::<u32>()];
     let t0 = prop_oneof![Just(0u64), any::<u64>()];
-    (knobs(), -1.0f32..1.0, any::<bool>(), seq0, t0, proptest::collection::vec(op(), 1..=MAX_OPS))
-        .prop_map(|(knobs, z_t0, elbow_up, seq0, t0, ops)| Case { knobs, z_t0, elbow_up, seq0, t0, ops })
+    (knobs(), -1.0f32..1.0, any::<bool>(), proptest::bool::weighted(0.1), seq0, t0, proptest::collection::vec(op(), 1..=MAX_OPS)).prop_map(
+        |(knobs, z_t0, elbow_up, pressed, seq0, t0, mut ops)| {
+            if pressed {
+                // A tip driven into the belt: every frame plausible, the load cell
+                // at full scale (the overload limit needs 10 ms of it in a row).
+                for op in &mut ops {
+                    if let Op::Step { counts, .. } = op
+                        && !matches!(counts, Counts::Plausible { .. })
+                    {
+                        *counts = Counts::Plausible { dz_t: 0, dz_n: 0, f_t: 0, f_n: 0, belt: 0 };
+                    }
+                }
+            }
+            Case { knobs, z_t0, elbow_up, pressed, seq0, t0, ops }
+        },
+    )
 }

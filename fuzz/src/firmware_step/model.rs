@@ -24,7 +24,14 @@ pub(super) struct Model {
 
 /// Reason codes of the safe state a trusted frame may latch in the step itself
 /// (the law and the sensor checks).
-const LAW_REASONS: [SafeReason; 4] = [SafeReason::NonFinite, SafeReason::Singular, SafeReason::Unreachable, SafeReason::SensorFault];
+const LAW_REASONS: [SafeReason; 6] = [
+    SafeReason::NonFinite,
+    SafeReason::Singular,
+    SafeReason::Unreachable,
+    SafeReason::SensorFault,
+    SafeReason::Runaway,
+    SafeReason::Overload,
+];
 
 /// Checks one command of a step against the model and advances it. Public so the
 /// tests can show that a wrong command fails it.

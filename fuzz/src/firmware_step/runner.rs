@@ -40,7 +40,7 @@ pub struct Coverage {
     /// Commands with status bit `i` set, bits 0 to 9.
     pub bits: [u64; 10],
     /// Latches of each reason code (index = code, 1 to 7).
-    pub reasons: [u64; 8],
+    pub reasons: [u64; 10],
     /// Commands with non-zero torque.
     pub torque: u64,
 }
@@ -66,7 +66,7 @@ pub fn check_covering(case: &Case, cov: &mut Coverage) -> Result<(), String> {
         let at = |e: String| format!("op {i}: {e}");
         match op {
             Op::Step { counts, flags, seq, t, start, clock } => {
-                let frame = maker.frame(&cfg, case.elbow_up, counts, *flags, seq, t);
+                let frame = maker.frame(&cfg, (case.elbow_up, case.pressed), counts, *flags, seq, t);
                 let now_us = match *start {
                     Start::Delay(d) => frame.t_us.saturating_add(u64::from(d)),
                     Start::Early(e) => frame.t_us.saturating_sub(e),
@@ -84,7 +84,7 @@ pub fn check_covering(case: &Case, cov: &mut Coverage) -> Result<(), String> {
                     *n += u64::from(cmd.status & (1 << b) != 0);
                 }
                 if !was_safe && let Some(r) = model.0.safe {
-                    cov.reasons[r as usize % 8] += 1;
+                    cov.reasons[r as usize % 10] += 1;
                 }
                 cov.torque += u64::from(cmd.u1_code != 0 || cmd.u2_code != 0);
             }

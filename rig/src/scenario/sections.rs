@@ -224,6 +224,15 @@ pub fn paper_hybrid_ki(x0: PaperX0) -> f64 {
     }
 }
 
+fn runaway_limits_on() -> bool {
+    true
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if signature
+fn is_on(b: &bool) -> bool {
+    *b
+}
+
 /// The controller section (the firmware's configuration).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -245,6 +254,12 @@ pub struct ControllerSection {
     /// saturated and flagged.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torque_limit_nm: Option<f64>,
+    /// The firmware's runaway limits (a joint's speed past 20 rad/s, the load cell
+    /// at full scale for 10 ms: `firmware::runaway`); true when absent. `false`
+    /// lets a study see what the arm does without them (the paper's persistent
+    /// bouncing beyond `Z_t,sliding`); never on a board.
+    #[serde(default = "runaway_limits_on", skip_serializing_if = "is_on")]
+    pub runaway_limits: bool,
     /// PID gains (paper eq. 8); the paper's when absent.
     #[serde(default)]
     pub pid: PidSection,
