@@ -315,6 +315,8 @@ impl Board for IpcBoard<'_> {
 /// [`WAIT_FOR_PLANT_S`].
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+    // One firmware per rig, whatever the timing: held until this returns.
+    let _lock = super::ipc::RigLock::acquire(super::ipc::Role::Firmware, rig)?;
     if let Some(pid) = super::ipc::live_owner(super::ipc::Role::Firmware, rig) {
         return Err(RunError::RigInUse { rig: rig.to_string(), role: "firmware", pid });
     }

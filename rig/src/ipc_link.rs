@@ -4,11 +4,15 @@
 //! time, and notices a dead or stalled firmware.
 //!
 //! Lockstep (default, as PX4 SITL): the plant owns time. It publishes frame `k`
-//! and waits for the command echoing `k`, up to `rig.command_timeout_s` of wall
-//! time; the command's `t_sent_us` (simulated time) decides when it takes effect.
-//! A timeout is a deadline miss; after each timeout the rig checks that the
-//! firmware process still lives, and gives up after
-//! `rig.max_consecutive_timeouts` timeouts in a row.
+//! and waits for the command echoing `k`; the command's `t_sent_us` (simulated
+//! time) decides when it takes effect. A late answer is not a deadline miss: the
+//! plant waits whatever the host's load, checking every 20 ms that the firmware
+//! process lives, and ends the run only when it is dead or made no progress for
+//! `rig.stall_limit_s` (saying whether its process is stopped). So a lockstep
+//! run's trace never depends on the host. Deadline misses come only from the
+//! injected faults (a stall, a dropped or a late command): in a period one of
+//! them touches, the plant waits `rig.command_timeout_s`, counts a miss, and
+//! gives up after `rig.max_consecutive_timeouts` timeouts in a row.
 //!
 //! Real time (`--realtime`): frame `k` is published at wall time `t0 + t_k` (or
 //! as soon after as the plant gets the core: the difference is the period
@@ -69,6 +73,8 @@ pub struct LinkTimings {
 
 /// The plant's iceoryx2 link to the firmware process.
 pub struct IpcLink {
+    /// The plant's hold of the rig, for the link's life.
+    _lock: super::ipc::RigLock,
     ports: PlantPorts,
     rig: String,
     spawned: Option<Spawned>,
@@ -92,6 +98,10 @@ pub struct IpcLink {
     /// Lockstep: the frame sent ahead of its exchange ([`FirmwareLink::send_ahead`]),
     /// and when it was published.
     sent_ahead: Option<(u32, Instant)>,
+    /// Lockstep: how long a period without an injected fault may wait.
+    stall_limit: Duration,
+    /// Lockstep: an injected stall began and the firmware has not answered since.
+    in_stall: bool,
 }
 
 impl IpcLink {
@@ -116,6 +126,8 @@ impl IpcLink {
     ) -> Result<Self, RunError> {
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
+        // First of all: the plant's lock of the rig (one plant per rig, whatever the timing).
+        let lock = super::ipc::RigLock::acquire(Role::Plant, rig)?;
         if let Some(pid) = super::ipc::live_owner(Role::Plant, rig) {
             return Err(RunError::RigInUse { rig: rig.to_string(), role: "plant", pid });
         }
@@ -136,6 +148,7 @@ impl IpcLink {
             None => None,
         };
         let mut link = Self {
+            _lock: lock,
             ports,
             rig: rig.to_string(),
             spawned,
@@ -153,6 +166,8 @@ impl IpcLink {
             announced: None,
             last_peer_check: None,
             sent_ahead: None,
+            stall_limit: Duration::from_secs_f64(s.rig.stall_limit_s),
+            in_stall: false,
         };
         let start = Instant::now();
         let limit = s.rig.connect_timeout_s;
@@ -294,6 +309,57 @@ impl IpcLink {
         }
     }
 
+    /// Lockstep: whether an injected fault may leave period `k` without its
+    /// answer (then the plant waits `rig.command_timeout_s` and counts a miss).
+    fn fault_may_miss(&mut self, k: u64) -> bool {
+        if self.faults.stall_starting(k).is_some() {
+            self.in_stall = true;
+        }
+        self.in_stall || self.faults.drops_command(k) || self.faults.command_delay(k).as_us() > 0 || self.faults.kills_firmware_at(k)
+    }
+
+    /// The firmware's process id (spawned, or the attached firmware's node owner).
+    fn firmware_pid(&self) -> Option<i64> {
+        match &self.spawned {
+            Some(sp) => Some(i64::from(sp.child.id())),
+            None => super::ipc::live_owner(Role::Firmware, &self.rig),
+        }
+    }
+
+    /// Lockstep outside injected faults: waits for the command echoing `seq`
+    /// whatever the host's load; `Err` when the firmware is gone or made no
+    /// progress for `rig.stall_limit_s`.
+    fn wait_for_answer(&mut self, seq: u32, t: f64) -> Result<Option<shared::wire::ActuatorCommand>, RunError> {
+        let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let start = Instant::now();
+        loop {
+            let chunk = Instant::now() + Duration::from_millis(20);
+            match self.ports.commands.next_before(chunk).map_err(transport)? {
+                Some(c) if c.seq == seq => return Ok(Some(c)),
+                Some(_) => self.timings.late_answers += 1,
+                None => {
+                    let k = seq as usize;
+                    if let Some(what) = self.firmware_gone() {
+                        return Err(RunError::FirmwareLost { k, t, what: format!("the firmware process {what}") });
+                    }
+                    let waited = start.elapsed();
+                    if waited >= self.stall_limit {
+                        let stopped = self.firmware_pid().and_then(process_state).is_some_and(|c| c == 'T' || c == 't');
+                        return Err(RunError::FirmwareLost {
+                            k,
+                            t,
+                            what: format!(
+                                "the firmware made no progress for {:.1} s (rig.stall_limit_s){}",
+                                waited.as_secs_f64(),
+                                if stopped { ": its process is stopped (SIGSTOP or a debugger); resume it with SIGCONT" } else { "" }
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+    }
+
     /// Publishes `truth` (to monitors) and `frame` (to the firmware); returns when the frame went out.
     fn publish(&self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Instant, RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
@@ -369,6 +435,7 @@ impl FirmwareLink for IpcLink {
 
     fn exchange(&mut self, frame: &SensorFrame, truth: &GroundTruth) -> Result<Exchange, RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
+        let patient = !self.realtime && !self.fault_may_miss(u64::from(frame.seq));
         let deadline = if self.realtime {
             let t0 = *self.t0.get_or_insert_with(Instant::now);
             let ideal = t0 + Duration::from_micros(frame.sampled_at().as_us());
@@ -381,6 +448,13 @@ impl FirmwareLink for IpcLink {
             Some((seq, published)) if seq == frame.seq => published,
             _ => self.publish(frame, truth)?,
         };
+        if patient && let Some(c) = self.wait_for_answer(frame.seq, truth.t)? {
+            self.consecutive_timeouts = 0;
+            self.timings.rtt.record(published.elapsed());
+            self.timings.step.record_ns(u64::from(c.step_ticks));
+            let telemetry = self.telemetry_for(c.seq)?;
+            return Ok(Exchange::Answered { command: c, telemetry, at_stamp: false });
+        }
         // Real time: the sample instant is the frame's publication (the hardware's
         // timer tick); the plant's own lateness against `t0 + t_k` is period jitter,
         // not the firmware's deadline. The plant stops waiting at the next sample
@@ -398,6 +472,7 @@ impl FirmwareLink for IpcLink {
                 Some(c) if c.seq == frame.seq => {
                     let now = Instant::now();
                     self.consecutive_timeouts = 0;
+                    self.in_stall = false;
                     self.timings.rtt.record(now - published);
                     self.timings.step.record_ns(u64::from(c.step_ticks));
                     let telemetry = self.telemetry_for(c.seq)?;
@@ -458,13 +533,23 @@ impl Drop for IpcLink {
         if let Some(setup) = &self.realtime_setup {
             leave_realtime(setup);
         }
-        if let Some(sp) = &mut self.spawned
-            && let Ok(None) = sp.child.try_wait()
-        {
-            let _ = sp.child.kill();
+        if let Some(sp) = &mut self.spawned {
+            if let Ok(None) = sp.child.try_wait() {
+                let _ = sp.child.kill();
+            }
             let _ = sp.child.wait();
+            // A killed firmware could not remove its lock file: the plant does.
+            super::ipc::RigLock::remove_stale(Role::Firmware, &self.rig);
         }
     }
+}
+
+/// The state letter of process `pid` (`/proc/PID/stat`'s third field: `R`, `S`,
+/// `T` stopped, `t` stopped by a tracer, ...); `None` where there is no procfs.
+fn process_state(pid: i64) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command name in parentheses may hold spaces: the state follows its ')'.
+    stat.rsplit_once(')')?.1.trim_start().chars().next()
 }
 
 /// Waits until `when`: the OS sleep to `spin` before, then a spin that yields the

@@ -71,6 +71,7 @@ impl FolderLock {
         let handle = File::open(&canonical).map_err(io_err(dir))?;
         let handle = match handle.try_lock() {
             Ok(()) => {
+                remove_stale_partials(&canonical);
                 let owner = format!("pid {}: {}\n", std::process::id(), command_line());
                 // Informative only: a failure to write it does not stop the command.
                 let _ = std::fs::write(canonical.join(OWNER_FILE), owner);
@@ -99,6 +100,26 @@ impl FolderLock {
     /// The locked folder (canonical).
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+}
+
+/// Removes what a killed command (SIGKILL, a power cut) left in `dir`, which
+/// this process has just locked, so no other command is writing there: its
+/// staged files `.NAME.partial` (never kept by design: a finished command renames
+/// them) and its owner file. Streamed `NAME.partial` files (rows flushed before
+/// the kill) are kept. Said on stderr.
+fn remove_stale_partials(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut removed = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if (name.starts_with('.') && name.ends_with(".partial") || name == OWNER_FILE) && std::fs::remove_file(e.path()).is_ok() {
+            removed.push(name);
+        }
+    }
+    if !removed.is_empty() {
+        removed.sort();
+        eprintln!("{}: removed what an interrupted command left: {}", dir.display(), removed.join(", "));
     }
 }
 

@@ -65,6 +65,88 @@ fn scenario(dir: &Path, name: &str, replace: &[(&str, &str)], extra: &str) -> Pa
 }
 
 #[test]
+fn lockstep_outcomes_never_depend_on_the_hosts_load() {
+    // The audit's reproducer (issue 39, 6): with the host loaded, a descheduled
+    // firmware process past rig.command_timeout_s counted deadline misses no
+    // fault caused, and the trace changed. Here the timeout is 100 us (any
+    // scheduling delay passes it) and four busy threads load the two cores: 20
+    // lockstep runs, each byte-identical to the in-process run.
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "tight.toml", &[("command_timeout_s = 5.0", "command_timeout_s = 0.0001")], "");
+    let s = s.to_str().unwrap();
+    let inp = dir.path().join("inp");
+    assert!(run(&["--scenario", s, "--duration", "1", "--in-process"], &inp).status.success());
+    let reference = std::fs::read(inp.join("trace.csv")).unwrap();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let hogs: Vec<_> = (0..4)
+        .map(|_| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                let mut x = 0u64;
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+                }
+            })
+        })
+        .collect();
+    let name = rig("load");
+    for i in 0..20 {
+        let out = dir.path().join(format!("ipc{i}"));
+        let o = run(&["--scenario", s, "--duration", "1", "--rig", &name], &out);
+        assert!(o.status.success(), "run {i}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(std::fs::read(out.join("trace.csv")).unwrap() == reference, "run {i}: the trace differs from the in-process run");
+        assert_eq!(summary(&out)["deadline_misses"], 0, "run {i}");
+    }
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    for h in hogs {
+        h.join().unwrap();
+    }
+}
+
+#[test]
+fn runs_started_together_on_one_rig_end_with_one_owner_and_the_rest_refused() {
+    // The audit's reproducer (issue 39, 5): six runs started at once on one rig,
+    // twenty times. Exactly one runs; every other exits 2 "rig in use" naming
+    // the owner, before it touches the rig; the winner's trace is the
+    // uncontested run's, byte for byte.
+    let dir = tempfile::tempdir().unwrap();
+    let s = scenario(dir.path(), "contest.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let args =
+        |rig: &str| vec!["run".to_string(), "--scenario".into(), s.into(), "--duration".into(), "30".into(), "--rig".into(), rig.into()];
+    let alone = dir.path().join("alone");
+    let o = sil_host().args(args(&rig("alone"))).arg("--out").arg(&alone).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let reference = std::fs::read(alone.join("trace.csv")).unwrap();
+    for round in 0..20 {
+        let name = rig(&format!("contest{round}"));
+        let children: Vec<_> = (0..6)
+            .map(|i| {
+                let out = dir.path().join(format!("r{round}-{i}"));
+                let child =
+                    sil_host().args(args(&name)).arg("--out").arg(&out).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+                (child, out)
+            })
+            .collect();
+        let mut winners = Vec::new();
+        for (child, out) in children {
+            let o = child.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).into_owned();
+            match o.status.code() {
+                Some(0) => winners.push(out),
+                Some(2) => assert!(
+                    err.contains("is in use by process") && err.contains(&name) && !err.contains("process -1"),
+                    "round {round}: {err}"
+                ),
+                other => panic!("round {round}: exit {other:?}: {err}"),
+            }
+        }
+        assert_eq!(winners.len(), 1, "round {round}: {} runs ran", winners.len());
+        assert!(std::fs::read(winners[0].join("trace.csv")).unwrap() == reference, "round {round}: the winner's trace differs");
+    }
+}
+
+#[test]
 fn lockstep_iceoryx2_and_in_process_traces_are_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
     let s = scenario(dir.path(), "default.toml", &[], "");
@@ -98,6 +180,41 @@ fn lockstep_iceoryx2_and_in_process_traces_are_bit_identical() {
     }
     // The PID run from x0u does lift off (so the identity covered flight and impacts).
     assert!(summary(&dir.path().join("pid-x0u-ipc"))["lift_offs"].as_u64().unwrap() >= 1);
+}
+
+#[test]
+fn a_stopped_firmware_ends_a_lockstep_run_past_the_stall_limit_saying_so() {
+    // Lockstep waits for a slow firmware, never for ever: a firmware stopped
+    // (SIGSTOP, a debugger) ends the run after rig.stall_limit_s with exit 1,
+    // naming the limit and the stopped process, the trace up to then kept.
+    let dir = tempfile::tempdir().unwrap();
+    let name = rig("stopped");
+    let s = scenario(dir.path(), "default.toml", &[], "");
+    let s = s.to_str().unwrap();
+    let mut fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s, "--duration", "300"]).stderr(Stdio::null()).spawn().unwrap();
+    let out = dir.path().join("stopped");
+    let plant = sil_host()
+        .args(["run", "--attach", &name, "--scenario", s, "--duration", "300", "--set", "rig.stall_limit_s=1", "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Event-driven: the firmware is stopped once periods are being recorded.
+    let start = Instant::now();
+    let started = |d: &Path| std::fs::read_dir(d).map(|it| it.flatten().any(|e| e.metadata().map_or(0, |m| m.len()) > 0)).unwrap_or(false);
+    while !started(&out) {
+        assert!(start.elapsed() < Duration::from_secs(60), "the run never started");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // SAFETY: kill(2) on our own child's pid.
+    unsafe { libc::kill(fw.id() as i32, libc::SIGSTOP) };
+    let o = plant.wait_with_output().unwrap();
+    unsafe { libc::kill(fw.id() as i32, libc::SIGKILL) };
+    let _ = fw.wait();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("made no progress for 1.0 s (rig.stall_limit_s)") && err.contains("stopped"), "{err}");
 }
 
 #[test]

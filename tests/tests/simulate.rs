@@ -211,3 +211,54 @@ fn a_mu_scan_across_a_bouncing_band_of_a_perturbed_arm_completes_with_its_jams_c
         assert!(jams >= 10, "{iwc}: the corner is met and counted: {jams} jams");
     }
 }
+
+#[test]
+fn sigterm_stops_simulate_with_its_outputs_written_and_nothing_left_over() {
+    // Issue 39: an interrupted simulate left `.partial` files and a stale owner
+    // file (SIGTERM killed it). Now it stops at its next chunk, writes what it
+    // simulated (status `stopped`), cleans up, and exits 143.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["simulate", "--duration", "3000", "--out", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Event-driven: the signal comes once rows are being written.
+    let partial = out.join(".trace.csv.partial");
+    let start = std::time::Instant::now();
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) == 0 {
+        assert!(start.elapsed() < std::time::Duration::from_secs(60), "simulate never started writing");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(143), "{err}");
+    assert!(err.contains("stopped by a signal"), "{err}");
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.svg"]);
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "stopped");
+    assert!(summary["simulated_s"].as_f64().unwrap() < 3000.0);
+}
+
+#[test]
+fn what_a_killed_command_left_is_removed_by_the_next_one() {
+    // SIGKILL leaves its staged files and owner file: the next command on the
+    // folder (which now holds its lock) removes them and says so.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir_all(&out).unwrap();
+    for f in [".trace.csv.partial", ".events.csv.partial", ".sil-host.owner"] {
+        std::fs::write(out.join(f), "left by a killed run").unwrap();
+    }
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["simulate", "--duration", "1", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("removed what an interrupted command left"));
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.svg"]);
+}

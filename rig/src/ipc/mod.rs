@@ -27,17 +27,21 @@
 //! Node names are `painleve-plant-R` and `painleve-firmware-R`; each side finds
 //! out whether its peer died from iceoryx2's node monitoring, and removes the
 //! stale resources of dead nodes (a killed run) before it opens the services.
+//! Before any of that, each side takes its role's lock ([`rig_lock`]): one plant
+//! and one firmware per rig, whatever the timing.
 
 mod error;
 mod mailbox;
 mod monitors;
 mod peers;
 mod ports;
+pub mod rig_lock;
 
 pub use error::IpcError;
 pub use mailbox::{Inbox, Outbox};
 pub use monitors::{MonitorCounts, MonitorPolicy};
 pub use peers::{PeerState, Role, check_rig_name, default_rig_name, live_owner, node, peer_state};
 pub use ports::{FirmwarePorts, PlantPorts};
+pub use rig_lock::RigLock;
 
 pub use crate::services::QUEUE_DEPTH;

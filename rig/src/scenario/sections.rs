@@ -336,9 +336,16 @@ fn default_encoder_bits() -> u8 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RigSection {
-    /// Lockstep: wall-clock time the plant waits for a period's command before it
-    /// counts a deadline miss (a stalled or dead firmware), s.
+    /// Lockstep, in a period an injected fault touches (a stall, a dropped or late
+    /// command): wall-clock time the plant waits for the command before it counts
+    /// a deadline miss, s. Every other period waits for its answer whatever the
+    /// host's load (up to `stall_limit_s`): in lockstep a slow host never misses.
     pub command_timeout_s: f64,
+    /// Lockstep: wall-clock time without the period's answer, outside injected
+    /// faults, after which the plant ends the run ("the firmware made no progress
+    /// for N s"; exit 1, the trace kept), s (0 to 600). The firmware process is
+    /// checked all along: dead, it ends the run at once.
+    pub stall_limit_s: f64,
     /// Bounded spin before a blocking wait, microseconds of wall time.
     pub spin_us: f64,
     /// Wall-clock time without a frame after which the firmware process checks
@@ -396,6 +403,7 @@ impl Default for RigSection {
     fn default() -> Self {
         Self {
             command_timeout_s: 0.05,
+            stall_limit_s: 10.0,
             spin_us: 200.0,
             peer_check_s: 0.5,
             max_consecutive_timeouts: 100,

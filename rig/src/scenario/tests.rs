@@ -53,8 +53,15 @@ fn control_characters_in_the_name_are_refused_and_shown_escaped() {
         assert!(e.contains("name") && e.contains("control character"), "{e}");
         assert!(!e.chars().any(char::is_control), "the message carries no control character: {e:?}");
     }
-    let fine = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", "name = \"Zürich run — 2\"", 1);
-    assert_eq!(Scenario::from_toml(&fine).unwrap().name, "Zürich run — 2");
+    // Issue 39: U+FFFE and U+FFFF (noncharacters, not XML 1.0 characters) made
+    // `trace.svg` ill-formed too.
+    for bad in ["a\u{FFFE}b", "end\u{FFFF}", "x\u{FDD0}", "plane1\u{1FFFF}"] {
+        let toml = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", &format!("name = {}", toml::Value::from(bad)), 1);
+        let e = Scenario::from_toml(&toml).unwrap_err().to_string();
+        assert!(e.contains("name") && e.contains("noncharacter"), "{e}");
+    }
+    let fine = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", "name = \"Zürich run — 2 \u{FFFD}\"", 1);
+    assert_eq!(Scenario::from_toml(&fine).unwrap().name, "Zürich run — 2 \u{FFFD}");
 }
 
 fn set(arg: &str) -> Override {

@@ -57,11 +57,14 @@ impl Scenario {
     pub fn validate(&self) -> Result<(), ScenarioError> {
         let finite = |x: f64| x.is_finite();
         check(
-            !self.name.is_empty() && self.name.chars().count() <= Self::MAX_NAME_CHARS && !self.name.chars().any(char::is_control),
+            !self.name.is_empty()
+                && self.name.chars().count() <= Self::MAX_NAME_CHARS
+                && !self.name.chars().any(|c| c.is_control() || is_noncharacter(c)),
             "name",
             // Debug-quoted: a control character shows as an escape, never reaches the terminal raw.
             format!("{:?}", self.name.chars().take(40).collect::<String>()),
-            "1 to 64 characters, none a control character (it titles figures and terminal lines)",
+            "1 to 64 characters, none a control character or a Unicode noncharacter such as U+FFFE (it titles figures, \
+             which XML 1.0 must be able to hold, and terminal lines)",
         )?;
         check(self.faults.len() <= Self::MAX_FAULTS, "faults", self.faults.len(), "at most 1000 [[faults]]")?;
         let p = &self.plant;
@@ -186,6 +189,12 @@ impl Scenario {
             r.command_timeout_s,
             "a value in (0, 60] s",
         )?;
+        check(
+            finite(r.stall_limit_s) && r.stall_limit_s > 0.0 && r.stall_limit_s <= 600.0,
+            "rig.stall_limit_s",
+            r.stall_limit_s,
+            "a value in (0, 600] s",
+        )?;
         check(finite(r.spin_us) && (0.0..=1e6).contains(&r.spin_us), "rig.spin_us", r.spin_us, "a value in [0, 1e6] us")?;
         check(
             finite(r.peer_check_s) && r.peer_check_s > 0.0 && r.peer_check_s <= 60.0,
@@ -222,4 +231,12 @@ impl Scenario {
         self.calibration.check().map_err(ScenarioError::Board)?;
         Ok(())
     }
+}
+
+/// A Unicode noncharacter (U+FDD0 to U+FDEF, and the last two code points of
+/// every plane: U+FFFE, U+FFFF, ...): U+FFFE and U+FFFF are not XML 1.0
+/// characters at all (an SVG holding one is ill-formed), and none is text.
+fn is_noncharacter(c: char) -> bool {
+    let u = u32::from(c);
+    (0xFDD0..=0xFDEF).contains(&u) || u & 0xFFFE == 0xFFFE
 }

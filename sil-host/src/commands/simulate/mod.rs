@@ -224,8 +224,15 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let mut new_events: Vec<EventRow> = Vec::new();
     let mut wall = std::time::Duration::ZERO;
     let mut failure: Option<SimError> = None;
+    // Ctrl-C or SIGTERM: stop at the next chunk, write what was simulated.
+    let stop = crate::cancel::stop_flag();
+    let mut stopped = false;
     let mut k = 0;
     while k < steps && failure.is_none() {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            stopped = true;
+            break;
+        }
         let started = Instant::now();
         let end = steps.min(k + CHUNK);
         while k < end {
@@ -260,11 +267,19 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
 
     let tables = [args.format.file("trace"), args.format.file("events")];
     let files = tables.iter().map(String::as_str).chain(["trace.svg", "summary.json"]).map(|f| out.path(f).display().to_string()).collect();
-    let summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
+    let mut summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
+    let interrupted = stopped.then(|| {
+        format!("simulate stopped by a signal at t = {} s of {} s; the outputs up to then are written", summary.simulated_s, args.duration)
+    });
+    if let Some(why) = &interrupted {
+        summary.status = "stopped";
+        summary.error = Some(why.clone());
+    }
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
     let validity = summary.validity;
-    Ok(Done { result: summary, files, failure: failure.map(CliError::Sim) }.strict(args.strict.strict, &validity))
+    let failure = failure.map(CliError::Sim).or(interrupted.map(CliError::Interrupted));
+    Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host simulate`: [`execute`], then prints the summary (human, or the

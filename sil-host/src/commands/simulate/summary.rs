@@ -143,7 +143,7 @@ pub struct InitialCondition {
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
-    /// `ok`, or `failed` with `error`.
+    /// `ok`, `failed` with `error`, or `stopped` (Ctrl-C or SIGTERM) with `error` saying when.
     pub status: &'static str,
     /// The error, when the run failed part way.
     pub error: Option<String>,
