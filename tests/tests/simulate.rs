@@ -262,3 +262,34 @@ fn what_a_killed_command_left_is_removed_by_the_next_one() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("removed what an interrupted command left"));
     assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.svg"]);
 }
+
+#[test]
+fn with_no_friction_a_tip_at_rest_is_never_a_cone_violation() {
+    // Issue 39: the fuzzer's reproducer at mu = 0 was flagged INVALID for a
+    // friction-cone violation; with no friction there is no cone to leave (the
+    // tip comes to rest at an equilibrium, its slip acceleration zero to rounding).
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mu0");
+    let code = run(&[
+        "simulate",
+        "--x0-deg=-4.241873513684681,6.759357711486936,-38.74046096645096,-8.50371822885448",
+        "--mu",
+        "0.0",
+        "--v-belt",
+        "0.0",
+        "--impact-law",
+        "energetic",
+        "--e-n",
+        "1.0",
+        "--duration",
+        "20.880",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["validity"]["cone_violations"], 0, "{}", summary["validity"]);
+    assert_eq!(summary["status"], "ok");
+    // The run reached the rest the violation was flagged at (t = 19.81 s).
+    assert!(summary["counters"]["touchdowns"].as_u64().unwrap() > 1000);
+}
