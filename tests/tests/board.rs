@@ -170,6 +170,12 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on:
     let (code, out, err) = board(&t, &["--json", "watch", "--count", "2", "--interval-ms", "10"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(out.lines().filter(|l| l.starts_with('{')).count(), 2, "{out}");
+    // Watch in words: one line per reading (into a pipe; a terminal's line is
+    // rewritten in place), the joints in degrees once the zeros are set.
+    let (code, out, err) = board(&t, &["watch", "--count", "3", "--interval-ms", "10"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.lines().count(), 3, "{out}");
+    assert!(out.lines().all(|l| l.starts_with("period ") && l.contains(" deg") && l.contains("fault line clear")), "{out}");
     // The span refuses a force it cannot see (nothing on the load cell).
     let (code, _, err) = board(&t, &["span", "--axis", "normal", "--newtons", "5"]);
     assert!(code == 1 && err.contains("is the weight on the load cell"), "{err}");

@@ -31,7 +31,9 @@ pub enum BoardCommand {
     /// The firmware's state, its raw readings (encoder counts and field strength,
     /// ADC codes, belt count, fault line), its calibration and last telemetry.
     Status,
-    /// Status and raw readings every --interval-ms, until Ctrl-C or --count.
+    /// The raw readings every --interval-ms on one line (rewritten in place on a
+    /// terminal; one line per reading into a pipe or a file; --json: one document per
+    /// reading), until Ctrl-C or --count.
     Watch {
         /// Milliseconds between two readings.
         #[arg(long, default_value_t = 200)]

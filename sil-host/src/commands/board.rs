@@ -55,6 +55,35 @@ fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Snapshot, Ste
     Ok(Snapshot { status, raw, calibration, telemetry })
 }
 
+/// One reading of `watch` on one line: the period, the drivers, the joints
+/// (degrees once the zeros are set, else raw counts), the load cell's counts,
+/// the belt's counter, the fault line and the status word in words.
+fn watch_line(s: &Snapshot) -> String {
+    let st = &s.status;
+    let r = &s.raw;
+    let joints: Vec<String> = ["theta1", "elbow"]
+        .iter()
+        .enumerate()
+        .map(|(i, name)| match r.encoder_counts[i] {
+            Ok(n) => match joint_degrees(n, &s.calibration, i) {
+                Some(d) => format!("{name} {d:+8.3} deg"),
+                None => format!("{name} {n:5} counts"),
+            },
+            Err(e) => format!("{name} no reading ({})", e.describe()),
+        })
+        .collect();
+    let adc = r.adc_counts.map_or_else(|| "ADC none".to_string(), |[t, n]| format!("ADC f_t {t:4} f_n {n:4}"));
+    format!(
+        "period {} | drivers {} | {} | {adc} | belt {} | fault line {} | {}",
+        st.periods,
+        if st.drivers_enabled { "on " } else { "off" },
+        joints.join(", "),
+        r.belt_count,
+        if r.driver_fault { "ASSERTED" } else { "clear" },
+        describe_status(st.status)
+    )
+}
+
 fn print_snapshot(s: &Snapshot) {
     let st = &s.status;
     println!(
@@ -179,17 +208,26 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         }
         BoardCommand::Watch { interval_ms, count } => {
             let stop = crate::cancel::stop_flag();
+            // On a terminal one line, rewritten in place; into a pipe or a file,
+            // one line per reading (JSON: one document per reading).
+            let tty = std::io::IsTerminal::is_terminal(&std::io::stdout());
             let mut n = 0;
             while !stop.load(std::sync::atomic::Ordering::Relaxed) && count.is_none_or(|k| n < k) {
                 let s = snapshot(&mut c)?;
                 if json {
                     println!("{}", serde_json::to_string(&s).unwrap_or_default());
+                } else if tty {
+                    // Carriage return, erase the line, then the new reading.
+                    print!("\r\x1b[2K{}", watch_line(&s));
+                    let _ = std::io::stdout().flush();
                 } else {
-                    print_snapshot(&s);
-                    println!();
+                    println!("{}", watch_line(&s));
                 }
                 n += 1;
                 std::thread::sleep(Duration::from_millis(*interval_ms));
+            }
+            if tty && !json {
+                println!();
             }
             if crate::cancel::exit_code().is_some() {
                 // Ctrl-C or SIGTERM: the shell's 130 or 143, as every command.
