@@ -56,6 +56,7 @@ on_both!(
     a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded,
     an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings,
     a_record_saved_over_the_line_is_reloaded_after_the_reset_button,
+    a_client_killed_mid_command_leaves_a_board_the_next_client_can_use,
 );
 
 fn twin(on: Board, extra: &[&str]) -> Twin {
@@ -282,6 +283,41 @@ fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
     assert_eq!(after["status"]["drivers_enabled"], false, "a reset comes back with the drivers off: {after}");
     let (code, out, err) = board(&t, &["enable"]);
     assert!(code == 0 && out.contains("enable: done"), "{out}{err}");
+}
+
+fn a_client_killed_mid_command_leaves_a_board_the_next_client_can_use(on: Board) {
+    // Issue 39: a client killed in the middle of a command (here `calibrate`,
+    // between its jogs, half a request possibly on the line) must not take the
+    // board or the twin down: the next client is answered, the jog under way
+    // ends, and the calibration runs again from the start.
+    let mut t = twin(on, &[]);
+    let pose = format!("--pose-deg={}", t.pose);
+    let mut client = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board", "--port", &t.port, "calibrate", &pose])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Event-driven: killed once the zeros are set, during the first jog.
+    let mut line = String::new();
+    BufReader::new(client.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    assert!(line.starts_with("zeros set"), "{line}");
+    client.kill().unwrap();
+    client.wait().unwrap();
+    assert!(t.child.try_wait().unwrap().is_none(), "the twin survives the client");
+    let mut s = status(&t);
+    for _ in 0..400 {
+        if s["status"]["activity"] == "Idle" {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+        s = status(&t);
+    }
+    assert_eq!(s["status"]["activity"], "Idle", "the jog under way ends: {s}");
+    assert_eq!(s["status"]["drivers_enabled"], false, "{s}");
+    let (code, out, err) = board(&t, &["calibrate", &pose]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(out.matches("moved its torque's way").count(), 4, "{out}");
 }
 
 fn an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings(on: Board) {
