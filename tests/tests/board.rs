@@ -281,8 +281,11 @@ fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
     assert_eq!(after["status"]["directions_checked"], true, "{after}");
     assert_eq!(after["calibration"]["zero_counts"], zeros, "{after}");
     assert_eq!(after["status"]["drivers_enabled"], false, "a reset comes back with the drivers off: {after}");
-    let (code, out, err) = board(&t, &["enable"]);
-    assert!(code == 0 && out.contains("enable: done"), "{out}{err}");
+    // The reloaded record lets the drivers on. (The arm hangs free, so the closed
+    // loop's consistency check turns them off again within periods: whether the
+    // read-back sees them still on depends on the host's speed.)
+    let (_, out, err) = board(&t, &["enable"]);
+    assert!(out.contains("drivers enabled at period") || err.contains("the drivers came on at period"), "{out}{err}");
 }
 
 fn a_client_killed_mid_command_leaves_a_board_the_next_client_can_use(on: Board) {
