@@ -96,6 +96,17 @@ impl<S: Read + Write> Client<S> {
     /// # Errors
     /// A message naming what failed: the write, the read, or no reply in time.
     pub fn request(&mut self, request: &Request, timeout: Duration) -> Result<Reply, String> {
+        self.request_until(request, timeout, |_| true)
+    }
+
+    /// As [`Client::request`], skipping the replies `wanted` refuses: the first
+    /// request of a session (`Hello`) skips replies still on their way to an
+    /// earlier client that was killed mid-command (one request, one reply, in
+    /// order: they all come before this request's).
+    ///
+    /// # Errors
+    /// As [`Client::request`].
+    pub fn request_until(&mut self, request: &Request, timeout: Duration, wanted: impl Fn(&Reply) -> bool) -> Result<Reply, String> {
         let mut buf = [0u8; MAX_FRAME];
         let bytes = encode(request, &mut buf).map_err(|e| format!("encode {request:?}: {e:?}"))?;
         // A lone terminator first ends whatever partial frame is on the line.
@@ -113,6 +124,7 @@ impl<S: Read + Write> Client<S> {
             for &b in &byte[..n] {
                 if let Push::Frame(f) = self.frames.push(b)
                     && let Ok(reply) = decode::<Reply>(f)
+                    && wanted(&reply)
                 {
                     return Ok(reply);
                 }

@@ -284,8 +284,8 @@ fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
     // The reloaded record lets the drivers on. (The arm hangs free, so the closed
     // loop's consistency check turns them off again within periods: whether the
     // read-back sees them still on depends on the host's speed.)
-    let (_, out, err) = board(&t, &["enable"]);
-    assert!(out.contains("drivers enabled at period") || err.contains("the drivers came on at period"), "{out}{err}");
+    let (code, out, err) = board(&t, &["enable"]);
+    assert!(code == 0 && out.contains("drivers enabled at period"), "{out}{err}");
 }
 
 fn a_client_killed_mid_command_leaves_a_board_the_next_client_can_use(on: Board) {

@@ -306,6 +306,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
                 println!("enable: done: {}", bp::describe_enable(&st.last_enable));
             });
+            if !st.drivers_enabled {
+                eprintln!("warning: the drivers are off again since: {}", describe_status(st.status));
+            }
         }
         BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Disable => {
             let (request, name) = match args.command {
