@@ -75,7 +75,7 @@ fn lockstep_outcomes_never_depend_on_the_hosts_load() {
     let s = scenario(dir.path(), "tight.toml", &[("command_timeout_s = 5.0", "command_timeout_s = 0.0001")], "");
     let s = s.to_str().unwrap();
     let inp = dir.path().join("inp");
-    assert!(run(&["--scenario", s, "--duration", "1", "--in-process"], &inp).status.success());
+    assert!(run(&["--scenario", s, "--duration", "0.3", "--in-process"], &inp).status.success());
     let reference = std::fs::read(inp.join("trace.csv")).unwrap();
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let hogs: Vec<_> = (0..4)
@@ -92,7 +92,7 @@ fn lockstep_outcomes_never_depend_on_the_hosts_load() {
     let name = rig("load");
     for i in 0..20 {
         let out = dir.path().join(format!("ipc{i}"));
-        let o = run(&["--scenario", s, "--duration", "1", "--rig", &name], &out);
+        let o = run(&["--scenario", s, "--duration", "0.3", "--rig", &name], &out);
         assert!(o.status.success(), "run {i}: {}", String::from_utf8_lossy(&o.stderr));
         assert!(std::fs::read(out.join("trace.csv")).unwrap() == reference, "run {i}: the trace differs from the in-process run");
         assert_eq!(summary(&out)["deadline_misses"], 0, "run {i}");
@@ -113,7 +113,7 @@ fn runs_started_together_on_one_rig_end_with_one_owner_and_the_rest_refused() {
     let s = scenario(dir.path(), "contest.toml", &[], "");
     let s = s.to_str().unwrap();
     let args =
-        |rig: &str| vec!["run".to_string(), "--scenario".into(), s.into(), "--duration".into(), "30".into(), "--rig".into(), rig.into()];
+        |rig: &str| vec!["run".to_string(), "--scenario".into(), s.into(), "--duration".into(), "1".into(), "--rig".into(), rig.into()];
     let alone = dir.path().join("alone");
     let o = sil_host().args(args(&rig("alone"))).arg("--out").arg(&alone).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
