@@ -198,7 +198,7 @@ impl FirmwareLink for EmulatorLink {
 /// with defmt): CI's gate (`rig/tests/emulator.rs`), `sil-host bench --only emulator`.
 pub const HANDLER_INSTRUCTIONS_CEILING: u64 = 10_000;
 /// The ceiling of the handler's worst core cycles with the flash's wait states
-/// ([`ImageTiming::flash_cycles`]; 18 658 measured on `pid-x0d`, 15 371 of them
+/// ([`ImageTiming::flash_cycles`]; 18 160 measured on `pid-x0d`, 15 427 of them
 /// at zero wait states): 15 % of the 1 kHz period at 168 MHz. The step's own 5 %
 /// (docs/hardware.md "Budgets") plus the sensing, the PWM and the defmt window
 /// the worst periods log; the other 85 % are left to USART1's interrupt and the
