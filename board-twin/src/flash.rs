@@ -52,6 +52,16 @@ impl FlashModel {
         Ok(flash)
     }
 
+    /// The sector of a board that was brought up: the record of calibration
+    /// `cal` with every step done (`CalibrationRecord::brought_up`) and the
+    /// firmware's `config`.
+    ///
+    /// # Errors
+    /// As [`FlashModel::saved`].
+    pub fn brought_up(cal: &arm_app::ArmCalibration, config: firmware::Config) -> Result<Self, RecordFault> {
+        Self::saved(&Stored { calibration: arm_app::bringup::CalibrationRecord::brought_up(cal), config })
+    }
+
     /// The sector's bytes (read them, or damage them).
     pub fn bytes(&self) -> FlashBytes {
         self.bytes.clone()

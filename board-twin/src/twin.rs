@@ -17,11 +17,7 @@ use crate::{
     motor_stage::{PinModel, PwmModel, Wire},
     physics::BoardPhysics,
 };
-use arm_app::{
-    ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog,
-    bringup::CalibrationRecord,
-    record::{RecordFault, Stored},
-};
+use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog, record::RecordFault};
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
 
@@ -116,7 +112,7 @@ impl BoardTwin {
     /// motor stage that does not disable, an application that refuses the
     /// configuration or calibration.
     pub fn new(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
-        let flash = FlashModel::saved(&Stored { calibration: CalibrationRecord::brought_up(cal), config }).map_err(TwinError::Flash)?;
+        let flash = FlashModel::brought_up(cal, config).map_err(TwinError::Flash)?;
         Self::with_flash(board, flash, config, cal, seed, load_noise_n)
     }
 

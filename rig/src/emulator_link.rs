@@ -16,7 +16,7 @@
 
 use std::path::{Path, PathBuf};
 
-use arm_app::{BUTTON_PERIODS, bringup::CalibrationRecord, record::Stored};
+use arm_app::BUTTON_PERIODS;
 use board_emulator::{
     ArmImage, EmuError, EmulatedBoard, SpiFaults,
     core_clock::{HandlerRun, Mode},
@@ -102,8 +102,8 @@ impl EmulatorLink {
         let config = firmware_config(s);
         let announced = crate::handshake::of_config(&config)?;
         let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
-        let stored = Stored { calibration: CalibrationRecord::brought_up(&s.calibration.arm_calibration()), config };
-        let flash = FlashModel::saved(&stored).map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;
+        let flash = FlashModel::brought_up(&s.calibration.arm_calibration(), config)
+            .map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;
         let sector = flash.bytes().borrow().clone();
         let board = EmulatedBoard::new(arm_image, s.board, &sector, period_us * 1000, s.sensors.seed, s.sensors.load_noise_n, mode)
             .map_err(board_error)?;

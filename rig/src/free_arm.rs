@@ -183,12 +183,7 @@ impl FreeArm<TwinBench> {
     /// # Errors
     /// [`FreeArmError`] when the plant or the twin refuses its set-up.
     pub fn new(s: &Scenario, board: BoardDescription, cal: &CalibrationSection) -> Result<Self, FreeArmError> {
-        // As BoardTwin::new: the record of a board that was brought up.
-        let stored = arm_app::record::Stored {
-            calibration: arm_app::bringup::CalibrationRecord::brought_up(&cal.arm_calibration()),
-            config: firmware_config(s),
-        };
-        let flash = FlashModel::saved(&stored).map_err(TwinError::Flash)?;
+        let flash = FlashModel::brought_up(&cal.arm_calibration(), firmware_config(s)).map_err(TwinError::Flash)?;
         Self::with_flash(s, board, cal, flash)
     }
 

@@ -311,6 +311,8 @@ impl IpcLink {
 
     /// Lockstep: whether an injected fault may leave period `k` without its
     /// answer (then the plant waits `rig.command_timeout_s` and counts a miss).
+    /// Notes a stall that starts at `k`: its periods stay faulted until the
+    /// firmware answers again.
     fn fault_may_miss(&mut self, k: u64) -> bool {
         if self.faults.stall_starting(k).is_some() {
             self.in_stall = true;

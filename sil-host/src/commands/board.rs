@@ -6,7 +6,6 @@ use std::{io::Write, sync::Arc, time::Duration};
 
 use arm_app::{
     bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
-    record::Stored,
     telemetry::ArmTelemetry,
 };
 use board_twin::{BusFaults, FlashModel};
@@ -338,8 +337,8 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     let flash = if args.flash == FlashArg::Erased {
         FlashModel::erased()
     } else {
-        let stored = Stored { calibration: CalibrationRecord::brought_up(&s.calibration.arm_calibration()), config: firmware_config(&s) };
-        FlashModel::saved(&stored).map_err(|e| CliError::BadInput(format!("the settings record: {}", e.describe())))?
+        FlashModel::brought_up(&s.calibration.arm_calibration(), firmware_config(&s))
+            .map_err(|e| CliError::BadInput(format!("the settings record: {}", e.describe())))?
     };
     if args.flash == FlashArg::Corrupt {
         // One bit of the record's frame: its CRC-32C no longer matches.
