@@ -2,6 +2,7 @@
 //! takes typed settings and returns a typed result; the command line
 //! (`sil-host`) prints, plots and writes them.
 //!
+//! - [`corner_search`]: the search for runs that do not complete on perturbed arms (issue 40);
 //! - [`admissible`]: the admissible configurations of the tip on the belt
 //!   (docs/model.md, experiment 2; paper Table II);
 //! - [`modes`]: the map of contact modes (experiment 1; paper Fig. 2);
@@ -14,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod admissible;
+pub mod corner_search;
 pub mod error;
 pub mod ideal;
 pub mod modes;

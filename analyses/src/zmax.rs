@@ -410,7 +410,7 @@ fn empty_trial(combo: Combination, target: f64) -> Trial {
 
 fn sim_config(base: &Scenario) -> SimConfig {
     let p = &base.plant;
-    SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, iwc: p.iwc, ..SimConfig::default() }
+    SimConfig { rtol: p.rtol, atol: p.atol, impact_law: p.impact_law, e_n: p.e_n, iwc: p.iwc, singular: p.singular, ..SimConfig::default() }
 }
 
 /// The set-up of an ideal trial: the paper's ideal law for `combo` with `base`'s

@@ -6,6 +6,7 @@ use serde::Serialize;
 use crate::{
     error::SimError,
     impact::{ImpactLaw, IwcRule},
+    moreau_jean::SingularRule,
 };
 
 /// Numerical and modelling settings of the simulator (scenario parameters).
@@ -50,7 +51,30 @@ pub struct SimConfig {
     /// summaries only when set.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_step: Option<f64>,
+    /// What a slide does at the singular point `p = 0, b = 0` reached with a finite
+    /// normal force ([`SingularRule`]; docs/plant.md "The singular point"): leave
+    /// the belt (the default) or slide on through it. Written in summaries only
+    /// when it is not the default.
+    #[serde(skip_serializing_if = "SimConfig::is_default_singular")]
+    pub singular: SingularRule,
+    /// Step of the Moreau-Jean bridge across a collapsed event-driven step, s (in
+    /// [1e-8, 1e-4]; docs/plant.md "The bridge"); the bridge halves it until its
+    /// result agrees with the half-step one. Written in summaries only when it is
+    /// not the default.
+    #[serde(skip_serializing_if = "SimConfig::is_default_bridge_step")]
+    pub bridge_step: f64,
+    /// Length of one Moreau-Jean bridge, s (in [1e-5, 0.1], at least 10 bridge
+    /// steps; cut at the end of the `advance` interval). Written in summaries only
+    /// when it is not the default.
+    #[serde(skip_serializing_if = "SimConfig::is_default_bridge_length")]
+    pub bridge_length: f64,
 }
+
+/// The default [`SimConfig::bridge_step`], s.
+pub const BRIDGE_STEP: f64 = 1e-5;
+
+/// The default [`SimConfig::bridge_length`], s.
+pub const BRIDGE_LENGTH: f64 = 1e-3;
 
 /// The default [`SimConfig::jam_load`]: large enough that the outcome no longer
 /// moves with it (`plant::tests::the_jam_outcome_converges_as_its_threshold_grows`).
@@ -75,6 +99,9 @@ impl Default for SimConfig {
             max_steps: 100_000_000,
             jam_load: JAM_LOAD,
             max_step: None,
+            singular: SingularRule::Leave,
+            bridge_step: BRIDGE_STEP,
+            bridge_length: BRIDGE_LENGTH,
         }
     }
 }
@@ -84,9 +111,22 @@ impl SimConfig {
         v.to_bits() == JAM_LOAD.to_bits()
     }
 
+    fn is_default_singular(v: &SingularRule) -> bool {
+        *v == SingularRule::Leave
+    }
+
+    fn is_default_bridge_step(v: &f64) -> bool {
+        v.to_bits() == BRIDGE_STEP.to_bits()
+    }
+
+    fn is_default_bridge_length(v: &f64) -> bool {
+        v.to_bits() == BRIDGE_LENGTH.to_bits()
+    }
+
     /// Checks ranges: tolerances finite and in (0, 0.1]; `e_n` in [0, 1];
     /// `v_stick`, `zeno_velocity` finite and >= 0; limits > 0; `max_step`, when set,
-    /// in [1e-7, 1e3] s.
+    /// in [1e-7, 1e3] s; `bridge_step` in [1e-8, 1e-4] s and `bridge_length` in
+    /// [1e-5, 0.1] s, at least 10 bridge steps.
     ///
     /// # Errors
     /// [`SimError::BadConfig`] naming the field.
@@ -112,6 +152,13 @@ impl SimConfig {
             && !(h.is_finite() && MAX_STEP_RANGE.contains(&h))
         {
             return bad("max_step", h, "a step in [1e-7, 1e3] s");
+        }
+        if !(self.bridge_step.is_finite() && (1e-8..=1e-4).contains(&self.bridge_step)) {
+            return bad("bridge_step", self.bridge_step, "a step in [1e-8, 1e-4] s");
+        }
+        if !(self.bridge_length.is_finite() && (1e-5..=0.1).contains(&self.bridge_length) && self.bridge_length >= 10.0 * self.bridge_step)
+        {
+            return bad("bridge_length", self.bridge_length, "a length in [1e-5, 0.1] s and at least 10 bridge steps");
         }
         if self.max_events_per_advance == 0 || self.max_steps == 0 {
             return bad("max_events_per_advance/max_steps", 0.0, "a positive count");

@@ -80,6 +80,20 @@ pub enum SimError {
         /// Why.
         source: ImpactError,
     },
+    /// A Moreau-Jean bridge across a collapsed step did not converge: at the
+    /// smallest step its joint angles still differed from the half-step bridge's
+    /// by more than the tolerance (docs/plant.md "The bridge").
+    #[error(
+        "bridge at t = {t} s did not converge: at a step of {step:e} s its angles differ by {difference:e} rad from the half-step bridge's"
+    )]
+    Bridge {
+        /// Start of the bridge, s.
+        t: f64,
+        /// The last step tried, s.
+        step: f64,
+        /// The difference of the joint angles there, rad.
+        difference: f64,
+    },
     /// A segment ended outside its mode without the event being located, even with small steps.
     #[error("event missed at t = {t} s in mode {mode}: the segment left its domain between steps")]
     MissedEvent {
@@ -106,7 +120,12 @@ impl SimError {
     pub fn is_integrator_failure(&self) -> bool {
         matches!(
             self,
-            Self::Integrator { .. } | Self::NonFinite { .. } | Self::Impact { .. } | Self::MissedEvent { .. } | Self::EventStorm { .. }
+            Self::Integrator { .. }
+                | Self::NonFinite { .. }
+                | Self::Impact { .. }
+                | Self::Bridge { .. }
+                | Self::MissedEvent { .. }
+                | Self::EventStorm { .. }
         )
     }
 

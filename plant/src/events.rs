@@ -24,6 +24,15 @@ pub enum EventKind {
     Jam,
     /// An impact without collision from an inconsistent sliding state.
     ImpactWithoutCollision,
+    /// A slide reached the singular point `p = 0, b = 0` with a finite normal
+    /// force where the event-driven step collapsed: crossed by a Moreau-Jean
+    /// bridge under the singular rule ([`crate::moreau_jean::SingularRule`]).
+    SingularPoint,
+    /// The event-driven step collapsed away from the jam and the singular point:
+    /// a stretch of Moreau-Jean time-stepping crossed the difficulty
+    /// (docs/plant.md "The bridge"). Reported at the bridge's start, with the
+    /// velocities before it and after it.
+    Bridge,
     /// The slip stopped and the tip sticks to the belt.
     SlipToStick,
     /// The slip stopped and resumed the other way.
@@ -47,6 +56,8 @@ impl EventKind {
             Self::PZero => "p_zero",
             Self::Jam => "jam",
             Self::ImpactWithoutCollision => "impact_without_collision",
+            Self::SingularPoint => "singular_point",
+            Self::Bridge => "bridge",
             Self::SlipToStick => "slip_to_stick",
             Self::SlipReversal => "slip_reversal",
             Self::StickToSlip => "stick_to_slip",
@@ -107,6 +118,15 @@ pub struct Counters {
     /// collapsed before `f_n` reached `jam_load m g` (the slide already jamming:
     /// `p > 0`, `b < 0`, `f_n >= 10 m g`).
     pub jams_at_collapse: u64,
+    /// Singular points: slides that reached `p = 0, b = 0` with a finite normal
+    /// force where the event-driven step collapsed ([`EventKind::SingularPoint`]),
+    /// each crossed by a bridge (also counted in [`Counters::bridges`]).
+    pub singular_points: u64,
+    /// Moreau-Jean bridges: stretches of time-stepping across a collapsed
+    /// event-driven step (at singular points and elsewhere).
+    pub bridges: u64,
+    /// Time spent in bridges, s.
+    pub bridged_s: f64,
     /// Sticking phases entered.
     pub stick_phases: u64,
     /// Stick-to-slip transitions.

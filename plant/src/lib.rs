@@ -47,6 +47,7 @@
 pub mod dop853;
 pub mod impact;
 pub mod initial;
+pub mod moreau_jean;
 pub mod observer;
 pub mod segment;
 pub mod trig;
@@ -59,6 +60,9 @@ mod error;
 mod events;
 mod phase;
 mod plant;
+
+#[cfg(test)]
+mod corner_tests;
 
 pub use bounds::{MAX_ANGLE, MAX_RATE, PROJECTION_TOLERANCE};
 pub use config::{MAX_STEP_RANGE, SimConfig};

@@ -25,6 +25,7 @@ use crate::{
 };
 
 mod advance;
+pub(crate) mod bridge;
 mod projection;
 mod transitions;
 
@@ -38,6 +39,10 @@ pub struct Plant {
     phase: Phase,
     cone_relaxed: bool,
     in_violation: bool,
+    /// Sliding through the indeterminate region after a singular point under
+    /// [`SingularRule::Slide`](crate::moreau_jean::SingularRule::Slide): time-stepped
+    /// by bridges until the slide leaves it.
+    time_stepping: bool,
     /// First step of the next solve, s: the step the controller proposed last.
     last_h: f64,
     evals: Cell<u64>,
@@ -60,6 +65,7 @@ pub struct Checkpoint {
     phase: Phase,
     cone_relaxed: bool,
     in_violation: bool,
+    time_stepping: bool,
     last_h: f64,
     evals: u64,
     trig: TrigCache,
@@ -118,6 +124,7 @@ impl Plant {
             phase: Phase::Flight,
             cone_relaxed: false,
             in_violation: false,
+            time_stepping: false,
             last_h: 2e-4,
             evals: Cell::new(0),
             trig: TrigCache::new(),
@@ -259,6 +266,7 @@ impl Plant {
             phase: self.phase,
             cone_relaxed: self.cone_relaxed,
             in_violation: self.in_violation,
+            time_stepping: self.time_stepping,
             last_h: self.last_h,
             evals: self.evals.get(),
             trig: self.trig.clone(),
@@ -270,8 +278,9 @@ impl Plant {
     /// Goes back to `c`, a [`Plant::checkpoint`] of this plant: what follows is
     /// bit for bit what would have followed the checkpoint.
     pub fn restore(&mut self, c: Checkpoint) {
-        let Checkpoint { t, y, phase, cone_relaxed, in_violation, last_h, evals, trig, counters, end_point } = c;
-        (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.last_h) = (t, y, phase, cone_relaxed, in_violation, last_h);
+        let Checkpoint { t, y, phase, cone_relaxed, in_violation, time_stepping, last_h, evals, trig, counters, end_point } = c;
+        (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.time_stepping, self.last_h) =
+            (t, y, phase, cone_relaxed, in_violation, time_stepping, last_h);
         self.evals.set(evals);
         (self.trig, self.counters, self.end_point) = (trig, counters, end_point);
     }

@@ -42,6 +42,12 @@ pub enum Boundary {
     Jam,
     /// Sliding: the relative velocity reached 0.
     SlipStops,
+    /// Sliding: the step size collapsed at the singular point `p = 0, b = 0`
+    /// approached with a finite normal force ([`Segment::near_singular`]): a
+    /// Moreau-Jean bridge crosses it under the singular rule.
+    Singular,
+    /// Any mode: the step size collapsed elsewhere: a Moreau-Jean bridge crosses it.
+    Collapse,
     /// Sticking: the friction force reached the cone's edge.
     ConeEdge,
 }
@@ -200,6 +206,21 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         c[0].1 > 0.0 && c[1].1 > 0.0 && f_n_over_mg >= JAM_ONSET_LOAD
     }
 
+    /// Whether a slide at `(t, y)` is at the singular point `p = 0, b = 0` with a
+    /// finite normal force: `p / Q_22` and `-b / g` both at most
+    /// [`SINGULAR_NEIGHBOURHOOD`] (each small on its own scale) and `f_n = -b/p`
+    /// below [`JAM_ONSET_LOAD`] times `m g` (else it is the jam). Where the step size
+    /// collapses there, the plant crosses the point by a Moreau-Jean bridge under
+    /// the singular rule (docs/plant.md "The singular point").
+    pub fn near_singular(&self, t: f64, y: &OdeState) -> bool {
+        if !matches!(self.phase, Phase::Sliding(_)) {
+            return false;
+        }
+        let c = self.components(t, y);
+        let f_n_over_mg = (1.0 - c[3].1) * self.jam_load;
+        c[0].1 <= SINGULAR_NEIGHBOURHOOD && c[1].1 <= SINGULAR_NEIGHBOURHOOD && f_n_over_mg < JAM_ONSET_LOAD
+    }
+
     /// [`Segment::components`] from the tip dynamics and contact force at the point.
     #[inline]
     pub fn components_of(&self, td: &TipDynamics<f64>, f: &Vector2<f64>) -> [(Boundary, f64); 4] {
@@ -296,6 +317,12 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
 /// (`f_n* = 10 N` is about 8.5 `m g`) and far below where the collapse happens (at
 /// 1e4 to 1e6 `m g` in the cases of issue 24's search).
 pub const JAM_ONSET_LOAD: f64 = 10.0;
+
+/// How close to the singular point `p = 0, b = 0` a slide whose step collapses
+/// counts as at it ([`Segment::near_singular`]): `p / Q_22` and `-b / g` both at
+/// most 0.05. Issue 40's failures collapsed with `p / Q_22` about 1e-3 and `-b/g`
+/// 3e-3 to 7e-3; a steady slide of the experiments has `-b/g` near 1.
+pub const SINGULAR_NEIGHBOURHOOD: f64 = 0.05;
 
 /// Event-function magnitude that counts as on the boundary (rounding after a
 /// projection): the same margin [`super::Plant`] allows at a segment's end.

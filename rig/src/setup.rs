@@ -67,6 +67,7 @@ pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
         e_n: s.plant.e_n,
         iwc: s.plant.iwc,
         max_step: s.plant.max_step,
+        singular: s.plant.singular,
         ..SimConfig::default()
     };
     Plant::new(params, sim, initial::deg_to_state(s.plant.x0.condition().deg), 0.0, [0.0, 0.0])

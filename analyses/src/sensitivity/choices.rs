@@ -3,7 +3,10 @@
 //! default among them.
 
 use firmware::{ControllerKind, config::FrictionCompensation};
-use plant::impact::{ImpactLaw, IwcRule};
+use plant::{
+    impact::{ImpactLaw, IwcRule},
+    moreau_jean::SingularRule,
+};
 use rig::scenario::Scenario;
 use serde::Serialize;
 
@@ -17,6 +20,8 @@ pub struct Knobs {
     pub e_n: f64,
     /// Impact-without-collision rule.
     pub iwc: IwcRule,
+    /// The singular-point rule.
+    pub singular: SingularRule,
     /// The hybrid law's friction term (sampled firmware).
     pub friction: FrictionCompensation,
     /// Duration of the reference's move, s.
@@ -45,6 +50,7 @@ impl Default for Knobs {
             impact_law: ImpactLaw::Newton,
             e_n: 0.2,
             iwc: IwcRule::Restitution,
+            singular: SingularRule::Leave,
             friction: FrictionCompensation::ModelCommandedNormal,
             move_time_s: 2.0,
             lift_off_gap_m: 0.0,
@@ -68,6 +74,7 @@ impl Knobs {
         s.plant.impact_law = self.impact_law;
         s.plant.e_n = self.e_n;
         s.plant.iwc = self.iwc;
+        s.plant.singular = self.singular;
         s.controller.friction = self.friction;
         s.controller.move_time_s = self.move_time_s;
         s.controller.mu_hat = base.plant.mu * (1.0 + self.mu_hat_mismatch);
@@ -90,6 +97,8 @@ pub enum Dimension {
     ImpactLaw,
     /// The IWC rule.
     Iwc,
+    /// The singular-point rule.
+    Singular,
     /// The hybrid law's friction compensation.
     Friction,
     /// The reference's move time.
@@ -112,9 +121,10 @@ pub enum Dimension {
 
 impl Dimension {
     /// Every dimension, in the study's order.
-    pub const ALL: [Dimension; 11] = [
+    pub const ALL: [Dimension; 12] = [
         Self::ImpactLaw,
         Self::Iwc,
+        Self::Singular,
         Self::Friction,
         Self::MoveTime,
         Self::LiftOff,
@@ -131,6 +141,7 @@ impl Dimension {
         match self {
             Self::ImpactLaw => "impact law, e_n",
             Self::Iwc => "IWC rule",
+            Self::Singular => "singular-point rule",
             Self::Friction => "hybrid friction term",
             Self::MoveTime => "move time (s)",
             Self::LiftOff => "lift-off criterion",
@@ -145,12 +156,12 @@ impl Dimension {
 
     /// Whether the choice enters the open-loop results (no controller).
     pub fn in_open_loop(self) -> bool {
-        matches!(self, Self::ImpactLaw | Self::Iwc | Self::LiftOff)
+        matches!(self, Self::ImpactLaw | Self::Iwc | Self::Singular | Self::LiftOff)
     }
 
     /// Whether the choice enters the ideal (continuous-time, exact) controllers.
     pub fn in_ideal(self) -> bool {
-        matches!(self, Self::ImpactLaw | Self::Iwc | Self::MoveTime | Self::LiftOff)
+        matches!(self, Self::ImpactLaw | Self::Iwc | Self::Singular | Self::MoveTime | Self::LiftOff)
     }
 
     /// Whether the choice enters the controller `kind` (the friction term is the hybrid law's).
@@ -191,6 +202,9 @@ pub fn choices(base: &Scenario) -> Vec<Choice> {
     }
     for (k, iwc) in IwcRule::ALL.into_iter().enumerate() {
         push(Dimension::Iwc, iwc.to_string(), k as f64, Knobs { iwc, ..d });
+    }
+    for (k, singular) in SingularRule::ALL.into_iter().enumerate() {
+        push(Dimension::Singular, singular.to_string(), k as f64, Knobs { singular, ..d });
     }
     let frictions = [
         (FrictionCompensation::ModelCommandedNormal, "commanded"),
@@ -258,6 +272,7 @@ mod tests {
             let changed = [
                 k.impact_law != d.impact_law || k.e_n != d.e_n,
                 k.iwc != d.iwc,
+                k.singular != d.singular,
                 k.friction != d.friction,
                 k.move_time_s != d.move_time_s,
                 k.lift_off_gap_m != d.lift_off_gap_m,

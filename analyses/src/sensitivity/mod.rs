@@ -192,6 +192,7 @@ fn open_spec(base: &Scenario, g: &Grids, k: &Knobs) -> SweepSpec {
         iwc_rules: vec![k.iwc],
         impact_laws: vec![k.impact_law],
         e_n: vec![k.e_n],
+        singular: k.singular,
         paper_ics: vec![PaperX0::A, PaperX0::D],
         transient_s: g.open_windows_s.0,
         record_s: g.open_windows_s.1,
@@ -219,6 +220,7 @@ fn closed_spec(base: &Scenario, g: &Grids, k: &Knobs) -> SweepSpec {
         atol: base.plant.atol,
         params: base.plant.params(),
         mu_hat_factor: 1.0 + k.mu_hat_mismatch,
+        singular: k.singular,
         ..SweepSpec::paper()
     }
 }

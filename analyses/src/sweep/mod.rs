@@ -26,6 +26,7 @@ use shared::{ElbowBranch, Params, kinematics::inverse_kinematics};
 
 use plant::impact::{ImpactLaw, IwcRule};
 use plant::initial::{self, PaperX0};
+use plant::moreau_jean::SingularRule;
 use rig::scenario::Scenario;
 
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
@@ -183,6 +184,10 @@ pub struct SweepSpec {
     /// which knows `mu`). `sil-host sensitivity` varies it.
     #[serde(default = "unit", skip_serializing_if = "is_unit")]
     pub mu_hat_factor: f64,
+    /// What a slide does at the singular point `p = b = 0` (`plant::SimConfig::singular`;
+    /// written only when it is not the default, `leave`).
+    #[serde(default, skip_serializing_if = "is_leave")]
+    pub singular: SingularRule,
 }
 
 /// One initial condition of a sweep.
@@ -251,6 +256,7 @@ impl SweepSpec {
             atol: 1e-11,
             params: Params::paper(),
             mu_hat_factor: 1.0,
+            singular: SingularRule::Leave,
         }
     }
 
@@ -392,6 +398,10 @@ fn unit() -> f64 {
 
 fn is_unit(x: &f64) -> bool {
     *x == 1.0
+}
+
+fn is_leave(x: &SingularRule) -> bool {
+    *x == SingularRule::Leave
 }
 
 /// Default indicator threshold, rad/s. The paper flags `max theta1_dot > 0`; in

@@ -211,8 +211,15 @@ fn lift_offs(c: &Counters) -> u64 {
 /// set before the run finished (nothing is recorded for it).
 pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &AtomicBool) -> Option<RunRow> {
     let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..spec.params };
-    let sim =
-        SimConfig { rtol: spec.rtol, atol: spec.atol, impact_law: key.impact_law, e_n: key.e_n, iwc: key.iwc, ..SimConfig::default() };
+    let sim = SimConfig {
+        rtol: spec.rtol,
+        atol: spec.atol,
+        impact_law: key.impact_law,
+        e_n: key.e_n,
+        iwc: key.iwc,
+        singular: spec.singular,
+        ..SimConfig::default()
+    };
     let mut row = RunRow {
         index: key.index,
         impact_law: key.impact_law.name().into(),

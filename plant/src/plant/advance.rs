@@ -104,6 +104,13 @@ impl Plant {
                     .join(", ");
                 return Err(SimError::EventStorm { t: self.t, count: self.cfg.max_events_per_advance, recent });
             }
+            // A slide through the indeterminate region after a singular point
+            // (`SingularRule::Slide`) goes on time-stepped.
+            if self.time_stepping {
+                self.bridge(ctrl, Boundary::Collapse, t_end, obs, &mut events)?;
+                handled += 1;
+                continue;
+            }
             // A mode must start inside its domain (up to rounding: a slip starting from
             // rest has s v_r = +-1e-16), or it ends at once. One model evaluation gives
             // the event function and the integrator's first stage.
@@ -134,6 +141,10 @@ impl Plant {
             let hit = self.integrate(ctrl, seg_end, &start, g0, obs)?;
             self.counters.segments += 1;
             match hit {
+                Some(b @ (Boundary::Singular | Boundary::Collapse)) => {
+                    self.bridge(ctrl, b, t_end, obs, &mut events)?;
+                    handled += 1;
+                }
                 Some(b) => {
                     if !self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
                         self.cross(ctrl, b, &mut events)?;
@@ -287,16 +298,23 @@ impl Plant {
             control
         }) {
             Ok(s) => s,
-            // The dynamic jam whose step size collapsed before f_n reached jam_load m g:
-            // resolved from the last accepted point (the solve's start if it accepted
-            // none), where the slide was already jamming.
+            // The step size collapsed: at the dynamic jam before f_n reached jam_load m g
+            // (resolved from the last accepted point, the solve's start if it accepted
+            // none, where the slide was already jamming), at the singular point, or
+            // elsewhere (both crossed by a Moreau-Jean bridge from that point).
             Err(SolveError::StepSizeTooSmall { .. })
                 if let (t1, y1) = locator.last.unwrap_or((self.t, self.y))
-                    && y1.iter().all(|v| v.is_finite())
-                    && seg.jamming(t1, &y1) =>
+                    && y1.iter().all(|v| v.is_finite()) =>
             {
-                self.counters.jams_at_collapse += 1;
-                return Ok((t1, y1, Some(Boundary::Jam), 0.0));
+                let boundary = if seg.jamming(t1, &y1) {
+                    self.counters.jams_at_collapse += 1;
+                    Boundary::Jam
+                } else if seg.near_singular(t1, &y1) {
+                    Boundary::Singular
+                } else {
+                    Boundary::Collapse
+                };
+                return Ok((t1, y1, Some(boundary), 0.0));
             }
             Err(e) => return Err(SimError::Integrator { t: self.t, message: e.to_string() }),
         };

@@ -83,6 +83,10 @@ impl Plant {
                 self.project_contact()?;
                 self.enter_contact(ctrl, Entry::ConeEdge, events)
             }
+            // Crossed by a bridge in `advance`, never here: no mode's components name them.
+            Boundary::Singular | Boundary::Collapse => {
+                Err(SimError::Integrator { t: self.t, message: "a collapsed step reached the mode change (internal)".into() })
+            }
         }
     }
 

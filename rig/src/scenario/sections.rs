@@ -8,6 +8,7 @@ use firmware::{ControllerKind, config::FrictionCompensation};
 use plant::{
     impact::{ImpactLaw, IwcRule},
     initial::PaperX0,
+    moreau_jean::SingularRule,
 };
 use shared::{Params, Period};
 
@@ -31,6 +32,11 @@ pub struct PlantSection {
     /// `plastic` (docs/plant.md "Impact without collision").
     #[serde(default)]
     pub iwc: IwcRule,
+    /// What a slide does at the singular point `p = b = 0` reached with a finite
+    /// normal force: `leave` (default) or `slide` (docs/plant.md "The singular
+    /// point"; optional, written only when not the default).
+    #[serde(default, skip_serializing_if = "is_leave")]
+    pub singular: SingularRule,
     /// Integrator relative tolerance.
     pub rtol: f64,
     /// Integrator absolute tolerance.
@@ -60,6 +66,10 @@ pub struct PlantSection {
     /// Gravity `g`, m/s^2 (paper Table I: 9.81; optional).
     #[serde(default = "paper::g")]
     pub g: f64,
+}
+
+fn is_leave(rule: &SingularRule) -> bool {
+    *rule == SingularRule::Leave
 }
 
 /// The keys of `[plant]` (and `[controller.model]`) that hold the arm's

@@ -54,6 +54,11 @@ pub struct SimulateArgs {
     /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
     #[arg(long, value_enum, default_value = "restitution")]
     pub iwc: plant::impact::IwcRule,
+    /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
+    /// normal force: `leave` (the tip leaves the belt, the flight solution) or
+    /// `slide` (it slides on through the indeterminate region). docs/plant.md.
+    #[arg(long, value_enum, default_value = "leave")]
+    pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,
@@ -199,6 +204,11 @@ pub struct PoincareArgs {
     /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
     #[arg(long, value_enum, default_value = "restitution")]
     pub iwc: plant::impact::IwcRule,
+    /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
+    /// normal force: `leave` (the tip leaves the belt, the flight solution) or
+    /// `slide` (it slides on through the indeterminate region). docs/plant.md.
+    #[arg(long, value_enum, default_value = "leave")]
+    pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
     #[command(flatten)]
     pub strict: StrictArgs,

@@ -66,6 +66,11 @@ pub struct SweepArgs {
     /// `restitution` (the tip is thrown off the belt), `plastic` (left stuck, v_n = 0).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "restitution")]
     pub iwc: Vec<plant::impact::IwcRule>,
+    /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
+    /// normal force: `leave` (the tip leaves the belt) or `slide` (it slides on
+    /// through the indeterminate region). docs/plant.md "The singular point".
+    #[arg(long, value_enum, default_value = "leave")]
+    pub singular: plant::moreau_jean::SingularRule,
     /// Persistent bouncing is flagged when max theta1_dot over the record window
     /// exceeds this, rad/s. The paper's threshold is 0; an arm at rest shows
     /// theta1_dot ~ 5e-15 rad/s from rounding, hence the small default.

@@ -56,7 +56,7 @@ impl<T> Done<T> {
 
 /// The keys of `[plant]` each open-loop command sets with a flag of its own:
 /// `--set` of one of them is refused (use the flag).
-pub const PLANT_FLAGS: [(&str, &str); 8] = [
+pub const PLANT_FLAGS: [(&str, &str); 9] = [
     ("plant.mu", "--mu"),
     ("plant.v_belt", "--v-belt"),
     ("plant.x0", "--x0 or --x0-deg"),
@@ -65,6 +65,7 @@ pub const PLANT_FLAGS: [(&str, &str); 8] = [
     ("plant.rtol", "--rtol"),
     ("plant.atol", "--atol"),
     ("plant.iwc", "--iwc"),
+    ("plant.singular", "--singular"),
 ];
 
 /// The parameters of a command without a scenario file (`simulate`,

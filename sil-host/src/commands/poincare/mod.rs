@@ -97,8 +97,15 @@ pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, Initi
     // Parameters at both ends of the grid (mu, v_belt finite, ...).
     super::arm_params(&args.set, "poincare", &[], args.mu, v_min)?;
     let params = super::arm_params(&args.set, "poincare", &[], args.mu, v_max)?;
-    let sim =
-        SimConfig { rtol: args.rtol, atol: args.atol, impact_law: args.impact_law, e_n: args.e_n, iwc: args.iwc, ..SimConfig::default() };
+    let sim = SimConfig {
+        rtol: args.rtol,
+        atol: args.atol,
+        impact_law: args.impact_law,
+        e_n: args.e_n,
+        iwc: args.iwc,
+        singular: args.singular,
+        ..SimConfig::default()
+    };
     sim.validate()?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);

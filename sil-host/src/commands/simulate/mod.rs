@@ -125,6 +125,7 @@ pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
         e_n: args.e_n,
         iwc: args.iwc,
         max_step: args.max_step,
+        singular: args.singular,
         ..SimConfig::default()
     };
     sim.validate()?;

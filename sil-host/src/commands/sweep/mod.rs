@@ -60,7 +60,7 @@ fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, CliError> {
 }
 
 /// The keys a sweep sets per run or by its flags: `--set` of one of them is refused.
-const RUN_KEYS: [(&str, &str); 11] = [
+const RUN_KEYS: [(&str, &str); 12] = [
     ("plant.mu", "--mu"),
     ("plant.v_belt", "--v-belt"),
     ("plant.x0", "--ics"),
@@ -69,6 +69,7 @@ const RUN_KEYS: [(&str, &str); 11] = [
     ("plant.rtol", "--rtol"),
     ("plant.atol", "--atol"),
     ("plant.iwc", "--iwc"),
+    ("plant.singular", "--singular"),
     ("controller.kind", "--controller"),
     ("controller.mu_hat", "the sweep (mu_hat = each run's mu)"),
     ("timing.duration_s", "--transient and --record"),
@@ -123,6 +124,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         atol: args.atol,
         params,
         mu_hat_factor: 1.0,
+        singular: args.singular,
     };
     spec.validate().map_err(CliError::BadInput)?;
     Ok(spec)

@@ -1,0 +1,252 @@
+//! The search for runs that do not complete (issue 40; docs/plant.md "The corner
+//! search"): open-loop runs on random perturbed arms, each with a fine `mu` scan
+//! across its Painlevé threshold and a `v_belt` scan across the edge of its
+//! bouncing band, under both IWC rules and several sample periods. Every run must
+//! reach its end; the search counts the singular points, bridges and jams it met.
+//!
+//! An arm: each of Table I's `m`, `l`, `sigma`, `k`, `alpha0` moved uniformly
+//! within +-25 %, `H` set so that `x0a` is on the belt (as in issue 24's search),
+//! one impact law and `e_n` in [0, 0.6] drawn for it (ChaCha8 from the seed). Its
+//! threshold is the smallest `mu` at which `p = Q_22 - mu |Q_21|` reaches 0 on the
+//! belt on `x0a`'s branch (the critical `mu` of the paper's Fig. 3, `Q_22 / Q_12`);
+//! its band edge is the first belt speed, from -1 m/s up in 0.05 m/s steps, where a
+//! run from `x0a` at `max(0.6, threshold + 0.15)` changes from settled to bouncing
+//! over the last fifth of the run (or back).
+
+use nalgebra::Vector2;
+use plant::{
+    Counters, Hold, NoObserver, Plant, SimConfig, SimError,
+    impact::{ImpactLaw, IwcRule},
+    initial::{X0A, deg_to_state},
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+use shared::{Arm, ElbowBranch, Params, kinematics::inverse_kinematics};
+
+/// The search's size.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SearchSpec {
+    /// Random arms.
+    pub arms: usize,
+    /// Seed of the arms (ChaCha8).
+    pub seed: u64,
+    /// Points of the `mu` scan, over `threshold +- 0.05`.
+    pub mu_points: usize,
+    /// Points of the `v_belt` scan, over `edge +- 0.05` m/s.
+    pub v_points: usize,
+    /// Length of each run, s.
+    pub duration_s: f64,
+    /// Sample periods (the `advance` interval, s), each a run of its own.
+    pub sample_periods: Vec<f64>,
+}
+
+impl SearchSpec {
+    /// The full search of issue 40: 20 arms, 21-point scans, 300 s runs, 1 ms and
+    /// 10 ms samples, both IWC rules: 3 360 runs.
+    pub fn full() -> Self {
+        Self { arms: 20, seed: 40, mu_points: 21, v_points: 21, duration_s: 300.0, sample_periods: vec![1e-3, 1e-2] }
+    }
+
+    /// The subset CI runs: 3 arms, 5-point scans, 60 s runs, 10 ms samples (60 runs).
+    pub fn quick() -> Self {
+        Self { arms: 3, seed: 40, mu_points: 5, v_points: 5, duration_s: 60.0, sample_periods: vec![1e-2] }
+    }
+}
+
+/// One run of the search.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SearchRun {
+    /// The arm's index.
+    pub arm: usize,
+    /// The arm, with this run's `mu` and `v_belt`.
+    pub params: Params<f64>,
+    /// The simulator's settings (impact law, `e_n`, IWC rule).
+    pub sim: SimConfig,
+    /// Sample period, s.
+    pub sample_period_s: f64,
+}
+
+/// What the search found.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SearchReport {
+    /// Runs made.
+    pub runs: usize,
+    /// Runs that reached their end.
+    pub completed: usize,
+    /// Singular points met, over all runs.
+    pub singular_points: u64,
+    /// Moreau-Jean bridges, over all runs.
+    pub bridges: u64,
+    /// Time bridged, s, over all runs.
+    pub bridged_s: f64,
+    /// Dynamic jams, over all runs (of which at a collapsed step: `jams_at_collapse`).
+    pub jams: u64,
+    /// Jams resolved where the step collapsed.
+    pub jams_at_collapse: u64,
+    /// Runs that bounced persistently (touchdowns in the last fifth of the run).
+    pub bouncing: usize,
+    /// The runs that failed, each with its error.
+    pub failures: Vec<(SearchRun, String)>,
+}
+
+/// The critical `mu` of `params` on `branch`: the smallest `Q_22 / |Q_21|` over
+/// the belt (400 points across the reach), where `p(s)` can reach 0.
+pub fn threshold(params: &Params<f64>, branch: ElbowBranch) -> Option<f64> {
+    let arm = Arm::new(*params);
+    let reach = (4.0 * params.l * params.l - params.h * params.h).sqrt();
+    (1..400)
+        .filter_map(|i| {
+            let z_t = reach * (2.0 * f64::from(i) / 400.0 - 1.0);
+            let q = inverse_kinematics(params.l, &Vector2::new(z_t, -params.h), branch).ok()?;
+            let qm = arm.q_matrix(&q);
+            Some(qm[(1, 1)] / qm[(0, 1)].abs())
+        })
+        .min_by(f64::total_cmp)
+}
+
+/// The `i`-th random arm of `seed`, its impact law and `e_n`.
+pub fn arm(seed: u64, i: usize) -> (Params<f64>, ImpactLaw, f64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
+    let base = Params::<f64>::paper();
+    let mut f = || 0.75 + 0.5 * rng.random::<f64>();
+    let (m, l, sigma, k, alpha0) = (base.m * f(), base.l * f(), base.sigma * f(), base.k * f(), base.alpha0 * f());
+    let x0a = deg_to_state(X0A.deg);
+    let h = l * (x0a[0].cos() + x0a[2].cos());
+    let law = ImpactLaw::ALL[rng.random_range(0..3usize)];
+    let e_n = 0.6 * rng.random::<f64>();
+    (Params { m, l, sigma, k, alpha0, h, ..base }, law, e_n)
+}
+
+/// One open-loop run from `x0a` under zero torque; its counters, whether it
+/// bounced in the last fifth, or its error.
+pub fn simulate(run: &SearchRun, duration_s: f64) -> Result<(Counters, bool), SimError> {
+    let mut plant = Plant::new(run.params, run.sim, deg_to_state(X0A.deg), 0.0, [0.0, 0.0])?;
+    let n = (duration_s / run.sample_period_s).round() as usize;
+    let mut late_touchdowns = 0;
+    for k in 0..n {
+        let before = plant.counters().touchdowns + plant.counters().lift_offs;
+        plant.advance(&Hold([0.0, 0.0]), (k + 1) as f64 * run.sample_period_s - plant.time(), &mut NoObserver)?;
+        if k >= n * 4 / 5 {
+            late_touchdowns += plant.counters().touchdowns + plant.counters().lift_offs - before;
+        }
+    }
+    Ok((*plant.counters(), late_touchdowns > 0))
+}
+
+/// The first belt speed from -1 m/s up (0.05 m/s steps) where bouncing starts or
+/// stops at `mu` (runs of `duration_s`, 10 ms samples); -0.4 m/s if none.
+fn band_edge(params: &Params<f64>, sim: SimConfig, mu: f64, duration_s: f64) -> f64 {
+    let bouncing = |v: f64| {
+        let run = SearchRun { arm: 0, params: Params { mu, v_belt: v, ..*params }, sim, sample_period_s: 1e-2 };
+        simulate(&run, duration_s).map(|(_, b)| b).unwrap_or(false)
+    };
+    let speeds: Vec<f64> = (0..=18).map(|i| -1.0 + 0.05 * f64::from(i)).collect();
+    let states: Vec<bool> = speeds.par_iter().map(|&v| bouncing(v)).collect();
+    states.windows(2).position(|w| w[0] != w[1]).map_or(-0.4, |i| 0.5 * (speeds[i] + speeds[i + 1]))
+}
+
+/// The runs of the search: per arm, the `mu` scan at the arm's band-edge speed
+/// and the `v_belt` scan at its threshold plus 0.15, under both IWC rules and every
+/// sample period.
+pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
+    let mut runs = Vec::new();
+    for i in 0..spec.arms {
+        let (params, impact_law, e_n) = arm(spec.seed, i);
+        let Some(mu_c) = threshold(&params, ElbowBranch::Down) else { continue };
+        let sim = SimConfig { impact_law, e_n, ..SimConfig::default() };
+        let mu_band = (mu_c + 0.15).max(0.6).min(1.2);
+        let edge = band_edge(&params, sim, mu_band, spec.duration_s.min(100.0));
+        let scan = |centre: f64, points: usize| -> Vec<f64> {
+            (0..points).map(|k| centre - 0.05 + 0.1 * k as f64 / (points.max(2) - 1) as f64).collect()
+        };
+        let mut points: Vec<(f64, f64)> = scan(mu_c, spec.mu_points).into_iter().filter(|&m| m > 0.0).map(|m| (m, edge)).collect();
+        points.extend(scan(edge, spec.v_points).into_iter().filter(|&v| (-1.0..0.0).contains(&v)).map(|v| (mu_band, v)));
+        for (mu, v_belt) in points {
+            for iwc in IwcRule::ALL {
+                for &sample_period_s in &spec.sample_periods {
+                    runs.push(SearchRun {
+                        arm: i,
+                        params: Params { mu, v_belt, ..params },
+                        sim: SimConfig { iwc, ..sim },
+                        sample_period_s,
+                    });
+                }
+            }
+        }
+    }
+    runs
+}
+
+/// Runs the search on every core; `progress(done, total)` after each run.
+pub fn search(spec: &SearchSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> SearchReport {
+    let runs = plan(spec);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<(SearchRun, Result<(Counters, bool), SimError>)> = runs
+        .par_iter()
+        .map(|run| {
+            let r = simulate(run, spec.duration_s);
+            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, runs.len());
+            (*run, r)
+        })
+        .collect();
+    let mut report = SearchReport { runs: results.len(), ..SearchReport::default() };
+    for (run, r) in results {
+        match r {
+            Ok((c, bouncing)) => {
+                report.completed += 1;
+                report.singular_points += c.singular_points;
+                report.bridges += c.bridges;
+                report.bridged_s += c.bridged_s;
+                report.jams += c.jams;
+                report.jams_at_collapse += c.jams_at_collapse;
+                report.bouncing += usize::from(bouncing);
+            }
+            Err(e) => report.failures.push((run, e.to_string())),
+        }
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// CI's subset: every run completes, and the scans cross something (some runs
+    /// bounce, some do not).
+    #[test]
+    fn every_run_of_the_quick_corner_search_completes() {
+        let report = search(&SearchSpec::quick(), &|_, _| {});
+        assert!(report.runs >= 50, "{report:?}");
+        assert!(report.failures.is_empty(), "{:#?}", report.failures);
+        assert_eq!(report.completed, report.runs);
+        assert!(report.bouncing > 0 && report.bouncing < report.runs, "the scans cross a band edge: {report:?}");
+    }
+
+    /// The full search (docs/plant.md "The corner search"): `cargo test --release
+    /// -p analyses --lib corner_search -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "the full search: about 10 minutes on 2 cores"]
+    fn every_run_of_the_full_corner_search_completes() {
+        let report = search(&SearchSpec::full(), &|done, total| {
+            if done % 200 == 0 || done == total {
+                eprintln!("{done} of {total} runs");
+            }
+        });
+        let SearchReport { runs, completed, singular_points, bridges, bridged_s, jams, jams_at_collapse, bouncing, .. } = report;
+        eprintln!(
+            "runs {runs}, completed {completed}, bouncing {bouncing}, singular points {singular_points}, bridges {bridges} ({bridged_s:.4} s), jams {jams} (at collapse {jams_at_collapse}), failures {}",
+            report.failures.len()
+        );
+        assert!(report.failures.is_empty(), "{:#?}", report.failures);
+        assert_eq!(completed, runs);
+    }
+
+    /// The threshold of the paper's arm is the paper's critical `mu` (about 0.4).
+    #[test]
+    fn the_paper_arms_threshold_is_its_critical_mu() {
+        let mu_c = threshold(&Params::paper(), ElbowBranch::Down).unwrap();
+        assert!((0.3..0.5).contains(&mu_c), "{mu_c}");
+    }
+}

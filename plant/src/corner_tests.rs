@@ -1,0 +1,217 @@
+//! The singular point `p = b = 0` and the Moreau-Jean bridge (issue 40): a slide
+//! driven through the singular point by a torque law, resolved event-driven (the
+//! located passage, `p_zero`) and by the bridge under both singular rules, and the
+//! bridge's refinement.
+
+use nalgebra::{Matrix2, Vector2};
+use shared::{Arm, ElbowBranch, Params, SlipDirection, kinematics::inverse_kinematics};
+
+use crate::{
+    Controller, EventKind, NoObserver, Plant, SimConfig,
+    moreau_jean::SingularRule,
+    plant::bridge::BRIDGE_TOLERANCE,
+    segment::{Boundary, OdeState},
+};
+
+/// A torque law with the plant's model (as the paper's hybrid law has) that holds
+/// a slide's normal reaction at `f_star` (N), by `b = -f_star p(+)`, and its tip
+/// speed at `v_des` (m/s): the slide reaches `p = 0` with `b = 0` and a finite
+/// force, and passes into the indeterminate region `p < 0, b > 0`.
+struct ThroughTheCorner {
+    arm: Arm<f64>,
+    f_star: f64,
+    v_des: f64,
+}
+
+impl Controller for ThroughTheCorner {
+    fn torque(&self, _t: f64, x: &[f64; 4], _xi: &[f64; 2], _xi_dot: &mut [f64; 2]) -> [f64; 2] {
+        let mu = self.arm.params.mu;
+        let (q, qd) = (Vector2::new(x[0], x[2]), Vector2::new(x[1], x[3]));
+        let td = |u: [f64; 2]| self.arm.tip_dynamics(&q, &qd, &Arm::generalised_torque(&Vector2::new(u[0], u[1])));
+        let (t0, t1, t2) = (td([0.0, 0.0]), td([1.0, 0.0]), td([0.0, 1.0]));
+        let p = t0.p(mu, SlipDirection::Positive);
+        let g = Matrix2::new(t1.b() - t0.b(), t2.b() - t0.b(), t1.a_free[0] - t0.a_free[0], t2.a_free[0] - t0.a_free[0]);
+        let tangential = (t0.qmat[(0, 1)] - mu * t0.qmat[(0, 0)]) * self.f_star;
+        let rhs = Vector2::new(-self.f_star * p - t0.b(), -20.0 * (t0.z_dot[0] - self.v_des) - tangential - t0.a_free[0]);
+        let u = g.try_inverse().map_or(Vector2::zeros(), |gi| gi * rhs);
+        [u[0], u[1]]
+    }
+}
+
+/// The paper's arm at `mu = 0.6` sliding elbow down at `z_t = 0.160 m`
+/// (Table II: `p(+) > 0` up to 0.168 m) towards the `p = 0` point at 5 cm/s,
+/// pressed with 3 N, under `rule`.
+fn corner_case(rule: SingularRule, bridge_step: f64) -> (Plant, ThroughTheCorner) {
+    let params = Params::<f64>::paper();
+    let ctrl = ThroughTheCorner { arm: Arm::new(params), f_star: 3.0, v_des: 0.05 };
+    let q = inverse_kinematics(params.l, &Vector2::new(0.160, -params.h), ElbowBranch::Down).unwrap();
+    let jac = shared::kinematics::jacobian(params.l, &q);
+    let qd = jac.try_inverse().unwrap() * Vector2::new(ctrl.v_des, 0.0);
+    let x0 = [q[0], qd[0], q[1], qd[1]];
+    let u0 = ctrl.torque(0.0, &x0, &[0.0; 2], &mut [0.0; 2]);
+    let cfg = SimConfig { singular: rule, bridge_step, ..SimConfig::default() };
+    let plant = Plant::new(params, cfg, x0, 0.0, u0).unwrap();
+    assert_eq!(plant.mode(), shared::ContactMode::Sliding);
+    (plant, ctrl)
+}
+
+/// `p(+) / Q_22` and `b` (m/s^2) of the plant's current state under `ctrl`.
+fn p_and_b(plant: &Plant, ctrl: &ThroughTheCorner) -> (f64, f64) {
+    let x = plant.state();
+    let u = ctrl.torque(0.0, &x, &[0.0; 2], &mut [0.0; 2]);
+    let td =
+        plant.arm().tip_dynamics(&Vector2::new(x[0], x[2]), &Vector2::new(x[1], x[3]), &Arm::generalised_torque(&Vector2::new(u[0], u[1])));
+    (td.p(0.6, SlipDirection::Positive) / td.qmat[(1, 1)], td.b())
+}
+
+/// Runs the case to 0.2 ms before the event-driven `p_zero`, then crosses the
+/// singular point by a bridge; returns the plant 5 ms later and the bridge's events.
+fn bridged(rule: SingularRule, bridge_step: f64) -> (Plant, Vec<crate::PlantEvent>) {
+    let (mut reference, ctrl) = corner_case(rule, bridge_step);
+    let mut t_zero = None;
+    for k in 0..1000 {
+        let r = reference.advance(&ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
+        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
+            t_zero = Some(e.t);
+            break;
+        }
+    }
+    let t_zero = t_zero.expect("the slide reaches p = 0");
+    let (mut plant, _) = corner_case(rule, bridge_step);
+    plant.advance(&ctrl, t_zero - 2e-4, &mut NoObserver).unwrap();
+    let (p, b) = p_and_b(&plant, &ctrl);
+    assert!(p > 0.0 && p < 1e-3 && b < 0.0 && -b / 9.81 < 1e-2, "near the singular point: p/Q22 {p}, b {b}");
+    let mut events = Vec::new();
+    plant.bridge(&ctrl, Boundary::Singular, plant.time() + 5e-3, &mut NoObserver, &mut events).unwrap();
+    while plant.time() < t_zero - 2e-4 + 5e-3 - 1e-12 {
+        events.extend(plant.advance(&ctrl, t_zero - 2e-4 + 5e-3 - plant.time(), &mut NoObserver).unwrap().events);
+    }
+    (plant, events)
+}
+
+/// Event-driven, the located passage through the singular point is `p_zero`
+/// followed by an impact without collision, as before issue 40 (the controlled
+/// corner of the hybrid law's `Z_t,sliding` trials): no singular point, no bridge.
+#[test]
+fn a_located_passage_through_the_singular_point_stays_p_zero() {
+    let (mut plant, ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
+    for k in 0..1000 {
+        plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap();
+        if plant.counters().p_zero > 0 {
+            break;
+        }
+    }
+    let c = plant.counters();
+    assert_eq!((c.p_zero, c.impacts_without_collision, c.singular_points, c.bridges), (1, 1, 0, 0));
+}
+
+/// The rule decides the indeterminate region: `leave` takes the flight solution
+/// (the tip is off the belt 5 ms later), `slide` the sliding one (still sliding,
+/// time-stepped, with the reaction `f_n = -b/p` at the law's 3 N and `p < 0, b > 0`).
+#[test]
+fn the_singular_rule_leaves_or_slides_through_the_indeterminate_region() {
+    let (plant, events) = bridged(SingularRule::Leave, crate::config::BRIDGE_STEP);
+    assert_eq!(events[0].kind, EventKind::SingularPoint);
+    assert_eq!(events[0].mode_after, shared::ContactMode::Flight);
+    assert_eq!(plant.mode(), shared::ContactMode::Flight);
+    assert!(plant.tip()[1] + plant.arm().params.h > 0.0, "off the belt");
+    assert_eq!((plant.counters().singular_points, plant.counters().bridges), (1, 1));
+
+    let (plant, events) = bridged(SingularRule::Slide, crate::config::BRIDGE_STEP);
+    assert_eq!(events[0].kind, EventKind::SingularPoint);
+    assert_eq!(plant.mode(), shared::ContactMode::Sliding);
+    let (p, b) = p_and_b(&plant, &PRESS);
+    assert!(p < 0.0 && b > 0.0, "in the indeterminate region: p/Q22 {p}, b {b}");
+    let u = PRESS.torque(0.0, &plant.state(), &[0.0; 2], &mut [0.0; 2]);
+    let f_n = plant.contact_force(u)[1];
+    assert!((f_n - 3.0).abs() < 0.05, "the law's reaction: {f_n} N");
+    assert!(plant.counters().bridges >= 5, "time-stepped on: {}", plant.counters().bridges);
+}
+
+/// The law of the two tests above, for reading `p` and `b` after the run.
+const PRESS: ThroughTheCorner = ThroughTheCorner {
+    arm: Arm {
+        params: Params { m: 0.12, l: 0.21, sigma: 0.005, k: 1.3, h: 0.3775, alpha0: 0.23945917337362202, g: 9.81, mu: 0.6, v_belt: -0.4 },
+    },
+    f_star: 3.0,
+    v_des: 0.05,
+};
+
+/// The bridge converges as its step shrinks: from 0.2 ms before the singular
+/// point, a 1 ms stretch's end angles move about half as much at each halving of
+/// the step (Moreau-Jean is first order) and its outcome does not change; and the
+/// bridged run, refined to [`BRIDGE_TOLERANCE`], has the same outcome and end
+/// state (to twice that tolerance) from any starting bridge step.
+#[test]
+fn a_bridged_run_converges_as_the_bridge_step_shrinks() {
+    let (mut plant, ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
+    let mut t_zero = None;
+    let mut reference = plant.clone();
+    for k in 0..1000 {
+        let r = reference.advance(&ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
+        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
+            t_zero = Some(e.t);
+            break;
+        }
+    }
+    plant.advance(&ctrl, t_zero.unwrap() - 2e-4, &mut NoObserver).unwrap();
+    let y0: OdeState = {
+        let x = plant.state();
+        [x[0], x[1], x[2], x[3], 0.0, 0.0]
+    };
+    let ends: Vec<(OdeState, crate::moreau_jean::ContactSolution)> = [25, 50, 100, 200, 400, 800]
+        .into_iter()
+        .map(|n| {
+            let s = plant.stretch(&ctrl, plant.time(), &y0, 1e-3, n).unwrap();
+            (*s.states.last().unwrap(), s.last)
+        })
+        .collect();
+    let moved: Vec<f64> = ends.windows(2).map(|w| (w[0].0[0] - w[1].0[0]).abs().max((w[0].0[2] - w[1].0[2]).abs())).collect();
+    assert!(ends.windows(2).all(|w| w[0].1 == w[1].1), "the same outcome: {:?}", ends.iter().map(|e| e.1).collect::<Vec<_>>());
+    assert!(moved.windows(2).all(|w| w[1] < 0.7 * w[0] && w[1] > 0.3 * w[0]), "first-order convergence: {moved:?}");
+
+    let runs: Vec<([f64; 4], shared::ContactMode, Vec<EventKind>)> = [4e-5, 2e-5, 1e-5, 3e-6]
+        .into_iter()
+        .map(|h| {
+            let (plant, events) = bridged(SingularRule::Leave, h);
+            (plant.state(), plant.mode(), events.iter().map(|e| e.kind).collect())
+        })
+        .collect();
+    for w in runs.windows(2) {
+        assert_eq!((w[0].1, &w[0].2), (w[1].1, &w[1].2), "the same outcome");
+        let d = (w[0].0[0] - w[1].0[0]).abs().max((w[0].0[2] - w[1].0[2]).abs());
+        assert!(d <= 2.0 * BRIDGE_TOLERANCE, "end angles within the tolerance: {d}");
+    }
+}
+
+/// `near_singular` names the neighbourhood along the slide into the corner: both
+/// `p/Q22` and `-b/g` at most 0.05 with the reaction (3 N) finite; false at the
+/// start of the slide, true just before `p = 0`.
+#[test]
+fn the_singular_neighbourhood_is_both_small_with_a_finite_force() {
+    let (mut plant, ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
+    let (cell, trig) = (std::cell::Cell::new(0), crate::trig::TrigCache::new());
+    let mut seen = Vec::new();
+    for k in 0..1000 {
+        let x = plant.state();
+        let y: OdeState = [x[0], x[1], x[2], x[3], 0.0, 0.0];
+        let seg = crate::segment::Segment::new(
+            plant.arm(),
+            crate::Phase::Sliding(SlipDirection::Positive),
+            &ctrl,
+            false,
+            plant.config(),
+            &cell,
+            &trig,
+        );
+        let (p, b) = p_and_b(&plant, &ctrl);
+        let near = seg.near_singular(plant.time(), &y);
+        assert_eq!(near, p <= 0.05 && -b / 9.81 <= 0.05, "p/Q22 {p}, b {b}");
+        seen.push(near);
+        plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap();
+        if plant.counters().p_zero > 0 {
+            break;
+        }
+    }
+    assert!(!seen[0] && *seen.last().unwrap(), "{seen:?}");
+}
