@@ -32,7 +32,7 @@ pub struct SearchSpec {
     pub arms: usize,
     /// Seed of the arms (ChaCha8).
     pub seed: u64,
-    /// Points of the `mu` scan, over `threshold +- 0.05`.
+    /// Points of each `mu` scan, over `threshold - 0.05` to `threshold + 0.25`.
     pub mu_points: usize,
     /// Points of the `v_belt` scan, over `edge +- 0.05` m/s.
     pub v_points: usize,
@@ -44,14 +44,15 @@ pub struct SearchSpec {
 
 impl SearchSpec {
     /// The full search of issue 40: 40 arms, 21-point scans, 300 s runs, 10 ms and
-    /// 100 ms samples, both IWC rules: about 6 700 runs.
+    /// 100 ms samples, both IWC rules: about 10 000 runs.
     pub fn full() -> Self {
         Self { arms: 40, seed: 40, mu_points: 21, v_points: 21, duration_s: 300.0, sample_periods: vec![1e-2, 1e-1] }
     }
 
-    /// The subset CI runs: 3 arms, 5-point scans, 60 s runs, 10 ms samples (60 runs).
+    /// The subset CI runs: 3 arms (issue 24's first), 13-point `mu` scans, 5-point
+    /// `v_belt` scans, 130 s runs, 10 ms samples (186 runs).
     pub fn quick() -> Self {
-        Self { arms: 3, seed: 40, mu_points: 5, v_points: 5, duration_s: 60.0, sample_periods: vec![1e-2] }
+        Self { arms: 3, seed: 40, mu_points: 13, v_points: 5, duration_s: 130.0, sample_periods: vec![1e-2] }
     }
 }
 
@@ -106,8 +107,23 @@ pub fn threshold(params: &Params<f64>, branch: ElbowBranch) -> Option<f64> {
         .min_by(f64::total_cmp)
 }
 
-/// The `i`-th random arm of `seed`, its impact law and `e_n`.
+/// The `i`-th arm of `seed`, its impact law and `e_n`. Arm 0 is the one issue 24's
+/// search found (Table I's `m` +11 %, `l` +4 %, `sigma` +19 %, `k` -16 %, `alpha0`
+/// -17 %; Poisson, `e_n = 0.1`), where slides run into the dynamic jam; the
+/// others are random.
 pub fn arm(seed: u64, i: usize) -> (Params<f64>, ImpactLaw, f64) {
+    if i == 0 {
+        let params = Params {
+            m: 0.13288317384683318,
+            l: 0.21762723339408532,
+            sigma: 0.005932199636113795,
+            k: 1.0920241576528966,
+            h: 0.3912149518771235,
+            alpha0: 0.19777060647993205,
+            ..Params::paper()
+        };
+        return (params, ImpactLaw::Poisson, 0.1);
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
     let base = Params::<f64>::paper();
     let mut f = || 0.75 + 0.5 * rng.random::<f64>();
@@ -147,9 +163,15 @@ fn band_edge(params: &Params<f64>, sim: SimConfig, mu: f64, duration_s: f64) -> 
     states.windows(2).position(|w| w[0] != w[1]).map_or(-0.4, |i| 0.5 * (speeds[i] + speeds[i + 1]))
 }
 
-/// The runs of the search: per arm, the `mu` scan at the arm's band-edge speed
-/// and the `v_belt` scan at its threshold plus 0.15, under both IWC rules and every
-/// sample period.
+/// The belt speed of the second `mu` scan, m/s: near the fast end of Table I's
+/// range, where issue 24's arm ran into the jam.
+const FAST_BELT: f64 = -0.98;
+
+/// The runs of the search: per arm, the `mu` scans from its threshold - 0.05 to
+/// + 0.25 (across the Painlevé threshold and the onset of bouncing) at its
+/// band-edge speed and at -0.98 m/s, and the `v_belt` scan over the edge +- 0.05
+/// m/s at `max(0.6, threshold + 0.15)`, under both IWC rules and every sample
+/// period.
 pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
     let mut runs = Vec::new();
     for i in 0..spec.arms {
@@ -158,11 +180,15 @@ pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
         let sim = SimConfig { impact_law, e_n, ..SimConfig::default() };
         let mu_band = (mu_c + 0.15).max(0.6).min(1.2);
         let edge = band_edge(&params, sim, mu_band, spec.duration_s.min(100.0));
-        let scan = |centre: f64, points: usize| -> Vec<f64> {
-            (0..points).map(|k| centre - 0.05 + 0.1 * k as f64 / (points.max(2) - 1) as f64).collect()
+        let scan = |lo: f64, hi: f64, points: usize| -> Vec<f64> {
+            (0..points).map(|k| lo + (hi - lo) * k as f64 / (points.max(2) - 1) as f64).collect()
         };
-        let mut points: Vec<(f64, f64)> = scan(mu_c, spec.mu_points).into_iter().filter(|&m| m > 0.0).map(|m| (m, edge)).collect();
-        points.extend(scan(edge, spec.v_points).into_iter().filter(|&v| (-1.0..0.0).contains(&v)).map(|v| (mu_band, v)));
+        let mut points = Vec::new();
+        for v in [edge, FAST_BELT] {
+            points.extend(scan(mu_c - 0.05, mu_c + 0.25, spec.mu_points).into_iter().filter(|&m| m > 0.0).map(|m| (m, v)));
+        }
+        points
+            .extend(scan(edge - 0.05, edge + 0.05, spec.v_points).into_iter().filter(|&v| (-1.0..0.0).contains(&v)).map(|v| (mu_band, v)));
         for (mu, v_belt) in points {
             for iwc in IwcRule::ALL {
                 for &sample_period_s in &spec.sample_periods {
@@ -222,6 +248,7 @@ mod tests {
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(report.completed, report.runs);
         assert!(report.bouncing > 0 && report.bouncing < report.runs, "the scans cross a band edge: {report:?}");
+        assert!(report.jams > 0, "issue 24's arm meets the corner: {report:?}");
     }
 
     /// The full search (docs/plant.md "The corner search"): `cargo test --release

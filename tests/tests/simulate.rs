@@ -293,3 +293,27 @@ fn with_no_friction_a_tip_at_rest_is_never_a_cone_violation() {
     // The run reached the rest the violation was flagged at (t = 19.81 s).
     assert!(summary["counters"]["touchdowns"].as_u64().unwrap() > 1000);
 }
+
+/// Issue 40: the singular-point rule is a setting of every run: `--singular slide`
+/// is written in the summary's `sim` (the default, `leave`, is not), the counters
+/// name the singular points and bridges, and a value that is no rule is refused.
+#[test]
+fn the_singular_rule_is_a_setting_and_its_counters_are_in_every_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    for (rule, written) in [(None, false), (Some("slide"), true)] {
+        let out = dir.path().join(format!("{rule:?}"));
+        let mut args = vec!["simulate", "--duration", "1", "--out", out.to_str().unwrap()];
+        if let Some(r) = rule {
+            args.extend(["--singular", r]);
+        }
+        assert_eq!(run(&args), 0);
+        let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(s["sim"].get("singular").is_some(), written, "{rule:?}: {}", s["sim"]);
+        for key in ["singular_points", "bridges", "bridged_s"] {
+            assert_eq!(s["counters"][key].as_f64(), Some(0.0), "{key}");
+        }
+    }
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sil-host-e2e")).args(["simulate", "--singular", "stay"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("leave"), "the choices are named");
+}
