@@ -135,9 +135,12 @@ pub fn arm(seed: u64, i: usize) -> (Params<f64>, ImpactLaw, f64) {
     (Params { m, l, sigma, k, alpha0, h, ..base }, law, e_n)
 }
 
+/// A run's counters and whether it bounced in the last fifth, or its error.
+pub type RunOutcome = Result<(Counters, bool), SimError>;
+
 /// One open-loop run from `x0a` under zero torque; its counters, whether it
 /// bounced in the last fifth, or its error.
-pub fn simulate(run: &SearchRun, duration_s: f64) -> Result<(Counters, bool), SimError> {
+pub fn simulate(run: &SearchRun, duration_s: f64) -> RunOutcome {
     let mut plant = Plant::new(run.params, run.sim, deg_to_state(X0A.deg), 0.0, [0.0, 0.0])?;
     let n = (duration_s / run.sample_period_s).round() as usize;
     let mut late_touchdowns = 0;
@@ -167,18 +170,18 @@ fn band_edge(params: &Params<f64>, sim: SimConfig, mu: f64, duration_s: f64) -> 
 /// range, where issue 24's arm ran into the jam.
 const FAST_BELT: f64 = -0.98;
 
-/// The runs of the search: per arm, the `mu` scans from its threshold - 0.05 to
-/// + 0.25 (across the Painlevé threshold and the onset of bouncing) at its
-/// band-edge speed and at -0.98 m/s, and the `v_belt` scan over the edge +- 0.05
-/// m/s at `max(0.6, threshold + 0.15)`, under both IWC rules and every sample
-/// period.
+/// The runs of the search: per arm, the `mu` scans from 0.05 below its threshold
+/// to 0.25 above it (across the Painlevé threshold and the onset of bouncing) at
+/// its band-edge speed and at -0.98 m/s, and the `v_belt` scan over the edge
+/// plus and minus 0.05 m/s at `max(0.6, threshold + 0.15)` (at most 1.2), under
+/// both IWC rules and every sample period.
 pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
     let mut runs = Vec::new();
     for i in 0..spec.arms {
         let (params, impact_law, e_n) = arm(spec.seed, i);
         let Some(mu_c) = threshold(&params, ElbowBranch::Down) else { continue };
         let sim = SimConfig { impact_law, e_n, ..SimConfig::default() };
-        let mu_band = (mu_c + 0.15).max(0.6).min(1.2);
+        let mu_band = (mu_c + 0.15).clamp(0.6, 1.2);
         let edge = band_edge(&params, sim, mu_band, spec.duration_s.min(100.0));
         let scan = |lo: f64, hi: f64, points: usize| -> Vec<f64> {
             (0..points).map(|k| lo + (hi - lo) * k as f64 / (points.max(2) - 1) as f64).collect()
@@ -209,7 +212,7 @@ pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
 pub fn search(spec: &SearchSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> SearchReport {
     let runs = plan(spec);
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<(SearchRun, Result<(Counters, bool), SimError>)> = runs
+    let results: Vec<(SearchRun, RunOutcome)> = runs
         .par_iter()
         .map(|run| {
             let r = simulate(run, spec.duration_s);
