@@ -57,6 +57,7 @@ def simulate(
     atol: float = 1e-11,
     max_step: Optional[float] = None,
     iwc: str = "restitution",
+    singular: str = "leave",
     set: _args.Overrides = None,
     strict: bool = False,
     progress: Progress = True,
@@ -78,6 +79,9 @@ def simulate(
         max_step: the largest integrator step, s (``None``: the tolerances and the
             samples set the steps; a cap gives a reference run whose steps differ).
         iwc: impact-without-collision rule, ``"restitution"`` or ``"plastic"``.
+        singular: the rule where a slide reaches ``p = 0`` and ``b = 0`` with a
+            finite force, ``"leave"`` (the tip leaves the belt) or ``"slide"``
+            (it slides on through the indeterminate region); docs/plant.md.
         set: the arm's parameters (paper Table I, SI, radians): ``{"plant.m":
             0.24}`` or ``["plant.m=0.24"]``; keys ``plant.m``, ``plant.l``,
             ``plant.sigma``, ``plant.k``, ``plant.h``, ``plant.alpha0``, ``plant.g``.
@@ -196,6 +200,7 @@ def poincare(
     atol: float = 1e-11,
     threads: Optional[int] = None,
     iwc: str = "restitution",
+    singular: str = "leave",
     set: _args.Overrides = None,
     strict: bool = False,
     progress: Progress = True,
@@ -255,6 +260,7 @@ def sweep(
     impact_law: Union[str, Sequence[str]] = ("newton",),
     e_n: Union[float, Sequence[float]] = (0.2,),
     iwc: Union[str, Sequence[str]] = ("restitution",),
+    singular: str = "leave",
     threshold: float = 1e-6,
     rtol: float = 1e-9,
     atol: float = 1e-11,
@@ -281,6 +287,7 @@ def sweep(
             continuous-time law.
         scenario: closed loop: a scenario path or dict (:func:`run`).
         impact_law, e_n, iwc: sweep dimensions (lists).
+        singular: the singular-point rule, ``"leave"`` or ``"slide"`` (one for all runs).
         threshold: bouncing when ``max theta1_dot`` over the record exceeds it, rad/s.
         set: open loop: the arm's parameters; closed loop: any scenario key but
             those the sweep sets.

@@ -79,7 +79,7 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
 fn sensitivity_properties(study: &serde_json::Value) {
     let results = study["results"].as_array().unwrap();
     let defaults: Vec<&serde_json::Value> = results.iter().filter(|r| r["choice"]["is_default"] == true).collect();
-    assert_eq!(defaults.len(), 11, "one default per dimension");
+    assert_eq!(defaults.len(), 12, "one default per dimension (12 dimensions since issue 40's singular-point rule)");
     let zmax_of = |r: &serde_json::Value| -> Vec<(String, serde_json::Value)> {
         r["zmax"]
             .as_array()
