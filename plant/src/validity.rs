@@ -5,8 +5,9 @@
 //! A *violation* is a result the model's laws do not allow: an impact that created
 //! energy (never expected: the laws fall back to the energetic one), a contact held
 //! with the friction cone ignored (the documented corner case), or a run the
-//! integrator could not finish. Fallbacks and Zeno stops are documented modelling
-//! rules, not violations, and are counted so a reader can judge how often they act.
+//! integrator could not finish. Fallbacks, Zeno stops, singular points and bridges
+//! are documented modelling rules, not violations, and are counted so a reader can
+//! judge how often they act.
 
 use serde::{Deserialize, Serialize};
 
@@ -27,6 +28,18 @@ pub struct Validity {
     pub zeno_stops: u64,
     /// Runs the integrator or the event handling could not finish ([`SimError::is_integrator_failure`]).
     pub integrator_failures: u64,
+    /// Singular points `p = b = 0` crossed under the singular rule (a documented
+    /// rule; written only when not 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub singular_points: u64,
+    /// Moreau-Jean bridges across a collapsed step (a documented rule, singular
+    /// points included; written only when not 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub bridges: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 impl Validity {
@@ -39,6 +52,8 @@ impl Validity {
             cone_violations: counters.cone_violations,
             zeno_stops: counters.zeno_stops,
             integrator_failures: u64::from(failure.is_some_and(SimError::is_integrator_failure)),
+            singular_points: counters.singular_points,
+            bridges: counters.bridges,
         }
     }
 
@@ -60,6 +75,8 @@ impl Validity {
         self.cone_violations += other.cone_violations;
         self.zeno_stops += other.zeno_stops;
         self.integrator_failures += other.integrator_failures;
+        self.singular_points += other.singular_points;
+        self.bridges += other.bridges;
     }
 
     /// The violations in words (`"2 cone violations, 1 integrator failure"`), empty if none.
@@ -81,7 +98,8 @@ impl Validity {
 
 impl std::fmt::Display for Validity {
     /// One line: `energy-creating impacts 0 | Newton fallbacks 0 | Poisson fallbacks 0 |
-    /// cone violations 0 | Zeno stops 3 | integrator failures 0`.
+    /// cone violations 0 | Zeno stops 3 | integrator failures 0`, then `| singular
+    /// points 1 | bridges 2` where a bridge acted.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
@@ -92,7 +110,11 @@ impl std::fmt::Display for Validity {
             self.cone_violations,
             self.zeno_stops,
             self.integrator_failures
-        )
+        )?;
+        if self.bridges > 0 || self.singular_points > 0 {
+            write!(f, " | singular points {} | bridges {}", self.singular_points, self.bridges)?;
+        }
+        Ok(())
     }
 }
 
@@ -112,5 +134,21 @@ mod tests {
         assert_eq!(failed.integrator_failures, 1);
         let bad_input = Validity::of(&Counters::default(), Some(&SimError::BadStep(-1.0)));
         assert_eq!(bad_input.integrator_failures, 0, "bad input is not an integrator failure");
+    }
+
+    /// Singular points and bridges are rules, not violations; they show in the line
+    /// and the JSON only where they acted, so a run without them reads as before.
+    #[test]
+    fn singular_points_and_bridges_show_where_they_acted() {
+        let quiet = Validity::default();
+        assert!(!quiet.to_string().contains("bridges"));
+        assert!(!serde_json::to_string(&quiet).unwrap().contains("bridges"));
+        let counters = Counters { singular_points: 1, bridges: 3, ..Counters::default() };
+        let acted = Validity::of(&counters, None);
+        assert!(acted.is_valid());
+        assert!(acted.to_string().ends_with(" | singular points 1 | bridges 3"), "{acted}");
+        let json = serde_json::to_string(&acted).unwrap();
+        assert!(json.contains("\"singular_points\":1") && json.contains("\"bridges\":3"), "{json}");
+        assert_eq!(serde_json::from_str::<Validity>(&json).unwrap(), acted);
     }
 }

@@ -374,7 +374,9 @@ enum Ended {
 }
 
 impl RunRow {
-    /// The run's validity counters ([`plant::Validity`]).
+    /// The run's validity counters ([`plant::Validity`]); the rows do not carry the
+    /// singular points and bridges (0 here: a column would change the row layout,
+    /// `FORMAT`).
     pub fn validity(&self) -> Validity {
         Validity {
             energy_gains: self.energy_gains,
@@ -383,6 +385,7 @@ impl RunRow {
             cone_violations: self.cone_violations,
             zeno_stops: self.zeno_stops,
             integrator_failures: self.integrator_failures,
+            ..Validity::default()
         }
     }
 }
