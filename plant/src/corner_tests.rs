@@ -215,3 +215,39 @@ fn the_singular_neighbourhood_is_both_small_with_a_finite_force() {
     }
     assert!(!seen[0] && *seen.last().unwrap(), "{seen:?}");
 }
+
+/// Whatever the mode, the bridge is the same model: from a flight that lands on
+/// the belt within it (an impact, Newton's law with friction, as the event-driven
+/// touchdown), a 1 ms bridge ends where the event-driven integration does, to
+/// within a few times its step (first order: half as far at half the step).
+#[test]
+fn a_bridge_across_a_touchdown_agrees_with_the_event_driven_run() {
+    let params = Params::<f64>::paper();
+    // x0a lifted 1 mm, falling at 0.2 m/s.
+    let q = inverse_kinematics(params.l, &Vector2::new(0.17, -params.h + 1e-4), ElbowBranch::Down).unwrap();
+    let qd = shared::kinematics::jacobian(params.l, &q).try_inverse().unwrap() * Vector2::new(0.0, -0.2);
+    let x0 = [q[0], qd[0], q[1], qd[1]];
+    let mut reference = Plant::new(params, SimConfig::default(), x0, 0.0, [0.0; 2]).unwrap();
+    assert_eq!(reference.mode(), shared::ContactMode::Flight);
+    let events = reference.advance(&crate::Hold([0.0; 2]), 2e-3, &mut NoObserver).unwrap().events;
+    assert!(events.iter().any(|e| e.kind == EventKind::Touchdown), "it lands: {events:?}");
+    let gaps: Vec<f64> = [2e-5, 1e-5]
+        .into_iter()
+        .map(|h| {
+            let cfg = SimConfig { bridge_step: h, bridge_length: 2e-3, ..SimConfig::default() };
+            let mut plant = Plant::new(params, cfg, x0, 0.0, [0.0; 2]).unwrap();
+            let mut events = Vec::new();
+            // One stretch at exactly this step: the refinement is tested above.
+            let y0: OdeState = [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0];
+            let stretch = plant.stretch(&crate::Hold([0.0; 2]), 0.0, &y0, 2e-3, (2e-3 / h) as usize).unwrap();
+            let end = stretch.states.last().unwrap();
+            plant.bridge(&crate::Hold([0.0; 2]), Boundary::Collapse, 2e-3, &mut NoObserver, &mut events).unwrap();
+            assert_eq!(events[0].kind, EventKind::Bridge);
+            let x = reference.state();
+            (0..4).map(|i| (end[[0, 1, 2, 3][i]] - x[i]).abs()).fold(0.0, f64::max)
+        })
+        .collect();
+    // Measured: 6.3e-3 and 3.1e-3 (rad, rad/s) at 20 and 10 us.
+    assert!(gaps[0] < 0.02, "agrees to first order: {gaps:?}");
+    assert!(gaps[1] > 0.4 * gaps[0] && gaps[1] < 0.6 * gaps[0], "half as far at half the step: {gaps:?}");
+}
