@@ -46,8 +46,15 @@ impl ControllerKind {
 /// With the commanded normal force, `f_t_hat = -mu_hat s a_f`, there is no loop
 /// and `f_n = a_f` exactly when `mu_hat = mu`: that is the default.
 ///
+/// The robust variant, `f_t_hat = -mu_est s a_f`, keeps the commanded normal force
+/// (no loop through `f_n`) and replaces `mu_hat` by an online estimate from the
+/// ratio `-s f_t / f_n` the load cell measures while the tip slides
+/// ([`crate::mu_estimate`]): Coulomb's law makes that ratio `mu` whatever the law
+/// commands, so the estimate feeds no loop back, and a wrong `mu_hat` leaves no
+/// steady-state error once it has converged.
+///
 /// Scenario files name it `controller.friction`: `measured`, `measured_normal`,
-/// `commanded` or `none`.
+/// `commanded`, `none` or `estimated`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum FrictionCompensation {
@@ -65,6 +72,12 @@ pub enum FrictionCompensation {
     /// No friction term.
     #[serde(rename = "none")]
     None,
+    /// `-mu_est s a_f` with the commanded normal force and `mu_est` estimated online
+    /// from the measured `f_t / f_n` while sliding ([`crate::mu_estimate`]): the
+    /// robust variant for an arm whose friction is not known.
+    #[serde(rename = "estimated")]
+    #[cfg_attr(feature = "clap", value(name = "estimated"))]
+    Estimated,
 }
 
 /// PID gains per joint of `q' = [theta1, theta2 - theta1]` (paper eq. 8).

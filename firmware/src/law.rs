@@ -9,6 +9,7 @@ use shared::{
 
 use crate::{
     config::{FrictionCompensation, HybridGains, PidGains},
+    mu_estimate::{FrictionSample, MuEstimate},
     reference::RefPoint,
 };
 
@@ -96,11 +97,14 @@ pub fn pid(
     if u.iter().all(|x| x.is_finite()) { Ok(u) } else { Err(LawError::NonFinite) }
 }
 
-/// State of the hybrid law's force integrator (N s).
+/// State of the hybrid law: its force integrator and, for
+/// [`FrictionCompensation::Estimated`], the friction estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct HybridState {
     /// `int (f_n* - f_n) dt`, N s.
     pub force_integral: f32,
+    /// The online estimate of `mu` ([`crate::mu_estimate`]; held at `mu_hat` by the other terms).
+    pub mu: MuEstimate,
 }
 
 /// Signals of one evaluation of the hybrid law (for telemetry and tests).
@@ -112,6 +116,8 @@ pub struct HybridSignals {
     pub a_f: f32,
     /// The friction term used, N.
     pub f_t_hat: f32,
+    /// The friction coefficient the term used: `mu_hat`, or the estimate.
+    pub mu_used: f32,
     /// Generalised torque `u = [u1 - u2, u2]`, N m (paper eq. 9).
     pub u_gen: [f32; 2],
 }
@@ -208,22 +214,37 @@ pub fn hybrid_trig(
     let f_floor = if f_n_ref > 1.0 { f_n_ref } else { 1.0 };
     let i_max = if gains.ki > 0.0 { 4.0 * f_floor / gains.ki } else { 0.0 };
     state.force_integral = clamp(state.force_integral, -i_max, i_max);
-    let s = if z_dot[0] - input.v_belt < 0.0 { -1.0 } else { 1.0 };
+    let v_r = z_dot[0] - input.v_belt;
+    let s = if v_r < 0.0 { -1.0 } else { 1.0 };
+    let m = arm.mass_matrix_cos(c21);
+    let mu_used = if comp == FrictionCompensation::Estimated {
+        // p / Q_22 with the current estimate, Q = J M^-1 J^T (paper eq. 3) from M's closed-form inverse.
+        let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+        let (i11, i12, i22) = (m[(1, 1)] / det, -m[(0, 1)] / det, m[(0, 0)] / det);
+        let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
+        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
+        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+        let p_over_q22 = (q22 - state.mu.mu(p.mu) * s * q21) / q22;
+        let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p_over_q22 };
+        state.mu.update(p.mu, &sample, dt);
+        state.mu.mu(p.mu)
+    } else {
+        p.mu
+    };
     let f_t_hat = match comp {
         FrictionCompensation::Measured => input.f_t,
-        FrictionCompensation::ModelMeasuredNormal => -p.mu * s * input.f_n,
-        FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
+        FrictionCompensation::ModelMeasuredNormal => -mu_used * s * input.f_n,
+        FrictionCompensation::ModelCommandedNormal | FrictionCompensation::Estimated => -mu_used * s * a_f,
         FrictionCompensation::None => 0.0,
     };
     let wc = arm.w_sin(trig.s1, trig.s2, &q, &qd) + arm.c_sin(s12, &qd);
-    let m = arm.mass_matrix_cos(c21);
     let s_vec = jdot_qdot_trig(p.l, trig, &qd);
     let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
     if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
         return Err(LawError::NonFinite);
     }
-    Ok((motor, HybridSignals { a_v, a_f, f_t_hat, u_gen: [u_gen[0], u_gen[1]] }))
+    Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]] }))
 }
 
 #[cfg(test)]
@@ -269,7 +290,9 @@ mod tests {
         let f_t_hat = match comp {
             FrictionCompensation::Measured => input.f_t,
             FrictionCompensation::ModelMeasuredNormal => -p.mu * s * input.f_n,
-            FrictionCompensation::ModelCommandedNormal => -p.mu * s * a_f,
+            // The estimate is the law's own (tested in crate::mu_estimate); this
+            // reference covers the four fixed terms.
+            FrictionCompensation::ModelCommandedNormal | FrictionCompensation::Estimated => -p.mu * s * a_f,
             FrictionCompensation::None => 0.0,
         };
         let wc = arm.w(&q, &qd) + arm.c(&q, &qd);
@@ -280,7 +303,7 @@ mod tests {
         if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
             return Err(LawError::NonFinite);
         }
-        Ok((motor, HybridSignals { a_v, a_f, f_t_hat, u_gen: [u_gen[0], u_gen[1]] }))
+        Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used: p.mu, u_gen: [u_gen[0], u_gen[1]] }))
     }
 
     proptest! {
@@ -307,7 +330,7 @@ mod tests {
             ][comp];
             let reference = RefPoint { pos: ref_pos, vel: ref_vel, acc: ref_acc, moving: true };
             let input = HybridInput { q: Vector2::new(q0, q1), qd: Vector2::new(qd0, qd1), f_t, f_n, v_belt };
-            let (mut a, mut b) = (HybridState { force_integral: integral }, HybridState { force_integral: integral });
+            let (mut a, mut b) = (HybridState { force_integral: integral, ..HybridState::default() }, HybridState { force_integral: integral, ..HybridState::default() });
             let new = hybrid(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut a, 1e-3, saturated).unwrap();
             let old = hybrid_unshared(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut b, 1e-3, saturated).unwrap();
             let bits = |(m, s): ([f32; 2], HybridSignals)| [m[0], m[1], s.a_v, s.a_f, s.f_t_hat, s.u_gen[0], s.u_gen[1]].map(f32::to_bits);
@@ -341,7 +364,7 @@ mod tests {
             let reference = RefPoint { pos: ref_pos, vel: ref_vel, acc: ref_acc, moving: true };
             // The exact friction force is what the law compensates (its `Measured` option).
             // f_t depends on f_n = a_f; iterate the fixed point once with the law's own a_f.
-            let mut state = HybridState { force_integral: integral };
+            let mut state = HybridState { force_integral: integral, ..HybridState::default() };
             let a_f = cfg.f_n_ref + cfg.hybrid.ki * integral;
             let f_t_exact = -(params.mu as f32) * dir.sign::<f32>() * a_f;
             let input = HybridInput { q: q.cast(), qd: qd.cast(), f_t: f_t_exact, f_n: cfg.f_n_ref, v_belt: params.v_belt as f32 };

@@ -22,6 +22,7 @@ pub mod decode;
 pub mod estimator;
 pub mod law;
 pub mod liftoff;
+pub mod mu_estimate;
 pub mod pil;
 pub mod reference;
 pub mod runaway;

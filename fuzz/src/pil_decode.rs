@@ -214,6 +214,7 @@ fn config() -> impl Strategy<Value = Config> {
         Just(FrictionCompensation::ModelMeasuredNormal),
         Just(FrictionCompensation::ModelCommandedNormal),
         Just(FrictionCompensation::None),
+        Just(FrictionCompensation::Estimated),
     ];
     let branch = proptest::option::of(prop_oneof![Just(ElbowBranch::Up), Just(ElbowBranch::Down)]);
     (vec(any_f32(), 30), kind, friction, branch, any_u32(), any::<[u8; 4]>(), any::<[u16; 4]>()).prop_map(

@@ -101,7 +101,7 @@ fn ideal_and_firmware_hybrid_agree_at_the_same_state() {
                 f_n: out.f[1] as f32,
                 v_belt: params.v_belt as f32,
             };
-            let mut st = HybridState { force_integral: integral as f32 };
+            let mut st = HybridState { force_integral: integral as f32, ..HybridState::default() };
             let (u_fw, sig) = hybrid(
                 &arm32,
                 &cfg.hybrid,

@@ -16,6 +16,7 @@ fn knobs() -> impl Strategy<Value = Knobs> {
         Just(FrictionCompensation::ModelMeasuredNormal),
         Just(FrictionCompensation::ModelCommandedNormal),
         Just(FrictionCompensation::None),
+        Just(FrictionCompensation::Estimated),
     ];
     let branch = option::of(prop_oneof![Just(ElbowBranch::Up), Just(ElbowBranch::Down)]);
     let limit = prop_oneof![4 => 1u16..6, 1 => Just(u16::MAX)];
