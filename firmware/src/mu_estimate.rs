@@ -81,7 +81,8 @@ impl MuEstimate {
         let f_min = if F_N_MIN_FRACTION * sample.f_n_ref > 0.5 { F_N_MIN_FRACTION * sample.f_n_ref } else { 0.5 };
         let trusted = sample.f_n > f_min && sample.v_r.abs() >= V_R_MIN && same_slip && sample.p_over_q22 > P_MIN;
         let ratio = -s * sample.f_t / sample.f_n;
-        if !(trusted && ratio.is_finite() && dt.is_finite() && dt > 0.0) {
+        let finite = sample.f_t.is_finite() && sample.f_n.is_finite() && ratio.is_finite();
+        if !(trusted && finite && dt.is_finite() && dt > 0.0) {
             return false;
         }
         let bound = BOUND * mu_hat;
@@ -100,5 +101,78 @@ fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
         hi
     } else {
         x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sliding(f_t: f32) -> FrictionSample {
+        FrictionSample { f_t, f_n: 10.0, f_n_ref: 10.0, v_r: 0.3, p_over_q22: 0.8 }
+    }
+
+    /// A slide with `mu = 0.72` seen by a law told `mu_hat = 0.6`: the estimate is a
+    /// first-order filter of the ratio (after the first period, which only sets the
+    /// slip direction), within 1 % of `mu` after five time constants.
+    #[test]
+    fn the_estimate_converges_to_the_measured_ratio() {
+        let mut e = MuEstimate::default();
+        let dt = 1e-3;
+        assert!(!e.update(0.6, &sliding(-7.2), dt), "no slip direction yet");
+        assert!(e.update(0.6, &sliding(-7.2), dt));
+        assert!((e.correction - 0.12 * dt / TAU_S).abs() < 1e-7, "one filter step: {}", e.correction);
+        for _ in 0..(5.0 * TAU_S / dt) as usize {
+            e.update(0.6, &sliding(-7.2), dt);
+        }
+        assert!((e.mu(0.6) - 0.72).abs() < 0.01 * 0.72, "{}", e.mu(0.6));
+        // A slide the other way measures the same mu from f_t of the other sign.
+        let mut back = MuEstimate::default();
+        let reverse = FrictionSample { f_t: 7.2, v_r: -0.3, ..sliding(0.0) };
+        for _ in 0..200 {
+            back.update(0.6, &reverse, dt);
+        }
+        assert!((back.mu(0.6) - 0.72).abs() < 0.01 * 0.72, "{}", back.mu(0.6));
+    }
+
+    /// Bounded to `mu_hat (1 +- 0.5)` however wrong the ratio.
+    #[test]
+    fn the_estimate_is_bounded() {
+        let mut e = MuEstimate::default();
+        for _ in 0..1000 {
+            e.update(0.6, &sliding(-30.0), 1e-3);
+        }
+        assert!((e.correction - BOUND * 0.6).abs() < 1e-6, "{}", e.correction);
+        for _ in 0..1000 {
+            e.update(0.6, &sliding(0.0), 1e-3);
+        }
+        assert!((e.correction + BOUND * 0.6).abs() < 1e-6, "{}", e.correction);
+    }
+
+    /// Frozen where the ratio is not `mu`: low `f_n`, slow slip, the period after a
+    /// slip reversal, near `p -> 0`, and a sample that is not finite.
+    #[test]
+    fn the_estimate_is_frozen_where_it_cannot_be_trusted() {
+        let mut e = MuEstimate::default();
+        e.update(0.6, &sliding(-7.2), 1e-3);
+        e.update(0.6, &sliding(-7.2), 1e-3);
+        let held = e;
+        let untrusted = [
+            FrictionSample { f_n: 2.0, f_t: -2.0, ..sliding(0.0) },
+            FrictionSample { v_r: 0.005, ..sliding(-7.2) },
+            FrictionSample { p_over_q22: 0.1, ..sliding(-7.2) },
+            sliding(f32::NAN),
+            FrictionSample { f_n: f32::INFINITY, ..sliding(-7.2) },
+        ];
+        for sample in untrusted {
+            let mut e = held;
+            assert!(!e.update(0.6, &sample, 1e-3), "{sample:?}");
+            assert_eq!(e.correction, held.correction, "{sample:?}");
+        }
+        // A reversal: the first period in the new direction is held, the next updates.
+        let mut e = held;
+        let reverse = FrictionSample { f_t: 7.2, v_r: -0.3, ..sliding(0.0) };
+        assert!(!e.update(0.6, &reverse, 1e-3));
+        assert!(e.update(0.6, &reverse, 1e-3));
     }
 }
