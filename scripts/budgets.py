@@ -34,7 +34,9 @@ CEILINGS = {
     # emulator reads): 55 464 B (mcu) / 55 412 B (qemu).
     "mcu/arm": 57 * 1024,  # 55 464 B measured
     "qemu/arm": 57 * 1024,  # 55 412 B measured
-    "qemu/pil": 31 * 1024,  # 30 464 B measured
+    # Issue 41 (the hybrid law's friction estimate): 31 960 B (qemu), 30 804 B (mcu);
+    # the QEMU image now has the PIL image's 32 KiB target too.
+    "qemu/pil": 32 * 1024,  # 31 960 B measured
     "release/pil": FLASH_BUDGET,  # 43 468 B measured
 }
 FLASH_SECTIONS = (".vector_table", ".text", ".rodata", ".data", ".defmt")

@@ -27,8 +27,10 @@ Also `--profile`: where the worst step's instructions go, from `llvm-addr2line
 - by call: the frame called from `Firmware::step`/`Firmware::control`.
 
 Usage:
-  scripts/cycles.py [--controller hybrid|pid|both] [--duration S] [--image ELF]
+  scripts/cycles.py [--controller hybrid|hybrid-estimated|pid|both|all] [--duration S] [--image ELF]
                     [--sil-host EXE] [--json] [--profile] [--max-cycles N]
+  `all` (the default): the hybrid law with the paper's friction term and with
+  the estimated one (`controller.friction = estimated`, issue 41), and the PID.
   --json prints {"hybrid": {...}, "pid": {...}} with worst/median/p99 of
   instructions and cycles, the share of a 1 kHz period and the highest control
   rate at which the worst step fits 5 % of the period at 168 MHz (HARDWARE.md).
@@ -146,7 +148,11 @@ def run_traced(args, controller, log_path):
     reader = threading.Thread(target=read)
     reader.start()
     out = os.path.join(os.path.dirname(log_path), "out")
-    cmd = [args.sil_host, "pil", "--image", args.image, "--qemu", wrapper, "--quiet", "--controller", controller]
+    # `hybrid-estimated`: the hybrid law with its robust friction term (issue 41).
+    kind, _, variant = controller.partition("-")
+    cmd = [args.sil_host, "pil", "--image", args.image, "--qemu", wrapper, "--quiet", "--controller", kind]
+    if variant:
+        cmd += ["--set", f"controller.friction={variant}"]
     cmd += ["--duration", str(args.duration), "--answer-timeout", "60", "--out", out]
     done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     reader.join()
@@ -350,7 +356,7 @@ def analyse(args, controller, tools, syms, disasm):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--controller", default="both", choices=["hybrid", "pid", "both"])
+    ap.add_argument("--controller", default="all", choices=["hybrid", "hybrid-estimated", "pid", "both", "all"])
     ap.add_argument("--duration", type=float, default=2.5, help="s of the default scenario (its move takes 2 s)")
     ap.add_argument("--image", default=os.path.join(ROOT, "target/thumbv7em-none-eabihf/qemu/pil"))
     ap.add_argument("--sil-host", default=os.path.join(ROOT, "target/release/sil-host"))
@@ -371,7 +377,7 @@ def main():
     }
     syms = symbols(args.image, tools["nm"])
     disasm = disassemble(args.image, tools["objdump"])
-    controllers = ["hybrid", "pid"] if args.controller == "both" else [args.controller]
+    controllers = {"both": ["hybrid", "pid"], "all": ["hybrid", "hybrid-estimated", "pid"]}.get(args.controller, [args.controller])
     reports = {c: analyse(args, c, tools, syms, disasm) for c in controllers}
     if args.json:
         print(json.dumps(reports, indent=1))

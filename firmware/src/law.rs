@@ -218,14 +218,14 @@ pub fn hybrid_trig(
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
     let m = arm.mass_matrix_cos(c21);
     let mu_used = if comp == FrictionCompensation::Estimated {
-        // p / Q_22 with the current estimate, Q = J M^-1 J^T (paper eq. 3) from M's closed-form inverse.
-        let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
-        let (i11, i12, i22) = (m[(1, 1)] / det, -m[(0, 1)] / det, m[(0, 0)] / det);
+        // p and Q_22 with the current estimate, both times det M (> 0): Q = J M^-1 J^T
+        // (paper eq. 3) with M^-1 = adj(M) / det M, the division left out.
+        let (i11, i12, i22) = (m[(1, 1)], -m[(0, 1)], m[(0, 0)]);
         let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
         let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
         let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
-        let p_over_q22 = (q22 - state.mu.mu(p.mu) * s * q21) / q22;
-        let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p_over_q22 };
+        let p_det = q22 - state.mu.mu(p.mu) * s * q21;
+        let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
         state.mu.update(p.mu, &sample, dt);
         state.mu.mu(p.mu)
     } else {

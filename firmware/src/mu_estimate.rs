@@ -61,8 +61,12 @@ pub struct FrictionSample {
     pub f_n_ref: f32,
     /// Estimated slip speed `z_r_dot = z_t_dot - v_belt`, m/s.
     pub v_r: f32,
-    /// `p / Q_22` with the current estimate (dimensionless).
-    pub p_over_q22: f32,
+    /// `p` with the current estimate and `Q_22`, in one positive scale (the law
+    /// passes both times `det M`, which saves the division by it): only their
+    /// ratio is used.
+    pub p: f32,
+    /// `Q_22`, in the scale of `p` (> 0).
+    pub q22: f32,
 }
 
 impl MuEstimate {
@@ -79,7 +83,7 @@ impl MuEstimate {
         let same_slip = self.last_slip == s;
         self.last_slip = if sample.v_r.abs() >= V_R_MIN { s } else { 0.0 };
         let f_min = if F_N_MIN_FRACTION * sample.f_n_ref > 0.5 { F_N_MIN_FRACTION * sample.f_n_ref } else { 0.5 };
-        let trusted = sample.f_n > f_min && sample.v_r.abs() >= V_R_MIN && same_slip && sample.p_over_q22 > P_MIN;
+        let trusted = sample.f_n > f_min && sample.v_r.abs() >= V_R_MIN && same_slip && sample.p > P_MIN * sample.q22;
         let ratio = -s * sample.f_t / sample.f_n;
         let finite = sample.f_t.is_finite() && sample.f_n.is_finite() && ratio.is_finite();
         if !(trusted && finite && dt.is_finite() && dt > 0.0) {
@@ -87,7 +91,7 @@ impl MuEstimate {
         }
         let bound = BOUND * mu_hat;
         let target = clamp(ratio - mu_hat, -bound, bound);
-        let alpha = if dt < TAU_S { dt / TAU_S } else { 1.0 };
+        let alpha = if dt < TAU_S { dt * (1.0 / TAU_S) } else { 1.0 };
         self.correction += alpha * (target - self.correction);
         true
     }
@@ -109,7 +113,7 @@ mod tests {
     use super::*;
 
     fn sliding(f_t: f32) -> FrictionSample {
-        FrictionSample { f_t, f_n: 10.0, f_n_ref: 10.0, v_r: 0.3, p_over_q22: 0.8 }
+        FrictionSample { f_t, f_n: 10.0, f_n_ref: 10.0, v_r: 0.3, p: 0.8, q22: 1.0 }
     }
 
     /// A slide with `mu = 0.72` seen by a law told `mu_hat = 0.6`: the estimate is a
@@ -160,7 +164,7 @@ mod tests {
         let untrusted = [
             FrictionSample { f_n: 2.0, f_t: -2.0, ..sliding(0.0) },
             FrictionSample { v_r: 0.005, ..sliding(-7.2) },
-            FrictionSample { p_over_q22: 0.1, ..sliding(-7.2) },
+            FrictionSample { p: 0.1, ..sliding(-7.2) },
             sliding(f32::NAN),
             FrictionSample { f_n: f32::INFINITY, ..sliding(-7.2) },
         ];
