@@ -111,7 +111,7 @@ pub enum Dimension {
     EncoderBits,
     /// Load-cell noise.
     LoadNoise,
-    /// `mu_hat` mismatch.
+    /// `mu_hat` mismatch, under the paper's friction term and the estimated one.
     MuHat,
     /// The firmware's torque limit.
     TorqueLimit,
@@ -211,6 +211,7 @@ pub fn choices(base: &Scenario) -> Vec<Choice> {
         (FrictionCompensation::ModelMeasuredNormal, "measured_normal"),
         (FrictionCompensation::Measured, "measured"),
         (FrictionCompensation::None, "none"),
+        (FrictionCompensation::Estimated, "estimated"),
     ];
     for (k, (friction, name)) in frictions.into_iter().enumerate() {
         push(Dimension::Friction, name.into(), k as f64, Knobs { friction, ..d });
@@ -230,8 +231,13 @@ pub fn choices(base: &Scenario) -> Vec<Choice> {
     for n in [0.0, 0.01, 0.02, 0.05, 0.1] {
         push(Dimension::LoadNoise, format!("{n}"), n, Knobs { load_noise_n: n, ..d });
     }
+    // The paper's friction term, then the robust variant's (issue 41) beside it.
     for m in [-0.2, -0.1, 0.0, 0.1, 0.2] {
         push(Dimension::MuHat, format!("{:+}%", (m * 100.0f64).round()), m, Knobs { mu_hat_mismatch: m, ..d });
+    }
+    for m in [-0.2, -0.1, 0.0, 0.1, 0.2] {
+        let knobs = Knobs { mu_hat_mismatch: m, friction: FrictionCompensation::Estimated, ..d };
+        push(Dimension::MuHat, format!("{:+}%, estimated", (m * 100.0f64).round()), m, knobs);
     }
     // Below the default's 5 N m only: the wire and the drivers stop there.
     for t in [2.0, 3.0, 4.0] {
@@ -266,14 +272,15 @@ mod tests {
             assert_eq!(of.iter().filter(|c| c.is_default).count(), 1, "{dim:?}: one default");
         }
         // Each choice differs from the defaults in at most one knob (the impact
-        // dimension moves the law and e_n together).
+        // dimension moves the law and e_n together, the mu_hat dimension the
+        // mismatch and the friction term).
         for c in &all {
             let k = c.knobs;
             let changed = [
                 k.impact_law != d.impact_law || k.e_n != d.e_n,
                 k.iwc != d.iwc,
                 k.singular != d.singular,
-                k.friction != d.friction,
+                k.friction != d.friction && c.dimension != Dimension::MuHat,
                 k.move_time_s != d.move_time_s,
                 k.lift_off_gap_m != d.lift_off_gap_m,
                 k.rate_hz != d.rate_hz,
