@@ -244,6 +244,7 @@ fn search(base: &Scenario, g: &Grids, k: &Knobs, combination: Combination) -> Re
         z_t_sliding: found.z_t_sliding,
         outcome: found.bisection.outcome_name(),
         stop_above: found.failing_trial(&found.bisection).map(|t| t.stop),
+        missed_by_m: found.failing_trial(&found.bisection).filter(|t| t.stop == zmax::StopReason::NotReached).map(|t| t.settle_error_m),
         z_t_tracking: found.z_t_tracking,
         tracking_outcome: found.tracking.outcome_name(),
         tracking_stop_above: found.failing_trial(&found.tracking).map(|t| t.stop),

@@ -55,6 +55,10 @@ pub struct Zmax {
     /// the safe state, a failure, not reached, a model violation (`None` for
     /// `upper_reached`).
     pub stop_above: Option<StopReason>,
+    /// When that target was not reached: by how much it was missed, the largest
+    /// `|z_t - z_t*|` over the settle window, m (issue 41: a limit a missed target
+    /// sets is not a lift-off limit).
+    pub missed_by_m: Option<f64>,
     /// The tracking limit, m: the largest target also settled within the settle
     /// tolerance (`None` when the lower end is not tracked).
     pub z_t_tracking: Option<f64>,
@@ -108,18 +112,26 @@ fn round3(x: f64) -> f64 {
 
 impl Zmax {
     /// `Z_t,sliding` (or with `tracking` the tracking limit) for tables, in mm: the
-    /// value to 0.1 mm (`>= v` when the bracket's upper end passes), or `< lo` with
-    /// the lower end's stop reason (`< lo: lift_off`).
+    /// value in mm (`>= v` when the bracket's upper end passes), or `< lo` with
+    /// the lower end's stop reason (`< lo: lift_off`). A `Z_t,sliding` set by a
+    /// missed target rather than a lift-off says so: `-141 (above: missed by 5 mm)`,
+    /// `< lo: missed by 9 mm`.
     pub fn cell_text(&self, tracking: bool) -> String {
         let (value, outcome, stop) = if tracking {
             (self.z_t_tracking, self.tracking_outcome, self.tracking_stop_above)
         } else {
             (self.z_t_sliding, self.outcome, self.stop_above)
         };
-        match (outcome, value) {
-            ("lower_fails", _) | (_, None) => format!("< lo: {}", stop.map_or("?", StopReason::name)),
-            ("upper_reached", Some(v)) => format!(">= {:.0}", v * 1e3),
-            (_, Some(v)) => format!("{:.0}", v * 1e3),
+        let missed = match (tracking, stop, self.missed_by_m) {
+            (false, Some(StopReason::NotReached), Some(m)) if m.is_finite() => Some(format!("missed by {:.0} mm", m * 1e3)),
+            _ => None,
+        };
+        match (outcome, value, missed) {
+            ("lower_fails", _, Some(m)) | (_, None, Some(m)) => format!("< lo: {m}"),
+            ("lower_fails", _, None) | (_, None, None) => format!("< lo: {}", stop.map_or("?", StopReason::name)),
+            ("upper_reached", Some(v), _) => format!(">= {:.0}", v * 1e3),
+            (_, Some(v), Some(m)) => format!("{:.0} (above: {m})", v * 1e3),
+            (_, Some(v), None) => format!("{:.0}", v * 1e3),
         }
     }
 }
@@ -307,6 +319,29 @@ pub(super) fn main_interval(speeds: &[f64], flags: &[bool]) -> (Option<[f64; 2]>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A limit a missed target sets reads as a missed target (issue 41), not as a
+    /// lift-off limit; a lift-off limit reads as before.
+    #[test]
+    fn a_limit_set_by_a_missed_target_says_by_how_much() {
+        let combination = Combination::all()[0];
+        let z = |z_t_sliding, outcome, stop, missed_by_m| Zmax {
+            combination,
+            z_t_sliding,
+            outcome,
+            stop_above: Some(stop),
+            missed_by_m,
+            z_t_tracking: None,
+            tracking_outcome: "lower_fails",
+            tracking_stop_above: Some(stop),
+            validity: Validity::default(),
+        };
+        assert_eq!(z(None, "lower_fails", StopReason::NotReached, Some(8.7e-3)).cell_text(false), "< lo: missed by 9 mm");
+        assert_eq!(z(Some(-0.1409), "found", StopReason::NotReached, Some(5.03e-3)).cell_text(false), "-141 (above: missed by 5 mm)");
+        assert_eq!(z(Some(0.1642), "found", StopReason::LiftOff, None).cell_text(false), "164");
+        assert_eq!(z(None, "lower_fails", StopReason::LiftOff, None).cell_text(false), "< lo: lift_off");
+        assert_eq!(z(None, "lower_fails", StopReason::NotReached, Some(8.7e-3)).cell_text(true), "< lo: not_reached");
+    }
 
     #[test]
     fn an_isolated_bouncing_speed_is_listed_apart_and_does_not_move_the_band() {
