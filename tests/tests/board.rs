@@ -57,7 +57,24 @@ on_both!(
     an_asserted_fault_line_stops_the_calibration_and_shows_in_the_raw_readings,
     a_record_saved_over_the_line_is_reloaded_after_the_reset_button,
     a_client_killed_mid_command_leaves_a_board_the_next_client_can_use,
+    every_friction_term_is_accepted_by_configure,
 );
+
+/// Issue 41: `configure` sends every friction term of the hybrid law, the robust
+/// `estimated` among them, and the board's firmware (on the emulated image, the
+/// flashed bytes) decodes and accepts each; a term that is not one is refused by
+/// the scenario's check, naming the choices.
+fn every_friction_term_is_accepted_by_configure(on: Board) {
+    let t = twin(on, &[]);
+    for friction in ["commanded", "measured_normal", "measured", "none", "estimated"] {
+        let set = format!("controller.friction={friction}");
+        let (code, _, err) = board(&t, &["configure", "--set", &set]);
+        assert_eq!(code, 0, "{friction}: {err}");
+    }
+    let (code, _, err) = board(&t, &["configure", "--set", "controller.friction=guessed"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("estimated"), "{err}");
+}
 
 fn twin(on: Board, extra: &[&str]) -> Twin {
     let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
