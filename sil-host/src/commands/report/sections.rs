@@ -120,6 +120,27 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
             .collect(),
     });
     v.push(Section {
+        title: "The hybrid law when friction is not known",
+        source: "issue 41, docs/analyses.md \"The hybrid law when friction is not known\": the sampled hybrid law from x0d with mu_hat 10 % low, the paper's friction term beside the estimated one (controller.friction = estimated)",
+        steps: [("hybrid-x0d-mu-hat-low", "commanded"), ("hybrid-x0d-mu-hat-low-estimated", "estimated")]
+            .into_iter()
+            .map(|(id, friction)| Step {
+                id,
+                writes: true,
+                args: vec![
+                    "run".into(),
+                    "--in-process".into(),
+                    "--scenario".into(),
+                    scenarios.join("hybrid-x0d.toml").to_string_lossy().into_owned(),
+                    "--set".into(),
+                    "controller.mu_hat=0.54".into(),
+                    "--set".into(),
+                    format!("controller.friction={friction}"),
+                ],
+            })
+            .collect(),
+    });
+    v.push(Section {
         title: "Speed of the rig",
         source: "control periods per wall second on the default scenario, in-process and in lockstep over iceoryx2 (sil-host bench)",
         steps: vec![Step {
