@@ -79,6 +79,52 @@ class Table(Dict[str, np.ndarray]):
         cols = ", ".join(self.columns[:8]) + (", ..." if len(self) > 8 else "")
         return f"<Table {self.name!r}: {self.nrows} rows x {len(self)} columns [{cols}]>"
 
+    def _shown_rows(self, limit: int) -> List[Optional[int]]:
+        """The row indices a printout shows: all of them up to ``limit``, else the
+        first ``limit - 4`` and the last 3 with ``None`` for the elided middle."""
+        n = self.nrows
+        if n <= limit:
+            return list(range(n))
+        head = limit - 4
+        return list(range(head)) + [None] + list(range(n - 3, n))
+
+    def _cells(self, limit: int) -> List[List[str]]:
+        """The shown rows' cells as text (numbers to 6 significant digits)."""
+        rows: List[List[str]] = []
+        for i in self._shown_rows(limit):
+            if i is None:
+                rows.append(["..."] * len(self))
+            else:
+                rows.append([_cell(col[i]) for col in self.values()])
+        return rows
+
+    def __str__(self) -> str:
+        """The table as aligned text: a title line, the column names, and its rows
+        (at most 20: the first 16 and the last 3 of a longer one)."""
+        title = f"{self.name or 'table'}: {self.nrows} rows x {len(self)} columns"
+        if not self:
+            return title
+        rows = [self.columns] + self._cells(20)
+        widths = [max(len(r[j]) for r in rows) for j in range(len(self))]
+        lines = ["  ".join(c.rjust(w) for c, w in zip(r, widths)) for r in rows]
+        return "\n".join([title] + lines)
+
+    def _repr_html_(self) -> str:
+        """The table as HTML for notebooks (at most 20 rows, as :meth:`__str__`)."""
+        import html
+
+        head = "".join(f"<th>{html.escape(c)}</th>" for c in self.columns)
+        body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in self._cells(20))
+        title = html.escape(f"{self.name or 'table'}: {self.nrows} rows x {len(self)} columns")
+        return f"<p><b>{title}</b></p><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _cell(v: Any) -> str:
+    """One cell as text: floats to 6 significant digits, the rest as they are."""
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.6g}"
+    return str(v)
+
 
 _VIOLATION_WORDS = (
     ("energy_gains", "energy-creating impact", "energy-creating impacts"),
@@ -233,6 +279,26 @@ class Result:
     def to_polars(self, table: Optional[str] = None) -> Any:
         """A table (by default the first) as a ``polars.DataFrame``."""
         return self._table(table).to_polars()
+
+    def _state(self) -> str:
+        """``valid``, ``INVALID (...)`` or ``no simulation``."""
+        if self.validity is None:
+            return "no simulation"
+        return "valid" if self.valid else f"INVALID ({self.violations})"
+
+    def __str__(self) -> str:
+        """The result as text: the command, its validity (and failure), then each
+        table as :meth:`Table.__str__` prints it (``print(painleve.admissible())``
+        prints paper Table II)."""
+        head = f"painleve.Result {self.command}: {self._state()}" + (f"; failure: {self.failure}" if self.failure else "")
+        return "\n\n".join([head] + [str(t) for t in self.tables.values()])
+
+    def _repr_html_(self) -> str:
+        """The result as HTML for notebooks: the command, its validity, and its tables."""
+        import html
+
+        head = html.escape(f"painleve.Result {self.command}: {self._state()}" + (f"; failure: {self.failure}" if self.failure else ""))
+        return f"<p>{head}</p>" + "".join(t._repr_html_() for t in self.tables.values())
 
     def __repr__(self) -> str:
         tables = ", ".join(f"{k}: {t.nrows}x{len(t)}" for k, t in self.tables.items())

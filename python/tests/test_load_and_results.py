@@ -100,3 +100,29 @@ def test_load_a_report_folder_loads_its_experiments(tmp_path):
     assert r.extras["report"] == "# report\n"
     sim = r.extras["experiments"]["simulate"]
     assert sim.command == "simulate" and sim.trace.nrows == 1001 and sim.valid
+
+
+def test_a_result_prints_its_tables():
+    # Issue 42, 4: print(painleve.admissible()) shows paper Table II, not a repr.
+    r = painleve.admissible()
+    text = str(r)
+    assert text.startswith("painleve.Result admissible: no simulation")
+    assert "intervals: 4 rows x 4 columns" in text, "Table II: two branches, two slip directions"
+    for word in ("direction", "branch", "lo_m", "hi_m", "elbow_up", "elbow_down"):
+        assert word in text, word
+    # Every interval's ends, to 6 significant digits.
+    for lo, hi in zip(r.intervals["lo_m"], r.intervals["hi_m"]):
+        assert f"{lo:.6g}" in text and f"{hi:.6g}" in text
+    html = r._repr_html_()
+    assert html.count("<table>") == len(r.tables) and "<th>lo_m</th>" in html
+
+
+def test_a_long_table_prints_its_ends_and_elides_the_middle():
+    t = painleve.Table({"t": np.arange(100) * 0.5, "mode": np.array(["a&b"] * 100)}, "trace")
+    lines = str(t).splitlines()
+    assert lines[0] == "trace: 100 rows x 2 columns"
+    assert len(lines) == 2 + 20, "the title, the header and 20 rows"
+    assert lines[2].split()[0] == "0" and lines[-1].split()[0] == "49.5"
+    assert any(line.split()[0] == "..." for line in lines)
+    html = t._repr_html_()
+    assert "a&amp;b" in html and "a&b" not in html.replace("a&amp;b", "")
