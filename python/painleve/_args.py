@@ -25,6 +25,7 @@ import json
 import numbers
 import os
 import tempfile
+import typing
 from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Union
 
 from . import _painleve
@@ -155,10 +156,73 @@ def scenario_file(scenario: Any) -> Iterator[Optional[str]]:
         yield path
 
 
+_WORDS = {float: "a number", int: "an integer", str: "a string", bool: "True or False"}
+
+
+def _matches(v: Any, hint: Any) -> Optional[bool]:
+    """Whether ``v`` is of the annotated type ``hint``: ``True``/``False``, or
+    ``None`` where the annotation is not one this check reads (callables,
+    mappings, paths: the CLI's own checks cover them)."""
+    if hint is float:
+        return isinstance(v, numbers.Real) and not isinstance(v, bool)
+    if hint is int:
+        return isinstance(v, numbers.Integral) and not isinstance(v, bool)
+    if hint is str:
+        return isinstance(v, str)
+    if hint is bool:
+        return isinstance(v, bool)
+    if hint is type(None):
+        return v is None
+    origin = typing.get_origin(hint)
+    if origin is Union:
+        answers = [_matches(v, h) for h in typing.get_args(hint)]
+        if any(a is True for a in answers):
+            return True
+        return None if any(a is None for a in answers) else False
+    if origin in (list, tuple, Sequence, typing.get_origin(Sequence[int])):
+        if isinstance(v, (str, bytes)) or not isinstance(v, (list, tuple)) and not hasattr(v, "__array__"):
+            return False
+        args = [a for a in typing.get_args(hint) if a is not Ellipsis]
+        if not args:
+            return True
+        return all(_matches(x, args[0]) is not False for x in v)
+    return None
+
+
+def _describe(hint: Any) -> str:
+    """An annotation in words: ``a number``, ``a number or None``, ``a list of numbers``."""
+    if hint in _WORDS:
+        return _WORDS[hint]
+    if hint is type(None):
+        return "None"
+    origin = typing.get_origin(hint)
+    if origin is Union:
+        return " or ".join(dict.fromkeys(_describe(h) for h in typing.get_args(hint)))
+    if origin in (list, tuple, Sequence, typing.get_origin(Sequence[int])):
+        args = [a for a in typing.get_args(hint) if a is not Ellipsis]
+        return "a list of " + (_describe(args[0]).removeprefix("a ").removeprefix("an ") + "s" if args else "values")
+    return str(hint)
+
+
+def check_types(fn: Callable[..., Any], given: Mapping[str, Any]) -> None:
+    """Checks each argument ``given`` to ``fn`` against its annotation, at the
+    Python boundary: ``TypeError`` naming the parameter, what it takes and what it
+    got (``mu: expected a number, got list [1, 2]``). ``None`` passes only where
+    the annotation says ``Optional``; ``True`` is not a number."""
+    hints = typing.get_type_hints(fn)
+    for name, v in given.items():
+        hint = hints.get(name)
+        if hint is None or name in ("set", "progress", "scenario"):
+            continue
+        if _matches(v, hint) is False:
+            raise TypeError(f"{name}: expected {_describe(hint)}, got {type(v).__name__} {v!r}")
+
+
 def call(name: str, fn: Callable[..., Any], given: Dict[str, Any], progress: Any = None, scenario: Any = None) -> Any:
     """Calls the compiled ``name`` with the tokens of ``given`` (and the
     scenario, as ``--scenario``)."""
     native = getattr(_painleve, name)
+    check_types(fn, given)
     with scenario_file(scenario) as path:
         toks = tokens(fn, given, skip=("scenario",))
         if path is not None:

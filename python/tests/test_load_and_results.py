@@ -126,3 +126,29 @@ def test_a_long_table_prints_its_ends_and_elides_the_middle():
     assert any(line.split()[0] == "..." for line in lines)
     html = t._repr_html_()
     assert "a&amp;b" in html and "a&b" not in html.replace("a&amp;b", "")
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"mu": [1, 2]}, "mu: expected a number, got list [1, 2]"),
+        ({"mu": True}, "mu: expected a number, got bool True"),
+        ({"mu": None}, "mu: expected a number, got NoneType None"),
+        ({"duration": "10"}, "duration: expected a number, got str '10'"),
+        ({"impact_law": 3}, "impact_law: expected a string, got int 3"),
+    ],
+)
+def test_a_wrong_type_is_a_type_error_naming_the_parameter(kwargs, message):
+    # Issue 42, 2: Python types are checked at the boundary, not as CLI syntax.
+    with pytest.raises(TypeError) as e:
+        painleve.simulate(progress=False, **kwargs)
+    assert str(e.value) == message
+    assert "--" not in str(e.value), "no CLI syntax"
+
+
+def test_right_types_pass_the_check():
+    # Integers and NumPy scalars are numbers; Optional takes None; a sequence of numbers is a list.
+    r = painleve.simulate(mu=np.float64(0.6), duration=1, max_step=None, progress=False)
+    assert r.valid
+    r = painleve.admissible(mu=1)
+    assert r.intervals.nrows == 4
