@@ -14,7 +14,9 @@ __version__: str
 
 class PainleveError(ValueError):
     """Bad input or a failure, with the CLI's message; ``exit_code``: the CLI's
-    exit code (2 bad input, 1 a run that failed)."""
+    exit code (2 bad input, 1 a run that failed); ``result``: the
+    :class:`painleve.Result` of a run that failed part way (``strict=True``, or
+    :meth:`painleve.Result.check`), ``None`` for bad input."""
 
     exit_code: int
     result: Any

@@ -19,8 +19,11 @@ pyo3::create_exception!(
 /// A `PainleveError` with `message` and `exit_code`.
 pub fn error(py: Python<'_>, message: String, exit_code: i32) -> PyErr {
     let err = PainleveError::new_err(message);
-    // Best effort: an instance attribute, read by `painleve`'s Python layer.
+    // Best effort: instance attributes, read by `painleve`'s Python layer. `result`
+    // is the partial result of a run that failed part way (set by `Result.check`),
+    // None here: bad input computed nothing.
     let _ = err.value(py).setattr("exit_code", exit_code);
+    let _ = err.value(py).setattr("result", py.None());
     err
 }
 

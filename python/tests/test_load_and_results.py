@@ -152,3 +152,10 @@ def test_right_types_pass_the_check():
     assert r.valid
     r = painleve.admissible(mu=1)
     assert r.intervals.nrows == 4
+
+
+def test_a_painleve_error_always_has_its_result():
+    # Issue 42, 2: `PainleveError.result` as documented: None for bad input.
+    with pytest.raises(painleve.PainleveError) as e:
+        painleve.simulate(mu=-1.0, progress=False)
+    assert e.value.exit_code == 2 and e.value.result is None
