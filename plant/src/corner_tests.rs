@@ -66,18 +66,22 @@ fn p_and_b(plant: &Plant, ctrl: &ThroughTheCorner) -> (f64, f64) {
 
 /// Runs the case to 0.2 ms before the event-driven `p_zero`, then crosses the
 /// singular point by a bridge; returns the plant 5 ms later and the bridge's events.
-fn bridged(rule: SingularRule, bridge_step: f64) -> (Plant, Vec<crate::PlantEvent>) {
-    let (mut reference, ctrl) = corner_case(rule, bridge_step);
-    let mut t_zero = None;
+/// The time (s) the event-driven run of `plant` under `ctrl` reaches `p = 0` (its
+/// `p_zero` event), advancing a copy in 1 ms intervals.
+fn time_of_p_zero(plant: &Plant, ctrl: &ThroughTheCorner) -> f64 {
+    let mut reference = plant.clone();
     for k in 0..1000 {
-        let r = reference.advance(&ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
+        let r = reference.advance(ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
         if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
-            t_zero = Some(e.t);
-            break;
+            return e.t;
         }
     }
-    let t_zero = t_zero.expect("the slide reaches p = 0");
-    let (mut plant, _) = corner_case(rule, bridge_step);
+    panic!("the slide never reaches p = 0");
+}
+
+fn bridged(rule: SingularRule, bridge_step: f64) -> (Plant, Vec<crate::PlantEvent>) {
+    let (mut plant, ctrl) = corner_case(rule, bridge_step);
+    let t_zero = time_of_p_zero(&plant, &ctrl);
     plant.advance(&ctrl, t_zero - 2e-4, &mut NoObserver).unwrap();
     let (p, b) = p_and_b(&plant, &ctrl);
     assert!(p > 0.0 && p < 1e-3 && b < 0.0 && -b / 9.81 < 1e-2, "near the singular point: p/Q22 {p}, b {b}");
@@ -145,16 +149,8 @@ const PRESS: ThroughTheCorner = ThroughTheCorner {
 #[test]
 fn a_bridged_run_converges_as_the_bridge_step_shrinks() {
     let (mut plant, ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
-    let mut t_zero = None;
-    let mut reference = plant.clone();
-    for k in 0..1000 {
-        let r = reference.advance(&ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
-        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
-            t_zero = Some(e.t);
-            break;
-        }
-    }
-    plant.advance(&ctrl, t_zero.unwrap() - 2e-4, &mut NoObserver).unwrap();
+    let t_zero = time_of_p_zero(&plant, &ctrl);
+    plant.advance(&ctrl, t_zero - 2e-4, &mut NoObserver).unwrap();
     let y0: OdeState = {
         let x = plant.state();
         [x[0], x[1], x[2], x[3], 0.0, 0.0]
