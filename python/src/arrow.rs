@@ -1,13 +1,13 @@
 //! `painleve._painleve.read_arrow`: an Arrow IPC table the CLI wrote
-//! (`--format arrow`: `trace.arrow`, `events.arrow`), read by the CLI's own
-//! reader (`sil-host`'s `arrow_table`), so `painleve.load` needs no pyarrow.
+//! (`--format arrow`: `trace.arrow`, `events.arrow`), read by the experiments'
+//! own reader ([`experiments::table::arrow`]), so `painleve.load` needs no pyarrow.
 
 use std::path::PathBuf;
 
+use experiments::table::arrow::read_arrow as read;
 use pyo3::{prelude::*, types::PyDict};
-use sil_host::arrow_table::{ArrowColumn, read_arrow as read};
 
-use crate::{cli::cli_error, columns::Column, convert::columns_to_py};
+use crate::{cli::cli_error, convert::table_to_py};
 
 /// `read_arrow(path)`: the Arrow IPC file at `path` as `{column: array}` in the
 /// file's order (float64, int64 and bool NumPy arrays, lists of `str` for text),
@@ -19,17 +19,6 @@ use crate::{cli::cli_error, columns::Column, convert::columns_to_py};
 /// Int64, Boolean or Utf8; the message names the file.
 #[pyfunction]
 pub fn read_arrow<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let columns = py.detach(|| read(&path)).map_err(|e| cli_error(py, &e))?;
-    columns_to_py(
-        py,
-        columns.into_iter().map(|(name, c)| {
-            let c = match c {
-                ArrowColumn::F64(v) => Column::F64(v),
-                ArrowColumn::I64(v) => Column::I64(v),
-                ArrowColumn::Bool(v) => Column::Bool(v),
-                ArrowColumn::Str(v) => Column::Str(v),
-            };
-            (name, c)
-        }),
-    )
+    let table = py.detach(|| read(&path)).map_err(|e| cli_error(py, &e))?;
+    table_to_py(py, table)
 }

@@ -1,13 +1,13 @@
-//! The command line as the Python functions' argument parser: each function's
-//! arguments come as the tokens the CLI would get (`--mu=0.6`, ...), parsed by
-//! `sil-host`'s own clap definitions, so the defaults, the value parsing and the
-//! error messages are the CLI's; errors become `painleve.PainleveError` with the
-//! CLI's message and exit code.
+//! The experiments' settings as the Python functions' arguments: the Python layer
+//! checks each keyword argument's type and turns it into a token (`--mu=0.6`,
+//! ...), parsed here by the settings' own clap definitions
+//! ([`experiments::settings`], the ones `sil-host` parses its flags with), so the
+//! defaults, the value parsing and the ranges are one; errors become
+//! `painleve.PainleveError` with the experiment's message and exit code.
 
-use clap::{CommandFactory, Parser};
+use clap::{Args, FromArgMatches};
+use experiments::{Error as CliError, settings::*};
 use pyo3::{prelude::*, types::PyDict};
-use sil_host::cli::{Cli, Command};
-use sil_host::error::CliError;
 
 pyo3::create_exception!(
     painleve,
@@ -33,37 +33,30 @@ pub fn cli_error(py: Python<'_>, e: &CliError) -> PyErr {
     error(py, e.to_string(), e.exit_code())
 }
 
-/// Parses `sil-host <command> <tokens>`.
+/// The settings' arguments as a clap command named `name`, as the command
+/// line's subcommand has them (negative numbers are values).
+fn command_of<T: Args>(name: &'static str) -> clap::Command {
+    T::augment_args(clap::Command::new(name).no_binary_name(true).allow_negative_numbers(true))
+}
+
+/// Parses the settings `T` of experiment `command` from `tokens`.
 ///
 /// # Errors
-/// `PainleveError` with clap's message (what the CLI prints, less its leading
-/// `error: ` and the usage and help lines that follow the message's paragraph,
-/// which name the command line's flags) and its exit code (2).
-pub fn parse(py: Python<'_>, command: &str, tokens: &[String]) -> PyResult<Command> {
-    let argv = ["sil-host", command].into_iter().map(String::from).chain(tokens.iter().cloned());
-    match Cli::try_parse_from(argv) {
-        Ok(cli) => Ok(cli.command),
-        Err(e) => {
-            let text = e.to_string();
-            let text = text.trim_end().strip_prefix("error: ").unwrap_or(text.trim_end());
-            let text = text.split("\n\n").next().unwrap_or(text).trim_end().to_string();
-            Err(error(py, text, e.exit_code()))
-        }
-    }
-}
-
-/// Unwraps the command's arguments from a parsed command line.
-macro_rules! args_of {
-    ($py:expr, $command:literal, $tokens:expr, $variant:ident) => {
-        match $crate::cli::parse($py, $command, $tokens)? {
-            sil_host::cli::Command::$variant(args) => args,
-            _ => unreachable!(concat!("`sil-host ", $command, "` parses as ", stringify!($variant))),
-        }
+/// `PainleveError` with clap's message (its first paragraph, less the leading
+/// `error: `; the usage and help lines that follow name command-line flags) and
+/// its exit code (2).
+pub fn parse<T: Args + FromArgMatches>(py: Python<'_>, command: &'static str, tokens: &[String]) -> PyResult<T> {
+    let fail = |e: clap::Error| {
+        let text = e.to_string();
+        let text = text.trim_end().strip_prefix("error: ").unwrap_or(text.trim_end());
+        let text = text.split("\n\n").next().unwrap_or(text).trim_end().to_string();
+        error(py, text, e.exit_code())
     };
+    let matches = command_of::<T>(command).try_get_matches_from(tokens).map_err(fail)?;
+    T::from_arg_matches(&matches).map_err(fail)
 }
-pub(crate) use args_of;
 
-/// The CLI's options of `command` and their defaults: `{long flag name: [default
+/// The options of experiment `command` and their defaults: `{long flag name: [default
 /// values as the CLI shows them]}` (an option without a default maps to `[]`, a
 /// flag to `["false"]`). For the tests that check the Python signatures' defaults
 /// against the CLI's.
@@ -72,8 +65,17 @@ pub(crate) use args_of;
 /// `PainleveError` for an unknown command.
 #[pyfunction]
 pub fn cli_defaults<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyDict>> {
-    let cli = Cli::command();
-    let sub = cli.find_subcommand(command).ok_or_else(|| error(py, format!("no command `{command}`"), 2))?;
+    let sub = match command {
+        "simulate" => command_of::<SimulateArgs>("simulate"),
+        "admissible" => command_of::<AdmissibleArgs>("admissible"),
+        "modes" => command_of::<ModesArgs>("modes"),
+        "poincare" => command_of::<PoincareArgs>("poincare"),
+        "sweep" => command_of::<SweepArgs>("sweep"),
+        "zmax" => command_of::<ZmaxArgs>("zmax"),
+        "run" => command_of::<RunArgs>("run"),
+        "sensitivity" => command_of::<SensitivityArgs>("sensitivity"),
+        _ => return Err(error(py, format!("no experiment `{command}`"), 2)),
+    };
     let out = PyDict::new(py);
     for arg in sub.get_arguments() {
         let Some(long) = arg.get_long() else { continue };

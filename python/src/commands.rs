@@ -1,21 +1,19 @@
-//! The package's functions, one per `sil-host` command: each parses its tokens
-//! with the CLI's parser, checks them with the CLI's validation (the command's
-//! `prepare`/`plan`/`validated`), computes with the libraries (plant, rig,
-//! analyses) on a worker thread without the GIL where it is long, and builds the
-//! CLI's summary document and tables in memory (nothing is written).
+//! The package's functions, one per experiment (and `sil-host` command): each
+//! parses its tokens into the experiment's settings ([`experiments::settings`]),
+//! checks them with the experiment's own check (`prepare`/`plan`/`validated`),
+//! runs the experiment's loop ([`experiments`]: one copy, the command line's too)
+//! on a worker thread without the GIL where it is long, and builds the summary
+//! document and tables in memory (nothing is written).
 
 use std::time::Instant;
 
 use pyo3::{prelude::*, types::PyDict};
-use rayon::prelude::*;
 
-use analyses::AnalysisError;
+use experiments::{self as cmd, Done, Error as CliError, settings::*};
 use rig::FirmwareLink;
-use sil_host::commands::{self as cmd, Done};
-use sil_host::error::CliError;
 
-use crate::cli::{args_of, cli_error};
-use crate::convert::{Outcome, points_to_py, rows_to_py, to_py};
+use crate::cli::{cli_error, parse};
+use crate::convert::{Outcome, columns_to_py, points_to_py, rows_to_py, to_py};
 use crate::work::{self, Control};
 
 /// The CLI's failure after `--strict` ([`Done::strict`]): the message and exit
@@ -28,53 +26,40 @@ fn failure_of(failure: Option<CliError>, strict: bool, validity: &plant::Validit
     }
 }
 
-/// A rayon pool of `threads` threads, as the CLI builds it.
+/// A rayon pool of `threads` threads ([`experiments::pool`]).
 fn pool(py: Python<'_>, threads: usize) -> PyResult<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| cli_error(py, &CliError::BadInput(format!("cannot start {threads} worker threads: {e}"))))
+    experiments::pool(threads).map_err(|e| cli_error(py, &e))
 }
 
 /// `painleve.simulate`: `sil-host simulate`.
 #[pyfunction]
 #[pyo3(signature = (tokens, progress=None))]
 pub fn simulate<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
-    use cmd::simulate::{Prepared, sample_step, summary::EventRow, trace_row};
-    let args = args_of!(py, "simulate", &tokens, Simulate);
-    let Prepared { params, sim, steps, initial_condition, mut plant } = cmd::simulate::prepare(&args).map_err(|e| cli_error(py, &e))?;
-    let sample_dt = args.sample_dt;
+    use cmd::simulate::{OpenLoop, summary::TraceRow};
+    let args: SimulateArgs = parse(py, "simulate", &tokens)?;
+    let prepared = cmd::simulate::prepare(&args).map_err(|e| cli_error(py, &e))?;
+    let (params, sim, initial_condition) = (prepared.params, prepared.sim, prepared.initial_condition.clone());
     let (trace, events, failure, wall_s, plant) = work::run(py, progress.as_ref(), "simulate", "samples", |c: &Control| {
-        c.set(0, steps as u64);
-        let mut trace = Vec::with_capacity(steps + 1);
-        let mut events: Vec<EventRow> = plant.startup_events().iter().map(EventRow::from).collect();
-        trace.push(trace_row(&plant, plant.contact_force([0.0, 0.0])));
+        let (mut open_loop, row, mut events) = OpenLoop::start(prepared, args.sample_dt);
+        c.set(0, open_loop.steps as u64);
+        let mut trace: Vec<TraceRow> = Vec::with_capacity(open_loop.steps + 1);
+        trace.push(row);
         let started = Instant::now();
         let mut failure = None;
-        for k in 0..steps {
-            if c.stopped() {
-                break;
-            }
-            match sample_step(&mut plant, k, sample_dt) {
-                Ok(report) => {
-                    events.extend(report.events.iter().map(EventRow::from));
-                    trace.push(trace_row(&plant, report.f));
-                }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
-            }
-            c.tick();
+        // Ctrl-C is seen between chunks of CHUNK samples.
+        const CHUNK: usize = 64;
+        while !open_loop.finished() && failure.is_none() && !c.stopped() {
+            failure = open_loop.advance(open_loop.k + CHUNK, &mut trace, &mut events).err();
+            c.set(open_loop.k as u64, open_loop.steps as u64);
         }
-        (trace, events, failure, started.elapsed().as_secs_f64(), plant)
+        (trace, events, failure, started.elapsed().as_secs_f64(), open_loop.plant)
     })?;
     let summary =
         cmd::simulate::summary(&args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, Vec::new(), events.len());
-    let (message, code) = failure_of(failure.map(CliError::Sim), args.strict.strict, &summary.validity);
+    let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &summary.validity);
     Outcome::new(py, "simulate", to_py(py, &summary)?)?
-        .table("trace", rows_to_py(py, &trace)?)?
-        .table("events", rows_to_py(py, &events)?)?
+        .table("trace", columns_to_py(py, &trace))?
+        .table("events", columns_to_py(py, &events))?
         .validity(&summary.validity)?
         .failure(message, code)
         .map(Outcome::done)
@@ -84,7 +69,7 @@ pub fn simulate<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
 #[pyfunction]
 #[pyo3(signature = (tokens))]
 pub fn admissible<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
-    let args = args_of!(py, "admissible", &tokens, Admissible);
+    let args: AdmissibleArgs = parse(py, "admissible", &tokens)?;
     let report = py.detach(|| cmd::admissible::compute(&args)).map_err(|e| cli_error(py, &e))?;
     let document = cmd::admissible::document(&report, &[]).map_err(|e| cli_error(py, &e))?;
     let document = py.import("json")?.call_method1("loads", (document,))?;
@@ -95,7 +80,7 @@ pub fn admissible<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'
 #[pyfunction]
 #[pyo3(signature = (tokens))]
 pub fn modes<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
-    let args = args_of!(py, "modes", &tokens, Modes);
+    let args: ModesArgs = parse(py, "modes", &tokens)?;
     let map = py.detach(|| cmd::modes::compute(&args)).map_err(|e| cli_error(py, &e))?;
     let rows: Vec<_> = cmd::modes::summary::csv_rows(&map).collect();
     let curves = |lines: &[Vec<(f64, f64)>]| -> PyResult<Bound<'py, PyAny>> {
@@ -115,28 +100,15 @@ pub fn modes<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, P
 #[pyo3(signature = (tokens, progress=None))]
 pub fn poincare<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use cmd::poincare::summary::ClassRow;
-    let args = args_of!(py, "poincare", &tokens, Poincare);
+    let args: PoincareArgs = parse(py, "poincare", &tokens)?;
     let (cfg, grid, ic) = cmd::poincare::validated(&args).map_err(|e| cli_error(py, &e))?;
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = pool(py, threads)?;
+    // Stopped between belt speeds: the speeds not started are left out (and
+    // the call raises KeyboardInterrupt).
     let (results, wall_s) = work::run(py, progress.as_ref(), "poincare", "belt speeds", |c: &Control| {
         c.set(0, grid.len() as u64);
-        let started = Instant::now();
-        // Stopped between belt speeds: the speeds not started are left out (and
-        // the call raises KeyboardInterrupt).
-        let results: Vec<Option<analyses::poincare::PointResult>> = pool.install(|| {
-            grid.par_iter()
-                .map(|&v| {
-                    if c.stopped() {
-                        return None;
-                    }
-                    let r = analyses::poincare::analyse(v, &cfg);
-                    c.tick();
-                    Some(r)
-                })
-                .collect()
-        });
-        (results.into_iter().flatten().collect::<Vec<_>>(), started.elapsed().as_secs_f64())
+        cmd::poincare::analyse_grid(&pool, &cfg, &grid, &c.stop, &|| c.tick())
     })?;
     let section = cmd::poincare::section_rows(&results);
     let classes: Vec<ClassRow> = results.iter().map(ClassRow::from).collect();
@@ -158,40 +130,30 @@ pub fn poincare<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
 #[pyo3(signature = (tokens, progress=None))]
 pub fn sweep<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use analyses::sweep::run::RunRow;
-    use sil_host::commands::sweep::outputs::{Timing, cpu_seconds, summary_of};
-    use sil_host::sweep::store::{Manifest, missing};
-    let args = args_of!(py, "sweep", &tokens, Sweep);
+    use cmd::sweep::{
+        store::{Manifest, missing},
+        summary::summary_of,
+    };
+    let args: SweepArgs = parse(py, "sweep", &tokens)?;
     let (spec, shard, threads) = cmd::sweep::plan(&args).map_err(|e| cli_error(py, &e))?;
     let mut todo = shard.indices(&spec);
     if let Some(limit) = args.limit {
         todo.truncate(limit);
     }
-    let ics = spec.initial_conditions();
     let pool = pool(py, threads)?;
-    let (mut rows, timing) = work::run(py, progress.as_ref(), "sweep", "runs", |c: &Control| {
+    let (rows, ran) = work::run(py, progress.as_ref(), "sweep", "runs", |c: &Control| {
         c.set(0, todo.len() as u64);
-        let started = Instant::now();
-        let cpu_start = cpu_seconds();
-        let rows: Vec<RunRow> = pool.install(|| {
-            todo.par_iter()
-                .with_max_len(1)
-                .filter_map(|&index| {
-                    if c.stopped() {
-                        return None;
-                    }
-                    let key = spec.run_at(index);
-                    let row = analyses::sweep::run::simulate(&spec, &key, &ics[key.i_ic], &c.stop);
-                    if row.is_some() {
-                        c.tick();
-                    }
-                    row
-                })
-                .collect()
-        });
-        let (wall_s, cpu_s) = (started.elapsed().as_secs_f64(), cpu_seconds() - cpu_start);
-        let timing = Timing::of(&spec, rows.len(), threads, wall_s, cpu_s);
-        (rows, timing)
+        let rows = std::sync::Mutex::new(Vec::with_capacity(todo.len()));
+        let sink = |row: RunRow| {
+            rows.lock().unwrap_or_else(|p| p.into_inner()).push(row);
+            c.tick();
+            Ok(())
+        };
+        let ran = cmd::sweep::run_all(&pool, &spec, &todo, threads, &c.stop, &sink);
+        (rows.into_inner().unwrap_or_else(|p| p.into_inner()), ran)
     })?;
+    let (_, timing) = ran.map_err(|e| cli_error(py, &e))?;
+    let mut rows = rows;
     rows.sort_by_key(|r| r.index);
     let manifest = Manifest { spec, shard };
     let n_missing = missing(&manifest, &rows).len();
@@ -209,28 +171,18 @@ pub fn sweep<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'
 #[pyfunction]
 #[pyo3(signature = (tokens, progress=None))]
 pub fn zmax<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
-    use analyses::zmax::{max_trials, search_until};
-    let args = args_of!(py, "zmax", &tokens, Zmax);
+    use analyses::zmax::max_trials;
+    let args: ZmaxArgs = parse(py, "zmax", &tokens)?;
     let started = Instant::now();
     let plan = cmd::zmax::plan(&args).map_err(|e| cli_error(py, &e))?;
     let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
-    let tol = args.tol;
-    let results = work::run(py, progress.as_ref(), "zmax", "trials", |c: &Control| {
+    let searches = work::run(py, progress.as_ref(), "zmax", "trials", |c: &Control| {
         c.set(0, total);
-        plan.jobs
-            .par_iter()
-            .map(|&(combo, bracket)| {
-                let s = search_until(&plan.base, combo, bracket, tol, &plan.criteria, &c.stop, |_| c.tick());
-                // A search that ends early (a bracket end decides) frees its share of the bar.
-                if let Ok(s) = &s {
-                    let unused = u64::from(max_trials(bracket.0, bracket.1, tol)).saturating_sub(s.trials.len() as u64);
-                    c.done.fetch_add(unused, std::sync::atomic::Ordering::Relaxed);
-                }
-                s
-            })
-            .collect::<Vec<Result<analyses::zmax::Search, AnalysisError>>>()
+        cmd::zmax::run_searches(&plan, args.tol, &c.stop, &|n| {
+            c.done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        })
     })?;
-    let searches = results.into_iter().collect::<Result<Vec<_>, _>>().map_err(|e| cli_error(py, &CliError::Analysis(e)))?;
+    let searches = searches.map_err(|e| cli_error(py, &CliError::from(e)))?;
     let summary = cmd::zmax::summary(&args, plan, &searches, started.elapsed().as_secs_f64());
     let traces = PyDict::new(py);
     for s in &searches {
@@ -274,9 +226,9 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
     use rig::{in_process::InProcessLink, stats::RunStats, summary::RunSummary};
     let mut tokens = tokens;
     tokens.insert(0, "--in-process".into());
-    let args = args_of!(py, "run", &tokens, Run);
+    let args: RunArgs = parse(py, "run", &tokens)?;
     let (scenario, _) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
-    let mut link = InProcessLink::new(&scenario).map_err(|e| cli_error(py, &CliError::Run(e)))?;
+    let mut link = InProcessLink::new(&scenario).map_err(|e| cli_error(py, &CliError::from(e)))?;
     let (records, failure, validity, wall_s) = work::run(py, progress.as_ref(), "run", "periods", |c: &Control| {
         c.set(0, scenario.timing.periods());
         let mut observer = Observer { control: c, validity: plant::Validity::default() };
@@ -289,9 +241,9 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
         firmware_announcement: link.announcement().cloned(),
         ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
-    let (message, code) = failure_of(failure.map(CliError::Run), args.strict.strict, &validity);
+    let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);
     Outcome::new(py, "run", to_py(py, &summary)?)?
-        .table("trace", rows_to_py(py, &records)?)?
+        .table("trace", columns_to_py(py, &records))?
         .extra("scenario", to_py(py, &scenario)?)?
         .validity(&validity)?
         .failure(message, code)
@@ -302,7 +254,7 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
 #[pyfunction]
 #[pyo3(signature = (tokens, progress=None))]
 pub fn sensitivity<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
-    let args = args_of!(py, "sensitivity", &tokens, Sensitivity);
+    let args: SensitivityArgs = parse(py, "sensitivity", &tokens)?;
     let (base, threads) = cmd::sensitivity::prepare(&args).map_err(|e| cli_error(py, &e))?;
     let pool = pool(py, threads)?;
     let size = args.size;
@@ -311,7 +263,7 @@ pub fn sensitivity<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<B
         let study = pool.install(|| analyses::sensitivity::run(&base, size, &c.stop, &|done, total| c.set(done, total)));
         (study, started.elapsed().as_secs_f64())
     })?;
-    let study = study.map_err(|e| cli_error(py, &CliError::Analysis(e)))?;
+    let study = study.map_err(|e| cli_error(py, &CliError::from(e)))?;
     let rows = study.rows();
     let validity = study.validity;
     let summary = cmd::sensitivity::Summary { study, base_scenario: base, wall_s, threads, files: Vec::new() };

@@ -11,7 +11,7 @@ use pyo3::{
 use serde::Serialize;
 use std::collections::HashMap;
 
-use crate::columns::{Column, Table};
+use experiments::table::{Column, ColumnRows, Table};
 
 /// Any serialisable value as Python objects, through its JSON text (what the
 /// CLI writes to its JSON files, in its fields' order), read by Python's `json`.
@@ -23,16 +23,8 @@ pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, v: &T) -> PyResult<Bou
 /// A table as `{column: array}`: float64, int64, uint64 or bool NumPy arrays, and
 /// lists of `str` for text columns (the Python layer makes them NumPy string arrays).
 pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
-    columns_to_py(py, t.into_columns())
-}
-
-/// Named columns as `{column: array}`, as [`table_to_py`] makes them.
-pub fn columns_to_py<'py, N: IntoPyObject<'py>>(
-    py: Python<'py>,
-    columns: impl IntoIterator<Item = (N, Column)>,
-) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (name, col) in columns {
+    for (name, col) in t.columns {
         match col {
             Column::F64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
             Column::I64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
@@ -50,10 +42,17 @@ pub fn columns_to_py<'py, N: IntoPyObject<'py>>(
     Ok(d)
 }
 
-/// Rows as a table dict ([`table_to_py`]).
+/// Rows of a type that derives `serde::Serialize` as a table dict ([`Table::of_rows`], [`table_to_py`]).
 pub fn rows_to_py<'py, 'a, T: Serialize + 'a>(py: Python<'py>, rows: impl IntoIterator<Item = &'a T>) -> PyResult<Bound<'py, PyDict>> {
-    let t = Table::of(rows).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let t = Table::of_rows(rows).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     table_to_py(py, t)
+}
+
+/// Rows of a type that declares its columns (the long tables: the traces and
+/// events) as a table dict ([`Table::of_columns`], [`table_to_py`]).
+pub fn columns_to_py<'py, T: ColumnRows>(py: Python<'py>, rows: &[T]) -> Bound<'py, PyDict> {
+    // Only fails on a dict's `set_item`, which cannot fail for str keys.
+    table_to_py(py, Table::of_columns(rows)).unwrap_or_else(|_| PyDict::new(py))
 }
 
 /// Points `(x, y)` as an `(n, 2)` float64 array.

@@ -1,8 +1,9 @@
 //! `painleve._painleve`: the compiled part of the Python package `painleve`
 //! (python/painleve, the pure-Python layer users import). It reproduces ECC 2019's
 //! "Control of Painlevé Paradox in a Robotic System" through this workspace's
-//! libraries: the plant (`plant`), the SIL rig (`rig`), the analyses (`analyses`),
-//! with the command line's (`sil-host`) arguments, validation and summaries.
+//! libraries: the experiments (`experiments`: their settings, checks, loops,
+//! summaries and tables, the ones the command line `sil-host` uses too) over the
+//! plant (`plant`), the SIL rig (`rig`) and the analyses (`analyses`).
 //!
 //! Each function takes the command's tokens (`["--mu=0.6", ...]`, built by the
 //! Python layer from keyword arguments) and an optional progress object, and
@@ -11,7 +12,6 @@
 
 mod arrow;
 mod cli;
-mod columns;
 mod commands;
 mod convert;
 mod work;

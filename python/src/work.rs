@@ -4,12 +4,12 @@
 //!
 //! Ctrl-C: Python's SIGINT handler marks the signal; the waiting thread sees it
 //! through `check_signals` (which raises `KeyboardInterrupt`), sets the work's
-//! stop flag, the same flag the CLI's cancellation sets (`sil_host::cancel`;
+//! stop flag, the flag the experiments' loops read (the CLI's signal handler sets it;
 //! here one per call, never a process-wide signal handler: Python keeps its
 //! own), waits for the work to wind down (a sweep stops within its current
 //! run, a closed-loop run within its period, a `Z_t,sliding` search before its
 //! next trial, `poincare` before its next belt speed, a simulation within its
-//! sample) and raises the `KeyboardInterrupt`.
+//! chunk of 64 samples) and raises the `KeyboardInterrupt`.
 
 use std::{
     panic::{AssertUnwindSafe, catch_unwind},

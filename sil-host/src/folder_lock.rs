@@ -50,13 +50,13 @@ impl FolderLock {
     ///
     /// # Errors
     /// [`CliError::FolderInUse`] (exit 2) when another process holds the folder,
-    /// with the holder as its owner file names it; [`CliError::BadInput`] (exit
+    /// with the holder as its owner file names it; [`CliError::Analysis`] (exit
     /// 2) when `dir` is a file; [`CliError::Io`] when the folder cannot be
     /// created or opened.
     pub fn acquire(dir: &Path) -> Result<Self, CliError> {
         if dir.exists() && !dir.is_dir() {
             // Bad input (exit 2), nothing written: the user named a file.
-            return Err(CliError::BadInput(format!(
+            return Err(CliError::bad_input(format!(
                 "--out {}: a file, not a folder; name a folder (it is made if missing)",
                 dir.display()
             )));

@@ -1,15 +1,14 @@
-//! The command line of the rig (`sil-host`): each command parses its flags, calls
-//! the plant ([`plant`]), the rig ([`rig`]) or an analysis ([`analyses`]), and
-//! writes the outputs (CSV, JSON, SVG figures, the report).
+//! The command line of the rig (`sil-host`): each command parses its flags into an
+//! experiment's settings, calls the experiment ([`experiments`]: the plant, the
+//! rig and the analyses under it), and prints and writes what it computed (CSV,
+//! Arrow, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
-pub mod arrow_table;
 pub mod bench;
 pub mod cancel;
 pub mod cli;
 pub mod commands;
 pub mod error;
-pub mod fastcsv;
 pub mod folder_lock;
 pub mod output;
 pub mod plot;

@@ -11,7 +11,8 @@ use std::{
     path::{Path, PathBuf},
 };
 
-use crate::{error::CliError, fastcsv::CsvFile, folder_lock::FolderLock};
+use crate::{error::CliError, folder_lock::FolderLock};
+use experiments::table::csv::CsvFile;
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -58,7 +59,7 @@ impl OutputSet {
     }
 
     /// As [`OutputSet::create`], for writers that buffer themselves
-    /// ([`crate::fastcsv::CsvFile`]).
+    /// ([`experiments::table::csv::CsvFile`]).
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
@@ -68,7 +69,7 @@ impl OutputSet {
         Ok((tmp, file))
     }
 
-    /// Starts the CSV file `name` ([`crate::fastcsv::CsvFile`]) with its header row `header`.
+    /// Starts the CSV file `name` ([`experiments::table::csv::CsvFile`]) with its header row `header`.
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
@@ -166,7 +167,7 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 /// A CSV file written row by row as a run produces it ([`OutputSet::create_streamed`]),
 /// flushed to the operating system at least every `flush_every` of wall time: a
 /// process killed outright (SIGKILL) loses at most the rows of that interval.
-/// Rows are formatted by [`crate::fastcsv`] (the bytes of the `csv` crate's serde path).
+/// Rows are formatted by [`experiments::table::csv`] (the bytes of the `csv` crate's serde path).
 pub struct StreamedCsv {
     csv: CsvFile,
     flush_every: std::time::Duration,
@@ -186,7 +187,7 @@ impl StreamedCsv {
 
     /// Appends one row. The first write error is kept (and later rows dropped)
     /// for [`StreamedCsv::finish`] to report: a run is not stopped by its trace.
-    pub fn push<T: crate::fastcsv::CsvRow>(&mut self, row: &T) {
+    pub fn push<T: experiments::table::csv::CsvRow>(&mut self, row: &T) {
         if self.error.is_some() {
             return;
         }

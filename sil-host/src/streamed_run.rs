@@ -9,10 +9,10 @@ use std::{
 
 use crate::{
     error::CliError,
-    fastcsv::CsvRow,
     output::{OutputSet, StreamedCsv},
     plot,
 };
+use experiments::table::csv::CsvRow;
 use plant::Validity;
 use rig::{
     FirmwareLink, RunObserver,
@@ -21,32 +21,6 @@ use rig::{
     stats::RunStats,
     stream_loop,
 };
-
-// `trace.csv` of `run` and `pil`: [`PeriodRecord`]'s fields in order (the header
-// the `csv` crate derived from them); the test below checks the bytes against it.
-crate::csv_row!(PeriodRecord {
-    t: f64,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    z_t: f64,
-    z_n: f64,
-    z_t_ref: f64,
-    f_t: f64,
-    f_n: f64,
-    mode: str,
-    u1_cmd: f64,
-    u2_cmd: f64,
-    u1_applied: f64,
-    u2_applied: f64,
-    lift_off_true: bool,
-    lift_off_detected: bool,
-    deadline_miss: bool,
-    firmware_deadline_miss: bool,
-    overruns: int,
-    status: int,
-});
 
 /// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
 /// with the run: every period's row goes to `trace.csv` of `out` as it is made
@@ -135,42 +109,4 @@ pub struct Streamed {
     pub wall_s: f64,
     /// The plant's validity counters at the end.
     pub validity: Validity,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fastcsv::{push_header, push_row};
-    use proptest::prelude::*;
-
-    fn float() -> impl Strategy<Value = f64> {
-        prop_oneof![any::<u64>().prop_map(f64::from_bits), -10.0..10.0f64, Just(0.0), Just(-0.0)]
-    }
-
-    proptest! {
-        /// `trace.csv` of `run`/`pil`: the bytes of the old path (`csv::Writer::serialize`, header derived).
-        #[test]
-        fn period_records_match_the_csv_crate(
-            f in proptest::array::uniform14(float()),
-            b in proptest::array::uniform4(any::<bool>()),
-            n in any::<(u32, u32)>(),
-            m in 0..3usize,
-        ) {
-            let r = PeriodRecord {
-                t: f[0], theta1: f[1], theta1_dot: f[2], theta2: f[3], theta2_dot: f[4], z_t: f[5], z_n: f[6], z_t_ref: f[7],
-                f_t: f[8], f_n: f[9], mode: ["flight", "sliding", "sticking"][m], u1_cmd: f[10], u2_cmd: f[11],
-                u1_applied: f[12], u2_applied: f[13], lift_off_true: b[0], lift_off_detected: b[1], deadline_miss: b[2],
-                firmware_deadline_miss: b[3], overruns: n.0, status: n.1,
-            };
-            let mut w = csv::Writer::from_writer(Vec::new());
-            w.serialize(r).unwrap();
-            w.serialize(r).unwrap();
-            let old = w.into_inner().unwrap();
-            let mut new = Vec::new();
-            push_header(&mut new, <PeriodRecord as CsvRow>::HEADER);
-            push_row(&mut new, &r);
-            push_row(&mut new, &r);
-            prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
-        }
-    }
 }

@@ -1,54 +1,25 @@
 //! A long table written as it is produced, in the format the user chose
-//! (`--format csv|arrow`): CSV by a writer thread ([`crate::fastcsv::CsvThread`]),
-//! or an Arrow IPC file ([`crate::arrow_table::ArrowFile`]).
+//! (`--format csv|arrow`): CSV by a writer thread ([`experiments::table::csv::CsvThread`]),
+//! or an Arrow IPC file ([`experiments::table::arrow::ArrowFile`]).
 
-use serde::Serialize;
-
-use crate::{
-    arrow_table::{ArrowFile, ArrowRow},
-    error::CliError,
-    fastcsv::{CsvRow, CsvThread},
-    output::OutputSet,
+use crate::{error::CliError, output::OutputSet};
+pub use experiments::table::TableFormat;
+use experiments::table::{
+    ColumnRows,
+    arrow::ArrowFile,
+    csv::{CsvRow, CsvThread},
 };
-
-/// The file format of a command's long tables (`trace`, `events`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum TableFormat {
-    /// CSV with a header row (`trace.csv`): floats in their shortest round-trip digits.
-    #[default]
-    Csv,
-    /// Arrow IPC file, also called Feather v2 (`trace.arrow`): typed columns, floats
-    /// with their bits, for `pandas.read_feather`, `polars.read_ipc`, pyarrow and
-    /// `painleve.load` ([`crate::arrow_table`]).
-    Arrow,
-}
-
-impl TableFormat {
-    /// The file extension, without the dot: `csv` or `arrow`.
-    pub fn extension(self) -> &'static str {
-        match self {
-            Self::Csv => "csv",
-            Self::Arrow => "arrow",
-        }
-    }
-
-    /// The file name of table `stem` (`trace` -> `trace.csv` or `trace.arrow`).
-    pub fn file(self, stem: &str) -> String {
-        format!("{stem}.{}", self.extension())
-    }
-}
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
 /// name until the set is committed).
-pub enum TableOut<T: CsvRow + ArrowRow + Send + 'static> {
+pub enum TableOut<T: CsvRow + ColumnRows + Send + 'static> {
     /// CSV, formatted and written by a thread of its own while the caller goes on.
     Csv(CsvThread<T>),
     /// An Arrow IPC file, a record batch at a time.
     Arrow(Box<ArrowFile<T>>),
 }
 
-impl<T: CsvRow + ArrowRow + Send + 'static> TableOut<T> {
+impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     /// Starts table `stem` of `out` in `format` (`stem.csv` or `stem.arrow`).
     ///
     /// # Errors

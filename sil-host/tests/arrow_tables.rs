@@ -1,11 +1,11 @@
 //! `simulate --format arrow` against `--format csv`: the same tables, column for
 //! column, every float with the same bits (the CSV's shortest round-trip digits
 //! read back by the `csv` crate and Rust's parser, the Arrow columns by
-//! `arrow_table::read_arrow`: two independent paths).
+//! `experiments::table::arrow::read_arrow`: two independent paths).
 
 use std::{path::Path, process::Command};
 
-use sil_host::arrow_table::{ArrowColumn, read_arrow};
+use experiments::table::{Column, arrow::read_arrow};
 
 fn simulate(format: &str, out: &Path) {
     let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
@@ -37,19 +37,19 @@ fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
     simulate("arrow", &a);
     for table in ["trace", "events"] {
         let (header, cells) = read_csv(&c.join(format!("{table}.csv")));
-        let columns = read_arrow(&a.join(format!("{table}.arrow"))).unwrap();
+        let columns = read_arrow(&a.join(format!("{table}.arrow"))).unwrap().columns;
         assert_eq!(columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), header, "{table}");
         assert!(cells[0].len() > 1, "{table}: rows");
         for ((name, col), cells) in columns.iter().zip(&cells) {
             assert_eq!(col.len(), cells.len(), "{table}.{name}");
             match col {
-                ArrowColumn::F64(v) => {
+                Column::F64(v) => {
                     for (x, cell) in v.iter().zip(cells) {
                         let y: f64 = cell.parse().unwrap();
                         assert_eq!(x.to_bits(), y.to_bits(), "{table}.{name}: {x:e} against `{cell}`");
                     }
                 }
-                ArrowColumn::Str(v) => assert_eq!(v, cells, "{table}.{name}"),
+                Column::Str(v) => assert_eq!(v, cells, "{table}.{name}"),
                 other => panic!("{table}.{name}: unexpected column type {other:?}"),
             }
         }

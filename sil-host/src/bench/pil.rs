@@ -45,8 +45,8 @@ pub type PilRuns = Result<Vec<PilRun>, String>;
 /// are skipped).
 ///
 /// # Errors
-/// [`CliError::Scenario`] for a run length the scenario refuses (exit 2);
-/// [`CliError::Run`] for a run that fails once started (exit 1).
+/// [`CliError::Analysis`] for a run length the scenario refuses (exit 2);
+/// [`CliError::Analysis`] for a run that fails once started (exit 1).
 pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<PilRuns, CliError> {
     if !image.is_file() {
         return Ok(Err(format!("no PIL image at {}: build it with `{}`", image.display(), pil_link::BUILD_HINT)));
@@ -65,14 +65,14 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
             Ok(l) => l,
             // QEMU missing or the image not booting is a set-up matter: the figure is skipped.
             Err(e) if runs.is_empty() => return Ok(Err(format!("cannot start the image in QEMU: {e}"))),
-            Err(e) => return Err(CliError::Run(e)),
+            Err(e) => return Err(CliError::from(e)),
         };
         let boot_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let (periods, e) = stream_loop(&s, &mut link, &mut Discard);
         let rate = periods as f64 / t.elapsed().as_secs_f64();
         if let Some(e) = e {
-            return Err(CliError::Run(e));
+            return Err(CliError::from(e));
         }
         let per_tick = link.counts.counts_per_tick();
         runs.push(PilRun {

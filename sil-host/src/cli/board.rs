@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use super::common::ScenarioArgs;
+use experiments::settings::ScenarioArgs;
 
 /// `sil-host board`.
 #[derive(Debug, Clone, Args)]

@@ -1,28 +1,17 @@
 //! Command-line interface of `sil-host` (clap): the program and its commands
 //! ([`Cli`], [`Command`]); each command group's arguments in a file of its own
-//! (`common`: what several commands share), re-exported here.
+//! (the experiments' settings are [`experiments::settings`]), re-exported here.
 
 mod bench;
 mod board;
-mod closed_loop;
-mod common;
-mod open_loop;
 mod report;
-mod sensitivity;
-mod sweep;
-mod zmax;
 
 use clap::{Parser, Subcommand};
 
 pub use self::bench::BenchArgs;
 pub use self::board::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg, JointArg};
-pub use self::closed_loop::{FirmwareArgs, PilArgs, QemuLinkArg, RunArgs, RunLink};
-pub use self::common::{OutputArgs, ScenarioArgs, StrictArgs};
-pub use self::open_loop::{AdmissibleArgs, ModesArgs, PoincareArgs, SimulateArgs};
 pub use self::report::{ReportArgs, ReportSize};
-pub use self::sensitivity::SensitivityArgs;
-pub use self::sweep::{MergeArgs, SweepArgs};
-pub use self::zmax::ZmaxArgs;
+pub use experiments::settings::*;
 
 /// Plant simulator and rig for the Painlevé paradox on a two-link arm
 /// (Marchese, Coraggio, Hogan, di Bernardo, ECC 2019).

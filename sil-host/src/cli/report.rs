@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::common::{OutputArgs, StrictArgs};
+use experiments::settings::{OutputArgs, StrictArgs};
 
 /// How big the report's experiments are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -20,18 +20,9 @@ use serde::Serialize;
 
 use crate::{
     cli::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg, JointArg},
-    commands::closed_loop::load_scenario,
     error::CliError,
 };
-
-impl From<StepError> for CliError {
-    fn from(e: StepError) -> Self {
-        match e {
-            StepError::Line(m) => Self::BadInput(m),
-            StepError::Refused(m) => Self::Board(m),
-        }
-    }
-}
+use experiments::scenario::load_scenario;
 
 /// Everything `status` reads.
 #[derive(Debug, Serialize)]
@@ -186,7 +177,7 @@ impl bp::Operator for Terminal {
 /// `sil-host board`.
 ///
 /// # Errors
-/// [`CliError::BadInput`] (exit 2) for bad input, a port that does not open or a
+/// [`CliError::Analysis`] (exit 2) for bad input, a port that does not open or a
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
@@ -196,7 +187,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
     // never raises SIGPIPE, so only standard output is concerned.
     // SAFETY: restoring a signal's default disposition, before any thread.
     unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
-    let mut c = Client::open(&args.port, args.baud).map_err(CliError::BadInput)?;
+    let mut c = Client::open(&args.port, args.baud).map_err(CliError::bad_input)?;
     bp::hello(&mut c)?;
     let json = args.json;
     let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || println!("{what}: done"));
@@ -230,21 +221,21 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             }
             if crate::cancel::exit_code().is_some() {
                 // Ctrl-C or SIGTERM: the shell's 130 or 143, as every command.
-                return Err(CliError::Interrupted(format!("watch stopped after {n} readings")));
+                return Err(CliError::interrupted(format!("watch stopped after {n} readings")));
             }
         }
         BoardCommand::Calibrate { pose_deg, reversed, jog_nm, no_tare } => {
             let [t1, el] = pose_deg[..] else {
-                return Err(CliError::BadInput("--pose-deg needs THETA1,ELBOW in degrees (the jig's drawing)".into()));
+                return Err(CliError::bad_input("--pose-deg needs THETA1,ELBOW in degrees (the jig's drawing)"));
             };
             if ![t1, el].iter().all(|d| d.is_finite() && *d > -180.0 && *d <= 180.0) {
-                return Err(CliError::BadInput(format!(
+                return Err(CliError::bad_input(format!(
                     "--pose-deg {t1},{el}: each angle in (-180, 180] degrees (theta1 from straight down, the elbow's theta2 - theta1)"
                 )));
             }
             let max_nm = f64::from(MAX_JOG_CODES) * 5.0 / 2048.0;
             if !(jog_nm.is_finite() && *jog_nm > 0.0 && *jog_nm <= max_nm) {
-                return Err(CliError::BadInput(format!("--jog-nm {jog_nm}: must be in (0, {max_nm:.2}] N m")));
+                return Err(CliError::bad_input(format!("--jog-nm {jog_nm}: must be in (0, {max_nm:.2}] N m")));
             }
             let o = CalibrateOptions {
                 pose_counts: [t1, el].map(|d| shared::wire::encode_angle(d.to_radians())),
@@ -268,11 +259,11 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let request = match newtons {
                 _ if *skip => Request::SkipSpan { axis },
                 Some(n) if n.is_finite() && *n != 0.0 && n.abs() <= 25.0 => Request::Span { axis, newtons: *n as f32 },
-                Some(n) => return Err(CliError::BadInput(format!("--newtons {n}: must be a non-zero force of at most 25 N"))),
-                None => return Err(CliError::BadInput("span needs --newtons or --skip".into())),
+                Some(n) => return Err(CliError::bad_input(format!("--newtons {n}: must be a non-zero force of at most 25 N"))),
+                None => return Err(CliError::bad_input("span needs --newtons or --skip")),
             };
             let Reply::Calibration(cal) = bp::ask(&mut c, request)? else {
-                return Err(CliError::BadInput("unexpected reply to span".into()));
+                return Err(CliError::bad_input("unexpected reply to span"));
             };
             emit(json, &cal, || {
                 if *skip {
@@ -332,13 +323,13 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     if let Some(t) = args.serve_for
         && !(t.is_finite() && t > 0.0)
     {
-        return Err(CliError::BadInput(format!("--serve-for {t}: must be a positive number of seconds")));
+        return Err(CliError::bad_input(format!("--serve-for {t}: must be a positive number of seconds")));
     }
     let flash = if args.flash == FlashArg::Erased {
         FlashModel::erased()
     } else {
         FlashModel::brought_up(&s.calibration.arm_calibration(), firmware_config(&s))
-            .map_err(|e| CliError::BadInput(format!("the settings record: {}", e.describe())))?
+            .map_err(|e| CliError::bad_input(format!("the settings record: {}", e.describe())))?
     };
     if args.flash == FlashArg::Corrupt {
         // One bit of the record's frame: its CRC-32C no longer matches.
@@ -346,10 +337,10 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     }
     if args.emulated {
         let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
-        let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::BadInput(e.to_string()))?;
+        let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::bad_input(e.to_string()))?;
         serve_arm(args, &s, arm, "emulated arm image")
     } else {
-        let arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::BadInput(e.to_string()))?;
+        let arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::bad_input(e.to_string()))?;
         serve_arm(args, &s, arm, "board twin")
     }
 }
@@ -397,7 +388,7 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     if args.fault_line {
         arm.set_faults(BusFaults { driver_fault: true, ..BusFaults::default() });
     }
-    let mut pty = Pty::open().map_err(CliError::BadInput)?;
+    let mut pty = Pty::open().map_err(CliError::bad_input)?;
     let pose = arm.pose_counts();
     let pose_deg = pose.map(|c| {
         let d = f64::from(c) * 360.0 / 16384.0;
@@ -451,7 +442,7 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     bringup_line::serve(&mut arm, &mut pty.master, ts, &stop).map_err(CliError::Board)?;
     if crate::cancel::exit_code().is_some() {
         // Ctrl-C or SIGTERM (not --serve-for's end): 130 or 143.
-        return Err(CliError::Interrupted(format!("{what} stopped")));
+        return Err(CliError::interrupted(format!("{what} stopped")));
     }
     Ok(())
 }

@@ -12,7 +12,7 @@
 
 use std::io::Write;
 
-use super::closed_loop::{draw, load_scenario, print_summary};
+use super::closed_loop::{draw, print_summary};
 use crate::commands::Done;
 use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
@@ -21,6 +21,7 @@ use crate::{
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
 };
+use experiments::scenario::load_scenario;
 use rig::{
     FirmwareLink,
     pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
@@ -33,18 +34,18 @@ use rig::{
 /// Checks the arguments that say where the image runs.
 ///
 /// # Errors
-/// [`CliError::BadInput`] (exit 2): a serial device that does not exist, a baud
+/// [`CliError::Analysis`] (exit 2): a serial device that does not exist, a baud
 /// rate outside [`BAUD_RANGE`], a missing image.
 fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
     if let Some(path) = &args.serial {
         if !path.exists() {
-            return Err(CliError::BadInput(format!(
+            return Err(CliError::bad_input(format!(
                 "--serial {}: no such device (is the USB-serial adapter plugged in? `ls /dev/ttyUSB* /dev/ttyACM*` lists them)",
                 path.display()
             )));
         }
         if !BAUD_RANGE.contains(&args.baud) {
-            return Err(CliError::BadInput(format!(
+            return Err(CliError::bad_input(format!(
                 "--baud {}: outside {}..={} baud (the reference board's USART1 runs at {})",
                 args.baud,
                 BAUD_RANGE.start(),
@@ -56,7 +57,7 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
     }
     let image = args.image.clone().unwrap_or_else(pil_link::default_image);
     if !image.is_file() {
-        return Err(CliError::BadInput(format!(
+        return Err(CliError::bad_input(format!(
             "no PIL image at {}: build it with `{}` (from the workspace root) or pass --image",
             image.display(),
             pil_link::BUILD_HINT
@@ -74,13 +75,13 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
 /// (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     let scenario = load_scenario(&args.scenario)?;
-    plant_for(&scenario).map_err(CliError::Sim)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
+    plant_for(&scenario).map_err(CliError::from)?;
+    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::bad_input(format!("firmware configuration: {e}")))?;
     if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {
-        return Err(CliError::BadInput(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
+        return Err(CliError::bad_input(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
     }
     let target = target_of(args)?;
-    pil_link::check_faults(&scenario, &target).map_err(|e| CliError::BadInput(e.to_string()))?;
+    pil_link::check_faults(&scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
@@ -90,7 +91,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         Box::new(move |l: &LogLine| bar.println(format!("[image {}] {}", l.level, l.message))) as pil_link::LogSink
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
-    let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::Run)?;
+    let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
     let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
@@ -113,7 +114,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host pil`: [`execute`], then prints the summary (human, or the

@@ -8,7 +8,7 @@
 //! the run goes (flushed every millisecond of wall time) and renamed at the end,
 //! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
-use super::closed_loop::{draw, load_scenario, print_summary};
+use super::closed_loop::{draw, print_summary};
 use crate::commands::Done;
 use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
@@ -16,7 +16,7 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
 };
-use rig::faults::LinkKind;
+pub use experiments::run::prepare;
 use rig::scenario::Scenario;
 use rig::{
     FirmwareLink,
@@ -24,53 +24,9 @@ use rig::{
     in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
     ipc_link::IpcLink,
-    setup::{firmware_config, plant_for},
     summary::{MonitorSummary, RunSummary},
     twin_link::TwinLink,
 };
-
-/// Checks `sil-host run`'s scenario and options before any link is made: the
-/// scenario with its overrides, the plant and firmware set-up, the link
-/// (`--in-process`, `--link`) with the options it allows and the faults it can
-/// inject. Returns the scenario and the link.
-///
-/// # Errors
-/// Bad scenario, overrides or options (exit 2).
-pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
-    let scenario = load_scenario(&args.scenario)?;
-    // Check the plant and firmware set-up before touching the output folder.
-    plant_for(&scenario).map_err(CliError::Sim)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::BadInput(format!("firmware configuration: {e}")))?;
-    let chosen = if args.in_process { RunLink::InProcess } else { args.link.unwrap_or(RunLink::Iceoryx2) };
-    let kind = match chosen {
-        RunLink::InProcess => LinkKind::InProcess,
-        RunLink::Iceoryx2 => LinkKind::Ipc,
-        RunLink::Twin => LinkKind::Twin,
-        RunLink::Emulator => LinkKind::Emulator,
-    };
-    if args.elf.is_some() && chosen != RunLink::Emulator {
-        return Err(CliError::BadInput("--elf names the image for --link emulator only".into()));
-    }
-    if chosen != RunLink::Iceoryx2 {
-        let what = match chosen {
-            RunLink::Twin => "--link twin",
-            RunLink::Emulator => "--link emulator",
-            _ => "--in-process",
-        };
-        for (given, flag) in [
-            (args.realtime, "--realtime"),
-            (args.attach.is_some(), "--attach"),
-            (args.rig.is_some(), "--rig"),
-            (args.monitors > 0, "--monitors"),
-        ] {
-            if given {
-                return Err(CliError::BadInput(format!("{flag} needs the firmware process over iceoryx2: not with {what}")));
-            }
-        }
-    }
-    kind.check(&scenario.faults).map_err(|e| CliError::BadInput(e.to_string()))?;
-    Ok((scenario, chosen))
-}
 
 /// Runs `sil-host run`.
 ///
@@ -83,9 +39,9 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         (Some(name), _) | (None, Some(name)) => name.clone(),
         (None, None) => default_rig_name(),
     };
-    check_rig_name(&rig).map_err(CliError::BadInput)?;
+    check_rig_name(&rig).map_err(CliError::bad_input)?;
     if !(args.monitor_timeout > 0.0 && args.monitor_timeout <= 600.0) {
-        return Err(CliError::BadInput(format!("--monitor-timeout {}: expected seconds in (0, 600]", args.monitor_timeout)));
+        return Err(CliError::bad_input(format!("--monitor-timeout {}: expected seconds in (0, 600]", args.monitor_timeout)));
     }
     // Real time never waits for a monitor: the wall clock paces the periods.
     let monitors = MonitorPolicy {
@@ -99,21 +55,21 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let mut twin: Option<TwinLink> = None;
     let mut emulator: Option<EmulatorLink> = None;
     let link: &mut dyn FirmwareLink = if chosen == RunLink::InProcess {
-        in_process.insert(InProcessLink::new(&scenario).map_err(CliError::Run)?)
+        in_process.insert(InProcessLink::new(&scenario).map_err(CliError::from)?)
     } else if chosen == RunLink::Twin {
-        twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::BadInput(e.to_string()))?)
+        twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::bad_input(e.to_string()))?)
     } else if chosen == RunLink::Emulator {
         let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
-        emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::BadInput(e.to_string()))?)
+        emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::bad_input(e.to_string()))?)
     } else {
         let exe = match &args.attach {
             Some(_) => None,
             None => Some(
                 std::env::current_exe()
-                    .map_err(|e| CliError::BadInput(format!("cannot find this executable to spawn the firmware: {e}")))?,
+                    .map_err(|e| CliError::bad_input(format!("cannot find this executable to spawn the firmware: {e}")))?,
             ),
         };
-        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime, &monitors).map_err(CliError::Run)?)
+        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime, &monitors).map_err(CliError::from)?)
     };
     let transport = link.transport();
     // Only once the firmware is there: a run that cannot start writes nothing.
@@ -162,7 +118,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::Run) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host run`: [`execute`], then prints the summary (human, or the

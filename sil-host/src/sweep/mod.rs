@@ -4,4 +4,4 @@
 //! indicator slices).
 
 pub mod figures;
-pub mod store;
+pub use experiments::sweep::store;

@@ -6,18 +6,19 @@ use std::io::Write;
 
 use crate::commands::Done;
 use crate::{cli::AdmissibleArgs, error::CliError, output::OutputSet};
-use analyses::admissible::{AdmissibleReport, compute_for};
+use analyses::admissible::AdmissibleReport;
+pub use experiments::admissible::{compute, document, summary};
 
 pub mod figures;
-pub mod summary;
+mod print;
 use figures::*;
-use summary::*;
+use print::*;
 
 /// Computes the admissible configurations and writes `admissible.json` and
 /// `admissible.svg`; prints nothing.
 ///
 /// # Errors
-/// [`CliError::Param`] (exit 2) for a bad `mu`, before anything is written;
+/// [`CliError::Analysis`] (exit 2) for a bad `mu`, before anything is written;
 /// [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError> {
     let report = compute(args)?;
@@ -30,32 +31,13 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
     Ok(Done::ok(report, files.into_iter().map(Into::into).collect()))
 }
 
-/// Checks the options and computes the admissible configurations (what
-/// [`execute`] writes), without writing anything.
-///
-/// # Errors
-/// [`CliError::Param`] or [`CliError::Scenario`] (exit 2) for a bad `mu` or `--set`.
-pub fn compute(args: &AdmissibleArgs) -> Result<AdmissibleReport, CliError> {
-    let params = super::arm_params(&args.set, "admissible", &["l", "h"], args.mu, shared::Params::<f64>::paper().v_belt)?;
-    Ok(compute_for(params, analyses::admissible::SCAN_STEPS)?)
-}
-
-/// `admissible.json` (also what `--json` prints), listing `files`.
-///
-/// # Errors
-/// [`CliError::Io`] when it cannot be serialised.
-pub fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, CliError> {
-    serde_json::to_string_pretty(&json_report(report, files))
-        .map_err(|e| CliError::Io { path: "admissible.json".into(), source: std::io::Error::other(e) })
-}
-
 /// Runs `sil-host admissible` (docs/model.md experiment 2): computes the admissible
 /// intervals for `--mu`, prints them (human table, or one JSON document with
 /// `--json`), and writes `admissible.json` and `admissible.svg` under `--out`,
 /// all or nothing.
 ///
 /// # Errors
-/// [`CliError::Param`] (exit 2) for a negative or non-finite `--mu`, before
+/// [`CliError::Analysis`] (exit 2) for a negative or non-finite `--mu`, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).
 pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {

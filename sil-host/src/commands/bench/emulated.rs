@@ -36,11 +36,11 @@ const PAPER: [(&str, &str); 4] = [
 
 fn image() -> Result<std::path::PathBuf, CliError> {
     let p = default_image();
-    if p.exists() { Ok(p) } else { Err(CliError::BadInput(format!("{} is missing: {}", p.display(), rig::emulator_link::BUILD_HINT))) }
+    if p.exists() { Ok(p) } else { Err(CliError::bad_input(format!("{} is missing: {}", p.display(), rig::emulator_link::BUILD_HINT))) }
 }
 
 fn with_duration(text: &str, duration_s: f64) -> Result<Scenario, CliError> {
-    let mut s = Scenario::from_toml(text).map_err(|e| CliError::BadInput(e.to_string()))?;
+    let mut s = Scenario::from_toml(text).map_err(|e| CliError::bad_input(e.to_string()))?;
     s.timing.duration_s = duration_s;
     s.validate()?;
     Ok(s)
@@ -55,11 +55,11 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
     let s = with_duration(rig::scenario::DEFAULT_TOML, args.duration)?;
     let mut rates = Vec::new();
     for _ in 0..args.repeat {
-        let mut link = EmulatorLink::new(&s, &image).map_err(CliError::Run)?;
+        let mut link = EmulatorLink::new(&s, &image).map_err(CliError::from)?;
         let t = Instant::now();
         let (records, e) = run_loop(&s, &mut link, &mut ());
         if let Some(e) = e {
-            return Err(CliError::Run(e));
+            return Err(CliError::from(e));
         }
         rates.push(records.len() as f64 / t.elapsed().as_secs_f64());
     }
@@ -80,10 +80,10 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
     let mut lines = Vec::new();
     for (name, text) in PAPER {
         let s = with_duration(text, args.duration)?;
-        let mut link = EmulatorLink::with_mode(&s, &image, Mode::Counted).map_err(CliError::Run)?;
+        let mut link = EmulatorLink::with_mode(&s, &image, Mode::Counted).map_err(CliError::from)?;
         let (_, e) = run_loop(&s, &mut link, &mut ());
         if let Some(e) = e.filter(|e| !matches!(e, rig::record::RunError::SafeState { .. })) {
-            return Err(CliError::Run(e));
+            return Err(CliError::from(e));
         }
         let Some(t) = link.timing() else { continue };
         lines.push(format!(

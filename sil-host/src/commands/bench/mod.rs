@@ -57,7 +57,7 @@ pub const GROUPS: [(&str, &str); 11] = [
 /// tracing) and `realtime` unless `--realtime-s` is positive.
 ///
 /// # Errors
-/// [`CliError::BadInput`] naming an unknown group and listing the known ones.
+/// [`CliError::Analysis`] naming an unknown group and listing the known ones.
 fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
     if args.only.is_empty() {
         return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "cycles" && (*g != "realtime" || args.realtime_s > 0.0)).collect());
@@ -66,14 +66,14 @@ fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
     for name in &args.only {
         let Some((g, _)) = GROUPS.iter().find(|(g, _)| g == name) else {
             let known: Vec<_> = GROUPS.iter().map(|g| g.0).collect();
-            return Err(CliError::BadInput(format!("--only {name}: unknown figure group (known: {})", known.join(", "))));
+            return Err(CliError::bad_input(format!("--only {name}: unknown figure group (known: {})", known.join(", "))));
         };
         if !out.contains(g) {
             out.push(*g);
         }
     }
     if out.contains(&"realtime") && args.realtime_s <= 0.0 {
-        return Err(CliError::BadInput("--only realtime needs --realtime-s S > 0 (the length of the real-time run)".into()));
+        return Err(CliError::bad_input("--only realtime needs --realtime-s S > 0 (the length of the real-time run)"));
     }
     Ok(out)
 }
@@ -81,18 +81,18 @@ fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
 /// Checks the numbers of `args`.
 ///
 /// # Errors
-/// [`CliError::BadInput`] (exit 2) naming the flag.
+/// [`CliError::Analysis`] (exit 2) naming the flag.
 fn check(args: &BenchArgs) -> Result<(), CliError> {
     if args.repeat == 0 || args.repeat > 1000 {
-        return Err(CliError::BadInput(format!("--repeat {}: between 1 and 1000", args.repeat)));
+        return Err(CliError::bad_input(format!("--repeat {}: between 1 and 1000", args.repeat)));
     }
     for (flag, v, max) in [("--duration", args.duration, 3600.0), ("--pil-s", args.pil_s, 600.0)] {
         if !(v.is_finite() && v > 0.0 && v <= max) {
-            return Err(CliError::BadInput(format!("{flag} {v}: in (0, {max}] s")));
+            return Err(CliError::bad_input(format!("{flag} {v}: in (0, {max}] s")));
         }
     }
     if !(args.realtime_s.is_finite() && (0.0..=3600.0).contains(&args.realtime_s)) {
-        return Err(CliError::BadInput(format!("--realtime-s {}: in [0, 3600] s", args.realtime_s)));
+        return Err(CliError::bad_input(format!("--realtime-s {}: in [0, 3600] s", args.realtime_s)));
     }
     Ok(())
 }

@@ -45,7 +45,7 @@ pub const SWEEP_ARGS: [&str; 6] = ["sweep", "--controller", "hybrid", "--ics", "
 fn parse(args: &[&str], out: &std::path::Path) -> Result<Command, CliError> {
     let out = out.to_string_lossy();
     let argv = std::iter::once("sil-host").chain(args.iter().copied()).chain(["--out", &out]);
-    Cli::try_parse_from(argv).map(|c| c.command).map_err(|e| CliError::BadInput(format!("bench: {e}")))
+    Cli::try_parse_from(argv).map(|c| c.command).map_err(|e| CliError::bad_input(format!("bench: {e}")))
 }
 
 fn scratch() -> Result<tempfile::TempDir, CliError> {

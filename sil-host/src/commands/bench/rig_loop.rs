@@ -42,7 +42,7 @@ fn timed(s: &Scenario, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize
     let (periods, e) = stream_loop(s, link, &mut misses);
     let rate = periods as f64 / t.elapsed().as_secs_f64();
     match e {
-        Some(e) => Err(CliError::Run(e)),
+        Some(e) => Err(CliError::from(e)),
         None => Ok((periods, rate, misses.0)),
     }
 }
@@ -60,7 +60,7 @@ fn scenario(duration_s: f64) -> Result<Scenario, CliError> {
 }
 
 fn this_exe() -> Result<std::path::PathBuf, CliError> {
-    std::env::current_exe().map_err(|e| CliError::BadInput(format!("cannot find this executable: {e}")))
+    std::env::current_exe().map_err(|e| CliError::bad_input(format!("cannot find this executable: {e}")))
 }
 
 fn fmt(p: &Percentiles) -> String {
@@ -76,7 +76,7 @@ pub fn in_process(args: &BenchArgs) -> Result<Figure, CliError> {
     let mut rates = Vec::new();
     let mut misses = 0;
     for _ in 0..args.repeat {
-        let mut link = InProcessLink::new(&s).map_err(CliError::Run)?;
+        let mut link = InProcessLink::new(&s).map_err(CliError::from)?;
         let (_, rate, m) = timed(&s, &mut link)?;
         rates.push(rate);
         misses += m;
@@ -97,7 +97,7 @@ pub fn twin(args: &BenchArgs) -> Result<Figure, CliError> {
     let mut rates = Vec::new();
     let mut misses = 0;
     for _ in 0..args.repeat {
-        let mut link = TwinLink::new(&s).map_err(CliError::Run)?;
+        let mut link = TwinLink::new(&s).map_err(CliError::from)?;
         let (_, rate, m) = timed(&s, &mut link)?;
         rates.push(rate);
         misses += m;
@@ -119,7 +119,7 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
     let mut misses = 0;
     let mut timings = LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::Run)?;
+        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::from)?;
         let (_, rate, m) = timed(&s, &mut link)?;
         rates.push(rate);
         misses += m;
@@ -144,7 +144,7 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
 pub fn realtime(args: &BenchArgs) -> Result<Figure, CliError> {
     let s = scenario(args.realtime_s)?;
     let exe = this_exe()?;
-    let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::Run)?;
+    let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::from)?;
     let (periods, _, misses) = timed(&s, &mut link)?;
     let name = format!("real time at 1 kHz over iceoryx2, {} s: deadline misses", args.realtime_s);
     let mut f = Figure::measured("realtime_misses", "realtime", name, misses as f64, "misses", 0.0, Goal::AtMost)

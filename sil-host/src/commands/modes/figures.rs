@@ -8,6 +8,7 @@ use crate::{
     },
 };
 use analyses::modes::*;
+use experiments::modes::branch_label;
 use plotters::prelude::*;
 use shared::ContactMode;
 use std::path::Path;
@@ -27,14 +28,6 @@ pub(crate) fn color(mode: PointMode) -> RGBColor {
 
 pub(crate) fn plot_err(path: &Path) -> impl Fn(String) -> CliError + '_ {
     move |message| CliError::Plot { path: path.to_path_buf(), message }
-}
-
-pub(crate) fn branch_label(map: &ModeMap) -> String {
-    let root = if map.sign.sign(map.branch) > 0.0 { "+" } else { "-" };
-    match map.sign {
-        Theta2Sign::Auto => format!("elbow {}, theta2 = {root}acos(H/l - cos theta1)", map.branch.name()),
-        _ => format!("theta2 = {root}acos(H/l - cos theta1), both elbow branches"),
-    }
 }
 
 /// `theta1` (rad) of the straight arm on the map's root of `theta2`, if the map

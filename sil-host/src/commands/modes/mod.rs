@@ -6,18 +6,20 @@
 use std::io::Write;
 
 use crate::commands::Done;
-use crate::{cli::ModesArgs, commands::parse_range, error::CliError, output::OutputSet};
+use crate::{cli::ModesArgs, error::CliError, output::OutputSet};
 use analyses::modes::*;
 
 pub mod figures;
-pub mod summary;
+mod print;
+pub use experiments::modes::{branch_label, compute, summary};
 use figures::*;
+use print::*;
 use summary::*;
 
 /// Computes the mode map and writes `modes.csv` and `modes.svg`; prints nothing.
 ///
 /// # Errors
-/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
+/// [`CliError::Analysis`] / [`CliError::Analysis`] (exit 2) for bad ranges, `mu`
 /// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
@@ -32,25 +34,12 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     Ok(Done::ok(map, files))
 }
 
-/// Checks the options and computes the mode map (what [`execute`] writes),
-/// without writing anything.
-///
-/// # Errors
-/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
-/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size.
-pub fn compute(args: &ModesArgs) -> Result<ModeMap, CliError> {
-    let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
-    let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
-    let params = super::arm_params(&args.set, "modes", &[], args.mu, args.v_belt)?;
-    Ok(compute_for(params, args.branch, args.theta2_sign, t1, t1d, args.grid)?)
-}
-
 /// Runs `sil-host modes` (docs/model.md experiment 1): computes the map, prints the
 /// counts per mode (human table, or one JSON document with `--json`) and writes
 /// `modes.csv` and `modes.svg` under `--out`, all or nothing.
 ///
 /// # Errors
-/// [`CliError::BadInput`] / [`CliError::Param`] (exit 2) for bad ranges, `mu`
+/// [`CliError::Analysis`] / [`CliError::Analysis`] (exit 2) for bad ranges, `mu`
 /// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).

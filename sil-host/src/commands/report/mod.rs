@@ -68,14 +68,14 @@ struct ReportIndex<'a> {
 /// Runs `sil-host report`.
 ///
 /// # Errors
-/// [`CliError::BadInput`] when the scenario folder is missing; [`CliError::Io`]
+/// [`CliError::Analysis`] when the scenario folder is missing; [`CliError::Io`]
 /// when the report cannot be written; [`CliError::PartFailed`] (exit 1) when an
-/// experiment failed, after everything is written; [`CliError::Interrupted`]
+/// experiment failed, after everything is written; [`CliError::Analysis`]
 /// (exit 130 or 143) when Ctrl-C or SIGTERM stopped it, after the page is written
 /// with the experiments that finished (`--results` is then not written).
 pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     let scenarios = scenario_dir()
-        .ok_or_else(|| CliError::BadInput("cannot find the scenarios/ folder: run `sil-host report` from the repository root".into()))?;
+        .ok_or_else(|| CliError::bad_input("cannot find the scenarios/ folder: run `sil-host report` from the repository root"))?;
     let sections = sections::sections(args.size, &scenarios);
     let mut out = OutputSet::new(&args.output.out)?;
     let n: usize = sections.iter().map(|s| s.steps.len()).sum();
@@ -128,7 +128,7 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     if interrupted {
         let finished = results.iter().flatten().filter(|r| r.error.is_none()).count();
         let results_note = if args.results.is_some() { "; --results was not written" } else { "" };
-        return Err(CliError::Interrupted(format!(
+        return Err(CliError::interrupted(format!(
             "{finished} of {n} experiments finished; the page lists them: {}{results_note}",
             dir.join("report.md").display()
         )));
@@ -243,7 +243,7 @@ fn execute(command: Command) -> Result<(Outcome, Option<CliError>), CliError> {
         Command::Pil(a) => typed(commands::pil::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Bench(a) => (Outcome::Bench(commands::bench::execute(&a)?), None),
         Command::Sensitivity(a) => typed(commands::sensitivity::execute(&a)?, |s| Outcome::Sensitivity(Box::new(s))),
-        other => return Err(CliError::BadInput(format!("the report has no page for {other:?}"))),
+        other => return Err(CliError::bad_input(format!("the report has no page for {other:?}"))),
     })
 }
 

@@ -24,11 +24,11 @@ pub fn merge(args: &MergeArgs) -> Result<(), CliError> {
     let mut shards = Vec::new();
     for dir in &args.dirs {
         let m = store::read_manifest(dir)?
-            .ok_or_else(|| CliError::BadInput(format!("{} has no {}: not a sweep folder", dir.display(), store::MANIFEST)))?;
+            .ok_or_else(|| CliError::bad_input(format!("{} has no {}: not a sweep folder", dir.display(), store::MANIFEST)))?;
         if let Some((d0, m0)) = &first {
             if m.spec != m0.spec {
                 let diff = store::differences(&Manifest { shard: m.shard, ..m0.clone() }, &m);
-                return Err(CliError::BadInput(format!(
+                return Err(CliError::bad_input(format!(
                     "{} and {} hold different sweeps: {}",
                     d0.display(),
                     dir.display(),
@@ -43,7 +43,7 @@ pub fn merge(args: &MergeArgs) -> Result<(), CliError> {
             match rows.get(&r.index) {
                 Some((other, where_)) => {
                     if !store::same_row(other, &r) {
-                        return Err(CliError::BadInput(format!(
+                        return Err(CliError::bad_input(format!(
                             "run {} is in {} and {} with different results",
                             r.index,
                             where_.display(),
@@ -59,16 +59,16 @@ pub fn merge(args: &MergeArgs) -> Result<(), CliError> {
         }
     }
     let Some((_, m0)) = first else {
-        return Err(CliError::BadInput("no folders given".into()));
+        return Err(CliError::bad_input("no folders given"));
     };
     let merged = Manifest { spec: m0.spec.clone(), shard: Shard::ALL };
     let rows: Vec<RunRow> = rows.into_values().map(|(r, _)| r).collect();
     let missing = store::missing(&merged, &rows);
     if !missing.is_empty() && !args.allow_missing {
-        return Err(CliError::BadInput(missing_message(&merged.spec, &missing, shards.iter().find(|s| s.n > 1))));
+        return Err(CliError::bad_input(missing_message(&merged.spec, &missing, shards.iter().find(|s| s.n > 1))));
     }
     if args.dirs.iter().any(|d| d == &args.out) {
-        return Err(CliError::BadInput("--out must not be one of the merged folders".into()));
+        return Err(CliError::bad_input("--out must not be one of the merged folders"));
     }
     // One writer per folder: a second merge or a sweep into --out is refused.
     let _lock = FolderLock::acquire(&args.out)?;

@@ -11,158 +11,19 @@
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use crate::commands::Done;
 use crate::{
     cli::ZmaxArgs,
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
 };
-use analyses::admissible::{p_on_belt, positive_intervals};
-use analyses::zmax::{Combination, Criteria, Search, Setting, default_bracket, max_trials, sampled_scenario, search};
-use plant::initial::PaperX0;
-use rig::scenario::Scenario;
+use analyses::zmax::max_trials;
 
 pub mod figures;
-pub mod summary;
+mod print;
+pub use experiments::zmax::{Plan, plan, run_searches, summary, summary::*, trial_rows};
 use figures::*;
-use summary::*;
-
-fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
-    if args.all {
-        return Combination::all();
-    }
-    let (controller, x0) = (args.controller, args.x0);
-    let setting = if args.ideal { Setting::Ideal } else { Setting::Sampled };
-    vec![Combination { controller, x0, setting }]
-}
-
-/// The keys each trial sets: `--set` of one of them is refused.
-const TRIAL_KEYS: [(&str, &str); 4] = [
-    ("controller.kind", "--controller (or --all)"),
-    ("plant.x0", "--x0 (or --all)"),
-    ("controller.target_z_t", "the bisection"),
-    ("timing.duration_s", "--duration"),
-];
-
-/// The base scenario (`--scenario` or the embedded default) with the `--set`
-/// overrides and `--iwc` (a key is set in one place: `--set plant.iwc` with `--iwc` is refused).
-fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
-    rig::overrides::check_keys(&args.set, &TRIAL_KEYS).map_err(rig::scenario::ScenarioError::from)?;
-    if args.iwc.is_some() {
-        rig::overrides::check_keys(&args.set, &[("plant.iwc", "--iwc")]).map_err(rig::scenario::ScenarioError::from)?;
-    }
-    let mut s = crate::commands::closed_loop::read_scenario(args.scenario.as_deref(), &args.set)?;
-    if let Some(iwc) = args.iwc {
-        s.plant.iwc = iwc;
-    }
-    Ok(s)
-}
-
-/// End of the admissible range on the initial condition's branch, `z_r_dot > 0`.
-fn p_zero_end(base: &Scenario, x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
-    let params = base.plant.params();
-    let arm = shared::Arm::new(params);
-    let branch = x0.branch();
-    let p = |z| p_on_belt(&arm, z, branch, shared::SlipDirection::Positive);
-    positive_intervals(p, bracket.0, bracket.1 + 1e-3 - 1e-9, 20_000, 1e-9).iter().find(|i| i.hi_is_root).map(|i| i.hi)
-}
-
-/// The `z_t` (m) of the largest `theta1` on the belt on the initial condition's
-/// branch, by a scan of 20 000 steps over the bracket; `None` at an end of it.
-fn theta1_fold(x0: PaperX0, bracket: (f64, f64)) -> Option<f64> {
-    let params = shared::Params::<f64>::paper();
-    let branch = x0.branch();
-    let n = 20_000;
-    let z_at = |i: usize| bracket.0 + (bracket.1 - bracket.0) * i as f64 / n as f64;
-    let theta1 = |z: f64| {
-        shared::kinematics::inverse_kinematics(params.l, &nalgebra::Vector2::new(z, -params.h), branch).map_or(f64::NEG_INFINITY, |q| q[0])
-    };
-    let best = (0..=n).max_by(|&a, &b| theta1(z_at(a)).total_cmp(&theta1(z_at(b))))?;
-    (best > 0 && best < n).then(|| z_at(best))
-}
-
-/// A `Z_t,sliding` search checked and set up, before anything runs: what [`plan`] returns.
-#[derive(Debug, Clone)]
-pub struct Plan {
-    /// The base scenario (`--scenario` or the embedded default, with `--set` and `--iwc`).
-    pub base: Scenario,
-    /// The trial's criteria.
-    pub criteria: Criteria,
-    /// The searches: each case with its bracket of targets, m.
-    pub jobs: Vec<(Combination, (f64, f64))>,
-}
-
-/// Checks `sil-host zmax`'s options and every case's set-up (the sampled
-/// scenario and the ideal law at the top of its bracket).
-///
-/// # Errors
-/// Bad input (exit 2).
-pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
-    let base = base_scenario(args)?;
-    let criteria = Criteria {
-        duration_s: args.duration,
-        move_time_s: base.controller.move_time_s,
-        reach_tol_m: args.reach_tol,
-        settle_tol_m: args.settle_tol,
-        settle_window_s: args.settle_window,
-        lift_off_gap_m: args.lift_off_gap,
-    };
-    criteria.validate()?;
-    if !(args.tol.is_finite() && args.tol > 0.0) {
-        return Err(CliError::BadInput(format!("--tol {} m must be finite and > 0", args.tol)));
-    }
-    let combos = combinations(args);
-    for c in &combos {
-        analyses::zmax::check_x0(c.x0)?;
-    }
-    let mut jobs = Vec::new();
-    for combo in combos {
-        let bracket = match &args.bracket {
-            Some(s) => super::parse_range("bracket", s)?,
-            None => default_bracket(&base, combo.x0)?,
-        };
-        sampled_scenario(&base, combo, bracket.1, &criteria)?;
-        analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::Sim)?;
-        jobs.push((combo, bracket));
-    }
-    Ok(Plan { base, criteria, jobs })
-}
-
-/// `summary.json` (with `zmax.csv`'s rows) of the `searches` of `plan`, which
-/// took `wall_s` s.
-pub fn summary(args: &ZmaxArgs, plan: Plan, searches: &[Search], wall_s: f64) -> ZmaxSummary {
-    let Plan { base, criteria, .. } = plan;
-    let rows: Vec<ZmaxRow> = searches
-        .iter()
-        .map(|s| ZmaxRow::of(s, p_zero_end(&base, s.combination.x0, s.bracket), theta1_fold(s.combination.x0, s.bracket)))
-        .collect();
-    ZmaxSummary {
-        results: rows,
-        trials: searches.iter().flat_map(|s| s.trials.iter().cloned()).collect(),
-        criteria,
-        tol_m: args.tol,
-        definition: DEFINITION,
-        paper: PAPER,
-        plant_params: base.plant.params(),
-        gains: ZmaxGains {
-            pid: base.controller.pid,
-            hybrid_kp: base.controller.hybrid.kp,
-            hybrid_kd: base.controller.hybrid.kd,
-            hybrid_ki_x0d: base.controller.hybrid_ki(PaperX0::D),
-            hybrid_ki_x0u: base.controller.hybrid_ki(PaperX0::U),
-        },
-        base_scenario: base,
-        validity: trials_validity(searches),
-        wall_s,
-    }
-}
-
-/// The rows of `trials.csv`: every trial of every search, in order.
-pub fn trial_rows(summary: &ZmaxSummary) -> Vec<TrialRow> {
-    summary.trials.iter().map(TrialRow::from).collect()
-}
+use print::*;
 
 /// Runs `sil-host zmax`.
 ///
@@ -174,20 +35,11 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let plan = plan(args)?;
     let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
     let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
-    let results: Vec<Result<Search, analyses::AnalysisError>> = plan
-        .jobs
-        .par_iter()
-        .map(|&(combo, bracket)| {
-            let s = search(&plan.base, combo, bracket, args.tol, &plan.criteria, |_| progress.inc(1));
-            // A search that ends early (a bracket end decides) frees its share of the bar.
-            if let Ok(s) = &s {
-                progress.inc(u64::from(max_trials(bracket.0, bracket.1, args.tol)).saturating_sub(s.trials.len() as u64));
-            }
-            s
-        })
-        .collect();
+    // Every search runs to its end (a signal ends the process, cancel.rs).
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let searches = run_searches(&plan, args.tol, &never, &|n| progress.inc(n));
     progress.finish_and_clear();
-    let searches = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let searches = searches?;
 
     let mut out = OutputSet::new(&args.output.out)?;
     let summary = summary(args, plan, &searches, f64::NAN);
@@ -202,15 +54,6 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let files = out.commit()?;
     let validity = summary.validity;
     Ok(Done::ok(summary, files).strict(args.strict.strict, &validity))
-}
-
-/// The validity counters summed over every trial of every search.
-fn trials_validity(searches: &[Search]) -> plant::Validity {
-    let mut v = plant::Validity::default();
-    for t in searches.iter().flat_map(|s| &s.trials) {
-        v.add(&t.validity);
-    }
-    v
 }
 
 /// Runs `sil-host zmax`: [`execute`], then prints the table (or the JSON

@@ -1,4 +1,4 @@
-//! Tables by column from rows that derive `serde::Serialize`: the CLI's CSV row
+//! Tables by column from rows that derive `serde::Serialize`: the experiments' row
 //! types (`trace.csv`, `sweep.csv`, ...) turned into one typed vector per column,
 //! in the rows' field order, with the cells the CSV would hold.
 //!
@@ -14,20 +14,7 @@ use std::fmt;
 
 use serde::ser::{self, Impossible, Serialize, SerializeStruct, Serializer};
 
-/// The values of one column.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Column {
-    /// Floats (NaN for empty cells).
-    F64(Vec<f64>),
-    /// Signed integers.
-    I64(Vec<i64>),
-    /// Unsigned integers too large for `i64`.
-    U64(Vec<u64>),
-    /// Booleans.
-    Bool(Vec<bool>),
-    /// Strings (`""` for empty cells).
-    Str(Vec<String>),
-}
+use super::Column;
 
 /// A column being filled: its type is fixed by its first non-empty cell.
 #[derive(Debug, Clone)]
@@ -49,9 +36,10 @@ enum Cell {
     Empty,
 }
 
-/// A table: named columns of equal length, in the rows' field order.
+/// A table being built from rows: named columns of equal length, in the rows'
+/// field order ([`super::Table`] when finished).
 #[derive(Debug, Clone, Default)]
-pub struct Table {
+pub struct TableBuilder {
     names: Vec<&'static str>,
     columns: Vec<Building>,
     rows: usize,
@@ -75,7 +63,7 @@ impl ser::Error for ColumnError {
     }
 }
 
-impl Table {
+impl TableBuilder {
     /// A table of the `rows`.
     ///
     /// # Errors
@@ -110,9 +98,10 @@ impl Table {
         Ok(())
     }
 
-    /// The columns, named, in field order, with the empty-cell rules applied.
-    pub fn into_columns(self) -> Vec<(&'static str, Column)> {
-        self.names.into_iter().zip(self.columns).map(|(n, c)| (n, finish(c))).collect()
+    /// The finished table: the columns, named, in field order, with the empty-cell
+    /// rules applied.
+    pub fn finish(self) -> super::Table {
+        super::Table { columns: self.names.into_iter().zip(self.columns).map(|(n, c)| (n.to_string(), finish(c))).collect() }
     }
 }
 

@@ -1,115 +1,116 @@
 //! The arguments of the open-loop commands, on the plant alone: `simulate`,
 //! `admissible`, `modes` and `poincare`.
 
-use clap::Args;
-
 use super::common::{OutputArgs, StrictArgs};
 
 /// `sil-host simulate`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct SimulateArgs {
     /// Initial condition: one of the paper's (projected onto the belt).
-    #[arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg"))]
     pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     /// A tip up to 1 mm inside the belt is projected onto it; deeper is an error.
-    #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true))]
     pub x0_deg: Option<String>,
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6))]
     pub mu: f64,
     /// Belt speed v_belt, m/s.
-    #[arg(long, default_value_t = -0.4, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = -0.4, allow_hyphen_values = true))]
     pub v_belt: f64,
     /// Impact law at touchdown and for impacts without collision.
-    #[arg(long, value_enum, default_value = "newton")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "newton"))]
     pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse
     /// for Poisson, of the normal work for energetic).
-    #[arg(long, default_value_t = 0.2)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.2))]
     pub e_n: f64,
     /// Simulated time, s.
-    #[arg(long, default_value_t = 10.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 10.0))]
     pub duration: f64,
     /// Sampling period of the trace, s (events are written at their exact times in the events table).
-    #[arg(long, default_value_t = 1e-3)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-3))]
     pub sample_dt: f64,
     /// Format of the trace and events tables: `csv` (trace.csv, events.csv) or `arrow`
     /// (trace.arrow, events.arrow: Arrow IPC files, typed columns with the floats'
     /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads both).
-    #[arg(long, value_enum, default_value = "csv")]
-    pub format: crate::table_out::TableFormat,
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
+    pub format: crate::table::TableFormat,
     /// Relative tolerance of the integrator.
-    #[arg(long, default_value_t = 1e-9)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-9))]
     pub rtol: f64,
     /// Absolute tolerance of the integrator.
-    #[arg(long, default_value_t = 1e-11)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-11))]
     pub atol: f64,
     /// Largest integrator step, s (default: none; the tolerances and the samples set
     /// the steps). A cap gives a reference whose steps differ from the samples' (the
     /// accuracy contract, docs/architecture.md).
-    #[arg(long, value_name = "S")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub max_step: Option<f64>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the
     /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
-    #[arg(long, value_enum, default_value = "restitution")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
     /// normal force: `leave` (the tip leaves the belt, the flight solution) or
     /// `slide` (it slides on through the indeterminate region). docs/plant.md.
-    #[arg(long, value_enum, default_value = "leave")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "leave"))]
     pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
-    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host admissible`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct AdmissibleArgs {
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6, allow_hyphen_values = true))]
     pub mu: f64,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.l=0.25 --set plant.h=0.35`: KEYS plant.l, plant.h. Repeatable;
     /// the defaults are the paper's. Only these change where p > 0 (m scales p; the rest do not enter it). Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
-    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host modes`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ModesArgs {
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6, allow_hyphen_values = true))]
     pub mu: f64,
     /// Belt speed v_belt, m/s (sets the sign of z_r_dot, hence which p applies).
-    #[arg(long, default_value_t = -0.4, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = -0.4, allow_hyphen_values = true))]
     pub v_belt: f64,
     /// Elbow branch for theta2 (the tip is put on the belt on this branch).
-    #[arg(long, value_enum, default_value = "down")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "down"))]
     pub branch: shared::ElbowBranch,
     /// theta1 range in degrees: MIN,MAX.
-    #[arg(long, default_value = "-90,90", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "-90,90", value_name = "MIN,MAX", allow_hyphen_values = true))]
     pub theta1_deg: String,
     /// theta1_dot range in rad/s: MIN,MAX.
-    #[arg(long, default_value = "-10,10", value_name = "MIN,MAX", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "-10,10", value_name = "MIN,MAX", allow_hyphen_values = true))]
     pub theta1_dot: String,
     /// Grid points along each axis.
-    #[arg(long, default_value_t = 400)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 400))]
     pub grid: usize,
     /// Which root of cos(theta2) = H/l - cos(theta1) to use. `auto`: the one on
     /// `--branch` (minus for down, plus for up); points whose configuration is then
@@ -118,107 +119,108 @@ pub struct ModesArgs {
     /// elbow branch then changes at the straight arm (`plus` holds x0a, `minus` x0u
     /// and x0d) and is written per point in modes.csv. Default `plus`: the root through
     /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
-    #[arg(long, value_enum, default_value = "plus")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "plus"))]
     pub theta2_sign: analyses::modes::Theta2Sign,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
-    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host poincare`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct PoincareArgs {
     /// Friction coefficient mu (>= 0).
-    #[arg(long, default_value_t = 0.6)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6))]
     pub mu: f64,
     /// Initial condition: one of the paper's (projected onto the belt).
-    #[arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg"))]
     pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
-    #[arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true))]
     pub x0_deg: Option<String>,
     /// Belt-speed range, m/s: MIN,MAX (both ends included), or one speed. The default covers
     /// the band where the open loop from x0a keeps bouncing at mu = 0.6 (found
     /// with this command over [-1, -0.1] in steps of 0.02, then 0.002: from about
     /// -0.864 to -0.310 m/s, with steady sliding interleaved between -0.864 and
     /// -0.782), with steady sliding at both ends.
-    #[arg(long, default_value = "-0.90,-0.30", value_name = "MIN,MAX|V", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "-0.90,-0.30", value_name = "MIN,MAX|V", allow_hyphen_values = true))]
     pub v_belt: String,
     /// Grid step of v_belt, m/s.
-    #[arg(long, default_value_t = 0.002)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.002))]
     pub v_step: f64,
     /// Transient discarded before recording, s.
-    #[arg(long, default_value_t = 250.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 250.0))]
     pub transient: f64,
     /// Record window, s.
-    #[arg(long, default_value_t = 50.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 50.0))]
     pub record: f64,
     /// Tolerance on section points (theta1 and theta2, rad) for the period and the
     /// count of distinct points.
-    #[arg(long, default_value_t = 1e-4)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-4))]
     pub tol: f64,
     /// Largest period looked for.
-    #[arg(long, default_value_t = 32)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 32))]
     pub max_period: usize,
     /// Hysteresis of the section, rad/s: an upward crossing counts only after
     /// theta1_dot went below minus this (steady sliding has theta1_dot = 0 to
     /// about 1e-11 rad/s of rounding noise, which must not count as motion).
-    #[arg(long, default_value_t = 1e-6)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-6))]
     pub section_depth: f64,
     /// An aperiodic motion is chaotic when its largest Lyapunov exponent per
     /// section crossing, less twice its standard error, exceeds this.
-    #[arg(long, default_value_t = 0.01)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.01))]
     pub chaos_threshold: f64,
     /// Crossings averaged in the Lyapunov estimate (0: no estimate).
-    #[arg(long, default_value_t = 200)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 200))]
     pub lyap_iterations: usize,
     /// Crossings discarded first in the Lyapunov estimate.
-    #[arg(long, default_value_t = 20)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 20))]
     pub lyap_skip: usize,
     /// Separation of the two trajectories after each renormalisation (state norm,
     /// rad and rad/s).
-    #[arg(long, default_value_t = 1e-7)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-7))]
     pub lyap_d0: f64,
     /// Impact law at touchdown and for impacts without collision.
-    #[arg(long, value_enum, default_value = "newton")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "newton"))]
     pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1].
-    #[arg(long, default_value_t = 0.2)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.2))]
     pub e_n: f64,
     /// Relative tolerance of the integrator.
-    #[arg(long, default_value_t = 1e-9)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-9))]
     pub rtol: f64,
     /// Absolute tolerance of the integrator.
-    #[arg(long, default_value_t = 1e-11)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-11))]
     pub atol: f64,
     /// Worker threads (default: one per core).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub threads: Option<usize>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the
     /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
-    #[arg(long, value_enum, default_value = "restitution")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
     /// normal force: `leave` (the tip leaves the belt, the flight solution) or
     /// `slide` (it slides on through the indeterminate region). docs/plant.md.
-    #[arg(long, value_enum, default_value = "leave")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "leave"))]
     pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
-    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }

@@ -3,12 +3,11 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
-
 use super::common::{OutputArgs, ScenarioArgs, StrictArgs};
 
 /// The link of `sil-host run --link`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum RunLink {
     /// The firmware process over iceoryx2 shared memory.
     Iceoryx2,
@@ -21,15 +20,16 @@ pub enum RunLink {
 }
 
 /// `sil-host run`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct RunArgs {
     /// The scenario.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub scenario: ScenarioArgs,
     /// Link the firmware step directly into this process (no IPC). Same scenario
     /// and seed give the same trace, bit for bit, as the lockstep iceoryx2 run.
     /// Short for `--link in-process`.
-    #[arg(long, conflicts_with_all = ["realtime", "attach"])]
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["realtime", "attach"]))]
     pub in_process: bool,
     /// How the plant reaches the firmware: `iceoryx2` (the default: the firmware
     /// process in lockstep), `in-process` (the step linked in), or `twin` (the
@@ -38,101 +38,104 @@ pub struct RunArgs {
     /// docs/board.md "The board twin"), or `emulator` (the unmodified `arm` ELF,
     /// the bytes flashed, on the emulated STM32F405 whose SPI1, ADC1, timers and
     /// pins drive the same device models; docs/board.md "The emulated image").
-    #[arg(long, value_enum, value_name = "LINK", conflicts_with = "in_process")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, value_name = "LINK", conflicts_with = "in_process"))]
     pub link: Option<RunLink>,
     /// With --link emulator: the `arm` ELF to run (default
     /// target/thumbv7em-none-eabihf/mcu/arm, built by `cargo build -p
     /// board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm`).
-    #[arg(long, value_name = "PATH")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub elf: Option<std::path::PathBuf>,
     /// Pace the periods by the wall clock (1 kHz: 1 ms per period) instead of
     /// lockstep; reports period jitter and the firmware's step time.
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub realtime: bool,
     /// Attach to a firmware process started by hand (`sil-host firmware --rig NAME`)
     /// instead of spawning one.
-    #[arg(long, value_name = "NAME", conflicts_with = "rig")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "NAME", conflicts_with = "rig"))]
     pub attach: Option<String>,
     /// Name of the rig (its iceoryx2 services) when spawning; default painleve-<pid>.
-    #[arg(long, value_name = "NAME")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "NAME"))]
     pub rig: Option<String>,
     /// Wait for N monitors (subscribers of painleve/RIG/ground_truth, such as
     /// examples/python/monitor.py) before period 0, up to rig.connect_timeout_s;
     /// in lockstep the plant then also waits for a monitor whose buffer is full,
     /// so every monitor receives every sample (docs/rig.md, "Monitors").
-    #[arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=8), conflicts_with = "in_process")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=8), conflicts_with = "in_process"))]
     pub monitors: u16,
     /// With --monitors in lockstep: how long one sample waits for a full monitor
     /// before that monitor is given up (not waited for again), s, in (0, 600].
-    #[arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors"))]
     pub monitor_timeout: f64,
     /// Exit status on model violations.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host firmware`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct FirmwareArgs {
     /// The rig to serve (the plant's `--rig` or `--attach` name).
-    #[arg(long, value_name = "NAME")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "NAME"))]
     pub rig: String,
     /// Real-time mode: the firmware's clock is the wall clock (the plant runs with --realtime).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub realtime: bool,
     /// The scenario (the firmware's configuration and the faults on its side).
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub scenario: ScenarioArgs,
 }
 
 /// `sil-host pil`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct PilArgs {
     /// The scenario (as for `run`).
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub scenario: ScenarioArgs,
     /// QEMU mode: the PIL image (ELF); default: `cargo build-pil`'s output,
     /// target/thumbv7em-none-eabihf/qemu/pil.
-    #[arg(long, value_name = "ELF")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ELF"))]
     pub image: Option<PathBuf>,
     /// QEMU mode: the QEMU executable.
-    #[arg(long, default_value = "qemu-system-arm", value_name = "EXE")]
+    #[cfg_attr(feature = "clap", arg(long, default_value = "qemu-system-arm", value_name = "EXE"))]
     pub qemu: PathBuf,
     /// QEMU mode: how the frames reach the image. `semihosting` (default): two
     /// host FIFOs the image reads and writes through semihosting, a frame per
     /// call (faster than real time at 1 kHz). `usart`: the emulated USART1 on a
     /// socket, the board's own driver, one byte per emulator main-loop turn
     /// (about 0.4x real time). The same frames, trace and instruction counts.
-    #[arg(long, value_enum, default_value_t = QemuLinkArg::Semihosting, value_name = "LINK", conflicts_with = "serial")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = QemuLinkArg::Semihosting, value_name = "LINK", conflicts_with = "serial"))]
     pub qemu_link: QemuLinkArg,
     /// Hardware in the loop: the serial device of a board running the PIL image
     /// (e.g. /dev/ttyUSB0), instead of spawning QEMU. It must exist.
-    #[arg(long, value_name = "PATH", conflicts_with_all = ["image", "qemu"])]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH", conflicts_with_all = ["image", "qemu"]))]
     pub serial: Option<PathBuf>,
     /// With --serial: the line rate, baud (8N1, no flow control), 9600 to 12000000;
     /// the reference board's USART1 runs at 2 Mbaud.
-    #[arg(long, default_value_t = 2_000_000, value_name = "BAUD", requires = "serial")]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 2_000_000, value_name = "BAUD", requires = "serial"))]
     pub baud: u32,
     /// Wall time the image gets to answer one frame before the run stops as hung, s.
-    #[arg(long, default_value_t = 5.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 5.0))]
     pub answer_timeout: f64,
     /// QEMU mode: do not echo the image's defmt log while it runs (it is still
     /// written to defmt.log).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub quiet: bool,
     /// Exit status on model violations.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host pil --qemu-link` ([`rig::pil_link::QemuLink`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum QemuLinkArg {
     /// Host FIFOs through semihosting, a frame per call.
     Semihosting,

@@ -21,29 +21,15 @@ use std::{
     sync::Arc,
 };
 
-use arrow_array::{Array, ArrayRef, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};
+use arrow_array::{Array, ArrayRef, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray, UInt64Array};
 use arrow_ipc::{reader::FileReader, writer::FileWriter};
-use arrow_schema::{ArrowError, DataType, Schema};
+use arrow_schema::{ArrowError, DataType, Field, Schema};
 
-use crate::error::CliError;
-
-// For `csv_row!`'s expansion in any crate.
-#[doc(hidden)]
-pub use {arrow_array, arrow_schema};
+use super::{Column, ColumnRows, Kind, Table};
+use crate::error::Error as CliError;
 
 /// Rows per record batch: 64 Ki rows (about 7 MB of a 14-column trace).
 pub const BATCH_ROWS: usize = 1 << 16;
-
-/// A row type written as an Arrow table: its schema and its columns. The
-/// [`crate::csv_row!`] macro implements it with [`crate::fastcsv::CsvRow`], from
-/// the same field list, so the CSV and Arrow tables have the same columns in the
-/// same order.
-pub trait ArrowRow: Sized {
-    /// The table's schema: one non-nullable field per column, in the CSV's order.
-    fn schema() -> Schema;
-    /// The columns of `rows`, in the schema's order; each holds `rows.len()` values.
-    fn columns(rows: &[Self]) -> Vec<ArrayRef>;
-}
 
 /// The error of an Arrow file, as the CLI reports it: the file and what failed.
 fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> CliError + '_ {
@@ -60,20 +46,20 @@ fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> CliError + '_ {
 /// batch of [`BATCH_ROWS`] at a time; [`ArrowFile::finish`] writes the last
 /// batch and the footer (a file without its footer is not an Arrow file:
 /// readers refuse it, so a run that fails before `finish` leaves no half table).
-pub struct ArrowFile<T: ArrowRow> {
+pub struct ArrowFile<T: ColumnRows> {
     path: PathBuf,
     writer: FileWriter<BufWriter<File>>,
     schema: Arc<Schema>,
     pending: Vec<T>,
 }
 
-impl<T: ArrowRow> ArrowFile<T> {
+impl<T: ColumnRows> ArrowFile<T> {
     /// Starts the Arrow IPC file `file` (at `path`, for error messages) with `T`'s schema.
     ///
     /// # Errors
     /// [`CliError::Io`] when the header cannot be written.
     pub fn new(path: PathBuf, file: File) -> Result<Self, CliError> {
-        let schema = Arc::new(T::schema());
+        let schema = Arc::new(schema_of(T::NAMES, T::KINDS));
         let writer = FileWriter::try_new_buffered(file, &schema).map_err(arrow_err(&path))?;
         Ok(Self { path, writer, schema, pending: Vec::with_capacity(BATCH_ROWS) })
     }
@@ -97,7 +83,8 @@ impl<T: ArrowRow> ArrowFile<T> {
         if self.pending.is_empty() {
             return Ok(());
         }
-        let batch = RecordBatch::try_new(self.schema.clone(), T::columns(&self.pending)).map_err(arrow_err(&self.path))?;
+        let batch = RecordBatch::try_new(self.schema.clone(), T::columns(&self.pending).into_iter().map(array_of).collect())
+            .map_err(arrow_err(&self.path))?;
         self.writer.write(&batch).map_err(arrow_err(&self.path))?;
         self.pending.clear();
         Ok(())
@@ -117,140 +104,101 @@ impl<T: ArrowRow> ArrowFile<T> {
     }
 }
 
-/// The values of one column read back from an Arrow file.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ArrowColumn {
-    /// `Float64` (a null reads as NaN).
-    F64(Vec<f64>),
-    /// `Int64`.
-    I64(Vec<i64>),
-    /// `Boolean`.
-    Bool(Vec<bool>),
-    /// `Utf8` (a null reads as `""`).
-    Str(Vec<String>),
+/// The Arrow schema of columns `names` of kinds `kinds`: one non-nullable field
+/// per column (`Float64`, `Utf8`, `Boolean`, `Int64`).
+fn schema_of(names: &[&str], kinds: &[Kind]) -> Schema {
+    let field = |(name, kind): (&&str, &Kind)| {
+        let t = match kind {
+            Kind::F64 => DataType::Float64,
+            Kind::Str => DataType::Utf8,
+            Kind::Bool => DataType::Boolean,
+            Kind::Int => DataType::Int64,
+        };
+        Field::new(*name, t, false)
+    };
+    Schema::new(names.iter().zip(kinds).map(field).collect::<Vec<_>>())
 }
 
-impl ArrowColumn {
-    fn empty(t: &DataType) -> Option<Self> {
-        Some(match t {
-            DataType::Float64 => Self::F64(Vec::new()),
-            DataType::Int64 => Self::I64(Vec::new()),
-            DataType::Boolean => Self::Bool(Vec::new()),
-            DataType::Utf8 => Self::Str(Vec::new()),
-            _ => return None,
-        })
-    }
-
-    /// Appends `a`, of the column's own type (the schema fixes it for every batch).
-    fn extend(&mut self, a: &dyn Array) -> Option<()> {
-        let any = a.as_any();
-        match self {
-            Self::F64(v) => {
-                let a = any.downcast_ref::<Float64Array>()?;
-                v.extend((0..a.len()).map(|i| if a.is_null(i) { f64::NAN } else { a.value(i) }));
-            }
-            Self::I64(v) => {
-                let a = any.downcast_ref::<Int64Array>()?;
-                if a.null_count() > 0 {
-                    return None;
-                }
-                v.extend_from_slice(a.values());
-            }
-            Self::Bool(v) => {
-                let a = any.downcast_ref::<BooleanArray>()?;
-                if a.null_count() > 0 {
-                    return None;
-                }
-                v.extend((0..a.len()).map(|i| a.value(i)));
-            }
-            Self::Str(v) => {
-                let a = any.downcast_ref::<StringArray>()?;
-                v.extend((0..a.len()).map(|i| if a.is_null(i) { String::new() } else { a.value(i).to_string() }));
-            }
-        }
-        Some(())
-    }
-
-    /// The number of values.
-    pub fn len(&self) -> usize {
-        match self {
-            Self::F64(v) => v.len(),
-            Self::I64(v) => v.len(),
-            Self::Bool(v) => v.len(),
-            Self::Str(v) => v.len(),
-        }
-    }
-
-    /// Whether the column has no values.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
+/// A column as an Arrow array (the values move; strings are copied once).
+fn array_of(c: Column) -> ArrayRef {
+    match c {
+        Column::F64(v) => Arc::new(Float64Array::from(v)),
+        Column::I64(v) => Arc::new(Int64Array::from(v)),
+        Column::U64(v) => Arc::new(UInt64Array::from(v)),
+        Column::Bool(v) => Arc::new(BooleanArray::from(v)),
+        Column::Str(v) => Arc::new(StringArray::from_iter_values(v)),
     }
 }
 
-/// Reads the Arrow IPC file at `path` whole: its columns by name, in the file's
-/// order (the tables this module writes, or any file of `Float64`, `Int64`,
-/// `Boolean` and `Utf8` columns).
+/// An empty column of Arrow type `t`, or `None` for a type the tables never hold.
+fn empty_column(t: &DataType) -> Option<Column> {
+    Some(match t {
+        DataType::Float64 => Column::F64(Vec::new()),
+        DataType::Int64 => Column::I64(Vec::new()),
+        DataType::Boolean => Column::Bool(Vec::new()),
+        DataType::Utf8 => Column::Str(Vec::new()),
+        _ => return None,
+    })
+}
+
+/// Appends the values of the Arrow array `a` to `c`; `None` when `a` is of
+/// another type, or has nulls where the column cannot hold them (a null float
+/// reads as NaN, a null string as `""`).
+fn extend(c: &mut Column, a: &dyn Array) -> Option<()> {
+    let any = a.as_any();
+    match c {
+        Column::F64(v) => {
+            let a = any.downcast_ref::<Float64Array>()?;
+            v.extend((0..a.len()).map(|i| if a.is_null(i) { f64::NAN } else { a.value(i) }));
+        }
+        Column::I64(v) => {
+            let a = any.downcast_ref::<Int64Array>()?;
+            if a.null_count() > 0 {
+                return None;
+            }
+            v.extend_from_slice(a.values());
+        }
+        Column::U64(_) => return None,
+        Column::Bool(v) => {
+            let a = any.downcast_ref::<BooleanArray>()?;
+            if a.null_count() > 0 {
+                return None;
+            }
+            v.extend((0..a.len()).map(|i| a.value(i)));
+        }
+        Column::Str(v) => {
+            let a = any.downcast_ref::<StringArray>()?;
+            v.extend((0..a.len()).map(|i| if a.is_null(i) { String::new() } else { a.value(i).to_string() }));
+        }
+    }
+    Some(())
+}
+
+/// Reads the Arrow IPC file at `path` into a [`Table`]: its columns in the
+/// file's order, every record batch appended.
 ///
 /// # Errors
-/// [`CliError::Io`] when the file cannot be read, is not an Arrow IPC file (or
-/// lacks its footer: a run cut off before it finished), or holds a column of
-/// another type, or an integer or boolean column with nulls (the message names
-/// the column).
-pub fn read_arrow(path: &Path) -> Result<Vec<(String, ArrowColumn)>, CliError> {
+/// [`CliError::Io`] naming the file when it cannot be read, is not an Arrow IPC
+/// file (or was cut off before its footer), or has a column of another type than
+/// Float64, Int64, Boolean or Utf8.
+pub fn read_arrow(path: &Path) -> Result<Table, CliError> {
     let bad = |msg: String| CliError::Io { path: path.to_path_buf(), source: std::io::Error::other(msg) };
     let file = File::open(path).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
     let reader = FileReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
     let schema = reader.schema();
     let mut columns = Vec::with_capacity(schema.fields().len());
     for f in schema.fields() {
-        let c = ArrowColumn::empty(f.data_type())
+        let c = empty_column(f.data_type())
             .ok_or_else(|| bad(format!("column `{}` is {}, not Float64, Int64, Boolean or Utf8", f.name(), f.data_type())))?;
         columns.push((f.name().clone(), c));
     }
     for batch in reader {
         let batch = batch.map_err(arrow_err(path))?;
         for ((name, c), a) in columns.iter_mut().zip(batch.columns()) {
-            c.extend(a.as_ref()).ok_or_else(|| bad(format!("column `{name}`: a batch of another type, or nulls where none can be")))?;
+            extend(c, a.as_ref()).ok_or_else(|| bad(format!("column `{name}`: a batch of another type, or nulls where none can be")))?;
         }
     }
-    Ok(columns)
-}
-
-/// The Arrow field of a row field of kind `f64`, `str`, `bool` or `int` (the
-/// kinds of [`crate::csv_row!`]).
-#[doc(hidden)]
-pub fn field(name: &str, kind: &str) -> arrow_schema::Field {
-    let t = match kind {
-        "f64" => DataType::Float64,
-        "str" => DataType::Utf8,
-        "bool" => DataType::Boolean,
-        _ => DataType::Int64,
-    };
-    arrow_schema::Field::new(name, t, false)
-}
-
-/// A `Float64` column of `values`.
-#[doc(hidden)]
-pub fn f64_column(values: impl Iterator<Item = f64>) -> ArrayRef {
-    Arc::new(Float64Array::from_iter_values(values))
-}
-
-/// A `Utf8` column of `values`.
-#[doc(hidden)]
-pub fn str_column<'a>(values: impl Iterator<Item = &'a str>) -> ArrayRef {
-    Arc::new(StringArray::from_iter_values(values))
-}
-
-/// A `Boolean` column of `values`.
-#[doc(hidden)]
-pub fn bool_column(values: impl Iterator<Item = bool>) -> ArrayRef {
-    Arc::new(values.map(Some).collect::<BooleanArray>())
-}
-
-/// An `Int64` column of `values`.
-#[doc(hidden)]
-pub fn int_column(values: impl Iterator<Item = i64>) -> ArrayRef {
-    Arc::new(Int64Array::from_iter_values(values))
+    Ok(Table { columns })
 }
 
 #[cfg(test)]
@@ -278,8 +226,8 @@ mod tests {
         (dir, path)
     }
 
-    fn back(cols: &[(String, ArrowColumn)]) -> Vec<Row> {
-        let [(na, ArrowColumn::F64(a)), (nb, ArrowColumn::Str(b)), (nc, ArrowColumn::Bool(c)), (nd, ArrowColumn::I64(d))] = cols else {
+    fn back(cols: &[(String, Column)]) -> Vec<Row> {
+        let [(na, Column::F64(a)), (nb, Column::Str(b)), (nc, Column::Bool(c)), (nd, Column::I64(d))] = cols else {
             panic!("unexpected columns {cols:?}")
         };
         assert_eq!([na, nb, nc, nd], ["a", "b", "c", "d"]);
@@ -293,7 +241,7 @@ mod tests {
         fn rows_round_trip(rows in proptest::collection::vec((any::<f64>(), ".{0,8}", any::<bool>(), any::<u32>()), 0..50)) {
             let rows: Vec<Row> = rows.into_iter().map(|(a, b, c, d)| Row { a, b, c, d }).collect();
             let (_dir, path) = write(rows.clone());
-            let got = back(&read_arrow(&path).unwrap());
+            let got = back(&read_arrow(&path).unwrap().columns);
             prop_assert_eq!(got.len(), rows.len());
             for (g, r) in got.iter().zip(&rows) {
                 prop_assert_eq!(g.a.to_bits(), r.a.to_bits());
@@ -309,13 +257,13 @@ mod tests {
         let n = BATCH_ROWS * 2 + 7;
         let rows: Vec<Row> = (0..n).map(|i| Row { a: i as f64 * 0.5, b: format!("{}", i % 3), c: i % 2 == 0, d: i as u32 }).collect();
         let (_dir, path) = write(rows.clone());
-        assert_eq!(back(&read_arrow(&path).unwrap()), rows);
+        assert_eq!(back(&read_arrow(&path).unwrap().columns), rows);
     }
 
     #[test]
     fn an_empty_table_keeps_its_columns() {
         let (_dir, path) = write(Vec::new());
-        let cols = read_arrow(&path).unwrap();
+        let cols = read_arrow(&path).unwrap().columns;
         assert_eq!(cols.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["a", "b", "c", "d"]);
         assert!(cols.iter().all(|(_, c)| c.is_empty()));
     }

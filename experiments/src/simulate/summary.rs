@@ -4,7 +4,6 @@ use plant::initial::ProjectionInfo;
 use plant::{Counters, PlantEvent, SimConfig, Validity};
 use serde::Serialize;
 use shared::Params;
-use std::io::Write;
 
 /// One row of `trace.csv`.
 #[derive(Debug, Clone, Serialize)]
@@ -186,84 +185,13 @@ pub struct Summary {
     pub events: usize,
 }
 
-pub(crate) fn print_human(s: &Summary) {
-    let n_events = s.events;
-    let ic = &s.initial_condition;
-    let mut o = std::io::stdout().lock();
-    let _ = writeln!(
-        o,
-        "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {}), impact without collision: {}",
-        s.params.mu,
-        s.params.v_belt,
-        s.sim.impact_law.name(),
-        s.sim.e_n,
-        s.sim.iwc
-    );
-    let _ = writeln!(
-        o,
-        "initial condition {} = [{:.2} deg, {:.2} deg/s, {:.2} deg, {:.2} deg/s] (elbow {})",
-        ic.name,
-        ic.given_deg[0],
-        ic.given_deg[1],
-        ic.given_deg[2],
-        ic.given_deg[3],
-        ic.projection.branch.name()
-    );
-    if ic.projection.projected {
-        let _ = writeln!(
-            o,
-            "  tip was {:.4} mm {} the belt: projected onto it at the same z_t = {:.5} m and elbow branch -> [{:.4} deg, {:.4} deg]",
-            ic.projection.height_above_belt.abs() * 1e3,
-            if ic.projection.height_above_belt < 0.0 { "inside" } else { "on" },
-            ic.projection.tip_given[0],
-            ic.used_deg[0],
-            ic.used_deg[2]
-        );
-    }
-    let _ = writeln!(
-        o,
-        "  initial mode: {}{}",
-        ic.initial_mode,
-        if ic.startup_events.is_empty() { String::new() } else { format!(" (after {} at t = 0)", ic.startup_events.join(", ")) }
-    );
-    let _ = writeln!(
-        o,
-        "simulated {:.3} s of {:.3} s in {:.3} s wall ({:.0}x real time)",
-        s.simulated_s, s.duration_s, s.wall_s, s.realtime_factor
-    );
-    let c = &s.counters;
-    let _ = writeln!(
-        o,
-        "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {}",
-        c.lift_offs, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals,
-    );
-    let _ = writeln!(o, "validity: {}", s.validity);
-    if !s.validity.is_valid() {
-        let _ = writeln!(o, "INVALID: {} (the trajectory violates the model)", s.validity.describe_violations());
-    }
-    let x = s.final_state;
-    let _ = writeln!(
-        o,
-        "final: mode {}, theta1 = {:.3} deg, theta2 = {:.3} deg, tip = ({:.5}, {:.5}) m",
-        s.final_mode,
-        x[0].to_degrees(),
-        x[2].to_degrees(),
-        s.final_tip[0],
-        s.final_tip[1]
-    );
-    if let Some(e) = &s.error {
-        let _ = writeln!(o, "FAILED: {e}");
-    }
-    let _ = writeln!(o, "wrote {}", s.files.join(", "));
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fastcsv::{CsvRow, push_header, push_row};
+    use crate::table::csv::{CsvRow, push_header, push_row};
     use proptest::prelude::*;
 
-    /// `rows` through the old path (`csv::Writer::serialize`, header derived) and through [`crate::fastcsv`].
+    /// `rows` through the old path (`csv::Writer::serialize`, header derived) and through [`crate::table::csv`].
     fn both<T: serde::Serialize + CsvRow>(rows: &[T]) -> (Vec<u8>, Vec<u8>) {
         let mut w = csv::Writer::from_writer(Vec::new());
         for r in rows {
@@ -295,6 +223,7 @@ mod tests {
                 .collect();
             let (old, new) = both(&rows);
             prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
+            same_table(&rows)?;
         }
 
         #[test]
@@ -303,8 +232,30 @@ mod tests {
                 t: f[0], kind: "touchdown", mode_after: "sticking", v_n_before: f[1], v_n_after: f[2], v_r_before: f[3],
                 v_r_after: f[4], impulse_t: f[5], impulse_n: f[6], energy_change: f[7], contact_work: f[8], resolution,
             };
-            let (old, new) = both(&[row]);
+            let rows = [row];
+            let (old, new) = both(&rows);
             prop_assert_eq!(String::from_utf8(old).unwrap(), String::from_utf8(new).unwrap());
+            same_table(&rows)?;
         }
+    }
+
+    /// The two ways from rows to columns agree: the declared columns (`csv_row!`,
+    /// what Arrow and NumPy read for the long tables) and the serde path (the
+    /// cells the `csv` crate writes), in names, types and bits.
+    fn same_table<T: serde::Serialize + crate::table::ColumnRows>(rows: &[T]) -> Result<(), TestCaseError> {
+        use crate::table::{Column, Table};
+        let declared = Table::of_columns(rows);
+        let serde = Table::of_rows(rows).unwrap();
+        prop_assert_eq!(declared.columns.len(), serde.columns.len());
+        for ((na, a), (nb, b)) in declared.columns.iter().zip(&serde.columns) {
+            prop_assert_eq!(na, nb);
+            match (a, b) {
+                (Column::F64(a), Column::F64(b)) => {
+                    prop_assert_eq!(a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), b.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                }
+                (a, b) => prop_assert_eq!(a, b, "column {}", na),
+            }
+        }
+        Ok(())
     }
 }

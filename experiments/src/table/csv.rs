@@ -13,7 +13,7 @@
 
 use std::{fs::File, io::Write, path::PathBuf};
 
-use crate::error::{CliError, io_err};
+use crate::error::{Error as CliError, io_err};
 
 /// Bytes buffered before they go to the file (one `write` system call each).
 pub const FLUSH_BYTES: usize = 1 << 20;
@@ -126,14 +126,14 @@ fn end_record(buf: &mut Vec<u8>, n_fields: usize) {
     }
 }
 
-/// Implements [`CsvRow`] and [`crate::arrow_table::ArrowRow`] for a struct from
-/// its fields, each with its kind: `f64`, `str` (a `&str` or `String` field),
-/// `bool`, `int` (an integer that converts to `i64` without loss). The CSV
-/// header and the Arrow schema list the same columns in the same order.
+/// Implements [`CsvRow`] and [`crate::table::ColumnRows`] for a struct from its
+/// fields, each with its kind: `f64`, `str` (a `&str` or `String` field), `bool`,
+/// `int` (an integer that converts to `i64` without loss). The CSV header and
+/// the columns (Arrow, NumPy) list the same columns in the same order.
 #[macro_export]
 macro_rules! csv_row {
     ($ty:ty { $($field:ident : $kind:ident),+ $(,)? }) => {
-        impl $crate::fastcsv::CsvRow for $ty {
+        impl $crate::table::csv::CsvRow for $ty {
             const HEADER: &'static [&'static str] = &[$(stringify!($field)),+];
             #[inline]
             fn push_fields(&self, buf: &mut Vec<u8>) {
@@ -143,23 +143,26 @@ macro_rules! csv_row {
                 )+
             }
         }
-        impl $crate::arrow_table::ArrowRow for $ty {
-            fn schema() -> $crate::arrow_table::arrow_schema::Schema {
-                $crate::arrow_table::arrow_schema::Schema::new(vec![$($crate::arrow_table::field(stringify!($field), stringify!($kind))),+])
-            }
-            fn columns(rows: &[Self]) -> Vec<$crate::arrow_table::arrow_array::ArrayRef> {
+        impl $crate::table::ColumnRows for $ty {
+            const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
+            const KINDS: &'static [$crate::table::Kind] = &[$($crate::csv_row!(@kind $kind)),+];
+            fn columns(rows: &[Self]) -> Vec<$crate::table::Column> {
                 vec![$($crate::csv_row!(@column rows, $kind, $field)),+]
             }
         }
     };
-    (@column $rows:ident, f64, $f:ident) => { $crate::arrow_table::f64_column($rows.iter().map(|r| r.$f)) };
-    (@column $rows:ident, str, $f:ident) => { $crate::arrow_table::str_column($rows.iter().map(|r| -> &str { &r.$f })) };
-    (@column $rows:ident, bool, $f:ident) => { $crate::arrow_table::bool_column($rows.iter().map(|r| r.$f)) };
-    (@column $rows:ident, int, $f:ident) => { $crate::arrow_table::int_column($rows.iter().map(|r| i64::from(r.$f))) };
-    (@push $buf:ident, f64, $v:expr) => { $crate::fastcsv::push_f64($buf, $v) };
-    (@push $buf:ident, str, $v:expr) => { $crate::fastcsv::push_str($buf, &$v) };
-    (@push $buf:ident, bool, $v:expr) => { $crate::fastcsv::push_bool($buf, $v) };
-    (@push $buf:ident, int, $v:expr) => { $crate::fastcsv::push_int($buf, $v) };
+    (@kind f64) => { $crate::table::Kind::F64 };
+    (@kind str) => { $crate::table::Kind::Str };
+    (@kind bool) => { $crate::table::Kind::Bool };
+    (@kind int) => { $crate::table::Kind::Int };
+    (@column $rows:ident, f64, $f:ident) => { $crate::table::Column::F64($rows.iter().map(|r| r.$f).collect()) };
+    (@column $rows:ident, str, $f:ident) => { $crate::table::Column::Str($rows.iter().map(|r| -> String { (&*r.$f).to_string() }).collect()) };
+    (@column $rows:ident, bool, $f:ident) => { $crate::table::Column::Bool($rows.iter().map(|r| r.$f).collect()) };
+    (@column $rows:ident, int, $f:ident) => { $crate::table::Column::I64($rows.iter().map(|r| i64::from(r.$f)).collect()) };
+    (@push $buf:ident, f64, $v:expr) => { $crate::table::csv::push_f64($buf, $v) };
+    (@push $buf:ident, str, $v:expr) => { $crate::table::csv::push_str($buf, &$v) };
+    (@push $buf:ident, bool, $v:expr) => { $crate::table::csv::push_bool($buf, $v) };
+    (@push $buf:ident, int, $v:expr) => { $crate::table::csv::push_int($buf, $v) };
 }
 
 /// A CSV file written through a byte buffer of about [`FLUSH_BYTES`]: one

@@ -2,56 +2,55 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
-
 use super::common::{OutputArgs, StrictArgs};
 
 /// `sil-host zmax`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ZmaxArgs {
     /// Controller (ignored with --all).
-    #[arg(long, value_enum, default_value = "hybrid")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "hybrid"))]
     pub controller: firmware::ControllerKind,
     /// Initial condition (ignored with --all).
-    #[arg(long, value_enum, default_value = "d")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "d"))]
     pub x0: plant::initial::PaperX0,
     /// The paper's ideal controllers (continuous time, exact measurements, no
     /// saturation) instead of the sampled firmware (ignored with --all).
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub ideal: bool,
     /// All eight cases (pid/hybrid x x0d/x0u x ideal/sampled), in parallel, as a table.
-    #[arg(long)]
+    #[cfg_attr(feature = "clap", arg(long))]
     pub all: bool,
     /// Bisection tolerance on z_t*, m.
-    #[arg(long, default_value_t = 1e-3)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-3))]
     pub tol: f64,
     /// Targets searched, m: LO,HI. Default: from the initial tip position
     /// (z_t* = start) to 1 mm short of the end of the reachable belt.
-    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LO,HI", allow_hyphen_values = true))]
     pub bracket: Option<String>,
     /// Run length of a trial, s (the move takes the scenario's move_time_s, 2 s).
-    #[arg(long, default_value_t = 10.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 10.0))]
     pub duration: f64,
     /// Largest |z_t - z_t*| over the settle window for the tip to count as having got
     /// to the target, m: Z_t,sliding is the largest target the tip slides to, within
     /// this, with no lift-off (5 mm, the closed-loop sweep's target tolerance).
-    #[arg(long, default_value_t = 5e-3)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 5e-3))]
     pub reach_tol: f64,
     /// Largest |z_t - z_t*| over the settle window for the target to count as
     /// tracked, m: the tracking limit is the largest target tracked (at most --reach-tol).
-    #[arg(long, default_value_t = 1e-3)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-3))]
     pub settle_tol: f64,
     /// The last part of the run where the tip must be within --reach-tol and --settle-tol, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1.0))]
     pub settle_window: f64,
     /// Impact-without-collision rule of the base scenario (`plant.iwc`): `restitution`
     /// or `plastic`; default: the scenario's.
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub iwc: Option<plant::impact::IwcRule>,
     /// Lift-off criterion, m: 0 counts any departure from the belt (located exactly);
     /// a gap > 0 counts a lift-off only when the tip rises more than this above the
     /// belt at a sample (0 to 0.1 m).
-    #[arg(long, default_value_t = 0.0)]
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.0))]
     pub lift_off_gap: f64,
     /// Base scenario of the sampled setting (rate, sensors, the arm's parameters,
     /// mu, v_belt, gains, f_n*, move time, ...); its controller, initial condition,
@@ -59,10 +58,10 @@ pub struct ZmaxArgs {
     /// controller.hybrid.ki (the paper's: 650 from x0d, 0 from x0u). The ideal
     /// setting takes the plant's parameters, the gains, f_n*, the move time and the
     /// plant settings from it. Default: the embedded default scenario.
-    #[arg(long, value_name = "FILE.toml")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "FILE.toml"))]
     pub scenario: Option<PathBuf>,
     /// Exit status on model violations.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
     /// Change one key of the base scenario, e.g. `--set plant.m=0.24
     /// --set controller.hybrid.kp=800 --set controller.hybrid.ki=300` (repeatable;
@@ -70,9 +69,9 @@ pub struct ZmaxArgs {
     /// parameters and the gains it gives; without `controller.hybrid.ki` K'_I is
     /// the paper's per initial condition. Refused: the keys each trial sets
     /// (controller.kind, plant.x0, controller.target_z_t, timing.duration_s).
-    #[arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true)]
+    #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
-    #[command(flatten)]
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub output: OutputArgs,
 }

@@ -16,7 +16,7 @@ use std::{
 
 use serde::{Deserialize, Serialize};
 
-use crate::{error::CliError, output::io_err};
+use crate::{Error as CliError, error::io_err};
 use analyses::sweep::{Shard, SweepSpec, run::RunRow};
 
 /// File name of the manifest.
@@ -37,21 +37,21 @@ pub struct Manifest {
 /// Reads `dir/sweep.json`, if there is one.
 ///
 /// # Errors
-/// [`CliError::BadInput`] when it cannot be read, is not a manifest of this
+/// [`crate::Error::Analysis`] when it cannot be read, is not a manifest of this
 /// version, holds an invalid spec or names an impossible shard.
 pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let path = dir.join(MANIFEST);
     let text = match std::fs::read_to_string(&path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(CliError::BadInput(format!("cannot read {}: {e}", path.display()))),
+        Err(e) => return Err(CliError::bad_input(format!("cannot read {}: {e}", path.display()))),
     };
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
-        CliError::BadInput(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
+        CliError::bad_input(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
     })?;
-    m.spec.validate().map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))?;
+    m.spec.validate().map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
     if m.shard.n == 0 || m.shard.k >= m.shard.n {
-        return Err(CliError::BadInput(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
+        return Err(CliError::bad_input(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
     }
     Ok(Some(m))
 }
@@ -100,19 +100,19 @@ pub fn differences(a: &Manifest, b: &Manifest) -> Vec<String> {
 /// the manifest already there is the same.
 ///
 /// # Errors
-/// [`CliError::BadInput`] when the folder holds another sweep (naming the
+/// [`crate::Error::Analysis`] when the folder holds another sweep (naming the
 /// differing settings); [`CliError::Io`].
 pub fn open(dir: &Path, m: &Manifest) -> Result<(), CliError> {
     match read_manifest(dir)? {
         Some(existing) if existing == *m => Ok(()),
-        Some(existing) => Err(CliError::BadInput(format!(
+        Some(existing) => Err(CliError::bad_input(format!(
             "{} holds a different sweep; resuming needs the same arguments (use another --out, or delete the folder). Differences (folder vs now): {}",
             dir.display(),
             differences(&existing, m).join("; ")
         ))),
         None => {
             if dir.join(JOURNAL).exists() {
-                return Err(CliError::BadInput(format!("{} has a {JOURNAL} but no {MANIFEST}: not a sweep folder", dir.display())));
+                return Err(CliError::bad_input(format!("{} has a {JOURNAL} but no {MANIFEST}: not a sweep folder", dir.display())));
             }
             write_manifest(dir, m)
         }
@@ -135,7 +135,7 @@ pub struct JournalContents {
 /// its parameters those of that index).
 ///
 /// # Errors
-/// [`CliError::BadInput`] for a row that does not parse or does not belong, or a
+/// [`crate::Error::Analysis`] for a row that does not parse or does not belong, or a
 /// repeated index with different results; [`CliError::Io`].
 pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliError> {
     let path = dir.join(JOURNAL);
@@ -155,7 +155,7 @@ pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliErro
     let mut seen: BTreeMap<usize, usize> = BTreeMap::new();
     let mut reader = csv::ReaderBuilder::new().from_reader(bytes.as_slice());
     for (line, rec) in reader.deserialize::<RunRow>().enumerate() {
-        let bad = |what: String| CliError::BadInput(format!("{} row {}: {what}", path.display(), line + 1));
+        let bad = |what: String| CliError::bad_input(format!("{} row {}: {what}", path.display(), line + 1));
         let row = rec.map_err(|e| bad(format!("does not parse: {e}")))?;
         if row.index >= n_runs || !m.shard.owns(&m.spec, row.index) {
             return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));

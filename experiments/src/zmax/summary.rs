@@ -6,7 +6,6 @@ use firmware::ControllerKind;
 use plant::{Validity, initial::PaperX0};
 use rig::scenario::Scenario;
 use serde::Serialize;
-use std::io::Write;
 
 /// One row of `zmax.csv`.
 #[derive(Debug, Clone, Serialize)]
@@ -111,7 +110,8 @@ pub struct ZmaxSummary {
     pub wall_s: f64,
 }
 
-pub(crate) const DEFINITION: &str = "A trial drives z_t* from the initial tip position by a quintic move over move_time_s, then holds it until duration_s. \
+/// What a trial is and what counts as sliding (in `summary.json`).
+pub const DEFINITION: &str = "A trial drives z_t* from the initial tip position by a quintic move over move_time_s, then holds it until duration_s. \
 The tip slides to the target when it never leaves the belt (no lift-off event, located exactly between samples too; no impact without collision; no sample in flight), \
 the run ends normally (no plant failure, firmware safe state or ideal-law fault) with no model violation (energy-creating impact, friction-cone violation), \
 and |z_t - z_t*| <= reach_tol_m at every sample of the last settle_window_s. The target is tracked when, in addition, |z_t - z_t*| <= settle_tol_m there. \
@@ -120,11 +120,12 @@ the tracking limit is the largest target verified tracked, by bisection on [lo, 
 lower_fails: lo already fails (no limit); upper_reached: the limit is at least hi. \
 Each trial's stop reason (the first that applies): invalid, lift_off, safe_state, failure, not_reached, not_settled or tracked.";
 
-pub(crate) const PAPER: &str = analyses::paper::Z_T_SLIDING_SUMMARY;
+/// What the paper reports for `Z_t,sliding` (in `summary.json`).
+pub const PAPER: &str = analyses::paper::Z_T_SLIDING_SUMMARY;
 
 impl ZmaxRow {
     /// The row of one search; `p_zero_end_m` and `theta1_fold_m` as computed by the command.
-    pub(crate) fn of(s: &Search, p_zero_end_m: Option<f64>, theta1_fold_m: Option<f64>) -> Self {
+    pub fn of(s: &Search, p_zero_end_m: Option<f64>, theta1_fold_m: Option<f64>) -> Self {
         let first = |b: &Bisection| match *b {
             Bisection::Found { hi, .. } => Some(hi),
             _ => None,
@@ -233,7 +234,7 @@ impl From<&Trial> for TrialRow {
 
 /// A limit for tables: `< lo` when the lower end fails, `>= hi` when the upper end
 /// passes, else the value, m to 4 decimals.
-pub(crate) fn limit_text(outcome: &str, value: Option<f64>, lo: f64, hi: f64) -> String {
+pub fn limit_text(outcome: &str, value: Option<f64>, lo: f64, hi: f64) -> String {
     match (outcome, value) {
         ("lower_fails", _) => format!("< {lo:.4}"),
         ("upper_reached", Some(v)) => format!(">= {v:.4}"),
@@ -241,94 +242,4 @@ pub(crate) fn limit_text(outcome: &str, value: Option<f64>, lo: f64, hi: f64) ->
         (_, Some(v)) => format!("{v:.4}"),
         (_, None) => "-".into(),
     }
-}
-
-pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
-    let mut o = std::io::stdout().lock();
-    let c = &s.criteria;
-    let _ = writeln!(
-        o,
-        "Z_t,sliding (docs/model.md experiments 5 and 6): largest z_t* the tip slides to (within {} mm) with no lift-off (the paper's definition); tracking: largest z_t* also settled within {} mm over the last {} s; mu {}, v_belt {} m/s, move {} s, run {} s, bisection to {} mm",
-        c.reach_tol_m * 1e3,
-        c.settle_tol_m * 1e3,
-        c.settle_window_s,
-        s.base_scenario.plant.mu,
-        s.base_scenario.plant.v_belt,
-        c.move_time_s,
-        c.duration_s,
-        s.tol_m * 1e3
-    );
-    let _ = writeln!(
-        o,
-        "{:<8} {:<4} {:<8} {:>16} {:>10} {:>12} {:>8} {:>14} {:>12} {:>13} {:>16} {:>7} {:>8}",
-        "control",
-        "x0",
-        "setting",
-        "Z_t,sliding (m)",
-        "error (mm)",
-        "stop above",
-        "paper",
-        "tracking (m)",
-        "stop above",
-        "p = 0 at (m)",
-        "theta1 max at (m)",
-        "trials",
-        "wall (s)"
-    );
-    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
-    let reason = |r: Option<StopReason>| r.map_or("-".to_string(), |r| r.name().to_string());
-    for r in &s.results {
-        let paper = match analyses::paper::z_t_sliding(r.controller, r.x0) {
-            Some(Some(v)) => format!("{v}"),
-            Some(None) => "none".into(),
-            None => "-".into(),
-        };
-        let _ = writeln!(
-            o,
-            "{:<8} {:<4} {:<8} {:>16} {:>10} {:>12} {:>8} {:>14} {:>12} {:>13} {:>16} {:>7} {:>8.2}",
-            r.controller,
-            format!("x0{}", r.x0),
-            r.setting,
-            limit_text(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m),
-            r.error_at_limit_m.map_or("-".into(), |e| format!("{:.1}", e * 1e3)),
-            reason(r.stop_failing),
-            paper,
-            limit_text(r.tracking_outcome, r.z_t_tracking_m, r.bracket_lo_m, r.bracket_hi_m),
-            reason(r.tracking_stop_failing),
-            f(r.p_zero_end_m),
-            f(r.theta1_fold_m),
-            r.trials,
-            r.wall_s
-        );
-    }
-    for r in &s.results {
-        if let (Some(why), Some(at)) = (&r.why_failing, r.first_failing_m.or(Some(r.bracket_lo_m))) {
-            let _ = writeln!(o, "{} x0{} {}: Z_t,sliding fails at {at:.4} m: {why}", r.controller, r.x0, r.setting);
-        }
-        if let (Some(why), Some(at)) = (&r.tracking_why_failing, r.tracking_first_failing_m.or(Some(r.bracket_lo_m)))
-            && r.tracking_first_failing_m != r.first_failing_m
-        {
-            let _ = writeln!(o, "{} x0{} {}: tracking fails at {at:.4} m: {why}", r.controller, r.x0, r.setting);
-        }
-    }
-    let _ = writeln!(
-        o,
-        "error: max |z_t - z_t*| over the settle window at Z_t,sliding; stop above: why the first target above the limit failed"
-    );
-    let _ = writeln!(
-        o,
-        "p = 0 at: end of the admissible range on the branch (paper Table II); theta1 max at: the fold of theta1 along the belt, which the PID (on theta1 alone) cannot pass"
-    );
-    let _ = writeln!(o, "{}", s.paper);
-    let _ = writeln!(o, "validity (all trials): {}", s.validity);
-    let invalid: u32 = s.results.iter().map(|r| r.invalid_trials).sum();
-    if invalid > 0 {
-        let _ = writeln!(o, "INVALID: {invalid} trials violate the model (counted as not free of lift-off; trials.csv lists them)");
-    }
-    let _ = writeln!(
-        o,
-        "wall time {:.1} s; wrote {}",
-        s.wall_s,
-        written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-    );
 }

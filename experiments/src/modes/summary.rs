@@ -1,7 +1,7 @@
 //! The outputs of `sil-host modes` other than the figure: `modes.csv`, the JSON document and the human summary.
 
-use super::figures::branch_label;
-use crate::error::CliError;
+use super::branch_label;
+use crate::Error as CliError;
 use analyses::modes::*;
 use nalgebra::Vector2;
 use serde::Serialize;
@@ -34,7 +34,8 @@ pub struct CsvRow {
     pub branch: Option<&'static str>,
 }
 
-pub(crate) fn finite(x: f64) -> Option<f64> {
+/// `Some(x)` when `x` is finite: an empty cell for a quantity the point does not have.
+pub fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
@@ -75,35 +76,54 @@ pub fn csv_rows(map: &ModeMap) -> impl Iterator<Item = CsvRow> + '_ {
     })
 }
 
+/// The count of one contact mode over the grid.
 #[derive(Serialize)]
-pub(crate) struct JsonCount {
-    pub(crate) mode: &'static str,
-    pub(crate) count: usize,
-    pub(crate) fraction_of_grid: f64,
+pub struct JsonCount {
+    /// The mode's name.
+    pub mode: &'static str,
+    /// Grid points in the mode.
+    pub count: usize,
+    /// Fraction of the grid.
+    pub fraction_of_grid: f64,
     /// Fraction of the points with the tip on the belt (neither unreachable nor singular).
-    pub(crate) fraction_of_on_belt: Option<f64>,
+    pub fraction_of_on_belt: Option<f64>,
 }
 
+/// The JSON document of `modes` (`--json`): the settings, the counts per mode and the boundaries.
 #[derive(Serialize)]
-pub(crate) struct JsonSummary<'a> {
-    pub(crate) experiment: &'static str,
-    pub(crate) mu: f64,
-    pub(crate) v_belt: f64,
+pub struct JsonSummary<'a> {
+    /// The experiment, as docs/model.md names it.
+    pub experiment: &'static str,
+    /// Friction coefficient `mu`.
+    pub mu: f64,
+    /// Belt speed `v_belt`, m/s.
+    pub v_belt: f64,
     /// The requested branch; `None` when `theta2_sign` is plus/minus (branch ignored).
-    pub(crate) branch: Option<&'static str>,
-    pub(crate) theta2_sign: Theta2Sign,
-    pub(crate) theta2_rule: String,
-    pub(crate) theta1_deg_range: [f64; 2],
-    pub(crate) theta1_dot_range: [f64; 2],
-    pub(crate) grid: [usize; 2],
-    pub(crate) points: usize,
-    pub(crate) on_belt_points: usize,
-    pub(crate) counts: Vec<JsonCount>,
-    pub(crate) p_zero: &'a [PZero],
-    pub(crate) b_zero_curve_points: usize,
-    pub(crate) files: &'a [String],
+    pub branch: Option<&'static str>,
+    /// Which root of `theta2` the map follows.
+    pub theta2_sign: Theta2Sign,
+    /// That rule in words.
+    pub theta2_rule: String,
+    /// `theta1` range, degrees.
+    pub theta1_deg_range: [f64; 2],
+    /// `theta1_dot` range, rad/s.
+    pub theta1_dot_range: [f64; 2],
+    /// Grid size, `[theta1, theta1_dot]` points.
+    pub grid: [usize; 2],
+    /// Grid points.
+    pub points: usize,
+    /// Points with the tip on the belt (neither unreachable nor singular).
+    pub on_belt_points: usize,
+    /// The counts per mode.
+    pub counts: Vec<JsonCount>,
+    /// The zeros of `p` in the `theta1` range, with where each is a boundary.
+    pub p_zero: &'a [PZero],
+    /// Points located on the `b = 0` curves.
+    pub b_zero_curve_points: usize,
+    /// Files written.
+    pub files: &'a [String],
     /// The parameters used (paper Table I with `--set`, `mu`, `v_belt`; SI, radians).
-    pub(crate) params: shared::Params<f64>,
+    pub params: shared::Params<f64>,
 }
 
 /// The JSON document of `--json` for the map, listing `files`.
@@ -111,7 +131,8 @@ pub fn summary<'a>(map: &'a ModeMap, files: &'a [String]) -> impl Serialize + 'a
     json_summary(map, files)
 }
 
-pub(crate) fn json_summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
+/// The JSON document of the map, typed (what [`summary`] returns), listing `files`.
+pub fn json_summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSummary<'a> {
     let counts = map.counts();
     let on_belt: usize = counts.iter().filter(|(m, _)| matches!(m, PointMode::Contact(_))).map(|(_, c)| c).sum();
     let total = map.points.len();
@@ -144,41 +165,4 @@ pub(crate) fn json_summary<'a>(map: &'a ModeMap, files: &'a [String]) -> JsonSum
         params: map.params,
         files,
     }
-}
-
-/// The human summary printed by the command.
-pub fn human_summary(map: &ModeMap) -> String {
-    let files: [String; 0] = [];
-    let s = json_summary(map, &files);
-    let mut out = String::new();
-    out += "Contact modes on the belt (docs/model.md experiment 1, paper Fig. 2)\n";
-    out += &format!("mu = {}, v_belt = {} m/s, u = 0, {}\n", s.mu, s.v_belt, s.theta2_rule);
-    out += &format!(
-        "grid {} x {}: theta1 in [{}, {}] deg, theta1_dot in [{}, {}] rad/s; {} of {} points have the tip on the belt\n",
-        s.grid[0],
-        s.grid[1],
-        s.theta1_deg_range[0],
-        s.theta1_deg_range[1],
-        s.theta1_dot_range[0],
-        s.theta1_dot_range[1],
-        s.on_belt_points,
-        s.points
-    );
-    out += &format!("  {:<14} {:>8} {:>9} {:>12}\n", "mode", "count", "of grid", "of on-belt");
-    for c in &s.counts {
-        let ob = c.fraction_of_on_belt.map(|f| format!("{:.2}%", 100.0 * f)).unwrap_or_else(|| "-".into());
-        out += &format!("  {:<14} {:>8} {:>8.2}% {:>12}\n", c.mode, c.count, 100.0 * c.fraction_of_grid, ob);
-    }
-    if map.p_zero.is_empty() {
-        out += "p = 0: no zero of p in the theta1 range\n";
-    }
-    for z in &map.p_zero {
-        let w = match z.theta1_dot_range {
-            Some([a, b]) => format!("boundary for theta1_dot in [{a:.3}, {b:.3}] rad/s"),
-            None => "not a boundary here (z_r_dot has the other sign over the whole window)".into(),
-        };
-        out += &format!("p = 0 for {} at theta1 = {:.4} deg: {w}\n", dir_name(z.dir), z.theta1_deg);
-    }
-    out += &format!("b = 0: {} curve points located (marching squares, bisection along cell edges to 1e-12)\n", s.b_zero_curve_points);
-    out
 }

@@ -1,0 +1,156 @@
+//! The error of an experiment and of its outputs, shared by both fronts (the
+//! `sil-host` command line calls it `CliError`; the Python package raises it as
+//! `painleve.PainleveError`), and the exit codes it maps to.
+//!
+//! What an experiment computes fails with an [`analyses::AnalysisError`] (bad
+//! input, a parameter, a scenario, the simulation, a closed-loop run, an
+//! interruption), which [`Error::Analysis`] wraps with its message and exit
+//! code; the other variants are the outputs' (files, folders, figures) and the
+//! verdicts on a finished run (`--strict`, a part that failed, the bring-up).
+
+use std::path::PathBuf;
+
+use analyses::AnalysisError;
+
+/// An error that ends an experiment (a `sil-host` command, a `painleve` call).
+///
+/// Exit codes ([`Error::exit_code`]): 2 for bad input (unknown flags,
+/// out-of-range parameters, unreachable initial conditions, a folder or rig in
+/// use), 1 for failures while running or writing.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// What the experiment computes failed: bad input, a parameter, a scenario,
+    /// the simulation, a closed-loop run, an interruption (its message is the
+    /// analysis error's).
+    #[error(transparent)]
+    Analysis(#[from] AnalysisError),
+    /// Writing or reading a file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The board refused a bring-up request, or a bring-up check failed.
+    #[error("{0}")]
+    Board(String),
+    /// Part of a sweep or report failed (everything was written, the failures included).
+    #[error("{0}")]
+    PartFailed(String),
+    /// `--strict`: a result violates the model (energy-creating impact, friction-cone
+    /// violation, integrator failure); everything was written, the violations listed.
+    #[error("results violate the model (--strict): {0}")]
+    Invalid(String),
+    /// Another process writes into the output folder; nothing was written.
+    #[error("{} is in use by {owner}: wait for it to finish, or write to another --out", path.display())]
+    FolderInUse {
+        /// The folder.
+        path: PathBuf,
+        /// The holder, as its owner file names it (pid and command line).
+        owner: String,
+    },
+    /// Drawing a figure failed.
+    #[error("cannot draw {path}: {message}")]
+    Plot {
+        /// The figure file.
+        path: PathBuf,
+        /// What plotters reported.
+        message: String,
+    },
+}
+
+/// Maps an I/O error on `path` into an [`Error::Io`].
+pub fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Io { path: path.to_path_buf(), source }
+}
+
+impl Error {
+    /// Bad input (exit 2; "invalid input: `message`"): [`AnalysisError::BadInput`].
+    pub fn bad_input(message: impl Into<String>) -> Self {
+        Self::Analysis(AnalysisError::BadInput(message.into()))
+    }
+
+    /// A stop by Ctrl-C or SIGTERM part way (exit 1, what was computed is kept):
+    /// [`AnalysisError::Interrupted`].
+    pub fn interrupted(message: impl Into<String>) -> Self {
+        Self::Analysis(AnalysisError::Interrupted(message.into()))
+    }
+
+    /// Process exit code: 2 for bad input, 1 otherwise. An analysis error counts
+    /// as the error it holds: bad input, a parameter or a scenario 2, a simulation
+    /// on bad input ([`plant::SimError::is_bad_input`]) 2, a run refused before it
+    /// started (a rig in use, a firmware that does not fit) 2, the rest 1.
+    pub fn exit_code(&self) -> i32 {
+        use AnalysisError as A;
+        match self {
+            Self::FolderInUse { .. } => 2,
+            Self::Analysis(A::BadInput(_) | A::Param(_) | A::Scenario(_)) => 2,
+            Self::Analysis(A::Sim(e)) if e.is_bad_input() => 2,
+            Self::Analysis(A::Run(e)) if run_is_bad_input(e) => 2,
+            _ => 1,
+        }
+    }
+}
+
+macro_rules! through_analysis {
+    ($($t:ty),+) => {$(
+        impl From<$t> for Error {
+            fn from(e: $t) -> Self {
+                Self::Analysis(e.into())
+            }
+        }
+    )+};
+}
+through_analysis!(shared::ParamError, plant::SimError, rig::scenario::ScenarioError, rig::record::RunError);
+
+/// A bring-up step's failure ([`rig::bringup_procedure`]): a line that does not
+/// answer as the protocol says is bad input (exit 2), a refusal of the board
+/// [`Error::Board`] (exit 1).
+impl From<rig::bringup_procedure::StepError> for Error {
+    fn from(e: rig::bringup_procedure::StepError) -> Self {
+        match e {
+            rig::bringup_procedure::StepError::Line(m) => Self::bad_input(m),
+            rig::bringup_procedure::StepError::Refused(m) => Self::Board(m),
+        }
+    }
+}
+
+/// Whether a run failed on its input rather than while running: the rig is
+/// another's, or the firmware process or a service does not fit (exit 2).
+fn run_is_bad_input(e: &rig::record::RunError) -> bool {
+    matches!(
+        e,
+        rig::record::RunError::RigInUse { .. } | rig::record::RunError::Handshake(_) | rig::record::RunError::IncompatibleService(_)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rig::record::RunError;
+
+    /// The exit codes of the analysis errors, and the messages, which are the
+    /// analysis errors' own.
+    #[test]
+    fn an_analysis_error_keeps_its_message_and_its_exit_code() {
+        let param = || shared::ParamError::NonFinite { name: "mu", value: f64::NAN };
+        let in_use = || RunError::RigInUse { rig: "r".into(), role: "plant", pid: 1 };
+        let cases: [(Error, &str, i32); 6] = [
+            (Error::bad_input("--grid"), "invalid input: --grid", 2),
+            (param().into(), "invalid parameter: ", 2),
+            (plant::SimError::BadStep(-1.0).into(), "simulation failed: ", 2),
+            (in_use().into(), "run failed: ", 2),
+            (RunError::Transport("gone".into()).into(), "run failed: ", 1),
+            (Error::interrupted("sweep stopped"), "interrupted: sweep stopped", 1),
+        ];
+        for (e, prefix, code) in cases {
+            assert!(matches!(e, Error::Analysis(_)), "{e:?}");
+            assert!(e.to_string().starts_with(prefix), "{e}");
+            assert_eq!(e.exit_code(), code, "{e}");
+        }
+        let folder = Error::FolderInUse { path: "out".into(), owner: "pid 1".into() };
+        assert_eq!(folder.exit_code(), 2);
+        assert_eq!(Error::Invalid("x".into()).exit_code(), 1);
+    }
+}

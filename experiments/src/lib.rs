@@ -1,0 +1,45 @@
+//! The paper's experiments as a library, under both fronts: the `sil-host`
+//! command line parses its flags into these settings and prints and writes what
+//! they compute; the Python package `painleve` does the same from its keyword
+//! arguments and returns NumPy tables. Neither front computes anything itself.
+//!
+//! Per experiment (docs/model.md's numbering): its settings ([`settings`], clap
+//! arguments behind the `clap` feature), its check (`prepare`, `plan`,
+//! `validated`, `compute`), the loop both fronts run (one copy:
+//! [`simulate::OpenLoop`], [`poincare::analyse_grid`], [`sweep::run_all`],
+//! [`zmax::run_searches`]; the closed loop is [`rig::run_loop`], the study
+//! [`analyses::sensitivity::run`]), its typed summary and rows. Shared: the
+//! error ([`Error`], wrapping [`analyses::AnalysisError`]), the outcome
+//! ([`Done`]), the tables ([`table`]: rows to columns once; CSV, Arrow and
+//! NumPy read them) and the sweep's folder ([`sweep::store`]).
+
+#![warn(missing_docs)]
+
+pub mod admissible;
+pub mod arm;
+pub mod done;
+pub mod error;
+pub mod modes;
+pub mod poincare;
+pub mod run;
+pub mod scenario;
+pub mod sensitivity;
+pub mod settings;
+pub mod simulate;
+pub mod sweep;
+pub mod table;
+pub mod zmax;
+
+pub use done::Done;
+pub use error::Error;
+
+/// A rayon pool of `threads` worker threads, for an experiment's runs.
+///
+/// # Errors
+/// [`Error`] (bad input, exit 2) when the threads cannot be started.
+pub fn pool(threads: usize) -> Result<rayon::ThreadPool, Error> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::bad_input(format!("cannot start {threads} worker threads: {e}")))
+}

@@ -1,0 +1,227 @@
+//! The open-loop run (`u = 0`) of the arm on the belt (docs/model.md experiment
+//! 3): the settings' check and the plant at `t = 0` ([`prepare`]), the sampling
+//! loop both fronts run ([`OpenLoop`]), the trace and events rows and the summary.
+
+use crate::{Error as CliError, settings::SimulateArgs};
+use plant::initial::{self, PaperX0};
+use plant::{Plant, SimConfig, SimError};
+
+pub mod summary;
+use summary::*;
+
+/// The initial condition of `--x0` or, when given, `--x0-deg`: its name and
+/// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and degrees per second.
+///
+/// # Errors
+/// [`crate::Error::Analysis`] for a malformed `--x0-deg`.
+pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
+    Ok(match x0_deg {
+        Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
+        None => {
+            let ic = x0.condition();
+            (ic.name.to_string(), ic.deg)
+        }
+    })
+}
+
+/// Parses `--x0-deg th1,th1dot,th2,th2dot`.
+///
+/// # Errors
+/// [`crate::Error::Analysis`] unless it is four finite numbers.
+pub fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
+    let bad = || CliError::bad_input(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    match v.as_slice() {
+        [a, b, c, d] if v.iter().all(|x| x.is_finite()) => Ok([*a, *b, *c, *d]),
+        _ => Err(bad()),
+    }
+}
+
+/// Checks the run-length options (`--duration`, `--sample-dt`) and returns the
+/// number of samples after the first, `round(duration / sample_dt)` (at least 1).
+///
+/// # Errors
+/// [`crate::Error::Analysis`] naming the option.
+pub fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
+    if !(duration.is_finite() && duration > 0.0 && duration <= 1e6) {
+        return Err(CliError::bad_input(format!("--duration must be in (0, 1e6] s, got {duration}")));
+    }
+    if !(sample_dt.is_finite() && sample_dt > 0.0 && sample_dt <= duration) {
+        return Err(CliError::bad_input(format!("--sample-dt must be in (0, duration] s, got {sample_dt}")));
+    }
+    let n = (duration / sample_dt).round();
+    if n > 5e7 {
+        return Err(CliError::bad_input(format!("--duration / --sample-dt gives {n} trace rows (at most 5e7); raise --sample-dt")));
+    }
+    Ok((n as usize).max(1))
+}
+
+/// The `trace.csv` row of the plant's current state, with the contact force `f`
+/// (`[f_t, f_n]`, N) of the step that led there.
+pub fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
+    let x = plant.state();
+    let z = plant.tip();
+    let v = plant.tip_velocity();
+    TraceRow {
+        t: plant.time(),
+        theta1: x[0],
+        theta1_dot: x[1],
+        theta2: x[2],
+        theta2_dot: x[3],
+        z_t: z[0],
+        z_n: z[1],
+        z_t_dot: v[0],
+        z_n_dot: v[1],
+        z_r_dot: v[0] - plant.arm().params.v_belt,
+        f_t: f[0],
+        f_n: f[1],
+        mode: plant.mode().name(),
+        energy: plant.energy(),
+    }
+}
+
+/// A simulation checked and set up, before anything is written: what
+/// [`prepare`] returns.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The arm's parameters (paper Table I with `--set`, `--mu`, `--v-belt`).
+    pub params: shared::Params<f64>,
+    /// The simulator's settings.
+    pub sim: SimConfig,
+    /// Samples after the first ([`check_times`]).
+    pub steps: usize,
+    /// The initial condition as given and as used.
+    pub initial_condition: InitialCondition,
+    /// The plant at `t = 0` (projected onto the belt, initial mode chosen).
+    pub plant: Plant,
+}
+
+/// Checks `sil-host simulate`'s options and sets the plant up at `t = 0`.
+///
+/// # Errors
+/// [`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]
+/// (exit 2) for bad options or initial conditions.
+pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
+    let params = crate::arm::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
+    let sim = SimConfig {
+        rtol: args.rtol,
+        atol: args.atol,
+        impact_law: args.impact_law,
+        e_n: args.e_n,
+        iwc: args.iwc,
+        max_step: args.max_step,
+        singular: args.singular,
+        ..SimConfig::default()
+    };
+    sim.validate()?;
+    let steps = check_times(args.duration, args.sample_dt)?;
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
+    let x0 = initial::deg_to_state(given_deg);
+    let projection = initial::describe_projection(&params, x0);
+    let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
+    let initial_condition = InitialCondition {
+        name,
+        given_deg,
+        projection,
+        used_deg: plant.state().map(f64::to_degrees),
+        initial_mode: plant.mode().name(),
+        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
+    };
+    Ok(Prepared { params, sim, steps, initial_condition, plant })
+}
+
+/// Advances the open loop (`u = 0`) to sample `k + 1`, at exactly
+/// `(k + 1) sample_dt` s (no accumulated drift): one row of `trace.csv`.
+///
+/// # Errors
+/// The plant's [`SimError`] when the step fails.
+pub fn sample_step(plant: &mut Plant, k: usize, sample_dt: f64) -> Result<plant::StepReport, SimError> {
+    let target = (k + 1) as f64 * sample_dt;
+    plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver)
+}
+
+/// The open-loop sampling loop, the one both fronts run: the plant advanced
+/// sample after sample (`(k + 1) sample_dt` s exactly, [`sample_step`]), each
+/// sample's [`TraceRow`] and the events of its interval appended for the caller,
+/// who writes them, shows progress or stops between calls of [`OpenLoop::advance`].
+#[derive(Debug)]
+pub struct OpenLoop {
+    /// The plant, at the last sample taken.
+    pub plant: Plant,
+    /// Samples taken after the first (the row of `t = 0`).
+    pub k: usize,
+    /// Samples to take after the first ([`check_times`]).
+    pub steps: usize,
+    /// The sampling period, s.
+    pub sample_dt: f64,
+}
+
+impl OpenLoop {
+    /// The loop of a prepared simulation, with the first trace row (`t = 0`, the
+    /// contact force of the initial mode) and the start-up events (the projection's
+    /// touchdown, an impact at `t = 0`).
+    pub fn start(prepared: Prepared, sample_dt: f64) -> (Self, TraceRow, Vec<EventRow>) {
+        let Prepared { plant, steps, .. } = prepared;
+        let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
+        let events = plant.startup_events().iter().map(EventRow::from).collect();
+        (Self { plant, k: 0, steps, sample_dt }, row, events)
+    }
+
+    /// Whether every sample is taken.
+    pub fn finished(&self) -> bool {
+        self.k >= self.steps
+    }
+
+    /// Takes the samples up to `end` (at most [`OpenLoop::steps`]), appending one
+    /// row per sample to `rows` and the events located on the way to `events`.
+    ///
+    /// # Errors
+    /// The plant's [`SimError`] when a step fails: the samples before it are
+    /// appended, [`OpenLoop::k`] counts them, and the loop is not advanced further.
+    pub fn advance(&mut self, end: usize, rows: &mut Vec<TraceRow>, events: &mut Vec<EventRow>) -> Result<(), SimError> {
+        while self.k < end.min(self.steps) {
+            let report = sample_step(&mut self.plant, self.k, self.sample_dt)?;
+            events.extend(report.events.iter().map(EventRow::from));
+            rows.push(trace_row(&self.plant, report.f));
+            self.k += 1;
+        }
+        Ok(())
+    }
+}
+/// `summary.json` of a simulation that ended with `plant` (after `failure`, if it
+/// failed), which took `wall_s` s and wrote `files` with `events` events.
+pub fn summary(
+    args: &SimulateArgs,
+    prepared: (shared::Params<f64>, SimConfig, InitialCondition),
+    plant: &Plant,
+    failure: Option<&SimError>,
+    wall_s: f64,
+    files: Vec<String>,
+    events: usize,
+) -> Summary {
+    let (params, sim, initial_condition) = prepared;
+    let counters = *plant.counters();
+    let simulated_s = plant.time();
+    Summary {
+        status: if failure.is_some() { "failed" } else { "ok" },
+        error: failure.map(|e| e.to_string()),
+        params,
+        sim,
+        initial_condition,
+        duration_s: args.duration,
+        simulated_s,
+        lift_offs: counters.lift_offs,
+        touchdowns: counters.touchdowns,
+        impacts_without_collision: counters.impacts_without_collision,
+        stick_phases: counters.stick_phases,
+        validity: plant.validity(failure),
+        counters,
+        final_state: plant.state(),
+        final_tip: [plant.tip()[0], plant.tip()[1]],
+        final_mode: plant.mode().name(),
+        wall_s,
+        realtime_factor: simulated_s / wall_s.max(1e-9),
+        files,
+        events,
+    }
+}
