@@ -24,7 +24,15 @@ use super::{scenario::PyScenario, sensed::PySensed};
 use crate::cli::error;
 use crate::convert::to_py;
 
-/// The firmware of a scenario, stepped frame by frame.
+/// The firmware of a scenario (`rig::firmware_config`; `None`: the default
+/// scenario), stepped frame by frame on the wire types: `step(frame)` encodes
+/// the frame as the rig's sensors do (14-bit encoders, 12-bit load cell, no
+/// noise) and answers through `rig::firmware_side::FirmwareSide::answer`, as
+/// `rig::InProcessLink` does, bit for bit (bring-up, checks and safe state
+/// included); the command comes back decoded to SI (`Command`).
+///
+/// Raises `PainleveError` (exit_code 2) for a configuration the firmware
+/// refuses. Source: python/src/objects/firmware.rs.
 #[pyclass(name = "Firmware", module = "painleve._painleve")]
 pub struct PyFirmware {
     side: Mutex<FirmwareSide>,
@@ -34,7 +42,9 @@ pub struct PyFirmware {
     k: u32,
 }
 
-/// The firmware's answer to one frame, decoded.
+/// The firmware's answer to one frame (`shared::wire::ActuatorCommand`) decoded
+/// to SI: `u1`, `u2` (N m), `torques` `(2,)`, `status` and its words,
+/// `lift_off`, `safe_state`, `telemetry`; `u1, u2 = command`.
 #[pyclass(name = "Command", module = "painleve._painleve", frozen)]
 pub struct PyCommand {
     command: ActuatorCommand,
@@ -160,6 +170,12 @@ impl PyFirmware {
     /// Answers one frame: a `Sensed` (its raw frame as it crossed the wire) or a
     /// dict with `theta1`, `theta2` (rad), `f_t`, `f_n` (N), and optionally
     /// `v_belt` (m/s; the scenario's) and `k` (the period index; the next one).
+    /// Returns the `Command`.
+    ///
+    /// Raises `KeyError` for a missing key, `TypeError` for a value that is
+    /// not a number, `PainleveError` (exit_code 2) for a bad `k`. A frame the
+    /// firmware does not trust (a NaN, a repeated `k`) is answered as on the
+    /// board: the previous command held, its status says why.
     fn step(&mut self, py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<PyCommand> {
         let period = self.scenario.timing.period();
         let frame: SensorFrame = if let Ok(s) = frame.cast::<PySensed>() {

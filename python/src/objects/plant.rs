@@ -38,8 +38,20 @@ fn sim_config(s: &Scenario) -> SimConfig {
 }
 
 /// The hybrid plant: the two-link arm (paper Table I) with its tip on the belt
-/// moving at `v_belt`, Coulomb friction `mu`, impacts; advanced under held motor
-/// torques `[u1, u2]` (N m).
+/// moving at `v_belt`, Coulomb friction `mu`, impacts (paper eqs. 1 to 7);
+/// advanced under held motor torques `(u1, u2)` (N m, zero-order hold).
+///
+/// Built from `scenario`'s `[plant]` (a `Scenario` or TOML text; `None`: the
+/// default scenario's, paper Table I with `mu = 0.6`, `v_belt = -0.4` m/s,
+/// Newton `e_n = 0.2`, from `x0 = "a"` as `painleve.simulate`), with any key of
+/// `[plant]` as a keyword (`mu`, `v_belt`, `x0`, `impact_law`, `e_n`, `iwc`,
+/// `singular`, `rtol`, `atol`, `max_step`, `m`, `l`, `sigma`, `k`, `h`,
+/// `alpha0`, `g`), and `state`, `(4,)` `[theta1, theta1_dot, theta2,
+/// theta2_dot]` (rad, rad/s), instead of the paper's initial condition.
+///
+/// Raises `PainleveError` (exit_code 2) for bad parameters or an initial state
+/// below the belt, `TypeError` for an unknown keyword. Source:
+/// python/src/objects/plant.rs over `plant::Plant` and `rig::plant_for`.
 #[pyclass(name = "Plant", module = "painleve._painleve")]
 pub struct PyPlant {
     plant: Mutex<Plant>,
@@ -65,7 +77,8 @@ pub fn events_to_py<'py>(py: Python<'py>, events: &[PlantEvent]) -> PyResult<Bou
     to_py(py, events)
 }
 
-/// What one `Plant.advance` reports.
+/// What one `Plant.advance` reports (`plant::StepReport`): `t` (s), `mode`,
+/// `state` `(4,)`, `tip` `(2,)` m, `force` `(2,)` `[f_t, f_n]` N, `events`.
 #[pyclass(name = "Step", module = "painleve._painleve", frozen)]
 pub struct PyStep {
     report: StepReport,
@@ -164,8 +177,14 @@ impl PyPlant {
         Ok(Self { initial: Mutex::new(plant.clone()), plant: Mutex::new(plant), scenario: s })
     }
 
-    /// Advances by `dt` (s, >= 0) with the motor torques `torques = [u1, u2]`
-    /// (N m) held over the interval; returns the interval's `Step`.
+    /// Advances by `dt` (s, >= 0) with the motor torques `torques = (u1, u2)`
+    /// (N m) held over the interval; returns the interval's `Step` (its events
+    /// at their exact times, the state, the contact force at its end).
+    ///
+    /// Raises `PainleveError`: exit_code 2 for a negative or NaN `dt` or a
+    /// non-finite torque (the plant unchanged), exit_code 1 for a failure of
+    /// the plant during the interval (`plant::SimError`; the plant is left at
+    /// the failure time). `TypeError` when `torques` is not two numbers.
     #[pyo3(signature = (dt, torques=(0.0, 0.0)))]
     fn advance(&mut self, py: Python<'_>, dt: f64, torques: (f64, f64)) -> PyResult<PyStep> {
         let u = [torques.0, torques.1];

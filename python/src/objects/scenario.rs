@@ -23,6 +23,15 @@ pub fn scenario_error(py: Python<'_>, e: &ScenarioError) -> PyErr {
 /// condition, the impact law), the firmware's controller and gains, the timing
 /// (rate, `delta`, duration), the sensor models and the injected faults. Always
 /// valid: every change is validated by the rig (`rig::Scenario::validate`).
+///
+/// `Scenario()` or `Scenario.default()`: the embedded default
+/// (`scenarios/default.toml`); `Scenario(text)`: TOML text;
+/// `Scenario.load(path)`: a file. `s.set("plant.mu", 0.5)` changes a key (the
+/// CLI's `--set` keys), `s["plant.mu"]` reads one, `s.to_toml()`, `s.to_dict()`.
+///
+/// Raises `PainleveError` (exit_code 2) for invalid TOML, an unknown key or a
+/// value out of range, naming the key. Source: python/src/objects/scenario.rs
+/// over `rig::scenario` and `rig::overrides`.
 #[pyclass(name = "Scenario", module = "painleve._painleve", eq)]
 #[derive(Clone, PartialEq)]
 pub struct PyScenario {

@@ -8,7 +8,10 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use shared::wire::SensorFrame;
 
-/// A decoded frame.
+/// A sensor frame as a controller sees it, in SI units: `k`, `t` (s), `theta1`,
+/// `theta2` (rad), `theta1_dot`, `theta2_dot` (rad/s, estimated), `f_t`, `f_n`
+/// (N), `v_belt` (m/s), `z_t`, `z_n` (m), `state` `(4,)`, `valid`, `fault`,
+/// `frame` (the raw counts). Source: python/src/objects/sensed.rs.
 #[pyclass(name = "Sensed", module = "painleve._painleve", frozen)]
 #[derive(Clone)]
 pub struct PySensed {
