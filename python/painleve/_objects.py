@@ -8,9 +8,8 @@ returns a :class:`painleve.Result` as :func:`painleve.run` does."""
 
 from __future__ import annotations
 
-import json
 import os
-from typing import Any, Callable, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union
 
 from . import _painleve
 from ._painleve import Command, Firmware, Plant, Scenario, Sensed, Step
@@ -24,6 +23,19 @@ __all__ = ["Scenario", "Plant", "Step", "Firmware", "Command", "Sensed", "run_co
 Controller = Callable[[float, Sensed], Union[Sequence[float], Command]]
 
 
+def _dotted(tables: Mapping[str, Any], prefix: str = "") -> Dict[str, Any]:
+    """A nested dict of scenario tables as ``{dotted key: value}`` (its leaves)."""
+    out: Dict[str, Any] = {}
+    for key, value in tables.items():
+        if not isinstance(key, str):
+            raise TypeError(f"scenario: keys must be str, got {type(key).__name__} {key!r}")
+        if isinstance(value, Mapping) and value:
+            out.update(_dotted(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
 def _scenario_of(scenario: Union[None, Scenario, str, "os.PathLike[str]", Mapping[str, Any]]) -> Scenario:
     """A :class:`Scenario` of what :func:`run_controller` takes."""
     if scenario is None:
@@ -33,7 +45,8 @@ def _scenario_of(scenario: Union[None, Scenario, str, "os.PathLike[str]", Mappin
     if isinstance(scenario, (str, os.PathLike)):
         return Scenario.load(os.fspath(scenario))
     if isinstance(scenario, Mapping):
-        return Scenario.from_toml(_painleve.json_to_toml(json.dumps(scenario)))
+        # Merged onto the default, key by key (a partial dict changes only its keys).
+        return Scenario.default().update(_dotted(scenario))
     raise TypeError(
         f"scenario: expected a painleve.Scenario, the path of a TOML file, a dict or None, got {type(scenario).__name__}"
     )
@@ -69,8 +82,8 @@ def run_controller(
     Args:
         controller: ``controller(t, sensed) -> (u1, u2)``.
         scenario: ``None`` (the embedded default), a :class:`Scenario`, the path
-            of a TOML file, or a dict of its tables (a whole scenario, as
-            :func:`painleve.default_scenario` gives).
+            of a TOML file, or a dict of its tables merged onto the default
+            (``{"plant": {"mu": 0.5}}`` changes only ``plant.mu``).
         duration: run length, s (``timing.duration_s``; ``None``: the scenario's).
         strict: raise :class:`PainleveError` when the run fails part way or has
             a model violation (else a :class:`PainleveWarning`).

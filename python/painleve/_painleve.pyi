@@ -80,6 +80,8 @@ class Scenario:
         and validates; returns ``self``. Raises PainleveError (exit code 2) for
         a bad key or value (the scenario is then unchanged), TypeError for a
         value TOML cannot hold."""
+    def update(self, values: Dict[str, Any]) -> Scenario:
+        """Sets several dotted keys at once, validated together; returns ``self``."""
     def validate(self) -> None:
         """Validates again (``rig::Scenario::validate``)."""
     def to_toml(self) -> str:

@@ -36,6 +36,8 @@ def test_scenario_set_validate_and_toml_round_trip() -> None:
     assert back.to_dict()["plant"]["mu"] == 0.45
     assert Scenario(s.to_toml()) == s and Scenario() == Scenario.default()
     assert copy.deepcopy(s) == s
+    both = Scenario.default().update({"plant.mu": 0.5, "timing.duration_s": 1.0})
+    assert (both["plant.mu"], both["timing.duration_s"], both.periods) == (0.5, 1.0, 1000)
 
 
 def test_scenario_bad_keys_and_values_raise_painleve_error() -> None:
@@ -231,6 +233,11 @@ def test_controller_errors_propagate_and_bad_returns_name_the_period() -> None:
     assert e.value.exit_code == 2
     arr = painleve.run_controller(lambda t, y: np.zeros(2), short(0.05))
     assert arr.trace.nrows == 50
+    # A partial scenario dict is merged onto the default; a bad key is named.
+    merged = painleve.run_controller(lambda t, y: (0.0, 0.0), {"timing": {"duration_s": 0.03}, "plant": {"mu": 0.5}})
+    assert merged.trace.nrows == 30 and merged.extras["scenario"]["plant"]["mu"] == 0.5
+    with pytest.raises(PainleveError, match="plant.nope"):
+        painleve.run_controller(lambda t, y: (0.0, 0.0), {"plant": {"nope": 1}})
 
 
 def test_ctrl_c_stops_the_loop() -> None:

@@ -109,7 +109,11 @@ fn torques_of(out: &Bound<'_, PyAny>, k: u32, t: f64) -> PyResult<[f64; 2]> {
         let item = |i: usize| -> PyResult<f64> {
             let x = tuple.get_item(i)?;
             x.extract::<f64>().map_err(|_| {
-                PyTypeError::new_err(format!("{}: torque {i} is {}, not a number", what(), x.get_type().name().map(|n| n.to_string()).unwrap_or_default()))
+                PyTypeError::new_err(format!(
+                    "{}: torque {i} is {}, not a number",
+                    what(),
+                    x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+                ))
             })
         };
         [item(0)?, item(1)?]

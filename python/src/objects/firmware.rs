@@ -143,15 +143,28 @@ impl PyCommand {
 
     fn __repr__(&self) -> String {
         let u = self.si();
-        format!("<Command seq {}: u1 = {} N m, u2 = {} N m, status {:#x} ({})>", self.command.seq, u[0], u[1], self.command.status, self.status_text())
+        format!(
+            "<Command seq {}: u1 = {} N m, u2 = {} N m, status {:#x} ({})>",
+            self.command.seq,
+            u[0],
+            u[1],
+            self.command.status,
+            self.status_text()
+        )
     }
 }
 
 /// A float from a frame dict (`key`), or `default` when absent.
 fn field(d: &Bound<'_, PyDict>, key: &str, default: Option<f64>) -> PyResult<f64> {
     match d.get_item(key)? {
-        Some(v) => v.extract::<f64>().map_err(|_| PyTypeError::new_err(format!("frame[{key:?}]: expected a number, got {}", v.get_type().name().map(|n| n.to_string()).unwrap_or_default()))),
-        None => default.ok_or_else(|| PyKeyError::new_err(format!("frame: `{key}` is missing (it needs theta1, theta2 in rad and f_t, f_n in N)"))),
+        Some(v) => v.extract::<f64>().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "frame[{key:?}]: expected a number, got {}",
+                v.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+            ))
+        }),
+        None => default
+            .ok_or_else(|| PyKeyError::new_err(format!("frame: `{key}` is missing (it needs theta1, theta2 in rad and f_t, f_n in N)"))),
     }
 }
 

@@ -5,11 +5,7 @@
 use std::sync::Mutex;
 
 use numpy::PyArray1;
-use pyo3::{
-    exceptions::PyTypeError,
-    prelude::*,
-    types::PyDict,
-};
+use pyo3::{exceptions::PyTypeError, prelude::*, types::PyDict};
 use rig::Scenario;
 
 use plant::{Hold, NoObserver, Plant, PlantEvent, SimConfig, SimError, StepReport, initial};

@@ -64,10 +64,7 @@ impl PyScenario {
 /// str, a list or tuple of them, a dict of them.
 fn toml_of(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     let bad = || -> PyResult<toml::Value> {
-        Err(PyTypeError::new_err(format!(
-            "`{key}`: expected a bool, int, float, str, list or dict, got {}",
-            v.get_type().name()?
-        )))
+        Err(PyTypeError::new_err(format!("`{key}`: expected a bool, int, float, str, list or dict, got {}", v.get_type().name()?)))
     };
     if v.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(v.extract()?));
@@ -154,6 +151,27 @@ impl PyScenario {
             return Err(error(py, format!("`{key}` is not a dotted scenario key, e.g. plant.mu"), 2));
         }
         let next = slf.borrow().inner.with_overrides(std::slice::from_ref(&o)).map_err(|e| scenario_error(py, &e))?;
+        slf.borrow_mut().inner = next;
+        Ok(slf)
+    }
+
+    /// Sets several dotted keys at once (`{"plant.mu": 0.5, "timing.duration_s":
+    /// 2.0}`), validated together; returns the scenario (for chaining). Raises as
+    /// `set` (the scenario unchanged on error).
+    pub fn update<'py>(slf: Bound<'py, Self>, values: &Bound<'py, PyDict>) -> PyResult<Bound<'py, Self>> {
+        let py = slf.py();
+        let mut overrides = Vec::with_capacity(values.len());
+        for (k, v) in values.iter() {
+            let key: String = k.extract().map_err(|_| PyTypeError::new_err("Scenario.update: keys must be dotted scenario keys (str)"))?;
+            let value = toml_of(&key, &v)?;
+            let key = key.trim().to_string();
+            if key.is_empty() || key.split('.').any(str::is_empty) {
+                return Err(error(py, format!("`{key}` is not a dotted scenario key, e.g. plant.mu"), 2));
+            }
+            overrides.push(Override { key, text: value.to_string(), value });
+        }
+        rig::overrides::check_unique(&overrides).map_err(|e| scenario_error(py, &e.into()))?;
+        let next = slf.borrow().inner.with_overrides(&overrides).map_err(|e| scenario_error(py, &e))?;
         slf.borrow_mut().inner = next;
         Ok(slf)
     }
