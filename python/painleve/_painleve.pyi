@@ -57,13 +57,14 @@ class Scenario:
     sensors, faults. Always valid: every change is validated by the rig.
 
     ``Scenario()`` / ``Scenario.default()``: the embedded default
-    (``scenarios/default.toml``); ``Scenario(text)``: TOML text.
+    (``scenarios/default.toml``); ``Scenario(text)``: TOML text;
+    ``Scenario(path)``: a TOML file.
 
     Raises:
         PainleveError: invalid TOML or values (``exit_code`` 2), naming the key.
     """
 
-    def __init__(self, source: Optional[str] = None) -> None: ...
+    def __init__(self, source: Union[None, str, PathLike[str]] = None) -> None: ...
     def __eq__(self, other: object) -> bool: ...
     @staticmethod
     def default() -> Scenario:
@@ -138,7 +139,7 @@ class Plant:
 
     def __init__(
         self,
-        scenario: Union[None, Scenario, str] = None,
+        scenario: Union[None, Scenario, str, PathLike[str]] = None,
         *,
         state: Optional[Sequence[float]] = None,
         mu: float = ...,
@@ -288,7 +289,7 @@ class Firmware:
         PainleveError: an invalid firmware configuration (``exit_code`` 2).
     """
 
-    def __init__(self, scenario: Union[None, Scenario, str] = None) -> None: ...
+    def __init__(self, scenario: Union[None, Scenario, str, PathLike[str]] = None) -> None: ...
     def step(self, frame: Union[Sensed, Dict[str, float]]) -> Command:
         """Answers a :class:`Sensed` or a dict ``theta1``, ``theta2`` (rad),
         ``f_t``, ``f_n`` (N), optional ``v_belt`` (m/s), ``k``. Raises KeyError

@@ -17,6 +17,12 @@ import painleve
 from painleve import Firmware, PainleveError, Plant, Scenario
 
 
+def painleve_repo():
+    from pathlib import Path
+
+    return Path(__file__).resolve().parents[2]
+
+
 def short(duration: float = 0.5) -> Scenario:
     return Scenario.default().set("timing.duration_s", duration)
 
@@ -36,6 +42,10 @@ def test_scenario_set_validate_and_toml_round_trip() -> None:
     assert back.to_dict()["plant"]["mu"] == 0.45
     assert Scenario(s.to_toml()) == s and Scenario() == Scenario.default()
     assert copy.deepcopy(s) == s
+    s.set("sensors.seed", np.int64(3)).set("plant.e_n", np.float64(0.25))
+    assert (s["sensors.seed"], s["plant.e_n"]) == (3, 0.25)
+    from_file = Scenario(painleve_repo() / "scenarios" / "default.toml")
+    assert from_file == Scenario.default() == Scenario(str(painleve_repo() / "scenarios" / "default.toml"))
     both = Scenario.default().update({"plant.mu": 0.5, "timing.duration_s": 1.0})
     assert (both["plant.mu"], both["timing.duration_s"], both.periods) == (0.5, 1.0, 1000)
 
@@ -205,6 +215,22 @@ def test_zero_torque_controller_sees_quantised_noisy_sensors() -> None:
         assert theta1 == pytest.approx(np.float32(count * lsb) if count < 2**13 else np.float32(count * lsb) - 2 * math.pi, abs=1e-6)
     f_err = np.array([f for _, _, f, _, _ in frames]) - tr["f_n"]
     assert 0.0 < np.std(f_err) < 0.1, "load-cell noise (0.02 N rms) and quantisation"
+
+
+def test_sensor_faults_reach_the_controller() -> None:
+    """The scenario's sensor faults act on the frames the controller sees (the
+    rig's `SensorFaults`): a NaN load cell at period 10 gives an invalid frame."""
+    seen = {}
+
+    def record(t, y):
+        seen[y.k] = (y.valid, y.fault, y.f_n, y.theta1)
+        return 0.0, 0.0
+
+    s = short(0.05).set("faults", [{"kind": "nan_sensor", "at_s": 0.01, "signal": "f_n"}])
+    painleve.run_controller(record, s)
+    assert seen[9][0] and seen[11][0]
+    valid, fault, f_n, theta1 = seen[10]
+    assert not valid and "invalid" in fault and math.isnan(f_n) and math.isnan(theta1)
 
 
 def test_controller_errors_propagate_and_bad_returns_name_the_period() -> None:

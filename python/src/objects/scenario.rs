@@ -26,7 +26,7 @@ pub fn scenario_error(py: Python<'_>, e: &ScenarioError) -> PyErr {
 ///
 /// `Scenario()` or `Scenario.default()`: the embedded default
 /// (`scenarios/default.toml`); `Scenario(text)`: TOML text;
-/// `Scenario.load(path)`: a file. `s.set("plant.mu", 0.5)` changes a key (the
+/// `Scenario(path)` or `Scenario.load(path)`: a file. `s.set("plant.mu", 0.5)` changes a key (the
 /// CLI's `--set` keys), `s["plant.mu"]` reads one, `s.to_toml()`, `s.to_dict()`.
 ///
 /// Raises `PainleveError` (exit_code 2) for invalid TOML, an unknown key or a
@@ -48,11 +48,18 @@ impl PyScenario {
                 if let Ok(s) = v.cast::<PyScenario>() {
                     return Ok(s.borrow().inner.clone());
                 }
-                if let Ok(text) = v.extract::<String>() {
-                    return Scenario::from_toml(&text).map_err(|e| scenario_error(py, &e));
+                // A str with a key in it is TOML text; any other str or os.PathLike a file.
+                if v.is_instance_of::<PyString>() {
+                    let text: String = v.extract()?;
+                    if text.contains('=') || text.contains('\n') {
+                        return Scenario::from_toml(&text).map_err(|e| scenario_error(py, &e));
+                    }
+                }
+                if let Ok(path) = v.extract::<std::path::PathBuf>() {
+                    return Ok(Self::load(py, path)?.inner);
                 }
                 Err(PyTypeError::new_err(format!(
-                    "scenario: expected a painleve.Scenario, TOML text or None, got {}",
+                    "scenario: expected a painleve.Scenario, TOML text, the path of a TOML file or None, got {}",
                     v.get_type().name()?
                 )))
             }
@@ -94,7 +101,10 @@ fn toml_of(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
         }
         return Ok(toml::Value::Table(t));
     }
-    // NumPy scalars and other numbers: through float.
+    // NumPy scalars and other numbers: integers through `__index__`, the rest through float.
+    if let Ok(i) = v.extract::<i64>() {
+        return Ok(toml::Value::Integer(i));
+    }
     if let Ok(x) = v.extract::<f64>() {
         return Ok(toml::Value::Float(x));
     }
@@ -114,7 +124,7 @@ fn lookup<'a>(table: &'a toml::Table, key: &str) -> Option<&'a toml::Value> {
 #[pymethods]
 impl PyScenario {
     /// `Scenario(source=None)`: `None` the embedded default
-    /// (`scenarios/default.toml`), else TOML text (see `load` for a file).
+    /// (`scenarios/default.toml`), TOML text, or the path of a TOML file.
     #[new]
     #[pyo3(signature = (source=None))]
     fn new(py: Python<'_>, source: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
