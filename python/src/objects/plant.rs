@@ -8,7 +8,7 @@ use numpy::PyArray1;
 use pyo3::{exceptions::PyTypeError, prelude::*, types::PyDict};
 use rig::Scenario;
 
-use plant::{Hold, NoObserver, Plant, PlantEvent, SimConfig, SimError, StepReport, initial};
+use plant::{Hold, NoObserver, Plant, SimConfig, SimError, StepReport, initial};
 
 use super::scenario::PyScenario;
 use crate::cli::error;
@@ -68,11 +68,6 @@ fn sim_error(py: Python<'_>, e: &SimError) -> PyErr {
     error(py, e.to_string(), code)
 }
 
-/// The events of an interval as a list of dicts (the columns of `events.csv`).
-pub fn events_to_py<'py>(py: Python<'py>, events: &[PlantEvent]) -> PyResult<Bound<'py, PyAny>> {
-    to_py(py, events)
-}
-
 /// What one `Plant.advance` reports (`plant::StepReport`): `t` (s), `mode`,
 /// `state` `(4,)`, `tip` `(2,)` m, `force` `(2,)` `[f_t, f_n]` N, `events`.
 #[pyclass(name = "Step", module = "painleve._painleve", frozen)]
@@ -118,7 +113,7 @@ impl PyStep {
     /// and after, `impulse`, `energy_change`, `contact_work`, `resolution`.
     #[getter]
     fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        events_to_py(py, &self.report.events)
+        to_py(py, &self.report.events)
     }
 
     fn __repr__(&self) -> String {
@@ -145,7 +140,8 @@ impl PyPlant {
             s.plant.x0 = initial::PaperX0::A;
         }
         if let Some(params) = params {
-            let mut overrides = Vec::new();
+            // The keywords as the scenario's `[plant]` keys, set and validated together.
+            let keys = PyDict::new(py);
             for (k, v) in params.iter() {
                 let key: String = k.extract()?;
                 if !PLANT_KEYS.contains(&key.as_str()) {
@@ -154,12 +150,9 @@ impl PyPlant {
                         PLANT_KEYS.join(", ")
                     )));
                 }
-                overrides.push((key, v.clone()));
+                keys.set_item(format!("plant.{key}"), v)?;
             }
-            let mut sc = Bound::new(py, PyScenario { inner: s })?;
-            for (key, value) in overrides {
-                sc = PyScenario::set(sc, &format!("plant.{key}"), &value)?;
-            }
+            let sc = PyScenario::update(Bound::new(py, PyScenario { inner: s })?, &keys)?;
             s = sc.borrow().inner.clone();
         }
         let plant = match state {
@@ -293,7 +286,7 @@ impl PyPlant {
     #[getter]
     fn startup_events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let events = self.with(|p| p.startup_events().to_vec());
-        events_to_py(py, &events)
+        to_py(py, &events)
     }
 
     /// The plant's parameters: dict of `m`, `l`, `sigma`, `k`, `h`, `alpha0`, `g`,

@@ -152,7 +152,7 @@ impl PyScenario {
 
     /// Sets the value at dotted key `key` (`"plant.mu"`, `"controller.pid.kp"`),
     /// validated; returns the scenario (for chaining).
-    pub fn set<'py>(slf: Bound<'py, Self>, key: &str, value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, Self>> {
+    fn set<'py>(slf: Bound<'py, Self>, key: &str, value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, Self>> {
         let py = slf.py();
         let toml_value = toml_of(key, value)?;
         let text = toml_value.to_string();
