@@ -16,7 +16,10 @@ line, and returns NumPy arrays:
 - :func:`zmax`: ``Z_t,sliding`` (experiments 5 and 6);
 - :func:`run`: a closed-loop SIL run of a scenario;
 - :func:`sensitivity`: the results under each open modelling choice;
-- :func:`load`: any output folder the CLI writes.
+- :func:`load`: any output folder the CLI writes;
+- objects to hold and step: :class:`Scenario`, :class:`Plant`,
+  :class:`Firmware`, and :func:`run_controller` (a Python controller in the
+  closed loop).
 
 Every function returns a :class:`Result`: ``summary`` (the command's
 ``summary.json`` as a dict), ``tables`` (``{name: Table}``, a :class:`Table`
@@ -40,12 +43,19 @@ from ._api import (
     zmax,
 )
 from ._load import load, read_arrow, read_csv
+from ._objects import Command, Firmware, Plant, Scenario, Sensed, Step, run_controller
 from ._result import PainleveWarning, Result, Table, describe_violations
 
 __all__ = [
+    "Command",
+    "Firmware",
     "PainleveError",
     "PainleveWarning",
+    "Plant",
     "Result",
+    "Scenario",
+    "Sensed",
+    "Step",
     "Table",
     "__version__",
     "admissible",
@@ -57,6 +67,7 @@ __all__ = [
     "read_arrow",
     "read_csv",
     "run",
+    "run_controller",
     "scenario_toml",
     "sensitivity",
     "simulate",

@@ -8,7 +8,11 @@ that ``painleve.Result`` wraps: ``command``, ``summary``, ``tables`` (``{name:
 instead.
 """
 
-from typing import Any, Callable, Dict, List, Optional, Union
+from os import PathLike
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
 
 __version__: str
 
@@ -42,3 +46,267 @@ def toml_to_json(text: str) -> str:
     """A TOML document as JSON text."""
 def json_to_toml(text: str) -> str:
     """A JSON object as TOML text."""
+
+# --- Objects (python/src/objects; docs/python.md "Objects") --------------------
+
+_F64 = npt.NDArray[np.float64]
+_Torques = Union[Tuple[float, float], Sequence[float], _F64]
+
+class Scenario:
+    """A closed-loop scenario (``rig::Scenario``): plant, controller, timing,
+    sensors, faults. Always valid: every change is validated by the rig.
+
+    ``Scenario()`` / ``Scenario.default()``: the embedded default
+    (``scenarios/default.toml``); ``Scenario(text)``: TOML text;
+    ``Scenario(path)``: a TOML file.
+
+    Raises:
+        PainleveError: invalid TOML or values (``exit_code`` 2), naming the key.
+    """
+
+    def __init__(self, source: Union[None, str, PathLike[str]] = None) -> None: ...
+    def __eq__(self, other: object) -> bool: ...
+    @staticmethod
+    def default() -> Scenario:
+        """The embedded default scenario (``scenarios/default.toml``)."""
+    @staticmethod
+    def from_toml(text: str) -> Scenario:
+        """A scenario from TOML text. Raises PainleveError (exit code 2)."""
+    @staticmethod
+    def load(path: Union[str, PathLike[str]]) -> Scenario:
+        """A scenario from a TOML file. Raises PainleveError (exit code 2)."""
+    def set(self, key: str, value: Any) -> Scenario:
+        """Sets dotted key ``key`` (the CLI's ``--set`` keys: ``"plant.mu"``,
+        ``"controller.pid.kp"``) to ``value`` (bool, int, float, str, list, dict)
+        and validates; returns ``self``. Raises PainleveError (exit code 2) for
+        a bad key or value (the scenario is then unchanged), TypeError for a
+        value TOML cannot hold."""
+    def update(self, values: Dict[str, Any]) -> Scenario:
+        """Sets several dotted keys at once, validated together; returns ``self``."""
+    def validate(self) -> None:
+        """Validates again (``rig::Scenario::validate``)."""
+    def to_toml(self) -> str:
+        """The scenario as TOML text (every key written)."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The scenario as a dict of its tables."""
+    def get(self, key: str) -> Any:
+        """The value at dotted key ``key``. Raises KeyError."""
+    def __getitem__(self, key: str) -> Any: ...
+    def copy(self) -> Scenario: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def periods(self) -> int:
+        """Control periods in the run."""
+
+class Step:
+    """What :meth:`Plant.advance` reports about its interval."""
+
+    @property
+    def t(self) -> float:
+        """Time at the end, s."""
+    @property
+    def mode(self) -> Literal["flight", "sliding", "sticking"]: ...
+    @property
+    def state(self) -> _F64:
+        """``(4,)``: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s."""
+    @property
+    def tip(self) -> _F64:
+        """``(2,)``: ``[z_t, z_n]``, m."""
+    @property
+    def force(self) -> _F64:
+        """``(2,)``: contact force ``[f_t, f_n]`` at the end, N."""
+    @property
+    def events(self) -> List[Dict[str, Any]]:
+        """The interval's events: ``t`` (s), ``kind``, ``mode_after``, velocities
+        before and after (m/s), ``impulse`` (N s), ``energy_change``,
+        ``contact_work`` (J), ``resolution``."""
+
+class Plant:
+    """The hybrid plant (``plant::Plant``), advanced under held torques.
+
+    ``Plant(scenario=None, *, state=None, **params)``: the plant of
+    ``scenario``'s ``[plant]`` (``None``: the default scenario's, paper Table I,
+    ``mu = 0.6``, ``v_belt = -0.4`` m/s, from ``x0 = "a"`` as
+    :func:`painleve.simulate`), the keys of ``[plant]`` given as keywords
+    replacing its values, and ``state`` ``(4,)`` (rad, rad/s) replacing the
+    paper's initial condition.
+
+    Raises:
+        PainleveError: bad parameters or initial state (``exit_code`` 2).
+        TypeError: an unknown keyword.
+    """
+
+    def __init__(
+        self,
+        scenario: Union[None, Scenario, str, PathLike[str]] = None,
+        *,
+        state: Optional[Sequence[float]] = None,
+        mu: float = ...,
+        v_belt: float = ...,
+        x0: Literal["a", "d", "u"] = ...,
+        impact_law: Literal["newton", "poisson", "energetic"] = ...,
+        e_n: float = ...,
+        iwc: Literal["restitution", "plastic"] = ...,
+        singular: Literal["leave", "slide"] = ...,
+        rtol: float = ...,
+        atol: float = ...,
+        max_step: float = ...,
+        m: float = ...,
+        l: float = ...,
+        sigma: float = ...,
+        k: float = ...,
+        h: float = ...,
+        alpha0: float = ...,
+        g: float = ...,
+    ) -> None: ...
+    def advance(self, dt: float, torques: _Torques = (0.0, 0.0)) -> Step:
+        """Advances ``dt`` s (>= 0) with ``torques = (u1, u2)`` N m held.
+        Raises PainleveError: bad ``dt`` or torques (exit code 2), a failure of
+        the plant (exit code 1; the plant is left at the failure time)."""
+    def advance_to(self, t: float, torques: _Torques = (0.0, 0.0)) -> Step:
+        """Advances to time ``t`` s (>= :attr:`time`)."""
+    def reset(self) -> None:
+        """Back to time 0, counters cleared."""
+    def copy(self) -> Plant: ...
+    def contact_force(self, torques: _Torques = (0.0, 0.0)) -> _F64:
+        """``(2,)``: ``[f_t, f_n]`` N in the current mode under ``torques``."""
+    @property
+    def time(self) -> float:
+        """s."""
+    @property
+    def state(self) -> _F64:
+        """``(4,)``: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s."""
+    @property
+    def tip(self) -> _F64:
+        """``(2,)``: ``[z_t, z_n]``, m."""
+    @property
+    def tip_velocity(self) -> _F64:
+        """``(2,)``: ``[z_t_dot, z_n_dot]``, m/s."""
+    @property
+    def mode(self) -> Literal["flight", "sliding", "sticking"]: ...
+    @property
+    def energy(self) -> float:
+        """Mechanical energy, J."""
+    @property
+    def counters(self) -> Dict[str, Union[int, float]]:
+        """Event counts since creation (``plant::Counters``)."""
+    @property
+    def validity(self) -> Dict[str, int]:
+        """Validity counters (``plant::Validity``)."""
+    @property
+    def startup_events(self) -> List[Dict[str, Any]]: ...
+    @property
+    def params(self) -> Dict[str, float]:
+        """``m, l, sigma, k, h, alpha0, g, mu, v_belt`` (SI, rad)."""
+    @property
+    def scenario(self) -> Scenario: ...
+
+class Sensed:
+    """One sensor frame decoded to SI units, as the firmware decodes it."""
+
+    @property
+    def k(self) -> int:
+        """Period index."""
+    @property
+    def t(self) -> float:
+        """Sample time ``k Ts``, s."""
+    @property
+    def theta1(self) -> float:
+        """rad (14-bit encoder), NaN in an invalid frame."""
+    @property
+    def theta2(self) -> float:
+        """rad (theta1 + the elbow encoder's angle)."""
+    @property
+    def theta1_dot(self) -> float:
+        """rad/s, alpha-beta tracker estimate (0 at period 0)."""
+    @property
+    def theta2_dot(self) -> float:
+        """rad/s, as theta1_dot."""
+    @property
+    def f_t(self) -> float:
+        """N (12-bit load cell, noisy)."""
+    @property
+    def f_n(self) -> float:
+        """N (12-bit load cell, noisy)."""
+    @property
+    def v_belt(self) -> float:
+        """m/s (belt encoder, 1 mm/s)."""
+    @property
+    def z_t(self) -> float:
+        """m, from the sensed angles."""
+    @property
+    def z_n(self) -> float:
+        """m, from the sensed angles (the belt at -H)."""
+    @property
+    def state(self) -> _F64:
+        """``(4,)``: theta1, theta1_dot, theta2, theta2_dot (rad, rad/s)."""
+    @property
+    def valid(self) -> bool: ...
+    @property
+    def fault(self) -> Optional[str]: ...
+    @property
+    def frame(self) -> Dict[str, int]:
+        """The raw ``SensorFrame`` (counts and codes)."""
+
+class Command:
+    """The firmware's answer to a frame, decoded; ``u1, u2 = command``."""
+
+    @property
+    def u1(self) -> float:
+        """N m."""
+    @property
+    def u2(self) -> float:
+        """N m."""
+    @property
+    def torques(self) -> _F64:
+        """``(2,)``: ``[u1, u2]``, N m."""
+    @property
+    def seq(self) -> int: ...
+    @property
+    def status(self) -> int:
+        """Status word (``shared::wire::status`` bits)."""
+    @property
+    def status_text(self) -> str: ...
+    @property
+    def lift_off(self) -> bool: ...
+    @property
+    def safe_state(self) -> Optional[str]: ...
+    @property
+    def t_sent(self) -> float:
+        """s."""
+    @property
+    def raw(self) -> Dict[str, int]: ...
+    @property
+    def telemetry(self) -> Dict[str, Any]: ...
+    def __len__(self) -> int: ...
+    def __getitem__(self, i: int) -> float: ...
+
+class Firmware:
+    """The firmware's control step of a scenario (``rig::firmware_side``).
+
+    Raises:
+        PainleveError: an invalid firmware configuration (``exit_code`` 2).
+    """
+
+    def __init__(self, scenario: Union[None, Scenario, str, PathLike[str]] = None) -> None: ...
+    def step(self, frame: Union[Sensed, Dict[str, float]]) -> Command:
+        """Answers a :class:`Sensed` or a dict ``theta1``, ``theta2`` (rad),
+        ``f_t``, ``f_n`` (N), optional ``v_belt`` (m/s), ``k``. Raises KeyError
+        (missing key), TypeError (wrong type)."""
+    def reset(self) -> None: ...
+    @property
+    def k(self) -> int: ...
+    @property
+    def period(self) -> float:
+        """Ts, s."""
+    @property
+    def safe_state(self) -> Optional[str]: ...
+    @property
+    def scenario(self) -> Scenario: ...
+
+def run_controller(
+    controller: Callable[[float, Sensed], Any], scenario: Optional[Scenario] = None, duration: Optional[float] = None
+) -> _Raw:
+    """The closed loop with ``controller`` as the firmware; call
+    :func:`painleve.run_controller` instead."""

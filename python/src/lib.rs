@@ -14,6 +14,7 @@ mod arrow;
 mod cli;
 mod commands;
 mod convert;
+mod objects;
 mod work;
 
 use pyo3::prelude::*;
@@ -93,5 +94,6 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(default_scenario_toml, m)?)?;
     m.add_function(wrap_pyfunction!(toml_to_json, m)?)?;
     m.add_function(wrap_pyfunction!(json_to_toml, m)?)?;
+    objects::register(m)?;
     Ok(())
 }

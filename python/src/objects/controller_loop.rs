@@ -1,0 +1,252 @@
+//! `painleve.run_controller`: the closed loop with a Python callable as the
+//! controller. The plant side is the rig's own (`rig::run_loop` and
+//! `rig::PeriodLoop`: the sensor models and their faults, the zero-order hold,
+//! the command taking effect at `t_k + delta`, deadline misses); the controller is
+//! reached through a [`FirmwareLink`], [`PythonLink`], in place of the firmware's.
+//!
+//! What differs from the firmware's path (`painleve.run`, `rig::InProcessLink`):
+//! the frame is decoded here (`firmware::decode::decode_bits`, as the firmware
+//! decodes it) and handed over in SI units; the torques come back as numbers and
+//! are applied as they are (no 12-bit torque code, no saturation at 5 N m: the
+//! trace's `u1_cmd`/`u2_cmd` are the callable's values); none of the firmware's
+//! checks (bad or stale frames, deadline misses, the safe state, runaway and
+//! sensor-consistency monitors, the reference ramp) run; the loop runs on the
+//! calling thread holding the GIL, and checks for Ctrl-C every period.
+
+use std::time::Instant;
+
+use firmware::estimator::AngleTracker;
+use pyo3::{
+    exceptions::{PyTypeError, PyValueError},
+    prelude::*,
+    types::{PyDict, PyString, PyTuple},
+};
+use rig::{
+    Exchange, FaultPlan, FirmwareLink, LinkKind, RunError, Scenario, firmware_side::step_start, stats::RunStats, summary::RunSummary,
+};
+use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
+
+use super::{scenario::PyScenario, sensed::PySensed};
+use crate::cli::error;
+use crate::convert::{Outcome, rows_to_py, to_py};
+
+/// A Python callable `controller(t, sensed) -> (u1, u2)` as the firmware of a run.
+pub struct PythonLink<'py> {
+    controller: Bound<'py, PyAny>,
+    faults: FaultPlan,
+    encoder_bits: u8,
+    /// Link length for the sensed tip position (the firmware's model's), m.
+    l: f64,
+    ts: f32,
+    bandwidth: f32,
+    trackers: Option<[AngleTracker; 2]>,
+    /// The torques of the last answer, N m.
+    torques: [f64; 2],
+    /// The Python exception that stopped the run.
+    pub raised: Option<PyErr>,
+}
+
+impl<'py> PythonLink<'py> {
+    /// The link of `controller` for scenario `s`.
+    ///
+    /// # Errors
+    /// [`RunError::Unsupported`] for faults that need the firmware in a process
+    /// of its own (as the in-process link).
+    pub fn new(s: &Scenario, controller: Bound<'py, PyAny>) -> Result<Self, RunError> {
+        LinkKind::InProcess.check(&s.faults)?;
+        let cfg = rig::firmware_config(s);
+        Ok(Self {
+            controller,
+            faults: FaultPlan::new(&s.faults, s.timing.period()),
+            encoder_bits: s.sensors.encoder_bits,
+            l: rig::setup::firmware_params(s).l,
+            ts: cfg.period.as_secs_f32(),
+            bandwidth: cfg.observer_bandwidth,
+            trackers: None,
+            torques: [0.0; 2],
+            raised: None,
+        })
+    }
+
+    /// The frame decoded, the velocity trackers updated.
+    fn sense(&mut self, frame: &SensorFrame) -> PySensed {
+        let t = frame.t_us as f64 * 1e-6;
+        let mut sensed = PySensed::decode(*frame, t, self.encoder_bits, [0.0; 2], self.l);
+        if sensed.fault.is_none() {
+            let q = sensed.q.map(|x| x as f32);
+            let trackers = match &mut self.trackers {
+                Some(tr) => {
+                    tr[0].update(q[0], self.ts);
+                    tr[1].update(q[1], self.ts);
+                    tr
+                }
+                None => self.trackers.insert(q.map(|x| AngleTracker::new(x, self.bandwidth, self.ts))),
+            };
+            sensed.qd = [f64::from(trackers[0].rate), f64::from(trackers[1].rate)];
+        }
+        sensed
+    }
+
+    /// Calls the controller on `sensed`; its torques, or the Python error.
+    fn call(&self, py: Python<'py>, sensed: PySensed) -> PyResult<[f64; 2]> {
+        let (k, t) = (sensed.frame.seq, sensed.t);
+        let out = self.controller.call1((t, Bound::new(py, sensed)?))?;
+        torques_of(&out, k, t)
+    }
+}
+
+/// The two torques a controller returned at period `k` (`t` s).
+///
+/// # Errors
+/// `TypeError` for anything but two numbers, `ValueError` for a NaN or infinite one.
+fn torques_of(out: &Bound<'_, PyAny>, k: u32, t: f64) -> PyResult<[f64; 2]> {
+    let what = || format!("the controller's return at period {k} (t = {t} s)");
+    let type_name = || out.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+    let u: [f64; 2] = if let Ok(tuple) = out.cast::<PyTuple>() {
+        if tuple.len() != 2 {
+            return Err(PyTypeError::new_err(format!("{}: expected two torques (u1, u2) in N m, got a tuple of {}", what(), tuple.len())));
+        }
+        let item = |i: usize| -> PyResult<f64> {
+            let x = tuple.get_item(i)?;
+            x.extract::<f64>().map_err(|_| {
+                PyTypeError::new_err(format!(
+                    "{}: torque {i} is {}, not a number",
+                    what(),
+                    x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+                ))
+            })
+        };
+        [item(0)?, item(1)?]
+    } else {
+        let len = if out.is_instance_of::<PyString>() || out.is_instance_of::<PyDict>() { None } else { out.len().ok() };
+        match len {
+            Some(2) => {
+                let item = |i: usize| -> PyResult<f64> {
+                    let x = out.get_item(i)?;
+                    x.extract::<f64>().map_err(|_| {
+                        PyTypeError::new_err(format!(
+                            "{}: torque {i} is {}, not a number",
+                            what(),
+                            x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+                        ))
+                    })
+                };
+                [item(0)?, item(1)?]
+            }
+            _ => return Err(PyTypeError::new_err(format!("{}: expected two torques (u1, u2) in N m, got {}", what(), type_name()))),
+        }
+    };
+    if !u.iter().all(|x| x.is_finite()) {
+        return Err(PyValueError::new_err(format!("{}: torques ({}, {}) N m; expected two finite numbers", what(), u[0], u[1])));
+    }
+    Ok(u)
+}
+
+impl FirmwareLink for PythonLink<'_> {
+    fn transport(&self) -> &'static str {
+        "python"
+    }
+
+    fn exchange(&mut self, frame: &SensorFrame, _truth: &GroundTruth) -> Result<Exchange, RunError> {
+        let py = self.controller.py();
+        let k = frame.seq as usize;
+        let t = frame.t_us as f64 * 1e-6;
+        if let Err(e) = py.check_signals() {
+            self.raised = Some(e);
+            return Err(RunError::Interrupted { k });
+        }
+        let sensed = self.sense(frame);
+        let (q, qd, f) = (sensed.q, sensed.qd, sensed.f);
+        match self.call(py, sensed) {
+            Ok(u) => self.torques = u,
+            Err(e) => {
+                self.raised = Some(e);
+                return Err(RunError::Transport(format!("the Python controller raised at period {k} (t = {t} s)")));
+            }
+        }
+        // The `late_command` fault delays the answer as it delays the firmware's step.
+        let sent = step_start(&self.faults, frame, frame.sampled_at());
+        let u = self.torques;
+        let command = ActuatorCommand {
+            t_sent_us: sent.as_us(),
+            seq: frame.seq,
+            // For the record only: the plant applies `torques` ([`Self::actuator_torque`]).
+            u1_code: shared::wire::encode_torque(u[0] as f32).0,
+            u2_code: shared::wire::encode_torque(u[1] as f32).0,
+            ..ActuatorCommand::default()
+        };
+        let f32s = |v: [f64; 2]| v.map(|x| x as f32);
+        let telemetry = FirmwareTelemetry {
+            seq: frame.seq,
+            status: 0,
+            z_t_ref: f32::NAN,
+            f_n_ref: f32::NAN,
+            q: f32s(q),
+            qd: f32s(qd),
+            f: f32s(f),
+            u_raw: f32s(u),
+        };
+        Ok(Exchange::Answered { command, telemetry, at_stamp: false })
+    }
+
+    fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
+        self.torques
+    }
+}
+
+/// Keeps the validity of the run.
+#[derive(Default)]
+struct Finished {
+    validity: plant::Validity,
+}
+
+impl rig::RunObserver for Finished {
+    fn on_finished(&mut self, validity: &plant::Validity) {
+        self.validity = *validity;
+    }
+}
+
+/// `painleve.run_controller`: the closed loop of `scenario` with `controller`
+/// in place of the firmware; the raw result dict of `painleve.run`'s shape.
+#[pyfunction]
+#[pyo3(signature = (controller, scenario=None, duration=None))]
+pub fn run_controller<'py>(
+    py: Python<'py>,
+    controller: Bound<'py, PyAny>,
+    scenario: Option<Bound<'py, PyAny>>,
+    duration: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !controller.is_callable() {
+        return Err(PyTypeError::new_err(format!(
+            "controller: expected a callable controller(t, sensed) -> (u1, u2), got {}",
+            controller.get_type().name()?
+        )));
+    }
+    let mut s = PyScenario::of(py, scenario.as_ref())?;
+    if let Some(d) = duration {
+        let o = rig::Override { key: "timing.duration_s".into(), value: toml::Value::Float(d), text: d.to_string() };
+        s = s.with_overrides(&[o]).map_err(|e| super::scenario::scenario_error(py, &e))?;
+    }
+    let mut link = PythonLink::new(&s, controller).map_err(|e| error(py, e.to_string(), 2))?;
+    let mut finished = Finished::default();
+    let started = Instant::now();
+    let (records, failure) = rig::run_loop(&s, &mut link, &mut finished);
+    let wall_s = started.elapsed().as_secs_f64();
+    if let Some(e) = link.raised.take() {
+        return Err(e);
+    }
+    let validity = finished.validity;
+    let stats = RunStats::of(&records);
+    let summary = RunSummary::from_stats(&s, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity);
+    let failed = failure.map(|e| {
+        let code = if matches!(e, RunError::Unsupported(_) | RunError::Firmware(_)) { 2 } else { 1 };
+        (e.to_string(), code)
+    });
+    let (message, code) = failed.map_or((None, 0), |(m, c)| (Some(m), c));
+    Outcome::new(py, "run_controller", to_py(py, &summary)?)?
+        .table("trace", rows_to_py(py, &records)?)?
+        .extra("scenario", to_py(py, &s)?)?
+        .validity(&validity)?
+        .failure(message, code)
+        .map(Outcome::done)
+}

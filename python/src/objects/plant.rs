@@ -1,0 +1,321 @@
+//! `painleve.Plant`: the hybrid plant (`plant::Plant`, paper eqs. 1 to 7) held in
+//! Python and advanced interval by interval under held motor torques (zero-order
+//! hold), as pydrake's `Simulator.AdvanceTo` or MuJoCo's `mj_step` do.
+
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::{exceptions::PyTypeError, prelude::*, types::PyDict};
+use rig::Scenario;
+
+use plant::{Hold, NoObserver, Plant, SimConfig, SimError, StepReport, initial};
+
+use super::scenario::PyScenario;
+use crate::cli::error;
+use crate::convert::to_py;
+
+/// The `[plant]` keys a `Plant` takes as keyword arguments.
+const PLANT_KEYS: [&str; 17] =
+    ["mu", "v_belt", "x0", "impact_law", "e_n", "iwc", "singular", "rtol", "atol", "max_step", "m", "l", "sigma", "k", "h", "alpha0", "g"];
+
+/// The simulator settings of a scenario's `[plant]` (as `rig::setup::plant_for`).
+fn sim_config(s: &Scenario) -> SimConfig {
+    let p = &s.plant;
+    SimConfig {
+        rtol: p.rtol,
+        atol: p.atol,
+        impact_law: p.impact_law,
+        e_n: p.e_n,
+        iwc: p.iwc,
+        max_step: p.max_step,
+        singular: p.singular,
+        ..SimConfig::default()
+    }
+}
+
+/// The hybrid plant: the two-link arm (paper Table I) with its tip on the belt
+/// moving at `v_belt`, Coulomb friction `mu`, impacts (paper eqs. 1 to 7);
+/// advanced under held motor torques `(u1, u2)` (N m, zero-order hold).
+///
+/// Built from `scenario`'s `[plant]` (a `Scenario` or TOML text; `None`: the
+/// default scenario's, paper Table I with `mu = 0.6`, `v_belt = -0.4` m/s,
+/// Newton `e_n = 0.2`, from `x0 = "a"` as `painleve.simulate`), with any key of
+/// `[plant]` as a keyword (`mu`, `v_belt`, `x0`, `impact_law`, `e_n`, `iwc`,
+/// `singular`, `rtol`, `atol`, `max_step`, `m`, `l`, `sigma`, `k`, `h`,
+/// `alpha0`, `g`), and `state`, `(4,)` `[theta1, theta1_dot, theta2,
+/// theta2_dot]` (rad, rad/s), instead of the paper's initial condition.
+///
+/// Raises `PainleveError` (exit_code 2) for bad parameters or an initial state
+/// below the belt, `TypeError` for an unknown keyword. Source:
+/// python/src/objects/plant.rs over `plant::Plant` and `rig::plant_for`.
+#[pyclass(name = "Plant", module = "painleve._painleve")]
+pub struct PyPlant {
+    plant: Mutex<Plant>,
+    initial: Mutex<Plant>,
+    scenario: Scenario,
+}
+
+impl PyPlant {
+    fn with<T>(&self, f: impl FnOnce(&Plant) -> T) -> T {
+        f(&self.plant.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+}
+
+/// A `SimError` while advancing: exit code 1 (a failure while running), or 2 for
+/// bad input (a step or torque the plant refused).
+fn sim_error(py: Python<'_>, e: &SimError) -> PyErr {
+    let code = if matches!(e, SimError::BadStep(_) | SimError::BadTorque(_)) { 2 } else { 1 };
+    error(py, e.to_string(), code)
+}
+
+/// What one `Plant.advance` reports (`plant::StepReport`): `t` (s), `mode`,
+/// `state` `(4,)`, `tip` `(2,)` m, `force` `(2,)` `[f_t, f_n]` N, `events`.
+#[pyclass(name = "Step", module = "painleve._painleve", frozen)]
+pub struct PyStep {
+    report: StepReport,
+    tip: [f64; 2],
+}
+
+#[pymethods]
+impl PyStep {
+    /// Time at the end of the interval, s.
+    #[getter]
+    fn t(&self) -> f64 {
+        self.report.t
+    }
+
+    /// Contact mode at the end: `"flight"`, `"sliding"` or `"sticking"`.
+    #[getter]
+    fn mode(&self) -> &'static str {
+        self.report.mode.name()
+    }
+
+    /// State at the end, `(4,)`: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s.
+    #[getter]
+    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.report.x)
+    }
+
+    /// Tip position at the end, `(2,)`: `[z_t, z_n]`, m.
+    #[getter]
+    fn tip<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.tip)
+    }
+
+    /// Contact force at the end, `(2,)`: `[f_t, f_n]`, N (zero in flight).
+    #[getter]
+    fn force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.report.f)
+    }
+
+    /// The interval's events in time order: dicts with `t` (s), `kind`
+    /// (`"lift_off"`, `"touchdown"`, ...), `mode_after`, the velocities before
+    /// and after, `impulse`, `energy_change`, `contact_work`, `resolution`.
+    #[getter]
+    fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.report.events)
+    }
+
+    fn __repr__(&self) -> String {
+        let kinds: Vec<&str> = self.report.events.iter().map(|e| e.kind.name()).collect();
+        format!("<Step t = {} s, {}, events [{}]>", self.report.t, self.report.mode.name(), kinds.join(", "))
+    }
+}
+
+#[pymethods]
+impl PyPlant {
+    /// `Plant(scenario=None, *, state=None, **params)`.
+    #[new]
+    #[pyo3(signature = (scenario=None, *, state=None, **params))]
+    fn new(
+        py: Python<'_>,
+        scenario: Option<&Bound<'_, PyAny>>,
+        state: Option<[f64; 4]>,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let given = scenario.is_some_and(|s| !s.is_none());
+        let mut s = PyScenario::of(py, scenario)?;
+        if !given {
+            // `painleve.simulate`'s initial condition.
+            s.plant.x0 = initial::PaperX0::A;
+        }
+        if let Some(params) = params {
+            // The keywords as the scenario's `[plant]` keys, set and validated together.
+            let keys = PyDict::new(py);
+            for (k, v) in params.iter() {
+                let key: String = k.extract()?;
+                if !PLANT_KEYS.contains(&key.as_str()) {
+                    return Err(PyTypeError::new_err(format!(
+                        "Plant() got an unexpected keyword argument `{key}` (it takes scenario, state and the keys of [plant]: {})",
+                        PLANT_KEYS.join(", ")
+                    )));
+                }
+                keys.set_item(format!("plant.{key}"), v)?;
+            }
+            let sc = PyScenario::update(Bound::new(py, PyScenario { inner: s })?, &keys)?;
+            s = sc.borrow().inner.clone();
+        }
+        let plant = match state {
+            None => rig::plant_for(&s),
+            Some(x) => {
+                let params = s.plant.params();
+                params.validate().map_err(SimError::from).and_then(|()| Plant::new(params, sim_config(&s), x, 0.0, [0.0, 0.0]))
+            }
+        }
+        .map_err(|e| error(py, e.to_string(), 2))?;
+        Ok(Self { initial: Mutex::new(plant.clone()), plant: Mutex::new(plant), scenario: s })
+    }
+
+    /// Advances by `dt` (s, >= 0) with the motor torques `torques = (u1, u2)`
+    /// (N m) held over the interval; returns the interval's `Step` (its events
+    /// at their exact times, the state, the contact force at its end).
+    ///
+    /// Raises `PainleveError`: exit_code 2 for a negative or NaN `dt` or a
+    /// non-finite torque (the plant unchanged), exit_code 1 for a failure of
+    /// the plant during the interval (`plant::SimError`; the plant is left at
+    /// the failure time). `TypeError` when `torques` is not two numbers.
+    #[pyo3(signature = (dt, torques=(0.0, 0.0)))]
+    fn advance(&mut self, py: Python<'_>, dt: f64, torques: (f64, f64)) -> PyResult<PyStep> {
+        let u = [torques.0, torques.1];
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(error(py, format!("dt = {dt} s: expected a finite step >= 0"), 2));
+        }
+        if !u.iter().all(|x| x.is_finite()) {
+            return Err(error(py, format!("torques = [{}, {}] N m: expected two finite numbers", u[0], u[1]), 2));
+        }
+        let plant = self.plant.get_mut().unwrap_or_else(|p| p.into_inner());
+        // The plant runs without the GIL (other Python threads go on).
+        let report = py.detach(|| plant.advance(&Hold(u), dt, &mut NoObserver)).map_err(|e| sim_error(py, &e))?;
+        let z = plant.tip();
+        Ok(PyStep { report, tip: [z[0], z[1]] })
+    }
+
+    /// Advances to time `t` (s, >= `time`): `advance(t - time, torques)`.
+    #[pyo3(signature = (t, torques=(0.0, 0.0)))]
+    fn advance_to(&mut self, py: Python<'_>, t: f64, torques: (f64, f64)) -> PyResult<PyStep> {
+        let now = self.with(Plant::time);
+        if !(t.is_finite() && t >= now) {
+            return Err(error(py, format!("t = {t} s: expected a finite time >= the plant's, {now} s"), 2));
+        }
+        self.advance(py, t - now, torques)
+    }
+
+    /// Back to the initial state (time 0, the counters cleared).
+    fn reset(&mut self) {
+        let initial = self.initial.get_mut().unwrap_or_else(|p| p.into_inner()).clone();
+        *self.plant.get_mut().unwrap_or_else(|p| p.into_inner()) = initial;
+    }
+
+    /// A copy (its own state from now on).
+    fn copy(&self) -> Self {
+        let initial = self.initial.lock().unwrap_or_else(|p| p.into_inner()).clone();
+        Self { plant: Mutex::new(self.with(Plant::clone)), initial: Mutex::new(initial), scenario: self.scenario.clone() }
+    }
+
+    fn __copy__(&self) -> Self {
+        self.copy()
+    }
+
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.copy()
+    }
+
+    /// Time, s.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.with(Plant::time)
+    }
+
+    /// State, `(4,)`: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s.
+    #[getter]
+    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.with(Plant::state))
+    }
+
+    /// Tip position, `(2,)`: `[z_t, z_n]`, m (the belt is at `z_n = -H`).
+    #[getter]
+    fn tip<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let z = self.with(Plant::tip);
+        PyArray1::from_slice(py, &[z[0], z[1]])
+    }
+
+    /// Tip velocity, `(2,)`: `[z_t_dot, z_n_dot]`, m/s.
+    #[getter]
+    fn tip_velocity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v = self.with(Plant::tip_velocity);
+        PyArray1::from_slice(py, &[v[0], v[1]])
+    }
+
+    /// Contact mode: `"flight"`, `"sliding"` or `"sticking"`.
+    #[getter]
+    fn mode(&self) -> &'static str {
+        self.with(Plant::mode).name()
+    }
+
+    /// Mechanical energy (kinetic + gravity + spring), J.
+    #[getter]
+    fn energy(&self) -> f64 {
+        self.with(Plant::energy)
+    }
+
+    /// Contact force, `(2,)`: `[f_t, f_n]` (N) in the current mode under motor
+    /// torques `torques = [u1, u2]` (N m).
+    #[pyo3(signature = (torques=(0.0, 0.0)))]
+    fn contact_force<'py>(&self, py: Python<'py>, torques: (f64, f64)) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        if !(torques.0.is_finite() && torques.1.is_finite()) {
+            return Err(error(py, format!("torques = [{}, {}] N m: expected two finite numbers", torques.0, torques.1), 2));
+        }
+        Ok(PyArray1::from_slice(py, &self.with(|p| p.contact_force([torques.0, torques.1]))))
+    }
+
+    /// Event counts since creation (or `reset`): dict of int (`lift_offs`,
+    /// `touchdowns`, `impacts_without_collision`, ...; `bridged_s` in s).
+    #[getter]
+    fn counters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.with(|p| *p.counters()))
+    }
+
+    /// The validity counters since creation (`energy_gains`, `cone_violations`,
+    /// `integrator_failures`, `zeno_stops`, fallbacks, ...): dict of int.
+    #[getter]
+    fn validity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.with(|p| p.validity(None)))
+    }
+
+    /// The events at time 0 while the initial mode was chosen (list of dicts, as `Step.events`).
+    #[getter]
+    fn startup_events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let events = self.with(|p| p.startup_events().to_vec());
+        to_py(py, &events)
+    }
+
+    /// The plant's parameters: dict of `m`, `l`, `sigma`, `k`, `h`, `alpha0`, `g`,
+    /// `mu`, `v_belt` (SI units, radians).
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.with(|p| p.arm().params))
+    }
+
+    /// The scenario whose `[plant]` built this plant (the keyword arguments applied).
+    #[getter]
+    fn scenario(&self) -> PyScenario {
+        PyScenario { inner: self.scenario.clone() }
+    }
+
+    fn __repr__(&self) -> String {
+        self.with(|p| {
+            let x = p.state();
+            format!(
+                "<Plant t = {} s, {}, state [{:.6}, {:.6}, {:.6}, {:.6}], mu = {}, v_belt = {} m/s>",
+                p.time(),
+                p.mode().name(),
+                x[0],
+                x[1],
+                x[2],
+                x[3],
+                p.arm().params.mu,
+                p.arm().params.v_belt
+            )
+        })
+    }
+}
