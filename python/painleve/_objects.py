@@ -73,8 +73,9 @@ def run_controller(
     sensed angles). It returns the motor torques ``(u1, u2)`` in N m: a tuple,
     a list, a ``(2,)`` array or a :class:`Command`.
 
-    Differences from the firmware's path (:func:`painleve.run`): the torques are
-    applied as returned (no 12-bit torque code, no 5 N m saturation); the
+    Differences from the firmware's path (:func:`painleve.run`): none in the
+    torques (they go out as the firmware's 12-bit torque codes, saturated at
+    5 N m; the trace's ``u1_cmd``, ``u2_cmd`` are the values returned); the
     firmware's checks (bad or stale frames, deadline misses, safe state,
     monitors) do not run; the trace's ``z_t_ref`` is NaN and ``status`` 0; the
     loop holds the GIL on the calling thread (no progress line).

@@ -7,8 +7,9 @@
 //! What differs from the firmware's path (`painleve.run`, `rig::InProcessLink`):
 //! the frame is decoded here (`firmware::decode::decode_bits`, as the firmware
 //! decodes it) and handed over in SI units; the torques come back as numbers and
-//! are applied as they are (no 12-bit torque code, no saturation at 5 N m: the
-//! trace's `u1_cmd`/`u2_cmd` are the callable's values); none of the firmware's
+//! go out as the wire's 12-bit torque codes (saturated at 5 N m), as the
+//! firmware's do (the trace's `u1_cmd`/`u2_cmd` are the callable's values, before
+//! that quantisation); none of the firmware's
 //! checks (bad or stale frames, deadline misses, the safe state, runaway and
 //! sensor-consistency monitors, the reference ramp) run; the loop runs on the
 //! calling thread holding the GIL, and checks for Ctrl-C every period.
@@ -170,7 +171,8 @@ impl FirmwareLink for PythonLink<'_> {
         let command = ActuatorCommand {
             t_sent_us: sent.as_us(),
             seq: frame.seq,
-            // For the record only: the plant applies `torques` ([`Self::actuator_torque`]).
+            // The wire's torque codes, as the firmware sends them: the plant applies
+            // them decoded (12-bit, 5/2048 N m a code, saturated at +-5 N m).
             u1_code: shared::wire::encode_torque(u[0] as f32).0,
             u2_code: shared::wire::encode_torque(u[1] as f32).0,
             ..ActuatorCommand::default()
@@ -187,10 +189,6 @@ impl FirmwareLink for PythonLink<'_> {
             u_raw: f32s(u),
         };
         Ok(Exchange::Answered { command, telemetry, at_stamp: false })
-    }
-
-    fn actuator_torque(&self, _command: &ActuatorCommand) -> [f64; 2] {
-        self.torques
     }
 }
 
