@@ -57,6 +57,9 @@ pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
         RunLink::Twin => LinkKind::Twin,
         RunLink::Emulator => LinkKind::Emulator,
     };
+    if !matches!(chosen, RunLink::Twin | RunLink::Emulator) {
+        crate::scenario::refuse_board_overrides(&args.scenario.set, chosen.without_board())?;
+    }
     if args.elf.is_some() && chosen != RunLink::Emulator {
         return Err(CliError::bad_input("--elf names the image for --link emulator only"));
     }

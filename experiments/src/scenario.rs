@@ -64,3 +64,73 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     s.validate()?;
     Ok(s)
 }
+
+/// The scenario tables that describe a board: its devices (`[board]`, the board
+/// twin's and the emulated board's physical truth) and the firmware's calibration
+/// of them (`[calibration]`). Only a run with a board reads them (`run --link
+/// twin`, `run --link emulator`, `board-twin`); elsewhere they do nothing.
+pub const BOARD_TABLES: [&str; 2] = ["board", "calibration"];
+
+/// Refuses the `--set` overrides of a board table (`board.*`, `calibration.*`,
+/// [`BOARD_TABLES`]) where they would do nothing: `on` says what runs instead of
+/// a board (`the in-process link`, `a sweep`).
+///
+/// # Errors
+/// [`CliError`] (bad input, exit 2) naming the first such key.
+pub fn refuse_board_overrides(set: &[Override], on: &str) -> Result<(), CliError> {
+    match set.iter().find(|o| BOARD_TABLES.iter().any(|t| o.key.split('.').next() == Some(t))) {
+        Some(o) => Err(CliError::bad_input(format!(
+            "--set {}: `{}` describes a board and does nothing on {on}: only the runs of `sil-host run` \
+             on the twin or emulator link have a board",
+            o.key, o.key
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// A warning when the scenario's board tables ([`BOARD_TABLES`], from its file)
+/// differ from the reference board's but `on` has no board: they are checked and
+/// then ignored. `None` when they are the reference board's.
+pub fn board_tables_note(s: &Scenario, on: &str) -> Option<String> {
+    let reference = Scenario::default_scenario();
+    let differ: Vec<&str> = [("board", s.board != reference.board), ("calibration", s.calibration != reference.calibration)]
+        .into_iter()
+        .filter_map(|(t, d)| d.then_some(t))
+        .collect();
+    (!differ.is_empty()).then(|| {
+        format!(
+            "the scenario's [{}] describes a board (the board twin, the emulated board), which {on} does not have: it is ignored",
+            differ.join("] and [")
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(key: &str, value: &str) -> Override {
+        format!("{key}={value}").parse().unwrap()
+    }
+
+    /// A board key is refused where there is no board, naming it; other keys pass.
+    #[test]
+    fn board_keys_are_refused_without_a_board() {
+        let e = refuse_board_overrides(&[set("plant.mu", "0.5"), set("board.pwm_max_duty", "0.5")], "the in-process link").unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("board.pwm_max_duty") && e.to_string().contains("the in-process link"), "{e}");
+        assert!(refuse_board_overrides(&[set("calibration.theta1_zero_count", "1")], "a sweep").is_err());
+        assert!(refuse_board_overrides(&[set("plant.mu", "0.5"), set("boardx.y", "1")], "a sweep").is_ok());
+    }
+
+    /// The note names the tables that differ from the reference board's, and
+    /// says nothing for the default scenario.
+    #[test]
+    fn a_scenario_board_table_is_noted() {
+        let s = Scenario::default_scenario();
+        assert_eq!(board_tables_note(&s, "a sweep"), None);
+        let s = read_scenario(None, &[set("board.pwm_max_duty", "4000")]).unwrap();
+        let note = board_tables_note(&s, "a sweep").unwrap();
+        assert!(note.contains("[board]") && !note.contains("[calibration]"), "{note}");
+    }
+}

@@ -47,6 +47,7 @@ pub struct Summary {
 /// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2).
 pub fn prepare(args: &SensitivityArgs) -> Result<(rig::scenario::Scenario, usize), CliError> {
     rig::overrides::check_keys(&args.set, &STUDY_KEYS).map_err(rig::scenario::ScenarioError::from)?;
+    crate::scenario::refuse_board_overrides(&args.set, "the sensitivity study (the firmware in-process)")?;
     let base = crate::scenario::read_scenario(args.scenario.as_deref(), &args.set)?;
     base.validate()?;
     if args.threads == Some(0) {

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Tuple, Union, cast
+from typing import Any, Callable, Dict, Literal, Mapping, Optional, Sequence, Tuple, Union, cast
 
 from . import _args, _painleve
 from ._result import PainleveWarning, Result
@@ -29,7 +29,27 @@ __all__ = [
 Number = Union[int, float]
 Range = Union[str, Number, Tuple[Number, Number], Sequence[Number]]
 Progress = Union[bool, None, Callable[[int, int], Any]]
-Scenario = Union[None, str, "os.PathLike[str]", Mapping[str, Any]]
+Scenario = Union[None, str, "os.PathLike[str]", Mapping[str, Any], "_painleve.Scenario"]
+
+# The choices of the settings (the same as the CLI's: python/tests/test_defaults.py).
+PaperX0 = Literal["a", "d", "u"]
+"""The paper's initial conditions (Table I): ``x0a``, ``x0d``, ``x0u``."""
+ImpactLaw = Literal["newton", "poisson", "energetic"]
+"""Impact law at touchdown and for impacts without collision."""
+IwcRule = Literal["restitution", "plastic"]
+"""Impact-without-collision rule."""
+SingularRule = Literal["leave", "slide"]
+"""Rule at the singular point ``p = b = 0`` (docs/plant.md)."""
+ElbowBranch = Literal["up", "down"]
+"""Elbow branch of the arm's configuration."""
+Theta2Sign = Literal["auto", "plus", "minus"]
+"""Which root of ``theta2`` a mode map follows."""
+Controller = Literal["pid", "hybrid"]
+"""The firmware's controller."""
+SweepController = Literal["none", "hybrid", "pid"]
+"""A sweep's controller: ``none`` is the open loop."""
+StudySize = Literal["quick", "paper"]
+"""The sensitivity study's size."""
 
 
 def _finish(raw: Mapping[str, Any], strict: bool) -> Result:
@@ -45,19 +65,19 @@ def _finish(raw: Mapping[str, Any], strict: bool) -> Result:
 
 def simulate(
     *,
-    x0: str = "a",
+    x0: PaperX0 = "a",
     x0_deg: Optional[Union[str, Sequence[Number]]] = None,
     mu: float = 0.6,
     v_belt: float = -0.4,
-    impact_law: str = "newton",
+    impact_law: ImpactLaw = "newton",
     e_n: float = 0.2,
     duration: float = 10.0,
     sample_dt: float = 1e-3,
     rtol: float = 1e-9,
     atol: float = 1e-11,
     max_step: Optional[float] = None,
-    iwc: str = "restitution",
-    singular: str = "leave",
+    iwc: IwcRule = "restitution",
+    singular: SingularRule = "leave",
     set: _args.Overrides = None,
     strict: bool = False,
     progress: Progress = True,
@@ -140,11 +160,11 @@ def modes(
     *,
     mu: float = 0.6,
     v_belt: float = -0.4,
-    branch: str = "down",
+    branch: ElbowBranch = "down",
     theta1_deg: Range = (-90.0, 90.0),
     theta1_dot: Range = (-10.0, 10.0),
     grid: int = 400,
-    theta2_sign: str = "plus",
+    theta2_sign: Theta2Sign = "plus",
     set: _args.Overrides = None,
 ) -> Result:
     """Mode map (paper Fig. 2): the contact mode over a grid of ``(theta1,
@@ -181,7 +201,7 @@ def modes(
 def poincare(
     *,
     mu: float = 0.6,
-    x0: str = "a",
+    x0: PaperX0 = "a",
     x0_deg: Optional[Union[str, Sequence[Number]]] = None,
     v_belt: Range = (-0.9, -0.3),
     v_step: float = 0.002,
@@ -194,13 +214,13 @@ def poincare(
     lyap_iterations: int = 200,
     lyap_skip: int = 20,
     lyap_d0: float = 1e-7,
-    impact_law: str = "newton",
+    impact_law: ImpactLaw = "newton",
     e_n: float = 0.2,
     rtol: float = 1e-9,
     atol: float = 1e-11,
     threads: Optional[int] = None,
-    iwc: str = "restitution",
-    singular: str = "leave",
+    iwc: IwcRule = "restitution",
+    singular: SingularRule = "leave",
     set: _args.Overrides = None,
     strict: bool = False,
     progress: Progress = True,
@@ -254,13 +274,13 @@ def sweep(
     seed: int = 1,
     transient: float = 250.0,
     record: float = 50.0,
-    controller: str = "none",
+    controller: SweepController = "none",
     ideal: bool = False,
     scenario: Scenario = None,
-    impact_law: Union[str, Sequence[str]] = ("newton",),
+    impact_law: Union[ImpactLaw, Sequence[ImpactLaw]] = ("newton",),
     e_n: Union[float, Sequence[float]] = (0.2,),
-    iwc: Union[str, Sequence[str]] = ("restitution",),
-    singular: str = "leave",
+    iwc: Union[IwcRule, Sequence[IwcRule]] = ("restitution",),
+    singular: SingularRule = "leave",
     threshold: float = 1e-6,
     rtol: float = 1e-9,
     atol: float = 1e-11,
@@ -316,8 +336,8 @@ def sweep(
 
 def zmax(
     *,
-    controller: str = "hybrid",
-    x0: str = "d",
+    controller: Controller = "hybrid",
+    x0: PaperX0 = "d",
     ideal: bool = False,
     all: bool = False,
     tol: float = 1e-3,
@@ -326,7 +346,7 @@ def zmax(
     reach_tol: float = 5e-3,
     settle_tol: float = 1e-3,
     settle_window: float = 1.0,
-    iwc: Optional[str] = None,
+    iwc: Optional[IwcRule] = None,
     lift_off_gap: float = 0.0,
     scenario: Scenario = None,
     set: _args.Overrides = None,
@@ -377,12 +397,12 @@ def zmax(
 def run(
     scenario: Scenario = None,
     *,
-    controller: Optional[str] = None,
-    x0: Optional[str] = None,
+    controller: Optional[Controller] = None,
+    x0: Optional[PaperX0] = None,
     target_zt: Optional[float] = None,
     duration: Optional[float] = None,
     seed: Optional[int] = None,
-    iwc: Optional[str] = None,
+    iwc: Optional[IwcRule] = None,
     set: _args.Overrides = None,
     strict: bool = False,
     progress: Progress = True,
@@ -425,7 +445,7 @@ def run(
 
 def sensitivity(
     *,
-    size: str = "quick",
+    size: StudySize = "quick",
     scenario: Scenario = None,
     set: _args.Overrides = None,
     threads: Optional[int] = None,

@@ -24,9 +24,10 @@ import inspect
 import json
 import numbers
 import os
+import re
 import tempfile
 import typing
-from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Union
 
 from . import _painleve
 
@@ -138,17 +139,46 @@ def scenario_toml(scenario: Mapping[str, Any]) -> str:
     return _painleve.json_to_toml(text)
 
 
+def dotted(tables: Mapping[str, Any], prefix: str = "") -> Dict[str, Any]:
+    """A nested dict of scenario tables as ``{dotted key: value}`` (its leaves)."""
+    out: Dict[str, Any] = {}
+    for key, v in tables.items():
+        if not isinstance(key, str):
+            raise TypeError(f"scenario: keys must be str, got {type(key).__name__} {key!r}")
+        if isinstance(v, Mapping) and v:
+            out.update(dotted(v, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = v
+    return out
+
+
+def scenario_object(scenario: Any) -> "_painleve.Scenario":
+    """``scenario=`` as a :class:`painleve.Scenario`: ``None`` the embedded
+    default, a ``Scenario`` itself, a path read from its file, a dict of tables
+    merged onto the default key by key (``{"timing": {"duration_s": 1.0}}``
+    changes only ``timing.duration_s``; a bad key or value raises
+    ``PainleveError`` naming it)."""
+    if scenario is None:
+        return _painleve.Scenario.default()
+    if isinstance(scenario, _painleve.Scenario):
+        return scenario
+    if isinstance(scenario, (str, os.PathLike)):
+        return _painleve.Scenario.load(os.fspath(scenario))
+    if isinstance(scenario, Mapping):
+        return _painleve.Scenario.default().update(dotted(scenario))
+    raise TypeError(f"scenario: expected a painleve.Scenario, the path of a TOML file, a dict or None, got {type(scenario).__name__}")
+
+
 @contextlib.contextmanager
 def scenario_file(scenario: Any) -> Iterator[Optional[str]]:
     """``scenario=`` as the path of a TOML file: ``None`` (the embedded default),
-    a path (given as it is, read by the CLI's code), or a dict (written to a
-    temporary file for the call)."""
+    a path (given as it is, read by the experiment's own code), or a
+    ``Scenario`` or a dict (merged onto the default, :func:`scenario_object`),
+    written to a temporary file for the call."""
     if scenario is None or isinstance(scenario, (str, os.PathLike)):
         yield None if scenario is None else os.fspath(scenario)
         return
-    if not isinstance(scenario, Mapping):
-        raise TypeError(f"scenario= takes a path or a dict, got {type(scenario).__name__}")
-    text = scenario_toml(scenario)
+    text = scenario_object(scenario).to_toml()
     with tempfile.TemporaryDirectory(prefix="painleve-") as d:
         path = os.path.join(d, "scenario.toml")
         with open(path, "w", encoding="utf-8") as f:
@@ -162,7 +192,10 @@ _WORDS = {float: "a number", int: "an integer", str: "a string", bool: "True or 
 def _matches(v: Any, hint: Any) -> Optional[bool]:
     """Whether ``v`` is of the annotated type ``hint``: ``True``/``False``, or
     ``None`` where the annotation is not one this check reads (callables,
-    mappings, paths: the CLI's own checks cover them)."""
+    mappings, paths: the experiment's own checks cover them). A ``Literal``
+    matches one of its values."""
+    if typing.get_origin(hint) is Literal:
+        return isinstance(v, str) and v in typing.get_args(hint)
     if hint is float:
         return isinstance(v, numbers.Real) and not isinstance(v, bool)
     if hint is int:
@@ -190,7 +223,11 @@ def _matches(v: Any, hint: Any) -> Optional[bool]:
 
 
 def _describe(hint: Any) -> str:
-    """An annotation in words: ``a number``, ``a number or None``, ``a list of numbers``."""
+    """An annotation in words: ``a number``, ``a number or None``, ``a list of
+    numbers``, ``'newton', 'poisson' or 'energetic'``."""
+    if typing.get_origin(hint) is Literal:
+        choices = [repr(c) for c in typing.get_args(hint)]
+        return ", ".join(choices[:-1]) + " or " + choices[-1] if len(choices) > 1 else choices[0]
     if hint in _WORDS:
         return _WORDS[hint]
     if hint is type(None):
@@ -200,22 +237,52 @@ def _describe(hint: Any) -> str:
         return " or ".join(dict.fromkeys(_describe(h) for h in typing.get_args(hint)))
     if origin in (list, tuple, Sequence, typing.get_origin(Sequence[int])):
         args = [a for a in typing.get_args(hint) if a is not Ellipsis]
+        if args and typing.get_origin(args[0]) is Literal:
+            return "a list of " + _describe(args[0])
         return "a list of " + (_describe(args[0]).removeprefix("a ").removeprefix("an ") + "s" if args else "values")
     return str(hint)
+
+
+def _loosened(hint: Any) -> Any:
+    """``hint`` with each ``Literal`` of strings read as ``str``: the type the
+    value must have, whatever its value."""
+    if typing.get_origin(hint) is Literal:
+        return str
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is Union:
+        return Union[tuple(_loosened(a) for a in args)]
+    if origin in (list, tuple, Sequence, typing.get_origin(Sequence[int])) and args:
+        return Sequence[_loosened(args[0])]  # type: ignore[index]
+    return hint
 
 
 def check_types(fn: Callable[..., Any], given: Mapping[str, Any]) -> None:
     """Checks each argument ``given`` to ``fn`` against its annotation, at the
     Python boundary: ``TypeError`` naming the parameter, what it takes and what it
-    got (``mu: expected a number, got list [1, 2]``). ``None`` passes only where
-    the annotation says ``Optional``; ``True`` is not a number."""
+    got (``mu: expected a number, got list [1, 2]``); ``ValueError`` for a string
+    that is not one of a ``Literal``'s choices (``impact_law: expected 'newton',
+    'poisson' or 'energetic', got 'bogus'``). ``None`` passes only where the
+    annotation says ``Optional``; ``True`` is not a number."""
     hints = typing.get_type_hints(fn)
     for name, v in given.items():
         hint = hints.get(name)
         if hint is None or name in ("set", "progress", "scenario"):
             continue
         if _matches(v, hint) is False:
-            raise TypeError(f"{name}: expected {_describe(hint)}, got {type(v).__name__} {v!r}")
+            message = f"{name}: expected {_describe(hint)}, got {type(v).__name__} {v!r}"
+            if _matches(v, _loosened(hint)) is not False:
+                raise ValueError(message)
+            raise TypeError(message)
+
+
+_FLAG = re.compile(r"'?--([a-z][a-z0-9-]*)(?: <[^>]*>)?'?")
+
+
+def pythonic(message: str) -> str:
+    """An experiment's message with its command-line syntax written as the Python
+    call's: a flag ``--sample-dt`` (or clap's ``'--x0 <X0>'``) is the parameter
+    ``sample_dt``, ``--set KEY=VALUE`` is ``set KEY=VALUE``."""
+    return _FLAG.sub(lambda m: m.group(1).replace("-", "_"), message)
 
 
 def call(name: str, fn: Callable[..., Any], given: Dict[str, Any], progress: Any = None, scenario: Any = None) -> Any:
@@ -227,6 +294,12 @@ def call(name: str, fn: Callable[..., Any], given: Dict[str, Any], progress: Any
         toks = tokens(fn, given, skip=("scenario",))
         if path is not None:
             toks.insert(0, f"--scenario={path}")
-        if name in ("admissible", "modes"):
-            return native(toks)
-        return native(toks, progress)
+        try:
+            if name in ("admissible", "modes"):
+                return native(toks)
+            return native(toks, progress)
+        except _painleve.PainleveError as e:
+            # The message in the call's terms (parameters, not flags); the
+            # attributes (exit_code, result) kept.
+            e.args = (pythonic(str(e)),)
+            raise

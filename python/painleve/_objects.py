@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union
 
-from . import _painleve
+from . import _args, _painleve
 from ._painleve import Command, Firmware, Plant, Scenario, Sensed, Step
 from ._api import _finish
 from ._result import Result
@@ -21,35 +21,6 @@ __all__ = ["Scenario", "Plant", "Step", "Firmware", "Command", "Sensed", "run_co
 #: A controller: ``controller(t, sensed) -> (u1, u2)``; ``t`` in s, ``sensed`` a
 #: :class:`Sensed`, the torques in N m.
 Controller = Callable[[float, Sensed], Union[Sequence[float], Command]]
-
-
-def _dotted(tables: Mapping[str, Any], prefix: str = "") -> Dict[str, Any]:
-    """A nested dict of scenario tables as ``{dotted key: value}`` (its leaves)."""
-    out: Dict[str, Any] = {}
-    for key, value in tables.items():
-        if not isinstance(key, str):
-            raise TypeError(f"scenario: keys must be str, got {type(key).__name__} {key!r}")
-        if isinstance(value, Mapping) and value:
-            out.update(_dotted(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
-def _scenario_of(scenario: Union[None, Scenario, str, "os.PathLike[str]", Mapping[str, Any]]) -> Scenario:
-    """A :class:`Scenario` of what :func:`run_controller` takes."""
-    if scenario is None:
-        return Scenario.default()
-    if isinstance(scenario, Scenario):
-        return scenario
-    if isinstance(scenario, (str, os.PathLike)):
-        return Scenario.load(os.fspath(scenario))
-    if isinstance(scenario, Mapping):
-        # Merged onto the default, key by key (a partial dict changes only its keys).
-        return Scenario.default().update(_dotted(scenario))
-    raise TypeError(
-        f"scenario: expected a painleve.Scenario, the path of a TOML file, a dict or None, got {type(scenario).__name__}"
-    )
 
 
 def run_controller(
@@ -108,5 +79,5 @@ def run_controller(
         raise TypeError(f"strict: expected a bool, got {type(strict).__name__}")
     if duration is not None and (isinstance(duration, bool) or not isinstance(duration, (int, float))):
         raise TypeError(f"duration: expected a number of seconds or None, got {type(duration).__name__}")
-    raw = _painleve.run_controller(controller, _scenario_of(scenario), None if duration is None else float(duration))
+    raw = _painleve.run_controller(controller, _args.scenario_object(scenario), None if duration is None else float(duration))
     return _finish(raw, strict)

@@ -65,7 +65,39 @@ pub fn parse<T: Args + FromArgMatches>(py: Python<'_>, command: &'static str, to
 /// `PainleveError` for an unknown command.
 #[pyfunction]
 pub fn cli_defaults<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyDict>> {
-    let sub = match command {
+    let out = PyDict::new(py);
+    for arg in experiment_command(py, command)?.get_arguments() {
+        let Some(long) = arg.get_long() else { continue };
+        let defaults: Vec<String> = arg.get_default_values().iter().map(|v| v.to_string_lossy().into_owned()).collect();
+        out.set_item(long, defaults)?;
+    }
+    Ok(out)
+}
+
+/// The choices of experiment `command`'s options that take one of a fixed set
+/// of values: `{long flag name: [values]}` (`impact-law`: `["newton",
+/// "poisson", "energetic"]`). For the tests that check the Python signatures'
+/// `Literal` annotations against the settings.
+///
+/// # Errors
+/// `PainleveError` for an unknown experiment.
+#[pyfunction]
+pub fn cli_choices<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    for arg in experiment_command(py, command)?.get_arguments() {
+        let Some(long) = arg.get_long() else { continue };
+        let values: Vec<String> = arg.get_possible_values().iter().filter(|v| !v.is_hide_set()).map(|v| v.get_name().to_string()).collect();
+        // A flag's possible values are `true` and `false`: not a choice.
+        if !values.is_empty() && arg.get_action().takes_values() {
+            out.set_item(long, values)?;
+        }
+    }
+    Ok(out)
+}
+
+/// The clap command of experiment `command`'s settings.
+fn experiment_command(py: Python<'_>, command: &str) -> PyResult<clap::Command> {
+    Ok(match command {
         "simulate" => command_of::<SimulateArgs>("simulate"),
         "admissible" => command_of::<AdmissibleArgs>("admissible"),
         "modes" => command_of::<ModesArgs>("modes"),
@@ -75,12 +107,5 @@ pub fn cli_defaults<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, 
         "run" => command_of::<RunArgs>("run"),
         "sensitivity" => command_of::<SensitivityArgs>("sensitivity"),
         _ => return Err(error(py, format!("no experiment `{command}`"), 2)),
-    };
-    let out = PyDict::new(py);
-    for arg in sub.get_arguments() {
-        let Some(long) = arg.get_long() else { continue };
-        let defaults: Vec<String> = arg.get_default_values().iter().map(|v| v.to_string_lossy().into_owned()).collect();
-        out.set_item(long, defaults)?;
-    }
-    Ok(out)
+    })
 }

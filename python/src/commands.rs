@@ -26,6 +26,18 @@ fn failure_of(failure: Option<CliError>, strict: bool, validity: &plant::Validit
     }
 }
 
+/// Warns with `note`, if any, as a `painleve.PainleveWarning` (the CLI prints it
+/// as `warning: ...` on standard error).
+///
+/// # Errors
+/// The warning raised as an exception (warnings filtered to `error`).
+pub(crate) fn warn(py: Python<'_>, note: Option<String>) -> PyResult<()> {
+    let Some(note) = note else { return Ok(()) };
+    let category = py.import("painleve._result")?.getattr("PainleveWarning")?;
+    let message = std::ffi::CString::new(note).unwrap_or_default();
+    PyErr::warn(py, &category, &message, 2)
+}
+
 /// A rayon pool of `threads` threads ([`experiments::pool`]).
 fn pool(py: Python<'_>, threads: usize) -> PyResult<rayon::ThreadPool> {
     experiments::pool(threads).map_err(|e| cli_error(py, &e))
@@ -136,6 +148,9 @@ pub fn sweep<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'
     };
     let args: SweepArgs = parse(py, "sweep", &tokens)?;
     let (spec, shard, threads) = cmd::sweep::plan(&args).map_err(|e| cli_error(py, &e))?;
+    if let Some(s) = &spec.scenario {
+        warn(py, cmd::scenario::board_tables_note(s, "a sweep (the firmware in-process)"))?;
+    }
     let mut todo = shard.indices(&spec);
     if let Some(limit) = args.limit {
         todo.truncate(limit);
@@ -175,6 +190,7 @@ pub fn zmax<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'p
     let args: ZmaxArgs = parse(py, "zmax", &tokens)?;
     let started = Instant::now();
     let plan = cmd::zmax::plan(&args).map_err(|e| cli_error(py, &e))?;
+    warn(py, cmd::scenario::board_tables_note(&plan.base, "zmax (the firmware in-process, or the ideal law)"))?;
     let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
     let searches = work::run(py, progress.as_ref(), "zmax", "trials", |c: &Control| {
         c.set(0, total);
@@ -227,7 +243,8 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
     let mut tokens = tokens;
     tokens.insert(0, "--in-process".into());
     let args: RunArgs = parse(py, "run", &tokens)?;
-    let (scenario, _) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
+    let (scenario, link) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
+    warn(py, cmd::scenario::board_tables_note(&scenario, link.without_board()))?;
     let mut link = InProcessLink::new(&scenario).map_err(|e| cli_error(py, &CliError::from(e)))?;
     let (records, failure, validity, wall_s) = work::run(py, progress.as_ref(), "run", "periods", |c: &Control| {
         c.set(0, scenario.timing.periods());
@@ -256,6 +273,7 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
 pub fn sensitivity<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     let args: SensitivityArgs = parse(py, "sensitivity", &tokens)?;
     let (base, threads) = cmd::sensitivity::prepare(&args).map_err(|e| cli_error(py, &e))?;
+    warn(py, cmd::scenario::board_tables_note(&base, "the sensitivity study (the firmware in-process)"))?;
     let pool = pool(py, threads)?;
     let size = args.size;
     let (study, wall_s) = work::run(py, progress.as_ref(), "sensitivity", "jobs", |c: &Control| {

@@ -19,6 +19,19 @@ pub enum RunLink {
     Emulator,
 }
 
+impl RunLink {
+    /// What runs on a link without a board, in words (`the in-process link`), for
+    /// the messages about the board tables (`experiments::scenario::BOARD_TABLES`).
+    pub fn without_board(self) -> &'static str {
+        match self {
+            Self::Iceoryx2 => "the iceoryx2 link (the firmware process)",
+            Self::InProcess => "the in-process link",
+            Self::Twin => "the board twin",
+            Self::Emulator => "the emulated board",
+        }
+    }
+}
+
 /// `sil-host run`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]

@@ -80,6 +80,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
             (None, crate::arm::arm_params(&args.set, "sweep (open loop)", &[], p.mu, p.v_belt)?)
         }
         _ => {
+            crate::scenario::refuse_board_overrides(&args.set, "a sweep (the firmware in-process)")?;
             let s = crate::scenario::read_scenario(args.scenario.as_deref(), &args.set)?;
             let params = s.plant.params();
             (Some(s), params)

@@ -33,6 +33,7 @@ fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
     if args.iwc.is_some() {
         rig::overrides::check_keys(&args.set, &[("plant.iwc", "--iwc")]).map_err(rig::scenario::ScenarioError::from)?;
     }
+    crate::scenario::refuse_board_overrides(&args.set, "zmax (the firmware in-process, or the ideal law)")?;
     let mut s = crate::scenario::read_scenario(args.scenario.as_deref(), &args.set)?;
     if let Some(iwc) = args.iwc {
         s.plant.iwc = iwc;

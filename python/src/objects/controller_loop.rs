@@ -221,6 +221,7 @@ pub fn run_controller<'py>(
         )));
     }
     let mut s = PyScenario::of(py, scenario.as_ref())?;
+    crate::commands::warn(py, experiments::scenario::board_tables_note(&s, "a Python controller (no board)"))?;
     if let Some(d) = duration {
         let o = rig::Override { key: "timing.duration_s".into(), value: toml::Value::Float(d), text: d.to_string() };
         s = s.with_overrides(&[o]).map_err(|e| super::scenario::scenario_error(py, &e))?;

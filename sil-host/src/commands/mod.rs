@@ -18,6 +18,14 @@ pub mod zmax;
 pub use experiments::Done;
 pub use experiments::arm::{PLANT_FLAGS, arm_params, parse_range};
 
+/// Prints `note`, if any, on standard error as `warning: <note>` (standard output
+/// stays the command's document).
+pub fn warn(note: Option<String>) {
+    if let Some(note) = note {
+        eprintln!("warning: {note}");
+    }
+}
+
 /// Prints `value` as the command's one JSON document (`--json`).
 ///
 /// # Errors

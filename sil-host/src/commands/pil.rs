@@ -74,7 +74,9 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
 /// start or boot, a board that does not answer, or a run that stopped part way
 /// (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
+    experiments::scenario::refuse_board_overrides(&args.scenario.set, "the PIL board (its own firmware image)")?;
     let scenario = load_scenario(&args.scenario)?;
+    crate::commands::warn(experiments::scenario::board_tables_note(&scenario, "the PIL board (its own firmware image)"));
     plant_for(&scenario).map_err(CliError::from)?;
     firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::bad_input(format!("firmware configuration: {e}")))?;
     if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {

@@ -35,6 +35,9 @@ use rig::{
 /// way (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     let (scenario, chosen) = prepare(args)?;
+    if !matches!(chosen, RunLink::Twin | RunLink::Emulator) {
+        crate::commands::warn(experiments::scenario::board_tables_note(&scenario, chosen.without_board()));
+    }
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
         (None, None) => default_rig_name(),

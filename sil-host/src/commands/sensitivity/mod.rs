@@ -25,6 +25,7 @@ pub use experiments::sensitivity::{Summary, prepare};
 /// written); I/O and figure errors.
 pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
     let (base, threads) = prepare(args)?;
+    crate::commands::warn(experiments::scenario::board_tables_note(&base, "the sensitivity study (the firmware in-process)"));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -27,6 +27,9 @@ use outputs::*;
 /// an I/O failure (exit 1; finished runs are kept in the journal).
 pub fn execute(args: &SweepArgs) -> Result<Done<SweepSummary>, CliError> {
     let (spec, shard, threads) = plan(args)?;
+    if let Some(s) = &spec.scenario {
+        crate::commands::warn(experiments::scenario::board_tables_note(s, "a sweep (the firmware in-process)"));
+    }
     // One writer per folder, from before the manifest is read to the last figure:
     // a second sweep started into the same --out is refused here (exit 2), and the
     // first finishes unharmed.

@@ -33,6 +33,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let started = Instant::now();
     // Check every set-up before the output folder is touched.
     let plan = plan(args)?;
+    crate::commands::warn(experiments::scenario::board_tables_note(&plan.base, "zmax (the firmware in-process, or the ideal law)"));
     let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
     let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
     // Every search runs to its end (a signal ends the process, cancel.rs).
