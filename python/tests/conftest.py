@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 from pathlib import Path
 from typing import Any, Iterable, List, Optional
@@ -60,6 +61,28 @@ def cli_error(command: str, args: Iterable[str]) -> tuple:
     text = p.stderr.rstrip()
     assert text.startswith("error: "), text
     return text[len("error: ") :].split("\n\n")[0].rstrip(), p.returncode
+
+
+def assert_raises_like_cli(call, command: str, argv: Iterable[str]) -> None:
+    """``call()`` fails as ``sil-host command argv`` does: a ``PainleveError`` with
+    the CLI's exit code and its message in the call's terms (``--sample-dt`` is
+    ``sample_dt``: ``painleve._args.pythonic``), or, for a choice not among an
+    option's choices, a ``ValueError`` raised in Python before the experiment runs
+    that lists the same choices as the CLI."""
+    import painleve
+    from painleve._args import pythonic
+
+    message, code = cli_error(command, argv)
+    with pytest.raises(ValueError) as e:
+        call()
+    if isinstance(e.value, painleve.PainleveError):
+        assert (str(e.value), e.value.exit_code) == (pythonic(message), code)
+        assert "--" not in str(e.value), f"CLI syntax in {e.value}"
+        return
+    choices = re.search(r"\[possible values: ([^\]]*)\]", message)
+    assert code == 2 and choices, f"the CLI refuses it as a choice: {message}"
+    for c in choices.group(1).split(", "):
+        assert repr(c) in str(e.value), f"{c!r} not in {e.value}"
 
 
 def assert_columns_equal(a: np.ndarray, b: np.ndarray, where: str) -> None:

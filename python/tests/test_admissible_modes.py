@@ -4,7 +4,7 @@
 import pytest
 
 import painleve
-from conftest import assert_docs_equal, assert_tables_equal, cli, cli_error, json_of
+from conftest import assert_docs_equal, assert_tables_equal, cli, assert_raises_like_cli, json_of
 
 
 @pytest.mark.parametrize("mu,sets", [(0.6, []), (0.3, []), (0.6, ["plant.l=0.25"])])
@@ -65,7 +65,4 @@ def test_modes_equals_the_cli(kwargs, argv, out):
     ],
 )
 def test_bad_input_raises_the_cli_message(command, kwargs, argv):
-    message, code = cli_error(command, argv)
-    with pytest.raises(painleve.PainleveError) as e:
-        getattr(painleve, command)(**kwargs)
-    assert (str(e.value), e.value.exit_code) == (message, code)
+    assert_raises_like_cli(lambda: getattr(painleve, command)(**kwargs), command, argv)

@@ -69,3 +69,35 @@ def test_every_function_has_a_docstring_naming_its_columns():
     for name in FUNCTIONS:
         doc = getattr(painleve, name).__doc__
         assert doc and "Returns:" in doc and "Raises:" in doc, name
+
+
+def _choices(hint):
+    """The ``Literal`` choices in an annotation (through ``Optional``, ``Union``
+    and ``Sequence``), or ``None`` when it has none."""
+    import typing
+
+    if typing.get_origin(hint) is typing.Literal:
+        return list(typing.get_args(hint))
+    for a in typing.get_args(hint):
+        c = _choices(a)
+        if c is not None:
+            return c
+    return None
+
+
+@pytest.mark.parametrize("name", FUNCTIONS)
+def test_choices_are_the_settings_choices(name):
+    # Issue 42, 2: an option that takes one of a fixed set of values is a Literal of
+    # exactly those values, in the settings' order (the CLI's possible values).
+    import typing
+
+    cli = _painleve.cli_choices(name)
+    hints = typing.get_type_hints(getattr(painleve, name))
+    for flag, values in cli.items():
+        param = flag.replace("-", "_")
+        if flag in NOT_IN_PYTHON:
+            continue
+        assert _choices(hints[param]) == values, f"{name}({param}): {hints[param]} against the CLI's {values}"
+    for param, hint in hints.items():
+        if _choices(hint) is not None:
+            assert param.replace("_", "-") in cli, f"{name}({param}) is a Literal but not a choice of the CLI"

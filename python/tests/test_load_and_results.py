@@ -135,7 +135,7 @@ def test_a_long_table_prints_its_ends_and_elides_the_middle():
         ({"mu": True}, "mu: expected a number, got bool True"),
         ({"mu": None}, "mu: expected a number, got NoneType None"),
         ({"duration": "10"}, "duration: expected a number, got str '10'"),
-        ({"impact_law": 3}, "impact_law: expected a string, got int 3"),
+        ({"impact_law": 3}, "impact_law: expected 'newton', 'poisson' or 'energetic', got int 3"),
     ],
 )
 def test_a_wrong_type_is_a_type_error_naming_the_parameter(kwargs, message):

@@ -5,7 +5,7 @@ file, a scenario dict and overrides."""
 import pytest
 
 import painleve
-from conftest import REPO, assert_docs_equal, assert_tables_equal, cli, cli_error
+from conftest import REPO, assert_docs_equal, assert_tables_equal, cli, assert_raises_like_cli
 
 
 def compare(mine, out):
@@ -67,7 +67,4 @@ def test_overrides_as_a_list_equal_a_dict():
 )
 def test_bad_input_raises_the_cli_message(kwargs, argv, monkeypatch):
     monkeypatch.chdir(REPO)
-    message, code = cli_error("run", ["--in-process", *argv])
-    with pytest.raises(painleve.PainleveError) as e:
-        painleve.run(progress=False, **kwargs)
-    assert (str(e.value), e.value.exit_code) == (message, code)
+    assert_raises_like_cli(lambda: painleve.run(progress=False, **kwargs), "run", ["--in-process", *argv])

@@ -4,7 +4,7 @@ summary for the same arguments; bad input raises with the CLI's message."""
 import pytest
 
 import painleve
-from conftest import assert_docs_equal, assert_tables_equal, cli, cli_error
+from conftest import assert_docs_equal, assert_tables_equal, cli, assert_raises_like_cli
 
 CASES = [
     # (keyword arguments, the same on the command line)
@@ -59,9 +59,4 @@ def test_counters_and_validity_are_carried():
     ],
 )
 def test_bad_input_raises_the_cli_message(kwargs, argv):
-    message, code = cli_error("simulate", argv)
-    with pytest.raises(painleve.PainleveError) as e:
-        painleve.simulate(progress=False, **kwargs)
-    assert str(e.value) == message
-    assert e.value.exit_code == code == 2
-    assert isinstance(e.value, ValueError)
+    assert_raises_like_cli(lambda: painleve.simulate(progress=False, **kwargs), "simulate", argv)

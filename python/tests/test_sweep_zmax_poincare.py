@@ -4,7 +4,7 @@ loop), `zmax` (ideal and sampled) and `poincare`."""
 import pytest
 
 import painleve
-from conftest import assert_docs_equal, assert_tables_equal, cli, cli_error
+from conftest import assert_docs_equal, assert_tables_equal, cli, assert_raises_like_cli
 
 SWEEP_CASES = [
     (
@@ -109,7 +109,4 @@ def test_bad_input_raises_the_cli_message(command, kwargs, argv, monkeypatch):
     from conftest import REPO
 
     monkeypatch.chdir(REPO)
-    message, code = cli_error(command, argv)
-    with pytest.raises(painleve.PainleveError) as e:
-        getattr(painleve, command)(progress=False, **kwargs)
-    assert (str(e.value), e.value.exit_code) == (message, code)
+    assert_raises_like_cli(lambda: getattr(painleve, command)(progress=False, **kwargs), command, argv)

@@ -42,3 +42,41 @@ fn help_explains_the_commands() {
         assert!(text.contains(cmd));
     }
 }
+
+/// A board key where there is no board (issue 42): `--set board.*` refused with
+/// exit 2 before anything is written; a scenario file's `[board]` warned about on
+/// standard error, the run done; on the twin link the same key is taken.
+#[test]
+fn board_keys_do_nothing_without_a_board_and_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sil_host()
+        .args(["run", "--in-process", "--duration", "0.01", "--set", "board.pwm_max_duty=4000", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("board.pwm_max_duty") && stderr.contains("in-process"), "{stderr}");
+    assert!(!dir.path().join("trace.csv").exists(), "nothing written");
+
+    let scenario = dir.path().join("board.toml");
+    std::fs::write(&scenario, format!("{}\n[board]\npwm_max_duty = 4000\n", rig::scenario::DEFAULT_TOML)).unwrap();
+    let out = sil_host()
+        .args(["run", "--in-process", "--duration", "0.01", "--scenario"])
+        .arg(&scenario)
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: the scenario's [board]") && stderr.contains("ignored"), "{stderr}");
+
+    let out = sil_host()
+        .args(["run", "--link", "twin", "--duration", "0.01", "--set", "board.pwm_max_duty=4000", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !stderr.contains("warning"), "{stderr}");
+}
