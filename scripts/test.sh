@@ -74,7 +74,7 @@ cargo build --release -p sil-host
 python3 scripts/cycles.py --duration 1 --max-cycles 2650
 
 echo "== the Python package (python/, docs/python.md): pinned tools from python/requirements-dev.txt in"
-echo "   target/venv-python, pip install ./python (maturin, the workspace's target dir), pytest against"
+echo "   target/venv-python, maturin build (the workspace's target dir) and the wheel installed, pytest against"
 echo "   target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
 pystarted=$SECONDS
 pyvenv="target/venv-python"
@@ -93,9 +93,13 @@ if [ ! -x "$pyvenv/bin/pip" ] || ! "$pyvenv/bin/pip" --version >/dev/null 2>&1; 
   rm -rf "$pyvenv" && python3 -m venv "$pyvenv"
 fi
 "$pyvenv/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-dev.txt
-# pip fetches maturin itself (build isolation) and builds the extension with cargo; the
-# release profile's artifacts of the workspace are reused, only the pyo3 crates rebuild.
-"$pyvenv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps ./python
+# The wheel, built by the pinned maturin with cargo in the workspace's target dir (the
+# release artefacts are reused where the features agree; cargo's progress is shown), then
+# installed: the tests run against the installed wheel, not the source tree
+# (python/tests/conftest.py checks where `painleve` comes from).
+rm -rf target/wheels
+"$pyvenv/bin/maturin" build --release -m python/Cargo.toml --interpreter "$pyvenv/bin/python" --out target/wheels
+"$pyvenv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps target/wheels/painleve-*.whl
 log="$(mktemp)"
 pylog="$(mktemp)"
 trap 'rm -f "$log" "$pylog"' EXIT

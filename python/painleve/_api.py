@@ -113,7 +113,11 @@ def simulate(
         :class:`Result` with ``summary`` (``summary.json``: parameters,
         initial condition, ``counters``, ``validity``, final state) and tables:
 
-        ``trace`` (one row per sample): ``t`` s, ``theta1`` rad, ``theta1_dot``
+        Every table is ``{column: array}``, each column a NumPy array of shape
+        ``(n,)`` (float64, int64, bool, or str for text), ``n`` its rows.
+
+        ``trace`` (one row per sample, ``n = round(duration / sample_dt) + 1``
+        with the row of ``t = 0``; fewer when the run failed part way): ``t`` s, ``theta1`` rad, ``theta1_dot``
         rad/s, ``theta2`` rad, ``theta2_dot`` rad/s, ``z_t`` m, ``z_n`` m,
         ``z_t_dot`` m/s, ``z_n_dot`` m/s, ``z_r_dot`` m/s (``z_t_dot - v_belt``),
         ``f_t`` N, ``f_n`` N, ``mode`` (``flight``, ``sliding``, ``sticking``),
@@ -126,7 +130,7 @@ def simulate(
 
     Raises:
         PainleveError: bad input, with the CLI's message (``exit_code`` 2).
-        KeyboardInterrupt: Ctrl-C (the simulation stops within its sample).
+        KeyboardInterrupt: Ctrl-C (the simulation stops within its chunk of 64 samples).
 
     A simulation that fails part way returns what it computed up to then, with
     ``failure`` set and a :class:`PainleveWarning` (``strict=True`` raises).
@@ -146,7 +150,8 @@ def admissible(*, mu: float = 0.6, set: _args.Overrides = None) -> Result:
         :class:`Result` with ``summary`` = ``admissible.json``:
         ``z_r_dot_positive`` (the paper's case) and ``z_r_dot_negative``, each
         ``{"elbow_up": [[lo, hi], ...], "elbow_down": [...]}`` in m; ``reach_m``,
-        ``mirror_check``, ``params``; and the table ``intervals``: ``direction``
+        ``mirror_check``, ``params``; and the table ``intervals`` (one row per
+        interval, each column a NumPy array of shape ``(n,)``): ``direction``
         (``z_r_dot_positive``/``z_r_dot_negative``), ``branch`` (``elbow_up``/
         ``elbow_down``), ``lo_m``, ``hi_m``. No simulation: ``validity`` is ``None``.
 
@@ -182,8 +187,8 @@ def modes(
 
     Returns:
         :class:`Result` with ``summary`` (the ``--json`` document: counts per
-        mode, ``p_zero``, ranges) and the table ``modes`` (``grid**2`` rows,
-        ``theta1`` outer): ``theta1_rad``, ``theta1_deg``, ``theta1_dot`` rad/s,
+        mode, ``p_zero``, ranges) and the table ``modes`` (``n = grid**2`` rows,
+        ``theta1`` outer; each column a NumPy array of shape ``(n,)``): ``theta1_rad``, ``theta1_deg``, ``theta1_dot`` rad/s,
         ``theta2_rad``, ``b`` m/s^2, ``p`` 1/kg, ``z_r_dot`` m/s, ``mode``
         (``sliding``, ``flight``, ``indeterminate``, ``inconsistent``,
         ``unreachable``, ``singular``), ``theta2_dot`` rad/s, ``branch``;
@@ -240,9 +245,10 @@ def poincare(
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: counts, bands,
-        ``validity``) and tables:
+        ``validity``) and tables (each column a NumPy array of shape ``(n,)``, ``n``
+        the table's rows):
 
-        ``section``: ``v_belt`` m/s, ``t`` s, ``theta1`` rad, ``theta1_deg``,
+        ``section`` (one row per crossing of the section, all belt speeds): ``v_belt`` m/s, ``t`` s, ``theta1`` rad, ``theta1_deg``,
         ``theta1_dot`` rad/s, ``theta2`` rad, ``theta2_dot`` rad/s, ``kind``
         (``smooth``/``jump``), ``mode``.
 
@@ -317,7 +323,8 @@ def sweep(
         :class:`Result` with ``summary`` (``summary.json``: ``spec``,
         ``results`` with the critical ``mu``, the bands, outcome counts and
         ``validity``, ``timing``) and the table ``sweep`` (one row per run, by
-        index; ``sweep.csv``): ``index``, ``impact_law``, ``e_n``, ``iwc``,
+        index, ``sweep.csv``'s rows; each column a NumPy array of shape ``(n,)``,
+        ``n`` the runs): ``index``, ``impact_law``, ``e_n``, ``iwc``,
         ``mu``, ``v_belt`` m/s, ``ic``, ``outcome``, ``bouncing``,
         ``theta1_dot_max`` rad/s, ``t_theta1_dot_max`` s, ``lift_offs``,
         ``touchdowns``, ``impacts_without_collision``, ``z_n_max`` m,
@@ -367,7 +374,8 @@ def zmax(
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: ``results``,
-        ``trials``, ``criteria``, ``validity``, gains) and tables:
+        ``trials``, ``criteria``, ``validity``, gains) and tables (each column a
+        NumPy array of shape ``(n,)``, ``n`` the table's rows):
 
         ``zmax`` (one row per case): ``controller``, ``x0``, ``setting``,
         ``outcome``, ``z_t_sliding_m``, ``error_at_limit_m``,
@@ -424,7 +432,9 @@ def run(
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: lift-off
         statistics, deadline misses, tracking error, ``validity``, the
-        firmware's announcement), the table ``trace`` (one row per period):
+        firmware's announcement), the table ``trace`` (one row per period, ``n =
+        duration x rate`` rows, fewer when the run stopped early; each column a
+        NumPy array of shape ``(n,)``):
         ``t`` s, ``theta1`` rad, ``theta1_dot`` rad/s, ``theta2`` rad,
         ``theta2_dot`` rad/s, ``z_t``, ``z_n``, ``z_t_ref`` m, ``f_t``, ``f_n``
         N, ``mode``, ``u1_cmd``, ``u2_cmd``, ``u1_applied``, ``u2_applied`` N m,
@@ -459,7 +469,8 @@ def sensitivity(
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: ``study`` with
         per choice its results and ``validity``, ``base_scenario``) and the
-        table ``sensitivity``: ``choice``, ``value``, ``is_default``,
+        table ``sensitivity`` (one row per choice and result; each column a NumPy
+        array of shape ``(n,)``): ``choice``, ``value``, ``is_default``,
         ``result``, ``outcome``.
 
     Raises:

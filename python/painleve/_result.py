@@ -30,7 +30,7 @@ def _column(values: Any) -> np.ndarray:
 
 
 class Table(Dict[str, np.ndarray]):
-    """One table of a result: ``{column name: 1-D NumPy array}``, every column of
+    """One table of a result: ``{column name: NumPy array of shape (n,)}``, every column of
     the same length, in the order of the CSV file the CLI writes for it (the
     table ``trace`` is ``trace.csv``).
 

@@ -101,3 +101,15 @@ def test_choices_are_the_settings_choices(name):
     for param, hint in hints.items():
         if _choices(hint) is not None:
             assert param.replace("_", "-") in cli, f"{name}({param}) is a Literal but not a choice of the CLI"
+
+
+def test_the_installed_package_is_tested_not_the_source_tree():
+    # Issue 42, 5: scripts/test.sh builds a wheel (maturin build) and installs it; the
+    # package under test is the installed one, with its compiled module beside it.
+    from pathlib import Path
+
+    here = Path(painleve.__file__).resolve().parent
+    source = Path(__file__).resolve().parents[1] / "painleve"
+    assert here != source.resolve(), f"painleve imported from the source tree {here}"
+    assert Path(_painleve.__file__).resolve().parent == here, "the compiled module is the installed package's"
+    assert (here / "py.typed").exists() and (here / "_painleve.pyi").exists(), "the wheel carries the type information"
