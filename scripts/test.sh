@@ -55,6 +55,8 @@ echo "== format, lints (rustfmt.toml; clippy, warnings are errors) and no import
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-twin/src board-emulator/src boards/stm32f405/src plant/src rig/src analyses/src experiments/src sil-host/src fuzz/src python/src
+# The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
+python3 scripts/front_features.py
 
 echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf
