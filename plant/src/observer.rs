@@ -34,6 +34,10 @@ pub trait Observer {
     /// inside this step, if one was located there (the trajectory ends there).
     fn on_step(&mut self, _step: &mut dyn DenseStep<STATE_LEN>, _stop: Option<(f64, OdeState)>, _mode: ContactMode) {}
 
+    /// The sample [`crate::Plant::advance_sampled`] asked for, read from a step of
+    /// the current attempt (kept only if the attempt is).
+    fn on_sample(&mut self, _sample: &crate::Sample) {}
+
     /// The plant keeps the current attempt; the segment ended in state `y_end`.
     fn on_kept(&mut self, _y_end: &OdeState, _mode: ContactMode) {}
 

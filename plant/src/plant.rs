@@ -53,6 +53,28 @@ pub struct Plant {
     startup_events: Vec<PlantEvent>,
     /// The model at the end of the last interval under a held torque (see [`EndPoint`]).
     end_point: Option<EndPoint>,
+    /// The instant [`Plant::advance_sampled`] samples (s), while it runs.
+    sample_at: Option<f64>,
+}
+
+/// The plant at an instant inside an advance, read from the dense output of the
+/// step that covers it ([`Plant::advance_sampled`]): what the sensors of the SIL
+/// loop sample at `t_k` while the plant steps from one zero-order-hold switch to
+/// the next (`rig::PeriodLoop`'s look-ahead).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// The instant, s.
+    pub t: f64,
+    /// `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s), DOP853's 7th-order
+    /// dense output (Hairer, Nørsett, Wanner I, II.6).
+    pub x: [f64; 4],
+    /// Tip position `[z_t, z_n]`, m.
+    pub tip: [f64; 2],
+    /// The contact mode of the segment that covers the instant.
+    pub mode: shared::ContactMode,
+    /// Contact force `[f_t, f_n]`, N, of that segment's model at the sample under
+    /// the torque then held.
+    pub f: [f64; 2],
 }
 
 /// What [`Plant::advance`] changes in a plant: a plant restored to it
@@ -132,6 +154,7 @@ impl Plant {
             counters: Counters::default(),
             startup_events: Vec::new(),
             end_point: None,
+            sample_at: None,
         };
         let z = plant.tip();
         let belt = -params.h;

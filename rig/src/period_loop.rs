@@ -23,7 +23,7 @@ use super::{
     sensors::{SensorFaults, SensorModel, Sensors},
     setup::plant_for,
 };
-use plant::{Hold, NoObserver, Observer, Plant, PlantEvent, Validity};
+use plant::{Hold, NoObserver, Observer, Plant, PlantEvent, Sample, Validity};
 
 /// Ground-truth mode code of [`GroundTruth::mode`]: 0 flight, 1 sliding, 2 sticking.
 pub fn mode_code(mode: ContactMode) -> u8 {
@@ -62,6 +62,9 @@ pub struct PeriodLoop {
     k: usize,
     /// Whether the period's first part may run while the firmware computes ([`PeriodLoop::overlapping`]).
     overlap: bool,
+    /// The look-ahead: the plant is at `t_k + delta`, past the sample at `t_k`
+    /// (this), having stepped from the last zero-order-hold switch to the next.
+    ahead: Option<Sample>,
 }
 
 impl PeriodLoop {
@@ -84,6 +87,7 @@ impl PeriodLoop {
             z_t_ref: f64::NAN,
             k: 0,
             overlap: false,
+            ahead: None,
         }
     }
 
@@ -131,9 +135,12 @@ impl PeriodLoop {
         let t_k = k as f64 * ts;
         // The frame's stamp: k whole periods (shared::time); t_k is the same instant in s.
         let t_us = self.period.sample(k as u64).as_us();
-        let x = plant.state();
-        let z = plant.tip();
-        let mode = plant.mode();
+        // The sample at t_k: read on the way when the plant stepped past it (the
+        // look-ahead), else the plant's own state.
+        let (x, z, mode) = match &self.ahead {
+            Some(s) => (s.x, s.tip, s.mode),
+            None => (plant.state(), [plant.tip()[0], plant.tip()[1]], plant.mode()),
+        };
         let frame = self.sensors.frame(k as u32, t_us, &x, self.f_now, self.v_belt);
         run.on_frame(&frame);
         let truth = GroundTruth {
@@ -152,7 +159,12 @@ impl PeriodLoop {
         let fail = |error| Box::new(PeriodFailure { record: None, error });
         // The first part of the period, run while the firmware computes (see
         // `overlapping`), with the plant's state before it.
-        let ahead = if self.overlap && self.delta > 0.0 && self.delta < ts && wire.send_ahead(&frame, &truth).map_err(fail)? {
+        let ahead = if self.ahead.is_none()
+            && self.overlap
+            && self.delta > 0.0
+            && self.delta < ts
+            && wire.send_ahead(&frame, &truth).map_err(fail)?
+        {
             let before = plant.checkpoint();
             Some((before, plant.advance_events(&Hold(self.applied), self.delta, &mut NoObserver)))
         } else {
@@ -227,27 +239,66 @@ impl PeriodLoop {
         }
         // Zero-order hold: the previous command until the switch, then the new one.
         let t_next = (k + 1) as f64 * ts;
-        let step = match (switch, first_part) {
-            (Some(_), Some(part)) => part.and_then(|events| {
-                run.on_events(&events);
-                plant.advance(&Hold(u_new), t_next - plant.time(), obs)
-            }),
-            (Some(at), None) => plant.advance_events(&Hold(applied), at, obs).and_then(|events| {
-                run.on_events(&events);
-                plant.advance(&Hold(u_new), t_next - plant.time(), obs)
-            }),
-            (None, _) => plant.advance(&Hold(applied), t_next - plant.time(), obs),
+        // Already at t_k + delta (the look-ahead) or, with overlap, past the first part.
+        let past_first = self.ahead.take().is_some();
+        let first = match (switch, first_part) {
+            (_, Some(part)) => part,
+            // The switch later than delta (a late command): the old command up to it.
+            (Some(at), None) if !past_first || at.to_bits() != self.delta.to_bits() => {
+                plant.advance_events(&Hold(applied), k as f64 * ts + at - plant.time(), obs)
+            }
+            _ => Ok(Vec::new()),
         };
+        let held = if switch.is_some() { u_new } else { applied };
+        let step = first.and_then(|events| {
+            run.on_events(&events);
+            self.hold_to_next_switch(plant, held, t_next, obs)
+        });
         match step {
-            Ok(r) => {
-                run.on_events(&r.events);
-                self.f_now = r.f;
+            Ok((events, f)) => {
+                run.on_events(&events);
+                self.f_now = f;
             }
             Err(e) => return Err(Box::new(PeriodFailure { record: Some(record), error: e.into() })),
         }
         self.applied = u_new;
         self.k += 1;
         Ok(record)
+    }
+
+    /// Holds `u` from the plant's time to the next period's zero-order-hold switch
+    /// `t_next + delta` in one solve, reading the sample at `t_next` on the way from
+    /// the dense output (the look-ahead: one step per period from switch to switch,
+    /// issue 43; docs/architecture.md "The accuracy contract"), or, without a delay
+    /// (`delta = 0` or a whole period), to `t_next`. Where no accepted step covers
+    /// `t_next` (a Moreau–Jean bridge there), the plant goes back and advances in
+    /// two parts, `t_next` then the switch. Returns the events and the contact force
+    /// at `t_next` (N).
+    fn hold_to_next_switch(
+        &mut self,
+        plant: &mut Plant,
+        u: [f64; 2],
+        t_next: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<(Vec<PlantEvent>, [f64; 2]), plant::SimError> {
+        if !(self.delta > 0.0 && self.delta < self.ts) {
+            let r = plant.advance(&Hold(u), t_next - plant.time(), obs)?;
+            return Ok((r.events, r.f));
+        }
+        let before = plant.checkpoint();
+        let switch = t_next + self.delta;
+        let (events, sample) = plant.advance_sampled(&Hold(u), switch - plant.time(), t_next, obs)?;
+        if let Some(sample) = sample {
+            self.ahead = Some(sample);
+            return Ok((events, sample.f));
+        }
+        plant.restore(before);
+        let r = plant.advance(&Hold(u), t_next - plant.time(), obs)?;
+        let sample = Sample { t: t_next, x: plant.state(), tip: [plant.tip()[0], plant.tip()[1]], mode: plant.mode(), f: r.f };
+        let mut events = r.events;
+        events.extend(plant.advance_events(&Hold(u), switch - plant.time(), obs)?);
+        self.ahead = Some(sample);
+        Ok((events, sample.f))
     }
 }
 

@@ -2,17 +2,17 @@
 //! segments and the events that end them, the integration of one segment with its
 //! retries, and the guard against mode changes that repeat at one instant.
 
-use shared::model::TipDynamics;
+use shared::{ContactMode, model::TipDynamics};
 
-use super::{EndPoint, Plant};
+use super::{EndPoint, Plant, Sample};
 use crate::{
     controller::Controller,
-    dop853::{Dop853, SolveError},
+    dop853::{DenseStep, Dop853, SolveError},
     error::SimError,
     events::{PlantEvent, StepReport},
     observer::Observer,
     phase::Phase,
-    segment::{self, Boundary, EventLocator, OdeState, Point},
+    segment::{self, Boundary, EventLocator, OdeState, Point, STATE_LEN},
 };
 
 /// The end of one solve: end time, state, the boundary hit (if any), and the event
@@ -58,6 +58,37 @@ impl Plant {
             }
         };
         Ok(StepReport { t: self.t, mode: self.mode(), x: self.state(), f, events })
+    }
+
+    /// [`Plant::advance_events`] that also samples the trajectory at `t_sample` (s,
+    /// strictly inside `(t, t + dt)`) from the 7th-order dense output of the accepted
+    /// step that covers it, in the attempt the plant keeps: the SIL loop's
+    /// look-ahead (`rig::PeriodLoop`) steps from one zero-order-hold switch to the
+    /// next and reads the sensors' sample at `t_k` in between, so no step stops at
+    /// `t_k`. An event located at `t_sample` gives the state before it.
+    ///
+    /// Returns the events and the sample; the sample is `None` when no accepted
+    /// step covered `t_sample` (a Moreau–Jean bridge there has no dense output,
+    /// docs/plant.md "The bridge"): the caller then advances in two parts.
+    ///
+    /// # Errors
+    /// As [`Plant::advance`]; [`SimError::BadStep`] for a `t_sample` outside the interval.
+    pub fn advance_sampled<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        t_sample: f64,
+        obs: &mut dyn Observer,
+    ) -> Result<(Vec<PlantEvent>, Option<Sample>), SimError> {
+        if !(t_sample > self.t && t_sample < self.t + dt) {
+            return Err(SimError::BadStep(t_sample - self.t));
+        }
+        self.sample_at = Some(t_sample);
+        let mut sampler = Sampler { inner: obs, attempt: None, kept: None };
+        let events = self.advance_events(ctrl, dt, &mut sampler);
+        self.sample_at = None;
+        let kept = sampler.kept;
+        Ok((events?, kept))
     }
 
     /// [`Plant::advance`] without its report: the events of the interval only, in
@@ -292,8 +323,26 @@ impl Plant {
         let mode = self.mode();
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None, last: None };
+        let (l, sample_at) = (self.arm.params.l, self.sample_at);
+        let mut sampled = false;
         let solved = match solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
+            // The look-ahead's sample (`advance_sampled`): from the step that covers it,
+            // up to the event that ends the segment inside it.
+            if let Some(ts) = sample_at
+                && !sampled
+                && step.t_prev() < ts
+                && ts <= locator.hit.map_or(step.t_curr(), |(t, _)| t)
+            {
+                sampled = true;
+                let y = match locator.hit {
+                    Some((t, y)) if t.to_bits() == ts.to_bits() => y,
+                    _ => step.interpolate(ts),
+                };
+                let (_, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
+                let z = shared::kinematics::tip_position(l, &nalgebra::Vector2::new(y[0], y[2]));
+                obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode, f: [f[0], f[1]] });
+            }
             obs.on_step(step, locator.hit, mode);
             control
         }) {
@@ -331,5 +380,47 @@ impl Plant {
             return Err(SimError::NonFinite { t: t_end, mode: self.mode().name() });
         }
         Ok((t_end, solved.y, None, g_end))
+    }
+}
+
+/// Keeps the sample of the attempt the plant keeps, and passes everything on to
+/// the caller's observer ([`Plant::advance_sampled`]).
+struct Sampler<'o> {
+    inner: &'o mut dyn Observer,
+    attempt: Option<Sample>,
+    kept: Option<Sample>,
+}
+
+impl Observer for Sampler<'_> {
+    fn on_segment_start(&mut self, t: f64, y: &OdeState, mode: ContactMode) {
+        self.inner.on_segment_start(t, y, mode);
+    }
+
+    fn on_attempt(&mut self) {
+        self.attempt = None;
+        self.inner.on_attempt();
+    }
+
+    fn on_step(&mut self, step: &mut dyn DenseStep<STATE_LEN>, stop: Option<(f64, OdeState)>, mode: ContactMode) {
+        self.inner.on_step(step, stop, mode);
+    }
+
+    fn on_sample(&mut self, sample: &Sample) {
+        self.attempt = Some(*sample);
+    }
+
+    fn on_kept(&mut self, y_end: &OdeState, mode: ContactMode) {
+        if self.kept.is_none() {
+            self.kept = self.attempt.take();
+        }
+        self.inner.on_kept(y_end, mode);
+    }
+
+    fn on_advanced(&mut self, t: f64, y: &OdeState) {
+        self.inner.on_advanced(t, y);
+    }
+
+    fn on_event(&mut self, event: &PlantEvent) {
+        self.inner.on_event(event);
     }
 }
