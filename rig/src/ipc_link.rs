@@ -410,6 +410,10 @@ impl FirmwareLink for IpcLink {
         "iceoryx2"
     }
 
+    fn switches_at_stamp(&self) -> bool {
+        self.realtime
+    }
+
     fn announcement(&self) -> Option<&Announced> {
         self.announced.as_ref()
     }

@@ -78,6 +78,10 @@ impl<L: FirmwareLink + ?Sized> FirmwareLink for DropCommands<'_, L> {
     fn actuator_torque(&self, command: &ActuatorCommand) -> [f64; 2] {
         self.inner.actuator_torque(command)
     }
+
+    fn switches_at_stamp(&self) -> bool {
+        self.inner.switches_at_stamp()
+    }
 }
 
 /// A way to reach the firmware: in-process, or over iceoryx2 in another process.
@@ -118,6 +122,14 @@ pub trait FirmwareLink {
     /// (duty quantisation, full scales, wiring, enable and fault line).
     fn actuator_torque(&self, command: &ActuatorCommand) -> [f64; 2] {
         [wire::decode_torque(command.u1_code) as f64, wire::decode_torque(command.u2_code) as f64]
+    }
+
+    /// Whether a command takes effect at its send stamp, which may come before
+    /// `t_k + delta` (a real-time link: [`Exchange::Answered`]'s `at_stamp`), rather
+    /// than at `max(t_k + delta, t_sent)`. The period loop then cannot step past
+    /// `t_k + delta` ahead of the answer ([`crate::PeriodLoop`]'s look-ahead is off).
+    fn switches_at_stamp(&self) -> bool {
+        false
     }
 
     /// The firmware's own announcement of its configuration, checked against the

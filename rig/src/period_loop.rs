@@ -65,6 +65,10 @@ pub struct PeriodLoop {
     /// The look-ahead: the plant is at `t_k + delta`, past the sample at `t_k`
     /// (this), having stepped from the last zero-order-hold switch to the next.
     ahead: Option<Sample>,
+    /// Whether commands may take effect at their send stamp, before `t_k + delta`
+    /// (a real-time link): then the plant cannot step past `t_k + delta` ahead of
+    /// the answer, and the look-ahead is off.
+    stamped: bool,
 }
 
 impl PeriodLoop {
@@ -88,6 +92,7 @@ impl PeriodLoop {
             k: 0,
             overlap: false,
             ahead: None,
+            stamped: false,
         }
     }
 
@@ -155,6 +160,7 @@ impl PeriodLoop {
             u_applied: self.applied,
         };
         link.before_period(k as u64);
+        self.stamped = link.switches_at_stamp();
         let mut wire = DropCommands { inner: link, plan: self.sensors.plan() };
         let fail = |error| Box::new(PeriodFailure { record: None, error });
         // The first part of the period, run while the firmware computes (see
@@ -270,7 +276,9 @@ impl PeriodLoop {
     /// `t_next + delta` in one solve, reading the sample at `t_next` on the way from
     /// the dense output (the look-ahead: one step per period from switch to switch,
     /// issue 43; docs/architecture.md "The accuracy contract"), or, without a delay
-    /// (`delta = 0` or a whole period), to `t_next`. Where no accepted step covers
+    /// (`delta = 0` or a whole period) or on a real-time link (a command takes
+    /// effect at its send stamp, which may come before `delta`), to `t_next`.
+    /// Where no accepted step covers
     /// `t_next` (a Moreau–Jean bridge there), the plant goes back and advances in
     /// two parts, `t_next` then the switch. Returns the events and the contact force
     /// at `t_next` (N).
@@ -281,7 +289,7 @@ impl PeriodLoop {
         t_next: f64,
         obs: &mut dyn Observer,
     ) -> Result<(Vec<PlantEvent>, [f64; 2]), plant::SimError> {
-        if !(self.delta > 0.0 && self.delta < self.ts) {
+        if !(self.delta > 0.0 && self.delta < self.ts) || self.stamped {
             let r = plant.advance(&Hold(u), t_next - plant.time(), obs)?;
             return Ok((r.events, r.f));
         }
