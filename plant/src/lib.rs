@@ -71,7 +71,7 @@ pub use error::SimError;
 pub use events::{Counters, EventKind, PlantEvent, StepReport};
 pub use observer::{NoObserver, Observer};
 pub use phase::Phase;
-pub use plant::{Checkpoint, Plant, Sample};
+pub use plant::{Checkpoint, Plant, Sample, SampleGrid};
 pub use validity::Validity;
 
 #[cfg(test)]

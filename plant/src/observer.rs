@@ -34,8 +34,14 @@ pub trait Observer {
     /// inside this step, if one was located there (the trajectory ends there).
     fn on_step(&mut self, _step: &mut dyn DenseStep<STATE_LEN>, _stop: Option<(f64, OdeState)>, _mode: ContactMode) {}
 
-    /// The sample [`crate::Plant::advance_sampled`] asked for, read from a step of
-    /// the current attempt (kept only if the attempt is).
+    /// The index of the next instant of [`crate::Plant::advance_sampling`]'s grid to
+    /// sample, if any (the plant's own sampler answers; other observers leave it).
+    fn next_sample(&self) -> Option<u64> {
+        None
+    }
+
+    /// The sample asked for by [`Observer::next_sample`], read from a step of the
+    /// current attempt (kept only if the attempt is).
     fn on_sample(&mut self, _sample: &crate::Sample) {}
 
     /// The plant keeps the current attempt; the segment ended in state `y_end`.

@@ -53,8 +53,23 @@ pub struct Plant {
     startup_events: Vec<PlantEvent>,
     /// The model at the end of the last interval under a held torque (see [`EndPoint`]).
     end_point: Option<EndPoint>,
-    /// The instant [`Plant::advance_sampled`] samples (s), while it runs.
-    sample_at: Option<f64>,
+    /// The instants [`Plant::advance_sampling`] samples, while it runs.
+    sampling: Option<SampleGrid>,
+}
+
+/// The instants an advance samples ([`Plant::advance_sampling`]): `k dt` s for `k`
+/// in `next..=last` (each computed from `k`, so no drift accumulates), with the
+/// integrator's steps capped at `max_step` s meanwhile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleGrid {
+    /// The sampling period, s.
+    pub dt: f64,
+    /// The first sample's index.
+    pub next: u64,
+    /// The last sample's index.
+    pub last: u64,
+    /// The largest step while sampling, s (`f64::INFINITY`: the tolerances alone).
+    pub max_step: f64,
 }
 
 /// The plant at an instant inside an advance, read from the dense output of the
@@ -154,7 +169,7 @@ impl Plant {
             counters: Counters::default(),
             startup_events: Vec::new(),
             end_point: None,
-            sample_at: None,
+            sampling: None,
         };
         let z = plant.tip();
         let belt = -params.h;
@@ -263,6 +278,16 @@ impl Plant {
     pub fn energy(&self) -> f64 {
         let (q, qd) = segment::split(&self.y);
         self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q)
+    }
+
+    /// Mechanical energy (J) and tip velocity `[z_t_dot, z_n_dot]` (m/s) of the arm
+    /// in state `x` (`[theta1, theta1_dot, theta2, theta2_dot]`, rad, rad/s), as
+    /// [`Plant::energy`] and [`Plant::tip_velocity`] give them for the plant's own
+    /// state: for a [`Sample`] inside an advance.
+    pub fn energy_and_tip_velocity_of(&self, x: &[f64; 4]) -> (f64, [f64; 2]) {
+        let (q, qd) = (Vector2::new(x[0], x[2]), Vector2::new(x[1], x[3]));
+        let v = shared::kinematics::jacobian(self.arm.params.l, &q) * qd;
+        (self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q), [v[0], v[1]])
     }
 
     /// Event counts since creation.

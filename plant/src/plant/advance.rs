@@ -4,7 +4,7 @@
 
 use shared::{ContactMode, model::TipDynamics};
 
-use super::{EndPoint, Plant, Sample};
+use super::{EndPoint, Plant, Sample, SampleGrid};
 use crate::{
     controller::Controller,
     dop853::{DenseStep, Dop853, SolveError},
@@ -83,12 +83,43 @@ impl Plant {
         if !(t_sample > self.t && t_sample < self.t + dt) {
             return Err(SimError::BadStep(t_sample - self.t));
         }
-        self.sample_at = Some(t_sample);
-        let mut sampler = Sampler { inner: obs, attempt: None, kept: None };
+        // One instant: a grid of one point (its period is the instant itself).
+        let grid = SampleGrid { dt: t_sample, next: 1, last: 1, max_step: f64::INFINITY };
+        let mut samples = [None];
+        let events = self.advance_sampling(ctrl, dt, grid, &mut samples, obs)?;
+        Ok((events, samples[0]))
+    }
+
+    /// [`Plant::advance_events`] that also samples the trajectory at the instants
+    /// of `grid` inside `(t, t + dt]`, each from the 7th-order dense output of the
+    /// accepted step that covers it (in the attempt the plant keeps), with the steps
+    /// capped at `grid.max_step`: `simulate`'s trace with steps the tolerances set
+    /// (issue 43) rather than one stop per sample. `out[i]` receives the sample of
+    /// `grid.next + i` (`out` holds one slot per instant); an instant no accepted
+    /// step covered (a Moreau–Jean bridge there has no dense output, docs/plant.md
+    /// "The bridge") is left `None`: the caller then advances in parts.
+    ///
+    /// # Errors
+    /// As [`Plant::advance`]; [`SimError::BadStep`] for a grid whose period is not
+    /// finite and positive or whose `out` has another length.
+    pub fn advance_sampling<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        dt: f64,
+        grid: SampleGrid,
+        out: &mut [Option<Sample>],
+        obs: &mut dyn Observer,
+    ) -> Result<Vec<PlantEvent>, SimError> {
+        let n = grid.last.checked_sub(grid.next).map_or(0, |d| d + 1);
+        if !(grid.dt.is_finite() && grid.dt > 0.0) || out.len() as u64 != n || !(grid.max_step > 0.0) {
+            return Err(SimError::BadStep(grid.dt));
+        }
+        out.fill(None);
+        self.sampling = Some(grid);
+        let mut sampler = Sampler { inner: obs, first: grid.next, out, attempt_next: grid.next, kept: grid.next };
         let events = self.advance_events(ctrl, dt, &mut sampler);
-        self.sample_at = None;
-        let kept = sampler.kept;
-        Ok((events?, kept))
+        self.sampling = None;
+        events
     }
 
     /// [`Plant::advance`] without its report: the events of the interval only, in
@@ -319,29 +350,33 @@ impl Plant {
         g0: f64,
         obs: &mut dyn Observer,
     ) -> Result<SegmentEnd, SimError> {
-        let solver = Dop853 { h_max: h_max.min(self.solver.h_max), ..self.solver };
+        let cap = self.sampling.map_or(f64::INFINITY, |g| g.max_step);
+        let solver = Dop853 { h_max: h_max.min(self.solver.h_max).min(cap), ..self.solver };
         let mode = self.mode();
         let seg = self.segment(ctrl);
         let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None, last: None };
-        let (l, sample_at) = (self.arm.params.l, self.sample_at);
-        let mut sampled = false;
+        let (l, grid) = (self.arm.params.l, self.sampling);
         let solved = match solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
-            // The look-ahead's sample (`advance_sampled`): from the step that covers it,
-            // up to the event that ends the segment inside it.
-            if let Some(ts) = sample_at
-                && !sampled
-                && step.t_prev() < ts
-                && ts <= locator.hit.map_or(step.t_curr(), |(t, _)| t)
-            {
-                sampled = true;
-                let y = match locator.hit {
-                    Some((t, y)) if t.to_bits() == ts.to_bits() => y,
-                    _ => step.interpolate(ts),
-                };
-                let (_, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
-                let z = shared::kinematics::tip_position(l, &nalgebra::Vector2::new(y[0], y[2]));
-                obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode, f: [f[0], f[1]] });
+            // The samples `advance_sampling` asks for: each from the step that covers
+            // it, up to the event that ends the segment inside it.
+            if let Some(g) = grid {
+                let end = locator.hit.map_or(step.t_curr(), |(t, _)| t);
+                while let Some(k) = obs.next_sample()
+                    && k <= g.last
+                {
+                    let ts = k as f64 * g.dt;
+                    if !(step.t_prev() < ts && ts <= end) {
+                        break;
+                    }
+                    let y = match locator.hit {
+                        Some((t, y)) if t.to_bits() == ts.to_bits() => y,
+                        _ => step.interpolate(ts),
+                    };
+                    let (_, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
+                    let z = shared::kinematics::tip_position(l, &nalgebra::Vector2::new(y[0], y[2]));
+                    obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode, f: [f[0], f[1]] });
+                }
             }
             obs.on_step(step, locator.hit, mode);
             control
@@ -383,21 +418,30 @@ impl Plant {
     }
 }
 
-/// Keeps the sample of the attempt the plant keeps, and passes everything on to
-/// the caller's observer ([`Plant::advance_sampled`]).
-struct Sampler<'o> {
+/// Keeps the samples of the attempts the plant keeps ([`Plant::advance_sampling`]),
+/// asks for the next instant, and passes everything on to the caller's observer.
+struct Sampler<'o, 's> {
     inner: &'o mut dyn Observer,
-    attempt: Option<Sample>,
-    kept: Option<Sample>,
+    /// The grid index of `out[0]`.
+    first: u64,
+    out: &'s mut [Option<Sample>],
+    /// The next index the current attempt wants (back to `kept` on a new attempt).
+    attempt_next: u64,
+    /// The next index after the samples of the attempts kept so far.
+    kept: u64,
 }
 
-impl Observer for Sampler<'_> {
+impl Observer for Sampler<'_, '_> {
     fn on_segment_start(&mut self, t: f64, y: &OdeState, mode: ContactMode) {
         self.inner.on_segment_start(t, y, mode);
     }
 
     fn on_attempt(&mut self) {
-        self.attempt = None;
+        // Samples of a discarded attempt are taken again by the next one.
+        for s in self.out.iter_mut().skip((self.kept - self.first) as usize) {
+            *s = None;
+        }
+        self.attempt_next = self.kept;
         self.inner.on_attempt();
     }
 
@@ -405,14 +449,19 @@ impl Observer for Sampler<'_> {
         self.inner.on_step(step, stop, mode);
     }
 
+    fn next_sample(&self) -> Option<u64> {
+        ((self.attempt_next - self.first) < self.out.len() as u64).then_some(self.attempt_next)
+    }
+
     fn on_sample(&mut self, sample: &Sample) {
-        self.attempt = Some(*sample);
+        if let Some(slot) = self.out.get_mut((self.attempt_next - self.first) as usize) {
+            *slot = Some(*sample);
+        }
+        self.attempt_next += 1;
     }
 
     fn on_kept(&mut self, y_end: &OdeState, mode: ContactMode) {
-        if self.kept.is_none() {
-            self.kept = self.attempt.take();
-        }
+        self.kept = self.attempt_next;
         self.inner.on_kept(y_end, mode);
     }
 
