@@ -224,7 +224,8 @@ impl OpenLoop {
         let before = self.plant.checkpoint();
         let mut samples = vec![None; end - self.k];
         let target = end as f64 * self.sample_dt;
-        let sampled = self.plant.advance_sampling(&plant::Hold([0.0, 0.0]), target - self.plant.time(), grid, &mut samples, &mut plant::NoObserver);
+        let sampled =
+            self.plant.advance_sampling(&plant::Hold([0.0, 0.0]), target - self.plant.time(), grid, &mut samples, &mut plant::NoObserver);
         match sampled {
             Ok(new) if samples.iter().all(Option::is_some) => {
                 events.extend(new.iter().map(EventRow::from));
