@@ -111,7 +111,7 @@ impl Plant {
         obs: &mut dyn Observer,
     ) -> Result<Vec<PlantEvent>, SimError> {
         let n = grid.last.checked_sub(grid.next).map_or(0, |d| d + 1);
-        if !(grid.dt.is_finite() && grid.dt > 0.0) || out.len() as u64 != n || !(grid.max_step > 0.0) {
+        if !(grid.dt.is_finite() && grid.dt > 0.0) || out.len() as u64 != n || grid.max_step.is_nan() || grid.max_step <= 0.0 {
             return Err(SimError::BadStep(grid.dt));
         }
         out.fill(None);
