@@ -130,7 +130,7 @@ def simulate(
 
     Raises:
         PainleveError: bad input, with the CLI's message (``exit_code`` 2).
-        KeyboardInterrupt: Ctrl-C (the simulation stops within its chunk of 64 samples).
+        KeyboardInterrupt: Ctrl-C (the simulation stops within its chunk of 1024 samples).
 
     A simulation that fails part way returns what it computed up to then, with
     ``failure`` set and a :class:`PainleveWarning` (``strict=True`` raises).

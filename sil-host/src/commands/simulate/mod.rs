@@ -54,9 +54,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     curves.push(&row);
     trace.send(vec![row])?;
     // The simulation's own wall time, without writing files: rows wait in a
-    // chunk of at most CHUNK samples (bounded memory) while the clock runs.
-    const CHUNK: usize = 1024;
-    let mut rows: Vec<TraceRow> = Vec::with_capacity(CHUNK);
+    // chunk of at most OpenLoop::CHUNK samples (bounded memory) while the clock runs.
+    let mut rows: Vec<TraceRow> = Vec::with_capacity(OpenLoop::CHUNK);
     let mut new_events: Vec<EventRow> = Vec::new();
     let mut wall = std::time::Duration::ZERO;
     let mut failure: Option<SimError> = None;
@@ -69,7 +68,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
             break;
         }
         let started = Instant::now();
-        failure = open_loop.advance(open_loop.k + CHUNK, &mut rows, &mut new_events).err();
+        failure = open_loop.advance(open_loop.k + 1, &mut rows, &mut new_events).err();
         wall += started.elapsed();
         n_events += new_events.len();
         new_events = events.send(new_events)?;
