@@ -62,10 +62,13 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
 
 def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
     """One Arrow IPC table the CLI wrote (``simulate --format arrow``:
-    ``trace.arrow``, ``events.arrow``), as a :class:`Table` with the columns,
-    types and values :func:`read_csv` gives for the same table as CSV (floats
-    with their exact bits). pandas (``pandas.read_feather``, with pyarrow) and
-    polars (``polars.read_ipc``) read the same files directly.
+    ``trace.arrow``, ``events.arrow``, Arrow IPC files; ``run`` and ``pil``
+    ``--format arrow``: ``trace.arrow``, an Arrow IPC stream, whole batches of
+    one cut off), as a :class:`Table` with the columns, types and values
+    :func:`read_csv` gives for the same table as CSV (floats with their exact
+    bits). pandas (``pandas.read_feather``, with pyarrow) and polars
+    (``polars.read_ipc``; ``polars.read_ipc_stream`` for a stream) read the same
+    files directly.
 
     Raises:
         PainleveError: the file cannot be read, is not an Arrow IPC file (or was

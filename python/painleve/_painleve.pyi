@@ -41,7 +41,7 @@ def cli_defaults(command: str) -> Dict[str, List[str]]:
 def default_scenario_toml() -> str:
     """The embedded default scenario's TOML text."""
 def read_arrow(path: str) -> Dict[str, Any]:
-    """An Arrow IPC table as ``{column: array}`` (lists of ``str`` for text)."""
+    """An Arrow IPC file or stream as ``{column: array}`` (lists of ``str`` for text)."""
 def toml_to_json(text: str) -> str:
     """A TOML document as JSON text."""
 def json_to_toml(text: str) -> str:

@@ -78,3 +78,18 @@ def test_an_unknown_format_is_refused():
 
     message, code = cli_error("simulate", ["--format", "parquet"])
     assert code == 2 and "parquet" in message and "arrow" in message
+
+
+def test_a_runs_arrow_stream_loads_as_its_csv_trace(tmp_path):
+    # `run --format arrow` (issue 43): the trace is an Arrow IPC stream, written a
+    # batch at a time; painleve.load reads it, and polars and pyarrow read streams.
+    cli("run", ["--in-process", "--duration", "0.5", "--format", "csv"], tmp_path / "csv")
+    cli("run", ["--in-process", "--duration", "0.5", "--format", "arrow"], tmp_path / "arrow")
+    a, c = painleve.load(tmp_path / "arrow"), painleve.load(tmp_path / "csv")
+    assert a.trace.columns == c.trace.columns and a.trace.nrows == c.trace.nrows == 500
+    for col in c.trace.columns:
+        assert_columns_equal(a.trace[col], c.trace[col], f"trace.{col}")
+    import pyarrow.ipc
+
+    with open(tmp_path / "arrow" / "trace.arrow", "rb") as f:
+        assert pyarrow.ipc.open_stream(f).read_all().num_rows == 500

@@ -12,7 +12,11 @@ use std::{
 };
 
 use crate::{error::CliError, folder_lock::FolderLock};
-use experiments::table::csv::CsvFile;
+use experiments::table::{
+    ColumnRows, TableFormat,
+    arrow::ArrowStream,
+    csv::{CsvFile, CsvRow},
+};
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -164,44 +168,60 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
     csv_w.flush().map_err(io_err(&tmp))
 }
 
-/// A CSV file written row by row as a run produces it ([`OutputSet::create_streamed`]),
-/// flushed to the operating system at least every `flush_every` of wall time: a
-/// process killed outright (SIGKILL) loses at most the rows of that interval.
-/// Rows are formatted by [`experiments::table::csv`] (the bytes of the `csv` crate's serde path).
-pub struct StreamedCsv {
-    csv: CsvFile,
+/// A table written row by row as a run produces it ([`OutputSet::create_streamed`]),
+/// as CSV or as an Arrow IPC stream (`--format`), and flushed to the operating
+/// system at least every `flush_every` of wall time: a process killed outright
+/// (SIGKILL) loses at most the rows of that interval. CSV rows are formatted by
+/// [`experiments::table::csv`] (the bytes of the `csv` crate's serde path); Arrow
+/// rows go out one record batch per flush ([`experiments::table::arrow::ArrowStream`]).
+pub struct StreamedTable<T: CsvRow + ColumnRows + Copy> {
+    writer: StreamedWriter<T>,
     flush_every: std::time::Duration,
     last_flush: std::time::Instant,
     error: Option<CliError>,
 }
 
-impl StreamedCsv {
-    /// Starts `name` in `out` with the header row `header`, flushed every `flush_every`.
+/// The file behind a [`StreamedTable`].
+enum StreamedWriter<T: ColumnRows> {
+    Csv(CsvFile),
+    Arrow(ArrowStream<T>),
+}
+
+impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
+    /// Starts table `stem` (`trace`: `trace.csv` or `trace.arrow`) in `out`,
+    /// flushed every `flush_every`.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the file cannot be created.
-    pub fn new(out: &mut OutputSet, name: &str, header: &[&str], flush_every: std::time::Duration) -> Result<Self, CliError> {
-        let (path, file) = out.create_streamed(name)?;
-        Ok(Self { csv: CsvFile::new(path, file, header), flush_every, last_flush: std::time::Instant::now(), error: None })
+    /// [`CliError::Io`] when the file cannot be created (or the Arrow schema written).
+    pub fn new(out: &mut OutputSet, stem: &str, format: TableFormat, flush_every: std::time::Duration) -> Result<Self, CliError> {
+        let (path, file) = out.create_streamed(&format.file(stem))?;
+        let writer = match format {
+            TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
+            TableFormat::Arrow => StreamedWriter::Arrow(ArrowStream::new(path, file)?),
+        };
+        Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }
 
     /// Appends one row. The first write error is kept (and later rows dropped)
-    /// for [`StreamedCsv::finish`] to report: a run is not stopped by its trace.
-    pub fn push<T: experiments::table::csv::CsvRow>(&mut self, row: &T) {
+    /// for [`StreamedTable::finish`] to report: a run is not stopped by its trace.
+    pub fn push(&mut self, row: &T) {
         if self.error.is_some() {
             return;
         }
-        let mut result = self.csv.row(row);
-        if result.is_ok() && self.last_flush.elapsed() >= self.flush_every {
+        let flush = self.last_flush.elapsed() >= self.flush_every;
+        if flush {
             self.last_flush = std::time::Instant::now();
-            result = self.csv.flush();
         }
+        let result = match &mut self.writer {
+            StreamedWriter::Csv(csv) => csv.row(row).and_then(|()| if flush { csv.flush() } else { Ok(()) }),
+            StreamedWriter::Arrow(arrow) => arrow.push(*row, flush),
+        };
         if let Err(e) = result {
             self.error = Some(e);
         }
     }
 
-    /// Flushes the rest.
+    /// Writes the rest (and an Arrow stream's end marker).
     ///
     /// # Errors
     /// The first write error, if any.
@@ -209,7 +229,10 @@ impl StreamedCsv {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        self.csv.finish()
+        match self.writer {
+            StreamedWriter::Csv(csv) => csv.finish(),
+            StreamedWriter::Arrow(arrow) => arrow.finish(),
+        }
     }
 }
 

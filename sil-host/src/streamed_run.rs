@@ -9,10 +9,9 @@ use std::{
 
 use crate::{
     error::CliError,
-    output::{OutputSet, StreamedCsv},
+    output::{OutputSet, StreamedTable},
     plot,
 };
-use experiments::table::csv::CsvRow;
 use plant::Validity;
 use rig::{
     FirmwareLink, RunObserver,
@@ -23,9 +22,10 @@ use rig::{
 };
 
 /// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
-/// with the run: every period's row goes to `trace.csv` of `out` as it is made
-/// (`trace.csv.partial`, flushed every 1 ms of wall time, so a plant killed
-/// outright keeps every period up to the last flush), the summary's figures are
+/// with the run: every period's row goes to the trace of `out` in `format` as it
+/// is made (`trace.csv.partial` or `trace.arrow.partial`, flushed every 1 ms of
+/// wall time, an Arrow record batch per flush, so a plant killed outright keeps
+/// every period up to the last flush), the summary's figures are
 /// accumulated ([`RunStats`]) and the figure's curves decimated
 /// ([`plot::HistoryEnvelope`]); the progress bar moves every `every` periods,
 /// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
@@ -40,14 +40,15 @@ pub fn run_streamed(
     out: &mut OutputSet,
     progress: &indicatif::ProgressBar,
     every: usize,
+    format: experiments::table::TableFormat,
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
-    let mut trace = StreamedCsv::new(out, "trace.csv", <PeriodRecord as CsvRow>::HEADER, std::time::Duration::from_millis(1))?;
+    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", format, std::time::Duration::from_millis(1))?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the
     /// bar, stops on Ctrl-C, keeps the validity.
     struct Streaming<'a> {
-        trace: &'a mut StreamedCsv,
+        trace: &'a mut StreamedTable<PeriodRecord>,
         progress: &'a indicatif::ProgressBar,
         every: usize,
         stop: &'a AtomicBool,

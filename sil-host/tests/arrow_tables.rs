@@ -1,4 +1,4 @@
-//! `simulate --format arrow` against `--format csv`: the same tables, column for
+//! `simulate --format arrow` (and `run`'s) against `--format csv`: the same tables, column for
 //! column, every float with the same bits (the CSV's shortest round-trip digits
 //! read back by the `csv` crate and Rust's parser, the Arrow columns by
 //! `experiments::table::arrow::read_arrow`: two independent paths).
@@ -8,12 +8,50 @@ use std::{path::Path, process::Command};
 use experiments::table::{Column, arrow::read_arrow};
 
 fn simulate(format: &str, out: &Path) {
-    let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
-        .args(["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "2", "--format", format, "--json", "--out"])
-        .arg(out)
-        .output()
-        .unwrap();
+    sil_host(&["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "2", "--format", format, "--json", "--out"], out);
+}
+
+fn sil_host(args: &[&str], out: &Path) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).args(args).arg(out).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Each column of the Arrow table equals the CSV's: floats to the bit, text as
+/// written, integers and flags as the CSV's cells.
+fn assert_same(table: &str, csv: &Path, arrow: &Path) {
+    let (header, cells) = read_csv(csv);
+    let columns = read_arrow(arrow).unwrap().columns;
+    assert_eq!(columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), header, "{table}");
+    assert!(cells[0].len() > 1, "{table}: rows");
+    for ((name, col), cells) in columns.iter().zip(&cells) {
+        assert_eq!(col.len(), cells.len(), "{table}.{name}");
+        match col {
+            Column::F64(v) => {
+                for (x, cell) in v.iter().zip(cells) {
+                    let y: f64 = cell.parse().unwrap();
+                    assert_eq!(x.to_bits(), y.to_bits(), "{table}.{name}: {x:e} against `{cell}`");
+                }
+            }
+            Column::Str(v) => assert_eq!(v, cells, "{table}.{name}"),
+            Column::I64(v) => assert_eq!(v.iter().map(i64::to_string).collect::<Vec<_>>(), *cells, "{table}.{name}"),
+            Column::Bool(v) => assert_eq!(v.iter().map(bool::to_string).collect::<Vec<_>>(), *cells, "{table}.{name}"),
+            other => panic!("{table}.{name}: unexpected column type {other:?}"),
+        }
+    }
+}
+
+/// `run --format arrow` (issue 43): the closed-loop trace as an Arrow IPC stream
+/// (record batches as the run goes), the CSV's table bit for bit.
+#[test]
+fn a_runs_arrow_stream_holds_its_csv_trace_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, a) = (dir.path().join("csv"), dir.path().join("arrow"));
+    sil_host(&["run", "--in-process", "--duration", "1", "--format", "csv", "--out"], &c);
+    sil_host(&["run", "--in-process", "--duration", "1", "--format", "arrow", "--out"], &a);
+    assert!(!a.join("trace.csv").exists() && !c.join("trace.arrow").exists());
+    let bytes = std::fs::read(a.join("trace.arrow")).unwrap();
+    assert_ne!(&bytes[..6], b"ARROW1", "the stream format, not the file format");
+    assert_same("trace", &c.join("trace.csv"), &a.join("trace.arrow"));
 }
 
 /// The CSV table's header and its cells by column.

@@ -22,7 +22,10 @@ use std::{
 };
 
 use arrow_array::{Array, ArrayRef, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray, UInt64Array};
-use arrow_ipc::{reader::FileReader, writer::FileWriter};
+use arrow_ipc::{
+    reader::{FileReader, StreamReader},
+    writer::{FileWriter, StreamWriter},
+};
 use arrow_schema::{ArrowError, DataType, Field, Schema};
 
 use super::{Column, ColumnRows, Kind, Table};
@@ -104,6 +107,64 @@ impl<T: ColumnRows> ArrowFile<T> {
     }
 }
 
+/// A table written as an Arrow IPC *stream* as a run produces it (`run` and `pil`
+/// with `--format arrow`): rows wait in memory until [`ArrowStream::push`] is told
+/// to write them, as one record batch, flushed to the operating system at once, so
+/// a process killed outright keeps every batch written before (a reader of the
+/// stream gets them; [`read_arrow`] reads a stream whose end marker is missing up to
+/// its last whole batch). The stream format is the file format without its footer:
+/// pandas (`pyarrow.ipc.open_stream`), polars (`polars.read_ipc_stream`) and
+/// `painleve.load` read it.
+pub struct ArrowStream<T: ColumnRows> {
+    path: PathBuf,
+    writer: StreamWriter<File>,
+    schema: Arc<Schema>,
+    pending: Vec<T>,
+}
+
+impl<T: ColumnRows> ArrowStream<T> {
+    /// Starts the stream `file` (at `path`, for error messages) with `T`'s schema.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the schema message cannot be written.
+    pub fn new(path: PathBuf, file: File) -> Result<Self, CliError> {
+        let schema = Arc::new(schema_of(T::NAMES, T::KINDS));
+        let writer = StreamWriter::try_new(file, &schema).map_err(arrow_err(&path))?;
+        Ok(Self { path, writer, schema, pending: Vec::new() })
+    }
+
+    /// Adds `row`; with `write`, writes every waiting row as one record batch and
+    /// flushes it (the caller decides: `run` every 1 ms of wall time, like its CSV).
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when writing fails.
+    pub fn push(&mut self, row: T, write: bool) -> Result<(), CliError> {
+        self.pending.push(row);
+        if write { self.write_pending() } else { Ok(()) }
+    }
+
+    fn write_pending(&mut self) -> Result<(), CliError> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let batch = RecordBatch::try_new(self.schema.clone(), T::columns(&self.pending).into_iter().map(array_of).collect())
+            .map_err(arrow_err(&self.path))?;
+        self.writer.write(&batch).map_err(arrow_err(&self.path))?;
+        self.writer.flush().map_err(arrow_err(&self.path))?;
+        self.pending.clear();
+        Ok(())
+    }
+
+    /// Writes the rows still waiting and the end-of-stream marker.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), CliError> {
+        self.write_pending()?;
+        self.writer.finish().map_err(arrow_err(&self.path))
+    }
+}
+
 /// The Arrow schema of columns `names` of kinds `kinds`: one non-nullable field
 /// per column (`Float64`, `Utf8`, `Boolean`, `Int64`).
 fn schema_of(names: &[&str], kinds: &[Kind]) -> Schema {
@@ -174,25 +235,38 @@ fn extend(c: &mut Column, a: &dyn Array) -> Option<()> {
     Some(())
 }
 
-/// Reads the Arrow IPC file at `path` into a [`Table`]: its columns in the
-/// file's order, every record batch appended.
+/// Reads the Arrow IPC file or stream at `path` into a [`Table`]: its columns in
+/// the file's order, every record batch appended. A stream cut off (a run killed
+/// while writing, [`ArrowStream`]) gives its whole batches.
 ///
 /// # Errors
-/// [`CliError::Io`] naming the file when it cannot be read, is not an Arrow IPC
-/// file (or was cut off before its footer), or has a column of another type than
-/// Float64, Int64, Boolean or Utf8.
+/// [`CliError::Io`] naming the file when it cannot be read, is neither an Arrow
+/// IPC file (nor one cut off before its footer) nor a stream, or has a column of
+/// another type than Float64, Int64, Boolean or Utf8.
 pub fn read_arrow(path: &Path) -> Result<Table, CliError> {
     let bad = |msg: String| CliError::Io { path: path.to_path_buf(), source: std::io::Error::other(msg) };
-    let file = File::open(path).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
-    let reader = FileReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
-    let schema = reader.schema();
+    let mut file = File::open(path).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
+    // The file format starts with the magic `ARROW1`; the stream format (`run`,
+    // `pil`) with a message.
+    let mut magic = [0u8; 6];
+    let is_file = std::io::Read::read_exact(&mut file, &mut magic).is_ok() && &magic == b"ARROW1";
+    std::io::Seek::rewind(&mut file).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
+    let (schema, batches): (Arc<Schema>, Box<dyn Iterator<Item = Result<RecordBatch, ArrowError>>>) = if is_file {
+        let reader = FileReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
+        (reader.schema(), Box::new(reader))
+    } else {
+        let reader = StreamReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
+        // A stream cut off (a killed run): its whole batches, the cut one dropped.
+        let mut done = false;
+        (reader.schema(), Box::new(reader.take_while(move |b| !std::mem::replace(&mut done, b.is_err())).filter(Result::is_ok)))
+    };
     let mut columns = Vec::with_capacity(schema.fields().len());
     for f in schema.fields() {
         let c = empty_column(f.data_type())
             .ok_or_else(|| bad(format!("column `{}` is {}, not Float64, Int64, Boolean or Utf8", f.name(), f.data_type())))?;
         columns.push((f.name().clone(), c));
     }
-    for batch in reader {
+    for batch in batches {
         let batch = batch.map_err(arrow_err(path))?;
         for ((name, c), a) in columns.iter_mut().zip(batch.columns()) {
             extend(c, a.as_ref()).ok_or_else(|| bad(format!("column `{name}`: a batch of another type, or nulls where none can be")))?;
@@ -266,6 +340,30 @@ mod tests {
         let cols = read_arrow(&path).unwrap().columns;
         assert_eq!(cols.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["a", "b", "c", "d"]);
         assert!(cols.iter().all(|(_, c)| c.is_empty()));
+    }
+
+    /// A stream (`run --format arrow`): every batch back, in order; cut off after
+    /// two whole batches (a killed run), those two.
+    #[test]
+    fn a_stream_is_read_whole_and_a_cut_one_to_its_last_whole_batch() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("trace.arrow");
+        let rows: Vec<Row> = (0..30).map(|i| Row { a: i as f64 * 0.25, b: format!("r{i}"), c: i % 3 == 0, d: i }).collect();
+        let mut w = ArrowStream::<Row>::new(path.clone(), File::create(&path).unwrap()).unwrap();
+        let mut ends = Vec::new();
+        for (i, r) in rows.iter().enumerate() {
+            let write = (i + 1) % 10 == 0;
+            w.push(r.clone(), write).unwrap();
+            if write {
+                ends.push(std::fs::metadata(&path).unwrap().len());
+            }
+        }
+        w.finish().unwrap();
+        assert_eq!(back(&read_arrow(&path).unwrap().columns), rows);
+        let bytes = std::fs::read(&path).unwrap();
+        // Killed inside the third batch: the first two come back.
+        std::fs::write(&path, &bytes[..ends[1] as usize + 17]).unwrap();
+        assert_eq!(back(&read_arrow(&path).unwrap().columns), rows[..20]);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! image's counts per step (instructions under QEMU, cycles on silicon) and, under
 //! QEMU, its defmt log.
 //!
-//! Writes `trace.csv`, `summary.json` (with a `pil` object: counts per step and
+//! Writes `trace.csv` (`trace.arrow` with `--format arrow`), `summary.json` (with a `pil` object: counts per step and
 //! per frame, median, p99 and worst, against the budget, in `count_unit`),
 //! `trace.svg`, `instructions.svg` (the counts of each step against time, with the
 //! budget) and, under QEMU, `defmt.log`.
@@ -94,7 +94,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
-    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100)?;
+    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);

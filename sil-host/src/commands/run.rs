@@ -1,6 +1,7 @@
 //! `sil-host run`: a closed-loop SIL run of a scenario.
 //!
-//! Writes `trace.csv` (one row per control period), `summary.json` and
+//! Writes `trace.csv` (one row per control period; `trace.arrow` with `--format
+//! arrow`, an Arrow IPC stream), `summary.json` and
 //! `trace.svg` (tip position against its reference, normal force, torques and
 //! contact mode against time). A run that stops part way (the firmware in its
 //! safe state or lost, a plant failure, Ctrl-C) still writes every period up to
@@ -80,7 +81,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500)?;
+    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
     let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
