@@ -184,7 +184,7 @@ pub struct StreamedTable<T: CsvRow + ColumnRows + Copy> {
 /// The file behind a [`StreamedTable`].
 enum StreamedWriter<T: ColumnRows> {
     Csv(CsvFile),
-    Arrow(ArrowStream<T>),
+    Arrow(Box<ArrowStream<T>>),
 }
 
 impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
@@ -197,7 +197,7 @@ impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
         let (path, file) = out.create_streamed(&format.file(stem))?;
         let writer = match format {
             TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
-            TableFormat::Arrow => StreamedWriter::Arrow(ArrowStream::new(path, file)?),
+            TableFormat::Arrow => StreamedWriter::Arrow(Box::new(ArrowStream::new(path, file)?)),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }
