@@ -295,13 +295,17 @@ impl PeriodLoop {
         }
         let before = plant.checkpoint();
         let switch = t_next + self.delta;
-        let (events, sample) = plant.advance_sampled(&Hold(u), switch - plant.time(), t_next, obs)?;
-        if let Some(sample) = sample {
-            self.ahead = Some(sample);
-            return Ok((events, sample.f));
+        // A late switch within rounding of t_next leaves no interval before the
+        // sample: the two parts then.
+        if t_next > plant.time() {
+            let (events, sample) = plant.advance_sampled(&Hold(u), switch - plant.time(), t_next, obs)?;
+            if let Some(sample) = sample {
+                self.ahead = Some(sample);
+                return Ok((events, sample.f));
+            }
+            plant.restore(before);
         }
-        plant.restore(before);
-        let r = plant.advance(&Hold(u), t_next - plant.time(), obs)?;
+        let r = plant.advance(&Hold(u), (t_next - plant.time()).max(0.0), obs)?;
         let sample = Sample { t: t_next, x: plant.state(), tip: [plant.tip()[0], plant.tip()[1]], mode: plant.mode(), f: r.f };
         let mut events = r.events;
         events.extend(plant.advance_events(&Hold(u), switch - plant.time(), obs)?);
