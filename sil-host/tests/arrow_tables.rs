@@ -74,23 +74,7 @@ fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
     simulate("csv", &c);
     simulate("arrow", &a);
     for table in ["trace", "events"] {
-        let (header, cells) = read_csv(&c.join(format!("{table}.csv")));
-        let columns = read_arrow(&a.join(format!("{table}.arrow"))).unwrap().columns;
-        assert_eq!(columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), header, "{table}");
-        assert!(cells[0].len() > 1, "{table}: rows");
-        for ((name, col), cells) in columns.iter().zip(&cells) {
-            assert_eq!(col.len(), cells.len(), "{table}.{name}");
-            match col {
-                Column::F64(v) => {
-                    for (x, cell) in v.iter().zip(cells) {
-                        let y: f64 = cell.parse().unwrap();
-                        assert_eq!(x.to_bits(), y.to_bits(), "{table}.{name}: {x:e} against `{cell}`");
-                    }
-                }
-                Column::Str(v) => assert_eq!(v, cells, "{table}.{name}"),
-                other => panic!("{table}.{name}: unexpected column type {other:?}"),
-            }
-        }
+        assert_same(table, &c.join(format!("{table}.csv")), &a.join(format!("{table}.arrow")));
     }
     // The summary names the files written.
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join("summary.json")).unwrap()).unwrap();

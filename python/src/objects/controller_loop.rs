@@ -103,40 +103,26 @@ impl<'py> PythonLink<'py> {
 fn torques_of(out: &Bound<'_, PyAny>, k: u32, t: f64) -> PyResult<[f64; 2]> {
     let what = || format!("the controller's return at period {k} (t = {t} s)");
     let type_name = || out.get_type().name().map(|n| n.to_string()).unwrap_or_default();
-    let u: [f64; 2] = if let Ok(tuple) = out.cast::<PyTuple>() {
-        if tuple.len() != 2 {
-            return Err(PyTypeError::new_err(format!("{}: expected two torques (u1, u2) in N m, got a tuple of {}", what(), tuple.len())));
-        }
-        let item = |i: usize| -> PyResult<f64> {
-            let x = tuple.get_item(i)?;
-            x.extract::<f64>().map_err(|_| {
-                PyTypeError::new_err(format!(
-                    "{}: torque {i} is {}, not a number",
-                    what(),
-                    x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
-                ))
-            })
+    // A tuple, a list, a (2,) array: anything of length 2 but text and mappings.
+    let len = if out.is_instance_of::<PyString>() || out.is_instance_of::<PyDict>() { None } else { out.len().ok() };
+    if len != Some(2) {
+        let got = match out.cast::<PyTuple>() {
+            Ok(tuple) => format!("a tuple of {}", tuple.len()),
+            Err(_) => type_name(),
         };
-        [item(0)?, item(1)?]
-    } else {
-        let len = if out.is_instance_of::<PyString>() || out.is_instance_of::<PyDict>() { None } else { out.len().ok() };
-        match len {
-            Some(2) => {
-                let item = |i: usize| -> PyResult<f64> {
-                    let x = out.get_item(i)?;
-                    x.extract::<f64>().map_err(|_| {
-                        PyTypeError::new_err(format!(
-                            "{}: torque {i} is {}, not a number",
-                            what(),
-                            x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
-                        ))
-                    })
-                };
-                [item(0)?, item(1)?]
-            }
-            _ => return Err(PyTypeError::new_err(format!("{}: expected two torques (u1, u2) in N m, got {}", what(), type_name()))),
-        }
+        return Err(PyTypeError::new_err(format!("{}: expected two torques (u1, u2) in N m, got {got}", what())));
+    }
+    let item = |i: usize| -> PyResult<f64> {
+        let x = out.get_item(i)?;
+        x.extract::<f64>().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "{}: torque {i} is {}, not a number",
+                what(),
+                x.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+            ))
+        })
     };
+    let u = [item(0)?, item(1)?];
     if !u.iter().all(|x| x.is_finite()) {
         return Err(PyValueError::new_err(format!("{}: torques ({}, {}) N m; expected two finite numbers", what(), u[0], u[1])));
     }
