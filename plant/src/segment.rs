@@ -11,7 +11,7 @@ use shared::{
     Arm,
     contact::{sliding_force, sticking_force},
     kinematics::tip_position_trig,
-    model::TipDynamics,
+    model::{ArmTerms, TipDynamics},
 };
 
 pub use crate::phase::Phase;
@@ -73,6 +73,8 @@ pub struct Segment<'a, C: ?Sized> {
     /// The nearest boundary at the end of the last accepted step, keyed by `(t, y)`
     /// (the FSAL stage computes the tip dynamics there; the event function reuses them).
     end: Cell<Option<StepEnd>>,
+    /// The arm's constant factors, folded once for the segment's evaluations.
+    terms: ArmTerms<f64>,
 }
 
 /// `(t, y)` and the nearest boundary there (see [`Segment::nearest_boundary`]).
@@ -108,7 +110,18 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         evals: &'a Cell<u64>,
         trig: &'a TrigCache,
     ) -> Self {
-        Self { arm, phase, ctrl, cone_relaxed, baumgarte: cfg.baumgarte, jam_load: cfg.jam_load, evals, trig, end: Cell::new(None) }
+        Self {
+            arm,
+            phase,
+            ctrl,
+            cone_relaxed,
+            baumgarte: cfg.baumgarte,
+            jam_load: cfg.jam_load,
+            evals,
+            trig,
+            end: Cell::new(None),
+            terms: arm.terms(),
+        }
     }
 
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
@@ -118,22 +131,28 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         let xi = [y[4], y[5]];
         let motor = self.ctrl.torque_in(self.phase, t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
-        let td = self.arm.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
+        let mut td = self.terms.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
+        // The corrected free acceleration is applied in place and then restored (not on
+        // a copy: a copy of the tip dynamics was a tenth of an evaluation's cost).
         let f = match self.phase {
             Phase::Flight => Vector2::zeros(),
             Phase::Sliding(dir) => {
                 // Baumgarte (1972): ask for z_n_ddot = -2 w z_n_dot - w^2 (z_n + H) instead of 0,
                 // so integration drift off the belt decays instead of accumulating.
                 let corr = self.constraint_correction(&td);
-                let mut td_c = td;
-                td_c.a_free[1] += corr[1];
-                sliding_force(&td_c, self.arm.params.mu, dir)
+                let b = td.a_free[1];
+                td.a_free[1] += corr[1];
+                let f = sliding_force(&td, self.arm.params.mu, dir);
+                td.a_free[1] = b;
+                f
             }
             Phase::Sticking => {
                 let corr = self.constraint_correction(&td);
-                let mut td_c = td;
-                td_c.a_free += corr;
-                sticking_force(&td_c)
+                let a = td.a_free;
+                td.a_free += corr;
+                let f = sticking_force(&td);
+                td.a_free = a;
+                f
             }
         };
         (td, f, Vector2::new(motor[0], motor[1]))

@@ -189,46 +189,18 @@ impl<T: Real> Arm<T> {
 
     /// [`Arm::tip_dynamics`] with the sines and cosines of `q` given (`trig` must be
     /// those of `q`; a caller that already has them saves the two `sin_cos`).
-    ///
-    /// Written out in scalars: the 2x2 products of nalgebra's generic code do not
-    /// inline fully, and this is evaluated 12 times per integration step.
-    #[inline]
+    /// The same value as [`ArmTerms::tip_dynamics_trig`] on [`Arm::terms`], which
+    /// a caller evaluating many states of one arm keeps instead of refolding them.
+    #[inline(always)]
     pub fn tip_dynamics_trig(&self, trig: &JointTrig<T>, q: &Vector2<T>, qd: &Vector2<T>, u: &Vector2<T>) -> TipDynamics<T> {
-        let p = &self.params;
-        let (l, half) = (p.l, lit::<T>(0.5));
-        let JointTrig { s1, c1, s2, c2 } = *trig;
-        let s12 = trig.s12(); // sin(theta1 - theta2)
-        let ml2 = p.m * l * l;
-        // M^-1 (closed form).
-        let m_inv = self.mass_matrix_inverse_trig(trig);
-        let (i11, i12, i22) = (m_inv[(0, 0)], m_inv[(0, 1)], m_inv[(1, 1)]);
-        // w + c (paper eq. 1).
-        let mgl2 = p.m * p.g * l * half;
-        let spring = p.k * (q[1] - q[0] + p.alpha0);
-        let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
-        let half_ml2 = ml2 * half;
-        let wc0 = mgl2 * lit::<T>(3.0) * s1 - spring - p.sigma * (qd[1] - qd[0] - qd[0]) + half_ml2 * w2 * s12;
-        let wc1 = mgl2 * s2 + spring + p.sigma * (qd[1] - qd[0]) - half_ml2 * w1 * s12;
-        let (v0, v1) = (u[0] - wc0, u[1] - wc1);
-        let (qdd0, qdd1) = (i11 * v0 + i12 * v1, i12 * v0 + i22 * v1);
-        // J = [[l c1, l c2], [l s1, l s2]] (paper eq. 1), s = J_dot q_dot (eq. 4).
-        let (j11, j12, j21, j22) = (l * c1, l * c2, l * s1, l * s2);
-        let s_t = -l * (w1 * s1 + w2 * s2);
-        let s_n = l * (w1 * c1 + w2 * c2);
-        // J M^-1, then Q = (J M^-1) J^T (eq. 3).
-        let (a11, a12) = (j11 * i11 + j12 * i12, j11 * i12 + j12 * i22);
-        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
-        let (q11, q12) = (a11 * j11 + a12 * j12, a11 * j21 + a12 * j22);
-        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
-        TipDynamics {
-            z: Vector2::new(l * (s1 + s2), -l * (c1 + c2)),
-            z_dot: Vector2::new(j11 * qd[0] + j12 * qd[1], j21 * qd[0] + j22 * qd[1]),
-            jac: Matrix2::new(j11, j12, j21, j22),
-            m_inv,
-            qmat: Matrix2::new(q11, q12, q21, q22),
-            a_free: Vector2::new(j11 * qdd0 + j12 * qdd1 + s_t, j21 * qdd0 + j22 * qdd1 + s_n),
-            qdd_free: Vector2::new(qdd0, qdd1),
-        }
+        self.terms().tip_dynamics_trig(trig, q, qd, u)
+    }
+
+    /// The arm's constant factors of the equations of motion, folded once
+    /// ([`ArmTerms`]).
+    #[inline(always)]
+    pub fn terms(&self) -> ArmTerms<T> {
+        ArmTerms::of(&self.params)
     }
 
     /// Kinetic energy `T = 1/2 q_dot^T M q_dot` (J).
@@ -245,6 +217,103 @@ impl<T: Real> Arm<T> {
         let half = lit::<T>(0.5);
         let spring = q[1] - q[0] + p.alpha0;
         -p.m * p.g * p.l * (lit::<T>(1.5) * q[0].cos_rad() + half * q[1].cos_rad()) + half * p.k * spring * spring
+    }
+}
+
+/// The constant factors of the arm's equations of motion (paper eq. 1), folded
+/// from [`Params`] once: the plant evaluates the model about 17 times a control
+/// period and each evaluation refolded about a dozen products of `m`, `l` and `g`.
+/// Each factor is computed in the same order as the unfolded expression, so
+/// [`ArmTerms::tip_dynamics_trig`] gives the same bits as the formulas written
+/// out. Units as in [`Params`]; a copy, so it does not follow later changes of
+/// the parameters it was folded from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmTerms<T> {
+    /// Link length `l`, m.
+    pub l: T,
+    /// `M_11 = 4/3 m l^2`, kg m^2.
+    pub m11: T,
+    /// `m l^2 / 2` (kg m^2): `M_12 = m l^2/2 cos(theta2 - theta1)` and the centripetal factor.
+    pub half_ml2: T,
+    /// `M_22 = m l^2 / 3`, kg m^2.
+    pub m22: T,
+    /// `M_11 M_22`, kg^2 m^4 (the constant part of `det M`).
+    pub m11_m22: T,
+    /// `m g l / 2`, N m: the elbow link's gravity torque factor.
+    pub mgl2: T,
+    /// `3 m g l / 2`, N m: the base link's gravity torque factor.
+    pub mgl2_3: T,
+    /// Spring stiffness `k`, N m/rad.
+    pub k: T,
+    /// Spring rest angle `alpha0`, rad.
+    pub alpha0: T,
+    /// Joint damping `sigma`, N m s/rad.
+    pub sigma: T,
+}
+
+impl<T: Real> ArmTerms<T> {
+    /// The folded factors of `p` (not validated here; see [`Params::validate`]).
+    #[inline(always)]
+    pub fn of(p: &Params<T>) -> Self {
+        let (l, half) = (p.l, lit::<T>(0.5));
+        let ml2 = p.m * l * l;
+        let (m11, m22) = (ml2 * lit::<T>(4.0 / 3.0), ml2 * lit::<T>(1.0 / 3.0));
+        let mgl2 = p.m * p.g * l * half;
+        Self {
+            l,
+            m11,
+            half_ml2: ml2 * half,
+            m22,
+            m11_m22: m11 * m22,
+            mgl2,
+            mgl2_3: mgl2 * lit::<T>(3.0),
+            k: p.k,
+            alpha0: p.alpha0,
+            sigma: p.sigma,
+        }
+    }
+
+    /// Everything tip-space at `(q, q_dot)` under generalised torque `u` (paper eqs.
+    /// 1 to 7), with `trig` the sines and cosines of `q`: shapes and units as
+    /// [`TipDynamics`]; the same value as [`Arm::tip_dynamics`] of the arm these
+    /// terms were folded from.
+    ///
+    /// Written out in scalars: the 2x2 products of nalgebra's generic code do not
+    /// inline fully, and this is evaluated about 17 times per control period.
+    #[inline(always)]
+    pub fn tip_dynamics_trig(&self, trig: &JointTrig<T>, q: &Vector2<T>, qd: &Vector2<T>, u: &Vector2<T>) -> TipDynamics<T> {
+        let l = self.l;
+        let JointTrig { s1, c1, s2, c2 } = *trig;
+        let s12 = trig.s12(); // sin(theta1 - theta2)
+        // M^-1 (closed form; det M >= 7/36 m^2 l^4).
+        let (m11, m12, m22) = (self.m11, self.half_ml2 * trig.c21(), self.m22);
+        let det = self.m11_m22 - m12 * m12;
+        let (i11, i12, i22) = (m22 / det, -m12 / det, m11 / det);
+        // w + c (paper eq. 1).
+        let spring = self.k * (q[1] - q[0] + self.alpha0);
+        let (w1, w2) = (qd[0] * qd[0], qd[1] * qd[1]);
+        let wc0 = self.mgl2_3 * s1 - spring - self.sigma * (qd[1] - qd[0] - qd[0]) + self.half_ml2 * w2 * s12;
+        let wc1 = self.mgl2 * s2 + spring + self.sigma * (qd[1] - qd[0]) - self.half_ml2 * w1 * s12;
+        let (v0, v1) = (u[0] - wc0, u[1] - wc1);
+        let (qdd0, qdd1) = (i11 * v0 + i12 * v1, i12 * v0 + i22 * v1);
+        // J = [[l c1, l c2], [l s1, l s2]] (paper eq. 1), s = J_dot q_dot (eq. 4).
+        let (j11, j12, j21, j22) = (l * c1, l * c2, l * s1, l * s2);
+        let s_t = -l * (w1 * s1 + w2 * s2);
+        let s_n = l * (w1 * c1 + w2 * c2);
+        // J M^-1, then Q = (J M^-1) J^T (eq. 3).
+        let (a11, a12) = (j11 * i11 + j12 * i12, j11 * i12 + j12 * i22);
+        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
+        let (q11, q12) = (a11 * j11 + a12 * j12, a11 * j21 + a12 * j22);
+        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+        TipDynamics {
+            z: Vector2::new(l * (s1 + s2), -l * (c1 + c2)),
+            z_dot: Vector2::new(j11 * qd[0] + j12 * qd[1], j21 * qd[0] + j22 * qd[1]),
+            jac: Matrix2::new(j11, j12, j21, j22),
+            m_inv: Matrix2::new(i11, i12, i12, i22),
+            qmat: Matrix2::new(q11, q12, q21, q22),
+            a_free: Vector2::new(j11 * qdd0 + j12 * qdd1 + s_t, j21 * qdd0 + j22 * qdd1 + s_n),
+            qdd_free: Vector2::new(qdd0, qdd1),
+        }
     }
 }
 
