@@ -207,12 +207,14 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
                 color: colors::ORANGE,
                 step: false,
                 dashed: false,
+                markers: false,
             },
-            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false, dashed: false },
+            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false, dashed: false, markers: false },
             Series::reference(&budget_label, vec![(0.0, budget), (t_end, budget)], colors::RED),
         ],
         y_range: Some((0.0, (counts.frame.max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),
         categories: None,
+        between_samples: None,
     }];
     let source = match (counts.unit(), target) {
         (CountUnit::Instructions, PilTarget::Qemu { .. }) => format!("QEMU -icount shift={ICOUNT_SHIFT}"),

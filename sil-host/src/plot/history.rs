@@ -44,8 +44,8 @@ fn panels_of_columns(columns: [Vec<(f64, f64)>; 6], step_torques: bool) -> [Pane
         Panel::numeric(
             "torque (N m)",
             vec![
-                Series { label: "u1", points: u1, color: colors::ORANGE, step: step_torques, dashed: false },
-                Series { label: "u2", points: u2, color: colors::RED, step: step_torques, dashed: false },
+                Series { label: "u1", points: u1, color: colors::ORANGE, step: step_torques, dashed: false, markers: false },
+                Series { label: "u2", points: u2, color: colors::RED, step: step_torques, dashed: false, markers: false },
             ],
         ),
         mode_panel_of_points(mode),
@@ -101,8 +101,9 @@ pub const MODE_NAMES: [&str; 3] = ["flight", "sliding", "sticking"];
 pub fn mode_panel_of_points(points: Vec<(f64, f64)>) -> Panel<'static> {
     Panel {
         y_label: "contact mode",
-        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true, dashed: false }],
+        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true, dashed: false, markers: false }],
         y_range: None,
         categories: Some(&MODE_NAMES),
+        between_samples: None,
     }
 }

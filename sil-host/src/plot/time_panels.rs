@@ -30,6 +30,8 @@ pub struct Series<'a> {
     /// Draw dashed: a reference or a limit (`z_t*`, the belt, a budget), so that a
     /// measured curve under it stays visible.
     pub dashed: bool,
+    /// Draw each point as a marker, not joined: instants such as impacts.
+    pub markers: bool,
 }
 
 /// One panel: a y-axis label and its curves.
@@ -42,24 +44,33 @@ pub struct Panel<'a> {
     pub y_range: Option<(f64, f64)>,
     /// A categorical y axis: the value `i` is drawn as `categories[i]`.
     pub categories: Option<&'static [&'static str]>,
+    /// What happened between the samples that the panel's curves cannot show
+    /// (`58 touchdowns between the samples, marked on z_n`): added to the note
+    /// when the panel is constant and so not drawn.
+    pub between_samples: Option<String>,
 }
 
 impl<'a> Panel<'a> {
     /// A numeric panel of `series` under `y_label` (`name (unit)`), its y range from the data.
     pub fn numeric(y_label: &'a str, series: Vec<Series<'a>>) -> Self {
-        Self { y_label, series, y_range: None, categories: None }
+        Self { y_label, series, y_range: None, categories: None, between_samples: None }
     }
 }
 
 impl<'a> Series<'a> {
     /// A curve drawn as a line between its points.
     pub fn line(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false, dashed: false }
+        Self { label, points, color, step: false, dashed: false, markers: false }
     }
 
     /// A reference or a limit, dashed, drawn over the measured curves.
     pub fn reference(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false, dashed: true }
+        Self { label, points, color, step: false, dashed: true, markers: false }
+    }
+
+    /// Instants (impacts, events) drawn as markers over the curves.
+    pub fn markers(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label, points, color, step: false, dashed: false, markers: true }
     }
 }
 
@@ -131,7 +142,10 @@ fn constant_note(panel: &Panel) -> Option<String> {
     }
     if let Some(names) = panel.categories {
         let name = names.get(lo.round().max(0.0) as usize).copied().unwrap_or("?");
-        return Some(format!("{}: {name} throughout", panel.y_label));
+        return Some(match &panel.between_samples {
+            Some(between) => format!("{}: {name} at every sample ({between})", panel.y_label),
+            None => format!("{}: {name} throughout", panel.y_label),
+        });
     }
     let (name, unit) = match panel.y_label.split_once(" (") {
         Some((n, u)) => (n, format!(" {}", u.trim_end_matches(')'))),
@@ -256,17 +270,27 @@ fn draw_series<DB: DrawingBackend, Y>(mut chart: super::chart::Chart<'_, DB, Y>,
 where
     Y: plotters::coord::ranged1d::Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
 {
-    // Measured curves first, references and limits dashed over them.
-    for s in panel.series.iter().filter(|s| !s.dashed) {
+    // Measured curves first, references and limits dashed over them, instants on top.
+    for s in panel.series.iter().filter(|s| !s.dashed && !s.markers) {
         chart.draw_series(LineSeries::new(drawn_points(s), s.color.stroke_width(1))).map_err(|e| e.to_string())?;
     }
     for s in panel.series.iter().filter(|s| s.dashed) {
         chart.draw_series(DashedLineSeries::new(drawn_points(s), 6, 4, s.color.stroke_width(2))).map_err(|e| e.to_string())?;
     }
+    for s in panel.series.iter().filter(|s| s.markers) {
+        let points = s.points.iter().copied().filter(|p| p.1.is_finite());
+        chart.draw_series(points.map(|p| Circle::new(p, 3, s.color.filled()))).map_err(|e| e.to_string())?;
+    }
     Ok(())
 }
 
-/// A series' legend swatch: a line, dashed for a reference.
+/// A series' legend swatch: a line, dashed for a reference, a marker for instants.
 fn swatch(s: &Series) -> Swatch {
-    if s.dashed { Swatch::Dashed(s.color) } else { Swatch::Line(s.color) }
+    if s.markers {
+        Swatch::Marker(s.color)
+    } else if s.dashed {
+        Swatch::Dashed(s.color)
+    } else {
+        Swatch::Line(s.color)
+    }
 }

@@ -22,18 +22,22 @@ use analyses::sweep::{
     run::{Outcome, RunRow},
 };
 
-/// Colour of an outcome on the map.
+/// Colour of an outcome on the map. The outcomes a reader looks for (bouncing,
+/// oscillating, lift-off) are saturated colours of the Okabe-Ito palette (distinct
+/// under the common colour-vision deficiencies); staying in contact, the expected
+/// outcome, is a pale tint, as the paper shades only the bouncing region (Figs. 3
+/// and 9).
 pub fn outcome_color(o: Outcome) -> RGBColor {
     match o {
-        Outcome::Bouncing => colors::RED,
-        Outcome::Oscillating => colors::ORANGE,
-        Outcome::LiftOffOnly => colors::PURPLE,
-        Outcome::LiftOff => RGBColor(140, 20, 20),
-        Outcome::TargetNotReached => colors::GREY,
-        Outcome::Contact => colors::BLUE,
-        Outcome::Flight => colors::GREEN,
-        Outcome::SafeState => RGBColor(40, 40, 40),
-        Outcome::Failed => RGBColor(200, 200, 200),
+        Outcome::Bouncing => RGBColor(213, 94, 0),
+        Outcome::Oscillating => RGBColor(230, 159, 0),
+        Outcome::LiftOffOnly => RGBColor(204, 121, 167),
+        Outcome::LiftOff => RGBColor(0, 114, 178),
+        Outcome::TargetNotReached => RGBColor(240, 228, 66),
+        Outcome::Contact => RGBColor(228, 234, 242),
+        Outcome::Flight => RGBColor(86, 180, 233),
+        Outcome::SafeState => RGBColor(0, 158, 115),
+        Outcome::Failed => RGBColor(150, 150, 150),
         Outcome::Invalid => RGBColor(0, 0, 0),
     }
 }
@@ -57,10 +61,18 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let grid_rows = ics.len().div_ceil(cols);
     // At least 760 px, so that a one-panel map keeps a readable title.
     let width = (560 * cols as u32).max(760);
-    // The legend: one coloured box and name per outcome the sweep can give, packed
-    // in rows across the width (measured with the figures' font).
+    // The legend: one coloured box, name and count per outcome that occurs in this
+    // case (in the order of the outcomes the sweep can give), packed in rows across
+    // the width (measured with the figures' font).
     let outcomes: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
-    let legend = Legend::new(outcomes.iter().map(|o| (o.name().to_string(), Swatch::Box(outcome_color(*o)))).collect());
+    let legend = Legend::new(
+        outcomes
+            .iter()
+            .map(|&o| (o, rows.iter().filter(|r| r.outcome == o).count()))
+            .filter(|&(_, n)| n > 0)
+            .map(|(o, n)| (format!("{} ({n} run{})", o.name(), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
+            .collect(),
+    );
     let legend_h = legend.rows_height(width);
     let title_h = 40;
     let root = plot::svg_canvas(path, (width, title_h + legend_h + 470 * grid_rows as u32)).map_err(|e| err(&e))?;
@@ -120,14 +132,27 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     let cols = if mus.len() > 4 { 2 } else { 1 };
     let grid_rows = mus.len().div_ceil(cols);
     let width = 620 * cols as u32;
-    let mut legend = Legend::new(vec![(format!("threshold ({} rad/s)", spec.threshold), Swatch::Dashed(BLACK))]);
+    // The indicator spans from 0 (a tip at rest) to tens of rad/s (bouncing), and the
+    // threshold is 1e-6 rad/s: a log axis, values at or below a thousandth of the
+    // threshold drawn on its floor. One marker shape per initial condition (a hollow
+    // ring under a filled dot, then a triangle), so that equal values of two
+    // conditions both stay visible.
+    let floor = spec.threshold * 1e-3;
+    let mut legend = Legend::new(vec![(format!("threshold ({:e} rad/s)", spec.threshold), Swatch::Dashed(BLACK))]);
     for (i, ic) in ics.iter().enumerate() {
-        legend.entries.push((format!("from {}", ic.name), Swatch::Line(IC_COLORS[i % IC_COLORS.len()])));
+        let color = IC_COLORS[i % IC_COLORS.len()];
+        let swatch = match i % 3 {
+            0 => Swatch::Ring(color),
+            1 => Swatch::Marker(color),
+            _ => Swatch::Triangle(color),
+        };
+        legend.entries.push((format!("from {}", ic.name), swatch));
     }
+    legend.entries.push((format!("floor: at or below {floor:e} rad/s"), Swatch::Dashed(colors::GREY)));
     let (title_h, legend_h) = (40, legend.rows_height(width));
     let root = plot::svg_canvas(path, (width, title_h + legend_h + 240 * grid_rows as u32)).map_err(|e| err(&e))?;
     let title = format!(
-        "max theta1_dot over the record window against v_belt{}, {} ({law}, e_n = {e_n})",
+        "max theta1_dot over the record window against v_belt (log scale){}, {} ({law}, e_n = {e_n})",
         paper_figure(spec),
         controller_label(spec)
     );
@@ -141,33 +166,39 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     for (m, area) in panels.split_evenly((grid_rows, cols)).iter().enumerate().take(mus.len()) {
         let mu = mus[m];
         let at_mu: Vec<&&RunRow> = rows.iter().filter(|r| r.mu == mu).collect();
-        let (mut lo, mut hi) = (spec.threshold, spec.threshold);
-        for r in &at_mu {
-            if r.theta1_dot_max.is_finite() {
-                lo = lo.min(r.theta1_dot_max);
-                hi = hi.max(r.theta1_dot_max);
-            }
-        }
-        let pad = ((hi - lo) * 0.08).max(0.05);
+        let log = |v: f64| v.max(floor).log10();
+        let hi = at_mu.iter().map(|r| r.theta1_dot_max).filter(|v| v.is_finite()).fold(spec.threshold * 10.0, f64::max);
+        let (y_lo, y_hi) = (log(floor) - 0.3, log(hi) + 0.3);
         let caption = format!("mu = {mu}");
         let axes = plot::Axes {
             caption: Some(&caption),
             x: x_lo..x_hi,
-            y: (lo - pad)..(hi + pad),
+            y: y_lo..y_hi,
             x_desc: "v_belt (m/s)",
-            y_desc: "max theta1_dot (rad/s)",
+            y_desc: "log10 max theta1_dot (rad/s)",
         };
         let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         chart
-            .draw_series(DashedLineSeries::new([(x_lo, spec.threshold), (x_hi, spec.threshold)], 5, 4, BLACK.stroke_width(1)))
+            .draw_series(DashedLineSeries::new([(x_lo, log(floor)), (x_hi, log(floor))], 2, 4, colors::GREY.stroke_width(1)))
+            .map_err(|e| err(&e))?;
+        chart
+            .draw_series(DashedLineSeries::new([(x_lo, log(spec.threshold)), (x_hi, log(spec.threshold))], 5, 4, BLACK.stroke_width(1)))
             .map_err(|e| err(&e))?;
         for (i, ic) in ics.iter().enumerate() {
             let color = IC_COLORS[i % IC_COLORS.len()];
-            let mut pts: Vec<(f64, f64)> =
-                at_mu.iter().filter(|r| r.ic == ic.name && r.theta1_dot_max.is_finite()).map(|r| (r.v_belt, r.theta1_dot_max)).collect();
+            let mut pts: Vec<(f64, f64)> = at_mu
+                .iter()
+                .filter(|r| r.ic == ic.name && r.theta1_dot_max.is_finite())
+                .map(|r| (r.v_belt, log(r.theta1_dot_max)))
+                .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1))).map_err(|e| err(&e))?;
-            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))).map_err(|e| err(&e))?;
+            match i % 3 {
+                0 => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 5, color.stroke_width(2)))),
+                1 => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))),
+                _ => chart.draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 4, color.filled()))),
+            }
+            .map_err(|e| err(&e))?;
         }
     }
     root.present().map_err(|e| err(&e))

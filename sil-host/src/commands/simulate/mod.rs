@@ -50,6 +50,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let mut curves = TraceCurves::default();
     let (mut open_loop, row, startup) = OpenLoop::start(prepared, args.sample_dt);
     let mut n_events = startup.len();
+    curves.push_events(&startup);
     events.send(startup)?;
     curves.push(&row);
     trace.send(vec![row])?;
@@ -71,6 +72,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         failure = open_loop.advance(open_loop.k + 1, &mut rows, &mut new_events).err();
         wall += started.elapsed();
         n_events += new_events.len();
+        curves.push_events(&new_events);
         new_events = events.send(new_events)?;
         for row in &rows {
             curves.push(row);
