@@ -28,7 +28,7 @@ FOLDERS = {
     "poincare": ("poincare", ["--v-belt", "-0.5,-0.46", "--v-step", "0.02", "--transient", "10", "--record", "5",
                               "--lyap-iterations", "10", "--lyap-skip", "2"]),
     # zmax.csv, trials.csv and the limit traces
-    "zmax": ("zmax", ["--controller", "pid", "--x0", "d", "--ideal", "--tol", "0.02", "--duration", "2"]),
+    "zmax": ("zmax", ["--controller", "pid", "--x0", "d", "--ideal", "--tol", "0.02", "--duration", "3"]),
     "modes": ("modes", ["--grid", "40"]),
     "admissible": ("admissible", []),
 }
@@ -74,8 +74,8 @@ def test_every_csv_table_reads_as_the_former_reader_read_it(folders):
     # load reads the same tables.
     for name in FOLDERS:
         r = painleve.load(folders / name)
-        for t, table in r.tables.items():
-            assert_identical(table, reference_read_csv(folders / name / f"{t}.csv"), f"load {name}/{t}")
+        for p in sorted((folders / name).glob("*.csv")):
+            assert_identical(r.tables[p.stem], reference_read_csv(p), f"load {name}/{p.stem}")
 
 
 # Files the CLI does not write, with the cases of the typing rule; each is read as
