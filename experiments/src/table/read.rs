@@ -70,9 +70,15 @@ pub fn parse_csv(bytes: &[u8]) -> Result<Table, (Option<u64>, String)> {
     if bytes.is_empty() {
         return Ok(Table::default());
     }
-    let lines = || bytes.iter().filter(|&&b| b == b'\n').count() as u64;
+    let line_at = |offset: usize| 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count() as u64;
     if !bytes.ends_with(b"\n") {
-        return Err((Some(lines() + 1), "the file ends inside a row (a file cut off while it was written?)".into()));
+        return Err((Some(line_at(bytes.len())), "the file ends inside a row (a file cut off while it was written?)".into()));
+    }
+    if !bytes.contains(&b'"') {
+        // No quoted cell (the CLI quotes only text holding `,`, `"` or a line end):
+        // rows are lines and cells are split at commas, in parallel.
+        let text = std::str::from_utf8(bytes).map_err(|e| (Some(line_at(e.valid_up_to())), "not UTF-8 text".to_string()))?;
+        return parse_plain(text).map_err(|(offset, message)| (Some(line_at(offset)), message));
     }
     let reader = || csv::ReaderBuilder::new().has_headers(true).flexible(true).from_reader(bytes);
     let fail = |e: csv::Error| {
@@ -85,11 +91,7 @@ pub fn parse_csv(bytes: &[u8]) -> Result<Table, (Option<u64>, String)> {
     };
     let mut r = reader();
     let header: Vec<String> = r.headers().map_err(fail)?.iter().map(str::to_string).collect();
-    for (i, name) in header.iter().enumerate() {
-        if header[..i].contains(name) {
-            return Err((Some(1), format!("the header names the column `{name}` twice")));
-        }
-    }
+    twice(&header).map_err(|m| (Some(1), m))?;
     let mut columns: Vec<Infer> = header.iter().map(|_| Infer::Empty(0)).collect();
     let mut record = csv::StringRecord::new();
     let mut rows = 0usize;
@@ -124,6 +126,109 @@ pub fn parse_csv(bytes: &[u8]) -> Result<Table, (Option<u64>, String)> {
         })
         .collect();
     Ok(Table { columns })
+}
+
+/// Refuses a header that names a column twice.
+fn twice(header: &[String]) -> Result<(), String> {
+    match header.iter().enumerate().find(|(i, name)| header[..*i].contains(name)) {
+        Some((_, name)) => Err(format!("the header names the column `{name}` twice")),
+        None => Ok(()),
+    }
+}
+
+/// Bytes per chunk of rows typed on one thread, at least.
+const CHUNK_BYTES: usize = 1 << 20;
+
+/// [`parse_csv`] of a file without quotes (UTF-8, ending with a line end): a
+/// row per line (a `\r` before the `\n` dropped, blank lines skipped), cells
+/// split at commas; the rows typed in chunks on rayon's threads, the chunks'
+/// columns then joined ([`Infer::join`]: the same types and values as one pass).
+/// The error is `(byte offset, message)`.
+fn parse_plain(text: &str) -> Result<Table, (usize, String)> {
+    let end = text.find('\n').unwrap_or(text.len());
+    let header: Vec<String> = text[..end].strip_suffix('\r').unwrap_or(&text[..end]).split(',').map(str::to_string).collect();
+    twice(&header).map_err(|m| (0, m))?;
+    if text[..end].trim_end_matches('\r').is_empty() {
+        // A blank first line: no header, no table (as the csv crate reads it).
+        return Ok(Table::default());
+    }
+    let body_at = (end + 1).min(text.len());
+    let body = &text[body_at..];
+    // Chunks of whole lines, one or a few per thread.
+    let parts = (body.len() / CHUNK_BYTES).clamp(1, 4 * rayon::current_num_threads());
+    let mut bounds = vec![0];
+    for k in 1..parts {
+        let at = (body.len() * k / parts).max(*bounds.last().unwrap_or(&0));
+        match body.as_bytes()[at..].iter().position(|&b| b == b'\n') {
+            Some(i) if at + i + 1 < body.len() => bounds.push(at + i + 1),
+            _ => break,
+        }
+    }
+    bounds.push(body.len());
+    bounds.dedup();
+    let ncols = header.len();
+    use rayon::prelude::*;
+    let chunks: Vec<Vec<Infer>> = bounds
+        .par_windows(2)
+        .map(|w| typed_lines(&body[w[0]..w[1]], body_at + w[0], ncols))
+        .collect::<Result<_, _>>()?;
+    let mut columns: Vec<Infer> = (0..ncols).map(|_| Infer::Empty(0)).collect();
+    for chunk in chunks {
+        for (c, part) in columns.iter_mut().zip(chunk) {
+            c.join(part);
+        }
+    }
+    // The columns that turned out text after typed cells: their text, from a second pass.
+    let redo: Vec<usize> = (0..ncols).filter(|&i| matches!(columns[i], Infer::Redo)).collect();
+    let mut text_of: Vec<Vec<String>> = redo.iter().map(|_| Vec::new()).collect();
+    if !redo.is_empty() {
+        for line in body.split_terminator('\n') {
+            let line = line.strip_suffix('\r').unwrap_or(line);
+            if line.is_empty() {
+                continue;
+            }
+            let mut cells = line.split(',');
+            let mut at = 0;
+            for (t, &i) in text_of.iter_mut().zip(&redo) {
+                let cell = cells.nth(i - at).unwrap_or_default();
+                at = i + 1;
+                t.push(cell.to_string());
+            }
+        }
+    }
+    let mut text_of = text_of.into_iter();
+    let columns = header
+        .into_iter()
+        .zip(columns)
+        .map(|(name, c)| (name, c.finish().unwrap_or_else(|| Column::Str(text_of.next().unwrap_or_default()))))
+        .collect();
+    Ok(Table { columns })
+}
+
+/// The columns of the lines `lines` (whole lines, starting at byte `at` of the
+/// file), typed; the error is `(byte offset, message)`.
+fn typed_lines(lines: &str, at: usize, ncols: usize) -> Result<Vec<Infer>, (usize, String)> {
+    let mut columns: Vec<Infer> = (0..ncols).map(|_| Infer::Empty(0)).collect();
+    let mut offset = at;
+    for line in lines.split_terminator('\n') {
+        let start = offset;
+        offset += line.len() + 1;
+        let line = line.strip_suffix('\r').unwrap_or(line);
+        if line.is_empty() {
+            continue;
+        }
+        let mut n = 0;
+        for cell in line.split(',') {
+            if let Some(c) = columns.get_mut(n) {
+                c.push(cell);
+            }
+            n += 1;
+        }
+        if n != ncols {
+            return Err((start, format!("{n} cells where the header has {ncols}")));
+        }
+    }
+    Ok(columns)
 }
 
 /// `table` (read from Arrow) with the columns a CSV of it reads back as, so a
@@ -255,6 +360,66 @@ impl Infer {
                 Err(_) => self.to_floats(cell),
             },
         }
+    }
+
+    /// Appends `next`, the same column typed over the rows that follow: the
+    /// column one pass over all the rows gives (its type depends only on which
+    /// kinds of cells it holds, the rule of this module).
+    fn join(&mut self, next: Self) {
+        use Infer as I;
+        let nan = |n: usize| std::iter::repeat_n(f64::NAN, n);
+        let floats = |c: Self| -> Vec<f64> {
+            match c {
+                I::Int(v) => v.into_iter().map(|i| i as f64).collect(),
+                I::UInt(v) => v.into_iter().map(|u| u as f64).collect(),
+                I::F64(v) => v,
+                I::Empty(n) => vec![f64::NAN; n],
+                _ => unreachable!("only numbers and empty cells are floats"),
+            }
+        };
+        let this = std::mem::replace(self, I::Redo);
+        *self = match (this, next) {
+            (I::Redo, _) | (_, I::Redo) => I::Redo,
+            (I::Empty(a), I::Empty(b)) => I::Empty(a + b),
+            (a, I::Empty(0)) => a,
+            (I::Empty(0), b) => b,
+            (I::Bool(mut a), I::Bool(b)) => {
+                a.extend(b);
+                I::Bool(a)
+            }
+            // Flags have no empty cell, and no other cell.
+            (I::Bool(_), _) | (_, I::Bool(_)) => I::Redo,
+            (I::Str(mut a), I::Str(b)) => {
+                a.extend(b);
+                I::Str(a)
+            }
+            (I::Empty(n), I::Str(b)) => I::Str(std::iter::repeat_n(String::new(), n).chain(b).collect()),
+            (I::Str(mut a), I::Empty(n)) => {
+                a.extend(std::iter::repeat_n(String::new(), n));
+                I::Str(a)
+            }
+            // Text after numbers, or numbers after text: the numbers' text is gone.
+            (I::Str(_), _) | (_, I::Str(_)) => I::Redo,
+            (I::Int(mut a), I::Int(b)) => {
+                a.extend(b);
+                I::Int(a)
+            }
+            (I::UInt(mut a), I::UInt(b)) => {
+                a.extend(b);
+                I::UInt(a)
+            }
+            (I::Int(a), I::UInt(b)) if a.iter().all(|&i| i >= 0) => I::UInt(a.into_iter().map(|i| i as u64).chain(b).collect()),
+            (I::UInt(mut a), I::Int(b)) if b.iter().all(|&i| i >= 0) => {
+                a.extend(b.into_iter().map(|i| i as u64));
+                I::UInt(a)
+            }
+            (I::Empty(n), b) => I::F64(nan(n).chain(floats(b)).collect()),
+            (a, b) => {
+                let mut a = floats(a);
+                a.extend(floats(b));
+                I::F64(a)
+            }
+        };
     }
 
     /// An integer column meeting a cell that is not one of its integers: floats
