@@ -194,3 +194,35 @@ def test_a_missing_file_or_a_folder_is_file_not_found(tmp_path):
             read(tmp_path)
     with pytest.raises(TypeError):
         painleve.read_csv(3)
+
+
+def test_a_long_file_read_in_chunks_reads_as_one_pass(tmp_path):
+    """A file of several MB is typed in chunks of rows on several threads, the
+    chunks' columns then joined: columns whose kind changes far into the file
+    (an integer column with a float at the end, flags with one empty cell, text
+    after numbers, empties only at the start) read as the former reader read them."""
+    n = 120_000
+    rows = []
+    for i in range(n):
+        late = i == n - 7
+        rows.append(
+            ",".join(
+                [
+                    repr(i * 1e-3),
+                    "2.5" if late else str(i),  # int64 until the end: float64
+                    "" if late else ("true" if i % 3 else "false"),  # flags, one empty: text
+                    "x" if late else repr(i * 0.5),  # numbers, then text: text
+                    "" if i < n // 2 else str(i),  # empty, then integers: float64 with NaN
+                    "" if i < n - 3 else "sliding",  # empty, then text
+                    str(2**63 + i) if i == n // 3 else str(i),  # one above int64: uint64
+                    "",  # never a value: NaN
+                    ("flight", "sliding", "sticking")[i % 3],
+                ]
+            )
+        )
+    p = tmp_path / "long.csv"
+    p.write_text("t,a,b,c,d,e,u,none,mode\n" + "\n".join(rows) + "\n")
+    assert p.stat().st_size > 4 << 20, "more than a few chunks"
+    got = painleve.read_csv(p)
+    assert_identical(got, reference_read_csv(p), "long")
+    assert [got[c].dtype.kind for c in got.columns] == ["f", "f", "U", "U", "f", "U", "u", "f", "U"]
