@@ -9,11 +9,23 @@ import os
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Set, Union
 
+import numpy as np
+
 from ._painleve import read_arrow as _read_arrow
 from ._painleve import read_csv as _read_csv
 from ._result import Result, Table, describe_violations
 
 __all__ = ["load", "read_arrow", "read_csv"]
+
+
+def _table(columns: Dict[str, Any], name: str) -> Table:
+    """A table from the compiled readers: a text column comes as ``(values,
+    codes)``, its distinct values and each row's index into them."""
+    for key, col in columns.items():
+        if isinstance(col, tuple):
+            values, codes = col
+            columns[key] = np.array(values, dtype=str)[codes]
+    return Table(columns, name)
 
 
 def _file(path: Union[str, "os.PathLike[str]"]) -> Path:
@@ -55,7 +67,7 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
             The message names the file and the line.
     """
     p = _file(path)
-    return Table(_read_csv(os.fspath(p)), p.stem)
+    return _table(_read_csv(os.fspath(p)), p.stem)
 
 
 def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
@@ -78,7 +90,7 @@ def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
             Float64, Int64, Boolean or Utf8.
     """
     p = _file(path)
-    return Table(_read_arrow(os.fspath(p)), p.stem)
+    return _table(_read_arrow(os.fspath(p)), p.stem)
 
 
 # Where each command's summary keeps the validity counters summed over its runs.

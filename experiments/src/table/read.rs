@@ -209,23 +209,29 @@ fn parse_plain(text: &str) -> Result<Table, (usize, String)> {
 /// file), typed; the error is `(byte offset, message)`.
 fn typed_lines(lines: &str, at: usize, ncols: usize) -> Result<Vec<Infer>, (usize, String)> {
     let mut columns: Vec<Infer> = (0..ncols).map(|_| Infer::Empty(0)).collect();
-    let mut offset = at;
-    for line in lines.split_terminator('\n') {
-        let start = offset;
-        offset += line.len() + 1;
-        let line = line.strip_suffix('\r').unwrap_or(line);
-        if line.is_empty() {
-            continue;
-        }
-        let mut n = 0;
-        for cell in line.split(',') {
+    // One scan of the bytes: a cell ends at `,` or at the line end (`\r\n` or
+    // `\n`); both are ASCII, so every cell is a slice of whole characters.
+    let (mut line, mut cell, mut n) = (0, 0, 0);
+    for (i, &b) in lines.as_bytes().iter().enumerate() {
+        if b == b',' {
             if let Some(c) = columns.get_mut(n) {
-                c.push(cell);
+                c.push(&lines[cell..i]);
             }
             n += 1;
-        }
-        if n != ncols {
-            return Err((start, format!("{n} cells where the header has {ncols}")));
+            cell = i + 1;
+        } else if b == b'\n' {
+            let end = if i > cell && lines.as_bytes()[i - 1] == b'\r' { i - 1 } else { i };
+            if n == 0 && end == line {
+                // A blank line.
+            } else {
+                if let Some(c) = columns.get_mut(n) {
+                    c.push(&lines[cell..end]);
+                }
+                if n + 1 != ncols {
+                    return Err((at + line, format!("{} cells where the header has {ncols}", n + 1)));
+                }
+            }
+            (line, cell, n) = (i + 1, i + 1, 0);
         }
     }
     Ok(columns)
