@@ -26,12 +26,14 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def median_s(call, runs):
-    times = []
+    """Median wall time and median CPU time (this process, all its threads) of ``runs`` calls."""
+    wall, cpu = [], []
     for _ in range(runs):
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.process_time()
         call()
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
+        wall.append(time.perf_counter() - started)
+        cpu.append(time.process_time() - cpu_started)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def main():
@@ -63,17 +65,16 @@ def main():
             mb = csv.stat().st_size / 1e6
             print(f"\n{what}: trace.csv, {t.nrows} rows x {len(t)} columns, {mb:.1f} MB")
             ours = median_s(lambda: painleve.read_csv(csv), args.runs)
-            print(f"  painleve.read_csv        {ours:7.3f} s   {mb / ours:6.0f} MB/s")
-            print(f"  painleve.load (folder)   {median_s(lambda: painleve.load(out), args.runs):7.3f} s")
+            print(f"  {'':24} {'wall':>7}   {'CPU':>7}")
+            print(f"  painleve.read_csv        {ours[0]:7.3f} s {ours[1]:7.3f} s   {mb / ours[0]:4.0f} MB/s")
+            w, c = median_s(lambda: painleve.load(out), args.runs)
+            print(f"  painleve.load (folder)   {w:7.3f} s {c:7.3f} s")
             if pd is not None:
-                theirs = median_s(lambda: pd.read_csv(csv), args.runs)
-                print(f"  pandas.read_csv          {theirs:7.3f} s   {mb / theirs:6.0f} MB/s   (pandas / painleve: {theirs / ours:.1f})")
-                exact = median_s(lambda: pd.read_csv(csv, float_precision="round_trip"), args.runs)
-                print(f"  pandas, round_trip       {exact:7.3f} s   (the exact bits, as painleve reads them: {exact / ours:.1f})")
+                w, c = median_s(lambda: pd.read_csv(csv), args.runs)
+                print(f"  pandas.read_csv          {w:7.3f} s {c:7.3f} s   {mb / w:4.0f} MB/s   pandas / painleve: wall {w / ours[0]:.2f}, CPU {c / ours[1]:.2f}")
             if reference_read_csv is not None:
-                old = median_s(lambda: reference_read_csv(csv), max(1, args.runs // 3))
-                print(f"  former Python reader     {old:7.3f} s   (former / painleve: {old / ours:.0f})")
-
+                w, c = median_s(lambda: reference_read_csv(csv), max(1, args.runs // 3))
+                print(f"  former Python reader     {w:7.3f} s {c:7.3f} s   former / painleve: wall {w / ours[0]:.0f}")
 
 if __name__ == "__main__":
     main()
