@@ -45,7 +45,7 @@ def test_progress_in_a_saved_notebook_is_one_output():
     # Long enough for several rewrites (one every 250 ms from 0.5 s on); the
     # second call is quick (under 0.5 s): no progress output at all.
     nb.cells = [
-        nbformat.v4.new_code_cell("import painleve\nr = painleve.sweep(mu=0.6, v_belt=(-0.6, -0.3), v_belt_step=0.05, transient=60, record=20)\nprint(r.sweep.nrows, 'runs')"),
+        nbformat.v4.new_code_cell("import painleve\nr = painleve.sweep(mu=0.6, v_belt=(-0.6, -0.3), v_belt_step=0.025, transient=600, record=200)\nprint(r.sweep.nrows, 'runs')"),
         nbformat.v4.new_code_cell("q = painleve.simulate(duration=0.05)\nprint(q.trace.nrows, 'samples')"),
     ]
     updates = []
@@ -71,7 +71,7 @@ def test_progress_in_a_saved_notebook_is_one_output():
     assert line.output_type == "display_data", line
     text = line.data["text/plain"]
     assert "\r" not in text and "\n" not in text.strip(), repr(text)
-    assert text.startswith("sweep: 14/14 runs (100 %)"), text
+    assert text.startswith("sweep: 26/26 runs (100 %)"), text
     assert not any(o.output_type == "stream" and o.name == "stderr" for o in long_call.outputs), "nothing on stderr"
-    assert any("14 runs" in o.get("text", "") for o in long_call.outputs), "the cell's own output"
+    assert any("26 runs" in o.get("text", "") for o in long_call.outputs), "the cell's own output"
     assert [o.output_type for o in quick_call.outputs] == ["stream"], "a quick call shows no progress"
