@@ -172,12 +172,22 @@ fn parse_plain(text: &str) -> Result<Table, (usize, String)> {
         .par_windows(2)
         .map(|w| typed_lines(&body[w[0]..w[1]], body_at + w[0], ncols))
         .collect::<Result<_, _>>()?;
-    let mut columns: Vec<Infer> = (0..ncols).map(|_| Infer::Empty(0)).collect();
-    for chunk in chunks {
-        for (c, part) in columns.iter_mut().zip(chunk) {
-            c.join(part);
-        }
-    }
+    // Each column's chunks joined, its values copied once.
+    let mut parts: Vec<std::vec::IntoIter<Infer>> = chunks.into_iter().map(Vec::into_iter).collect();
+    let columns: Vec<Infer> = (0..ncols)
+        .map(|_| {
+            let pieces: Vec<Infer> = parts.iter_mut().filter_map(Iterator::next).collect();
+            let total = pieces.iter().map(Infer::len).sum();
+            let mut c = Infer::Empty(0);
+            for (k, piece) in pieces.into_iter().enumerate() {
+                c.join(piece);
+                if k == 0 {
+                    c.reserve(total);
+                }
+            }
+            c
+        })
+        .collect();
     // The columns that turned out text after typed cells: their text, from a second pass.
     let redo: Vec<usize> = (0..ncols).filter(|&i| matches!(columns[i], Infer::Redo)).collect();
     let mut text_of: Vec<Vec<String>> = redo.iter().map(|_| Vec::new()).collect();
@@ -212,6 +222,7 @@ fn typed_lines(lines: &str, at: usize, ncols: usize) -> Result<Vec<Infer>, (usiz
     // One scan of the bytes: a cell ends at `,` or at the line end (`\r\n` or
     // `\n`); both are ASCII, so every cell is a slice of whole characters.
     let (mut line, mut cell, mut n) = (0, 0, 0);
+    let mut reserved = false;
     for (i, &b) in lines.as_bytes().iter().enumerate() {
         if b == b',' {
             if let Some(c) = columns.get_mut(n) {
@@ -230,6 +241,12 @@ fn typed_lines(lines: &str, at: usize, ncols: usize) -> Result<Vec<Infer>, (usiz
                 if n + 1 != ncols {
                     return Err((at + line, format!("{} cells where the header has {ncols}", n + 1)));
                 }
+            }
+            if !reserved && end > line {
+                // Room for as many rows as lines of this one's length fit in the chunk.
+                reserved = true;
+                let rows = lines.len() / (i + 1 - line) + 16;
+                columns.iter_mut().for_each(|c| c.reserve(rows));
             }
             (line, cell, n) = (i + 1, i + 1, 0);
         }
@@ -365,6 +382,32 @@ impl Infer {
                 Ok(u) => v.push(u),
                 Err(_) => self.to_floats(cell),
             },
+        }
+    }
+
+    /// The number of rows (0 for a column to read again).
+    fn len(&self) -> usize {
+        match self {
+            Self::Empty(n) => *n,
+            Self::Bool(v) => v.len(),
+            Self::Int(v) => v.len(),
+            Self::UInt(v) => v.len(),
+            Self::F64(v) => v.len(),
+            Self::Str(v) => v.len(),
+            Self::Redo => 0,
+        }
+    }
+
+    /// Room for `rows` rows in all (a typed column's values; nothing otherwise).
+    fn reserve(&mut self, rows: usize) {
+        let more = rows.saturating_sub(self.len());
+        match self {
+            Self::Bool(v) => v.reserve(more),
+            Self::Int(v) => v.reserve(more),
+            Self::UInt(v) => v.reserve(more),
+            Self::F64(v) => v.reserve(more),
+            Self::Str(v) => v.reserve(more),
+            Self::Empty(_) | Self::Redo => {}
         }
     }
 
