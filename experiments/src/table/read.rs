@@ -168,10 +168,8 @@ fn parse_plain(text: &str) -> Result<Table, (usize, String)> {
     bounds.dedup();
     let ncols = header.len();
     use rayon::prelude::*;
-    let chunks: Vec<Vec<Infer>> = bounds
-        .par_windows(2)
-        .map(|w| typed_lines(&body[w[0]..w[1]], body_at + w[0], ncols))
-        .collect::<Result<_, _>>()?;
+    let chunks: Vec<Vec<Infer>> =
+        bounds.par_windows(2).map(|w| typed_lines(&body[w[0]..w[1]], body_at + w[0], ncols)).collect::<Result<_, _>>()?;
     // Each column's chunks joined, its values copied once.
     let mut parts: Vec<std::vec::IntoIter<Infer>> = chunks.into_iter().map(Vec::into_iter).collect();
     let columns: Vec<Infer> = (0..ncols)
@@ -315,7 +313,10 @@ fn float(cell: &str) -> Option<f64> {
     // Python also takes surrounding whitespace and `_` between two digits.
     let s = cell.trim();
     let b = s.as_bytes();
-    let underscores_ok = b.iter().enumerate().all(|(i, &c)| c != b'_' || (i > 0 && i + 1 < b.len() && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit()));
+    let underscores_ok = b
+        .iter()
+        .enumerate()
+        .all(|(i, &c)| c != b'_' || (i > 0 && i + 1 < b.len() && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit()));
     if !underscores_ok || (s.len() == cell.len() && !s.contains('_')) {
         return None;
     }
@@ -374,13 +375,13 @@ impl Infer {
                 Some(Ok(i)) => v.push(i),
                 Some(Err(())) => match cell.parse::<u64>() {
                     Ok(u) if v.iter().all(|&i| i >= 0) => *self = Self::UInt(v.iter().map(|&i| i as u64).chain([u]).collect()),
-                    _ => self.to_floats(cell),
+                    _ => self.become_floats(cell),
                 },
-                None => self.to_floats(cell),
+                None => self.become_floats(cell),
             },
             Self::UInt(v) => match cell.parse::<u64>() {
                 Ok(u) => v.push(u),
-                Err(_) => self.to_floats(cell),
+                Err(_) => self.become_floats(cell),
             },
         }
     }
@@ -474,7 +475,7 @@ impl Infer {
     /// An integer column meeting a cell that is not one of its integers: floats
     /// (each integer converted with correct rounding, as Python's `float` reads
     /// its digits), or text.
-    fn to_floats(&mut self, cell: &str) {
+    fn become_floats(&mut self, cell: &str) {
         let x = if cell.is_empty() { Some(f64::NAN) } else { float(cell) };
         let Some(x) = x else {
             *self = Self::Redo;
