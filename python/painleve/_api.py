@@ -106,8 +106,9 @@ def simulate(
             0.24}`` or ``["plant.m=0.24"]``; keys ``plant.m``, ``plant.l``,
             ``plant.sigma``, ``plant.k``, ``plant.h``, ``plant.alpha0``, ``plant.g``.
         strict: raise :class:`PainleveError` (exit code 1) on a model violation.
-        progress: ``True`` a progress line on stderr, ``False`` none, or a
-            callable ``f(done, total)`` (samples).
+        progress: ``True`` a progress line (on stderr, rewritten in place; in
+            a Jupyter notebook one output updated in place), ``False`` none,
+            or a callable ``f(done, total)`` (samples).
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: parameters,

@@ -29,7 +29,7 @@ import tempfile
 import typing
 from typing import Any, Callable, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Union
 
-from . import _painleve
+from . import _painleve, _progress
 
 Overrides = Union[None, str, Mapping[str, Any], Sequence[str]]
 
@@ -297,7 +297,7 @@ def call(name: str, fn: Callable[..., Any], given: Dict[str, Any], progress: Any
         try:
             if name in ("admissible", "modes"):
                 return native(toks)
-            return native(toks, progress)
+            return native(toks, _progress.resolve(progress))
         except _painleve.PainleveError as e:
             # The message in the call's terms (parameters, not flags); the
             # attributes (exit_code, result) kept.

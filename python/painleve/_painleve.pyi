@@ -41,7 +41,9 @@ def cli_defaults(command: str) -> Dict[str, List[str]]:
 def default_scenario_toml() -> str:
     """The embedded default scenario's TOML text."""
 def read_arrow(path: str) -> Dict[str, Any]:
-    """An Arrow IPC file or stream as ``{column: array}`` (lists of ``str`` for text)."""
+    """An Arrow IPC file or stream as ``{column: array}`` (lists of ``str`` for text), typed as its CSV reads."""
+def read_csv(path: str) -> Dict[str, Any]:
+    """A CSV table as ``{column: array}`` (lists of ``str`` for text), each column typed from its cells."""
 def toml_to_json(text: str) -> str:
     """A TOML document as JSON text."""
 def json_to_toml(text: str) -> str:

@@ -10,7 +10,7 @@
 //! returns a dict (`convert::Outcome`) the Python layer wraps in
 //! `painleve.Result`. See docs/python.md.
 
-mod arrow;
+mod read;
 mod cli;
 mod commands;
 mod convert;
@@ -89,7 +89,8 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::zmax, m)?)?;
     m.add_function(wrap_pyfunction!(commands::run, m)?)?;
     m.add_function(wrap_pyfunction!(commands::sensitivity, m)?)?;
-    m.add_function(wrap_pyfunction!(arrow::read_arrow, m)?)?;
+    m.add_function(wrap_pyfunction!(read::read_arrow, m)?)?;
+    m.add_function(wrap_pyfunction!(read::read_csv, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_choices, m)?)?;
     m.add_function(wrap_pyfunction!(default_scenario_toml, m)?)?;

@@ -52,10 +52,13 @@ impl Control {
 }
 
 /// How progress is shown: `progress=False`/`None` nothing, `True` a line on
-/// `sys.stderr` rewritten in place, a callable `f(done, total)` called instead.
+/// `sys.stderr` rewritten in place (`\r`), a callable `f(done, total)` called
+/// instead, or an object with a method `show(text, last)` given the same line
+/// (`painleve._progress.NotebookLine`, which `painleve` passes for `True` under
+/// Jupyter: one display output updated in place, not a stream of rewrites).
 enum Reporter {
     Silent,
-    Text { label: &'static str, unit: &'static str, shown: bool },
+    Text { label: &'static str, unit: &'static str, shown: bool, line: Option<Py<PyAny>> },
     Callback(Py<PyAny>),
 }
 
@@ -64,7 +67,8 @@ impl Reporter {
         Ok(match progress {
             None => Self::Silent,
             Some(p) if p.is_callable() => Self::Callback(p.clone().unbind()),
-            Some(p) if p.is_truthy()? => Self::Text { label, unit, shown: false },
+            Some(p) if p.hasattr("show")? => Self::Text { label, unit, shown: false, line: Some(p.clone().unbind()) },
+            Some(p) if p.is_truthy()? => Self::Text { label, unit, shown: false, line: None },
             Some(_) => Self::Silent,
         })
     }
@@ -74,7 +78,7 @@ impl Reporter {
         match self {
             Self::Silent => Ok(()),
             Self::Callback(f) => f.call1(py, (done, total)).map(|_| ()),
-            Self::Text { label, unit, shown } => {
+            Self::Text { label, unit, shown, line } => {
                 let elapsed = started.elapsed().as_secs_f64();
                 // Quick calls print nothing; a long one shows its line from 0.5 s on.
                 if !*shown && (last || elapsed < 0.5) {
@@ -91,8 +95,11 @@ impl Reporter {
                 } else {
                     String::new()
                 };
-                let end = if last { "\n" } else { "" };
-                write_stderr(py, &format!("\r{label}: {of}, {elapsed:.1} s{eta}   {end}"))
+                let text = format!("{label}: {of}, {elapsed:.1} s{eta}");
+                match line {
+                    Some(sink) => sink.call_method1(py, "show", (text, last)).map(|_| ()),
+                    None => write_stderr(py, &format!("\r{text}   {}", if last { "\n" } else { "" })),
+                }
             }
         }
     }
@@ -100,7 +107,7 @@ impl Reporter {
     /// Ends a progress line left open by an interrupted call (so that the traceback
     /// starts on a line of its own).
     fn interrupted(&self, py: Python<'_>) {
-        if let Self::Text { shown: true, .. } = self {
+        if let Self::Text { shown: true, line: None, .. } = self {
             let _ = write_stderr(py, "\n");
         }
     }

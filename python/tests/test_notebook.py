@@ -32,3 +32,46 @@ def test_paper_notebook_executes():
     assert "lift-offs 0" in text, "the hybrid closed loop from x0d does not lift off"
     images = sum(1 for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []) if "image/png" in o.get("data", {}))
     assert images == 3, f"{images} figures"
+
+
+def test_progress_in_a_saved_notebook_is_one_output():
+    """Issue 44, 5: under Jupyter the progress line is one display output updated
+    in place (IPython's display_id), so a saved notebook holds it once with its
+    last text, not one stderr output per rewrite (the terminal's ``\\r`` form)."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    pytest.importorskip("ipykernel")
+    nb = nbformat.v4.new_notebook()
+    # Long enough for several rewrites (one every 250 ms from 0.5 s on); the
+    # second call is quick (under 0.5 s): no progress output at all.
+    nb.cells = [
+        nbformat.v4.new_code_cell("import painleve\nr = painleve.sweep(mu=0.6, v_belt=(-0.6, -0.3), v_belt_step=0.025, transient=600, record=200)\nprint(r.sweep.nrows, 'runs')"),
+        nbformat.v4.new_code_cell("q = painleve.simulate(duration=0.05)\nprint(q.trace.nrows, 'samples')"),
+    ]
+    updates = []
+
+    class Client(nbclient.NotebookClient):
+        def process_message(self, msg, *args, **kwargs):
+            if msg["header"]["msg_type"] == "update_display_data":
+                updates.append(msg["content"]["data"]["text/plain"])
+            return super().process_message(msg, *args, **kwargs)
+
+    Client(nb, timeout=600, kernel_name="python3").execute()
+    assert len(updates) >= 2, f"the line was rewritten in place several times: {updates}"
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        path = f"{d}/progress.ipynb"
+        nbformat.write(nb, path)
+        saved = nbformat.read(path, as_version=4)
+    long_call, quick_call = saved.cells
+    progress = [o for o in long_call.outputs if "sweep:" in (o.get("text") or o.get("data", {}).get("text/plain", ""))]
+    assert len(progress) == 1, f"{len(progress)} progress outputs: {progress}"
+    (line,) = progress
+    assert line.output_type == "display_data", line
+    text = line.data["text/plain"]
+    assert "\r" not in text and "\n" not in text.strip(), repr(text)
+    assert text.startswith("sweep: 26/26 runs (100 %)"), text
+    assert not any(o.output_type == "stream" and o.name == "stderr" for o in long_call.outputs), "nothing on stderr"
+    assert any("26 runs" in o.get("text", "") for o in long_call.outputs), "the cell's own output"
+    assert [o.output_type for o in quick_call.outputs] == ["stream"], "a quick call shows no progress"

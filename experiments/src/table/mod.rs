@@ -7,10 +7,12 @@
 //! `events`, the closed-loop trace) declare their columns with [`crate::csv_row!`]
 //! ([`ColumnRows`], typed, no per-cell dispatch); any other row type that derives
 //! `serde::Serialize` goes through [`Table::of_rows`] ([`rows`], the cells the
-//! `csv` crate would write).
+//! `csv` crate would write). [`read`] reads a CSV table back, with the column
+//! types a reader of the file sees (and gives an Arrow table the same types).
 
 pub mod arrow;
 pub mod csv;
+pub mod read;
 pub mod rows;
 
 use serde::Serialize;
