@@ -10,11 +10,11 @@
 //! returns a dict (`convert::Outcome`) the Python layer wraps in
 //! `painleve.Result`. See docs/python.md.
 
-mod read;
 mod cli;
 mod commands;
 mod convert;
 mod objects;
+mod read;
 mod work;
 
 use pyo3::prelude::*;

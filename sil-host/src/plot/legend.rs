@@ -19,8 +19,10 @@ pub enum Swatch {
     Ring(RGBColor),
     /// A filled square of this colour (a map's cell).
     Box(RGBColor),
-    /// A filled triangle of this colour (points outside an axis, marked at its edge).
+    /// A filled triangle of this colour pointing up (points above an axis, marked at its edge).
     Triangle(RGBColor),
+    /// A filled triangle of this colour pointing down (points below an axis, marked at its edge).
+    TriangleDown(RGBColor),
 }
 
 /// A legend: labelled swatches, in the order given.
@@ -130,6 +132,10 @@ fn draw_entry<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, (x, y): (i32, i
         Swatch::Triangle(c) => {
             let cx = x + SWATCH_W / 2;
             area.draw(&Polygon::new(vec![(cx - 5, mid + 4), (cx + 5, mid + 4), (cx, mid - 5)], c.filled())).map_err(e)?
+        }
+        Swatch::TriangleDown(c) => {
+            let cx = x + SWATCH_W / 2;
+            area.draw(&Polygon::new(vec![(cx - 5, mid - 4), (cx + 5, mid - 4), (cx, mid + 5)], c.filled())).map_err(e)?
         }
     }
     let style = TextStyle::from((FAMILY, LABEL_PX).into_font())

@@ -155,6 +155,16 @@ fn constant_note(panel: &Panel) -> Option<String> {
     Some(format!("{name} = {v}{unit} throughout"))
 }
 
+/// The end of the time axis: `t_range`'s end, or the round tick just after it when
+/// that is within 2 % of the span (a 10 s run's last sample is at 9.999 s: its axis
+/// ends at 10 s, not at its last round tick, 9 s).
+fn round_end(t_range: (f64, f64)) -> f64 {
+    let (t0, t1) = t_range;
+    let step = NiceAxis::step(&NiceAxis::new(t0..t1, 12), 12);
+    let up = (t1 / step).ceil() * step;
+    if up.is_finite() && up > t1 && up - t1 <= 0.02 * (t1 - t0) { up } else { t1 }
+}
+
 /// The points drawn for a series: decimated, as steps when asked, finite only.
 fn drawn_points(s: &Series) -> Vec<(f64, f64)> {
     let pts = decimate(&s.points, 4000);
@@ -182,6 +192,7 @@ fn drawn_points(s: &Series) -> Vec<(f64, f64)> {
 /// [`CliError::Plot`] when plotters fails (e.g. the file cannot be written).
 pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), CliError> {
     let err = plot_err(path);
+    let t_end = round_end(t_range);
     let notes: Vec<Option<String>> = panels.iter().map(constant_note).collect();
     let mut shown: Vec<&Panel> = panels.iter().zip(&notes).filter(|(_, n)| n.is_none()).map(|(p, _)| p).collect();
     if shown.is_empty() {
@@ -238,7 +249,7 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
             margin_top: 8,
             y_area: Some(y_area),
         };
-        let x = NiceAxis::new(t_range.0..t_range.1, 12);
+        let x = NiceAxis::new(t_range.0..t_end, 12);
         let drawn = match y_axis(panel) {
             YAxis::Categories(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
             YAxis::Numeric(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
@@ -292,5 +303,21 @@ fn swatch(s: &Series) -> Swatch {
         Swatch::Dashed(s.color)
     } else {
         Swatch::Line(s.color)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_end;
+
+    /// A run's axis ends at its duration, not at its last sample or last round tick;
+    /// an end far from a tick stays.
+    #[test]
+    fn a_ten_second_run_ends_at_ten_seconds() {
+        assert_eq!(round_end((0.0, 9.999)), 10.0);
+        assert_eq!(round_end((0.0, 10.0)), 10.0);
+        assert_eq!(round_end((0.0, 2.999)), 3.0);
+        assert_eq!(round_end((0.0, 9.5)), 9.5);
+        assert_eq!(round_end((0.0, 0.0)), 0.0);
     }
 }

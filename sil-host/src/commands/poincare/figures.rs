@@ -28,6 +28,11 @@ pub(crate) fn class_style(r: &PointResult) -> (RGBColor, &'static str) {
     }
 }
 
+/// Whether a point's label is the equilibrium class's ([`class_style`]).
+fn is_equilibrium(label: &str) -> bool {
+    label.starts_with("equilibrium")
+}
+
 /// The y range a diagram shows: all its points, except a few at either end set
 /// apart from the rest by a gap wider than a fifth of the whole span (within the
 /// lowest or highest 5 % of the points: an equilibrium far below a chaotic band),
@@ -64,8 +69,11 @@ fn draw_classes<DB: DrawingBackend>(
     radius: i32,
 ) -> Result<(), String> {
     let inside = |y: f64| y >= y_range.0 && y <= y_range.1;
-    let dots = pts.iter().filter(|p| inside(p.1)).map(|p| Circle::new((p.0, p.1), radius, p.2.filled()));
+    let dots = pts.iter().filter(|p| inside(p.1) && !is_equilibrium(p.3)).map(|p| Circle::new((p.0, p.1), radius, p.2.filled()));
     chart.draw_series(dots).map_err(|e| e.to_string())?;
+    // The equilibria over the section points, larger (a branch a reader looks for).
+    let equilibria = pts.iter().filter(|p| inside(p.1) && is_equilibrium(p.3)).map(|p| Circle::new((p.0, p.1), radius + 2, p.2.filled()));
+    chart.draw_series(equilibria).map_err(|e| e.to_string())?;
     // A triangle 8 px wide, pointing out of the axis, its tip on the edge.
     let marks = pts.iter().filter(|p| !inside(p.1)).map(|p| {
         let below = p.1 < y_range.0;
@@ -95,7 +103,25 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
             pts.extend(r.crossings.iter().map(|x| (r.v_belt, x.x[0].to_degrees(), c, label)));
         }
     }
-    let (lo, hi) = bulk_range(&pts.iter().map(|p| p.1).collect::<Vec<_>>());
+    // The section points set the range (a few far ones at its edge); the equilibria
+    // are a branch of the diagram (the paper's Fig. 4 draws it), so the range always
+    // takes them in.
+    let (mut lo, mut hi) = bulk_range(&pts.iter().filter(|p| !is_equilibrium(p.3)).map(|p| p.1).collect::<Vec<_>>());
+    if pts.iter().all(|p| is_equilibrium(p.3)) {
+        (lo, hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    }
+    let (mut eq_lo, mut eq_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in pts.iter().filter(|p| is_equilibrium(p.3)) {
+        (eq_lo, eq_hi) = (eq_lo.min(p.1), eq_hi.max(p.1));
+    }
+    if eq_lo <= eq_hi {
+        // Padded like the section points' range (5 % of the whole, at least 0.5 deg).
+        let pad = ((hi.max(eq_hi) - lo.min(eq_lo)) * 0.05).max(0.5);
+        (lo, hi) = (lo.min(eq_lo - pad), hi.max(eq_hi + pad));
+    }
+    if !lo.is_finite() || !hi.is_finite() || lo >= hi {
+        (lo, hi) = (-1.0, 1.0);
+    }
     // One marker per pixel row and belt speed (the figure is 750 px high): a
     // periodic orbit repeats its points hundreds of times.
     let resolution = (hi - lo).max(1e-9) / 1500.0;
@@ -129,10 +155,13 @@ fn legend_of(pts: &[(f64, f64, RGBColor, &'static str)], y_range: (f64, f64)) ->
     classes.sort_unstable_by_key(|c| c.0);
     classes.dedup_by_key(|c| c.0);
     let mut legend = Legend::new(classes.into_iter().map(|(l, c)| (l.to_string(), Swatch::Marker(c))).collect());
-    let outside: Vec<f64> = pts.iter().map(|p| p.1).filter(|y| *y < y_range.0 || *y > y_range.1).collect();
-    if !outside.is_empty() {
-        let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
-        legend.entries.push((format!("{} outside the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), Swatch::Triangle(BLACK)));
+    for (below, side) in [(true, "below"), (false, "above")] {
+        let outside: Vec<f64> = pts.iter().map(|p| p.1).filter(|&y| if below { y < y_range.0 } else { y > y_range.1 }).collect();
+        if !outside.is_empty() {
+            let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
+            let swatch = if below { Swatch::TriangleDown(BLACK) } else { Swatch::Triangle(BLACK) };
+            legend.entries.push((format!("{} {side} the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), swatch));
+        }
     }
     legend
 }
