@@ -274,13 +274,14 @@ impl McapFile {
     /// [`CliError::Io`] when writing fails.
     pub fn write_merged<A: McapRows, B: McapRows>(&mut self, a: (McapTable, &[A]), b: (McapTable, &[B])) -> Result<(), CliError> {
         let (ca, cb) = (A::columns(a.1), B::columns(b.1));
-        let time = |table: McapTable, cols: &[Column], i: usize| match &cols[self.tables[table.0].t] {
+        let (ta, tb) = (self.tables[a.0.0].t, self.tables[b.0.0].t);
+        let time = |t: usize, cols: &[Column], i: usize| match &cols[t] {
             Column::F64(v) => v[i],
             _ => f64::NAN,
         };
         let (mut i, mut j) = (0, 0);
         while i < a.1.len() || j < b.1.len() {
-            let take_b = i == a.1.len() || (j < b.1.len() && time(b.0, &cb, j) < time(a.0, &ca, i));
+            let take_b = i == a.1.len() || (j < b.1.len() && time(tb, &cb, j) < time(ta, &ca, i));
             if take_b {
                 self.write_row(b.0, &cb, j)?;
                 j += 1;
@@ -606,6 +607,27 @@ mod tests {
         let mut encodings: Vec<_> = summary.channels.values().map(|c| (c.topic.clone(), c.message_encoding.clone(), c.schema.as_ref().unwrap().encoding.clone())).collect();
         encodings.sort();
         assert_eq!(encodings[0], ("/events".to_string(), "json".to_string(), "jsonschema".to_string()));
+    }
+
+    /// The CLI's tables: every column but `t` in exactly one group, each group's
+    /// columns the table's; `add_table` accepts them.
+    #[test]
+    fn the_cli_tables_groups_hold_each_column_once() {
+        fn check<T: McapRows>() {
+            let mut grouped: Vec<&str> = T::GROUPS.iter().flat_map(|g| g.columns.iter().copied()).collect();
+            grouped.sort_unstable();
+            let mut names: Vec<&str> = T::NAMES.iter().copied().filter(|n| *n != "t").collect();
+            names.sort_unstable();
+            assert_eq!(grouped, names, "{}", T::TABLE);
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("t.mcap");
+            let mut f = McapFile::new(path.clone(), File::create(&path).unwrap(), None).unwrap();
+            f.add_table::<T>().unwrap();
+            f.finish().unwrap();
+        }
+        check::<crate::simulate::summary::TraceRow>();
+        check::<crate::simulate::summary::EventRow>();
+        check::<rig::record::PeriodRecord>();
     }
 
     #[test]
