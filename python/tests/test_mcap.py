@@ -140,7 +140,8 @@ def test_a_runs_mcap_trace_equals_its_csv(runs):
     assert c.trace.nrows == 1000
     assert_equals_csv(messages, c.trace, ["/state", "/contact", "/torques", "/firmware"])
     # A chunk per 100 periods (count-based, so the bytes are the same on every link).
-    assert len(summary.chunk_indexes) == 10
+    # (Its schemas and channels are in a chunk of their own, before the rows.)
+    assert sorted(len(c.message_index_offsets) for c in summary.chunk_indexes) == [0] + [4] * 10
     m = painleve.load(mcap_dir)
     assert m.command == "run" and list(m.tables) == ["trace"]
     for col in c.trace.columns:
@@ -152,7 +153,7 @@ def test_a_cut_mcap_file_gives_its_whole_chunks(runs, tmp_path):
     c = painleve.load(csv_dir).trace
     data = (mcap_dir / "trace.mcap").read_bytes()
     seen = set()
-    for frac in (0.15, 0.5, 0.93):
+    for frac in (0.15, 0.5, 0.8):
         cut = tmp_path / "trace.mcap"
         cut.write_bytes(data[: int(len(data) * frac)])
         tables = painleve.read_mcap(cut)

@@ -144,29 +144,34 @@ fn kind_name(k: Kind) -> &'static str {
 }
 
 /// The JSON Schema (draft 2020-12) of a group's messages: an object with `t`
-/// and the group's columns, all required; floats are `number` or `null` (NaN).
+/// and the group's columns, in the messages' order, all required; floats are
+/// `number` or `null` (NaN).
 fn schema_json(names: &[&str], kinds: &[Kind], group: &McapGroup) -> Result<Vec<u8>, String> {
-    let mut properties = serde_json::Map::new();
+    // Built as text: serde_json's maps sort their keys, and the order of the
+    // properties is what Foxglove lists.
+    let quote = |s: &str| serde_json::to_string(s).unwrap_or_default();
+    let mut properties = Vec::new();
     let mut required = Vec::new();
     for name in std::iter::once(&"t").chain(group.columns) {
         let i = names.iter().position(|n| n == name).ok_or_else(|| format!("group {}: no column `{name}`", group.topic))?;
         let t = match kinds[i] {
-            Kind::F64 => serde_json::json!(["number", "null"]),
-            Kind::Str => serde_json::json!("string"),
-            Kind::Bool => serde_json::json!("boolean"),
-            Kind::Int => serde_json::json!("integer"),
+            Kind::F64 => r#"["number","null"]"#,
+            Kind::Str => r#""string""#,
+            Kind::Bool => r#""boolean""#,
+            Kind::Int => r#""integer""#,
         };
-        properties.insert(name.to_string(), serde_json::json!({ "type": t, "description": describe(name) }));
-        required.push(*name);
+        properties.push(format!(r#"{}:{{"type":{t},"description":{}}}"#, quote(name), quote(describe(name))));
+        required.push(quote(name));
     }
-    let schema = serde_json::json!({
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": group.schema,
-        "type": "object",
-        "properties": properties,
-        "required": required,
-    });
-    serde_json::to_vec(&schema).map_err(|e| e.to_string())
+    let schema = format!(
+        r#"{{"$schema":"https://json-schema.org/draft/2020-12/schema","title":{},"type":"object","properties":{{{}}},"required":[{}]}}"#,
+        quote(group.schema),
+        properties.join(","),
+        required.join(",")
+    );
+    // Checked to parse, so a bad name or description fails here and not in a reader.
+    serde_json::from_str::<serde_json::Value>(&schema).map_err(|e| format!("group {}: schema: {e}", group.topic))?;
+    Ok(schema.into_bytes())
 }
 
 /// The channels of one table in an [`McapFile`].
