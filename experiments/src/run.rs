@@ -43,7 +43,11 @@ crate::csv_row!(PeriodRecord {
 impl crate::table::mcap::McapRows for PeriodRecord {
     const TABLE: &'static str = "trace";
     const GROUPS: &'static [crate::table::mcap::McapGroup] = &[
-        crate::table::mcap::McapGroup { topic: "/state", schema: "painleve.State", columns: &["theta1", "theta1_dot", "theta2", "theta2_dot"] },
+        crate::table::mcap::McapGroup {
+            topic: "/state",
+            schema: "painleve.State",
+            columns: &["theta1", "theta1_dot", "theta2", "theta2_dot"],
+        },
         crate::table::mcap::McapGroup {
             topic: "/contact",
             schema: "painleve.Contact",

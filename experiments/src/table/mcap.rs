@@ -465,7 +465,8 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, CliError> {
             return Err(bad(format!("{}: message {} has sequence number {}", m.channel.topic, list.len(), m.sequence)));
         }
         let data: Cow<[u8]> = m.data;
-        let object = serde_json::from_slice(&data).map_err(|e| bad(format!("{}: message {}: not a JSON object: {e}", m.channel.topic, list.len())))?;
+        let object = serde_json::from_slice(&data)
+            .map_err(|e| bad(format!("{}: message {}: not a JSON object: {e}", m.channel.topic, list.len())))?;
         list.push(object);
     }
     let mut tables = Vec::new();
@@ -492,10 +493,16 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, CliError> {
                         })
                         .collect::<Result<_, _>>()?,
                 ),
-                "int" => Column::I64((0..n).map(|k| value(k).and_then(serde_json::Value::as_i64).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?),
-                "bool" => Column::Bool((0..n).map(|k| value(k).and_then(serde_json::Value::as_bool).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?),
+                "int" => Column::I64(
+                    (0..n).map(|k| value(k).and_then(serde_json::Value::as_i64).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?,
+                ),
+                "bool" => Column::Bool(
+                    (0..n).map(|k| value(k).and_then(serde_json::Value::as_bool).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?,
+                ),
                 "str" => Column::Str(
-                    (0..n).map(|k| value(k).and_then(serde_json::Value::as_str).map(String::from).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?,
+                    (0..n)
+                        .map(|k| value(k).and_then(serde_json::Value::as_str).map(String::from).ok_or_else(|| wrong(k)))
+                        .collect::<Result<_, _>>()?,
                 ),
                 other => return Err(bad(format!("table {}: column `{name}` of unknown kind `{other}`", spec.name))),
             };
@@ -539,7 +546,8 @@ mod tests {
     }
 
     fn back(table: &Table) -> Vec<Row> {
-        let [(_, Column::F64(t)), (_, Column::F64(a)), (_, Column::Str(b)), (_, Column::Bool(c)), (_, Column::I64(d))] = &table.columns[..] else {
+        let [(_, Column::F64(t)), (_, Column::F64(a)), (_, Column::Str(b)), (_, Column::Bool(c)), (_, Column::I64(d))] = &table.columns[..]
+        else {
             panic!("unexpected columns {:?}", table.columns)
         };
         (0..t.len()).map(|i| Row { t: t[i], a: a[i], b: b[i].clone(), c: c[i], d: u32::try_from(d[i]).unwrap() }).collect()
@@ -603,13 +611,18 @@ mod tests {
         let (p, q) = (write("a.mcap"), write("b.mcap"));
         assert_eq!(std::fs::read(&p).unwrap(), std::fs::read(&q).unwrap());
         let bytes = std::fs::read(&p).unwrap();
-        let times: Vec<(String, u64)> = MessageStream::new(&bytes).unwrap().map(|m| m.unwrap()).map(|m| (m.channel.topic.clone(), m.log_time)).collect();
+        let times: Vec<(String, u64)> =
+            MessageStream::new(&bytes).unwrap().map(|m| m.unwrap()).map(|m| (m.channel.topic.clone(), m.log_time)).collect();
         assert!(times.windows(2).all(|w| w[0].1 <= w[1].1), "log times in order");
         assert_eq!(times.iter().filter(|(t, _)| t == "/events").map(|(_, ns)| *ns).collect::<Vec<_>>(), [0, 10_500_000, 500_000_000]);
         let tables = read_mcap(&p).unwrap();
         assert_eq!(tables.iter().map(|(n, t)| (n.as_str(), t.rows())).collect::<Vec<_>>(), [("trace", 100), ("events", 3)]);
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-        let mut encodings: Vec<_> = summary.channels.values().map(|c| (c.topic.clone(), c.message_encoding.clone(), c.schema.as_ref().unwrap().encoding.clone())).collect();
+        let mut encodings: Vec<_> = summary
+            .channels
+            .values()
+            .map(|c| (c.topic.clone(), c.message_encoding.clone(), c.schema.as_ref().unwrap().encoding.clone()))
+            .collect();
         encodings.sort();
         assert_eq!(encodings[0], ("/events".to_string(), "json".to_string(), "jsonschema".to_string()));
     }
