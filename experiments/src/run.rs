@@ -38,6 +38,34 @@ crate::csv_row!(PeriodRecord {
     status: int,
 });
 
+// `--format mcap` (trace.mcap): the signal groups of the closed-loop trace, one
+// channel each; docs/rig.md "Outputs" lists them.
+impl crate::table::mcap::McapRows for PeriodRecord {
+    const TABLE: &'static str = "trace";
+    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[
+        crate::table::mcap::McapGroup {
+            topic: "/state",
+            schema: "painleve.State",
+            columns: &["theta1", "theta1_dot", "theta2", "theta2_dot"],
+        },
+        crate::table::mcap::McapGroup {
+            topic: "/contact",
+            schema: "painleve.Contact",
+            columns: &["mode", "f_t", "f_n", "z_t", "z_n", "z_t_ref", "lift_off_true"],
+        },
+        crate::table::mcap::McapGroup {
+            topic: "/torques",
+            schema: "painleve.Torques",
+            columns: &["u1_cmd", "u2_cmd", "u1_applied", "u2_applied"],
+        },
+        crate::table::mcap::McapGroup {
+            topic: "/firmware",
+            schema: "painleve.Firmware",
+            columns: &["lift_off_detected", "deadline_miss", "firmware_deadline_miss", "overruns", "status"],
+        },
+    ];
+}
+
 /// Checks `sil-host run`'s scenario and options before any link is made: the
 /// scenario with its overrides, the plant and firmware set-up, the link
 /// (`--in-process`, `--link`) with the options it allows and the faults it can

@@ -42,7 +42,7 @@ from ._api import (
     sweep,
     zmax,
 )
-from ._load import load, read_arrow, read_csv
+from ._load import load, read_arrow, read_csv, read_mcap
 from ._objects import Command, Firmware, Plant, Scenario, Sensed, Step, run_controller
 from ._result import PainleveWarning, Result, Table, describe_violations
 
@@ -65,6 +65,7 @@ __all__ = [
     "modes",
     "poincare",
     "read_arrow",
+    "read_mcap",
     "read_csv",
     "run",
     "run_controller",

@@ -1,6 +1,7 @@
 """``painleve.load``: any output folder ``sil-host`` writes, read back: its
 tables (CSV and Arrow) by the compiled module's readers (Rust, without the GIL;
-no pandas or pyarrow needed), JSON and text files by the standard library."""
+no pandas or pyarrow needed), the tables of ``--format mcap`` with the ``mcap``
+package, if installed, and JSON and text files by the standard library."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from ._painleve import read_arrow as _read_arrow
 from ._painleve import read_csv as _read_csv
 from ._result import Result, Table, describe_violations
 
-__all__ = ["load", "read_arrow", "read_csv"]
+__all__ = ["load", "read_arrow", "read_csv", "read_mcap"]
 
 
 def _table(columns: Dict[str, Any], name: str) -> Table:
@@ -95,6 +96,102 @@ def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
     return _table(_read_arrow(os.fspath(p)), p.stem)
 
 
+_MCAP_PACKAGE = "mcap==1.6.0"
+
+
+def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
+    """The tables of an MCAP file the CLI wrote (``--format mcap``:
+    ``trace.mcap``; ``simulate``: tables ``trace`` and ``events``, ``run`` and
+    ``pil``: ``trace``), as ``{name: Table}`` with the columns, types and values
+    :func:`read_csv` gives for the same tables as CSV: floats with their exact
+    bits (the file's JSON numbers are the CSV's shortest round-trip digits; a
+    JSON ``null``, written for NaN and infinities, reads as NaN), integers as
+    ``int64``, flags as ``bool``, text as ``str`` (a text column whose cells are
+    all empty as NaN, as :func:`read_csv` reads it). Row ``k`` is the ``k``-th
+    message of each of the table's channels; the columns' order comes from the
+    file's ``painleve.table.<name>`` metadata records. A file cut off (a run
+    killed while writing) gives its whole chunks, and of each table the rows
+    whose every message is there. Needs the ``mcap`` package (``pip install
+    mcap``); Foxglove opens the file directly.
+
+    Raises:
+        ImportError: the ``mcap`` package is not installed (the message names
+            it and the other ways to read the trace).
+        PainleveError: the file cannot be read, is not MCAP, holds no table
+            of sil-host, or a message is not the JSON object its table describes.
+    """
+    from ._painleve import PainleveError
+
+    path = Path(path)
+    try:
+        from mcap.exceptions import EndOfFile, McapError
+        from mcap.records import Channel, Message, Metadata
+        from mcap.stream_reader import StreamReader
+    except ImportError as e:
+        raise ImportError(
+            f"{path}: reading an MCAP trace needs the Python package `mcap` (pip install {_MCAP_PACKAGE}; "
+            "it brings zstandard for the zstd chunks); or open it in Foxglove, or write the tables "
+            "with --format csv or --format arrow, which painleve.load reads without it"
+        ) from e
+    specs: Dict[str, Dict[str, List[str]]] = {}
+    topics: Dict[int, str] = {}
+    messages: Dict[str, List[bytes]] = {}
+    try:
+        with open(path, "rb") as f:
+            try:
+                for record in StreamReader(f).records:
+                    if isinstance(record, Metadata) and record.name.startswith("painleve.table."):
+                        spec = {k: v.split(",") if v else [] for k, v in record.metadata.items()}
+                        specs[record.name[len("painleve.table.") :]] = spec
+                    elif isinstance(record, Channel):
+                        topics[record.id] = record.topic
+                    elif isinstance(record, Message):
+                        topic = topics.get(record.channel_id, "")
+                        got = messages.setdefault(topic, [])
+                        if record.sequence != len(got):
+                            raise PainleveError(f"{path}: {topic}: message {len(got)} has sequence number {record.sequence}")
+                        got.append(record.data)
+            except EndOfFile:
+                pass  # cut off while writing: the records up to the cut
+    except OSError as e:
+        raise PainleveError(f"{path}: {e}") from e
+    except McapError as e:
+        raise PainleveError(f"{path}: not an MCAP file: {e!r}") from e
+    if not specs:
+        raise PainleveError(f"{path}: no table in it (no painleve.table.* metadata record): not written by sil-host --format mcap")
+    tables: Dict[str, Table] = {}
+    for name, spec in specs.items():
+        columns, kinds, chans = spec.get("columns", []), spec.get("kinds", []), spec.get("topics", [])
+        if len(columns) != len(kinds):
+            raise PainleveError(f"{path}: table {name}: {len(columns)} columns but {len(kinds)} kinds")
+        n = min((len(messages.get(t, [])) for t in chans), default=0)
+        try:
+            objects = [[json.loads(m) for m in messages.get(t, [])[:n]] for t in chans]
+        except ValueError as e:
+            raise PainleveError(f"{path}: table {name}: a message is not JSON: {e}") from e
+        out: Dict[str, Any] = {}
+        for col, kind in zip(columns, kinds):
+            source = next((o for o in objects if o and col in o[0]), None)
+            try:
+                cells = [o[col] for o in source] if source is not None else []
+                if kind == "f64":
+                    out[col] = np.array([np.nan if c is None else float(c) for c in cells], dtype=np.float64)
+                elif kind == "int":
+                    out[col] = np.array([int(c) for c in cells], dtype=np.int64)
+                elif kind == "bool":
+                    out[col] = np.array([bool(c) for c in cells], dtype=bool)
+                elif cells and all(c == "" for c in cells):
+                    out[col] = np.full(len(cells), np.nan)
+                else:
+                    out[col] = np.array([str(c) for c in cells], dtype=str)
+            except (KeyError, TypeError, ValueError) as e:
+                raise PainleveError(f"{path}: table {name}: column `{col}` is not {kind} in every message: {e!r}") from e
+            if len(out[col]) != n:
+                raise PainleveError(f"{path}: table {name}: column `{col}` is in no message of {', '.join(chans)}")
+        tables[name] = Table(out, name)
+    return tables
+
+
 # Where each command's summary keeps the validity counters summed over its runs.
 _VALIDITY_AT = {
     "simulate": ("validity",),
@@ -107,8 +204,8 @@ _VALIDITY_AT = {
 }
 
 
-def _detect(files: Set[str], summary: Any) -> str:
-    """The command that wrote a folder, from its files."""
+def _detect(files: Set[str], summary: Any, tables: Optional[Dict[str, Table]] = None) -> str:
+    """The command that wrote a folder, from its files (and the tables of an MCAP file)."""
     if "report.json" in files:
         return "report"
     if "admissible.json" in files:
@@ -123,9 +220,9 @@ def _detect(files: Set[str], summary: Any) -> str:
         return "zmax"
     if "sensitivity.csv" in files:
         return "sensitivity"
-    if "events.csv" in files or "events.arrow" in files:
+    if "events.csv" in files or "events.arrow" in files or ("trace.mcap" in files and "events" in (tables or {})):
         return "simulate"
-    if "trace.csv" in files:
+    if "trace.csv" in files or "trace.mcap" in files:
         return "pil" if isinstance(summary, dict) and summary.get("pil") else "run"
     return "unknown"
 
@@ -153,7 +250,8 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     """Reads an output folder of ``sil-host`` (any command's ``--out DIR``).
 
     Every ``*.csv`` (and ``*.arrow``, :func:`read_arrow`) becomes a :class:`Table`
-    named as the file without its extension
+    named as the file without its extension, every table of a ``*.mcap``
+    (:func:`read_mcap`, with the ``mcap`` package) one named as in the file
     (``trace``, ``events``, ``sweep``, ``runs``, ``section``, ``classes``,
     ``zmax``, ``trials``, ``modes``, ``sensitivity``), ``summary.json`` the
     result's ``summary`` (``admissible.json`` for ``admissible``,
@@ -174,6 +272,8 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
         PainleveError: a table cannot be read (:func:`read_csv`,
             :func:`read_arrow`; the message names the file).
         ValueError: a JSON file does not parse (the message names it).
+        ImportError: the folder has an MCAP trace and the ``mcap`` package is
+            not installed (:func:`read_mcap`).
     """
     root = Path(path)
     if not root.is_dir():
@@ -191,6 +291,8 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
             tables[p.stem] = read_csv(p)
         elif p.suffix == ".arrow":
             tables[p.stem] = read_arrow(p)
+        elif p.suffix == ".mcap":
+            tables.update(read_mcap(p))
         elif p.suffix == ".json":
             try:
                 docs[p.stem] = json.loads(p.read_text(encoding="utf-8"))
@@ -204,7 +306,7 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     if "summary" not in docs:
         main = "admissible" if "admissible" in docs else "report" if "report" in docs else main
     summary = docs.pop(main, None)
-    command = _detect(files, summary)
+    command = _detect(files, summary, tables)
     if command == "report":
         summary = docs.pop("report", summary)
         extras["experiments"] = {p.name: load(p) for p in entries if p.is_dir() and any(q.is_file() for q in p.iterdir())}

@@ -13,9 +13,10 @@ use std::{
 
 use crate::{error::CliError, folder_lock::FolderLock};
 use experiments::table::{
-    ColumnRows, TableFormat,
+    TableFormat,
     arrow::ArrowStream,
     csv::{CsvFile, CsvRow},
+    mcap::{McapRows, McapStream},
 };
 
 /// A set of output files written into one folder, committed together.
@@ -169,12 +170,16 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 }
 
 /// A table written row by row as a run produces it ([`OutputSet::create_streamed`]),
-/// as CSV or as an Arrow IPC stream (`--format`), and flushed to the operating
-/// system at least every `flush_every` of wall time: a process killed outright
-/// (SIGKILL) loses at most the rows of that interval. CSV rows are formatted by
-/// [`experiments::table::csv`] (the bytes of the `csv` crate's serde path); Arrow
-/// rows go out one record batch per flush ([`experiments::table::arrow::ArrowStream`]).
-pub struct StreamedTable<T: CsvRow + ColumnRows + Copy> {
+/// as CSV, as an Arrow IPC stream or as MCAP (`--format`). CSV and Arrow are
+/// flushed to the operating system at least every `flush_every` of wall time: a
+/// process killed outright (SIGKILL) loses at most the rows of that interval. CSV
+/// rows are formatted by [`experiments::table::csv`] (the bytes of the `csv`
+/// crate's serde path); Arrow rows go out one record batch per flush
+/// ([`experiments::table::arrow::ArrowStream`]). MCAP rows go out one chunk per
+/// [`experiments::table::mcap::STREAM_CHUNK_ROWS`] rows, flushed at once
+/// ([`experiments::table::mcap::McapStream`]): counted in rows, not wall time, so
+/// the file's bytes are the same over every link.
+pub struct StreamedTable<T: CsvRow + McapRows + Copy> {
     writer: StreamedWriter<T>,
     flush_every: std::time::Duration,
     last_flush: std::time::Instant,
@@ -182,22 +187,25 @@ pub struct StreamedTable<T: CsvRow + ColumnRows + Copy> {
 }
 
 /// The file behind a [`StreamedTable`].
-enum StreamedWriter<T: ColumnRows> {
+enum StreamedWriter<T: McapRows> {
     Csv(CsvFile),
     Arrow(Box<ArrowStream<T>>),
+    Mcap(Box<McapStream<T>>),
 }
 
-impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
-    /// Starts table `stem` (`trace`: `trace.csv` or `trace.arrow`) in `out`,
-    /// flushed every `flush_every`.
+impl<T: CsvRow + McapRows + Copy> StreamedTable<T> {
+    /// Starts table `stem` (`trace`: `trace.csv`, `trace.arrow` or `trace.mcap`)
+    /// in `out`, flushed every `flush_every` (CSV, Arrow).
     ///
     /// # Errors
-    /// [`CliError::Io`] when the file cannot be created (or the Arrow schema written).
+    /// [`CliError::Io`] when the file cannot be created (or the Arrow schema, the
+    /// MCAP header and channels written).
     pub fn new(out: &mut OutputSet, stem: &str, format: TableFormat, flush_every: std::time::Duration) -> Result<Self, CliError> {
         let (path, file) = out.create_streamed(&format.file(stem))?;
         let writer = match format {
             TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
             TableFormat::Arrow => StreamedWriter::Arrow(Box::new(ArrowStream::new(path, file)?)),
+            TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::new(path, file)?)),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }
@@ -215,13 +223,14 @@ impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
         let result = match &mut self.writer {
             StreamedWriter::Csv(csv) => csv.row(row).and_then(|()| if flush { csv.flush() } else { Ok(()) }),
             StreamedWriter::Arrow(arrow) => arrow.push(*row, flush),
+            StreamedWriter::Mcap(mcap) => mcap.push(*row),
         };
         if let Err(e) = result {
             self.error = Some(e);
         }
     }
 
-    /// Writes the rest (and an Arrow stream's end marker).
+    /// Writes the rest (and an Arrow stream's end marker, an MCAP file's summary and footer).
     ///
     /// # Errors
     /// The first write error, if any.
@@ -232,6 +241,7 @@ impl<T: CsvRow + ColumnRows + Copy> StreamedTable<T> {
         match self.writer {
             StreamedWriter::Csv(csv) => csv.finish(),
             StreamedWriter::Arrow(arrow) => arrow.finish(),
+            StreamedWriter::Mcap(mcap) => mcap.finish(),
         }
     }
 }

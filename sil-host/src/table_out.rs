@@ -1,6 +1,7 @@
 //! A long table written as it is produced, in the format the user chose
-//! (`--format csv|arrow`): CSV by a writer thread ([`experiments::table::csv::CsvThread`]),
-//! or an Arrow IPC file ([`experiments::table::arrow::ArrowFile`]).
+//! (`--format csv|arrow|mcap`): CSV by a writer thread ([`experiments::table::csv::CsvThread`]),
+//! an Arrow IPC file ([`experiments::table::arrow::ArrowFile`]), or, for two
+//! tables at once ([`TablesOut`]), one MCAP file ([`experiments::table::mcap::McapFile`]).
 
 use crate::{error::CliError, output::OutputSet};
 pub use experiments::table::TableFormat;
@@ -8,6 +9,7 @@ use experiments::table::{
     ColumnRows,
     arrow::ArrowFile,
     csv::{CsvRow, CsvThread},
+    mcap::{FILE_CHUNK_BYTES, McapFile, McapRows, McapTable},
 };
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
@@ -23,7 +25,9 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     /// Starts table `stem` of `out` in `format` (`stem.csv` or `stem.arrow`).
     ///
     /// # Errors
-    /// [`CliError::Io`] when the file cannot be created or its header written.
+    /// [`CliError::Io`] when the file cannot be created or its header written;
+    /// [`CliError::Io`] for [`TableFormat::Mcap`], which holds several tables in
+    /// one file ([`TablesOut`]).
     pub fn create(out: &mut OutputSet, stem: &str, format: TableFormat) -> Result<Self, CliError> {
         let name = format.file(stem);
         Ok(match format {
@@ -31,6 +35,12 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
             TableFormat::Arrow => {
                 let (path, file) = out.create_unbuffered(&name)?;
                 Self::Arrow(Box::new(ArrowFile::new(path, file)?))
+            }
+            TableFormat::Mcap => {
+                return Err(CliError::Io {
+                    path: out.path(&name),
+                    source: std::io::Error::other("an MCAP file holds all of a command's tables: written by TablesOut"),
+                });
             }
         })
     }
@@ -57,6 +67,76 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
         match self {
             Self::Csv(t) => t.finish(),
             Self::Arrow(a) => a.finish(),
+        }
+    }
+}
+
+/// Two tables of a command (`simulate`'s `trace` of rows `A` and `events` of
+/// rows `B`): two files (`trace.csv` and `events.csv`, or `.arrow`), or one MCAP
+/// file `trace.mcap` holding both, their messages interleaved in order of time
+/// and written a chunk of [`FILE_CHUNK_BYTES`] at a time.
+pub enum TablesOut<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'static> {
+    /// A file per table.
+    Two(TableOut<A>, TableOut<B>),
+    /// One MCAP file.
+    Mcap(Box<McapFile>, McapTable, McapTable),
+}
+
+impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'static> TablesOut<A, B> {
+    /// Starts tables `stems` (`["trace", "events"]`) of `out` in `format`: the
+    /// files [`TablesOut::files`] names.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when a file cannot be created or its header written.
+    pub fn create(out: &mut OutputSet, stems: [&str; 2], format: TableFormat) -> Result<Self, CliError> {
+        Ok(match format {
+            TableFormat::Mcap => {
+                let (path, file) = out.create_unbuffered(&format.file(stems[0]))?;
+                let mut mcap = McapFile::new(path, file, Some(FILE_CHUNK_BYTES))?;
+                let (a, b) = (mcap.add_table::<A>()?, mcap.add_table::<B>()?);
+                Self::Mcap(Box::new(mcap), a, b)
+            }
+            _ => Self::Two(TableOut::create(out, stems[0], format)?, TableOut::create(out, stems[1], format)?),
+        })
+    }
+
+    /// The files of tables `stems` in `format`: `trace.csv`, `events.csv`; or
+    /// `trace.arrow`, `events.arrow`; or `trace.mcap`.
+    pub fn files(stems: [&str; 2], format: TableFormat) -> Vec<String> {
+        match format {
+            TableFormat::Mcap => vec![format.file(stems[0])],
+            _ => stems.iter().map(|s| format.file(s)).collect(),
+        }
+    }
+
+    /// Hands over rows of both tables (each in order of time) and returns empty
+    /// vectors to fill next (the capacity kept).
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when writing has failed.
+    pub fn send(&mut self, mut a: Vec<A>, mut b: Vec<B>) -> Result<(Vec<A>, Vec<B>), CliError> {
+        match self {
+            Self::Two(ta, tb) => Ok((ta.send(a)?, tb.send(b)?)),
+            Self::Mcap(file, ia, ib) => {
+                file.write_merged((*ia, &a), (*ib, &b))?;
+                a.clear();
+                b.clear();
+                Ok((a, b))
+            }
+        }
+    }
+
+    /// Writes everything still waiting and closes the files.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when writing fails.
+    pub fn finish(self) -> Result<(), CliError> {
+        match self {
+            Self::Two(a, b) => {
+                a.finish()?;
+                b.finish()
+            }
+            Self::Mcap(file, _, _) => file.finish(),
         }
     }
 }

@@ -1,11 +1,12 @@
-//! `simulate --format arrow` (and `run`'s) against `--format csv`: the same tables, column for
-//! column, every float with the same bits (the CSV's shortest round-trip digits
-//! read back by the `csv` crate and Rust's parser, the Arrow columns by
-//! `experiments::table::arrow::read_arrow`: two independent paths).
+//! `simulate --format arrow` and `--format mcap` (and `run`'s) against `--format csv`: the
+//! same tables, column for column, every float with the same bits (the CSV's shortest
+//! round-trip digits read back by the `csv` crate and Rust's parser, the Arrow columns by
+//! `experiments::table::arrow::read_arrow`, the MCAP messages' JSON by
+//! `experiments::table::mcap::read_mcap` and serde_json: independent paths).
 
 use std::{path::Path, process::Command};
 
-use experiments::table::{Column, arrow::read_arrow};
+use experiments::table::{Column, Table, arrow::read_arrow, mcap::read_mcap};
 
 fn simulate(format: &str, out: &Path) {
     sil_host(&["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "2", "--format", format, "--json", "--out"], out);
@@ -19,8 +20,13 @@ fn sil_host(args: &[&str], out: &Path) {
 /// Each column of the Arrow table equals the CSV's: floats to the bit, text as
 /// written, integers and flags as the CSV's cells.
 fn assert_same(table: &str, csv: &Path, arrow: &Path) {
+    assert_same_table(table, csv, read_arrow(arrow).unwrap());
+}
+
+/// Each column of `got` equals the CSV's, as [`assert_same`].
+fn assert_same_table(table: &str, csv: &Path, got: Table) {
     let (header, cells) = read_csv(csv);
-    let columns = read_arrow(arrow).unwrap().columns;
+    let columns = got.columns;
     assert_eq!(columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), header, "{table}");
     assert!(cells[0].len() > 1, "{table}: rows");
     for ((name, col), cells) in columns.iter().zip(&cells) {
@@ -81,4 +87,43 @@ fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
     let files: Vec<String> =
         summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
     assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "summary.json"]);
+}
+
+/// `simulate --format mcap` (issue 44): one `trace.mcap` holding both tables, each
+/// the CSV's bit for bit; the summary names the files written.
+#[test]
+fn an_mcap_file_holds_the_csv_tables_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, m) = (dir.path().join("csv"), dir.path().join("mcap"));
+    simulate("csv", &c);
+    simulate("mcap", &m);
+    let mut names: Vec<String> = std::fs::read_dir(&m).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    assert_eq!(names, ["summary.json", "trace.mcap", "trace.svg"]);
+    let tables = read_mcap(&m.join("trace.mcap")).unwrap();
+    assert_eq!(tables.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["trace", "events"]);
+    for (name, table) in tables {
+        assert_same_table(&name, &c.join(format!("{name}.csv")), table);
+    }
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(m.join("summary.json")).unwrap()).unwrap();
+    let files: Vec<String> =
+        summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
+    assert_eq!(files, ["trace.mcap", "trace.svg", "summary.json"]);
+}
+
+/// `run --format mcap`: the closed-loop trace bit for bit, and the same bytes
+/// in-process and over iceoryx2 (chunks closed by row count, zstd single-threaded).
+#[test]
+fn a_runs_mcap_trace_is_its_csv_and_the_same_bytes_over_both_links() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, m, i) = (dir.path().join("csv"), dir.path().join("mcap"), dir.path().join("ipc"));
+    sil_host(&["run", "--in-process", "--duration", "1", "--format", "csv", "--out"], &c);
+    sil_host(&["run", "--in-process", "--duration", "1", "--format", "mcap", "--out"], &m);
+    sil_host(&["run", "--duration", "1", "--format", "mcap", "--out"], &i);
+    let tables = read_mcap(&m.join("trace.mcap")).unwrap();
+    assert_eq!(tables.len(), 1);
+    let (name, table) = tables.into_iter().next().unwrap();
+    assert_eq!((name.as_str(), table.rows()), ("trace", 1000));
+    assert_same_table("trace", &c.join("trace.csv"), table);
+    assert!(std::fs::read(m.join("trace.mcap")).unwrap() == std::fs::read(i.join("trace.mcap")).unwrap(), "in-process and iceoryx2 differ");
 }

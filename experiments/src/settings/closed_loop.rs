@@ -79,9 +79,13 @@ pub struct RunArgs {
     /// before that monitor is given up (not waited for again), s, in (0, 600].
     #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors"))]
     pub monitor_timeout: f64,
-    /// Format of the trace: `csv` (trace.csv) or `arrow` (trace.arrow: an Arrow IPC
+    /// Format of the trace: `csv` (trace.csv), `arrow` (trace.arrow: an Arrow IPC
     /// stream written a record batch at a time as the run goes, so a killed run keeps
-    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load).
+    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load) or
+    /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
+    /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
+    /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
+    /// docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: crate::table::TableFormat,
     /// Exit status on model violations.
@@ -143,9 +147,13 @@ pub struct PilArgs {
     /// written to defmt.log).
     #[cfg_attr(feature = "clap", arg(long))]
     pub quiet: bool,
-    /// Format of the trace: `csv` (trace.csv) or `arrow` (trace.arrow: an Arrow IPC
+    /// Format of the trace: `csv` (trace.csv), `arrow` (trace.arrow: an Arrow IPC
     /// stream written a record batch at a time as the run goes, so a killed run keeps
-    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load).
+    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load) or
+    /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
+    /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
+    /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
+    /// docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: crate::table::TableFormat,
     /// Exit status on model violations.

@@ -33,9 +33,12 @@ pub struct SimulateArgs {
     /// Sampling period of the trace, s (events are written at their exact times in the events table).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-3))]
     pub sample_dt: f64,
-    /// Format of the trace and events tables: `csv` (trace.csv, events.csv) or `arrow`
+    /// Format of the trace and events tables: `csv` (trace.csv, events.csv), `arrow`
     /// (trace.arrow, events.arrow: Arrow IPC files, typed columns with the floats'
-    /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads both).
+    /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads
+    /// both) or `mcap` (trace.mcap, both tables in one file for Foxglove and ROS 2
+    /// tools: channels /state, /contact, /events of JSON messages with JSON schemas,
+    /// log times in ns of simulated time; docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: crate::table::TableFormat,
     /// Relative tolerance of the integrator.

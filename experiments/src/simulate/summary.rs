@@ -122,6 +122,44 @@ crate::csv_row!(EventRow {
     resolution: str,
 });
 
+// `--format mcap` (trace.mcap): the signal groups of `trace` and `events`, one
+// channel each; docs/rig.md "Outputs" lists them.
+impl crate::table::mcap::McapRows for TraceRow {
+    const TABLE: &'static str = "trace";
+    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[
+        crate::table::mcap::McapGroup {
+            topic: "/state",
+            schema: "painleve.State",
+            columns: &["theta1", "theta1_dot", "theta2", "theta2_dot", "energy"],
+        },
+        crate::table::mcap::McapGroup {
+            topic: "/contact",
+            schema: "painleve.Contact",
+            columns: &["mode", "f_t", "f_n", "z_t", "z_n", "z_t_dot", "z_n_dot", "z_r_dot"],
+        },
+    ];
+}
+impl crate::table::mcap::McapRows for EventRow {
+    const TABLE: &'static str = "events";
+    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[crate::table::mcap::McapGroup {
+        topic: "/events",
+        schema: "painleve.Event",
+        columns: &[
+            "kind",
+            "mode_after",
+            "v_n_before",
+            "v_n_after",
+            "v_r_before",
+            "v_r_after",
+            "impulse_t",
+            "impulse_n",
+            "energy_change",
+            "contact_work",
+            "resolution",
+        ],
+    }];
+}
+
 /// The initial condition as resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct InitialCondition {

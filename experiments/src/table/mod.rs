@@ -12,6 +12,7 @@
 
 pub mod arrow;
 pub mod csv;
+pub mod mcap;
 pub mod read;
 pub mod rows;
 
@@ -128,18 +129,24 @@ pub enum TableFormat {
     /// with their bits, for `pandas.read_feather`, `polars.read_ipc`, pyarrow and
     /// `painleve.load` ([`arrow`]).
     Arrow,
+    /// MCAP (`trace.mcap`, one file for all of a command's tables), the bag format
+    /// of ROS 2 and Foxglove: a channel per signal group, JSON messages with JSON
+    /// schemas, log times in ns of simulated time ([`mcap`]).
+    Mcap,
 }
 
 impl TableFormat {
-    /// The file extension, without the dot: `csv` or `arrow`.
+    /// The file extension, without the dot: `csv`, `arrow` or `mcap`.
     pub fn extension(self) -> &'static str {
         match self {
             Self::Csv => "csv",
             Self::Arrow => "arrow",
+            Self::Mcap => "mcap",
         }
     }
 
-    /// The file name of table `stem` (`trace` -> `trace.csv` or `trace.arrow`).
+    /// The file name of table `stem` (`trace` -> `trace.csv`, `trace.arrow` or
+    /// `trace.mcap`; with MCAP every table of a command goes into `trace.mcap`).
     pub fn file(self, stem: &str) -> String {
         format!("{stem}.{}", self.extension())
     }

@@ -5,7 +5,7 @@
 //! image's counts per step (instructions under QEMU, cycles on silicon) and, under
 //! QEMU, its defmt log.
 //!
-//! Writes `trace.csv` (`trace.arrow` with `--format arrow`), `summary.json` (with a `pil` object: counts per step and
+//! Writes `trace.csv` (`trace.arrow` with `--format arrow`, `trace.mcap` with `--format mcap`), `summary.json` (with a `pil` object: counts per step and
 //! per frame, median, p99 and worst, against the budget, in `count_unit`),
 //! `trace.svg`, `instructions.svg` (the counts of each step against time, with the
 //! budget) and, under QEMU, `defmt.log`.

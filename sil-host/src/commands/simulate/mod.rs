@@ -3,7 +3,9 @@
 //! Writes under `--out`: `trace.csv` (one row per `--sample-dt`), `events.csv`
 //! (every event at its located time), `trace.svg` (`z_t`, `z_n`, `f_n` and the
 //! contact mode against time) and `summary.json`; with `--format arrow` the two
-//! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns). If the simulation fails part
+//! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns), with
+//! `--format mcap` both are in `trace.mcap` (channels `/state`, `/contact`,
+//! `/events`; [`experiments::table::mcap`]). If the simulation fails part
 //! way, everything up to the failure is still written (with the error in the
 //! summary) and the command exits with code 1.
 
@@ -14,7 +16,7 @@ use crate::{
     cli::SimulateArgs,
     error::CliError,
     output::{OutputSet, progress_bar},
-    table_out::TableOut,
+    table_out::TablesOut,
 };
 use plant::SimError;
 
@@ -44,16 +46,15 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Streamed: rows and events go to their files as they come, the figure keeps
     // a decimated copy; nothing grows with the run but the files. CSV rows are
     // formatted and written by a thread of their own (CsvThread) while the
-    // simulation goes on; Arrow rows are batched (ArrowFile).
-    let mut trace = TableOut::<TraceRow>::create(&mut out, "trace", args.format)?;
-    let mut events = TableOut::<EventRow>::create(&mut out, "events", args.format)?;
+    // simulation goes on; Arrow rows are batched (ArrowFile); MCAP rows and
+    // events go into one file, interleaved by time (McapFile).
+    let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format)?;
     let mut curves = TraceCurves::default();
     let (mut open_loop, row, startup) = OpenLoop::start(prepared, args.sample_dt);
     let mut n_events = startup.len();
     curves.push_events(&startup);
-    events.send(startup)?;
     curves.push(&row);
-    trace.send(vec![row])?;
+    tables.send(vec![row], startup)?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of at most OpenLoop::CHUNK samples (bounded memory) while the clock runs.
     let mut rows: Vec<TraceRow> = Vec::with_capacity(OpenLoop::CHUNK);
@@ -73,23 +74,21 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         wall += started.elapsed();
         n_events += new_events.len();
         curves.push_events(&new_events);
-        new_events = events.send(new_events)?;
         for row in &rows {
             curves.push(row);
         }
-        rows = trace.send(rows)?;
+        (rows, new_events) = tables.send(rows, new_events)?;
         progress.set_position(open_loop.k as u64);
     }
     let plant = open_loop.plant;
     let wall_s = wall.as_secs_f64();
     progress.finish_and_clear();
-    trace.finish()?;
-    events.finish()?;
+    tables.finish()?;
     // trace.svg
     let svg = out.stage("trace.svg");
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
-    let tables = [args.format.file("trace"), args.format.file("events")];
+    let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);
     let files = tables.iter().map(String::as_str).chain(["trace.svg", "summary.json"]).map(|f| out.path(f).display().to_string()).collect();
     let mut summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
     let interrupted = stopped.then(|| {

@@ -1,0 +1,223 @@
+"""``--format mcap`` (issue 44): ``trace.mcap`` holds what the CSV tables hold,
+read back two ways: with the ``mcap`` package's own readers (the file as
+Foxglove sees it: channels, JSON schemas, JSON messages, log times) and with
+``painleve.load``. Floats compare to the bit: the file's JSON numbers are the
+CSV's shortest round-trip digits, which Python's ``json`` parses to the nearest
+double, the value written."""
+
+import json
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import painleve
+from conftest import REPO, assert_columns_equal, cli, sil_host
+
+mcap_reader = pytest.importorskip("mcap.reader")
+
+# A bouncing run from x0a (touchdowns and an impact without collision), so the
+# events table has several kinds and resolutions.
+ARGS = ["--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "2"]
+
+SIMULATE_TOPICS = {"/state", "/contact", "/events"}
+RUN_TOPICS = {"/state", "/contact", "/torques", "/firmware"}
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    root = tmp_path_factory.mktemp("mcap")
+    cli("simulate", ARGS + ["--format", "csv"], root / "csv")
+    cli("simulate", ARGS + ["--format", "mcap"], root / "mcap")
+    return root / "csv", root / "mcap"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("mcap-run")
+    cli("run", ["--in-process", "--duration", "1", "--format", "csv"], root / "csv")
+    cli("run", ["--in-process", "--duration", "1", "--format", "mcap"], root / "mcap")
+    return root / "csv", root / "mcap"
+
+
+def by_reader(path):
+    """The file through the ``mcap`` package's indexed reader: ``{topic: [(log
+    time, sequence, message object)]}``, the channels and the summary."""
+    with open(path, "rb") as f:
+        reader = mcap_reader.make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None, "a finished file has its summary"
+        out = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert channel.message_encoding == "json" and schema.encoding == "jsonschema", channel.topic
+            out.setdefault(channel.topic, []).append((message.log_time, message.sequence, json.loads(message.data)))
+    return out, summary
+
+
+def assert_equals_csv(messages, csv_table, topics):
+    """Each CSV column is in exactly one of ``topics``' messages (``t`` in all),
+    row ``k`` the ``k``-th message; every value equal, floats to the bit."""
+    n = csv_table.nrows
+    assert n > 1
+    for topic in topics:
+        assert len(messages[topic]) == n, topic
+        assert [seq for _, seq, _ in messages[topic]] == list(range(n)), topic
+        t = np.array([m["t"] for _, _, m in messages[topic]])
+        assert np.array_equal(t.view(np.int64), csv_table["t"].view(np.int64)), f"{topic}.t"
+        # Log time: t in ns of simulated time.
+        assert [ns for ns, _, _ in messages[topic]] == [round(x * 1e9) for x in csv_table["t"]], topic
+    for col in csv_table.columns:
+        if col == "t":
+            continue
+        holders = [tp for tp in topics if col in messages[tp][0][2]]
+        assert len(holders) == 1, f"{col} in {holders}"
+        cells = [m[col] for _, _, m in messages[holders[0]]]
+        want = csv_table[col]
+        if want.dtype.kind == "f":
+            got = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
+            if not all(c == "" for c in cells):  # an all-empty text column reads as NaN from CSV
+                assert np.array_equal(got.view(np.int64), want.view(np.int64)), col
+        else:
+            assert list(cells) == want.tolist(), col
+    grouped = {k for tp in topics for k in messages[tp][0][2]}
+    assert grouped == set(csv_table.columns), "no column added or lost"
+
+
+def test_simulate_writes_one_mcap_file_equal_to_its_csv_tables(folders):
+    csv_dir, mcap_dir = folders
+    assert sorted(p.name for p in mcap_dir.iterdir()) == ["summary.json", "trace.mcap", "trace.svg"]
+    c = painleve.load(csv_dir)
+    messages, summary = by_reader(mcap_dir / "trace.mcap")
+    assert set(messages) == SIMULATE_TOPICS
+    assert_equals_csv(messages, c.trace, ["/state", "/contact"])
+    assert_equals_csv(messages, c.events, ["/events"])
+    assert c.events.nrows > 5 and len(set(c.events["kind"])) >= 2
+    # Statistics and indexes for Foxglove's seeking: every message counted.
+    assert summary.statistics.message_count == 2 * c.trace.nrows + c.events.nrows
+    assert summary.statistics.message_end_time == round(c.trace["t"][-1] * 1e9)
+    assert len(summary.chunk_indexes) >= 1
+    files = json.loads((mcap_dir / "summary.json").read_text())["files"]
+    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.mcap", "trace.svg", "summary.json"]
+
+
+def test_the_json_schemas_describe_every_field_with_its_type(folders):
+    _, mcap_dir = folders
+    with open(mcap_dir / "trace.mcap", "rb") as f:
+        summary = mcap_reader.make_reader(f).get_summary()
+    for channel in summary.channels.values():
+        schema = json.loads(summary.schemas[channel.schema_id].data)
+        assert schema["type"] == "object" and schema["title"].startswith("painleve.")
+        assert list(schema["properties"])[0] == "t" and schema["required"] == list(schema["properties"])
+        for name, prop in schema["properties"].items():
+            assert prop["type"] in (["number", "null"], "string", "boolean", "integer"), (channel.topic, name)
+            assert prop["description"], (channel.topic, name)
+    state = json.loads(summary.schemas[next(c.schema_id for c in summary.channels.values() if c.topic == "/state")].data)
+    assert "rad" in state["properties"]["theta1"]["description"]
+
+
+def test_painleve_load_reads_the_mcap_tables_as_the_csv_ones(folders):
+    csv_dir, mcap_dir = folders
+    m, c = painleve.load(mcap_dir), painleve.load(csv_dir)
+    assert m.command == c.command == "simulate"
+    assert sorted(m.tables) == sorted(c.tables) == ["events", "trace"]
+    for name in ("trace", "events"):
+        assert m.tables[name].columns == c.tables[name].columns, name
+        for col in c.tables[name].columns:
+            x, y = m.tables[name][col], c.tables[name][col]
+            assert_columns_equal(x, y, f"{name}.{col}")
+            if x.dtype.kind == "f":
+                assert np.array_equal(x.view(np.int64), y.view(np.int64)), f"{name}.{col}"
+
+
+def test_a_runs_mcap_trace_equals_its_csv(runs):
+    csv_dir, mcap_dir = runs
+    c = painleve.load(csv_dir)
+    messages, summary = by_reader(mcap_dir / "trace.mcap")
+    assert set(messages) == RUN_TOPICS
+    assert c.trace.nrows == 1000
+    assert_equals_csv(messages, c.trace, ["/state", "/contact", "/torques", "/firmware"])
+    # A chunk per 100 periods (count-based, so the bytes are the same on every link).
+    # (Its schemas and channels are in a chunk of their own, before the rows.)
+    assert sorted(len(c.message_index_offsets) for c in summary.chunk_indexes) == [0] + [4] * 10
+    m = painleve.load(mcap_dir)
+    assert m.command == "run" and list(m.tables) == ["trace"]
+    for col in c.trace.columns:
+        assert_columns_equal(m.trace[col], c.trace[col], f"trace.{col}")
+
+
+def test_a_cut_mcap_file_gives_its_whole_chunks(runs, tmp_path):
+    csv_dir, mcap_dir = runs
+    c = painleve.load(csv_dir).trace
+    data = (mcap_dir / "trace.mcap").read_bytes()
+    seen = set()
+    for frac in (0.15, 0.5, 0.8):
+        cut = tmp_path / "trace.mcap"
+        cut.write_bytes(data[: int(len(data) * frac)])
+        tables = painleve.read_mcap(cut)
+        t = tables["trace"]
+        assert 0 < t.nrows < c.nrows and t.nrows % 100 == 0, (frac, t.nrows)
+        seen.add(t.nrows)
+        for col in c.columns:
+            assert_columns_equal(t[col], c[col][: t.nrows], f"{frac}: trace.{col}")
+        # The mcap package's linear reader reads the same messages up to the cut.
+        with open(cut, "rb") as f:
+            reader = mcap_reader.NonSeekingReader(f)
+            n = 0
+            try:
+                for _, channel, _ in reader.iter_messages(log_time_order=False):
+                    n += channel.topic == "/state"
+            except Exception:  # the cut record
+                pass
+        assert n == t.nrows
+    assert len(seen) == 3
+
+
+def test_a_killed_run_keeps_the_chunks_it_wrote(runs, tmp_path):
+    # SIGKILL part way: trace.mcap.partial holds whole chunks of the run's rows,
+    # the same as a full run's first rows (lockstep: the same rows every time).
+    csv_dir, _ = runs
+    out = tmp_path / "killed"
+    argv = [str(sil_host()), "run", "--in-process", "--duration", "600", "--format", "mcap", "--out", str(out), "--json"]
+    p = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    partial = out / "trace.mcap.partial"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not partial.exists() or partial.stat().st_size < 200_000):
+        time.sleep(0.05)
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait()
+    assert partial.stat().st_size >= 200_000, "the run wrote chunks while it went"
+    t = painleve.read_mcap(partial)["trace"]
+    assert t.nrows > 1000 and t.nrows % 100 == 0
+    full = painleve.load(csv_dir).trace  # 1 s: the first 1000 periods
+    for col in full.columns:
+        assert_columns_equal(t[col][:1000], full[col], f"trace.{col}")
+
+
+def test_the_format_option_lists_mcap_and_an_unknown_one_is_refused():
+    from conftest import cli_error
+
+    message, code = cli_error("run", ["--format", "bag"])
+    assert code == 2 and "bag" in message and "mcap" in message
+    help_text = subprocess.run([str(sil_host()), "simulate", "--help"], capture_output=True, text=True).stdout
+    assert "mcap" in help_text and "trace.mcap" in help_text
+
+
+def test_without_the_mcap_package_load_says_which_reader_to_use(folders, monkeypatch):
+    import sys
+
+    _, mcap_dir = folders
+    for mod in [m for m in sys.modules if m == "mcap" or m.startswith("mcap.")]:
+        monkeypatch.delitem(sys.modules, mod)
+    monkeypatch.setitem(sys.modules, "mcap", None)
+    with pytest.raises(ImportError, match=r"pip install mcap==.*--format csv"):
+        painleve.load(mcap_dir)
+
+
+def test_a_file_that_is_not_mcap_is_an_error_naming_it(tmp_path):
+    bad = tmp_path / "trace.mcap"
+    bad.write_text("t,theta1\n0,1\n")
+    with pytest.raises(painleve.PainleveError, match="trace.mcap"):
+        painleve.read_mcap(bad)
