@@ -6,7 +6,8 @@
 #   - Any other image is flashed to a board with probe-rs, which prints its defmt log
 #     over RTT (the knurling app-template's runner). Without probe-rs it says how to
 #     install it, and what runs without a board, and exits 127.
-# PAINLEVE_CHIP overrides the chip probe-rs is told (default STM32F405RGTx).
+# PAINLEVE_CHIP overrides the chip probe-rs is told (default STM32F405RGTx), PAINLEVE_PROBE_RS
+# the probe-rs program (default `probe-rs` on PATH; tests/tests/aliases.rs names a missing one).
 # Usage: scripts/runner.sh ELF [args...]   (docs/board.md "Flash the arm image")
 set -euo pipefail
 if [ $# -lt 1 ]; then
@@ -20,9 +21,10 @@ case "$elf" in
     exec bash "$here/qemu-run.sh" "$elf" "$@"
     ;;
 esac
-if ! command -v probe-rs >/dev/null; then
+probe_rs="${PAINLEVE_PROBE_RS:-probe-rs}"
+if ! command -v "$probe_rs" >/dev/null; then
   cat >&2 <<MSG
-error: probe-rs is not installed: it flashes $(basename "$elf") to the board and prints its defmt log.
+error: probe-rs is not installed ($probe_rs not found): it flashes $(basename "$elf") to the board and prints its defmt log.
   install it:  cargo install probe-rs-tools --locked   (or https://probe.rs/docs/getting-started/installation/)
   then connect a debug probe (ST-LINK, J-Link, CMSIS-DAP) to the board's SWD pins (PA13/PA14) and run this again.
   without a board:
@@ -33,4 +35,4 @@ error: probe-rs is not installed: it flashes $(basename "$elf") to the board and
 MSG
   exit 127
 fi
-exec probe-rs run --chip "${PAINLEVE_CHIP:-STM32F405RGTx}" "$elf" "$@"
+exec "$probe_rs" run --chip "${PAINLEVE_CHIP:-STM32F405RGTx}" "$elf" "$@"
