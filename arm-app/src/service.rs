@@ -8,11 +8,11 @@ use firmware::Firmware;
 
 use crate::{
     ArmApp, ArmIo,
+    app::stored_is_valid,
     bringup::{
         Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS,
         MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
     },
-    app::stored_is_valid,
     hardware::{CODES_FULL_SCALE, Hardware, Jog},
     joint::Joint,
     record::{self, Settings, Stored},

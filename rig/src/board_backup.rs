@@ -106,7 +106,11 @@ pub fn parse(text: &str) -> Result<Backup, BackupError> {
         let path = e.path().to_string();
         let inner = e.into_inner().to_string();
         let inner = inner.lines().next().unwrap_or_default();
-        if path == "." { BackupError::Parse(format!("backup: {inner}")) } else { BackupError::Parse(format!("backup key `{path}`: {inner}")) }
+        if path == "." {
+            BackupError::Parse(format!("backup: {inner}"))
+        } else {
+            BackupError::Parse(format!("backup key `{path}`: {inner}"))
+        }
     })?;
     // Keys the structures ignore (the nested ones have no deny_unknown_fields):
     // anything the canonical form lacks.

@@ -121,9 +121,14 @@ fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchan
         ("not TOML", "calibration = [\n".into(), 2, "not a TOML backup"),
         ("truncated", read("a.toml").lines().take(6).collect::<Vec<_>>().join("\n"), 2, "missing"),
         ("another format", edit(&|x| x["format"] = toml::Value::Integer(9)), 2, "backup format 9"),
-        ("an unknown key", edit(&|x| {
+        (
+            "an unknown key",
+            edit(&|x| {
                 x["config"].as_table_mut().unwrap().insert("torque_limt".into(), 1.0.into());
-            }), 2, "config.torque_limt"),
+            }),
+            2,
+            "config.torque_limt",
+        ),
         ("a wrong type", edit(&|x| x["calibration"]["reversed"] = toml::Value::String("no".into())), 2, "calibration.reversed"),
         ("a torque limit of 50 N m", edit(&|x| x["config"]["torque_limit"] = toml::Value::Float(50.0)), 1, "torque_limit"),
         ("a 15-bit encoder zero", edit(&|x| x["calibration"]["zero_counts"][1] = toml::Value::Integer(20000)), 1, "zero_counts[1] = 20000"),

@@ -307,11 +307,11 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             }
             let b = bp::backup(&mut c)?;
             board_backup::write(file, &b).map_err(|e| CliError::bad_input(e.to_string()))?;
+            let controller = format!("{:?}", b.config.controller).to_lowercase();
             emit(json, &serde_json::json!({ "done": "backup", "file": file, "backup": b }), || {
                 println!(
-                    "backup: done: the calibration (lacks: {}) and the {} configuration written to {}",
+                    "backup: done: the calibration (lacks: {}) and the {controller} configuration written to {}",
                     bp::describe_missing(b.calibration.missing()),
-                    format!("{:?}", b.config.controller).to_lowercase(),
                     file.display()
                 );
             });
