@@ -173,3 +173,54 @@ pub fn explain_invalid(b: &Backup) -> Option<String> {
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn backup() -> Backup {
+        let cal = crate::calibration::CalibrationSection::default().arm_calibration();
+        Backup { format: BACKUP_FORMAT, protocol: 5, calibration: CalibrationRecord::brought_up(&cal), config: Config::default() }
+    }
+
+    #[test]
+    fn every_f32_reads_back_to_its_bits_and_a_bad_file_is_named() {
+        let mut b = backup();
+        // Values with no short decimal form, a subnormal, the largest f32.
+        b.calibration.load_newtons_per_count = [f32::from_bits(0x3C48_0001), -f32::MIN_POSITIVE / 3.0];
+        b.calibration.belt_metres_per_count = f32::MAX;
+        b.config.target_z_t = 0.1 + f32::EPSILON;
+        let text = to_toml(&b).unwrap();
+        let back = parse(&text).unwrap();
+        assert_eq!(back, b);
+        assert_eq!(back.calibration.load_newtons_per_count.map(f32::to_bits), b.calibration.load_newtons_per_count.map(f32::to_bits));
+
+        let err = |t: &str| parse(t).unwrap_err().to_string();
+        assert!(err("format = 2").contains("backup format 2"), "{}", err("format = 2"));
+        assert!(err("protocol = 5").contains("`format` is missing"));
+        assert!(err("[[x").contains("not a TOML backup"));
+        let e = err(&text.replace("[config.hybrid]", "[config.hybrid]\nkx = 1.0"));
+        assert!(e.contains("`config.hybrid.kx`: unknown"), "{e}");
+        let e = err(&text.replace("tared = true", "tared = 1"));
+        assert!(e.contains("`calibration.tared`"), "{e}");
+        let e = err(&text.replace("controller = \"hybrid\"", "controller = \"lqr\""));
+        assert!(e.contains("`config.controller`"), "{e}");
+    }
+
+    #[test]
+    fn the_firmware_s_checks_are_named_for_the_message() {
+        assert_eq!(explain_invalid(&backup()), None);
+        let mut b = backup();
+        b.config.torque_limit = 50.0;
+        assert!(explain_invalid(&b).unwrap().contains("torque_limit"));
+        let mut b = backup();
+        b.calibration.zero_counts[1] = 16384;
+        assert!(explain_invalid(&b).unwrap().contains("zero_counts[1] = 16384"));
+        let mut b = backup();
+        b.calibration.load_zero_counts[0] = f32::NAN;
+        assert!(explain_invalid(&b).unwrap().contains("load cell"));
+        let mut b = backup();
+        b.calibration.belt_metres_per_count = 0.0;
+        assert!(explain_invalid(&b).unwrap().contains("belt_metres_per_count"));
+    }
+}
