@@ -5,7 +5,7 @@
 # defmt log goes to stdout (decoded with defmt-print when stdout is a terminal
 # and `defmt-print` is installed: `cargo install defmt-print`), and it exits
 # through semihosting with its status.
-# Usage: scripts/qemu-run.sh ELF [extra qemu args]   (the cargo runner of `cargo qemu-arm`)
+# Usage: scripts/qemu-run.sh ELF [extra qemu args]   (scripts/runner.sh calls it for profile `qemu`: `cargo qemu-arm`)
 set -euo pipefail
 elf="$1"; shift
 if ! command -v qemu-system-arm >/dev/null; then

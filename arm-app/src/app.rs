@@ -63,8 +63,9 @@ pub struct ArmCalibration {
 }
 
 /// Whether a stored record's values would be taken: its configuration, its
-/// load-cell calibration, its belt scale at its control period.
-fn stored_is_valid(s: &Stored) -> bool {
+/// encoders' zeros, its load-cell calibration, its belt scale at its control
+/// period. The check of the record loaded at reset, and of `Request::Restore`.
+pub(crate) fn stored_is_valid(s: &Stored) -> bool {
     let c = s.calibration;
     Firmware::new(s.config).is_ok()
         && c.zero_counts.iter().all(|&z| z < 1 << 14)

@@ -14,12 +14,12 @@ use serde::{Deserialize, Serialize};
 pub use crate::record::{CalibrationRecord, Missing, SpanStep};
 use crate::{
     joint::{EncoderFault, Joint},
-    record::{RecordFault, Settings},
+    record::{RecordFault, Settings, Stored},
     telemetry::ArmTelemetry,
 };
 
 /// The protocol's version, told in [`Reply::Hello`].
-pub const BRINGUP_PROTOCOL: u16 = 4;
+pub const BRINGUP_PROTOCOL: u16 = 5;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
@@ -196,6 +196,18 @@ pub enum Request {
     Save,
     /// The firmware configuration in force.
     GetConfig,
+    /// Restores a backup (`sil-host board restore FILE`): the calibration and the
+    /// configuration together, both or neither. The firmware validates them as it
+    /// validates the flash record at reset (the same checks: the configuration by
+    /// `Firmware::new`, the encoders' zeros below 2^14, the load cell's
+    /// calibration, the belt's scale at the control period), and the rate must be
+    /// the image's. The calibration's bring-up steps are taken as recorded (a
+    /// backup of this board: the steps were done with these very values); a
+    /// calibration that differs from the one in force runs at the reduced torque
+    /// limit until lifted, and any change is unsaved (the drivers locked out until
+    /// `Save`). Drivers disabled only. Refused: `DriversEnabled`, `Busy`, `Rate`,
+    /// `InvalidConfig`, `OutOfRange` (the calibration), with nothing changed.
+    Restore(Stored),
 }
 
 /// A jog's result: how far each joint moved, in counts of the calibrated joint

@@ -8,6 +8,7 @@ use firmware::Firmware;
 
 use crate::{
     ArmApp, ArmIo,
+    app::stored_is_valid,
     bringup::{
         Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS,
         MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
@@ -68,6 +69,26 @@ impl<H: ArmIo> ArmApp<H> {
                 apply_calibration(hw, cal)
             }
             Request::SetCalibration(cal) => apply_calibration(hw, cal),
+            Request::Restore(stored) => {
+                if stored.config.period != hw.config.period {
+                    return Reply::Refused(Refusal::Rate);
+                }
+                let Ok(fw) = Firmware::new(stored.config) else { return Reply::Refused(Refusal::InvalidConfig) };
+                // The flash record's own check at reset: the calibration against the configuration.
+                if !stored_is_valid(&stored) {
+                    return Reply::Refused(Refusal::OutOfRange);
+                }
+                // Both are valid: neither can be refused now.
+                let Reply::Calibration(_) = put_calibration(hw, stored.calibration, false) else {
+                    return Reply::Refused(Refusal::OutOfRange);
+                };
+                if stored.config != self.hw.config {
+                    self.firmware = Some(fw);
+                    self.hw.config = stored.config;
+                    self.hw.settings = Settings::Unsaved;
+                }
+                Reply::Done
+            }
             Request::Configure(config) => {
                 if config.period != hw.config.period {
                     return Reply::Refused(Refusal::Rate);
@@ -188,9 +209,15 @@ fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
 /// Puts `cal` in force in every driver, or refuses it whole. New encoder zeros
 /// or directions clear the direction checks unless they come from `SetZeros`
 /// (which clears them itself).
-fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord) -> Reply {
+fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> Reply {
+    put_calibration(hw, cal, true)
+}
+
+/// [`apply_calibration`]; with `clear_checks` false (a restored backup) the
+/// direction checks are taken as the record says.
+fn put_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord, clear_checks: bool) -> Reply {
     let encoders_changed = (cal.zero_counts, cal.reversed) != (hw.cal.zero_counts, hw.cal.reversed);
-    if encoders_changed {
+    if encoders_changed && clear_checks {
         cal.directions_checked = false;
     }
     if cal.zero_counts.iter().any(|&z| z >= COUNTS) {

@@ -16,7 +16,11 @@ use arm_app::{
 };
 use serde::Serialize;
 
-use crate::{bringup_line::Client, status_words::describe_status};
+use crate::{
+    board_backup::{BACKUP_FORMAT, Backup, explain_invalid},
+    bringup_line::Client,
+    status_words::describe_status,
+};
 
 /// How long a request may wait for its reply (a save erases a flash sector:
 /// about 1 s on the STM32F405).
@@ -133,6 +137,7 @@ fn request_name(r: &Request) -> &'static str {
         Request::Disable => "disable",
         Request::Telemetry => "telemetry",
         Request::Save => "save",
+        Request::Restore(_) => "restore",
     }
 }
 
@@ -150,6 +155,49 @@ pub fn hello<S: Read + Write>(c: &mut Client<S>) -> Result<(), StepError> {
         ))),
         other => Err(StepError::Line(format!("unexpected reply to hello: {other:?}"))),
     }
+}
+
+/// The board's calibration and configuration in force, as a backup
+/// (`GetCalibration`, `GetConfig`; `sil-host board backup`).
+///
+/// # Errors
+/// [`StepError`].
+pub fn backup<S: Read + Write>(c: &mut Client<S>) -> Result<Backup, StepError> {
+    let Reply::Calibration(calibration) = ask(c, Request::GetCalibration)? else {
+        return Err(StepError::Line("unexpected reply to get calibration".into()));
+    };
+    let Reply::Config(config) = ask(c, Request::GetConfig)? else {
+        return Err(StepError::Line("unexpected reply to get configuration".into()));
+    };
+    Ok(Backup { format: BACKUP_FORMAT, protocol: BRINGUP_PROTOCOL, calibration, config })
+}
+
+/// Restores backup `b` with one `Restore` request: the firmware checks it as it
+/// checks its flash record at reset and takes it whole or not at all; then reads
+/// the settings back (they must equal the file's) and returns the board's status
+/// (the settings now unsaved unless the file was what the board held).
+///
+/// # Errors
+/// [`StepError::Refused`] when the firmware refuses it (the message names the
+/// value out of range, from [`explain_invalid`]; the board is unchanged) or reads
+/// back other settings; [`StepError::Line`].
+pub fn restore<S: Read + Write>(c: &mut Client<S>, b: &Backup) -> Result<Status, StepError> {
+    match c.request(&Request::Restore(b.stored()), REPLY_TIMEOUT).map_err(StepError::Line)? {
+        Reply::Done => {}
+        Reply::Refused(r) => {
+            let why = match (r, explain_invalid(b)) {
+                (Refusal::InvalidConfig | Refusal::OutOfRange, Some(value)) => value,
+                _ => describe_refusal(&r),
+            };
+            return Err(StepError::Refused(format!("restore: refused by the firmware, the board unchanged: {why}")));
+        }
+        other => return Err(StepError::Line(format!("unexpected reply to restore: {other:?}"))),
+    }
+    let back = backup(c)?;
+    if (back.calibration, back.config) != (b.calibration, b.config) {
+        return Err(StepError::Refused("restore: the settings read back differ from the file's".into()));
+    }
+    status(c)
 }
 
 /// The board's status.

@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod board_backup;
 pub mod bringup_line;
 pub mod bringup_procedure;
 pub mod calibration;

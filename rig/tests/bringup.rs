@@ -176,3 +176,77 @@ fn bring_up_requests_refuse_what_is_unsafe_or_out_of_range() {
     assert!(matches!(b.twin_mut().serve(Request::Tare), Reply::Calibration(_)));
     assert_eq!(b.twin_mut().serve(Request::Span { axis: 1, newtons: 5.0 }), Reply::Refused(Refusal::NoSpan));
 }
+
+/// Issue 44: `Restore` (a backup file's settings, `sil-host board restore`) is
+/// checked by the firmware itself, with its flash record's check, and taken
+/// whole or not at all: a refused one (each value out of range, another rate,
+/// the drivers on) leaves the calibration, the configuration, the settings and
+/// the torque limit as they were; an accepted one puts both in force, its
+/// direction checks as recorded, unsaved until `Save`.
+#[test]
+fn a_restore_is_checked_by_the_firmware_and_taken_whole_or_not_at_all() {
+    use arm_app::record::Stored;
+    let mut b = bench(BoardDescription::default());
+    b.ticks(3).unwrap();
+    let state = |b: &mut FreeArm| {
+        let Reply::Calibration(cal) = b.twin_mut().serve(Request::GetCalibration) else { panic!() };
+        let Reply::Config(config) = b.twin_mut().serve(Request::GetConfig) else { panic!() };
+        let Reply::Status(st) = b.twin_mut().serve(Request::Status) else { panic!() };
+        (Stored { calibration: cal, config }, st.settings, st.torque_limit_codes, st.directions_checked)
+    };
+    let before = state(&mut b);
+    assert_eq!(before.1, Settings::Saved, "the bench's flash holds the scenario's settings");
+    let good = before.0;
+    let mut bad: Vec<(&str, Stored, Refusal)> = Vec::new();
+    let mut s = good;
+    s.config.torque_limit = 50.0;
+    bad.push(("torque limit 50 N m", s, Refusal::InvalidConfig));
+    let mut s = good;
+    s.config.observer_bandwidth = f32::NAN;
+    bad.push(("a NaN gain", s, Refusal::InvalidConfig));
+    let mut s = good;
+    s.config.period = shared::time::Period::from_us(500).unwrap();
+    bad.push(("another rate", s, Refusal::Rate));
+    let mut s = good;
+    s.calibration.zero_counts[0] = 1 << 14;
+    bad.push(("a 15-bit zero", s, Refusal::OutOfRange));
+    let mut s = good;
+    s.calibration.load_newtons_per_count[1] = 0.0;
+    bad.push(("a zero gain", s, Refusal::OutOfRange));
+    let mut s = good;
+    s.calibration.load_zero_counts[0] = 5000.0;
+    bad.push(("a load-cell zero beyond 12 bits", s, Refusal::OutOfRange));
+    let mut s = good;
+    s.calibration.belt_metres_per_count = f32::INFINITY;
+    bad.push(("an infinite belt scale", s, Refusal::OutOfRange));
+    for (what, s, why) in bad {
+        assert_eq!(b.twin_mut().serve(Request::Restore(s)), Reply::Refused(why), "{what}");
+        assert_eq!(state(&mut b), before, "{what}: the board unchanged");
+    }
+    // The same settings: nothing changes, the record stays in force.
+    assert_eq!(b.twin_mut().serve(Request::Restore(good)), Reply::Done);
+    assert_eq!(state(&mut b), before);
+    // Other settings: both in force, unsaved, the reduced torque limit.
+    let mut other = good;
+    other.calibration.zero_counts = [1234, 4321];
+    other.calibration.belt_metres_per_count *= 2.0;
+    other.config.torque_limit = 3.0;
+    assert_eq!(b.twin_mut().serve(Request::Restore(other)), Reply::Done);
+    let after = state(&mut b);
+    assert_eq!(after.0, other);
+    assert_eq!((after.1, after.2), (Settings::Unsaved, arm_app::bringup::REDUCED_TORQUE_CODES));
+    assert_eq!(after.3, good.calibration.directions_checked, "the steps as recorded");
+    assert_eq!(b.twin_mut().serve(Request::Enable), Reply::Refused(Refusal::LockedOut(Settings::Unsaved)));
+    // Back to the first, then saved: as before, but for the limit (lifted by the operator).
+    assert_eq!(b.twin_mut().serve(Request::Restore(good)), Reply::Done);
+    assert_eq!(b.twin_mut().serve(Request::Save), Reply::Done);
+    assert_eq!(b.twin_mut().serve(Request::LiftTorqueLimit), Reply::Done);
+    assert_eq!(state(&mut b), before);
+    // Running: refused.
+    assert_eq!(b.twin_mut().serve(Request::Enable), Reply::Done);
+    b.ticks(2).unwrap();
+    assert!(b.twin().drivers_enabled());
+    assert_eq!(b.twin_mut().serve(Request::Restore(other)), Reply::Refused(Refusal::DriversEnabled));
+    assert_eq!(b.twin_mut().serve(Request::Disable), Reply::Done);
+    assert_eq!(state(&mut b).0, good);
+}

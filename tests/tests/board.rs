@@ -58,7 +58,101 @@ on_both!(
     a_record_saved_over_the_line_is_reloaded_after_the_reset_button,
     a_client_killed_mid_command_leaves_a_board_the_next_client_can_use,
     every_friction_term_is_accepted_by_configure,
+    a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged,
 );
+
+/// Issue 44: `backup FILE` writes the calibration and configuration in force as
+/// TOML; `restore FILE` puts them back whole (the firmware checks them as it
+/// checks its flash record), so that backup, change, restore, backup gives the
+/// first file again. A file that is not a backup (not TOML, a key unknown or
+/// missing) is refused before it is sent (exit 2), one with a value out of range
+/// by the firmware (exit 1, naming the value); either way the board is unchanged.
+fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged(on: Board) {
+    let t = twin(on, &["--flash", "saved"]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let read = |name: &str| std::fs::read_to_string(path(name)).unwrap();
+    let (code, out, err) = board(&t, &["backup", &path("a.toml")]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("backup: done"), "{out}");
+    let a: toml::Table = read("a.toml").parse().unwrap();
+    assert_eq!(a["format"].as_integer(), Some(1), "{a}");
+    assert_eq!(a["calibration"]["zeros_set"].as_bool(), Some(true), "{a}");
+    // The file is the board's own record: what `status` shows.
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"], "Saved", "{s}");
+    let zeros: Vec<i64> = a["calibration"]["zero_counts"].as_array().unwrap().iter().map(|v| v.as_integer().unwrap()).collect();
+    assert_eq!(serde_json::json!(zeros), s["calibration"]["zero_counts"], "{s}");
+    // No overwrite without --force.
+    let (code, _, err) = board(&t, &["backup", &path("a.toml")]);
+    assert!(code == 2 && err.contains("--force"), "{err}");
+
+    // Change both: a configuration over the line, a calibration from an edited file.
+    assert_eq!(board(&t, &["configure", "--set", "controller.friction=none"]).0, 0);
+    let mut b = a.clone();
+    b["calibration"]["belt_metres_per_count"] = toml::Value::Float(1.9073486328125e-6); // 2^-19: an f32 exactly
+    b["calibration"]["zero_counts"] = toml::Value::Array(vec![toml::Value::Integer(1234), toml::Value::Integer(4321)]);
+    std::fs::write(path("b.toml"), toml::to_string(&b).unwrap()).unwrap();
+    let (code, out, err) = board(&t, &["--json", "restore", &path("b.toml")]);
+    assert_eq!(code, 0, "{out}{err}");
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["status"]["settings"], "Unsaved", "a change is unsaved: {r}");
+    assert_eq!(r["status"]["torque_limit_codes"], 410, "a new calibration runs at the reduced limit: {r}");
+    assert_eq!(board(&t, &["backup", "--force", &path("b2.toml")]).0, 0);
+    // The edited file is what the board holds, to the f32 (the board writes each
+    // float's shortest form: 1.9073486e-6 for the edit's 2^-19).
+    let parse = |text: &str| rig::board_backup::parse(text).unwrap();
+    assert_eq!(parse(&read("b2.toml")), parse(&toml::to_string(&b).unwrap()), "the edited file is what the board holds");
+
+    // Restore the first: the board holds it again, bit for bit.
+    let (code, out, err) = board(&t, &["restore", &path("a.toml")]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("restore: done") && out.contains("sil-host board save"), "{out}");
+    assert_eq!(board(&t, &["backup", &path("a2.toml")]).0, 0);
+    assert_eq!(read("a2.toml"), read("a.toml"), "backup, change, restore, backup: the first file");
+    assert_eq!(board(&t, &["save"]).0, 0);
+    assert_eq!(status(&t)["status"]["settings"], "Saved");
+
+    // Bad files: refused, the board unchanged (its backup and its settings).
+    let before = status(&t);
+    let edit = |f: &dyn Fn(&mut toml::Table)| {
+        let mut x = a.clone();
+        f(&mut x);
+        toml::to_string(&x).unwrap()
+    };
+    let cases: Vec<(&str, String, i32, &str)> = vec![
+        ("not TOML", "calibration = [\n".into(), 2, "not a TOML backup"),
+        ("truncated", read("a.toml").lines().take(6).collect::<Vec<_>>().join("\n"), 2, "missing"),
+        ("another format", edit(&|x| x["format"] = toml::Value::Integer(9)), 2, "backup format 9"),
+        (
+            "an unknown key",
+            edit(&|x| {
+                x["config"].as_table_mut().unwrap().insert("torque_limt".into(), 1.0.into());
+            }),
+            2,
+            "config.torque_limt",
+        ),
+        ("a wrong type", edit(&|x| x["calibration"]["reversed"] = toml::Value::String("no".into())), 2, "calibration.reversed"),
+        ("a torque limit of 50 N m", edit(&|x| x["config"]["torque_limit"] = toml::Value::Float(50.0)), 1, "torque_limit"),
+        ("a 15-bit encoder zero", edit(&|x| x["calibration"]["zero_counts"][1] = toml::Value::Integer(20000)), 1, "zero_counts[1] = 20000"),
+        ("a zero load-cell gain", edit(&|x| x["calibration"]["load_newtons_per_count"][0] = toml::Value::Float(0.0)), 1, "gain"),
+        ("a zero belt scale", edit(&|x| x["calibration"]["belt_metres_per_count"] = toml::Value::Float(0.0)), 1, "belt_metres_per_count"),
+    ];
+    for (what, text, want, says) in cases {
+        std::fs::write(path("bad.toml"), &text).unwrap();
+        let (code, out, err) = board(&t, &["restore", &path("bad.toml")]);
+        assert_eq!(code, want, "{what}: {out}{err}");
+        assert!(err.contains(says), "{what}: the error names it: {err}");
+        if want == 1 {
+            assert!(err.contains("refused by the firmware, the board unchanged"), "{what}: {err}");
+        }
+        assert_eq!(board(&t, &["backup", "--force", &path("after.toml")]).0, 0);
+        assert_eq!(read("after.toml"), read("a.toml"), "{what}: the board is unchanged");
+        let after = status(&t);
+        assert_eq!(after["status"]["settings"], before["status"]["settings"], "{what}: {after}");
+        assert_eq!(after["status"]["torque_limit_codes"], before["status"]["torque_limit_codes"], "{what}: {after}");
+    }
+}
 
 /// Issue 41: `configure` sends every friction term of the hybrid law, the robust
 /// `estimated` among them, and the board's firmware (on the emulated image, the

@@ -10,10 +10,26 @@ use crate::record::RunError;
 /// One decoded line of the image's defmt log.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct LogLine {
+    /// The line's defmt timestamp as the image formats it (`boards/stm32f405`'s
+    /// `mcu::log_time`: seconds with six decimals, the control period's number
+    /// times the period, `0.001000`); `None` for an image without
+    /// `defmt::timestamp!`.
+    pub timestamp: Option<String>,
     /// `trace`, `debug`, `info`, `warn`, `error` (or `println`).
     pub level: String,
     /// The formatted message.
     pub message: String,
+}
+
+impl LogLine {
+    /// The line as `defmt.log` and the console show it: `TIMESTAMP [level]
+    /// message`, or `[level] message` without a timestamp.
+    pub fn display(&self) -> String {
+        match &self.timestamp {
+            Some(t) => format!("{t} [{}] {}", self.level, self.message),
+            None => format!("[{}] {}", self.level, self.message),
+        }
+    }
 }
 
 /// Called for every defmt line as it arrives (on the log reader's thread).
@@ -50,6 +66,7 @@ pub(super) fn decode_defmt(
             match decoder.decode() {
                 Ok(frame) => {
                     let line = LogLine {
+                        timestamp: frame.display_timestamp().map(|t| t.to_string()),
                         level: frame.level().map_or("println", |l| l.as_str()).to_string(),
                         message: frame.display_message().to_string(),
                     };
@@ -87,6 +104,6 @@ pub(super) fn tail(log: &[LogLine]) -> String {
     if log.is_empty() {
         return String::new();
     }
-    let last: Vec<String> = log.iter().rev().take(3).rev().map(|l| format!("[{}] {}", l.level, l.message)).collect();
+    let last: Vec<String> = log.iter().rev().take(3).rev().map(LogLine::display).collect();
     format!("; image log: {}", last.join(" | "))
 }

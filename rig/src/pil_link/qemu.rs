@@ -229,7 +229,7 @@ impl Qemu {
             && let Ok(Err(e)) = t.join()
             && let Ok(mut l) = log.lock()
         {
-            l.push(LogLine { level: "error".into(), message: format!("sil-host: {e}") });
+            l.push(LogLine { timestamp: None, level: "error".into(), message: format!("sil-host: {e}") });
         }
     }
 }

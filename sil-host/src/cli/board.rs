@@ -101,6 +101,27 @@ pub enum BoardCommand {
     Enable,
     /// Disables the drivers now.
     Disable,
+    /// Writes the board's calibration and firmware configuration in force to FILE,
+    /// as TOML (read over the line: what `save` would store; docs/board.md "Backup
+    /// and restore"). Refuses to overwrite FILE without --force.
+    Backup {
+        /// The backup file to write (TOML).
+        file: PathBuf,
+        /// Overwrite FILE if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Restores a backup FILE: the calibration and configuration together. The
+    /// file's form is checked here (TOML, format version, every key known and
+    /// typed: exit 2 naming the key); its values by the firmware, as it checks
+    /// its flash record at reset, which takes the file whole or refuses it (exit
+    /// 1 naming the value; the board unchanged). Drivers disabled only. The
+    /// restored settings are not saved: `save`, then `lift-torque-limit` if the
+    /// calibration changed, before `enable`.
+    Restore {
+        /// The backup file to read (TOML, from `backup`).
+        file: PathBuf,
+    },
 }
 
 /// A joint, by name.

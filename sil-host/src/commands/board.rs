@@ -10,6 +10,7 @@ use arm_app::{
 };
 use board_twin::{BusFaults, FlashModel};
 use rig::{
+    board_backup,
     bringup_line::{self, Client, Pty},
     bringup_procedure::{self as bp, CalibrateOptions, StepError},
     free_arm::{ArmBoard, FreeArm},
@@ -299,6 +300,34 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             if !st.drivers_enabled {
                 eprintln!("warning: the drivers are off again since: {}", describe_status(st.status));
             }
+        }
+        BoardCommand::Backup { file, force } => {
+            if file.exists() && !force {
+                return Err(CliError::bad_input(format!("backup: {} exists: give --force to overwrite it", file.display())));
+            }
+            let b = bp::backup(&mut c)?;
+            board_backup::write(file, &b).map_err(|e| CliError::bad_input(e.to_string()))?;
+            let controller = format!("{:?}", b.config.controller).to_lowercase();
+            emit(json, &serde_json::json!({ "done": "backup", "file": file, "backup": b }), || {
+                println!(
+                    "backup: done: the calibration (lacks: {}) and the {controller} configuration written to {}",
+                    bp::describe_missing(b.calibration.missing()),
+                    file.display()
+                );
+            });
+        }
+        BoardCommand::Restore { file } => {
+            let b = board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?;
+            let st = bp::restore(&mut c, &b)?;
+            emit(json, &serde_json::json!({ "done": "restore", "file": file, "status": st }), || {
+                println!("restore: done: the calibration and configuration of {} are in force", file.display());
+                println!(
+                    "settings: {}; torque limit {} codes of 2048{}",
+                    st.settings.describe(),
+                    st.torque_limit_codes,
+                    if st.settings.allows_enable() { "" } else { "; next: `sil-host board save`" }
+                );
+            });
         }
         BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Disable => {
             let (request, name) = match args.command {

@@ -90,7 +90,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let progress = progress_bar(n, "PIL run", "periods", args.output.json);
     let sink: Option<pil_link::LogSink> = (!args.quiet && !args.output.json).then(|| {
         let bar = progress.clone();
-        Box::new(move |l: &LogLine| bar.println(format!("[image {}] {}", l.level, l.message))) as pil_link::LogSink
+        Box::new(move |l: &LogLine| bar.println(format!("image: {}", l.display()))) as pil_link::LogSink
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
@@ -107,7 +107,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let svg = out.stage("instructions.svg");
     draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
-        let text: String = log.iter().map(|l| format!("[{}] {}\n", l.level, l.message)).collect();
+        let text: String = log.iter().map(|l| l.display() + "\n").collect();
         out.write_bytes("defmt.log", text.as_bytes())?;
     }
     let summary = RunSummary {

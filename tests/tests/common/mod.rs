@@ -56,6 +56,27 @@ pub fn decode_defmt(elf: &Path, bytes: &[u8]) -> Vec<String> {
     lines
 }
 
+/// The defmt lines of `bytes` with their timestamps (`mcu::log_time`: seconds with
+/// six decimals), decoded with the table of `elf`: `(timestamp, "[level] message")`.
+pub fn decode_defmt_stamped(elf: &Path, bytes: &[u8]) -> Vec<(Option<String>, String)> {
+    let elf = std::fs::read(elf).unwrap();
+    let table = defmt_decoder::Table::parse(&elf).unwrap().expect("the image has a defmt table");
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = Vec::new();
+    loop {
+        match decoder.decode() {
+            Ok(frame) => {
+                let level = frame.level().map_or("println", |l| l.as_str()).to_string();
+                lines.push((frame.display_timestamp().map(|t| t.to_string()), format!("[{level}] {}", frame.display_message())));
+            }
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(e) => panic!("corrupt defmt stream: {e}"),
+        }
+    }
+    lines
+}
+
 /// The numbers after `key` in a log line (`key 123`, `key 1..2 of 3`).
 pub fn numbers_after(line: &str, key: &str) -> Vec<u64> {
     let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];

@@ -47,7 +47,7 @@ mod image {
             flash::SettingsFlash,
             gpio::{self, GpioPin},
             iwdg::{self, Iwdg},
-            rcc, spi, stack,
+            log_time, rcc, spi, stack,
             timers::{self, BeltCounter, PwmChannel},
             usart,
         },
@@ -164,6 +164,8 @@ mod image {
         if !timers::take_tick() {
             return;
         }
+        // The defmt log's timestamp (mcu::log_time): this tick's time.
+        log_time::tick();
         cortex_m::interrupt::free(|cs| {
             if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
                 arm.tick(&mut log);
@@ -317,6 +319,7 @@ mod image {
             }
         };
         let period_us = cfg.period.as_us();
+        log_time::set_period_us(period_us as u32);
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(app)));
         defmt::info!(
             "arm image up: {=u64} us control period (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",

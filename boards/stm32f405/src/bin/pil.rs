@@ -26,7 +26,7 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod image {
-    use board_stm32f405::mcu::{self, cycles::CycleClock, exit, stack, usart};
+    use board_stm32f405::mcu::{self, cycles::CycleClock, exit, log_time, stack, usart};
     use cortex_m_rt::entry;
     use firmware::{
         Event, Firmware, Outcome, TickClock,
@@ -150,6 +150,8 @@ mod image {
                     }
                     Ok(Downlink::Configure(cfg)) => return Ok(Event::Configure(cfg)),
                     Ok(Downlink::Frame { frame, start_delay_us }) => {
+                        // The defmt log's timestamp (mcu::log_time): this frame's period.
+                        log_time::set_tick(frame.seq);
                         self.now = frame.sampled_at().saturating_add(Duration(u64::from(start_delay_us)));
                         return Ok(Event::Frame(frame));
                     }
@@ -174,6 +176,7 @@ mod image {
                 }
                 (Outcome::Configured, Some(fw)) => {
                     let cfg = fw.config();
+                    log_time::set_period_us(cfg.period.as_us() as u32);
                     let pid = matches!(cfg.controller, firmware::ControllerKind::Pid);
                     defmt::info!("configured: {=str} controller, period {=u64} us", if pid { "pid" } else { "hybrid" }, cfg.period.as_us());
                     self.fig = Figures::default();

@@ -7,6 +7,7 @@ pub mod exit;
 pub mod flash;
 pub mod gpio;
 pub mod iwdg;
+pub mod log_time;
 pub mod rcc;
 pub mod spi;
 pub mod stack;
