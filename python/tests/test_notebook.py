@@ -42,10 +42,12 @@ def test_progress_in_a_saved_notebook_is_one_output():
     nbclient = pytest.importorskip("nbclient")
     pytest.importorskip("ipykernel")
     nb = nbformat.v4.new_notebook()
-    # Long enough for several rewrites (one every 250 ms from 0.5 s on); the
-    # second call is quick (under 0.5 s): no progress output at all.
+    # Long enough for several rewrites (one every 250 ms from 0.5 s on, and the
+    # last): 26 runs of 3.2 s simulated take about 3.5 s here (0.8 s with a
+    # 0.8 s transient was too close to the 1 s that two rewrites need on an idle
+    # machine). The second call is quick (under 0.5 s): no progress output at all.
     nb.cells = [
-        nbformat.v4.new_code_cell("import painleve\nr = painleve.sweep(mu=0.6, v_belt=(-0.6, -0.3), v_belt_step=0.025, transient=600, record=200)\nprint(r.sweep.nrows, 'runs')"),
+        nbformat.v4.new_code_cell("import painleve\nr = painleve.sweep(mu=0.6, v_belt=(-0.6, -0.3), v_belt_step=0.025, transient=3000, record=200)\nprint(r.sweep.nrows, 'runs')"),
         nbformat.v4.new_code_cell("q = painleve.simulate(duration=0.05)\nprint(q.trace.nrows, 'samples')"),
     ]
     updates = []
