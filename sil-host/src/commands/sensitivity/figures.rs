@@ -39,6 +39,21 @@ pub struct Figure {
     /// What a computed result with no value means, and the panel edge its hollow
     /// marker is drawn at.
     pub none: Option<NoValue>,
+    /// The series come in pairs of one case, the paper's ideal setting then the
+    /// sampled firmware: one colour per case (Okabe-Ito), the ideal result a large
+    /// ring and the sampled one a dot on the same row, so that equal results show
+    /// as a dot in its ring instead of one marker hiding the other.
+    pub paired: bool,
+}
+
+/// Colours of the cases of a paired figure (Okabe-Ito: distinct under the common
+/// colour-vision deficiencies).
+const CASE_COLORS: [RGBColor; 4] = [RGBColor(0, 114, 178), RGBColor(213, 94, 0), RGBColor(0, 158, 115), RGBColor(204, 121, 167)];
+
+/// How series `s` of `fig` is drawn: its colour, whether as a ring (else a dot),
+/// and its row slot (the dodge within a choice's row) among `slots`.
+fn style(fig: &Figure, s: usize, n: usize) -> (RGBColor, bool, usize, usize) {
+    if fig.paired { (CASE_COLORS[(s / 2) % 4], s.is_multiple_of(2), s / 2, n.div_ceil(2)) } else { (colors::CYCLE[s % 10], false, s, n) }
 }
 
 /// A result computed with no value (no critical `mu` on the grid, no bouncing band,
@@ -75,6 +90,7 @@ pub const FIGURES: [Figure; 5] = [
             ]
         },
         none: Some(NoValue { desc: "none: no persistent bouncing at any mu of the grid", at_low_end: false }),
+        paired: false,
     },
     Figure {
         file: "band_mu06_x0a.svg",
@@ -89,6 +105,7 @@ pub const FIGURES: [Figure; 5] = [
             ]
         },
         none: Some(NoValue { desc: "none: no persistent bouncing at mu = 0.6", at_low_end: false }),
+        paired: false,
     },
     Figure {
         file: "x0d_bounces.svg",
@@ -98,6 +115,7 @@ pub const FIGURES: [Figure; 5] = [
         count: false,
         series: || vec![("x0d".into(), |r, _| open(r, |o| if o.x0d_bounces { 1.0 } else { 0.0 }), 0)],
         none: None,
+        paired: false,
     },
     Figure {
         file: "zt_sliding.svg",
@@ -117,6 +135,7 @@ pub const FIGURES: [Figure; 5] = [
                 .collect()
         },
         none: Some(NoValue { desc: "none: fails already at the bisection's lower end", at_low_end: true }),
+        paired: true,
     },
     Figure {
         file: "hybrid_closed_loop.svg",
@@ -132,6 +151,7 @@ pub const FIGURES: [Figure; 5] = [
             ]
         },
         none: None,
+        paired: false,
     },
 ];
 
@@ -150,12 +170,20 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         .collect();
     let cols = 2usize;
     let width = 1400u32;
-    let mut entries: Vec<(String, Swatch)> =
-        series.iter().enumerate().map(|(s, (name, _, _))| (name.clone(), Swatch::Marker(colors::CYCLE[s % 10]))).collect();
+    let n = series.len();
+    let mut entries: Vec<(String, Swatch)> = series
+        .iter()
+        .enumerate()
+        .map(|(s, (name, _, _))| {
+            let (color, ring, _, _) = style(fig, s, n);
+            (name.clone(), if ring { Swatch::Ring(color) } else { Swatch::Marker(color) })
+        })
+        .collect();
     let any_none = study.results.iter().any(|r| series.iter().any(|(_, f, i)| f(r, *i).is_some_and(f64::is_nan)));
     if let (Some(none), true) = (&fig.none, any_none) {
         let edge = if none.at_low_end { "left" } else { "right" };
-        entries.push((format!("{} (hollow, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
+        let how = if fig.paired { "the series' marker" } else { "hollow" };
+        entries.push((format!("{} ({how}, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
     }
     let legend = Legend::new(entries);
     let legend_h = if legend.entries.len() > 1 { legend.rows_height(width) } else { 0 };
@@ -203,8 +231,11 @@ fn draw_panel<DB: DrawingBackend>(
     let names: Vec<String> = of.iter().map(|r| format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" })).collect();
     let y = CategoryAxis::top_down(names);
     let frame = Frame { x_desc: fig.value_desc, y_desc: "", x_tick_labels: true, caption: Some(dim.label()), margin_top: 6, y_area: None };
-    let n = series.len() as f64;
-    let dodge = |s: usize| if n > 1.0 { (s as f64 - (n - 1.0) / 2.0) * (0.6 / n) } else { 0.0 };
+    let slots = style(fig, 0, series.len()).3 as f64;
+    let dodge = |s: usize| {
+        let slot = style(fig, s, series.len()).2 as f64;
+        if slots > 1.0 { (slot - (slots - 1.0) / 2.0) * (0.6 / slots) } else { 0.0 }
+    };
     // Rows are drawn top down: a later series sits lower, so the dodge is negated.
     let points = |s: usize, f: &fn(&ChoiceResult, usize) -> Option<f64>, i: usize| -> Vec<(f64, f64)> {
         of.iter().enumerate().filter_map(|(k, r)| f(r, i).filter(|v| v.is_finite()).map(|v| (v, k as f64 - dodge(s)))).collect()
@@ -214,13 +245,28 @@ fn draw_panel<DB: DrawingBackend>(
         of.iter().enumerate().filter(|(_, r)| f(r, i).is_some_and(f64::is_nan)).map(|(k, _)| k as f64 - dodge(s)).collect()
     };
     let all: Vec<(f64, f64)> = series.iter().enumerate().flat_map(|(s, (_, f, i))| points(s, f, *i)).collect();
-    let marker = |chart_points: Vec<(f64, f64)>, color: RGBColor| chart_points.into_iter().map(move |p| Circle::new(p, 5, color.filled()));
-    let ring = |rows: Vec<f64>, x: f64, color: RGBColor| rows.into_iter().map(move |y| Circle::new((x, y), 5, color.stroke_width(2)));
+    // A series' marker: a filled dot, or (the ideal result of a paired figure) a
+    // larger ring around where the sampled result's dot sits when the two agree.
+    let marker = |chart_points: Vec<(f64, f64)>, s: usize| {
+        let (color, ring, _, _) = style(fig, s, series.len());
+        chart_points
+            .into_iter()
+            .map(move |p| if ring { Circle::new(p, 7, color.stroke_width(2)) } else { Circle::new(p, 4, color.filled()) })
+    };
+    let ring = |rows: Vec<f64>, x: f64, s: usize| {
+        let (color, paired_ring, _, _) = style(fig, s, series.len());
+        let paired = fig.paired;
+        rows.into_iter().map(move |y| match (paired, paired_ring) {
+            (true, false) => Circle::new((x, y), 4, color.filled()),
+            (true, true) => Circle::new((x, y), 7, color.stroke_width(2)),
+            _ => Circle::new((x, y), 5, color.stroke_width(2)),
+        })
+    };
     if let Some(value_names) = fig.value_names {
         let x = CategoryAxis::new(value_names.iter().map(|s| s.to_string()).collect());
         let mut chart = frame_chart(area, x, y, &frame)?;
         for (s, (_, f, i)) in series.iter().enumerate() {
-            chart.draw_series(marker(points(s, f, *i), colors::CYCLE[s % 10])).map_err(|e| e.to_string())?;
+            chart.draw_series(marker(points(s, f, *i), s)).map_err(|e| e.to_string())?;
         }
         return Ok(());
     }
@@ -245,9 +291,8 @@ fn draw_panel<DB: DrawingBackend>(
     }
     let mut chart = frame_chart(area, x, y, &frame)?;
     for (s, (_, f, i)) in series.iter().enumerate() {
-        let color = colors::CYCLE[s % 10];
-        chart.draw_series(marker(points(s, f, *i), color)).map_err(|e| e.to_string())?;
-        chart.draw_series(ring(nones(s, f, *i), none_x, color)).map_err(|e| e.to_string())?;
+        chart.draw_series(marker(points(s, f, *i), s)).map_err(|e| e.to_string())?;
+        chart.draw_series(ring(nones(s, f, *i), none_x, s)).map_err(|e| e.to_string())?;
     }
     Ok(())
 }
