@@ -41,7 +41,12 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
                 Some(v) if v.is_valid() => "none".to_string(),
                 Some(v) => format!("**{}**", v.describe_violations()),
             };
-            let _ = writeln!(md, "| {} ({}) | {} | {} | {} | {} s |", s.title, r.id, cell(s.source), status, violations, short(r.wall_s));
+            // The section's source, and what this run is where the section's runs differ.
+            let source = match s.steps.iter().find(|st| st.id == r.id).and_then(|st| st.what) {
+                Some(what) => format!("{}; this run: {what}", s.source),
+                None => s.source.to_string(),
+            };
+            let _ = writeln!(md, "| {} ({}) | {} | {} | {} | {} s |", s.title, r.id, cell(&source), status, violations, short(r.wall_s));
         }
     }
     super::paper::side_by_side(&mut md, results);

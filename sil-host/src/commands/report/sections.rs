@@ -14,6 +14,9 @@ pub struct Step {
     pub args: Vec<String>,
     /// Whether the command writes files (takes `--out`).
     pub writes: bool,
+    /// What this run is within its section, where the section has runs of different
+    /// kinds (`the sampled firmware` beside `the paper's ideal law`).
+    pub what: Option<&'static str>,
 }
 
 /// One section of the report: an experiment of docs/model.md with its commands.
@@ -28,7 +31,12 @@ pub struct Section {
 }
 
 fn step(id: &'static str, args: &[&str]) -> Step {
-    Step { id, args: args.iter().map(|s| (*s).to_string()).collect(), writes: true }
+    Step { id, args: args.iter().map(|s| (*s).to_string()).collect(), writes: true, what: None }
+}
+
+/// [`step`] with what the run is within its section ([`Step::what`]).
+fn step_of(id: &'static str, what: &'static str, args: &[&str]) -> Step {
+    Step { what: Some(what), ..step(id, args) }
 }
 
 /// The paper's scenario files: `./scenarios`, else the repository's at build time.
@@ -70,14 +78,21 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     });
     v.push(Section {
         title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
-        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the sampled hybrid firmware in the loop, beside the paper's ideal law",
+        source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the hybrid controller in the loop",
         steps: {
             let args = if quick {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d", "--v-belt-step", "0.05", "--transient", "20", "--record", "10"]
             } else {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d"]
             };
-            vec![step("sweep-hybrid", &args), step("sweep-hybrid-ideal", &[&args[..], &["--ideal"]].concat())]
+            vec![
+                step_of("sweep-hybrid", "the sampled firmware (1 kHz, docs/hardware.md's sensors, saturated torques)", &args),
+                step_of(
+                    "sweep-hybrid-ideal",
+                    "the paper's ideal law (continuous time, exact measurements, no saturation)",
+                    &[&args[..], &["--ideal"]].concat(),
+                ),
+            ]
         },
     });
     v.push(Section {
@@ -110,6 +125,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
             .map(|name| Step {
                 id: name,
                 writes: true,
+                what: None,
                 args: vec![
                     "run".into(),
                     "--in-process".into(),
@@ -127,6 +143,11 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
             .map(|(id, friction)| Step {
                 id,
                 writes: true,
+                what: Some(if friction == "commanded" {
+                    "mu_hat 10 % low, the commanded friction term"
+                } else {
+                    "mu_hat 10 % low, the friction term from the estimated mu"
+                }),
                 args: vec![
                     "run".into(),
                     "--in-process".into(),
