@@ -66,13 +66,30 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
     );
 }
 
-/// A validity line for a table cell: every counter, violations first in words.
+/// A validity line for a table cell: every counter, violations first in words, then
+/// what each counter that is not zero but no violation means (a reader sees `Zeno stops
+/// 46 844` under "valid" and asks why).
 pub(crate) fn validity_cell(v: &plant::Validity) -> String {
     let counts = format!(
         "energy gains {}, Newton fallbacks {}, Poisson fallbacks {}, cone violations {}, Zeno stops {}, integrator failures {}",
         v.energy_gains, v.newton_fallbacks, v.poisson_fallbacks, v.cone_violations, v.zeno_stops, v.integrator_failures
     );
-    if v.is_valid() { format!("valid ({counts})") } else { format!("**INVALID: {}** ({counts})", v.describe_violations()) }
+    let line = if v.is_valid() { format!("valid ({counts})") } else { format!("**INVALID: {}** ({counts})", v.describe_violations()) };
+    let mut why = Vec::new();
+    if v.zeno_stops > 0 {
+        why.push(
+            "a Zeno stop ends a sequence of ever smaller bounces: a last bounce slower than 1e-4 m/s is made plastic and the \
+             tip stays on the belt (docs/plant.md \"The Zeno rule\"), part of the model, not an error",
+        );
+    }
+    if v.newton_fallbacks > 0 || v.poisson_fallbacks > 0 {
+        why.push(
+            "a fallback is an impact where Newton's or Poisson's law with friction would create energy, resolved by the \
+             energetic law with the same coefficient instead (docs/plant.md \"Fallback: no impact creates energy\"), \
+             so that no impact creates energy",
+        );
+    }
+    if why.is_empty() { line } else { format!("{line}; {}", why.join("; ")) }
 }
 
 pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
