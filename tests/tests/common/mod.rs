@@ -36,24 +36,10 @@ pub fn qemu_image(bin: &str) -> PathBuf {
     target_dir.join("thumbv7em-none-eabihf/qemu").join(bin)
 }
 
-/// The defmt lines of `bytes` (an image's semihosting output), decoded with the table of `elf`.
+/// The defmt lines of `bytes` (an image's semihosting output), decoded with the table of `elf`
+/// ([`decode_defmt_stamped`] without the timestamps).
 pub fn decode_defmt(elf: &Path, bytes: &[u8]) -> Vec<String> {
-    let elf = std::fs::read(elf).unwrap();
-    let table = defmt_decoder::Table::parse(&elf).unwrap().expect("the image has a defmt table");
-    let mut decoder = table.new_stream_decoder();
-    decoder.received(bytes);
-    let mut lines = Vec::new();
-    loop {
-        match decoder.decode() {
-            Ok(frame) => {
-                let level = frame.level().map_or("println", |l| l.as_str()).to_string();
-                lines.push(format!("[{level}] {}", frame.display_message()));
-            }
-            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
-            Err(e) => panic!("corrupt defmt stream: {e}"),
-        }
-    }
-    lines
+    decode_defmt_stamped(elf, bytes).into_iter().map(|(_, line)| line).collect()
 }
 
 /// The defmt lines of `bytes` with their timestamps (`mcu::log_time`: seconds with
