@@ -107,6 +107,16 @@ impl OutputSet {
         tmp
     }
 
+    /// Reserves temporary paths for the figure `name` (an `.svg`) and its PDF
+    /// (the same name with `.pdf`, at [`crate::plot::print::pdf_path`] of the SVG's
+    /// temporary path), both renamed on commit; returns the SVG's.
+    pub fn stage_figure(&mut self, name: &str) -> PathBuf {
+        let svg = self.stage(name);
+        let pdf_final = self.dir.join(Path::new(name).with_extension("pdf"));
+        self.pending.push((crate::plot::print::pdf_path(&svg), pdf_final));
+        svg
+    }
+
     /// Writes `bytes` as file `name`.
     ///
     /// # Errors

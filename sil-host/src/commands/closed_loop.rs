@@ -83,8 +83,12 @@ pub(crate) fn draw(
     let t_end = t_end.unwrap_or(1.0).max(1e-9);
     let panels = history.panels(true);
     let title = format!(
-        "{what} run {} (cf. paper Figs. 6 to 8): {} from x0{}, z_t* = {} m",
-        s.name, s.controller.kind, s.plant.x0, s.controller.target_z_t
+        "{what} run {} (cf. paper Figs. 6 to 8): {} from x0{}, {} = {} m",
+        s.name,
+        s.controller.kind,
+        s.plant.x0,
+        plot::symbols::Z_T_REF,
+        s.controller.target_z_t
     );
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

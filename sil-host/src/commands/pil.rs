@@ -102,9 +102,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let transport = link.transport();
     drop(link);
 
-    let svg = out.stage("trace.svg");
+    let svg = out.stage_figure("trace.svg");
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &history, stats.last_t())?;
-    let svg = out.stage("instructions.svg");
+    let svg = out.stage_figure("instructions.svg");
     draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
         let text: String = log.iter().map(|l| l.display() + "\n").collect();
@@ -196,20 +196,13 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
         let pts: Vec<_> = ticks.points().into_iter().map(|(t, n)| (t, n * per_tick)).collect();
         plot::decimate(&pts, 4000)
     };
-    let budget_label = format!("budget (5 % of {:.0} us at 168 MHz)", 1e6 / s.timing.rate_hz);
+    let budget_label = format!("budget (5 % of {:.0} µs at 168 MHz)", 1e6 / s.timing.rate_hz);
     let y_label = format!("{unit} per step");
     let panels = [Panel {
-        y_label: &y_label,
+        y_label: y_label.into(),
         series: vec![
-            Series {
-                label: "frame (decode + step)",
-                points: series(&counts.frame_series),
-                color: colors::ORANGE,
-                step: false,
-                dashed: false,
-                markers: false,
-            },
-            Series { label: "step", points: series(&counts.step_series), color: colors::BLUE, step: false, dashed: false, markers: false },
+            Series::line("frame (decode + step)", series(&counts.frame_series), colors::ORANGE),
+            Series::line("step", series(&counts.step_series), colors::BLUE),
             Series::reference(&budget_label, vec![(0.0, budget), (t_end, budget)], colors::RED),
         ],
         y_range: Some((0.0, (counts.frame.max().unwrap_or(0) as f64 * per_tick).max(budget) * 1.15)),

@@ -20,12 +20,7 @@ use super::{
 /// A chart of `f64` against `f64` on axes `X` and `Y`.
 pub type Chart<'a, DB, Y, X = NiceAxis> = ChartContext<'a, DB, Cartesian2d<X, Y>>;
 
-/// Font size of tick labels, px (plotters' size).
-pub const TICK_PX: f64 = 15.0;
-/// Font size of axis descriptions, px (plotters' size).
-pub const DESC_PX: f64 = 16.0;
-/// Font size of a chart's caption, px (plotters' size).
-pub const CAPTION_PX: f64 = 18.0;
+pub use super::font::{CAPTION_PX, DESC_PX, TEXT_PX as TICK_PX};
 
 /// The tick labels an axis draws.
 pub trait TickLabels {

@@ -15,6 +15,17 @@ use plotters::style::{FontStyle, register_font};
 /// The family every figure uses.
 pub const FAMILY: &str = "sans-serif";
 
+/// plotters' font size of the smallest text a figure draws (tick labels, legend
+/// labels, notes): 18, which prints at 7.26 pt on a figure's print width
+/// ([`super::print::printed_pt`]), above the 7 pt floor.
+pub const TEXT_PX: f64 = 18.0;
+/// plotters' font size of axis descriptions (7.7 pt in print).
+pub const DESC_PX: f64 = 19.0;
+/// plotters' font size of a chart's caption above it (8.1 pt in print).
+pub const CAPTION_PX: f64 = 20.0;
+/// plotters' font size of a figure's title (8.9 pt in print).
+pub const TITLE_PX: f64 = 22.0;
+
 /// The bytes of the font the figures are laid out with (DejaVu Sans 2.37, TrueType).
 pub fn bytes() -> &'static [u8] {
     dejavu::sans::regular()

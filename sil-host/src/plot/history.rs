@@ -5,6 +5,7 @@ use rig::envelope::Envelope;
 
 use super::{
     colors,
+    symbols::{F_N, TAU, Z_T, Z_T_REF, axis},
     time_panels::{Panel, Series},
 };
 
@@ -39,13 +40,13 @@ pub fn history_panels(samples: &[HistorySample], step_torques: bool) -> [Panel<'
 fn panels_of_columns(columns: [Vec<(f64, f64)>; 6], step_torques: bool) -> [Panel<'static>; 4] {
     let [z_t, z_t_ref, f_n, u1, u2, mode] = columns;
     [
-        Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE), Series::reference("z_t*", z_t_ref, colors::GREY)]),
-        Panel::numeric("f_n (N)", vec![Series::line("f_n", f_n, colors::GREEN)]),
+        Panel::numeric(axis(Z_T, "m"), vec![Series::line(Z_T, z_t, colors::BLUE), Series::reference(Z_T_REF, z_t_ref, colors::GREY)]),
+        Panel::numeric(axis(F_N, "N"), vec![Series::line(F_N, f_n, colors::GREEN)]),
         Panel::numeric(
             "torque (N m)",
             vec![
-                Series { label: "u1", points: u1, color: colors::ORANGE, step: step_torques, dashed: false, markers: false },
-                Series { label: "u2", points: u2, color: colors::RED, step: step_torques, dashed: false, markers: false },
+                Series { step: step_torques, ..Series::line(TAU[0], u1, colors::ORANGE) },
+                Series { step: step_torques, ..Series::line(TAU[1], u2, colors::RED) },
             ],
         ),
         mode_panel_of_points(mode),
@@ -100,8 +101,8 @@ pub const MODE_NAMES: [&str; 3] = ["flight", "sliding", "sticking"];
 /// curve on a categorical axis (flight, sliding, sticking).
 pub fn mode_panel_of_points(points: Vec<(f64, f64)>) -> Panel<'static> {
     Panel {
-        y_label: "contact mode",
-        series: vec![Series { label: "mode", points, color: colors::PURPLE, step: true, dashed: false, markers: false }],
+        y_label: "contact mode".into(),
+        series: vec![Series { step: true, ..Series::line("mode", points, colors::PURPLE) }],
         y_range: None,
         categories: Some(&MODE_NAMES),
         between_samples: None,

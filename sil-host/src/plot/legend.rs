@@ -33,13 +33,13 @@ pub struct Legend {
 }
 
 /// Font size of legend labels, px (plotters' size, 1.24 times the SVG font-size).
-pub const LABEL_PX: f64 = 15.0;
+pub const LABEL_PX: f64 = super::font::TEXT_PX;
 /// Width of a swatch, px.
 const SWATCH_W: i32 = 22;
 /// Gap between a swatch and its label, and after a label in a row, px.
 const GAP: i32 = 6;
 /// Height of one legend line, px.
-pub const LINE_H: i32 = 20;
+pub const LINE_H: i32 = 24;
 
 /// Width and height of `text` at plotters' font size `px`, px, as plotters lays it
 /// out (the registered font's advances; a generous guess if text measurement fails).

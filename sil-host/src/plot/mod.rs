@@ -16,6 +16,8 @@ pub mod colors;
 pub mod font;
 pub mod history;
 pub mod legend;
+pub mod print;
+pub mod symbols;
 pub mod time_panels;
 
 use std::{ops::Range, path::Path};
@@ -23,6 +25,7 @@ use std::{ops::Range, path::Path};
 use plotters::{coord::Shift, prelude::*};
 
 pub use history::{HistoryEnvelope, HistorySample, MODE_NAMES, history_panels, mode_code, mode_panel, mode_panel_of_points};
+pub use print::{PrintWidth, finish};
 pub use time_panels::{Panel, Series, decimate, time_panels};
 
 use crate::error::CliError;
@@ -36,32 +39,63 @@ pub fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_
     move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
 }
 
-/// A white SVG canvas of `size` px (width, height) writing to `path`, with the
-/// figures' font registered ([`font::register`]).
+/// A white SVG canvas writing to `path`, [`PrintWidth::px`] wide for `width` and
+/// `height` px high, with the figures' font registered ([`font::register`]).
+/// [`print::finish`] presents it, sets its printed size and writes its PDF.
 ///
 /// # Errors
 /// plotters' error, as text.
-pub fn svg_canvas(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
+pub fn svg_canvas(path: &Path, width: PrintWidth, height: u32) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
     font::register();
-    let root = SVGBackend::new(path, size).into_drawing_area();
+    let root = SVGBackend::new(path, (width.px(), height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     Ok(root)
 }
 
+/// `title` broken at spaces into lines that each fit `width` px, less 10 px
+/// either side, at plotters' font size `px` (a word wider than that stays whole on
+/// its line, and fails the figure check).
+pub fn title_lines(title: &str, width: u32, px: f64) -> Vec<String> {
+    let room = width.saturating_sub(20);
+    let mut lines: Vec<String> = Vec::new();
+    for word in title.split(' ') {
+        match lines.last_mut() {
+            Some(line) if text_size(&format!("{line} {word}"), px).0 <= room => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
+}
+
+/// The height `title` takes drawn by [`draw_title`] at plotters' font size `px`
+/// on an area `width` px wide from `top` px down, with 10 px below, px.
+pub fn title_height(title: &str, width: u32, px: f64, top: u32) -> u32 {
+    top + title_lines(title, width, px).len() as u32 * title_line_h(px) + 10
+}
+
+/// The distance between the lines of a title at plotters' font size `px`, px.
+fn title_line_h(px: f64) -> u32 {
+    (px * 1.25).ceil() as u32
+}
+
 /// Draws `title` centred at the top of `area`, `top` px down, at plotters' font
-/// size `px` or smaller so that it fits the width with 10 px either side.
+/// size `px`, in as many lines as it needs to fit the width with 10 px either side
+/// ([`title_lines`]; [`title_height`] is the space it takes).
 ///
 /// # Errors
 /// plotters' error, as text.
 pub fn draw_title<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, px: f64, top: i32) -> Result<(), String> {
-    let width = area.dim_in_pixel().0 as f64 - 20.0;
-    let mut size = px;
-    while size > 8.0 && text_size(title, size).0 as f64 > width {
-        size -= 1.0;
-    }
-    let style = TextStyle::from((FAMILY, size).into_font())
+    let width = area.dim_in_pixel().0;
+    let style = TextStyle::from((FAMILY, px).into_font())
         .pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Center, plotters::style::text_anchor::VPos::Top));
-    area.draw_text(title, &style, (area.dim_in_pixel().0 as i32 / 2, top)).map_err(|e| e.to_string())
+    for (i, line) in title_lines(title, width, px).iter().enumerate() {
+        let y = top + (i as u32 * title_line_h(px)) as i32;
+        area.draw_text(line, &style, (width as i32 / 2, y)).map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 /// An x-y chart of `f64` against `f64` on round-valued axes.

@@ -4,23 +4,25 @@
 //! constant (an open-loop bounce has `f_n = 0` and flight between instantaneous
 //! impacts) carries no picture: it is left out and said in a note under the title.
 
-use std::path::Path;
+use std::{borrow::Cow, path::Path};
 
 use plotters::prelude::*;
 
 use super::{
     axis::{CategoryAxis, NiceAxis},
     chart::{Frame, TickLabels, frame_chart, y_label_area},
-    font::FAMILY,
+    font::{FAMILY, TEXT_PX, TITLE_PX},
     legend::{Legend, Swatch},
-    plot_err, svg_canvas,
+    plot_err,
+    print::{PrintWidth, finish},
+    svg_canvas,
 };
 use crate::error::CliError;
 
 /// One curve of a panel.
 pub struct Series<'a> {
     /// Legend label.
-    pub label: &'a str,
+    pub label: Cow<'a, str>,
     /// Points `(t, value)`: t in s, value in the panel's unit.
     pub points: Vec<(f64, f64)>,
     /// Colour.
@@ -37,7 +39,7 @@ pub struct Series<'a> {
 /// One panel: a y-axis label and its curves.
 pub struct Panel<'a> {
     /// Y-axis description with units, `name (unit)`.
-    pub y_label: &'a str,
+    pub y_label: Cow<'a, str>,
     /// The curves.
     pub series: Vec<Series<'a>>,
     /// Optional fixed y-range (in the panel's unit).
@@ -52,25 +54,25 @@ pub struct Panel<'a> {
 
 impl<'a> Panel<'a> {
     /// A numeric panel of `series` under `y_label` (`name (unit)`), its y range from the data.
-    pub fn numeric(y_label: &'a str, series: Vec<Series<'a>>) -> Self {
-        Self { y_label, series, y_range: None, categories: None, between_samples: None }
+    pub fn numeric(y_label: impl Into<Cow<'a, str>>, series: Vec<Series<'a>>) -> Self {
+        Self { y_label: y_label.into(), series, y_range: None, categories: None, between_samples: None }
     }
 }
 
 impl<'a> Series<'a> {
     /// A curve drawn as a line between its points.
-    pub fn line(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false, dashed: false, markers: false }
+    pub fn line(label: impl Into<Cow<'a, str>>, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.into(), points, color, step: false, dashed: false, markers: false }
     }
 
     /// A reference or a limit, dashed, drawn over the measured curves.
-    pub fn reference(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false, dashed: true, markers: false }
+    pub fn reference(label: impl Into<Cow<'a, str>>, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.into(), points, color, step: false, dashed: true, markers: false }
     }
 
     /// Instants (impacts, events) drawn as markers over the curves.
-    pub fn markers(label: &'a str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label, points, color, step: false, dashed: false, markers: true }
+    pub fn markers(label: impl Into<Cow<'a, str>>, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.into(), points, color, step: false, dashed: false, markers: true }
     }
 }
 
@@ -149,7 +151,7 @@ fn constant_note(panel: &Panel) -> Option<String> {
     }
     let (name, unit) = match panel.y_label.split_once(" (") {
         Some((n, u)) => (n, format!(" {}", u.trim_end_matches(')'))),
-        None => (panel.y_label, String::new()),
+        None => (panel.y_label.as_ref(), String::new()),
     };
     let v = if lo == 0.0 { "0".to_string() } else { format!("{lo:.4}") };
     Some(format!("{name} = {v}{unit} throughout"))
@@ -202,18 +204,21 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
     let legends: Vec<Legend> =
         shown.iter().map(|p| Legend::new(p.series.iter().map(|s| (s.label.to_string(), swatch(s))).collect())).collect();
     let legend_w = legends.iter().map(Legend::column_width).max().unwrap_or(0) + 10;
-    let width = 1100u32;
-    let head = 48 + if note.is_empty() { 0 } else { 24 };
+    let print = PrintWidth::TwoColumn;
+    let width = print.px();
+    let title_h = super::title_height(title, width, TITLE_PX, 8);
+    let note_lines =
+        if note.is_empty() { Vec::new() } else { super::title_lines(&format!("not drawn, constant: {}", note.join("; ")), width, TEXT_PX) };
+    let head = title_h + 24 * note_lines.len() as u32;
     let panel_h = 210u32;
     let height = head + panel_h * shown.len() as u32 + 30;
-    let root = svg_canvas(path, (width, height)).map_err(|e| err(&e))?;
+    let root = svg_canvas(path, print, height).map_err(|e| err(&e))?;
     let (top, body) = root.split_vertically(head);
-    super::draw_title(&top, title, 22.0, 8).map_err(|e| err(&e))?;
-    if !note.is_empty() {
-        let text = format!("not drawn, constant: {}", note.join("; "));
-        let grey = BLACK.mix(0.75);
-        let style = TextStyle::from((FAMILY, 14.0).into_font()).color(&grey);
-        top.draw_text(&text, &style, (16, 44)).map_err(|e| err(&e.to_string()))?;
+    super::draw_title(&top, title, TITLE_PX, 8).map_err(|e| err(&e))?;
+    let grey = BLACK.mix(0.75);
+    let style = TextStyle::from((FAMILY, TEXT_PX).into_font()).color(&grey);
+    for (i, line) in note_lines.iter().enumerate() {
+        top.draw_text(line, &style, (16, (title_h - 6) as i32 + 24 * i as i32)).map_err(|e| err(&e.to_string()))?;
     }
     let mut heights: Vec<u32> = vec![panel_h; shown.len()];
     if let Some(last) = heights.last_mut() {
@@ -234,7 +239,7 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
                 YAxis::Categories(y) => y.tick_labels(),
                 YAxis::Numeric(y) => y.tick_labels(),
             };
-            y_label_area(&labels, p.y_label)
+            y_label_area(&labels, &p.y_label)
         })
         .max()
         .unwrap_or(0);
@@ -243,13 +248,13 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
         let (chart_area, legend_area) = area.split_horizontally(width - legend_w);
         let frame = Frame {
             x_desc: if last { "t (s)" } else { "" },
-            y_desc: panel.y_label,
+            y_desc: &panel.y_label,
             x_tick_labels: last,
             caption: None,
             margin_top: 8,
             y_area: Some(y_area),
         };
-        let x = NiceAxis::new(t_range.0..t_end, 12);
+        let x = NiceAxis::new(t_range.0..t_end, 10);
         let drawn = match y_axis(panel) {
             YAxis::Categories(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
             YAxis::Numeric(y) => frame_chart(&chart_area, x, y, &frame).and_then(|c| draw_series(c, panel)),
@@ -257,8 +262,7 @@ pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Pane
         drawn.map_err(|e| err(&e))?;
         legend.draw_column(&legend_area.margin(8, 0, 0, 0)).map_err(|e| err(&e))?;
     }
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    finish(root, path, print).map_err(|e| err(&e))
 }
 
 /// A panel's y axis.

@@ -4,6 +4,9 @@
 //! - `slices_<law>_e<e_n>.svg`: per `mu`, the indicator `max theta1_dot` over the
 //!   record window against `v_belt`, one curve per initial condition, with the
 //!   threshold.
+//!
+//! Each also as PDF; one column wide for one panel per row, two for more
+//! ([`plot::print`]).
 
 use std::path::Path;
 
@@ -12,9 +15,11 @@ use plotters::prelude::*;
 use crate::{
     error::CliError,
     plot::{
-        self, colors,
+        self, PrintWidth, colors,
+        font::TITLE_PX,
         legend::{Legend, Swatch},
         plot_err,
+        symbols::{BELT_SPEED, E_N, MU, THETA1_DOT, axis},
     },
 };
 use analyses::sweep::{
@@ -29,16 +34,16 @@ use analyses::sweep::{
 /// and 9).
 pub fn outcome_color(o: Outcome) -> RGBColor {
     match o {
-        Outcome::Bouncing => RGBColor(213, 94, 0),
-        Outcome::Oscillating => RGBColor(230, 159, 0),
-        Outcome::LiftOffOnly => RGBColor(204, 121, 167),
-        Outcome::LiftOff => RGBColor(0, 114, 178),
-        Outcome::TargetNotReached => RGBColor(240, 228, 66),
+        Outcome::Bouncing => colors::RED,
+        Outcome::Oscillating => colors::SKY,
+        Outcome::LiftOffOnly => colors::PURPLE,
+        Outcome::LiftOff => colors::BLUE,
+        Outcome::TargetNotReached => colors::YELLOW,
         Outcome::Contact => RGBColor(228, 234, 242),
-        Outcome::Flight => RGBColor(86, 180, 233),
-        Outcome::SafeState => RGBColor(0, 158, 115),
-        Outcome::Failed => RGBColor(150, 150, 150),
-        Outcome::Invalid => RGBColor(0, 0, 0),
+        Outcome::Flight => colors::ORANGE,
+        Outcome::SafeState => colors::GREEN,
+        Outcome::Failed => colors::LIGHT_GREY,
+        Outcome::Invalid => colors::BLACK,
     }
 }
 
@@ -59,8 +64,9 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let ics = spec.initial_conditions();
     let cols = ics.len().min(3);
     let grid_rows = ics.len().div_ceil(cols);
-    // At least 760 px, so that a one-panel map keeps a readable title.
-    let width = (560 * cols as u32).max(760);
+    // One column for one panel, the page's width for two or three.
+    let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
+    let width = print.px();
     // The legend: one coloured box, name and count per outcome that occurs in this
     // case (in the order of the outcomes the sweep can give), packed in rows across
     // the width (measured with the figures' font).
@@ -74,11 +80,12 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
             .collect(),
     );
     let legend_h = legend.rows_height(width);
-    let title_h = 40;
-    let root = plot::svg_canvas(path, (width, title_h + legend_h + 470 * grid_rows as u32)).map_err(|e| err(&e))?;
-    let title = format!("Outcome over (v_belt, mu){}, {} ({law}, e_n = {e_n})", paper_figure(spec), controller_label(spec));
+    let title = format!("Outcome over ({BELT_SPEED}, {MU}){}, {} ({law}, {E_N} = {e_n})", paper_figure(spec), controller_label(spec));
+    let title_h = plot::title_height(&title, width, TITLE_PX, 10);
+    let panel_h = if cols == 3 { 360 } else { 420 };
+    let root = plot::svg_canvas(path, print, title_h + legend_h + panel_h * grid_rows as u32).map_err(|e| err(&e))?;
     let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
+    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
     let (legend_area, panels_area) = rest.split_vertically(legend_h);
     legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
     let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
@@ -88,7 +95,8 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     for (i, area) in panels_area.split_evenly((grid_rows, cols)).iter().enumerate().take(ics.len()) {
         let ic = &ics[i];
         let caption = format!("from {} (elbow {})", ic.name, ic.branch.name());
-        let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: "v_belt (m/s)", y_desc: "mu (-)" };
+        let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(MU, "-"));
+        let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: &x_desc, y_desc: &y_desc };
         let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         let cells = rows
             .iter()
@@ -96,7 +104,7 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
             .map(|r| Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv, r.mu + dmu)], outcome_color(r.outcome).filled()));
         chart.draw_series(cells).map_err(|e| err(&e))?;
     }
-    root.present().map_err(|e| err(&e))
+    plot::finish(root, path, print).map_err(|e| err(&e))
 }
 
 fn half_step(a: &analyses::sweep::Axis) -> f64 {
@@ -131,7 +139,8 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     let mus = spec.mu.values();
     let cols = if mus.len() > 4 { 2 } else { 1 };
     let grid_rows = mus.len().div_ceil(cols);
-    let width = 620 * cols as u32;
+    let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
+    let width = print.px();
     // The indicator spans from 0 (a tip at rest) to tens of rad/s (bouncing), and the
     // threshold is 1e-6 rad/s: a log axis, values at or below a thousandth of the
     // threshold drawn on its floor. One marker shape per initial condition (a hollow
@@ -149,15 +158,15 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
         legend.entries.push((format!("from {}", ic.name), swatch));
     }
     legend.entries.push((format!("floor: at or below {floor:e} rad/s"), Swatch::Dashed(colors::GREY)));
-    let (title_h, legend_h) = (40, legend.rows_height(width));
-    let root = plot::svg_canvas(path, (width, title_h + legend_h + 240 * grid_rows as u32)).map_err(|e| err(&e))?;
     let title = format!(
-        "max theta1_dot over the record window against v_belt (log scale){}, {} ({law}, e_n = {e_n})",
+        "Largest {THETA1_DOT} over the record window against {BELT_SPEED}{}, {} ({law}, {E_N} = {e_n})",
         paper_figure(spec),
         controller_label(spec)
     );
+    let (title_h, legend_h) = (plot::title_height(&title, width, TITLE_PX, 10), legend.rows_height(width));
+    let root = plot::svg_canvas(path, print, title_h + legend_h + 240 * grid_rows as u32).map_err(|e| err(&e))?;
     let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
+    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
     let (legend_area, panels) = rest.split_vertically(legend_h);
     legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
     let vs = spec.v_belt.values();
@@ -169,14 +178,9 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
         let log = |v: f64| v.max(floor).log10();
         let hi = at_mu.iter().map(|r| r.theta1_dot_max).filter(|v| v.is_finite()).fold(spec.threshold * 10.0, f64::max);
         let (y_lo, y_hi) = (log(floor) - 0.3, log(hi) + 0.3);
-        let caption = format!("mu = {mu}");
-        let axes = plot::Axes {
-            caption: Some(&caption),
-            x: x_lo..x_hi,
-            y: y_lo..y_hi,
-            x_desc: "v_belt (m/s)",
-            y_desc: "log10 max theta1_dot (rad/s)",
-        };
+        let caption = format!("{MU} = {mu}");
+        let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), format!("log₁₀ max {}", axis(THETA1_DOT, "rad/s")));
+        let axes = plot::Axes { caption: Some(&caption), x: x_lo..x_hi, y: y_lo..y_hi, x_desc: &x_desc, y_desc: &y_desc };
         let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
         chart
             .draw_series(DashedLineSeries::new([(x_lo, log(floor)), (x_hi, log(floor))], 2, 4, colors::GREY.stroke_width(1)))
@@ -201,5 +205,5 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
             .map_err(|e| err(&e))?;
         }
     }
-    root.present().map_err(|e| err(&e))
+    plot::finish(root, path, print).map_err(|e| err(&e))
 }

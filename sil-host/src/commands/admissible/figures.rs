@@ -3,8 +3,12 @@
 use super::summary::fmt_intervals;
 use crate::error::CliError;
 use crate::plot::{
+    PrintWidth,
     axis::NiceAxis,
     chart::{Frame, frame_chart},
+    colors,
+    font::{FAMILY, TEXT_PX, TITLE_PX},
+    symbols::{MU, Z_T, axis},
 };
 use analyses::admissible::{AdmissibleReport, p_on_belt};
 use analyses::paper;
@@ -53,19 +57,20 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let clamp = |p: f64| p.clamp(ymin, ymax);
     let (x0, x1) = (-r.reach * 1.03, r.reach * 1.03);
 
-    let root = crate::plot::svg_canvas(path, (960, 780)).map_err(&perr)?;
-    let (top, root) = root.split_vertically(40);
+    let print = PrintWidth::TwoColumn;
+    let canvas = crate::plot::svg_canvas(path, print, 760).map_err(&perr)?;
+    let (top, root) = canvas.split_vertically(44);
     crate::plot::draw_title(
         &top,
-        &format!("Admissible configurations on the belt (paper Table II): p(z_t) for z_r_dot > 0, mu = {}", r.params.mu),
-        20.0,
+        &format!("Admissible configurations on the belt (paper Table II): p({Z_T}) for ż_r > 0, {MU} = {}", r.params.mu),
+        TITLE_PX,
         10,
     )
     .map_err(&perr)?;
-    let (panels_area, note_area) = root.split_vertically(root.dim_in_pixel().1.saturating_sub(24));
+    let (panels_area, note_area) = root.split_vertically(root.dim_in_pixel().1.saturating_sub(56));
     let areas = panels_area.split_evenly((2, 1));
-    let line_color = RGBColor(31, 119, 180);
-    let shade = RGBColor(44, 160, 44).mix(0.22);
+    let line_color = colors::BLUE;
+    let shade = colors::GREEN.mix(0.22);
     // The paper's Table II, side by side, where its mu is ours.
     let paper_of = |branch| {
         (r.params.mu == paper::TABLE_II_MU).then_some(match branch {
@@ -78,13 +83,14 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
         let paper = paper_of(*branch);
         let caption = match paper {
             Some([from, to]) => {
-                format!("elbow {}: p > 0 (shaded) for z_t in {} m; paper: [{from}, {to}) m", branch.name(), fmt_intervals(iv))
+                format!("elbow {}: p > 0 (shaded) for {Z_T} in {} m; paper: [{from}, {to}) m", branch.name(), fmt_intervals(iv))
             }
-            None => format!("elbow {}: p > 0 (shaded) for z_t in {} m", branch.name(), fmt_intervals(iv)),
+            None => format!("elbow {}: p > 0 (shaded) for {Z_T} in {} m", branch.name(), fmt_intervals(iv)),
         };
+        let x_desc = axis(Z_T, "m");
         let frame =
-            Frame { x_desc: "z_t (m)", y_desc: "p (1/kg)", x_tick_labels: true, caption: Some(&caption), margin_top: 6, y_area: None };
-        let mut chart = frame_chart(area, NiceAxis::new(x0..x1, 9), NiceAxis::new(ymin..ymax, 6), &frame).map_err(&perr)?;
+            Frame { x_desc: &x_desc, y_desc: "p (1/kg)", x_tick_labels: true, caption: Some(&caption), margin_top: 6, y_area: None };
+        let mut chart = frame_chart(area, NiceAxis::new(x0..x1, 9), NiceAxis::new(ymin..ymax, 5), &frame).map_err(&perr)?;
         chart
             .draw_series(iv.iter().map(|i| Rectangle::new([(i.lo, ymin), (i.hi, ymax)], shade.filled())))
             .map_err(|e| perr(e.to_string()))?;
@@ -98,7 +104,7 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
             .draw_series(LineSeries::new(pts.iter().map(|&(z, p)| (z, clamp(p))), line_color.stroke_width(2)))
             .map_err(|e| perr(e.to_string()))?;
         // The paper's ends on the line p = 0, as triangles pointing up at it.
-        let paper_red = RGBColor(214, 39, 40);
+        let paper_red = colors::RED;
         chart
             .draw_series(
                 paper
@@ -108,12 +114,17 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
             )
             .map_err(|e| perr(e.to_string()))?;
     }
-    let note = if r.params.mu == paper::TABLE_II_MU {
-        "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p; red triangles: the paper's ends"
-    } else {
-        "solid black: p = 0; dashed: ends of the reachable belt (+-sqrt((2l)^2 - H^2)); * = end of the belt, not a zero of p"
-    };
-    note_area.draw_text(note, &("sans-serif", 12).into_font().color(&BLACK.mix(0.7)), (70, 4)).map_err(|e| perr(e.to_string()))?;
-    root.present().map_err(|e| perr(e.to_string()))?;
-    Ok(())
+    let notes = [
+        "solid black: p = 0; dashed: the ends of the reachable belt, ±√((2l)² − H²)",
+        if r.params.mu == paper::TABLE_II_MU {
+            "*: an end of the belt, not a zero of p; red triangles: the paper's ends"
+        } else {
+            "*: an end of the belt, not a zero of p"
+        },
+    ];
+    let grey = BLACK.mix(0.75);
+    for (i, note) in notes.iter().enumerate() {
+        note_area.draw_text(note, &(FAMILY, TEXT_PX).into_font().color(&grey), (16, 4 + 26 * i as i32)).map_err(|e| perr(e.to_string()))?;
+    }
+    crate::plot::finish(canvas, path, print).map_err(perr)
 }

@@ -25,7 +25,7 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
     let mut out = OutputSet::new(&args.output.out)?;
     let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     out.write_bytes("admissible.json", document(&report, &files)?.as_bytes())?;
-    let svg = out.stage("admissible.svg");
+    let svg = out.stage_figure("admissible.svg");
     draw_figure(&report, &svg)?;
     out.commit()?;
     Ok(Done::ok(report, files.into_iter().map(Into::into).collect()))

@@ -3,8 +3,11 @@
 use crate::{
     error::CliError,
     plot::{
+        PrintWidth,
         axis::NiceAxis,
         chart::{Frame, frame_chart},
+        font::{DESC_PX, FAMILY, TEXT_PX, TITLE_PX},
+        symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, THETA2, THETA2_DOT, Z_N, Z_N_DOT, Z_R_DOT, axis},
     },
 };
 use analyses::modes::*;
@@ -13,14 +16,16 @@ use plotters::prelude::*;
 use shared::ContactMode;
 use std::path::Path;
 
-/// The fill colour of a mode in `modes.svg`.
+/// The fill colour of a mode in `modes.svg`: pale tints of the Okabe-Ito bluish
+/// green and sky blue for the consistent modes, its orange and vermillion at full
+/// strength for the two the paradox is about, its yellow for sticking.
 pub(crate) fn color(mode: PointMode) -> RGBColor {
     match mode {
-        PointMode::Contact(ContactMode::Sliding) => RGBColor(161, 217, 155),
-        PointMode::Contact(ContactMode::Flight) => RGBColor(158, 202, 225),
-        PointMode::Contact(ContactMode::Indeterminate) => RGBColor(253, 174, 97),
-        PointMode::Contact(ContactMode::Inconsistent) => RGBColor(215, 48, 39),
-        PointMode::Contact(ContactMode::Sticking) => RGBColor(255, 255, 153),
+        PointMode::Contact(ContactMode::Sliding) => RGBColor(153, 216, 199),
+        PointMode::Contact(ContactMode::Flight) => RGBColor(187, 225, 246),
+        PointMode::Contact(ContactMode::Indeterminate) => crate::plot::colors::ORANGE,
+        PointMode::Contact(ContactMode::Inconsistent) => crate::plot::colors::RED,
+        PointMode::Contact(ContactMode::Sticking) => crate::plot::colors::YELLOW,
         PointMode::Unreachable => RGBColor(228, 228, 228),
         PointMode::Singular => RGBColor(60, 60, 60),
     }
@@ -74,19 +79,18 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
         }
     };
 
-    let root = crate::plot::svg_canvas(path, (1100, 700)).map_err(|e| perr(e.to_string()))?;
-    let title = format!(
-        "Contact modes on the belt (paper Fig. 2): mu = {}, v_belt = {} m/s, u = 0, {}",
-        map.params.mu,
-        map.params.v_belt,
-        branch_label(map)
-    );
-    let (top, root) = root.split_vertically(36);
-    crate::plot::draw_title(&top, &title, 18.0, 8).map_err(|e| perr(e.to_string()))?;
-    let (left, right) = root.split_horizontally(790);
-    let frame =
-        Frame { x_desc: "theta1 (deg)", y_desc: "theta1_dot (rad/s)", x_tick_labels: true, caption: None, margin_top: 8, y_area: None };
-    let mut chart = frame_chart(&left, NiceAxis::new(x0..x1, 9), NiceAxis::new(y0..y1, 11), &frame).map_err(|e| perr(e.to_string()))?;
+    let print = PrintWidth::TwoColumn;
+    let canvas = crate::plot::svg_canvas(path, print, 700).map_err(|e| perr(e.to_string()))?;
+    let title =
+        format!("Contact modes on the belt (paper Fig. 2): {MU} = {}, {BELT_SPEED} {} m/s, u = 0", map.params.mu, map.params.v_belt);
+    let (top, root) = canvas.split_vertically(66);
+    crate::plot::draw_title(&top, &title, TITLE_PX, 8).map_err(|e| perr(e.to_string()))?;
+    let branch = branch_label(map).replace("theta2", THETA2).replace("theta1", THETA1);
+    crate::plot::draw_title(&top, &branch, TEXT_PX, 38).map_err(|e| perr(e.to_string()))?;
+    let (left, right) = root.split_horizontally(640);
+    let (x_desc, y_desc) = (axis(THETA1, "deg"), axis(THETA1_DOT, "rad/s"));
+    let frame = Frame { x_desc: &x_desc, y_desc: &y_desc, x_tick_labels: true, caption: None, margin_top: 8, y_area: None };
+    let mut chart = frame_chart(&left, NiceAxis::new(x0..x1, 7), NiceAxis::new(y0..y1, 10), &frame).map_err(|e| perr(e.to_string()))?;
 
     // Cells, run-length merged along theta1 within each theta1_dot row.
     let mut rects = Vec::new();
@@ -121,7 +125,7 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
     if let Some(d) = straight {
         chart.draw_series(DashedLineSeries::new([(d, y0), (d, y1)], 2, 3, straight_style)).map_err(|e| perr(e.to_string()))?;
     }
-    let p_style = RGBColor(148, 0, 211).stroke_width(3);
+    let p_style = RGBColor(120, 40, 160).stroke_width(3);
     for z in &map.p_zero {
         if let Some([a, b]) = z.theta1_dot_range {
             chart.draw_series(LineSeries::new([(z.theta1_deg, a), (z.theta1_deg, b)], p_style)).map_err(|e| perr(e.to_string()))?;
@@ -130,57 +134,60 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
 
     // Legend panel.
     let total = map.points.len().max(1);
-    let text = |s: &str, size: u32| (s.to_string(), ("sans-serif", size).into_font().color(&BLACK));
-    let mut y = 40;
-    let (t, f) = text("Mode (count, share of grid)", 15);
-    right.draw_text(&t, &f, (10, y)).map_err(|e| perr(e.to_string()))?;
-    y += 28;
-    for (mode, count) in map.counts() {
-        right.draw(&Rectangle::new([(12, y - 2), (32, y + 14)], color(mode).filled())).map_err(|e| perr(e.to_string()))?;
-        right.draw(&Rectangle::new([(12, y - 2), (32, y + 14)], BLACK.mix(0.5))).map_err(|e| perr(e.to_string()))?;
-        let (t, f) = text(&format!("{} ({count}, {:.1}%)", mode.name(), 100.0 * count as f64 / total as f64), 14);
-        right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
+    let text = |s: &str, size: f64| (s.to_string(), (FAMILY, size).into_font().color(&BLACK));
+    let e = |e: DrawingAreaErrorKind<_>| perr(e.to_string());
+    let mut y = 12;
+    let (t, f) = text("Mode (count, share of grid)", DESC_PX);
+    right.draw_text(&t, &f, (10, y)).map_err(e)?;
+    y += 30;
+    for (mode, count) in map.counts().into_iter().filter(|&(_, n)| n > 0) {
+        right.draw(&Rectangle::new([(12, y - 2), (32, y + 16)], color(mode).filled())).map_err(e)?;
+        right.draw(&Rectangle::new([(12, y - 2), (32, y + 16)], BLACK.mix(0.5))).map_err(e)?;
+        let (t, f) = text(&format!("{} ({count}, {:.1} %)", mode.name(), 100.0 * count as f64 / total as f64), TEXT_PX);
+        right.draw_text(&t, &f, (40, y)).map_err(e)?;
         y += 26;
     }
-    y += 14;
-    let (t, f) = text("Curves", 15);
-    right.draw_text(&t, &f, (10, y)).map_err(|e| perr(e.to_string()))?;
-    y += 28;
-    right.draw(&PathElement::new([(12, y + 6), (32, y + 6)], b_style)).map_err(|e| perr(e.to_string()))?;
-    let (t, f) = text("b = 0", 14);
-    right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
+    y += 12;
+    let (t, f) = text("Curves", DESC_PX);
+    right.draw_text(&t, &f, (10, y)).map_err(e)?;
+    y += 30;
+    right.draw(&PathElement::new([(12, y + 7), (32, y + 7)], b_style)).map_err(e)?;
+    let (t, f) = text("b = 0", TEXT_PX);
+    right.draw_text(&t, &f, (40, y)).map_err(e)?;
     y += 26;
-    right.draw(&PathElement::new([(12, y + 6), (32, y + 6)], p_style)).map_err(|e| perr(e.to_string()))?;
-    let (t, f) = text("p = 0 (p for the local sign(z_r_dot))", 14);
-    right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
+    right.draw(&PathElement::new([(12, y + 7), (32, y + 7)], p_style)).map_err(e)?;
+    let (t, f) = text(&format!("p = 0 (p for the local sign of {Z_R_DOT})"), TEXT_PX);
+    right.draw_text(&t, &f, (40, y)).map_err(e)?;
     y += 26;
-    right.draw(&PathElement::new([(12, y + 6), (18, y + 6)], zr_style)).map_err(|e| perr(e.to_string()))?;
-    right.draw(&PathElement::new([(24, y + 6), (32, y + 6)], zr_style)).map_err(|e| perr(e.to_string()))?;
-    let (t, f) = text("z_r_dot = 0 (p jumps)", 14);
-    right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
+    right.draw(&PathElement::new([(12, y + 7), (18, y + 7)], zr_style)).map_err(e)?;
+    right.draw(&PathElement::new([(24, y + 7), (32, y + 7)], zr_style)).map_err(e)?;
+    let (t, f) = text(&format!("{Z_R_DOT} = 0 (p jumps)"), TEXT_PX);
+    right.draw_text(&t, &f, (40, y)).map_err(e)?;
     if straight.is_some() {
         y += 26;
-        right.draw(&PathElement::new([(12, y + 6), (14, y + 6)], straight_style)).map_err(|e| perr(e.to_string()))?;
-        right.draw(&PathElement::new([(18, y + 6), (20, y + 6)], straight_style)).map_err(|e| perr(e.to_string()))?;
-        right.draw(&PathElement::new([(24, y + 6), (26, y + 6)], straight_style)).map_err(|e| perr(e.to_string()))?;
-        let (t, f) = text("straight arm: elbow up left, down right", 14);
-        right.draw_text(&t, &f, (40, y)).map_err(|e| perr(e.to_string()))?;
+        for x in [12, 18, 24] {
+            right.draw(&PathElement::new([(x, y + 7), (x + 2, y + 7)], straight_style)).map_err(e)?;
+        }
+        let (t, f) = text("straight arm (elbow up left,", TEXT_PX);
+        right.draw_text(&t, &f, (40, y)).map_err(e)?;
+        y += 22;
+        let (t, f) = text("down right)", TEXT_PX);
+        right.draw_text(&t, &f, (40, y)).map_err(e)?;
     }
-    y += 40;
+    y += 38;
     let notes = [
-        "theta2: tip on the belt (z_n = -H)".to_string(),
-        "theta2_dot: z_n_dot = 0".to_string(),
-        format!("grid {n1} x {n2}"),
+        format!("{THETA2}: the tip on the belt ({Z_N} = −H)"),
+        format!("{THETA2_DOT}: {Z_N_DOT} = 0"),
+        format!("grid {n1} × {n2}"),
         "sliding: p > 0, b < 0".to_string(),
-        "flight: p > 0, b >= 0".to_string(),
-        "indeterminate: p <= 0, b >= 0".to_string(),
-        "inconsistent: p <= 0, b < 0".to_string(),
+        "flight: p > 0, b ≥ 0".to_string(),
+        "indeterminate: p ≤ 0, b ≥ 0".to_string(),
+        "inconsistent: p ≤ 0, b < 0".to_string(),
     ];
     for n in notes {
-        let (t, f) = text(&n, 13);
-        right.draw_text(&t, &f, (10, y)).map_err(|e| perr(e.to_string()))?;
-        y += 20;
+        let (t, f) = text(&n, TEXT_PX);
+        right.draw_text(&t, &f, (10, y)).map_err(e)?;
+        y += 23;
     }
-    root.present().map_err(|e| perr(e.to_string()))?;
-    Ok(())
+    crate::plot::finish(canvas, path, print).map_err(perr)
 }

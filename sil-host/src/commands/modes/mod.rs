@@ -28,7 +28,7 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     let files = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f)).collect();
     let (tmp, w) = out.create("modes.csv")?;
     write_csv(&map, w, &tmp)?;
-    let svg = out.stage("modes.svg");
+    let svg = out.stage_figure("modes.svg");
     draw_figure(&map, &svg)?;
     out.commit()?;
     Ok(Done::ok(map, files))

@@ -3,9 +3,11 @@
 use crate::{
     error::CliError,
     plot::{
-        self, colors,
+        self, PrintWidth, colors,
+        font::TITLE_PX,
         legend::{Legend, Swatch},
         plot_err,
+        symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, axis},
     },
 };
 use analyses::poincare::{PoincareConfig, PointResult, classify::Class};
@@ -18,13 +20,13 @@ pub(crate) fn class_style(r: &PointResult) -> (RGBColor, &'static str) {
         (Class::Periodic, Some(1)) => (colors::BLUE, "period 1"),
         (Class::Periodic, Some(2)) => (colors::GREEN, "period 2"),
         (Class::Periodic, Some(3 | 4)) => (colors::ORANGE, "period 3-4"),
-        (Class::Periodic, _) => (colors::PURPLE, "period >= 5"),
+        (Class::Periodic, _) => (colors::PURPLE, "period ≥ 5"),
         (Class::Chaotic, _) => (colors::RED, "chaotic"),
         (Class::Aperiodic, _) => (colors::GREY, "aperiodic"),
-        (Class::Settling, _) => (RGBColor(190, 190, 190), "settling"),
-        (Class::Equilibrium, _) => (BLACK, "equilibrium (final theta1)"),
-        (Class::Failed, _) => (RGBColor(255, 0, 255), "failed"),
-        (Class::Invalid, _) => (RGBColor(0, 160, 160), "invalid (violates the model)"),
+        (Class::Settling, _) => (colors::LIGHT_GREY, "settling"),
+        (Class::Equilibrium, _) => (colors::BLACK, "equilibrium (final θ₁)"),
+        (Class::Failed, _) => (colors::SKY, "failed"),
+        (Class::Invalid, _) => (colors::YELLOW, "invalid (violates the model)"),
     }
 }
 
@@ -74,12 +76,14 @@ fn draw_classes<DB: DrawingBackend>(
     // The equilibria over the section points, larger (a branch a reader looks for).
     let equilibria = pts.iter().filter(|p| inside(p.1) && is_equilibrium(p.3)).map(|p| Circle::new((p.0, p.1), radius + 2, p.2.filled()));
     chart.draw_series(equilibria).map_err(|e| e.to_string())?;
-    // A triangle 8 px wide, pointing out of the axis, its tip on the edge.
+    // A triangle 8 px wide, pointing out of the axis, its tip on the edge, in the
+    // colour its legend entry gives (`outside_color`).
     let marks = pts.iter().filter(|p| !inside(p.1)).map(|p| {
         let below = p.1 < y_range.0;
         let edge = if below { y_range.0 } else { y_range.1 };
+        let color = outside_color(pts, y_range, below);
         EmptyElement::at((p.0, edge))
-            + Polygon::new(if below { vec![(-4, -7), (4, -7), (0, 0)] } else { vec![(-4, 7), (4, 7), (0, 0)] }, p.2.filled())
+            + Polygon::new(if below { vec![(-4, -7), (4, -7), (0, 0)] } else { vec![(-4, 7), (4, 7), (0, 0)] }, color.filled())
     });
     chart.draw_series(marks).map_err(|e| e.to_string())?;
     Ok(())
@@ -122,30 +126,36 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
     if !lo.is_finite() || !hi.is_finite() || lo >= hi {
         (lo, hi) = (-1.0, 1.0);
     }
-    // One marker per pixel row and belt speed (the figure is 750 px high): a
+    // One marker per pixel row and belt speed (the figure is about 700 px high): a
     // periodic orbit repeats its points hundreds of times.
     let resolution = (hi - lo).max(1e-9) / 1500.0;
     pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     pts.dedup_by(|b, a| a.0 == b.0 && (b.1 - a.1).abs() < resolution);
-    let root = plot::svg_canvas(path, (1200, 750)).map_err(|e| err(&e))?;
-    let (top, body) = root.split_vertically(44);
-    let title =
-        format!("Poincare section theta1_dot = 0 (upward) against v_belt (paper Fig. 4), open loop, mu = {}, from {x0_name}", cfg.mu);
-    plot::draw_title(&top, &title, 22.0, 10).map_err(|e| err(&e))?;
+    let print = PrintWidth::TwoColumn;
+    let title = format!(
+        "Poincaré section {THETA1_DOT} = 0 (upward) against {BELT_SPEED} (paper Fig. 4), open loop, {MU} = {}, from {x0_name}",
+        cfg.mu
+    );
     let legend = legend_of(&pts, (lo, hi));
-    let (chart_area, legend_area) = body.split_horizontally(1200 - legend.column_width() - 10);
-    let axes = plot::Axes {
-        caption: None,
-        x: (v_lo - pad)..(v_hi + pad),
-        y: lo..hi,
-        x_desc: "v_belt (m/s)",
-        y_desc: "theta1 at the section (deg)",
-    };
+    let (title_h, legend_h) = (plot::title_height(&title, print.px(), TITLE_PX, 10), legend.rows_height(print.px()));
+    let root = plot::svg_canvas(path, print, title_h + legend_h + 560).map_err(|e| err(&e))?;
+    let (top, body) = root.split_vertically(title_h);
+    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
+    let (legend_area, chart_area) = body.split_vertically(legend_h);
+    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(&format!("{THETA1} at the section"), "deg"));
+    let axes = plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: &x_desc, y_desc: &y_desc };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     draw_classes(&mut chart, &pts, (lo, hi), 1).map_err(|e| err(&e))?;
-    legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    plot::finish(root, path, print).map_err(|e| err(&e))
+}
+
+/// The colour of the triangles marking the points of `pts` below (`below`) or
+/// above `y_range`: their class's when they are all of one class, else black.
+fn outside_color(pts: &[(f64, f64, RGBColor, &'static str)], y_range: (f64, f64), below: bool) -> RGBColor {
+    let mut outside = pts.iter().filter(|p| if below { p.1 < y_range.0 } else { p.1 > y_range.1 });
+    let first = outside.next().map_or(BLACK, |p| p.2);
+    if outside.all(|p| p.2 == first) { first } else { BLACK }
 }
 
 /// The legend of [`draw_classes`] for `pts` in `y_range`: each class with its
@@ -159,7 +169,8 @@ fn legend_of(pts: &[(f64, f64, RGBColor, &'static str)], y_range: (f64, f64)) ->
         let outside: Vec<f64> = pts.iter().map(|p| p.1).filter(|&y| if below { y < y_range.0 } else { y > y_range.1 }).collect();
         if !outside.is_empty() {
             let (lo, hi) = outside.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
-            let swatch = if below { Swatch::TriangleDown(BLACK) } else { Swatch::Triangle(BLACK) };
+            let color = outside_color(pts, y_range, below);
+            let swatch = if below { Swatch::TriangleDown(color) } else { Swatch::Triangle(color) };
             legend.entries.push((format!("{} {side} the axis ({lo:.1} to {hi:.1}), at its edge", outside.len()), swatch));
         }
     }
@@ -184,20 +195,21 @@ pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointR
     }
     let ypad = (hi - lo) * 0.05;
     let (lo, hi) = (lo - ypad, hi + ypad);
-    let root = plot::svg_canvas(path, (1200, 500)).map_err(|e| err(&e))?;
-    let (top, body) = root.split_vertically(40);
-    let title = format!("largest Lyapunov exponent of the section map, mu = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
-    plot::draw_title(&top, &title, 20.0, 10).map_err(|e| err(&e))?;
+    let print = PrintWidth::TwoColumn;
+    let title = format!("Largest Lyapunov exponent of the section map, {MU} = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
     let legend = legend_of(&pts, (lo, hi));
-    let (chart_area, legend_area) = body.split_horizontally(1200 - legend.column_width() - 10);
-    let axes =
-        plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: "v_belt (m/s)", y_desc: "lambda per crossing (-)" };
+    let (title_h, legend_h) = (plot::title_height(&title, print.px(), TITLE_PX, 10), legend.rows_height(print.px()));
+    let root = plot::svg_canvas(path, print, title_h + legend_h + 380).map_err(|e| err(&e))?;
+    let (top, body) = root.split_vertically(title_h);
+    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
+    let (legend_area, chart_area) = body.split_vertically(legend_h);
+    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let x_desc = axis(BELT_SPEED, "m/s");
+    let axes = plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: &x_desc, y_desc: "λ per crossing (-)" };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
     draw_classes(&mut chart, &pts, (lo, hi), 2).map_err(|e| err(&e))?;
-    legend.draw_column(&legend_area.margin(12, 0, 0, 0)).map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    plot::finish(root, path, print).map_err(|e| err(&e))
 }
 
 #[cfg(test)]

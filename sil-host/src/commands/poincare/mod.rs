@@ -54,9 +54,9 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     };
     let classes_json = serde_json::to_string_pretty(&results).map_err(json_err("classes.json"))?;
     out.write_bytes("classes.json", classes_json.as_bytes())?;
-    let svg = out.stage("bifurcation.svg");
+    let svg = out.stage_figure("bifurcation.svg");
     draw_bifurcation(&svg, &cfg, &ic.name, &results)?;
-    let svg = out.stage("lyapunov.svg");
+    let svg = out.stage_figure("lyapunov.svg");
     draw_lyapunov(&svg, &cfg, &results)?;
 
     let files = ["section.csv", "classes.csv", "classes.json", "bifurcation.svg", "lyapunov.svg", "summary.json"];

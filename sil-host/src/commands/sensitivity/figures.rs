@@ -9,12 +9,14 @@ use plotters::{coord::Shift, prelude::*};
 
 use crate::error::CliError;
 use crate::plot::{
-    self,
+    self, PrintWidth,
     axis::{CategoryAxis, NiceAxis},
     chart::{Frame, frame_chart},
     colors,
+    font::TITLE_PX,
     legend::{Legend, Swatch},
     plot_err,
+    symbols::{BELT_SPEED, MU, Z_T_SLIDING, axis},
 };
 
 /// A series of a figure: its label, its value under a choice (given the series'
@@ -25,10 +27,10 @@ pub type SeriesOf = (String, fn(&ChoiceResult, usize) -> Option<f64>, usize);
 pub struct Figure {
     /// File name.
     pub file: &'static str,
-    /// Title.
-    pub title: &'static str,
+    /// Title (in the symbols of [`crate::plot::symbols`]).
+    pub title: fn() -> String,
     /// The value axis's description with units.
-    pub value_desc: &'static str,
+    pub value_desc: fn() -> String,
     /// A value that is a category (`0` no, `1` yes): its names by value.
     pub value_names: Option<&'static [&'static str]>,
     /// Whether the value counts something (ticks on whole numbers).
@@ -48,12 +50,16 @@ pub struct Figure {
 
 /// Colours of the cases of a paired figure (Okabe-Ito: distinct under the common
 /// colour-vision deficiencies).
-const CASE_COLORS: [RGBColor; 4] = [RGBColor(0, 114, 178), RGBColor(213, 94, 0), RGBColor(0, 158, 115), RGBColor(204, 121, 167)];
+const CASE_COLORS: [RGBColor; 4] = [colors::BLUE, colors::RED, colors::GREEN, colors::PURPLE];
 
 /// How series `s` of `fig` is drawn: its colour, whether as a ring (else a dot),
 /// and its row slot (the dodge within a choice's row) among `slots`.
 fn style(fig: &Figure, s: usize, n: usize) -> (RGBColor, bool, usize, usize) {
-    if fig.paired { (CASE_COLORS[(s / 2) % 4], s.is_multiple_of(2), s / 2, n.div_ceil(2)) } else { (colors::CYCLE[s % 10], false, s, n) }
+    if fig.paired {
+        (CASE_COLORS[(s / 2) % 4], s.is_multiple_of(2), s / 2, n.div_ceil(2))
+    } else {
+        (colors::CYCLE[s % colors::CYCLE.len()], false, s, n)
+    }
 }
 
 /// A result computed with no value (no critical `mu` on the grid, no bouncing band,
@@ -79,8 +85,8 @@ fn open<T>(r: &ChoiceResult, f: impl Fn(&analyses::sensitivity::OpenLoop) -> T) 
 pub const FIGURES: [Figure; 5] = [
     Figure {
         file: "critical_mu.svg",
-        title: "critical mu (open loop)",
-        value_desc: "critical mu (-)",
+        title: || format!("Critical {MU} (open loop)"),
+        value_desc: || axis(&format!("critical {MU}"), "-"),
         value_names: None,
         count: false,
         series: || {
@@ -89,13 +95,13 @@ pub const FIGURES: [Figure; 5] = [
                 ("x0d".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.critical_mu_x0d).flatten()), 0),
             ]
         },
-        none: Some(NoValue { desc: "none: no persistent bouncing at any mu of the grid", at_low_end: false }),
+        none: Some(NoValue { desc: "none: no persistent bouncing at any μ of the grid", at_low_end: false }),
         paired: false,
     },
     Figure {
         file: "band_mu06_x0a.svg",
-        title: "persistent bouncing at mu = 0.6 from x0a: main interval (open loop)",
-        value_desc: "v_belt (m/s)",
+        title: || format!("Persistent bouncing at {MU} = 0.6 from x0a: the longest interval of {BELT_SPEED} (open loop)"),
+        value_desc: || axis(BELT_SPEED, "m/s"),
         value_names: None,
         count: false,
         series: || {
@@ -104,13 +110,13 @@ pub const FIGURES: [Figure; 5] = [
                 ("to".into(), |r, _| or_none(r.open_loop.is_some(), open(r, |o| o.band_x0a_mu06.map(|b| b[1])).flatten()), 0),
             ]
         },
-        none: Some(NoValue { desc: "none: no persistent bouncing at mu = 0.6", at_low_end: false }),
+        none: Some(NoValue { desc: "none: no persistent bouncing at μ = 0.6", at_low_end: false }),
         paired: false,
     },
     Figure {
         file: "x0d_bounces.svg",
-        title: "does x0d ever bounce? (open loop)",
-        value_desc: "x0d bounces at some (v_belt, mu)",
+        title: || "Does x0d ever bounce? (open loop)".into(),
+        value_desc: || format!("x0d bounces at some ({BELT_SPEED}, {MU})"),
         value_names: Some(&["no", "yes"]),
         count: false,
         series: || vec![("x0d".into(), |r, _| open(r, |o| if o.x0d_bounces { 1.0 } else { 0.0 }), 0)],
@@ -119,8 +125,8 @@ pub const FIGURES: [Figure; 5] = [
     },
     Figure {
         file: "zt_sliding.svg",
-        title: "Z_t,sliding of the four paper cases, ideal and sampled",
-        value_desc: "Z_t,sliding (m)",
+        title: || format!("{Z_T_SLIDING} of the four paper cases, ideal and sampled"),
+        value_desc: || axis(Z_T_SLIDING, "m"),
         value_names: None,
         count: false,
         series: || {
@@ -139,8 +145,8 @@ pub const FIGURES: [Figure; 5] = [
     },
     Figure {
         file: "hybrid_closed_loop.svg",
-        title: "hybrid closed loop from x0d at mu = 0.6: how the belt speeds' runs ended",
-        value_desc: "belt speeds of the sweep (count)",
+        title: || format!("Hybrid closed loop from x0d at {MU} = 0.6: how the runs at each belt speed ended"),
+        value_desc: || "belt speeds of the sweep (count)".into(),
         value_names: None,
         count: true,
         series: || {
@@ -169,7 +175,8 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         .filter(|d| study.results.iter().filter(|r| r.choice.dimension == *d).any(|r| series.iter().any(|(_, f, i)| f(r, *i).is_some())))
         .collect();
     let cols = 2usize;
-    let width = 1400u32;
+    let print = PrintWidth::TwoColumn;
+    let width = print.px();
     let n = series.len();
     let mut entries: Vec<(String, Swatch)> = series
         .iter()
@@ -183,18 +190,19 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
     if let (Some(none), true) = (&fig.none, any_none) {
         let edge = if none.at_low_end { "left" } else { "right" };
         let how = if fig.paired { "the series' marker" } else { "hollow" };
-        entries.push((format!("{} ({how}, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
+        entries.push((format!("{} ({how} in a grey ring, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
     }
     let legend = Legend::new(entries);
     let legend_h = if legend.entries.len() > 1 { legend.rows_height(width) } else { 0 };
     // Each row of panels as high as its longest list of choices.
     let choices_of = |d: &Dimension| study.results.iter().filter(|r| r.choice.dimension == *d).count() as u32;
-    let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 90 + 24 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
-    let title_h = 44;
+    let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 96 + 26 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
+    let title = (fig.title)();
+    let title_h = plot::title_height(&title, width, TITLE_PX, 10);
     let height = title_h + legend_h + row_heights.iter().sum::<u32>().max(100);
-    let root = plot::svg_canvas(path, (width, height)).map_err(|e| err(&e))?;
+    let root = plot::svg_canvas(path, print, height).map_err(|e| err(&e))?;
     let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, fig.title, 24.0, 10).map_err(|e| err(&e))?;
+    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
     let (legend_area, body) = rest.split_vertically(legend_h);
     if legend.entries.len() > 1 {
         legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
@@ -213,8 +221,7 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
             draw_panel(area, study, fig, &series, *dim).map_err(|e| err(&e))?;
         }
     }
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    plot::finish(root, path, print).map_err(|e| err(&e))
 }
 
 /// One dimension's panel: its choices top down, each series' value as a marker,
@@ -230,7 +237,8 @@ fn draw_panel<DB: DrawingBackend>(
     let of: Vec<&ChoiceResult> = study.results.iter().filter(|r| r.choice.dimension == dim).collect();
     let names: Vec<String> = of.iter().map(|r| format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" })).collect();
     let y = CategoryAxis::top_down(names);
-    let frame = Frame { x_desc: fig.value_desc, y_desc: "", x_tick_labels: true, caption: Some(dim.label()), margin_top: 6, y_area: None };
+    let value_desc = (fig.value_desc)();
+    let frame = Frame { x_desc: &value_desc, y_desc: "", x_tick_labels: true, caption: Some(dim.label()), margin_top: 6, y_area: None };
     let slots = style(fig, 0, series.len()).3 as f64;
     let dodge = |s: usize| {
         let slot = style(fig, s, series.len()).2 as f64;
@@ -262,6 +270,8 @@ fn draw_panel<DB: DrawingBackend>(
             _ => Circle::new((x, y), 5, color.stroke_width(2)),
         })
     };
+    // The grey ring around each result with no value (its legend entry's swatch).
+    let no_value = |rows: Vec<f64>, x: f64| rows.into_iter().map(move |y| Circle::new((x, y), 10, colors::GREY.stroke_width(1)));
     if let Some(value_names) = fig.value_names {
         let x = CategoryAxis::new(value_names.iter().map(|s| s.to_string()).collect());
         let mut chart = frame_chart(area, x, y, &frame)?;
@@ -293,6 +303,7 @@ fn draw_panel<DB: DrawingBackend>(
     for (s, (_, f, i)) in series.iter().enumerate() {
         chart.draw_series(marker(points(s, f, *i), s)).map_err(|e| e.to_string())?;
         chart.draw_series(ring(nones(s, f, *i), none_x, s)).map_err(|e| e.to_string())?;
+        chart.draw_series(no_value(nones(s, f, *i), none_x)).map_err(|e| e.to_string())?;
     }
     Ok(())
 }

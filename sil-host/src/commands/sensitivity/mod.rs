@@ -46,7 +46,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
     write_csv(&mut out, "sensitivity.csv", &study.rows())?;
     let mut names = vec!["sensitivity.csv".to_string(), "summary.json".to_string()];
     for fig in figures::FIGURES {
-        let path = out.stage(fig.file);
+        let path = out.stage_figure(fig.file);
         figures::draw(&path, &study, &fig)?;
         names.push(fig.file.to_string());
     }

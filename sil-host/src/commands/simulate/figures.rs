@@ -2,6 +2,7 @@
 //! from a decimated copy kept in fixed memory while the trace is streamed.
 
 use super::summary::{EventRow, TraceRow};
+use crate::plot::symbols::{BELT_SPEED, F_N, MU, Z_N, Z_T, axis};
 use crate::{
     error::CliError,
     plot::{self, Panel, Series, colors},
@@ -81,7 +82,7 @@ pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &st
     let belt = -params.h;
     let impacts = &trace.impacts;
     let mut z_n_series =
-        vec![Series::line("z_n", z_n, colors::ORANGE), Series::reference("belt -H", vec![(0.0, belt), (t_end, belt)], colors::GREY)];
+        vec![Series::line(Z_N, z_n, colors::ORANGE), Series::reference("belt, −H", vec![(0.0, belt), (t_end, belt)], colors::GREY)];
     let impact_label = match impacts.stride {
         0 | 1 => "impact".to_string(),
         k => format!("impact (1 in {k})"),
@@ -92,14 +93,14 @@ pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &st
     let mut mode_panel = plot::mode_panel_of_points(mode);
     if impacts.count > 0 {
         let s = if impacts.count == 1 { "" } else { "s" };
-        mode_panel.between_samples = Some(format!("{} impact{s} between the samples, marked on z_n", impacts.count));
+        mode_panel.between_samples = Some(format!("{} impact{s} between the samples, marked on {Z_N}", impacts.count));
     }
     let panels = [
-        Panel::numeric("z_t (m)", vec![Series::line("z_t", z_t, colors::BLUE)]),
-        Panel::numeric("z_n (m)", z_n_series),
-        Panel::numeric("f_n (N)", vec![Series::line("f_n", f_n, colors::GREEN)]),
+        Panel::numeric(axis(Z_T, "m"), vec![Series::line(Z_T, z_t, colors::BLUE)]),
+        Panel::numeric(axis(Z_N, "m"), z_n_series),
+        Panel::numeric(axis(F_N, "N"), vec![Series::line(F_N, f_n, colors::GREEN)]),
         mode_panel,
     ];
-    let title = format!("open loop from {name}: mu = {}, v_belt = {} m/s", params.mu, params.v_belt);
+    let title = format!("Open loop from {name}: {MU} = {}, {BELT_SPEED} {} m/s", params.mu, params.v_belt);
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }

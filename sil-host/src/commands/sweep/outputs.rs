@@ -39,8 +39,8 @@ pub(crate) fn finish(
             let suffix = figures::case_suffix(law.name(), e_n);
             let map = format!("map_{suffix}.svg");
             let slices = format!("slices_{suffix}.svg");
-            figures::draw_map(&out.stage(&map), &m.spec, law.name(), e_n, case_rows)?;
-            figures::draw_slices(&out.stage(&slices), &m.spec, law.name(), e_n, case_rows)?;
+            figures::draw_map(&out.stage_figure(&map), &m.spec, law.name(), e_n, case_rows)?;
+            figures::draw_slices(&out.stage_figure(&slices), &m.spec, law.name(), e_n, case_rows)?;
             files.push(dir.join(map));
             files.push(dir.join(slices));
         }

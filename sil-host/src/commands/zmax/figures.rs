@@ -1,5 +1,6 @@
 //! The figures of `sil-host zmax`: the run at the limit of each case.
 
+use crate::plot::symbols::{Z_T_REF, Z_T_SLIDING};
 use crate::{error::CliError, plot};
 use analyses::zmax::{Bisection, Search};
 
@@ -13,10 +14,10 @@ pub(crate) fn draw(path: &std::path::Path, s: &Search) -> Result<(), CliError> {
     let panels = plot::history_panels(&samples, false);
     let c = &s.combination;
     let what = match s.bisection {
-        Bisection::Found { lo, hi, .. } => format!("at the limit z_t* = {lo:.4} m (fails at {hi:.4} m)"),
+        Bisection::Found { lo, hi, .. } => format!("at the limit {Z_T_REF} = {lo:.4} m (fails at {hi:.4} m)"),
         Bisection::LowerFails { lo, .. } => format!("lifts off already at the lowest target {lo:.4} m"),
         Bisection::UpperReached { hi, .. } => format!("reaches the highest target {hi:.4} m"),
     };
-    let title = format!("Z_t,sliding: {} from x0{}, {}: {what}", c.controller.name(), c.x0.letter(), c.setting.name());
+    let title = format!("{Z_T_SLIDING}: {} from x0{}, {}: {what}", c.controller.name(), c.x0.letter(), c.setting.name());
     plot::time_panels(path, &title, (0.0, t_end), &panels)
 }
