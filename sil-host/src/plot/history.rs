@@ -45,7 +45,7 @@ fn panels_of_columns(columns: [Vec<(f64, f64)>; 6], step_torques: bool) -> [Pane
         Panel::numeric(
             "torque (N m)",
             vec![
-                Series { step: step_torques, ..Series::line(TAU[0], u1, colors::ORANGE) },
+                Series { step: step_torques, ..Series::line(TAU[0], u1, colors::BLUE) },
                 Series { step: step_torques, ..Series::line(TAU[1], u2, colors::RED) },
             ],
         ),

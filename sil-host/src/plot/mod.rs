@@ -115,14 +115,14 @@ pub struct Axes<'s> {
     pub y_desc: &'s str,
 }
 
-/// A chart on `area` with `axes` (round ticks, about one per 90 px across and 40 px
+/// A chart on `area` with `axes` (round ticks, about one per 75 px across and 40 px
 /// up), its mesh drawn.
 ///
 /// # Errors
 /// plotters' error, as text.
 pub fn xy_chart<'a, DB: DrawingBackend>(area: &'a DrawingArea<DB, Shift>, axes: &Axes) -> Result<XyChart<'a, DB>, String> {
     let (w, h) = area.dim_in_pixel();
-    let x = NiceAxis::new(axes.x.clone(), (w / 90).clamp(3, 12) as usize);
+    let x = NiceAxis::new(axes.x.clone(), (w / 75).clamp(3, 12) as usize);
     let y = NiceAxis::new(axes.y.clone(), (h / 40).clamp(3, 10) as usize);
     let frame = Frame { x_desc: axes.x_desc, y_desc: axes.y_desc, x_tick_labels: true, caption: axes.caption, margin_top: 8, y_area: None };
     frame_chart(area, x, y, &frame)

@@ -43,6 +43,46 @@ pub const BELT_SPEED: &str = "belt speed";
 /// The joint torques `u1`, `u2`.
 pub const TAU: [&str; 2] = ["τ₁", "τ₂"];
 
+/// The code names [`prose`] replaces, each with its symbol.
+const CODE_NAMES: [(&str, &str); 14] = [
+    ("theta1_dot", THETA1_DOT),
+    ("theta2_dot", THETA2_DOT),
+    ("theta1", THETA1),
+    ("theta2", THETA2),
+    ("mu_hat", MU_HAT),
+    ("mu", MU),
+    ("e_n", E_N),
+    ("z_t", Z_T),
+    ("Z_t", "Zₜ"),
+    ("z_n", Z_N),
+    ("f_n", F_N),
+    ("z_r_dot", Z_R_DOT),
+    ("v_belt", BELT_SPEED),
+    ("um", "µm"),
+];
+
+/// `text` with each code name standing as a word (`mu_hat`, `e_n`, `theta1_dot`,
+/// `um`) replaced by its symbol (μ̂, eₙ, θ̇₁, µm), for labels that come from the
+/// analyses' own names (a sensitivity study's choices).
+pub fn prose(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 8);
+    let mut word = String::new();
+    let flush = |word: &mut String, out: &mut String| {
+        out.push_str(CODE_NAMES.iter().find(|(code, _)| *code == word.as_str()).map_or(word.as_str(), |(_, sym)| sym));
+        word.clear();
+    };
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() || c == '_' {
+            word.push(c);
+        } else {
+            flush(&mut word, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut word, &mut out);
+    out
+}
+
 /// An axis description: `symbol (unit)`, e.g. `θ̇₁ (rad/s)`; the unit `-` for a
 /// number without one.
 pub fn axis(symbol: &str, unit: &str) -> String {
@@ -85,5 +125,20 @@ mod tests {
             assert!(("sans-serif", 18.0).into_font().box_size(s).is_ok());
         }
         assert_eq!(axis(THETA1_DOT, "rad/s"), "θ\u{307}₁ (rad/s)");
+        for (_, sym) in CODE_NAMES {
+            for c in sym.chars() {
+                assert_ne!(ab_glyph::Font::glyph_id(&face, c).0, 0, "{c:?} of {sym:?} is not in DejaVu Sans");
+            }
+        }
+    }
+
+    /// Code names become symbols where they stand as words, and only there.
+    #[test]
+    fn prose_replaces_whole_code_names() {
+        assert_eq!(prose("mu_hat mismatch"), "μ\u{302} mismatch");
+        assert_eq!(prose("newton, e_n = 0.2*"), "newton, eₙ = 0.2*");
+        assert_eq!(prose("gap > 1 um"), "gap > 1 µm");
+        assert_eq!(prose("Z_t,sliding at mu = 0.6"), "Zₜ,sliding at μ = 0.6");
+        assert_eq!(prose("mumble, summit, e_nx"), "mumble, summit, e_nx");
     }
 }

@@ -16,7 +16,7 @@ use crate::plot::{
     font::TITLE_PX,
     legend::{Legend, Swatch},
     plot_err,
-    symbols::{BELT_SPEED, MU, Z_T_SLIDING, axis},
+    symbols::{BELT_SPEED, MU, Z_T_SLIDING, axis, prose},
 };
 
 /// A series of a figure: its label, its value under a choice (given the series'
@@ -146,7 +146,7 @@ pub const FIGURES: [Figure; 5] = [
     Figure {
         file: "hybrid_closed_loop.svg",
         title: || format!("Hybrid closed loop from x0d at {MU} = 0.6: how the runs at each belt speed ended"),
-        value_desc: || "belt speeds of the sweep (count)".into(),
+        value_desc: || "belt speeds (count)".into(),
         value_names: None,
         count: true,
         series: || {
@@ -174,7 +174,8 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         .into_iter()
         .filter(|d| study.results.iter().filter(|r| r.choice.dimension == *d).any(|r| series.iter().any(|(_, f, i)| f(r, *i).is_some())))
         .collect();
-    let cols = 2usize;
+    // Three columns for many panels, so that the figure fits a page's height.
+    let cols = if dims.len() > 6 { 3usize } else { 2 };
     let print = PrintWidth::TwoColumn;
     let width = print.px();
     let n = series.len();
@@ -196,7 +197,7 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
     let legend_h = if legend.entries.len() > 1 { legend.rows_height(width) } else { 0 };
     // Each row of panels as high as its longest list of choices.
     let choices_of = |d: &Dimension| study.results.iter().filter(|r| r.choice.dimension == *d).count() as u32;
-    let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 96 + 26 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
+    let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 84 + 22 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
     let title = (fig.title)();
     let title_h = plot::title_height(&title, width, TITLE_PX, 10);
     let height = title_h + legend_h + row_heights.iter().sum::<u32>().max(100);
@@ -235,10 +236,12 @@ fn draw_panel<DB: DrawingBackend>(
     dim: Dimension,
 ) -> Result<(), String> {
     let of: Vec<&ChoiceResult> = study.results.iter().filter(|r| r.choice.dimension == dim).collect();
-    let names: Vec<String> = of.iter().map(|r| format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" })).collect();
+    let names: Vec<String> =
+        of.iter().map(|r| prose(&format!("{}{}", r.choice.value, if r.choice.is_default { "*" } else { "" }))).collect();
     let y = CategoryAxis::top_down(names);
     let value_desc = (fig.value_desc)();
-    let frame = Frame { x_desc: &value_desc, y_desc: "", x_tick_labels: true, caption: Some(dim.label()), margin_top: 6, y_area: None };
+    let caption = prose(dim.label());
+    let frame = Frame { x_desc: &value_desc, y_desc: "", x_tick_labels: true, caption: Some(&caption), margin_top: 6, y_area: None };
     let slots = style(fig, 0, series.len()).3 as f64;
     let dodge = |s: usize| {
         let slot = style(fig, s, series.len()).2 as f64;
@@ -295,7 +298,7 @@ fn draw_panel<DB: DrawingBackend>(
         _ => hi - 0.02 * (hi - lo),
     };
     let (w, _) = area.dim_in_pixel();
-    let mut x = NiceAxis::new(lo..hi, (w / 90).clamp(3, 8) as usize);
+    let mut x = NiceAxis::new(lo..hi, (w / 55).clamp(3, 8) as usize);
     if fig.count {
         x = x.with_min_step(1.0);
     }
