@@ -22,10 +22,10 @@ fn svg_of(w: u32, h: u32, texts: &[(f64, f64, &str, &str)]) -> String {
 
 #[test]
 fn the_check_finds_overlapping_texts_text_off_the_canvas_and_minus_zero() {
-    let good = svg_of(400, 100, &[(10.0, 10.0, "start", "z_t (m)"), (10.0, 40.0, "start", "f_n (N)"), (390.0, 10.0, "end", "0.10")]);
+    let good = svg_of(400, 100, &[(10.0, 10.0, "start", "zₜ (m)"), (10.0, 40.0, "start", "fₙ (N)"), (390.0, 10.0, "end", "0.10")]);
     assert_eq!(figure_check::problems(&good), Vec::<String>::new());
     // Two labels on one line, the second starting inside the first.
-    let overlap = svg_of(400, 100, &[(10.0, 10.0, "start", "lift_off_only"), (60.0, 12.0, "start", "contact")]);
+    let overlap = svg_of(400, 100, &[(10.0, 10.0, "start", "lift-off only"), (60.0, 12.0, "start", "contact")]);
     assert_eq!(figure_check::problems(&overlap).len(), 1, "{:?}", figure_check::problems(&overlap));
     // A legend entry cut at the right edge (the sweep map's "inval").
     let cut = svg_of(400, 100, &[(360.0, 10.0, "start", "invalid")]);
@@ -33,6 +33,8 @@ fn the_check_finds_overlapping_texts_text_off_the_canvas_and_minus_zero() {
     // A centred title wider than the canvas.
     let wide = svg_of(200, 100, &[(100.0, 10.0, "middle", "Outcome over (v_belt, mu), hybrid (firmware, sampled)")]);
     assert!(figure_check::problems(&wide).iter().any(|p| p.contains("outside")));
+    let code = svg_of(400, 100, &[(10.0, 10.0, "start", "theta1_dot (rad/s), mu = 0.6")]);
+    assert_eq!(figure_check::problems(&code).len(), 2, "{:?}", figure_check::problems(&code));
     let minus = svg_of(400, 100, &[(10.0, 10.0, "start", "-0.0")]);
     assert!(figure_check::problems(&minus)[0].contains("-0.0"));
     // A y-axis description rotated about its anchor stays inside when it fits.

@@ -47,6 +47,12 @@ pub fn outcome_color(o: Outcome) -> RGBColor {
     }
 }
 
+/// An outcome in words for a figure's legend (`lift-off`, `safe state`), not the
+/// CSV's code (`lift_off`, `safe_state`).
+pub fn outcome_words(o: Outcome) -> String {
+    o.name().replace("lift_off", "lift-off").replace('_', " ")
+}
+
 /// File-name suffix of a case: `newton_e0.2`.
 pub fn case_suffix(law: &str, e_n: f64) -> String {
     format!("{law}_e{e_n}")
@@ -76,7 +82,7 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
             .iter()
             .map(|&o| (o, rows.iter().filter(|r| r.outcome == o).count()))
             .filter(|&(_, n)| n > 0)
-            .map(|(o, n)| (format!("{} ({n} run{})", o.name(), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
+            .map(|(o, n)| (format!("{} ({n} run{})", outcome_words(o), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
             .collect(),
     );
     let legend_h = legend.rows_height(width);

@@ -81,6 +81,11 @@ fn rotation(t: &str) -> Option<(f64, f64, f64)> {
     }
 }
 
+/// The code names a figure writes as symbols (`plot::symbols`): none may stand as
+/// a word in its text.
+pub const CODE_NAMES: [&str; 14] =
+    ["theta1", "theta2", "theta1_dot", "theta2_dot", "mu", "mu_hat", "e_n", "z_t", "Z_t", "z_n", "f_n", "z_r_dot", "v_belt", "u1"];
+
 /// The smallest text a figure may print, pt.
 pub const MIN_TEXT_PT: f64 = 7.0;
 
@@ -149,7 +154,8 @@ pub fn text_boxes(svg: &str) -> ((f64, f64), Vec<TextBox>) {
 }
 
 /// What is wrong with the figure `svg`: text outside the canvas, two texts that
-/// overlap (by more than half a pixel both ways), a tick reading `-0`, no print
+/// overlap (by more than half a pixel both ways), a tick reading `-0`, a code
+/// name where its symbol belongs ([`CODE_NAMES`]), no print
 /// size, text below [`MIN_TEXT_PT`] at it, a legend entry whose mark does not
 /// occur ([`legend_problems`]). Empty when it passes.
 pub fn problems(svg: &str) -> Vec<String> {
@@ -173,6 +179,11 @@ pub fn problems(svg: &str) -> Vec<String> {
             out.push(format!("outside the {w} x {h} canvas: {:?} at [{l:.1}, {t:.1}, {r:.1}, {btm:.1}]", b.text));
         }
         let s = b.text.trim();
+        for word in s.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')) {
+            if CODE_NAMES.contains(&word) {
+                out.push(format!("{:?} writes the code name {word:?}, not its symbol", b.text));
+            }
+        }
         if s.starts_with('-') && s.parse::<f64>().is_ok_and(|v| v == 0.0) {
             out.push(format!("a tick reads {s:?}"));
         }

@@ -85,7 +85,7 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
         format!("Contact modes on the belt (paper Fig. 2): {MU} = {}, {BELT_SPEED} {} m/s, u = 0", map.params.mu, map.params.v_belt);
     let (top, root) = canvas.split_vertically(66);
     crate::plot::draw_title(&top, &title, TITLE_PX, 8).map_err(|e| perr(e.to_string()))?;
-    let branch = branch_label(map).replace("theta2", THETA2).replace("theta1", THETA1);
+    let branch = crate::plot::symbols::prose(&branch_label(map));
     crate::plot::draw_title(&top, &branch, TEXT_PX, 38).map_err(|e| perr(e.to_string()))?;
     let (left, right) = root.split_horizontally(640);
     let (x_desc, y_desc) = (axis(THETA1, "deg"), axis(THETA1_DOT, "rad/s"));
