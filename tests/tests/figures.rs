@@ -38,7 +38,7 @@ fn the_check_finds_overlapping_texts_text_off_the_canvas_and_minus_zero() {
     let minus = svg_of(400, 100, &[(10.0, 10.0, "start", "-0.0")]);
     assert!(figure_check::problems(&minus)[0].contains("-0.0"));
     // A y-axis description rotated about its anchor stays inside when it fits.
-    let rotated = r#"<svg width="0.6944in" height="2.0833in" viewBox="0 0 100 300" xmlns="http://www.w3.org/2000/svg"><text x="20" y="150" dy="0.76em" text-anchor="middle" font-family="sans-serif" font-size="16" transform="rotate(270, 20, 150)">theta1_dot (rad/s)</text></svg>"#;
+    let rotated = r#"<svg width="0.6944in" height="2.0833in" viewBox="0 0 100 300" xmlns="http://www.w3.org/2000/svg"><text x="20" y="150" dy="0.76em" text-anchor="middle" font-family="sans-serif" font-size="16" transform="rotate(270, 20, 150)">θ̇₁ (rad/s)</text></svg>"#;
     let ((_, _), boxes) = figure_check::text_boxes(rotated);
     let r = boxes[0].rect;
     assert!(r[3] - r[1] > r[2] - r[0], "a rotated text is taller than wide: {r:?}");
