@@ -259,7 +259,7 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     ``extras`` (``classes`` of ``poincare``, ``sweep`` of a sweep's spec), and
     text files (``defmt.log``, ``report.md``) entries of ``extras`` as strings.
     A report's experiment folders are loaded too, into ``extras["experiments"]``
-    (``{id: Result}``). SVG figures are listed in ``extras["figures"]`` (paths).
+    (``{id: Result}``). SVG figures are listed in ``extras["figures"]`` (paths); each has its PDF beside it.
 
     The command is recognised from the files; the validity counters come from the
     summary where the command keeps them (``validity``, ``results.validity`` of a

@@ -22,7 +22,7 @@ def folders(tmp_path_factory):
 
 def test_the_arrow_folder_has_the_csv_tables_with_the_same_bits(folders):
     csv_dir, arrow_dir = folders
-    assert sorted(p.name for p in arrow_dir.iterdir()) == ["events.arrow", "summary.json", "trace.arrow", "trace.svg"]
+    assert sorted(p.name for p in arrow_dir.iterdir()) == ["events.arrow", "summary.json", "trace.arrow", "trace.pdf", "trace.svg"]
     a, c = painleve.load(arrow_dir), painleve.load(csv_dir)
     assert a.command == c.command == "simulate"
     assert sorted(a.tables) == sorted(c.tables) == ["events", "trace"]
@@ -36,7 +36,7 @@ def test_the_arrow_folder_has_the_csv_tables_with_the_same_bits(folders):
                 # The CSV's shortest round-trip digits read back to the same bits.
                 assert np.array_equal(x.view(np.int64), y.view(np.int64)), f"{name}.{col}"
     files = a.summary["files"]
-    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.arrow", "events.arrow", "trace.svg", "summary.json"]
+    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "summary.json"]
 
 
 def test_pandas_and_polars_read_the_arrow_tables(folders):

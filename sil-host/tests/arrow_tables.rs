@@ -86,7 +86,7 @@ fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join("summary.json")).unwrap()).unwrap();
     let files: Vec<String> =
         summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
-    assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "summary.json"]);
+    assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "summary.json"]);
 }
 
 /// `simulate --format mcap` (issue 44): one `trace.mcap` holding both tables, each
@@ -99,7 +99,7 @@ fn an_mcap_file_holds_the_csv_tables_bit_for_bit() {
     simulate("mcap", &m);
     let mut names: Vec<String> = std::fs::read_dir(&m).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     names.sort();
-    assert_eq!(names, ["summary.json", "trace.mcap", "trace.svg"]);
+    assert_eq!(names, ["summary.json", "trace.mcap", "trace.pdf", "trace.svg"]);
     let tables = read_mcap(&m.join("trace.mcap")).unwrap();
     assert_eq!(tables.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["trace", "events"]);
     for (name, table) in tables {
@@ -108,7 +108,7 @@ fn an_mcap_file_holds_the_csv_tables_bit_for_bit() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(m.join("summary.json")).unwrap()).unwrap();
     let files: Vec<String> =
         summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
-    assert_eq!(files, ["trace.mcap", "trace.svg", "summary.json"]);
+    assert_eq!(files, ["trace.mcap", "trace.svg", "trace.pdf", "summary.json"]);
 }
 
 /// `run --format mcap`: the closed-loop trace bit for bit, and the same bytes

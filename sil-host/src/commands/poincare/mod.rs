@@ -59,7 +59,16 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let svg = out.stage_figure("lyapunov.svg");
     draw_lyapunov(&svg, &cfg, &results)?;
 
-    let files = ["section.csv", "classes.csv", "classes.json", "bifurcation.svg", "lyapunov.svg", "summary.json"];
+    let files = [
+        "section.csv",
+        "classes.csv",
+        "classes.json",
+        "bifurcation.svg",
+        "bifurcation.pdf",
+        "lyapunov.svg",
+        "lyapunov.pdf",
+        "summary.json",
+    ];
     let files = files.iter().map(|f| out.path(f).display().to_string()).collect();
     let summary = summary(args, (cfg, &grid, ic), &results, threads, wall_s, files);
     out.write_json("summary.json", &summary)?;

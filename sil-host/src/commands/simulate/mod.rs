@@ -89,7 +89,12 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
     let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);
-    let files = tables.iter().map(String::as_str).chain(["trace.svg", "summary.json"]).map(|f| out.path(f).display().to_string()).collect();
+    let files = tables
+        .iter()
+        .map(String::as_str)
+        .chain(["trace.svg", "trace.pdf", "summary.json"])
+        .map(|f| out.path(f).display().to_string())
+        .collect();
     let mut summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
     let interrupted = stopped.then(|| {
         format!("simulate stopped by a signal at t = {} s of {} s; the outputs up to then are written", summary.simulated_s, args.duration)
