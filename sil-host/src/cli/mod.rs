@@ -17,8 +17,10 @@ pub use experiments::settings::*;
 /// (Marchese, Coraggio, Hogan, di Bernardo, ECC 2019).
 ///
 /// Every command prints a human summary, or one JSON document with `--json`,
-/// and writes its files under `--out DIR` (default `out/`). Bad input exits
-/// with code 2 and writes nothing; a failure while running exits with 1.
+/// and writes its files under `--out DIR` (default `out/`). Every figure is an
+/// SVG and a PDF of the same name, sized for a journal's column (3.5 in) or page
+/// (7 in). Bad input exits with code 2 and writes nothing; a failure while
+/// running exits with 1.
 #[derive(Debug, Parser)]
 #[command(name = "sil-host", version, about, long_about)]
 pub struct Cli {
