@@ -25,21 +25,27 @@ pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, v: &T) -> PyResult<Bou
 pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (name, col) in t.columns {
-        match col {
-            Column::F64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Column::I64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Column::U64(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Column::Bool(v) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Column::Str(v) => {
-                // One Python string per distinct value (a mode, a kind: a few per
-                // column), shared by its rows.
-                let mut seen: HashMap<String, Bound<'py, PyString>> = HashMap::new();
-                let items = v.into_iter().map(|s| seen.entry(s).or_insert_with_key(|k| PyString::new(py, k)).clone()).collect::<Vec<_>>();
-                d.set_item(name, PyList::new(py, items)?)?
-            }
-        }
+        d.set_item(name, column_to_py(py, col)?)?;
     }
     Ok(d)
+}
+
+/// A column as a NumPy array of shape `(n,)` (float64, int64, uint64 or bool; the
+/// `Vec` becomes the array's memory, no copy), or a list of `str` for text.
+pub fn column_to_py<'py>(py: Python<'py>, col: Column) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match col {
+        Column::F64(v) => PyArray1::from_vec(py, v).into_any(),
+        Column::I64(v) => PyArray1::from_vec(py, v).into_any(),
+        Column::U64(v) => PyArray1::from_vec(py, v).into_any(),
+        Column::Bool(v) => PyArray1::from_vec(py, v).into_any(),
+        Column::Str(v) => {
+            // One Python string per distinct value (a mode, a kind: a few per
+            // column), shared by its rows.
+            let mut seen: HashMap<String, Bound<'py, PyString>> = HashMap::new();
+            let items = v.into_iter().map(|s| seen.entry(s).or_insert_with_key(|k| PyString::new(py, k)).clone()).collect::<Vec<_>>();
+            PyList::new(py, items)?.into_any()
+        }
+    })
 }
 
 /// Rows of a type that derives `serde::Serialize` as a table dict ([`Table::of_rows`], [`table_to_py`]).

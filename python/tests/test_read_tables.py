@@ -94,6 +94,9 @@ EDGE_FILES = {
     "header only": "t,z_t,mode\n",
     "whitespace and underscores": "x,y\n 1.5,1_000\n2.5 ,2_000.5\n",
     "crlf": "a,b\r\n1,x\r\n2,y\r\n",
+    # "-0" is an integer, but -0.0 once its column is floats; a cell of 20 digits and a
+    # letter is text (no integer that overflows).
+    "negative zero": "i,j,k\n-0,-0,10000000000000000000e\n1.5,2,1\n",
     "empty": "",
 }
 
@@ -226,3 +229,36 @@ def test_a_long_file_read_in_chunks_reads_as_one_pass(tmp_path):
     got = painleve.read_csv(p)
     assert_identical(got, reference_read_csv(p), "long")
     assert [got[c].dtype.kind for c in got.columns] == ["f", "f", "U", "U", "f", "U", "u", "f", "U"]
+
+
+def test_a_long_file_the_cli_writes_reads_in_chunks_as_the_former_reader(tmp_path):
+    """A file of several MB without text after numbers: read in chunks of lines
+    on several threads (the reader's fast path), the chunks' columns joined:
+    kinds that change between chunks (an integer column with a float at the end,
+    empties first, one value above int64, a negative zero in integers that turn
+    floats) read as the former reader read them."""
+    n = 120_000
+    rows = []
+    for i in range(n):
+        rows.append(
+            ",".join(
+                [
+                    repr(i * 1e-3),
+                    str(i),  # int64
+                    "2.5" if i == n - 7 else ("-0" if i == 5 else str(i)),  # int64 until the end: float64, -0.0 at row 5
+                    "true" if i % 3 else "false",
+                    "" if i < n // 2 else repr(i * 0.25),  # empty, then floats: float64 with NaN
+                    "" if i < n - 3 else "sliding",  # empty, then text
+                    str(2**63 + i) if i == n // 3 else str(i),  # one above int64: uint64
+                    "",  # never a value: NaN
+                    ("flight", "sliding", "sticking", "")[i % 4],
+                ]
+            )
+        )
+    p = tmp_path / "long.csv"
+    p.write_text("t,i,late,flag,gap,e,u,none,mode\n" + "\n".join(rows) + "\n")
+    assert p.stat().st_size > 4 << 20, "more than a few chunks"
+    got = painleve.read_csv(p)
+    assert_identical(got, reference_read_csv(p), "long")
+    assert [got[c].dtype.kind for c in got.columns] == ["f", "i", "f", "b", "f", "U", "u", "f", "U"]
+    assert np.signbit(got["late"][5]) and got["late"][5] == 0.0
