@@ -21,8 +21,9 @@ pub struct ReportArgs {
     /// Size of the experiments.
     #[arg(long, value_enum, default_value = "quick")]
     pub size: ReportSize,
-    /// Also write the page's tables (no figures), stamped with date, commit and
-    /// machine, to this Markdown file (the repository keeps them in docs/results.md).
+    /// Also write the page, stamped with date, commit and machine, to this Markdown
+    /// file (the repository keeps it in docs/results.md), its figures (SVG) copied to
+    /// `figures/` beside it; other files in that `figures/` are removed.
     #[arg(long, value_name = "FILE.md")]
     pub results: Option<PathBuf>,
     /// Exit status on model violations in any experiment.
