@@ -231,9 +231,14 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
         Outcome::Zmax(z) => {
             let row = z.results.iter().find(|r| stem == format!("zmax-{}-x0{}-{}", r.controller.name(), r.x0.letter(), r.setting.name()));
             let Some(r) = row else { return other(file) };
-            let target = r.z_t_sliding_m.map_or_else(
-                || format!("the bracket's lower end z_t* = {} m (no target passes)", super::format::position(r.bracket_lo_m)),
-                |v| format!("z_t* = Z_t,sliding = {} m", located(v, z.tol_m)),
+            let (at, target) = r.z_t_sliding_m.map_or_else(
+                || {
+                    (
+                        "the bracket's lower end",
+                        format!("z_t* = {} m (the bracket's lower end: no target passes)", super::format::position(r.bracket_lo_m)),
+                    )
+                },
+                |v| ("its Z_t,sliding", format!("z_t* = {} m (its Z_t,sliding)", located(v, z.tol_m))),
             );
             let setting = if r.setting == analyses::zmax::Setting::Ideal {
                 "The paper's ideal law (continuous time)"
@@ -243,12 +248,12 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
             let sc = &z.base_scenario;
             Caption {
                 what: format!(
-                    "The {} law from x0{} at its Z_t,sliding: z_t and z_t*, f_n, the torques and the contact mode against time",
+                    "The {} law from x0{} at {at}: z_t and z_t*, f_n, the torques and the contact mode against time",
                     law(r.controller),
                     r.x0.letter()
                 ),
                 parameters: format!(
-                    "{setting}, {target} reached by a {} s move, mu = {}, v_belt = {} m/s, {} impacts with e_n = {}, {} s",
+                    "{setting}, a {} s move to {target}, mu = {}, v_belt = {} m/s, {} impacts with e_n = {}, {} s",
                     given(z.criteria.move_time_s),
                     given(sc.plant.mu),
                     given(sc.plant.v_belt),
@@ -342,15 +347,15 @@ fn scenario_parameters(sc: &Scenario) -> String {
         _ => "the paper's PID gains".to_string(),
     };
     format!(
-        "Scenario {}: from x0{}, mu = {}, v_belt = {} m/s, {} impacts with e_n = {}, z_t* = {} m reached by a {} s move, {law}, sampled at {} Hz, {} s",
+        "Scenario {}: from x0{}, mu = {}, v_belt = {} m/s, {} impacts with e_n = {}, a {} s move to z_t* = {} m, {law}, sampled at {} Hz, {} s",
         sc.name,
         sc.plant.x0.letter(),
         given(sc.plant.mu),
         given(sc.plant.v_belt),
         impacts(sc.plant.impact_law.name()),
         given(sc.plant.e_n),
-        given(c.target_z_t),
         given(c.move_time_s),
+        given(c.target_z_t),
         given(sc.timing.rate_hz),
         given(sc.timing.duration_s)
     )
