@@ -9,7 +9,8 @@ use experiments::settings::{OutputArgs, StrictArgs};
 /// How big the report's experiments are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ReportSize {
-    /// Coarse grids and short windows: minutes on a 2-core machine.
+    /// Coarse grids and short windows: about 1 minute on an idle 2-core machine
+    /// (61 s wall), 2 to 2.5 minutes while other work loads it (141 s at a load of 5).
     Quick,
     /// The paper's grids and windows (hours on a 2-core machine).
     Paper,
