@@ -10,7 +10,7 @@ use experiments::settings::{OutputArgs, StrictArgs};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ReportSize {
     /// Coarse grids and short windows: about 1 minute on an idle 2-core machine
-    /// (61 s wall), 2 to 2.5 minutes while other work loads it (141 s at a load of 5).
+    /// (56 s wall), 2 to 2.5 minutes while other work loads it (141 s at a load of 5).
     Quick,
     /// The paper's grids and windows (hours on a 2-core machine).
     Paper,
