@@ -9,8 +9,10 @@ use experiments::settings::{OutputArgs, StrictArgs};
 /// How big the report's experiments are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ReportSize {
-    /// Coarse grids and short windows: about 1 minute on an idle 2-core machine
-    /// (56 s wall), 2 to 2.5 minutes while other work loads it (141 s at a load of 5).
+    /// Coarse grids and short windows: under 2 minutes on an idle 2-core machine
+    /// into a fresh `--out` folder (100 s wall), 2.5 minutes while other work loads
+    /// it (141 s at a load of 5); about half when the folder holds a previous
+    /// report's sweeps, which resume.
     Quick,
     /// The paper's grids and windows (hours on a 2-core machine).
     Paper,

@@ -99,6 +99,7 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
         md,
         &[
             ("runs (missing)", format!("{} ({})", r.runs, r.missing)),
+            ("resumed runs (found in the output folder, not run again)", s.resumed_runs.to_string()),
             ("outcomes", outcomes.join(", ")),
             ("validity (all runs)", validity_cell(&r.validity)),
             ("dynamic jams (tangential impacts)", r.jams.to_string()),
