@@ -10,7 +10,7 @@ use experiments::settings::{OutputArgs, StrictArgs};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ReportSize {
     /// Coarse grids and short windows: under 2 minutes on an idle 2-core machine
-    /// into a fresh `--out` folder (100 s wall), 2.5 minutes while other work loads
+    /// into a fresh `--out` folder (69 to 100 s wall), 2.5 minutes while other work loads
     /// it (141 s at a load of 5); about half when the folder holds a previous
     /// report's sweeps, which resume.
     Quick,
