@@ -38,7 +38,7 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
             assert!(out.join(f).is_file(), "{f}");
             if f.ends_with(".svg") {
                 figures += 1;
-                assert!(page.contains(&format!("![{f}]({f})")), "{f} not shown");
+                assert!(page.contains(&format!("]({f})")), "{f} not shown");
             }
         }
     }
@@ -64,11 +64,43 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     assert!(!side.contains("did not run"), "every row has ours: {side}");
     // The closed loop: the sampled firmware beside the ideal law, per mu.
     assert!(page.contains("sweep-hybrid-ideal: lift-off / not reached / contact / safe state / other"));
-    // The results page: the same tables, stamped, without figures.
+    // Every figure numbered, in order, with its caption below it.
+    let numbered = page.matches("**Figure ").count();
+    assert_eq!(numbered, page.matches("![Figure ").count() - side_by_side_extra(&page), "{page}");
+    for n in 1..=numbered {
+        assert!(page.contains(&format!("**Figure {n}.** ")), "Figure {n} has no caption");
+    }
+    // The engineering sections come after the reproduction, in the appendix.
+    let appendix = page.find("## Appendix: the rig and the firmware").expect("the appendix");
+    assert!(page.find("### Speed of the rig").is_some_and(|b| b > appendix), "bench in the appendix");
+    assert!(page.find("## Sensitivity to the choices").is_some_and(|s| s < appendix));
+    // The results page: the same page, stamped, its figures copied beside it and
+    // referenced by relative path; no temporary folder named.
+    let results_dir = results.parent().unwrap().to_path_buf();
     let results = std::fs::read_to_string(&results).unwrap();
     assert!(results.contains("commit `") && results.contains("UTC") && results.contains("CPUs"), "no stamp");
     assert!(results.contains("| hybrid-x0d |") || results.contains(" hybrid-x0d |"), "no run comparison");
-    assert!(!results.contains("!["), "figures in the results page");
+    let images = image_targets(&results);
+    assert!(images.len() >= figures, "{} of {figures} figures on the results page", images.len());
+    for target in &images {
+        assert!(target.starts_with("figures/") && target.ends_with(".svg"), "{target}");
+        assert!(results_dir.join(target).is_file(), "{target} not copied");
+    }
+    assert!(!results.contains(&dir.path().display().to_string()), "the results page names the temporary folder");
+    assert!(results.contains("--out OUT/modes"), "commands write to OUT");
+}
+
+/// The images a Markdown page shows: the targets of its `![alt](target)`.
+fn image_targets(page: &str) -> Vec<String> {
+    page.split("![")
+        .skip(1)
+        .filter_map(|s| s.split_once("](").and_then(|(_, rest)| rest.split_once(')')).map(|(t, _)| t.to_string()))
+        .collect()
+}
+
+/// Images beyond the first of each side-by-side figure (one number, several images).
+fn side_by_side_extra(page: &str) -> usize {
+    page.lines().filter(|l| l.starts_with("| ![Figure ")).map(|l| l.matches("![Figure ").count() - 1).sum()
 }
 
 /// Properties of the sensitivity study (issue 14) that do not depend on its numbers:

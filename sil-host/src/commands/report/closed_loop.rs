@@ -4,7 +4,8 @@
 
 use std::fmt::Write as _;
 
-use super::format::{cell, number};
+use super::captions::{Caption, Figures, sweep_caption, sweep_controller, sweep_rank};
+use super::format::on_grid;
 use crate::commands::sweep::outputs::SweepSummary;
 
 /// The closed-loop outcome classes, in the table's order.
@@ -25,9 +26,9 @@ At 10 kHz (`--set timing.rate_hz=10000 --set timing.delta_s=0.00005`) the satura
 at t = 0.268 s), which is why that run never reaches its target. \
 The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `tests/tests/closed_loop_friction.rs` checks it.";
 
-/// The comparison table of `sweeps` (id, summary), one column group per sweep,
-/// and the maps side by side when `figures`.
-pub(crate) fn compare(md: &mut String, sweeps: &[(&str, &SweepSummary, &[String])], figures: bool) {
+/// The comparison table of `sweeps` (id, summary, files), one column group per
+/// sweep, and their maps side by side as one figure.
+pub(crate) fn compare(md: &mut String, sweeps: &[(&str, &SweepSummary, &[String])], figures: &mut Figures) {
     let _ = writeln!(md, "Runs per outcome at each `mu` (every belt speed), side by side:\n");
     let mut header = String::from("| mu |");
     let mut rule = String::from("|---|");
@@ -37,9 +38,10 @@ pub(crate) fn compare(md: &mut String, sweeps: &[(&str, &SweepSummary, &[String]
     }
     let _ = writeln!(md, "{header}\n{rule}");
     let mus: Vec<f64> = sweeps[0].1.results.outcomes_per_mu.iter().map(|m| m.mu).collect();
+    let step = sweeps[0].1.spec.mu.step;
     let mut differ = Vec::new();
     for mu in mus {
-        let mut row = format!("| {} |", number(mu));
+        let mut row = format!("| {} |", on_grid(mu, step));
         let mut lifts = Vec::new();
         for (_, s, _) in sweeps {
             let Some(m) = s.results.outcomes_per_mu.iter().find(|m| m.mu == mu) else {
@@ -61,25 +63,48 @@ pub(crate) fn compare(md: &mut String, sweeps: &[(&str, &SweepSummary, &[String]
     if differ.is_empty() {
         let _ = writeln!(md, "The sweeps end the same way at every `mu`.\n");
     } else {
-        let _ =
-            writeln!(md, "They differ at `mu` = {}. {}\n", differ.iter().map(|m| number(*m)).collect::<Vec<_>>().join(", "), HIGH_FRICTION);
+        let _ = writeln!(
+            md,
+            "They differ at `mu` = {}. {}\n",
+            differ.iter().map(|m| on_grid(*m, step)).collect::<Vec<_>>().join(", "),
+            HIGH_FRICTION
+        );
     }
-    if figures {
-        let maps: Vec<Vec<&String>> = sweeps.iter().map(|(_, _, files)| files.iter().filter(|f| is_map(f)).collect()).collect();
-        let rows = maps.iter().map(Vec::len).max().unwrap_or(0);
-        if rows > 0 {
-            let _ = writeln!(
-                md,
-                "| {} |\n|{}",
-                sweeps.iter().map(|(id, _, _)| cell(id)).collect::<Vec<_>>().join(" | "),
-                "---|".repeat(sweeps.len())
-            );
-            for i in 0..rows {
-                let cells: Vec<String> = maps.iter().map(|m| m.get(i).map_or(String::new(), |f| format!("![{f}]({f})"))).collect();
-                let _ = writeln!(md, "| {} |", cells.join(" | "));
-            }
-            md.push('\n');
-        }
+    // One figure per impact law and e_n: each sweep's map of it, side by side.
+    let maps: Vec<Vec<&String>> = sweeps
+        .iter()
+        .map(|(_, s, files)| {
+            let mut m: Vec<&String> = files.iter().filter(|f| is_map(f)).collect();
+            m.sort_by_key(|f| sweep_rank(s, f));
+            m
+        })
+        .collect();
+    let rows = maps.iter().map(Vec::len).max().unwrap_or(0);
+    for i in 0..rows {
+        let columns: Vec<(String, Vec<String>)> = sweeps
+            .iter()
+            .zip(&maps)
+            .map(|((id, _, _), m)| (format!("`{id}`"), m.get(i).map(|f| (*f).clone()).into_iter().collect()))
+            .collect();
+        let Some((k, first)) = maps.iter().enumerate().find_map(|(k, m)| m.get(i).map(|f| (k, f))) else { continue };
+        // The map's caption, with who closes the loop in each column.
+        let c = sweep_caption(sweeps[k].1, first, false);
+        let who: Vec<String> = sweeps
+            .iter()
+            .enumerate()
+            .map(|(j, (id, s, _))| format!("{} `{id}`, {}", side(j, sweeps.len()), sweep_controller(&s.spec)))
+            .collect();
+        let c = Caption { what: format!("{}; {}", c.what, who.join("; ")), ..c };
+        figures.show_side_by_side(md, &columns, &c);
+    }
+}
+
+/// The name of column `j` of `n` side by side: `left`, `right`, else `column j + 1`.
+fn side(j: usize, n: usize) -> String {
+    match (j, n) {
+        (0, 2) => "left,".into(),
+        (1, 2) => "right,".into(),
+        _ => format!("column {},", j + 1),
     }
 }
 

@@ -1,6 +1,6 @@
 //! The tables of the experiments' sections: each drawn from its typed result.
 
-use super::format::{MAX_ROWS, cell, number, opt, pairs};
+use super::format::{MAX_ROWS, angle, cell, error_mm, given, located, on_grid, pairs, position, rough, share};
 use crate::commands::{
     admissible::summary::fmt_intervals, poincare::summary::Summary as PoincareSummary, simulate::summary::Summary as SimulateSummary,
     sweep::outputs::SweepSummary, zmax::summary::ZmaxSummary,
@@ -10,15 +10,15 @@ use shared::{ElbowBranch, SlipDirection};
 use std::fmt::Write as _;
 
 pub(crate) fn modes(md: &mut String, m: &ModeMap) {
-    let total = m.points.len().max(1);
+    let total = m.points.len();
     let _ = writeln!(md, "| mode | grid points | share |\n|---|---|---|");
     for (mode, n) in m.counts() {
-        let _ = writeln!(md, "| {} | {n} | {} % |", mode.name(), number(100.0 * n as f64 / total as f64));
+        let _ = writeln!(md, "| {} | {n} | {} % |", mode.name(), share(n, total));
     }
     md.push('\n');
     for z in &m.p_zero {
         let dir = analyses::modes::dir_name(z.dir);
-        let _ = writeln!(md, "- `p = 0` for {dir} at theta1 = {} deg", number(z.theta1_deg));
+        let _ = writeln!(md, "- `p = 0` for {dir} at theta1 = {} deg", angle(z.theta1_deg));
     }
     md.push('\n');
 }
@@ -27,8 +27,8 @@ pub(crate) fn admissible(md: &mut String, a: &AdmissibleReport) {
     let _ = writeln!(
         md,
         "`z_t` (m) on the belt where `p > 0` (`*`: end of the reachable belt, |z_t| <= {} m), mu = {}:\n",
-        number(a.reach),
-        number(a.params.mu)
+        position(a.reach),
+        given(a.params.mu)
     );
     let _ = writeln!(md, "| slip direction | elbow up | elbow down |\n|---|---|---|");
     for (label, dir) in
@@ -41,7 +41,7 @@ pub(crate) fn admissible(md: &mut String, a: &AdmissibleReport) {
             fmt_intervals(a.intervals(ElbowBranch::Down, dir))
         );
     }
-    let _ = writeln!(md, "\nMirror check: largest end mismatch {} m.\n", opt(a.mirror_max_diff));
+    let _ = writeln!(md, "\nMirror check: largest end mismatch {} m.\n", a.mirror_max_diff.map_or_else(|| "-".into(), rough));
 }
 
 pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
@@ -51,17 +51,17 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
         &[
             ("status", s.status.to_string()),
             ("initial condition", s.initial_condition.name.clone()),
-            ("mu, v_belt (m/s)", format!("{}, {}", number(s.params.mu), number(s.params.v_belt))),
-            ("impact law, e_n", format!("{}, {}", s.sim.impact_law.name(), number(s.sim.e_n))),
-            ("rtol, atol", format!("{}, {}", number(s.sim.rtol), number(s.sim.atol))),
-            ("simulated (s)", number(s.simulated_s)),
+            ("mu, v_belt (m/s)", format!("{}, {}", given(s.params.mu), given(s.params.v_belt))),
+            ("impact law, e_n", format!("{}, {}", s.sim.impact_law.name(), given(s.sim.e_n))),
+            ("rtol, atol", format!("{}, {}", given(s.sim.rtol), given(s.sim.atol))),
+            ("simulated (s)", given(s.simulated_s)),
             ("lift-offs", c.lift_offs.to_string()),
             ("touchdowns (bounces)", format!("{} ({})", c.touchdowns, c.bounces)),
             ("impacts without collision", c.impacts_without_collision.to_string()),
             ("stick phases, stick-to-slip", format!("{}, {}", c.stick_phases, c.stick_to_slip)),
             ("impact without collision rule", s.sim.iwc.to_string()),
             ("validity", validity_cell(&s.validity)),
-            ("final mode, z_t (m)", format!("{}, {}", s.final_mode, number(s.final_tip[0]))),
+            ("final mode, z_t (m)", format!("{}, {}", s.final_mode, position(s.final_tip[0]))),
         ],
     );
 }
@@ -99,11 +99,12 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
         md,
         &[
             ("runs (missing)", format!("{} ({})", r.runs, r.missing)),
+            ("resumed runs (found in the output folder, not run again)", s.resumed_runs.to_string()),
             ("outcomes", outcomes.join(", ")),
             ("validity (all runs)", validity_cell(&r.validity)),
             ("dynamic jams (tangential impacts)", r.jams.to_string()),
-            ("indicator threshold (rad/s)", number(r.threshold)),
-            ("rtol, atol", format!("{}, {}", number(s.spec.rtol), number(s.spec.atol))),
+            ("indicator threshold (rad/s)", given(r.threshold)),
+            ("rtol, atol", format!("{}, {}", given(s.spec.rtol), given(s.spec.atol))),
         ],
     );
     if !r.invalid.is_empty() {
@@ -118,10 +119,10 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
                 "| {} | {} | {} | {} | {} | {} | {} | {} |",
                 i.index,
                 i.impact_law,
-                number(i.e_n),
+                given(i.e_n),
                 i.iwc,
-                number(i.mu),
-                number(i.v_belt),
+                on_grid(i.mu, s.spec.mu.step),
+                on_grid(i.v_belt, s.spec.v_belt.step),
                 i.ic,
                 cell(&i.violations)
             );
@@ -136,6 +137,7 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
         md,
         "| impact law | e_n | IWC | initial condition | critical mu | bands of v_belt (m/s) per mu |\n|---|---|---|---|---|---|"
     );
+    let (mu_step, v_step) = (s.spec.mu.step, s.spec.v_belt.step);
     for case in &r.cases {
         for ic in &case.ics {
             let per_mu: Vec<String> = ic
@@ -143,13 +145,14 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
                 .iter()
                 .filter(|m| !m.bands.is_empty())
                 .map(|m| {
-                    let bands: Vec<String> = m.bands.iter().map(|b| format!("[{}, {}]", number(b.v_min), number(b.v_max))).collect();
-                    format!("{}: {}", number(m.mu), bands.join(" "))
+                    let bands: Vec<String> =
+                        m.bands.iter().map(|b| format!("[{}, {}]", on_grid(b.v_min, v_step), on_grid(b.v_max, v_step))).collect();
+                    format!("{}: {}", on_grid(m.mu, mu_step), bands.join(" "))
                 })
                 .collect();
             let bands = if per_mu.is_empty() { "none".to_string() } else { per_mu.join("; ") };
-            let critical = ic.critical_mu.map_or_else(|| "none".to_string(), number);
-            let _ = writeln!(md, "| {} | {} | {} | {} | {critical} | {bands} |", case.impact_law, number(case.e_n), case.iwc, ic.ic);
+            let critical = ic.critical_mu.map_or_else(|| "none".to_string(), |c| on_grid(c, mu_step));
+            let _ = writeln!(md, "| {} | {} | {} | {} | {critical} | {bands} |", case.impact_law, given(case.e_n), case.iwc, ic.ic);
         }
     }
     md.push('\n');
@@ -160,10 +163,10 @@ pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
     pairs(
         md,
         &[
-            ("mu, initial condition", format!("{}, {}", number(p.mu), p.initial_condition.name)),
-            ("v_belt (m/s)", format!("{} to {} in steps of {}", number(p.v_belt_range[0]), number(p.v_belt_range[1]), number(p.v_step))),
-            ("transient, record (s)", format!("{}, {}", number(p.transient_s), number(p.record_s))),
-            ("rtol, atol", format!("{}, {}", number(p.sim.rtol), number(p.sim.atol))),
+            ("mu, initial condition", format!("{}, {}", given(p.mu), p.initial_condition.name)),
+            ("v_belt (m/s)", format!("{} to {} in steps of {}", given(p.v_belt_range[0]), given(p.v_belt_range[1]), given(p.v_step))),
+            ("transient, record (s)", format!("{}, {}", given(p.transient_s), given(p.record_s))),
+            ("rtol, atol", format!("{}, {}", given(p.sim.rtol), given(p.sim.atol))),
             (
                 "classes",
                 format!(
@@ -178,7 +181,14 @@ pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
     let _ = writeln!(md, "| class | period | v_belt from (m/s) | to (m/s) | points |\n|---|---|---|---|---|");
     for b in p.bands.iter().take(MAX_ROWS) {
         let period = b.period.map_or_else(|| "-".into(), |n| n.to_string());
-        let _ = writeln!(md, "| {} | {period} | {} | {} | {} |", b.class.name(), number(b.v_belt_min), number(b.v_belt_max), b.points);
+        let _ = writeln!(
+            md,
+            "| {} | {period} | {} | {} | {} |",
+            b.class.name(),
+            on_grid(b.v_belt_min, p.v_step),
+            on_grid(b.v_belt_max, p.v_step),
+            b.points
+        );
     }
     if p.bands.len() > MAX_ROWS {
         let _ = writeln!(md, "\n({} more bands in the files)", p.bands.len() - MAX_ROWS);
@@ -186,8 +196,20 @@ pub(crate) fn poincare(md: &mut String, p: &PoincareSummary) {
     md.push('\n');
 }
 
+/// A limit found by bisection to `tol` (m), as the zmax table prints it: the value to
+/// the tolerance, `< lo` when the bracket's lower end already fails, `>= v` when the
+/// upper end passes (the bracket's ends are tip positions: [`position`]).
+pub(crate) fn limit(outcome: &str, value: Option<f64>, lo: f64, hi: f64, tol: f64) -> String {
+    match (outcome, value) {
+        ("lower_fails", _) => format!("< {}", position(lo)),
+        ("upper_reached", v) => format!(">= {}", position(v.unwrap_or(hi))),
+        (_, Some(v)) => located(v, tol),
+        (_, None) => "-".into(),
+    }
+}
+
 pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
-    use crate::commands::zmax::summary::limit_text;
+    let tol = z.tol_m;
     let _ = writeln!(md, "{}\n", z.definition);
     let _ = writeln!(
         md,
@@ -195,7 +217,7 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
     );
     for r in &z.results {
         let paper = match analyses::paper::z_t_sliding(r.controller, r.x0) {
-            Some(Some(v)) => number(v),
+            Some(Some(v)) => given(v),
             Some(None) => "none (lifts off)".into(),
             None => "-".into(),
         };
@@ -205,13 +227,13 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
             r.controller,
             r.x0,
             r.setting,
-            limit_text(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m),
+            limit(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m, tol),
             paper,
-            r.error_at_limit_m.map_or("-".into(), |e| number(e * 1e3)),
-            opt(r.first_failing_m),
+            r.error_at_limit_m.map_or("-".into(), error_mm),
+            r.first_failing_m.map_or("-".into(), |v| located(v, tol)),
             cell(r.why_failing.as_deref().unwrap_or("-")),
-            limit_text(r.tracking_outcome, r.z_t_tracking_m, r.bracket_lo_m, r.bracket_hi_m),
-            opt(r.tracking_first_failing_m),
+            limit(r.tracking_outcome, r.z_t_tracking_m, r.bracket_lo_m, r.bracket_hi_m, tol),
+            r.tracking_first_failing_m.map_or("-".into(), |v| located(v, tol)),
             cell(r.tracking_why_failing.as_deref().unwrap_or("-")),
             r.trials
         );
@@ -219,13 +241,25 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
     let _ = writeln!(
         md,
         "\nBisection tolerance {} m; settle tolerance {} mm over the last {} s of a {} s run. Compare with {}.\n",
-        number(z.tol_m),
-        number(z.criteria.settle_tol_m * 1e3),
-        number(z.criteria.settle_window_s),
-        number(z.criteria.duration_s),
+        given(z.tol_m),
+        given(z.criteria.settle_tol_m * 1e3),
+        given(z.criteria.settle_window_s),
+        given(z.criteria.duration_s),
         z.paper
     );
     let _ = writeln!(md, "Validity over every trial: {}.\n", validity_cell(&z.validity));
+}
+
+/// The band at `mu = 0.6` from `x0a` of the study's open loop: `[from, to]` on the
+/// study's grid of `v_belt` (spacing `step`), then `+ v` for each bouncing speed
+/// outside it; `none`.
+fn band_text(o: &analyses::sensitivity::OpenLoop, step: f64) -> String {
+    let Some(b) = o.band_x0a_mu06 else { return "none".into() };
+    let mut t = format!("[{}, {}]", on_grid(b[0], step), on_grid(b[1], step));
+    for v in &o.band_outside {
+        let _ = write!(t, " + {}", on_grid(*v, step));
+    }
+    t
 }
 
 pub(crate) fn sensitivity(md: &mut String, st: &analyses::sensitivity::Study) {
@@ -245,14 +279,14 @@ pub(crate) fn sensitivity(md: &mut String, st: &analyses::sensitivity::Study) {
         md,
         "| choice | value | critical mu x0a | critical mu x0d | bouncing at mu = 0.6 from x0a (m/s) | x0d bounces | Z_t,sliding ideal | Z_t,sliding sampled | tracking limit sampled | hybrid closed loop |\n|---|---|---|---|---|---|---|---|---|---|"
     );
-    let opt_num = |x: Option<f64>| x.map_or_else(|| "none".to_string(), number);
+    let opt_num = |x: Option<f64>| x.map_or_else(|| "none".to_string(), |mu| on_grid(mu, st.grids.mu.step));
     for r in &st.results {
         let c = &r.choice;
         let (a, d, band, x0d) = match &r.open_loop {
             Some(o) => (
                 opt_num(o.critical_mu_x0a),
                 opt_num(o.critical_mu_x0d),
-                o.band_text(),
+                band_text(o, st.grids.v_belt.step),
                 if o.x0d_bounces { "yes".to_string() } else { "no".to_string() },
             ),
             None => (".".to_string(), ".".to_string(), ".".to_string(), ".".to_string()),

@@ -1,40 +1,100 @@
-//! The report's page: one section per experiment, each result drawn from its
-//! typed value (the analysis result or the command's summary), every number
-//! through [`super::format::number`].
+//! The report's page: the index of the experiments, the paper side by side, one
+//! section per experiment of the reproduction, then the appendix (the rig and the
+//! firmware). Each result is drawn from its typed value (the analysis result or
+//! the command's summary), every number by the rule of its kind
+//! ([`super::format`]), every figure numbered with its caption ([`super::captions`]).
 
-use std::fmt::Write as _;
+use std::{fmt::Write as _, path::Path};
 
 use rig::summary::RunSummary;
 
 use crate::commands::sweep::outputs::SweepSummary;
 
 use super::{
+    captions::{Figures, caption, order},
     closed_loop,
     experiments::{admissible, modes, poincare, sensitivity, simulate, sweep, zmax},
     runs::{bench, pil, run_comparison},
 };
 use super::{
-    format::{cell, number, short},
+    format::{cell, rough},
     outcome::{Outcome, StepResult},
     sections::Section,
     stamp::Stamp,
 };
 
-/// The page: a heading with the stamp, the index table, then each section with
-/// its command lines, results, figures (when `figures`) and data links.
-pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wall_s: f64, stamp: &Stamp, figures: bool) -> String {
+/// Which page: report.md in the report's folder, or the results page
+/// (docs/results.md) that ships its figures in `figures/` beside it.
+#[derive(Debug, Clone, Copy)]
+pub struct Page<'a> {
+    /// The report's folder as the commands on the page name it (`OUT` on the results page).
+    pub out: &'a Path,
+    /// Before each figure's path in the report's folder (`""` on report.md, `figures/`).
+    pub figure_prefix: &'a str,
+    /// Whether the page links the data files (CSV, JSON), which only the report's folder holds.
+    pub data: bool,
+}
+
+/// The page and the figures it shows (paths in the report's folder, in order).
+pub fn render(
+    sections: &[Section],
+    results: &[Vec<StepResult>],
+    size: &str,
+    wall_s: f64,
+    stamp: &Stamp,
+    page: Page,
+) -> (String, Vec<String>) {
     let mut md = String::new();
+    let mut figures = Figures::new(page.figure_prefix);
     let _ = writeln!(md, "# Reproduction of Marchese, Coraggio, Hogan, di Bernardo (ECC 2019)\n");
+    let where_ = if page.data {
+        "its files are in the folder of the same name".to_string()
+    } else {
+        format!(
+            "its figures are in `{}<id>/` beside this page, its data files in the report's folder (`{}` in the commands)",
+            page.figure_prefix,
+            page.out.display()
+        )
+    };
     let _ = writeln!(
         md,
         "Every experiment of docs/model.md from our own simulation (`sil-host report --size {size}`, {} s of wall time), \
-         made {}. Each section gives the command that made it; its files are in the folder of the same name.\n",
-        number(wall_s.round()),
+         made {}. Each section gives the command that made it (`<id>` in the first column below); {where_}. \
+         Figures are numbered in the page's order, each with a caption below it: what it shows, its parameters, and \
+         the paper's counterpart. Numbers print to their resolution (docs/analyses.md \"The report's numbers\").\n",
+        rough(wall_s),
         stamp.line()
     );
-    let _ = writeln!(md, "| experiment | source | status | model violations | wall time |\n|---|---|---|---|---|");
-    for (s, rs) in sections.iter().zip(results) {
-        for r in rs {
+    let (main, appendix): (Vec<_>, Vec<_>) = sections.iter().zip(results).partition(|(s, _)| !s.appendix);
+    index(&mut md, &main);
+    if !appendix.is_empty() {
+        let _ = writeln!(md, "\nIn the appendix (the rig and the firmware, not results of the paper):\n");
+        index(&mut md, &appendix);
+    }
+    super::paper::side_by_side(&mut md, results);
+    for (s, rs) in &main {
+        section(&mut md, s, rs, page, &mut figures, 2);
+    }
+    if !appendix.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n## Appendix: the rig and the firmware\n\n\
+             Engineering figures of the rig itself, not results of the paper: how fast the loop runs, and what the \
+             firmware costs on the MCU.\n"
+        );
+        for (s, rs) in &appendix {
+            section(&mut md, s, rs, page, &mut figures, 3);
+        }
+    }
+    let shown = figures.shown().to_vec();
+    (md, shown)
+}
+
+/// The index table of `sections`: one row per step.
+fn index(md: &mut String, sections: &[(&Section, &Vec<StepResult>)]) {
+    let _ = writeln!(md, "| experiment (`<id>`) | source | status | model violations | wall time |\n|---|---|---|---|---|");
+    for (s, rs) in sections {
+        for r in rs.iter() {
             let status = if r.error.is_none() { "ok".to_string() } else { "**failed**".to_string() };
             let violations = match r.outcome.as_ref().and_then(Outcome::validity) {
                 None => "-".to_string(),
@@ -46,67 +106,69 @@ pub fn render(sections: &[Section], results: &[Vec<StepResult>], size: &str, wal
                 Some(what) => format!("{}; this run: {what}", s.source),
                 None => s.source.to_string(),
             };
-            let _ = writeln!(md, "| {} ({}) | {} | {} | {} | {} s |", s.title, r.id, cell(&source), status, violations, short(r.wall_s));
+            let _ = writeln!(md, "| {} (`{}`) | {} | {} | {} | {} s |", s.title, r.id, cell(&source), status, violations, rough(r.wall_s));
         }
     }
-    super::paper::side_by_side(&mut md, results);
-    for (s, rs) in sections.iter().zip(results) {
-        let _ = writeln!(md, "\n## {}\n\n*{}*\n", s.title, s.source);
-        let runs: Vec<(&str, &RunSummary)> = rs
-            .iter()
-            .filter_map(|r| match &r.outcome {
-                Some(Outcome::Run(summary)) => Some((r.id, summary.as_ref())),
-                _ => None,
-            })
-            .collect();
-        if runs.len() > 1 {
-            run_comparison(&mut md, &runs);
+}
+
+/// One section: its heading at `level`, its tables, its commands, its figures.
+fn section(md: &mut String, s: &Section, rs: &[StepResult], page: Page, figures: &mut Figures, level: usize) {
+    let h = "#".repeat(level);
+    let _ = writeln!(md, "\n{h} {}\n\n*{}*\n", s.title, s.source);
+    let runs: Vec<(&str, &RunSummary)> = rs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Some(Outcome::Run(summary)) => Some((r.id, summary.as_ref())),
+            _ => None,
+        })
+        .collect();
+    if runs.len() > 1 {
+        run_comparison(md, &runs);
+    }
+    let sweeps: Vec<(&str, &SweepSummary, &[String])> = rs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Some(Outcome::Sweep(s)) => Some((r.id, s.as_ref(), r.files.as_slice())),
+            _ => None,
+        })
+        .collect();
+    if sweeps.len() > 1 {
+        closed_loop::compare(md, &sweeps, figures);
+    }
+    for r in rs {
+        if rs.len() > 1 {
+            let _ = writeln!(md, "\n{h}# {}\n", r.id);
         }
-        let sweeps: Vec<(&str, &SweepSummary, &[String])> = rs
-            .iter()
-            .filter_map(|r| match &r.outcome {
-                Some(Outcome::Sweep(s)) => Some((r.id, s.as_ref(), r.files.as_slice())),
-                _ => None,
-            })
-            .collect();
-        if sweeps.len() > 1 {
-            closed_loop::compare(&mut md, &sweeps, figures);
+        let command = s.steps.iter().find(|st| st.id == r.id).map_or_else(|| r.command.clone(), |st| super::command_line(page.out, st));
+        let _ = writeln!(md, "```\n{command}\n```\n");
+        if let Some(e) = &r.error {
+            let _ = writeln!(md, "**Failed**:\n\n```\n{e}\n```\n");
         }
-        for r in rs {
-            if rs.len() > 1 {
-                let _ = writeln!(md, "\n### {}\n", r.id);
-            }
-            let _ = writeln!(md, "```\n{}\n```\n", r.command);
-            if let Some(e) = &r.error {
-                let _ = writeln!(md, "**Failed**:\n\n```\n{e}\n```\n");
-            }
-            match &r.outcome {
-                Some(Outcome::Modes(m)) => modes(&mut md, m),
-                Some(Outcome::Admissible(a)) => admissible(&mut md, a),
-                Some(Outcome::Simulate(s)) => simulate(&mut md, s),
-                Some(Outcome::Sweep(s)) => sweep(&mut md, s),
-                Some(Outcome::Poincare(p)) => poincare(&mut md, p),
-                Some(Outcome::Zmax(z)) => zmax(&mut md, z),
-                Some(Outcome::Run(summary)) if runs.len() <= 1 => {
-                    run_comparison(&mut md, &[(r.id, summary.as_ref())]);
-                    if let Some(p) = &summary.pil {
-                        pil(&mut md, p);
-                    }
-                }
-                Some(Outcome::Bench(b)) => bench(&mut md, b),
-                Some(Outcome::Sensitivity(s)) => sensitivity(&mut md, &s.study),
-                _ => {}
-            }
-            if figures {
-                for f in r.files.iter().filter(|f| f.ends_with(".svg") && !(sweeps.len() > 1 && closed_loop::is_map(f))) {
-                    let _ = writeln!(md, "![{f}]({f})\n");
+        match &r.outcome {
+            Some(Outcome::Modes(m)) => modes(md, m),
+            Some(Outcome::Admissible(a)) => admissible(md, a),
+            Some(Outcome::Simulate(s)) => simulate(md, s),
+            Some(Outcome::Sweep(s)) => sweep(md, s),
+            Some(Outcome::Poincare(p)) => poincare(md, p),
+            Some(Outcome::Zmax(z)) => zmax(md, z),
+            Some(Outcome::Run(summary)) if runs.len() <= 1 => {
+                run_comparison(md, &[(r.id, summary.as_ref())]);
+                if let Some(p) = &summary.pil {
+                    pil(md, p);
                 }
             }
-            let data: Vec<String> = r.files.iter().filter(|f| !f.ends_with(".svg")).map(|f| format!("[{f}]({f})")).collect();
-            if figures && !data.is_empty() {
-                let _ = writeln!(md, "Data: {}\n", data.join(", "));
-            }
+            Some(Outcome::Bench(b)) => bench(md, b),
+            Some(Outcome::Sensitivity(s)) => sensitivity(md, &s.study),
+            _ => {}
+        }
+        for f in order(r.outcome.as_ref(), &r.files).into_iter().filter(|f| !(sweeps.len() > 1 && closed_loop::is_map(f))) {
+            figures.show(md, f, &caption(r.outcome.as_ref(), f));
+        }
+        // Data files: not the figures (SVG, and the PDF beside an SVG).
+        let data: Vec<String> =
+            r.files.iter().filter(|f| !f.ends_with(".svg") && !f.ends_with(".pdf")).map(|f| format!("[{f}]({f})")).collect();
+        if page.data && !data.is_empty() {
+            let _ = writeln!(md, "Data: {}\n", data.join(", "));
         }
     }
-    md
 }

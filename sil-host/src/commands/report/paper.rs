@@ -9,7 +9,7 @@ use firmware::ControllerKind;
 use plant::initial::PaperX0;
 use shared::{ElbowBranch, SlipDirection};
 
-use super::format::{cell, number};
+use super::format::{POSITION_RESOLUTION_M, cell, given, located, on_grid, position, signed};
 use super::outcome::{Outcome, StepResult};
 use crate::commands::sweep::outputs::SweepSummary;
 
@@ -22,12 +22,19 @@ struct Row {
     cause: String,
 }
 
+/// A value the paper prints, in m, as printed.
 fn m(x: f64) -> String {
-    format!("{} m", number((x * 1e4).round() / 1e4 + 0.0))
+    format!("{} m", given(x))
 }
 
-fn diff_mm(ours: f64, theirs: f64) -> String {
-    format!("{:+.1} mm", (ours - theirs) * 1e3)
+/// Ours, a tip position in m ([`position`]).
+fn ours_m(x: f64) -> String {
+    format!("{} m", position(x))
+}
+
+/// The difference ours - theirs in mm, to `resolution_m` (ours's resolution).
+fn diff_mm(ours: f64, theirs: f64, resolution_m: f64) -> String {
+    format!("{} mm", signed(located((ours - theirs) * 1e3, resolution_m * 1e3)))
 }
 
 /// The step `id`'s typed result, if it ran.
@@ -78,22 +85,22 @@ fn table_ii(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
         rows.push(Row {
             what: format!("Table II, {name}, mu = {}: lower end of p > 0", paper::TABLE_II_MU),
             paper: m(theirs[0]),
-            ours: m(i.lo),
-            difference: diff_mm(i.lo, theirs[0]),
+            ours: ours_m(i.lo),
+            difference: diff_mm(i.lo, theirs[0], POSITION_RESOLUTION_M),
             cause: "none: the end of the reachable belt (the arm straight), printed to 3 decimals".into(),
         });
         let (difference, cause) = if (i.hi - theirs[1]).abs() <= 5e-4 {
-            (diff_mm(i.hi, theirs[1]), "none: the paper prints 3 decimals".to_string())
+            (diff_mm(i.hi, theirs[1], POSITION_RESOLUTION_M), "none: the paper prints 3 decimals".to_string())
         } else {
             (
-                diff_mm(i.hi, theirs[1]),
+                diff_mm(i.hi, theirs[1], POSITION_RESOLUTION_M),
                 "not found: more than the paper's rounding; ours is the root of p on the belt, located to 1e-9 m and equal to an independent implementation's; the paper does not say how it located its end".to_string(),
             )
         };
         rows.push(Row {
             what: format!("Table II, {name}, mu = {}: upper end of p > 0", paper::TABLE_II_MU),
             paper: m(theirs[1]),
-            ours: m(i.hi),
+            ours: ours_m(i.hi),
             difference,
             cause,
         });
@@ -114,11 +121,12 @@ fn open_loop(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
     let ic = |name: &str| case.ics.iter().find(|i| i.ic == name);
     if let Some(x0a) = ic("x0a") {
         let ours = x0a.critical_mu;
+        let (mu_step, v_step) = (s.spec.mu.step, s.spec.v_belt.step);
         rows.push(Row {
-            what: "Fig. 3: critical mu (from x0a, on a 0.1 grid of mu)".into(),
-            paper: number(paper::CRITICAL_MU),
-            ours: ours.map_or("none".into(), number),
-            difference: ours.map_or("-".into(), |o| number(((o - paper::CRITICAL_MU) * 1e3).round() / 1e3 + 0.0)),
+            what: format!("Fig. 3: critical mu (from x0a, on a {} grid of mu)", given(mu_step)),
+            paper: given(paper::CRITICAL_MU),
+            ours: ours.map_or("none".into(), |o| on_grid(o, mu_step)),
+            difference: ours.map_or("-".into(), |o| signed(on_grid(o - paper::CRITICAL_MU, mu_step))),
             cause: if ours == Some(paper::CRITICAL_MU) {
                 "none".into()
             } else {
@@ -130,12 +138,14 @@ fn open_loop(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
         rows.push(Row {
             what: "Fig. 3: persistent bouncing at mu = 0.6 from x0a, v_belt (the longest band)".into(),
             paper: format!("[{}, {}] m/s", theirs[0], theirs[1]),
-            ours: band.map_or("none".into(), |b| format!("[{}, {}] m/s", number(b.v_min), number(b.v_max))),
-            difference: band.map_or("-".into(), |b| format!("{:+.3}, {:+.3} m/s", b.v_min - theirs[0], b.v_max - theirs[1])),
+            ours: band.map_or("none".into(), |b| format!("[{}, {}] m/s", on_grid(b.v_min, v_step), on_grid(b.v_max, v_step))),
+            difference: band.map_or("-".into(), |b| {
+                format!("{}, {} m/s", signed(located(b.v_min - theirs[0], 1e-3)), signed(located(b.v_max - theirs[1], 1e-3)))
+            }),
             cause: format!(
                 "the impact law and e_n the paper leaves open (ours: Newton, e_n = 0.2{}), and our grid of {} m/s",
                 law_spread(results),
-                number(s.spec.v_belt.step)
+                given(v_step)
             ),
         });
     }
@@ -144,7 +154,11 @@ fn open_loop(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
         rows.push(Row {
             what: "Fig. 3: persistent bouncing from x0d".into(),
             paper: "none".into(),
-            ours: if bounces { format!("from mu = {}", number(x0d.critical_mu.unwrap_or(f64::NAN))) } else { "none".into() },
+            ours: if bounces {
+                format!("from mu = {}", on_grid(x0d.critical_mu.unwrap_or(f64::NAN), s.spec.mu.step))
+            } else {
+                "none".into()
+            },
             difference: if bounces == paper::X0D_BOUNCES { "none".into() } else { "differs".into() },
             cause: if bounces == paper::X0D_BOUNCES { "none".into() } else { "the impact law the paper leaves open".into() },
         });
@@ -166,14 +180,15 @@ fn law_spread(results: &[Vec<StepResult>]) -> String {
     if bands.is_empty() {
         return String::new();
     }
+    let step = s.study.grids.v_belt.step;
     let lo = |i: usize| bands.iter().map(|b| b[i]).fold(f64::INFINITY, f64::min);
     let hi = |i: usize| bands.iter().map(|b| b[i]).fold(f64::NEG_INFINITY, f64::max);
     format!(
         "; the sensitivity rows \"impact law, e_n\" put its lower end from {} to {} m/s and its upper end from {} to {} m/s",
-        number(lo(0)),
-        number(hi(0)),
-        number(lo(1)),
-        number(hi(1))
+        on_grid(lo(0), step),
+        on_grid(hi(0), step),
+        on_grid(lo(1), step),
+        on_grid(hi(1), step)
     )
 }
 
@@ -182,7 +197,8 @@ fn z_t_sliding(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
         rows.push(missing("Z_t,sliding", "see docs/model.md".into(), "zmax"));
         return;
     };
-    use crate::commands::zmax::summary::limit_text;
+    use super::experiments::limit;
+    let tol = z.tol_m;
     for (controller, x0) in [
         (ControllerKind::Pid, PaperX0::D),
         (ControllerKind::Pid, PaperX0::U),
@@ -193,25 +209,25 @@ fn z_t_sliding(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
         let of =
             |setting: analyses::zmax::Setting| z.results.iter().find(|r| r.controller == controller && r.x0 == x0 && r.setting == setting);
         let (Some(ideal), Some(sampled)) = (of(analyses::zmax::Setting::Ideal), of(analyses::zmax::Setting::Sampled)) else { continue };
-        let text = |r: &crate::commands::zmax::summary::ZmaxRow| limit_text(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m);
+        let text = |r: &crate::commands::zmax::summary::ZmaxRow| limit(r.outcome, r.z_t_sliding_m, r.bracket_lo_m, r.bracket_hi_m, tol);
         let ours = format!("{} m ideal, {} m sampled", text(ideal), text(sampled));
         let (difference, cause) = match (theirs, ideal.z_t_sliding_m) {
             (None, None) => ("none".to_string(), format!("none: {}", ideal.why_failing.as_deref().unwrap_or("the lowest target fails"))),
             (Some(t), Some(o)) if controller == ControllerKind::Pid => (
-                diff_mm(o, t),
+                diff_mm(o, t, tol),
                 format!(
                     "the paper does not say how closely or for how long the target is reached: ours never lifts off from x0d, and stops where the steady error exceeds {} mm ({}); within {} mm it tracks to {} m",
-                    number(z.criteria.reach_tol_m * 1e3),
+                    given(z.criteria.reach_tol_m * 1e3),
                     ideal.why_failing.as_deref().unwrap_or("-"),
-                    number(z.criteria.settle_tol_m * 1e3),
-                    ideal.z_t_tracking_m.map_or("-".into(), |v| number((v * 1e4).round() / 1e4))
+                    given(z.criteria.settle_tol_m * 1e3),
+                    ideal.z_t_tracking_m.map_or("-".into(), |v| located(v, tol))
                 ),
             ),
             (Some(t), Some(o)) => (
-                diff_mm(o, t),
+                diff_mm(o, t, tol),
                 format!(
                     "not found: ours (ideal) lifts off where p = 0 on the belt ({} m, Table II's end on the branch), under every open choice of the sensitivity study; the paper's limit lies inside it",
-                    ideal.p_zero_end_m.map_or("-".into(), |v| number((v * 1e4).round() / 1e4))
+                    ideal.p_zero_end_m.map_or("-".into(), position)
                 ),
             ),
             _ => ("differs".to_string(), ideal.why_failing.clone().unwrap_or_default()),
@@ -230,16 +246,17 @@ fn closed_loop(rows: &mut Vec<Row>, results: &[Vec<StepResult>]) {
     let lifting = |s: &SweepSummary| -> Vec<f64> {
         s.results.outcomes_per_mu.iter().filter(|m| m.outcomes.get("lift_off").is_some_and(|&n| n > 0)).map(|m| m.mu).collect()
     };
+    let (Some(sampled), ideal) = (sweep(results, "sweep-hybrid"), sweep(results, "sweep-hybrid-ideal")) else {
+        rows.push(missing("Fig. 9", "none".into(), "sweep-hybrid"));
+        return;
+    };
+    let step = sampled.spec.mu.step;
     let text = |mus: &[f64]| {
         if mus.is_empty() {
             "no lift-off".to_string()
         } else {
-            format!("lift-offs at mu = {}", mus.iter().map(|m| number(*m)).collect::<Vec<_>>().join(", "))
+            format!("lift-offs at mu = {}", mus.iter().map(|m| on_grid(*m, step)).collect::<Vec<_>>().join(", "))
         }
-    };
-    let (Some(sampled), ideal) = (sweep(results, "sweep-hybrid"), sweep(results, "sweep-hybrid-ideal")) else {
-        rows.push(missing("Fig. 9", "none".into(), "sweep-hybrid"));
-        return;
     };
     let s = lifting(sampled);
     let i = ideal.map(lifting);

@@ -1,6 +1,6 @@
 //! The tables of the closed-loop sections: runs side by side, the rig's speed, the MCU image's step counts.
 
-use super::format::{cell, mm, number};
+use super::format::{cell, error_mm, given, position, rough};
 use crate::bench::figure::{Figure, Goal, Status};
 use rig::summary::{PilFigures, RunSummary};
 use std::fmt::Write as _;
@@ -12,14 +12,14 @@ pub(crate) fn bench(md: &mut String, figures: &[Figure]) {
             Goal::AtMost => "<=",
             Goal::AtLeast => ">=",
         };
-        let value = f.value.map_or_else(|| "-".into(), |v| format!("{} {}", number(v.round()), f.unit));
+        let value = f.value.map_or_else(|| "-".into(), |v| format!("{} {}", rough(v), f.unit));
         let status = match &f.status {
             Status::Met => "met".to_string(),
             Status::NotMet => "**not met**".into(),
             Status::Skipped(why) => format!("skipped: {}", cell(why)),
         };
         let _ =
-            writeln!(md, "| {} | {value} | {goal} {} {} | {status} | {} |", f.name, number(f.target), f.unit, cell(&f.detail.join("; ")));
+            writeln!(md, "| {} | {value} | {goal} {} {} | {status} | {} |", f.name, given(f.target), f.unit, cell(&f.detail.join("; ")));
     }
     md.push('\n');
 }
@@ -28,19 +28,12 @@ pub(crate) fn pil(md: &mut String, p: &PilFigures) {
     let unit = p.count_unit.as_str();
     let _ = writeln!(md, "| {unit} per | median | p99 | worst | budget |\n|---|---|---|---|---|");
     for (what, s) in [("control step", &p.step_counts), ("frame (decode + step)", &p.frame_counts)] {
-        let _ = writeln!(
-            md,
-            "| {what} | {} | {} | {} | {} |",
-            number(s.median.round()),
-            number(s.p99.round()),
-            number(s.worst.round()),
-            number(p.step_budget)
-        );
+        let _ = writeln!(md, "| {what} | {} | {} | {} | {} |", s.median.round(), s.p99.round(), s.worst.round(), given(p.step_budget));
     }
     let _ = writeln!(
         md,
         "\nWorst step: {} % of the control period at 168 MHz; within the budget: {}.\n",
-        number(100.0 * p.worst_step_period_share),
+        rough(100.0 * p.worst_step_period_share),
         p.within_budget
     );
 }
@@ -64,8 +57,8 @@ pub(crate) fn run_comparison(md: &mut String, runs: &[(&str, &RunSummary)]) {
         ("false alarms", |s| s.lift_off.false_alarms.to_string()),
         ("deadline misses", |s| s.deadline_misses.to_string()),
         ("firmware overruns", |s| s.firmware_overruns.to_string()),
-        ("rms tracking error (mm)", |s| mm(s.rms_tracking_error_m)),
-        ("final z_t (m)", |s| number(s.final_z_t_m)),
+        ("rms tracking error (mm)", |s| error_mm(s.rms_tracking_error_m)),
+        ("final z_t (m)", |s| position(s.final_z_t_m)),
         ("stopped because", |s| s.error.clone().unwrap_or_else(|| "-".into())),
         ("model violations", |s| if s.validity.is_valid() { "none".into() } else { s.validity.describe_violations() }),
     ];

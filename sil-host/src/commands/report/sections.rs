@@ -28,6 +28,9 @@ pub struct Section {
     pub source: &'static str,
     /// The commands that reproduce it.
     pub steps: Vec<Step>,
+    /// Whether it belongs in the appendix (the rig and the firmware, not a result of
+    /// the paper): shown after the reproduction's sections.
+    pub appendix: bool,
 }
 
 fn step(id: &'static str, args: &[&str]) -> Step {
@@ -51,22 +54,26 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
         Section {
             title: "Contact modes on the belt",
             source: "docs/model.md experiment 1, paper Fig. 2",
+            appendix: false,
             steps: vec![step("modes", &["modes", "--mu", "0.6", "--grid", if quick { "200" } else { "400" }])],
         },
         Section {
             title: "Admissible configurations",
             source: "docs/model.md experiment 2, paper Table II",
+            appendix: false,
             steps: vec![step("admissible", &["admissible", "--mu", "0.6"])],
         },
         Section {
             title: "Open-loop bouncing from x0a",
             source: "docs/model.md experiments 3 and 4 (one run of the open-loop system, u = 0)",
+            appendix: false,
             steps: vec![step("simulate", &["simulate", "--x0", "a", "--mu", "0.6", "--v-belt", "-0.4", "--duration", "10"])],
         },
     ];
     v.push(Section {
         title: "Open-loop two-parameter bifurcation diagram",
         source: "docs/model.md experiment 3, paper Fig. 3: persistent bouncing over (v_belt, mu), u = 0, from x0a and x0d, for e_n = 0, 0.2 and 0.5 (how the band moves with the impact law)",
+        appendix: false,
         steps: vec![step(
             "sweep-open-loop",
             &if quick {
@@ -79,6 +86,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     v.push(Section {
         title: "Closed-loop bifurcation diagram (hybrid force/motion control)",
         source: "docs/model.md experiment 7, paper Fig. 9: experiment 3's sweep from x0d with the hybrid controller in the loop",
+        appendix: false,
         steps: {
             let args = if quick {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d", "--v-belt-step", "0.05", "--transient", "20", "--record", "10"]
@@ -98,6 +106,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     v.push(Section {
         title: "One-parameter bifurcation diagram (Poincaré section)",
         source: "docs/model.md experiment 4, paper Fig. 4: mu = 0.6 from x0a, theta1 where theta1_dot crosses 0 upwards",
+        appendix: false,
         steps: vec![step(
             "poincare",
             &if quick {
@@ -110,16 +119,19 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     v.push(Section {
         title: "Z_t,sliding: how far each controller drives the tip with no lift-off",
         source: "docs/model.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
+        appendix: false,
         steps: vec![step("zmax", &["zmax", "--all"])],
     });
     v.push(Section {
         title: "Sensitivity to the choices the paper leaves open",
         source: "docs/model.md \"What the paper leaves open\": the headline results under each open choice, one at a time from the defaults (sil-host sensitivity)",
+        appendix: false,
         steps: vec![step("sensitivity", &["sensitivity", "--size", if quick { "quick" } else { "paper" }])],
     });
     v.push(Section {
         title: "PID and hybrid force/motion control in the SIL loop",
         source: "docs/model.md experiments 5 and 6 (paper Figs. 6 to 8): the firmware sampled at 1 kHz with docs/hardware.md's sensors",
+        appendix: false,
         steps: ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"]
             .into_iter()
             .map(|name| Step {
@@ -138,6 +150,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     v.push(Section {
         title: "The hybrid law when friction is not known",
         source: "issue 41, docs/analyses.md \"The hybrid law when friction is not known\": the sampled hybrid law from x0d with mu_hat 10 % low, the paper's friction term beside the estimated one (controller.friction = estimated)",
+        appendix: false,
         steps: [("hybrid-x0d-mu-hat-low", "commanded"), ("hybrid-x0d-mu-hat-low-estimated", "estimated")]
             .into_iter()
             .map(|(id, friction)| Step {
@@ -164,6 +177,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
     v.push(Section {
         title: "Speed of the rig",
         source: "control periods per wall second on the default scenario, in-process and in lockstep over iceoryx2 (sil-host bench)",
+        appendix: true,
         steps: vec![Step {
             writes: false,
             ..step(
@@ -182,6 +196,7 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
         v.push(Section {
             title: "The firmware on the MCU (processor in the loop)",
             source: "the default scenario with the Cortex-M4F image in QEMU; instructions per control step against docs/hardware.md \"Budgets\"",
+            appendix: true,
             steps: vec![step("pil", &["pil", "--duration", if quick { "2" } else { "10" }])],
         });
     }
