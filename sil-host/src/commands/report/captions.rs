@@ -47,13 +47,32 @@ pub struct Figures {
     prefix: String,
     numbered: usize,
     shown: Vec<String>,
+    /// Whether each caption links the figure's PDF (the report's folder holds them).
+    pdf: bool,
 }
 
 impl Figures {
     /// No figure shown yet; `prefix` goes before each file's path in the report
     /// folder (`""` on report.md, `figures/` on docs/results.md).
     pub fn new(prefix: &str) -> Self {
-        Self { prefix: prefix.to_string(), numbered: 0, shown: Vec::new() }
+        Self { prefix: prefix.to_string(), numbered: 0, shown: Vec::new(), pdf: false }
+    }
+
+    /// The same, each caption ending with a link to the figure's PDF (beside its
+    /// SVG, as every command writes it: `trace.pdf` for `trace.svg`).
+    pub fn with_pdf(mut self) -> Self {
+        self.pdf = true;
+        self
+    }
+
+    /// The links to the PDFs of `files` after a caption (empty without PDFs).
+    fn pdf_links(&self, files: &[&str]) -> String {
+        if !self.pdf {
+            return String::new();
+        }
+        let links: Vec<String> =
+            files.iter().map(|f| format!("[PDF]({}{})", self.prefix, f.trim_end_matches(".svg").to_string() + ".pdf")).collect();
+        format!(" {}", links.join(", "))
     }
 
     /// Shows `file` (its path in the report folder) as the next figure, with `caption` below it.
@@ -61,7 +80,7 @@ impl Figures {
         self.numbered += 1;
         let n = self.numbered;
         let _ = writeln!(md, "![Figure {n}: {}]({}{file})\n", alt(&caption.what), self.prefix);
-        let _ = writeln!(md, "**Figure {n}.** {}\n", caption.text());
+        let _ = writeln!(md, "**Figure {n}.** {}{}\n", caption.text(), self.pdf_links(&[file]));
         self.shown.push(file.to_string());
     }
 
@@ -88,7 +107,9 @@ impl Figures {
                 .collect();
             let _ = writeln!(md, "| {} |", cells.join(" | "));
         }
-        let _ = writeln!(md, "\n**Figure {n}.** {}\n", caption.text());
+        let start = self.shown.len() - columns.iter().map(|(_, f)| f.len()).sum::<usize>();
+        let files: Vec<&str> = self.shown[start..].iter().map(String::as_str).collect();
+        let _ = writeln!(md, "\n**Figure {n}.** {}{}\n", caption.text(), self.pdf_links(&files));
     }
 
     /// The files shown so far (paths in the report folder), in the page's order.
@@ -450,6 +471,11 @@ mod tests {
         assert!(md.contains("![Figure 2: The outcome per run](figures/sweep/map_newton_e0.2.svg)"), "{md}");
         assert!(md.find("Figure 1.").unwrap() < md.find("Figure 2.").unwrap());
         assert_eq!(figures.shown(), ["modes/modes.svg", "sweep/map_newton_e0.2.svg"]);
+        // On the report's own page each caption links its PDF.
+        let mut md = String::new();
+        let mut figures = Figures::new("").with_pdf();
+        figures.show(&mut md, "modes/modes.svg", &caption("Contact modes: the map"));
+        assert!(md.contains("In the paper: Fig. 3. [PDF](modes/modes.pdf)\n"), "{md}");
     }
 
     #[test]

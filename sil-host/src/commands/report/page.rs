@@ -45,13 +45,13 @@ pub fn render(
     page: Page,
 ) -> (String, Vec<String>) {
     let mut md = String::new();
-    let mut figures = Figures::new(page.figure_prefix);
+    let mut figures = if page.data { Figures::new(page.figure_prefix).with_pdf() } else { Figures::new(page.figure_prefix) };
     let _ = writeln!(md, "# Reproduction of Marchese, Coraggio, Hogan, di Bernardo (ECC 2019)\n");
     let where_ = if page.data {
         "its files are in the folder of the same name".to_string()
     } else {
         format!(
-            "its figures are in `{}<id>/` beside this page, its data files in the report's folder (`{}` in the commands)",
+            "its figures are in `{}<id>/` beside this page, each figure's PDF and its data files in the report's folder (`{}` in the commands)",
             page.figure_prefix,
             page.out.display()
         )
