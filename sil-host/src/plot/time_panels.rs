@@ -121,14 +121,18 @@ fn value_range(panel: &Panel) -> Option<(f64, f64)> {
     lo.is_finite().then_some((lo, hi))
 }
 
-/// The panel's y range: its fixed range, or its values' range padded by 5 %
-/// (a constant curve gets a unit around it).
+/// The panel's y range: its fixed range, or its values' range padded by 5 %. A
+/// curve constant to within a millionth of its magnitude (an ideal force law's
+/// `f_n` of 10 N give or take rounding) gets the range a constant gets, half its
+/// magnitude (at least one unit) either side, so the axis shows the value and not
+/// its last bits.
 fn y_range(panel: &Panel) -> (f64, f64) {
     if let Some(r) = panel.y_range {
         return r;
     }
     let Some((lo, hi)) = value_range(panel) else { return (-1.0, 1.0) };
-    let pad = if hi > lo { (hi - lo) * 0.05 } else { 0.5 * hi.abs().max(1.0) };
+    let magnitude = lo.abs().max(hi.abs());
+    let pad = if hi - lo > 1e-6 * magnitude { (hi - lo) * 0.05 } else { 0.5 * magnitude.max(1.0) };
     (lo - pad, hi + pad)
 }
 
@@ -313,6 +317,21 @@ fn swatch(s: &Series) -> Swatch {
 #[cfg(test)]
 mod tests {
     use super::round_end;
+
+    /// A curve constant but for its last bits is drawn on a constant's range.
+    #[test]
+    fn rounding_noise_does_not_set_the_range() {
+        use super::{Panel, Series, y_range};
+        let noisy = Panel::numeric(
+            "fₙ (N)",
+            vec![Series::line("fₙ", vec![(0.0, 10.0), (1.0, 10.0 + 1e-12), (2.0, 10.0 - 1e-12)], plotters::style::BLACK)],
+        );
+        let (lo, hi) = y_range(&noisy);
+        assert!((lo - 5.0).abs() < 1e-9 && (hi - 15.0).abs() < 1e-9, "{lo} {hi}");
+        let varying = Panel::numeric("fₙ (N)", vec![Series::line("fₙ", vec![(0.0, 10.0), (1.0, 12.0)], plotters::style::BLACK)]);
+        let (lo, hi) = y_range(&varying);
+        assert!((lo - 9.9).abs() < 1e-12 && (hi - 12.1).abs() < 1e-12, "{lo} {hi}");
+    }
 
     /// A run's axis ends at its duration, not at its last sample or last round tick;
     /// an end far from a tick stays.
