@@ -93,7 +93,8 @@ mod tests {
         assert_eq!(json["mirror_check"]["ok"], true);
         assert_eq!(printed, json, "--json prints the document written to admissible.json");
         let svg = std::fs::read_to_string(dir.path().join("admissible.svg")).unwrap();
-        assert!(svg.contains("<svg") && svg.contains("z_t (m)"));
+        assert!(svg.contains("<svg") && svg.contains("zₜ (m)"));
+        assert!(dir.path().join("admissible.pdf").is_file(), "the figure as PDF too");
         let leftovers: Vec<_> = std::fs::read_dir(dir.path())
             .unwrap()
             .filter_map(|e| e.ok())

@@ -123,6 +123,7 @@ mod tests {
         assert_eq!(lines.next().unwrap(), "theta1_rad,theta1_deg,theta1_dot,theta2_rad,b,p,z_r_dot,mode,theta2_dot,branch");
         assert_eq!(lines.count(), 60 * 60);
         let svg = std::fs::read_to_string(dir.path().join("modes.svg")).unwrap();
-        assert!(svg.contains("theta1 (deg)") && svg.contains("sliding"));
+        assert!(svg.contains("θ₁ (deg)") && svg.contains("sliding"));
+        assert!(dir.path().join("modes.pdf").is_file(), "the figure as PDF too");
     }
 }
