@@ -104,10 +104,17 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
         let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(MU, "-"));
         let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: &x_desc, y_desc: &y_desc };
         let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
-        let cells = rows
-            .iter()
-            .filter(|r| r.ic == ic.name)
-            .map(|r| Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv, r.mu + dmu)], outcome_color(r.outcome).filled()));
+        // Row by row from the lowest mu, each cell reaching a quarter of a cell into
+        // its right and upper neighbours, which are drawn after it and cover that:
+        // cells that only touch leave hairline seams in PDF viewers' anti-aliasing.
+        let mut of_ic: Vec<&&RunRow> = rows.iter().filter(|r| r.ic == ic.name).collect();
+        of_ic.sort_by(|a, b| a.mu.total_cmp(&b.mu).then(a.v_belt.total_cmp(&b.v_belt)));
+        let (v_last, mu_last) = (vs[vs.len() - 1], mus[mus.len() - 1]);
+        let cells = of_ic.iter().map(|r| {
+            let right = if r.v_belt < v_last { 0.5 * dv } else { 0.0 };
+            let up = if r.mu < mu_last { 0.5 * dmu } else { 0.0 };
+            Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv + right, r.mu + dmu + up)], outcome_color(r.outcome).filled())
+        });
         chart.draw_series(cells).map_err(|e| err(&e))?;
     }
     plot::finish(root, path, print).map_err(|e| err(&e))

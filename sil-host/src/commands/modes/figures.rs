@@ -92,7 +92,11 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
     let frame = Frame { x_desc: &x_desc, y_desc: &y_desc, x_tick_labels: true, caption: None, margin_top: 8, y_area: None };
     let mut chart = frame_chart(&left, NiceAxis::new(x0..x1, 7), NiceAxis::new(y0..y1, 10), &frame).map_err(|e| perr(e.to_string()))?;
 
-    // Cells, run-length merged along theta1 within each theta1_dot row.
+    // Cells, run-length merged along theta1 within each theta1_dot row, rows drawn
+    // upwards; each run reaches a quarter of a cell into its right and upper
+    // neighbours, which are drawn after it and cover that (runs that only touch
+    // leave hairline seams in PDF viewers' anti-aliasing).
+    let overlap = |e0: f64, e1: f64| 0.25 * (e1 - e0);
     let mut rects = Vec::new();
     for j in 0..n2 {
         let mut i = 0;
@@ -102,7 +106,9 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
             while k < n1 && map.points[k * n2 + j].mode == mode {
                 k += 1;
             }
-            rects.push(Rectangle::new([(x_edge(i), y_edge(j)), (x_edge(k), y_edge(j + 1))], color(mode).filled()));
+            let right = if k < n1 { overlap(x_edge(k - 1), x_edge(k)) } else { 0.0 };
+            let up = if j + 1 < n2 { overlap(y_edge(j), y_edge(j + 1)) } else { 0.0 };
+            rects.push(Rectangle::new([(x_edge(i), y_edge(j)), (x_edge(k) + right, y_edge(j + 1) + up)], color(mode).filled()));
             i = k;
         }
     }

@@ -41,8 +41,10 @@ pub(crate) fn finish(
             let slices = format!("slices_{suffix}.svg");
             figures::draw_map(&out.stage_figure(&map), &m.spec, law.name(), e_n, case_rows)?;
             figures::draw_slices(&out.stage_figure(&slices), &m.spec, law.name(), e_n, case_rows)?;
-            files.push(dir.join(map));
-            files.push(dir.join(slices));
+            for figure in [map, slices] {
+                files.push(dir.join(&figure));
+                files.push(dir.join(figure.replace(".svg", ".pdf")));
+            }
         }
     }
     files.push(dir.join("summary.json"));
