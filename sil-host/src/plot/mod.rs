@@ -52,6 +52,32 @@ pub fn svg_canvas(path: &Path, width: PrintWidth, height: u32) -> Result<Drawing
     Ok(root)
 }
 
+/// A canvas for `width` with `title` on top ([`draw_title`] at [`font::TITLE_PX`],
+/// as many lines as it needs), `legend` packed in rows under it (none when
+/// `None`), and `body_h` px below them for the charts: the canvas, to pass to
+/// [`finish`], and the body's area.
+///
+/// # Errors
+/// plotters' error, as text.
+pub fn titled_canvas<'a>(
+    path: &'a Path,
+    width: PrintWidth,
+    title: &str,
+    legend: Option<&legend::Legend>,
+    body_h: u32,
+) -> Result<(DrawingArea<SVGBackend<'a>, Shift>, DrawingArea<SVGBackend<'a>, Shift>), String> {
+    let title_h = title_height(title, width.px(), font::TITLE_PX, 10);
+    let legend_h = legend.map_or(0, |l| l.rows_height(width.px()));
+    let root = svg_canvas(path, width, title_h + legend_h + body_h)?;
+    let (top, rest) = root.split_vertically(title_h);
+    draw_title(&top, title, font::TITLE_PX, 10)?;
+    let (legend_area, body) = rest.split_vertically(legend_h);
+    if let Some(l) = legend {
+        l.draw_rows(&legend_area.margin(0, 0, 10, 10))?;
+    }
+    Ok((root, body))
+}
+
 /// `title` broken at spaces into lines that each fit `width` px, less 10 px
 /// either side, at plotters' font size `px` (a word wider than that stays whole on
 /// its line, and fails the figure check).

@@ -16,7 +16,6 @@ use crate::{
     error::CliError,
     plot::{
         self, PrintWidth, colors,
-        font::TITLE_PX,
         legend::{Legend, Swatch},
         plot_err,
         symbols::{BELT_SPEED, E_N, MU, THETA1_DOT, axis},
@@ -72,7 +71,6 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     let grid_rows = ics.len().div_ceil(cols);
     // One column for one panel, the page's width for two or three.
     let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
-    let width = print.px();
     // The legend: one coloured box, name and count per outcome that occurs in this
     // case (in the order of the outcomes the sweep can give), packed in rows across
     // the width (measured with the figures' font).
@@ -85,15 +83,9 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
             .map(|(o, n)| (format!("{} ({n} run{})", outcome_words(o), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
             .collect(),
     );
-    let legend_h = legend.rows_height(width);
     let title = format!("Outcome over ({BELT_SPEED}, {MU}){}, {} ({law}, {E_N} = {e_n})", paper_figure(spec), controller_label(spec));
-    let title_h = plot::title_height(&title, width, TITLE_PX, 10);
     let panel_h = if cols == 3 { 360 } else { 420 };
-    let root = plot::svg_canvas(path, print, title_h + legend_h + panel_h * grid_rows as u32).map_err(|e| err(&e))?;
-    let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
-    let (legend_area, panels_area) = rest.split_vertically(legend_h);
-    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let (root, panels_area) = plot::titled_canvas(path, print, &title, Some(&legend), panel_h * grid_rows as u32).map_err(|e| err(&e))?;
     let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
     let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
     let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
@@ -153,7 +145,6 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
     let cols = if mus.len() > 4 { 2 } else { 1 };
     let grid_rows = mus.len().div_ceil(cols);
     let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
-    let width = print.px();
     // The indicator spans from 0 (a tip at rest) to tens of rad/s (bouncing), and the
     // threshold is 1e-6 rad/s: a log axis, values at or below a thousandth of the
     // threshold drawn on its floor. One marker shape per initial condition (a hollow
@@ -176,12 +167,7 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
         paper_figure(spec),
         controller_label(spec)
     );
-    let (title_h, legend_h) = (plot::title_height(&title, width, TITLE_PX, 10), legend.rows_height(width));
-    let root = plot::svg_canvas(path, print, title_h + legend_h + 240 * grid_rows as u32).map_err(|e| err(&e))?;
-    let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
-    let (legend_area, panels) = rest.split_vertically(legend_h);
-    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let (root, panels) = plot::titled_canvas(path, print, &title, Some(&legend), 240 * grid_rows as u32).map_err(|e| err(&e))?;
     let vs = spec.v_belt.values();
     let dv = half_step(&spec.v_belt);
     let (x_lo, x_hi) = (vs[0] - dv, vs[vs.len() - 1] + dv);

@@ -4,7 +4,6 @@ use crate::{
     error::CliError,
     plot::{
         self, PrintWidth, colors,
-        font::TITLE_PX,
         legend::{Legend, Swatch},
         plot_err,
         symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, axis},
@@ -136,13 +135,7 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
         "Poincaré section {THETA1_DOT} = 0 (upward) against {BELT_SPEED} (paper Fig. 4), open loop, {MU} = {}, from {x0_name}",
         cfg.mu
     );
-    let legend = legend_of(&pts, (lo, hi));
-    let (title_h, legend_h) = (plot::title_height(&title, print.px(), TITLE_PX, 10), legend.rows_height(print.px()));
-    let root = plot::svg_canvas(path, print, title_h + legend_h + 560).map_err(|e| err(&e))?;
-    let (top, body) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
-    let (legend_area, chart_area) = body.split_vertically(legend_h);
-    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let (root, chart_area) = plot::titled_canvas(path, print, &title, Some(&legend_of(&pts, (lo, hi))), 560).map_err(|e| err(&e))?;
     let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(&format!("{THETA1} at the section"), "deg"));
     let axes = plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: &x_desc, y_desc: &y_desc };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
@@ -197,13 +190,7 @@ pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointR
     let (lo, hi) = (lo - ypad, hi + ypad);
     let print = PrintWidth::TwoColumn;
     let title = format!("Largest Lyapunov exponent of the section map, {MU} = {} (chaotic above {})", cfg.mu, cfg.classify.chaos_threshold);
-    let legend = legend_of(&pts, (lo, hi));
-    let (title_h, legend_h) = (plot::title_height(&title, print.px(), TITLE_PX, 10), legend.rows_height(print.px()));
-    let root = plot::svg_canvas(path, print, title_h + legend_h + 380).map_err(|e| err(&e))?;
-    let (top, body) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
-    let (legend_area, chart_area) = body.split_vertically(legend_h);
-    legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
+    let (root, chart_area) = plot::titled_canvas(path, print, &title, Some(&legend_of(&pts, (lo, hi))), 380).map_err(|e| err(&e))?;
     let x_desc = axis(BELT_SPEED, "m/s");
     let axes = plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: &x_desc, y_desc: "λ per crossing (-)" };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;

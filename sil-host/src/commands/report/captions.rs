@@ -118,6 +118,12 @@ impl Figures {
     }
 }
 
+/// A sweep's axis in words: `mu from 0.1 to 1 by 0.1`, `v_belt from -1 to -0.1 m/s
+/// by 0.05` (`unit` after the end, with its space).
+fn axis_text(name: &str, axis: &analyses::sweep::Axis, unit: &str) -> String {
+    format!("{name} from {} to {}{unit} by {}", given(axis.start), given(axis.stop), given(axis.step))
+}
+
 /// Alt text: the caption's first clause, without the characters Markdown reads in `[...]`.
 fn alt(what: &str) -> String {
     what.split([':', ';']).next().unwrap_or(what).replace(['[', ']', '|', '`'], "").trim().to_string()
@@ -290,22 +296,16 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
         Outcome::Sensitivity(s) => {
             let g = &s.study.grids;
             let open = format!(
-                "open loop on mu from {} to {} by {} and v_belt from {} to {} m/s by {}, {} s + {} s per run",
-                given(g.mu.start),
-                given(g.mu.stop),
-                given(g.mu.step),
-                given(g.v_belt.start),
-                given(g.v_belt.stop),
-                given(g.v_belt.step),
+                "open loop on {} and {}, {} s + {} s per run",
+                axis_text("mu", &g.mu, ""),
+                axis_text("v_belt", &g.v_belt, " m/s"),
                 given(g.open_windows_s.0),
                 given(g.open_windows_s.1)
             );
             let zmax = format!("bisection to {} m, {} s per trial", given(g.zmax_tol_m), given(g.zmax_duration_s));
             let closed = format!(
-                "v_belt from {} to {} m/s by {}, {} s + {} s per run",
-                given(g.closed_v_belt.start),
-                given(g.closed_v_belt.stop),
-                given(g.closed_v_belt.step),
+                "{}, {} s + {} s per run",
+                axis_text("v_belt", &g.closed_v_belt, " m/s"),
                 given(g.closed_windows_s.0),
                 given(g.closed_windows_s.1)
             );
@@ -421,13 +421,9 @@ pub fn sweep_caption(s: &SweepSummary, file: &str, with_controller: bool) -> Cap
     // A symbol (`z_t*`) starts the sentence as it is; words get a capital.
     let lead = if with_controller { upper_first(&lead.join(", ")) } else { lead.join(", ") };
     let parameters = format!(
-        "{lead}; mu from {} to {} by {}, v_belt from {} to {} m/s by {}; a transient of {} s then {} s recorded per run",
-        given(spec.mu.start),
-        given(spec.mu.stop),
-        given(spec.mu.step),
-        given(spec.v_belt.start),
-        given(spec.v_belt.stop),
-        given(spec.v_belt.step),
+        "{lead}; {}, {}; a transient of {} s then {} s recorded per run",
+        axis_text("mu", &spec.mu, ""),
+        axis_text("v_belt", &spec.v_belt, " m/s"),
         given(spec.transient_s),
         given(spec.record_s)
     );

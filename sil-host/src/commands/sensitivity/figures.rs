@@ -13,7 +13,6 @@ use crate::plot::{
     axis::{CategoryAxis, NiceAxis},
     chart::{Frame, frame_chart},
     colors,
-    font::TITLE_PX,
     legend::{Legend, Swatch},
     plot_err,
     symbols::{BELT_SPEED, MU, Z_T_SLIDING, axis, prose},
@@ -177,7 +176,6 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
     // Three columns for many panels, so that the figure fits a page's height.
     let cols = if dims.len() > 6 { 3usize } else { 2 };
     let print = PrintWidth::TwoColumn;
-    let width = print.px();
     let n = series.len();
     let mut entries: Vec<(String, Swatch)> = series
         .iter()
@@ -193,21 +191,13 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
         let how = if fig.paired { "the series' marker" } else { "hollow" };
         entries.push((format!("{} ({how} in a grey ring, at the {edge} edge)", none.desc), Swatch::Ring(colors::GREY)));
     }
-    let legend = Legend::new(entries);
-    let legend_h = if legend.entries.len() > 1 { legend.rows_height(width) } else { 0 };
+    // A legend of one series says nothing its title does not.
+    let legend = Some(Legend::new(entries)).filter(|l| l.entries.len() > 1);
     // Each row of panels as high as its longest list of choices.
     let choices_of = |d: &Dimension| study.results.iter().filter(|r| r.choice.dimension == *d).count() as u32;
     let row_heights: Vec<u32> = dims.chunks(cols).map(|row| 84 + 22 * row.iter().map(choices_of).max().unwrap_or(1)).collect();
-    let title = (fig.title)();
-    let title_h = plot::title_height(&title, width, TITLE_PX, 10);
-    let height = title_h + legend_h + row_heights.iter().sum::<u32>().max(100);
-    let root = plot::svg_canvas(path, print, height).map_err(|e| err(&e))?;
-    let (top, rest) = root.split_vertically(title_h);
-    plot::draw_title(&top, &title, TITLE_PX, 10).map_err(|e| err(&e))?;
-    let (legend_area, body) = rest.split_vertically(legend_h);
-    if legend.entries.len() > 1 {
-        legend.draw_rows(&legend_area.margin(0, 0, 10, 10)).map_err(|e| err(&e))?;
-    }
+    let body_h = row_heights.iter().sum::<u32>().max(100);
+    let (root, body) = plot::titled_canvas(path, print, &(fig.title)(), legend.as_ref(), body_h).map_err(|e| err(&e))?;
     let mut breaks = Vec::new();
     let mut y = 0;
     for h in &row_heights {
