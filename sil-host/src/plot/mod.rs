@@ -52,6 +52,9 @@ pub fn svg_canvas(path: &Path, width: PrintWidth, height: u32) -> Result<Drawing
     Ok(root)
 }
 
+/// An area of an SVG canvas.
+pub type SvgArea<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
 /// A canvas for `width` with `title` on top ([`draw_title`] at [`font::TITLE_PX`],
 /// as many lines as it needs), `legend` packed in rows under it (none when
 /// `None`), and `body_h` px below them for the charts: the canvas, to pass to
@@ -65,7 +68,7 @@ pub fn titled_canvas<'a>(
     title: &str,
     legend: Option<&legend::Legend>,
     body_h: u32,
-) -> Result<(DrawingArea<SVGBackend<'a>, Shift>, DrawingArea<SVGBackend<'a>, Shift>), String> {
+) -> Result<(SvgArea<'a>, SvgArea<'a>), String> {
     let title_h = title_height(title, width.px(), font::TITLE_PX, 10);
     let legend_h = legend.map_or(0, |l| l.rows_height(width.px()));
     let root = svg_canvas(path, width, title_h + legend_h + body_h)?;
