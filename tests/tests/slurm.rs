@@ -127,8 +127,9 @@ impl Drop for Cluster {
 }
 
 /// The files of a sweep folder, those that do not depend on the invocation:
-/// `summary.json` without `timing` and `files`, `runs.csv` sorted (completion order).
-fn contents(dir: &Path) -> BTreeMap<String, String> {
+/// `summary.json` without `timing` and `files`, `runs.csv` sorted (completion order),
+/// every other file (the figures' SVG and PDF) as its bytes.
+fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut out = BTreeMap::new();
     for e in std::fs::read_dir(dir).unwrap() {
         let path = e.unwrap().path();
@@ -136,7 +137,12 @@ fn contents(dir: &Path) -> BTreeMap<String, String> {
         if name.starts_with('.') || name.starts_with("slurm-") {
             continue;
         }
-        let mut t = std::fs::read_to_string(&path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        if name != "summary.json" && name != "runs.csv" {
+            out.insert(name, bytes);
+            continue;
+        }
+        let mut t = String::from_utf8(bytes).unwrap_or_else(|e| panic!("{} is not UTF-8: {e}", path.display()));
         if name == "summary.json" {
             let mut v: serde_json::Value = serde_json::from_str(&t).unwrap();
             let m = v.as_object_mut().unwrap();
@@ -148,7 +154,7 @@ fn contents(dir: &Path) -> BTreeMap<String, String> {
             lines[1..].sort();
             t = lines.join("\n");
         }
-        out.insert(name, t);
+        out.insert(name, t.into_bytes());
     }
     out
 }
