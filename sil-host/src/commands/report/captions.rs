@@ -24,7 +24,9 @@ pub struct Caption {
 }
 
 impl Caption {
-    /// The caption's text: what, parameters, the paper's counterpart.
+    /// The caption's text: what, parameters, the paper's counterpart, with the
+    /// paper's symbols for the code names (`theta1_dot` as θ̇₁, `mu` as μ:
+    /// [`crate::plot::symbols::prose`], the table the figures are labelled with).
     pub fn text(&self) -> String {
         let mut t = format!("{}.", self.what);
         if !self.parameters.is_empty() {
@@ -36,7 +38,7 @@ impl Caption {
             }
             None => t.push_str(" No counterpart in the paper."),
         }
-        t
+        crate::plot::symbols::prose(&t)
     }
 }
 
@@ -124,9 +126,10 @@ fn axis_text(name: &str, axis: &analyses::sweep::Axis, unit: &str) -> String {
     format!("{name} from {} to {}{unit} by {}", given(axis.start), given(axis.stop), given(axis.step))
 }
 
-/// Alt text: the caption's first clause, without the characters Markdown reads in `[...]`.
+/// Alt text: the caption's first clause, in symbols, without the characters
+/// Markdown reads in `[...]`.
 fn alt(what: &str) -> String {
-    what.split([':', ';']).next().unwrap_or(what).replace(['[', ']', '|', '`'], "").trim().to_string()
+    crate::plot::symbols::prose(what.split([':', ';']).next().unwrap_or(what).replace(['[', ']', '|', '`'], "").trim())
 }
 
 /// The figures of one experiment in the order the page shows them: the order of its
@@ -463,7 +466,7 @@ mod tests {
         let mut md = String::new();
         figures.show(&mut md, "modes/modes.svg", &caption("Contact modes: the map"));
         figures.show(&mut md, "sweep/map_newton_e0.2.svg", &caption("The outcome [per run]"));
-        assert!(md.contains("![Figure 1: Contact modes](figures/modes/modes.svg)\n\n**Figure 1.** Contact modes: the map. mu = 0.6. In the paper: Fig. 3.\n"), "{md}");
+        assert!(md.contains("![Figure 1: Contact modes](figures/modes/modes.svg)\n\n**Figure 1.** Contact modes: the map. μ = 0.6. In the paper: Fig. 3.\n"), "{md}");
         assert!(md.contains("![Figure 2: The outcome per run](figures/sweep/map_newton_e0.2.svg)"), "{md}");
         assert!(md.find("Figure 1.").unwrap() < md.find("Figure 2.").unwrap());
         assert_eq!(figures.shown(), ["modes/modes.svg", "sweep/map_newton_e0.2.svg"]);
@@ -485,6 +488,21 @@ mod tests {
         assert!(md.contains("| ![Figure 2, left: Both](l/map.svg) | ![Figure 2, right: Both](r/map.svg) |"), "{md}");
         assert!(md.contains("**Figure 2.** Both.") && md.contains("**Figure 3.** Three."), "{md}");
         assert_eq!(figures.shown().len(), 4);
+    }
+
+    /// Captions and alt text use the figures' symbols, not the code names.
+    #[test]
+    fn captions_are_written_in_the_papers_symbols() {
+        let c = Caption {
+            what: "The indicator max theta1_dot against v_belt".into(),
+            parameters: "z_t* = 0.1 m, f_n* = 10 N, e_n = 0.2, mu_hat = 0.66".into(),
+            paper: Some("Fig. 9".into()),
+        };
+        assert_eq!(
+            c.text(),
+            "The indicator max θ\u{307}₁ against belt speed. zₜ* = 0.1 m, fₙ* = 10 N, eₙ = 0.2, μ\u{302} = 0.66. In the paper: Fig. 9."
+        );
+        assert_eq!(alt("The (theta1, theta1_dot) grid: modes"), "The (θ₁, θ\u{307}₁) grid");
     }
 
     #[test]
