@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Set, Union
 
@@ -100,6 +101,52 @@ def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
 
 _MCAP_PACKAGE = "mcap==1.6.0"
 
+# MCAP's framing (the MCAP specification, "Records"): 8 magic bytes, then records of a
+# 1-byte opcode, a little-endian u64 body length and the body; the Footer (opcode 0x02)
+# is followed by the magic again.
+_MCAP_MAGIC_LEN = 8
+_MCAP_RECORD_HEAD = struct.Struct("<BQ")
+_MCAP_FOOTER = 0x02
+
+
+def _mcap_whole_records_end(f: Any) -> int:
+    """The byte offset where the last whole record of the MCAP file ``f`` (open
+    for reading, binary) ends: its size when the file is complete, else the end
+    of the last record whose 9-byte head and body are both in the file (a file
+    cut off while its run was killed ends anywhere, inside a record's head or
+    body). Reads only the records' heads; leaves ``f`` at offset 0."""
+    size = os.fstat(f.fileno()).st_size
+    pos = _MCAP_MAGIC_LEN
+    while pos + _MCAP_RECORD_HEAD.size <= size:
+        f.seek(pos)
+        opcode, length = _MCAP_RECORD_HEAD.unpack(f.read(_MCAP_RECORD_HEAD.size))
+        end = pos + _MCAP_RECORD_HEAD.size + length
+        if end > size:
+            break
+        pos = end
+        if opcode == _MCAP_FOOTER and pos + _MCAP_MAGIC_LEN <= size:
+            pos += _MCAP_MAGIC_LEN  # the closing magic, when it is whole
+            break
+    f.seek(0)
+    return min(pos, size)
+
+
+class _Prefix:
+    """The first ``end`` bytes of the binary file ``f`` as a stream with
+    ``read(n)``: what the ``mcap`` package's StreamReader is given, so that a
+    cut-off file ends, for it, at a record boundary (its ``EndOfFile``) rather
+    than inside a record (a ``struct.error`` or a zstd error)."""
+
+    def __init__(self, f: Any, end: int) -> None:
+        self._f = f
+        self._left = end
+
+    def read(self, n: int = -1) -> bytes:
+        n = self._left if n is None or n < 0 else min(n, self._left)
+        data = self._f.read(n)
+        self._left -= len(data)
+        return data
+
 
 def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     """The tables of an MCAP file the CLI wrote (``--format mcap``:
@@ -141,7 +188,7 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     try:
         with open(path, "rb") as f:
             try:
-                for record in StreamReader(f).records:
+                for record in StreamReader(_Prefix(f, _mcap_whole_records_end(f))).records:
                     if isinstance(record, Metadata) and record.name.startswith("painleve.table."):
                         spec = {k: v.split(",") if v else [] for k, v in record.metadata.items()}
                         specs[record.name[len("painleve.table.") :]] = spec
@@ -157,7 +204,7 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
                 pass  # cut off while writing: the records up to the cut
     except OSError as e:
         raise PainleveError(f"{path}: {e}") from e
-    except McapError as e:
+    except (McapError, struct.error) as e:
         raise PainleveError(f"{path}: not an MCAP file: {e!r}") from e
     if not specs:
         raise PainleveError(f"{path}: no table in it (no painleve.table.* metadata record): not written by sil-host --format mcap")

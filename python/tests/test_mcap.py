@@ -8,6 +8,7 @@ double, the value written."""
 import json
 import os
 import signal
+import struct
 import subprocess
 import time
 
@@ -173,6 +174,54 @@ def test_a_cut_mcap_file_gives_its_whole_chunks(runs, tmp_path):
                 pass
         assert n == t.nrows
     assert len(seen) == 3
+
+
+def record_offsets(data):
+    """``[(start, head end, end)]`` of the records of a whole MCAP file (the
+    specification's framing: 8 magic bytes, then opcode u8, body length u64 LE,
+    body), up to and with the Footer."""
+    out, pos = [], 8
+    while pos + 9 <= len(data):
+        opcode, length = struct.unpack_from("<BQ", data, pos)
+        out.append((pos, pos + 9, pos + 9 + length))
+        pos += 9 + length
+        if opcode == 0x02:
+            break
+    return out
+
+
+def test_a_file_cut_at_any_byte_reads_as_its_whole_records(runs, tmp_path):
+    # A killed run's file ends anywhere: at a record boundary, inside a record's
+    # 9-byte head or inside its body. Cut the whole file there: the reader gives of
+    # each table a prefix of the whole table's rows, never an error but "no table"
+    # before the table's metadata is whole, more rows for a later cut, and all of
+    # them once the cut is past the data (inside the summary or the closing magic).
+    _, mcap_dir = runs
+    data = (mcap_dir / "trace.mcap").read_bytes()
+    full = painleve.read_mcap(mcap_dir / "trace.mcap")["trace"]
+    records = record_offsets(data)
+    assert len(records) > 24 and records[-1][2] == len(data) - 8
+    cuts = set()
+    for start, head_end, end in records[:12] + records[-12:]:
+        cuts |= {start, start + 1, start + 5, head_end, (head_end + end) // 2}
+    cuts |= {len(data) - 4, len(data)}
+    cut_file = tmp_path / "trace.mcap.partial"
+    last_rows = 0
+    for cut in sorted(cuts):
+        cut_file.write_bytes(data[:cut])
+        try:
+            t = painleve.read_mcap(cut_file)["trace"]
+        except painleve.PainleveError as e:
+            assert "no table" in str(e) and last_rows == 0, f"cut at {cut}: {e}"
+            continue
+        assert t.nrows >= last_rows, f"cut at {cut}: {t.nrows} rows after {last_rows}"
+        last_rows = t.nrows
+        for col in full.columns:
+            assert_columns_equal(t[col], full[col][: t.nrows], f"cut at {cut}: trace.{col}")
+    assert last_rows == full.nrows
+    data_end = max(end for (start, _, end), in zip(records) if data[start] == 0x07)
+    cut_file.write_bytes(data[:data_end])
+    assert painleve.read_mcap(cut_file)["trace"].nrows == full.nrows, "every chunk whole: every row"
 
 
 def test_a_killed_run_keeps_the_chunks_it_wrote(runs, tmp_path):

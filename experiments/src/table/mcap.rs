@@ -593,6 +593,18 @@ mod tests {
         assert_eq!(back(&read_mcap(&path).unwrap()[0].1).len(), 2 * STREAM_CHUNK_ROWS);
         std::fs::write(&path, &bytes[..ends[1] as usize]).unwrap();
         assert_eq!(back(&read_mcap(&path).unwrap()[0].1).len(), 2 * STREAM_CHUNK_ROWS);
+        // Cut anywhere (in a record's head, its body, the summary, the closing
+        // magic): a prefix of the rows, as many or more for a later cut, all of
+        // them once the cut is past the last chunk.
+        let mut last = 0;
+        for cut in (ends[0] as usize..=bytes.len()).step_by(7).chain([bytes.len() - 1, bytes.len()]) {
+            std::fs::write(&path, &bytes[..cut]).unwrap();
+            let got = back(&read_mcap(&path).unwrap()[0].1);
+            assert!(got.len() >= last.max(STREAM_CHUNK_ROWS), "cut at {cut}: {} rows after {last}", got.len());
+            assert!(got.iter().zip(&want).all(|(g, w)| (g.t.to_bits(), &g.b, g.d) == (w.t.to_bits(), &w.b, w.d)), "cut at {cut}");
+            last = got.len();
+        }
+        assert_eq!(last, want.len());
     }
 
     /// Two tables in one file, their messages in order of log time, which is
