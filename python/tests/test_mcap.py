@@ -219,7 +219,8 @@ def test_a_file_cut_at_any_byte_reads_as_its_whole_records(runs, tmp_path):
         for col in full.columns:
             assert_columns_equal(t[col], full[col][: t.nrows], f"cut at {cut}: trace.{col}")
     assert last_rows == full.nrows
-    data_end = max(end for (start, _, end), in zip(records) if data[start] == 0x07)
+    # The end of the last MessageIndex record (opcode 0x07), which follows the last chunk.
+    data_end = max(end for start, _, end in records if data[start] == 0x07)
     cut_file.write_bytes(data[:data_end])
     assert painleve.read_mcap(cut_file)["trace"].nrows == full.nrows, "every chunk whole: every row"
 
