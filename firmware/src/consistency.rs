@@ -51,7 +51,14 @@ pub struct ConsistencyRule {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct ConsistencyMonitor {
     inconsistent: u8,
+    pulling: u8,
 }
+
+/// Consecutive periods of a pulling belt (`f_n < -contact_force`) that declare
+/// a sensor fault, whatever `confirm`: no healthy sample reads it (the noise is
+/// 20 mN), and a load cell of the wrong sign must be caught on the two frames a
+/// PID from `x0d` reads before its lift-off (issue 52).
+pub const PULLING_CONFIRM: u8 = 2;
 
 impl ConsistencyMonitor {
     /// Folds in one period: the measured normal force `f_n` (N) and the tip height
@@ -59,14 +66,54 @@ impl ConsistencyMonitor {
     /// once `rule.confirm` consecutive periods were inconsistent (pressing while off
     /// the belt line, or below the belt by more than the tolerance); a consistent
     /// period clears the count. Non-finite inputs count as inconsistent, and so
-    /// does a pulling belt (`f_n < -contact_force`).
+    /// does a pulling belt (`f_n < -contact_force`), which declares the fault
+    /// after [`PULLING_CONFIRM`] periods.
     pub fn update(&mut self, rule: &ConsistencyRule, f_n: f32, height: f32) -> bool {
         let pressing_off_the_belt = f_n > rule.contact_force && height.abs() > rule.height_tolerance;
         let inside_the_belt = height < -rule.height_tolerance;
         let pulling = f_n < -rule.contact_force;
         let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !(f_n.is_finite() && height.is_finite());
         self.inconsistent = if inconsistent { self.inconsistent.saturating_add(1) } else { 0 };
-        self.inconsistent >= rule.confirm
+        self.pulling = if pulling { self.pulling.saturating_add(1) } else { 0 };
+        self.inconsistent >= rule.confirm || self.pulling >= PULLING_CONFIRM.min(rule.confirm)
+    }
+}
+
+/// Slip speed `|z_t_dot - v_belt|` above which the tip surely slides, m/s
+/// (the observer's velocity noise is a few mm/s).
+pub const SLIP_MIN: f32 = 0.05;
+/// How long friction along the slip must last to declare a sensor fault, s:
+/// longer than the observer's lag after an unmeasured velocity jump (the belt
+/// grabbing a tip at rest makes it stick at once, and the estimated slip lags
+/// the true one by about `2 / w`, 8 ms at 40 Hz).
+pub const FRICTION_CONFIRM_S: f32 = 0.020;
+
+/// Coulomb's law against the load cell's tangential axis (issue 52): while the
+/// tip slides on the belt (the normal force above `contact_force`, the slip
+/// speed above [`SLIP_MIN`]), friction opposes the slip, `f_t (z_t_dot -
+/// v_belt) < 0`, whatever `mu`. A tangential axis of the wrong sign reads
+/// friction along the slip at `mu f_n`; a healthy one never does (noise is
+/// 20 mN, the threshold a quarter of `contact_force`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FrictionSignMonitor {
+    run: u16,
+}
+
+impl FrictionSignMonitor {
+    /// Folds in one period: the measured forces `f_t`, `f_n` (N) and the slip
+    /// velocity `slip = z_t_dot - v_belt` (m/s). Returns `true` once friction
+    /// was along the slip for `confirm` periods in a row
+    /// ([`FrictionSignMonitor::confirm_periods`]).
+    pub fn update(&mut self, contact_force: f32, f_t: f32, f_n: f32, slip: f32, confirm: u16) -> bool {
+        let along = f_n > contact_force && slip.abs() > SLIP_MIN && f_t * slip > 0.0 && f_t.abs() > 0.25 * contact_force;
+        self.run = if along { self.run.saturating_add(1) } else { 0 };
+        self.run >= confirm
+    }
+
+    /// [`FRICTION_CONFIRM_S`] in periods of `ts` seconds (at least 1).
+    pub fn confirm_periods(ts: f32) -> u16 {
+        let n = libm::ceilf(FRICTION_CONFIRM_S / ts - 1e-3);
+        if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
     }
 }
 
@@ -152,8 +199,12 @@ mod tests {
             assert!(!m.update(&RULE, f_n, 0.0), "{f_n}");
         }
         assert!(!m.update(&RULE, -10.0, 0.0));
-        assert!(!m.update(&RULE, -10.0, 0.0));
-        assert!(m.update(&RULE, -10.0, 0.0));
+        assert!(m.update(&RULE, -10.0, 0.0), "two periods of a pulling belt");
+        let mut m = ConsistencyMonitor::default();
+        for _ in 0..50 {
+            assert!(!m.update(&RULE, -10.0, 0.0));
+            assert!(!m.update(&RULE, 5.0, 0.0), "a pushing period between clears the count");
+        }
     }
 
     #[test]
@@ -179,6 +230,35 @@ mod tests {
             assert!(!m.update(&RULE, f32::NAN, 0.0));
         }
         assert!(m.update(&RULE, 0.0, f32::INFINITY));
+    }
+}
+
+#[cfg(test)]
+mod friction_tests {
+    use super::*;
+
+    #[test]
+    fn friction_along_the_slip_is_declared_after_20_ms_and_only_while_sliding() {
+        let mut m = FrictionSignMonitor::default();
+        // Healthy sliding: the belt moves at -0.4 m/s under a still tip, slip +0.4,
+        // friction -mu f_n.
+        for _ in 0..100 {
+            assert!(!m.update(2.0, -6.0, 10.0, 0.4, 20));
+        }
+        // Reversed axis: 19 periods pass, the 20th (20 ms at 1 kHz) declares.
+        assert_eq!(FrictionSignMonitor::confirm_periods(1e-3), 20);
+        assert_eq!(FrictionSignMonitor::confirm_periods(1e-4), 200);
+        for _ in 1..20 {
+            assert!(!m.update(2.0, 6.0, 10.0, 0.4, 20));
+        }
+        assert!(m.update(2.0, 6.0, 10.0, 0.4, 20));
+        // Not in contact, sticking, or noise: never.
+        let mut m = FrictionSignMonitor::default();
+        for _ in 0..100 {
+            assert!(!m.update(2.0, 6.0, 1.0, 0.4, 1), "light contact");
+            assert!(!m.update(2.0, 6.0, 10.0, 0.01, 1), "sticking");
+            assert!(!m.update(2.0, 0.03, 10.0, 0.4, 1), "noise");
+        }
     }
 }
 

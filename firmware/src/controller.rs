@@ -13,13 +13,15 @@ use shared::{
 use crate::{
     TickClock,
     config::{Config, ConfigError, ControllerKind},
-    consistency::{ConsistencyMonitor, ConsistencyRule, InnovationMonitor, InnovationRule},
+    consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, FrameFault, Measurement},
     estimator::AngleTracker,
     law::{self, HybridInput, HybridSignals, HybridState, LawError, PidState},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
+    tracking::{Expectation, TrackingMonitor, TrackingRule},
+    wiring::{WiringInput, WiringMonitor, WiringRule},
 };
 
 /// Why the firmware is in its safe state (zero torque). The code is reported in
@@ -48,6 +50,15 @@ pub enum SafeReason {
     /// The load cell at full scale for [`crate::runaway::OVERLOAD_S`]: the force
     /// loop is blind ([`crate::runaway`]).
     Overload = 9,
+    /// A joint accelerated against the torque its motor applied, beyond the
+    /// model's uncertainty, for 5 ms ([`crate::wiring`]): a motor wired the other
+    /// way, an encoder mounted reversed, the encoders swapped.
+    Miswired = 10,
+    /// Under the hybrid law the tip strayed more than 5 mm from `z_t*` for 3 ms
+    /// ([`crate::tracking`]).
+    Tracking = 11,
+    /// Under the hybrid law lift-off stayed declared for 10 ms ([`crate::tracking`]).
+    LiftOff = 12,
 }
 
 impl SafeReason {
@@ -66,6 +77,9 @@ impl SafeReason {
             7 => Some(Self::SensorFault),
             8 => Some(Self::Runaway),
             9 => Some(Self::Overload),
+            10 => Some(Self::Miswired),
+            11 => Some(Self::Tracking),
+            12 => Some(Self::LiftOff),
             _ => None,
         }
     }
@@ -79,10 +93,21 @@ impl SafeReason {
             Self::Singular => "the arm reached a singular (straight) configuration",
             Self::Unreachable => "the reference is out of the arm's reach",
             Self::PeerLost => "the plant or the link to it is gone",
-            Self::SensorFault => "the encoders and the load cell disagree about the tip (a stuck or failed sensor, or a driver fault)",
+            Self::SensorFault => {
+                "the encoders and the load cell disagree about the tip (a stuck or failed sensor, a load cell of the wrong sign, or a driver fault)"
+            }
             Self::Runaway => "a joint ran away: its speed passed 20 rad/s (a reversed motor, or motors that cannot hold the arm)",
             Self::Overload => {
                 "the load cell stayed at full scale for 10 ms: the force ran away (a reversed motor, or the tip driven into the belt)"
+            }
+            Self::Tracking => {
+                "the tip strayed more than 5 mm from its reference under the force law for 3 ms (a motor or sensor wired wrong)"
+            }
+            Self::LiftOff => {
+                "the tip was off the belt, or the load cell read no force, for 10 ms under the force law (a motor or the load cell wired wrong, or the paradox's bounce)"
+            }
+            Self::Miswired => {
+                "a joint accelerated against its motor's torque for 5 ms (a motor wired the other way, an encoder reversed, or the encoders swapped)"
             }
         }
     }
@@ -147,9 +172,18 @@ pub struct Firmware {
     liftoff: LiftOffDetector,
     consistency: ConsistencyMonitor,
     innovation: InnovationMonitor,
+    friction_sign: FrictionSignMonitor,
+    /// The friction sign check's confirmation at this rate, periods.
+    friction_confirm: u16,
     runaway: RunawayMonitor,
     /// The runaway limits at this rate, derived once.
     runaway_rule: RunawayRule,
+    wiring: WiringMonitor,
+    /// The wiring check at this rate, derived once.
+    wiring_rule: WiringRule,
+    tracking: TrackingMonitor,
+    /// The hybrid law's tracking check at this rate, derived once.
+    tracking_rule: TrackingRule,
     pid: PidState,
     hybrid: HybridState,
     last_codes: [i16; 2],
@@ -186,8 +220,14 @@ impl Firmware {
             liftoff: LiftOffDetector::default(),
             consistency: ConsistencyMonitor::default(),
             innovation: InnovationMonitor::default(),
+            friction_sign: FrictionSignMonitor::default(),
+            friction_confirm: FrictionSignMonitor::confirm_periods(cfg.period.as_secs_f32()),
             runaway: RunawayMonitor::default(),
             runaway_rule: RunawayRule::at_period(cfg.period.as_secs_f32()),
+            wiring: WiringMonitor::default(),
+            wiring_rule: WiringRule::at_period(cfg.period.as_secs_f32()),
+            tracking: TrackingMonitor::default(),
+            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32()),
             pid: PidState::default(),
             hybrid: HybridState::default(),
             last_codes: [0, 0],
@@ -400,6 +440,8 @@ impl Firmware {
         let p = &cfg.params;
         let theta2 = decode::wrap(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];
+        // The joint accelerations the model did not explain over the interval, rad/s^2.
+        let mut missed_accel = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
         let s: &mut Started = match &mut self.started {
             Some(s) => {
@@ -416,6 +458,8 @@ impl Firmware {
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
                 ];
+                let per_s = 1.0 / dt;
+                missed_accel = [s.trackers[0].rate_correction(innovation[0]) * per_s, s.trackers[1].rate_correction(innovation[1]) * per_s];
                 s.last_seq = seq;
                 s
             }
@@ -461,7 +505,8 @@ impl Firmware {
         };
         let innovation_rule =
             InnovationRule { threshold: cfg.innovation_threshold, confirm: cfg.innovation_confirm, settle: cfg.innovation_settle };
-        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height);
+        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height)
+            | self.friction_sign.update(cfg.sensor_contact_force, m.f_t, m.f_n, z_dot[0] - m.v_belt, self.friction_confirm);
         // A load cell at full scale under-reads: the prediction made with it is wrong.
         let full_scale = wire::LOAD_FULL_SCALE_N * (wire::LOAD_CODE_MAX - 1) as f32 / -(wire::LOAD_CODE_MIN as f32);
         let load_saturated = m.f_n.abs() >= full_scale || m.f_t.abs() >= full_scale;
@@ -475,9 +520,28 @@ impl Firmware {
                 Some(Runaway::Overload) => return Err(SafeReason::Overload),
                 None => {}
             }
+            let input = WiringInput {
+                unexplained: missed_accel,
+                c21: trig.c21(),
+                applied: self.applied,
+                lifted,
+                height,
+                height_rate: z_dot[1],
+                load_saturated,
+            };
+            if self.wiring.update(&self.wiring_rule, p.m * p.l * p.l, &input).is_some() {
+                return Err(SafeReason::Miswired);
+            }
         }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         let reference: RefPoint = s.quintic.at(t_run);
+        if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
+            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
+                Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
+                Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
+                None => {}
+            }
+        }
         let f_n_ref = s.force_ramp.at(t_run).pos;
         let mut flags = m.flags;
         if lifted {

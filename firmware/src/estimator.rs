@@ -59,6 +59,14 @@ impl AngleTracker {
         self.rate += self.beta_over_ts * residual;
         residual
     }
+
+    /// The rate correction an innovation `residual` (rad) made, rad/s: the
+    /// velocity change over the interval that the model's acceleration did not
+    /// explain (divided by the interval, the unexplained acceleration;
+    /// [`crate::wiring`]).
+    pub fn rate_correction(&self, residual: f32) -> f32 {
+        self.beta_over_ts * residual
+    }
 }
 
 #[cfg(test)]

@@ -26,6 +26,8 @@ pub mod mu_estimate;
 pub mod pil;
 pub mod reference;
 pub mod runaway;
+pub mod tracking;
+pub mod wiring;
 
 #[cfg(test)]
 mod tests;

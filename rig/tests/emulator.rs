@@ -189,7 +189,16 @@ fn the_flashed_image_stops_a_reversed_motor_as_the_twin_does() {
     let (twin_records, twin_e) = run_loop(&s, &mut twin, &mut ());
     assert_eq!(format!("{e:?}"), format!("{twin_e:?}"));
     match e {
-        Some(rig::record::RunError::SafeState { k, reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. }) => {
+        Some(rig::record::RunError::SafeState {
+            k,
+            reason:
+                firmware::SafeReason::Runaway
+                | firmware::SafeReason::Overload
+                | firmware::SafeReason::Miswired
+                | firmware::SafeReason::Tracking
+                | firmware::SafeReason::LiftOff,
+            ..
+        }) => {
             assert!(k <= 250, "stopped at period {k}");
         }
         other => panic!("{other:?}"),

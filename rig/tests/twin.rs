@@ -153,13 +153,17 @@ fn each_bus_fault_is_held_one_period_then_ends_in_the_safe_state_with_the_driver
         assert!(!link.twin().drivers_enabled(), "{fault}: drivers disabled");
         assert_eq!(link.twin().app().last_command().map(|c| (c.u1_code, c.u2_code)), Some((0, 0)), "{fault}");
     }
-    // A stuck encoder during the move: the firmware's cross-checks latch SensorFault.
+    // A stuck encoder during the move: the firmware's cross-checks latch SensorFault,
+    // or, the computed tip leaving the belt, the hybrid law's lift-off check.
     for signal in ["theta1", "elbow"] {
         let s = scenario(&format!(
             "{DEFAULT_TOML}\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"{signal}\"\nat_s = 1.0\nduration_s = 0.5\n"
         ));
         let (_, err, link) = twin_run(&s);
-        assert!(matches!(err, Some(RunError::SafeState { reason: firmware::SafeReason::SensorFault, .. })), "{signal}: {err:?}");
+        assert!(
+            matches!(err, Some(RunError::SafeState { reason: firmware::SafeReason::SensorFault | firmware::SafeReason::LiftOff, .. })),
+            "{signal}: {err:?}"
+        );
         assert!(!link.twin().drivers_enabled());
     }
 }
@@ -197,7 +201,16 @@ fn a_reversed_motor_is_stopped_as_a_runaway_within_a_quarter_second_and_30_mm() 
         }
         let (records, err, link) = twin_run(&s);
         match err {
-            Some(RunError::SafeState { k, reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. }) => {
+            Some(RunError::SafeState {
+                k,
+                reason:
+                    firmware::SafeReason::Runaway
+                    | firmware::SafeReason::Overload
+                    | firmware::SafeReason::Miswired
+                    | firmware::SafeReason::Tracking
+                    | firmware::SafeReason::LiftOff,
+                ..
+            }) => {
                 assert!(k <= 250, "{motor} {kind}: stopped at period {k}");
             }
             other => panic!("{motor} {kind}: {other:?}"),

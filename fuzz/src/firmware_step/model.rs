@@ -24,13 +24,16 @@ pub(super) struct Model {
 
 /// Reason codes of the safe state a trusted frame may latch in the step itself
 /// (the law and the sensor checks).
-const LAW_REASONS: [SafeReason; 6] = [
+const LAW_REASONS: [SafeReason; 9] = [
     SafeReason::NonFinite,
     SafeReason::Singular,
     SafeReason::Unreachable,
     SafeReason::SensorFault,
     SafeReason::Runaway,
     SafeReason::Overload,
+    SafeReason::Miswired,
+    SafeReason::Tracking,
+    SafeReason::LiftOff,
 ];
 
 /// Checks one command of a step against the model and advances it. Public so the

@@ -1,0 +1,139 @@
+//! The hybrid law's expectations (issue 52): under the force/motion law the
+//! tip stays on the belt and follows `z_t*` along it within a bound no healthy
+//! run comes near, and a miswired arm breaks one of them within a few periods.
+//!
+//! **On the belt.** The law commands the normal force `f_n*` (paper eq. 11):
+//! below `Z_t,sliding` the tip never leaves the belt (docs/model.md experiment
+//! 6; 0 periods of lift-off over 1 000 random admissible scenarios). Lift-off
+//! declared for [`LIFT_OFF_S`] (10 ms) in a row is therefore a fault: the tip
+//! whipped off the belt by a reversed motor, or a load cell that reads no
+//! force while the tip presses (its sign reversed: the law then commands no
+//! force). Beyond `Z_t,sliding` the law's own bounce (the paradox) trips it too:
+//! on a board that is a stop, as the runaway limits already made it.
+//!
+//! **The bound.** The motion loop (paper eq. 10, `K'_P = K'_D = 900`) starts at
+//! the tip's own position (`crate::reference::Quintic`), so the error is what
+//! the loop's disturbances leave: the sampled, delayed command and the friction
+//! term's error (`mu_hat` against `mu`). Over the default, the four paper
+//! scenarios and 1 000 random admissible scenarios (`mu` 0.3 to 0.8, `v_belt`
+//! -1 to -0.1 m/s, `f_n*` 3 to 10 N, targets below `Z_t,sliding`, from `x0d`
+//! and `x0u`) the largest `|z_t - z_t*|` is 0.52 mm (`rig/tests/wiring.rs`).
+//! The bound, [`TRACKING_M`] = 5 mm, is ten times it, and a sixth of the 30 mm a
+//! miswired arm may stray before it is stopped (docs/board.md "Wiring checks").
+//! A reversed motor drives the tip away at 0.1 to 4 m/s: past 5 mm within 2 to
+//! 10 ms, [`CONFIRM_S`] later the safe state.
+//!
+//! The PID (paper eq. 8) lifts off by design from `x0u` (its healthy tip moves
+//! 212 mm in the first 0.1 s): there is no such bound for it, and its wiring
+//! faults are the wiring check's ([`crate::wiring`]).
+
+/// How long lift-off may stay declared under the hybrid law, s.
+pub const LIFT_OFF_S: f32 = 0.010;
+
+/// The largest `|z_t - z_t*|` under the hybrid law, m.
+pub const TRACKING_M: f32 = 0.005;
+/// How long past it trips, s.
+pub const CONFIRM_S: f32 = 0.003;
+
+/// The check's state across periods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct TrackingMonitor {
+    run: u16,
+    lifted: u16,
+}
+
+/// What the hybrid law's expectations found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expectation {
+    /// `|z_t - z_t*|` past [`TRACKING_M`] for [`CONFIRM_S`].
+    Tracking,
+    /// Lift-off declared for [`LIFT_OFF_S`].
+    LiftOff,
+}
+
+/// The check in periods of the control rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackingRule {
+    /// [`TRACKING_M`], m.
+    pub bound: f32,
+    /// Periods past it that trip.
+    pub confirm: u16,
+    /// Periods of declared lift-off that trip.
+    pub lift_off: u16,
+}
+
+fn periods(s: f32, ts: f32) -> u16 {
+    let n = libm::ceilf(s / ts - 1e-3);
+    if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
+}
+
+impl TrackingRule {
+    /// The check above at a control period of `ts` seconds.
+    pub fn at_period(ts: f32) -> Self {
+        Self { bound: TRACKING_M, confirm: periods(CONFIRM_S, ts), lift_off: periods(LIFT_OFF_S, ts) }
+    }
+}
+
+impl TrackingMonitor {
+    /// Folds in one period's tracking error `z_t - z_t*` (m) and whether lift-off
+    /// is declared; returns what was found once the error was past the bound
+    /// (or not finite) for the confirmation, or lift-off held for its time.
+    pub fn update(&mut self, rule: &TrackingRule, error: f32, lifted: bool) -> Option<Expectation> {
+        let past = !(error.abs() <= rule.bound);
+        self.run = if past { self.run.saturating_add(1) } else { 0 };
+        self.lifted = if lifted { self.lifted.saturating_add(1) } else { 0 };
+        if self.run >= rule.confirm {
+            Some(Expectation::Tracking)
+        } else if self.lifted >= rule.lift_off {
+            Some(Expectation::LiftOff)
+        } else {
+            None
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bound_trips_after_its_confirmation_at_every_rate() {
+        for (ts, n) in [(1e-3, 3), (1e-4, 30), (4e-3, 1)] {
+            let rule = TrackingRule::at_period(ts);
+            assert_eq!(rule.confirm, n, "{ts}");
+            let mut m = TrackingMonitor::default();
+            for _ in 1..n {
+                assert_eq!(m.update(&rule, -0.006, false), None);
+            }
+            assert_eq!(m.update(&rule, 0.0051, false), Some(Expectation::Tracking));
+        }
+        let rule = TrackingRule::at_period(1e-3);
+        let mut m = TrackingMonitor::default();
+        for k in 0..100 {
+            assert_eq!(m.update(&rule, if k % 3 == 2 { 0.0 } else { 0.01 }, false), None, "a period within the bound clears it");
+        }
+        let mut m = TrackingMonitor::default();
+        m.update(&rule, f32::NAN, false);
+        m.update(&rule, f32::NAN, false);
+        assert_eq!(m.update(&rule, f32::NAN, false), Some(Expectation::Tracking), "a non-finite error is past the bound");
+    }
+
+    #[test]
+    fn a_lift_off_of_10_ms_trips_and_a_bounce_shorter_does_not() {
+        for (ts, n) in [(1e-3, 10u16), (1e-4, 100), (4e-3, 3)] {
+            let rule = TrackingRule::at_period(ts);
+            assert_eq!(rule.lift_off, n, "{ts}");
+            let mut m = TrackingMonitor::default();
+            for _ in 0..20 {
+                for _ in 1..n {
+                    assert_eq!(m.update(&rule, 0.0, true), None);
+                }
+                assert_eq!(m.update(&rule, 0.0, false), None, "touchdown clears it");
+            }
+            for _ in 1..n {
+                assert_eq!(m.update(&rule, 0.0, true), None);
+            }
+            assert_eq!(m.update(&rule, 0.0, true), Some(Expectation::LiftOff));
+        }
+    }
+}

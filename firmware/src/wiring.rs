@@ -1,0 +1,161 @@
+//! Wiring checks: a joint that accelerates against the torque its motor was
+//! commanded (issue 52). A motor wired the other way, an encoder mounted
+//! reversed or the two encoders' chip selects swapped all make the arm move, as
+//! the firmware sees it, against what it commands, from the first period and
+//! at any speed: the runaway limits ([`crate::runaway`]) see it only once the
+//! arm is whipped past 20 rad/s or the load cell clips, 30 to 450 ms later.
+//!
+//! **The signal.** Each angle's observer ([`crate::estimator::AngleTracker`])
+//! predicts the angle with the model's joint acceleration under the applied
+//! torque and the measured contact force, and corrects its rate by
+//! `beta / Ts * r` for an innovation `r`: that correction, per second, is the
+//! joint acceleration the model did not explain, `a_u = beta r / (Ts dt)`
+//! (rad/s^2). Through the mass matrix it is the generalised torque the model
+//! missed, `M(q) a_u`, and, with `u_gen = [u1 - u2, u2]` (paper eq. 9), the
+//! motor torques it missed: `du = [d0 + d1, d1]` (N m). A first-order filter of
+//! time constant [`FILTER_S`] takes the quantisation's noise out of it (one
+//! 14-bit count of innovation is `beta q / Ts^2` = 19 rad/s^2 at 1 kHz; the
+//! filtered torque noise is a few mN m).
+//!
+//! **The rule.** Motor `j` is miswired when its missed torque opposes the
+//! torque it applied by more than [`AGAINST_FRACTION`] of it plus the model's
+//! uncertainty [`MARGIN_NM`], `du_j u_j < 0` and `|du_j| > 0.5 |u_j| + 0.15 N m`,
+//! for [`CONFIRM_S`] in a row. A reversed motor makes `du_j = -2 u_j`: four times
+//! the fraction. A reversed encoder makes the joint's measured acceleration the
+//! negative of the true one, so the firmware sees `du_j` of about `-2 u_j` too.
+//! In a healthy run `du` is the model's error: the contact force's change
+//! within a period (the load cell is sampled at the period's start), the
+//! command's delay (`delta`), the PWM's duty quantisation and the load cell's
+//! noise, all within tens of mN m.
+//!
+//! **Where it is off.** An impact changes the joints' velocities by an impulse
+//! the load cell never samples: the observers take about [`SETTLE_S`] to absorb
+//! it, and their `a_u` is then large and of any sign. The check is therefore
+//! off while the load cell is at full scale (its force under-reads), from a
+//! touchdown for [`SETTLE_S`], and while the tip, declared lifted, descends
+//! within [`IMPACT_HEIGHT_M`] of the belt (an impact may come), and for
+//! [`SETTLE_S`] after. A tip that rises from the belt cannot hit it: a motor
+//! that whips the arm off the belt is seen from the first periods.
+
+/// The fraction of its applied torque a motor's missed torque must oppose it by.
+pub const AGAINST_FRACTION: f32 = 0.5;
+/// The model's uncertainty in motor torque, N m.
+pub const MARGIN_NM: f32 = 0.15;
+/// The missed torque's filter time constant, s.
+pub const FILTER_S: f32 = 0.004;
+/// How long the rule must hold, s.
+pub const CONFIRM_S: f32 = 0.005;
+/// How long the check stays off after an impact may have happened, s.
+pub const SETTLE_S: f32 = 0.015;
+/// Height above the belt within which a descending lifted tip may hit it, m.
+pub const IMPACT_HEIGHT_M: f32 = 0.005;
+
+/// The rule in periods of the control rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WiringRule {
+    /// `AGAINST_FRACTION`.
+    pub against_fraction: f32,
+    /// `MARGIN_NM`, N m.
+    pub margin_nm: f32,
+    /// The filter's gain per period, `Ts / (FILTER_S + Ts)`.
+    pub smoothing: f32,
+    /// Periods the rule must hold.
+    pub confirm: u16,
+    /// Periods the check stays off after a possible impact.
+    pub settle: u16,
+    /// `IMPACT_HEIGHT_M`, m.
+    pub impact_height: f32,
+}
+
+fn periods(s: f32, ts: f32) -> u16 {
+    let n = libm::ceilf(s / ts - 1e-3);
+    if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
+}
+
+impl WiringRule {
+    /// The rule above at a control period of `ts` seconds.
+    pub fn at_period(ts: f32) -> Self {
+        Self {
+            against_fraction: AGAINST_FRACTION,
+            margin_nm: MARGIN_NM,
+            smoothing: ts / (FILTER_S + ts),
+            confirm: periods(CONFIRM_S, ts),
+            settle: periods(SETTLE_S, ts),
+            impact_height: IMPACT_HEIGHT_M,
+        }
+    }
+}
+
+/// What one period tells the check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WiringInput {
+    /// The joint accelerations the model did not explain `[theta1, theta2]`, rad/s^2.
+    pub unexplained: [f32; 2],
+    /// `cos(theta2 - theta1)`, for the mass matrix.
+    pub c21: f32,
+    /// The motor torques `[u1, u2]` applied over the interval, N m.
+    pub applied: [f32; 2],
+    /// Lift-off declared.
+    pub lifted: bool,
+    /// The tip's height above the belt, m, and its normal velocity, m/s.
+    pub height: f32,
+    /// The tip's normal velocity `z_n_dot`, m/s.
+    pub height_rate: f32,
+    /// The load cell is at full scale on either axis.
+    pub load_saturated: bool,
+}
+
+/// The check's state across periods.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WiringMonitor {
+    /// The filtered missed motor torques `[u1, u2]`, N m.
+    missed: [f32; 2],
+    run: [u16; 2],
+    settling: u16,
+    was_lifted: bool,
+}
+
+impl WiringMonitor {
+    /// The filtered missed motor torques `[u1, u2]`, N m.
+    pub fn missed(&self) -> [f32; 2] {
+        self.missed
+    }
+
+    /// Folds in one period with `m`, the arm's `m l^2` (kg m^2). Returns the
+    /// motor (0: `u1`, 1: `u2`) found miswired once the rule held for its
+    /// confirmation. Non-finite inputs are no evidence (the other checks see them).
+    pub fn update(&mut self, rule: &WiringRule, ml2: f32, input: &WiringInput) -> Option<usize> {
+        // M(q) a_u (paper eq. 1), then the motor torques of u_gen = [u1 - u2, u2].
+        let off = 0.5 * ml2 * input.c21;
+        let a = input.unexplained;
+        let d0 = (4.0 / 3.0) * ml2 * a[0] + off * a[1];
+        let d1 = off * a[0] + (1.0 / 3.0) * ml2 * a[1];
+        let du = [d0 + d1, d1];
+        for (m, d) in self.missed.iter_mut().zip(du) {
+            if d.is_finite() {
+                *m += rule.smoothing * (d - *m);
+            }
+        }
+        let touchdown = self.was_lifted && !input.lifted;
+        self.was_lifted = input.lifted;
+        let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
+        if touchdown || impact_may_come {
+            self.settling = rule.settle;
+        }
+        if input.load_saturated || self.settling > 0 {
+            self.settling = self.settling.saturating_sub(1);
+            self.run = [0; 2];
+            return None;
+        }
+        let mut found = None;
+        for j in 0..2 {
+            let (d, u) = (self.missed[j], input.applied[j]);
+            let against = d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
+            self.run[j] = if against { self.run[j].saturating_add(1) } else { 0 };
+            if self.run[j] >= rule.confirm && found.is_none() {
+                found = Some(j);
+            }
+        }
+        found
+    }
+}
