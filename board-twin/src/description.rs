@@ -87,6 +87,9 @@ pub struct BoardDescription {
     pub motor2: MotorWiring,
     /// The PWM's full-scale duty, timer counts (TIM3 at 84 MHz for 20 kHz: 4200).
     pub pwm_max_duty: u16,
+    /// The two encoders' chip selects are swapped (a wiring fault): the base's
+    /// chip answers on the elbow's select and the elbow's on the base's.
+    pub encoders_swapped: bool,
 }
 
 impl Default for BoardDescription {
@@ -99,6 +102,7 @@ impl Default for BoardDescription {
             motor1: MotorWiring::default(),
             motor2: MotorWiring::default(),
             pwm_max_duty: 4200,
+            encoders_swapped: false,
         }
     }
 }

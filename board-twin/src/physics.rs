@@ -93,7 +93,8 @@ impl BoardPhysics {
         };
         let mut b = crate::bench::lock(&self.bench);
         let d = &self.board;
-        b.magnet_counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
+        let counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
+        b.magnet_counts = if d.encoders_swapped { [counts[1], counts[0]] } else { counts };
         b.encoder_faults = faults.encoders;
         let lc = &d.load_cell;
         let fresh = [
