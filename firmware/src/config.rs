@@ -158,9 +158,10 @@ pub struct Config {
     /// Innovation check: periods after a touchdown during which it is off.
     pub innovation_settle: u16,
     /// The runaway limits ([`crate::runaway`]: a joint's speed past 20 rad/s, the
-    /// load cell at full scale for 10 ms) latch the safe state. On by default and
-    /// on every board; off only to study what the arm would do without them (the
-    /// paper's persistent bouncing beyond `Z_t,sliding`).
+    /// load cell at full scale for 10 ms) and the wiring checks ([`crate::wiring`],
+    /// [`crate::tracking`]) latch the safe state. On by default and on every
+    /// board; off only to study what the arm would do without them (the paper's
+    /// persistent bouncing beyond `Z_t,sliding`).
     pub runaway_limits: bool,
     /// Consecutive deadline misses that latch the safe state.
     pub deadline_miss_limit: u16,
