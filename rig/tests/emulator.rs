@@ -31,6 +31,9 @@ use rig::{
     twin_link::TwinLink,
 };
 
+#[path = "support/wiring_cases.rs"]
+mod wiring_cases;
+
 fn scenario(name: &str) -> Scenario {
     let text = std::fs::read_to_string(format!("{}/../scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
     Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -207,4 +210,35 @@ fn the_flashed_image_stops_a_reversed_motor_as_the_twin_does() {
     let (z0, n0) = (records[0].z_t, records[0].z_n);
     let travel = records.iter().map(|r| (r.z_t - z0).hypot(r.z_n - n0)).fold(0.0, f64::max);
     assert!(travel < 0.030, "the tip moved {:.1} mm", travel * 1e3);
+}
+
+#[test]
+fn the_flashed_image_stops_every_wiring_fault_at_the_twins_period_on_a_sample_of_random_scenarios() {
+    // Issue 52 on the bytes that are flashed: each wiring fault under each law, on
+    // two of the twin's random admissible scenarios (`twin.rs` runs 200): the
+    // image's run is the twin's bit for bit, so it stops at the same period for
+    // the same reason, which the twin's test bounds (0.1 s, 30 mm).
+    for kind in ["hybrid", "pid"] {
+        for i in [3u64, 17] {
+            let base = wiring_cases::random_admissible(i, kind, 0.15);
+            for (fault, wire) in wiring_cases::WIRING_FAULTS {
+                let mut s = base.clone();
+                wire(&mut s.board);
+                let mut link = EmulatorLink::new(&s, &image()).unwrap();
+                let (records, e) = run_loop(&s, &mut link, &mut ());
+                let mut twin = TwinLink::new(&s).unwrap();
+                let (twin_records, twin_e) = run_loop(&s, &mut twin, &mut ());
+                assert_eq!(format!("{e:?}"), format!("{twin_e:?}"), "{fault}, {kind} scenario {i}");
+                assert_eq!(records.len(), twin_records.len(), "{fault}, {kind} scenario {i}");
+                for (k, (a, b)) in records.iter().zip(&twin_records).enumerate() {
+                    assert_eq!(format!("{a:?}"), format!("{b:?}"), "{fault}, {kind} scenario {i}: period {k}");
+                }
+                match e {
+                    Some(RunError::SafeState { k, .. }) => assert!(k <= 100, "{fault}, {kind} scenario {i}: period {k}"),
+                    None => assert!(wiring_cases::unused_by(kind, fault), "{fault}, {kind} scenario {i}: never stopped"),
+                    Some(other) => panic!("{fault}, {kind} scenario {i}: {other}"),
+                }
+            }
+        }
+    }
 }

@@ -15,6 +15,9 @@
 //! a factor of 1.5 for the tail beyond the largest of four draws).
 
 use board_twin::BoardDescription;
+
+#[path = "support/wiring_cases.rs"]
+mod wiring_cases;
 use rig::{
     in_process,
     record::{PeriodRecord, RunError},
@@ -22,6 +25,7 @@ use rig::{
     scenario::{DEFAULT_TOML, Scenario},
     twin_link::TwinLink,
 };
+use wiring_cases::{WIRING_FAULTS, random_admissible, unused_by};
 
 fn scenario(text: &str) -> Scenario {
     Scenario::from_toml(text).unwrap_or_else(|e| panic!("{e}\n{text}"))
@@ -255,65 +259,6 @@ fn the_runaway_limits_never_trip_on_the_paper_scenarios_or_their_neighbours() {
     assert!(completed >= 36, "{completed} of 40 completed");
 }
 
-/// A reproducible uniform source in [0, 1) (xorshift64).
-struct Uniform(u64);
-
-impl Uniform {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// Random admissible scenario `i` under `kind` (`pid` or `hybrid`), `duration`
-/// seconds: the paper's arm and gains from `x0d` or `x0u`, `mu` 0.3 to 0.8 (and
-/// `mu_hat = mu`), `v_belt` -1 to -0.1 m/s, `f_n*` 3 to 10 N, `z_t*` -0.05 to
-/// 0.14 m (below the hybrid law's `Z_t,sliding`, 0.148 m from `x0d`), any seed.
-fn random_admissible(i: u64, kind: &str, duration: f64) -> Scenario {
-    let mut r = Uniform(0x9E37_79B9_7F4A_7C15 ^ (i * 7919 + 1));
-    for _ in 0..5 {
-        r.next();
-    }
-    let x0 = if r.next() < 0.5 { "d" } else { "u" };
-    let sets = [
-        format!("controller.kind={kind}"),
-        format!("plant.x0={x0}"),
-        format!("plant.mu={}", 0.3 + 0.5 * r.next()),
-        format!("plant.v_belt={}", -1.0 + 0.9 * r.next()),
-        format!("controller.f_n_ref={}", 3.0 + 7.0 * r.next()),
-        format!("controller.target_z_t={}", -0.05 + 0.19 * r.next()),
-        format!("sensors.seed={}", 100 + i),
-        format!("timing.duration_s={duration}"),
-    ];
-    let overrides: Vec<_> = sets.iter().map(|a| a.parse().unwrap()).collect();
-    let mut s = Scenario::from_toml_with(DEFAULT_TOML, &overrides).unwrap();
-    s.controller.mu_hat = s.plant.mu;
-    s
-}
-
-/// The wiring faults of issue 52, as changes of the board's truth.
-const WIRING_FAULTS: [(&str, fn(&mut BoardDescription)); 8] = [
-    ("motor 1 reversed", |b| b.motor1.reversed = true),
-    ("motor 2 reversed", |b| b.motor2.reversed = true),
-    ("theta1 encoder reversed", |b| b.theta1_encoder.reversed = true),
-    ("elbow encoder reversed", |b| b.elbow_encoder.reversed = true),
-    ("encoders swapped", |b| b.encoders_swapped = true),
-    ("load cell's normal axis reversed", |b| b.load_cell.counts_per_newton[1] *= -1.0),
-    ("load cell's tangential axis reversed", |b| b.load_cell.counts_per_newton[0] *= -1.0),
-    ("load cell reversed", |b| {
-        b.load_cell.counts_per_newton[0] *= -1.0;
-        b.load_cell.counts_per_newton[1] *= -1.0;
-    }),
-];
-
-/// Whether the paper's `kind` law leaves `fault` without any input to act on:
-/// the PID (paper eq. 8) uses no force, and its joint-2 gains are 0 (`u2 = 0`).
-fn unused_by(kind: &str, fault: &str) -> bool {
-    kind == "pid" && (fault.starts_with("load cell") || fault == "motor 2 reversed")
-}
-
 #[test]
 fn every_wiring_fault_is_stopped_within_a_tenth_of_a_second_and_30_mm_of_the_healthy_path() {
     // Issue 52: for every fault, under both laws, from 200 random admissible
@@ -345,11 +290,7 @@ fn every_wiring_fault_is_stopped_within_a_tenth_of_a_second_and_30_mm_of_the_hea
                     Some(other) => panic!("{fault}, {kind} scenario {i}: {other}"),
                 };
                 let upto = stopped.unwrap_or(records.len() - 1).min(h.len() - 1);
-                let stray = records[..=upto]
-                    .iter()
-                    .zip(h)
-                    .map(|(a, b)| (a.z_t - b.z_t).hypot(a.z_n - b.z_n))
-                    .fold(0.0, f64::max);
+                let stray = records[..=upto].iter().zip(h).map(|(a, b)| (a.z_t - b.z_t).hypot(a.z_n - b.z_n)).fold(0.0, f64::max);
                 assert!(stray < 0.030, "{fault}, {kind} scenario {i}: the tip strayed {:.1} mm (stopped at {stopped:?})", stray * 1e3);
                 match stopped {
                     Some(k) => {
