@@ -29,10 +29,16 @@ fn at_mu_one_the_base_motor_saturates_before_the_tip_lifts_off() {
     let saturated = records[first_saturation..first_lift_off].iter().filter(|r| r.status & status::SATURATED_U1 != 0).count();
     assert!(2 * saturated > first_lift_off - first_saturation, "{saturated} of {} periods saturated", first_lift_off - first_saturation);
     assert!(lift_off_stats(&records).lift_offs >= 3, "it bounces: {:?}", lift_off_stats(&records));
-    // Then a joint runs away: the firmware's runaway limit stops the arm, after
-    // the lift-offs and within a few hundred milliseconds.
+    // Then the tip is dragged from its reference: the firmware's tracking check (or,
+    // failing it, a runaway limit) stops the arm, after the lift-offs and within a
+    // few hundred milliseconds.
     match error {
-        Some(rig::RunError::SafeState { k, reason: firmware::SafeReason::Runaway | firmware::SafeReason::Overload, .. }) => {
+        Some(rig::RunError::SafeState {
+            k,
+            reason:
+                firmware::SafeReason::Tracking | firmware::SafeReason::LiftOff | firmware::SafeReason::Runaway | firmware::SafeReason::Overload,
+            ..
+        }) => {
             assert!(k > first_lift_off && k < 1000, "stopped at period {k}, first lift-off {first_lift_off}");
         }
         e => panic!("the firmware must stop the runaway: {e:?}"),

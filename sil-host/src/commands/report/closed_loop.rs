@@ -18,8 +18,8 @@ the base motor saturates at the firmware's 5 N m limit (the wire's and the drive
 At `mu = 1.0` with `f_n* = 10 N` the friction force `mu f_n` reaches 10 N as `f_n` ramps up, `u1` saturates from t = 0.197 s \
 (`SATURATED_U1` in the status word), the arm cannot hold the tip against the belt, and the tip sticks, is dragged and bounces \
 (`sil-host run --in-process --set plant.mu=1.0 --set controller.mu_hat=1.0 --set controller.runaway_limits=false`, the paper's controller \
-as the studies run it: 2 223 lift-offs, 222 mm rms tracking error; with the board's runaway limits, the default of `run`, the firmware stops \
-the whipped arm at t = 0.281 s: `Runaway`). \
+as the studies run it: 2 223 lift-offs, 222 mm rms tracking error; with the board's runaway limits and wiring checks, the default of `run`, the \
+firmware stops the dragged arm at t = 0.224 s: `Tracking`, its tip more than 5 mm from `z_t*`). \
 With `f_n* = 7 N` (`--set controller.f_n_ref=7`), or 5 N or 3 N, the same run has no lift-off and ends within 0.2 mm of its target. \
 At 10 kHz (`--set timing.rate_hz=10000 --set timing.delta_s=0.00005`) the saturated arm drags the stuck tip until the load cell clips \
 (28 N against its 25 N range): the firmware latches its `Overload` safe state at t = 0.221 s (without the runaway limits, `SensorFault` \
