@@ -97,7 +97,7 @@ pub struct WiringInput {
     pub applied: [f32; 2],
     /// Lift-off declared.
     pub lifted: bool,
-    /// The tip's height above the belt, m, and its normal velocity, m/s.
+    /// The tip's height above the belt from the estimate, `z_n + H`, m.
     pub height: f32,
     /// The tip's normal velocity `z_n_dot`, m/s.
     pub height_rate: f32,
@@ -157,5 +157,94 @@ impl WiringMonitor {
             }
         }
         found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The paper's arm: `m l^2` of m = 0.12 kg, l = 0.21 m.
+    const ML2: f32 = 0.12 * 0.21 * 0.21;
+
+    /// The joint accelerations a missed motor torque `du` (N m) leaves at
+    /// `c21`: `M^-1` of the generalised torque `[du1 - du2, du2]`.
+    fn accel_of(du: [f32; 2], c21: f32) -> [f32; 2] {
+        let (a, b, d) = ((4.0 / 3.0) * ML2, 0.5 * ML2 * c21, ML2 / 3.0);
+        let t = [du[0] - du[1], du[1]];
+        let det = a * d - b * b;
+        [(d * t[0] - b * t[1]) / det, (a * t[1] - b * t[0]) / det]
+    }
+
+    fn input(unexplained: [f32; 2], applied: [f32; 2]) -> WiringInput {
+        WiringInput { unexplained, c21: 0.9, applied, lifted: false, height: 0.0, height_rate: 0.0, load_saturated: false }
+    }
+
+    #[test]
+    fn the_missed_torque_is_the_motor_torque_that_made_the_acceleration() {
+        // One period with the filter's gain 1 gives back the motor torques exactly.
+        let rule = WiringRule { smoothing: 1.0, ..WiringRule::at_period(1e-3) };
+        for du in [[0.3f32, 0.0], [0.0, -0.2], [1.0, 1.0], [-0.7, 0.4]] {
+            let mut m = WiringMonitor::default();
+            m.update(&rule, ML2, &input(accel_of(du, 0.9), [0.0; 2]));
+            for j in 0..2 {
+                assert!((m.missed()[j] - du[j]).abs() < 1e-5, "{du:?}: {:?}", m.missed());
+            }
+        }
+    }
+
+    #[test]
+    fn a_reversed_motor_trips_after_the_filter_and_the_confirmation_at_every_rate() {
+        for (j, u) in [(0usize, 0.4f32), (1, -0.3)] {
+            for ts in [1e-3f32, 1e-4, 4e-3] {
+                let rule = WiringRule::at_period(ts);
+                let mut applied = [0.0; 2];
+                applied[j] = u;
+                let mut du = [0.0; 2];
+                du[j] = -2.0 * u;
+                let mut m = WiringMonitor::default();
+                let a = accel_of(du, 0.9);
+                let trip = (1..10_000).find(|_| m.update(&rule, ML2, &input(a, applied)).is_some()).unwrap();
+                // The filter reaches the rule's threshold, then the confirmation runs.
+                let t = trip as f32 * ts;
+                assert!(t <= FILTER_S * 2.0 + CONFIRM_S + ts, "motor {j} at {ts} s: tripped after {t} s");
+                assert!(t >= CONFIRM_S - 1e-6, "motor {j} at {ts} s: tripped after {t} s");
+            }
+        }
+    }
+
+    #[test]
+    fn a_missed_torque_along_the_applied_one_or_within_the_margin_never_trips() {
+        let rule = WiringRule::at_period(1e-3);
+        let mut m = WiringMonitor::default();
+        for k in 0..10_000 {
+            // The model's error helping the motor, and small errors against it.
+            let along = accel_of([0.8, -0.8], 0.9);
+            assert_eq!(m.update(&rule, ML2, &input(along, [0.4, -0.4])), None);
+            let small = accel_of([-0.2, 0.12], 0.9);
+            assert_eq!(m.update(&rule, ML2, &input(small, [0.1, -0.01])), None, "{k}");
+        }
+    }
+
+    #[test]
+    fn the_check_is_off_at_full_scale_after_touchdown_and_while_a_lifted_tip_descends_to_the_belt() {
+        let rule = WiringRule::at_period(1e-3);
+        let a = accel_of([-1.0, 0.0], 0.9);
+        let trips_after = |m: &mut WiringMonitor, i: &WiringInput| (1..1000).find(|_| m.update(&rule, ML2, i).is_some());
+        // At full scale: never.
+        let mut m = WiringMonitor::default();
+        assert_eq!(trips_after(&mut m, &WiringInput { load_saturated: true, ..input(a, [0.5, 0.0]) }), None);
+        // Descending within 5 mm of the belt, lifted: never; rising from it: at once.
+        let mut m = WiringMonitor::default();
+        let descending = WiringInput { lifted: true, height: 0.002, height_rate: -0.1, ..input(a, [0.5, 0.0]) };
+        assert_eq!(trips_after(&mut m, &descending), None);
+        let mut m = WiringMonitor::default();
+        let rising = WiringInput { lifted: true, height: 0.002, height_rate: 0.1, ..input(a, [0.5, 0.0]) };
+        assert!(trips_after(&mut m, &rising).is_some_and(|k| k <= 10));
+        // A touchdown holds it off for the settling time.
+        let mut m = WiringMonitor::default();
+        m.update(&rule, ML2, &WiringInput { lifted: true, height: 0.01, height_rate: 0.1, ..input([0.0; 2], [0.0; 2]) });
+        let k = trips_after(&mut m, &input(a, [0.5, 0.0])).unwrap();
+        assert!(k > usize::from(rule.settle) + usize::from(rule.confirm) - 1, "tripped {k} periods after the touchdown");
     }
 }
