@@ -58,6 +58,8 @@ pub trait ArmBoard {
     /// # Errors
     /// The board's failure to come back, in words.
     fn reset(&mut self, arm: &ArmState) -> Result<(), String>;
+    /// Whether the motor drivers are enabled after the last tick.
+    fn drivers_enabled(&self) -> bool;
 }
 
 /// The board twin with the image's idle loop: requests out of the line's frames.
@@ -95,6 +97,10 @@ impl ArmBoard for TwinBench {
         self.replies.clear();
         Ok(())
     }
+
+    fn drivers_enabled(&self) -> bool {
+        self.twin.drivers_enabled()
+    }
 }
 
 impl ArmBoard for EmulatedBoard {
@@ -110,6 +116,11 @@ impl ArmBoard for EmulatedBoard {
     fn reset(&mut self, arm: &ArmState) -> Result<(), String> {
         EmulatedBoard::reset(self, arm).map(|_| ()).map_err(|e| e.to_string())
     }
+
+    fn drivers_enabled(&self) -> bool {
+        // The image's monitor block, as a debug probe reads it.
+        self.monitor().is_some_and(|m| m.drivers_enabled != 0)
+    }
 }
 
 /// The arm, its board, and the board's application or image.
@@ -124,7 +135,20 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     load: Load,
     /// The reset button, pressed by whoever holds it: the next tick resets first.
     reset_button: ResetButton,
+    /// The belt's position asked by whoever moves it (`true`: raised to the tip).
+    belt: BeltLift,
+    /// The belt's position now.
+    raised: bool,
+    /// The belt's travel since it was raised, m (its encoder's count).
+    belt_travel_m: f64,
+    /// The scenario: its plant at its initial state is the arm on the raised belt.
+    scenario: Box<Scenario>,
 }
+
+/// The belt's lift, shared with whoever works it (the twin's operator on its
+/// standard input, `belt up` and `belt down`): `true` raises the belt to the
+/// tip from the next tick on, `false` lowers it below the hanging tip.
+pub type BeltLift = std::sync::Arc<std::sync::atomic::AtomicBool>;
 
 /// The reset button (NRST), shared with whoever presses it (the twin's
 /// operator on its standard input): `true` until the next tick takes it.
@@ -171,6 +195,10 @@ impl FreeArm<EmulatedBoard> {
             faults: BusFaults::default(),
             load: Load::default(),
             reset_button: ResetButton::default(),
+            belt: BeltLift::default(),
+            raised: false,
+            belt_travel_m: 0.0,
+            scenario: Box::new(s.clone()),
         })
     }
 }
@@ -211,6 +239,10 @@ impl FreeArm<TwinBench> {
             faults: BusFaults::default(),
             load: Load::default(),
             reset_button: ResetButton::default(),
+            belt: BeltLift::default(),
+            raised: false,
+            belt_travel_m: 0.0,
+            scenario: Box::new(s.clone()),
         };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
@@ -236,13 +268,58 @@ impl<B: ArmBoard> FreeArm<B> {
         if self.reset_button.swap(false, std::sync::atomic::Ordering::Relaxed) {
             self.reset()?;
         }
+        let raise = self.belt.load(std::sync::atomic::Ordering::Relaxed);
+        if raise != self.raised {
+            self.move_belt(raise)?;
+        }
         self.sensed = self.plant.state();
         let load = *self.load.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let f = self.plant.contact_force(self.u);
-        let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: 0.0 };
+        let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: self.belt_travel_m };
         self.u = self.board.tick(&arm, &self.faults).map_err(FreeArmError::Emulated)?;
+        if self.raised {
+            self.belt_travel_m += self.scenario.plant.v_belt * self.ts;
+            // On the raised belt the operator holds the arm at its pose while the
+            // drivers are off (as before a run's enable, docs/board.md "The board
+            // twin"); it moves under the drivers' torques once they are on.
+            if !self.board.drivers_enabled() {
+                return Ok(());
+            }
+        }
         self.plant.advance(&Hold(self.u), self.ts, &mut NoObserver)?;
         Ok(())
+    }
+
+    /// Raises the belt to the tip (`true`: the arm stood at the scenario's
+    /// initial state with its tip on the belt, which runs at the scenario's
+    /// `v_belt`: docs/board.md "Bring-up", step 7) or lowers it below the
+    /// hanging tip (`false`: the arm left where it is, at rest).
+    ///
+    /// # Errors
+    /// [`FreeArmError::Sim`] when the plant refuses the new set-up.
+    pub fn move_belt(&mut self, raise: bool) -> Result<(), FreeArmError> {
+        self.plant = if raise {
+            crate::setup::plant_for(&self.scenario)?
+        } else {
+            let x = self.plant.state();
+            let params = shared::Params { h: LOWERED_BELT_H, ..plant_params(&self.scenario) };
+            Plant::new(params, SimConfig::default(), [x[0], 0.0, x[2], 0.0], 0.0, [0.0; 2])?
+        };
+        self.raised = raise;
+        self.belt_travel_m = 0.0;
+        self.belt.store(raise, std::sync::atomic::Ordering::Relaxed);
+        Ok(())
+    }
+
+    /// The belt's lift, to work from another thread: the next tick raises or
+    /// lowers the belt ([`FreeArm::move_belt`]).
+    pub fn belt_lift(&self) -> BeltLift {
+        self.belt.clone()
+    }
+
+    /// Whether the belt is raised to the tip.
+    pub fn belt_raised(&self) -> bool {
+        self.raised
     }
 
     /// `n` periods.
