@@ -89,7 +89,8 @@ pub fn board_firmware(config: Config) -> Result<Firmware, Refusal> {
 /// off, [`RecordFault::Content`] for any other invalid value.
 pub(crate) fn check_stored(s: &Stored) -> Result<Firmware, RecordFault> {
     let c = s.calibration;
-    let fw = board_firmware(s.config).map_err(|r| if r == Refusal::ProtectionOff { RecordFault::ProtectionOff } else { RecordFault::Content })?;
+    let fw = board_firmware(s.config)
+        .map_err(|r| if r == Refusal::ProtectionOff { RecordFault::ProtectionOff } else { RecordFault::Content })?;
     let valid = c.zero_counts.iter().all(|&z| z < 1 << 14)
         && Calibration { zero_counts: c.load_zero_counts, newtons_per_count: c.load_newtons_per_count }.validate().is_ok()
         && drivers::belt::scale(c.belt_metres_per_count, s.config.period.as_secs_f32()).is_ok();

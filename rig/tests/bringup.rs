@@ -286,7 +286,10 @@ fn the_runaway_limits_cannot_be_turned_off_on_a_board() {
     // Off, and otherwise invalid: the protection is named first.
     let worse = firmware::Config { f_n_ref: 100.0, ..off };
     assert_eq!(b.twin_mut().serve(Request::Configure(worse)), Reply::Refused(Refusal::ProtectionOff));
-    assert_eq!(b.twin_mut().serve(Request::Configure(firmware::Config { f_n_ref: 100.0, ..before })), Reply::Refused(Refusal::InvalidConfig));
+    assert_eq!(
+        b.twin_mut().serve(Request::Configure(firmware::Config { f_n_ref: 100.0, ..before })),
+        Reply::Refused(Refusal::InvalidConfig)
+    );
 
     // A record saved with them off (by an earlier image, or written by hand):
     // refused at reset, the drivers locked out, the button ignored with the reason.

@@ -8,8 +8,8 @@ use arm_app::{
     bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, SpanStep, Status},
     telemetry::ArmTelemetry,
 };
-use firmware::pil::StepClock;
 use board_twin::{BusFaults, FlashModel};
+use firmware::pil::StepClock;
 use rig::{
     board_backup,
     bringup_line::{self, Client, Pty},
