@@ -51,37 +51,65 @@ fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Snapshot, Ste
 pub const WATCH_COLUMNS: usize = 100;
 
 /// One reading of `watch` on one line of at most [`WATCH_COLUMNS`] characters:
-/// the period, the drivers, the joints (degrees once the zeros are set, else
-/// raw counts), the load cell (newtons once tared and spanned or skipped, else
-/// ADC counts), the belt's counter, the fault line and the status word in words
-/// (cut with `...` where the line would be longer).
+/// `#` and the period, the drivers, the joints (theta1 and the elbow's angle in
+/// degrees once the zeros are set, else raw counts), the load cell (newtons
+/// once tared and spanned or skipped, else ADC counts), the belt's counter, the
+/// fault line when asserted, and the status word in short (`ok`, the safe
+/// state's reason, the flags: `status` says them in words); cut with `...`
+/// beyond the width.
 fn watch_line(s: &Snapshot) -> String {
     let st = &s.status;
     let r = &s.raw;
     let joints = match (r.encoder_counts, [0, 1].map(|i| r.encoder_counts[i].ok().and_then(|n| joint_degrees(n, &s.calibration, i)))) {
-        (_, [Some(a), Some(b)]) => format!("theta1 {a:+8.3} elbow {b:+8.3} deg"),
-        ([Ok(a), Ok(b)], _) => format!("theta1 {a:5} elbow {b:5} counts"),
+        (_, [Some(a), Some(b)]) => format!("θ1 {a:+.2}° el {b:+.2}°"),
+        ([Ok(a), Ok(b)], _) => format!("θ1 {a} el {b} counts"),
         ([a, b], _) => {
             let one = |x: Result<u16, arm_app::EncoderFault>| x.map_or_else(|e| format!("{e:?}"), |n| n.to_string());
-            format!("theta1 {} elbow {}", one(a), one(b))
+            format!("θ1 {} el {}", one(a), one(b))
         }
     };
     let load = match r.adc_counts {
         None => "load cell: no conversion".to_string(),
         Some(counts) => match load_newtons(counts, &s.calibration) {
-            [Some(t), Some(n)] => format!("f_t {t:+6.2} f_n {n:+6.2} N"),
-            _ => format!("f_t {:4} f_n {:4} counts", counts[0], counts[1]),
+            [Some(t), Some(n)] => format!("f_t {t:+.2} f_n {n:+.2} N"),
+            _ => format!("f_t {} f_n {} counts", counts[0], counts[1]),
         },
     };
     let line = format!(
-        "period {} | drivers {} | {joints} | {load} | belt {} | nFAULT {} | {}",
+        "#{} | drv {} | {joints} | {load} | belt {}{} | {}",
         st.periods,
-        if st.drivers_enabled { "on " } else { "off" },
+        if st.drivers_enabled { "on" } else { "off" },
         r.belt_count,
-        if r.driver_fault { "ASSERTED" } else { "clear" },
-        describe_status(st.status)
+        if r.driver_fault { " | nFAULT ASSERTED" } else { "" },
+        short_status(st.status)
     );
     fit(&line, WATCH_COLUMNS)
+}
+
+/// A status word in a few characters (`watch`): `ok`, `safe: REASON`, or its
+/// flags' short names (docs/wire.md; `describe_status` says them in words).
+fn short_status(word: u32) -> String {
+    use shared::wire::status;
+    let mut parts = Vec::new();
+    if word & status::SAFE_STATE != 0 {
+        parts.push(firmware::SafeReason::from_status(word).map_or_else(|| "safe: unknown".to_string(), |r| format!("safe: {r:?}")));
+    }
+    for (bit, name) in [
+        (status::BAD_FRAME, "bad frame"),
+        (status::STALE_FRAME, "stale"),
+        (status::SEQUENCE_GAP, "seq gap"),
+        (status::LIFT_OFF, "lift-off"),
+        (status::SATURATED_U1, "u1 sat"),
+        (status::SATURATED_U2, "u2 sat"),
+        (status::DEADLINE_MISS, "deadline"),
+        (status::LOAD_CLIPPED, "clipped"),
+        (status::REFERENCE_MOVING, "moving"),
+    ] {
+        if word & bit != 0 {
+            parts.push(name.to_string());
+        }
+    }
+    if parts.is_empty() { "ok".into() } else { parts.join(", ") }
 }
 
 /// `line` cut to `width` characters, `...` at its end when cut.
@@ -362,14 +390,31 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 Some(n) => return Err(CliError::bad_input(format!("--newtons {n}: must be a non-zero force of at most 25 N"))),
                 None => return Err(CliError::bad_input("span needs --newtons or --skip")),
             };
-            let Reply::Calibration(cal) = bp::ask(&mut c, request)? else {
+            let reply = match c.request(&request, bp::REPLY_TIMEOUT).map_err(CliError::bad_input)? {
+                // The force was in range: the gain it gives is not.
+                Reply::Refused(arm_app::bringup::Refusal::OutOfRange) => {
+                    return Err(CliError::Board(
+                        "span: refused: the gain it gives (the force over the counts from the tare) is not the load cell's: \
+                         positive and within a factor 4 of the nominal 25/2048 N per count (docs/hardware.md \"The calibration's \
+                         ranges\"); is the weight on this axis, the force's sign right, the front end wired as documented?"
+                            .into(),
+                    ));
+                }
+                Reply::Refused(r) => return Err(CliError::Board(format!("span: refused: {}", bp::describe_refusal(&r)))),
+                reply => reply,
+            };
+            let Reply::Calibration(cal) = reply else {
                 return Err(CliError::bad_input("unexpected reply to span"));
             };
+            let i = usize::from(axis);
+            let name = ["f_t", "f_n"][i];
+            let gain = cal.load_newtons_per_count[i];
+            let ratio = f64::from(gain) / (25.0 / 2048.0);
             emit(json, &cal, || {
                 if *skip {
-                    println!("span skipped: the nominal gain {} N per count is kept", cal.load_newtons_per_count[usize::from(axis)]);
+                    println!("span skipped: {name} keeps the nominal gain {gain:.6} N per count");
                 } else {
-                    println!("span set: N per count {:?}", cal.load_newtons_per_count);
+                    println!("span set: {name} gain {gain:.6} N per count ({ratio:.3} times the nominal 25/2048); {name} now reads in newtons");
                 }
             });
         }
