@@ -139,7 +139,7 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     belt: BeltLift,
     /// The belt's position now.
     raised: bool,
-    /// The belt's travel since it was raised, m (its encoder's count).
+    /// The belt's travel, m (its encoder's count): it runs while raised.
     belt_travel_m: f64,
     /// The scenario: its plant at its initial state is the arm on the raised belt.
     scenario: Box<Scenario>,
@@ -305,8 +305,9 @@ impl<B: ArmBoard> FreeArm<B> {
             let params = shared::Params { h: LOWERED_BELT_H, ..plant_params(&self.scenario) };
             Plant::new(params, SimConfig::default(), [x[0], 0.0, x[2], 0.0], 0.0, [0.0; 2])?
         };
+        // The belt's counter goes on from where it was (an encoder counts edges,
+        // it never jumps).
         self.raised = raise;
-        self.belt_travel_m = 0.0;
         self.belt.store(raise, std::sync::atomic::Ordering::Relaxed);
         Ok(())
     }
