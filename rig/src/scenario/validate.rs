@@ -232,7 +232,7 @@ impl Scenario {
         // `Configure` and `Restore` run too), its field named by the scenario's key.
         if let Err(firmware::config::ConfigError::OutOfRange { name, value, expected }) = crate::setup::firmware_config(self).validate() {
             return Err(ScenarioError::OutOfRange {
-                key: scenario_key(name).into(),
+                key: scenario_key(name),
                 value: value.to_string(),
                 expected: format!("{expected} (the firmware's check)"),
             });

@@ -414,7 +414,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 if *skip {
                     println!("span skipped: {name} keeps the nominal gain {gain:.6} N per count");
                 } else {
-                    println!("span set: {name} gain {gain:.6} N per count ({ratio:.3} times the nominal 25/2048); {name} now reads in newtons");
+                    println!(
+                        "span set: {name} gain {gain:.6} N per count ({ratio:.3} times the nominal 25/2048); {name} now reads in newtons"
+                    );
                 }
             });
         }
