@@ -5,7 +5,11 @@
 //! procedure asks for the belt lowered below the hanging tip; here the base
 //! stands 0.4199 m above it (within the arm's 0.42 m reach, so the simulator
 //! takes it), and the arm at rest, its elbow bent by the spring between the
-//! links, clears it by a few millimetres; a jog lifts the tip.
+//! links, clears it by a few millimetres; a jog lifts the tip. For the first
+//! enable and closed-loop run (steps 7 and 8) the belt is raised to the tip
+//! ([`FreeArm::move_belt`], `belt up` on `board-twin`'s standard input): the arm
+//! stands at the scenario's initial state with its tip on the belt, which runs at
+//! the scenario's `v_belt`, held there while the drivers are off.
 
 use arm_app::bringup::Request;
 use board_emulator::{ArmImage, EmulatedBoard, SpiFaults, core_clock::Mode};
