@@ -39,7 +39,7 @@ use shared::{
 };
 
 use crate::{
-    bringup::{CalibrationRecord, EnableOutcome, REDUCED_TORQUE_CODES, RawReadings},
+    bringup::{CalibrationRecord, EnableOutcome, REDUCED_TORQUE_CODES, RawReadings, Refusal},
     hardware::{CODES_FULL_SCALE, Hardware},
     io::Motors,
     io::{ArmIo, IntervalClock, Watchdog},
@@ -62,15 +62,39 @@ pub struct ArmCalibration {
     pub belt_metres_per_count: f32,
 }
 
-/// Whether a stored record's values would be taken: its configuration, its
-/// encoders' zeros, its load-cell calibration, its belt scale at its control
-/// period. The check of the record loaded at reset, and of `Request::Restore`.
-pub(crate) fn stored_is_valid(s: &Stored) -> bool {
+/// The firmware of configuration `config` as a board runs it: the
+/// configuration valid (`firmware::Config::validate`) and the runaway limits on
+/// (`Config::runaway_limits`: a board never runs without them; the studies
+/// that need them off run without a board). The check of every configuration
+/// put in force: `Configure`, `Restore`, the flash record at reset, the
+/// compiled-in fallback.
+///
+/// # Errors
+/// [`Refusal::ProtectionOff`] when the runaway limits are off (checked first),
+/// [`Refusal::InvalidConfig`] when the configuration is invalid.
+pub fn board_firmware(config: Config) -> Result<Firmware, Refusal> {
+    if !config.runaway_limits {
+        return Err(Refusal::ProtectionOff);
+    }
+    Firmware::new(config).map_err(|_| Refusal::InvalidConfig)
+}
+
+/// Whether a stored record's values would be taken: its configuration
+/// ([`board_firmware`]), its encoders' zeros, its load-cell calibration, its
+/// belt scale at its control period. The check of the record loaded at reset,
+/// and of `Request::Restore`.
+///
+/// # Errors
+/// [`RecordFault::ProtectionOff`] for a configuration with the runaway limits
+/// off, [`RecordFault::Content`] for any other invalid value.
+pub(crate) fn check_stored(s: &Stored) -> Result<Firmware, RecordFault> {
     let c = s.calibration;
-    Firmware::new(s.config).is_ok()
-        && c.zero_counts.iter().all(|&z| z < 1 << 14)
+    let fw = board_firmware(s.config)
+        .map_err(|r| if r == Refusal::ProtectionOff { RecordFault::ProtectionOff } else { RecordFault::Content })?;
+    let valid = c.zero_counts.iter().all(|&z| z < 1 << 14)
         && Calibration { zero_counts: c.load_zero_counts, newtons_per_count: c.load_newtons_per_count }.validate().is_ok()
-        && drivers::belt::scale(c.belt_metres_per_count, s.config.period.as_secs_f32()).is_ok()
+        && drivers::belt::scale(c.belt_metres_per_count, s.config.period.as_secs_f32()).is_ok();
+    if valid { Ok(fw) } else { Err(RecordFault::Content) }
 }
 
 /// A board's parts, handed to [`ArmApp::new`]. The motor stage comes built: a
@@ -106,6 +130,9 @@ pub enum StartError {
     LoadCell(CalibrationError),
     /// The belt's scale (or the control period) is invalid.
     Belt(BeltError),
+    /// The fallback configuration turns the runaway limits off, which a board
+    /// never runs ([`board_firmware`]).
+    ProtectionOff,
 }
 
 /// The arm application: the firmware and the board it runs on.
@@ -125,13 +152,20 @@ impl<H: ArmIo> ArmApp<H> {
     /// belt's scale. The drivers stay disabled until the enable button.
     ///
     /// # Errors
-    /// [`StartError`]: an invalid fallback configuration, load-cell calibration
-    /// or belt scale (a stored record with invalid values is refused instead:
-    /// `Settings::Corrupt(RecordFault::Content)`).
+    /// [`StartError`]: an invalid fallback configuration (or one with the
+    /// runaway limits off), load-cell calibration or belt scale (a stored record
+    /// with invalid values is refused instead, the drivers locked out:
+    /// `Settings::Corrupt(RecordFault::Content)`, or
+    /// `Settings::Corrupt(RecordFault::ProtectionOff)` for one with the runaway
+    /// limits off).
     pub fn new(mut parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
         let fallback = CalibrationRecord::uncalibrated(cal);
-        let (settings, config, record) = match record::load(&mut parts.flash) {
-            Ok(Some(s)) if !stored_is_valid(&s) => (Settings::Corrupt(RecordFault::Content), config, fallback),
+        let loaded = record::load(&mut parts.flash).and_then(|s| match s.map(|s| check_stored(&s).map(|_| s)) {
+            Some(Err(fault)) => Err(fault),
+            Some(Ok(s)) => Ok(Some(s)),
+            None => Ok(None),
+        });
+        let (settings, config, record) = match loaded {
             Ok(Some(s)) if !s.calibration.missing().is_empty() => {
                 (Settings::Corrupt(RecordFault::Incomplete(s.calibration.missing())), config, fallback)
             }
@@ -142,6 +176,9 @@ impl<H: ArmIo> ArmApp<H> {
         let cal = record.arm_calibration();
         let directions_checked = record.directions_checked;
         log(Notice::Settings(settings));
+        if !config.runaway_limits {
+            return Err(StartError::ProtectionOff);
+        }
         let firmware = Firmware::new(config).map_err(StartError::Config)?;
         let mut theta1 = As5047p::new(parts.theta1);
         let mut elbow = As5047p::new(parts.elbow);

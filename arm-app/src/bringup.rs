@@ -18,8 +18,10 @@ use crate::{
     telemetry::ArmTelemetry,
 };
 
-/// The protocol's version, told in [`Reply::Hello`].
-pub const BRINGUP_PROTOCOL: u16 = 5;
+/// The protocol's version, told in [`Reply::Hello`] (6: `Refusal::ProtectionOff`
+/// and `Refusal::NothingToSave`, `RecordFault::ProtectionOff`; the configuration's
+/// runaway limits always on).
+pub const BRINGUP_PROTOCOL: u16 = 6;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
@@ -177,7 +179,8 @@ pub enum Request {
     SetCalibration(CalibrationRecord),
     /// Takes a firmware configuration (controller, gains, rate, limits), which
     /// the firmware validates. Drivers disabled only; the control rate must be
-    /// the one the image's timer runs.
+    /// the one the image's timer runs; the runaway limits must be on
+    /// ([`Refusal::ProtectionOff`]).
     Configure(Config),
     /// Lifts the reduced torque limit a calibration set.
     LiftTorqueLimit,
@@ -190,8 +193,9 @@ pub enum Request {
     /// ticks, the tick's interval, overruns).
     Telemetry,
     /// Saves the calibration and configuration in force to the flash record
-    /// (`crate::record`), then reads it back. Drivers disabled and a complete
-    /// calibration only (`CalibrationRecord::missing` empty). The
+    /// (`crate::record`), then reads it back. Drivers disabled, a complete
+    /// calibration (`CalibrationRecord::missing` empty) and something unsaved
+    /// ([`Refusal::NothingToSave`]: the settings in force are the record) only. The
     /// control loop pauses while the sector erases (about 1 s on the STM32F405).
     Save,
     /// The firmware configuration in force.
@@ -199,9 +203,9 @@ pub enum Request {
     /// Restores a backup (`sil-host board restore FILE`): the calibration and the
     /// configuration together, both or neither. The firmware validates them as it
     /// validates the flash record at reset (the same checks: the configuration by
-    /// `Firmware::new`, the encoders' zeros below 2^14, the load cell's
-    /// calibration, the belt's scale at the control period), and the rate must be
-    /// the image's. The calibration's bring-up steps are taken as recorded (a
+    /// `Firmware::new` with the runaway limits on, the encoders' zeros below 2^14,
+    /// the load cell's calibration, the belt's scale at the control period), and
+    /// the rate must be the image's. The calibration's bring-up steps are taken as recorded (a
     /// backup of this board: the steps were done with these very values); a
     /// calibration that differs from the one in force runs at the reduced torque
     /// limit until lifted, and any change is unsaved (the drivers locked out until
@@ -289,6 +293,16 @@ pub enum Refusal {
     /// The calibration lacks these bring-up steps: `Save` refuses it (and
     /// `Span` refuses before the tare).
     Incomplete(Missing),
+    /// The configuration turns the runaway limits off (`Config::runaway_limits`
+    /// false): a board never runs without them (`Configure`, `Restore`; a flash
+    /// record holding it is refused at reset, `RecordFault::ProtectionOff`). The
+    /// studies that need them off run without a board (docs/board.md "Runaway
+    /// limits").
+    ProtectionOff,
+    /// `Save` with nothing to save: the settings in force are already the record
+    /// in flash (loaded at the last reset, or saved since). A change sent before a
+    /// reset was discarded by it (a reset reloads the record): send it again.
+    NothingToSave,
 }
 
 /// A reply to a [`Request`].

@@ -195,6 +195,9 @@ pub enum RecordFault {
     Verify,
     /// The record's calibration lacks bring-up steps (`CalibrationRecord::missing`).
     Incomplete(Missing),
+    /// The record's configuration turns the runaway limits off, which a board
+    /// never runs (`crate::bringup::Refusal::ProtectionOff`).
+    ProtectionOff,
 }
 
 /// The settings in force, against the record in flash: the drivers enable only
@@ -242,6 +245,10 @@ impl RecordFault {
             Self::Flash => "the flash failed",
             Self::Verify => "the settings record read back differs from what was written",
             Self::Incomplete(_) => "the calibration lacks bring-up steps: drivers locked out; finish the bring-up and save",
+            Self::ProtectionOff => {
+                "the settings record turns the runaway limits off, which a board never runs: drivers locked out; \
+                 configure with them on (`controller.runaway_limits = true`) and save"
+            }
         }
     }
 }

@@ -4,11 +4,10 @@
 //! (`crate::jog`), one period at a time, the firmware's command set aside.
 
 use drivers::{EncoderCalibration, frame::FrameCalibration, load_cell::Calibration};
-use firmware::Firmware;
 
 use crate::{
     ArmApp, ArmIo,
-    app::stored_is_valid,
+    app::{board_firmware, check_stored},
     bringup::{
         Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS,
         MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
@@ -73,11 +72,15 @@ impl<H: ArmIo> ArmApp<H> {
                 if stored.config.period != hw.config.period {
                     return Reply::Refused(Refusal::Rate);
                 }
-                let Ok(fw) = Firmware::new(stored.config) else { return Reply::Refused(Refusal::InvalidConfig) };
-                // The flash record's own check at reset: the calibration against the configuration.
-                if !stored_is_valid(&stored) {
-                    return Reply::Refused(Refusal::OutOfRange);
-                }
+                // The configuration as every configuration a board takes, then the
+                // flash record's own check at reset: the calibration against it.
+                let fw = match board_firmware(stored.config) {
+                    Ok(_) => match check_stored(&stored) {
+                        Ok(fw) => fw,
+                        Err(_) => return Reply::Refused(Refusal::OutOfRange),
+                    },
+                    Err(why) => return Reply::Refused(why),
+                };
                 // Both are valid: neither can be refused now.
                 let Reply::Calibration(_) = put_calibration(hw, stored.calibration, false) else {
                     return Reply::Refused(Refusal::OutOfRange);
@@ -93,7 +96,7 @@ impl<H: ArmIo> ArmApp<H> {
                 if config.period != hw.config.period {
                     return Reply::Refused(Refusal::Rate);
                 }
-                match Firmware::new(config) {
+                match board_firmware(config) {
                     Ok(fw) => {
                         self.firmware = Some(fw);
                         if config != self.hw.config {
@@ -102,7 +105,7 @@ impl<H: ArmIo> ArmApp<H> {
                         self.hw.config = config;
                         Reply::Done
                     }
-                    Err(_) => Reply::Refused(Refusal::InvalidConfig),
+                    Err(why) => Reply::Refused(why),
                 }
             }
             Request::LiftTorqueLimit => {
@@ -122,6 +125,9 @@ impl<H: ArmIo> ArmApp<H> {
                 }
             },
             Request::Save if !hw.cal.missing().is_empty() => Reply::Refused(Refusal::Incomplete(hw.cal.missing())),
+            // The settings in force are the record: a save would say "done" having
+            // saved nothing the operator sent (a reset since reloaded the record).
+            Request::Save if hw.settings == Settings::Saved => Reply::Refused(Refusal::NothingToSave),
             Request::Save => match record::save(&mut hw.flash, &Stored { calibration: hw.cal, config: hw.config }) {
                 Ok(()) => {
                     hw.settings = Settings::Saved;

@@ -23,7 +23,8 @@ pub trait QuadratureCounter {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BeltError {
     /// `metres_per_count` or `period_s` is NaN, infinite, zero (or, for the
-    /// period, negative), or their ratio makes a 16-bit count delta overflow.
+    /// period, negative), or their ratio is outside `MIN_MM_S_PER_COUNT` to
+    /// `MAX_MM_S_PER_COUNT` mm/s per count ([`scale`]).
     InvalidScale,
     /// The speed is beyond +-[`MAX_SPEED_MM_S`]: `delta_counts` counts in one period.
     OutOfRange {
@@ -43,15 +44,36 @@ impl fmt::Display for BeltError {
     }
 }
 
-/// mm/s per count of change over one period of `period_s`, at `metres_per_count`.
+/// The finest belt scale, mm/s per count of change over one period: the
+/// counter's 16-bit change in one period must hold the frame's largest speed,
+/// [`MAX_SPEED_MM_S`] (5000 / 32767 = 0.153 mm/s per count), or the count would
+/// wrap within a period and a fast belt read as a slow one.
+pub const MIN_MM_S_PER_COUNT: f32 = MAX_SPEED_MM_S as f32 / 32767.0;
+
+/// The coarsest belt scale, mm/s per count of change over one period: 100 mm/s
+/// (the paper's belt speeds, 0.1 to 1 m/s, read to one count in 1 to 10). The
+/// reference board's encoder, 1 um per count, gives 1 mm/s per count at 1 kHz
+/// and 10 at 10 kHz (docs/hardware.md "Full scales and signs").
+pub const MAX_MM_S_PER_COUNT: f32 = 100.0;
+
+/// mm/s per count of change over one period of `period_s`, at `metres_per_count`
+/// (negative flips the direction). The one rule of the firmware, the bring-up's
+/// `Restore` and the flash record, the backup files and the scenario files'
+/// `[calibration]`.
 ///
 /// # Errors
 /// [`BeltError::InvalidScale`] when either is NaN, infinite or zero (the period
-/// negative), or a 16-bit count delta would overflow: no speed is ever inf or NaN.
+/// negative), or the scale's magnitude is outside [`MIN_MM_S_PER_COUNT`] to
+/// [`MAX_MM_S_PER_COUNT`] mm/s per count: no speed is ever inf or NaN, and a
+/// 16-bit count a period holds every speed the frame carries.
 pub fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
     let mm_s_per_count = metres_per_count * 1000.0 / period_s;
-    let valid = period_s > 0.0 && metres_per_count != 0.0 && mm_s_per_count != 0.0;
-    if valid && (mm_s_per_count * 32768.0).is_finite() { Ok(mm_s_per_count) } else { Err(BeltError::InvalidScale) }
+    let valid = period_s > 0.0 && period_s.is_finite() && metres_per_count.is_finite();
+    if valid && (MIN_MM_S_PER_COUNT..=MAX_MM_S_PER_COUNT).contains(&mm_s_per_count.abs()) {
+        Ok(mm_s_per_count)
+    } else {
+        Err(BeltError::InvalidScale)
+    }
 }
 
 /// The belt's speed from a quadrature counter read once per control period.
@@ -185,6 +207,11 @@ mod tests {
         assert_eq!(new(f32::INFINITY, 1e-3), Err(BeltError::InvalidScale));
         assert_eq!(new(1e30, 1e-9), Err(BeltError::InvalidScale));
         assert_eq!(new(1e-45, 1e30), Err(BeltError::InvalidScale)); // underflows to 0 mm/s per count
+        // Too fine a scale (5 m/s wraps the counter within a period), too coarse a one.
+        assert_eq!(new(1e-8, 1e-3), Err(BeltError::InvalidScale));
+        assert_eq!(new(-1e-6, 1e-3), Ok(()));
+        assert_eq!(new(1.01e-4, 1e-3), Err(BeltError::InvalidScale));
+        assert_eq!(new(0.99e-4, 1e-3), Ok(()));
     }
 
     proptest! {

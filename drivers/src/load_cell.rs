@@ -38,21 +38,63 @@ pub enum Axis {
     Normal,
 }
 
+/// The nominal gain of the reference front end, N per count: +-25 N over
+/// +-2048 counts (docs/hardware.md "Full scales and signs": 81.92 counts per N),
+/// one ADC count one wire code.
+pub const NOMINAL_NEWTONS_PER_COUNT: f32 = LOAD_FULL_SCALE_N / 2048.0;
+
+/// How far a gain may lie from [`NOMINAL_NEWTONS_PER_COUNT`], as a factor either
+/// way: a gain in `[nominal / 4, 4 nominal]` (0.00305 to 0.0488 N per count) is
+/// taken. Why: the front end's amplifiers are set so that the load cell's +-25 N
+/// fill the ADC's 4096 counts; a gain 4 times the nominal one would put 25 N at
+/// 512 counts (the 12-bit ADC used as a 9-bit one, 50 mN a count: the force
+/// loop's noise floor), a gain a quarter of it would clip the ADC at 6.25 N,
+/// below the reference force `f_n*` of 10 N. Beyond these the front end is
+/// mis-built or mis-spanned (a weight on the wrong axis, a span of the noise),
+/// and the force loop would be blind (a gain of 1e-45 reads every force as 0)
+/// or deafened. The sign is positive: the count increases with the force in its
+/// positive direction on the reference board (docs/hardware.md); a load cell of
+/// the wrong sign is a wiring fault to fix, not to calibrate away.
+pub const GAIN_FACTOR: f32 = 4.0;
+
 /// Why a [`Calibration`] was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CalibrationError {
     /// The zero is NaN, infinite, or outside `0..=4095` counts.
     BadZero(Axis),
-    /// The gain is NaN, infinite, zero, or so large that a full-scale count
-    /// difference (4095) overflows `f32`.
+    /// The gain is NaN, infinite, not positive, or outside
+    /// `[nominal / GAIN_FACTOR, nominal * GAIN_FACTOR]` ([`GAIN_FACTOR`]).
     BadGain(Axis),
+}
+
+impl CalibrationError {
+    /// The axis whose value is refused.
+    pub fn axis(self) -> Axis {
+        match self {
+            Self::BadZero(a) | Self::BadGain(a) => a,
+        }
+    }
+}
+
+impl Axis {
+    /// The axis's index in every `[_; 2]` (0 tangential, 1 normal).
+    pub fn index(self) -> usize {
+        match self {
+            Self::Tangential => 0,
+            Self::Normal => 1,
+        }
+    }
 }
 
 impl fmt::Display for CalibrationError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             CalibrationError::BadZero(a) => write!(f, "load cell {a:?}: zero must be finite and within 0..=4095 counts"),
-            CalibrationError::BadGain(a) => write!(f, "load cell {a:?}: gain must be finite and non-zero"),
+            CalibrationError::BadGain(a) => write!(
+                f,
+                "load cell {a:?}: gain must be positive, within a factor 4 of the nominal 25/2048 N per count \
+                 (0.00305 to 0.0488 N per count)"
+            ),
         }
     }
 }
@@ -62,7 +104,8 @@ impl fmt::Display for CalibrationError {
 pub struct Calibration {
     /// ADC count at zero force `[tangential, normal]`, in `0..=4095`.
     pub zero_counts: [f32; 2],
-    /// Gain `[tangential, normal]`, N per count; non-zero (negative flips the axis).
+    /// Gain `[tangential, normal]`, N per count; positive, within a factor
+    /// [`GAIN_FACTOR`] of [`NOMINAL_NEWTONS_PER_COUNT`].
     pub newtons_per_count: [f32; 2],
 }
 
@@ -70,12 +113,16 @@ impl Default for Calibration {
     /// The nominal front end: zero at mid-scale (2048 counts) and +-25 N over
     /// +-2048 counts, i.e. one ADC count is one wire code (25/2048 N).
     fn default() -> Self {
-        Self { zero_counts: [2048.0; 2], newtons_per_count: [LOAD_FULL_SCALE_N / 2048.0; 2] }
+        Self { zero_counts: [2048.0; 2], newtons_per_count: [NOMINAL_NEWTONS_PER_COUNT; 2] }
     }
 }
 
 impl Calibration {
-    /// Checks the calibration, so that every force it gives is finite.
+    /// Checks the calibration: every force it gives is finite, and the front end
+    /// is one the reference board's can be (zero within the ADC, gain positive and
+    /// within a factor [`GAIN_FACTOR`] of the nominal one). The one rule of the
+    /// firmware, the bring-up's `Restore` and the flash record, the backup files
+    /// and the scenario files' `[calibration]`.
     ///
     /// # Errors
     /// [`CalibrationError::BadZero`], [`CalibrationError::BadGain`] (first bad axis).
@@ -85,7 +132,8 @@ impl Calibration {
             if !(zero.is_finite() && (0.0..=ADC_MAX_COUNT as f32).contains(&zero)) {
                 return Err(CalibrationError::BadZero(axis));
             }
-            if gain == 0.0 || !(gain * ADC_MAX_COUNT as f32).is_finite() {
+            let (lo, hi) = (NOMINAL_NEWTONS_PER_COUNT / GAIN_FACTOR, NOMINAL_NEWTONS_PER_COUNT * GAIN_FACTOR);
+            if !(lo..=hi).contains(&gain) {
                 return Err(CalibrationError::BadGain(axis));
             }
         }
@@ -259,8 +307,8 @@ mod tests {
     fn codes_clamp_at_full_scale() {
         assert_eq!(cell(Ok([4095, 0])).read_codes(), Ok([2047, -2048]));
         // A steeper front end saturates earlier, at the wire's ends.
-        let cal = Calibration { zero_counts: [2048.0; 2], newtons_per_count: [0.1, -0.1] };
-        let mut lc = LoadCell::new(FakeAdc(Ok([4095, 4095])), cal).unwrap();
+        let cal = Calibration { zero_counts: [2048.0; 2], newtons_per_count: [0.04; 2] };
+        let mut lc = LoadCell::new(FakeAdc(Ok([4095, 0])), cal).unwrap();
         assert_eq!(lc.read_codes(), Ok([LOAD_CODE_MAX, LOAD_CODE_MIN]));
     }
 
@@ -275,14 +323,23 @@ mod tests {
     fn calibration_is_validated() {
         let ok = Calibration::default();
         assert_eq!(ok.validate(), Ok(()));
+        let n = NOMINAL_NEWTONS_PER_COUNT;
         let with = |z: [f32; 2], g: [f32; 2]| Calibration { zero_counts: z, newtons_per_count: g }.validate();
-        assert_eq!(with([f32::NAN, 0.0], [1.0; 2]), Err(CalibrationError::BadZero(Axis::Tangential)));
-        assert_eq!(with([0.0, 4095.5], [1.0; 2]), Err(CalibrationError::BadZero(Axis::Normal)));
-        assert_eq!(with([0.0, -1.0], [1.0; 2]), Err(CalibrationError::BadZero(Axis::Normal)));
-        assert_eq!(with([0.0, 4095.0], [1.0, 0.0]), Err(CalibrationError::BadGain(Axis::Normal)));
-        assert_eq!(with([0.0; 2], [f32::INFINITY, 1.0]), Err(CalibrationError::BadGain(Axis::Tangential)));
-        assert_eq!(with([0.0; 2], [1.0, f32::NAN]), Err(CalibrationError::BadGain(Axis::Normal)));
-        assert_eq!(with([0.0; 2], [1.0, f32::MAX / 1000.0]), Err(CalibrationError::BadGain(Axis::Normal)));
+        assert_eq!(with([f32::NAN, 0.0], [n; 2]), Err(CalibrationError::BadZero(Axis::Tangential)));
+        assert_eq!(with([0.0, 4095.5], [n; 2]), Err(CalibrationError::BadZero(Axis::Normal)));
+        assert_eq!(with([0.0, -1.0], [n; 2]), Err(CalibrationError::BadZero(Axis::Normal)));
+        assert_eq!(with([0.0, 4095.0], [n, 0.0]), Err(CalibrationError::BadGain(Axis::Normal)));
+        assert_eq!(with([0.0; 2], [f32::INFINITY, n]), Err(CalibrationError::BadGain(Axis::Tangential)));
+        assert_eq!(with([0.0; 2], [n, f32::NAN]), Err(CalibrationError::BadGain(Axis::Normal)));
+        assert_eq!(with([0.0; 2], [n, f32::MAX / 1000.0]), Err(CalibrationError::BadGain(Axis::Normal)));
+        // The audit's blind front end (issue 52): 1e-45 N per count reads every force as 0.
+        assert_eq!(with([2048.0; 2], [1e-45, n]), Err(CalibrationError::BadGain(Axis::Tangential)));
+        // A negative gain: a load cell of the wrong sign.
+        assert_eq!(with([2048.0; 2], [n, -n]), Err(CalibrationError::BadGain(Axis::Normal)));
+        // The range's ends are taken, just beyond them is not.
+        assert_eq!(with([2048.0; 2], [n / GAIN_FACTOR, n * GAIN_FACTOR]), Ok(()));
+        assert_eq!(with([2048.0; 2], [(n / GAIN_FACTOR).next_down(), n]), Err(CalibrationError::BadGain(Axis::Tangential)));
+        assert_eq!(with([2048.0; 2], [n, (n * GAIN_FACTOR).next_up()]), Err(CalibrationError::BadGain(Axis::Normal)));
         assert!(LoadCell::new(FakeAdc(Ok([0, 0])), Calibration { zero_counts: [0.0; 2], newtons_per_count: [0.0; 2] }).is_err());
     }
 
@@ -327,8 +384,8 @@ mod tests {
         }
 
         #[test]
-        fn any_count_gives_finite_forces(counts in any::<[u16; 2]>(), z in 0.0f32..=4095.0, g in -1e30f32..1e30) {
-            prop_assume!(g != 0.0);
+        fn any_count_gives_finite_forces(counts in any::<[u16; 2]>(), z in 0.0f32..=4095.0, g in 0.25f32..=4.0) {
+            let g = g * NOMINAL_NEWTONS_PER_COUNT;
             let cal = Calibration { zero_counts: [z; 2], newtons_per_count: [g; 2] };
             let mut lc = LoadCell::new(FakeAdc(Ok(counts)), cal).unwrap();
             match lc.read_newtons() {

@@ -117,11 +117,15 @@ impl From<rig::bringup_procedure::StepError> for Error {
 }
 
 /// Whether a run failed on its input rather than while running: the rig is
-/// another's, or the firmware process or a service does not fit (exit 2).
+/// another's, the firmware process or a service does not fit, or the scenario
+/// asks a board for what it never runs (exit 2).
 fn run_is_bad_input(e: &rig::record::RunError) -> bool {
     matches!(
         e,
-        rig::record::RunError::RigInUse { .. } | rig::record::RunError::Handshake(_) | rig::record::RunError::IncompatibleService(_)
+        rig::record::RunError::RigInUse { .. }
+            | rig::record::RunError::Handshake(_)
+            | rig::record::RunError::IncompatibleService(_)
+            | rig::record::RunError::NotOnABoard(_)
     )
 }
 

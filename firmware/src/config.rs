@@ -116,7 +116,8 @@ pub struct Config {
     pub target_z_t: f32,
     /// Duration of the quintic move from the initial tip position to the target, s.
     pub move_time_s: f32,
-    /// Normal force reference `f_n*`, N (hybrid law).
+    /// Normal force reference `f_n*`, N (hybrid law): within the load cell's
+    /// range, `[0, 25]` N (`shared::wire::LOAD_FULL_SCALE_N`, docs/hardware.md).
     pub f_n_ref: f32,
     /// Bumpless start of the hybrid law, s: `f_n*` ramps (quintic) from the normal
     /// force measured at the first frame to `f_n_ref` over this time (0: a step).
@@ -228,10 +229,13 @@ pub enum ConfigError {
 }
 
 impl Config {
-    /// Checks every setting.
+    /// Checks every setting. The runaway limits may be off here (a study without a
+    /// board); a board's application refuses that itself (`arm_app`, docs/board.md
+    /// "Runaway limits").
     ///
     /// # Errors
-    /// [`ConfigError`] naming the first bad field.
+    /// [`ConfigError`] naming the first bad field (its name as in the struct,
+    /// `pid.kp` for a nested one).
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.params.validate()?;
         let check = |name: &'static str, value: f32, ok: bool, expected: &'static str| {
@@ -241,7 +245,12 @@ impl Config {
         check("period_us", us as f32, (100..=4000).contains(&us), "100 to 4000 us (250 Hz to 10 kHz)")?;
         check("target_z_t", self.target_z_t, self.target_z_t.abs() < 2.0 * self.params.l, "|z_t*| < 2 l")?;
         check("move_time_s", self.move_time_s, self.move_time_s > 0.0, "> 0")?;
-        check("f_n_ref", self.f_n_ref, self.f_n_ref >= 0.0, ">= 0")?;
+        check(
+            "f_n_ref",
+            self.f_n_ref,
+            (0.0..=shared::wire::LOAD_FULL_SCALE_N).contains(&self.f_n_ref),
+            "[0, 25] N (the load cell's range)",
+        )?;
         check("force_ramp_s", self.force_ramp_s, self.force_ramp_s >= 0.0, ">= 0")?;
         for (name, v) in [("pid.kp", self.pid.kp), ("pid.ki", self.pid.ki), ("pid.kd", self.pid.kd)] {
             check(name, v[0], v[0] >= 0.0 && v[1] >= 0.0 && v[1].is_finite(), ">= 0")?;

@@ -11,10 +11,13 @@
 //! reset and takes whole or not at all. Floats are written so that they read back
 //! to the same `f32` bits.
 //!
-//! Reading a file here checks its form only: TOML, the format version, every key
-//! known, present and of its type (the error names the key). The values' ranges
-//! are the firmware's to check; [`explain_invalid`] names the value the firmware
-//! would refuse, for the message.
+//! Reading a file here checks its form: TOML, the format version, every key
+//! known, present and of its type (the error names the key). [`validate`] then
+//! checks its values with the firmware's own rules (`firmware::Config::validate`,
+//! the runaway limits on, the encoders' zeros, `drivers::load_cell::Calibration::validate`,
+//! `drivers::belt::scale`: the rules the scenario files' path calls too), and the
+//! bring-up protocol it was made with, naming the key; the firmware checks them
+//! again when it takes the file.
 
 use std::path::Path;
 
@@ -147,31 +150,49 @@ fn unknown_key(doc: &toml::Table, canonical: &toml::Table, prefix: &str) -> Opti
     None
 }
 
-/// Which of `b`'s values the firmware refuses, in words, with its range: the
-/// same checks as the firmware's (`firmware::Config::validate`, the encoders'
-/// zeros, `drivers::load_cell::Calibration::validate`, `drivers::belt::scale`),
-/// for the message of a refused restore. `None` when all pass.
-pub fn explain_invalid(b: &Backup) -> Option<String> {
-    if let Err(e) = b.config.validate() {
-        return Some(format!("config: {e}"));
+/// Checks `b` before it is sent, naming the key of the first value refused:
+/// its `protocol` (a backup of another bring-up protocol is refused, both
+/// named), then each value by the firmware's own rule, as the firmware checks
+/// its flash record at reset and `Restore` (the configuration by
+/// `firmware::Config::validate` and the runaway limits on, the encoders' zeros
+/// below 2^14, the load cell's calibration by `drivers::load_cell::Calibration::validate`,
+/// the belt's scale by `drivers::belt::scale` at the configuration's period).
+///
+/// # Errors
+/// `"backup key `config.f_n_ref` = 100: ..."`, in words.
+pub fn validate(b: &Backup) -> Result<(), String> {
+    let protocol = arm_app::bringup::BRINGUP_PROTOCOL;
+    if b.protocol != protocol {
+        return Err(format!(
+            "backup key `protocol` = {}: the backup was made with bring-up protocol {}, this sil-host speaks protocol {protocol} \
+             (make the backup again with this version, or restore it with the sil-host of protocol {})",
+            b.protocol, b.protocol, b.protocol
+        ));
+    }
+    crate::bringup_procedure::check_protection(&b.config, "backup key `config.runaway_limits`")?;
+    match b.config.validate() {
+        Ok(()) => {}
+        Err(firmware::config::ConfigError::OutOfRange { name, value, expected }) => {
+            return Err(format!("backup key `config.{name}` = {value}: out of range ({expected})"));
+        }
+        Err(firmware::config::ConfigError::Params(e)) => return Err(format!("backup key `config.params`: {e}")),
     }
     let c = &b.calibration;
     for (i, z) in c.zero_counts.iter().enumerate() {
         if *z >= 1 << 14 {
-            return Some(format!("calibration.zero_counts[{i}] = {z}: must be below 16384 (14-bit encoder counts)"));
+            return Err(format!("backup key `calibration.zero_counts[{i}]` = {z}: must be below 16384 (14-bit encoder counts)"));
         }
     }
     let load = drivers::load_cell::Calibration { zero_counts: c.load_zero_counts, newtons_per_count: c.load_newtons_per_count };
-    if let Err(e) = load.validate() {
-        return Some(format!("calibration.load_zero_counts / load_newtons_per_count: {e}"));
-    }
-    if drivers::belt::scale(c.belt_metres_per_count, b.config.period.as_secs_f32()).is_err() {
-        return Some(format!(
-            "calibration.belt_metres_per_count = {}: must be finite and non-zero, and a 16-bit count a period must stay finite in mm/s",
-            c.belt_metres_per_count
-        ));
-    }
-    None
+    let key = |e: String| format!("backup key {e}");
+    crate::calibration::check_load_cell(&load, "calibration.load_zero_counts", "calibration.load_newtons_per_count").map_err(key)?;
+    crate::calibration::check_belt("calibration.belt_metres_per_count", c.belt_metres_per_count, b.config.period.as_secs_f32()).map_err(key)
+}
+
+/// Which of `b`'s values the firmware refuses, in words ([`validate`]'s
+/// message), for the message of a refused restore. `None` when all pass.
+pub fn explain_invalid(b: &Backup) -> Option<String> {
+    validate(b).err()
 }
 
 #[cfg(test)]
@@ -180,7 +201,12 @@ mod tests {
 
     fn backup() -> Backup {
         let cal = crate::calibration::CalibrationSection::default().arm_calibration();
-        Backup { format: BACKUP_FORMAT, protocol: 5, calibration: CalibrationRecord::brought_up(&cal), config: Config::default() }
+        Backup {
+            format: BACKUP_FORMAT,
+            protocol: arm_app::bringup::BRINGUP_PROTOCOL,
+            calibration: CalibrationRecord::brought_up(&cal),
+            config: Config::default(),
+        }
     }
 
     #[test]
@@ -208,19 +234,31 @@ mod tests {
     }
 
     #[test]
-    fn the_firmware_s_checks_are_named_for_the_message() {
-        assert_eq!(explain_invalid(&backup()), None);
-        let mut b = backup();
-        b.config.torque_limit = 50.0;
-        assert!(explain_invalid(&b).unwrap().contains("torque_limit"));
-        let mut b = backup();
-        b.calibration.zero_counts[1] = 16384;
-        assert!(explain_invalid(&b).unwrap().contains("zero_counts[1] = 16384"));
-        let mut b = backup();
-        b.calibration.load_zero_counts[0] = f32::NAN;
-        assert!(explain_invalid(&b).unwrap().contains("load cell"));
-        let mut b = backup();
-        b.calibration.belt_metres_per_count = 0.0;
-        assert!(explain_invalid(&b).unwrap().contains("belt_metres_per_count"));
+    fn the_firmware_s_checks_are_named_by_their_keys() {
+        assert_eq!(validate(&backup()), Ok(()));
+        let refused = |f: &dyn Fn(&mut Backup)| {
+            let mut b = backup();
+            f(&mut b);
+            validate(&b).unwrap_err()
+        };
+        let e = refused(&|b| b.config.torque_limit = 50.0);
+        assert!(e.contains("`config.torque_limit` = 50"), "{e}");
+        let e = refused(&|b| b.calibration.zero_counts[1] = 16384);
+        assert!(e.contains("`calibration.zero_counts[1]` = 16384"), "{e}");
+        let e = refused(&|b| b.calibration.load_zero_counts[0] = f32::NAN);
+        assert!(e.contains("`calibration.load_zero_counts[0]` = NaN"), "{e}");
+        let e = refused(&|b| b.calibration.belt_metres_per_count = 0.0);
+        assert!(e.contains("`calibration.belt_metres_per_count` = 0"), "{e}");
+        // Issue 52: what the scenario path refused, a backup took.
+        let e = refused(&|b| b.config.f_n_ref = 100.0);
+        assert!(e.contains("`config.f_n_ref` = 100") && e.contains("[0, 25] N"), "{e}");
+        let e = refused(&|b| b.calibration.load_newtons_per_count[0] = 1e-45);
+        assert!(e.contains("`calibration.load_newtons_per_count[0]` = 1e-45") && e.contains("factor 4"), "{e}");
+        let e = refused(&|b| b.calibration.load_newtons_per_count[1] = -0.012);
+        assert!(e.contains("`calibration.load_newtons_per_count[1]` = -1.2e-2") && e.contains("positive"), "{e}");
+        let e = refused(&|b| b.config.runaway_limits = false);
+        assert!(e.contains("`config.runaway_limits` = false") && e.contains("cannot be turned off on a board"), "{e}");
+        let e = refused(&|b| b.protocol = 5);
+        assert!(e.contains("protocol 5") && e.contains("protocol 6"), "{e}");
     }
 }

@@ -37,6 +37,21 @@ pub enum StepError {
     Refused(String),
 }
 
+/// Why a board refuses the runaway limits off (`Refusal::ProtectionOff`,
+/// `RecordFault::ProtectionOff`, and the host's own checks of a scenario or a
+/// backup before it reaches a board).
+pub const PROTECTION_OFF: &str = "the runaway limits cannot be turned off on a board; the studies that need them off run without \
+                                  a board (`run --in-process`/`--link ipc`)";
+
+/// [`PROTECTION_OFF`] for a configuration that turns them off, the key named:
+/// `Err` when `config.runaway_limits` is false.
+///
+/// # Errors
+/// `"{key} = false: {PROTECTION_OFF}"`.
+pub fn check_protection(config: &firmware::Config, key: &str) -> Result<(), String> {
+    if config.runaway_limits { Ok(()) } else { Err(format!("{key} = false: {PROTECTION_OFF}")) }
+}
+
 /// A refusal in words, with what to do.
 pub fn describe_refusal(r: &Refusal) -> String {
     match r {
@@ -56,6 +71,11 @@ pub fn describe_refusal(r: &Refusal) -> String {
         Refusal::LockedOut(s) => s.describe().into(),
         Refusal::Flash(f) => format!("the save failed: {}", f.describe()),
         Refusal::Incomplete(m) => format!("the calibration lacks {}", describe_missing(*m)),
+        Refusal::ProtectionOff => format!("controller.runaway_limits = false: {PROTECTION_OFF}"),
+        Refusal::NothingToSave => "nothing to save: the settings in force are already the record in flash (loaded at the last reset, \
+                                   or saved since); a change sent before a reset is discarded by it (the reset reloads the record): \
+                                   send it again, then save"
+            .into(),
     }
 }
 
@@ -352,21 +372,29 @@ fn calibrate_after_zeros<S: Read + Write>(
 /// 1 kHz; the rest is the line's and a loaded host's slack.
 pub const ENABLE_TIMEOUT: Duration = Duration::from_secs(2);
 
-/// Enables the drivers and reads the state back until the enable has an
-/// outcome: `Ok` once the drivers came on (its `drivers_enabled` says whether
-/// a safety check has turned them off again since: a free arm's consistency
-/// check does within periods).
+/// How long `enable` watches the drivers once they came on, in the board's
+/// control periods (50 ms at 1 kHz), before it says done: the firmware's checks
+/// that need a few periods to confirm a fault (the sensor consistency check
+/// latches within 3 to 24 periods on an arm that cannot be where its sensors
+/// say, the runaway limits within 3 or 10 ms) have all had their time. A board
+/// whose period counter stops for 5 s is reported (its control tick stopped).
+pub const ENABLE_WATCH_PERIODS: u32 = 50;
+
+/// Enables the drivers, reads the state back until the enable has an outcome,
+/// then watches the drivers for [`ENABLE_WATCH_PERIODS`] of the board's
+/// periods: `Ok` only when they came on and are still on at the end.
 ///
 /// # Errors
 /// [`StepError::Refused`] when the board refuses (locked out, incomplete
 /// calibration: saying why), when the drivers did not come on (their fault
-/// line, the firmware's safe state with its reason in words), or when no
-/// outcome came within [`ENABLE_TIMEOUT`];
-/// [`StepError::Line`] for the line.
+/// line, the firmware's safe state with its reason in words), when no outcome
+/// came within [`ENABLE_TIMEOUT`], or when the drivers went off within the
+/// watch (the period and the firmware's status word in words: the safe state
+/// and its reason); [`StepError::Line`] for the line.
 pub fn enable<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
     ask(c, Request::Enable)?;
     let start = std::time::Instant::now();
-    loop {
+    let on_at = loop {
         let st = status(c)?;
         match st.last_enable {
             EnableOutcome::Pending if start.elapsed() < ENABLE_TIMEOUT => std::thread::sleep(Duration::from_millis(5)),
@@ -377,11 +405,35 @@ pub fn enable<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
                     st.periods
                 )));
             }
-            // The drivers came on: done, whether or not a safety check has turned
-            // them off again by this read-back (that race depends on the host's
-            // speed; the caller says it from `drivers_enabled` and the status word).
-            EnableOutcome::Enabled { .. } => return Ok(st),
+            EnableOutcome::Enabled { seq } => break seq,
             other => return Err(StepError::Refused(format!("enable: the drivers are off: {}", describe_enable(&other)))),
         }
+    };
+    watch_drivers(c, on_at)
+}
+
+/// Watches the drivers that came on at period `on_at` until the board has run
+/// [`ENABLE_WATCH_PERIODS`] periods since, polling its status.
+fn watch_drivers<S: Read + Write>(c: &mut Client<S>, on_at: u32) -> Result<Status, StepError> {
+    let (mut last, mut since) = (None, std::time::Instant::now());
+    loop {
+        let st = status(c)?;
+        if !st.drivers_enabled {
+            return Err(StepError::Refused(format!(
+                "enable: the drivers came on at period {on_at} and went off again by period {} (watched for {ENABLE_WATCH_PERIODS} \
+                 periods): {}",
+                st.periods,
+                describe_status(st.status)
+            )));
+        }
+        if st.periods.wrapping_sub(on_at) >= ENABLE_WATCH_PERIODS {
+            return Ok(st);
+        }
+        if last != Some(st.periods) {
+            (last, since) = (Some(st.periods), std::time::Instant::now());
+        } else if since.elapsed() > Duration::from_secs(5) {
+            return Err(StepError::Refused(format!("enable: the board's control tick stopped at period {}", st.periods)));
+        }
+        std::thread::sleep(Duration::from_millis(5));
     }
 }

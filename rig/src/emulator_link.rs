@@ -77,7 +77,8 @@ impl EmulatorLink {
     /// load-cell noise.
     ///
     /// # Errors
-    /// [`RunError::Unsupported`] for a fault the emulator cannot inject;
+    /// [`RunError::NotOnABoard`] for the runaway limits off (a board never runs
+    /// without them); [`RunError::Unsupported`] for a fault the emulator cannot inject;
     /// [`RunError::Board`] for an image that cannot be read, a rate other than
     /// the image's, a board or calibration refused.
     pub fn new(s: &Scenario, image: &Path) -> Result<Self, RunError> {
@@ -92,7 +93,8 @@ impl EmulatorLink {
     /// As [`EmulatorLink::new`].
     pub fn with_mode(s: &Scenario, image: &Path, mode: Mode) -> Result<Self, RunError> {
         LinkKind::Emulator.check(&s.faults)?;
-        s.calibration.check().map_err(RunError::Board)?;
+        crate::bringup_procedure::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let period_us = s.timing.period().as_us();
         if period_us != IMAGE_PERIOD_US {
             return Err(RunError::Board(format!(

@@ -5,7 +5,11 @@
 //! procedure asks for the belt lowered below the hanging tip; here the base
 //! stands 0.4199 m above it (within the arm's 0.42 m reach, so the simulator
 //! takes it), and the arm at rest, its elbow bent by the spring between the
-//! links, clears it by a few millimetres; a jog lifts the tip.
+//! links, clears it by a few millimetres; a jog lifts the tip. For the first
+//! enable and closed-loop run (steps 7 and 8) the belt is raised to the tip
+//! ([`FreeArm::move_belt`], `belt up` on `board-twin`'s standard input): the arm
+//! stands at the scenario's initial state with its tip on the belt, which runs at
+//! the scenario's `v_belt`, held there while the drivers are off.
 
 use arm_app::bringup::Request;
 use board_emulator::{ArmImage, EmulatedBoard, SpiFaults, core_clock::Mode};
@@ -58,6 +62,8 @@ pub trait ArmBoard {
     /// # Errors
     /// The board's failure to come back, in words.
     fn reset(&mut self, arm: &ArmState) -> Result<(), String>;
+    /// Whether the motor drivers are enabled after the last tick.
+    fn drivers_enabled(&self) -> bool;
 }
 
 /// The board twin with the image's idle loop: requests out of the line's frames.
@@ -95,6 +101,10 @@ impl ArmBoard for TwinBench {
         self.replies.clear();
         Ok(())
     }
+
+    fn drivers_enabled(&self) -> bool {
+        self.twin.drivers_enabled()
+    }
 }
 
 impl ArmBoard for EmulatedBoard {
@@ -110,6 +120,11 @@ impl ArmBoard for EmulatedBoard {
     fn reset(&mut self, arm: &ArmState) -> Result<(), String> {
         EmulatedBoard::reset(self, arm).map(|_| ()).map_err(|e| e.to_string())
     }
+
+    fn drivers_enabled(&self) -> bool {
+        // The image's monitor block, as a debug probe reads it.
+        self.monitor().is_some_and(|m| m.drivers_enabled != 0)
+    }
 }
 
 /// The arm, its board, and the board's application or image.
@@ -124,7 +139,20 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     load: Load,
     /// The reset button, pressed by whoever holds it: the next tick resets first.
     reset_button: ResetButton,
+    /// The belt's position asked by whoever moves it (`true`: raised to the tip).
+    belt: BeltLift,
+    /// The belt's position now.
+    raised: bool,
+    /// The belt's travel, m (its encoder's count): it runs while raised.
+    belt_travel_m: f64,
+    /// The scenario: its plant at its initial state is the arm on the raised belt.
+    scenario: Box<Scenario>,
 }
+
+/// The belt's lift, shared with whoever works it (the twin's operator on its
+/// standard input, `belt up` and `belt down`): `true` raises the belt to the
+/// tip from the next tick on, `false` lowers it below the hanging tip.
+pub type BeltLift = std::sync::Arc<std::sync::atomic::AtomicBool>;
 
 /// The reset button (NRST), shared with whoever presses it (the twin's
 /// operator on its standard input): `true` until the next tick takes it.
@@ -171,6 +199,10 @@ impl FreeArm<EmulatedBoard> {
             faults: BusFaults::default(),
             load: Load::default(),
             reset_button: ResetButton::default(),
+            belt: BeltLift::default(),
+            raised: false,
+            belt_travel_m: 0.0,
+            scenario: Box::new(s.clone()),
         })
     }
 }
@@ -211,6 +243,10 @@ impl FreeArm<TwinBench> {
             faults: BusFaults::default(),
             load: Load::default(),
             reset_button: ResetButton::default(),
+            belt: BeltLift::default(),
+            raised: false,
+            belt_travel_m: 0.0,
+            scenario: Box::new(s.clone()),
         };
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
@@ -236,13 +272,59 @@ impl<B: ArmBoard> FreeArm<B> {
         if self.reset_button.swap(false, std::sync::atomic::Ordering::Relaxed) {
             self.reset()?;
         }
+        let raise = self.belt.load(std::sync::atomic::Ordering::Relaxed);
+        if raise != self.raised {
+            self.move_belt(raise)?;
+        }
         self.sensed = self.plant.state();
         let load = *self.load.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let f = self.plant.contact_force(self.u);
-        let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: 0.0 };
+        let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: self.belt_travel_m };
         self.u = self.board.tick(&arm, &self.faults).map_err(FreeArmError::Emulated)?;
+        if self.raised {
+            self.belt_travel_m += self.scenario.plant.v_belt * self.ts;
+            // On the raised belt the operator holds the arm at its pose while the
+            // drivers are off (as before a run's enable, docs/board.md "The board
+            // twin"); it moves under the drivers' torques once they are on.
+            if !self.board.drivers_enabled() {
+                return Ok(());
+            }
+        }
         self.plant.advance(&Hold(self.u), self.ts, &mut NoObserver)?;
         Ok(())
+    }
+
+    /// Raises the belt to the tip (`true`: the arm stood at the scenario's
+    /// initial state with its tip on the belt, which runs at the scenario's
+    /// `v_belt`: docs/board.md "Bring-up", step 7) or lowers it below the
+    /// hanging tip (`false`: the arm left where it is, at rest).
+    ///
+    /// # Errors
+    /// [`FreeArmError::Sim`] when the plant refuses the new set-up.
+    pub fn move_belt(&mut self, raise: bool) -> Result<(), FreeArmError> {
+        self.plant = if raise {
+            crate::setup::plant_for(&self.scenario)?
+        } else {
+            let x = self.plant.state();
+            let params = shared::Params { h: LOWERED_BELT_H, ..plant_params(&self.scenario) };
+            Plant::new(params, SimConfig::default(), [x[0], 0.0, x[2], 0.0], 0.0, [0.0; 2])?
+        };
+        // The belt's counter goes on from where it was (an encoder counts edges,
+        // it never jumps).
+        self.raised = raise;
+        self.belt.store(raise, std::sync::atomic::Ordering::Relaxed);
+        Ok(())
+    }
+
+    /// The belt's lift, to work from another thread: the next tick raises or
+    /// lowers the belt ([`FreeArm::move_belt`]).
+    pub fn belt_lift(&self) -> BeltLift {
+        self.belt.clone()
+    }
+
+    /// Whether the belt is raised to the tip.
+    pub fn belt_raised(&self) -> bool {
+        self.raised
     }
 
     /// `n` periods.

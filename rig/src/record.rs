@@ -109,6 +109,12 @@ pub enum RunError {
     /// application did not start.
     #[error("board twin: {0}")]
     Board(String),
+    /// The scenario asks a board (`--link twin`, `--link emulator`) for what a
+    /// board never runs: the message names the key (`controller.runaway_limits =
+    /// false`: the runaway limits off) and where such a study runs instead. Bad
+    /// input (exit 2): nothing ran.
+    #[error("{0}")]
+    NotOnABoard(String),
     /// An iceoryx2 service of the rig, created by another process (a monitor
     /// started first), lacks what this run needs: the message names the service,
     /// the attribute, its value and the value to use (docs/rig.md, "Monitors").

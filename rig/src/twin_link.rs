@@ -43,12 +43,14 @@ impl TwinLink {
     /// firmware configuration, its sensors' seed and load-cell noise.
     ///
     /// # Errors
-    /// [`RunError::Unsupported`] for a fault the twin cannot inject;
+    /// [`RunError::NotOnABoard`] for the runaway limits off (a board never runs
+    /// without them); [`RunError::Unsupported`] for a fault the twin cannot inject;
     /// [`RunError::Board`] when the board, the calibration or the configuration
     /// is refused.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
         LinkKind::Twin.check(&s.faults)?;
-        s.calibration.check().map_err(RunError::Board)?;
+        crate::bringup_procedure::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let config = firmware_config(s);
         let announced = crate::handshake::of_config(&config)?;
         let twin = BoardTwin::new(s.board, config, &s.calibration.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)

@@ -219,6 +219,22 @@ fn a_restore_is_checked_by_the_firmware_and_taken_whole_or_not_at_all() {
     let mut s = good;
     s.calibration.belt_metres_per_count = f32::INFINITY;
     bad.push(("an infinite belt scale", s, Refusal::OutOfRange));
+    // Issue 52: what the scenario path refused, a restore took.
+    let mut s = good;
+    s.config.runaway_limits = false;
+    bad.push(("the runaway limits off", s, Refusal::ProtectionOff));
+    let mut s = good;
+    s.config.f_n_ref = 100.0;
+    bad.push(("f_n* of 100 N, four times the load cell's range", s, Refusal::InvalidConfig));
+    let mut s = good;
+    s.calibration.load_newtons_per_count[1] = 1e-45;
+    bad.push(("a load-cell gain of 1e-45 N per count (a blind force loop)", s, Refusal::OutOfRange));
+    let mut s = good;
+    s.calibration.load_newtons_per_count[0] = -25.0 / 2048.0;
+    bad.push(("a negative load-cell gain", s, Refusal::OutOfRange));
+    let mut s = good;
+    s.calibration.belt_metres_per_count = 1e-3;
+    bad.push(("a belt scale of 1 mm per count (1 m/s a count)", s, Refusal::OutOfRange));
     for (what, s, why) in bad {
         assert_eq!(b.twin_mut().serve(Request::Restore(s)), Reply::Refused(why), "{what}");
         assert_eq!(state(&mut b), before, "{what}: the board unchanged");
@@ -249,4 +265,71 @@ fn a_restore_is_checked_by_the_firmware_and_taken_whole_or_not_at_all() {
     assert_eq!(b.twin_mut().serve(Request::Restore(other)), Reply::Refused(Refusal::DriversEnabled));
     assert_eq!(b.twin_mut().serve(Request::Disable), Reply::Done);
     assert_eq!(state(&mut b).0, good);
+}
+
+/// Issue 52 (1): a board never runs without its runaway limits. `Configure`
+/// refuses them off, naming why (`Refusal::ProtectionOff`), the configuration
+/// in force unchanged; a flash record holding them off is refused at reset,
+/// the drivers locked out saying why; and an application whose compiled-in
+/// configuration has them off does not start.
+#[test]
+fn the_runaway_limits_cannot_be_turned_off_on_a_board() {
+    let mut b = bench(BoardDescription::default());
+    b.ticks(3).unwrap();
+    let Reply::Config(before) = b.twin_mut().serve(Request::GetConfig) else { panic!() };
+    assert!(before.runaway_limits);
+    let off = firmware::Config { runaway_limits: false, ..before };
+    assert_eq!(b.twin_mut().serve(Request::Configure(off)), Reply::Refused(Refusal::ProtectionOff));
+    assert_eq!(b.twin_mut().serve(Request::GetConfig), Reply::Config(before), "the configuration in force unchanged");
+    let Reply::Status(st) = b.twin_mut().serve(Request::Status) else { panic!() };
+    assert_eq!(st.settings, Settings::Saved);
+    // Off, and otherwise invalid: the protection is named first.
+    let worse = firmware::Config { f_n_ref: 100.0, ..off };
+    assert_eq!(b.twin_mut().serve(Request::Configure(worse)), Reply::Refused(Refusal::ProtectionOff));
+    assert_eq!(
+        b.twin_mut().serve(Request::Configure(firmware::Config { f_n_ref: 100.0, ..before })),
+        Reply::Refused(Refusal::InvalidConfig)
+    );
+
+    // A record saved with them off (by an earlier image, or written by hand):
+    // refused at reset, the drivers locked out, the button ignored with the reason.
+    let s = scenario();
+    let cal = CalibrationSection::default();
+    let flash = FlashModel::brought_up(&cal.arm_calibration(), off).unwrap();
+    let mut b = FreeArm::with_flash(&s, BoardDescription::default(), &cal, flash).unwrap();
+    let refused = Settings::Corrupt(RecordFault::ProtectionOff);
+    assert_eq!(b.twin_mut().take_notices().first(), Some(&Notice::Settings(refused)));
+    assert_eq!(b.twin_mut().serve(Request::Enable), Reply::Refused(Refusal::LockedOut(refused)));
+    assert!(refused.describe().contains("runaway limits off"), "{}", refused.describe());
+    let Reply::Config(fallback) = b.twin_mut().serve(Request::GetConfig) else { panic!() };
+    assert!(fallback.runaway_limits, "the compiled-in fallback is in force, its limits on");
+
+    // A compiled-in configuration with them off: the application does not start.
+    let twin = board_twin::BoardTwin::with_flash(BoardDescription::default(), FlashModel::erased(), off, &cal.arm_calibration(), 1, 0.0);
+    assert!(matches!(twin, Err(board_twin::TwinError::Start(arm_app::StartError::ProtectionOff))), "{:?}", twin.err());
+}
+
+/// Issue 52 (3): `save` said "done" after a reset had discarded the `Configure`
+/// before it (the reset reloads the flash record): with the record in force
+/// there is nothing to save, and `Save` says so (`Refusal::NothingToSave`).
+#[test]
+fn a_save_after_a_reset_that_discarded_the_change_says_nothing_was_saved() {
+    let mut b = bench(BoardDescription::default());
+    b.ticks(3).unwrap();
+    let Reply::Config(saved) = b.twin_mut().serve(Request::GetConfig) else { panic!() };
+    let changed = firmware::Config { f_n_ref: 7.0, ..saved };
+    assert_eq!(b.twin_mut().serve(Request::Configure(changed)), Reply::Done);
+    let Reply::Status(st) = b.twin_mut().serve(Request::Status) else { panic!() };
+    assert_eq!(st.settings, Settings::Unsaved);
+    // The reset button: the record reloaded, the change gone.
+    b.reset().unwrap();
+    b.ticks(3).unwrap();
+    assert_eq!(b.twin_mut().serve(Request::GetConfig), Reply::Config(saved));
+    assert_eq!(b.twin_mut().serve(Request::Save), Reply::Refused(Refusal::NothingToSave));
+    // Sent again, it saves, and survives the next reset.
+    assert_eq!(b.twin_mut().serve(Request::Configure(changed)), Reply::Done);
+    assert_eq!(b.twin_mut().serve(Request::Save), Reply::Done);
+    b.reset().unwrap();
+    b.ticks(3).unwrap();
+    assert_eq!(b.twin_mut().serve(Request::GetConfig), Reply::Config(changed));
 }

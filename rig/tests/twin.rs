@@ -182,6 +182,26 @@ fn the_twin_refuses_faults_it_cannot_make_and_bad_boards() {
     assert!(Scenario::from_toml(&bad).unwrap_err().to_string().contains("board.theta1_encoder.zero_count"));
     let bad = format!("{DEFAULT_TOML}\n[calibration]\nload_newtons_per_count = [0.0, 0.01]\n");
     assert!(Scenario::from_toml(&bad).is_err());
+    // Issue 52: the firmware's rules, named by key (the rules a backup's restore runs).
+    for (table, key) in [
+        ("load_newtons_per_count = [1e-45, 0.0122]", "`calibration.load_newtons_per_count[0]` = 1e-45"),
+        ("load_newtons_per_count = [0.0122, -0.0122]", "`calibration.load_newtons_per_count[1]` = -1.22e-2"),
+        ("load_zero_counts = [2048.0, 5000.0]", "`calibration.load_zero_counts[1]` = 5000"),
+        ("belt_metres_per_count = 1e-3", "`calibration.belt_metres_per_count` = 1e-3"),
+    ] {
+        let bad = format!("{DEFAULT_TOML}\n[calibration]\n{table}\n");
+        let e = Scenario::from_toml(&bad).unwrap_err().to_string();
+        assert!(e.contains(key), "{table}: {e}");
+    }
+    // The runaway limits off: a study without a board runs, a board refuses (exit 2).
+    let mut off = Scenario::from_toml(DEFAULT_TOML).unwrap();
+    off.controller.runaway_limits = false;
+    match TwinLink::new(&off) {
+        Err(e @ rig::record::RunError::NotOnABoard(_)) => {
+            assert!(e.to_string().contains("controller.runaway_limits = false: the runaway limits cannot be turned off on a board"), "{e}");
+        }
+        other => panic!("{:?}", other.err()),
+    }
 }
 
 /// The tip's largest distance from where it started, m, over `records`.

@@ -59,14 +59,17 @@ on_both!(
     a_client_killed_mid_command_leaves_a_board_the_next_client_can_use,
     every_friction_term_is_accepted_by_configure,
     a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged,
+    the_runaway_limits_cannot_be_turned_off_on_a_board,
+    a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved,
 );
 
 /// Issue 44: `backup FILE` writes the calibration and configuration in force as
 /// TOML; `restore FILE` puts them back whole (the firmware checks them as it
 /// checks its flash record), so that backup, change, restore, backup gives the
 /// first file again. A file that is not a backup (not TOML, a key unknown or
-/// missing) is refused before it is sent (exit 2), one with a value out of range
-/// by the firmware (exit 1, naming the value); either way the board is unchanged.
+/// missing, another protocol) or holds a value out of range by the firmware's
+/// own rules is refused before it is sent (exit 2, naming the key); the board is
+/// unchanged.
 fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged(on: Board) {
     let t = twin(on, &["--flash", "saved"]);
     let dir = tempfile::tempdir().unwrap();
@@ -133,24 +136,130 @@ fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchan
             "config.torque_limt",
         ),
         ("a wrong type", edit(&|x| x["calibration"]["reversed"] = toml::Value::String("no".into())), 2, "calibration.reversed"),
-        ("a torque limit of 50 N m", edit(&|x| x["config"]["torque_limit"] = toml::Value::Float(50.0)), 1, "torque_limit"),
-        ("a 15-bit encoder zero", edit(&|x| x["calibration"]["zero_counts"][1] = toml::Value::Integer(20000)), 1, "zero_counts[1] = 20000"),
-        ("a zero load-cell gain", edit(&|x| x["calibration"]["load_newtons_per_count"][0] = toml::Value::Float(0.0)), 1, "gain"),
-        ("a zero belt scale", edit(&|x| x["calibration"]["belt_metres_per_count"] = toml::Value::Float(0.0)), 1, "belt_metres_per_count"),
+        ("a torque limit of 50 N m", edit(&|x| x["config"]["torque_limit"] = toml::Value::Float(50.0)), 2, "`config.torque_limit` = 50"),
+        (
+            "a 15-bit encoder zero",
+            edit(&|x| x["calibration"]["zero_counts"][1] = toml::Value::Integer(20000)),
+            2,
+            "zero_counts[1]` = 20000",
+        ),
+        ("a zero load-cell gain", edit(&|x| x["calibration"]["load_newtons_per_count"][0] = toml::Value::Float(0.0)), 2, "gain"),
+        ("a zero belt scale", edit(&|x| x["calibration"]["belt_metres_per_count"] = toml::Value::Float(0.0)), 2, "belt_metres_per_count"),
+        // Issue 52: what the scenario path refuses, a restore took.
+        ("f_n* of 100 N", edit(&|x| x["config"]["f_n_ref"] = toml::Value::Float(100.0)), 2, "`config.f_n_ref` = 100"),
+        (
+            "a load-cell gain of 1e-45",
+            edit(&|x| x["calibration"]["load_newtons_per_count"][1] = toml::Value::Float(1e-45)),
+            2,
+            "`calibration.load_newtons_per_count[1]` = 1e-45",
+        ),
+        (
+            "a negative load-cell gain",
+            edit(&|x| x["calibration"]["load_newtons_per_count"][0] = toml::Value::Float(-0.012)),
+            2,
+            "`calibration.load_newtons_per_count[0]` = -1.2e-2",
+        ),
+        (
+            "the runaway limits off",
+            edit(&|x| x["config"]["runaway_limits"] = toml::Value::Boolean(false)),
+            2,
+            "cannot be turned off on a board",
+        ),
+        (
+            "another protocol",
+            edit(&|x| x["protocol"] = toml::Value::Integer(5)),
+            2,
+            "made with bring-up protocol 5, this sil-host speaks protocol 6",
+        ),
     ];
     for (what, text, want, says) in cases {
         std::fs::write(path("bad.toml"), &text).unwrap();
         let (code, out, err) = board(&t, &["restore", &path("bad.toml")]);
         assert_eq!(code, want, "{what}: {out}{err}");
         assert!(err.contains(says), "{what}: the error names it: {err}");
-        if want == 1 {
-            assert!(err.contains("refused by the firmware, the board unchanged"), "{what}: {err}");
-        }
         assert_eq!(board(&t, &["backup", "--force", &path("after.toml")]).0, 0);
         assert_eq!(read("after.toml"), read("a.toml"), "{what}: the board is unchanged");
         let after = status(&t);
         assert_eq!(after["status"]["settings"], before["status"]["settings"], "{what}: {after}");
         assert_eq!(after["status"]["torque_limit_codes"], before["status"]["torque_limit_codes"], "{what}: {after}");
+    }
+}
+
+/// Issue 52 (1): the runaway limits cannot be turned off on a board. `configure`
+/// and `restore` refuse them off before sending (exit 2, naming the key and
+/// why); the firmware refuses the same requests sent over the line as they are
+/// (`Refusal::ProtectionOff`), its settings unchanged; and a flash record
+/// holding them off is refused at reset, the drivers locked out saying why.
+fn the_runaway_limits_cannot_be_turned_off_on_a_board(on: Board) {
+    use arm_app::bringup::{Refusal, Reply, Request};
+    let t = twin(on, &["--flash", "saved"]);
+    let (code, _, err) = board(&t, &["configure", "--set", "controller.runaway_limits=false"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("controller.runaway_limits = false") && err.contains("cannot be turned off on a board"), "{err}");
+    assert!(err.contains("--in-process"), "where such a study runs: {err}");
+    let Reply::Config(config) = ask_raw(&t, Request::GetConfig) else { panic!() };
+    let Reply::Calibration(calibration) = ask_raw(&t, Request::GetCalibration) else { panic!() };
+    assert!(config.runaway_limits);
+    let off = firmware::Config { runaway_limits: false, ..config };
+    assert_eq!(ask_raw(&t, Request::Configure(off)), Reply::Refused(Refusal::ProtectionOff));
+    let stored = arm_app::record::Stored { calibration, config: off };
+    assert_eq!(ask_raw(&t, Request::Restore(stored)), Reply::Refused(Refusal::ProtectionOff));
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"], "Saved", "{s}");
+    assert_eq!(ask_raw(&t, Request::GetConfig), Reply::Config(config), "the configuration in force unchanged");
+    drop(t);
+    // A record that holds them off (saved by another image, or written by hand).
+    let t = twin(on, &["--flash", "saved", "--set", "controller.runaway_limits=false"]);
+    let s = status(&t);
+    assert_eq!(s["status"]["settings"]["Corrupt"], "ProtectionOff", "{s}");
+    let (code, _, err) = board(&t, &["enable"]);
+    assert!(code == 1 && err.contains("turns the runaway limits off"), "{err}");
+}
+
+/// Issue 52 (3): `save` said "done" after the reset button had discarded the
+/// `configure` before it (a reset reloads the flash record); it now says that
+/// nothing was saved, and why (exit 1).
+fn a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved(on: Board) {
+    use std::io::Write;
+    let mut t = twin(on, &["--flash", "saved"]);
+    let (code, out, err) = board(&t, &["configure", "--set", "controller.f_n_ref=7"]);
+    assert!(code == 0 && out.contains("config.f_n_ref = 10.0 -> 7.0"), "{out}{err}");
+    let periods = status(&t)["status"]["periods"].as_u64().unwrap();
+    writeln!(t.stdin, "reset").unwrap();
+    t.stdin.flush().unwrap();
+    let mut after = status_while_booting(&t);
+    for _ in 0..400 {
+        if after["status"]["periods"].as_u64().unwrap() < periods {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+        after = status_while_booting(&t);
+    }
+    assert_eq!(after["status"]["settings"], "Saved", "{after}");
+    let (code, out, err) = board(&t, &["save"]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(err.contains("nothing to save") && err.contains("reset"), "{err}");
+    // Sent again, it is saved.
+    assert_eq!(board(&t, &["configure", "--set", "controller.f_n_ref=7"]).0, 0);
+    let (code, out, err) = board(&t, &["save"]);
+    assert!(code == 0 && out.contains("save: done"), "{out}{err}");
+}
+
+/// Issue 52 (1): `run` on a board (`--link twin`, `--link emulator`) with the
+/// runaway limits off is refused before it starts (exit 2, naming the key);
+/// without a board it runs.
+#[test]
+fn a_run_on_a_board_refuses_the_runaway_limits_off_naming_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    for link in ["twin", "emulator"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+            .args(["run", "--link", link, "--duration", "0.01", "--set", "controller.runaway_limits=false", "--out"])
+            .arg(dir.path().join(link))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{link}: {err}");
+        assert!(err.contains("controller.runaway_limits = false") && err.contains("cannot be turned off on a board"), "{link}: {err}");
     }
 }
 
@@ -213,6 +322,43 @@ fn hang(t: &mut Twin, what: &str) {
     panic!("the board never read the weight ({what})");
 }
 
+/// Raises the belt to the tip (`up`: the arm stood at the scenario's initial
+/// pose, `x0d`, its tip on the belt) or lowers it (`down`), and waits until the
+/// board's theta1 encoder reads the arm's new pose (more than 100 counts away).
+fn belt(t: &mut Twin, what: &str) {
+    use std::io::Write;
+    let theta1 = |t: &Twin| status(t)["raw"]["encoder_counts"][0]["Ok"].as_i64().unwrap_or(-1);
+    let before = theta1(t);
+    writeln!(t.stdin, "belt {what}").unwrap();
+    t.stdin.flush().unwrap();
+    if what == "down" {
+        // The arm stays where it is: only the belt moves.
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        return;
+    }
+    for _ in 0..200 {
+        let d = (theta1(t) - before).rem_euclid(16384);
+        if d.min(16384 - d) > 100 {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+    }
+    panic!("the board never read the arm on the raised belt");
+}
+
+/// Sends `request` over the board's line as a client would, without
+/// `sil-host`'s own checks: what the firmware itself answers.
+fn ask_raw(t: &Twin, request: arm_app::bringup::Request) -> arm_app::bringup::Reply {
+    let line = std::fs::OpenOptions::new().read(true).write(true).open(&t.port).unwrap();
+    let fd = std::os::fd::AsRawFd::as_raw_fd(&line);
+    // SAFETY: our own descriptor.
+    unsafe { libc::fcntl(fd, libc::F_SETFL, libc::fcntl(fd, libc::F_GETFL) | libc::O_NONBLOCK) };
+    let mut c = rig::bringup_line::Client::new(line);
+    let wait = std::time::Duration::from_secs(10);
+    c.request_until(&arm_app::bringup::Request::Hello, wait, |r| matches!(r, arm_app::bringup::Reply::Hello { .. })).unwrap();
+    c.request(&request, wait).unwrap()
+}
+
 fn status(t: &Twin) -> serde_json::Value {
     let (code, out, err) = board(t, &["--json", "status"]);
     assert_eq!(code, 0, "{err}");
@@ -249,6 +395,9 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on:
     assert_eq!(code, 0, "{out}{err}");
     assert_eq!(out.matches("moved its torque's way").count(), 4, "{out}");
     assert!(out.contains("load cell tared"), "{out}");
+    // It ends in words, not a Rust dump.
+    assert!(out.contains("calibrate: done") && out.contains("directions checked by the jogs"), "{out}");
+    assert!(!out.contains("CalibrationRecord") && !out.contains('{'), "{out}");
     // The zeros found are the board's mounting (theta1's magnet at 5000.4 counts,
     // the elbow's at 0), to the encoder's quantisation.
     let s = status(&t);
@@ -259,8 +408,13 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on:
     assert_eq!(s["status"]["torque_limit_codes"], 410, "a new calibration runs at the reduced limit: {s}");
     assert_eq!(s["status"]["settings"], "Unsaved", "{s}");
 
-    // Configuration; a save refused until both spans are measured or skipped.
-    assert_eq!(board(&t, &["configure"]).0, 0);
+    // Configuration, echoed (key = old -> new); a save refused until both spans
+    // are measured or skipped.
+    let (code, out, err) = board(&t, &["configure", "--set", "controller.f_n_ref=8"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("config.f_n_ref = 10.0 -> 8.0"), "{out}");
+    let (code, out, _) = board(&t, &["configure", "--set", "controller.f_n_ref=8"]);
+    assert!(code == 0 && out.contains("nothing changed"), "{out}");
     let (code, _, err) = board(&t, &["enable"]);
     assert!(code == 1 && err.contains("save"), "unsaved settings keep the drivers locked out: {err}");
     let (code, _, err) = board(&t, &["save"]);
@@ -275,32 +429,52 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on:
     let gain = serde_json::from_str::<serde_json::Value>(&out).unwrap()["load_newtons_per_count"][1].as_f64().unwrap();
     // The twin's front end: 2048 counts per 25 N (the wire's scale), to a count of 60.
     assert!((gain / (25.0 / 2048.0) - 1.0).abs() < 0.03, "gain {gain} N/count");
+    // Spanned, the load cell reads in newtons: the weight's 4.905 N.
+    let (_, out, _) = board(&t, &["status"]);
+    let line = out.lines().find(|l| l.starts_with("load cell:")).unwrap_or_default();
+    let f_n: f64 = line.split("f_n ").nth(1).and_then(|r| r.split(' ').next()).and_then(|n| n.parse().ok()).unwrap_or(f64::NAN);
+    assert!((f_n - 4.905).abs() < 0.1, "{line}");
     hang(&mut t, "off");
     assert_eq!(status(&t)["status"]["missing"], 0);
-    assert_eq!(board(&t, &["save"]).0, 0);
+    let (code, out, err) = board(&t, &["save"]);
+    assert!(code == 0 && out.contains("save: done") && out.contains("hybrid configuration"), "{out}{err}");
     assert_eq!(status(&t)["status"]["settings"], "Saved");
     assert_eq!(board(&t, &["lift-torque-limit"]).0, 0);
     assert_eq!(status(&t)["status"]["torque_limit_codes"], 2048);
+    // The arm hangs free (the belt lowered): the closed loop's consistency check
+    // stops it within periods, and `enable`, watching the drivers, says so.
     let (code, out, err) = board(&t, &["enable"]);
-    assert!(code == 0 && out.contains("enable: done: drivers enabled at period"), "{out}{err}");
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(err.contains("came on at period") && err.contains("went off again"), "{err}");
+    assert!(err.contains("safe state: the encoders and the load cell disagree"), "{err}");
+    let (_, out, _) = board(&t, &["status"]);
+    assert!(out.contains("off again"), "{out}");
+    // Step 7: the belt raised to the tip; the closed loop runs.
+    belt(&mut t, "up");
+    let (code, out, err) = board(&t, &["enable"]);
+    assert!(code == 0 && out.contains("enable: done: drivers enabled at period") && out.contains("50 periods watched"), "{out}{err}");
     // After calibration the joints read in degrees too.
     let (_, out, _) = board(&t, &["status"]);
-    assert!(out.contains(" deg), AGC"), "{out}");
-    // The arm hangs free (no belt under it): the closed loop's consistency check
-    // stops it, and status says so in words.
-    assert!(out.contains("safe state: the encoders and the load cell disagree"), "{out}");
-    assert!(out.contains("off again"), "{out}");
+    assert!(out.contains(" deg), AGC") && out.contains("drivers enabled"), "{out}");
+    if on == Board::Twin {
+        assert!(out.contains("step time not measured") && out.contains("stack not measured") && !out.contains(" 0 ticks"), "{out}");
+    }
+    // Step 8: watch the closed loop: one line per reading (into a pipe; a
+    // terminal's line is rewritten in place), within 100 columns, the joints in
+    // degrees and the load cell in newtons.
+    let (code, out, err) = board(&t, &["watch", "--count", "3", "--interval-ms", "10"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.lines().count(), 3, "{out}");
+    for l in out.lines() {
+        assert!(l.starts_with('#') && l.contains("drv on") && l.contains("°") && l.contains(" N |"), "{l}");
+        assert!(!l.contains("nFAULT") && !l.contains("...") && l.chars().count() <= 100, "{} columns: {l}", l.chars().count());
+    }
     assert_eq!(board(&t, &["disable"]).0, 0);
+    belt(&mut t, "down");
     // Watch: one JSON document per reading.
     let (code, out, err) = board(&t, &["--json", "watch", "--count", "2", "--interval-ms", "10"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(out.lines().filter(|l| l.starts_with('{')).count(), 2, "{out}");
-    // Watch in words: one line per reading (into a pipe; a terminal's line is
-    // rewritten in place), the joints in degrees once the zeros are set.
-    let (code, out, err) = board(&t, &["watch", "--count", "3", "--interval-ms", "10"]);
-    assert_eq!(code, 0, "{err}");
-    assert_eq!(out.lines().count(), 3, "{out}");
-    assert!(out.lines().all(|l| l.starts_with("period ") && l.contains(" deg") && l.contains("fault line clear")), "{out}");
     // The span refuses a force it cannot see (nothing on the load cell).
     let (code, _, err) = board(&t, &["span", "--axis", "normal", "--newtons", "5"]);
     assert!(code == 1 && err.contains("is the weight on the load cell"), "{err}");
@@ -365,10 +539,12 @@ fn a_corrupt_record_locks_the_drivers_out_and_a_sound_one_is_loaded(on: Board) {
     let (code, _, err) = board(&t, &["enable"]);
     assert!(code == 1 && err.contains("damaged (CRC-32C"), "{err}");
     drop(t);
-    let t = twin(on, &["--flash", "saved"]);
+    let mut t = twin(on, &["--flash", "saved"]);
     let s = status(&t);
     assert_eq!(s["status"]["settings"], "Saved", "{s}");
-    assert_eq!(board(&t, &["enable"]).0, 0);
+    belt(&mut t, "up");
+    let (code, out, err) = board(&t, &["enable"]);
+    assert_eq!(code, 0, "{out}{err}");
 }
 
 fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
@@ -406,9 +582,9 @@ fn a_record_saved_over_the_line_is_reloaded_after_the_reset_button(on: Board) {
     assert_eq!(after["status"]["directions_checked"], true, "{after}");
     assert_eq!(after["calibration"]["zero_counts"], zeros, "{after}");
     assert_eq!(after["status"]["drivers_enabled"], false, "a reset comes back with the drivers off: {after}");
-    // The reloaded record lets the drivers on. (The arm hangs free, so the closed
-    // loop's consistency check turns them off again within periods: whether the
-    // read-back sees them still on depends on the host's speed.)
+    // The reloaded record lets the drivers on (the belt raised to the tip, so
+    // that the closed loop runs).
+    belt(&mut t, "up");
     let (code, out, err) = board(&t, &["enable"]);
     assert!(code == 0 && out.contains("drivers enabled at period"), "{out}{err}");
 }

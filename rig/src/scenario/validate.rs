@@ -227,9 +227,31 @@ impl Scenario {
                 return Err(ScenarioError::Fault { index: i, what });
             }
         }
+        // The firmware's own check of the configuration this scenario makes (one
+        // rule, one place: `firmware::Config::validate`, which a board's
+        // `Configure` and `Restore` run too), its field named by the scenario's key.
+        if let Err(firmware::config::ConfigError::OutOfRange { name, value, expected }) = crate::setup::firmware_config(self).validate() {
+            return Err(ScenarioError::OutOfRange {
+                key: scenario_key(name),
+                value: value.to_string(),
+                expected: format!("{expected} (the firmware's check)"),
+            });
+        }
         self.board.check().map_err(ScenarioError::Board)?;
-        self.calibration.check().map_err(ScenarioError::Board)?;
+        self.calibration.check(self.timing.period().as_secs_f32()).map_err(ScenarioError::Board)?;
         Ok(())
+    }
+}
+
+/// The scenario key that sets the firmware configuration's field `name` (as
+/// `firmware::config::ConfigError` names it); the fields a scenario does not set
+/// are named under `controller`.
+fn scenario_key(name: &str) -> String {
+    match name {
+        "period_us" => "timing.rate_hz".into(),
+        "torque_limit" => "controller.torque_limit_nm".into(),
+        "encoder_bits" | "innovation_threshold" => "sensors.encoder_bits".into(),
+        other => format!("controller.{other}"),
     }
 }
 

@@ -31,9 +31,12 @@ pub enum BoardCommand {
     /// The firmware's state, its raw readings (encoder counts and field strength,
     /// ADC codes, belt count, fault line), its calibration and last telemetry.
     Status,
-    /// The raw readings every --interval-ms on one line (rewritten in place on a
-    /// terminal; one line per reading into a pipe or a file; --json: one document per
-    /// reading), until Ctrl-C or --count.
+    /// The raw readings every --interval-ms on one line of at most 100 columns
+    /// (rewritten in place on a terminal; one line per reading into a pipe or a file;
+    /// --json: one document per reading), until Ctrl-C or --count: the period, the
+    /// drivers, the joints (degrees once the zeros are set), the load cell (newtons
+    /// once tared and spanned or skipped, else ADC counts), the belt's count, the
+    /// fault line when asserted, the status in short.
     Watch {
         /// Milliseconds between two readings.
         #[arg(long, default_value_t = 200)]
@@ -80,7 +83,10 @@ pub enum BoardCommand {
         skip: bool,
     },
     /// Sends the firmware configuration of a scenario (controller, gains, rate,
-    /// limits); the firmware validates it. The rate must be the image's.
+    /// limits); the firmware validates it. The rate must be the image's, and the
+    /// runaway limits on (`controller.runaway_limits = false` is refused, exit 2:
+    /// a board never runs without them). Echoes each setting it changed (`KEY = OLD
+    /// -> NEW`).
     Configure {
         /// The scenario.
         #[command(flatten)]
@@ -90,14 +96,18 @@ pub enum BoardCommand {
     /// CRC-32C); they are loaded at every reset. Until saved the drivers stay
     /// locked out. Refused (exit 1, naming what is missing) unless the
     /// calibration is complete: zeros set, both directions checked, tared, each
-    /// axis spanned or skipped.
+    /// axis spanned or skipped; and when nothing is unsaved (the settings in force
+    /// are the record already: a reset since a `configure` reloaded the record and
+    /// discarded it).
     Save,
     /// Lifts the reduced torque limit a new calibration runs at (both joints'
     /// directions must have been checked).
     LiftTorqueLimit,
     /// Enables the drivers: resets the firmware, which closes the loop; then reads
-    /// the state back until the drivers are on. Exit 1 naming why when they are
-    /// not (locked out, their fault line, the firmware's safe state).
+    /// the state back until the drivers are on, and watches them for 50 of the
+    /// board's periods. Exit 1 naming why when they are not on, or went off within
+    /// the watch (locked out, their fault line, the firmware's safe state and its
+    /// reason).
     Enable,
     /// Disables the drivers now.
     Disable,
@@ -112,10 +122,11 @@ pub enum BoardCommand {
         force: bool,
     },
     /// Restores a backup FILE: the calibration and configuration together. The
-    /// file's form is checked here (TOML, format version, every key known and
-    /// typed: exit 2 naming the key); its values by the firmware, as it checks
-    /// its flash record at reset, which takes the file whole or refuses it (exit
-    /// 1 naming the value; the board unchanged). Drivers disabled only. The
+    /// file is checked here (TOML, format version, the bring-up protocol, every
+    /// key known and typed, every value by the firmware's own rules: exit 2 naming
+    /// the key, nothing sent); the firmware checks it again as it checks its flash
+    /// record at reset, and takes it whole or refuses it (exit 1; the board
+    /// unchanged). Drivers disabled only. The
     /// restored settings are not saved: `save`, then `lift-torque-limit` if the
     /// calibration changed, before `enable`.
     Restore {
@@ -145,7 +156,11 @@ pub enum AxisArg {
 /// `sil-host board-twin`.
 #[derive(Debug, Clone, Args)]
 pub struct BoardTwinArgs {
-    /// Serve on a new pseudo-terminal (the only transport).
+    /// Serve on a new pseudo-terminal (the only transport). Standard input takes
+    /// the operator's actions, one a line: `weight normal|tangential NEWTONS`,
+    /// `weight off`, `reset` (the reset button), `belt up` (the belt raised to the
+    /// tip: the arm at the scenario's initial pose on the running belt, held while
+    /// the drivers are off) and `belt down`.
     #[arg(long, required = true)]
     pub pty: bool,
     /// The scenario: its `[board]` (the board's physical truth: mountings, wiring),

@@ -5,10 +5,11 @@
 use std::{io::Write, sync::Arc, time::Duration};
 
 use arm_app::{
-    bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, Status},
+    bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, SpanStep, Status},
     telemetry::ArmTelemetry,
 };
 use board_twin::{BusFaults, FlashModel};
+use firmware::pil::StepClock;
 use rig::{
     board_backup,
     bringup_line::{self, Client, Pty},
@@ -46,33 +47,141 @@ fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Snapshot, Ste
     Ok(Snapshot { status, raw, calibration, telemetry })
 }
 
-/// One reading of `watch` on one line: the period, the drivers, the joints
-/// (degrees once the zeros are set, else raw counts), the load cell's counts,
-/// the belt's counter, the fault line and the status word in words.
+/// The widest `watch` line, characters: a reading fits a 100-column terminal.
+pub const WATCH_COLUMNS: usize = 100;
+
+/// One reading of `watch` on one line of at most [`WATCH_COLUMNS`] characters:
+/// `#` and the period, the drivers, the joints (theta1 and the elbow's angle in
+/// degrees once the zeros are set, else raw counts), the load cell (newtons
+/// once tared and spanned or skipped, else ADC counts), the belt's counter, the
+/// fault line when asserted, and the status word in short (`ok`, the safe
+/// state's reason, the flags: `status` says them in words); cut with `...`
+/// beyond the width.
 fn watch_line(s: &Snapshot) -> String {
     let st = &s.status;
     let r = &s.raw;
-    let joints: Vec<String> = ["theta1", "elbow"]
-        .iter()
-        .enumerate()
-        .map(|(i, name)| match r.encoder_counts[i] {
-            Ok(n) => match joint_degrees(n, &s.calibration, i) {
-                Some(d) => format!("{name} {d:+8.3} deg"),
-                None => format!("{name} {n:5} counts"),
-            },
-            Err(e) => format!("{name} no reading ({})", e.describe()),
-        })
-        .collect();
-    let adc = r.adc_counts.map_or_else(|| "ADC none".to_string(), |[t, n]| format!("ADC f_t {t:4} f_n {n:4}"));
-    format!(
-        "period {} | drivers {} | {} | {adc} | belt {} | fault line {} | {}",
+    let joints = match (r.encoder_counts, [0, 1].map(|i| r.encoder_counts[i].ok().and_then(|n| joint_degrees(n, &s.calibration, i)))) {
+        (_, [Some(a), Some(b)]) => format!("θ1 {a:+.2}° el {b:+.2}°"),
+        ([Ok(a), Ok(b)], _) => format!("θ1 {a} el {b} counts"),
+        ([a, b], _) => {
+            let one = |x: Result<u16, arm_app::EncoderFault>| x.map_or_else(|e| format!("{e:?}"), |n| n.to_string());
+            format!("θ1 {} el {}", one(a), one(b))
+        }
+    };
+    let load = match r.adc_counts {
+        None => "load cell: no conversion".to_string(),
+        Some(counts) => match load_newtons(counts, &s.calibration) {
+            [Some(t), Some(n)] => format!("f_t {t:+.2} f_n {n:+.2} N"),
+            _ => format!("f_t {} f_n {} counts", counts[0], counts[1]),
+        },
+    };
+    let line = format!(
+        "#{} | drv {} | {joints} | {load} | belt {}{} | {}",
         st.periods,
-        if st.drivers_enabled { "on " } else { "off" },
-        joints.join(", "),
+        if st.drivers_enabled { "on" } else { "off" },
         r.belt_count,
-        if r.driver_fault { "ASSERTED" } else { "clear" },
-        describe_status(st.status)
-    )
+        if r.driver_fault { " | nFAULT ASSERTED" } else { "" },
+        short_status(st.status)
+    );
+    fit(&line, WATCH_COLUMNS)
+}
+
+/// A status word in a few characters (`watch`): `ok`, `safe: REASON`, or its
+/// flags' short names (docs/wire.md; `describe_status` says them in words).
+fn short_status(word: u32) -> String {
+    use shared::wire::status;
+    let mut parts = Vec::new();
+    if word & status::SAFE_STATE != 0 {
+        parts.push(firmware::SafeReason::from_status(word).map_or_else(|| "safe: unknown".to_string(), |r| format!("safe: {r:?}")));
+    }
+    for (bit, name) in [
+        (status::BAD_FRAME, "bad frame"),
+        (status::STALE_FRAME, "stale"),
+        (status::SEQUENCE_GAP, "seq gap"),
+        (status::LIFT_OFF, "lift-off"),
+        (status::SATURATED_U1, "u1 sat"),
+        (status::SATURATED_U2, "u2 sat"),
+        (status::DEADLINE_MISS, "deadline"),
+        (status::LOAD_CLIPPED, "clipped"),
+        (status::REFERENCE_MOVING, "moving"),
+    ] {
+        if word & bit != 0 {
+            parts.push(name.to_string());
+        }
+    }
+    if parts.is_empty() { "ok".into() } else { parts.join(", ") }
+}
+
+/// `line` cut to `width` characters, `...` at its end when cut.
+fn fit(line: &str, width: usize) -> String {
+    if line.chars().count() <= width {
+        line.to_string()
+    } else {
+        let mut cut: String = line.chars().take(width - 3).collect();
+        cut.push_str("...");
+        cut
+    }
+}
+
+/// The load cell's forces `[f_t, f_n]`, N, from its ADC counts, for each axis
+/// whose calibration is known: tared, and spanned (or its span skipped: the
+/// nominal gain kept on purpose); `None` for an axis still in ADC counts.
+fn load_newtons(counts: [u16; 2], cal: &CalibrationRecord) -> [Option<f64>; 2] {
+    [0, 1].map(|i| {
+        (cal.tared && cal.span[i] != SpanStep::NotDone)
+            .then(|| (f64::from(counts[i]) - f64::from(cal.load_zero_counts[i])) * f64::from(cal.load_newtons_per_count[i]))
+    })
+}
+
+/// The calibration in force, in words (`calibrate`'s end, `status`).
+fn describe_calibration(c: &CalibrationRecord) -> Vec<String> {
+    let reversed = match c.reversed {
+        [false, false] => "neither encoder reversed",
+        [true, false] => "theta1's encoder reversed",
+        [false, true] => "the elbow's encoder reversed",
+        [true, true] => "both encoders reversed",
+    };
+    let span = |i: usize| match c.span[i] {
+        SpanStep::NotDone => "span not done",
+        SpanStep::Measured => "spanned with a known weight",
+        SpanStep::Skipped => "span skipped: the nominal gain",
+    };
+    vec![
+        format!(
+            "encoders: zeros at count {} (theta1) and {} (elbow) of 16384, {reversed}; {}; directions {}",
+            c.zero_counts[0],
+            c.zero_counts[1],
+            if c.zeros_set { "set at the jig's pose" } else { "not set (the compiled-in defaults)" },
+            if c.directions_checked { "checked by the jogs" } else { "not checked" }
+        ),
+        format!(
+            "load cell: {} at f_t {} and f_n {} counts; gains f_t {:.6} N per count ({}), f_n {:.6} N per count ({})",
+            if c.tared { "tared" } else { "not tared, zero" },
+            c.load_zero_counts[0],
+            c.load_zero_counts[1],
+            c.load_newtons_per_count[0],
+            span(0),
+            c.load_newtons_per_count[1],
+            span(1)
+        ),
+        format!("belt: {:e} m per count", c.belt_metres_per_count),
+    ]
+}
+
+/// The fields of `new` that differ from `old` (two JSON documents of one
+/// structure), as `(dotted key, old, new)`: what `configure` changed.
+fn changes(prefix: &str, old: &serde_json::Value, new: &serde_json::Value) -> Vec<(String, serde_json::Value, serde_json::Value)> {
+    match (old, new) {
+        (serde_json::Value::Object(a), serde_json::Value::Object(b)) => b
+            .iter()
+            .flat_map(|(k, v)| {
+                let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+                changes(&key, a.get(k).unwrap_or(&serde_json::Value::Null), v)
+            })
+            .collect(),
+        _ if old == new => Vec::new(),
+        _ => vec![(prefix.to_string(), old.clone(), new.clone())],
+    }
 }
 
 fn print_snapshot(s: &Snapshot) {
@@ -114,22 +223,37 @@ fn print_snapshot(s: &Snapshot) {
         }
     }
     match r.adc_counts {
-        Some([t, n]) => println!("load cell ADC: f_t {t}, f_n {n} of 4095"),
+        Some(counts @ [t, n]) => {
+            let newtons = load_newtons(counts, &s.calibration);
+            let axis = |f: Option<f64>| f.map_or_else(|| "not yet spanned".to_string(), |f| format!("{f:+.3} N"));
+            println!("load cell: f_t {} ({t} counts), f_n {} ({n} counts of 4095)", axis(newtons[0]), axis(newtons[1]));
+        }
         None => println!("load cell ADC: no conversion this period"),
     }
     println!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
-    let c = &s.calibration;
-    println!(
-        "calibration: zeros {:?} reversed {:?}; load cell zeros {:?} N/count {:?}; belt {} m/count",
-        c.zero_counts, c.reversed, c.load_zero_counts, c.load_newtons_per_count, c.belt_metres_per_count
-    );
+    for line in describe_calibration(&s.calibration) {
+        println!("calibration: {line}");
+    }
     match &s.telemetry {
-        Some(t) => println!(
-            "last window (period {}): step median {} worst {} ticks, overruns {}, stack high-water {} B",
-            t.seq, t.step.median, t.step.worst, t.overruns, t.stack_high_water_bytes
-        ),
+        Some(t) => println!("last window (period {}): {}", t.seq, describe_window(t)),
         None => println!("telemetry: no window closed yet"),
     }
+}
+
+/// A telemetry window in words: the step's ticks and the stack's high-water
+/// mark where the board measures them, else that they are not measured (the
+/// board twin's step takes no time and it has no stack: every figure is 0).
+fn describe_window(t: &ArmTelemetry) -> String {
+    let step = match t.clock {
+        StepClock::Simulated => "step time not measured (the board twin's step takes no time)".to_string(),
+        _ => format!("step median {} worst {} ticks", t.step.median, t.step.worst),
+    };
+    let stack = match (t.clock, t.stack_high_water_bytes) {
+        (StepClock::Simulated, _) => "stack not measured (the twin runs on the PC's stack)".to_string(),
+        (_, 0) => "stack high-water not measured".to_string(),
+        (_, b) => format!("stack high-water {b} B"),
+    };
+    format!("{step}, overruns {}, {stack}", t.overruns)
 }
 
 /// Joint `i`'s calibrated angle from its raw count, degrees in (-180, 180]
@@ -248,8 +372,11 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             };
             let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;
             emit(json, &report, || {
-                println!("calibration in force (not yet saved): {:?}", report.calibration);
-                println!("next: `sil-host board span` with a known weight, `configure`, `save`, `enable`");
+                println!("calibrate: done; the calibration in force (not yet saved):");
+                for line in describe_calibration(&report.calibration) {
+                    println!("  {line}");
+                }
+                println!("next: `sil-host board span` with a known weight (or --skip) on each axis, `configure`, `save`, `enable`");
             });
         }
         BoardCommand::Span { axis, newtons, skip } => {
@@ -263,24 +390,47 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 Some(n) => return Err(CliError::bad_input(format!("--newtons {n}: must be a non-zero force of at most 25 N"))),
                 None => return Err(CliError::bad_input("span needs --newtons or --skip")),
             };
-            let Reply::Calibration(cal) = bp::ask(&mut c, request)? else {
+            let reply = match c.request(&request, bp::REPLY_TIMEOUT).map_err(CliError::bad_input)? {
+                // The force was in range: the gain it gives is not.
+                Reply::Refused(arm_app::bringup::Refusal::OutOfRange) => {
+                    return Err(CliError::Board(
+                        "span: refused: the gain it gives (the force over the counts from the tare) is not the load cell's: \
+                         positive and within a factor 4 of the nominal 25/2048 N per count (docs/hardware.md \"The calibration's \
+                         ranges\"); is the weight on this axis, the force's sign right, the front end wired as documented?"
+                            .into(),
+                    ));
+                }
+                Reply::Refused(r) => return Err(CliError::Board(format!("span: refused: {}", bp::describe_refusal(&r)))),
+                reply => reply,
+            };
+            let Reply::Calibration(cal) = reply else {
                 return Err(CliError::bad_input("unexpected reply to span"));
             };
+            let i = usize::from(axis);
+            let name = ["f_t", "f_n"][i];
+            let gain = cal.load_newtons_per_count[i];
+            let ratio = f64::from(gain) / (25.0 / 2048.0);
             emit(json, &cal, || {
                 if *skip {
-                    println!("span skipped: the nominal gain {} N per count is kept", cal.load_newtons_per_count[usize::from(axis)]);
+                    println!("span skipped: {name} keeps the nominal gain {gain:.6} N per count");
                 } else {
-                    println!("span set: N per count {:?}", cal.load_newtons_per_count);
+                    println!(
+                        "span set: {name} gain {gain:.6} N per count ({ratio:.3} times the nominal 25/2048); {name} now reads in newtons"
+                    );
                 }
             });
         }
         BoardCommand::Configure { scenario } => {
             let s = load_scenario(scenario)?;
             let config = firmware_config(&s);
+            // A board never runs without its runaway limits: refused here, naming
+            // the key, before the firmware refuses it too.
+            bp::check_protection(&config, "controller.runaway_limits").map_err(CliError::bad_input)?;
+            let Reply::Config(now) = bp::ask(&mut c, Request::GetConfig)? else {
+                return Err(CliError::bad_input("unexpected reply to get configuration"));
+            };
             // The image's timer runs one rate: say both when they differ.
-            if let Ok(Reply::Config(now)) = bp::ask(&mut c, Request::GetConfig)
-                && now.period != config.period
-            {
+            if now.period != config.period {
                 return Err(CliError::Board(format!(
                     "configure: refused: the scenario's control period is {} us ({:.0} Hz) and the image's timer runs {} us ({:.0} Hz); set timing.rate_hz to the image's",
                     config.period.as_us(),
@@ -290,16 +440,31 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 )));
             }
             bp::ask(&mut c, Request::Configure(config))?;
-            done("configure");
+            let json_of = |c: &firmware::Config| serde_json::to_value(c).unwrap_or_default();
+            let changed = changes("config", &json_of(&now), &json_of(&config));
+            let listed: Vec<_> = changed.iter().map(|(k, a, b)| serde_json::json!({ "key": k, "old": a, "new": b })).collect();
+            emit(json, &serde_json::json!({ "done": "configure", "changed": listed }), || {
+                if changed.is_empty() {
+                    println!("configure: done: nothing changed (the configuration in force is the scenario's)");
+                } else {
+                    println!("configure: done: {} setting(s) changed, not yet saved (`sil-host board save`):", changed.len());
+                    for (k, a, b) in &changed {
+                        println!("  {k} = {a} -> {b}");
+                    }
+                }
+            });
         }
         BoardCommand::Enable => {
             let st = bp::enable(&mut c)?;
             emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
-                println!("enable: done: {}", bp::describe_enable(&st.last_enable));
+                println!(
+                    "enable: done: {}; still on at period {} ({} periods watched): {}",
+                    bp::describe_enable(&st.last_enable),
+                    st.periods,
+                    bp::ENABLE_WATCH_PERIODS,
+                    describe_status(st.status)
+                );
             });
-            if !st.drivers_enabled {
-                eprintln!("warning: the drivers are off again since: {}", describe_status(st.status));
-            }
         }
         BoardCommand::Backup { file, force } => {
             if file.exists() && !force {
@@ -318,6 +483,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         }
         BoardCommand::Restore { file } => {
             let b = board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?;
+            // The firmware's own rules, named by key, before anything is sent.
+            board_backup::validate(&b).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
             let st = bp::restore(&mut c, &b)?;
             emit(json, &serde_json::json!({ "done": "restore", "file": file, "status": st }), || {
                 println!("restore: done: the calibration and configuration of {} are in force", file.display());
@@ -329,9 +496,18 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 );
             });
         }
-        BoardCommand::Save | BoardCommand::LiftTorqueLimit | BoardCommand::Disable => {
+        BoardCommand::Save => {
+            bp::ask(&mut c, Request::Save)?;
+            let b = bp::backup(&mut c)?;
+            emit(json, &serde_json::json!({ "done": "save", "saved": b }), || {
+                println!(
+                    "save: done: the calibration and the {} configuration in force are the record in flash (loaded at every reset)",
+                    b.config.controller
+                );
+            });
+        }
+        BoardCommand::LiftTorqueLimit | BoardCommand::Disable => {
             let (request, name) = match args.command {
-                BoardCommand::Save => (Request::Save, "save"),
                 BoardCommand::LiftTorqueLimit => (Request::LiftTorqueLimit, "lift the torque limit"),
                 _ => (Request::Disable, "disable"),
             };
@@ -364,6 +540,11 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
         // One bit of the record's frame: its CRC-32C no longer matches.
         flash.bytes().borrow_mut()[12] ^= 0x10;
     }
+    // A board's compiled-in configuration has the runaway limits on, always: a
+    // scenario that turns them off puts that in the saved record only (`--flash
+    // saved`), which the board refuses at reset, the drivers locked out.
+    let mut s = s;
+    s.controller.runaway_limits = true;
     if args.emulated {
         let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
         let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::bad_input(e.to_string()))?;
@@ -381,20 +562,26 @@ enum Operator {
     Weight([f64; 2]),
     /// Presses the reset button (`reset`).
     Reset,
+    /// Raises the belt to the tip (`belt up`) or lowers it below the hanging
+    /// tip (`belt down`).
+    Belt(bool),
 }
 
-/// A line of the twin's standard input: `weight AXIS NEWTONS`, `weight off` or `reset`.
+/// A line of the twin's standard input: `weight AXIS NEWTONS`, `weight off`,
+/// `reset`, `belt up` or `belt down`.
 fn operator_command(line: &str) -> Result<Operator, String> {
-    if line.split_whitespace().collect::<Vec<_>>() == ["reset"] {
-        return Ok(Operator::Reset);
+    match line.split_whitespace().collect::<Vec<_>>()[..] {
+        ["reset"] => Ok(Operator::Reset),
+        ["belt", "up"] => Ok(Operator::Belt(true)),
+        ["belt", "down"] => Ok(Operator::Belt(false)),
+        _ => weight_command(line).map(Operator::Weight),
     }
-    weight_command(line).map(Operator::Weight)
 }
 
 /// `weight AXIS NEWTONS` or `weight off`: the load `[f_t, f_n]` it hangs, N.
 fn weight_command(line: &str) -> Result<[f64; 2], String> {
     let words: Vec<&str> = line.split_whitespace().collect();
-    let usage = || format!("`{line}`: expected `weight normal|tangential NEWTONS`, `weight off` or `reset`");
+    let usage = || format!("`{line}`: expected `weight normal|tangential NEWTONS`, `weight off`, `reset`, `belt up` or `belt down`");
     match words[..] {
         ["weight", "off"] => Ok([0.0; 2]),
         ["weight", axis, n] => {
@@ -438,10 +625,11 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     }
     let _ = std::io::stdout().flush();
     // The operator, from standard input (one a line): a weight on the load
-    // cell (`weight normal 4.905`, `weight tangential -2`, `weight off`), or
-    // the reset button (`reset`).
+    // cell (`weight normal 4.905`, `weight tangential -2`, `weight off`), the
+    // reset button (`reset`), or the belt's lift (`belt up`, `belt down`).
     let load = arm.load();
     let reset = arm.reset_button();
+    let belt = arm.belt_lift();
     std::thread::spawn(move || {
         for line in std::io::stdin().lines().map_while(Result::ok) {
             match operator_command(&line) {
@@ -452,6 +640,17 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
                 Ok(Operator::Reset) => {
                     reset.store(true, std::sync::atomic::Ordering::Relaxed);
                     eprintln!("reset: the board restarts from its flash");
+                }
+                Ok(Operator::Belt(up)) => {
+                    belt.store(up, std::sync::atomic::Ordering::Relaxed);
+                    eprintln!(
+                        "{}",
+                        if up {
+                            "belt up: the tip on the running belt at the scenario's initial pose, held there while the drivers are off"
+                        } else {
+                            "belt down: below the hanging tip"
+                        }
+                    );
                 }
                 Err(e) => eprintln!("{e}"),
             }

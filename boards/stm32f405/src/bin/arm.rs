@@ -317,6 +317,10 @@ mod image {
                 defmt::error!("invalid belt calibration");
                 exit::exit(2);
             }
+            Err(StartError::ProtectionOff) => {
+                defmt::error!("the compiled-in configuration turns the runaway limits off, which a board never runs");
+                exit::exit(2);
+            }
         };
         let period_us = cfg.period.as_us();
         log_time::set_period_us(period_us as u32);
