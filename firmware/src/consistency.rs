@@ -97,15 +97,29 @@ pub const FRICTION_CONFIRM_S: f32 = 0.020;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FrictionSignMonitor {
     run: u16,
+    /// Periods left before the check counts again after a lift-off.
+    quiet: u16,
 }
 
 impl FrictionSignMonitor {
     /// Folds in one period: the measured forces `f_t`, `f_n` (N) and the slip
-    /// velocity `slip = z_t_dot - v_belt` (m/s). Returns `true` once friction
-    /// was along the slip for `confirm` periods in a row
-    /// ([`FrictionSignMonitor::confirm_periods`]).
-    pub fn update(&mut self, contact_force: f32, f_t: f32, f_n: f32, slip: f32, confirm: u16) -> bool {
-        let along = f_n > contact_force && slip.abs() > SLIP_MIN && f_t * slip > 0.0 && f_t.abs() > 0.25 * contact_force;
+    /// velocity `slip = z_t_dot - v_belt` (m/s), and whether the slip may be
+    /// wrong (lift-off declared, or the load cell at full scale). Returns `true` once friction was along the slip for `confirm`
+    /// periods in a row ([`FrictionSignMonitor::confirm_periods`]). A touchdown
+    /// is an unmeasured impulse too (the estimated slip lags the true one): the
+    /// check counts only from `confirm` periods after the last unsure one.
+    pub fn update(&mut self, contact_force: f32, f_t: f32, f_n: f32, slip: f32, unsure: bool, confirm: u16) -> bool {
+        if unsure {
+            self.quiet = confirm;
+        } else {
+            self.quiet = self.quiet.saturating_sub(1);
+        }
+        let along = self.quiet == 0
+            && !unsure
+            && f_n > contact_force
+            && slip.abs() > SLIP_MIN
+            && f_t * slip > 0.0
+            && f_t.abs() > 0.25 * contact_force;
         self.run = if along { self.run.saturating_add(1) } else { 0 };
         self.run >= confirm
     }
@@ -243,22 +257,29 @@ mod friction_tests {
         // Healthy sliding: the belt moves at -0.4 m/s under a still tip, slip +0.4,
         // friction -mu f_n.
         for _ in 0..100 {
-            assert!(!m.update(2.0, -6.0, 10.0, 0.4, 20));
+            assert!(!m.update(2.0, -6.0, 10.0, 0.4, false, 20));
         }
         // Reversed axis: 19 periods pass, the 20th (20 ms at 1 kHz) declares.
         assert_eq!(FrictionSignMonitor::confirm_periods(1e-3), 20);
         assert_eq!(FrictionSignMonitor::confirm_periods(1e-4), 200);
         for _ in 1..20 {
-            assert!(!m.update(2.0, 6.0, 10.0, 0.4, 20));
+            assert!(!m.update(2.0, 6.0, 10.0, 0.4, false, 20));
         }
-        assert!(m.update(2.0, 6.0, 10.0, 0.4, 20));
+        assert!(m.update(2.0, 6.0, 10.0, 0.4, false, 20));
         // Not in contact, sticking, or noise: never.
         let mut m = FrictionSignMonitor::default();
         for _ in 0..100 {
-            assert!(!m.update(2.0, 6.0, 1.0, 0.4, 1), "light contact");
-            assert!(!m.update(2.0, 6.0, 10.0, 0.01, 1), "sticking");
-            assert!(!m.update(2.0, 0.03, 10.0, 0.4, 1), "noise");
+            assert!(!m.update(2.0, 6.0, 1.0, 0.4, false, 1), "light contact");
+            assert!(!m.update(2.0, 6.0, 10.0, 0.01, false, 1), "sticking");
+            assert!(!m.update(2.0, 0.03, 10.0, 0.4, false, 1), "noise");
         }
+        // After a lift-off it is quiet for `confirm` periods, then counts.
+        let mut m = FrictionSignMonitor::default();
+        assert!(!m.update(2.0, 6.0, 0.0, 0.4, true, 20));
+        for k in 0..39 {
+            assert!(!m.update(2.0, 6.0, 10.0, 0.4, false, 20), "{k}");
+        }
+        assert!(m.update(2.0, 6.0, 10.0, 0.4, false, 20));
     }
 }
 

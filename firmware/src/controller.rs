@@ -505,11 +505,20 @@ impl Firmware {
         };
         let innovation_rule =
             InnovationRule { threshold: cfg.innovation_threshold, confirm: cfg.innovation_confirm, settle: cfg.innovation_settle };
-        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height)
-            | self.friction_sign.update(cfg.sensor_contact_force, m.f_t, m.f_n, z_dot[0] - m.v_belt, self.friction_confirm);
         // A load cell at full scale under-reads: the prediction made with it is wrong.
         let full_scale = wire::LOAD_FULL_SCALE_N * (wire::LOAD_CODE_MAX - 1) as f32 / -(wire::LOAD_CODE_MIN as f32);
         let load_saturated = m.f_n.abs() >= full_scale || m.f_t.abs() >= full_scale;
+        // Friction against the slip: the slip is the observer's, whose prediction
+        // is wrong at full scale (as after an impact): it is then no evidence.
+        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height)
+            | self.friction_sign.update(
+                cfg.sensor_contact_force,
+                m.f_t,
+                m.f_n,
+                z_dot[0] - m.v_belt,
+                lifted || load_saturated,
+                self.friction_confirm,
+            );
         let unexplained = self.innovation.update(&innovation_rule, innovation, lifted, load_saturated);
         if inconsistent || unexplained {
             return Err(SafeReason::SensorFault);
