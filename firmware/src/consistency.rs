@@ -273,10 +273,11 @@ mod friction_tests {
             assert!(!m.update(2.0, 6.0, 10.0, 0.01, false, 1), "sticking");
             assert!(!m.update(2.0, 0.03, 10.0, 0.4, false, 1), "noise");
         }
-        // After a lift-off it is quiet for `confirm` periods, then counts.
+        // After a lift-off it is quiet for `confirm` periods (the 20th counts), then
+        // trips after `confirm` more.
         let mut m = FrictionSignMonitor::default();
         assert!(!m.update(2.0, 6.0, 0.0, 0.4, true, 20));
-        for k in 0..39 {
+        for k in 0..38 {
             assert!(!m.update(2.0, 6.0, 10.0, 0.4, false, 20), "{k}");
         }
         assert!(m.update(2.0, 6.0, 10.0, 0.4, false, 20));
