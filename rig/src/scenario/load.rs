@@ -42,7 +42,12 @@ impl Scenario {
         let s: Scenario = if overrides.is_empty() && !migrated {
             // The text itself: the TOML errors give the line.
             let de = toml::de::Deserializer::parse(text).map_err(|e| toml_error(&e))?;
-            read(de, &[])?
+            let s = read(de, &[])?;
+            // The text's reader drops an array's extra elements (`kp = [1.0, 2.0,
+            // "x"]` read as `[1.0, 2.0]`: toml's array reader never says it had
+            // more); the document's refuses them, naming the key (issue 52, 6).
+            read(toml::Value::Table(doc), &[])?;
+            s
         } else {
             read(toml::Value::Table(doc), overrides)?
         };

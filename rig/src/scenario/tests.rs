@@ -60,6 +60,14 @@ fn control_characters_in_the_name_are_refused_and_shown_escaped() {
         let e = Scenario::from_toml(&toml).unwrap_err().to_string();
         assert!(e.contains("name") && e.contains("noncharacter"), "{e}");
     }
+    // Issue 52, 8: U+202E (right-to-left override) showed the name's end reversed;
+    // every format character (category Cf) is refused, shown escaped.
+    for bad in ["run\u{202E}dcba", "a\u{2066}b", "zero\u{200B}width", "bom\u{FEFF}", "tag\u{E0041}", "soft\u{AD}"] {
+        let toml = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", &format!("name = {}", toml::Value::from(bad)), 1);
+        let e = Scenario::from_toml(&toml).unwrap_err().to_string();
+        assert!(e.contains("name") && e.contains("format character"), "{e}");
+        assert!(!e.contains(bad), "the name is shown escaped: {e:?}");
+    }
     let fine = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", "name = \"Zürich run — 2 \u{FFFD}\"", 1);
     assert_eq!(Scenario::from_toml(&fine).unwrap().name, "Zürich run — 2 \u{FFFD}");
 }
@@ -70,6 +78,44 @@ fn set(arg: &str) -> Override {
 
 /// Issue 27: a fault in the run's last half period was accepted and never acted.
 /// The load applies the run's own rule (`Fault::periods`).
+/// Issue 52, 6: a scenario file's array with extra elements ran with them
+/// dropped, while `--set` refused the same values. Every array is strict: a wrong
+/// length or a wrong-typed element is an error naming the key.
+#[test]
+fn arrays_of_a_wrong_length_or_type_are_refused_naming_the_key() {
+    let cases = [
+        ("[controller.pid]", "kp = [200.0, 0.0, \"x\"]", "controller.pid.kp"),
+        ("[controller.pid]", "kp = [200.0, 0.0, 1.0]", "controller.pid.kp"),
+        ("[controller.pid]", "ki = [1.0]", "controller.pid.ki"),
+        ("[controller.pid]", "kd = [1.0, \"x\"]", "controller.pid.kd"),
+        ("[board.load_cell]", "zero_counts = [2048.0, 2048.0, \"junk\", {a=1}]", "board.load_cell.zero_counts"),
+        ("[board.load_cell]", "zero_counts = [2048.0]", "board.load_cell.zero_counts"),
+    ];
+    let base = Scenario::default_scenario().to_table().unwrap();
+    for (table, line, key) in cases {
+        // The key replaced in the default scenario's own text (a file), and the
+        // same value given by `--set` (a document).
+        let mut doc = base.clone();
+        let (section, field) = key.rsplit_once('.').unwrap();
+        let mut t = &mut doc;
+        for part in section.split('.') {
+            t = t.get_mut(part).and_then(toml::Value::as_table_mut).unwrap();
+        }
+        t.remove(field);
+        let mut file = toml::to_string(&doc).unwrap();
+        file = file.replacen(&format!("{table}\n"), &format!("{table}\n{line}\n"), 1);
+        assert!(file.contains(line), "{table} is in the default scenario");
+        let e = Scenario::from_toml(&file).unwrap_err();
+        assert!(e.to_string().contains(key), "{line}: {e}");
+        let value = line.split_once(" = ").unwrap().1;
+        let e = Scenario::default_scenario().with_overrides(&[set(&format!("{key}={value}"))]).unwrap_err();
+        assert!(e.to_string().contains(key), "--set {key}={value}: {e}");
+    }
+    // The right lengths still read.
+    let file = toml::to_string(&base).unwrap();
+    assert_eq!(Scenario::from_toml(&file).unwrap().controller.pid.kp, Scenario::default_scenario().controller.pid.kp);
+}
+
 #[test]
 fn a_fault_that_cannot_act_is_refused_at_load() {
     let fault = |at_s: f64| format!("{DEFAULT_TOML}\n[[faults]]\nkind = \"drop_command\"\nat_s = {at_s}\n");
