@@ -77,21 +77,21 @@ fn watch_line(s: &Snapshot) -> String {
 
 fn print_snapshot(s: &Snapshot) {
     let st = &s.status;
-    println!(
+    outln!(
         "state: {:?}, period {}, drivers {}, overruns {}",
         st.activity,
         st.periods,
         if st.drivers_enabled { "enabled" } else { "disabled" },
         st.overruns
     );
-    println!("firmware status {:#x}: {}", st.status, describe_status(st.status));
+    outln!("firmware status {:#x}: {}", st.status, describe_status(st.status));
     let off_again = matches!(st.last_enable, EnableOutcome::Enabled { .. }) && !st.drivers_enabled;
-    println!(
+    outln!(
         "last enable: {}{}",
         bp::describe_enable(&st.last_enable),
         if off_again { "; off again since (the firmware status above says why)" } else { "" }
     );
-    println!(
+    outln!(
         "settings: {:?} ({}); zeros set {}, directions checked {}, torque limit {} codes of 2048",
         st.settings,
         st.settings.describe(),
@@ -100,35 +100,43 @@ fn print_snapshot(s: &Snapshot) {
         st.torque_limit_codes
     );
     if !st.missing.is_empty() {
-        println!("calibration lacks: {}", bp::describe_missing(st.missing));
+        outln!("calibration lacks: {}", bp::describe_missing(st.missing));
     }
     let r = &s.raw;
     for (i, name) in ["theta1", "elbow"].iter().enumerate() {
         match r.encoder_counts[i] {
-            Ok(n) => println!(
+            Ok(n) => outln!(
                 "encoder {name}: raw count {n} of 16384{}, AGC {}",
                 joint_degrees(n, &s.calibration, i).map_or_else(String::new, |d| format!(" ({d:+.3} deg)")),
                 r.encoder_agc[i].map_or_else(|| "unreadable".into(), |a| a.to_string())
             ),
-            Err(e) => println!("encoder {name}: no reading ({})", e.describe()),
+            Err(e) => outln!("encoder {name}: no reading ({})", e.describe()),
         }
     }
     match r.adc_counts {
-        Some([t, n]) => println!("load cell ADC: f_t {t}, f_n {n} of 4095"),
-        None => println!("load cell ADC: no conversion this period"),
+        Some([t, n]) => outln!("load cell ADC: f_t {t}, f_n {n} of 4095"),
+        None => outln!("load cell ADC: no conversion this period"),
     }
-    println!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
+    outln!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
     let c = &s.calibration;
-    println!(
+    outln!(
         "calibration: zeros {:?} reversed {:?}; load cell zeros {:?} N/count {:?}; belt {} m/count",
-        c.zero_counts, c.reversed, c.load_zero_counts, c.load_newtons_per_count, c.belt_metres_per_count
+        c.zero_counts,
+        c.reversed,
+        c.load_zero_counts,
+        c.load_newtons_per_count,
+        c.belt_metres_per_count
     );
     match &s.telemetry {
-        Some(t) => println!(
+        Some(t) => outln!(
             "last window (period {}): step median {} worst {} ticks, overruns {}, stack high-water {} B",
-            t.seq, t.step.median, t.step.worst, t.overruns, t.stack_high_water_bytes
+            t.seq,
+            t.step.median,
+            t.step.worst,
+            t.overruns,
+            t.stack_high_water_bytes
         ),
-        None => println!("telemetry: no window closed yet"),
+        None => outln!("telemetry: no window closed yet"),
     }
 }
 
@@ -146,7 +154,7 @@ fn joint_degrees(raw: u16, cal: &CalibrationRecord, i: usize) -> Option<f64> {
 
 fn emit<T: Serialize>(json: bool, value: &T, human: impl FnOnce()) {
     if json {
-        println!("{}", serde_json::to_string_pretty(value).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(value).unwrap_or_default());
     } else {
         human();
     }
@@ -162,7 +170,7 @@ struct Terminal {
 impl bp::Operator for Terminal {
     fn say(&mut self, line: &str) {
         if !self.json {
-            println!("{line}");
+            outln!("{line}");
         }
     }
 
@@ -182,16 +190,13 @@ impl bp::Operator for Terminal {
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
-    // A reader that goes away (`board status | head -1`) ends the command as it
-    // ends `cat`: by SIGPIPE, silently. Rust ignores SIGPIPE and `println!`
-    // panicked (exit 101). The line to the board is a terminal, where a write
-    // never raises SIGPIPE, so only standard output is concerned.
-    // SAFETY: restoring a signal's default disposition, before any thread.
-    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    // A reader that goes away (`board status | head -1`) or a full disk ends
+    // the command as every command (crate::stdout): quietly, exit 141, or with a
+    // message, exit 1; `watch` stops at the first failed line.
     let mut c = Client::open(&args.port, args.baud).map_err(CliError::bad_input)?;
     bp::hello(&mut c)?;
     let json = args.json;
-    let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || println!("{what}: done"));
+    let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || outln!("{what}: done"));
     match &args.command {
         BoardCommand::Status => {
             let s = snapshot(&mut c)?;
@@ -203,22 +208,21 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             // one line per reading (JSON: one document per reading).
             let tty = std::io::IsTerminal::is_terminal(&std::io::stdout());
             let mut n = 0;
-            while !stop.load(std::sync::atomic::Ordering::Relaxed) && count.is_none_or(|k| n < k) {
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) && !crate::stdout::failed() && count.is_none_or(|k| n < k) {
                 let s = snapshot(&mut c)?;
                 if json {
-                    println!("{}", serde_json::to_string(&s).unwrap_or_default());
+                    outln!("{}", serde_json::to_string(&s).unwrap_or_default());
                 } else if tty {
                     // Carriage return, erase the line, then the new reading.
-                    print!("\r\x1b[2K{}", watch_line(&s));
-                    let _ = std::io::stdout().flush();
+                    out!("\r\x1b[2K{}", watch_line(&s));
                 } else {
-                    println!("{}", watch_line(&s));
+                    outln!("{}", watch_line(&s));
                 }
                 n += 1;
                 std::thread::sleep(Duration::from_millis(*interval_ms));
             }
             if tty && !json {
-                println!();
+                outln!();
             }
             if crate::cancel::exit_code().is_some() {
                 // Ctrl-C or SIGTERM: the shell's 130 or 143, as every command.
@@ -248,8 +252,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             };
             let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;
             emit(json, &report, || {
-                println!("calibration in force (not yet saved): {:?}", report.calibration);
-                println!("next: `sil-host board span` with a known weight, `configure`, `save`, `enable`");
+                outln!("calibration in force (not yet saved): {:?}", report.calibration);
+                outln!("next: `sil-host board span` with a known weight, `configure`, `save`, `enable`");
             });
         }
         BoardCommand::Span { axis, newtons, skip } => {
@@ -268,9 +272,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             };
             emit(json, &cal, || {
                 if *skip {
-                    println!("span skipped: the nominal gain {} N per count is kept", cal.load_newtons_per_count[usize::from(axis)]);
+                    outln!("span skipped: the nominal gain {} N per count is kept", cal.load_newtons_per_count[usize::from(axis)]);
                 } else {
-                    println!("span set: N per count {:?}", cal.load_newtons_per_count);
+                    outln!("span set: N per count {:?}", cal.load_newtons_per_count);
                 }
             });
         }
@@ -295,7 +299,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         BoardCommand::Enable => {
             let st = bp::enable(&mut c)?;
             emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
-                println!("enable: done: {}", bp::describe_enable(&st.last_enable));
+                outln!("enable: done: {}", bp::describe_enable(&st.last_enable));
             });
             if !st.drivers_enabled {
                 eprintln!("warning: the drivers are off again since: {}", describe_status(st.status));
@@ -309,7 +313,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             board_backup::write(file, &b).map_err(|e| CliError::bad_input(e.to_string()))?;
             let controller = format!("{:?}", b.config.controller).to_lowercase();
             emit(json, &serde_json::json!({ "done": "backup", "file": file, "backup": b }), || {
-                println!(
+                outln!(
                     "backup: done: the calibration (lacks: {}) and the {controller} configuration written to {}",
                     bp::describe_missing(b.calibration.missing()),
                     file.display()
@@ -320,8 +324,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let b = board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?;
             let st = bp::restore(&mut c, &b)?;
             emit(json, &serde_json::json!({ "done": "restore", "file": file, "status": st }), || {
-                println!("restore: done: the calibration and configuration of {} are in force", file.display());
-                println!(
+                outln!("restore: done: the calibration and configuration of {} are in force", file.display());
+                outln!(
                     "settings: {}; torque limit {} codes of 2048{}",
                     st.settings.describe(),
                     st.torque_limit_codes,
@@ -425,9 +429,9 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     });
     let flash_name = format!("{:?}", args.flash).to_lowercase();
     if args.json {
-        println!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
+        outln!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
     } else {
-        println!(
+        outln!(
             "{what} on {}: the arm hangs at theta1 {:.6} deg, elbow {:.6} deg (counts {:?}: the jig's pose); flash {flash_name}{}",
             pty.path.display(),
             pose_deg[0],
@@ -436,7 +440,10 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
             if args.fault_line { "; fault line asserted" } else { "" }
         );
     }
-    let _ = std::io::stdout().flush();
+    if crate::stdout::failed() {
+        // Nobody can read the port's name: nothing to serve (exit 141 or 1, crate::stdout).
+        return Ok(());
+    }
     // The operator, from standard input (one a line): a weight on the load
     // cell (`weight normal 4.905`, `weight tangential -2`, `weight off`), or
     // the reset button (`reset`).
