@@ -190,6 +190,22 @@ fn clear_stale(path: &Path) -> io::Result<()> {
     }
 }
 
+/// Removes the files in `dir` named `<prefix><pid>-...` whose process `pid` is
+/// dead (a SIGKILLed PIL run's FIFOs and socket, `painleve-pil-<pid>-<n>.up`);
+/// returns their names.
+pub fn remove_dead_pid_files(dir: &Path, prefix: &str) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut removed = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let pid = name.strip_prefix(prefix).and_then(|r| r.split_once('-')).and_then(|(p, _)| p.parse::<i64>().ok());
+        if pid.is_some_and(|p| !pid_alive(p)) && std::fs::remove_file(e.path()).is_ok() {
+            removed.push(name);
+        }
+    }
+    removed
+}
+
 /// Whether process `pid` exists (it may be another user's).
 pub fn pid_alive(pid: i64) -> bool {
     let Ok(pid) = libc::pid_t::try_from(pid) else { return false };
@@ -289,6 +305,20 @@ mod tests {
         std::os::unix::fs::chown(&lock, Some(65534), Some(65534)).unwrap();
         let e = open_lock(&lock).unwrap_err().to_string();
         assert!(e.contains("owned by uid 65534"), "{e}");
+    }
+
+    #[test]
+    fn a_dead_runs_pid_files_are_removed_and_a_live_ones_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let me = std::process::id();
+        for name in [format!("painleve-pil-{dead}-0.up"), format!("painleve-pil-{me}-0.up"), "painleve-pil-x-0.up".into(), "other".into()] {
+            std::fs::write(dir.path().join(name), "").unwrap();
+        }
+        assert_eq!(remove_dead_pid_files(dir.path(), "painleve-pil-"), [format!("painleve-pil-{dead}-0.up")]);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
     }
 
     #[test]

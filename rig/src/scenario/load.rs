@@ -163,10 +163,10 @@ where
         // Errors from a document (not a text) repeat the key on a line of their own.
         let inner = if overrides.is_empty() { inner.as_str() } else { inner.lines().next().unwrap_or_default() };
         // toml's document reader on an array longer than the key takes.
-        let longer = inner
-            .strip_prefix("invalid length ")
-            .and_then(|r| r.split_once(", expected fewer elements in array"))
-            .map(|(n, rest)| format!("an array of {n} elements, more than the key takes (an element too many is an error, never dropped){rest}"));
+        let longer =
+            inner.strip_prefix("invalid length ").and_then(|r| r.split_once(", expected fewer elements in array")).map(|(n, rest)| {
+                format!("an array of {n} elements, more than the key takes (an element too many is an error, never dropped){rest}")
+            });
         let inner = longer.as_deref().unwrap_or(inner);
         let msg = if path == "." { inner.to_string() } else { format!("scenario key `{path}`: {inner}") };
         match overrides::culprit(overrides, &path) {
