@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import warnings
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Set, Union
 
@@ -295,6 +296,28 @@ def _failure(command: str, summary: Any) -> Optional[str]:
     return None
 
 
+def _check_partial(root: Path, files: Set[str]) -> None:
+    """Raises (nothing finished) or warns (finished results beside them) about a
+    killed run's ``NAME.partial`` files in ``root``."""
+    partial = sorted(f for f in files if f.endswith(".partial"))
+    if not partial:
+        return
+    finished = [f for f in files if not f.endswith(".partial") and Path(f).suffix in (".csv", ".arrow", ".mcap", ".json")]
+    how = (
+        "read them with painleve.read_csv / read_arrow / read_mcap "
+        "(a cut file reads as its whole rows), or run the command again"
+    )
+    if not finished:
+        raise ValueError(
+            f"{root}: the folder of a run that was killed before it finished: only partial files "
+            f"({', '.join(partial)}), no summary; {how}"
+        )
+    warnings.warn(
+        f"{root}: partial files of a killed run left out: {', '.join(partial)}; {how}",
+        stacklevel=3,
+    )
+
+
 def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     """Reads an output folder of ``sil-host`` (any command's ``--out DIR``).
 
@@ -316,8 +339,16 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
     CLI's words, and ``failure`` from a summary whose ``status`` is ``failed``
     or ``interrupted``.
 
+    A killed run (SIGKILL, a power cut) leaves its streamed tables as
+    ``NAME.partial`` (``trace.csv.partial``, ``trace.mcap.partial``: the rows
+    flushed before it died) and no summary: ``load`` then raises, naming them
+    and how to read them; a folder that also holds finished results loads, with
+    a warning naming the partial files it leaves out.
+
     Raises:
         FileNotFoundError: ``path`` is not a folder.
+        ValueError: the folder holds only a killed run's partial files (the
+            message names them).
         PainleveError: a table cannot be read (:func:`read_csv`,
             :func:`read_arrow`; the message names the file).
         ValueError: a JSON file does not parse (the message names it).
@@ -329,6 +360,7 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
         raise FileNotFoundError(f"no output folder {root}")
     entries = sorted(p for p in root.iterdir() if not p.name.startswith("."))
     files = {p.name for p in entries if p.is_file()}
+    _check_partial(root, files)
     tables: Dict[str, Table] = {}
     docs: Dict[str, Any] = {}
     extras: Dict[str, Any] = {}

@@ -79,6 +79,22 @@ def test_load_rejects_a_missing_folder(tmp_path):
         painleve.load(tmp_path / "nothing")
 
 
+def test_load_of_a_killed_runs_folder_says_so(tmp_path):
+    # Issue 52, 8: a killed run's folder (its streamed trace as
+    # `trace.csv.partial`, no summary) loaded as an empty result, silently.
+    out = tmp_path / "killed"
+    out.mkdir()
+    (out / "trace.csv.partial").write_text("t,z_n\n0.001,0.1\n")
+    (out / ".sil-host.owner").write_text("pid 1: sil-host run\n")
+    with pytest.raises(ValueError, match=r"killed.*trace\.csv\.partial"):
+        painleve.load(out)
+    # Beside finished results, a partial file is named in a warning and left out.
+    (out / "summary.json").write_text("{}")
+    with pytest.warns(UserWarning, match=r"trace\.csv\.partial"):
+        r = painleve.load(out)
+    assert r.summary == {} and r.tables == {}
+
+
 def test_result_repr_and_attributes():
     r = painleve.simulate(duration=0.5, progress=False)
     assert "simulate" in repr(r) and "valid" in repr(r)

@@ -249,8 +249,10 @@ def test_controller_errors_propagate_and_bad_returns_name_the_period() -> None:
             raise Boom("at seven")
         return 0.0, 0.0
 
-    with pytest.raises(Boom, match="at seven"):
+    with pytest.raises(Boom, match="at seven") as boom:
         painleve.run_controller(raises, short(0.1))
+    # Issue 52, 8: the exception, kept as raised, says when it was raised.
+    assert boom.value.__notes__ == ["raised by the controller at period 7 (t = 0.007 s)"]
     with pytest.raises(TypeError, match=r"period 3 \(t = 0.003 s\)"):
         painleve.run_controller(lambda t, y: (0.0, 0.0) if y.k < 3 else "garbage", short(0.1))
     with pytest.raises(TypeError, match="period 0"):

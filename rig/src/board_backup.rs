@@ -84,7 +84,8 @@ pub fn to_toml(b: &Backup) -> Result<String, BackupError> {
 pub fn write(path: &Path, b: &Backup) -> Result<(), BackupError> {
     let text = to_toml(b)?;
     let tmp = path.with_extension("toml.partial");
-    std::fs::write(&tmp, text)
+    // Made new, never through a link left at its name.
+    crate::private_files::write_new(&tmp, text.as_bytes())
         .and_then(|()| std::fs::rename(&tmp, path))
         .map_err(|e| BackupError::Io(format!("cannot write the backup {}: {e}", path.display())))
 }

@@ -65,6 +65,26 @@ mod tests {
     use super::*;
     use crate::record::lift_off_stats;
 
+    /// Issue 52, 8: `timing.delta_s = 1e-20` (in range: [0, one period)) failed
+    /// with "time step ... must be finite": the delay is below the clock's
+    /// resolution at every sample, so it acts as none; the run is the run without
+    /// a delay, bit for bit.
+    #[test]
+    fn a_delay_below_the_clocks_resolution_acts_as_none() {
+        let mut s = Scenario::default_scenario();
+        s.timing.duration_s = 0.5;
+        s.timing.delta_s = 0.0;
+        let (none, err) = run(&s, &mut ());
+        assert!(err.is_none(), "{err:?}");
+        for tiny in [1e-20, 1e-300, f64::from_bits(1)] {
+            s.timing.delta_s = tiny;
+            s.validate().unwrap();
+            let (r, err) = run(&s, &mut ());
+            assert!(err.is_none(), "delta_s {tiny:e}: {err:?}");
+            assert_eq!(format!("{r:?}"), format!("{none:?}"), "delta_s {tiny:e}");
+        }
+    }
+
     #[test]
     fn default_scenario_tracks_without_lift_off_and_is_reproducible() {
         let mut s = Scenario::default_scenario();

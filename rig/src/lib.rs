@@ -33,6 +33,7 @@ pub mod overrides;
 pub mod period_loop;
 #[cfg(feature = "pil")]
 pub mod pil_link;
+pub mod private_files;
 pub mod realtime;
 pub mod record;
 pub mod scenario;

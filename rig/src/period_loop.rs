@@ -296,8 +296,12 @@ impl PeriodLoop {
         let before = plant.checkpoint();
         let switch = t_next + self.delta;
         // A late switch within rounding of t_next leaves no interval before the
-        // sample: the two parts then.
-        if t_next > plant.time() {
+        // sample, and a delay below the clock's resolution at t_next (`delta_s =
+        // 1e-20`: `t_next + delta == t_next`) none after it: the two parts then
+        // (the second of length zero: the delay acts as none). Issue 52, 8: the
+        // sample then fell outside the solve and the run failed with a false "time
+        // step must be finite".
+        if t_next > plant.time() && switch > t_next {
             let (events, sample) = plant.advance_sampled(&Hold(u), switch - plant.time(), t_next, obs)?;
             if let Some(sample) = sample {
                 self.ahead = Some(sample);

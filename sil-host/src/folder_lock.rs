@@ -74,7 +74,8 @@ impl FolderLock {
                 remove_stale_partials(&canonical);
                 let owner = format!("pid {}: {}\n", std::process::id(), command_line());
                 // Informative only: a failure to write it does not stop the command.
-                let _ = std::fs::write(canonical.join(OWNER_FILE), owner);
+                // Made new, never through a link (rig::private_files).
+                let _ = rig::private_files::write_new(&canonical.join(OWNER_FILE), owner.as_bytes());
                 Some(handle)
             }
             Err(std::fs::TryLockError::WouldBlock) => {

@@ -4,6 +4,9 @@
 //! Arrow, JSON, SVG figures, the report).
 #![warn(missing_docs)]
 
+#[macro_use]
+pub mod stdout;
+
 pub mod bench;
 pub mod cancel;
 pub mod cli;
@@ -21,7 +24,10 @@ use clap::Parser;
 /// Runs the command line `args` (program name first) and returns the process
 /// exit code: 0 on success, 1 when a run fails, 2 for bad input (unknown flags,
 /// invalid values; nothing is written then), 130 or 143 when stopped by Ctrl-C or
-/// SIGTERM (what was finished is kept: [`cancel`]). `--help` and `--version` print and return 0.
+/// SIGTERM (what was finished is kept: [`cancel`]), 141 when standard output's
+/// reader went away (quietly; a full disk or another write error on standard
+/// output is exit 1 with a message: [`stdout`]). `--help` and `--version` print
+/// and return 0.
 pub fn run<I, T>(args: I) -> i32
 where
     I: IntoIterator<Item = T>,
@@ -54,8 +60,16 @@ where
             Err(e) => Err(e),
         },
     };
+    let stdout_failure = stdout::take_failure();
     match result {
-        Ok(()) => 0,
+        Ok(()) => match stdout_failure {
+            None => 0,
+            Some(e) if e.kind() == std::io::ErrorKind::BrokenPipe => stdout::BROKEN_PIPE_EXIT,
+            Some(e) => {
+                eprintln!("error: cannot write to standard output: {e}");
+                1
+            }
+        },
         Err(e) => {
             eprintln!("error: {e}");
             // Stopped by Ctrl-C or SIGTERM: the shell's 128 + signal (130, 143).

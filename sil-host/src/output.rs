@@ -4,6 +4,15 @@
 //! renamed into place by [`OutputSet::commit`]; if a command fails before it
 //! commits, the temporary files are removed when the set is dropped, so a bad
 //! run never leaves half-written results (or clobbers a previous run's).
+//!
+//! No file is written through a link (issue 52, 5): every temporary file is made
+//! new ([`rig::private_files::create_new`]: `O_CREAT | O_EXCL | O_NOFOLLOW`) after
+//! removing what a killed run left at its name (a link itself, never its target,
+//! or a regular file of ours), and a rename replaces a link at the final name
+//! rather than following it. A link planted in a shared `--out` folder (another
+//! user's, in a folder with the sticky bit such as `/tmp/x`) therefore never
+//! redirects an output; anything else in the way (a folder, another user's file)
+//! is refused with the path named.
 
 use std::{
     fs::File,
@@ -69,8 +78,9 @@ impl OutputSet {
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
     pub fn create_unbuffered(&mut self, name: &str) -> Result<(PathBuf, File), CliError> {
-        let tmp = self.stage(name);
-        let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
+        let tmp = self.dir.join(format!(".{name}.partial"));
+        let file = create_new(&tmp)?;
+        self.pending.push((tmp.clone(), self.dir.join(name)));
         Ok((tmp, file))
     }
 
@@ -93,28 +103,36 @@ impl OutputSet {
     pub fn create_streamed(&mut self, name: &str) -> Result<(PathBuf, File), CliError> {
         let final_path = self.dir.join(name);
         let tmp = self.dir.join(format!("{name}.partial"));
-        let file = File::create(&tmp).map_err(|source| CliError::Io { path: tmp.clone(), source })?;
+        let file = create_new(&tmp)?;
         self.streamed.push((tmp.clone(), final_path));
         Ok((tmp, file))
     }
 
     /// Reserves a temporary path for `name` (for writers that open files themselves,
-    /// such as plotters' SVG backend).
-    pub fn stage(&mut self, name: &str) -> PathBuf {
-        let final_path = self.dir.join(name);
-        let tmp = self.dir.join(format!(".{name}.partial"));
-        self.pending.push((tmp.clone(), final_path));
-        tmp
+    /// such as plotters' SVG backend): the file is made there, new and empty, so
+    /// that the writer opens a regular file of ours, not a link.
+    ///
+    /// # Errors
+    /// [`CliError::Io`] when the file cannot be made (something not ours in the way).
+    pub fn stage(&mut self, name: &str) -> Result<PathBuf, CliError> {
+        let (tmp, _) = self.create_unbuffered(name)?;
+        Ok(tmp)
     }
 
     /// Reserves temporary paths for the figure `name` (an `.svg`) and its PDF
     /// (the same name with `.pdf`, at [`crate::plot::print::pdf_path`] of the SVG's
-    /// temporary path), both renamed on commit; returns the SVG's.
-    pub fn stage_figure(&mut self, name: &str) -> PathBuf {
-        let svg = self.stage(name);
+    /// temporary path), both made as [`OutputSet::stage`] makes its file and
+    /// renamed on commit; returns the SVG's.
+    ///
+    /// # Errors
+    /// As [`OutputSet::stage`].
+    pub fn stage_figure(&mut self, name: &str) -> Result<PathBuf, CliError> {
+        let svg = self.stage(name)?;
         let pdf_final = self.dir.join(Path::new(name).with_extension("pdf"));
-        self.pending.push((crate::plot::print::pdf_path(&svg), pdf_final));
-        svg
+        let pdf = crate::plot::print::pdf_path(&svg);
+        create_new(&pdf)?;
+        self.pending.push((pdf, pdf_final));
+        Ok(svg)
     }
 
     /// Writes `bytes` as file `name`.
@@ -165,6 +183,11 @@ impl Drop for OutputSet {
 }
 
 pub use crate::error::io_err;
+
+/// [`rig::private_files::create_new`] with the error naming `path`.
+fn create_new(path: &Path) -> Result<File, CliError> {
+    rig::private_files::create_new(path).map_err(io_err(path))
+}
 
 /// Writes `rows` as CSV file `name` of `out` (a header row from the field names).
 ///
@@ -266,4 +289,58 @@ pub fn progress_bar(len: u64, what: &str, unit: &str, hidden: bool) -> indicatif
     let template = format!("{{spinner}} {what} [{{bar:40}}] {{pos}}/{{len}} {unit}, {{elapsed}} elapsed, ETA {{eta}}");
     bar.set_style(indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::symlink;
+
+    /// Issue 52, 5: `run` wrote its streamed trace through a link planted in
+    /// `--out` (`trace.csv.partial`); the staged files could be redirected too.
+    /// Every temporary file is made new: a planted link is replaced, its target
+    /// (existing or not) untouched.
+    #[test]
+    fn no_output_is_written_through_a_link_planted_at_its_temporary_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, "theirs").unwrap();
+        let absent = dir.path().join("absent");
+        for name in ["trace.csv.partial", ".summary.json.partial", ".trace.svg.partial", ".trace.pdf.partial", ".sil-host.owner"] {
+            symlink(&victim, out.join(name)).unwrap();
+        }
+        symlink(&absent, out.join("trace.arrow.partial")).unwrap();
+        let mut set = OutputSet::new(&out).unwrap();
+        let (_, mut f) = set.create_streamed("trace.csv").unwrap();
+        f.write_all(b"t\n").unwrap();
+        let (_, mut f) = set.create_streamed("trace.arrow").unwrap();
+        f.write_all(b"arrow").unwrap();
+        set.write_bytes("summary.json", b"{}").unwrap();
+        let svg = set.stage_figure("trace.svg").unwrap();
+        std::fs::write(&svg, "<svg/>").unwrap();
+        std::fs::write(crate::plot::print::pdf_path(&svg), "%PDF").unwrap();
+        let files = set.commit().unwrap();
+        assert_eq!(files.len(), 5, "{files:?}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "theirs", "nothing written through a link");
+        assert!(!absent.exists(), "no file made through a dangling link");
+        for (name, text) in
+            [("trace.csv", "t\n"), ("trace.arrow", "arrow"), ("summary.json", "{}"), ("trace.svg", "<svg/>"), ("trace.pdf", "%PDF")]
+        {
+            let m = std::fs::symlink_metadata(out.join(name)).unwrap();
+            assert!(m.is_file(), "{name} is a file of its own");
+            assert_eq!(std::fs::read_to_string(out.join(name)).unwrap(), text, "{name}");
+        }
+    }
+
+    /// What is in the way and is not a link or a file of ours is refused, naming it.
+    #[test]
+    fn a_folder_at_a_temporary_name_is_refused_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("trace.csv.partial")).unwrap();
+        let mut set = OutputSet::new(dir.path()).unwrap();
+        let e = set.create_streamed("trace.csv").unwrap_err().to_string();
+        assert!(e.contains("trace.csv.partial") && e.contains("in the way"), "{e}");
+    }
 }

@@ -77,3 +77,32 @@ fn bad_ranges_exit_with_2_and_write_nothing() {
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
 }
+
+/// Issue 52, 8: Ctrl-C on `poincare` printed nothing and left the folder's owner
+/// file. It now stops once the belt speeds under way finish, says so, writes
+/// nothing, removes the owner file, and exits 130.
+#[test]
+fn an_interrupted_poincare_says_so_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let child = sil_host()
+        .args(["poincare", "--v-belt=-0.9,-0.3", "--v-step", "0.002", "--threads", "1", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !out.join(".sil-host.owner").exists() {
+        assert!(started.elapsed() < std::time::Duration::from_secs(30), "poincare never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted: poincare stopped after") && err.contains("of 301 belt speeds"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(left.is_empty(), "nothing written, no owner file left: {left:?}");
+}

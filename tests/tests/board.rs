@@ -723,9 +723,11 @@ fn a_twin_killed_during_calibrate_leaves_exit_1_saying_the_calibration_is_half_d
 }
 
 #[test]
-fn a_reader_that_goes_away_ends_board_status_quietly_as_sigpipe_ends_cat() {
+fn a_reader_that_goes_away_or_a_full_disk_ends_board_commands_as_every_command() {
     // Issue 39: `sil-host board ... status | true` panicked on the broken pipe (exit 101).
-    use std::os::unix::process::ExitStatusExt;
+    // Issue 52, 7: one behaviour for every command (sil_host::stdout): a closed
+    // pipe ends it quietly with exit 141 (`watch` at its first line), a full
+    // device with exit 1 and a message.
     let t = twin(Board::Twin, &[]);
     let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
         .args(["board", "--port", &t.port, "watch", "--interval-ms", "5"])
@@ -737,6 +739,30 @@ fn a_reader_that_goes_away_ends_board_status_quietly_as_sigpipe_ends_cat() {
     drop(child.stdout.take());
     let o = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.signal(), Some(libc::SIGPIPE), "{:?}: {err}", o.status);
-    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(o.status.code(), Some(141), "{:?}: {err}", o.status);
+    assert!(!err.contains("panicked") && !err.contains("error"), "{err}");
+    for args in [&["status"][..], &["--json", "status"]] {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+            .args(["board", "--port", &t.port])
+            .args(args)
+            .stdout(full)
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("cannot write to standard output: No space left on device") && !err.contains("panicked"), "{err}");
+    }
+    // The twin itself, whose port nobody can read: ends at once, quietly.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host-e2e"))
+        .args(["board-twin", "--pty", "--serve-for", "60"])
+        .stdout(writer)
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(141), "board-twin | (closed): {err}");
 }

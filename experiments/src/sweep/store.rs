@@ -10,6 +10,7 @@
 use std::{
     collections::BTreeMap,
     fs::{File, OpenOptions},
+    os::unix::fs::OpenOptionsExt,
     path::{Path, PathBuf},
     sync::Mutex,
 };
@@ -65,7 +66,8 @@ pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), CliError> {
     let path = dir.join(MANIFEST);
     let tmp = dir.join(format!(".{MANIFEST}.partial"));
     let json = serde_json::to_string_pretty(m).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
-    std::fs::write(&tmp, json).map_err(io_err(&tmp))?;
+    // Made new, never through a link left at its name (rig::private_files).
+    rig::private_files::write_new(&tmp, json.as_bytes()).map_err(io_err(&tmp))?;
     std::fs::rename(&tmp, &path).map_err(io_err(&path))
 }
 
@@ -212,7 +214,8 @@ pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
 pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), CliError> {
     let tmp = path.with_file_name(format!(".{}.partial", path.file_name().and_then(|n| n.to_str()).unwrap_or("rows.csv")));
     {
-        let mut w = csv::Writer::from_path(&tmp).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+        // Made new, never through a link left at its name (rig::private_files).
+        let mut w = csv::Writer::from_writer(rig::private_files::create_new(&tmp).map_err(io_err(&tmp))?);
         for r in rows {
             w.serialize(r).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
         }
@@ -240,7 +243,13 @@ impl Journal {
             write_rows(&path, existing)?;
         }
         let fresh = std::fs::metadata(&path).map(|m| m.len() == 0).unwrap_or(true);
-        let file = OpenOptions::new().create(true).append(true).open(&path).map_err(io_err(&path))?;
+        // Not through a link planted at its name (ELOOP: refused).
+        let file = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&path)
+            .map_err(io_err(&path))?;
         let writer = csv::WriterBuilder::new().has_headers(fresh).from_writer(file);
         Ok(Self { path, writer: Mutex::new(writer) })
     }

@@ -88,11 +88,26 @@ impl<'py> PythonLink<'py> {
         sensed
     }
 
-    /// Calls the controller on `sensed`; its torques, or the Python error.
+    /// Calls the controller on `sensed`; its torques, or the Python error. An
+    /// exception the controller raised is kept as it is (its type, message and
+    /// traceback) with a note naming the period and time (issue 52, 8: it did not
+    /// say when it was raised): `raised by the controller at period 7 (t = 0.007 s)`.
     fn call(&self, py: Python<'py>, sensed: PySensed) -> PyResult<[f64; 2]> {
         let (k, t) = (sensed.frame.seq, sensed.t);
-        let out = self.controller.call1((t, Bound::new(py, sensed)?))?;
+        let out = self.controller.call1((t, Bound::new(py, sensed)?)).inspect_err(|e| {
+            add_note(py, e, &format!("raised by the controller at period {k} (t = {t} s)"));
+        })?;
         torques_of(&out, k, t)
+    }
+}
+
+/// Adds `note` to the exception `e` (PEP 678's `add_note`, shown under its
+/// message in a traceback, in `e.__notes__`); before Python 3.11, which has no
+/// `add_note`, sets `__notes__` itself.
+fn add_note(py: Python<'_>, e: &PyErr, note: &str) {
+    let value = e.value(py);
+    if value.call_method1("add_note", (note,)).is_err() {
+        let _ = value.setattr("__notes__", vec![note]);
     }
 }
 

@@ -57,11 +57,48 @@ pub fn node(role: Role, rig: &str) -> Result<Node<ipc::Service>, IpcError> {
         // The rig handles SIGINT/SIGTERM itself (it writes what it recorded).
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|e| err("create node", e))?;
+        .map_err(|e| match foreign_iceoryx2_files() {
+            // iceoryx2 keeps one folder per machine; another user's run made it,
+            // and it only says "InternalError" (issue 52, 4).
+            Some(why) => IpcError::Transport(format!("create node: {e:?}: {why}")),
+            None => err("create node", e),
+        })?;
     // A killed run leaves its node's resources behind: clean them so that they
     // never block this run's services.
     let _ = node.try_cleanup_dead_nodes();
     Ok(node)
+}
+
+/// Why this user cannot make iceoryx2 nodes, if another user's files are in the
+/// way: iceoryx2's root folder (`/tmp/iceoryx2/`) and its subfolders are one
+/// per machine, made by whoever ran first, so a second user's node fails.
+fn foreign_iceoryx2_files() -> Option<String> {
+    let root = std::path::PathBuf::from(String::from_utf8_lossy(Config::global_config().global.root_path().as_bytes()).into_owned());
+    foreign_files_in(&root)
+}
+
+/// The message naming the first of `root` and its entries that is another
+/// user's, if any.
+fn foreign_files_in(root: &std::path::Path) -> Option<String> {
+    use std::os::unix::fs::MetadataExt;
+    let root = root.to_path_buf();
+    let me = crate::private_files::euid();
+    let mut places = vec![root.clone()];
+    if let Ok(entries) = std::fs::read_dir(&root) {
+        places.extend(entries.flatten().map(|e| e.path()));
+    }
+    places.into_iter().find_map(|p| {
+        let m = std::fs::symlink_metadata(&p).ok()?;
+        (m.uid() != me).then(|| {
+            format!(
+                "another user's iceoryx2 files are in the way: {} belongs to uid {} (you are uid {me}); iceoryx2 keeps one \
+                 folder per machine, so run as that user, or remove {} when no rig runs",
+                p.display(),
+                m.uid(),
+                root.display()
+            )
+        })
+    })
 }
 
 /// What iceoryx2's node monitoring says about the peer of a rig.
@@ -119,4 +156,25 @@ pub fn peer_state(role: Role, rig: &str) -> PeerState {
         CallbackProgression::Continue
     });
     state
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 52, 4: a second user's run failed with "create node: InternalError";
+    /// another user's iceoryx2 folder is now named, with its owner.
+    #[test]
+    fn another_users_iceoryx2_files_are_named() {
+        let root = tempfile::tempdir().unwrap();
+        std::fs::create_dir(root.path().join("nodes")).unwrap();
+        assert_eq!(foreign_files_in(root.path()), None, "all ours");
+        if crate::private_files::euid() != 0 {
+            eprintln!("skipped the other user's case: needs root to chown to nobody");
+            return;
+        }
+        std::os::unix::fs::chown(root.path().join("nodes"), Some(65534), Some(65534)).unwrap();
+        let why = foreign_files_in(root.path()).unwrap();
+        assert!(why.contains("another user's iceoryx2 files") && why.contains("uid 65534") && why.contains("nodes"), "{why}");
+    }
 }

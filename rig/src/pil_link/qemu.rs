@@ -37,11 +37,16 @@ pub(super) struct Qemu {
     killed_by_fault: bool,
 }
 
-/// A path prefix of our own in the temporary folder (Unix socket paths are short).
-fn temp_prefix() -> PathBuf {
+/// A path prefix of our own in the user's private folder
+/// ([`crate::private_files::runtime_dir`]: no other user can plant a link or a
+/// FIFO at these names; Unix socket paths are short).
+fn temp_prefix() -> Result<PathBuf, RunError> {
     use std::sync::atomic::{AtomicU32, Ordering};
     static N: AtomicU32 = AtomicU32::new(0);
-    std::env::temp_dir().join(format!("painleve-pil-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed)))
+    let dir = crate::private_files::runtime_dir().map_err(|e| RunError::Transport(format!("the PIL link's folder: {e}")))?;
+    // What a killed PIL run left (its FIFOs or socket).
+    crate::private_files::remove_dead_pid_files(&dir, "painleve-pil-");
+    Ok(dir.join(format!("painleve-pil-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed))))
 }
 
 /// `prefix` with `ext` appended (`/tmp/x` and `.up`: `/tmp/x.up`).
@@ -71,7 +76,7 @@ impl Qemu {
         on_log: Option<LogSink>,
     ) -> Result<(Self, Pipe), RunError> {
         let table = table_of(image)?;
-        let prefix = temp_prefix();
+        let prefix = temp_prefix()?;
         let mut cmd = Command::new(qemu);
         cmd.args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
             .args(["-icount", &format!("shift={ICOUNT_SHIFT}")]);

@@ -42,7 +42,16 @@ impl Scenario {
         let s: Scenario = if overrides.is_empty() && !migrated {
             // The text itself: the TOML errors give the line.
             let de = toml::de::Deserializer::parse(text).map_err(|e| toml_error(&e))?;
-            read(de, &[])?
+            let s = read(de, &[])?;
+            // The text's reader drops an array's extra elements (`kp = [1.0, 2.0,
+            // "x"]` read as `[1.0, 2.0]`: toml's array reader never says it had
+            // more; the document's, which `--set` goes through, refuses them):
+            // every array of the file must have the length it was read with
+            // (issue 52, 6).
+            check_lengths(&doc, &s.to_table()?, "")?;
+            // Tables not written back (`[board]` at its default) by the document's reader.
+            read(toml::Value::Table(doc), &[])?;
+            s
         } else {
             read(toml::Value::Table(doc), overrides)?
         };
@@ -117,6 +126,31 @@ fn migrate_legacy(doc: &mut toml::Table) -> Result<bool, ScenarioError> {
     }
 }
 
+/// Checks that every array of the document `doc` has the length of the same
+/// key's array in `read` (the scenario read from it, as a table), `prefix` the
+/// path of `doc`'s table.
+///
+/// # Errors
+/// [`ScenarioError::Parse`] naming the first key whose array is longer (or
+/// shorter) than the key takes, with both lengths.
+fn check_lengths(doc: &toml::Table, read: &toml::Table, prefix: &str) -> Result<(), ScenarioError> {
+    for (k, v) in doc {
+        let path = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        match (v, read.get(k)) {
+            (toml::Value::Table(a), Some(toml::Value::Table(b))) => check_lengths(a, b, &path)?,
+            (toml::Value::Array(a), Some(toml::Value::Array(b))) if a.len() != b.len() => {
+                return Err(ScenarioError::Parse(format!(
+                    "scenario key `{path}`: an array of {} elements where the key takes {} (an element too many is an error, never dropped)",
+                    a.len(),
+                    b.len()
+                )));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Deserialises a scenario; the error names the key path (`controller.kind`) and,
 /// when an override touched that key, the override.
 fn read<'de, D: serde::Deserializer<'de>>(de: D, overrides: &[Override]) -> Result<Scenario, ScenarioError>
@@ -128,6 +162,12 @@ where
         let inner = e.into_inner().to_string();
         // Errors from a document (not a text) repeat the key on a line of their own.
         let inner = if overrides.is_empty() { inner.as_str() } else { inner.lines().next().unwrap_or_default() };
+        // toml's document reader on an array longer than the key takes.
+        let longer =
+            inner.strip_prefix("invalid length ").and_then(|r| r.split_once(", expected fewer elements in array")).map(|(n, rest)| {
+                format!("an array of {n} elements, more than the key takes (an element too many is an error, never dropped){rest}")
+            });
+        let inner = longer.as_deref().unwrap_or(inner);
         let msg = if path == "." { inner.to_string() } else { format!("scenario key `{path}`: {inner}") };
         match overrides::culprit(overrides, &path) {
             Some(o) => ScenarioError::Parse(format!("{msg} (from --set {o})")),

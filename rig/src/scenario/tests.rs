@@ -60,12 +60,61 @@ fn control_characters_in_the_name_are_refused_and_shown_escaped() {
         let e = Scenario::from_toml(&toml).unwrap_err().to_string();
         assert!(e.contains("name") && e.contains("noncharacter"), "{e}");
     }
+    // Issue 52, 8: U+202E (right-to-left override) showed the name's end reversed;
+    // every format character (category Cf) is refused, shown escaped.
+    for bad in ["run\u{202E}dcba", "a\u{2066}b", "zero\u{200B}width", "bom\u{FEFF}", "tag\u{E0041}", "soft\u{AD}"] {
+        let toml = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", &format!("name = {}", toml::Value::from(bad)), 1);
+        let e = Scenario::from_toml(&toml).unwrap_err().to_string();
+        assert!(e.contains("name") && e.contains("format character"), "{e}");
+        assert!(!e.contains(bad), "the name is shown escaped: {e:?}");
+    }
     let fine = DEFAULT_TOML.replacen("name = \"hybrid-x0d\"", "name = \"Zürich run — 2 \u{FFFD}\"", 1);
     assert_eq!(Scenario::from_toml(&fine).unwrap().name, "Zürich run — 2 \u{FFFD}");
 }
 
 fn set(arg: &str) -> Override {
     arg.parse().unwrap()
+}
+
+/// Issue 52, 6: a scenario file's array with extra elements ran with them
+/// dropped, while `--set` refused the same values. Every array is strict: a wrong
+/// length or a wrong-typed element is an error naming the key.
+#[test]
+fn arrays_of_a_wrong_length_or_type_are_refused_naming_the_key() {
+    let cases = [
+        ("[controller.pid]", "kp = [200.0, 0.0, \"x\"]", "controller.pid.kp"),
+        ("[controller.pid]", "kp = [200.0, 0.0, 1.0]", "controller.pid.kp"),
+        ("[controller.pid]", "ki = [1.0]", "controller.pid.ki"),
+        ("[controller.pid]", "kd = [1.0, \"x\"]", "controller.pid.kd"),
+        ("[board.load_cell]", "zero_counts = [2048.0, 2048.0, \"junk\", {a=1}]", "board.load_cell.zero_counts"),
+        ("[board.load_cell]", "zero_counts = [2048.0]", "board.load_cell.zero_counts"),
+    ];
+    for (table, line, key) in cases {
+        // In a file: the default scenario's own text with the key's line replaced
+        // (its other lines as they are), the board's table added.
+        let field = key.rsplit_once('.').unwrap().1;
+        let kept: Vec<&str> = DEFAULT_TOML.lines().filter(|l| !l.starts_with(&format!("{field} ="))).collect();
+        let mut file = kept.join("\n") + "\n";
+        if file.contains(&format!("\n{table}")) {
+            let header = file.lines().find(|l| l.starts_with(table)).unwrap().to_string();
+            file = file.replacen(&header, &format!("{header}\n{line}"), 1);
+        } else {
+            file += &format!("\n{table}\n{line}\n");
+        }
+        let e = Scenario::from_toml(&file).expect_err(line).to_string();
+        assert!(e.contains(key), "{line}: {e}");
+        if line.matches(',').count() >= 2 {
+            assert!(e.contains("more than the key takes") || e.contains("where the key takes 2"), "{line}: {e}");
+        }
+        // The same value by `--set`.
+        let value = line.split_once(" = ").unwrap().1;
+        let e = Scenario::default_scenario().with_overrides(&[set(&format!("{key}={value}"))]).unwrap_err();
+        assert!(e.to_string().contains(key), "--set {key}={value}: {e}");
+    }
+    // The right lengths still read, from a file and from the default.
+    let file = DEFAULT_TOML.to_string() + "\n[board.load_cell]\nzero_counts = [2000.0, 2100.0]\n";
+    assert_eq!(Scenario::from_toml(&file).unwrap().board.load_cell.zero_counts, [2000.0, 2100.0]);
+    assert_eq!(Scenario::from_toml(DEFAULT_TOML).unwrap().controller.pid.kp, [200.0, 0.0]);
 }
 
 /// Issue 27: a fault in the run's last half period was accepted and never acted.

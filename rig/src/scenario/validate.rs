@@ -59,12 +59,13 @@ impl Scenario {
         check(
             !self.name.is_empty()
                 && self.name.chars().count() <= Self::MAX_NAME_CHARS
-                && !self.name.chars().any(|c| c.is_control() || is_noncharacter(c)),
+                && !self.name.chars().any(|c| c.is_control() || is_format(c) || is_noncharacter(c)),
             "name",
             // Debug-quoted: a control character shows as an escape, never reaches the terminal raw.
             format!("{:?}", self.name.chars().take(40).collect::<String>()),
-            "1 to 64 characters, none a control character or a Unicode noncharacter such as U+FFFE (it titles figures, \
-             which XML 1.0 must be able to hold, and terminal lines)",
+            "1 to 64 characters, none a control character, a format character (Unicode category Cf: the bidirectional \
+             controls such as U+202E that reorder what a terminal shows, zero-width characters) or a Unicode noncharacter \
+             such as U+FFFE (it titles figures, which XML 1.0 must be able to hold, and terminal lines)",
         )?;
         check(self.faults.len() <= Self::MAX_FAULTS, "faults", self.faults.len(), "at most 1000 [[faults]]")?;
         let p = &self.plant;
@@ -258,6 +259,37 @@ fn scenario_key(name: &str) -> String {
 /// A Unicode noncharacter (U+FDD0 to U+FDEF, and the last two code points of
 /// every plane: U+FFFE, U+FFFF, ...): U+FFFE and U+FFFF are not XML 1.0
 /// characters at all (an SVG holding one is ill-formed), and none is text.
+/// Whether `c` is a format character (Unicode general category Cf, as of Unicode
+/// 16): invisible characters that change how text around them shows, such as
+/// the bidirectional overrides U+202A..U+202E and isolates U+2066..U+2069 (a
+/// name with U+202E shows its end reversed), zero-width spaces and joiners, the
+/// byte-order mark and the tag characters.
+pub fn is_format(c: char) -> bool {
+    matches!(
+        u32::from(c),
+        0xAD | 0x600..=0x605
+            | 0x61C
+            | 0x6DD
+            | 0x70F
+            | 0x890..=0x891
+            | 0x8E2
+            | 0x180E
+            | 0x200B..=0x200F
+            | 0x202A..=0x202E
+            | 0x2060..=0x2064
+            | 0x2066..=0x206F
+            | 0xFEFF
+            | 0xFFF9..=0xFFFB
+            | 0x110BD
+            | 0x110CD
+            | 0x13430..=0x1343F
+            | 0x1BCA0..=0x1BCA3
+            | 0x1D173..=0x1D17A
+            | 0xE0001
+            | 0xE0020..=0xE007F
+    )
+}
+
 fn is_noncharacter(c: char) -> bool {
     let u = u32::from(c);
     (0xFDD0..=0xFDEF).contains(&u) || u & 0xFFFE == 0xFFFE

@@ -186,21 +186,21 @@ fn changes(prefix: &str, old: &serde_json::Value, new: &serde_json::Value) -> Ve
 
 fn print_snapshot(s: &Snapshot) {
     let st = &s.status;
-    println!(
+    outln!(
         "state: {:?}, period {}, drivers {}, overruns {}",
         st.activity,
         st.periods,
         if st.drivers_enabled { "enabled" } else { "disabled" },
         st.overruns
     );
-    println!("firmware status {:#x}: {}", st.status, describe_status(st.status));
+    outln!("firmware status {:#x}: {}", st.status, describe_status(st.status));
     let off_again = matches!(st.last_enable, EnableOutcome::Enabled { .. }) && !st.drivers_enabled;
-    println!(
+    outln!(
         "last enable: {}{}",
         bp::describe_enable(&st.last_enable),
         if off_again { "; off again since (the firmware status above says why)" } else { "" }
     );
-    println!(
+    outln!(
         "settings: {:?} ({}); zeros set {}, directions checked {}, torque limit {} codes of 2048",
         st.settings,
         st.settings.describe(),
@@ -209,34 +209,34 @@ fn print_snapshot(s: &Snapshot) {
         st.torque_limit_codes
     );
     if !st.missing.is_empty() {
-        println!("calibration lacks: {}", bp::describe_missing(st.missing));
+        outln!("calibration lacks: {}", bp::describe_missing(st.missing));
     }
     let r = &s.raw;
     for (i, name) in ["theta1", "elbow"].iter().enumerate() {
         match r.encoder_counts[i] {
-            Ok(n) => println!(
+            Ok(n) => outln!(
                 "encoder {name}: raw count {n} of 16384{}, AGC {}",
                 joint_degrees(n, &s.calibration, i).map_or_else(String::new, |d| format!(" ({d:+.3} deg)")),
                 r.encoder_agc[i].map_or_else(|| "unreadable".into(), |a| a.to_string())
             ),
-            Err(e) => println!("encoder {name}: no reading ({})", e.describe()),
+            Err(e) => outln!("encoder {name}: no reading ({})", e.describe()),
         }
     }
     match r.adc_counts {
         Some(counts @ [t, n]) => {
             let newtons = load_newtons(counts, &s.calibration);
             let axis = |f: Option<f64>| f.map_or_else(|| "not yet spanned".to_string(), |f| format!("{f:+.3} N"));
-            println!("load cell: f_t {} ({t} counts), f_n {} ({n} counts of 4095)", axis(newtons[0]), axis(newtons[1]));
+            outln!("load cell: f_t {} ({t} counts), f_n {} ({n} counts of 4095)", axis(newtons[0]), axis(newtons[1]));
         }
-        None => println!("load cell ADC: no conversion this period"),
+        None => outln!("load cell ADC: no conversion this period"),
     }
-    println!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
+    outln!("belt counter: {}; driver fault line: {}", r.belt_count, if r.driver_fault { "ASSERTED" } else { "clear" });
     for line in describe_calibration(&s.calibration) {
-        println!("calibration: {line}");
+        outln!("calibration: {line}");
     }
     match &s.telemetry {
-        Some(t) => println!("last window (period {}): {}", t.seq, describe_window(t)),
-        None => println!("telemetry: no window closed yet"),
+        Some(t) => outln!("last window (period {}): {}", t.seq, describe_window(t)),
+        None => outln!("telemetry: no window closed yet"),
     }
 }
 
@@ -270,7 +270,7 @@ fn joint_degrees(raw: u16, cal: &CalibrationRecord, i: usize) -> Option<f64> {
 
 fn emit<T: Serialize>(json: bool, value: &T, human: impl FnOnce()) {
     if json {
-        println!("{}", serde_json::to_string_pretty(value).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(value).unwrap_or_default());
     } else {
         human();
     }
@@ -286,7 +286,7 @@ struct Terminal {
 impl bp::Operator for Terminal {
     fn say(&mut self, line: &str) {
         if !self.json {
-            println!("{line}");
+            outln!("{line}");
         }
     }
 
@@ -306,16 +306,13 @@ impl bp::Operator for Terminal {
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
-    // A reader that goes away (`board status | head -1`) ends the command as it
-    // ends `cat`: by SIGPIPE, silently. Rust ignores SIGPIPE and `println!`
-    // panicked (exit 101). The line to the board is a terminal, where a write
-    // never raises SIGPIPE, so only standard output is concerned.
-    // SAFETY: restoring a signal's default disposition, before any thread.
-    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    // A reader that goes away (`board status | head -1`) or a full disk ends
+    // the command as every command (crate::stdout): quietly, exit 141, or with a
+    // message, exit 1; `watch` stops at the first failed line.
     let mut c = Client::open(&args.port, args.baud).map_err(CliError::bad_input)?;
     bp::hello(&mut c)?;
     let json = args.json;
-    let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || println!("{what}: done"));
+    let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || outln!("{what}: done"));
     match &args.command {
         BoardCommand::Status => {
             let s = snapshot(&mut c)?;
@@ -327,22 +324,21 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             // one line per reading (JSON: one document per reading).
             let tty = std::io::IsTerminal::is_terminal(&std::io::stdout());
             let mut n = 0;
-            while !stop.load(std::sync::atomic::Ordering::Relaxed) && count.is_none_or(|k| n < k) {
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) && !crate::stdout::failed() && count.is_none_or(|k| n < k) {
                 let s = snapshot(&mut c)?;
                 if json {
-                    println!("{}", serde_json::to_string(&s).unwrap_or_default());
+                    outln!("{}", serde_json::to_string(&s).unwrap_or_default());
                 } else if tty {
                     // Carriage return, erase the line, then the new reading.
-                    print!("\r\x1b[2K{}", watch_line(&s));
-                    let _ = std::io::stdout().flush();
+                    out!("\r\x1b[2K{}", watch_line(&s));
                 } else {
-                    println!("{}", watch_line(&s));
+                    outln!("{}", watch_line(&s));
                 }
                 n += 1;
                 std::thread::sleep(Duration::from_millis(*interval_ms));
             }
             if tty && !json {
-                println!();
+                outln!();
             }
             if crate::cancel::exit_code().is_some() {
                 // Ctrl-C or SIGTERM: the shell's 130 or 143, as every command.
@@ -372,11 +368,11 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             };
             let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;
             emit(json, &report, || {
-                println!("calibrate: done; the calibration in force (not yet saved):");
+                outln!("calibrate: done; the calibration in force (not yet saved):");
                 for line in describe_calibration(&report.calibration) {
-                    println!("  {line}");
+                    outln!("  {line}");
                 }
-                println!("next: `sil-host board span` with a known weight (or --skip) on each axis, `configure`, `save`, `enable`");
+                outln!("next: `sil-host board span` with a known weight (or --skip) on each axis, `configure`, `save`, `enable`");
             });
         }
         BoardCommand::Span { axis, newtons, skip } => {
@@ -412,9 +408,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let ratio = f64::from(gain) / (25.0 / 2048.0);
             emit(json, &cal, || {
                 if *skip {
-                    println!("span skipped: {name} keeps the nominal gain {gain:.6} N per count");
+                    outln!("span skipped: {name} keeps the nominal gain {gain:.6} N per count");
                 } else {
-                    println!(
+                    outln!(
                         "span set: {name} gain {gain:.6} N per count ({ratio:.3} times the nominal 25/2048); {name} now reads in newtons"
                     );
                 }
@@ -445,11 +441,11 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let listed: Vec<_> = changed.iter().map(|(k, a, b)| serde_json::json!({ "key": k, "old": a, "new": b })).collect();
             emit(json, &serde_json::json!({ "done": "configure", "changed": listed }), || {
                 if changed.is_empty() {
-                    println!("configure: done: nothing changed (the configuration in force is the scenario's)");
+                    outln!("configure: done: nothing changed (the configuration in force is the scenario's)");
                 } else {
-                    println!("configure: done: {} setting(s) changed, not yet saved (`sil-host board save`):", changed.len());
+                    outln!("configure: done: {} setting(s) changed, not yet saved (`sil-host board save`):", changed.len());
                     for (k, a, b) in &changed {
-                        println!("  {k} = {a} -> {b}");
+                        outln!("  {k} = {a} -> {b}");
                     }
                 }
             });
@@ -457,7 +453,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         BoardCommand::Enable => {
             let st = bp::enable(&mut c)?;
             emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
-                println!(
+                outln!(
                     "enable: done: {}; still on at period {} ({} periods watched): {}",
                     bp::describe_enable(&st.last_enable),
                     st.periods,
@@ -474,7 +470,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             board_backup::write(file, &b).map_err(|e| CliError::bad_input(e.to_string()))?;
             let controller = format!("{:?}", b.config.controller).to_lowercase();
             emit(json, &serde_json::json!({ "done": "backup", "file": file, "backup": b }), || {
-                println!(
+                outln!(
                     "backup: done: the calibration (lacks: {}) and the {controller} configuration written to {}",
                     bp::describe_missing(b.calibration.missing()),
                     file.display()
@@ -487,8 +483,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             board_backup::validate(&b).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
             let st = bp::restore(&mut c, &b)?;
             emit(json, &serde_json::json!({ "done": "restore", "file": file, "status": st }), || {
-                println!("restore: done: the calibration and configuration of {} are in force", file.display());
-                println!(
+                outln!("restore: done: the calibration and configuration of {} are in force", file.display());
+                outln!(
                     "settings: {}; torque limit {} codes of 2048{}",
                     st.settings.describe(),
                     st.torque_limit_codes,
@@ -500,7 +496,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             bp::ask(&mut c, Request::Save)?;
             let b = bp::backup(&mut c)?;
             emit(json, &serde_json::json!({ "done": "save", "saved": b }), || {
-                println!(
+                outln!(
                     "save: done: the calibration and the {} configuration in force are the record in flash (loaded at every reset)",
                     b.config.controller
                 );
@@ -612,9 +608,9 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
     });
     let flash_name = format!("{:?}", args.flash).to_lowercase();
     if args.json {
-        println!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
+        outln!("{}", serde_json::json!({ "port": pty.path, "pose_deg": pose_deg, "pose_counts": pose, "flash": flash_name }));
     } else {
-        println!(
+        outln!(
             "{what} on {}: the arm hangs at theta1 {:.6} deg, elbow {:.6} deg (counts {:?}: the jig's pose); flash {flash_name}{}",
             pty.path.display(),
             pose_deg[0],
@@ -623,7 +619,10 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
             if args.fault_line { "; fault line asserted" } else { "" }
         );
     }
-    let _ = std::io::stdout().flush();
+    if crate::stdout::failed() {
+        // Nobody can read the port's name: nothing to serve (exit 141 or 1, crate::stdout).
+        return Ok(());
+    }
     // The operator, from standard input (one a line): a weight on the load
     // cell (`weight normal 4.905`, `weight tangential -2`, `weight off`), the
     // reset button (`reset`), or the belt's lift (`belt up`, `belt down`).

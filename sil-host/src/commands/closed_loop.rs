@@ -8,7 +8,7 @@ use crate::{error::CliError, plot};
 use rig::{scenario::Scenario, summary::Percentiles, summary::RunSummary};
 
 pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let l = &summary.lift_off;
     let _ = writeln!(
         o,

@@ -32,6 +32,6 @@ pub fn warn(note: Option<String>) {
 /// [`crate::error::CliError::Io`] when it cannot be serialised.
 pub fn print_json<T: serde::Serialize + ?Sized>(value: &T) -> Result<(), crate::error::CliError> {
     let json = serde_json::to_string_pretty(value).map_err(|e| crate::error::CliError::Io { path: "<stdout>".into(), source: e.into() })?;
-    println!("{json}");
+    outln!("{json}");
     Ok(())
 }

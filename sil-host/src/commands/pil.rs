@@ -35,7 +35,8 @@ use rig::{
 ///
 /// # Errors
 /// [`CliError::Analysis`] (exit 2): a serial device that does not exist, a baud
-/// rate outside [`BAUD_RANGE`], a missing image.
+/// rate outside [`BAUD_RANGE`], a missing image, or one that is not a 32-bit
+/// little-endian ARM ELF.
 fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
     if let Some(path) = &args.serial {
         if !path.exists() {
@@ -63,7 +64,36 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
             pil_link::BUILD_HINT
         )));
     }
+    check_image(&image)?;
     Ok(PilTarget::Qemu { image, qemu: args.qemu.clone(), link: args.qemu_link.into() })
+}
+
+/// Refuses at once an image QEMU's Cortex-M4 cannot run (issue 52, 8: a damaged
+/// file exited 1 and one of another machine waited 20 s for a boot that never
+/// came): it must read as an ELF whose header says 32-bit little-endian ARM.
+///
+/// # Errors
+/// [`CliError::Analysis`] (exit 2) naming the file and what is wrong.
+fn check_image(image: &std::path::Path) -> Result<(), CliError> {
+    use object::Object;
+    let bad = |why: String| {
+        CliError::bad_input(format!(
+            "--image {}: {why}; the PIL image is the `arm` firmware's ELF for the Cortex-M4: build it with `{}`",
+            image.display(),
+            pil_link::BUILD_HINT
+        ))
+    };
+    let bytes = std::fs::read(image).map_err(|e| bad(format!("cannot read it ({e})")))?;
+    let elf = object::File::parse(&*bytes).map_err(|e| bad(format!("not an ELF image ({e})")))?;
+    if elf.architecture() != object::Architecture::Arm || !elf.is_little_endian() || elf.is_64() {
+        return Err(bad(format!(
+            "an ELF for {:?} ({}-bit, {}-endian), not 32-bit little-endian ARM",
+            elf.architecture(),
+            if elf.is_64() { 64 } else { 32 },
+            if elf.is_little_endian() { "little" } else { "big" }
+        )));
+    }
+    Ok(())
 }
 
 /// Runs the PIL (or HIL) loop and writes its files; prints nothing.
@@ -102,9 +132,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let transport = link.transport();
     drop(link);
 
-    let svg = out.stage_figure("trace.svg");
+    let svg = out.stage_figure("trace.svg")?;
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &history, stats.last_t())?;
-    let svg = out.stage_figure("instructions.svg");
+    let svg = out.stage_figure("instructions.svg")?;
     draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
         let text: String = log.iter().map(|l| l.display() + "\n").collect();
@@ -147,7 +177,7 @@ fn clock_description(p: &PilFigures) -> String {
 
 fn print_pil(summary: &RunSummary) {
     let Some(p) = &summary.pil else { return };
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let unit = p.count_unit.as_str();
     let sp = |s: &Spread| format!("median {:.0}, p99 {:.0}, worst {:.0}", s.median, s.p99, s.worst);
     let link = match (&p.serial_port, p.baud, p.transport) {

@@ -93,7 +93,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         }
     }
 
-    let svg = out.stage_figure("trace.svg");
+    let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),

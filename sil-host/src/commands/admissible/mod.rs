@@ -25,7 +25,7 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
     let mut out = OutputSet::new(&args.output.out)?;
     let files: Vec<String> = ["admissible.json", "admissible.svg"].iter().map(|f| out.path(f).display().to_string()).collect();
     out.write_bytes("admissible.json", document(&report, &files)?.as_bytes())?;
-    let svg = out.stage_figure("admissible.svg");
+    let svg = out.stage_figure("admissible.svg")?;
     draw_figure(&report, &svg)?;
     out.commit()?;
     Ok(Done::ok(report, files.into_iter().map(Into::into).collect()))
@@ -41,7 +41,7 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).
 pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {
-    run_with(args, &mut std::io::stdout().lock())
+    run_with(args, &mut crate::stdout::out())
 }
 
 /// [`run`], printing to `stdout` instead of the process's standard output.

@@ -186,7 +186,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
     if args.json {
         crate::commands::print_json(&figures)?;
     } else {
-        let mut o = std::io::stdout().lock();
+        let mut o = crate::stdout::out();
         for f in &figures {
             let goal = match f.goal {
                 Goal::AtMost => "<=",

@@ -28,7 +28,7 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     let files = ["modes.csv", "modes.svg"].iter().map(|f| out.path(f)).collect();
     let (tmp, w) = out.create("modes.csv")?;
     write_csv(&map, w, &tmp)?;
-    let svg = out.stage_figure("modes.svg");
+    let svg = out.stage_figure("modes.svg")?;
     draw_figure(&map, &svg)?;
     out.commit()?;
     Ok(Done::ok(map, files))
@@ -44,7 +44,7 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).
 pub fn run(args: &ModesArgs) -> Result<(), CliError> {
-    run_with(args, &mut std::io::stdout().lock())
+    run_with(args, &mut crate::stdout::out())
 }
 
 /// [`run`], printing to `stdout` instead of the process's standard output.

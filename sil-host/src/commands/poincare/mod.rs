@@ -37,11 +37,19 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     let mut out = OutputSet::new(&args.output.out)?;
 
     let progress = progress_bar(grid.len() as u64, "poincare", "belt speeds", args.output.json);
-    // Every belt speed is analysed (a signal ends the process, cancel.rs): a
-    // summary is of the whole grid.
-    let never = std::sync::atomic::AtomicBool::new(false);
-    let (results, wall_s) = analyse_grid(&pool, &cfg, &grid, &never, &|| progress.inc(1));
+    // Ctrl-C or SIGTERM (cancel.rs) stops the grid: the belt speeds being
+    // analysed finish, then the command says so and writes nothing (a diagram is
+    // of the whole grid); the folder's owner file goes with its lock.
+    let stop = crate::cancel::stop_flag();
+    let (results, wall_s) = analyse_grid(&pool, &cfg, &grid, &stop, &|| progress.inc(1));
     progress.finish_and_clear();
+    if stop.load(std::sync::atomic::Ordering::Relaxed) {
+        return Err(CliError::interrupted(format!(
+            "poincare stopped after {} of {} belt speeds in {wall_s:.1} s; nothing written (the diagram is of the whole grid: run it again)",
+            results.len(),
+            grid.len()
+        )));
+    }
 
     let section = section_rows(&results);
     write_csv(&mut out, "section.csv", &section)?;
@@ -54,9 +62,9 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     };
     let classes_json = serde_json::to_string_pretty(&results).map_err(json_err("classes.json"))?;
     out.write_bytes("classes.json", classes_json.as_bytes())?;
-    let svg = out.stage_figure("bifurcation.svg");
+    let svg = out.stage_figure("bifurcation.svg")?;
     draw_bifurcation(&svg, &cfg, &ic.name, &results)?;
-    let svg = out.stage_figure("lyapunov.svg");
+    let svg = out.stage_figure("lyapunov.svg")?;
     draw_lyapunov(&svg, &cfg, &results)?;
 
     let files = [

@@ -5,7 +5,7 @@ use std::io::Write;
 use experiments::poincare::summary::*;
 
 pub(crate) fn print_human(s: &Summary) {
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let ic = &s.initial_condition;
     let _ = writeln!(
         o,

@@ -142,9 +142,9 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
         results_page::write(path, &dir, &sections, &results, size, wall_s, &stamp)?;
     }
     if args.output.json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        println!("report: {n} experiments in {wall_s:.1} s wall, {failed} failed; open {}", dir.join("report.md").display());
+        outln!("report: {n} experiments in {wall_s:.1} s wall, {failed} failed; open {}", dir.join("report.md").display());
     }
     if failed > 0 {
         return Err(CliError::PartFailed(format!("{failed} experiment(s) failed; see {}", dir.join("report.md").display())));

@@ -46,7 +46,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
     write_csv(&mut out, "sensitivity.csv", &study.rows())?;
     let mut names = vec!["sensitivity.csv".to_string(), "summary.json".to_string()];
     for fig in figures::FIGURES {
-        let path = out.stage_figure(fig.file);
+        let path = out.stage_figure(fig.file)?;
         figures::draw(&path, &study, &fig)?;
         names.push(fig.file.to_string());
         names.push(fig.file.replace(".svg", ".pdf"));
@@ -76,7 +76,7 @@ pub fn run(args: &SensitivityArgs) -> Result<(), CliError> {
 
 /// The human table: per dimension and value, the headline results.
 pub(crate) fn print_table(s: &Summary) {
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let st = &s.study;
     let _ = writeln!(
         o,

@@ -85,7 +85,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     progress.finish_and_clear();
     tables.finish()?;
     // trace.svg
-    let svg = out.stage_figure("trace.svg");
+    let svg = out.stage_figure("trace.svg")?;
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
 
     let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);

@@ -7,7 +7,7 @@ use experiments::simulate::summary::Summary;
 pub(crate) fn print_human(s: &Summary) {
     let n_events = s.events;
     let ic = &s.initial_condition;
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let _ = writeln!(
         o,
         "open-loop simulation, u = 0: mu = {}, v_belt = {} m/s, impact law {} (e_n = {}), impact without collision: {}",

@@ -24,7 +24,7 @@ pub(crate) fn finish(
     let missing = store::missing(m, &rows).len();
     let results = summary::results(&m.spec, &rows, missing);
     let mut out = OutputSet::new(dir)?;
-    let csv_tmp = out.stage("sweep.csv");
+    let csv_tmp = out.stage("sweep.csv")?;
     store::write_rows(&csv_tmp, &rows)?;
     // Figures per impact law and e_n.
     let mut by_case: BTreeMap<(String, u64), Vec<&RunRow>> = BTreeMap::new();
@@ -39,8 +39,8 @@ pub(crate) fn finish(
             let suffix = figures::case_suffix(law.name(), e_n);
             let map = format!("map_{suffix}.svg");
             let slices = format!("slices_{suffix}.svg");
-            figures::draw_map(&out.stage_figure(&map), &m.spec, law.name(), e_n, case_rows)?;
-            figures::draw_slices(&out.stage_figure(&slices), &m.spec, law.name(), e_n, case_rows)?;
+            figures::draw_map(&out.stage_figure(&map)?, &m.spec, law.name(), e_n, case_rows)?;
+            figures::draw_slices(&out.stage_figure(&slices)?, &m.spec, law.name(), e_n, case_rows)?;
             for figure in [map, slices] {
                 files.push(dir.join(&figure));
                 files.push(dir.join(figure.replace(".svg", ".pdf")));
@@ -57,10 +57,10 @@ pub(crate) fn finish(
 
 pub(crate) fn report(s: &SweepSummary, json: bool) {
     if json {
-        println!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
         return;
     }
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let ctrl = match (s.spec.controller, s.spec.ideal) {
         (SweepController::None, _) => "open loop (u = 0)".to_string(),
         (c, true) => format!("closed loop, {} (ideal continuous-time)", c.name()),

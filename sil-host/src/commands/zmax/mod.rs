@@ -47,7 +47,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     write_csv(&mut out, "zmax.csv", &summary.results)?;
     write_csv(&mut out, "trials.csv", &trial_rows(&summary))?;
     for s in &searches {
-        let path = out.stage_figure(&format!("zmax-{}.svg", s.combination.stem()));
+        let path = out.stage_figure(&format!("zmax-{}.svg", s.combination.stem()))?;
         draw(&path, s)?;
     }
     let summary = ZmaxSummary { wall_s: started.elapsed().as_secs_f64(), ..summary };

@@ -6,7 +6,7 @@ use analyses::zmax::StopReason;
 use experiments::zmax::summary::*;
 
 pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
-    let mut o = std::io::stdout().lock();
+    let mut o = crate::stdout::out();
     let c = &s.criteria;
     let _ = writeln!(
         o,
