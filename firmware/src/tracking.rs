@@ -79,7 +79,7 @@ impl TrackingMonitor {
     /// is declared; returns what was found once the error was past the bound
     /// (or not finite) for the confirmation, or lift-off held for its time.
     pub fn update(&mut self, rule: &TrackingRule, error: f32, lifted: bool) -> Option<Expectation> {
-        let past = !(error.abs() <= rule.bound);
+        let past = error.is_nan() || error.abs() > rule.bound;
         self.run = if past { self.run.saturating_add(1) } else { 0 };
         self.lifted = if lifted { self.lifted.saturating_add(1) } else { 0 };
         if self.run >= rule.confirm {

@@ -305,7 +305,7 @@ fn every_wiring_fault_is_stopped_within_a_tenth_of_a_second_and_30_mm_of_the_hea
                 wire(&mut f.board);
                 let (records, err, link) = twin_run(&f);
                 let stopped = match err {
-                    Some(RunError::SafeState { k, .. }) => Some(k as usize),
+                    Some(RunError::SafeState { k, .. }) => Some(k),
                     None => None,
                     Some(other) => panic!("{fault}, {kind} scenario {i}: {other}"),
                 };

@@ -43,8 +43,11 @@ pub fn random_admissible(i: u64, kind: &str, duration: f64) -> Scenario {
     s
 }
 
+/// A wiring fault: its name, and how it changes the board's truth.
+pub type WiringFault = (&'static str, fn(&mut BoardDescription));
+
 /// The wiring faults of issue 52, as changes of the board's truth.
-pub const WIRING_FAULTS: [(&str, fn(&mut BoardDescription)); 8] = [
+pub const WIRING_FAULTS: [WiringFault; 8] = [
     ("motor 1 reversed", |b| b.motor1.reversed = true),
     ("motor 2 reversed", |b| b.motor2.reversed = true),
     ("theta1 encoder reversed", |b| b.theta1_encoder.reversed = true),
