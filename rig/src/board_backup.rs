@@ -170,7 +170,7 @@ pub fn validate(b: &Backup) -> Result<(), String> {
             b.protocol, b.protocol, b.protocol
         ));
     }
-    crate::bringup_procedure::check_protection(&b.config, "backup key `config.runaway_limits`")?;
+    crate::board_protection::check_protection(&b.config, "backup key `config.runaway_limits`")?;
     match b.config.validate() {
         Ok(()) => {}
         Err(firmware::config::ConfigError::OutOfRange { name, value, expected }) => {

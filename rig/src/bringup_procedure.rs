@@ -37,20 +37,7 @@ pub enum StepError {
     Refused(String),
 }
 
-/// Why a board refuses the runaway limits off (`Refusal::ProtectionOff`,
-/// `RecordFault::ProtectionOff`, and the host's own checks of a scenario or a
-/// backup before it reaches a board).
-pub const PROTECTION_OFF: &str = "the runaway limits cannot be turned off on a board; the studies that need them off run without \
-                                  a board (`run --in-process`/`--link ipc`)";
-
-/// [`PROTECTION_OFF`] for a configuration that turns them off, the key named:
-/// `Err` when `config.runaway_limits` is false.
-///
-/// # Errors
-/// `"{key} = false: {PROTECTION_OFF}"`.
-pub fn check_protection(config: &firmware::Config, key: &str) -> Result<(), String> {
-    if config.runaway_limits { Ok(()) } else { Err(format!("{key} = false: {PROTECTION_OFF}")) }
-}
+pub use crate::board_protection::{PROTECTION_OFF, check_protection};
 
 /// A refusal in words, with what to do.
 pub fn describe_refusal(r: &Refusal) -> String {

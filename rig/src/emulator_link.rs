@@ -93,7 +93,7 @@ impl EmulatorLink {
     /// As [`EmulatorLink::new`].
     pub fn with_mode(s: &Scenario, image: &Path, mode: Mode) -> Result<Self, RunError> {
         LinkKind::Emulator.check(&s.faults)?;
-        crate::bringup_procedure::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        crate::board_protection::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let period_us = s.timing.period().as_us();
         if period_us != IMAGE_PERIOD_US {

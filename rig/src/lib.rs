@@ -11,6 +11,7 @@
 
 pub mod arm;
 pub mod board_backup;
+pub mod board_protection;
 pub mod bringup_line;
 pub mod bringup_procedure;
 pub mod calibration;

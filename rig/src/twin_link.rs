@@ -49,7 +49,7 @@ impl TwinLink {
     /// is refused.
     pub fn new(s: &Scenario) -> Result<Self, RunError> {
         LinkKind::Twin.check(&s.faults)?;
-        crate::bringup_procedure::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        crate::board_protection::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let config = firmware_config(s);
         let announced = crate::handshake::of_config(&config)?;
