@@ -32,11 +32,15 @@ CEILINGS = {
     # record in flash): 32 152 B before, 52 612 B (mcu) / 52 768 B (qemu) after.
     # Issue 39 (the record's bring-up steps) and issue 38 (the monitor block the
     # emulator reads): 55 464 B (mcu) / 55 412 B (qemu).
-    "mcu/arm": 57 * 1024,  # 55 464 B measured
-    "qemu/arm": 57 * 1024,  # 55 412 B measured
+    # Issue 52 (the runaway limits locked on, the calibration's ranges, the wiring
+    # checks of firmware::wiring and firmware::tracking): 58 736 B (mcu) / 59 028 B (qemu).
+    "mcu/arm": 60 * 1024,  # 58 736 B measured
+    "qemu/arm": 60 * 1024,  # 59 028 B measured
     # Issue 41 (the hybrid law's friction estimate): 31 960 B (qemu), 30 804 B (mcu);
     # the QEMU image now has the PIL image's 32 KiB target too.
-    "qemu/pil": 32 * 1024,  # 31 960 B measured
+    # Issue 52's wiring checks (1.6 KiB in the step): 33 540 B (qemu); the flashed PIL
+    # image (mcu) keeps the 32 KiB target at 32 492 B.
+    "qemu/pil": 34 * 1024,  # 33 540 B measured
     "release/pil": FLASH_BUDGET,  # 43 468 B measured
 }
 FLASH_SECTIONS = (".vector_table", ".text", ".rodata", ".data", ".defmt")
