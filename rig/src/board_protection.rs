@@ -19,4 +19,3 @@ pub const PROTECTION_OFF: &str = "the runaway limits cannot be turned off on a b
 pub fn check_protection(config: &firmware::Config, key: &str) -> Result<(), String> {
     if config.runaway_limits { Ok(()) } else { Err(format!("{key} = false: {PROTECTION_OFF}")) }
 }
-
