@@ -101,7 +101,7 @@ impl SafeReason {
                 "the load cell stayed at full scale for 10 ms: the force ran away (a reversed motor, or the tip driven into the belt)"
             }
             Self::Tracking => {
-                "the tip strayed more than 5 mm from its reference under the force law for 3 ms (a motor or sensor wired wrong)"
+                "the tip strayed more than 5 mm from its reference, and away from it, under the force law for 3 ms (a motor or sensor wired wrong)"
             }
             Self::LiftOff => {
                 "the tip was off the belt, or the load cell read no force, for 10 ms under the force law (a motor or the load cell wired wrong, or the paradox's bounce)"
@@ -545,7 +545,7 @@ impl Firmware {
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         let reference: RefPoint = s.quintic.at(t_run);
         if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
-            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
+            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, z_dot[0] - reference.vel, lifted) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
                 Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
                 None => {}

@@ -30,8 +30,9 @@ fn knobs() -> impl Strategy<Value = Knobs> {
             option::of(0.0f32..50.0),
             option::of(0.01f32..0.99),
         ),
+        proptest::bool::weighted(0.25),
     )
-        .prop_map(|(a, b, c)| Knobs {
+        .prop_map(|(a, b, c, protection_off)| Knobs {
             base: a.0,
             controller: a.1,
             period_us: a.2,
@@ -47,6 +48,7 @@ fn knobs() -> impl Strategy<Value = Knobs> {
             force_ramp_s: c.2,
             gain_scale: c.3,
             observer_fraction: c.4,
+            protection_off,
         })
 }
 

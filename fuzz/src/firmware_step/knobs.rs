@@ -64,6 +64,10 @@ pub struct Knobs {
     pub gain_scale: Option<f32>,
     /// Observer bandwidth as a fraction of its largest value `3/Ts`.
     pub observer_fraction: Option<f32>,
+    /// The runaway limits and wiring checks off (`Config::runaway_limits`), as the
+    /// studies run: the law's own failures (`NonFinite`, `Singular`) are reached
+    /// there, where the checks would stop a wild case first.
+    pub protection_off: bool,
 }
 
 impl Knobs {
@@ -116,6 +120,7 @@ impl Knobs {
         // Within (0, 3/Ts] at the (possibly new) period.
         let frac = self.observer_fraction.unwrap_or(0.2);
         c.observer_bandwidth = c.observer_bandwidth.min(frac * 3.0 / c.period.as_secs_f32());
+        c.runaway_limits = !self.protection_off;
         c
     }
 }

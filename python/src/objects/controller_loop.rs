@@ -95,7 +95,9 @@ impl<'py> PythonLink<'py> {
     fn call(&self, py: Python<'py>, sensed: PySensed) -> PyResult<[f64; 2]> {
         let (k, t) = (sensed.frame.seq, sensed.t);
         let out = self.controller.call1((t, Bound::new(py, sensed)?)).inspect_err(|e| {
-            add_note(py, e, &format!("raised by the controller at period {k} (t = {t} s)"));
+            // To the nanosecond: the sample time k Ts, without its last bits (0.006999999999 s).
+            let shown = (t * 1e9).round() / 1e9;
+            add_note(py, e, &format!("raised by the controller at period {k} (t = {shown} s)"));
         })?;
         torques_of(&out, k, t)
     }
