@@ -545,7 +545,7 @@ impl Firmware {
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         let reference: RefPoint = s.quintic.at(t_run);
         if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
-            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, z_dot[0] - reference.vel, lifted) {
+            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
                 Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
                 None => {}

@@ -20,10 +20,12 @@
 //! and `x0u`) the largest `|z_t - z_t*|` is 0.52 mm (`rig/tests/wiring.rs`).
 //! The bound, [`TRACKING_M`] = 5 mm, is ten times it, and a sixth of the 30 mm a
 //! miswired arm may stray before it is stopped (docs/board.md "Wiring checks").
-//! The error must also grow away from the reference faster than
-//! [`DIVERGING_M_S`] (5 cm/s): a wrong `mu_hat` leaves a steady error of 10 to
-//! 20 mm that builds over the move's seconds at millimetres per second
-//! (docs/analyses.md), a miswired arm drives it away at 0.1 to 4 m/s.
+//! The error must also stand above
+//! its own 50 ms average by [`DIVERGING_M`] (2 mm: growing at 4 cm/s or more),
+//! or be past [`TRACKING_ANY_M`] (25 mm): a wrong
+//! `mu_hat` leaves a steady error of 10 to 20 mm that builds over the move's
+//! seconds at millimetres per second (docs/analyses.md), a miswired arm drives
+//! it away at 0.1 to 4 m/s.
 //! A reversed motor drives the tip away at 0.1 to 4 m/s: past 5 mm within 2 to
 //! 10 ms, [`CONFIRM_S`] later the safe state.
 //!
@@ -38,14 +40,22 @@ pub const LIFT_OFF_S: f32 = 0.010;
 pub const TRACKING_M: f32 = 0.005;
 /// How long past it trips, s.
 pub const CONFIRM_S: f32 = 0.003;
-/// How fast the error must grow, away from the reference, to count, m/s.
-pub const DIVERGING_M_S: f32 = 0.05;
+/// How far `|z_t - z_t*|` must stand above its own 50 ms average to count, m:
+/// an error that grows at 4 cm/s or faster.
+pub const DIVERGING_M: f32 = 0.002;
+/// The average's time constant, s.
+pub const AVERAGE_S: f32 = 0.05;
+/// The error past which it counts however it moves, m: beyond the steady error
+/// of a `mu_hat` 20 % off (20.5 mm, docs/analyses.md).
+pub const TRACKING_ANY_M: f32 = 0.025;
 
 /// The check's state across periods.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TrackingMonitor {
     run: u16,
     lifted: u16,
+    /// `|z_t - z_t*|` averaged over [`AVERAGE_S`], m.
+    average: f32,
 }
 
 /// What the hybrid law's expectations found.
@@ -66,6 +76,8 @@ pub struct TrackingRule {
     pub confirm: u16,
     /// Periods of declared lift-off that trip.
     pub lift_off: u16,
+    /// The average's gain per period, `Ts / (AVERAGE_S + Ts)`.
+    pub smoothing: f32,
 }
 
 fn periods(s: f32, ts: f32) -> u16 {
@@ -76,19 +88,23 @@ fn periods(s: f32, ts: f32) -> u16 {
 impl TrackingRule {
     /// The check above at a control period of `ts` seconds.
     pub fn at_period(ts: f32) -> Self {
-        Self { bound: TRACKING_M, confirm: periods(CONFIRM_S, ts), lift_off: periods(LIFT_OFF_S, ts) }
+        Self { bound: TRACKING_M, confirm: periods(CONFIRM_S, ts), lift_off: periods(LIFT_OFF_S, ts), smoothing: ts / (AVERAGE_S + ts) }
     }
 }
 
 impl TrackingMonitor {
-    /// Folds in one period's tracking error `z_t - z_t*` (m), its rate
-    /// `z_t_dot - z_t_dot*` (m/s) and whether lift-off is declared; returns what
-    /// was found once the error was past the bound and growing away from the
-    /// reference faster than [`DIVERGING_M_S`] (or not finite) for the
-    /// confirmation, or lift-off held for its time.
-    pub fn update(&mut self, rule: &TrackingRule, error: f32, rate: f32, lifted: bool) -> Option<Expectation> {
-        let diverging = error * rate > 0.0 && rate.abs() > DIVERGING_M_S;
-        let past = error.is_nan() || rate.is_nan() || (error.abs() > rule.bound && diverging);
+    /// Folds in one period's tracking error `z_t - z_t*` (m) and whether
+    /// lift-off is declared; returns what was found once the error was past the
+    /// bound and [`DIVERGING_M`] above its own average (or past
+    /// [`TRACKING_ANY_M`], or not finite) for the confirmation, or lift-off held
+    /// for its time.
+    pub fn update(&mut self, rule: &TrackingRule, error: f32, lifted: bool) -> Option<Expectation> {
+        let size = error.abs();
+        let diverging = size - self.average > DIVERGING_M;
+        if size.is_finite() {
+            self.average += rule.smoothing * (size - self.average);
+        }
+        let past = error.is_nan() || (size > rule.bound && diverging) || size > TRACKING_ANY_M;
         self.run = if past { self.run.saturating_add(1) } else { 0 };
         self.lifted = if lifted { self.lifted.saturating_add(1) } else { 0 };
         if self.run >= rule.confirm {
@@ -112,26 +128,34 @@ mod tests {
             assert_eq!(rule.confirm, n, "{ts}");
             let mut m = TrackingMonitor::default();
             for _ in 1..n {
-                assert_eq!(m.update(&rule, -0.006, -0.1, false), None);
+                assert_eq!(m.update(&rule, -0.006, false), None);
             }
-            assert_eq!(m.update(&rule, 0.0051, 0.1, false), Some(Expectation::Tracking));
+            assert_eq!(m.update(&rule, 0.0051, false), Some(Expectation::Tracking));
         }
         let rule = TrackingRule::at_period(1e-3);
         let mut m = TrackingMonitor::default();
         for k in 0..100 {
-            assert_eq!(m.update(&rule, if k % 3 == 2 { 0.0 } else { 0.01 }, 0.1, false), None, "a period within the bound clears it");
+            assert_eq!(m.update(&rule, if k % 3 == 2 { 0.0 } else { 0.01 }, false), None, "a period within the bound clears it");
         }
         // A steady error, or one that shrinks, is the friction term's (a wrong
         // `mu_hat` leaves 10 to 20 mm, docs/analyses.md), not a fault.
         let mut m = TrackingMonitor::default();
-        for _ in 0..1000 {
-            assert_eq!(m.update(&rule, 0.02, 0.01, false), None);
-            assert_eq!(m.update(&rule, -0.02, 0.3, false), None);
+        for k in 0..20_000 {
+            // 1 cm/s up to 20 mm, then steady.
+            let e = (k as f32 * 1e-5).min(0.02);
+            assert_eq!(m.update(&rule, e, false), None, "{k}");
         }
+        // Beyond 25 mm it counts however the error moves.
         let mut m = TrackingMonitor::default();
-        m.update(&rule, f32::NAN, 0.0, false);
-        m.update(&rule, f32::NAN, 0.0, false);
-        assert_eq!(m.update(&rule, f32::NAN, 0.0, false), Some(Expectation::Tracking), "a non-finite error is past the bound");
+        for _ in 1..rule.confirm {
+            assert_eq!(m.update(&rule, 0.026, false), None);
+        }
+        assert_eq!(m.update(&rule, -0.026, false), Some(Expectation::Tracking));
+        for _ in 0..0 {}
+        let mut m = TrackingMonitor::default();
+        m.update(&rule, f32::NAN, false);
+        m.update(&rule, f32::NAN, false);
+        assert_eq!(m.update(&rule, f32::NAN, false), Some(Expectation::Tracking), "a non-finite error is past the bound");
     }
 
     #[test]
@@ -142,14 +166,14 @@ mod tests {
             let mut m = TrackingMonitor::default();
             for _ in 0..20 {
                 for _ in 1..n {
-                    assert_eq!(m.update(&rule, 0.0, 0.0, true), None);
+                    assert_eq!(m.update(&rule, 0.0, true), None);
                 }
-                assert_eq!(m.update(&rule, 0.0, 0.0, false), None, "touchdown clears it");
+                assert_eq!(m.update(&rule, 0.0, false), None, "touchdown clears it");
             }
             for _ in 1..n {
-                assert_eq!(m.update(&rule, 0.0, 0.0, true), None);
+                assert_eq!(m.update(&rule, 0.0, true), None);
             }
-            assert_eq!(m.update(&rule, 0.0, 0.0, true), Some(Expectation::LiftOff));
+            assert_eq!(m.update(&rule, 0.0, true), Some(Expectation::LiftOff));
         }
     }
 }
