@@ -151,7 +151,6 @@ mod tests {
             assert_eq!(m.update(&rule, 0.026, false), None);
         }
         assert_eq!(m.update(&rule, -0.026, false), Some(Expectation::Tracking));
-        for _ in 0..0 {}
         let mut m = TrackingMonitor::default();
         m.update(&rule, f32::NAN, false);
         m.update(&rule, f32::NAN, false);
