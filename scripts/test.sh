@@ -72,7 +72,7 @@ python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
 echo "   ceiling 3100 cycles per worst step, every controller (5 % of a 2.7 kHz period at 168 MHz; 2650 before"
-echo "   issue 52's wiring checks, which cost 210 to 380 cycles: docs/measurements.md)"
+echo "   issue 52's wiring checks, which cost 240 to 410 cycles: docs/measurements.md)"
 cargo build --release -p sil-host
 python3 scripts/cycles.py --duration 1 --max-cycles 3100
 
