@@ -126,8 +126,7 @@ impl FrictionSignMonitor {
 
     /// [`FRICTION_CONFIRM_S`] in periods of `ts` seconds (at least 1).
     pub fn confirm_periods(ts: f32) -> u16 {
-        let n = libm::ceilf(FRICTION_CONFIRM_S / ts - 1e-3);
-        if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
+        crate::runaway::periods_of(FRICTION_CONFIRM_S, ts)
     }
 }
 

@@ -41,6 +41,14 @@ pub enum Runaway {
     Overload,
 }
 
+/// `seconds` in whole periods of `ts` seconds, rounded up (a thousandth of a
+/// period below a whole number counts as it: 0.010 s at 1 kHz is 10), at least
+/// 1 and below `u16::MAX`: the confirmation times of every monitor.
+pub fn periods_of(seconds: f32, ts: f32) -> u16 {
+    let n = libm::ceilf(seconds / ts - 1e-3);
+    if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
+}
+
 /// The limits in periods of the control rate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunawayRule {
@@ -55,12 +63,7 @@ pub struct RunawayRule {
 impl RunawayRule {
     /// The limits above at a control period of `ts` seconds.
     pub fn at_period(ts: f32) -> Self {
-        let overload = libm::ceilf(OVERLOAD_S / ts - 1e-3);
-        Self {
-            speed_limit: SPEED_LIMIT,
-            speed_confirm: SPEED_CONFIRM,
-            overload_confirm: if overload >= 1.0 && overload < f32::from(u16::MAX) { overload as u16 } else { 1 },
-        }
+        Self { speed_limit: SPEED_LIMIT, speed_confirm: SPEED_CONFIRM, overload_confirm: periods_of(OVERLOAD_S, ts) }
     }
 }
 

@@ -80,15 +80,15 @@ pub struct TrackingRule {
     pub smoothing: f32,
 }
 
-fn periods(s: f32, ts: f32) -> u16 {
-    let n = libm::ceilf(s / ts - 1e-3);
-    if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
-}
-
 impl TrackingRule {
     /// The check above at a control period of `ts` seconds.
     pub fn at_period(ts: f32) -> Self {
-        Self { bound: TRACKING_M, confirm: periods(CONFIRM_S, ts), lift_off: periods(LIFT_OFF_S, ts), smoothing: ts / (AVERAGE_S + ts) }
+        Self {
+            bound: TRACKING_M,
+            confirm: crate::runaway::periods_of(CONFIRM_S, ts),
+            lift_off: crate::runaway::periods_of(LIFT_OFF_S, ts),
+            smoothing: ts / (AVERAGE_S + ts),
+        }
     }
 }
 

@@ -67,11 +67,6 @@ pub struct WiringRule {
     pub impact_height: f32,
 }
 
-fn periods(s: f32, ts: f32) -> u16 {
-    let n = libm::ceilf(s / ts - 1e-3);
-    if n >= 1.0 && n < f32::from(u16::MAX) { n as u16 } else { 1 }
-}
-
 impl WiringRule {
     /// The rule above at a control period of `ts` seconds.
     pub fn at_period(ts: f32) -> Self {
@@ -79,8 +74,8 @@ impl WiringRule {
             against_fraction: AGAINST_FRACTION,
             margin_nm: MARGIN_NM,
             smoothing: ts / (FILTER_S + ts),
-            confirm: periods(CONFIRM_S, ts),
-            settle: periods(SETTLE_S, ts),
+            confirm: crate::runaway::periods_of(CONFIRM_S, ts),
+            settle: crate::runaway::periods_of(SETTLE_S, ts),
             impact_height: IMPACT_HEIGHT_M,
         }
     }
