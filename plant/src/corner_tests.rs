@@ -153,7 +153,7 @@ fn a_bridged_run_converges_as_the_bridge_step_shrinks() {
     plant.advance(&ctrl, t_zero - 2e-4, &mut NoObserver).unwrap();
     let y0: OdeState = {
         let x = plant.state();
-        [x[0], x[1], x[2], x[3], 0.0, 0.0]
+        [x[0], x[1], x[2], x[3], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     };
     let ends: Vec<(OdeState, crate::moreau_jean::ContactSolution)> = [25, 50, 100, 200, 400, 800]
         .into_iter()
@@ -190,7 +190,7 @@ fn the_singular_neighbourhood_is_both_small_with_a_finite_force() {
     let mut seen = Vec::new();
     for k in 0..1000 {
         let x = plant.state();
-        let y: OdeState = [x[0], x[1], x[2], x[3], 0.0, 0.0];
+        let y: OdeState = [x[0], x[1], x[2], x[3], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         let seg = crate::segment::Segment::new(
             plant.arm(),
             crate::Phase::Sliding(SlipDirection::Positive),
@@ -201,7 +201,7 @@ fn the_singular_neighbourhood_is_both_small_with_a_finite_force() {
             &trig,
         );
         let (p, b) = p_and_b(&plant, &ctrl);
-        let near = seg.near_singular(plant.time(), &y);
+        let near = seg.near_singular(plant.time(), &y, None);
         assert_eq!(near, p <= 0.05 && -b / 9.81 <= 0.05, "p/Q22 {p}, b {b}");
         seen.push(near);
         plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap();
@@ -234,7 +234,7 @@ fn a_bridge_across_a_touchdown_agrees_with_the_event_driven_run() {
             let mut plant = Plant::new(params, cfg, x0, 0.0, [0.0; 2]).unwrap();
             let mut events = Vec::new();
             // One stretch at exactly this step: the refinement is tested above.
-            let y0: OdeState = [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0];
+            let y0: OdeState = [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
             let stretch = plant.stretch(&crate::Hold([0.0; 2]), 0.0, &y0, 2e-3, (2e-3 / h) as usize).unwrap();
             let end = stretch.states.last().unwrap();
             plant.bridge(&crate::Hold([0.0; 2]), Boundary::Collapse, 2e-3, &mut NoObserver, &mut events).unwrap();

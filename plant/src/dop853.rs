@@ -15,6 +15,9 @@
 /// A state of `N` components (the plant's: `N = 6`).
 pub type State<const N: usize> = [f64; N];
 
+/// The step ratio after the caller rejects a step ([`Control::Reject`]): a quarter.
+pub const REJECT_FACTOR: f64 = 0.25;
+
 /// A system `y' = f(t, y)` on [`State`]`<N>`.
 pub trait OdeSystem<const N: usize> {
     /// Writes `f(t, y)` into `dy` (`t` in s; units of `y` per second).
@@ -28,6 +31,12 @@ pub trait OdeSystem<const N: usize> {
     fn rhs_step_end(&self, t: f64, y: &State<N>, dy: &mut State<N>) {
         self.rhs(t, y, dy);
     }
+
+    /// How many leading components the error norm measures (all `N` by default).
+    /// The others are carried along (integrated by the same stages, with the same
+    /// dense output) but set no step: quadratures of the solution, such as the
+    /// plant's energy ledger, that must not change the path they measure.
+    const NORM_LEN: usize = N;
 }
 
 /// What the step callback of [`Dop853::solve`] asks for.
@@ -37,6 +46,10 @@ pub enum Control {
     Continue,
     /// End the solve after this step (e.g. an event was located in it).
     Stop,
+    /// Do not accept this step after all (a check of the caller's that the error
+    /// estimate cannot make, e.g. a balance the step breaks): it is taken again from
+    /// the same point at a quarter of its size, and counted as rejected.
+    Reject,
 }
 
 /// Why a solve failed.
@@ -194,11 +207,18 @@ impl Dop853 {
                     h_new = h_new.min(h);
                 }
                 reject = false;
-                done.accepted += 1;
                 let control = {
                     let mut view = StepView { sys, t_prev: t, t_curr: t_new, h, y_prev: &y, y_curr: &y_new, k: k_rest, k_end, cont: None };
                     on_step(&mut view)
                 };
+                if control == Control::Reject {
+                    // k[0] is still f(t, y); k[12] is evaluated again at the next end.
+                    h = h * REJECT_FACTOR;
+                    reject = true;
+                    done.rejected += 1;
+                    continue;
+                }
+                done.accepted += 1;
                 k[0] = k[12];
                 t = t_new;
                 y = y_new;
@@ -227,7 +247,8 @@ impl Dop853 {
         let mut dnf = 0.0;
         let mut dny = 0.0;
         let mut sk = [0.0; N];
-        for i in 0..N {
+        let norm_len = S::NORM_LEN.min(N);
+        for i in 0..norm_len {
             sk[i] = self.atol + self.rtol * y0[i].abs();
             dnf += (f0[i] / sk[i]).powi(2);
             dny += (y0[i] / sk[i]).powi(2);
@@ -240,7 +261,7 @@ impl Dop853 {
         }
         let mut f1 = [0.0; N];
         sys.rhs(t0 + h, &y1, &mut f1);
-        let der2 = (0..N).map(|i| ((f1[i] - f0[i]) / sk[i]).powi(2)).sum::<f64>().sqrt() / h;
+        let der2 = (0..norm_len).map(|i| ((f1[i] - f0[i]) / sk[i]).powi(2)).sum::<f64>().sqrt() / h;
         let der12 = der2.abs().max(dnf.sqrt());
         let h1 = if der12 <= 1e-15 { (h.abs() * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / 8.0) };
         (100.0 * h.abs()).min(h1).min(h_max)
@@ -428,10 +449,14 @@ fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
     sys.rhs(t + h, &s, &mut k[11]);
     // The 8th-order solution, and the 5th- and 3rd-order error estimates.
     let (mut err5, mut err3) = (0.0, 0.0);
+    let norm_len = S::NORM_LEN.min(N);
     for i in 0..N {
         let inc =
             B1 * k[0][i] + B6 * k[5][i] + B7 * k[6][i] + B8 * k[7][i] + B9 * k[8][i] + B10 * k[9][i] + B11 * k[10][i] + B12 * k[11][i];
         y_new[i] = y[i] + h * inc;
+        if i >= norm_len {
+            continue;
+        }
         let sk = atol + rtol * y[i].abs().max(y_new[i].abs());
         let e3 = inc - BHH1 * k[0][i] - BHH2 * k[8][i] - BHH3 * k[11][i];
         err3 += (e3 / sk) * (e3 / sk);
@@ -449,14 +474,14 @@ fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
     if deno <= 0.0 {
         deno = 1.0;
     }
-    let inv = 1.0 / (N as f64 * deno);
+    let inv = 1.0 / (norm_len as f64 * deno);
     if inv.is_finite() {
         h.abs() * err5 * inv.sqrt()
     } else {
         // `deno` underflowed to a subnormal (a state at rest: every stage equal to
         // within ~1e-160); `0 * inf` would make the error NaN and reject every step.
         // err5 <= deno, so this quotient is finite.
-        h.abs() * err5 / (N as f64 * deno).sqrt()
+        h.abs() * err5 / (norm_len as f64 * deno).sqrt()
     }
 }
 

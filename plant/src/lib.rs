@@ -47,6 +47,7 @@
 pub mod dop853;
 pub mod impact;
 pub mod initial;
+pub mod ledger;
 pub mod moreau_jean;
 pub mod observer;
 pub mod segment;
@@ -63,12 +64,15 @@ mod plant;
 
 #[cfg(test)]
 mod corner_tests;
+#[cfg(test)]
+mod ledger_tests;
 
 pub use bounds::{MAX_ANGLE, MAX_RATE, PROJECTION_TOLERANCE};
 pub use config::{MAX_STEP_RANGE, SimConfig};
 pub use controller::{Controller, Hold};
 pub use error::SimError;
 pub use events::{Counters, EventKind, PlantEvent, StepReport};
+pub use ledger::Ledger;
 pub use observer::{NoObserver, Observer};
 pub use phase::Phase;
 pub use plant::{Checkpoint, Plant, Sample, SampleGrid};

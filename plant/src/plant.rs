@@ -18,6 +18,7 @@ use crate::{
     dop853::Dop853,
     error::SimError,
     events::{Counters, PlantEvent},
+    ledger::Ledger,
     phase::Phase,
     segment::{self, OdeState, Point, Segment},
     trig::TrigCache,
@@ -55,6 +56,19 @@ pub struct Plant {
     end_point: Option<EndPoint>,
     /// The instants [`Plant::advance_sampling`] samples, while it runs.
     sampling: Option<SampleGrid>,
+    /// The energy ledger's entries that are not integrated with the state (its
+    /// works are, `y[6..10]`; [`Plant::ledger`] puts them together).
+    ledger: Ledger,
+    /// The arm's energy at the start, J: the ledger's origin.
+    e0: f64,
+    /// A flight that leaves the singular point with the residue of `b` (a few
+    /// 1e-10 m/s^2 either side of 0) taken as 0: its start is not a grazing
+    /// touchdown (docs/plant.md "The singular point").
+    departing: bool,
+    /// The current slide's normal force on its approach to `p = 0`, N
+    /// ([`crate::segment::EventLocator::trend_f_n`]), kept from one solve to the
+    /// next while the slide goes on (an interval's end can fall in the approach).
+    slide_trend: Option<f64>,
 }
 
 /// The instants an advance samples ([`Plant::advance_sampling`]): `k dt` s for `k`
@@ -108,6 +122,9 @@ pub struct Checkpoint {
     trig: TrigCache,
     counters: Counters,
     end_point: Option<EndPoint>,
+    ledger: Ledger,
+    departing: bool,
+    slide_trend: Option<f64>,
 }
 
 /// The model at the end of an interval, under the held torque `u` (N m) of that
@@ -157,7 +174,7 @@ impl Plant {
             arm: Arm::new(params),
             cfg,
             t: t0,
-            y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0],
+            y: [x0[0], x0[1], x0[2], x0[3], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             phase: Phase::Flight,
             cone_relaxed: false,
             in_violation: false,
@@ -170,7 +187,12 @@ impl Plant {
             startup_events: Vec::new(),
             end_point: None,
             sampling: None,
+            ledger: Ledger::default(),
+            e0: f64::NAN,
+            departing: false,
+            slide_trend: None,
         };
+        plant.e0 = plant.energy();
         let z = plant.tip();
         let belt = -params.h;
         let depth = belt - z[1];
@@ -290,6 +312,18 @@ impl Plant {
         (self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q), [v[0], v[1]])
     }
 
+    /// The energy ledger since creation (docs/plant.md "The energy ledger"): the
+    /// works of the motors, the damping, the belt and the contact's slip, the
+    /// projections' share, the energy change they explain and what is left.
+    pub fn ledger(&self) -> Ledger {
+        use crate::ledger::{BELT, DAMPING, MOTORS, SLIP};
+        let mut l = self.ledger;
+        (l.motors_j, l.damping_j, l.belt_j, l.slip_j) = (self.y[MOTORS], self.y[DAMPING], self.y[BELT], self.y[SLIP]);
+        l.energy_change_j = self.energy() - self.e0;
+        l.residual_j = l.energy_change_j - (l.motors_j + l.damping_j + l.belt_j + l.slip_j + l.projections_j);
+        l
+    }
+
     /// Event counts since creation.
     pub fn counters(&self) -> &Counters {
         &self.counters
@@ -297,7 +331,7 @@ impl Plant {
 
     /// The validity counters since creation, for a run that ended with `failure`.
     pub fn validity(&self, failure: Option<&SimError>) -> Validity {
-        Validity::of(&self.counters, failure)
+        Validity::of(&self.counters, &self.ledger, failure)
     }
 
     /// Evaluations of the vector field since creation (a cost measure).
@@ -320,17 +354,36 @@ impl Plant {
             trig: self.trig.clone(),
             counters: self.counters,
             end_point: self.end_point,
+            ledger: self.ledger,
+            departing: self.departing,
+            slide_trend: self.slide_trend,
         }
     }
 
     /// Goes back to `c`, a [`Plant::checkpoint`] of this plant: what follows is
     /// bit for bit what would have followed the checkpoint.
     pub fn restore(&mut self, c: Checkpoint) {
-        let Checkpoint { t, y, phase, cone_relaxed, in_violation, time_stepping, last_h, evals, trig, counters, end_point } = c;
+        let Checkpoint {
+            t,
+            y,
+            phase,
+            cone_relaxed,
+            in_violation,
+            time_stepping,
+            last_h,
+            evals,
+            trig,
+            counters,
+            end_point,
+            ledger,
+            departing,
+            slide_trend,
+        } = c;
         (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.time_stepping, self.last_h) =
             (t, y, phase, cone_relaxed, in_violation, time_stepping, last_h);
         self.evals.set(evals);
-        (self.trig, self.counters, self.end_point) = (trig, counters, end_point);
+        (self.trig, self.counters, self.end_point, self.ledger, self.departing, self.slide_trend) =
+            (trig, counters, end_point, ledger, departing, slide_trend);
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {

@@ -22,9 +22,15 @@ use crate::{
 };
 
 /// Components of the plant's integrated state.
-pub const STATE_LEN: usize = 6;
+pub const STATE_LEN: usize = 10;
 
-/// The integrated state: 4 plant states then 2 controller states.
+/// Components the integrator's error norm measures: the arm's four states and the
+/// controller's two. The energy ledger's four works ([`crate::ledger`]) follow them,
+/// integrated with the same stages but setting no step.
+pub const NORM_LEN: usize = 6;
+
+/// The integrated state: 4 plant states, 2 controller states, then the energy
+/// ledger's works `W_motors`, `W_damping`, `W_belt`, `W_slip` (J, [`crate::ledger`]).
 pub type OdeState = super::dop853::State<STATE_LEN>;
 
 /// Which boundary of the current phase an event function component crossed.
@@ -66,6 +72,10 @@ pub struct Segment<'a, C: ?Sized> {
     pub baumgarte: f64,
     /// The jam threshold on `f_n / (m g)` ([`crate::SimConfig::jam_load`]).
     pub jam_load: f64,
+    /// The integrator's tolerances ([`crate::SimConfig::rtol`], [`crate::SimConfig::atol`]): the ledger's scale.
+    pub rtol: f64,
+    /// See [`Segment::rtol`].
+    pub atol: f64,
     /// Count of model evaluations (vector field and event function), for profiling.
     pub evals: &'a Cell<u64>,
     /// Sines and cosines of the joint angles (shared with the plant's projections).
@@ -77,8 +87,9 @@ pub struct Segment<'a, C: ?Sized> {
     terms: ArmTerms<f64>,
 }
 
-/// `(t, y)` and the nearest boundary there (see [`Segment::nearest_boundary`]).
-type StepEnd = (f64, OdeState, (Boundary, f64));
+/// `(t, y)`, the event components there and the normal force (N; see
+/// [`Segment::nearest_boundary`], [`Segment::end_components`]).
+type StepEnd = (f64, OdeState, [(Boundary, f64); 4], f64);
 
 /// The model at one point `(t, y)` of a segment.
 #[derive(Debug, Clone, Copy)]
@@ -87,7 +98,8 @@ pub struct Point {
     pub td: TipDynamics<f64>,
     /// Contact force `[f_t, f_n]` of the mode, N.
     pub f: Vector2<f64>,
-    /// The vector field `dy/dt` (rad/s, rad/s^2, and the controller's `xi_dot`).
+    /// The vector field `dy/dt` (rad/s, rad/s^2, the controller's `xi_dot`, and the
+    /// powers of the ledger's works, W).
     pub dydt: OdeState,
 }
 
@@ -117,6 +129,8 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
             cone_relaxed,
             baumgarte: cfg.baumgarte,
             jam_load: cfg.jam_load,
+            rtol: cfg.rtol,
+            atol: cfg.atol,
             evals,
             trig,
             end: Cell::new(None),
@@ -185,12 +199,40 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     #[inline]
     pub fn point_uncounted(&self, t: f64, y: &OdeState) -> Point {
         let mut xi_dot = [0.0; 2];
-        let (td, f, _) = self.evaluate(t, y, &mut xi_dot);
-        let qdd = match self.phase {
-            Phase::Flight => td.qdd_free,
-            _ => td.qdd_with_force(&f),
+        let (td, f, motor) = self.evaluate(t, y, &mut xi_dot);
+        let p = &self.arm.params;
+        let (d1, d2) = (y[1], y[3]);
+        // The ledger's powers (crate::ledger): the motors' `u_gen . q_dot`, the joint
+        // damping's, and the contact force's on the tip, the belt's part `v_belt f_t`
+        // and the part in the belt's frame `f . [z_r_dot, z_n_dot]`.
+        let motors = (motor[0] - motor[1]) * d1 + motor[1] * d2;
+        let damping = -p.sigma * (d1 * d1 + (d2 - d1) * (d2 - d1));
+        let (qdd, belt, slip) = match self.phase {
+            Phase::Flight => (td.qdd_free, 0.0, 0.0),
+            _ => (td.qdd_with_force(&f), p.v_belt * f[0], f[0] * (td.z_dot[0] - p.v_belt) + f[1] * td.z_dot[1]),
         };
-        Point { td, f, dydt: [y[1], qdd[0], y[3], qdd[1], xi_dot[0], xi_dot[1]] }
+        Point { td, f, dydt: [d1, qdd[0], d2, qdd[1], xi_dot[0], xi_dot[1], motors, damping, belt, slip] }
+    }
+
+    /// The arm's mechanical energy at `y`, J ([`crate::ledger::energy`]).
+    #[inline]
+    pub fn energy(&self, y: &OdeState) -> f64 {
+        let (q, _) = split(y);
+        crate::ledger::energy(self.arm, &self.trig.get(&q), y)
+    }
+
+    /// The energy balance of the stretch from `y0` (energy `e0`) to `y1` (energy
+    /// `e1`): its residual `e1 - e0 - sum of the works` (J) and its tolerance
+    /// ([`crate::ledger::step_tolerance`] at `y1`).
+    #[inline]
+    pub fn balance(&self, y0: &OdeState, e0: f64, y1: &OdeState, e1: f64) -> (f64, f64) {
+        use crate::ledger::{BELT, DAMPING, MOTORS, SLIP};
+        let works = [MOTORS, DAMPING, BELT, SLIP].map(|i| y1[i] - y0[i]);
+        let residual = (e1 - e0) - (works[0] + works[1] + works[2] + works[3]);
+        let size = [MOTORS, DAMPING, BELT, SLIP].iter().map(|&i| y1[i].abs() + y0[i].abs()).sum::<f64>();
+        let (q, _) = split(y1);
+        let tol = crate::ledger::step_tolerance(self.arm, &self.trig.get(&q), y1, self.rtol, self.atol, size + e0.abs() + e1.abs());
+        (residual, tol)
     }
 
     /// The event components (each positive inside the phase), normalised to be
@@ -212,32 +254,34 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     }
 
     /// Whether a slide at `(t, y)` is running into the dynamic jam: `p > 0`, `b < 0`
-    /// and a normal reaction `f_n = -b/p` of at least [`JAM_ONSET_LOAD`] times `m g`.
-    /// Where the step size collapses there before `f_n` reaches `jam_load m g`, the
-    /// plant resolves the jam from the last accepted point (docs/plant.md "The jam
-    /// corner").
-    pub fn jamming(&self, t: f64, y: &OdeState) -> bool {
+    /// and a normal reaction of at least [`JAM_ONSET_LOAD`] times `m g`: the slide's
+    /// trend `trend_f_n` (N, [`EventLocator::trend_f_n`]) where known, else `f_n =
+    /// -b/p` at the point. Where the step size collapses there before `f_n` reaches
+    /// `jam_load m g`, the plant resolves the jam from the last accepted point
+    /// (docs/plant.md "The jam corner").
+    pub fn jamming(&self, t: f64, y: &OdeState, trend_f_n: Option<f64>) -> bool {
         if !matches!(self.phase, Phase::Sliding(_)) {
             return false;
         }
-        let c = self.components(t, y);
-        let f_n_over_mg = (1.0 - c[3].1) * self.jam_load;
-        c[0].1 > 0.0 && c[1].1 > 0.0 && f_n_over_mg >= JAM_ONSET_LOAD
+        let (c, f_n) = self.end_components(t, y);
+        let f_n = trend_f_n.unwrap_or(f_n);
+        c[0].1 > 0.0 && c[1].1 > 0.0 && f_n >= JAM_ONSET_LOAD * self.arm.params.m * self.arm.params.g
     }
 
     /// Whether a slide at `(t, y)` is at the singular point `p = 0, b = 0` with a
     /// finite normal force: `p / Q_22` and `-b / g` both at most
-    /// [`SINGULAR_NEIGHBOURHOOD`] (each small on its own scale) and `f_n = -b/p`
-    /// below [`JAM_ONSET_LOAD`] times `m g` (else it is the jam). Where the step size
-    /// collapses there, the plant crosses the point by a Moreau-Jean bridge under
-    /// the singular rule (docs/plant.md "The singular point").
-    pub fn near_singular(&self, t: f64, y: &OdeState) -> bool {
+    /// [`SINGULAR_NEIGHBOURHOOD`] (each small on its own scale) and the normal force
+    /// (the trend `trend_f_n` where known, as [`Segment::jamming`]) below
+    /// [`JAM_ONSET_LOAD`] times `m g` (else it is the jam). Where the step size
+    /// collapses there, the plant crosses the point under the singular rule
+    /// (docs/plant.md "The singular point").
+    pub fn near_singular(&self, t: f64, y: &OdeState, trend_f_n: Option<f64>) -> bool {
         if !matches!(self.phase, Phase::Sliding(_)) {
             return false;
         }
-        let c = self.components(t, y);
-        let f_n_over_mg = (1.0 - c[3].1) * self.jam_load;
-        c[0].1 <= SINGULAR_NEIGHBOURHOOD && c[1].1 <= SINGULAR_NEIGHBOURHOOD && f_n_over_mg < JAM_ONSET_LOAD
+        let (c, f_n) = self.end_components(t, y);
+        let f_n = trend_f_n.unwrap_or(f_n);
+        c[0].1 <= SINGULAR_NEIGHBOURHOOD && c[1].1 <= SINGULAR_NEIGHBOURHOOD && f_n < JAM_ONSET_LOAD * self.arm.params.m * self.arm.params.g
     }
 
     /// [`Segment::components`] from the tip dynamics and contact force at the point.
@@ -282,13 +326,25 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
 
     /// The component closest to its boundary, and its value.
     pub fn nearest_boundary(&self, t: f64, y: &OdeState) -> (Boundary, f64) {
-        if let Some((te, ye, nearest)) = self.end.get()
+        nearest(self.end_components(t, y).0)
+    }
+
+    /// The event components at `(t, y)` and the normal force there (N), from the
+    /// last step's end when `(t, y)` is it (no evaluation), else evaluated.
+    pub fn end_components(&self, t: f64, y: &OdeState) -> ([(Boundary, f64); 4], f64) {
+        if let Some((te, ye, components, f_n)) = self.end.get()
             && te.to_bits() == t.to_bits()
             && ye.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
         {
-            return nearest;
+            return (components, f_n);
         }
-        nearest(self.components(t, y))
+        match self.phase {
+            Phase::Flight => (self.components(t, y), 0.0),
+            _ => {
+                let (td, f, _) = self.evaluate(t, y, &mut [0.0; 2]);
+                (self.components_of(&td, &f), f[1])
+            }
+        }
     }
 }
 
@@ -299,6 +355,8 @@ pub fn nearest(components: [(Boundary, f64); 4]) -> (Boundary, f64) {
 }
 
 impl<C: Controller + ?Sized> OdeSystem<STATE_LEN> for Segment<'_, C> {
+    const NORM_LEN: usize = NORM_LEN;
+
     #[inline]
     fn rhs(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
         *dydt = self.point(t, y).dydt;
@@ -309,16 +367,30 @@ impl<C: Controller + ?Sized> OdeSystem<STATE_LEN> for Segment<'_, C> {
     fn rhs_step_end(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
         let pt = self.point(t, y);
         *dydt = pt.dydt;
-        self.end.set(Some((t, *y, nearest(self.components_of(&pt.td, &pt.f)))));
+        self.end.set(Some((t, *y, self.components_of(&pt.td, &pt.f), pt.f[1])));
     }
 }
 
-/// The step callback that locates this segment's event.
+/// The step callback that locates this segment's event and keeps the energy
+/// ledger's checks.
 ///
 /// The detection is the standard one: a sign change of the event function (the
 /// nearest boundary's component) from positive to non-positive across an accepted
 /// step, then a bracketing root search (Illinois regula falsi, safeguarded by
 /// bisection) on the step's 7th-order dense output, to `1e-14 s + 1e-15 |t|`.
+///
+/// Three checks can reject a step DOP853 accepted ([`Control::Reject`]: it is taken
+/// again at a quarter of its size), so that no state is kept from a step that is
+/// not a solution of its mode (issue 53):
+/// - its energy balance ([`Segment::balance`]) misses by more than its tolerance;
+/// - a slide ends it with `p < 0` and `b < 0`: the step crossed the pole of
+///   `f_n = -b/p` at `p = 0` (the force is negative at its end, and its dense output
+///   between the ends is no solution);
+/// - the located event is no root (`|g| > ` [`ROOT_TOLERANCE`] there) or breaks the
+///   balance from the step's start to it.
+///
+/// A step that cannot be mended collapses, and the plant resolves the collapse
+/// from the last accepted point (docs/plant.md "The singular point").
 pub struct EventLocator<'s, 'a, C: ?Sized> {
     /// The segment (its event function).
     pub segment: &'s Segment<'a, C>,
@@ -328,6 +400,16 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
     pub hit: Option<(f64, OdeState)>,
     /// The last accepted point `(t, y)` (none before the first step).
     pub last: Option<(f64, OdeState)>,
+    /// The arm's energy at the previous accepted point, J (NaN: not yet known).
+    pub e_prev: f64,
+    /// The ledger of the accepted steps: largest residual (J) and ratio to its tolerance.
+    pub worst: (f64, f64),
+    /// Steps rejected by the checks above.
+    pub rejected: u64,
+    /// While sliding: the normal force (N) at the last accepted point whose
+    /// `p / Q_22` is at least [`TREND_P`]: the slide's force on its approach to
+    /// `p = 0`, before the integration's residue of `b` dominates `-b/p`.
+    pub trend_f_n: Option<f64>,
 }
 
 /// The normal reaction, in units of `m g`, above which a slide whose step size
@@ -347,24 +429,78 @@ pub const SINGULAR_NEIGHBOURHOOD: f64 = 0.05;
 /// projection): the same margin [`super::Plant`] allows at a segment's end.
 const ON_BOUNDARY: f64 = 1e-9;
 
-impl<'a, C: Controller + ?Sized> EventLocator<'_, 'a, C> {
-    /// Checks one accepted step for a crossing and locates it; stops the solve at an event.
+/// The largest `|g|` (dimensionless, the event components' scale) at a located
+/// event: the root search brackets the crossing to `1e-14 s`, where a continuous
+/// event function is within about 1e-9 of 0 (the largest measured over the
+/// reproducer of issue 53 outside the pole crossings was below 1e-7); a
+/// located "root" across a discontinuity (the pole of `-b/p`) is far from it
+/// (-2428 in issue 53).
+pub const ROOT_TOLERANCE: f64 = 1e-6;
+
+/// The `p / Q_22` down to which a slide's normal force shows its trend
+/// ([`EventLocator::trend_f_n`]): below it the integration's residue in `b` (about
+/// 1e-9 m/s^2) can dominate `f_n = -b/p` (issue 53: 1.4e3 N at `p / Q_22 = 6.5e-13`
+/// where the slide's force tends to 4.2 N).
+pub const TREND_P: f64 = 1e-6;
+
+impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
+    /// A locator for a solve of `segment` starting where the event function is `g0`.
+    pub fn new(segment: &'s Segment<'a, C>, g0: f64) -> Self {
+        Self { segment, g_prev: g0, hit: None, last: None, e_prev: f64::NAN, worst: (0.0, 0.0), rejected: 0, trend_f_n: None }
+    }
+
+    /// Checks one accepted step for a crossing and locates it; stops the solve at an
+    /// event, rejects a step that fails a check (type docs).
     pub fn on_step(&mut self, step: &mut StepView<'_, Segment<'a, C>, STATE_LEN>) -> Control {
         let (t_prev, t_curr) = (step.t_prev(), step.t_curr());
-        self.last = Some((t_curr, *step.y_curr()));
-        let g_curr = self.segment.nearest_boundary(t_curr, step.y_curr()).1;
+        let y_prev = *step.y_prev();
+        let y_curr = *step.y_curr();
+        let seg = self.segment;
+        let e_prev = if self.e_prev.is_nan() { seg.energy(&y_prev) } else { self.e_prev };
+        let e_curr = seg.energy(&y_curr);
+        let (residual, tol) = seg.balance(&y_prev, e_prev, &y_curr, e_curr);
+        if !(residual.abs() <= tol) {
+            self.rejected += 1;
+            return Control::Reject;
+        }
+        let (components, f_n) = seg.end_components(t_curr, &y_curr);
+        let sliding = matches!(seg.phase, Phase::Sliding(_));
+        // p < 0 with b < 0 at the end of a slide: the pole of -b/p was stepped over.
+        if sliding && components[1].1 < 0.0 && components[0].1 > 0.0 {
+            self.rejected += 1;
+            return Control::Reject;
+        }
+        let g_curr = nearest(components).1;
         let g_a = self.g_prev;
-        self.g_prev = g_curr;
         // A segment that starts on its boundary (g = 0 to rounding, e.g. flight right
         // after a lift-off) and leaves its domain in the first step has no sign
         // change from a positive value: it counts as a crossing near the start.
         let from_the_boundary = g_a > -ON_BOUNDARY && g_curr < -ON_BOUNDARY;
         if ((g_a > 0.0 && g_curr <= 0.0) || from_the_boundary) && t_curr > t_prev {
-            let y_curr = *step.y_curr();
-            self.hit = Some(locate_root(self.segment, step, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, y_curr)));
+            let (t_hit, y_hit) = locate_root(seg, step, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, y_curr));
+            let g_hit = if t_hit.to_bits() == t_curr.to_bits() { g_curr } else { seg.nearest_boundary(t_hit, &y_hit).1 };
+            let (r_hit, tol_hit) = seg.balance(&y_prev, e_prev, &y_hit, seg.energy(&y_hit));
+            // A crossing from the boundary may sit anywhere in (-ON_BOUNDARY, 0].
+            let root = g_hit.abs() <= ROOT_TOLERANCE || (from_the_boundary && g_hit > -ON_BOUNDARY);
+            if !(root && r_hit.abs() <= tol_hit) {
+                self.rejected += 1;
+                return Control::Reject;
+            }
+            self.note_balance(residual.abs().max(r_hit.abs()), (residual.abs() / tol).max(r_hit.abs() / tol_hit));
+            (self.last, self.g_prev, self.e_prev) = (Some((t_curr, y_curr)), g_curr, e_curr);
+            self.hit = Some((t_hit, y_hit));
             return Control::Stop;
         }
+        self.note_balance(residual.abs(), residual.abs() / tol);
+        if sliding && components[1].1 >= TREND_P {
+            self.trend_f_n = Some(f_n);
+        }
+        (self.last, self.g_prev, self.e_prev) = (Some((t_curr, y_curr)), g_curr, e_curr);
         Control::Continue
+    }
+
+    fn note_balance(&mut self, residual: f64, ratio: f64) {
+        self.worst = (self.worst.0.max(residual), self.worst.1.max(ratio));
     }
 }
 

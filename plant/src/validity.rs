@@ -11,7 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{error::SimError, events::Counters};
+use crate::{error::SimError, events::Counters, ledger::Ledger};
 
 /// Validity counters of one run (or a sum over runs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -36,6 +36,11 @@ pub struct Validity {
     /// points included; written only when not 0).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub bridges: u64,
+    /// Energy-ledger entries (an integration step, an impact or a bridge) whose
+    /// balance refinement could not mend (docs/plant.md "The energy ledger"): a
+    /// violation, written only when not 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub ledger_violations: u64,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -44,7 +49,7 @@ fn is_zero(n: &u64) -> bool {
 
 impl Validity {
     /// The counters of a plant (`counters`) and how its run ended (`failure`).
-    pub fn of(counters: &Counters, failure: Option<&SimError>) -> Self {
+    pub fn of(counters: &Counters, ledger: &Ledger, failure: Option<&SimError>) -> Self {
         Self {
             energy_gains: counters.energy_gains,
             newton_fallbacks: counters.newton_fallbacks,
@@ -54,12 +59,13 @@ impl Validity {
             integrator_failures: u64::from(failure.is_some_and(SimError::is_integrator_failure)),
             singular_points: counters.singular_points,
             bridges: counters.bridges,
+            ledger_violations: ledger.violations,
         }
     }
 
     /// Violations: energy-creating impacts, cone violations and integrator failures.
     pub fn violations(&self) -> u64 {
-        self.energy_gains + self.cone_violations + self.integrator_failures
+        self.energy_gains + self.cone_violations + self.integrator_failures + self.ledger_violations
     }
 
     /// Whether the run has no violation.
@@ -77,6 +83,7 @@ impl Validity {
         self.integrator_failures += other.integrator_failures;
         self.singular_points += other.singular_points;
         self.bridges += other.bridges;
+        self.ledger_violations += other.ledger_violations;
     }
 
     /// The violations in words (`"2 cone violations, 1 integrator failure"`), empty if none.
@@ -91,6 +98,9 @@ impl Validity {
         }
         if self.integrator_failures > 0 {
             parts.push(plural(self.integrator_failures, "integrator failure", "integrator failures"));
+        }
+        if self.ledger_violations > 0 {
+            parts.push(plural(self.ledger_violations, "energy-ledger violation", "energy-ledger violations"));
         }
         parts.join(", ")
     }
@@ -114,6 +124,9 @@ impl std::fmt::Display for Validity {
         if self.bridges > 0 || self.singular_points > 0 {
             write!(f, " | singular points {} | bridges {}", self.singular_points, self.bridges)?;
         }
+        if self.ledger_violations > 0 {
+            write!(f, " | energy-ledger violations {}", self.ledger_violations)?;
+        }
         Ok(())
     }
 }
@@ -130,9 +143,9 @@ mod tests {
         assert_eq!(v.violations(), 3);
         assert_eq!(v.describe_violations(), "2 friction-cone violations, 1 integrator failure");
         assert_eq!(v.zeno_stops, 9);
-        let failed = Validity::of(&Counters::default(), Some(&SimError::MissedEvent { t: 1.0, mode: "sliding" }));
+        let failed = Validity::of(&Counters::default(), &Ledger::default(), Some(&SimError::MissedEvent { t: 1.0, mode: "sliding" }));
         assert_eq!(failed.integrator_failures, 1);
-        let bad_input = Validity::of(&Counters::default(), Some(&SimError::BadStep(-1.0)));
+        let bad_input = Validity::of(&Counters::default(), &Ledger::default(), Some(&SimError::BadStep(-1.0)));
         assert_eq!(bad_input.integrator_failures, 0, "bad input is not an integrator failure");
     }
 
@@ -144,7 +157,7 @@ mod tests {
         assert!(!quiet.to_string().contains("bridges"));
         assert!(!serde_json::to_string(&quiet).unwrap().contains("bridges"));
         let counters = Counters { singular_points: 1, bridges: 3, ..Counters::default() };
-        let acted = Validity::of(&counters, None);
+        let acted = Validity::of(&counters, &Ledger::default(), None);
         assert!(acted.is_valid());
         assert!(acted.to_string().ends_with(" | singular points 1 | bridges 3"), "{acted}");
         let json = serde_json::to_string(&acted).unwrap();

@@ -7,12 +7,13 @@ use shared::{ContactMode, model::TipDynamics};
 use super::{EndPoint, Plant, Sample, SampleGrid};
 use crate::{
     controller::Controller,
-    dop853::{DenseStep, Dop853, SolveError},
+    dop853::{Control, DenseStep, Dop853, SolveError},
     error::SimError,
-    events::{PlantEvent, StepReport},
+    events::{EventKind, PlantEvent, StepReport},
+    moreau_jean::SingularRule,
     observer::Observer,
     phase::Phase,
-    segment::{self, Boundary, EventLocator, OdeState, Point, STATE_LEN},
+    segment::{self, Boundary, EventLocator, OdeState, Point, STATE_LEN, Segment},
 };
 
 /// The end of one solve: end time, state, the boundary hit (if any), and the event
@@ -24,6 +25,17 @@ const STALL_LIMIT: usize = 16;
 
 /// Rounding slack on the (dimensionless) event components at the start of a segment.
 const START_SLACK: f64 = 1e-12;
+
+/// The `-b/g` within which a slide whose step collapsed at the singular point is at
+/// the point itself ([`Plant::at_singular_point`]): issue 53's collapses end with
+/// `-b/g` from 1e-10 to 3e-10 (the integration's residue), issue 40's, in the
+/// point's neighbourhood, with 3e-3 to 7e-3.
+pub const SINGULAR_RESIDUE: f64 = 1e-6;
+
+/// The time over which [`Plant::flight_departs`] takes flight's rate of `b`, s:
+/// long enough that the change dwarfs the residue of `b` (1e-9 m/s^2), short
+/// enough to be the rate at the point.
+const DEPARTURE_PROBE: f64 = 1e-6;
 
 impl Plant {
     /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`](crate::Hold)`(u)` for the
@@ -188,7 +200,8 @@ impl Plant {
                 let nb = segment::nearest(seg.components_of(&start.td, &start.f));
                 (start, nb)
             };
-            if (g0 < -START_SLACK && self.phase != Phase::Flight) || self.flight_starts_into_belt(&start.td) {
+            let departing = std::mem::take(&mut self.departing);
+            if (g0 < -START_SLACK && self.phase != Phase::Flight) || (!departing && self.flight_starts_into_belt(&start.td)) {
                 if self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
                     handled += 1;
                     continue;
@@ -203,6 +216,19 @@ impl Plant {
             let hit = self.integrate(ctrl, seg_end, &start, g0, obs)?;
             self.counters.segments += 1;
             match hit {
+                Some(Boundary::Singular) if self.cfg.singular == SingularRule::Leave && self.at_singular_point(ctrl) => {
+                    if self.flight_departs(ctrl) {
+                        self.leave_singular_point(&mut events);
+                    } else {
+                        // Flight is no solution here (in flight `b` falls below 0 at
+                        // once): the slide has reached p = 0 with its force finite,
+                        // the located passage's case, and the impact without
+                        // collision follows. Counted as a singular point too.
+                        self.counters.singular_points += 1;
+                        self.cross(ctrl, Boundary::PZero, &mut events)?;
+                    }
+                    handled += 1;
+                }
                 Some(b @ (Boundary::Singular | Boundary::Collapse)) => {
                     self.bridge(ctrl, b, t_end, obs, &mut events)?;
                     handled += 1;
@@ -231,6 +257,59 @@ impl Plant {
             obs.on_event(e);
         }
         Ok(events)
+    }
+
+    /// Whether the slide is at the singular point itself: `-b/g` within
+    /// [`SINGULAR_RESIDUE`] of 0 (the integration's residue of `b` as `p -> 0`), not
+    /// only in its neighbourhood (where the step collapses on the way, issue 40's
+    /// cases, a bridge crosses it).
+    fn at_singular_point<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
+        let c = self.segment(ctrl).components(self.t, &self.y);
+        c[0].1.abs() <= SINGULAR_RESIDUE
+    }
+
+    /// Whether a flight from the current state departs from the belt: `b`, 0 to
+    /// the integration's residue here, grows in flight (its rate, from the flight's
+    /// field over [`DEPARTURE_PROBE`] s, is positive). At the singular point the
+    /// slide's `b` tends to 0 from below at the rate `c = alpha / (k - 1)` (docs/plant.md
+    /// "The singular point"), and flight's rate is `alpha`: positive only where
+    /// the slide's force trend `alpha / ((k - 1) |A|)` would be negative, so on the
+    /// arms met so far flight does not depart, and the impact without collision
+    /// at `p = 0` resolves the point.
+    fn flight_departs<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
+        let flight = Segment::new(&self.arm, Phase::Flight, ctrl, false, &self.cfg, &self.evals, &self.trig);
+        let here = flight.point(self.t, &self.y);
+        let dt = DEPARTURE_PROBE;
+        let ahead: OdeState = std::array::from_fn(|i| self.y[i] + dt * here.dydt[i]);
+        let there = flight.point(self.t + dt, &ahead);
+        there.td.b() > here.td.b()
+    }
+
+    /// The singular rule `leave` at the singular point itself: the tip leaves the
+    /// belt with its state continuous, the residue of `b` taken as 0 (the flight
+    /// starts without the grazing test; in flight `b` grows from 0 at the rate the
+    /// slide's force tended to, Génot and Brogliato 1999, sec. 4). Reported as a
+    /// `singular_point` event and a lift-off.
+    fn leave_singular_point(&mut self, events: &mut Vec<PlantEvent>) {
+        let before = self.rel_velocity();
+        self.phase = Phase::Flight;
+        self.departing = true;
+        self.slide_trend = None;
+        self.counters.singular_points += 1;
+        self.counters.lift_offs += 1;
+        events.push(PlantEvent {
+            t: self.t,
+            kind: EventKind::SingularPoint,
+            mode_after: ContactMode::Flight,
+            v_n_before: before[1],
+            v_n_after: before[1],
+            v_r_before: before[0],
+            v_r_after: before[0],
+            impulse: [0.0; 2],
+            energy_change: 0.0,
+            contact_work: 0.0,
+            resolution: None,
+        });
     }
 
     /// Whether `e` is the model at the current time, state and mode under `ctrl`
@@ -354,10 +433,14 @@ impl Plant {
         let solver = Dop853 { h_max: h_max.min(self.solver.h_max).min(cap), ..self.solver };
         let mode = self.mode();
         let seg = self.segment(ctrl);
-        let mut locator = EventLocator { segment: &seg, g_prev: g0, hit: None, last: None };
+        let mut locator = EventLocator::new(&seg, g0);
+        locator.trend_f_n = self.slide_trend;
         let (l, grid) = (self.arm.params.l, self.sampling);
-        let solved = match solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
+        let solved = solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
+            if control == Control::Reject {
+                return control;
+            }
             // The samples `advance_sampling` asks for: each from the step that covers
             // it, up to the event that ends the segment inside it.
             if let Some(g) = grid {
@@ -380,20 +463,29 @@ impl Plant {
             }
             obs.on_step(step, locator.hit, mode);
             control
-        }) {
+        });
+        let (rejected, worst, trend) = (locator.rejected, locator.worst, locator.trend_f_n);
+        let (locator_end, last) = ((locator.g_prev, locator.hit), locator.last);
+        drop(seg);
+        self.slide_trend = trend;
+        self.ledger.refinements += rejected;
+        self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(worst.0);
+        self.ledger.worst_ratio = self.ledger.worst_ratio.max(worst.1);
+        let solved = match solved {
             Ok(s) => s,
             // The step size collapsed: at the dynamic jam before f_n reached jam_load m g
             // (resolved from the last accepted point, the solve's start if it accepted
             // none, where the slide was already jamming), at the singular point, or
             // elsewhere (both crossed by a Moreau-Jean bridge from that point).
             Err(SolveError::StepSizeTooSmall { .. })
-                if let (t1, y1) = locator.last.unwrap_or((self.t, self.y))
+                if let (t1, y1) = last.unwrap_or((self.t, self.y))
                     && y1.iter().all(|v| v.is_finite()) =>
             {
-                let boundary = if seg.jamming(t1, &y1) {
+                let seg = self.segment(ctrl);
+                let boundary = if seg.jamming(t1, &y1, trend) {
                     self.counters.jams_at_collapse += 1;
                     Boundary::Jam
-                } else if seg.near_singular(t1, &y1) {
+                } else if seg.near_singular(t1, &y1, trend) {
                     Boundary::Singular
                 } else {
                     Boundary::Collapse
@@ -402,7 +494,7 @@ impl Plant {
             }
             Err(e) => return Err(SimError::Integrator { t: self.t, message: e.to_string() }),
         };
-        let (g_end, hit) = (locator.g_prev, locator.hit);
+        let (g_end, hit) = locator_end;
         self.last_h = solved.h_next;
         if let Some((t1, y1)) = hit {
             if !y1.iter().all(|v| v.is_finite()) {

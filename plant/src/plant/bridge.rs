@@ -13,6 +13,7 @@ use crate::{
     dop853::{DenseStep, State},
     error::SimError,
     events::{EventKind, PlantEvent},
+    ledger::{BELT, DAMPING, MOTORS, SLIP},
     moreau_jean::{ContactSolution, SingularRule, contact_impulse},
     observer::Observer,
     phase::Phase,
@@ -69,6 +70,7 @@ impl Plant {
         events: &mut Vec<PlantEvent>,
     ) -> Result<(), SimError> {
         let (t0, y0) = (self.t, self.y);
+        self.slide_trend = None;
         let length = (t_end - t0).min(self.cfg.bridge_length);
         let before = self.rel_velocity();
         let stretch = self.converged_stretch(ctrl, t0, &y0, length)?;
@@ -197,15 +199,15 @@ impl Plant {
             let v_free = qd + td.qdd_free * h;
             let v_n = td.z_dot[1];
             let active = td.z[1] + params.h + 0.5 * h * v_n <= BRIDGE_CONTACT_GAP;
-            let (v_new, solution) = if active {
+            let (v_new, solution, impulse) = if active {
                 let tip = td.jac * v_free;
                 let target = if v_n < 0.0 { -self.cfg.e_n * v_n } else { 0.0 };
                 let rel = Vector2::new(tip[0] - params.v_belt, tip[1]);
                 let (p, solution) = contact_impulse(&td.qmat, params.mu, rel, target, self.cfg.singular)
                     .ok_or(SimError::NonFinite { t, mode: "bridge" })?;
-                (v_free + td.m_inv * (td.jac.transpose() * p), solution)
+                (v_free + td.m_inv * (td.jac.transpose() * p), solution, p)
             } else {
-                (v_free, ContactSolution::Inactive)
+                (v_free, ContactSolution::Inactive, Vector2::zeros())
             };
             phase = match solution {
                 ContactSolution::Inactive | ContactSolution::Separation => Phase::Flight,
@@ -213,8 +215,27 @@ impl Plant {
                 ContactSolution::Sliding(dir) => Phase::Sliding(dir),
             };
             last = solution;
-            let q_new = q + (qd + v_new) * (0.5 * h);
-            y = [q_new[0], v_new[0], q_new[1], v_new[1], y[4] + h * xi_dot[0], y[5] + h * xi_dot[1]];
+            let v_mid = (qd + v_new) * 0.5;
+            let q_new = q + v_mid * h;
+            // The ledger's works of the step's forces over its displacement `h v_mid`:
+            // the motors' and the damping's (explicit, at the step's start), the
+            // contact impulse's on the tip's mean velocity, split as in segment.rs.
+            let damping = -params.sigma * (qd[0] * v_mid[0] + (qd[1] - qd[0]) * (v_mid[1] - v_mid[0]));
+            let tip_mid = td.jac * v_mid;
+            let belt = params.v_belt * impulse[0];
+            let slip = impulse[0] * (tip_mid[0] - params.v_belt) + impulse[1] * tip_mid[1];
+            y = [
+                q_new[0],
+                v_new[0],
+                q_new[1],
+                v_new[1],
+                y[4] + h * xi_dot[0],
+                y[5] + h * xi_dot[1],
+                y[MOTORS] + h * (u[0] * v_mid[0] + u[1] * v_mid[1]),
+                y[DAMPING] + h * damping,
+                y[BELT] + belt,
+                y[SLIP] + slip,
+            ];
             if !y.iter().all(|v| v.is_finite()) {
                 return Err(SimError::NonFinite { t: t + h, mode: "bridge" });
             }

@@ -20,6 +20,13 @@ impl Plant {
     /// with the step at most `1e-8` rad it is below rounding, the same result as
     /// the inverse kinematics (used otherwise) without its `acos` and `atan2`.
     pub(super) fn project_position(&mut self) -> Result<(), SimError> {
+        let e = self.energy();
+        let moved = self.project_position_only();
+        self.ledger.projections_j += self.energy() - e;
+        moved
+    }
+
+    fn project_position_only(&mut self) -> Result<(), SimError> {
         let (q, _) = segment::split(&self.y);
         let l = self.arm.params.l;
         let trig = self.trig.get(&q);
@@ -46,7 +53,8 @@ impl Plant {
     }
 
     /// Removes the constrained velocity components by the smallest kinetic-energy
-    /// correction: `z_n_dot -> 0`, and `z_r_dot -> 0` too when `sticking`.
+    /// correction: `z_n_dot -> 0`, and `z_r_dot -> 0` too when `sticking`. The
+    /// correction is an impulse at the tip, booked in the energy ledger as one.
     pub(super) fn project_contact_velocity(&mut self, sticking: bool) -> Result<(), SimError> {
         let (q, qd) = segment::split(&self.y);
         let trig = self.trig.get(&q);
@@ -60,8 +68,14 @@ impl Plant {
             Vector2::new(0.0, -v[1] / qm[(1, 1)])
         };
         let dqd = m_inv * (jac.transpose() * lambda);
+        let ke = self.arm.kinetic_energy(&q, &qd);
         self.y[1] += dqd[0];
         self.y[3] += dqd[1];
+        let (_, qd_new) = segment::split(&self.y);
+        let ke_new = self.arm.kinetic_energy(&q, &qd_new);
+        let v_new = jac * qd_new;
+        let mid = Vector2::new(0.5 * (v[0] + v_new[0]) - self.arm.params.v_belt, 0.5 * (v[1] + v_new[1]));
+        self.book_impulse(lambda, lambda.dot(&mid), ke_new - ke, ke + ke_new);
         Ok(())
     }
 

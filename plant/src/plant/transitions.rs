@@ -43,6 +43,8 @@ impl Plant {
         events: &mut Vec<PlantEvent>,
     ) -> Result<(), SimError> {
         self.cone_relaxed = false;
+        // A new slide, if any, has its own approach to p = 0.
+        self.slide_trend = None;
         let result = self.cross_inner(ctrl, boundary, events);
         // An episode of cone violation ends when another mode is chosen.
         if !self.cone_relaxed {
@@ -307,7 +309,8 @@ impl Plant {
         self.enter_contact(ctrl, Entry::SlipStopped, events)
     }
 
-    /// Applies a tip impulse: `q_dot += M^-1 J^T P`; returns the kinetic energy change (J).
+    /// Applies a tip impulse: `q_dot += M^-1 J^T P`; returns the kinetic energy change
+    /// (J), booked in the energy ledger with the impulse's works.
     fn apply_impulse(&mut self, imp: &Impulse) -> f64 {
         let (q, qd) = segment::split(&self.y);
         let before = self.arm.kinetic_energy(&q, &qd);
@@ -316,7 +319,29 @@ impl Plant {
         self.y[1] += dqd[0];
         self.y[3] += dqd[1];
         let (q, qd) = segment::split(&self.y);
-        self.arm.kinetic_energy(&q, &qd) - before
+        let after = self.arm.kinetic_energy(&q, &qd);
+        self.book_impulse(imp.p, imp.contact_work, after - before, before + after);
+        after - before
+    }
+
+    /// Books an impulse `p = [P_t, P_n]` (N s) at the tip in the energy ledger: the
+    /// belt's work `v_belt P_t` and the work in the belt's frame `rel_work` (J), and
+    /// checks that they explain the kinetic energy change `de` (J; `ke` the kinetic
+    /// energies' sum, the rounding's scale). At a fixed configuration `T = v Q^-1 v / 2`
+    /// for the tip velocity `v`, so `dT = int v . dP` exactly, whatever the law.
+    pub(super) fn book_impulse(&mut self, p: Vector2<f64>, rel_work: f64, de: f64, ke: f64) {
+        use crate::ledger::{BELT, SLIP};
+        let belt = self.arm.params.v_belt * p[0];
+        self.y[BELT] += belt;
+        self.y[SLIP] += rel_work;
+        self.ledger.largest_event_belt_j = self.ledger.largest_event_belt_j.max(belt);
+        let residual = (de - (belt + rel_work)).abs();
+        let tol = crate::ledger::IMPULSE_TOLERANCE * (ke + belt.abs() + rel_work.abs()) + 1e-15;
+        self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(residual);
+        self.ledger.worst_ratio = self.ledger.worst_ratio.max(residual / tol);
+        if !(residual <= tol) {
+            self.ledger.violations += 1;
+        }
     }
 
     /// Counts a law's fallback to the energetic one, and reports an impact whose

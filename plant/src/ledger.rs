@@ -1,0 +1,121 @@
+//! The energy ledger (docs/plant.md "The energy ledger"): along every run,
+//! `E(t) - E(0) = W_motors + W_damping + W_belt + W_slip + W_projections`, each
+//! term accounted per integration step, per impact and per bridge, and each entry
+//! checked against its own tolerance.
+//!
+//! - `E = T + V` is the arm's mechanical energy (kinetic, gravity and spring; paper
+//!   eq. 1's `M`, and the conservative part of `w`), J.
+//! - `W_motors` is the work of the motor torques, `int u_gen . q_dot dt` with
+//!   `u_gen = [u1 - u2, u2]` (paper eq. 9's generalised torque).
+//! - `W_damping` is the joint damping's, `-int sigma (theta1_dot^2 + (theta2_dot -
+//!   theta1_dot)^2) dt <= 0` (the non-conservative part of paper eq. 1's `w`).
+//! - The contact force does work `f . z_dot` on the tip in the ground frame, split
+//!   in two: `W_belt = v_belt int f_t dt` (plus `v_belt P_t` per impulse), the energy
+//!   the moving belt puts in, and `W_slip = int f . [z_r_dot, z_n_dot] dt` (plus each
+//!   impulse's contact work in the belt's frame), what the contact dissipates (`<= 0`
+//!   for Coulomb friction and the energetically consistent impacts).
+//! - `W_projections`: the energy the projections onto the contact constraint change
+//!   (integration drift removed at a segment's end, a Zeno residue, a stopped slip):
+//!   booked, not a violation.
+//!
+//! The four integrals are integrated by DOP853 with the state (components
+//! [`MOTORS`] to [`SLIP`] of the plant's ODE state, outside the error norm, so
+//! they set no step), to the method's order. A step whose balance
+//! `E(t1) - E(t0) - sum of the works` exceeds [`step_tolerance`] is rejected and
+//! taken again smaller; one that cannot be mended (its step collapses) is resolved
+//! as any collapse, and a balance left broken is a violation.
+
+use serde::{Deserialize, Serialize};
+use shared::{Arm, kinematics::JointTrig};
+
+/// Index of `W_motors` (J) in the plant's ODE state.
+pub const MOTORS: usize = 6;
+/// Index of `W_damping` (J).
+pub const DAMPING: usize = 7;
+/// Index of `W_belt` (J).
+pub const BELT: usize = 8;
+/// Index of `W_slip` (J).
+pub const SLIP: usize = 9;
+
+/// A step's balance may miss by this many times the energy that one unit of the
+/// integrator's tolerance in each state component is worth ([`step_tolerance`]).
+/// DOP853 accepts a step when its 5th-order error estimate is within one unit; the
+/// 8th-order solution's own error, and the quadrature's, are far below it (the
+/// largest ratio measured over the paper's experiments is in docs/plant.md).
+pub const STEP_FACTOR: f64 = 1.0;
+
+/// The relative tolerance of an impulse's balance: the kinetic energy change
+/// against the impulse's works, both exact at a fixed configuration, differ by the
+/// rounding of the laws' piecewise-linear Darboux-Keller phases (about 1e-15 of the
+/// energies; 1e-9 leaves six decades for a law's long sequence of phases).
+pub const IMPULSE_TOLERANCE: f64 = 1e-9;
+
+/// The arm's mechanical energy `E = T + V` (J) at `y` (`[theta1, theta1_dot,
+/// theta2, theta2_dot, ..]`), from the sines and cosines `tr` of its angles.
+#[inline]
+pub fn energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
+    let p = &arm.params;
+    let (d1, d2) = (y[1], y[3]);
+    let ml2 = p.m * p.l * p.l;
+    let c21 = tr.c2 * tr.c1 + tr.s2 * tr.s1;
+    let t = 0.5 * (ml2 * (4.0 / 3.0) * d1 * d1 + ml2 * c21 * d1 * d2 + ml2 * (1.0 / 3.0) * d2 * d2);
+    let spring = y[2] - y[0] + p.alpha0;
+    t - p.m * p.g * p.l * (1.5 * tr.c1 + 0.5 * tr.c2) + 0.5 * p.k * spring * spring
+}
+
+/// The energy (J) that one unit of the integrator's tolerance in each arm state is
+/// worth at `y`: `sum_i |dE/dy_i| (atol + rtol |y_i|)` over the angles and rates,
+/// times [`STEP_FACTOR`], plus the rounding of the balance's terms (`8 u` of the
+/// energies and works involved, `works` their sizes). The tolerance of one step's
+/// balance.
+#[inline]
+pub fn step_tolerance(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64], rtol: f64, atol: f64, works: f64) -> f64 {
+    let p = &arm.params;
+    let (d1, d2) = (y[1], y[3]);
+    let ml2 = p.m * p.l * p.l;
+    let c21 = tr.c2 * tr.c1 + tr.s2 * tr.s1;
+    let s21 = tr.s2 * tr.c1 - tr.c2 * tr.s1;
+    let spring = y[2] - y[0] + p.alpha0;
+    let mgl = p.m * p.g * p.l;
+    // dE/dq: the kinetic coupling's and the potential's.
+    let coupling = 0.5 * ml2 * s21 * d1 * d2;
+    let de_dq1 = coupling + 1.5 * mgl * tr.s1 - p.k * spring;
+    let de_dq2 = -coupling + 0.5 * mgl * tr.s2 + p.k * spring;
+    // dE/dq_dot = M q_dot (the momenta).
+    let de_dd1 = ml2 * (4.0 / 3.0) * d1 + 0.5 * ml2 * c21 * d2;
+    let de_dd2 = 0.5 * ml2 * c21 * d1 + ml2 * (1.0 / 3.0) * d2;
+    let sk = |v: f64| atol + rtol * v.abs();
+    let unit = de_dq1.abs() * sk(y[0]) + de_dd1.abs() * sk(d1) + de_dq2.abs() * sk(y[2]) + de_dd2.abs() * sk(d2);
+    let e_scale = 0.5 * ml2 * (d1 * d1 + d2 * d2) * 2.0 + mgl * 2.0 + 0.5 * p.k * spring * spring;
+    STEP_FACTOR * unit + 8.0 * f64::EPSILON * (e_scale + works)
+}
+
+/// The ledger of a run (or its totals): the works since `t0`, the energy change,
+/// the balance's residual and the checks (docs/plant.md "The energy ledger").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Ledger {
+    /// `E(t) - E(t0)`, J.
+    pub energy_change_j: f64,
+    /// `W_motors`, J.
+    pub motors_j: f64,
+    /// `W_damping`, J (`<= 0`).
+    pub damping_j: f64,
+    /// `W_belt`: the energy the moving belt put in through the contact force, J.
+    pub belt_j: f64,
+    /// `W_slip`: the contact's work in the belt's frame, J (what it dissipated, `<= 0`).
+    pub slip_j: f64,
+    /// `W_projections`: the energy the projections onto the constraint changed, J.
+    pub projections_j: f64,
+    /// `energy_change_j` less every work: what the ledger does not explain, J.
+    pub residual_j: f64,
+    /// The largest residual of one entry (step, impact or bridge), J.
+    pub worst_entry_j: f64,
+    /// The largest ratio of an accepted entry's residual to its tolerance.
+    pub worst_ratio: f64,
+    /// The largest energy one event took from the belt (`v_belt P_t`), J.
+    pub largest_event_belt_j: f64,
+    /// Integration steps rejected by the ledger (and taken again smaller).
+    pub refinements: u64,
+    /// Entries whose balance refinement could not mend: violations.
+    pub violations: u64,
+}
