@@ -449,7 +449,7 @@ fn ideal_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -
     t.impacts_without_collision = run.impacts_without_collision;
     t.first_lift_off_s = run.first_lift_off_s;
     let lifted = run.first_lift_off_s.is_some();
-    t.validity = Validity::of(&run.counters, run.error.as_ref().filter(|_| !lifted));
+    t.validity = Validity::of(&run.counters, &run.ledger, run.error.as_ref().filter(|_| !lifted));
     t.failure = match (&run.error, run.law_fault) {
         (Some(e), _) if !lifted => Some(format!("plant: {e}")),
         (_, Some(f)) if !lifted => Some(format!("law: {f}")),

@@ -58,7 +58,7 @@ pub fn simulate<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
         trace.push(row);
         let started = Instant::now();
         let mut failure = None;
-        // Ctrl-C is seen between the loop's chunks (OpenLoop::CHUNK samples).
+        // Ctrl-C is seen between the loop's chunks (OpenLoop::CHUNK_S s of samples).
         while !open_loop.finished() && failure.is_none() && !c.stopped() {
             failure = open_loop.advance(open_loop.k + 1, &mut trace, &mut events).err();
             c.set(open_loop.k as u64, open_loop.steps as u64);

@@ -317,3 +317,105 @@ fn the_singular_rule_is_a_setting_and_its_counters_are_in_every_summary() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("leave"), "the choices are named");
 }
+
+/// Issue 53's arm, start and belt (`--mu 0.422`, Newton `e_n` 0.2).
+const ISSUE53: [&str; 18] = [
+    "--set",
+    "plant.m=0.15",
+    "--set",
+    "plant.l=0.23",
+    "--set",
+    "plant.sigma=0.008",
+    "--set",
+    "plant.k=1.0",
+    "--set",
+    "plant.h=0.40",
+    "--set",
+    "plant.alpha0=0.20",
+    "--x0-deg=34.53531701873741,0.0,23.744016380660902,0.0",
+    "--v-belt=-0.5",
+    "--mu",
+    "0.422",
+    "--duration",
+    "300",
+];
+
+fn summary_of(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path).unwrap().lines().map(|l| l.split(',').map(String::from).collect()).collect()
+}
+
+/// Issue 53: the energy jump with status ok. Both reproducers (plastic at 10 ms,
+/// restitution at 100 ms) and the four other runs bounce to 300 s, as a
+/// Moreau-Jean time-stepper and a SciPy event-driven simulator do: no rise of the
+/// energy between two samples beyond the orbit's own (0.033 J), the energy at the
+/// end the bouncing orbit's (above -0.59 J; the rest state the jump ended in has
+/// -0.6078 J), the ledger closed and in the summary.
+#[test]
+fn the_issue53_reproducers_keep_bouncing_with_the_energy_ledger_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    for iwc in ["plastic", "restitution"] {
+        for dt in ["0.1", "0.01", "0.001"] {
+            let out = dir.path().join(format!("{iwc}-{dt}"));
+            let mut args = vec!["simulate", "--iwc", iwc, "--sample-dt", dt, "--out", out.to_str().unwrap()];
+            args.extend(ISSUE53);
+            assert_eq!(run(&args), 0, "{iwc} {dt}");
+            let s = summary_of(&out);
+            assert_eq!(s["status"], "ok");
+            let rows = csv_rows(&out.join("trace.csv"));
+            let energy = rows[0].iter().position(|c| c == "energy").unwrap();
+            let e: Vec<f64> = rows[1..].iter().map(|r| r[energy].parse().unwrap()).collect();
+            let rise = e.windows(2).map(|w| w[1] - w[0]).fold(f64::NEG_INFINITY, f64::max);
+            assert!(rise < 0.2, "{iwc} {dt}: the energy rose by {rise} J between two samples");
+            assert!(*e.last().unwrap() > -0.59, "{iwc} {dt}: E(300) = {} J: left the bouncing orbit", e.last().unwrap());
+            let l = &s["ledger"];
+            assert_eq!(l["violations"], 0, "{iwc} {dt}: {l}");
+            assert!(l["residual_j"].as_f64().unwrap().abs() < 1e-6, "{iwc} {dt}: {l}");
+            assert!(s["counters"]["singular_points"].as_u64().unwrap() > 100, "{iwc} {dt}: the orbit passes the singular point");
+        }
+    }
+}
+
+/// Issue 53: the open loop's path does not depend on the sample period nor on the
+/// duration. From `x0a` at `mu` 0.6, `v_belt` -0.5 (where the 0.1 s trace used to
+/// leave the 0.001 s one at t = 0.4 s): the events are the same bytes, a row of the
+/// 0.1 s trace is the row of the 0.001 s trace at the same instant (the same bytes
+/// where the two instants `k 0.1` and `100 k 0.001` are the same double, within
+/// what their rounding moves elsewhere), and a 100 s run is the first 100 s of a 300 s run.
+#[test]
+fn the_open_loop_path_depends_on_neither_the_sample_period_nor_the_duration() {
+    let dir = tempfile::tempdir().unwrap();
+    let simulate = |name: &str, dt: &str, duration: &str| {
+        let out = dir.path().join(name);
+        let args = ["simulate", "--x0", "a", "--mu", "0.6", "--v-belt=-0.5", "--sample-dt", dt, "--duration", duration];
+        let mut args = args.to_vec();
+        args.extend(["--out", out.to_str().unwrap()]);
+        assert_eq!(run(&args), 0, "{name}");
+        (csv_rows(&out.join("trace.csv")), std::fs::read_to_string(out.join("events.csv")).unwrap())
+    };
+    let (fine, fine_events) = simulate("fine", "0.001", "30");
+    let (coarse, coarse_events) = simulate("coarse", "0.1", "30");
+    assert_eq!(fine_events, coarse_events, "the events do not depend on the sample period");
+    assert!(fine_events.lines().count() > 100);
+    let (mut same_instant, mut worst) = (0, 0.0f64);
+    for (k, row) in coarse.iter().enumerate().skip(1) {
+        let other = &fine[(k - 1) * 100 + 1];
+        if row[0] == other[0] {
+            assert_eq!(row, other, "the same instant, the same row");
+            same_instant += 1;
+        } else {
+            for (a, b) in row[1..10].iter().zip(&other[1..10]) {
+                worst = worst.max((a.parse::<f64>().unwrap() - b.parse::<f64>().unwrap()).abs());
+            }
+        }
+    }
+    assert!(same_instant > 200, "{same_instant} rows at bit-equal instants");
+    assert!(worst < 1e-9, "rows at instants a rounding apart differ by {worst}");
+    let (long, long_events) = simulate("long", "0.01", "300");
+    let (short, short_events) = simulate("short", "0.01", "100");
+    assert_eq!(short[..], long[..short.len()], "a 100 s run is the first 100 s of a 300 s run");
+    assert!(long_events.starts_with(&short_events));
+}

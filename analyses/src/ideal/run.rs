@@ -115,6 +115,8 @@ pub struct IdealRun {
     pub first_lift_off_s: Option<f64>,
     /// The plant's event counts.
     pub counters: Counters,
+    /// The plant's energy ledger (docs/plant.md "The energy ledger").
+    pub ledger: plant::Ledger,
     /// The first fault of the law (it output zero torque then).
     pub law_fault: Option<LawFault>,
     /// Why the run stopped early (the samples up to then are kept).
@@ -205,6 +207,7 @@ pub fn simulate(setup: &IdealSetup, mut on_sample: impl FnMut(f64)) -> Result<Id
         impacts_without_collision: 0,
         first_lift_off_s: None,
         counters: Counters::default(),
+        ledger: plant::Ledger::default(),
         law_fault: None,
         error: None,
     };
@@ -242,6 +245,7 @@ pub fn simulate(setup: &IdealSetup, mut on_sample: impl FnMut(f64)) -> Result<Id
     run.lift_offs = c.lift_offs;
     run.impacts_without_collision = c.impacts_without_collision;
     run.counters = c;
+    run.ledger = plant.ledger();
     run.law_fault = law.fault();
     Ok(run)
 }

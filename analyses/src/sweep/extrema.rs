@@ -138,7 +138,7 @@ impl ExtremaWatch {
     /// theta2, theta2_dot]` (rad, rad/s), counting that point; `l` is the link length, m.
     pub fn start(t: f64, x: [f64; 4], l: f64) -> Self {
         let mut e = Extrema::new();
-        e.observe_point(t, &[x[0], x[1], x[2], x[3], 0.0, 0.0], l);
+        e.observe_point(t, &[x[0], x[1], x[2], x[3], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], l);
         Self { l, kept: e, trying: e }
     }
 

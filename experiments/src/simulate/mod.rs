@@ -140,11 +140,11 @@ pub fn sample_step(plant: &mut Plant, k: usize, sample_dt: f64) -> Result<plant:
     plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver)
 }
 
-/// The largest integrator step while `simulate` samples its trace from the dense
-/// output, s: 2 ms keeps the accuracy of the 1 ms steps the samples used to set
-/// (1.1e-13 rad in `theta1` from `x0a` at 0.5 s against a reference with 0.1 ms
-/// steps, where 5 ms lose three decades: docs/architecture.md "The accuracy
-/// contract"). A longer sampling period caps the steps at itself.
+/// The largest integrator step of the open loop, s, whatever the sampling period
+/// (issue 53: the path must not depend on it): 2 ms keeps the accuracy of the 1 ms
+/// steps the samples used to set (1.1e-13 rad in `theta1` from `x0a` at 0.5 s
+/// against a reference with 0.1 ms steps, where 5 ms lose three decades:
+/// docs/architecture.md "The accuracy contract").
 pub const DENSE_MAX_STEP: f64 = 2e-3;
 
 /// The row of `trace.csv` of a [`plant::Sample`] read inside an advance of `plant`.
@@ -169,13 +169,20 @@ pub fn sample_row(plant: &Plant, s: &plant::Sample) -> TraceRow {
 }
 
 /// The open-loop sampling loop, the one both fronts run: the plant advanced with
-/// its steps set by the tolerances (at most [`DENSE_MAX_STEP`] or the sampling
-/// period), each sample at `(k + 1) sample_dt` s exactly read from the dense
-/// output of the step that covers it (`Plant::advance_sampling`; issue 43), its
-/// [`TraceRow`] and the events appended for the caller, who writes them, shows
-/// progress or stops between calls of [`OpenLoop::advance`]. Where a sample falls
-/// in a Moreau–Jean bridge (no dense output) the chunk is advanced again sample
-/// by sample ([`sample_step`]).
+/// its steps set by the tolerances (at most [`DENSE_MAX_STEP`]), each sample at
+/// `(k + 1) sample_dt` s exactly read from the dense output of the step that covers
+/// it (`Plant::advance_sampling`; issue 43), its [`TraceRow`] and the events
+/// appended for the caller, who writes them, shows progress or stops between calls
+/// of [`OpenLoop::advance`].
+///
+/// The integration does not depend on the sampling period nor on the duration
+/// (issue 53): the plant is advanced in chunks that end at multiples of
+/// [`OpenLoop::CHUNK_S`] s, whatever the samples, and the last chunk too is
+/// integrated to its whole end, its samples past the duration dropped; the plant is
+/// then taken back to the chunk's start and advanced to the last sample, for the
+/// final state. A Moreau-Jean bridge gives its samples from its steps (linear
+/// between their ends). Only a chunk that fails is advanced again sample by sample
+/// ([`sample_step`]), so that the rows up to the failure are kept.
 #[derive(Debug)]
 pub struct OpenLoop {
     /// The plant, at the last sample taken.
@@ -205,7 +212,7 @@ impl OpenLoop {
     }
 
     /// Takes the samples up to `end` (at most [`OpenLoop::steps`]), rounded up to a
-    /// whole chunk of [`OpenLoop::CHUNK`] samples, appending one row per sample to
+    /// whole chunk of [`OpenLoop::CHUNK_S`] s, appending one row per sample to
     /// `rows` and the events located on the way to `events`.
     ///
     /// # Errors
@@ -214,42 +221,60 @@ impl OpenLoop {
     pub fn advance(&mut self, end: usize, rows: &mut Vec<TraceRow>, events: &mut Vec<EventRow>) -> Result<(), SimError> {
         let end = end.min(self.steps);
         while self.k < end {
-            // Whole chunks, ending at multiples of CHUNK samples: the steps (and so
-            // the trace) do not depend on how the caller splits the run.
-            let chunk_end = ((self.k / Self::CHUNK + 1) * Self::CHUNK).min(self.steps);
-            self.advance_chunk(chunk_end, rows, events)?;
+            self.advance_chunk(rows, events)?;
         }
         Ok(())
     }
 
-    /// Samples in a chunk: one solve (its steps end at the chunk's last sample),
-    /// so at most this many rows wait in memory.
-    pub const CHUNK: usize = 1024;
+    /// The length of a chunk, s: the plant's solves end at its multiples whatever
+    /// the sampling and the duration, so the path does not depend on them (issue
+    /// 53); at most `0.25 / sample_dt` rows wait in memory.
+    pub const CHUNK_S: f64 = 0.25;
 
-    fn advance_chunk(&mut self, end: usize, rows: &mut Vec<TraceRow>, events: &mut Vec<EventRow>) -> Result<(), SimError> {
-        let grid = plant::SampleGrid {
-            dt: self.sample_dt,
-            next: self.k as u64 + 1,
-            last: end as u64,
-            max_step: DENSE_MAX_STEP.max(self.sample_dt),
-        };
+    /// The time of sample `k`, s.
+    fn sample_time(&self, k: usize) -> f64 {
+        k as f64 * self.sample_dt
+    }
+
+    fn advance_chunk(&mut self, rows: &mut Vec<TraceRow>, events: &mut Vec<EventRow>) -> Result<(), SimError> {
+        // The chunk after the plant's time: its end at a multiple of CHUNK_S.
+        let t0 = self.plant.time();
+        let mut chunk_end = ((t0 / Self::CHUNK_S).floor() + 1.0) * Self::CHUNK_S;
+        if chunk_end <= t0 {
+            chunk_end += Self::CHUNK_S;
+        }
+        // The samples in (t0, chunk_end], at most the last one of the run.
+        let mut last = self.k;
+        while last < self.steps && self.sample_time(last + 1) <= chunk_end {
+            last += 1;
+        }
         let before = self.plant.checkpoint();
-        let mut samples = vec![None; end - self.k];
-        let target = end as f64 * self.sample_dt;
-        let sampled =
-            self.plant.advance_sampling(&plant::Hold([0.0, 0.0]), target - self.plant.time(), grid, &mut samples, &mut plant::NoObserver);
+        let grid = plant::SampleGrid { dt: self.sample_dt, next: self.k as u64 + 1, last: last as u64, max_step: DENSE_MAX_STEP };
+        let mut samples = vec![None; last - self.k];
+        let sampled = self.plant.advance_sampling(&plant::Hold([0.0, 0.0]), chunk_end - t0, grid, &mut samples, &mut plant::NoObserver);
         match sampled {
             Ok(new) if samples.iter().all(Option::is_some) => {
-                events.extend(new.iter().map(EventRow::from));
+                let t_last = self.sample_time(last);
                 rows.extend(samples.iter().flatten().map(|s| sample_row(&self.plant, s)));
-                self.k = end;
+                if last == self.steps && t_last < self.plant.time() {
+                    // The run ends inside this chunk: its events up to the end, and
+                    // the plant taken back and advanced to the last sample.
+                    events.extend(new.iter().filter(|e| e.t <= t_last).map(EventRow::from));
+                    self.plant.restore(before);
+                    if t_last > self.plant.time() {
+                        self.plant.advance(&plant::Hold([0.0, 0.0]), t_last - self.plant.time(), &mut plant::NoObserver)?;
+                    }
+                } else {
+                    events.extend(new.iter().map(EventRow::from));
+                }
+                self.k = last;
                 Ok(())
             }
-            // A sample in a bridge, or a failure somewhere in the chunk: sample by
-            // sample, so the rows up to a failure are kept.
+            // A failure somewhere in the chunk (or a sample no step covered):
+            // sample by sample, so the rows up to a failure are kept.
             _ => {
                 self.plant.restore(before);
-                while self.k < end {
+                while self.k < last {
                     let report = sample_step(&mut self.plant, self.k, self.sample_dt)?;
                     events.extend(report.events.iter().map(EventRow::from));
                     rows.push(trace_row(&self.plant, report.f));
@@ -288,6 +313,7 @@ pub fn summary(
         stick_phases: counters.stick_phases,
         validity: plant.validity(failure),
         counters,
+        ledger: plant.ledger(),
         final_state: plant.state(),
         final_tip: [plant.tip()[0], plant.tip()[1]],
         final_mode: plant.mode().name(),

@@ -206,6 +206,10 @@ pub struct Summary {
     pub validity: Validity,
     /// All event counters.
     pub counters: Counters,
+    /// The energy ledger (docs/plant.md "The energy ledger"): the works since
+    /// `t = 0`, what they leave unexplained, the worst entry, the largest energy one
+    /// event took from the belt.
+    pub ledger: plant::Ledger,
     /// Final state `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s.
     pub final_state: [f64; 4],
     /// Final tip position `[z_t, z_n]`, m.

@@ -7,7 +7,7 @@
 use nalgebra::Vector2;
 use shared::{Arm, ContactMode, contact::p_of};
 
-use super::Plant;
+use super::{Plant, Sample};
 use crate::{
     controller::Controller,
     dop853::{DenseStep, State},
@@ -44,6 +44,8 @@ pub(crate) struct Stretch {
     pub states: Vec<OdeState>,
     /// The contact solution of the last step.
     pub last: ContactSolution,
+    /// Each step's contact mode and mean contact force `P / h` (`[f_t, f_n]`, N).
+    pub forces: Vec<(ContactMode, [f64; 2])>,
 }
 
 impl Plant {
@@ -77,10 +79,27 @@ impl Plant {
         let mode = self.mode();
         obs.on_segment_start(t0, &y0, mode);
         obs.on_attempt();
+        let (l, grid) = (self.arm.params.l, self.sampling);
         for (k, pair) in stretch.states.windows(2).enumerate() {
             let t_prev = t0 + k as f64 * stretch.h;
             let t_curr = if k + 2 == stretch.states.len() { t0 + length } else { t_prev + stretch.h };
-            obs.on_step(&mut LinearStep::new(t_prev, t_curr, pair[0], pair[1]), None, mode);
+            let mut step = LinearStep::new(t_prev, t_curr, pair[0], pair[1]);
+            // The samples `advance_sampling` asks for, linear between the step's ends.
+            if let Some(g) = grid {
+                let (step_mode, f) = stretch.forces[k];
+                while let Some(i) = obs.next_sample()
+                    && i <= g.last
+                {
+                    let ts = i as f64 * g.dt;
+                    if !(t_prev < ts && ts <= t_curr) {
+                        break;
+                    }
+                    let y = step.interpolate(ts);
+                    let z = shared::kinematics::tip_position(l, &Vector2::new(y[0], y[2]));
+                    obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode: step_mode, f });
+                }
+            }
+            obs.on_step(&mut step, None, mode);
         }
         let y_end = *stretch.states.last().unwrap_or(&y0);
         obs.on_kept(&y_end, mode);
@@ -189,6 +208,7 @@ impl Plant {
         let mut y = *y0;
         let mut phase = self.phase;
         let mut last = ContactSolution::Inactive;
+        let mut forces = Vec::with_capacity(n);
         for k in 0..n {
             let t = t0 + k as f64 * h;
             let (q, qd) = (Vector2::new(y[0], y[2]), Vector2::new(y[1], y[3]));
@@ -215,6 +235,7 @@ impl Plant {
                 ContactSolution::Sliding(dir) => Phase::Sliding(dir),
             };
             last = solution;
+            forces.push((phase_mode(phase), [impulse[0] / h, impulse[1] / h]));
             let v_mid = (qd + v_new) * 0.5;
             let q_new = q + v_mid * h;
             // The ledger's works of the step's forces over its displacement `h v_mid`:
@@ -241,7 +262,16 @@ impl Plant {
             }
             states.push(y);
         }
-        Ok(Stretch { h, states, last })
+        Ok(Stretch { h, states, last, forces })
+    }
+}
+
+/// The contact mode of a phase.
+fn phase_mode(phase: Phase) -> ContactMode {
+    match phase {
+        Phase::Flight => ContactMode::Flight,
+        Phase::Sliding(_) => ContactMode::Sliding,
+        Phase::Sticking => ContactMode::Sticking,
     }
 }
 

@@ -56,8 +56,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     curves.push(&row);
     tables.send(vec![row], startup)?;
     // The simulation's own wall time, without writing files: rows wait in a
-    // chunk of at most OpenLoop::CHUNK samples (bounded memory) while the clock runs.
-    let mut rows: Vec<TraceRow> = Vec::with_capacity(OpenLoop::CHUNK);
+    // chunk of OpenLoop::CHUNK_S s of samples (bounded memory) while the clock runs.
+    let mut rows: Vec<TraceRow> = Vec::new();
     let mut new_events: Vec<EventRow> = Vec::new();
     let mut wall = std::time::Duration::ZERO;
     let mut failure: Option<SimError> = None;

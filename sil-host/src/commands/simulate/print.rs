@@ -56,6 +56,7 @@ pub(crate) fn print_human(s: &Summary) {
         c.lift_offs, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals,
     );
     let _ = writeln!(o, "validity: {}", s.validity);
+    let _ = writeln!(o, "energy ledger: {}", s.ledger);
     if !s.validity.is_valid() {
         let _ = writeln!(o, "INVALID: {} (the trajectory violates the model)", s.validity.describe_violations());
     }
