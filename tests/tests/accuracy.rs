@@ -255,7 +255,11 @@ fn paper_level(dir: &Path) -> Value {
     let mut outcomes: Vec<String> = runs.rows.iter().map(|r| format!("{} {} {} {}", r[ic], r[mu], r[v], r[outcome])).collect();
     outcomes.sort();
     let critical_mu = |x0: &str| -> Value {
-        let bouncing = runs.rows.iter().filter(|r| r[ic] == x0 && r[col("bouncing")] == "true").filter_map(|r| r[mu].parse::<f64>().ok());
+        let bouncing = runs
+            .rows
+            .iter()
+            .filter(|r| r[ic] == x0 && r[col("theta1_dot_over_threshold")] == "true")
+            .filter_map(|r| r[mu].parse::<f64>().ok());
         bouncing.fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.min(x)))).map_or(Value::Null, |m| json!(m))
     };
     json!({

@@ -328,7 +328,7 @@ mod tests {
     }
     impl OdeSystem<STATE_LEN> for Oscillator {
         fn rhs(&self, t: f64, _y: &OdeState, dy: &mut OdeState) {
-            *dy = [self.a * (self.w * t).cos(), -self.a * self.w * (self.w * t).sin(), 0.0, 0.0, 0.0, 0.0];
+            *dy = [self.a * (self.w * t).cos(), -self.a * self.w * (self.w * t).sin(), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         }
     }
 
@@ -351,7 +351,7 @@ mod tests {
     fn crossings_of_a_cosine_are_exact() {
         let sys = Oscillator { a: 1.0, w: 1.0 };
         let solver = Dop853::new(1e-10, 1e-12);
-        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], 20.0, solver, Section::THETA1_DOT, 0.0);
+        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 20.0, solver, Section::THETA1_DOT, 0.0);
         let pi = std::f64::consts::PI;
         let exact = [1.5 * pi, 3.5 * pi, 5.5 * pi];
         assert_eq!(found.len(), exact.len(), "{found:?}");
@@ -369,7 +369,7 @@ mod tests {
         let section = Section { normal: [0.0, 1.0, 0.0, 0.0], offset: 0.999 };
         // Loose tolerance: every step is the 1 s cap, so one step holds the whole hump.
         let solver = Dop853 { h_max: 1.0, ..Dop853::new(1e-3, 1e-3) };
-        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], 7.0, solver, section, 0.0);
+        let found = scan_run(&sys, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 7.0, solver, section, 0.0);
         // cos t = 0.999 going up at t = 2 pi - acos(0.999).
         let exact = 2.0 * std::f64::consts::PI - 0.999f64.acos();
         assert_eq!(found.len(), 1, "{found:?}");
@@ -382,7 +382,7 @@ mod tests {
     fn hysteresis_ignores_noise_on_the_section() {
         let sys = Oscillator { a: 1e-9, w: 50.0 };
         let solver = Dop853::new(1e-12, 1e-14);
-        let y0 = [0.0, 1e-9, 0.0, 0.0, 0.0, 0.0];
+        let y0 = [0.0, 1e-9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         let deep = scan_run(&sys, y0, 1.0, solver, Section::THETA1_DOT, 1e-6);
         assert!(deep.len() <= 1, "{deep:?}");
         let plain = scan_run(&sys, y0, 1.0, solver, Section::THETA1_DOT, 0.0);

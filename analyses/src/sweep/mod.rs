@@ -33,8 +33,10 @@ use rig::scenario::Scenario;
 /// Version 2: the IWC rule as a dimension, validity counters and the `invalid`
 /// outcome in every row. Version 3: closed-loop outcomes (`lift_off`,
 /// `target_not_reached`) and the `target_error_m` column. Version 4: the `jams`
-/// column (issue 24's dynamic jams, resolved by a tangential impact).
-pub const FORMAT: u32 = 4;
+/// column (issue 24's dynamic jams, resolved by a tangential impact). Version 5:
+/// the `bouncing` column named for what it is (`theta1_dot_over_threshold`) and
+/// the energy ledger's columns (issue 53).
+pub const FORMAT: u32 = 5;
 
 /// An evenly spaced axis `start, start + step, ..., stop` (both ends included).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -157,8 +157,11 @@ pub struct RunRow {
     pub ic: String,
     /// [`Outcome`] name.
     pub outcome: Outcome,
-    /// The paper's flag: `theta1_dot_max > threshold`.
-    pub bouncing: bool,
+    /// The paper's open-loop indicator over its threshold, `theta1_dot_max >
+    /// threshold` (the column was `bouncing`). In closed loop it measures the
+    /// controller's dither as much as a bounce: whether the tip left the belt is
+    /// the `outcome` and `lift_offs`.
+    pub theta1_dot_over_threshold: bool,
     /// The paper's indicator: largest `theta1_dot` over the record window, rad/s.
     pub theta1_dot_max: f64,
     /// When it occurred, s.
@@ -197,6 +200,17 @@ pub struct RunRow {
     pub jams: u64,
     /// 1 if the integrator or the event handling failed (a violation; outcome `failed`).
     pub integrator_failures: u64,
+    /// Over the whole run: energy-ledger entries whose balance refinement could not
+    /// mend (a violation; docs/plant.md "The energy ledger").
+    pub ledger_violations: u64,
+    /// Over the whole run: the energy the moving belt put in, J.
+    pub belt_j: f64,
+    /// Over the whole run: the contact's work in the belt's frame (dissipated), J.
+    pub slip_j: f64,
+    /// Over the whole run: what the ledger leaves unexplained, J.
+    pub ledger_residual_j: f64,
+    /// The largest energy one event took from the belt, J.
+    pub largest_event_belt_j: f64,
     /// Why the run failed (empty if it did not).
     pub error: String,
 }
@@ -229,7 +243,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         v_belt: key.v_belt,
         ic: ic.name.clone(),
         outcome: Outcome::Failed,
-        bouncing: false,
+        theta1_dot_over_threshold: false,
         theta1_dot_max: f64::NAN,
         t_theta1_dot_max: f64::NAN,
         lift_offs: 0,
@@ -248,6 +262,11 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         zeno_stops: 0,
         jams: 0,
         integrator_failures: 0,
+        ledger_violations: 0,
+        belt_j: 0.0,
+        slip_j: 0.0,
+        ledger_residual_j: 0.0,
+        largest_event_belt_j: 0.0,
         error: String::new(),
     };
     let built = match (spec.ideal, closed_loop_scenario(spec, key, ic)) {
@@ -286,6 +305,10 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
     row.cone_violations = v.cone_violations;
     row.zeno_stops = v.zeno_stops;
     row.integrator_failures = u64::from(sim_failed);
+    let ledger = plant.ledger();
+    row.ledger_violations = ledger.violations;
+    (row.belt_j, row.slip_j, row.ledger_residual_j) = (ledger.belt_j, ledger.slip_j, ledger.residual_j);
+    row.largest_event_belt_j = ledger.largest_event_belt_j;
     let end = *plant.counters();
     row.jams = end.jams;
     row.lift_offs_transient = start.map_or(lift_offs(&end), |s| lift_offs(&s));
@@ -301,7 +324,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         row.t_theta1_dot_max = e.t_theta1_dot_max;
         row.z_n_max = e.z_n_max;
         row.tip_height_max = e.z_n_max + params.h;
-        row.bouncing = e.theta1_dot_max > spec.threshold;
+        row.theta1_dot_over_threshold = e.theta1_dot_max > spec.threshold;
     }
     let stopped = error.as_ref().map(|(_, safe)| *safe);
     let target = closed_loop_scenario(spec, key, ic).map(|s| s.controller.target_z_t);
@@ -309,7 +332,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         row.target_error_m = (plant.tip()[0] - z_t_ref).abs();
     }
     row.outcome = match target {
-        None => Outcome::of(stopped, &row.validity(), row.bouncing, row.lift_offs, plant.mode()),
+        None => Outcome::of(stopped, &row.validity(), row.theta1_dot_over_threshold, row.lift_offs, plant.mode()),
         Some(_) => Outcome::of_closed_loop(stopped, &row.validity(), row.lift_offs, row.target_error_m, plant.mode()),
     };
     if let Some((e, _)) = error {
@@ -385,6 +408,7 @@ impl RunRow {
             cone_violations: self.cone_violations,
             zeno_stops: self.zeno_stops,
             integrator_failures: self.integrator_failures,
+            ledger_violations: self.ledger_violations,
             ..Validity::default()
         }
     }

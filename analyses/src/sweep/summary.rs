@@ -165,7 +165,7 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
     for r in rows.iter().filter(|r| r.outcome != Outcome::Invalid) {
         let key = spec.run_at(r.index);
         let case = r.index / (ics.len() * vs.len() * mus.len());
-        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome.is_bouncing(), r.bouncing));
+        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome.is_bouncing(), r.theta1_dot_over_threshold));
     }
     let mut cases = Vec::new();
     for (case, per_ic) in flags.iter().enumerate() {
@@ -325,7 +325,7 @@ mod tests {
             v_belt: spec.v_belt.value(index),
             ic: "x0a".into(),
             outcome,
-            bouncing: true,
+            theta1_dot_over_threshold: true,
             theta1_dot_max: 1.0,
             t_theta1_dot_max: 0.0,
             lift_offs: 3,
@@ -343,6 +343,11 @@ mod tests {
             cone_violations: cone,
             zeno_stops: 2,
             jams: 0,
+            ledger_violations: 0,
+            belt_j: 0.0,
+            slip_j: 0.0,
+            ledger_residual_j: 0.0,
+            largest_event_belt_j: 0.0,
             integrator_failures: 0,
             error: String::new(),
         };

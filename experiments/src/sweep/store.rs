@@ -192,7 +192,12 @@ pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
     let f = |x: f64, y: f64| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
     a.index == b.index
         && a.outcome == b.outcome
-        && a.bouncing == b.bouncing
+        && a.theta1_dot_over_threshold == b.theta1_dot_over_threshold
+        && a.ledger_violations == b.ledger_violations
+        && f(a.belt_j, b.belt_j)
+        && f(a.slip_j, b.slip_j)
+        && f(a.ledger_residual_j, b.ledger_residual_j)
+        && f(a.largest_event_belt_j, b.largest_event_belt_j)
         && f(a.theta1_dot_max, b.theta1_dot_max)
         && f(a.t_theta1_dot_max, b.t_theta1_dot_max)
         && f(a.z_n_max, b.z_n_max)
