@@ -9,7 +9,7 @@
 //! own), waits for the work to wind down (a sweep stops within its current
 //! run, a closed-loop run within its period, a `Z_t,sliding` search before its
 //! next trial, `poincare` before its next belt speed, a simulation within its
-//! chunk of 1024 samples) and raises the `KeyboardInterrupt`.
+//! chunk of 0.25 s of samples) and raises the `KeyboardInterrupt`.
 
 use std::{
     panic::{AssertUnwindSafe, catch_unwind},
