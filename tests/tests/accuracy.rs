@@ -338,16 +338,18 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
     assert!(wrong.is_empty(), "the accuracy contract is broken (outputs in {}):\n{}", dir.display(), wrong.join("\n"));
 }
 
-/// The contract can fail: the 1 s-sample case (whose steps the tolerance sets) run
-/// at a tolerance 100 times looser than the default breaks it.
+/// The contract can fail: the 1 s-sample case run at a tolerance 1000 times looser
+/// than the default breaks it. (100 times looser did before issue 53, when the
+/// tolerance alone set this case's steps; now the 2 ms cap sets most of them, and
+/// 100 times looser stays under the contract's floor of 1000 tolerances.)
 #[test]
 fn a_looser_tolerance_breaks_the_contract() {
     let root = common::workspace();
     let recorded: Value =
         serde_json::from_str(&std::fs::read_to_string(root.join("tests/accuracy/contract.json")).expect("contract.json")).unwrap();
     let case = cases().into_iter().find(|c| c.name == "simulate-x0a-300s-1s-samples").unwrap();
-    let loose = Case { measured: ["--rtol", "1e-7", "--atol", "1e-9"].map(String::from).to_vec(), ..case };
+    let loose = Case { measured: ["--rtol", "1e-6", "--atol", "1e-8"].map(String::from).to_vec(), ..case };
     let m = measure(&loose, &root.join("target/accuracy-loose"));
     let wrong = check_case(loose.name, &m, &recorded["cases"][loose.name]);
-    assert!(!wrong.is_empty(), "a 100 times looser tolerance kept the contract");
+    assert!(!wrong.is_empty(), "a 1000 times looser tolerance kept the contract");
 }
