@@ -181,7 +181,13 @@ fn check_case(name: &str, m: &Measured, recorded: &Value) -> Vec<String> {
         .into_iter()
         .map(|b| format!("{name}: trace.csv {b}"))
         .collect();
-    wrong.extend(quantum_breaches(&m.trace.absolute_envelope(h), checkpoints).into_iter().map(|b| format!("{name}: trace.csv {b}")));
+    // The sensors' bound holds before the horizon: the horizon's own sample is where
+    // the run has departed (by 1000 tolerances, more than a thousandth of the
+    // encoders' quantum), and with 1 s samples it is where the references part too.
+    let before_horizon = h * (1.0 - 1e-9);
+    wrong.extend(
+        quantum_breaches(&m.trace.absolute_envelope(before_horizon), checkpoints).into_iter().map(|b| format!("{name}: trace.csv {b}")),
+    );
     if let Some((events, reference)) = &m.events {
         let now = Comparison::of(events, reference).envelope(h);
         wrong.extend(breaches(&envelope_of(&recorded["events"]), &now, checkpoints).into_iter().map(|b| format!("{name}: events.csv {b}")));
@@ -338,18 +344,20 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
     assert!(wrong.is_empty(), "the accuracy contract is broken (outputs in {}):\n{}", dir.display(), wrong.join("\n"));
 }
 
-/// The contract can fail: the 1 s-sample case run at a tolerance 1000 times looser
-/// than the default breaks it. (100 times looser did before issue 53, when the
-/// tolerance alone set this case's steps; now the 2 ms cap sets most of them, and
-/// 100 times looser stays under the contract's floor of 1000 tolerances.)
+/// The contract can fail. A looser tolerance no longer shows it (issue 53): with
+/// every open-loop step capped at 2 ms, DOP853's local error is far below even
+/// rtol 1e-4 in flight, so the cap, not the tolerance, sets the steps, and a run
+/// at rtol 1e-4 keeps the contract (measured). A model 1e-7 off (the arm's mass
+/// 0.12 kg -> 0.120000012 kg, an error a hundred tolerances would leave after a
+/// second) breaks it on the bouncing case.
 #[test]
-fn a_looser_tolerance_breaks_the_contract() {
+fn a_run_1e_7_off_breaks_the_contract() {
     let root = common::workspace();
     let recorded: Value =
         serde_json::from_str(&std::fs::read_to_string(root.join("tests/accuracy/contract.json")).expect("contract.json")).unwrap();
-    let case = cases().into_iter().find(|c| c.name == "simulate-x0a-300s-1s-samples").unwrap();
-    let loose = Case { measured: ["--rtol", "1e-6", "--atol", "1e-8"].map(String::from).to_vec(), ..case };
+    let case = cases().into_iter().find(|c| c.name == "simulate-x0a").unwrap();
+    let loose = Case { measured: ["--set", "plant.m=0.120000012"].map(String::from).to_vec(), ..case };
     let m = measure(&loose, &root.join("target/accuracy-loose"));
     let wrong = check_case(loose.name, &m, &recorded["cases"][loose.name]);
-    assert!(!wrong.is_empty(), "a 1000 times looser tolerance kept the contract");
+    assert!(!wrong.is_empty(), "a model 1e-7 off kept the contract");
 }
