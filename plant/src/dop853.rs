@@ -213,7 +213,7 @@ impl Dop853 {
                 };
                 if control == Control::Reject {
                     // k[0] is still f(t, y); k[12] is evaluated again at the next end.
-                    h = h * REJECT_FACTOR;
+                    h *= REJECT_FACTOR;
                     reject = true;
                     done.rejected += 1;
                     continue;

@@ -459,7 +459,8 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         let e_prev = if self.e_prev.is_nan() { seg.energy(&y_prev) } else { self.e_prev };
         let e_curr = seg.energy(&y_curr);
         let (residual, tol) = seg.balance(&y_prev, e_prev, &y_curr, e_curr);
-        if !(residual.abs() <= tol) {
+        // NaN breaks the balance too.
+        if residual.abs() > tol || residual.is_nan() {
             self.rejected += 1;
             return Control::Reject;
         }

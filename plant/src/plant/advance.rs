@@ -466,7 +466,6 @@ impl Plant {
         });
         let (rejected, worst, trend) = (locator.rejected, locator.worst, locator.trend_f_n);
         let (locator_end, last) = ((locator.g_prev, locator.hit), locator.last);
-        drop(seg);
         self.slide_trend = trend;
         self.ledger.refinements += rejected;
         self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(worst.0);

@@ -339,7 +339,7 @@ impl Plant {
         let tol = crate::ledger::IMPULSE_TOLERANCE * (ke + belt.abs() + rel_work.abs()) + 1e-15;
         self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(residual);
         self.ledger.worst_ratio = self.ledger.worst_ratio.max(residual / tol);
-        if !(residual <= tol) {
+        if residual > tol || residual.is_nan() {
             self.ledger.violations += 1;
         }
     }
