@@ -4,7 +4,7 @@
 //! bouncing band, under both IWC rules and several sample periods. Every run must
 //! reach its end; the search counts the singular points, bridges and jams it met.
 //!
-//! An arm: each of Table I's `m`, `l`, `sigma`, `k`, `alpha0` moved uniformly
+//! Two families of arms. The first (issue 40, [`Family::Perturbed`]): each of Table I's `m`, `l`, `sigma`, `k`, `alpha0` moved uniformly
 //! within +-25 %, `H` set so that `x0a` is on the belt (as in issue 24's search),
 //! one impact law and `e_n` in [0, 0.6] drawn for it (ChaCha8 from the seed). Its
 //! threshold is the smallest `mu` at which `p = Q_22 - mu |Q_21|` reaches 0 on the
@@ -12,10 +12,17 @@
 //! its band edge is the first belt speed, from -1 m/s up in 0.05 m/s steps, where a
 //! run from `x0a` at `max(0.6, threshold + 0.15)` changes from settled to bouncing
 //! over the last fifth of the run (or back).
+//!
+//! The second (issue 53, [`Family::Corner`]) starts on the corner: arms within 3 %
+//! of issue 53's (`m 0.15, l 0.23, sigma 0.008, k 1.0, alpha0 0.20`, arm 0 exactly it),
+//! from its start within 0.5 deg (`H` putting the tip on the belt), Newton `e_n 0.2`,
+//! `mu` across its band 0.410 to 0.432 and `v_belt` within 0.02 m/s of -0.5: a slide of
+//! its bouncing orbit runs into `p = b = 0` about every 0.18 s. Its check is the energy
+//! ledger: every run completes with no ledger violation.
 
 use nalgebra::Vector2;
 use plant::{
-    Counters, Hold, NoObserver, Plant, SimConfig, SimError,
+    Counters, Hold, Ledger, NoObserver, Plant, SimConfig, SimError,
     impact::{ImpactLaw, IwcRule},
     initial::{X0A, deg_to_state},
 };
@@ -25,9 +32,20 @@ use rayon::prelude::*;
 use serde::Serialize;
 use shared::{Arm, ElbowBranch, Params, kinematics::inverse_kinematics};
 
+/// Which arms a search draws (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Family {
+    /// Table I within 25 %, from `x0a`, scans across each arm's Painlevé threshold (issue 40).
+    Perturbed,
+    /// Issue 53's arm within 3 %, from its start, across its singular-point band.
+    Corner,
+}
+
 /// The search's size.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SearchSpec {
+    /// The arms' family.
+    pub family: Family,
     /// Random arms.
     pub arms: usize,
     /// Seed of the arms (ChaCha8).
@@ -46,13 +64,33 @@ impl SearchSpec {
     /// The full search of issue 40: 40 arms, 21-point scans, 300 s runs, 10 ms and
     /// 100 ms samples, both IWC rules: about 10 000 runs.
     pub fn full() -> Self {
-        Self { arms: 40, seed: 40, mu_points: 21, v_points: 21, duration_s: 300.0, sample_periods: vec![1e-2, 1e-1] }
+        Self {
+            family: Family::Perturbed,
+            arms: 40,
+            seed: 40,
+            mu_points: 21,
+            v_points: 21,
+            duration_s: 300.0,
+            sample_periods: vec![1e-2, 1e-1],
+        }
+    }
+
+    /// The corner search of issue 53: 25 arms, 21 `mu` by 5 `v_belt`, both IWC rules,
+    /// 10 ms and 100 ms samples (10 500 runs of 60 s).
+    pub fn corner() -> Self {
+        Self { family: Family::Corner, arms: 25, seed: 53, mu_points: 21, v_points: 5, duration_s: 60.0, sample_periods: vec![1e-2, 1e-1] }
+    }
+
+    /// The corner search's subset CI runs: 2 arms (issue 53's first), 7 `mu` by 2
+    /// `v_belt`, both IWC rules, 10 ms samples, 30 s runs (56 runs).
+    pub fn corner_quick() -> Self {
+        Self { family: Family::Corner, arms: 2, seed: 53, mu_points: 7, v_points: 2, duration_s: 30.0, sample_periods: vec![1e-2] }
     }
 
     /// The subset CI runs: 3 arms (issue 24's first), 13-point `mu` scans, 5-point
     /// `v_belt` scans, 130 s runs, 10 ms samples (186 runs).
     pub fn quick() -> Self {
-        Self { arms: 3, seed: 40, mu_points: 13, v_points: 5, duration_s: 130.0, sample_periods: vec![1e-2] }
+        Self { family: Family::Perturbed, arms: 3, seed: 40, mu_points: 13, v_points: 5, duration_s: 130.0, sample_periods: vec![1e-2] }
     }
 }
 
@@ -67,6 +105,8 @@ pub struct SearchRun {
     pub sim: SimConfig,
     /// Sample period, s.
     pub sample_period_s: f64,
+    /// The start `[theta1, theta1_dot, theta2, theta2_dot]`, rad and rad/s.
+    pub x0: [f64; 4],
 }
 
 /// What the search found.
@@ -88,6 +128,16 @@ pub struct SearchReport {
     pub jams_at_collapse: u64,
     /// Runs that bounced persistently (touchdowns in the last fifth of the run).
     pub bouncing: usize,
+    /// Located passages of `p = 0` with the reaction finite (each followed by an IWC), over all runs.
+    pub p_zero: u64,
+    /// Integration steps the energy ledger rejected and took again smaller, over all runs.
+    pub refinements: u64,
+    /// Energy-ledger violations, over all runs (0 for a sound search).
+    pub ledger_violations: u64,
+    /// The largest ratio of an accepted entry's residual to its tolerance.
+    pub worst_ledger_ratio: f64,
+    /// The largest `|E(t) - E(0) - works|` of a run's end, J.
+    pub worst_residual_j: f64,
     /// The runs that failed, each with its error.
     pub failures: Vec<(SearchRun, String)>,
 }
@@ -135,13 +185,13 @@ pub fn arm(seed: u64, i: usize) -> (Params<f64>, ImpactLaw, f64) {
     (Params { m, l, sigma, k, alpha0, h, ..base }, law, e_n)
 }
 
-/// A run's counters and whether it bounced in the last fifth, or its error.
-pub type RunOutcome = Result<(Counters, bool), SimError>;
+/// A run's counters, ledger and whether it bounced in the last fifth, or its error.
+pub type RunOutcome = Result<(Counters, Ledger, bool), SimError>;
 
-/// One open-loop run from `x0a` under zero torque; its counters, whether it
-/// bounced in the last fifth, or its error.
+/// One open-loop run from the run's start under zero torque; its counters, ledger,
+/// whether it bounced in the last fifth, or its error.
 pub fn simulate(run: &SearchRun, duration_s: f64) -> RunOutcome {
-    let mut plant = Plant::new(run.params, run.sim, deg_to_state(X0A.deg), 0.0, [0.0, 0.0])?;
+    let mut plant = Plant::new(run.params, run.sim, run.x0, 0.0, [0.0, 0.0])?;
     let n = (duration_s / run.sample_period_s).round() as usize;
     let mut late_touchdowns = 0;
     for k in 0..n {
@@ -151,15 +201,15 @@ pub fn simulate(run: &SearchRun, duration_s: f64) -> RunOutcome {
             late_touchdowns += plant.counters().touchdowns + plant.counters().lift_offs - before;
         }
     }
-    Ok((*plant.counters(), late_touchdowns > 0))
+    Ok((*plant.counters(), plant.ledger(), late_touchdowns > 0))
 }
 
 /// The first belt speed from -1 m/s up (0.05 m/s steps) where bouncing starts or
 /// stops at `mu` (runs of `duration_s`, 10 ms samples); -0.4 m/s if none.
 fn band_edge(params: &Params<f64>, sim: SimConfig, mu: f64, duration_s: f64) -> f64 {
     let bouncing = |v: f64| {
-        let run = SearchRun { arm: 0, params: Params { mu, v_belt: v, ..*params }, sim, sample_period_s: 1e-2 };
-        simulate(&run, duration_s).map(|(_, b)| b).unwrap_or(false)
+        let run = SearchRun { arm: 0, params: Params { mu, v_belt: v, ..*params }, sim, sample_period_s: 1e-2, x0: deg_to_state(X0A.deg) };
+        simulate(&run, duration_s).map(|(_, _, b)| b).unwrap_or(false)
     };
     let speeds: Vec<f64> = (0..=18).map(|i| -1.0 + 0.05 * f64::from(i)).collect();
     let states: Vec<bool> = speeds.par_iter().map(|&v| bouncing(v)).collect();
@@ -176,6 +226,9 @@ const FAST_BELT: f64 = -0.98;
 /// plus and minus 0.05 m/s at `max(0.6, threshold + 0.15)` (at most 1.2), under
 /// both IWC rules and every sample period.
 pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
+    if spec.family == Family::Corner {
+        return plan_corner(spec);
+    }
     let mut runs = Vec::new();
     for i in 0..spec.arms {
         let (params, impact_law, e_n) = arm(spec.seed, i);
@@ -200,7 +253,56 @@ pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
                         params: Params { mu, v_belt, ..params },
                         sim: SimConfig { iwc, ..sim },
                         sample_period_s,
+                        x0: deg_to_state(X0A.deg),
                     });
+                }
+            }
+        }
+    }
+    runs
+}
+
+/// Issue 53's start, degrees.
+const ISSUE53_START_DEG: [f64; 2] = [34.53531701873741, 23.744016380660902];
+
+/// The `i`-th arm of the corner family of `seed` and its start (rad, rad/s): arm 0
+/// is issue 53's, the others move each of its `m`, `l`, `sigma`, `k`, `alpha0`
+/// within 3 % and its start's angles within 0.5 deg; `H` puts the tip on the belt.
+pub fn corner_arm(seed: u64, i: usize) -> (Params<f64>, [f64; 4]) {
+    let (mut f, mut d) = ([1.0; 5], [0.0; 2]);
+    if i > 0 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
+        f = std::array::from_fn(|_| 0.97 + 0.06 * rng.random::<f64>());
+        d = std::array::from_fn(|_| rng.random::<f64>() - 0.5);
+    }
+    let (q1, q2) = ((ISSUE53_START_DEG[0] + d[0]).to_radians(), (ISSUE53_START_DEG[1] + d[1]).to_radians());
+    let (m, l, sigma, k, alpha0) = (0.15 * f[0], 0.23 * f[1], 0.008 * f[2], 1.0 * f[3], 0.20 * f[4]);
+    let h = l * (q1.cos() + q2.cos());
+    (Params { m, l, sigma, k, alpha0, h, ..Params::paper() }, [q1, 0.0, q2, 0.0])
+}
+
+/// The runs of the corner family: per arm, `mu` from 0.410 to 0.432 by `v_belt`
+/// from -0.52 to -0.48 m/s, both IWC rules, every sample period; Newton, `e_n 0.2`.
+fn plan_corner(spec: &SearchSpec) -> Vec<SearchRun> {
+    let scan = |lo: f64, hi: f64, points: usize| -> Vec<f64> {
+        (0..points).map(|k| if points < 2 { 0.5 * (lo + hi) } else { lo + (hi - lo) * k as f64 / (points - 1) as f64 }).collect()
+    };
+    let sim = SimConfig { impact_law: ImpactLaw::Newton, e_n: 0.2, ..SimConfig::default() };
+    let mut runs = Vec::new();
+    for i in 0..spec.arms {
+        let (params, x0) = corner_arm(spec.seed, i);
+        for mu in scan(0.410, 0.432, spec.mu_points) {
+            for v_belt in scan(-0.52, -0.48, spec.v_points) {
+                for iwc in IwcRule::ALL {
+                    for &sample_period_s in &spec.sample_periods {
+                        runs.push(SearchRun {
+                            arm: i,
+                            params: Params { mu, v_belt, ..params },
+                            sim: SimConfig { iwc, ..sim },
+                            sample_period_s,
+                            x0,
+                        });
+                    }
                 }
             }
         }
@@ -223,8 +325,13 @@ pub fn search(spec: &SearchSpec, progress: &(dyn Fn(usize, usize) + Sync)) -> Se
     let mut report = SearchReport { runs: results.len(), ..SearchReport::default() };
     for (run, r) in results {
         match r {
-            Ok((c, bouncing)) => {
+            Ok((c, ledger, bouncing)) => {
                 report.completed += 1;
+                report.p_zero += c.p_zero;
+                report.refinements += ledger.refinements;
+                report.ledger_violations += ledger.violations;
+                report.worst_ledger_ratio = report.worst_ledger_ratio.max(ledger.worst_ratio);
+                report.worst_residual_j = report.worst_residual_j.max(ledger.residual_j.abs());
                 report.singular_points += c.singular_points;
                 report.bridges += c.bridges;
                 report.bridged_s += c.bridged_s;
@@ -271,6 +378,52 @@ mod tests {
         );
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(completed, runs);
+    }
+
+    /// CI's subset of the corner search (issue 53): every run completes, meets the
+    /// singular point, and closes its energy ledger.
+    #[test]
+    fn every_run_of_the_quick_corner_search_completes_with_its_ledger_closed() {
+        let report = search(&SearchSpec::corner_quick(), &|_, _| {});
+        assert!(report.failures.is_empty(), "{:#?}", report.failures);
+        assert_eq!(report.completed, report.runs);
+        assert_eq!(report.ledger_violations, 0, "{report:?}");
+        assert!(report.worst_residual_j < 1e-6, "{report:?}");
+        assert!(report.singular_points + report.p_zero >= 100, "the runs pass the corner: {report:?}");
+    }
+
+    /// The full corner search (docs/plant.md "The corner search"): `cargo test
+    /// --release -p analyses --lib corner_search -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "the full corner search: about ten minutes on 2 cores"]
+    fn every_run_of_the_full_corner_search_completes_with_its_ledger_closed() {
+        let report = search(&SearchSpec::corner(), &|done, total| {
+            if done % 500 == 0 || done == total {
+                eprintln!("{done} of {total} runs");
+            }
+        });
+        let SearchReport {
+            runs,
+            completed,
+            singular_points,
+            p_zero,
+            bridges,
+            jams,
+            refinements,
+            ledger_violations,
+            worst_ledger_ratio,
+            worst_residual_j,
+            bouncing,
+            ..
+        } = report;
+        eprintln!(
+            "runs {runs}, completed {completed}, bouncing {bouncing}, singular points {singular_points}, p_zero {p_zero}, bridges {bridges}, jams {jams}, refinements {refinements}, ledger violations {ledger_violations}, worst ratio {worst_ledger_ratio:.3e}, worst residual {worst_residual_j:.3e} J, failures {}",
+            report.failures.len()
+        );
+        assert!(report.failures.is_empty(), "{:#?}", report.failures);
+        assert_eq!(completed, runs);
+        assert!(runs >= 10_000 && singular_points >= 1_000, "{runs} runs, {singular_points} singular points");
+        assert_eq!(ledger_violations, 0);
     }
 
     /// The threshold of the paper's arm is the paper's critical `mu` (about 0.4).
