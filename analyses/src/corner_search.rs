@@ -354,6 +354,10 @@ mod tests {
     #[test]
     fn every_run_of_the_quick_corner_search_completes() {
         let report = search(&SearchSpec::quick(), &|_, _| {});
+        eprintln!(
+            "QUICK {} runs, singular {}, p_zero {}, bridges {}, jams {}, refinements {}, ledger violations {}",
+            report.runs, report.singular_points, report.p_zero, report.bridges, report.jams, report.refinements, report.ledger_violations
+        );
         assert!(report.runs >= 50, "{report:?}");
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(report.completed, report.runs);
@@ -385,6 +389,10 @@ mod tests {
     #[test]
     fn every_run_of_the_quick_corner_search_completes_with_its_ledger_closed() {
         let report = search(&SearchSpec::corner_quick(), &|_, _| {});
+        eprintln!(
+            "CORNER QUICK {} runs, singular {}, p_zero {}, bridges {}, jams {}, refinements {}, ledger violations {}",
+            report.runs, report.singular_points, report.p_zero, report.bridges, report.jams, report.refinements, report.ledger_violations
+        );
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(report.completed, report.runs);
         assert_eq!(report.ledger_violations, 0, "{report:?}");

@@ -84,7 +84,7 @@ pub enum SimError {
     /// smallest step its joint angles still differed from the half-step bridge's
     /// by more than the tolerance (docs/plant.md "The bridge").
     #[error(
-        "bridge at t = {t} s did not converge: at a step of {step:e} s its angles differ by {difference:e} rad from the half-step bridge's"
+        "bridge at t = {t} s did not converge: at a step of {step:e} s its angles differ by {difference:e} rad and its rates by {rate_difference:e} rad/s from the half-step bridge's"
     )]
     Bridge {
         /// Start of the bridge, s.
@@ -93,6 +93,8 @@ pub enum SimError {
         step: f64,
         /// The difference of the joint angles there, rad.
         difference: f64,
+        /// The difference of the joint rates there, rad/s.
+        rate_difference: f64,
     },
     /// A segment ended outside its mode without the event being located, even with small steps.
     #[error("event missed at t = {t} s in mode {mode}: the segment left its domain between steps")]
