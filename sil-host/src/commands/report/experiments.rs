@@ -61,6 +61,7 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
             ("stick phases, stick-to-slip", format!("{}, {}", c.stick_phases, c.stick_to_slip)),
             ("impact without collision rule", s.sim.iwc.to_string()),
             ("validity", validity_cell(&s.validity)),
+            ("energy ledger", s.ledger.to_string()),
             ("final mode, z_t (m)", format!("{}, {}", s.final_mode, position(s.final_tip[0]))),
         ],
     );
@@ -71,8 +72,14 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
 /// 46 844` under "valid" and asks why).
 pub(crate) fn validity_cell(v: &plant::Validity) -> String {
     let counts = format!(
-        "energy gains {}, Newton fallbacks {}, Poisson fallbacks {}, cone violations {}, Zeno stops {}, integrator failures {}",
-        v.energy_gains, v.newton_fallbacks, v.poisson_fallbacks, v.cone_violations, v.zeno_stops, v.integrator_failures
+        "energy gains {}, Newton fallbacks {}, Poisson fallbacks {}, cone violations {}, Zeno stops {}, integrator failures {}, energy-ledger violations {}",
+        v.energy_gains,
+        v.newton_fallbacks,
+        v.poisson_fallbacks,
+        v.cone_violations,
+        v.zeno_stops,
+        v.integrator_failures,
+        v.ledger_violations
     );
     let line = if v.is_valid() { format!("valid ({counts})") } else { format!("**INVALID: {}** ({counts})", v.describe_violations()) };
     let mut why = Vec::new();
