@@ -245,19 +245,7 @@ pub fn plan(spec: &SearchSpec) -> Vec<SearchRun> {
         }
         points
             .extend(scan(edge - 0.05, edge + 0.05, spec.v_points).into_iter().filter(|&v| (-1.0..0.0).contains(&v)).map(|v| (mu_band, v)));
-        for (mu, v_belt) in points {
-            for iwc in IwcRule::ALL {
-                for &sample_period_s in &spec.sample_periods {
-                    runs.push(SearchRun {
-                        arm: i,
-                        params: Params { mu, v_belt, ..params },
-                        sim: SimConfig { iwc, ..sim },
-                        sample_period_s,
-                        x0: deg_to_state(X0A.deg),
-                    });
-                }
-            }
-        }
+        push_runs(&mut runs, spec, (i, params, sim, deg_to_state(X0A.deg)), points);
     }
     runs
 }
@@ -291,23 +279,36 @@ fn plan_corner(spec: &SearchSpec) -> Vec<SearchRun> {
     let mut runs = Vec::new();
     for i in 0..spec.arms {
         let (params, x0) = corner_arm(spec.seed, i);
-        for mu in scan(0.410, 0.432, spec.mu_points) {
-            for v_belt in scan(-0.52, -0.48, spec.v_points) {
-                for iwc in IwcRule::ALL {
-                    for &sample_period_s in &spec.sample_periods {
-                        runs.push(SearchRun {
-                            arm: i,
-                            params: Params { mu, v_belt, ..params },
-                            sim: SimConfig { iwc, ..sim },
-                            sample_period_s,
-                            x0,
-                        });
-                    }
-                }
+        let points = scan(0.410, 0.432, spec.mu_points)
+            .into_iter()
+            .flat_map(|mu| scan(-0.52, -0.48, spec.v_points).into_iter().map(move |v| (mu, v)));
+        push_runs(&mut runs, spec, (i, params, sim, x0), points);
+    }
+    runs
+}
+
+/// Appends the runs of arm `i` (its parameters, settings and start) at each
+/// `(mu, v_belt)` of `points`, under both IWC rules and every sample period.
+fn push_runs(
+    runs: &mut Vec<SearchRun>,
+    spec: &SearchSpec,
+    arm: (usize, Params<f64>, SimConfig, [f64; 4]),
+    points: impl IntoIterator<Item = (f64, f64)>,
+) {
+    let (i, params, sim, x0) = arm;
+    for (mu, v_belt) in points {
+        for iwc in IwcRule::ALL {
+            for &sample_period_s in &spec.sample_periods {
+                runs.push(SearchRun {
+                    arm: i,
+                    params: Params { mu, v_belt, ..params },
+                    sim: SimConfig { iwc, ..sim },
+                    sample_period_s,
+                    x0,
+                });
             }
         }
     }
-    runs
 }
 
 /// Runs the search on every core; `progress(done, total)` after each run.
