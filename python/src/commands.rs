@@ -218,6 +218,7 @@ pub fn zmax<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'p
 struct Observer<'a> {
     control: &'a Control,
     validity: plant::Validity,
+    ledger: plant::Ledger,
 }
 
 impl rig::RunObserver for Observer<'_> {
@@ -230,6 +231,10 @@ impl rig::RunObserver for Observer<'_> {
 
     fn on_finished(&mut self, validity: &plant::Validity) {
         self.validity = *validity;
+    }
+
+    fn on_ledger(&mut self, ledger: &plant::Ledger) {
+        self.ledger = *ledger;
     }
 }
 
@@ -245,16 +250,17 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
     let (scenario, link) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
     warn(py, cmd::scenario::board_tables_note(&scenario, link.without_board()))?;
     let mut link = InProcessLink::new(&scenario).map_err(|e| cli_error(py, &CliError::from(e)))?;
-    let (records, failure, validity, wall_s) = work::run(py, progress.as_ref(), "run", "periods", |c: &Control| {
+    let (records, failure, (validity, ledger), wall_s) = work::run(py, progress.as_ref(), "run", "periods", |c: &Control| {
         c.set(0, scenario.timing.periods());
-        let mut observer = Observer { control: c, validity: plant::Validity::default() };
+        let mut observer = Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default() };
         let started = Instant::now();
         let (records, failure) = rig::run_loop(&scenario, &mut link, &mut observer);
-        (records, failure, observer.validity, started.elapsed().as_secs_f64())
+        (records, failure, (observer.validity, observer.ledger), started.elapsed().as_secs_f64())
     })?;
     let stats = RunStats::of(&records);
     let summary = RunSummary {
         firmware_announcement: link.announcement().cloned(),
+        ledger,
         ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);

@@ -342,6 +342,10 @@ pub trait RunObserver {
     /// (energy-creating impacts, fallbacks, cone violations, Zeno stops, integrator
     /// failures; [`Validity`]).
     fn on_finished(&mut self, _validity: &Validity) {}
+
+    /// At the end of the run, just before [`RunObserver::on_finished`]: the plant's
+    /// energy ledger ([`plant::Ledger`], docs/plant.md "The energy ledger").
+    fn on_ledger(&mut self, _ledger: &plant::Ledger) {}
 }
 
 impl RunObserver for () {}
@@ -392,6 +396,7 @@ pub fn stream_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunO
         Some(RunError::Sim(e)) => Some(e),
         _ => None,
     };
+    run.on_ledger(&plant.ledger());
     run.on_finished(&plant.validity(sim_error));
     (recorded, failure)
 }
@@ -429,6 +434,10 @@ pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObse
 
         fn on_finished(&mut self, validity: &Validity) {
             self.inner.on_finished(validity);
+        }
+
+        fn on_ledger(&mut self, ledger: &plant::Ledger) {
+            self.inner.on_ledger(ledger);
         }
     }
     // One allocation up front (capped: a scenario that is not validated may ask for anything).

@@ -41,6 +41,9 @@ pub struct RunSummary {
     /// The plant's validity counters (energy-creating impacts, fallbacks, cone
     /// violations, Zeno stops, integrator failures; `plant::Validity`).
     pub validity: Validity,
+    /// The plant's energy ledger (docs/plant.md "The energy ledger"): the works of
+    /// the motors, the damping, the belt and the contact, what they leave unexplained.
+    pub ledger: plant::Ledger,
     /// Deadline misses seen by the plant (no command, lost, or late past `t_k + Ts`).
     pub deadline_misses: usize,
     /// Deadline misses the firmware counted itself (its overrun counter at the end).
@@ -132,6 +135,7 @@ impl RunSummary {
             periods,
             lift_off: stats.lift_off(),
             validity,
+            ledger: plant::Ledger::default(),
             deadline_misses: stats.deadline_misses(),
             firmware_overruns: stats.max_overruns(),
             rms_tracking_error_m: stats.rms_tracking_error(),

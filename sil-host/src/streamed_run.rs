@@ -55,10 +55,15 @@ pub fn run_streamed(
         stats: RunStats,
         history: plot::HistoryEnvelope,
         validity: Validity,
+        ledger: plant::Ledger,
     }
     impl RunObserver for Streaming<'_> {
         fn on_finished(&mut self, validity: &Validity) {
             self.validity = *validity;
+        }
+
+        fn on_ledger(&mut self, ledger: &plant::Ledger) {
+            self.ledger = *ledger;
         }
 
         fn on_record(&mut self, r: &PeriodRecord) {
@@ -89,13 +94,14 @@ pub fn run_streamed(
         stats: RunStats::default(),
         history: plot::HistoryEnvelope::default(),
         validity: Validity::default(),
+        ledger: plant::Ledger::default(),
     };
     let (_, failure) = stream_loop(scenario, link, &mut observer);
-    let Streaming { stats, history, validity, .. } = observer;
+    let Streaming { stats, history, validity, ledger, .. } = observer;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;
-    Ok(Streamed { stats, history, failure, wall_s, validity })
+    Ok(Streamed { stats, history, failure, wall_s, validity, ledger })
 }
 
 /// What [`run_streamed`] returns: nothing in it grows with the run's length.
@@ -110,4 +116,6 @@ pub struct Streamed {
     pub wall_s: f64,
     /// The plant's validity counters at the end.
     pub validity: Validity,
+    /// The plant's energy ledger at the end.
+    pub ledger: plant::Ledger,
 }

@@ -199,11 +199,16 @@ impl FirmwareLink for PythonLink<'_> {
 #[derive(Default)]
 struct Finished {
     validity: plant::Validity,
+    ledger: plant::Ledger,
 }
 
 impl rig::RunObserver for Finished {
     fn on_finished(&mut self, validity: &plant::Validity) {
         self.validity = *validity;
+    }
+
+    fn on_ledger(&mut self, ledger: &plant::Ledger) {
+        self.ledger = *ledger;
     }
 }
 
@@ -239,7 +244,10 @@ pub fn run_controller<'py>(
     }
     let validity = finished.validity;
     let stats = RunStats::of(&records);
-    let summary = RunSummary::from_stats(&s, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity);
+    let summary = RunSummary {
+        ledger: finished.ledger,
+        ..RunSummary::from_stats(&s, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
+    };
     let failed = failure.map(|e| {
         let code = if matches!(e, RunError::Unsupported(_) | RunError::Firmware(_)) { 2 } else { 1 };
         (e.to_string(), code)

@@ -62,6 +62,7 @@ pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: 
         }
     }
     let _ = writeln!(o, "validity: {}", summary.validity);
+    let _ = writeln!(o, "energy ledger: {}", summary.ledger);
     if !summary.validity.is_valid() {
         let _ = writeln!(o, "INVALID: {} (the trajectory violates the model)", summary.validity.describe_violations());
     }

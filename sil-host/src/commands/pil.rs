@@ -124,7 +124,8 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
     let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
-    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, &mut link, &mut out, &progress, 100, args.format)?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger } =
+        run_streamed(&scenario, &mut link, &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -142,6 +143,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     }
     let summary = RunSummary {
         pil: Some(figures),
+        ledger,
         ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
     };
     out.write_json("summary.json", &summary)?;

@@ -81,7 +81,8 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { stats, history, failure, wall_s, validity } = run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger } =
+        run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
     let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
     let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
@@ -110,6 +111,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
             samples_dropped: c.samples_dropped,
         }),
         firmware_announcement,
+        ledger,
         ..RunSummary::from_stats(
             &scenario,
             &stats,
