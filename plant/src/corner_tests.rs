@@ -180,6 +180,38 @@ fn a_bridged_run_converges_as_the_bridge_step_shrinks() {
     }
 }
 
+/// A bridge keeps the energy ledger (issue 53): its works are booked step by step,
+/// its balance is within what its convergence tolerances are worth, and the ledger
+/// of the bridged run closes, whatever step the bridge started from. Its end rates,
+/// refined with its angles, agree across those starts to twice
+/// [`super::plant::bridge::BRIDGE_RATE_TOLERANCE`] right after the bridge.
+#[test]
+fn a_bridge_keeps_the_energy_ledger_and_converges_in_its_rates() {
+    let mut ends = Vec::new();
+    for h in [4e-5, 1e-5] {
+        let (mut plant, ctrl) = corner_case(SingularRule::Leave, h);
+        let t_zero = time_of_p_zero(&plant, &ctrl);
+        plant.advance(&ctrl, t_zero - 2e-4, &mut NoObserver).unwrap();
+        let e0 = plant.energy();
+        let works = |p: &Plant| {
+            let l = p.ledger();
+            l.motors_j + l.damping_j + l.belt_j + l.slip_j + l.projections_j
+        };
+        let w0 = works(&plant);
+        let mut events = Vec::new();
+        plant.bridge(&ctrl, Boundary::Singular, plant.time() + 5e-3, &mut NoObserver, &mut events).unwrap();
+        let l = plant.ledger();
+        assert_eq!(plant.counters().bridges, 1);
+        assert_eq!(l.violations, 0, "{l:?}");
+        let across = (plant.energy() - e0) - (works(&plant) - w0);
+        assert!(across.abs() < 1e-5, "the bridge's balance: {across} J unexplained ({l:?})");
+        assert!(l.residual_j.abs() < 1e-5, "{l:?}");
+        ends.push(plant.state());
+    }
+    let dv = (ends[0][1] - ends[1][1]).abs().max((ends[0][3] - ends[1][3]).abs());
+    assert!(dv <= 2.0 * super::plant::bridge::BRIDGE_RATE_TOLERANCE, "end rates {dv} rad/s apart");
+}
+
 /// `near_singular` names the neighbourhood along the slide into the corner: both
 /// `p/Q22` and `-b/g` at most 0.05 with the reaction (3 N) finite; false at the
 /// start of the slide, true just before `p = 0`.

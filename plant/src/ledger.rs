@@ -67,6 +67,28 @@ pub fn energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
     t - p.m * p.g * p.l * (1.5 * tr.c1 + 0.5 * tr.c2) + 0.5 * p.k * spring * spring
 }
 
+/// The gradient of the arm's energy at `y` (`[theta1, theta1_dot, theta2,
+/// theta2_dot, ..]`): `[dE/dtheta1 (J/rad), dE/dtheta1_dot (J s/rad), dE/dtheta2,
+/// dE/dtheta2_dot]`, the kinetic coupling's and the potential's angle terms and the
+/// momenta `M q_dot`, from the sines and cosines `tr` of its angles.
+#[inline]
+pub fn energy_gradient(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> [f64; 4] {
+    let p = &arm.params;
+    let (d1, d2) = (y[1], y[3]);
+    let ml2 = p.m * p.l * p.l;
+    let c21 = tr.c2 * tr.c1 + tr.s2 * tr.s1;
+    let s21 = tr.s2 * tr.c1 - tr.c2 * tr.s1;
+    let spring = y[2] - y[0] + p.alpha0;
+    let mgl = p.m * p.g * p.l;
+    let coupling = 0.5 * ml2 * s21 * d1 * d2;
+    [
+        coupling + 1.5 * mgl * tr.s1 - p.k * spring,
+        ml2 * (4.0 / 3.0) * d1 + 0.5 * ml2 * c21 * d2,
+        -coupling + 0.5 * mgl * tr.s2 + p.k * spring,
+        0.5 * ml2 * c21 * d1 + ml2 * (1.0 / 3.0) * d2,
+    ]
+}
+
 /// The energy (J) that one unit of the integrator's tolerance in each arm state is
 /// worth at `y`: `sum_i |dE/dy_i| (atol + rtol |y_i|)` over the angles and rates,
 /// times [`STEP_FACTOR`], plus the rounding of the balance's terms (`8 u` of the
@@ -75,23 +97,22 @@ pub fn energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
 #[inline]
 pub fn step_tolerance(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64], rtol: f64, atol: f64, works: f64) -> f64 {
     let p = &arm.params;
-    let (d1, d2) = (y[1], y[3]);
-    let ml2 = p.m * p.l * p.l;
-    let c21 = tr.c2 * tr.c1 + tr.s2 * tr.s1;
-    let s21 = tr.s2 * tr.c1 - tr.c2 * tr.s1;
-    let spring = y[2] - y[0] + p.alpha0;
-    let mgl = p.m * p.g * p.l;
-    // dE/dq: the kinetic coupling's and the potential's.
-    let coupling = 0.5 * ml2 * s21 * d1 * d2;
-    let de_dq1 = coupling + 1.5 * mgl * tr.s1 - p.k * spring;
-    let de_dq2 = -coupling + 0.5 * mgl * tr.s2 + p.k * spring;
-    // dE/dq_dot = M q_dot (the momenta).
-    let de_dd1 = ml2 * (4.0 / 3.0) * d1 + 0.5 * ml2 * c21 * d2;
-    let de_dd2 = 0.5 * ml2 * c21 * d1 + ml2 * (1.0 / 3.0) * d2;
+    let g = energy_gradient(arm, tr, y);
     let sk = |v: f64| atol + rtol * v.abs();
-    let unit = de_dq1.abs() * sk(y[0]) + de_dd1.abs() * sk(d1) + de_dq2.abs() * sk(y[2]) + de_dd2.abs() * sk(d2);
-    let e_scale = 0.5 * ml2 * (d1 * d1 + d2 * d2) * 2.0 + mgl * 2.0 + 0.5 * p.k * spring * spring;
+    let unit = g[0].abs() * sk(y[0]) + g[1].abs() * sk(y[1]) + g[2].abs() * sk(y[2]) + g[3].abs() * sk(y[3]);
+    let (ml2, mgl, spring) = (p.m * p.l * p.l, p.m * p.g * p.l, y[2] - y[0] + p.alpha0);
+    let e_scale = ml2 * (y[1] * y[1] + y[3] * y[3]) + 2.0 * mgl + 0.5 * p.k * spring * spring;
     STEP_FACTOR * unit + 8.0 * f64::EPSILON * (e_scale + works)
+}
+
+/// The tolerance of a bridge's balance (J): the energy its convergence tolerances
+/// are worth at its end `y`, `angle_tol` (rad) in each angle and `rate_tol` (rad/s)
+/// in each rate (the bridge's own accuracy, docs/plant.md "The bridge"), plus the
+/// rounding of the terms as [`step_tolerance`].
+#[inline]
+pub fn bridge_tolerance(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64], angle_tol: f64, rate_tol: f64, works: f64) -> f64 {
+    let g = energy_gradient(arm, tr, y);
+    (g[0].abs() + g[2].abs()) * angle_tol + (g[1].abs() + g[3].abs()) * rate_tol + 8.0 * f64::EPSILON * works
 }
 
 /// The ledger of a run (or its totals): the works since `t0`, the energy change,

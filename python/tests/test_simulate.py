@@ -43,6 +43,19 @@ def test_counters_and_validity_are_carried():
     assert (r.trace["mode"] == "flight").any()
 
 
+def test_the_energy_ledger_closes_and_says_where_the_energy_went():
+    # docs/plant.md "The energy ledger": E(t) - E(0) = motors + damping + belt + slip + projections + residual.
+    r = painleve.simulate(duration=10.0, progress=False)
+    led = r.summary["ledger"]
+    parts = led["motors_j"] + led["damping_j"] + led["belt_j"] + led["slip_j"] + led["projections_j"]
+    assert led["energy_change_j"] == pytest.approx(parts + led["residual_j"], abs=1e-12)
+    assert abs(led["residual_j"]) < 1e-9 and led["violations"] == 0
+    assert led["motors_j"] == 0.0, "open loop: no motor torque"
+    assert led["damping_j"] < 0 and led["slip_j"] < 0 < led["belt_j"], "the belt feeds the bouncing, damping and friction take it"
+    e = r.trace["energy"]
+    assert float(e[len(e) - 1] - e[0]) == pytest.approx(led["energy_change_j"], abs=1e-9)
+
+
 @pytest.mark.parametrize(
     "kwargs,argv",
     [

@@ -82,7 +82,12 @@ impl Plant {
         self.slide_trend = None;
         let length = (t_end - t0).min(self.cfg.bridge_length);
         let before = self.rel_velocity();
-        let stretch = self.converged_stretch(ctrl, t0, &y0, length)?;
+        let (stretch, residual, tol) = self.converged_stretch(ctrl, t0, &y0, length)?;
+        self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(residual.abs());
+        self.ledger.worst_ratio = self.ledger.worst_ratio.max(residual.abs() / tol);
+        if residual.abs() > tol || residual.is_nan() {
+            self.ledger.violations += 1;
+        }
         let mode = self.mode();
         obs.on_segment_start(t0, &y0, mode);
         obs.on_attempt();
@@ -180,8 +185,19 @@ impl Plant {
 
     /// Time-steps `[t0, t0 + length]` from `y0` at the configured bridge step,
     /// halving it until the stretch agrees with the one at half its step
-    /// ([`BRIDGE_TOLERANCE`] on the angles at the end); returns the finer one.
-    fn converged_stretch<C: Controller + ?Sized>(&self, ctrl: &C, t0: f64, y0: &OdeState, length: f64) -> Result<Stretch, SimError> {
+    /// ([`BRIDGE_TOLERANCE`] on the angles, [`BRIDGE_RATE_TOLERANCE`] on the rates at
+    /// the end) and its energy balance is within what those tolerances are worth
+    /// ([`crate::ledger::bridge_tolerance`]); returns the finer one, with its
+    /// balance's residual (J) and tolerance. A bridge that converges in its state
+    /// but not in its balance at [`BRIDGE_STEP_FLOOR`] is returned all the same: the
+    /// caller counts a ledger violation.
+    fn converged_stretch<C: Controller + ?Sized>(
+        &self,
+        ctrl: &C,
+        t0: f64,
+        y0: &OdeState,
+        length: f64,
+    ) -> Result<(Stretch, f64, f64), SimError> {
         let mut n = ((length / self.cfg.bridge_step).ceil() as usize).max(1);
         let mut coarse = self.stretch(ctrl, t0, y0, length, n)?;
         loop {
@@ -189,14 +205,30 @@ impl Plant {
             let (a, b) = (coarse.states.last().unwrap_or(y0), fine.states.last().unwrap_or(y0));
             let difference = (a[0] - b[0]).abs().max((a[2] - b[2]).abs());
             let rate_difference = (a[1] - b[1]).abs().max((a[3] - b[3]).abs());
-            if difference <= BRIDGE_TOLERANCE && rate_difference <= BRIDGE_RATE_TOLERANCE {
-                return Ok(fine);
+            let converged = difference <= BRIDGE_TOLERANCE && rate_difference <= BRIDGE_RATE_TOLERANCE;
+            let (residual, tol) = self.bridge_balance(y0, b);
+            let at_floor = fine.h / 2.0 < BRIDGE_STEP_FLOOR;
+            if converged && (residual.abs() <= tol || at_floor) {
+                return Ok((fine, residual, tol));
             }
-            if fine.h / 2.0 < BRIDGE_STEP_FLOOR {
+            if at_floor {
                 return Err(SimError::Bridge { t: t0, step: fine.h, difference, rate_difference });
             }
             (coarse, n) = (fine, 2 * n);
         }
+    }
+
+    /// The energy balance of a bridge from `y0` to `y1`: its residual `E(y1) -
+    /// E(y0) - works` (J) and its tolerance ([`crate::ledger::bridge_tolerance`]).
+    fn bridge_balance(&self, y0: &OdeState, y1: &OdeState) -> (f64, f64) {
+        use crate::ledger::{self, BELT, DAMPING, MOTORS, SLIP};
+        let energy = |y: &OdeState| ledger::energy(&self.arm, &self.trig.get(&Vector2::new(y[0], y[2])), y);
+        let (e0, e1) = (energy(y0), energy(y1));
+        let works: f64 = [MOTORS, DAMPING, BELT, SLIP].iter().map(|&i| y1[i] - y0[i]).sum();
+        let size = [MOTORS, DAMPING, BELT, SLIP].iter().map(|&i| y1[i].abs() + y0[i].abs()).sum::<f64>() + e0.abs() + e1.abs();
+        let tr = self.trig.get(&Vector2::new(y1[0], y1[2]));
+        let tol = ledger::bridge_tolerance(&self.arm, &tr, y1, BRIDGE_TOLERANCE, BRIDGE_RATE_TOLERANCE, size);
+        ((e1 - e0) - works, tol)
     }
 
     /// `n` Moreau-Jean steps over `[t0, t0 + length]` from `y0` (module docs of
