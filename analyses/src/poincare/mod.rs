@@ -91,6 +91,8 @@ pub struct PointResult {
     /// Lyapunov estimate's own short runs are not included); a violation makes the
     /// class [`Class::Invalid`].
     pub validity: Validity,
+    /// The plant's energy ledger over the same span (docs/plant.md "The energy ledger").
+    pub ledger: plant::Ledger,
     /// Wall time of this point, s.
     pub wall_s: f64,
 }
@@ -153,6 +155,7 @@ pub fn analyse(v_belt: f64, cfg: &PoincareConfig) -> PointResult {
         touchdowns: 0,
         error: None,
         validity: Validity::default(),
+        ledger: plant::Ledger::default(),
         wall_s: 0.0,
     };
     match run_into(v_belt, cfg, &mut result) {
@@ -176,6 +179,7 @@ fn run_into(v_belt: f64, cfg: &PoincareConfig, r: &mut PointResult) -> Result<()
     let mut plant = Plant::new(params, cfg.sim, cfg.x0, 0.0, [0.0, 0.0])?;
     let result = record(&mut plant, params, cfg, r);
     r.validity = plant.validity(result.as_ref().err());
+    r.ledger = plant.ledger();
     result
 }
 

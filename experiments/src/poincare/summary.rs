@@ -80,6 +80,14 @@ pub struct ClassRow {
     pub zeno_stops: u64,
     /// Validity: integrator failures.
     pub integrator_failures: u64,
+    /// Validity: energy-ledger violations (docs/plant.md "The energy ledger").
+    pub ledger_violations: u64,
+    /// The energy the moving belt put in, J.
+    pub belt_j: f64,
+    /// The contact's work in the belt's frame (dissipated), J.
+    pub slip_j: f64,
+    /// What the energy ledger leaves unexplained, J.
+    pub ledger_residual_j: f64,
 }
 
 impl From<&PointResult> for ClassRow {
@@ -107,6 +115,10 @@ impl From<&PointResult> for ClassRow {
             cone_violations: r.validity.cone_violations,
             zeno_stops: r.validity.zeno_stops,
             integrator_failures: r.validity.integrator_failures,
+            ledger_violations: r.validity.ledger_violations,
+            belt_j: r.ledger.belt_j,
+            slip_j: r.ledger.slip_j,
+            ledger_residual_j: r.ledger.residual_j,
         }
     }
 }

@@ -203,6 +203,8 @@ pub struct TrialRow {
     pub zeno_stops: u64,
     /// Validity: integrator failures.
     pub integrator_failures: u64,
+    /// Validity: energy-ledger violations (docs/plant.md "The energy ledger").
+    pub ledger_violations: u64,
 }
 
 impl From<&Trial> for TrialRow {
@@ -228,6 +230,7 @@ impl From<&Trial> for TrialRow {
             cone_violations: t.validity.cone_violations,
             zeno_stops: t.validity.zeno_stops,
             integrator_failures: t.validity.integrator_failures,
+            ledger_violations: t.validity.ledger_violations,
         }
     }
 }
