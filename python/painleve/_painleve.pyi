@@ -200,6 +200,10 @@ class Plant:
     def validity(self) -> Dict[str, int]:
         """Validity counters (``plant::Validity``)."""
     @property
+    def ledger(self) -> Dict[str, Union[int, float]]:
+        """The energy ledger since creation (``plant::Ledger``), J: ``energy_change_j``,
+        ``motors_j``, ``damping_j``, ``belt_j``, ``slip_j``, ``projections_j``, ``residual_j``, ..."""
+    @property
     def startup_events(self) -> List[Dict[str, Any]]: ...
     @property
     def params(self) -> Dict[str, float]:

@@ -103,10 +103,14 @@ def test_plant_conserves_energy_in_flight_without_damping() -> None:
         assert np.array_equal(step.force, [0.0, 0.0])
     assert plant.time == pytest.approx(0.1)
     assert abs(plant.energy - e0) < 1e-8 * max(1.0, abs(e0))
-    # With damping, energy decreases.
+    # With damping, energy decreases, and the ledger says by how much.
     damped = Plant(state=[0.8, 0.0, 0.2, 0.0])
     damped.advance(0.1)
     assert damped.energy < e0
+    led = damped.ledger
+    assert led["damping_j"] < 0 and led["belt_j"] == led["slip_j"] == led["motors_j"] == 0.0
+    assert damped.energy - e0 == pytest.approx(led["damping_j"], abs=1e-9)
+    assert led["energy_change_j"] == pytest.approx(damped.energy - e0, abs=1e-12) and led["violations"] == 0
 
 
 def test_plant_advance_in_two_halves_equals_one_advance() -> None:

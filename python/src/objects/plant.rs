@@ -282,6 +282,15 @@ impl PyPlant {
         to_py(py, &self.with(|p| p.validity(None)))
     }
 
+    /// The energy ledger since creation (docs/plant.md "The energy ledger"): dict
+    /// of float, J (`energy_change_j`, `motors_j`, `damping_j`, `belt_j`, `slip_j`,
+    /// `projections_j`, `residual_j`, `worst_entry_j`, `worst_ratio`,
+    /// `largest_event_belt_j`) and int (`refinements`, `violations`).
+    #[getter]
+    fn ledger<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.with(|p| p.ledger()))
+    }
+
     /// The events at time 0 while the initial mode was chosen (list of dicts, as `Step.events`).
     #[getter]
     fn startup_events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
