@@ -142,6 +142,29 @@ pub struct SearchReport {
     pub failures: Vec<(SearchRun, String)>,
 }
 
+impl SearchReport {
+    /// One line of what the search met: runs, singular points, located `p = 0`
+    /// passages, bridges, jams, ledger refinements and violations, failures.
+    pub fn line(&self) -> String {
+        format!(
+            "{} runs ({} completed, {} bouncing), singular points {}, p_zero {}, bridges {}, jams {} (at collapse {}), ledger refinements {}, ledger violations {}, worst ratio {:.3e}, worst residual {:.3e} J, failures {}",
+            self.runs,
+            self.completed,
+            self.bouncing,
+            self.singular_points,
+            self.p_zero,
+            self.bridges,
+            self.jams,
+            self.jams_at_collapse,
+            self.refinements,
+            self.ledger_violations,
+            self.worst_ledger_ratio,
+            self.worst_residual_j,
+            self.failures.len()
+        )
+    }
+}
+
 /// The critical `mu` of `params` on `branch`: the smallest `Q_22 / |Q_21|` over
 /// the belt (400 points across the reach), where `p(s)` can reach 0.
 pub fn threshold(params: &Params<f64>, branch: ElbowBranch) -> Option<f64> {
@@ -355,10 +378,7 @@ mod tests {
     #[test]
     fn every_run_of_the_quick_corner_search_completes() {
         let report = search(&SearchSpec::quick(), &|_, _| {});
-        eprintln!(
-            "QUICK {} runs, singular {}, p_zero {}, bridges {}, jams {}, refinements {}, ledger violations {}",
-            report.runs, report.singular_points, report.p_zero, report.bridges, report.jams, report.refinements, report.ledger_violations
-        );
+        eprintln!("QUICK: {}", report.line());
         assert!(report.runs >= 50, "{report:?}");
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(report.completed, report.runs);
@@ -376,13 +396,9 @@ mod tests {
                 eprintln!("{done} of {total} runs");
             }
         });
-        let SearchReport { runs, completed, singular_points, bridges, bridged_s, jams, jams_at_collapse, bouncing, .. } = report;
-        eprintln!(
-            "runs {runs}, completed {completed}, bouncing {bouncing}, singular points {singular_points}, bridges {bridges} ({bridged_s:.4} s), jams {jams} (at collapse {jams_at_collapse}), failures {}",
-            report.failures.len()
-        );
+        eprintln!("{}", report.line());
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
-        assert_eq!(completed, runs);
+        assert_eq!(report.completed, report.runs);
     }
 
     /// CI's subset of the corner search (issue 53): every run completes, meets the
@@ -390,10 +406,7 @@ mod tests {
     #[test]
     fn every_run_of_the_quick_corner_search_completes_with_its_ledger_closed() {
         let report = search(&SearchSpec::corner_quick(), &|_, _| {});
-        eprintln!(
-            "CORNER QUICK {} runs, singular {}, p_zero {}, bridges {}, jams {}, refinements {}, ledger violations {}",
-            report.runs, report.singular_points, report.p_zero, report.bridges, report.jams, report.refinements, report.ledger_violations
-        );
+        eprintln!("CORNER QUICK: {}", report.line());
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(report.completed, report.runs);
         assert_eq!(report.ledger_violations, 0, "{report:?}");
@@ -411,24 +424,8 @@ mod tests {
                 eprintln!("{done} of {total} runs");
             }
         });
-        let SearchReport {
-            runs,
-            completed,
-            singular_points,
-            p_zero,
-            bridges,
-            jams,
-            refinements,
-            ledger_violations,
-            worst_ledger_ratio,
-            worst_residual_j,
-            bouncing,
-            ..
-        } = report;
-        eprintln!(
-            "runs {runs}, completed {completed}, bouncing {bouncing}, singular points {singular_points}, p_zero {p_zero}, bridges {bridges}, jams {jams}, refinements {refinements}, ledger violations {ledger_violations}, worst ratio {worst_ledger_ratio:.3e}, worst residual {worst_residual_j:.3e} J, failures {}",
-            report.failures.len()
-        );
+        eprintln!("{}", report.line());
+        let SearchReport { runs, completed, singular_points, ledger_violations, .. } = report;
         assert!(report.failures.is_empty(), "{:#?}", report.failures);
         assert_eq!(completed, runs);
         assert!(runs >= 10_000 && singular_points >= 1_000, "{runs} runs, {singular_points} singular points");

@@ -59,10 +59,9 @@ pub const IMPULSE_TOLERANCE: f64 = 1e-9;
 #[inline]
 pub fn energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
     let p = &arm.params;
-    let (d1, d2) = (y[1], y[3]);
-    let ml2 = p.m * p.l * p.l;
-    let c21 = tr.c2 * tr.c1 + tr.s2 * tr.s1;
-    let t = 0.5 * (ml2 * (4.0 / 3.0) * d1 * d1 + ml2 * c21 * d1 * d2 + ml2 * (1.0 / 3.0) * d2 * d2);
+    let qd = nalgebra::Vector2::new(y[1], y[3]);
+    // T from the mass matrix of paper eq. 1 at cos(theta2 - theta1), as `Arm::kinetic_energy`.
+    let t = 0.5 * qd.dot(&(arm.mass_matrix_cos(tr.c2 * tr.c1 + tr.s2 * tr.s1) * qd));
     let spring = y[2] - y[0] + p.alpha0;
     t - p.m * p.g * p.l * (1.5 * tr.c1 + 0.5 * tr.c2) + 0.5 * p.k * spring * spring
 }
@@ -81,12 +80,8 @@ pub fn energy_gradient(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> [f64; 
     let spring = y[2] - y[0] + p.alpha0;
     let mgl = p.m * p.g * p.l;
     let coupling = 0.5 * ml2 * s21 * d1 * d2;
-    [
-        coupling + 1.5 * mgl * tr.s1 - p.k * spring,
-        ml2 * (4.0 / 3.0) * d1 + 0.5 * ml2 * c21 * d2,
-        -coupling + 0.5 * mgl * tr.s2 + p.k * spring,
-        0.5 * ml2 * c21 * d1 + ml2 * (1.0 / 3.0) * d2,
-    ]
+    let momenta = arm.mass_matrix_cos(c21) * nalgebra::Vector2::new(d1, d2);
+    [coupling + 1.5 * mgl * tr.s1 - p.k * spring, momenta[0], -coupling + 0.5 * mgl * tr.s2 + p.k * spring, momenta[1]]
 }
 
 /// The energy (J) that one unit of the integrator's tolerance in each arm state is

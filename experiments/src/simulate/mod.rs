@@ -329,20 +329,25 @@ mod tests {
     use super::*;
     use plant::initial::PaperX0;
 
-    fn start(x0: PaperX0, duration: f64) -> (OpenLoop, TraceRow, Vec<EventRow>) {
-        let params = shared::Params::<f64>::paper();
-        let x = plant::initial::deg_to_state(x0.condition().deg);
-        let plant = Plant::new(params, SimConfig::default(), x, 0.0, [0.0, 0.0]).unwrap();
-        let steps = check_times(duration, 1e-3).unwrap();
+    /// The loop of an open-loop run of `params` from `x0` (rad, rad/s) for `duration` s
+    /// sampled every `dt` s.
+    fn open_loop(params: shared::Params<f64>, sim: SimConfig, x0: [f64; 4], duration: f64, dt: f64) -> (OpenLoop, TraceRow, Vec<EventRow>) {
+        let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0]).unwrap();
+        let steps = check_times(duration, dt).unwrap();
         let initial_condition = summary::InitialCondition {
             name: String::new(),
             given_deg: [0.0; 4],
-            projection: initial::describe_projection(&params, x),
+            projection: initial::describe_projection(&params, x0),
             used_deg: [0.0; 4],
             initial_mode: "",
             startup_events: Vec::new(),
         };
-        OpenLoop::start(Prepared { params, sim: SimConfig::default(), steps, initial_condition, plant }, 1e-3)
+        OpenLoop::start(Prepared { params, sim, steps, initial_condition, plant }, dt)
+    }
+
+    fn start(x0: PaperX0, duration: f64) -> (OpenLoop, TraceRow, Vec<EventRow>) {
+        let x = plant::initial::deg_to_state(x0.condition().deg);
+        open_loop(shared::Params::<f64>::paper(), SimConfig::default(), x, duration, 1e-3)
     }
 
     /// The trace does not depend on how a caller splits the run (the CLI asks for
@@ -392,19 +397,9 @@ mod tests {
         duration: f64,
         dt: f64,
     ) -> (Vec<TraceRow>, Vec<EventRow>, plant::Counters) {
-        let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0]).unwrap();
-        let steps = check_times(duration, dt).unwrap();
-        let initial_condition = summary::InitialCondition {
-            name: String::new(),
-            given_deg: [0.0; 4],
-            projection: initial::describe_projection(&params, x0),
-            used_deg: [0.0; 4],
-            initial_mode: "",
-            startup_events: Vec::new(),
-        };
-        let (mut l, first, mut events) = OpenLoop::start(Prepared { params, sim, steps, initial_condition, plant }, dt);
+        let (mut l, first, mut events) = open_loop(params, sim, x0, duration, dt);
         let mut rows = vec![first];
-        l.advance(steps, &mut rows, &mut events).unwrap();
+        l.advance(l.steps, &mut rows, &mut events).unwrap();
         let counters = *l.plant.counters();
         (rows, events, counters)
     }
