@@ -267,6 +267,9 @@ pub struct TraceRow {
     pub height: f64,
 }
 
+// The time history at the limit (`painleve.zmax`'s `limit_traces`): its columns, declared.
+tables::declare!(TraceRow { t: f64, z_t: f64, z_t_ref: f64, f_n: f64, u1: f64, u2: f64, mode: str, height: f64 });
+
 /// The outcome of one trial.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Trial {

@@ -1,15 +1,16 @@
-"""The speed of painleve.read_csv / painleve.load against pandas.read_csv
-(docs/python.md, "Reading tables"): wall time to read a table the CLI wrote,
-median of N runs in one sitting, each reader in turn. The tables: a 300 s
-open-loop trace (`simulate --duration 300`: 300 001 rows x 14 columns, 66 MB) and
-a 62 s closed-loop trace (`run --in-process --duration 62`: 62 000 rows x 21
+"""The speed of painleve.read_csv / painleve.load against pandas.read_csv, and of
+painleve.read_arrow against pandas.read_feather (docs/python.md, "Reading
+tables"): wall time to read a table the CLI wrote, median of N runs in one
+sitting, each reader in turn. The tables: a 300 s open-loop trace (`simulate
+--duration 300`: 300 001 rows x 14 columns, 66 MB of CSV, 34 MB of Arrow) and a
+62 s closed-loop trace (`run --in-process --duration 62`: 62 000 rows x 21
 columns, 17 MB), written by the CLI into a temporary folder first.
 
     cargo build --release -p sil-host
     python examples/python/read_speed.py [--runs 7] [--sil-host target/release/sil-host]
 
-The former pure-Python reader is timed too when python/tests/reference_csv.py is
-there (it is the tests' reference).
+The tests' pure-Python reference (python/tests/reference_csv.py: the `csv`
+module, each cell read by Python) is timed too when it is there.
 """
 
 import argparse
@@ -58,6 +59,8 @@ def main():
         }
         for argv, out in tables.values():
             subprocess.run([args.sil_host, *argv, "--out", str(out), "--json"], check=True, capture_output=True, cwd=REPO)
+            arrow = Path(str(out) + "-arrow")
+            subprocess.run([args.sil_host, *argv, "--format", "arrow", "--out", str(arrow), "--json"], check=True, capture_output=True, cwd=REPO)
         print(f"painleve {painleve.__version__}" + (f", pandas {pd.__version__}" if pd else ", no pandas") + f", median of {args.runs} runs")
         for what, (_, out) in tables.items():
             csv = out / "trace.csv"
@@ -74,7 +77,13 @@ def main():
                 print(f"  pandas.read_csv          {w:7.3f} s {c:7.3f} s   {mb / w:4.0f} MB/s   pandas / painleve: wall {w / ours[0]:.2f}, CPU {c / ours[1]:.2f}")
             if reference_read_csv is not None:
                 w, c = median_s(lambda: reference_read_csv(csv), max(1, args.runs // 3))
-                print(f"  former Python reader     {w:7.3f} s {c:7.3f} s   former / painleve: wall {w / ours[0]:.0f}")
+                print(f"  Python csv reference     {w:7.3f} s {c:7.3f} s   reference / painleve: wall {w / ours[0]:.0f}")
+            arrow = Path(str(out) + "-arrow") / "trace.arrow"
+            ours = median_s(lambda: painleve.read_arrow(arrow), args.runs)
+            print(f"  painleve.read_arrow      {ours[0]:7.3f} s {ours[1]:7.3f} s   ({arrow.stat().st_size / 1e6:.1f} MB)")
+            if pd is not None:
+                w, c = median_s(lambda: pd.read_feather(arrow), args.runs)
+                print(f"  pandas.read_feather      {w:7.3f} s {c:7.3f} s   pandas / painleve: wall {w / ours[0]:.2f}, CPU {c / ours[1]:.2f}")
 
 if __name__ == "__main__":
     main()

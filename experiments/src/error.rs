@@ -32,6 +32,9 @@ pub enum Error {
         /// The OS error.
         source: std::io::Error,
     },
+    /// A table file cannot be read (a CSV file that is not the table it names): its message.
+    #[error(transparent)]
+    Table(tables::Error),
     /// The board refused a bring-up request, or a bring-up check failed.
     #[error("{0}")]
     Board(String),
@@ -61,11 +64,12 @@ pub enum Error {
 }
 
 /// A table file that cannot be written or read ([`tables::Error`]): the same
-/// message as the [`Error::Io`] it becomes.
+/// message, as the [`Error::Io`] it becomes (or [`Error::Table`]).
 impl From<tables::Error> for Error {
     fn from(e: tables::Error) -> Self {
         match e {
             tables::Error::Io { path, source } => Self::Io { path, source },
+            other => Self::Table(other),
         }
     }
 }

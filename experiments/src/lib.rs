@@ -32,6 +32,25 @@ pub mod zmax;
 pub use done::Done;
 pub use error::Error;
 
+/// The declarations of the tables the project writes as CSV (the CSV reader
+/// matches a file's header against them: `painleve.read_csv`, `painleve.load`):
+/// `trace.csv` and `events.csv` of `simulate`, `trace.csv` of `run` and `pil`,
+/// `sweep.csv` and `runs.csv`, `section.csv`, `classes.csv`, `zmax.csv`,
+/// `trials.csv`, `sensitivity.csv` and `modes.csv`. Each header names one table
+/// (tested).
+pub const DECLARED: &[tables::Declaration] = &[
+    tables::Declaration::of::<simulate::summary::TraceRow>(),
+    tables::Declaration::of::<simulate::summary::EventRow>(),
+    tables::Declaration::of::<rig::record::PeriodRecord>(),
+    tables::Declaration::of::<analyses::sweep::run::RunRow>(),
+    tables::Declaration::of::<poincare::summary::SectionRow>(),
+    tables::Declaration::of::<poincare::summary::ClassRow>(),
+    tables::Declaration::of::<zmax::summary::ZmaxRow>(),
+    tables::Declaration::of::<zmax::summary::TrialRow>(),
+    tables::Declaration::of::<analyses::sensitivity::Row>(),
+    tables::Declaration::of::<modes::summary::CsvRow>(),
+];
+
 /// A rayon pool of `threads` worker threads, for an experiment's runs.
 ///
 /// # Errors
@@ -41,4 +60,17 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool, Error> {
         .num_threads(threads)
         .build()
         .map_err(|e| Error::bad_input(format!("cannot start {threads} worker threads: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    /// No two tables the project writes have the same header, so a file's header
+    /// names its declaration.
+    #[test]
+    fn each_header_names_one_declaration() {
+        for (i, d) in super::DECLARED.iter().enumerate() {
+            assert!(super::DECLARED[..i].iter().all(|e| e.names != d.names), "{:?}", d.names);
+            assert_eq!(d.names.len(), d.kinds.len());
+        }
+    }
 }

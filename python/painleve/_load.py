@@ -44,34 +44,29 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
     file's column order, units as the CLI writes them (SI; see each function's
     docstring for its columns).
 
-    Each column is typed from its cells (the typing rule, the same for Arrow):
+    Each column has the type the CLI declares for it (the file's header names its
+    table; :func:`painleve._painleve.declared_tables` lists them): ``float64`` for
+    a float (an empty cell, an absent optional value, is NaN; an optional count
+    such as ``classes.csv``'s ``period`` is ``float64`` too), ``int64`` for an
+    integer, ``bool`` for a flag, and text (a NumPy ``str`` array, ``""`` for an
+    empty cell) for text and named choices. Every float has the exact bits of its
+    shortest round-trip digits. The same table read from its Arrow file
+    (:func:`read_arrow`) has the same columns, types and values.
 
-    - ``bool`` when every cell is ``true`` or ``false``;
-    - ``int64`` when every cell is an integer (``uint64`` when one is above
-      2**63 - 1 and none is negative);
-    - ``float64`` when every cell is a number or empty, an empty cell NaN (so an
-      integer column with an empty cell is ``float64``); every float has the
-      exact bits of its shortest round-trip digits (what Python's ``float`` reads);
-    - ``float64`` NaN when no cell holds a value: a column of empty cells, text
-      columns included, and every column of a file with a header and no rows
-      (a CSV cell carries no type);
-    - text (a NumPy ``str`` array, ``""`` for an empty cell) otherwise.
+    A file whose header is no table of the CLI is read with the types arrow-csv
+    infers (``int64``, ``float64``, ``bool``, text; a column without a value is
+    ``float64`` NaN, an integer column with an empty cell ``float64``, a flag
+    column with an empty cell text). An empty file is a table without columns.
 
-    These are ``pandas.read_csv``'s types for the CLI's files. Reading is done in
-    Rust (``tables::read``, in chunks of lines read and typed on
-    several threads, without the GIL; the float, integer and flag arrays are the
-    reader's memory, not copied): 40 to 60 times as fast as the former pure-Python
-    reader, and faster than ``pandas.read_csv`` on the CLI's traces (1.15 to 1.7
-    times its speed on a 300 000-row, 66 MB trace, 1.5 times on a 62 000-row one;
-    docs/python.md, "Reading tables"). An empty file is a table without columns;
-    blank lines are skipped.
+    Reading is done in Rust (the ``tables`` crate, with arrow-csv, without the
+    GIL); the float and integer arrays share the reader's Arrow memory (no copy).
 
     Raises:
         FileNotFoundError: ``path`` is not a file.
         PainleveError: the file is not a table the CLI writes: not UTF-8, ends
             inside a row (a file cut off while it was written), has a row with
-            another number of cells than its header, or names a column twice.
-            The message names the file and the line.
+            another number of cells than its header, a cell not of its column's
+            type, or names a column twice. The message names the file and the line.
     """
     p = _file(path)
     return _table(_read_csv(os.fspath(p)), p.stem)
@@ -81,20 +76,20 @@ def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
     """One Arrow IPC table the CLI wrote (``simulate --format arrow``:
     ``trace.arrow``, ``events.arrow``, Arrow IPC files; ``run`` and ``pil``
     ``--format arrow``: ``trace.arrow``, an Arrow IPC stream, whole batches of
-    one cut off), as a :class:`Table` of NumPy arrays of shape ``(nrows,)``
-    with the columns, types and values :func:`read_csv` gives for the same table
-    as CSV (floats with their exact bits; a text column is typed by
-    :func:`read_csv`'s rule, so one of empty strings is ``float64`` NaN, and
-    every column of a table without rows is an empty ``float64`` array). pandas
-    (``pandas.read_feather``, with pyarrow) and polars (``polars.read_ipc``;
-    ``polars.read_ipc_stream`` for a stream) read the same files directly, with
-    the file's own types.
+    one cut off), as a :class:`Table` of NumPy arrays of shape ``(nrows,)``,
+    each column of the file's own type: ``Float64`` as ``float64`` (its exact
+    bits), ``Int64`` as ``int64``, ``Boolean`` as ``bool``, ``Utf8`` as text
+    (a null as NaN or ``""``). For a table the CLI wrote these are the types
+    :func:`read_csv` gives its CSV. The float and integer arrays share the
+    reader's Arrow memory, not copied. pandas (``pandas.read_feather``, with
+    pyarrow) and polars (``polars.read_ipc``; ``polars.read_ipc_stream`` for a
+    stream) read the same files directly.
 
     Raises:
         FileNotFoundError: ``path`` is not a file.
         PainleveError: the file cannot be read, is not an Arrow IPC file (or was
             cut off before its footer), or holds a column of another type than
-            Float64, Int64, Boolean or Utf8.
+            Float64, Int64, Boolean or Utf8 (or a null integer or flag).
     """
     p = _file(path)
     return _table(_read_arrow(os.fspath(p)), p.stem)
@@ -156,8 +151,8 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     :func:`read_csv` gives for the same tables as CSV: floats with their exact
     bits (the file's JSON numbers are the CSV's shortest round-trip digits; a
     JSON ``null``, written for NaN and infinities, reads as NaN), integers as
-    ``int64``, flags as ``bool``, text as ``str`` (a text column whose cells are
-    all empty as NaN, as :func:`read_csv` reads it). Row ``k`` is the ``k``-th
+    ``int64``, flags as ``bool``, text as ``str`` (the types of the tables'
+    declarations, which the file's metadata records carry). Row ``k`` is the ``k``-th
     message of each of the table's channels; the columns' order comes from the
     file's ``painleve.table.<name>`` metadata records. A file cut off (a run
     killed while writing) gives its whole chunks, and of each table the rows
@@ -230,8 +225,6 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
                     out[col] = np.array([int(c) for c in cells], dtype=np.int64)
                 elif kind == "bool":
                     out[col] = np.array([bool(c) for c in cells], dtype=bool)
-                elif cells and all(c == "" for c in cells):
-                    out[col] = np.full(len(cells), np.nan)
                 else:
                     out[col] = np.array([str(c) for c in cells], dtype=str)
             except (KeyError, TypeError, ValueError) as e:

@@ -40,13 +40,16 @@ def cli_defaults(command: str) -> Dict[str, List[str]]:
     """``{long option: [default values as the CLI shows them]}`` of a command."""
 def default_scenario_toml() -> str:
     """The embedded default scenario's TOML text."""
+def declared_tables() -> List[Tuple[List[str], List[str]]]:
+    """The declarations of the tables the CLI writes as CSV: ``(names, kinds)`` each, kinds ``f64``, ``int``, ``bool``, ``str``."""
 def read_arrow(path: str) -> Dict[str, Any]:
-    """An Arrow IPC file or stream as ``{column: array}``, typed as its CSV reads (text as in :func:`read_csv`)."""
+    """An Arrow IPC file or stream as ``{column: array}``, each column of the file's type (text as in :func:`read_csv`)."""
 def read_csv(path: str) -> Dict[str, Any]:
-    """A CSV table as ``{column: array}`` in the file's order, each column typed from its cells:
-    float64, int64, uint64 or bool arrays of shape ``(nrows,)``, a text column as ``(values, codes)``
-    (its distinct cells, a list of ``str``, and a uint32 array of each row's index into them).
-    Raises ``PainleveError`` (exit code 2) naming the file and line for a file the CLI did not write whole."""
+    """A CSV table as ``{column: array}`` in the file's order, of its declaration's types (a table the CLI
+    writes; else arrow-csv's inferred types): float64, int64 or bool arrays of shape ``(nrows,)``, a text
+    column as ``(values, codes)`` (its distinct cells, a list of ``str``, and a uint32 array of each row's
+    index into them). Raises ``PainleveError`` (exit code 2) naming the file and line for a file the CLI did
+    not write whole."""
 def toml_to_json(text: str) -> str:
     """A TOML document as JSON text."""
 def json_to_toml(text: str) -> str:

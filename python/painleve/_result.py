@@ -34,11 +34,12 @@ class Table(Dict[str, np.ndarray]):
     the same length, in the order of the CSV file the CLI writes for it (the
     table ``trace`` is ``trace.csv``).
 
-    Column types follow the CSV's cells: ``float64`` for numbers with a fraction
-    or an exponent (NaN for an empty cell), ``int64`` for integer counts,
-    ``bool`` for ``true``/``false``, NumPy ``str`` arrays for text. An integer
-    column with an empty cell is ``float64`` with NaN there, and a column whose
-    cells are all empty is ``float64`` NaN (as ``pandas.read_csv`` reads them).
+    Column types are the table's declaration's, whatever the cells: ``float64``
+    for numbers (NaN for an empty cell or an absent optional value; an optional
+    count is ``float64`` too), ``int64`` for integer counts, ``bool`` for flags,
+    NumPy ``str`` arrays for text and named choices (``""`` for an empty cell).
+    A table computed in process, read from the CLI's CSV and from its Arrow file
+    has the same columns, types and values.
     Units are SI (s, m, m/s, N, N m, rad, rad/s) unless a column's name says
     otherwise (``theta1_deg``); each function's docstring lists its columns.
     """

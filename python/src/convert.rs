@@ -11,7 +11,7 @@ use pyo3::{
 use serde::Serialize;
 use std::collections::HashMap;
 
-use tables::{Column, ColumnRows, Table};
+use tables::{Column, ColumnRows, Declared, Table};
 
 /// Any serialisable value as Python objects, through its JSON text (what the
 /// CLI writes to its JSON files, in its fields' order), read by Python's `json`.
@@ -20,8 +20,8 @@ pub fn to_py<'py, T: Serialize + ?Sized>(py: Python<'py>, v: &T) -> PyResult<Bou
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// A table as `{column: array}`: float64, int64, uint64 or bool NumPy arrays, and
-/// lists of `str` for text columns (the Python layer makes them NumPy string arrays).
+/// A table as `{column: array}`: float64, int64 or bool NumPy arrays, and lists
+/// of `str` for text columns (the Python layer makes them NumPy string arrays).
 pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (name, col) in t.columns {
@@ -30,13 +30,12 @@ pub fn table_to_py<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict
     Ok(d)
 }
 
-/// A column as a NumPy array of shape `(n,)` (float64, int64, uint64 or bool; the
+/// A column as a NumPy array of shape `(n,)` (float64, int64 or bool; the
 /// `Vec` becomes the array's memory, no copy), or a list of `str` for text.
 pub fn column_to_py<'py>(py: Python<'py>, col: Column) -> PyResult<Bound<'py, PyAny>> {
     Ok(match col {
         Column::F64(v) => PyArray1::from_vec(py, v).into_any(),
         Column::I64(v) => PyArray1::from_vec(py, v).into_any(),
-        Column::U64(v) => PyArray1::from_vec(py, v).into_any(),
         Column::Bool(v) => PyArray1::from_vec(py, v).into_any(),
         Column::Str(v) => {
             // One Python string per distinct value (a mode, a kind: a few per
@@ -48,8 +47,12 @@ pub fn column_to_py<'py>(py: Python<'py>, col: Column) -> PyResult<Bound<'py, Py
     })
 }
 
-/// Rows of a type that derives `serde::Serialize` as a table dict ([`Table::of_rows`], [`table_to_py`]).
-pub fn rows_to_py<'py, 'a, T: Serialize + 'a>(py: Python<'py>, rows: impl IntoIterator<Item = &'a T>) -> PyResult<Bound<'py, PyDict>> {
+/// Rows of a type that declares its columns and derives `serde::Serialize` as a
+/// table dict of the declared types ([`Table::of_rows`], [`table_to_py`]).
+pub fn rows_to_py<'py, 'a, T: Declared + Serialize + 'a>(
+    py: Python<'py>,
+    rows: impl IntoIterator<Item = &'a T>,
+) -> PyResult<Bound<'py, PyDict>> {
     let t = Table::of_rows(rows).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     table_to_py(py, t)
 }

@@ -9,6 +9,7 @@ from conftest import cli
 
 
 def test_read_csv_types(tmp_path):
+    # A file of no table of the CLI: arrow-csv's inferred types.
     p = tmp_path / "t.csv"
     p.write_text("a,b,c,d,e,f,g\n1,1.5,true,x,,2,\n2,NaN,false,,,,\n")
     t = painleve.read_csv(p)

@@ -79,8 +79,7 @@ def assert_equals_csv(messages, csv_table, topics):
         want = csv_table[col]
         if want.dtype.kind == "f":
             got = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
-            if not all(c == "" for c in cells):  # an all-empty text column reads as NaN from CSV
-                assert np.array_equal(got.view(np.int64), want.view(np.int64)), col
+            assert np.array_equal(got.view(np.int64), want.view(np.int64)), col
         else:
             assert list(cells) == want.tolist(), col
     grouped = {k for tp in topics for k in messages[tp][0][2]}

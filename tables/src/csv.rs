@@ -126,15 +126,17 @@ fn end_record(buf: &mut Vec<u8>, n_fields: usize) {
     }
 }
 
-/// Implements [`CsvRow`] and [`crate::ColumnRows`] for a struct from its
+/// Declares a long table's row type ([`crate::Declared`], as [`crate::declare!`])
+/// and implements [`CsvRow`] and [`crate::ColumnRows`] for it from the same
 /// fields, each with its kind: `f64`, `str` (a `&str` or `String` field), `bool`,
-/// `int` (an integer that converts to `i64` without loss). The CSV header and
-/// the columns (Arrow, NumPy) list the same columns in the same order.
+/// `int` (an integer that converts to `i64` without loss). The CSV header, the
+/// columns (Arrow, NumPy) and the MCAP groups list the same columns in the same order.
 #[macro_export]
 macro_rules! csv_row {
     ($ty:ty { $($field:ident : $kind:ident),+ $(,)? }) => {
+        $crate::declare!($ty { $($field : $kind),+ });
         impl $crate::csv::CsvRow for $ty {
-            const HEADER: &'static [&'static str] = &[$(stringify!($field)),+];
+            const HEADER: &'static [&'static str] = <$ty as $crate::Declared>::NAMES;
             #[inline]
             fn push_fields(&self, buf: &mut Vec<u8>) {
                 $(
@@ -144,17 +146,11 @@ macro_rules! csv_row {
             }
         }
         impl $crate::ColumnRows for $ty {
-            const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
-            const KINDS: &'static [$crate::Kind] = &[$($crate::csv_row!(@kind $kind)),+];
             fn columns(rows: &[Self]) -> Vec<$crate::Column> {
                 vec![$($crate::csv_row!(@column rows, $kind, $field)),+]
             }
         }
     };
-    (@kind f64) => { $crate::Kind::F64 };
-    (@kind str) => { $crate::Kind::Str };
-    (@kind bool) => { $crate::Kind::Bool };
-    (@kind int) => { $crate::Kind::Int };
     (@column $rows:ident, f64, $f:ident) => { $crate::Column::F64($rows.iter().map(|r| r.$f).collect()) };
     (@column $rows:ident, str, $f:ident) => { $crate::Column::Str($rows.iter().map(|r| -> String { (&*r.$f).to_string() }).collect()) };
     (@column $rows:ident, bool, $f:ident) => { $crate::Column::Bool($rows.iter().map(|r| r.$f).collect()) };

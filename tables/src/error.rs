@@ -16,6 +16,18 @@ pub enum Error {
         /// The OS error, or what is wrong with the file.
         source: std::io::Error,
     },
+    /// A CSV table cannot be read ([`crate::read`]): the file, the line where it
+    /// goes wrong when known (1-based; else it is in `message` as arrow-csv words
+    /// it, or the file as a whole is wrong), and what is wrong.
+    #[error("cannot read {}: {}{message}", path.display(), line.map(|l| format!("line {l}: ")).unwrap_or_default())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The line where it goes wrong (1-based), when this crate found it.
+        line: Option<u64>,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 impl Error {

@@ -1,15 +1,17 @@
-//! The project's tables, one layer for every format: rows become columns once
-//! ([`Table`], [`Column`]), and the Arrow files ([`arrow`]) and the Python
-//! package's NumPy arrays read those columns; CSV ([`csv`]) is written row by row
-//! from the same row types, with the same columns in the same order; MCAP
-//! ([`mcap`]) splits a table's columns into signal groups, a channel each.
+//! The project's tables, one layer for every format. Each row type declares its
+//! table's columns once ([`declared`]: names and kinds); from that declaration
+//! rows become typed columns ([`Table`], [`Column`]), CSV is written row by row
+//! ([`csv`], the `csv` crate's bytes), Arrow IPC files are written and read
+//! ([`arrow`], the declaration's schema), MCAP files split a table's columns into
+//! signal groups, a channel each ([`mcap`]), and a CSV file is read back with
+//! the declared types ([`read`], by arrow-csv).
 //!
 //! Two ways from rows to a [`Table`]: the long tables' row types (`trace`,
-//! `events`, the closed-loop trace) declare their columns with [`csv_row!`]
-//! ([`ColumnRows`], typed, no per-cell dispatch); any other row type that derives
-//! `serde::Serialize` goes through [`Table::of_rows`] ([`rows`], the cells the
-//! `csv` crate would write). [`read`] reads a CSV table back, with the column
-//! types a reader of the file sees (and gives an Arrow table the same types).
+//! `events`, the closed-loop trace) fill their columns field by field
+//! ([`csv_row!`], [`ColumnRows`], no per-cell dispatch); the other row types
+//! derive `serde::Serialize` and declare their columns ([`declare!`]), and go
+//! through [`Table::of_rows`] ([`rows`], the cells the `csv` crate writes, each
+//! in its declared column). The two give the same table (tested).
 //!
 //! Feature `files` (on by default): the Arrow and MCAP files and the CSV reader.
 //! Without it the crate holds the declarations, the rows-to-columns layer and the
@@ -21,6 +23,7 @@
 #[cfg(feature = "files")]
 pub mod arrow;
 pub mod csv;
+pub mod declared;
 pub mod error;
 pub mod mcap;
 #[cfg(feature = "files")]
@@ -30,6 +33,7 @@ pub mod rows;
 pub use error::Error;
 use serde::Serialize;
 
+pub use declared::{Declaration, Declared, Kind};
 pub use rows::{ColumnError, TableBuilder};
 
 /// The values of one column: a table's cells of one field, typed.
@@ -39,8 +43,6 @@ pub enum Column {
     F64(Vec<f64>),
     /// Signed integers.
     I64(Vec<i64>),
-    /// Unsigned integers too large for `i64`.
-    U64(Vec<u64>),
     /// Booleans.
     Bool(Vec<bool>),
     /// Strings (`""` for empty cells).
@@ -53,7 +55,6 @@ impl Column {
         match self {
             Self::F64(v) => v.len(),
             Self::I64(v) => v.len(),
-            Self::U64(v) => v.len(),
             Self::Bool(v) => v.len(),
             Self::Str(v) => v.len(),
         }
@@ -65,29 +66,12 @@ impl Column {
     }
 }
 
-/// The type of a column declared by [`csv_row!`]: `f64`, `str` (a `&str` or
-/// `String` field), `bool`, `int` (an integer that converts to `i64` without loss).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    /// [`Column::F64`].
-    F64,
-    /// [`Column::Str`].
-    Str,
-    /// [`Column::Bool`].
-    Bool,
-    /// [`Column::I64`].
-    Int,
-}
-
-/// A row type whose columns are declared field by field ([`csv_row!`]
-/// implements it with [`csv::CsvRow`], from the same field list, so the CSV and
-/// the columns agree in names and order).
-pub trait ColumnRows: Sized {
-    /// The column names, in order (the struct's field names).
-    const NAMES: &'static [&'static str];
-    /// The columns' kinds, in the same order.
-    const KINDS: &'static [Kind];
-    /// The columns of `rows`, in [`ColumnRows::NAMES`]' order; each holds `rows.len()` values.
+/// A row type whose columns are filled field by field, typed, without serde
+/// ([`csv_row!`] implements it with [`csv::CsvRow`] and [`Declared`], from the
+/// same field list, so the CSV and the columns agree in names and order).
+pub trait ColumnRows: Declared + Sized {
+    /// The columns of `rows`, in [`Declared::NAMES`]' order, of [`Declared::KINDS`];
+    /// each holds `rows.len()` values.
     fn columns(rows: &[Self]) -> Vec<Column>;
 }
 
@@ -99,28 +83,26 @@ pub struct Table {
 }
 
 impl Table {
-    /// The table of `rows` of a type that derives `serde::Serialize` (a flat
-    /// struct of scalars, `Option`s and unit enum variants): the cells the `csv`
-    /// crate would write, with the empty-cell rules of [`rows`].
+    /// The table of `rows` of a type that declares its columns ([`Declared`]) and
+    /// derives `serde::Serialize` (a flat struct of scalars, `Option`s and unit
+    /// enum variants): the cells the `csv` crate would write, each in its declared
+    /// column ([`rows`]: NaN for an empty float cell, `""` for an empty text cell).
     ///
     /// # Errors
-    /// [`ColumnError`] when a row is not a flat struct of scalars, or rows differ in their fields.
-    pub fn of_rows<'a, T: Serialize + 'a>(rows: impl IntoIterator<Item = &'a T>) -> Result<Self, ColumnError> {
-        let mut t = TableBuilder::default();
+    /// [`ColumnError`] when a row is not a flat struct of scalars, its fields are
+    /// not the declared columns, or a cell does not fit its column's kind.
+    pub fn of_rows<'a, T: Declared + Serialize + 'a>(rows: impl IntoIterator<Item = &'a T>) -> Result<Self, ColumnError> {
+        let mut t = TableBuilder::new(Declaration::of::<T>());
         for r in rows {
             t.push(r)?;
         }
         Ok(t.finish())
     }
 
-    /// The table of `rows` of a type that declares its columns ([`ColumnRows`]),
-    /// with the empty-cell rule of [`Table::of_rows`] (a text column whose cells
-    /// are all empty is a float column of NaN, what a reader of the CSV sees), so
-    /// the two paths give the same table (tested).
+    /// The table of `rows` of a type whose columns are filled without serde
+    /// ([`ColumnRows`]): the same table as [`Table::of_rows`] (tested).
     pub fn of_columns<T: ColumnRows>(rows: &[T]) -> Self {
-        let empty_text = |c: &Column| matches!(c, Column::Str(v) if !v.is_empty() && v.iter().all(String::is_empty));
-        let columns = T::columns(rows).into_iter().map(|c| if empty_text(&c) { Column::F64(vec![f64::NAN; c.len()]) } else { c });
-        Self { columns: T::NAMES.iter().map(|n| n.to_string()).zip(columns).collect() }
+        Self { columns: T::NAMES.iter().map(|n| n.to_string()).zip(T::columns(rows)).collect() }
     }
 
     /// The number of rows (0 for a table without columns).

@@ -1,29 +1,21 @@
-//! Tables by column from rows that derive `serde::Serialize`: the experiments' row
-//! types (`trace.csv`, `sweep.csv`, ...) turned into one typed vector per column,
-//! in the rows' field order, with the cells the CSV would hold.
+//! Tables by column from rows that derive `serde::Serialize`: the project's row
+//! types written through serde (`sweep.csv`, `section.csv`, ...) turned into one
+//! typed vector per column, in the rows' field order, each column of the kind its
+//! declaration gives ([`crate::Declared`]).
 //!
 //! A cell is what the `csv` crate writes for the field: a float, an integer, a
-//! bool, a string, or empty (`None`). Per column the type is that of its cells;
-//! the rules for empty cells are those of `painleve.load` reading the CSV (and of
-//! pandas' `read_csv`): an integer column with an empty cell becomes a float
-//! column with NaN there, a column whose cells are all empty is a float column of
-//! NaN, a string column keeps `""`. So a table computed in process and the same
-//! table read back from the CLI's CSV have the same columns, types and values.
+//! bool, a string, or empty (`None`). It goes into its column by the column's
+//! kind: a float column takes numbers (an integer as its float) and an empty
+//! cell as NaN; an integer column integers that fit `i64`; a flag column flags;
+//! a text column text and an empty cell as `""`. Any other cell, or a row whose
+//! fields are not the declared columns, is a [`ColumnError`] (a bug of the
+//! declaration, found by the tests that tabulate each row type).
 
 use std::fmt;
 
 use serde::ser::{self, Impossible, Serialize, SerializeStruct, Serializer};
 
-use super::Column;
-
-/// A column being filled: its type is fixed by its first non-empty cell.
-#[derive(Debug, Clone)]
-enum Building {
-    /// Only empty cells so far (their count).
-    Empty(usize),
-    /// The typed values, with the rows whose cell was empty.
-    Typed(Column, Vec<usize>),
-}
+use crate::{Column, Declaration, Kind, Table};
 
 /// One cell, as the `csv` crate would write it.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,16 +28,17 @@ enum Cell {
     Empty,
 }
 
-/// A table being built from rows: named columns of equal length, in the rows'
-/// field order ([`super::Table`] when finished).
-#[derive(Debug, Clone, Default)]
+/// A table being built from rows of a declared type: named columns of equal
+/// length, of the declared kinds ([`Table`] when finished).
+#[derive(Debug, Clone)]
 pub struct TableBuilder {
-    names: Vec<&'static str>,
-    columns: Vec<Building>,
-    rows: usize,
+    declaration: Declaration,
+    columns: Vec<Column>,
+    cells: Vec<(&'static str, Cell)>,
 }
 
-/// Why a row cannot be a table row (a nested field, a map): a bug of the row type.
+/// Why a row cannot be a table row (a nested field, a map, a cell its declared
+/// column cannot hold): a bug of the row type or of its declaration.
 #[derive(Debug, Clone)]
 pub struct ColumnError(String);
 
@@ -64,166 +57,86 @@ impl ser::Error for ColumnError {
 }
 
 impl TableBuilder {
-    /// A table of the `rows`.
-    ///
-    /// # Errors
-    /// [`ColumnError`] when a row is not a flat struct of scalars.
-    pub fn of<'a, T: Serialize + 'a>(rows: impl IntoIterator<Item = &'a T>) -> Result<Self, ColumnError> {
-        let mut t = Self::default();
-        for r in rows {
-            t.push(r)?;
-        }
-        Ok(t)
+    /// An empty table of the columns `declaration` declares.
+    pub fn new(declaration: Declaration) -> Self {
+        let columns = declaration
+            .kinds
+            .iter()
+            .map(|k| match k {
+                Kind::F64 => Column::F64(Vec::new()),
+                Kind::Int => Column::I64(Vec::new()),
+                Kind::Bool => Column::Bool(Vec::new()),
+                Kind::Str => Column::Str(Vec::new()),
+            })
+            .collect();
+        Self { declaration, columns, cells: Vec::with_capacity(declaration.names.len()) }
     }
 
     /// Appends one row.
     ///
     /// # Errors
-    /// [`ColumnError`] when the row is not a flat struct of scalars, or its fields
-    /// differ from the first row's.
+    /// [`ColumnError`] when the row is not a flat struct of scalars, its fields are
+    /// not the declared columns (in order), or a cell does not fit its column's kind.
     pub fn push<T: Serialize + ?Sized>(&mut self, row: &T) -> Result<(), ColumnError> {
-        let mut cells = Vec::with_capacity(self.names.len());
-        row.serialize(RowSerializer { cells: &mut cells })?;
-        if self.rows == 0 && self.names.is_empty() {
-            self.names = cells.iter().map(|(n, _)| *n).collect();
-            self.columns = vec![Building::Empty(0); cells.len()];
+        self.cells.clear();
+        row.serialize(RowSerializer { cells: &mut self.cells })?;
+        let names = self.declaration.names;
+        if self.cells.len() != names.len() || self.cells.iter().zip(names).any(|((a, _), b)| a != b) {
+            let fields: Vec<&str> = self.cells.iter().map(|(n, _)| *n).collect();
+            return Err(ColumnError(format!("the row's fields {fields:?} are not the declared columns {names:?}")));
         }
-        if cells.len() != self.names.len() || cells.iter().zip(&self.names).any(|((a, _), b)| a != b) {
-            return Err(ColumnError("rows of different fields in one table".into()));
+        // Checked before any column grows, so a refused row leaves the table as it was.
+        for ((name, cell), column) in self.cells.iter().zip(&self.columns) {
+            if !fits(column, cell) {
+                return Err(ColumnError(format!("field `{name}`: {cell:?} in a column declared {}", kind_of(column).name())));
+            }
         }
-        for ((_, cell), col) in cells.into_iter().zip(&mut self.columns) {
-            push_cell(col, cell, self.rows);
+        for ((_, cell), column) in self.cells.drain(..).zip(&mut self.columns) {
+            push_cell(column, cell);
         }
-        self.rows += 1;
         Ok(())
     }
 
-    /// The finished table: the columns, named, in field order, with the empty-cell
-    /// rules applied.
-    pub fn finish(self) -> super::Table {
-        super::Table { columns: self.names.into_iter().zip(self.columns).map(|(n, c)| (n.to_string(), finish(c))).collect() }
+    /// The finished table: the declared columns, in order.
+    pub fn finish(self) -> Table {
+        Table { columns: self.declaration.names.iter().map(|n| n.to_string()).zip(self.columns).collect() }
     }
 }
 
-fn push_cell(col: &mut Building, cell: Cell, row: usize) {
-    match col {
-        Building::Empty(n) => {
-            if cell == Cell::Empty {
-                *n += 1;
-                return;
-            }
-            let empties: Vec<usize> = (0..*n).collect();
-            let column = match &cell {
-                Cell::F64(_) => Column::F64(vec![f64::NAN; *n]),
-                Cell::I64(_) => Column::I64(vec![0; *n]),
-                Cell::U64(_) => Column::U64(vec![0; *n]),
-                Cell::Bool(_) => Column::Bool(vec![false; *n]),
-                Cell::Str(_) | Cell::Empty => Column::Str(vec![String::new(); *n]),
-            };
-            *col = Building::Typed(column, empties);
-            push_cell(col, cell, row);
-        }
-        Building::Typed(column, empties) => {
-            match (&mut *column, cell) {
-                (Column::F64(v), Cell::F64(x)) => v.push(x),
-                (Column::F64(v), Cell::I64(x)) => v.push(x as f64),
-                (Column::F64(v), Cell::U64(x)) => v.push(x as f64),
-                (Column::F64(v), Cell::Empty) => {
-                    v.push(f64::NAN);
-                    empties.push(row);
-                }
-                (Column::I64(v), Cell::I64(x)) => v.push(x),
-                (Column::I64(v), Cell::U64(x)) => match i64::try_from(x) {
-                    Ok(x) => v.push(x),
-                    Err(_) => {
-                        let mut u: Vec<u64> = v.iter().map(|&y| y as u64).collect();
-                        u.push(x);
-                        *column = Column::U64(u);
-                    }
-                },
-                (Column::U64(v), Cell::U64(x)) => v.push(x),
-                (Column::U64(v), Cell::I64(x)) => v.push(x as u64),
-                (Column::I64(v), Cell::Empty) => {
-                    v.push(0);
-                    empties.push(row);
-                }
-                (Column::U64(v), Cell::Empty) => {
-                    v.push(0);
-                    empties.push(row);
-                }
-                (Column::I64(v), Cell::F64(x)) => {
-                    let mut f: Vec<f64> = v.iter().map(|&y| y as f64).collect();
-                    for &i in empties.iter() {
-                        f[i] = f64::NAN;
-                    }
-                    f.push(x);
-                    *column = Column::F64(f);
-                }
-                (Column::Bool(v), Cell::Bool(x)) => v.push(x),
-                (Column::Bool(v), Cell::Empty) => {
-                    v.push(false);
-                    empties.push(row);
-                }
-                (Column::Str(v), Cell::Str(x)) => v.push(x),
-                (Column::Str(v), Cell::Empty) => {
-                    v.push(String::new());
-                    empties.push(row);
-                }
-                // Mixed types (not in any of the CLI's tables): the column becomes text.
-                (_, cell) => {
-                    let mut s = as_strings(column, empties);
-                    s.push(cell_text(&cell));
-                    *column = Column::Str(s);
-                }
-            }
-        }
-    }
-}
-
-fn cell_text(c: &Cell) -> String {
+/// The kind of a column being built.
+fn kind_of(c: &Column) -> Kind {
     match c {
-        Cell::F64(x) => x.to_string(),
-        Cell::I64(x) => x.to_string(),
-        Cell::U64(x) => x.to_string(),
-        Cell::Bool(x) => x.to_string(),
-        Cell::Str(s) => s.clone(),
-        Cell::Empty => String::new(),
+        Column::F64(_) => Kind::F64,
+        Column::I64(_) => Kind::Int,
+        Column::Bool(_) => Kind::Bool,
+        Column::Str(_) => Kind::Str,
     }
 }
 
-fn as_strings(c: &Column, empties: &[usize]) -> Vec<String> {
-    let mut s: Vec<String> = match c {
-        Column::F64(v) => v.iter().map(f64::to_string).collect(),
-        Column::I64(v) => v.iter().map(i64::to_string).collect(),
-        Column::U64(v) => v.iter().map(u64::to_string).collect(),
-        Column::Bool(v) => v.iter().map(bool::to_string).collect(),
-        Column::Str(v) => v.clone(),
-    };
-    for &i in empties {
-        s[i].clear();
-    }
-    s
+/// Whether `cell` goes into `column` (the rules of this module).
+fn fits(column: &Column, cell: &Cell) -> bool {
+    matches!(
+        (column, cell),
+        (Column::F64(_), Cell::F64(_) | Cell::I64(_) | Cell::U64(_) | Cell::Empty)
+            | (Column::I64(_), Cell::I64(_))
+            | (Column::Bool(_), Cell::Bool(_))
+            | (Column::Str(_), Cell::Str(_) | Cell::Empty)
+    )
 }
 
-/// The empty-cell rules: all empty gives NaN floats, integers with an empty cell
-/// become floats with NaN there, strings keep `""`; a string column whose cells are
-/// all empty is all NaN floats too (what a reader of the CSV sees).
-fn finish(b: Building) -> Column {
-    match b {
-        Building::Empty(n) => Column::F64(vec![f64::NAN; n]),
-        Building::Typed(Column::I64(v), empties) if !empties.is_empty() => Column::F64(with_nan(v.iter().map(|&x| x as f64), &empties)),
-        Building::Typed(Column::U64(v), empties) if !empties.is_empty() => Column::F64(with_nan(v.iter().map(|&x| x as f64), &empties)),
-        Building::Typed(Column::Str(v), _) if !v.is_empty() && v.iter().all(String::is_empty) => Column::F64(vec![f64::NAN; v.len()]),
-        Building::Typed(c, _) => c,
+/// Appends `cell` ([`fits`] checked) to `column`.
+fn push_cell(column: &mut Column, cell: Cell) {
+    match (column, cell) {
+        (Column::F64(v), Cell::F64(x)) => v.push(x),
+        (Column::F64(v), Cell::I64(x)) => v.push(x as f64),
+        (Column::F64(v), Cell::U64(x)) => v.push(x as f64),
+        (Column::F64(v), _) => v.push(f64::NAN),
+        (Column::I64(v), Cell::I64(x)) => v.push(x),
+        (Column::Bool(v), Cell::Bool(x)) => v.push(x),
+        (Column::Str(v), Cell::Str(x)) => v.push(x),
+        (Column::Str(v), _) => v.push(String::new()),
+        _ => {}
     }
-}
-
-fn with_nan(values: impl Iterator<Item = f64>, empties: &[usize]) -> Vec<f64> {
-    let mut v: Vec<f64> = values.collect();
-    for &i in empties {
-        v[i] = f64::NAN;
-    }
-    v
 }
 
 /// Serialises one row (a struct) into its named cells.
@@ -445,4 +358,69 @@ impl Serializer for CellSerializer {
         serialize_struct(&'static str, usize) -> Self::SerializeStruct,
         serialize_struct_variant(&'static str, u32, &'static str, usize) -> Self::SerializeStructVariant,
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{Column, Table};
+
+    #[derive(serde::Serialize)]
+    #[serde(rename_all = "snake_case")]
+    enum Mode {
+        Sliding,
+    }
+
+    #[derive(serde::Serialize)]
+    struct Row {
+        a: Option<f64>,
+        n: Option<usize>,
+        s: Option<&'static str>,
+        m: Mode,
+        k: u64,
+        f: bool,
+    }
+    crate::declare!(Row { a: f64, n: f64, s: str, m: str, k: int, f: bool });
+
+    #[test]
+    fn serde_rows_fill_their_declared_columns() {
+        let rows = [
+            Row { a: Some(1.5), n: Some(3), s: Some("x"), m: Mode::Sliding, k: 7, f: true },
+            Row { a: None, n: None, s: None, m: Mode::Sliding, k: 8, f: false },
+        ];
+        let t = Table::of_rows(&rows).unwrap();
+        let [(_, Column::F64(a)), (_, Column::F64(n)), (_, Column::Str(s)), (_, Column::Str(m)), (_, Column::I64(k)), (_, Column::Bool(f))] =
+            &t.columns[..]
+        else {
+            panic!("{:?}", t.columns)
+        };
+        assert_eq!((a[0], n[0], a[1].is_nan(), n[1].is_nan()), (1.5, 3.0, true, true));
+        assert_eq!((s, m, k, f), (&vec!["x".to_string(), String::new()], &vec!["sliding".to_string(); 2], &vec![7, 8], &vec![true, false]));
+        // No row: the declared columns, empty.
+        let t = Table::of_rows::<Row>(&[]).unwrap();
+        assert_eq!(t.columns.iter().map(|(n, c)| (n.as_str(), c.len())).collect::<Vec<_>>().len(), 6);
+        assert!(matches!(t.columns[4].1, Column::I64(_)));
+    }
+
+    #[derive(serde::Serialize)]
+    struct Wrong {
+        a: &'static str,
+        b: Option<u32>,
+    }
+    crate::declare!(Wrong { a: f64, b: int });
+
+    #[derive(serde::Serialize)]
+    struct Renamed {
+        a: f64,
+    }
+    crate::declare!(Renamed { b: f64 });
+
+    #[test]
+    fn a_cell_its_column_cannot_hold_or_other_fields_are_refused() {
+        let e = Table::of_rows(&[Wrong { a: "x", b: Some(1) }]).unwrap_err().to_string();
+        assert!(e.contains("field `a`") && e.contains("declared f64"), "{e}");
+        let e = Table::of_rows(&[Wrong { a: "x", b: None }]).unwrap_err().to_string();
+        assert!(e.contains("field `a`"), "{e}");
+        let e = Table::of_rows(&[Renamed { a: 1.0 }]).unwrap_err().to_string();
+        assert!(e.contains("not the declared columns"), "{e}");
+    }
 }

@@ -200,6 +200,9 @@ pub struct Row {
     pub outcome: String,
 }
 
+// `sensitivity.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(Row { choice: str, value: str, is_default: bool, result: str, outcome: str });
+
 impl Study {
     /// The table: one row per choice and headline result computed under it.
     pub fn rows(&self) -> Vec<Row> {
@@ -319,6 +322,15 @@ pub(super) fn main_interval(speeds: &[f64], flags: &[bool]) -> (Option<[f64; 2]>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A row of `sensitivity.csv` fills its declared columns (serde's fields are the declaration's).
+    #[test]
+    fn a_row_fills_its_declared_columns() {
+        let row = Row { choice: "mu", value: "0.6".into(), is_default: true, result: "critical_mu_x0a".into(), outcome: "none".into() };
+        let t = tables::Table::of_rows(&[row]).unwrap();
+        assert_eq!(t.columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), <Row as tables::Declared>::NAMES);
+        assert!(matches!(&t.columns[1].1, tables::Column::Str(v) if v[0] == "0.6"), "text stays text");
+    }
 
     /// A limit a missed target sets reads as a missed target (issue 41), not as a
     /// lift-off limit; a lift-off limit reads as before.

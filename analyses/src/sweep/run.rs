@@ -215,6 +215,43 @@ pub struct RunRow {
     pub error: String,
 }
 
+// `runs.csv` and `sweep.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(RunRow {
+    index: int,
+    impact_law: str,
+    e_n: f64,
+    iwc: str,
+    mu: f64,
+    v_belt: f64,
+    ic: str,
+    outcome: str,
+    theta1_dot_over_threshold: bool,
+    theta1_dot_max: f64,
+    t_theta1_dot_max: f64,
+    lift_offs: int,
+    touchdowns: int,
+    impacts_without_collision: int,
+    z_n_max: f64,
+    tip_height_max: f64,
+    final_mode: str,
+    target_error_m: f64,
+    lift_offs_transient: int,
+    rhs_evaluations: int,
+    energy_gains: int,
+    newton_fallbacks: int,
+    poisson_fallbacks: int,
+    cone_violations: int,
+    zeno_stops: int,
+    jams: int,
+    integrator_failures: int,
+    ledger_violations: int,
+    belt_j: f64,
+    slip_j: f64,
+    ledger_residual_j: f64,
+    largest_event_belt_j: f64,
+    error: str,
+});
+
 /// Lift-offs in `c`: lift-off events (including impacts without collision into
 /// flight) and bounces.
 fn lift_offs(c: &Counters) -> u64 {

@@ -352,6 +352,10 @@ mod tests {
             error: String::new(),
         };
         let rows = [row(0, Outcome::Bouncing, 0), row(1, Outcome::Invalid, 1)];
+        // The rows fill their declared columns (the fields serde writes are the declaration's).
+        let t = tables::Table::of_rows(&rows).unwrap();
+        assert_eq!(t.columns.len(), <RunRow as tables::Declared>::NAMES.len());
+        assert!(matches!(&t.columns[7].1, tables::Column::Str(v) if v[1] == "invalid"), "{:?}", t.columns[7]);
         let r = results(&spec, &rows, 0);
         assert_eq!(r.invalid.len(), 1);
         assert_eq!((r.invalid[0].index, r.invalid[0].violations.as_str()), (1, "1 friction-cone violation"));

@@ -34,6 +34,20 @@ pub struct CsvRow {
     pub branch: Option<&'static str>,
 }
 
+// `modes.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(CsvRow {
+    theta1_rad: f64,
+    theta1_deg: f64,
+    theta1_dot: f64,
+    theta2_rad: f64,
+    b: f64,
+    p: f64,
+    z_r_dot: f64,
+    mode: str,
+    theta2_dot: f64,
+    branch: str,
+});
+
 /// `Some(x)` when `x` is finite: an empty cell for a quantity the point does not have.
 pub fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)

@@ -33,6 +33,19 @@ pub struct SectionRow {
     pub mode: &'static str,
 }
 
+// `section.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(SectionRow {
+    v_belt: f64,
+    t: f64,
+    theta1: f64,
+    theta1_deg: f64,
+    theta1_dot: f64,
+    theta2: f64,
+    theta2_dot: f64,
+    kind: str,
+    mode: str,
+});
+
 /// One row of `classes.csv`: a belt speed classified, with its validity counters.
 #[derive(Debug, Clone, Serialize)]
 pub struct ClassRow {
@@ -89,6 +102,36 @@ pub struct ClassRow {
     /// What the energy ledger leaves unexplained, J.
     pub ledger_residual_j: f64,
 }
+
+// `classes.csv`: the columns serde writes, declared; an optional count is a float (NaN when empty).
+tables::declare!(ClassRow {
+    v_belt: f64,
+    class: str,
+    period: f64,
+    n_crossings: int,
+    distinct_points: int,
+    lyapunov_per_crossing: f64,
+    lyapunov_per_s: f64,
+    lyapunov_std_error: f64,
+    lyapunov_iterations: f64,
+    lyapunov_collapsed: f64,
+    final_mode: str,
+    final_theta1: f64,
+    lift_offs: int,
+    touchdowns: int,
+    error: str,
+    wall_s: f64,
+    energy_gains: int,
+    newton_fallbacks: int,
+    poisson_fallbacks: int,
+    cone_violations: int,
+    zeno_stops: int,
+    integrator_failures: int,
+    ledger_violations: int,
+    belt_j: f64,
+    slip_j: f64,
+    ledger_residual_j: f64,
+});
 
 impl From<&PointResult> for ClassRow {
     fn from(r: &PointResult) -> Self {

@@ -306,13 +306,13 @@ mod tests {
     #[test]
     fn the_cli_tables_groups_hold_each_column_once() {
         use tables::{
-            ColumnRows,
+            Declared,
             mcap::{McapFile, McapRows},
         };
         fn check<T: McapRows>() {
             let mut grouped: Vec<&str> = T::GROUPS.iter().flat_map(|g| g.columns.iter().copied()).collect();
             grouped.sort_unstable();
-            let mut names: Vec<&str> = <T as ColumnRows>::NAMES.iter().copied().filter(|n| *n != "t").collect();
+            let mut names: Vec<&str> = <T as Declared>::NAMES.iter().copied().filter(|n| *n != "t").collect();
             names.sort_unstable();
             assert_eq!(grouped, names, "{}", T::TABLE);
             let dir = tempfile::tempdir().unwrap();

@@ -65,6 +65,32 @@ pub struct ZmaxRow {
     pub wall_s: f64,
 }
 
+// `zmax.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(ZmaxRow {
+    controller: str,
+    x0: str,
+    setting: str,
+    outcome: str,
+    z_t_sliding_m: f64,
+    error_at_limit_m: f64,
+    first_failing_m: f64,
+    stop_failing: str,
+    why_failing: str,
+    paper_z_t_sliding_m: f64,
+    tracking_outcome: str,
+    z_t_tracking_m: f64,
+    tracking_first_failing_m: f64,
+    tracking_stop_failing: str,
+    tracking_why_failing: str,
+    bracket_lo_m: f64,
+    bracket_hi_m: f64,
+    p_zero_end_m: f64,
+    theta1_fold_m: f64,
+    trials: int,
+    invalid_trials: int,
+    wall_s: f64,
+});
+
 /// The gains of `sil-host zmax`'s trials (paper eqs. 8 to 11), ideal and sampled alike.
 #[derive(Debug, Clone, Serialize)]
 pub struct ZmaxGains {
@@ -206,6 +232,31 @@ pub struct TrialRow {
     /// Validity: energy-ledger violations (docs/plant.md "The energy ledger").
     pub ledger_violations: u64,
 }
+
+// `trials.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
+tables::declare!(TrialRow {
+    controller: str,
+    x0: str,
+    setting: str,
+    target_z_t_m: f64,
+    stop: str,
+    slides_to_target: bool,
+    tracked: bool,
+    lift_offs: int,
+    impacts_without_collision: int,
+    first_lift_off_s: f64,
+    settle_error_m: f64,
+    failure: str,
+    simulated_s: f64,
+    wall_s: f64,
+    energy_gains: int,
+    newton_fallbacks: int,
+    poisson_fallbacks: int,
+    cone_violations: int,
+    zeno_stops: int,
+    integrator_failures: int,
+    ledger_violations: int,
+});
 
 impl From<&Trial> for TrialRow {
     fn from(t: &Trial) -> Self {

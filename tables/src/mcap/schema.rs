@@ -1,6 +1,5 @@
 //! The JSON Schemas of an MCAP file's channels (schema encoding `jsonschema`):
-//! each group's fields, their types and, in the descriptions, their units; and
-//! the kind names of the tables' metadata records.
+//! each group's fields, their types and, in the descriptions, their units.
 
 use super::McapGroup;
 use crate::Kind;
@@ -46,16 +45,6 @@ pub(super) fn describe(name: &str) -> &str {
         "contact_work" => "work of the contact impulse, J",
         "resolution" => "how an impact was resolved (empty when not an impact)",
         other => other,
-    }
-}
-
-/// The name of a column kind in the metadata record (`f64`, `str`, `bool`, `int`).
-pub(super) fn kind_name(k: Kind) -> &'static str {
-    match k {
-        Kind::F64 => "f64",
-        Kind::Str => "str",
-        Kind::Bool => "bool",
-        Kind::Int => "int",
     }
 }
 

@@ -14,10 +14,7 @@ use mcap::{
     records::{MessageHeader, Metadata},
 };
 
-use super::{
-    McapRows, STREAM_CHUNK_ROWS,
-    schema::{kind_name, schema_json},
-};
+use super::{McapRows, STREAM_CHUNK_ROWS, schema::schema_json};
 use crate::{Column, error::Error};
 
 /// The zstd level of the chunks: 1, the fastest (a 300 s `simulate`: 45 MB in 1.0 s,
@@ -112,7 +109,7 @@ impl McapFile {
         let join = |v: &mut dyn Iterator<Item = &str>| v.collect::<Vec<_>>().join(",");
         let metadata = BTreeMap::from([
             ("columns".to_string(), join(&mut T::NAMES.iter().copied())),
-            ("kinds".to_string(), join(&mut T::KINDS.iter().map(|k| kind_name(*k)))),
+            ("kinds".to_string(), join(&mut T::KINDS.iter().map(|k| k.name()))),
             ("topics".to_string(), join(&mut T::GROUPS.iter().map(|g| g.topic))),
         ]);
         let name = format!("painleve.table.{}", T::TABLE);
@@ -217,7 +214,6 @@ fn push_value(buf: &mut Vec<u8>, c: &Column, i: usize) {
         Column::F64(v) if v[i].is_finite() => crate::csv::push_f64(buf, v[i]),
         Column::F64(_) => buf.extend_from_slice(b"null"),
         Column::I64(v) => buf.extend_from_slice(itoa::Buffer::new().format(v[i]).as_bytes()),
-        Column::U64(v) => buf.extend_from_slice(itoa::Buffer::new().format(v[i]).as_bytes()),
         Column::Bool(v) => buf.extend_from_slice(if v[i] { b"true" } else { b"false" }),
         // Writing a string into a Vec cannot fail.
         Column::Str(v) => serde_json::to_writer(&mut *buf, &v[i]).unwrap_or_default(),

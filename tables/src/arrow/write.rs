@@ -1,0 +1,131 @@
+//! Writing Arrow IPC files ([`ArrowFile`], `simulate`) and streams
+//! ([`ArrowStream`], `run` and `pil`) of a declared row type, a record batch at a time.
+
+use std::{fs::File, io::BufWriter, path::PathBuf, sync::Arc};
+
+use arrow_array::RecordBatch;
+use arrow_ipc::writer::{FileWriter, StreamWriter};
+use arrow_schema::Schema;
+
+use super::{BATCH_ROWS, array_of, arrow_err, schema};
+use crate::{ColumnRows, Declaration, error::Error};
+
+/// An Arrow IPC file being written: rows are buffered and written a record
+/// batch of [`BATCH_ROWS`] at a time; [`ArrowFile::finish`] writes the last
+/// batch and the footer (a file without its footer is not an Arrow file:
+/// readers refuse it, so a run that fails before `finish` leaves no half table).
+pub struct ArrowFile<T: ColumnRows> {
+    path: PathBuf,
+    writer: FileWriter<BufWriter<File>>,
+    schema: Arc<Schema>,
+    pending: Vec<T>,
+}
+
+impl<T: ColumnRows> ArrowFile<T> {
+    /// Starts the Arrow IPC file `file` (at `path`, for error messages) with `T`'s schema.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the header cannot be written.
+    pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
+        let schema = Arc::new(schema(Declaration::of::<T>()));
+        let writer = FileWriter::try_new_buffered(file, &schema).map_err(arrow_err(&path))?;
+        Ok(Self { path, writer, schema, pending: Vec::with_capacity(BATCH_ROWS) })
+    }
+
+    /// Takes the rows of `rows` (leaving it empty, its capacity kept); writes a
+    /// record batch whenever [`BATCH_ROWS`] rows are waiting.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when writing fails.
+    pub fn push(&mut self, rows: &mut Vec<T>) -> Result<(), Error> {
+        for row in rows.drain(..) {
+            self.pending.push(row);
+            if self.pending.len() >= BATCH_ROWS {
+                self.write_pending()?;
+            }
+        }
+        Ok(())
+    }
+
+    fn write_pending(&mut self) -> Result<(), Error> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let batch = RecordBatch::try_new(self.schema.clone(), T::columns(&self.pending).into_iter().map(array_of).collect())
+            .map_err(arrow_err(&self.path))?;
+        self.writer.write(&batch).map_err(arrow_err(&self.path))?;
+        self.pending.clear();
+        Ok(())
+    }
+
+    /// Writes the rows still waiting, the footer, and closes the file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), Error> {
+        self.write_pending()?;
+        self.writer.finish().map_err(arrow_err(&self.path))?;
+        let path = self.path.clone();
+        let buffered = self.writer.into_inner().map_err(arrow_err(&path))?;
+        buffered.into_inner().map_err(|e| Error::Io { path, source: e.into_error() })?;
+        Ok(())
+    }
+}
+
+/// A table written as an Arrow IPC *stream* as a run produces it (`run` and `pil`
+/// with `--format arrow`): rows wait in memory until [`ArrowStream::push`] is told
+/// to write them, as one record batch, flushed to the operating system at once, so
+/// a process killed outright keeps every batch written before (a reader of the
+/// stream gets them; [`super::read_arrow`] reads a stream whose end marker is missing up to
+/// its last whole batch). The stream format is the file format without its footer:
+/// pandas (`pyarrow.ipc.open_stream`), polars (`polars.read_ipc_stream`) and
+/// `painleve.load` read it.
+pub struct ArrowStream<T: ColumnRows> {
+    path: PathBuf,
+    writer: StreamWriter<File>,
+    schema: Arc<Schema>,
+    pending: Vec<T>,
+}
+
+impl<T: ColumnRows> ArrowStream<T> {
+    /// Starts the stream `file` (at `path`, for error messages) with `T`'s schema.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the schema message cannot be written.
+    pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
+        let schema = Arc::new(schema(Declaration::of::<T>()));
+        let writer = StreamWriter::try_new(file, &schema).map_err(arrow_err(&path))?;
+        Ok(Self { path, writer, schema, pending: Vec::new() })
+    }
+
+    /// Adds `row`; with `write`, writes every waiting row as one record batch and
+    /// flushes it (the caller decides: `run` every 1 ms of wall time, like its CSV).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when writing fails.
+    pub fn push(&mut self, row: T, write: bool) -> Result<(), Error> {
+        self.pending.push(row);
+        if write { self.write_pending() } else { Ok(()) }
+    }
+
+    fn write_pending(&mut self) -> Result<(), Error> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let batch = RecordBatch::try_new(self.schema.clone(), T::columns(&self.pending).into_iter().map(array_of).collect())
+            .map_err(arrow_err(&self.path))?;
+        self.writer.write(&batch).map_err(arrow_err(&self.path))?;
+        self.writer.flush().map_err(arrow_err(&self.path))?;
+        self.pending.clear();
+        Ok(())
+    }
+
+    /// Writes the rows still waiting and the end-of-stream marker.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), Error> {
+        self.write_pending()?;
+        self.writer.finish().map_err(arrow_err(&self.path))
+    }
+}
