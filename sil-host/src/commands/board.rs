@@ -1,6 +1,6 @@
 //! `sil-host board` (bring-up over the board's serial port) and `sil-host
 //! board-twin` (the board twin serving the same protocol on a pseudo-terminal):
-//! thin commands over `rig::bringup_procedure` and `rig::bringup_line`.
+//! thin commands over `board_link::bringup_procedure` and `board_link::bringup_line`.
 
 use std::{io::Write, sync::Arc, time::Duration};
 
@@ -8,16 +8,15 @@ use arm_app::{
     bringup::{CalibrationRecord, EnableOutcome, MAX_JOG_CODES, RawReadings, Reply, Request, SpanStep, Status},
     telemetry::ArmTelemetry,
 };
-use board_twin::{BusFaults, FlashModel};
-use firmware::pil::StepClock;
-use rig::{
+use board_link::{
     board_backup,
     bringup_line::{self, Client, Pty},
     bringup_procedure::{self as bp, CalibrateOptions, StepError},
     free_arm::{ArmBoard, FreeArm},
-    setup::firmware_config,
-    status_words::describe_status,
 };
+use board_twin::{BusFaults, FlashModel};
+use firmware::pil::StepClock;
+use rig::{setup::firmware_config, status_words::describe_status};
 use serde::Serialize;
 
 use crate::{
@@ -25,6 +24,16 @@ use crate::{
     error::CliError,
 };
 use experiments::scenario::load_scenario;
+
+/// A bring-up step's failure as the command's error: a line that does not
+/// answer as the protocol says is bad input (exit 2), a refusal of the board
+/// [`CliError::Board`] (exit 1).
+fn step(e: StepError) -> CliError {
+    match e {
+        StepError::Line(m) => CliError::bad_input(m),
+        StepError::Refused(m) => CliError::Board(m),
+    }
+}
 
 /// Everything `status` reads.
 #[derive(Debug, Serialize)]
@@ -310,12 +319,12 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
     // the command as every command (crate::stdout): quietly, exit 141, or with a
     // message, exit 1; `watch` stops at the first failed line.
     let mut c = Client::open(&args.port, args.baud).map_err(CliError::bad_input)?;
-    bp::hello(&mut c)?;
+    bp::hello(&mut c).map_err(step)?;
     let json = args.json;
     let done = |what: &str| emit(json, &serde_json::json!({ "done": what }), || outln!("{what}: done"));
     match &args.command {
         BoardCommand::Status => {
-            let s = snapshot(&mut c)?;
+            let s = snapshot(&mut c).map_err(step)?;
             emit(json, &s, || print_snapshot(&s));
         }
         BoardCommand::Watch { interval_ms, count } => {
@@ -325,7 +334,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let tty = std::io::IsTerminal::is_terminal(&std::io::stdout());
             let mut n = 0;
             while !stop.load(std::sync::atomic::Ordering::Relaxed) && !crate::stdout::failed() && count.is_none_or(|k| n < k) {
-                let s = snapshot(&mut c)?;
+                let s = snapshot(&mut c).map_err(step)?;
                 if json {
                     outln!("{}", serde_json::to_string(&s).unwrap_or_default());
                 } else if tty {
@@ -366,7 +375,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 settle_periods: 300,
                 tare: !no_tare,
             };
-            let report = bp::calibrate(&mut c, &o, &mut Terminal { json })?;
+            let report = bp::calibrate(&mut c, &o, &mut Terminal { json }).map_err(step)?;
             emit(json, &report, || {
                 outln!("calibrate: done; the calibration in force (not yet saved):");
                 for line in describe_calibration(&report.calibration) {
@@ -422,7 +431,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             // A board never runs without its runaway limits: refused here, naming
             // the key, before the firmware refuses it too.
             bp::check_protection(&config, "controller.runaway_limits").map_err(CliError::bad_input)?;
-            let Reply::Config(now) = bp::ask(&mut c, Request::GetConfig)? else {
+            let Reply::Config(now) = bp::ask(&mut c, Request::GetConfig).map_err(step)? else {
                 return Err(CliError::bad_input("unexpected reply to get configuration"));
             };
             // The image's timer runs one rate: say both when they differ.
@@ -435,7 +444,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                     1e6 / now.period.as_us() as f64
                 )));
             }
-            bp::ask(&mut c, Request::Configure(config))?;
+            bp::ask(&mut c, Request::Configure(config)).map_err(step)?;
             let json_of = |c: &firmware::Config| serde_json::to_value(c).unwrap_or_default();
             let changed = changes("config", &json_of(&now), &json_of(&config));
             let listed: Vec<_> = changed.iter().map(|(k, a, b)| serde_json::json!({ "key": k, "old": a, "new": b })).collect();
@@ -451,7 +460,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             });
         }
         BoardCommand::Enable => {
-            let st = bp::enable(&mut c)?;
+            let st = bp::enable(&mut c).map_err(step)?;
             emit(json, &serde_json::json!({ "done": "enable", "status": st }), || {
                 outln!(
                     "enable: done: {}; still on at period {} ({} periods watched): {}",
@@ -466,7 +475,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             if file.exists() && !force {
                 return Err(CliError::bad_input(format!("backup: {} exists: give --force to overwrite it", file.display())));
             }
-            let b = bp::backup(&mut c)?;
+            let b = bp::backup(&mut c).map_err(step)?;
             board_backup::write(file, &b).map_err(|e| CliError::bad_input(e.to_string()))?;
             let controller = format!("{:?}", b.config.controller).to_lowercase();
             emit(json, &serde_json::json!({ "done": "backup", "file": file, "backup": b }), || {
@@ -481,7 +490,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             let b = board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?;
             // The firmware's own rules, named by key, before anything is sent.
             board_backup::validate(&b).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
-            let st = bp::restore(&mut c, &b)?;
+            let st = bp::restore(&mut c, &b).map_err(step)?;
             emit(json, &serde_json::json!({ "done": "restore", "file": file, "status": st }), || {
                 outln!("restore: done: the calibration and configuration of {} are in force", file.display());
                 outln!(
@@ -493,8 +502,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             });
         }
         BoardCommand::Save => {
-            bp::ask(&mut c, Request::Save)?;
-            let b = bp::backup(&mut c)?;
+            bp::ask(&mut c, Request::Save).map_err(step)?;
+            let b = bp::backup(&mut c).map_err(step)?;
             emit(json, &serde_json::json!({ "done": "save", "saved": b }), || {
                 outln!(
                     "save: done: the calibration and the {} configuration in force are the record in flash (loaded at every reset)",
@@ -507,7 +516,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 BoardCommand::LiftTorqueLimit => (Request::LiftTorqueLimit, "lift the torque limit"),
                 _ => (Request::Disable, "disable"),
             };
-            bp::ask(&mut c, request)?;
+            bp::ask(&mut c, request).map_err(step)?;
             done(name);
         }
     }
@@ -542,7 +551,7 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     let mut s = s;
     s.controller.runaway_limits = true;
     if args.emulated {
-        let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
+        let elf = args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image);
         let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::bad_input(e.to_string()))?;
         serve_arm(args, &s, arm, "emulated arm image")
     } else {

@@ -17,16 +17,15 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
 };
+use board_link::{EmulatorLink, TwinLink};
 pub use experiments::run::prepare;
 use rig::scenario::Scenario;
 use rig::{
     FirmwareLink,
-    emulator_link::EmulatorLink,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
     ipc_link::IpcLink,
     summary::{MonitorSummary, RunSummary},
-    twin_link::TwinLink,
 };
 
 /// Runs `sil-host run`.
@@ -63,7 +62,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     } else if chosen == RunLink::Twin {
         twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::bad_input(e.to_string()))?)
     } else if chosen == RunLink::Emulator {
-        let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
+        let elf = args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image);
         emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::bad_input(e.to_string()))?)
     } else {
         let exe = match &args.attach {
@@ -90,7 +89,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     drop(ipc);
     if let Some(t) = &twin {
         for (k, n) in &t.notices {
-            eprintln!("twin: period {k}: {}", rig::twin_link::describe(n));
+            eprintln!("twin: period {k}: {}", board_link::twin_link::describe(n));
         }
     }
 

@@ -7,11 +7,8 @@
 use std::time::Instant;
 
 use board_emulator::core_clock::Mode;
-use rig::{
-    emulator_link::{EmulatorLink, ImageTiming, default_image},
-    run_loop,
-    scenario::Scenario,
-};
+use board_link::emulator_link::{EmulatorLink, ImageTiming, default_image};
+use rig::{run_loop, scenario::Scenario};
 
 use crate::{
     bench::figure::{Figure, Goal, median},
@@ -21,10 +18,10 @@ use crate::{
 
 /// The emulated closed loop's target: real time at 1 kHz (issue 38).
 pub const RATE_TARGET: f64 = 1_000.0;
-/// The gates' ceilings (`rig::emulator_link`), as figures' targets.
-const HANDLER_INSTRUCTIONS_CEILING: f64 = rig::emulator_link::HANDLER_INSTRUCTIONS_CEILING as f64;
-const HANDLER_CYCLES_CEILING: f64 = rig::emulator_link::HANDLER_CYCLES_CEILING as f64;
-const STACK_CEILING: f64 = rig::emulator_link::STACK_CEILING_BYTES as f64;
+/// The gates' ceilings (`board_link::emulator_link`), as figures' targets.
+const HANDLER_INSTRUCTIONS_CEILING: f64 = board_link::emulator_link::HANDLER_INSTRUCTIONS_CEILING as f64;
+const HANDLER_CYCLES_CEILING: f64 = board_link::emulator_link::HANDLER_CYCLES_CEILING as f64;
+const STACK_CEILING: f64 = board_link::emulator_link::STACK_CEILING_BYTES as f64;
 
 /// The paper's four closed-loop scenarios (docs/model.md experiments 5 and 6).
 const PAPER: [(&str, &str); 4] = [
@@ -36,7 +33,11 @@ const PAPER: [(&str, &str); 4] = [
 
 fn image() -> Result<std::path::PathBuf, CliError> {
     let p = default_image();
-    if p.exists() { Ok(p) } else { Err(CliError::bad_input(format!("{} is missing: {}", p.display(), rig::emulator_link::BUILD_HINT))) }
+    if p.exists() {
+        Ok(p)
+    } else {
+        Err(CliError::bad_input(format!("{} is missing: {}", p.display(), board_link::emulator_link::BUILD_HINT)))
+    }
 }
 
 fn with_duration(text: &str, duration_s: f64) -> Result<Scenario, CliError> {

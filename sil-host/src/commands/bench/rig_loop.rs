@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use crate::bench::figure::{Figure, Goal, median};
 use crate::{cli::BenchArgs, error::CliError};
+use board_link::TwinLink;
 use rig::{
     FirmwareLink, RunObserver,
     in_process::InProcessLink,
@@ -14,7 +15,6 @@ use rig::{
     scenario::Scenario,
     stream_loop,
     summary::Percentiles,
-    twin_link::TwinLink,
 };
 
 /// Target of the in-process loop, periods per wall second (issue 16).
