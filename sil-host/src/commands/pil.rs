@@ -157,15 +157,15 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 /// # Errors
 /// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
 pub fn run(args: &PilArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    let (summary, scenario) = &done.result;
-    if args.output.json {
-        crate::commands::print_json(summary)?;
-    } else {
-        print_pil(summary);
-        print_summary(summary, scenario, &done.files);
-    }
-    done.into_result()
+    crate::commands::finish(
+        execute(args)?,
+        args.output.json,
+        |(summary, _)| summary,
+        |(summary, scenario), files| {
+            print_pil(summary);
+            print_summary(summary, scenario, files);
+        },
+    )
 }
 
 /// What counted the ticks, for the human output and the figure.

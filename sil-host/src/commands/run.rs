@@ -132,12 +132,10 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 /// # Errors
 /// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    let (summary, scenario) = &done.result;
-    if args.output.json {
-        crate::commands::print_json(summary)?;
-    } else {
-        print_summary(summary, scenario, &done.files);
-    }
-    done.into_result()
+    crate::commands::finish(
+        execute(args)?,
+        args.output.json,
+        |(summary, _)| summary,
+        |(summary, scenario), files| print_summary(summary, scenario, files),
+    )
 }
