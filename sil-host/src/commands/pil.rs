@@ -18,13 +18,14 @@ use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,
+    link_spec::{LinkSpec, OpenLink},
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
 };
 use experiments::scenario::load_scenario;
 use rig::{
     FirmwareLink,
-    pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
+    pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilOptions, PilTarget},
     scenario::Scenario,
     setup::{firmware_config, plant_for},
     summary::{CountUnit, Spread},
@@ -123,9 +124,11 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         Box::new(move |l: &LogLine| bar.println(format!("image: {}", l.display()))) as pil_link::LogSink
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
-    let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
+    let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&scenario)? else {
+        unreachable!("a PIL spec opens a PIL link")
+    };
     let Streamed { stats, history, failure, wall_s, validity, ledger } =
-        run_streamed(&scenario, &mut link, &mut out, &progress, 100, args.format)?;
+        run_streamed(&scenario, link.as_mut(), &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);

@@ -15,16 +15,13 @@ use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::{RunArgs, RunLink},
     error::CliError,
+    link_spec::{LinkSpec, OpenLink},
     output::{OutputSet, progress_bar},
 };
-use board_link::{EmulatorLink, TwinLink};
 pub use experiments::run::prepare;
 use rig::scenario::Scenario;
 use rig::{
-    FirmwareLink,
-    in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
-    ipc_link::IpcLink,
     summary::{MonitorSummary, RunSummary},
 };
 
@@ -53,27 +50,14 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         timeout: std::time::Duration::from_secs_f64(args.monitor_timeout),
     };
 
-    let mut ipc: Option<IpcLink> = None;
-    let mut in_process: Option<InProcessLink> = None;
-    let mut twin: Option<TwinLink> = None;
-    let mut emulator: Option<EmulatorLink> = None;
-    let link: &mut dyn FirmwareLink = if chosen == RunLink::InProcess {
-        in_process.insert(InProcessLink::new(&scenario).map_err(CliError::from)?)
-    } else if chosen == RunLink::Twin {
-        twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::bad_input(e.to_string()))?)
-    } else if chosen == RunLink::Emulator {
-        let elf = args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image);
-        emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::bad_input(e.to_string()))?)
-    } else {
-        let exe = match &args.attach {
-            Some(_) => None,
-            None => Some(
-                std::env::current_exe()
-                    .map_err(|e| CliError::bad_input(format!("cannot find this executable to spawn the firmware: {e}")))?,
-            ),
-        };
-        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime, &monitors).map_err(CliError::from)?)
+    let spec = match chosen {
+        RunLink::InProcess => LinkSpec::InProcess,
+        RunLink::Twin => LinkSpec::Twin,
+        RunLink::Emulator => LinkSpec::Emulator { elf: args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image) },
+        RunLink::Iceoryx2 => LinkSpec::Iceoryx2 { rig: rig.clone(), attach: args.attach.is_some(), realtime: args.realtime, monitors },
     };
+    let mut open = spec.open(&scenario)?;
+    let link = open.link();
     let transport = link.transport();
     // Only once the firmware is there: a run that cannot start writes nothing.
     let mut out = OutputSet::new(&args.output.out)?;
@@ -83,15 +67,21 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let Streamed { stats, history, failure, wall_s, validity, ledger } =
         run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
-    let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
-    let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
-    let monitor_counts = ipc.as_ref().filter(|_| monitors.wait_for > 0).map(IpcLink::monitor_counts);
-    drop(ipc);
-    if let Some(t) = &twin {
-        for (k, n) in &t.notices {
-            eprintln!("twin: period {k}: {}", board_link::twin_link::describe(n));
+    let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
+    match &mut open {
+        OpenLink::Iceoryx2(l) => {
+            timings = Some(std::mem::take(&mut l.timings));
+            realtime_setup = l.realtime_setup.clone();
+            monitor_counts = (monitors.wait_for > 0).then(|| l.monitor_counts());
         }
+        OpenLink::Twin(t) => {
+            for (k, n) in &t.notices {
+                eprintln!("twin: period {k}: {}", board_link::twin_link::describe(n));
+            }
+        }
+        _ => {}
     }
+    drop(open);
 
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
