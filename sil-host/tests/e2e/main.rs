@@ -3,7 +3,9 @@
 //! user would. `common` builds the MCU images for QEMU once per run and decodes
 //! their defmt logs; `figure_check` checks every figure a command writes. The soak
 //! test is a binary of its own (`tests/soak.rs`): it compares the machine's
-//! iceoryx2 files before and after, so nothing else may run beside it.
+//! iceoryx2 files before and after, so nothing else may run beside it. So is the
+//! memory test (`tests/memory.rs`): a child's peak RSS counts the process it was
+//! forked from, which must be small.
 
 mod accuracy;
 mod aliases;
@@ -21,7 +23,6 @@ mod figures;
 mod friction_loop;
 mod friction_unknown;
 mod golden;
-mod memory;
 mod model_f32_f64;
 mod monitors;
 mod params;

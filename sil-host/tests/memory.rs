@@ -6,6 +6,11 @@
 //! of a 100 s one. (Before streaming: 299 MB and 38 MB in-process, 184 MB and
 //! 26 MB for `simulate`, docs/measurements.md.)
 //!
+//! A test binary of its own: a child's `ru_maxrss` starts from the resident set
+//! of the process it was forked from (Linux records the forked copy's high-water
+//! mark at `exec`), so spawned from the end-to-end binary, which holds other
+//! tests' traces and fonts meanwhile, the same run read 100 MB and more.
+//!
 //! Release builds (CI) run the full lengths; a debug build runs a tenth of each
 //! (the same bounds, so the check still means something, in a tenth of the time).
 
