@@ -28,8 +28,7 @@ use rig::{
     faults::{FaultPlan, LinkKind},
     link::{Exchange, FirmwareLink},
     record::RunError,
-    scenario::Scenario,
-    setup::firmware_config,
+    setup::RunSetup,
 };
 
 use crate::twin_link::bus_faults;
@@ -82,8 +81,8 @@ impl EmulatorLink {
     /// without them); [`RunError::Unsupported`] for a fault the emulator cannot inject;
     /// [`RunError::Board`] for an image that cannot be read, a rate other than
     /// the image's, a board or calibration refused.
-    pub fn new(s: &Scenario, image: &Path) -> Result<Self, RunError> {
-        Self::with_mode(s, image, Mode::Functional)
+    pub fn new(setup: &RunSetup, image: &Path) -> Result<Self, RunError> {
+        Self::with_mode(setup, image, Mode::Functional)
     }
 
     /// As [`EmulatorLink::new`], the core run in `mode`: [`Mode::Counted`]
@@ -92,9 +91,10 @@ impl EmulatorLink {
     ///
     /// # Errors
     /// As [`EmulatorLink::new`].
-    pub fn with_mode(s: &Scenario, image: &Path, mode: Mode) -> Result<Self, RunError> {
+    pub fn with_mode(setup: &RunSetup, image: &Path, mode: Mode) -> Result<Self, RunError> {
+        let s = setup.scenario();
         LinkKind::Emulator.check(&s.faults)?;
-        rig::board_protection::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        rig::board_protection::check_protection(setup.firmware(), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let period_us = s.timing.period().as_us();
         if period_us != IMAGE_PERIOD_US {
@@ -102,7 +102,7 @@ impl EmulatorLink {
                 "the `arm` image's control tick is compiled at {IMAGE_PERIOD_US} us (1 kHz); the scenario's period is {period_us} us"
             )));
         }
-        let config = firmware_config(s);
+        let config = *setup.firmware();
         let announced = rig::handshake::of_config(&config)?;
         let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
         let flash = FlashModel::brought_up(&s.calibration.arm_calibration(), config)
@@ -112,7 +112,7 @@ impl EmulatorLink {
             .map_err(board_error)?;
         Ok(Self {
             board,
-            plan: FaultPlan::new(&s.faults, s.timing.period()),
+            plan: setup.faults().clone(),
             v_belt: s.plant.v_belt,
             period_us,
             started: false,

@@ -21,8 +21,7 @@ use rig::{
     faults::{FaultKind, FaultPlan, LinkKind, Signal},
     link::{Exchange, FirmwareLink},
     record::RunError,
-    scenario::Scenario,
-    setup::firmware_config,
+    setup::RunSetup,
 };
 
 /// The board twin behind the rig's link.
@@ -39,7 +38,7 @@ pub struct TwinLink {
 }
 
 impl TwinLink {
-    /// The twin of scenario `s`: its `[board]` and `[calibration]`, its
+    /// The twin of `setup`: its scenario's `[board]` and `[calibration]`, its
     /// firmware configuration, its sensors' seed and load-cell noise.
     ///
     /// # Errors
@@ -47,17 +46,18 @@ impl TwinLink {
     /// without them); [`RunError::Unsupported`] for a fault the twin cannot inject;
     /// [`RunError::Board`] when the board, the calibration or the configuration
     /// is refused.
-    pub fn new(s: &Scenario) -> Result<Self, RunError> {
+    pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+        let s = setup.scenario();
         LinkKind::Twin.check(&s.faults)?;
-        rig::board_protection::check_protection(&firmware_config(s), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
+        rig::board_protection::check_protection(setup.firmware(), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
-        let config = firmware_config(s);
+        let config = *setup.firmware();
         let announced = rig::handshake::of_config(&config)?;
         let twin = BoardTwin::new(s.board, config, &s.calibration.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)
             .map_err(|e| RunError::Board(e.to_string()))?;
         Ok(Self {
             twin,
-            plan: FaultPlan::new(&s.faults, s.timing.period()),
+            plan: setup.faults().clone(),
             v_belt: s.plant.v_belt,
             period_us: s.timing.period().as_us(),
             started: false,

@@ -27,10 +27,10 @@ fn main() {
                 IpcLink::connect(&s, &default_rig_name(), Some(std::path::Path::new(exe)), false, &MonitorPolicy::default())
                     .expect("firmware process"),
             ),
-            None => Box::new(InProcessLink::new(&s).expect("default scenario")),
+            None => Box::new(InProcessLink::new(&rig::RunSetup::new(s.clone()).unwrap()).expect("default scenario")),
         };
         let t = std::time::Instant::now();
-        let (periods, err) = stream_loop(&s, link.as_mut(), &mut ());
+        let (periods, err) = stream_loop(&rig::RunSetup::new(s.clone()).unwrap(), link.as_mut(), &mut ());
         assert!(err.is_none(), "{err:?}");
         println!("{periods} periods, {:.0} periods/s", periods as f64 / t.elapsed().as_secs_f64());
     }

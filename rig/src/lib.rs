@@ -58,6 +58,6 @@ pub use period_loop::{PeriodFailure, PeriodLoop, RunObserver, run_loop, stream_l
 pub use pil_link::{PilLink, PilOptions, PilTarget, QemuLink};
 pub use record::{PeriodRecord, RunError};
 pub use scenario::{DEFAULT_TOML, Scenario, ScenarioError};
-pub use setup::{firmware_config, plant_for};
+pub use setup::{RunSetup, firmware_config, plant_for};
 pub use stats::RunStats;
 pub use summary::{PilFigures, RunSummary};

@@ -13,7 +13,7 @@ use rig::{
     ipc::MonitorPolicy,
     ipc_link::IpcLink,
     pil_link::{LogSink, PilLink, PilOptions},
-    scenario::Scenario,
+    setup::RunSetup,
 };
 
 use crate::error::CliError;
@@ -71,7 +71,7 @@ pub enum OpenLink {
 }
 
 impl LinkSpec {
-    /// Opens the link for scenario `s`: makes the firmware's side ready and, for
+    /// Opens the link for run `setup`: makes the firmware's side ready and, for
     /// the links that handshake, checks its announcement against the scenario.
     ///
     /// # Errors
@@ -80,9 +80,9 @@ impl LinkSpec {
     /// announces another configuration, else 1); the twin's and the emulated
     /// board's refusals as bad input (exit 2), such as runaway limits turned off
     /// or a missing image; QEMU that cannot start or a board that does not answer.
-    pub fn open(self, s: &Scenario) -> Result<OpenLink, CliError> {
+    pub fn open(self, setup: &RunSetup) -> Result<OpenLink, CliError> {
         Ok(match self {
-            Self::InProcess => OpenLink::InProcess(Box::new(InProcessLink::new(s).map_err(CliError::from)?)),
+            Self::InProcess => OpenLink::InProcess(Box::new(InProcessLink::new(setup).map_err(CliError::from)?)),
             Self::Iceoryx2 { rig, attach, realtime, monitors } => {
                 let exe = if attach {
                     None
@@ -92,13 +92,15 @@ impl LinkSpec {
                             .map_err(|e| CliError::bad_input(format!("cannot find this executable to spawn the firmware: {e}")))?,
                     )
                 };
-                OpenLink::Iceoryx2(Box::new(IpcLink::connect(s, &rig, exe.as_deref(), realtime, &monitors).map_err(CliError::from)?))
+                OpenLink::Iceoryx2(Box::new(
+                    IpcLink::connect(setup.scenario(), &rig, exe.as_deref(), realtime, &monitors).map_err(CliError::from)?,
+                ))
             }
-            Self::Twin => OpenLink::Twin(Box::new(TwinLink::new(s).map_err(|e| CliError::bad_input(e.to_string()))?)),
+            Self::Twin => OpenLink::Twin(Box::new(TwinLink::new(setup).map_err(|e| CliError::bad_input(e.to_string()))?)),
             Self::Emulator { elf } => {
-                OpenLink::Emulator(Box::new(EmulatorLink::new(s, &elf).map_err(|e| CliError::bad_input(e.to_string()))?))
+                OpenLink::Emulator(Box::new(EmulatorLink::new(setup, &elf).map_err(|e| CliError::bad_input(e.to_string()))?))
             }
-            Self::Pil { options, on_log } => OpenLink::Pil(Box::new(PilLink::start(s, &options, on_log).map_err(CliError::from)?)),
+            Self::Pil { options, on_log } => OpenLink::Pil(Box::new(PilLink::start(setup, &options, on_log).map_err(CliError::from)?)),
         })
     }
 }

@@ -28,7 +28,7 @@ use super::{InitialCondition, RunKey, SweepController, SweepSpec};
 use crate::ideal::{self, IdealLaw, IdealSetup};
 use plant::{Counters, Plant, SimConfig, SimError, Validity, impact::IwcRule};
 use plant::{Hold, NoObserver, Observer};
-use rig::{InProcessLink, PeriodLoop, Scenario};
+use rig::{InProcessLink, PeriodLoop, RunSetup, Scenario};
 
 /// Open loop: the length of the intervals the plant is advanced by, s (a Ctrl-C
 /// is noticed between them).
@@ -523,11 +523,13 @@ fn closed_loop(
     let Some(s) = closed_loop_scenario(spec, key, ic) else {
         return Ended::Stopped { start: None, error: "closed loop without a scenario".into(), safe_state: false, sim_failed: false };
     };
-    let mut link = match InProcessLink::new(&s) {
+    // The run's set-up, its plant unused: the sweep steps its own, at the grid's initial state.
+    let link_and_setup = RunSetup::new(s).and_then(|setup| Ok((InProcessLink::new(&setup)?, setup)));
+    let (mut link, setup) = match link_and_setup {
         Ok(l) => l,
         Err(e) => return Ended::Stopped { start: None, error: e.to_string(), safe_state: false, sim_failed: false },
     };
-    let mut periods = PeriodLoop::new(&s, plant);
+    let mut periods = PeriodLoop::new(&setup, plant);
     let n = periods.periods_in(spec.run_duration());
     let k_record = periods.periods_in(spec.transient_s);
     let mut start = None;

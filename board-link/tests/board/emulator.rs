@@ -52,10 +52,10 @@ type Run = (Vec<PeriodRecord>, Option<RunError>);
 /// The twin's run and the emulated image's, of scenario `name`.
 fn runs(name: &str) -> (Run, Run) {
     let s = scenario(name);
-    let mut twin = TwinLink::new(&s).unwrap();
-    let t = run_loop(&s, &mut twin, &mut ());
-    let mut emu = EmulatorLink::new(&s, &image()).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let e = run_loop(&s, &mut emu, &mut ());
+    let mut twin = TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
+    let t = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
+    let mut emu = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &image()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let e = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut emu, &mut ());
     (t, e)
 }
 
@@ -102,7 +102,7 @@ fn pid_from_x0u_the_flashed_image_lifts_off_as_the_twin_does_bit_for_bit() {
 fn a_scenario_at_another_rate_than_the_images_is_refused_by_name() {
     let mut s = scenario("default");
     s.timing.rate_hz = 2000.0;
-    let e = EmulatorLink::new(&s, &image()).err().expect("refused").to_string();
+    let e = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &image()).err().expect("refused").to_string();
     assert!(e.contains("1 kHz") && e.contains("500 us"), "{e}");
 }
 
@@ -111,7 +111,7 @@ fn an_image_that_is_not_an_elf_is_refused_by_name() {
     let s = scenario("default");
     let bad = std::env::temp_dir().join(format!("not-an-elf-{}", std::process::id()));
     std::fs::write(&bad, b"hello").unwrap();
-    let e = EmulatorLink::new(&s, &bad).err().expect("refused").to_string();
+    let e = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &bad).err().expect("refused").to_string();
     let _ = std::fs::remove_file(&bad);
     assert!(e.contains("not an ARM ELF"), "{e}");
 }
@@ -126,10 +126,11 @@ fn counting_the_handlers_instructions_changes_no_bit_of_the_run_and_measures_the
     for name in ["pid-x0u", "hybrid-x0d"] {
         let mut s = scenario(name);
         s.timing.duration_s = 2.0;
-        let mut fast = EmulatorLink::new(&s, &image()).unwrap();
-        let a = run_loop(&s, &mut fast, &mut ());
-        let mut counted = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
-        let b = run_loop(&s, &mut counted, &mut ());
+        let mut fast = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &image()).unwrap();
+        let a = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut fast, &mut ());
+        let mut counted =
+            EmulatorLink::with_mode(&rig::RunSetup::new(s.clone()).unwrap(), &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let b = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut counted, &mut ());
         assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1), "{name}");
         assert_eq!(a.0.len(), b.0.len(), "{name}");
         for (k, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
@@ -168,8 +169,9 @@ fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every
     for name in ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"] {
         let mut s = scenario(name);
         s.timing.duration_s = 2.0;
-        let mut link = EmulatorLink::with_mode(&s, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
-        let (records, e) = run_loop(&s, &mut link, &mut ());
+        let mut link =
+            EmulatorLink::with_mode(&rig::RunSetup::new(s.clone()).unwrap(), &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let (records, e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
         assert!(e.is_none() && records.len() == 2000, "{name}: {e:?} after {} periods", records.len());
         let t = link.timing().expect("handlers counted");
         eprintln!("{name}: {t:?}");
@@ -187,10 +189,11 @@ fn the_flashed_image_stops_a_reversed_motor_as_the_twin_does() {
     let mut s = scenario("default");
     s.timing.duration_s = 1.0;
     s.board.motor2.reversed = true;
-    let mut link = EmulatorLink::new(&s, &image()).unwrap();
-    let (records, e) = run_loop(&s, &mut link, &mut ());
-    let mut twin = board_link::twin_link::TwinLink::new(&s).unwrap();
-    let (twin_records, twin_e) = run_loop(&s, &mut twin, &mut ());
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut link = EmulatorLink::new(&setup, &image()).unwrap();
+    let (records, e) = run_loop(&setup, &mut link, &mut ());
+    let mut twin = board_link::twin_link::TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
+    let (twin_records, twin_e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
     assert_eq!(format!("{e:?}"), format!("{twin_e:?}"));
     match e {
         Some(rig::record::RunError::SafeState {
@@ -225,10 +228,11 @@ fn the_flashed_image_stops_every_wiring_fault_at_the_twins_period_on_a_sample_of
             for (fault, wire) in wiring_cases::WIRING_FAULTS {
                 let mut s = base.clone();
                 wire(&mut s.board);
-                let mut link = EmulatorLink::new(&s, &image()).unwrap();
-                let (records, e) = run_loop(&s, &mut link, &mut ());
-                let mut twin = TwinLink::new(&s).unwrap();
-                let (twin_records, twin_e) = run_loop(&s, &mut twin, &mut ());
+                let setup = rig::RunSetup::new(s.clone()).unwrap();
+                let mut link = EmulatorLink::new(&setup, &image()).unwrap();
+                let (records, e) = run_loop(&setup, &mut link, &mut ());
+                let mut twin = TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
+                let (twin_records, twin_e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
                 assert_eq!(format!("{e:?}"), format!("{twin_e:?}"), "{fault}, {kind} scenario {i}");
                 assert_eq!(records.len(), twin_records.len(), "{fault}, {kind} scenario {i}");
                 for (k, (a, b)) in records.iter().zip(&twin_records).enumerate() {

@@ -35,8 +35,9 @@ fn paper(name: &str) -> String {
 }
 
 fn twin_run(s: &Scenario) -> (Vec<PeriodRecord>, Option<RunError>, TwinLink) {
-    let mut link = TwinLink::new(s).unwrap();
-    let (records, err) = run_loop(s, &mut link, &mut ());
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut link = TwinLink::new(&setup).unwrap();
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     (records, err, link)
 }
 
@@ -174,7 +175,7 @@ fn each_bus_fault_is_held_one_period_then_ends_in_the_safe_state_with_the_driver
 #[test]
 fn the_twin_refuses_faults_it_cannot_make_and_bad_boards() {
     let nan = with_fault("kind = \"nan_sensor\"\nsignal = \"f_n\"", 0.1);
-    assert!(TwinLink::new(&nan).err().unwrap().to_string().contains("spi_error"));
+    assert!(TwinLink::new(&rig::RunSetup::new(nan.clone()).unwrap()).err().unwrap().to_string().contains("spi_error"));
     let bad = format!("{DEFAULT_TOML}\n[board]\npwm_max_duty = 1\n");
     assert!(Scenario::from_toml(&bad).unwrap_err().to_string().contains("board.pwm_max_duty"));
     let bad = format!("{DEFAULT_TOML}\n[board.theta1_encoder]\nzero_count = 16384.0\n");
@@ -195,7 +196,7 @@ fn the_twin_refuses_faults_it_cannot_make_and_bad_boards() {
     // The runaway limits off: a study without a board runs, a board refuses (exit 2).
     let mut off = Scenario::from_toml(DEFAULT_TOML).unwrap();
     off.controller.runaway_limits = false;
-    match TwinLink::new(&off) {
+    match TwinLink::new(&rig::RunSetup::new(off.clone()).unwrap()) {
         Err(e @ rig::record::RunError::NotOnABoard(_)) => {
             assert!(e.to_string().contains("controller.runaway_limits = false: the runaway limits cannot be turned off on a board"), "{e}");
         }

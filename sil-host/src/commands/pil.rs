@@ -27,7 +27,6 @@ use rig::{
     FirmwareLink,
     pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilOptions, PilTarget},
     scenario::Scenario,
-    setup::{firmware_config, plant_for},
     summary::{CountUnit, Spread},
     summary::{PilFigures, RunSummary},
 };
@@ -108,13 +107,13 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     experiments::scenario::refuse_board_overrides(&args.scenario.set, "the PIL board (its own firmware image)")?;
     let scenario = load_scenario(&args.scenario)?;
     crate::commands::warn(experiments::scenario::board_tables_note(&scenario, "the PIL board (its own firmware image)"));
-    plant_for(&scenario).map_err(CliError::from)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::bad_input(format!("firmware configuration: {e}")))?;
+    let setup = experiments::run::setup(scenario)?;
+    let scenario = setup.scenario();
     if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {
         return Err(CliError::bad_input(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
     }
     let target = target_of(args)?;
-    pil_link::check_faults(&scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
+    pil_link::check_faults(scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
@@ -124,11 +123,11 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         Box::new(move |l: &LogLine| bar.println(format!("image: {}", l.display()))) as pil_link::LogSink
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
-    let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&scenario)? else {
+    let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&setup)? else {
         unreachable!("a PIL spec opens a PIL link")
     };
     let Streamed { stats, history, failure, wall_s, validity, ledger } =
-        run_streamed(&scenario, link.as_mut(), &mut out, &progress, 100, args.format)?;
+        run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -137,9 +136,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     drop(link);
 
     let svg = out.stage_figure("trace.svg")?;
-    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &history, stats.last_t())?;
+    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
     let svg = out.stage_figure("instructions.svg")?;
-    draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
+    draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
         let text: String = log.iter().map(|l| l.display() + "\n").collect();
         out.write_bytes("defmt.log", text.as_bytes())?;
@@ -147,11 +146,11 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let summary = RunSummary {
         pil: Some(figures),
         ledger,
-        ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
+        ..RunSummary::from_stats(scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host pil`: [`execute`], then prints the summary (human, or the

@@ -31,9 +31,10 @@ use rig::{
 /// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
 /// way (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
-    let (scenario, chosen) = prepare(args)?;
+    let (setup, chosen) = prepare(args)?;
+    let scenario = setup.scenario();
     if !matches!(chosen, RunLink::Twin | RunLink::Emulator) {
-        crate::commands::warn(experiments::scenario::board_tables_note(&scenario, chosen.without_board()));
+        crate::commands::warn(experiments::scenario::board_tables_note(scenario, chosen.without_board()));
     }
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
@@ -56,7 +57,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         RunLink::Emulator => LinkSpec::Emulator { elf: args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image) },
         RunLink::Iceoryx2 => LinkSpec::Iceoryx2 { rig: rig.clone(), attach: args.attach.is_some(), realtime: args.realtime, monitors },
     };
-    let mut open = spec.open(&scenario)?;
+    let mut open = spec.open(&setup)?;
     let link = open.link();
     let transport = link.transport();
     // Only once the firmware is there: a run that cannot start writes nothing.
@@ -64,8 +65,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { stats, history, failure, wall_s, validity, ledger } =
-        run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger } = run_streamed(&setup, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
     let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
     match &mut open {
@@ -84,7 +84,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     drop(open);
 
     let svg = out.stage_figure("trace.svg")?;
-    draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
+    draw(&svg, "SIL", scenario, &history, stats.last_t())?;
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),
         ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),
@@ -102,7 +102,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         firmware_announcement,
         ledger,
         ..RunSummary::from_stats(
-            &scenario,
+            scenario,
             &stats,
             failure.as_ref(),
             transport,
@@ -113,7 +113,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host run`: [`execute`], then prints the summary (human, or the

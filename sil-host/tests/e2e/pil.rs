@@ -72,8 +72,9 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     assert!(err.is_none(), "{err:?}");
 
     let opts = PilOptions { keep_ticks: true, ..PilOptions::new(image()) };
-    let mut link = PilLink::start(&s, &opts, None).unwrap();
-    let (pil, err) = run_loop(&s, &mut link, &mut ());
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut link = PilLink::start(&setup, &opts, None).unwrap();
+    let (pil, err) = run_loop(&setup, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(pil.len(), sil.len());
     for (name, records) in [("SIL", &sil), ("PIL", &pil)] {
@@ -169,8 +170,9 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     s.faults = Scenario::from_toml(&format!("{}\n[[faults]]\nkind = \"kill_firmware\"\nat_s = 0.3\n", rig::scenario::DEFAULT_TOML))
         .unwrap()
         .faults;
-    let mut link = PilLink::start(&s, &PilOptions::new(image()), None).unwrap();
-    let (records, err) = run_loop(&s, &mut link, &mut ());
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut link = PilLink::start(&setup, &PilOptions::new(image()), None).unwrap();
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
             assert_eq!(k, 300);
@@ -188,7 +190,7 @@ fn a_killed_qemu_or_a_missing_image_ends_the_run_with_a_clear_error() {
     let code = sil_host::run(["sil-host", "pil", "--image", "/nonexistent/pil", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 2);
     let qemu = PilTarget::Qemu { image: image().into(), qemu: "/nonexistent/qemu-system-arm".into(), link: QemuLink::Semihosting };
-    let err = PilLink::start(&s, &PilOptions::for_target(qemu), None).unwrap_err();
+    let err = PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &PilOptions::for_target(qemu), None).unwrap_err();
     assert!(err.to_string().contains("cannot start /nonexistent/qemu-system-arm"), "{err}");
 }
 
@@ -365,15 +367,17 @@ fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
     let s = scenario(ControllerKind::Hybrid, 1.5);
     let qemu = PtyQemu::start();
     let opts = PilOptions { keep_ticks: true, ..PilOptions::serial(&qemu.pty, DEFAULT_BAUD) };
-    let mut serial = PilLink::start(&s, &opts, None).unwrap();
+    let mut serial = PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &opts, None).unwrap();
     assert_eq!(serial.transport(), "pil-serial");
-    let (via_serial, err) = run_loop(&s, &mut serial, &mut ());
+    let (via_serial, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut serial, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert!(!serial.captures_log() && serial.log().is_empty() && serial.exit_status().is_none());
     drop(qemu);
 
-    let mut socket = PilLink::start(&s, &PilOptions { keep_ticks: true, ..PilOptions::new(image()) }, None).unwrap();
-    let (via_socket, err) = run_loop(&s, &mut socket, &mut ());
+    let mut socket =
+        PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &PilOptions { keep_ticks: true, ..PilOptions::new(image()) }, None)
+            .unwrap();
+    let (via_socket, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut socket, &mut ());
     assert!(err.is_none(), "{err:?}");
 
     assert_eq!(via_serial, via_socket, "the same records");
@@ -409,7 +413,7 @@ fn hil_refuses_a_missing_serial_port_and_the_kill_firmware_fault() {
     assert_eq!(code, 2);
     assert!(!out.exists());
     let s = Scenario::from_toml(&toml).unwrap();
-    match PilLink::start(&s, &PilOptions::serial("/dev/null", DEFAULT_BAUD), None) {
+    match PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &PilOptions::serial("/dev/null", DEFAULT_BAUD), None) {
         Err(RunError::Unsupported(m)) => {
             assert!(m.contains("kill_firmware") && m.contains("not available over a serial port"), "{m}");
             assert!(!m.contains("QEMU"), "{m}");
@@ -424,8 +428,13 @@ fn the_usart_and_semihosting_links_give_the_same_run_and_counts_and_semihosting_
     let mut runs = Vec::new();
     for link in [QemuLink::Usart, QemuLink::Semihosting] {
         let target = PilTarget::Qemu { image: image().into(), qemu: "qemu-system-arm".into(), link };
-        let mut l = PilLink::start(&s, &PilOptions { keep_ticks: true, ..PilOptions::for_target(target) }, None).unwrap();
-        let (records, err) = run_loop(&s, &mut l, &mut ());
+        let mut l = PilLink::start(
+            &rig::RunSetup::new(s.clone()).unwrap(),
+            &PilOptions { keep_ticks: true, ..PilOptions::for_target(target) },
+            None,
+        )
+        .unwrap();
+        let (records, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut l, &mut ());
         assert!(err.is_none(), "{link:?}: {err:?}");
         assert_eq!(records.len(), 1000);
         runs.push((records, l.counts.step_ticks.clone(), l.counts.frame_ticks.clone()));
@@ -454,7 +463,13 @@ fn an_image_that_never_opens_the_fifos_is_reported_within_the_boot_timeout() {
     let s = scenario(ControllerKind::Hybrid, 0.1);
     let target = PilTarget::Qemu { image: image().into(), qemu: fake, link: QemuLink::Semihosting };
     let t = std::time::Instant::now();
-    let err = PilLink::start(&s, &PilOptions { boot_timeout_s: 0.5, ..PilOptions::for_target(target) }, None).unwrap_err().to_string();
+    let err = PilLink::start(
+        &rig::RunSetup::new(s.clone()).unwrap(),
+        &PilOptions { boot_timeout_s: 0.5, ..PilOptions::for_target(target) },
+        None,
+    )
+    .unwrap_err()
+    .to_string();
     // The 0.5 s boot timeout, not the stand-in's 30 s: 20 s tells them apart under load.
     assert!(t.elapsed() < std::time::Duration::from_secs(20), "{:?}", t.elapsed());
     assert!(err.contains("did not say Hello on the semihosting FIFOs") && err.contains("cargo build-pil"), "{err}");

@@ -53,12 +53,12 @@ fn with_duration(text: &str, duration_s: f64) -> Result<Scenario, CliError> {
 /// A missing image (exit 2), a run that fails (exit 1).
 pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
     let image = image()?;
-    let s = with_duration(rig::scenario::DEFAULT_TOML, args.duration)?;
+    let setup = rig::RunSetup::new(with_duration(rig::scenario::DEFAULT_TOML, args.duration)?).map_err(CliError::from)?;
     let mut rates = Vec::new();
     for _ in 0..args.repeat {
-        let mut link = EmulatorLink::new(&s, &image).map_err(CliError::from)?;
+        let mut link = EmulatorLink::new(&setup, &image).map_err(CliError::from)?;
         let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, &mut ());
+        let (records, e) = run_loop(&setup, &mut link, &mut ());
         if let Some(e) = e {
             return Err(CliError::from(e));
         }
@@ -74,15 +74,15 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             RATE_TARGET,
             Goal::AtLeast,
         )
-        .note(format!("{} runs of {} periods", rates.len(), s.timing.periods()))
+        .note(format!("{} runs of {} periods", rates.len(), setup.scenario().timing.periods()))
         .with_runs(rates),
     ];
     let mut worst: Option<(ImageTiming, &str)> = None;
     let mut lines = Vec::new();
     for (name, text) in PAPER {
-        let s = with_duration(text, args.duration)?;
-        let mut link = EmulatorLink::with_mode(&s, &image, Mode::Counted).map_err(CliError::from)?;
-        let (_, e) = run_loop(&s, &mut link, &mut ());
+        let setup = rig::RunSetup::new(with_duration(text, args.duration)?).map_err(CliError::from)?;
+        let mut link = EmulatorLink::with_mode(&setup, &image, Mode::Counted).map_err(CliError::from)?;
+        let (_, e) = run_loop(&setup, &mut link, &mut ());
         if let Some(e) = e.filter(|e| !matches!(e, rig::record::RunError::SafeState { .. })) {
             return Err(CliError::from(e));
         }
