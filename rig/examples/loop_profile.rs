@@ -24,8 +24,14 @@ fn main() {
     for _ in 0..repeat {
         let mut link: Box<dyn FirmwareLink> = match &ipc {
             Some(exe) => Box::new(
-                IpcLink::connect(&s, &default_rig_name(), Some(std::path::Path::new(exe)), false, &MonitorPolicy::default())
-                    .expect("firmware process"),
+                IpcLink::connect(
+                    &rig::RunSetup::new(s.clone()).unwrap(),
+                    &default_rig_name(),
+                    Some(std::path::Path::new(exe)),
+                    false,
+                    &MonitorPolicy::default(),
+                )
+                .expect("firmware process"),
             ),
             None => Box::new(InProcessLink::new(&rig::RunSetup::new(s.clone()).unwrap()).expect("default scenario")),
         };

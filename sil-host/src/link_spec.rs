@@ -92,9 +92,7 @@ impl LinkSpec {
                             .map_err(|e| CliError::bad_input(format!("cannot find this executable to spawn the firmware: {e}")))?,
                     )
                 };
-                OpenLink::Iceoryx2(Box::new(
-                    IpcLink::connect(setup.scenario(), &rig, exe.as_deref(), realtime, &monitors).map_err(CliError::from)?,
-                ))
+                OpenLink::Iceoryx2(Box::new(IpcLink::connect(setup, &rig, exe.as_deref(), realtime, &monitors).map_err(CliError::from)?))
             }
             Self::Twin => OpenLink::Twin(Box::new(TwinLink::new(setup).map_err(|e| CliError::bad_input(e.to_string()))?)),
             Self::Emulator { elf } => {

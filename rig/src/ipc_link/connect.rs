@@ -11,19 +11,19 @@ use shared::wire::{SensorFrame, WIRE_VERSION, frame_flags};
 
 use super::{IpcLink, LinkTimings, process::spawn};
 use crate::{
-    faults::{FaultPlan, LinkKind},
+    faults::LinkKind,
     handshake::{self, Announced},
     ipc::{IpcError, MonitorPolicy, PeerState, PlantPorts, Role, peer_state},
     realtime::prepare_realtime,
     record::RunError,
-    scenario::Scenario,
+    setup::RunSetup,
 };
 
 /// How long the plant waits for the firmware to connect, s.
 pub const CONNECT_TIMEOUT_S: f64 = 20.0;
 
 impl IpcLink {
-    /// Opens the rig `rig`'s services and, when `firmware_exe` is given, spawns
+    /// Opens the rig `rig`'s services for run `setup` and, when `firmware_exe` is given, spawns
     /// `firmware_exe firmware --rig RIG --scenario -` with the scenario on its
     /// standard input (and `--realtime` in real time); then waits until the
     /// firmware is connected and has announced its configuration, and then until
@@ -36,12 +36,13 @@ impl IpcLink {
     /// be opened, the process cannot be started, or no firmware (or fewer
     /// monitors than asked) connects in time.
     pub fn connect(
-        s: &Scenario,
+        setup: &RunSetup,
         rig: &str,
         firmware_exe: Option<&Path>,
         realtime: bool,
         monitors: &MonitorPolicy,
     ) -> Result<Self, RunError> {
+        let s = setup.scenario();
         LinkKind::Ipc.check(&s.faults)?;
         let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
         // First of all: the plant's lock of the rig (one plant per rig, whatever the timing).
@@ -77,7 +78,7 @@ impl IpcLink {
             timeout: Duration::from_secs_f64(s.rig.command_timeout_s),
             max_timeouts: s.rig.max_consecutive_timeouts,
             consecutive_timeouts: 0,
-            faults: FaultPlan::new(&s.faults, s.timing.period()),
+            faults: setup.faults().clone(),
             t0: None,
             k: 0,
             timings: LinkTimings::default(),
@@ -114,7 +115,7 @@ impl IpcLink {
             }
             std::thread::sleep(Duration::from_millis(2));
         }
-        link.announced = Some(link.handshake(s, start + Duration::from_secs_f64(limit))?);
+        link.announced = Some(link.handshake(setup, start + Duration::from_secs_f64(limit))?);
         // The answer must have come from the process spawned here: a firmware started
         // by hand between the check above and the spawn holds the rig's firmware node
         // (the spawned one then refuses to start), and is refused here by its pid.
@@ -159,7 +160,7 @@ impl IpcLink {
     /// announcement (a [`frame_flags::HELLO`] frame carrying our wire version,
     /// repeated every 50 ms until it answers or `deadline`) and checks it against
     /// the configuration the scenario asks for ([`handshake::check`]).
-    fn handshake(&mut self, s: &Scenario, deadline: Instant) -> Result<Announced, RunError> {
+    fn handshake(&mut self, setup: &RunSetup, deadline: Instant) -> Result<Announced, RunError> {
         let transport = |e: crate::ipc::IpcError| RunError::Transport(e.to_string());
         let hello = SensorFrame { t_us: u64::from(WIRE_VERSION), flags: frame_flags::HELLO, ..SensorFrame::default() };
         let mut asked: Option<Instant> = None;
@@ -169,7 +170,7 @@ impl IpcLink {
                 asked = Some(Instant::now());
             }
             if let Some(a) = self.ports.announcements.try_next().map_err(transport)? {
-                return Ok(handshake::check(&a, &crate::setup::firmware_config(s), &self.rig)?);
+                return Ok(handshake::check(&a, setup.firmware(), &self.rig)?);
             }
             if let Some(what) = self.firmware_gone() {
                 return Err(RunError::Transport(format!("the firmware process {what} before announcing its configuration")));
@@ -178,7 +179,8 @@ impl IpcLink {
                 return Err(RunError::Transport(format!(
                     "the firmware on rig `{}` connected but did not announce its configuration within rig.connect_timeout_s = {} s: \
                      it may be an older build without the handshake (rebuild both sides from the same sources)",
-                    self.rig, s.rig.connect_timeout_s
+                    self.rig,
+                    setup.scenario().rig.connect_timeout_s
                 )));
             }
             std::thread::sleep(Duration::from_millis(1));

@@ -120,8 +120,8 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
     let mut misses = 0;
     let mut timings = LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(setup.scenario(), &default_rig_name(), Some(&exe), false, &MonitorPolicy::default())
-            .map_err(CliError::from)?;
+        let mut link =
+            IpcLink::connect(&setup, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::from)?;
         let (_, rate, m) = timed(&setup, &mut link)?;
         rates.push(rate);
         misses += m;
@@ -146,8 +146,7 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
 pub fn realtime(args: &BenchArgs) -> Result<Figure, CliError> {
     let setup = scenario(args.realtime_s)?;
     let exe = this_exe()?;
-    let mut link =
-        IpcLink::connect(setup.scenario(), &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::from)?;
+    let mut link = IpcLink::connect(&setup, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::from)?;
     let (periods, _, misses) = timed(&setup, &mut link)?;
     let name = format!("real time at 1 kHz over iceoryx2, {} s: deadline misses", args.realtime_s);
     let mut f = Figure::measured("realtime_misses", "realtime", name, misses as f64, "misses", 0.0, Goal::AtMost)
