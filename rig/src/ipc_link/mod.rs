@@ -23,7 +23,7 @@
 //! latency. Both sides judge the same stamp, so they agree. A stalled firmware
 //! costs the plant one period per missed period, and is given up after
 //! `rig.max_consecutive_timeouts` periods in a row, as in lockstep.
-//! Both processes run their loop on one CPU ([`prepare_realtime`]).
+//! Both processes run their loop on one CPU ([`prepare_realtime`](crate::realtime::prepare_realtime)).
 
 //!
 //! The link's parts: `connect.rs` (spawn or attach, the monitors, the handshake),
@@ -93,7 +93,7 @@ pub struct IpcLink {
     announced: Option<Announced>,
     /// When the attached firmware's node was last looked up.
     last_peer_check: Option<Instant>,
-    /// Lockstep: the frame sent ahead of its exchange ([`FirmwareLink::send_ahead`]),
+    /// Lockstep: the frame sent ahead of its exchange ([`FirmwareLink::send_ahead`](crate::link::FirmwareLink::send_ahead)),
     /// and when it was published.
     sent_ahead: Option<(u32, Instant)>,
     /// Lockstep: how long a period without an injected fault may wait.
