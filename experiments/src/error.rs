@@ -60,6 +60,16 @@ pub enum Error {
     },
 }
 
+/// A table file that cannot be written or read ([`tables::Error`]): the same
+/// message as the [`Error::Io`] it becomes.
+impl From<tables::Error> for Error {
+    fn from(e: tables::Error) -> Self {
+        match e {
+            tables::Error::Io { path, source } => Self::Io { path, source },
+        }
+    }
+}
+
 /// Maps an I/O error on `path` into an [`Error::Io`].
 pub fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io { path: path.to_path_buf(), source }

@@ -10,8 +10,8 @@
 //! [`zmax::run_searches`]; the closed loop is [`rig::run_loop`], the study
 //! [`analyses::sensitivity::run`]), its typed summary and rows. Shared: the
 //! error ([`Error`], wrapping [`analyses::AnalysisError`]), the outcome
-//! ([`Done`]), the tables ([`table`]: rows to columns once; CSV, Arrow and
-//! NumPy read them) and the sweep's folder ([`sweep::store`]).
+//! ([`Done`]) and the sweep's folder ([`sweep::store`]); the row types declare
+//! their columns for the `tables` crate, which writes and reads the files.
 
 #![warn(missing_docs)]
 
@@ -27,7 +27,6 @@ pub mod sensitivity;
 pub mod settings;
 pub mod simulate;
 pub mod sweep;
-pub mod table;
 pub mod zmax;
 
 pub use done::Done;

@@ -8,64 +8,9 @@ use crate::{
     settings::{RunArgs, RunLink},
 };
 use rig::faults::LinkKind;
-use rig::record::PeriodRecord;
 use rig::record::RunError;
 use rig::scenario::Scenario;
 use rig::setup::RunSetup;
-
-// `trace.csv` of `run` and `pil`: [`PeriodRecord`]'s fields in order (the header
-// the `csv` crate derived from them); the test below checks the bytes against it.
-crate::csv_row!(PeriodRecord {
-    t: f64,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    z_t: f64,
-    z_n: f64,
-    z_t_ref: f64,
-    f_t: f64,
-    f_n: f64,
-    mode: str,
-    u1_cmd: f64,
-    u2_cmd: f64,
-    u1_applied: f64,
-    u2_applied: f64,
-    lift_off_true: bool,
-    lift_off_detected: bool,
-    deadline_miss: bool,
-    firmware_deadline_miss: bool,
-    overruns: int,
-    status: int,
-});
-
-// `--format mcap` (trace.mcap): the signal groups of the closed-loop trace, one
-// channel each; docs/rig.md "Outputs" lists them.
-impl crate::table::mcap::McapRows for PeriodRecord {
-    const TABLE: &'static str = "trace";
-    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[
-        crate::table::mcap::McapGroup {
-            topic: "/state",
-            schema: "painleve.State",
-            columns: &["theta1", "theta1_dot", "theta2", "theta2_dot"],
-        },
-        crate::table::mcap::McapGroup {
-            topic: "/contact",
-            schema: "painleve.Contact",
-            columns: &["mode", "f_t", "f_n", "z_t", "z_n", "z_t_ref", "lift_off_true"],
-        },
-        crate::table::mcap::McapGroup {
-            topic: "/torques",
-            schema: "painleve.Torques",
-            columns: &["u1_cmd", "u2_cmd", "u1_applied", "u2_applied"],
-        },
-        crate::table::mcap::McapGroup {
-            topic: "/firmware",
-            schema: "painleve.Firmware",
-            columns: &["lift_off_detected", "deadline_miss", "firmware_deadline_miss", "overruns", "status"],
-        },
-    ];
-}
 
 /// The run `scenario` asks for ([`RunSetup`]: the plant at `t = 0`, the
 /// firmware's configuration, the faults), made once, before the output folder
@@ -127,12 +72,12 @@ pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), CliError> {
 
 #[cfg(test)]
 mod tests {
-    use crate::table::{
+    use proptest::prelude::*;
+    use rig::record::PeriodRecord;
+    use tables::{
         Table,
         csv::{CsvRow, push_header, push_row},
     };
-    use proptest::prelude::*;
-    use rig::record::PeriodRecord;
 
     fn float() -> impl Strategy<Value = f64> {
         prop_oneof![any::<u64>().prop_map(f64::from_bits), -10.0..10.0f64, Just(0.0), Just(-0.0)]

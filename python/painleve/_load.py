@@ -58,7 +58,7 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
     - text (a NumPy ``str`` array, ``""`` for an empty cell) otherwise.
 
     These are ``pandas.read_csv``'s types for the CLI's files. Reading is done in
-    Rust (``experiments::table::read``, in chunks of lines read and typed on
+    Rust (``tables::read``, in chunks of lines read and typed on
     several threads, without the GIL; the float, integer and flag arrays are the
     reader's memory, not copied): 40 to 60 times as fast as the former pure-Python
     reader, and faster than ``pandas.read_csv`` on the CLI's traces (1.15 to 1.7

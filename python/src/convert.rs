@@ -11,7 +11,7 @@ use pyo3::{
 use serde::Serialize;
 use std::collections::HashMap;
 
-use experiments::table::{Column, ColumnRows, Table};
+use tables::{Column, ColumnRows, Table};
 
 /// Any serialisable value as Python objects, through its JSON text (what the
 /// CLI writes to its JSON files, in its fields' order), read by Python's `json`.

@@ -1,20 +1,20 @@
 //! `painleve._painleve.read_csv` and `read_arrow`: the tables the CLI writes (CSV;
 //! `--format arrow`: `trace.arrow`, `events.arrow`), read by the experiments' own
-//! readers ([`experiments::table::read`], [`experiments::table::arrow`]) without the
+//! readers ([`tables::read`], [`tables::arrow`]) without the
 //! GIL, as NumPy arrays; so `painleve.load` needs neither pandas nor pyarrow.
 //! Both give a table the column types of its CSV
-//! ([`experiments::table::read`]'s rule), so the formats read alike.
+//! ([`tables::read`]'s rule), so the formats read alike.
 
 use std::path::PathBuf;
 
-use experiments::table::{
-    arrow::read_arrow as arrow,
-    read::{self, ReadColumn},
-};
 use numpy::PyArray1;
 use pyo3::{
     prelude::*,
     types::{PyDict, PyTuple},
+};
+use tables::{
+    arrow::read_arrow as arrow,
+    read::{self, ReadColumn},
 };
 
 use crate::{
@@ -25,7 +25,7 @@ use crate::{
 /// `read_csv(path)`: the CSV table at `path` as `{column: array}` in the file's
 /// order: float64, int64, uint64 and bool NumPy arrays of shape `(nrows,)`, and
 /// each text column as a pair `(values, codes)` ([`coded_to_py`]), typed by
-/// [`experiments::table::read`]'s rule; read by [`read::read_csv_coded`] without
+/// [`tables::read`]'s rule; read by [`read::read_csv_coded`] without
 /// the GIL (in chunks of lines on rayon's threads), each array's memory the
 /// reader's `Vec` (no copy).
 ///
@@ -52,7 +52,7 @@ pub fn read_csv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDi
 pub fn read_arrow<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let columns = py
         .detach(|| arrow(&path).map(|t| read::as_read_from_csv(t).columns.into_iter().map(|(name, c)| (name, ReadColumn::of(c))).collect()))
-        .map_err(|e| cli_error(py, &e))?;
+        .map_err(|e| cli_error(py, &e.into()))?;
     coded_to_py(py, columns)
 }
 

@@ -55,6 +55,56 @@ pub struct PeriodRecord {
     pub status: u32,
 }
 
+// `trace.csv` of `run` and `pil`: [`PeriodRecord`]'s fields in order (the header
+// the `csv` crate derived from them); experiments/src/run.rs's test checks the bytes against it.
+tables::csv_row!(PeriodRecord {
+    t: f64,
+    theta1: f64,
+    theta1_dot: f64,
+    theta2: f64,
+    theta2_dot: f64,
+    z_t: f64,
+    z_n: f64,
+    z_t_ref: f64,
+    f_t: f64,
+    f_n: f64,
+    mode: str,
+    u1_cmd: f64,
+    u2_cmd: f64,
+    u1_applied: f64,
+    u2_applied: f64,
+    lift_off_true: bool,
+    lift_off_detected: bool,
+    deadline_miss: bool,
+    firmware_deadline_miss: bool,
+    overruns: int,
+    status: int,
+});
+
+// `--format mcap` (trace.mcap): the signal groups of the closed-loop trace, one
+// channel each; docs/rig.md "Outputs" lists them.
+impl tables::mcap::McapRows for PeriodRecord {
+    const TABLE: &'static str = "trace";
+    const GROUPS: &'static [tables::mcap::McapGroup] = &[
+        tables::mcap::McapGroup { topic: "/state", schema: "painleve.State", columns: &["theta1", "theta1_dot", "theta2", "theta2_dot"] },
+        tables::mcap::McapGroup {
+            topic: "/contact",
+            schema: "painleve.Contact",
+            columns: &["mode", "f_t", "f_n", "z_t", "z_n", "z_t_ref", "lift_off_true"],
+        },
+        tables::mcap::McapGroup {
+            topic: "/torques",
+            schema: "painleve.Torques",
+            columns: &["u1_cmd", "u2_cmd", "u1_applied", "u2_applied"],
+        },
+        tables::mcap::McapGroup {
+            topic: "/firmware",
+            schema: "painleve.Firmware",
+            columns: &["lift_off_detected", "deadline_miss", "firmware_deadline_miss", "overruns", "status"],
+        },
+    ];
+}
+
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {

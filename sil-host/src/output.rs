@@ -21,7 +21,7 @@ use std::{
 };
 
 use crate::{error::CliError, folder_lock::FolderLock};
-use experiments::table::{
+use tables::{
     TableFormat,
     arrow::ArrowStream,
     csv::{CsvFile, CsvRow},
@@ -73,7 +73,7 @@ impl OutputSet {
     }
 
     /// As [`OutputSet::create`], for writers that buffer themselves
-    /// ([`experiments::table::csv::CsvFile`]).
+    /// ([`tables::csv::CsvFile`]).
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
@@ -84,7 +84,7 @@ impl OutputSet {
         Ok((tmp, file))
     }
 
-    /// Starts the CSV file `name` ([`experiments::table::csv::CsvFile`]) with its header row `header`.
+    /// Starts the CSV file `name` ([`tables::csv::CsvFile`]) with its header row `header`.
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created.
@@ -206,11 +206,11 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 /// as CSV, as an Arrow IPC stream or as MCAP (`--format`). CSV and Arrow are
 /// flushed to the operating system at least every `flush_every` of wall time: a
 /// process killed outright (SIGKILL) loses at most the rows of that interval. CSV
-/// rows are formatted by [`experiments::table::csv`] (the bytes of the `csv`
+/// rows are formatted by [`tables::csv`] (the bytes of the `csv`
 /// crate's serde path); Arrow rows go out one record batch per flush
-/// ([`experiments::table::arrow::ArrowStream`]). MCAP rows go out one chunk per
-/// [`experiments::table::mcap::STREAM_CHUNK_ROWS`] rows, flushed at once
-/// ([`experiments::table::mcap::McapStream`]): counted in rows, not wall time, so
+/// ([`tables::arrow::ArrowStream`]). MCAP rows go out one chunk per
+/// [`tables::mcap::STREAM_CHUNK_ROWS`] rows, flushed at once
+/// ([`tables::mcap::McapStream`]): counted in rows, not wall time, so
 /// the file's bytes are the same over every link.
 pub struct StreamedTable<T: CsvRow + McapRows + Copy> {
     writer: StreamedWriter<T>,
@@ -259,7 +259,7 @@ impl<T: CsvRow + McapRows + Copy> StreamedTable<T> {
             StreamedWriter::Mcap(mcap) => mcap.push(*row),
         };
         if let Err(e) = result {
-            self.error = Some(e);
+            self.error = Some(e.into());
         }
     }
 
@@ -271,11 +271,11 @@ impl<T: CsvRow + McapRows + Copy> StreamedTable<T> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        match self.writer {
+        Ok(match self.writer {
             StreamedWriter::Csv(csv) => csv.finish(),
             StreamedWriter::Arrow(arrow) => arrow.finish(),
             StreamedWriter::Mcap(mcap) => mcap.finish(),
-        }
+        }?)
     }
 }
 

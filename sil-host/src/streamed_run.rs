@@ -40,7 +40,7 @@ pub fn run_streamed(
     out: &mut OutputSet,
     progress: &indicatif::ProgressBar,
     every: usize,
-    format: experiments::table::TableFormat,
+    format: tables::TableFormat,
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
     let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", format, std::time::Duration::from_millis(1))?;

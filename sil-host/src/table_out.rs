@@ -1,11 +1,11 @@
 //! A long table written as it is produced, in the format the user chose
-//! (`--format csv|arrow|mcap`): CSV by a writer thread ([`experiments::table::csv::CsvThread`]),
-//! an Arrow IPC file ([`experiments::table::arrow::ArrowFile`]), or, for two
-//! tables at once ([`TablesOut`]), one MCAP file ([`experiments::table::mcap::McapFile`]).
+//! (`--format csv|arrow|mcap`): CSV by a writer thread ([`tables::csv::CsvThread`]),
+//! an Arrow IPC file ([`tables::arrow::ArrowFile`]), or, for two
+//! tables at once ([`TablesOut`]), one MCAP file ([`tables::mcap::McapFile`]).
 
 use crate::{error::CliError, output::OutputSet};
-pub use experiments::table::TableFormat;
-use experiments::table::{
+pub use tables::TableFormat;
+use tables::{
     ColumnRows,
     arrow::ArrowFile,
     csv::{CsvRow, CsvThread},
@@ -51,7 +51,7 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     /// [`CliError::Io`] when writing has failed.
     pub fn send(&mut self, mut rows: Vec<T>) -> Result<Vec<T>, CliError> {
         match self {
-            Self::Csv(t) => t.send(rows),
+            Self::Csv(t) => Ok(t.send(rows)?),
             Self::Arrow(a) => {
                 a.push(&mut rows)?;
                 Ok(rows)
@@ -65,8 +65,8 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     /// [`CliError::Io`] when writing fails.
     pub fn finish(self) -> Result<(), CliError> {
         match self {
-            Self::Csv(t) => t.finish(),
-            Self::Arrow(a) => a.finish(),
+            Self::Csv(t) => Ok(t.finish()?),
+            Self::Arrow(a) => Ok(a.finish()?),
         }
     }
 }
@@ -136,7 +136,7 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
                 a.finish()?;
                 b.finish()
             }
-            Self::Mcap(file, _, _) => file.finish(),
+            Self::Mcap(file, _, _) => Ok(file.finish()?),
         }
     }
 }

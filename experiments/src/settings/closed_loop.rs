@@ -87,7 +87,7 @@ pub struct RunArgs {
     /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
     /// docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
-    pub format: crate::table::TableFormat,
+    pub format: tables::TableFormat,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
@@ -155,7 +155,7 @@ pub struct PilArgs {
     /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
     /// docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
-    pub format: crate::table::TableFormat,
+    pub format: tables::TableFormat,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,

@@ -40,7 +40,7 @@ pub struct SimulateArgs {
     /// tools: channels /state, /contact, /events of JSON messages with JSON schemas,
     /// log times in ns of simulated time; docs/rig.md "Outputs").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
-    pub format: crate::table::TableFormat,
+    pub format: tables::TableFormat,
     /// Relative tolerance of the integrator.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-9))]
     pub rtol: f64,

@@ -91,7 +91,7 @@ impl From<&PlantEvent> for EventRow {
 
 // The CSV columns, in the structs' field order (the header the `csv` crate
 // derived from them): the tests at the end check the bytes against it.
-crate::csv_row!(TraceRow {
+tables::csv_row!(TraceRow {
     t: f64,
     theta1: f64,
     theta1_dot: f64,
@@ -107,7 +107,7 @@ crate::csv_row!(TraceRow {
     mode: str,
     energy: f64,
 });
-crate::csv_row!(EventRow {
+tables::csv_row!(EventRow {
     t: f64,
     kind: str,
     mode_after: str,
@@ -124,24 +124,24 @@ crate::csv_row!(EventRow {
 
 // `--format mcap` (trace.mcap): the signal groups of `trace` and `events`, one
 // channel each; docs/rig.md "Outputs" lists them.
-impl crate::table::mcap::McapRows for TraceRow {
+impl tables::mcap::McapRows for TraceRow {
     const TABLE: &'static str = "trace";
-    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[
-        crate::table::mcap::McapGroup {
+    const GROUPS: &'static [tables::mcap::McapGroup] = &[
+        tables::mcap::McapGroup {
             topic: "/state",
             schema: "painleve.State",
             columns: &["theta1", "theta1_dot", "theta2", "theta2_dot", "energy"],
         },
-        crate::table::mcap::McapGroup {
+        tables::mcap::McapGroup {
             topic: "/contact",
             schema: "painleve.Contact",
             columns: &["mode", "f_t", "f_n", "z_t", "z_n", "z_t_dot", "z_n_dot", "z_r_dot"],
         },
     ];
 }
-impl crate::table::mcap::McapRows for EventRow {
+impl tables::mcap::McapRows for EventRow {
     const TABLE: &'static str = "events";
-    const GROUPS: &'static [crate::table::mcap::McapGroup] = &[crate::table::mcap::McapGroup {
+    const GROUPS: &'static [tables::mcap::McapGroup] = &[tables::mcap::McapGroup {
         topic: "/events",
         schema: "painleve.Event",
         columns: &[
@@ -230,10 +230,10 @@ pub struct Summary {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::csv::{CsvRow, push_header, push_row};
     use proptest::prelude::*;
+    use tables::csv::{CsvRow, push_header, push_row};
 
-    /// `rows` through the old path (`csv::Writer::serialize`, header derived) and through [`crate::table::csv`].
+    /// `rows` through the old path (`csv::Writer::serialize`, header derived) and through [`tables::csv`].
     fn both<T: serde::Serialize + CsvRow>(rows: &[T]) -> (Vec<u8>, Vec<u8>) {
         let mut w = csv::Writer::from_writer(Vec::new());
         for r in rows {
@@ -284,8 +284,8 @@ mod tests {
     /// The two ways from rows to columns agree: the declared columns (`csv_row!`,
     /// what Arrow and NumPy read for the long tables) and the serde path (the
     /// cells the `csv` crate writes), in names, types and bits.
-    fn same_table<T: serde::Serialize + crate::table::ColumnRows>(rows: &[T]) -> Result<(), TestCaseError> {
-        use crate::table::{Column, Table};
+    fn same_table<T: serde::Serialize + tables::ColumnRows>(rows: &[T]) -> Result<(), TestCaseError> {
+        use tables::{Column, Table};
         let declared = Table::of_columns(rows);
         let serde = Table::of_rows(rows).unwrap();
         prop_assert_eq!(declared.columns.len(), serde.columns.len());
@@ -299,5 +299,30 @@ mod tests {
             }
         }
         Ok(())
+    }
+
+    /// The CLI's tables: every column but `t` in exactly one group, each group's
+    /// columns the table's; `add_table` accepts them.
+    #[test]
+    fn the_cli_tables_groups_hold_each_column_once() {
+        use tables::{
+            ColumnRows,
+            mcap::{McapFile, McapRows},
+        };
+        fn check<T: McapRows>() {
+            let mut grouped: Vec<&str> = T::GROUPS.iter().flat_map(|g| g.columns.iter().copied()).collect();
+            grouped.sort_unstable();
+            let mut names: Vec<&str> = <T as ColumnRows>::NAMES.iter().copied().filter(|n| *n != "t").collect();
+            names.sort_unstable();
+            assert_eq!(grouped, names, "{}", T::TABLE);
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("t.mcap");
+            let mut f = McapFile::new(path.clone(), std::fs::File::create(&path).unwrap(), None).unwrap();
+            f.add_table::<T>().unwrap();
+            f.finish().unwrap();
+        }
+        check::<TraceRow>();
+        check::<EventRow>();
+        check::<rig::record::PeriodRecord>();
     }
 }

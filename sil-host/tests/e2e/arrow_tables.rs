@@ -1,12 +1,12 @@
 //! `simulate --format arrow` and `--format mcap` (and `run`'s) against `--format csv`: the
 //! same tables, column for column, every float with the same bits (the CSV's shortest
 //! round-trip digits read back by the `csv` crate and Rust's parser, the Arrow columns by
-//! `experiments::table::arrow::read_arrow`, the MCAP messages' JSON by
-//! `experiments::table::mcap::read_mcap` and serde_json: independent paths).
+//! `tables::arrow::read_arrow`, the MCAP messages' JSON by
+//! `tables::mcap::read_mcap` and serde_json: independent paths).
 
 use std::{path::Path, process::Command};
 
-use experiments::table::{Column, Table, arrow::read_arrow, mcap::read_mcap};
+use tables::{Column, Table, arrow::read_arrow, mcap::read_mcap};
 
 fn simulate(format: &str, out: &Path) {
     sil_host(&["simulate", "--x0", "a", "--v-belt", "-0.5", "--duration", "2", "--format", format, "--json", "--out"], out);

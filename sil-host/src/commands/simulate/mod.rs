@@ -5,7 +5,7 @@
 //! contact mode against time) and `summary.json`; with `--format arrow` the two
 //! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns), with
 //! `--format mcap` both are in `trace.mcap` (channels `/state`, `/contact`,
-//! `/events`; [`experiments::table::mcap`]). If the simulation fails part
+//! `/events`; [`tables::mcap`]). If the simulation fails part
 //! way, everything up to the failure is still written (with the error in the
 //! summary) and the command exits with code 1.
 

@@ -1,21 +1,33 @@
-//! The experiments' tables, one layer for every reader: rows become columns once
+//! The project's tables, one layer for every format: rows become columns once
 //! ([`Table`], [`Column`]), and the Arrow files ([`arrow`]) and the Python
 //! package's NumPy arrays read those columns; CSV ([`csv`]) is written row by row
-//! from the same row types, with the same columns in the same order.
+//! from the same row types, with the same columns in the same order; MCAP
+//! ([`mcap`]) splits a table's columns into signal groups, a channel each.
 //!
 //! Two ways from rows to a [`Table`]: the long tables' row types (`trace`,
-//! `events`, the closed-loop trace) declare their columns with [`crate::csv_row!`]
+//! `events`, the closed-loop trace) declare their columns with [`csv_row!`]
 //! ([`ColumnRows`], typed, no per-cell dispatch); any other row type that derives
 //! `serde::Serialize` goes through [`Table::of_rows`] ([`rows`], the cells the
 //! `csv` crate would write). [`read`] reads a CSV table back, with the column
 //! types a reader of the file sees (and gives an Arrow table the same types).
+//!
+//! Feature `files` (on by default): the Arrow and MCAP files and the CSV reader.
+//! Without it the crate holds the declarations, the rows-to-columns layer and the
+//! CSV writer (what `rig` and `analyses` need to declare their row types).
+//! Errors: [`Error`].
 
+#![warn(missing_docs)]
+
+#[cfg(feature = "files")]
 pub mod arrow;
 pub mod csv;
+pub mod error;
 pub mod mcap;
+#[cfg(feature = "files")]
 pub mod read;
 pub mod rows;
 
+pub use error::Error;
 use serde::Serialize;
 
 pub use rows::{ColumnError, TableBuilder};
@@ -53,7 +65,7 @@ impl Column {
     }
 }
 
-/// The type of a column declared by [`crate::csv_row!`]: `f64`, `str` (a `&str` or
+/// The type of a column declared by [`csv_row!`]: `f64`, `str` (a `&str` or
 /// `String` field), `bool`, `int` (an integer that converts to `i64` without loss).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -67,7 +79,7 @@ pub enum Kind {
     Int,
 }
 
-/// A row type whose columns are declared field by field ([`crate::csv_row!`]
+/// A row type whose columns are declared field by field ([`csv_row!`]
 /// implements it with [`csv::CsvRow`], from the same field list, so the CSV and
 /// the columns agree in names and order).
 pub trait ColumnRows: Sized {

@@ -29,14 +29,14 @@ use arrow_ipc::{
 use arrow_schema::{ArrowError, DataType, Field, Schema};
 
 use super::{Column, ColumnRows, Kind, Table};
-use crate::error::Error as CliError;
+use crate::error::Error;
 
 /// Rows per record batch: 64 Ki rows (about 7 MB of a 14-column trace).
 pub const BATCH_ROWS: usize = 1 << 16;
 
 /// The error of an Arrow file, as the CLI reports it: the file and what failed.
-fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> CliError + '_ {
-    move |e| CliError::Io {
+fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> Error + '_ {
+    move |e| Error::Io {
         path: path.to_path_buf(),
         source: match e {
             ArrowError::IoError(_, io) => io,
@@ -60,8 +60,8 @@ impl<T: ColumnRows> ArrowFile<T> {
     /// Starts the Arrow IPC file `file` (at `path`, for error messages) with `T`'s schema.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the header cannot be written.
-    pub fn new(path: PathBuf, file: File) -> Result<Self, CliError> {
+    /// [`Error::Io`] when the header cannot be written.
+    pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
         let schema = Arc::new(schema_of(T::NAMES, T::KINDS));
         let writer = FileWriter::try_new_buffered(file, &schema).map_err(arrow_err(&path))?;
         Ok(Self { path, writer, schema, pending: Vec::with_capacity(BATCH_ROWS) })
@@ -71,8 +71,8 @@ impl<T: ColumnRows> ArrowFile<T> {
     /// record batch whenever [`BATCH_ROWS`] rows are waiting.
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn push(&mut self, rows: &mut Vec<T>) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn push(&mut self, rows: &mut Vec<T>) -> Result<(), Error> {
         for row in rows.drain(..) {
             self.pending.push(row);
             if self.pending.len() >= BATCH_ROWS {
@@ -82,7 +82,7 @@ impl<T: ColumnRows> ArrowFile<T> {
         Ok(())
     }
 
-    fn write_pending(&mut self) -> Result<(), CliError> {
+    fn write_pending(&mut self) -> Result<(), Error> {
         if self.pending.is_empty() {
             return Ok(());
         }
@@ -96,13 +96,13 @@ impl<T: ColumnRows> ArrowFile<T> {
     /// Writes the rows still waiting, the footer, and closes the file.
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn finish(mut self) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), Error> {
         self.write_pending()?;
         self.writer.finish().map_err(arrow_err(&self.path))?;
         let path = self.path.clone();
         let buffered = self.writer.into_inner().map_err(arrow_err(&path))?;
-        buffered.into_inner().map_err(|e| CliError::Io { path, source: e.into_error() })?;
+        buffered.into_inner().map_err(|e| Error::Io { path, source: e.into_error() })?;
         Ok(())
     }
 }
@@ -126,8 +126,8 @@ impl<T: ColumnRows> ArrowStream<T> {
     /// Starts the stream `file` (at `path`, for error messages) with `T`'s schema.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the schema message cannot be written.
-    pub fn new(path: PathBuf, file: File) -> Result<Self, CliError> {
+    /// [`Error::Io`] when the schema message cannot be written.
+    pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
         let schema = Arc::new(schema_of(T::NAMES, T::KINDS));
         let writer = StreamWriter::try_new(file, &schema).map_err(arrow_err(&path))?;
         Ok(Self { path, writer, schema, pending: Vec::new() })
@@ -137,13 +137,13 @@ impl<T: ColumnRows> ArrowStream<T> {
     /// flushes it (the caller decides: `run` every 1 ms of wall time, like its CSV).
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn push(&mut self, row: T, write: bool) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn push(&mut self, row: T, write: bool) -> Result<(), Error> {
         self.pending.push(row);
         if write { self.write_pending() } else { Ok(()) }
     }
 
-    fn write_pending(&mut self) -> Result<(), CliError> {
+    fn write_pending(&mut self) -> Result<(), Error> {
         if self.pending.is_empty() {
             return Ok(());
         }
@@ -158,8 +158,8 @@ impl<T: ColumnRows> ArrowStream<T> {
     /// Writes the rows still waiting and the end-of-stream marker.
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn finish(mut self) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), Error> {
         self.write_pending()?;
         self.writer.finish().map_err(arrow_err(&self.path))
     }
@@ -240,17 +240,17 @@ fn extend(c: &mut Column, a: &dyn Array) -> Option<()> {
 /// while writing, [`ArrowStream`]) gives its whole batches.
 ///
 /// # Errors
-/// [`CliError::Io`] naming the file when it cannot be read, is neither an Arrow
+/// [`Error::Io`] naming the file when it cannot be read, is neither an Arrow
 /// IPC file (nor one cut off before its footer) nor a stream, or has a column of
 /// another type than Float64, Int64, Boolean or Utf8.
-pub fn read_arrow(path: &Path) -> Result<Table, CliError> {
-    let bad = |msg: String| CliError::Io { path: path.to_path_buf(), source: std::io::Error::other(msg) };
-    let mut file = File::open(path).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
+pub fn read_arrow(path: &Path) -> Result<Table, Error> {
+    let bad = |msg: String| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(msg) };
+    let mut file = File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     // The file format starts with the magic `ARROW1`; the stream format (`run`,
     // `pil`) with a message.
     let mut magic = [0u8; 6];
     let is_file = std::io::Read::read_exact(&mut file, &mut magic).is_ok() && &magic == b"ARROW1";
-    std::io::Seek::rewind(&mut file).map_err(|e| CliError::Io { path: path.to_path_buf(), source: e })?;
+    std::io::Seek::rewind(&mut file).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let (schema, batches): (Arc<Schema>, Box<dyn Iterator<Item = Result<RecordBatch, ArrowError>>>) = if is_file {
         let reader = FileReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
         (reader.schema(), Box::new(reader))

@@ -13,7 +13,7 @@
 
 use std::{fs::File, io::Write, path::PathBuf};
 
-use crate::error::{Error as CliError, io_err};
+use crate::error::{Error, io_err};
 
 /// Bytes buffered before they go to the file (one `write` system call each).
 pub const FLUSH_BYTES: usize = 1 << 20;
@@ -126,14 +126,14 @@ fn end_record(buf: &mut Vec<u8>, n_fields: usize) {
     }
 }
 
-/// Implements [`CsvRow`] and [`crate::table::ColumnRows`] for a struct from its
+/// Implements [`CsvRow`] and [`crate::ColumnRows`] for a struct from its
 /// fields, each with its kind: `f64`, `str` (a `&str` or `String` field), `bool`,
 /// `int` (an integer that converts to `i64` without loss). The CSV header and
 /// the columns (Arrow, NumPy) list the same columns in the same order.
 #[macro_export]
 macro_rules! csv_row {
     ($ty:ty { $($field:ident : $kind:ident),+ $(,)? }) => {
-        impl $crate::table::csv::CsvRow for $ty {
+        impl $crate::csv::CsvRow for $ty {
             const HEADER: &'static [&'static str] = &[$(stringify!($field)),+];
             #[inline]
             fn push_fields(&self, buf: &mut Vec<u8>) {
@@ -143,26 +143,26 @@ macro_rules! csv_row {
                 )+
             }
         }
-        impl $crate::table::ColumnRows for $ty {
+        impl $crate::ColumnRows for $ty {
             const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
-            const KINDS: &'static [$crate::table::Kind] = &[$($crate::csv_row!(@kind $kind)),+];
-            fn columns(rows: &[Self]) -> Vec<$crate::table::Column> {
+            const KINDS: &'static [$crate::Kind] = &[$($crate::csv_row!(@kind $kind)),+];
+            fn columns(rows: &[Self]) -> Vec<$crate::Column> {
                 vec![$($crate::csv_row!(@column rows, $kind, $field)),+]
             }
         }
     };
-    (@kind f64) => { $crate::table::Kind::F64 };
-    (@kind str) => { $crate::table::Kind::Str };
-    (@kind bool) => { $crate::table::Kind::Bool };
-    (@kind int) => { $crate::table::Kind::Int };
-    (@column $rows:ident, f64, $f:ident) => { $crate::table::Column::F64($rows.iter().map(|r| r.$f).collect()) };
-    (@column $rows:ident, str, $f:ident) => { $crate::table::Column::Str($rows.iter().map(|r| -> String { (&*r.$f).to_string() }).collect()) };
-    (@column $rows:ident, bool, $f:ident) => { $crate::table::Column::Bool($rows.iter().map(|r| r.$f).collect()) };
-    (@column $rows:ident, int, $f:ident) => { $crate::table::Column::I64($rows.iter().map(|r| i64::from(r.$f)).collect()) };
-    (@push $buf:ident, f64, $v:expr) => { $crate::table::csv::push_f64($buf, $v) };
-    (@push $buf:ident, str, $v:expr) => { $crate::table::csv::push_str($buf, &$v) };
-    (@push $buf:ident, bool, $v:expr) => { $crate::table::csv::push_bool($buf, $v) };
-    (@push $buf:ident, int, $v:expr) => { $crate::table::csv::push_int($buf, $v) };
+    (@kind f64) => { $crate::Kind::F64 };
+    (@kind str) => { $crate::Kind::Str };
+    (@kind bool) => { $crate::Kind::Bool };
+    (@kind int) => { $crate::Kind::Int };
+    (@column $rows:ident, f64, $f:ident) => { $crate::Column::F64($rows.iter().map(|r| r.$f).collect()) };
+    (@column $rows:ident, str, $f:ident) => { $crate::Column::Str($rows.iter().map(|r| -> String { (&*r.$f).to_string() }).collect()) };
+    (@column $rows:ident, bool, $f:ident) => { $crate::Column::Bool($rows.iter().map(|r| r.$f).collect()) };
+    (@column $rows:ident, int, $f:ident) => { $crate::Column::I64($rows.iter().map(|r| i64::from(r.$f)).collect()) };
+    (@push $buf:ident, f64, $v:expr) => { $crate::csv::push_f64($buf, $v) };
+    (@push $buf:ident, str, $v:expr) => { $crate::csv::push_str($buf, &$v) };
+    (@push $buf:ident, bool, $v:expr) => { $crate::csv::push_bool($buf, $v) };
+    (@push $buf:ident, int, $v:expr) => { $crate::csv::push_int($buf, $v) };
 }
 
 /// A CSV file written through a byte buffer of about [`FLUSH_BYTES`]: one
@@ -184,9 +184,9 @@ impl CsvFile {
     /// Appends `row`; writes the buffer out when it is full.
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
+    /// [`Error::Io`] when writing fails.
     #[inline]
-    pub fn row<T: CsvRow>(&mut self, row: &T) -> Result<(), CliError> {
+    pub fn row<T: CsvRow>(&mut self, row: &T) -> Result<(), Error> {
         push_row(&mut self.buf, row);
         if self.buf.len() >= FLUSH_BYTES { self.flush() } else { Ok(()) }
     }
@@ -194,8 +194,8 @@ impl CsvFile {
     /// Writes what is buffered to the file (to the operating system, not to disk).
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn flush(&mut self) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn flush(&mut self) -> Result<(), Error> {
         self.file.write_all(&self.buf).map_err(io_err(&self.path))?;
         self.buf.clear();
         Ok(())
@@ -209,8 +209,8 @@ impl CsvFile {
     /// Writes the rest and closes the file.
     ///
     /// # Errors
-    /// [`CliError::Io`] when writing fails.
-    pub fn finish(mut self) -> Result<(), CliError> {
+    /// [`Error::Io`] when writing fails.
+    pub fn finish(mut self) -> Result<(), Error> {
         self.flush()
     }
 }
@@ -223,7 +223,7 @@ impl CsvFile {
 pub struct CsvThread<T: CsvRow + Send + 'static> {
     to_writer: Option<std::sync::mpsc::SyncSender<Vec<T>>>,
     from_writer: std::sync::mpsc::Receiver<Vec<T>>,
-    writer: Option<std::thread::JoinHandle<Result<(), CliError>>>,
+    writer: Option<std::thread::JoinHandle<Result<(), Error>>>,
     path: PathBuf,
 }
 
@@ -234,8 +234,8 @@ impl<T: CsvRow + Send + 'static> CsvThread<T> {
     /// Starts the thread that writes `csv`.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the thread cannot be started.
-    pub fn spawn(mut csv: CsvFile) -> Result<Self, CliError> {
+    /// [`Error::Io`] when the thread cannot be started.
+    pub fn spawn(mut csv: CsvFile) -> Result<Self, Error> {
         let (to_writer, rx) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH);
         let (back, from_writer) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH + 2);
         let path = csv.path.clone();
@@ -260,8 +260,8 @@ impl<T: CsvRow + Send + 'static> CsvThread<T> {
     /// the writer is done with, or a new one of the same capacity).
     ///
     /// # Errors
-    /// The writer's [`CliError::Io`] if it has stopped on one.
-    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, CliError> {
+    /// The writer's [`Error::Io`] if it has stopped on one.
+    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, Error> {
         let capacity = rows.capacity();
         let sent = self.to_writer.as_ref().is_some_and(|tx| tx.send(rows).is_ok());
         if !sent {
@@ -274,16 +274,16 @@ impl<T: CsvRow + Send + 'static> CsvThread<T> {
     /// Waits for the writer to write everything and close the file.
     ///
     /// # Errors
-    /// The writer's [`CliError::Io`], if any.
-    pub fn finish(mut self) -> Result<(), CliError> {
+    /// The writer's [`Error::Io`], if any.
+    pub fn finish(mut self) -> Result<(), Error> {
         self.join()
     }
 
-    fn join(&mut self) -> Result<(), CliError> {
+    fn join(&mut self) -> Result<(), Error> {
         self.to_writer = None;
         match self.writer.take() {
             Some(h) => h.join().unwrap_or_else(|_| {
-                Err(CliError::Io { path: self.path.clone(), source: std::io::Error::other("the CSV writer thread panicked") })
+                Err(Error::Io { path: self.path.clone(), source: std::io::Error::other("the CSV writer thread panicked") })
             }),
             None => Ok(()),
         }
