@@ -3,7 +3,7 @@
 #
 #   scripts/soak.sh SECONDS SEED [OUT]      e.g. scripts/soak.sh 3600 1   (the hour)
 #
-# Runs tests/tests/soak.rs in release with SOAK_SECONDS=SECONDS of simulated time and
+# Runs sil-host/tests/soak.rs in release with SOAK_SECONDS=SECONDS of simulated time and
 # SOAK_SEED=SEED (the random fault schedule's and the sensor noise's seed): `sil-host
 # run` over iceoryx2 in lockstep with the seeded faults, then the checks (counts
 # against the faults, no leak in /dev/shm, /tmp/iceoryx2 or the temp folder, flat
@@ -32,7 +32,7 @@ echo "== /dev/shm before: $(find /dev/shm -mindepth 1 | wc -l) entries; iceoryx2
 start=$(date +%s)
 status=0
 SOAK_SECONDS="$seconds" SOAK_SEED="$seed" SOAK_OUT="$out" \
-  cargo test --release -p e2e --test soak -- --nocapture --test-threads 1 || status=$?
+  cargo test --release -p sil-host --test soak -- --nocapture --test-threads 1 || status=$?
 echo "== /dev/shm after: $(find /dev/shm -mindepth 1 | wc -l) entries; iceoryx2 files: $(find /tmp/iceoryx2 -mindepth 1 2>/dev/null | wc -l)"
 echo "== $(($(date +%s) - start)) s of wall time (build included); report: $out/soak/soak-report.json"
 exit "$status"

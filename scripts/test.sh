@@ -32,7 +32,7 @@ if ! command -v llvm-addr2line >/dev/null && ! command -v llvm-addr2line-14 >/de
   fi
 fi
 
-# The Python monitor's environment (tests/tests/python_monitor.rs): a virtual environment
+# The Python monitor's environment (sil-host/tests/e2e/python_monitor.rs): a virtual environment
 # with examples/python/requirements.txt (iceoryx2 from PyPI, pinned to the crate's version).
 # An existing PAINLEVE_PYTHON (a Python with those packages) is used as it is.
 if [ -z "${PAINLEVE_PYTHON:-}" ]; then
@@ -51,12 +51,14 @@ if [ -z "${PAINLEVE_PYTHON:-}" ]; then
   export PAINLEVE_PYTHON="$PWD/$venv/bin/python"
 fi
 
-echo "== format, lints (rustfmt.toml; clippy, warnings are errors) and no import cycle between files"
+echo "== format, lints (rustfmt.toml; clippy, warnings are errors), no import cycle between files, no large tracked file"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
-python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-twin/src board-emulator/src boards/stm32f405/src plant/src rig/src analyses/src tables/src experiments/src sil-host/src fuzz/src python/src
+python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src analyses/src experiments/src sil-host/src fuzz/src python/src
 # The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
 python3 scripts/front_features.py
+# No tracked file over 1 MiB outside an explicit list (a committed wheel or archive).
+python3 scripts/tracked_sizes.py
 
 echo "== no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf

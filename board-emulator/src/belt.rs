@@ -39,7 +39,7 @@ pub const EDGE_SPACING_TICKS: u64 = 10;
 /// The same between scheduler rounds ([`Mode::Counted`]): TIM4 then sees an
 /// edge only where a round is cut, and at 60 ns some were lost; 200 ns apart
 /// none are (the counted run equals the functional one bit for bit:
-/// `rig/tests/emulator.rs`).
+/// `board-link/tests/board/emulator.rs`).
 pub const ROUND_EDGE_SPACING_TICKS: u64 = 34;
 /// Core ticks from the end of a period's run to the first edge.
 const LEAD_TICKS: u64 = 168;

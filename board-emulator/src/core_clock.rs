@@ -31,31 +31,27 @@
 use std::{
     collections::VecDeque,
     sync::{
-        Arc, Mutex, MutexGuard, PoisonError, Weak,
+        Arc, Mutex, MutexGuard, PoisonError,
         atomic::{AtomicU64, Ordering::Relaxed},
     },
 };
 
 use rsemu::{
     core::{
-        SpinDetector,
-        clock::ClockControl,
-        device::{DebugTranslation, Deferred, Device, DeviceClass, Export, ExportId, RealizeCtx, ResetKind, SinkPin},
-        error::Result,
-        sched::{Budget, Consumed, LazyHandle, TickCursor},
-        space::RegionRef,
-        state::{ChunkReader, ChunkWriter},
-        wire::{DmaPeripheral, IntAck, LocalController, WireId, WireSink, WireSource},
+        sched::TickCursor,
+        wire::{WireId, WireSink},
     },
-    cpu::arm::v7m::{ArmV7m, sys::Exception},
-    machine::{BindCtx, Bindings, Instance},
+    cpu::arm::v7m::ArmV7m,
+    machine::{Bindings, Instance},
 };
 
 use crate::{
-    accelerator::{Accelerator, Acr, FLASH},
+    accelerator::{Accelerator, Acr},
     device::PinsDevice,
-    flash_reads,
 };
+
+mod device;
+mod run;
 
 /// External interrupt inputs folded in (the STM32F405 has 82; three words).
 const IRQS: u16 = 96;
@@ -221,282 +217,5 @@ impl Core {
     /// The handler runs counted since the last call ([`Mode::Counted`]).
     pub fn take_handlers(&self) -> Vec<HandlerRun> {
         std::mem::take(&mut lock(&self.handlers))
-    }
-
-    /// Ticks of `ticks` that may be charged without a step (0: the core must
-    /// step): the core sleeps, owes nothing, nothing is pending or could pend.
-    fn sleepable(&self, ticks: u64) -> u64 {
-        let c = &*self.cpu;
-        if self.reset_seen.swap(false, Relaxed) {
-            // The next step takes the reset.
-            return 0;
-        }
-        if !c.is_asleep() || c.cycle_debt() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
-            return 0;
-        }
-        c.with_sys(|s| {
-            // As Exec::step's merge_external: an asserted line pends unless
-            // active. Only enabled lines can wake the core; a disabled line's
-            // pending bit is folded in by the next step, which nothing reads
-            // before (the image reads no NVIC pending bits).
-            for irq in 0..IRQS {
-                let e = Exception(irq + 16);
-                if s.is_enabled(e) && c.irq_asserted(irq) && !s.is_active(e) {
-                    s.set_pending(e, true);
-                }
-            }
-            if s.highest_pending().is_some() {
-                return 0;
-            }
-            let mut n = ticks;
-            if s.syst_csr & 0b11 == 0b11 && s.syst_rvr & 0xFF_FFFF != 0 {
-                let current = u64::from(s.syst_cvr & 0xFF_FFFF);
-                if current == 0 {
-                    return 0;
-                }
-                n = n.min(current);
-            }
-            s.tick_cyccnt(n);
-            if s.tick_systick(n) && s.syst_csr & 0b10 != 0 {
-                s.set_pending(Exception::SYSTICK, true);
-            }
-            n
-        })
-    }
-
-    fn run_functional(&self, ticks: u64) -> u64 {
-        let c = &*self.cpu;
-        let cursor = lock(&self.cursor).clone();
-        let anchor = cursor.as_ref().map_or(0, TickCursor::anchor);
-        let mut edges = lock(&self.edges);
-        let pins = lock(&self.pins).clone();
-        let mut used = 0;
-        let mut calls = 0u64;
-        while used < ticks {
-            let mut rest = ticks - used;
-            // A host edge where the core owes nothing: its position is then
-            // exactly anchor + used.
-            if let (Some(e), Some(cur), Some(pins)) = (edges.front().copied(), cursor.as_ref(), pins.as_ref())
-                && c.cycle_debt() == 0
-            {
-                let pos = anchor + used;
-                if e.at <= pos {
-                    if e.at < pos {
-                        self.late_edges.fetch_add(1, Relaxed);
-                    }
-                    edges.pop_front();
-                    cur.set(pos);
-                    pins.drive(e.line, e.high);
-                    continue;
-                }
-                if c.is_asleep() {
-                    rest = rest.min(e.at - pos);
-                }
-            }
-            // A sleeping core's debt is paid without a step.
-            let d = if c.is_asleep() { c.cycle_debt().min(rest) } else { 0 };
-            if d > 0 {
-                used += c.run_budget(d);
-                continue;
-            }
-            let n = self.sleepable(rest);
-            if n > 0 {
-                used += n;
-                continue;
-            }
-            // Awake: only the first run_budget call of a run publishes exact
-            // positions; a later one runs a short chunk.
-            let chunk = if calls == 0 { rest } else { rest.min(64) };
-            let r = c.run_budget(chunk);
-            calls += 1;
-            used += r;
-            if r < chunk {
-                break;
-            }
-        }
-        self.end_tick.store(anchor + used, Relaxed);
-        used
-    }
-
-    fn run_counted(&self, ticks: u64) -> u64 {
-        let c = &*self.cpu;
-        let anchor = lock(&self.cursor).as_ref().map_or(0, TickCursor::anchor);
-        let mut tr = lock(&self.track);
-        let mut used = 0;
-        while used < ticks {
-            let n = self.sleepable(ticks - used);
-            if n > 0 {
-                used += n;
-                tr.tick += n;
-                continue;
-            }
-            if tr.irq_seen.is_none() && c.irq_asserted(TIM2_IRQ) {
-                tr.irq_seen = Some(tr.tick);
-            }
-            let debt = c.cycle_debt();
-            let before = c.current_exception().0;
-            let now = tr.tick;
-            let stall = match (debt, tr.accel.as_mut()) {
-                (0, Some(a)) => {
-                    let r = c.regs().r;
-                    let pc = r[15];
-                    match flash_reads::instruction_at(&a.code, FLASH.start, pc) {
-                        Some((width, insn)) => {
-                            a.reads.clear();
-                            flash_reads::data_reads(&insn, pc, &r, &mut a.reads);
-                            a.art.instruction(pc, width, &a.reads, now)
-                        }
-                        None => 0,
-                    }
-                }
-                _ => 0,
-            };
-            let n = c.run_budget(1);
-            if n == 0 {
-                break;
-            }
-            if debt == 0 && before == TIM2_EXCEPTION {
-                tr.instructions += 1;
-                tr.wait += stall;
-                let tick = tr.tick;
-                let start = *tr.first.get_or_insert(tick);
-                if !c.with_sys(|s| s.is_active(Exception(TIM2_EXCEPTION))) {
-                    // Returned (a preempting handler leaves TIM2 active).
-                    let end = tr.tick + 1 + c.cycle_debt();
-                    let latency = tr.irq_seen.take().map_or(0, |s| start.saturating_sub(s));
-                    let run = HandlerRun {
-                        latency_cycles: latency,
-                        instructions: std::mem::take(&mut tr.instructions),
-                        cycles: end - start,
-                        wait_cycles: std::mem::take(&mut tr.wait),
-                        started_at: start,
-                    };
-                    tr.first = None;
-                    lock(&self.handlers).push(run);
-                }
-            }
-            used += n;
-            tr.tick += n;
-        }
-        self.end_tick.store(anchor + used, Relaxed);
-        used
-    }
-}
-
-impl Instance for Core {
-    fn bind(&self, ctx: &BindCtx<'_>) -> Result<()> {
-        Instance::bind(&*self.cpu, ctx)
-    }
-}
-
-impl Device for Core {
-    fn run(&self, budget: Budget) -> Consumed {
-        Consumed::new(match self.mode {
-            Mode::Functional => self.run_functional(budget.ticks),
-            Mode::Counted => self.run_counted(budget.ticks),
-        })
-    }
-    fn attach_cursor(&self, c: TickCursor) {
-        *lock(&self.cursor) = Some(c.clone());
-        Device::attach_cursor(&*self.cpu, c);
-    }
-    fn class(&self) -> &'static DeviceClass {
-        Device::class(&*self.cpu)
-    }
-    fn realize(&self, ctx: &mut RealizeCtx<'_>) -> Result<()> {
-        Device::realize(&*self.cpu, ctx)
-    }
-    fn unrealize(&self, ctx: &mut RealizeCtx<'_>) -> Result<()> {
-        Device::unrealize(&*self.cpu, ctx)
-    }
-    fn reset(&self, kind: ResetKind) {
-        Device::reset(&*self.cpu, kind);
-    }
-    fn debug_halt(&self, h: bool) {
-        Device::debug_halt(&*self.cpu, h);
-    }
-    fn flush(&self) -> Result<()> {
-        Device::flush(&*self.cpu)
-    }
-    fn save(&self, w: &mut ChunkWriter<'_>) -> Result<()> {
-        Device::save(&*self.cpu, w)
-    }
-    fn load(&self, r: &mut ChunkReader<'_>) -> Result<()> {
-        Device::load(&*self.cpu, r)
-    }
-    fn region(&self, name: &str) -> Option<RegionRef> {
-        Device::region(&*self.cpu, name)
-    }
-    fn set_spin_detector(&self, cpu: u32, d: Option<Arc<SpinDetector>>) -> bool {
-        Device::set_spin_detector(&*self.cpu, cpu, d)
-    }
-    fn sink(&self, port: &str, sources: &[WireId]) -> Option<SinkPin> {
-        let pin = Device::sink(&*self.cpu, port, sources)?;
-        if port != "reset" {
-            return Some(pin);
-        }
-        let watch = Arc::new(ResetWatch { inner: pin.sink, seen: Arc::clone(&self.reset_seen) });
-        *lock(&self.reset_watch) = Some(Arc::clone(&watch));
-        Some(SinkPin { sink: watch, line: pin.line })
-    }
-    fn export(&self, which: ExportId) -> Option<Export> {
-        Device::export(&*self.cpu, which)
-    }
-    fn connect(&self, port: &str, source: WireSource) -> Result<()> {
-        Device::connect(&*self.cpu, port, source)
-    }
-    fn int_ack(&self, port: &str) -> Option<Arc<dyn IntAck>> {
-        Device::int_ack(&*self.cpu, port)
-    }
-    fn attach_int_ack(&self, port: &str, ack: Weak<dyn IntAck>) {
-        Device::attach_int_ack(&*self.cpu, port, ack);
-    }
-    fn dma_peripheral(&self, port: &str) -> Option<Arc<dyn DmaPeripheral>> {
-        Device::dma_peripheral(&*self.cpu, port)
-    }
-    fn attach_dma_peripheral(&self, port: &str, p: Weak<dyn DmaPeripheral>) {
-        Device::attach_dma_peripheral(&*self.cpu, port, p);
-    }
-    fn local_controller(&self, port: &str) -> Option<Arc<dyn LocalController>> {
-        Device::local_controller(&*self.cpu, port)
-    }
-    fn attach_local_controller(&self, port: &str, p: Weak<dyn LocalController>) {
-        Device::attach_local_controller(&*self.cpu, port, p);
-    }
-    fn announce(&self, port: &str) {
-        Device::announce(&*self.cpu, port);
-    }
-    fn debug_translate(&self, va: u64) -> DebugTranslation {
-        Device::debug_translate(&*self.cpu, va)
-    }
-    fn combinational(&self) -> bool {
-        Device::combinational(&*self.cpu)
-    }
-    fn is_runnable(&self) -> bool {
-        Device::is_runnable(&*self.cpu)
-    }
-    fn event(&self, token: u64, d: &mut Deferred) {
-        Device::event(&*self.cpu, token, d);
-    }
-    fn is_lazy(&self) -> bool {
-        Device::is_lazy(&*self.cpu)
-    }
-    fn current_tick(&self) -> u64 {
-        Device::current_tick(&*self.cpu)
-    }
-    fn advance_to(&self, tick: u64) {
-        Device::advance_to(&*self.cpu, tick);
-    }
-    fn next_event_tick(&self) -> Option<u64> {
-        Device::next_event_tick(&*self.cpu)
-    }
-    fn sampled_every_cycle(&self) -> bool {
-        Device::sampled_every_cycle(&*self.cpu)
-    }
-    fn attach_lazy(&self, h: LazyHandle) {
-        Device::attach_lazy(&*self.cpu, h);
-    }
-    fn attach_clock_control(&self, c: Arc<ClockControl>) {
-        Device::attach_clock_control(&*self.cpu, c);
     }
 }

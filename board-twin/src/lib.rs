@@ -25,7 +25,7 @@ pub mod adc;
 pub mod as5047p;
 pub mod bench;
 pub mod counter;
-pub mod description;
+pub use board_description as description;
 pub mod flash;
 pub mod motor_stage;
 pub mod physics;

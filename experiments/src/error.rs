@@ -118,18 +118,6 @@ macro_rules! through_analysis {
 }
 through_analysis!(shared::ParamError, plant::SimError, rig::scenario::ScenarioError, rig::record::RunError);
 
-/// A bring-up step's failure ([`rig::bringup_procedure`]): a line that does not
-/// answer as the protocol says is bad input (exit 2), a refusal of the board
-/// [`Error::Board`] (exit 1).
-impl From<rig::bringup_procedure::StepError> for Error {
-    fn from(e: rig::bringup_procedure::StepError) -> Self {
-        match e {
-            rig::bringup_procedure::StepError::Line(m) => Self::bad_input(m),
-            rig::bringup_procedure::StepError::Refused(m) => Self::Board(m),
-        }
-    }
-}
-
 /// Whether a run failed on its input rather than while running: the rig is
 /// another's, the firmware process or a service does not fit, or the scenario
 /// asks a board for what it never runs (exit 2).

@@ -8,21 +8,34 @@ use crate::{
     settings::{RunArgs, RunLink},
 };
 use rig::faults::LinkKind;
+use rig::record::RunError;
 use rig::scenario::Scenario;
-use rig::setup::{firmware_config, plant_for};
+use rig::setup::RunSetup;
+
+/// The run `scenario` asks for ([`RunSetup`]: the plant at `t = 0`, the
+/// firmware's configuration, the faults), made once, before the output folder
+/// is touched; `run` and `pil` hand it to the loop and the link.
+///
+/// # Errors
+/// Bad plant parameters or initial conditions, or a firmware configuration the
+/// firmware refuses (exit 2).
+pub fn setup(scenario: Scenario) -> Result<RunSetup, CliError> {
+    RunSetup::new(scenario).map_err(|e| match e {
+        RunError::Firmware(e) => CliError::bad_input(format!("firmware configuration: {e}")),
+        e => CliError::from(e),
+    })
+}
 
 /// Checks `sil-host run`'s scenario and options before any link is made: the
-/// scenario with its overrides, the plant and firmware set-up, the link
+/// scenario with its overrides, the run it makes ([`setup`]), the link
 /// (`--in-process`, `--link`) with the options it allows and the faults it can
-/// inject. Returns the scenario and the link.
+/// inject. Returns the run and the link.
 ///
 /// # Errors
 /// Bad scenario, overrides or options (exit 2).
-pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
-    let scenario = load_scenario(&args.scenario)?;
-    // Check the plant and firmware set-up before touching the output folder.
-    plant_for(&scenario).map_err(CliError::from)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::bad_input(format!("firmware configuration: {e}")))?;
+pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), CliError> {
+    let setup = setup(load_scenario(&args.scenario)?)?;
+    let scenario = setup.scenario();
     let chosen = if args.in_process { RunLink::InProcess } else { args.link.unwrap_or(RunLink::Iceoryx2) };
     let kind = match chosen {
         RunLink::InProcess => LinkKind::InProcess,
@@ -54,7 +67,7 @@ pub fn prepare(args: &RunArgs) -> Result<(Scenario, RunLink), CliError> {
         }
     }
     kind.check(&scenario.faults).map_err(|e| CliError::bad_input(e.to_string()))?;
-    Ok((scenario, chosen))
+    Ok((setup, chosen))
 }
 
 #[cfg(test)]

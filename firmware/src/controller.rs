@@ -16,7 +16,7 @@ use crate::{
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, FrameFault, Measurement},
     estimator::AngleTracker,
-    law::{self, HybridInput, HybridSignals, HybridState, LawError, PidState},
+    law::{self, HybridInput, HybridSignals, HybridState, PidState},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
@@ -24,131 +24,11 @@ use crate::{
     wiring::{WiringInput, WiringMonitor, WiringRule},
 };
 
-/// Why the firmware is in its safe state (zero torque). The code is reported in
-/// bits 24..31 of the status word.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub enum SafeReason {
-    /// `deadline_miss_limit` consecutive deadline misses.
-    DeadlineMisses = 1,
-    /// `bad_frame_limit` consecutive bad (out-of-range or stale) frames.
-    BadFrames = 2,
-    /// The control law produced a NaN or infinite value.
-    NonFinite = 3,
-    /// The arm reached a singular (straight) configuration.
-    Singular = 4,
-    /// The reference is out of the arm's reach.
-    Unreachable = 5,
-    /// The peer (the plant, or the link to it) is gone: no frames arrive and the
-    /// board reports it dead ([`Firmware::enter_safe_state`] from the board's loop).
-    PeerLost = 6,
-    /// The encoders and the load cell disagree about where the tip is (a stuck or
-    /// failed sensor; [`crate::consistency`]) for `sensor_fault_confirm` periods.
-    SensorFault = 7,
-    /// A joint's speed past [`crate::runaway::SPEED_LIMIT`] ([`crate::runaway`]).
-    Runaway = 8,
-    /// The load cell at full scale for [`crate::runaway::OVERLOAD_S`]: the force
-    /// loop is blind ([`crate::runaway`]).
-    Overload = 9,
-    /// A joint accelerated against the torque its motor applied, beyond the
-    /// model's uncertainty, for 5 ms ([`crate::wiring`]): a motor wired the other
-    /// way, an encoder mounted reversed, the encoders swapped.
-    Miswired = 10,
-    /// Under the hybrid law the tip strayed more than 5 mm from `z_t*` for 3 ms
-    /// ([`crate::tracking`]).
-    Tracking = 11,
-    /// Under the hybrid law lift-off stayed declared for 10 ms ([`crate::tracking`]).
-    LiftOff = 12,
-}
+mod safe_reason;
+mod telemetry;
 
-impl SafeReason {
-    /// The reason of a status word, if the safe-state bit is set.
-    pub fn from_status(status_word: u32) -> Option<Self> {
-        if status_word & status::SAFE_STATE == 0 {
-            return None;
-        }
-        match (status_word >> status::REASON_SHIFT) as u8 {
-            1 => Some(Self::DeadlineMisses),
-            2 => Some(Self::BadFrames),
-            3 => Some(Self::NonFinite),
-            4 => Some(Self::Singular),
-            5 => Some(Self::Unreachable),
-            6 => Some(Self::PeerLost),
-            7 => Some(Self::SensorFault),
-            8 => Some(Self::Runaway),
-            9 => Some(Self::Overload),
-            10 => Some(Self::Miswired),
-            11 => Some(Self::Tracking),
-            12 => Some(Self::LiftOff),
-            _ => None,
-        }
-    }
-
-    /// The reason in a few words, for the operator (no `core::fmt` on the image).
-    pub fn describe(self) -> &'static str {
-        match self {
-            Self::DeadlineMisses => "too many consecutive deadline misses",
-            Self::BadFrames => "too many consecutive bad or stale sensor frames",
-            Self::NonFinite => "the control law produced a NaN or infinite value",
-            Self::Singular => "the arm reached a singular (straight) configuration",
-            Self::Unreachable => "the reference is out of the arm's reach",
-            Self::PeerLost => "the plant or the link to it is gone",
-            Self::SensorFault => {
-                "the encoders and the load cell disagree about the tip (a stuck or failed sensor, a load cell of the wrong sign, or a driver fault)"
-            }
-            Self::Runaway => "a joint ran away: its speed passed 20 rad/s (a reversed motor, or motors that cannot hold the arm)",
-            Self::Overload => {
-                "the load cell stayed at full scale for 10 ms: the force ran away (a reversed motor, or the tip driven into the belt)"
-            }
-            Self::Tracking => {
-                "the tip strayed more than 5 mm from its reference, and away from it, under the force law for 3 ms (a motor or sensor wired wrong)"
-            }
-            Self::LiftOff => {
-                "the tip was off the belt, or the load cell read no force, for 10 ms under the force law (a motor or the load cell wired wrong, or the paradox's bounce)"
-            }
-            Self::Miswired => {
-                "a joint accelerated against its motor's torque for 5 ms (a motor wired the other way, an encoder reversed, or the encoders swapped)"
-            }
-        }
-    }
-}
-
-impl From<LawError> for SafeReason {
-    fn from(e: LawError) -> Self {
-        match e {
-            LawError::Unreachable => Self::Unreachable,
-            LawError::Singular => Self::Singular,
-            LawError::NonFinite => Self::NonFinite,
-        }
-    }
-}
-
-/// What the firmware computed in its last step (for telemetry, SIL traces and tests).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Telemetry {
-    /// Estimated `[theta1, theta2]`, rad.
-    pub q: [f32; 2],
-    /// Estimated `[theta1_dot, theta2_dot]`, rad/s.
-    pub qd: [f32; 2],
-    /// Estimated tip position `[z_t, z_n]`, m.
-    pub z: [f32; 2],
-    /// Estimated tip velocity, m/s.
-    pub z_dot: [f32; 2],
-    /// Reference `[z_t*, z_t_dot*, z_t_ddot*]`.
-    pub reference: [f32; 3],
-    /// Normal-force reference `f_n*` after the start-up ramp, N.
-    pub f_n_ref: f32,
-    /// Measured `[f_t, f_n]`, N.
-    pub f: [f32; 2],
-    /// Hybrid-law signals (zero under PID).
-    pub hybrid: HybridSignals,
-    /// Motor torques before saturation and quantisation, N m.
-    pub u_raw: [f32; 2],
-    /// Whether lift-off is declared.
-    pub lifted: bool,
-    /// Observer innovations `[theta1, theta2]` (measured minus predicted angle), rad.
-    pub innovation: [f32; 2],
-}
+pub use safe_reason::SafeReason;
+pub use telemetry::Telemetry;
 
 #[derive(Debug, Clone, Copy)]
 struct Started {
@@ -317,22 +197,6 @@ impl Firmware {
             reserved: 0,
         }
     }
-
-    /// The telemetry message of the last step, answering `command` (SIL rig).
-    pub fn telemetry_message(&self, command: &ActuatorCommand) -> wire::FirmwareTelemetry {
-        let t = &self.telemetry;
-        wire::FirmwareTelemetry {
-            seq: command.seq,
-            status: command.status,
-            z_t_ref: t.reference[0],
-            f_n_ref: t.f_n_ref,
-            q: t.q,
-            qd: t.qd,
-            f: t.f,
-            u_raw: t.u_raw,
-        }
-    }
-
     /// One control period.
     ///
     /// `now` is when the step starts, on the clock of `frame.t_us`; `clock`

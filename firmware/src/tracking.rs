@@ -17,7 +17,7 @@
 //! term's error (`mu_hat` against `mu`). Over the default, the four paper
 //! scenarios and 1 000 random admissible scenarios (`mu` 0.3 to 0.8, `v_belt`
 //! -1 to -0.1 m/s, `f_n*` 3 to 10 N, targets below `Z_t,sliding`, from `x0d`
-//! and `x0u`) the largest `|z_t - z_t*|` is 0.52 mm (`rig/tests/wiring.rs`).
+//! and `x0u`) the largest `|z_t - z_t*|` is 0.52 mm (`board-link/tests/board/twin.rs`).
 //! The bound, [`TRACKING_M`] = 5 mm, is ten times it, and a sixth of the 30 mm a
 //! miswired arm may stray before it is stopped (docs/board.md "Wiring checks").
 //! The error must also stand above

@@ -76,7 +76,7 @@ fn firmware_cases_reach_every_status_bit_and_safe_reason() {
     // Every reason but `LiftOff` (12): it needs 10 ms of lift-off under the hybrid law
     // with no other check tripping first, which a random script does not hold; the
     // twin's wiring tests reach it (a reversed load cell stops on it at period 10,
-    // rig/tests/twin.rs) and firmware::tracking's unit tests pin its rule.
+    // board-link/tests/board/twin.rs) and firmware::tracking's unit tests pin its rule.
     assert!(cov.reasons[1..12].iter().all(|&n| n > 0), "{cov:?}");
     assert!(cov.torque > cov.steps / 20, "{cov:?}");
 }

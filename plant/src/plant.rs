@@ -27,6 +27,7 @@ use crate::{
 
 mod advance;
 pub(crate) mod bridge;
+mod integrate;
 mod projection;
 mod transitions;
 

@@ -247,26 +247,29 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
     let mut tokens = tokens;
     tokens.insert(0, "--in-process".into());
     let args: RunArgs = parse(py, "run", &tokens)?;
-    let (scenario, link) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
-    warn(py, cmd::scenario::board_tables_note(&scenario, link.without_board()))?;
-    let mut link = InProcessLink::new(&scenario).map_err(|e| cli_error(py, &CliError::from(e)))?;
-    let (records, failure, (validity, ledger), wall_s) = work::run(py, progress.as_ref(), "run", "periods", |c: &Control| {
-        c.set(0, scenario.timing.periods());
+    let (setup, link) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
+    let scenario = &setup.scenario().clone();
+    warn(py, cmd::scenario::board_tables_note(scenario, link.without_board()))?;
+    let mut link = InProcessLink::new(&setup).map_err(|e| cli_error(py, &CliError::from(e)))?;
+    let link_in_loop = &mut link;
+    // The run moves to the worker (its plant is `Send`, not `Sync`).
+    let (records, failure, (validity, ledger), wall_s) = work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
+        c.set(0, setup.scenario().timing.periods());
         let mut observer = Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default() };
         let started = Instant::now();
-        let (records, failure) = rig::run_loop(&scenario, &mut link, &mut observer);
+        let (records, failure) = rig::run_loop(&setup, link_in_loop, &mut observer);
         (records, failure, (observer.validity, observer.ledger), started.elapsed().as_secs_f64())
     })?;
     let stats = RunStats::of(&records);
     let summary = RunSummary {
         firmware_announcement: link.announcement().cloned(),
         ledger,
-        ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
+        ..RunSummary::from_stats(scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);
     Outcome::new(py, "run", to_py(py, &summary)?)?
         .table("trace", columns_to_py(py, &records))?
-        .extra("scenario", to_py(py, &scenario)?)?
+        .extra("scenario", to_py(py, scenario)?)?
         .validity(&validity)?
         .failure(message, code)
         .map(Outcome::done)

@@ -1,7 +1,7 @@
 //! The firmware's calibration of the board (a scenario's `[calibration]`):
 //! what the `arm` application believes about its encoders' zeros and
 //! directions, the load cell's front end and the belt's scale, kept apart from
-//! the board's truth (`[board]`, `board_twin::BoardDescription`) so that the
+//! the board's truth (`[board]`, `board_description::BoardDescription`) so that the
 //! board twin can run a calibration that does not match its board.
 
 use arm_app::ArmCalibration;
@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 /// The firmware's calibration of the board (a scenario's `[calibration]`): what
 /// the firmware believes, against the board's truth (`[board]`,
-/// `board_twin::BoardDescription`). The defaults equal the reference board's
+/// `board_description::BoardDescription`). The defaults equal the reference board's
 /// description, and the `arm` image's compiled-in calibration
 /// (`boards/stm32f405/src/calibration.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

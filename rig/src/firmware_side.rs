@@ -21,7 +21,7 @@ use shared::{
     wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame},
 };
 
-use super::{faults::FaultPlan, record::RunError, scenario::Scenario, setup::firmware_config};
+use super::{faults::FaultPlan, record::RunError, setup::RunSetup};
 
 /// The firmware and the faults injected on its side.
 #[derive(Debug, Clone)]
@@ -37,9 +37,9 @@ impl FirmwareSide {
     ///
     /// # Errors
     /// [`RunError::Firmware`] for an invalid configuration.
-    pub fn new(s: &Scenario) -> Result<Self, RunError> {
-        let fw = Firmware::new(firmware_config(s))?;
-        Ok(Self { fw: Some(fw), faults: FaultPlan::new(&s.faults, s.timing.period()) })
+    pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+        let fw = Firmware::new(*setup.firmware())?;
+        Ok(Self { fw: Some(fw), faults: setup.faults().clone() })
     }
 
     /// The firmware.

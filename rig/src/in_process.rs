@@ -12,6 +12,7 @@ use super::{
     period_loop::{RunObserver, run_loop},
     record::{PeriodRecord, RunError},
     scenario::Scenario,
+    setup::RunSetup,
 };
 
 /// The firmware step called directly.
@@ -27,9 +28,9 @@ impl InProcessLink {
     /// # Errors
     /// [`RunError::Firmware`] for an invalid configuration; [`RunError::Unsupported`]
     /// when the scenario injects a fault that needs the firmware in its own process.
-    pub fn new(s: &Scenario) -> Result<Self, RunError> {
-        LinkKind::InProcess.check(&s.faults)?;
-        let side = FirmwareSide::new(s)?;
+    pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+        LinkKind::InProcess.check(&setup.scenario().faults)?;
+        let side = FirmwareSide::new(setup)?;
         let announced = crate::handshake::of_config(side.firmware().config())?;
         Ok(Self { side, announced })
     }
@@ -54,8 +55,12 @@ impl FirmwareLink for InProcessLink {
 /// telling `run` what happens. Returns every period's record, and the error if
 /// the run stopped early.
 pub fn run(s: &Scenario, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
-    match InProcessLink::new(s) {
-        Ok(mut link) => run_loop(s, &mut link, run),
+    let setup = match RunSetup::new(s.clone()) {
+        Ok(setup) => setup,
+        Err(e) => return (Vec::new(), Some(e)),
+    };
+    match InProcessLink::new(&setup) {
+        Ok(mut link) => run_loop(&setup, &mut link, run),
         Err(e) => (Vec::new(), Some(e)),
     }
 }

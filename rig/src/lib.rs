@@ -2,7 +2,8 @@
 //! plant-side loop, and the transports that reach the firmware (in-process, or
 //! iceoryx2 shared memory to the firmware in its own process, or the MCU image
 //! over its USART, in QEMU or on a board behind a serial port: processor and
-//! hardware in the loop).
+//! hardware in the loop). The board twin and the emulated `arm` image as links,
+//! and the board tools (bring-up, backup), are the `board-link` crate, above this one.
 //!
 //! Features: `ipc` (iceoryx2: [`ipc`], [`services`], [`ipc_link`], [`firmware_process`]) and
 //! `pil` ([`pil_link`]), both on by default; without them the rig runs the
@@ -10,18 +11,13 @@
 #![warn(missing_docs)]
 
 pub mod arm;
-pub mod board_backup;
 pub mod board_protection;
-pub mod bringup_line;
-pub mod bringup_procedure;
 pub mod calibration;
-pub mod emulator_link;
 pub mod envelope;
 pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
 pub mod firmware_side;
-pub mod free_arm;
 pub mod handshake;
 pub mod image_path;
 pub mod in_process;
@@ -45,7 +41,6 @@ pub mod setup;
 pub mod stats;
 pub mod status_words;
 pub mod summary;
-pub mod twin_link;
 
 // The API callers use most, at the crate root (`rig::Scenario`, `rig::run_loop`);
 // every item keeps its module path too (`rig::scenario::Scenario`).
@@ -63,7 +58,6 @@ pub use period_loop::{PeriodFailure, PeriodLoop, RunObserver, run_loop, stream_l
 pub use pil_link::{PilLink, PilOptions, PilTarget, QemuLink};
 pub use record::{PeriodRecord, RunError};
 pub use scenario::{DEFAULT_TOML, Scenario, ScenarioError};
-pub use setup::{firmware_config, plant_for};
+pub use setup::{RunSetup, firmware_config, plant_for};
 pub use stats::RunStats;
 pub use summary::{PilFigures, RunSummary};
-pub use twin_link::TwinLink;

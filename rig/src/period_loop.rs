@@ -16,12 +16,10 @@ use shared::{
 };
 
 use super::{
-    faults::FaultPlan,
     link::{DropCommands, Exchange, FirmwareLink},
     record::{PeriodRecord, RunError},
-    scenario::Scenario,
     sensors::{SensorFaults, SensorModel, Sensors},
-    setup::plant_for,
+    setup::RunSetup,
 };
 use plant::{Hold, NoObserver, Observer, Plant, PlantEvent, Sample, Validity};
 
@@ -72,15 +70,17 @@ pub struct PeriodLoop {
 }
 
 impl PeriodLoop {
-    /// The loop of scenario `s` starting at period 0 with zero torque on `plant`
-    /// (at `t = 0`).
-    pub fn new(s: &Scenario, plant: &Plant) -> Self {
+    /// The loop of `setup` starting at period 0 with zero torque on `plant` (at
+    /// `t = 0`: the setup's own, [`RunSetup::plant`], or a caller's at another
+    /// initial state, as the sweep's grid).
+    pub fn new(setup: &RunSetup, plant: &Plant) -> Self {
+        let s = setup.scenario();
         let period = s.timing.period();
         let ts = period.as_secs_f64();
         Self {
             sensors: SensorFaults::new(
                 Sensors::new(s.sensors.seed, s.sensors.load_noise_n).with_encoder_bits(s.sensors.encoder_bits),
-                FaultPlan::new(&s.faults, period),
+                setup.faults().clone(),
             ),
             ts,
             period,
@@ -360,15 +360,12 @@ impl RunObserver for () {}
 /// (plant failure, the firmware lost or in its safe state, `on_period` said
 /// stop), why; the last period's record is handed to `run` before the error
 /// when it was made.
-pub fn stream_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (usize, Option<RunError>) {
-    let mut plant = match plant_for(s) {
-        Ok(p) => p,
-        Err(e) => return (0, Some(e.into())),
-    };
+pub fn stream_loop(setup: &RunSetup, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (usize, Option<RunError>) {
+    let mut plant = setup.plant().clone();
     run.on_events(plant.startup_events());
     // No trajectory observer here: the period's first part may overlap the firmware's step.
-    let mut periods = PeriodLoop::new(s, &plant).overlapping(true);
-    let n = periods.periods_in(s.timing.duration_s);
+    let mut periods = PeriodLoop::new(setup, &plant).overlapping(true);
+    let n = periods.periods_in(setup.scenario().timing.duration_s);
     let mut recorded = 0;
     let mut failure = None;
     for k in 0..n {
@@ -408,7 +405,7 @@ pub fn stream_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunO
 /// Returns every period's record; when the run stops early (plant failure, the
 /// firmware lost or in its safe state, `on_period` said stop) the records up to
 /// and including the last period come back with the error.
-pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
+pub fn run_loop(setup: &RunSetup, link: &mut dyn FirmwareLink, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
     /// Forwards everything to `inner` and keeps the records.
     struct Keep<'a> {
         inner: &'a mut dyn RunObserver,
@@ -441,8 +438,8 @@ pub fn run_loop(s: &Scenario, link: &mut dyn FirmwareLink, run: &mut dyn RunObse
         }
     }
     // One allocation up front (capped: a scenario that is not validated may ask for anything).
-    let capacity = usize::try_from(s.timing.periods()).unwrap_or(0).min(1 << 20);
+    let capacity = usize::try_from(setup.scenario().timing.periods()).unwrap_or(0).min(1 << 20);
     let mut keep = Keep { inner: run, records: Vec::with_capacity(capacity) };
-    let (_, failure) = stream_loop(s, link, &mut keep);
+    let (_, failure) = stream_loop(setup, link, &mut keep);
     (keep.records, failure)
 }

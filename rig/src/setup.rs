@@ -1,5 +1,5 @@
 //! From a scenario to the two sides of the loop: the plant at `t = 0` and the
-//! firmware's configuration.
+//! firmware's configuration, and [`RunSetup`], the run made of them once.
 
 use firmware::{
     Config,
@@ -7,7 +7,7 @@ use firmware::{
 };
 use shared::Params;
 
-use super::scenario::Scenario;
+use super::{faults::FaultPlan, record::RunError, scenario::Scenario};
 use plant::{Plant, SimConfig, SimError, initial};
 
 /// The plant's parameters (paper Table I, `mu`, `v_belt`) a scenario asks for:
@@ -71,4 +71,55 @@ pub fn plant_for(s: &Scenario) -> Result<Plant, SimError> {
         ..SimConfig::default()
     };
     Plant::new(params, sim, initial::deg_to_state(s.plant.x0.condition().deg), 0.0, [0.0, 0.0])
+}
+
+/// A closed-loop run as its scenario asks for it, made once and handed to the
+/// period loop and to the link (whichever of the five): the scenario, the plant
+/// at `t = 0` ([`plant_for`]), the firmware's configuration ([`firmware_config`],
+/// validated), and the plan of the scenario's faults over its control period.
+/// Each side takes what it needs from here, so that the plant, the firmware and
+/// the faults are built from the scenario in one place.
+#[derive(Debug, Clone)]
+pub struct RunSetup {
+    scenario: Scenario,
+    plant: Plant,
+    firmware: Config,
+    faults: FaultPlan,
+}
+
+impl RunSetup {
+    /// The run scenario `scenario` asks for.
+    ///
+    /// # Errors
+    /// [`RunError::Sim`] for bad plant parameters or initial conditions;
+    /// [`RunError::Firmware`] for a firmware configuration the firmware refuses
+    /// (`firmware::Config::validate`).
+    pub fn new(scenario: Scenario) -> Result<Self, RunError> {
+        let plant = plant_for(&scenario)?;
+        let firmware = firmware_config(&scenario);
+        firmware.validate()?;
+        let faults = FaultPlan::new(&scenario.faults, scenario.timing.period());
+        Ok(Self { scenario, plant, firmware, faults })
+    }
+
+    /// The scenario.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The plant at `t = 0`, at the scenario's initial state with zero torque (each
+    /// run steps its own copy).
+    pub fn plant(&self) -> &Plant {
+        &self.plant
+    }
+
+    /// The firmware's configuration (validated).
+    pub fn firmware(&self) -> &Config {
+        &self.firmware
+    }
+
+    /// The scenario's faults over its control period.
+    pub fn faults(&self) -> &FaultPlan {
+        &self.faults
+    }
 }

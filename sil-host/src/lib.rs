@@ -13,6 +13,7 @@ pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod folder_lock;
+pub mod link_spec;
 pub mod output;
 pub mod plot;
 pub mod streamed_run;

@@ -16,12 +16,12 @@ use plant::Validity;
 use rig::{
     FirmwareLink, RunObserver,
     record::{PeriodRecord, RunError},
-    scenario::Scenario,
+    setup::RunSetup,
     stats::RunStats,
     stream_loop,
 };
 
-/// Runs `scenario` over `link` as `run` and `pil` do, keeping nothing that grows
+/// Runs `setup` over `link` as `run` and `pil` do, keeping nothing that grows
 /// with the run: every period's row goes to the trace of `out` in `format` as it
 /// is made (`trace.csv.partial` or `trace.arrow.partial`, flushed every 1 ms of
 /// wall time, an Arrow record batch per flush, so a plant killed outright keeps
@@ -35,7 +35,7 @@ use rig::{
 /// # Errors
 /// I/O errors of the trace file.
 pub fn run_streamed(
-    scenario: &Scenario,
+    setup: &RunSetup,
     link: &mut dyn FirmwareLink,
     out: &mut OutputSet,
     progress: &indicatif::ProgressBar,
@@ -96,7 +96,7 @@ pub fn run_streamed(
         validity: Validity::default(),
         ledger: plant::Ledger::default(),
     };
-    let (_, failure) = stream_loop(scenario, link, &mut observer);
+    let (_, failure) = stream_loop(setup, link, &mut observer);
     let Streaming { stats, history, validity, ledger, .. } = observer;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();

@@ -8,13 +8,17 @@
 //!   the runs are numbered by [`SweepSpec::run_at`] in a fixed order, so shards,
 //!   resumed sweeps and merges agree on every run's index;
 //! - [`run`]: one run (open loop, or closed loop with the firmware step in-process);
+//!   how it ended and its row ([`run::Outcome`], [`run::RunRow`], in `outcome.rs`);
+//! - [`Shard`]: the runs dealt to the shards of a sweep;
 //! - [`summary`]: critical `mu` and belt-speed bands of persistent bouncing.
 //!
 //! The sweep's folder (journal, resume, merge) and its figures are the command
 //! line's (`sil-host`'s `sweep` module).
 
 pub mod extrema;
+mod outcome;
 pub mod run;
+mod shard;
 pub mod summary;
 
 use firmware::ControllerKind;
@@ -28,6 +32,8 @@ use plant::impact::{ImpactLaw, IwcRule};
 use plant::initial::{self, PaperX0};
 use plant::moreau_jean::SingularRule;
 use rig::scenario::Scenario;
+
+pub use shard::{Assignment, Shard};
 
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
 /// Version 2: the IWC rule as a dimension, validity counters and the `invalid`
@@ -411,106 +417,6 @@ fn is_leave(x: &SingularRule) -> bool {
 /// 5e-15 rad/s, so an exact `> 0` would flag resting arms at random.
 pub const DEFAULT_THRESHOLD: f64 = 1e-6;
 
-/// How the runs of a sweep are dealt to `N` shards (`sweep.json`'s
-/// `shard.assignment`). Every shard of a sweep, its merge and its resume use the
-/// same one, computed from the spec alone.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Assignment {
-    /// Run `i` to shard `i mod N`: folders written before the balanced assignment
-    /// (a `sweep.json` whose shard has no `assignment`), resumed and merged as
-    /// they were. Unbalanced: with two initial conditions and an even `N`, every
-    /// run from `x0a` (the costly, bouncing one) lands on an even shard.
-    #[default]
-    Modulo,
-    /// Balanced ([`Shard::owner`]): each row of the grid (all belt speeds at one
-    /// IWC rule, impact law, `e_n`, initial condition and `mu`) is dealt round
-    /// robin over the shards, continuing where the previous row stopped, its
-    /// speeds rotated by a row-dependent offset.
-    Balanced,
-}
-
-impl Assignment {
-    fn is_modulo(&self) -> bool {
-        *self == Self::Modulo
-    }
-}
-
-/// `K/N` of `--shard`: this process computes shard `K` of `N` (`0 <= K < N`) of
-/// the sweep's runs, dealt by [`Assignment::Balanced`] ([`Shard::owner`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Shard {
-    /// This shard, `0 <= k < n`.
-    pub k: usize,
-    /// Number of shards, `>= 1`.
-    pub n: usize,
-    /// How runs are dealt to the shards (absent in `sweep.json`: [`Assignment::Modulo`],
-    /// the only one before; never written for `n = 1`, where both are the whole sweep).
-    #[serde(default, skip_serializing_if = "Assignment::is_modulo")]
-    pub assignment: Assignment,
-}
-
-impl Shard {
-    /// The whole sweep.
-    pub const ALL: Shard = Shard { k: 0, n: 1, assignment: Assignment::Modulo };
-
-    /// Parses `K/N`: shard `K` of `N`, balanced ([`Shard::ALL`] for `0/1`).
-    ///
-    /// # Errors
-    /// A message when the text is not `K/N` with `0 <= K < N`.
-    pub fn parse(s: &str) -> Result<Self, String> {
-        let bad = || format!("--shard expects K/N with 0 <= K < N (e.g. 0/8), got `{s}`");
-        let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let (k, n) = (k.trim().parse::<usize>().map_err(|_| bad())?, n.trim().parse::<usize>().map_err(|_| bad())?);
-        if n == 0 || k >= n {
-            return Err(bad());
-        }
-        Ok(if n == 1 { Self::ALL } else { Self { k, n, assignment: Assignment::Balanced } })
-    }
-
-    /// The shard (`0..n`) that computes run `index` (`< spec.n_runs()`) of `spec`.
-    ///
-    /// Balanced: the runs are put in the order (IWC rule, impact law, `e_n`,
-    /// initial condition, `mu`, `v_belt`), `v_belt` fastest; the run at position
-    /// `p` of that order goes to shard `p mod n`. Each row (one rule, law, `e_n`,
-    /// initial condition and `mu`; `n_v` belt speeds) thus holds consecutive
-    /// positions, and so does every block of rows: every shard gets the same
-    /// number of runs (to one), of every initial condition and of every row, and
-    /// neighbouring belt speeds go to different shards. The cost of a run depends
-    /// on its row (the initial condition and `mu`: on the paper's grid a run from
-    /// `x0a` costs 5 to 6 times one from `x0d`) and, along the row, on the band of speeds that
-    /// bounce; both are spread evenly without a cost model. Within a row the
-    /// speeds are rotated by `floor(frac(r phi) n_v)` (`r` the row's number, `phi`
-    /// the golden ratio; Fibonacci hashing, integer arithmetic), so that when `n_v`
-    /// is a multiple of `n` a speed does not land on the same shard in every row.
-    pub fn owner(&self, spec: &SweepSpec, index: usize) -> usize {
-        match self.assignment {
-            Assignment::Modulo => index % self.n,
-            Assignment::Balanced => {
-                let (n_ic, n_v, n_mu) = (spec.n_ics(), spec.v_belt.len(), spec.mu.len());
-                let i_ic = index % n_ic;
-                let rest = index / n_ic;
-                let i_v = rest % n_v;
-                // (rule, law, e_n, mu), mu fastest.
-                let outer = rest / n_v;
-                let row = ((outer / n_mu) * n_ic + i_ic) * n_mu + outer % n_mu;
-                let offset = (((row as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) as u128 * n_v as u128) >> 64) as usize;
-                (row * n_v + (i_v + offset) % n_v) % self.n
-            }
-        }
-    }
-
-    /// Whether run `index` of `spec` belongs to this shard.
-    pub fn owns(&self, spec: &SweepSpec, index: usize) -> bool {
-        self.n == 1 || self.owner(spec, index) == self.k
-    }
-
-    /// The indices of this shard's runs of `spec`, ascending.
-    pub fn indices(&self, spec: &SweepSpec) -> Vec<usize> {
-        (0..spec.n_runs()).filter(|&i| self.owns(spec, i)).collect()
-    }
-}
-
 /// `sweep.json` names the paper's initial conditions `x0a`, `x0d`, `x0u`
 /// ([`PaperX0::parse`] reads them back; an unknown name is an error).
 mod ic_names {
@@ -530,135 +436,5 @@ mod ic_names {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    #[test]
-    fn the_paper_grid_has_10_by_181_points() {
-        let s = SweepSpec::paper();
-        assert_eq!((s.mu.len(), s.v_belt.len(), s.n_runs()), (10, 181, 3620));
-        assert_eq!(s.mu.values()[2], 0.3);
-        assert_eq!(s.v_belt.value(180), -0.1);
-        let last = s.run_at(3619);
-        assert_eq!((last.i_mu, last.i_v, last.i_ic, last.mu, last.v_belt), (9, 180, 1, 1.0, -0.1));
-        assert!(s.validate().is_ok());
-    }
-
-    /// The paper's grid in 16 shards: 113 or 114 runs from `x0a` in every shard
-    /// (modulo: 226 or 227 in each even shard, none in the odd ones).
-    #[test]
-    fn balanced_shards_spread_the_costly_initial_condition() {
-        let s = SweepSpec::paper();
-        let count = |shard: Shard| shard.indices(&s).into_iter().filter(|&i| s.run_at(i).i_ic == 0).count();
-        let balanced: Vec<usize> = (0..16).map(|k| count(Shard::parse(&format!("{k}/16")).unwrap())).collect();
-        assert!(balanced.iter().all(|&c| c == 113 || c == 114), "{balanced:?}");
-        assert_eq!(balanced.iter().sum::<usize>(), 1810);
-        let modulo: Vec<usize> = (0..16).map(|k| count(Shard { k, n: 16, assignment: Assignment::Modulo })).collect();
-        assert_eq!((modulo[0], modulo[1]), (227, 0));
-    }
-
-    /// `sweep.json`: the whole sweep is written as before (`{"k":0,"n":1}`), a
-    /// balanced shard names its assignment, and a shard without one (written before
-    /// it existed) is read as modulo.
-    #[test]
-    fn shard_manifests_old_and_new() {
-        assert_eq!(Shard::parse("0/1"), Ok(Shard::ALL));
-        assert_eq!(serde_json::to_string(&Shard::ALL).unwrap(), r#"{"k":0,"n":1}"#);
-        let b = Shard::parse("3/16").unwrap();
-        assert_eq!(serde_json::to_string(&b).unwrap(), r#"{"k":3,"n":16,"assignment":"balanced"}"#);
-        assert_eq!(serde_json::from_str::<Shard>(r#"{"k":1,"n":2}"#).unwrap(), Shard { k: 1, n: 2, assignment: Assignment::Modulo });
-        for bad in ["2/2", "1/0", "a/3", "3", "-1/4"] {
-            assert!(Shard::parse(bad).is_err(), "{bad}");
-        }
-    }
-
-    #[test]
-    fn random_initial_conditions_are_on_the_belt_and_reproducible() {
-        let s = SweepSpec { random_ics: 5, ..SweepSpec::paper() };
-        let a = s.initial_conditions();
-        assert_eq!(a, s.initial_conditions());
-        assert_eq!(a.len(), 7);
-        let p = Params::<f64>::paper();
-        for ic in &a[2..] {
-            let z = shared::kinematics::tip_position(p.l, &Vector2::new(ic.x0[0], ic.x0[2]));
-            assert!((z[1] + p.h).abs() < 1e-12, "{ic:?}");
-        }
-        assert_ne!(a[2].x0, a[3].x0);
-    }
-
-    proptest! {
-        /// The shards of a sweep partition its runs (every run in exactly one shard,
-        /// `indices` ascending), and the balanced assignment gives every shard the same
-        /// number of runs to one: overall, of every initial condition (per rule, law and
-        /// `e_n`), and of every row (all belt speeds at one rule, law, `e_n`, initial
-        /// condition and `mu`).
-        #[test]
-        fn balanced_shards_partition_the_runs_evenly(
-            n_mu in 1usize..6, n_v in 1usize..40, n_e in 1usize..3, ics in 1usize..4, n in 1usize..40,
-        ) {
-            let s = SweepSpec {
-                mu: Axis { start: 0.1, stop: 0.1 * n_mu as f64, step: 0.1 },
-                v_belt: Axis { start: -1.0, stop: -1.0 + 0.01 * (n_v - 1) as f64, step: 0.01 },
-                e_n: (0..n_e).map(|i| i as f64 * 0.1).collect(),
-                impact_laws: vec![ImpactLaw::Newton, ImpactLaw::Poisson],
-                paper_ics: vec![],
-                random_ics: ics,
-                ..SweepSpec::paper()
-            };
-            let shards: Vec<Shard> = (0..n).map(|k| Shard::parse(&format!("{k}/{n}")).unwrap()).collect();
-            let mut owner = vec![usize::MAX; s.n_runs()];
-            for shard in &shards {
-                let idx = shard.indices(&s);
-                prop_assert!(idx.windows(2).all(|w| w[0] < w[1]));
-                for i in idx {
-                    prop_assert_eq!(owner[i], usize::MAX, "run {} in two shards", i);
-                    prop_assert!(shard.owns(&s, i));
-                    owner[i] = shard.k;
-                }
-            }
-            prop_assert!(owner.iter().all(|&o| o < n), "every run has a shard");
-            // Per-shard counts of the runs selected by `group`, for every group value.
-            let spread = |group: &dyn Fn(&RunKey) -> usize| -> usize {
-                let mut counts: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
-                for (i, &o) in owner.iter().enumerate() {
-                    counts.entry(group(&s.run_at(i))).or_insert_with(|| vec![0; n])[o] += 1;
-                }
-                counts.values().map(|c| c.iter().max().unwrap() - c.iter().min().unwrap()).max().unwrap_or(0)
-            };
-            let law = |k: &RunKey| usize::from(k.impact_law == ImpactLaw::Poisson);
-            let e = |k: &RunKey| (k.e_n * 10.0).round() as usize;
-            prop_assert!(spread(&|_| 0) <= 1);
-            prop_assert!(spread(&|k| (law(k) * 10 + e(k)) * 10 + k.i_ic) <= 1);
-            prop_assert!(spread(&|k| ((law(k) * 10 + e(k)) * 10 + k.i_ic) * 10 + k.i_mu) <= 1);
-        }
-
-        /// The modulo assignment (folders without `assignment`) is `index mod N`.
-        #[test]
-        fn modulo_shards_are_index_mod_n(i in 0usize..3620, n in 1usize..40) {
-            let s = SweepSpec::paper();
-            prop_assert_eq!(Shard { k: 0, n, assignment: Assignment::Modulo }.owner(&s, i), i % n);
-        }
-
-        /// Run indices and grid points correspond one to one.
-        #[test]
-        fn run_index_decodes_every_point_once(n_mu in 1usize..5, n_v in 1usize..7, n_e in 1usize..3, ics in 1usize..4) {
-            let s = SweepSpec {
-                mu: Axis { start: 0.1, stop: 0.1 * n_mu as f64, step: 0.1 },
-                v_belt: Axis { start: -1.0, stop: -1.0 + 0.1 * (n_v - 1) as f64, step: 0.1 },
-                e_n: (0..n_e).map(|i| i as f64 * 0.1).collect(),
-                impact_laws: vec![ImpactLaw::Newton, ImpactLaw::Poisson],
-                iwc_rules: IwcRule::ALL.to_vec(),
-                paper_ics: vec![],
-                random_ics: ics,
-                ..SweepSpec::paper()
-            };
-            let mut seen = std::collections::HashSet::new();
-            for i in 0..s.n_runs() {
-                let k = s.run_at(i);
-                prop_assert!(seen.insert((k.iwc, k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
-            }
-            prop_assert_eq!(seen.len(), 2 * 2 * n_e * n_mu * n_v * ics);
-        }
-    }
-}
+#[path = "sweep_tests.rs"]
+mod tests;

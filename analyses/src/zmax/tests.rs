@@ -1,4 +1,5 @@
 use super::*;
+use firmware::ControllerKind;
 
 #[test]
 fn bisection_finds_a_known_threshold_of_a_monotone_predicate() {

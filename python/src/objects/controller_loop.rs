@@ -23,7 +23,7 @@ use pyo3::{
     types::{PyDict, PyString, PyTuple},
 };
 use rig::{
-    Exchange, FaultPlan, FirmwareLink, LinkKind, RunError, Scenario, firmware_side::step_start, stats::RunStats, summary::RunSummary,
+    Exchange, FaultPlan, FirmwareLink, LinkKind, RunError, RunSetup, firmware_side::step_start, stats::RunStats, summary::RunSummary,
 };
 use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
 
@@ -48,17 +48,18 @@ pub struct PythonLink<'py> {
 }
 
 impl<'py> PythonLink<'py> {
-    /// The link of `controller` for scenario `s`.
+    /// The link of `controller` for run `setup`.
     ///
     /// # Errors
     /// [`RunError::Unsupported`] for faults that need the firmware in a process
     /// of its own (as the in-process link).
-    pub fn new(s: &Scenario, controller: Bound<'py, PyAny>) -> Result<Self, RunError> {
+    pub fn new(setup: &RunSetup, controller: Bound<'py, PyAny>) -> Result<Self, RunError> {
+        let s = setup.scenario();
         LinkKind::InProcess.check(&s.faults)?;
-        let cfg = rig::firmware_config(s);
+        let cfg = setup.firmware();
         Ok(Self {
             controller,
-            faults: FaultPlan::new(&s.faults, s.timing.period()),
+            faults: setup.faults().clone(),
             encoder_bits: s.sensors.encoder_bits,
             l: rig::setup::firmware_params(s).l,
             ts: cfg.period.as_secs_f32(),
@@ -234,10 +235,11 @@ pub fn run_controller<'py>(
         let o = rig::Override { key: "timing.duration_s".into(), value: toml::Value::Float(d), text: d.to_string() };
         s = s.with_overrides(&[o]).map_err(|e| super::scenario::scenario_error(py, &e))?;
     }
-    let mut link = PythonLink::new(&s, controller).map_err(|e| error(py, e.to_string(), 2))?;
+    let setup = RunSetup::new(s.clone()).map_err(|e| error(py, e.to_string(), 2))?;
+    let mut link = PythonLink::new(&setup, controller).map_err(|e| error(py, e.to_string(), 2))?;
     let mut finished = Finished::default();
     let started = Instant::now();
-    let (records, failure) = rig::run_loop(&s, &mut link, &mut finished);
+    let (records, failure) = rig::run_loop(&setup, &mut link, &mut finished);
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(e) = link.raised.take() {
         return Err(e);

@@ -176,7 +176,8 @@ impl PyFirmware {
     #[pyo3(signature = (scenario=None))]
     fn new(py: Python<'_>, scenario: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let s = PyScenario::of(py, scenario)?;
-        let side = FirmwareSide::new(&s).map_err(|e| error(py, e.to_string(), 2))?;
+        let setup = rig::RunSetup::new(s.clone()).map_err(|e| error(py, e.to_string(), 2))?;
+        let side = FirmwareSide::new(&setup).map_err(|e| error(py, e.to_string(), 2))?;
         Ok(Self { side: Mutex::new(side.clone()), initial: side, scenario: s, k: 0 })
     }
 

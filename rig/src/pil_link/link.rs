@@ -23,8 +23,7 @@ use crate::{
     faults::FaultPlan,
     link::{Exchange, FirmwareLink},
     record::RunError,
-    scenario::Scenario,
-    setup::firmware_config,
+    setup::RunSetup,
 };
 
 /// How often the handshake asks again for the image's Hello (a board may miss
@@ -76,8 +75,8 @@ impl PilLink {
     /// QEMU that cannot start or does not connect, a serial port that cannot be
     /// opened, no Hello within `boot_timeout_s`, another protocol version, or a
     /// configuration rejected or not answered.
-    pub fn start(s: &Scenario, opts: &PilOptions, on_log: Option<LogSink>) -> Result<Self, RunError> {
-        check_faults(s, &opts.target)?;
+    pub fn start(setup: &RunSetup, opts: &PilOptions, on_log: Option<LogSink>) -> Result<Self, RunError> {
+        check_faults(setup.scenario(), &opts.target)?;
         let boot = seconds("boot timeout", opts.boot_timeout_s)?;
         let answer_timeout = seconds("answer timeout", opts.answer_timeout_s)?;
         let log = Arc::new(Mutex::new(Vec::new()));
@@ -92,16 +91,16 @@ impl PilLink {
             pipe: FramedPipe::new(pipe),
             qemu,
             answer_timeout,
-            faults: FaultPlan::new(&s.faults, s.timing.period()),
+            faults: setup.faults().clone(),
             log,
             counts: PilCounts { keep_ticks: opts.keep_ticks, ..PilCounts::default() },
         };
-        link.handshake(s, boot)?;
+        link.handshake(setup.firmware(), boot)?;
         Ok(link)
     }
 
     /// Hello, the version check and the configuration (the same over either pipe).
-    fn handshake(&mut self, s: &Scenario, boot: Duration) -> Result<(), RunError> {
+    fn handshake(&mut self, config: &firmware::Config, boot: Duration) -> Result<(), RunError> {
         let deadline = Instant::now() + boot;
         // A lone terminator ends whatever partial frame a previous bridge left
         // in the image's buffer (the image ignores an empty frame).
@@ -143,7 +142,7 @@ impl PilLink {
                 Received::Msg(_) | Received::Undecodable(_) | Received::Nothing => {}
             }
         }
-        let configure = Downlink::Configure(firmware_config(s));
+        let configure = Downlink::Configure(*config);
         self.send(&configure)?;
         let deadline = Instant::now() + boot;
         // A `Garbled` here is a frame damaged before the image's USART was up (QEMU

@@ -14,6 +14,7 @@ use crate::{
     period_loop::{RunObserver, stream_loop},
     record::{PeriodRecord, RunError},
     scenario::Scenario,
+    setup::RunSetup,
 };
 
 /// What [`measure_rate`] measured: how fast a PIL run goes in wall time.
@@ -39,7 +40,7 @@ pub struct PilRate {
 /// # Errors
 /// As [`PilLink::start`]; the run's own failure ([`RunError::FirmwareLost`] and
 /// the rest) when it stopped before its end.
-pub fn measure_rate(s: &Scenario, opts: &PilOptions) -> Result<PilRate, RunError> {
+pub fn measure_rate(setup: &RunSetup, opts: &PilOptions) -> Result<PilRate, RunError> {
     /// Notes when each record is made.
     struct LastRecord(Option<Instant>);
     impl RunObserver for LastRecord {
@@ -48,10 +49,10 @@ pub fn measure_rate(s: &Scenario, opts: &PilOptions) -> Result<PilRate, RunError
         }
     }
     let t0 = Instant::now();
-    let mut link = PilLink::start(s, opts, None)?;
+    let mut link = PilLink::start(setup, opts, None)?;
     let started = Instant::now();
     let mut last = LastRecord(None);
-    let (periods, failure) = stream_loop(s, &mut link, &mut last);
+    let (periods, failure) = stream_loop(setup, &mut link, &mut last);
     if let Some(e) = failure {
         return Err(e);
     }
@@ -79,5 +80,5 @@ pub fn measure_default_rate(image: &Path, periods: u32, link: QemuLink) -> Resul
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = f64::from(periods) / s.timing.rate_hz;
     let target = PilTarget::Qemu { image: image.to_path_buf(), qemu: "qemu-system-arm".into(), link };
-    measure_rate(&s, &PilOptions::for_target(target))
+    measure_rate(&RunSetup::new(s)?, &PilOptions::for_target(target))
 }

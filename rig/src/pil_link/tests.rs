@@ -52,7 +52,8 @@ fn with_kill_fault() -> Scenario {
 fn a_serial_link_refuses_kill_firmware_and_bad_settings_before_touching_the_port() {
     let mut s = with_kill_fault();
     // The device does not exist either: the fault is what is reported.
-    match PilLink::start(&s, &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None) {
+    match PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None)
+    {
         Err(RunError::Unsupported(m)) => assert!(m.contains("kill_firmware") && m.contains("serial port") && !m.contains("QEMU"), "{m}"),
         other => panic!("expected Unsupported, got {other:?}"),
     }
@@ -61,13 +62,18 @@ fn a_serial_link_refuses_kill_firmware_and_bad_settings_before_touching_the_port
         check_faults(&s, &PilTarget::Qemu { image: "pil".into(), qemu: "qemu-system-arm".into(), link: QemuLink::Semihosting }).is_ok()
     );
     s.faults.clear();
-    let err = PilLink::start(&s, &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None).unwrap_err().to_string();
+    let err =
+        PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &PilOptions::serial("/nonexistent/ttyUSB9", DEFAULT_BAUD), None)
+            .unwrap_err()
+            .to_string();
     assert!(err.contains("cannot open the serial port /nonexistent/ttyUSB9 at 2000000 baud"), "{err}");
-    let err = PilLink::start(&s, &PilOptions::serial("/dev/null", 300), None).unwrap_err().to_string();
+    let err = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &PilOptions::serial("/dev/null", 300), None)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("outside 9600..=12000000 baud"), "{err}");
     for bad in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
         let opts = PilOptions { answer_timeout_s: bad, ..PilOptions::serial("/dev/null", DEFAULT_BAUD) };
-        let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
+        let err = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &opts, None).unwrap_err().to_string();
         assert!(err.contains("answer timeout") && err.contains("positive number of seconds"), "{err}");
     }
 }
@@ -218,7 +224,7 @@ fn board_link(s: &Scenario, script: Script, answer_timeout_s: f64) -> (Result<Pi
     let Pty { master, slave, path } = pty();
     let board = fake_board(master, script);
     let opts = PilOptions { boot_timeout_s: 5.0, answer_timeout_s, ..PilOptions::serial(path, DEFAULT_BAUD) };
-    let link = PilLink::start(s, &opts, None);
+    let link = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &opts, None);
     drop(slave);
     (link, board)
 }
@@ -231,7 +237,7 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
     let (link, board) = board_link(&s, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
-    let (records, err) = run_loop(&s, &mut link, &mut ());
+    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 300);
     let c = &link.counts;
@@ -255,7 +261,7 @@ fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_g
     let mut link = link.unwrap();
     // The board answers both configurations; the second `Configured` comes
     // before the first answer and must not end the run.
-    let (records, err) = run_loop(&s, &mut link, &mut ());
+    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 200);
     let seen = board.join().unwrap();
@@ -269,7 +275,7 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let (link, _board) = board_link(&s, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&s, &mut link, &mut ());
+    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
     // 50 periods and one 0.3 s answer timeout: a bound of 20 s tells a hang from a
     // loaded machine.
     assert!(started.elapsed() < Duration::from_secs(20), "no hang: {:?}", started.elapsed());
@@ -293,7 +299,7 @@ fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let (link, _board) = board_link(&s, script, 60.0);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&s, &mut link, &mut ());
+    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
     assert!(started.elapsed() < Duration::from_secs(30), "noticed at once, not after the timeout: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
@@ -317,7 +323,7 @@ fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let Pty { master: _master, slave: _slave, path } = pty();
     let opts = PilOptions { boot_timeout_s: 0.5, ..PilOptions::serial(&path, DEFAULT_BAUD) };
     let started = Instant::now();
-    let err = PilLink::start(&s, &opts, None).unwrap_err().to_string();
+    let err = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &opts, None).unwrap_err().to_string();
     assert!(started.elapsed() < Duration::from_secs(20), "the boot timeout ends the wait: {:?}", started.elapsed());
     assert!(err.contains("the image did not say Hello within 0.5 s: nothing from /dev/pts/") && !err.contains("QEMU"), "{err}");
 }

@@ -448,7 +448,7 @@ pub struct Scenario {
     /// when absent (and then not written back, so that outputs of scenarios
     /// without it are unchanged).
     #[serde(default, skip_serializing_if = "is_default")]
-    pub board: board_twin::BoardDescription,
+    pub board: board_description::BoardDescription,
     /// The firmware's calibration of the board (`run --link twin`): the reference
     /// board's when absent (not written back then).
     #[serde(default, skip_serializing_if = "is_default")]

@@ -58,10 +58,11 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
         s.controller.kind = kind;
         s.timing.duration_s = pil_s;
         s.validate()?;
+        let setup = rig::RunSetup::new(s).map_err(CliError::from)?;
         let opts =
             PilOptions::for_target(PilTarget::Qemu { image: image.to_path_buf(), qemu: qemu.to_path_buf(), link: QemuLink::default() });
         let t = Instant::now();
-        let mut link = match PilLink::start(&s, &opts, None) {
+        let mut link = match PilLink::start(&setup, &opts, None) {
             Ok(l) => l,
             // QEMU missing or the image not booting is a set-up matter: the figure is skipped.
             Err(e) if runs.is_empty() => return Ok(Err(format!("cannot start the image in QEMU: {e}"))),
@@ -69,7 +70,7 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
         };
         let boot_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let (periods, e) = stream_loop(&s, &mut link, &mut Discard);
+        let (periods, e) = stream_loop(&setup, &mut link, &mut Discard);
         let rate = periods as f64 / t.elapsed().as_secs_f64();
         if let Some(e) = e {
             return Err(CliError::from(e));

@@ -13,6 +13,10 @@ pub use self::board::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg,
 pub use self::report::{ReportArgs, ReportSize};
 pub use experiments::settings::*;
 
+/// `sil-host --version`: the package version and the commit it was built from
+/// (`build.rs`: `git describe --always --dirty`, or `unknown` outside a git checkout).
+pub const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("SIL_HOST_COMMIT"), ")");
+
 /// Plant simulator and rig for the Painlevé paradox on a two-link arm
 /// (Marchese, Coraggio, Hogan, di Bernardo, ECC 2019).
 ///
@@ -22,7 +26,7 @@ pub use experiments::settings::*;
 /// (7 in). Bad input exits with code 2 and writes nothing; a failure while
 /// running exits with 1.
 #[derive(Debug, Parser)]
-#[command(name = "sil-host", version, about, long_about)]
+#[command(name = "sil-host", version = VERSION, about, long_about)]
 pub struct Cli {
     /// The command to run.
     #[command(subcommand)]

@@ -26,6 +26,28 @@ pub fn warn(note: Option<String>) {
     }
 }
 
+/// The end of every command that computes, then prints: `done`'s JSON document
+/// (`document` of its result) with `--json`, else `human` with the result and the
+/// files written; then the command's exit (`Done::into_result`: a failure after
+/// writing, or `--strict`'s verdict).
+///
+/// # Errors
+/// [`crate::error::CliError::Io`] when the document cannot be serialised; the
+/// failure `done` carries.
+pub fn finish<R, D: serde::Serialize + ?Sized>(
+    done: experiments::done::Done<R>,
+    json: bool,
+    document: impl FnOnce(&R) -> &D,
+    human: impl FnOnce(&R, &[std::path::PathBuf]),
+) -> Result<(), crate::error::CliError> {
+    if json {
+        print_json(document(&done.result))?;
+    } else {
+        human(&done.result, &done.files);
+    }
+    done.into_result()
+}
+
 /// Prints `value` as the command's one JSON document (`--json`).
 ///
 /// # Errors

@@ -18,15 +18,15 @@ use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,
+    link_spec::{LinkSpec, OpenLink},
     output::{OutputSet, progress_bar},
     plot::{self, Panel, Series, colors},
 };
 use experiments::scenario::load_scenario;
 use rig::{
     FirmwareLink,
-    pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilLink, PilOptions, PilTarget},
+    pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilOptions, PilTarget},
     scenario::Scenario,
-    setup::{firmware_config, plant_for},
     summary::{CountUnit, Spread},
     summary::{PilFigures, RunSummary},
 };
@@ -107,13 +107,13 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     experiments::scenario::refuse_board_overrides(&args.scenario.set, "the PIL board (its own firmware image)")?;
     let scenario = load_scenario(&args.scenario)?;
     crate::commands::warn(experiments::scenario::board_tables_note(&scenario, "the PIL board (its own firmware image)"));
-    plant_for(&scenario).map_err(CliError::from)?;
-    firmware::Firmware::new(firmware_config(&scenario)).map_err(|e| CliError::bad_input(format!("firmware configuration: {e}")))?;
+    let setup = experiments::run::setup(scenario)?;
+    let scenario = setup.scenario();
     if !(args.answer_timeout.is_finite() && args.answer_timeout > 0.0 && args.answer_timeout <= 600.0) {
         return Err(CliError::bad_input(format!("--answer-timeout {}: in (0, 600] s", args.answer_timeout)));
     }
     let target = target_of(args)?;
-    pil_link::check_faults(&scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
+    pil_link::check_faults(scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
@@ -123,9 +123,11 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         Box::new(move |l: &LogLine| bar.println(format!("image: {}", l.display()))) as pil_link::LogSink
     });
     let opts = PilOptions { answer_timeout_s: args.answer_timeout, ..PilOptions::for_target(target.clone()) };
-    let mut link = PilLink::start(&scenario, &opts, sink).map_err(CliError::from)?;
+    let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&setup)? else {
+        unreachable!("a PIL spec opens a PIL link")
+    };
     let Streamed { stats, history, failure, wall_s, validity, ledger } =
-        run_streamed(&scenario, &mut link, &mut out, &progress, 100, args.format)?;
+        run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -134,9 +136,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     drop(link);
 
     let svg = out.stage_figure("trace.svg")?;
-    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, &scenario, &history, stats.last_t())?;
+    draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
     let svg = out.stage_figure("instructions.svg")?;
-    draw_counts(&svg, &scenario, stats.last_t(), &counts, &target)?;
+    draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {
         let text: String = log.iter().map(|l| l.display() + "\n").collect();
         out.write_bytes("defmt.log", text.as_bytes())?;
@@ -144,11 +146,11 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let summary = RunSummary {
         pil: Some(figures),
         ledger,
-        ..RunSummary::from_stats(&scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
+        ..RunSummary::from_stats(scenario, &stats, failure.as_ref(), transport, "lockstep", wall_s, validity)
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host pil`: [`execute`], then prints the summary (human, or the
@@ -157,15 +159,15 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 /// # Errors
 /// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
 pub fn run(args: &PilArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    let (summary, scenario) = &done.result;
-    if args.output.json {
-        crate::commands::print_json(summary)?;
-    } else {
-        print_pil(summary);
-        print_summary(summary, scenario, &done.files);
-    }
-    done.into_result()
+    crate::commands::finish(
+        execute(args)?,
+        args.output.json,
+        |(summary, _)| summary,
+        |(summary, scenario), files| {
+            print_pil(summary);
+            print_summary(summary, scenario, files);
+        },
+    )
 }
 
 /// What counted the ticks, for the human output and the figure.

@@ -15,18 +15,14 @@ use crate::streamed_run::{Streamed, run_streamed};
 use crate::{
     cli::{RunArgs, RunLink},
     error::CliError,
+    link_spec::{LinkSpec, OpenLink},
     output::{OutputSet, progress_bar},
 };
 pub use experiments::run::prepare;
 use rig::scenario::Scenario;
 use rig::{
-    FirmwareLink,
-    emulator_link::EmulatorLink,
-    in_process::InProcessLink,
     ipc::{MonitorPolicy, check_rig_name, default_rig_name},
-    ipc_link::IpcLink,
     summary::{MonitorSummary, RunSummary},
-    twin_link::TwinLink,
 };
 
 /// Runs `sil-host run`.
@@ -35,9 +31,10 @@ use rig::{
 /// Bad scenario or overrides (exit 2, nothing written); a run that stopped part
 /// way (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
-    let (scenario, chosen) = prepare(args)?;
+    let (setup, chosen) = prepare(args)?;
+    let scenario = setup.scenario();
     if !matches!(chosen, RunLink::Twin | RunLink::Emulator) {
-        crate::commands::warn(experiments::scenario::board_tables_note(&scenario, chosen.without_board()));
+        crate::commands::warn(experiments::scenario::board_tables_note(scenario, chosen.without_board()));
     }
     let rig = match (&args.attach, &args.rig) {
         (Some(name), _) | (None, Some(name)) => name.clone(),
@@ -54,48 +51,40 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         timeout: std::time::Duration::from_secs_f64(args.monitor_timeout),
     };
 
-    let mut ipc: Option<IpcLink> = None;
-    let mut in_process: Option<InProcessLink> = None;
-    let mut twin: Option<TwinLink> = None;
-    let mut emulator: Option<EmulatorLink> = None;
-    let link: &mut dyn FirmwareLink = if chosen == RunLink::InProcess {
-        in_process.insert(InProcessLink::new(&scenario).map_err(CliError::from)?)
-    } else if chosen == RunLink::Twin {
-        twin.insert(TwinLink::new(&scenario).map_err(|e| CliError::bad_input(e.to_string()))?)
-    } else if chosen == RunLink::Emulator {
-        let elf = args.elf.clone().unwrap_or_else(rig::emulator_link::default_image);
-        emulator.insert(EmulatorLink::new(&scenario, &elf).map_err(|e| CliError::bad_input(e.to_string()))?)
-    } else {
-        let exe = match &args.attach {
-            Some(_) => None,
-            None => Some(
-                std::env::current_exe()
-                    .map_err(|e| CliError::bad_input(format!("cannot find this executable to spawn the firmware: {e}")))?,
-            ),
-        };
-        ipc.insert(IpcLink::connect(&scenario, &rig, exe.as_deref(), args.realtime, &monitors).map_err(CliError::from)?)
+    let spec = match chosen {
+        RunLink::InProcess => LinkSpec::InProcess,
+        RunLink::Twin => LinkSpec::Twin,
+        RunLink::Emulator => LinkSpec::Emulator { elf: args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image) },
+        RunLink::Iceoryx2 => LinkSpec::Iceoryx2 { rig: rig.clone(), attach: args.attach.is_some(), realtime: args.realtime, monitors },
     };
+    let mut open = spec.open(&setup)?;
+    let link = open.link();
     let transport = link.transport();
     // Only once the firmware is there: a run that cannot start writes nothing.
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { stats, history, failure, wall_s, validity, ledger } =
-        run_streamed(&scenario, link, &mut out, &progress, 500, args.format)?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger } = run_streamed(&setup, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
-    let timings = ipc.as_mut().map(|l| std::mem::take(&mut l.timings));
-    let realtime_setup = ipc.as_ref().and_then(|l| l.realtime_setup.clone());
-    let monitor_counts = ipc.as_ref().filter(|_| monitors.wait_for > 0).map(IpcLink::monitor_counts);
-    drop(ipc);
-    if let Some(t) = &twin {
-        for (k, n) in &t.notices {
-            eprintln!("twin: period {k}: {}", rig::twin_link::describe(n));
+    let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
+    match &mut open {
+        OpenLink::Iceoryx2(l) => {
+            timings = Some(std::mem::take(&mut l.timings));
+            realtime_setup = l.realtime_setup.clone();
+            monitor_counts = (monitors.wait_for > 0).then(|| l.monitor_counts());
         }
+        OpenLink::Twin(t) => {
+            for (k, n) in &t.notices {
+                eprintln!("twin: period {k}: {}", board_link::twin_link::describe(n));
+            }
+        }
+        _ => {}
     }
+    drop(open);
 
     let svg = out.stage_figure("trace.svg")?;
-    draw(&svg, "SIL", &scenario, &history, stats.last_t())?;
+    draw(&svg, "SIL", scenario, &history, stats.last_t())?;
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),
         ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),
@@ -113,7 +102,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         firmware_announcement,
         ledger,
         ..RunSummary::from_stats(
-            &scenario,
+            scenario,
             &stats,
             failure.as_ref(),
             transport,
@@ -124,7 +113,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
-    Ok(Done { result: (summary, scenario), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
+    Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 
 /// Runs `sil-host run`: [`execute`], then prints the summary (human, or the
@@ -133,12 +122,10 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 /// # Errors
 /// As [`execute`]; a run that stopped part way (exit 1, everything up to then written).
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    let (summary, scenario) = &done.result;
-    if args.output.json {
-        crate::commands::print_json(summary)?;
-    } else {
-        print_summary(summary, scenario, &done.files);
-    }
-    done.into_result()
+    crate::commands::finish(
+        execute(args)?,
+        args.output.json,
+        |(summary, _)| summary,
+        |(summary, scenario), files| print_summary(summary, scenario, files),
+    )
 }

@@ -7,11 +7,8 @@
 use std::time::Instant;
 
 use board_emulator::core_clock::Mode;
-use rig::{
-    emulator_link::{EmulatorLink, ImageTiming, default_image},
-    run_loop,
-    scenario::Scenario,
-};
+use board_link::emulator_link::{EmulatorLink, ImageTiming, default_image};
+use rig::{run_loop, scenario::Scenario};
 
 use crate::{
     bench::figure::{Figure, Goal, median},
@@ -21,10 +18,10 @@ use crate::{
 
 /// The emulated closed loop's target: real time at 1 kHz (issue 38).
 pub const RATE_TARGET: f64 = 1_000.0;
-/// The gates' ceilings (`rig::emulator_link`), as figures' targets.
-const HANDLER_INSTRUCTIONS_CEILING: f64 = rig::emulator_link::HANDLER_INSTRUCTIONS_CEILING as f64;
-const HANDLER_CYCLES_CEILING: f64 = rig::emulator_link::HANDLER_CYCLES_CEILING as f64;
-const STACK_CEILING: f64 = rig::emulator_link::STACK_CEILING_BYTES as f64;
+/// The gates' ceilings (`board_link::emulator_link`), as figures' targets.
+const HANDLER_INSTRUCTIONS_CEILING: f64 = board_link::emulator_link::HANDLER_INSTRUCTIONS_CEILING as f64;
+const HANDLER_CYCLES_CEILING: f64 = board_link::emulator_link::HANDLER_CYCLES_CEILING as f64;
+const STACK_CEILING: f64 = board_link::emulator_link::STACK_CEILING_BYTES as f64;
 
 /// The paper's four closed-loop scenarios (docs/model.md experiments 5 and 6).
 const PAPER: [(&str, &str); 4] = [
@@ -36,7 +33,11 @@ const PAPER: [(&str, &str); 4] = [
 
 fn image() -> Result<std::path::PathBuf, CliError> {
     let p = default_image();
-    if p.exists() { Ok(p) } else { Err(CliError::bad_input(format!("{} is missing: {}", p.display(), rig::emulator_link::BUILD_HINT))) }
+    if p.exists() {
+        Ok(p)
+    } else {
+        Err(CliError::bad_input(format!("{} is missing: {}", p.display(), board_link::emulator_link::BUILD_HINT)))
+    }
 }
 
 fn with_duration(text: &str, duration_s: f64) -> Result<Scenario, CliError> {
@@ -52,12 +53,12 @@ fn with_duration(text: &str, duration_s: f64) -> Result<Scenario, CliError> {
 /// A missing image (exit 2), a run that fails (exit 1).
 pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
     let image = image()?;
-    let s = with_duration(rig::scenario::DEFAULT_TOML, args.duration)?;
+    let setup = rig::RunSetup::new(with_duration(rig::scenario::DEFAULT_TOML, args.duration)?).map_err(CliError::from)?;
     let mut rates = Vec::new();
     for _ in 0..args.repeat {
-        let mut link = EmulatorLink::new(&s, &image).map_err(CliError::from)?;
+        let mut link = EmulatorLink::new(&setup, &image).map_err(CliError::from)?;
         let t = Instant::now();
-        let (records, e) = run_loop(&s, &mut link, &mut ());
+        let (records, e) = run_loop(&setup, &mut link, &mut ());
         if let Some(e) = e {
             return Err(CliError::from(e));
         }
@@ -73,15 +74,15 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             RATE_TARGET,
             Goal::AtLeast,
         )
-        .note(format!("{} runs of {} periods", rates.len(), s.timing.periods()))
+        .note(format!("{} runs of {} periods", rates.len(), setup.scenario().timing.periods()))
         .with_runs(rates),
     ];
     let mut worst: Option<(ImageTiming, &str)> = None;
     let mut lines = Vec::new();
     for (name, text) in PAPER {
-        let s = with_duration(text, args.duration)?;
-        let mut link = EmulatorLink::with_mode(&s, &image, Mode::Counted).map_err(CliError::from)?;
-        let (_, e) = run_loop(&s, &mut link, &mut ());
+        let setup = rig::RunSetup::new(with_duration(text, args.duration)?).map_err(CliError::from)?;
+        let mut link = EmulatorLink::with_mode(&setup, &image, Mode::Counted).map_err(CliError::from)?;
+        let (_, e) = run_loop(&setup, &mut link, &mut ());
         if let Some(e) = e.filter(|e| !matches!(e, rig::record::RunError::SafeState { .. })) {
             return Err(CliError::from(e));
         }

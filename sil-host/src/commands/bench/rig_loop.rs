@@ -6,15 +6,16 @@ use std::time::Instant;
 
 use crate::bench::figure::{Figure, Goal, median};
 use crate::{cli::BenchArgs, error::CliError};
+use board_link::TwinLink;
 use rig::{
     FirmwareLink, RunObserver,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, default_rig_name},
     ipc_link::{IpcLink, LinkTimings},
     scenario::Scenario,
+    setup::RunSetup,
     stream_loop,
     summary::Percentiles,
-    twin_link::TwinLink,
 };
 
 /// Target of the in-process loop, periods per wall second (issue 16).
@@ -34,12 +35,12 @@ impl RunObserver for Misses {
     }
 }
 
-/// Runs `s` over `link`: periods run, periods per wall second and deadline
+/// Runs `setup` over `link`: periods run, periods per wall second and deadline
 /// misses, or the run's error.
-fn timed(s: &Scenario, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize), CliError> {
+fn timed(setup: &RunSetup, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize), CliError> {
     let mut misses = Misses::default();
     let t = Instant::now();
-    let (periods, e) = stream_loop(s, link, &mut misses);
+    let (periods, e) = stream_loop(setup, link, &mut misses);
     let rate = periods as f64 / t.elapsed().as_secs_f64();
     match e {
         Some(e) => Err(CliError::from(e)),
@@ -47,16 +48,16 @@ fn timed(s: &Scenario, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize
     }
 }
 
-/// The default scenario, `duration_s` long, with a 1 s command timeout (the
+/// The run of the default scenario, `duration_s` long, with a 1 s command timeout (the
 /// default's 50 ms guards against a stalled firmware; a benchmark on a loaded
 /// machine (issue 27) must measure a slow loop, not latch the firmware's safe state
 /// after three descheduled waits in a row).
-fn scenario(duration_s: f64) -> Result<Scenario, CliError> {
+fn scenario(duration_s: f64) -> Result<RunSetup, CliError> {
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = duration_s;
     s.rig.command_timeout_s = 1.0;
     s.validate()?;
-    Ok(s)
+    RunSetup::new(s).map_err(CliError::from)
 }
 
 fn this_exe() -> Result<std::path::PathBuf, CliError> {
@@ -72,18 +73,18 @@ fn fmt(p: &Percentiles) -> String {
 /// # Errors
 /// A run that fails (exit 1).
 pub fn in_process(args: &BenchArgs) -> Result<Figure, CliError> {
-    let s = scenario(args.duration)?;
+    let setup = scenario(args.duration)?;
     let mut rates = Vec::new();
     let mut misses = 0;
     for _ in 0..args.repeat {
-        let mut link = InProcessLink::new(&s).map_err(CliError::from)?;
-        let (_, rate, m) = timed(&s, &mut link)?;
+        let mut link = InProcessLink::new(&setup).map_err(CliError::from)?;
+        let (_, rate, m) = timed(&setup, &mut link)?;
         rates.push(rate);
         misses += m;
     }
     let name = "in-process closed loop (default scenario)";
     Ok(Figure::measured("in_process", "in-process", name, median(&rates), "periods/s", IN_PROCESS_TARGET, Goal::AtLeast)
-        .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), s.timing.periods()))
+        .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), setup.scenario().timing.periods()))
         .with_runs(rates))
 }
 
@@ -93,18 +94,18 @@ pub fn in_process(args: &BenchArgs) -> Result<Figure, CliError> {
 /// # Errors
 /// A run that fails (exit 1).
 pub fn twin(args: &BenchArgs) -> Result<Figure, CliError> {
-    let s = scenario(args.duration)?;
+    let setup = scenario(args.duration)?;
     let mut rates = Vec::new();
     let mut misses = 0;
     for _ in 0..args.repeat {
-        let mut link = TwinLink::new(&s).map_err(CliError::from)?;
-        let (_, rate, m) = timed(&s, &mut link)?;
+        let mut link = TwinLink::new(&setup).map_err(CliError::from)?;
+        let (_, rate, m) = timed(&setup, &mut link)?;
         rates.push(rate);
         misses += m;
     }
     let name = "board twin closed loop (default scenario)";
     Ok(Figure::measured("twin", "twin", name, median(&rates), "periods/s", TWIN_TARGET, Goal::AtLeast)
-        .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), s.timing.periods()))
+        .note(format!("{} runs of {} periods; deadline misses {misses}", rates.len(), setup.scenario().timing.periods()))
         .with_runs(rates))
 }
 
@@ -113,14 +114,15 @@ pub fn twin(args: &BenchArgs) -> Result<Figure, CliError> {
 /// # Errors
 /// A run or the firmware process that fails (exit 1).
 pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
-    let s = scenario(args.duration)?;
+    let setup = scenario(args.duration)?;
     let exe = this_exe()?;
     let mut rates = Vec::new();
     let mut misses = 0;
     let mut timings = LinkTimings::default();
     for _ in 0..args.repeat {
-        let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::from)?;
-        let (_, rate, m) = timed(&s, &mut link)?;
+        let mut link =
+            IpcLink::connect(&setup, &default_rig_name(), Some(&exe), false, &MonitorPolicy::default()).map_err(CliError::from)?;
+        let (_, rate, m) = timed(&setup, &mut link)?;
         rates.push(rate);
         misses += m;
         timings.rtt.merge(&link.timings.rtt);
@@ -130,7 +132,7 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
         .note(format!(
             "{} runs of {} periods; round trip {}; deadline misses {misses}",
             rates.len(),
-            s.timing.periods(),
+            setup.scenario().timing.periods(),
             fmt(&timings.rtt.percentiles())
         ))
         .with_runs(rates))
@@ -142,10 +144,10 @@ pub fn lockstep(args: &BenchArgs) -> Result<Figure, CliError> {
 /// # Errors
 /// A run or the firmware process that fails (exit 1).
 pub fn realtime(args: &BenchArgs) -> Result<Figure, CliError> {
-    let s = scenario(args.realtime_s)?;
+    let setup = scenario(args.realtime_s)?;
     let exe = this_exe()?;
-    let mut link = IpcLink::connect(&s, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::from)?;
-    let (periods, _, misses) = timed(&s, &mut link)?;
+    let mut link = IpcLink::connect(&setup, &default_rig_name(), Some(&exe), true, &MonitorPolicy::default()).map_err(CliError::from)?;
+    let (periods, _, misses) = timed(&setup, &mut link)?;
     let name = format!("real time at 1 kHz over iceoryx2, {} s: deadline misses", args.realtime_s);
     let mut f = Figure::measured("realtime_misses", "realtime", name, misses as f64, "misses", 0.0, Goal::AtMost)
         .note(format!("{periods} periods; period jitter {}", fmt(&link.timings.jitter.percentiles())))

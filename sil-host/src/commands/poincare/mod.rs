@@ -92,11 +92,5 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
 /// # Errors
 /// As [`execute`]; belt speeds that failed (after writing).
 pub fn run(args: &PoincareArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    if args.output.json {
-        crate::commands::print_json(&done.result)?;
-    } else {
-        print_human(&done.result);
-    }
-    done.into_result()
+    crate::commands::finish(execute(args)?, args.output.json, |r| r, |r, _| print_human(r))
 }

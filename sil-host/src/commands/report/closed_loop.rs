@@ -24,7 +24,7 @@ With `f_n* = 7 N` (`--set controller.f_n_ref=7`), or 5 N or 3 N, the same run ha
 At 10 kHz (`--set timing.rate_hz=10000 --set timing.delta_s=0.00005`) the saturated arm drags the stuck tip until the load cell clips \
 (28 N against its 25 N range): the firmware latches its `Overload` safe state at t = 0.221 s (without the runaway limits, `SensorFault` \
 at t = 0.268 s), which is why that run never reaches its target. \
-The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `tests/tests/closed_loop_friction.rs` checks it.";
+The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `sil-host/tests/e2e/closed_loop_friction.rs` checks it.";
 
 /// The comparison table of `sweeps` (id, summary, files), one column group per
 /// sweep, and their maps side by side as one figure.

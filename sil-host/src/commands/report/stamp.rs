@@ -8,7 +8,8 @@ use serde::Serialize;
 pub struct Stamp {
     /// `YYYY-MM-DD HH:MM UTC`.
     pub date: String,
-    /// `git describe --always --dirty` of the working directory, or `unknown`.
+    /// The commit the binary was built from (`git describe --always --dirty` at
+    /// build time, `sil-host/build.rs`), or `unknown` when built outside a git checkout.
     pub commit: String,
     /// Host name.
     pub host: String,
@@ -25,13 +26,6 @@ impl Stamp {
     pub fn now() -> Self {
         let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
         let read = |p: &str| std::fs::read_to_string(p).ok().map(|s| s.trim().to_string());
-        let commit = std::process::Command::new("git")
-            .args(["describe", "--always", "--dirty"])
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_else(|| "unknown".into());
         let cpu = read("/proc/cpuinfo")
             .and_then(|c| {
                 c.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, m)| m.trim().to_string())
@@ -39,7 +33,7 @@ impl Stamp {
             .unwrap_or_else(|| "unknown".into());
         Self {
             date: utc(secs),
-            commit,
+            commit: env!("SIL_HOST_COMMIT").to_string(),
             host: read("/proc/sys/kernel/hostname").unwrap_or_else(|| "unknown".into()),
             cpu,
             cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),

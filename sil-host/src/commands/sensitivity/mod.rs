@@ -65,13 +65,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
 /// # Errors
 /// As [`execute`].
 pub fn run(args: &SensitivityArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    if args.output.json {
-        crate::commands::print_json(&done.result)?;
-    } else {
-        print_table(&done.result);
-    }
-    done.into_result()
+    crate::commands::finish(execute(args)?, args.output.json, |r| r, |r, _| print_table(r))
 }
 
 /// The human table: per dimension and value, the headline results.

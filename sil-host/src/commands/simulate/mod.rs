@@ -116,11 +116,5 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
 /// # Errors
 /// As [`execute`]; a simulation that failed part way (after writing).
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    if args.output.json {
-        crate::commands::print_json(&done.result)?;
-    } else {
-        print_human(&done.result);
-    }
-    done.into_result()
+    crate::commands::finish(execute(args)?, args.output.json, |r| r, |r, _| print_human(r))
 }

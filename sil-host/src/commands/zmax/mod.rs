@@ -63,11 +63,5 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
 /// # Errors
 /// As [`execute`].
 pub fn run(args: &ZmaxArgs) -> Result<(), CliError> {
-    let done = execute(args)?;
-    if args.output.json {
-        crate::commands::print_json(&done.result)?;
-    } else {
-        print_table(&done.result, &done.files);
-    }
-    done.into_result()
+    crate::commands::finish(execute(args)?, args.output.json, |r| r, print_table)
 }

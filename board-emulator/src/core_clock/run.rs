@@ -1,0 +1,171 @@
+//! The wrapped core's runs ([`super`] documentation): what a sleeping core may
+//! skip, the functional run with the host's edges at exact core positions, and
+//! the counted run through TIM2's handler.
+
+use std::sync::atomic::Ordering::Relaxed;
+
+use rsemu::{core::sched::TickCursor, cpu::arm::v7m::sys::Exception};
+
+use super::{Core, HandlerRun, IRQS, TIM2_EXCEPTION, TIM2_IRQ, lock};
+use crate::{accelerator::FLASH, flash_reads};
+
+impl Core {
+    /// Ticks of `ticks` that may be charged without a step (0: the core must
+    /// step): the core sleeps, owes nothing, nothing is pending or could pend.
+    fn sleepable(&self, ticks: u64) -> u64 {
+        let c = &*self.cpu;
+        if self.reset_seen.swap(false, Relaxed) {
+            // The next step takes the reset.
+            return 0;
+        }
+        if !c.is_asleep() || c.cycle_debt() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
+            return 0;
+        }
+        c.with_sys(|s| {
+            // As Exec::step's merge_external: an asserted line pends unless
+            // active. Only enabled lines can wake the core; a disabled line's
+            // pending bit is folded in by the next step, which nothing reads
+            // before (the image reads no NVIC pending bits).
+            for irq in 0..IRQS {
+                let e = Exception(irq + 16);
+                if s.is_enabled(e) && c.irq_asserted(irq) && !s.is_active(e) {
+                    s.set_pending(e, true);
+                }
+            }
+            if s.highest_pending().is_some() {
+                return 0;
+            }
+            let mut n = ticks;
+            if s.syst_csr & 0b11 == 0b11 && s.syst_rvr & 0xFF_FFFF != 0 {
+                let current = u64::from(s.syst_cvr & 0xFF_FFFF);
+                if current == 0 {
+                    return 0;
+                }
+                n = n.min(current);
+            }
+            s.tick_cyccnt(n);
+            if s.tick_systick(n) && s.syst_csr & 0b10 != 0 {
+                s.set_pending(Exception::SYSTICK, true);
+            }
+            n
+        })
+    }
+
+    pub(super) fn run_functional(&self, ticks: u64) -> u64 {
+        let c = &*self.cpu;
+        let cursor = lock(&self.cursor).clone();
+        let anchor = cursor.as_ref().map_or(0, TickCursor::anchor);
+        let mut edges = lock(&self.edges);
+        let pins = lock(&self.pins).clone();
+        let mut used = 0;
+        let mut calls = 0u64;
+        while used < ticks {
+            let mut rest = ticks - used;
+            // A host edge where the core owes nothing: its position is then
+            // exactly anchor + used.
+            if let (Some(e), Some(cur), Some(pins)) = (edges.front().copied(), cursor.as_ref(), pins.as_ref())
+                && c.cycle_debt() == 0
+            {
+                let pos = anchor + used;
+                if e.at <= pos {
+                    if e.at < pos {
+                        self.late_edges.fetch_add(1, Relaxed);
+                    }
+                    edges.pop_front();
+                    cur.set(pos);
+                    pins.drive(e.line, e.high);
+                    continue;
+                }
+                if c.is_asleep() {
+                    rest = rest.min(e.at - pos);
+                }
+            }
+            // A sleeping core's debt is paid without a step.
+            let d = if c.is_asleep() { c.cycle_debt().min(rest) } else { 0 };
+            if d > 0 {
+                used += c.run_budget(d);
+                continue;
+            }
+            let n = self.sleepable(rest);
+            if n > 0 {
+                used += n;
+                continue;
+            }
+            // Awake: only the first run_budget call of a run publishes exact
+            // positions; a later one runs a short chunk.
+            let chunk = if calls == 0 { rest } else { rest.min(64) };
+            let r = c.run_budget(chunk);
+            calls += 1;
+            used += r;
+            if r < chunk {
+                break;
+            }
+        }
+        self.end_tick.store(anchor + used, Relaxed);
+        used
+    }
+
+    pub(super) fn run_counted(&self, ticks: u64) -> u64 {
+        let c = &*self.cpu;
+        let anchor = lock(&self.cursor).as_ref().map_or(0, TickCursor::anchor);
+        let mut tr = lock(&self.track);
+        let mut used = 0;
+        while used < ticks {
+            let n = self.sleepable(ticks - used);
+            if n > 0 {
+                used += n;
+                tr.tick += n;
+                continue;
+            }
+            if tr.irq_seen.is_none() && c.irq_asserted(TIM2_IRQ) {
+                tr.irq_seen = Some(tr.tick);
+            }
+            let debt = c.cycle_debt();
+            let before = c.current_exception().0;
+            let now = tr.tick;
+            let stall = match (debt, tr.accel.as_mut()) {
+                (0, Some(a)) => {
+                    let r = c.regs().r;
+                    let pc = r[15];
+                    match flash_reads::instruction_at(&a.code, FLASH.start, pc) {
+                        Some((width, insn)) => {
+                            a.reads.clear();
+                            flash_reads::data_reads(&insn, pc, &r, &mut a.reads);
+                            a.art.instruction(pc, width, &a.reads, now)
+                        }
+                        None => 0,
+                    }
+                }
+                _ => 0,
+            };
+            let n = c.run_budget(1);
+            if n == 0 {
+                break;
+            }
+            if debt == 0 && before == TIM2_EXCEPTION {
+                tr.instructions += 1;
+                tr.wait += stall;
+                let tick = tr.tick;
+                let start = *tr.first.get_or_insert(tick);
+                if !c.with_sys(|s| s.is_active(Exception(TIM2_EXCEPTION))) {
+                    // Returned (a preempting handler leaves TIM2 active).
+                    let end = tr.tick + 1 + c.cycle_debt();
+                    let latency = tr.irq_seen.take().map_or(0, |s| start.saturating_sub(s));
+                    let run = HandlerRun {
+                        latency_cycles: latency,
+                        instructions: std::mem::take(&mut tr.instructions),
+                        cycles: end - start,
+                        wait_cycles: std::mem::take(&mut tr.wait),
+                        started_at: start,
+                    };
+                    tr.first = None;
+                    lock(&self.handlers).push(run);
+                }
+            }
+            used += n;
+            tr.tick += n;
+        }
+        self.end_tick.store(anchor + used, Relaxed);
+        used
+    }
+}

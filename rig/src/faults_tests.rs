@@ -1,0 +1,210 @@
+//! Tests of the faults ([`super`]): windows of whole periods, every kind acting
+//! from the same period, the checks' messages, what each link refuses, and the
+//! random schedules of the soak.
+
+use super::*;
+
+#[test]
+fn windows_cover_whole_periods() {
+    let f = Fault { kind: FaultKind::DropCommand, at_s: 0.5, duration_s: 0.003, delay_s: 0.0, signal: None };
+    let ms = Period::MILLISECOND;
+    assert_eq!(f.periods(ms), 500..503);
+    assert_eq!(Fault { duration_s: 0.0, ..f }.periods(ms), 500..501, "at least the period at at_s");
+    assert_eq!(Fault { at_s: 0.0, duration_s: 0.0, ..f }.periods(ms), 0..1);
+    // Inexact products of the period round to the microsecond first.
+    assert_eq!(Fault { at_s: 3.0 * 0.1, duration_s: 7.0 * 0.001, ..f }.periods(ms), 300..307);
+    // At 6 kHz (167 us): the first sample time at or after 1 s is period 5989 (1.000163 s).
+    let p6 = Period::from_rate_hz(6000.0).unwrap();
+    assert_eq!(Fault { at_s: 1.0, duration_s: 0.0, ..f }.periods(p6), 5989..5990);
+}
+
+/// Issue 27: a fault at `at_s = 3.0005` fired in period 3000 for four kinds and
+/// 3001 for the others. Every query now reads the same compiled window.
+#[test]
+fn every_kind_acts_from_the_same_period() {
+    let at = |kind, signal| Fault { kind, at_s: 3.0005, duration_s: 0.0, delay_s: 0.0, signal };
+    let faults = [
+        at(FaultKind::DropCommand, None),
+        Fault { delay_s: 2e-4, ..at(FaultKind::LateCommand, None) },
+        Fault { duration_s: 0.05, ..at(FaultKind::Stall, None) },
+        at(FaultKind::KillFirmware, None),
+        at(FaultKind::StuckSensor, Some(Signal::Theta1)),
+        at(FaultKind::NanSensor, Some(Signal::FN)),
+        at(FaultKind::OutOfRange, Some(Signal::Belt)),
+        at(FaultKind::SpiError, Some(Signal::Elbow)),
+        at(FaultKind::MissingConversion, None),
+        at(FaultKind::DriverFault, None),
+    ];
+    let plan = FaultPlan::new(&faults, Period::MILLISECOND);
+    let first = |acts: &dyn Fn(u64) -> bool| (2990..3010).find(|&k| acts(k));
+    assert_eq!(first(&|k| plan.drops_command(k)), Some(3001));
+    assert_eq!(first(&|k| plan.command_delay(k) == Duration(200)), Some(3001));
+    assert_eq!(first(&|k| plan.stall_starting(k) == Some(0.05)), Some(3001));
+    assert_eq!(first(&|k| plan.kills_firmware_at(k)), Some(3001));
+    for kind in [FaultKind::StuckSensor, FaultKind::NanSensor, FaultKind::OutOfRange] {
+        assert_eq!(first(&|k| plan.sensor_faults(k).any(|(f, _)| f == kind)), Some(3001), "{kind:?}");
+    }
+    for kind in [FaultKind::SpiError, FaultKind::MissingConversion, FaultKind::DriverFault, FaultKind::StuckSensor] {
+        assert_eq!(first(&|k| plan.board_faults(k).any(|(f, _)| f == kind)), Some(3001), "{kind:?}");
+    }
+    // One period each (duration 0), the stall's and kill's at their first only.
+    assert!(!plan.drops_command(3002) && plan.stall_starting(3002).is_none() && !plan.kills_firmware_at(3002));
+}
+
+#[test]
+fn checks_name_the_problem() {
+    let f = Fault { kind: FaultKind::StuckSensor, at_s: 1.0, duration_s: 1.0, delay_s: 0.0, signal: None };
+    assert!(f.check().unwrap_err().contains("signal"));
+    let f = Fault { kind: FaultKind::LateCommand, at_s: 1.0, duration_s: 0.0, delay_s: f64::NAN, signal: None };
+    assert!(f.check().unwrap_err().contains("delay_s"));
+    // Regression (fuzzing): a fault that does not use its delay still gets a sane one.
+    for delay_s in [f64::NAN, f64::INFINITY, -1.0, 10.0] {
+        let f = Fault { kind: FaultKind::StuckSensor, at_s: 1.0, duration_s: 0.0, delay_s, signal: Some(Signal::FN) };
+        assert!(f.check().unwrap_err().contains("delay_s"), "{delay_s}");
+    }
+    let f = Fault { kind: FaultKind::StuckSensor, at_s: 1.0, duration_s: 0.0, delay_s: 0.0, signal: Some(Signal::FN) };
+    assert_eq!(f.check(), Ok(()));
+}
+
+/// Each link refuses exactly the faults it cannot inject, in one table: the
+/// firmware in its own process takes every wire and process fault; QEMU can be
+/// killed but not stalled; in-process and a board behind a serial port take
+/// neither; only the board twin takes the bus faults, and it refuses the
+/// wire-level frame's faults, the late step and the process faults.
+#[test]
+fn links_refuse_exactly_what_they_cannot_inject() {
+    use FaultKind::*;
+    let all = [
+        LateCommand,
+        DropCommand,
+        Stall,
+        KillFirmware,
+        StuckSensor,
+        NanSensor,
+        OutOfRange,
+        SpiError,
+        ParityError,
+        MagnetLost,
+        MissingConversion,
+        DriverFault,
+    ];
+    let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
+    for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin, LinkKind::Emulator] {
+        for kind in all {
+            let refused = link.check(&[fault(kind)]).is_err();
+            let process_fault = matches!(kind, Stall | KillFirmware);
+            let bus = kind.is_bus_fault();
+            let expected = match link {
+                LinkKind::Ipc => bus,
+                LinkKind::PilQemu => kind == Stall || bus,
+                LinkKind::InProcess | LinkKind::PilSerial => process_fault || bus,
+                LinkKind::Twin | LinkKind::Emulator => process_fault || matches!(kind, LateCommand | NanSensor | OutOfRange),
+            };
+            assert_eq!(refused, expected, "{link:?} {kind:?}");
+        }
+    }
+    let e = LinkKind::InProcess.check(&[fault(Stall)]).unwrap_err().to_string();
+    assert!(e.contains("Stall") && e.contains("--in-process"), "{e}");
+    let e = LinkKind::InProcess.check(&[fault(MagnetLost)]).unwrap_err().to_string();
+    assert!(e.contains("--link twin"), "{e}");
+    let e = LinkKind::Twin.check(&[fault(NanSensor)]).unwrap_err().to_string();
+    assert!(e.contains("spi_error") && e.contains("stuck_sensor"), "{e}");
+}
+
+fn soak_spec(seed: u64) -> RandomSchedule {
+    RandomSchedule {
+        seed,
+        kinds: RandomSchedule::survivable_ipc_kinds(),
+        count: 600,
+        from_s: 3.0,
+        to_s: 600.0,
+        ts: 1e-3,
+        max_in_a_row: 2,
+        max_window: 20,
+        command_timeout_s: 0.25,
+    }
+}
+
+/// The soak schedule: reproducible from its seed, every survivable iceoryx2
+/// kind drawn, windows in whole periods inside the span, apart, and within
+/// the bounds that keep the firmware out of its safe state; a scenario accepts it.
+#[test]
+fn random_schedules_are_seeded_disjoint_and_bounded() {
+    use FaultKind::*;
+    let spec = soak_spec(11);
+    let a = random_schedule(&spec).unwrap();
+    assert_eq!(a, random_schedule(&spec).unwrap(), "same seed, same schedule");
+    assert_ne!(a, random_schedule(&soak_spec(12)).unwrap(), "another seed, another schedule");
+    assert_eq!(a.len(), 600);
+    assert_eq!(RandomSchedule::survivable_ipc_kinds(), [LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, Stall]);
+    for kind in RandomSchedule::survivable_ipc_kinds() {
+        assert!(a.iter().filter(|f| f.kind == kind).count() >= 60, "{kind:?} drawn about 1/6 of the time");
+    }
+    LinkKind::Ipc.check(&a).unwrap();
+    let ts = spec.ts;
+    let mut end_prev = 0u64;
+    let (mut late_past, mut late_on_time, mut stall_n) = (0, 0, [0; 3]);
+    for f in &a {
+        f.check().unwrap();
+        let k0 = (f.at_s / ts).round() as u64;
+        assert!((f.at_s - k0 as f64 * ts).abs() < 1e-12, "{f:?} starts on a sample");
+        assert!(f.at_s >= 3.0 && k0 >= end_prev + 3, "{f:?}: at least two clean periods after the previous window");
+        let n = if f.kind == Stall { 1 } else { (f.duration_s / ts).round() as u64 };
+        assert!(n >= 1 && (f.duration_s - n as f64 * ts).abs() < 1e-12 || f.kind == Stall, "{f:?} lasts whole periods");
+        let reach = match f.kind {
+            LateCommand if f.delay_s >= ts => {
+                late_past += 1;
+                assert!(n <= 2 && f.delay_s <= 3.0 * ts, "{f:?}");
+                n
+            }
+            LateCommand => {
+                late_on_time += 1;
+                assert!(n <= 20 && f.delay_s > 0.0, "{f:?}");
+                n
+            }
+            NanSensor | OutOfRange => {
+                assert!(n <= 2 && f.signal.is_some(), "{f:?}");
+                n + 1
+            }
+            Stall => {
+                let m = f.duration_s / 0.25 - 0.5;
+                assert!((m - m.round()).abs() < 1e-9 && (0.0..=2.0).contains(&m), "{f:?}: (n + 1/2) timeouts");
+                stall_n[m.round() as usize] += 1;
+                m.round() as u64 + 1
+            }
+            DropCommand | StuckSensor => {
+                assert!(n <= 20 && (f.kind == DropCommand) != f.signal.is_some(), "{f:?}");
+                n
+            }
+            KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault => unreachable!(),
+        };
+        end_prev = k0 + reach - 1;
+        assert!(((end_prev + 3) as f64) * ts <= 600.0 + 1e-9, "{f:?} ends inside the span");
+    }
+    assert!(late_past > 20 && late_on_time > 20, "both kinds of lateness: {late_past}, {late_on_time}");
+    assert!(stall_n.iter().all(|&c| c > 5), "stalls of 0, 1 and 2 timeouts: {stall_n:?}");
+    let mut s = crate::scenario::Scenario::default_scenario();
+    s.timing.duration_s = 600.0;
+    s.faults = a;
+    s.validate().unwrap();
+}
+
+#[test]
+fn random_schedules_refuse_what_cannot_fit() {
+    let ok = soak_spec(1);
+    let cases = [
+        (RandomSchedule { kinds: vec![], ..ok.clone() }, "no fault kinds"),
+        (RandomSchedule { kinds: vec![FaultKind::KillFirmware], ..ok.clone() }, "kill_firmware"),
+        (RandomSchedule { count: 1001, ..ok.clone() }, "count"),
+        (RandomSchedule { count: 0, ..ok.clone() }, "count"),
+        (RandomSchedule { to_s: 2.0, ..ok.clone() }, "span"),
+        (RandomSchedule { ts: f64::NAN, ..ok.clone() }, "ts"),
+        (RandomSchedule { max_window: 0, ..ok.clone() }, "max_window"),
+        (RandomSchedule { to_s: 12.0, ..ok.clone() }, "periods each"),
+        (RandomSchedule { command_timeout_s: 30.0, ..ok.clone() }, "stall"),
+    ];
+    for (spec, word) in cases {
+        let e = random_schedule(&spec).unwrap_err();
+        assert!(e.contains(word), "{word}: {e}");
+    }
+}

@@ -1,0 +1,36 @@
+//! Stamps the build with its commit: `SIL_HOST_COMMIT` is `git describe --always
+//! --dirty` of the source tree when it was built (`sil-host --version`, the
+//! report's stamp), or `unknown` when the source is not a git checkout (an
+//! unpacked source archive) or git is missing.
+
+use std::{path::Path, process::Command};
+
+fn git(args: &[&str]) -> Option<String> {
+    let o = Command::new("git").args(args).output().ok().filter(|o| o.status.success())?;
+    Some(String::from_utf8_lossy(&o.stdout).trim().to_string()).filter(|s| !s.is_empty())
+}
+
+fn watch(path: &Path) {
+    if path.exists() {
+        println!("cargo:rerun-if-changed={}", path.display());
+    }
+}
+
+fn main() {
+    let commit = git(&["describe", "--always", "--dirty"]).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=SIL_HOST_COMMIT={commit}");
+    println!("cargo:rerun-if-changed=build.rs");
+    // Built again when the commit moves or the index changes (a commit, a checkout,
+    // staged edits): a worktree's HEAD and index are its own, the refs are the
+    // common folder's (the branch's ref, which a commit moves, and packed-refs).
+    if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
+        watch(&Path::new(&dir).join("HEAD"));
+        watch(&Path::new(&dir).join("index"));
+    }
+    if let Some(common) = git(&["rev-parse", "--git-common-dir"]) {
+        watch(&Path::new(&common).join("packed-refs"));
+        if let Some(branch) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            watch(&Path::new(&common).join(branch));
+        }
+    }
+}

@@ -1,0 +1,69 @@
+//! Building and running the board's images for the end-to-end tests.
+
+use std::{
+    path::{Path, PathBuf},
+    process::Command,
+    sync::OnceLock,
+};
+
+/// The workspace root.
+pub fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Builds image `bin` of `boards/stm32f405` for QEMU (profile `qemu`, feature
+/// `qemu`) in its own target folder (the outer `cargo test` holds the
+/// workspace's lock), once per test binary; its path.
+pub fn qemu_image(bin: &str) -> PathBuf {
+    static BUILT: OnceLock<()> = OnceLock::new();
+    let root = workspace();
+    let target_dir = root.join("target/mcu-test");
+    BUILT.get_or_init(|| {
+        assert!(
+            Command::new("qemu-system-arm").arg("--version").output().is_ok(),
+            "qemu-system-arm is missing: apt-get install -y qemu-system-arm (CI installs it)"
+        );
+        let build = Command::new(env!("CARGO"))
+            .args(["build", "-p", "board-stm32f405", "--profile", "qemu", "--target", "thumbv7em-none-eabihf"])
+            .args(["--no-default-features", "--features", "qemu", "--bin", "arm", "--bin", "pil"])
+            .env("CARGO_TARGET_DIR", &target_dir)
+            .current_dir(&root)
+            .output()
+            .unwrap();
+        assert!(build.status.success(), "building the images failed:\n{}", String::from_utf8_lossy(&build.stderr));
+    });
+    target_dir.join("thumbv7em-none-eabihf/qemu").join(bin)
+}
+
+/// The defmt lines of `bytes` (an image's semihosting output), decoded with the table of `elf`
+/// ([`decode_defmt_stamped`] without the timestamps).
+pub fn decode_defmt(elf: &Path, bytes: &[u8]) -> Vec<String> {
+    decode_defmt_stamped(elf, bytes).into_iter().map(|(_, line)| line).collect()
+}
+
+/// The defmt lines of `bytes` with their timestamps (`mcu::log_time`: seconds with
+/// six decimals), decoded with the table of `elf`: `(timestamp, "[level] message")`.
+pub fn decode_defmt_stamped(elf: &Path, bytes: &[u8]) -> Vec<(Option<String>, String)> {
+    let elf = std::fs::read(elf).unwrap();
+    let table = defmt_decoder::Table::parse(&elf).unwrap().expect("the image has a defmt table");
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = Vec::new();
+    loop {
+        match decoder.decode() {
+            Ok(frame) => {
+                let level = frame.level().map_or("println", |l| l.as_str()).to_string();
+                lines.push((frame.display_timestamp().map(|t| t.to_string()), format!("[{level}] {}", frame.display_message())));
+            }
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(e) => panic!("corrupt defmt stream: {e}"),
+        }
+    }
+    lines
+}
+
+/// The numbers after `key` in a log line (`key 123`, `key 1..2 of 3`).
+pub fn numbers_after(line: &str, key: &str) -> Vec<u64> {
+    let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
+    rest.split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()).map(|s| s.parse().unwrap()).collect()
+}
