@@ -9,7 +9,7 @@
 //!
 //! Each case runs through the command line at the default tolerances (rtol 1e-9,
 //! atol 1e-11) and as its reference at rtol 1e-12, atol 1e-14, with steps of at
-//! most 0.1 ms (events are located to rounding in both: plant/src/segment.rs). The
+//! most 0.1 ms (events are located to rounding in both: plant/src/segment/locate.rs). The
 //! cap matters: where the samples (simulate's 1 ms trace) or the zero-order hold
 //! (a closed loop's 0.2 and 0.8 ms segments) set the steps, a reference at a tighter
 //! tolerance alone takes the very same steps, and would measure the run against
