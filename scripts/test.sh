@@ -53,7 +53,10 @@ fi
 
 echo "== format, lints (rustfmt.toml; clippy, warnings are errors), no import cycle between files, no large tracked file"
 cargo fmt --all -- --check
-cargo clippy --workspace --all-targets -- -D warnings
+# In the release profile, the one the builds and tests below use: the build scripts'
+# and proc macros' builds (zstd's C sources among them) are then theirs too, and no
+# dev-profile tree is made (0.75 GB, 40 s on 2 cores).
+cargo clippy --release --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src analyses/src experiments/src sil-host/src fuzz/src python/src
 # The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
 python3 scripts/front_features.py
@@ -74,9 +77,12 @@ python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
 echo "   ceiling 3100 cycles per worst step, every controller (5 % of a 2.7 kHz period at 168 MHz; 2650 before"
-echo "   issue 52's wiring checks, which cost 240 to 410 cycles: docs/measurements.md)"
+echo "   issue 52's wiring checks, which cost 240 to 410 cycles: docs/measurements.md); run beside the Python"
+echo "   package's install (pip waits on the network), its report printed when it is done"
 cargo build --release -p sil-host
-python3 scripts/cycles.py --duration 1 --max-cycles 3100
+cycles_log="$(mktemp)"
+python3 scripts/cycles.py --duration 1 --max-cycles 3100 >"$cycles_log" 2>&1 &
+cycles_pid=$!
 
 echo "== the Python package (python/, docs/python.md): pinned tools from python/requirements-dev.txt in"
 echo "   target/venv-python, maturin build (the workspace's target dir) and the wheel installed, pytest against"
@@ -111,10 +117,29 @@ trap 'rm -f "$log" "$pylog"' EXIT
 pystatus=0
 PAINLEVE_SIL_HOST="$PWD/target/release/sil-host" "$pyvenv/bin/python" -m pytest python/tests -q -p no:cacheprovider 2>&1 | tee "$pylog" || pystatus=$?
 echo "python package: $((SECONDS - pystarted)) s (install and tests)"
+cycles_status=0
+wait "$cycles_pid" || cycles_status=$?
+echo "== the control step's cycle estimate (scripts/cycles.py), exit $cycles_status"
+cat "$cycles_log"
+rm -f "$cycles_log"
+[ "$cycles_status" -ne 0 ] && exit "$cycles_status"
 
-echo "== tests (release: the simulator is numerical)"
+echo "== tests (release: the simulator is numerical); the soak test (sil-host/tests/soak.rs, about 80 s"
+echo "   of wall time, mostly its injected stalls' waits) beside the others, its output printed at the end"
 status=0
+cargo test --workspace --release --no-run
+soak_exe="$(cargo test --release -p sil-host --test soak --no-run --message-format=json \
+  | python3 -c 'import json, sys; print([m["executable"] for m in map(json.loads, sys.stdin) if m.get("reason") == "compiler-artifact" and m.get("executable") and m["target"]["name"] == "soak"][0])')"
+soaklog="$(mktemp)"
+(cd sil-host && "$soak_exe") >"$soaklog" 2>&1 &
+soak_pid=$!
 cargo test --workspace --release --no-fail-fast 2>&1 | tee "$log" || status=$?
+soak_status=0
+wait "$soak_pid" || soak_status=$?
+echo "== the soak test (sil-host/tests/soak.rs), exit $soak_status"
+cat "$soaklog" | tee -a "$log"
+rm -f "$soaklog"
+[ "$soak_status" -ne 0 ] && status="$soak_status"
 # One closing line over all test binaries (cargo prints one per binary) and pytest's.
 awk -v py="$pylog" '/^test result:/ || (FILENAME == py && /(passed|failed)/ && / in [0-9.]+s/) {
        for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^(failed|error)/) f += $i } }

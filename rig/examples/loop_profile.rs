@@ -21,22 +21,17 @@ fn main() {
     let ipc = args.next().filter(|a| a == "ipc").and(args.next());
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = duration;
+    let setup = rig::RunSetup::new(s).unwrap();
     for _ in 0..repeat {
         let mut link: Box<dyn FirmwareLink> = match &ipc {
             Some(exe) => Box::new(
-                IpcLink::connect(
-                    &rig::RunSetup::new(s.clone()).unwrap(),
-                    &default_rig_name(),
-                    Some(std::path::Path::new(exe)),
-                    false,
-                    &MonitorPolicy::default(),
-                )
-                .expect("firmware process"),
+                IpcLink::connect(&setup, &default_rig_name(), Some(std::path::Path::new(exe)), false, &MonitorPolicy::default())
+                    .expect("firmware process"),
             ),
-            None => Box::new(InProcessLink::new(&rig::RunSetup::new(s.clone()).unwrap()).expect("default scenario")),
+            None => Box::new(InProcessLink::new(&setup).expect("default scenario")),
         };
         let t = std::time::Instant::now();
-        let (periods, err) = stream_loop(&rig::RunSetup::new(s.clone()).unwrap(), link.as_mut(), &mut ());
+        let (periods, err) = stream_loop(&setup, link.as_mut(), &mut ());
         assert!(err.is_none(), "{err:?}");
         println!("{periods} periods, {:.0} periods/s", periods as f64 / t.elapsed().as_secs_f64());
     }

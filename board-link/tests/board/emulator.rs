@@ -49,52 +49,54 @@ fn image() -> std::path::PathBuf {
 /// A run's records and how it ended.
 type Run = (Vec<PeriodRecord>, Option<RunError>);
 
-/// The twin's run and the emulated image's, of scenario `name`.
+/// The twin's run and the emulated image's, of scenario `name`, from one set-up.
 fn runs(name: &str) -> (Run, Run) {
-    let s = scenario(name);
-    let mut twin = TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
-    let t = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
-    let mut emu = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &image()).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let e = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut emu, &mut ());
+    let setup = rig::RunSetup::new(scenario(name)).unwrap();
+    let mut twin = TwinLink::new(&setup).unwrap();
+    let t = run_loop(&setup, &mut twin, &mut ());
+    let mut emu = EmulatorLink::new(&setup, &image()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let e = run_loop(&setup, &mut emu, &mut ());
     (t, e)
 }
 
-fn same(name: &str) {
-    let ((twin, twin_err), (emu, emu_err)) = runs(name);
+/// Asserts that the two runs of scenario `name` ([`runs`]) are the same, bit for bit.
+fn same(name: &str, runs: &(Run, Run)) {
+    let ((twin, twin_err), (emu, emu_err)) = runs;
     assert_eq!(format!("{emu_err:?}"), format!("{twin_err:?}"), "{name}: the same outcome");
     assert_eq!(emu.len(), twin.len(), "{name}");
-    for (k, (e, t)) in emu.iter().zip(&twin).enumerate() {
+    for (k, (e, t)) in emu.iter().zip(twin).enumerate() {
         assert_eq!(format!("{e:?}"), format!("{t:?}"), "{name}: period {k} differs");
     }
     let lift_offs = |r: &[PeriodRecord]| r.iter().filter(|p| p.lift_off_true).count();
-    eprintln!("{name}: {} periods equal, {} with the tip off the belt, outcome {emu_err:?}", emu.len(), lift_offs(&emu));
+    eprintln!("{name}: {} periods equal, {} with the tip off the belt, outcome {emu_err:?}", emu.len(), lift_offs(emu));
 }
 
 #[test]
 fn default_scenario_the_flashed_image_runs_the_twins_trace_bit_for_bit() {
-    same("default");
+    same("default", &runs("default"));
 }
 
 #[test]
 fn hybrid_from_x0d_the_flashed_image_runs_the_twins_trace_bit_for_bit() {
-    same("hybrid-x0d");
+    same("hybrid-x0d", &runs("hybrid-x0d"));
 }
 
 #[test]
 fn hybrid_from_x0u_the_flashed_image_runs_the_twins_trace_bit_for_bit() {
-    same("hybrid-x0u");
+    same("hybrid-x0u", &runs("hybrid-x0u"));
 }
 
 #[test]
 fn pid_from_x0d_the_flashed_image_runs_the_twins_trace_bit_for_bit() {
-    same("pid-x0d");
+    same("pid-x0d", &runs("pid-x0d"));
 }
 
 #[test]
 fn pid_from_x0u_the_flashed_image_lifts_off_as_the_twin_does_bit_for_bit() {
-    let ((twin, _), (emu, _)) = runs("pid-x0u");
+    let runs = runs("pid-x0u");
+    let ((twin, _), (emu, _)) = &runs;
     assert!(twin.iter().any(|p| p.lift_off_true), "the paper's PID from x0u lifts off");
-    same("pid-x0u");
+    same("pid-x0u", &runs);
     assert_eq!(emu.iter().filter(|p| p.lift_off_true).count(), twin.iter().filter(|p| p.lift_off_true).count());
 }
 
@@ -126,11 +128,11 @@ fn counting_the_handlers_instructions_changes_no_bit_of_the_run_and_measures_the
     for name in ["pid-x0u", "hybrid-x0d"] {
         let mut s = scenario(name);
         s.timing.duration_s = 2.0;
-        let mut fast = EmulatorLink::new(&rig::RunSetup::new(s.clone()).unwrap(), &image()).unwrap();
-        let a = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut fast, &mut ());
-        let mut counted =
-            EmulatorLink::with_mode(&rig::RunSetup::new(s.clone()).unwrap(), &image(), board_emulator::core_clock::Mode::Counted).unwrap();
-        let b = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut counted, &mut ());
+        let setup = rig::RunSetup::new(s).unwrap();
+        let mut fast = EmulatorLink::new(&setup, &image()).unwrap();
+        let a = run_loop(&setup, &mut fast, &mut ());
+        let mut counted = EmulatorLink::with_mode(&setup, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let b = run_loop(&setup, &mut counted, &mut ());
         assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1), "{name}");
         assert_eq!(a.0.len(), b.0.len(), "{name}");
         for (k, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
@@ -169,9 +171,9 @@ fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every
     for name in ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"] {
         let mut s = scenario(name);
         s.timing.duration_s = 2.0;
-        let mut link =
-            EmulatorLink::with_mode(&rig::RunSetup::new(s.clone()).unwrap(), &image(), board_emulator::core_clock::Mode::Counted).unwrap();
-        let (records, e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+        let setup = rig::RunSetup::new(s).unwrap();
+        let mut link = EmulatorLink::with_mode(&setup, &image(), board_emulator::core_clock::Mode::Counted).unwrap();
+        let (records, e) = run_loop(&setup, &mut link, &mut ());
         assert!(e.is_none() && records.len() == 2000, "{name}: {e:?} after {} periods", records.len());
         let t = link.timing().expect("handlers counted");
         eprintln!("{name}: {t:?}");
@@ -189,11 +191,11 @@ fn the_flashed_image_stops_a_reversed_motor_as_the_twin_does() {
     let mut s = scenario("default");
     s.timing.duration_s = 1.0;
     s.board.motor2.reversed = true;
-    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let setup = rig::RunSetup::new(s).unwrap();
     let mut link = EmulatorLink::new(&setup, &image()).unwrap();
     let (records, e) = run_loop(&setup, &mut link, &mut ());
-    let mut twin = board_link::twin_link::TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
-    let (twin_records, twin_e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
+    let mut twin = board_link::twin_link::TwinLink::new(&setup).unwrap();
+    let (twin_records, twin_e) = run_loop(&setup, &mut twin, &mut ());
     assert_eq!(format!("{e:?}"), format!("{twin_e:?}"));
     match e {
         Some(rig::record::RunError::SafeState {
@@ -228,11 +230,11 @@ fn the_flashed_image_stops_every_wiring_fault_at_the_twins_period_on_a_sample_of
             for (fault, wire) in wiring_cases::WIRING_FAULTS {
                 let mut s = base.clone();
                 wire(&mut s.board);
-                let setup = rig::RunSetup::new(s.clone()).unwrap();
+                let setup = rig::RunSetup::new(s).unwrap();
                 let mut link = EmulatorLink::new(&setup, &image()).unwrap();
                 let (records, e) = run_loop(&setup, &mut link, &mut ());
-                let mut twin = TwinLink::new(&rig::RunSetup::new(s.clone()).unwrap()).unwrap();
-                let (twin_records, twin_e) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut twin, &mut ());
+                let mut twin = TwinLink::new(&setup).unwrap();
+                let (twin_records, twin_e) = run_loop(&setup, &mut twin, &mut ());
                 assert_eq!(format!("{e:?}"), format!("{twin_e:?}"), "{fault}, {kind} scenario {i}");
                 assert_eq!(records.len(), twin_records.len(), "{fault}, {kind} scenario {i}");
                 for (k, (a, b)) in records.iter().zip(&twin_records).enumerate() {

@@ -220,24 +220,24 @@ fn short(duration_s: f64) -> Scenario {
 }
 
 /// Starts a link to a fake board with `script`; the board's thread.
-fn board_link(s: &Scenario, script: Script, answer_timeout_s: f64) -> (Result<PilLink, RunError>, JoinHandle<Seen>) {
+fn board_link(setup: &crate::setup::RunSetup, script: Script, answer_timeout_s: f64) -> (Result<PilLink, RunError>, JoinHandle<Seen>) {
     let Pty { master, slave, path } = pty();
     let board = fake_board(master, script);
     let opts = PilOptions { boot_timeout_s: 5.0, answer_timeout_s, ..PilOptions::serial(path, DEFAULT_BAUD) };
-    let link = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &opts, None);
+    let link = PilLink::start(setup, &opts, None);
     drop(slave);
     (link, board)
 }
 
 #[test]
 fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftovers() {
-    let s = short(0.3);
+    let setup = crate::setup::RunSetup::new(short(0.3)).unwrap();
     let script =
         Script { protocol: pil::PROTOCOL_VERSION, leftovers: true, garbled_after_hello: false, answer: usize::MAX, then: Then::Silent };
-    let (link, board) = board_link(&s, script, 5.0);
+    let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
-    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 300);
     let c = &link.counts;
@@ -254,14 +254,14 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
 
 #[test]
 fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_goes_on() {
-    let s = short(0.2);
+    let setup = crate::setup::RunSetup::new(short(0.2)).unwrap();
     let script =
         Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: true, answer: usize::MAX, then: Then::Silent };
-    let (link, board) = board_link(&s, script, 5.0);
+    let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     // The board answers both configurations; the second `Configured` comes
     // before the first answer and must not end the run.
-    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 200);
     let seen = board.join().unwrap();
@@ -270,12 +270,12 @@ fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_g
 
 #[test]
 fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
-    let s = short(1.0);
+    let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
     let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::Silent };
-    let (link, _board) = board_link(&s, script, 0.3);
+    let (link, _board) = board_link(&setup, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     // 50 periods and one 0.3 s answer timeout: a bound of 20 s tells a hang from a
     // loaded machine.
     assert!(started.elapsed() < Duration::from_secs(20), "no hang: {:?}", started.elapsed());
@@ -292,14 +292,14 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
 
 #[test]
 fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
-    let s = short(1.0);
+    let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
     let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::HangUp };
     // An answer timeout of 60 s: noticed in under half of it is noticed by the
     // hang-up, not by the timeout, however loaded the machine is.
-    let (link, _board) = board_link(&s, script, 60.0);
+    let (link, _board) = board_link(&setup, script, 60.0);
     let mut link = link.unwrap();
     let started = Instant::now();
-    let (records, err) = run_loop(&crate::setup::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     assert!(started.elapsed() < Duration::from_secs(30), "noticed at once, not after the timeout: {:?}", started.elapsed());
     match err {
         Some(RunError::FirmwareLost { k, what, .. }) => {
@@ -314,16 +314,16 @@ fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
 
 #[test]
 fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
-    let s = short(0.1);
+    let setup = crate::setup::RunSetup::new(short(0.1)).unwrap();
     let script = Script { protocol: 1, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
-    let err = board_link(&s, script, 5.0).0.unwrap_err().to_string();
+    let err = board_link(&setup, script, 5.0).0.unwrap_err().to_string();
     assert!(err.contains("speaks PIL protocol 1") && err.contains("flash"), "{err}");
 
     // Nobody at the other end: no Hello within the boot timeout.
     let Pty { master: _master, slave: _slave, path } = pty();
     let opts = PilOptions { boot_timeout_s: 0.5, ..PilOptions::serial(&path, DEFAULT_BAUD) };
     let started = Instant::now();
-    let err = PilLink::start(&crate::setup::RunSetup::new(s.clone()).unwrap(), &opts, None).unwrap_err().to_string();
+    let err = PilLink::start(&setup, &opts, None).unwrap_err().to_string();
     assert!(started.elapsed() < Duration::from_secs(20), "the boot timeout ends the wait: {:?}", started.elapsed());
     assert!(err.contains("the image did not say Hello within 0.5 s: nothing from /dev/pts/") && !err.contains("QEMU"), "{err}");
 }

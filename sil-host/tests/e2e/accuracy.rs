@@ -342,6 +342,8 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
     }
     wrong.extend(check_paper(&paper, &recorded["paper"]));
     assert!(wrong.is_empty(), "the accuracy contract is broken (outputs in {}):\n{}", dir.display(), wrong.join("\n"));
+    // Kept only for a broken contract (0.25 GB, the 300 s trace most of it).
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The contract can fail. A looser tolerance no longer shows it (issue 53): with
@@ -357,7 +359,9 @@ fn a_run_1e_7_off_breaks_the_contract() {
         serde_json::from_str(&std::fs::read_to_string(root.join("sil-host/tests/accuracy/contract.json")).expect("contract.json")).unwrap();
     let case = cases().into_iter().find(|c| c.name == "simulate-x0a").unwrap();
     let loose = Case { measured: ["--set", "plant.m=0.120000012"].map(String::from).to_vec(), ..case };
-    let m = measure(&loose, &root.join("target/accuracy-loose"));
+    let dir = root.join("target/accuracy-loose");
+    let m = measure(&loose, &dir);
     let wrong = check_case(loose.name, &m, &recorded["cases"][loose.name]);
-    assert!(!wrong.is_empty(), "a model 1e-7 off kept the contract");
+    assert!(!wrong.is_empty(), "a model 1e-7 off kept the contract (outputs in {})", dir.display());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,8 +6,9 @@
 //! execute process". An alias this test does not know fails it: add its check.
 //! `cargo qemu-arm`'s log must carry the defmt timestamps (`mcu::log_time`).
 //!
-//! The builds go to `target/mcu-test` (the outer `cargo test` holds the
-//! workspace's lock), shared with `common::qemu_image`. Needs `qemu-system-arm`
+//! The builds go to the workspace's `target/` (`common::target_dir`), where
+//! scripts/test.sh built the images already: the aliases' builds are then cargo's
+//! freshness checks, and the runs use those images. Needs `qemu-system-arm`
 //! and flip-link (scripts/test.sh installs both).
 
 use crate::common;
@@ -18,13 +19,13 @@ use std::process::{Command, Output};
 const KNOWN: [&str; 5] = ["arm", "pil", "qemu-arm", "build-arm", "build-pil"];
 
 /// `cargo ALIAS` from the workspace's `docs/` folder (an alias must not depend
-/// on the folder it is typed in), the builds in `target/mcu-test`.
+/// on the folder it is typed in), the builds in `target/` ([`common::target_dir`]).
 fn cargo(alias: &str) -> Output {
     let root = common::workspace();
     Command::new(env!("CARGO"))
         .arg(alias)
         .current_dir(root.join("docs"))
-        .env("CARGO_TARGET_DIR", root.join("target/mcu-test"))
+        .env("CARGO_TARGET_DIR", common::target_dir())
         // A probe-rs that is not there, whatever this machine has installed.
         .env("PAINLEVE_PROBE_RS", "probe-rs-absent-for-the-alias-test")
         .env_remove("CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUNNER")
@@ -44,7 +45,7 @@ fn every_alias_runs_and_the_board_ones_say_how_to_get_probe_rs() {
         assert!(KNOWN.contains(&name.as_str()), "alias `{name}` is not run by sil-host/tests/e2e/aliases.rs: add its check");
     }
     assert_eq!(aliases.len(), KNOWN.len(), "{aliases:?}");
-    let target = common::workspace().join("target/mcu-test/thumbv7em-none-eabihf");
+    let target = common::target_dir().join("thumbv7em-none-eabihf");
 
     // The builds: each image where the tools look for it.
     for (alias, elf) in [("build-pil", "qemu/pil"), ("build-arm", "mcu/arm")] {

@@ -164,12 +164,8 @@ fn a_closed_or_full_standard_output_ends_every_command_without_a_panic() {
         strings(&["sweep", "--mu", "0.6", "--v-belt=-0.5,-0.4", "--v-belt-step", "0.1", "--transient", "2", "--record", "1"]),
         strings(&["zmax", "--duration", "3.5", "--tol", "0.05"]),
     ];
-    // `cargo build-pil`'s image, or the one the e2e tests build (sil-host/tests/e2e/common.rs).
-    let target = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target");
-    let image = ["thumbv7em-none-eabihf/qemu/pil", "mcu-test/thumbv7em-none-eabihf/qemu/pil"]
-        .map(|p| target.join(p))
-        .into_iter()
-        .find(|p| p.is_file());
+    // `cargo build-pil`'s image, the one the e2e tests build too (sil-host/tests/e2e/common.rs).
+    let image = Some(crate::common::target_dir().join("thumbv7em-none-eabihf/qemu/pil")).filter(|p| p.is_file());
     let qemu = Command::new("qemu-system-arm").arg("--version").output().is_ok_and(|o| o.status.success());
     if let Some(image) = image.filter(|_| qemu) {
         commands.push(vec!["pil".into(), "--image".into(), image.display().to_string(), "--duration".into(), "0.05".into()]);

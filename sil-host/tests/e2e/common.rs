@@ -11,13 +11,21 @@ pub fn workspace() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// The workspace's target folder, where the MCU images are built: `target/`. The
+/// tests' own cargo runs build there too (the outer `cargo test` releases its
+/// lock once the test binaries are built), so an image scripts/test.sh built is
+/// found fresh, not built a second time.
+pub fn target_dir() -> PathBuf {
+    workspace().join("target")
+}
+
 /// Builds image `bin` of `boards/stm32f405` for QEMU (profile `qemu`, feature
-/// `qemu`) in its own target folder (the outer `cargo test` holds the
-/// workspace's lock), once per test binary; its path.
+/// `qemu`) in the workspace's target folder ([`target_dir`]; a no-op when it is
+/// fresh), once per test binary; its path.
 pub fn qemu_image(bin: &str) -> PathBuf {
     static BUILT: OnceLock<()> = OnceLock::new();
     let root = workspace();
-    let target_dir = root.join("target/mcu-test");
+    let target_dir = target_dir();
     BUILT.get_or_init(|| {
         assert!(
             Command::new("qemu-system-arm").arg("--version").output().is_ok(),

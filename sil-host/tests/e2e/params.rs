@@ -62,8 +62,9 @@ fn a_heavier_arm_changes_the_run_and_the_file_key_equals_set() {
     let mut scenario = Scenario::default_scenario();
     scenario.plant.m = 0.24;
     scenario.timing.duration_s = 1.0;
-    let mut link = InProcessLink::new(&rig::RunSetup::new(scenario.clone()).unwrap()).unwrap();
-    let (records, failure) = run_loop(&rig::RunSetup::new(scenario.clone()).unwrap(), &mut link, &mut ());
+    let setup = rig::RunSetup::new(scenario).unwrap();
+    let mut link = InProcessLink::new(&setup).unwrap();
+    let (records, failure) = run_loop(&setup, &mut link, &mut ());
     assert!(failure.is_none());
     let last = records.last().unwrap();
     let final_z_t = s["final_z_t_m"].as_f64().unwrap();

@@ -367,17 +367,16 @@ fn hil_over_a_serial_port_counts_the_same_step_ticks_per_period() {
     let s = scenario(ControllerKind::Hybrid, 1.5);
     let qemu = PtyQemu::start();
     let opts = PilOptions { keep_ticks: true, ..PilOptions::serial(&qemu.pty, DEFAULT_BAUD) };
-    let mut serial = PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &opts, None).unwrap();
+    let setup = rig::RunSetup::new(s).unwrap();
+    let mut serial = PilLink::start(&setup, &opts, None).unwrap();
     assert_eq!(serial.transport(), "pil-serial");
-    let (via_serial, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut serial, &mut ());
+    let (via_serial, err) = run_loop(&setup, &mut serial, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert!(!serial.captures_log() && serial.log().is_empty() && serial.exit_status().is_none());
     drop(qemu);
 
-    let mut socket =
-        PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &PilOptions { keep_ticks: true, ..PilOptions::new(image()) }, None)
-            .unwrap();
-    let (via_socket, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut socket, &mut ());
+    let mut socket = PilLink::start(&setup, &PilOptions { keep_ticks: true, ..PilOptions::new(image()) }, None).unwrap();
+    let (via_socket, err) = run_loop(&setup, &mut socket, &mut ());
     assert!(err.is_none(), "{err:?}");
 
     assert_eq!(via_serial, via_socket, "the same records");
@@ -425,16 +424,12 @@ fn hil_refuses_a_missing_serial_port_and_the_kill_firmware_fault() {
 #[test]
 fn the_usart_and_semihosting_links_give_the_same_run_and_counts_and_semihosting_is_faster() {
     let s = scenario(ControllerKind::Hybrid, 1.0);
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
     let mut runs = Vec::new();
     for link in [QemuLink::Usart, QemuLink::Semihosting] {
         let target = PilTarget::Qemu { image: image().into(), qemu: "qemu-system-arm".into(), link };
-        let mut l = PilLink::start(
-            &rig::RunSetup::new(s.clone()).unwrap(),
-            &PilOptions { keep_ticks: true, ..PilOptions::for_target(target) },
-            None,
-        )
-        .unwrap();
-        let (records, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut l, &mut ());
+        let mut l = PilLink::start(&setup, &PilOptions { keep_ticks: true, ..PilOptions::for_target(target) }, None).unwrap();
+        let (records, err) = run_loop(&setup, &mut l, &mut ());
         assert!(err.is_none(), "{link:?}: {err:?}");
         assert_eq!(records.len(), 1000);
         runs.push((records, l.counts.step_ticks.clone(), l.counts.frame_ticks.clone()));

@@ -49,9 +49,10 @@ impl FirmwareLink for Compare {
 fn the_pil_image_sends_the_commands_of_the_host_library() {
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = 2.5; // the move (2 s) and the hold after it
-    let image = PilLink::start(&rig::RunSetup::new(s.clone()).unwrap(), &PilOptions::new(common::qemu_image("pil")), None).unwrap();
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let image = PilLink::start(&setup, &PilOptions::new(common::qemu_image("pil")), None).unwrap();
     let mut link = Compare { image, host: Firmware::new(firmware_config(&s)).unwrap(), pairs: Vec::new() };
-    let (records, err) = run_loop(&rig::RunSetup::new(s.clone()).unwrap(), &mut link, &mut ());
+    let (records, err) = run_loop(&setup, &mut link, &mut ());
     assert!(err.is_none(), "{err:?}");
     assert_eq!(link.pairs.len(), records.len());
     assert_eq!(link.pairs.len(), 2500);
