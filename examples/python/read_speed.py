@@ -1,6 +1,6 @@
-"""The speed of painleve.read_csv / painleve.load against pandas.read_csv, and of
-painleve.read_arrow against pandas.read_feather (docs/python.md, "Reading
-tables"): wall time to read a table the CLI wrote, median of N runs in one
+"""The speed of painleve.read_csv / painleve.load against pandas.read_csv, of
+painleve.read_arrow against pandas.read_feather, and of painleve.read_mcap
+(docs/python.md, "Reading tables"): wall time to read a table the CLI wrote, median of N runs in one
 sitting, each reader in turn. The tables: a 300 s open-loop trace (`simulate
 --duration 300`: 300 001 rows x 14 columns, 66 MB of CSV, 34 MB of Arrow) and a
 62 s closed-loop trace (`run --in-process --duration 62`: 62 000 rows x 21
@@ -61,6 +61,8 @@ def main():
             subprocess.run([args.sil_host, *argv, "--out", str(out), "--json"], check=True, capture_output=True, cwd=REPO)
             arrow = Path(str(out) + "-arrow")
             subprocess.run([args.sil_host, *argv, "--format", "arrow", "--out", str(arrow), "--json"], check=True, capture_output=True, cwd=REPO)
+            mcap = Path(str(out) + "-mcap")
+            subprocess.run([args.sil_host, *argv, "--format", "mcap", "--out", str(mcap), "--json"], check=True, capture_output=True, cwd=REPO)
         print(f"painleve {painleve.__version__}" + (f", pandas {pd.__version__}" if pd else ", no pandas") + f", median of {args.runs} runs")
         for what, (_, out) in tables.items():
             csv = out / "trace.csv"
@@ -84,6 +86,9 @@ def main():
             if pd is not None:
                 w, c = median_s(lambda: pd.read_feather(arrow), args.runs)
                 print(f"  pandas.read_feather      {w:7.3f} s {c:7.3f} s   pandas / painleve: wall {w / ours[0]:.2f}, CPU {c / ours[1]:.2f}")
+            mcap = Path(str(out) + "-mcap") / "trace.mcap"
+            w, c = median_s(lambda: painleve.read_mcap(mcap), args.runs)
+            print(f"  painleve.read_mcap       {w:7.3f} s {c:7.3f} s   ({mcap.stat().st_size / 1e6:.1f} MB)")
 
 if __name__ == "__main__":
     main()

@@ -17,6 +17,7 @@ line, and returns NumPy arrays:
 - :func:`run`: a closed-loop SIL run of a scenario;
 - :func:`sensitivity`: the results under each open modelling choice;
 - :func:`load`: any output folder the CLI writes;
+- the arm's :class:`Model` (kinematics, ``J``, ``M``, ``Q``, ``p``, ``b``);
 - objects to hold and step: :class:`Scenario`, :class:`Plant`,
   :class:`Firmware`, and :func:`run_controller` (a Python controller in the
   closed loop).
@@ -43,7 +44,7 @@ from ._api import (
     zmax,
 )
 from ._load import load, read_arrow, read_csv, read_mcap
-from ._objects import Command, Firmware, Plant, Scenario, Sensed, Step, run_controller
+from ._objects import Command, Firmware, Model, Plant, Scenario, Sensed, Step, run_controller
 from ._result import PainleveWarning, Result, Table, describe_violations
 
 __all__ = [
@@ -51,6 +52,7 @@ __all__ = [
     "Firmware",
     "PainleveError",
     "PainleveWarning",
+    "Model",
     "Plant",
     "Result",
     "Scenario",

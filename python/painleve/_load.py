@@ -1,13 +1,12 @@
 """``painleve.load``: any output folder ``sil-host`` writes, read back: its
-tables (CSV and Arrow) by the compiled module's readers (Rust, without the GIL;
-no pandas or pyarrow needed), the tables of ``--format mcap`` with the ``mcap``
-package, if installed, and JSON and text files by the standard library."""
+tables (CSV, Arrow and MCAP) by the compiled module's readers (Rust, without
+the GIL; no pandas, pyarrow or mcap package needed), and JSON and text files by
+the standard library."""
 
 from __future__ import annotations
 
 import json
 import os
-import struct
 import warnings
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Set, Union
@@ -16,6 +15,7 @@ import numpy as np
 
 from ._painleve import read_arrow as _read_arrow
 from ._painleve import read_csv as _read_csv
+from ._painleve import read_mcap as _read_mcap
 from ._result import Result, Table, describe_violations
 
 __all__ = ["load", "read_arrow", "read_csv", "read_mcap"]
@@ -73,17 +73,16 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> Table:
 
 
 def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
-    """One Arrow IPC table the CLI wrote (``simulate --format arrow``:
-    ``trace.arrow``, ``events.arrow``, Arrow IPC files; ``run`` and ``pil``
-    ``--format arrow``: ``trace.arrow``, an Arrow IPC stream, whole batches of
-    one cut off), as a :class:`Table` of NumPy arrays of shape ``(nrows,)``,
+    """One Arrow IPC file the CLI wrote (``--format arrow``: ``simulate``'s
+    ``trace.arrow`` and ``events.arrow``, ``run``'s and ``pil``'s ``trace.arrow``;
+    the whole batches of a killed run's file, cut off before its footer; an
+    Arrow IPC stream too), as a :class:`Table` of NumPy arrays of shape ``(nrows,)``,
     each column of the file's own type: ``Float64`` as ``float64`` (its exact
     bits), ``Int64`` as ``int64``, ``Boolean`` as ``bool``, ``Utf8`` as text
     (a null as NaN or ``""``). For a table the CLI wrote these are the types
     :func:`read_csv` gives its CSV. The float and integer arrays share the
     reader's Arrow memory, not copied. pandas (``pandas.read_feather``, with
-    pyarrow) and polars (``polars.read_ipc``; ``polars.read_ipc_stream`` for a
-    stream) read the same files directly.
+    pyarrow) and polars (``polars.read_ipc``) read the same files directly.
 
     Raises:
         FileNotFoundError: ``path`` is not a file.
@@ -93,55 +92,6 @@ def read_arrow(path: Union[str, "os.PathLike[str]"]) -> Table:
     """
     p = _file(path)
     return _table(_read_arrow(os.fspath(p)), p.stem)
-
-
-_MCAP_PACKAGE = "mcap==1.6.0"
-
-# MCAP's framing (the MCAP specification, "Records"): 8 magic bytes, then records of a
-# 1-byte opcode, a little-endian u64 body length and the body; the Footer (opcode 0x02)
-# is followed by the magic again.
-_MCAP_MAGIC_LEN = 8
-_MCAP_RECORD_HEAD = struct.Struct("<BQ")
-_MCAP_FOOTER = 0x02
-
-
-def _mcap_whole_records_end(f: Any) -> int:
-    """The byte offset where the last whole record of the MCAP file ``f`` (open
-    for reading, binary) ends: its size when the file is complete, else the end
-    of the last record whose 9-byte head and body are both in the file (a file
-    cut off while its run was killed ends anywhere, inside a record's head or
-    body). Reads only the records' heads; leaves ``f`` at offset 0."""
-    size = os.fstat(f.fileno()).st_size
-    pos = _MCAP_MAGIC_LEN
-    while pos + _MCAP_RECORD_HEAD.size <= size:
-        f.seek(pos)
-        opcode, length = _MCAP_RECORD_HEAD.unpack(f.read(_MCAP_RECORD_HEAD.size))
-        end = pos + _MCAP_RECORD_HEAD.size + length
-        if end > size:
-            break
-        pos = end
-        if opcode == _MCAP_FOOTER and pos + _MCAP_MAGIC_LEN <= size:
-            pos += _MCAP_MAGIC_LEN  # the closing magic, when it is whole
-            break
-    f.seek(0)
-    return min(pos, size)
-
-
-class _Prefix:
-    """The first ``end`` bytes of the binary file ``f`` as a stream with
-    ``read(n)``: what the ``mcap`` package's StreamReader is given, so that a
-    cut-off file ends, for it, at a record boundary (its ``EndOfFile``) rather
-    than inside a record (a ``struct.error`` or a zstd error)."""
-
-    def __init__(self, f: Any, end: int) -> None:
-        self._f = f
-        self._left = end
-
-    def read(self, n: int = -1) -> bytes:
-        n = self._left if n is None or n < 0 else min(n, self._left)
-        data = self._f.read(n)
-        self._left -= len(data)
-        return data
 
 
 def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
@@ -156,83 +106,17 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     message of each of the table's channels; the columns' order comes from the
     file's ``painleve.table.<name>`` metadata records. A file cut off (a run
     killed while writing) gives its whole chunks, and of each table the rows
-    whose every message is there. Needs the ``mcap`` package (``pip install
-    mcap``); Foxglove opens the file directly.
+    whose every message is there. Read by the package's own Rust reader (the
+    ``tables`` crate's, chunk by chunk; no ``mcap`` Python package needed);
+    Foxglove opens the file directly.
 
     Raises:
-        ImportError: the ``mcap`` package is not installed (the message names
-            it and the other ways to read the trace).
+        FileNotFoundError: ``path`` is not a file.
         PainleveError: the file cannot be read, is not MCAP, holds no table
             of sil-host, or a message is not the JSON object its table describes.
     """
-    from ._painleve import PainleveError
-
-    path = Path(path)
-    try:
-        from mcap.exceptions import EndOfFile, McapError
-        from mcap.records import Channel, Message, Metadata
-        from mcap.stream_reader import StreamReader
-    except ImportError as e:
-        raise ImportError(
-            f"{path}: reading an MCAP trace needs the Python package `mcap` (pip install {_MCAP_PACKAGE}; "
-            "it brings zstandard for the zstd chunks); or open it in Foxglove, or write the tables "
-            "with --format csv or --format arrow, which painleve.load reads without it"
-        ) from e
-    specs: Dict[str, Dict[str, List[str]]] = {}
-    topics: Dict[int, str] = {}
-    messages: Dict[str, List[bytes]] = {}
-    try:
-        with open(path, "rb") as f:
-            try:
-                for record in StreamReader(_Prefix(f, _mcap_whole_records_end(f))).records:
-                    if isinstance(record, Metadata) and record.name.startswith("painleve.table."):
-                        spec = {k: v.split(",") if v else [] for k, v in record.metadata.items()}
-                        specs[record.name[len("painleve.table.") :]] = spec
-                    elif isinstance(record, Channel):
-                        topics[record.id] = record.topic
-                    elif isinstance(record, Message):
-                        topic = topics.get(record.channel_id, "")
-                        got = messages.setdefault(topic, [])
-                        if record.sequence != len(got):
-                            raise PainleveError(f"{path}: {topic}: message {len(got)} has sequence number {record.sequence}")
-                        got.append(record.data)
-            except EndOfFile:
-                pass  # cut off while writing: the records up to the cut
-    except OSError as e:
-        raise PainleveError(f"{path}: {e}") from e
-    except (McapError, struct.error) as e:
-        raise PainleveError(f"{path}: not an MCAP file: {e!r}") from e
-    if not specs:
-        raise PainleveError(f"{path}: no table in it (no painleve.table.* metadata record): not written by sil-host --format mcap")
-    tables: Dict[str, Table] = {}
-    for name, spec in specs.items():
-        columns, kinds, chans = spec.get("columns", []), spec.get("kinds", []), spec.get("topics", [])
-        if len(columns) != len(kinds):
-            raise PainleveError(f"{path}: table {name}: {len(columns)} columns but {len(kinds)} kinds")
-        n = min((len(messages.get(t, [])) for t in chans), default=0)
-        try:
-            objects = [[json.loads(m) for m in messages.get(t, [])[:n]] for t in chans]
-        except ValueError as e:
-            raise PainleveError(f"{path}: table {name}: a message is not JSON: {e}") from e
-        out: Dict[str, Any] = {}
-        for col, kind in zip(columns, kinds):
-            source = next((o for o in objects if o and col in o[0]), None)
-            try:
-                cells = [o[col] for o in source] if source is not None else []
-                if kind == "f64":
-                    out[col] = np.array([np.nan if c is None else float(c) for c in cells], dtype=np.float64)
-                elif kind == "int":
-                    out[col] = np.array([int(c) for c in cells], dtype=np.int64)
-                elif kind == "bool":
-                    out[col] = np.array([bool(c) for c in cells], dtype=bool)
-                else:
-                    out[col] = np.array([str(c) for c in cells], dtype=str)
-            except (KeyError, TypeError, ValueError) as e:
-                raise PainleveError(f"{path}: table {name}: column `{col}` is not {kind} in every message: {e!r}") from e
-            if len(out[col]) != n:
-                raise PainleveError(f"{path}: table {name}: column `{col}` is in no message of {', '.join(chans)}")
-        tables[name] = Table(out, name)
-    return tables
+    p = _file(path)
+    return {name: _table(cols, name) for name, cols in _read_mcap(os.fspath(p))}
 
 
 # Where each command's summary keeps the validity counters summed over its runs.
@@ -316,7 +200,7 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
 
     Every ``*.csv`` (and ``*.arrow``, :func:`read_arrow`) becomes a :class:`Table`
     named as the file without its extension, every table of a ``*.mcap``
-    (:func:`read_mcap`, with the ``mcap`` package) one named as in the file
+    (:func:`read_mcap`) one named as in the file
     (``trace``, ``events``, ``sweep``, ``runs``, ``section``, ``classes``,
     ``zmax``, ``trials``, ``modes``, ``sensitivity``), ``summary.json`` the
     result's ``summary`` (``admissible.json`` for ``admissible``,
@@ -345,8 +229,6 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
         PainleveError: a table cannot be read (:func:`read_csv`,
             :func:`read_arrow`; the message names the file).
         ValueError: a JSON file does not parse (the message names it).
-        ImportError: the folder has an MCAP trace and the ``mcap`` package is
-            not installed (:func:`read_mcap`).
     """
     root = Path(path)
     if not root.is_dir():

@@ -1,5 +1,5 @@
 """Objects a researcher holds and steps (docs/python.md, "Objects"):
-:class:`Scenario`, :class:`Plant`, :class:`Firmware`, and :func:`run_controller`,
+:class:`Scenario`, :class:`Model`, :class:`Plant`, :class:`Firmware`, and :func:`run_controller`,
 the closed loop with a Python callable in place of the firmware.
 
 The classes are the compiled module's (``painleve._painleve``, python/src/objects);
@@ -12,11 +12,11 @@ import os
 from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union
 
 from . import _args, _painleve
-from ._painleve import Command, Firmware, Plant, Scenario, Sensed, Step
+from ._painleve import Command, Firmware, Model, Plant, Scenario, Sensed, Step
 from ._api import _finish
 from ._result import Result
 
-__all__ = ["Scenario", "Plant", "Step", "Firmware", "Command", "Sensed", "run_controller"]
+__all__ = ["Scenario", "Model", "Plant", "Step", "Firmware", "Command", "Sensed", "run_controller"]
 
 #: A controller: ``controller(t, sensed) -> (u1, u2)``; ``t`` in s, ``sensed`` a
 #: :class:`Sensed`, the torques in N m.

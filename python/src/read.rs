@@ -1,7 +1,8 @@
-//! `painleve._painleve.read_csv` and `read_arrow`: the tables the CLI writes (CSV;
-//! `--format arrow`: `trace.arrow`, `events.arrow`), read by the `tables` crate's
-//! readers ([`tables::read::read_csv`] with the declarations of the tables the
-//! project writes, [`experiments::DECLARED`]; [`tables::arrow::read_arrow_batch`])
+//! `painleve._painleve.read_csv`, `read_arrow` and `read_mcap`: the tables the CLI
+//! writes (CSV; `--format arrow`: `trace.arrow`, `events.arrow`; `--format mcap`:
+//! `trace.mcap`), read by the `tables` crate's readers ([`tables::read::read_csv`]
+//! with the declarations of the tables the project writes, [`experiments::DECLARED`];
+//! [`tables::arrow::read_arrow_batch`]; [`tables::mcap::read_mcap`])
 //! without the GIL into one Arrow record batch, whose arrays go to NumPy with
 //! their own types: float64 and int64 arrays share the Arrow buffers (no copy),
 //! flags are copied into a bool array (Arrow packs them in bits), and text comes
@@ -50,6 +51,41 @@ pub fn read_csv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDi
 pub fn read_arrow<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let columns = py.detach(|| tables::arrow::read_arrow_batch(&path).map(|b| columns_of(&b))).map_err(|e| cli_error(py, &e.into()))?;
     batch_to_py(py, columns.map_err(|e| error(py, format!("cannot read {}: {e}", path.display()), 1))?)
+}
+
+/// `read_mcap(path)`: the tables of an MCAP file the CLI wrote (`--format mcap`),
+/// read by [`tables::mcap::read_mcap`] without the GIL, as a list of
+/// `(name, {column: array})` in the order of the file's table metadata, each
+/// column of its declared type as [`read_csv`] gives it (float64 and int64 arrays
+/// over Arrow buffers, bool arrays, text coded by its distinct values). A file
+/// cut off (a run killed while writing) gives its whole chunks.
+///
+/// # Errors
+/// `PainleveError` naming the file when it cannot be read, is not MCAP, holds no
+/// table of sil-host, or a message is not the JSON object its table describes.
+#[pyfunction]
+pub fn read_mcap<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<(String, Bound<'py, PyDict>)>> {
+    let tables = py
+        .detach(|| {
+            tables::mcap::read_mcap(&path).map(|tables| {
+                tables
+                    .into_iter()
+                    .map(|(name, table)| {
+                        let arrays = table.columns.into_iter().map(|(n, c)| (n, tables::arrow::array_of(c)));
+                        let batch = RecordBatch::try_from_iter(arrays).map_err(|e| e.to_string());
+                        (name, batch.and_then(|b| columns_of(&b)))
+                    })
+                    .collect::<Vec<_>>()
+            })
+        })
+        .map_err(|e| cli_error(py, &e.into()))?;
+    tables
+        .into_iter()
+        .map(|(name, columns)| {
+            let columns = columns.map_err(|e| error(py, format!("cannot read {}: table {name}: {e}", path.display()), 1))?;
+            Ok((name, batch_to_py(py, columns)?))
+        })
+        .collect()
 }
 
 /// `declared_tables()`: the declarations of the tables the project writes as CSV

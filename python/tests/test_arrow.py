@@ -62,12 +62,14 @@ def test_pandas_and_polars_read_the_arrow_tables(folders):
                 assert pf[col].to_list() == list(want), col
 
 
-def test_a_cut_arrow_file_is_an_error_naming_it(folders, tmp_path):
+def test_a_cut_arrow_file_gives_its_whole_batches_and_text_is_an_error_naming_it(folders, tmp_path):
+    # Cut in its footer (a killed writer's file ends before it): every batch.
     _, arrow_dir = folders
+    whole = painleve.read_arrow(arrow_dir / "trace.arrow")
     bad = tmp_path / "trace.arrow"
     bad.write_bytes((arrow_dir / "trace.arrow").read_bytes()[:-40])
-    with pytest.raises(painleve.PainleveError, match="trace.arrow"):
-        painleve.read_arrow(bad)
+    cut = painleve.read_arrow(bad)
+    assert cut.columns == whole.columns and cut.nrows == whole.nrows > 0
     bad.write_text("t,z_t\n0,1\n")
     with pytest.raises(painleve.PainleveError, match="trace.arrow"):
         painleve.read_arrow(bad)
@@ -80,16 +82,36 @@ def test_an_unknown_format_is_refused():
     assert code == 2 and "parquet" in message and "arrow" in message
 
 
-def test_a_runs_arrow_stream_loads_as_its_csv_trace(tmp_path):
-    # `run --format arrow` (issue 43): the trace is an Arrow IPC stream, written a
-    # batch at a time; painleve.load reads it, and polars and pyarrow read streams.
+def test_a_runs_arrow_file_loads_as_its_csv_trace(tmp_path):
+    # `run --format arrow`: the trace is an Arrow IPC file like simulate's (one
+    # `.arrow` convention, issue 55), written a batch at a time; painleve.load,
+    # pandas.read_feather and polars.read_ipc read it.
     cli("run", ["--in-process", "--duration", "0.5", "--format", "csv"], tmp_path / "csv")
     cli("run", ["--in-process", "--duration", "0.5", "--format", "arrow"], tmp_path / "arrow")
     a, c = painleve.load(tmp_path / "arrow"), painleve.load(tmp_path / "csv")
     assert a.trace.columns == c.trace.columns and a.trace.nrows == c.trace.nrows == 500
     for col in c.trace.columns:
         assert_columns_equal(a.trace[col], c.trace[col], f"trace.{col}")
-    import pyarrow.ipc
+    import pandas
+    import polars
 
-    with open(tmp_path / "arrow" / "trace.arrow", "rb") as f:
-        assert pyarrow.ipc.open_stream(f).read_all().num_rows == 500
+    path = tmp_path / "arrow" / "trace.arrow"
+    assert len(pandas.read_feather(path)) == 500
+    assert polars.read_ipc(path).height == 500
+
+
+def test_every_arrow_file_the_cli_writes_is_read_by_pandas_and_polars(tmp_path):
+    # One `.arrow` convention (issue 55): every `.arrow` of every command that
+    # writes one is an Arrow IPC file, the same columns as its CSV.
+    import pandas
+    import polars
+
+    cli("simulate", ["--duration", "0.5", "--format", "arrow"], tmp_path / "simulate")
+    cli("run", ["--in-process", "--duration", "0.3", "--format", "arrow"], tmp_path / "run")
+    files = sorted(tmp_path.glob("*/*.arrow"))
+    assert [f.relative_to(tmp_path).as_posix() for f in files] == ["run/trace.arrow", "simulate/events.arrow", "simulate/trace.arrow"]
+    for f in files:
+        table = painleve.read_arrow(f)
+        frame, pl = pandas.read_feather(f), polars.read_ipc(f)
+        assert list(frame.columns) == list(pl.columns) == table.columns, f
+        assert len(frame) == pl.height == table.nrows, f

@@ -23,7 +23,7 @@ use std::{
 use crate::{error::CliError, folder_lock::FolderLock};
 use tables::{
     TableFormat,
-    arrow::ArrowStream,
+    arrow::StreamedArrowFile,
     csv::{CsvFile, CsvRow},
     mcap::{McapRows, McapStream},
 };
@@ -203,12 +203,12 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 }
 
 /// A table written row by row as a run produces it ([`OutputSet::create_streamed`]),
-/// as CSV, as an Arrow IPC stream or as MCAP (`--format`). CSV and Arrow are
+/// as CSV, as an Arrow IPC file or as MCAP (`--format`). CSV and Arrow are
 /// flushed to the operating system at least every `flush_every` of wall time: a
 /// process killed outright (SIGKILL) loses at most the rows of that interval. CSV
 /// rows are formatted by [`tables::csv`] (the bytes of the `csv`
 /// crate's serde path); Arrow rows go out one record batch per flush
-/// ([`tables::arrow::ArrowStream`]). MCAP rows go out one chunk per
+/// ([`tables::arrow::StreamedArrowFile`], the footer at the end). MCAP rows go out one chunk per
 /// [`tables::mcap::STREAM_CHUNK_ROWS`] rows, flushed at once
 /// ([`tables::mcap::McapStream`]): counted in rows, not wall time, so
 /// the file's bytes are the same over every link.
@@ -222,7 +222,7 @@ pub struct StreamedTable<T: CsvRow + McapRows + Copy> {
 /// The file behind a [`StreamedTable`].
 enum StreamedWriter<T: McapRows> {
     Csv(CsvFile),
-    Arrow(Box<ArrowStream<T>>),
+    Arrow(Box<StreamedArrowFile<T>>),
     Mcap(Box<McapStream<T>>),
 }
 
@@ -237,7 +237,7 @@ impl<T: CsvRow + McapRows + Copy> StreamedTable<T> {
         let (path, file) = out.create_streamed(&format.file(stem))?;
         let writer = match format {
             TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
-            TableFormat::Arrow => StreamedWriter::Arrow(Box::new(ArrowStream::new(path, file)?)),
+            TableFormat::Arrow => StreamedWriter::Arrow(Box::new(StreamedArrowFile::new(path, file)?)),
             TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::new(path, file)?)),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })

@@ -80,8 +80,9 @@ pub struct RunArgs {
     #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value_t = 2.0, requires = "monitors"))]
     pub monitor_timeout: f64,
     /// Format of the trace: `csv` (trace.csv), `arrow` (trace.arrow: an Arrow IPC
-    /// stream written a record batch at a time as the run goes, so a killed run keeps
-    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load) or
+    /// file, as simulate's, written a record batch at a time as the run goes, so a
+    /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
+    /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
     /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
     /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
@@ -148,8 +149,9 @@ pub struct PilArgs {
     #[cfg_attr(feature = "clap", arg(long))]
     pub quiet: bool,
     /// Format of the trace: `csv` (trace.csv), `arrow` (trace.arrow: an Arrow IPC
-    /// stream written a record batch at a time as the run goes, so a killed run keeps
-    /// its batches; pyarrow.ipc.open_stream, polars.read_ipc_stream, painleve.load) or
+    /// file, as simulate's, written a record batch at a time as the run goes, so a
+    /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
+    /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
     /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
     /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;

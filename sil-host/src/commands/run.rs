@@ -1,7 +1,7 @@
 //! `sil-host run`: a closed-loop SIL run of a scenario.
 //!
 //! Writes `trace.csv` (one row per control period; `trace.arrow` with `--format
-//! arrow`, an Arrow IPC stream; `trace.mcap` with `--format mcap`), `summary.json` and
+//! arrow`, an Arrow IPC file; `trace.mcap` with `--format mcap`), `summary.json` and
 //! `trace.svg` (tip position against its reference, normal force, torques and
 //! contact mode against time). A run that stops part way (the firmware in its
 //! safe state or lost, a plant failure, Ctrl-C) still writes every period up to

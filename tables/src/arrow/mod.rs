@@ -12,9 +12,9 @@
 //! Columns: the row type's declaration ([`schema`]): `f64` fields are `Float64`
 //! (the value's bits, NaN and infinities included), text `Utf8`, flags
 //! `Boolean`, integers `Int64`; none is nullable. Rows go out in record batches
-//! of at most [`BATCH_ROWS`] rows ([`ArrowFile`], [`ArrowStream`]), so a writer
+//! of at most [`BATCH_ROWS`] rows ([`ArrowFile`]; [`StreamedArrowFile`] as the caller flushes), so a writer
 //! holds at most one batch in memory however long the run. [`read_arrow_batch`]
-//! reads a file or stream back as one record batch (the Python package hands its
+//! reads a file (or stream, or a file cut off before its footer) back as one record batch (the Python package hands its
 //! arrays to NumPy), [`read_arrow`] as a [`Table`].
 
 use std::{path::Path, sync::Arc};
@@ -30,7 +30,7 @@ mod tests;
 mod write;
 
 pub use read::{read_arrow, read_arrow_batch};
-pub use write::{ArrowFile, ArrowStream};
+pub use write::{ArrowFile, StreamedArrowFile};
 
 /// Rows per record batch: 64 Ki rows (about 7 MB of a 14-column trace).
 pub const BATCH_ROWS: usize = 1 << 16;

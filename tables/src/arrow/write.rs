@@ -1,10 +1,11 @@
-//! Writing Arrow IPC files ([`ArrowFile`], `simulate`) and streams
-//! ([`ArrowStream`], `run` and `pil`) of a declared row type, a record batch at a time.
+//! Writing Arrow IPC files of a declared row type, a record batch at a time:
+//! whole ([`ArrowFile`], `simulate`) or as a run produces the rows
+//! ([`StreamedArrowFile`], `run` and `pil`).
 
 use std::{fs::File, io::BufWriter, path::PathBuf, sync::Arc};
 
 use arrow_array::RecordBatch;
-use arrow_ipc::writer::{FileWriter, StreamWriter};
+use arrow_ipc::writer::FileWriter;
 use arrow_schema::Schema;
 
 use super::{BATCH_ROWS, array_of, arrow_err, schema};
@@ -72,29 +73,31 @@ impl<T: ColumnRows> ArrowFile<T> {
     }
 }
 
-/// A table written as an Arrow IPC *stream* as a run produces it (`run` and `pil`
-/// with `--format arrow`): rows wait in memory until [`ArrowStream::push`] is told
-/// to write them, as one record batch, flushed to the operating system at once, so
-/// a process killed outright keeps every batch written before (a reader of the
-/// stream gets them; [`super::read_arrow`] reads a stream whose end marker is missing up to
-/// its last whole batch). The stream format is the file format without its footer:
-/// pandas (`pyarrow.ipc.open_stream`), polars (`polars.read_ipc_stream`) and
-/// `painleve.load` read it.
-pub struct ArrowStream<T: ColumnRows> {
+/// A table written as an Arrow IPC *file* as a run produces it (`run` and `pil`
+/// with `--format arrow`): rows wait in memory until [`StreamedArrowFile::push`]
+/// is told to write them, as one record batch, flushed to the operating system at
+/// once; [`StreamedArrowFile::finish`] writes the footer. The same format as
+/// [`ArrowFile`] (one `.arrow` convention: `pandas.read_feather`,
+/// `polars.read_ipc`, `pyarrow.ipc.open_file` read both). A process killed
+/// outright leaves the file without its footer: the IPC file format is the
+/// stream format between the magic (padded to 64 bytes) and the footer, so
+/// [`super::read_arrow`] (and `painleve.load`) still gives every whole batch
+/// written before.
+pub struct StreamedArrowFile<T: ColumnRows> {
     path: PathBuf,
-    writer: StreamWriter<File>,
+    writer: FileWriter<File>,
     schema: Arc<Schema>,
     pending: Vec<T>,
 }
 
-impl<T: ColumnRows> ArrowStream<T> {
-    /// Starts the stream `file` (at `path`, for error messages) with `T`'s schema.
+impl<T: ColumnRows> StreamedArrowFile<T> {
+    /// Starts the Arrow IPC file `file` (at `path`, for error messages) with `T`'s schema.
     ///
     /// # Errors
-    /// [`Error::Io`] when the schema message cannot be written.
+    /// [`Error::Io`] when the head and the schema cannot be written.
     pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
         let schema = Arc::new(schema(Declaration::of::<T>()));
-        let writer = StreamWriter::try_new(file, &schema).map_err(arrow_err(&path))?;
+        let writer = FileWriter::try_new(file, &schema).map_err(arrow_err(&path))?;
         Ok(Self { path, writer, schema, pending: Vec::new() })
     }
 
@@ -120,7 +123,7 @@ impl<T: ColumnRows> ArrowStream<T> {
         Ok(())
     }
 
-    /// Writes the rows still waiting and the end-of-stream marker.
+    /// Writes the rows still waiting and the footer.
     ///
     /// # Errors
     /// [`Error::Io`] when writing fails.

@@ -1,0 +1,109 @@
+"""``painleve.Model`` (issue 55): the arm's model in Python, checked against finite
+differences, against its own identities (paper eqs. 1 to 7) and against the
+compiled plant (``painleve.Plant``)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import painleve
+
+X0D = [math.radians(60.0), 0.0, math.radians(-30.0), 0.0]
+
+
+@pytest.fixture(scope="module")
+def model():
+    return painleve.Model()
+
+
+def states(n=25, seed=3):
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        th = rng.uniform(-math.pi, math.pi, 2)
+        thd = rng.uniform(-5, 5, 2)
+        yield np.array([th[0], thd[0], th[1], thd[1]])
+
+
+def test_the_parameters_are_the_scenarios_and_keywords_override_them(model):
+    p = model.params
+    assert p["mu"] == 0.6 and p["v_belt"] == -0.4 and p["l"] > 0 and p["m"] > 0
+    m = painleve.Model(mu=0.3, v_belt=0.2)
+    assert (m.params["mu"], m.params["v_belt"]) == (0.3, 0.2)
+    with pytest.raises(TypeError, match="x0"):
+        painleve.Model(x0="d")
+    with pytest.raises(painleve.PainleveError):
+        painleve.Model(l=-1.0)
+
+
+def test_inverse_kinematics_inverts_the_tip_on_both_branches(model):
+    for s in states():
+        theta = np.array([s[0], s[2]])
+        z = model.tip(theta)
+        # The branch as the inverse kinematics has it: the elbow's side, the sign of
+        # theta2 - theta1 taken in (-pi, pi].
+        branch = "up" if math.sin(theta[1] - theta[0]) > 0 else "down"
+        back = model.inverse_kinematics(z, branch)
+        assert np.allclose(model.tip(back), z, atol=1e-12)
+        # the same configuration, angles up to 2 pi
+        assert np.allclose(np.angle(np.exp(1j * (back - theta))), 0.0, atol=1e-7), (theta, back)
+    with pytest.raises(ValueError, match="z ="):
+        model.inverse_kinematics([10.0, 0.0])
+    with pytest.raises(ValueError, match="branch"):
+        model.inverse_kinematics([0.1, 0.0], "sideways")
+
+
+def test_the_jacobian_and_jdot_qdot_are_the_tips_derivatives(model):
+    eps = 1e-6
+    for s in states():
+        theta, thd = np.array([s[0], s[2]]), np.array([s[1], s[3]])
+        J = model.jacobian(theta)
+        assert J.shape == (2, 2)
+        fd = np.column_stack([(model.tip(theta + eps * e) - model.tip(theta - eps * e)) / (2 * eps) for e in np.eye(2)])
+        assert np.allclose(J, fd, atol=1e-8)
+        # d/dt (J q_dot) at q_ddot = 0: (J(theta + eps q_dot) - J(theta - eps q_dot)) q_dot / (2 eps)
+        fd_jdot = (model.jacobian(theta + eps * thd) - model.jacobian(theta - eps * thd)) @ thd / (2 * eps)
+        assert np.allclose(model.jdot_qdot(s), fd_jdot, atol=1e-6 * (1 + np.abs(fd_jdot).max()))
+
+
+def test_m_q_p_and_b_keep_the_papers_identities(model):
+    mu = model.params["mu"]
+    for s in states():
+        theta = np.array([s[0], s[2]])
+        M = model.mass_matrix(theta)
+        assert np.allclose(M, M.T) and np.all(np.linalg.eigvalsh(M) > 0)
+        J = model.jacobian(theta)
+        Q = model.q_matrix(theta)
+        assert np.allclose(Q, J @ np.linalg.inv(M) @ J.T, rtol=1e-12, atol=1e-12)  # eq. 3
+        for direction, sign in (("positive", 1.0), ("negative", -1.0)):
+            p = model.p(theta, direction)
+            assert p == pytest.approx(Q[1, 1] - mu * sign * Q[1, 0], rel=1e-12, abs=1e-12)  # eq. 7
+            assert model.painleve(theta, direction) == (p < 0)
+        # eq. 6: b is the normal component of J M^-1 (u - w - c) + J_dot q_dot
+        u = np.array([0.3, -0.2])
+        qdd = np.linalg.solve(M, model.generalised_torque(u) - model.bias(s))
+        b = (J @ qdd + model.jdot_qdot(s))[1]
+        assert model.b(s, u) == pytest.approx(b, rel=1e-9, abs=1e-9)
+        assert model.energy(s) == pytest.approx(
+            0.5 * np.array([s[1], s[3]]) @ M @ np.array([s[1], s[3]]) + model.energy([s[0], 0.0, s[2], 0.0]), rel=1e-12
+        )
+
+
+def test_the_model_agrees_with_the_compiled_plant(model):
+    # The plant's tip and its sliding normal force f_n = -b/p (paper eqs. 5 to 7).
+    plant = painleve.Plant(x0="d")
+    step = plant.advance(0.001, (0.0, 0.0))
+    s = step.state
+    assert np.allclose(model.tip([s[0], s[2]]), step.tip, atol=1e-12)
+    assert step.mode == "sliding" == model.contact_mode(s)
+    z_r_dot = (model.jacobian([s[0], s[2]]) @ [s[1], s[3]])[0] - model.params["v_belt"]
+    direction = "positive" if z_r_dot > 0 else "negative"
+    f_n = -model.b(s) / model.p([s[0], s[2]], direction)
+    assert step.force[1] == pytest.approx(f_n, rel=1e-9)
+
+
+def test_a_non_finite_state_gives_non_finite_values_not_an_error(model):
+    assert np.isnan(model.tip([math.nan, 0.0])).all()
+    assert math.isnan(model.b([math.nan, 0.0, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="direction"):
+        model.p([0.0, 0.0], "sideways")
