@@ -46,60 +46,183 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
     if specs.is_empty() {
         return Err(bad("no table in it (no painleve.table.* metadata record): not written by sil-host --format mcap".into()));
     }
-    // The messages of each topic, in order.
-    let mut by_topic: BTreeMap<String, Vec<serde_json::Map<String, serde_json::Value>>> = BTreeMap::new();
-    let messages = MessageStream::new_with_options(&bytes, lenient()).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
-    for m in messages {
-        let Ok(m) = m else { break };
-        let list = by_topic.entry(m.channel.topic.clone()).or_default();
-        if m.sequence as usize != list.len() {
-            return Err(bad(format!("{}: message {} has sequence number {}", m.channel.topic, list.len(), m.sequence)));
-        }
-        let data: Cow<[u8]> = m.data;
-        let object = serde_json::from_slice(&data)
-            .map_err(|e| bad(format!("{}: message {}: not a JSON object: {e}", m.channel.topic, list.len())))?;
-        list.push(object);
-    }
-    let mut tables = Vec::new();
-    for spec in specs {
+    // Each topic's columns, parsed message by message into typed columns (no JSON
+    // tree per message): the kinds are the tables' declarations.
+    let mut kinds: BTreeMap<&str, BTreeMap<&str, &str>> = BTreeMap::new();
+    for spec in &specs {
         if spec.columns.len() != spec.kinds.len() {
             return Err(bad(format!("table {}: {} columns but {} kinds", spec.name, spec.columns.len(), spec.kinds.len())));
         }
-        let empty = Vec::new();
-        let topics: Vec<&Vec<_>> = spec.topics.iter().map(|t| by_topic.get(t).unwrap_or(&empty)).collect();
-        let n = topics.iter().map(|m| m.len()).min().unwrap_or(0);
+        for topic in &spec.topics {
+            let of_topic = kinds.entry(topic.as_str()).or_default();
+            for (c, k) in spec.columns.iter().zip(&spec.kinds) {
+                of_topic.insert(c.as_str(), k.as_str());
+            }
+        }
+    }
+    let mut by_topic: BTreeMap<String, TopicColumns> = BTreeMap::new();
+    let messages = MessageStream::new_with_options(&bytes, lenient()).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
+    for m in messages {
+        let Ok(m) = m else { break };
+        let Some(of_topic) = kinds.get(m.channel.topic.as_str()) else { continue };
+        let columns = by_topic.entry(m.channel.topic.clone()).or_default();
+        if m.sequence as usize != columns.rows {
+            return Err(bad(format!("{}: message {} has sequence number {}", m.channel.topic, columns.rows, m.sequence)));
+        }
+        let data: Cow<[u8]> = m.data;
+        columns.push(&data, of_topic).map_err(|e| bad(format!("{}: message {}: {e}", m.channel.topic, columns.rows)))?;
+    }
+    let mut tables = Vec::new();
+    for spec in specs {
+        let empty = TopicColumns::default();
+        let topics: Vec<&TopicColumns> = spec.topics.iter().map(|t| by_topic.get(t).unwrap_or(&empty)).collect();
+        let n = topics.iter().map(|t| t.rows).min().unwrap_or(0);
         let mut columns = Vec::with_capacity(spec.columns.len());
         for (name, kind) in spec.columns.iter().zip(&spec.kinds) {
+            if !["f64", "int", "bool", "str"].contains(&kind.as_str()) {
+                return Err(bad(format!("table {}: column `{name}` of unknown kind `{kind}`", spec.name)));
+            }
             // The first topic whose messages hold the column (`t` is in all).
-            let source = topics.iter().find(|m| m.first().is_some_and(|o| o.contains_key(name)));
-            let value = |k: usize| source.and_then(|m| m[k].get(name.as_str()));
-            let wrong = |k: usize| bad(format!("table {}: row {k}: `{name}` is not a {kind}", spec.name));
-            let column = match kind.as_str() {
-                "f64" => Column::F64(
-                    (0..n)
-                        .map(|k| match value(k) {
-                            Some(serde_json::Value::Null) => Ok(f64::NAN),
-                            Some(v) => v.as_f64().ok_or_else(|| wrong(k)),
-                            None => Err(wrong(k)),
-                        })
-                        .collect::<Result<_, _>>()?,
-                ),
-                "int" => Column::I64(
-                    (0..n).map(|k| value(k).and_then(serde_json::Value::as_i64).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?,
-                ),
-                "bool" => Column::Bool(
-                    (0..n).map(|k| value(k).and_then(serde_json::Value::as_bool).ok_or_else(|| wrong(k))).collect::<Result<_, _>>()?,
-                ),
-                "str" => Column::Str(
-                    (0..n)
-                        .map(|k| value(k).and_then(serde_json::Value::as_str).map(String::from).ok_or_else(|| wrong(k)))
-                        .collect::<Result<_, _>>()?,
-                ),
-                other => return Err(bad(format!("table {}: column `{name}` of unknown kind `{other}`", spec.name))),
+            let source = topics.iter().find_map(|t| t.names.iter().position(|c| c == name).map(|i| &t.columns[i]));
+            let column = match source {
+                Some(c) => c.head(n),
+                None if n == 0 => TopicColumns::new_column(kind),
+                None => return Err(bad(format!("table {}: row 0: `{name}` is not a {kind}", spec.name))),
             };
             columns.push((name.clone(), column));
         }
         tables.push((spec.name, Table { columns }));
     }
     Ok(tables)
+}
+
+/// The columns of one topic's messages so far: the keys of its first message
+/// that a table declares, in that message's order, each a typed column.
+#[derive(Debug, Default)]
+struct TopicColumns {
+    names: Vec<String>,
+    columns: Vec<Column>,
+    rows: usize,
+}
+
+impl TopicColumns {
+    /// An empty column of kind `kind` (`f64`, `int`, `bool`, else text).
+    fn new_column(kind: &str) -> Column {
+        match kind {
+            "f64" => Column::F64(Vec::new()),
+            "int" => Column::I64(Vec::new()),
+            "bool" => Column::Bool(Vec::new()),
+            _ => Column::Str(Vec::new()),
+        }
+    }
+
+    /// Appends the message `data` (a JSON object): each declared key's value to
+    /// its column (`null` as NaN in a float column); the first message sets the
+    /// keys, every later one must hold the same.
+    fn push(&mut self, data: &[u8], kinds: &BTreeMap<&str, &str>) -> Result<(), String> {
+        let first = self.rows == 0 && self.names.is_empty();
+        let mut de = serde_json::Deserializer::from_slice(data);
+        let seen = serde::de::Deserializer::deserialize_map(&mut de, MessageVisitor { topic: self, kinds, first })
+            .map_err(|e| format!("not the JSON object its table describes: {e}"))?;
+        de.end().map_err(|e| format!("not a JSON object: {e}"))?;
+        if seen != self.names.len() {
+            let missing = self.columns.iter().zip(&self.names).find(|(c, _)| c.len() <= self.rows).map(|(_, n)| n.clone());
+            return Err(format!("`{}` is missing", missing.unwrap_or_default()));
+        }
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+/// Column `c`'s first `n` values.
+trait Head {
+    fn head(&self, n: usize) -> Column;
+}
+
+impl Head for Column {
+    fn head(&self, n: usize) -> Column {
+        match self {
+            Column::F64(v) => Column::F64(v[..n].to_vec()),
+            Column::I64(v) => Column::I64(v[..n].to_vec()),
+            Column::Bool(v) => Column::Bool(v[..n].to_vec()),
+            Column::Str(v) => Column::Str(v[..n].to_vec()),
+        }
+    }
+}
+
+/// Visits one message's JSON object into [`TopicColumns`]; gives how many of
+/// the topic's columns it filled.
+struct MessageVisitor<'a, 'k> {
+    topic: &'a mut TopicColumns,
+    kinds: &'a BTreeMap<&'k str, &'k str>,
+    first: bool,
+}
+
+/// A key of a message, borrowed from it when it has no escapes.
+struct Key<'de>(Cow<'de, str>);
+
+impl<'de> serde::Deserialize<'de> for Key<'de> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Key<'de>;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a key")
+            }
+            fn visit_borrowed_str<E>(self, v: &'de str) -> Result<Key<'de>, E> {
+                Ok(Key(Cow::Borrowed(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Key<'de>, E> {
+                Ok(Key(Cow::Owned(v.to_string())))
+            }
+        }
+        d.deserialize_str(V)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for MessageVisitor<'_, '_> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON object")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<usize, A::Error> {
+        use serde::de::{Error as _, IgnoredAny};
+        let topic = self.topic;
+        let mut seen = 0;
+        let mut at = 0;
+        while let Some(Key(key)) = map.next_key::<Key<'de>>()? {
+            // The keys come in the first message's order: try the next one first.
+            let index = if topic.names.get(at).is_some_and(|n| *n == key) { Some(at) } else { topic.names.iter().position(|n| *n == key) };
+            let index = match (index, self.first) {
+                (Some(i), _) => i,
+                (None, true) => match self.kinds.get(key.as_ref()) {
+                    Some(kind) => {
+                        topic.names.push(key.to_string());
+                        topic.columns.push(TopicColumns::new_column(kind));
+                        topic.names.len() - 1
+                    }
+                    None => {
+                        map.next_value::<IgnoredAny>()?;
+                        continue;
+                    }
+                },
+                (None, false) => {
+                    map.next_value::<IgnoredAny>()?;
+                    continue;
+                }
+            };
+            at = index + 1;
+            let wrong = |kind: &str| A::Error::custom(format!("`{key}` is not a {kind}"));
+            match &mut topic.columns[index] {
+                Column::F64(v) => v.push(map.next_value::<Option<f64>>().map_err(|_| wrong("f64"))?.unwrap_or(f64::NAN)),
+                Column::I64(v) => v.push(map.next_value::<i64>().map_err(|_| wrong("int"))?),
+                Column::Bool(v) => v.push(map.next_value::<bool>().map_err(|_| wrong("bool"))?),
+                Column::Str(v) => v.push(map.next_value::<String>().map_err(|_| wrong("str"))?),
+            }
+            seen += 1;
+        }
+        Ok(seen)
+    }
 }
