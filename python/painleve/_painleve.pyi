@@ -196,8 +196,8 @@ class Plant:
         the plant (exit code 1; the plant is left at the failure time)."""
     def advance_to(self, t: float, torques: _Torques = (0.0, 0.0)) -> Step:
         """Advances to time ``t`` s (>= :attr:`time`)."""
-    def reset(self) -> None:
-        """Back to time 0, counters cleared."""
+    def reset(self, state: Optional[Sequence[float]] = None, t: Optional[float] = None) -> None:
+        """Back to time 0, counters cleared; with ``state`` ``(4,)``, to that state at time ``t`` (refused below the belt)."""
     def copy(self) -> Plant: ...
     def contact_force(self, torques: _Torques = (0.0, 0.0)) -> _F64:
         """``(2,)``: ``[f_t, f_n]`` N in the current mode under ``torques``."""
@@ -207,6 +207,8 @@ class Plant:
     @property
     def state(self) -> _F64:
         """``(4,)``: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s."""
+    @state.setter
+    def state(self, value: Sequence[float]) -> None: ...
     @property
     def tip(self) -> _F64:
         """``(2,)``: ``[z_t, z_n]``, m."""

@@ -107,3 +107,30 @@ def test_a_non_finite_state_gives_non_finite_values_not_an_error(model):
     assert math.isnan(model.b([math.nan, 0.0, 0.0, 0.0]))
     with pytest.raises(ValueError, match="direction"):
         model.p([0.0, 0.0], "sideways")
+
+
+def test_a_plants_state_is_settable_and_checked_against_the_contact(model):
+    plant = painleve.Plant(x0="d")
+    plant.advance(0.01, (0.0, 0.0))
+    t = plant.time
+    # Lift the arm clear of the belt: in flight, the state and time as set.
+    up = model.inverse_kinematics([0.2, 0.0], "down")
+    state = [up[0], 0.0, up[1], 0.0]
+    plant.state = state
+    assert np.array_equal(plant.state, state) and plant.time == t and plant.mode == "flight"
+    # reset(state=..., t=...) moves the clock too; the plant then advances from there.
+    plant.reset(state=state, t=2.0)
+    assert plant.time == 2.0 and plant.advance(0.01).t == pytest.approx(2.01)
+    # Below the belt (z_n < -h): refused, the plant unchanged.
+    h = model.params["h"]
+    low = model.inverse_kinematics([0.05, -h - 0.01], "down")
+    before = plant.state.copy()
+    with pytest.raises(painleve.PainleveError) as e:
+        plant.state = [low[0], 0.0, low[1], 0.0]
+    assert e.value.exit_code == 2 and np.array_equal(plant.state, before)
+    with pytest.raises(painleve.PainleveError):
+        plant.reset(state=[math.nan, 0, 0, 0])
+    with pytest.raises(painleve.PainleveError):
+        plant.reset(t=-1.0)
+    plant.reset()
+    assert plant.time == 0.0

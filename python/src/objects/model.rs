@@ -141,7 +141,7 @@ impl PyModel {
             other => return Err(PyValueError::new_err(format!("branch `{other}`: \"down\" (theta2 < theta1) or \"up\""))),
         };
         let q = kinematics::inverse_kinematics(self.arm.params.l, &Vector2::new(z[0], z[1]), branch)
-            .map_err(|e| PyValueError::new_err(format!("z = ({}, {}) m: {e:?}", z[0], z[1])))?;
+            .map_err(|e| PyValueError::new_err(format!("z = ({}, {}) m: {e}", z[0], z[1])))?;
         Ok(vec_py(py, q))
     }
 

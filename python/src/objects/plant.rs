@@ -59,6 +59,16 @@ impl PyPlant {
     fn with<T>(&self, f: impl FnOnce(&Plant) -> T) -> T {
         f(&self.plant.lock().unwrap_or_else(|p| p.into_inner()))
     }
+
+    /// A plant of this one's parameters and settings at state `x`, time `t` (s),
+    /// no torque yet: `plant::Plant::new`, which refuses a state below the belt.
+    fn at(&self, py: Python<'_>, x: [f64; 4], t: f64) -> PyResult<Plant> {
+        if !x.iter().all(|v| v.is_finite()) {
+            return Err(error(py, format!("state {x:?}: expected four finite numbers (rad, rad/s)"), 2));
+        }
+        let params = self.with(|p| p.arm().params);
+        Plant::new(params, sim_config(&self.scenario), x, t, [0.0, 0.0]).map_err(|e| error(py, e.to_string(), 2))
+    }
 }
 
 /// A `SimError` while advancing: exit code 1 (a failure while running), or 2 for
@@ -200,10 +210,31 @@ impl PyPlant {
         self.advance(py, t - now, torques)
     }
 
-    /// Back to the initial state (time 0, the counters cleared).
-    fn reset(&mut self) {
-        let initial = self.initial.get_mut().unwrap_or_else(|p| p.into_inner()).clone();
-        *self.plant.get_mut().unwrap_or_else(|p| p.into_inner()) = initial;
+    /// Back to the initial state (time 0, the counters cleared); with `state`,
+    /// `(4,)` `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s), to that
+    /// state instead, at time `t` (s, default 0): a new plant of the same
+    /// parameters there, its contact mode found from the state (counters, ledger
+    /// and events start afresh), as MuJoCo's writable `qpos`/`qvel` or pydrake's
+    /// `SetPositionsAndVelocities`.
+    ///
+    /// Raises `PainleveError` (exit_code 2, the plant unchanged) for a state
+    /// below the belt (the tip under `z_n = -H`), a non-finite state or a
+    /// negative or non-finite `t`.
+    #[pyo3(signature = (state=None, t=None))]
+    fn reset(&mut self, py: Python<'_>, state: Option<[f64; 4]>, t: Option<f64>) -> PyResult<()> {
+        let t0 = t.unwrap_or(0.0);
+        if !(t0.is_finite() && t0 >= 0.0) {
+            return Err(error(py, format!("t = {t0} s: expected a finite time >= 0"), 2));
+        }
+        let plant = match (state, t) {
+            (None, None) => self.initial.get_mut().unwrap_or_else(|p| p.into_inner()).clone(),
+            (x, _) => {
+                let x = x.unwrap_or_else(|| self.initial.get_mut().unwrap_or_else(|p| p.into_inner()).state());
+                self.at(py, x, t0)?
+            }
+        };
+        *self.plant.get_mut().unwrap_or_else(|p| p.into_inner()) = plant;
+        Ok(())
     }
 
     /// A copy (its own state from now on).
@@ -227,9 +258,20 @@ impl PyPlant {
     }
 
     /// State, `(4,)`: theta1 rad, theta1_dot rad/s, theta2 rad, theta2_dot rad/s.
+    /// Settable: `plant.state = x` is `plant.reset(state=x, t=plant.time)` (a new
+    /// plant there, checked against the contact; `PainleveError` with exit_code 2
+    /// for a state below the belt, the plant unchanged).
     #[getter]
     fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.with(Plant::state))
+    }
+
+    #[setter]
+    fn set_state(&mut self, py: Python<'_>, state: [f64; 4]) -> PyResult<()> {
+        let now = self.with(Plant::time);
+        let plant = self.at(py, state, now)?;
+        *self.plant.get_mut().unwrap_or_else(|p| p.into_inner()) = plant;
+        Ok(())
     }
 
     /// Tip position, `(2,)`: `[z_t, z_n]`, m (the belt is at `z_n = -H`).
