@@ -3,6 +3,8 @@
 
 use std::{borrow::Cow, collections::BTreeMap, path::Path};
 
+use rayon::prelude::*;
+
 use mcap::{
     read::{LinearReader, MessageStream, Options},
     records::Record,
@@ -60,18 +62,52 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
             }
         }
     }
-    let mut by_topic: BTreeMap<String, TopicColumns> = BTreeMap::new();
-    let messages = MessageStream::new_with_options(&bytes, lenient()).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
-    for m in messages {
-        let Ok(m) = m else { break };
-        let Some(of_topic) = kinds.get(m.channel.topic.as_str()) else { continue };
-        let columns = by_topic.entry(m.channel.topic.clone()).or_default();
-        if m.sequence as usize != columns.rows {
-            return Err(bad(format!("{}: message {} has sequence number {}", m.channel.topic, columns.rows, m.sequence)));
+    // A whole file's chunks, from its summary's chunk index, parsed in parallel
+    // and joined in file order; a cut file (no summary) read linearly.
+    let summary = mcap::Summary::read(&bytes).ok().flatten().filter(|s| !s.chunk_indexes.is_empty());
+    let by_topic = match summary {
+        Some(summary) => {
+            let mut chunks = summary.chunk_indexes.clone();
+            chunks.sort_by_key(|c| c.chunk_start_offset);
+            let parts: Vec<Result<BTreeMap<String, TopicColumns>, String>> = chunks
+                .par_iter()
+                .map(|chunk| {
+                    let mut part = BTreeMap::new();
+                    let messages = summary.stream_chunk(&bytes, chunk).map_err(|e| format!("a chunk: {e}"))?;
+                    for m in messages {
+                        add_message(&mut part, &kinds, m.map_err(|e| format!("a chunk: {e}"))?)?;
+                    }
+                    Ok(part)
+                })
+                .collect();
+            let mut joined: BTreeMap<String, TopicColumns> = BTreeMap::new();
+            for part in parts {
+                for (topic, columns) in part.map_err(&bad)? {
+                    match joined.get_mut(&topic) {
+                        Some(have) => have.append(columns).map_err(|e| bad(format!("{topic}: {e}")))?,
+                        None if columns.first_sequence == Some(0) => {
+                            joined.insert(topic, columns);
+                        }
+                        None => return Err(bad(format!("{topic}: message 0 has sequence number {:?}", columns.first_sequence))),
+                    }
+                }
+            }
+            joined
         }
-        let data: Cow<[u8]> = m.data;
-        columns.push(&data, of_topic).map_err(|e| bad(format!("{}: message {}: {e}", m.channel.topic, columns.rows)))?;
-    }
+        None => {
+            let mut by_topic = BTreeMap::new();
+            let messages = MessageStream::new_with_options(&bytes, lenient()).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
+            for m in messages {
+                // A cut file: its messages up to the cut.
+                let Ok(m) = m else { break };
+                add_message(&mut by_topic, &kinds, m).map_err(&bad)?;
+            }
+            if let Some((topic, c)) = by_topic.iter().find(|(_, c)| c.first_sequence.is_some_and(|s| s != 0)) {
+                return Err(bad(format!("{topic}: message 0 has sequence number {:?}", c.first_sequence)));
+            }
+            by_topic
+        }
+    };
     let mut tables = Vec::new();
     for spec in specs {
         let empty = TopicColumns::default();
@@ -96,16 +132,57 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
     Ok(tables)
 }
 
-/// The columns of one topic's messages so far: the keys of its first message
-/// that a table declares, in that message's order, each a typed column.
+/// Adds message `m` to its topic's columns in `by_topic` (a topic no table
+/// declares is skipped): its sequence number must follow the topic's last.
+fn add_message(
+    by_topic: &mut BTreeMap<String, TopicColumns>,
+    kinds: &BTreeMap<&str, BTreeMap<&str, &str>>,
+    m: mcap::Message<'_>,
+) -> Result<(), String> {
+    let Some(of_topic) = kinds.get(m.channel.topic.as_str()) else { return Ok(()) };
+    let columns = by_topic.entry(m.channel.topic.clone()).or_default();
+    let first = *columns.first_sequence.get_or_insert(m.sequence);
+    if m.sequence as usize != first as usize + columns.rows {
+        return Err(format!("{}: message {} has sequence number {}", m.channel.topic, first as usize + columns.rows, m.sequence));
+    }
+    columns.push(&m.data, of_topic).map_err(|e| format!("{}: message {}: {e}", m.channel.topic, first as usize + columns.rows))
+}
+
+/// The columns of one topic's messages so far (of the whole file, or of one
+/// chunk): the keys of its first message that a table declares, in that
+/// message's order, each a typed column; the sequence number of the first.
 #[derive(Debug, Default)]
 struct TopicColumns {
     names: Vec<String>,
     columns: Vec<Column>,
     rows: usize,
+    first_sequence: Option<u32>,
 }
 
 impl TopicColumns {
+    /// Appends `next`, the same topic's messages that follow these (the next
+    /// chunk's): the same keys, the sequence numbers continuing.
+    fn append(&mut self, next: TopicColumns) -> Result<(), String> {
+        let expected = self.first_sequence.unwrap_or(0) as usize + self.rows;
+        if next.first_sequence.map(|s| s as usize) != Some(expected) {
+            return Err(format!("message {expected} has sequence number {:?}", next.first_sequence));
+        }
+        if next.names != self.names {
+            return Err(format!("message {expected} has the keys {:?}, the first {:?}", next.names, self.names));
+        }
+        for (have, more) in self.columns.iter_mut().zip(next.columns) {
+            match (have, more) {
+                (Column::F64(a), Column::F64(b)) => a.extend(b),
+                (Column::I64(a), Column::I64(b)) => a.extend(b),
+                (Column::Bool(a), Column::Bool(b)) => a.extend(b),
+                (Column::Str(a), Column::Str(b)) => a.extend(b),
+                _ => return Err(format!("message {expected}: a column of another kind")),
+            }
+        }
+        self.rows += next.rows;
+        Ok(())
+    }
+
     /// An empty column of kind `kind` (`f64`, `int`, `bool`, else text).
     fn new_column(kind: &str) -> Column {
         match kind {
