@@ -7,11 +7,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 use numpy::{PyArray1, PyArray2};
-use pyo3::{
-    exceptions::{PyTypeError, PyValueError},
-    prelude::*,
-    types::PyDict,
-};
+use pyo3::{exceptions::PyValueError, prelude::*, types::PyDict};
 use shared::{
     contact::{self, ContactMode},
     kinematics::{self, ElbowBranch},
@@ -77,22 +73,7 @@ impl PyModel {
     #[new]
     #[pyo3(signature = (scenario=None, **params))]
     fn new(py: Python<'_>, scenario: Option<&Bound<'_, PyAny>>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        let mut s = PyScenario::of(py, scenario)?;
-        if let Some(params) = params {
-            let keys = PyDict::new(py);
-            for (k, v) in params.iter() {
-                let key: String = k.extract()?;
-                if !MODEL_KEYS.contains(&key.as_str()) {
-                    return Err(PyTypeError::new_err(format!(
-                        "Model() got an unexpected keyword argument `{key}` (it takes scenario and the model's keys of [plant]: {})",
-                        MODEL_KEYS.join(", ")
-                    )));
-                }
-                keys.set_item(format!("plant.{key}"), v)?;
-            }
-            let sc = PyScenario::update(Bound::new(py, PyScenario { inner: s })?, &keys)?;
-            s = sc.borrow().inner.clone();
-        }
+        let s = PyScenario::with_plant_keywords(py, PyScenario::of(py, scenario)?, params, &MODEL_KEYS, "Model()", "scenario")?;
         let params: Params<f64> = s.plant.params();
         params.validate().map_err(|e| error(py, e.to_string(), 2))?;
         Ok(Self { arm: Arm::new(params) })

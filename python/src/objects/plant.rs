@@ -5,7 +5,7 @@
 use std::sync::Mutex;
 
 use numpy::PyArray1;
-use pyo3::{exceptions::PyTypeError, prelude::*, types::PyDict};
+use pyo3::{prelude::*, types::PyDict};
 use rig::Scenario;
 
 use plant::{Hold, NoObserver, Plant, SimConfig, SimError, StepReport, initial};
@@ -149,22 +149,7 @@ impl PyPlant {
             // `painleve.simulate`'s initial condition.
             s.plant.x0 = initial::PaperX0::A;
         }
-        if let Some(params) = params {
-            // The keywords as the scenario's `[plant]` keys, set and validated together.
-            let keys = PyDict::new(py);
-            for (k, v) in params.iter() {
-                let key: String = k.extract()?;
-                if !PLANT_KEYS.contains(&key.as_str()) {
-                    return Err(PyTypeError::new_err(format!(
-                        "Plant() got an unexpected keyword argument `{key}` (it takes scenario, state and the keys of [plant]: {})",
-                        PLANT_KEYS.join(", ")
-                    )));
-                }
-                keys.set_item(format!("plant.{key}"), v)?;
-            }
-            let sc = PyScenario::update(Bound::new(py, PyScenario { inner: s })?, &keys)?;
-            s = sc.borrow().inner.clone();
-        }
+        let s = PyScenario::with_plant_keywords(py, s, params, &PLANT_KEYS, "Plant()", "scenario, state")?;
         let plant = match state {
             None => rig::plant_for(&s),
             Some(x) => {

@@ -39,6 +39,39 @@ pub struct PyScenario {
 }
 
 impl PyScenario {
+    /// `s` with the keyword arguments `keywords` set as keys of its `[plant]`
+    /// (`mu=0.5` is `plant.mu = 0.5`), set and validated together; `owner`
+    /// (`"Plant()"`, `"Model()"`) takes the keys of `allowed` and `besides` (its
+    /// other arguments, for the message).
+    ///
+    /// # Errors
+    /// `TypeError` for a keyword not in `allowed`; `PainleveError` (exit_code 2)
+    /// for a value the scenario refuses.
+    pub fn with_plant_keywords(
+        py: Python<'_>,
+        s: Scenario,
+        keywords: Option<&Bound<'_, PyDict>>,
+        allowed: &[&str],
+        owner: &str,
+        besides: &str,
+    ) -> PyResult<Scenario> {
+        let Some(keywords) = keywords else { return Ok(s) };
+        let keys = PyDict::new(py);
+        for (k, v) in keywords.iter() {
+            let key: String = k.extract()?;
+            if !allowed.contains(&key.as_str()) {
+                return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                    "{owner} got an unexpected keyword argument `{key}` (it takes {besides} and the keys of [plant]: {})",
+                    allowed.join(", ")
+                )));
+            }
+            keys.set_item(format!("plant.{key}"), v)?;
+        }
+        let sc = Self::update(Bound::new(py, Self { inner: s })?, &keys)?;
+        let inner = sc.borrow().inner.clone();
+        Ok(inner)
+    }
+
     /// The scenario of a Python value: a `Scenario`, TOML text, or `None` (`default`).
     pub fn of(py: Python<'_>, value: Option<&Bound<'_, PyAny>>) -> PyResult<Scenario> {
         match value {
