@@ -17,6 +17,12 @@
 //! hold, are `null` (read back as NaN). Integers are JSON integers, flags
 //! `true`/`false`, text JSON strings.
 //!
+//! A table may carry a view ([`McapView`]): channels drawn from its rows
+//! besides its own, in any schema, written after each row's messages with
+//! the row's log time (`arm-view`: the arm's frames, 3D scene and log in
+//! Foxglove's own schemas). [`RowEncoder`] and [`ChannelSpec`] give the
+//! channels and bytes apart from the file, for a live stream of the same.
+//!
 //! A metadata record per table (`painleve.table.<name>`: `columns`, `kinds`,
 //! `topics`) gives its columns in the CSV's order, so a reader
 //! ([`read_mcap`], `painleve.load`) puts the table back together.
@@ -35,6 +41,8 @@
 use crate::ColumnRows;
 
 #[cfg(feature = "files")]
+mod channel;
+#[cfg(feature = "files")]
 mod read;
 #[cfg(feature = "files")]
 mod schema;
@@ -43,6 +51,8 @@ mod tests;
 #[cfg(feature = "files")]
 mod write;
 
+#[cfg(feature = "files")]
+pub use channel::{ChannelSpec, McapView, RowEncoder, log_time_ns};
 #[cfg(feature = "files")]
 pub use read::read_mcap;
 #[cfg(feature = "files")]

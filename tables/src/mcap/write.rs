@@ -3,6 +3,7 @@
 //! [`STREAM_CHUNK_ROWS`] rows, flushed at once).
 
 use std::{
+    any::Any,
     collections::BTreeMap,
     fs::File,
     io::BufWriter,
@@ -14,7 +15,10 @@ use mcap::{
     records::{MessageHeader, Metadata},
 };
 
-use super::{McapRows, STREAM_CHUNK_ROWS, schema::schema_json};
+use super::{
+    McapRows, STREAM_CHUNK_ROWS,
+    channel::{ChannelSpec, McapView, RowEncoder, log_time_ns},
+};
 use crate::{Column, error::Error};
 
 /// The zstd level of the chunks: 1, the fastest (a 300 s `simulate`: 45 MB in 1.0 s,
@@ -32,36 +36,37 @@ fn mcap_err(path: &Path) -> impl Fn(McapError) -> Error + '_ {
     }
 }
 
-/// The channels of one table in an [`McapFile`].
+/// The channels of one table in an [`McapFile`]: its own and its view's.
 struct TableChannels {
-    /// `(channel id, the group's column indices)` per group.
-    channels: Vec<(u16, Vec<usize>)>,
-    /// The index of column `t`.
-    t: usize,
-    /// The table's column names.
-    names: &'static [&'static str],
+    /// The table's [`RowEncoder`] (of its row type, checked at each write).
+    encoder: Box<dyn Any + Send>,
+    /// The MCAP channel id of each group.
+    channels: Vec<u16>,
     /// Rows written so far (the next message's sequence number).
     rows: u32,
+    /// The view's `Box<dyn McapView<T>>`, its channels' ids and their next sequence numbers.
+    view: Option<(Box<dyn Any + Send>, Vec<u16>, Vec<u32>)>,
 }
 
 /// A table registered in an [`McapFile`] ([`McapFile::add_table`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct McapTable(usize);
 
-/// An MCAP file being written: tables registered with [`McapFile::add_table`],
-/// rows written with [`McapFile::write`] (or two tables' rows interleaved by
-/// time, [`McapFile::write_merged`]); [`McapFile::finish`] writes the last chunk,
-/// the summary (indexes, statistics) and the footer.
+/// An MCAP file being written: tables registered with [`McapFile::add_table`]
+/// (or [`McapFile::add_table_with_view`]), rows written with [`McapFile::write`]
+/// (or two tables' rows interleaved by time, [`McapFile::write_merged`]);
+/// [`McapFile::finish`] writes the last chunk, the summary (indexes,
+/// statistics) and the footer.
 pub struct McapFile {
     path: PathBuf,
     writer: Writer<BufWriter<File>>,
     tables: Vec<TableChannels>,
-    buf: Vec<u8>,
 }
 
 impl McapFile {
     /// Starts the MCAP file `file` (at `path`, for error messages): its magic
-    /// and header. `chunk_size`: close a chunk when it holds that many bytes
+    /// and header (profile empty: the channels are Foxglove's and JSON, no ROS).
+    /// `chunk_size`: close a chunk when it holds that many bytes
     /// (uncompressed); `None`: only at [`McapFile::flush`]. Chunks are built in
     /// memory and written whole, so the file only ever ends inside a chunk while
     /// one is being written.
@@ -77,7 +82,7 @@ impl McapFile {
             .disable_seeking(true)
             .library(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION"), " (mcap crate)"));
         let writer = Writer::with_options(BufWriter::new(file), options).map_err(mcap_err(&path))?;
-        Ok(Self { path, writer, tables: Vec::new(), buf: Vec::with_capacity(1024) })
+        Ok(Self { path, writer, tables: Vec::new() })
     }
 
     /// Registers the table of rows `T`: a schema and a channel per group, and
@@ -87,25 +92,19 @@ impl McapFile {
     /// # Errors
     /// [`Error::Io`] when writing fails, or when `T`'s groups name a column it
     /// lacks or leave one out (a bug of the row type, reported as an error).
-    pub fn add_table<T: McapRows>(&mut self) -> Result<McapTable, Error> {
+    pub fn add_table<T: McapRows + 'static>(&mut self) -> Result<McapTable, Error> {
+        self.add_table_with_view::<T>(None)
+    }
+
+    /// [`McapFile::add_table`], and `view`'s channels after the table's: each
+    /// row written is followed by its view's messages ([`McapView`]).
+    ///
+    /// # Errors
+    /// As [`McapFile::add_table`].
+    pub fn add_table_with_view<T: McapRows + 'static>(&mut self, view: Option<Box<dyn McapView<T>>>) -> Result<McapTable, Error> {
         let bad = |what: String| Error::Io { path: self.path.clone(), source: std::io::Error::other(what) };
-        let t = T::NAMES.iter().position(|n| *n == "t").ok_or_else(|| bad(format!("table {}: no column `t`", T::TABLE)))?;
-        let grouped: usize = T::GROUPS.iter().map(|g| g.columns.len()).sum();
-        if grouped + 1 != T::NAMES.len() {
-            return Err(bad(format!("table {}: its groups hold {grouped} columns besides t, not {}", T::TABLE, T::NAMES.len() - 1)));
-        }
-        let mut channels = Vec::with_capacity(T::GROUPS.len());
-        for g in T::GROUPS {
-            let schema = schema_json(T::NAMES, T::KINDS, g).map_err(bad)?;
-            let indices = g
-                .columns
-                .iter()
-                .map(|c| T::NAMES.iter().position(|n| n == c).ok_or_else(|| bad(format!("group {}: no column `{c}`", g.topic))))
-                .collect::<Result<Vec<_>, _>>()?;
-            let schema_id = self.writer.add_schema(g.schema, "jsonschema", &schema).map_err(mcap_err(&self.path))?;
-            let channel = self.writer.add_channel(schema_id, g.topic, "json", &BTreeMap::new()).map_err(mcap_err(&self.path))?;
-            channels.push((channel, indices));
-        }
+        let encoder = RowEncoder::<T>::new().map_err(bad)?;
+        let channels = encoder.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
         let join = |v: &mut dyn Iterator<Item = &str>| v.collect::<Vec<_>>().join(",");
         let metadata = BTreeMap::from([
             ("columns".to_string(), join(&mut T::NAMES.iter().copied())),
@@ -114,18 +113,33 @@ impl McapFile {
         ]);
         let name = format!("painleve.table.{}", T::TABLE);
         self.writer.write_metadata(&Metadata { name, metadata }).map_err(mcap_err(&self.path))?;
-        self.tables.push(TableChannels { channels, t, names: T::NAMES, rows: 0 });
+        let view = match view {
+            Some(v) => {
+                let ids = v.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
+                let sequences = vec![0; ids.len()];
+                Some((Box::new(v) as Box<dyn Any + Send>, ids, sequences))
+            }
+            None => None,
+        };
+        self.tables.push(TableChannels { encoder: Box::new(encoder), channels, rows: 0, view });
         Ok(McapTable(self.tables.len() - 1))
     }
 
-    /// Writes `rows` of `table` (registered for `T`): one message per group and row.
+    /// Adds `c`'s schema and channel; returns the channel's id.
+    fn add_channel(&mut self, c: &ChannelSpec) -> Result<u16, Error> {
+        let schema = self.writer.add_schema(&c.schema_name, &c.schema_encoding, &c.schema).map_err(mcap_err(&self.path))?;
+        self.writer.add_channel(schema, &c.topic, &c.message_encoding, &BTreeMap::new()).map_err(mcap_err(&self.path))
+    }
+
+    /// Writes `rows` of `table` (registered for `T`): one message per group and
+    /// row, then the row's view messages.
     ///
     /// # Errors
-    /// [`Error::Io`] when writing fails.
-    pub fn write<T: McapRows>(&mut self, table: McapTable, rows: &[T]) -> Result<(), Error> {
+    /// [`Error::Io`] when writing fails or `table` was registered for another row type.
+    pub fn write<T: McapRows + 'static>(&mut self, table: McapTable, rows: &[T]) -> Result<(), Error> {
         let columns = T::columns(rows);
-        for i in 0..rows.len() {
-            self.write_row(table, &columns, i)?;
+        for (i, row) in rows.iter().enumerate() {
+            self.write_row(table, &columns, i, row)?;
         }
         Ok(())
     }
@@ -134,55 +148,63 @@ impl McapFile {
     /// order of `t`; on a tie `a`'s row first): `simulate`'s samples and events.
     ///
     /// # Errors
-    /// [`Error::Io`] when writing fails.
-    pub fn write_merged<A: McapRows, B: McapRows>(&mut self, a: (McapTable, &[A]), b: (McapTable, &[B])) -> Result<(), Error> {
+    /// [`Error::Io`] when writing fails or a table was registered for another row type.
+    pub fn write_merged<A: McapRows + 'static, B: McapRows + 'static>(
+        &mut self,
+        a: (McapTable, &[A]),
+        b: (McapTable, &[B]),
+    ) -> Result<(), Error> {
         let (ca, cb) = (A::columns(a.1), B::columns(b.1));
-        let (ta, tb) = (self.tables[a.0.0].t, self.tables[b.0.0].t);
         let time = |t: usize, cols: &[Column], i: usize| match &cols[t] {
             Column::F64(v) => v[i],
             _ => f64::NAN,
         };
+        let (ta, tb) = (A::NAMES.iter().position(|n| *n == "t").unwrap_or(0), B::NAMES.iter().position(|n| *n == "t").unwrap_or(0));
         let (mut i, mut j) = (0, 0);
         while i < a.1.len() || j < b.1.len() {
             let take_b = i == a.1.len() || (j < b.1.len() && time(tb, &cb, j) < time(ta, &ca, i));
             if take_b {
-                self.write_row(b.0, &cb, j)?;
+                self.write_row(b.0, &cb, j, &b.1[j])?;
                 j += 1;
             } else {
-                self.write_row(a.0, &ca, i)?;
+                self.write_row(a.0, &ca, i, &a.1[i])?;
                 i += 1;
             }
         }
         Ok(())
     }
 
-    /// Writes row `i` of `columns` (a table's columns): its message on each channel.
-    fn write_row(&mut self, table: McapTable, columns: &[Column], i: usize) -> Result<(), Error> {
-        let tc = &mut self.tables[table.0];
-        let t = match &columns[tc.t] {
-            Column::F64(v) => v[i],
-            _ => f64::NAN,
+    /// Writes row `i` of `columns` (`T`'s columns of a batch whose row `i` is
+    /// `row`): its message on each channel, then its view's.
+    fn write_row<T: McapRows + 'static>(&mut self, table: McapTable, columns: &[Column], i: usize, row: &T) -> Result<(), Error> {
+        let wrong = || Error::Io {
+            path: self.path.clone(),
+            source: std::io::Error::other(format!("table {} written with rows of another type", T::TABLE)),
         };
-        // Nanoseconds of simulated time; a negative or NaN time (never written) is 0.
-        let ns = (t * 1e9).round() as u64;
+        let tc = &mut self.tables[table.0];
+        let Some(encoder) = tc.encoder.downcast_mut::<RowEncoder<T>>() else { return Err(wrong()) };
+        let ns = log_time_ns(encoder.time(columns, i));
         let sequence = tc.rows;
         tc.rows = tc.rows.wrapping_add(1);
-        for (channel, indices) in &tc.channels {
-            let buf = &mut self.buf;
-            buf.clear();
-            buf.extend_from_slice(b"{\"t\":");
-            push_value(buf, &columns[tc.t], i);
-            for &c in indices {
-                buf.extend_from_slice(b",\"");
-                buf.extend_from_slice(tc.names[c].as_bytes());
-                buf.extend_from_slice(b"\":");
-                push_value(buf, &columns[c], i);
+        let writer = &mut self.writer;
+        let mut result = Ok(());
+        encoder.encode(columns, i, &mut |g, bytes| {
+            if result.is_ok() {
+                let header = MessageHeader { channel_id: tc.channels[g], sequence, log_time: ns, publish_time: ns };
+                result = writer.write_to_known_channel(&header, bytes);
             }
-            buf.push(b'}');
-            let header = MessageHeader { channel_id: *channel, sequence, log_time: ns, publish_time: ns };
-            self.writer.write_to_known_channel(&header, buf).map_err(mcap_err(&self.path))?;
+        });
+        if let Some((view, ids, sequences)) = &mut tc.view {
+            let Some(view) = view.downcast_mut::<Box<dyn McapView<T>>>() else { return Err(wrong()) };
+            view.messages(row, &mut |c, bytes| {
+                if result.is_ok() {
+                    let header = MessageHeader { channel_id: ids[c], sequence: sequences[c], log_time: ns, publish_time: ns };
+                    sequences[c] = sequences[c].wrapping_add(1);
+                    result = writer.write_to_known_channel(&header, bytes);
+                }
+            });
         }
-        Ok(())
+        result.map_err(mcap_err(&self.path))
     }
 
     /// Closes the chunk being built (written whole) and flushes the file to the
@@ -207,39 +229,34 @@ impl McapFile {
     }
 }
 
-/// Appends value `i` of `c` as JSON: a float with the CSV's digits (`null` for
-/// NaN and infinities), an integer, `true`/`false`, a string escaped.
-fn push_value(buf: &mut Vec<u8>, c: &Column, i: usize) {
-    match c {
-        Column::F64(v) if v[i].is_finite() => crate::csv::push_f64(buf, v[i]),
-        Column::F64(_) => buf.extend_from_slice(b"null"),
-        Column::I64(v) => buf.extend_from_slice(itoa::Buffer::new().format(v[i]).as_bytes()),
-        Column::Bool(v) => buf.extend_from_slice(if v[i] { b"true" } else { b"false" }),
-        // Writing a string into a Vec cannot fail.
-        Column::Str(v) => serde_json::to_writer(&mut *buf, &v[i]).unwrap_or_default(),
-    }
-}
-
 /// One table written as an MCAP file as a run produces it (`run` and `pil` with
 /// `--format mcap`): rows wait in memory until [`STREAM_CHUNK_ROWS`] have come
 /// (or [`McapStream::flush`]), then go out as one chunk, flushed to the
 /// operating system at once, so a process killed outright keeps every chunk
 /// before (a linear reader gets them: [`read_mcap`], `painleve.load`, the Python
 /// `mcap` package's `NonSeekingReader`).
-pub struct McapStream<T: McapRows> {
+pub struct McapStream<T: McapRows + 'static> {
     file: McapFile,
     table: McapTable,
     pending: Vec<T>,
 }
 
-impl<T: McapRows> McapStream<T> {
+impl<T: McapRows + 'static> McapStream<T> {
     /// Starts the file `file` (at `path`, for error messages) with `T`'s table.
     ///
     /// # Errors
     /// [`Error::Io`] when the header, schemas or channels cannot be written.
     pub fn new(path: PathBuf, file: File) -> Result<Self, Error> {
+        Self::with_view(path, file, None)
+    }
+
+    /// [`McapStream::new`], with `view`'s channels and messages after each row's ([`McapView`]).
+    ///
+    /// # Errors
+    /// As [`McapStream::new`].
+    pub fn with_view(path: PathBuf, file: File, view: Option<Box<dyn McapView<T>>>) -> Result<Self, Error> {
         let mut file = McapFile::new(path, file, None)?;
-        let table = file.add_table::<T>()?;
+        let table = file.add_table_with_view::<T>(view)?;
         file.flush()?;
         Ok(Self { file, table, pending: Vec::with_capacity(STREAM_CHUNK_ROWS) })
     }

@@ -1,0 +1,144 @@
+//! The channels of a trace and their messages, apart from where they go: an
+//! MCAP file ([`super::McapFile`]) or a live stream (the `arm-view` crate's
+//! Foxglove WebSocket server). Both take their channels and bytes from here,
+//! so a live viewer gets exactly the file's messages.
+//!
+//! - [`ChannelSpec`]: a channel's topic, schema and encodings.
+//! - [`RowEncoder`]: a table's own channels, one per signal group
+//!   ([`McapRows::GROUPS`]), a JSON message per row and group.
+//! - [`McapView`]: channels drawn from a table's rows besides its own (the
+//!   arm's frames, 3D scene and log in Foxglove's schemas).
+
+use std::marker::PhantomData;
+
+use super::{McapRows, schema::schema_json};
+use crate::Column;
+
+/// One channel: its topic, its schema (name, encoding and bytes) and its
+/// messages' encoding, as an MCAP Schema and Channel record hold them
+/// (<https://mcap.dev/spec#channel-op0x04>).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChannelSpec {
+    /// The topic (`/state`, `/tf`).
+    pub topic: String,
+    /// The schema's name (`painleve.State`, `foxglove.FrameTransforms`).
+    pub schema_name: String,
+    /// The schema's encoding (`jsonschema`, `protobuf`).
+    pub schema_encoding: String,
+    /// The schema itself (a JSON Schema's text, a protobuf `FileDescriptorSet`).
+    pub schema: Vec<u8>,
+    /// The messages' encoding (`json`, `protobuf`).
+    pub message_encoding: String,
+}
+
+/// Messages drawn from a table's rows besides the table's own: the arm's
+/// frames, 3D scene and log for Foxglove (`arm-view`). The writer calls
+/// [`McapView::messages`] after each row's own messages, with the row's log
+/// time, so the file stays in order of time.
+pub trait McapView<T>: Send {
+    /// The view's channels, registered once, after the table's own.
+    fn channels(&self) -> Vec<ChannelSpec>;
+    /// The messages of `row` (none, one or several), each given to `emit` as
+    /// (its channel's index in [`McapView::channels`], its bytes). A message's
+    /// log time is the row's time.
+    fn messages(&mut self, row: &T, emit: &mut dyn FnMut(usize, &[u8]));
+}
+
+/// The JSON messages of a table's rows, one per signal group: the channels
+/// [`RowEncoder::channels`] and, per row, [`RowEncoder::encode`]. A message is
+/// a JSON object with the row's time `t` (s) first and then the group's
+/// columns by the CSV's names; floats with the CSV's digits (`null` for NaN
+/// and infinities), integers, `true`/`false`, strings escaped.
+pub struct RowEncoder<T: McapRows> {
+    channels: Vec<ChannelSpec>,
+    /// The column indices of each group, in its messages' order.
+    groups: Vec<Vec<usize>>,
+    /// The index of column `t`.
+    t: usize,
+    buf: Vec<u8>,
+    rows: PhantomData<fn(&T)>,
+}
+
+impl<T: McapRows> RowEncoder<T> {
+    /// The encoder of `T`'s table.
+    ///
+    /// # Errors
+    /// A message when `T` has no column `t`, or its groups name a column it
+    /// lacks or leave one out (a bug of the row type, reported as an error).
+    pub fn new() -> Result<Self, String> {
+        let t = T::NAMES.iter().position(|n| *n == "t").ok_or_else(|| format!("table {}: no column `t`", T::TABLE))?;
+        let grouped: usize = T::GROUPS.iter().map(|g| g.columns.len()).sum();
+        if grouped + 1 != T::NAMES.len() {
+            return Err(format!("table {}: its groups hold {grouped} columns besides t, not {}", T::TABLE, T::NAMES.len() - 1));
+        }
+        let mut channels = Vec::with_capacity(T::GROUPS.len());
+        let mut groups = Vec::with_capacity(T::GROUPS.len());
+        for g in T::GROUPS {
+            let indices = g
+                .columns
+                .iter()
+                .map(|c| T::NAMES.iter().position(|n| n == c).ok_or_else(|| format!("group {}: no column `{c}`", g.topic)))
+                .collect::<Result<Vec<_>, _>>()?;
+            channels.push(ChannelSpec {
+                topic: g.topic.to_string(),
+                schema_name: g.schema.to_string(),
+                schema_encoding: "jsonschema".into(),
+                schema: schema_json(T::NAMES, T::KINDS, g)?,
+                message_encoding: "json".into(),
+            });
+            groups.push(indices);
+        }
+        Ok(Self { channels, groups, t, buf: Vec::with_capacity(1024), rows: PhantomData })
+    }
+
+    /// The table's channels, one per group, in [`McapRows::GROUPS`]' order.
+    pub fn channels(&self) -> &[ChannelSpec] {
+        &self.channels
+    }
+
+    /// The time of row `i` of `columns` (`T`'s columns), s; NaN when `t` is not a float column.
+    pub fn time(&self, columns: &[Column], i: usize) -> f64 {
+        match &columns[self.t] {
+            Column::F64(v) => v[i],
+            _ => f64::NAN,
+        }
+    }
+
+    /// The messages of row `i` of `columns` (`T`'s columns), one per group in
+    /// order, each given to `emit` as (channel index, bytes).
+    pub fn encode(&mut self, columns: &[Column], i: usize, emit: &mut dyn FnMut(usize, &[u8])) {
+        for (g, indices) in self.groups.iter().enumerate() {
+            let buf = &mut self.buf;
+            buf.clear();
+            buf.extend_from_slice(b"{\"t\":");
+            push_value(buf, &columns[self.t], i);
+            for &c in indices {
+                buf.extend_from_slice(b",\"");
+                buf.extend_from_slice(T::NAMES[c].as_bytes());
+                buf.extend_from_slice(b"\":");
+                push_value(buf, &columns[c], i);
+            }
+            buf.push(b'}');
+            emit(g, buf);
+        }
+    }
+}
+
+/// The log time of a row at `t` (s): nanoseconds of simulated time,
+/// `round(t * 1e9)`; a negative or NaN time (never written) is 0.
+pub fn log_time_ns(t: f64) -> u64 {
+    (t * 1e9).round() as u64
+}
+
+/// Appends value `i` of `c` as JSON: a float with the CSV's digits (`null` for
+/// NaN and infinities), an integer, `true`/`false`, a string escaped.
+fn push_value(buf: &mut Vec<u8>, c: &Column, i: usize) {
+    match c {
+        Column::F64(v) if v[i].is_finite() => crate::csv::push_f64(buf, v[i]),
+        Column::F64(_) => buf.extend_from_slice(b"null"),
+        Column::I64(v) => buf.extend_from_slice(itoa::Buffer::new().format(v[i]).as_bytes()),
+        Column::Bool(v) => buf.extend_from_slice(if v[i] { b"true" } else { b"false" }),
+        // Writing a string into a Vec cannot fail.
+        Column::Str(v) => serde_json::to_writer(&mut *buf, &v[i]).unwrap_or_default(),
+    }
+}
