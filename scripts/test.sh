@@ -84,39 +84,17 @@ cycles_log="$(mktemp)"
 python3 scripts/cycles.py --duration 1 --max-cycles 3100 >"$cycles_log" 2>&1 &
 cycles_pid=$!
 
-echo "== the Python package (python/, docs/python.md): pinned tools from python/requirements-dev.txt in"
-echo "   target/venv-python, maturin build (the workspace's target dir) and the wheel installed, pytest against"
-echo "   target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
+echo "== the Python package (python/, docs/python.md): scripts/python-tests.sh builds the manylinux2014 abi3"
+echo "   wheel and the sdist (scripts/build-wheel.sh: maturin with zig's linker, the workspace's target dir),"
+echo "   installs the wheel into a fresh target/venv-wheel without Rust on PATH (timed) and runs pytest there"
+echo "   against target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
 pystarted=$SECONDS
-pyvenv="target/venv-python"
-# A virtual environment holds its own absolute path: one whose target folder was
-# moved or copied (a cache restored elsewhere) no longer runs, and is made afresh.
-if [ ! -x "$pyvenv/bin/pip" ] || ! "$pyvenv/bin/pip" --version >/dev/null 2>&1; then
-  # Debian's python3 has no ensurepip (so no venv) without python3-venv.
-  if ! python3 -c "import ensurepip, venv" 2>/dev/null; then
-    if [ "$(id -u)" = 0 ]; then
-      apt-get update && apt-get install -y python3-venv
-    else
-      echo "python3 with venv is missing: sudo apt-get install -y python3-venv" >&2
-      exit 1
-    fi
-  fi
-  rm -rf "$pyvenv" && python3 -m venv "$pyvenv"
-fi
-"$pyvenv/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-dev.txt
-# The wheel, built by the pinned maturin with cargo in the workspace's target dir (the
-# release artefacts are reused where the features agree; cargo's progress is shown), then
-# installed: the tests run against the installed wheel, not the source tree
-# (python/tests/conftest.py checks where `painleve` comes from).
-rm -rf target/wheels
-"$pyvenv/bin/maturin" build --release -m python/Cargo.toml --interpreter "$pyvenv/bin/python" --out target/wheels
-"$pyvenv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps target/wheels/painleve-*.whl
 log="$(mktemp)"
 pylog="$(mktemp)"
 trap 'rm -f "$log" "$pylog"' EXIT
 pystatus=0
-PAINLEVE_SIL_HOST="$PWD/target/release/sil-host" "$pyvenv/bin/python" -m pytest python/tests -q -p no:cacheprovider 2>&1 | tee "$pylog" || pystatus=$?
-echo "python package: $((SECONDS - pystarted)) s (install and tests)"
+bash scripts/python-tests.sh 2>&1 | tee "$pylog" || pystatus=$?
+echo "python package: $((SECONDS - pystarted)) s (wheel, install and tests)"
 cycles_status=0
 wait "$cycles_pid" || cycles_status=$?
 echo "== the control step's cycle estimate (scripts/cycles.py), exit $cycles_status"
