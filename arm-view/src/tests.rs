@@ -1,0 +1,238 @@
+//! The view's frames against the plant's kinematics, its messages against
+//! Foxglove's published schemas, the layout against the channels.
+
+use foxglove::{
+    Encode,
+    messages::{FrameTransforms, Log, Quaternion, SceneUpdate, Vector3},
+};
+use proptest::prelude::*;
+use prost::Message as _;
+use tables::mcap::McapView;
+
+use crate::{geometry::*, validate::Schema, view::*};
+
+fn rotate(q: &Quaternion, v: [f64; 3]) -> [f64; 3] {
+    // v' = v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z).
+    let u = [q.x, q.y, q.z];
+    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let c = cross(u, v);
+    let cc = cross(u, c);
+    [0, 1, 2].map(|i| v[i] + 2.0 * q.w * c[i] + 2.0 * cc[i])
+}
+
+fn mul(a: &Quaternion, b: &Quaternion) -> Quaternion {
+    Quaternion {
+        w: a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+        x: a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+        y: a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+        z: a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+    }
+}
+
+/// The origin of `frame` in `world`, composing the chain of `tf` from the root.
+fn origin_in_world(tf: &FrameTransforms, frame: &str) -> [f64; 3] {
+    let mut chain = Vec::new();
+    let mut child = frame.to_string();
+    while child != "world" {
+        let t = tf.transforms.iter().find(|t| t.child_frame_id == child).expect("a parent");
+        chain.push(t.clone());
+        child = t.parent_frame_id.clone();
+    }
+    let mut p = [0.0; 3];
+    let mut r = Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 };
+    for t in chain.iter().rev() {
+        let Vector3 { x, y, z } = t.translation.unwrap();
+        let d = rotate(&r, [x, y, z]);
+        p = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
+        r = mul(&r, &t.rotation.unwrap());
+    }
+    p
+}
+
+const PAPER: ArmGeometry = ArmGeometry { l: 0.21, h: 0.3775, v_belt: -0.4 };
+
+proptest! {
+    /// The transforms composed put the tip where the plant's kinematics do
+    /// (docs/model.md: `z_t = l (sin theta1 + sin theta2)`, `z_n = -l (cos theta1
+    /// + cos theta2)`), the elbow `l` from the base, in the plane `y = 0`.
+    #[test]
+    fn the_frames_put_the_tip_where_the_kinematics_do(theta1 in -3.2..3.2f64, theta2 in -3.2..3.2f64, l in 0.05..1.0f64) {
+        let g = ArmGeometry { l, ..PAPER };
+        let tf = frame_transforms(&g, 0.5, theta1, theta2);
+        let tip = origin_in_world(&tf, "tip");
+        let want = g.tip(theta1, theta2);
+        prop_assert!((tip[0] - want[0]).abs() < 1e-12 && tip[1].abs() < 1e-15 && (tip[2] - want[1]).abs() < 1e-12, "{tip:?} against {want:?}");
+        let elbow = origin_in_world(&tf, "link2");
+        prop_assert!(((elbow[0].powi(2) + elbow[2].powi(2)).sqrt() - l).abs() < 1e-12);
+        prop_assert!((elbow[0] - l * theta1.sin()).abs() < 1e-12);
+    }
+}
+
+fn record(t: f64, theta1: f64, theta2: f64, mode: &'static str) -> rig::record::PeriodRecord {
+    let [z_t, z_n] = PAPER.tip(theta1, theta2);
+    rig::record::PeriodRecord {
+        t,
+        theta1,
+        theta1_dot: 0.0,
+        theta2,
+        theta2_dot: 0.0,
+        z_t,
+        z_n,
+        z_t_ref: 0.1,
+        f_t: -6.0,
+        f_n: 10.0,
+        mode,
+        u1_cmd: 0.1,
+        u2_cmd: -0.2,
+        u1_applied: 0.1,
+        u2_applied: -0.2,
+        lift_off_true: mode == "flight",
+        lift_off_detected: mode == "flight",
+        deadline_miss: false,
+        firmware_deadline_miss: false,
+        overruns: 0,
+        status: 0,
+    }
+}
+
+/// Every message of a run's view checks against the schema its channel
+/// carries (the SDK's published descriptors), and decodes to what was drawn:
+/// a frame every 10 ms of 1 ms rows, a log line per change.
+#[test]
+fn a_runs_view_messages_check_against_foxglove_schemas() {
+    let mut view = ArmView::new(PAPER);
+    let channels = McapView::<rig::record::PeriodRecord>::channels(&view);
+    let names: Vec<&str> = channels.iter().map(|c| c.schema_name.as_str()).collect();
+    assert_eq!(names, ["foxglove.FrameTransforms", "foxglove.SceneUpdate", "foxglove.Log"]);
+    let schemas: Vec<Schema> = channels.iter().map(|c| Schema::parse(&c.schema).unwrap()).collect();
+    let mut seen = [0usize; 3];
+    let mut decoded_logs = Vec::new();
+    for k in 0..100 {
+        let t = k as f64 * 1e-3;
+        let mode = if (40..60).contains(&k) { "flight" } else { "sliding" };
+        let r = record(t, 0.3 + 0.001 * k as f64, 1.2, mode);
+        view.messages(&r, &mut |c, bytes| {
+            schemas[c].check(&channels[c].schema_name, bytes).unwrap_or_else(|e| panic!("period {k}, {}: {e}", channels[c].topic));
+            seen[c] += 1;
+            match c {
+                0 => {
+                    let tf = FrameTransforms::decode(bytes).unwrap();
+                    let tip = origin_in_world(&tf, "tip");
+                    assert!((tip[0] - r.z_t).abs() < 1e-12 && (tip[2] - r.z_n).abs() < 1e-12);
+                }
+                1 => {
+                    let s = SceneUpdate::decode(bytes).unwrap();
+                    let force = s.entities.iter().find(|e| e.id == "force").unwrap();
+                    let a = &force.arrows[0];
+                    let length = a.shaft_length + a.head_length;
+                    assert!((length - 0.01 * (6.0f64.hypot(10.0))).abs() < 1e-12, "the arrow is |f| at 0.01 m/N");
+                }
+                _ => decoded_logs.push(Log::decode(bytes).unwrap()),
+            }
+        });
+    }
+    assert_eq!(seen[..2], [10, 10], "100 rows of 1 ms: a frame and a scene every 10 ms");
+    let messages: Vec<&str> = decoded_logs.iter().map(|l| l.message.as_str()).collect();
+    assert_eq!(decoded_logs.len(), 5, "start, lift-off (true and detected), touchdown (true and detected): {messages:?}");
+    assert!(messages[1].starts_with("lift-off (true)") && decoded_logs[1].timestamp.unwrap().nsec() == 40_000_000);
+}
+
+/// A message that breaks the schema is caught: an undeclared field, a wrong
+/// wire type, a cut message (the checker can fail).
+#[test]
+fn the_schema_check_catches_broken_messages() {
+    let c = channel::<Log>(LOG_TOPIC);
+    let schema = Schema::parse(&c.schema).unwrap();
+    let mut good = Vec::new();
+    Encode::encode(&crate::log::line(1.5, foxglove::messages::log::Level::Warning, "plant", "lift-off".into()), &mut good).unwrap();
+    schema.check("foxglove.Log", &good).unwrap();
+    let mut unknown = good.clone();
+    unknown.extend_from_slice(&[(99 << 3) as u8 | 0, 1]);
+    assert!(schema.check("foxglove.Log", &unknown).is_err());
+    let cut = &good[..good.len() - 1];
+    assert!(schema.check("foxglove.Log", cut).is_err());
+    // Field 2 (level, an enum) sent as a 64-bit value.
+    let mut wrong = good.clone();
+    wrong.extend_from_slice(&[(2 << 3) | 1, 0, 0, 0, 0, 0, 0, 0, 0]);
+    assert!(schema.check("foxglove.Log", &wrong).unwrap_err().contains("wire type"));
+    // An undeclared log level.
+    let mut level = good.clone();
+    level.extend_from_slice(&[2 << 3, 77]);
+    assert!(schema.check("foxglove.Log", &level).unwrap_err().contains("not a value"));
+    assert!(schema.check("foxglove.Nothing", &good).is_err());
+}
+
+/// The belt's stripes move at `v_belt`: between two frames `dt` apart their
+/// offset moves by `v_belt dt` (modulo the spacing).
+#[test]
+fn the_belts_stripes_move_at_the_belt_speed() {
+    let stripe_x = |t: f64| {
+        let s = crate::scene::scene_update(
+            &PAPER,
+            &crate::scene::Instant { t, tip: [0.0, -0.3], force: [0.0, 0.0], mode: "sliding", path: &[] },
+        );
+        let belt = s.entities.iter().find(|e| e.id == "belt").unwrap();
+        belt.cubes[1].pose.unwrap().position.unwrap().x
+    };
+    let dt = 0.01;
+    let moved = (stripe_x(0.5 + dt) - stripe_x(0.5)).rem_euclid(crate::scene::STRIPE_SPACING_M);
+    let want = (PAPER.v_belt * dt).rem_euclid(crate::scene::STRIPE_SPACING_M);
+    assert!((moved - want).abs() < 1e-12, "{moved} against {want}");
+}
+
+/// The shipped layout shows the view's channels and the tables' columns: its
+/// 3D panel's topics, its plots' `topic.field` paths and its log panel's topic
+/// are channels of a run's `trace.mcap` (the table's JSON schemas, the view's).
+#[test]
+fn the_layout_names_channels_and_fields_a_run_writes() {
+    let layout: serde_json::Value = serde_json::from_str(crate::LAYOUT).unwrap();
+    let encoder = tables::mcap::RowEncoder::<rig::record::PeriodRecord>::new().unwrap();
+    let fields = |topic: &str| -> Option<Vec<String>> {
+        let c = encoder.channels().iter().find(|c| c.topic == topic)?;
+        let schema: serde_json::Value = serde_json::from_slice(&c.schema).ok()?;
+        Some(schema["properties"].as_object()?.keys().cloned().collect())
+    };
+    let view_topics = [TF_TOPIC, SCENE_TOPIC, LOG_TOPIC];
+    let panels = layout["configById"].as_object().unwrap();
+    let mut plotted = 0;
+    for (id, config) in panels {
+        match id.split('!').next().unwrap() {
+            "3D" => {
+                for topic in config["topics"].as_object().unwrap().keys() {
+                    assert!(view_topics.contains(&topic.as_str()), "{id}: {topic}");
+                }
+                assert_eq!(config["followTf"], "world");
+            }
+            "Plot" => {
+                for path in config["paths"].as_array().unwrap() {
+                    let path = path["value"].as_str().unwrap();
+                    let (topic, field) = path.rsplit_once('.').unwrap();
+                    let have = fields(topic).unwrap_or_else(|| panic!("{id}: no channel {topic}"));
+                    assert!(have.iter().any(|f| f == field), "{id}: {topic} has no field {field}: {have:?}");
+                    plotted += 1;
+                }
+            }
+            "RosOut" => assert_eq!(config["topicToRender"], LOG_TOPIC),
+            other => panic!("unexpected panel {other}"),
+        }
+        assert!(layout["layout"].to_string().contains(&format!("\"{id}\"")), "{id} is placed in the layout");
+    }
+    assert_eq!(plotted, 6);
+}
+
+/// The schema a channel carries is the SDK's own (`foxglove.<Type>`, protobuf).
+#[test]
+fn the_channels_carry_the_sdks_schemas() {
+    for (c, want) in [
+        (channel::<FrameTransforms>(TF_TOPIC), FrameTransforms::get_schema().unwrap()),
+        (channel::<SceneUpdate>(SCENE_TOPIC), SceneUpdate::get_schema().unwrap()),
+        (channel::<Log>(LOG_TOPIC), Log::get_schema().unwrap()),
+    ] {
+        assert_eq!(
+            (c.schema_name.as_str(), c.schema_encoding.as_str(), c.message_encoding.as_str()),
+            (want.name.as_str(), "protobuf", "protobuf")
+        );
+        assert_eq!(c.schema, want.data.as_ref());
+        assert!(Schema::parse(&c.schema).unwrap().check(&c.schema_name, &[]).is_ok(), "an empty message is valid");
+    }
+}
