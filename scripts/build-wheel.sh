@@ -16,8 +16,8 @@
 # version but Python's own (`Py*`, resolved by the interpreter) and weak ones (looked up at run time).
 #
 # Usage: scripts/build-wheel.sh [--no-sdist]
-# The tools (maturin, ziglang, auditwheel: python/requirements-build.txt) come from the virtual
-# environment $PAINLEVE_BUILD_VENV (default target/venv-python; scripts/python-tests.sh makes it).
+# The tools (maturin, ziglang, auditwheel: python/requirements-build.txt, pinned, from PyPI) come from
+# the virtual environment $PAINLEVE_BUILD_VENV (default target/venv-python), made if missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -26,16 +26,25 @@ sdist=1
 for a in "$@"; do
   case "$a" in
     --no-sdist) sdist=0 ;;
-    -h | --help) sed -n '2,20p' "$0"; exit 0 ;;
+    -h | --help) awk 'NR > 1 && /^#/ { print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) die "unknown argument '$a' (usage: scripts/build-wheel.sh [--no-sdist])" ;;
   esac
 done
 
 [ "$(uname -m)" = x86_64 ] && [ "$(uname -s)" = Linux ] || die "this script builds the x86_64 Linux wheel; here is $(uname -s) $(uname -m)"
+# The tools: the pinned python/requirements-build.txt in $PAINLEVE_BUILD_VENV (default
+# target/venv-python), made here if missing. A virtual environment holds its own absolute path: one
+# whose target folder was moved or copied (a cache restored elsewhere) no longer runs, and is made afresh.
 tools="${PAINLEVE_BUILD_VENV:-target/venv-python}"
-tools="$(cd "$tools" 2>/dev/null && pwd)" || die "no virtual environment at ${PAINLEVE_BUILD_VENV:-target/venv-python}: python3 -m venv target/venv-python && target/venv-python/bin/pip install -r python/requirements-build.txt"
+if [ ! -x "$tools/bin/pip" ] || ! "$tools/bin/pip" --version >/dev/null 2>&1; then
+  python3 -c "import ensurepip, venv" 2>/dev/null || die "python3 with venv is missing: apt-get install -y python3-venv"
+  rm -rf "$tools" && python3 -m venv "$tools" || die "could not make a virtual environment at $tools"
+fi
+"$tools/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-build.txt \
+  || die "pip could not install python/requirements-build.txt into $tools"
+tools="$(cd "$tools" && pwd)"
 for exe in maturin auditwheel python; do
-  [ -x "$tools/bin/$exe" ] || die "$tools/bin/$exe is missing: $tools/bin/pip install -r python/requirements-build.txt"
+  [ -x "$tools/bin/$exe" ] || die "$tools/bin/$exe is missing after installing python/requirements-build.txt"
 done
 zig="$("$tools/bin/python" -c 'import os, ziglang; print(os.path.join(os.path.dirname(ziglang.__file__), "zig"))' 2>/dev/null)" \
   || die "the ziglang package is missing from $tools: $tools/bin/pip install -r python/requirements-build.txt"

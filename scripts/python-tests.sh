@@ -26,16 +26,8 @@ if ! python3 -c "import ensurepip, venv" 2>/dev/null; then
   fi
 fi
 
-# 1. The build tools. A virtual environment holds its own absolute path: one whose target folder
-# was moved or copied (a cache restored elsewhere) no longer runs, and is made afresh.
-build_venv="target/venv-python"
-if [ ! -x "$build_venv/bin/pip" ] || ! "$build_venv/bin/pip" --version >/dev/null 2>&1; then
-  rm -rf "$build_venv" && python3 -m venv "$build_venv"
-fi
-"$build_venv/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-build.txt
-
-# 2. The wheel and the sdist.
-PAINLEVE_BUILD_VENV="$build_venv" bash scripts/build-wheel.sh
+# 1 and 2. The build tools in target/venv-python (made if missing), the wheel and the sdist.
+PAINLEVE_BUILD_VENV=target/venv-python bash scripts/build-wheel.sh
 wheel="$(ls target/wheels/painleve-*-cp39-abi3-manylinux_2_17_x86_64.manylinux2014_x86_64.whl)"
 
 # 3. A fresh environment without Rust.
