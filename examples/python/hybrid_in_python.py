@@ -181,6 +181,10 @@ class HybridLaw:
         return np.array([tr[0].angle, tr[1].angle]), np.array([tr[0].rate, tr[1].rate])
 
     def __call__(self, t: float, y: painleve.Sensed) -> Tuple[float, float]:
+        if not y.valid:
+            # A frame with a sensor flagged or a count out of range (NaN values): the
+            # firmware holds its previous command and does not step its estimator.
+            return tuple(self.applied) if self.started else (0.0, 0.0)
         if not self.started:
             self._start(y)
         q, qd = self._estimate(y)
