@@ -11,7 +11,7 @@
 //! - [`ArmView`], [`EventLog`]: views of the CLI's tables
 //!   ([`tables::mcap::McapView`]) that `trace.mcap` carries beside the tables'
 //!   own JSON channels.
-//! - [`LiveTable`]: the same channels and bytes served live over the Foxglove
+//! - [`LiveServer`], [`LiveTable`]: the same channels and bytes served live over the Foxglove
 //!   WebSocket protocol (`sil-host run --live`), paced to real time or a rate.
 //! - [`LAYOUT`]: the Foxglove layout that shows them (`docs/foxglove/layout.json`:
 //!   a 3D panel, plots of `z_t`, `f_n` and the torques, the log).

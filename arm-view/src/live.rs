@@ -11,9 +11,19 @@
 //! falls behind loses messages (the SDK's bounded queue per client), the run
 //! never waits for one.
 
-use std::{net::SocketAddr, sync::Arc, time::Duration};
+use std::{
+    net::SocketAddr,
+    sync::{
+        Arc,
+        atomic::{AtomicUsize, Ordering},
+    },
+    time::Duration,
+};
 
-use foxglove::{Context, RawChannel, Schema, WebSocketServerHandle, websocket::Capability};
+use foxglove::{
+    Context, RawChannel, Schema, WebSocketServerHandle,
+    websocket::{Capability, ChannelView, Client, ServerListener},
+};
 use tables::mcap::{ChannelSpec, McapRows, McapView, RowEncoder, log_time_ns};
 
 /// Why a live server could not start.
@@ -46,24 +56,39 @@ pub struct LiveServer {
     _context: Arc<Context>,
     server: Option<WebSocketServerHandle>,
     channels: Vec<Arc<RawChannel>>,
-    rate: f64,
+    rate: Option<f64>,
     /// The wall clock and the simulated time of the first row.
     origin: Option<(std::time::Instant, f64)>,
+    /// Subscriptions made by viewers so far.
+    subscriptions: Arc<AtomicUsize>,
+}
+
+/// Counts the viewers' subscriptions ([`LiveServer::wait_for_viewer`]).
+struct Subscriptions(Arc<AtomicUsize>);
+
+impl ServerListener for Subscriptions {
+    fn on_subscribe(&self, _client: Client, _channel: ChannelView) {
+        self.0.fetch_add(1, Ordering::SeqCst);
+    }
 }
 
 impl LiveServer {
     /// Starts the server on `addr` (port 0: any free port, [`LiveServer::addr`]
-    /// tells which) with `channels`, paced at `rate` (1: real time).
+    /// tells which) with `channels`, paced at `rate` (1: real time; `None`: not
+    /// paced, for a run the wall clock already paces).
     ///
     /// # Errors
     /// [`LiveError::Rate`] for a rate that is not positive and finite;
     /// [`LiveError::Start`] when the address cannot be bound;
     /// [`LiveError::Channel`] when a channel cannot be made.
-    pub fn start(addr: SocketAddr, channels: &[ChannelSpec], rate: f64) -> Result<Self, LiveError> {
-        if !(rate.is_finite() && rate > 0.0) {
+    pub fn start(addr: SocketAddr, channels: &[ChannelSpec], rate: Option<f64>) -> Result<Self, LiveError> {
+        if let Some(rate) = rate
+            && !(rate.is_finite() && rate > 0.0)
+        {
             return Err(LiveError::Rate(rate));
         }
         let context = Context::new();
+        let subscriptions = Arc::new(AtomicUsize::new(0));
         let made = channels
             .iter()
             .map(|c| {
@@ -80,9 +105,10 @@ impl LiveServer {
             .name(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION")))
             .bind(addr.ip().to_string(), addr.port())
             .capabilities([Capability::Time])
+            .listener(Arc::new(Subscriptions(Arc::clone(&subscriptions))))
             .start_blocking()
             .map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
-        Ok(Self { _context: context, server: Some(server), channels: made, rate, origin: None })
+        Ok(Self { _context: context, server: Some(server), channels: made, rate, origin: None, subscriptions })
     }
 
     /// The address the server listens on (its port the one bound).
@@ -95,11 +121,28 @@ impl LiveServer {
         self.server.as_ref().map_or(0, WebSocketServerHandle::client_count)
     }
 
-    /// Waits until the row at `t` (s) is due ([`LiveServer`]'s pacing) and
-    /// sets the server's clock to it.
+    /// Waits at most `timeout` for a viewer to subscribe to a channel, then
+    /// `settle` more for its other subscriptions (the Foxglove app subscribes
+    /// to a layout's topics one after the other), so that the run's first
+    /// messages reach it; returns early when `stop` is set. Whether a viewer came.
+    pub fn wait_for_viewer(&self, timeout: Duration, settle: Duration, stop: &std::sync::atomic::AtomicBool) -> bool {
+        let deadline = std::time::Instant::now() + timeout;
+        while self.subscriptions.load(Ordering::SeqCst) == 0 {
+            if std::time::Instant::now() >= deadline || stop.load(Ordering::Relaxed) {
+                return false;
+            }
+            // Polled: the SDK calls the listener on its own runtime's thread.
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(settle);
+        true
+    }
+
+    /// Waits until the row at `t` (s) is due ([`LiveServer`]'s pacing; a time
+    /// already past is not waited for) and sets the server's clock to it.
     pub fn pace(&mut self, t: f64) {
         let (wall0, t0) = *self.origin.get_or_insert((std::time::Instant::now(), t));
-        let due = (t - t0) / self.rate;
+        let due = self.rate.map_or(0.0, |rate| (t - t0) / rate);
         if due.is_finite() && due > 0.0 {
             let elapsed = wall0.elapsed().as_secs_f64();
             if due > elapsed {
@@ -129,46 +172,42 @@ impl Drop for LiveServer {
     }
 }
 
-/// A table's rows shown live: its own channels and its view's, row by row.
+/// A table's rows shown live: its own channels and its view's, row by row, on
+/// a [`LiveServer`] (one server may show several tables: `simulate`'s samples
+/// and events).
 pub struct LiveTable<T: McapRows + 'static> {
-    server: LiveServer,
     encoder: RowEncoder<T>,
     view: Box<dyn McapView<T>>,
-    /// The index of the view's first channel.
+    /// The index of the table's first channel on the server, and of its view's.
+    first: usize,
     view_first: usize,
 }
 
 impl<T: McapRows + 'static> LiveTable<T> {
-    /// Starts a server on `addr`, paced at `rate`, with `T`'s channels and `view`'s.
+    /// `T`'s table with `view`: its channels (the table's groups, then the
+    /// view's) appended to `channels`, the list the server is started with.
     ///
     /// # Errors
-    /// [`LiveError`] as [`LiveServer::start`]; [`LiveError::Channel`] when
-    /// `T`'s groups are inconsistent (a bug of the row type).
-    pub fn start(addr: SocketAddr, rate: f64, view: Box<dyn McapView<T>>) -> Result<Self, LiveError> {
+    /// [`LiveError::Channel`] when `T`'s groups are inconsistent (a bug of the row type).
+    pub fn new(view: Box<dyn McapView<T>>, channels: &mut Vec<ChannelSpec>) -> Result<Self, LiveError> {
         let encoder = RowEncoder::<T>::new().map_err(|what| LiveError::Channel { topic: T::TABLE.into(), what })?;
-        let mut channels = encoder.channels().to_vec();
+        let first = channels.len();
+        channels.extend_from_slice(encoder.channels());
         let view_first = channels.len();
         channels.extend(view.channels());
-        let server = LiveServer::start(addr, &channels, rate)?;
-        Ok(Self { server, encoder, view, view_first })
+        Ok(Self { encoder, view, first, view_first })
     }
 
-    /// The server (its address, its viewers).
-    pub fn server(&self) -> &LiveServer {
-        &self.server
-    }
-
-    /// Waits until `row` is due and sends its messages: the table's, then the view's.
-    pub fn push(&mut self, row: &T)
+    /// Waits until `row` is due on `server` and sends its messages: the table's, then the view's.
+    pub fn push(&mut self, server: &mut LiveServer, row: &T)
     where
         T: Clone,
     {
         let columns = T::columns(std::slice::from_ref(row));
         let t = self.encoder.time(&columns, 0);
-        self.server.pace(t);
-        let server = &self.server;
-        self.encoder.encode(&columns, 0, &mut |c, bytes| server.send(c, t, bytes));
-        let first = self.view_first;
-        self.view.messages(row, &mut |c, bytes| server.send(first + c, t, bytes));
+        server.pace(t);
+        let (first, view_first) = (self.first, self.view_first);
+        self.encoder.encode(&columns, 0, &mut |c, bytes| server.send(first + c, t, bytes));
+        self.view.messages(row, &mut |c, bytes| server.send(view_first + c, t, bytes));
     }
 }

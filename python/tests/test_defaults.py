@@ -21,6 +21,9 @@ NOT_IN_PYTHON = {
     "rig": "needs the firmware process over iceoryx2",
     "monitors": "needs the firmware process over iceoryx2",
     "monitor-timeout": "needs the firmware process over iceoryx2",
+    "live": "a live Foxglove view of a CLI run; in Python the results are returned (and Foxglove opens trace.mcap)",
+    "live-rate": "the pace of --live",
+    "live-wait": "the wait of --live for a viewer",
 }
 # Arguments of the functions that are not flags.
 NOT_FLAGS = {"progress"}

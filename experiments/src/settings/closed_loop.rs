@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::common::{OutputArgs, ScenarioArgs, StrictArgs};
+use super::common::{LiveArgs, OutputArgs, ScenarioArgs, StrictArgs};
 
 /// The link of `sil-host run --link`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,11 +84,15 @@ pub struct RunArgs {
     /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
     /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
-    /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
-    /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
-    /// docs/rig.md "Outputs").
+    /// /torques, /firmware of JSON messages with JSON schemas, and the arm in
+    /// Foxglove's own schemas: /tf (FrameTransforms), /scene (SceneUpdate), /log
+    /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
+    /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: tables::TableFormat,
+    /// The run shown live in Foxglove.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub live: LiveArgs,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,
@@ -153,11 +157,15 @@ pub struct PilArgs {
     /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
     /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
-    /// /torques, /firmware of JSON messages with JSON schemas, log times in ns of
-    /// simulated time; a zstd chunk per 100 periods, so a killed run keeps its chunks;
-    /// docs/rig.md "Outputs").
+    /// /torques, /firmware of JSON messages with JSON schemas, and the arm in
+    /// Foxglove's own schemas: /tf (FrameTransforms), /scene (SceneUpdate), /log
+    /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
+    /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: tables::TableFormat,
+    /// The run shown live in Foxglove.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub live: LiveArgs,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub strict: StrictArgs,

@@ -16,6 +16,49 @@ pub struct OutputArgs {
     pub json: bool,
 }
 
+/// `--live [ADDR]` and `--live-rate`: a run shown live in Foxglove (`run`,
+/// `pil`, `simulate`; `arm-view::LiveTable`).
+#[derive(Debug, Clone, Copy)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct LiveArgs {
+    /// Serve the run live to the Foxglove app over the Foxglove WebSocket
+    /// protocol on ADDR (default 127.0.0.1:8765, the app's default; port 0: any
+    /// free port), while it runs: the channels of trace.mcap, the arm in 3D
+    /// (/tf, /scene), the plots' channels and the log (/log), with the same
+    /// bytes. In Foxglove: Open connection > Foxglove WebSocket >
+    /// ws://127.0.0.1:8765, and the layout docs/foxglove/layout.json. The run
+    /// is paced by --live-rate; its files do not depend on the viewer.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8765"))]
+    pub live: Option<std::net::SocketAddr>,
+    /// With --live: simulated seconds per wall-clock second (1: real time; 0.1:
+    /// ten times slower, to follow a bounce), in (0, 1000]. A `--realtime` run
+    /// is paced by its own clock and takes only 1.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live"))]
+    pub live_rate: f64,
+    /// With --live: wait at most S seconds, in [0, 3600], for a viewer to
+    /// subscribe before the run starts (then 0.5 s for its other
+    /// subscriptions), so that it sees the run from its first period; 0: start
+    /// at once. The run starts anyway when no viewer comes.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value_t = 0.0, requires = "live"))]
+    pub live_wait: f64,
+}
+
+impl LiveArgs {
+    /// The live view asked for: its address, rate and wait (s).
+    ///
+    /// # Errors
+    /// A message when the rate is not in (0, 1000] or the wait not in [0, 3600].
+    pub fn checked(&self) -> Result<Option<(std::net::SocketAddr, f64, f64)>, String> {
+        if !(self.live_rate > 0.0 && self.live_rate <= 1000.0) {
+            return Err(format!("--live-rate {}: expected simulated seconds per second in (0, 1000]", self.live_rate));
+        }
+        if !(0.0..=3600.0).contains(&self.live_wait) {
+            return Err(format!("--live-wait {}: expected seconds in [0, 3600]", self.live_wait));
+        }
+        Ok(self.live.map(|a| (a, self.live_rate, self.live_wait)))
+    }
+}
+
 /// `--strict`, on every command that simulates.
 #[derive(Debug, Clone, Copy)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]

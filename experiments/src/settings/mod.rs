@@ -12,7 +12,7 @@ mod sweep;
 mod zmax;
 
 pub use self::closed_loop::{FirmwareArgs, PilArgs, QemuLinkArg, RunArgs, RunLink};
-pub use self::common::{OutputArgs, ScenarioArgs, StrictArgs};
+pub use self::common::{LiveArgs, OutputArgs, ScenarioArgs, StrictArgs};
 pub use self::open_loop::{AdmissibleArgs, ModesArgs, PoincareArgs, SimulateArgs};
 pub use self::sensitivity::SensitivityArgs;
 pub use self::sweep::{MergeArgs, SweepArgs};

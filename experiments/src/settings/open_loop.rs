@@ -1,7 +1,7 @@
 //! The arguments of the open-loop commands, on the plant alone: `simulate`,
 //! `admissible`, `modes` and `poincare`.
 
-use super::common::{OutputArgs, StrictArgs};
+use super::common::{LiveArgs, OutputArgs, StrictArgs};
 
 /// `sil-host simulate`.
 #[derive(Debug, Clone)]
@@ -38,9 +38,15 @@ pub struct SimulateArgs {
     /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads
     /// both) or `mcap` (trace.mcap, both tables in one file for Foxglove and ROS 2
     /// tools: channels /state, /contact, /events of JSON messages with JSON schemas,
-    /// log times in ns of simulated time; docs/rig.md "Outputs").
+    /// and the arm in Foxglove's own schemas: /tf (FrameTransforms), /scene
+    /// (SceneUpdate), /log (Log, the events); log times in ns of simulated time;
+    /// docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
     pub format: tables::TableFormat,
+    /// The simulation shown live in Foxglove (its samples and events as they are
+    /// computed, paced by --live-rate).
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub live: LiveArgs,
     /// Relative tolerance of the integrator.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-9))]
     pub rtol: f64,
