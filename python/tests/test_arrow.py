@@ -22,7 +22,7 @@ def folders(tmp_path_factory):
 
 def test_the_arrow_folder_has_the_csv_tables_with_the_same_bits(folders):
     csv_dir, arrow_dir = folders
-    assert sorted(p.name for p in arrow_dir.iterdir()) == ["events.arrow", "summary.json", "trace.arrow", "trace.pdf", "trace.svg"]
+    assert sorted(p.name for p in arrow_dir.iterdir()) == ["events.arrow", "summary.json", "trace.arrow", "trace.html", "trace.pdf", "trace.svg"]
     a, c = painleve.load(arrow_dir), painleve.load(csv_dir)
     assert a.command == c.command == "simulate"
     assert sorted(a.tables) == sorted(c.tables) == ["events", "trace"]

@@ -88,7 +88,7 @@ def assert_equals_csv(messages, csv_table, topics):
 
 def test_simulate_writes_one_mcap_file_equal_to_its_csv_tables(folders):
     csv_dir, mcap_dir = folders
-    assert sorted(p.name for p in mcap_dir.iterdir()) == ["summary.json", "trace.mcap", "trace.pdf", "trace.svg"]
+    assert sorted(p.name for p in mcap_dir.iterdir()) == ["summary.json", "trace.html", "trace.mcap", "trace.pdf", "trace.svg"]
     c = painleve.load(csv_dir)
     messages, summary = by_reader(mcap_dir / "trace.mcap")
     assert set(messages) == SIMULATE_TOPICS

@@ -19,6 +19,7 @@ pub mod plot;
 pub mod streamed_run;
 pub mod sweep;
 pub mod table_out;
+pub mod trace_page;
 
 use clap::Parser;
 

@@ -11,6 +11,7 @@ use crate::{
     error::CliError,
     output::{OutputSet, StreamedTable},
     plot,
+    trace_page::{PageInfo, TracePage},
 };
 use plant::Validity;
 use rig::{
@@ -30,7 +31,8 @@ use rig::{
 /// ([`plot::HistoryEnvelope`]); the progress bar moves every `every` periods,
 /// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
 /// it did, the loop's wall-clock time (s) and the plant's validity counters; the
-/// progress bar is cleared.
+/// progress bar is cleared. Every record also goes to the run's page
+/// (`trace.html`, [`crate::trace_page`]: fixed memory too, returned to be written).
 ///
 /// # Errors
 /// I/O errors of the trace file.
@@ -56,6 +58,7 @@ pub fn run_streamed(
         history: plot::HistoryEnvelope,
         validity: Validity,
         ledger: plant::Ledger,
+        page: TracePage,
     }
     impl RunObserver for Streaming<'_> {
         fn on_finished(&mut self, validity: &Validity) {
@@ -77,6 +80,7 @@ pub fn run_streamed(
                 u: [r.u1_cmd, r.u2_cmd],
                 mode: r.mode,
             });
+            self.page.push(&r.into());
         }
 
         fn on_period(&mut self, k: usize, _n: usize) -> bool {
@@ -95,13 +99,14 @@ pub fn run_streamed(
         history: plot::HistoryEnvelope::default(),
         validity: Validity::default(),
         ledger: plant::Ledger::default(),
+        page: TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport())),
     };
     let (_, failure) = stream_loop(setup, link, &mut observer);
-    let Streaming { stats, history, validity, ledger, .. } = observer;
+    let Streaming { stats, history, validity, ledger, page, .. } = observer;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;
-    Ok(Streamed { stats, history, failure, wall_s, validity, ledger })
+    Ok(Streamed { stats, history, failure, wall_s, validity, ledger, page })
 }
 
 /// What [`run_streamed`] returns: nothing in it grows with the run's length.
@@ -118,4 +123,6 @@ pub struct Streamed {
     pub validity: Validity,
     /// The plant's energy ledger at the end.
     pub ledger: plant::Ledger,
+    /// The run's `trace.html`, gathered (fixed memory), to be written.
+    pub page: TracePage,
 }

@@ -37,7 +37,9 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Open-loop simulation (u = 0) of the arm on the belt from one of the paper's
-    /// initial conditions; writes trace.csv, events.csv, trace.svg, summary.json.
+    /// initial conditions; writes trace.csv, events.csv, trace.svg, summary.json and
+    /// trace.html (the arm animated on the belt beside the plots: one self-contained
+    /// page, open it in a browser; docs/rig.md "The animated page").
     #[command(allow_negative_numbers = true)]
     Simulate(SimulateArgs),
     /// Admissible configurations (docs/model.md experiment 2, paper Table II): the ranges
@@ -69,7 +71,10 @@ pub enum Command {
     /// or attached with --attach) against the plant, over iceoryx2 shared memory, in
     /// lockstep (default) or paced by the wall clock (--realtime); sampled at the
     /// control rate with quantised sensors and torques and a zero-order hold.
-    /// Writes trace.csv, summary.json and trace.svg.
+    /// Writes trace.csv, summary.json, trace.svg and trace.html (the arm animated on
+    /// the belt beside the plots, a time slider and play: one self-contained page, no
+    /// network; long runs thinned to at most 5000 frames, as the page says; docs/rig.md
+    /// "The animated page").
     ///
     /// Exit codes: 0 ok; 1 the run stopped early (firmware in its safe state, firmware
     /// process dead or stalled, plant failure; everything up to then is written);
@@ -128,7 +133,7 @@ pub enum Command {
     ///
     /// The worst and median step are reported against the budget, 5 % of the control
     /// period at 168 MHz (8400 at 1 kHz). Writes trace.csv, summary.json, trace.svg,
-    /// instructions.svg and (QEMU) defmt.log.
+    /// trace.html (as run's), instructions.svg and (QEMU) defmt.log.
     ///
     /// Exit codes: 0 ok; 1 the run stopped early (safe state, QEMU or the board dead or
     /// hung, plant failure; everything up to then is written); 2 bad input, no image,

@@ -126,7 +126,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&setup)? else {
         unreachable!("a PIL spec opens a PIL link")
     };
-    let Streamed { stats, history, failure, wall_s, validity, ledger } =
+    let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
         run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, args.format)?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
@@ -137,6 +137,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
+    page.write(&mut out)?;
     let svg = out.stage_figure("instructions.svg")?;
     draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {

@@ -1,11 +1,12 @@
 //! `sil-host run`: a closed-loop SIL run of a scenario.
 //!
 //! Writes `trace.csv` (one row per control period; `trace.arrow` with `--format
-//! arrow`, an Arrow IPC file; `trace.mcap` with `--format mcap`), `summary.json` and
+//! arrow`, an Arrow IPC file; `trace.mcap` with `--format mcap`), `summary.json`,
 //! `trace.svg` (tip position against its reference, normal force, torques and
-//! contact mode against time). A run that stops part way (the firmware in its
-//! safe state or lost, a plant failure, Ctrl-C) still writes every period up to
-//! then and exits with code 1. The trace is streamed to `trace.csv.partial` while
+//! contact mode against time) and `trace.html` (the arm animated on the belt
+//! beside the trace's plots, one self-contained page: [`crate::trace_page`]). A
+//! run that stops part way (the firmware in its safe state or lost, a plant
+//! failure, Ctrl-C) still writes every period up to then and exits with code 1. The trace is streamed to `trace.csv.partial` while
 //! the run goes (flushed every millisecond of wall time) and renamed at the end,
 //! so a plant killed outright (SIGKILL) still leaves its rows on disk.
 
@@ -65,7 +66,8 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
-    let Streamed { stats, history, failure, wall_s, validity, ledger } = run_streamed(&setup, link, &mut out, &progress, 500, args.format)?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
+        run_streamed(&setup, link, &mut out, &progress, 500, args.format)?;
     let firmware_announcement = link.announcement().cloned();
     let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
     match &mut open {
@@ -85,6 +87,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", scenario, &history, stats.last_t())?;
+    page.write(&mut out)?;
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),
         ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),

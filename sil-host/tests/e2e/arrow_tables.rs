@@ -110,7 +110,7 @@ fn an_mcap_file_holds_the_csv_tables_bit_for_bit() {
     simulate("mcap", &m);
     let mut names: Vec<String> = std::fs::read_dir(&m).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     names.sort();
-    assert_eq!(names, ["summary.json", "trace.mcap", "trace.pdf", "trace.svg"]);
+    assert_eq!(names, ["summary.json", "trace.html", "trace.mcap", "trace.pdf", "trace.svg"]);
     let tables = read_mcap(&m.join("trace.mcap")).unwrap();
     assert_eq!(tables.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["trace", "events"]);
     for (name, table) in tables {

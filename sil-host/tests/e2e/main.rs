@@ -38,5 +38,6 @@ mod simulate;
 mod slurm;
 mod sweep;
 mod time_base;
+mod trace_page;
 mod validity;
 mod zmax;

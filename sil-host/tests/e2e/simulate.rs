@@ -22,7 +22,7 @@ fn simulate_writes_trace_events_figure_and_summary() {
     let out = dir.path().join("run");
     let code = run(&["simulate", "--x0", "a", "--duration", "2", "--out", out.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0);
-    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.pdf", "trace.svg"]);
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.html", "trace.pdf", "trace.svg"]);
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "ok");
     assert_eq!(summary["initial_condition"]["name"], "x0a");
@@ -101,7 +101,7 @@ fn a_failed_run_does_not_clobber_a_previous_one() {
     let before = std::fs::read(out.join("summary.json")).unwrap();
     assert_eq!(run(&["simulate", "--mu", "nan", "--out", out.to_str().unwrap()]), 2);
     assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
-    assert_eq!(files_in(out), vec!["events.csv", "summary.json", "trace.csv", "trace.pdf", "trace.svg"]);
+    assert_eq!(files_in(out), vec!["events.csv", "summary.json", "trace.csv", "trace.html", "trace.pdf", "trace.svg"]);
 }
 
 /// Issue 24's example (elbow up, below the critical `mu`, Newton with `e_n = 0.5`):
@@ -238,7 +238,7 @@ fn sigterm_stops_simulate_with_its_outputs_written_and_nothing_left_over() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(143), "{err}");
     assert!(err.contains("stopped by a signal"), "{err}");
-    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.pdf", "trace.svg"]);
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.html", "trace.pdf", "trace.svg"]);
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "stopped");
     assert!(summary["simulated_s"].as_f64().unwrap() < 3000.0);
@@ -260,7 +260,7 @@ fn what_a_killed_command_left_is_removed_by_the_next_one() {
         .unwrap();
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("removed what an interrupted command left"));
-    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.pdf", "trace.svg"]);
+    assert_eq!(files_in(&out), vec!["events.csv", "summary.json", "trace.csv", "trace.html", "trace.pdf", "trace.svg"]);
 }
 
 #[test]

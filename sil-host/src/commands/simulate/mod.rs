@@ -2,7 +2,8 @@
 //!
 //! Writes under `--out`: `trace.csv` (one row per `--sample-dt`), `events.csv`
 //! (every event at its located time), `trace.svg` (`z_t`, `z_n`, `f_n` and the
-//! contact mode against time) and `summary.json`; with `--format arrow` the two
+//! contact mode against time), `trace.html` (the arm animated on the belt beside
+//! the trace's plots: [`crate::trace_page`]) and `summary.json`; with `--format arrow` the two
 //! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns), with
 //! `--format mcap` both are in `trace.mcap` (channels `/state`, `/contact`,
 //! `/events`; [`tables::mcap`]). If the simulation fails part
@@ -17,6 +18,7 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
     table_out::TablesOut,
+    trace_page::{PageInfo, TracePage},
 };
 use plant::SimError;
 
@@ -50,10 +52,13 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // events go into one file, interleaved by time (McapFile).
     let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format)?;
     let mut curves = TraceCurves::default();
+    let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
+    let mut page = TracePage::new(PageInfo::open_loop(&params, &initial_condition.name, &impact_law, sim.e_n));
     let (mut open_loop, row, startup) = OpenLoop::start(prepared, args.sample_dt);
     let mut n_events = startup.len();
     curves.push_events(&startup);
     curves.push(&row);
+    page.push(&(&row).into());
     tables.send(vec![row], startup)?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of OpenLoop::CHUNK_S s of samples (bounded memory) while the clock runs.
@@ -76,6 +81,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         curves.push_events(&new_events);
         for row in &rows {
             curves.push(row);
+            page.push(&row.into());
         }
         (rows, new_events) = tables.send(rows, new_events)?;
         progress.set_position(open_loop.k as u64);
@@ -87,12 +93,13 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // trace.svg
     let svg = out.stage_figure("trace.svg")?;
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
+    page.write(&mut out)?;
 
     let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);
     let files = tables
         .iter()
         .map(String::as_str)
-        .chain(["trace.svg", "trace.pdf", "summary.json"])
+        .chain(["trace.svg", "trace.pdf", crate::trace_page::FILE, "summary.json"])
         .map(|f| out.path(f).display().to_string())
         .collect();
     let mut summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);

@@ -1,0 +1,237 @@
+//! End-to-end: `trace.html` in a real browser. Headless Chromium (Debian's
+//! `chromium`) opens the page a `sil-host run` and a `sil-host simulate` wrote,
+//! at chosen times (`?t=SECONDS`), and screenshots it; the tip's marker (pure
+//! magenta, a colour nothing else on the page has) must be within a few pixels
+//! of where the trace puts the tip at that time: `z_t`, `z_n` read from
+//! `trace.csv`, mapped to pixels by the page's documented world-to-pixel mapping
+//! (the arm canvas's `data-px-per-m`, `data-base-x`, `data-base-y`, read from the
+//! page's DOM after its script ran, `--dump-dom`). The page's own idea of where
+//! the tip is (`tipPixel()`) is not used. The base joint's marker (pure cyan)
+//! checks the mapping's origin the same way.
+//!
+//! Chromium missing: the test is skipped with a message, or fails when
+//! `PAINLEVE_REQUIRE_CHROMIUM=1` (CI, `.ci/run`). Every browser is killed after
+//! [`BROWSER_TIMEOUT`]. Chromium's stderr (D-Bus noise when run as root) is not a failure.
+
+use std::{
+    path::{Path, PathBuf},
+    process::{Command, Stdio},
+    time::{Duration, Instant},
+};
+
+/// The longest one browser may take to load the page and answer.
+const BROWSER_TIMEOUT: Duration = Duration::from_secs(90);
+/// The browser window, CSS px (at a device scale factor of 1: screen pixels).
+const WINDOW: (u32, u32) = (1280, 960);
+/// How far the marker's centre may be from the trace's tip, px.
+const TOLERANCE_PX: f64 = 3.0;
+
+/// Chromium's executable, or `None` (skip) when it is missing and not required.
+fn chromium() -> Option<PathBuf> {
+    let found = ["/usr/bin/chromium", "/usr/bin/chromium-browser"].into_iter().map(PathBuf::from).find(|p| p.is_file());
+    if found.is_none() {
+        let why = "headless Chromium is missing (/usr/bin/chromium): apt-get install -y chromium";
+        assert!(std::env::var("PAINLEVE_REQUIRE_CHROMIUM").as_deref() != Ok("1"), "{why} (PAINLEVE_REQUIRE_CHROMIUM=1)");
+        eprintln!("skipped: {why}");
+    }
+    found
+}
+
+/// Runs `sil-host` with `args` (the real binary) and checks it succeeded.
+fn sil_host(args: &[&str]) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).args(args).output().unwrap();
+    assert!(o.status.success(), "sil-host {args:?}: {}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+}
+
+/// Runs Chromium headless on `url` with `extra` flags (a fresh profile in
+/// `scratch`), killed after [`BROWSER_TIMEOUT`]; its standard output.
+fn browse(chromium: &Path, scratch: &Path, extra: &[String], url: &str) -> String {
+    let profile = tempfile::tempdir_in(scratch).unwrap();
+    let stdout = tempfile::NamedTempFile::new_in(scratch).unwrap().into_temp_path();
+    let mut child = Command::new(chromium)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run"])
+        .args(["--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars"])
+        .args(["--force-device-scale-factor=1", "--run-all-compositor-stages-before-draw", "--virtual-time-budget=3000"])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(format!("--window-size={},{}", WINDOW.0, WINDOW.1))
+        .args(extra)
+        .arg(url)
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&stdout).unwrap())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap_or_else(|e| panic!("starting {}: {e}", chromium.display()));
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > BROWSER_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("Chromium did not finish {url} within {} s (killed): {extra:?}", BROWSER_TIMEOUT.as_secs());
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "Chromium failed on {url} ({status}): {extra:?}");
+    std::fs::read_to_string(&stdout).unwrap()
+}
+
+/// The page's world-to-pixel mapping as its script published it on the arm
+/// canvas: `(px per m, base x, base y, the frame's time)`.
+fn mapping(dom: &str) -> (f64, f64, f64, f64) {
+    let start = dom.find("<canvas id=\"arm\"").unwrap_or_else(|| panic!("no arm canvas in the DOM:\n{}", &dom[..dom.len().min(2000)]));
+    let tag = &dom[start..start + dom[start..].find('>').unwrap()];
+    let attr = |name: &str| -> f64 {
+        let at = tag.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("{name} missing on the arm canvas: {tag}")) + name.len() + 2;
+        tag[at..at + tag[at..].find('"').unwrap()].parse().unwrap_or_else(|e| panic!("{name} in {tag}: {e}"))
+    };
+    (attr("data-px-per-m"), attr("data-base-x"), attr("data-base-y"), attr("data-frame-t"))
+}
+
+/// An RGB screenshot: width, height and the pixels row by row.
+struct Image {
+    w: usize,
+    h: usize,
+    rgb: Vec<[u8; 3]>,
+}
+
+fn decode(png_path: &Path) -> Image {
+    let bytes = std::fs::read(png_path).unwrap();
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().expect("a PNG of a sane size")];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = match info.color_type {
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        other => panic!("unexpected PNG colour type {other:?}"),
+    };
+    let (w, h) = (info.width as usize, info.height as usize);
+    let rgb = (0..w * h).map(|i| [buf[i * channels], buf[i * channels + 1], buf[i * channels + 2]]).collect();
+    Image { w, h, rgb }
+}
+
+/// The centre (px, from the top left) of the pixels `like` picks, how many
+/// there are and the size of their bounding box.
+fn blob(img: &Image, like: impl Fn([u8; 3]) -> bool) -> (f64, f64, usize, (usize, usize)) {
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0usize);
+    let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (usize::MAX, 0, usize::MAX, 0);
+    for y in 0..img.h {
+        for x in 0..img.w {
+            if like(img.rgb[y * img.w + x]) {
+                // A pixel's centre is at +0.5 of its index in CSS coordinates.
+                sx += x as f64 + 0.5;
+                sy += y as f64 + 0.5;
+                n += 1;
+                (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(x), x_hi.max(x), y_lo.min(y), y_hi.max(y));
+            }
+        }
+    }
+    assert!(n > 0, "no pixel of the marker's colour in the screenshot");
+    (sx / n as f64, sy / n as f64, n, (x_hi - x_lo + 1, y_hi - y_lo + 1))
+}
+
+const MAGENTA: fn([u8; 3]) -> bool = |[r, g, b]| r >= 235 && g <= 30 && b >= 235;
+const CYAN: fn([u8; 3]) -> bool = |[r, g, b]| r <= 30 && g >= 235 && b >= 235;
+
+/// The row of `trace.csv` at time `t`: `(t, z_t, z_n)`.
+fn trace_at(csv_path: &Path, t: f64) -> (f64, f64, f64) {
+    let mut rdr = csv::Reader::from_path(csv_path).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    let col = |name: &str| headers.iter().position(|c| c == name).unwrap_or_else(|| panic!("no column {name}"));
+    let (ct, czt, czn) = (col("t"), col("z_t"), col("z_n"));
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            let f = |i: usize| r[i].parse::<f64>().unwrap();
+            (f(ct), f(czt), f(czn))
+        })
+        .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
+        .unwrap()
+}
+
+/// What one screenshot at time `t` showed: the expected tip pixel (from the
+/// trace), the marker's centre, and the base check.
+struct Shot {
+    expected: (f64, f64),
+    marker: (f64, f64),
+}
+
+/// Opens `dir/trace.html` at time `t` and checks the tip and base markers
+/// against `dir/trace.csv` at that time; `png` keeps the screenshot.
+fn check_at(chromium: &Path, scratch: &Path, dir: &Path, t: f64, png: &Path) -> Shot {
+    let url = format!("file://{}?t={t}", dir.join("trace.html").canonicalize().unwrap().display());
+    let dom = browse(chromium, scratch, &["--dump-dom".to_string()], &url);
+    let (s, base_x, base_y, frame_t) = mapping(&dom);
+    let (row_t, z_t, z_n) = trace_at(&dir.join("trace.csv"), t);
+    assert!((row_t - t).abs() < 1e-9, "the trace has a sample at {t} s (nearest {row_t})");
+    assert!((frame_t - t).abs() < 1e-5, "the page shows the frame at {t} s, not {frame_t}");
+    assert!(s > 100.0 && s.is_finite(), "a sane scale: {s} px/m");
+    browse(chromium, scratch, &[format!("--screenshot={}", png.display())], &url);
+    let img = decode(png);
+    assert_eq!((img.w, img.h), (WINDOW.0 as usize, WINDOW.1 as usize), "the screenshot is the window");
+    let (bx, by, _, _) = blob(&img, CYAN);
+    assert!((bx - base_x).hypot(by - base_y) <= 2.0, "base marker at ({bx:.1}, {by:.1}), the mapping says ({base_x:.1}, {base_y:.1})");
+    let expected = (base_x + s * z_t, base_y - s * z_n);
+    let (mx, my, n, (w, h)) = blob(&img, MAGENTA);
+    assert!(w <= 16 && h <= 16 && n >= 40, "one round tip marker (6 px radius): {n} px in a {w} x {h} box");
+    let off = (mx - expected.0).hypot(my - expected.1);
+    assert!(
+        off <= TOLERANCE_PX,
+        "t = {t} s: the tip marker is at ({mx:.1}, {my:.1}) px, the trace's tip (z_t {z_t:.5} m, z_n {z_n:.5} m) maps to \
+         ({:.1}, {:.1}) px: {off:.1} px off",
+        expected.0,
+        expected.1
+    );
+    Shot { expected, marker: (mx, my) }
+}
+
+/// Two times of a closed-loop run and one of an open-loop bounce: the tip is
+/// where the trace says at each, and the two times' tips are far enough apart
+/// that the check tells them apart.
+#[test]
+fn the_pages_arm_is_where_the_trace_puts_it() {
+    let Some(chromium) = chromium() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let scratch = dir.path();
+    let run = scratch.join("run");
+    sil_host(&["run", "--in-process", "--duration", "2.5", "--out", run.to_str().unwrap()]);
+    let html = std::fs::read_to_string(run.join("trace.html")).unwrap();
+    for bad in ["http://", "https://", "<link", " src=", "@import", "fetch("] {
+        assert!(!html.contains(bad), "trace.html is self-contained: {bad} in it");
+    }
+    // Early in the move and after it: z_t* goes from the start to 0.10 m over 2 s.
+    let shots: Vec<Shot> =
+        [0.25, 2.2].iter().map(|&t| check_at(&chromium, scratch, &run, t, &scratch.join(format!("run-{t}.png")))).collect();
+    let apart = (shots[0].expected.0 - shots[1].expected.0).hypot(shots[0].expected.1 - shots[1].expected.1);
+    assert!(apart > 4.0 * TOLERANCE_PX, "the two times' tips are {apart:.1} px apart: too close to tell apart");
+    let wrong = (shots[0].marker.0 - shots[1].expected.0).hypot(shots[0].marker.1 - shots[1].expected.1);
+    assert!(wrong > TOLERANCE_PX, "the check tells the times apart");
+
+    // An open-loop bounce from x0a: the tip in flight.
+    let sim = scratch.join("simulate");
+    sil_host(&["simulate", "--x0", "a", "--duration", "0.6", "--out", sim.to_str().unwrap()]);
+    check_at(&chromium, scratch, &sim, 0.35, &scratch.join("simulate.png"));
+    if let Ok(keep) = std::env::var("PAINLEVE_KEEP_SCREENSHOTS") {
+        for f in ["run-0.25.png", "run-2.2.png", "simulate.png"] {
+            std::fs::copy(scratch.join(f), Path::new(&keep).join(f)).unwrap();
+        }
+    }
+}
+
+/// Every table format gets the page.
+#[test]
+fn every_format_writes_the_page() {
+    let dir = tempfile::tempdir().unwrap();
+    for format in ["arrow", "mcap"] {
+        let out = dir.path().join(format);
+        sil_host(&["run", "--in-process", "--duration", "0.3", "--format", format, "--out", out.to_str().unwrap()]);
+        let html = std::fs::read_to_string(out.join("trace.html")).unwrap();
+        assert!(html.contains("id=\"trace-data\"") && html.contains("\"frames\""), "{format}: the page holds its data");
+        let sim = dir.path().join(format!("sim-{format}"));
+        sil_host(&["simulate", "--duration", "0.2", "--format", format, "--out", sim.to_str().unwrap()]);
+        assert!(sim.join("trace.html").is_file(), "simulate --format {format} writes trace.html");
+    }
+}
