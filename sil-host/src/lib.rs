@@ -7,6 +7,7 @@
 #[macro_use]
 pub mod stdout;
 
+pub mod animation;
 pub mod bench;
 pub mod cancel;
 pub mod cli;

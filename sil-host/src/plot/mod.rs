@@ -14,6 +14,7 @@ pub mod axis;
 pub mod chart;
 pub mod colors;
 pub mod font;
+pub mod gutter;
 pub mod history;
 pub mod legend;
 pub mod print;

@@ -9,6 +9,7 @@
 
 mod accuracy;
 mod aliases;
+mod animation;
 mod arm_image;
 mod arrow_tables;
 mod bench;

@@ -72,8 +72,11 @@ impl Figures {
         if !self.pdf {
             return String::new();
         }
-        let links: Vec<String> =
-            files.iter().map(|f| format!("[PDF]({}{})", self.prefix, f.trim_end_matches(".svg").to_string() + ".pdf")).collect();
+        let links: Vec<String> = files
+            .iter()
+            .filter(|f| f.ends_with(".svg"))
+            .map(|f| format!("[PDF]({}{})", self.prefix, f.trim_end_matches(".svg").to_string() + ".pdf"))
+            .collect();
         format!(" {}", links.join(", "))
     }
 
@@ -136,9 +139,9 @@ fn alt(what: &str) -> String {
 /// own tables (a sweep's cases as its impact laws and `e_n` were given, maps before
 /// slices; `zmax`'s rows; the sensitivity table's columns), else by name.
 pub fn order<'a>(outcome: Option<&Outcome>, files: &'a [String]) -> Vec<&'a String> {
-    let mut v: Vec<&String> = files.iter().filter(|f| f.ends_with(".svg")).collect();
+    let mut v: Vec<&String> = files.iter().filter(|f| f.ends_with(".svg") || f.ends_with(".gif")).collect();
     let rank = |file: &str| -> (usize, usize) {
-        let stem = file.rsplit('/').next().unwrap_or(file).trim_end_matches(".svg");
+        let stem = file.rsplit('/').next().unwrap_or(file).trim_end_matches(".svg").trim_end_matches(".gif");
         match outcome {
             Some(Outcome::Sweep(s)) => sweep_rank(s, file),
             Some(Outcome::Zmax(z)) => (
@@ -150,7 +153,8 @@ pub fn order<'a>(outcome: Option<&Outcome>, files: &'a [String]) -> Vec<&'a Stri
             ),
             Some(Outcome::Sensitivity(_)) => (SENSITIVITY.iter().position(|s| *s == stem).unwrap_or(usize::MAX), 0),
             Some(Outcome::Poincare(_)) => (usize::from(stem != "bifurcation"), 0),
-            Some(Outcome::Run(_)) => (usize::from(stem != "trace"), 0),
+            Some(Outcome::Run(_)) => (usize::from(stem != "trace") + usize::from(stem == "animation"), 0),
+            Some(Outcome::Simulate(_)) => (usize::from(stem == "animation"), 0),
             _ => (0, 0),
         }
     };
@@ -198,6 +202,9 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
     let Some(outcome) = outcome else { return other(file) };
     let name = file.rsplit('/').next().unwrap_or(file);
     let stem = name.strip_suffix(".svg").unwrap_or(name);
+    if name == super::animations::FILE {
+        return super::animations::caption(Some(outcome), file);
+    }
     let c = |what: &str, parameters: String, paper: Option<&str>| Caption {
         what: what.to_string(),
         parameters,

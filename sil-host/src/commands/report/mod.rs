@@ -12,6 +12,7 @@
 //! repository) with its figures copied to `figures/` beside it
 //! ([`results_page`]).
 
+pub mod animations;
 mod captions;
 mod closed_loop;
 mod experiments;
@@ -103,6 +104,9 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     }
     progress.finish_and_clear();
     let interrupted = stop.load(Ordering::Relaxed);
+    if !interrupted {
+        animations::animate(out.dir(), &mut results);
+    }
     let wall_s = started.elapsed().as_secs_f64();
     let failed = results.iter().flatten().filter(|r| r.error.is_some()).count();
     let size = match args.size {

@@ -16,6 +16,7 @@ use crate::{
 };
 
 pub mod figures;
+mod layout;
 pub use experiments::sensitivity::{Summary, prepare};
 
 /// Runs the study and writes its files; prints nothing.
