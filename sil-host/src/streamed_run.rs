@@ -23,7 +23,7 @@ use rig::{
 };
 
 /// Runs `setup` over `link` as `run` and `pil` do, keeping nothing that grows
-/// with the run: every period's row goes to the trace of `out` in `format` as it
+/// with the run: every period's row goes to the trace of `out` in `files.format` as it
 /// is made (`trace.csv.partial` or `trace.arrow.partial`, flushed every 1 ms of
 /// wall time, an Arrow record batch per flush, so a plant killed outright keeps
 /// every period up to the last flush), the summary's figures are
@@ -31,7 +31,7 @@ use rig::{
 /// ([`plot::HistoryEnvelope`]); the progress bar moves every `every` periods,
 /// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
 /// it did, the loop's wall-clock time (s) and the plant's validity counters; the
-/// progress bar is cleared. Every record also goes to the run's page
+/// progress bar is cleared. With `files.page` every record also goes to the run's page
 /// (`trace.html`, [`crate::trace_page`]: fixed memory too, returned to be written).
 ///
 /// # Errors
@@ -42,10 +42,10 @@ pub fn run_streamed(
     out: &mut OutputSet,
     progress: &indicatif::ProgressBar,
     every: usize,
-    format: tables::TableFormat,
+    files: TraceFiles,
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
-    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", format, std::time::Duration::from_millis(1))?;
+    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1))?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the
     /// bar, stops on Ctrl-C, keeps the validity.
@@ -58,7 +58,7 @@ pub fn run_streamed(
         history: plot::HistoryEnvelope,
         validity: Validity,
         ledger: plant::Ledger,
-        page: TracePage,
+        page: Option<TracePage>,
     }
     impl RunObserver for Streaming<'_> {
         fn on_finished(&mut self, validity: &Validity) {
@@ -80,7 +80,9 @@ pub fn run_streamed(
                 u: [r.u1_cmd, r.u2_cmd],
                 mode: r.mode,
             });
-            self.page.push(&r.into());
+            if let Some(page) = &mut self.page {
+                page.push(&r.into());
+            }
         }
 
         fn on_period(&mut self, k: usize, _n: usize) -> bool {
@@ -99,7 +101,7 @@ pub fn run_streamed(
         history: plot::HistoryEnvelope::default(),
         validity: Validity::default(),
         ledger: plant::Ledger::default(),
-        page: TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport())),
+        page: files.page.then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport()))),
     };
     let (_, failure) = stream_loop(setup, link, &mut observer);
     let Streaming { stats, history, validity, ledger, page, .. } = observer;
@@ -123,6 +125,16 @@ pub struct Streamed {
     pub validity: Validity,
     /// The plant's energy ledger at the end.
     pub ledger: plant::Ledger,
-    /// The run's `trace.html`, gathered (fixed memory), to be written.
-    pub page: TracePage,
+    /// The run's `trace.html`, gathered (fixed memory), to be written; `None`
+    /// without [`TraceFiles::page`] (`--no-page`).
+    pub page: Option<TracePage>,
+}
+
+/// What [`run_streamed`] writes of the trace as the run goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TraceFiles {
+    /// The trace table's format (`--format`).
+    pub format: tables::TableFormat,
+    /// Whether to gather `trace.html` (not `--no-page`).
+    pub page: bool,
 }

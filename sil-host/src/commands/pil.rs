@@ -14,7 +14,7 @@ use std::io::Write;
 
 use super::closed_loop::{draw, print_summary};
 use crate::commands::Done;
-use crate::streamed_run::{Streamed, run_streamed};
+use crate::streamed_run::{Streamed, TraceFiles, run_streamed};
 use crate::{
     cli::PilArgs,
     error::CliError,
@@ -127,7 +127,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         unreachable!("a PIL spec opens a PIL link")
     };
     let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
-        run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, args.format)?;
+        run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, TraceFiles { format: args.format, page: !args.no_page })?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -137,7 +137,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
-    page.write(&mut out)?;
+    if let Some(page) = page {
+        page.write(&mut out)?;
+    }
     let svg = out.stage_figure("instructions.svg")?;
     draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;
     if let Some(log) = &log {

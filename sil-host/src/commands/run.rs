@@ -12,7 +12,7 @@
 
 use super::closed_loop::{draw, print_summary};
 use crate::commands::Done;
-use crate::streamed_run::{Streamed, run_streamed};
+use crate::streamed_run::{Streamed, TraceFiles, run_streamed};
 use crate::{
     cli::{RunArgs, RunLink},
     error::CliError,
@@ -67,7 +67,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
-        run_streamed(&setup, link, &mut out, &progress, 500, args.format)?;
+        run_streamed(&setup, link, &mut out, &progress, 500, TraceFiles { format: args.format, page: !args.no_page })?;
     let firmware_announcement = link.announcement().cloned();
     let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
     match &mut open {
@@ -87,7 +87,9 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
 
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", scenario, &history, stats.last_t())?;
-    page.write(&mut out)?;
+    if let Some(page) = page {
+        page.write(&mut out)?;
+    }
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),
         ipc_rtt_us: timings.as_ref().map(|t| t.rtt.percentiles()),

@@ -116,7 +116,7 @@ mod tests {
         assert_eq!(f.samples(), 1235);
         let (frames, step) = f.finish();
         assert_eq!(step, 0.01);
-        assert_eq!(frames.len(), 125 + 1, "0, 0.01, ..., 1.23 and the last sample 1.234");
+        assert_eq!(frames.len(), 124 + 1, "0, 0.01, ..., 1.23 and the last sample 1.234");
         for (k, fr) in frames.iter().take(124).enumerate() {
             assert!((fr.t - k as f64 * 0.01).abs() < 1e-9, "frame {k} at {}", fr.t);
         }

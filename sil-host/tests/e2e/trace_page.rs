@@ -185,6 +185,7 @@ fn check_at(chromium: &Path, scratch: &Path, dir: &Path, t: f64, png: &Path) -> 
         expected.0,
         expected.1
     );
+    eprintln!("t = {t} s: the tip marker is {off:.2} px from the trace's tip ({n} px of magenta)");
     Shot { expected, marker: (mx, my) }
 }
 
@@ -221,10 +222,16 @@ fn the_pages_arm_is_where_the_trace_puts_it() {
     }
 }
 
-/// Every table format gets the page.
+/// Every table format gets the page; `--no-page` leaves it out.
 #[test]
-fn every_format_writes_the_page() {
+fn every_format_writes_the_page_and_no_page_leaves_it_out() {
     let dir = tempfile::tempdir().unwrap();
+    for command in ["run", "simulate"] {
+        let out = dir.path().join(format!("{command}-no-page"));
+        let extra: &[&str] = if command == "run" { &["--in-process"] } else { &[] };
+        sil_host(&[&[command, "--duration", "0.2", "--no-page", "--out", out.to_str().unwrap()], extra].concat());
+        assert!(out.join("summary.json").is_file() && !out.join("trace.html").exists(), "{command} --no-page");
+    }
     for format in ["arrow", "mcap"] {
         let out = dir.path().join(format);
         sil_host(&["run", "--in-process", "--duration", "0.3", "--format", format, "--out", out.to_str().unwrap()]);

@@ -53,12 +53,14 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format)?;
     let mut curves = TraceCurves::default();
     let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
-    let mut page = TracePage::new(PageInfo::open_loop(&params, &initial_condition.name, &impact_law, sim.e_n));
+    let mut page = (!args.no_page).then(|| TracePage::new(PageInfo::open_loop(&params, &initial_condition.name, &impact_law, sim.e_n)));
     let (mut open_loop, row, startup) = OpenLoop::start(prepared, args.sample_dt);
     let mut n_events = startup.len();
     curves.push_events(&startup);
     curves.push(&row);
-    page.push(&(&row).into());
+    if let Some(page) = &mut page {
+        page.push(&(&row).into());
+    }
     tables.send(vec![row], startup)?;
     // The simulation's own wall time, without writing files: rows wait in a
     // chunk of OpenLoop::CHUNK_S s of samples (bounded memory) while the clock runs.
@@ -81,7 +83,9 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         curves.push_events(&new_events);
         for row in &rows {
             curves.push(row);
-            page.push(&row.into());
+            if let Some(page) = &mut page {
+                page.push(&row.into());
+            }
         }
         (rows, new_events) = tables.send(rows, new_events)?;
         progress.set_position(open_loop.k as u64);
@@ -93,13 +97,17 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // trace.svg
     let svg = out.stage_figure("trace.svg")?;
     draw_trace(&svg, &params, &initial_condition.name, &curves)?;
-    page.write(&mut out)?;
+    if let Some(page) = page {
+        page.write(&mut out)?;
+    }
 
     let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);
     let files = tables
         .iter()
         .map(String::as_str)
-        .chain(["trace.svg", "trace.pdf", crate::trace_page::FILE, "summary.json"])
+        .chain(["trace.svg", "trace.pdf"])
+        .chain((!args.no_page).then_some(crate::trace_page::FILE))
+        .chain(["summary.json"])
         .map(|f| out.path(f).display().to_string())
         .collect();
     let mut summary = summary(args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, files, n_events);
