@@ -81,7 +81,8 @@ impl ArmView {
     /// each multiple of [`VIEW_PERIOD_S`] (within 1 ns, so rows on a 1 ms grid
     /// are drawn every tenth).
     fn due(&mut self, t: f64) -> bool {
-        if !(t >= self.next - 1e-9) {
+        // NaN times are never drawn.
+        if t.is_nan() || t < self.next - 1e-9 {
             return false;
         }
         self.next = ((t + 1e-9) / VIEW_PERIOD_S).floor() * VIEW_PERIOD_S + VIEW_PERIOD_S;

@@ -15,6 +15,7 @@ pub mod commands;
 pub mod error;
 pub mod folder_lock;
 pub mod link_spec;
+pub mod live;
 pub mod output;
 pub mod plot;
 pub mod streamed_run;

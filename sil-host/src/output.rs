@@ -25,7 +25,7 @@ use tables::{
     TableFormat,
     arrow::StreamedArrowFile,
     csv::{CsvFile, CsvRow},
-    mcap::{McapRows, McapStream},
+    mcap::{McapRows, McapStream, McapView},
 };
 
 /// A set of output files written into one folder, committed together.
@@ -212,7 +212,7 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
 /// [`tables::mcap::STREAM_CHUNK_ROWS`] rows, flushed at once
 /// ([`tables::mcap::McapStream`]): counted in rows, not wall time, so
 /// the file's bytes are the same over every link.
-pub struct StreamedTable<T: CsvRow + McapRows + Copy> {
+pub struct StreamedTable<T: CsvRow + McapRows + Copy + 'static> {
     writer: StreamedWriter<T>,
     flush_every: std::time::Duration,
     last_flush: std::time::Instant,
@@ -220,25 +220,32 @@ pub struct StreamedTable<T: CsvRow + McapRows + Copy> {
 }
 
 /// The file behind a [`StreamedTable`].
-enum StreamedWriter<T: McapRows> {
+enum StreamedWriter<T: McapRows + 'static> {
     Csv(CsvFile),
     Arrow(Box<StreamedArrowFile<T>>),
     Mcap(Box<McapStream<T>>),
 }
 
-impl<T: CsvRow + McapRows + Copy> StreamedTable<T> {
+impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
     /// Starts table `stem` (`trace`: `trace.csv`, `trace.arrow` or `trace.mcap`)
-    /// in `out`, flushed every `flush_every` (CSV, Arrow).
+    /// in `out`, flushed every `flush_every` (CSV, Arrow); an MCAP file carries
+    /// `view`'s channels too ([`tables::mcap::McapView`]: the arm in Foxglove's schemas).
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created (or the Arrow schema, the
     /// MCAP header and channels written).
-    pub fn new(out: &mut OutputSet, stem: &str, format: TableFormat, flush_every: std::time::Duration) -> Result<Self, CliError> {
+    pub fn new(
+        out: &mut OutputSet,
+        stem: &str,
+        format: TableFormat,
+        flush_every: std::time::Duration,
+        view: Option<Box<dyn McapView<T>>>,
+    ) -> Result<Self, CliError> {
         let (path, file) = out.create_streamed(&format.file(stem))?;
         let writer = match format {
             TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
             TableFormat::Arrow => StreamedWriter::Arrow(Box::new(StreamedArrowFile::new(path, file)?)),
-            TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::new(path, file)?)),
+            TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::with_view(path, file, view)?)),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }

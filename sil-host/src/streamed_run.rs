@@ -32,7 +32,9 @@ use rig::{
 /// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
 /// it did, the loop's wall-clock time (s) and the plant's validity counters; the
 /// progress bar is cleared. With `files.page` every record also goes to the run's page
-/// (`trace.html`, [`crate::trace_page`]: fixed memory too, returned to be written).
+/// (`trace.html`, [`crate::trace_page`]: fixed memory too, returned to be written), and to `live`
+/// (`--live`: the Foxglove WebSocket server, paced) when there is one. An MCAP
+/// trace carries the arm's view ([`arm_view::ArmView`]).
 ///
 /// # Errors
 /// I/O errors of the trace file.
@@ -43,9 +45,12 @@ pub fn run_streamed(
     progress: &indicatif::ProgressBar,
     every: usize,
     files: TraceFiles,
+    live: Option<&mut crate::live::LiveRun>,
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
-    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1))?;
+    let view = arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())));
+    let mut trace =
+        StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1), Some(Box::new(view)))?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the
     /// bar, stops on Ctrl-C, keeps the validity.
@@ -59,6 +64,7 @@ pub fn run_streamed(
         validity: Validity,
         ledger: plant::Ledger,
         page: Option<TracePage>,
+        live: Option<&'a mut crate::live::LiveRun>,
     }
     impl RunObserver for Streaming<'_> {
         fn on_finished(&mut self, validity: &Validity) {
@@ -83,6 +89,9 @@ pub fn run_streamed(
             if let Some(page) = &mut self.page {
                 page.push(&r.into());
             }
+            if let Some(live) = self.live.as_deref_mut() {
+                live.push(r);
+            }
         }
 
         fn on_period(&mut self, k: usize, _n: usize) -> bool {
@@ -102,6 +111,7 @@ pub fn run_streamed(
         validity: Validity::default(),
         ledger: plant::Ledger::default(),
         page: files.page.then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport()))),
+        live,
     };
     let (_, failure) = stream_loop(setup, link, &mut observer);
     let Streaming { stats, history, validity, ledger, page, .. } = observer;

@@ -9,7 +9,7 @@ use tables::{
     ColumnRows,
     arrow::ArrowFile,
     csv::{CsvRow, CsvThread},
-    mcap::{FILE_CHUNK_BYTES, McapFile, McapRows, McapTable},
+    mcap::{FILE_CHUNK_BYTES, McapFile, McapRows, McapTable, McapView},
 };
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
@@ -71,6 +71,10 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     }
 }
 
+/// The views of two tables in an MCAP file (the arm's frames and scene, the
+/// events' log: `arm_view`), one per table, each optional.
+pub type Views<A, B> = (Option<Box<dyn McapView<A>>>, Option<Box<dyn McapView<B>>>);
+
 /// Two tables of a command (`simulate`'s `trace` of rows `A` and `events` of
 /// rows `B`): two files (`trace.csv` and `events.csv`, or `.arrow`), or one MCAP
 /// file `trace.mcap` holding both, their messages interleaved in order of time
@@ -84,16 +88,17 @@ pub enum TablesOut<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows +
 
 impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'static> TablesOut<A, B> {
     /// Starts tables `stems` (`["trace", "events"]`) of `out` in `format`: the
-    /// files [`TablesOut::files`] names.
+    /// files [`TablesOut::files`] names; an MCAP file carries each table's view
+    /// of `views` too ([`tables::mcap::McapView`]: the arm in Foxglove's schemas).
     ///
     /// # Errors
     /// [`CliError::Io`] when a file cannot be created or its header written.
-    pub fn create(out: &mut OutputSet, stems: [&str; 2], format: TableFormat) -> Result<Self, CliError> {
+    pub fn create(out: &mut OutputSet, stems: [&str; 2], format: TableFormat, views: Views<A, B>) -> Result<Self, CliError> {
         Ok(match format {
             TableFormat::Mcap => {
                 let (path, file) = out.create_unbuffered(&format.file(stems[0]))?;
                 let mut mcap = McapFile::new(path, file, Some(FILE_CHUNK_BYTES))?;
-                let (a, b) = (mcap.add_table::<A>()?, mcap.add_table::<B>()?);
+                let (a, b) = (mcap.add_table_with_view::<A>(views.0)?, mcap.add_table_with_view::<B>(views.1)?);
                 Self::Mcap(Box::new(mcap), a, b)
             }
             _ => Self::Two(TableOut::create(out, stems[0], format)?, TableOut::create(out, stems[1], format)?),

@@ -309,7 +309,7 @@ mod tests {
             Declared,
             mcap::{McapFile, McapRows},
         };
-        fn check<T: McapRows>() {
+        fn check<T: McapRows + 'static>() {
             let mut grouped: Vec<&str> = T::GROUPS.iter().flat_map(|g| g.columns.iter().copied()).collect();
             grouped.sort_unstable();
             let mut names: Vec<&str> = <T as Declared>::NAMES.iter().copied().filter(|n| *n != "t").collect();

@@ -114,6 +114,8 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     }
     let target = target_of(args)?;
     pil_link::check_faults(scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
+    // Before anything is written: an address in use is refused with nothing written.
+    let mut live = crate::live::LiveRun::start(&args.live, &rig::setup::plant_params(scenario), false)?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
@@ -126,8 +128,15 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let OpenLink::Pil(mut link) = (LinkSpec::Pil { options: opts, on_log: sink }).open(&setup)? else {
         unreachable!("a PIL spec opens a PIL link")
     };
-    let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
-        run_streamed(&setup, link.as_mut(), &mut out, &progress, 100, TraceFiles { format: args.format, page: !args.no_page })?;
+    let Streamed { stats, history, failure, wall_s, validity, ledger, page } = run_streamed(
+        &setup,
+        link.as_mut(),
+        &mut out,
+        &progress,
+        100,
+        TraceFiles { format: args.format, page: !args.no_page },
+        live.as_mut(),
+    )?;
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);

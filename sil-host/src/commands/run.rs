@@ -61,13 +61,15 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let mut open = spec.open(&setup)?;
     let link = open.link();
     let transport = link.transport();
+    // Before anything is written: an address in use is refused with nothing written.
+    let mut live = crate::live::LiveRun::start(&args.live, &rig::setup::plant_params(scenario), args.realtime)?;
     // Only once the firmware is there: a run that cannot start writes nothing.
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
-        run_streamed(&setup, link, &mut out, &progress, 500, TraceFiles { format: args.format, page: !args.no_page })?;
+        run_streamed(&setup, link, &mut out, &progress, 500, TraceFiles { format: args.format, page: !args.no_page }, live.as_mut())?;
     let firmware_announcement = link.announcement().cloned();
     let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
     match &mut open {

@@ -21,6 +21,7 @@ mod closed_loop_friction;
 mod common;
 mod figure_check;
 mod figures;
+mod foxglove_view;
 mod friction_loop;
 mod friction_unknown;
 mod golden;

@@ -137,3 +137,68 @@ fn not_mcap_is_refused_with_its_path() {
     let e = read_mcap(&path).unwrap_err().to_string();
     assert!(e.contains("trace.mcap"), "{e}");
 }
+
+/// A view's channels come after its table's; each row's view messages follow
+/// its own, with its log time and their own sequence numbers (from 0); the
+/// reader leaves them out and gives the table back whole.
+#[test]
+fn a_views_messages_follow_their_rows_and_the_reader_skips_them() {
+    /// A message on `/odd` for each row with an odd `d`, two on `/every` for every row.
+    struct Odd;
+    impl McapView<Row> for Odd {
+        fn channels(&self) -> Vec<ChannelSpec> {
+            let spec = |topic: &str| ChannelSpec {
+                topic: topic.into(),
+                schema_name: "test.Blob".into(),
+                schema_encoding: String::new(),
+                schema: Vec::new(),
+                message_encoding: "application/octet-stream".into(),
+            };
+            vec![spec("/odd"), spec("/every")]
+        }
+        fn messages(&mut self, row: &Row, emit: &mut dyn FnMut(usize, &[u8])) {
+            if row.d % 2 == 1 {
+                emit(0, &row.d.to_le_bytes());
+            }
+            emit(1, b"a");
+            emit(1, b"b");
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trace.mcap");
+    let want = rows(250);
+    let mut w = McapStream::<Row>::with_view(path.clone(), File::create(&path).unwrap(), Some(Box::new(Odd))).unwrap();
+    for r in &want {
+        w.push(r.clone()).unwrap();
+    }
+    w.finish().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let messages: Vec<(String, u32, u64, Vec<u8>)> = MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .map(|m| (m.channel.topic.clone(), m.sequence, m.log_time, m.data.to_vec()))
+        .collect();
+    // Row k: /one, /two, then /odd (odd d), /every twice.
+    let mut k = 0;
+    let mut odd = 0;
+    let mut it = messages.iter();
+    while let Some((topic, seq, ns, _)) = it.next() {
+        assert_eq!((topic.as_str(), *seq as usize), ("/one", k));
+        let t = (want[k].t * 1e9).round() as u64;
+        assert_eq!(*ns, t);
+        assert_eq!(it.next().unwrap().0, "/two");
+        if want[k].d % 2 == 1 {
+            let (topic, seq, ns, data) = it.next().unwrap();
+            assert_eq!((topic.as_str(), *seq, *ns, data.as_slice()), ("/odd", odd, t, &want[k].d.to_le_bytes()[..]));
+            odd += 1;
+        }
+        for (i, byte) in [b'a', b'b'].into_iter().enumerate() {
+            let (topic, seq, ns, data) = it.next().unwrap();
+            assert_eq!((topic.as_str(), *seq as usize, *ns, data.as_slice()), ("/every", 2 * k + i, t, &[byte][..]));
+        }
+        k += 1;
+    }
+    assert_eq!((k, odd), (250, 125));
+    let tables = read_mcap(&path).unwrap();
+    assert_eq!(back(&tables[0].1).len(), want.len());
+}

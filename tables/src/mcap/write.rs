@@ -44,8 +44,16 @@ struct TableChannels {
     channels: Vec<u16>,
     /// Rows written so far (the next message's sequence number).
     rows: u32,
-    /// The view's `Box<dyn McapView<T>>`, its channels' ids and their next sequence numbers.
-    view: Option<(Box<dyn Any + Send>, Vec<u16>, Vec<u32>)>,
+    /// The table's view, if it has one.
+    view: Option<ViewChannels>,
+}
+
+/// A table's view in an [`McapFile`]: the `Box<dyn McapView<T>>`, its
+/// channels' ids and their next sequence numbers.
+struct ViewChannels {
+    view: Box<dyn Any + Send>,
+    ids: Vec<u16>,
+    sequences: Vec<u32>,
 }
 
 /// A table registered in an [`McapFile`] ([`McapFile::add_table`]).
@@ -117,7 +125,7 @@ impl McapFile {
             Some(v) => {
                 let ids = v.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
                 let sequences = vec![0; ids.len()];
-                Some((Box::new(v) as Box<dyn Any + Send>, ids, sequences))
+                Some(ViewChannels { view: Box::new(v), ids, sequences })
             }
             None => None,
         };
@@ -194,7 +202,7 @@ impl McapFile {
                 result = writer.write_to_known_channel(&header, bytes);
             }
         });
-        if let Some((view, ids, sequences)) = &mut tc.view {
+        if let Some(ViewChannels { view, ids, sequences }) = &mut tc.view {
             let Some(view) = view.downcast_mut::<Box<dyn McapView<T>>>() else { return Err(wrong()) };
             view.messages(row, &mut |c, bytes| {
                 if result.is_ok() {

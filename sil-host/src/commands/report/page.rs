@@ -165,8 +165,12 @@ fn section(md: &mut String, s: &Section, rs: &[StepResult], page: Page, figures:
             figures.show(md, f, &caption(r.outcome.as_ref(), f));
         }
         // Data files: not the figures (SVG, the PDF beside an SVG, the animations' GIF).
-        let data: Vec<String> =
-            r.files.iter().filter(|f| !f.ends_with(".svg") && !f.ends_with(".pdf") && !f.ends_with(".gif")).map(|f| format!("[{f}]({f})")).collect();
+        let data: Vec<String> = r
+            .files
+            .iter()
+            .filter(|f| !f.ends_with(".svg") && !f.ends_with(".pdf") && !f.ends_with(".gif"))
+            .map(|f| format!("[{f}]({f})"))
+            .collect();
         if page.data && !data.is_empty() {
             let _ = writeln!(md, "Data: {}\n", data.join(", "));
         }

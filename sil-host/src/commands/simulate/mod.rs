@@ -43,6 +43,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let (params, sim, initial_condition) = (prepared.params, prepared.sim, prepared.initial_condition.clone());
     let steps = prepared.steps;
 
+    // Before anything is written: an address in use is refused with nothing written.
+    let mut live = crate::live::LiveSimulation::start(&args.live, &params)?;
     let mut out = OutputSet::new(&args.output.out)?;
     let progress = progress_bar(steps as u64, "simulating", "samples", args.output.json);
     // Streamed: rows and events go to their files as they come, the figure keeps
@@ -50,7 +52,12 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // formatted and written by a thread of their own (CsvThread) while the
     // simulation goes on; Arrow rows are batched (ArrowFile); MCAP rows and
     // events go into one file, interleaved by time (McapFile).
-    let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format)?;
+    let geometry = arm_view::ArmGeometry::of(&params);
+    let views = (
+        Some(Box::new(arm_view::ArmView::new(geometry)) as Box<dyn tables::mcap::McapView<TraceRow>>),
+        Some(Box::new(arm_view::EventLog::default()) as Box<dyn tables::mcap::McapView<EventRow>>),
+    );
+    let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format, views)?;
     let mut curves = TraceCurves::default();
     let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
     let mut page = (!args.no_page).then(|| TracePage::new(PageInfo::open_loop(&params, &initial_condition.name, &impact_law, sim.e_n)));
@@ -60,6 +67,9 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     curves.push(&row);
     if let Some(page) = &mut page {
         page.push(&(&row).into());
+    }
+    if let Some(live) = live.as_mut() {
+        live.push(std::slice::from_ref(&row), &startup);
     }
     tables.send(vec![row], startup)?;
     // The simulation's own wall time, without writing files: rows wait in a
@@ -86,6 +96,9 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
             if let Some(page) = &mut page {
                 page.push(&row.into());
             }
+        }
+        if let Some(live) = live.as_mut() {
+            live.push(&rows, &new_events);
         }
         (rows, new_events) = tables.send(rows, new_events)?;
         progress.set_position(open_loop.k as u64);

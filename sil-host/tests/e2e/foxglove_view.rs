@@ -1,0 +1,282 @@
+//! End-to-end: the arm in Foxglove (issue 55). A run's and a simulation's
+//! `trace.mcap` carry `/tf`, `/scene` and `/log` in Foxglove's own schemas;
+//! every message checks against the schema its channel carries, the frames put
+//! the tip where the trace's `/contact` does at the same time, the log holds
+//! the events. `--live` serves the same channels over the Foxglove WebSocket
+//! protocol to a client while the run goes, and the run's files are the same
+//! bytes with a viewer as without.
+
+use std::{
+    collections::BTreeMap,
+    io::{BufRead, BufReader},
+    path::Path,
+    process::{Command, Stdio},
+    time::{Duration, Instant},
+};
+
+use arm_view::validate::Schema;
+use foxglove::messages::{FrameTransforms, Log, Quaternion};
+use prost::Message as _;
+
+fn sil_host() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sil-host"))
+}
+
+fn rotate(q: &Quaternion, v: [f64; 3]) -> [f64; 3] {
+    let u = [q.x, q.y, q.z];
+    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let c = cross(u, v);
+    let cc = cross(u, c);
+    [0, 1, 2].map(|i| v[i] + 2.0 * q.w * c[i] + 2.0 * cc[i])
+}
+
+/// The tip's origin in `world`, composing `/tf`'s chain.
+fn tip_of(tf: &FrameTransforms) -> [f64; 3] {
+    let mut chain = Vec::new();
+    let mut child = "tip".to_string();
+    while child != "world" {
+        let t = tf.transforms.iter().find(|t| t.child_frame_id == child).expect("a parent frame");
+        chain.push(t.clone());
+        child = t.parent_frame_id.clone();
+    }
+    let (mut p, mut r) = ([0.0; 3], Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 });
+    for t in chain.iter().rev() {
+        let v = t.translation.unwrap();
+        let d = rotate(&r, [v.x, v.y, v.z]);
+        p = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
+        let q = t.rotation.unwrap();
+        r = Quaternion {
+            w: r.w * q.w - r.x * q.x - r.y * q.y - r.z * q.z,
+            x: r.w * q.x + r.x * q.w + r.y * q.z - r.z * q.y,
+            y: r.w * q.y - r.x * q.z + r.y * q.w + r.z * q.x,
+            z: r.w * q.z + r.x * q.y - r.y * q.x + r.z * q.w,
+        };
+    }
+    p
+}
+
+/// What a `trace.mcap` holds on its Foxglove channels.
+struct Checked {
+    /// Messages per topic.
+    counts: BTreeMap<String, usize>,
+    /// The log's lines.
+    log: Vec<Log>,
+    /// `/tf` messages whose tip was compared with `/contact`.
+    compared: usize,
+}
+
+/// Reads `path`: every protobuf message checked against its channel's schema,
+/// every `/tf` tip against `/contact`'s `z_t`, `z_n` at the same log time.
+fn check_file(path: &Path) -> Checked {
+    let bytes = std::fs::read(path).unwrap();
+    let mut contact: BTreeMap<u64, (f64, f64)> = BTreeMap::new();
+    let mut tips: Vec<(u64, [f64; 3])> = Vec::new();
+    let mut counts = BTreeMap::new();
+    let mut log = Vec::new();
+    let mut schemas: BTreeMap<u16, Schema> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        *counts.entry(m.channel.topic.clone()).or_insert(0) += 1;
+        let schema = m.channel.schema.as_ref().unwrap();
+        if schema.encoding == "protobuf" {
+            assert_eq!(m.channel.message_encoding, "protobuf");
+            assert!(schema.name.starts_with("foxglove."), "{}", schema.name);
+            let s = schemas.entry(m.channel.id).or_insert_with(|| Schema::parse(&schema.data).unwrap());
+            s.check(&schema.name, &m.data).unwrap_or_else(|e| panic!("{} at {} ns: {e}", m.channel.topic, m.log_time));
+        }
+        match m.channel.topic.as_str() {
+            "/contact" => {
+                let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+                contact.insert(m.log_time, (v["z_t"].as_f64().unwrap(), v["z_n"].as_f64().unwrap()));
+            }
+            "/tf" => tips.push((m.log_time, tip_of(&FrameTransforms::decode(&*m.data).unwrap()))),
+            "/log" => log.push(Log::decode(&*m.data).unwrap()),
+            _ => {}
+        }
+    }
+    for (t, tip) in &tips {
+        let (z_t, z_n) = contact[t];
+        assert!(
+            (tip[0] - z_t).abs() < 1e-9 && tip[1].abs() < 1e-12 && (tip[2] - z_n).abs() < 1e-9,
+            "at {t} ns: tip {tip:?}, trace ({z_t}, {z_n})"
+        );
+    }
+    Checked { counts, log, compared: tips.len() }
+}
+
+/// A closed-loop run's trace.mcap: a frame and a scene every 10 ms of its 1 ms
+/// periods, each valid against Foxglove's schema; the tip of the frames is the
+/// trace's; the log starts with the contact mode.
+#[test]
+fn a_runs_trace_mcap_shows_the_arm_in_foxglove_schemas() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let s = sil_host().args(["run", "--in-process", "--duration", "1", "--format", "mcap", "--json", "--out"]).arg(&out).output().unwrap();
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let c = check_file(&out.join("trace.mcap"));
+    assert_eq!(c.counts["/state"], 1000, "{:?}", c.counts);
+    assert_eq!((c.counts["/tf"], c.counts["/scene"]), (100, 100), "a frame every 10 ms: {:?}", c.counts);
+    assert_eq!(c.compared, 100);
+    assert!(c.log[0].message.starts_with("start: contact mode sliding"), "{:?}", c.log[0].message);
+}
+
+/// A simulation's trace.mcap: the open-loop bounce from x0a (the Painlevé
+/// paradox: an impact without collision, then touchdowns); its log holds one line per event of
+/// events.csv, in order, at the events' times.
+#[test]
+fn a_simulations_log_holds_its_events() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mcap, csv) = (dir.path().join("mcap"), dir.path().join("csv"));
+    for (out, format) in [(&mcap, "mcap"), (&csv, "csv")] {
+        let s = sil_host()
+            .args(["simulate", "--x0", "a", "--duration", "0.5", "--format", format, "--json", "--out"])
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    }
+    let c = check_file(&mcap.join("trace.mcap"));
+    let events = std::fs::read_to_string(csv.join("events.csv")).unwrap();
+    let kinds: Vec<&str> = events.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+    assert!(kinds.contains(&"impact_without_collision") && kinds.contains(&"touchdown"), "the bounce: {kinds:?}");
+    assert_eq!(c.log.len(), kinds.len());
+    for (line, kind) in c.log.iter().zip(&kinds) {
+        assert!(line.message.starts_with(&format!("{kind}:")), "{} against {kind}", line.message);
+    }
+    assert_eq!(c.counts["/tf"], 51, "samples from 0 to 0.5 s, a frame every 10 ms");
+}
+
+/// Reads the `ws://` address the run prints on stderr (waiting at most 30 s).
+fn live_address(stderr: impl std::io::Read + Send + 'static) -> (String, std::sync::mpsc::Receiver<String>) {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        let line = rx.recv_timeout(left).expect("sil-host printed no live address within 30 s");
+        if let Some(at) = line.split_whitespace().find(|w| w.starts_with("ws://")) {
+            return (at.to_string(), rx);
+        }
+    }
+}
+
+/// `run --live`: a WebSocket client (protocol `foxglove.sdk.v1`) is told the
+/// server's channels (the file's seven, with their schemas), subscribes to
+/// `/tf` and `/log` (the run waits for it, `--live-wait`) and receives
+/// messages that check against Foxglove's schemas, the log's first line among
+/// them; the run's trace.mcap is the same bytes as a run without a viewer.
+#[test]
+fn a_live_run_streams_the_files_channels_and_leaves_the_files_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let (live_out, plain_out) = (dir.path().join("live"), dir.path().join("plain"));
+    // 2 s of simulated time at 2 simulated s per s: about 1 s of wall time.
+    let mut child = sil_host()
+        .args([
+            "run",
+            "--in-process",
+            "--duration",
+            "2",
+            "--format",
+            "mcap",
+            "--json",
+            "--live",
+            "127.0.0.1:0",
+            "--live-rate",
+            "2",
+            "--live-wait",
+            "60",
+            "--out",
+        ])
+        .arg(&live_out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (addr, _rest) = live_address(child.stderr.take().unwrap());
+    let mut request = tungstenite::client::IntoClientRequest::into_client_request(addr.as_str()).unwrap();
+    request.headers_mut().insert("Sec-WebSocket-Protocol", "foxglove.sdk.v1".parse().unwrap());
+    let (mut ws, response) = tungstenite::connect(request).expect("the live server accepts a client");
+    assert_eq!(response.headers()["Sec-WebSocket-Protocol"], "foxglove.sdk.v1");
+
+    let mut channels: BTreeMap<u64, (String, String, String)> = BTreeMap::new();
+    let mut subscribed = BTreeMap::new();
+    let mut received: BTreeMap<String, usize> = BTreeMap::new();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while received.get("/tf").copied().unwrap_or(0) < 5 || received.get("/log").copied().unwrap_or(0) < 1 {
+        assert!(Instant::now() < deadline, "no /tf and /log messages within 60 s: {received:?}, channels {channels:?}");
+        match ws.read().expect("the server keeps the connection while the run goes") {
+            tungstenite::Message::Text(text) => {
+                let v: serde_json::Value = serde_json::from_str(text.as_str()).unwrap();
+                if v["op"] == "advertise" {
+                    let mut subscriptions = Vec::new();
+                    for c in v["channels"].as_array().unwrap() {
+                        let id = c["id"].as_u64().unwrap();
+                        let topic = c["topic"].as_str().unwrap().to_string();
+                        let schema = c["schema"].as_str().unwrap_or_default().to_string();
+                        channels.insert(id, (topic.clone(), c["schemaName"].as_str().unwrap().to_string(), schema));
+                        if topic == "/tf" || topic == "/log" {
+                            let sub = subscribed.len() as u64 + 1;
+                            subscribed.insert(sub, id);
+                            subscriptions.push(serde_json::json!({ "id": sub, "channelId": id }));
+                        }
+                    }
+                    // One subscribe for both: the run waits for it (--live-wait).
+                    let msg = serde_json::json!({ "op": "subscribe", "subscriptions": subscriptions });
+                    ws.send(tungstenite::Message::Text(msg.to_string().into())).unwrap();
+                }
+            }
+            tungstenite::Message::Binary(b) if b.first() == Some(&1) => {
+                // Message data: op 1, subscription id (u32 LE), log time (u64 LE), payload.
+                let sub = u64::from(u32::from_le_bytes(b[1..5].try_into().unwrap()));
+                let (topic, schema_name, _) = &channels[&subscribed[&sub]];
+                let payload = &b[13..];
+                let spec = match topic.as_str() {
+                    "/tf" => arm_view::view::channel::<FrameTransforms>("/tf"),
+                    _ => arm_view::view::channel::<Log>("/log"),
+                };
+                assert_eq!(&spec.schema_name, schema_name);
+                Schema::parse(&spec.schema).unwrap().check(schema_name, payload).unwrap();
+                *received.entry(topic.clone()).or_insert(0) += 1;
+            }
+            _ => {}
+        }
+    }
+    let mut topics: Vec<&str> = channels.values().map(|c| c.0.as_str()).collect();
+    topics.sort_unstable();
+    assert_eq!(topics, ["/contact", "/firmware", "/log", "/scene", "/state", "/tf", "/torques"]);
+    drop(ws);
+    let status = child.wait().unwrap();
+    assert!(status.success());
+
+    let s = sil_host()
+        .args(["run", "--in-process", "--duration", "2", "--format", "mcap", "--json", "--out"])
+        .arg(&plain_out)
+        .output()
+        .unwrap();
+    assert!(s.status.success());
+    assert!(
+        std::fs::read(live_out.join("trace.mcap")).unwrap() == std::fs::read(plain_out.join("trace.mcap")).unwrap(),
+        "a viewer changes no byte of trace.mcap"
+    );
+}
+
+/// `--live` on an address in use is refused (exit 2) before anything is written.
+#[test]
+fn a_live_address_in_use_is_refused_with_nothing_written() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let s = sil_host().args(["run", "--in-process", "--duration", "0.1", "--live", &addr, "--out"]).arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&s.stderr);
+    assert_eq!(s.status.code(), Some(2), "{err}");
+    assert!(err.contains("could not start") && err.contains(&addr), "{err}");
+    assert!(!out.exists(), "nothing written");
+    let s = sil_host().args(["run", "--in-process", "--live", "127.0.0.1:0", "--live-rate", "0", "--out"]).arg(&out).output().unwrap();
+    assert_eq!(s.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&s.stderr).contains("--live-rate 0"));
+}
