@@ -36,7 +36,7 @@ def test_the_arrow_folder_has_the_csv_tables_with_the_same_bits(folders):
                 # The CSV's shortest round-trip digits read back to the same bits.
                 assert np.array_equal(x.view(np.int64), y.view(np.int64)), f"{name}.{col}"
     files = a.summary["files"]
-    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "summary.json"]
+    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "trace.html", "summary.json"]
 
 
 def test_pandas_and_polars_read_the_arrow_tables(folders):

@@ -100,7 +100,7 @@ def test_simulate_writes_one_mcap_file_equal_to_its_csv_tables(folders):
     assert summary.statistics.message_end_time == round(c.trace["t"][-1] * 1e9)
     assert len(summary.chunk_indexes) >= 1
     files = json.loads((mcap_dir / "summary.json").read_text())["files"]
-    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.mcap", "trace.svg", "trace.pdf", "summary.json"]
+    assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.mcap", "trace.svg", "trace.pdf", "trace.html", "summary.json"]
 
 
 def test_the_json_schemas_describe_every_field_with_its_type(folders):

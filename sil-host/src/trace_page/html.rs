@@ -91,7 +91,8 @@ fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64
     } else {
         format!(
             "Plots: the lowest and the highest value of every {per_bucket} consecutive samples ({samples} samples in all), \
-             finer than a pixel: no extreme is lost."
+             finer than a pixel of the whole run: no extreme is lost; zoomed in (the plots menu) they show the same points, \
+             the trace file has every sample."
         )
     };
     vec![
@@ -108,7 +109,8 @@ fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64
          the arm canvas's data-px-per-m, data-base-x and data-base-y (from the page's top left)."
             .to_string(),
         "Open a time with ?t=SECONDS in the address; keys: space plays or pauses, the arrows step a frame; \
-         click or drag on the plots to move the cursor."
+         click or drag on the plots to move the cursor; the plots menu shows the whole run or 10 s, 1 s or 0.1 s around \
+         the cursor."
             .to_string(),
     ]
 }

@@ -97,7 +97,7 @@ fn arrow_tables_hold_the_csv_tables_bit_for_bit() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join("summary.json")).unwrap()).unwrap();
     let files: Vec<String> =
         summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
-    assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "summary.json"]);
+    assert_eq!(files, ["trace.arrow", "events.arrow", "trace.svg", "trace.pdf", "trace.html", "summary.json"]);
 }
 
 /// `simulate --format mcap` (issue 44): one `trace.mcap` holding both tables, each
@@ -119,7 +119,7 @@ fn an_mcap_file_holds_the_csv_tables_bit_for_bit() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(m.join("summary.json")).unwrap()).unwrap();
     let files: Vec<String> =
         summary["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap().rsplit('/').next().unwrap().to_string()).collect();
-    assert_eq!(files, ["trace.mcap", "trace.svg", "trace.pdf", "summary.json"]);
+    assert_eq!(files, ["trace.mcap", "trace.svg", "trace.pdf", "trace.html", "summary.json"]);
 }
 
 /// `run --format mcap`: the closed-loop trace bit for bit, and the same bytes

@@ -88,6 +88,13 @@
     }
   }
 
+  // A polyline through `pts` ([[x, y], ...], px) in the current stroke style.
+  function polyline(c, pts) {
+    c.beginPath();
+    pts.forEach(([x, y], k) => (k ? c.lineTo(x, y) : c.moveTo(x, y)));
+    c.stroke();
+  }
+
   function drawArm(i) {
     const c = A.ctx, t = F.t[i];
     c.fillStyle = "#fff";
@@ -106,19 +113,12 @@
     c.lineWidth = 2;
     for (let k = Math.floor((x0 - shift) / gap) - 2; k * gap + shift < x1 + D.belt_depth; k++) {
       const x = k * gap + shift;
-      const [xa, ya] = px(x, -D.h), [xb, yb] = px(x - D.belt_depth, -D.h - D.belt_depth);
-      c.beginPath();
-      c.moveTo(xa, ya);
-      c.lineTo(xb, yb);
-      c.stroke();
+      polyline(c, [px(x, -D.h), px(x - D.belt_depth, -D.h - D.belt_depth)]);
     }
     c.restore();
     c.strokeStyle = C.beltLine;
     c.lineWidth = 1.5;
-    c.beginPath();
-    c.moveTo(bl, bt);
-    c.lineTo(br, bt);
-    c.stroke();
+    polyline(c, [[bl, bt], [br, bt]]);
     // The base mount, hatched above the base joint.
     const [ml, mt] = px(-0.04, 0.025), [mr] = px(0.04, 0);
     c.strokeStyle = C.beltLine;
@@ -165,11 +165,7 @@
       c.lineWidth = 7;
       c.lineCap = "round";
       c.lineJoin = "round";
-      c.beginPath();
-      c.moveTo(ox, oy);
-      c.lineTo(pe, qe);
-      c.lineTo(pt, qt);
-      c.stroke();
+      polyline(c, [[ox, oy], [pe, qe], [pt, qt]]);
       c.lineCap = "butt";
       disc(c, pe, qe, 5, "#fff", C.link);
       const ft = F.f_t[i], fn = F.f_n[i];
@@ -195,12 +191,7 @@
     const ly = A.h - LEGEND + 26;
     c.strokeStyle = C.text;
     c.lineWidth = 2;
-    c.beginPath();
-    c.moveTo(PAD, ly - 4);
-    c.lineTo(PAD, ly);
-    c.lineTo(PAD + 0.1 * s, ly);
-    c.lineTo(PAD + 0.1 * s, ly - 4);
-    c.stroke();
+    polyline(c, [[PAD, ly - 4], [PAD, ly], [PAD + 0.1 * s, ly], [PAD + 0.1 * s, ly - 4]]);
     c.fillText("10 cm", PAD + 0.1 * s + 6, ly + 4);
     let lx = PAD + 0.1 * s + 62;
     c.strokeStyle = C.force;
@@ -223,7 +214,20 @@
   still.height = plots.height;
   const ML = 74, MR = 12, MT = 18, MB = 42, GAP = 24;
   const tMin = F.t[0], tMax = Math.max(F.t[N - 1], tMin + 1e-9);
-  const xOf = (t) => ML + ((t - tMin) / (tMax - tMin)) * (G.w - ML - MR);
+  // The plots' time window: the whole run, or a span around the current time.
+  let wA = tMin, wB = tMax;
+  const xOf = (t) => ML + ((t - wA) / (wB - wA)) * (G.w - ML - MR);
+  function setWindow(t) {
+    const span = parseFloat($("span").value);
+    let a = tMin, b = tMax;
+    if (span > 0 && span < tMax - tMin) {
+      a = Math.min(Math.max(t - span / 2, tMin), tMax - span);
+      b = a + span;
+    }
+    if (a === wA && b === wB) return false;
+    [wA, wB] = [a, b];
+    return true;
+  }
   const weights = D.panels.map((p) => (p.categories ? 0.55 : 1));
   const unit = (G.h - MT - MB - GAP * (D.panels.length - 1)) / weights.reduce((a, b) => a + b, 0);
   let top = MT;
@@ -247,8 +251,9 @@
       lo = -0.4;
       hi = p.categories.length - 0.6;
     } else {
-      p.series.forEach((sr) => sr.y.forEach((v) => {
-        if (ok(v)) {
+      const whole = wA <= tMin && wB >= tMax;
+      p.series.forEach((sr) => sr.y.forEach((v, j) => {
+        if (ok(v) && (whole || (sr.t[j] >= wA && sr.t[j] <= wB))) {
           lo = Math.min(lo, v);
           hi = Math.max(hi, v);
         }
@@ -276,25 +281,20 @@
       const y = yOf(v);
       c.strokeStyle = C.grid;
       c.lineWidth = 1;
-      c.beginPath();
-      c.moveTo(ML, y);
-      c.lineTo(right, y);
-      c.stroke();
+      polyline(c, [[ML, y], [right, y]]);
       c.fillStyle = C.text;
       c.textAlign = "right";
       c.fillText(p.categories ? p.categories[v] : tickText(v, ticks.step), ML - 5, y);
     });
     // x ticks (labels under the last panel)
-    const xs = niceStep((tMax - tMin) / 8);
+    const xs = niceStep((wB - wA) / 8);
     c.textAlign = "center";
     c.textBaseline = "top";
-    for (let t = Math.ceil(tMin / xs) * xs; t <= tMax + 1e-9; t += xs) {
+    for (let k = Math.ceil(wA / xs - 1e-9); k * xs <= wB + 1e-9 * xs; k++) {
+      const t = k * xs;
       const x = xOf(t);
       c.strokeStyle = C.frame;
-      c.beginPath();
-      c.moveTo(x, b.top + b.h);
-      c.lineTo(x, b.top + b.h + 4);
-      c.stroke();
+      polyline(c, [[x, b.top + b.h], [x, b.top + b.h + 4]]);
       if (last) c.fillText(tickText(t, xs), x, b.top + b.h + 6);
     }
     // the curves, clipped to the box
@@ -350,10 +350,7 @@
       c.strokeStyle = sr.color;
       c.lineWidth = 2;
       c.setLineDash(sr.dash ? [5, 2] : []);
-      c.beginPath();
-      c.moveTo(lx, ly);
-      c.lineTo(lx + 22, ly);
-      c.stroke();
+      polyline(c, [[lx, ly], [lx + 22, ly]]);
       c.setLineDash([]);
       c.fillStyle = C.text;
       c.fillText(sr.name, lx + 26, ly);
@@ -382,10 +379,7 @@
     const x = xOf(F.t[i]);
     c.strokeStyle = C.cursor;
     c.lineWidth = 1.5;
-    c.beginPath();
-    c.moveTo(x, MT);
-    c.lineTo(x, boxes[boxes.length - 1].top + boxes[boxes.length - 1].h);
-    c.stroke();
+    polyline(c, [[x, MT], [x, boxes[boxes.length - 1].top + boxes[boxes.length - 1].h]]);
   }
 
   // ---- time: the frame nearest a time, play, the slider, the keys ----
@@ -408,6 +402,7 @@
     const t = F.t[index];
     $("clock").textContent = "t = " + fmt(t, 3) + " s of " + fmt(F.t[N - 1], 3) + " s";
     drawArm(index);
+    if (setWindow(t)) drawStill();
     drawPlots(index);
     const parts = [
       ["mode", D.modes[F.mode[index]] || "?"],
@@ -452,7 +447,7 @@
   const seek = (e) => {
     const r = plots.getBoundingClientRect();
     pause();
-    show(nearest(tMin + ((e.clientX - r.left - ML) / (G.w - ML - MR)) * (tMax - tMin)));
+    show(nearest(wA + ((e.clientX - r.left - ML) / (G.w - ML - MR)) * (wB - wA)));
   };
   plots.addEventListener("mousedown", seek);
   plots.addEventListener("mousemove", (e) => e.buttons & 1 && seek(e));
@@ -465,6 +460,11 @@
     e.preventDefault();
   });
   window.addEventListener("resize", publishMapping);
+  $("span").addEventListener("change", () => {
+    setWindow(F.t[index]);
+    drawStill();
+    drawPlots(index);
+  });
 
   // For scripts and tests: the frame nearest a time, and where the page drew the tip.
   window.painleve = {
