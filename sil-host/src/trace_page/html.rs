@@ -74,7 +74,9 @@ fn data(info: &PageInfo, frames: &[Frame], step: f64, samples: u64, curves: &Cur
 /// What the page says about its decimation, scales and units.
 fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64, n_per_m: f64) -> Vec<String> {
     let ms = |s: f64| format!("{:.3}", s * 1e3).trim_end_matches('0').trim_end_matches('.').to_string();
-    let animation = if step <= sample_dt * (1.0 + 1e-9) || frames as u64 >= samples {
+    let animation = if samples == 0 {
+        "Animation: none, the run has no samples (it stopped before its first).".to_string()
+    } else if step <= sample_dt * (1.0 + 1e-9) || frames as u64 >= samples {
         format!("Animation: every sample is a frame ({frames} frames, a sample every {} ms of simulated time).", ms(sample_dt))
     } else {
         format!(
@@ -135,7 +137,7 @@ mod tests {
             closed_loop: true,
         };
         let mut page = TracePage::new(info);
-        let n = (seconds * 1e3) as usize;
+        let n = (seconds * 1e3).round() as i64;
         for k in 0..=n {
             let t = k as f64 * 1e-3;
             page.push(&PageSample {
@@ -169,6 +171,14 @@ mod tests {
         let notes = data["notes"].as_array().unwrap();
         assert!(notes[0].as_str().unwrap().contains("a frame every 10 ms"), "{}", notes[0]);
         assert!(notes[1].as_str().unwrap().contains("every sample (2001)"), "{}", notes[1]);
+    }
+
+    /// A run without samples still gives a page that says so.
+    #[test]
+    fn an_empty_run_gives_a_page_that_says_so() {
+        let html = page_of(-1.0);
+        assert!(html.contains("the run has no samples"), "the note");
+        assert!(html.contains("\"t\":[]"), "no frames");
     }
 
     /// A long run's page stays small, and says how it was thinned.
