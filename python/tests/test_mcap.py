@@ -26,6 +26,8 @@ ARGS = ["--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "2"]
 
 SIMULATE_TOPICS = {"/state", "/contact", "/events"}
 RUN_TOPICS = {"/state", "/contact", "/torques", "/firmware"}
+# The arm in Foxglove's own schemas (arm-view: protobuf), beside the tables' channels.
+FOXGLOVE = {"/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate", "/log": "foxglove.Log"}
 
 
 @pytest.fixture(scope="module")
@@ -46,15 +48,25 @@ def runs(tmp_path_factory):
 
 def by_reader(path):
     """The file through the ``mcap`` package's indexed reader: ``{topic: [(log
-    time, sequence, message object)]}``, the channels and the summary."""
+    time, sequence, message object)]}`` of the tables' JSON channels, the
+    summary; the arm's channels (Foxglove's protobuf schemas, ``FOXGLOVE``) are
+    all there, every one of their messages at a log time of the trace."""
     with open(path, "rb") as f:
         reader = mcap_reader.make_reader(f)
         summary = reader.get_summary()
         assert summary is not None, "a finished file has its summary"
         out = {}
+        foxglove = {}
         for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if channel.topic in FOXGLOVE:
+                assert (channel.message_encoding, schema.encoding, schema.name) == ("protobuf", "protobuf", FOXGLOVE[channel.topic])
+                foxglove.setdefault(channel.topic, []).append(message.log_time)
+                continue
             assert channel.message_encoding == "json" and schema.encoding == "jsonschema", channel.topic
             out.setdefault(channel.topic, []).append((message.log_time, message.sequence, json.loads(message.data)))
+    assert set(foxglove) == set(FOXGLOVE), sorted(foxglove)
+    times = {ns for ns, _, _ in out["/state"]}
+    assert set(foxglove["/tf"]) <= times and foxglove["/tf"] == foxglove["/scene"]
     return out, summary
 
 
@@ -95,8 +107,11 @@ def test_simulate_writes_one_mcap_file_equal_to_its_csv_tables(folders):
     assert_equals_csv(messages, c.trace, ["/state", "/contact"])
     assert_equals_csv(messages, c.events, ["/events"])
     assert c.events.nrows > 5 and len(set(c.events["kind"])) >= 2
-    # Statistics and indexes for Foxglove's seeking: every message counted.
-    assert summary.statistics.message_count == 2 * c.trace.nrows + c.events.nrows
+    # Statistics and indexes for Foxglove's seeking: every message counted: two per
+    # sample, one per event, and the arm's (a frame and a scene every 10 ms of the 1 ms
+    # samples, a log line per event).
+    frames = (c.trace.nrows - 1) // 10 + 1
+    assert summary.statistics.message_count == 2 * c.trace.nrows + c.events.nrows + 2 * frames + c.events.nrows
     assert summary.statistics.message_end_time == round(c.trace["t"][-1] * 1e9)
     assert len(summary.chunk_indexes) >= 1
     files = json.loads((mcap_dir / "summary.json").read_text())["files"]
@@ -108,6 +123,10 @@ def test_the_json_schemas_describe_every_field_with_its_type(folders):
     with open(mcap_dir / "trace.mcap", "rb") as f:
         summary = mcap_reader.make_reader(f).get_summary()
     for channel in summary.channels.values():
+        if channel.topic in FOXGLOVE:
+            # Foxglove's own schemas: a protobuf FileDescriptorSet (checked in sil-host/tests/e2e/foxglove_view.rs).
+            assert summary.schemas[channel.schema_id].encoding == "protobuf", channel.topic
+            continue
         schema = json.loads(summary.schemas[channel.schema_id].data)
         assert schema["type"] == "object" and schema["title"].startswith("painleve.")
         assert list(schema["properties"])[0] == "t" and schema["required"] == list(schema["properties"])
@@ -141,7 +160,10 @@ def test_a_runs_mcap_trace_equals_its_csv(runs):
     assert_equals_csv(messages, c.trace, ["/state", "/contact", "/torques", "/firmware"])
     # A chunk per 100 periods (count-based, so the bytes are the same on every link).
     # (Its schemas and channels are in a chunk of their own, before the rows.)
-    assert sorted(len(c.message_index_offsets) for c in summary.chunk_indexes) == [0] + [4] * 10
+    # The tables' four channels, /tf and /scene (a frame every 10 ms) and /log in every
+    # chunk but the last ones without a log line.
+    counts = sorted(len(c.message_index_offsets) for c in summary.chunk_indexes)
+    assert counts[0] == 0 and all(n in (6, 7) for n in counts[1:]) and len(counts) == 11, counts
     m = painleve.load(mcap_dir)
     assert m.command == "run" and list(m.tables) == ["trace"]
     for col in c.trace.columns:

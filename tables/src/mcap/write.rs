@@ -113,14 +113,8 @@ impl McapFile {
         let bad = |what: String| Error::Io { path: self.path.clone(), source: std::io::Error::other(what) };
         let encoder = RowEncoder::<T>::new().map_err(bad)?;
         let channels = encoder.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
-        let join = |v: &mut dyn Iterator<Item = &str>| v.collect::<Vec<_>>().join(",");
-        let metadata = BTreeMap::from([
-            ("columns".to_string(), join(&mut T::NAMES.iter().copied())),
-            ("kinds".to_string(), join(&mut T::KINDS.iter().map(|k| k.name()))),
-            ("topics".to_string(), join(&mut T::GROUPS.iter().map(|g| g.topic))),
-        ]);
-        let name = format!("painleve.table.{}", T::TABLE);
-        self.writer.write_metadata(&Metadata { name, metadata }).map_err(mcap_err(&self.path))?;
+        // The view's channels before the metadata record, which closes the chunk
+        // being built: the schemas and channels of a table share one chunk.
         let view = match view {
             Some(v) => {
                 let ids = v.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
@@ -129,6 +123,14 @@ impl McapFile {
             }
             None => None,
         };
+        let join = |v: &mut dyn Iterator<Item = &str>| v.collect::<Vec<_>>().join(",");
+        let metadata = BTreeMap::from([
+            ("columns".to_string(), join(&mut T::NAMES.iter().copied())),
+            ("kinds".to_string(), join(&mut T::KINDS.iter().map(|k| k.name()))),
+            ("topics".to_string(), join(&mut T::GROUPS.iter().map(|g| g.topic))),
+        ]);
+        let name = format!("painleve.table.{}", T::TABLE);
+        self.writer.write_metadata(&Metadata { name, metadata }).map_err(mcap_err(&self.path))?;
         self.tables.push(TableChannels { encoder: Box::new(encoder), channels, rows: 0, view });
         Ok(McapTable(self.tables.len() - 1))
     }
