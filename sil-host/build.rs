@@ -20,6 +20,16 @@ fn main() {
     let commit = git(&["describe", "--always", "--dirty"]).unwrap_or_else(|| "unknown".into());
     println!("cargo:rustc-env=SIL_HOST_COMMIT={commit}");
     println!("cargo:rerun-if-changed=build.rs");
+    // A build whose git failed (not on PATH, a lock held by another git) said
+    // `unknown`: it is built again when PATH changes or the checkout's own files
+    // move, found from the manifest's folder, so the stamp never stays stale.
+    println!("cargo:rerun-if-env-changed=PATH");
+    if let Ok(manifest) = std::env::var("CARGO_MANIFEST_DIR") {
+        let dot_git = Path::new(&manifest).join("../.git");
+        for file in ["HEAD", "index", "packed-refs", "refs/heads/main"] {
+            watch(&dot_git.join(file));
+        }
+    }
     // Built again when the commit moves or the index changes (a commit, a checkout,
     // staged edits): a worktree's HEAD and index are its own, the refs are the
     // common folder's (the branch's ref, which a commit moves, and packed-refs).

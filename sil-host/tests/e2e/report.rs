@@ -83,7 +83,7 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     let images = image_targets(&results);
     assert!(images.len() >= figures, "{} of {figures} figures on the results page", images.len());
     for target in &images {
-        assert!(target.starts_with("figures/") && target.ends_with(".svg"), "{target}");
+        assert!(target.starts_with("figures/") && (target.ends_with(".svg") || target.ends_with("/animation.gif")), "{target}");
         assert!(results_dir.join(target).is_file(), "{target} not copied");
     }
     assert!(!results.contains(&dir.path().display().to_string()), "the results page names the temporary folder");

@@ -31,7 +31,11 @@ fn every_image_of_the_results_page_is_in_the_repository() {
     let images = images(&page);
     assert!(images.len() >= 10, "{} images on docs/results.md", images.len());
     for target in &images {
-        assert!(target.starts_with("figures/") && target.ends_with(".svg"), "{target}: not a relative path to an SVG in docs/figures/");
+        // The figures (SVG, their PDFs beside them) and the report's animations (GIF).
+        assert!(
+            target.starts_with("figures/") && (target.ends_with(".svg") || target.ends_with("/animation.gif")),
+            "{target}: not a relative path to an SVG or a report animation in docs/figures/"
+        );
         assert!(docs().join(target).is_file(), "{target} is referenced by docs/results.md but not in docs/");
     }
 }
