@@ -76,3 +76,49 @@ pub fn frame_transforms(g: &ArmGeometry, t: f64, theta1: f64, theta2: f64) -> Fr
         ],
     }
 }
+
+/// `v` (3-vector) turned by the unit quaternion `q` (`v + 2 w (u x v) + 2 u x (u x v)`,
+/// `u = (x, y, z)`).
+pub fn rotate(q: &Quaternion, v: [f64; 3]) -> [f64; 3] {
+    let u = [q.x, q.y, q.z];
+    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let c = cross(u, v);
+    let cc = cross(u, c);
+    [0, 1, 2].map(|i| v[i] + 2.0 * q.w * c[i] + 2.0 * cc[i])
+}
+
+/// The Hamilton product `a b` (the turn `b`, then `a`).
+pub fn multiply(a: &Quaternion, b: &Quaternion) -> Quaternion {
+    Quaternion {
+        w: a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+        x: a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+        y: a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+        z: a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+    }
+}
+
+/// The origin of `frame` in `world` (m), composing the transforms of `tf` from
+/// the root down, as Foxglove does: what a reader of `/tf` finds the tip at.
+/// `None` when the chain from `frame` does not reach `world` (a frame without
+/// a parent, a loop, a transform without translation or rotation).
+pub fn origin_in_world(tf: &FrameTransforms, frame: &str) -> Option<[f64; 3]> {
+    let mut chain = Vec::new();
+    let mut child = frame;
+    while child != FRAMES[0] {
+        let t = tf.transforms.iter().find(|t| t.child_frame_id == child)?;
+        if chain.len() > tf.transforms.len() {
+            return None;
+        }
+        chain.push(t);
+        child = &t.parent_frame_id;
+    }
+    let mut p = [0.0; 3];
+    let mut r = Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 };
+    for t in chain.iter().rev() {
+        let v = t.translation?;
+        let d = rotate(&r, [v.x, v.y, v.z]);
+        p = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
+        r = multiply(&r, &t.rotation?);
+    }
+    Some(p)
+}

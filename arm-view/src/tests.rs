@@ -3,7 +3,7 @@
 
 use foxglove::{
     Encode,
-    messages::{FrameTransforms, Log, Quaternion, SceneUpdate, Vector3},
+    messages::{FrameTransforms, Log, SceneUpdate},
 };
 use proptest::prelude::*;
 use prost::Message as _;
@@ -11,42 +11,9 @@ use tables::mcap::McapView;
 
 use crate::{geometry::*, validate::Schema, view::*};
 
-fn rotate(q: &Quaternion, v: [f64; 3]) -> [f64; 3] {
-    // v' = v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z).
-    let u = [q.x, q.y, q.z];
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let c = cross(u, v);
-    let cc = cross(u, c);
-    [0, 1, 2].map(|i| v[i] + 2.0 * q.w * c[i] + 2.0 * cc[i])
-}
-
-fn mul(a: &Quaternion, b: &Quaternion) -> Quaternion {
-    Quaternion {
-        w: a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-        x: a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-        y: a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-        z: a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
-    }
-}
-
-/// The origin of `frame` in `world`, composing the chain of `tf` from the root.
-fn origin_in_world(tf: &FrameTransforms, frame: &str) -> [f64; 3] {
-    let mut chain = Vec::new();
-    let mut child = frame.to_string();
-    while child != "world" {
-        let t = tf.transforms.iter().find(|t| t.child_frame_id == child).expect("a parent");
-        chain.push(t.clone());
-        child = t.parent_frame_id.clone();
-    }
-    let mut p = [0.0; 3];
-    let mut r = Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 };
-    for t in chain.iter().rev() {
-        let Vector3 { x, y, z } = t.translation.unwrap();
-        let d = rotate(&r, [x, y, z]);
-        p = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
-        r = mul(&r, &t.rotation.unwrap());
-    }
-    p
+/// The origin of `frame` in `world`, which every test's chain has.
+fn origin(tf: &FrameTransforms, frame: &str) -> [f64; 3] {
+    origin_in_world(tf, frame).expect("a chain to world")
 }
 
 const PAPER: ArmGeometry = ArmGeometry { l: 0.21, h: 0.3775, v_belt: -0.4 };
@@ -59,10 +26,10 @@ proptest! {
     fn the_frames_put_the_tip_where_the_kinematics_do(theta1 in -3.2..3.2f64, theta2 in -3.2..3.2f64, l in 0.05..1.0f64) {
         let g = ArmGeometry { l, ..PAPER };
         let tf = frame_transforms(&g, 0.5, theta1, theta2);
-        let tip = origin_in_world(&tf, "tip");
+        let tip = origin(&tf, "tip");
         let want = g.tip(theta1, theta2);
         prop_assert!((tip[0] - want[0]).abs() < 1e-12 && tip[1].abs() < 1e-15 && (tip[2] - want[1]).abs() < 1e-12, "{tip:?} against {want:?}");
-        let elbow = origin_in_world(&tf, "link2");
+        let elbow = origin(&tf, "link2");
         prop_assert!(((elbow[0].powi(2) + elbow[2].powi(2)).sqrt() - l).abs() < 1e-12);
         prop_assert!((elbow[0] - l * theta1.sin()).abs() < 1e-12);
     }
@@ -117,7 +84,7 @@ fn a_runs_view_messages_check_against_foxglove_schemas() {
             match c {
                 0 => {
                     let tf = FrameTransforms::decode(bytes).unwrap();
-                    let tip = origin_in_world(&tf, "tip");
+                    let tip = origin(&tf, "tip");
                     assert!((tip[0] - r.z_t).abs() < 1e-12 && (tip[2] - r.z_n).abs() < 1e-12);
                 }
                 1 => {
@@ -236,4 +203,15 @@ fn the_channels_carry_the_sdks_schemas() {
         assert_eq!(c.schema, want.data.as_ref());
         assert!(Schema::parse(&c.schema).unwrap().check(&c.schema_name, &[]).is_ok(), "an empty message is valid");
     }
+}
+
+/// A chain that does not reach `world` has no origin: a frame without a parent,
+/// a loop between two frames.
+#[test]
+fn a_broken_chain_has_no_origin() {
+    let mut tf = frame_transforms(&PAPER, 0.0, 0.1, 0.2);
+    assert!(origin_in_world(&tf, "nowhere").is_none());
+    tf.transforms[2].parent_frame_id = "link2".into();
+    tf.transforms[3].parent_frame_id = "link2".into();
+    assert!(origin_in_world(&tf, "tip").is_none(), "link2 is its own parent");
 }

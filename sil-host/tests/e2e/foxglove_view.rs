@@ -15,44 +15,11 @@ use std::{
 };
 
 use arm_view::validate::Schema;
-use foxglove::messages::{FrameTransforms, Log, Quaternion};
+use foxglove::messages::{FrameTransforms, Log};
 use prost::Message as _;
 
 fn sil_host() -> Command {
     Command::new(env!("CARGO_BIN_EXE_sil-host"))
-}
-
-fn rotate(q: &Quaternion, v: [f64; 3]) -> [f64; 3] {
-    let u = [q.x, q.y, q.z];
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let c = cross(u, v);
-    let cc = cross(u, c);
-    [0, 1, 2].map(|i| v[i] + 2.0 * q.w * c[i] + 2.0 * cc[i])
-}
-
-/// The tip's origin in `world`, composing `/tf`'s chain.
-fn tip_of(tf: &FrameTransforms) -> [f64; 3] {
-    let mut chain = Vec::new();
-    let mut child = "tip".to_string();
-    while child != "world" {
-        let t = tf.transforms.iter().find(|t| t.child_frame_id == child).expect("a parent frame");
-        chain.push(t.clone());
-        child = t.parent_frame_id.clone();
-    }
-    let (mut p, mut r) = ([0.0; 3], Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 });
-    for t in chain.iter().rev() {
-        let v = t.translation.unwrap();
-        let d = rotate(&r, [v.x, v.y, v.z]);
-        p = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
-        let q = t.rotation.unwrap();
-        r = Quaternion {
-            w: r.w * q.w - r.x * q.x - r.y * q.y - r.z * q.z,
-            x: r.w * q.x + r.x * q.w + r.y * q.z - r.z * q.y,
-            y: r.w * q.y - r.x * q.z + r.y * q.w + r.z * q.x,
-            z: r.w * q.z + r.x * q.y - r.y * q.x + r.z * q.w,
-        };
-    }
-    p
 }
 
 /// What a `trace.mcap` holds on its Foxglove channels.
@@ -89,7 +56,9 @@ fn check_file(path: &Path) -> Checked {
                 let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
                 contact.insert(m.log_time, (v["z_t"].as_f64().unwrap(), v["z_n"].as_f64().unwrap()));
             }
-            "/tf" => tips.push((m.log_time, tip_of(&FrameTransforms::decode(&*m.data).unwrap()))),
+            "/tf" => {
+                tips.push((m.log_time, arm_view::geometry::origin_in_world(&FrameTransforms::decode(&*m.data).unwrap(), "tip").unwrap()))
+            }
             "/log" => log.push(Log::decode(&*m.data).unwrap()),
             _ => {}
         }
