@@ -169,6 +169,137 @@ impl Diagnostics {
     }
 }
 
+impl Error<()> {
+    /// The same error with the transport's error `bus` in place of `Bus(())`
+    /// (`None`: [`Error::NotReady`], as a chip that never answered).
+    pub fn with_bus<E>(self, bus: Option<E>) -> Error<E> {
+        match self {
+            Error::Bus(()) => bus.map_or(Error::NotReady, Error::Bus),
+            Error::Parity { frame } => Error::Parity { frame },
+            Error::ErrorFlag { errfl } => Error::ErrorFlag { errfl },
+            Error::NotReady => Error::NotReady,
+            Error::Magnet { too_strong, too_weak } => Error::Magnet { too_strong, too_weak },
+            Error::CordicOverflow => Error::CordicOverflow,
+        }
+    }
+}
+
+/// Where a [`SampleSequence`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Sending frame `n` of READ ANGLECOM, READ DIAAGC, READ NOP.
+    Sampling(u8),
+    /// An answer carried EF: sending READ ERRFL.
+    ErrflCommand,
+    /// Sending READ NOP, whose answer is ERRFL.
+    ErrflValue,
+    /// Over.
+    Done,
+}
+
+/// One encoder's sample as a sequence of frames, without a bus: the commands
+/// to send one frame at a time and what their answers mean, for a driver that
+/// blocks on each frame ([`As5047p::sample`]) and for an interrupt-driven
+/// acquisition (the `arm` image's DMA, docs/board.md "The encoders by DMA")
+/// alike, so both put the same frames on the bus.
+///
+/// The frames (AS5047P datasheet v1-06, "SPI Read", one chip-select assertion
+/// each): READ ANGLECOM, READ DIAAGC, READ NOP; the answers of the second and
+/// third are the angle and DIAAGC. An answer of odd parity ends the sample
+/// ([`Error::Parity`]); when every answer has even parity and one carries EF,
+/// two more frames, READ ERRFL and READ NOP, read (and so clear) ERRFL
+/// ([`Error::ErrorFlag`]; [`ERRFL_UNKNOWN`] when that read fails). At most 5
+/// frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleSequence {
+    phase: Phase,
+    answers: [u16; 3],
+    outcome: Option<Result<u16, Error<()>>>,
+}
+
+impl Default for SampleSequence {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The most frames a [`SampleSequence`] sends.
+pub const SAMPLE_MAX_FRAMES: usize = 5;
+
+impl SampleSequence {
+    /// A sample not started: its first command is READ ANGLECOM.
+    pub const fn new() -> Self {
+        Self { phase: Phase::Sampling(0), answers: [0; 3], outcome: None }
+    }
+
+    /// The command of the next frame (16-bit, even parity), or `None` once
+    /// the sample is over ([`SampleSequence::outcome`]).
+    pub fn command(&self) -> Option<u16> {
+        match self.phase {
+            Phase::Sampling(0) => Some(read_command(REG_ANGLECOM)),
+            Phase::Sampling(1) => Some(read_command(REG_DIAAGC)),
+            Phase::Sampling(_) | Phase::ErrflValue => Some(read_command(REG_NOP)),
+            Phase::ErrflCommand => Some(read_command(REG_ERRFL)),
+            Phase::Done => None,
+        }
+    }
+
+    /// The answer `word` to the frame of [`SampleSequence::command`] (ignored
+    /// once the sample is over).
+    pub fn answer(&mut self, word: u16) {
+        let parity_ok = has_even_parity(word);
+        match self.phase {
+            Phase::Sampling(n) => {
+                if !parity_ok {
+                    self.finish(Err(Error::Parity { frame: word }));
+                    return;
+                }
+                self.answers[usize::from(n)] = word;
+                if n < 2 {
+                    self.phase = Phase::Sampling(n + 1);
+                } else if self.answers.iter().any(|a| a & EF != 0) {
+                    self.phase = Phase::ErrflCommand;
+                } else {
+                    let [_, angle, diaagc] = self.answers;
+                    self.finish(Diagnostics::from_register(diaagc).check().map(|()| angle & DATA));
+                }
+            }
+            // EF in the answer to READ ERRFL is expected (reading ERRFL is how
+            // EF is cleared); only its parity counts.
+            Phase::ErrflCommand if parity_ok => self.phase = Phase::ErrflValue,
+            Phase::ErrflCommand => self.finish(Err(Error::ErrorFlag { errfl: ERRFL_UNKNOWN })),
+            Phase::ErrflValue => {
+                let errfl = if parity_ok { word & DATA } else { ERRFL_UNKNOWN };
+                self.finish(Err(Error::ErrorFlag { errfl }));
+            }
+            Phase::Done => {}
+        }
+    }
+
+    /// The frame of [`SampleSequence::command`] did not complete (the bus
+    /// failed): the sample ends as [`Error::Bus`], or, while reading ERRFL,
+    /// as [`Error::ErrorFlag`] with [`ERRFL_UNKNOWN`].
+    pub fn transfer_failed(&mut self) {
+        match self.phase {
+            Phase::Sampling(_) => self.finish(Err(Error::Bus(()))),
+            Phase::ErrflCommand | Phase::ErrflValue => self.finish(Err(Error::ErrorFlag { errfl: ERRFL_UNKNOWN })),
+            Phase::Done => {}
+        }
+    }
+
+    fn finish(&mut self, outcome: Result<u16, Error<()>>) {
+        self.outcome = Some(outcome);
+        self.phase = Phase::Done;
+    }
+
+    /// The sample's outcome once over (`None` before): the 14-bit angle in
+    /// `[0, 2^14)` or the error, as [`As5047p::sample`] returns them
+    /// (`Error::Bus(())` for a failed transfer: [`Error::with_bus`]).
+    pub fn outcome(&self) -> Option<Result<u16, Error<()>>> {
+        self.outcome
+    }
+}
+
 /// One AS5047P on its own chip select.
 ///
 /// `SPI` is the device (bus plus chip select) configured for mode 1 (CPOL 0,
@@ -250,9 +381,27 @@ impl<SPI: SpiDevice<u16>> As5047p<SPI> {
     /// DIAAGC (see [`Diagnostics::check`]): [`Error::NotReady`],
     /// [`Error::Magnet`], [`Error::CordicOverflow`].
     pub fn sample(&mut self) -> Result<u16, Error<SPI::Error>> {
-        let [_, angle, diaagc] = self.frames([read_command(REG_ANGLECOM), read_command(REG_DIAAGC), read_command(REG_NOP)])?;
-        Diagnostics::from_register(diaagc).check()?;
-        Ok(angle & DATA)
+        // The frames of [`SampleSequence`], one chip-select assertion each: the
+        // same bus traffic as a DMA acquisition of the same sequence.
+        let mut seq = SampleSequence::new();
+        let mut bus = None;
+        while let Some(command) = seq.command() {
+            let mut word = [command];
+            match self.spi.transfer_in_place(&mut word) {
+                Ok(()) => seq.answer(word[0]),
+                Err(e) => {
+                    bus.get_or_insert(e);
+                    seq.transfer_failed();
+                }
+            }
+        }
+        match seq.outcome() {
+            Some(Ok(angle)) => Ok(angle),
+            Some(Err(e)) => Err(e.with_bus(bus)),
+            // Unreachable: the loop runs until the sequence is done; a
+            // sequence without an outcome is reported as a bus error.
+            None => Err(Error::NotReady),
+        }
     }
 
     /// Reads DIAAGC (2 frames) and decodes it, without judging it.

@@ -232,3 +232,64 @@ proptest! {
         spi.done();
     }
 }
+
+mod sequence {
+    use super::*;
+    use crate::as5047p::{SAMPLE_MAX_FRAMES, SampleSequence};
+
+    /// Runs a sequence against `answer_of(frame_index, command)`.
+    fn run(mut answer_of: impl FnMut(usize, u16) -> Option<u16>) -> (Vec<u16>, Result<u16, Error<()>>) {
+        let mut seq = SampleSequence::new();
+        let mut sent = Vec::new();
+        while let Some(c) = seq.command() {
+            match answer_of(sent.len(), c) {
+                Some(a) => seq.answer(a),
+                None => seq.transfer_failed(),
+            }
+            sent.push(c);
+            assert!(sent.len() <= SAMPLE_MAX_FRAMES);
+        }
+        (sent, seq.outcome().expect("a finished sequence has an outcome"))
+    }
+
+    #[test]
+    fn a_clean_sample_is_three_frames() {
+        let answers = [answer(0x155, false), answer(0x2ABC, false), answer(DIAAGC_LF | 0x80, false)];
+        let (sent, out) = run(|i, _| Some(answers[i]));
+        assert_eq!(sent, vec![read_command(REG_ANGLECOM), read_command(REG_DIAAGC), read_command(REG_NOP)]);
+        assert_eq!(out, Ok(0x2ABC));
+    }
+
+    #[test]
+    fn an_error_flag_reads_errfl_in_two_more_frames() {
+        let answers = [answer(0, false), answer(0x10, true), answer(DIAAGC_LF, false), answer(0, true), answer(ERRFL_PARERR, false)];
+        let (sent, out) = run(|i, _| Some(answers[i]));
+        assert_eq!(sent.len(), 5);
+        assert_eq!(sent[3], read_command(REG_ERRFL));
+        assert_eq!(out, Err(Error::ErrorFlag { errfl: ERRFL_PARERR }));
+    }
+
+    #[test]
+    fn a_failed_transfer_is_a_bus_error_then_unknown_errfl() {
+        assert_eq!(run(|i, _| (i < 1).then_some(0)).1, Err(Error::Bus(())));
+        let answers = [answer(0, true), answer(0, false), answer(DIAAGC_LF, false)];
+        assert_eq!(run(|i, _| answers.get(i).copied()).1, Err(Error::ErrorFlag { errfl: ERRFL_UNKNOWN }));
+        assert_eq!(Error::Bus(()).with_bus(Some(7u8)), Error::Bus(7));
+    }
+
+    proptest! {
+        #[test]
+        fn the_blocking_sample_sends_the_sequences_frames_and_returns_its_outcome(
+            answers in proptest::collection::vec(any::<u16>(), SAMPLE_MAX_FRAMES),
+        ) {
+            // The sequence alone, then As5047p::sample over a mock expecting
+            // exactly the sequence's frames: the same outcome.
+            let (sent, out) = run(|i, _| Some(answers[i]));
+            let frames: Vec<(u16, u16)> = sent.iter().zip(&answers).map(|(&c, &a)| (c, a)).collect();
+            let mut spi = mock(&frames);
+            let got = As5047p::new(spi.clone()).sample();
+            spi.done();
+            prop_assert_eq!(got, out.map_err(|e| e.with_bus(None::<ErrorKind>)));
+        }
+    }
+}
