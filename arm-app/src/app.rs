@@ -105,6 +105,8 @@ pub struct ArmParts<H: ArmIo> {
     pub theta1: H::Spi,
     /// The elbow's encoder (`theta2 - theta1`).
     pub elbow: H::Spi,
+    /// How the period's encoder samples are taken.
+    pub encoders: H::Encoders,
     /// The load cell's ADC.
     pub adc: H::Adc,
     /// The belt's counter.
@@ -195,6 +197,8 @@ impl<H: ArmIo> ArmApp<H> {
         let hw = Hardware {
             theta1,
             elbow,
+            acquisition: parts.encoders,
+            acquisition_logged: None,
             load,
             belt,
             motors: parts.motors,
@@ -264,6 +268,12 @@ impl<H: ArmIo> ArmApp<H> {
         }
         hw.seq = hw.seq.wrapping_add(1);
         hw.handler_worst = hw.handler_worst.max(clock.ticks().wrapping_sub(hw.tick_mark));
+    }
+
+    /// The firmware's configuration in force (the settings record's, else the
+    /// fallback's): its period is the control tick's.
+    pub fn config(&self) -> &Config {
+        &self.hw.config
     }
 
     /// Periods run so far.

@@ -15,7 +15,7 @@ use shared::{
 
 use crate::{
     bringup::{CalibrationRecord, JogOutcome, RawReadings},
-    io::{ArmIo, Motors},
+    io::{ArmIo, EncoderAcquisition, Motors},
     joint::{EncoderFault, Joint},
     notice::Notice,
     record::Settings,
@@ -46,6 +46,9 @@ pub(crate) struct Jog {
 pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) theta1: As5047p<H::Spi>,
     pub(crate) elbow: As5047p<H::Spi>,
+    pub(crate) acquisition: H::Encoders,
+    /// The acquisition fault last logged (`None`: none, or the acquisition is back).
+    pub(crate) acquisition_logged: Option<crate::joint::AcquisitionFault>,
     pub(crate) load: LoadCell<H::Adc>,
     pub(crate) belt: BeltEncoder<H::Counter>,
     pub(crate) motors: Motors<H>,
@@ -94,8 +97,17 @@ impl<H: ArmIo> Hardware<H> {
     /// Samples every sensor now (the tick): the frame of period `seq`, with a
     /// notice when the set of invalid readings changes.
     pub(crate) fn sample(&mut self, log: &mut impl FnMut(Notice)) -> SensorFrame {
-        let encoder = |r: Result<u16, drivers::as5047p::Error<_>>| r.map_err(|e| EncoderFault::of(&e));
-        let encoder_counts = [encoder(self.theta1.sample()), encoder(self.elbow.sample())];
+        let encoder_counts = self.acquisition.acquire(&mut self.theta1, &mut self.elbow);
+        let acquisition = encoder_counts.iter().find_map(|r| match r {
+            Err(EncoderFault::Acquisition(f)) => Some(*f),
+            _ => None,
+        });
+        if acquisition != self.acquisition_logged {
+            if let Some(fault) = acquisition {
+                log(Notice::AcquisitionFault { seq: self.seq, fault });
+            }
+            self.acquisition_logged = acquisition;
+        }
         let load = self.load.read_counts_and_codes().ok();
         let readings = Readings {
             theta1_raw: encoder_counts[0].ok(),

@@ -37,6 +37,45 @@ pub enum EncoderFault {
     Magnet,
     /// CORDIC overflow.
     CordicOverflow,
+    /// The period's acquisition of both encoders failed ([`AcquisitionFault`]).
+    Acquisition(AcquisitionFault),
+}
+
+/// Why a period's acquisition of the two encoders failed on a board that reads
+/// them without the core (the `arm` image: SPI1 through DMA2, RM0090 10;
+/// docs/board.md "The encoders by DMA"). Both encoders' readings of that period
+/// are invalid (the frame's `THETA1_INVALID` and `ELBOW_INVALID`); the
+/// firmware holds its last command, and three such periods in a row latch the
+/// safe state with reason 2, `BadFrames` (`firmware::SafeReason`), the drivers
+/// disabled. Each fault is logged by name ([`crate::Notice::AcquisitionFault`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum AcquisitionFault {
+    /// A stream's transfer error (DMA_LISR TEIF: a bus error at SxPAR or
+    /// SxM0AR; the hardware disables the stream, RM0090 10.3.16).
+    TransferError,
+    /// A stream's FIFO error (DMA_LISR FEIF: in direct mode, RM0090 10.3.16).
+    FifoError,
+    /// A stream's direct-mode error (DMA_LISR DMEIF, RM0090 10.3.16).
+    DirectModeError,
+    /// The frames had not completed by the acquisition's deadline (a stream or
+    /// SPI1 stalled: no request, a mode fault, a stream disabled).
+    Timeout,
+    /// An encoder's chip select read low after it was released (a short, a
+    /// pin held by something else): both chips could drive MISO at once.
+    StuckChipSelect,
+}
+
+impl AcquisitionFault {
+    /// A short description for a log line.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::TransferError => "DMA transfer error (TEIF)",
+            Self::FifoError => "DMA FIFO error (FEIF)",
+            Self::DirectModeError => "DMA direct-mode error (DMEIF)",
+            Self::Timeout => "the encoders' frames did not complete in time",
+            Self::StuckChipSelect => "an encoder's chip select is stuck low",
+        }
+    }
 }
 
 impl EncoderFault {
@@ -62,6 +101,7 @@ impl EncoderFault {
             Self::NotReady => "offset compensation not finished, or no chip on the bus",
             Self::Magnet => "magnetic field out of range",
             Self::CordicOverflow => "CORDIC overflow",
+            Self::Acquisition(f) => f.describe(),
         }
     }
 }

@@ -37,7 +37,7 @@ pub mod telemetry;
 
 pub use app::{ArmApp, ArmCalibration, ArmParts, StartError};
 pub use hardware::{BUTTON_PERIODS, CODES_FULL_SCALE};
-pub use io::{ArmIo, IntervalClock, Motors, Watchdog};
-pub use joint::{EncoderFault, Joint};
+pub use io::{ArmIo, Blocking, EncoderAcquisition, IntervalClock, Motors, Watchdog};
+pub use joint::{AcquisitionFault, EncoderFault, Joint};
 pub use notice::Notice;
 pub use record::Settings;

@@ -32,6 +32,14 @@ pub enum Notice {
         /// The frame's flags masked with `frame_flags::ANY_INVALID`.
         flags: u16,
     },
+    /// The period's acquisition of the encoders failed (logged when the fault
+    /// first appears or changes; the frame flags them invalid).
+    AcquisitionFault {
+        /// The period.
+        seq: u32,
+        /// Which fault.
+        fault: crate::joint::AcquisitionFault,
+    },
     /// Every sensor reads again.
     ReadingsBack {
         /// The period.

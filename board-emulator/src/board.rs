@@ -23,6 +23,7 @@ use crate::{
     checks::{self, peek},
     core_clock::Mode,
     device::{BoardError, RegisterModel},
+    dma2::{Dma2, DmaFaults},
     image::{ArmImage, FLASH_BASE, RECORD_SECTOR},
     machine::{BoardMachine, BuildError, input, out},
     spi1::{Spi1, SpiFaults},
@@ -207,6 +208,24 @@ impl EmulatedBoard {
             w.with(|m| {
                 if let Some(s) = as_spi(m) {
                     s.faults = spi;
+                }
+            });
+        }
+        // The acquisition's faults (the twin's `BusFaults::acquisition`) on
+        // DMA2's next transfer; a stuck chip select is not modelled here
+        // (rsemu's GPIO reads back its own output).
+        use arm_app::AcquisitionFault as F;
+        let dma = match faults.acquisition {
+            Some(F::TransferError) => DmaFaults { transfer_error: true, ..DmaFaults::default() },
+            Some(F::FifoError) => DmaFaults { fifo_error: true, ..DmaFaults::default() },
+            Some(F::DirectModeError) => DmaFaults { direct_mode_error: true, ..DmaFaults::default() },
+            Some(F::Timeout) => DmaFaults { stall: true, ..DmaFaults::default() },
+            Some(F::StuckChipSelect) | None => DmaFaults::default(),
+        };
+        if let Some(w) = self.m.hub.window("dma2") {
+            w.with(|m| {
+                if let Some(d) = (m as &mut dyn std::any::Any).downcast_mut::<Dma2>() {
+                    d.faults = dma;
                 }
             });
         }

@@ -55,9 +55,13 @@ mod run;
 
 /// External interrupt inputs folded in (the STM32F405 has 82; three words).
 const IRQS: u16 = 96;
-/// TIM2's interrupt line and exception number.
+/// TIM2's interrupt line (the tick: its update, and the acquisition's
+/// deadline on compare 1).
 pub const TIM2_IRQ: u16 = 28;
-const TIM2_EXCEPTION: u16 = 16 + TIM2_IRQ;
+/// The control interrupt's line: CAN2_TX's vector, pended by the image when the
+/// period's acquisition is over (`board_stm32f405::mcu::acquisition`, issue 56).
+pub const CONTROL_IRQ: u16 = 64;
+const CONTROL_EXCEPTION: u16 = 16 + CONTROL_IRQ;
 
 /// How the core is run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,6 +104,8 @@ pub struct HandlerRun {
 struct Track {
     tick: u64,
     irq_seen: Option<u64>,
+    /// TIM2's line at the last step (its rising edges are the tick and the deadline).
+    tim2_level: bool,
     first: Option<u64>,
     instructions: u64,
     wait: u64,

@@ -114,6 +114,9 @@ pub trait RegisterModel: Send + std::any::Any {
     }
     /// Back to its reset state (a system reset, RM0090 6.1.2).
     fn reset(&mut self);
+    /// The bus a bus master reaches memory by (the machine's `dmabus`) and its
+    /// requester id; models that master no bus ignore it.
+    fn bind_bus(&mut self, _space: Arc<rsemu::core::space::AddressSpace>, _requester: rsemu::core::space::RequesterId) {}
 }
 
 /// A model's result.
@@ -237,7 +240,15 @@ impl Device for RegsDevice {
     }
 }
 
-impl Instance for RegsDevice {}
+impl Instance for RegsDevice {
+    fn bind(&self, ctx: &rsemu::machine::BindCtx<'_>) -> Result<()> {
+        if let Some(space) = ctx.space_named("dmabus") {
+            let requester = ctx.requester();
+            self.window.with(|m| m.bind_bus(Arc::clone(space), requester));
+        }
+        Ok(())
+    }
+}
 
 /// The class of our register windows.
 pub static REGS_CLASS: DeviceClass = DeviceClass {

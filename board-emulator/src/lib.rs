@@ -19,7 +19,7 @@
 //! | [`image`] | the ELF: flash content, the RAM symbols read (monitor block, RTT, stack) |
 //! | [`machine`] | the rsemu machine: the STM32F407 description plus the board's parts and wires |
 //! | [`device`] | our device classes in rsemu, and [`device::BoardError`] |
-//! | [`spi1`], [`adc1`], [`usart1`] | the peripherals we model, each strict |
+//! | [`spi1`], [`adc1`], [`usart1`], [`dma2`] | the peripherals we model, each strict |
 //! | [`checks`] | the board's checks of the peripherals rsemu models (clock tree, pins, timers, IWDG) |
 //! | [`core_clock`] | the core wrapped: a sleeping core skips to the next event; the tick handler's instructions, latency and cycles |
 //! | [`accelerator`], [`flash_reads`] | the flash's wait states behind the ART accelerator, costed on the executed instructions |
@@ -35,6 +35,7 @@ pub mod board;
 pub mod checks;
 pub mod core_clock;
 pub mod device;
+pub mod dma2;
 pub mod flash_reads;
 pub mod flash_sequence;
 pub mod image;
@@ -46,4 +47,5 @@ mod widen;
 pub use board::{EmuError, EmulatedBoard, RegisterFault};
 pub use device::BoardError;
 pub use image::{ArmImage, ImageError};
+pub use dma2::DmaFaults;
 pub use spi1::SpiFaults;

@@ -26,13 +26,16 @@ const BOARD: &str = r#"
   object spi1   "painleve.regs" { role = "spi1" }
   object adc1   "painleve.regs" { role = "adc1" }
   object usart1 "painleve.regs" { role = "usart1" }
+  object dma2   "painleve.regs" { role = "dma2" }
   object board  "painleve.pins" { }
   map mem apb2-base + 0x3000 size 0x400 = spi1
   map mem apb2-base + 0x2000 size 0x400 = adc1
   map mem apb2-base + 0x1000 size 0x400 = usart1
+  map mem ahb1-base + 0x6400 size 0x400 = dma2
   wire spi1.irq   -> cpu.irq35      # SPI1
   wire adc1.irq   -> cpu.irq18      # ADC
   wire usart1.irq -> cpu.irq37      # USART1
+  wire dma2.irq   -> cpu.irq56      # DMA2_Stream0: SPI1_RX's frame ends
   wire tim2.trgo  -> adc1.in0       # the control tick starts the injected conversions
   wire gpioa.p4   -> spi1.in0       # PA4: the theta1 encoder's CSn
   wire gpiob.p0   -> spi1.in1       # PB0: the elbow encoder's CSn
@@ -54,8 +57,12 @@ const BOARD: &str = r#"
 pub const LEFT_OUT: [&str; 13] =
     ["tim1", "tim5", "tim6", "tim7", "tim8", "tim9", "tim10", "tim11", "tim12", "tim13", "tim14", "wwdg", "rtc"];
 
-/// The description without the objects of [`LEFT_OUT`]: their `object` lines
-/// and every `map` and `wire` line naming one.
+/// The objects of rsemu's description the board replaces with its own model:
+/// DMA2 ([`crate::dma2`], strict, reaching SPI1's model).
+pub const REPLACED: [&str; 1] = ["dma2"];
+
+/// The description without the objects of [`LEFT_OUT`] and [`REPLACED`]: their
+/// `object` lines and every `map` and `wire` line naming one.
 fn without_unused(text: &str) -> String {
     let names = |line: &str| -> bool {
         let t = line.trim_start();
@@ -63,7 +70,7 @@ fn without_unused(text: &str) -> String {
             return false;
         }
         let code = t.split('#').next().unwrap_or("");
-        code.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-' || c == '_')).any(|w| LEFT_OUT.contains(&w))
+        code.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-' || c == '_')).any(|w| LEFT_OUT.contains(&w) || REPLACED.contains(&w))
     };
     text.lines().filter(|l| !names(l)).flat_map(|l| [l, "\n"]).collect()
 }
@@ -128,6 +135,7 @@ impl BoardMachine {
         idle[out::FAULT] = true;
         idle[out::BUTTON] = true;
         let hub = Arc::new(Hub::new(errors.clone(), idle));
+        hub.offer("dma2", Box::new(crate::dma2::Dma2::new(Arc::downgrade(&hub))));
         for (role, m) in models {
             hub.offer(role, m);
         }
@@ -138,8 +146,8 @@ impl BoardMachine {
         crate::widen::check_flash_class(&mut opts.bindings, "st.flash", errors.clone());
         if mode == Mode::Functional {
             // The core alone runnable on its crystal: rsemu then arms live
-            // positions (the belt's edges need them). The image never enables
-            // DMA (checked: `checks::dma_unused`).
+            // positions (the belt's edges need them). DMA1 is unused; DMA2 is
+            // the board's own model (`crate::dma2`), which moves a frame at once.
             crate::widen::not_runnable_class(&mut opts.bindings, "st.dma");
         }
         device::install(&mut reg, &mut opts.bindings, &mut opts.classes, Arc::clone(&hub)).map_err(e)?;

@@ -14,8 +14,10 @@
 //! sets `OVR` and is lost (cleared by reading DR then SR); a mode fault sets
 //! `MODF` and clears `SPE` and `MSTR` (RM0090 28.4.8).
 //!
-//! Not modelled: the transfer's duration (a frame completes at once: `TXE` is
-//! always set, `BSY` never), CRC, TI mode, I2S, DMA.
+//! DMA: with CR2's TXDMAEN and RXDMAEN, DMA2's streams move the words
+//! ([`crate::dma2`], [`Spi1::dma_exchange`]). Not modelled: the transfer's
+//! duration (a frame completes at once: `TXE` is always set, `BSY` never), CRC,
+//! TI mode, I2S.
 
 use board_twin::as5047p::As5047pModel;
 use embedded_hal::spi::{Operation, SpiDevice};
@@ -38,6 +40,8 @@ const SSI: u32 = 1 << 8;
 const SSM: u32 = 1 << 9;
 const DFF: u32 = 1 << 11;
 const SSOE: u32 = 1 << 2; // CR2
+const RXDMAEN: u32 = 1 << 0; // CR2
+const TXDMAEN: u32 = 1 << 1; // CR2
 
 const RXNE: u32 = 1 << 0;
 const TXE: u32 = 1 << 1;
@@ -199,6 +203,27 @@ impl Spi1 {
             self.rx = Some(answer);
         }
         Ok(())
+    }
+}
+
+impl Spi1 {
+    /// DMA2's TX stream writes `word` to DR (RM0090 28.3.9): `Ok(None)` when
+    /// SPI1 does not ask for it (TXDMAEN or SPE clear: the stream waits);
+    /// otherwise the frame goes out, and the word received is returned for
+    /// the RX stream when `rx_stream` is enabled and RXDMAEN set (`Some(None)`:
+    /// it stays in DR, RXNE set).
+    ///
+    /// # Errors
+    /// As a frame written by the core ([`BoardError`]).
+    pub fn dma_exchange(&mut self, word: u16, rx_stream: bool) -> Result2<Option<Option<u16>>> {
+        if self.cr2 & TXDMAEN == 0 || self.cr1 & SPE == 0 {
+            return Ok(None);
+        }
+        self.frame(word)?;
+        if rx_stream && self.cr2 & RXDMAEN != 0 && !self.ovr {
+            return Ok(Some(self.rx.take()));
+        }
+        Ok(Some(None))
     }
 }
 

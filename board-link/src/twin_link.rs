@@ -160,6 +160,7 @@ pub fn describe(n: &Notice) -> String {
             format!("invalid readings: {} (frame flags {flags:#x})", rig::status_words::describe_frame_flags(*flags))
         }
         Notice::ReadingsBack { .. } => "every sensor reads again".into(),
+        Notice::AcquisitionFault { fault, .. } => format!("the encoders' acquisition failed: {}", fault.describe()),
         Notice::SafeState { reason, .. } => format!(
             "{}: drivers disabled",
             rig::status_words::describe_status(

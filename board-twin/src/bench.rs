@@ -46,6 +46,10 @@ pub struct Bench {
     pub belt_count: u16,
     /// The drivers hold nFAULT low (over-current, over-temperature).
     pub driver_fault: bool,
+    /// The acquisition of the encoders fails this period
+    /// ([`crate::acquisition`]): a DMA stream's error flag, a timeout, a
+    /// stuck chip select.
+    pub acquisition: Option<arm_app::AcquisitionFault>,
     /// The enable button is held (PC13 low).
     pub button_held: bool,
     /// What the motor stage's outputs are now.

@@ -8,6 +8,7 @@
 //! |---|---|
 //! | [`description`] | the board's physical truth (mountings, gains, wiring, full scales), a scenario's `[board]` |
 //! | [`bench`] | what the devices share in a period: the arm's inputs, the faults, the pins' outputs |
+//! | [`acquisition`] | the encoders' frames of a period, as the image's DMA moves them, and its faults (TEIF, FEIF, DMEIF, timeout, stuck chip select) |
 //! | [`as5047p`] | the AS5047P's SPI side: 16-bit frames, parity, the one-frame pipeline, ERRFL, DIAAGC |
 //! | [`adc`] | the load cell's amplifiers into 12-bit ADC codes |
 //! | [`counter`] | the belt's quadrature counter, 16-bit wrap |
@@ -21,6 +22,7 @@
 //! drivers' current loop (torque follows the duty at once), the PWM's ripple, the
 //! MCU's clock (a step takes no time: deadline figures come from PIL).
 
+pub mod acquisition;
 pub mod adc;
 pub mod as5047p;
 pub mod bench;

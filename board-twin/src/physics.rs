@@ -43,6 +43,10 @@ pub struct BusFaults {
     pub belt_stuck: bool,
     /// The drivers assert nFAULT.
     pub driver_fault: bool,
+    /// The period's acquisition of the encoders fails this way (the `arm`
+    /// image's DMA: docs/board.md "The encoders by DMA"); no frame reaches the
+    /// encoders.
+    pub acquisition: Option<arm_app::AcquisitionFault>,
 }
 
 /// The board's devices as the arm drives them: the shared bench, the board's
@@ -109,6 +113,7 @@ impl BoardPhysics {
             b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
         }
         b.driver_fault = faults.driver_fault;
+        b.acquisition = faults.acquisition;
     }
 
     /// The joint torques `[u1, u2]` (N m) the drivers make from the outputs on

@@ -9,6 +9,7 @@
 
 pub use crate::physics::{ArmState, BusFaults};
 use crate::{
+    acquisition::TwinAcquisition,
     adc::AdcModel,
     as5047p::As5047pModel,
     counter::CounterModel,
@@ -63,6 +64,7 @@ pub enum TwinIo {}
 
 impl ArmIo for TwinIo {
     type Spi = As5047pModel;
+    type Encoders = TwinAcquisition;
     type Adc = AdcModel;
     type Counter = CounterModel;
     type Pwm = PwmModel;
@@ -141,6 +143,7 @@ impl BoardTwin {
         let parts = ArmParts::<TwinIo> {
             theta1: As5047pModel::new(bench.clone(), 0),
             elbow: As5047pModel::new(bench.clone(), 1),
+            encoders: TwinAcquisition::new(bench.clone()),
             adc: AdcModel::new(bench.clone()),
             belt: CounterModel::new(bench.clone()),
             motors,

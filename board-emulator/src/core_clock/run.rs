@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering::Relaxed;
 
 use rsemu::{core::sched::TickCursor, cpu::arm::v7m::sys::Exception};
 
-use super::{Core, HandlerRun, IRQS, TIM2_EXCEPTION, TIM2_IRQ, lock};
+use super::{CONTROL_EXCEPTION, Core, HandlerRun, IRQS, TIM2_IRQ, lock};
 use crate::{accelerator::FLASH, flash_reads};
 
 impl Core {
@@ -117,9 +117,13 @@ impl Core {
                 tr.tick += n;
                 continue;
             }
-            if tr.irq_seen.is_none() && c.irq_asserted(TIM2_IRQ) {
+            // The latency runs from TIM2's last rising edge (the tick, whose
+            // update starts the acquisition) to the control handler's start.
+            let level = c.irq_asserted(TIM2_IRQ);
+            if level && !tr.tim2_level {
                 tr.irq_seen = Some(tr.tick);
             }
+            tr.tim2_level = level;
             let debt = c.cycle_debt();
             let before = c.current_exception().0;
             let now = tr.tick;
@@ -142,13 +146,13 @@ impl Core {
             if n == 0 {
                 break;
             }
-            if debt == 0 && before == TIM2_EXCEPTION {
+            if debt == 0 && before == CONTROL_EXCEPTION {
                 tr.instructions += 1;
                 tr.wait += stall;
                 let tick = tr.tick;
                 let start = *tr.first.get_or_insert(tick);
-                if !c.with_sys(|s| s.is_active(Exception(TIM2_EXCEPTION))) {
-                    // Returned (a preempting handler leaves TIM2 active).
+                if !c.with_sys(|s| s.is_active(Exception(CONTROL_EXCEPTION))) {
+                    // Returned (a preempting handler leaves the control active).
                     let end = tr.tick + 1 + c.cycle_debt();
                     let latency = tr.irq_seen.take().map_or(0, |s| start.saturating_sub(s));
                     let run = HandlerRun {

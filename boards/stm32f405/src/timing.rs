@@ -13,6 +13,13 @@ pub const QEMU_TIMER_HZ: u32 = 1_000_000_000;
 
 use shared::Period;
 
+/// The shortest control period the `arm` image runs, us (10 kHz, the top of
+/// docs/hardware.md "Timing"'s range; the acquisition's deadline, 40 us, and
+/// the handler must fit in it).
+pub const MIN_PERIOD_US: u64 = 100;
+/// The longest, us (250 Hz, the bottom of the range).
+pub const MAX_PERIOD_US: u64 = 4_000;
+
 /// The LSI that clocks the watchdog, Hz (nominal; 17 to 47 kHz over parts and
 /// temperature, DS8626 table 41: the timeout is chosen with that margin).
 pub const LSI_HZ: u32 = 32_000;

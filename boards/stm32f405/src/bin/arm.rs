@@ -41,7 +41,7 @@ mod image {
         calibration,
         clock_tree::ClockOutcome,
         mcu::{
-            self, adc,
+            self, acquisition, adc,
             cycles::CycleClock,
             exit,
             flash::SettingsFlash,
@@ -76,6 +76,7 @@ mod image {
 
     impl ArmIo for Stm32f405 {
         type Spi = spi::Spi1Device;
+        type Encoders = acquisition::DmaEncoders;
         type Adc = adc::LoadCellAdc;
         type Counter = BeltCounter;
         type Pwm = PwmChannel;
@@ -95,7 +96,13 @@ mod image {
     /// a character time (5 us at 2 Mbaud), shorter than a step: USART1 preempts
     /// TIM2 (its handler moves one byte: tens of cycles).
     const USART1_PRIORITY: u8 = 0x00;
-    const TIM2_PRIORITY: u8 = 0x40;
+    /// The acquisition's interrupts (TIM2's update and deadline, DMA2 stream
+    /// 0's frame ends): short, above the control, so a late step never delays
+    /// the next period's frames.
+    const ACQUISITION_PRIORITY: u8 = 0x20;
+    /// The control step (`acquisition::CONTROL_INTERRUPT`, pended when the
+    /// period's acquisition is over).
+    const CONTROL_PRIORITY: u8 = 0x40;
 
     /// What the application tells the operator, in the defmt log; a window's
     /// report also goes to the idle loop, which sends it on USART1.
@@ -106,6 +113,9 @@ mod image {
                 defmt::error!("encoder {=str}: not ready ({=str}): its readings will be invalid", joint.name(), fault.describe())
             }
             Notice::ReadingsBack { seq } => defmt::info!("period {=u32}: every sensor reads again", seq),
+            Notice::AcquisitionFault { seq, fault } => {
+                defmt::warn!("period {=u32}: the encoders' acquisition failed: {=str}", seq, fault.describe())
+            }
             Notice::InvalidReadings { seq, flags } => defmt::warn!(
                 "period {=u32}: invalid readings (frame flags {=u16:#x}: theta1 {=bool}, elbow {=bool}, f_t {=bool}, f_n {=bool}, belt {=bool}, driver fault {=bool})",
                 seq,
@@ -159,11 +169,30 @@ mod image {
         }
     }
 
+    /// TIM2: the tick (update: the period's frames start) and the
+    /// acquisition's deadline (compare 1).
     #[interrupt]
     fn TIM2() {
-        if !timers::take_tick() {
-            return;
+        let (update, deadline) = timers::take_tick_events();
+        if deadline {
+            acquisition::on_deadline();
         }
+        if update {
+            acquisition::on_tick();
+        }
+    }
+
+    /// DMA2 stream 0 (SPI1_RX): a frame is over, or a stream failed.
+    #[interrupt]
+    fn DMA2_STREAM0() {
+        acquisition::on_rx_stream();
+    }
+
+    /// The control step, pended by the acquisition once both encoders and the
+    /// load cell are in memory: reads memory and computes.
+    #[interrupt]
+    fn CAN2_TX() {
+        acquisition::publish();
         // The defmt log's timestamp (mcu::log_time): this tick's time.
         log_time::tick();
         cortex_m::interrupt::free(|cs| {
@@ -276,20 +305,15 @@ mod image {
             defmt::warn!("reset by the watchdog (a step hung): drivers disabled until the enable button");
         }
         let cfg = Config::default();
-        let tick = match TickTimer::for_period(timer_hz, cfg.period) {
-            Ok(t) => t,
-            Err(e) => {
-                defmt::error!("control rate: {}", e);
-                exit::exit(2);
-            }
-        };
         spi::init();
+        acquisition::init();
         adc::init();
         timers::start_belt_encoder();
         usart::init(true);
         let parts = ArmParts::<Stm32f405> {
             theta1: spi::Spi1Device::new(pins::CS_THETA1),
             elbow: spi::Spi1Device::new(pins::CS_ELBOW),
+            encoders: acquisition::DmaEncoders,
             adc: adc::LoadCellAdc,
             belt: BeltCounter,
             motors,
@@ -322,7 +346,21 @@ mod image {
                 exit::exit(2);
             }
         };
-        let period_us = cfg.period.as_us();
+        // The control rate is the configuration's in force (the settings
+        // record's, else the compiled-in fallback's): TIM2's reload from it.
+        let period = app.config().period;
+        let tick = match TickTimer::for_period(timer_hz, period) {
+            Ok(t) if period.as_us() >= board_stm32f405::timing::MIN_PERIOD_US && period.as_us() <= board_stm32f405::timing::MAX_PERIOD_US => t,
+            Ok(_) => {
+                defmt::error!("control rate: {=u64} us is outside the image's 100 to 4000 us (250 Hz to 10 kHz)", period.as_us());
+                exit::exit(2);
+            }
+            Err(e) => {
+                defmt::error!("control rate: {}", e);
+                exit::exit(2);
+            }
+        };
+        let period_us = period.as_us();
         log_time::set_period_us(period_us as u32);
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(app)));
         defmt::info!(
@@ -338,14 +376,18 @@ mod image {
             }
         );
         iwdg::start(5 * period_us as u32);
-        timers::start_tick(tick);
         // SAFETY: the handlers' state is in place; nothing else uses these lines.
         unsafe {
             core.NVIC.set_priority(Interrupt::USART1, USART1_PRIORITY);
-            core.NVIC.set_priority(Interrupt::TIM2, TIM2_PRIORITY);
+            core.NVIC.set_priority(Interrupt::TIM2, ACQUISITION_PRIORITY);
+            core.NVIC.set_priority(Interrupt::DMA2_STREAM0, ACQUISITION_PRIORITY);
+            core.NVIC.set_priority(acquisition::CONTROL_INTERRUPT, CONTROL_PRIORITY);
             cortex_m::peripheral::NVIC::unmask(Interrupt::USART1);
+            cortex_m::peripheral::NVIC::unmask(Interrupt::DMA2_STREAM0);
+            cortex_m::peripheral::NVIC::unmask(acquisition::CONTROL_INTERRUPT);
             cortex_m::peripheral::NVIC::unmask(Interrupt::TIM2);
         }
+        timers::start_tick(tick, timer_hz, acquisition::DEADLINE_US);
         let mut frames = FrameBuffer::default();
         // Idle: serve the bring-up requests (the interrupts preempt this).
         loop {
@@ -356,6 +398,7 @@ mod image {
                 cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.periods(), a.drivers_enabled())));
             if exit::UNDER_QEMU && periods >= QEMU_PERIODS {
                 cortex_m::peripheral::NVIC::mask(Interrupt::TIM2);
+                cortex_m::peripheral::NVIC::mask(acquisition::CONTROL_INTERRUPT);
                 defmt::info!(
                     "qemu run over: {=u32} periods, drivers {=str}, stack high-water mark {=u32} of {=u32} bytes",
                     periods,

@@ -8,10 +8,6 @@ use stm32f4::stm32f405 as pac;
 use super::gpio;
 use crate::pins;
 
-/// Polls of JEOC before the conversions count as missing (they finish about
-/// 1.4 us after the tick, long before the interrupt handler reads them).
-const MAX_POLLS: u32 = 2_000;
-
 /// Why no reading is available.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, defmt::Format)]
 pub enum AdcError {
@@ -45,7 +41,7 @@ pub fn init() {
     a.cr2().write(|w| unsafe { w.jextsel().bits(0b0011) }.jexten().rising_edge().adon().set_bit());
 }
 
-/// The latest injected conversions as the load cell's ADC.
+/// The period's injected conversions, as the acquisition copied them, as the load cell's ADC.
 #[derive(Debug, Default)]
 pub struct LoadCellAdc;
 
@@ -53,13 +49,8 @@ impl drivers::load_cell::LoadCellAdc for LoadCellAdc {
     type Error = AdcError;
 
     fn read(&mut self) -> Result<[u16; 2], AdcError> {
-        let a = adc();
-        if !(0..MAX_POLLS).any(|_| a.sr().read().jeoc().bit_is_set()) {
-            return Err(AdcError::Missing);
-        }
-        let v = [a.jdr1().read().jdata().bits(), a.jdr2().read().jdata().bits()];
-        // Cleared, so the next tick's read waits for that tick's conversions.
-        a.sr().write(|w| w.jeoc().clear_bit().jstrt().clear_bit());
-        Ok(v)
+        // Copied by the acquisition (`super::acquisition`) after the tick's
+        // frames: memory, no wait on JEOC here.
+        super::acquisition::current().adc.ok_or(AdcError::Missing)
     }
 }

@@ -1,6 +1,7 @@
 //! The chip: peripherals through the `stm32f4` PAC, behind the embedded-hal
 //! and `drivers` traits the images use (Cortex-M4F builds only).
 
+pub mod acquisition;
 pub mod adc;
 pub mod cycles;
 pub mod exit;

@@ -23,6 +23,9 @@ pub enum SpiError {
     Overrun,
     /// Another master pulled NSS (SR.MODF).
     ModeFault,
+    /// The period's frames are in flight by DMA (`super::acquisition`): the
+    /// bus is not free.
+    Busy,
 }
 
 impl embedded_hal::spi::Error for SpiError {
@@ -31,6 +34,7 @@ impl embedded_hal::spi::Error for SpiError {
             Self::Timeout => ErrorKind::Other,
             Self::Overrun => ErrorKind::Overrun,
             Self::ModeFault => ErrorKind::ModeFault,
+            Self::Busy => ErrorKind::Other,
         }
     }
 }
@@ -49,6 +53,17 @@ pub fn init() {
         w.cpha().second_edge().cpol().idle_low().mstr().master().br().div16().ssm().enabled().ssi().slave_not_selected();
         w.dff().sixteen_bit().spe().enabled()
     });
+}
+
+/// SPI1 asks DMA2 for each word (CR2 RXDMAEN, TXDMAEN: RM0090 28.3.9); the
+/// streams decide whether anything moves.
+pub fn enable_dma_requests() {
+    spi().cr2().modify(|_, w| w.rxdmaen().set_bit().txdmaen().set_bit());
+}
+
+/// SPI1's DR, the address DMA2's streams move words to and from.
+pub fn data_register_address() -> u32 {
+    spi().dr().as_ptr() as u32
 }
 
 fn wait(flag: impl Fn(&pac::spi1::sr::R) -> bool) -> Result<(), SpiError> {
@@ -98,6 +113,11 @@ impl ErrorType for Spi1Device {
 
 impl SpiDevice<u16> for Spi1Device {
     fn transaction(&mut self, operations: &mut [Operation<'_, u16>]) -> Result<(), SpiError> {
+        // Start-up and bring-up only (the tick's frames go by DMA): never
+        // across a period's frames.
+        if super::acquisition::busy() {
+            return Err(SpiError::Busy);
+        }
         gpio::write(&self.cs, false);
         let result = operations.iter_mut().try_for_each(|op| match op {
             Operation::Read(words) => words.iter_mut().try_for_each(|w| exchange(0).map(|r| *w = r)),

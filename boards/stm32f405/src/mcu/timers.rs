@@ -24,23 +24,34 @@ fn tim4() -> &'static pac::tim3::RegisterBlock {
     unsafe { &*pac::TIM4::ptr() }
 }
 
-/// Starts TIM2 at `tick`: update interrupt enabled, update event on TRGO.
-pub fn start_tick(tick: TickTimer) {
+/// Starts TIM2 at `tick` from a timer clock of `timer_hz`: update interrupt
+/// enabled, update event on TRGO, and compare 1 (frozen output, no pin) at
+/// `deadline_us` after each update with its interrupt: the acquisition's
+/// deadline (`super::acquisition::DEADLINE_US`), clamped into the period.
+pub fn start_tick(tick: TickTimer, timer_hz: u32, deadline_us: u32) {
     let t = tim2();
+    let counts_per_us = (timer_hz / 1_000_000) / (u32::from(tick.psc) + 1);
+    let ccr = (deadline_us * counts_per_us.max(1)).min(u32::from(tick.arr));
     t.psc().write(|w| w.psc().set(tick.psc));
     t.arr().write(|w| w.arr().set(u32::from(tick.arr)));
+    t.ccr(0).write(|w| w.ccr().set(ccr));
     t.cr2().write(|w| w.mms().update());
     t.egr().write(|w| w.ug().set_bit()); // load PSC now
-    t.sr().write(|w| w.uif().clear_bit());
-    t.dier().write(|w| w.uie().set_bit());
+    t.sr().write(|w| w.uif().clear_bit().cc1if().clear_bit());
+    t.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
     t.cr1().write(|w| w.cen().set_bit());
 }
 
-/// Clears the tick's update flag (in its interrupt); whether it was set.
-pub fn take_tick() -> bool {
-    let set = tim2().sr().read().uif().bit_is_set();
-    tim2().sr().write(|w| w.uif().clear_bit());
-    set
+/// TIM2's events in its interrupt, cleared: `(update, compare 1)`.
+pub fn take_tick_events() -> (bool, bool) {
+    let sr = tim2().sr().read();
+    let (update, deadline) = (sr.uif().bit_is_set(), sr.cc1if().bit_is_set());
+    // rc_w0: writing 1 leaves a flag, 0 clears it; only the two taken are
+    // cleared, the reserved bits written as their reset value 0 (RM0090 18.4.5).
+    const FLAGS: u32 = 0x1E5F;
+    // SAFETY (bits): the register's own flags only.
+    tim2().sr().write(|w| unsafe { w.bits(FLAGS & !(u32::from(update) | (u32::from(deadline) << 1))) });
+    (update, deadline)
 }
 
 /// TIM3 channels 1 and 2 in PWM mode 1 at [`PWM_HZ`] from `timer_hz`, duty 0.
