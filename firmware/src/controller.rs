@@ -5,7 +5,8 @@
 use nalgebra::Vector2;
 use shared::{
     Arm, ElbowBranch,
-    kinematics::{JointTrig, jacobian_trig, tip_position_trig},
+    kinematics::{JointTrig, tip_position_trig},
+    model::ArmTerms,
     time::{Duration, Instant},
     wire::{self, ActuatorCommand, SensorFrame, status},
 };
@@ -14,9 +15,9 @@ use crate::{
     TickClock,
     config::{Config, ConfigError, ControllerKind},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
-    decode::{self, FrameFault, Measurement},
+    decode::{self, EncoderScale, FrameFault, Measurement},
     estimator::AngleTracker,
-    law::{self, HybridInput, HybridSignals, HybridState, PidState},
+    law::{self, HybridInput, HybridSignals, HybridState, PidState, TipKinematics},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
@@ -48,6 +49,10 @@ struct Started {
 pub struct Firmware {
     cfg: Config,
     arm: Arm<f32>,
+    /// The arm's constant factors, folded once per configuration (not every step).
+    terms: ArmTerms<f32>,
+    /// The encoders' count range and angle per count, derived once.
+    scale: EncoderScale,
     started: Option<Started>,
     liftoff: LiftOffDetector,
     consistency: ConsistencyMonitor,
@@ -76,6 +81,8 @@ pub struct Firmware {
     telemetry: Telemetry,
     /// The period in seconds, `f32`, derived once from `cfg.period`.
     dt: f32,
+    /// `1 / dt`, 1/s: the rate of a step that follows its predecessor (no gap).
+    rate: f32,
     /// The observer's gains for `cfg` (at angle 0): the first frame's trackers
     /// start from it, so no step pays for the `expf` of the gains.
     tracker: AngleTracker,
@@ -96,6 +103,8 @@ impl Firmware {
         Self {
             cfg,
             arm: Arm::new(cfg.params),
+            terms: ArmTerms::of(&cfg.params),
+            scale: EncoderScale::of_bits(cfg.encoder_bits),
             started: None,
             liftoff: LiftOffDetector::default(),
             consistency: ConsistencyMonitor::default(),
@@ -119,6 +128,7 @@ impl Firmware {
             safe: None,
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
+            rate: 1.0 / cfg.period.as_secs_f32(),
             tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
         }
     }
@@ -287,7 +297,7 @@ impl Firmware {
     /// Decodes the frame and checks its sequence; returns the measurement and
     /// whether periods were skipped.
     fn checked(&self, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
-        let m = decode::decode_bits(frame, self.cfg.encoder_bits)?;
+        let m = decode::decode_with(frame, &self.scale)?;
         match &self.started {
             Some(s) if frame.seq <= s.last_seq => Err(FrameFault::Stale),
             Some(s) => Ok((m, frame.seq > s.last_seq.wrapping_add(1))),
@@ -309,20 +319,23 @@ impl Firmware {
         // Initialise on the first trusted frame: the reference starts where the tip is.
         let s: &mut Started = match &mut self.started {
             Some(s) => {
-                let dt = (seq.wrapping_sub(s.last_seq)) as f32 * ts;
+                let gap = seq.wrapping_sub(s.last_seq);
+                let dt = gap as f32 * ts;
                 // Model-based prediction: the joint acceleration under the torque we
                 // commanded and the force we measured (both held over the interval).
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let td = self.arm.tip_dynamics_trig(&s.trig, &q, &qd, &u);
+                let td = self.terms.tip_dynamics_trig(&s.trig, &q, &qd, &u);
                 let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
                 let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
                 innovation = [
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
                 ];
-                let per_s = 1.0 / dt;
+                // 1 / dt without the division when no period was skipped (the same bits:
+                // `1 as f32 * ts` is `ts`).
+                let per_s = if gap == 1 { self.rate } else { 1.0 / dt };
                 missed_accel = [s.trackers[0].rate_correction(innovation[0]) * per_s, s.trackers[1].rate_correction(innovation[1]) * per_s];
                 s.last_seq = seq;
                 s
@@ -349,8 +362,8 @@ impl Firmware {
         // step's prediction.
         let trig = JointTrig::new(&q);
         s.trig = trig;
-        let z = tip_position_trig(p.l, &trig);
-        let z_dot = jacobian_trig(p.l, &trig) * qd;
+        let kin = TipKinematics::of(p.l, &trig, &qd);
+        let (z, z_dot) = (kin.z, kin.z_dot);
         let height = z[1] + p.h;
         let rule = LiftOffRule {
             lift_off_force: cfg.lift_off_force,
@@ -428,14 +441,16 @@ impl Firmware {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, sig) = law::hybrid_trig(
-                    &self.arm,
+                let (u, sig) = law::hybrid_at(
+                    &self.terms,
+                    p.mu,
                     &cfg.hybrid,
                     cfg.friction,
                     &reference,
                     f_n_ref,
                     &input,
                     &trig,
+                    &kin,
                     &mut self.hybrid,
                     ts,
                     self.last_saturated,

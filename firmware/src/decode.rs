@@ -84,11 +84,47 @@ pub fn decode(frame: &SensorFrame) -> Result<Measurement, FrameFault> {
 /// # Errors
 /// As [`decode`].
 pub fn decode_bits(frame: &SensorFrame, encoder_bits: u8) -> Result<Measurement, FrameFault> {
+    decode_with(frame, &EncoderScale::of_bits(encoder_bits))
+}
+
+/// An encoder's resolution, derived once per configuration: the count range and
+/// the angle of one count (the step's decoding then divides nothing).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EncoderScale {
+    /// Counts per turn, `2^bits` with `bits` clamped to [`wire::ENCODER_BITS_RANGE`].
+    pub counts: u32,
+    /// One count, rad: `2 pi / counts` (exact: a power-of-two division).
+    pub lsb: f32,
+}
+
+impl EncoderScale {
+    /// The scale of a `bits`-bit encoder (clamped to [`wire::ENCODER_BITS_RANGE`]).
+    pub fn of_bits(bits: u8) -> Self {
+        let counts = 1u32 << bits.clamp(wire::ENCODER_BITS_RANGE.0, wire::ENCODER_BITS_RANGE.1);
+        Self { counts, lsb: TAU / counts as f32 }
+    }
+
+    /// The angle of `count` (in `[0, counts)`), rad, wrapped to `(-pi, pi]`: the
+    /// bits of [`wrap`] of `count * lsb`, which lies in `[0, 2 pi)`, so only the
+    /// upper half turn moves.
+    #[inline(always)]
+    fn angle(&self, count: u16) -> f32 {
+        let a = count as f32 * self.lsb;
+        if a > PI { a - TAU } else { a }
+    }
+}
+
+/// [`decode_bits`] with the encoder's scale given (`scale` from
+/// [`EncoderScale::of_bits`]): the firmware's step. The same measurement, bit for bit.
+///
+/// # Errors
+/// As [`decode_bits`].
+#[inline(always)]
+pub fn decode_with(frame: &SensorFrame, scale: &EncoderScale) -> Result<Measurement, FrameFault> {
     if frame.flags & wire::frame_flags::ANY_INVALID != 0 {
         return Err(FrameFault::SensorInvalid);
     }
-    let counts = 1u32 << encoder_bits.clamp(wire::ENCODER_BITS_RANGE.0, wire::ENCODER_BITS_RANGE.1);
-    if frame.theta1_count as u32 >= counts || frame.elbow_count as u32 >= counts {
+    if frame.theta1_count as u32 >= scale.counts || frame.elbow_count as u32 >= scale.counts {
         return Err(FrameFault::EncoderOutOfRange);
     }
     let load_ok = |c: i16| (wire::LOAD_CODE_MIN..=wire::LOAD_CODE_MAX).contains(&c);
@@ -98,12 +134,11 @@ pub fn decode_bits(frame: &SensorFrame, encoder_bits: u8) -> Result<Measurement,
     if frame.belt_count.unsigned_abs() > 5000 {
         return Err(FrameFault::BeltOutOfRange);
     }
-    let lsb_angle = TAU / counts as f32;
     let lsb_force = wire::LOAD_FULL_SCALE_N / 2048.0;
     let clipped = |c: i16| c == wire::LOAD_CODE_MIN || c == wire::LOAD_CODE_MAX;
     Ok(Measurement {
-        theta1: wrap(frame.theta1_count as f32 * lsb_angle),
-        elbow: wrap(frame.elbow_count as f32 * lsb_angle),
+        theta1: scale.angle(frame.theta1_count),
+        elbow: scale.angle(frame.elbow_count),
         f_t: frame.f_t_code as f32 * lsb_force,
         f_n: frame.f_n_code as f32 * lsb_force,
         v_belt: frame.belt_count as f32 * wire::BELT_SPEED_RESOLUTION,
@@ -160,6 +195,21 @@ mod tests {
         for a in edges.into_iter().chain(edges.map(|e| -e)).chain(sweep) {
             let (w, r) = (wrap(a), by_rem(a));
             assert!(w.to_bits() == r.to_bits() || (w.is_nan() && r.is_nan()), "{a}: {w} vs {r}");
+        }
+    }
+
+    #[test]
+    fn the_scale_gives_the_bits_of_wrap_for_every_count_at_every_width() {
+        for bits in 0..=20u8 {
+            let scale = EncoderScale::of_bits(bits);
+            let counts = 1u32 << bits.clamp(wire::ENCODER_BITS_RANGE.0, wire::ENCODER_BITS_RANGE.1);
+            assert_eq!(scale.counts, counts);
+            assert_eq!(scale.lsb.to_bits(), (TAU / counts as f32).to_bits());
+            for c in 0..counts {
+                let (a, w) = (scale.angle(c as u16), wrap(c as f32 * (TAU / counts as f32)));
+                assert_eq!(a.to_bits(), w.to_bits(), "{bits} bits, count {c}");
+                assert!(a > -PI && a <= PI);
+            }
         }
     }
 

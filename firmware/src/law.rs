@@ -5,6 +5,7 @@ use nalgebra::{Matrix2, Vector2};
 use shared::{
     Arm, ElbowBranch, Real,
     kinematics::{JointTrig, inverse_kinematics_trig, jacobian_trig, jdot_qdot_trig, tip_position_trig},
+    model::ArmTerms,
 };
 
 use crate::{
@@ -169,12 +170,8 @@ pub fn hybrid(
 }
 
 /// [`hybrid`] with the sines and cosines of `input.q` given (`trig` must be
-/// `JointTrig::new(&input.q)`): the firmware's step computes them once for the
-/// tip estimate and the law. The same torques and signals as [`hybrid`].
-///
-/// One more `sin_cos`, of `theta1 - theta2`, gives the singularity test, the
-/// centripetal torque and the mass matrix (the cosine is even, exactly), so the
-/// law costs three `sin_cos` in all (docs/measurements.md "Speed and scale").
+/// `JointTrig::new(&input.q)`): the tip's kinematics from them, then [`hybrid_at`].
+/// The same torques and signals as [`hybrid`].
 ///
 /// # Errors
 /// As [`hybrid`].
@@ -191,17 +188,68 @@ pub fn hybrid_trig(
     dt: f32,
     saturated: bool,
 ) -> Result<([f32; 2], HybridSignals), LawError> {
-    let p = &arm.params;
+    let kin = TipKinematics::of(arm.params.l, trig, &input.qd);
+    hybrid_at(&arm.terms(), arm.params.mu, gains, comp, reference, f_n_ref, input, trig, &kin, state, dt, saturated)
+}
+
+/// The tip's kinematics at the estimated state (paper eq. 1): what the step
+/// computes for its monitors and the hybrid law uses again.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TipKinematics {
+    /// Tip position `z = [z_t, z_n]`, m.
+    pub z: Vector2<f32>,
+    /// Tip velocity `z_dot = J q_dot`, m/s.
+    pub z_dot: Vector2<f32>,
+    /// Jacobian `J`, m/rad.
+    pub jac: Matrix2<f32>,
+}
+
+impl TipKinematics {
+    /// `z`, `J` and `J q_dot` for link length `l` (m), the sines and cosines of
+    /// `q` in `trig` and `qd` (rad/s).
+    #[inline(always)]
+    pub fn of(l: f32, trig: &JointTrig<f32>, qd: &Vector2<f32>) -> Self {
+        let jac = jacobian_trig(l, trig);
+        Self { z: tip_position_trig(l, trig), z_dot: jac * qd, jac }
+    }
+}
+
+/// [`hybrid_trig`] with the arm's folded factors `terms` (once per configuration),
+/// the friction coefficient `mu_hat` and the tip's kinematics `kin` (those of
+/// `trig` and `input.qd`) given: the firmware's step, which has them already.
+/// The same torques and signals as [`hybrid`], bit for bit.
+///
+/// One more `sin_cos`, of `theta1 - theta2`, gives the singularity test, the
+/// centripetal torque and the mass matrix (the cosine is even, exactly), so the
+/// law costs three `sin_cos` in all (docs/measurements.md "Speed and scale").
+///
+/// # Errors
+/// As [`hybrid`].
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn hybrid_at(
+    terms: &ArmTerms<f32>,
+    mu_hat: f32,
+    gains: &HybridGains,
+    comp: FrictionCompensation,
+    reference: &RefPoint,
+    f_n_ref: f32,
+    input: &HybridInput,
+    trig: &JointTrig<f32>,
+    kin: &TipKinematics,
+    state: &mut HybridState,
+    dt: f32,
+    saturated: bool,
+) -> Result<([f32; 2], HybridSignals), LawError> {
     let (q, qd) = (input.q, input.qd);
-    let jac = jacobian_trig(p.l, trig);
+    let jac = kin.jac;
     // sin(theta1 - theta2) and cos(theta1 - theta2) = cos(theta2 - theta1).
     let (s12, c21) = (q[0] - q[1]).sin_cos_rad();
     if s12.abs() < 1e-3 {
         return Err(LawError::Singular);
     }
     let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
-    let z = tip_position_trig(p.l, trig);
-    let z_dot = jac * qd;
+    let (z, z_dot) = (kin.z, kin.z_dot);
     let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
     // The integral up to the previous sample (forward Euler): a new error acts from
     // the next period, so the first period does not kick `a_f`.
@@ -216,7 +264,8 @@ pub fn hybrid_trig(
     state.force_integral = clamp(state.force_integral, -i_max, i_max);
     let v_r = z_dot[0] - input.v_belt;
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
-    let m = arm.mass_matrix_cos(c21);
+    let m12 = terms.half_ml2 * c21;
+    let m = Matrix2::new(terms.m11, m12, m12, terms.m22);
     let mu_used = if comp == FrictionCompensation::Estimated {
         // p and Q_22 with the current estimate, both times det M (> 0): Q = J M^-1 J^T
         // (paper eq. 3) with M^-1 = adj(M) / det M, the division left out.
@@ -224,12 +273,12 @@ pub fn hybrid_trig(
         let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
         let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
         let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
-        let p_det = q22 - state.mu.mu(p.mu) * s * q21;
+        let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
         let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
-        state.mu.update(p.mu, &sample, dt);
-        state.mu.mu(p.mu)
+        state.mu.update(mu_hat, &sample, dt);
+        state.mu.mu(mu_hat)
     } else {
-        p.mu
+        mu_hat
     };
     let f_t_hat = match comp {
         FrictionCompensation::Measured => input.f_t,
@@ -237,14 +286,30 @@ pub fn hybrid_trig(
         FrictionCompensation::ModelCommandedNormal | FrictionCompensation::Estimated => -mu_used * s * a_f,
         FrictionCompensation::None => 0.0,
     };
-    let wc = arm.w_sin(trig.s1, trig.s2, &q, &qd) + arm.c_sin(s12, &qd);
-    let s_vec = jdot_qdot_trig(p.l, trig, &qd);
+    let wc = w_sin(terms, trig.s1, trig.s2, &q, &qd) + c_sin(terms, s12, &qd);
+    let s_vec = jdot_qdot_trig(terms.l, trig, &qd);
     let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
     if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
         return Err(LawError::NonFinite);
     }
     Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]] }))
+}
+
+/// [`Arm::w_sin`] from the folded factors (N m): gravity, spring and damping
+/// torques at `q` (rad), `qd` (rad/s) with `s1 = sin theta1`, `s2 = sin theta2`
+/// (paper eq. 1). The same bits (each factor folded in the same order).
+#[inline(always)]
+fn w_sin(t: &ArmTerms<f32>, s1: f32, s2: f32, q: &Vector2<f32>, qd: &Vector2<f32>) -> Vector2<f32> {
+    let spring = t.k * (q[1] - q[0] + t.alpha0);
+    Vector2::new(t.mgl2_3 * s1 - spring - t.sigma * (qd[1] - qd[0] - qd[0]), t.mgl2 * s2 + spring + t.sigma * (qd[1] - qd[0]))
+}
+
+/// [`Arm::c_sin`] from the folded factors (N m): the centripetal torques with
+/// `s12 = sin(theta1 - theta2)` (paper eq. 1). The same bits.
+#[inline(always)]
+fn c_sin(t: &ArmTerms<f32>, s12: f32, qd: &Vector2<f32>) -> Vector2<f32> {
+    Vector2::new(t.half_ml2 * qd[1] * qd[1] * s12, -t.half_ml2 * qd[0] * qd[0] * s12)
 }
 
 #[cfg(test)]
