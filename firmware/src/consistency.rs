@@ -168,8 +168,8 @@ impl InnovationMonitor {
             *self = Self { run: [0; 2], sign: [0; 2], ..*self };
             return false;
         }
-        let mut fault = false;
-        for (j, &r) in innovation.iter().enumerate() {
+        // Two joints written out (the loop is not unrolled at `opt-level = "s"`).
+        let mut joint = |j: usize, r: f32| {
             let sign = if r > rule.threshold {
                 1
             } else if r < -rule.threshold {
@@ -179,9 +179,10 @@ impl InnovationMonitor {
             };
             self.run[j] = if sign != 0 && sign == self.sign[j] { self.run[j].saturating_add(1) } else { u16::from(sign != 0) };
             self.sign[j] = sign;
-            fault |= self.run[j] >= rule.confirm;
-        }
-        fault
+            self.run[j] >= rule.confirm
+        };
+        let first = joint(0, innovation[0]);
+        joint(1, innovation[1]) | first
     }
 }
 

@@ -428,7 +428,7 @@ impl Firmware {
                 None => {}
             }
         }
-        let f_n_ref = s.force_ramp.at(t_run).pos;
+        let f_n_ref = s.force_ramp.pos_at(t_run);
         let mut flags = m.flags;
         if lifted {
             flags |= status::LIFT_OFF;

@@ -47,7 +47,7 @@ impl FrameFault {
 }
 
 /// Wraps an angle to `(-pi, pi]`.
-#[inline]
+#[inline(always)]
 pub fn wrap(angle: f32) -> f32 {
     // `%` is a software `fmodf` on the MCU; within one turn it returns `angle`
     // itself (fmod is exact), so only larger angles pay for it.

@@ -86,16 +86,17 @@ pub fn pid(
         let (rd, md) = (to_prime(qd_ref), to_prime(qd));
         ([r[0] - m[0], r[1] - m[1]], [rd[0] - md[0], rd[1] - md[1]])
     };
-    let mut u = [0.0f32; 2];
-    for i in 0..2 {
+    // The two joints written out (the loop is not unrolled at `opt-level = "s"`).
+    let mut joint = |i: usize| {
         let unclamped = gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i];
         let winding = unclamped.abs() > limit && unclamped.signum() == e[i].signum();
         if !winding {
             state.integral[i] += e[i] * dt;
         }
-        u[i] = gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i];
-    }
-    if u.iter().all(|x| x.is_finite()) { Ok(u) } else { Err(LawError::NonFinite) }
+        gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i]
+    };
+    let u = [joint(0), joint(1)];
+    if u[0].is_finite() && u[1].is_finite() { Ok(u) } else { Err(LawError::NonFinite) }
 }
 
 /// State of the hybrid law: its force integrator and, for

@@ -126,11 +126,14 @@ impl WiringMonitor {
         let d0 = (4.0 / 3.0) * ml2 * a[0] + off * a[1];
         let d1 = off * a[0] + (1.0 / 3.0) * ml2 * a[1];
         let du = [d0 + d1, d1];
-        for (m, d) in self.missed.iter_mut().zip(du) {
+        // Two joints written out (the loops' iterators are not unrolled at `opt-level = "s"`).
+        let filter = |m: &mut f32, d: f32| {
             if d.is_finite() {
                 *m += rule.smoothing * (d - *m);
             }
-        }
+        };
+        filter(&mut self.missed[0], du[0]);
+        filter(&mut self.missed[1], du[1]);
         let touchdown = self.was_lifted && !input.lifted;
         self.was_lifted = input.lifted;
         let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
@@ -142,16 +145,16 @@ impl WiringMonitor {
             self.run = [0; 2];
             return None;
         }
-        let mut found = None;
-        for j in 0..2 {
-            let (d, u) = (self.missed[j], input.applied[j]);
-            let against = d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
-            self.run[j] = if against { self.run[j].saturating_add(1) } else { 0 };
-            if self.run[j] >= rule.confirm && found.is_none() {
-                found = Some(j);
-            }
+        let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
+        let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
+        self.run = [run(self.run[0], against(self.missed[0], input.applied[0])), run(self.run[1], against(self.missed[1], input.applied[1]))];
+        if self.run[0] >= rule.confirm {
+            Some(0)
+        } else if self.run[1] >= rule.confirm {
+            Some(1)
+        } else {
+            None
         }
-        found
     }
 }
 
