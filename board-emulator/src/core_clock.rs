@@ -60,7 +60,7 @@ const IRQS: u16 = 96;
 pub const TIM2_IRQ: u16 = 28;
 /// The control interrupt's line: CAN2_TX's vector, pended by the image when the
 /// period's acquisition is over (`board_stm32f405::mcu::acquisition`, issue 56).
-pub const CONTROL_IRQ: u16 = 64;
+pub const CONTROL_IRQ: u16 = 63;
 const CONTROL_EXCEPTION: u16 = 16 + CONTROL_IRQ;
 
 /// How the core is run.
@@ -83,10 +83,12 @@ pub struct Edge {
     pub high: bool,
 }
 
-/// One execution of TIM2's handler ([`Mode::Counted`]).
+/// One execution of the control handler ([`Mode::Counted`]; TIM2's before issue 56).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HandlerRun {
-    /// Core cycles from TIM2's interrupt line rising to the handler's first instruction.
+    /// Core cycles from TIM2's interrupt line rising (the tick's update) to the
+    /// control handler's first instruction: the interrupt's entry, TIM2's
+    /// handler and the acquisition's frames (DMA2 stream 0's handlers).
     pub latency_cycles: u64,
     /// Instructions executed in the handler (preempting handlers excluded).
     pub instructions: u64,
@@ -106,6 +108,8 @@ struct Track {
     irq_seen: Option<u64>,
     /// TIM2's line at the last step (its rising edges are the tick and the deadline).
     tim2_level: bool,
+    /// The running control handler's latency from the tick, cycles.
+    latency: u64,
     first: Option<u64>,
     instructions: u64,
     wait: u64,

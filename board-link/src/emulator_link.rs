@@ -33,9 +33,12 @@ use rig::{
 
 use crate::twin_link::bus_faults;
 
-/// The `arm` image's control period, compiled in (`firmware::Config::default`:
-/// TIM2 is set from it at start-up; a configuration of another rate is refused).
-pub const IMAGE_PERIOD_US: u64 = 1000;
+/// The control periods the `arm` image runs, us: TIM2's reload comes from the
+/// configuration in its settings record (issue 56), any whole number of
+/// microseconds from 100 (10 kHz) to 4 000 (250 Hz), docs/hardware.md "Timing"
+/// (`board_stm32f405::timing::MIN_PERIOD_US`, `MAX_PERIOD_US`; the image
+/// refuses to start outside them).
+pub const IMAGE_PERIODS_US: std::ops::RangeInclusive<u64> = 100..=4_000;
 
 /// Where `run --link emulator` looks for the image by default: the `mcu`
 /// profile's output next to this executable's target folder, else in the
@@ -97,9 +100,9 @@ impl EmulatorLink {
         rig::board_protection::check_protection(setup.firmware(), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
         let period_us = s.timing.period().as_us();
-        if period_us != IMAGE_PERIOD_US {
+        if !IMAGE_PERIODS_US.contains(&period_us) {
             return Err(RunError::Board(format!(
-                "the `arm` image's control tick is compiled at {IMAGE_PERIOD_US} us (1 kHz); the scenario's period is {period_us} us"
+                "the `arm` image runs control periods of 100 to 4000 us (10 kHz to 250 Hz, TIM2's reload from the saved configuration); the scenario's period is {period_us} us"
             )));
         }
         let config = *setup.firmware();

@@ -39,3 +39,37 @@ impl EncoderAcquisition<As5047pModel> for TwinAcquisition {
         Blocking.acquire(theta1, elbow)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::{Bench, lock};
+    use arm_app::AcquisitionFault as F;
+
+    fn pair(bench: &Shared) -> (As5047p<As5047pModel>, As5047p<As5047pModel>) {
+        (As5047p::new(As5047pModel::new(bench.clone(), 0)), As5047p::new(As5047pModel::new(bench.clone(), 1)))
+    }
+
+    #[test]
+    fn a_clean_acquisition_samples_both_encoders_in_three_frames_each() {
+        let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+        lock(&bench).magnet_counts = [1234.4, 16000.6];
+        let (mut a, mut b) = pair(&bench);
+        let got = TwinAcquisition::new(bench.clone()).acquire(&mut a, &mut b);
+        assert_eq!(got, [Ok(1234), Ok(16001)]);
+        assert_eq!([a.release().frames, b.release().frames], [3, 3]);
+    }
+
+    #[test]
+    fn every_acquisition_fault_invalidates_both_encoders_and_sends_no_frame() {
+        for fault in [F::TransferError, F::FifoError, F::DirectModeError, F::Timeout, F::StuckChipSelect] {
+            let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+            lock(&bench).acquisition = Some(fault);
+            let (mut a, mut b) = pair(&bench);
+            let got = TwinAcquisition::new(bench.clone()).acquire(&mut a, &mut b);
+            assert_eq!(got, [Err(EncoderFault::Acquisition(fault)); 2], "{fault:?}");
+            assert_eq!([a.release().frames, b.release().frames], [0, 0], "{fault:?}");
+            assert!(!fault.describe().is_empty());
+        }
+    }
+}

@@ -150,11 +150,16 @@ impl Core {
                 tr.instructions += 1;
                 tr.wait += stall;
                 let tick = tr.tick;
+                if tr.first.is_none() {
+                    // At the first instruction: the last TIM2 edge before it is
+                    // the tick's update (the deadline's edge comes later).
+                    tr.latency = tr.irq_seen.map_or(0, |s| tick.saturating_sub(s));
+                }
                 let start = *tr.first.get_or_insert(tick);
                 if !c.with_sys(|s| s.is_active(Exception(CONTROL_EXCEPTION))) {
                     // Returned (a preempting handler leaves the control active).
                     let end = tr.tick + 1 + c.cycle_debt();
-                    let latency = tr.irq_seen.take().map_or(0, |s| start.saturating_sub(s));
+                    let latency = std::mem::take(&mut tr.latency);
                     let run = HandlerRun {
                         latency_cycles: latency,
                         instructions: std::mem::take(&mut tr.instructions),

@@ -193,3 +193,34 @@ fn a_corrupt_record_keeps_the_emulated_images_drivers_locked_out() {
     assert!(log.contains("CRC-32C mismatch"), "{log}");
     assert_eq!(ask(&mut arm, Request::Enable), Reply::Refused(Refusal::LockedOut(Settings::Corrupt(RecordFault::Crc))));
 }
+
+/// The encoders by DMA (issue 56): each of the acquisition's faults, injected
+/// on DMA2 under the unmodified image (a TEIF on the TX stream, seen at the
+/// deadline; an FEIF or a DMEIF on the RX stream, seen in its interrupt; a
+/// stalled transfer, stopped at the deadline), makes both encoders' readings
+/// of that period invalid and is logged by name; a clean period after one
+/// fault reads again; three periods in a row latch the safe state (reason 2,
+/// bad frames, or the consistency check's 7 first on the hanging arm).
+#[test]
+fn every_dma_fault_is_named_and_makes_that_periods_encoders_invalid() {
+    use arm_app::AcquisitionFault as F;
+    for fault in [F::TransferError, F::FifoError, F::DirectModeError, F::Timeout] {
+        let mut arm = bench();
+        let faulty = BusFaults { acquisition: Some(fault), ..BusFaults::default() };
+        let (st, log) = one_tick(&mut arm, |a| a.set_faults(faulty));
+        assert_ne!(st & status::BAD_FRAME, 0, "{fault:?}: {st:#x}");
+        assert!(log.contains(fault.describe()) && log.contains("theta1 true, elbow true"), "{fault:?}: {log}");
+        arm.set_faults(BusFaults::default());
+        arm.ticks(2).unwrap();
+        assert_eq!(status_now(&arm) & status::BAD_FRAME, 0, "{fault:?}: the next frames are good again");
+        arm.set_faults(faulty);
+        arm.ticks(3).unwrap();
+        let st = status_now(&arm);
+        assert_ne!(st & status::SAFE_STATE, 0, "{fault:?}: {st:#x}");
+        // Three invalid frames in a row (BadFrames), unless the sensor
+        // consistency check, which the held encoders trip on the hanging arm,
+        // is first (SensorFault).
+        let reason = firmware::SafeReason::from_status(st);
+        assert!(matches!(reason, Some(firmware::SafeReason::BadFrames | firmware::SafeReason::SensorFault)), "{fault:?}: {st:#x}");
+    }
+}
