@@ -83,6 +83,10 @@ pub struct Firmware {
     dt: f32,
     /// `1 / dt`, 1/s: the rate of a step that follows its predecessor (no gap).
     rate: f32,
+    /// `1 / move_time_s`, 1/s, for the first frame's move.
+    move_rate: f32,
+    /// The force ramp's duration (`force_ramp_s`, at least 1 ns), s, and its inverse, 1/s.
+    ramp: (f32, f32),
     /// The observer's gains for `cfg` (at angle 0): the first frame's trackers
     /// start from it, so no step pays for the `expf` of the gains.
     tracker: AngleTracker,
@@ -129,6 +133,8 @@ impl Firmware {
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
             rate: 1.0 / cfg.period.as_secs_f32(),
+            move_rate: 1.0 / cfg.move_time_s,
+            ramp: (cfg.force_ramp_s.max(1e-9), 1.0 / cfg.force_ramp_s.max(1e-9)),
             tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
         }
     }
@@ -317,6 +323,8 @@ impl Firmware {
         // The joint accelerations the model did not explain over the interval, rad/s^2.
         let mut missed_accel = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
+        // The sines and cosines of the estimate, when the first frame has them already.
+        let mut first_trig = None;
         let s: &mut Started = match &mut self.started {
             Some(s) => {
                 let gap = seq.wrapping_sub(s.last_seq);
@@ -348,11 +356,14 @@ impl Firmware {
                     seq0: seq,
                     last_seq: seq,
                     trackers: [self.tracker.restarted_at(m.theta1), self.tracker.restarted_at(theta2)],
-                    quintic: Quintic::new(z[0], cfg.target_z_t, cfg.move_time_s),
-                    force_ramp: Quintic::new(law::clamp(m.f_n, 0.0, cfg.f_n_ref), cfg.f_n_ref, cfg.force_ramp_s.max(1e-9)),
+                    quintic: Quintic::with_rate(z[0], cfg.target_z_t, cfg.move_time_s, self.move_rate),
+                    force_ramp: Quintic::with_rate(law::clamp(m.f_n, 0.0, cfg.f_n_ref), cfg.f_n_ref, self.ramp.0, self.ramp.1),
                     branch: cfg.branch.unwrap_or(ElbowBranch::of(&q)),
                     trig,
                 };
+                // The trackers start at the measured angles: the estimate's sines and
+                // cosines are these (no second sin_cos on the first frame).
+                first_trig = Some(trig);
                 self.started.insert(s)
             }
         };
@@ -360,7 +371,10 @@ impl Firmware {
         let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
         // One sin_cos per angle for the tip estimate, the hybrid law and the next
         // step's prediction.
-        let trig = JointTrig::new(&q);
+        let trig = match first_trig {
+            Some(t) => t,
+            None => JointTrig::new(&q),
+        };
         s.trig = trig;
         let kin = TipKinematics::of(p.l, &trig, &qd);
         let (z, z_dot) = (kin.z, kin.z_dot);

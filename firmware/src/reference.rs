@@ -33,7 +33,15 @@ impl Quintic {
     /// The move from `start` to `target` (m) over `duration` (s, > 0: the
     /// configuration checks it).
     pub fn new(start: f32, target: f32, duration: f32) -> Self {
-        Self { start, target, duration, rate: 1.0 / duration }
+        Self::with_rate(start, target, duration, 1.0 / duration)
+    }
+
+    /// [`Quintic::new`] with `rate = 1 / duration` (1/s) given: a caller that
+    /// starts moves of one duration derives it once. The same reference when
+    /// `rate` is `1.0 / duration`.
+    #[inline]
+    pub fn with_rate(start: f32, target: f32, duration: f32, rate: f32) -> Self {
+        Self { start, target, duration, rate }
     }
 
     /// The reference `t` s after the start of the move (holds at the target after `duration`).

@@ -287,7 +287,6 @@ pub fn decode_torque(code: i16) -> f32 {
 }
 
 /// Encodes a torque (N m) as a 12-bit code, saturating; returns the code and whether it saturated.
-#[inline]
 pub fn encode_torque(torque: f32) -> (i16, bool) {
     let x = torque / TORQUE_FULL_SCALE_NM * 2048.0;
     if !x.is_finite() {
