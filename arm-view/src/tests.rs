@@ -150,15 +150,15 @@ fn the_belts_stripes_move_at_the_belt_speed() {
 
 /// The shipped layout shows the view's channels and the tables' columns: its
 /// 3D panel's topics, its plots' `topic.field` paths and its log panel's topic
-/// are channels of a run's `trace.mcap` (the table's JSON schemas, the view's).
+/// are channels of a run's `trace.mcap` (the table's protobuf schemas, the view's).
 #[test]
 fn the_layout_names_channels_and_fields_a_run_writes() {
     let layout: serde_json::Value = serde_json::from_str(crate::LAYOUT).unwrap();
     let encoder = tables::mcap::RowEncoder::<rig::record::PeriodRecord>::new().unwrap();
     let fields = |topic: &str| -> Option<Vec<String>> {
         let c = encoder.channels().iter().find(|c| c.topic == topic)?;
-        let schema: serde_json::Value = serde_json::from_slice(&c.schema).ok()?;
-        Some(schema["properties"].as_object()?.keys().cloned().collect())
+        let set = <prost_types::FileDescriptorSet as prost::Message>::decode(&c.schema[..]).ok()?;
+        Some(set.file.iter().flat_map(|f| &f.message_type).flat_map(|m| &m.field).map(|f| f.name().to_string()).collect())
     };
     let view_topics = [TF_TOPIC, SCENE_TOPIC, LOG_TOPIC];
     let panels = layout["configById"].as_object().unwrap();

@@ -99,8 +99,8 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     ``trace.mcap``; ``simulate``: tables ``trace`` and ``events``, ``run`` and
     ``pil``: ``trace``), as ``{name: Table}`` with the columns, types and values
     :func:`read_csv` gives for the same tables as CSV: floats with their exact
-    bits (the file's JSON numbers are the CSV's shortest round-trip digits; a
-    JSON ``null``, written for NaN and infinities, reads as NaN), integers as
+    bits (the messages' protobuf ``double`` fields carry them, NaN and
+    infinities too), integers as
     ``int64``, flags as ``bool``, text as ``str`` (the types of the tables'
     declarations, which the file's metadata records carry). Row ``k`` is the ``k``-th
     message of each of the table's channels; the columns' order comes from the
@@ -113,7 +113,9 @@ def read_mcap(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Table]:
     Raises:
         FileNotFoundError: ``path`` is not a file.
         PainleveError: the file cannot be read, is not MCAP, holds no table
-            of sil-host, or a message is not the JSON object its table describes.
+            of sil-host, a table's channel is not protobuf (a file written
+            before issue 55, whose tables were JSON), or a message is not the
+            one its channel's schema describes.
     """
     p = _file(path)
     return {name: _table(cols, name) for name, cols in _read_mcap(os.fspath(p))}

@@ -62,7 +62,8 @@ pub fn read_arrow<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
 ///
 /// # Errors
 /// `PainleveError` naming the file when it cannot be read, is not MCAP, holds no
-/// table of sil-host, or a message is not the JSON object its table describes.
+/// table of sil-host, a table's channel is not protobuf (a file written before
+/// issue 55) or a message is not the one its channel's schema describes.
 #[pyfunction]
 pub fn read_mcap<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<(String, Bound<'py, PyDict>)>> {
     let tables = py

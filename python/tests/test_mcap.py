@@ -1,9 +1,8 @@
-"""``--format mcap`` (issue 44): ``trace.mcap`` holds what the CSV tables hold,
-read back two ways: with the ``mcap`` package's own readers (the file as
-Foxglove sees it: channels, JSON schemas, JSON messages, log times) and with
-``painleve.load``. Floats compare to the bit: the file's JSON numbers are the
-CSV's shortest round-trip digits, which Python's ``json`` parses to the nearest
-double, the value written."""
+"""``--format mcap`` (issues 44 and 55): ``trace.mcap`` holds what the CSV tables
+hold, read back two ways: with the ``mcap`` package's own readers and Google's
+protobuf runtime (the file as Foxglove sees it: channels, protobuf schemas and
+messages, log times) and with ``painleve.load``. Floats compare to the bit:
+the messages' ``double`` fields carry the values' bits."""
 
 import json
 import os
@@ -19,6 +18,8 @@ import painleve
 from conftest import REPO, assert_columns_equal, cli, sil_host
 
 mcap_reader = pytest.importorskip("mcap.reader")
+mcap_protobuf = pytest.importorskip("mcap_protobuf.decoder")
+descriptor_pb2 = pytest.importorskip("google.protobuf.descriptor_pb2")
 
 # A bouncing run from x0a (touchdowns and an impact without collision), so the
 # events table has several kinds and resolutions.
@@ -47,23 +48,25 @@ def runs(tmp_path_factory):
 
 
 def by_reader(path):
-    """The file through the ``mcap`` package's indexed reader: ``{topic: [(log
-    time, sequence, message object)]}`` of the tables' JSON channels, the
-    summary; the arm's channels (Foxglove's protobuf schemas, ``FOXGLOVE``) are
-    all there, every one of their messages at a log time of the trace."""
+    """The file through the ``mcap`` package's indexed reader, every message
+    decoded by its channel's schema with Google's protobuf runtime: ``{topic:
+    [(log time, sequence, {field: value})]}`` of the tables' channels, the
+    summary; the arm's channels (Foxglove's schemas, ``FOXGLOVE``) are all there,
+    every one of their messages at a log time of the trace."""
     with open(path, "rb") as f:
-        reader = mcap_reader.make_reader(f)
+        reader = mcap_reader.make_reader(f, decoder_factories=[mcap_protobuf.DecoderFactory()])
         summary = reader.get_summary()
         assert summary is not None, "a finished file has its summary"
         out = {}
         foxglove = {}
-        for schema, channel, message in reader.iter_messages(log_time_order=False):
+        for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False):
+            assert (channel.message_encoding, schema.encoding) == ("protobuf", "protobuf"), channel.topic
             if channel.topic in FOXGLOVE:
-                assert (channel.message_encoding, schema.encoding, schema.name) == ("protobuf", "protobuf", FOXGLOVE[channel.topic])
+                assert schema.name == FOXGLOVE[channel.topic]
                 foxglove.setdefault(channel.topic, []).append(message.log_time)
                 continue
-            assert channel.message_encoding == "json" and schema.encoding == "jsonschema", channel.topic
-            out.setdefault(channel.topic, []).append((message.log_time, message.sequence, json.loads(message.data)))
+            fields = {d.name: getattr(decoded, d.name) for d in decoded.DESCRIPTOR.fields}
+            out.setdefault(channel.topic, []).append((message.log_time, message.sequence, fields))
     assert set(foxglove) == set(FOXGLOVE), sorted(foxglove)
     times = {ns for ns, _, _ in out["/state"]}
     assert set(foxglove["/tf"]) <= times and foxglove["/tf"] == foxglove["/scene"]
@@ -118,23 +121,31 @@ def test_simulate_writes_one_mcap_file_equal_to_its_csv_tables(folders):
     assert [f.rsplit("/", 1)[-1] for f in files] == ["trace.mcap", "trace.svg", "trace.pdf", "trace.html", "summary.json"]
 
 
-def test_the_json_schemas_describe_every_field_with_its_type(folders):
+def test_the_protobuf_schemas_describe_every_field_with_its_type_and_unit(folders):
     _, mcap_dir = folders
     with open(mcap_dir / "trace.mcap", "rb") as f:
         summary = mcap_reader.make_reader(f).get_summary()
+    fdp = descriptor_pb2.FieldDescriptorProto
+    units = {}
     for channel in summary.channels.values():
+        schema = summary.schemas[channel.schema_id]
+        assert schema.encoding == "protobuf", channel.topic
         if channel.topic in FOXGLOVE:
-            # Foxglove's own schemas: a protobuf FileDescriptorSet (checked in sil-host/tests/e2e/foxglove_view.rs).
-            assert summary.schemas[channel.schema_id].encoding == "protobuf", channel.topic
+            # Foxglove's own schemas (checked in sil-host/tests/e2e/foxglove_view.rs).
             continue
-        schema = json.loads(summary.schemas[channel.schema_id].data)
-        assert schema["type"] == "object" and schema["title"].startswith("painleve.")
-        assert list(schema["properties"])[0] == "t" and schema["required"] == list(schema["properties"])
-        for name, prop in schema["properties"].items():
-            assert prop["type"] in (["number", "null"], "string", "boolean", "integer"), (channel.topic, name)
-            assert prop["description"], (channel.topic, name)
-    state = json.loads(summary.schemas[next(c.schema_id for c in summary.channels.values() if c.topic == "/state")].data)
-    assert "rad" in state["properties"]["theta1"]["description"]
+        files = descriptor_pb2.FileDescriptorSet.FromString(schema.data).file
+        assert len(files) == 1 and files[0].syntax == "proto3", channel.topic
+        (message,) = files[0].message_type
+        assert f"{files[0].package}.{message.name}" == schema.name and schema.name.startswith("painleve."), schema.name
+        assert message.field[0].name == "t" and [f.number for f in message.field] == list(range(1, len(message.field) + 1))
+        for field in message.field:
+            assert field.type in (fdp.TYPE_DOUBLE, fdp.TYPE_STRING, fdp.TYPE_BOOL, fdp.TYPE_INT64), (channel.topic, field.name)
+        # Each field's meaning and unit, as its comment.
+        comments = {tuple(loc.path): loc.leading_comments for loc in files[0].source_code_info.location}
+        for k, field in enumerate(message.field):
+            assert comments[(4, 0, 2, k)].strip(), (channel.topic, field.name)
+            units[(channel.topic, field.name)] = comments[(4, 0, 2, k)]
+    assert "rad" in units[("/state", "theta1")] and "m/s" in units[("/contact", "z_n_dot")]
 
 
 def test_painleve_load_reads_the_mcap_tables_as_the_csv_ones(folders):
@@ -158,12 +169,15 @@ def test_a_runs_mcap_trace_equals_its_csv(runs):
     assert set(messages) == RUN_TOPICS
     assert c.trace.nrows == 1000
     assert_equals_csv(messages, c.trace, ["/state", "/contact", "/torques", "/firmware"])
-    # A chunk per 100 periods (count-based, so the bytes are the same on every link).
-    # (Its schemas and channels are in a chunk of their own, before the rows.)
-    # The tables' four channels, /tf and /scene (a frame every 10 ms) and /log in every
-    # chunk but the last ones without a log line.
-    counts = sorted(len(c.message_index_offsets) for c in summary.chunk_indexes)
-    assert counts[0] == 0 and all(n in (6, 7) for n in counts[1:]) and len(counts) == 11, counts
+    # A chunk of the table's rows per 100 periods (count-based, so the bytes are the
+    # same on every link), each followed by a chunk of the arm's messages of those
+    # periods (/tf and /scene, a frame every 10 ms, and /log when a line was written).
+    # (The schemas and channels are in a chunk of their own, before the rows.)
+    topics = {c.id: c.topic for c in summary.channels.values()}
+    kinds = [sorted(topics[i] for i in c.message_index_offsets) for c in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)]
+    assert kinds[0] == [] and len(kinds) == 21, kinds
+    assert all(k == sorted(RUN_TOPICS) for k in kinds[1::2]), kinds
+    assert all(set(k) >= {"/tf", "/scene"} and set(k) <= set(FOXGLOVE) for k in kinds[2::2]), kinds
     m = painleve.load(mcap_dir)
     assert m.command == "run" and list(m.tables) == ["trace"]
     for col in c.trace.columns:

@@ -35,6 +35,11 @@ impl Kind {
             Self::Int => "int",
         }
     }
+
+    /// The kind named `name` ([`Kind::name`]); `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::F64, Self::Str, Self::Bool, Self::Int].into_iter().find(|k| k.name() == name)
+    }
 }
 
 /// A row type that declares its table's columns ([`declare!`], [`crate::csv_row!`]).

@@ -32,11 +32,19 @@ struct Checked {
     compared: usize,
 }
 
-/// Reads `path`: every protobuf message checked against its channel's schema,
-/// every `/tf` tip against `/contact`'s `z_t`, `z_n` at the same log time.
+/// Reads `path`: every message (the tables' and the view's, all protobuf)
+/// checked against its channel's schema, every `/tf` tip against the trace's
+/// `z_t`, `z_n` at the same log time (the table as `read_mcap` gives it).
 fn check_file(path: &Path) -> Checked {
     let bytes = std::fs::read(path).unwrap();
-    let mut contact: BTreeMap<u64, (f64, f64)> = BTreeMap::new();
+    let tables = tables::mcap::read_mcap(path).unwrap();
+    let trace = &tables.iter().find(|(n, _)| n == "trace").unwrap().1;
+    let column = |name: &str| match trace.columns.iter().find(|(n, _)| n == name) {
+        Some((_, tables::Column::F64(v))) => v.clone(),
+        other => panic!("{name}: {other:?}"),
+    };
+    let contact: BTreeMap<u64, (f64, f64)> =
+        column("t").iter().zip(column("z_t")).zip(column("z_n")).map(|((t, z_t), z_n)| (tables::mcap::log_time_ns(*t), (z_t, z_n))).collect();
     let mut tips: Vec<(u64, [f64; 3])> = Vec::new();
     let mut counts = BTreeMap::new();
     let mut log = Vec::new();
@@ -45,17 +53,12 @@ fn check_file(path: &Path) -> Checked {
         let m = m.unwrap();
         *counts.entry(m.channel.topic.clone()).or_insert(0) += 1;
         let schema = m.channel.schema.as_ref().unwrap();
-        if schema.encoding == "protobuf" {
-            assert_eq!(m.channel.message_encoding, "protobuf");
-            assert!(schema.name.starts_with("foxglove."), "{}", schema.name);
+        assert_eq!((schema.encoding.as_str(), m.channel.message_encoding.as_str()), ("protobuf", "protobuf"), "{}", m.channel.topic);
+        {
             let s = schemas.entry(m.channel.id).or_insert_with(|| Schema::parse(&schema.data).unwrap());
             s.check(&schema.name, &m.data).unwrap_or_else(|e| panic!("{} at {} ns: {e}", m.channel.topic, m.log_time));
         }
         match m.channel.topic.as_str() {
-            "/contact" => {
-                let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
-                contact.insert(m.log_time, (v["z_t"].as_f64().unwrap(), v["z_n"].as_f64().unwrap()));
-            }
             "/tf" => {
                 tips.push((m.log_time, arm_view::geometry::origin_in_world(&FrameTransforms::decode(&*m.data).unwrap(), "tip").unwrap()))
             }

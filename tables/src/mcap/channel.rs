@@ -5,13 +5,13 @@
 //!
 //! - [`ChannelSpec`]: a channel's topic, schema and encodings.
 //! - [`RowEncoder`]: a table's own channels, one per signal group
-//!   ([`McapRows::GROUPS`]), a JSON message per row and group.
+//!   ([`McapRows::GROUPS`]), a protobuf message per row and group.
 //! - [`McapView`]: channels drawn from a table's rows besides its own (the
 //!   arm's frames, 3D scene and log in Foxglove's schemas).
 
 use std::marker::PhantomData;
 
-use super::{McapRows, schema::schema_json};
+use super::{McapRows, schema::schema_proto};
 use crate::Column;
 
 /// One channel: its topic, its schema (name, encoding and bytes) and its
@@ -44,11 +44,13 @@ pub trait McapView<T>: Send {
     fn messages(&mut self, row: &T, emit: &mut dyn FnMut(usize, &[u8]));
 }
 
-/// The JSON messages of a table's rows, one per signal group: the channels
-/// [`RowEncoder::channels`] and, per row, [`RowEncoder::encode`]. A message is
-/// a JSON object with the row's time `t` (s) first and then the group's
-/// columns by the CSV's names; floats with the CSV's digits (`null` for NaN
-/// and infinities), integers, `true`/`false`, strings escaped.
+/// The protobuf messages of a table's rows, one per signal group: the channels
+/// [`RowEncoder::channels`] and, per row, [`RowEncoder::encode`]. A message
+/// holds the row's time `t` (s, field 1) and then the group's columns (fields
+/// 2, 3, ... in the group's order, named as in the CSV; the channel's schema,
+/// [`super::schema`]), every field written, zeros included: floats as `double`
+/// with their bits (NaN and infinities too), integers as `int64`, flags as
+/// `bool`, text as `string`.
 pub struct RowEncoder<T: McapRows> {
     channels: Vec<ChannelSpec>,
     /// The column indices of each group, in its messages' order.
@@ -82,9 +84,9 @@ impl<T: McapRows> RowEncoder<T> {
             channels.push(ChannelSpec {
                 topic: g.topic.to_string(),
                 schema_name: g.schema.to_string(),
-                schema_encoding: "jsonschema".into(),
-                schema: schema_json(T::NAMES, T::KINDS, g)?,
-                message_encoding: "json".into(),
+                schema_encoding: "protobuf".into(),
+                schema: schema_proto(T::NAMES, T::KINDS, g)?,
+                message_encoding: "protobuf".into(),
             });
             groups.push(indices);
         }
@@ -110,15 +112,10 @@ impl<T: McapRows> RowEncoder<T> {
         for (g, indices) in self.groups.iter().enumerate() {
             let buf = &mut self.buf;
             buf.clear();
-            buf.extend_from_slice(b"{\"t\":");
-            push_value(buf, &columns[self.t], i);
-            for &c in indices {
-                buf.extend_from_slice(b",\"");
-                buf.extend_from_slice(T::NAMES[c].as_bytes());
-                buf.extend_from_slice(b"\":");
-                push_value(buf, &columns[c], i);
+            push_field(buf, 1, &columns[self.t], i);
+            for (number, &c) in (2..).zip(indices) {
+                push_field(buf, number, &columns[c], i);
             }
-            buf.push(b'}');
             emit(g, buf);
         }
     }
@@ -130,15 +127,15 @@ pub fn log_time_ns(t: f64) -> u64 {
     (t * 1e9).round() as u64
 }
 
-/// Appends value `i` of `c` as JSON: a float with the CSV's digits (`null` for
-/// NaN and infinities), an integer, `true`/`false`, a string escaped.
-fn push_value(buf: &mut Vec<u8>, c: &Column, i: usize) {
+/// Appends value `i` of `c` as protobuf field `number` (its key and its
+/// value, written even when zero or empty): `double` (fixed 64 bits), `int64`
+/// and `bool` (varints), `string` (length-delimited).
+fn push_field(buf: &mut Vec<u8>, number: u32, c: &Column, i: usize) {
+    use prost::encoding::{bool, double, int64, string};
     match c {
-        Column::F64(v) if v[i].is_finite() => crate::csv::push_f64(buf, v[i]),
-        Column::F64(_) => buf.extend_from_slice(b"null"),
-        Column::I64(v) => buf.extend_from_slice(itoa::Buffer::new().format(v[i]).as_bytes()),
-        Column::Bool(v) => buf.extend_from_slice(if v[i] { b"true" } else { b"false" }),
-        // Writing a string into a Vec cannot fail.
-        Column::Str(v) => serde_json::to_writer(&mut *buf, &v[i]).unwrap_or_default(),
+        Column::F64(v) => double::encode(number, &v[i], buf),
+        Column::I64(v) => int64::encode(number, &v[i], buf),
+        Column::Bool(v) => bool::encode(number, &v[i], buf),
+        Column::Str(v) => string::encode(number, &v[i], buf),
     }
 }

@@ -6,20 +6,20 @@
 //! `run` and `pil`: `trace`). Each table's columns are split into signal groups
 //! ([`McapRows::GROUPS`]), one channel per group (`/state`, `/contact`,
 //! `/torques`, `/firmware`, `/events`); a row is one message on each of its
-//! table's channels. A message is a JSON object (message encoding `json`) with
-//! the row's time `t` (s) first and then the group's columns, by the CSV's names;
-//! each channel has a JSON Schema (schema encoding `jsonschema`: the fields'
-//! types and, in their descriptions, units). Log and publish times are the
-//! row's `t` in nanoseconds of simulated time (`round(t * 1e9)`), the sequence
-//! number the row's index in its table (from 0). Floats are written with the
-//! CSV's digits (the shortest that read back to the same bits, so any correct
-//! JSON parser gets the bits back); NaN and infinities, which JSON cannot
-//! hold, are `null` (read back as NaN). Integers are JSON integers, flags
-//! `true`/`false`, text JSON strings.
+//! table's channels. A message is protobuf (message encoding `protobuf`): the
+//! row's time `t` (s) as field 1, then the group's columns as fields 2, 3, ...
+//! by the CSV's names; each channel's schema is a `FileDescriptorSet` (schema
+//! encoding `protobuf`, module `schema`: the fields' types and, in their comments,
+//! units). Log and publish times are the row's `t` in nanoseconds of simulated
+//! time (`round(t * 1e9)`), the sequence number the row's index in its table
+//! (from 0). Floats are `double` fields with their bits (NaN and infinities
+//! too), integers `int64`, flags `bool`, text `string`; every field is written,
+//! zeros included.
 //!
 //! A table may carry a view ([`McapView`]): channels drawn from its rows
-//! besides its own, in any schema, written after each row's messages with
-//! the row's log time (`arm-view`: the arm's frames, 3D scene and log in
+//! besides its own, in any schema, with each row's log time, in chunks of
+//! their own after the chunk of the rows they are drawn from (a reader of the
+//! tables skips them by the chunk index) (`arm-view`: the arm's frames, 3D scene and log in
 //! Foxglove's own schemas). [`RowEncoder`] and [`ChannelSpec`] give the
 //! channels and bytes apart from the file, for a live stream of the same.
 //!
@@ -28,8 +28,8 @@
 //! ([`read_mcap`], `painleve.load`) puts the table back together.
 //!
 //! Writing is the `mcap` crate's: chunks compressed with zstd (level 1, single-threaded,
-//! so the same rows give the same bytes), closed at a size ([`McapFile::new`]
-//! with a chunk size: `simulate`) or every [`STREAM_CHUNK_ROWS`] rows
+//! so the same rows give the same bytes), closed when the tables' messages reach a size
+//! ([`McapFile::new`] with a chunk size: `simulate`) or every [`STREAM_CHUNK_ROWS`] rows
 //! ([`McapStream`]: `run` and `pil`, flushed to the operating system at once);
 //! a run killed outright leaves its whole chunks, which a linear reader reads
 //! (the summary and footer written by [`McapFile::finish`] are missing).

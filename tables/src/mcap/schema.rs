@@ -1,10 +1,19 @@
-//! The JSON Schemas of an MCAP file's channels (schema encoding `jsonschema`):
-//! each group's fields, their types and, in the descriptions, their units.
+//! The protobuf schemas of an MCAP file's table channels (schema encoding
+//! `protobuf`: a `FileDescriptorSet`, as the MCAP spec's well-known encodings
+//! define it): each group's message, its fields' types and numbers and, in the
+//! fields' comments, their units.
+
+use prost::Message as _;
+use prost_types::{
+    DescriptorProto, FieldDescriptorProto, FileDescriptorProto, FileDescriptorSet, SourceCodeInfo,
+    field_descriptor_proto::{Label, Type},
+    source_code_info::Location,
+};
 
 use super::McapGroup;
 use crate::Kind;
 
-/// What a column holds and in which unit, for the JSON Schema's descriptions
+/// What a column holds and in which unit, for the fields' comments
 /// (the CLI's tables' columns; another gets its name).
 pub(super) fn describe(name: &str) -> &str {
     match name {
@@ -48,33 +57,60 @@ pub(super) fn describe(name: &str) -> &str {
     }
 }
 
-/// The JSON Schema (draft 2020-12) of a group's messages: an object with `t`
-/// and the group's columns, in the messages' order, all required; floats are
-/// `number` or `null` (NaN).
-pub(super) fn schema_json(names: &[&str], kinds: &[Kind], group: &McapGroup) -> Result<Vec<u8>, String> {
-    // Built as text: serde_json's maps sort their keys, and the order of the
-    // properties is what Foxglove lists.
-    let quote = |s: &str| serde_json::to_string(s).unwrap_or_default();
-    let mut properties = Vec::new();
-    let mut required = Vec::new();
-    for name in std::iter::once(&"t").chain(group.columns) {
-        let i = names.iter().position(|n| n == name).ok_or_else(|| format!("group {}: no column `{name}`", group.topic))?;
-        let t = match kinds[i] {
-            Kind::F64 => r#"["number","null"]"#,
-            Kind::Str => r#""string""#,
-            Kind::Bool => r#""boolean""#,
-            Kind::Int => r#""integer""#,
-        };
-        properties.push(format!(r#"{}:{{"type":{t},"description":{}}}"#, quote(name), quote(describe(name))));
-        required.push(quote(name));
+/// The protobuf type of a column of kind `kind`: `double` (NaN and infinities
+/// kept with their bits), `int64`, `bool`, `string`.
+pub(super) fn proto_type(kind: Kind) -> Type {
+    match kind {
+        Kind::F64 => Type::Double,
+        Kind::Int => Type::Int64,
+        Kind::Bool => Type::Bool,
+        Kind::Str => Type::String,
     }
-    let schema = format!(
-        r#"{{"$schema":"https://json-schema.org/draft/2020-12/schema","title":{},"type":"object","properties":{{{}}},"required":[{}]}}"#,
-        quote(group.schema),
-        properties.join(","),
-        required.join(",")
-    );
-    // Checked to parse, so a bad name or description fails here and not in a reader.
-    serde_json::from_str::<serde_json::Value>(&schema).map_err(|e| format!("group {}: schema: {e}", group.topic))?;
-    Ok(schema.into_bytes())
+}
+
+/// The `FileDescriptorSet` (protobuf-encoded) of a group's messages: one
+/// proto3 file `<package>/<Name>.proto` holding the message `group.schema`
+/// (`painleve.State`: package `painleve`, message `State`), its fields `t`
+/// (number 1) and then the group's columns (numbers 2, 3, ... in order), each
+/// of its column's [`proto_type`], with the column's meaning and unit
+/// ([`describe`]) as the field's leading comment.
+///
+/// # Errors
+/// A message when the group names a column that `names` lacks, or its schema
+/// name is not `<package>.<Message>`.
+pub(super) fn schema_proto(names: &[&str], kinds: &[Kind], group: &McapGroup) -> Result<Vec<u8>, String> {
+    let (package, message) = group
+        .schema
+        .rsplit_once('.')
+        .filter(|(p, m)| !p.is_empty() && !m.is_empty())
+        .ok_or_else(|| format!("group {}: schema `{}` is not <package>.<Message>", group.topic, group.schema))?;
+    let mut fields = Vec::new();
+    let mut comments = Vec::new();
+    for (number, name) in (1..).zip(std::iter::once(&"t").chain(group.columns)) {
+        let i = names.iter().position(|n| n == name).ok_or_else(|| format!("group {}: no column `{name}`", group.topic))?;
+        fields.push(FieldDescriptorProto {
+            name: Some(name.to_string()),
+            number: Some(number),
+            label: Some(Label::Optional as i32),
+            r#type: Some(proto_type(kinds[i]) as i32),
+            json_name: Some(name.to_string()),
+            ..Default::default()
+        });
+        // Path: FileDescriptorProto.message_type (4) [0], DescriptorProto.field (2) [k].
+        comments.push(Location {
+            path: vec![4, 0, 2, number - 1],
+            span: vec![0, 0, 0],
+            leading_comments: Some(format!(" {}\n", describe(name))),
+            ..Default::default()
+        });
+    }
+    let file = FileDescriptorProto {
+        name: Some(format!("{}/{message}.proto", package.replace('.', "/"))),
+        package: Some(package.to_string()),
+        message_type: vec![DescriptorProto { name: Some(message.to_string()), field: fields, ..Default::default() }],
+        source_code_info: Some(SourceCodeInfo { location: comments }),
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    Ok(FileDescriptorSet { file: vec![file] }.encode_to_vec())
 }

@@ -50,8 +50,8 @@ fn rows(n: usize) -> Vec<Row> {
         .collect()
 }
 
-/// Every finite float back with its bits (the CSV's digits are JSON numbers
-/// that parse to them), NaN and infinities as NaN, text escaped and back.
+/// Every float back with its bits (protobuf `double`: NaN and infinities
+/// too), text with quotes, backslashes and newlines back as it was.
 #[test]
 fn a_stream_round_trips_and_a_cut_one_gives_its_whole_chunks() {
     let dir = tempfile::tempdir().unwrap();
@@ -72,8 +72,7 @@ fn a_stream_round_trips_and_a_cut_one_gives_its_whole_chunks() {
     let got = back(&tables[0].1);
     assert_eq!(got.len(), want.len());
     for (g, w) in got.iter().zip(&want) {
-        let a = if w.a.is_finite() { w.a } else { f64::NAN };
-        assert_eq!((g.t.to_bits(), g.a.to_bits(), &g.b, g.c, g.d), (w.t.to_bits(), a.to_bits(), &w.b, w.c, w.d));
+        assert_eq!((g.t.to_bits(), g.a.to_bits(), &g.b, g.c, g.d), (w.t.to_bits(), w.a.to_bits(), &w.b, w.c, w.d));
     }
     // Killed inside the third chunk: the first two come back.
     let bytes = std::fs::read(&path).unwrap();
@@ -126,7 +125,77 @@ fn merged_tables_are_in_time_order_and_deterministic() {
         .map(|c| (c.topic.clone(), c.message_encoding.clone(), c.schema.as_ref().unwrap().encoding.clone()))
         .collect();
     encodings.sort();
-    assert_eq!(encodings[0], ("/events".to_string(), "json".to_string(), "jsonschema".to_string()));
+    assert_eq!(encodings[0], ("/events".to_string(), "protobuf".to_string(), "protobuf".to_string()));
+}
+
+/// Each channel's schema is a `FileDescriptorSet` of one proto3 message named
+/// as the group's schema: `t` as field 1, then the group's columns in order,
+/// each of its kind's type, with its unit in the field's comment.
+#[test]
+fn the_schemas_are_protobuf_descriptors_with_every_column_in_order() {
+    use prost::Message as _;
+    use prost_types::field_descriptor_proto::Type;
+    let encoder = RowEncoder::<Row>::new().unwrap();
+    let two = &encoder.channels()[1];
+    assert_eq!((two.topic.as_str(), two.schema_name.as_str(), two.schema_encoding.as_str()), ("/two", "test.Two", "protobuf"));
+    let set = prost_types::FileDescriptorSet::decode(&two.schema[..]).unwrap();
+    let [file] = &set.file[..] else { panic!("{set:?}") };
+    assert_eq!((file.package(), file.syntax(), file.message_type[0].name()), ("test", "proto3", "Two"));
+    let fields: Vec<_> = file.message_type[0].field.iter().map(|f| (f.name(), f.number(), f.r#type())).collect();
+    assert_eq!(fields, [("t", 1, Type::Double), ("b", 2, Type::String), ("d", 3, Type::Int64)]);
+    let comments = &file.source_code_info.as_ref().unwrap().location;
+    assert_eq!(comments[0].path, [4, 0, 2, 0]);
+    assert!(comments[0].leading_comments().contains("time, s"), "{:?}", comments[0]);
+}
+
+/// A file whose table channel is not the protobuf the reader knows, or
+/// whose messages break their schema, is refused with the channel, the
+/// message and the field: JSON messages (a file written before), a field
+/// missing, twice, or of another wire type, bytes cut inside a field.
+#[test]
+fn a_message_that_breaks_its_schema_is_refused_by_field() {
+    use prost::encoding::{double, string};
+    let dir = tempfile::tempdir().unwrap();
+    let encoder = RowEncoder::<Event>::new().unwrap();
+    let spec = &encoder.channels()[0];
+    let write = |name: &str, encoding: &str, data: &[u8]| {
+        let path = dir.path().join(name);
+        let mut w = mcap::Writer::new(std::io::BufWriter::new(File::create(&path).unwrap())).unwrap();
+        let schema = w.add_schema(&spec.schema_name, encoding, &spec.schema).unwrap();
+        let channel = w.add_channel(schema, "/events", encoding, &Default::default()).unwrap();
+        let metadata = [("columns", "t,kind"), ("kinds", "f64,str"), ("topics", "/events")];
+        let metadata = metadata.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        w.write_metadata(&mcap::records::Metadata { name: "painleve.table.events".into(), metadata }).unwrap();
+        let header = mcap::records::MessageHeader { channel_id: channel, sequence: 0, log_time: 0, publish_time: 0 };
+        w.write_to_known_channel(&header, data).unwrap();
+        w.finish().unwrap();
+        drop(w);
+        read_mcap(&path).map(|t| t[0].1.rows()).map_err(|e| e.to_string())
+    };
+    let mut good = Vec::new();
+    double::encode(1, &0.5, &mut good);
+    string::encode(2, &"touchdown".to_string(), &mut good);
+    assert_eq!(write("good.mcap", "protobuf", &good), Ok(1));
+    // An unknown field is skipped.
+    let mut more = good.clone();
+    double::encode(9, &1.0, &mut more);
+    assert_eq!(write("more.mcap", "protobuf", &more), Ok(1));
+    let e = write("json.mcap", "json", br#"{"t":0.5,"kind":"touchdown"}"#).unwrap_err();
+    assert!(e.contains("json.mcap") && e.contains("/events") && e.contains("not protobuf"), "{e}");
+    let mut missing = Vec::new();
+    double::encode(1, &0.5, &mut missing);
+    let e = write("missing.mcap", "protobuf", &missing).unwrap_err();
+    assert!(e.contains("/events: message 0: `kind` is missing"), "{e}");
+    let mut twice = good.clone();
+    double::encode(1, &0.5, &mut twice);
+    assert!(write("twice.mcap", "protobuf", &twice).unwrap_err().contains("`t` twice"));
+    let mut wrong = Vec::new();
+    string::encode(1, &"0.5".to_string(), &mut wrong);
+    string::encode(2, &"touchdown".to_string(), &mut wrong);
+    let e = write("wrong.mcap", "protobuf", &wrong).unwrap_err();
+    assert!(e.contains("message 0: `t`"), "{e}");
+    let e = write("cut.mcap", "protobuf", &good[..good.len() - 3]).unwrap_err();
+    assert!(e.contains("message 0: `kind`"), "{e}");
 }
 
 #[test]
@@ -138,9 +207,11 @@ fn not_mcap_is_refused_with_its_path() {
     assert!(e.contains("trace.mcap"), "{e}");
 }
 
-/// A view's channels come after its table's; each row's view messages follow
-/// its own, with its log time and their own sequence numbers (from 0); the
-/// reader leaves them out and gives the table back whole.
+/// A view's channels come after its table's. The view messages of a chunk's
+/// rows come in a chunk of their own right after it, with each row's log time
+/// and their own sequence numbers (from 0); the chunk index tells the two
+/// apart, and the reader leaves the views out and gives the table back whole,
+/// from a whole file and from one cut inside a view's chunk.
 #[test]
 fn a_views_messages_follow_their_rows_and_the_reader_skips_them() {
     /// A message on `/odd` for each row with an odd `d`, two on `/every` for every row.
@@ -178,27 +249,56 @@ fn a_views_messages_follow_their_rows_and_the_reader_skips_them() {
         .map(|m| m.unwrap())
         .map(|m| (m.channel.topic.clone(), m.sequence, m.log_time, m.data.to_vec()))
         .collect();
-    // Row k: /one, /two, then /odd (odd d), /every twice.
-    let mut k = 0;
-    let mut odd = 0;
+    // Per chunk of STREAM_CHUNK_ROWS rows: row k's /one and /two, for every
+    // row; then, per row, /odd (odd d) and /every twice.
+    let (mut k, mut odd, mut every) = (0, 0, 0);
     let mut it = messages.iter();
-    while let Some((topic, seq, ns, _)) = it.next() {
-        assert_eq!((topic.as_str(), *seq as usize), ("/one", k));
-        let t = (want[k].t * 1e9).round() as u64;
-        assert_eq!(*ns, t);
-        assert_eq!(it.next().unwrap().0, "/two");
-        if want[k].d % 2 == 1 {
-            let (topic, seq, ns, data) = it.next().unwrap();
-            assert_eq!((topic.as_str(), *seq, *ns, data.as_slice()), ("/odd", odd, t, &want[k].d.to_le_bytes()[..]));
-            odd += 1;
+    for block in want.chunks(STREAM_CHUNK_ROWS) {
+        for row in block {
+            let t = (row.t * 1e9).round() as u64;
+            let (topic, seq, ns, _) = it.next().unwrap();
+            assert_eq!((topic.as_str(), *seq as usize, *ns), ("/one", k, t));
+            let (topic, seq, ns, _) = it.next().unwrap();
+            assert_eq!((topic.as_str(), *seq as usize, *ns), ("/two", k, t));
+            k += 1;
         }
-        for (i, byte) in [b'a', b'b'].into_iter().enumerate() {
-            let (topic, seq, ns, data) = it.next().unwrap();
-            assert_eq!((topic.as_str(), *seq as usize, *ns, data.as_slice()), ("/every", 2 * k + i, t, &[byte][..]));
+        for row in block {
+            let t = (row.t * 1e9).round() as u64;
+            if row.d % 2 == 1 {
+                let (topic, seq, ns, data) = it.next().unwrap();
+                assert_eq!((topic.as_str(), *seq, *ns, data.as_slice()), ("/odd", odd, t, &row.d.to_le_bytes()[..]));
+                odd += 1;
+            }
+            for byte in [b'a', b'b'] {
+                let (topic, seq, ns, data) = it.next().unwrap();
+                assert_eq!((topic.as_str(), *seq, *ns, data.as_slice()), ("/every", every, t, &[byte][..]));
+                every += 1;
+            }
         }
-        k += 1;
     }
-    assert_eq!((k, odd), (250, 125));
+    assert_eq!((k, odd, every, it.next()), (250, 125, 500, None));
+    // Each chunk of messages holds the table's channels or the view's, never
+    // both, in turn (the first chunk holds only the schemas and channels).
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let id = |topic: &str| summary.channels.values().find(|c| c.topic == topic).unwrap().id;
+    let table = [id("/one"), id("/two")];
+    assert!(summary.chunk_indexes[0].message_index_offsets.is_empty());
+    let kinds: Vec<bool> = summary.chunk_indexes[1..]
+        .iter()
+        .map(|c| {
+            let ids: Vec<u16> = c.message_index_offsets.keys().copied().collect();
+            assert!(ids.iter().all(|i| table.contains(i)) || ids.iter().all(|i| !table.contains(i)), "{ids:?}");
+            table.contains(&ids[0])
+        })
+        .collect();
+    assert_eq!(kinds, [true, false, true, false, true, false]);
+    // Cut inside the second view chunk: the first two table chunks' rows.
+    let second_view = &summary.chunk_indexes[4];
+    std::fs::write(&path, &bytes[..(second_view.chunk_start_offset + second_view.chunk_length / 2) as usize]).unwrap();
+    let got = back(&read_mcap(&path).unwrap()[0].1);
+    let bits = |r: &[Row]| r.iter().map(|r| (r.t.to_bits(), r.a.to_bits(), r.b.clone(), r.c, r.d)).collect::<Vec<_>>();
+    assert!(bits(&got) == bits(&want[..2 * STREAM_CHUNK_ROWS]), "{} rows", got.len());
+    std::fs::write(&path, &bytes).unwrap();
     let tables = read_mcap(&path).unwrap();
     assert_eq!(back(&tables[0].1).len(), want.len());
 }

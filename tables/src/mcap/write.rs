@@ -65,19 +65,38 @@ pub struct McapTable(usize);
 /// (or two tables' rows interleaved by time, [`McapFile::write_merged`]);
 /// [`McapFile::finish`] writes the last chunk, the summary (indexes,
 /// statistics) and the footer.
+///
+/// The tables' messages and their views' go to separate chunks: the rows'
+/// chunk is closed, then the view messages of the same rows follow in a chunk
+/// of their own (same log times, so the two overlap in time, which MCAP
+/// readers merge). A reader of the tables alone ([`super::read_mcap`]) skips
+/// the views' chunks by the chunk index without decompressing them.
 pub struct McapFile {
     path: PathBuf,
     writer: Writer<BufWriter<File>>,
     tables: Vec<TableChannels>,
+    /// Close the chunks when the tables' messages since the last close hold this many bytes.
+    chunk_size: Option<u64>,
+    /// The tables' message bytes since the chunks were last closed.
+    table_bytes: u64,
+    /// The views' messages since the chunks were last closed, for their own chunk.
+    views: ViewBuffer,
+}
+
+/// View messages waiting for their chunk: each header and where its bytes end in `data`.
+#[derive(Default)]
+struct ViewBuffer {
+    headers: Vec<(MessageHeader, usize)>,
+    data: Vec<u8>,
 }
 
 impl McapFile {
     /// Starts the MCAP file `file` (at `path`, for error messages): its magic
-    /// and header (profile empty: the channels are Foxglove's and JSON, no ROS).
-    /// `chunk_size`: close a chunk when it holds that many bytes
-    /// (uncompressed); `None`: only at [`McapFile::flush`]. Chunks are built in
-    /// memory and written whole, so the file only ever ends inside a chunk while
-    /// one is being written.
+    /// and header (profile empty: the channels are protobuf, no ROS).
+    /// `chunk_size`: close the tables' chunk (and the views' after it) when
+    /// the tables' messages in it hold that many bytes; `None`: only at
+    /// [`McapFile::flush`]. Chunks are built in memory and written whole, so the
+    /// file only ever ends inside a chunk while one is being written.
     ///
     /// # Errors
     /// [`Error::Io`] when the header cannot be written.
@@ -86,11 +105,11 @@ impl McapFile {
             .compression(Some(mcap::Compression::Zstd))
             .compression_level(ZSTD_LEVEL)
             .compression_threads(0)
-            .chunk_size(chunk_size)
+            .chunk_size(None)
             .disable_seeking(true)
             .library(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION"), " (mcap crate)"));
         let writer = Writer::with_options(BufWriter::new(file), options).map_err(mcap_err(&path))?;
-        Ok(Self { path, writer, tables: Vec::new() })
+        Ok(Self { path, writer, tables: Vec::new(), chunk_size, table_bytes: 0, views: ViewBuffer::default() })
     }
 
     /// Registers the table of rows `T`: a schema and a channel per group, and
@@ -198,32 +217,58 @@ impl McapFile {
         tc.rows = tc.rows.wrapping_add(1);
         let writer = &mut self.writer;
         let mut result = Ok(());
+        let table_bytes = &mut self.table_bytes;
         encoder.encode(columns, i, &mut |g, bytes| {
             if result.is_ok() {
                 let header = MessageHeader { channel_id: tc.channels[g], sequence, log_time: ns, publish_time: ns };
+                *table_bytes += bytes.len() as u64;
                 result = writer.write_to_known_channel(&header, bytes);
             }
         });
         if let Some(ViewChannels { view, ids, sequences }) = &mut tc.view {
             let Some(view) = view.downcast_mut::<Box<dyn McapView<T>>>() else { return Err(wrong()) };
+            let views = &mut self.views;
             view.messages(row, &mut |c, bytes| {
-                if result.is_ok() {
-                    let header = MessageHeader { channel_id: ids[c], sequence: sequences[c], log_time: ns, publish_time: ns };
-                    sequences[c] = sequences[c].wrapping_add(1);
-                    result = writer.write_to_known_channel(&header, bytes);
-                }
+                let header = MessageHeader { channel_id: ids[c], sequence: sequences[c], log_time: ns, publish_time: ns };
+                sequences[c] = sequences[c].wrapping_add(1);
+                views.data.extend_from_slice(bytes);
+                views.headers.push((header, views.data.len()));
             });
         }
-        result.map_err(mcap_err(&self.path))
+        result.map_err(mcap_err(&self.path))?;
+        if self.chunk_size.is_some_and(|size| self.table_bytes >= size) {
+            self.close_chunks()?;
+        }
+        Ok(())
     }
 
-    /// Closes the chunk being built (written whole) and flushes the file to the
-    /// operating system: a process killed after this keeps every row written.
+    /// Closes the tables' chunk being built, then writes the views' messages
+    /// of the same rows as a chunk of their own.
+    fn close_chunks(&mut self) -> Result<(), Error> {
+        let err = mcap_err(&self.path);
+        self.writer.flush().map_err(&err)?;
+        if !self.views.headers.is_empty() {
+            let mut start = 0;
+            for (header, end) in &self.views.headers {
+                self.writer.write_to_known_channel(header, &self.views.data[start..*end]).map_err(&err)?;
+                start = *end;
+            }
+            self.views.headers.clear();
+            self.views.data.clear();
+            self.writer.flush().map_err(&err)?;
+        }
+        self.table_bytes = 0;
+        Ok(())
+    }
+
+    /// Closes the chunks being built (the tables', then the views') and
+    /// flushes the file to the operating system: a process killed after this
+    /// keeps every row written.
     ///
     /// # Errors
     /// [`Error::Io`] when writing fails.
     pub fn flush(&mut self) -> Result<(), Error> {
-        self.writer.flush().map_err(mcap_err(&self.path))
+        self.close_chunks()
     }
 
     /// Writes the last chunk, the summary section and the footer, and closes the file.
@@ -231,6 +276,7 @@ impl McapFile {
     /// # Errors
     /// [`Error::Io`] when writing fails.
     pub fn finish(mut self) -> Result<(), Error> {
+        self.close_chunks()?;
         self.writer.finish().map_err(mcap_err(&self.path))?;
         let path = self.path.clone();
         let buffered = self.writer.into_inner();
