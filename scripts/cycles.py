@@ -27,10 +27,11 @@ Also `--profile`: where the worst step's instructions go, from `llvm-addr2line
 - by call: the frame called from `Firmware::step`/`Firmware::control`.
 
 Usage:
-  scripts/cycles.py [--controller hybrid|hybrid-estimated|pid|both|all] [--duration S] [--image ELF]
+  scripts/cycles.py [--controller hybrid|hybrid-FRICTION|pid|both|all] [--duration S] [--image ELF]
                     [--sil-host EXE] [--json] [--profile] [--max-cycles N]
-  `all` (the default): the hybrid law with the paper's friction term and with
-  the estimated one (`controller.friction = estimated`, issue 41), and the PID.
+  `all` (the default): the hybrid law with every friction term (`hybrid`: the
+  default `commanded`; `hybrid-estimated`, issue 41; `hybrid-measured`,
+  `hybrid-measured_normal`, `hybrid-none`: `controller.friction`), and the PID.
   --json prints {"hybrid": {...}, "pid": {...}} with worst/median/p99 of
   instructions and cycles, the share of a 1 kHz period and the highest control
   rate at which the worst step fits 5 % of the period at 168 MHz (HARDWARE.md).
@@ -312,6 +313,10 @@ def spread(values):
     return {"worst": v[-1], "median": v[n // 2], "p99": v[min(n - 1, (99 * n) // 100)]}
 
 
+# The hybrid law's friction terms besides the default (`commanded`): every one is
+# gated (issue 56), as `controller.friction` names them (firmware::config::FrictionCompensation).
+HYBRID_VARIANTS = ("hybrid-estimated", "hybrid-measured", "hybrid-measured_normal", "hybrid-none")
+
 CORE_HZ = 168e6  # docs/hardware.md: the reference board's core clock
 SHARE = 0.05  # HARDWARE.md: the step's budget is 5 % of the control period
 
@@ -357,7 +362,7 @@ def analyse(args, controller, tools, syms, disasm):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--controller", default="all", choices=["hybrid", "hybrid-estimated", "pid", "both", "all"])
+    ap.add_argument("--controller", default="all", choices=["hybrid", *HYBRID_VARIANTS, "pid", "both", "all"])
     ap.add_argument("--duration", type=float, default=2.5, help="s of the default scenario (its move takes 2 s)")
     ap.add_argument("--image", default=os.path.join(ROOT, "target/thumbv7em-none-eabihf/qemu/pil"))
     ap.add_argument("--sil-host", default=os.path.join(ROOT, "target/release/sil-host"))
@@ -378,7 +383,7 @@ def main():
     }
     syms = symbols(args.image, tools["nm"])
     disasm = disassemble(args.image, tools["objdump"])
-    controllers = {"both": ["hybrid", "pid"], "all": ["hybrid", "hybrid-estimated", "pid"]}.get(args.controller, [args.controller])
+    controllers = {"both": ["hybrid", "pid"], "all": ["hybrid", *HYBRID_VARIANTS, "pid"]}.get(args.controller, [args.controller])
     # One process per controller, as many at once as there are cores: each traced run
     # is one QEMU and one Python parser, both single-threaded (the three take about
     # 90 s each on one core). The runs are independent: each has its own PIL link,
