@@ -199,6 +199,7 @@ impl<H: ArmIo> ArmApp<H> {
             elbow,
             acquisition: parts.encoders,
             acquisition_logged: None,
+            acquisition_faults: 0,
             load,
             belt,
             motors: parts.motors,
@@ -261,6 +262,15 @@ impl<H: ArmIo> ArmApp<H> {
         let mut board = TickBoard { hw, clock, log };
         loop {
             let Ok(event) = board.next_event();
+            // The acquisition's own safe-state reason (issue 56): its faults make
+            // the frame bad, and the firmware's bad-frame rule would name them
+            // `BadFrames` at the same period (or the consistency check, on held
+            // encoders, `SensorFault`): latched first, before the step.
+            if board.hw.acquisition_faults >= board.hw.config.bad_frame_limit
+                && let Some(fw) = firmware.as_mut()
+            {
+                fw.enter_safe_state(SafeReason::Acquisition);
+            }
             let _ = board::handle(firmware, event, &mut board, clock);
             if matches!(event, Event::Frame(_)) {
                 break;

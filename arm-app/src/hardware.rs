@@ -49,6 +49,8 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) acquisition: H::Encoders,
     /// The acquisition fault last logged (`None`: none, or the acquisition is back).
     pub(crate) acquisition_logged: Option<crate::joint::AcquisitionFault>,
+    /// Consecutive periods whose acquisition failed (0 after a clean one).
+    pub(crate) acquisition_faults: u16,
     pub(crate) load: LoadCell<H::Adc>,
     pub(crate) belt: BeltEncoder<H::Counter>,
     pub(crate) motors: Motors<H>,
@@ -108,6 +110,7 @@ impl<H: ArmIo> Hardware<H> {
             }
             self.acquisition_logged = acquisition;
         }
+        self.acquisition_faults = if acquisition.is_some() { self.acquisition_faults.saturating_add(1) } else { 0 };
         let load = self.load.read_counts_and_codes().ok();
         let readings = Readings {
             theta1_raw: encoder_counts[0].ok(),

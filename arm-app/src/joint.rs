@@ -45,8 +45,10 @@ pub enum EncoderFault {
 /// them without the core (the `arm` image: SPI1 through DMA2, RM0090 10;
 /// docs/board.md "The encoders by DMA"). Both encoders' readings of that period
 /// are invalid (the frame's `THETA1_INVALID` and `ELBOW_INVALID`); the
-/// firmware holds its last command, and three such periods in a row latch the
-/// safe state with reason 2, `BadFrames` (`firmware::SafeReason`), the drivers
+/// firmware holds its last command, and `bad_frame_limit` (3) such periods in a
+/// row latch the safe state with its own reason, 13 `Acquisition`
+/// (`firmware::SafeReason`, latched before that period's step, so neither the
+/// bad-frame rule nor the consistency check names it first), the drivers
 /// disabled. Each fault is logged by name ([`crate::Notice::AcquisitionFault`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum AcquisitionFault {

@@ -150,7 +150,8 @@ impl Dma2 {
             return err(format!("channel {chsel}: SPI1's requests are channel 3 of streams 0, 2, 3, 5 (RM0090 table 43)"));
         }
         let dir = (cr >> 6) & 0b11;
-        let (want, what) = if rx { (0b00, "SPI1_RX: peripheral to memory (DIR = 00)") } else { (0b01, "SPI1_TX: memory to peripheral (DIR = 01)") };
+        let (want, what) =
+            if rx { (0b00, "SPI1_RX: peripheral to memory (DIR = 00)") } else { (0b01, "SPI1_TX: memory to peripheral (DIR = 01)") };
         if dir != want {
             return err(format!("direction {dir:#04b}: stream {s} is {what}"));
         }
@@ -161,7 +162,9 @@ impl Dma2 {
             ));
         }
         if cr & (CIRC | DBM | PFCTRL) != 0 {
-            return err("circular, double-buffer or peripheral flow control: not what the image's acquisition does, and not modelled".into());
+            return err(
+                "circular, double-buffer or peripheral flow control: not what the image's acquisition does, and not modelled".into()
+            );
         }
         if cr & PINC != 0 || cr & MINC == 0 {
             return err("the peripheral address incremented or the memory address fixed: SPI1_DR is one register, the words are an array (PINC = 0, MINC = 1)".into());
@@ -172,7 +175,7 @@ impl Dma2 {
         if st.ndtr == 0 {
             return Err(BoardError::new(Self::reg(s, "NDTR"), 0, "an empty transfer: the stream would complete at once (RM0090 10.3.10)"));
         }
-        if s != 0 && cr & (TCIE | TEIE | DMEIE | HTIE) != 0 || s != 0 && st.fcr & FEIE != 0 {
+        if s != 0 && (cr & (TCIE | TEIE | DMEIE | HTIE) != 0 || st.fcr & FEIE != 0) {
             return err(format!(
                 "stream {s}'s interrupts: the emulated board wires only DMA2_Stream0's line (IRQ 56); take the TX stream's flags in stream 0's handler"
             ));
@@ -252,15 +255,15 @@ impl Dma2 {
 
     fn clear(&mut self, high: bool, value: u32) {
         let first = if high { 4 } else { 0 };
-        for i in 0..4 {
-            self.flags[first + i] &= !((value >> SHIFT[i]) & FLAGS);
+        for (f, shift) in self.flags[first..first + 4].iter_mut().zip(SHIFT) {
+            *f &= !((value >> shift) & FLAGS);
         }
     }
 }
 
 impl RegisterModel for Dma2 {
     fn read(&mut self, offset: u32) -> Result2<u32> {
-        Ok(self.peek_checked(offset)?)
+        self.peek_checked(offset)
     }
 
     fn write(&mut self, offset: u32, value: u32) -> Result2<()> {
@@ -280,14 +283,22 @@ impl RegisterModel for Dma2 {
                 let enabled = self.streams[s].cr & EN != 0;
                 if enabled && r != 0 {
                     // RM0090 10.5.5: the other registers are write-protected while EN = 1.
-                    return Err(BoardError::new(Self::reg(s, ["CR", "NDTR", "PAR", "M0AR", "M1AR", "FCR"][r as usize / 4]), value, "written while the stream is enabled (EN = 1): the write is ignored on the part (RM0090 10.3.17)"));
+                    return Err(BoardError::new(
+                        Self::reg(s, ["CR", "NDTR", "PAR", "M0AR", "M1AR", "FCR"][r as usize / 4]),
+                        value,
+                        "written while the stream is enabled (EN = 1): the write is ignored on the part (RM0090 10.3.17)",
+                    ));
                 }
                 match r {
                     0x00 => {
                         if value & EN != 0 && !enabled {
                             self.check(s, value)?;
                             if self.flags[s] & (TCIF | TEIF | FEIF | DMEIF) != 0 {
-                                return Err(BoardError::new(Self::reg(s, "CR"), value, "EN set with the stream's flags still set in LISR/HISR: clear them first (RM0090 10.3.17)"));
+                                return Err(BoardError::new(
+                                    Self::reg(s, "CR"),
+                                    value,
+                                    "EN set with the stream's flags still set in LISR/HISR: clear them first (RM0090 10.3.17)",
+                                ));
                             }
                             self.streams[s].done = 0;
                             self.streams[s].cr = value & 0x0FFF_FFFF;

@@ -46,6 +46,6 @@ mod widen;
 
 pub use board::{EmuError, EmulatedBoard, RegisterFault};
 pub use device::BoardError;
-pub use image::{ArmImage, ImageError};
 pub use dma2::DmaFaults;
+pub use image::{ArmImage, ImageError};
 pub use spi1::SpiFaults;

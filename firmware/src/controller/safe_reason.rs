@@ -40,6 +40,14 @@ pub enum SafeReason {
     Tracking = 11,
     /// Under the hybrid law lift-off stayed declared for 10 ms ([`crate::tracking`]).
     LiftOff = 12,
+    /// The board's acquisition of the encoders failed (issue 56: a DMA2
+    /// transfer, FIFO or direct-mode error, frames not done by their deadline, a
+    /// stuck chip select; RM0090 10.3.16) in `bad_frame_limit` consecutive
+    /// periods. Latched by the board through
+    /// [`Firmware::enter_safe_state`](super::Firmware::enter_safe_state) before
+    /// that period's step (the `arm` image's application, `arm_app`), never by
+    /// the step itself.
+    Acquisition = 13,
 }
 
 impl SafeReason {
@@ -61,6 +69,7 @@ impl SafeReason {
             10 => Some(Self::Miswired),
             11 => Some(Self::Tracking),
             12 => Some(Self::LiftOff),
+            13 => Some(Self::Acquisition),
             _ => None,
         }
     }
@@ -86,6 +95,9 @@ impl SafeReason {
             }
             Self::LiftOff => {
                 "the tip was off the belt, or the load cell read no force, for 10 ms under the force law (a motor or the load cell wired wrong, or the paradox's bounce)"
+            }
+            Self::Acquisition => {
+                "the encoders' acquisition (SPI1 by DMA) failed in consecutive periods: a DMA transfer, FIFO or direct-mode error, frames not done in time, or a chip select stuck low"
             }
             Self::Miswired => {
                 "a joint accelerated against its motor's torque for 5 ms (a motor wired the other way, an encoder reversed, or the encoders swapped)"

@@ -104,7 +104,45 @@ mod image {
     /// period's acquisition is over).
     const CONTROL_PRIORITY: u8 = 0x40;
 
-    /// What the application tells the operator, in the defmt log; a window's
+    /// The notices of the control interrupt, waiting for the idle loop to log
+    /// them (issue 56): a defmt line costs the handler thousands of cycles (the
+    /// window's report, once every `step_stats::WINDOW` periods, about 11 000
+    /// with the flash's wait states, most of the 1 kHz handler's worst case).
+    /// Logged in order, at the same stamp (`log_time`: the period's, as long as
+    /// the idle loop runs before the next tick's control step).
+    static NOTICES: Mutex<RefCell<Deque<Notice, NOTICE_QUEUE>>> = Mutex::new(RefCell::new(Deque::new()));
+    /// Notices a period can raise, with room to spare: a window's report, the
+    /// invalid readings, an acquisition fault, the safe state and the drivers'.
+    const NOTICE_QUEUE: usize = 8;
+    /// Notices dropped because the queue was full (the idle loop starved by
+    /// the interrupts), told with the next ones logged.
+    static NOTICES_DROPPED: Mutex<core::cell::Cell<u32>> = Mutex::new(core::cell::Cell::new(0));
+
+    /// The control interrupt's notice sink: queued for [`log_notices`].
+    fn defer(n: Notice) {
+        cortex_m::interrupt::free(|cs| {
+            if NOTICES.borrow(cs).borrow_mut().push_back(n).is_err() {
+                let d = NOTICES_DROPPED.borrow(cs);
+                d.set(d.get().saturating_add(1));
+            }
+        });
+    }
+
+    /// The idle loop: logs the notices the control interrupt queued ([`defer`]).
+    fn log_notices() {
+        loop {
+            let (n, dropped) =
+                cortex_m::interrupt::free(|cs| (NOTICES.borrow(cs).borrow_mut().pop_front(), NOTICES_DROPPED.borrow(cs).replace(0)));
+            if dropped > 0 {
+                defmt::warn!("{=u32} notices dropped (the idle loop fell behind the control interrupt)", dropped);
+            }
+            let Some(n) = n else { return };
+            log(n);
+        }
+    }
+
+    /// What the application tells the operator, in the defmt log (at start-up
+    /// directly, from the control interrupt through [`defer`]); a window's
     /// report also goes to the idle loop, which sends it on USART1.
     fn log(n: Notice) {
         match n {
@@ -197,7 +235,7 @@ mod image {
         log_time::tick();
         cortex_m::interrupt::free(|cs| {
             if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
-                arm.tick(&mut log);
+                arm.tick(&mut defer);
                 if let Some(m) = arm.monitor() {
                     // SAFETY: written here only, inside the critical section;
                     // read by a debugger or the emulator, never by the image.
@@ -350,7 +388,11 @@ mod image {
         // record's, else the compiled-in fallback's): TIM2's reload from it.
         let period = app.config().period;
         let tick = match TickTimer::for_period(timer_hz, period) {
-            Ok(t) if period.as_us() >= board_stm32f405::timing::MIN_PERIOD_US && period.as_us() <= board_stm32f405::timing::MAX_PERIOD_US => t,
+            Ok(t)
+                if period.as_us() >= board_stm32f405::timing::MIN_PERIOD_US && period.as_us() <= board_stm32f405::timing::MAX_PERIOD_US =>
+            {
+                t
+            }
             Ok(_) => {
                 defmt::error!("control rate: {=u64} us is outside the image's 100 to 4000 us (250 Hz to 10 kHz)", period.as_us());
                 exit::exit(2);
@@ -392,6 +434,7 @@ mod image {
         // Idle: serve the bring-up requests (the interrupts preempt this).
         loop {
             cortex_m::asm::wfi();
+            log_notices();
             serve_requests(&mut frames);
             // The periods run so far and whether the drivers are on, from the application itself.
             let (periods, drivers) =

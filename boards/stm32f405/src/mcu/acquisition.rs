@@ -18,6 +18,11 @@
 //!   at the latest by the next update: the streams are stopped;
 //! - a chip select that reads low after its release (GPIO IDR).
 //!
+//! SPI1's overrun (SR's OVR, looked at once per frame end and cleared) fails
+//! that encoder's sample alone, as a bus error; frames stopped by a fault or
+//! the deadline leave SPI1's receiver drained (DR, then SR) for the next
+//! period.
+//!
 //! Priorities: TIM2 and DMA2 stream 0 above the control interrupt, so the next
 //! period's acquisition starts on time even behind a late step.
 
@@ -164,6 +169,9 @@ fn stop() {
     for c in &CS {
         gpio::write(c, true);
     }
+    // A word left in DR (an overrun: SPI1 asks the RX stream for no word
+    // while OVR is set) would overrun every period after.
+    spi::drain();
 }
 
 /// The injected conversions, if this period's are there: one look at JEOC, no wait.
@@ -178,7 +186,12 @@ fn conversions() -> Option<[u16; 2]> {
     Some(v)
 }
 
-fn finish(cs: &interrupt::CriticalSection, flight: &mut Option<InFlight>, encoders: Option<[Result<u16, EncoderFault>; 2]>, fault: Option<AcquisitionFault>) {
+fn finish(
+    cs: &interrupt::CriticalSection,
+    flight: &mut Option<InFlight>,
+    encoders: Option<[Result<u16, EncoderFault>; 2]>,
+    fault: Option<AcquisitionFault>,
+) {
     *flight = None;
     let adc = conversions();
     let acquired = match (encoders, fault) {
@@ -259,7 +272,13 @@ pub fn on_rx_stream() {
         }
         // SAFETY: DMA2 wrote the word before TCIF.
         let answer = unsafe { core::ptr::read_volatile(&raw const RX_WORD) };
-        f.seqs[chip].answer(answer);
+        if spi::take_overrun() {
+            // The word is not this frame's (RM0090 28.4.8): that encoder's
+            // sample fails as a bus error, as the blocking driver's does.
+            f.seqs[chip].transfer_failed();
+        } else {
+            f.seqs[chip].answer(answer);
+        }
         if let Some(c) = f.seqs[chip].command() {
             cortex_m::asm::delay(CS_GAP_CYCLES);
             start_frame(chip, c);

@@ -66,6 +66,28 @@ pub fn data_register_address() -> u32 {
     spi().dr().as_ptr() as u32
 }
 
+/// Whether SPI1 overran since the last look (SR's OVR: a word received before
+/// the last was read, RM0090 28.4.8), cleared if so (DR, then SR, read). One
+/// look, no wait: the acquisition's frame end (DMA2 stream 0's interrupt)
+/// calls it, since the streams never read SR and an overrun left set would
+/// freeze DR for every frame after.
+pub fn take_overrun() -> bool {
+    if spi().sr().read().ovr().bit_is_clear() {
+        return false;
+    }
+    let _ = spi().dr().read();
+    let _ = spi().sr().read();
+    true
+}
+
+/// Empties SPI1's receiver after stopped frames: DR read (RXNE cleared), then
+/// SR (OVR cleared, RM0090 28.4.8), so the next period's first word is not
+/// taken for an overrun. One read each, no wait.
+pub fn drain() {
+    let _ = spi().dr().read();
+    let _ = spi().sr().read();
+}
+
 fn wait(flag: impl Fn(&pac::spi1::sr::R) -> bool) -> Result<(), SpiError> {
     for _ in 0..MAX_POLLS {
         let sr = spi().sr().read();
