@@ -45,6 +45,7 @@
 #![warn(missing_docs)]
 
 pub mod dop853;
+pub mod hermite;
 pub mod impact;
 pub mod initial;
 pub mod ledger;

@@ -57,6 +57,10 @@ pub struct Plant {
     end_point: Option<EndPoint>,
     /// The instants [`Plant::advance_sampling`] samples, while it runs.
     sampling: Option<SampleGrid>,
+    /// Whether the samples of [`Plant::advance_sampled`] (the SIL loop's look-ahead)
+    /// are being taken: those come from the step's ends ([`crate::hermite`]), the
+    /// others (`simulate`'s trace) from the 7th-order dense output.
+    hermite_samples: bool,
     /// The energy ledger's entries that are not integrated with the state (its
     /// works are, `y[6..10]`; [`Plant::ledger`] puts them together).
     ledger: Ledger,
@@ -87,16 +91,19 @@ pub struct SampleGrid {
     pub max_step: f64,
 }
 
-/// The plant at an instant inside an advance, read from the dense output of the
-/// step that covers it ([`Plant::advance_sampled`]): what the sensors of the SIL
+/// The plant at an instant inside an advance, read from the step that covers it
+/// ([`Plant::advance_sampled`], [`Plant::advance_sampling`]): what the sensors of the SIL
 /// loop sample at `t_k` while the plant steps from one zero-order-hold switch to
 /// the next (`rig::PeriodLoop`'s look-ahead).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     /// The instant, s.
     pub t: f64,
-    /// `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s), DOP853's 7th-order
-    /// dense output (Hairer, Nørsett, Wanner I, II.6).
+    /// `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s): in the SIL loop's
+    /// look-ahead ([`Plant::advance_sampled`]) the quintic Hermite interpolant of each
+    /// angle from the step's ends ([`crate::hermite::sample`], issue 56), in
+    /// [`Plant::advance_sampling`]'s grid DOP853's 7th-order dense output (Hairer,
+    /// Nørsett, Wanner I, II.6); where an event ends the step inside it, the dense output.
     pub x: [f64; 4],
     /// Tip position `[z_t, z_n]`, m.
     pub tip: [f64; 2],
@@ -188,6 +195,7 @@ impl Plant {
             startup_events: Vec::new(),
             end_point: None,
             sampling: None,
+            hermite_samples: false,
             ledger: Ledger::default(),
             e0: f64::NAN,
             departing: false,
@@ -297,20 +305,28 @@ impl Plant {
         [f[0], f[1]]
     }
 
-    /// Mechanical energy (kinetic + gravity + spring), J.
+    /// Mechanical energy (kinetic + gravity + spring), J, from the trig cache's
+    /// sines and cosines ([`crate::ledger::energy`]; `Arm::kinetic_energy` plus
+    /// `Arm::potential_energy` to rounding, without their three `cos` calls: the
+    /// projection books its share of the ledger every period of a slide, issue 56).
     pub fn energy(&self) -> f64 {
-        let (q, qd) = segment::split(&self.y);
-        self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q)
+        let (q, _) = segment::split(&self.y);
+        crate::ledger::energy(&self.arm, &self.trig.get(&q), &self.y)
     }
 
     /// Mechanical energy (J) and tip velocity `[z_t_dot, z_n_dot]` (m/s) of the arm
     /// in state `x` (`[theta1, theta1_dot, theta2, theta2_dot]`, rad, rad/s), as
     /// [`Plant::energy`] and [`Plant::tip_velocity`] give them for the plant's own
     /// state: for a [`Sample`] inside an advance.
+    ///
+    /// The sines and cosines come from the plant's trig cache (the model
+    /// evaluations' values, to rounding: [`crate::trig`]), not from `sin_cos` calls:
+    /// a trace row's cost (issue 56).
     pub fn energy_and_tip_velocity_of(&self, x: &[f64; 4]) -> (f64, [f64; 2]) {
         let (q, qd) = (Vector2::new(x[0], x[2]), Vector2::new(x[1], x[3]));
-        let v = shared::kinematics::jacobian(self.arm.params.l, &q) * qd;
-        (self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q), [v[0], v[1]])
+        let trig = self.trig.get(&q);
+        let v = shared::kinematics::jacobian_trig(self.arm.params.l, &trig) * qd;
+        (crate::ledger::energy(&self.arm, &trig, x), [v[0], v[1]])
     }
 
     /// The energy ledger since creation (docs/plant.md "The energy ledger"): the

@@ -70,7 +70,7 @@ impl Plant {
     }
 
     /// [`Plant::advance_events`] that also samples the trajectory at `t_sample` (s,
-    /// strictly inside `(t, t + dt)`) from the 7th-order dense output of the accepted
+    /// strictly inside `(t, t + dt)`) from the ends of the accepted (the quintic Hermite interpolant, [`crate::hermite`])
     /// step that covers it, in the attempt the plant keeps: the SIL loop's
     /// look-ahead (`rig::PeriodLoop`) steps from one zero-order-hold switch to the
     /// next and reads the sensors' sample at `t_k` in between, so no step stops at
@@ -95,7 +95,10 @@ impl Plant {
         // One instant: a grid of one point (its period is the instant itself).
         let grid = SampleGrid { dt: t_sample, next: 1, last: 1, max_step: f64::INFINITY };
         let mut samples = [None];
-        let events = self.advance_sampling(ctrl, dt, grid, &mut samples, obs)?;
+        self.hermite_samples = true;
+        let events = self.advance_sampling(ctrl, dt, grid, &mut samples, obs);
+        self.hermite_samples = false;
+        let events = events?;
         Ok((events, samples[0]))
     }
 

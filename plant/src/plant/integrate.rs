@@ -95,7 +95,7 @@ impl Plant {
         let seg = self.segment(ctrl);
         let mut locator = EventLocator::new(&seg, g0);
         locator.trend_f_n = self.slide_trend;
-        let (l, grid) = (self.arm.params.l, self.sampling);
+        let (l, grid, hermite) = (self.arm.params.l, self.sampling, self.hermite_samples);
         let solved = solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
             if control == Control::Reject {
@@ -112,12 +112,17 @@ impl Plant {
                     if !(step.t_prev() < ts && ts <= end) {
                         break;
                     }
+                    // The look-ahead's sample from the step's ends (`crate::hermite`): no
+                    // model evaluation, where the 7th-order dense output takes three. A
+                    // step that an event ends inside has its dense output already (the
+                    // root search's), and its end lies past the event, outside the mode.
                     let y = match locator.hit {
                         Some((t, y)) if t.to_bits() == ts.to_bits() => y,
+                        None if hermite => crate::hermite::sample(&*step, ts),
                         _ => step.interpolate(ts),
                     };
                     let (_, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
-                    let z = shared::kinematics::tip_position(l, &nalgebra::Vector2::new(y[0], y[2]));
+                    let z = shared::kinematics::tip_position_trig(l, &seg.trig.get(&nalgebra::Vector2::new(y[0], y[2])));
                     obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode, f: [f[0], f[1]] });
                 }
             }

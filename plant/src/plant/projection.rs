@@ -68,11 +68,14 @@ impl Plant {
             Vector2::new(0.0, -v[1] / qm[(1, 1)])
         };
         let dqd = m_inv * (jac.transpose() * lambda);
-        let ke = self.arm.kinetic_energy(&q, &qd);
+        // The kinetic energies from the same sines and cosines (`Arm::kinetic_energy` at
+        // cos(theta2 - theta1) without its `cos`).
+        let m = self.arm.mass_matrix_cos(trig.c2 * trig.c1 + trig.s2 * trig.s1);
+        let ke = 0.5 * qd.dot(&(m * qd));
         self.y[1] += dqd[0];
         self.y[3] += dqd[1];
         let (_, qd_new) = segment::split(&self.y);
-        let ke_new = self.arm.kinetic_energy(&q, &qd_new);
+        let ke_new = 0.5 * qd_new.dot(&(m * qd_new));
         let v_new = jac * qd_new;
         let mid = Vector2::new(0.5 * (v[0] + v_new[0]) - self.arm.params.v_belt, 0.5 * (v[1] + v_new[1]));
         self.book_impulse(lambda, lambda.dot(&mid), ke_new - ke, ke + ke_new);
