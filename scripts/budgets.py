@@ -34,8 +34,12 @@ CEILINGS = {
     # emulator reads): 55 464 B (mcu) / 55 412 B (qemu).
     # Issue 52 (the runaway limits locked on, the calibration's ranges, the wiring
     # checks of firmware::wiring and firmware::tracking): 58 736 B (mcu) / 59 028 B (qemu).
-    "mcu/arm": 60 * 1024,  # 58 736 B measured
-    "qemu/arm": 60 * 1024,  # 59 028 B measured
+    # Issue 56 (the encoders by DMA: the acquisition's interrupts, DMA2, the
+    # faults; the notices queued for the idle loop): 62 096 B (mcu) at 029680a's
+    # successor 76099ca, 62 788 B (mcu) / 64 672 B (qemu) after; the qemu image is
+    # 864 B from the 64 KiB budget: the next feature there needs a cut first.
+    "mcu/arm": 63 * 1024,  # 62 788 B measured
+    "qemu/arm": FLASH_BUDGET,  # 64 672 B measured
     # Issue 41 (the hybrid law's friction estimate): 31 960 B (qemu), 30 804 B (mcu);
     # the QEMU image now has the PIL image's 32 KiB target too.
     # Issue 52's wiring checks (1.6 KiB in the step): 33 540 B (qemu); the flashed PIL

@@ -118,7 +118,9 @@ mod image {
     /// the interrupts), told with the next ones logged.
     static NOTICES_DROPPED: Mutex<core::cell::Cell<u32>> = Mutex::new(core::cell::Cell::new(0));
 
-    /// The control interrupt's notice sink: queued for [`log_notices`].
+    /// The control interrupt's notice sink: queued for [`log_notices`]. Out
+    /// of line: one copy for the tick's call sites.
+    #[inline(never)]
     fn defer(n: Notice) {
         cortex_m::interrupt::free(|cs| {
             if NOTICES.borrow(cs).borrow_mut().push_back(n).is_err() {
@@ -143,7 +145,10 @@ mod image {
 
     /// What the application tells the operator, in the defmt log (at start-up
     /// directly, from the control interrupt through [`defer`]); a window's
-    /// report also goes to the idle loop, which sends it on USART1.
+    /// report also goes to the idle loop, which sends it on USART1. Out of
+    /// line: called from start-up and the idle loop, one copy (the image's
+    /// 64 KiB under the qemu profile's semihosting).
+    #[inline(never)]
     fn log(n: Notice) {
         match n {
             Notice::EncoderReady { joint, agc } => defmt::info!("encoder {=str}: ready, AGC {=u8}", joint.name(), agc),
