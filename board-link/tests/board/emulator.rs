@@ -124,7 +124,7 @@ fn the_image_takes_every_rate_the_rig_runs_and_a_rate_outside_is_refused_by_name
         same(&name, &r);
     }
     s.timing.rate_hz = 20_000.0;
-    let e = s.validate().err().expect("refused").to_string();
+    let e = s.validate().expect_err("refused").to_string();
     assert!(e.contains("timing.rate_hz"), "{e}");
 }
 
