@@ -147,7 +147,8 @@ impl WiringMonitor {
         }
         let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
         let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
-        self.run = [run(self.run[0], against(self.missed[0], input.applied[0])), run(self.run[1], against(self.missed[1], input.applied[1]))];
+        self.run =
+            [run(self.run[0], against(self.missed[0], input.applied[0])), run(self.run[1], against(self.missed[1], input.applied[1]))];
         if self.run[0] >= rule.confirm {
             Some(0)
         } else if self.run[1] >= rule.confirm {

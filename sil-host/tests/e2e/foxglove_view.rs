@@ -43,8 +43,12 @@ fn check_file(path: &Path) -> Checked {
         Some((_, tables::Column::F64(v))) => v.clone(),
         other => panic!("{name}: {other:?}"),
     };
-    let contact: BTreeMap<u64, (f64, f64)> =
-        column("t").iter().zip(column("z_t")).zip(column("z_n")).map(|((t, z_t), z_n)| (tables::mcap::log_time_ns(*t), (z_t, z_n))).collect();
+    let contact: BTreeMap<u64, (f64, f64)> = column("t")
+        .iter()
+        .zip(column("z_t"))
+        .zip(column("z_n"))
+        .map(|((t, z_t), z_n)| (tables::mcap::log_time_ns(*t), (z_t, z_n)))
+        .collect();
     let mut tips: Vec<(u64, [f64; 3])> = Vec::new();
     let mut counts = BTreeMap::new();
     let mut log = Vec::new();

@@ -81,7 +81,10 @@ pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
                     pieces.entry(topic).or_default().push(columns);
                 }
             }
-            pieces.into_iter().map(|(topic, p)| Ok((topic.clone(), join(p).map_err(|e| bad(format!("{topic}: {e}")))?))).collect::<Result<_, Error>>()?
+            pieces
+                .into_iter()
+                .map(|(topic, p)| Ok((topic.clone(), join(p).map_err(|e| bad(format!("{topic}: {e}")))?)))
+                .collect::<Result<_, Error>>()?
         }
         None => {
             let mut layouts: BTreeMap<u16, Arc<Layout>> = BTreeMap::new();
@@ -231,7 +234,8 @@ impl Layout {
         let mut slots = Vec::new();
         for field in &message.field {
             let Some(kind) = declared.get(field.name()) else { continue };
-            let number = usize::try_from(field.number()).map_err(|_| format!("{topic}: field `{}` numbered {}", field.name(), field.number()))?;
+            let number =
+                usize::try_from(field.number()).map_err(|_| format!("{topic}: field `{}` numbered {}", field.name(), field.number()))?;
             if field.r#type() != proto_type(*kind) {
                 return Err(format!("{topic}: field `{}` is {:?}, its table declares {}", field.name(), field.r#type(), kind.name()));
             }
