@@ -89,8 +89,20 @@ pub fn rate_figure(runs: &PilRuns) -> Figure {
 /// period: 10 kHz, 840 cycles at 168 MHz (issue 16).
 pub const RATE_AIM_HZ: f64 = 10_000.0;
 
+/// The controllers and friction terms `scripts/cycles.py` measures (its
+/// `--controller all`): the figure's id, the script's JSON key, the label.
+const STEPS: [(&str, &str, &str); 6] = [
+    ("max_rate_hybrid", "hybrid", "hybrid (friction commanded)"),
+    ("max_rate_hybrid_estimated", "hybrid-estimated", "hybrid (friction estimated)"),
+    ("max_rate_hybrid_measured", "hybrid-measured", "hybrid (friction measured)"),
+    ("max_rate_hybrid_measured_normal", "hybrid-measured_normal", "hybrid (friction measured_normal)"),
+    ("max_rate_hybrid_none", "hybrid-none", "hybrid (no friction term)"),
+    ("max_rate_pid", "pid", "PID"),
+];
+
 /// The worst step's Cortex-M4 cycle estimate and the highest control rate at
-/// which it fits 5 % of the period, per controller, from `scripts/cycles.py`
+/// which it fits 5 % of the period, per controller and friction term
+/// ([`STEPS`]), from `scripts/cycles.py`
 /// (QEMU's exec trace of the first second, TRM timings on the executed path;
 /// docs/board.md "The control step's cost"). Needs the repository's script,
 /// Python 3 and LLVM's objdump, nm and addr2line; skipped without them.
@@ -101,10 +113,7 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/cycles.py");
     let name = |k: &str| format!("highest control rate, worst {k} step within 5 % (cycle estimate)");
     let skip = |why: String| -> Vec<Figure> {
-        [("max_rate_hybrid", "hybrid"), ("max_rate_pid", "PID")]
-            .into_iter()
-            .map(|(id, k)| Figure::skipped(id, "cycles", name(k), "Hz", RATE_AIM_HZ, Goal::AtLeast, why.clone()))
-            .collect()
+        STEPS.into_iter().map(|(id, _, k)| Figure::skipped(id, "cycles", name(k), "Hz", RATE_AIM_HZ, Goal::AtLeast, why.clone())).collect()
     };
     let exe = match std::env::current_exe() {
         Ok(e) => e,
@@ -127,7 +136,7 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
         Err(e) => return skip(format!("scripts/cycles.py printed no JSON: {e}")),
     };
     let mut figures = Vec::new();
-    for (id, key, label) in [("max_rate_hybrid", "hybrid", "hybrid"), ("max_rate_pid", "pid", "PID")] {
+    for (id, key, label) in STEPS {
         let r = &v[key];
         let (Some(rate), Some(hi), Some(lo), Some(instr)) = (
             r["max_rate_hz"].as_f64(),

@@ -38,7 +38,10 @@ pub const STEP_INSTRUCTIONS_TARGET: f64 = 2_000.0;
 /// The figure groups, in the order of the table, and what each measures.
 pub const GROUPS: [(&str, &str); 11] = [
     ("step", "the worst control step of each controller in PIL (QEMU -icount: instructions)"),
-    ("cycles", "the worst step's Cortex-M4 cycle estimate and the highest rate it allows (scripts/cycles.py, about 2 min)"),
+    (
+        "cycles",
+        "the worst step's Cortex-M4 cycle estimate and the highest rate it allows (scripts/cycles.py: the hybrid law with each friction term and the PID, about 4 min)",
+    ),
     ("flash", "the PIL image's flash, profiles mcu and release (ELF sections)"),
     ("in-process", "the closed loop with the firmware step in this process"),
     ("lockstep", "the closed loop over iceoryx2, firmware in its own process"),
