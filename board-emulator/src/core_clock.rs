@@ -114,6 +114,22 @@ struct Track {
     instructions: u64,
     wait: u64,
     accel: Option<Accel>,
+    /// The address of the last instruction stepped in the control handler.
+    last_pc: u32,
+    /// Cycles and instructions by address ([`Core::profile`]), when on.
+    profile: Option<std::collections::BTreeMap<u32, PcCost>>,
+}
+
+/// What the control handler spent at one instruction's address over the runs
+/// profiled ([`Core::profile`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PcCost {
+    /// Times the instruction executed.
+    pub instructions: u64,
+    /// Core cycles charged to it: its own and its stall on the flash's wait
+    /// states (a cycle is charged to the instruction that started last; the
+    /// exception's entry to the handler's first, its return to its last).
+    pub cycles: u64,
 }
 
 /// The accelerator model and the code it decodes.
@@ -227,5 +243,24 @@ impl Core {
     /// The handler runs counted since the last call ([`Mode::Counted`]).
     pub fn take_handlers(&self) -> Vec<HandlerRun> {
         std::mem::take(&mut lock(&self.handlers))
+    }
+
+    /// Starts (`true`) or stops profiling the control handler by instruction
+    /// address ([`Mode::Counted`]): where its cycles go, for `llvm-objdump` or
+    /// `addr2line` on the image's ELF. Starting clears the profile.
+    pub fn set_profile(&self, on: bool) {
+        lock(&self.track).profile = on.then(std::collections::BTreeMap::new);
+    }
+
+    /// Empties the profile, if on (the link's period 0 starts it again).
+    pub fn clear_profile(&self) {
+        if let Some(p) = lock(&self.track).profile.as_mut() {
+            p.clear();
+        }
+    }
+
+    /// The profile so far (empty when off): each Thumb address's cost.
+    pub fn profile(&self) -> Vec<(u32, PcCost)> {
+        lock(&self.track).profile.as_ref().map(|p| p.iter().map(|(&a, &c)| (a, c)).collect()).unwrap_or_default()
     }
 }

@@ -127,10 +127,10 @@ impl Core {
             let debt = c.cycle_debt();
             let before = c.current_exception().0;
             let now = tr.tick;
+            let pc = if debt == 0 { c.regs().r[15] } else { tr.last_pc };
             let stall = match (debt, tr.accel.as_mut()) {
                 (0, Some(a)) => {
                     let r = c.regs().r;
-                    let pc = r[15];
                     match flash_reads::instruction_at(&a.code, FLASH.start, pc) {
                         Some((width, insn)) => {
                             a.reads.clear();
@@ -146,7 +146,15 @@ impl Core {
             if n == 0 {
                 break;
             }
+            if before == CONTROL_EXCEPTION
+                && let Some(p) = tr.profile.as_mut()
+            {
+                let e = p.entry(pc & !1).or_default();
+                e.cycles += n + stall;
+                e.instructions += u64::from(debt == 0);
+            }
             if debt == 0 && before == CONTROL_EXCEPTION {
+                tr.last_pc = pc;
                 tr.instructions += 1;
                 tr.wait += stall;
                 let tick = tr.tick;

@@ -164,6 +164,10 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
 fn at_10_khz(args: &BenchArgs, image: &std::path::Path) -> Result<Vec<Figure>, CliError> {
     let mut s = with_duration(rig::scenario::DEFAULT_TOML, args.duration)?;
     s.timing.rate_hz = 10_000.0;
+    // The default scenario's 0.2 ms delay is two periods at 10 kHz, which no
+    // command meets: half the period (the image's command leaves 15 to 20 us
+    // after the tick), as CI's test (`board-link/tests/board/emulator.rs`).
+    s.timing.delta_s = 0.5 / s.timing.rate_hz;
     s.validate()?;
     let setup = rig::RunSetup::new(s).map_err(CliError::from)?;
     let mut link = EmulatorLink::with_mode(&setup, image, Mode::Counted).map_err(CliError::from)?;
