@@ -101,8 +101,27 @@ mod image {
     /// the next period's frames.
     const ACQUISITION_PRIORITY: u8 = 0x20;
     /// The control step (`acquisition::CONTROL_INTERRUPT`, pended when the
-    /// period's acquisition is over).
+    /// period's acquisition is over), below every other interrupt: USART1's
+    /// bytes, the next period's tick and frames preempt it (a step takes tens of
+    /// microseconds: 10 characters at 2 Mbaud). It takes no critical section
+    /// around the step (issue 56): the application (`ARM`) is its own at this
+    /// priority (see [`control_section`]).
     const CONTROL_PRIORITY: u8 = 0x40;
+
+    /// The control interrupt's access to `ARM` without masking the interrupts
+    /// above it. Sound by priority, as a ceiling: `ARM` is borrowed by the
+    /// control interrupt and by thread mode, there only inside
+    /// `cortex_m::interrupt::free` (PRIMASK set: the control interrupt cannot
+    /// run then); no interrupt above the control's touches it (USART1 fills
+    /// `RX`, TIM2 and DMA2 the acquisition's own state), and the control
+    /// interrupt never preempts itself. The RefCell's flag still checks it.
+    ///
+    /// # Safety
+    /// From the control interrupt only.
+    unsafe fn control_section() -> cortex_m::interrupt::CriticalSection {
+        // SAFETY: the caller is the control interrupt (see above).
+        unsafe { cortex_m::interrupt::CriticalSection::new() }
+    }
 
     /// The notices of the control interrupt, waiting for the idle loop to log
     /// them (issue 56): a defmt line costs the handler thousands of cycles (the
@@ -232,22 +251,23 @@ mod image {
     }
 
     /// The control step, pended by the acquisition once both encoders and the
-    /// load cell are in memory: reads memory and computes.
+    /// load cell are in memory: reads memory and computes, preemptible by the
+    /// interrupts above it (`CONTROL_PRIORITY`).
     #[interrupt]
     fn CAN2_TX() {
         acquisition::publish();
         // The defmt log's timestamp (mcu::log_time): this tick's time.
         log_time::tick();
-        cortex_m::interrupt::free(|cs| {
-            if let Some(arm) = ARM.borrow(cs).borrow_mut().as_mut() {
-                arm.tick(&mut defer);
-                if let Some(m) = arm.monitor() {
-                    // SAFETY: written here only, inside the critical section;
-                    // read by a debugger or the emulator, never by the image.
-                    unsafe { core::ptr::write_volatile(&raw mut PAINLEVE_MONITOR, m) };
-                }
+        // SAFETY: this is the control interrupt.
+        let cs = unsafe { control_section() };
+        if let Some(arm) = ARM.borrow(&cs).borrow_mut().as_mut() {
+            arm.tick(&mut defer);
+            if let Some(m) = arm.monitor() {
+                // SAFETY: written here only; read by a debugger or the
+                // emulator, never by the image.
+                unsafe { core::ptr::write_volatile(&raw mut PAINLEVE_MONITOR, m) };
             }
-        });
+        }
     }
 
     /// The monitor block (`arm_app::monitor`): the last tick's command and
@@ -295,14 +315,25 @@ mod image {
 
     /// Serves the bring-up requests received so far (docs/board.md "Bring-up"):
     /// each request between two ticks, its reply on USART1 TX.
-    fn serve_requests(frames: &mut FrameBuffer) {
+    fn serve_requests(frames: &mut FrameBuffer, timer_hz: u32) {
         while let Some(b) = cortex_m::interrupt::free(|cs| RX.borrow(cs).borrow_mut().pop_front()) {
             let Push::Frame(f) = frames.push(b) else { continue };
             let Ok(request) = pil::decode::<Request>(f) else {
                 defmt::warn!("bring-up: a frame that does not decode was dropped");
                 continue;
             };
-            let mut reply = cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow_mut().as_mut().map(|a| a.serve(request)));
+            // A new rate (`Configure`, `Restore`): TIM2 follows it before the next tick.
+            let mut reply = cortex_m::interrupt::free(|cs| {
+                ARM.borrow(cs).borrow_mut().as_mut().map(|a| {
+                    let reply = a.serve(request);
+                    // (`Status` reports the tick's period; TIM2's update that
+                    // loaded it, cleared, left its interrupt pending: dropped.)
+                    if a.retime(|p| timers::retime(p, timer_hz, acquisition::DEADLINE_US)).is_some() {
+                        cortex_m::peripheral::NVIC::unpend(Interrupt::TIM2);
+                    }
+                    reply
+                })
+            });
             // The stack's scan takes too long for the tick: done here.
             if let Some(Reply::Telemetry(Some(t))) = reply.as_mut() {
                 t.stack_high_water_bytes = stack::high_water_bytes();
@@ -440,7 +471,7 @@ mod image {
         loop {
             cortex_m::asm::wfi();
             log_notices();
-            serve_requests(&mut frames);
+            serve_requests(&mut frames, timer_hz);
             // The periods run so far and whether the drivers are on, from the application itself.
             let (periods, drivers) =
                 cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.periods(), a.drivers_enabled())));

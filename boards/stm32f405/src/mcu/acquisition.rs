@@ -26,7 +26,7 @@
 //! Priorities: TIM2 and DMA2 stream 0 above the control interrupt, so the next
 //! period's acquisition starts on time even behind a late step.
 
-use core::cell::{Cell, RefCell};
+use core::cell::{Cell, RefCell, UnsafeCell};
 
 use arm_app::{AcquisitionFault, EncoderAcquisition, EncoderFault};
 use cortex_m::interrupt::{self, Mutex};
@@ -80,7 +80,10 @@ const TX_SHIFT: u32 = 22;
 const CS_GAP_CYCLES: u32 = 32;
 
 /// A finished acquisition: both encoders' samples and the load cell's counts.
+/// Word-aligned: a copy is four word moves, not a call of `memcpy` for its
+/// 14 bytes (issue 56).
 #[derive(Debug, Clone, Copy)]
+#[repr(C, align(4))]
 pub struct Acquired {
     /// `[theta1, elbow]`: the count or why there is none.
     pub encoders: [Result<u16, EncoderFault>; 2],
@@ -89,7 +92,7 @@ pub struct Acquired {
 }
 
 impl Acquired {
-    fn failed(fault: AcquisitionFault) -> Self {
+    const fn failed(fault: AcquisitionFault) -> Self {
         Self { encoders: [Err(EncoderFault::Acquisition(fault)); 2], adc: None }
     }
 }
@@ -104,8 +107,19 @@ struct InFlight {
 /// The acquisition in flight, and the last one finished for the control.
 static FLIGHT: Mutex<RefCell<Option<InFlight>>> = Mutex::new(RefCell::new(None));
 static READY: Mutex<Cell<Option<Acquired>>> = Mutex::new(Cell::new(None));
-/// What the control interrupt works on (published at its start).
-static CURRENT: Mutex<Cell<Option<Acquired>>> = Mutex::new(Cell::new(None));
+/// What the control interrupt works on: written by [`publish`] at its start,
+/// read by [`encoders`] and [`conversions_of_period`] during its step.
+static CURRENT: ControlOnly = ControlOnly(UnsafeCell::new(Acquired::failed(AcquisitionFault::Timeout)));
+
+/// The control interrupt's own copy of the period's acquisition. Only the
+/// control interrupt touches it (`CONTROL_INTERRUPT`: one priority, it never
+/// preempts itself; the acquisition's interrupts above it and the idle loop
+/// below never touch it), so it is read without a critical section (issue 56:
+/// the two reads a period had cost a critical section and a 14-byte copy each).
+struct ControlOnly(UnsafeCell<Acquired>);
+
+// SAFETY: accessed from the control interrupt only (see `ControlOnly`).
+unsafe impl Sync for ControlOnly {}
 
 /// The words DMA2 moves: a command out, an answer in (SRAM, never CCM: no DMA
 /// reaches it, RM0090 2.3).
@@ -295,18 +309,26 @@ pub fn on_rx_stream() {
     });
 }
 
-/// At the control interrupt's start: the finished acquisition becomes the
-/// period's (none finished: [`AcquisitionFault::Timeout`]).
+/// At the control interrupt's start, and from there only: the finished
+/// acquisition becomes the period's (none finished: [`AcquisitionFault::Timeout`]).
 pub fn publish() {
-    interrupt::free(|cs| {
-        let a = READY.borrow(cs).take().unwrap_or(Acquired::failed(AcquisitionFault::Timeout));
-        CURRENT.borrow(cs).set(Some(a));
-    });
+    let a = interrupt::free(|cs| READY.borrow(cs).take()).unwrap_or(Acquired::failed(AcquisitionFault::Timeout));
+    // SAFETY: the control interrupt is CURRENT's only user (`ControlOnly`).
+    unsafe { *CURRENT.0.get() = a };
 }
 
-/// The period's acquisition as [`publish`] left it.
-pub fn current() -> Acquired {
-    interrupt::free(|cs| CURRENT.borrow(cs).get()).unwrap_or(Acquired::failed(AcquisitionFault::Timeout))
+/// The period's encoder samples as [`publish`] left them (from the control
+/// interrupt only).
+pub fn encoders() -> [Result<u16, EncoderFault>; 2] {
+    // SAFETY: the control interrupt is CURRENT's only user (`ControlOnly`).
+    unsafe { (*CURRENT.0.get()).encoders }
+}
+
+/// The period's injected conversions `[f_t, f_n]` as [`publish`] left them
+/// (`None`: not done by the frames' end), from the control interrupt only.
+pub fn conversions_of_period() -> Option<[u16; 2]> {
+    // SAFETY: the control interrupt is CURRENT's only user (`ControlOnly`).
+    unsafe { (*CURRENT.0.get()).adc }
 }
 
 /// The encoders as the control interrupt finds them: in memory.
@@ -315,6 +337,6 @@ pub struct DmaEncoders;
 
 impl EncoderAcquisition<spi::Spi1Device> for DmaEncoders {
     fn acquire(&mut self, _theta1: &mut As5047p<spi::Spi1Device>, _elbow: &mut As5047p<spi::Spi1Device>) -> [Result<u16, EncoderFault>; 2] {
-        current().encoders
+        encoders()
     }
 }

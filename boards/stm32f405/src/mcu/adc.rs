@@ -51,6 +51,6 @@ impl drivers::load_cell::LoadCellAdc for LoadCellAdc {
     fn read(&mut self) -> Result<[u16; 2], AdcError> {
         // Copied by the acquisition (`super::acquisition`) after the tick's
         // frames: memory, no wait on JEOC here.
-        super::acquisition::current().adc.ok_or(AdcError::Missing)
+        super::acquisition::conversions_of_period().ok_or(AdcError::Missing)
     }
 }
