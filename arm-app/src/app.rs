@@ -229,6 +229,7 @@ impl<H: ArmIo> ArmApp<H> {
             enable_requested: false,
             last_enable: EnableOutcome::NotAsked,
             period_us: config.period.as_us(),
+            time_offset_us: 0,
             seq: 0,
             tick_mark,
             now: Instant(0),

@@ -18,19 +18,25 @@ use crate::{
     telemetry::ArmTelemetry,
 };
 
-/// The protocol's version, told in [`Reply::Hello`] (6: `Refusal::ProtectionOff`
-/// and `Refusal::NothingToSave`, `RecordFault::ProtectionOff`; the configuration's
-/// runaway limits always on).
-pub const BRINGUP_PROTOCOL: u16 = 6;
+/// The protocol's version, told in [`Reply::Hello`] (7: the control rate set
+/// by `Configure` and `Restore` within `crate::rate`'s range, the tick's period
+/// in [`Status::period_us`], a jog's length bounded in time; 6:
+/// `Refusal::ProtectionOff` and `Refusal::NothingToSave`,
+/// `RecordFault::ProtectionOff`; the configuration's runaway limits always on).
+pub const BRINGUP_PROTOCOL: u16 = 7;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
 pub const REDUCED_TORQUE_CODES: i16 = 410;
 
-/// The largest jog: 0.5 N m (205 codes) for at most 0.5 s (500 periods at 1 kHz).
+/// The largest jog: 0.5 N m (205 codes) for at most [`MAX_JOG_US`].
 pub const MAX_JOG_CODES: i16 = 205;
-/// The longest jog, periods.
-pub const MAX_JOG_PERIODS: u16 = 500;
+/// The longest jog, us (0.5 s: 500 periods at 1 kHz, 5 000 at 10 kHz, 125 at
+/// 250 Hz): a jog's `periods` times the tick's period.
+pub const MAX_JOG_US: u64 = 500_000;
+/// The most periods a jog can ask for (0.5 s at 10 kHz, the fastest rate);
+/// at a slower rate [`MAX_JOG_US`] bounds it first.
+pub const MAX_JOG_PERIODS: u16 = 5_000;
 
 /// What the image is doing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -103,6 +109,9 @@ pub struct Status {
     pub missing: Missing,
     /// What became of the last enable.
     pub last_enable: EnableOutcome,
+    /// The control period the board's tick runs, us (TIM2's reload on the
+    /// image, from the configuration in force: `crate::rate`).
+    pub period_us: u32,
 }
 
 /// Raw readings, the drivers disabled or not (`sil-host board watch`).
@@ -142,7 +151,8 @@ pub enum Request {
         pose_counts: [u16; 2],
     },
     /// Jogs `joint` with torque `code` (at most [`MAX_JOG_CODES`]) for
-    /// `periods` (at most [`MAX_JOG_PERIODS`]), the other joint at zero torque,
+    /// `periods` of the tick (at most [`MAX_JOG_US`] long: the host converts a
+    /// time with [`Status::period_us`]), the other joint at zero torque,
     /// then disables the drivers. Drivers disabled and zeros set only. The
     /// reply comes with [`Request::JogResult`].
     Jog {
@@ -178,9 +188,12 @@ pub enum Request {
     /// checks. Drivers disabled only.
     SetCalibration(CalibrationRecord),
     /// Takes a firmware configuration (controller, gains, rate, limits), which
-    /// the firmware validates. Drivers disabled only; the control rate must be
-    /// the one the image's timer runs; the runaway limits must be on
-    /// ([`Refusal::ProtectionOff`]).
+    /// the firmware validates. Drivers disabled only; the control period must be
+    /// one the image runs (`crate::rate`: 100 to 4000 us, else
+    /// [`Refusal::Rate`]), and the board's tick follows it at once (TIM2's
+    /// reload; [`Status::period_us`] then reports it); the runaway limits must
+    /// be on ([`Refusal::ProtectionOff`]). A belt scale in force that the new
+    /// period puts out of range is [`Refusal::OutOfRange`].
     Configure(Config),
     /// Lifts the reduced torque limit a calibration set.
     LiftTorqueLimit,
@@ -205,7 +218,8 @@ pub enum Request {
     /// validates the flash record at reset (the same checks: the configuration by
     /// `Firmware::new` with the runaway limits on, the encoders' zeros below 2^14,
     /// the load cell's calibration, the belt's scale at the control period), and
-    /// the rate must be the image's. The calibration's bring-up steps are taken as recorded (a
+    /// the rate must be one the image runs (`crate::rate`; the tick follows it
+    /// as for `Configure`). The calibration's bring-up steps are taken as recorded (a
     /// backup of this board: the steps were done with these very values); a
     /// calibration that differs from the one in force runs at the reduced torque
     /// limit until lifted, and any change is unsaved (the drivers locked out until
@@ -276,7 +290,9 @@ pub enum Refusal {
     /// The configuration is invalid (`firmware::Config::validate` says why: the
     /// host checks it before sending).
     InvalidConfig,
-    /// The configuration's control rate is not the image's.
+    /// The configuration's control period is not one the image runs
+    /// (`crate::rate`: 100 to 4000 us, 10 kHz to 250 Hz); or, to an enable, the
+    /// board's tick does not run the configuration's period.
     Rate,
     /// No jog has run since power-up.
     NoJog,

@@ -83,7 +83,12 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) enable_requested: bool,
     /// What became of the last enable.
     pub(crate) last_enable: crate::bringup::EnableOutcome,
+    /// The period the board's tick runs, us (`crate::rate`: the
+    /// configuration's, once the board has followed it).
     pub(crate) period_us: u64,
+    /// Added to `seq x period_us` for a frame's time, us (wrapping): nonzero
+    /// after the rate changed (`ArmApp::retime`), so the time goes on.
+    pub(crate) time_offset_us: u64,
     pub(crate) seq: u32,
     pub(crate) tick_mark: u32,
     pub(crate) now: Instant,
@@ -127,7 +132,12 @@ impl<H: ArmIo> Hardware<H> {
             belt_count: self.belt.last_count(),
             driver_fault: readings.driver_fault != Some(false),
         };
-        let f = frame::assemble(u64::from(self.seq) * self.period_us, self.seq, readings, &self.encoders);
+        let f = frame::assemble(
+            u64::from(self.seq).wrapping_mul(self.period_us).wrapping_add(self.time_offset_us),
+            self.seq,
+            readings,
+            &self.encoders,
+        );
         let invalid = f.flags & frame_flags::ANY_INVALID;
         if invalid != self.invalid_logged {
             log(if invalid == 0 {
@@ -141,14 +151,19 @@ impl<H: ArmIo> Hardware<H> {
     }
 
     /// Why the drivers may not be enabled now, if they may not: settings in
-    /// force that are not the saved record, or a calibration that lacks a
-    /// bring-up step (a saved record never does: `Save` refuses it).
+    /// force that are not the saved record, a calibration that lacks a
+    /// bring-up step (a saved record never does: `Save` refuses it), or a tick
+    /// that does not run the configuration's period.
     pub(crate) fn enable_lockout(&self) -> Option<crate::bringup::Refusal> {
         use crate::bringup::Refusal;
         if !self.settings.allows_enable() {
             Some(Refusal::LockedOut(self.settings))
         } else if !self.cal.missing().is_empty() {
             Some(Refusal::Incomplete(self.cal.missing()))
+        } else if self.period_us != self.config.period.as_us() {
+            // The tick does not run the configuration's period (a board that
+            // could not follow a new rate): the firmware's Ts would be wrong.
+            Some(Refusal::Rate)
         } else {
             None
         }

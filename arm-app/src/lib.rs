@@ -14,6 +14,7 @@
 //! | [`monitor`] | the block the image publishes in RAM each tick for a debugger or the emulator |
 //! | [`notice`] | what the application tells the operator, as values |
 //! | [`bringup`] | the bring-up protocol on USART1: requests, replies, refusals |
+//! | [`rate`] | the control rates the image runs, and [`ArmApp::retime`]: a board following a new one |
 //! | [`record`] | the settings record in flash: format, load, save, and the lockout it drives |
 //! | `service` | [`ArmApp::serve`]: the bring-up requests, and the jog the ticks run |
 //! | [`step_stats`] | the step's execution time per window |
@@ -30,6 +31,7 @@ mod jog;
 pub mod joint;
 pub mod monitor;
 pub mod notice;
+pub mod rate;
 pub mod record;
 mod service;
 pub mod step_stats;

@@ -9,7 +9,7 @@ use crate::{
     ArmApp, ArmIo,
     app::{board_firmware, check_stored},
     bringup::{
-        Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS,
+        Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, MAX_JOG_US,
         MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
     },
     hardware::{CODES_FULL_SCALE, Hardware, Jog},
@@ -69,7 +69,7 @@ impl<H: ArmIo> ArmApp<H> {
             }
             Request::SetCalibration(cal) => apply_calibration(hw, cal),
             Request::Restore(stored) => {
-                if stored.config.period != hw.config.period {
+                if !crate::rate::supported(stored.config.period) {
                     return Reply::Refused(Refusal::Rate);
                 }
                 // The configuration as every configuration a board takes, then the
@@ -81,8 +81,9 @@ impl<H: ArmIo> ArmApp<H> {
                     },
                     Err(why) => return Reply::Refused(why),
                 };
-                // Both are valid: neither can be refused now.
-                let Reply::Calibration(_) = put_calibration(hw, stored.calibration, false) else {
+                // Both are valid: neither can be refused now (the belt's scale
+                // checked at the record's period, which it is put in force at).
+                let Reply::Calibration(_) = put_calibration(hw, stored.calibration, false, stored.config.period) else {
                     return Reply::Refused(Refusal::OutOfRange);
                 };
                 if stored.config != self.hw.config {
@@ -93,11 +94,18 @@ impl<H: ArmIo> ArmApp<H> {
                 Reply::Done
             }
             Request::Configure(config) => {
-                if config.period != hw.config.period {
+                if !crate::rate::supported(config.period) {
                     return Reply::Refused(Refusal::Rate);
                 }
                 match board_firmware(config) {
                     Ok(fw) => {
+                        // The belt's speed per count is per period: the calibration
+                        // in force again at the new one (the last check: refused,
+                        // nothing changed; the same calibration changes nothing else).
+                        let cal = self.hw.cal;
+                        let Reply::Calibration(_) = put_calibration(&mut self.hw, cal, false, config.period) else {
+                            return Reply::Refused(Refusal::OutOfRange);
+                        };
                         self.firmware = Some(fw);
                         if config != self.hw.config {
                             self.hw.settings = Settings::Unsaved;
@@ -171,6 +179,7 @@ fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
         settings: hw.settings,
         missing: hw.cal.missing(),
         last_enable: hw.last_enable,
+        period_us: hw.period_us as u32,
     }
 }
 
@@ -216,12 +225,14 @@ fn span<H: ArmIo>(hw: &mut Hardware<H>, axis: u8, newtons: f32) -> Reply {
 /// or directions clear the direction checks unless they come from `SetZeros`
 /// (which clears them itself).
 fn apply_calibration<H: ArmIo>(hw: &mut Hardware<H>, cal: CalibrationRecord) -> Reply {
-    put_calibration(hw, cal, true)
+    let period = hw.config.period;
+    put_calibration(hw, cal, true, period)
 }
 
 /// [`apply_calibration`]; with `clear_checks` false (a restored backup) the
-/// direction checks are taken as the record says.
-fn put_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord, clear_checks: bool) -> Reply {
+/// direction checks are taken as the record says. The belt's scale is set for
+/// control period `period` (the configuration's that comes with it).
+fn put_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord, clear_checks: bool, period: shared::time::Period) -> Reply {
     let encoders_changed = (cal.zero_counts, cal.reversed) != (hw.cal.zero_counts, hw.cal.reversed);
     if encoders_changed && clear_checks {
         cal.directions_checked = false;
@@ -230,7 +241,7 @@ fn put_calibration<H: ArmIo>(hw: &mut Hardware<H>, mut cal: CalibrationRecord, c
         return Reply::Refused(Refusal::OutOfRange);
     }
     let load = Calibration { zero_counts: cal.load_zero_counts, newtons_per_count: cal.load_newtons_per_count };
-    if load.validate().is_err() || hw.belt.set_scale(cal.belt_metres_per_count, hw.config.period.as_secs_f32()).is_err() {
+    if load.validate().is_err() || hw.belt.set_scale(cal.belt_metres_per_count, period.as_secs_f32()).is_err() {
         return Reply::Refused(Refusal::OutOfRange);
     }
     let _ = hw.load.set_calibration(load);
@@ -255,7 +266,8 @@ fn start_jog<H: ArmIo>(hw: &mut Hardware<H>, joint: Joint, code: i16, periods: u
     if !hw.cal.zeros_set {
         return Reply::Refused(Refusal::ZerosNotSet);
     }
-    if code == 0 || code.unsigned_abs() > MAX_JOG_CODES.unsigned_abs() || periods == 0 || periods > MAX_JOG_PERIODS {
+    let too_long = periods > MAX_JOG_PERIODS || u64::from(periods) * hw.period_us > MAX_JOG_US;
+    if code == 0 || code.unsigned_abs() > MAX_JOG_CODES.unsigned_abs() || periods == 0 || too_long {
         return Reply::Refused(Refusal::OutOfRange);
     }
     match hw.joint_counts() {

@@ -153,7 +153,7 @@ fn unknown_key(doc: &toml::Table, canonical: &toml::Table, prefix: &str) -> Opti
 
 /// Checks `b` before it is sent, naming the key of the first value refused:
 /// its `protocol` (a backup of another bring-up protocol is refused, both
-/// named), then each value by the firmware's own rule, as the firmware checks
+/// named), its control period (one the image runs: `arm_app::rate`), then each value by the firmware's own rule, as the firmware checks
 /// its flash record at reset and `Restore` (the configuration by
 /// `firmware::Config::validate` and the runaway limits on, the encoders' zeros
 /// below 2^14, the load cell's calibration by `drivers::load_cell::Calibration::validate`,
@@ -171,6 +171,14 @@ pub fn validate(b: &Backup) -> Result<(), String> {
         ));
     }
     rig::board_protection::check_protection(&b.config, "backup key `config.runaway_limits`")?;
+    // The rates the image runs (`arm_app::rate`), named by the file's key.
+    if !arm_app::rate::supported(b.config.period) {
+        return Err(format!(
+            "backup key `config.period` = {}: the image runs control periods of {}",
+            b.config.period.as_us(),
+            arm_app::rate::RANGE_WORDS
+        ));
+    }
     match b.config.validate() {
         Ok(()) => {}
         Err(firmware::config::ConfigError::OutOfRange { name, value, expected }) => {
@@ -259,7 +267,19 @@ mod tests {
         assert!(e.contains("`calibration.load_newtons_per_count[1]` = -1.2e-2") && e.contains("positive"), "{e}");
         let e = refused(&|b| b.config.runaway_limits = false);
         assert!(e.contains("`config.runaway_limits` = false") && e.contains("cannot be turned off on a board"), "{e}");
+        // Issue 56: a period the image does not run, named with the range; one
+        // of 0 us (a corrupt file: no `Period` has it) read and refused too.
+        for us in [99, 4001, 1_000_000] {
+            let e = refused(&|b| b.config.period = shared::time::Period::from_us(us).unwrap());
+            assert!(e.contains(&format!("`config.period` = {us}")) && e.contains("100 to 4000 us"), "{e}");
+        }
+        let text = to_toml(&backup()).unwrap();
+        assert!(text.contains("period = 1000"), "{text}");
+        let zero = parse(&text.replace("period = 1000", "period = 0")).unwrap();
+        let e = validate(&zero).unwrap_err();
+        assert!(e.contains("`config.period` = 0") && e.contains("100 to 4000 us"), "{e}");
+        assert!(parse(&text.replace("period = 1000", "period = -5")).unwrap_err().to_string().contains("config.period"));
         let e = refused(&|b| b.protocol = 5);
-        assert!(e.contains("protocol 5") && e.contains("protocol 6"), "{e}");
+        assert!(e.contains("protocol 5") && e.contains(&format!("protocol {}", arm_app::bringup::BRINGUP_PROTOCOL)), "{e}");
     }
 }

@@ -167,14 +167,15 @@ fn flush_what_fits(line: &mut impl Write, outbox: &mut std::collections::VecDequ
 }
 
 /// Serves the bring-up protocol on `line` for `arm`, one tick per period of
-/// wall time (`ts`), until `stop` is set or the line is closed. Requests are
+/// wall time (the board's period at that tick, [`FreeArm::period_s`]: a
+/// `configure` of another rate changes the pace), until `stop` is set or the line is closed. Requests are
 /// answered between ticks. `line` must not block on reads (a pseudo-terminal
 /// master in non-blocking mode). A client that writes faster than it reads is
 /// served what the line takes (the rest waits, up to [`OUTBOX_LIMIT`] bytes).
 ///
 /// # Errors
 /// A message when the line fails or the plant fails.
-pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), ts: Duration, stop: &AtomicBool) -> Result<(), String> {
+pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), stop: &AtomicBool) -> Result<(), String> {
     let mut next = Instant::now();
     let mut byte = [0u8; 256];
     // Replies the line has not taken yet (a client that writes faster than it
@@ -182,6 +183,7 @@ pub fn serve<B: ArmBoard>(arm: &mut FreeArm<B>, line: &mut (impl Read + Write), 
     // are dropped, as a UART drops what nobody reads.
     let mut outbox: std::collections::VecDeque<u8> = std::collections::VecDeque::new();
     while !stop.load(Ordering::Relaxed) {
+        let ts = Duration::from_secs_f64(arm.period_s());
         arm.tick().map_err(|e| e.to_string())?;
         let mut received = Vec::new();
         loop {

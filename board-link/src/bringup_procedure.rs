@@ -52,7 +52,10 @@ pub fn describe_refusal(r: &Refusal) -> String {
             "the force gives less than 40 counts of difference from the tare: is the weight on the load cell, and heavy enough?".into()
         }
         Refusal::InvalidConfig => "the configuration is invalid".into(),
-        Refusal::Rate => "the configuration's control rate is not the image's timer rate".into(),
+        Refusal::Rate => format!(
+            "the control period is not one the image runs ({}), or the board's tick does not run the configuration's period",
+            arm_app::rate::RANGE_WORDS
+        ),
         Refusal::NoJog => "no jog has run since power-up".into(),
         Refusal::Busy => "a jog is under way".into(),
         Refusal::DirectionsNotChecked => "both joints' directions must be checked by `sil-host board calibrate` first".into(),
@@ -229,14 +232,22 @@ pub struct CalibrateOptions {
     pub reversed: [bool; 2],
     /// The jog's torque code (at most `MAX_JOG_CODES`).
     pub jog_code: i16,
-    /// The jog's length, periods.
-    pub jog_periods: u16,
-    /// Rest between jogs, so that the arm hangs still again, in the board's
-    /// control periods (counted by its raw readings' period, not the host's
-    /// clock: a board or an emulated image slower than real time rests as long).
-    pub settle_periods: u32,
+    /// The jog's length, s (at most `arm_app::bringup::MAX_JOG_US`): sent in
+    /// the board's control periods ([`periods_of`] with its
+    /// `Status::period_us`), so a jog moves the arm as far at every rate.
+    pub jog_s: f64,
+    /// Rest between jogs, so that the arm hangs still again, s: counted in the
+    /// board's control periods (its raw readings' period, not the host's clock:
+    /// a board or an emulated image slower than real time rests as long).
+    pub settle_s: f64,
     /// Tare the load cell at the end (nothing on it).
     pub tare: bool,
+}
+
+/// How many control periods of `period_us` last `seconds` (rounded, at least
+/// one): the bring-up's times in the board's own periods.
+pub fn periods_of(seconds: f64, period_us: u32) -> u32 {
+    ((seconds * 1e6 / f64::from(period_us.max(1))).round() as u32).max(1)
 }
 
 /// Waits until the board has run `periods` control periods more (its raw
@@ -298,6 +309,15 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
     if st.drivers_enabled {
         return Err(StepError::Refused("the drivers are enabled: `sil-host board disable` first".into()));
     }
+    let jog_periods = periods_of(o.jog_s, st.period_us);
+    if !(o.jog_s.is_finite() && o.jog_s > 0.0 && u64::from(jog_periods) * u64::from(st.period_us) <= arm_app::bringup::MAX_JOG_US) {
+        return Err(StepError::Refused(format!(
+            "a jog of {} s: at most {} s (the board runs {} us periods)",
+            o.jog_s,
+            arm_app::bringup::MAX_JOG_US as f64 * 1e-6,
+            st.period_us
+        )));
+    }
     if o.reversed != [false; 2] {
         let Reply::Calibration(mut cal) = ask(c, Request::GetCalibration)? else {
             return Err(StepError::Line("unexpected reply to get calibration".into()));
@@ -309,7 +329,8 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
     op.say(&format!("zeros set at the pose {:?} counts", o.pose_counts));
     // From here the board has changed: a line that fails is no longer "nothing
     // done" (exit 2) but a calibration left half done (exit 1).
-    calibrate_after_zeros(c, o, op).map_err(|e| match e {
+    let periods = (jog_periods as u16, periods_of(o.settle_s, st.period_us));
+    calibrate_after_zeros(c, o, periods, op).map_err(|e| match e {
         StepError::Line(m) => StepError::Refused(format!(
             "the line failed after the encoders' zeros were set ({m}): the calibration is half done and not saved; run calibrate again"
         )),
@@ -317,17 +338,19 @@ pub fn calibrate<S: Read + Write>(c: &mut Client<S>, o: &CalibrateOptions, op: &
     })
 }
 
-/// `calibrate`'s steps after the zeros: the jogs and the tare.
+/// `calibrate`'s steps after the zeros: the jogs and the tare, the jogs'
+/// length and the rests `(jog, settle)` in the board's periods.
 fn calibrate_after_zeros<S: Read + Write>(
     c: &mut Client<S>,
     o: &CalibrateOptions,
+    (jog_periods, settle_periods): (u16, u32),
     op: &mut impl Operator,
 ) -> Result<CalibrateReport, StepError> {
     op.remove_jig();
     let mut jogs = Vec::new();
     for joint in [Joint::Theta1, Joint::Elbow] {
         for code in [o.jog_code, -o.jog_code] {
-            ask(c, Request::Jog { joint, code, periods: o.jog_periods })?;
+            ask(c, Request::Jog { joint, code, periods: jog_periods })?;
             let outcome = loop {
                 std::thread::sleep(Duration::from_millis(20));
                 match c.request(&Request::JogResult, REPLY_TIMEOUT).map_err(StepError::Line)? {
@@ -342,7 +365,7 @@ fn calibrate_after_zeros<S: Read + Write>(
             if outcome.verdict.is_err() {
                 return Err(StepError::Refused(format!("calibration stopped: {}", describe_jog(&outcome))));
             }
-            settle(c, o.settle_periods)?;
+            settle(c, settle_periods)?;
         }
     }
     if o.tare {
@@ -356,21 +379,34 @@ fn calibrate_after_zeros<S: Read + Write>(
 }
 
 /// How long `enable` waits for the drivers to come on: the firmware resets at
-/// the next tick and the drivers enable at its first command, two periods at
-/// 1 kHz; the rest is the line's and a loaded host's slack.
+/// the next tick and the drivers enable at its first command, two periods
+/// (8 ms at 250 Hz, the slowest rate); the rest is the line's and a loaded
+/// host's slack.
 pub const ENABLE_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// How long `enable` watches the drivers once they came on, in the board's
-/// control periods (50 ms at 1 kHz), before it says done: the firmware's checks
-/// that need a few periods to confirm a fault (the sensor consistency check
-/// latches within 3 to 24 periods on an arm that cannot be where its sensors
-/// say, the runaway limits within 3 or 10 ms) have all had their time. A board
-/// whose period counter stops for 5 s is reported (its control tick stopped).
+/// control periods, at least (50 ms at 1 kHz), before it says done: the
+/// firmware's checks that need a few periods to confirm a fault (the sensor
+/// consistency check latches within 3 to 24 periods on an arm that cannot be
+/// where its sensors say, the runaway limits within 3 or 10 ms) have all had
+/// their time. At a faster rate the watch is [`ENABLE_WATCH_S`] long instead
+/// ([`enable_watch_periods`]). A board whose period counter stops for 5 s is
+/// reported (its control tick stopped).
 pub const ENABLE_WATCH_PERIODS: u32 = 50;
 
+/// The shortest watch of `enable`, s (the runaway limits' 10 ms with a margin).
+pub const ENABLE_WATCH_S: f64 = 0.05;
+
+/// The periods `enable` watches the drivers for on a board whose tick runs
+/// `period_us`: [`ENABLE_WATCH_PERIODS`], or [`ENABLE_WATCH_S`] when longer
+/// (500 periods at 10 kHz).
+pub fn enable_watch_periods(period_us: u32) -> u32 {
+    ENABLE_WATCH_PERIODS.max(periods_of(ENABLE_WATCH_S, period_us))
+}
+
 /// Enables the drivers, reads the state back until the enable has an outcome,
-/// then watches the drivers for [`ENABLE_WATCH_PERIODS`] of the board's
-/// periods: `Ok` only when they came on and are still on at the end.
+/// then watches the drivers for [`enable_watch_periods`] of the board's
+/// periods (its `Status::period_us`): `Ok` only when they came on and are still on at the end.
 ///
 /// # Errors
 /// [`StepError::Refused`] when the board refuses (locked out, incomplete
@@ -393,7 +429,7 @@ pub fn enable<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
                     st.periods
                 )));
             }
-            EnableOutcome::Enabled { seq } => break seq,
+            EnableOutcome::Enabled { seq } => break (seq, enable_watch_periods(st.period_us)),
             other => return Err(StepError::Refused(format!("enable: the drivers are off: {}", describe_enable(&other)))),
         }
     };
@@ -401,20 +437,20 @@ pub fn enable<S: Read + Write>(c: &mut Client<S>) -> Result<Status, StepError> {
 }
 
 /// Watches the drivers that came on at period `on_at` until the board has run
-/// [`ENABLE_WATCH_PERIODS`] periods since, polling its status.
-fn watch_drivers<S: Read + Write>(c: &mut Client<S>, on_at: u32) -> Result<Status, StepError> {
+/// `watch` periods since, polling its status.
+fn watch_drivers<S: Read + Write>(c: &mut Client<S>, (on_at, watch): (u32, u32)) -> Result<Status, StepError> {
     let (mut last, mut since) = (None, std::time::Instant::now());
     loop {
         let st = status(c)?;
         if !st.drivers_enabled {
             return Err(StepError::Refused(format!(
-                "enable: the drivers came on at period {on_at} and went off again by period {} (watched for {ENABLE_WATCH_PERIODS} \
+                "enable: the drivers came on at period {on_at} and went off again by period {} (watched for {watch} \
                  periods): {}",
                 st.periods,
                 describe_status(st.status)
             )));
         }
-        if st.periods.wrapping_sub(on_at) >= ENABLE_WATCH_PERIODS {
+        if st.periods.wrapping_sub(on_at) >= watch {
             return Ok(st);
         }
         if last != Some(st.periods) {

@@ -64,6 +64,10 @@ pub trait ArmBoard {
     fn reset(&mut self, arm: &ArmState) -> Result<(), String>;
     /// Whether the motor drivers are enabled after the last tick.
     fn drivers_enabled(&self) -> bool;
+    /// The control period the board's tick runs now, us (it follows the
+    /// configuration in force: a `Configure` of another rate changes it,
+    /// `arm_app::rate`).
+    fn period_us(&self) -> u64;
 }
 
 /// The board twin with the image's idle loop: requests out of the line's frames.
@@ -105,6 +109,10 @@ impl ArmBoard for TwinBench {
     fn drivers_enabled(&self) -> bool {
         self.twin.drivers_enabled()
     }
+
+    fn period_us(&self) -> u64 {
+        self.twin.period_us()
+    }
 }
 
 impl ArmBoard for EmulatedBoard {
@@ -125,6 +133,10 @@ impl ArmBoard for EmulatedBoard {
         // The image's monitor block, as a debug probe reads it.
         self.monitor().is_some_and(|m| m.drivers_enabled != 0)
     }
+
+    fn period_us(&self) -> u64 {
+        self.period_ns() / 1000
+    }
 }
 
 /// The arm, its board, and the board's application or image.
@@ -132,7 +144,6 @@ pub struct FreeArm<B: ArmBoard = TwinBench> {
     plant: Plant,
     board: B,
     u: [f64; 2],
-    ts: f64,
     sensed: [f64; 4],
     faults: BusFaults,
     /// A known load hung on the load cell `[f_t, f_n]`, N (a weight for the span).
@@ -185,7 +196,6 @@ impl FreeArm<EmulatedBoard> {
             EmulatedBoard::new(arm_image, board, &sector, period_ns, s.sensors.seed, s.sensors.load_noise_n, Mode::Functional)
                 .map_err(|e| FreeArmError::Emulated(e.to_string()))?;
         let mut plant = hanging_plant(s)?;
-        let ts = s.timing.period().as_secs_f64();
         plant.advance(&Hold([0.0; 2]), SETTLE_S, &mut NoObserver)?;
         let sensed = plant.state();
         let arm = ArmState { x: sensed, f: plant.contact_force([0.0; 2]), belt_travel_m: 0.0 };
@@ -194,7 +204,6 @@ impl FreeArm<EmulatedBoard> {
             plant,
             board: emulated,
             u: [0.0; 2],
-            ts,
             sensed,
             faults: BusFaults::default(),
             load: Load::default(),
@@ -232,13 +241,11 @@ impl FreeArm<TwinBench> {
         let restart = move || BoardTwin::with_flash(board, flash.clone(), config, &arm_cal, seed, noise);
         let twin = restart()?;
         let plant = hanging_plant(s)?;
-        let ts = s.timing.period().as_secs_f64();
         let board = TwinBench { twin, restart: Box::new(restart), frames: FrameBuffer::default(), replies: Vec::new() };
         let mut arm = Self {
             plant,
             board,
             u: [0.0; 2],
-            ts,
             sensed: [0.0; 4],
             faults: BusFaults::default(),
             load: Load::default(),
@@ -248,6 +255,7 @@ impl FreeArm<TwinBench> {
             belt_travel_m: 0.0,
             scenario: Box::new(s.clone()),
         };
+        let ts = arm.period_s();
         arm.ticks((SETTLE_S / ts).round() as usize)?;
         Ok(arm)
     }
@@ -264,7 +272,14 @@ impl FreeArm<TwinBench> {
 }
 
 impl<B: ArmBoard> FreeArm<B> {
-    /// One period: the devices sense the arm, the tick runs, the arm moves.
+    /// The control period the board runs now, s ([`ArmBoard::period_us`]):
+    /// each tick advances the arm by it.
+    pub fn period_s(&self) -> f64 {
+        self.board.period_us() as f64 * 1e-6
+    }
+
+    /// One period of the board's (its period now: [`FreeArm::period_s`]): the
+    /// devices sense the arm, the tick runs, the arm moves.
     ///
     /// # Errors
     /// [`FreeArmError`] when the plant or the board fails.
@@ -280,9 +295,12 @@ impl<B: ArmBoard> FreeArm<B> {
         let load = *self.load.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let f = self.plant.contact_force(self.u);
         let arm = ArmState { x: self.sensed, f: [f[0] + load[0], f[1] + load[1]], belt_travel_m: self.belt_travel_m };
+        // The period this tick runs: a request served during the last one may
+        // have changed it (`Configure` of another rate).
+        let ts = self.period_s();
         self.u = self.board.tick(&arm, &self.faults).map_err(FreeArmError::Emulated)?;
         if self.raised {
-            self.belt_travel_m += self.scenario.plant.v_belt * self.ts;
+            self.belt_travel_m += self.scenario.plant.v_belt * ts;
             // On the raised belt the operator holds the arm at its pose while the
             // drivers are off (as before a run's enable, docs/board.md "The board
             // twin"); it moves under the drivers' torques once they are on.
@@ -290,7 +308,7 @@ impl<B: ArmBoard> FreeArm<B> {
                 return Ok(());
             }
         }
-        self.plant.advance(&Hold(self.u), self.ts, &mut NoObserver)?;
+        self.plant.advance(&Hold(self.u), ts, &mut NoObserver)?;
         Ok(())
     }
 

@@ -193,9 +193,20 @@ impl BoardTwin {
         self.physics.hold_button(false);
     }
 
-    /// Serves a bring-up request between two ticks, as the image's idle loop does.
+    /// Serves a bring-up request between two ticks, as the image's idle loop
+    /// does, then follows a new control rate as the image does
+    /// ([`ArmApp::retime`]: the twin's tick is whoever calls [`BoardTwin::tick`],
+    /// which paces it by [`BoardTwin::period_us`]).
     pub fn serve(&mut self, request: arm_app::bringup::Request) -> arm_app::bringup::Reply {
-        self.app.serve(request)
+        let reply = self.app.serve(request);
+        self.app.retime(Some);
+        reply
+    }
+
+    /// The control period the twin's tick runs, us: the configuration's in
+    /// force (the saved record's at power-up, a `Configure` or `Restore`'s since).
+    pub fn period_us(&self) -> u64 {
+        self.app.tick_period_us()
     }
 
     /// What the application said since the last call.

@@ -205,8 +205,11 @@ fn a_restore_is_checked_by_the_firmware_and_taken_whole_or_not_at_all() {
     s.config.observer_bandwidth = f32::NAN;
     bad.push(("a NaN gain", s, Refusal::InvalidConfig));
     let mut s = good;
-    s.config.period = shared::time::Period::from_us(500).unwrap();
-    bad.push(("another rate", s, Refusal::Rate));
+    s.config.period = shared::time::Period::from_us(5000).unwrap();
+    bad.push(("a rate the image does not run (200 Hz)", s, Refusal::Rate));
+    let mut s = good;
+    s.config.period = shared::time::Period::from_us(99).unwrap();
+    bad.push(("a rate the image does not run (10.1 kHz)", s, Refusal::Rate));
     let mut s = good;
     s.calibration.zero_counts[0] = 1 << 14;
     bad.push(("a 15-bit zero", s, Refusal::OutOfRange));

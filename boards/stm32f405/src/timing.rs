@@ -13,12 +13,11 @@ pub const QEMU_TIMER_HZ: u32 = 1_000_000_000;
 
 use shared::Period;
 
-/// The shortest control period the `arm` image runs, us (10 kHz, the top of
-/// docs/hardware.md "Timing"'s range; the acquisition's deadline, 40 us, and
-/// the handler must fit in it).
-pub const MIN_PERIOD_US: u64 = 100;
-/// The longest, us (250 Hz, the bottom of the range).
-pub const MAX_PERIOD_US: u64 = 4_000;
+/// The shortest and longest control periods the `arm` image runs, us (10 kHz
+/// and 250 Hz, docs/hardware.md "Timing"'s range): `arm_app::rate`'s, the one
+/// statement the image and the host share. Every whole microsecond between is
+/// exact on both timer clocks (tested below).
+pub use arm_app::rate::{MAX_PERIOD_US, MIN_PERIOD_US};
 
 /// The LSI that clocks the watchdog, Hz (nominal; 17 to 47 kHz over parts and
 /// temperature, DS8626 table 41: the timeout is chosen with that margin).
@@ -55,6 +54,8 @@ impl TickTimer {
     /// # Errors
     /// [`TimingError::Inexact`] when `clock_hz` is not a whole number of MHz (no
     /// whole count of ticks per microsecond) or the count does not fit 16 x 16 bits.
+    // Out of line: the image's start-up and its change of rate share one copy.
+    #[inline(never)]
     pub fn for_period(clock_hz: u32, period: Period) -> Result<Self, TimingError> {
         let period_us = period.as_us() as u32;
         let err = TimingError::Inexact { clock_hz, period_us };
@@ -113,6 +114,19 @@ mod tests {
         assert_eq!(TickTimer::for_period(84_000_000, ms), Ok(TickTimer { psc: 1, arr: 41_999 }));
         // A clock with no whole number of ticks per microsecond is refused rather than drifting.
         assert!(TickTimer::for_period(84_000_001, ms).is_err());
+    }
+
+    #[test]
+    fn every_period_the_image_runs_is_exact_on_both_clocks() {
+        // All 3 901 of them: a `Configure` can ask for any (arm_app::rate).
+        for us in MIN_PERIOD_US..=MAX_PERIOD_US {
+            let period = Period::from_us(us).unwrap();
+            for clock in [TIM2_CLOCK_HZ, QEMU_TIMER_HZ] {
+                let t = TickTimer::for_period(clock, period).unwrap_or_else(|e| panic!("{us} us at {clock} Hz: {e:?}"));
+                let ticks = u64::from(u32::from(t.psc) + 1) * u64::from(u32::from(t.arr) + 1);
+                assert_eq!(ticks, u64::from(clock / 1_000_000) * us, "{us} us at {clock} Hz");
+            }
+        }
     }
 
     #[test]

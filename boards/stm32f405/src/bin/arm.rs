@@ -315,14 +315,25 @@ mod image {
 
     /// Serves the bring-up requests received so far (docs/board.md "Bring-up"):
     /// each request between two ticks, its reply on USART1 TX.
-    fn serve_requests(frames: &mut FrameBuffer) {
+    fn serve_requests(frames: &mut FrameBuffer, timer_hz: u32) {
         while let Some(b) = cortex_m::interrupt::free(|cs| RX.borrow(cs).borrow_mut().pop_front()) {
             let Push::Frame(f) = frames.push(b) else { continue };
             let Ok(request) = pil::decode::<Request>(f) else {
                 defmt::warn!("bring-up: a frame that does not decode was dropped");
                 continue;
             };
-            let mut reply = cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow_mut().as_mut().map(|a| a.serve(request)));
+            // A new rate (`Configure`, `Restore`): TIM2 follows it before the next tick.
+            let mut reply = cortex_m::interrupt::free(|cs| {
+                ARM.borrow(cs).borrow_mut().as_mut().map(|a| {
+                    let reply = a.serve(request);
+                    // (`Status` reports the tick's period; TIM2's update that
+                    // loaded it, cleared, left its interrupt pending: dropped.)
+                    if a.retime(|p| timers::retime(p, timer_hz, acquisition::DEADLINE_US)).is_some() {
+                        cortex_m::peripheral::NVIC::unpend(Interrupt::TIM2);
+                    }
+                    reply
+                })
+            });
             // The stack's scan takes too long for the tick: done here.
             if let Some(Reply::Telemetry(Some(t))) = reply.as_mut() {
                 t.stack_high_water_bytes = stack::high_water_bytes();
@@ -460,7 +471,7 @@ mod image {
         loop {
             cortex_m::asm::wfi();
             log_notices();
-            serve_requests(&mut frames);
+            serve_requests(&mut frames, timer_hz);
             // The periods run so far and whether the drivers are on, from the application itself.
             let (periods, drivers) =
                 cortex_m::interrupt::free(|cs| ARM.borrow(cs).borrow().as_ref().map_or((0, false), |a| (a.periods(), a.drivers_enabled())));

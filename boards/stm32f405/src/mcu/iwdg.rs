@@ -21,6 +21,14 @@ pub fn start(timeout_us: u32) {
     set_timeout(timeout_us);
 }
 
+/// Sets a new timeout of at least `timeout_us` on the running watchdog (a new
+/// control rate: five of its periods, `super::timers::retime`); [`stretched`]
+/// restores this one from now on.
+pub fn retime(timeout_us: u32) {
+    TIMEOUT_US.store(timeout_us, Ordering::Relaxed);
+    set_timeout(timeout_us);
+}
+
 /// Runs `f` with the watchdog's timeout lengthened to at least `timeout_us`
 /// (a flash sector erase stalls the core for up to 1.1 s: DS8626 "Flash
 /// memory programming"), then restores [`start`]'s timeout. PR and RLR can be
@@ -35,6 +43,8 @@ pub fn stretched<T>(timeout_us: u32, f: impl FnOnce() -> T) -> T {
     out
 }
 
+// Out of line: start-up, the save's stretch and a change of rate share one copy.
+#[inline(never)]
 fn set_timeout(timeout_us: u32) {
     let (pr, rl) = crate::timing::watchdog(timeout_us);
     let w = iwdg();

@@ -3,7 +3,8 @@
 //!
 //! - `arm`: TIM2's update interrupt counts its ticks ([`tick`], the first is period
 //!   0, as the application's `seq`); the period is the configured control period
-//!   ([`set_period_us`] at start-up). A line's stamp is the time of the last tick
+//!   ([`set_period_us`] at start-up; at a change of rate [`retime`] rebases the
+//!   count, so the stamps go on). A line's stamp is the time of the last tick
 //!   since the first: a line logged in period `k`'s tick (`period k: ...`), or in
 //!   the idle loop after it, reads `k` periods.
 //! - `pil`: the plant owns time; each frame sets the period number it carries
@@ -31,6 +32,19 @@ pub fn set_period_us(us: u32) {
     PERIOD_US.store(us, Ordering::Relaxed);
 }
 
+/// A new control period, microseconds, from the current period on (`arm`'s
+/// change of rate: `super::timers::retime`): the period number is rebased so
+/// that the stamp goes on from where it is, rounded up to a whole new period
+/// (never back; ahead by less than one new period). Called between two ticks
+/// with the interrupts masked.
+pub fn retime(us: u32) {
+    let k = TICKS.load(Ordering::Relaxed);
+    if k != NONE && us != 0 {
+        TICKS.store(now_us().div_ceil(u64::from(us)) as u32, Ordering::Relaxed);
+    }
+    set_period_us(us);
+}
+
 /// Counts one control tick (TIM2's update interrupt, `arm`): the first is period 0.
 pub fn tick() {
     TICKS.fetch_add(1, Ordering::Relaxed);
@@ -42,7 +56,7 @@ pub fn set_tick(n: u32) {
 }
 
 /// The stamp, microseconds: the current period's number times the period (0
-/// before the first tick).
+/// before the first tick; the number rebased at a change of rate, [`retime`]).
 pub fn now_us() -> u64 {
     match TICKS.load(Ordering::Relaxed) {
         NONE => 0,

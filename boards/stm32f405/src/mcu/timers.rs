@@ -28,6 +28,8 @@ fn tim4() -> &'static pac::tim3::RegisterBlock {
 /// enabled, update event on TRGO, and compare 1 (frozen output, no pin) at
 /// `deadline_us` after each update with its interrupt: the acquisition's
 /// deadline (`super::acquisition::DEADLINE_US`), clamped into the period.
+// Out of line: the start-up and a change of rate (`retime`) share one copy.
+#[inline(never)]
 pub fn start_tick(tick: TickTimer, timer_hz: u32, deadline_us: u32) {
     let t = tim2();
     let counts_per_us = (timer_hz / 1_000_000) / (u32::from(tick.psc) + 1);
@@ -40,6 +42,26 @@ pub fn start_tick(tick: TickTimer, timer_hz: u32, deadline_us: u32) {
     t.sr().write(|w| w.uif().clear_bit().cc1if().clear_bit());
     t.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
     t.cr1().write(|w| w.cen().set_bit());
+}
+
+/// Restarts the control tick at `period` (a `Configure` or `Restore` of another
+/// rate, served between two ticks in the idle loop's critical section:
+/// `arm_app::ArmApp::retime`): TIM2 stopped, then started as [`start_tick`]
+/// does with the new prescaler, reload and deadline (the update that loads
+/// them is cleared before the interrupts are unmasked: its pended interrupt
+/// finds no flag and does nothing), so the next tick comes one new period
+/// later; the watchdog's timeout to five new periods; the log's stamp rebased.
+/// Returns the period TIM2 now runs, `None` (TIM2 untouched) for one the
+/// clock cannot make exactly (never within `arm_app::rate`'s range, which the
+/// application checks before: `timing`'s tests).
+pub fn retime(period: shared::Period, timer_hz: u32, deadline_us: u32) -> Option<shared::Period> {
+    let tick = TickTimer::for_period(timer_hz, period).ok()?;
+    tim2().cr1().write(|w| w.cen().clear_bit());
+    start_tick(tick, timer_hz, deadline_us);
+    let us = period.as_us() as u32;
+    super::iwdg::retime(5 * us);
+    super::log_time::retime(us);
+    Some(period)
 }
 
 /// TIM2's events in its interrupt, cleared: `(update, compare 1)`.

@@ -148,8 +148,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 pose_counts: [t1, el].map(|d| shared::wire::encode_angle(d.to_radians())),
                 reversed: [JointArg::Theta1, JointArg::Elbow].map(|j| reversed.contains(&j)),
                 jog_code: (jog_nm / 5.0 * 2048.0).round() as i16,
-                jog_periods: 100,
-                settle_periods: 300,
+                // In the board's periods at its rate (bp::periods_of).
+                jog_s: 0.1,
+                settle_s: 0.3,
                 tare: !no_tare,
             };
             let report = bp::calibrate(&mut c, &o, &mut Terminal { json }).map_err(step)?;
@@ -208,24 +209,34 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             // A board never runs without its runaway limits: refused here, naming
             // the key, before the firmware refuses it too.
             bp::check_protection(&config, "controller.runaway_limits").map_err(CliError::bad_input)?;
+            // The rates the image runs (arm_app::rate, the one statement the
+            // image shares): refused here, naming the range, before the
+            // firmware refuses it too (`Refusal::Rate`).
+            let us = config.period.as_us();
+            if !arm_app::rate::supported(config.period) {
+                return Err(CliError::bad_input(format!(
+                    "configure: timing.rate_hz = {} gives a control period of {us} us: the image runs {}",
+                    s.timing.rate_hz,
+                    arm_app::rate::RANGE_WORDS
+                )));
+            }
             let Reply::Config(now) = bp::ask(&mut c, Request::GetConfig).map_err(step)? else {
                 return Err(CliError::bad_input("unexpected reply to get configuration"));
             };
-            // The image's timer runs one rate: say both when they differ.
-            if now.period != config.period {
+            bp::ask(&mut c, Request::Configure(config)).map_err(step)?;
+            // The board's tick follows the configuration's rate (TIM2's reload):
+            // what it runs now, read back.
+            let tick_us = u64::from(bp::status(&mut c).map_err(step)?.period_us);
+            if tick_us != us {
                 return Err(CliError::Board(format!(
-                    "configure: refused: the scenario's control period is {} us ({:.0} Hz) and the image's timer runs {} us ({:.0} Hz); set timing.rate_hz to the image's",
-                    config.period.as_us(),
-                    1e6 / config.period.as_us() as f64,
-                    now.period.as_us(),
-                    1e6 / now.period.as_us() as f64
+                    "configure: the board took the configuration but its tick runs {tick_us} us, not the configuration's {us} us: \
+                     the board could not reprogram its timer, and its drivers stay locked out until it does (reset it)"
                 )));
             }
-            bp::ask(&mut c, Request::Configure(config)).map_err(step)?;
             let json_of = |c: &firmware::Config| serde_json::to_value(c).unwrap_or_default();
             let changed = changes("config", &json_of(&now), &json_of(&config));
             let listed: Vec<_> = changed.iter().map(|(k, a, b)| serde_json::json!({ "key": k, "old": a, "new": b })).collect();
-            emit(json, &serde_json::json!({ "done": "configure", "changed": listed }), || {
+            emit(json, &serde_json::json!({ "done": "configure", "changed": listed, "period_us": tick_us }), || {
                 if changed.is_empty() {
                     outln!("configure: done: nothing changed (the configuration in force is the scenario's)");
                 } else {
@@ -234,6 +245,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                         outln!("  {k} = {a} -> {b}");
                     }
                 }
+                outln!("the board's control tick runs {tick_us} us ({:.0} Hz)", 1e6 / tick_us as f64);
             });
         }
         BoardCommand::Enable => {
@@ -243,7 +255,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                     "enable: done: {}; still on at period {} ({} periods watched): {}",
                     bp::describe_enable(&st.last_enable),
                     st.periods,
-                    bp::ENABLE_WATCH_PERIODS,
+                    bp::enable_watch_periods(st.period_us),
                     describe_status(st.status)
                 );
             });

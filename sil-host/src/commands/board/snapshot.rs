@@ -167,6 +167,7 @@ pub(super) fn print_snapshot(s: &Snapshot) {
         if st.drivers_enabled { "enabled" } else { "disabled" },
         st.overruns
     );
+    outln!("control tick: {} us ({:.0} Hz)", st.period_us, 1e6 / f64::from(st.period_us.max(1)));
     outln!("firmware status {:#x}: {}", st.status, describe_status(st.status));
     let off_again = matches!(st.last_enable, EnableOutcome::Enabled { .. }) && !st.drivers_enabled;
     outln!(

@@ -48,10 +48,10 @@ pub fn twin(args: &BoardTwinArgs) -> Result<(), CliError> {
     if args.emulated {
         let elf = args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image);
         let arm = FreeArm::emulated(&s, s.board, &flash, &elf).map_err(|e| CliError::bad_input(e.to_string()))?;
-        serve_arm(args, &s, arm, "emulated arm image")
+        serve_arm(args, arm, "emulated arm image")
     } else {
         let arm = FreeArm::with_flash(&s, s.board, &s.calibration, flash).map_err(|e| CliError::bad_input(e.to_string()))?;
-        serve_arm(args, &s, arm, "board twin")
+        serve_arm(args, arm, "board twin")
     }
 }
 
@@ -100,7 +100,7 @@ fn weight_command(line: &str) -> Result<[f64; 2], String> {
 }
 
 /// Announces the port and the pose, then serves `arm` until stopped.
-fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut arm: FreeArm<B>, what: &str) -> Result<(), CliError> {
+fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, mut arm: FreeArm<B>, what: &str) -> Result<(), CliError> {
     if args.fault_line {
         arm.set_faults(BusFaults { driver_fault: true, ..BusFaults::default() });
     }
@@ -169,8 +169,7 @@ fn serve_arm<B: ArmBoard>(args: &BoardTwinArgs, s: &rig::scenario::Scenario, mut
             stop.store(true, std::sync::atomic::Ordering::Relaxed);
         });
     }
-    let ts = Duration::from_secs_f64(s.timing.period().as_secs_f64());
-    bringup_line::serve(&mut arm, &mut pty.master, ts, &stop).map_err(CliError::Board)?;
+    bringup_line::serve(&mut arm, &mut pty.master, &stop).map_err(CliError::Board)?;
     if crate::cancel::exit_code().is_some() {
         // Ctrl-C or SIGTERM (not --serve-for's end): 130 or 143.
         return Err(CliError::interrupted(format!("{what} stopped")));
