@@ -117,7 +117,10 @@ impl EmulatedBoard {
     /// `record_sector` (the bytes of `board_twin::FlashModel`: a record saved,
     /// erased, or damaged), its load cell's noise as the twin's (`seed`,
     /// `load_noise_n`), the control period `period_ns`, the core run in `mode`.
-    /// Nothing runs yet.
+    /// Nothing runs yet. `period_ns` is the period expected until the image
+    /// starts its tick; from then on the board runs the period TIM2 is
+    /// programmed for ([`EmulatedBoard::period_ns`]: the image's configuration
+    /// in force, `arm_app::rate`), and follows the image when it changes it.
     ///
     /// # Errors
     /// [`EmuError::Board`] for a bad description, [`EmuError::Build`].
@@ -174,6 +177,10 @@ impl EmulatedBoard {
         for ms in 1..=200u64 {
             self.run_to(t0 + ms * step)?;
             if self.monitor().is_some() {
+                // The image's rate: TIM2 as its configuration programmed it.
+                if let Some(p) = self.timer_period_ns() {
+                    self.period_ns = p;
+                }
                 // The tick's phase from TIM2's counter: the last update was CNT
                 // timer counts ago.
                 let psc = peek(&self.m.machine, 0x4000_0028) + 1;
@@ -256,12 +263,42 @@ impl EmulatedBoard {
             return Err(EmuError::WatchdogReset { period: self.ticks });
         }
         self.last_image_ticks = ticks;
+        if let Some(p) = self.timer_period_ns()
+            && p != self.period_ns
+        {
+            // The image retimed its tick in this period (a `Configure` of
+            // another rate, served by its idle loop: TIM2 restarted with the new
+            // reload): the next tick from TIM2's counter, as at boot.
+            self.period_ns = p;
+            let psc = peek(&self.m.machine, 0x4000_0028) + 1;
+            let cnt = peek(&self.m.machine, 0x4000_0024);
+            let since = u64::from(cnt) * u64::from(psc) * 1_000_000_000 / u64::from(checks::APB1_TIMER_HZ);
+            self.next_tick_ns = self.m.now_ns() - since;
+        }
         self.next_tick_ns += self.period_ns;
         self.ticks += 1;
         if self.ticks % 1000 == 1 {
             self.check_configuration()?;
         }
         Ok(self.torques())
+    }
+
+    /// The control period the board runs, ns: TIM2's update period as the
+    /// image programmed it once its tick started (else the period given to
+    /// [`EmulatedBoard::new`]).
+    pub fn period_ns(&self) -> u64 {
+        self.period_ns
+    }
+
+    /// TIM2's update period, ns: `(PSC + 1) (ARR + 1)` counts of APB1's timer
+    /// clock (RM0090 18.3.1, 84 MHz), `None` while TIM2 is stopped.
+    fn timer_period_ns(&self) -> Option<u64> {
+        let m = &self.m.machine;
+        if peek(m, 0x4000_0000) & 1 == 0 {
+            return None;
+        }
+        let counts = (u64::from(peek(m, 0x4000_0028)) + 1) * (u64::from(peek(m, 0x4000_002C)) + 1);
+        Some(counts * 1_000_000_000 / u64::from(checks::APB1_TIMER_HZ))
     }
 
     /// The torques from TIM3's duty, the direction pins and the enable pin.

@@ -36,9 +36,9 @@ use crate::twin_link::bus_faults;
 /// The control periods the `arm` image runs, us: TIM2's reload comes from the
 /// configuration in its settings record (issue 56), any whole number of
 /// microseconds from 100 (10 kHz) to 4 000 (250 Hz), docs/hardware.md "Timing"
-/// (`board_stm32f405::timing::MIN_PERIOD_US`, `MAX_PERIOD_US`; the image
-/// refuses to start outside them).
-pub const IMAGE_PERIODS_US: std::ops::RangeInclusive<u64> = 100..=4_000;
+/// (`arm_app::rate`, the one statement the image and the host share; the
+/// image refuses to start outside them).
+pub const IMAGE_PERIODS_US: std::ops::RangeInclusive<u64> = arm_app::rate::MIN_PERIOD_US..=arm_app::rate::MAX_PERIOD_US;
 
 /// Where `run --link emulator` looks for the image by default: the `mcu`
 /// profile's output next to this executable's target folder, else in the
@@ -102,7 +102,8 @@ impl EmulatorLink {
         let period_us = s.timing.period().as_us();
         if !IMAGE_PERIODS_US.contains(&period_us) {
             return Err(RunError::Board(format!(
-                "the `arm` image runs control periods of 100 to 4000 us (10 kHz to 250 Hz, TIM2's reload from the saved configuration); the scenario's period is {period_us} us"
+                "the `arm` image runs control periods of {} (TIM2's reload from the saved configuration); the scenario's period is {period_us} us",
+                arm_app::rate::RANGE_WORDS
             )));
         }
         let config = *setup.firmware();
@@ -144,6 +145,14 @@ impl EmulatorLink {
     /// reset lands on the next tick (as `board_twin::BoardTwin::press_enable`).
     fn start(&mut self, arm: &ArmState, faults: &BusFaults) -> Result<(), RunError> {
         self.board.boot(arm).map_err(board_error)?;
+        // The image's tick from its saved configuration: the scenario's rate.
+        if self.board.period_ns() != self.period_us * 1000 {
+            return Err(RunError::Board(format!(
+                "the image's tick runs {} ns, the scenario's period is {} us: TIM2's reload is not the saved configuration's",
+                self.board.period_ns(),
+                self.period_us
+            )));
+        }
         self.board.hold_button(false);
         self.tick(arm, faults, false)?;
         self.board.hold_button(true);
