@@ -61,7 +61,64 @@ on_both!(
     a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged,
     the_runaway_limits_cannot_be_turned_off_on_a_board,
     a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved,
+    configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset,
 );
+
+/// Issue 56: `configure` sends the scenario's control rate and the board's tick
+/// follows it (TIM2's reload on the emulated image), which `configure` reads
+/// back and `status` reports; a rate the image does not run is refused naming
+/// the range, nothing sent; a saved rate comes back at the reset, a backup
+/// carries it, and a backup with a period outside the range is refused naming
+/// the key and the range, the board unchanged.
+fn configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset(on: Board) {
+    use std::io::Write;
+    let mut t = twin(on, &["--flash", "saved"]);
+    assert_eq!(status(&t)["status"]["period_us"], 1000);
+    for rate in ["200", "12000"] {
+        let (code, _, err) = board(&t, &["configure", "--set", &format!("timing.rate_hz={rate}")]);
+        assert!(code == 2 && err.contains("timing.rate_hz") && err.contains("250 to 10000 Hz"), "{rate} Hz: {err}");
+        assert_eq!(status(&t)["status"]["period_us"], 1000, "{rate} Hz: nothing sent");
+    }
+    // 10 kHz needs a sampling delay within its 100 us period.
+    for (rate, us, delta) in [("250", 4000, "0.0002"), ("4000", 250, "0.0002"), ("10000", 100, "0.00005"), ("1000", 1000, "0.0002")] {
+        let (code, out, err) =
+            board(&t, &["configure", "--set", &format!("timing.rate_hz={rate}"), "--set", &format!("timing.delta_s={delta}")]);
+        assert_eq!(code, 0, "{rate} Hz: {out}{err}");
+        assert!(out.contains(&format!("the board's control tick runs {us} us")), "{rate} Hz: {out}");
+        let s = status(&t);
+        assert_eq!(s["status"]["period_us"], us, "{rate} Hz: {s}");
+    }
+    let (code, out, err) = board(&t, &["configure", "--set", "timing.rate_hz=4000"]);
+    assert!(code == 0 && out.contains("config.period = 1000 -> 250"), "{out}{err}");
+    assert_eq!(board(&t, &["save"]).0, 0);
+    let periods = status(&t)["status"]["periods"].as_u64().unwrap();
+    writeln!(t.stdin, "reset").unwrap();
+    t.stdin.flush().unwrap();
+    let mut after = status_while_booting(&t);
+    for _ in 0..400 {
+        if after["status"]["periods"].as_u64().unwrap() < periods {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+        after = status_while_booting(&t);
+    }
+    assert!(after["status"]["periods"].as_u64().unwrap() < periods, "no reset: {after}");
+    assert_eq!((after["status"]["period_us"].as_u64(), after["status"]["settings"].as_str()), (Some(250), Some("Saved")), "{after}");
+    let (code, out, _) = board(&t, &["status"]);
+    assert!(code == 0 && out.contains("control tick: 250 us (4000 Hz)"), "{out}");
+    // The backup carries the rate; one with a period the image does not run is refused.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("b.toml");
+    assert_eq!(board(&t, &["backup", file.to_str().unwrap()]).0, 0);
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.contains("period = 250"), "{text}");
+    for bad in ["5000", "99", "0"] {
+        std::fs::write(&file, text.replace("period = 250", &format!("period = {bad}"))).unwrap();
+        let (code, _, err) = board(&t, &["restore", file.to_str().unwrap()]);
+        assert!(code == 2 && err.contains(&format!("`config.period` = {bad}")) && err.contains("100 to 4000 us"), "{bad}: {err}");
+    }
+    assert_eq!(status(&t)["status"]["period_us"], 250, "the board unchanged");
+}
 
 /// Issue 44: `backup FILE` writes the calibration and configuration in force as
 /// TOML; `restore FILE` puts them back whole (the firmware checks them as it
@@ -169,7 +226,7 @@ fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchan
             "another protocol",
             edit(&|x| x["protocol"] = toml::Value::Integer(5)),
             2,
-            "made with bring-up protocol 5, this sil-host speaks protocol 6",
+            "made with bring-up protocol 5, this sil-host speaks protocol 7",
         ),
     ];
     for (what, text, want, says) in cases {
@@ -647,9 +704,10 @@ fn a_pose_out_of_range_or_another_rate_is_refused_naming_the_values() {
         let (code, _, err) = board(&t, &["calibrate", pose]);
         assert!(code == 2 && err.contains("(-180, 180] degrees"), "{pose}: {err}");
     }
-    let (code, _, err) = board(&t, &["configure", "--set", "timing.rate_hz=2000"]);
-    assert_eq!(code, 1, "{err}");
-    assert!(err.contains("500 us (2000 Hz)") && err.contains("1000 us (1000 Hz)"), "{err}");
+    // A rate the image does not run (issue 56: any other is configured).
+    let (code, _, err) = board(&t, &["configure", "--set", "timing.rate_hz=100"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("timing.rate_hz") && err.contains("250 to 10000 Hz"), "{err}");
 }
 
 #[test]
