@@ -120,7 +120,7 @@ mod tests {
     fn every_period_the_image_runs_is_exact_on_both_clocks() {
         // All 3 901 of them: a `Configure` can ask for any (arm_app::rate).
         for us in MIN_PERIOD_US..=MAX_PERIOD_US {
-            let period = Period::from_us(us).unwrap();
+            let period = Period::from_us(u32::try_from(us).unwrap()).unwrap();
             for clock in [TIM2_CLOCK_HZ, QEMU_TIMER_HZ] {
                 let t = TickTimer::for_period(clock, period).unwrap_or_else(|e| panic!("{us} us at {clock} Hz: {e:?}"));
                 let ticks = u64::from(u32::from(t.psc) + 1) * u64::from(u32::from(t.arr) + 1);

@@ -83,10 +83,13 @@ pub enum BoardCommand {
         skip: bool,
     },
     /// Sends the firmware configuration of a scenario (controller, gains, rate,
-    /// limits); the firmware validates it. The rate must be the image's, and the
-    /// runaway limits on (`controller.runaway_limits = false` is refused, exit 2:
-    /// a board never runs without them). Echoes each setting it changed (`KEY = OLD
-    /// -> NEW`).
+    /// limits); the firmware validates it. The rate (`timing.rate_hz`) is any the
+    /// image runs, 250 Hz to 10 kHz (control periods of 100 to 4000 us): the
+    /// board's control tick follows it at once, and the period it runs is read
+    /// back and printed; a rate outside is refused, exit 2, nothing sent. The
+    /// runaway limits must be on (`controller.runaway_limits = false` is refused,
+    /// exit 2: a board never runs without them). Echoes each setting it changed
+    /// (`KEY = OLD -> NEW`); unsaved until `save`.
     Configure {
         /// The scenario.
         #[command(flatten)]
