@@ -16,7 +16,7 @@ use crate::{
     config::{Config, ConfigError, ControllerKind},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, EncoderScale, FrameFault, Measurement},
-    estimator::AngleTracker,
+    estimator::{self, AngleTracker},
     law::{self, HybridInput, HybridSignals, HybridState, PidState, TipKinematics},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
@@ -30,6 +30,15 @@ mod telemetry;
 
 pub use safe_reason::SafeReason;
 pub use telemetry::Telemetry;
+
+/// `1 / x`, out of line and cold: the rate of an interval after skipped periods,
+/// rare. Inline, the compiler computed the division (14 cycles) every step, the
+/// usual one too, to select it without a branch.
+#[cold]
+#[inline(never)]
+fn reciprocal(x: f32) -> f32 {
+    1.0 / x
+}
 
 #[derive(Debug, Clone, Copy)]
 struct Started {
@@ -334,8 +343,7 @@ impl Firmware {
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let td = self.terms.tip_dynamics_trig(&s.trig, &q, &qd, &u);
-                let qdd = td.qdd_with_force(&Vector2::new(m.f_t, m.f_n));
+                let qdd = estimator::predicted_acceleration(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
                 let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
                 innovation = [
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
@@ -343,7 +351,7 @@ impl Firmware {
                 ];
                 // 1 / dt without the division when no period was skipped (the same bits:
                 // `1 as f32 * ts` is `ts`).
-                let per_s = if gap == 1 { self.rate } else { 1.0 / dt };
+                let per_s = if gap == 1 { self.rate } else { reciprocal(dt) };
                 missed_accel = [s.trackers[0].rate_correction(innovation[0]) * per_s, s.trackers[1].rate_correction(innovation[1]) * per_s];
                 s.last_seq = seq;
                 s

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix2, Vector2};
 use shared::{
     Arm, ElbowBranch, Real,
-    kinematics::{JointTrig, inverse_kinematics_trig, jacobian_trig, jdot_qdot_trig, tip_position_trig},
+    kinematics::{JointTrig, jacobian_trig, jdot_qdot_trig, tip_position_trig},
     model::ArmTerms,
 };
 
@@ -77,9 +77,15 @@ pub fn pid(
     limit: f32,
 ) -> Result<[f32; 2], LawError> {
     let p = &arm.params;
-    let (q_ref, trig_ref) = inverse_kinematics_trig(p.l, &Vector2::new(reference.pos, -p.h), branch).map_err(|_| LawError::Unreachable)?;
+    let (q_ref, trig_ref) = reference_joints(p.l, reference.pos, -p.h, branch)?;
+    // q'*_dot = J(q*)^-1 [z_t_dot*, 0] = [J_22, -J_21] z_t_dot* / det J (one reciprocal).
     let j_ref = jacobian_trig(p.l, &trig_ref);
-    let qd_ref = j_ref.try_inverse().ok_or(LawError::Singular)? * Vector2::new(reference.vel, 0.0);
+    let det = j_ref[(0, 0)] * j_ref[(1, 1)] - j_ref[(0, 1)] * j_ref[(1, 0)];
+    if det == 0.0 {
+        return Err(LawError::Singular);
+    }
+    let v_det = reference.vel * (1.0 / det);
+    let qd_ref = Vector2::new(j_ref[(1, 1)] * v_det, -j_ref[(1, 0)] * v_det);
     let to_prime = |v: Vector2<f32>| [v[0], v[1] - v[0]];
     let (e, ed) = {
         let (r, m) = (to_prime(q_ref), to_prime(q));
@@ -97,6 +103,57 @@ pub fn pid(
     };
     let u = [joint(0), joint(1)];
     if u[0].is_finite() && u[1].is_finite() { Ok(u) } else { Err(LawError::NonFinite) }
+}
+
+/// The PID's reference joint angles `q* = [theta1*, theta2*]` (rad) and their
+/// sines and cosines, for the tip at `z = [z_t, z_n]` (m) with links of length
+/// `l` (m), on `branch`: the geometry of
+/// [`shared::kinematics::inverse_kinematics_trig`] (`theta1,2 = psi -+ delta/2`,
+/// `psi = atan2(z_t, -z_n)`, `cos(delta/2) = |z| / 2l`), with the half elbow angle
+/// as `atan2(sin(delta/2), cos(delta/2))` where that function takes
+/// `acos(cos(delta/2))`: the same angle (`delta/2` is in `[0, pi/2]`), and the
+/// sine is needed for the sines and cosines anyway. On the MCU `libm::acosf`
+/// takes `libm::sqrtf` in software and two divisions; `atan2f` one division, and
+/// the square root is one `VSQRT` (`shared::sqrt`). `1 / |z|` is taken once.
+/// Within a few roundings of that function's angles and sines and cosines (test
+/// below).
+///
+/// # Errors
+/// [`LawError::Unreachable`]: a non-finite target, one beyond the reach `2 l`
+/// (by more than 1e-6 of it), or at the base joint (`|z| <= 1e-9 l`).
+pub fn reference_joints(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Result<(Vector2<f32>, JointTrig<f32>), LawError> {
+    if !(z_t.is_finite() && z_n.is_finite()) {
+        return Err(LawError::Unreachable);
+    }
+    let r = (z_t * z_t + z_n * z_n).square_root();
+    let reach = l + l;
+    if r > reach * (1.0 + 1e-6) || r <= l * 1e-9 {
+        return Err(LawError::Unreachable);
+    }
+    // cos(delta/2) = r / (2 l), at most 1 (a comparison: `f32::min` is a call to
+    // `fminf` on the MCU); sin(delta/2) >= 0 from it (`1 - c` exact for c >= 1/2).
+    let c = r / reach;
+    let c_half = if c < 1.0 { c } else { 1.0 };
+    let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
+    let half = s_abs.arc_tan2(c_half);
+    // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
+    let sign = match branch {
+        ElbowBranch::Up => 1.0,
+        ElbowBranch::Down => -1.0,
+    };
+    let half_delta = sign * (half + half) * 0.5;
+    let psi = z_t.arc_tan2(-z_n);
+    let q = Vector2::new(psi - half_delta, psi + half_delta);
+    let inv_r = 1.0 / r;
+    let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
+    let s_half = sign * s_abs;
+    let trig = JointTrig {
+        s1: s_psi * c_half - c_psi * s_half,
+        c1: c_psi * c_half + s_psi * s_half,
+        s2: s_psi * c_half + c_psi * s_half,
+        c2: c_psi * c_half - s_psi * s_half,
+    };
+    Ok((q, trig))
 }
 
 /// State of the hybrid law: its force integrator and, for
@@ -220,9 +277,11 @@ impl TipKinematics {
 /// `trig` and `input.qd`) given: the firmware's step, which has them already.
 /// The same torques and signals as [`hybrid`], bit for bit.
 ///
-/// One more `sin_cos`, of `theta1 - theta2`, gives the singularity test, the
-/// centripetal torque and the mass matrix (the cosine is even, exactly), so the
-/// law costs three `sin_cos` in all (docs/measurements.md "Speed and scale").
+/// The sine and cosine of `theta1 - theta2` (the singularity test, the centripetal
+/// torque and the mass matrix) come from `trig` by the angle-difference identities,
+/// not a third `sin_cos` (within 1e-6 of it), and `J^-1` is `adj(J) / det J` with
+/// one reciprocal, not nalgebra's inverse (four divisions): issue 56, as accurate as
+/// the term-by-term law (test below; docs/measurements.md "Speed IV").
 ///
 /// # Errors
 /// As [`hybrid`].
@@ -244,12 +303,19 @@ pub fn hybrid_at(
 ) -> Result<([f32; 2], HybridSignals), LawError> {
     let (q, qd) = (input.q, input.qd);
     let jac = kin.jac;
-    // sin(theta1 - theta2) and cos(theta1 - theta2) = cos(theta2 - theta1).
-    let (s12, c21) = (q[0] - q[1]).sin_cos_rad();
+    // sin(theta1 - theta2) and cos(theta1 - theta2) = cos(theta2 - theta1) from the
+    // angles' own (the angle-difference identities), not a third sin_cos.
+    let (s12, c21) = (trig.s12(), trig.c21());
     if s12.abs() < 1e-3 {
         return Err(LawError::Singular);
     }
-    let j_inv: Matrix2<f32> = jac.try_inverse().ok_or(LawError::Singular)?;
+    // J^-1 = adj(J) / det J (det J = -l^2 sin(theta1 - theta2)), with one reciprocal.
+    let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
+    let det = j11 * j22 - j12 * j21;
+    if det == 0.0 {
+        return Err(LawError::Singular);
+    }
+    let inv_det = 1.0 / det;
     let (z, z_dot) = (kin.z, kin.z_dot);
     let a_v = reference.acc + gains.kp * (reference.pos - z[0]) + gains.kd * (reference.vel - z_dot[0]);
     // The integral up to the previous sample (forward Euler): a new error acts from
@@ -261,17 +327,26 @@ pub fn hybrid_at(
     // `f_n_ref.max(1.0)` as a comparison: core's `f32::max` is a call to `fmaxf` on
     // the MCU (no VMAXNM before ARMv8). The same value, 1 for a NaN too.
     let f_floor = if f_n_ref > 1.0 { f_n_ref } else { 1.0 };
-    let i_max = if gains.ki > 0.0 { 4.0 * f_floor / gains.ki } else { 0.0 };
-    state.force_integral = clamp(state.force_integral, -i_max, i_max);
+    // The integral's contribution within `+-4 f_floor`: `|K'_I integral| <= 4 f_floor`
+    // compared as products, the bound `4 f_floor / K'_I` divided out only when it
+    // clamps.
+    if gains.ki > 0.0 {
+        let (limit, contribution) = (4.0 * f_floor, gains.ki * state.force_integral);
+        if contribution > limit {
+            state.force_integral = limit / gains.ki;
+        } else if contribution < -limit {
+            state.force_integral = -limit / gains.ki;
+        }
+    } else {
+        state.force_integral = clamp(state.force_integral, -0.0, 0.0);
+    }
     let v_r = z_dot[0] - input.v_belt;
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
     let m12 = terms.half_ml2 * c21;
-    let m = Matrix2::new(terms.m11, m12, m12, terms.m22);
     let mu_used = if comp == FrictionCompensation::Estimated {
         // p and Q_22 with the current estimate, both times det M (> 0): Q = J M^-1 J^T
         // (paper eq. 3) with M^-1 = adj(M) / det M, the division left out.
-        let (i11, i12, i22) = (m[(1, 1)], -m[(0, 1)], m[(0, 0)]);
-        let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
+        let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
         let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
         let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
         let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
@@ -289,7 +364,11 @@ pub fn hybrid_at(
     };
     let wc = w_sin(terms, trig.s1, trig.s2, &q, &qd) + c_sin(terms, s12, &qd);
     let s_vec = jdot_qdot_trig(terms.l, trig, &qd);
-    let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
+    // M J^-1 (i_x a_v - s) + J^T (-i_x f_t_hat - i_y a_f), each product written out.
+    let (v0, v1) = (a_v - s_vec[0], -s_vec[1]);
+    let (x0, x1) = ((j22 * v0 - j12 * v1) * inv_det, (j11 * v1 - j21 * v0) * inv_det);
+    let u_gen =
+        wc + Vector2::new(terms.m11 * x0 + m12 * x1 - (j11 * f_t_hat + j21 * a_f), m12 * x0 + terms.m22 * x1 - (j12 * f_t_hat + j22 * a_f));
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
     if !(motor[0].is_finite() && motor[1].is_finite() && a_f.is_finite()) {
         return Err(LawError::NonFinite);
@@ -318,7 +397,7 @@ mod tests {
     use super::*;
     use crate::config::Config;
     use proptest::prelude::*;
-    use shared::kinematics::{inverse_kinematics, jacobian};
+    use shared::kinematics::{inverse_kinematics, jacobian, jdot_qdot};
     use shared::{Params, SlipDirection, contact::sliding_force};
 
     /// The law as written before the shared trigonometry (issue 16): every term
@@ -335,7 +414,7 @@ mod tests {
         dt: f32,
         saturated: bool,
     ) -> Result<([f32; 2], HybridSignals), LawError> {
-        use shared::kinematics::{jdot_qdot, tip_position};
+        use shared::kinematics::tip_position;
         let p = &arm.params;
         let (q, qd) = (input.q, input.qd);
         let jac = jacobian(p.l, &q);
@@ -373,13 +452,18 @@ mod tests {
     }
 
     proptest! {
-        /// Sharing the trigonometry changes no bit of the law's output (the PIL
-        /// trace must stay byte-identical): the same torques, signals and integrator
-        /// as the term-by-term law over the arm's whole range of states, every
-        /// friction option, saturated or not. Away from the singularity test's
-        /// threshold only, where `sinf` and `sin_cos_f32` may round to different sides.
+        /// The law as the firmware computes it (the sines and cosines of
+        /// `theta1 - theta2` from the angles' own, `J^-1` with one reciprocal) is as
+        /// accurate as the term-by-term law (a third `sin_cos`, nalgebra's inverse):
+        /// against the same law in `f64` (`f64` sines and cosines of the same `f32`
+        /// inputs), over the arm's whole range of states, every fixed friction term,
+        /// saturated or not, each torque within twice the term-by-term law's error
+        /// plus a floor of 2e-6 of the terms' magnitude (`sum |M_ij x_j| + |w + c|
+        /// + |J^T f|`: a few `f32` roundings, 1.2e-7 each), and the signals the
+        /// same but for those roundings. Away from the singularity test's threshold,
+        /// where the two may decide differently.
         #[test]
-        fn shared_trigonometry_gives_the_same_bits(
+        fn the_law_is_as_accurate_as_the_term_by_term_law(
             q0 in -7.0f32..7.0, q1 in -7.0f32..7.0, qd0 in -30.0f32..30.0, qd1 in -30.0f32..30.0,
             ref_pos in -0.3f32..0.3, ref_vel in -1.0f32..1.0, ref_acc in -20.0f32..20.0,
             f_t in -25.0f32..25.0, f_n in -25.0f32..25.0, v_belt in -2.0f32..2.0, integral in -0.1f32..0.1,
@@ -397,11 +481,54 @@ mod tests {
             let reference = RefPoint { pos: ref_pos, vel: ref_vel, acc: ref_acc, moving: true };
             let input = HybridInput { q: Vector2::new(q0, q1), qd: Vector2::new(qd0, qd1), f_t, f_n, v_belt };
             let (mut a, mut b) = (HybridState { force_integral: integral, ..HybridState::default() }, HybridState { force_integral: integral, ..HybridState::default() });
-            let new = hybrid(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut a, 1e-3, saturated).unwrap();
-            let old = hybrid_unshared(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut b, 1e-3, saturated).unwrap();
-            let bits = |(m, s): ([f32; 2], HybridSignals)| [m[0], m[1], s.a_v, s.a_f, s.f_t_hat, s.u_gen[0], s.u_gen[1]].map(f32::to_bits);
-            prop_assert_eq!(bits(new), bits(old));
+            let (new, sn) = hybrid(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut a, 1e-3, saturated).unwrap();
+            let (old, so) = hybrid_unshared(&arm, &cfg.hybrid, comp, &reference, cfg.f_n_ref, &input, &mut b, 1e-3, saturated).unwrap();
             prop_assert_eq!(a.force_integral.to_bits(), b.force_integral.to_bits());
+            // The same law in f64 with the f32 law's a_v, a_f and friction term (their
+            // own roundings are compared below).
+            let arm64 = Arm::new(cfg.params.cast::<f64>());
+            let (q, qd) = (Vector2::new(q0 as f64, q1 as f64), Vector2::new(qd0 as f64, qd1 as f64));
+            let jac = jacobian(arm64.params.l, &q);
+            let x = jac.try_inverse().unwrap() * (Vector2::new(sn.a_v as f64, 0.0) - jdot_qdot(arm64.params.l, &q, &qd));
+            let m = arm64.mass_matrix(&q);
+            let wc = arm64.w(&q, &qd) + arm64.c(&q, &qd);
+            let jf = jac.transpose() * Vector2::new(-sn.f_t_hat as f64, -sn.a_f as f64);
+            let exact = wc + m * x + jf;
+            for i in 0..2 {
+                let scale = (m[(i, 0)] * x[0]).abs() + (m[(i, 1)] * x[1]).abs() + wc[i].abs() + jf[i].abs();
+                let (err_new, err_old) = ((sn.u_gen[i] as f64 - exact[i]).abs(), (so.u_gen[i] as f64 - exact[i]).abs());
+                prop_assert!(err_new <= 2.0 * err_old + 2e-6 * scale, "u_gen[{}]: error {:e} against {:e} (scale {:e})", i, err_new, err_old, scale);
+            }
+            prop_assert_eq!(new.map(f32::to_bits), [sn.u_gen[0] + sn.u_gen[1], sn.u_gen[1]].map(f32::to_bits), "motor torques from u_gen");
+            prop_assert_eq!(old.map(f32::to_bits), [so.u_gen[0] + so.u_gen[1], so.u_gen[1]].map(f32::to_bits));
+            prop_assert_eq!([sn.a_v, sn.a_f].map(f32::to_bits), [so.a_v, so.a_f].map(f32::to_bits), "a_v and a_f: the same kinematics");
+            prop_assert!((sn.f_t_hat - so.f_t_hat).abs() <= 1e-6 * so.f_t_hat.abs(), "f_t_hat {} against {}", sn.f_t_hat, so.f_t_hat);
+        }
+
+        /// The PID's inverse kinematics (the half angle by `atan2`) against the
+        /// shared one (by `acos`, f64 and f32) over random targets within the reach,
+        /// both branches: the angles within 2e-6 rad of the f64 solution (`acos` and
+        /// `atan2` are each within an ulp or two, 2.4e-7 rad at pi/2; the angles are
+        /// sums of two of them; near the straight arm `1 - c` is exact and the
+        /// square root's relative error is halved), the sines and cosines within
+        /// 1e-6 of those of the f64 angles. Beyond the reach (and at the base, and
+        /// for a non-finite target) both refuse.
+        #[test]
+        fn reference_joints_agree_with_the_shared_inverse_kinematics(
+            radius in 0.001f64..1.0, angle in -3.1f64..3.1, down in proptest::bool::ANY,
+        ) {
+            let l = 0.21f32;
+            let branch = if down { ElbowBranch::Down } else { ElbowBranch::Up };
+            let (z_t, z_n) = ((radius * 2.0 * l as f64 * angle.sin()) as f32, (-radius * 2.0 * l as f64 * angle.cos()) as f32);
+            let (q, t) = reference_joints(l, z_t, z_n, branch).unwrap();
+            let exact = inverse_kinematics(l as f64, &Vector2::new(z_t as f64, z_n as f64), branch).unwrap();
+            for i in 0..2 {
+                prop_assert!((q[i] as f64 - exact[i]).abs() <= 2e-6, "q[{}] = {} against {}", i, q[i], exact[i]);
+            }
+            let te = JointTrig::new(&exact);
+            for (a, b) in [(t.s1, te.s1), (t.c1, te.c1), (t.s2, te.s2), (t.c2, te.c2)] {
+                prop_assert!((a as f64 - b).abs() <= 1e-6, "{} against {}", a, b);
+            }
         }
 
         /// Paper eqs. 9 to 11: with exact model values and exact forces, in sliding,
@@ -446,5 +573,19 @@ mod tests {
             prop_assert!((f[1] - sig.a_f as f64).abs() < 1e-3 * sig.a_f.abs().max(1.0) as f64, "f_n {} vs a_f {}", f[1], sig.a_f);
             prop_assert!((z_ddot[0] - sig.a_v as f64).abs() < 2e-3 * (sig.a_v.abs() as f64 + 10.0), "z_t_ddot {} vs a_v {}", z_ddot[0], sig.a_v);
         }
+    }
+
+    /// Targets the arm cannot take are refused as unreachable, as the shared
+    /// inverse kinematics refuses them (beyond the reach, at the base, non-finite).
+    #[test]
+    fn reference_joints_refuse_what_the_arm_cannot_reach() {
+        let l = 0.21f32;
+        for (z_t, z_n) in [(0.0, -0.43), (0.3, -0.3), (0.0, 0.0), (f32::NAN, -0.2), (0.1, f32::INFINITY)] {
+            assert_eq!(reference_joints(l, z_t, z_n, ElbowBranch::Up), Err(LawError::Unreachable), "({z_t}, {z_n})");
+            assert!(inverse_kinematics(l, &Vector2::new(z_t, z_n), ElbowBranch::Up).is_err());
+        }
+        // At the reach exactly: the straight arm, both angles psi.
+        let (q, _) = reference_joints(l, 0.0, -0.42, ElbowBranch::Down).unwrap();
+        assert!(q[0].abs() < 1e-6 && q[1].abs() < 1e-6, "{q:?}");
     }
 }

@@ -286,17 +286,32 @@ pub fn decode_torque(code: i16) -> f32 {
     code as f32 * (TORQUE_FULL_SCALE_NM / 2048.0)
 }
 
-/// Encodes a torque (N m) as a 12-bit code, saturating; returns the code and whether it saturated.
+/// Codes per N m of the torque codes: `2048 / TORQUE_FULL_SCALE_NM`, rounded to `f32`.
+const TORQUE_CODES_PER_NM: f32 = 2048.0 / TORQUE_FULL_SCALE_NM;
+
+/// Encodes a torque (N m) as a 12-bit code, saturating; returns the code and whether
+/// it saturated (a non-finite torque: code 0, saturated).
+///
+/// The code is `round(torque * 2048 / TORQUE_FULL_SCALE_NM)` (halfway away from
+/// zero) within `[TORQUE_CODE_MIN, TORQUE_CODE_MAX]`: the scale is one product by
+/// [`TORQUE_CODES_PER_NM`] (a division is 14 cycles on the M4F, and the firmware
+/// encodes two torques a step), within one rounding of the quotient
+/// `torque / TORQUE_FULL_SCALE_NM * 2048` (test below), so a code can differ from
+/// the quotient's only for a torque within 2^-23 of a code's half.
+/// It saturates when the rounded code leaves the range, that is from `x >= 2047.5`
+/// or `x <= -2048.5` (compared on `x`, before rounding).
 pub fn encode_torque(torque: f32) -> (i16, bool) {
-    let x = torque / TORQUE_FULL_SCALE_NM * 2048.0;
+    let x = torque * TORQUE_CODES_PER_NM;
     if !x.is_finite() {
-        return (0, true);
+        (0, true)
+    } else if x >= TORQUE_CODE_MAX as f32 + 0.5 {
+        (TORQUE_CODE_MAX, true)
+    } else if x <= TORQUE_CODE_MIN as f32 - 0.5 {
+        (TORQUE_CODE_MIN, true)
+    } else {
+        // Within the range: through i32 (one VCVT) rather than `as i16`'s saturating compares.
+        (round_half_away(x) as i32 as i16, false)
     }
-    // Beyond twice the code range the result (a saturated code) is the same.
-    let code = round_half_away(x.clamp(-4096.0, 4096.0));
-    let clamped = code.clamp(TORQUE_CODE_MIN as f32, TORQUE_CODE_MAX as f32);
-    // In range already: through i32 (one VCVT) rather than `as i16`'s saturating compares.
-    (clamped as i32 as i16, clamped != code)
 }
 
 /// `x` rounded to the nearest integer, halfway cases away from zero (`roundf`),
@@ -364,6 +379,62 @@ mod tests {
             let d = (back - a).rem_euclid(core::f64::consts::TAU);
             let d = d.min(core::f64::consts::TAU - d);
             assert!(d <= 0.5 * lsb + 1e-12);
+        }
+    }
+
+    /// The encoding as it was (the quotient `torque / 5 * 2048`, clamped, rounded,
+    /// clamped again): the reference of the product form.
+    fn encode_torque_by_quotient(torque: f32) -> (i16, bool) {
+        let x = torque / TORQUE_FULL_SCALE_NM * 2048.0;
+        if !x.is_finite() {
+            return (0, true);
+        }
+        let code = libm::roundf(x.clamp(-4096.0, 4096.0));
+        let clamped = code.clamp(TORQUE_CODE_MIN as f32, TORQUE_CODE_MAX as f32);
+        (clamped as i32 as i16, clamped != code)
+    }
+
+    /// The product by `2048 / 5` is within one rounding of the quotient: each is
+    /// the exact `2048 t / 5` rounded once, but for the constant's own rounding
+    /// (relative 2^-24 at most), so the two differ by at most one ulp of `x`. The
+    /// codes are then the quotient's, saturation included, except for an `x` within
+    /// an ulp of a code's half; and every torque of the range (a dense sweep through
+    /// the f32 bits from 1e-30 to 2.5 times the full scale, both signs) agrees so.
+    #[test]
+    fn torque_codes_from_the_product_are_the_quotients() {
+        // From 1e-30 N m: below, the quotient's `t / 5` is subnormal (fewer bits); every code there is 0.
+        let mut bits: u32 = 1e-30f32.to_bits();
+        let mut differ = 0usize;
+        let end = (2.5 * TORQUE_FULL_SCALE_NM).to_bits();
+        while bits <= end {
+            for t in [f32::from_bits(bits), -f32::from_bits(bits)] {
+                let (xp, xq) = (t * TORQUE_CODES_PER_NM, t / TORQUE_FULL_SCALE_NM * 2048.0);
+                let ulp = f32::from_bits(xq.abs().to_bits() + 1) - xq.abs();
+                assert!((xp - xq).abs() <= ulp, "t = {t:e}: {xp:e} against {xq:e}");
+                let (new, old) = (encode_torque(t), encode_torque_by_quotient(t));
+                if new != old {
+                    // Only across a code's half: the quotient within one ulp of k + 1/2.
+                    let half = xq.abs() - xq.abs().floor();
+                    assert!((half - 0.5).abs() <= ulp, "t = {t:e}: {new:?} against {old:?}");
+                    differ += 1;
+                }
+            }
+            bits += 101;
+        }
+        assert!(differ < 20, "{differ} codes differ");
+        // The saturation's edges exactly: the largest torques whose `x` is below the
+        // code range's halves keep their codes, the next ones saturate.
+        let next = |t: f32| f32::from_bits(t.to_bits() + 1);
+        for (half, code) in [(2047.5f32, TORQUE_CODE_MAX), (-2048.5, TORQUE_CODE_MIN)] {
+            let mut t = half / TORQUE_CODES_PER_NM;
+            while (t * TORQUE_CODES_PER_NM).abs() >= half.abs() {
+                t = f32::from_bits(t.to_bits() - 1);
+            }
+            assert_eq!(encode_torque(t), (code, false), "below {half}");
+            assert_eq!(encode_torque(next(t)), (code, true), "at {half}");
+        }
+        for t in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 0.0, -0.0, 1e30, -1e30] {
+            assert_eq!(encode_torque(t), encode_torque_by_quotient(t), "t = {t}");
         }
     }
 
