@@ -6,6 +6,7 @@ use shared::{
     Arm, ElbowBranch, Real,
     kinematics::{JointTrig, jacobian_trig, jdot_qdot_trig, tip_position_trig},
     model::ArmTerms,
+    trig,
 };
 
 use crate::{
@@ -113,8 +114,9 @@ pub fn pid(
 /// as `atan2(sin(delta/2), cos(delta/2))` where that function takes
 /// `acos(cos(delta/2))`: the same angle (`delta/2` is in `[0, pi/2]`), and the
 /// sine is needed for the sines and cosines anyway. On the MCU `libm::acosf`
-/// takes `libm::sqrtf` in software and two divisions; `atan2f` one division, and
-/// the square root is one `VSQRT` (`shared::sqrt`). `1 / |z|` is taken once.
+/// takes `libm::sqrtf` in software and two divisions; here the square root is one
+/// `VSQRT` (`shared::sqrt`) and both angles are [`trig::atan2_f32`] (one division
+/// each, within 3 ulp; `libm::atan2f` takes two and a call). `1 / |z|` is taken once.
 /// Within a few roundings of that function's angles and sines and cosines (test
 /// below).
 ///
@@ -135,14 +137,14 @@ pub fn reference_joints(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Resu
     let c = r / reach;
     let c_half = if c < 1.0 { c } else { 1.0 };
     let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
-    let half = s_abs.arc_tan2(c_half);
+    let half = trig::atan2_f32(s_abs, c_half);
     // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
     let sign = match branch {
         ElbowBranch::Up => 1.0,
         ElbowBranch::Down => -1.0,
     };
     let half_delta = sign * (half + half) * 0.5;
-    let psi = z_t.arc_tan2(-z_n);
+    let psi = trig::atan2_f32(z_t, -z_n);
     let q = Vector2::new(psi - half_delta, psi + half_delta);
     let inv_r = 1.0 / r;
     let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
