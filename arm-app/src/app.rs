@@ -17,7 +17,8 @@
 //!    is not the safe state; the duties follow the torque codes
 //!    (`drivers::motor::duty_for`; disabled drivers get zero duty);
 //! 6. the watchdog is fed, and the step's ticks are recorded; every
-//!    `step_stats::WINDOW` periods a [`Notice::Window`] carries the window's report.
+//!    `step_stats::WINDOW` periods the window closes, and between two ticks
+//!    ([`ArmApp::idle`]) its report is made and returned for a [`Notice::Window`].
 //!
 //! A reset (or a watchdog reset) comes up with the drivers disabled until the
 //! enable button resets the firmware.
@@ -46,7 +47,7 @@ use crate::{
     joint::{EncoderFault, Joint},
     notice::Notice,
     record::{self, RecordFault, Settings, Stored},
-    step_stats::StepStats,
+    step_stats::{StepStats, WindowSummary},
     telemetry::ArmTelemetry,
 };
 
@@ -140,7 +141,14 @@ pub enum StartError {
 /// The arm application: the firmware and the board it runs on.
 pub struct ArmApp<H: ArmIo> {
     pub(crate) hw: Hardware<H>,
-    pub(crate) firmware: Option<Firmware>,
+    /// The firmware in force is `slots[active]`. The other slot holds, once
+    /// [`ArmApp::prepare_reset`] made it between two ticks, a fresh firmware
+    /// of the same configuration: the enable button's reset then takes it
+    /// (`active` flips) instead of `Firmware::reset` rebuilding and copying
+    /// the whole state in the control interrupt (issue 56: 2 300 of the
+    /// press's period's 7 850 cycles on the `arm` image).
+    slots: [Option<Firmware>; 2],
+    active: usize,
     clock: H::Clock,
 }
 
@@ -221,6 +229,7 @@ impl<H: ArmIo> ArmApp<H> {
             torque_limit: if directions_checked { CODES_FULL_SCALE } else { REDUCED_TORQUE_CODES },
             directions_checked: [directions_checked; 2],
             last_report: None,
+            closing: None,
             jog: None,
             last_jog: None,
             button_low: 0,
@@ -240,13 +249,59 @@ impl<H: ArmIo> ArmApp<H> {
             safe_logged: false,
             last_command: None,
         };
-        Ok(Self { hw, firmware: Some(firmware), clock })
+        Ok(Self { hw, slots: [Some(firmware), None], active: 0, clock })
+    }
+
+    /// Puts `fw` in force (a configuration taken): the fresh spare of the
+    /// last one, if any, is dropped.
+    pub(crate) fn set_firmware(&mut self, fw: Firmware) {
+        self.active &= 1;
+        self.slots[self.active] = Some(fw);
+        self.slots[self.active ^ 1] = None;
+    }
+
+    /// Makes the fresh firmware the next reset takes, if there is none yet:
+    /// `Firmware::new` of the configuration in force, the state
+    /// `Firmware::reset` would make (which it is: `Firmware::reset` is
+    /// `Firmware::new` of its own configuration, tested). Between two ticks (the
+    /// `arm` image's idle loop; the board twin after each tick): its cost
+    /// (about 3 000 cycles on the image) leaves the control interrupt, whose
+    /// reset is then a flip of two slots. Without it the reset rebuilds in
+    /// place, to the same state.
+    pub fn prepare_reset(&mut self) {
+        self.active &= 1;
+        let spare = self.active ^ 1;
+        if self.slots[spare].is_none()
+            && let Some(fw) = &self.slots[self.active]
+        {
+            self.slots[spare] = Firmware::new(*fw.config()).ok();
+        }
+    }
+
+    /// What a board does between two ticks (the `arm` image's idle loop, the
+    /// board twin after each tick), the control interrupt's work that can
+    /// wait: the window closed at the last tick finished (the step's median
+    /// and worst from its histogram, `step_stats`), its report returned for
+    /// the log ([`Notice::Window`]) and kept for `Request::Telemetry`; and the
+    /// next reset's fresh firmware made ([`ArmApp::prepare_reset`]).
+    pub fn idle(&mut self) -> Option<ArmTelemetry> {
+        self.prepare_reset();
+        let hw = &mut self.hw;
+        let mut report = hw.closing.take()?;
+        report.step = hw.stats.finish()?;
+        hw.last_report = Some(report);
+        Some(report)
+    }
+
+    /// Whether the next reset's fresh firmware is made ([`ArmApp::prepare_reset`]).
+    pub fn reset_prepared(&self) -> bool {
+        self.slots[(self.active & 1) ^ 1].is_some()
     }
 
     /// One control period (the tick's interrupt): see the module's documentation.
     /// `log` receives what the operator should know.
     pub fn tick(&mut self, log: &mut impl FnMut(Notice)) {
-        let Self { hw, firmware, clock } = self;
+        let Self { hw, slots, active, clock } = self;
         let interval = clock.ticks().wrapping_sub(hw.tick_mark);
         hw.tick_mark = clock.mark();
         if hw.seq > 0 {
@@ -268,11 +323,20 @@ impl<H: ArmIo> ArmApp<H> {
             // `BadFrames` at the same period (or the consistency check, on held
             // encoders, `SensorFault`): latched first, before the step.
             if board.hw.acquisition_faults >= board.hw.config.bad_frame_limit
-                && let Some(fw) = firmware.as_mut()
+                && let Some(fw) = slots[*active & 1].as_mut()
             {
                 fw.enter_safe_state(SafeReason::Acquisition);
             }
-            let _ = board::handle(firmware, event, &mut board, clock);
+            // The reset with its fresh firmware made: the slots flip, and the
+            // event goes through `board::handle` with no firmware (which
+            // resets none and answers `Outcome::Reset`, as it would with one).
+            let old = *active & 1;
+            let prepared = matches!(event, Event::Reset) && slots[old ^ 1].is_some();
+            if prepared {
+                slots[old] = None;
+                *active = old ^ 1;
+            }
+            let _ = board::handle(&mut slots[old], event, &mut board, clock);
             if matches!(event, Event::Frame(_)) {
                 break;
             }
@@ -304,7 +368,7 @@ impl<H: ArmIo> ArmApp<H> {
 
     /// The firmware (its counters, its estimate).
     pub fn firmware(&self) -> Option<&Firmware> {
-        self.firmware.as_ref()
+        self.slots[self.active & 1].as_ref()
     }
 }
 
@@ -371,22 +435,22 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
                 let limit = hw.torque_limit;
                 let _ = hw.motors.apply([c.u1_code, c.u2_code].map(|u| u.clamp(-limit, limit)));
                 hw.watchdog.feed();
-                if let Some(step) = hw.stats.record(c.step_ticks) {
-                    let report = ArmTelemetry {
+                if hw.stats.record(c.step_ticks) {
+                    // The step's summary is made between two ticks
+                    // (`ArmApp::idle`), which reports the window.
+                    hw.closing = Some(ArmTelemetry {
                         seq: c.seq,
                         status: c.status,
                         overruns: fw.map_or(0, Firmware::overruns),
                         drivers_enabled: hw.motors.is_enabled(),
                         clock: self.clock.kind(),
-                        step,
+                        step: WindowSummary::default(),
                         tick_interval: hw.interval,
                         handler_worst: hw.handler_worst,
                         // Filled in by the board's idle loop: scanning the stack
                         // takes too long in the tick.
                         stack_high_water_bytes: 0,
-                    };
-                    hw.last_report = Some(report);
-                    (self.log)(Notice::Window(report));
+                    });
                     hw.interval = [u32::MAX, 0];
                     hw.handler_worst = 0;
                 }
@@ -399,5 +463,36 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
             _ => {}
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shared::wire::SensorFrame;
+
+    #[test]
+    fn a_prepared_fresh_firmware_is_the_state_the_reset_makes() {
+        // `ArmApp::prepare_reset`'s claim: `Firmware::new` of the configuration
+        // in force is what `Firmware::reset` makes of a firmware that has run
+        // (stepped, latched a safe state), field for field (their Debug).
+        for config in [Config::default(), Config { period: shared::time::Period::from_us(100).unwrap(), ..Config::default() }] {
+            let mut fw = Firmware::new(config).unwrap();
+            for seq in 0..50u32 {
+                let frame = SensorFrame {
+                    t_us: u64::from(seq) * config.period.as_us(),
+                    seq,
+                    theta1_count: 15_860 + (seq as u16 % 7),
+                    elbow_count: 15_290,
+                    ..SensorFrame::default()
+                };
+                let _ = fw.step(Instant(frame.t_us), &frame, &firmware::board::FrozenClock);
+            }
+            fw.enter_safe_state(SafeReason::PeerLost);
+            let fresh = format!("{:?}", Firmware::new(*fw.config()).unwrap());
+            assert_ne!(format!("{fw:?}"), fresh, "the run changed the state");
+            fw.reset();
+            assert_eq!(format!("{fw:?}"), fresh);
+        }
     }
 }

@@ -67,6 +67,9 @@ pub(crate) struct Hardware<H: ArmIo> {
     pub(crate) settings: Settings,
     /// The last window's telemetry.
     pub(crate) last_report: Option<ArmTelemetry>,
+    /// The window closed at the last tick, its step's summary to come
+    /// (`ArmApp::idle`).
+    pub(crate) closing: Option<ArmTelemetry>,
     /// This period's raw readings.
     pub(crate) raw: RawReadings,
     /// The torque limit on the codes written to the drivers (2048: none).

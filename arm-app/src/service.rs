@@ -87,7 +87,7 @@ impl<H: ArmIo> ArmApp<H> {
                     return Reply::Refused(Refusal::OutOfRange);
                 };
                 if stored.config != self.hw.config {
-                    self.firmware = Some(fw);
+                    self.set_firmware(fw);
                     self.hw.config = stored.config;
                     self.hw.settings = Settings::Unsaved;
                 }
@@ -106,7 +106,7 @@ impl<H: ArmIo> ArmApp<H> {
                         let Reply::Calibration(_) = put_calibration(&mut self.hw, cal, false, config.period) else {
                             return Reply::Refused(Refusal::OutOfRange);
                         };
-                        self.firmware = Some(fw);
+                        self.set_firmware(fw);
                         if config != self.hw.config {
                             self.hw.settings = Settings::Unsaved;
                         }

@@ -164,6 +164,11 @@ impl BoardTwin {
         self.physics.sense(arm, faults, noisy);
         let notices = &mut self.notices;
         self.app.tick(&mut |n| notices.push(n));
+        // Between two ticks, as the image's idle loop: the window's report,
+        // the next reset's fresh firmware (`ArmApp::idle`).
+        if let Some(report) = self.app.idle() {
+            self.notices.push(Notice::Window(report));
+        }
         self.ticks += 1;
         self.physics.torques(self.physics.board().pwm_max_duty)
     }

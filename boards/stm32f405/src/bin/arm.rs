@@ -87,7 +87,16 @@ mod image {
         type Flash = SettingsFlash;
     }
 
-    static ARM: Mutex<RefCell<Option<ArmApp<Stm32f405>>>> = Mutex::new(RefCell::new(None));
+    /// The application, once made (`main`; `APP` holds it). A reference, not
+    /// the application itself: `None` is then all zeros and the static takes
+    /// no flash (in `.data`, the application's `None`, a tag inside a 2.7 KiB
+    /// structure, took its size of flash for its initial value; issue 56).
+    static ARM: Mutex<RefCell<Option<&'static mut ArmApp<Stm32f405>>>> = Mutex::new(RefCell::new(None));
+    /// Where the application lives: written once by `main`, before `ARM` refers
+    /// to it and any interrupt is enabled (cortex-m-rt's `.uninit`: neither
+    /// copied from flash nor zeroed).
+    #[unsafe(link_section = ".uninit.APP")]
+    static mut APP: core::mem::MaybeUninit<ArmApp<Stm32f405>> = core::mem::MaybeUninit::uninit();
     /// Bytes received on USART1, filled by its interrupt, emptied by the idle loop.
     static RX: Mutex<RefCell<Deque<u8, RX_BYTES>>> = Mutex::new(RefCell::new(Deque::new()));
     /// Room for two whole requests.
@@ -111,10 +120,11 @@ mod image {
     /// The control interrupt's access to `ARM` without masking the interrupts
     /// above it. Sound by priority, as a ceiling: `ARM` is borrowed by the
     /// control interrupt and by thread mode, there only inside
-    /// `cortex_m::interrupt::free` (PRIMASK set: the control interrupt cannot
-    /// run then); no interrupt above the control's touches it (USART1 fills
-    /// `RX`, TIM2 and DMA2 the acquisition's own state), and the control
-    /// interrupt never preempts itself. The RefCell's flag still checks it.
+    /// `cortex_m::interrupt::free` (PRIMASK set) or [`below_control`] (BASEPRI
+    /// at `CONTROL_PRIORITY`), where the control interrupt cannot run; no
+    /// interrupt above the control's touches it (USART1 fills `RX`, TIM2 and
+    /// DMA2 the acquisition's own state), and the control interrupt never
+    /// preempts itself. The RefCell's flag still checks it.
     ///
     /// # Safety
     /// From the control interrupt only.
@@ -190,7 +200,7 @@ mod image {
                 flags & frame_flags::DRIVER_FAULT != 0
             ),
             Notice::SafeState { seq, reason } => defmt::error!(
-                "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault): drivers disabled; press the enable button to reset",
+                "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault, 8 runaway, 9 overload, 10 miswired, 11 tracking, 12 lift-off, 13 acquisition; firmware::SafeReason): drivers disabled; press the enable button to reset",
                 seq,
                 reason
             ),
@@ -268,6 +278,24 @@ mod image {
                 unsafe { core::ptr::write_volatile(&raw mut PAINLEVE_MONITOR, m) };
             }
         }
+    }
+
+    /// Runs `f` on the application from thread mode with the control interrupt
+    /// masked (BASEPRI at `CONTROL_PRIORITY`, RM0090 / ARMv7-M B1.5.7) and the
+    /// interrupts above it not: the long work of the idle loop (the next
+    /// reset's fresh firmware, about 3 000 cycles) delays neither USART1's
+    /// bytes nor the acquisition's frames. `None` before the application.
+    fn below_control<R>(f: impl FnOnce(&mut ArmApp<Stm32f405>) -> R) -> Option<R> {
+        let old = cortex_m::register::basepri::read();
+        // Raising BASEPRI only masks more (BASEPRI_MAX never lowers it).
+        cortex_m::register::basepri_max::write(CONTROL_PRIORITY);
+        // SAFETY: the control interrupt is masked now, and nothing above it
+        // touches ARM (`control_section`'s argument).
+        let cs = unsafe { cortex_m::interrupt::CriticalSection::new() };
+        let r = ARM.borrow(&cs).borrow_mut().as_deref_mut().map(f);
+        // SAFETY: back to what it was (thread mode runs at BASEPRI 0).
+        unsafe { cortex_m::register::basepri::write(old) };
+        r
     }
 
     /// The monitor block (`arm_app::monitor`): the last tick's command and
@@ -440,6 +468,9 @@ mod image {
         };
         let period_us = period.as_us();
         log_time::set_period_us(period_us as u32);
+        // SAFETY: once, here, before any interrupt is enabled: nothing else
+        // refers to APP (ARM is None until this line's end).
+        let app = unsafe { (*(&raw mut APP)).write(app) };
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(app)));
         defmt::info!(
             "arm image up: {=u64} us control period (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
@@ -471,6 +502,11 @@ mod image {
         loop {
             cortex_m::asm::wfi();
             log_notices();
+            // The control interrupt's work that can wait (issue 56): the
+            // window's summary, the next reset's fresh firmware.
+            if let Some(Some(report)) = below_control(ArmApp::idle) {
+                log(Notice::Window(report));
+            }
             serve_requests(&mut frames, timer_hz);
             // The periods run so far and whether the drivers are on, from the application itself.
             let (periods, drivers) =

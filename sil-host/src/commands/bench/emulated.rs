@@ -91,11 +91,12 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
         }
         let Some(t) = link.timing() else { continue };
         lines.push(format!(
-            "{name}: instructions median {} worst {}; cycles median {} worst {} (zero wait states: median {} worst {}); latency {}..{} cycles; jitter {:+}..{:+} cycles; stack {} B",
+            "{name}: instructions median {} worst {}; cycles median {} worst {} (after period 0: {}; zero wait states: median {} worst {}); latency {}..{} cycles; jitter {:+}..{:+} cycles; stack {} B",
             t.instructions[0],
             t.instructions[1],
             t.flash_cycles[0],
             t.flash_cycles[1],
+            t.steady_flash_cycles,
             t.cycles[0],
             t.cycles[1],
             t.latency_cycles[0],
