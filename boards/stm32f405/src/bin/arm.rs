@@ -470,7 +470,8 @@ mod image {
         log_time::set_period_us(period_us as u32);
         // SAFETY: once, here, before any interrupt is enabled: nothing else
         // refers to APP (ARM is None until this line's end).
-        let app = unsafe { (*(&raw mut APP)).write(app) };
+        let slot = &raw mut APP;
+        let app = unsafe { (*slot).write(app) };
         cortex_m::interrupt::free(|cs| ARM.borrow(cs).replace(Some(app)));
         defmt::info!(
             "arm image up: {=u64} us control period (TIM2 psc {=u16} arr {=u16} from {=u32} Hz), step clock {=str}, drivers disabled until the enable button",
