@@ -213,3 +213,57 @@ fn any_state_size() {
     assert_eq!(solved.t, end);
     assert!((solved.y[0] - 1.0).abs() < 1e-8 && solved.y[1].abs() < 1e-8, "{:?}", solved.y);
 }
+
+/// Quadratures outside [`OdeSystem::READ_LEN`] are summed in the solution and the
+/// dense output alone: a damped oscillator with its damping's work and the time
+/// integral of `x^2` as quadratures gives the same bits, step for step and in the
+/// dense output, as when every stage forms them, and the work closes the energy
+/// balance `E(t) - E(0) = W` to the tolerance.
+#[test]
+fn quadratures_outside_the_read_components() {
+    /// `x'' = -x - 0.1 x'`, then `W' = -0.1 x'^2` and `Q' = x^2`.
+    fn field(y: &State<4>) -> State<4> {
+        [y[1], -y[0] - 0.1 * y[1], -0.1 * y[1] * y[1], y[0] * y[0]]
+    }
+    struct Every;
+    impl OdeSystem<4> for Every {
+        const NORM_LEN: usize = 2;
+        fn rhs(&self, _t: f64, y: &State<4>, dy: &mut State<4>) {
+            *dy = field(y);
+        }
+    }
+    struct Read;
+    impl OdeSystem<4> for Read {
+        const NORM_LEN: usize = 2;
+        const READ_LEN: usize = 2;
+        fn rhs(&self, _t: f64, y: &State<4>, dy: &mut State<4>) {
+            *dy = field(y);
+        }
+    }
+    fn run<S: OdeSystem<4>>(sys: &S) -> (Vec<(f64, State<4>, State<4>)>, State<4>) {
+        let mut steps = Vec::new();
+        let solved = Dop853::new(1e-10, 1e-12)
+            .solve(sys, 0.0, &[1.0, 0.0, 0.0, 0.0], None, 30.0, 0.0, |step| {
+                let mid = 0.5 * (step.t_prev() + step.t_curr());
+                steps.push((step.t_curr(), *step.y_curr(), step.interpolate(mid)));
+                Control::Continue
+            })
+            .unwrap();
+        (steps, solved.y)
+    }
+    let (every, y_every) = run(&Every);
+    let (read, y_read) = run(&Read);
+    assert!(every.len() > 50, "{} steps", every.len());
+    assert_eq!(every.len(), read.len());
+    let bits = |y: &State<4>| y.map(f64::to_bits);
+    for ((t, y, m), (t2, y2, m2)) in every.iter().zip(&read) {
+        assert_eq!(t.to_bits(), t2.to_bits());
+        assert_eq!(bits(y), bits(y2), "at t = {t}");
+        assert_eq!(bits(m), bits(m2), "dense output before t = {t}");
+    }
+    assert_eq!(bits(&y_every), bits(&y_read));
+    let energy = |y: &State<4>| 0.5 * (y[0] * y[0] + y[1] * y[1]);
+    let residual = energy(&y_read) - energy(&[1.0, 0.0, 0.0, 0.0]) - y_read[2];
+    assert!(residual.abs() < 1e-9, "balance misses by {residual:e} J");
+    assert!(y_read[2] < -0.4 && y_read[3] > 1.0, "{y_read:?}");
+}

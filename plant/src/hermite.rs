@@ -28,7 +28,8 @@ use crate::{
 /// interpolant of each angle, every other component from the cubic Hermite
 /// interpolant of its values and derivatives (module docs). Units as the state's
 /// (rad, rad/s, the controller's states, J). A step of zero length gives its start.
-pub fn sample(step: &dyn DenseStep<STATE_LEN>, t: f64) -> OdeState {
+#[inline]
+pub fn sample<S: DenseStep<STATE_LEN> + ?Sized>(step: &S, t: f64) -> OdeState {
     let (t0, t1) = (step.t_prev(), step.t_curr());
     let (y0, y1, f0, f1) = (step.y_prev(), step.y_curr(), step.f_prev(), step.f_curr());
     let h = t1 - t0;

@@ -226,12 +226,31 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     /// ([`crate::ledger::step_tolerance`] at `y1`).
     #[inline]
     pub fn balance(&self, y0: &OdeState, e0: f64, y1: &OdeState, e1: f64) -> (f64, f64) {
+        let (q, _) = split(y1);
+        self.balance_with(&self.trig.get(&q), y0, e0, y1, e1)
+    }
+
+    /// The energy at `y1` (J, [`Segment::energy`]) and the balance of the stretch
+    /// from `y0` (energy `e0`) to it ([`Segment::balance`]): `(e1, residual,
+    /// tolerance)`, the same values from one look-up of `y1`'s sines and cosines
+    /// (a step's check, issue 56).
+    #[inline]
+    pub fn energy_and_balance(&self, y0: &OdeState, e0: f64, y1: &OdeState) -> (f64, f64, f64) {
+        let (q, _) = split(y1);
+        let tr = self.trig.get(&q);
+        let e1 = crate::ledger::energy(self.arm, &tr, y1);
+        let (residual, tol) = self.balance_with(&tr, y0, e0, y1, e1);
+        (e1, residual, tol)
+    }
+
+    /// [`Segment::balance`] with `tr`, the sines and cosines of `y1`'s angles.
+    #[inline(always)]
+    fn balance_with(&self, tr: &shared::kinematics::JointTrig<f64>, y0: &OdeState, e0: f64, y1: &OdeState, e1: f64) -> (f64, f64) {
         use crate::ledger::{BELT, DAMPING, MOTORS, SLIP};
         let works = [MOTORS, DAMPING, BELT, SLIP].map(|i| y1[i] - y0[i]);
         let residual = (e1 - e0) - (works[0] + works[1] + works[2] + works[3]);
         let size = [MOTORS, DAMPING, BELT, SLIP].iter().map(|&i| y1[i].abs() + y0[i].abs()).sum::<f64>();
-        let (q, _) = split(y1);
-        let tol = crate::ledger::step_tolerance(self.arm, &self.trig.get(&q), y1, self.rtol, self.atol, size + e0.abs() + e1.abs());
+        let tol = crate::ledger::step_tolerance(self.arm, tr, y1, self.rtol, self.atol, size + e0.abs() + e1.abs());
         (residual, tol)
     }
 
@@ -356,6 +375,8 @@ pub fn nearest(components: [(Boundary, f64); 4]) -> (Boundary, f64) {
 
 impl<C: Controller + ?Sized> OdeSystem<STATE_LEN> for Segment<'_, C> {
     const NORM_LEN: usize = NORM_LEN;
+    /// The ledger's works are quadratures: [`Segment::point`] never reads them.
+    const READ_LEN: usize = NORM_LEN;
 
     #[inline]
     fn rhs(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {

@@ -4,11 +4,12 @@
 
 use super::{OdeSystem, State, tableau};
 
-/// `y + h sum_j a_j k_j` over the given `(a_j, k_j)`.
+/// `y + h sum_j a_j k_j` over the given `(a_j, k_j)` in the first `read` components
+/// (those `f` reads, [`OdeSystem::READ_LEN`]); the others keep `y`'s values.
 #[inline(always)]
-fn combine<const M: usize, const N: usize>(y: &State<N>, h: f64, terms: [(f64, &State<N>); M]) -> State<N> {
-    let mut out = [0.0; N];
-    for i in 0..N {
+fn combine<const M: usize, const N: usize>(y: &State<N>, h: f64, terms: [(f64, &State<N>); M], read: usize) -> State<N> {
+    let mut out = *y;
+    for i in 0..read.min(N) {
         let mut acc = 0.0;
         for (a, k) in terms.iter() {
             acc += a * k[i];
@@ -33,28 +34,30 @@ pub(super) fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
     y_new: &mut State<N>,
 ) -> f64 {
     use tableau::*;
-    let mut s = combine(y, h, [(A21, &k[0])]);
+    let read = S::READ_LEN.min(N);
+    let mut s = combine(y, h, [(A21, &k[0])], read);
     sys.rhs(t + C2 * h, &s, &mut k[1]);
-    s = combine(y, h, [(A31, &k[0]), (A32, &k[1])]);
+    s = combine(y, h, [(A31, &k[0]), (A32, &k[1])], read);
     sys.rhs(t + C3 * h, &s, &mut k[2]);
-    s = combine(y, h, [(A41, &k[0]), (A43, &k[2])]);
+    s = combine(y, h, [(A41, &k[0]), (A43, &k[2])], read);
     sys.rhs(t + C4 * h, &s, &mut k[3]);
-    s = combine(y, h, [(A51, &k[0]), (A53, &k[2]), (A54, &k[3])]);
+    s = combine(y, h, [(A51, &k[0]), (A53, &k[2]), (A54, &k[3])], read);
     sys.rhs(t + C5 * h, &s, &mut k[4]);
-    s = combine(y, h, [(A61, &k[0]), (A64, &k[3]), (A65, &k[4])]);
+    s = combine(y, h, [(A61, &k[0]), (A64, &k[3]), (A65, &k[4])], read);
     sys.rhs(t + C6 * h, &s, &mut k[5]);
-    s = combine(y, h, [(A71, &k[0]), (A74, &k[3]), (A75, &k[4]), (A76, &k[5])]);
+    s = combine(y, h, [(A71, &k[0]), (A74, &k[3]), (A75, &k[4]), (A76, &k[5])], read);
     sys.rhs(t + C7 * h, &s, &mut k[6]);
-    s = combine(y, h, [(A81, &k[0]), (A84, &k[3]), (A85, &k[4]), (A86, &k[5]), (A87, &k[6])]);
+    s = combine(y, h, [(A81, &k[0]), (A84, &k[3]), (A85, &k[4]), (A86, &k[5]), (A87, &k[6])], read);
     sys.rhs(t + C8 * h, &s, &mut k[7]);
-    s = combine(y, h, [(A91, &k[0]), (A94, &k[3]), (A95, &k[4]), (A96, &k[5]), (A97, &k[6]), (A98, &k[7])]);
+    s = combine(y, h, [(A91, &k[0]), (A94, &k[3]), (A95, &k[4]), (A96, &k[5]), (A97, &k[6]), (A98, &k[7])], read);
     sys.rhs(t + C9 * h, &s, &mut k[8]);
-    s = combine(y, h, [(A101, &k[0]), (A104, &k[3]), (A105, &k[4]), (A106, &k[5]), (A107, &k[6]), (A108, &k[7]), (A109, &k[8])]);
+    s = combine(y, h, [(A101, &k[0]), (A104, &k[3]), (A105, &k[4]), (A106, &k[5]), (A107, &k[6]), (A108, &k[7]), (A109, &k[8])], read);
     sys.rhs(t + C10 * h, &s, &mut k[9]);
     s = combine(
         y,
         h,
         [(A111, &k[0]), (A114, &k[3]), (A115, &k[4]), (A116, &k[5]), (A117, &k[6]), (A118, &k[7]), (A119, &k[8]), (A1110, &k[9])],
+        read,
     );
     sys.rhs(t + C11 * h, &s, &mut k[10]);
     s = combine(
@@ -71,6 +74,7 @@ pub(super) fn stages<const N: usize, S: OdeSystem<N> + ?Sized>(
             (A1210, &k[9]),
             (A1211, &k[10]),
         ],
+        read,
     );
     sys.rhs(t + h, &s, &mut k[11]);
     // The 8th-order solution, and the 5th- and 3rd-order error estimates.
@@ -123,10 +127,12 @@ pub(super) fn dense_coefficients<const N: usize, S: OdeSystem<N> + ?Sized>(
     k13: &State<N>,
 ) -> [State<N>; 8] {
     use tableau::*;
+    let read = S::READ_LEN.min(N);
     let s = combine(
         y,
         h,
         [(A141, &k[0]), (A147, &k[6]), (A148, &k[7]), (A149, &k[8]), (A1410, &k[9]), (A1411, &k[10]), (A1412, &k[11]), (A1413, k13)],
+        read,
     );
     let mut k14 = [0.0; N];
     sys.rhs(t + C14 * h, &s, &mut k14);
@@ -134,6 +140,7 @@ pub(super) fn dense_coefficients<const N: usize, S: OdeSystem<N> + ?Sized>(
         y,
         h,
         [(A151, &k[0]), (A156, &k[5]), (A157, &k[6]), (A158, &k[7]), (A1511, &k[10]), (A1512, &k[11]), (A1513, k13), (A1514, &k14)],
+        read,
     );
     let mut k15 = [0.0; N];
     sys.rhs(t + C15 * h, &s, &mut k15);
@@ -141,6 +148,7 @@ pub(super) fn dense_coefficients<const N: usize, S: OdeSystem<N> + ?Sized>(
         y,
         h,
         [(A161, &k[0]), (A166, &k[5]), (A167, &k[6]), (A168, &k[7]), (A169, &k[8]), (A1613, k13), (A1614, &k14), (A1615, &k15)],
+        read,
     );
     let mut k16 = [0.0; N];
     sys.rhs(t + C16 * h, &s, &mut k16);

@@ -95,7 +95,7 @@ impl Plant {
         let seg = self.segment(ctrl);
         let mut locator = EventLocator::new(&seg, g0);
         locator.trend_f_n = self.slide_trend;
-        let (l, grid, hermite) = (self.arm.params.l, self.sampling, self.hermite_samples);
+        let (grid, hermite) = (self.sampling, self.hermite_samples);
         let solved = solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
             if control == Control::Reject {
@@ -121,8 +121,9 @@ impl Plant {
                         None if hermite => crate::hermite::sample(&*step, ts),
                         _ => step.interpolate(ts),
                     };
-                    let (_, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
-                    let z = shared::kinematics::tip_position_trig(l, &seg.trig.get(&nalgebra::Vector2::new(y[0], y[2])));
+                    // The tip's position from the evaluation's (`tip_position_trig`, the same bits).
+                    let (td, f, _) = seg.evaluate(ts, &y, &mut [0.0; 2]);
+                    let z = td.z;
                     obs.on_sample(&Sample { t: ts, x: [y[0], y[1], y[2], y[3]], tip: [z[0], z[1]], mode, f: [f[0], f[1]] });
                 }
             }

@@ -82,8 +82,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         let y_curr = *step.y_curr();
         let seg = self.segment;
         let e_prev = if self.e_prev.is_nan() { seg.energy(&y_prev) } else { self.e_prev };
-        let e_curr = seg.energy(&y_curr);
-        let (residual, tol) = seg.balance(&y_prev, e_prev, &y_curr, e_curr);
+        let (e_curr, residual, tol) = seg.energy_and_balance(&y_prev, e_prev, &y_curr);
         // NaN breaks the balance too.
         if residual.abs() > tol || residual.is_nan() {
             self.rejected += 1;
@@ -105,7 +104,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         if ((g_a > 0.0 && g_curr <= 0.0) || from_the_boundary) && t_curr > t_prev {
             let (t_hit, y_hit) = locate_root(seg, step, (t_prev, g_a.max(f64::MIN_POSITIVE)), (t_curr, g_curr, y_curr));
             let g_hit = if t_hit.to_bits() == t_curr.to_bits() { g_curr } else { seg.nearest_boundary(t_hit, &y_hit).1 };
-            let (r_hit, tol_hit) = seg.balance(&y_prev, e_prev, &y_hit, seg.energy(&y_hit));
+            let (_, r_hit, tol_hit) = seg.energy_and_balance(&y_prev, e_prev, &y_hit);
             // A crossing from the boundary may sit anywhere in (-ON_BOUNDARY, 0].
             let root = g_hit.abs() <= ROOT_TOLERANCE || (from_the_boundary && g_hit > -ON_BOUNDARY);
             if !(root && r_hit.abs() <= tol_hit) {
