@@ -1,13 +1,13 @@
 //! A long table written as it is produced, in the format the user chose
 //! (`--format csv|arrow|mcap`): CSV by a writer thread ([`tables::csv::CsvThread`]),
-//! an Arrow IPC file ([`tables::arrow::ArrowFile`]), or, for two
+//! an Arrow IPC file by a writer thread ([`tables::arrow::ArrowThread`]), or, for two
 //! tables at once ([`TablesOut`]), one MCAP file ([`tables::mcap::McapFile`]).
 
 use crate::{error::CliError, output::OutputSet};
 pub use tables::TableFormat;
 use tables::{
     ColumnRows,
-    arrow::ArrowFile,
+    arrow::{ArrowFile, ArrowThread},
     csv::{CsvRow, CsvThread},
     mcap::{FILE_CHUNK_BYTES, McapFile, McapRows, McapTable, McapView},
 };
@@ -17,8 +17,9 @@ use tables::{
 pub enum TableOut<T: CsvRow + ColumnRows + Send + 'static> {
     /// CSV, formatted and written by a thread of its own while the caller goes on.
     Csv(CsvThread<T>),
-    /// An Arrow IPC file, a record batch at a time.
-    Arrow(Box<ArrowFile<T>>),
+    /// An Arrow IPC file, a record batch at a time, batched and written by a
+    /// thread of its own while the caller goes on.
+    Arrow(ArrowThread<T>),
 }
 
 impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
@@ -34,7 +35,7 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
             TableFormat::Csv => Self::Csv(CsvThread::spawn(out.create_csv(&name, T::HEADER)?)?),
             TableFormat::Arrow => {
                 let (path, file) = out.create_unbuffered(&name)?;
-                Self::Arrow(Box::new(ArrowFile::new(path, file)?))
+                Self::Arrow(ArrowThread::spawn(ArrowFile::new(path, file)?)?)
             }
             TableFormat::Mcap => {
                 return Err(CliError::Io {
@@ -49,13 +50,10 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     ///
     /// # Errors
     /// [`CliError::Io`] when writing has failed.
-    pub fn send(&mut self, mut rows: Vec<T>) -> Result<Vec<T>, CliError> {
+    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, CliError> {
         match self {
             Self::Csv(t) => Ok(t.send(rows)?),
-            Self::Arrow(a) => {
-                a.push(&mut rows)?;
-                Ok(rows)
-            }
+            Self::Arrow(a) => Ok(a.send(rows)?),
         }
     }
 

@@ -30,7 +30,7 @@ mod tests;
 mod write;
 
 pub use read::{read_arrow, read_arrow_batch};
-pub use write::{ArrowFile, StreamedArrowFile};
+pub use write::{ArrowFile, ArrowThread, StreamedArrowFile};
 
 /// Rows per record batch: 64 Ki rows (about 7 MB of a 14-column trace).
 pub const BATCH_ROWS: usize = 1 << 16;

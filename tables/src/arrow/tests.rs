@@ -166,3 +166,26 @@ fn text_is_coded_by_its_distinct_values_in_order_of_first_appearance() {
     let values = d.values().as_any().downcast_ref::<StringArray>().unwrap();
     assert_eq!(values.iter().map(Option::unwrap).collect::<Vec<_>>(), ["sliding", "flight", ""]);
 }
+
+/// The writer thread (`simulate --format arrow`) writes the same file, byte for
+/// byte, as [`ArrowFile`] given the same rows, whatever the chunks they are handed
+/// over in (batches of [`BATCH_ROWS`] cut at the same rows), and the rows come back.
+#[test]
+fn the_writer_thread_writes_the_same_file_as_the_file_itself() {
+    let n = BATCH_ROWS * 2 + 123;
+    let rows: Vec<Row> =
+        (0..n).map(|i| Row { a: (i as f64).sqrt() - 7.25, b: format!("r{}", i % 5), c: i % 3 == 0, d: (i * 7) as u32 }).collect();
+    let (_dir, whole) = write(rows.clone());
+    for chunk in [1, 999, BATCH_ROWS, n] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.arrow");
+        let mut w = ArrowThread::spawn(ArrowFile::<Row>::new(path.clone(), File::create(&path).unwrap()).unwrap()).unwrap();
+        for part in rows.chunks(chunk) {
+            let back = w.send(part.to_vec()).unwrap();
+            assert!(back.is_empty());
+        }
+        w.finish().unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), std::fs::read(&whole).unwrap(), "chunks of {chunk}");
+        assert_eq!(back(&read_arrow(&path).unwrap().columns), rows);
+    }
+}
