@@ -111,6 +111,11 @@ pub enum RunError {
     /// The plant failed.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// The scenario is out of its ranges (`Scenario::validate`), e.g. a command
+    /// delay `timing.delta_s` not within one control period, which would drop every
+    /// command as late.
+    #[error("invalid scenario: {0}")]
+    Scenario(#[from] crate::scenario::ScenarioError),
     /// The firmware configuration is invalid.
     #[error("firmware configuration: {0}")]
     Firmware(#[from] firmware::config::ConfigError),

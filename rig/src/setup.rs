@@ -91,10 +91,15 @@ impl RunSetup {
     /// The run scenario `scenario` asks for.
     ///
     /// # Errors
+    /// [`RunError::Scenario`] for a scenario out of its ranges
+    /// ([`Scenario::validate`], the check the command line makes when it reads one:
+    /// a scenario built in code gets it here too, e.g. a `timing.delta_s` of a
+    /// period or more, which would drop every command as late);
     /// [`RunError::Sim`] for bad plant parameters or initial conditions;
     /// [`RunError::Firmware`] for a firmware configuration the firmware refuses
     /// (`firmware::Config::validate`).
     pub fn new(scenario: Scenario) -> Result<Self, RunError> {
+        scenario.validate()?;
         let plant = plant_for(&scenario)?;
         let firmware = firmware_config(&scenario);
         firmware.validate()?;
@@ -121,5 +126,30 @@ impl RunSetup {
     /// The scenario's faults over its control period.
     pub fn faults(&self) -> &FaultPlan {
         &self.faults
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::DEFAULT_TOML;
+
+    /// A scenario built in code is checked as one read from a file: a command delay
+    /// of one period or more (every command late, dropped) is refused naming the key,
+    /// at 1 kHz and at 10 kHz where the default 0.2 ms is two periods; within the
+    /// period it is taken.
+    #[test]
+    fn a_scenario_built_in_code_is_validated() {
+        let mut s = Scenario::from_toml(DEFAULT_TOML).unwrap();
+        assert!(RunSetup::new(s.clone()).is_ok());
+        s.timing.rate_hz = 10_000.0;
+        let e = RunSetup::new(s.clone()).unwrap_err();
+        assert!(matches!(e, RunError::Scenario(_)), "{e}");
+        assert!(e.to_string().contains("timing.delta_s"), "{e}");
+        s.timing.delta_s = 0.000_05;
+        assert!(RunSetup::new(s.clone()).is_ok());
+        s.timing.rate_hz = 1_000.0;
+        s.timing.delta_s = 0.001;
+        assert!(RunSetup::new(s).unwrap_err().to_string().contains("timing.delta_s"));
     }
 }
