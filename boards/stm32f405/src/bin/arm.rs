@@ -2,14 +2,21 @@
 //!
 //! This file only creates the peripherals and hands them to the arm application
 //! (`arm_app::ArmApp`, hardware-independent, the same code the board twin runs
-//! on the host), whose `tick` runs from TIM2's update interrupt at the control
-//! rate: the sensors are sampled at the tick (encoders over SPI1, the load
-//! cell's conversions that the tick itself started, the belt's quadrature
-//! count), the firmware steps through `firmware::board::handle`, the torques are
-//! written to the PWM, and the independent watchdog is fed. The safe state disables the
-//! drivers. A reset (or a watchdog reset) comes up with them disabled until the
-//! enable button (PC13 to ground, held 20 ms) resets the firmware; they are
-//! enabled at the next command that is not the safe state.
+//! on the host). TIM2's update, at the rate of the saved configuration
+//! (`arm_app::rate`: 100 to 4 000 us), starts the period's acquisition: the load
+//! cell's injected conversions on its trigger, and the two AS5047P frames on SPI1
+//! through DMA2 (SPI1_TX stream 3, SPI1_RX stream 0, the chip select released and
+//! the next frame started in the RX stream's completion). When the frames are in
+//! memory the acquisition pends the control interrupt (CAN2_TX's vector), whose
+//! `tick` reads that memory only (no peripheral flag is polled), steps the firmware
+//! through `firmware::board::handle`, writes the torques to the PWM and feeds the
+//! independent watchdog. Priorities: USART1 (0x00) above TIM2 and DMA2 (0x20) above
+//! the control interrupt (0x40); the idle loop (the notices' defmt lines, the
+//! window's report, the reset's fresh firmware, the bring-up's requests) borrows
+//! the application under PRIMASK or BASEPRI at the control's priority. The safe
+//! state disables the drivers. A reset (or a watchdog reset) comes up with them
+//! disabled until the enable button (PC13 to ground, held 20 periods) resets the
+//! firmware; they are enabled at the next command that is not the safe state.
 //!
 //! The step's cycles (DWT `CYCCNT` on silicon) are reported per window of
 //! `step_stats::WINDOW` periods, worst and median, with the tick's interval
