@@ -3,6 +3,7 @@
 //! firmware sees it (the tick's status word in the image's monitor block) and
 //! said in its defmt log (the RTT buffer, decoded with the image's own table).
 
+use super::ask;
 use arm_app::{
     Settings,
     bringup::{CalibrationRecord, Refusal, Reply, Request},
@@ -11,7 +12,6 @@ use arm_app::{
 use board_emulator::{EmuError, EmulatedBoard, RegisterFault, SpiFaults};
 use board_link::{emulator_link::default_image, free_arm::FreeArm};
 use board_twin::{BusFaults, EncoderFaults, FlashModel};
-use firmware::pil::{MAX_FRAME, decode, encode};
 use rig::{
     pil_link::decode_log,
     scenario::{DEFAULT_TOML, Scenario},
@@ -145,21 +145,6 @@ fn a_watchdog_reset_is_an_error_naming_it_not_a_silent_restart() {
     }
     let e = err.expect("the reset is reported");
     assert!(e.contains(&EmuError::WatchdogReset { period: 0 }.to_string()[..40]), "{e}");
-}
-
-/// One bring-up request over the image's USART1, answered between ticks.
-fn ask(arm: &mut FreeArm<EmulatedBoard>, request: Request) -> Reply {
-    let mut buf = [0u8; MAX_FRAME];
-    let frame = encode(&request, &mut buf).unwrap().to_vec();
-    let mut got = arm.line(&frame);
-    for _ in 0..50 {
-        if let Some(end) = got.iter().position(|&b| b == 0) {
-            return decode::<Reply>(&mut got[..end]).unwrap();
-        }
-        arm.tick().unwrap();
-        got.extend(arm.line(&[]));
-    }
-    panic!("no reply to {request:?}")
 }
 
 #[test]

@@ -7,6 +7,7 @@
 //! period outside the range is refused with `Refusal::Rate`, the board
 //! unchanged; a saved rate comes back at reset.
 
+use super::ask;
 use arm_app::{
     bringup::{CalibrationRecord, Refusal, Reply, Request},
     rate,
@@ -19,7 +20,6 @@ use board_link::{
     free_arm::FreeArm,
 };
 use board_twin::{ArmState, BoardDescription, BoardTwin, BusFaults, FlashModel};
-use firmware::pil::{MAX_FRAME, decode, encode};
 use proptest::prelude::*;
 use rig::{
     calibration::CalibrationSection,
@@ -175,21 +175,6 @@ proptest! {
             twin.tick(&arm, &BusFaults::default(), false);
         }
     }
-}
-
-/// One bring-up request over the image's USART1, answered between ticks.
-fn ask(arm: &mut FreeArm<EmulatedBoard>, request: Request) -> Reply {
-    let mut buf = [0u8; MAX_FRAME];
-    let frame = encode(&request, &mut buf).unwrap().to_vec();
-    let mut got = arm.line(&frame);
-    for _ in 0..50 {
-        if let Some(end) = got.iter().position(|&b| b == 0) {
-            return decode::<Reply>(&mut got[..end]).unwrap();
-        }
-        arm.tick().unwrap();
-        got.extend(arm.line(&[]));
-    }
-    panic!("no reply to {request:?}")
 }
 
 /// The tick the emulated board runs, checked at the registers: TIM2 updates at
