@@ -369,8 +369,10 @@ impl EmulatedBoard {
 
     /// The reset button (NRST) pressed and released: every device returns to
     /// its reset state but the flash, whose array survives (rsemu's `Warm`
-    /// reset); the image starts again from its vector table, loads its record
-    /// from the emulated flash, and is booted as [`EmulatedBoard::boot`] does.
+    /// reset), the core's NVIC and system control block with them (a system
+    /// reset: `core_clock::Core`'s reset); the image starts again from its
+    /// vector table, loads its record from the emulated flash, and is booted
+    /// as [`EmulatedBoard::boot`] does.
     /// SRAM keeps its content on the part; the monitor block's magic is
     /// cleared first so that the boot waits for the new image's first tick.
     ///

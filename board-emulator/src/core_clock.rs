@@ -41,7 +41,7 @@ use rsemu::{
         sched::TickCursor,
         wire::{WireId, WireSink},
     },
-    cpu::arm::v7m::ArmV7m,
+    cpu::arm::v7m::{ArmV7m, sys::Sys},
     machine::{Bindings, Instance},
 };
 
@@ -160,6 +160,10 @@ pub struct Core {
     reset_seen: Arc<std::sync::atomic::AtomicBool>,
     /// The watch on the reset input, held here: a net holds its sinks weakly.
     reset_watch: Mutex<Option<Arc<ResetWatch>>>,
+    /// The NVIC and the system control block as the part comes out of its
+    /// power-on reset, which a system reset returns them to
+    /// ([`Core::system_reset`]).
+    power_on: Sys,
 }
 
 /// The core's reset input, watched: forwards the level, notes a rise.
@@ -192,8 +196,10 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
     let slot: Arc<Mutex<Option<Arc<Core>>>> = Arc::default();
     let s = Arc::clone(&slot);
     b.replace("cpu.arm.v7m", move |props| {
+        let cpu = Arc::new(ArmV7m::from_props(props)?);
+        let power_on = cpu.with_sys(|s| s.clone());
         let core = Arc::new(Core {
-            cpu: Arc::new(ArmV7m::from_props(props)?),
+            cpu,
             mode,
             cursor: Mutex::new(None),
             edges: Mutex::new(VecDeque::new()),
@@ -204,6 +210,7 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
             handlers: Mutex::default(),
             reset_seen: Arc::default(),
             reset_watch: Mutex::new(None),
+            power_on,
         });
         *lock(&s) = Some(Arc::clone(&core));
         Ok(core as Arc<dyn Instance>)
@@ -212,6 +219,28 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
 }
 
 impl Core {
+    /// A system reset (NRST, the IWDG's reset: RM0090 section 6.1.2) on the
+    /// core's system block: the NVIC's enables, pending and active bits and
+    /// priorities, the SCB's registers (SHCSR, CCR, the fault status, CPACR),
+    /// the FPU's context control (FPCCR, FPCAR: a lazily preserved frame is
+    /// forgotten), SysTick and the MPU back to their reset values (ARMv7-M ARM,
+    /// DDI 0403E, B3.2.2 and B3.4.3: reset by a system reset), the debug block
+    /// (DEMCR, the DWT) kept: a power-on reset alone clears it (C1.6.5).
+    ///
+    /// rsemu's warm reset restarts the core's reset sequence (registers, the
+    /// exception state, the vector table's SP and PC) and keeps this block as
+    /// the image left it: the restarted image booted with its interrupts
+    /// still enabled at their old priorities, taken before its `main` set
+    /// them up (issue 56: a bus fault after `board reset` on a board whose
+    /// tick had run at 4 kHz).
+    fn system_reset(&self) {
+        self.cpu.with_sys(|s| {
+            let (demcr, dwt_ctrl, dwt_cyccnt) = (s.demcr, s.dwt_ctrl, s.dwt_cyccnt);
+            *s = self.power_on.clone();
+            (s.demcr, s.dwt_ctrl, s.dwt_cyccnt) = (demcr, dwt_ctrl, dwt_cyccnt);
+        });
+    }
+
     /// The mode it runs in.
     pub fn mode(&self) -> Mode {
         self.mode

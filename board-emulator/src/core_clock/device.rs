@@ -48,6 +48,9 @@ impl Device for Core {
     }
     fn reset(&self, kind: ResetKind) {
         Device::reset(&*self.cpu, kind);
+        if kind == ResetKind::Warm {
+            self.system_reset();
+        }
     }
     fn debug_halt(&self, h: bool) {
         Device::debug_halt(&*self.cpu, h);

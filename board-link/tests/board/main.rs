@@ -3,13 +3,15 @@
 //! `emulator_faults`; `dma_faults`: the encoders' acquisition faults over random
 //! sequences on both), bring-up over the protocol (`bringup`), and the wiring
 //! faults and random scenarios the twin and the image share (`wiring_cases`),
-//! the control rate set by configuration on both (`rate`).
+//! the control rate set by configuration on both (`rate`), the reset button at
+//! any instant on the flashed image (`reset`).
 
 mod bringup;
 mod dma_faults;
 mod emulator;
 mod emulator_faults;
 mod rate;
+mod reset;
 mod twin;
 mod wiring_cases;
 

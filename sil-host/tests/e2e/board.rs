@@ -61,22 +61,8 @@ on_both!(
     a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchanged,
     the_runaway_limits_cannot_be_turned_off_on_a_board,
     a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved,
+    configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset,
 );
-
-#[test]
-fn twin_configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset() {
-    configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset(Board::Twin);
-}
-
-/// Known bug, open in issue 56: on the emulated image, a board restarted from its
-/// flash with a saved 4 kHz rate HardFaults at boot (a bus fault at 0x3df1d8d8 from
-/// `HardFault_`), since the control handler's second round (the application in
-/// `.uninit`, the reset's prepared slot); the twin passes. Run it with `--ignored`.
-#[test]
-#[ignore = "known bug (issue 56): the emulated image HardFaults after a restart with a saved 4 kHz rate"]
-fn emulated_configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset() {
-    configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset(Board::Emulated);
-}
 
 /// Issue 56: `configure` sends the scenario's control rate and the board's tick
 /// follows it (TIM2's reload on the emulated image), which `configure` reads
