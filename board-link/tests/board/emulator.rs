@@ -139,7 +139,7 @@ fn the_image_takes_every_rate_the_rig_runs_and_a_rate_outside_is_refused_by_name
 /// rest). The image's command leaves 15 to 20 us after the tick (the
 /// acquisition's frames, then the step's start), within half of a 100 us
 /// period, so the image and the twin stay equal at any rate.
-fn delay_within(rate_hz: f64) -> f64 {
+pub(crate) fn delay_within(rate_hz: f64) -> f64 {
     0.0002_f64.min(0.5 / rate_hz)
 }
 

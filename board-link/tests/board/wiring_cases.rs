@@ -6,10 +6,20 @@ use board_twin::BoardDescription;
 use rig::scenario::{DEFAULT_TOML, Scenario};
 
 /// A reproducible uniform source in [0, 1) (xorshift64).
-struct Uniform(u64);
+pub struct Uniform(u64);
 
 impl Uniform {
-    fn next(&mut self) -> f64 {
+    /// The source seeded with `seed` (any value but 0), its first draws skipped.
+    pub fn new(seed: u64) -> Self {
+        let mut r = Self(seed.max(1));
+        for _ in 0..5 {
+            r.next();
+        }
+        r
+    }
+
+    /// The next draw.
+    pub fn next(&mut self) -> f64 {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 7;
         self.0 ^= self.0 << 17;
