@@ -13,11 +13,13 @@
 //! more than half the period (which 5 000 cycles is from 100 us on).
 //!
 //! The sample, seeded (the same cases on every run): random admissible
-//! scenarios (`wiring_cases::random_admissible`) under both laws, the hybrid
+//! scenarios (`board_link::random_scenarios`) under both laws, the hybrid
 //! law with each of its five friction terms in turn, at random periods of the
 //! image's whole range (`arm_app::rate`: 100 to 4 000 us, drawn log-uniform so
 //! that each decade is as likely), the command's delay within the period
-//! (`emulator::delay_within`). A quarter of the cases carry a wiring fault of
+//! (`random_scenarios::delay_within`), the belt within the counted mode's
+//! speed (`random_scenarios::COUNTED_BELT_SPEED_MAX`, a limit of the emulated
+//! board's counted mode; the belt's speed changes no path of the handler). A quarter of the cases carry a wiring fault of
 //! issue 52, a quarter a bus fault (SPI error, parity, lost magnet, missing
 //! conversion, driver fault) at a random time: both end in the safe state, the
 //! period that latches it and the one that disables the drivers in the sample.
@@ -46,40 +48,16 @@ use board_link::{
 use firmware::{ControllerKind, SafeReason, config::FrictionCompensation};
 use rig::{faults::Fault, record::RunError, run_loop, scenario::Scenario};
 
-use crate::{
-    emulator::delay_within,
-    wiring_cases::{Uniform, WIRING_FAULTS, random_admissible, unused_by},
-};
+use board_link::random_scenarios::{FRICTIONS, Uniform, at_period, counted_admissible as admissible, friction_name, log_uniform_period_us};
+
+use crate::wiring_cases::{WIRING_FAULTS, unused_by};
 
 /// Cases in CI's sample (about 60 s of one core in release; the figures of
 /// the last full run in the commit that set it).
 const CASES: u64 = 48;
 
-/// The fastest belt the counted mode runs at every rate, m/s: the emulated
-/// board drives the belt encoder's edges in the last tenth of each period
-/// (its runs stop at 90 % of it), one every
-/// [`board_emulator::belt::ROUND_EDGE_SPACING_TICKS`] core ticks in the counted
-/// mode (0.2 us: TIM4 sees an edge only where a scheduler round is cut), so at
-/// the reference board's 1e6 counts per metre a belt past about 0.44 m/s
-/// (0.1 x 168 ticks/us / 34 ticks, less the lead) is refused by name at every
-/// rate ("the belt moves N quadrature counts in one period: more than the
-/// emulated encoder's M edges before the next tick"). A limit of the emulated
-/// board's counted mode, not of the image (the functional mode takes 1.4 m/s);
-/// the belt's speed changes no path of the handler (the count is read and
-/// differenced the same), so the sample's belt runs -0.4 to -0.1 m/s.
-const COUNTED_BELT_SPEED_MAX: f64 = 0.4;
-
 /// The sample's seed.
 const SEED: u64 = 0x5eed_0056;
-
-/// The hybrid law's friction terms, taken in turn.
-const FRICTIONS: [FrictionCompensation; 5] = [
-    FrictionCompensation::ModelCommandedNormal,
-    FrictionCompensation::Estimated,
-    FrictionCompensation::Measured,
-    FrictionCompensation::ModelMeasuredNormal,
-    FrictionCompensation::None,
-];
 
 /// The bus faults the emulated board injects (`rig::faults::LinkKind::Emulator`),
 /// as a scenario's `[[faults]]` entry without its time.
@@ -112,33 +90,6 @@ struct Case {
     ending: Ending,
 }
 
-/// A period of the image's range drawn log-uniform in `lo..=hi` us.
-fn period_us(r: &mut Uniform, lo: u64, hi: u64) -> u64 {
-    let (lo, hi) = (lo as f64, hi as f64);
-    (lo * (hi / lo).powf(r.next())).round() as u64
-}
-
-/// `s` at period `us`, `periods` long, the delay within the period.
-fn at_period(s: &mut Scenario, us: u64, duration_s: f64) {
-    s.timing.rate_hz = 1e6 / us as f64;
-    s.timing.delta_s = delay_within(s.timing.rate_hz);
-    s.timing.duration_s = duration_s;
-    assert_eq!(s.timing.period().as_us(), us, "the rate gives the period back");
-}
-
-/// Random admissible scenario `seed` under `kind` (`wiring_cases`), `friction`
-/// its friction term, at period `us` for `duration_s`, the belt within the
-/// counted mode's speed.
-fn admissible(seed: u64, kind: &str, friction: FrictionCompensation, us: u64, duration_s: f64) -> Scenario {
-    let mut s = random_admissible(seed, kind, duration_s);
-    // The admissible belt speeds, -1 to -0.1 m/s, mapped onto the counted
-    // mode's (see [`COUNTED_BELT_SPEED_MAX`]).
-    s.plant.v_belt = -0.1 + (s.plant.v_belt + 0.1) * (COUNTED_BELT_SPEED_MAX - 0.1) / 0.9;
-    at_period(&mut s, us, duration_s);
-    s.controller.friction = friction;
-    s
-}
-
 /// The law of `kind` and `friction`, for a case's name.
 fn law(kind: &str, friction: FrictionCompensation) -> String {
     if kind == "pid" { "pid".to_string() } else { format!("hybrid/{}", friction_name(friction)) }
@@ -156,11 +107,11 @@ fn random_case(i: u64) -> Case {
     // Periods up to 1 ms for the cases past a window's close (the slowest
     // rates would cost the test minutes for the same path).
     let long = matches!(i % 16, 0 | 9);
-    let us = if long { period_us(&mut r, 100, 1000) } else { period_us(&mut r, 100, 4000) };
-    let periods = if long { 1000 + (100.0 * r.next()) as u64 } else { 100 + (300.0 * r.next()) as u64 };
+    let us = if long { log_uniform_period_us(&mut r, 100, 1000) } else { log_uniform_period_us(&mut r, 100, 4000) };
+    let periods = if long { 1000 + (100.0 * r.draw()) as u64 } else { 100 + (300.0 * r.draw()) as u64 };
     let ending = match i % 4 {
-        2 => Ending::Wiring(WIRING_FAULTS[(r.next() * WIRING_FAULTS.len() as f64) as usize].0),
-        3 => Ending::Bus(BUS_FAULTS[(r.next() * BUS_FAULTS.len() as f64) as usize]),
+        2 => Ending::Wiring(WIRING_FAULTS[(r.draw() * WIRING_FAULTS.len() as f64) as usize].0),
+        3 => Ending::Bus(BUS_FAULTS[(r.draw() * BUS_FAULTS.len() as f64) as usize]),
         _ => Ending::NoFault,
     };
     let mut duration_s = periods as f64 * us as f64 * 1e-6;
@@ -177,7 +128,7 @@ fn random_case(i: u64) -> Case {
         Ending::Bus(fault) => {
             // From a random period of the run's first 80 %, held 0.1 s: the
             // firmware's limit of bad frames in a row is reached within it.
-            let at_s = (0.8 * r.next() * periods as f64).floor() * us as f64 * 1e-6;
+            let at_s = (0.8 * r.draw() * periods as f64).floor() * us as f64 * 1e-6;
             let f: Fault = toml::from_str(&format!("{fault}\nat_s = {at_s}\nduration_s = 0.1")).unwrap();
             s.faults.push(f);
         }
@@ -216,16 +167,6 @@ fn named_cases() -> Vec<Case> {
         },
     );
     lift_off.chain(kept).collect()
-}
-
-fn friction_name(f: FrictionCompensation) -> &'static str {
-    match f {
-        FrictionCompensation::ModelCommandedNormal => "commanded",
-        FrictionCompensation::Estimated => "estimated",
-        FrictionCompensation::Measured => "measured",
-        FrictionCompensation::ModelMeasuredNormal => "measured_normal",
-        FrictionCompensation::None => "none",
-    }
 }
 
 /// One case's figures.
