@@ -67,6 +67,10 @@ pub struct EmulatorLink {
     pub image: PathBuf,
     /// Every run of TIM2's handler from period 0 on ([`Mode::Counted`]).
     pub handlers: Vec<HandlerRun>,
+    /// The handler's runs before period 0 ([`Mode::Counted`]): the boot's tick
+    /// and the enable button's held ticks, the drivers still off (the worst-case
+    /// bound covers them too: `board-link/tests/board/emulator_bound.rs`).
+    pub start_handlers: Vec<HandlerRun>,
 }
 
 fn board_error(e: EmuError) -> RunError {
@@ -126,6 +130,7 @@ impl EmulatorLink {
             rtt: Vec::new(),
             image: image.into(),
             handlers: Vec::new(),
+            start_handlers: Vec::new(),
         })
     }
 
@@ -177,8 +182,9 @@ impl FirmwareLink for EmulatorLink {
         let arm = ArmState { x: truth.x, f: truth.f, belt_travel_m: self.v_belt * truth.t };
         if !self.started {
             self.start(&arm, &faults)?;
-            // The timing (and the profile, if on) counts from period 0's handler on.
-            self.handlers.clear();
+            // The timing (and the profile, if on) counts from period 0's handler
+            // on; the start's runs kept apart.
+            self.start_handlers = std::mem::take(&mut self.handlers);
             self.board.core().clear_profile();
         }
         self.torque = self.tick(&arm, &faults, true)?;

@@ -33,6 +33,8 @@ use rig::{
     scenario::Scenario,
 };
 
+use board_link::random_scenarios::delay_within;
+
 use crate::wiring_cases;
 
 fn scenario(name: &str) -> Scenario {
@@ -130,17 +132,6 @@ fn the_image_takes_every_rate_the_rig_runs_and_a_rate_outside_is_refused_by_name
     s.timing.rate_hz = 20_000.0;
     let e = s.validate().expect_err("refused").to_string();
     assert!(e.contains("timing.rate_hz"), "{e}");
-}
-
-/// The command's delay `timing.delta_s` of the default scenario (0.2 ms) at
-/// `rate_hz`, or half the period where that is not within it: the plant
-/// applies a command `delta` after its sample only when `delta` is shorter
-/// than the period (`rig::period_loop`; `Scenario::validate` refuses the
-/// rest). The image's command leaves 15 to 20 us after the tick (the
-/// acquisition's frames, then the step's start), within half of a 100 us
-/// period, so the image and the twin stay equal at any rate.
-fn delay_within(rate_hz: f64) -> f64 {
-    0.0002_f64.min(0.5 / rate_hz)
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The board links and tools end to end, one test binary: the board twin in
 //! closed loop (`twin`), the flashed image on the emulated board (`emulator`,
-//! `emulator_faults`; `dma_faults`: the encoders' acquisition faults over random
+//! `emulator_faults`; `emulator_bound`: the control handler's worst case over
+//! random scenarios and rates; `dma_faults`: the encoders' acquisition faults over random
 //! sequences on both), bring-up over the protocol (`bringup`), and the wiring
 //! faults and random scenarios the twin and the image share (`wiring_cases`),
 //! the control rate set by configuration on both (`rate`), the reset button at
@@ -9,6 +10,7 @@
 mod bringup;
 mod dma_faults;
 mod emulator;
+mod emulator_bound;
 mod emulator_faults;
 mod rate;
 mod reset;

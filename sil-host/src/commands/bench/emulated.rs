@@ -3,8 +3,9 @@
 //! instruction by instruction, the control handler (issue 56: the interrupt the
 //! acquisition pends once the encoders are in memory) per rate: at 1 kHz over
 //! the four paper scenarios (instructions, cycles, interrupt latency, period
-//! jitter), at 10 kHz on the default scenario (cycles, deadline misses), and
-//! the stack's high-water mark.
+//! jitter), at 10 kHz on the default scenario (cycles, deadline misses), over
+//! a seeded sample of random admissible scenarios at random rates (the worst
+//! per rate class), and the stack's high-water mark.
 
 use std::time::Instant;
 
@@ -156,7 +157,70 @@ pub fn figures(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
         ));
     }
     out.extend(at_10_khz(args, &image)?);
+    out.push(over_random_scenarios(&image)?);
     Ok(out)
+}
+
+/// Cases of the random sample ([`over_random_scenarios`]).
+const RANDOM_CASES: u64 = 16;
+/// Periods per case of the random sample (period 0, the enable button's firmware reset, in each).
+const RANDOM_PERIODS: u64 = 300;
+
+/// The control handler over a seeded sample of random admissible scenarios
+/// (`board_link::random_scenarios`; CI's gate on a larger one with faults:
+/// `board-link/tests/board/emulator_bound.rs`): both laws, the hybrid law's
+/// friction terms in turn, periods log-uniform over the image's range (100 to
+/// 4 000 us), [`RANDOM_PERIODS`] each, counted; the worst cycles with the
+/// flash's wait states, the handler's runs before period 0 (boot and the
+/// enable button's ticks) in, against the 1 kHz ceiling at every rate (the
+/// handler's work does not depend on the rate), and the worst per rate class.
+fn over_random_scenarios(image: &std::path::Path) -> Result<Figure, CliError> {
+    use board_link::random_scenarios::{FRICTIONS, Uniform, counted_admissible, friction_name, log_uniform_period_us};
+    let classes = [("250 Hz to 1 kHz", 1000..=4000u64), ("1 to 4 kHz", 250..=999), ("4 to 10 kHz", 100..=249)];
+    let mut worst: [(u64, String); 3] = Default::default();
+    let mut medians = Vec::new();
+    for i in 0..RANDOM_CASES {
+        let mut r = Uniform::new(0x5eed_b056 ^ (i + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let us = log_uniform_period_us(&mut r, 100, 4000);
+        let (kind, friction) = (if i % 2 == 0 { "hybrid" } else { "pid" }, FRICTIONS[((i / 2) % 5) as usize]);
+        let s = counted_admissible(40_000 + i, kind, friction, us, (RANDOM_PERIODS * us) as f64 * 1e-6);
+        s.validate()?;
+        let setup = rig::RunSetup::new(s).map_err(CliError::from)?;
+        let mut link = EmulatorLink::with_mode(&setup, image, Mode::Counted).map_err(CliError::from)?;
+        let (_, e) = run_loop(&setup, &mut link, &mut ());
+        if let Some(e) = e.filter(|e| !matches!(e, rig::record::RunError::SafeState { .. })) {
+            return Err(CliError::from(e));
+        }
+        let Some(t) = link.timing() else { continue };
+        let start = link.start_handlers.iter().map(|r| r.cycles + r.wait_cycles).max().unwrap_or(0);
+        medians.push(t.flash_cycles[0] as f64);
+        let law = if kind == "pid" { "pid".to_string() } else { format!("hybrid/{}", friction_name(friction)) };
+        if let Some(c) = classes.iter().position(|(_, r)| r.contains(&us)) {
+            let w = t.flash_cycles[1].max(start);
+            if w > worst[c].0 {
+                worst[c] = (w, format!("case {i}, {law} at {us} us"));
+            }
+        }
+    }
+    let max = worst.iter().map(|(w, _)| *w).max().unwrap_or(0);
+    let mut f = Figure::measured(
+        "control_handler_cycles_random",
+        "emulator",
+        format!(
+            "the control handler, worst core cycles with the flash's wait states over {RANDOM_CASES} random admissible scenarios at random rates (100 to 4000 us), {RANDOM_PERIODS} periods each, period 0 and the button's ticks in"
+        ),
+        max as f64,
+        "cycles",
+        HANDLER_CYCLES_CEILING,
+        Goal::AtMost,
+    )
+    .note(format!("median of the cases' medians {:.0} cycles", median(&medians)));
+    for ((name, _), (w, case)) in classes.iter().zip(&worst) {
+        if *w > 0 {
+            f = f.note(format!("{name}: worst {w} cycles ({case})"));
+        }
+    }
+    Ok(f)
 }
 
 /// The control handler at 10 kHz (issue 56): the default scenario at

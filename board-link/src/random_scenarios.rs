@@ -1,0 +1,135 @@
+//! Random admissible scenarios, reproducible: the wiring faults' sample
+//! (issue 52, `board-link/tests/board/twin.rs`) and the control handler's
+//! bound over random scenarios and rates on the flashed image (issue 56,
+//! `board-link/tests/board/emulator_bound.rs`, `sil-host bench --only
+//! emulator`).
+
+use firmware::config::FrictionCompensation;
+use rig::scenario::{DEFAULT_TOML, Scenario};
+
+/// A reproducible uniform source in [0, 1) (xorshift64).
+pub struct Uniform(u64);
+
+impl Uniform {
+    /// The source seeded with `seed` (any value but 0), its first draws skipped.
+    pub fn new(seed: u64) -> Self {
+        let mut r = Self(seed.max(1));
+        for _ in 0..5 {
+            r.draw();
+        }
+        r
+    }
+
+    /// The next draw.
+    pub fn draw(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Random admissible scenario `i` under `kind` (`pid` or `hybrid`), `duration`
+/// seconds: the paper's arm and gains from `x0d` or `x0u`, `mu` 0.3 to 0.8 (and
+/// `mu_hat = mu`), `v_belt` -1 to -0.1 m/s, `f_n*` 3 to 10 N, `z_t*` -0.05 to
+/// 0.14 m (below the hybrid law's `Z_t,sliding`, 0.148 m from `x0d`), any seed.
+///
+/// # Panics
+/// For a `kind` the scenario files do not name.
+pub fn random_admissible(i: u64, kind: &str, duration: f64) -> Scenario {
+    let mut r = Uniform(0x9E37_79B9_7F4A_7C15 ^ (i * 7919 + 1));
+    for _ in 0..5 {
+        r.draw();
+    }
+    let x0 = if r.draw() < 0.5 { "d" } else { "u" };
+    let sets = [
+        format!("controller.kind={kind}"),
+        format!("plant.x0={x0}"),
+        format!("plant.mu={}", 0.3 + 0.5 * r.draw()),
+        format!("plant.v_belt={}", -1.0 + 0.9 * r.draw()),
+        format!("controller.f_n_ref={}", 3.0 + 7.0 * r.draw()),
+        format!("controller.target_z_t={}", -0.05 + 0.19 * r.draw()),
+        format!("sensors.seed={}", 100 + i),
+        format!("timing.duration_s={duration}"),
+    ];
+    let overrides: Vec<_> = sets.iter().map(|a| a.parse().unwrap()).collect();
+    let mut s = Scenario::from_toml_with(DEFAULT_TOML, &overrides).unwrap();
+    s.controller.mu_hat = s.plant.mu;
+    s
+}
+
+/// The hybrid law's friction terms (`controller.friction`), in the order a
+/// sample takes them.
+pub const FRICTIONS: [FrictionCompensation; 5] = [
+    FrictionCompensation::ModelCommandedNormal,
+    FrictionCompensation::Estimated,
+    FrictionCompensation::Measured,
+    FrictionCompensation::ModelMeasuredNormal,
+    FrictionCompensation::None,
+];
+
+/// `f` as scenario files name it.
+pub fn friction_name(f: FrictionCompensation) -> &'static str {
+    match f {
+        FrictionCompensation::ModelCommandedNormal => "commanded",
+        FrictionCompensation::Estimated => "estimated",
+        FrictionCompensation::Measured => "measured",
+        FrictionCompensation::ModelMeasuredNormal => "measured_normal",
+        FrictionCompensation::None => "none",
+    }
+}
+
+/// The fastest belt the emulated board's counted mode runs at every rate,
+/// m/s: the board drives the belt encoder's edges in the last tenth of each
+/// period (its runs stop at 90 % of it), one every
+/// [`board_emulator::belt::ROUND_EDGE_SPACING_TICKS`] core ticks in the
+/// counted mode (0.2 us: TIM4 sees an edge only where a scheduler round is
+/// cut), so at the reference board's 1e6 counts per metre a belt past about
+/// 0.44 m/s (0.1 x 168 ticks/us / 34 ticks, less the lead) is refused by name
+/// at every rate ("the belt moves N quadrature counts in one period: more than
+/// the emulated encoder's M edges before the next tick"). A limit of the
+/// counted mode, not of the image (the functional mode takes 1.4 m/s).
+pub const COUNTED_BELT_SPEED_MAX: f64 = 0.4;
+
+/// The command's delay `timing.delta_s` of the default scenario (0.2 ms) at
+/// `rate_hz`, or half the period where that is not within it: the plant
+/// applies a command `delta` after its sample only when `delta` is shorter
+/// than the period (`rig::period_loop`; `Scenario::validate` refuses the
+/// rest). The image's command leaves 15 to 20 us after the tick (the
+/// acquisition's frames, then the step's start), within half of a 100 us
+/// period, so the image and the twin stay equal at any rate.
+pub fn delay_within(rate_hz: f64) -> f64 {
+    0.0002_f64.min(0.5 / rate_hz)
+}
+
+/// A period of the image's range drawn log-uniform in `lo..=hi` us (each
+/// decade as likely).
+pub fn log_uniform_period_us(r: &mut Uniform, lo: u64, hi: u64) -> u64 {
+    let (lo, hi) = (lo as f64, hi as f64);
+    (lo * (hi / lo).powf(r.draw())).round() as u64
+}
+
+/// `s` at period `us` (an exact rate), `duration_s` long, the delay within
+/// the period ([`delay_within`]).
+///
+/// # Panics
+/// For a period the rate does not give back (none from 100 to 4 000 us).
+pub fn at_period(s: &mut Scenario, us: u64, duration_s: f64) {
+    s.timing.rate_hz = 1e6 / us as f64;
+    s.timing.delta_s = delay_within(s.timing.rate_hz);
+    s.timing.duration_s = duration_s;
+    assert_eq!(s.timing.period().as_us(), us, "the rate gives the period back");
+}
+
+/// Random admissible scenario `seed` ([`random_admissible`]) under `kind`,
+/// `friction` its friction term, at period `us` for `duration_s`, its belt's
+/// speed mapped from -1..-0.1 m/s onto the counted mode's
+/// (-[`COUNTED_BELT_SPEED_MAX`]..-0.1; the belt's speed changes no path of
+/// the control handler: the count is read and differenced the same).
+pub fn counted_admissible(seed: u64, kind: &str, friction: FrictionCompensation, us: u64, duration_s: f64) -> Scenario {
+    let mut s = random_admissible(seed, kind, duration_s);
+    s.plant.v_belt = -0.1 + (s.plant.v_belt + 0.1) * (COUNTED_BELT_SPEED_MAX - 0.1) / 0.9;
+    at_period(&mut s, us, duration_s);
+    s.controller.friction = friction;
+    s
+}
