@@ -11,8 +11,10 @@ pub struct BenchArgs {
     /// realtime): step (worst control step in PIL, instructions), cycles (its
     /// Cortex-M4 cycle estimate and the highest rate it allows, scripts/cycles.py,
     /// about 2 min), flash (the PIL image's size),
-    /// in-process, lockstep (iceoryx2), twin (the board twin's closed loop), pil
-    /// (PIL periods per wall second), simulate
+    /// in-process, lockstep (iceoryx2), twin (the board twin's closed loop),
+    /// emulator (the flashed `arm` image on the emulated board: its control
+    /// handler's cycles, counted, at 1 kHz, 10 kHz and over random scenarios),
+    /// pil (PIL periods per wall second), simulate
     /// (300 s with its 1 ms trace), sweep (closed-loop hybrid grid, estimated),
     /// realtime (needs --realtime-s).
     #[arg(long, value_delimiter = ',', value_name = "LIST")]

@@ -48,7 +48,7 @@ pub const GROUPS: [(&str, &str); 11] = [
     ("twin", "the closed loop on the board twin (the arm application on bus-level device models)"),
     (
         "emulator",
-        "the flashed arm image on the emulated board: its closed loop's rate; TIM2's handler (instructions, cycles, latency, jitter) and the stack over the paper scenarios",
+        "the flashed arm image on the emulated board: its closed loop's rate; the control handler (instructions, cycles, latency, jitter) and the stack over the paper scenarios, at 10 kHz and over random scenarios at random rates",
     ),
     ("pil", "PIL periods per wall second (the image in QEMU)"),
     ("simulate", "sil-host simulate, 300 s with its 1 ms trace.csv, trace.arrow, and with 1 s samples"),
