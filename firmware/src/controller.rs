@@ -381,7 +381,7 @@ impl Firmware {
         // step's prediction.
         let trig = match first_trig {
             Some(t) => t,
-            None => JointTrig::new(&q),
+            None => JointTrig::of(&q),
         };
         s.trig = trig;
         let kin = TipKinematics::of(p.l, &trig, &qd);

@@ -513,8 +513,10 @@ mod tests {
         /// `atan2` are each within an ulp or two, 2.4e-7 rad at pi/2; the angles are
         /// sums of two of them; near the straight arm `1 - c` is exact and the
         /// square root's relative error is halved), the sines and cosines within
-        /// 1e-6 of those of the f64 angles. Beyond the reach (and at the base, and
-        /// for a non-finite target) both refuse.
+        /// 2e-6 of those of the f64 angles, as the angles (a sine's slope is at most
+        /// 1; near the straight arm `sin(delta/2)` carries the `f32` rounding of `|z|`
+        /// times `cos / sin (delta/2)`, 1.5e-6 at `|z| = 0.999 (2 l)`, the saved case).
+        /// Beyond the reach (and at the base, and for a non-finite target) both refuse.
         #[test]
         fn reference_joints_agree_with_the_shared_inverse_kinematics(
             radius in 0.001f64..1.0, angle in -3.1f64..3.1, down in proptest::bool::ANY,
@@ -529,7 +531,7 @@ mod tests {
             }
             let te = JointTrig::new(&exact);
             for (a, b) in [(t.s1, te.s1), (t.c1, te.c1), (t.s2, te.s2), (t.c2, te.c2)] {
-                prop_assert!((a as f64 - b).abs() <= 1e-6, "{} against {}", a, b);
+                prop_assert!((a as f64 - b).abs() <= 2e-6, "{} against {}", a, b);
             }
         }
 

@@ -103,6 +103,15 @@ impl<T: Real> JointTrig<T> {
 }
 
 impl JointTrig<f32> {
+    /// [`JointTrig::new`]`(q)` (rad), the same bits, with the two angles' `sin_cos`
+    /// as one run ([`trig::sin_cos2_f32`]: their constants loaded once) and inlined
+    /// where it is called: the firmware's estimate, every control step.
+    #[inline(always)]
+    pub fn of(q: &Vector2<f32>) -> Self {
+        let [(s1, c1), (s2, c2)] = trig::sin_cos2_f32(q[0], q[1]);
+        Self { s1, c1, s2, c2 }
+    }
+
     /// The sines and cosines at `q` (rad) from these, taken at `base` (rad), when
     /// `q` is within 1/16 rad of `base` in both angles ([`trig::rotate_f32`]: a
     /// dozen instructions per angle on the MCU against fifty), else
@@ -253,6 +262,16 @@ mod tests {
             }
         }
         assert!(worst.0 < 1e-14 && worst.1 < 2e-6, "worst differences {worst:?}");
+    }
+
+    /// `of` (the two angles' `sin_cos` as one run) is `new`, bit for bit.
+    #[test]
+    fn of_is_new_bit_for_bit() {
+        for i in -300..=300 {
+            let q = Vector2::new(0.0213f32 * i as f32, 1.3 - 0.0171 * i as f32);
+            let (a, b) = (JointTrig::of(&q), JointTrig::new(&q));
+            assert_eq!([a.s1, a.c1, a.s2, a.c2].map(f32::to_bits), [b.s1, b.c1, b.s2, b.c2].map(f32::to_bits), "q = {q:?}");
+        }
     }
 
     /// `near` gives the sines and cosines of `q` to a few f32 roundings from those
