@@ -17,7 +17,7 @@ use crate::{
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, EncoderScale, FrameFault, Measurement},
     estimator::{self, AngleTracker},
-    law::{self, HybridInput, HybridSignals, HybridState, PidState, TipKinematics},
+    law::{self, HybridInput, HybridState, PidState, TipKinematics},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
@@ -395,8 +395,8 @@ impl Firmware {
         };
         let lifted = self.liftoff.update(&rule, m.f_n, height);
         // The raw angles (quantisation only, no observer lag) against the load cell.
-        // Their sines and cosines from the estimate's (a few milliradians away).
-        let measured_height = tip_position_trig(p.l, &trig.near(&q, &Vector2::new(m.theta1, theta2)))[1] + p.h;
+        // Their cosines from the estimate's sines and cosines (a few milliradians away).
+        let measured_height = trig.tip_normal_near(p.l, &q, &Vector2::new(m.theta1, theta2)) + p.h;
         let consistency_rule = ConsistencyRule {
             contact_force: cfg.sensor_contact_force,
             height_tolerance: cfg.sensor_height_tolerance,
@@ -458,12 +458,11 @@ impl Firmware {
         if reference.moving {
             flags |= status::REFERENCE_MOVING;
         }
-        let mut signals = HybridSignals::default();
         let u_raw = match cfg.controller {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, sig) = law::hybrid_at(
+                let (u, _signals) = law::hybrid_at(
                     &self.terms,
                     p.mu,
                     &cfg.hybrid,
@@ -477,7 +476,6 @@ impl Firmware {
                     ts,
                     self.last_saturated,
                 )?;
-                signals = sig;
                 u
             }
         };
@@ -491,15 +489,10 @@ impl Firmware {
         self.telemetry = Telemetry {
             q: [q[0], q[1]],
             qd: [qd[0], qd[1]],
-            z: [z[0], z[1]],
-            z_dot: [z_dot[0], z_dot[1]],
             reference: [reference.pos, reference.vel, reference.acc],
             f_n_ref,
             f: [m.f_t, m.f_n],
-            hybrid: signals,
             u_raw,
-            lifted,
-            innovation,
         };
         Ok((u, flags))
     }

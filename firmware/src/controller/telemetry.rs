@@ -1,37 +1,31 @@
 //! What the firmware reports of its last step: [`Telemetry`] (its estimates,
-//! references, forces and law signals, for SIL traces and tests) and the wire's
-//! telemetry message built from it ([`Firmware::telemetry_message`]).
+//! reference, forces and the law's torques, for SIL traces and tests) and the
+//! wire's telemetry message built from it ([`Firmware::telemetry_message`]).
 
 use shared::wire::{self, ActuatorCommand};
 
 use super::Firmware;
-use crate::law::HybridSignals;
 
-/// What the firmware computed in its last step (for telemetry, SIL traces and tests).
+/// What the firmware computed in its last step (for telemetry, SIL traces and tests):
+/// what the wire's telemetry message carries, and the reference's rate and
+/// acceleration. Stored every step, so nothing more (issue 56: the tip's estimate,
+/// the hybrid law's signals, the lift-off flag and the innovations were 13 stores a
+/// step that no message carried; the law's signals are [`crate::law::hybrid_at`]'s
+/// return, the tip's from [`crate::law::TipKinematics`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Telemetry {
     /// Estimated `[theta1, theta2]`, rad.
     pub q: [f32; 2],
     /// Estimated `[theta1_dot, theta2_dot]`, rad/s.
     pub qd: [f32; 2],
-    /// Estimated tip position `[z_t, z_n]`, m.
-    pub z: [f32; 2],
-    /// Estimated tip velocity, m/s.
-    pub z_dot: [f32; 2],
     /// Reference `[z_t*, z_t_dot*, z_t_ddot*]`.
     pub reference: [f32; 3],
     /// Normal-force reference `f_n*` after the start-up ramp, N.
     pub f_n_ref: f32,
     /// Measured `[f_t, f_n]`, N.
     pub f: [f32; 2],
-    /// Hybrid-law signals (zero under PID).
-    pub hybrid: HybridSignals,
     /// Motor torques before saturation and quantisation, N m.
     pub u_raw: [f32; 2],
-    /// Whether lift-off is declared.
-    pub lifted: bool,
-    /// Observer innovations `[theta1, theta2]` (measured minus predicted angle), rad.
-    pub innovation: [f32; 2],
 }
 
 impl Firmware {
