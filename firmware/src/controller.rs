@@ -437,7 +437,8 @@ impl Firmware {
                 height_rate: z_dot[1],
                 load_saturated,
             };
-            if self.wiring.update(&self.wiring_rule, p.m * p.l * p.l, &input).is_some() {
+            let mass = [self.terms.m11, self.terms.half_ml2, self.terms.m22];
+            if self.wiring.update_folded(&self.wiring_rule, mass, &input).is_some() {
                 return Err(SafeReason::Miswired);
             }
         }
