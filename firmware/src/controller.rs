@@ -490,7 +490,7 @@ impl Firmware {
         self.telemetry = Telemetry {
             q: [q[0], q[1]],
             qd: [qd[0], qd[1]],
-            reference: [reference.pos, reference.vel, reference.acc],
+            z_t_ref: reference.pos,
             f_n_ref,
             f: [m.f_t, m.f_n],
             u_raw,
