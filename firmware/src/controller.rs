@@ -92,6 +92,8 @@ pub struct Firmware {
     dt: f32,
     /// `1 / dt`, 1/s: the rate of a step that follows its predecessor (no gap).
     rate: f32,
+    /// The friction estimate's filter gain per period, `mu_estimate::gain(dt)`.
+    mu_gain: f32,
     /// `1 / move_time_s`, 1/s, for the first frame's move.
     move_rate: f32,
     /// The force ramp's duration (`force_ramp_s`, at least 1 ns), s, and its inverse, 1/s.
@@ -142,6 +144,7 @@ impl Firmware {
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
             rate: 1.0 / cfg.period.as_secs_f32(),
+            mu_gain: crate::mu_estimate::gain(cfg.period.as_secs_f32()),
             move_rate: 1.0 / cfg.move_time_s,
             ramp: (cfg.force_ramp_s.max(1e-9), 1.0 / cfg.force_ramp_s.max(1e-9)),
             tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
@@ -475,6 +478,7 @@ impl Firmware {
                     &kin,
                     &mut self.hybrid,
                     ts,
+                    self.mu_gain,
                     self.last_saturated,
                 )?;
                 u

@@ -11,7 +11,7 @@ use shared::{
 
 use crate::{
     config::{FrictionCompensation, HybridGains, PidGains},
-    mu_estimate::{FrictionSample, MuEstimate},
+    mu_estimate::{self, FrictionSample, MuEstimate},
     reference::RefPoint,
 };
 
@@ -249,7 +249,7 @@ pub fn hybrid_trig(
     saturated: bool,
 ) -> Result<([f32; 2], HybridSignals), LawError> {
     let kin = TipKinematics::of(arm.params.l, trig, &input.qd);
-    hybrid_at(&arm.terms(), arm.params.mu, gains, comp, reference, f_n_ref, input, trig, &kin, state, dt, saturated)
+    hybrid_at(&arm.terms(), arm.params.mu, gains, comp, reference, f_n_ref, input, trig, &kin, state, dt, mu_estimate::gain(dt), saturated)
 }
 
 /// The tip's kinematics at the estimated state (paper eq. 1): what the step
@@ -276,7 +276,9 @@ impl TipKinematics {
 
 /// [`hybrid_trig`] with the arm's folded factors `terms` (once per configuration),
 /// the friction coefficient `mu_hat` and the tip's kinematics `kin` (those of
-/// `trig` and `input.qd`) given: the firmware's step, which has them already.
+/// `trig` and `input.qd`) given, and the friction estimate's gain per period
+/// `mu_gain` ([`mu_estimate::gain`]`(dt)`, folded once per configuration): the
+/// firmware's step, which has them already.
 /// The same torques and signals as [`hybrid`], bit for bit.
 ///
 /// The sine and cosine of `theta1 - theta2` (the singularity test, the centripetal
@@ -301,6 +303,7 @@ pub fn hybrid_at(
     kin: &TipKinematics,
     state: &mut HybridState,
     dt: f32,
+    mu_gain: f32,
     saturated: bool,
 ) -> Result<([f32; 2], HybridSignals), LawError> {
     let (q, qd) = (input.q, input.qd);
@@ -353,7 +356,7 @@ pub fn hybrid_at(
         let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
         let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
         let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
-        state.mu.update(mu_hat, &sample, dt);
+        state.mu.update_with_gain(mu_hat, &sample, mu_gain);
         state.mu.mu(mu_hat)
     } else {
         mu_hat
