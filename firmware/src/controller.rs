@@ -17,7 +17,7 @@ use crate::{
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, EncoderScale, FrameFault, Measurement},
     estimator::{self, AngleTracker},
-    law::{self, HybridInput, HybridSignals, HybridState, PidState, TipKinematics},
+    law::{self, HybridInput, HybridState, PidState, TipKinematics},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
@@ -92,6 +92,8 @@ pub struct Firmware {
     dt: f32,
     /// `1 / dt`, 1/s: the rate of a step that follows its predecessor (no gap).
     rate: f32,
+    /// The friction estimate's filter gain per period, `mu_estimate::gain(dt)`.
+    mu_gain: f32,
     /// `1 / move_time_s`, 1/s, for the first frame's move.
     move_rate: f32,
     /// The force ramp's duration (`force_ramp_s`, at least 1 ns), s, and its inverse, 1/s.
@@ -142,6 +144,7 @@ impl Firmware {
             telemetry: Telemetry::default(),
             dt: cfg.period.as_secs_f32(),
             rate: 1.0 / cfg.period.as_secs_f32(),
+            mu_gain: crate::mu_estimate::gain(cfg.period.as_secs_f32()),
             move_rate: 1.0 / cfg.move_time_s,
             ramp: (cfg.force_ramp_s.max(1e-9), 1.0 / cfg.force_ramp_s.max(1e-9)),
             tracker: AngleTracker::new(0.0, cfg.observer_bandwidth, cfg.period.as_secs_f32()),
@@ -381,7 +384,7 @@ impl Firmware {
         // step's prediction.
         let trig = match first_trig {
             Some(t) => t,
-            None => JointTrig::new(&q),
+            None => JointTrig::of(&q),
         };
         s.trig = trig;
         let kin = TipKinematics::of(p.l, &trig, &qd);
@@ -395,8 +398,8 @@ impl Firmware {
         };
         let lifted = self.liftoff.update(&rule, m.f_n, height);
         // The raw angles (quantisation only, no observer lag) against the load cell.
-        // Their sines and cosines from the estimate's (a few milliradians away).
-        let measured_height = tip_position_trig(p.l, &trig.near(&q, &Vector2::new(m.theta1, theta2)))[1] + p.h;
+        // Their cosines from the estimate's sines and cosines (a few milliradians away).
+        let measured_height = trig.tip_normal_near(p.l, &q, &Vector2::new(m.theta1, theta2)) + p.h;
         let consistency_rule = ConsistencyRule {
             contact_force: cfg.sensor_contact_force,
             height_tolerance: cfg.sensor_height_tolerance,
@@ -437,7 +440,8 @@ impl Firmware {
                 height_rate: z_dot[1],
                 load_saturated,
             };
-            if self.wiring.update(&self.wiring_rule, p.m * p.l * p.l, &input).is_some() {
+            let mass = [self.terms.m11, self.terms.half_ml2, self.terms.m22];
+            if self.wiring.update_folded(&self.wiring_rule, mass, &input).is_some() {
                 return Err(SafeReason::Miswired);
             }
         }
@@ -458,12 +462,11 @@ impl Firmware {
         if reference.moving {
             flags |= status::REFERENCE_MOVING;
         }
-        let mut signals = HybridSignals::default();
         let u_raw = match cfg.controller {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, sig) = law::hybrid_at(
+                let (u, _signals) = law::hybrid_at(
                     &self.terms,
                     p.mu,
                     &cfg.hybrid,
@@ -475,9 +478,9 @@ impl Firmware {
                     &kin,
                     &mut self.hybrid,
                     ts,
+                    self.mu_gain,
                     self.last_saturated,
                 )?;
-                signals = sig;
                 u
             }
         };
@@ -491,15 +494,10 @@ impl Firmware {
         self.telemetry = Telemetry {
             q: [q[0], q[1]],
             qd: [qd[0], qd[1]],
-            z: [z[0], z[1]],
-            z_dot: [z_dot[0], z_dot[1]],
-            reference: [reference.pos, reference.vel, reference.acc],
+            z_t_ref: reference.pos,
             f_n_ref,
             f: [m.f_t, m.f_n],
-            hybrid: signals,
             u_raw,
-            lifted,
-            innovation,
         };
         Ok((u, flags))
     }

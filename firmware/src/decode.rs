@@ -51,13 +51,11 @@ impl FrameFault {
 pub fn wrap(angle: f32) -> f32 {
     // `%` is a software `fmodf` on the MCU; within one turn it returns `angle`
     // itself (fmod is exact), so only larger angles pay for it.
-    let mut a = if angle.abs() < TAU { angle } else { rem_turn(angle) };
-    if a > PI {
-        a -= TAU;
-    } else if a <= -PI {
-        a += TAU;
-    }
-    a
+    let a = if angle.abs() < TAU { angle } else { rem_turn(angle) };
+    // `a > PI` and `a <= -PI` exclude each other: two selects, no branch (the
+    // usual angle, within the turn, took one and its pipeline refill).
+    let up = if a <= -PI { a + TAU } else { a };
+    if a > PI { a - TAU } else { up }
 }
 
 /// `angle % TAU`, out of line: LLVM would otherwise compute the remainder on

@@ -79,8 +79,9 @@ impl RunawayMonitor {
     /// cell is at full scale on either axis. Returns what ran away once a limit
     /// held for its confirmation; a non-finite rate counts as past the limit.
     pub fn update(&mut self, rule: &RunawayRule, qd: [f32; 2], load_clipped: bool) -> Option<Runaway> {
-        let beyond = |w: f32| w.is_nan() || w.abs() > rule.speed_limit;
-        let fast = beyond(qd[0]) || beyond(qd[1]);
+        // `|w| <= limit` is false for NaN: one comparison a rate, NaN past the limit.
+        let within = |w: f32| w.abs() <= rule.speed_limit;
+        let fast = !(within(qd[0]) && within(qd[1]));
         self.fast = if fast { self.fast.saturating_add(1) } else { 0 };
         self.clipped = if load_clipped { self.clipped.saturating_add(1) } else { 0 };
         if self.fast >= rule.speed_confirm {

@@ -101,10 +101,12 @@ impl TrackingMonitor {
     pub fn update(&mut self, rule: &TrackingRule, error: f32, lifted: bool) -> Option<Expectation> {
         let size = error.abs();
         let diverging = size - self.average > DIVERGING_M;
-        if size.is_finite() {
-            self.average += rule.smoothing * (size - self.average);
-        }
-        let past = error.is_nan() || (size > rule.bound && diverging) || size > TRACKING_ANY_M;
+        // A select, not a branch: the average moves only for a finite error.
+        let average = self.average + rule.smoothing * (size - self.average);
+        self.average = if size < f32::INFINITY { average } else { self.average };
+        // Not within `TRACKING_ANY_M`: past it, or NaN (one comparison for both).
+        let within_any = size <= TRACKING_ANY_M;
+        let past = !within_any || (size > rule.bound && diverging);
         self.run = if past { self.run.saturating_add(1) } else { 0 };
         self.lifted = if lifted { self.lifted.saturating_add(1) } else { 0 };
         if self.run >= rule.confirm {

@@ -120,11 +120,21 @@ impl WiringMonitor {
     /// motor (0: `u1`, 1: `u2`) found miswired once the rule held for its
     /// confirmation. Non-finite inputs are no evidence (the other checks see them).
     pub fn update(&mut self, rule: &WiringRule, ml2: f32, input: &WiringInput) -> Option<usize> {
+        self.update_folded(rule, [(4.0 / 3.0) * ml2, 0.5 * ml2, (1.0 / 3.0) * ml2], input)
+    }
+
+    /// [`WiringMonitor::update`] with the mass matrix's factors folded once per
+    /// configuration, `[4/3, 1/2, 1/3]` times `m l^2` (kg m^2; `shared::model::ArmTerms`'
+    /// `m11`, `half_ml2`, `m22`, the same products): the same bits, without the
+    /// step's five products for them.
+    #[inline(always)]
+    pub fn update_folded(&mut self, rule: &WiringRule, mass: [f32; 3], input: &WiringInput) -> Option<usize> {
         // M(q) a_u (paper eq. 1), then the motor torques of u_gen = [u1 - u2, u2].
-        let off = 0.5 * ml2 * input.c21;
+        let [m11, half_ml2, m22] = mass;
+        let off = half_ml2 * input.c21;
         let a = input.unexplained;
-        let d0 = (4.0 / 3.0) * ml2 * a[0] + off * a[1];
-        let d1 = off * a[0] + (1.0 / 3.0) * ml2 * a[1];
+        let d0 = m11 * a[0] + off * a[1];
+        let d1 = off * a[0] + m22 * a[1];
         let du = [d0 + d1, d1];
         // Two joints written out (the loops' iterators are not unrolled at `opt-level = "s"`).
         let filter = |m: &mut f32, d: f32| {
@@ -177,6 +187,28 @@ mod tests {
 
     fn input(unexplained: [f32; 2], applied: [f32; 2]) -> WiringInput {
         WiringInput { unexplained, c21: 0.9, applied, lifted: false, height: 0.0, height_rate: 0.0, load_saturated: false }
+    }
+
+    /// The factors folded in `ArmTerms` are the products `update` takes of `m l^2`,
+    /// so `update_folded` with them keeps every bit of `update`'s state and verdicts.
+    #[test]
+    fn the_folded_factors_are_the_products_bit_for_bit() {
+        let p = shared::Params::<f32>::paper();
+        let terms = shared::model::ArmTerms::of(&p);
+        let ml2 = p.m * p.l * p.l;
+        assert_eq!(
+            [terms.m11, terms.half_ml2, terms.m22].map(f32::to_bits),
+            [(4.0 / 3.0) * ml2, 0.5 * ml2, (1.0 / 3.0) * ml2].map(f32::to_bits)
+        );
+        let rule = WiringRule::at_period(1e-3);
+        let (mut a, mut b) = (WiringMonitor::default(), WiringMonitor::default());
+        for i in 0..200 {
+            let x = i as f32 * 0.37;
+            let inp = WiringInput { c21: libm::cosf(x), ..input([30.0 * libm::sinf(x), -50.0 * libm::cosf(1.3 * x)], [0.4, -0.2]) };
+            let (va, vb) = (a.update(&rule, ml2, &inp), b.update_folded(&rule, [terms.m11, terms.half_ml2, terms.m22], &inp));
+            assert_eq!(va, vb);
+            assert_eq!(a.missed().map(f32::to_bits), b.missed().map(f32::to_bits), "step {i}");
+        }
     }
 
     #[test]

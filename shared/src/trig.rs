@@ -27,36 +27,84 @@ const PIO2_3: f32 = 7.549_789_954_891_882e-8;
 /// Largest `|x|` reduced in single precision.
 const REDUCE_MAX: f32 = 8192.0;
 
-/// `x % TAU` (exact: fmodf), out of line and cold: never an arm angle, and kept
-/// out of the control step's code (its instruction count is a CI gate).
-#[cold]
-#[inline(never)]
-fn reduce_large(x: f32) -> f32 {
-    x % core::f32::consts::TAU
-}
-
 /// `(sin x, cos x)` for `x` in radians, in `f32` arithmetic only; NaN for NaN or
 /// infinite `x`.
 #[inline]
 pub fn sin_cos_f32(x: f32) -> (f32, f32) {
-    if !x.is_finite() {
-        return (f32::NAN, f32::NAN);
-    }
-    // `%` is exact (fmodf); `|x % TAU| < TAU` is then in the range below.
-    let x = if x.abs() > REDUCE_MAX { reduce_large(x) } else { x };
+    sin_cos_reduced(in_range(x))
+}
+
+/// `(sin x, cos x)` of two angles `x = [x0, x1]` (rad): exactly
+/// `[sin_cos_f32(x0), sin_cos_f32(x1)]` (test below; NaN for NaN alike), written as
+/// one straight run so that the two evaluations share their constants' loads and
+/// interleave on the MCU's FPU (the arm's two joints, every control step).
+#[inline(always)]
+pub fn sin_cos2_f32(x0: f32, x1: f32) -> [(f32, f32); 2] {
+    let (x0, x1) = (in_range(x0), in_range(x1));
+    let (k0, r0) = reduce(x0);
+    let (k1, r1) = reduce(x1);
+    let (s0, c0) = polynomials(r0);
+    let (s1, c1) = polynomials(r1);
+    [quadrant(k0, s0, c0), quadrant(k1, s1, c1)]
+}
+
+/// `x` when `|x| <= 2^13` (one comparison, false for NaN and infinities too), else
+/// [`outside`]`(x)`.
+#[inline(always)]
+fn in_range(x: f32) -> f32 {
+    if x.abs() <= REDUCE_MAX { x } else { outside(x) }
+}
+
+/// Beyond `2^13` rad: `x % TAU` (exact: fmodf; `|x % TAU| < TAU`); NaN for NaN or
+/// infinite `x` (the evaluation then gives NaN). Out of line and cold: never an arm
+/// angle, and kept out of the control step's code (its cycles are a CI gate).
+#[cold]
+#[inline(never)]
+fn outside(x: f32) -> f32 {
+    if x.is_finite() { x % core::f32::consts::TAU } else { f32::NAN }
+}
+
+/// `(sin x, cos x)` for `|x| <= 2^13`: the reduction, the polynomials and the quadrant.
+#[inline(always)]
+fn sin_cos_reduced(x: f32) -> (f32, f32) {
+    let (k, r) = reduce(x);
+    let (s, c) = polynomials(r);
+    quadrant(k, s, c)
+}
+
+/// `k = round(x 2/pi)` (halves away from zero) and `r = x - k pi/2` in three parts
+/// (Cody and Waite), for `|x| <= 2^13`.
+#[inline(always)]
+fn reduce(x: f32) -> (i32, f32) {
     let t = x * core::f32::consts::FRAC_2_PI;
-    let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+    // `t + 0.5` for `t >= 0` (-0 included), `t - 0.5` below: `0.5` with the sign of `t`
+    // (the same `k`: `-0 - 0.5` and `-0 + 0.5` both truncate to 0), no select.
+    let half = f32::from_bits(0.5f32.to_bits() | (t.to_bits() & 0x8000_0000));
+    let k = (t + half) as i32;
     let kf = k as f32;
-    let r = ((x - kf * PIO2_1) - kf * PIO2_2) - kf * PIO2_3;
+    (k, ((x - kf * PIO2_1) - kf * PIO2_2) - kf * PIO2_3)
+}
+
+/// Cephes' minimax polynomials for `(sin r, cos r)` on `[-pi/4, pi/4]`.
+#[inline(always)]
+fn polynomials(r: f32) -> (f32, f32) {
     let z = r * r;
     let s = ((-1.951_529_589_1e-4 * z + 8.332_160_873_6e-3) * z - 1.666_665_461_1e-1) * z * r + r;
     let c = ((2.443_315_711_809_948e-5 * z - 1.388_731_625_493_765e-3) * z + 4.166_664_568_298_827e-2) * z * z - 0.5 * z + 1.0;
-    match k & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    (s, c)
+}
+
+/// `(sin x, cos x)` from `(sin r, cos r)` in quadrant `k mod 4` (`x = r + k pi/2`):
+/// `(s, c)`, `(c, -s)`, `(-s, -c)`, `(-c, s)`. Without a branch (a table branch and
+/// its pipeline refill on the MCU): the pair swapped for an odd `k`, the sine's sign
+/// flipped by bit 1 of `k`, the cosine's by bit 1 of `k + 1` (a sign bit's flip is
+/// the negation, bit for bit).
+#[inline(always)]
+fn quadrant(k: i32, s: f32, c: f32) -> (f32, f32) {
+    let (a, b) = if k & 1 != 0 { (c, s) } else { (s, c) };
+    let sin_sign = ((k as u32) & 2) << 30;
+    let cos_sign = ((k.wrapping_add(1) as u32) & 2) << 30;
+    (f32::from_bits(a.to_bits() ^ sin_sign), f32::from_bits(b.to_bits() ^ cos_sign))
 }
 
 /// Largest angle step (rad) [`rotate_f32`] takes.
@@ -79,6 +127,27 @@ pub fn rotate_f32(s: f32, c: f32, d: f32) -> Option<(f32, f32)> {
     let sd = d + d * d2 * (-1.0 / 6.0 + d2 * (1.0 / 120.0));
     let cm1 = d2 * (-0.5 + d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
     Some((s + (s * cm1 + c * sd), c + (c * cm1 - s * sd)))
+}
+
+/// `cos(b + d)` alone from `(s, c) = (sin b, cos b)` and a step `d` (rad,
+/// `|d| <= ROTATE_MAX = 1/16`), in `f32`: `c - (c (1 - cos d) + s sin d)` with
+/// `1 - cos d` to `d^2 / 2` and `sin d` to `d^3 / 6`. Half of [`rotate_f32`]'s
+/// work for one output and its series' two leading terms each: within `d^4 / 24`
+/// (6.4e-7 at `1/16`, below 1e-13 at the encoders' few milliradians) plus a few
+/// `f32` roundings of the true value when `s` and `c` are exact (test below).
+/// `None` beyond `1/16` rad or for a NaN `d`. For a check that needs the value to
+/// far less than that (the firmware's tip height against the load cell, tolerance
+/// millimetres), not for a computation carried on.
+#[inline]
+pub fn cos_rotated_f32(s: f32, c: f32, d: f32) -> Option<f32> {
+    // One comparison, false for NaN too.
+    let within = d.abs() <= ROTATE_MAX;
+    if !within {
+        return None;
+    }
+    let d2 = d * d;
+    let sd = d - d * d2 * (1.0 / 6.0);
+    Some(c - (c * (0.5 * d2) + s * sd))
 }
 
 /// `tan(pi/8)`: below it `atan` takes its argument directly.
@@ -141,6 +210,87 @@ mod tests {
         assert!(rotate_f32(0.0, 1.0, 0.0626).is_none() && rotate_f32(0.0, 1.0, f32::NAN).is_none());
     }
     use super::*;
+
+    /// The form before issue 56's third round: the rounding by a select, the
+    /// quadrant by a `match` (a table branch on the MCU).
+    fn sin_cos_matched(x: f32) -> (f32, f32) {
+        if !x.is_finite() {
+            return (f32::NAN, f32::NAN);
+        }
+        let x = if x.abs() > REDUCE_MAX { x % core::f32::consts::TAU } else { x };
+        let t = x * core::f32::consts::FRAC_2_PI;
+        let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+        let kf = k as f32;
+        let r = ((x - kf * PIO2_1) - kf * PIO2_2) - kf * PIO2_3;
+        let (s, c) = polynomials(r);
+        match k & 3 {
+            0 => (s, c),
+            1 => (c, -s),
+            2 => (-s, -c),
+            _ => (-c, s),
+        }
+    }
+
+    /// The branchless rounding and quadrant, and the two-angle form, give the
+    /// matched form's bits: every quadrant's boundaries (`k pi/4` and the floats
+    /// next to them), a sweep over `|x| <= 2^13`, zeros, large values, NaN and
+    /// infinities.
+    #[test]
+    fn the_branchless_quadrant_and_the_pair_are_the_matched_form_bit_for_bit() {
+        let same = |x: f32, y: f32| {
+            let want = sin_cos_matched(x);
+            let bits = |p: (f32, f32)| (p.0.to_bits(), p.1.to_bits());
+            let got = sin_cos_f32(x);
+            assert!(bits(got) == bits(want) || (got.0.is_nan() && want.0.is_nan()), "x = {x:e}: {got:?} against {want:?}");
+            let pair = sin_cos2_f32(x, y);
+            let want_y = sin_cos_matched(y);
+            assert!(bits(pair[0]) == bits(want) || (pair[0].0.is_nan() && want.0.is_nan()), "x = {x:e} in a pair");
+            assert!(bits(pair[1]) == bits(want_y) || (pair[1].0.is_nan() && want_y.0.is_nan()), "y = {y:e} in a pair");
+        };
+        for k in -40..=40 {
+            let b = k as f32 * core::f32::consts::FRAC_PI_4;
+            for d in -3i32..=3 {
+                let x = f32::from_bits((b.to_bits() as i32 + d) as u32);
+                same(x, -x);
+                same(-x, 0.37 * x);
+            }
+        }
+        for i in -200_000..=200_000 {
+            let x = i as f32 * 0.040_96;
+            same(x, 1.0 - x * 0.5);
+        }
+        for x in [0.0f32, -0.0, 8192.0, -8192.0, 8192.5, 1.0e9, f32::MAX, f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            same(x, 0.25);
+            same(0.25, x);
+        }
+    }
+
+    /// Within 1/16 rad, the cosine of `b + d` from `(sin b, cos b)` is within
+    /// `d^4 / 24 + 1.5e-7` of the true value (f64 of the `f32` inputs); beyond
+    /// 1/16 or for NaN, none. A series' term dropped (the `d^3` of the sine) fails it.
+    #[test]
+    fn the_rotated_cosine_agrees_with_the_true_value() {
+        let mut worst = 0.0f64;
+        for i in -300..=300 {
+            let b = 0.0213 * i as f32;
+            let (s, c) = sin_cos_f32(b);
+            for j in -256i32..=256 {
+                let d = ROTATE_MAX * j as f32 / 256.0;
+                let got = cos_rotated_f32(s, c, d).expect("within 1/16 rad") as f64;
+                let want = (b as f64 + d as f64).cos();
+                let bound = (d as f64).powi(4) / 24.0 + 1.5e-7;
+                assert!((got - want).abs() <= bound, "b = {b}, d = {d}: {got} against {want}");
+                worst = worst.max((got - want).abs());
+                let dropped = (c - (c * (0.5 * d * d) + s * d)) as f64;
+                if j.abs() == 256 && (b as f64).sin().abs() > 0.5 {
+                    assert!((dropped - want).abs() > bound, "the sine's cube matters at 1/16 (b = {b})");
+                }
+            }
+        }
+        assert!(worst > 1e-8, "the bound is exercised ({worst:e})");
+        assert!(cos_rotated_f32(0.0, 1.0, 0.0626).is_none() && cos_rotated_f32(0.0, 1.0, f32::NAN).is_none());
+        assert_eq!(cos_rotated_f32(0.3, 0.9, 0.0), Some(0.9), "no step, the same value");
+    }
 
     #[test]
     fn agrees_with_f64_over_the_reduced_range() {
