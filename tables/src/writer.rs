@@ -131,11 +131,14 @@ mod tests {
 
     use super::*;
 
+    /// What a [`Recorder`] saw: the rows, the chunks' sizes, whether it was finished.
+    type Seen = Arc<Mutex<(Vec<u32>, Vec<usize>, bool)>>;
+
     /// A sink that keeps what it is given: the rows, in order, and the chunks'
     /// sizes; fails on the row `fail_at`, panics on the row `panic_at`.
     struct Recorder {
         path: PathBuf,
-        seen: Arc<Mutex<(Vec<u32>, Vec<usize>, bool)>>,
+        seen: Seen,
         fail_at: Option<u32>,
         panic_at: Option<u32>,
     }
@@ -168,7 +171,7 @@ mod tests {
         }
     }
 
-    fn recorder(fail_at: Option<u32>, panic_at: Option<u32>) -> (Recorder, Arc<Mutex<(Vec<u32>, Vec<usize>, bool)>>) {
+    fn recorder(fail_at: Option<u32>, panic_at: Option<u32>) -> (Recorder, Seen) {
         let seen = Arc::new(Mutex::new((Vec::new(), Vec::new(), false)));
         (Recorder { path: "t.rows".into(), seen: seen.clone(), fail_at, panic_at }, seen)
     }

@@ -140,7 +140,7 @@ mod tests {
         let mut checked = [0usize; 2];
         for (x0, v_belt) in [(X0A, -0.5), (X0D, 0.3)] {
             let params = Params { v_belt, ..Params::paper() };
-            let mut plant = Plant::new(params, SimConfig::default(), deg_to_state(x0), 0.0, [0.0, 0.0]).unwrap();
+            let mut plant = Plant::new(params, SimConfig::default(), deg_to_state(x0.deg), 0.0, [0.0, 0.0]).unwrap();
             for k in 0..3000 {
                 plant.advance(&Hold([0.2, -0.1]), 1e-3, &mut NoObserver).unwrap();
                 let sticking = match plant.phase {
