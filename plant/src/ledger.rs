@@ -58,10 +58,26 @@ pub const IMPULSE_TOLERANCE: f64 = 1e-9;
 /// theta2, theta2_dot, ..]`), from the sines and cosines `tr` of its angles.
 #[inline]
 pub fn energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
-    let p = &arm.params;
+    energy_with_kinetic(arm, tr, y, kinetic_energy(arm, tr, y))
+}
+
+/// The arm's kinetic energy `T = q_dot^T M q_dot / 2` (J) at `y` (`[theta1,
+/// theta1_dot, theta2, theta2_dot, ..]`), from the sines and cosines `tr` of its
+/// angles: the mass matrix of paper eq. 1 at `cos(theta2 - theta1)`, as
+/// `Arm::kinetic_energy`; [`energy`]'s kinetic part, the same bits.
+#[inline]
+pub fn kinetic_energy(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64]) -> f64 {
     let qd = nalgebra::Vector2::new(y[1], y[3]);
-    // T from the mass matrix of paper eq. 1 at cos(theta2 - theta1), as `Arm::kinetic_energy`.
-    let t = 0.5 * qd.dot(&(arm.mass_matrix_cos(tr.c2 * tr.c1 + tr.s2 * tr.s1) * qd));
+    0.5 * qd.dot(&(arm.mass_matrix_cos(tr.c2 * tr.c1 + tr.s2 * tr.s1) * qd))
+}
+
+/// [`energy`] (J) given its kinetic part `t` (J, [`kinetic_energy`] at `y`, or the
+/// same expression computed elsewhere): `t` plus gravity's and the spring's
+/// potential at `y`'s angles (sines and cosines `tr`), the same bits as [`energy`]
+/// for the same `t`.
+#[inline]
+pub fn energy_with_kinetic(arm: &Arm<f64>, tr: &JointTrig<f64>, y: &[f64], t: f64) -> f64 {
+    let p = &arm.params;
     let spring = y[2] - y[0] + p.alpha0;
     t - p.m * p.g * p.l * (1.5 * tr.c1 + 0.5 * tr.c2) + 0.5 * p.k * spring * spring
 }

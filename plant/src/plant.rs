@@ -8,7 +8,7 @@ use std::cell::Cell;
 use nalgebra::Vector2;
 use shared::{
     Arm, ContactMode, Params, SlipDirection,
-    kinematics::{jacobian_trig, tip_position_trig},
+    kinematics::{JointTrig, jacobian_trig, tip_position_trig},
 };
 
 use crate::{
@@ -74,6 +74,35 @@ pub struct Plant {
     /// ([`crate::segment::EventLocator::trend_f_n`]), kept from one solve to the
     /// next while the slide goes on (an interval's end can fall in the approach).
     slide_trend: Option<f64>,
+    /// The energy and the sines and cosines at one arm state, for where that state
+    /// is met again ([`Known`]).
+    known: Option<Known>,
+}
+
+/// The arm's energy and the sines and cosines of its angles at one state `x`,
+/// kept where they were computed and read again where the plant meets the same
+/// state (bit for bit): a solve's last step (the locator's balance) and the
+/// projection after it; the projection and the next interval's start (its first
+/// evaluation, the locator's first balance). A value cache: each value is a
+/// function of `x` alone (the trig cache's values are, [`crate::trig`]), so the
+/// plant computes the same bits with or without it (issue 56: three energies and
+/// three look-ups of the same angles a control period).
+#[derive(Debug, Clone, Copy)]
+struct Known {
+    /// `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s).
+    x: [f64; 4],
+    /// The sines and cosines of `x`'s angles.
+    trig: JointTrig<f64>,
+    /// The energy at `x`, J ([`crate::ledger::energy`]).
+    energy: f64,
+}
+
+impl Known {
+    /// Whether this is the state of `y` (`[theta1, theta1_dot, theta2, theta2_dot, ..]`), to the bit.
+    #[inline]
+    fn at(&self, y: &[f64]) -> bool {
+        self.x.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
+    }
 }
 
 /// The instants an advance samples ([`Plant::advance_sampling`]): `k dt` s for `k`
@@ -116,7 +145,11 @@ pub struct Sample {
 
 /// What [`Plant::advance`] changes in a plant: a plant restored to it
 /// ([`Plant::restore`]) goes on exactly as from the instant it was taken
-/// ([`Plant::checkpoint`]), counters and the model's caches included.
+/// ([`Plant::checkpoint`]), counters included. The model's value caches (the
+/// sines and cosines, [`crate::trig`]; [`Known`]) are not kept: their values are
+/// functions of the angles alone, so a restored plant computes the same bits with
+/// whatever they hold. Small, as the SIL loop takes one every period (issue 56):
+/// the end point of an interval, rare there, is kept boxed.
 #[derive(Debug, Clone)]
 pub struct Checkpoint {
     t: f64,
@@ -127,9 +160,8 @@ pub struct Checkpoint {
     time_stepping: bool,
     last_h: f64,
     evals: u64,
-    trig: TrigCache,
     counters: Counters,
-    end_point: Option<EndPoint>,
+    end_point: Option<Box<EndPoint>>,
     ledger: Ledger,
     departing: bool,
     slide_trend: Option<f64>,
@@ -200,6 +232,7 @@ impl Plant {
             e0: f64::NAN,
             departing: false,
             slide_trend: None,
+            known: None,
         };
         plant.e0 = plant.energy();
         let z = plant.tip();
@@ -310,8 +343,25 @@ impl Plant {
     /// `Arm::potential_energy` to rounding, without their three `cos` calls: the
     /// projection books its share of the ledger every period of a slide, issue 56).
     pub fn energy(&self) -> f64 {
-        let (q, _) = segment::split(&self.y);
-        crate::ledger::energy(&self.arm, &self.trig.get(&q), &self.y)
+        match self.known() {
+            Some(k) => k.energy,
+            None => crate::ledger::energy(&self.arm, &self.trig.get(&Vector2::new(self.y[0], self.y[2])), &self.y),
+        }
+    }
+
+    /// What is known at the current state ([`Known`]), if anything.
+    #[inline]
+    fn known(&self) -> Option<Known> {
+        self.known.filter(|k| k.at(&self.y))
+    }
+
+    /// The sines and cosines of the current angles: known ([`Known`]) or from the trig cache.
+    #[inline]
+    fn trig_here(&self) -> JointTrig<f64> {
+        match self.known() {
+            Some(k) => k.trig,
+            None => self.trig.get(&Vector2::new(self.y[0], self.y[2])),
+        }
     }
 
     /// Mechanical energy (J) and tip velocity `[z_t_dot, z_n_dot]` (m/s) of the arm
@@ -358,6 +408,7 @@ impl Plant {
 
     /// The plant's state now, to go back to with [`Plant::restore`] (e.g. after
     /// advancing ahead of a decision that turned out otherwise).
+    #[inline]
     pub fn checkpoint(&self) -> Checkpoint {
         Checkpoint {
             t: self.t,
@@ -368,9 +419,8 @@ impl Plant {
             time_stepping: self.time_stepping,
             last_h: self.last_h,
             evals: self.evals.get(),
-            trig: self.trig.clone(),
             counters: self.counters,
-            end_point: self.end_point,
+            end_point: self.end_point.map(Box::new),
             ledger: self.ledger,
             departing: self.departing,
             slide_trend: self.slide_trend,
@@ -389,7 +439,6 @@ impl Plant {
             time_stepping,
             last_h,
             evals,
-            trig,
             counters,
             end_point,
             ledger,
@@ -399,8 +448,8 @@ impl Plant {
         (self.t, self.y, self.phase, self.cone_relaxed, self.in_violation, self.time_stepping, self.last_h) =
             (t, y, phase, cone_relaxed, in_violation, time_stepping, last_h);
         self.evals.set(evals);
-        (self.trig, self.counters, self.end_point, self.ledger, self.departing, self.slide_trend) =
-            (trig, counters, end_point, ledger, departing, slide_trend);
+        (self.counters, self.end_point, self.ledger, self.departing, self.slide_trend) =
+            (counters, end_point.map(|e| *e), ledger, departing, slide_trend);
     }
 
     fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {

@@ -10,7 +10,7 @@ use nalgebra::Vector2;
 use shared::{
     Arm,
     contact::{sliding_force, sticking_force},
-    kinematics::tip_position_trig,
+    kinematics::{JointTrig, tip_position_trig},
     model::{ArmTerms, TipDynamics},
 };
 
@@ -141,11 +141,36 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     /// Tip dynamics, contact force `[f_t, f_n]` (N) and controller output at `(t, y)`.
     #[inline]
     pub fn evaluate(&self, t: f64, y: &OdeState, xi_dot: &mut [f64; 2]) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
+        let (q, _) = split(y);
+        self.evaluate_body(t, y, xi_dot, &self.trig.get(&q))
+    }
+
+    /// [`Segment::evaluate`] with `trig`, the sines and cosines of `y`'s angles
+    /// (the trig cache's values for them, or the same values kept elsewhere).
+    #[inline]
+    pub fn evaluate_trig(
+        &self,
+        t: f64,
+        y: &OdeState,
+        xi_dot: &mut [f64; 2],
+        trig: &JointTrig<f64>,
+    ) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
+        self.evaluate_body(t, y, xi_dot, trig)
+    }
+
+    #[inline(always)]
+    fn evaluate_body(
+        &self,
+        t: f64,
+        y: &OdeState,
+        xi_dot: &mut [f64; 2],
+        trig: &JointTrig<f64>,
+    ) -> (TipDynamics<f64>, Vector2<f64>, Vector2<f64>) {
         let (q, qd) = split(y);
         let xi = [y[4], y[5]];
         let motor = self.ctrl.torque_in(self.phase, t, &[y[0], y[1], y[2], y[3]], &xi, xi_dot);
         let u = Arm::generalised_torque(&Vector2::new(motor[0], motor[1]));
-        let mut td = self.terms.tip_dynamics_trig(&self.trig.get(&q), &q, &qd, &u);
+        let mut td = self.terms.tip_dynamics_trig(trig, &q, &qd, &u);
         // The corrected free acceleration is applied in place and then restored (not on
         // a copy: a copy of the tip dynamics was a tenth of an evaluation's cost).
         let f = match self.phase {
@@ -199,7 +224,30 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     #[inline]
     pub fn point_uncounted(&self, t: f64, y: &OdeState) -> Point {
         let mut xi_dot = [0.0; 2];
-        let (td, f, motor) = self.evaluate(t, y, &mut xi_dot);
+        let ev = self.evaluate(t, y, &mut xi_dot);
+        self.point_of(y, ev, xi_dot)
+    }
+
+    /// [`Segment::point`] with `trig`, the sines and cosines of `y`'s angles (as
+    /// [`Segment::evaluate_trig`]); counted in `evals`.
+    #[inline]
+    pub fn point_trig(&self, t: f64, y: &OdeState, trig: &JointTrig<f64>) -> Point {
+        self.count_evaluation();
+        self.point_trig_uncounted(t, y, trig)
+    }
+
+    /// [`Segment::point_trig`] without counting it.
+    #[inline]
+    pub fn point_trig_uncounted(&self, t: f64, y: &OdeState, trig: &JointTrig<f64>) -> Point {
+        let mut xi_dot = [0.0; 2];
+        let ev = self.evaluate_trig(t, y, &mut xi_dot, trig);
+        self.point_of(y, ev, xi_dot)
+    }
+
+    /// The point at `y` from the model's evaluation there (`(td, f, motor)` and
+    /// the controller's `xi_dot`, as [`Segment::evaluate`] gives them).
+    #[inline(always)]
+    fn point_of(&self, y: &OdeState, (td, f, motor): (TipDynamics<f64>, Vector2<f64>, Vector2<f64>), xi_dot: [f64; 2]) -> Point {
         let p = &self.arm.params;
         let (d1, d2) = (y[1], y[3]);
         // The ledger's powers (crate::ledger): the motors' `u_gen . q_dot`, the joint
@@ -236,16 +284,24 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
     /// (a step's check, issue 56).
     #[inline]
     pub fn energy_and_balance(&self, y0: &OdeState, e0: f64, y1: &OdeState) -> (f64, f64, f64) {
+        let (e1, residual, tol, _) = self.energy_and_balance_trig(y0, e0, y1);
+        (e1, residual, tol)
+    }
+
+    /// [`Segment::energy_and_balance`] and the sines and cosines of `y1`'s angles
+    /// it looked up (for the plant's projection at `y1`, `crate::plant::Known`).
+    #[inline]
+    pub fn energy_and_balance_trig(&self, y0: &OdeState, e0: f64, y1: &OdeState) -> (f64, f64, f64, JointTrig<f64>) {
         let (q, _) = split(y1);
         let tr = self.trig.get(&q);
         let e1 = crate::ledger::energy(self.arm, &tr, y1);
         let (residual, tol) = self.balance_with(&tr, y0, e0, y1, e1);
-        (e1, residual, tol)
+        (e1, residual, tol, tr)
     }
 
     /// [`Segment::balance`] with `tr`, the sines and cosines of `y1`'s angles.
     #[inline(always)]
-    fn balance_with(&self, tr: &shared::kinematics::JointTrig<f64>, y0: &OdeState, e0: f64, y1: &OdeState, e1: f64) -> (f64, f64) {
+    fn balance_with(&self, tr: &JointTrig<f64>, y0: &OdeState, e0: f64, y1: &OdeState, e1: f64) -> (f64, f64) {
         use crate::ledger::{BELT, DAMPING, MOTORS, SLIP};
         let works = [MOTORS, DAMPING, BELT, SLIP].map(|i| y1[i] - y0[i]);
         let residual = (e1 - e0) - (works[0] + works[1] + works[2] + works[3]);

@@ -13,7 +13,10 @@
 
 use std::{fs::File, io::Write, path::PathBuf};
 
-use crate::error::{Error, io_err};
+use crate::{
+    error::{Error, io_err},
+    writer::{RowSink, WriterThread},
+};
 
 /// Bytes buffered before they go to the file (one `write` system call each).
 pub const FLUSH_BYTES: usize = 1 << 20;
@@ -211,87 +214,35 @@ impl CsvFile {
     }
 }
 
-/// A [`CsvFile`] written by a thread of its own: the caller hands over chunks
-/// of rows and goes on (the simulation) while they are formatted and written,
-/// so on two cores the trace costs little more than the simulation alone.
-/// At most `DEPTH` chunks wait in the channel (bounded memory); emptied chunks
-/// come back for reuse.
-pub struct CsvThread<T: CsvRow + Send + 'static> {
-    to_writer: Option<std::sync::mpsc::SyncSender<Vec<T>>>,
-    from_writer: std::sync::mpsc::Receiver<Vec<T>>,
-    writer: Option<std::thread::JoinHandle<Result<(), Error>>>,
-    path: PathBuf,
-}
+impl<T: CsvRow> RowSink<T> for CsvFile {
+    const THREAD_NAME: &'static str = "csv-writer";
+    const FORMAT: &'static str = "CSV";
 
-impl<T: CsvRow + Send + 'static> CsvThread<T> {
-    /// Chunks waiting in the channel at most.
-    const DEPTH: usize = 4;
-
-    /// Starts the thread that writes `csv`.
-    ///
-    /// # Errors
-    /// [`Error::Io`] when the thread cannot be started.
-    pub fn spawn(mut csv: CsvFile) -> Result<Self, Error> {
-        let (to_writer, rx) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH);
-        let (back, from_writer) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH + 2);
-        let path = csv.path.clone();
-        let writer = std::thread::Builder::new()
-            .name("csv-writer".into())
-            .spawn(move || {
-                for mut rows in rx {
-                    for r in &rows {
-                        csv.row(r)?;
-                    }
-                    rows.clear();
-                    // The caller may have stopped taking them back: then drop it.
-                    let _ = back.try_send(rows);
-                }
-                csv.finish()
-            })
-            .map_err(io_err(&path))?;
-        Ok(Self { to_writer: Some(to_writer), from_writer, writer: Some(writer), path })
+    fn path(&self) -> &std::path::Path {
+        &self.path
     }
 
-    /// Hands `rows` to the writer and returns an empty chunk to fill next (one
-    /// the writer is done with, or a new one of the same capacity).
-    ///
-    /// # Errors
-    /// The writer's [`Error::Io`] if it has stopped on one.
-    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, Error> {
-        let capacity = rows.capacity();
-        let sent = self.to_writer.as_ref().is_some_and(|tx| tx.send(rows).is_ok());
-        if !sent {
-            // The writer only hangs up on an error: report it.
-            self.join()?;
+    /// Appends the rows ([`CsvFile::row`]) and clears `rows`.
+    fn write_rows(&mut self, rows: &mut Vec<T>) -> Result<(), Error> {
+        for r in rows.iter() {
+            self.row(r)?;
         }
-        Ok(self.from_writer.try_recv().unwrap_or_else(|_| Vec::with_capacity(capacity)))
+        rows.clear();
+        Ok(())
     }
 
-    /// Waits for the writer to write everything and close the file.
-    ///
-    /// # Errors
-    /// The writer's [`Error::Io`], if any.
-    pub fn finish(mut self) -> Result<(), Error> {
-        self.join()
-    }
-
-    fn join(&mut self) -> Result<(), Error> {
-        self.to_writer = None;
-        match self.writer.take() {
-            Some(h) => h.join().unwrap_or_else(|_| {
-                Err(Error::Io { path: self.path.clone(), source: std::io::Error::other("the CSV writer thread panicked") })
-            }),
-            None => Ok(()),
-        }
+    fn finish(self) -> Result<(), Error> {
+        CsvFile::finish(self)
     }
 }
 
-impl<T: CsvRow + Send + 'static> Drop for CsvThread<T> {
-    fn drop(&mut self) {
-        // Unwinding or an early return: let the writer finish its rows, ignore errors.
-        let _ = self.join();
-    }
-}
+/// A [`CsvFile`] written by a thread of its own ([`WriterThread`]): the caller
+/// hands over chunks of rows and goes on (the simulation) while they are
+/// formatted and written, so on two cores the trace costs little more than the
+/// simulation alone. At most [`WriterThread::DEPTH`] chunks wait in the channel
+/// (bounded memory); emptied chunks come back for reuse. The file is the one
+/// [`CsvFile`] writes given the same rows.
+pub type CsvThread<T> = WriterThread<T, CsvFile>;
 
 #[cfg(test)]
 mod tests {

@@ -4,7 +4,8 @@
 //! ([`csv`], the `csv` crate's bytes), Arrow IPC files are written and read
 //! ([`arrow`], the declaration's schema), MCAP files split a table's columns into
 //! signal groups, a channel each ([`mcap`]), and a CSV file is read back with
-//! the declared types ([`read`], by arrow-csv).
+//! the declared types ([`read`], by arrow-csv). A long table's CSV or Arrow file
+//! is written by a thread of its own ([`writer`], one for every format).
 //!
 //! Two ways from rows to a [`Table`]: the long tables' row types (`trace`,
 //! `events`, the closed-loop trace) fill their columns field by field
@@ -29,6 +30,7 @@ pub mod mcap;
 #[cfg(feature = "files")]
 pub mod read;
 pub mod rows;
+pub mod writer;
 
 pub use error::Error;
 use serde::Serialize;

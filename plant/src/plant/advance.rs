@@ -56,7 +56,8 @@ impl Plant {
                 let f = match ctrl.held() {
                     // Kept for the next interval's start (see `EndPoint`); counted when used there.
                     Some(u) => {
-                        let point = seg.point_uncounted(self.t, &self.y);
+                        // The projection's sines and cosines of these angles, when it left them.
+                        let point = seg.point_trig_uncounted(self.t, &self.y, &self.trig_here());
                         let (t, y, phase, cone_relaxed) = (self.t, self.y, self.phase, self.cone_relaxed);
                         self.end_point = Some(EndPoint { t, y, u, phase, cone_relaxed, point });
                         point.f
@@ -195,7 +196,8 @@ impl Plant {
                         seg.count_evaluation();
                         e.point
                     }
-                    _ => seg.point(self.t, &self.y),
+                    // The projection's (or the last solve's) sines and cosines of these angles, when it left them.
+                    _ => seg.point_trig(self.t, &self.y, &self.trig_here()),
                 };
                 let nb = segment::nearest(seg.components_of(&start.td, &start.f));
                 (start, nb)

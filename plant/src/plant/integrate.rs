@@ -95,6 +95,10 @@ impl Plant {
         let seg = self.segment(ctrl);
         let mut locator = EventLocator::new(&seg, g0);
         locator.trend_f_n = self.slide_trend;
+        // The start's energy, when the projection (or the last solve) left it.
+        if let Some(k) = self.known() {
+            locator.e_prev = k.energy;
+        }
         let (grid, hermite) = (self.sampling, self.hermite_samples);
         let solved = solver.solve(&seg, self.t, &self.y, Some(&start.dydt), t_end, h0, |step| {
             let control = locator.on_step(step);
@@ -132,6 +136,12 @@ impl Plant {
         });
         let (rejected, worst, trend) = (locator.rejected, locator.worst, locator.trend_f_n);
         let (locator_end, last) = ((locator.g_prev, locator.hit), locator.last);
+        // The last accepted point's energy and sines and cosines, for its projection.
+        if let Some((_, y)) = last
+            && locator.hit.is_none()
+        {
+            self.known = Some(super::Known { x: [y[0], y[1], y[2], y[3]], trig: locator.trig_last, energy: locator.e_prev });
+        }
         self.slide_trend = trend;
         self.ledger.refinements += rejected;
         self.ledger.worst_entry_j = self.ledger.worst_entry_j.max(worst.0);

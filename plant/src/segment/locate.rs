@@ -3,6 +3,8 @@
 //! and the Illinois root search it runs ([`illinois_root`], also the Poincare
 //! section's).
 
+use shared::kinematics::JointTrig;
+
 use super::{OdeState, Phase, STATE_LEN, Segment, nearest};
 use crate::{
     controller::Controller,
@@ -38,8 +40,11 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
     pub hit: Option<(f64, OdeState)>,
     /// The last accepted point `(t, y)` (none before the first step).
     pub last: Option<(f64, OdeState)>,
-    /// The arm's energy at the previous accepted point, J (NaN: not yet known).
+    /// The arm's energy at the previous accepted point, J (NaN: not yet known; a
+    /// caller that knows it at the solve's start may set it).
     pub e_prev: f64,
+    /// The sines and cosines of the angles of [`EventLocator::last`] (NaN before the first step).
+    pub trig_last: JointTrig<f64>,
     /// The ledger of the accepted steps: largest residual (J) and ratio to its tolerance.
     pub worst: (f64, f64),
     /// Steps rejected by the checks above.
@@ -71,7 +76,8 @@ pub const TREND_P: f64 = 1e-6;
 impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
     /// A locator for a solve of `segment` starting where the event function is `g0`.
     pub fn new(segment: &'s Segment<'a, C>, g0: f64) -> Self {
-        Self { segment, g_prev: g0, hit: None, last: None, e_prev: f64::NAN, worst: (0.0, 0.0), rejected: 0, trend_f_n: None }
+        let trig_last = JointTrig { s1: f64::NAN, c1: f64::NAN, s2: f64::NAN, c2: f64::NAN };
+        Self { segment, g_prev: g0, hit: None, last: None, e_prev: f64::NAN, trig_last, worst: (0.0, 0.0), rejected: 0, trend_f_n: None }
     }
 
     /// Checks one accepted step for a crossing and locates it; stops the solve at an
@@ -82,7 +88,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         let y_curr = *step.y_curr();
         let seg = self.segment;
         let e_prev = if self.e_prev.is_nan() { seg.energy(&y_prev) } else { self.e_prev };
-        let (e_curr, residual, tol) = seg.energy_and_balance(&y_prev, e_prev, &y_curr);
+        let (e_curr, residual, tol, trig_curr) = seg.energy_and_balance_trig(&y_prev, e_prev, &y_curr);
         // NaN breaks the balance too.
         if residual.abs() > tol || residual.is_nan() {
             self.rejected += 1;
@@ -112,7 +118,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
                 return Control::Reject;
             }
             self.note_balance(residual.abs().max(r_hit.abs()), (residual.abs() / tol).max(r_hit.abs() / tol_hit));
-            (self.last, self.g_prev, self.e_prev) = (Some((t_curr, y_curr)), g_curr, e_curr);
+            (self.last, self.g_prev, self.e_prev, self.trig_last) = (Some((t_curr, y_curr)), g_curr, e_curr, trig_curr);
             self.hit = Some((t_hit, y_hit));
             return Control::Stop;
         }
@@ -120,7 +126,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         if sliding && components[1].1 >= TREND_P {
             self.trend_f_n = Some(f_n);
         }
-        (self.last, self.g_prev, self.e_prev) = (Some((t_curr, y_curr)), g_curr, e_curr);
+        (self.last, self.g_prev, self.e_prev, self.trig_last) = (Some((t_curr, y_curr)), g_curr, e_curr, trig_curr);
         Control::Continue
     }
 

@@ -9,7 +9,11 @@ use arrow_ipc::writer::FileWriter;
 use arrow_schema::Schema;
 
 use super::{BATCH_ROWS, array_of, arrow_err, schema};
-use crate::{ColumnRows, Declaration, error::Error};
+use crate::{
+    ColumnRows, Declaration,
+    error::Error,
+    writer::{RowSink, WriterThread},
+};
 
 /// An Arrow IPC file being written: rows are buffered and written a record
 /// batch of [`BATCH_ROWS`] at a time; [`ArrowFile::finish`] writes the last
@@ -73,84 +77,31 @@ impl<T: ColumnRows> ArrowFile<T> {
     }
 }
 
-/// An [`ArrowFile`] written by a thread of its own (`simulate --format arrow`):
-/// the caller hands over chunks of rows and goes on while the thread batches
-/// them, builds the record batches' columns and writes them, as
+impl<T: ColumnRows + Send + 'static> RowSink<T> for ArrowFile<T> {
+    const THREAD_NAME: &'static str = "arrow-writer";
+    const FORMAT: &'static str = "Arrow";
+
+    fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+
+    /// [`ArrowFile::push`].
+    fn write_rows(&mut self, rows: &mut Vec<T>) -> Result<(), Error> {
+        self.push(rows)
+    }
+
+    /// [`ArrowFile::finish`]: the last batch, the footer.
+    fn finish(self) -> Result<(), Error> {
+        ArrowFile::finish(self)
+    }
+}
+
+/// An [`ArrowFile`] written by a thread of its own (`simulate --format arrow`,
+/// [`WriterThread`]): the caller hands over chunks of rows and goes on while the
+/// thread batches them, builds the record batches' columns and writes them, as
 /// [`crate::csv::CsvThread`] does for CSV. The file is the same, byte for byte,
 /// as [`ArrowFile`] given the same rows (the batches are cut at the same rows).
-pub struct ArrowThread<T: ColumnRows + Send + 'static> {
-    to_writer: Option<std::sync::mpsc::SyncSender<Vec<T>>>,
-    from_writer: std::sync::mpsc::Receiver<Vec<T>>,
-    writer: Option<std::thread::JoinHandle<Result<(), Error>>>,
-    path: PathBuf,
-}
-
-impl<T: ColumnRows + Send + 'static> ArrowThread<T> {
-    /// Chunks waiting in the channel at most.
-    const DEPTH: usize = 4;
-
-    /// Starts the thread that writes `file` (an [`ArrowFile`] just made).
-    ///
-    /// # Errors
-    /// [`Error::Io`] when the thread cannot be started.
-    pub fn spawn(mut file: ArrowFile<T>) -> Result<Self, Error> {
-        let (to_writer, rx) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH);
-        let (back, from_writer) = std::sync::mpsc::sync_channel::<Vec<T>>(Self::DEPTH + 2);
-        let path = file.path.clone();
-        let writer = std::thread::Builder::new()
-            .name("arrow-writer".into())
-            .spawn(move || {
-                for mut rows in rx {
-                    file.push(&mut rows)?;
-                    // The caller may have stopped taking them back: then drop it.
-                    let _ = back.try_send(rows);
-                }
-                file.finish()
-            })
-            .map_err(|source| Error::Io { path: path.clone(), source })?;
-        Ok(Self { to_writer: Some(to_writer), from_writer, writer: Some(writer), path })
-    }
-
-    /// Hands `rows` to the writer and returns an empty chunk to fill next (one
-    /// the writer is done with, or a new one of the same capacity).
-    ///
-    /// # Errors
-    /// The writer's [`Error::Io`] if it has stopped on one.
-    pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, Error> {
-        let capacity = rows.capacity();
-        let sent = self.to_writer.as_ref().is_some_and(|tx| tx.send(rows).is_ok());
-        if !sent {
-            // The writer only hangs up on an error: report it.
-            self.join()?;
-        }
-        Ok(self.from_writer.try_recv().unwrap_or_else(|_| Vec::with_capacity(capacity)))
-    }
-
-    /// Waits for the writer to write every row, the footer, and close the file.
-    ///
-    /// # Errors
-    /// The writer's [`Error::Io`], if any.
-    pub fn finish(mut self) -> Result<(), Error> {
-        self.join()
-    }
-
-    fn join(&mut self) -> Result<(), Error> {
-        self.to_writer = None;
-        match self.writer.take() {
-            Some(h) => h.join().unwrap_or_else(|_| {
-                Err(Error::Io { path: self.path.clone(), source: std::io::Error::other("the Arrow writer thread panicked") })
-            }),
-            None => Ok(()),
-        }
-    }
-}
-
-impl<T: ColumnRows + Send + 'static> Drop for ArrowThread<T> {
-    fn drop(&mut self) {
-        // Unwinding or an early return: let the writer finish its rows, ignore errors.
-        let _ = self.join();
-    }
-}
+pub type ArrowThread<T> = WriterThread<T, ArrowFile<T>>;
 
 /// A table written as an Arrow IPC *file* as a run produces it (`run` and `pil`
 /// with `--format arrow`): rows wait in memory until [`StreamedArrowFile::push`]
