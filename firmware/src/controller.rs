@@ -446,7 +446,8 @@ impl Firmware {
             }
         }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
-        let reference: RefPoint = s.quintic.at(t_run);
+        // The PID uses no reference acceleration: not computed under it.
+        let reference: RefPoint = s.quintic.at_with(t_run, cfg.controller == ControllerKind::Hybrid);
         if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
             match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
