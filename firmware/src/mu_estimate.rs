@@ -98,7 +98,7 @@ impl MuEstimate {
         // (so not NaN) and, checked here, finite; then a non-finite `f_t` (inf or
         // NaN) makes `ratio = -s f_t / f_n` inf or NaN, which `ratio.is_finite()`
         // rejects. The same verdict for every input (test `a_non_finite_force_*`).
-        let finite = sample.f_n.is_finite() && ratio.is_finite();
+        let finite = crate::finite(sample.f_n) && crate::finite(ratio);
         if !(trusted && finite && alpha > 0.0) {
             return false;
         }
