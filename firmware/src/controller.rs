@@ -347,7 +347,7 @@ impl Firmware {
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
                 let qdd = estimator::predicted_acceleration(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
-                let qdd = if qdd[0].is_finite() && qdd[1].is_finite() { qdd } else { Vector2::zeros() };
+                let qdd = if crate::finite(qdd[0]) && crate::finite(qdd[1]) { qdd } else { Vector2::zeros() };
                 innovation = [
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),
@@ -446,7 +446,8 @@ impl Firmware {
             }
         }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
-        let reference: RefPoint = s.quintic.at(t_run);
+        // The PID uses no reference acceleration: not computed under it.
+        let reference: RefPoint = s.quintic.at_with(t_run, cfg.controller == ControllerKind::Hybrid);
         if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
             match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),

@@ -94,7 +94,11 @@ impl MuEstimate {
         let f_min = if F_N_MIN_FRACTION * sample.f_n_ref > 0.5 { F_N_MIN_FRACTION * sample.f_n_ref } else { 0.5 };
         let trusted = sample.f_n > f_min && sample.v_r.abs() >= V_R_MIN && same_slip && sample.p > P_MIN * sample.q22;
         let ratio = -s * sample.f_t / sample.f_n;
-        let finite = sample.f_t.is_finite() && sample.f_n.is_finite() && ratio.is_finite();
+        // No check of `f_t` of its own: where `trusted` holds, `f_n > f_min >= 0.5`
+        // (so not NaN) and, checked here, finite; then a non-finite `f_t` (inf or
+        // NaN) makes `ratio = -s f_t / f_n` inf or NaN, which `ratio.is_finite()`
+        // rejects. The same verdict for every input (test `a_non_finite_force_*`).
+        let finite = crate::finite(sample.f_n) && crate::finite(ratio);
         if !(trusted && finite && alpha > 0.0) {
             return false;
         }
@@ -189,6 +193,39 @@ mod tests {
             e.update(0.6, &sliding(0.0), 1e-3);
         }
         assert!((e.correction + BOUND * 0.6).abs() < 1e-6, "{}", e.correction);
+    }
+
+    /// Without `f_t`'s own finiteness check the verdict and the state are those of
+    /// the three checks (`f_t`, `f_n`, the ratio) for every non-finite force, with
+    /// `f_n` above, at and below the trust threshold: a NaN or infinite force is never used.
+    #[test]
+    fn a_non_finite_force_is_refused_as_by_the_three_checks() {
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -f32::NAN];
+        let three = |e: &mut MuEstimate, x: &FrictionSample| {
+            let finite = x.f_t.is_finite() && x.f_n.is_finite() && (-x.f_t / x.f_n).is_finite();
+            let before = *e;
+            let used = e.update_with_gain(0.6, x, gain(1e-3));
+            if !finite {
+                *e = before;
+                return false;
+            }
+            used
+        };
+        let mut held = MuEstimate::default();
+        held.update(0.6, &sliding(-7.2), 1e-3);
+        for &bad in &odd {
+            for (f_t, f_n) in [(bad, 10.0), (-7.2, bad), (bad, bad), (bad, 0.5), (bad, 1e30), (bad, -10.0), (1e38, 1e-30)] {
+                let x = FrictionSample { f_t, f_n, ..sliding(0.0) };
+                let (mut a, mut b) = (held, held);
+                let used = a.update_with_gain(0.6, &x, gain(1e-3));
+                assert_eq!(used, three(&mut b, &x), "{x:?}");
+                assert_eq!(a.correction.to_bits(), b.correction.to_bits(), "{x:?}");
+                if !(f_t.is_finite() && f_n.is_finite()) {
+                    assert!(!used && a.correction.to_bits() == held.correction.to_bits(), "{x:?} was used");
+                }
+                assert!(a.correction.is_finite());
+            }
+        }
     }
 
     /// Frozen where the ratio is not `mu`: low `f_n`, slow slip, the period after a

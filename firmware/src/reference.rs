@@ -46,6 +46,14 @@ impl Quintic {
 
     /// The reference `t` s after the start of the move (holds at the target after `duration`).
     pub fn at(&self, t: f32) -> RefPoint {
+        self.at_with(t, true)
+    }
+
+    /// [`Quintic::at`], its acceleration only when `with_acc` (else 0): the PID
+    /// uses none, and its step saves the products (issue 56). Position, velocity
+    /// and `moving` have the bits of [`Quintic::at`] either way.
+    #[inline(always)]
+    pub fn at_with(&self, t: f32, with_acc: bool) -> RefPoint {
         let d = self.target - self.start;
         if t >= self.duration {
             return RefPoint { pos: self.target, vel: 0.0, acc: 0.0, moving: false };
@@ -54,8 +62,8 @@ impl Quintic {
         let (t2, t3) = (tau * tau, tau * tau * tau);
         let s = t3 * (10.0 - 15.0 * tau + 6.0 * t2);
         let ds = 30.0 * t2 * (1.0 - 2.0 * tau + t2);
-        let dds = 60.0 * tau * (1.0 - 3.0 * tau + 2.0 * t2);
-        RefPoint { pos: self.start + d * s, vel: d * ds * self.rate, acc: d * dds * (self.rate * self.rate), moving: true }
+        let acc = if with_acc { d * (60.0 * tau * (1.0 - 3.0 * tau + 2.0 * t2)) * (self.rate * self.rate) } else { 0.0 };
+        RefPoint { pos: self.start + d * s, vel: d * ds * self.rate, acc, moving: true }
     }
 
     /// The position of [`Quintic::at`] alone (the same bits), m: the force ramp
@@ -101,6 +109,22 @@ mod tests {
             for i in -10..=1100 {
                 let t = duration * i as f32 / 1000.0;
                 assert_eq!(q.pos_at(t).to_bits(), q.at(t).pos.to_bits(), "{start} to {target} over {duration} s at {t} s");
+            }
+        }
+    }
+
+    /// Without the acceleration (the PID's reference) the position, velocity and
+    /// `moving` keep [`Quintic::at`]'s bits; the acceleration is then 0.
+    #[test]
+    fn the_point_without_acceleration_keeps_the_others_bits() {
+        for (start, target, duration) in [(-0.16f32, 0.1f32, 2.0f32), (3.0, 10.0, 0.25), (10.0, 0.0, 0.3), (0.05, -0.12, 1.7)] {
+            let q = Quintic::new(start, target, duration);
+            for i in -10..=1100 {
+                let t = duration * i as f32 / 1000.0;
+                let (a, b) = (q.at(t), q.at_with(t, false));
+                assert_eq!((a.pos.to_bits(), a.vel.to_bits(), a.moving), (b.pos.to_bits(), b.vel.to_bits(), b.moving), "{t} s");
+                assert_eq!(b.acc, 0.0);
+                assert_eq!(q.at_with(t, true), a);
             }
         }
     }

@@ -138,7 +138,7 @@ impl WiringMonitor {
         let du = [d0 + d1, d1];
         // Two joints written out (the loops' iterators are not unrolled at `opt-level = "s"`).
         let filter = |m: &mut f32, d: f32| {
-            if d.is_finite() {
+            if crate::finite(d) {
                 *m += rule.smoothing * (d - *m);
             }
         };

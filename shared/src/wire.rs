@@ -305,12 +305,15 @@ const TORQUE_CODES_PER_NM: f32 = 2048.0 / TORQUE_FULL_SCALE_NM;
 #[inline(always)]
 pub fn encode_torque(torque: f32) -> (i16, bool) {
     let x = torque * TORQUE_CODES_PER_NM;
-    if !x.is_finite() {
-        (0, true)
-    } else if x >= TORQUE_CODE_MAX as f32 + 0.5 {
-        (TORQUE_CODE_MAX, true)
+    // The range's comparisons first (false for a NaN), the infinities among the
+    // out-of-range values, a NaN by `x != x`: the verdicts of a finiteness check
+    // first, with float comparisons (issue 56: the check was integer code).
+    if x >= TORQUE_CODE_MAX as f32 + 0.5 {
+        if x == f32::INFINITY { (0, true) } else { (TORQUE_CODE_MAX, true) }
     } else if x <= TORQUE_CODE_MIN as f32 - 0.5 {
-        (TORQUE_CODE_MIN, true)
+        if x == f32::NEG_INFINITY { (0, true) } else { (TORQUE_CODE_MIN, true) }
+    } else if x.is_nan() {
+        (0, true)
     } else {
         // Within the range: through i32 (one VCVT) rather than `as i16`'s saturating compares.
         (round_half_away(x) as i32 as i16, false)
@@ -441,11 +444,49 @@ mod tests {
         }
     }
 
+    /// The comparisons-first form has the verdicts of the finiteness check first
+    /// (the form before issue 56's fourth round) over a sweep of every bit pattern's
+    /// neighbourhood: the infinities and the NaNs (both signs, any payload) give
+    /// `(0, true)`, and every other value the same code.
+    #[test]
+    fn torque_encoding_matches_the_finiteness_check_first() {
+        let before = |torque: f32| {
+            let x = torque * TORQUE_CODES_PER_NM;
+            if !x.is_finite() {
+                (0, true)
+            } else if x >= TORQUE_CODE_MAX as f32 + 0.5 {
+                (TORQUE_CODE_MAX, true)
+            } else if x <= TORQUE_CODE_MIN as f32 - 0.5 {
+                (TORQUE_CODE_MIN, true)
+            } else {
+                (round_half_away(x) as i32 as i16, false)
+            }
+        };
+        let mut bits = 0u32;
+        loop {
+            for b in [bits, bits.wrapping_add(1), bits.wrapping_sub(1)] {
+                let t = f32::from_bits(b);
+                assert_eq!(encode_torque(t), before(t), "t = {t:e} ({b:#x})");
+            }
+            let (next, over) = bits.overflowing_add(4099);
+            if over {
+                break;
+            }
+            bits = next;
+        }
+        for t in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN, f32::from_bits(0x7f80_0001), f32::from_bits(0xffc0_1234), f32::MAX, f32::MIN] {
+            assert_eq!(encode_torque(t), before(t), "t = {t:e}");
+        }
+    }
+
     #[test]
     fn torque_encoding_saturates_and_reports_it() {
         assert_eq!(encode_torque(10.0), (2047, true));
         assert_eq!(encode_torque(-10.0), (-2048, true));
         assert_eq!(encode_torque(f32::NAN), (0, true));
+        assert_eq!(encode_torque(-f32::NAN), (0, true));
+        assert_eq!(encode_torque(f32::INFINITY), (0, true));
+        assert_eq!(encode_torque(f32::NEG_INFINITY), (0, true));
         let (c, sat) = encode_torque(1.0);
         assert!(!sat);
         assert!((decode_torque(c) - 1.0).abs() <= 5.0 / 2048.0 / 2.0 + 1e-6);
