@@ -492,14 +492,7 @@ impl Firmware {
         if sat[1] {
             flags |= status::SATURATED_U2;
         }
-        self.telemetry = Telemetry {
-            q: [q[0], q[1]],
-            qd: [qd[0], qd[1]],
-            z_t_ref: reference.pos,
-            f_n_ref,
-            f: [m.f_t, m.f_n],
-            u_raw,
-        };
+        self.telemetry = Telemetry { q: [q[0], q[1]], qd: [qd[0], qd[1]], z_t_ref: reference.pos, f_n_ref, f: [m.f_t, m.f_n], u_raw };
         Ok((u, flags))
     }
 }

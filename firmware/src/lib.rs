@@ -74,7 +74,19 @@ mod finite_tests {
             }
             bits = next;
         }
-        for x in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN, f32::from_bits(0x7f80_0001), f32::MAX, f32::MIN, f32::MIN_POSITIVE, 1e-45, 0.0, -0.0] {
+        for x in [
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            f32::from_bits(0x7f80_0001),
+            f32::MAX,
+            f32::MIN,
+            f32::MIN_POSITIVE,
+            1e-45,
+            0.0,
+            -0.0,
+        ] {
             assert_eq!(super::finite(x), x.is_finite(), "{x:e}");
         }
     }

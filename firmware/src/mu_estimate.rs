@@ -154,7 +154,11 @@ mod tests {
             for i in 0..50 {
                 let sample = FrictionSample { f_t: -4.0 - 0.1 * i as f32, ..sliding(-5.0) };
                 assert_eq!(a.update(0.5, &sample, dt), b.update_with_gain(0.5, &sample, gain(dt)), "dt {dt}");
-                assert_eq!((a.correction.to_bits(), a.last_slip.to_bits()), (b.correction.to_bits(), b.last_slip.to_bits()), "dt {dt}, step {i}");
+                assert_eq!(
+                    (a.correction.to_bits(), a.last_slip.to_bits()),
+                    (b.correction.to_bits(), b.last_slip.to_bits()),
+                    "dt {dt}, step {i}"
+                );
             }
         }
         assert_eq!(gain(1e-3).to_bits(), (1e-3f32 * (1.0 / TAU_S)).to_bits());

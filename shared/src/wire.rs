@@ -474,7 +474,16 @@ mod tests {
             }
             bits = next;
         }
-        for t in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN, f32::from_bits(0x7f80_0001), f32::from_bits(0xffc0_1234), f32::MAX, f32::MIN] {
+        for t in [
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            f32::from_bits(0x7f80_0001),
+            f32::from_bits(0xffc0_1234),
+            f32::MAX,
+            f32::MIN,
+        ] {
             assert_eq!(encode_torque(t), before(t), "t = {t:e}");
         }
     }
