@@ -86,7 +86,7 @@ cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pi
 python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
-echo "   ceiling 2100 cycles per worst step, every controller and friction term (5 % of a 4 kHz period at"
+echo "   ceiling 1790 cycles per worst step, every controller and friction term (5 % of a 4.7 kHz period at"
 echo "   168 MHz; 3100 before issue 56, whose target is 1680: docs/measurements.md \"Speed IV\"); run beside the Python"
 echo "   package's install (pip waits on the network), its report printed when it is done"
 cargo build --release -p sil-host
