@@ -51,6 +51,7 @@ use crate::{
 };
 
 mod device;
+mod itstate;
 mod run;
 
 /// External interrupt inputs folded in (the STM32F405 has 82; three words).

@@ -58,7 +58,6 @@ impl Core {
         let mut edges = lock(&self.edges);
         let pins = lock(&self.pins).clone();
         let mut used = 0;
-        let mut calls = 0u64;
         while used < ticks {
             let mut rest = ticks - used;
             // A host edge where the core owes nothing: its position is then
@@ -91,13 +90,13 @@ impl Core {
                 used += n;
                 continue;
             }
-            // Awake: only the first run_budget call of a run publishes exact
-            // positions; a later one runs a short chunk.
-            let chunk = if calls == 0 { rest } else { rest.min(64) };
-            let r = c.run_budget(chunk);
-            calls += 1;
+            // Awake: one instruction (or exception entry) at a time, so that an
+            // exception taken inside an `IT` block keeps it (`super::itstate`);
+            // a debt is paid in one call.
+            let debt = c.cycle_debt().min(rest);
+            let (r, asked) = if debt > 0 { (c.run_budget(debt), debt) } else { (self.step_keeping_itstate(), 1) };
             used += r;
-            if r < chunk {
+            if r < asked {
                 break;
             }
         }
@@ -142,7 +141,7 @@ impl Core {
                 }
                 _ => 0,
             };
-            let n = c.run_budget(1);
+            let n = if debt == 0 { self.step_keeping_itstate() } else { c.run_budget(1) };
             if n == 0 {
                 break;
             }
