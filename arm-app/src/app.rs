@@ -4,7 +4,7 @@
 //! At the tick (TIM2's update interrupt on the reference board):
 //! 1. the interval since the previous tick is recorded (its spread is the tick's
 //!    jitter plus the handler's latency);
-//! 2. the enable button is read (a press: low for [`BUTTON_PERIODS`] periods after
+//! 2. the enable button is read (a press: low for [`BUTTON_PRESS_S`] after
 //!    having been seen released);
 //! 3. the sensors are sampled now: both encoders (`As5047p::sample`), the load
 //!    cell's conversions, the belt's counter, the drivers' fault line, into the
@@ -238,6 +238,7 @@ impl<H: ArmIo> ArmApp<H> {
             enable_requested: false,
             last_enable: EnableOutcome::NotAsked,
             period_us: config.period.as_us(),
+            button_press_periods: crate::button_periods(config.period.as_us()),
             time_offset_us: 0,
             seq: 0,
             tick_mark,

@@ -23,8 +23,17 @@ use crate::{
     telemetry::ArmTelemetry,
 };
 
-/// Periods the button must read pressed (20 ms at 1 kHz).
-pub const BUTTON_PERIODS: u16 = 20;
+/// How long the enable button must read pressed, s: a press, not a bounce of its
+/// contacts (20 periods at 1 kHz).
+pub const BUTTON_PRESS_S: f32 = 0.020;
+
+/// [`BUTTON_PRESS_S`] in periods of `period_us` microseconds, rounded up, at
+/// least one (`firmware::runaway::periods_of`, as the monitors' times): 20 at
+/// 1 kHz, 200 at 10 kHz, 5 at 250 Hz. Before issue 56's rates it was 20 periods
+/// at any rate, 2 ms at 10 kHz: shorter than a contact's bounce.
+pub fn button_periods(period_us: u64) -> u16 {
+    firmware::runaway::periods_of(BUTTON_PRESS_S, period_us as f32 * 1e-6)
+}
 
 /// Torque codes of full scale (the wire's: 2048 = 5 N m); the torque limit when
 /// none is set.
@@ -89,6 +98,8 @@ pub(crate) struct Hardware<H: ArmIo> {
     /// The period the board's tick runs, us (`crate::rate`: the
     /// configuration's, once the board has followed it).
     pub(crate) period_us: u64,
+    /// [`button_periods`] of `period_us`, set with it.
+    pub(crate) button_press_periods: u16,
     /// Added to `seq x period_us` for a frame's time, us (wrapping): nonzero
     /// after the rate changed (`ArmApp::retime`), so the time goes on.
     pub(crate) time_offset_us: u64,
@@ -172,7 +183,8 @@ impl<H: ArmIo> Hardware<H> {
         }
     }
 
-    /// A press: low for [`BUTTON_PERIODS`] after having been seen released (a
+    /// A press: low for [`button_periods`] of the tick's period
+    /// (`button_press_periods`) after having been seen released (a
     /// button stuck low, a pin that cannot be read, or one QEMU does not model,
     /// never presses).
     pub(crate) fn button_pressed(&mut self) -> bool {
@@ -189,7 +201,7 @@ impl<H: ArmIo> Hardware<H> {
             return false;
         }
         self.button_low = self.button_low.saturating_add(1);
-        if self.button_low == BUTTON_PERIODS {
+        if self.button_low == self.button_press_periods {
             self.button_released = false;
             return true;
         }

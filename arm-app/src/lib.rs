@@ -38,7 +38,7 @@ pub mod step_stats;
 pub mod telemetry;
 
 pub use app::{ArmApp, ArmCalibration, ArmParts, StartError};
-pub use hardware::{BUTTON_PERIODS, CODES_FULL_SCALE};
+pub use hardware::{BUTTON_PRESS_S, CODES_FULL_SCALE, button_periods};
 pub use io::{ArmIo, Blocking, EncoderAcquisition, IntervalClock, Motors, Watchdog};
 pub use joint::{AcquisitionFault, EncoderFault, Joint};
 pub use notice::Notice;

@@ -63,6 +63,7 @@ impl<H: ArmIo> ArmApp<H> {
         let t = seq.wrapping_mul(hw.period_us).wrapping_add(hw.time_offset_us);
         hw.time_offset_us = t.wrapping_sub(seq.wrapping_mul(now.as_us()));
         hw.period_us = now.as_us();
+        hw.button_press_periods = crate::button_periods(hw.period_us);
         Some(now)
     }
 }
@@ -82,5 +83,18 @@ mod tests {
             assert_eq!(supported(period), firmware_takes, "{us} us");
             assert_eq!(supported(period), (100..=4000).contains(&us), "{us} us");
         }
+    }
+
+    #[test]
+    fn the_enable_button_is_held_its_time_at_every_rate_the_image_runs() {
+        // n periods of Ts hold BUTTON_PRESS_S: n Ts >= 20 ms (never a shorter
+        // press than at 1 kHz: a contact's bounce is not a press; to the
+        // thousandth of a period `periods_of` rounds off) and (n - 1) Ts < 20 ms,
+        // for every whole microsecond of the range.
+        for us in 100..=4000u64 {
+            let n = u64::from(crate::button_periods(us));
+            assert!(1000 * n * us + us >= 20_000_000 && (n - 1) * us < 20_000, "{us} us: {n} periods");
+        }
+        assert_eq!([100, 1000, 4000].map(crate::button_periods), [200, 20, 5]);
     }
 }

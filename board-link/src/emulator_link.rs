@@ -16,7 +16,7 @@
 
 use std::path::{Path, PathBuf};
 
-use arm_app::BUTTON_PERIODS;
+use arm_app::button_periods;
 use board_emulator::{
     ArmImage, EmuError, EmulatedBoard, SpiFaults,
     core_clock::{HandlerRun, Mode},
@@ -161,7 +161,7 @@ impl EmulatorLink {
         self.board.hold_button(false);
         self.tick(arm, faults, false)?;
         self.board.hold_button(true);
-        for _ in 1..BUTTON_PERIODS {
+        for _ in 1..button_periods(self.period_us) {
             self.tick(arm, faults, false)?;
         }
         Ok(())

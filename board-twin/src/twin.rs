@@ -18,7 +18,7 @@ use crate::{
     motor_stage::{PinModel, PwmModel, Wire},
     physics::BoardPhysics,
 };
-use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, BUTTON_PERIODS, IntervalClock, Notice, StartError, Watchdog, record::RecordFault};
+use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, IntervalClock, Notice, StartError, Watchdog, button_periods, record::RecordFault};
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
 
@@ -174,7 +174,7 @@ impl BoardTwin {
     }
 
     /// The operator's enable, timed so that the firmware's reset lands on the
-    /// next tick: one tick with the button released, then `BUTTON_PERIODS - 1`
+    /// next tick: one tick with the button released, then `button_periods - 1`
     /// ticks with it held (noise-free readings of `arm`, which stands still);
     /// the button stays held for the next [`BoardTwin::tick`], whose frame is the
     /// first after the reset (the drivers enable at its command), and is released
@@ -183,7 +183,7 @@ impl BoardTwin {
         self.physics.hold_button(false);
         self.tick(arm, faults, false);
         self.physics.hold_button(true);
-        for _ in 1..BUTTON_PERIODS {
+        for _ in 1..button_periods(self.period_us()) {
             self.tick(arm, faults, false);
         }
     }

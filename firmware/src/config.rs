@@ -137,7 +137,8 @@ pub struct Config {
     pub lift_off_force: f32,
     /// Lift-off: tip height above the belt (from the encoders) that declares lift-off, m.
     pub lift_off_height: f32,
-    /// Lift-off: consecutive periods of low force needed to declare lift-off.
+    /// Lift-off: consecutive periods of low force needed to declare lift-off
+    /// ([`LIFT_OFF_CONFIRM`] at the period: [`Config::default_at`]).
     pub lift_off_confirm: u8,
     /// Touchdown (end of lift-off): normal force above which contact is back, N.
     pub touchdown_force: f32,
@@ -148,15 +149,16 @@ pub struct Config {
     /// on the belt, m (the two 14-bit encoders are good to about 0.2 mm).
     pub sensor_height_tolerance: f32,
     /// Sensor consistency: consecutive inconsistent periods that latch the safe
-    /// state ([`crate::SafeReason::SensorFault`]).
+    /// state ([`crate::SafeReason::SensorFault`]; [`SENSOR_FAULT_CONFIRM`]).
     pub sensor_fault_confirm: u8,
     /// Innovation check ([`crate::consistency::InnovationMonitor`]): observer
     /// innovation that counts as unexplained, rad (default 3 encoder counts).
     pub innovation_threshold: f32,
     /// Innovation check: consecutive same-sign unexplained periods that latch the
-    /// safe state ([`crate::SafeReason::SensorFault`]).
+    /// safe state ([`crate::SafeReason::SensorFault`]; [`INNOVATION_CONFIRM`]).
     pub innovation_confirm: u16,
-    /// Innovation check: periods after a touchdown during which it is off.
+    /// Innovation check: periods after a touchdown during which it is off
+    /// ([`INNOVATION_SETTLE`]).
     pub innovation_settle: u16,
     /// The runaway limits ([`crate::runaway`]: a joint's speed past 20 rad/s, the
     /// load cell at full scale for 10 ms) and the wiring checks ([`crate::wiring`],
@@ -176,8 +178,69 @@ pub struct Config {
     pub encoder_bits: u8,
 }
 
+/// A detector's confirmation as tuned at 1 kHz: the time it must hold, and the
+/// samples it needs against noise. [`Config::default_at`] takes the larger of the
+/// two at any period: at least the time (10 kHz confirms over 2 ms, not 0.2 ms)
+/// and at least the samples (250 Hz confirms over 2 samples, not one: one noisy
+/// sample latched `SensorFault` in the default scenario's first periods).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Confirmation {
+    /// The time, s.
+    pub seconds: f32,
+    /// The samples, periods.
+    pub periods: u16,
+}
+
+impl Confirmation {
+    /// In periods of `ts` seconds: `max(periods_of(seconds, ts), periods)`
+    /// ([`crate::runaway::periods_of`]: whole periods, rounded up).
+    pub fn at(self, ts: f32) -> u16 {
+        crate::runaway::periods_of(self.seconds, ts).max(self.periods)
+    }
+}
+
+/// Lift-off: the normal force low for 2 ms (two periods at 1 kHz, as tuned).
+pub const LIFT_OFF_CONFIRM: Confirmation = Confirmation { seconds: 0.002, periods: 2 };
+/// Sensor consistency: the encoders and the load cell disagreeing for 3 ms (three
+/// periods at 1 kHz).
+pub const SENSOR_FAULT_CONFIRM: Confirmation = Confirmation { seconds: 0.003, periods: 3 };
+/// Innovation check: an unexplained innovation of one sign for 20 ms (20 periods
+/// at 1 kHz).
+pub const INNOVATION_CONFIRM: Confirmation = Confirmation { seconds: 0.020, periods: 20 };
+/// Innovation check: off for 50 ms after a touchdown (50 periods at 1 kHz).
+pub const INNOVATION_SETTLE: Confirmation = Confirmation { seconds: 0.050, periods: 50 };
+
 impl Default for Config {
+    /// [`Config::default_at`] 1 kHz.
     fn default() -> Self {
+        Self::default_at(Period::MILLISECOND)
+    }
+}
+
+impl Config {
+    /// The defaults at the control period `period`: the detectors' confirmation
+    /// and settle counts hold their times and their samples as tuned at 1 kHz
+    /// ([`LIFT_OFF_CONFIRM`], [`SENSOR_FAULT_CONFIRM`], [`INNOVATION_CONFIRM`],
+    /// [`INNOVATION_SETTLE`]; [`Confirmation::at`]), so that a board configured
+    /// at 10 kHz confirms a lift-off or a sensor fault over the same time as at
+    /// 1 kHz, not a tenth of it (issue 56), and one at 250 Hz over as many
+    /// samples. At 1 kHz and below these are 2, 3, 20 and 50 periods; at 10 kHz
+    /// 20, 30, 200 and 500. The deadline-miss and bad-frame limits stay counts
+    /// of periods: they count events, not a time.
+    pub fn default_at(period: Period) -> Self {
+        let ts = period.as_secs_f32();
+        Self {
+            lift_off_confirm: u8::try_from(LIFT_OFF_CONFIRM.at(ts)).unwrap_or(u8::MAX),
+            sensor_fault_confirm: u8::try_from(SENSOR_FAULT_CONFIRM.at(ts)).unwrap_or(u8::MAX),
+            innovation_confirm: INNOVATION_CONFIRM.at(ts),
+            innovation_settle: INNOVATION_SETTLE.at(ts),
+            period,
+            ..Self::at_1_khz()
+        }
+    }
+
+    /// The defaults as tuned, at 1 kHz.
+    fn at_1_khz() -> Self {
         Self {
             params: Params::paper(),
             controller: ControllerKind::Hybrid,
@@ -279,5 +342,64 @@ impl Config {
         let (lo, hi) = shared::wire::ENCODER_BITS_RANGE;
         check("encoder_bits", f32::from(self.encoder_bits), (lo..=hi).contains(&self.encoder_bits), "10 to 16 bits")?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_at_1_khz_are_the_counts_the_detectors_were_tuned_with() {
+        let c = Config::default();
+        assert_eq!(c, Config::default_at(Period::MILLISECOND));
+        assert_eq!((c.lift_off_confirm, c.sensor_fault_confirm, c.innovation_confirm, c.innovation_settle), (2, 3, 20, 50));
+        assert_eq!(c.period, Period::MILLISECOND);
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn every_period_a_board_runs_confirms_over_at_least_the_time_and_the_samples_tuned_at_1_khz() {
+        // Every whole microsecond of the image's range (100 to 4000 us, 10 kHz to
+        // 250 Hz: arm_app::rate): each count n holds its time t, n Ts >= t (never a
+        // shorter confirmation than at 1 kHz, to the thousandth of a period
+        // `periods_of` rounds off), and its samples, n >= n0; and it is the least
+        // such count: (n - 1) Ts < t or n = n0. The rest as at 1 kHz; valid.
+        let base = Config::default();
+        for us in 100..=4000u32 {
+            let period = Period::from_us(us).unwrap();
+            let c = Config::default_at(period);
+            let ts = f64::from(us) * 1e-6;
+            for (name, n, rule) in [
+                ("lift_off_confirm", u32::from(c.lift_off_confirm), LIFT_OFF_CONFIRM),
+                ("sensor_fault_confirm", u32::from(c.sensor_fault_confirm), SENSOR_FAULT_CONFIRM),
+                ("innovation_confirm", u32::from(c.innovation_confirm), INNOVATION_CONFIRM),
+                ("innovation_settle", u32::from(c.innovation_settle), INNOVATION_SETTLE),
+            ] {
+                let (t, n0) = (f64::from(rule.seconds), u32::from(rule.periods));
+                assert!(n >= n0, "{us} us: {name} = {n} periods, fewer samples than {n0}");
+                let n = f64::from(n);
+                assert!(n * ts >= t - ts * 1e-3 * (1.0 + 1e-6), "{us} us: {name} = {n} periods is shorter than {t} s");
+                assert!(n == f64::from(n0) || (n - 1.0) * ts < t, "{us} us: {name} = {n} periods is a period longer than {t} s");
+            }
+            assert_eq!(c.period, period);
+            let same = Config {
+                period: base.period,
+                lift_off_confirm: base.lift_off_confirm,
+                sensor_fault_confirm: base.sensor_fault_confirm,
+                innovation_confirm: base.innovation_confirm,
+                innovation_settle: base.innovation_settle,
+                ..c
+            };
+            assert_eq!(same, base, "{us} us: only the period and the counts move");
+            c.validate().unwrap_or_else(|e| panic!("{us} us: {e}"));
+        }
+        let counts = |us| {
+            let c = Config::default_at(Period::from_us(us).unwrap());
+            (c.lift_off_confirm, c.sensor_fault_confirm, c.innovation_confirm, c.innovation_settle)
+        };
+        assert_eq!(counts(100), (20, 30, 200, 500));
+        assert_eq!(counts(250), (8, 12, 80, 200));
+        assert_eq!(counts(4000), (2, 3, 20, 50));
     }
 }

@@ -28,11 +28,14 @@ pub fn firmware_params(s: &Scenario) -> Params<f64> {
 
 /// The firmware configuration a scenario asks for: the model of
 /// [`firmware_params`] in `f32`, the controller, the period, the references and
-/// the gains (paper eqs. 8 to 11; `K'_I` by [`crate::scenario::ControllerSection::hybrid_ki`]).
+/// the gains (paper eqs. 8 to 11; `K'_I` by [`crate::scenario::ControllerSection::hybrid_ki`]);
+/// the rest the firmware's defaults at the scenario's period ([`Config::default_at`]:
+/// the detectors' confirmations in time, not in periods).
 pub fn firmware_config(s: &Scenario) -> Config {
     let c = &s.controller;
     let f = |v: [f64; 2]| v.map(|x| x as f32);
-    let base = Config::default();
+    // The detectors' confirmations hold their times at the scenario's rate.
+    let base = Config::default_at(s.timing.period());
     Config {
         params: firmware_params(s).cast(),
         controller: c.kind,

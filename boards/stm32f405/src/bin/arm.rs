@@ -15,8 +15,9 @@
 //! window's report, the reset's fresh firmware, the bring-up's requests) borrows
 //! the application under PRIMASK or BASEPRI at the control's priority. The safe
 //! state disables the drivers. A reset (or a watchdog reset) comes up with them
-//! disabled until the enable button (PC13 to ground, held 20 periods) resets the
-//! firmware; they are enabled at the next command that is not the safe state.
+//! disabled until the enable button (PC13 to ground, held 20 ms at any rate:
+//! `arm_app::BUTTON_PRESS_S`) resets the firmware; they are enabled at the next
+//! command that is not the safe state.
 //!
 //! The step's cycles (DWT `CYCCNT` on silicon) are reported per window of
 //! `step_stats::WINDOW` periods, worst and median, with the tick's interval
