@@ -16,8 +16,17 @@
 //!   position so that TIM4 (a lazily advanced device) sees each at its instant
 //!   and its input filter settles between them. This needs the machine's
 //!   live positions, which rsemu arms only when the core is the crystal's one
-//!   runnable: the DMA controllers are bound as not runnable
-//!   ([`crate::machine`]; the image never enables DMA, which the board checks).
+//!   runnable: rsemu's DMA controllers are bound as not runnable
+//!   ([`crate::machine`]; DMA2 is the board's own model, which moves a frame
+//!   at once).
+//! - **One instruction at a time** ([`Mode::Functional`]): the awake core runs
+//!   rsemu's `step` (one instruction or one exception entry), its position
+//!   published to the scheduler's cursor before each (`anchor + used`: a
+//!   device read inside the instruction sees the instant it began), the last
+//!   instruction's overshoot carried into the next run as the core's own debt.
+//!   Between two steps the board repairs the frame of an exception taken
+//!   inside an `IT` block, which rsemu's entry stacks without `ITSTATE`
+//!   ([`itstate`]; both modes).
 //! - **The tick handler's instructions** ([`Mode::Counted`]): the awake core is
 //!   stepped one budget tick at a time (`run_budget(1)` steps an instruction
 //!   exactly when the core owes no cycle), counting the instructions executed
@@ -51,7 +60,7 @@ use crate::{
 };
 
 mod device;
-mod itstate;
+pub mod itstate;
 mod run;
 
 /// External interrupt inputs folded in (the STM32F405 has 82; three words).
@@ -165,6 +174,10 @@ pub struct Core {
     /// power-on reset, which a system reset returns them to
     /// ([`Core::system_reset`]).
     power_on: Sys,
+    /// [`Mode::Functional`]'s cycle debt: the cycles the last instruction of a
+    /// run took past its budget, paid at the start of the next (it steps the
+    /// core itself, `run.rs`; the counted core's debt is rsemu's own).
+    debt: AtomicU64,
 }
 
 /// The core's reset input, watched: forwards the level, notes a rise.
@@ -212,6 +225,7 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
             reset_seen: Arc::default(),
             reset_watch: Mutex::new(None),
             power_on,
+            debt: AtomicU64::new(0),
         });
         *lock(&s) = Some(Arc::clone(&core));
         Ok(core as Arc<dyn Instance>)

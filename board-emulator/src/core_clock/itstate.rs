@@ -37,19 +37,20 @@ const FRAME_XPSR: u32 = 28;
 const CONTROL_SPSEL: u32 = 1 << 1;
 
 impl Core {
-    /// One `run_budget(1)` of rsemu's core (one instruction, one exception
-    /// entry, or one tick of cycle debt), with the frame of an exception
-    /// taken inside an `IT` block repaired (module documentation). Returns
-    /// the ticks consumed, as `run_budget`: 0 when the core cannot run.
-    pub(super) fn step_keeping_itstate(&self) -> u64 {
+    /// `step`: one instruction or one exception entry of rsemu's core (its
+    /// `step`, or a `run_budget(1)` that owes nothing), with the frame of an
+    /// exception taken inside an `IT` block repaired (module documentation).
+    /// Returns what `step` returns: the cycles or ticks charged, 0 when the
+    /// core cannot run.
+    pub(super) fn step_keeping_itstate(&self, step: impl FnOnce() -> u64) -> u64 {
         let c = &*self.cpu;
         let it = c.xpsr() & IT_BITS;
         if it == 0 {
-            return c.run_budget(1);
+            return step();
         }
         let before = c.regs();
         let exception = c.current_exception();
-        let n = c.run_budget(1);
+        let n = step();
         if c.current_exception() != exception {
             self.restore_stacked_itstate(&before, it);
         }

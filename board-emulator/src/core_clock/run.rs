@@ -18,7 +18,7 @@ impl Core {
             // The next step takes the reset.
             return 0;
         }
-        if !c.is_asleep() || c.cycle_debt() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
+        if !c.is_asleep() || self.owed() != 0 || c.reset_pending() || c.is_locked_up() || c.nmi_asserted() {
             return 0;
         }
         c.with_sys(|s| {
@@ -51,20 +51,43 @@ impl Core {
         })
     }
 
+    /// The cycles the core owes from its last instruction: [`Mode::Functional`]'s
+    /// own debt, rsemu's for the counted core.
+    fn owed(&self) -> u64 {
+        match self.mode {
+            super::Mode::Functional => self.debt.load(Relaxed),
+            super::Mode::Counted => self.cpu.cycle_debt(),
+        }
+    }
+
+    /// The functional run: the core stepped one instruction (or exception
+    /// entry) at a time (`super::itstate`), its position published before each
+    /// (the scheduler's cursor at `anchor + used`: a device read inside the
+    /// instruction sees the instant it began), a sleeping core's idle ticks
+    /// skipped ([`Core::sleepable`]), the host's edges driven at their ticks,
+    /// and the last instruction's overshoot carried into the next run as debt.
     pub(super) fn run_functional(&self, ticks: u64) -> u64 {
         let c = &*self.cpu;
         let cursor = lock(&self.cursor).clone();
         let anchor = cursor.as_ref().map_or(0, TickCursor::anchor);
         let mut edges = lock(&self.edges);
         let pins = lock(&self.pins).clone();
+        // Once a round, as rsemu's own runs do (its spin detector's arming).
+        c.run(0);
         let mut used = 0;
         while used < ticks {
             let mut rest = ticks - used;
-            // A host edge where the core owes nothing: its position is then
-            // exactly anchor + used.
-            if let (Some(e), Some(cur), Some(pins)) = (edges.front().copied(), cursor.as_ref(), pins.as_ref())
-                && c.cycle_debt() == 0
-            {
+            // A debt first: the last instruction's cycles past the last run.
+            let owed = self.debt.load(Relaxed);
+            if owed > 0 {
+                let d = owed.min(rest);
+                self.debt.store(owed - d, Relaxed);
+                used += d;
+                continue;
+            }
+            // A host edge: the core owes nothing, so its position is exactly
+            // anchor + used.
+            if let (Some(e), Some(cur), Some(pins)) = (edges.front().copied(), cursor.as_ref(), pins.as_ref()) {
                 let pos = anchor + used;
                 if e.at <= pos {
                     if e.at < pos {
@@ -79,26 +102,25 @@ impl Core {
                     rest = rest.min(e.at - pos);
                 }
             }
-            // A sleeping core's debt is paid without a step.
-            let d = if c.is_asleep() { c.cycle_debt().min(rest) } else { 0 };
-            if d > 0 {
-                used += c.run_budget(d);
-                continue;
-            }
             let n = self.sleepable(rest);
             if n > 0 {
                 used += n;
                 continue;
             }
             // Awake: one instruction (or exception entry) at a time, so that an
-            // exception taken inside an `IT` block keeps it (`super::itstate`);
-            // a debt is paid in one call.
-            let debt = c.cycle_debt().min(rest);
-            let (r, asked) = if debt > 0 { (c.run_budget(debt), debt) } else { (self.step_keeping_itstate(), 1) };
-            used += r;
-            if r < asked {
+            // exception taken inside an `IT` block keeps it (`super::itstate`).
+            if let Some(cur) = cursor.as_ref() {
+                cur.set(anchor + used);
+            }
+            let n = self.step_keeping_itstate(|| c.step());
+            if n == 0 {
+                // No address space: nothing more to run.
                 break;
             }
+            if n > rest {
+                self.debt.store(n - rest, Relaxed);
+            }
+            used += n.min(rest);
         }
         self.end_tick.store(anchor + used, Relaxed);
         used
@@ -141,7 +163,7 @@ impl Core {
                 }
                 _ => 0,
             };
-            let n = if debt == 0 { self.step_keeping_itstate() } else { c.run_budget(1) };
+            let n = if debt == 0 { self.step_keeping_itstate(|| c.run_budget(1)) } else { c.run_budget(1) };
             if n == 0 {
                 break;
             }
