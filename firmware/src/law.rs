@@ -124,27 +124,30 @@ pub fn pid(
 /// [`LawError::Unreachable`]: a non-finite target, one beyond the reach `2 l`
 /// (by more than 1e-6 of it), or at the base joint (`|z| <= 1e-9 l`).
 pub fn reference_joints(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Result<(Vector2<f32>, JointTrig<f32>), LawError> {
-    if !(z_t.is_finite() && z_n.is_finite()) {
-        return Err(LawError::Unreachable);
-    }
     let r = (z_t * z_t + z_n * z_n).square_root();
     let reach = l + l;
-    if r > reach * (1.0 + 1e-6) || r <= l * 1e-9 {
+    // Beyond the reach or not a number: a target that is not finite makes `r`
+    // infinite or NaN, which `!(r <= ..)` refuses with the reach (the verdicts of
+    // `is_finite` of both coordinates and then `r > ..`, test below).
+    if !(r <= reach * (1.0 + 1e-6)) || r <= l * 1e-9 {
         return Err(LawError::Unreachable);
     }
     // cos(delta/2) = r / (2 l), at most 1 (a comparison: `f32::min` is a call to
     // `fminf` on the MCU); sin(delta/2) >= 0 from it (`1 - c` exact for c >= 1/2).
+    // Both in the first quadrant and finite (`r` finite and above 0 here), so the
+    // half angle is `atan2` without its sign and finiteness handling (the same bits).
     let c = r / reach;
     let c_half = if c < 1.0 { c } else { 1.0 };
     let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
-    let half = trig::atan2_f32(s_abs, c_half);
+    let half = trig::atan2_first_quadrant_f32(s_abs, c_half);
     // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
     let sign = match branch {
         ElbowBranch::Up => 1.0,
         ElbowBranch::Down => -1.0,
     };
     let half_delta = sign * (half + half) * 0.5;
-    let psi = trig::atan2_f32(z_t, -z_n);
+    // z_t and z_n are finite here (else `r` would be infinite or NaN).
+    let psi = trig::atan2_finite_f32(z_t, -z_n);
     let q = Vector2::new(psi - half_delta, psi + half_delta);
     let inv_r = 1.0 / r;
     let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
@@ -585,6 +588,95 @@ mod tests {
             prop_assert!((f[1] - sig.a_f as f64).abs() < 1e-3 * sig.a_f.abs().max(1.0) as f64, "f_n {} vs a_f {}", f[1], sig.a_f);
             prop_assert!((z_ddot[0] - sig.a_v as f64).abs() < 2e-3 * (sig.a_v.abs() as f64 + 10.0), "z_t_ddot {} vs a_v {}", z_ddot[0], sig.a_v);
         }
+    }
+
+    /// [`reference_joints`] as issue 56's fourth round left it: the finiteness of
+    /// the target checked first, both angles by the checked [`trig::atan2_f32`].
+    fn reference_joints_checked(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Result<(Vector2<f32>, JointTrig<f32>), LawError> {
+        if !(z_t.is_finite() && z_n.is_finite()) {
+            return Err(LawError::Unreachable);
+        }
+        let r = (z_t * z_t + z_n * z_n).square_root();
+        let reach = l + l;
+        if r > reach * (1.0 + 1e-6) || r <= l * 1e-9 {
+            return Err(LawError::Unreachable);
+        }
+        let c = r / reach;
+        let c_half = if c < 1.0 { c } else { 1.0 };
+        let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
+        let half = trig::atan2_f32(s_abs, c_half);
+        let sign = match branch {
+            ElbowBranch::Up => 1.0,
+            ElbowBranch::Down => -1.0,
+        };
+        let half_delta = sign * (half + half) * 0.5;
+        let psi = trig::atan2_f32(z_t, -z_n);
+        let q = Vector2::new(psi - half_delta, psi + half_delta);
+        let inv_r = 1.0 / r;
+        let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
+        let s_half = sign * s_abs;
+        let trig = JointTrig {
+            s1: s_psi * c_half - c_psi * s_half,
+            c1: c_psi * c_half + s_psi * s_half,
+            s2: s_psi * c_half + c_psi * s_half,
+            c2: c_psi * c_half - s_psi * s_half,
+        };
+        Ok((q, trig))
+    }
+
+    /// The bits of a `reference_joints` result (angles, sines and cosines), or its error.
+    fn joint_bits(r: Result<(Vector2<f32>, JointTrig<f32>), LawError>) -> Result<[u32; 6], LawError> {
+        r.map(|(q, t)| [q[0], q[1], t.s1, t.c1, t.s2, t.c2].map(f32::to_bits))
+    }
+
+    /// The reach's comparison refuses what the finiteness checks did, and the
+    /// unchecked `atan2`s keep every bit: the same verdict and the same angles,
+    /// sines and cosines as the checked form for targets over the whole plane
+    /// around the reach (inside, at and beyond it, at the base), both branches,
+    /// the paper's and other link lengths, and every non-finite coordinate.
+    #[test]
+    fn reference_joints_keep_the_checked_forms_bits() {
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MAX, -f32::MAX, 1e30, 0.0, -0.0, 1e-30];
+        let mut n = 0;
+        for l in [0.21f32, 0.05, 1.3] {
+            for branch in [ElbowBranch::Up, ElbowBranch::Down] {
+                for i in -300..=300 {
+                    for j in -300..=300 {
+                        let (z_t, z_n) = (2.1 * l * i as f32 / 300.0, 2.1 * l * j as f32 / 300.0);
+                        assert_eq!(
+                            joint_bits(reference_joints(l, z_t, z_n, branch)),
+                            joint_bits(reference_joints_checked(l, z_t, z_n, branch))
+                        );
+                        n += 1;
+                    }
+                    for &x in &odd {
+                        let y = 2.1 * l * i as f32 / 300.0;
+                        for (z_t, z_n) in [(x, y), (y, x), (x, x)] {
+                            assert_eq!(
+                                joint_bits(reference_joints(l, z_t, z_n, branch)),
+                                joint_bits(reference_joints_checked(l, z_t, z_n, branch)),
+                                "({z_t}, {z_n})"
+                            );
+                        }
+                    }
+                }
+                // At the reach and the base's threshold, ulp by ulp.
+                for z in [2.0 * l, 2.0 * l * (1.0 + 1e-6), l * 1e-9] {
+                    let mut b = z.to_bits() - 50;
+                    while b <= z.to_bits() + 50 {
+                        let z = f32::from_bits(b);
+                        for (z_t, z_n) in [(z, 0.0), (0.0, -z), (-z, 0.0)] {
+                            assert_eq!(
+                                joint_bits(reference_joints(l, z_t, z_n, branch)),
+                                joint_bits(reference_joints_checked(l, z_t, z_n, branch))
+                            );
+                        }
+                        b += 1;
+                    }
+                }
+            }
+        }
+        assert!(n > 2_000_000);
     }
 
     /// Targets the arm cannot take are refused as unreachable, as the shared
