@@ -58,6 +58,17 @@ pub fn wrap(angle: f32) -> f32 {
     if a > PI { a - TAU } else { up }
 }
 
+/// [`wrap`] of the sum of two decoded angles (each in `(-pi, pi]` as
+/// [`decode_with`] makes them, so the sum lies in `(-2 pi, 2 pi]`): the same bits
+/// without the remainder's range check, which such a sum never needs (test
+/// `the_sum_of_two_decoded_angles_wraps_as_wrap`; at `2 pi` itself both give
+/// `+0`). Issue 56: the elbow's absolute angle, every step.
+#[inline(always)]
+pub fn wrap_sum(angle: f32) -> f32 {
+    let up = if angle <= -PI { angle + TAU } else { angle };
+    if angle > PI { angle - TAU } else { up }
+}
+
 /// `angle % TAU`, out of line: LLVM would otherwise compute the remainder on
 /// both branches of [`wrap`] (a select), calling `fmodf` every time.
 #[cold]
@@ -147,6 +158,27 @@ pub fn decode_with(frame: &SensorFrame, scale: &EncoderScale) -> Result<Measurem
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every decoded angle of the first joint, at every encoder resolution the
+    /// configuration takes, with a stride of the second's (all of them near the
+    /// ends of the turn): [`wrap_sum`] of their sum has the bits of [`wrap`].
+    #[test]
+    fn the_sum_of_two_decoded_angles_wraps_as_wrap() {
+        for bits in wire::ENCODER_BITS_RANGE.0..=wire::ENCODER_BITS_RANGE.1 {
+            let scale = EncoderScale::of_bits(bits);
+            let counts = scale.counts;
+            let near = |c: u32| c < 64 || c + 64 >= counts || c.abs_diff(counts / 2) < 64;
+            for a in 0..counts {
+                let theta1 = scale.angle(a as u16);
+                let mut b = 0;
+                while b < counts {
+                    let sum = theta1 + scale.angle(b as u16);
+                    assert_eq!(wrap_sum(sum).to_bits(), wrap(sum).to_bits(), "{bits} bits: counts {a}, {b}");
+                    b += if near(a) || near(b) { 1 } else { 61 };
+                }
+            }
+        }
+    }
 
     #[test]
     fn encode_decode_round_trips_within_one_count() {

@@ -103,7 +103,7 @@ pub fn pid(
         gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i]
     };
     let u = [joint(0), joint(1)];
-    if crate::finite(u[0]) && crate::finite(u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
+    if crate::finite_both(u[0], u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
 }
 
 /// The PID's reference joint angles `q* = [theta1*, theta2*]` (rad) and their
@@ -378,7 +378,7 @@ pub fn hybrid_at(
     let u_gen =
         wc + Vector2::new(terms.m11 * x0 + m12 * x1 - (j11 * f_t_hat + j21 * a_f), m12 * x0 + terms.m22 * x1 - (j12 * f_t_hat + j22 * a_f));
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
-    if !(crate::finite(motor[0]) && crate::finite(motor[1]) && crate::finite(a_f)) {
+    if !crate::finite_all3(motor[0], motor[1], a_f) {
         return Err(LawError::NonFinite);
     }
     Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]] }))
