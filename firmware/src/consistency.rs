@@ -170,13 +170,7 @@ impl InnovationMonitor {
         }
         // Two joints written out (the loop is not unrolled at `opt-level = "s"`).
         let mut joint = |j: usize, r: f32| {
-            let sign = if r > rule.threshold {
-                1
-            } else if r < -rule.threshold {
-                -1
-            } else {
-                0
-            };
+            let sign = side(r, rule.threshold);
             self.run[j] = if sign != 0 && sign == self.sign[j] { self.run[j].saturating_add(1) } else { u16::from(sign != 0) };
             self.sign[j] = sign;
             self.run[j] >= rule.confirm
@@ -186,9 +180,56 @@ impl InnovationMonitor {
     }
 }
 
+/// The side of `threshold` an innovation `r` (rad) lies on: `1` above it, `-1`
+/// below `-threshold`, else 0 (a NaN too). Within the threshold first (the usual
+/// period: one comparison, no taken branch), then the two sides: the same sign
+/// for every `r` and threshold as the two comparisons alone (`|r| <= t` makes both
+/// `r > t` and `r < -t` false; a NaN, or a threshold that is not a number, takes
+/// the two comparisons; test `the_side_is_the_two_comparisons`). Issue 56.
+#[inline(always)]
+fn side(r: f32, threshold: f32) -> i8 {
+    if r.abs() <= threshold {
+        0
+    } else if r > threshold {
+        1
+    } else if r < -threshold {
+        -1
+    } else {
+        0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`side`] against the two comparisons it starts with a third for: every
+    /// innovation and threshold of a grid over both signs and the `f32` range by
+    /// exponent, each value's neighbours, the zeros, the infinities and NaNs.
+    #[test]
+    fn the_side_is_the_two_comparisons() {
+        let two = |r: f32, t: f32| {
+            if r > t {
+                1
+            } else if r < -t {
+                -1
+            } else {
+                0
+            }
+        };
+        let mut values = std::vec![0.0f32, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN, f32::MAX, 1e-45];
+        for e in -40..=40 {
+            let x = libm::exp2f(e as f32 * 0.5);
+            for v in [x, f32::from_bits(x.to_bits() + 1), f32::from_bits(x.to_bits() - 1)] {
+                values.extend([v, -v]);
+            }
+        }
+        for &r in &values {
+            for &t in &values {
+                assert_eq!(side(r, t), two(r, t), "r {r:e}, threshold {t:e}");
+            }
+        }
+    }
 
     const RULE: ConsistencyRule = ConsistencyRule { contact_force: 2.0, height_tolerance: 2e-3, confirm: 3 };
 
