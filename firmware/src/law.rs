@@ -352,11 +352,15 @@ pub fn hybrid_at(
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
     let m12 = terms.half_ml2 * c21;
     let mu_used = if comp == FrictionCompensation::Estimated {
-        // p and Q_22 with the current estimate, both times det M (> 0): Q = J M^-1 J^T
-        // (paper eq. 3) with M^-1 = adj(M) / det M, the division left out.
+        // p and Q_22 with the current estimate, both times det M / l^2 (> 0): Q = J M^-1 J^T
+        // (paper eq. 3) with M^-1 = adj(M) / det M and J = l [[c1, c2], [s1, s2]],
+        // the division and the factor l^2 left out (the estimate uses only their
+        // ratio): from the sines and cosines, which the step holds in registers,
+        // not from J's entries (issue 56's fifth round; the gate's verdict as from
+        // J's but for a rounding at its threshold, test below).
         let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
-        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
-        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+        let (a21, a22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
+        let (q21, q22) = (a21 * trig.c1 + a22 * trig.c2, a21 * trig.s1 + a22 * trig.s2);
         let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
         let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
         state.mu.update_with_gain(mu_hat, &sample, mu_gain);
@@ -677,6 +681,49 @@ mod tests {
             }
         }
         assert!(n > 2_000_000);
+    }
+
+    /// The friction estimate's gate `p > P_MIN Q_22` from the sines and cosines
+    /// (both times `det M / l^2`) against the form before issue 56's fifth round
+    /// (from J's entries, both times `det M`): the same verdict over a grid of the
+    /// arm's angles, both slip directions and estimates from 0 to 1.5, except within
+    /// a few roundings of the threshold (`|p / Q_22 - P_MIN|` below 1e-5, where
+    /// either is a rounding's choice), and those are a handful in a million.
+    #[test]
+    fn the_gate_from_the_sines_is_the_gate_from_the_jacobian() {
+        let params = Config::default().params;
+        let terms = ArmTerms::of(&params);
+        let (mut n, mut edge) = (0u32, 0u32);
+        for i in 0..400 {
+            for j in 0..400 {
+                let q = Vector2::new(-3.1 + 6.2 * i as f32 / 400.0, -3.1 + 6.2 * j as f32 / 400.0);
+                let trig = JointTrig::new(&q);
+                let jac = jacobian_trig(terms.l, &trig);
+                let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
+                let m12 = terms.half_ml2 * trig.c21();
+                let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
+                let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
+                let (q21_j, q22_j) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+                let (b21, b22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
+                let (q21_t, q22_t) = (b21 * trig.c1 + b22 * trig.c2, b21 * trig.s1 + b22 * trig.s2);
+                for mu in [0.0f32, 0.3, 0.6, 0.9, 1.5] {
+                    for s in [-1.0f32, 1.0] {
+                        let (p_j, p_t) = (q22_j - mu * s * q21_j, q22_t - mu * s * q21_t);
+                        let (gate_j, gate_t) = (p_j > mu_estimate::P_MIN * q22_j, p_t > mu_estimate::P_MIN * q22_t);
+                        if gate_j != gate_t {
+                            let ratio = p_j as f64 / q22_j as f64;
+                            assert!(
+                                (ratio - mu_estimate::P_MIN as f64).abs() < 1e-5 || q22_j.abs() < 1e-12,
+                                "q {q:?}, mu {mu}, s {s}: p/Q22 {ratio}"
+                            );
+                            edge += 1;
+                        }
+                        n += 1;
+                    }
+                }
+            }
+        }
+        assert!(edge * 100_000 < n, "{edge} of {n} at the threshold");
     }
 
     /// Targets the arm cannot take are refused as unreachable, as the shared
