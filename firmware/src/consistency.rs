@@ -114,11 +114,14 @@ impl FrictionSignMonitor {
         } else {
             self.quiet = self.quiet.saturating_sub(1);
         }
-        let along = self.quiet == 0
+        // Friction along the slip first: in a healthy slide it opposes it, so the
+        // usual period ends at the first comparison (the same verdict in any order:
+        // each term is a comparison of its own, issue 56).
+        let along = f_t * slip > 0.0
+            && self.quiet == 0
             && !unsure
             && f_n > contact_force
             && slip.abs() > SLIP_MIN
-            && f_t * slip > 0.0
             && f_t.abs() > 0.25 * contact_force;
         self.run = if along { self.run.saturating_add(1) } else { 0 };
         self.run >= confirm
@@ -202,6 +205,53 @@ fn side(r: f32, threshold: f32) -> i8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The friction sign check with its conjunction reordered keeps the state and
+    /// verdicts of the order before issue 56's fifth round: pseudo-random runs of
+    /// forces, slips (NaNs and infinities among them) and unsure periods.
+    #[test]
+    fn the_reordered_friction_check_is_the_former() {
+        fn former(m: &mut FrictionSignMonitor, contact_force: f32, f_t: f32, f_n: f32, slip: f32, unsure: bool, confirm: u16) -> bool {
+            if unsure {
+                m.quiet = confirm;
+            } else {
+                m.quiet = m.quiet.saturating_sub(1);
+            }
+            let along = m.quiet == 0
+                && !unsure
+                && f_n > contact_force
+                && slip.abs() > SLIP_MIN
+                && f_t * slip > 0.0
+                && f_t.abs() > 0.25 * contact_force;
+            m.run = if along { m.run.saturating_add(1) } else { 0 };
+            m.run >= confirm
+        }
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32 - 0.5
+        };
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0];
+        let (mut a, mut b) = (FrictionSignMonitor::default(), FrictionSignMonitor::default());
+        let mut trips = 0;
+        for i in 0..300_000usize {
+            let (mut f_t, f_n, mut slip) = (next() * 10.0, next() * 20.0 + 5.0, next() * 0.4);
+            if i % 53 == 0 {
+                f_t = odd[(i / 53) % odd.len()];
+            }
+            if i % 71 == 0 {
+                slip = odd[(i / 71) % odd.len()];
+            }
+            let unsure = i % 97 < 2;
+            let va = a.update(2.0, f_t, f_n, slip, unsure, 4);
+            assert_eq!(va, former(&mut b, 2.0, f_t, f_n, slip, unsure, 4), "step {i}");
+            assert_eq!(a, b, "step {i}");
+            trips += usize::from(va);
+        }
+        assert!(trips > 10, "{trips}");
+    }
 
     /// [`side`] against the two comparisons it starts with a third for: every
     /// innovation and threshold of a grid over both signs and the `f32` range by
