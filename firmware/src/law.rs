@@ -127,9 +127,10 @@ pub fn reference_joints(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Resu
     let r = (z_t * z_t + z_n * z_n).square_root();
     let reach = l + l;
     // Beyond the reach or not a number: a target that is not finite makes `r`
-    // infinite or NaN, which `!(r <= ..)` refuses with the reach (the verdicts of
+    // infinite or NaN, which `r <= ..` being false refuses with the reach (the verdicts of
     // `is_finite` of both coordinates and then `r > ..`, test below).
-    if !(r <= reach * (1.0 + 1e-6)) || r <= l * 1e-9 {
+    let within_reach = r <= reach * (1.0 + 1e-6);
+    if !within_reach || r <= l * 1e-9 {
         return Err(LawError::Unreachable);
     }
     // cos(delta/2) = r / (2 l), at most 1 (a comparison: `f32::min` is a call to
