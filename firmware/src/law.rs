@@ -115,8 +115,11 @@ pub fn pid(
 /// `acos(cos(delta/2))`: the same angle (`delta/2` is in `[0, pi/2]`), and the
 /// sine is needed for the sines and cosines anyway. On the MCU `libm::acosf`
 /// takes `libm::sqrtf` in software and two divisions; here the square root is one
-/// `VSQRT` (`shared::sqrt`) and both angles are [`trig::atan2_f32`] (one division
-/// each, within 3 ulp; `libm::atan2f` takes two and a call). `1 / |z|` is taken once.
+/// `VSQRT` (`shared::sqrt`) and both angles are [`trig::atan2_f32`]'s arithmetic
+/// (one division each, within 3 ulp; `libm::atan2f` takes two and a call), without
+/// its finiteness and sign handling where the geometry bounds the arguments
+/// ([`trig::atan2_first_quadrant_f32`] for the half angle, [`trig::atan2_finite_f32`]
+/// for `psi`: the same bits, issue 56). `1 / |z|` is taken once.
 /// Within a few roundings of that function's angles and sines and cosines (test
 /// below).
 ///
