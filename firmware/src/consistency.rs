@@ -72,7 +72,7 @@ impl ConsistencyMonitor {
         let pressing_off_the_belt = f_n > rule.contact_force && height.abs() > rule.height_tolerance;
         let inside_the_belt = height < -rule.height_tolerance;
         let pulling = f_n < -rule.contact_force;
-        let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !(crate::finite(f_n) && crate::finite(height));
+        let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !crate::finite_both(f_n, height);
         self.inconsistent = if inconsistent { self.inconsistent.saturating_add(1) } else { 0 };
         self.pulling = if pulling { self.pulling.saturating_add(1) } else { 0 };
         self.inconsistent >= rule.confirm || self.pulling >= PULLING_CONFIRM.min(rule.confirm)
@@ -114,11 +114,14 @@ impl FrictionSignMonitor {
         } else {
             self.quiet = self.quiet.saturating_sub(1);
         }
-        let along = self.quiet == 0
+        // Friction along the slip first: in a healthy slide it opposes it, so the
+        // usual period ends at the first comparison (the same verdict in any order:
+        // each term is a comparison of its own, issue 56).
+        let along = f_t * slip > 0.0
+            && self.quiet == 0
             && !unsure
             && f_n > contact_force
             && slip.abs() > SLIP_MIN
-            && f_t * slip > 0.0
             && f_t.abs() > 0.25 * contact_force;
         self.run = if along { self.run.saturating_add(1) } else { 0 };
         self.run >= confirm
@@ -170,13 +173,7 @@ impl InnovationMonitor {
         }
         // Two joints written out (the loop is not unrolled at `opt-level = "s"`).
         let mut joint = |j: usize, r: f32| {
-            let sign = if r > rule.threshold {
-                1
-            } else if r < -rule.threshold {
-                -1
-            } else {
-                0
-            };
+            let sign = side(r, rule.threshold);
             self.run[j] = if sign != 0 && sign == self.sign[j] { self.run[j].saturating_add(1) } else { u16::from(sign != 0) };
             self.sign[j] = sign;
             self.run[j] >= rule.confirm
@@ -186,9 +183,103 @@ impl InnovationMonitor {
     }
 }
 
+/// The side of `threshold` an innovation `r` (rad) lies on: `1` above it, `-1`
+/// below `-threshold`, else 0 (a NaN too). Within the threshold first (the usual
+/// period: one comparison, no taken branch), then the two sides: the same sign
+/// for every `r` and threshold as the two comparisons alone (`|r| <= t` makes both
+/// `r > t` and `r < -t` false; a NaN, or a threshold that is not a number, takes
+/// the two comparisons; test `the_side_is_the_two_comparisons`). Issue 56.
+#[inline(always)]
+fn side(r: f32, threshold: f32) -> i8 {
+    if r.abs() <= threshold {
+        0
+    } else if r > threshold {
+        1
+    } else if r < -threshold {
+        -1
+    } else {
+        0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The friction sign check with its conjunction reordered keeps the state and
+    /// verdicts of the order before issue 56's fifth round: pseudo-random runs of
+    /// forces, slips (NaNs and infinities among them) and unsure periods.
+    #[test]
+    fn the_reordered_friction_check_is_the_former() {
+        fn former(m: &mut FrictionSignMonitor, contact_force: f32, f_t: f32, f_n: f32, slip: f32, unsure: bool, confirm: u16) -> bool {
+            if unsure {
+                m.quiet = confirm;
+            } else {
+                m.quiet = m.quiet.saturating_sub(1);
+            }
+            let along = m.quiet == 0
+                && !unsure
+                && f_n > contact_force
+                && slip.abs() > SLIP_MIN
+                && f_t * slip > 0.0
+                && f_t.abs() > 0.25 * contact_force;
+            m.run = if along { m.run.saturating_add(1) } else { 0 };
+            m.run >= confirm
+        }
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32 - 0.5
+        };
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0];
+        let (mut a, mut b) = (FrictionSignMonitor::default(), FrictionSignMonitor::default());
+        let mut trips = 0;
+        for i in 0..300_000usize {
+            let (mut f_t, f_n, mut slip) = (next() * 10.0, next() * 20.0 + 5.0, next() * 0.4);
+            if i % 53 == 0 {
+                f_t = odd[(i / 53) % odd.len()];
+            }
+            if i % 71 == 0 {
+                slip = odd[(i / 71) % odd.len()];
+            }
+            let unsure = i % 97 < 2;
+            let va = a.update(2.0, f_t, f_n, slip, unsure, 4);
+            assert_eq!(va, former(&mut b, 2.0, f_t, f_n, slip, unsure, 4), "step {i}");
+            assert_eq!(a, b, "step {i}");
+            trips += usize::from(va);
+        }
+        assert!(trips > 10, "{trips}");
+    }
+
+    /// [`side`] against the two comparisons it starts with a third for: every
+    /// innovation and threshold of a grid over both signs and the `f32` range by
+    /// exponent, each value's neighbours, the zeros, the infinities and NaNs.
+    #[test]
+    fn the_side_is_the_two_comparisons() {
+        let two = |r: f32, t: f32| {
+            if r > t {
+                1
+            } else if r < -t {
+                -1
+            } else {
+                0
+            }
+        };
+        let mut values = std::vec![0.0f32, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN, f32::MAX, 1e-45];
+        for e in -40..=40 {
+            let x = libm::exp2f(e as f32 * 0.5);
+            for v in [x, f32::from_bits(x.to_bits() + 1), f32::from_bits(x.to_bits() - 1)] {
+                values.extend([v, -v]);
+            }
+        }
+        for &r in &values {
+            for &t in &values {
+                assert_eq!(side(r, t), two(r, t), "r {r:e}, threshold {t:e}");
+            }
+        }
+    }
 
     const RULE: ConsistencyRule = ConsistencyRule { contact_force: 2.0, height_tolerance: 2e-3, confirm: 3 };
 

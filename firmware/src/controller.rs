@@ -330,7 +330,8 @@ impl Firmware {
         let cfg = &self.cfg;
         let ts = self.dt;
         let p = &cfg.params;
-        let theta2 = decode::wrap(m.theta1 + m.elbow);
+        // Both in (-pi, pi] (decoded): their sum needs no remainder (the same bits).
+        let theta2 = decode::wrap_sum(m.theta1 + m.elbow);
         let mut innovation = [0.0f32; 2];
         // The joint accelerations the model did not explain over the interval, rad/s^2.
         let mut missed_accel = [0.0f32; 2];
@@ -347,7 +348,7 @@ impl Firmware {
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
                 let qdd = estimator::predicted_acceleration(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
-                let qdd = if crate::finite(qdd[0]) && crate::finite(qdd[1]) { qdd } else { Vector2::zeros() };
+                let qdd = if crate::finite_both(qdd[0], qdd[1]) { qdd } else { Vector2::zeros() };
                 innovation = [
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
                     s.trackers[1].update_with_acceleration(theta2, dt, qdd[1]),

@@ -58,6 +58,17 @@ pub fn wrap(angle: f32) -> f32 {
     if a > PI { a - TAU } else { up }
 }
 
+/// [`wrap`] of the sum of two decoded angles (each in `(-pi, pi]` as
+/// [`decode_with`] makes them, so the sum lies in `(-2 pi, 2 pi]`): the same bits
+/// without the remainder's range check, which such a sum never needs (test
+/// `the_sum_of_two_decoded_angles_wraps_as_wrap`; at `2 pi` itself both give
+/// `+0`). Issue 56: the elbow's absolute angle, every step.
+#[inline(always)]
+pub fn wrap_sum(angle: f32) -> f32 {
+    let up = if angle <= -PI { angle + TAU } else { angle };
+    if angle > PI { angle - TAU } else { up }
+}
+
 /// `angle % TAU`, out of line: LLVM would otherwise compute the remainder on
 /// both branches of [`wrap`] (a select), calling `fmodf` every time.
 #[cold]
@@ -112,6 +123,10 @@ impl EncoderScale {
     }
 }
 
+/// The load cell's codes modulo their range's size (`LOAD_CODE_MAX - LOAD_CODE_MIN + 1`, 4096).
+const LOAD_RANGE_MASK: i32 = (wire::LOAD_CODE_MAX as i32 - wire::LOAD_CODE_MIN as i32 + 1) - 1;
+const _: () = assert!((wire::LOAD_CODE_MAX as i32 - wire::LOAD_CODE_MIN as i32 + 1).count_ones() == 1, "a power of two");
+
 /// [`decode_bits`] with the encoder's scale given (`scale` from
 /// [`EncoderScale::of_bits`]): the firmware's step. The same measurement, bit for bit.
 ///
@@ -133,20 +148,63 @@ pub fn decode_with(frame: &SensorFrame, scale: &EncoderScale) -> Result<Measurem
         return Err(FrameFault::BeltOutOfRange);
     }
     let lsb_force = wire::LOAD_FULL_SCALE_N / 2048.0;
-    let clipped = |c: i16| c == wire::LOAD_CODE_MIN || c == wire::LOAD_CODE_MAX;
+    // At either end of the range (checked above): `c - MIN + 1` runs over
+    // `[1, 4096]`, and modulo 4096 (the range's size, a power of two) it is 0 at
+    // the top and 1 at the bottom, 2 or more elsewhere. One comparison a code and
+    // no branch, where `c == MIN || c == MAX` took two and a branch out of line
+    // and back (issue 56; the same flag at every code, test below).
+    let clipped = |c: i16| ((i32::from(c) - i32::from(wire::LOAD_CODE_MIN) + 1) & LOAD_RANGE_MASK) < 2;
     Ok(Measurement {
         theta1: scale.angle(frame.theta1_count),
         elbow: scale.angle(frame.elbow_count),
         f_t: frame.f_t_code as f32 * lsb_force,
         f_n: frame.f_n_code as f32 * lsb_force,
         v_belt: frame.belt_count as f32 * wire::BELT_SPEED_RESOLUTION,
-        flags: if clipped(frame.f_t_code) || clipped(frame.f_n_code) { status::LOAD_CLIPPED } else { 0 },
+        flags: if clipped(frame.f_t_code) | clipped(frame.f_n_code) { status::LOAD_CLIPPED } else { 0 },
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The clipped flag from one comparison a code is the two ends' comparisons
+    /// for every pair of codes in the range (and every code with the other in the middle).
+    #[test]
+    fn the_clipped_flag_is_the_ends() {
+        let frame = |f_t_code: i16, f_n_code: i16| SensorFrame { f_t_code, f_n_code, ..SensorFrame::default() };
+        let scale = EncoderScale::of_bits(wire::ENCODER_BITS);
+        let ends = |c: i16| c == wire::LOAD_CODE_MIN || c == wire::LOAD_CODE_MAX;
+        for a in wire::LOAD_CODE_MIN..=wire::LOAD_CODE_MAX {
+            for b in [wire::LOAD_CODE_MIN, wire::LOAD_CODE_MIN + 1, -1, 0, 1, wire::LOAD_CODE_MAX - 1, wire::LOAD_CODE_MAX, a] {
+                for (t, n) in [(a, b), (b, a)] {
+                    let m = decode_with(&frame(t, n), &scale).unwrap();
+                    assert_eq!(m.flags == status::LOAD_CLIPPED, ends(t) || ends(n), "codes {t}, {n}");
+                }
+            }
+        }
+    }
+
+    /// Every decoded angle of the first joint, at every encoder resolution the
+    /// configuration takes, with a stride of the second's (all of them near the
+    /// ends of the turn): [`wrap_sum`] of their sum has the bits of [`wrap`].
+    #[test]
+    fn the_sum_of_two_decoded_angles_wraps_as_wrap() {
+        for bits in wire::ENCODER_BITS_RANGE.0..=wire::ENCODER_BITS_RANGE.1 {
+            let scale = EncoderScale::of_bits(bits);
+            let counts = scale.counts;
+            let near = |c: u32| c < 64 || c + 64 >= counts || c.abs_diff(counts / 2) < 64;
+            for a in 0..counts {
+                let theta1 = scale.angle(a as u16);
+                let mut b = 0;
+                while b < counts {
+                    let sum = theta1 + scale.angle(b as u16);
+                    assert_eq!(wrap_sum(sum).to_bits(), wrap(sum).to_bits(), "{bits} bits: counts {a}, {b}");
+                    b += if near(a) || near(b) { 1 } else { 61 };
+                }
+            }
+        }
+    }
 
     #[test]
     fn encode_decode_round_trips_within_one_count() {

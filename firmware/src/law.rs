@@ -103,7 +103,7 @@ pub fn pid(
         gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i]
     };
     let u = [joint(0), joint(1)];
-    if crate::finite(u[0]) && crate::finite(u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
+    if crate::finite_both(u[0], u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
 }
 
 /// The PID's reference joint angles `q* = [theta1*, theta2*]` (rad) and their
@@ -115,8 +115,11 @@ pub fn pid(
 /// `acos(cos(delta/2))`: the same angle (`delta/2` is in `[0, pi/2]`), and the
 /// sine is needed for the sines and cosines anyway. On the MCU `libm::acosf`
 /// takes `libm::sqrtf` in software and two divisions; here the square root is one
-/// `VSQRT` (`shared::sqrt`) and both angles are [`trig::atan2_f32`] (one division
-/// each, within 3 ulp; `libm::atan2f` takes two and a call). `1 / |z|` is taken once.
+/// `VSQRT` (`shared::sqrt`) and both angles are [`trig::atan2_f32`]'s arithmetic
+/// (one division each, within 3 ulp; `libm::atan2f` takes two and a call), without
+/// its finiteness and sign handling where the geometry bounds the arguments
+/// ([`trig::atan2_first_quadrant_f32`] for the half angle, [`trig::atan2_finite_f32`]
+/// for `psi`: the same bits, issue 56). `1 / |z|` is taken once.
 /// Within a few roundings of that function's angles and sines and cosines (test
 /// below).
 ///
@@ -124,27 +127,31 @@ pub fn pid(
 /// [`LawError::Unreachable`]: a non-finite target, one beyond the reach `2 l`
 /// (by more than 1e-6 of it), or at the base joint (`|z| <= 1e-9 l`).
 pub fn reference_joints(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Result<(Vector2<f32>, JointTrig<f32>), LawError> {
-    if !(z_t.is_finite() && z_n.is_finite()) {
-        return Err(LawError::Unreachable);
-    }
     let r = (z_t * z_t + z_n * z_n).square_root();
     let reach = l + l;
-    if r > reach * (1.0 + 1e-6) || r <= l * 1e-9 {
+    // Beyond the reach or not a number: a target that is not finite makes `r`
+    // infinite or NaN, which `r <= ..` being false refuses with the reach (the verdicts of
+    // `is_finite` of both coordinates and then `r > ..`, test below).
+    let within_reach = r <= reach * (1.0 + 1e-6);
+    if !within_reach || r <= l * 1e-9 {
         return Err(LawError::Unreachable);
     }
     // cos(delta/2) = r / (2 l), at most 1 (a comparison: `f32::min` is a call to
     // `fminf` on the MCU); sin(delta/2) >= 0 from it (`1 - c` exact for c >= 1/2).
+    // Both in the first quadrant and finite (`r` finite and above 0 here), so the
+    // half angle is `atan2` without its sign and finiteness handling (the same bits).
     let c = r / reach;
     let c_half = if c < 1.0 { c } else { 1.0 };
     let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
-    let half = trig::atan2_f32(s_abs, c_half);
+    let half = trig::atan2_first_quadrant_f32(s_abs, c_half);
     // The elbow's side: theta1 = psi - sign delta/2, theta2 = psi + sign delta/2.
     let sign = match branch {
         ElbowBranch::Up => 1.0,
         ElbowBranch::Down => -1.0,
     };
     let half_delta = sign * (half + half) * 0.5;
-    let psi = trig::atan2_f32(z_t, -z_n);
+    // z_t and z_n are finite here (else `r` would be infinite or NaN).
+    let psi = trig::atan2_finite_f32(z_t, -z_n);
     let q = Vector2::new(psi - half_delta, psi + half_delta);
     let inv_r = 1.0 / r;
     let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
@@ -349,11 +356,15 @@ pub fn hybrid_at(
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
     let m12 = terms.half_ml2 * c21;
     let mu_used = if comp == FrictionCompensation::Estimated {
-        // p and Q_22 with the current estimate, both times det M (> 0): Q = J M^-1 J^T
-        // (paper eq. 3) with M^-1 = adj(M) / det M, the division left out.
+        // p and Q_22 with the current estimate, both times det M / l^2 (> 0): Q = J M^-1 J^T
+        // (paper eq. 3) with M^-1 = adj(M) / det M and J = l [[c1, c2], [s1, s2]],
+        // the division and the factor l^2 left out (the estimate uses only their
+        // ratio): from the sines and cosines, which the step holds in registers,
+        // not from J's entries (issue 56's fifth round; the gate's verdict as from
+        // J's but for a rounding at its threshold, test below).
         let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
-        let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
-        let (q21, q22) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+        let (a21, a22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
+        let (q21, q22) = (a21 * trig.c1 + a22 * trig.c2, a21 * trig.s1 + a22 * trig.s2);
         let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
         let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
         state.mu.update_with_gain(mu_hat, &sample, mu_gain);
@@ -375,7 +386,7 @@ pub fn hybrid_at(
     let u_gen =
         wc + Vector2::new(terms.m11 * x0 + m12 * x1 - (j11 * f_t_hat + j21 * a_f), m12 * x0 + terms.m22 * x1 - (j12 * f_t_hat + j22 * a_f));
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
-    if !(crate::finite(motor[0]) && crate::finite(motor[1]) && crate::finite(a_f)) {
+    if !crate::finite_all3(motor[0], motor[1], a_f) {
         return Err(LawError::NonFinite);
     }
     Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]] }))
@@ -585,6 +596,138 @@ mod tests {
             prop_assert!((f[1] - sig.a_f as f64).abs() < 1e-3 * sig.a_f.abs().max(1.0) as f64, "f_n {} vs a_f {}", f[1], sig.a_f);
             prop_assert!((z_ddot[0] - sig.a_v as f64).abs() < 2e-3 * (sig.a_v.abs() as f64 + 10.0), "z_t_ddot {} vs a_v {}", z_ddot[0], sig.a_v);
         }
+    }
+
+    /// [`reference_joints`] as issue 56's fourth round left it: the finiteness of
+    /// the target checked first, both angles by the checked [`trig::atan2_f32`].
+    fn reference_joints_checked(l: f32, z_t: f32, z_n: f32, branch: ElbowBranch) -> Result<(Vector2<f32>, JointTrig<f32>), LawError> {
+        if !(z_t.is_finite() && z_n.is_finite()) {
+            return Err(LawError::Unreachable);
+        }
+        let r = (z_t * z_t + z_n * z_n).square_root();
+        let reach = l + l;
+        if r > reach * (1.0 + 1e-6) || r <= l * 1e-9 {
+            return Err(LawError::Unreachable);
+        }
+        let c = r / reach;
+        let c_half = if c < 1.0 { c } else { 1.0 };
+        let s_abs = ((1.0 - c_half) * (1.0 + c_half)).square_root();
+        let half = trig::atan2_f32(s_abs, c_half);
+        let sign = match branch {
+            ElbowBranch::Up => 1.0,
+            ElbowBranch::Down => -1.0,
+        };
+        let half_delta = sign * (half + half) * 0.5;
+        let psi = trig::atan2_f32(z_t, -z_n);
+        let q = Vector2::new(psi - half_delta, psi + half_delta);
+        let inv_r = 1.0 / r;
+        let (s_psi, c_psi) = (z_t * inv_r, -z_n * inv_r);
+        let s_half = sign * s_abs;
+        let trig = JointTrig {
+            s1: s_psi * c_half - c_psi * s_half,
+            c1: c_psi * c_half + s_psi * s_half,
+            s2: s_psi * c_half + c_psi * s_half,
+            c2: c_psi * c_half - s_psi * s_half,
+        };
+        Ok((q, trig))
+    }
+
+    /// The bits of a `reference_joints` result (angles, sines and cosines), or its error.
+    fn joint_bits(r: Result<(Vector2<f32>, JointTrig<f32>), LawError>) -> Result<[u32; 6], LawError> {
+        r.map(|(q, t)| [q[0], q[1], t.s1, t.c1, t.s2, t.c2].map(f32::to_bits))
+    }
+
+    /// The reach's comparison refuses what the finiteness checks did, and the
+    /// unchecked `atan2`s keep every bit: the same verdict and the same angles,
+    /// sines and cosines as the checked form for targets over the whole plane
+    /// around the reach (inside, at and beyond it, at the base), both branches,
+    /// the paper's and other link lengths, and every non-finite coordinate.
+    #[test]
+    fn reference_joints_keep_the_checked_forms_bits() {
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MAX, -f32::MAX, 1e30, 0.0, -0.0, 1e-30];
+        let mut n = 0;
+        for l in [0.21f32, 0.05, 1.3] {
+            for branch in [ElbowBranch::Up, ElbowBranch::Down] {
+                for i in -300..=300 {
+                    for j in -300..=300 {
+                        let (z_t, z_n) = (2.1 * l * i as f32 / 300.0, 2.1 * l * j as f32 / 300.0);
+                        assert_eq!(
+                            joint_bits(reference_joints(l, z_t, z_n, branch)),
+                            joint_bits(reference_joints_checked(l, z_t, z_n, branch))
+                        );
+                        n += 1;
+                    }
+                    for &x in &odd {
+                        let y = 2.1 * l * i as f32 / 300.0;
+                        for (z_t, z_n) in [(x, y), (y, x), (x, x)] {
+                            assert_eq!(
+                                joint_bits(reference_joints(l, z_t, z_n, branch)),
+                                joint_bits(reference_joints_checked(l, z_t, z_n, branch)),
+                                "({z_t}, {z_n})"
+                            );
+                        }
+                    }
+                }
+                // At the reach and the base's threshold, ulp by ulp.
+                for z in [2.0 * l, 2.0 * l * (1.0 + 1e-6), l * 1e-9] {
+                    let mut b = z.to_bits() - 50;
+                    while b <= z.to_bits() + 50 {
+                        let z = f32::from_bits(b);
+                        for (z_t, z_n) in [(z, 0.0), (0.0, -z), (-z, 0.0)] {
+                            assert_eq!(
+                                joint_bits(reference_joints(l, z_t, z_n, branch)),
+                                joint_bits(reference_joints_checked(l, z_t, z_n, branch))
+                            );
+                        }
+                        b += 1;
+                    }
+                }
+            }
+        }
+        assert!(n > 2_000_000);
+    }
+
+    /// The friction estimate's gate `p > P_MIN Q_22` from the sines and cosines
+    /// (both times `det M / l^2`) against the form before issue 56's fifth round
+    /// (from J's entries, both times `det M`): the same verdict over a grid of the
+    /// arm's angles, both slip directions and estimates from 0 to 1.5, except within
+    /// a few roundings of the threshold (`|p / Q_22 - P_MIN|` below 1e-5, where
+    /// either is a rounding's choice), and those are a handful in a million.
+    #[test]
+    fn the_gate_from_the_sines_is_the_gate_from_the_jacobian() {
+        let params = Config::default().params;
+        let terms = ArmTerms::of(&params);
+        let (mut n, mut edge) = (0u32, 0u32);
+        for i in 0..400 {
+            for j in 0..400 {
+                let q = Vector2::new(-3.1 + 6.2 * i as f32 / 400.0, -3.1 + 6.2 * j as f32 / 400.0);
+                let trig = JointTrig::new(&q);
+                let jac = jacobian_trig(terms.l, &trig);
+                let (j11, j12, j21, j22) = (jac[(0, 0)], jac[(0, 1)], jac[(1, 0)], jac[(1, 1)]);
+                let m12 = terms.half_ml2 * trig.c21();
+                let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
+                let (a21, a22) = (j21 * i11 + j22 * i12, j21 * i12 + j22 * i22);
+                let (q21_j, q22_j) = (a21 * j11 + a22 * j12, a21 * j21 + a22 * j22);
+                let (b21, b22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
+                let (q21_t, q22_t) = (b21 * trig.c1 + b22 * trig.c2, b21 * trig.s1 + b22 * trig.s2);
+                for mu in [0.0f32, 0.3, 0.6, 0.9, 1.5] {
+                    for s in [-1.0f32, 1.0] {
+                        let (p_j, p_t) = (q22_j - mu * s * q21_j, q22_t - mu * s * q21_t);
+                        let (gate_j, gate_t) = (p_j > mu_estimate::P_MIN * q22_j, p_t > mu_estimate::P_MIN * q22_t);
+                        if gate_j != gate_t {
+                            let ratio = p_j as f64 / q22_j as f64;
+                            assert!(
+                                (ratio - mu_estimate::P_MIN as f64).abs() < 1e-5 || q22_j.abs() < 1e-12,
+                                "q {q:?}, mu {mu}, s {s}: p/Q22 {ratio}"
+                            );
+                            edge += 1;
+                        }
+                        n += 1;
+                    }
+                }
+            }
+        }
+        assert!(edge * 100_000 < n, "{edge} of {n} at the threshold");
     }
 
     /// Targets the arm cannot take are refused as unreachable, as the shared

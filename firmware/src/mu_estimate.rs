@@ -96,9 +96,13 @@ impl MuEstimate {
         let ratio = -s * sample.f_t / sample.f_n;
         // No check of `f_t` of its own: where `trusted` holds, `f_n > f_min >= 0.5`
         // (so not NaN) and, checked here, finite; then a non-finite `f_t` (inf or
-        // NaN) makes `ratio = -s f_t / f_n` inf or NaN, which `ratio.is_finite()`
-        // rejects. The same verdict for every input (test `a_non_finite_force_*`).
-        let finite = crate::finite(sample.f_n) && crate::finite(ratio);
+        // NaN) makes `ratio = -s f_t / f_n` inf or NaN, which the check rejects.
+        // `f_n` and `ratio` in one check, of their sum: with `f_n > 0.5` the sum is
+        // finite exactly when both are (`f_n = +inf` makes it inf or NaN, and two
+        // finite terms never overflow: `|ratio| <= MAX / f_n`, so the sum is at most
+        // `f_n + MAX / f_n`, below `MAX + 2` on `(0.5, MAX]`). The same verdict for
+        // every input (tests `a_non_finite_force_*`, `the_sums_check_*`).
+        let finite = crate::finite(sample.f_n + ratio);
         if !(trusted && finite && alpha > 0.0) {
             return false;
         }
@@ -230,6 +234,46 @@ mod tests {
                 assert!(a.correction.is_finite());
             }
         }
+    }
+
+    /// The sum's check gives the two checks' verdict (`f_n` and the ratio finite)
+    /// wherever `trusted` holds: forces over the whole `f32` range by exponent and
+    /// mantissa, both signs, the non-finite values, and `f_n` from just above the
+    /// trust threshold to `MAX`; the same state after every update.
+    #[test]
+    fn the_sums_check_is_the_two_checks() {
+        let two_checks = |e: &mut MuEstimate, x: &FrictionSample| {
+            let s = if x.v_r < 0.0 { -1.0 } else { 1.0 };
+            let ratio = -s * x.f_t / x.f_n;
+            if !(crate::finite(x.f_n) && crate::finite(ratio)) {
+                // Refused either way: only the slip direction moves.
+                e.last_slip = if x.v_r.abs() >= V_R_MIN { s } else { 0.0 };
+                return false;
+            }
+            e.update_with_gain(0.6, x, gain(1e-3))
+        };
+        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MAX, -f32::MAX, 0.0, -0.0, 0.5, 3.0];
+        for e in -126..=127 {
+            for m in [1.0f32, 1.25, 1.999_999_9] {
+                let x = m * libm::exp2f(e as f32);
+                values.extend([x, -x]);
+            }
+        }
+        let mut held = MuEstimate::default();
+        held.update(0.6, &sliding(-7.2), 1e-3);
+        let mut n = 0;
+        for &f_t in &values {
+            for &f_n in &values {
+                for v_r in [0.3f32, -0.3] {
+                    let x = FrictionSample { f_t, f_n, v_r, ..sliding(0.0) };
+                    let (mut a, mut b) = (held, held);
+                    assert_eq!(a.update_with_gain(0.6, &x, gain(1e-3)), two_checks(&mut b, &x), "{x:?}");
+                    assert_eq!((a.correction.to_bits(), a.last_slip.to_bits()), (b.correction.to_bits(), b.last_slip.to_bits()), "{x:?}");
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > 1_000_000);
     }
 
     /// Frozen where the ratio is not `mu`: low `f_n`, slow slip, the period after a

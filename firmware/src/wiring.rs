@@ -137,13 +137,12 @@ impl WiringMonitor {
         let d1 = off * a[0] + m22 * a[1];
         let du = [d0 + d1, d1];
         // Two joints written out (the loops' iterators are not unrolled at `opt-level = "s"`).
-        let filter = |m: &mut f32, d: f32| {
-            if crate::finite(d) {
-                *m += rule.smoothing * (d - *m);
-            }
-        };
-        filter(&mut self.missed[0], du[0]);
-        filter(&mut self.missed[1], du[1]);
+        // Selects, not conditional stores: the filtered values stay in registers for
+        // the rule below (the same bits: a non-finite `d` leaves the value as it was).
+        let smoothing = rule.smoothing;
+        let filter = |m: f32, d: f32| if crate::finite(d) { m + smoothing * (d - m) } else { m };
+        let missed = [filter(self.missed[0], du[0]), filter(self.missed[1], du[1])];
+        self.missed = missed;
         let touchdown = self.was_lifted && !input.lifted;
         self.was_lifted = input.lifted;
         let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
@@ -155,10 +154,10 @@ impl WiringMonitor {
             self.run = [0; 2];
             return None;
         }
-        let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
+        let (fraction, margin) = (rule.against_fraction, rule.margin_nm);
+        let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > fraction * u.abs() + margin;
         let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
-        self.run =
-            [run(self.run[0], against(self.missed[0], input.applied[0])), run(self.run[1], against(self.missed[1], input.applied[1]))];
+        self.run = [run(self.run[0], against(missed[0], input.applied[0])), run(self.run[1], against(missed[1], input.applied[1]))];
         if self.run[0] >= rule.confirm {
             Some(0)
         } else if self.run[1] >= rule.confirm {
@@ -209,6 +208,92 @@ mod tests {
             assert_eq!(va, vb);
             assert_eq!(a.missed().map(f32::to_bits), b.missed().map(f32::to_bits), "step {i}");
         }
+    }
+
+    /// [`WiringMonitor::update_folded`] as issue 56's fourth round left it: the
+    /// filter by conditional stores, the rule on the stored values.
+    fn update_stored(m: &mut WiringMonitor, rule: &WiringRule, mass: [f32; 3], input: &WiringInput) -> Option<usize> {
+        let [m11, half_ml2, m22] = mass;
+        let off = half_ml2 * input.c21;
+        let a = input.unexplained;
+        let d0 = m11 * a[0] + off * a[1];
+        let d1 = off * a[0] + m22 * a[1];
+        let du = [d0 + d1, d1];
+        let filter = |m: &mut f32, d: f32| {
+            if crate::finite(d) {
+                *m += rule.smoothing * (d - *m);
+            }
+        };
+        filter(&mut m.missed[0], du[0]);
+        filter(&mut m.missed[1], du[1]);
+        let touchdown = m.was_lifted && !input.lifted;
+        m.was_lifted = input.lifted;
+        let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
+        if touchdown || impact_may_come {
+            m.settling = rule.settle;
+        }
+        if input.load_saturated || m.settling > 0 {
+            m.settling = m.settling.saturating_sub(1);
+            m.run = [0; 2];
+            return None;
+        }
+        let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
+        let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
+        m.run = [run(m.run[0], against(m.missed[0], input.applied[0])), run(m.run[1], against(m.missed[1], input.applied[1]))];
+        if m.run[0] >= rule.confirm {
+            Some(0)
+        } else if m.run[1] >= rule.confirm {
+            Some(1)
+        } else {
+            None
+        }
+    }
+
+    /// The filter by selects keeps the stored form's state and verdicts bit for
+    /// bit: long pseudo-random runs of accelerations (non-finite ones among them),
+    /// torques, lift-offs, heights and full-scale periods, at three rates.
+    #[test]
+    fn the_selected_filter_is_the_stored_one_bit_for_bit() {
+        let terms = shared::model::ArmTerms::of(&shared::Params::<f32>::paper());
+        let mass = [terms.m11, terms.half_ml2, terms.m22];
+        let mut seed = 0x2545_f491_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30];
+        let mut trips = 0;
+        for ts in [1e-3f32, 1e-4, 4e-3] {
+            let rule = WiringRule::at_period(ts);
+            let (mut a, mut b) = (WiringMonitor::default(), WiringMonitor::default());
+            for i in 0..200_000 {
+                let mut r = |scale: f32| (next() as f32 / u32::MAX as f32 - 0.5) * scale;
+                let mut unexplained = [r(400.0), r(400.0)];
+                if i % 97 == 0 {
+                    unexplained[i % 2] = odd[(i / 97) % odd.len()];
+                }
+                let input = WiringInput {
+                    unexplained,
+                    c21: r(2.0),
+                    applied: [r(1.0), r(1.0)],
+                    lifted: i % 50 < 3,
+                    height: r(0.02),
+                    height_rate: r(0.2),
+                    load_saturated: i % 211 == 0,
+                };
+                let (va, vb) = (a.update_folded(&rule, mass, &input), update_stored(&mut b, &rule, mass, &input));
+                assert_eq!(va, vb, "step {i}");
+                assert_eq!(
+                    (a.missed.map(f32::to_bits), a.run, a.settling, a.was_lifted),
+                    (b.missed.map(f32::to_bits), b.run, b.settling, b.was_lifted),
+                    "step {i}"
+                );
+                trips += usize::from(va.is_some());
+            }
+        }
+        assert!(trips > 100, "{trips} trips");
     }
 
     #[test]

@@ -172,7 +172,36 @@ pub fn atan2_f32(y: f32, x: f32) -> f32 {
     if !(y.is_finite() && x.is_finite()) {
         return f32::NAN;
     }
-    let (ax, ay) = (x.abs(), y.abs());
+    atan2_finite_f32(y, x)
+}
+
+/// [`atan2_f32`] for finite `y` and `x`, without its finiteness checks: the same
+/// bits there (it is that function's own arithmetic), an unspecified value (never
+/// a panic) for a NaN or infinite argument. For a caller whose arguments are
+/// finite by a check already made (issue 56: the PID's reference angle, whose
+/// target the reach's comparison refuses when not finite).
+#[inline]
+pub fn atan2_finite_f32(y: f32, x: f32) -> f32 {
+    let a = atan_first_quadrant(y.abs(), x.abs());
+    let a = if x.is_sign_negative() { core::f32::consts::PI - a } else { a };
+    if y.is_sign_negative() { -a } else { a }
+}
+
+/// [`atan2_f32`] in the first quadrant, `y` and `x` finite and at least `+0`
+/// (not `-0`): there that function takes neither of its sign corrections, so
+/// this is the same arithmetic with the same bits (test below), without the
+/// finiteness checks and the sign handling (issue 56: the PID's half elbow
+/// angle, whose sine and cosine are bounded so by construction). Outside that
+/// domain the value is unspecified (never a panic).
+#[inline]
+pub fn atan2_first_quadrant_f32(y: f32, x: f32) -> f32 {
+    atan_first_quadrant(y, x)
+}
+
+/// `atan2(ay, ax)` for `ay, ax >= 0` (radians, `[0, pi/2]`): the octant's
+/// reduction, one division and Cephes' polynomial ([`atan2_f32`]'s method).
+#[inline(always)]
+fn atan_first_quadrant(ay: f32, ax: f32) -> f32 {
     let (r, base) = if ay <= TAN_PI_8 * ax {
         // Also (0, 0): 0 / 0 is NaN, so the quotient is taken from 0 itself.
         (if ay == 0.0 { 0.0 } else { ay / ax }, 0.0)
@@ -182,9 +211,7 @@ pub fn atan2_f32(y: f32, x: f32) -> f32 {
         ((ay - ax) / (ay + ax), core::f32::consts::FRAC_PI_4)
     };
     let z = r * r;
-    let a = base + ((((8.053_744_495_38e-2 * z - 1.387_768_560_32e-1) * z + 1.997_771_064_78e-1) * z - 3.333_294_915_39e-1) * z * r + r);
-    let a = if x.is_sign_negative() { core::f32::consts::PI - a } else { a };
-    if y.is_sign_negative() { -a } else { a }
+    base + ((((8.053_744_495_38e-2 * z - 1.387_768_560_32e-1) * z + 1.997_771_064_78e-1) * z - 3.333_294_915_39e-1) * z * r + r)
 }
 
 #[cfg(test)]
@@ -344,6 +371,48 @@ mod tests {
         }
         let (s, c) = sin_cos_f32(f32::NEG_INFINITY);
         assert!(s.is_nan() && c.is_nan());
+    }
+
+    /// The first quadrant's form keeps [`atan2_f32`]'s bits wherever its domain
+    /// holds (both arguments finite and at least `+0`): every direction of the
+    /// quadrant on a fine grid, magnitudes from 1e-30 to 1e30, the axes and the
+    /// origin, and the PID's half angles (`x` in `(0, 1]`, `y = sqrt(1 - x^2)`).
+    /// So does the form without the finiteness checks for every finite pair
+    /// (every direction of the plane, the signed zeros).
+    #[test]
+    fn the_unchecked_forms_keep_the_bits() {
+        let mut n = 0;
+        for k in 0..=20_000 {
+            let a = core::f64::consts::FRAC_PI_2 * k as f64 / 20_000.0;
+            for m in [1e-30f64, 1e-3, 0.21, 1.0, 7.5, 1e30] {
+                let (y, x) = ((m * a.sin()) as f32, (m * a.cos()) as f32);
+                let (y, x) = (y.max(0.0), x.max(0.0));
+                assert_eq!(atan2_first_quadrant_f32(y, x).to_bits(), atan2_f32(y, x).to_bits(), "({y:e}, {x:e})");
+                n += 1;
+            }
+        }
+        let mut bits = 1u32;
+        while bits <= 0x3f80_0000 {
+            let x = f32::from_bits(bits);
+            let y = crate::sqrt::sqrt_f32((1.0 - x) * (1.0 + x));
+            assert_eq!(atan2_first_quadrant_f32(y, x).to_bits(), atan2_f32(y, x).to_bits(), "({y:e}, {x:e})");
+            bits += 997;
+            n += 1;
+        }
+        for (y, x) in [(0.0f32, 0.0f32), (0.0, 1.0), (1.0, 0.0), (3.0, 3.0), (f32::MAX, f32::MIN_POSITIVE), (f32::MIN_POSITIVE, f32::MAX)] {
+            assert_eq!(atan2_first_quadrant_f32(y, x).to_bits(), atan2_f32(y, x).to_bits(), "({y:e}, {x:e})");
+        }
+        assert!(n > 100_000);
+        for k in -20_000..=20_000 {
+            let a = core::f64::consts::PI * k as f64 / 20_000.0;
+            for m in [1e-30f64, 0.21, 1e30] {
+                let (y, x) = ((m * a.sin()) as f32, (m * a.cos()) as f32);
+                assert_eq!(atan2_finite_f32(y, x).to_bits(), atan2_f32(y, x).to_bits(), "({y:e}, {x:e})");
+            }
+        }
+        for (y, x) in [(0.0f32, -0.0f32), (-0.0, -0.0), (-0.0, 1.0), (0.0, -1.0), (-1.0, 0.0)] {
+            assert_eq!(atan2_finite_f32(y, x).to_bits(), atan2_f32(y, x).to_bits(), "({y:e}, {x:e})");
+        }
     }
 
     /// Within 3 ulp of the true `atan2` (f64) over the plane (2.74 measured): every direction on
