@@ -117,10 +117,13 @@ impl Core {
                 // No address space: nothing more to run.
                 break;
             }
-            if n > rest {
-                self.debt.store(n - rest, Relaxed);
+            // The whole instruction is charged to the budget; what runs past its
+            // end is owed (an edge's `rest` does not cut an instruction).
+            let left = ticks - used;
+            if n > left {
+                self.debt.store(n - left, Relaxed);
             }
-            used += n.min(rest);
+            used += n.min(left);
         }
         self.end_tick.store(anchor + used, Relaxed);
         used
