@@ -133,3 +133,62 @@ pub fn counted_admissible(seed: u64, kind: &str, friction: FrictionCompensation,
     s.controller.friction = friction;
     s
 }
+
+/// Random scenario `i` of the envelope the firmware accepts on a board
+/// (docs/hardware.md "The envelope", issue 66) under `kind` (`pid` or
+/// `hybrid`), `duration` seconds: `x0d` or `x0u`, `mu` 0.2 to 1.0, `mu_hat`
+/// within 25 % of it (`mu_hat = mu (1 + e)`, `|e| <= 0.25`), `v_belt` -1 to
+/// -0.1 m/s, `f_n*` 2 to 20 N, `z_t*` -0.05 to 0.14 m, any seed, the control
+/// period log-uniform over 100 to 4 000 us (the delay within it,
+/// [`delay_within`]); the hybrid law with any friction term and, half the time,
+/// the paper's gains where `K'_D Ts <= 1` allows them, else random gains of
+/// the validator's ranges (`K'_D` log-uniform from 30 to `min(2000, 1/Ts)`,
+/// `K'_P` log-uniform from `K'_D / 10` to `min(K'_D^2, 0.25 / Ts^2)`); the PID
+/// with the paper's gains. Returns the scenario and a line that says what it is.
+///
+/// # Panics
+/// For a `kind` the scenario files do not name.
+pub fn random_envelope(i: u64, kind: &str, duration: f64) -> (Scenario, String) {
+    let mut r = Uniform::new(0xE4F1_0000_0000 ^ (i * 104_729 + 17));
+    let x0 = if r.draw() < 0.5 { "d" } else { "u" };
+    let mu = 0.2 + 0.8 * r.draw();
+    let mu_hat = mu * (1.0 + 0.5 * (r.draw() - 0.5));
+    let sets = [
+        format!("controller.kind={kind}"),
+        format!("plant.x0={x0}"),
+        format!("plant.mu={mu}"),
+        format!("plant.v_belt={}", -1.0 + 0.9 * r.draw()),
+        format!("controller.f_n_ref={}", 2.0 + 18.0 * r.draw()),
+        format!("controller.target_z_t={}", -0.05 + 0.19 * r.draw()),
+        format!("sensors.seed={}", 1000 + i),
+        format!("timing.duration_s={duration}"),
+    ];
+    let overrides: Vec<_> = sets.iter().map(|a| a.parse().unwrap()).collect();
+    let mut s = Scenario::from_toml_with(DEFAULT_TOML, &overrides).unwrap();
+    s.controller.mu_hat = mu_hat;
+    let us = log_uniform_period_us(&mut r, 100, 4000);
+    at_period(&mut s, us, duration);
+    let ts = us as f64 * 1e-6;
+    let mut what = format!(
+        "{kind} from x0{x0}, {us} us, mu {mu:.3}, mu_hat {mu_hat:.3} ({:+.0} %), v_belt {:.2}, f_n* {:.1} N, z_t* {:.3} m",
+        100.0 * (mu_hat / mu - 1.0),
+        s.plant.v_belt,
+        s.controller.f_n_ref,
+        s.controller.target_z_t
+    );
+    if kind == "hybrid" {
+        let friction = FRICTIONS[(r.draw() * FRICTIONS.len() as f64) as usize];
+        s.controller.friction = friction;
+        let paper = r.draw() < 0.5 && 900.0 * ts <= 1.0;
+        if !paper {
+            let kd_max = (1.0 / ts).min(2000.0);
+            let kd = 30.0 * (kd_max / 30.0).powf(r.draw());
+            let kp_max = (kd * kd).min(0.25 / (ts * ts));
+            let kp = (kd / 10.0) * (kp_max / (kd / 10.0)).powf(r.draw());
+            s.controller.hybrid.kp = kp;
+            s.controller.hybrid.kd = kd;
+        }
+        what += &format!(", {}, K'_P {:.0}, K'_D {:.0}", friction_name(friction), s.controller.hybrid.kp, s.controller.hybrid.kd);
+    }
+    (s, what)
+}

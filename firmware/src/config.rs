@@ -273,6 +273,19 @@ impl Config {
     }
 }
 
+/// The largest `K'_D Ts` the hybrid law runs at (the envelope, docs/hardware.md):
+/// the sampled motion loop with its command delay tracks the default scenario at
+/// 1.29 and bounces at 1.5; the paper's gains (900) at 1 kHz are 0.9.
+pub const KD_TS_MAX: f32 = 1.0;
+/// The largest `K'_P Ts^2` the hybrid law runs at (the envelope): the loop's poles
+/// within the rate (the paper's gains at 1 kHz: 9e-4).
+pub const KP_TS2_MAX: f32 = 0.25;
+/// [`KD_TS_MAX`] in the validator's words.
+pub const HYBRID_KD_RANGE: &str =
+    "> 0 and K'_D Ts <= 1 (the sampled motion loop bounces beyond: at 1 kHz at most 1000, the paper's 900 from 900 Hz up)";
+/// [`KP_TS2_MAX`] in the validator's words.
+pub const HYBRID_KP_RANGE: &str = "> 0 and K'_P Ts^2 <= 0.25 (the loop's poles within the control rate)";
+
 /// Why a [`Config`] was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum ConfigError {
@@ -320,6 +333,18 @@ impl Config {
         }
         for (name, v) in [("hybrid.kp", self.hybrid.kp), ("hybrid.kd", self.hybrid.kd), ("hybrid.ki", self.hybrid.ki)] {
             check(name, v, v >= 0.0, ">= 0")?;
+        }
+        if self.controller == ControllerKind::Hybrid && self.runaway_limits {
+            // The envelope of the hybrid law's motion loop (docs/hardware.md "The
+            // envelope"), where the protection holds: a position and a damping gain
+            // (the tracking check's bound is derived from the loop's poles,
+            // crate::tracking), and a sampled loop within its stability: with the
+            // command's delay the default scenario tracks at K'_D Ts = 1.29 and
+            // bounces at 1.5. A study without the protection (no board) may go
+            // beyond, to see the law fail.
+            let ts = self.period.as_secs_f32();
+            check("hybrid.kp", self.hybrid.kp, self.hybrid.kp > 0.0 && self.hybrid.kp * ts * ts <= KP_TS2_MAX, HYBRID_KP_RANGE)?;
+            check("hybrid.kd", self.hybrid.kd, self.hybrid.kd > 0.0 && self.hybrid.kd * ts <= KD_TS_MAX, HYBRID_KD_RANGE)?;
         }
         check("torque_limit", self.torque_limit, self.torque_limit > 0.0 && self.torque_limit <= 5.0, "(0, 5] N m")?;
         check(

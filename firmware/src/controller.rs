@@ -76,8 +76,10 @@ pub struct Firmware {
     /// The wiring check at this rate, derived once.
     wiring_rule: WiringRule,
     tracking: TrackingMonitor,
-    /// The hybrid law's tracking check at this rate, derived once.
+    /// The hybrid law's tracking check at this rate and gains, derived once.
     tracking_rule: TrackingRule,
+    /// The hybrid law's last disturbance bound `D`, m/s^2 ([`crate::tracking`]).
+    disturbance: f32,
     pid: PidState,
     hybrid: HybridState,
     last_codes: [i16; 2],
@@ -131,7 +133,8 @@ impl Firmware {
             wiring: WiringMonitor::default(),
             wiring_rule: WiringRule::at_period(cfg.period.as_secs_f32()),
             tracking: TrackingMonitor::default(),
-            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32()),
+            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32(), cfg.hybrid.kp, cfg.hybrid.kd),
+            disturbance: 0.0,
             pid: PidState::default(),
             hybrid: HybridState::default(),
             last_codes: [0, 0],
@@ -450,8 +453,9 @@ impl Firmware {
         // The PID uses no reference acceleration: not computed under it.
         let reference: RefPoint = s.quintic.at_with(t_run, cfg.controller == ControllerKind::Hybrid);
         if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
-            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted) {
+            match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted, self.disturbance, self.last_saturated) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
+                Some(Expectation::Saturated) => return Err(SafeReason::Saturated),
                 Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
                 None => {}
             }
@@ -468,7 +472,7 @@ impl Firmware {
             ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
             ControllerKind::Hybrid => {
                 let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, _signals) = law::hybrid_at(
+                let (u, signals) = law::hybrid_at(
                     &self.terms,
                     p.mu,
                     &cfg.hybrid,
@@ -483,6 +487,7 @@ impl Firmware {
                     self.mu_gain,
                     self.last_saturated,
                 )?;
+                self.disturbance = signals.disturbance;
                 u
             }
         };

@@ -188,6 +188,11 @@ pub struct HybridSignals {
     pub mu_used: f32,
     /// Generalised torque `u = [u1 - u2, u2]`, N m (paper eq. 9).
     pub u_gen: [f32; 2],
+    /// The bound `D` on the tangential acceleration the law cannot see in a
+    /// slide, m/s^2: `Delta |f_n| det Q / |p_u|` for the `mu_hat` error the
+    /// envelope accepts ([`crate::tracking`]'s module docs; `+inf` or NaN where
+    /// `p_u = 0`, the Painlevé boundary of the friction term).
+    pub disturbance: f32,
 }
 
 /// Measured inputs of the hybrid law.
@@ -355,16 +360,16 @@ pub fn hybrid_at(
     let v_r = z_dot[0] - input.v_belt;
     let s = if v_r < 0.0 { -1.0 } else { 1.0 };
     let m12 = terms.half_ml2 * c21;
+    // Q_21 and Q_22 (paper eq. 3) times det M / l^2 (> 0): Q = J M^-1 J^T with
+    // M^-1 = adj(M) / det M and J = l [[c1, c2], [s1, s2]], the division and the
+    // factor l^2 left out (the estimate's gate and the disturbance bound use only
+    // ratios): from the sines and cosines, which the step holds in registers, not
+    // from J's entries (issue 56's fifth round; the gate's verdict as from J's but
+    // for a rounding at its threshold, test below).
+    let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
+    let (a21, a22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
+    let (q21, q22) = (a21 * trig.c1 + a22 * trig.c2, a21 * trig.s1 + a22 * trig.s2);
     let mu_used = if comp == FrictionCompensation::Estimated {
-        // p and Q_22 with the current estimate, both times det M / l^2 (> 0): Q = J M^-1 J^T
-        // (paper eq. 3) with M^-1 = adj(M) / det M and J = l [[c1, c2], [s1, s2]],
-        // the division and the factor l^2 left out (the estimate uses only their
-        // ratio): from the sines and cosines, which the step holds in registers,
-        // not from J's entries (issue 56's fifth round; the gate's verdict as from
-        // J's but for a rounding at its threshold, test below).
-        let (i11, i12, i22) = (terms.m22, -m12, terms.m11);
-        let (a21, a22) = (trig.s1 * i11 + trig.s2 * i12, trig.s1 * i12 + trig.s2 * i22);
-        let (q21, q22) = (a21 * trig.c1 + a22 * trig.c2, a21 * trig.s1 + a22 * trig.s2);
         let p_det = q22 - state.mu.mu(mu_hat) * s * q21;
         let sample = FrictionSample { f_t: input.f_t, f_n: input.f_n, f_n_ref, v_r, p: p_det, q22 };
         state.mu.update_with_gain(mu_hat, &sample, mu_gain);
@@ -372,6 +377,18 @@ pub fn hybrid_at(
     } else {
         mu_hat
     };
+    // The disturbance bound (crate::tracking): the coefficient in `p_u`, and the
+    // largest `|mu - mu_u|` of the envelope.
+    let delta = mu_hat * crate::tracking::MU_ERROR_PER_MU_HAT;
+    let (mu_p, mu_error) = match comp {
+        FrictionCompensation::ModelCommandedNormal | FrictionCompensation::Estimated => (mu_used, delta),
+        FrictionCompensation::ModelMeasuredNormal => (0.0, delta),
+        FrictionCompensation::None => (0.0, mu_hat + delta),
+        FrictionCompensation::Measured => (0.0, 0.0),
+    };
+    let p_u = q22 - mu_p * s * q21;
+    // det Q / p_u = l^2 sin^2(theta1 - theta2) / p_u in these terms.
+    let disturbance = mu_error * input.f_n.abs() * (terms.l * terms.l) * (s12 * s12) / p_u.abs();
     let f_t_hat = match comp {
         FrictionCompensation::Measured => input.f_t,
         FrictionCompensation::ModelMeasuredNormal => -mu_used * s * input.f_n,
@@ -389,7 +406,7 @@ pub fn hybrid_at(
     if !crate::finite_all3(motor[0], motor[1], a_f) {
         return Err(LawError::NonFinite);
     }
-    Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]] }))
+    Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]], disturbance }))
 }
 
 /// [`Arm::w_sin`] from the folded factors (N m): gravity, spring and damping
@@ -464,7 +481,18 @@ mod tests {
         if !(crate::finite(motor[0]) && crate::finite(motor[1]) && crate::finite(a_f)) {
             return Err(LawError::NonFinite);
         }
-        Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used: p.mu, u_gen: [u_gen[0], u_gen[1]] }))
+        // The disturbance bound from Q itself (paper eq. 3), in f64: det Q / |p_u|.
+        let qm = Arm::new(p.cast::<f64>()).q_matrix(&q.cast::<f64>());
+        let delta = f64::from(p.mu) * f64::from(crate::tracking::MU_ERROR_PER_MU_HAT);
+        let (mu_p, mu_error) = match comp {
+            FrictionCompensation::ModelCommandedNormal | FrictionCompensation::Estimated => (f64::from(p.mu), delta),
+            FrictionCompensation::ModelMeasuredNormal => (0.0, delta),
+            FrictionCompensation::None => (0.0, f64::from(p.mu) + delta),
+            FrictionCompensation::Measured => (0.0, 0.0),
+        };
+        let p_u = qm[(1, 1)] - mu_p * f64::from(s) * qm[(1, 0)];
+        let disturbance = (mu_error * f64::from(input.f_n.abs()) * qm.determinant() / p_u.abs()) as f32;
+        Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used: p.mu, u_gen: [u_gen[0], u_gen[1]], disturbance }))
     }
 
     proptest! {
@@ -519,6 +547,16 @@ mod tests {
             prop_assert_eq!(old.map(f32::to_bits), [so.u_gen[0] + so.u_gen[1], so.u_gen[1]].map(f32::to_bits));
             prop_assert_eq!([sn.a_v, sn.a_f].map(f32::to_bits), [so.a_v, so.a_f].map(f32::to_bits), "a_v and a_f: the same kinematics");
             prop_assert!((sn.f_t_hat - so.f_t_hat).abs() <= 1e-6 * so.f_t_hat.abs(), "f_t_hat {} against {}", sn.f_t_hat, so.f_t_hat);
+            // The disturbance bound from the law's scaled terms is det Q / |p_u| from
+            // Q itself (f64), to f32's roundings, away from p_u = 0 (the bound's pole).
+            let qm = arm64.q_matrix(&q);
+            let p_min = qm[(1, 1)].abs().min((qm[(1, 1)] - 0.8 * qm[(1, 0)]).abs()).min((qm[(1, 1)] + 0.8 * qm[(1, 0)]).abs());
+            if p_min > 1e-2 * qm[(1, 1)].abs() {
+                prop_assert!(
+                    (sn.disturbance - so.disturbance).abs() <= 1e-3 * so.disturbance.abs() + 1e-6,
+                    "disturbance {} against {} from Q", sn.disturbance, so.disturbance
+                );
+            }
         }
 
         /// The PID's inverse kinematics (the half angle by `atan2`) against the

@@ -12,6 +12,7 @@ mod dma_faults;
 mod emulator;
 mod emulator_bound;
 mod emulator_faults;
+mod envelope;
 mod rate;
 mod reset;
 mod twin;

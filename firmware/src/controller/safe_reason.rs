@@ -48,6 +48,11 @@ pub enum SafeReason {
     /// that period's step (the `arm` image's application, `arm_app`), never by
     /// the step itself.
     Acquisition = 13,
+    /// Under the hybrid law the tip strayed past its derived bound
+    /// ([`crate::tracking`]) while the law had saturated a motor within the last
+    /// 50 ms: the law could not act at its torque limit (friction or a force the
+    /// motors cannot hold), not a fault of the wiring.
+    Saturated = 14,
 }
 
 impl SafeReason {
@@ -70,6 +75,7 @@ impl SafeReason {
             11 => Some(Self::Tracking),
             12 => Some(Self::LiftOff),
             13 => Some(Self::Acquisition),
+            14 => Some(Self::Saturated),
             _ => None,
         }
     }
@@ -91,7 +97,10 @@ impl SafeReason {
                 "the load cell stayed at full scale for 10 ms: the force ran away (a reversed motor, or the tip driven into the belt)"
             }
             Self::Tracking => {
-                "the tip strayed more than 5 mm from its reference, and away from it, under the force law for 3 ms (a motor or sensor wired wrong)"
+                "the tip strayed past its derived bound (the error a quarter's error in mu_hat leaves, plus 5 mm), or away from it faster than that error can grow, under the force law for 3 ms (a motor or sensor wired wrong)"
+            }
+            Self::Saturated => {
+                "the tip strayed past its derived bound under the force law while the law had saturated a motor: the motors cannot hold the arm on its reference (the law's limit, not a wiring fault)"
             }
             Self::LiftOff => {
                 "the tip was off the belt, or the load cell read no force, for 10 ms under the force law (a motor or the load cell wired wrong, or the paradox's bounce)"

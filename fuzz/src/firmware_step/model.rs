@@ -24,7 +24,7 @@ pub(super) struct Model {
 
 /// Reason codes of the safe state a trusted frame may latch in the step itself
 /// (the law and the sensor checks).
-const LAW_REASONS: [SafeReason; 9] = [
+const LAW_REASONS: [SafeReason; 10] = [
     SafeReason::NonFinite,
     SafeReason::Singular,
     SafeReason::Unreachable,
@@ -34,6 +34,7 @@ const LAW_REASONS: [SafeReason; 9] = [
     SafeReason::Miswired,
     SafeReason::Tracking,
     SafeReason::LiftOff,
+    SafeReason::Saturated,
 ];
 
 /// Checks one command of a step against the model and advances it. Public so the
