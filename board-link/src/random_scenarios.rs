@@ -180,6 +180,11 @@ pub fn random_envelope(i: u64, kind: &str, duration: f64) -> (Scenario, String) 
         let friction = FRICTIONS[(r.draw() * FRICTIONS.len() as f64) as usize];
         s.controller.friction = friction;
         let paper = r.draw() < 0.5 && 900.0 * ts <= 1.0;
+        // The paper's K'_I (650 from x0d, 0 from x0u) where K'_I Ts <= 1 allows it,
+        // else within it.
+        if s.controller.hybrid.ki.unwrap_or(rig::scenario::paper_hybrid_ki(s.plant.x0)) * ts > 1.0 {
+            s.controller.hybrid.ki = Some(r.draw() / ts);
+        }
         if !paper {
             let kd_max = (1.0 / ts).min(2000.0);
             let kd = 30.0 * (kd_max / 30.0).powf(r.draw());

@@ -133,7 +133,7 @@ impl Firmware {
             wiring: WiringMonitor::default(),
             wiring_rule: WiringRule::at_period(cfg.period.as_secs_f32()),
             tracking: TrackingMonitor::default(),
-            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32(), cfg.hybrid.kp, cfg.hybrid.kd),
+            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32(), cfg.hybrid.kp, cfg.hybrid.kd, cfg.hybrid.ki),
             disturbance: 0.0,
             pid: PidState::default(),
             hybrid: HybridState::default(),
@@ -456,6 +456,7 @@ impl Firmware {
             match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted, self.disturbance, self.last_saturated) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
                 Some(Expectation::Saturated) => return Err(SafeReason::Saturated),
+                Some(Expectation::Unstable) => return Err(SafeReason::Unstable),
                 Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
                 None => {}
             }

@@ -121,6 +121,10 @@ pub enum Expectation {
     Saturated,
     /// Lift-off declared for [`LIFT_OFF_S`].
     LiftOff,
+    /// Either check tripped with the gains outside the envelope at this rate
+    /// ([`TrackingRule::unstable`]): the law's own failure (at 250 Hz the
+    /// paper's gains, `K'_D Ts = 3.6`, make the sampled loop bounce).
+    Unstable,
 }
 
 /// The check in periods of the control rate, for the motion loop's gains.
@@ -149,14 +153,21 @@ pub struct TrackingRule {
     pub cross: [f32; 2],
     /// Periods after a saturated one within which a trip is [`Expectation::Saturated`].
     pub saturation_window: u16,
+    /// The gains are outside the envelope at this rate (`K'_D Ts` past
+    /// [`crate::config::KD_TS_MAX`], `K'_P Ts^2` past
+    /// [`crate::config::KP_TS2_MAX`], `K'_I Ts` past
+    /// [`crate::config::KI_TS_MAX`], or `K'_P`, `K'_D` not positive): the sampled loop
+    /// need not hold, and every trip is [`Expectation::Unstable`].
+    pub unstable: bool,
 }
 
 impl TrackingRule {
     /// The check above at a control period of `ts` seconds for the motion
-    /// loop's gains `kp` (`K'_P`, 1/s^2) and `kd` (`K'_D`, 1/s), both > 0 (the
-    /// validator's envelope, docs/hardware.md). The poles of `s^2 + kd s + kp`:
+    /// loop's gains `kp` (`K'_P`, 1/s^2) and `kd` (`K'_D`, 1/s), both > 0 in
+    /// the envelope (docs/hardware.md), and the force integrator's `ki` (`K'_I`,
+    /// 1/s), whose envelope is `K'_I Ts <= 1` ([`TrackingRule::unstable`]). The poles of `s^2 + kd s + kp`:
     /// real, `a <= b`; complex, both at `kd / 2`.
-    pub fn at_period(ts: f32, kp: f32, kd: f32) -> Self {
+    pub fn at_period(ts: f32, kp: f32, kd: f32, ki: f32) -> Self {
         let disc = kd * kd - 4.0 * kp;
         let (a, b) = if disc > 0.0 {
             let root = libm::sqrtf(disc);
@@ -200,6 +211,11 @@ impl TrackingRule {
             gain: [ga, gb],
             cross: [c12, c2],
             saturation_window: window,
+            unstable: !(kd * ts <= crate::config::KD_TS_MAX
+                && kp * ts * ts <= crate::config::KP_TS2_MAX
+                && ki * ts <= crate::config::KI_TS_MAX
+                && kp > 0.0
+                && kd > 0.0),
         }
     }
 }
@@ -261,7 +277,7 @@ impl TrackingMonitor {
         self.run = if past { self.run.saturating_add(1) } else { 0 };
         self.lifted = if lifted { self.lifted.saturating_add(1) } else { 0 };
         self.saturated_recently = if saturated { rule.saturation_window } else { self.saturated_recently.saturating_sub(1) };
-        if self.run >= rule.confirm {
+        let found = if self.run >= rule.confirm {
             // Saturated, the law could not hold the tip; but an error that runs away
             // faster than a healthy one can is a fault's, saturated or not (a
             // reversed motor drives the law into its limit within a few periods).
@@ -270,7 +286,8 @@ impl TrackingMonitor {
             Some(Expectation::LiftOff)
         } else {
             None
-        }
+        };
+        if rule.unstable { found.map(|_| Expectation::Unstable) } else { found }
     }
 }
 
@@ -281,17 +298,23 @@ mod tests {
 
     const PAPER: (f32, f32) = (900.0, 900.0);
 
+    /// The paper's gains where the envelope takes them, else `K'_D Ts = 0.9`.
+    fn rule_at(ts: f32) -> TrackingRule {
+        let k = PAPER.0.min(0.9 / ts);
+        TrackingRule::at_period(ts, k, k, 0.0)
+    }
+
     #[test]
     fn the_poles_are_the_loops_own() {
         // s^2 + 900 s + 900: a = 1.0011, b = 898.999 (a b = kp, a + b = kd).
-        let r = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1);
+        let r = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1, 0.0);
         assert!((r.slow - 1.001_114).abs() < 1e-5, "{}", r.slow);
         assert!((r.decay[1] - libm::expf(-0.898_999)).abs() < 1e-5);
         // Complex poles: both at kd / 2.
-        let r = TrackingRule::at_period(1e-3, 2500.0, 60.0);
+        let r = TrackingRule::at_period(1e-3, 2500.0, 60.0, 0.0);
         assert_eq!((r.slow, r.decay[0]), (30.0, r.decay[1]));
         // The filters' DC gain: z2 -> D / (a b) = D / kp for a constant D.
-        let r = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1);
+        let r = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1, 0.0);
         let mut b = HealthyBound::default();
         for _ in 0..40_000 {
             b.update(&r, 9.0);
@@ -303,7 +326,7 @@ mod tests {
     #[test]
     fn the_bound_trips_after_its_confirmation_at_every_rate() {
         for (ts, n) in [(1e-3, 3), (1e-4, 30), (4e-3, 1)] {
-            let rule = TrackingRule::at_period(ts, PAPER.0, PAPER.1);
+            let rule = rule_at(ts);
             assert_eq!(rule.confirm, n, "{ts}");
             let mut m = TrackingMonitor::default();
             for _ in 1..n {
@@ -311,7 +334,7 @@ mod tests {
             }
             assert_eq!(m.update(&rule, 0.0051, false, 0.0, false), Some(Expectation::Tracking));
         }
-        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1);
+        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1, 0.0);
         let mut m = TrackingMonitor::default();
         for k in 0..100 {
             assert_eq!(
@@ -332,7 +355,7 @@ mod tests {
 
     #[test]
     fn a_trip_within_50_ms_of_a_saturated_motor_is_the_laws_saturation() {
-        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1);
+        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1, 0.0);
         let mut m = TrackingMonitor::default();
         // An error that crept past its 5 mm bound (1 mm over 50 ms: not running away).
         let creep = |k: usize| 0.004 + 2e-5 * k as f32;
@@ -365,7 +388,7 @@ mod tests {
     /// substeps a period, against the monitor fed `D` each period: returns the
     /// worst `|e| / (z2 + eps)`, `|e'| / (z1 + a z2 + eps)` and whether it tripped.
     fn healthy_loop(kp: f32, kd: f32, ts: f32, pieces: &[(f32, f32, u32)]) -> (f64, f64, bool) {
-        let rule = TrackingRule::at_period(ts, kp, kd);
+        let rule = TrackingRule::at_period(ts, kp, kd, 0.0);
         let mut m = TrackingMonitor::default();
         let (kp64, kd64) = (f64::from(kp), f64::from(kd));
         let (mut e, mut v) = (0.0f64, 0.0f64);
@@ -432,7 +455,7 @@ mod tests {
         // The bound allowing 30 mm (D = 27 m/s^2 for a second), a fault drives the
         // error away at 0.1 m/s from 5 mm: past 5 mm plus the growth the derived
         // rate allows within 70 ms.
-        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1);
+        let rule = TrackingRule::at_period(1e-3, PAPER.0, PAPER.1, 0.0);
         let mut m = TrackingMonitor::default();
         for _ in 0..1000 {
             assert_eq!(m.update(&rule, 0.0, false, 27.0, false), None);
@@ -442,9 +465,24 @@ mod tests {
     }
 
     #[test]
+    fn outside_the_gain_envelope_every_trip_is_the_laws_instability() {
+        // The paper's gains at 250 Hz (K'_D Ts = 3.6), 900 Hz (1.0: inside), a
+        // missing gain.
+        for (ts, kp, kd, unstable) in
+            [(4e-3, 900.0, 900.0, true), (1.0 / 900.0, 900.0, 900.0, false), (1e-3, 0.0, 900.0, true), (1e-3, 900.0, 0.0, true)]
+        {
+            let rule = TrackingRule::at_period(ts, kp, kd, 0.0);
+            assert_eq!(rule.unstable, unstable, "{ts} {kp} {kd}");
+            let mut m = TrackingMonitor::default();
+            let found = (0..20).find_map(|_| m.update(&rule, 0.1, false, 0.0, false));
+            assert_eq!(found, Some(if unstable { Expectation::Unstable } else { Expectation::Tracking }), "{ts} {kp} {kd}");
+        }
+    }
+
+    #[test]
     fn a_lift_off_of_10_ms_trips_and_a_bounce_shorter_does_not() {
         for (ts, n) in [(1e-3, 10u16), (1e-4, 100), (4e-3, 3)] {
-            let rule = TrackingRule::at_period(ts, PAPER.0, PAPER.1);
+            let rule = rule_at(ts);
             assert_eq!(rule.lift_off, n, "{ts}");
             let mut m = TrackingMonitor::default();
             for _ in 0..20 {

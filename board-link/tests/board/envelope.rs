@@ -54,3 +54,50 @@ fn no_healthy_arm_of_the_envelope_is_stopped_where_the_unprotected_arm_neither_l
         worst_error * 1e3
     );
 }
+
+fn twin_run(s: &rig::scenario::Scenario) -> (Vec<rig::record::PeriodRecord>, Option<RunError>) {
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut link = board_link::twin_link::TwinLink::new(&setup).unwrap();
+    rig::run_loop(&setup, &mut link, &mut ())
+}
+
+fn paper(name: &str, sets: &[&str]) -> rig::scenario::Scenario {
+    let text = std::fs::read_to_string(format!("{}/../scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let overrides: Vec<_> = sets.iter().map(|a| a.parse().unwrap()).collect();
+    rig::scenario::Scenario::from_toml_with(&text, &overrides).unwrap()
+}
+
+#[test]
+fn the_hybrid_law_from_x0u_with_mu_hat_a_fifth_or_a_quarter_off_runs_to_its_end_on_the_board() {
+    // Issue 66's reproducer: `run --link twin --scenario scenarios/hybrid-x0u.toml --set
+    // controller.mu_hat=0.48 --duration 4` stopped as `Tracking` at 0.651 s, a healthy
+    // arm (without the protection it never lifts off nor saturates, its error 30 mm).
+    for mu_hat in ["0.45", "0.48", "0.72", "0.75"] {
+        let s = paper("hybrid-x0u", &[&format!("controller.mu_hat={mu_hat}"), "timing.duration_s=4"]);
+        let (records, err) = twin_run(&s);
+        assert!(err.is_none(), "mu_hat {mu_hat}: {err:?}");
+        assert_eq!(records.len(), 4000);
+        let e = records.iter().map(|p| (p.z_t - p.z_t_ref).abs()).fold(0.0, f64::max);
+        // The law's own error with mu_hat off (docs/analyses.md): tens of millimetres.
+        assert!(e > 0.015, "mu_hat {mu_hat}: largest error {e}");
+    }
+}
+
+#[test]
+fn the_papers_gains_at_250_hz_are_stopped_as_the_laws_instability_not_a_wiring_fault() {
+    // K'_D Ts = 3.6: the sampled motion loop bounces (docs/hardware.md "The envelope").
+    let s = paper("default", &["timing.rate_hz=250", "timing.duration_s=1"]);
+    match twin_run(&s).1 {
+        Some(RunError::SafeState { reason: firmware::SafeReason::Unstable, k, .. }) => assert!(k < 50, "{k}"),
+        other => panic!("{other:?}"),
+    }
+    // Inside the envelope (K'_D = K'_P = 225: K'_D Ts = 0.9; K'_I = 100: K'_I Ts = 0.4)
+    // the same arm runs.
+    let s = paper(
+        "default",
+        &["timing.rate_hz=250", "timing.duration_s=1", "controller.hybrid.kp=225", "controller.hybrid.kd=225", "controller.hybrid.ki=100"],
+    );
+    let (records, err) = twin_run(&s);
+    assert!(err.is_none(), "{err:?}");
+    assert_eq!(records.len(), 250);
+}

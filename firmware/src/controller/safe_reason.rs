@@ -53,6 +53,12 @@ pub enum SafeReason {
     /// 50 ms: the law could not act at its torque limit (friction or a force the
     /// motors cannot hold), not a fault of the wiring.
     Saturated = 14,
+    /// Under the hybrid law with gains outside the envelope at this rate (`K'_D
+    /// Ts` past 1, `K'_P Ts^2` past 0.25, or a gain not positive:
+    /// [`crate::config::KD_TS_MAX`]) the tracking or the lift-off check tripped:
+    /// the sampled motion loop is unstable (the paper's gains at 250 Hz), the
+    /// law's own failure, not a fault of the wiring.
+    Unstable = 15,
 }
 
 impl SafeReason {
@@ -76,6 +82,7 @@ impl SafeReason {
             12 => Some(Self::LiftOff),
             13 => Some(Self::Acquisition),
             14 => Some(Self::Saturated),
+            15 => Some(Self::Unstable),
             _ => None,
         }
     }
@@ -98,6 +105,9 @@ impl SafeReason {
             }
             Self::Tracking => {
                 "the tip strayed past its derived bound (the error a quarter's error in mu_hat leaves, plus 5 mm), or away from it faster than that error can grow, under the force law for 3 ms (a motor or sensor wired wrong)"
+            }
+            Self::Unstable => {
+                "the force law's motion loop is unstable at this control rate (K'_D Ts past 1, or a gain not positive): the tip left its reference or the belt (raise the rate or lower the gains)"
             }
             Self::Saturated => {
                 "the tip strayed past its derived bound under the force law while the law had saturated a motor: the motors cannot hold the arm on its reference (the law's limit, not a wiring fault)"

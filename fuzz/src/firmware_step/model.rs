@@ -24,7 +24,7 @@ pub(super) struct Model {
 
 /// Reason codes of the safe state a trusted frame may latch in the step itself
 /// (the law and the sensor checks).
-const LAW_REASONS: [SafeReason; 10] = [
+const LAW_REASONS: [SafeReason; 11] = [
     SafeReason::NonFinite,
     SafeReason::Singular,
     SafeReason::Unreachable,
@@ -35,6 +35,7 @@ const LAW_REASONS: [SafeReason; 10] = [
     SafeReason::Tracking,
     SafeReason::LiftOff,
     SafeReason::Saturated,
+    SafeReason::Unstable,
 ];
 
 /// Checks one command of a step against the model and advances it. Public so the
