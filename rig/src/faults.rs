@@ -52,25 +52,58 @@ pub enum FaultKind {
     NanSensor,
     /// Plant side: the sensor's count is out of its range (a corrupt frame).
     OutOfRange,
-    /// Board twin only, bus: every SPI transfer to the encoder (`signal` theta1
+    /// Boards only (twin and emulated), bus: every SPI transfer to the encoder (`signal` theta1
     /// or elbow) fails.
     SpiError,
-    /// Board twin only, bus: a data bit of every answer of the encoder (`signal`
+    /// Boards only (twin and emulated), bus: a data bit of every answer of the encoder (`signal`
     /// theta1 or elbow) flips on MISO (odd parity).
     ParityError,
-    /// Board twin only: the encoder's magnet (`signal` theta1 or elbow) is gone
+    /// Boards only (twin and emulated): the encoder's magnet (`signal` theta1 or elbow) is gone
     /// (DIAAGC MAGL).
     MagnetLost,
-    /// Board twin only: the load cell's ADC conversion is missing (both channels).
+    /// Boards only (twin and emulated): the load cell's ADC conversion is missing (both channels).
     MissingConversion,
-    /// Board twin only: the motor drivers assert their shared fault line (nFAULT).
+    /// Boards only (twin and emulated): the motor drivers assert their shared fault line (nFAULT).
     DriverFault,
+    /// Board (twin and emulated), the encoders' acquisition by DMA (docs/board.md
+    /// "The encoders by DMA"): a transfer error on DMA2's SPI1 streams (DMA_LISR
+    /// TEIF, RM0090 10.5.1: a bus error, the stream disabled by the hardware). No
+    /// frame reaches the encoders: both readings of the period are invalid.
+    DmaTransferError,
+    /// Board, the encoders' acquisition: SPI1_RX's stream reports a FIFO error
+    /// (LISR FEIF, RM0090 10.3.18). Both readings of the period invalid.
+    DmaFifoError,
+    /// Board, the encoders' acquisition: SPI1_RX's stream reports a direct-mode
+    /// error (LISR DMEIF, RM0090 10.3.18). Both readings of the period invalid.
+    DmaDirectModeError,
+    /// Board, the encoders' acquisition: the period's frames are not done by the
+    /// acquisition's deadline (no DMA request reaches the streams; the image stops
+    /// them at TIM2's compare, 40 us after the tick). Both readings invalid.
+    DmaLateTransfer,
+    /// Board, the encoders' acquisition: the chip select of the encoder `signal`
+    /// (theta1: PA4, elbow: PB0) reads low after its release (GPIO IDR). Both
+    /// readings of the period invalid.
+    StuckChipSelect,
 }
 
 impl FaultKind {
-    /// Whether the fault acts on the board's bus or devices (the board twin).
+    /// Whether the fault acts on the board's bus or devices (the board twin and
+    /// the emulated board): the devices' faults and the encoders' acquisition
+    /// faults ([`FaultKind::is_acquisition_fault`]).
     pub fn is_bus_fault(self) -> bool {
         matches!(self, Self::SpiError | Self::ParityError | Self::MagnetLost | Self::MissingConversion | Self::DriverFault)
+            || self.is_acquisition_fault()
+    }
+
+    /// Whether the fault is one of the encoders' acquisition by DMA (docs/board.md
+    /// "The encoders by DMA"): each makes both encoders' readings of the period
+    /// invalid, and `bad_frame_limit` such periods in a row latch the safe state
+    /// `Acquisition` (13).
+    pub fn is_acquisition_fault(self) -> bool {
+        matches!(
+            self,
+            Self::DmaTransferError | Self::DmaFifoError | Self::DmaDirectModeError | Self::DmaLateTransfer | Self::StuckChipSelect
+        )
     }
 }
 
@@ -125,9 +158,15 @@ impl Fault {
         if sensor && self.signal.is_none() {
             return Err("a sensor fault needs `signal` (theta1, elbow, f_t, f_n or belt)".into());
         }
-        let encoder = matches!(self.kind, FaultKind::SpiError | FaultKind::ParityError | FaultKind::MagnetLost);
+        let encoder =
+            matches!(self.kind, FaultKind::SpiError | FaultKind::ParityError | FaultKind::MagnetLost | FaultKind::StuckChipSelect);
         if encoder && !matches!(self.signal, Some(Signal::Theta1 | Signal::Elbow)) {
             return Err("an encoder's bus fault needs `signal` theta1 or elbow".into());
+        }
+        if self.kind.is_acquisition_fault() && self.kind != FaultKind::StuckChipSelect && self.signal.is_some() {
+            return Err("the DMA faults (dma_transfer_error, dma_fifo_error, dma_direct_mode_error, dma_late_transfer) take no `signal`: \
+                 the streams carry both encoders' frames"
+                .into());
         }
         if matches!(self.kind, FaultKind::MissingConversion | FaultKind::DriverFault) && self.signal.is_some() {
             return Err(
@@ -237,7 +276,20 @@ impl LinkKind {
             // The twin makes its readings on the bus: the plant side's frame
             // faults (nan_sensor, out_of_range) do not reach it; a late step needs
             // a clock, which the twin's steps do not take.
-            Self::Twin | Self::Emulator => &[DropCommand, StuckSensor, SpiError, ParityError, MagnetLost, MissingConversion, DriverFault],
+            Self::Twin | Self::Emulator => &[
+                DropCommand,
+                StuckSensor,
+                SpiError,
+                ParityError,
+                MagnetLost,
+                MissingConversion,
+                DriverFault,
+                DmaTransferError,
+                DmaFifoError,
+                DmaDirectModeError,
+                DmaLateTransfer,
+                StuckChipSelect,
+            ],
         }
     }
 
@@ -265,12 +317,14 @@ impl LinkKind {
             }
             (kind, link) if kind.is_bus_fault() => {
                 format!(
-                    "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`), not the {link:?} link"
+                    "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`) or the emulated board \
+                     (`run --link emulator`), not the {link:?} link"
                 )
             }
             (kind @ (FaultKind::NanSensor | FaultKind::OutOfRange | FaultKind::LateCommand), Self::Twin | Self::Emulator) => format!(
                 "fault {kind:?} acts on the wire-level frame or the step's clock, which the board twin does not have: \
-                 use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault) or stuck_sensor"
+                 use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault), its acquisition faults \
+                 (dma_transfer_error, dma_fifo_error, dma_direct_mode_error, dma_late_transfer, stuck_chip_select) or stuck_sensor"
             ),
             (kind, link) => format!("fault {kind:?} cannot be injected over the {link:?} link"),
         }))

@@ -87,6 +87,11 @@ fn links_refuse_exactly_what_they_cannot_inject() {
         MagnetLost,
         MissingConversion,
         DriverFault,
+        DmaTransferError,
+        DmaFifoError,
+        DmaDirectModeError,
+        DmaLateTransfer,
+        StuckChipSelect,
     ];
     let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
     for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin, LinkKind::Emulator] {
@@ -108,7 +113,51 @@ fn links_refuse_exactly_what_they_cannot_inject() {
     let e = LinkKind::InProcess.check(&[fault(MagnetLost)]).unwrap_err().to_string();
     assert!(e.contains("--link twin"), "{e}");
     let e = LinkKind::Twin.check(&[fault(NanSensor)]).unwrap_err().to_string();
-    assert!(e.contains("spi_error") && e.contains("stuck_sensor"), "{e}");
+    assert!(e.contains("spi_error") && e.contains("stuck_sensor") && e.contains("dma_transfer_error"), "{e}");
+    // The acquisition's faults are the boards' (the twin's and the emulated
+    // board's, issue 66), refused by name elsewhere with where to run them.
+    for kind in [DmaTransferError, DmaFifoError, DmaDirectModeError, DmaLateTransfer, StuckChipSelect] {
+        assert!(kind.is_bus_fault() && kind.is_acquisition_fault(), "{kind:?}");
+        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial] {
+            let e = link.check(&[fault(kind)]).unwrap_err().to_string();
+            assert!(e.contains(&format!("{kind:?}")) && e.contains("--link twin") && e.contains("--link emulator"), "{link:?}: {e}");
+        }
+    }
+    assert!(![SpiError, DriverFault, StuckSensor].iter().any(|k| k.is_acquisition_fault()));
+}
+
+/// The acquisition's faults, from a scenario's text: the DMA stream faults take
+/// no `signal` (the streams carry both encoders' frames), a stuck chip select
+/// takes the encoder's (theta1 or elbow); each is refused otherwise, saying why.
+#[test]
+fn acquisition_faults_parse_and_check_their_signal() {
+    for (kind, name) in [
+        (FaultKind::DmaTransferError, "dma_transfer_error"),
+        (FaultKind::DmaFifoError, "dma_fifo_error"),
+        (FaultKind::DmaDirectModeError, "dma_direct_mode_error"),
+        (FaultKind::DmaLateTransfer, "dma_late_transfer"),
+        (FaultKind::StuckChipSelect, "stuck_chip_select"),
+    ] {
+        let parsed: Fault = toml::from_str(&format!("kind = \"{name}\"\nat_s = 1.0\n")).unwrap();
+        assert_eq!(parsed.kind, kind);
+        let f = Fault { kind, at_s: 1.0, duration_s: 0.01, delay_s: 0.0, signal: None };
+        let with = |signal| Fault { signal: Some(signal), ..f };
+        if kind == FaultKind::StuckChipSelect {
+            assert!(f.check().unwrap_err().contains("theta1 or elbow"), "{name}");
+            assert!(with(Signal::FN).check().unwrap_err().contains("theta1 or elbow"), "{name}");
+            assert_eq!(with(Signal::Theta1).check(), Ok(()));
+            assert_eq!(with(Signal::Elbow).check(), Ok(()));
+        } else {
+            assert_eq!(f.check(), Ok(()), "{name}");
+            let e = with(Signal::Theta1).check().unwrap_err();
+            assert!(e.contains("take no `signal`") && e.contains(name), "{name}: {e}");
+        }
+    }
+    // Every period of the window, as the board's faults.
+    let f = Fault { kind: FaultKind::DmaLateTransfer, at_s: 0.5, duration_s: 0.003, delay_s: 0.0, signal: None };
+    let plan = FaultPlan::new(&[f], Period::MILLISECOND);
+    let acts: Vec<u64> = (495..510).filter(|&k| plan.board_faults(k).any(|(kind, _)| kind == FaultKind::DmaLateTransfer)).collect();
+    assert_eq!(acts, vec![500, 501, 502]);
 }
 
 fn soak_spec(seed: u64) -> RandomSchedule {
@@ -176,7 +225,8 @@ fn random_schedules_are_seeded_disjoint_and_bounded() {
                 assert!(n <= 20 && (f.kind == DropCommand) != f.signal.is_some(), "{f:?}");
                 n
             }
-            KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault => unreachable!(),
+            KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault | DmaTransferError | DmaFifoError
+            | DmaDirectModeError | DmaLateTransfer | StuckChipSelect => unreachable!(),
         };
         end_prev = k0 + reach - 1;
         assert!(((end_prev + 3) as f64) * ts <= 600.0 + 1e-9, "{f:?} ends inside the span");

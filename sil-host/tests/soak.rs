@@ -192,7 +192,12 @@ fn expected(faults: &[Fault], ts: f64, command_timeout_s: f64, periods: usize) -
             | FaultKind::ParityError
             | FaultKind::MagnetLost
             | FaultKind::MissingConversion
-            | FaultKind::DriverFault => {}
+            | FaultKind::DriverFault
+            | FaultKind::DmaTransferError
+            | FaultKind::DmaFifoError
+            | FaultKind::DmaDirectModeError
+            | FaultKind::DmaLateTransfer
+            | FaultKind::StuckChipSelect => {}
         }
     }
     e
