@@ -360,10 +360,19 @@ pub struct RandomSchedule {
     /// `stuck_sensor`, `late_command` within the deadline), periods, >= 1.
     pub max_window: u32,
     /// The plant's lockstep command timeout (`rig.command_timeout_s`), s: a stall
-    /// lasts `(n + 1/2)` timeouts of wall time, `n` drawn in `0..=max_in_a_row`,
-    /// so that the plant times out `n` periods, half a timeout from either
-    /// boundary (the stall is in (0, 60] s: `(max_in_a_row + 1/2)` timeouts must fit).
+    /// lasts `(n + 1/2)` timeouts of wall time, `n` drawn in
+    /// `0..=max_stall_timeouts`, so that the plant times out `n` periods, half a
+    /// timeout from either boundary (the stall is in (0, 60] s:
+    /// `(max_stall_timeouts + 1/2)` timeouts must fit).
     pub command_timeout_s: f64,
+    /// Most periods a stall is drawn to time out (`n` above), at most
+    /// `max_in_a_row`. A stall is wall time against the plant's wall-clock
+    /// timeouts: a firmware that wakes more than half a timeout late (a machine
+    /// under load) makes the plant time out `n + 1` periods, and both sides count
+    /// them (docs/rig.md "Soak test"). `max_in_a_row - 1` keeps that extra one
+    /// short of the safe state; `max_in_a_row` draws the longest stall the
+    /// firmware survives on an idle machine.
+    pub max_stall_timeouts: u32,
 }
 
 impl RandomSchedule {
@@ -379,7 +388,7 @@ impl RandomSchedule {
     fn span_periods(&self, kind: FaultKind) -> u64 {
         let n = u64::from(self.max_in_a_row);
         match kind {
-            FaultKind::Stall => n + 1,
+            FaultKind::Stall => u64::from(self.max_stall_timeouts.min(self.max_in_a_row)) + 1,
             FaultKind::NanSensor | FaultKind::OutOfRange => n + 1,
             FaultKind::LateCommand => n.max(u64::from(self.max_window)),
             _ => u64::from(self.max_window),
@@ -400,7 +409,7 @@ impl RandomSchedule {
 ///   `3 Ts`, 1 to `max_in_a_row` periods); delays are whole microseconds, as the
 ///   firmware's clock counts them;
 /// - `nan_sensor`, `out_of_range`: 1 to `max_in_a_row` periods;
-/// - `stall`: `(n + 1/2) command_timeout_s` of wall time, `n` in `0..=max_in_a_row`.
+/// - `stall`: `(n + 1/2) command_timeout_s` of wall time, `n` in `0..=max_stall_timeouts`.
 ///
 /// Windows start at `k Ts` and last `n Ts` exactly (`duration_s`), so each hits
 /// periods `k..k+n`.
@@ -408,9 +417,9 @@ impl RandomSchedule {
 /// # Errors
 /// A message when the settings cannot give such a schedule: no kinds or
 /// `kill_firmware` among them, `count` outside 1 to 1000, a non-finite or empty
-/// span, a period outside (0, 1] s, `max_in_a_row` or `max_window` of 0, slots
-/// too short for the longest window plus two clean periods, or a stall longer
-/// than 60 s.
+/// span, a period outside (0, 1] s, `max_in_a_row` or `max_window` of 0,
+/// `max_stall_timeouts` above `max_in_a_row`, slots too short for the longest
+/// window plus two clean periods, or a stall longer than 60 s.
 pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
     use rand::{RngExt, SeedableRng};
 
@@ -433,9 +442,15 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
     if spec.max_in_a_row == 0 || spec.max_window == 0 {
         return Err("max_in_a_row and max_window: at least 1 period".into());
     }
-    let longest_stall = (f64::from(spec.max_in_a_row) + 0.5) * spec.command_timeout_s;
+    if spec.max_stall_timeouts > spec.max_in_a_row {
+        return Err(format!(
+            "max_stall_timeouts = {}: at most max_in_a_row = {} (more periods timed out in a row latch the safe state)",
+            spec.max_stall_timeouts, spec.max_in_a_row
+        ));
+    }
+    let longest_stall = (f64::from(spec.max_stall_timeouts) + 0.5) * spec.command_timeout_s;
     if spec.kinds.contains(&FaultKind::Stall) && !(spec.command_timeout_s > 0.0 && longest_stall <= 60.0) {
-        return Err(format!("a stall of up to {longest_stall} s: command_timeout_s > 0 and (max_in_a_row + 1/2) timeouts <= 60 s"));
+        return Err(format!("a stall of up to {longest_stall} s: command_timeout_s > 0 and (max_stall_timeouts + 1/2) timeouts <= 60 s"));
     }
     let first = (spec.from_s / ts).ceil() as u64;
     let last = (spec.to_s / ts).floor() as u64;
@@ -467,7 +482,7 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
             }
             FaultKind::NanSensor | FaultKind::OutOfRange => (rng.random_range(1..=spec.max_in_a_row), 0.0, None),
             FaultKind::Stall => {
-                let n = rng.random_range(0..=spec.max_in_a_row);
+                let n = rng.random_range(0..=spec.max_stall_timeouts);
                 (1, 0.0, Some((f64::from(n) + 0.5) * spec.command_timeout_s))
             }
             _ => (rng.random_range(1..=spec.max_window), 0.0, None),

@@ -171,6 +171,7 @@ fn soak_spec(seed: u64) -> RandomSchedule {
         max_in_a_row: 2,
         max_window: 20,
         command_timeout_s: 0.25,
+        max_stall_timeouts: 2,
     }
 }
 
@@ -252,9 +253,25 @@ fn random_schedules_refuse_what_cannot_fit() {
         (RandomSchedule { max_window: 0, ..ok.clone() }, "max_window"),
         (RandomSchedule { to_s: 12.0, ..ok.clone() }, "periods each"),
         (RandomSchedule { command_timeout_s: 30.0, ..ok.clone() }, "stall"),
+        (RandomSchedule { max_stall_timeouts: 3, ..ok.clone() }, "max_stall_timeouts"),
     ];
     for (spec, word) in cases {
         let e = random_schedule(&spec).unwrap_err();
         assert!(e.contains(word), "{word}: {e}");
     }
+}
+
+/// The soak's setting: stalls drawn to time out at most `max_stall_timeouts`
+/// periods (1 of the limit's 2), so that one more from a late wake stays short of
+/// the safe state; the other kinds keep their bounds.
+#[test]
+fn stalls_stay_within_max_stall_timeouts() {
+    let spec = RandomSchedule { max_stall_timeouts: 1, ..soak_spec(7) };
+    let faults = random_schedule(&spec).unwrap();
+    let stalls: Vec<f64> = faults.iter().filter(|f| f.kind == FaultKind::Stall).map(|f| f.duration_s / 0.25 - 0.5).collect();
+    assert!(stalls.len() > 20, "{}", stalls.len());
+    assert!(stalls.iter().all(|m| (m - m.round()).abs() < 1e-9 && (0.0..=1.0).contains(m)), "{stalls:?}");
+    assert!(stalls.contains(&0.0) && stalls.contains(&1.0), "both lengths drawn");
+    let bad = faults.iter().filter(|f| matches!(f.kind, FaultKind::NanSensor | FaultKind::OutOfRange));
+    assert!(bad.map(|f| (f.duration_s / 1e-3).round() as u32).max() == Some(2), "bad frames still up to max_in_a_row");
 }
