@@ -112,6 +112,10 @@ pub enum RegisterFault {
 /// 20 kHz) before the next tick.
 const RUN_TO: f64 = 0.9;
 
+/// The encoders' chip selects in their ports' `IDR` (docs/board.md "Pin map"):
+/// theta1's PA4 (GPIOA), the elbow's PB0 (GPIOB).
+const CS_PINS: [u32; 2] = [1 << 4, 1 << 0];
+
 impl EmulatedBoard {
     /// The board `board` running `image`, its settings sector holding
     /// `record_sector` (the bytes of `board_twin::FlashModel`: a record saved,
@@ -225,8 +229,9 @@ impl EmulatedBoard {
             });
         }
         // The acquisition's faults (the twin's `BusFaults::acquisition`) on
-        // DMA2's next transfer; a stuck chip select is not modelled here
-        // (rsemu's GPIO reads back its own output).
+        // DMA2's next transfer; a stuck chip select in GPIO's IDR (theta1's
+        // PA4, the elbow's PB0: the image reads the pin back after each
+        // release), the acquisition's `StuckChipSelect` being theta1's.
         use arm_app::AcquisitionFault as F;
         let dma = match faults.acquisition {
             Some(F::TransferError) => DmaFaults { transfer_error: true, ..DmaFaults::default() },
@@ -235,6 +240,9 @@ impl EmulatedBoard {
             Some(F::Timeout) => DmaFaults { stall: true, ..DmaFaults::default() },
             Some(F::StuckChipSelect) | None => DmaFaults::default(),
         };
+        let cs =
+            [faults.encoders[0].chip_select_stuck || faults.acquisition == Some(F::StuckChipSelect), faults.encoders[1].chip_select_stuck];
+        self.m.stuck_low.set(if cs[0] { CS_PINS[0] } else { 0 }, if cs[1] { CS_PINS[1] } else { 0 });
         if let Some(w) = self.m.hub.window("dma2") {
             w.with(|m| {
                 if let Some(d) = (m as &mut dyn std::any::Any).downcast_mut::<Dma2>() {

@@ -112,6 +112,8 @@ pub struct BoardMachine {
     pub hub: Arc<Hub>,
     /// What the parts found wrong.
     pub errors: ErrorLog,
+    /// The GPIO pins the host makes read low in `IDR` (a stuck chip select).
+    pub stuck_low: crate::widen::StuckLow,
 }
 
 impl BoardMachine {
@@ -144,6 +146,8 @@ impl BoardMachine {
         let slot = core_clock::bind(&mut opts.bindings, mode);
         crate::widen::widen_class(&mut opts.bindings, "st.iwdg");
         crate::widen::check_flash_class(&mut opts.bindings, "st.flash", errors.clone());
+        let stuck_low = crate::widen::StuckLow::default();
+        crate::widen::stuck_low_class(&mut opts.bindings, "st.gpio", stuck_low.clone());
         if mode == Mode::Functional {
             // The core alone runnable on its crystal: rsemu then arms live
             // positions (the belt's edges need them). DMA1 is unused; DMA2 is
@@ -155,7 +159,10 @@ impl BoardMachine {
         let machine = rsemu::machine::build("painleve-f405.machine", &text, &reg, &opts).map_err(e)?;
         let core =
             slot.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone().ok_or_else(|| BuildError("no core was built".into()))?;
-        Ok(Self { machine, core, hub, errors })
+        if !stuck_low.wraps_both_ports() {
+            return Err(BuildError("GPIOA and GPIOB were not told apart by their MODER reset values (crate::widen::StuckLow)".into()));
+        }
+        Ok(Self { machine, core, hub, errors, stuck_low })
     }
 
     /// The machine's time, ns.

@@ -3,11 +3,16 @@
 //! the register zero-extended), and the image writes `IWDG_KR` with a `STRH`;
 //! rsemu 0.0.7's `st.iwdg` answers anything but a word with a bus fault
 //! (`dev/stm32/iwdg.rs`). The same wrapper checks the flash interface's
-//! programming sequence ([`check_flash_class`], [`crate::flash_sequence`]).
+//! programming sequence ([`check_flash_class`], [`crate::flash_sequence`]), and
+//! makes the board's chip-select faults in GPIOA's and GPIOB's `IDR`
+//! ([`stuck_low_class`], [`StuckLow`]).
 //! [`widen_class`] replaces a class's constructor with
 //! one that wraps its instances, every `Device` method passed through but the
 //! register window's width. To be raised upstream.
-use std::sync::{Arc, Weak};
+use std::sync::{
+    Arc, Weak,
+    atomic::{AtomicU32, Ordering},
+};
 
 use rsemu::core::SpinDetector;
 use rsemu::core::clock::ClockControl;
@@ -59,6 +64,67 @@ pub enum Windows {
     Narrow,
     /// The flash interface's sequence checked ([`crate::flash_sequence`]).
     FlashSequence(ErrorLog),
+    /// A GPIO port's `IDR` with the pins of the mask read low ([`StuckLow`]).
+    StuckLow(Arc<AtomicU32>),
+}
+
+/// GPIO pins that read low in `IDR` whatever the port drives (issue 66: a chip
+/// select stuck low after its release, seen by the image's read-back in DMA2
+/// stream 0's interrupt, docs/board.md "The encoders by DMA"). Only the read-back
+/// changes: the pin's output, which the SPI1 model's chip-select inputs follow,
+/// is the port's own (rsemu's `st.gpio` reads back what it drives, so a fault on
+/// the net cannot show there). One bit a pin; the host sets them before a tick.
+#[derive(Debug, Clone, Default)]
+pub struct StuckLow {
+    /// GPIOA's pins that read low.
+    pub gpioa: Arc<AtomicU32>,
+    /// GPIOB's pins that read low.
+    pub gpiob: Arc<AtomicU32>,
+    /// The ports wrapped when the machine was built (bit 0 GPIOA, bit 1 GPIOB).
+    wrapped: Arc<AtomicU32>,
+}
+
+impl StuckLow {
+    /// Sets the pins that read low: `gpioa` and `gpiob`, one bit a pin.
+    pub fn set(&self, gpioa: u32, gpiob: u32) {
+        self.gpioa.store(gpioa, Ordering::Relaxed);
+        self.gpiob.store(gpiob, Ordering::Relaxed);
+    }
+
+    /// Whether both GPIOA and GPIOB were wrapped ([`stuck_low_class`]) when the
+    /// machine was built.
+    pub fn wraps_both_ports(&self) -> bool {
+        self.wrapped.load(Ordering::Relaxed) == 0b11
+    }
+}
+
+/// `GPIOx_IDR`'s offset in a port's window (RM0090 8.4.5).
+const GPIO_IDR: u64 = 0x10;
+/// `GPIOx_MODER`'s reset values of GPIOA and GPIOB (RM0090 8.4.1, the debug
+/// pins), the `moder-reset` property rsemu's STM32F407 description gives
+/// those two ports and no other: how a port's instance is told apart here.
+const MODER_RESET: [u64; 2] = [0xA800_0000, 0x0000_0280];
+
+#[derive(Debug)]
+struct StuckLowOps(Arc<dyn MemOps>, Arc<AtomicU32>);
+impl MemOps for StuckLowOps {
+    fn read(&self, offset: u64, dst: &mut [u8], attrs: MemAttrs) -> MemResult {
+        self.0.read(offset, dst, attrs)?;
+        let mask = self.1.load(Ordering::Relaxed);
+        for (i, b) in dst.iter_mut().enumerate() {
+            let at = offset + i as u64;
+            if (GPIO_IDR..GPIO_IDR + 4).contains(&at) {
+                *b &= !((mask >> (8 * (at - GPIO_IDR))) as u8);
+            }
+        }
+        Ok(())
+    }
+    fn write(&self, offset: u64, src: &[u8], attrs: MemAttrs) -> MemResult {
+        self.0.write(offset, src, attrs)
+    }
+    fn constraints(&self) -> AccessConstraints {
+        self.0.constraints()
+    }
 }
 
 /// An rsemu instance passed through, its register windows as `.1` says,
@@ -77,6 +143,20 @@ pub fn widen_class(b: &mut Bindings, class: &'static str) {
 pub fn check_flash_class(b: &mut Bindings, class: &'static str, errors: ErrorLog) {
     let Some(inner) = b.get(class) else { return };
     b.replace(class, move |props| Ok(Arc::new(Widen(inner(props)?, Windows::FlashSequence(errors.clone()), true)) as Arc<dyn Instance>));
+}
+
+/// Wraps GPIOA's and GPIOB's instances of `class` (`st.gpio`) so that the pins
+/// `stuck` names read low in their `IDR`; the other ports are left as they are.
+pub fn stuck_low_class(b: &mut Bindings, class: &'static str, stuck: StuckLow) {
+    let Some(inner) = b.get(class) else { return };
+    b.replace(class, move |props| {
+        let port = props.get("moder-reset").and_then(rsemu::core::props::Value::as_uint);
+        let instance = inner(props)?;
+        let Some(i) = MODER_RESET.iter().position(|r| port == Some(*r)) else { return Ok(instance) };
+        stuck.wrapped.fetch_or(1 << i, Ordering::Relaxed);
+        let mask = if i == 0 { stuck.gpioa.clone() } else { stuck.gpiob.clone() };
+        Ok(Arc::new(Widen(instance, Windows::StuckLow(mask), true)) as Arc<dyn Instance>)
+    });
 }
 
 /// Binds every instance of `class` as not runnable (a lazily advanced device
@@ -124,6 +204,9 @@ impl Device for Widen {
             (Windows::Narrow, RegionKind::Io(ops)) => Arc::new(WidenOps(Arc::clone(ops))),
             (Windows::FlashSequence(errors), RegionKind::Io(ops)) if matches!(name, "" | "regs") => {
                 Arc::new(FlashSequence::new(Arc::clone(ops), errors.clone()))
+            }
+            (Windows::StuckLow(mask), RegionKind::Io(ops)) if matches!(name, "" | "regs") => {
+                Arc::new(StuckLowOps(Arc::clone(ops), Arc::clone(mask)))
             }
             _ => return Some(r),
         };

@@ -13,7 +13,7 @@
 //! rig makes is not used here (its sensor model still runs, so that a run's
 //! other outputs are unchanged).
 
-use arm_app::Notice;
+use arm_app::{AcquisitionFault, Notice};
 use board_twin::{ArmState, BoardTwin, BusFaults};
 use shared::wire::{ActuatorCommand, GroundTruth, SensorFrame};
 
@@ -126,7 +126,11 @@ pub fn answer(frame: &SensorFrame, app_command: &ActuatorCommand, telemetry: sha
 }
 
 /// The bus faults of period `k` of `plan` (the board twin's and the emulated
-/// board's: the same devices).
+/// board's: the same devices). The DMA faults become the period's
+/// acquisition fault (`dma_transfer_error` TEIF, `dma_fifo_error` FEIF,
+/// `dma_direct_mode_error` DMEIF, `dma_late_transfer` the deadline's
+/// `Timeout`; two at once: the last listed in the scenario), a stuck chip
+/// select the encoder's `chip_select_stuck`.
 pub fn bus_faults(plan: &FaultPlan, k: u64) -> BusFaults {
     let mut b = BusFaults::default();
     for (kind, signal) in plan.board_faults(k) {
@@ -145,6 +149,11 @@ pub fn bus_faults(plan: &FaultPlan, k: u64) -> BusFaults {
             (FaultKind::StuckSensor, None, Some(Signal::Belt)) => b.belt_stuck = true,
             (FaultKind::MissingConversion, ..) => b.missing_conversion = true,
             (FaultKind::DriverFault, ..) => b.driver_fault = true,
+            (FaultKind::StuckChipSelect, Some(i), _) => b.encoders[i].chip_select_stuck = true,
+            (FaultKind::DmaTransferError, ..) => b.acquisition = Some(AcquisitionFault::TransferError),
+            (FaultKind::DmaFifoError, ..) => b.acquisition = Some(AcquisitionFault::FifoError),
+            (FaultKind::DmaDirectModeError, ..) => b.acquisition = Some(AcquisitionFault::DirectModeError),
+            (FaultKind::DmaLateTransfer, ..) => b.acquisition = Some(AcquisitionFault::Timeout),
             _ => {}
         }
     }

@@ -10,10 +10,13 @@
 //! The acquisition's own faults act before the first frame: a stream's
 //! TEIF, FEIF or DMEIF, frames not done by the deadline, a stuck chip select
 //! ([`arm_app::AcquisitionFault`], set on the bench from
-//! [`crate::BusFaults::acquisition`]). No frame then reaches the encoders, and
-//! both readings of the period are invalid, as on the image.
+//! [`crate::BusFaults::acquisition`], or a stuck chip select from an encoder's
+//! [`crate::bench::EncoderFaults::chip_select_stuck`]). No frame then reaches
+//! the encoders, and both readings of the period are invalid, as on the image
+//! (which, for the elbow's chip select, has sent theta1's frames first: the
+//! period's readings are the same).
 
-use arm_app::{Blocking, EncoderAcquisition, EncoderFault};
+use arm_app::{AcquisitionFault, Blocking, EncoderAcquisition, EncoderFault};
 use drivers::As5047p;
 
 use crate::{as5047p::As5047pModel, bench::Shared};
@@ -33,7 +36,11 @@ impl TwinAcquisition {
 
 impl EncoderAcquisition<As5047pModel> for TwinAcquisition {
     fn acquire(&mut self, theta1: &mut As5047p<As5047pModel>, elbow: &mut As5047p<As5047pModel>) -> [Result<u16, EncoderFault>; 2] {
-        if let Some(fault) = crate::bench::lock(&self.bench).acquisition {
+        let fault = {
+            let b = crate::bench::lock(&self.bench);
+            b.acquisition.or_else(|| b.encoder_faults.iter().any(|f| f.chip_select_stuck).then_some(AcquisitionFault::StuckChipSelect))
+        };
+        if let Some(fault) = fault {
             return [Err(EncoderFault::Acquisition(fault)); 2];
         }
         Blocking.acquire(theta1, elbow)
@@ -70,6 +77,18 @@ mod tests {
             assert_eq!(got, [Err(EncoderFault::Acquisition(fault)); 2], "{fault:?}");
             assert_eq!([a.release().frames, b.release().frames], [0, 0], "{fault:?}");
             assert!(!fault.describe().is_empty());
+        }
+    }
+
+    #[test]
+    fn either_encoders_stuck_chip_select_fails_the_acquisition_by_name() {
+        for chip in 0..2 {
+            let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
+            lock(&bench).encoder_faults[chip].chip_select_stuck = true;
+            let (mut a, mut b) = pair(&bench);
+            let got = TwinAcquisition::new(bench.clone()).acquire(&mut a, &mut b);
+            assert_eq!(got, [Err(EncoderFault::Acquisition(F::StuckChipSelect)); 2], "chip {chip}");
+            assert_eq!([a.release().frames, b.release().frames], [0, 0], "chip {chip}");
         }
     }
 }

@@ -29,6 +29,12 @@ pub struct EncoderFaults {
     /// The chip's angle stays where it was (a seized shaft coupling, a frozen
     /// CORDIC): every answer is right, the angle does not move.
     pub stuck: bool,
+    /// The encoder's chip select reads low after its release (GPIO IDR; theta1's
+    /// PA4, the elbow's PB0): the acquisition's
+    /// [`arm_app::AcquisitionFault::StuckChipSelect`], which makes both encoders'
+    /// readings of the period invalid ([`crate::acquisition`]; on the emulated
+    /// board, the image's own read-back of the pin).
+    pub chip_select_stuck: bool,
 }
 
 /// The board's shared state.

@@ -52,25 +52,58 @@ pub enum FaultKind {
     NanSensor,
     /// Plant side: the sensor's count is out of its range (a corrupt frame).
     OutOfRange,
-    /// Board twin only, bus: every SPI transfer to the encoder (`signal` theta1
+    /// Boards only (twin and emulated), bus: every SPI transfer to the encoder (`signal` theta1
     /// or elbow) fails.
     SpiError,
-    /// Board twin only, bus: a data bit of every answer of the encoder (`signal`
+    /// Boards only (twin and emulated), bus: a data bit of every answer of the encoder (`signal`
     /// theta1 or elbow) flips on MISO (odd parity).
     ParityError,
-    /// Board twin only: the encoder's magnet (`signal` theta1 or elbow) is gone
+    /// Boards only (twin and emulated): the encoder's magnet (`signal` theta1 or elbow) is gone
     /// (DIAAGC MAGL).
     MagnetLost,
-    /// Board twin only: the load cell's ADC conversion is missing (both channels).
+    /// Boards only (twin and emulated): the load cell's ADC conversion is missing (both channels).
     MissingConversion,
-    /// Board twin only: the motor drivers assert their shared fault line (nFAULT).
+    /// Boards only (twin and emulated): the motor drivers assert their shared fault line (nFAULT).
     DriverFault,
+    /// Board (twin and emulated), the encoders' acquisition by DMA (docs/board.md
+    /// "The encoders by DMA"): a transfer error on DMA2's SPI1 streams (DMA_LISR
+    /// TEIF, RM0090 10.5.1: a bus error, the stream disabled by the hardware). No
+    /// frame reaches the encoders: both readings of the period are invalid.
+    DmaTransferError,
+    /// Board, the encoders' acquisition: SPI1_RX's stream reports a FIFO error
+    /// (LISR FEIF, RM0090 10.3.18). Both readings of the period invalid.
+    DmaFifoError,
+    /// Board, the encoders' acquisition: SPI1_RX's stream reports a direct-mode
+    /// error (LISR DMEIF, RM0090 10.3.18). Both readings of the period invalid.
+    DmaDirectModeError,
+    /// Board, the encoders' acquisition: the period's frames are not done by the
+    /// acquisition's deadline (no DMA request reaches the streams; the image stops
+    /// them at TIM2's compare, 40 us after the tick). Both readings invalid.
+    DmaLateTransfer,
+    /// Board, the encoders' acquisition: the chip select of the encoder `signal`
+    /// (theta1: PA4, elbow: PB0) reads low after its release (GPIO IDR). Both
+    /// readings of the period invalid.
+    StuckChipSelect,
 }
 
 impl FaultKind {
-    /// Whether the fault acts on the board's bus or devices (the board twin).
+    /// Whether the fault acts on the board's bus or devices (the board twin and
+    /// the emulated board): the devices' faults and the encoders' acquisition
+    /// faults ([`FaultKind::is_acquisition_fault`]).
     pub fn is_bus_fault(self) -> bool {
         matches!(self, Self::SpiError | Self::ParityError | Self::MagnetLost | Self::MissingConversion | Self::DriverFault)
+            || self.is_acquisition_fault()
+    }
+
+    /// Whether the fault is one of the encoders' acquisition by DMA (docs/board.md
+    /// "The encoders by DMA"): each makes both encoders' readings of the period
+    /// invalid, and `bad_frame_limit` such periods in a row latch the safe state
+    /// `Acquisition` (13).
+    pub fn is_acquisition_fault(self) -> bool {
+        matches!(
+            self,
+            Self::DmaTransferError | Self::DmaFifoError | Self::DmaDirectModeError | Self::DmaLateTransfer | Self::StuckChipSelect
+        )
     }
 }
 
@@ -125,9 +158,15 @@ impl Fault {
         if sensor && self.signal.is_none() {
             return Err("a sensor fault needs `signal` (theta1, elbow, f_t, f_n or belt)".into());
         }
-        let encoder = matches!(self.kind, FaultKind::SpiError | FaultKind::ParityError | FaultKind::MagnetLost);
+        let encoder =
+            matches!(self.kind, FaultKind::SpiError | FaultKind::ParityError | FaultKind::MagnetLost | FaultKind::StuckChipSelect);
         if encoder && !matches!(self.signal, Some(Signal::Theta1 | Signal::Elbow)) {
             return Err("an encoder's bus fault needs `signal` theta1 or elbow".into());
+        }
+        if self.kind.is_acquisition_fault() && self.kind != FaultKind::StuckChipSelect && self.signal.is_some() {
+            return Err("the DMA faults (dma_transfer_error, dma_fifo_error, dma_direct_mode_error, dma_late_transfer) take no `signal`: \
+                 the streams carry both encoders' frames"
+                .into());
         }
         if matches!(self.kind, FaultKind::MissingConversion | FaultKind::DriverFault) && self.signal.is_some() {
             return Err(
@@ -237,7 +276,20 @@ impl LinkKind {
             // The twin makes its readings on the bus: the plant side's frame
             // faults (nan_sensor, out_of_range) do not reach it; a late step needs
             // a clock, which the twin's steps do not take.
-            Self::Twin | Self::Emulator => &[DropCommand, StuckSensor, SpiError, ParityError, MagnetLost, MissingConversion, DriverFault],
+            Self::Twin | Self::Emulator => &[
+                DropCommand,
+                StuckSensor,
+                SpiError,
+                ParityError,
+                MagnetLost,
+                MissingConversion,
+                DriverFault,
+                DmaTransferError,
+                DmaFifoError,
+                DmaDirectModeError,
+                DmaLateTransfer,
+                StuckChipSelect,
+            ],
         }
     }
 
@@ -265,12 +317,14 @@ impl LinkKind {
             }
             (kind, link) if kind.is_bus_fault() => {
                 format!(
-                    "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`), not the {link:?} link"
+                    "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`) or the emulated board \
+                     (`run --link emulator`), not the {link:?} link"
                 )
             }
             (kind @ (FaultKind::NanSensor | FaultKind::OutOfRange | FaultKind::LateCommand), Self::Twin | Self::Emulator) => format!(
                 "fault {kind:?} acts on the wire-level frame or the step's clock, which the board twin does not have: \
-                 use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault) or stuck_sensor"
+                 use its bus faults (spi_error, parity_error, magnet_lost, missing_conversion, driver_fault), its acquisition faults \
+                 (dma_transfer_error, dma_fifo_error, dma_direct_mode_error, dma_late_transfer, stuck_chip_select) or stuck_sensor"
             ),
             (kind, link) => format!("fault {kind:?} cannot be injected over the {link:?} link"),
         }))
@@ -306,10 +360,19 @@ pub struct RandomSchedule {
     /// `stuck_sensor`, `late_command` within the deadline), periods, >= 1.
     pub max_window: u32,
     /// The plant's lockstep command timeout (`rig.command_timeout_s`), s: a stall
-    /// lasts `(n + 1/2)` timeouts of wall time, `n` drawn in `0..=max_in_a_row`,
-    /// so that the plant times out `n` periods, half a timeout from either
-    /// boundary (the stall is in (0, 60] s: `(max_in_a_row + 1/2)` timeouts must fit).
+    /// lasts `(n + 1/2)` timeouts of wall time, `n` drawn in
+    /// `0..=max_stall_timeouts`, so that the plant times out `n` periods, half a
+    /// timeout from either boundary (the stall is in (0, 60] s:
+    /// `(max_stall_timeouts + 1/2)` timeouts must fit).
     pub command_timeout_s: f64,
+    /// Most periods a stall is drawn to time out (`n` above), at most
+    /// `max_in_a_row`. A stall is wall time against the plant's wall-clock
+    /// timeouts: a firmware that wakes more than half a timeout late (a machine
+    /// under load) makes the plant time out `n + 1` periods, and both sides count
+    /// them (docs/rig.md "Soak test"). `max_in_a_row - 1` keeps that extra one
+    /// short of the safe state; `max_in_a_row` draws the longest stall the
+    /// firmware survives on an idle machine.
+    pub max_stall_timeouts: u32,
 }
 
 impl RandomSchedule {
@@ -325,7 +388,7 @@ impl RandomSchedule {
     fn span_periods(&self, kind: FaultKind) -> u64 {
         let n = u64::from(self.max_in_a_row);
         match kind {
-            FaultKind::Stall => n + 1,
+            FaultKind::Stall => u64::from(self.max_stall_timeouts.min(self.max_in_a_row)) + 1,
             FaultKind::NanSensor | FaultKind::OutOfRange => n + 1,
             FaultKind::LateCommand => n.max(u64::from(self.max_window)),
             _ => u64::from(self.max_window),
@@ -346,7 +409,7 @@ impl RandomSchedule {
 ///   `3 Ts`, 1 to `max_in_a_row` periods); delays are whole microseconds, as the
 ///   firmware's clock counts them;
 /// - `nan_sensor`, `out_of_range`: 1 to `max_in_a_row` periods;
-/// - `stall`: `(n + 1/2) command_timeout_s` of wall time, `n` in `0..=max_in_a_row`.
+/// - `stall`: `(n + 1/2) command_timeout_s` of wall time, `n` in `0..=max_stall_timeouts`.
 ///
 /// Windows start at `k Ts` and last `n Ts` exactly (`duration_s`), so each hits
 /// periods `k..k+n`.
@@ -354,9 +417,9 @@ impl RandomSchedule {
 /// # Errors
 /// A message when the settings cannot give such a schedule: no kinds or
 /// `kill_firmware` among them, `count` outside 1 to 1000, a non-finite or empty
-/// span, a period outside (0, 1] s, `max_in_a_row` or `max_window` of 0, slots
-/// too short for the longest window plus two clean periods, or a stall longer
-/// than 60 s.
+/// span, a period outside (0, 1] s, `max_in_a_row` or `max_window` of 0,
+/// `max_stall_timeouts` above `max_in_a_row`, slots too short for the longest
+/// window plus two clean periods, or a stall longer than 60 s.
 pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
     use rand::{RngExt, SeedableRng};
 
@@ -379,9 +442,15 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
     if spec.max_in_a_row == 0 || spec.max_window == 0 {
         return Err("max_in_a_row and max_window: at least 1 period".into());
     }
-    let longest_stall = (f64::from(spec.max_in_a_row) + 0.5) * spec.command_timeout_s;
+    if spec.max_stall_timeouts > spec.max_in_a_row {
+        return Err(format!(
+            "max_stall_timeouts = {}: at most max_in_a_row = {} (more periods timed out in a row latch the safe state)",
+            spec.max_stall_timeouts, spec.max_in_a_row
+        ));
+    }
+    let longest_stall = (f64::from(spec.max_stall_timeouts) + 0.5) * spec.command_timeout_s;
     if spec.kinds.contains(&FaultKind::Stall) && !(spec.command_timeout_s > 0.0 && longest_stall <= 60.0) {
-        return Err(format!("a stall of up to {longest_stall} s: command_timeout_s > 0 and (max_in_a_row + 1/2) timeouts <= 60 s"));
+        return Err(format!("a stall of up to {longest_stall} s: command_timeout_s > 0 and (max_stall_timeouts + 1/2) timeouts <= 60 s"));
     }
     let first = (spec.from_s / ts).ceil() as u64;
     let last = (spec.to_s / ts).floor() as u64;
@@ -413,7 +482,7 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
             }
             FaultKind::NanSensor | FaultKind::OutOfRange => (rng.random_range(1..=spec.max_in_a_row), 0.0, None),
             FaultKind::Stall => {
-                let n = rng.random_range(0..=spec.max_in_a_row);
+                let n = rng.random_range(0..=spec.max_stall_timeouts);
                 (1, 0.0, Some((f64::from(n) + 0.5) * spec.command_timeout_s))
             }
             _ => (rng.random_range(1..=spec.max_window), 0.0, None),

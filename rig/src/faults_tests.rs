@@ -87,6 +87,11 @@ fn links_refuse_exactly_what_they_cannot_inject() {
         MagnetLost,
         MissingConversion,
         DriverFault,
+        DmaTransferError,
+        DmaFifoError,
+        DmaDirectModeError,
+        DmaLateTransfer,
+        StuckChipSelect,
     ];
     let fault = |kind| Fault { kind, at_s: 1.0, duration_s: 0.5, delay_s: 1e-3, signal: None };
     for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial, LinkKind::Twin, LinkKind::Emulator] {
@@ -108,7 +113,51 @@ fn links_refuse_exactly_what_they_cannot_inject() {
     let e = LinkKind::InProcess.check(&[fault(MagnetLost)]).unwrap_err().to_string();
     assert!(e.contains("--link twin"), "{e}");
     let e = LinkKind::Twin.check(&[fault(NanSensor)]).unwrap_err().to_string();
-    assert!(e.contains("spi_error") && e.contains("stuck_sensor"), "{e}");
+    assert!(e.contains("spi_error") && e.contains("stuck_sensor") && e.contains("dma_transfer_error"), "{e}");
+    // The acquisition's faults are the boards' (the twin's and the emulated
+    // board's, issue 66), refused by name elsewhere with where to run them.
+    for kind in [DmaTransferError, DmaFifoError, DmaDirectModeError, DmaLateTransfer, StuckChipSelect] {
+        assert!(kind.is_bus_fault() && kind.is_acquisition_fault(), "{kind:?}");
+        for link in [LinkKind::InProcess, LinkKind::Ipc, LinkKind::PilQemu, LinkKind::PilSerial] {
+            let e = link.check(&[fault(kind)]).unwrap_err().to_string();
+            assert!(e.contains(&format!("{kind:?}")) && e.contains("--link twin") && e.contains("--link emulator"), "{link:?}: {e}");
+        }
+    }
+    assert!(![SpiError, DriverFault, StuckSensor].iter().any(|k| k.is_acquisition_fault()));
+}
+
+/// The acquisition's faults, from a scenario's text: the DMA stream faults take
+/// no `signal` (the streams carry both encoders' frames), a stuck chip select
+/// takes the encoder's (theta1 or elbow); each is refused otherwise, saying why.
+#[test]
+fn acquisition_faults_parse_and_check_their_signal() {
+    for (kind, name) in [
+        (FaultKind::DmaTransferError, "dma_transfer_error"),
+        (FaultKind::DmaFifoError, "dma_fifo_error"),
+        (FaultKind::DmaDirectModeError, "dma_direct_mode_error"),
+        (FaultKind::DmaLateTransfer, "dma_late_transfer"),
+        (FaultKind::StuckChipSelect, "stuck_chip_select"),
+    ] {
+        let parsed: Fault = toml::from_str(&format!("kind = \"{name}\"\nat_s = 1.0\n")).unwrap();
+        assert_eq!(parsed.kind, kind);
+        let f = Fault { kind, at_s: 1.0, duration_s: 0.01, delay_s: 0.0, signal: None };
+        let with = |signal| Fault { signal: Some(signal), ..f };
+        if kind == FaultKind::StuckChipSelect {
+            assert!(f.check().unwrap_err().contains("theta1 or elbow"), "{name}");
+            assert!(with(Signal::FN).check().unwrap_err().contains("theta1 or elbow"), "{name}");
+            assert_eq!(with(Signal::Theta1).check(), Ok(()));
+            assert_eq!(with(Signal::Elbow).check(), Ok(()));
+        } else {
+            assert_eq!(f.check(), Ok(()), "{name}");
+            let e = with(Signal::Theta1).check().unwrap_err();
+            assert!(e.contains("take no `signal`") && e.contains(name), "{name}: {e}");
+        }
+    }
+    // Every period of the window, as the board's faults.
+    let f = Fault { kind: FaultKind::DmaLateTransfer, at_s: 0.5, duration_s: 0.003, delay_s: 0.0, signal: None };
+    let plan = FaultPlan::new(&[f], Period::MILLISECOND);
+    let acts: Vec<u64> = (495..510).filter(|&k| plan.board_faults(k).any(|(kind, _)| kind == FaultKind::DmaLateTransfer)).collect();
+    assert_eq!(acts, vec![500, 501, 502]);
 }
 
 fn soak_spec(seed: u64) -> RandomSchedule {
@@ -122,6 +171,7 @@ fn soak_spec(seed: u64) -> RandomSchedule {
         max_in_a_row: 2,
         max_window: 20,
         command_timeout_s: 0.25,
+        max_stall_timeouts: 2,
     }
 }
 
@@ -176,7 +226,8 @@ fn random_schedules_are_seeded_disjoint_and_bounded() {
                 assert!(n <= 20 && (f.kind == DropCommand) != f.signal.is_some(), "{f:?}");
                 n
             }
-            KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault => unreachable!(),
+            KillFirmware | SpiError | ParityError | MagnetLost | MissingConversion | DriverFault | DmaTransferError | DmaFifoError
+            | DmaDirectModeError | DmaLateTransfer | StuckChipSelect => unreachable!(),
         };
         end_prev = k0 + reach - 1;
         assert!(((end_prev + 3) as f64) * ts <= 600.0 + 1e-9, "{f:?} ends inside the span");
@@ -202,9 +253,25 @@ fn random_schedules_refuse_what_cannot_fit() {
         (RandomSchedule { max_window: 0, ..ok.clone() }, "max_window"),
         (RandomSchedule { to_s: 12.0, ..ok.clone() }, "periods each"),
         (RandomSchedule { command_timeout_s: 30.0, ..ok.clone() }, "stall"),
+        (RandomSchedule { max_stall_timeouts: 3, ..ok.clone() }, "max_stall_timeouts"),
     ];
     for (spec, word) in cases {
         let e = random_schedule(&spec).unwrap_err();
         assert!(e.contains(word), "{word}: {e}");
     }
+}
+
+/// The soak's setting: stalls drawn to time out at most `max_stall_timeouts`
+/// periods (1 of the limit's 2), so that one more from a late wake stays short of
+/// the safe state; the other kinds keep their bounds.
+#[test]
+fn stalls_stay_within_max_stall_timeouts() {
+    let spec = RandomSchedule { max_stall_timeouts: 1, ..soak_spec(7) };
+    let faults = random_schedule(&spec).unwrap();
+    let stalls: Vec<f64> = faults.iter().filter(|f| f.kind == FaultKind::Stall).map(|f| f.duration_s / 0.25 - 0.5).collect();
+    assert!(stalls.len() > 20, "{}", stalls.len());
+    assert!(stalls.iter().all(|m| (m - m.round()).abs() < 1e-9 && (0.0..=1.0).contains(m)), "{stalls:?}");
+    assert!(stalls.contains(&0.0) && stalls.contains(&1.0), "both lengths drawn");
+    let bad = faults.iter().filter(|f| matches!(f.kind, FaultKind::NanSensor | FaultKind::OutOfRange));
+    assert!(bad.map(|f| (f.duration_s / 1e-3).round() as u32).max() == Some(2), "bad frames still up to max_in_a_row");
 }

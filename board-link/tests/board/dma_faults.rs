@@ -16,6 +16,13 @@
 //! faulted periods in a row latch the safe state with the acquisition's own
 //! reason (13, `SafeReason::Acquisition`), and nothing else does; the safe
 //! state then holds. The twin and the image give the same status bits.
+//!
+//! From a scenario (issue 66): each acquisition fault as a `[[faults]]` entry
+//! (`dma_transfer_error`, `dma_fifo_error`, `dma_direct_mode_error`,
+//! `dma_late_transfer`, `stuck_chip_select` of either encoder), run in closed
+//! loop with the plant on `--link twin` and `--link emulator`: one faulted
+//! period is held and the run goes on, three latch `Acquisition` in the third,
+//! the same period and the same trace, bit for bit, on both boards.
 
 use arm_app::{
     AcquisitionFault as F,
@@ -24,8 +31,9 @@ use arm_app::{
 };
 use board_emulator::EmulatedBoard;
 use board_link::{
-    emulator_link::default_image,
+    emulator_link::{EmulatorLink, default_image},
     free_arm::{ArmBoard, FreeArm},
+    twin_link::TwinLink,
 };
 use board_twin::{BusFaults, FlashModel};
 use firmware::{
@@ -35,14 +43,16 @@ use firmware::{
 use proptest::{collection::vec, option, prelude::*};
 use rig::{
     calibration::CalibrationSection,
+    record::{PeriodRecord, RunError},
+    run_loop,
     scenario::{DEFAULT_TOML, Scenario},
     setup::firmware_config,
 };
 use shared::wire::status;
 
-/// The faults the emulated DMA2 makes (a stuck chip select is the twin's only:
-/// rsemu's GPIO reads back its own output).
-const EMULATED: [F; 4] = [F::TransferError, F::FifoError, F::DirectModeError, F::Timeout];
+/// The faults the emulated DMA2 makes, and a stuck chip select (theta1's PA4
+/// reads low in GPIOA's IDR: `board_emulator::widen::StuckLow`).
+const EMULATED: [F; 5] = [F::TransferError, F::FifoError, F::DirectModeError, F::Timeout, F::StuckChipSelect];
 /// Every fault the twin makes.
 const TWIN: [F; 5] = [F::TransferError, F::FifoError, F::DirectModeError, F::Timeout, F::StuckChipSelect];
 
@@ -175,5 +185,84 @@ proptest! {
     ) {
         let faults: Vec<Option<F>> = faults.iter().map(|f| f.map(|i| TWIN[i])).collect();
         prop_assert_eq!(on_the_twin(&faults), expected(&faults), "faults {:?}", faults);
+    }
+}
+
+// ------------------------------------------------------------- from a scenario
+
+/// Each acquisition fault as a scenario's `[[faults]]` entry (without its time),
+/// the name the log gives it (`AcquisitionFault::describe`).
+const SCENARIO_FAULTS: [(&str, F); 6] = [
+    ("kind = \"dma_transfer_error\"", F::TransferError),
+    ("kind = \"dma_fifo_error\"", F::FifoError),
+    ("kind = \"dma_direct_mode_error\"", F::DirectModeError),
+    ("kind = \"dma_late_transfer\"", F::Timeout),
+    ("kind = \"stuck_chip_select\"\nsignal = \"theta1\"", F::StuckChipSelect),
+    ("kind = \"stuck_chip_select\"\nsignal = \"elbow\"", F::StuckChipSelect),
+];
+
+/// Where the fault starts, s: mid-move (the default scenario's 2 s move), and
+/// the run's length past it.
+const AT_S: f64 = 0.5;
+const RUN_S: f64 = 0.52;
+
+/// The default scenario, `RUN_S` long, with `fault` from `AT_S` for `duration_s`.
+fn with_fault(fault: &str, duration_s: f64) -> Scenario {
+    let text = format!("{DEFAULT_TOML}\n[[faults]]\n{fault}\nat_s = {AT_S}\nduration_s = {duration_s}\n");
+    let mut s = Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    s.timing.duration_s = RUN_S;
+    s.validate().unwrap_or_else(|e| panic!("{e}"));
+    s
+}
+
+type Run = (Vec<PeriodRecord>, Option<RunError>);
+
+/// The twin's run and the emulated image's of `s`.
+fn both(s: &Scenario) -> (Run, Run) {
+    let setup = rig::RunSetup::new(s.clone()).unwrap();
+    let mut twin = TwinLink::new(&setup).unwrap();
+    let t = run_loop(&setup, &mut twin, &mut ());
+    let image = default_image();
+    assert!(image.exists(), "{}: {}", image.display(), board_link::emulator_link::BUILD_HINT);
+    let mut emu = EmulatorLink::new(&setup, &image).unwrap_or_else(|e| panic!("{e}"));
+    let e = run_loop(&setup, &mut emu, &mut ());
+    (t, e)
+}
+
+/// The two runs are the same, bit for bit, outcome included.
+fn same(what: &str, (twin, emu): &(Run, Run)) {
+    assert_eq!(format!("{:?}", emu.1), format!("{:?}", twin.1), "{what}: the same outcome on both boards");
+    assert_eq!(emu.0.len(), twin.0.len(), "{what}");
+    for (k, (e, t)) in emu.0.iter().zip(&twin.0).enumerate() {
+        assert_eq!(format!("{e:?}"), format!("{t:?}"), "{what}: period {k} differs");
+    }
+}
+
+#[test]
+fn each_acquisition_fault_from_a_scenario_is_held_then_latches_its_reason_alike_on_both_boards() {
+    let ts = 1e-3;
+    let k0 = (AT_S / ts).round() as usize;
+    let limit = usize::from(firmware::Config::default().bad_frame_limit);
+    for (fault, kind) in SCENARIO_FAULTS {
+        // One period: held (BAD_FRAME, the previous command), the run goes on to its end.
+        let one = both(&with_fault(fault, ts));
+        same(fault, &one);
+        let (records, err) = &one.0;
+        assert!(err.is_none(), "{fault}: {err:?}");
+        assert_eq!(records.len(), (RUN_S / ts).round() as usize, "{fault}");
+        let bad: Vec<usize> = records.iter().enumerate().filter(|(_, r)| r.status & status::BAD_FRAME != 0).map(|(k, _)| k).collect();
+        assert_eq!(bad, vec![k0], "{fault}: the one faulted period's frame is bad");
+        assert_eq!((records[k0].u1_cmd, records[k0].u2_cmd), (records[k0 - 1].u1_cmd, records[k0 - 1].u2_cmd), "{fault}: held");
+        // Longer: `bad_frame_limit` faulted periods latch the acquisition's own
+        // reason in the last of them, on both boards.
+        let long = both(&with_fault(fault, 10.0 * ts));
+        same(fault, &long);
+        match &long.0.1 {
+            Some(RunError::SafeState { k, reason: SafeReason::Acquisition, .. }) => assert_eq!(*k, k0 + limit - 1, "{fault}"),
+            other => panic!("{fault} ({kind:?}): {other:?}"),
+        }
+        let last = long.0.0.last().unwrap();
+        assert_eq!(last.status >> status::REASON_SHIFT, SafeReason::Acquisition as u32, "{fault}");
+        assert_eq!((last.u1_cmd, last.u2_cmd), (0.0, 0.0), "{fault}: zero torque");
     }
 }

@@ -320,6 +320,61 @@ fn a_run_on_a_board_refuses_the_runaway_limits_off_naming_the_key() {
     }
 }
 
+/// Issue 66: the encoders' acquisition faults from a scenario read on standard
+/// input (`run --link twin|emulator --scenario -`): each is named in the log of
+/// the period it starts (the twin's; the emulated image's lines stay in its
+/// RTT buffer), three faulted periods latch `Acquisition` in the third on both
+/// boards (exit 1, the trace and `summary.json` written up to there); a link
+/// without a board refuses them by name before it starts (exit 2).
+#[test]
+fn acquisition_faults_from_a_scenario_on_stdin_end_in_their_safe_state_on_both_boards() {
+    let dir = tempfile::tempdir().unwrap();
+    let default = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/default.toml")).unwrap();
+    let runs = |link: &[&str], fault: &str, tag: &str| {
+        use std::io::Write as _;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+            .arg("run")
+            .args(link)
+            .args(["--scenario", "-", "--duration", "0.3", "--out"])
+            .arg(dir.path().join(tag))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let text = format!("{default}\n[[faults]]\n{fault}\nat_s = 0.2\nduration_s = 0.01\n");
+        child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+        let o = child.wait_with_output().unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    for (fault, named) in [
+        ("kind = \"dma_transfer_error\"", "DMA transfer error (TEIF)"),
+        ("kind = \"dma_fifo_error\"", "DMA FIFO error (FEIF)"),
+        ("kind = \"dma_direct_mode_error\"", "DMA direct-mode error (DMEIF)"),
+        ("kind = \"dma_late_transfer\"", "the encoders' frames did not complete in time"),
+        ("kind = \"stuck_chip_select\"\nsignal = \"theta1\"", "an encoder's chip select is stuck low"),
+        ("kind = \"stuck_chip_select\"\nsignal = \"elbow\"", "an encoder's chip select is stuck low"),
+    ] {
+        for link in ["twin", "emulator"] {
+            let tag = format!("{link}-{}", fault.len());
+            let (code, err) = runs(&["--link", link], fault, &tag);
+            assert_eq!(code, Some(1), "{link} {fault}: {err}");
+            assert!(err.contains("the firmware entered its safe state at period 202 (t = 0.202 s): Acquisition"), "{link} {fault}: {err}");
+            if link == "twin" {
+                assert!(err.contains(&format!("twin: period 200: the encoders' acquisition failed: {named}")), "{fault}: {err}");
+            }
+            let out = dir.path().join(&tag);
+            let sm: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+            assert_eq!((sm["status"].as_str(), sm["periods"].as_u64()), (Some("failed"), Some(203)), "{link} {fault}");
+            let rows = std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count();
+            assert_eq!(rows, 1 + 203, "{link} {fault}: every period up to the safe state written");
+        }
+        let (code, err) = runs(&["--in-process"], fault, "refused");
+        assert_eq!(code, Some(2), "{fault}: {err}");
+        assert!(err.contains("acts on the board's bus and devices") && err.contains("--link emulator"), "{fault}: {err}");
+    }
+}
+
 /// Issue 41: `configure` sends every friction term of the hybrid law, the robust
 /// `estimated` among them, and the board's firmware (on the emulated image, the
 /// flashed bytes) decodes and accepts each; a term that is not one is refused by
