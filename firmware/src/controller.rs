@@ -117,6 +117,15 @@ impl Firmware {
 
     /// A fresh state for an already validated configuration.
     fn fresh(cfg: Config) -> Self {
+        let ts = cfg.period.as_secs_f32();
+        Self::fresh_with(cfg, TrackingRule::at_period(ts, cfg.hybrid.kp, cfg.hybrid.kd, cfg.hybrid.ki))
+    }
+
+    /// [`Self::fresh`] with the tracking check's rule already derived for `cfg`
+    /// (its filters' coefficients take a few thousand cycles of `expf`: a
+    /// reset, which the board runs in its control handler at the enable
+    /// button, keeps them instead; at 10 kHz they would take a period).
+    fn fresh_with(cfg: Config, tracking_rule: TrackingRule) -> Self {
         Self {
             cfg,
             arm: Arm::new(cfg.params),
@@ -133,7 +142,7 @@ impl Firmware {
             wiring: WiringMonitor::default(),
             wiring_rule: WiringRule::at_period(cfg.period.as_secs_f32()),
             tracking: TrackingMonitor::default(),
-            tracking_rule: TrackingRule::at_period(cfg.period.as_secs_f32(), cfg.hybrid.kp, cfg.hybrid.kd, cfg.hybrid.ki),
+            tracking_rule,
             disturbance: 0.0,
             pid: PidState::default(),
             hybrid: HybridState::default(),
@@ -178,7 +187,7 @@ impl Firmware {
     /// from the tip's position then, integrators and counters cleared). The only
     /// way out of the safe state.
     pub fn reset(&mut self) {
-        *self = Self::fresh(self.cfg);
+        *self = Self::fresh_with(self.cfg, self.tracking_rule);
     }
 
     fn enter_safe(&mut self, reason: SafeReason) {

@@ -181,24 +181,25 @@ impl TrackingRule {
         let (ga, gb) = (decay_integral(a, ts), decay_integral(b, ts));
         // int_0^Ts e^(-a (Ts - t)) e^(-b t) dt = e^(-a Ts) int_0^Ts e^(-(b - a) t) dt.
         let c12 = da * decay_integral(b - a, ts);
-        // int_0^Ts e^(-a (Ts - t)) (1 - e^(-b t)) / b dt, by Simpson's rule over 32
-        // intervals (the closed form `(ga - c12) / b` cancels to a few per cent in
-        // `f32` when the poles are slow against the rate).
-        let n = 32;
-        let h = ts / n as f32;
-        let mut c2 = 0.0;
-        for i in 0..=n {
-            let t = i as f32 * h;
-            let w = if i == 0 || i == n {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            c2 += w * libm::expf(-a * (ts - t)) * decay_integral(b, t);
-        }
-        let c2 = c2 * h / 3.0;
+        // int_0^Ts e^(-a (Ts - t)) (1 - e^(-b t)) / b dt: its closed form
+        // `(ga - c12) / b` cancels to a few per cent in `f32` when the poles are
+        // slow against the rate, so there its series, `sum_(n >= 2) (-1)^n Ts^n /
+        // n! h_(n-2)(a, b)` (`h_j = sum_i a^i b^(j-i)`, `h_j = b h_(j-1) + a^j`):
+        // terms fall as `(b Ts)^n`, eight of them within f32's rounding at `b Ts <
+        // 0.1`. A few hundred cycles either way: the image derives this rule in its
+        // control handler when a configuration comes into force.
+        let c2 = if b * ts < 0.1 {
+            let (mut h, mut a_pow, mut term, mut sum) = (1.0f32, 1.0f32, ts * ts / 2.0, 0.0f32);
+            for n in 2..10 {
+                sum += term * h;
+                a_pow *= a;
+                h = b * h + a_pow;
+                term *= -ts / (n + 1) as f32;
+            }
+            sum
+        } else {
+            (ga - c12) / b
+        };
         let window = crate::runaway::periods_of(AVERAGE_S, ts);
         Self {
             bound: TRACKING_M,
