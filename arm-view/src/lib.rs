@@ -24,7 +24,7 @@ pub mod validate;
 pub mod view;
 
 pub use geometry::ArmGeometry;
-pub use live::{LiveError, LiveServer, LiveTable};
+pub use live::{CLOSING_STATUS, Closed, LiveError, LiveServer, LiveTable};
 pub use view::{ArmView, EventLog, LOG_TOPIC, SCENE_TOPIC, TF_TOPIC, VIEW_PERIOD_S};
 
 /// The Foxglove layout shipped with the project (`docs/foxglove/layout.json`):

@@ -10,19 +10,25 @@
 //! clock (`Time` capability) follows the rows' simulated time. A viewer that
 //! falls behind loses messages (the SDK's bounded queue per client), the run
 //! never waits for one.
+//!
+//! Nor does its end: [`LiveServer::close`] (and the drop) tells every viewer the
+//! run is over (a status message, then the WebSocket close frame) and waits at
+//! most a grace time for them to take it; a viewer that has stopped reading (its
+//! connection full, the SDK's writer blocked on it for good) is then dropped: its
+//! connection is cut, and the caller is told how many were.
 
 use std::{
     net::SocketAddr,
     sync::{
         Arc,
-        atomic::{AtomicUsize, Ordering},
+        atomic::{AtomicBool, AtomicUsize, Ordering},
     },
-    time::Duration,
+    time::{Duration, Instant},
 };
 
 use foxglove::{
     Context, RawChannel, Schema, WebSocketServerHandle,
-    websocket::{Capability, ChannelView, Client, ServerListener},
+    websocket::{Capability, ChannelView, Client, ServerListener, Status},
 };
 use tables::mcap::{ChannelSpec, McapRows, McapView, RowEncoder, log_time_ns};
 
@@ -59,18 +65,60 @@ pub struct LiveServer {
     rate: Option<f64>,
     /// The wall clock and the simulated time of the first row.
     origin: Option<(std::time::Instant, f64)>,
-    /// Subscriptions made by viewers so far.
-    subscriptions: Arc<AtomicUsize>,
+    /// The viewers' subscriptions and connections so far.
+    counts: Arc<Counts>,
 }
 
-/// Counts the viewers' subscriptions ([`LiveServer::wait_for_viewer`]).
-struct Subscriptions(Arc<AtomicUsize>);
+/// What the server's listener counts: the viewers' subscriptions
+/// ([`LiveServer::wait_for_viewer`]), and their connections made and ended
+/// ([`LiveServer::close`]: a viewer whose connection has not ended is still
+/// being served).
+#[derive(Default)]
+struct Counts {
+    subscriptions: AtomicUsize,
+    connected: AtomicUsize,
+    disconnected: AtomicUsize,
+}
 
-impl ServerListener for Subscriptions {
-    fn on_subscribe(&self, _client: Client, _channel: ChannelView) {
-        self.0.fetch_add(1, Ordering::SeqCst);
+impl Counts {
+    /// Viewers connected whose connection has not ended.
+    fn open(&self) -> usize {
+        self.connected.load(Ordering::SeqCst).saturating_sub(self.disconnected.load(Ordering::SeqCst))
     }
 }
+
+/// The server's listener: [`Counts`].
+struct Listener(Arc<Counts>);
+
+impl ServerListener for Listener {
+    fn on_subscribe(&self, _client: Client, _channel: ChannelView) {
+        self.0.subscriptions.fetch_add(1, Ordering::SeqCst);
+    }
+
+    fn on_client_connect(&self) {
+        self.0.connected.fetch_add(1, Ordering::SeqCst);
+    }
+
+    fn on_client_disconnect(&self) {
+        self.0.disconnected.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
+/// What closing a [`LiveServer`] did ([`LiveServer::close`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Closed {
+    /// Viewers connected when the close began.
+    pub viewers: usize,
+    /// Of those, the viewers that had not taken the close within the grace time
+    /// (or by a stop): their connections were cut.
+    pub dropped: usize,
+}
+
+/// The status message every viewer is sent before the close frame.
+pub const CLOSING_STATUS: &str = "painleve: the run has ended; the server closes";
+
+/// The time between the status message and the stop, within the grace: 50 ms.
+const STATUS_PAUSE: Duration = Duration::from_millis(50);
 
 impl LiveServer {
     /// Starts the server on `addr` (port 0: any free port, [`LiveServer::addr`]
@@ -88,7 +136,7 @@ impl LiveServer {
             return Err(LiveError::Rate(rate));
         }
         let context = Context::new();
-        let subscriptions = Arc::new(AtomicUsize::new(0));
+        let counts = Arc::new(Counts::default());
         let made = channels
             .iter()
             .map(|c| {
@@ -105,10 +153,10 @@ impl LiveServer {
             .name(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION")))
             .bind(addr.ip().to_string(), addr.port())
             .capabilities([Capability::Time])
-            .listener(Arc::new(Subscriptions(Arc::clone(&subscriptions))))
+            .listener(Arc::new(Listener(Arc::clone(&counts))))
             .start_blocking()
             .map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
-        Ok(Self { _context: context, server: Some(server), channels: made, rate, origin: None, subscriptions })
+        Ok(Self { _context: context, server: Some(server), channels: made, rate, origin: None, counts })
     }
 
     /// The address the server listens on (its port the one bound).
@@ -125,9 +173,9 @@ impl LiveServer {
     /// `settle` more for its other subscriptions (the Foxglove app subscribes
     /// to a layout's topics one after the other), so that the run's first
     /// messages reach it; returns early when `stop` is set. Whether a viewer came.
-    pub fn wait_for_viewer(&self, timeout: Duration, settle: Duration, stop: &std::sync::atomic::AtomicBool) -> bool {
+    pub fn wait_for_viewer(&self, timeout: Duration, settle: Duration, stop: &AtomicBool) -> bool {
         let deadline = std::time::Instant::now() + timeout;
-        while self.subscriptions.load(Ordering::SeqCst) == 0 {
+        while self.counts.subscriptions.load(Ordering::SeqCst) == 0 {
             if std::time::Instant::now() >= deadline || stop.load(Ordering::Relaxed) {
                 return false;
             }
@@ -161,14 +209,55 @@ impl LiveServer {
             c.log_with_meta(bytes, foxglove::PartialMetadata { log_time: Some(log_time_ns(t)) });
         }
     }
+
+    /// Closes the server: every viewer is sent [`CLOSING_STATUS`] and, 50 ms
+    /// later, the WebSocket close frame, and the server's tasks are waited for
+    /// at most `grace` from the call (or until `stop` is set: a signal). A
+    /// viewer that has not taken the close by then (it stopped reading: its
+    /// connection is full) is dropped, its connection cut without the frame.
+    /// Returns at most `grace` (plus the 20 ms of one check) after it is called.
+    /// A second call does nothing.
+    pub fn close(&mut self, grace: Duration, stop: &AtomicBool) -> Closed {
+        let Some(server) = self.server.take() else { return Closed::default() };
+        let viewers = server.client_count();
+        let deadline = Instant::now() + grace;
+        if viewers > 0 {
+            server.publish_status(Status::info(CLOSING_STATUS));
+            // The stop ends each viewer's writer at once, the status queued or
+            // not: a moment for the writers of the viewers that read to send it
+            // (microseconds; a writer blocked on a full connection never will).
+            std::thread::sleep(STATUS_PAUSE.min(grace));
+        }
+        let handle = server.stop();
+        // The SDK's runtime runs the tasks; this one only keeps the time. Without
+        // a runtime (never seen) the tasks are let go: the process's end cuts them.
+        let Ok(clock) = tokio::runtime::Builder::new_current_thread().enable_time().build() else {
+            handle.detach_all();
+            return Closed { viewers, dropped: self.counts.open() };
+        };
+        let done = clock.block_on(async {
+            let mut wait = std::pin::pin!(handle.wait());
+            loop {
+                if tokio::time::timeout(Duration::from_millis(20), &mut wait).await.is_ok() {
+                    return true;
+                }
+                if Instant::now() >= deadline || stop.load(Ordering::Relaxed) {
+                    // Dropping the wait drops the shutdown handle, which aborts
+                    // the tasks still running: their connections are closed.
+                    return false;
+                }
+            }
+        });
+        Closed { viewers, dropped: if done { 0 } else { self.counts.open().min(viewers) } }
+    }
 }
+
+/// The grace time of a [`LiveServer`] closed by its drop (not by [`LiveServer::close`]).
+pub const DROP_GRACE: Duration = Duration::from_secs(1);
 
 impl Drop for LiveServer {
     fn drop(&mut self) {
-        if let Some(s) = self.server.take() {
-            // The shutdown waits for the server's tasks; nothing to report.
-            s.stop().wait_blocking();
-        }
+        self.close(DROP_GRACE, &AtomicBool::new(false));
     }
 }
 

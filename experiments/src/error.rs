@@ -119,8 +119,9 @@ macro_rules! through_analysis {
 through_analysis!(shared::ParamError, plant::SimError, rig::scenario::ScenarioError, rig::record::RunError);
 
 /// Whether a run failed on its input rather than while running: the rig is
-/// another's, the firmware process or a service does not fit, or the scenario
-/// asks a board for what it never runs (exit 2).
+/// another's, the firmware process or a service does not fit, the scenario
+/// asks a board for what it never runs, or the private folder of the locks is
+/// refused (another user's, a link, open to others) (exit 2).
 fn run_is_bad_input(e: &rig::record::RunError) -> bool {
     matches!(
         e,
@@ -128,6 +129,7 @@ fn run_is_bad_input(e: &rig::record::RunError) -> bool {
             | rig::record::RunError::Handshake(_)
             | rig::record::RunError::IncompatibleService(_)
             | rig::record::RunError::NotOnABoard(_)
+            | rig::record::RunError::PrivateFolder(_)
     )
 }
 
@@ -142,12 +144,15 @@ mod tests {
     fn an_analysis_error_keeps_its_message_and_its_exit_code() {
         let param = || shared::ParamError::NonFinite { name: "mu", value: f64::NAN };
         let in_use = || RunError::RigInUse { rig: "r".into(), role: "plant", pid: 1 };
-        let cases: [(Error, &str, i32); 6] = [
+        let refused = std::io::Error::new(std::io::ErrorKind::PermissionDenied, "/tmp/painleve-1: owned by uid 2");
+        let cases: [(Error, &str, i32); 8] = [
             (Error::bad_input("--grid"), "invalid input: --grid", 2),
             (param().into(), "invalid parameter: ", 2),
             (plant::SimError::BadStep(-1.0).into(), "simulation failed: ", 2),
             (in_use().into(), "run failed: ", 2),
             (RunError::Transport("gone".into()).into(), "run failed: ", 1),
+            (RunError::private_folder("the rig's lock folder", &refused).into(), "run failed: the rig's lock folder: /tmp", 2),
+            (RunError::private_folder("the rig's lock folder", &std::io::Error::other("disk")).into(), "run failed: ", 1),
             (Error::interrupted("sweep stopped"), "interrupted: sweep stopped", 1),
         ];
         for (e, prefix, code) in cases {

@@ -26,11 +26,17 @@ pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result
     Ok(Scenario::from_toml_with(&text, set)?)
 }
 
-/// Loads the scenario, applies the `--set` overrides, then the flags. A key set
-/// both by a flag and by `--set` is refused (exit 2): a key is set in one place.
+/// Loads the scenario with the `--set` overrides and the flags applied to its
+/// TOML document before it is read and validated, the flags as overrides of
+/// their keys (`--duration 15` is `timing.duration_s = 15.0`), so a flag acts as
+/// the `--set` of its key does: a file's fault past its own `duration_s` is
+/// reached by `--duration` as by `--set timing.duration_s` (issue 66). `--seed`
+/// is set after the read (any `u64`, which a TOML integer cannot hold; no check
+/// depends on it). A key set both by a flag and by `--set` is refused (exit 2):
+/// a key is set in one place.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2).
+/// [`crate::Error::Analysis`] (exit 2) naming the key.
 pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     let flags = [
         ("controller.kind", "--controller", args.controller.is_some()),
@@ -42,27 +48,30 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
     ];
     let given: Vec<(&str, &str)> = flags.iter().filter(|f| f.2).map(|f| (f.0, f.1)).collect();
     overrides::check_keys(&args.set, &given).map_err(rig::scenario::ScenarioError::from)?;
-    let mut s = read_scenario(args.scenario.as_deref(), &args.set)?;
-    if let Some(c) = args.controller {
-        s.controller.kind = c;
-    }
-    if let Some(x0) = args.x0 {
-        s.plant.x0 = x0;
-    }
-    if let Some(z) = args.target_zt {
-        s.controller.target_z_t = z;
-    }
-    if let Some(d) = args.duration {
-        s.timing.duration_s = d;
-    }
+    let mut set = args.set.clone();
+    set.extend(flag_override("controller.kind", args.controller)?);
+    set.extend(flag_override("plant.x0", args.x0)?);
+    set.extend(flag_override("controller.target_z_t", args.target_zt)?);
+    set.extend(flag_override("timing.duration_s", args.duration)?);
+    set.extend(flag_override("plant.iwc", args.iwc)?);
+    let mut s = read_scenario(args.scenario.as_deref(), &set)?;
     if let Some(seed) = args.seed {
         s.sensors.seed = seed;
+        s.validate()?;
     }
-    if let Some(iwc) = args.iwc {
-        s.plant.iwc = iwc;
-    }
-    s.validate()?;
     Ok(s)
+}
+
+/// The override of `key` a flag's `value` makes (`None` when the flag is not
+/// given): the value as the scenario file writes it.
+///
+/// # Errors
+/// [`crate::Error::Analysis`] (exit 2) if the value has no TOML form (none known).
+fn flag_override<T: serde::Serialize>(key: &str, value: Option<T>) -> Result<Option<Override>, CliError> {
+    let Some(value) = value else { return Ok(None) };
+    let value = toml::Value::try_from(value).map_err(|e| CliError::bad_input(format!("{key}: {e}")))?;
+    let text = value.to_string();
+    Ok(Some(Override { key: key.into(), value, text }))
 }
 
 /// The scenario tables that describe a board: its devices (`[board]`, the board
@@ -121,6 +130,56 @@ mod tests {
         assert!(e.to_string().contains("board.pwm_max_duty") && e.to_string().contains("the in-process link"), "{e}");
         assert!(refuse_board_overrides(&[set("calibration.theta1_zero_count", "1")], "a sweep").is_err());
         assert!(refuse_board_overrides(&[set("plant.mu", "0.5"), set("boardx.y", "1")], "a sweep").is_ok());
+    }
+
+    /// The default scenario, no flag given.
+    fn no_flags() -> ScenarioArgs {
+        ScenarioArgs { scenario: None, controller: None, x0: None, target_zt: None, duration: None, seed: None, iwc: None, set: Vec::new() }
+    }
+
+    /// Issue 66: `--duration` acts before the scenario is checked, as `--set
+    /// timing.duration_s` does: a fault a file places past its own duration is
+    /// reached by a longer `--duration`, and refused (exit 2) by a shorter one;
+    /// the other flags land on their keys.
+    #[test]
+    fn the_flags_act_before_the_scenario_is_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("late.toml");
+        let text = rig::scenario::DEFAULT_TOML.to_string()
+            + "\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"theta1\"\nat_s = 12.0\nduration_s = 1.0\n";
+        std::fs::write(&path, text).unwrap();
+        let args = |duration: Option<f64>, set: &[Override]| ScenarioArgs {
+            scenario: Some(path.clone()),
+            duration,
+            set: set.to_vec(),
+            ..no_flags()
+        };
+        let e = load_scenario(&args(None, &[])).unwrap_err();
+        assert_eq!(e.exit_code(), 2, "past the file's own 10 s: {e}");
+        let by_set = load_scenario(&args(None, &[set("timing.duration_s", "15")])).unwrap();
+        let by_flag = load_scenario(&args(Some(15.0), &[])).unwrap();
+        assert_eq!(by_flag.timing.duration_s, 15.0);
+        assert_eq!(by_flag, by_set, "the flag and the --set give the same scenario");
+        let e = load_scenario(&args(Some(11.0), &[])).unwrap_err();
+        assert!(e.to_string().contains("12"), "a fault past an 11 s run is still refused: {e}");
+        let e = load_scenario(&args(Some(15.0), &[set("timing.duration_s", "15")])).unwrap_err();
+        assert!(e.to_string().contains("--duration"), "a key in one place: {e}");
+        let s = load_scenario(&ScenarioArgs {
+            controller: Some(firmware::ControllerKind::Pid),
+            x0: Some(plant::initial::PaperX0::U),
+            target_zt: Some(-0.05),
+            seed: Some(u64::MAX),
+            iwc: Some(plant::impact::IwcRule::Plastic),
+            ..no_flags()
+        })
+        .unwrap();
+        assert_eq!(
+            (s.controller.kind, s.plant.x0, s.controller.target_z_t),
+            (firmware::ControllerKind::Pid, plant::initial::PaperX0::U, -0.05)
+        );
+        assert_eq!((s.sensors.seed, s.plant.iwc), (u64::MAX, plant::impact::IwcRule::Plastic));
+        let e = load_scenario(&ScenarioArgs { duration: Some(f64::NAN), ..no_flags() }).unwrap_err();
+        assert!(e.to_string().contains("timing.duration_s") && e.exit_code() == 2, "{e}");
     }
 
     /// The note names the tables that differ from the reference board's, and

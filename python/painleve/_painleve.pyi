@@ -134,7 +134,12 @@ class Step:
 
 class Model:
     """The arm's model at one parameter set (paper eqs. 1 to 7): states ``(4,)``
-    ``[theta1, theta1_dot, theta2, theta2_dot]``, configurations ``(2,)``, torques ``(2,)`` N m."""
+    ``[theta1, theta1_dot, theta2, theta2_dot]``, configurations ``(2,)``, torques ``(2,)`` N m.
+
+    Raises:
+        ValueError: (every method) a NaN or infinite angle, rate, torque or
+            position, naming the argument and the element (``theta[1] = nan``).
+    """
     def __init__(self, scenario: Any = None, **params: float) -> None: ...
     @property
     def params(self) -> Dict[str, float]: ...

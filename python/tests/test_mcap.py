@@ -279,6 +279,29 @@ def test_a_killed_run_keeps_the_chunks_it_wrote(runs, tmp_path):
     full = painleve.load(csv_dir).trace  # 1 s: the first 1000 periods
     for col in full.columns:
         assert_columns_equal(t[col][:1000], full[col], f"trace.{col}")
+    # What else reads it (docs/rig.md "MCAP traces"; issue 66): the mcap package's
+    # linear reader in file order gives every row's message, then EndOfFile at the
+    # cut; with its default log_time_order=True it sorts the whole file first and so
+    # gives nothing before EndOfFile; the seeking reader refuses the file.
+    from mcap.exceptions import EndOfFile
+
+    def linear(**kw):
+        n = 0
+        with open(partial, "rb") as f:
+            with pytest.raises(EndOfFile):
+                for _, channel, _ in mcap_reader.NonSeekingReader(f).iter_messages(**kw):
+                    n += channel.topic == "/state"
+        return n
+
+    assert linear(log_time_order=False) == t.nrows
+    assert linear() == 0
+    seeking = 0
+    try:
+        with open(partial, "rb") as f:
+            seeking = sum(c.topic == "/state" for _, c, _ in mcap_reader.make_reader(f).iter_messages())
+    except Exception:  # the footer it starts from is not there
+        pass
+    assert seeking < t.nrows
 
 
 def test_the_format_option_lists_mcap_and_an_unknown_one_is_refused():
@@ -306,5 +329,6 @@ def test_without_the_mcap_package_load_still_reads_the_trace(folders, monkeypatc
 def test_a_file_that_is_not_mcap_is_an_error_naming_it(tmp_path):
     bad = tmp_path / "trace.mcap"
     bad.write_text("t,theta1\n0,1\n")
-    with pytest.raises(painleve.PainleveError, match="trace.mcap"):
+    # A file being read that cannot be: "cannot read", never "cannot write" (issue 66).
+    with pytest.raises(painleve.PainleveError, match="^cannot read .*trace.mcap"):
         painleve.read_mcap(bad)

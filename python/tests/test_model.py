@@ -102,9 +102,47 @@ def test_the_model_agrees_with_the_compiled_plant(model):
     assert step.force[1] == pytest.approx(f_n, rel=1e-9)
 
 
-def test_a_non_finite_state_gives_non_finite_values_not_an_error(model):
-    assert np.isnan(model.tip([math.nan, 0.0])).all()
-    assert math.isnan(model.b([math.nan, 0.0, 0.0, 0.0]))
+def test_a_non_finite_input_is_refused_naming_the_argument(model):
+    # Issue 66: NaN or infinite angles gave NaN, False or "indeterminate"; the
+    # plant refuses such a state, and so does every method of the model, naming
+    # the argument and the element.
+    bad = (math.nan, math.inf, -math.inf)
+    for v in bad:
+        text = {math.inf: "inf", -math.inf: "-inf"}.get(v, "nan")
+        theta, state = [0.1, v], [0.1, 0.0, 0.2, v]
+        for call in (
+            lambda: model.tip(theta),
+            lambda: model.jacobian(theta),
+            lambda: model.mass_matrix(theta),
+            lambda: model.q_matrix(theta),
+            lambda: model.p(theta),
+            lambda: model.painleve(theta),
+        ):
+            with pytest.raises(ValueError, match=rf"^theta\[1\] = {text}: expected 2 finite numbers \(rad\)"):
+                call()
+        for call in (
+            lambda: model.jdot_qdot(state),
+            lambda: model.bias(state),
+            lambda: model.b(state),
+            lambda: model.contact_mode(state),
+            lambda: model.energy(state),
+        ):
+            with pytest.raises(ValueError, match=rf"^state\[3\] = {text}: "):
+                call()
+        with pytest.raises(ValueError, match=rf"^torques\[0\] = {text}: .*\(N m\)"):
+            model.b([0.1, 0.0, 0.2, 0.0], [v, 0.0])
+        with pytest.raises(ValueError, match=r"^torques\[0\]"):
+            model.contact_mode([0.1, 0.0, 0.2, 0.0], [v, 0.0])
+        with pytest.raises(ValueError, match=r"^torques\[0\]"):
+            model.generalised_torque([v, 0.0])
+        with pytest.raises(ValueError, match=rf"^z\[0\] = {text}: .*\(m\)"):
+            model.inverse_kinematics([v, 0.0])
+        with pytest.raises(ValueError, match=r"^v_stick = "):
+            model.contact_mode([0.1, 0.0, 0.2, 0.0], v_stick=v)
+    with pytest.raises(ValueError, match=r"^v_stick = -1.0"):
+        model.contact_mode([0.1, 0.0, 0.2, 0.0], v_stick=-1.0)
+    # Finite inputs still answer, and a bad direction is still named.
+    assert np.isfinite(model.tip([0.1, 0.2])).all() and isinstance(model.painleve([0.1, 0.2]), bool)
     with pytest.raises(ValueError, match="direction"):
         model.p([0.0, 0.0], "sideways")
 

@@ -9,7 +9,7 @@
 /// `RecordFault::ProtectionOff`, and the host's own checks of a scenario or a
 /// backup before it reaches a board).
 pub const PROTECTION_OFF: &str = "the runaway limits cannot be turned off on a board; the studies that need them off run without \
-                                  a board (`run --in-process`/`--link ipc`)";
+                                  a board: `sil-host run --in-process`, or `sil-host run` (the firmware process over iceoryx2)";
 
 /// [`PROTECTION_OFF`] for a configuration that turns them off, the key named:
 /// `Err` when `config.runaway_limits` is false.

@@ -175,12 +175,31 @@ pub enum RunError {
     /// the attribute, its value and the value to use (docs/rig.md, "Monitors").
     #[error("{0}")]
     IncompatibleService(String),
+    /// The user's private folder of locks and sockets
+    /// ([`crate::private_files::runtime_dir`]) is refused: a symbolic link, not a
+    /// folder, another user's, open to others, or not ours to make. The message
+    /// names the folder and why. Bad input (exit 2, as a rig in use): nothing ran
+    /// ([`RunError::private_folder`]).
+    #[error("{0}")]
+    PrivateFolder(String),
     /// The run was interrupted (SIGINT or SIGTERM).
     #[error("interrupted at period {k}")]
     Interrupted {
         /// Period.
         k: usize,
     },
+}
+
+impl RunError {
+    /// The error of the private folder `what` (`the rig's lock folder`) that
+    /// [`crate::private_files::runtime_dir`] gave: a refusal of the folder
+    /// ([`std::io::ErrorKind::PermissionDenied`]: a link, another user's, open to
+    /// others, not ours to make) is [`RunError::PrivateFolder`] (exit 2); any
+    /// other failure [`RunError::Transport`] (exit 1).
+    pub fn private_folder(what: &str, e: &std::io::Error) -> Self {
+        let message = format!("{what}: {e}");
+        if e.kind() == std::io::ErrorKind::PermissionDenied { Self::PrivateFolder(message) } else { Self::Transport(message) }
+    }
 }
 
 /// Lift-off detection statistics of a run (docs/hardware.md "Lift-off detection").

@@ -27,7 +27,9 @@ pub struct LiveArgs {
     /// (/tf, /scene), the plots' channels and the log (/log), with the same
     /// bytes. In Foxglove: Open connection > Foxglove WebSocket >
     /// ws://127.0.0.1:8765, and the layout docs/foxglove/layout.json. The run
-    /// is paced by --live-rate; its files do not depend on the viewer.
+    /// is paced by --live-rate; its files do not depend on the viewer, and a
+    /// viewer that stopped reading is dropped 1 s after the run's end. An ADDR
+    /// other than 127.0.0.1 or ::1 serves the run to the network (a warning).
     #[cfg_attr(feature = "clap", arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8765"))]
     pub live: Option<std::net::SocketAddr>,
     /// With --live: simulated seconds per wall-clock second (1: real time; 0.1:

@@ -32,23 +32,57 @@ const MODEL_KEYS: [&str; 9] = ["mu", "v_belt", "m", "l", "sigma", "k", "h", "alp
 /// keyword. States are `[theta1, theta1_dot, theta2, theta2_dot]` (rad, rad/s),
 /// configurations `[theta1, theta2]` (rad), motor torques `[u1, u2]` (N m, the
 /// base joint's and the elbow's). Every method returns NumPy arrays (`float64`)
-/// or floats; a non-finite input gives non-finite values, never an exception.
+/// or floats.
 ///
 /// Raises `PainleveError` (exit_code 2) for parameters out of range,
-/// `TypeError` for an unknown keyword. Source: python/src/objects/model.rs over
+/// `TypeError` for an unknown keyword; each method raises `ValueError` naming
+/// the argument and the element for a NaN or infinite angle, rate, torque or
+/// position (`theta[0] = nan`), as the plant refuses such a state (issue 66:
+/// they gave NaN, `False` or `"indeterminate"`). Source: python/src/objects/model.rs over
 /// `shared::model::Arm` and `shared::kinematics`.
 #[pyclass(name = "Model", module = "painleve._painleve", frozen)]
 pub struct PyModel {
     arm: Arm<f64>,
 }
 
-fn q_of(theta: [f64; 2]) -> Vector2<f64> {
-    Vector2::new(theta[0], theta[1])
+/// `values`, the argument `name` in `unit`, when every element is finite.
+///
+/// # Errors
+/// `ValueError` naming the argument and its first element that is NaN or
+/// infinite, as Python writes it: `theta[1] = nan: expected finite numbers (rad)`.
+fn finite<const N: usize>(name: &str, values: [f64; N], unit: &str) -> PyResult<[f64; N]> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(values),
+        Some(i) => Err(PyValueError::new_err(format!("{name}[{i}] = {}: expected {N} finite numbers ({unit})", py_float(values[i])))),
+    }
 }
 
-/// `[theta1, theta2]` and `[theta1_dot, theta2_dot]` of a state `[theta1, theta1_dot, theta2, theta2_dot]`.
-fn split(state: [f64; 4]) -> (Vector2<f64>, Vector2<f64>) {
-    (Vector2::new(state[0], state[2]), Vector2::new(state[1], state[3]))
+/// `v` as Python writes a float (`nan`, `inf`, `-inf`, `0.5`).
+fn py_float(v: f64) -> String {
+    match v {
+        v if v.is_nan() => "nan".into(),
+        v if v.is_infinite() => if v > 0.0 { "inf" } else { "-inf" }.into(),
+        v => format!("{v:?}"),
+    }
+}
+
+/// A configuration `theta` (rad) as a vector, checked ([`finite`]).
+fn q_of(theta: [f64; 2]) -> PyResult<Vector2<f64>> {
+    let theta = finite("theta", theta, "rad")?;
+    Ok(Vector2::new(theta[0], theta[1]))
+}
+
+/// `[theta1, theta2]` and `[theta1_dot, theta2_dot]` of a state `[theta1,
+/// theta1_dot, theta2, theta2_dot]` (rad, rad/s), checked ([`finite`]).
+fn split(state: [f64; 4]) -> PyResult<(Vector2<f64>, Vector2<f64>)> {
+    let state = finite("state", state, "rad, rad/s")?;
+    Ok((Vector2::new(state[0], state[2]), Vector2::new(state[1], state[3])))
+}
+
+/// The generalised torque of motor torques `torques` (N m), checked ([`finite`]).
+fn generalised(torques: [f64; 2]) -> PyResult<Vector2<f64>> {
+    let torques = finite("torques", torques, "N m")?;
+    Ok(Arm::generalised_torque(&Vector2::new(torques[0], torques[1])))
 }
 
 fn vec_py(py: Python<'_>, v: Vector2<f64>) -> Bound<'_, PyArray1<f64>> {
@@ -104,8 +138,8 @@ impl PyModel {
     /// Forward kinematics: the tip `[z_t, z_n]` (m, shape `(2,)`) at configuration
     /// `theta = [theta1, theta2]` (rad): `z_t = l (cos theta1 + cos theta2)`,
     /// `z_n = l (sin theta1 + sin theta2)` (docs/model.md; the belt is at `z_n = -h`).
-    fn tip<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> Bound<'py, PyArray1<f64>> {
-        vec_py(py, kinematics::tip_position(self.arm.params.l, &q_of(theta)))
+    fn tip<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(vec_py(py, kinematics::tip_position(self.arm.params.l, &q_of(theta)?)))
     }
 
     /// Inverse kinematics: `[theta1, theta2]` (rad, shape `(2,)`) putting the tip at
@@ -113,7 +147,7 @@ impl PyModel {
     /// as the paper's `x0d`; `"up"`, as `x0u`).
     ///
     /// Raises `ValueError` for a point out of reach (farther than `2 l` or at the
-    /// base) or an unknown branch.
+    /// base), a non-finite one, or an unknown branch.
     #[pyo3(signature = (z, branch="down"))]
     fn inverse_kinematics<'py>(&self, py: Python<'py>, z: [f64; 2], branch: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let branch = match branch {
@@ -121,6 +155,7 @@ impl PyModel {
             "up" => ElbowBranch::Up,
             other => return Err(PyValueError::new_err(format!("branch `{other}`: \"down\" (theta2 < theta1) or \"up\""))),
         };
+        let z = finite("z", z, "m")?;
         let q = kinematics::inverse_kinematics(self.arm.params.l, &Vector2::new(z[0], z[1]), branch)
             .map_err(|e| PyValueError::new_err(format!("z = ({}, {}) m: {e}", z[0], z[1])))?;
         Ok(vec_py(py, q))
@@ -129,39 +164,39 @@ impl PyModel {
     /// The Jacobian `J = d[z_t, z_n]/d[theta1, theta2]` (m/rad, shape `(2, 2)`)
     /// at configuration `theta` (paper eq. 2).
     fn jacobian<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        mat_py(py, kinematics::jacobian(self.arm.params.l, &q_of(theta)))
+        mat_py(py, kinematics::jacobian(self.arm.params.l, &q_of(theta)?))
     }
 
     /// `J_dot q_dot` (m/s^2, shape `(2,)`) at `state`: the tip's acceleration with
     /// no joint acceleration (paper eq. 2's `s`).
-    fn jdot_qdot<'py>(&self, py: Python<'py>, state: [f64; 4]) -> Bound<'py, PyArray1<f64>> {
-        let (q, qd) = split(state);
-        vec_py(py, kinematics::jdot_qdot(self.arm.params.l, &q, &qd))
+    fn jdot_qdot<'py>(&self, py: Python<'py>, state: [f64; 4]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, qd) = split(state)?;
+        Ok(vec_py(py, kinematics::jdot_qdot(self.arm.params.l, &q, &qd)))
     }
 
     /// The mass matrix `M(theta)` (kg m^2, shape `(2, 2)`), paper eq. 1.
     fn mass_matrix<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        mat_py(py, self.arm.mass_matrix(&q_of(theta)))
+        mat_py(py, self.arm.mass_matrix(&q_of(theta)?))
     }
 
     /// `Q = J M^-1 J^T` (1/kg, shape `(2, 2)`, symmetric positive definite): the
     /// tip's acceleration per newton of tip force (paper eq. 3).
     fn q_matrix<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        mat_py(py, self.arm.q_matrix(&q_of(theta)))
+        mat_py(py, self.arm.q_matrix(&q_of(theta)?))
     }
 
     /// The generalised forces of the free arm `w + c` (N m, shape `(2,)`) at
     /// `state`: gravity, the spring and damping (`w`) and the velocity terms (`c`)
     /// of paper eq. 1, `M q_ddot = -(w + c) + J^T f + u`.
-    fn bias<'py>(&self, py: Python<'py>, state: [f64; 4]) -> Bound<'py, PyArray1<f64>> {
-        let (q, qd) = split(state);
-        vec_py(py, self.arm.w(&q, &qd) + self.arm.c(&q, &qd))
+    fn bias<'py>(&self, py: Python<'py>, state: [f64; 4]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, qd) = split(state)?;
+        Ok(vec_py(py, self.arm.w(&q, &qd) + self.arm.c(&q, &qd)))
     }
 
     /// The generalised torque `u = [u1 - u2, u2]` (N m, shape `(2,)`) of the motor
     /// torques `torques = [u1, u2]` (paper eq. 1).
-    fn generalised_torque<'py>(&self, py: Python<'py>, torques: [f64; 2]) -> Bound<'py, PyArray1<f64>> {
-        vec_py(py, Arm::generalised_torque(&Vector2::new(torques[0], torques[1])))
+    fn generalised_torque<'py>(&self, py: Python<'py>, torques: [f64; 2]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(vec_py(py, generalised(torques)?))
     }
 
     /// The paper's `p` (1/kg) at configuration `theta` when sliding in
@@ -169,15 +204,15 @@ impl PyModel {
     /// sign(z_r_dot) Q21` (paper eq. 7). `p < 0` is the Painlevé paradox.
     #[pyo3(signature = (theta, direction="negative"))]
     fn p(&self, theta: [f64; 2], direction: &str) -> PyResult<f64> {
-        Ok(self.arm.p(&q_of(theta), self::direction(direction)?))
+        Ok(self.arm.p(&q_of(theta)?, self::direction(direction)?))
     }
 
     /// The paper's `b` (m/s^2) at `state` under motor torques `torques = [u1, u2]`
     /// (N m): the tip's free normal acceleration (paper eq. 6).
     #[pyo3(signature = (state, torques=[0.0, 0.0]))]
-    fn b(&self, state: [f64; 4], torques: [f64; 2]) -> f64 {
-        let (q, qd) = split(state);
-        self.arm.b(&q, &qd, &Arm::generalised_torque(&Vector2::new(torques[0], torques[1])))
+    fn b(&self, state: [f64; 4], torques: [f64; 2]) -> PyResult<f64> {
+        let (q, qd) = split(state)?;
+        Ok(self.arm.b(&q, &qd, &generalised(torques)?))
     }
 
     /// Whether configuration `theta` is in the Painlevé region when sliding in
@@ -192,21 +227,26 @@ impl PyModel {
     /// `state` under motor torques `torques`: the slipping classification by the
     /// signs of `b` and `p` (paper Table of modes; docs/model.md) with the slip
     /// direction of `z_r_dot = z_t_dot - v_belt`, or sticking when `|z_r_dot|` is
-    /// at most `v_stick` (m/s) and the sticking force is in the friction cone.
+    /// at most `v_stick` (m/s, finite and >= 0) and the sticking force is in the
+    /// friction cone.
     #[pyo3(signature = (state, torques=[0.0, 0.0], v_stick=1e-9))]
-    fn contact_mode(&self, state: [f64; 4], torques: [f64; 2], v_stick: f64) -> &'static str {
-        let (q, qd) = split(state);
-        let td = self.arm.tip_dynamics(&q, &qd, &Arm::generalised_torque(&Vector2::new(torques[0], torques[1])));
+    fn contact_mode(&self, state: [f64; 4], torques: [f64; 2], v_stick: f64) -> PyResult<&'static str> {
+        let (q, qd) = split(state)?;
+        let u = generalised(torques)?;
+        if !(v_stick.is_finite() && v_stick >= 0.0) {
+            return Err(PyValueError::new_err(format!("v_stick = {}: expected a finite number >= 0 (m/s)", py_float(v_stick))));
+        }
+        let td = self.arm.tip_dynamics(&q, &qd, &u);
         let z_r_dot = td.z_dot[0] - self.arm.params.v_belt;
         let mode: ContactMode = contact::classify(&td, self.arm.params.mu, z_r_dot, v_stick);
-        mode.name()
+        Ok(mode.name())
     }
 
     /// Mechanical energy (J) at `state`: kinetic `1/2 q_dot^T M q_dot` plus
     /// gravity and the spring (docs/plant.md "The energy ledger").
-    fn energy(&self, state: [f64; 4]) -> f64 {
-        let (q, qd) = split(state);
-        self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q)
+    fn energy(&self, state: [f64; 4]) -> PyResult<f64> {
+        let (q, qd) = split(state)?;
+        Ok(self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q))
     }
 
     fn __repr__(&self) -> String {

@@ -35,10 +35,12 @@ use crate::record::RunError;
 /// The lock file of `role` of rig `rig`, in the user's private folder.
 ///
 /// # Errors
-/// [`RunError::Transport`] when the private folder is refused or cannot be made
-/// ([`crate::private_files::runtime_dir`]: the message says why).
+/// [`RunError::PrivateFolder`] (exit 2) when the private folder is refused (a
+/// link, another user's, open to others), [`RunError::Transport`] when it cannot
+/// be made otherwise ([`crate::private_files::runtime_dir`]: the message says why;
+/// [`RunError::private_folder`]).
 pub fn lock_path(role: Role, rig: &str) -> Result<PathBuf, RunError> {
-    let dir = crate::private_files::runtime_dir().map_err(|e| RunError::Transport(format!("the rig's lock folder: {e}")))?;
+    let dir = crate::private_files::runtime_dir().map_err(|e| RunError::private_folder("the rig's lock folder", &e))?;
     Ok(dir.join(lock_name(role, rig)))
 }
 

@@ -43,7 +43,7 @@ pub(super) struct Qemu {
 fn temp_prefix() -> Result<PathBuf, RunError> {
     use std::sync::atomic::{AtomicU32, Ordering};
     static N: AtomicU32 = AtomicU32::new(0);
-    let dir = crate::private_files::runtime_dir().map_err(|e| RunError::Transport(format!("the PIL link's folder: {e}")))?;
+    let dir = crate::private_files::runtime_dir().map_err(|e| RunError::private_folder("the PIL link's folder", &e))?;
     // What a killed PIL run left (its FIFOs or socket).
     crate::private_files::remove_dead_pid_files(&dir, "painleve-pil-");
     Ok(dir.join(format!("painleve-pil-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed))))

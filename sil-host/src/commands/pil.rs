@@ -137,6 +137,8 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
         TraceFiles { format: args.format, page: !args.no_page },
         live.as_mut(),
     )?;
+    // The viewers are told while the outputs are written (docs/rig.md "Live").
+    let closing = live.map(crate::live::LiveRun::close);
     let log = link.captures_log().then(|| link.log());
     let exit = link.exit_status().map(|s| s.to_string());
     let figures = PilFigures::new(&target, &link.counts, scenario.timing.rate_hz, log.as_deref(), exit);
@@ -162,6 +164,9 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
+    if let Some(closing) = closing {
+        closing.finish();
+    }
     Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 

@@ -70,6 +70,8 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let progress = progress_bar(n, "SIL run", "periods", args.output.json);
     let Streamed { stats, history, failure, wall_s, validity, ledger, page } =
         run_streamed(&setup, link, &mut out, &progress, 500, TraceFiles { format: args.format, page: !args.no_page }, live.as_mut())?;
+    // The viewers are told while the outputs are written (docs/rig.md "Live").
+    let closing = live.map(crate::live::LiveRun::close);
     let firmware_announcement = link.announcement().cloned();
     let (mut timings, mut realtime_setup, mut monitor_counts) = (None, None, None);
     match &mut open {
@@ -120,6 +122,9 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     };
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
+    if let Some(closing) = closing {
+        closing.finish();
+    }
     Ok(Done { result: (summary, scenario.clone()), files, failure: failure.map(CliError::from) }.strict(args.strict.strict, &validity))
 }
 

@@ -19,13 +19,57 @@ pub(super) fn page(info: PageInfo, frames: Frames, curves: &Curves) -> String {
     let samples = frames.samples();
     let (frames, step) = frames.finish();
     let data = data(&info, &frames, step, samples, curves);
-    // JSON inside <script>: `</` could close the element; `<\/` is the same JSON string.
-    let json = data.to_string().replace("</", "<\\/");
-    SKELETON
-        .replace("{{TITLE}}", &escape(&info.title))
-        .replace("{{STYLE}}", STYLE)
-        .replace("{{SCRIPT}}", SCRIPT)
-        .replacen("{{DATA}}", &json, 1)
+    let json = script_json(&data);
+    fill(SKELETON, &[("TITLE", &escape(&info.title)), ("STYLE", STYLE), ("SCRIPT", SCRIPT), ("DATA", &json)])
+}
+
+/// `skeleton` with each of its `{{NAME}}` placeholders replaced by the value of
+/// `NAME` in `values` (an unknown name left as it is), in one pass over the
+/// skeleton alone: a value that holds a placeholder's text (a scenario named
+/// `{{DATA}}`) is never filled in itself.
+fn fill(skeleton: &str, values: &[(&str, &str)]) -> String {
+    let mut out = String::with_capacity(skeleton.len() + values.iter().map(|(_, v)| v.len()).sum::<usize>());
+    let mut rest = skeleton;
+    while let Some(open) = rest.find("{{") {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 2..];
+        match after.find("}}").and_then(|close| values.iter().find(|(name, _)| *name == &after[..close]).map(|(_, v)| (close, v))) {
+            Some((close, value)) => {
+                out.push_str(value);
+                rest = &after[close + 2..];
+            }
+            None => {
+                out.push_str("{{");
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// `data` as JSON text that is safe inside a `<script>` element: `<`, `>` and
+/// `&` (which can only occur inside its strings) written as `\u003c`, `\u003e`,
+/// `\u0026`, so no text of the run (a scenario's name such as `<!--<script>`,
+/// which would put the HTML parser in the script's "double escaped" state and
+/// let the page's own `</script>` through, or `</script>` itself) can end or
+/// change the element; U+2028 and U+2029 as `\u2028`, `\u2029`, which older
+/// JavaScript parsers take as line ends. The same JSON value: `JSON.parse` reads
+/// the escapes back.
+fn script_json(data: &Value) -> String {
+    let text = data.to_string();
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '>' => out.push_str("\\u003e"),
+            '&' => out.push_str("\\u0026"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The page's JSON document (what `assets/page.js` reads).
@@ -171,6 +215,39 @@ mod tests {
         let notes = data["notes"].as_array().unwrap();
         assert!(notes[0].as_str().unwrap().contains("a frame every 10 ms"), "{}", notes[0]);
         assert!(notes[1].as_str().unwrap().contains("every sample (2001)"), "{}", notes[1]);
+    }
+
+    /// A scenario name (or any text of the run) with what HTML reads inside a
+    /// script element (`<!--<script>`, `</script>`, `&`, U+2028/U+2029) gives
+    /// data with no `<`, `>` or `&` and those two characters escaped, which
+    /// parses back to the same strings; the page holds exactly two script
+    /// elements, the data's ending at the first `</script>`.
+    #[test]
+    fn the_data_escapes_what_html_reads_in_a_script() {
+        let name = "<!--<script> a\u{2028}b\u{2029}c & </script> --> {{DATA}} {{SCRIPT}}";
+        let info = PageInfo {
+            title: name.into(),
+            facts: vec![("scenario".into(), name.into())],
+            l: 0.21,
+            h: 0.3775,
+            v_belt: -0.4,
+            closed_loop: true,
+        };
+        let html = TracePage::new(info).html();
+        let start = html.find("id=\"trace-data\">").unwrap() + "id=\"trace-data\">".len();
+        let end = start + html[start..].find("</script>").unwrap();
+        let json = &html[start..end];
+        for bad in ['<', '>', '&', '\u{2028}', '\u{2029}'] {
+            assert!(!json.contains(bad), "{bad:?} in the data");
+        }
+        let data: Value = serde_json::from_str(json).unwrap();
+        assert_eq!(data["facts"][0][1], name, "the name reads back whole");
+        assert_eq!(data["title"], name);
+        assert_eq!(html.matches("<script").count(), 2, "the data's element and the script's");
+        assert_eq!(html.matches("</script>").count(), 2);
+        assert!(html[end..].starts_with("</script>\n<script>"), "the data's element ends where it should");
+        assert!(html.contains("<title>&lt;!--&lt;script&gt;"), "the title, escaped, placeholders left as text");
+        assert!(html.contains("{{DATA}} {{SCRIPT}}</title>"), "a placeholder in the name is not filled");
     }
 
     /// A run without samples still gives a page that says so.

@@ -245,8 +245,9 @@ fn run_writes_no_trace_through_a_link_planted_in_its_folder() {
 /// Issue 52, 4: the rig's locks were opened through links another user planted
 /// in the shared temporary folder. They live in the user's own 0700 folder
 /// (`<temp>/painleve-<uid>` here, `$XDG_RUNTIME_DIR` unset), which is refused
-/// when it is a link or another user's, with a message saying why; a run killed
-/// by SIGKILL leaves a lock file the next run removes.
+/// when it is a link, open to others or another user's, with a message saying
+/// why and exit 2 (a refusal before anything ran, as a rig in use: issue 66);
+/// a run killed by SIGKILL leaves a lock file the next run removes.
 #[test]
 fn a_run_keeps_its_locks_in_a_private_folder_and_refuses_one_that_is_not() {
     use std::os::unix::fs::{MetadataExt, PermissionsExt};
@@ -283,18 +284,26 @@ fn a_run_keeps_its_locks_in_a_private_folder_and_refuses_one_that_is_not() {
     std::os::unix::fs::symlink(&elsewhere, &private).unwrap();
     let o = run("b");
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("symbolic link") && err.contains(&private.display().to_string()), "{err}");
     assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "nothing made through the link");
-    // Another user's folder (as root: given to nobody), refused naming its owner.
+    assert!(!temp.path().join("b").exists(), "nothing written");
+    // A folder of ours that others can enter (made before us, 0755): refused, its mode named.
     std::fs::remove_file(&private).unwrap();
+    std::fs::create_dir(&private).unwrap();
+    std::fs::set_permissions(&private, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = run("c");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("mode 755") && err.contains(&private.display().to_string()), "{err}");
+    // Another user's folder made before us (as root: given to nobody), refused naming its owner.
     if uid == 0 {
-        std::fs::create_dir(&private).unwrap();
         std::fs::set_permissions(&private, std::fs::Permissions::from_mode(0o700)).unwrap();
         std::os::unix::fs::chown(&private, Some(65534), Some(65534)).unwrap();
-        let o = run("c");
+        let o = run("d");
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(err.contains("owned by uid 65534") && err.contains("another user's"), "{err}");
+        assert!(!temp.path().join("d").exists(), "nothing written");
     }
 }

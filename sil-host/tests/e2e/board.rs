@@ -304,19 +304,31 @@ fn a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved(on: Bo
 
 /// Issue 52 (1): `run` on a board (`--link twin`, `--link emulator`) with the
 /// runaway limits off is refused before it starts (exit 2, naming the key);
-/// without a board it runs.
+/// without a board it runs: each way the refusal names (issue 66: it named a
+/// `--link ipc` that does not exist) runs the same scenario.
 #[test]
 fn a_run_on_a_board_refuses_the_runaway_limits_off_naming_the_key() {
     let dir = tempfile::tempdir().unwrap();
+    let off = ["--duration", "0.01", "--set", "controller.runaway_limits=false", "--out"];
     for link in ["twin", "emulator"] {
         let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
-            .args(["run", "--link", link, "--duration", "0.01", "--set", "controller.runaway_limits=false", "--out"])
+            .args(["run", "--link", link])
+            .args(off)
             .arg(dir.path().join(link))
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{link}: {err}");
         assert!(err.contains("controller.runaway_limits = false") && err.contains("cannot be turned off on a board"), "{link}: {err}");
+        assert!(
+            err.contains("`sil-host run --in-process`") && err.contains("`sil-host run` (the firmware process over iceoryx2)"),
+            "{err}"
+        );
+        assert!(!err.contains("--link ipc"), "{err}");
+    }
+    for (name, way) in [("in-process", &["--in-process"][..]), ("iceoryx2", &[][..])] {
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).arg("run").args(way).args(off).arg(dir.path().join(name)).output().unwrap();
+        assert!(o.status.success(), "{name}: the named way runs: {}", String::from_utf8_lossy(&o.stderr));
     }
 }
 

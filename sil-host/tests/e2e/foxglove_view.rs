@@ -256,3 +256,249 @@ fn a_live_address_in_use_is_refused_with_nothing_written() {
     assert_eq!(s.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&s.stderr).contains("--live-rate 0"));
 }
+
+/// How long a run may outlive its end because of a viewer (docs/rig.md "Live"):
+/// the viewers get 1 s to take the close, the outputs are written meanwhile.
+const AFTER_THE_RUN: Duration = Duration::from_secs(2);
+
+/// A `ws://` client of the live server, connected from a socket whose receive
+/// buffer is `rcvbuf` bytes (set before the connection, so the window it
+/// advertises is that small: a client that stops reading fills it at once), the
+/// WebSocket handshake done with protocol `foxglove.sdk.v1`. It reads the
+/// server's advertisement and subscribes to every channel.
+fn viewer(ws_url: &str, rcvbuf: Option<i32>) -> tungstenite::WebSocket<std::net::TcpStream> {
+    use std::os::fd::FromRawFd;
+    let addr: std::net::SocketAddrV4 = ws_url.trim_start_matches("ws://").parse().unwrap();
+    // SAFETY: a new socket of our own, options and connect on it; the fd is then owned by the TcpStream.
+    let stream = unsafe {
+        let fd = libc::socket(libc::AF_INET, libc::SOCK_STREAM | libc::SOCK_CLOEXEC, 0);
+        assert!(fd >= 0, "socket: {}", std::io::Error::last_os_error());
+        if let Some(size) = rcvbuf {
+            let r = libc::setsockopt(
+                fd,
+                libc::SOL_SOCKET,
+                libc::SO_RCVBUF,
+                (&raw const size).cast(),
+                std::mem::size_of::<i32>() as libc::socklen_t,
+            );
+            assert_eq!(r, 0, "SO_RCVBUF: {}", std::io::Error::last_os_error());
+        }
+        let sa = libc::sockaddr_in {
+            sin_family: libc::AF_INET as libc::sa_family_t,
+            sin_port: addr.port().to_be(),
+            sin_addr: libc::in_addr { s_addr: u32::from_ne_bytes(addr.ip().octets()) },
+            sin_zero: [0; 8],
+        };
+        let r = libc::connect(fd, (&raw const sa).cast(), std::mem::size_of::<libc::sockaddr_in>() as libc::socklen_t);
+        assert_eq!(r, 0, "connect {addr}: {}", std::io::Error::last_os_error());
+        std::net::TcpStream::from_raw_fd(fd)
+    };
+    let mut request = tungstenite::client::IntoClientRequest::into_client_request(ws_url).unwrap();
+    request.headers_mut().insert("Sec-WebSocket-Protocol", "foxglove.sdk.v1".parse().unwrap());
+    let (mut ws, _) = tungstenite::client::client(request, stream).expect("the live server accepts a client");
+    loop {
+        if let tungstenite::Message::Text(text) = ws.read().expect("the advertisement") {
+            let v: serde_json::Value = serde_json::from_str(text.as_str()).unwrap();
+            if v["op"] == "advertise" {
+                let subscriptions: Vec<_> = v["channels"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| serde_json::json!({ "id": i + 1, "channelId": c["id"] }))
+                    .collect();
+                let msg = serde_json::json!({ "op": "subscribe", "subscriptions": subscriptions });
+                ws.send(tungstenite::Message::Text(msg.to_string().into())).unwrap();
+                return ws;
+            }
+        }
+    }
+}
+
+/// A live run (`--live 127.0.0.1:0 --live-wait 60 --live-rate 4`, 20 s of
+/// simulated time: about 5 s of wall time) with `args` more, its stderr lines
+/// timestamped as they come; the server's address.
+fn live_run(out: &Path, args: &[&str]) -> (std::process::Child, String, std::sync::mpsc::Receiver<(Instant, String)>) {
+    let mut child = sil_host()
+        .args(["run", "--in-process", "--duration", "20", "--json", "--no-page", "--live", "127.0.0.1:0", "--live-rate", "4"])
+        .args(["--live-wait", "60"])
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send((Instant::now(), line));
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while let Ok((_, line)) = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+        if let Some(at) = line.split_whitespace().find(|w| w.starts_with("ws://")) {
+            return (child, at.to_string(), rx);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    panic!("no live address within 60 s");
+}
+
+/// The child's exit, waited for on a thread of its own: when it came, and the status.
+fn exit_of(mut child: std::process::Child) -> (std::sync::mpsc::Receiver<Instant>, std::thread::JoinHandle<std::process::Output>) {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let waiter = std::thread::spawn(move || {
+        let status = child.wait().unwrap();
+        let _ = tx.send(Instant::now());
+        let mut stdout = Vec::new();
+        std::io::Read::read_to_end(child.stdout.as_mut().unwrap(), &mut stdout).unwrap();
+        std::process::Output { status, stdout, stderr: Vec::new() }
+    });
+    (rx, waiter)
+}
+
+/// Reads what is left on a viewer that stopped reading, after the run: the
+/// connection must end (end of stream or reset) rather than stay open.
+fn drain_to_the_end(ws: &mut tungstenite::WebSocket<std::net::TcpStream>) -> usize {
+    let s = ws.get_mut();
+    s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    let (mut buf, mut total) = (vec![0u8; 1 << 16], 0);
+    loop {
+        match std::io::Read::read(s, &mut buf) {
+            Ok(0) => return total,
+            Ok(n) => total += n,
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => return total,
+            Err(e) => panic!("the dropped viewer's connection did not end: {e}"),
+        }
+    }
+}
+
+/// Issue 66 (4): a viewer that subscribes and then never reads (a 4 KiB
+/// receive window: the server's writer to it blocks within the run) no longer
+/// holds the process after its run. At the run's end the server closes: a
+/// viewer that reads gets the close frame (after the status message, if that
+/// came), the stuck one is dropped after 1 s and stderr says so; the process
+/// exits within 2 s of the run's end with its summary printed, and the stuck
+/// viewer's connection ends.
+#[test]
+fn a_viewer_that_stopped_reading_is_dropped_and_the_run_exits() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (child, addr, lines) = live_run(&out, &[]);
+    let mut stuck = viewer(&addr, Some(4096));
+    let mut reader = viewer(&addr, None);
+    let reading = std::thread::spawn(move || {
+        let (mut messages, mut bytes, mut status, mut close) = (0usize, 0usize, None, None);
+        let end = loop {
+            match reader.read() {
+                Ok(tungstenite::Message::Close(frame)) => close = Some((frame, status.is_some())),
+                Ok(tungstenite::Message::Text(t)) if t.contains("\"status\"") => status = Some(t.to_string()),
+                Ok(m) => {
+                    messages += 1;
+                    bytes += m.len();
+                }
+                Err(e) => break e.to_string(),
+            }
+        };
+        eprintln!("the reading viewer: {bytes} bytes in {messages} messages; its connection ended: {end}");
+        (messages, status, close)
+    });
+    let (exited, waiter) = exit_of(child);
+    // The run's end: the server tells its viewers.
+    let mut ended = None;
+    let mut said = Vec::new();
+    while let Ok((at, line)) = lines.recv_timeout(Duration::from_secs(120)) {
+        if line.contains("the run has ended") {
+            ended = Some(at);
+        }
+        said.push(line);
+    }
+    let ended = ended.unwrap_or_else(|| panic!("no line of the run's end: {said:#?}"));
+    let exited = exited.recv().unwrap();
+    let o = waiter.join().unwrap();
+    let after = exited.duration_since(ended);
+    eprintln!("the run exited {:.3} s after its end (its viewers told), one viewer stuck", after.as_secs_f64());
+    assert!(o.status.success(), "{said:#?}");
+    assert!(after < AFTER_THE_RUN, "exited {after:?} after the run's end: {said:#?}");
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the summary is printed");
+    assert_eq!(summary["status"], "ok");
+    assert!(summary["periods"].as_u64().unwrap() >= 20_000, "{summary}");
+    assert!(out.join("summary.json").is_file() && out.join("trace.csv").is_file());
+    assert!(said.iter().any(|l| l.starts_with("live: dropped 1 of 2 viewer(s)") && l.contains("within 1 s")), "{said:#?}");
+    let (messages, status, close) = reading.join().unwrap();
+    let (frame, after_status) = close.expect("the reading viewer gets the close frame");
+    assert!(messages > 100, "it received the run: {messages} messages");
+    if let Some(status) = &status {
+        assert!(status.contains("the run has ended") && after_status, "the status, before the close: {status}, {frame:?}");
+    }
+    eprintln!("the reading viewer: {messages} messages, status {}, close {frame:?}", status.is_some());
+    let left = drain_to_the_end(&mut stuck);
+    eprintln!("the stuck viewer had {left} bytes in flight when its connection ended");
+}
+
+/// Issue 66 (4): Ctrl-C (SIGINT) mid-run with a stuck viewer ends the run at
+/// once: exit 130, the summary printed (the run stopped early: `failed`,
+/// "interrupted"), the outputs written, the viewer cut without the grace.
+#[test]
+fn ctrl_c_ends_a_live_run_with_a_stuck_viewer_and_prints_the_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (child, addr, lines) = live_run(&out, &[]);
+    let pid = child.id() as i32;
+    let _stuck = viewer(&addr, Some(4096));
+    let (exited, waiter) = exit_of(child);
+    // 12 000 of the 20 000 periods streamed (200 B a row of trace.csv at
+    // least; 3 s of wall time; its viewer subscribed, --live-wait let the run
+    // start): by then the messages sent to the viewer (about 0.57 KB a period:
+    // a reading viewer gets 11.4 MB over the run) are more than its connection
+    // holds (its 4 KiB window and the server's send buffer: 2.8 MB were in
+    // flight when the stuck viewer of the test above was dropped; at most the
+    // kernel's 4 MiB by default), so it is stuck.
+    let partial = out.join("trace.csv.partial");
+    let started = Instant::now();
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 12_000 * 200 {
+        assert!(started.elapsed() < Duration::from_secs(60), "the run never started");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let signalled = Instant::now();
+    // SAFETY: kill(2) on our own child's pid (not yet reaped: its waiter holds it).
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let exited = exited.recv_timeout(Duration::from_secs(60)).expect("the run ends on SIGINT");
+    let o = waiter.join().unwrap();
+    let mut said = Vec::new();
+    while let Ok((_, line)) = lines.recv_timeout(Duration::from_secs(30)) {
+        said.push(line);
+    }
+    let took = exited.duration_since(signalled);
+    eprintln!("SIGINT: exited {:.3} s after the signal", took.as_secs_f64());
+    assert_eq!(o.status.code(), Some(130), "{said:#?}");
+    assert!(took < AFTER_THE_RUN, "{took:?}: {said:#?}");
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the summary is printed");
+    assert_eq!(summary["status"], "failed");
+    assert!(summary["error"].as_str().unwrap().contains("interrupted"), "{summary}");
+    let periods = summary["periods"].as_u64().unwrap();
+    assert!(periods > 0 && periods < 20_001, "stopped mid-run: {periods}");
+    assert!(out.join("summary.json").is_file() && out.join("trace.csv").is_file());
+    assert!(said.iter().any(|l| l.contains("stopped by a signal") && l.contains("1 of 1 viewer(s)")), "{said:#?}");
+}
+
+/// Issue 66 (5): an address that is not a loopback one serves the run to the
+/// network: stderr warns of it; a loopback one says nothing of the kind.
+#[test]
+fn a_live_address_off_this_machine_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    for (addr, warned) in [("0.0.0.0:0", true), ("127.0.0.1:0", false)] {
+        let o = sil_host()
+            .args(["run", "--in-process", "--duration", "0.05", "--no-page", "--live", addr, "--live-rate", "1000", "--out"])
+            .arg(dir.path().join(if warned { "any" } else { "loopback" }))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(err.contains("warning: live: ws://0.0.0.0:") && err.contains("every network interface"), warned, "{addr}: {err}");
+        assert_eq!(err.contains("warning"), warned, "{addr}: {err}");
+    }
+}

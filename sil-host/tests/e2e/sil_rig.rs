@@ -563,7 +563,7 @@ fn sigterm_stops_a_run_and_everything_recorded_is_written() {
     let child = sil_host()
         .args(["run", "--rig", &name, "--duration", "1000", "--out"])
         .arg(&out)
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
@@ -585,6 +585,9 @@ fn sigterm_stops_a_run_and_everything_recorded_is_written() {
     let periods = sm["periods"].as_u64().unwrap() as usize;
     assert!(periods > 0);
     assert_eq!(trace(&out).len(), periods, "every recorded period is in trace.csv");
+    // The summary is printed, saying the run stopped early (issue 66).
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(printed.contains(&format!("STOPPED: interrupted at period {periods}")) && printed.contains("summary.json"), "{printed}");
 }
 
 unsafe extern "C" {

@@ -242,3 +242,25 @@ fn every_format_writes_the_page_and_no_page_leaves_it_out() {
         assert!(sim.join("trace.html").is_file(), "simulate --format {format} writes trace.html");
     }
 }
+
+/// Issue 66 (5): a scenario named with what HTML reads inside a script element
+/// (`<!--<script>`: the parser's "double escaped" state, in which the page's own
+/// `</script>` no longer ends the data) gives a page whose data holds no `<`,
+/// `>` or `&` and reads back to the name; the page has its two script elements.
+#[test]
+fn a_scenario_name_cannot_break_the_pages_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let name = "<!--<script>&\u{2028}";
+    let set = format!("name={}", serde_json::to_string(name).unwrap());
+    sil_host(&["run", "--in-process", "--duration", "0.05", "--set", &set, "--out", out.to_str().unwrap()]);
+    let html = std::fs::read_to_string(out.join("trace.html")).unwrap();
+    let start = html.find("id=\"trace-data\">").unwrap() + "id=\"trace-data\">".len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let json = &html[start..end];
+    assert!(!json.contains(['<', '>', '&', '\u{2028}']), "the data holds none of them: {json:.200}");
+    let data: serde_json::Value = serde_json::from_str(json).unwrap();
+    let facts = data["facts"].as_array().unwrap();
+    assert!(facts.iter().any(|f| f[0] == "scenario" && f[1] == name), "the name reads back: {facts:?}");
+    assert_eq!((html.matches("<script").count(), html.matches("</script>").count()), (2, 2));
+}

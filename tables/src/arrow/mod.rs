@@ -35,14 +35,21 @@ pub use write::{ArrowFile, ArrowThread, StreamedArrowFile};
 /// Rows per record batch: 64 Ki rows (about 7 MB of a 14-column trace).
 pub const BATCH_ROWS: usize = 1 << 16;
 
-/// The error of an Arrow file, as the CLI reports it: the file and what failed.
+/// The error of an Arrow file being written, as the CLI reports it: the file and what failed.
 pub(crate) fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> Error + '_ {
-    move |e| Error::Io {
-        path: path.to_path_buf(),
-        source: match e {
-            ArrowError::IoError(_, io) => io,
-            other => std::io::Error::other(other.to_string()),
-        },
+    move |e| Error::Io { path: path.to_path_buf(), source: arrow_io(e) }
+}
+
+/// The error of an Arrow file being read, as the CLI reports it: the file and what failed.
+pub(crate) fn arrow_read_err(path: &Path) -> impl Fn(ArrowError) -> Error + '_ {
+    move |e| Error::Unreadable { path: path.to_path_buf(), source: arrow_io(e) }
+}
+
+/// An Arrow error as an I/O error: the OS's own, or the Arrow error's words.
+fn arrow_io(e: ArrowError) -> std::io::Error {
+    match e {
+        ArrowError::IoError(_, io) => io,
+        other => std::io::Error::other(other.to_string()),
     }
 }
 

@@ -11,7 +11,7 @@ use arrow_array::RecordBatch;
 use arrow_ipc::reader::{FileReader, StreamReader};
 use arrow_schema::{ArrowError, Schema};
 
-use super::{arrow_err, settle, table_of};
+use super::{arrow_read_err, settle, table_of};
 use crate::{Table, error::Error};
 
 /// Reads the Arrow IPC file (or stream) at `path` into one record batch: its
@@ -24,12 +24,12 @@ use crate::{Table, error::Error};
 /// stream (what `run` wrote before issue 55) is read too.
 ///
 /// # Errors
-/// [`Error::Io`] naming the file when it cannot be read, is neither an Arrow
+/// [`Error::Unreadable`] naming the file when it cannot be read, is neither an Arrow
 /// IPC file (nor one cut off before its footer) nor a stream, has a column of
 /// another type than Float64, Int64, Boolean or Utf8, or a null integer or flag.
 pub fn read_arrow_batch(path: &Path) -> Result<RecordBatch, Error> {
-    let bad = |msg: String| Error::other(path, msg);
-    let io = |e: std::io::Error| Error::Io { path: path.to_path_buf(), source: e };
+    let bad = |msg: String| Error::unreadable(path, msg);
+    let io = |e: std::io::Error| Error::Unreadable { path: path.to_path_buf(), source: e };
     let mut file = File::open(path).map_err(io)?;
     // The file format starts with the magic `ARROW1` and two bytes of padding; the
     // stream format with a message.
@@ -44,14 +44,14 @@ pub fn read_arrow_batch(path: &Path) -> Result<RecordBatch, Error> {
             let mut file = File::open(path).map_err(io)?;
             let start = if is_file { stream_start(&mut file).map_err(io)? } else { 0 };
             file.seek(SeekFrom::Start(start)).map_err(io)?;
-            let reader = StreamReader::try_new_buffered(file, None).map_err(arrow_err(path))?;
+            let reader = StreamReader::try_new_buffered(file, None).map_err(arrow_read_err(path))?;
             // Cut off (a killed run): its whole batches, the cut one dropped.
             let mut done = false;
             (reader.schema(), Box::new(reader.take_while(move |b| !std::mem::replace(&mut done, b.is_err())).filter(Result::is_ok)))
         }
     };
-    let batches = batches.collect::<Result<Vec<_>, _>>().map_err(arrow_err(path))?;
-    let batch = arrow_select::concat::concat_batches(&schema, &batches).map_err(arrow_err(path))?;
+    let batches = batches.collect::<Result<Vec<_>, _>>().map_err(arrow_read_err(path))?;
+    let batch = arrow_select::concat::concat_batches(&schema, &batches).map_err(arrow_read_err(path))?;
     settle(&batch, true).map_err(|(_, _, message)| bad(message))
 }
 
@@ -76,5 +76,5 @@ fn stream_start(file: &mut File) -> std::io::Result<u64> {
 /// # Errors
 /// As [`read_arrow_batch`].
 pub fn read_arrow(path: &Path) -> Result<Table, Error> {
-    table_of(&read_arrow_batch(path)?).map_err(|m| Error::other(path, m))
+    table_of(&read_arrow_batch(path)?).map_err(|m| Error::unreadable(path, m))
 }

@@ -29,15 +29,15 @@ use crate::{Column, Kind, Table, error::Error};
 /// decoded in parallel; a cut file is read linearly.
 ///
 /// # Errors
-/// [`Error::Io`] naming the file when it cannot be read, is not MCAP, holds
+/// [`Error::Unreadable`] naming the file when it cannot be read, is not MCAP, holds
 /// no table metadata, a table's channel is not protobuf (a file written
 /// before the tables' channels were: JSON) or its schema lacks a column or
 /// gives it another type, or a message is not the one its schema describes
 /// (a field of another wire type, twice, or missing; a sequence number out of
 /// order).
 pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
-    let bad = |what: String| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(what) };
-    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let bad = |what: String| Error::unreadable(path, what);
+    let bytes = std::fs::read(path).map_err(|source| Error::Unreadable { path: path.to_path_buf(), source })?;
     let summary = mcap::Summary::read(&bytes).ok().flatten();
     let specs = specs(&bytes, summary.as_ref()).map_err(&bad)?;
     // Each table topic's declared kinds, by column name.

@@ -119,6 +119,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     }
     let plant = open_loop.plant;
     let wall_s = wall.as_secs_f64();
+    // The viewers are told while the outputs are written (docs/rig.md "Live").
+    let closing = live.map(crate::live::LiveSimulation::close);
     progress.finish_and_clear();
     drop(to_figures);
     let (curves, page) = joined(figures.join());
@@ -157,6 +159,9 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     }
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;
+    if let Some(closing) = closing {
+        closing.finish();
+    }
     let validity = summary.validity;
     let failure = failure.map(CliError::from).or(interrupted.map(CliError::interrupted));
     Ok(Done { result: summary, files, failure }.strict(args.strict.strict, &validity))
