@@ -15,9 +15,8 @@ pub enum Error {
         /// The OS error, or what is wrong.
         source: std::io::Error,
     },
-    /// Reading the Arrow or MCAP file `path` failed ([`crate::arrow::read_arrow`],
-    /// [`crate::mcap::read_mcap`]): an OS error, or a file that is not the table
-    /// it should be.
+    /// Reading the Arrow or MCAP file `path` failed (`read_arrow`, `read_mcap`):
+    /// an OS error, or a file that is not the table it should be.
     #[error("cannot read {path}: {source}")]
     Unreadable {
         /// The file.
@@ -55,29 +54,4 @@ impl Error {
 /// Maps an I/O error on `path` into an [`Error::Io`].
 pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io { path: path.to_path_buf(), source }
-}
-
-#[cfg(all(test, feature = "files"))]
-mod tests {
-    /// Issue 66: a file being read that cannot be read says "cannot read", never
-    /// "cannot write": missing, or not the table it should be, for both readers.
-    #[test]
-    fn a_file_that_cannot_be_read_says_so() {
-        let dir = tempfile::tempdir().unwrap();
-        let missing = dir.path().join("none.mcap");
-        let text = dir.path().join("trace.arrow");
-        std::fs::write(&text, "t,theta1\n0,1\n").unwrap();
-        let errors = [
-            crate::mcap::read_mcap(&missing).unwrap_err(),
-            crate::mcap::read_mcap(&text).unwrap_err(),
-            crate::arrow::read_arrow(&missing).unwrap_err(),
-            crate::arrow::read_arrow(&text).unwrap_err(),
-            crate::arrow::read_arrow_batch(&text).unwrap_err(),
-        ];
-        for e in errors {
-            let message = e.to_string();
-            assert!(message.starts_with("cannot read ") && !message.contains("cannot write"), "{message}");
-            assert!(message.contains("none.mcap") || message.contains("trace.arrow"), "names the file: {message}");
-        }
-    }
 }
