@@ -72,13 +72,13 @@ mod tests {
         assert!(s.starts_with("safe state: the encoders and the load cell disagree"), "{s}");
         assert_eq!(describe_status(0), "running, no flag");
         assert_eq!(describe_status(status::LIFT_OFF | status::SATURATED_U2), "lift-off detected; u2 saturated");
-        assert_eq!(describe_status(status::SAFE_STATE | (14 << status::REASON_SHIFT)), "safe state: unknown reason 14");
+        assert_eq!(describe_status(status::SAFE_STATE | (16 << status::REASON_SHIFT)), "safe state: unknown reason 16");
         assert_eq!(describe_status(1 << 12), "unknown bits 0x1000");
     }
 
     #[test]
     fn every_reason_has_its_own_words() {
-        let words: Vec<String> = (1..=13u32).map(|r| describe_status(status::SAFE_STATE | (r << status::REASON_SHIFT))).collect();
+        let words: Vec<String> = (1..=15u32).map(|r| describe_status(status::SAFE_STATE | (r << status::REASON_SHIFT))).collect();
         for (i, w) in words.iter().enumerate() {
             assert!(!w.contains("unknown"), "{w}");
             assert!(words[i + 1..].iter().all(|o| o != w), "{w} twice");

@@ -39,8 +39,8 @@ pub struct Coverage {
     pub steps: u64,
     /// Commands with status bit `i` set, bits 0 to 9.
     pub bits: [u64; 10],
-    /// Latches of each reason code (index = code, 1 to 7).
-    pub reasons: [u64; 13],
+    /// Latches of each reason code (index = code, 1 to 15; `SafeReason`'s codes).
+    pub reasons: [u64; 16],
     /// Commands with non-zero torque.
     pub torque: u64,
 }
@@ -84,7 +84,7 @@ pub fn check_covering(case: &Case, cov: &mut Coverage) -> Result<(), String> {
                     *n += u64::from(cmd.status & (1 << b) != 0);
                 }
                 if !was_safe && let Some(r) = model.0.safe {
-                    cov.reasons[r as usize % 13] += 1;
+                    cov.reasons[r as usize % 16] += 1;
                 }
                 cov.torque += u64::from(cmd.u1_code != 0 || cmd.u2_code != 0);
             }
