@@ -73,11 +73,17 @@ fn firmware_cases_reach_every_status_bit_and_safe_reason() {
         firmware_step::check_covering(&c, &mut cov).unwrap();
     }
     assert!(cov.bits.iter().all(|&n| n > 0), "{cov:?}");
-    // Every reason but `LiftOff` (12): it needs 10 ms of lift-off under the hybrid law
-    // with no other check tripping first, which a random script does not hold; the
-    // twin's wiring tests reach it (a reversed load cell stops on it at period 10,
-    // board-link/tests/board/twin.rs) and firmware::tracking's unit tests pin its rule.
-    assert!(cov.reasons[1..12].iter().all(|&n| n > 0), "{cov:?}");
+    // Every reason of the step but `LiftOff` (12): it needs 10 ms of lift-off under the
+    // hybrid law with no other check tripping first, which a random script does not
+    // hold; the twin's wiring tests reach it (a reversed load cell stops on it at
+    // period 10, board-link/tests/board/twin.rs) and firmware::tracking's unit tests pin
+    // its rule. The tracking check's trips are `Tracking` (11) with the gains inside
+    // their envelope at the script's rate and `Unstable` (15) outside it (issue 66:
+    // the paper's gains from 1.1 ms on), which most of the scripts' random periods are:
+    // one of the two. `Acquisition` (13) is the board's, `Saturated` (14) needs a
+    // saturated law whose error creeps past its bound (firmware::tracking's tests).
+    assert!(cov.reasons[1..11].iter().all(|&n| n > 0), "{cov:?}");
+    assert!(cov.reasons[11] + cov.reasons[15] > 0, "{cov:?}");
     assert!(cov.torque > cov.steps / 20, "{cov:?}");
 }
 
