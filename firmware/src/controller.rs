@@ -13,6 +13,7 @@ use shared::{
 
 use crate::{
     TickClock,
+    chatter::ChatterMonitor,
     config::{Config, ConfigError, ControllerKind},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
     decode::{self, EncoderScale, FrameFault, Measurement},
@@ -76,6 +77,8 @@ pub struct Firmware {
     /// The wiring check at this rate, derived once.
     wiring_rule: WiringRule,
     tracking: TrackingMonitor,
+    /// A law that chatters ([`crate::chatter`]).
+    chatter: ChatterMonitor,
     /// The hybrid law's tracking check at this rate and gains, derived once.
     tracking_rule: TrackingRule,
     /// The hybrid law's last disturbance bound `D`, m/s^2 ([`crate::tracking`]).
@@ -142,6 +145,7 @@ impl Firmware {
             wiring: WiringMonitor::default(),
             wiring_rule: WiringRule::at_period(cfg.period.as_secs_f32()),
             tracking: TrackingMonitor::default(),
+            chatter: ChatterMonitor::default(),
             tracking_rule,
             disturbance: 0.0,
             pid: PidState::default(),
@@ -347,6 +351,9 @@ impl Firmware {
         let mut innovation = [0.0f32; 2];
         // The joint accelerations the model did not explain over the interval, rad/s^2.
         let mut missed_accel = [0.0f32; 2];
+        // The motor torques the model expected to accelerate the joints over the
+        // interval, `[v0 + v1, v1]` of `M q_ddot = u - w - c + J^T f`, N m.
+        let mut net = [0.0f32; 2];
         // Initialise on the first trusted frame: the reference starts where the tip is.
         // The sines and cosines of the estimate, when the first frame has them already.
         let mut first_trig = None;
@@ -359,7 +366,8 @@ impl Firmware {
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let qdd = estimator::predicted_acceleration(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
+                let (qdd, v) = estimator::predicted_acceleration_and_net(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
+                net = [v[0] + v[1], v[1]];
                 let qdd = if crate::finite_both(qdd[0], qdd[1]) { qdd } else { Vector2::zeros() };
                 innovation = [
                     s.trackers[0].update_with_acceleration(m.theta1, dt, qdd[0]),
@@ -448,6 +456,7 @@ impl Firmware {
                 unexplained: missed_accel,
                 c21: trig.c21(),
                 applied: self.applied,
+                net,
                 lifted,
                 height,
                 height_rate: z_dot[1],
@@ -502,6 +511,9 @@ impl Firmware {
             }
         };
         let (u, sat) = law::saturate(u_raw, cfg.torque_limit);
+        if cfg.runaway_limits && self.chatter.update(u, cfg.torque_limit) {
+            return Err(SafeReason::Unstable);
+        }
         if sat[0] {
             flags |= status::SATURATED_U1;
         }

@@ -40,6 +40,22 @@ pub fn predicted_acceleration(
     u: &Vector2<f32>,
     f: &Vector2<f32>,
 ) -> Vector2<f32> {
+    predicted_acceleration_and_net(t, trig, q, qd, u, f).0
+}
+
+/// [`predicted_acceleration`] and the generalised torque that drives it,
+/// `M q_ddot = u - w - c + J^T f` (N m): the net torque the model expects to
+/// accelerate the joints (the wiring check's second reference,
+/// [`crate::wiring`]). The same bits for the acceleration.
+#[inline(always)]
+pub fn predicted_acceleration_and_net(
+    t: &ArmTerms<f32>,
+    trig: &JointTrig<f32>,
+    q: &Vector2<f32>,
+    qd: &Vector2<f32>,
+    u: &Vector2<f32>,
+    f: &Vector2<f32>,
+) -> (Vector2<f32>, [f32; 2]) {
     let l = t.l;
     let JointTrig { s1, c1, s2, c2 } = *trig;
     let s12 = trig.s12(); // sin(theta1 - theta2)
@@ -53,7 +69,7 @@ pub fn predicted_acceleration(
     // J^T f with J = [[l c1, l c2], [l s1, l s2]].
     let v0 = (u[0] - wc0) + (l * c1 * f[0] + l * s1 * f[1]);
     let v1 = (u[1] - wc1) + (l * c2 * f[0] + l * s2 * f[1]);
-    Vector2::new((t.m22 * v0 - m12 * v1) * inv_det, (t.m11 * v1 - m12 * v0) * inv_det)
+    (Vector2::new((t.m22 * v0 - m12 * v1) * inv_det, (t.m11 * v1 - m12 * v0) * inv_det), [v0, v1])
 }
 
 /// An alpha-beta tracker of one angle.

@@ -15,6 +15,7 @@ extern crate std;
 
 pub mod announce;
 pub mod board;
+pub mod chatter;
 pub mod config;
 pub mod consistency;
 pub mod controller;

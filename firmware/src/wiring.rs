@@ -90,6 +90,11 @@ pub struct WiringInput {
     pub c21: f32,
     /// The motor torques `[u1, u2]` applied over the interval, N m.
     pub applied: [f32; 2],
+    /// The motor torques the model expected to accelerate the joints over the
+    /// interval, `[v0 + v1, v1]` of `M q_ddot = u - w - c + J^T f` (N m):
+    /// `applied` less what holds the arm against gravity, the spring and the
+    /// contact.
+    pub net: [f32; 2],
     /// Lift-off declared.
     pub lifted: bool,
     /// The tip's height above the belt from the estimate, `z_n + H`, m.
@@ -105,6 +110,8 @@ pub struct WiringInput {
 pub struct WiringMonitor {
     /// The filtered missed motor torques `[u1, u2]`, N m.
     missed: [f32; 2],
+    /// The filtered net motor torques (`WiringInput::net`), N m.
+    net: [f32; 2],
     run: [u16; 2],
     settling: u16,
     was_lifted: bool,
@@ -143,6 +150,8 @@ impl WiringMonitor {
         let filter = |m: f32, d: f32| if crate::finite(d) { m + smoothing * (d - m) } else { m };
         let missed = [filter(self.missed[0], du[0]), filter(self.missed[1], du[1])];
         self.missed = missed;
+        let net = [filter(self.net[0], input.net[0]), filter(self.net[1], input.net[1])];
+        self.net = net;
         let touchdown = self.was_lifted && !input.lifted;
         self.was_lifted = input.lifted;
         let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
@@ -157,7 +166,12 @@ impl WiringMonitor {
         let (fraction, margin) = (rule.against_fraction, rule.margin_nm);
         let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > fraction * u.abs() + margin;
         let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
-        self.run = [run(self.run[0], against(missed[0], input.applied[0])), run(self.run[1], against(missed[1], input.applied[1]))];
+        // Against the applied torque (a reversed motor, encoder or pair), or
+        // against the net torque the model expected to move the joint (a stuck
+        // encoder: the joint does not move as the torque beyond the arm's load
+        // should; a dead or weak motor under a load).
+        let joint = |j: usize| against(missed[j], input.applied[j]) || against(missed[j], net[j]);
+        self.run = [run(self.run[0], joint(0)), run(self.run[1], joint(1))];
         if self.run[0] >= rule.confirm {
             Some(0)
         } else if self.run[1] >= rule.confirm {
@@ -185,7 +199,7 @@ mod tests {
     }
 
     fn input(unexplained: [f32; 2], applied: [f32; 2]) -> WiringInput {
-        WiringInput { unexplained, c21: 0.9, applied, lifted: false, height: 0.0, height_rate: 0.0, load_saturated: false }
+        WiringInput { unexplained, c21: 0.9, applied, net: applied, lifted: false, height: 0.0, height_rate: 0.0, load_saturated: false }
     }
 
     /// The factors folded in `ArmTerms` are the products `update` takes of `m l^2`,
@@ -226,6 +240,8 @@ mod tests {
         };
         filter(&mut m.missed[0], du[0]);
         filter(&mut m.missed[1], du[1]);
+        filter(&mut m.net[0], input.net[0]);
+        filter(&mut m.net[1], input.net[1]);
         let touchdown = m.was_lifted && !input.lifted;
         m.was_lifted = input.lifted;
         let impact_may_come = input.lifted && input.height < rule.impact_height && input.height_rate < -0.01;
@@ -239,7 +255,8 @@ mod tests {
         }
         let against = |d: f32, u: f32| d * u < 0.0 && d.abs() > rule.against_fraction * u.abs() + rule.margin_nm;
         let run = |n: u16, against: bool| if against { n.saturating_add(1) } else { 0 };
-        m.run = [run(m.run[0], against(m.missed[0], input.applied[0])), run(m.run[1], against(m.missed[1], input.applied[1]))];
+        let joint = |j: usize| against(m.missed[j], input.applied[j]) || against(m.missed[j], m.net[j]);
+        m.run = [run(m.run[0], joint(0)), run(m.run[1], joint(1))];
         if m.run[0] >= rule.confirm {
             Some(0)
         } else if m.run[1] >= rule.confirm {
@@ -278,6 +295,7 @@ mod tests {
                     unexplained,
                     c21: r(2.0),
                     applied: [r(1.0), r(1.0)],
+                    net: [r(1.0), r(1.0)],
                     lifted: i % 50 < 3,
                     height: r(0.02),
                     height_rate: r(0.2),
@@ -286,8 +304,8 @@ mod tests {
                 let (va, vb) = (a.update_folded(&rule, mass, &input), update_stored(&mut b, &rule, mass, &input));
                 assert_eq!(va, vb, "step {i}");
                 assert_eq!(
-                    (a.missed.map(f32::to_bits), a.run, a.settling, a.was_lifted),
-                    (b.missed.map(f32::to_bits), b.run, b.settling, b.was_lifted),
+                    (a.missed.map(f32::to_bits), a.net.map(f32::to_bits), a.run, a.settling, a.was_lifted),
+                    (b.missed.map(f32::to_bits), b.net.map(f32::to_bits), b.run, b.settling, b.was_lifted),
                     "step {i}"
                 );
                 trips += usize::from(va.is_some());

@@ -101,3 +101,38 @@ fn the_papers_gains_at_250_hz_are_stopped_as_the_laws_instability_not_a_wiring_f
     assert!(err.is_none(), "{err:?}");
     assert_eq!(records.len(), 250);
 }
+
+#[test]
+fn a_pid_that_chatters_is_stopped_as_the_laws_instability_before_the_arm_is_shaken() {
+    // Issue 66, items 2 and 3. The paper's PID from x0u at 250 Hz swings its base
+    // motor between +5 and -5 N m every period (K_D Ts over the base joint's
+    // effective inertia 2.6, past 2) before any fault: a stuck base encoder at 1 s
+    // then whipped the arm 839 mm. The user's joint-2 gains (K_D,2 = 1 at 1 kHz:
+    // 2.6 over the elbow's effective inertia) chatter at once. Both are stopped as
+    // `Unstable` within 0.1 s, the tip within 30 mm of where it started.
+    let stuck = "[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"theta1\"\nat_s = 1.0\nduration_s = 5.0\n";
+    let text = std::fs::read_to_string(format!("{}/../scenarios/pid-x0u.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let overrides: Vec<_> = ["timing.rate_hz=250", "timing.delta_s=0.0002", "controller.target_z_t=-0.13", "timing.duration_s=3"]
+        .iter()
+        .map(|a| a.parse().unwrap())
+        .collect();
+    let s = rig::scenario::Scenario::from_toml_with(&format!("{text}\n{stuck}"), &overrides).unwrap();
+    let user = |reversed: bool| {
+        let mut s = paper("pid-x0u", &["controller.pid.kp=[200.0,50.0]", "controller.pid.kd=[2.0,1.0]", "timing.duration_s=1"]);
+        s.board.motor2.reversed = reversed;
+        s
+    };
+    for (name, s) in [("stuck base encoder at 250 Hz", s), ("the user's joint-2 gains", user(false)), ("the same, motor 2 reversed", user(true))] {
+        let ts = s.timing.period().as_secs_f64();
+        let (records, err) = twin_run(&s);
+        match err {
+            Some(RunError::SafeState { reason: firmware::SafeReason::Unstable, k, .. }) => {
+                assert!(k as f64 * ts <= 0.1, "{name}: stopped at period {k}")
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+        let (z0, n0) = (records[0].z_t, records[0].z_n);
+        let travel = records.iter().map(|r| (r.z_t - z0).hypot(r.z_n - n0)).fold(0.0, f64::max);
+        assert!(travel < 0.030, "{name}: the tip moved {:.1} mm", travel * 1e3);
+    }
+}

@@ -158,14 +158,22 @@ fn each_bus_fault_is_held_one_period_then_ends_in_the_safe_state_with_the_driver
         assert_eq!(link.twin().app().last_command().map(|c| (c.u1_code, c.u2_code)), Some((0, 0)), "{fault}");
     }
     // A stuck encoder during the move: the firmware's cross-checks latch SensorFault,
-    // or, the computed tip leaving the belt, the hybrid law's lift-off check.
+    // or, the computed tip leaving the belt, the hybrid law's lift-off check, or
+    // (issue 66) the wiring check, the joint not moving as the net torque the model
+    // expected would move it.
     for signal in ["theta1", "elbow"] {
         let s = scenario(&format!(
             "{DEFAULT_TOML}\n[[faults]]\nkind = \"stuck_sensor\"\nsignal = \"{signal}\"\nat_s = 1.0\nduration_s = 0.5\n"
         ));
         let (_, err, link) = twin_run(&s);
         assert!(
-            matches!(err, Some(RunError::SafeState { reason: firmware::SafeReason::SensorFault | firmware::SafeReason::LiftOff, .. })),
+            matches!(
+                err,
+                Some(RunError::SafeState {
+                    reason: firmware::SafeReason::SensorFault | firmware::SafeReason::LiftOff | firmware::SafeReason::Miswired,
+                    ..
+                })
+            ),
             "{signal}: {err:?}"
         );
         assert!(!link.twin().drivers_enabled());

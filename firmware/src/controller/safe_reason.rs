@@ -53,11 +53,13 @@ pub enum SafeReason {
     /// 50 ms: the law could not act at its torque limit (friction or a force the
     /// motors cannot hold), not a fault of the wiring.
     Saturated = 14,
-    /// Under the hybrid law with gains outside the envelope at this rate (`K'_D
-    /// Ts` past 1, `K'_P Ts^2` past 0.25, or a gain not positive:
-    /// [`crate::config::KD_TS_MAX`]) the tracking or the lift-off check tripped:
-    /// the sampled motion loop is unstable (the paper's gains at 250 Hz), the
-    /// law's own failure, not a fault of the wiring.
+    /// The law's own failure, not a fault of the wiring: under the hybrid law
+    /// with gains outside the envelope at this rate (`K'_D Ts` past 1, `K'_P
+    /// Ts^2` past 0.25, `K'_I Ts` past 1, or a gain not positive:
+    /// [`crate::config::KD_TS_MAX`]) the tracking or the lift-off check tripped;
+    /// or, under either law, a motor's command chattered ([`crate::chatter`]:
+    /// reversed by half the torque limit four periods in a row, the paper's PID
+    /// from `x0u` at 250 Hz).
     Unstable = 15,
 }
 
@@ -107,7 +109,7 @@ impl SafeReason {
                 "the tip strayed past its derived bound (the error a quarter's error in mu_hat leaves, plus 5 mm), or away from it faster than that error can grow, under the force law for 3 ms (a motor or sensor wired wrong)"
             }
             Self::Unstable => {
-                "the force law's motion loop is unstable at this control rate (K'_D Ts past 1, or a gain not positive): the tip left its reference or the belt (raise the rate or lower the gains)"
+                "the control law is unstable at this rate: its command chattered, or the force law's tip left its reference or the belt with its gains outside their envelope (raise the rate or lower the gains)"
             }
             Self::Saturated => {
                 "the tip strayed past its derived bound under the force law while the law had saturated a motor: the motors cannot hold the arm on its reference (the law's limit, not a wiring fault)"
