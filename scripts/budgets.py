@@ -26,7 +26,10 @@ RAM_BUDGET = 16 * 1024
 # most 32 KiB, the plain --release builds within the 64 KiB budget, the other LTO
 # images at their size of 2026-11-22 (docs/measurements.md) plus 1.2 to 1.5 KiB.
 CEILINGS = {
-    "mcu/pil": 32 * 1024,  # target; 30 756 B measured
+    # The PIL image: 32 KiB was issue 16's target (30 756 B then). Issue 66's protection
+    # (the tracking bound derived from the law's poles, the chatter check, the wiring
+    # check's net-torque rule) brought it from 32 696 B to 33 092 B: 33 KiB.
+    "mcu/pil": 33 * 1024,
     # The arm image carries the bring-up protocol since issue 23 (the requests'
     # and replies' serde, the configuration sent over the line, the settings
     # record in flash): 32 152 B before, 52 612 B (mcu) / 52 768 B (qemu) after.

@@ -122,7 +122,9 @@ fn a_pid_that_chatters_is_stopped_as_the_laws_instability_before_the_arm_is_shak
         s.board.motor2.reversed = reversed;
         s
     };
-    for (name, s) in [("stuck base encoder at 250 Hz", s), ("the user's joint-2 gains", user(false)), ("the same, motor 2 reversed", user(true))] {
+    for (name, s) in
+        [("stuck base encoder at 250 Hz", s), ("the user's joint-2 gains", user(false)), ("the same, motor 2 reversed", user(true))]
+    {
         let ts = s.timing.period().as_secs_f64();
         let (records, err) = twin_run(&s);
         match err {
