@@ -619,7 +619,15 @@ fn a_stuck_sensor_mid_move_is_detected_and_the_firmware_goes_safe() {
         assert_eq!(o.status.code(), Some(1), "{signal}: {err}");
         // A stuck elbow puts the computed tip off the belt: the consistency check
         // or, first, the hybrid law's lift-off check (firmware::tracking) stops it.
-        let reasons: &[&str] = if signal == "elbow" { &["SensorFault", "LiftOff"] } else { &["SensorFault"] };
+        // A stuck encoder holds its joint where the net torque the model expected
+        // should move it: the wiring check's net-torque rule (issue 66,
+        // firmware::wiring; `Miswired` at 5 periods for the base encoder) may stop
+        // it first.
+        let reasons: &[&str] = match signal {
+            "elbow" => &["SensorFault", "LiftOff", "Miswired"],
+            "theta1" => &["SensorFault", "Miswired"],
+            _ => &["SensorFault"],
+        };
         assert!(err.contains("safe state") && reasons.iter().any(|r| err.contains(r)), "{signal}: {err}");
         let rows = trace(&out);
         assert!(rows.len() > 1001 && rows.len() <= 1000 + within, "{signal}: detected after {} periods", rows.len() - 1000);
