@@ -13,6 +13,7 @@ mod emulator;
 mod emulator_bound;
 mod emulator_faults;
 mod envelope;
+mod fmea;
 mod rate;
 mod reset;
 mod twin;
