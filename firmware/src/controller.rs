@@ -366,7 +366,7 @@ impl Firmware {
                 let q = Vector2::new(s.trackers[0].angle, s.trackers[1].angle);
                 let qd = Vector2::new(s.trackers[0].rate, s.trackers[1].rate);
                 let u = Arm::generalised_torque(&Vector2::new(self.applied[0], self.applied[1]));
-                let (qdd, v) = estimator::predicted_acceleration_and_net(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
+                let (qdd, v) = estimator::predicted_acceleration(&self.terms, &s.trig, &q, &qd, &u, &Vector2::new(m.f_t, m.f_n));
                 net = [v[0] + v[1], v[1]];
                 let qdd = if crate::finite_both(qdd[0], qdd[1]) { qdd } else { Vector2::zeros() };
                 innovation = [

@@ -31,24 +31,12 @@ use crate::decode::wrap;
 /// `7/36 m^2 l^4 > 0`, so `M` is never singular), and `u - w - c + J^T f` summed
 /// before the one product by `M^-1` (that function keeps the free acceleration
 /// and the force's part apart, for the plant's contact modes).
+///
+/// Also returns the generalised torque that drives it, `M q_ddot = u - w - c +
+/// J^T f` (N m): the net torque the model expects to accelerate the joints (the
+/// wiring check's second reference, [`crate::wiring`]).
 #[inline(always)]
 pub fn predicted_acceleration(
-    t: &ArmTerms<f32>,
-    trig: &JointTrig<f32>,
-    q: &Vector2<f32>,
-    qd: &Vector2<f32>,
-    u: &Vector2<f32>,
-    f: &Vector2<f32>,
-) -> Vector2<f32> {
-    predicted_acceleration_and_net(t, trig, q, qd, u, f).0
-}
-
-/// [`predicted_acceleration`] and the generalised torque that drives it,
-/// `M q_ddot = u - w - c + J^T f` (N m): the net torque the model expects to
-/// accelerate the joints (the wiring check's second reference,
-/// [`crate::wiring`]). The same bits for the acceleration.
-#[inline(always)]
-pub fn predicted_acceleration_and_net(
     t: &ArmTerms<f32>,
     trig: &JointTrig<f32>,
     q: &Vector2<f32>,
@@ -150,7 +138,7 @@ mod tests {
             let terms = ArmTerms::of(&params);
             let (q, qd, u, f) = (Vector2::new(q0, q1), Vector2::new(qd0, qd1), Vector2::new(u0, u1), Vector2::new(f_t, f_n));
             let trig = JointTrig::new(&q);
-            let ours = predicted_acceleration(&terms, &trig, &q, &qd, &u, &f);
+            let ours = predicted_acceleration(&terms, &trig, &q, &qd, &u, &f).0;
             let model = terms.tip_dynamics_trig(&trig, &q, &qd, &u).qdd_with_force(&f);
             // f64 at the same f32 sines and cosines (their error is the same in both f32 forms).
             let p64: Params<f64> = params.cast();

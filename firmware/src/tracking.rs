@@ -144,8 +144,9 @@ pub struct TrackingRule {
     pub slow: f32,
     /// `e^(-a Ts)`, `e^(-b Ts)`: the filters' decay per period.
     pub decay: [f32; 2],
-    /// `(1 - e^(-a Ts)) / a`, `(1 - e^(-b Ts)) / b`, s: their input gains.
-    pub gain: [f32; 2],
+    /// `(1 - e^(-b Ts)) / b`, s: the fast filter's input gain (`z2`'s input
+    /// comes through [`TrackingRule::cross`]).
+    pub gain: f32,
     /// The cascade's cross terms over a period: `z1`'s share in `z2`,
     /// `int_0^Ts e^(-a (Ts - t)) e^(-b t) dt` (s), and `D`'s,
     /// `(gain_a - that) / b` (s^2): with them the filters are exact for a `D`
@@ -209,7 +210,7 @@ impl TrackingRule {
             period: ts,
             slow: a,
             decay: [da, db],
-            gain: [ga, gb],
+            gain: gb,
             cross: [c12, c2],
             saturation_window: window,
             unstable: !(kd * ts <= crate::config::KD_TS_MAX
@@ -235,7 +236,7 @@ impl HealthyBound {
     pub fn update(&mut self, rule: &TrackingRule, d: f32) {
         let d = if d < DISTURBANCE_CAP { d } else { DISTURBANCE_CAP };
         let z1 = self.z1;
-        self.z1 = rule.decay[1] * z1 + rule.gain[1] * d;
+        self.z1 = rule.decay[1] * z1 + rule.gain * d;
         self.z2 = rule.decay[0] * self.z2 + rule.cross[0] * z1 + rule.cross[1] * d;
     }
 
