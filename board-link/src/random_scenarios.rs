@@ -134,6 +134,32 @@ pub fn counted_admissible(seed: u64, kind: &str, friction: FrictionCompensation,
     s
 }
 
+/// The paper's arm's least effective inertias `[base, elbow]`, kg m^2: the
+/// PID's sampled loop on joint `j` is stable while `K_D,j Ts` stays below twice
+/// it (docs/hardware.md "The envelope").
+pub const PID_INERTIA_KG_M2: [f64; 2] = [0.0031, 0.00039];
+
+/// Random PID gains of the envelope at period `ts` (s), per joint of
+/// `[theta1, theta2 - theta1]`: `K_D,j` log-uniform over 5 to 80 % of its
+/// sampled-loop bound `2 I_j / Ts` ([`PID_INERTIA_KG_M2`]), the base's at most
+/// 10 N m s/rad; `K_P,j = K_D,j w` with `w` log-uniform over 5 to 100 1/s,
+/// and `K_P,j Ts^2 <= I_j / 4`; `K_I,j = K_P,j r` with `r` log-uniform over 0.02
+/// to 0.5 1/s; the elbow's gains all zero half the time (as the paper's).
+pub fn random_pid_gains(r: &mut Uniform, ts: f64) -> rig::scenario::PidSection {
+    let log = |r: &mut Uniform, lo: f64, hi: f64| lo * (hi / lo).powf(r.draw());
+    let mut g = rig::scenario::PidSection { kp: [0.0; 2], ki: [0.0; 2], kd: [0.0; 2] };
+    let elbow = r.draw() < 0.5;
+    for (j, inertia) in PID_INERTIA_KG_M2.iter().enumerate().take(if elbow { 2 } else { 1 }) {
+        let bound = 2.0 * inertia / ts;
+        let kd = (log(r, 0.05, 0.8) * bound).min(10.0);
+        let kp = (kd * log(r, 5.0, 100.0)).min(0.25 * inertia / (ts * ts));
+        g.kd[j] = kd;
+        g.kp[j] = kp;
+        g.ki[j] = kp * log(r, 0.02, 0.5);
+    }
+    g
+}
+
 /// Random scenario `i` of the envelope the firmware accepts on a board
 /// (docs/hardware.md "The envelope", issue 66) under `kind` (`pid` or
 /// `hybrid`), `duration` seconds: `x0d` or `x0u`, `mu` 0.2 to 1.0, `mu_hat`
@@ -143,8 +169,10 @@ pub fn counted_admissible(seed: u64, kind: &str, friction: FrictionCompensation,
 /// [`delay_within`]); the hybrid law with any friction term and, half the time,
 /// the paper's gains where `K'_D Ts <= 1` allows them, else random gains of
 /// the validator's ranges (`K'_D` log-uniform from 30 to `min(2000, 1/Ts)`,
-/// `K'_P` log-uniform from `K'_D / 10` to `min(K'_D^2, 0.25 / Ts^2)`); the PID
-/// with the paper's gains. Returns the scenario and a line that says what it is.
+/// `K'_P` log-uniform from `K'_D / 10` to `min(K'_D^2, 0.25 / Ts^2)`); the PID,
+/// half the time, with the paper's gains where `K_D,1 Ts` is below twice the
+/// base's least effective inertia, else with random gains of the envelope
+/// ([`random_pid_gains`]). Returns the scenario and a line that says what it is.
 ///
 /// # Panics
 /// For a `kind` the scenario files do not name.
@@ -194,6 +222,13 @@ pub fn random_envelope(i: u64, kind: &str, duration: f64) -> (Scenario, String) 
             s.controller.hybrid.kd = kd;
         }
         what += &format!(", {}, K'_P {:.0}, K'_D {:.0}", friction_name(friction), s.controller.hybrid.kp, s.controller.hybrid.kd);
+    } else {
+        let paper = r.draw() < 0.5 && s.controller.pid.kd[0] * ts < 2.0 * PID_INERTIA_KG_M2[0];
+        if !paper {
+            s.controller.pid = random_pid_gains(&mut r, ts);
+        }
+        let g = s.controller.pid;
+        what += &format!(", K_P {:.1?}, K_I {:.1?}, K_D {:.3?}", g.kp, g.ki, g.kd);
     }
     (s, what)
 }
