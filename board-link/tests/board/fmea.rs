@@ -46,22 +46,21 @@ const STRAY_M: f64 = 0.030;
 /// before the safe state, as measured. The test holds each to that count (a
 /// detector that gets worse fails it; one that gets better passes, and the
 /// count here and in the docs comes down).
-const OPEN: [(&str, &str, usize); 10] = [
-    ("hybrid", "motor 1 weak (70 %)", 1),
-    ("hybrid", "elbow encoder offset +3 deg", 9),
+const OPEN: [(&str, &str, usize); 6] = [
+    ("hybrid", "elbow encoder offset +3 deg", 6),
     ("hybrid", "theta1 encoder stuck", 1),
-    ("hybrid", "elbow encoder stuck", 6),
-    ("hybrid", "load cell tangential axis stuck", 3),
+    ("hybrid", "elbow encoder stuck", 2),
+    ("hybrid", "load cell tangential axis stuck", 2),
     ("hybrid", "belt speed sensor stuck", 1),
-    ("pid", "load cell tangential axis reversed", 1),
-    ("pid", "load cell reversed", 1),
-    ("pid", "load cell normal axis dead", 4),
-    ("pid", "load cell tangential axis dead", 1),
+    ("pid", "load cell normal axis dead", 1),
 ];
 
 /// A fault class: its name, and the change of the board's truth (present
 /// from the start) or a scenario fault entry (from [`AT_S`]).
 enum Class {
+    /// No fault: the same scenario with another seed of the sensors' noise,
+    /// the healthy arm's own spread (the floor under every row).
+    Reseed(&'static str),
     Board(&'static str, fn(&mut BoardDescription)),
     Entry(&'static str, &'static str),
 }
@@ -69,7 +68,7 @@ enum Class {
 impl Class {
     fn name(&self) -> &'static str {
         match self {
-            Self::Board(n, _) | Self::Entry(n, _) => n,
+            Self::Reseed(n) | Self::Board(n, _) | Self::Entry(n, _) => n,
         }
     }
 
@@ -77,6 +76,10 @@ impl Class {
     fn inject(&self, s: &Scenario) -> (Scenario, f64) {
         let mut f = s.clone();
         match self {
+            Self::Reseed(_) => {
+                f.sensors.seed += 7919;
+                (f, 0.0)
+            }
             Self::Board(_, change) => {
                 change(&mut f.board);
                 (f, 0.0)
@@ -102,6 +105,7 @@ fn shift(zero: &mut f64, by: f64) {
 fn classes() -> Vec<Class> {
     use Class::{Board, Entry};
     vec![
+        Class::Reseed("no fault (another noise seed)"),
         Board("motor 1 reversed", |b| b.motor1.reversed = true),
         Board("motor 2 reversed", |b| b.motor2.reversed = true),
         Board("motor 1 weak (30 %)", |b| b.motor1.full_scale_nm *= 0.3),
@@ -203,7 +207,18 @@ fn row(class: &Class, healthy: &[Healthy]) -> Row {
             row.worst_stop_s = row.worst_stop_s.max(t);
         }
         if stray >= STRAY_M {
-            row.broken.push(format!("{} (seed {}): stop {stop:?} s, stray {:.1} mm", h.what, h.scenario.sensors.seed, stray * 1e3));
+            let sat = h
+                .records
+                .iter()
+                .filter(|p| p.status & (shared::wire::status::SATURATED_U1 | shared::wire::status::SATURATED_U2) != 0)
+                .count();
+            row.broken.push(format!(
+                "{} (seed {}): stop {stop:?} s, stray {:.1} mm; healthy saturated {:.0} % of periods",
+                h.what,
+                h.scenario.sensors.seed,
+                stray * 1e3,
+                100.0 * sat as f64 / h.records.len() as f64
+            ));
         } else if stop.is_some_and(|t| t <= WITHIN_S) {
             row.caught += 1;
         } else {
@@ -252,7 +267,7 @@ fn every_fault_class_is_stopped_within_100_ms_and_30_mm_or_never_moves_the_tip_3
                 broken.extend(row.broken.iter().map(|b| format!("{kind}, {}: {b}", class.name())));
             } else {
                 for b in &row.broken {
-                    println!("    open ({} of at most {allowed}): {b}", row.broken.len());
+                    println!("    open, {kind}, {} ({} of at most {allowed}): {b}", class.name(), row.broken.len());
                 }
             }
         }
@@ -262,4 +277,58 @@ fn every_fault_class_is_stopped_within_100_ms_and_30_mm_or_never_moves_the_tip_3
         "runs strayed 30 mm from the healthy run before the safe state, more than the open rows allow (OPEN):\n{}",
         broken.join("\n")
     );
+}
+
+/// How long each run of the flashed image's sample lasts, s: a board's fault
+/// acts from the start, and 0.2 s show it; a scenario's fault starts at
+/// [`AT_S`], and its run goes on 0.15 s past it (the promise's 0.1 s and the
+/// slowest stop of those classes' caught runs).
+fn image_sample_s(class: &Class) -> f64 {
+    match class {
+        Class::Entry(..) => AT_S + 0.15,
+        Class::Reseed(_) | Class::Board(..) => 0.2,
+    }
+}
+
+#[test]
+fn a_sample_of_the_fmea_on_the_flashed_image_is_the_twins_run_bit_for_bit() {
+    // Issue 66, "a sample on the flashed image, byte for byte": every class under
+    // each law on one healthy scenario of the envelope (a different one per
+    // class, rates 250 Hz to 10 kHz among them), the unmodified `arm` ELF on the
+    // emulated board against the twin: every record the same, and the same stop,
+    // so the twin's measurement above holds for the bytes that are flashed.
+    let image = board_link::emulator_link::default_image();
+    assert!(image.exists(), "{} is missing: {}", image.display(), board_link::emulator_link::BUILD_HINT);
+    let classes = classes();
+    let periods: Vec<u64> = std::thread::scope(|scope| {
+        let laws = ["hybrid", "pid"].map(|kind| {
+            let (classes, image) = (&classes, &image);
+            scope.spawn(move || {
+                let healthy = (0..200u64)
+                    .map(|i| random_envelope(20_000 + i, kind, DURATION_S))
+                    .filter(|(s, _)| twin_run(s).1.is_none())
+                    .take(classes.len());
+                let mut periods = Vec::new();
+                for (class, (mut s, what)) in classes.iter().zip(healthy) {
+                    s.timing.duration_s = image_sample_s(class);
+                    let (f, _) = class.inject(&s);
+                    periods.push(f.timing.period().as_us());
+                    let setup = rig::RunSetup::new(f).unwrap();
+                    let mut emu = board_link::emulator_link::EmulatorLink::new(&setup, image).unwrap_or_else(|e| panic!("{e}"));
+                    let (e_records, e_end) = rig::run_loop(&setup, &mut emu, &mut ());
+                    let mut twin = board_link::twin_link::TwinLink::new(&setup).unwrap();
+                    let (t_records, t_end) = rig::run_loop(&setup, &mut twin, &mut ());
+                    let name = format!("{}, {what}", class.name());
+                    assert_eq!(format!("{e_end:?}"), format!("{t_end:?}"), "{name}: the same outcome");
+                    assert_eq!(e_records.len(), t_records.len(), "{name}");
+                    for (k, (a, b)) in e_records.iter().zip(&t_records).enumerate() {
+                        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{name}: period {k} differs");
+                    }
+                }
+                periods
+            })
+        });
+        laws.into_iter().flat_map(|h| h.join().unwrap()).collect()
+    });
+    println!("{} runs, periods from {} to {} us", periods.len(), periods.iter().min().unwrap(), periods.iter().max().unwrap());
 }

@@ -294,7 +294,7 @@ fn every_wiring_fault_is_stopped_within_a_tenth_of_a_second_and_30_mm_of_the_hea
     // strays 30 mm from where the healthy arm's tip is at the same period. A fault
     // whose signal the law never uses (the PID's load cell, its unpowered motor 2)
     // can change the path only through the observer's prediction; it must then
-    // keep the tip within 30 mm over the run, stopped or not.
+    // keep the tip within 30 mm over the run, stopped (at any period) or not.
     let n: u64 = std::env::var("PAINLEVE_WIRING_SCENARIOS").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
     let mut worst: Vec<(String, usize, f64)> = Vec::new();
     for kind in ["hybrid", "pid"] {
@@ -322,7 +322,7 @@ fn every_wiring_fault_is_stopped_within_a_tenth_of_a_second_and_30_mm_of_the_hea
                 assert!(stray < 0.030, "{fault}, {kind} scenario {i}: the tip strayed {:.1} mm (stopped at {stopped:?})", stray * 1e3);
                 match stopped {
                     Some(k) => {
-                        assert!(k <= 100, "{fault}, {kind} scenario {i}: stopped at period {k}");
+                        assert!(k <= 100 || unused_by(kind, fault), "{fault}, {kind} scenario {i}: stopped at period {k}");
                         assert!(!link.twin().drivers_enabled(), "{fault}, {kind} scenario {i}: drivers still enabled");
                         worst_k = worst_k.max(k);
                     }
