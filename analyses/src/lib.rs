@@ -7,6 +7,7 @@
 //!   (docs/model.md, experiment 2; paper Table II);
 //! - [`modes`]: the map of contact modes (experiment 1; paper Fig. 2);
 //! - [`ideal`]: the paper's continuous-time controllers with exact measurements;
+//! - [`lift_offs`]: what every output's `lift_offs` counts (every departure from the belt);
 //! - [`zmax`]: Z_t,sliding, the largest target reached without lift-off
 //!   (experiments 5 and 6);
 //! - [`sweep`]: the brute-force two-parameter bifurcation diagram (experiments 3 and 7);
@@ -18,6 +19,7 @@ pub mod admissible;
 pub mod corner_search;
 pub mod error;
 pub mod ideal;
+pub mod lift_offs;
 pub mod modes;
 pub mod paper;
 pub mod poincare;

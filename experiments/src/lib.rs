@@ -17,6 +17,7 @@
 
 pub mod admissible;
 pub mod arm;
+pub mod counters;
 pub mod done;
 pub mod error;
 pub mod modes;

@@ -98,7 +98,10 @@ def simulate(
         rtol, atol: the integrator's tolerances.
         max_step: the largest integrator step, s (``None``: the tolerances and the
             samples set the steps; a cap gives a reference run whose steps differ).
-        iwc: impact-without-collision rule, ``"restitution"`` or ``"plastic"``.
+        iwc: impact-without-collision rule, ``"restitution"`` (the tip is
+            thrown off the belt) or ``"plastic"`` (left on it, ``v_n = 0``): a
+            Moreau-Jean time-stepper such as Siconos leaves the tip on the belt,
+            so compare with one under ``"plastic"``; docs/plant.md.
         singular: the rule where a slide reaches ``p = 0`` and ``b = 0`` with a
             finite force, ``"leave"`` (the tip leaves the belt) or ``"slide"``
             (it slides on through the indeterminate region); docs/plant.md.
@@ -112,7 +115,10 @@ def simulate(
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: parameters,
-        initial condition, ``counters``, ``validity``, final state) and tables:
+        initial condition (``used_deg`` the state before any impulse at
+        ``t = 0``, ``after_startup_deg`` after them), ``lift_offs`` (every
+        departure from the belt, as in every result), ``counters``,
+        ``validity``, final state) and tables:
 
         Every table is ``{column: array}``, each column a NumPy array of shape
         ``(n,)`` (float64, int64, bool, or str for text), ``n`` its rows.

@@ -227,7 +227,7 @@ class Plant:
         """Mechanical energy, J."""
     @property
     def counters(self) -> Dict[str, Union[int, float]]:
-        """Event counts since creation (``plant::Counters``)."""
+        """Event counts since creation (``plant::Counters`` as ``summary.json`` writes them: ``lift_offs`` every departure from the belt, ``lift_offs_from_contact`` those without the bounces)."""
     @property
     def validity(self) -> Dict[str, int]:
         """Validity counters (``plant::Validity``)."""

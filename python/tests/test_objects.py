@@ -91,6 +91,8 @@ def test_plant_equals_simulate_sample_by_sample() -> None:
     # In tolerances (1e-11 + 1e-9 |x|): the accuracy contract's departure is 1000.
     assert worst < 100, worst
     assert plant.counters["lift_offs"] >= 1 and plant.validity["energy_gains"] == 0
+    c = plant.counters  # as simulate's summary.json writes them (issue 67)
+    assert c["lift_offs"] == c["lift_offs_from_contact"] + c["bounces"]
 
 
 def test_plant_conserves_energy_in_flight_without_damping() -> None:

@@ -39,6 +39,15 @@ def test_counters_and_validity_are_carried():
     r = painleve.simulate(duration=10.0, progress=False)
     assert set(r.validity) == {"energy_gains", "newton_fallbacks", "poisson_fallbacks", "cone_violations", "zeno_stops", "integrator_failures"}
     assert r.summary["counters"]["lift_offs"] == r.summary["lift_offs"] > 0, "x0a at mu 0.6, v_belt -0.4 bounces"
+    # Issue 67: lift_offs is every departure from the belt, as in sweep's rows; the
+    # plant's own count (without the bounces) is lift_offs_from_contact.
+    c = r.summary["counters"]
+    assert c["lift_offs"] == c["lift_offs_from_contact"] + c["bounces"] and c["lift_offs_from_contact"] == 1
+    # used_deg is the projected start before any impulse (the rates as given),
+    # after_startup_deg the state after the impact without collision at t = 0.
+    ic = r.summary["initial_condition"]
+    assert ic["used_deg"][1] == ic["used_deg"][3] == 0.0 and ic["after_startup_deg"][1] > 100
+    assert ic["used_deg"][0] == ic["after_startup_deg"][0] and ic["used_deg"][2] == ic["after_startup_deg"][2]
     assert r.valid and r.violations is None
     assert (r.trace["mode"] == "flight").any()
 

@@ -346,6 +346,12 @@ pub trait RunObserver {
     /// At the end of the run, just before [`RunObserver::on_finished`]: the plant's
     /// energy ledger ([`plant::Ledger`], docs/plant.md "The energy ledger").
     fn on_ledger(&mut self, _ledger: &plant::Ledger) {}
+
+    /// At the end of the run, just before [`RunObserver::on_ledger`]: the plant's
+    /// event counts since `t = 0` ([`plant::Counters`]; every departure from the
+    /// belt, the outputs' `lift_offs`, is its `lift_offs` plus its `bounces`:
+    /// docs/plant.md "Counting lift-offs").
+    fn on_counters(&mut self, _counters: &plant::Counters) {}
 }
 
 impl RunObserver for () {}
@@ -393,6 +399,7 @@ pub fn stream_loop(setup: &RunSetup, link: &mut dyn FirmwareLink, run: &mut dyn 
         Some(RunError::Sim(e)) => Some(e),
         _ => None,
     };
+    run.on_counters(plant.counters());
     run.on_ledger(&plant.ledger());
     run.on_finished(&plant.validity(sim_error));
     (recorded, failure)
@@ -435,6 +442,10 @@ pub fn run_loop(setup: &RunSetup, link: &mut dyn FirmwareLink, run: &mut dyn Run
 
         fn on_ledger(&mut self, ledger: &plant::Ledger) {
             self.inner.on_ledger(ledger);
+        }
+
+        fn on_counters(&mut self, counters: &plant::Counters) {
+            self.inner.on_counters(counters);
         }
     }
     // One allocation up front (capped: a scenario that is not validated may ask for anything).

@@ -107,7 +107,8 @@ pub struct IdealSample {
 pub struct IdealRun {
     /// One sample per `sample_dt`, from `t = 0`.
     pub samples: Vec<IdealSample>,
-    /// Lift-offs (the tip leaving the belt, after a bounce or an impact without collision too).
+    /// Lift-offs: every departure of the tip from the belt (from contact, after an
+    /// impact without collision, at a bounce: [`crate::lift_offs::of`]).
     pub lift_offs: u64,
     /// Impacts without collision (the Painlevé paradox resolved).
     pub impacts_without_collision: u64,
@@ -242,7 +243,7 @@ pub fn simulate(setup: &IdealSetup, mut on_sample: impl FnMut(f64)) -> Result<Id
         }
     }
     let c = *plant.counters();
-    run.lift_offs = c.lift_offs;
+    run.lift_offs = crate::lift_offs::of(&c);
     run.impacts_without_collision = c.impacts_without_collision;
     run.counters = c;
     run.ledger = plant.ledger();

@@ -81,7 +81,8 @@ pub struct PointResult {
     pub final_mode: &'static str,
     /// `theta1` at the end of the record, rad.
     pub final_theta1: f64,
-    /// Lift-offs in the record window.
+    /// Lift-offs in the record window: every departure of the tip from the belt,
+    /// bounces included ([`crate::lift_offs::of`]).
     pub lift_offs: u64,
     /// Touchdowns (impacts) in the record window.
     pub touchdowns: u64,
@@ -204,7 +205,7 @@ fn record(plant: &mut Plant, params: Params<f64>, cfg: &PoincareConfig, r: &mut 
         k += 1.0;
     }
     let after = plant.counters();
-    r.lift_offs = after.lift_offs - before.lift_offs;
+    r.lift_offs = crate::lift_offs::of(after) - crate::lift_offs::of(&before);
     r.touchdowns = after.touchdowns - before.touchdowns;
     r.final_mode = plant.mode().name();
     r.final_theta1 = plant.state()[0];

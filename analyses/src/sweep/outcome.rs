@@ -136,7 +136,8 @@ pub struct RunRow {
     pub theta1_dot_max: f64,
     /// When it occurred, s.
     pub t_theta1_dot_max: f64,
-    /// Times the tip left the belt in the record window.
+    /// Times the tip left the belt in the record window: every departure, bounces
+    /// included ([`crate::lift_offs::of`]).
     pub lift_offs: u64,
     /// Touchdowns (impacts) in the record window.
     pub touchdowns: u64,
@@ -151,7 +152,8 @@ pub struct RunRow {
     /// Closed loop: `|z_t - z_t*|` at the end of the run, m (NaN in open loop, and
     /// for a run that stopped before its end).
     pub target_error_m: f64,
-    /// Times the tip left the belt during the transient.
+    /// Times the tip left the belt during the transient (every departure, as
+    /// `lift_offs`).
     pub lift_offs_transient: u64,
     /// Model evaluations of the plant (a deterministic cost measure).
     pub rhs_evaluations: u64,

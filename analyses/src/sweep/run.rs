@@ -38,10 +38,9 @@ pub const CHUNK_S: f64 = 10.0;
 /// Closed loop: control periods between checks for a Ctrl-C.
 const PERIODS_PER_CHECK: usize = 1000;
 
-/// Lift-offs in `c`: lift-off events (including impacts without collision into
-/// flight) and bounces.
+/// Lift-offs in `c`: every departure from the belt ([`crate::lift_offs::of`]).
 fn lift_offs(c: &Counters) -> u64 {
-    c.lift_offs + c.bounces
+    crate::lift_offs::of(c)
 }
 
 /// Simulates run `key` from initial condition `ic`. Returns `None` when `stop` was

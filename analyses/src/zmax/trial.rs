@@ -100,7 +100,9 @@ pub struct Trial {
     /// Slides to the target and settles within `settle_tol_m` (module docs, 1 to 4):
     /// the predicate of the tracking limit.
     pub tracked: bool,
-    /// Lift-offs seen (stopped at the first one).
+    /// Lift-offs seen: every departure of the tip from the belt up to the trial's
+    /// end ([`crate::lift_offs::of`]; a trial stops at the first lift-off or
+    /// impact without collision, so mostly 0 or 1).
     pub lift_offs: u64,
     /// Impacts without collision seen.
     pub impacts_without_collision: u64,
@@ -296,18 +298,24 @@ pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Cr
 fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
     let s = sampled_scenario(base, combo, target, c)?;
     let mut t = empty_trial(combo, target);
-    /// Counts the lift-offs and impacts without collision and stops at the first
-    /// (with a lift-off gap, the heights decide after the run: no early stop).
+    /// Counts the impacts without collision, notes the first lift-off or impact
+    /// without collision and stops there (with a lift-off gap, the heights decide
+    /// after the run: no early stop); the lift-offs are every departure from the
+    /// belt up to the stop, from the plant's counters (as the ideal trial's).
     struct LiftOffs<'a>(&'a mut Trial, bool, bool);
     impl RunObserver for LiftOffs<'_> {
         fn on_finished(&mut self, validity: &Validity) {
             self.0.validity = *validity;
         }
 
+        fn on_counters(&mut self, counters: &plant::Counters) {
+            self.0.lift_offs = crate::lift_offs::of(counters);
+        }
+
         fn on_events(&mut self, events: &[PlantEvent]) {
             for e in events {
                 match e.kind {
-                    EventKind::LiftOff => self.0.lift_offs += 1,
+                    EventKind::LiftOff => {}
                     EventKind::ImpactWithoutCollision => self.0.impacts_without_collision += 1,
                     _ => continue,
                 }

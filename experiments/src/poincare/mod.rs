@@ -97,17 +97,9 @@ pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, Initi
     sim.validate()?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
     let x0 = initial::deg_to_state(given_deg);
-    let projection = initial::describe_projection(&params, x0);
     // The initial state must be acceptable to the plant (not below the belt, reachable).
     let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
-    let ic = InitialCondition {
-        name,
-        given_deg,
-        projection,
-        used_deg: plant.state().map(f64::to_degrees),
-        initial_mode: plant.mode().name(),
-        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
-    };
+    let ic = InitialCondition::of(name, given_deg, &params, &plant);
     let cfg = PoincareConfig {
         mu: args.mu,
         params,

@@ -73,7 +73,8 @@ pub struct ClassRow {
     pub final_mode: &'static str,
     /// `theta1` at the end of the record, rad.
     pub final_theta1: f64,
-    /// Lift-offs in the record window.
+    /// Lift-offs in the record window: every departure of the tip from the belt,
+    /// bounces included ([`analyses::lift_offs::of`]).
     pub lift_offs: u64,
     /// Touchdowns in the record window.
     pub touchdowns: u64,

@@ -64,7 +64,11 @@ pub struct SimulateArgs {
     #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub max_step: Option<f64>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the
-    /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
+    /// tip off the belt: from x0a at v_belt = -0.5 m/s with v_n = 0.018 m/s) or
+    /// `plastic` (the tip is left stuck tangentially, v_n = 0). Moreau-Jean
+    /// time-steppers with Newton's law, Siconos among them, leave the tip on the belt
+    /// at the impact: to compare with one, run with `--iwc plastic` (docs/plant.md
+    /// "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
@@ -217,7 +221,11 @@ pub struct PoincareArgs {
     #[cfg_attr(feature = "clap", arg(long))]
     pub threads: Option<usize>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the
-    /// tip off the belt) or `plastic` (the tip is left stuck tangentially, v_n = 0).
+    /// tip off the belt: from x0a at v_belt = -0.5 m/s with v_n = 0.018 m/s) or
+    /// `plastic` (the tip is left stuck tangentially, v_n = 0). Moreau-Jean
+    /// time-steppers with Newton's law, Siconos among them, leave the tip on the belt
+    /// at the impact: to compare with one, run with `--iwc plastic` (docs/plant.md
+    /// "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite

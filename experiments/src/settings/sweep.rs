@@ -62,7 +62,9 @@ pub struct SweepArgs {
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', default_value = "0.2"))]
     pub e_n: Vec<f64>,
     /// Impact-without-collision rules, comma-separated (each is a sweep dimension):
-    /// `restitution` (the tip is thrown off the belt), `plastic` (left stuck, v_n = 0).
+    /// `restitution` (the tip is thrown off the belt), `plastic` (left stuck, v_n = 0;
+    /// the rule to compare with a Moreau-Jean time-stepper such as Siconos, which
+    /// leaves the tip on the belt: docs/plant.md "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, value_delimiter = ',', default_value = "restitution"))]
     pub iwc: Vec<plant::impact::IwcRule>,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite

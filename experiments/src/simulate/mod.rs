@@ -116,17 +116,8 @@ pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
     let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
-    let x0 = initial::deg_to_state(given_deg);
-    let projection = initial::describe_projection(&params, x0);
-    let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;
-    let initial_condition = InitialCondition {
-        name,
-        given_deg,
-        projection,
-        used_deg: plant.state().map(f64::to_degrees),
-        initial_mode: plant.mode().name(),
-        startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
-    };
+    let plant = Plant::new(params, sim, initial::deg_to_state(given_deg), 0.0, [0.0, 0.0])?;
+    let initial_condition = InitialCondition::of(name, given_deg, &params, &plant);
     Ok(Prepared { params, sim, steps, initial_condition, plant })
 }
 
@@ -307,7 +298,7 @@ pub fn summary(
         initial_condition,
         duration_s: args.duration,
         simulated_s,
-        lift_offs: counters.lift_offs,
+        lift_offs: analyses::lift_offs::of(&counters),
         touchdowns: counters.touchdowns,
         impacts_without_collision: counters.impacts_without_collision,
         stick_phases: counters.stick_phases,
@@ -334,14 +325,7 @@ mod tests {
     fn open_loop(params: shared::Params<f64>, sim: SimConfig, x0: [f64; 4], duration: f64, dt: f64) -> (OpenLoop, TraceRow, Vec<EventRow>) {
         let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0]).unwrap();
         let steps = check_times(duration, dt).unwrap();
-        let initial_condition = summary::InitialCondition {
-            name: String::new(),
-            given_deg: [0.0; 4],
-            projection: initial::describe_projection(&params, x0),
-            used_deg: [0.0; 4],
-            initial_mode: "",
-            startup_events: Vec::new(),
-        };
+        let initial_condition = summary::InitialCondition::of(String::new(), x0.map(f64::to_degrees), &params, &plant);
         OpenLoop::start(Prepared { params, sim, steps, initial_condition, plant }, dt)
     }
 

@@ -169,12 +169,47 @@ pub struct InitialCondition {
     pub given_deg: [f64; 4],
     /// Where the tip sat relative to the belt and whether it was projected onto it.
     pub projection: ProjectionInfo,
-    /// After projection: `[theta1, theta1_dot, theta2, theta2_dot]`, degrees and deg/s.
+    /// The state the run starts from, before any impulse: `given_deg` with the tip
+    /// projected onto the belt when `projection.projected` (the angles moved to the
+    /// same `z_t` on the same elbow branch, the rates as given),
+    /// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and deg/s. What
+    /// another simulator starts from to resolve `t = 0` itself (issue 67: it held
+    /// the rates after the `t = 0` events, `after_startup_deg`).
     pub used_deg: [f64; 4],
+    /// The state after the events at `t = 0` (`startup_events`: an impact, an
+    /// impact without collision, the contact's velocity projection), the trace's
+    /// first row: `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and deg/s.
+    /// `used_deg` when there is none.
+    pub after_startup_deg: [f64; 4],
     /// Contact mode chosen at t = 0 (after any initial impact).
     pub initial_mode: &'static str,
     /// Events at t = 0 while the initial mode was chosen (e.g. an impact without collision).
     pub startup_events: Vec<&'static str>,
+}
+
+impl InitialCondition {
+    /// The initial condition `name`, given as `given_deg` (`[theta1, theta1_dot,
+    /// theta2, theta2_dot]`, degrees and deg/s), of `plant` just made from it
+    /// (`Plant::new` at `t = 0`, with `params`).
+    ///
+    /// `used_deg` takes the angles from `plant` (where its projection put them:
+    /// the events at `t = 0` change the rates only, never the angles) and the
+    /// rates as given (a projection moves the angles only); `after_startup_deg` is
+    /// the plant's state.
+    pub fn of(name: String, given_deg: [f64; 4], params: &Params<f64>, plant: &plant::Plant) -> Self {
+        let x0 = plant::initial::deg_to_state(given_deg);
+        let after = plant.state();
+        let used = [after[0], x0[1], after[2], x0[3]];
+        Self {
+            name,
+            given_deg,
+            projection: plant::initial::describe_projection(params, x0),
+            used_deg: used.map(f64::to_degrees),
+            after_startup_deg: after.map(f64::to_degrees),
+            initial_mode: plant.mode().name(),
+            startup_events: plant.startup_events().iter().map(|e| e.kind.name()).collect(),
+        }
+    }
 }
 
 /// `summary.json`.
@@ -194,7 +229,10 @@ pub struct Summary {
     pub duration_s: f64,
     /// Simulated time reached, s.
     pub simulated_s: f64,
-    /// Lift-offs.
+    /// Lift-offs: every departure of the tip from the belt (a lift-off from
+    /// contact, an impact without collision into flight, a bounce at touchdown:
+    /// [`analyses::lift_offs::of`]), as in every output (issue 67: it was the
+    /// plant's count without the bounces, 1 for a run bouncing from `x0a`).
     pub lift_offs: u64,
     /// Touchdowns (impacts at touchdown).
     pub touchdowns: u64,
@@ -204,7 +242,10 @@ pub struct Summary {
     pub stick_phases: u64,
     /// Validity counters; any violation is printed as INVALID (and fails `--strict`).
     pub validity: Validity,
-    /// All event counters.
+    /// All event counters: the plant's ([`plant::Counters`]), written with
+    /// `lift_offs` every departure (as above) and the plant's own count, without
+    /// the bounces, as `lift_offs_from_contact` ([`crate::counters::Published`]).
+    #[serde(serialize_with = "crate::counters::published")]
     pub counters: Counters,
     /// The energy ledger (docs/plant.md "The energy ledger"): the works since
     /// `t = 0`, what they leave unexplained, the worst entry, the largest energy one

@@ -203,7 +203,8 @@ pub struct TrialRow {
     pub slides_to_target: bool,
     /// It also settled within the settle tolerance (the tracking predicate).
     pub tracked: bool,
-    /// Lift-offs seen (the trial stops at the first one).
+    /// Lift-offs seen: every departure of the tip from the belt up to the trial's
+    /// end (`analyses::lift_offs::of`; the trial stops at the first one).
     pub lift_offs: u64,
     /// Impacts without collision seen.
     pub impacts_without_collision: u64,

@@ -295,11 +295,15 @@ impl PyPlant {
         Ok(PyArray1::from_slice(py, &self.with(|p| p.contact_force([torques.0, torques.1]))))
     }
 
-    /// Event counts since creation (or `reset`): dict of int (`lift_offs`,
-    /// `touchdowns`, `impacts_without_collision`, ...; `bridged_s` in s).
+    /// Event counts since creation (or `reset`): dict of int (`lift_offs`, every
+    /// departure from the belt as in every result, and `lift_offs_from_contact`,
+    /// those without the bounces; `touchdowns`, `bounces`,
+    /// `impacts_without_collision`, ...; `bridged_s` in s), as `simulate`'s
+    /// `summary.json` writes them (`experiments::counters::Published`).
     #[getter]
     fn counters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &self.with(|p| *p.counters()))
+        let c = self.with(|p| *p.counters());
+        to_py(py, &experiments::counters::Published(&c))
     }
 
     /// The validity counters since creation (`energy_gains`, `cone_violations`,

@@ -33,6 +33,25 @@ impl Scenario {
     /// As [`Self::from_toml`]; an error caused by an override names it
     /// ([`ScenarioError::Override`], or the key and value of the bad key).
     pub fn from_toml_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        let s = Self::read_with(text, overrides)?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// [`Self::from_toml_with`] without the range checks ([`Scenario::validate`]):
+    /// for a caller that uses part of the scenario only and checks that part itself.
+    /// The open-loop commands take the arm's parameters of the embedded default
+    /// with their `--set` overrides and check the arm alone
+    /// ([`crate::arm::arm_params`]): the closed loop's keys they never use (the
+    /// target `controller.target_z_t` within the arm's reach, the firmware's `f32`
+    /// model) must not refuse an arm (issue 67: `simulate` refused every arm with
+    /// `l <= 0.05` m, the default target 0.10 m out of its reach).
+    ///
+    /// # Errors
+    /// [`ScenarioError::Parse`] (with the key and line from the TOML parser, or the
+    /// override that caused it) or [`ScenarioError::Override`]; never
+    /// [`ScenarioError::OutOfRange`].
+    pub(crate) fn read_with(text: &str, overrides: &[Override]) -> Result<Self, ScenarioError> {
         let mut doc: toml::Table = toml::from_str(text).map_err(|e| toml_error(&e))?;
         // The file's old key first (an override of `controller.hybrid.ki` then
         // wins over it), then an override's.
@@ -55,7 +74,6 @@ impl Scenario {
         } else {
             read(toml::Value::Table(doc), overrides)?
         };
-        s.validate()?;
         Ok(s)
     }
 

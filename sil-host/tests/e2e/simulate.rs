@@ -442,3 +442,203 @@ fn the_ledger_names_the_largest_energy_one_event_took_from_the_belt() {
     assert!(l["residual_j"].as_f64().unwrap().abs() < 1e-6, "{l}");
     assert_eq!(s["validity"]["energy_gains"], 0, "the impact is admissible in the belt's frame");
 }
+
+// Issue 67, item 5 ("Smaller").
+
+/// Runs the binary (for what it prints); returns the exit code, standard output
+/// and standard error.
+fn sil_host_output(args: &[&str]) -> (i32, String, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sil-host")).args(args).output().unwrap();
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// Issue 67's light, short arm with links of `l` m: its `--set` overrides, the
+/// base height `H` putting the tip of its start ([`SHORT_ARM_X0`]) on the belt.
+fn short_arm(l: f64) -> Vec<String> {
+    let h = l * (27.696865482139f64.to_radians().cos() + 18.573779305261f64.to_radians().cos());
+    ["plant.m=0.02".to_string(), format!("plant.l={l:?}"), "plant.sigma=0.0003".into(), "plant.k=1.5".into()]
+        .into_iter()
+        .chain([format!("plant.h={h:?}"), "plant.alpha0=0.2".into()])
+        .flat_map(|s| ["--set".to_string(), s])
+        .collect()
+}
+
+/// The start of issue 67's short arm, deg and deg/s.
+const SHORT_ARM_X0: &str = "--x0-deg=27.696865482139,0,18.573779305261,0";
+
+/// (a) The open-loop commands take an arm too short for the default scenario's
+/// closed-loop target (`controller.target_z_t` = 0.10 m, at or beyond the reach
+/// `2 l` for `l <= 0.05` m), which they never use: `simulate` ran issue 67's arm
+/// (`l` = 0.06 m) and refused every arm with `l <= 0.05` m. A closed-loop `run`
+/// uses the target and still refuses it, naming the key and the reach.
+#[test]
+fn a_short_arm_runs_open_loop_and_its_unreachable_target_is_refused_closed_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    for l in [0.06, 0.05, 0.04] {
+        let out = dir.path().join(format!("simulate-{l}"));
+        let arm = short_arm(l);
+        let mut args: Vec<&str> = vec!["simulate", SHORT_ARM_X0, "--v-belt=-0.5", "--mu", "0.6", "--duration", "0.5", "--no-page"];
+        args.extend(arm.iter().map(String::as_str));
+        args.extend(["--out", out.to_str().unwrap()]);
+        assert_eq!(run(&args), 0, "l = {l}");
+        let s = summary_of(&out);
+        assert_eq!((s["status"].as_str(), s["params"]["l"].as_f64()), (Some("ok"), Some(l)), "l = {l}");
+        assert!(s["simulated_s"].as_f64().unwrap() == 0.5 && s["touchdowns"].as_u64().unwrap() >= 1, "l = {l}: {s}");
+    }
+    let arm = short_arm(0.05);
+    let arm: Vec<&str> = arm.iter().map(String::as_str).collect();
+    let poincare = dir.path().join("poincare");
+    let mut args = vec!["poincare", SHORT_ARM_X0, "--v-belt=-0.5,-0.4", "--v-step", "0.1", "--transient", "1", "--record", "1"];
+    args.extend(&arm);
+    args.extend(["--out", poincare.to_str().unwrap()]);
+    assert_eq!(run(&args), 0, "poincare");
+    let sweep = dir.path().join("sweep");
+    let mut args = vec!["sweep", "--mu", "0.6", "--v-belt=-0.5", "--ics", "a", "--transient", "1", "--record", "1"];
+    args.extend(&arm);
+    args.extend(["--out", sweep.to_str().unwrap()]);
+    assert_eq!(run(&args), 0, "sweep");
+    for (what, set) in [("modes", vec!["modes", "--grid", "20"]), ("admissible", vec!["admissible"])] {
+        let out = dir.path().join(what);
+        let mut args = set;
+        args.extend(["--set", "plant.l=0.05", "--set", "plant.h=0.09", "--out", out.to_str().unwrap()]);
+        assert_eq!(run(&args), 0, "{what}");
+    }
+    // Closed loop the target is used: refused before anything is written.
+    let out = dir.path().join("run");
+    let mut args = vec!["run", "--in-process", "--duration", "0.1"];
+    args.extend(&arm);
+    args.extend(["--out", out.to_str().unwrap()]);
+    let (code, _, err) = sil_host_output(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("controller.target_z_t") && err.contains("0.1") && err.contains("2 l = 0.1 m"), "{err}");
+    assert!(!err.contains("panicked") && !out.exists(), "{err}");
+    // The arm itself is still checked: the belt out of its reach.
+    let (code, _, err) = sil_host_output(&["simulate", "--set", "plant.l=0.05", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("plant.h") && err.contains("2 l = 0.1 m") && !out.exists(), "{err}");
+}
+
+/// The times of the departures from the belt in `events.csv`: a lift-off or a
+/// singular point into flight, and an impact (a touchdown's bounce, an impact
+/// without collision, a jam) that leaves the tip faster than the Zeno rule's
+/// velocity, 1e-4 m/s (`analyses::lift_offs`'s test counts them so).
+fn departures(events: &Path) -> Vec<f64> {
+    let rows = csv_rows(events);
+    let col = |name: &str| rows[0].iter().position(|c| c == name).unwrap();
+    let (t, kind, mode, v_n) = (col("t"), col("kind"), col("mode_after"), col("v_n_after"));
+    rows[1..]
+        .iter()
+        .filter(|r| match r[kind].as_str() {
+            "lift_off" | "singular_point" => r[mode] == "flight",
+            "touchdown" | "impact_without_collision" | "jam" => r[v_n].parse::<f64>().unwrap() > 1e-4,
+            _ => false,
+        })
+        .map(|r| r[t].parse().unwrap())
+        .collect()
+}
+
+/// (b) `lift_offs` has one meaning everywhere, every departure from the belt: on
+/// the bounce from `x0a` (`mu` 0.6, `v_belt` -0.5: its impact without collision
+/// at `t = 0`, then rebounds) `simulate`'s count over 5 s is `sweep`'s over its
+/// transient (1 s) and record window (4 s), each window's the departures of
+/// `events.csv` in it; `counters.lift_offs` is the same count and the plant's own
+/// count, without the bounces, is `counters.lift_offs_from_contact` (1: before
+/// issue 67 `simulate` wrote that as `lift_offs`).
+#[test]
+fn simulate_and_sweep_count_the_same_lift_offs() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("simulate");
+    let args = ["simulate", "--x0", "a", "--mu", "0.6", "--v-belt=-0.5", "--duration", "5", "--sample-dt", "0.01", "--no-page"];
+    let mut args = args.to_vec();
+    args.extend(["--out", sim.to_str().unwrap()]);
+    assert_eq!(run(&args), 0);
+    let s = summary_of(&sim);
+    let sweep = dir.path().join("sweep");
+    let args = ["sweep", "--mu", "0.6", "--v-belt=-0.5", "--ics", "a", "--transient", "1", "--record", "4"];
+    let mut args = args.to_vec();
+    args.extend(["--out", sweep.to_str().unwrap()]);
+    assert_eq!(run(&args), 0);
+    let rows = csv_rows(&sweep.join("sweep.csv"));
+    assert_eq!(rows.len(), 2, "one run");
+    let cell = |name: &str| -> u64 { rows[1][rows[0].iter().position(|c| c == name).unwrap()].parse().unwrap() };
+    let (transient, record) = (cell("lift_offs_transient"), cell("lift_offs"));
+    let lift_offs = s["lift_offs"].as_u64().unwrap();
+    assert!(lift_offs > 20, "it bounces: {lift_offs}");
+    assert_eq!(lift_offs, transient + record, "simulate {lift_offs}, sweep {transient} + {record}");
+    let c = &s["counters"];
+    assert_eq!(c["lift_offs"].as_u64(), Some(lift_offs));
+    assert_eq!(c["lift_offs_from_contact"].as_u64(), Some(1), "the impact without collision at t = 0: {c}");
+    assert_eq!(c["lift_offs_from_contact"].as_u64().unwrap() + c["bounces"].as_u64().unwrap(), lift_offs, "{c}");
+    let t = departures(&sim.join("events.csv"));
+    assert_eq!(t.len() as u64, lift_offs, "every departure in events.csv");
+    assert_eq!(t.iter().filter(|t| **t <= 1.0).count() as u64, transient, "sweep's transient");
+    assert_eq!(t.iter().filter(|t| **t > 1.0).count() as u64, record, "sweep's record window");
+}
+
+/// (c) `initial_condition.used_deg` is the state the run starts from, before any
+/// impulse: from `x0a` the angles projected onto the belt and the rates as given
+/// (0), where it held the rates after the impact without collision at `t = 0`
+/// (199.94, -322.20 deg/s at `v_belt` -0.5), now `after_startup_deg` (the trace's
+/// first row). A run started from `used_deg` resolves `t = 0` the same way.
+#[test]
+fn used_deg_is_the_projected_start_before_any_impulse() {
+    let dir = tempfile::tempdir().unwrap();
+    let simulate = |name: &str, x0: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["simulate", "--mu", "0.6", "--v-belt=-0.5", "--duration", "0.2", "--no-page"];
+        args.extend(x0);
+        args.extend(["--out", out.to_str().unwrap()]);
+        assert_eq!(run(&args), 0, "{name}");
+        (summary_of(&out), csv_rows(&out.join("trace.csv")))
+    };
+    let deg = |v: &serde_json::Value| -> [f64; 4] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
+    let (s, trace) = simulate("x0a", &["--x0", "a"]);
+    let ic = &s["initial_condition"];
+    let (used, after) = (deg(&ic["used_deg"]), deg(&ic["after_startup_deg"]));
+    assert_eq!(ic["projection"]["projected"], true);
+    assert_eq!(ic["startup_events"], serde_json::json!(["impact_without_collision"]));
+    assert!((used[0] - 32.0043).abs() < 1e-4 && (used[2] - 18.2662).abs() < 1e-4, "{used:?}");
+    assert_eq!([used[1], used[3]], [0.0, 0.0], "the rates as given, before the impulse: {used:?}");
+    assert_eq!([after[0], after[2]], [used[0], used[2]], "an impulse moves no angle");
+    assert!((after[1] - 199.94).abs() < 0.01 && (after[3] + 322.20).abs() < 0.01, "{after:?}");
+    let first: Vec<f64> = trace[1][1..5].iter().map(|c| c.parse::<f64>().unwrap().to_degrees()).collect();
+    assert_eq!(first, after, "after_startup_deg is the trace's first row");
+    // The projected start is on the belt ...
+    let params = shared::Params::<f64> { mu: 0.6, v_belt: -0.5, ..shared::Params::paper() };
+    let x = plant::initial::deg_to_state(used);
+    assert!(plant::initial::describe_projection(&params, x).height_above_belt.abs() < 1e-12);
+    // ... and, given as a custom start, is resolved as x0a was: the same impact
+    // without collision at t = 0, the same state after it.
+    let given = format!("--x0-deg={}", used.map(|v| format!("{v:?}")).join(","));
+    let (custom, _) = simulate("custom", &[given.as_str()]);
+    let ic = &custom["initial_condition"];
+    assert_eq!(ic["startup_events"], serde_json::json!(["impact_without_collision"]));
+    for (a, b) in deg(&ic["used_deg"]).iter().zip(used) {
+        assert!((a - b).abs() < 1e-9, "{:?} against {used:?}", ic["used_deg"]);
+    }
+    for (a, b) in deg(&ic["after_startup_deg"]).iter().zip(after) {
+        assert!((a - b).abs() < 1e-6 * (1.0 + b.abs()), "{:?} against {after:?}", ic["after_startup_deg"]);
+    }
+}
+
+/// (d) The default impact-without-collision rule throws the tip off the belt
+/// where a Moreau-Jean time-stepper (Siconos) leaves it on: `--iwc`'s help says
+/// to compare with one under `--iwc plastic` (`simulate`, `poincare`; `sweep`'s
+/// list of rules names `plastic` as that rule).
+#[test]
+fn the_iwc_help_says_to_compare_with_moreau_jean_codes_under_plastic() {
+    for command in ["simulate", "poincare", "sweep"] {
+        let (code, help, err) = sil_host_output(&[command, "--help"]);
+        assert_eq!(code, 0, "{command}: {err}");
+        let at = help.find("--iwc <IWC>").unwrap_or_else(|| panic!("{command}: no --iwc in {help}"));
+        let entry = &help[at..];
+        let entry = &entry[..entry[2..].find("\n      --").map_or(entry.len(), |e| e + 2)];
+        let words = entry.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(words.contains("Moreau-Jean") && words.contains("Siconos"), "{command}: {words}");
+        if command == "sweep" {
+            assert!(words.contains("`plastic` (left stuck, v_n = 0; the rule to compare with a Moreau-Jean"), "{words}");
+        } else {
+            assert!(words.contains("run with `--iwc plastic`") && words.contains("v_n = 0.018 m/s"), "{command}: {words}");
+        }
+    }
+}

@@ -55,16 +55,29 @@ pub(crate) fn simulate(md: &mut String, s: &SimulateSummary) {
             ("impact law, e_n", format!("{}, {}", s.sim.impact_law.name(), given(s.sim.e_n))),
             ("rtol, atol", format!("{}, {}", given(s.sim.rtol), given(s.sim.atol))),
             ("simulated (s)", given(s.simulated_s)),
-            ("lift-offs", c.lift_offs.to_string()),
+            ("lift-offs (every departure from the belt)", s.lift_offs.to_string()),
             ("touchdowns (bounces)", format!("{} ({})", c.touchdowns, c.bounces)),
             ("impacts without collision", c.impacts_without_collision.to_string()),
             ("stick phases, stick-to-slip", format!("{}, {}", c.stick_phases, c.stick_to_slip)),
-            ("impact without collision rule", s.sim.iwc.to_string()),
+            ("impact without collision rule", iwc_cell(s.sim.iwc)),
             ("validity", validity_cell(&s.validity)),
             ("energy ledger", s.ledger.to_string()),
             ("final mode, z_t (m)", format!("{}, {}", s.final_mode, position(s.final_tip[0]))),
         ],
     );
+}
+
+/// The impact-without-collision rule for a table cell: the default,
+/// `restitution`, with the rule to compare with a Moreau-Jean code (issue 67,
+/// docs/plant.md "The impact without collision").
+fn iwc_cell(iwc: plant::impact::IwcRule) -> String {
+    if matches!(iwc, plant::impact::IwcRule::Restitution) {
+        format!(
+            "{iwc} (it throws the tip off the belt; Moreau-Jean codes such as Siconos leave it on: compare with them under `--iwc plastic`)"
+        )
+    } else {
+        iwc.to_string()
+    }
 }
 
 /// A validity line for a table cell: every counter, violations first in words, then

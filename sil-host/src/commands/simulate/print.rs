@@ -52,8 +52,8 @@ pub(crate) fn print_human(s: &Summary) {
     let c = &s.counters;
     let _ = writeln!(
         o,
-        "events: {n_events} | lift-offs {} | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {}",
-        c.lift_offs, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals,
+        "events: {n_events} | lift-offs {} ({} at a bounce) | touchdowns {} | impacts without collision {} | stick phases {} | stick-to-slip {} | slip reversals {}",
+        s.lift_offs, c.bounces, c.touchdowns, c.impacts_without_collision, c.stick_phases, c.stick_to_slip, c.slip_reversals,
     );
     let _ = writeln!(o, "validity: {}", s.validity);
     let _ = writeln!(o, "energy ledger: {}", s.ledger);
