@@ -102,3 +102,4 @@ fn the_ledger_closes_on_the_paper_runs() {
         }
     }
 }
+

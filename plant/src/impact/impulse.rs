@@ -27,6 +27,10 @@ pub enum Resolution {
     PlasticIwc,
     /// The tangential impact that resolves a dynamic jam ([`jam`](super::jam)).
     TangentialImpact,
+    /// The impact without collision at the singular point `p = b = 0`
+    /// ([`at_p_zero`](super::at_p_zero)): the edge impulse that stops the slip with
+    /// `v_n` unchanged, the limit of both IWC rules there.
+    IwcAtPZero,
 }
 
 impl Resolution {

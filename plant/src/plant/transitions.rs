@@ -71,7 +71,7 @@ impl Plant {
                 let before = self.rel_velocity();
                 self.push_event(events, EventKind::PZero, before, None, 0.0);
                 self.project_contact()?;
-                self.impact_without_collision(ctrl, events)
+                self.impact_without_collision_at(ctrl, events, true)
             }
             Boundary::Jam => {
                 self.project_contact()?;
@@ -265,11 +265,27 @@ impl Plant {
 
     /// The Painlevé resolution: an impact without collision from sliding.
     fn impact_without_collision<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        self.impact_without_collision_at(ctrl, events, false)
+    }
+
+    /// [`Plant::impact_without_collision`]; `at_p_zero`: at the singular point
+    /// (a slide that reached `p = b = 0`), with the edge impulse every IWC rule
+    /// tends to there ([`impact::at_p_zero`]), else the law's and the IWC rule's.
+    fn impact_without_collision_at<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        events: &mut Vec<PlantEvent>,
+        at_p_zero: bool,
+    ) -> Result<(), SimError> {
         let before = self.rel_velocity();
         let (q, _) = segment::split(&self.y);
         let qm = self.arm.q_matrix(&q);
-        let imp = impact::without_collision(&qm, self.arm.params.mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc)
-            .map_err(|source| SimError::Impact { t: self.t, source })?;
+        let mu = self.arm.params.mu;
+        let imp = match at_p_zero.then(|| impact::at_p_zero(&qm, mu, before[0])) {
+            Some(Ok(imp)) => Ok(imp),
+            _ => impact::without_collision(&qm, mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc),
+        }
+        .map_err(|source| SimError::Impact { t: self.t, source })?;
         let de = self.apply_impulse(&imp);
         self.counters.impacts_without_collision += 1;
         let after = self.rel_velocity();
