@@ -147,7 +147,12 @@ fn the_simultaneous_crossing_is_the_same_whichever_root_is_located_first() {
         let scale = reference[1].impulse[1];
         assert!(scale > 0.0);
         for i in 0..2 {
-            assert!((iwc.impulse[i] - reference[1].impulse[i]).abs() < 1e-5 * scale, "lead {lead}: {:?} against {:?}", iwc.impulse, reference[1].impulse);
+            assert!(
+                (iwc.impulse[i] - reference[1].impulse[i]).abs() < 1e-5 * scale,
+                "lead {lead}: {:?} against {:?}",
+                iwc.impulse,
+                reference[1].impulse
+            );
         }
     }
     let events = run(1e-3);
@@ -178,10 +183,16 @@ fn issue53s_arm_meets_the_singular_point_the_same_way_on_both_sides_of_the_cross
             let mut plant = Plant::new(params, cfg, x0, 0.0, [0.0, 0.0]).unwrap();
             let mut events = Vec::new();
             for k in 0..20 {
-                events.extend(plant.advance(&crate::Hold([0.0, 0.0]), (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap().events);
+                events
+                    .extend(plant.advance(&crate::Hold([0.0, 0.0]), (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap().events);
             }
             let kinds: Vec<EventKind> = events.iter().take(3).map(|e| e.kind).collect();
-            assert_eq!(kinds, [EventKind::PZero, EventKind::ImpactWithoutCollision, EventKind::LiftOff], "mu {mu}, v_belt {}", params.v_belt);
+            assert_eq!(
+                kinds,
+                [EventKind::PZero, EventKind::ImpactWithoutCollision, EventKind::LiftOff],
+                "mu {mu}, v_belt {}",
+                params.v_belt
+            );
             assert!(events[1].v_r_before > 0.3 && events[1].v_r_after.abs() < 1e-12, "mu {mu}: {:?}", events[1]);
         }
     }

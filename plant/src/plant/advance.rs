@@ -36,7 +36,6 @@ pub const SINGULAR_RESIDUE: f64 = 1e-6;
 /// `p / Q_22` of order 0.1 to 1.
 pub const SIMULTANEOUS_P: f64 = segment::TREND_P;
 
-
 impl Plant {
     /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`](crate::Hold)`(u)` for the
     /// motor torques `u = [u1, u2]` (N m) held constant (zero-order hold, as a
