@@ -121,6 +121,21 @@ cat "$cycles_log"
 rm -f "$cycles_log"
 [ "$cycles_status" -ne 0 ] && exit "$cycles_status"
 
+echo "== Siconos 4.4 as an independent implementation (tests/siconos/check.py, about 30 s; tests/siconos/README.md):"
+echo "   sil-host simulate --iwc plastic against the arm built in Debian's python3-siconos (system /usr/bin/python3):"
+echo "   from x0a mu 0.365 slides and 0.366 bounces in both; at mu 0.6 the bounce's lift-offs per 50 s and largest"
+echo "   gap within Siconos' own step-size convergence (h 1e-4 against 2e-5 s); x0d's final z_t. Skipped without"
+echo "   Siconos unless PAINLEVE_REQUIRE_SICONOS=1 (CI), which makes a missing Siconos a failure"
+siconos_status=0
+if [ -x /usr/bin/python3 ] && /usr/bin/python3 -c "import siconos.kernel" 2>/dev/null; then
+  /usr/bin/python3 tests/siconos/check.py --sil-host target/release/sil-host || siconos_status=$?
+elif [ "${PAINLEVE_REQUIRE_SICONOS:-0}" = 1 ]; then
+  echo "Siconos is missing and PAINLEVE_REQUIRE_SICONOS=1: apt-get install -y python3-siconos (Debian's, for /usr/bin/python3)" >&2
+  siconos_status=2
+else
+  echo "Siconos is missing (sudo apt-get install -y python3-siconos, for Debian's /usr/bin/python3): the check is skipped"
+fi
+
 echo "== tests (release: the simulator is numerical); the soak test (sil-host/tests/soak.rs, about 80 s"
 echo "   of wall time, mostly its injected stalls' waits) beside the others, its output printed at the end"
 status=0
@@ -142,4 +157,6 @@ awk -v py="$pylog" '/^test result:/ || (FILENAME == py && /(passed|failed)/ && /
        for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^(failed|error)/) f += $i } }
      END { printf "tests: %d passed, %d failed\n", p, f }' "$log" "$pylog"
 [ "$status" -ne 0 ] && exit "$status"
-exit "$pystatus"
+[ "$pystatus" -ne 0 ] && exit "$pystatus"
+[ "$siconos_status" -ne 0 ] && echo "the Siconos check failed (exit $siconos_status): its == section above says which check" >&2
+exit "$siconos_status"

@@ -51,8 +51,14 @@ const FLAT_MB: f64 = 4.0;
 /// off the CPU for a whole second to time out. (At 0.25 s, one period of about
 /// 9 million timed out so, on this 2-core machine at a load average of 10.)
 const COMMAND_TIMEOUT_S: f64 = 1.0;
-/// Longest window of the faults the firmware tolerates any number of, periods.
-const MAX_WINDOW: u32 = 20;
+/// Longest window of the faults the firmware tolerates any number of, periods:
+/// 10 ms of dropped commands or a stuck sensor. Longer, the wiring check's
+/// net-torque rule (issue 66: a missed torque against the net torque beyond
+/// `0.3 |net| + 0.1 N m` for 5 ms, `firmware::wiring`) may see the arm not follow
+/// the commands the firmware believes applied, which is what a dead motor looks
+/// like: at 20 ms, 2 of the 300 s run's dropped-command windows (at 36.7 s and
+/// 80.6 s, seed 1) were stopped as `Miswired`.
+const MAX_WINDOW: u32 = 10;
 /// Faults start after the 2 s move, once the arm holds still (a stuck sensor then
 /// reads right, so it stays undetected: docs/rig.md, "Faults").
 const FROM_S: f64 = 3.0;

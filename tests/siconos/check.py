@@ -1,0 +1,463 @@
+#!/usr/bin/python3
+"""Siconos 4.4 as an independent implementation of the arm on the belt (issue 67).
+
+Builds the paper's arm (docs/model.md, paper eqs. 1 to 7, Table I) in Siconos
+(Debian bookworm's python3-siconos 4.4: LagrangianDS, LagrangianRheonomousR,
+NewtonImpactFrictionNSL, MoreauJeanOSI, TimeStepping, FrictionContact 2D Lemke) and checks
+`sil-host simulate --iwc plastic` against it:
+
+1. both start from the same projected x0a and x0d;
+2. from x0a (e_n 0.2, v_belt -0.5 m/s) mu 0.365 slides and mu 0.366 bounces, in both;
+3. at mu 0.6 the bounce's lift-offs per 50 s and its largest gap agree within the step-size
+   convergence Siconos itself shows (h 1e-4 s against 2e-5 s);
+4. from x0d at mu 0.6 the tip slides to the same z_t;
+and prints the run-time ratio Siconos / sil-host on the same case, measured in this run.
+
+Run with Debian's system Python (python3-siconos installs there, not in a venv):
+
+    /usr/bin/python3 tests/siconos/check.py --sil-host target/release/sil-host
+
+Exit codes: 0 every check passed, 1 a check failed, 2 Siconos (or gcc, or sil-host) missing or
+another setup error. tests/siconos/README.md says what each tolerance is and why.
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+# One thread per process: the Siconos runs go two at a time on a 2-core machine.
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+PASS, FAIL, SETUP = 0, 1, 2
+
+
+class SetupError(Exception):
+    """Something this check needs is missing or broken (exit 2): gcc, the plugin, Siconos."""
+
+
+class SilHostError(Exception):
+    """sil-host itself failed on a valid command (exit 1: the implementation under test)."""
+
+
+# Paper Table I (docs/model.md "Parameters"), SI units; alpha0 in radians.
+TABLE_I = {"m": 0.12, "l": 0.21, "sigma": 0.005, "k": 1.3, "h": 0.3775, "alpha0": math.radians(13.72), "g": 9.81}
+V_BELT = -0.5  # belt speed, m/s
+E_N = 0.2  # Newton's restitution coefficient
+THETA = 0.5  # Moreau-Jean's theta (theta 1 damps the bounce: its largest gap 4.49 cm against 4.75 at h 1e-4)
+X0A_DEG = (32.0, 18.27)  # docs/model.md x0a: theta1, theta2 in degrees (velocities 0)
+X0D_DEG = (-11.4, -35.1)  # docs/model.md x0d
+H_COARSE, H_FINE = 1e-4, 2e-5  # Siconos' two time steps, s
+BOUNCE_T, BOUNCE_WINDOW = 60.0, (10.0, 60.0)  # mu 0.6: simulated s, and the 50 s counted
+BOUNCE_SUBWINDOWS = 5  # the window's parts whose spread sizes the count's sampling term
+EDGE_T, EDGE_WINDOW = 6.0, (3.0, 6.0)  # mu 0.365 / 0.366: simulated s, and the window classified
+SLIDE_T = 8.0  # x0d: simulated s (the slide settles to 1e-8 m by 7 s)
+ON_BELT_M = 1e-5  # a tip within 10 um of the belt is on it (Siconos leaves it < 0.2 um inside)
+BOUNCE_MIN_LIFT_OFFS, BOUNCE_MIN_GAP_M = 5, 1e-3  # a bounce: this many lift-offs, this high
+ZT_FLOOR_M = 1e-7  # the z_t tolerance's floor: two equal Siconos runs do not ask for bit equality
+PROJECTION_TOL_DEG = 1e-6  # both start from the same projected state
+
+
+def project(theta1_deg, theta2_deg, params=TABLE_I):
+    """The initial condition put on the belt, in radians (docs/model.md "Initial conditions").
+
+    Keeps the tip's z_t = l (sin theta1 + sin theta2) (m) and the elbow branch (down when
+    theta2 < theta1), and solves the inverse kinematics of the two equal links for the tip at
+    z = [z_t, -H] (docs/model.md "Geometry and state"). Returns (theta1, theta2) in rad.
+    """
+    l, h = params["l"], params["h"]
+    th1, th2 = math.radians(theta1_deg), math.radians(theta2_deg)
+    z_t = l * (math.sin(th1) + math.sin(th2))
+    reach = math.hypot(z_t, h)  # base to tip, m
+    heading = math.atan2(z_t, h)  # of the base-to-tip line, from the downward vertical, rad
+    half = math.acos(reach / (2.0 * l))  # half the angle between the links, rad
+    return (heading + half, heading - half) if th2 < th1 else (heading - half, heading + half)
+
+
+def build_plugin(source, folder, params=TABLE_I, v_belt=V_BELT):
+    """Compiles arm_plugin.c with gcc into `folder`, the parameters as -D macros.
+
+    `params`: paper Table I in SI units (docs/model.md "Parameters"); `v_belt` in m/s. Returns the
+    plugin's path without `.so`: Siconos appends it (notes: "plugin names are given without
+    .so"). Raises SetupError when no C compiler is found or the compile fails.
+    """
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        raise SetupError("no C compiler (gcc): apt-get install -y gcc")
+    defs = {"ARM_M": params["m"], "ARM_L": params["l"], "ARM_SIGMA": params["sigma"], "ARM_K": params["k"],
+            "ARM_H": params["h"], "ARM_ALPHA0": params["alpha0"], "ARM_G": params["g"], "ARM_VBELT": v_belt}
+    stem = os.path.join(folder, "arm_plugin")
+    cmd = [cc, "-O2", "-fPIC", "-shared", "-Wall", "-Wno-unused-parameter", "-o", stem + ".so", source, "-lm"]
+    cmd[1:1] = [f"-D{k}={v!r}" for k, v in defs.items()]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SetupError(f"compiling {source} failed:\n{done.stderr}")
+    return stem
+
+
+def siconos_run(plugin, q0, mu, h, duration, e_n=E_N, theta=THETA):
+    """Simulates the arm in Siconos from rest at q0 (rad) for `duration` s with time step `h` s.
+
+    The model (Siconos kernel docs: LagrangianDS.hpp, LagrangianRheonomousR.hpp): a LagrangianDS
+    M(q) v' + F_gyr + F_int = p with M, F_int = w and F_gyr = c (docs/model.md eq. 1) and their
+    Jacobians from the C plugin; a LagrangianRheonomousR h(q, t) = [z_n + H, z_t - v_belt t]
+    with G0 = dh/dq and hDot = [0, -v_belt]; NewtonImpactFrictionNSL(e_n, 0, mu, 2); MoreauJeanOSI
+    (theta); TimeStepping; FrictionContact(2, SICONOS_FRICTION_2D_LEMKE). Returns a dict of
+    per-step arrays: `t` (s), `th1`, `th2` (rad), `th1_dot` (rad/s), `p_n` (the step's normal
+    impulse, N s), the first step's impulse `p0` = (P_t, P_n) (N s), and `wall_s`, `cpu_s`.
+    """
+    import numpy as np
+    import siconos.kernel as sk
+    import siconos.numerics as sn
+
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    ds = sk.LagrangianDS(np.array(q0, dtype=float), np.zeros(2), plugin + ":arm_mass")
+    ds.setComputeFIntFunction(plugin, "arm_fint")
+    ds.setComputeJacobianFIntqFunction(plugin, "arm_fint_q")
+    ds.setComputeJacobianFIntqDotFunction(plugin, "arm_fint_v")
+    ds.setComputeFGyrFunction(plugin, "arm_fgyr")
+    ds.setComputeJacobianFGyrqFunction(plugin, "arm_fgyr_q")
+    ds.setComputeJacobianFGyrqDotFunction(plugin, "arm_fgyr_v")
+    relation = sk.LagrangianRheonomousR(plugin + ":arm_h", plugin + ":arm_g0", plugin + ":arm_hdot")
+    contact = sk.Interaction(sk.NewtonImpactFrictionNSL(e_n, 0.0, mu, 2), relation)
+    nsds = sk.NonSmoothDynamicalSystem(0.0, duration)
+    nsds.insertDynamicalSystem(ds)
+    nsds.link(contact, ds)
+    sim = sk.TimeStepping(nsds, sk.TimeDiscretisation(0.0, h), sk.MoreauJeanOSI(theta),
+                          sk.FrictionContact(2, sn.SICONOS_FRICTION_2D_LEMKE))
+    n = int(round(duration / h))
+    t, th1, th2, th1_dot, p_n = (np.zeros(n) for _ in range(5))
+    p0 = (0.0, 0.0)
+    k = 0
+    while sim.hasNextEvent() and k < n:
+        sim.computeOneStep()
+        q, v, impulse = ds.q(), ds.velocity(), contact.lambda_(1)  # impulse = [P_n, P_t]
+        t[k], th1[k], th2[k], th1_dot[k], p_n[k] = sim.nextTime(), q[0], q[1], v[0], impulse[0]
+        if k == 0:
+            p0 = (float(impulse[1]), float(impulse[0]))
+        sim.nextStep()
+        k += 1
+    return {"t": t[:k], "th1": th1[:k], "th2": th2[:k], "th1_dot": th1_dot[:k], "p_n": p_n[:k], "p0": p0,
+            "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0}
+
+
+def siconos_digest(run, window, subwindows=1, params=TABLE_I):
+    """What the checks read from a Siconos run, over `window` = (t0, t1) in s.
+
+    The gap z_n + H = H - l (cos theta1 + cos theta2) (m) comes from q (docs/model.md "Geometry and
+    state"). A lift-off is a step with no normal impulse after one with an impulse (P_n > 0: the
+    tip touched the belt, by an impact or in contact), the tip leaving the belt. Returns lift-off
+    `lift_offs` and `flight_steps` in the window, `max_gap` (m), `max_abs_gap` (m), the lift-offs
+    of each of `subwindows` equal parts, the first three touchdowns (s), the final `z_t` (m) and
+    `z_t` one second earlier, the final theta1 (deg), the first step's impulse and the timing.
+    """
+    import numpy as np
+
+    l, hh = params["l"], params["h"]
+    t, p_n = run["t"], run["p_n"]
+    gap = hh - l * (np.cos(run["th1"]) + np.cos(run["th2"]))
+    z_t = l * (np.sin(run["th1"]) + np.sin(run["th2"]))
+    on = p_n > 0.0
+    lift = t[1:][on[:-1] & ~on[1:]]
+    touch = t[1:][~on[:-1] & on[1:]]
+    t0, t1 = window
+    inside = (t > t0) & (t <= t1 + 1e-12)
+    edges = np.linspace(t0, t1, subwindows + 1)
+    parts = [int(((lift > a) & (lift <= b + 1e-12)).sum()) for a, b in zip(edges[:-1], edges[1:])]
+    earlier = int(np.searchsorted(t, t[-1] - 1.0))
+    return {"lift_offs": int(((lift > t0) & (lift <= t1 + 1e-12)).sum()), "parts": parts,
+            "flight_steps": int((~on[inside]).sum()), "max_gap": float(gap[inside].max()),
+            "max_abs_gap": float(np.abs(gap[inside]).max()), "touchdowns": [float(x) for x in touch[:3]],
+            "z_t": float(z_t[-1]), "z_t_1s_before": float(z_t[earlier]), "theta1_deg": math.degrees(run["th1"][-1]),
+            "final_gap": float(gap[-1]), "p0": run["p0"], "t_end": float(t[-1]),
+            "wall_s": run["wall_s"], "cpu_s": run["cpu_s"]}
+
+
+def siconos_case(plugin, x0_deg, mu, h, duration, window, subwindows=1):
+    """One Siconos case from docs/model.md's `x0_deg` (theta1, theta2 in deg, at rest), digested.
+
+    `mu` Coulomb's coefficient, `h` the time step (s), `duration` (s), `window` (s, s); see
+    siconos_run and siconos_digest. Runs in a worker process; returns the digest (a dict).
+    """
+    run = siconos_run(plugin, project(*x0_deg), mu, h, duration)
+    return siconos_digest(run, window, subwindows)
+
+
+def sil_host_run(exe, x0, mu, duration, folder):
+    """Runs `sil-host simulate --iwc plastic` (open loop, Newton e_n 0.2, v_belt -0.5 m/s).
+
+    `x0` is `a` or `d` (docs/model.md's x0a, x0d, which sil-host projects onto the belt), `mu`
+    Coulomb's coefficient, `duration` in s; the outputs (summary.json, events.csv, trace.csv at
+    1 ms: docs/plant.md "From the command line") go to `folder`. Returns (summary dict, wall s,
+    CPU s of the process). Raises SilHostError when sil-host fails.
+    """
+    cmd = [exe, "simulate", "--x0", x0, "--mu", repr(mu), "--v-belt", repr(V_BELT), "--impact-law", "newton",
+           "--e-n", repr(E_N), "--iwc", "plastic", "--duration", repr(duration), "--no-page", "--json",
+           "--out", folder]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall0 = time.perf_counter()
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - wall0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SilHostError(f"{' '.join(cmd)} exited {done.returncode}:\n{done.stderr}")
+    with open(os.path.join(folder, "summary.json")) as f:
+        summary = json.load(f)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return summary, wall, cpu
+
+
+def sil_host_digest(folder, summary, window, params=TABLE_I):
+    """What the checks read from a sil-host run's folder, over `window` = (t0, t1) in s.
+
+    Lift-offs (docs/plant.md "Discrete transitions"): the `lift_off` events and the touchdowns
+    after which the tip flies off again (a bounce: `mode_after` flight), from events.csv at
+    their exact times. The gap z_n + H (m) from trace.csv (every 1 ms). Returns the same keys
+    as siconos_digest where they apply, plus `final_mode` and the projected start (deg).
+    """
+    import numpy as np
+
+    lift, touch = [], []
+    with open(os.path.join(folder, "events.csv")) as f:
+        for row in csv.DictReader(f):
+            if row["kind"] == "lift_off" or (row["kind"] == "touchdown" and row["mode_after"] == "flight"):
+                lift.append(float(row["t"]))
+            if row["kind"] == "touchdown":
+                touch.append(float(row["t"]))
+    lift = np.array(lift)
+    trace = np.genfromtxt(os.path.join(folder, "trace.csv"), delimiter=",", names=True, usecols=(0, 1, 5, 6))
+    t, gap, z_t = trace["t"], trace["z_n"] + params["h"], trace["z_t"]
+    t0, t1 = window
+    inside = (t > t0) & (t <= t1 + 1e-12)
+    earlier = int(np.searchsorted(t, t[-1] - 1.0))
+    used = summary["initial_condition"]["used_deg"]
+    return {"lift_offs": int(((lift > t0) & (lift <= t1 + 1e-12)).sum()), "max_gap": float(gap[inside].max()),
+            "max_abs_gap": float(np.abs(gap[inside]).max()), "touchdowns": touch[:3],
+            "z_t": float(summary["final_tip"][0]), "z_t_1s_before": float(z_t[earlier]),
+            "theta1_deg": math.degrees(summary["final_state"][0]), "final_mode": summary["final_mode"],
+            "start_deg": (used[0], used[2])}
+
+
+def classify(d, sil_host):
+    """`slides`, `bounces` or `neither` for a digest over its window (the checks' definitions).
+
+    Slides: the tip stays on the belt (|gap| <= 10 um, Siconos: every step with a normal
+    impulse; sil-host: no lift-off and a sliding final mode). Bounces: at least 5 lift-offs and
+    a gap of at least 1 mm.
+    """
+    if d["lift_offs"] >= BOUNCE_MIN_LIFT_OFFS and d["max_gap"] >= BOUNCE_MIN_GAP_M:
+        return "bounces"
+    stays = d["lift_offs"] == 0 and d["max_abs_gap"] <= ON_BELT_M
+    stays = stays and (d["final_mode"] == "sliding" if sil_host else d["flight_steps"] == 0)
+    return "slides" if stays else "neither"
+
+
+def convergence_tolerance(coarse, fine, h_coarse=H_COARSE, h_fine=H_FINE):
+    """The step-size tolerance for a statistic X from Siconos at two steps (units of X).
+
+    Moreau-Jean, like every event-capturing scheme, is at most first-order accurate through
+    impacts (V. Acary, "Higher order event capturing time-stepping schemes for nonsmooth
+    multibody systems with unilateral constraints and impacts", Appl. Numer. Math. 62, 2012):
+    X(h) ~ X0 + C h. Two runs give C = (X(h1) - X(h2)) / (h1 - h2), so the coarse run's own error
+    is h1 |C| = |X(h1) - X(h2)| h1 / (h1 - h2). sil-host (X0 to its tolerances) must lie that
+    close to the fine run: as close as the coarse run lies to the limit. Returns (tolerance,
+    Richardson's estimate of X0).
+    """
+    slope = (coarse - fine) / (h_coarse - h_fine)
+    return abs(slope) * h_coarse, fine - slope * h_fine
+
+
+class Report:
+    """Collects pass/fail lines; `failed` is set by any failed check."""
+
+    def __init__(self):
+        """An empty report."""
+        self.failed = False
+
+    def check(self, ok, text):
+        """Prints `PASS text` or `FAIL text` and remembers a failure."""
+        print(("PASS " if ok else "FAIL ") + text, flush=True)
+        self.failed |= not ok
+
+
+def main(argv=None):
+    """Runs every check; returns the exit code (0 pass, 1 a check failed, 2 setup error)."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sil-host", default="target/release/sil-host", help="the sil-host binary to check")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="Siconos runs at once")
+    parser.add_argument("--keep", metavar="DIR", help="keep the plugin and sil-host's outputs in DIR")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+
+    try:
+        import numpy  # noqa: F401  (Debian's python3-numpy, a dependency of python3-siconos)
+        import siconos.kernel  # noqa: F401
+        import siconos.numerics  # noqa: F401
+    except ImportError as e:
+        print(f"SETUP Siconos is missing ({e}): apt-get install -y python3-siconos (Debian bookworm's 4.4), "
+              f"and run this with Debian's system Python, /usr/bin/python3 (this is {sys.executable})", flush=True)
+        return SETUP
+    exe = os.path.abspath(args.sil_host)
+    if not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
+        print(f"SETUP no sil-host at {exe}: cargo build --release -p sil-host", flush=True)
+        return SETUP
+    work = args.keep or tempfile.mkdtemp(prefix="siconos-check-")
+    os.makedirs(work, exist_ok=True)
+    try:
+        return run_checks(exe, work, args.jobs, started)
+    except SilHostError as e:
+        print(f"FAIL {e}", flush=True)
+        return FAIL
+    except SetupError as e:
+        print(f"SETUP {e}", flush=True)
+        return SETUP
+    except Exception as e:  # Siconos raises a bare Exception (std::exception) on a plugin it cannot load
+        import traceback
+
+        traceback.print_exc()
+        print(f"SETUP the Siconos model could not be built or run: {type(e).__name__}: {e}", flush=True)
+        return SETUP
+    finally:
+        if not args.keep:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+def run_checks(exe, work, jobs, started):
+    """The checks themselves (see the module's docstring); returns the exit code."""
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    plugin = build_plugin(os.path.join(here, "arm_plugin.c"), work)
+    pkg = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "python3-siconos"], capture_output=True, text=True)
+    print(f"Siconos: python3-siconos {pkg.stdout.strip() or '?'} on {sys.executable}; sil-host: {exe}")
+    print(f"model: docs/model.md's arm, e_n {E_N}, v_belt {V_BELT} m/s, Moreau-Jean theta {THETA}, "
+          f"h {H_COARSE:g} and {H_FINE:g} s; sil-host simulate --iwc plastic")
+
+    # sil-host, each case; the bounce three times more for its run time.
+    sil = {}
+    cases = {"bounce": ("a", 0.6, BOUNCE_T, BOUNCE_WINDOW), "mu0.365": ("a", 0.365, EDGE_T, EDGE_WINDOW),
+             "mu0.366": ("a", 0.366, EDGE_T, EDGE_WINDOW), "x0d": ("d", 0.6, SLIDE_T, (SLIDE_T - 2.0, SLIDE_T))}
+    sil_times = []
+    for name, (x0, mu, duration, window) in cases.items():
+        folder = os.path.join(work, f"sil-{name}")
+        summary, wall, cpu = sil_host_run(exe, x0, mu, duration, folder)
+        if name == "bounce":
+            sil_times.append((wall, cpu, summary["wall_s"]))
+            for _ in range(2):
+                again, wall, cpu = sil_host_run(exe, x0, mu, duration, folder + "-again")
+                sil_times.append((wall, cpu, again["wall_s"]))
+        sil[name] = sil_host_digest(folder, summary, window)
+
+    # Siconos: the bounce at the coarse step alone (its run time), then the rest two at a time.
+    sic = {("bounce", H_COARSE): siconos_case(plugin, X0A_DEG, 0.6, H_COARSE, BOUNCE_T, BOUNCE_WINDOW,
+                                              BOUNCE_SUBWINDOWS)}
+    todo = [("bounce", H_FINE, X0A_DEG, 0.6, BOUNCE_T, BOUNCE_WINDOW, BOUNCE_SUBWINDOWS)]
+    for h in (H_COARSE, H_FINE):
+        todo += [("mu0.365", h, X0A_DEG, 0.365, EDGE_T, EDGE_WINDOW, 1),
+                 ("mu0.366", h, X0A_DEG, 0.366, EDGE_T, EDGE_WINDOW, 1),
+                 ("x0d", h, X0D_DEG, 0.6, SLIDE_T, (SLIDE_T - 2.0, SLIDE_T), 1)]
+    with ProcessPoolExecutor(max_workers=max(1, jobs), mp_context=multiprocessing.get_context("fork")) as pool:
+        futures = {(name, h): pool.submit(siconos_case, plugin, x0, mu, h, duration, window, parts)
+                   for name, h, x0, mu, duration, window, parts in todo}
+        for key, future in futures.items():
+            sic[key] = future.result()
+
+    report = Report()
+    hc, hf = H_COARSE, H_FINE
+
+    # 1. The same start.
+    for name, x0_deg in (("bounce", X0A_DEG), ("x0d", X0D_DEG)):
+        mine = [math.degrees(a) for a in project(*x0_deg)]
+        theirs = sil[name]["start_deg"]
+        err = max(abs(a - b) for a, b in zip(mine, theirs))
+        report.check(err <= PROJECTION_TOL_DEG,
+                     f"start {'x0a' if name == 'bounce' else 'x0d'} projected onto the belt: this test "
+                     f"[{mine[0]:.6f}, 0, {mine[1]:.6f}, 0] deg, sil-host [{theirs[0]:.6f}, 0, {theirs[1]:.6f}, 0] deg "
+                     f"(differ by {err:.1e} deg, tolerance {PROJECTION_TOL_DEG:g})")
+
+    # 2. The edge of the bounce: 0.365 slides, 0.366 bounces.
+    for name, want in (("mu0.365", "slides"), ("mu0.366", "bounces")):
+        got = {"sil-host": classify(sil[name], True)}
+        for h in (hc, hf):
+            got[f"Siconos h {h:g}"] = classify(sic[(name, h)], False)
+        detail = "; ".join(
+            f"{who}: {what} ({d['lift_offs']} lift-offs, "
+            + (f"max |gap| {d['max_abs_gap'] * 1e6:.2g} um" if what == "slides" else f"max gap {d['max_gap'] * 100:.3f} cm")
+            + f", final theta1 {d['theta1_deg']:.4f} deg)"
+            for (who, what), d in zip(got.items(), (sil[name], sic[(name, hc)], sic[(name, hf)])))
+        report.check(all(v == want for v in got.values()),
+                     f"x0a, mu {name[2:]}: {want} in both, over t in ({EDGE_WINDOW[0]:g}, {EDGE_WINDOW[1]:g}] s: {detail}")
+
+    # 3. The bounce at mu 0.6: lift-offs per 50 s and the largest gap.
+    s, c, f = sil["bounce"], sic[("bounce", hc)], sic[("bounce", hf)]
+    span = BOUNCE_WINDOW[1] - BOUNCE_WINDOW[0]
+    print(f"x0a, mu 0.6, first touchdowns (s): sil-host {fmt(s['touchdowns'])}; Siconos h {hc:g} "
+          f"{fmt(c['touchdowns'])}; h {hf:g} {fmt(f['touchdowns'])}")
+    print(f"x0a, mu 0.6, the impact without collision at t = 0, Siconos' first-step impulse (P_t, P_n): "
+          f"h {hc:g} ({c['p0'][0]:.4f}, {c['p0'][1]:.4f}) N s; h {hf:g} ({f['p0'][0]:.4f}, {f['p0'][1]:.4f}) N s")
+    tol, limit = convergence_tolerance(c["lift_offs"], f["lift_offs"])
+    spread = math.sqrt(len(f["parts"])) * statistics.stdev(f["parts"])  # sampling spread of the 50 s count
+    tol_n = tol + 2.0 * spread
+    dev = abs(s["lift_offs"] - f["lift_offs"])
+    report.check(dev <= tol_n,
+                 f"x0a, mu 0.6, lift-offs in t in ({BOUNCE_WINDOW[0]:g}, {BOUNCE_WINDOW[1]:g}] s ({span:g} s): sil-host "
+                 f"{s['lift_offs']}, Siconos h {hc:g} {c['lift_offs']}, h {hf:g} {f['lift_offs']} (h -> 0: {limit:.1f}); "
+                 f"|sil-host - Siconos h {hf:g}| = {dev} <= {tol_n:.1f} = step term {tol:.1f} "
+                 f"(|{c['lift_offs']} - {f['lift_offs']}| x {hc / (hc - hf):g}) + 2 x sampling spread {spread:.1f} "
+                 f"(sqrt({len(f['parts'])}) x stdev of {f['parts']})")
+    tol_g, limit_g = convergence_tolerance(c["max_gap"], f["max_gap"])
+    dev_g = abs(s["max_gap"] - f["max_gap"])
+    report.check(dev_g <= tol_g,
+                 f"x0a, mu 0.6, max gap in the window: sil-host {s['max_gap'] * 100:.3f} cm, Siconos h {hc:g} "
+                 f"{c['max_gap'] * 100:.3f} cm, h {hf:g} {f['max_gap'] * 100:.3f} cm (h -> 0: {limit_g * 100:.3f} cm); "
+                 f"|sil-host - Siconos h {hf:g}| = {dev_g * 100:.3f} cm <= {tol_g * 100:.3f} cm "
+                 f"(|{c['max_gap'] * 100:.3f} - {f['max_gap'] * 100:.3f}| x {hc / (hc - hf):g})")
+
+    # 4. x0d at mu 0.6 slides to the same z_t.
+    s, c, f = sil["x0d"], sic[("x0d", hc)], sic[("x0d", hf)]
+    tol_z, limit_z = convergence_tolerance(c["z_t"], f["z_t"])
+    settle = abs(f["z_t"] - f["z_t_1s_before"]) + abs(s["z_t"] - s["z_t_1s_before"])
+    tol_zt = max(tol_z, ZT_FLOOR_M) + settle
+    dev_z = abs(s["z_t"] - f["z_t"])
+    slides = classify(s, True) == "slides" and all(classify(d, False) == "slides" for d in (c, f))
+    report.check(slides and dev_z <= tol_zt,
+                 f"x0d, mu 0.6, slides to z_t at t = {SLIDE_T:g} s: sil-host {s['z_t']:.8f} m, Siconos h {hc:g} "
+                 f"{c['z_t']:.8f} m (gap {c['final_gap']:.1e} m), h {hf:g} {f['z_t']:.8f} m (gap {f['final_gap']:.1e} m; "
+                 f"h -> 0: {limit_z:.8f}); |sil-host - Siconos h {hf:g}| = {dev_z:.1e} m <= {tol_zt:.1e} m = "
+                 f"max(step term {tol_z:.1e}, floor {ZT_FLOOR_M:g}) + not yet settled {settle:.1e} "
+                 f"(|z_t(T) - z_t(T - 1 s)|, both); slides in all three: {slides}")
+
+    # Run time, the same case (x0a, mu 0.6, v_belt -0.5, 60 s) in this run.
+    walls = sorted(x[0] for x in sil_times)
+    cpus = sorted(x[1] for x in sil_times)
+    sims = sorted(x[2] for x in sil_times)
+    sw, sc, ss = walls[len(walls) // 2], cpus[len(cpus) // 2], sims[len(sims) // 2]
+    c = sic[("bounce", hc)]
+    print(f"run time, x0a mu 0.6 for {BOUNCE_T:g} s: Siconos h {hc:g} (Python stepping loop, model built and "
+          f"stepped) {c['wall_s']:.2f} s wall, {c['cpu_s']:.2f} s CPU; sil-host simulate (whole process, files "
+          f"written; median of {len(walls)}) {sw:.3f} s wall, {sc:.3f} s CPU ({ss:.3f} s of it simulating); "
+          f"ratio Siconos / sil-host: {c['wall_s'] / sw:.0f} x wall, {c['cpu_s'] / max(sc, 1e-3):.0f} x CPU, "
+          f"{c['wall_s'] / ss:.0f} x against sil-host's simulation alone; Siconos h {hf:g}: "
+          f"{sic[('bounce', hf)]['wall_s']:.1f} s wall (two runs at once)")
+    verdict = "FAILED" if report.failed else "passed"
+    print(f"Siconos check {verdict} in {time.perf_counter() - started:.1f} s wall")
+    return FAIL if report.failed else PASS
+
+
+def fmt(values):
+    """Numbers (s) as a short bracketed list, 6 decimals."""
+    return "[" + ", ".join(f"{v:.6f}" for v in values) + "]"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
