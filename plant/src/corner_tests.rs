@@ -21,6 +21,9 @@ struct ThroughTheCorner {
     arm: Arm<f64>,
     f_star: f64,
     v_des: f64,
+    /// The `p / Q_22` at which `b` reaches 0 (`b = -f_star (p - lead Q_22)`): 0 for
+    /// the two together, positive for `b = 0` first, negative for `p = 0` first.
+    lead: f64,
 }
 
 impl Controller for ThroughTheCorner {
@@ -32,7 +35,8 @@ impl Controller for ThroughTheCorner {
         let p = t0.p(mu, SlipDirection::Positive);
         let g = Matrix2::new(t1.b() - t0.b(), t2.b() - t0.b(), t1.a_free[0] - t0.a_free[0], t2.a_free[0] - t0.a_free[0]);
         let tangential = (t0.qmat[(0, 1)] - mu * t0.qmat[(0, 0)]) * self.f_star;
-        let rhs = Vector2::new(-self.f_star * p - t0.b(), -20.0 * (t0.z_dot[0] - self.v_des) - tangential - t0.a_free[0]);
+        let b_target = -self.f_star * (p - self.lead * t0.qmat[(1, 1)]);
+        let rhs = Vector2::new(b_target - t0.b(), -20.0 * (t0.z_dot[0] - self.v_des) - tangential - t0.a_free[0]);
         let u = g.try_inverse().map_or(Vector2::zeros(), |gi| gi * rhs);
         [u[0], u[1]]
     }
@@ -43,7 +47,7 @@ impl Controller for ThroughTheCorner {
 /// pressed with 3 N, under `rule`.
 fn corner_case(rule: SingularRule, bridge_step: f64) -> (Plant, ThroughTheCorner) {
     let params = Params::<f64>::paper();
-    let ctrl = ThroughTheCorner { arm: Arm::new(params), f_star: 3.0, v_des: 0.05 };
+    let ctrl = ThroughTheCorner { arm: Arm::new(params), f_star: 3.0, v_des: 0.05, lead: 0.0 };
     let q = inverse_kinematics(params.l, &Vector2::new(0.160, -params.h), ElbowBranch::Down).unwrap();
     let jac = shared::kinematics::jacobian(params.l, &q);
     let qd = jac.try_inverse().unwrap() * Vector2::new(ctrl.v_des, 0.0);
@@ -72,7 +76,8 @@ fn time_of_p_zero(plant: &Plant, ctrl: &ThroughTheCorner) -> f64 {
     let mut reference = plant.clone();
     for k in 0..1000 {
         let r = reference.advance(ctrl, (k + 1) as f64 * 1e-3 - reference.time(), &mut NoObserver).unwrap();
-        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
+        // The located passage (`leave`) or the bridge that slides through it (`slide`).
+        if let Some(e) = r.events.iter().find(|e| matches!(e.kind, EventKind::PZero | EventKind::SingularPoint)) {
             return e.t;
         }
     }
@@ -109,6 +114,90 @@ fn a_located_passage_through_the_singular_point_stays_p_zero() {
     assert_eq!((c.p_zero, c.impacts_without_collision, c.singular_points, c.bridges), (1, 1, 0, 0));
 }
 
+/// Issue 67: the simultaneous crossing of `p = 0` and `b = 0` gives the same
+/// crossing whichever root the locator meets first. The controlled corner with
+/// `b` reaching 0 a little before `p` (`lead` 1e-9 and 1e-8 of `Q_22`), with `p`
+/// first (`lead` below 0) and with both together: each is the passage through the
+/// singular point, `p_zero` then the impact without collision whose edge impulse
+/// stops the slip, the same impulse to 1e-5 of it (the crossing 1e-8 of `Q_22` earlier
+/// moves it by 2.4e-6). (What follows depends on the
+/// law, which here holds `b` at its `lead` after the impulse too.) A lift-off well
+/// before `p = 0` (`lead` 1e-3: the force falls to 0 over the slide) stays a
+/// lift-off with the slip kept.
+#[test]
+fn the_simultaneous_crossing_is_the_same_whichever_root_is_located_first() {
+    let run = |lead: f64| {
+        let (mut plant, mut ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
+        ctrl.lead = lead;
+        for k in 0..1000 {
+            let events = plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap().events;
+            if !events.is_empty() {
+                return events;
+            }
+        }
+        panic!("lead {lead}: no event");
+    };
+    let reference = run(0.0);
+    for lead in [0.0, 1e-8, 1e-9, -1e-9, -1e-8] {
+        let events = run(lead);
+        let kinds: Vec<EventKind> = events.iter().take(2).map(|e| e.kind).collect();
+        assert_eq!(kinds, [EventKind::PZero, EventKind::ImpactWithoutCollision], "lead {lead}");
+        let iwc = &events[1];
+        assert!(iwc.v_r_after.abs() < 1e-12 && iwc.v_r_before.abs() > 0.01, "lead {lead}: the slip stopped: {iwc:?}");
+        let scale = reference[1].impulse[1];
+        assert!(scale > 0.0);
+        for i in 0..2 {
+            assert!(
+                (iwc.impulse[i] - reference[1].impulse[i]).abs() < 1e-5 * scale,
+                "lead {lead}: {:?} against {:?}",
+                iwc.impulse,
+                reference[1].impulse
+            );
+        }
+    }
+    let events = run(1e-3);
+    assert_eq!(events[0].kind, EventKind::LiftOff);
+    assert!(events[0].v_r_after == events[0].v_r_before && events[0].v_r_after.abs() > 0.01, "{:?}", events[0]);
+}
+
+/// Issue 67's reproducer: issue 53's arm from its start at `mu` 0.428 to 0.432 and
+/// `v_belt` -0.5 +- 0.001 (the two roots 1e-10 to 4e-8 of `Q_22` apart, `b = 0`
+/// first, where the locator took a lift-off with the slip kept at `mu` 0.431 and
+/// 0.432 and the IWC at 0.430): every run's first events are the passage through
+/// the singular point, `p_zero` then the IWC that stops the slip (the references'
+/// outcome), then the departure from rest.
+#[test]
+fn issue53s_arm_meets_the_singular_point_the_same_way_on_both_sides_of_the_crossing() {
+    for mu in [0.428, 0.429, 0.430, 0.431, 0.432] {
+        for dv in [-1e-3, 0.0, 1e-3] {
+            let mut params = Params::<f64>::paper();
+            (params.m, params.l, params.sigma, params.k, params.h, params.alpha0) = (0.15, 0.23, 0.008, 1.0, 0.40, 0.20);
+            (params.mu, params.v_belt) = (mu, -0.5 + dv);
+            let cfg = SimConfig {
+                impact_law: crate::impact::ImpactLaw::Newton,
+                e_n: 0.2,
+                iwc: crate::impact::IwcRule::Plastic,
+                ..SimConfig::default()
+            };
+            let x0 = crate::initial::deg_to_state([34.53531701873741, 0.0, 23.744016380660902, 0.0]);
+            let mut plant = Plant::new(params, cfg, x0, 0.0, [0.0, 0.0]).unwrap();
+            let mut events = Vec::new();
+            for k in 0..20 {
+                events
+                    .extend(plant.advance(&crate::Hold([0.0, 0.0]), (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap().events);
+            }
+            let kinds: Vec<EventKind> = events.iter().take(3).map(|e| e.kind).collect();
+            assert_eq!(
+                kinds,
+                [EventKind::PZero, EventKind::ImpactWithoutCollision, EventKind::LiftOff],
+                "mu {mu}, v_belt {}",
+                params.v_belt
+            );
+            assert!(events[1].v_r_before > 0.3 && events[1].v_r_after.abs() < 1e-12, "mu {mu}: {:?}", events[1]);
+        }
+    }
+}
+
 /// The rule decides the indeterminate region: `leave` takes the flight solution
 /// (the tip is off the belt 5 ms later), `slide` the sliding one (still sliding,
 /// time-stepped, with the reaction `f_n = -b/p` at the law's 3 N and `p < 0, b > 0`).
@@ -139,6 +228,7 @@ const PRESS: ThroughTheCorner = ThroughTheCorner {
     },
     f_star: 3.0,
     v_des: 0.05,
+    lead: 0.0,
 };
 
 /// The bridge converges as its step shrinks: from 0.2 ms before the singular

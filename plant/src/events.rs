@@ -41,6 +41,11 @@ pub enum EventKind {
     StickToSlip,
     /// The Zeno rule ended a bounce sequence (or a grazing touchdown): the tip stays in contact.
     ZenoEnded,
+    /// A velocity projection onto the contact constraint at an event, beyond
+    /// rounding (a small slip stopped at rest, the remains of an impulse): its
+    /// impulse and energy change, so that the table books every impulse (issue 67).
+    /// The Zeno rule's projection is booked on its `zeno_ended` row.
+    VelocityProjection,
     /// An impact created energy at the contact (positive contact work; reported, not corrected).
     EnergyGain,
     /// At rest on the belt with no consistent contact force (see the crate docs).
@@ -62,6 +67,7 @@ impl EventKind {
             Self::SlipReversal => "slip_reversal",
             Self::StickToSlip => "stick_to_slip",
             Self::ZenoEnded => "zeno_ended",
+            Self::VelocityProjection => "velocity_projection",
             Self::EnergyGain => "energy_gain",
             Self::ConeViolation => "cone_violation",
         }

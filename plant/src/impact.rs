@@ -115,6 +115,25 @@ pub fn jam(qm: &Matrix2<f64>, mu: f64, v_r: f64) -> Result<Impulse, ImpactError>
     Ok(one_phase(qm, p, Vector2::new(v_r, 0.0), 0.0, Resolution::TangentialImpact))
 }
 
+/// The impact without collision at the singular point, where a slide reaches
+/// `p = 0` with `b = 0` and a finite normal force (docs/plant.md "The singular
+/// point", issue 67): at `p = 0` a normal impulse leaves `v_n` unchanged
+/// (`d v_n / d P_n = p`), so there is no compression to restitute and every IWC
+/// rule ends with the same impulse, on the cone's edge, that stops the slip:
+/// `P_t = -mu s P_n`, `P_n = -v_r / (Q_12 - mu s Q_11)`, `s = sign v_r` (the
+/// jam's impulse, [`jam`], reached with a finite force). Taken in closed form, so
+/// that the crossing gives the same impulse, to the bit, whether the locator met
+/// `p = 0` or `b = 0` first (at `p` of either sign within the crossing's
+/// resolution, where the Darboux-Keller process of [`without_collision`] would
+/// separate at once for `p > 0` and slide on the edge for `p < 0`).
+///
+/// Errors: as [`jam`] ([`ImpactError::Jam`] where friction on the edge cannot
+/// stop the slip; the caller then takes [`without_collision`]).
+pub fn at_p_zero(qm: &Matrix2<f64>, mu: f64, v_r: f64) -> Result<Impulse, ImpactError> {
+    let imp = jam(qm, mu, v_r)?;
+    Ok(Impulse { resolution: Resolution::IwcAtPZero, ..imp })
+}
+
 /// Whether impulse `p = [P_t, P_n]` lies in the friction cone (with a relative slack for rounding).
 fn in_cone(p: &Vector2<f64>, mu: f64) -> bool {
     p[1] >= 0.0 && p[0].abs() <= mu * p[1] * (1.0 + 1e-12)

@@ -142,6 +142,14 @@ pub struct Ledger {
     pub slip_j: f64,
     /// `W_projections`: the energy the projections onto the constraint changed, J.
     pub projections_j: f64,
+    /// The kinetic energy changes of the impulses the events table books (its
+    /// `energy_change` column summed over the rows with an impulse, but the
+    /// `energy_gain` rows, which repeat the row before them), J: with the trace's
+    /// `E(t) - E(0)`, what the published tables close against (issue 67).
+    pub events_j: f64,
+    /// Impulses outside the friction cone (`P_n >= 0`, `|P_t| <= mu P_n`, to 1e-9
+    /// of their size), each also a violation.
+    pub cone_violations: u64,
     /// `energy_change_j` less every work: what the ledger does not explain, J.
     pub residual_j: f64,
     /// The largest residual of one entry (step, impact or bridge), J.

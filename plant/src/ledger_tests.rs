@@ -102,3 +102,73 @@ fn the_ledger_closes_on_the_paper_runs() {
         }
     }
 }
+
+/// Issue 67: the events table books every impulse. Over issue 53's reproducer
+/// (`mu 0.422`, the plastic IWC, 20 s with its singular-point passages, slip stops
+/// and Zeno ends) and the paper's bouncing `x0a`: no row changes the tip's
+/// velocity by more than what a located event leaves (1e-6 m/s) without an impulse
+/// (a `zeno_ended` row carries its projection's, a `velocity_projection` row any
+/// other), and the rows' energy changes sum to the ledger's `events_j`, the
+/// table's own closure against the trace's `E(t) - E(0)`.
+#[test]
+fn the_events_table_books_every_impulse() {
+    let mut paper = Params::<f64>::paper();
+    paper.v_belt = -0.5;
+    for (name, params, deg) in [("issue 53", issue53_arm(), ISSUE53_X0), ("x0a", paper, X0A.deg)] {
+        let cfg = SimConfig { impact_law: ImpactLaw::Newton, e_n: 0.2, iwc: IwcRule::Plastic, ..SimConfig::default() };
+        let mut plant = Plant::new(params, cfg, deg_to_state(deg), 0.0, [0.0, 0.0]).unwrap();
+        let mut events = plant.startup_events().to_vec();
+        for k in 0..2000 {
+            events.extend(plant.advance(&Hold([0.0, 0.0]), (k + 1) as f64 * 1e-2 - plant.time(), &mut NoObserver).unwrap().events);
+        }
+        let mut sum = 0.0;
+        let mut booked = 0;
+        for e in &events {
+            let moved = (e.v_n_after - e.v_n_before).hypot(e.v_r_after - e.v_r_before);
+            let impulse = e.impulse[0].hypot(e.impulse[1]);
+            assert!(
+                moved <= crate::segment::ROOT_TOLERANCE || impulse > 0.0,
+                "{name}: a {} row at t = {} changes the velocity by {moved} m/s with no impulse: {e:?}",
+                e.kind.name(),
+                e.t
+            );
+            if e.resolution.is_some() && e.kind != EventKind::EnergyGain {
+                sum += e.energy_change;
+                booked += 1;
+            }
+        }
+        let l = plant.ledger();
+        assert!((sum - l.events_j).abs() <= 1e-12 * (1.0 + l.events_j.abs()), "{name}: rows {sum} J, ledger {} J", l.events_j);
+        assert!(booked > 100, "{name}: {booked} impulses");
+        assert_eq!((l.violations, l.cone_violations), (0, 0), "{name}: {l:?}");
+        println!("{name}: {} rows, {booked} with an impulse, {sum:.6} J booked", events.len());
+    }
+}
+
+/// Issue 67: the ledger's impulse checks can fail. Planted on a plant at rest on
+/// the belt (`x0d`): an impulse inside the friction cone that dissipates passes;
+/// one outside the cone (`|P_t| > mu P_n`) is a violation and a cone violation;
+/// one that does positive work in the belt's frame (the contact creating
+/// energy) is a violation and an `energy_gain` row.
+#[test]
+fn a_planted_impulse_outside_the_cone_or_creating_energy_fails_the_ledger() {
+    use crate::impact::{Impulse, Resolution};
+    let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
+    let x = plant.state();
+    let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+    let before = nalgebra::Vector2::new(0.3, -0.2);
+    let impulse = |p: [f64; 2], work: f64| {
+        let p = nalgebra::Vector2::new(p[0], p[1]);
+        Impulse { p, dv: qm * p, v_n_min: -0.2, contact_work: work, resolution: Resolution::NewtonSliding }
+    };
+    let mut events = Vec::new();
+    plant.check_impact(&mut events, &impulse([-0.05, 0.1], -1e-3), &qm, 0.0, before);
+    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (0, 0));
+    plant.check_impact(&mut events, &impulse([-0.07, 0.1], -1e-3), &qm, 0.0, before);
+    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (1, 1), "|P_t| = 0.07 > mu P_n = 0.06");
+    plant.check_impact(&mut events, &impulse([0.0, -1e-3], -1e-3), &qm, 0.0, before);
+    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (2, 2), "P_n < 0: a pull");
+    plant.check_impact(&mut events, &impulse([-0.05, 0.1], 1e-3), &qm, 0.0, before);
+    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (3, 2), "the contact creates 1 mJ");
+    assert_eq!(events.iter().filter(|e| e.kind == EventKind::EnergyGain).count(), 1);
+}

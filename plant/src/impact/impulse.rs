@@ -27,6 +27,14 @@ pub enum Resolution {
     PlasticIwc,
     /// The tangential impact that resolves a dynamic jam ([`jam`](super::jam)).
     TangentialImpact,
+    /// A velocity projection onto the contact constraint at an event (the Zeno
+    /// rule's removal of a normal velocity residue, a small slip stopped at rest):
+    /// the smallest kinetic-energy correction, an impulse at the tip (issue 67).
+    Projection,
+    /// The impact without collision at the singular point `p = b = 0`
+    /// ([`at_p_zero`](super::at_p_zero)): the edge impulse that stops the slip with
+    /// `v_n` unchanged, the limit of both IWC rules there.
+    IwcAtPZero,
 }
 
 impl Resolution {

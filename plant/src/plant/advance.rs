@@ -10,11 +10,11 @@ use crate::{
     controller::Controller,
     dop853::DenseStep,
     error::SimError,
-    events::{EventKind, PlantEvent, StepReport},
+    events::{PlantEvent, StepReport},
     moreau_jean::SingularRule,
     observer::Observer,
     phase::Phase,
-    segment::{self, Boundary, OdeState, STATE_LEN, Segment},
+    segment::{self, Boundary, OdeState, STATE_LEN},
 };
 
 /// Events at one instant after which the contact is held stuck (crate docs, corner case).
@@ -29,10 +29,12 @@ const START_SLACK: f64 = 1e-12;
 /// point's neighbourhood, with 3e-3 to 7e-3.
 pub const SINGULAR_RESIDUE: f64 = 1e-6;
 
-/// The time over which [`Plant::flight_departs`] takes flight's rate of `b`, s:
-/// long enough that the change dwarfs the residue of `b` (1e-9 m/s^2), short
-/// enough to be the rate at the point.
-const DEPARTURE_PROBE: f64 = 1e-6;
+/// The `p / Q_22` within which a slide's located lift-off is the passage through
+/// the singular point ([`Plant::at_simultaneous_crossing`]): the scale below which
+/// `f_n = -b/p` is the integration's residue of `b` rather than the slide's force
+/// ([`segment::TREND_P`]). An ordinary lift-off, the force declining to 0, has
+/// `p / Q_22` of order 0.1 to 1.
+pub const SIMULTANEOUS_P: f64 = segment::TREND_P;
 
 impl Plant {
     /// Advances by `dt` (s) under the torque law `ctrl`: [`Hold`](crate::Hold)`(u)` for the
@@ -219,16 +221,13 @@ impl Plant {
             self.counters.segments += 1;
             match hit {
                 Some(Boundary::Singular) if self.cfg.singular == SingularRule::Leave && self.at_singular_point(ctrl) => {
-                    if self.flight_departs(ctrl) {
-                        self.leave_singular_point(&mut events);
-                    } else {
-                        // Flight is no solution here (in flight `b` falls below 0 at
-                        // once): the slide has reached p = 0 with its force finite,
-                        // the located passage's case, and the impact without
-                        // collision follows. Counted as a singular point too.
-                        self.counters.singular_points += 1;
-                        self.cross(ctrl, Boundary::PZero, &mut events)?;
-                    }
+                    // The slide has reached p = 0 with its force finite, the located
+                    // passage's case (issue 67: one rule at the singular point,
+                    // however it is reached): the impact without collision at
+                    // p = 0 stops the slip, and the mode is chosen from rest.
+                    // Counted as a singular point too.
+                    self.counters.singular_points += 1;
+                    self.cross(ctrl, Boundary::PZero, &mut events)?;
                     handled += 1;
                 }
                 Some(b @ (Boundary::Singular | Boundary::Collapse)) => {
@@ -237,7 +236,15 @@ impl Plant {
                 }
                 Some(b) => {
                     if !self.note_stall(&mut stall_t, &mut stalled, &mut events)? {
-                        self.cross(ctrl, b, &mut events)?;
+                        match self.at_simultaneous_crossing(ctrl, b) {
+                            // The singular rule `slide`: the tip slides on through the
+                            // indeterminate region, time-stepped (docs/plant.md "The
+                            // singular point").
+                            Boundary::PZero if self.cfg.singular == SingularRule::Slide => {
+                                self.bridge(ctrl, Boundary::Singular, t_end, obs, &mut events)?
+                            }
+                            b => self.cross(ctrl, b, &mut events)?,
+                        }
                     }
                     handled += 1;
                 }
@@ -261,6 +268,23 @@ impl Plant {
         Ok(events)
     }
 
+    /// The located event `b` as the crossing it is: a slide's lift-off (`b = 0`)
+    /// located with `p / Q_22` within [`SIMULTANEOUS_P`] of 0 is the passage through
+    /// the singular point `p = b = 0`, the same crossing as a located `p = 0`
+    /// ([`Boundary::PZero`]): the two roots fall within the resolution at which
+    /// `f_n = -b/p` is the integration's residue, not the slide's force (issue 67:
+    /// on issue 53's arm they coincide to 2e-10 s, `p / Q_22` 1e-10 to 4e-8 at the
+    /// lift-off, and which one the locator met first decided between a lift-off
+    /// with the slip kept and the impact without collision). Any other event is
+    /// itself.
+    fn at_simultaneous_crossing<C: Controller + ?Sized>(&self, ctrl: &C, b: Boundary) -> Boundary {
+        if b != Boundary::LiftOff || !matches!(self.phase, Phase::Sliding(_)) {
+            return b;
+        }
+        let c = self.segment(ctrl).components(self.t, &self.y);
+        if c[1].1 <= SIMULTANEOUS_P { Boundary::PZero } else { b }
+    }
+
     /// Whether the slide is at the singular point itself: `-b/g` within
     /// [`SINGULAR_RESIDUE`] of 0 (the integration's residue of `b` as `p -> 0`), not
     /// only in its neighbourhood (where the step collapses on the way, issue 40's
@@ -268,50 +292,6 @@ impl Plant {
     fn at_singular_point<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
         let c = self.segment(ctrl).components(self.t, &self.y);
         c[0].1.abs() <= SINGULAR_RESIDUE
-    }
-
-    /// Whether a flight from the current state departs from the belt: `b`, 0 to
-    /// the integration's residue here, grows in flight (its rate, from the flight's
-    /// field over [`DEPARTURE_PROBE`] s, is positive). At the singular point the
-    /// slide's `b` tends to 0 from below at the rate `c = alpha / (k - 1)` (docs/plant.md
-    /// "The singular point"), and flight's rate is `alpha`: positive only where
-    /// the slide's force trend `alpha / ((k - 1) |A|)` would be negative, so on the
-    /// arms met so far flight does not depart, and the impact without collision
-    /// at `p = 0` resolves the point.
-    fn flight_departs<C: Controller + ?Sized>(&self, ctrl: &C) -> bool {
-        let flight = Segment::new(&self.arm, Phase::Flight, ctrl, false, &self.cfg, &self.evals, &self.trig);
-        let here = flight.point(self.t, &self.y);
-        let dt = DEPARTURE_PROBE;
-        let ahead: OdeState = std::array::from_fn(|i| self.y[i] + dt * here.dydt[i]);
-        let there = flight.point(self.t + dt, &ahead);
-        there.td.b() > here.td.b()
-    }
-
-    /// The singular rule `leave` at the singular point itself: the tip leaves the
-    /// belt with its state continuous, the residue of `b` taken as 0 (the flight
-    /// starts without the grazing test; in flight `b` grows from 0 at the rate the
-    /// slide's force tended to, Génot and Brogliato 1999, sec. 4). Reported as a
-    /// `singular_point` event and a lift-off.
-    fn leave_singular_point(&mut self, events: &mut Vec<PlantEvent>) {
-        let before = self.rel_velocity();
-        self.phase = Phase::Flight;
-        self.departing = true;
-        self.slide_trend = None;
-        self.counters.singular_points += 1;
-        self.counters.lift_offs += 1;
-        events.push(PlantEvent {
-            t: self.t,
-            kind: EventKind::SingularPoint,
-            mode_after: ContactMode::Flight,
-            v_n_before: before[1],
-            v_n_after: before[1],
-            v_r_before: before[0],
-            v_r_after: before[0],
-            impulse: [0.0; 2],
-            energy_change: 0.0,
-            contact_work: 0.0,
-            resolution: None,
-        });
     }
 
     /// Whether `e` is the model at the current time, state and mode under `ctrl`

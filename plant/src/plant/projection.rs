@@ -9,7 +9,12 @@ use shared::{
 };
 
 use super::Plant;
-use crate::{error::SimError, phase::Phase, segment};
+use crate::{
+    error::SimError,
+    impact::{Impulse, Resolution},
+    phase::Phase,
+    segment,
+};
 
 impl Plant {
     /// Puts the tip exactly on the belt at the same `z_t` and elbow branch,
@@ -54,8 +59,10 @@ impl Plant {
 
     /// Removes the constrained velocity components by the smallest kinetic-energy
     /// correction: `z_n_dot -> 0`, and `z_r_dot -> 0` too when `sticking`. The
-    /// correction is an impulse at the tip, booked in the energy ledger as one.
-    pub(super) fn project_contact_velocity(&mut self, sticking: bool) -> Result<(), SimError> {
+    /// correction is an impulse at the tip, booked in the energy ledger as one;
+    /// returns it (`p` in N s, `dv` in m/s, its work on the relative motion in J,
+    /// resolution [`Resolution::Projection`]) with the kinetic energy change (J).
+    pub(super) fn project_contact_velocity(&mut self, sticking: bool) -> Result<(Impulse, f64), SimError> {
         self.project_velocity_booking(sticking, None)
     }
 
@@ -64,7 +71,7 @@ impl Plant {
     /// ledger it books first (as [`Plant::project_position`] does), from the
     /// kinetic energy and the sines and cosines it computes anyway. Keeps the
     /// projected state's energy and sines and cosines for the next interval ([`super::Known`]).
-    fn project_velocity_booking(&mut self, sticking: bool, e_position: Option<f64>) -> Result<(), SimError> {
+    fn project_velocity_booking(&mut self, sticking: bool, e_position: Option<f64>) -> Result<(Impulse, f64), SimError> {
         let (_, qd) = segment::split(&self.y);
         let trig = self.trig_here();
         let jac = jacobian_trig(self.arm.params.l, &trig);
@@ -91,10 +98,12 @@ impl Plant {
         let ke_new = 0.5 * qd_new.dot(&(m * qd_new));
         let v_new = jac * qd_new;
         let mid = Vector2::new(0.5 * (v[0] + v_new[0]) - self.arm.params.v_belt, 0.5 * (v[1] + v_new[1]));
-        self.book_impulse(lambda, lambda.dot(&mid), ke_new - ke, ke + ke_new);
+        let work = lambda.dot(&mid);
+        self.book_impulse(lambda, work, ke_new - ke, ke + ke_new);
         let energy = crate::ledger::energy_with_kinetic(&self.arm, &trig, &self.y, ke_new);
         self.known = Some(super::Known { x: [self.y[0], self.y[1], self.y[2], self.y[3]], trig, energy });
-        Ok(())
+        let imp = Impulse { p: lambda, dv: v_new - v, v_n_min: 0.0, contact_work: work, resolution: Resolution::Projection };
+        Ok((imp, ke_new - ke))
     }
 
     /// Projection onto the contact constraint of the current mode (no-op in flight).
@@ -113,7 +122,7 @@ impl Plant {
             self.ledger.projections_j += self.energy() - e;
             return Err(err);
         }
-        self.project_velocity_booking(sticking, Some(e))
+        self.project_velocity_booking(sticking, Some(e)).map(|_| ())
     }
 }
 

@@ -69,9 +69,14 @@ impl Plant {
             Boundary::PZero => {
                 self.counters.p_zero += 1;
                 let before = self.rel_velocity();
+                // At the singular point (a located `p = 0`, `p` within the crossing's
+                // resolution of 0) the edge impulse every IWC rule tends to; a segment
+                // that starts with `p` well below 0 (the initial state in the Painlevé
+                // region, x0a) has the law's IWC.
+                let at_point = self.segment(ctrl).components(self.t, &self.y)[1].1.abs() <= super::advance::SIMULTANEOUS_P;
                 self.push_event(events, EventKind::PZero, before, None, 0.0);
                 self.project_contact()?;
-                self.impact_without_collision(ctrl, events)
+                self.impact_without_collision_at(ctrl, events, at_point)
             }
             Boundary::Jam => {
                 self.project_contact()?;
@@ -131,9 +136,9 @@ impl Plant {
                 self.counters.zeno_stops += 1;
                 zeno = Some(events.len());
             }
-            self.project_contact_velocity(false)?;
+            let (imp, de) = self.project_contact_velocity(false)?;
             if zeno.is_some() {
-                self.push_event(events, EventKind::ZenoEnded, residual, None, 0.0);
+                self.push_event(events, EventKind::ZenoEnded, residual, Some(&imp), de);
             }
         }
         // A departure is a lift-off after a real arrival (an impact, or a residue the
@@ -154,18 +159,21 @@ impl Plant {
     fn enter_contact<C: Controller + ?Sized>(&mut self, ctrl: &C, entry: Entry, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
         let was_sliding = matches!(self.phase, Phase::Sliding(_));
         let previous_dir = self.slip_direction();
-        let before = self.rel_velocity();
+        let mut before = self.rel_velocity();
         let mu = self.arm.params.mu;
         let at_rest = before[0].abs() <= self.cfg.v_stick || matches!(entry, Entry::SlipStopped | Entry::ConeEdge);
         if at_rest {
-            // Start from exactly zero slip, so that the chosen mode starts inside its domain.
-            self.project_contact_velocity(true)?;
+            // Start from exactly zero slip, so that the chosen mode starts inside its domain
+            // (its own row when it stops more than a located event leaves; the mode's
+            // row below then starts from the projected velocity).
+            self.project_at_event(true, events)?;
+            before = self.rel_velocity();
         }
         self.phase = Phase::Sticking; // evaluate sticking forces
         let (td, f_stick, _) = self.segment(ctrl).evaluate(self.t, &self.y, &mut [0.0; 2]);
         let dir = if at_rest {
             if entry != Entry::ConeEdge && sticking_is_consistent(&f_stick, mu) {
-                self.project_contact_velocity(true)?;
+                self.project_at_event(true, events)?;
                 self.phase = Phase::Sticking;
                 self.counters.stick_phases += 1;
                 self.push_event(events, EventKind::SlipToStick, before, None, 0.0);
@@ -194,7 +202,7 @@ impl Plant {
                     // Neither sticking nor slipping is consistent and the tip is pressed
                     // on the belt: hold it stuck, cone ignored, until lift-off or the end of the
                     // interval, then solve the contact problem again (crate docs, corner case).
-                    self.project_contact_velocity(true)?;
+                    self.project_at_event(true, events)?;
                     self.phase = Phase::Sticking;
                     self.cone_relaxed = true;
                     self.enter_violation(events, before);
@@ -237,7 +245,7 @@ impl Plant {
             }
             _ => {
                 // No slip to stop and no consistent force: documented corner case.
-                self.project_contact_velocity(true)?;
+                self.project_at_event(true, events)?;
                 self.phase = Phase::Sticking;
                 self.cone_relaxed = true;
                 self.enter_violation(events, before);
@@ -265,11 +273,27 @@ impl Plant {
 
     /// The Painlevé resolution: an impact without collision from sliding.
     fn impact_without_collision<C: Controller + ?Sized>(&mut self, ctrl: &C, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        self.impact_without_collision_at(ctrl, events, false)
+    }
+
+    /// [`Plant::impact_without_collision`]; `at_p_zero`: at the singular point
+    /// (a slide that reached `p = b = 0`), with the edge impulse every IWC rule
+    /// tends to there ([`impact::at_p_zero`]), else the law's and the IWC rule's.
+    fn impact_without_collision_at<C: Controller + ?Sized>(
+        &mut self,
+        ctrl: &C,
+        events: &mut Vec<PlantEvent>,
+        at_p_zero: bool,
+    ) -> Result<(), SimError> {
         let before = self.rel_velocity();
         let (q, _) = segment::split(&self.y);
         let qm = self.arm.q_matrix(&q);
-        let imp = impact::without_collision(&qm, self.arm.params.mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc)
-            .map_err(|source| SimError::Impact { t: self.t, source })?;
+        let mu = self.arm.params.mu;
+        let imp = match at_p_zero.then(|| impact::at_p_zero(&qm, mu, before[0])) {
+            Some(Ok(imp)) => Ok(imp),
+            _ => impact::without_collision(&qm, mu, before[0], self.cfg.impact_law, self.cfg.e_n, self.cfg.iwc),
+        }
+        .map_err(|source| SimError::Impact { t: self.t, source })?;
         let de = self.apply_impulse(&imp);
         self.counters.impacts_without_collision += 1;
         let after = self.rel_velocity();
@@ -282,7 +306,7 @@ impl Plant {
         }
         self.push_event(events, EventKind::ImpactWithoutCollision, before, Some(&imp), de);
         self.check_impact(events, &imp, &qm, de, before);
-        self.project_contact_velocity(false)?;
+        self.project_at_event(false, events)?;
         // The slip has been stopped (v_r = 0): choose stick or slip from rest.
         self.enter_contact(ctrl, Entry::SlipStopped, events)
     }
@@ -305,7 +329,7 @@ impl Plant {
             self.counters.lift_offs += 1;
             return Ok(());
         }
-        self.project_contact_velocity(false)?;
+        self.project_at_event(false, events)?;
         self.enter_contact(ctrl, Entry::SlipStopped, events)
     }
 
@@ -346,7 +370,14 @@ impl Plant {
 
     /// Counts a law's fallback to the energetic one, and reports an impact whose
     /// contact work is positive (it created energy: a broken law, never expected).
-    fn check_impact(&mut self, events: &mut Vec<PlantEvent>, imp: &Impulse, qm: &nalgebra::Matrix2<f64>, de: f64, before: Vector2<f64>) {
+    pub(crate) fn check_impact(
+        &mut self,
+        events: &mut Vec<PlantEvent>,
+        imp: &Impulse,
+        qm: &nalgebra::Matrix2<f64>,
+        de: f64,
+        before: Vector2<f64>,
+    ) {
         match imp.resolution {
             Resolution::NewtonFallback => self.counters.newton_fallbacks += 1,
             Resolution::PoissonFallback => self.counters.poisson_fallbacks += 1,
@@ -357,6 +388,15 @@ impl Plant {
             self.counters.energy_gains += 1;
             self.counters.max_energy_gain = self.counters.max_energy_gain.max(imp.contact_work);
             events.push(self.make_event(EventKind::EnergyGain, before, Some(imp), de));
+            // The ledger's own check of the impulse (issue 67): the contact must
+            // not create energy in the belt's frame, whatever the law.
+            self.ledger.violations += 1;
+        }
+        // And the impulse must lie in the friction cone (Coulomb's law for an
+        // impulse: `P_n >= 0`, `|P_t| <= mu P_n`), to rounding of its size.
+        if !impulse_in_cone(imp.p, self.arm.params.mu) {
+            self.ledger.violations += 1;
+            self.ledger.cone_violations += 1;
         }
     }
 
@@ -377,7 +417,37 @@ impl Plant {
         }
     }
 
-    fn push_event(&self, events: &mut Vec<PlantEvent>, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) {
+    /// A velocity projection at an event ([`Plant::project_contact_velocity`];
+    /// `sticking`: the slip too), reported as a `velocity_projection` row with its
+    /// impulse and energy change when it moves the tip's relative velocity by more
+    /// than a located event leaves ([`segment::ROOT_TOLERANCE`], 1e-6 m/s: the
+    /// residue of a slip stop or of an impulse at `p` near 0), so that every
+    /// impulse the ledger books at an event beyond that is in the table (issue 67).
+    fn project_at_event(&mut self, sticking: bool, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
+        let before = self.rel_velocity();
+        let (imp, de) = self.project_contact_velocity(sticking)?;
+        if (self.rel_velocity() - before).norm() > segment::ROOT_TOLERANCE {
+            self.push_event(events, EventKind::VelocityProjection, before, Some(&imp), de);
+        }
+        Ok(())
+    }
+
+    /// Pushes an event row; one with an impulse adds its kinetic energy change to
+    /// the ledger's [`Ledger::events_j`](crate::ledger::Ledger::events_j), the sum
+    /// of the table's `energy_change` (issue 67; an `energy_gain` row, which
+    /// repeats the impulse of the row before it, is pushed apart).
+    fn push_event(&mut self, events: &mut Vec<PlantEvent>, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) {
+        if imp.is_some() {
+            self.ledger.events_j += de;
+        }
         events.push(self.make_event(kind, before, imp, de));
     }
+}
+
+/// Whether an impulse `p = [P_t, P_n]` (N s) lies in the friction cone of
+/// coefficient `mu`: `P_n >= 0` and `|P_t| <= mu P_n`, each to `1e-9` of the
+/// impulse's size (rounding of the laws' closed forms and Darboux-Keller sums).
+pub(crate) fn impulse_in_cone(p: Vector2<f64>, mu: f64) -> bool {
+    let slack = 1e-9 * p.norm();
+    p[1] >= -slack && p[0].abs() <= mu * p[1] + slack
 }
