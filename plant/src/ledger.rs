@@ -149,7 +149,7 @@ pub struct Ledger {
     pub events_j: f64,
     /// Impulses outside the friction cone (`P_n >= 0`, `|P_t| <= mu P_n`, to 1e-9
     /// of their size), each also a violation.
-    pub cone_violations: u64,
+    pub impulses_outside_cone: u64,
     /// `energy_change_j` less every work: what the ledger does not explain, J.
     pub residual_j: f64,
     /// The largest residual of one entry (step, impact or bridge), J.

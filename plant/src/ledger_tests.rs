@@ -140,7 +140,7 @@ fn the_events_table_books_every_impulse() {
         let l = plant.ledger();
         assert!((sum - l.events_j).abs() <= 1e-12 * (1.0 + l.events_j.abs()), "{name}: rows {sum} J, ledger {} J", l.events_j);
         assert!(booked > 100, "{name}: {booked} impulses");
-        assert_eq!((l.violations, l.cone_violations), (0, 0), "{name}: {l:?}");
+        assert_eq!((l.violations, l.impulses_outside_cone), (0, 0), "{name}: {l:?}");
         println!("{name}: {} rows, {booked} with an impulse, {sum:.6} J booked", events.len());
     }
 }
@@ -163,12 +163,12 @@ fn a_planted_impulse_outside_the_cone_or_creating_energy_fails_the_ledger() {
     };
     let mut events = Vec::new();
     plant.check_impact(&mut events, &impulse([-0.05, 0.1], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (0, 0));
+    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (0, 0));
     plant.check_impact(&mut events, &impulse([-0.07, 0.1], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (1, 1), "|P_t| = 0.07 > mu P_n = 0.06");
+    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (1, 1), "|P_t| = 0.07 > mu P_n = 0.06");
     plant.check_impact(&mut events, &impulse([0.0, -1e-3], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (2, 2), "P_n < 0: a pull");
+    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (2, 2), "P_n < 0: a pull");
     plant.check_impact(&mut events, &impulse([-0.05, 0.1], 1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().cone_violations), (3, 2), "the contact creates 1 mJ");
+    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (3, 2), "the contact creates 1 mJ");
     assert_eq!(events.iter().filter(|e| e.kind == EventKind::EnergyGain).count(), 1);
 }

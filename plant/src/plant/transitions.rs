@@ -396,7 +396,7 @@ impl Plant {
         // impulse: `P_n >= 0`, `|P_t| <= mu P_n`), to rounding of its size.
         if !impulse_in_cone(imp.p, self.arm.params.mu) {
             self.ledger.violations += 1;
-            self.ledger.cone_violations += 1;
+            self.ledger.impulses_outside_cone += 1;
         }
     }
 

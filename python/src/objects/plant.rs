@@ -315,8 +315,9 @@ impl PyPlant {
 
     /// The energy ledger since creation (docs/plant.md "The energy ledger"): dict
     /// of float, J (`energy_change_j`, `motors_j`, `damping_j`, `belt_j`, `slip_j`,
-    /// `projections_j`, `residual_j`, `worst_entry_j`, `worst_ratio`,
-    /// `largest_event_belt_j`) and int (`refinements`, `violations`).
+    /// `projections_j`, `events_j`: the events' energy changes summed, `residual_j`,
+    /// `worst_entry_j`, `worst_ratio`, `largest_event_belt_j`) and int
+    /// (`refinements`, `violations`, `impulses_outside_cone`).
     #[getter]
     fn ledger<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.with(|p| p.ledger()))
