@@ -557,6 +557,31 @@ fn zeno_ended_records_the_chosen_mode() {
     assert!(seen >= 3, "every law ends its bounce sequence by the Zeno rule: {seen}");
 }
 
+/// A touchdown that leaves the tip on the belt (a plastic one, `e_n = 0`) records
+/// the mode chosen after it, as a Zeno end does, not the flight it ended (issue
+/// 67's helper found `flight` on such rows): the same drop as above, each law.
+#[test]
+fn a_touchdown_that_stays_on_the_belt_records_the_chosen_mode() {
+    let params = Params::<f64>::paper();
+    let mut seen = 0;
+    for law in ImpactLaw::ALL {
+        let cfg = SimConfig { impact_law: law, e_n: 0.0, ..SimConfig::default() };
+        let q = inverse_kinematics(params.l, &Vector2::new(-0.16, -params.h + 0.01), ElbowBranch::Down).unwrap();
+        let mut p = Plant::new(params, cfg, [q[0], 0.0, q[1], 0.0], 0.0, [0.0, 0.0]).unwrap();
+        let events = run_events(&mut p, 0.5, 1e-3);
+        for (i, e) in events.iter().enumerate().filter(|(_, e)| e.kind == EventKind::Touchdown && e.v_n_after <= 1e-4) {
+            seen += 1;
+            let lifted = events[i + 1..].iter().take_while(|n| n.t == e.t).any(|n| n.kind == EventKind::LiftOff);
+            if lifted {
+                assert_eq!(e.mode_after, ContactMode::Flight, "{law:?}: {e:?}");
+            } else {
+                assert_ne!(e.mode_after, ContactMode::Flight, "{law:?}: {e:?}");
+            }
+        }
+    }
+    assert!(seen >= 3, "every law lands the dropped tip plastically: {seen}");
+}
+
 /// The corner case found by a search over held torques and perturbed arms (issue
 /// 24): a slide runs into `p -> 0+` with `b < 0`; without the jam rule DOP853's step
 /// collapsed at t = 0.721 s ("step size 1.6e-15 s too small").

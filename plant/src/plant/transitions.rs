@@ -107,6 +107,7 @@ impl Plant {
             self.phase = Phase::Flight;
             return Ok(());
         }
+        let mut landing = None;
         if v_n < -self.cfg.zeno_velocity {
             let (q, _) = segment::split(&self.y);
             let qm = self.arm.q_matrix(&q);
@@ -122,6 +123,9 @@ impl Plant {
                 self.check_impact(events, &imp, &qm, de, before);
                 return Ok(());
             }
+            // The tip stays on the belt: the row records the mode chosen below, not
+            // the flight it ended (as a Zeno end's does).
+            landing = Some(events.len());
             self.push_event(events, EventKind::Touchdown, before, Some(&imp), de);
             self.check_impact(events, &imp, &qm, de, before);
         }
@@ -147,8 +151,8 @@ impl Plant {
         let landed = !initial && (v_n < -self.cfg.zeno_velocity || zeno.is_some());
         let entry = if landed { Entry::Landed } else { Entry::Settle };
         let chosen = self.enter_contact(ctrl, entry, events);
-        // The Zeno event records the mode chosen after it.
-        if let Some(i) = zeno {
+        // The Zeno event and a touchdown that stays on the belt record the mode chosen after them.
+        for i in [landing, zeno].into_iter().flatten() {
             events[i].mode_after = self.mode();
         }
         chosen
