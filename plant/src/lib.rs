@@ -52,6 +52,7 @@ pub mod ledger;
 pub mod moreau_jean;
 pub mod observer;
 pub mod segment;
+pub mod time_scale;
 pub mod trig;
 pub mod validity;
 

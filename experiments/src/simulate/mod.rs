@@ -131,13 +131,6 @@ pub fn sample_step(plant: &mut Plant, k: usize, sample_dt: f64) -> Result<plant:
     plant.advance(&plant::Hold([0.0, 0.0]), target - plant.time(), &mut plant::NoObserver)
 }
 
-/// The largest integrator step of the open loop, s, whatever the sampling period
-/// (issue 53: the path must not depend on it): 2 ms keeps the accuracy of the 1 ms
-/// steps the samples used to set (1.1e-13 rad in `theta1` from `x0a` at 0.5 s
-/// against a reference with 0.1 ms steps, where 5 ms lose three decades:
-/// docs/architecture.md "The accuracy contract").
-pub const DENSE_MAX_STEP: f64 = 2e-3;
-
 /// The row of `trace.csv` of a [`plant::Sample`] read inside an advance of `plant`.
 pub fn sample_row(plant: &Plant, s: &plant::Sample) -> TraceRow {
     let (energy, v) = plant.energy_and_tip_velocity_of(&s.x);
@@ -160,7 +153,8 @@ pub fn sample_row(plant: &Plant, s: &plant::Sample) -> TraceRow {
 }
 
 /// The open-loop sampling loop, the one both fronts run: the plant advanced with
-/// its steps set by the tolerances (at most [`DENSE_MAX_STEP`]), each sample at
+/// its steps set by the tolerances (at most [`OpenLoop::max_step`], from the arm's
+/// dynamics), each sample at
 /// `(k + 1) sample_dt` s exactly read from the dense output of the step that covers
 /// it (`Plant::advance_sampling`; issue 43), its [`TraceRow`] and the events
 /// appended for the caller, who writes them, shows progress or stops between calls
@@ -184,6 +178,11 @@ pub struct OpenLoop {
     pub steps: usize,
     /// The sampling period, s.
     pub sample_dt: f64,
+    /// The largest integrator step, s, whatever the sampling period (issue 53: the
+    /// path must not depend on it): [`plant::time_scale::dense_max_step`] of the
+    /// arm, 0.12 rad of its fastest mode (2.0 ms for the paper's arm, 0.22 ms for
+    /// issue 67's short arm; docs/architecture.md "The accuracy contract").
+    pub max_step: f64,
 }
 
 impl OpenLoop {
@@ -194,7 +193,8 @@ impl OpenLoop {
         let Prepared { plant, steps, .. } = prepared;
         let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
         let events = plant.startup_events().iter().map(EventRow::from).collect();
-        (Self { plant, k: 0, steps, sample_dt }, row, events)
+        let max_step = plant::time_scale::dense_max_step(&plant.arm().params);
+        (Self { plant, k: 0, steps, sample_dt, max_step }, row, events)
     }
 
     /// Whether every sample is taken.
@@ -240,7 +240,7 @@ impl OpenLoop {
             last += 1;
         }
         let before = self.plant.checkpoint();
-        let grid = plant::SampleGrid { dt: self.sample_dt, next: self.k as u64 + 1, last: last as u64, max_step: DENSE_MAX_STEP };
+        let grid = plant::SampleGrid { dt: self.sample_dt, next: self.k as u64 + 1, last: last as u64, max_step: self.max_step };
         let mut samples = vec![None; last - self.k];
         let sampled = self.plant.advance_sampling(&plant::Hold([0.0, 0.0]), chunk_end - t0, grid, &mut samples, &mut plant::NoObserver);
         match sampled {
