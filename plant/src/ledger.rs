@@ -150,6 +150,13 @@ pub struct Ledger {
     /// Impulses outside the friction cone (`P_n >= 0`, `|P_t| <= mu P_n`, to 1e-9
     /// of their size), each also a violation.
     pub impulses_outside_cone: u64,
+    /// Velocity projections that create energy in the belt's frame or change it by
+    /// more than the constraint drift they remove allows (`drift . Q_c^-1 drift /
+    /// 2`, docs/plant.md "The energy ledger"), each also a violation (issue 67).
+    pub projections_beyond_drift: u64,
+    /// The largest constraint drift a velocity projection removed (the tip's
+    /// normal velocity, and its slip when sticking, in the belt's frame), m/s.
+    pub largest_projection_drift_m_s: f64,
     /// `energy_change_j` less every work: what the ledger does not explain, J.
     pub residual_j: f64,
     /// The largest residual of one entry (step, impact or bridge), J.

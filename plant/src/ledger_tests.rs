@@ -172,3 +172,34 @@ fn a_planted_impulse_outside_the_cone_or_creating_energy_fails_the_ledger() {
     assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (3, 2), "the contact creates 1 mJ");
     assert_eq!(events.iter().filter(|e| e.kind == EventKind::EnergyGain).count(), 1);
 }
+
+/// Issue 67: the ledger checks each velocity projection against the drift it
+/// removes. Sliding at 0.3 m/s with a normal drift `v_n` of 0.2 mm/s, the smallest
+/// kinetic-energy correction dissipates exactly `v_n^2 / (2 Q_22)` in the belt's
+/// frame and passes, as does a partial one; a planted projection that also brakes
+/// the slip (it dissipates far more than the drift allows) or that pulls the tip
+/// off (it creates energy) is a violation, counted in `projections_beyond_drift`;
+/// the largest drift is kept.
+#[test]
+fn a_planted_projection_beyond_its_drift_fails_the_ledger() {
+    let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
+    let x = plant.state();
+    let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+    let v_rel = nalgebra::Vector2::new(0.3, 2e-4);
+    let drift = nalgebra::Vector2::new(0.0, v_rel[1]);
+    let allowed = 0.5 * drift[1] * drift[1] / qm[(1, 1)];
+    let right = nalgebra::Vector2::new(0.0, -drift[1] / qm[(1, 1)]);
+    // Its work in the belt's frame, from the velocities before and after (as booked).
+    let work = |p: nalgebra::Vector2<f64>| p.dot(&(v_rel + 0.5 * qm * p));
+    assert!((work(right) + allowed).abs() < 1e-12 * allowed, "{} against {allowed}", work(right));
+    let mut check = |p: nalgebra::Vector2<f64>| {
+        plant.check_projection(p, work(p), drift, allowed);
+        let l = plant.ledger();
+        (l.violations, l.projections_beyond_drift, l.largest_projection_drift_m_s)
+    };
+    assert_eq!(check(right), (0, 0, 2e-4), "the exact projection");
+    assert_eq!(check(0.5 * right), (0, 0, 2e-4), "half of it (half the drift left) dissipates 3/4 of the allowance");
+    let braking = right + nalgebra::Vector2::new(-0.6 * right[1].abs(), 0.0);
+    assert_eq!(check(braking), (1, 1, 2e-4), "a projection that brakes the slip too");
+    assert_eq!(check(-right), (2, 2, 2e-4), "a pull, creating energy");
+}

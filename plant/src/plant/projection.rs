@@ -78,10 +78,16 @@ impl Plant {
         let m_inv = self.arm.mass_matrix_inverse_trig(&trig);
         let qm = jac * m_inv * jac.transpose();
         let v = jac * qd;
-        let lambda = if sticking {
-            qm.try_inverse().map(|inv| inv * Vector2::new(self.arm.params.v_belt - v[0], -v[1])).unwrap_or_else(Vector2::zeros)
+        // The drift removed: the constrained components of the tip's velocity in the
+        // belt's frame (the normal one; the slip too when sticking).
+        let drift = Vector2::new(if sticking { v[0] - self.arm.params.v_belt } else { 0.0 }, v[1]);
+        let (lambda, drift_energy) = if sticking {
+            qm.try_inverse().map_or((Vector2::zeros(), 0.0), |inv| {
+                let lambda = inv * -drift;
+                (lambda, -0.5 * drift.dot(&lambda))
+            })
         } else {
-            Vector2::new(0.0, -v[1] / qm[(1, 1)])
+            (Vector2::new(0.0, -v[1] / qm[(1, 1)]), 0.5 * v[1] * v[1] / qm[(1, 1)])
         };
         let dqd = m_inv * (jac.transpose() * lambda);
         // The kinetic energies from the same sines and cosines (`Arm::kinetic_energy` at
@@ -100,10 +106,35 @@ impl Plant {
         let mid = Vector2::new(0.5 * (v[0] + v_new[0]) - self.arm.params.v_belt, 0.5 * (v[1] + v_new[1]));
         let work = lambda.dot(&mid);
         self.book_impulse(lambda, work, ke_new - ke, ke + ke_new);
+        self.check_projection(lambda, work, drift, drift_energy);
         let energy = crate::ledger::energy_with_kinetic(&self.arm, &trig, &self.y, ke_new);
         self.known = Some(super::Known { x: [self.y[0], self.y[1], self.y[2], self.y[3]], trig, energy });
         let imp = Impulse { p: lambda, dv: v_new - v, v_n_min: 0.0, contact_work: work, resolution: Resolution::Projection };
         Ok((imp, ke_new - ke))
+    }
+
+    /// The ledger's check of a velocity projection (issue 67): it removes the
+    /// constraint's drift `drift` (m/s: the tip's velocity in the belt's frame along
+    /// the constrained directions) by the impulse `p` (N s), whose work in the
+    /// belt's frame is `work` (J). The smallest kinetic-energy correction
+    /// dissipates exactly `drift_energy = drift . Q_c^-1 drift / 2` there (J;
+    /// `Q_c` the constrained block of `Q = J M^-1 J^T`, paper eq. 3): a projection
+    /// that creates energy in the belt's frame, or that changes it by more than
+    /// the drift it removes allows, is a violation, counted apart in
+    /// [`Ledger::projections_beyond_drift`](crate::Ledger::projections_beyond_drift).
+    /// The largest drift removed is kept in
+    /// [`Ledger::largest_projection_drift_m_s`](crate::Ledger::largest_projection_drift_m_s).
+    /// The allowance is rounding: `1e-6` of `drift_energy`, and `|p|` times 1e-14
+    /// (1 + `|drift|`) m/s, the rounding of the velocities the work is taken from.
+    pub(crate) fn check_projection(&mut self, p: Vector2<f64>, work: f64, drift: Vector2<f64>, drift_energy: f64) {
+        let l = &mut self.ledger;
+        l.largest_projection_drift_m_s = l.largest_projection_drift_m_s.max(drift.norm());
+        let slack = 1e-6 * drift_energy + 1e-14 * p.norm() * (1.0 + drift.norm());
+        let beyond = work > slack || -work > drift_energy + slack || work.is_nan();
+        if beyond {
+            l.projections_beyond_drift += 1;
+            l.violations += 1;
+        }
     }
 
     /// Projection onto the contact constraint of the current mode (no-op in flight).

@@ -1,4 +1,5 @@
-//! Building and running the board's images for the end-to-end tests.
+//! Helpers of the end-to-end tests: the workspace, the board's images, running
+//! the command line in-process and reading what it writes.
 
 use std::{
     path::{Path, PathBuf},
@@ -74,4 +75,21 @@ pub fn decode_defmt_stamped(elf: &Path, bytes: &[u8]) -> Vec<(Option<String>, St
 pub fn numbers_after(line: &str, key: &str) -> Vec<u64> {
     let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
     rest.split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()).map(|s| s.parse().unwrap()).collect()
+}
+
+/// Runs `sil-host args` through the binary's entry point in this process; its exit code.
+pub fn run(args: &[&str]) -> i32 {
+    let mut full = vec!["sil-host"];
+    full.extend_from_slice(args);
+    sil_host::run(full)
+}
+
+/// The `summary.json` of an output folder.
+pub fn summary_of(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// A CSV file's lines split at commas (the header first): for tables with no quoted cells.
+pub fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path).unwrap().lines().map(|l| l.split(',').map(String::from).collect()).collect()
 }

@@ -31,6 +31,7 @@ mod params;
 mod pil;
 mod pil_vs_library;
 mod poincare;
+mod published_ledger;
 mod python_monitor;
 mod report;
 mod results_page;

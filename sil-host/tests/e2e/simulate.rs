@@ -2,11 +2,7 @@
 
 use std::path::Path;
 
-fn run(args: &[&str]) -> i32 {
-    let mut full = vec!["sil-host"];
-    full.extend_from_slice(args);
-    sil_host::run(full)
-}
+use crate::common::{csv_rows, run, summary_of};
 
 fn files_in(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -339,14 +335,6 @@ const ISSUE53: [&str; 18] = [
     "--duration",
     "300",
 ];
-
-fn summary_of(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
-
-fn csv_rows(path: &Path) -> Vec<Vec<String>> {
-    std::fs::read_to_string(path).unwrap().lines().map(|l| l.split(',').map(String::from).collect()).collect()
-}
 
 /// Issue 53: the energy jump with status ok. Both reproducers (plastic at 10 ms,
 /// restitution at 100 ms) and the four other runs bounce to 300 s, as a
