@@ -295,6 +295,9 @@ def main(argv=None):
     parser.add_argument("--sil-host", default="target/release/sil-host", help="the sil-host binary to check")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="Siconos runs at once")
     parser.add_argument("--keep", metavar="DIR", help="keep the plugin and sil-host's outputs in DIR")
+    parser.add_argument("--record", metavar="FILE",
+                        help="write the comparison as a Markdown section's body to FILE (tests/siconos/results.md, "
+                             "which `sil-host report` puts in docs/results.md as \"Against Siconos\")")
     args = parser.parse_args(argv)
     started = time.perf_counter()
 
@@ -313,7 +316,7 @@ def main(argv=None):
     work = args.keep or tempfile.mkdtemp(prefix="siconos-check-")
     os.makedirs(work, exist_ok=True)
     try:
-        return run_checks(exe, work, args.jobs, started)
+        return run_checks(exe, work, args.jobs, started, args.record)
     except SilHostError as e:
         print(f"FAIL {e}", flush=True)
         return FAIL
@@ -331,8 +334,9 @@ def main(argv=None):
             shutil.rmtree(work, ignore_errors=True)
 
 
-def run_checks(exe, work, jobs, started):
-    """The checks themselves (see the module's docstring); returns the exit code."""
+def run_checks(exe, work, jobs, started, record=None):
+    """The checks themselves (see the module's docstring); returns the exit code. With
+    `record`, a path: the comparison written there as Markdown (`write_record`)."""
     from concurrent.futures import ProcessPoolExecutor
     import multiprocessing
 
@@ -374,6 +378,7 @@ def run_checks(exe, work, jobs, started):
 
     report = Report()
     hc, hf = H_COARSE, H_FINE
+    rows = []  # the record's table: check, Siconos at hc, at hf, h -> 0, sil-host, tolerance, result
 
     # 1. The same start.
     for name, x0_deg in (("bounce", X0A_DEG), ("x0d", X0D_DEG)):
@@ -395,7 +400,14 @@ def run_checks(exe, work, jobs, started):
             + (f"max |gap| {d['max_abs_gap'] * 1e6:.2g} um" if what == "slides" else f"max gap {d['max_gap'] * 100:.3f} cm")
             + f", final theta1 {d['theta1_deg']:.4f} deg)"
             for (who, what), d in zip(got.items(), (sil[name], sic[(name, hc)], sic[(name, hf)])))
-        report.check(all(v == want for v in got.values()),
+        def said(what, d):
+            return (f"{what}, theta1 {d['theta1_deg']:.4f} deg" if what == "slides"
+                    else f"{what}: {d['lift_offs']} lift-offs, gap up to {d['max_gap'] * 100:.2f} cm")
+        ok = all(v == want for v in got.values())
+        rows.append((f"x0a, mu = {name[2:]}, t in ({EDGE_WINDOW[0]:g}, {EDGE_WINDOW[1]:g}] s",
+                     said(got[f"Siconos h {hc:g}"], sic[(name, hc)]), said(got[f"Siconos h {hf:g}"], sic[(name, hf)]), "",
+                     said(got["sil-host"], sil[name]), "class", "pass" if ok else "**fail**"))
+        report.check(ok,
                      f"x0a, mu {name[2:]}: {want} in both, over t in ({EDGE_WINDOW[0]:g}, {EDGE_WINDOW[1]:g}] s: {detail}")
 
     # 3. The bounce at mu 0.6: lift-offs per 50 s and the largest gap.
@@ -409,6 +421,9 @@ def run_checks(exe, work, jobs, started):
     spread = math.sqrt(len(f["parts"])) * statistics.stdev(f["parts"])  # sampling spread of the 50 s count
     tol_n = tol + 2.0 * spread
     dev = abs(s["lift_offs"] - f["lift_offs"])
+    rows.append((f"x0a, mu = 0.6: lift-offs in t in ({BOUNCE_WINDOW[0]:g}, {BOUNCE_WINDOW[1]:g}] s", c["lift_offs"],
+                 f["lift_offs"], f"{limit:.1f}", s["lift_offs"], f"{tol_n:.1f}",
+                 f"pass ({dev})" if dev <= tol_n else f"**fail** ({dev})"))
     report.check(dev <= tol_n,
                  f"x0a, mu 0.6, lift-offs in t in ({BOUNCE_WINDOW[0]:g}, {BOUNCE_WINDOW[1]:g}] s ({span:g} s): sil-host "
                  f"{s['lift_offs']}, Siconos h {hc:g} {c['lift_offs']}, h {hf:g} {f['lift_offs']} (h -> 0: {limit:.1f}); "
@@ -417,6 +432,13 @@ def run_checks(exe, work, jobs, started):
                  f"(sqrt({len(f['parts'])}) x stdev of {f['parts']})")
     tol_g, limit_g = convergence_tolerance(c["max_gap"], f["max_gap"])
     dev_g = abs(s["max_gap"] - f["max_gap"])
+    rows.append((f"x0a, mu = 0.6: largest gap in t in ({BOUNCE_WINDOW[0]:g}, {BOUNCE_WINDOW[1]:g}] s",
+                 f"{c['max_gap'] * 100:.3f} cm", f"{f['max_gap'] * 100:.3f} cm", f"{limit_g * 100:.3f} cm",
+                 f"{s['max_gap'] * 100:.3f} cm", f"{tol_g * 100:.3f} cm",
+                 f"{'pass' if dev_g <= tol_g else '**fail**'} ({dev_g * 100:.3f} cm)"))
+    rows.append(("x0a, mu = 0.6: first touchdowns", ", ".join(f"{v:.4f}" for v in c["touchdowns"]) + " s",
+                 ", ".join(f"{v:.5f}" for v in f["touchdowns"]) + " s", "",
+                 ", ".join(f"{v:.6f}" for v in s["touchdowns"]) + " s", "printed only", ""))
     report.check(dev_g <= tol_g,
                  f"x0a, mu 0.6, max gap in the window: sil-host {s['max_gap'] * 100:.3f} cm, Siconos h {hc:g} "
                  f"{c['max_gap'] * 100:.3f} cm, h {hf:g} {f['max_gap'] * 100:.3f} cm (h -> 0: {limit_g * 100:.3f} cm); "
@@ -430,6 +452,9 @@ def run_checks(exe, work, jobs, started):
     tol_zt = max(tol_z, ZT_FLOOR_M) + settle
     dev_z = abs(s["z_t"] - f["z_t"])
     slides = classify(s, True) == "slides" and all(classify(d, False) == "slides" for d in (c, f))
+    rows.append((f"x0d, mu = 0.6: z_t at t = {SLIDE_T:g} s", f"{c['z_t']:.8f} m", f"{f['z_t']:.8f} m",
+                 f"{limit_z:.8f} m", f"{s['z_t']:.8f} m", f"{tol_zt:.1e} m",
+                 f"{'pass' if slides and dev_z <= tol_zt else '**fail**'} ({dev_z:.1e} m)"))
     report.check(slides and dev_z <= tol_zt,
                  f"x0d, mu 0.6, slides to z_t at t = {SLIDE_T:g} s: sil-host {s['z_t']:.8f} m, Siconos h {hc:g} "
                  f"{c['z_t']:.8f} m (gap {c['final_gap']:.1e} m), h {hf:g} {f['z_t']:.8f} m (gap {f['final_gap']:.1e} m; "
@@ -450,8 +475,57 @@ def run_checks(exe, work, jobs, started):
           f"{c['wall_s'] / ss:.0f} x against sil-host's simulation alone; Siconos h {hf:g}: "
           f"{sic[('bounce', hf)]['wall_s']:.1f} s wall (two runs at once)")
     verdict = "FAILED" if report.failed else "passed"
-    print(f"Siconos check {verdict} in {time.perf_counter() - started:.1f} s wall")
+    total = time.perf_counter() - started
+    print(f"Siconos check {verdict} in {total:.1f} s wall")
+    if record:
+        times = {"siconos_wall": c["wall_s"], "siconos_cpu": c["cpu_s"], "sil_wall": sw, "sil_cpu": sc, "sil_sim": ss,
+                 "runs": len(walls), "total": total}
+        write_record(record, rows, times, exe, pkg.stdout.strip())
+        print(f"wrote {record}")
     return FAIL if report.failed else PASS
+
+
+def write_record(path, rows, times, exe, version):
+    """Writes the comparison's Markdown (the body of docs/results.md's "Against Siconos",
+    which `sil-host report` includes from tests/siconos/results.md): how it was made, the
+    table of `rows`, the run times `times` (s)."""
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                            cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip() or "?"
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    t = times
+    lines = [
+        "```",
+        "/usr/bin/python3 tests/siconos/check.py --sil-host target/release/sil-host --record tests/siconos/results.md",
+        "```",
+        "",
+        f"Debian's system Python with `python3-siconos` {version} (apt); `scripts/test.sh` runs the check, CI requires it. "
+        "The arm of docs/model.md built in Siconos: a `LagrangianDS` (`M`, `w`, `c` and their Jacobians from a C plugin "
+        "compiled at test time), a `LagrangianRheonomousR` with `h(q, t) = [z_n + H, z_t - v_belt t]`, "
+        f"`NewtonImpactFrictionNSL(e_n, 0, mu, 2)`, Moreau-Jean (theta {THETA}) time-stepping with a 2D Lemke "
+        "friction-contact solver at every step; against `sil-host simulate --iwc plastic` (the impact without collision "
+        "leaves `v_n = 0`, as Moreau-Jean does). From x0a and x0d projected onto the belt (both codes project them "
+        f"alike), `e_n = {E_N}`, `v_belt = {V_BELT}` m/s. Measured {stamp}, sil-host at commit `{commit}` "
+        f". Tolerances: the coarse Siconos run's own error under first-order convergence, "
+        f"`{H_COARSE / (H_COARSE - H_FINE):g} |X({H_COARSE:g}) - X({H_FINE:g})|`, plus twice the count's sampling "
+        "spread for the lift-offs (tests/siconos/README.md); Richardson's `h -> 0` estimate beside them.",
+        "",
+        f"| check | Siconos h = {H_COARSE:g} s | Siconos h = {H_FINE:g} s | Siconos h -> 0 | sil-host | tolerance | result |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    lines += ["| " + " | ".join(str(x) for x in row) + " |" for row in rows]
+    lines += [
+        "",
+        f"Run time of the same case in the same sitting (x0a, mu = 0.6, {BOUNCE_T:g} s): Siconos at h = {H_COARSE:g} s "
+        f"(model built and stepped from Python) {t['siconos_wall']:.2f} s wall, {t['siconos_cpu']:.2f} s CPU; "
+        f"`sil-host simulate` (the whole process, files written, median of {t['runs']}) {t['sil_wall']:.3f} s wall, "
+        f"{t['sil_cpu']:.3f} s CPU, {t['sil_sim']:.3f} s of it simulating. Siconos / sil-host: "
+        f"**{t['siconos_wall'] / t['sil_wall']:.0f} times** the wall time, "
+        f"{t['siconos_cpu'] / max(t['sil_cpu'], 1e-3):.0f} times the CPU time, "
+        f"{t['siconos_wall'] / t['sil_sim']:.0f} times sil-host's simulation alone. The whole check: "
+        f"{t['total']:.0f} s of wall time.",
+    ]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
 
 
 def fmt(values):

@@ -24,6 +24,12 @@ With `f_n* = 7 N` (`--set controller.f_n_ref=7`), or 5 N or 3 N, the same run ha
 At 10 kHz (`--set timing.rate_hz=10000 --set timing.delta_s=0.00005`) the saturated arm drags the stuck tip until the load cell clips \
 (28 N against its 25 N range): the firmware latches its `Overload` safe state at t = 0.221 s (without the runaway limits, `SensorFault` \
 at t = 0.268 s), which is why that run never reaches its target. \
+At `mu = 0.9` the loop sits on that limit's edge: holding `f_n* = 10 N` there takes `u1` to 4.998 N m, one code of the torque \
+command below the limit (`v_belt = -0.5`, t = 0.25 s), so the firmware's rounding decides the outcome: issue 56's rewrite of the hybrid \
+law's trigonometry (commit 467b208) moved the 19 runs at `mu = 0.9` from contact to 12 lift-offs and 6 safe states (`Singular`). \
+Measured on this map's grid (issue 67): with `f_n* = 9.9 N` all 19 keep contact, with 10.1 N 11 lift off and 5 stop, at `mu` 0.86 to \
+0.89 all keep contact, and a tolerance ten times tighter (`--rtol 1e-10`) changes nothing (`sil-host sweep --controller hybrid --ics d \
+--v-belt-step 0.05 --transient 20 --record 10 --mu 0.85,0.95 --mu-step 0.05 --set controller.f_n_ref=9.9`). \
 The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `sil-host/tests/e2e/closed_loop_friction.rs` checks it.";
 
 /// The comparison table of `sweeps` (id, summary, files), one column group per

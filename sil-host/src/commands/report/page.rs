@@ -75,6 +75,7 @@ pub fn render(
     for (s, rs) in &main {
         section(&mut md, s, rs, page, &mut figures, 2);
     }
+    against_siconos(&mut md);
     if !appendix.is_empty() {
         let _ = writeln!(
             md,
@@ -88,6 +89,22 @@ pub fn render(
     }
     let shown = figures.shown().to_vec();
     (md, shown)
+}
+
+/// The comparison with Siconos as `tests/siconos/check.py --record` last wrote it
+/// (issue 67): a measurement of this repository's code, compiled in, since the
+/// check needs Debian's `python3-siconos` that a report's machine may lack.
+const SICONOS_RECORD: &str = include_str!("../../../../tests/siconos/results.md");
+
+/// The section "Against Siconos": [`SICONOS_RECORD`] under its heading.
+fn against_siconos(md: &mut String) {
+    let _ = writeln!(
+        md,
+        "\n## Against Siconos\n\n*issue 67: sil-host against an independent implementation, Siconos 4.4 \
+         (tests/siconos/check.py, run by the test suite on every landing; this record is the one its `--record` \
+         last wrote, at the commit it names)*\n"
+    );
+    md.push_str(SICONOS_RECORD);
 }
 
 /// The index table of `sections`: one row per step.
