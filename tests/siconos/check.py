@@ -495,7 +495,7 @@ def write_record(path, rows, times, exe, version):
     t = times
     lines = [
         "```",
-        "/usr/bin/python3 tests/siconos/check.py --sil-host target/release/sil-host --record tests/siconos/results.md",
+        "python3 tests/siconos/check.py --sil-host target/release/sil-host --record tests/siconos/results.md",
         "```",
         "",
         f"Debian's system Python with `python3-siconos` {version} (apt); `scripts/test.sh` runs the check, CI requires it. "
