@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Import cycles between the files of each crate (docs/architecture.md, "One concept
-per module"): a file's `use` paths and inline `crate::` paths (tests and comments left
-out) make a graph per crate; any cycle is an error. Usage: import_cycles.py SRC_DIR...
+per module"): a file's `use` paths and its inline `crate::`, `super::` and `self::` paths
+(tests and comments left out) make a graph per crate; any cycle is an error. Usage:
+import_cycles.py SRC_DIR...
 """
 import re, os, sys, glob
 # module graph per crate: file -> set(files it imports from within the crate)
@@ -38,8 +39,10 @@ def uses(text):
             for it in items: res+=expand(it, prefix+pre)
             return res
         out+=expand(stmt)
-    # also inline crate:: paths
+    # also inline paths: crate::a::b, super::a::b (any depth of super), self::a::b
     out+=re.findall(r'\bcrate::([a-z_0-9:]+)', text)
+    out+=re.findall(r'(?<![A-Za-z_0-9:])((?:super::)+[a-z_0-9:]+)', text)
+    out+=re.findall(r'(?<![A-Za-z_0-9:])(self::[a-z_0-9:]+)', text)
     return out
 bad=0
 for crate_src in sys.argv[1:]:

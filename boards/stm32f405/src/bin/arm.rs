@@ -421,8 +421,8 @@ mod image {
         timers::start_belt_encoder();
         usart::init(true);
         let parts = ArmParts::<Stm32f405> {
-            theta1: spi::Spi1Device::new(pins::CS_THETA1),
-            elbow: spi::Spi1Device::new(pins::CS_ELBOW),
+            theta1: spi::Spi1Device::new(pins::CS_THETA1, acquisition::busy),
+            elbow: spi::Spi1Device::new(pins::CS_ELBOW, acquisition::busy),
             encoders: acquisition::DmaEncoders,
             adc: adc::LoadCellAdc,
             belt: BeltCounter,

@@ -23,7 +23,7 @@ pub enum SpiError {
     Overrun,
     /// Another master pulled NSS (SR.MODF).
     ModeFault,
-    /// The period's frames are in flight by DMA (`super::acquisition`): the
+    /// The period's frames are in flight by DMA (the acquisition): the
     /// bus is not free.
     Busy,
 }
@@ -116,16 +116,21 @@ fn exchange(word: u16) -> Result<u16, SpiError> {
     Ok(spi().dr().read().bits())
 }
 
-/// One encoder on SPI1: its chip select.
+/// One encoder on SPI1: its chip select, and who else may hold the bus.
 #[derive(Debug, Clone, Copy)]
 pub struct Spi1Device {
     cs: Pin,
+    /// Whether the bus is taken by a DMA acquisition (`super::acquisition::busy`,
+    /// given by the caller so that this driver knows nothing above it).
+    bus_taken: fn() -> bool,
 }
 
 impl Spi1Device {
-    /// The device behind chip select `cs` (a pin of the map, configured by [`init`]).
-    pub fn new(cs: Pin) -> Self {
-        Self { cs }
+    /// The device behind chip select `cs` (a pin of the map, configured by [`init`]);
+    /// `bus_taken` says when frames are in flight by DMA: the device then refuses a
+    /// transaction ([`SpiError::Busy`]).
+    pub fn new(cs: Pin, bus_taken: fn() -> bool) -> Self {
+        Self { cs, bus_taken }
     }
 }
 
@@ -137,7 +142,7 @@ impl SpiDevice<u16> for Spi1Device {
     fn transaction(&mut self, operations: &mut [Operation<'_, u16>]) -> Result<(), SpiError> {
         // Start-up and bring-up only (the tick's frames go by DMA): never
         // across a period's frames.
-        if super::acquisition::busy() {
+        if (self.bus_taken)() {
             return Err(SpiError::Busy);
         }
         gpio::write(&self.cs, false);

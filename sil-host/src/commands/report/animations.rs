@@ -6,7 +6,6 @@
 use std::path::Path;
 
 use super::{
-    captions::Caption,
     format::given,
     outcome::{Outcome, StepResult},
 };
@@ -83,14 +82,15 @@ pub fn write(id: &str, dir: &Path, arm: Arm, title: String) -> Result<Option<ani
     animation::write_gif(&dir.join(FILE), &trace, arm, &a).map(Some)
 }
 
-/// The caption of an animation `file` of the step whose result is `outcome`:
-/// what is drawn with which scales, the scenario and controller, and the time
-/// scale (the stretch of the run, the slow-down, the frames).
-pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
+/// The caption of an animation `file` of the step whose result is `outcome`, as
+/// `(what, parameters)`: what is drawn with which scales, the scenario and
+/// controller, and the time scale (the stretch of the run, the slow-down, the
+/// frames); `None` for a step that is not animated (`super::captions` words it).
+pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Option<(String, String)> {
     use crate::animation::frame::{FORCE_PX_PER_N, IMPULSE_PX_PER_NS, PATH_S};
     let id = file.split('/').next().unwrap_or(file);
     let (Some((t0, t1, slow_down, strip)), Some(outcome)) = (plan(id), outcome) else {
-        return Caption { what: format!("`{file}`"), parameters: String::new(), paper: None };
+        return None;
     };
     let frames = ((t1 - t0) * slow_down * f64::from(FPS)).round();
     let time = if (slow_down - 1.0).abs() < 1e-9 {
@@ -142,7 +142,7 @@ pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
                 ),
             )
         }
-        _ => return Caption { what: format!("`{file}`"), parameters: String::new(), paper: None },
+        _ => return None,
     };
-    Caption { what, parameters, paper: None }
+    Some((what, parameters))
 }

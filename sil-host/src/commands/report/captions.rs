@@ -203,7 +203,10 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
     let name = file.rsplit('/').next().unwrap_or(file);
     let stem = name.strip_suffix(".svg").unwrap_or(name);
     if name == super::animations::FILE {
-        return super::animations::caption(Some(outcome), file);
+        return match super::animations::caption(Some(outcome), file) {
+            Some((what, parameters)) => Caption { what, parameters, paper: None },
+            None => other(file),
+        };
     }
     let c = |what: &str, parameters: String, paper: Option<&str>| Caption {
         what: what.to_string(),
