@@ -7,7 +7,6 @@
 #[macro_use]
 pub mod stdout;
 
-pub mod animation;
 pub mod bench;
 pub mod cancel;
 pub mod cli;
@@ -17,11 +16,9 @@ pub mod folder_lock;
 pub mod link_spec;
 pub mod live;
 pub mod output;
-pub mod plot;
 pub mod streamed_run;
 pub mod sweep;
 pub mod table_out;
-pub mod trace_page;
 
 use clap::Parser;
 
@@ -81,3 +78,7 @@ where
         }
     }
 }
+
+// The figures (plots, the trace page, the animations) are the `figures` crate's;
+// the commands name them by these paths.
+pub use figures::{animation, plot, trace_page};

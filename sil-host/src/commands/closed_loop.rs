@@ -91,5 +91,5 @@ pub(crate) fn draw(
         plot::symbols::Z_T_REF,
         s.controller.target_z_t
     );
-    plot::time_panels(path, &title, (0.0, t_end), &panels)
+    plot::time_panels(path, &title, (0.0, t_end), &panels).map_err(CliError::from)
 }

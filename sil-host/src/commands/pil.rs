@@ -149,7 +149,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
     if let Some(page) = page {
-        page.write(&mut out)?;
+        out.write_bytes(crate::trace_page::FILE, page.html().as_bytes())?;
     }
     let svg = out.stage_figure("instructions.svg")?;
     draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;
@@ -268,5 +268,5 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
     };
     let what = if matches!(target, PilTarget::Serial { .. }) { "HIL" } else { "PIL" };
     let title = format!("{what} run {}: {} image {unit} per control step ({source})", s.name, s.controller.kind);
-    plot::time_panels(path, &title, (0.0, t_end), &panels)
+    plot::time_panels(path, &title, (0.0, t_end), &panels).map_err(CliError::from)
 }

@@ -92,7 +92,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", scenario, &history, stats.last_t())?;
     if let Some(page) = page {
-        page.write(&mut out)?;
+        out.write_bytes(crate::trace_page::FILE, page.html().as_bytes())?;
     }
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),

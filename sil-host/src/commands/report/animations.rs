@@ -79,7 +79,7 @@ pub fn write(id: &str, dir: &Path, arm: Arm, title: String) -> Result<Option<ani
     let events = dir.join("events.csv");
     let trace = animation::trace::read(&dir.join("trace.csv"), events.is_file().then_some(events.as_path()))?;
     let a = Animation { t0, t1, fps: FPS, look: Look { title, strip, slow_down } };
-    animation::write_gif(&dir.join(FILE), &trace, arm, &a).map(Some)
+    animation::write_gif(&dir.join(FILE), &trace, arm, &a).map(Some).map_err(CliError::from)
 }
 
 /// The caption of an animation `file` of the step whose result is `outcome`, as

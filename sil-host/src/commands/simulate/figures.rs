@@ -102,5 +102,5 @@ pub(crate) fn draw_trace(path: &std::path::Path, params: &Params<f64>, name: &st
         mode_panel,
     ];
     let title = format!("Open loop from {name}: {MU} = {}, {BELT_SPEED} {} m/s", params.mu, params.v_belt);
-    plot::time_panels(path, &title, (0.0, t_end), &panels)
+    plot::time_panels(path, &title, (0.0, t_end), &panels).map_err(CliError::from)
 }

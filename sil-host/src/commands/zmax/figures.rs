@@ -19,5 +19,5 @@ pub(crate) fn draw(path: &std::path::Path, s: &Search) -> Result<(), CliError> {
         Bisection::UpperReached { hi, .. } => format!("reaches the highest target {hi:.4} m"),
     };
     let title = format!("{Z_T_SLIDING}: {} from x0{}, {}: {what}", c.controller.name(), c.x0.letter(), c.setting.name());
-    plot::time_panels(path, &title, (0.0, t_end), &panels)
+    plot::time_panels(path, &title, (0.0, t_end), &panels).map_err(CliError::from)
 }

@@ -17,7 +17,7 @@ use super::{
     print::{PrintWidth, finish},
     svg_canvas,
 };
-use crate::error::CliError;
+use crate::Error;
 
 /// One curve of a panel.
 pub struct Series<'a> {
@@ -195,8 +195,8 @@ fn drawn_points(s: &Series) -> Vec<(f64, f64)> {
 /// named in a note under the title (at least one panel is drawn).
 ///
 /// # Errors
-/// [`CliError::Plot`] when plotters fails (e.g. the file cannot be written).
-pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), CliError> {
+/// [`Error::Plot`] when plotters fails (e.g. the file cannot be written).
+pub fn time_panels(path: &Path, title: &str, t_range: (f64, f64), panels: &[Panel]) -> Result<(), Error> {
     let err = plot_err(path);
     let t_end = round_end(t_range);
     let notes: Vec<Option<String>> = panels.iter().map(constant_note).collect();

@@ -8,7 +8,7 @@ use std::{borrow::Cow, collections::HashMap, fs::File, io::BufWriter, path::Path
 
 use plotters::style::RGBColor;
 
-use crate::error::CliError;
+use crate::Error;
 
 /// The palette's index for "unchanged" (transparent) pixels.
 const TRANSPARENT: u8 = 255;
@@ -72,10 +72,10 @@ impl GifWriter {
     /// second each, coloured from `palette`.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the file cannot be created; [`CliError::Plot`] from the encoder.
-    pub fn create(path: &Path, size: (u16, u16), delay_cs: u16, palette: Palette) -> Result<Self, CliError> {
-        let file = File::create(path).map_err(|source| CliError::Io { path: path.to_path_buf(), source })?;
-        let err = |e: gif::EncodingError| CliError::Plot { path: path.to_path_buf(), message: e.to_string() };
+    /// [`Error::Io`] when the file cannot be created; [`Error::Plot`] from the encoder.
+    pub fn create(path: &Path, size: (u16, u16), delay_cs: u16, palette: Palette) -> Result<Self, Error> {
+        let file = File::create(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let err = |e: gif::EncodingError| Error::Plot { path: path.to_path_buf(), message: e.to_string() };
         let mut encoder = gif::Encoder::new(BufWriter::new(file), size.0, size.1, &palette.table()).map_err(err)?;
         encoder.set_repeat(gif::Repeat::Infinite).map_err(err)?;
         Ok(Self { encoder, palette, previous: None, size, delay_cs, path: path.to_path_buf() })
@@ -86,10 +86,10 @@ impl GifWriter {
     /// changed, the unchanged ones in it transparent (disposal: keep).
     ///
     /// # Errors
-    /// [`CliError::Plot`] when `rgb` has the wrong length or the encoder fails.
-    pub fn add(&mut self, rgb: &[u8]) -> Result<(), CliError> {
+    /// [`Error::Plot`] when `rgb` has the wrong length or the encoder fails.
+    pub fn add(&mut self, rgb: &[u8]) -> Result<(), Error> {
         let (w, h) = (usize::from(self.size.0), usize::from(self.size.1));
-        let err = |message: String| CliError::Plot { path: self.path.clone(), message };
+        let err = |message: String| Error::Plot { path: self.path.clone(), message };
         if rgb.len() != 3 * w * h {
             return Err(err(format!("a frame of {} bytes, not {}", rgb.len(), 3 * w * h)));
         }
@@ -135,10 +135,10 @@ impl GifWriter {
     /// Ends the file (the GIF's trailer) and flushes it.
     ///
     /// # Errors
-    /// [`CliError::Io`] when the file cannot be written.
-    pub fn finish(self) -> Result<(), CliError> {
+    /// [`Error::Io`] when the file cannot be written.
+    pub fn finish(self) -> Result<(), Error> {
         use std::io::Write as _;
-        let io = |source| CliError::Io { path: self.path.clone(), source };
+        let io = |source| Error::Io { path: self.path.clone(), source };
         let mut file = self.encoder.into_inner().map_err(io)?;
         file.flush().map_err(io)
     }

@@ -75,7 +75,7 @@ pub fn finish(root: DrawingArea<SVGBackend<'_>, Shift>, path: &Path, width: Prin
 }
 
 /// Where the PDF of the figure at `svg` goes: beside it with the extension `pdf`;
-/// for a file staged by [`crate::output::OutputSet::stage_figure`]
+/// for a file staged by `sil-host`'s `OutputSet::stage_figure`
 /// (`.name.svg.partial`), the PDF's staged name (`.name.pdf.partial`).
 pub fn pdf_path(svg: &Path) -> PathBuf {
     let name = svg.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

@@ -29,15 +29,15 @@ pub use history::{HistoryEnvelope, HistorySample, MODE_NAMES, history_panels, mo
 pub use print::{PrintWidth, finish};
 pub use time_panels::{Panel, Series, decimate, time_panels};
 
-use crate::error::CliError;
+use crate::Error;
 use axis::NiceAxis;
 use chart::{Frame, frame_chart};
 use font::FAMILY;
 use legend::text_size;
 
-/// The error of drawing the figure at `path`, as a [`CliError::Plot`].
-pub fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> CliError + '_ {
-    move |e| CliError::Plot { path: path.to_path_buf(), message: e.to_string() }
+/// The error of drawing the figure at `path`, as a [`Error::Plot`].
+pub fn plot_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> Error + '_ {
+    move |e| Error::Plot { path: path.to_path_buf(), message: e.to_string() }
 }
 
 /// A white SVG canvas writing to `path`, [`PrintWidth::px`] wide for `width` and

@@ -23,7 +23,7 @@ pub use frame::{Look, Strip};
 pub use scene::{Arm, Scene};
 pub use trace::ArmTrace;
 
-use crate::error::CliError;
+use crate::Error;
 
 /// An animation of a stretch of a run.
 #[derive(Debug, Clone, PartialEq)]
@@ -76,26 +76,26 @@ const BATCH: usize = 16;
 /// [`frame::WIDTH`] x [`frame::HEIGHT`] px.
 ///
 /// # Errors
-/// [`CliError::bad_input`] for a frame rate outside 1 to 100, a slow-down that is
+/// [`Error::bad_input`] for a frame rate outside 1 to 100, a slow-down that is
 /// not a positive number, an empty stretch or one the trace does not cover;
-/// [`CliError::Io`] when the file cannot be written; [`CliError::Plot`] when a
+/// [`Error::Io`] when the file cannot be written; [`Error::Plot`] when a
 /// frame cannot be drawn or encoded.
-pub fn write_gif(path: &Path, trace: &ArmTrace, arm: Arm, animation: &Animation) -> Result<Written, CliError> {
+pub fn write_gif(path: &Path, trace: &ArmTrace, arm: Arm, animation: &Animation) -> Result<Written, Error> {
     let a = animation;
     if !(1..=100).contains(&a.fps) {
-        return Err(CliError::bad_input(format!("animation: {} frames per second: give 1 to 100", a.fps)));
+        return Err(Error::bad_input(format!("animation: {} frames per second: give 1 to 100", a.fps)));
     }
     if !(a.look.slow_down.is_finite() && a.look.slow_down > 0.0) {
-        return Err(CliError::bad_input(format!("animation: slow-down {}: give a positive number", a.look.slow_down)));
+        return Err(Error::bad_input(format!("animation: slow-down {}: give a positive number", a.look.slow_down)));
     }
     let (first, last) = (trace.t.first().copied().unwrap_or(f64::NAN), trace.t.last().copied().unwrap_or(f64::NAN));
     if !(a.t0 < a.t1 && a.t0 >= first && a.t1 <= last + 1e-9) || a.frames() == 0 {
-        return Err(CliError::bad_input(format!(
+        return Err(Error::bad_input(format!(
             "animation: the stretch {} s to {} s is empty or outside the trace ({first} s to {last} s)",
             a.t0, a.t1
         )));
     }
-    let plot_err = |m: String| CliError::Plot { path: path.to_path_buf(), message: m };
+    let plot_err = |m: String| Error::Plot { path: path.to_path_buf(), message: m };
     let painter = frame::Painter::new(arm, trace, a.look.clone(), a.t0, a.t1).map_err(plot_err)?;
     let palette = encode::Palette::new(&frame::INKS);
     let size = (frame::WIDTH as u16, frame::HEIGHT as u16);
@@ -108,6 +108,6 @@ pub fn write_gif(path: &Path, trace: &ArmTrace, arm: Arm, animation: &Animation)
         }
     }
     gif.finish()?;
-    let bytes = std::fs::metadata(path).map_err(|source| CliError::Io { path: path.to_path_buf(), source })?.len();
+    let bytes = std::fs::metadata(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?.len();
     Ok(Written { frames: a.frames(), delay_cs: a.delay_cs(), bytes, scene: painter.scene })
 }

@@ -30,7 +30,7 @@ pub use curves::{CurveSample, Curves};
 pub use frames::{Frame, Frames};
 pub use info::PageInfo;
 
-use crate::{error::CliError, output::OutputSet, plot::mode_code};
+use crate::plot::mode_code;
 
 /// The page's file name in a command's output folder.
 pub const FILE: &str = "trace.html";
@@ -106,17 +106,8 @@ impl TracePage {
         self.curves.push(&CurveSample { t: s.t, z: s.z, force: s.force, mode, z_t_ref: s.z_t_ref, u: s.u });
     }
 
-    /// The page's HTML text.
+    /// The page's HTML text (the caller writes it as [`FILE`] in its folder).
     pub fn html(self) -> String {
         html::page(self.info, self.frames, &self.curves)
-    }
-
-    /// Writes the page as [`FILE`] in `out` (renamed into place with the rest
-    /// of the set on [`OutputSet::commit`]).
-    ///
-    /// # Errors
-    /// [`CliError::Io`] when the file cannot be written.
-    pub fn write(self, out: &mut OutputSet) -> Result<(), CliError> {
-        out.write_bytes(FILE, self.html().as_bytes())
     }
 }

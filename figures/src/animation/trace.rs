@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::error::CliError;
+use crate::Error;
 
 /// An impact of the plant (`events.csv`, a `touchdown` or an
 /// `impact_without_collision`): when, and the impulse on the tip.
@@ -72,11 +72,11 @@ impl ArmTrace {
 /// `events_csv` (columns `t`, `kind`, `impulse_t`, `impulse_n`).
 ///
 /// # Errors
-/// [`CliError::Io`] when a file cannot be read; [`CliError::BadInput`] naming the
+/// [`Error::Io`] when a file cannot be read; [`Error::BadInput`] naming the
 /// file and line for a missing column, a value that is not a finite number, times
 /// that go back, or a trace with no row.
-pub fn read(trace_csv: &Path, events_csv: Option<&Path>) -> Result<ArmTrace, CliError> {
-    let bad = |path: &Path, what: String| CliError::bad_input(format!("{}: {what}", path.display()));
+pub fn read(trace_csv: &Path, events_csv: Option<&Path>) -> Result<ArmTrace, Error> {
+    let bad = |path: &Path, what: String| Error::bad_input(format!("{}: {what}", path.display()));
     let mut trace = ArmTrace::default();
     let mut refs = Vec::new();
     let table = Table::open(trace_csv, &["t", "theta1", "theta2", "z_t", "z_n", "f_t", "f_n", "mode"], &["z_t_ref"])?;
@@ -129,10 +129,10 @@ struct Table {
 }
 
 impl Table {
-    fn open(path: &Path, required: &[&str], optional: &[&str]) -> Result<Self, CliError> {
+    fn open(path: &Path, required: &[&str], optional: &[&str]) -> Result<Self, Error> {
         let io = |e: csv::Error| match e.into_kind() {
-            csv::ErrorKind::Io(source) => CliError::Io { path: path.to_path_buf(), source },
-            other => CliError::bad_input(format!("{}: {other:?}", path.display())),
+            csv::ErrorKind::Io(source) => Error::Io { path: path.to_path_buf(), source },
+            other => Error::bad_input(format!("{}: {other:?}", path.display())),
         };
         let mut reader = csv::Reader::from_path(path).map_err(io)?;
         let header = reader.headers().map_err(io)?.clone();
@@ -140,7 +140,7 @@ impl Table {
         let mut columns = Vec::new();
         let mut names = Vec::new();
         for name in required {
-            let k = find(name).ok_or_else(|| CliError::bad_input(format!("{}: no column `{name}`", path.display())))?;
+            let k = find(name).ok_or_else(|| Error::bad_input(format!("{}: no column `{name}`", path.display())))?;
             columns.push(k);
             names.push((*name).to_string());
         }
@@ -152,27 +152,25 @@ impl Table {
     }
 
     /// The records with their line numbers (the header is line 1).
-    fn rows(&self) -> impl Iterator<Item = (usize, Result<csv::StringRecord, CliError>)> + '_ {
+    fn rows(&self) -> impl Iterator<Item = (usize, Result<csv::StringRecord, Error>)> + '_ {
         (2..).map_while(move |line| {
             let mut record = csv::StringRecord::new();
             match self.reader.borrow_mut().read_record(&mut record) {
                 Ok(true) => Some((line, Ok(record))),
                 Ok(false) => None,
-                Err(e) => Some((line, Err(CliError::bad_input(format!("{}: line {line}: {e}", self.path.display()))))),
+                Err(e) => Some((line, Err(Error::bad_input(format!("{}: line {line}: {e}", self.path.display()))))),
             }
         })
     }
 
     /// The `k`th asked-for column of `row` (on `line`) as a finite number.
-    fn number(&self, row: &csv::StringRecord, k: usize, line: usize) -> Result<f64, CliError> {
+    fn number(&self, row: &csv::StringRecord, k: usize, line: usize) -> Result<f64, Error> {
         let text = row.get(self.columns[k]).unwrap_or_default();
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(CliError::bad_input(format!(
-                "{}: line {line}: `{}` is `{text}`, not a finite number",
-                self.path.display(),
-                self.names[k]
-            ))),
+            _ => {
+                Err(Error::bad_input(format!("{}: line {line}: `{}` is `{text}`, not a finite number", self.path.display(), self.names[k])))
+            }
         }
     }
 }
