@@ -7,7 +7,7 @@
 #     over RTT (the knurling app-template's runner). Without probe-rs it says how to
 #     install it, and what runs without a board, and exits 127.
 # PAINLEVE_CHIP overrides the chip probe-rs is told (default STM32F405RGTx), PAINLEVE_PROBE_RS
-# the probe-rs program (default `probe-rs` on PATH; sil-host/tests/e2e/aliases.rs names a missing one).
+# the probe-rs program (default `probe-rs` on PATH; tests/e2e/aliases.rs names a missing one).
 # Usage: scripts/runner.sh ELF [args...]   (docs/board.md "Flash the arm image")
 set -euo pipefail
 if [ $# -lt 1 ]; then

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A one-node Slurm cluster on this machine, for testing scripts/sweep-slurm.sh on a
-# real Slurm (CI: sil-host/tests/e2e/slurm.rs). Installs nothing: it needs Debian's
+# real Slurm (CI: tests/e2e/slurm.rs). Installs nothing: it needs Debian's
 # `slurm-wlm` and `munge` (apt-get install -y slurm-wlm munge) and root (the
 # daemons run as root: SlurmUser=root).
 #

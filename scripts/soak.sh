@@ -3,7 +3,7 @@
 #
 #   scripts/soak.sh SECONDS SEED [OUT]      e.g. scripts/soak.sh 3600 1   (the hour)
 #
-# Runs sil-host/tests/soak.rs in release with SOAK_SECONDS=SECONDS of simulated time and
+# Runs tests/soak.rs in release with SOAK_SECONDS=SECONDS of simulated time and
 # SOAK_SEED=SEED (the random fault schedule's and the sensor noise's seed): `sil-host
 # run` over iceoryx2 in lockstep with the seeded faults, then the checks (counts
 # against the faults, no leak in /dev/shm, /tmp/iceoryx2 or the temp folder, flat

@@ -17,7 +17,7 @@ if ! command -v qemu-system-arm >/dev/null; then
 fi
 
 # Headless Chromium (Debian's package) for the browser test of trace.html
-# (sil-host/tests/e2e/trace_page.rs; skipped without it unless PAINLEVE_REQUIRE_CHROMIUM=1).
+# (tests/e2e/trace_page.rs; skipped without it unless PAINLEVE_REQUIRE_CHROMIUM=1).
 if ! command -v chromium >/dev/null; then
   if [ "$(id -u)" = 0 ]; then
     apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y chromium
@@ -42,7 +42,7 @@ if ! command -v llvm-addr2line >/dev/null && ! command -v llvm-addr2line-14 >/de
   fi
 fi
 
-# The Python monitor's environment (sil-host/tests/e2e/python_monitor.rs): a virtual environment
+# The Python monitor's environment (tests/e2e/python_monitor.rs): a virtual environment
 # with examples/python/requirements.txt (iceoryx2 from PyPI, pinned to the crate's version).
 # An existing PAINLEVE_PYTHON (a Python with those packages) is used as it is.
 if [ -z "${PAINLEVE_PYTHON:-}" ]; then
@@ -136,7 +136,7 @@ else
   echo "Siconos is missing (sudo apt-get install -y python3-siconos, for Debian's /usr/bin/python3): the check is skipped"
 fi
 
-echo "== tests (release: the simulator is numerical); the soak test (sil-host/tests/soak.rs, about 80 s"
+echo "== tests (release: the simulator is numerical); the soak test (tests/soak.rs, about 80 s"
 echo "   of wall time, mostly its injected stalls' waits) beside the others, its output printed at the end"
 status=0
 cargo test --workspace --release --no-run
@@ -148,7 +148,7 @@ soak_pid=$!
 cargo test --workspace --release --no-fail-fast 2>&1 | tee "$log" || status=$?
 soak_status=0
 wait "$soak_pid" || soak_status=$?
-echo "== the soak test (sil-host/tests/soak.rs), exit $soak_status"
+echo "== the soak test (tests/soak.rs), exit $soak_status"
 cat "$soaklog" | tee -a "$log"
 rm -f "$soaklog"
 [ "$soak_status" -ne 0 ] && status="$soak_status"

@@ -14,7 +14,7 @@ LIMIT = 1 << 20
 
 # Paths (from the repository's root) allowed above LIMIT, with why. None today: the
 # largest tracked files are the recorded figures (docs/figures, under 1 MiB each) and the
-# golden digests (sil-host/tests/golden/digests.txt, a few kB).
+# golden digests (tests/golden/digests.txt, a few kB).
 ALLOWED: dict[str, str] = {}
 
 

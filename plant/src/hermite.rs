@@ -15,7 +15,7 @@
 //! Hermite interpolant of their values and derivatives, `O(h^4)`.
 //!
 //! The accuracy contract (docs/architecture.md) holds the samples read this way:
-//! `sil-host/tests/e2e/accuracy.rs`, and the test of this module against the
+//! `tests/e2e/accuracy.rs`, and the test of this module against the
 //! 7th-order dense output over random steps.
 
 use crate::{

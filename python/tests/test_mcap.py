@@ -131,7 +131,7 @@ def test_the_protobuf_schemas_describe_every_field_with_its_type_and_unit(folder
         schema = summary.schemas[channel.schema_id]
         assert schema.encoding == "protobuf", channel.topic
         if channel.topic in FOXGLOVE:
-            # Foxglove's own schemas (checked in sil-host/tests/e2e/foxglove_view.rs).
+            # Foxglove's own schemas (checked in tests/e2e/foxglove_view.rs).
             continue
         files = descriptor_pb2.FileDescriptorSet.FromString(schema.data).file
         assert len(files) == 1 and files[0].syntax == "proto3", channel.topic

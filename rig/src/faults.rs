@@ -333,7 +333,7 @@ impl LinkKind {
 
 /// What [`random_schedule`] draws: how many fault windows, over which span of
 /// sample time, and the bounds that keep every fault short of the firmware's safe
-/// state, so that a long run (the soak test, `sil-host/tests/soak.rs`) goes on after
+/// state, so that a long run (the soak test, `tests/soak.rs`) goes on after
 /// each one and every fault's effect can be checked on its own.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RandomSchedule {

@@ -8,7 +8,7 @@
 //! buffer: floats by [`zmij`] (shortest round-trip digits, like `ryu`, about
 //! twice as fast) with `ryu`'s notation restored, integers by [`itoa`], and
 //! strings with the `csv` crate's quoting rule. The tests in this module and
-//! `sil-host/tests/fastcsv.rs` check the equality against the `csv` crate over
+//! `tests/fastcsv.rs` check the equality against the `csv` crate over
 //! arbitrary values.
 
 use std::{fs::File, io::Write, path::PathBuf};

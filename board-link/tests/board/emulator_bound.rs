@@ -151,7 +151,7 @@ fn random_case(i: u64) -> Case {
 const KEPT_CASES: [u64; 1] = [375];
 
 /// The named cases. The hybrid law's lift-off at `mu` = 1 (the default
-/// scenario's arm, `sil-host/tests/e2e/closed_loop_friction.rs`), at 1 kHz and
+/// scenario's arm, `tests/e2e/closed_loop_friction.rs`), at 1 kHz and
 /// at 2 kHz, run until the firmware stops the arm. And two cases of the first
 /// sample (its generator since changed) kept: no fault, the test expecting
 /// their end, the firmware stopped them, the twin alike (where the paper's

@@ -5,7 +5,7 @@
 //! The SVG files still name the generic family `sans-serif`: DejaVu Sans is among
 //! the widest common sans-serif faces, so text laid out for it fits in the space
 //! given when a viewer substitutes Helvetica, Arial or Liberation Sans. The test
-//! over every figure (`sil-host/tests/e2e/figure_check.rs`) measures text with the same
+//! over every figure (`tests/e2e/figure_check.rs`) measures text with the same
 //! font.
 
 use std::sync::Once;

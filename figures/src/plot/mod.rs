@@ -8,7 +8,7 @@
 //! categorical axes, legends that measure their text) is here, on its public
 //! traits. The rules every figure keeps (no text outside the canvas, no two texts
 //! overlapping, no `-0.0`, units on every numeric axis) are checked by
-//! `sil-host/tests/e2e/figures.rs` on every figure `sil-host report` writes.
+//! `tests/e2e/figures.rs` on every figure `sil-host report` writes.
 
 pub mod axis;
 pub mod chart;

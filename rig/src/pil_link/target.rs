@@ -18,7 +18,7 @@ pub const DEFAULT_BAUD: u32 = 2_000_000;
 pub const BAUD_RANGE: RangeInclusive<u32> = 9_600..=12_000_000;
 
 /// How the bytes reach an image under QEMU. The frames, their checks and the
-/// image's instruction counts are the same over both (`sil-host/tests/e2e/pil.rs`).
+/// image's instruction counts are the same over both (`tests/e2e/pil.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum QemuLink {
     /// Two host FIFOs the image reads and writes through semihosting, a whole

@@ -30,7 +30,7 @@ law's trigonometry (commit 467b208) moved the 19 runs at `mu = 0.9` from contact
 Measured on this map's grid (issue 67): with `f_n* = 9.9 N` all 19 keep contact, with 10.1 N 11 lift off and 5 stop, at `mu` 0.86 to \
 0.89 all keep contact, and a tolerance ten times tighter (`--rtol 1e-10`) changes nothing (`sil-host sweep --controller hybrid --ics d \
 --v-belt-step 0.05 --transient 20 --record 10 --mu 0.85,0.95 --mu-step 0.05 --set controller.f_n_ref=9.9`). \
-The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `sil-host/tests/e2e/closed_loop_friction.rs` checks it.";
+The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `tests/e2e/closed_loop_friction.rs` checks it.";
 
 /// The comparison table of `sweeps` (id, summary, files), one column group per
 /// sweep, and their maps side by side as one figure.

@@ -44,7 +44,7 @@ fn the_quick_report_runs_every_experiment_and_links_every_figure() {
     }
     assert!(figures >= 10, "{figures} figures");
     // Every figure fit for a paper: no text off the canvas or over another, no -0
-    // (sil-host/tests/e2e/figure_check.rs); rendered to PNG under target/tmp/figures/report.
+    // (tests/e2e/figure_check.rs); rendered to PNG under target/tmp/figures/report.
     assert!(figure_check::check_all(&out, "report") >= figures);
     // The controller comparison of the paper: the hybrid law slides from x0d, PID from x0u lifts off.
     let summary = |id: &str| steps.iter().find(|s| s["id"] == id).unwrap()["result"].clone();

@@ -234,7 +234,7 @@ fn closed_loop_ideal_hybrid_keeps_the_tip_on_the_belt() {
 }
 
 /// `scripts/sweep-slurm.sh` under a stand-in for Slurm (the real one:
-/// sil-host/tests/e2e/slurm.rs, with PAINLEVE_SLURM=1): `submit` through a fake `sbatch`
+/// tests/e2e/slurm.rs, with PAINLEVE_SLURM=1): `submit` through a fake `sbatch`
 /// that records its arguments, then the array's tasks and the merge job run as
 /// Slurm would start them. The merged folder must equal the unsharded sweep; a
 /// merge without one shard's folder fails naming it and the command to re-run it.

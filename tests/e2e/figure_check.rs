@@ -1,5 +1,5 @@
-//! The check every figure must pass (issue 25), shared by `sil-host/tests/e2e/figures.rs`
-//! and `sil-host/tests/e2e/report.rs`: each SVG is parsed (roxmltree), every text
+//! The check every figure must pass (issue 25), shared by `tests/e2e/figures.rs`
+//! and `tests/e2e/report.rs`: each SVG is parsed (roxmltree), every text
 //! element's box is measured with the font the figures are laid out with (DejaVu
 //! Sans, `ab_glyph`), and the boxes must lie inside the canvas and overlap no
 //! other; no tick reads `-0`; no text prints below 7 pt at the figure's print

@@ -34,7 +34,7 @@ fn python() -> Option<PathBuf> {
             NOTICE.call_once(|| {
                 let _ = writeln!(
                     std::io::stderr(),
-                    "NOTICE: sil-host/tests/e2e/python_monitor.rs skipped: PAINLEVE_PYTHON is not set (python3 -m venv V && \
+                    "NOTICE: tests/e2e/python_monitor.rs skipped: PAINLEVE_PYTHON is not set (python3 -m venv V && \
                      V/bin/pip install -r examples/python/requirements.txt, then PAINLEVE_PYTHON=V/bin/python; scripts/test.sh does this)"
                 );
             });

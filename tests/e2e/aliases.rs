@@ -42,7 +42,7 @@ fn every_alias_runs_and_the_board_ones_say_how_to_get_probe_rs() {
     let config: toml::Table = std::fs::read_to_string(common::workspace().join(".cargo/config.toml")).unwrap().parse().unwrap();
     let aliases = config["alias"].as_table().expect("an [alias] table");
     for name in aliases.keys() {
-        assert!(KNOWN.contains(&name.as_str()), "alias `{name}` is not run by sil-host/tests/e2e/aliases.rs: add its check");
+        assert!(KNOWN.contains(&name.as_str()), "alias `{name}` is not run by tests/e2e/aliases.rs: add its check");
     }
     assert_eq!(aliases.len(), KNOWN.len(), "{aliases:?}");
     let target = common::target_dir().join("thumbv7em-none-eabihf");

@@ -1,6 +1,6 @@
 //! Golden outputs: a fixed set of commands must write byte-identical files
 //! (after dropping what depends on the wall clock, the machine or the output
-//! path) to the ones recorded in `sil-host/tests/golden/digests.txt`. It guards the
+//! path) to the ones recorded in `tests/golden/digests.txt`. It guards the
 //! host-side redesign (a refactor): every step keeps these digests.
 //!
 //! `GOLDEN=update cargo test --release -p sil-host --test e2e -- golden::` records them again
@@ -142,13 +142,13 @@ fn outputs_match_the_recorded_digests() {
             actual.insert(format!("{case}/{file}"), hash);
         }
     }
-    let path = root.join("sil-host/tests/golden/digests.txt");
+    let path = root.join("tests/golden/digests.txt");
     let text: String = actual.iter().map(|(k, v)| format!("{v}  {k}\n")).collect();
     if std::env::var("GOLDEN").as_deref() == Ok("update") {
         std::fs::write(&path, text).unwrap();
         return;
     }
-    let recorded = std::fs::read_to_string(&path).expect("sil-host/tests/golden/digests.txt (GOLDEN=update records it)");
+    let recorded = std::fs::read_to_string(&path).expect("tests/golden/digests.txt (GOLDEN=update records it)");
     let recorded: BTreeMap<String, String> =
         recorded.lines().filter_map(|l| l.split_once("  ")).map(|(h, k)| (k.to_string(), h.to_string())).collect();
     let mut wrong = Vec::new();

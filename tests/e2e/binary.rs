@@ -148,7 +148,7 @@ fn strings(args: &[&str]) -> Vec<String> {
 /// ends it quietly with exit 141 after its work (its files written), a full
 /// device with exit 1 and a message naming standard output. Each command runs
 /// on a tiny case. (`board` and `board-twin` need a board twin:
-/// sil-host/tests/e2e/board.rs; `sensitivity` and `report` take minutes: the ignored
+/// tests/e2e/board.rs; `sensitivity` and `report` take minutes: the ignored
 /// test below; `pil` needs QEMU and the image: tried when they are there;
 /// `firmware` prints nothing.)
 #[test]
@@ -164,7 +164,7 @@ fn a_closed_or_full_standard_output_ends_every_command_without_a_panic() {
         strings(&["sweep", "--mu", "0.6", "--v-belt=-0.5,-0.4", "--v-belt-step", "0.1", "--transient", "2", "--record", "1"]),
         strings(&["zmax", "--duration", "3.5", "--tol", "0.05"]),
     ];
-    // `cargo build-pil`'s image, the one the e2e tests build too (sil-host/tests/e2e/common.rs).
+    // `cargo build-pil`'s image, the one the e2e tests build too (tests/e2e/common.rs).
     let image = Some(crate::common::target_dir().join("thumbv7em-none-eabihf/qemu/pil")).filter(|p| p.is_file());
     let qemu = Command::new("qemu-system-arm").arg("--version").output().is_ok_and(|o| o.status.success());
     if let Some(image) = image.filter(|_| qemu) {

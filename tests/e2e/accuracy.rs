@@ -1,7 +1,7 @@
 //! The accuracy contract (docs/architecture.md "The accuracy contract"): a
 //! numerical change may move the last bits of the outputs only if every case stays
 //! as close to its tight-tolerance reference as the code recorded in
-//! `sil-host/tests/accuracy/contract.json` did (no worse than twice, or [`compare::FLOOR`]
+//! `tests/accuracy/contract.json` did (no worse than twice, or [`compare::FLOOR`]
 //! tolerances) and within a thousandth of the quantum of the sensor that measures
 //! each column ([`compare::quantum`]), with the same events, and if the
 //! paper-level results do not move (Table II to 5 decimals, `Z_t,sliding` within
@@ -336,7 +336,7 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
     let _ = std::fs::remove_dir_all(&dir);
     let measured: Vec<(&'static str, Measured)> = cases().iter().map(|c| (c.name, measure(c, &dir))).collect();
     let paper = paper_level(&dir);
-    let path = root.join("sil-host/tests/accuracy/contract.json");
+    let path = root.join("tests/accuracy/contract.json");
     if std::env::var("ACCURACY").as_deref() == Ok("record") {
         let cases: serde_json::Map<String, Value> = measured.iter().map(|(n, m)| (n.to_string(), record_case(m))).collect();
         let contract = json!({
@@ -351,7 +351,7 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
         return;
     }
     let recorded: Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).expect("sil-host/tests/accuracy/contract.json (ACCURACY=record records it)"))
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("tests/accuracy/contract.json (ACCURACY=record records it)"))
             .unwrap();
     let mut wrong = Vec::new();
     for (name, m) in &measured {
@@ -380,7 +380,7 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
 fn a_run_1e_7_off_breaks_the_contract() {
     let root = common::workspace();
     let recorded: Value =
-        serde_json::from_str(&std::fs::read_to_string(root.join("sil-host/tests/accuracy/contract.json")).expect("contract.json")).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(root.join("tests/accuracy/contract.json")).expect("contract.json")).unwrap();
     let case = cases().into_iter().find(|c| c.name == "simulate-x0a").unwrap();
     let loose = Case { measured: ["--set", "plant.m=0.120000012"].map(String::from).to_vec(), ..case };
     let dir = root.join("target/accuracy-loose");

@@ -1,6 +1,6 @@
 //! Figures fit for a paper (issue 25): the check over every figure
 //! (`figure_check`) catches what it must, and the figures of the quick commands
-//! pass it. `sil-host/tests/e2e/report.rs` runs the same check over every figure the
+//! pass it. `tests/e2e/report.rs` runs the same check over every figure the
 //! report writes.
 
 use crate::figure_check;
