@@ -351,8 +351,7 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
         return;
     }
     let recorded: Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).expect("tests/accuracy/contract.json (ACCURACY=record records it)"))
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("tests/accuracy/contract.json (ACCURACY=record records it)")).unwrap();
     let mut wrong = Vec::new();
     for (name, m) in &measured {
         // A reference that is the measured run itself (the same steps) measures nothing.
