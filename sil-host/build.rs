@@ -37,6 +37,15 @@ fn main() {
         watch(&Path::new(&dir).join("HEAD"));
         watch(&Path::new(&dir).join("index"));
     }
+    // And when a tracked file is edited in the working tree (`-dirty` appears or goes
+    // without the index moving, issue 68): every tracked file but the prose (`*.md`,
+    // `docs/`), whose edits change no output of the build. Paths are the checkout's,
+    // from its top level.
+    if let (Some(top), Some(files)) = (git(&["rev-parse", "--show-toplevel"]), git(&["ls-files"])) {
+        for file in files.lines().filter(|f| !f.ends_with(".md") && !f.starts_with("docs/")) {
+            watch(&Path::new(&top).join(file));
+        }
+    }
     if let Some(common) = git(&["rev-parse", "--git-common-dir"]) {
         watch(&Path::new(&common).join("packed-refs"));
         if let Some(branch) = git(&["symbolic-ref", "-q", "HEAD"]) {
