@@ -41,7 +41,9 @@ fn main() {
     // without the index moving, issue 68): every tracked file but the prose (`*.md`,
     // `docs/`), whose edits change no output of the build. Paths are the checkout's,
     // from its top level.
-    if let (Some(top), Some(files)) = (git(&["rev-parse", "--show-toplevel"]), git(&["ls-files"])) {
+    if let Some(top) = git(&["rev-parse", "--show-toplevel"])
+        && let Some(files) = git(&["-C", &top, "ls-files"])
+    {
         for file in files.lines().filter(|f| !f.ends_with(".md") && !f.starts_with("docs/")) {
             watch(&Path::new(&top).join(file));
         }
