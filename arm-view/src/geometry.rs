@@ -33,9 +33,9 @@ impl ArmGeometry {
     }
 
     /// The tip `[z_t, z_n]` (m, world `x` and `z`) at angles `theta1`, `theta2`
-    /// (rad): `shared::kinematics::tip_position`, the plant's own.
+    /// (rad): `shared::kinematics::joint_positions`, the plant's own, as every view draws it.
     pub fn tip(&self, theta1: f64, theta2: f64) -> [f64; 2] {
-        let z = shared::kinematics::tip_position(self.l, &nalgebra::Vector2::new(theta1, theta2));
+        let [_, z] = shared::kinematics::joint_positions(self.l, &nalgebra::Vector2::new(theta1, theta2));
         [z[0], z[1]]
     }
 }

@@ -148,6 +148,24 @@ pub fn tip_position_trig<T: Real>(l: T, t: &JointTrig<T>) -> Vector2<T> {
     Vector2::new(l * (t.s1 + t.s2), -l * (t.c1 + t.c2))
 }
 
+/// The elbow and the tip `[z_t, z_n]` (m, the base joint at the origin) of links of
+/// length `l` (m) from the sines and cosines of the angles: the elbow `l [sin
+/// theta1, -cos theta1]` ([`tip_position_trig`] with the second link's terms zero,
+/// the same bits), the tip [`tip_position_trig`]. Every view of the arm draws its
+/// joints from this (the trace page, the animations, the Foxglove scene).
+#[inline]
+pub fn joint_positions_trig<T: Real>(l: T, t: &JointTrig<T>) -> [Vector2<T>; 2] {
+    let elbow = JointTrig { s1: t.s1, c1: t.c1, s2: T::zero(), c2: T::zero() };
+    [tip_position_trig(l, &elbow), tip_position_trig(l, t)]
+}
+
+/// [`joint_positions_trig`] at the angles `q = [theta1, theta2]` (rad): the elbow
+/// and the tip, m.
+#[inline]
+pub fn joint_positions<T: Real>(l: T, q: &Vector2<T>) -> [Vector2<T>; 2] {
+    joint_positions_trig(l, &JointTrig::new(q))
+}
+
 /// Tip Jacobian `J = [[l cos theta1, l cos theta2], [l sin theta1, l sin theta2]]`
 /// (m/rad) from the sines and cosines of the angles; paper eq. 1.
 #[inline]
@@ -252,6 +270,23 @@ mod tests {
     use super::*;
 
     const L: f64 = 0.21;
+
+    /// The joints every view draws: the elbow `l [sin theta1, -cos theta1]` and the
+    /// plant's tip, bit for bit, over a grid of angles; the elbow is `l` from the base
+    /// and the tip `l` from the elbow.
+    #[test]
+    fn the_joints_are_the_elbow_and_the_plants_tip() {
+        for i in -12..=12 {
+            for j in -12..=12 {
+                let q = Vector2::new(f64::from(i) * 0.27, f64::from(j) * 0.31);
+                let [elbow, tip] = joint_positions(L, &q);
+                let (s1, c1) = q[0].sin_cos();
+                assert_eq!((elbow[0].to_bits(), elbow[1].to_bits()), ((L * s1).to_bits(), (-L * c1).to_bits()), "{q:?}");
+                assert_eq!(tip, tip_position(L, &q), "{q:?}");
+                assert!((elbow.norm() - L).abs() < 1e-15 && ((tip - elbow).norm() - L).abs() < 1e-15, "{q:?}");
+            }
+        }
+    }
 
     /// The geometry's sines and cosines are those of the angles, to a few roundings,
     /// on both branches over the workspace, in f32 and f64.

@@ -4,7 +4,7 @@
 //! frame's pixels (x to the right, y down), equal scales on both axes, fitted
 //! around everything the animation shows.
 
-use shared::kinematics::{JointTrig, tip_position_trig};
+use shared::kinematics::joint_positions;
 
 use super::trace::ArmTrace;
 
@@ -20,14 +20,10 @@ pub struct Arm {
 }
 
 /// The elbow and the tip `[z_t, z_n]` (m) of angles `theta1`, `theta2` (rad from
-/// the downward vertical), links of length `l` (m): the tip by
-/// [`shared::kinematics::tip_position_trig`], the elbow by the same with the
-/// second link's terms zero (`l (sin theta1, -cos theta1)`).
+/// the downward vertical), links of length `l` (m), by
+/// [`shared::kinematics::joint_positions`] (the plant's kinematics).
 pub fn joints(l: f64, theta1: f64, theta2: f64) -> [[f64; 2]; 2] {
-    let (s1, c1) = theta1.sin_cos();
-    let (s2, c2) = theta2.sin_cos();
-    let elbow = tip_position_trig(l, &JointTrig { s1, c1, s2: 0.0, c2: 0.0 });
-    let tip = tip_position_trig(l, &JointTrig { s1, c1, s2, c2 });
+    let [elbow, tip] = joint_positions(l, &nalgebra::Vector2::new(theta1, theta2));
     [[elbow[0], elbow[1]], [tip[0], tip[1]]]
 }
 

@@ -3,7 +3,7 @@
 //! show, and the force arrow's scale.
 
 use nalgebra::Vector2;
-use shared::kinematics::{JointTrig, tip_position};
+use shared::kinematics::joint_positions;
 
 /// Depth of the belt drawn under its surface, m.
 pub const BELT_DEPTH_M: f64 = 0.03;
@@ -13,13 +13,10 @@ pub const ARROW_MAX_M: f64 = 0.08;
 
 /// The elbow and the tip of configuration `theta = [theta1, theta2]` (rad) with
 /// links of length `l` (m), in the belt's frame `[z_t, z_n]` (m, the base at the
-/// origin): the elbow `l [sin theta1, -cos theta1]`, the tip
-/// [`shared::kinematics::tip_position`] (the plant's).
+/// origin), by [`shared::kinematics::joint_positions`] (the plant's kinematics).
 pub fn joints(l: f64, theta: [f64; 2]) -> ([f64; 2], [f64; 2]) {
-    let q = Vector2::new(theta[0], theta[1]);
-    let trig = JointTrig::new(&q);
-    let tip = tip_position(l, &q);
-    ([l * trig.s1, -l * trig.c1], [tip[0], tip[1]])
+    let [elbow, tip] = joint_positions(l, &Vector2::new(theta[0], theta[1]));
+    ([elbow[0], elbow[1]], [tip[0], tip[1]])
 }
 
 /// The world box `[z_t min, z_t max, z_n min, z_n max]` (m) the view shows: the
