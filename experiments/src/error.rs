@@ -24,6 +24,13 @@ pub enum Error {
     /// analysis error's).
     #[error(transparent)]
     Analysis(#[from] AnalysisError),
+    /// The caller asked for something the experiment or its outputs cannot take
+    /// (a flag out of range, a file that is not what it names, a serial port
+    /// that does not open, a command whose feature is not built): the message
+    /// names it. An analysis's own bad input is [`Error::Analysis`] holding
+    /// [`AnalysisError::BadInput`], with the same message form.
+    #[error("invalid input: {0}")]
+    BadInput(String),
     /// Writing or reading a file failed.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -80,9 +87,9 @@ pub fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Error + 
 }
 
 impl Error {
-    /// Bad input (exit 2; "invalid input: `message`"): [`AnalysisError::BadInput`].
+    /// Bad input (exit 2; "invalid input: `message`"): [`Error::BadInput`].
     pub fn bad_input(message: impl Into<String>) -> Self {
-        Self::Analysis(AnalysisError::BadInput(message.into()))
+        Self::BadInput(message.into())
     }
 
     /// A stop by Ctrl-C or SIGTERM part way (exit 1, what was computed is kept):
@@ -98,7 +105,7 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         use AnalysisError as A;
         match self {
-            Self::FolderInUse { .. } => 2,
+            Self::FolderInUse { .. } | Self::BadInput(_) => 2,
             Self::Analysis(A::BadInput(_) | A::Param(_) | A::Scenario(_)) => 2,
             Self::Analysis(A::Sim(e)) if e.is_bad_input() => 2,
             Self::Analysis(A::Run(e)) if run_is_bad_input(e) => 2,
@@ -146,7 +153,7 @@ mod tests {
         let in_use = || RunError::RigInUse { rig: "r".into(), role: "plant", pid: 1 };
         let refused = std::io::Error::new(std::io::ErrorKind::PermissionDenied, "/tmp/painleve-1: owned by uid 2");
         let cases: [(Error, &str, i32); 8] = [
-            (Error::bad_input("--grid"), "invalid input: --grid", 2),
+            (AnalysisError::BadInput("--grid".into()).into(), "invalid input: --grid", 2),
             (param().into(), "invalid parameter: ", 2),
             (plant::SimError::BadStep(-1.0).into(), "simulation failed: ", 2),
             (in_use().into(), "run failed: ", 2),
@@ -162,6 +169,10 @@ mod tests {
         }
         let folder = Error::FolderInUse { path: "out".into(), owner: "pid 1".into() };
         assert_eq!(folder.exit_code(), 2);
+        // The experiments' own bad input: its own variant, the same message form and code.
+        let bad = Error::bad_input("--grid");
+        assert!(matches!(bad, Error::BadInput(_)), "{bad:?}");
+        assert_eq!((bad.to_string().as_str(), bad.exit_code()), ("invalid input: --grid", 2));
         assert_eq!(Error::Invalid("x".into()).exit_code(), 1);
     }
 }

@@ -50,7 +50,7 @@ impl FolderLock {
     ///
     /// # Errors
     /// [`CliError::FolderInUse`] (exit 2) when another process holds the folder,
-    /// with the holder as its owner file names it; [`CliError::Analysis`] (exit
+    /// with the holder as its owner file names it; [`CliError::BadInput`] (exit
     /// 2) when `dir` is a file; [`CliError::Io`] when the folder cannot be
     /// created or opened.
     pub fn acquire(dir: &Path) -> Result<Self, CliError> {

@@ -45,7 +45,7 @@ pub type PilRuns = Result<Vec<PilRun>, String>;
 /// are skipped).
 ///
 /// # Errors
-/// [`CliError::Analysis`] for a run length the scenario refuses (exit 2);
+/// [`CliError::Analysis`] for a run length the scenario refuses (exit 2: a scenario error);
 /// [`CliError::Analysis`] for a run that fails once started (exit 1).
 pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<PilRuns, CliError> {
     if !image.is_file() {

@@ -34,7 +34,7 @@ use rig::{
 /// Checks the arguments that say where the image runs.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2): a serial device that does not exist, a baud
+/// [`CliError::BadInput`] (exit 2): a serial device that does not exist, a baud
 /// rate outside [`BAUD_RANGE`], a missing image, or one that is not a 32-bit
 /// little-endian ARM ELF.
 fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
@@ -73,7 +73,7 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
 /// came): it must read as an ELF whose header says 32-bit little-endian ARM.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2) naming the file and what is wrong.
+/// [`CliError::BadInput`] (exit 2) naming the file and what is wrong.
 fn check_image(image: &std::path::Path) -> Result<(), CliError> {
     use object::Object;
     let bad = |why: String| {

@@ -18,7 +18,7 @@ use print::*;
 /// `admissible.svg`; prints nothing.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2) for a bad `mu`, before anything is written;
+/// [`CliError::Analysis`] (exit 2: a parameter error) for a bad `mu`, before anything is written;
 /// [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError> {
     let report = compute(args)?;
@@ -37,7 +37,7 @@ pub fn execute(args: &AdmissibleArgs) -> Result<Done<AdmissibleReport>, CliError
 /// all or nothing.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2) for a negative or non-finite `--mu`, before
+/// [`CliError::Analysis`] (exit 2: a parameter error) for a negative or non-finite `--mu`, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).
 pub fn run(args: &AdmissibleArgs) -> Result<(), CliError> {

@@ -60,7 +60,7 @@ pub const GROUPS: [(&str, &str); 11] = [
 /// tracing) and `realtime` unless `--realtime-s` is positive.
 ///
 /// # Errors
-/// [`CliError::Analysis`] naming an unknown group and listing the known ones.
+/// [`CliError::BadInput`] naming an unknown group and listing the known ones.
 fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
     if args.only.is_empty() {
         return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "cycles" && (*g != "realtime" || args.realtime_s > 0.0)).collect());
@@ -84,7 +84,7 @@ fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
 /// Checks the numbers of `args`.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2) naming the flag.
+/// [`CliError::BadInput`] (exit 2) naming the flag.
 fn check(args: &BenchArgs) -> Result<(), CliError> {
     if args.repeat == 0 || args.repeat > 1000 {
         return Err(CliError::bad_input(format!("--repeat {}: between 1 and 1000", args.repeat)));

@@ -88,7 +88,7 @@ impl bp::Operator for Terminal {
 /// `sil-host board`.
 ///
 /// # Errors
-/// [`CliError::Analysis`] (exit 2) for bad input, a port that does not open or a
+/// [`CliError::BadInput`] (exit 2) for bad input, a port that does not open or a
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {

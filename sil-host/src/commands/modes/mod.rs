@@ -19,8 +19,8 @@ use summary::*;
 /// Computes the mode map and writes `modes.csv` and `modes.svg`; prints nothing.
 ///
 /// # Errors
-/// [`CliError::Analysis`] / [`CliError::Analysis`] (exit 2) for bad ranges, `mu`
-/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
+/// [`CliError::Analysis`] (exit 2: the analysis's bad input or a parameter error)
+/// for bad ranges, `mu`, `v_belt` or a bad grid size, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails.
 pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
     let map = compute(args)?;
@@ -39,8 +39,8 @@ pub fn execute(args: &ModesArgs) -> Result<Done<ModeMap>, CliError> {
 /// `modes.csv` and `modes.svg` under `--out`, all or nothing.
 ///
 /// # Errors
-/// [`CliError::Analysis`] / [`CliError::Analysis`] (exit 2) for bad ranges, `mu`
-/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size, before
+/// [`CliError::Analysis`] (exit 2: the analysis's bad input or a parameter error)
+/// for bad ranges, `mu`, `v_belt` or a bad grid size, before
 /// anything is written; [`CliError::Io`] / [`CliError::Plot`] when writing fails
 /// (nothing is left half-written).
 pub fn run(args: &ModesArgs) -> Result<(), CliError> {

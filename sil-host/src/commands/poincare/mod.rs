@@ -26,8 +26,8 @@ use print::*;
 /// Runs `sil-host poincare`.
 ///
 /// # Errors
-/// [`CliError::Analysis`]/[`CliError::Analysis`]/[`CliError::Analysis`] (exit 2) for bad
-/// options or initial conditions, before anything is written; [`CliError::Analysis`]
+/// [`CliError::BadInput`] or an analysis's bad input, parameter or initial state
+/// ([`CliError::Analysis`], exit 2) for bad options or initial conditions, before anything is written; [`CliError::Analysis`]
 /// (exit 1) when some belt speed failed (everything is written first);
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
 pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {

@@ -72,7 +72,7 @@ struct ReportIndex<'a> {
 /// Runs `sil-host report`.
 ///
 /// # Errors
-/// [`CliError::Analysis`] when the scenario folder is missing; [`CliError::Io`]
+/// [`CliError::BadInput`] when the scenario folder is missing; [`CliError::Io`]
 /// when the report cannot be written; [`CliError::PartFailed`] (exit 1) when an
 /// experiment failed, after everything is written; [`CliError::Analysis`]
 /// (exit 130 or 143) when Ctrl-C or SIGTERM stopped it, after the page is written

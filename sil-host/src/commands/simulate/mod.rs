@@ -33,8 +33,8 @@ use print::*;
 /// Runs `sil-host simulate`.
 ///
 /// # Errors
-/// [`CliError::Analysis`]/[`CliError::Analysis`]/[`CliError::Analysis`] (exit 2) for bad
-/// options or initial conditions, before anything is written; [`CliError::Analysis`]
+/// [`CliError::BadInput`] or an analysis's bad input, parameter or initial state
+/// ([`CliError::Analysis`], exit 2) for bad options or initial conditions, before anything is written; [`CliError::Analysis`]
 /// (exit 1) when the simulation fails part way (outputs up to then are written);
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
 pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
