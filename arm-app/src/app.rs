@@ -242,7 +242,7 @@ impl<H: ArmIo> ArmApp<H> {
             time_offset_us: 0,
             seq: 0,
             tick_mark,
-            now: Instant(0),
+            now: Instant::from_us(0),
             interval: [u32::MAX, 0],
             handler_worst: 0,
             stats: StepStats::default(),
@@ -391,7 +391,7 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
         // The step starts now: the tick plus the sampling.
         let per_us = (self.clock.ticks_per_second() / 1_000_000).max(1);
         let us = self.clock.ticks().wrapping_sub(self.hw.tick_mark) / per_us;
-        self.hw.now = frame.sampled_at().saturating_add(Duration(u64::from(us)));
+        self.hw.now = frame.sampled_at().saturating_add(Duration::from_us(u64::from(us)));
         Ok(Event::Frame(frame))
     }
 
@@ -487,7 +487,7 @@ mod tests {
                     elbow_count: 15_290,
                     ..SensorFrame::default()
                 };
-                let _ = fw.step(Instant(frame.t_us), &frame, &firmware::board::FrozenClock);
+                let _ = fw.step(Instant::from_us(frame.t_us), &frame, &firmware::board::FrozenClock);
             }
             fw.enter_safe_state(SafeReason::PeerLost);
             let fresh = format!("{:?}", Firmware::new(*fw.config()).unwrap());

@@ -223,7 +223,7 @@ mod tests {
             Event::Reset,
             Event::End,
         ];
-        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant(0) };
+        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
         let mut fw = None;
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
@@ -258,7 +258,7 @@ mod tests {
             Event::Frame(frame(u32::from(limit) + 501)),
             Event::End,
         ];
-        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant(0) };
+        let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
         let mut fw = Some(Firmware::new(Config::default()).unwrap());
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
@@ -272,7 +272,8 @@ mod tests {
 
     #[test]
     fn a_board_error_stops_the_loop() {
-        let mut board = Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now: Instant(0) };
+        let mut board =
+            Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
         assert_eq!(run(&mut None, &mut board, &FrozenClock), Err("script exhausted"));
     }
 }

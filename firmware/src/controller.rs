@@ -293,7 +293,7 @@ impl Firmware {
         // Deadline: the command leaves at now + the step's own time; leaving at
         // t_k + Ts or later it cannot act in period k (the plant's rule too).
         let elapsed_ticks = clock.ticks().wrapping_sub(start);
-        let elapsed = Duration(elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64);
+        let elapsed = Duration::from_us(elapsed_ticks as u64 * 1_000_000 / clock.ticks_per_second().max(1) as u64);
         let period_us = self.cfg.period.as_us();
         // Saturating: a clock near u64::MAX (or a frame stamped far in the past)
         // must read as late, never wrap round to on time.

@@ -117,32 +117,32 @@ fn deadline_misses_latch_the_safe_state_until_reset() {
     let clock = SteppingClock { now: Cell::new(0), step: 50 };
     // On time: the frame is handled at t_k + 100 us and the step takes 50 us.
     for k in 0..5 {
-        let c = fw.step(Instant(k as u64 * 1000 + 100), &frame(k, q, [-1.0, 2.0]), &clock);
+        let c = fw.step(Instant::from_us(k as u64 * 1000 + 100), &frame(k, q, [-1.0, 2.0]), &clock);
         assert_eq!(c.status & (status::DEADLINE_MISS | status::SAFE_STATE), 0);
         assert_eq!(c.step_ticks, 50);
     }
     // Two late periods (handled 990 us late: with the step's 50 us, past the deadline).
     for k in 5..7 {
-        let c = fw.step(Instant(k as u64 * 1000 + 990), &frame(k, q, [-1.0, 2.0]), &clock);
+        let c = fw.step(Instant::from_us(k as u64 * 1000 + 990), &frame(k, q, [-1.0, 2.0]), &clock);
         assert_ne!(c.status & status::DEADLINE_MISS, 0, "miss detected in the period it happens");
         assert_eq!(c.status & status::SAFE_STATE, 0, "two misses are tolerated");
     }
     // An on-time period resets the run of misses.
-    let c = fw.step(Instant(7000 + 100), &frame(7, q, [-1.0, 2.0]), &clock);
+    let c = fw.step(Instant::from_us(7000 + 100), &frame(7, q, [-1.0, 2.0]), &clock);
     assert_eq!(c.status & status::DEADLINE_MISS, 0);
     assert_eq!(fw.overruns(), 2);
     // Three in a row latch the safe state in the third.
     for k in 8..11 {
-        let c = fw.step(Instant(k as u64 * 1000 + 990), &frame(k, q, [-1.0, 2.0]), &clock);
+        let c = fw.step(Instant::from_us(k as u64 * 1000 + 990), &frame(k, q, [-1.0, 2.0]), &clock);
         assert_eq!(c.status & status::SAFE_STATE != 0, k == 10, "safe state at the 3rd consecutive miss (k = {k})");
     }
     // It stays, with zero torque, even when on time again.
-    let c = fw.step(Instant(11_000 + 100), &frame(11, q, [-1.0, 2.0]), &clock);
+    let c = fw.step(Instant::from_us(11_000 + 100), &frame(11, q, [-1.0, 2.0]), &clock);
     assert_eq!((c.u1_code, c.u2_code), (0, 0));
     assert_eq!(SafeReason::from_status(c.status), Some(SafeReason::DeadlineMisses));
     assert_eq!(c.overruns, 5);
     fw.reset();
-    let c = fw.step(Instant(12_000 + 100), &frame(12, q, [-1.0, 2.0]), &clock);
+    let c = fw.step(Instant::from_us(12_000 + 100), &frame(12, q, [-1.0, 2.0]), &clock);
     assert_eq!(c.status & status::SAFE_STATE, 0, "reset leaves the safe state");
     assert_ne!((c.u1_code, c.u2_code), (0, 0));
 }
@@ -164,7 +164,7 @@ proptest! {
         let mut seq = 0u32;
         let mut misses = 0u32;
         let mut step = |late: bool, fw: &mut Firmware| {
-            let c = fw.step(Instant(seq as u64 * 1000 + if late { 990 } else { 100 }), &frame(seq, q, [-1.0, 2.0]), &clock);
+            let c = fw.step(Instant::from_us(seq as u64 * 1000 + if late { 990 } else { 100 }), &frame(seq, q, [-1.0, 2.0]), &clock);
             seq += 1;
             c
         };
@@ -202,7 +202,7 @@ proptest! {
         let clock = SteppingClock { now: Cell::new(0), step };
         let now_us = t_us.saturating_add(late);
         let f = SensorFrame { t_us, ..frame(1, x0d(), [-1.0, 2.0]) };
-        let c = fw.step(Instant(now_us), &f, &clock);
+        let c = fw.step(Instant::from_us(now_us), &f, &clock);
         // The clock ticks at 1 MHz: one tick is one microsecond.
         let elapsed = u128::from(step);
         let lateness = u128::from(now_us.saturating_sub(t_us));
@@ -217,23 +217,23 @@ fn bad_and_stale_frames_are_never_trusted() {
     let mut fw = Firmware::new(Config::default()).unwrap();
     let q = x0d();
     let clock = crate::board::FrozenClock;
-    let good = fw.step(Instant(0), &frame(0, q, [-1.0, 2.0]), &clock);
-    let good = fw.step(Instant(1000), &frame(1, q, [-1.0, 2.0]), &clock).u1_code.max(good.u1_code);
+    let good = fw.step(Instant::from_us(0), &frame(0, q, [-1.0, 2.0]), &clock);
+    let good = fw.step(Instant::from_us(1000), &frame(1, q, [-1.0, 2.0]), &clock).u1_code.max(good.u1_code);
     let _ = good;
-    let held = fw.step(Instant(2000), &frame(2, q, [-1.0, 2.0]), &clock);
+    let held = fw.step(Instant::from_us(2000), &frame(2, q, [-1.0, 2.0]), &clock);
     // A repeated sequence number: stale, previous command held.
-    let c = fw.step(Instant(2000), &frame(2, q, [-1.0, 2.0]), &clock);
+    let c = fw.step(Instant::from_us(2000), &frame(2, q, [-1.0, 2.0]), &clock);
     assert_ne!(c.status & status::STALE_FRAME, 0);
     assert_eq!((c.u1_code, c.u2_code), (held.u1_code, held.u2_code));
     // A skipped period is accepted and reported.
-    let c = fw.step(Instant(5000), &frame(5, q, [-1.0, 2.0]), &clock);
+    let c = fw.step(Instant::from_us(5000), &frame(5, q, [-1.0, 2.0]), &clock);
     assert_ne!(c.status & status::SEQUENCE_GAP, 0);
     assert_eq!(c.status & status::BAD_FRAME, 0);
     // Three corrupt frames in a row latch the safe state.
     for k in 6..9 {
         let mut f = frame(k, q, [-1.0, 2.0]);
         f.theta1_count = 0xFFFF;
-        let c = fw.step(Instant(k as u64 * 1000), &f, &clock);
+        let c = fw.step(Instant::from_us(k as u64 * 1000), &f, &clock);
         assert_ne!(c.status & status::BAD_FRAME, 0);
         assert_eq!(c.status & status::SAFE_STATE != 0, k == 8);
     }
@@ -244,7 +244,7 @@ fn bad_and_stale_frames_are_never_trusted() {
 fn hybrid_near_a_straight_arm_goes_safe_not_nan() {
     let mut fw = Firmware::new(Config::default()).unwrap();
     // theta1 = theta2: the arm is straight, J is singular.
-    let c = fw.step(Instant(0), &frame(0, [0.2, 0.2], [0.0, 5.0]), &crate::board::FrozenClock);
+    let c = fw.step(Instant::from_us(0), &frame(0, [0.2, 0.2], [0.0, 5.0]), &crate::board::FrozenClock);
     assert_eq!(SafeReason::from_status(c.status), Some(SafeReason::Singular));
     assert_eq!((c.u1_code, c.u2_code), (0, 0));
 }
@@ -256,7 +256,7 @@ fn pid_with_an_unreachable_target_goes_safe() {
     let q = x0d();
     let mut last = None;
     for k in 0..20 {
-        last = Some(fw.step(Instant(k as u64 * 1000), &frame(k, q, [-1.0, 2.0]), &crate::board::FrozenClock));
+        last = Some(fw.step(Instant::from_us(k as u64 * 1000), &frame(k, q, [-1.0, 2.0]), &crate::board::FrozenClock));
     }
     assert_eq!(SafeReason::from_status(last.unwrap().status), Some(SafeReason::Unreachable));
 }
@@ -280,10 +280,10 @@ proptest! {
         let cfg = Config { controller: if controller_is_pid { ControllerKind::Pid } else { ControllerKind::Hybrid }, ..Config::default() };
         let mut fw = Firmware::new(cfg).unwrap();
         let clock = SteppingClock { now: Cell::new(0), step: 7 };
-        let _ = fw.step(Instant(0), &frame(0, x0d(), [-1.0, 2.0]), &clock);
+        let _ = fw.step(Instant::from_us(0), &frame(0, x0d(), [-1.0, 2.0]), &clock);
         for (seq, c1, c2, ft, fnn, belt, now) in frames {
             let f = SensorFrame { t_us: seq as u64 * 1000, seq, theta1_count: c1, elbow_count: c2, f_t_code: ft, f_n_code: fnn, belt_count: belt, flags: 0 };
-            let c = fw.step(Instant(now), &f, &clock);
+            let c = fw.step(Instant::from_us(now), &f, &clock);
             prop_assert_eq!(c.seq, seq);
             prop_assert!((wire::TORQUE_CODE_MIN..=wire::TORQUE_CODE_MAX).contains(&c.u1_code));
             prop_assert!((wire::TORQUE_CODE_MIN..=wire::TORQUE_CODE_MAX).contains(&c.u2_code));
@@ -303,8 +303,8 @@ fn torque_saturation_is_reported_in_the_status_word() {
     let cfg = Config { controller: ControllerKind::Pid, target_z_t: -0.06, move_time_s: 1e-3, ..Config::default() };
     let mut fw = Firmware::new(cfg).unwrap();
     let q = x0d();
-    let _ = fw.step(Instant(0), &frame(0, q, [-1.0, 2.0]), &crate::board::FrozenClock);
-    let c = fw.step(Instant(1000), &frame(1, q, [-1.0, 2.0]), &crate::board::FrozenClock);
+    let _ = fw.step(Instant::from_us(0), &frame(0, q, [-1.0, 2.0]), &crate::board::FrozenClock);
+    let c = fw.step(Instant::from_us(1000), &frame(1, q, [-1.0, 2.0]), &crate::board::FrozenClock);
     assert_ne!(c.status & status::SATURATED_U1, 0);
     assert_eq!(c.u1_code.abs().max(2047), 2047);
     assert!(c.u1_code == wire::TORQUE_CODE_MAX || c.u1_code == wire::TORQUE_CODE_MIN);

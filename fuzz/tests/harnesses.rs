@@ -103,7 +103,7 @@ fn a_wrong_command_fails_the_firmware_property() {
         for k in 0..3 {
             let frame = good_frame(k);
             let now_us = frame.t_us + 100;
-            let mut cmd = fw.step(shared::time::Instant(now_us), &frame, &FrozenClock);
+            let mut cmd = fw.step(shared::time::Instant::from_us(now_us), &frame, &FrozenClock);
             let seen_clock = Clock { start: 0, elapsed: 0, tps: 1_000_000 };
             if k == 2 {
                 cmd_change(&mut cmd);

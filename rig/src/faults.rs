@@ -206,7 +206,7 @@ impl FaultPlan {
     /// rounded to the microsecond.
     pub fn command_delay(&self, k: u64) -> Duration {
         let s = self.active(FaultKind::LateCommand, k).map(|f| f.delay_s).fold(0.0, f64::max);
-        Duration((s * 1e6).round() as u64)
+        Duration::from_us((s * 1e6).round() as u64)
     }
 
     /// Whether the command of period `k` is lost on the wire.

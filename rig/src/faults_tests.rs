@@ -38,7 +38,7 @@ fn every_kind_acts_from_the_same_period() {
     let plan = FaultPlan::new(&faults, Period::MILLISECOND);
     let first = |acts: &dyn Fn(u64) -> bool| (2990..3010).find(|&k| acts(k));
     assert_eq!(first(&|k| plan.drops_command(k)), Some(3001));
-    assert_eq!(first(&|k| plan.command_delay(k) == Duration(200)), Some(3001));
+    assert_eq!(first(&|k| plan.command_delay(k) == Duration::from_us(200)), Some(3001));
     assert_eq!(first(&|k| plan.stall_starting(k) == Some(0.05)), Some(3001));
     assert_eq!(first(&|k| plan.kills_firmware_at(k)), Some(3001));
     for kind in [FaultKind::StuckSensor, FaultKind::NanSensor, FaultKind::OutOfRange] {

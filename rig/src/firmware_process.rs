@@ -192,7 +192,7 @@ impl IpcBoard<'_> {
                         self.last_seq
                     );
                     self.ending = Some(Ending::PeerLost { answered: self.answered });
-                    self.now = time::Instant(0);
+                    self.now = time::Instant::from_us(0);
                     Ok(Some(Event::PeerLost { seq: self.last_seq.map_or(0, |q| q.wrapping_add(1)) }))
                 }
             };
@@ -265,9 +265,9 @@ impl Board for IpcBoard<'_> {
                     return Ok(Event::End);
                 }
                 let floor = match (self.realtime, self.epoch) {
-                    (true, Some(e)) => time::Instant(e.elapsed().as_micros() as u64),
+                    (true, Some(e)) => time::Instant::from_us(e.elapsed().as_micros() as u64),
                     (true, None) => frame.sampled_at(),
-                    (false, _) => time::Instant(self.newest_us),
+                    (false, _) => time::Instant::from_us(self.newest_us),
                 };
                 self.now = step_start(&self.faults, &frame, floor);
                 self.step_started = Instant::now();
@@ -342,7 +342,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
         stalled_at: None,
         batch: std::collections::VecDeque::with_capacity(super::ipc::QUEUE_DEPTH),
         newest_us: 0,
-        now: time::Instant(0),
+        now: time::Instant::from_us(0),
         step_started: Instant::now(),
         ending: None,
         announcement,

@@ -49,7 +49,8 @@ pub struct PeriodFailure {
 pub struct PeriodLoop {
     /// The sensor models with the run's faults (its plan also drives [`DropCommands`]).
     sensors: SensorFaults<Sensors>,
-    ts: f64,
+    /// The control period: `t_k = k period` (its seconds, `Period::as_secs_f64`, where
+    /// the plant's `f64` time needs them).
     period: shared::Period,
     delta: f64,
     v_belt: f64,
@@ -76,13 +77,11 @@ impl PeriodLoop {
     pub fn new(setup: &RunSetup, plant: &Plant) -> Self {
         let s = setup.scenario();
         let period = s.timing.period();
-        let ts = period.as_secs_f64();
         Self {
             sensors: SensorFaults::new(
                 Sensors::new(s.sensors.seed, s.sensors.load_noise_n).with_encoder_bits(s.sensors.encoder_bits),
                 setup.faults().clone(),
             ),
-            ts,
             period,
             delta: s.timing.delta_s,
             v_belt: s.plant.v_belt,
@@ -111,7 +110,7 @@ impl PeriodLoop {
 
     /// Control periods in `duration_s` seconds.
     pub fn periods_in(&self, duration_s: f64) -> usize {
-        (duration_s / self.ts).round() as usize
+        (duration_s / self.period.as_secs_f64()).round() as usize
     }
 
     /// The next period to run.
@@ -136,7 +135,7 @@ impl PeriodLoop {
         obs: &mut dyn Observer,
     ) -> Result<PeriodRecord, Box<PeriodFailure>> {
         let k = self.k;
-        let ts = self.ts;
+        let ts = self.period.as_secs_f64();
         let t_k = k as f64 * ts;
         // The frame's stamp: k whole periods (shared::time); t_k is the same instant in s.
         let t_us = self.period.sample(k as u64).as_us();
@@ -289,7 +288,7 @@ impl PeriodLoop {
         t_next: f64,
         obs: &mut dyn Observer,
     ) -> Result<(Vec<PlantEvent>, [f64; 2]), plant::SimError> {
-        if !(self.delta > 0.0 && self.delta < self.ts) || self.stamped {
+        if !(self.delta > 0.0 && self.delta < self.period.as_secs_f64()) || self.stamped {
             let r = plant.advance(&Hold(u), t_next - plant.time(), obs)?;
             return Ok((r.events, r.f));
         }

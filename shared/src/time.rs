@@ -14,15 +14,19 @@
 //! system uses that period, so no two parts disagree about a deadline and no
 //! stamp drifts from plant time.
 
-/// A point in time: microseconds since the start of the run.
+/// A point in time: microseconds since the start of the run ([`Instant::from_us`],
+/// [`Instant::as_us`]). `Instant + Duration` and `Instant - Instant` saturate (a
+/// clock that far reads as late, never wraps round to early; an earlier minus a
+/// later instant is 0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Instant(pub u64);
+pub struct Instant(u64);
 
-/// A span of time in microseconds.
+/// A span of time in microseconds ([`Duration::from_us`], [`Duration::as_us`]);
+/// `Duration + Duration` saturates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Duration(pub u64);
+pub struct Duration(u64);
 
 /// The control period: a whole, non-zero number of microseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -100,6 +104,12 @@ impl Period {
 }
 
 impl Instant {
+    /// The instant `us` microseconds after the start of the run.
+    #[inline]
+    pub const fn from_us(us: u64) -> Self {
+        Self(us)
+    }
+
     /// Microseconds since the start of the run.
     pub const fn as_us(self) -> u64 {
         self.0
@@ -123,6 +133,12 @@ impl Instant {
 }
 
 impl Duration {
+    /// A span of `us` microseconds.
+    #[inline]
+    pub const fn from_us(us: u64) -> Self {
+        Self(us)
+    }
+
     /// Microseconds.
     pub const fn as_us(self) -> u64 {
         self.0
@@ -134,9 +150,50 @@ impl Duration {
     }
 }
 
+impl core::ops::Add<Duration> for Instant {
+    type Output = Instant;
+    /// [`Instant::saturating_add`].
+    #[inline]
+    fn add(self, d: Duration) -> Instant {
+        self.saturating_add(d)
+    }
+}
+
+impl core::ops::Sub for Instant {
+    type Output = Duration;
+    /// [`Instant::saturating_since`]: 0 when `earlier` is later.
+    #[inline]
+    fn sub(self, earlier: Instant) -> Duration {
+        self.saturating_since(earlier)
+    }
+}
+
+impl core::ops::Add for Duration {
+    type Output = Duration;
+    /// [`Duration::saturating_add`].
+    #[inline]
+    fn add(self, other: Duration) -> Duration {
+        self.saturating_add(other)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn instants_and_durations_add_and_subtract_saturating() {
+        let (t, d) = (Instant::from_us(1_000), Duration::from_us(250));
+        assert_eq!((t + d).as_us(), 1_250);
+        assert_eq!((t + d) - t, d);
+        assert_eq!(t - (t + d), Duration::from_us(0), "an earlier minus a later instant is 0");
+        assert_eq!((Instant::from_us(u64::MAX) + d).as_us(), u64::MAX, "a late clock never wraps to early");
+        assert_eq!((d + Duration::from_us(u64::MAX)).as_us(), u64::MAX);
+        assert_eq!(
+            Period::MILLISECOND.sample(3) - Period::MILLISECOND.sample(1),
+            Period::MILLISECOND.duration().saturating_add(Period::MILLISECOND.duration())
+        );
+    }
 
     #[test]
     fn rates_that_divide_a_megahertz_are_exact() {

@@ -136,7 +136,7 @@ pub mod status {
 impl SensorFrame {
     /// The sample time [`SensorFrame::t_us`] as an [`Instant`](crate::time::Instant).
     pub const fn sampled_at(&self) -> crate::time::Instant {
-        crate::time::Instant(self.t_us)
+        crate::time::Instant::from_us(self.t_us)
     }
 }
 

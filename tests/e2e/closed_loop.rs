@@ -50,7 +50,7 @@ fn run(cfg: Config, target: f32, duration: f64) -> Run {
             belt_count: (params.v_belt * 1000.0).round() as i16,
             flags: 0,
         };
-        let cmd = fw.step(shared::time::Instant(k as u64 * 1000), &frame, &FrozenClock);
+        let cmd = fw.step(shared::time::Instant::from_us(k as u64 * 1000), &frame, &FrozenClock);
         let u_new = [wire::decode_torque(cmd.u1_code) as f64, wire::decode_torque(cmd.u2_code) as f64];
         plant.advance(&plant::Hold(u_applied), delta, &mut plant::NoObserver).unwrap();
         let r = plant.advance(&plant::Hold(u_new), ts - delta, &mut plant::NoObserver).unwrap();

@@ -74,7 +74,7 @@ pub fn check_covering(case: &Case, cov: &mut Coverage) -> Result<(), String> {
                     Start::NearMax(n) => u64::MAX - u64::from(n),
                 };
                 let c = ScriptedClock { next: Cell::new(clock.start), elapsed: clock.elapsed, tps: clock.tps };
-                let cmd = fw.step(shared::time::Instant(now_us), &frame, &c);
+                let cmd = fw.step(shared::time::Instant::from_us(now_us), &frame, &c);
                 let seen = Observed { frame: &frame, now_us, clock, cmd: &cmd, fw_safe: fw.safe_state(), fw_overruns: fw.overruns() };
                 let was_safe = model.0.safe.is_some();
                 check_step(&cfg, &mut model, &seen)
@@ -100,7 +100,7 @@ pub fn check_covering(case: &Case, cov: &mut Coverage) -> Result<(), String> {
                     cov.reasons[SafeReason::PeerLost as usize] += 1;
                 }
                 let reason = *m.safe.get_or_insert(SafeReason::PeerLost as u32);
-                let cmd = fw.safe_command(*seq, shared::time::Instant(*now_us));
+                let cmd = fw.safe_command(*seq, shared::time::Instant::from_us(*now_us));
                 let expected = ActuatorCommand {
                     t_sent_us: *now_us,
                     seq: *seq,

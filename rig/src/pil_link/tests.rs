@@ -170,7 +170,7 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                         seen.hellos += 1;
                         if script.leftovers && seen.hellos == 1 {
                             let mut old = Firmware::new(firmware_config(&Scenario::default_scenario())).unwrap();
-                            let command = old.step(shared::time::Instant(0), &SensorFrame::default(), &clock);
+                            let command = old.step(shared::time::Instant::from_us(0), &SensorFrame::default(), &clock);
                             let telemetry = old.telemetry_message(&command);
                             send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 1 });
                             send(&mut master, &Uplink::Garbled);
@@ -198,8 +198,11 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                         }
                         seen.frames += 1;
                         let Some(f) = fw.as_mut() else { return seen };
-                        let command =
-                            f.step(frame.sampled_at().saturating_add(shared::time::Duration(u64::from(start_delay_us))), &frame, &clock);
+                        let command = f.step(
+                            frame.sampled_at().saturating_add(shared::time::Duration::from_us(u64::from(start_delay_us))),
+                            &frame,
+                            &clock,
+                        );
                         let telemetry = f.telemetry_message(&command);
                         send(&mut master, &Uplink::Answer { command, telemetry, frame_ticks: 2 * command.step_ticks });
                     }

@@ -152,7 +152,7 @@ mod image {
                     Ok(Downlink::Frame { frame, start_delay_us }) => {
                         // The defmt log's timestamp (mcu::log_time): this frame's period.
                         log_time::set_tick(frame.seq);
-                        self.now = frame.sampled_at().saturating_add(Duration(u64::from(start_delay_us)));
+                        self.now = frame.sampled_at().saturating_add(Duration::from_us(u64::from(start_delay_us)));
                         return Ok(Event::Frame(frame));
                     }
                     Ok(Downlink::End) => return Ok(Event::End),
@@ -306,7 +306,7 @@ mod image {
         let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: clock.ticks_per_second(), clock: clock.kind() };
         let link = Link::choose();
         let mut board =
-            PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now: Instant(0), fig: Figures::default() };
+            PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now: Instant::from_us(0), fig: Figures::default() };
         let on = match board.link {
             Link::Usart => "USART1",
             #[cfg(feature = "qemu")]
