@@ -61,13 +61,15 @@ if [ -z "${PAINLEVE_PYTHON:-}" ]; then
   export PAINLEVE_PYTHON="$PWD/$venv/bin/python"
 fi
 
-echo "== format, lints (rustfmt.toml; clippy, warnings are errors), no import cycle between files, no large tracked file"
+echo "== format, lints (rustfmt.toml; clippy, warnings are errors), no import cycle between files, the architecture invariants, no large tracked file"
 cargo fmt --all -- --check
 # In the release profile, the one the builds and tests below use: the build scripts'
 # and proc macros' builds (zstd's C sources among them) are then theirs too, and no
 # dev-profile tree is made (0.75 GB, 40 s on 2 cores).
 cargo clippy --release --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src
+# The architecture invariants (docs/architecture.md): what each layer may not build.
+python3 scripts/invariants.py
 # The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
 python3 scripts/front_features.py
 # No tracked file over 1 MiB outside an explicit list (a committed wheel or archive).
