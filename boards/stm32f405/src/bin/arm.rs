@@ -41,9 +41,8 @@ mod image {
     use core::cell::RefCell;
 
     use arm_app::{
-        ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, Settings, StartError,
+        ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, StartError,
         bringup::{Reply, Request},
-        record::RecordFault,
     };
     use board_stm32f405::{
         calibration,
@@ -55,7 +54,9 @@ mod image {
             flash::SettingsFlash,
             gpio::{self, GpioPin},
             iwdg::{self, Iwdg},
-            log_time, rcc, spi, stack,
+            log_time,
+            notices::{defer, log, log_notices},
+            rcc, spi, stack,
             timers::{self, BeltCounter, PwmChannel},
             usart,
         },
@@ -70,7 +71,6 @@ mod image {
         pil::{self, FrameBuffer, MAX_FRAME, Push},
     };
     use heapless::Deque;
-    use shared::wire::frame_flags;
     use stm32f4::stm32f405::{Interrupt, interrupt};
 
     /// Periods the QEMU build runs before it exits (3 windows).
@@ -139,114 +139,6 @@ mod image {
     unsafe fn control_section() -> cortex_m::interrupt::CriticalSection {
         // SAFETY: the caller is the control interrupt (see above).
         unsafe { cortex_m::interrupt::CriticalSection::new() }
-    }
-
-    /// The notices of the control interrupt, waiting for the idle loop to log
-    /// them (issue 56): a defmt line costs the handler thousands of cycles (the
-    /// window's report, once every `step_stats::WINDOW` periods, about 11 000
-    /// with the flash's wait states, most of the 1 kHz handler's worst case).
-    /// Logged in order, at the same stamp (`log_time`: the period's, as long as
-    /// the idle loop runs before the next tick's control step).
-    static NOTICES: Mutex<RefCell<Deque<Notice, NOTICE_QUEUE>>> = Mutex::new(RefCell::new(Deque::new()));
-    /// Notices a period can raise, with room to spare: a window's report, the
-    /// invalid readings, an acquisition fault, the safe state and the drivers'.
-    const NOTICE_QUEUE: usize = 8;
-    /// Notices dropped because the queue was full (the idle loop starved by
-    /// the interrupts), told with the next ones logged.
-    static NOTICES_DROPPED: Mutex<core::cell::Cell<u32>> = Mutex::new(core::cell::Cell::new(0));
-
-    /// The control interrupt's notice sink: queued for [`log_notices`]. Out
-    /// of line: one copy for the tick's call sites.
-    #[inline(never)]
-    fn defer(n: Notice) {
-        cortex_m::interrupt::free(|cs| {
-            if NOTICES.borrow(cs).borrow_mut().push_back(n).is_err() {
-                let d = NOTICES_DROPPED.borrow(cs);
-                d.set(d.get().saturating_add(1));
-            }
-        });
-    }
-
-    /// The idle loop: logs the notices the control interrupt queued ([`defer`]).
-    fn log_notices() {
-        loop {
-            let (n, dropped) =
-                cortex_m::interrupt::free(|cs| (NOTICES.borrow(cs).borrow_mut().pop_front(), NOTICES_DROPPED.borrow(cs).replace(0)));
-            if dropped > 0 {
-                defmt::warn!("{=u32} notices dropped (the idle loop fell behind the control interrupt)", dropped);
-            }
-            let Some(n) = n else { return };
-            log(n);
-        }
-    }
-
-    /// What the application tells the operator, in the defmt log (at start-up
-    /// directly, from the control interrupt through [`defer`]); a window's
-    /// report also goes to the idle loop, which sends it on USART1. Out of
-    /// line: called from start-up and the idle loop, one copy (the image's
-    /// 64 KiB under the qemu profile's semihosting).
-    #[inline(never)]
-    fn log(n: Notice) {
-        match n {
-            Notice::EncoderReady { joint, agc } => defmt::info!("encoder {=str}: ready, AGC {=u8}", joint.name(), agc),
-            Notice::EncoderNotReady { joint, fault } => {
-                defmt::error!("encoder {=str}: not ready ({=str}): its readings will be invalid", joint.name(), fault.describe())
-            }
-            Notice::ReadingsBack { seq } => defmt::info!("period {=u32}: every sensor reads again", seq),
-            Notice::AcquisitionFault { seq, fault } => {
-                defmt::warn!("period {=u32}: the encoders' acquisition failed: {=str}", seq, fault.describe())
-            }
-            Notice::InvalidReadings { seq, flags } => defmt::warn!(
-                "period {=u32}: invalid readings (frame flags {=u16:#x}: theta1 {=bool}, elbow {=bool}, f_t {=bool}, f_n {=bool}, belt {=bool}, driver fault {=bool})",
-                seq,
-                flags,
-                flags & frame_flags::THETA1_INVALID != 0,
-                flags & frame_flags::ELBOW_INVALID != 0,
-                flags & frame_flags::F_T_INVALID != 0,
-                flags & frame_flags::F_N_INVALID != 0,
-                flags & frame_flags::BELT_INVALID != 0,
-                flags & frame_flags::DRIVER_FAULT != 0
-            ),
-            Notice::SafeState { seq, reason } => defmt::error!(
-                "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault, 8 runaway, 9 overload, 10 miswired, 11 tracking, 12 lift-off, 13 acquisition; firmware::SafeReason): drivers disabled; press the enable button to reset",
-                seq,
-                reason
-            ),
-            Notice::DriversDidNotDisable => defmt::error!("the drivers did not disable"),
-            Notice::DriversEnabled { seq } => defmt::info!("period {=u32}: drivers enabled", seq),
-            Notice::DriversRefused { seq } => defmt::error!("period {=u32}: the drivers refuse to enable (fault line asserted)", seq),
-            Notice::FirmwareReset => defmt::info!("enable button: firmware reset; the drivers enable at the next command"),
-            Notice::Jogged(j) => defmt::info!(
-                "jog of {=str} at code {=i16}: moved {=i32} / {=i32} counts, {=str}; drivers disabled",
-                j.joint.name(),
-                j.code,
-                j.moved_counts[0],
-                j.moved_counts[1],
-                if j.verdict.is_ok() { "direction right" } else { "refused" }
-            ),
-            Notice::Window(report) => {
-                defmt::info!(
-                    "period {=u32}: step ticks median {=u32} worst {=u32} over {=u32}; tick interval {=u32}..{=u32} ticks; handler worst {=u32} ticks; overruns {=u32}; drivers {=str}",
-                    report.seq,
-                    report.step.median,
-                    report.step.worst,
-                    report.step.steps,
-                    report.tick_interval[0],
-                    report.tick_interval[1],
-                    report.handler_worst,
-                    report.overruns,
-                    if report.drivers_enabled { "enabled" } else { "disabled" }
-                );
-            }
-            Notice::Settings(s) => match s {
-                Settings::Saved => defmt::info!("settings: loaded from flash"),
-                Settings::Corrupt(RecordFault::Version(v)) => {
-                    defmt::error!("settings: record of format version {=u16}: {=str}", v, s.describe())
-                }
-                _ => defmt::error!("settings: {=str}", s.describe()),
-            },
-            Notice::LockedOut(s) => defmt::warn!("enable button ignored: {=str}", s.describe()),
-        }
     }
 
     /// TIM2: the tick (update: the period's frames start) and the

@@ -9,6 +9,7 @@ pub mod flash;
 pub mod gpio;
 pub mod iwdg;
 pub mod log_time;
+pub mod notices;
 pub mod rcc;
 pub mod spi;
 pub mod stack;
