@@ -35,12 +35,6 @@ const REFERENCE_TOL: (&str, &str, &str) = ("1e-12", "1e-14", "1e-4");
 /// another step sequence), for the predictability horizon.
 const REFERENCE_2_TOL: (&str, &str, &str) = ("1e-13", "1e-14", "7e-5");
 
-/// Issue 67's short, light arm (`m` 0.02 kg, `l` 0.06 m): `--set` assignments.
-const SHORT_ARM: [&str; 6] = ["plant.m=0.02", "plant.l=0.06", "plant.sigma=0.0003", "plant.k=1.5", "plant.h=0.11", "plant.alpha0=0.2"];
-/// A long, heavy arm (`m` 0.5 kg, `l` 0.5 m), its belt at the short arm's `h / l`.
-const LONG_ARM: [&str; 6] =
-    ["plant.m=0.5", "plant.l=0.5", "plant.sigma=0.02", "plant.k=1.3", "plant.h=0.9166666666666666", "plant.alpha0=0.2"];
-
 /// `simulate` of an arm other than the paper's for 5 s at `mu` 0.6, `v_belt`
 /// -0.5, from rest with its tip on the belt (the same joint angles for both arms:
 /// `h / l` is the same).
@@ -49,7 +43,7 @@ fn other_arm(assignments: &[&str]) -> Vec<String> {
     for a in assignments {
         args.extend(["--set".to_string(), a.to_string()]);
     }
-    args.extend(["--x0-deg=27.696865482139,0,18.573779305261,0", "--v-belt=-0.5", "--mu", "0.6", "--duration", "5"].map(String::from));
+    args.extend([common::OTHER_ARM_X0, "--v-belt=-0.5", "--mu", "0.6", "--duration", "5"].map(String::from));
     args
 }
 
@@ -100,8 +94,8 @@ fn cases() -> Vec<Case> {
         // light arm nine times faster than the paper's (535 rad/s, steps of at most
         // 0.22 ms; the paper's 2 ms left the contract at 0.34 s) and a long, heavy one
         // four times slower (15.7 rad/s, 7.7 ms), each bouncing then sliding.
-        Case { name: "simulate-short-arm", args: other_arm(&SHORT_ARM), tolerance: simulate_ref, measured: vec![] },
-        Case { name: "simulate-long-arm", args: other_arm(&LONG_ARM), tolerance: simulate_ref, measured: vec![] },
+        Case { name: "simulate-short-arm", args: other_arm(&common::SHORT_ARM), tolerance: simulate_ref, measured: vec![] },
+        Case { name: "simulate-long-arm", args: other_arm(&common::LONG_ARM), tolerance: simulate_ref, measured: vec![] },
     ];
     for (name, s) in
         [("run-pid-x0d", "pid-x0d"), ("run-pid-x0u", "pid-x0u"), ("run-hybrid-x0d", "hybrid-x0d"), ("run-hybrid-x0u", "hybrid-x0u")]

@@ -93,3 +93,13 @@ pub fn summary_of(dir: &Path) -> serde_json::Value {
 pub fn csv_rows(path: &Path) -> Vec<Vec<String>> {
     std::fs::read_to_string(path).unwrap().lines().map(|l| l.split(',').map(String::from).collect()).collect()
 }
+
+/// Issue 67's short, light arm (`m` 0.02 kg, `l` 0.06 m; 535 rad/s, nine times the
+/// paper's fastest mode): its `--set` assignments.
+pub const SHORT_ARM: [&str; 6] = ["plant.m=0.02", "plant.l=0.06", "plant.sigma=0.0003", "plant.k=1.5", "plant.h=0.11", "plant.alpha0=0.2"];
+/// A long, heavy arm (`m` 0.5 kg, `l` 0.5 m; 15.7 rad/s), its belt at the short arm's
+/// `h / l`: its `--set` assignments.
+pub const LONG_ARM: [&str; 6] =
+    ["plant.m=0.5", "plant.l=0.5", "plant.sigma=0.02", "plant.k=1.3", "plant.h=0.9166666666666666", "plant.alpha0=0.2"];
+/// The start of both arms at rest with the tip on the belt (the same `h / l`), deg and deg/s.
+pub const OTHER_ARM_X0: &str = "--x0-deg=27.696865482139,0,18.573779305261,0";

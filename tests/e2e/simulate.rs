@@ -379,14 +379,14 @@ fn the_issue53_reproducers_keep_bouncing_with_the_energy_ledger_closed() {
 fn the_open_loop_path_depends_on_neither_the_sample_period_nor_the_duration() {
     let paper = ["--x0", "a"];
     let other = |sets: [&'static str; 6]| {
-        let mut args = vec!["--x0-deg=27.696865482139,0,18.573779305261,0"];
+        let mut args = vec![crate::common::OTHER_ARM_X0];
         for set in sets {
             args.extend(["--set", set]);
         }
         args
     };
-    let short = other(["plant.m=0.02", "plant.l=0.06", "plant.sigma=0.0003", "plant.k=1.5", "plant.h=0.11", "plant.alpha0=0.2"]);
-    let long = other(["plant.m=0.5", "plant.l=0.5", "plant.sigma=0.02", "plant.k=1.3", "plant.h=0.9166666666666666", "plant.alpha0=0.2"]);
+    let short = other(crate::common::SHORT_ARM);
+    let long = other(crate::common::LONG_ARM);
     path_is_independent_of_sampling_and_duration("paper", &paper, "30", ("100", "300"), 100);
     path_is_independent_of_sampling_and_duration("short", &short, "10", ("4", "10"), 40);
     path_is_independent_of_sampling_and_duration("long", &long, "10", ("4", "10"), 10);
@@ -474,7 +474,7 @@ fn short_arm(l: f64) -> Vec<String> {
 }
 
 /// The start of issue 67's short arm, deg and deg/s.
-const SHORT_ARM_X0: &str = "--x0-deg=27.696865482139,0,18.573779305261,0";
+const SHORT_ARM_X0: &str = crate::common::OTHER_ARM_X0;
 
 /// (a) The open-loop commands take an arm too short for the default scenario's
 /// closed-loop target (`controller.target_z_t` = 0.10 m, at or beyond the reach

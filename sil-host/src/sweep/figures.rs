@@ -109,7 +109,7 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
         });
         chart.draw_series(cells).map_err(|e| err(&e))?;
     }
-    plot::finish(root, path, print).map_err(|e| err(&e)).map_err(CliError::from)
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
 }
 
 fn half_step(a: &analyses::sweep::Axis) -> f64 {
@@ -204,5 +204,5 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
             .map_err(|e| err(&e))?;
         }
     }
-    plot::finish(root, path, print).map_err(|e| err(&e)).map_err(CliError::from)
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
 }

@@ -140,7 +140,7 @@ pub(crate) fn draw_bifurcation(path: &Path, cfg: &PoincareConfig, x0_name: &str,
     let axes = plot::Axes { caption: None, x: (v_lo - pad)..(v_hi + pad), y: lo..hi, x_desc: &x_desc, y_desc: &y_desc };
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     draw_classes(&mut chart, &pts, (lo, hi), 1).map_err(|e| err(&e))?;
-    plot::finish(root, path, print).map_err(|e| err(&e)).map_err(CliError::from)
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
 }
 
 /// The colour of the triangles marking the points of `pts` below (`below`) or
@@ -196,7 +196,7 @@ pub(crate) fn draw_lyapunov(path: &Path, cfg: &PoincareConfig, results: &[PointR
     let mut chart = plot::xy_chart(&chart_area, &axes).map_err(|e| err(&e))?;
     chart.draw_series(LineSeries::new([(v_lo - pad, 0.0), (v_hi + pad, 0.0)], BLACK.mix(0.5).stroke_width(1))).map_err(|e| err(&e))?;
     draw_classes(&mut chart, &pts, (lo, hi), 2).map_err(|e| err(&e))?;
-    plot::finish(root, path, print).map_err(|e| err(&e)).map_err(CliError::from)
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
 }
 
 #[cfg(test)]

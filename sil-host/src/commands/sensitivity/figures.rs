@@ -280,7 +280,7 @@ pub fn draw(path: &Path, study: &Study, fig: &Figure) -> Result<(), CliError> {
             draw_panel(area, &panel, *dim).map_err(|e| err(&e))?;
         }
     }
-    plot::finish(root, path, print).map_err(|e| err(&e)).map_err(CliError::from)
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
 }
 
 /// What every panel of a figure shares.
