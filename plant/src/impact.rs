@@ -71,13 +71,15 @@
 
 mod impulse;
 mod law;
+mod prescription;
 mod shock;
 
 use nalgebra::{Matrix2, Vector2};
 use shared::SlipDirection;
 
-pub use impulse::{ImpactError, Impulse, Resolution, work_tolerance};
+pub use impulse::{Compression, ImpactError, Impulse, Resolution, work_tolerance};
 pub use law::{ImpactLaw, IwcRule};
+pub use prescription::{Breach, LAW_TOLERANCE, breach};
 pub use shock::{darboux_keller, energetic};
 
 use impulse::one_phase;
@@ -237,7 +239,7 @@ pub fn without_collision(qm: &Matrix2<f64>, mu: f64, v_r: f64, law: ImpactLaw, e
             let inv = qm.try_inverse().ok_or(ImpactError::NonFinite)?;
             let p = inv * Vector2::new(-v_r, -e * compression.v_n_min);
             let imp = if in_cone(&p, mu) {
-                one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::NewtonDarbouxKeller)
+                one_phase(qm, p, Vector2::new(v_r, 0.0), compression.v_n_min, Resolution::NewtonSticking)
             } else {
                 let mut dk = darboux_keller(qm, mu, v_r, 0.0, e)?;
                 dk.resolution = Resolution::NewtonDarbouxKeller;

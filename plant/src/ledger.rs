@@ -150,6 +150,12 @@ pub struct Ledger {
     /// Impulses outside the friction cone (`P_n >= 0`, `|P_t| <= mu P_n`, to 1e-9
     /// of their size), each also a violation.
     pub impulses_outside_cone: u64,
+    /// Impulses that break their own impact law's relation or bound (Newton's
+    /// `v_n+ = -e v_n-`, Poisson's `P_n = (1 + e) P_c`, the energetic law's
+    /// `W_r = -e^2 W_c`, friction's work `<= 0` through a Darboux-Keller process,
+    /// the slip stopped by a sticking or edge impulse: [`crate::impact::breach`]),
+    /// each also a violation (issue 67).
+    pub impulses_off_law: u64,
     /// Velocity projections that create energy in the belt's frame or change it by
     /// more than the constraint drift they remove allows (`drift . Q_c^-1 drift /
     /// 2`, docs/plant.md "The energy ledger"), each also a violation (issue 67).

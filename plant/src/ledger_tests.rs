@@ -140,37 +140,109 @@ fn the_events_table_books_every_impulse() {
         let l = plant.ledger();
         assert!((sum - l.events_j).abs() <= 1e-12 * (1.0 + l.events_j.abs()), "{name}: rows {sum} J, ledger {} J", l.events_j);
         assert!(booked > 100, "{name}: {booked} impulses");
-        assert_eq!((l.violations, l.impulses_outside_cone), (0, 0), "{name}: {l:?}");
+        assert_eq!((l.violations, l.impulses_outside_cone, l.impulses_off_law), (0, 0, 0), "{name}: {l:?}");
         println!("{name}: {} rows, {booked} with an impulse, {sum:.6} J booked", events.len());
     }
 }
 
 /// Issue 67: the ledger's impulse checks can fail. Planted on a plant at rest on
-/// the belt (`x0d`): an impulse inside the friction cone that dissipates passes;
-/// one outside the cone (`|P_t| > mu P_n`) is a violation and a cone violation;
-/// one that does positive work in the belt's frame (the contact creating
-/// energy) is a violation and an `energy_gain` row.
+/// the belt (`x0d`), for a tip arriving at `[v_r, v_n] = [0.3, -0.2]` m/s: Newton's
+/// own impulse passes; one pushed outside the friction cone (`|P_t| > mu P_n`) or
+/// pulling (`P_n < 0`) is a violation and a cone violation (and, no longer being
+/// Newton's, off its law); one that does positive work in the belt's frame (the
+/// contact creating energy) is a violation and an `energy_gain` row.
 #[test]
 fn a_planted_impulse_outside_the_cone_or_creating_energy_fails_the_ledger() {
-    use crate::impact::{Impulse, Resolution};
+    use crate::impact::{ImpactLaw, Impulse};
     let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
     let x = plant.state();
     let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+    let (mu, e) = (plant.arm().params.mu, SimConfig::default().e_n);
     let before = nalgebra::Vector2::new(0.3, -0.2);
-    let impulse = |p: [f64; 2], work: f64| {
+    let newton = crate::impact::touchdown(&qm, mu, before[0], before[1], ImpactLaw::Newton, e).unwrap();
+    let with_p = |p: [f64; 2]| {
         let p = nalgebra::Vector2::new(p[0], p[1]);
-        Impulse { p, dv: qm * p, v_n_min: -0.2, contact_work: work, resolution: Resolution::NewtonSliding }
+        Impulse { p, dv: qm * p, contact_work: p.dot(&(before + 0.5 * qm * p)), ..newton }
+    };
+    let counts = |plant: &Plant| {
+        let l = plant.ledger();
+        (l.violations, l.impulses_outside_cone, l.impulses_off_law)
     };
     let mut events = Vec::new();
-    plant.check_impact(&mut events, &impulse([-0.05, 0.1], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (0, 0));
-    plant.check_impact(&mut events, &impulse([-0.07, 0.1], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (1, 1), "|P_t| = 0.07 > mu P_n = 0.06");
-    plant.check_impact(&mut events, &impulse([0.0, -1e-3], -1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (2, 2), "P_n < 0: a pull");
-    plant.check_impact(&mut events, &impulse([-0.05, 0.1], 1e-3), &qm, 0.0, before);
-    assert_eq!((plant.ledger().violations, plant.ledger().impulses_outside_cone), (3, 2), "the contact creates 1 mJ");
-    assert_eq!(events.iter().filter(|e| e.kind == EventKind::EnergyGain).count(), 1);
+    plant.check_impact(&mut events, &newton, &qm, 0.0, before);
+    assert_eq!(counts(&plant), (0, 0, 0), "Newton's own impulse: {newton:?}");
+    let pn = newton.p[1];
+    plant.check_impact(&mut events, &with_p([-1.2 * mu * pn, pn]), &qm, 0.0, before);
+    assert_eq!(counts(&plant), (2, 1, 1), "|P_t| = 1.2 mu P_n");
+    plant.check_impact(&mut events, &with_p([0.0, -1e-3]), &qm, 0.0, before);
+    assert_eq!(counts(&plant), (5, 2, 2), "P_n < 0: a pull (which also does positive work)");
+    let creating = Impulse { contact_work: 1e-3, ..newton };
+    plant.check_impact(&mut events, &creating, &qm, 0.0, before);
+    assert_eq!(counts(&plant), (6, 2, 2), "the contact creates 1 mJ");
+    assert_eq!(events.iter().filter(|e| e.kind == EventKind::EnergyGain).count(), 2);
+}
+
+/// Issue 67: the ledger holds each impulse to its own impact law
+/// ([`crate::impact::breach`]). Planted on the same plant and tip: each law's own
+/// impulse passes; Newton's scaled by 1.01 leaves `v_n+ != -e v_n-`; Poisson's
+/// with its restitution ended for another `e` leaves `P_n != (1 + e) P_c`; the
+/// energetic law's with 1 % more restitution work, or whose friction did positive
+/// work while the whole impact still dissipates (so the belt-frame check alone
+/// passes it), each fail the ledger and are counted in `impulses_off_law`; and a
+/// plastic IWC that leaves the tip moving off the belt.
+#[test]
+fn a_planted_impulse_off_its_own_law_fails_the_ledger() {
+    use crate::impact::{Compression, ImpactLaw, Impulse, IwcRule};
+    let x0 = deg_to_state(X0D.deg);
+    let before = nalgebra::Vector2::new(0.3, -0.2);
+    for law in ImpactLaw::ALL {
+        let cfg = SimConfig { impact_law: law, e_n: 0.5, ..SimConfig::default() };
+        let mut plant = Plant::new(Params::paper(), cfg, x0, 0.0, [0.0, 0.0]).unwrap();
+        let x = plant.state();
+        let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+        let mu = plant.arm().params.mu;
+        let own = crate::impact::touchdown(&qm, mu, before[0], before[1], law, cfg.e_n).unwrap();
+        let mut events = Vec::new();
+        let mut check = |imp: &Impulse| {
+            plant.check_impact(&mut events, imp, &qm, 0.0, before);
+            let l = plant.ledger();
+            (l.violations, l.impulses_off_law, l.impulses_outside_cone)
+        };
+        assert_eq!(check(&own), (0, 0, 0), "{law}: its own impulse {own:?}");
+        let wrong = match law {
+            ImpactLaw::Newton => Impulse { p: own.p * 1.01, dv: qm * own.p * 1.01, ..own },
+            ImpactLaw::Poisson => crate::impact::darboux_keller(&qm, mu, before[0], before[1], 0.6).unwrap(),
+            ImpactLaw::Energetic => Impulse { compression: Compression { w_r: 1.01 * own.compression.w_r, ..own.compression }, ..own },
+        };
+        assert_eq!(check(&wrong), (1, 1, 0), "{law}: {wrong:?}");
+        if law == ImpactLaw::Energetic {
+            let c = own.compression;
+            let pushed = Impulse { contact_work: 0.9 * (c.w_c + c.w_r), ..own };
+            assert!(pushed.contact_work < -1e-4, "still dissipative: {}", pushed.contact_work);
+            assert_eq!(check(&pushed), (2, 2, 0), "friction's work > 0");
+        }
+    }
+    // The plastic IWC leaves the tip on the belt; one that throws it off breaks the rule.
+    let cfg = SimConfig { iwc: IwcRule::Plastic, ..SimConfig::default() };
+    let mut plant = Plant::new(Params::paper(), cfg, x0, 0.0, [0.0, 0.0]).unwrap();
+    let x = plant.state();
+    let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+    let v = nalgebra::Vector2::new(0.3, 0.0);
+    let stuck = qm.try_inverse().unwrap() * -v;
+    let plastic = Impulse {
+        p: stuck,
+        dv: -v,
+        v_n_min: 0.0,
+        contact_work: -0.5 * v.dot(&(qm.try_inverse().unwrap() * v)),
+        resolution: crate::impact::Resolution::PlasticIwc,
+        compression: Compression::default(),
+    };
+    let mut events = Vec::new();
+    plant.check_impact(&mut events, &plastic, &qm, 0.0, v);
+    assert_eq!(plant.ledger().impulses_off_law, 0, "{plastic:?}");
+    let thrown = qm.try_inverse().unwrap() * nalgebra::Vector2::new(-0.3, 0.05);
+    plant.check_impact(&mut events, &Impulse { p: thrown, dv: qm * thrown, ..plastic }, &qm, 0.0, v);
+    assert_eq!(plant.ledger().impulses_off_law, 1);
 }
 
 /// Issue 67: the ledger checks each velocity projection against the drift it

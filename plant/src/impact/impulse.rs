@@ -1,7 +1,8 @@
 //! What an impact returns ([`super`] documentation): the impulse with its velocity
 //! change, its contact work and how it was obtained ([`Impulse`], [`Resolution`]),
 //! why an impact could not be resolved ([`ImpactError`]), and the work counted as
-//! rounding ([`work_tolerance`]).
+//! rounding ([`work_tolerance`]), and the Darboux-Keller process's two phases
+//! ([`Compression`]).
 
 use nalgebra::{Matrix2, Vector2};
 
@@ -9,7 +10,8 @@ use nalgebra::{Matrix2, Vector2};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Resolution {
-    /// Newton's law with the sticking impulse inside the cone.
+    /// Newton's law with the sticking impulse inside the cone (at a touchdown, or at
+    /// an impact without collision with `v_n+ = -e v_n,min`).
     NewtonSticking,
     /// Newton's law with the impulse on the cone's edge.
     NewtonSliding,
@@ -63,6 +65,23 @@ pub struct Impulse {
     pub contact_work: f64,
     /// Which branch of the law produced it.
     pub resolution: Resolution,
+    /// The normal impulse and work of the Darboux-Keller process's compression and
+    /// restitution (all zero for an impulse not obtained by that process).
+    pub compression: Compression,
+}
+
+/// The two phases of a Darboux-Keller impact in the normal impulse `P_n`
+/// (Stronge 2000, ch. 5): what Poisson's law ends restitution by (`P_n = (1 + e)
+/// P_c`) and what the energetic law does (`W_r = -e^2 W_c`). The ledger holds an
+/// impulse to them ([`breach`](super::breach)).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Compression {
+    /// The normal impulse at the end of compression, `P_c` (N s, `>= 0`).
+    pub p_c: f64,
+    /// The normal work in compression, `W_c = int_0^P_c v_n dP_n` (J, `<= 0`).
+    pub w_c: f64,
+    /// The normal work in restitution, `W_r = int_P_c^P_n v_n dP_n` (J, `>= 0`).
+    pub w_r: f64,
 }
 
 /// Why an impact could not be resolved.
@@ -91,5 +110,5 @@ pub fn work_tolerance(qm: &Matrix2<f64>, v_r: f64, v_n: f64) -> f64 {
 /// A one-phase impulse `p` applied to relative velocity `v = [v_r, v_n]`.
 pub(super) fn one_phase(qm: &Matrix2<f64>, p: Vector2<f64>, v: Vector2<f64>, v_n_min: f64, resolution: Resolution) -> Impulse {
     let dv = qm * p;
-    Impulse { p, dv, v_n_min, contact_work: p.dot(&(v + v + dv)) * 0.5, resolution }
+    Impulse { p, dv, v_n_min, contact_work: p.dot(&(v + v + dv)) * 0.5, resolution, compression: Compression::default() }
 }

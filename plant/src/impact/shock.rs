@@ -5,7 +5,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use super::impulse::{ImpactError, Impulse, Resolution};
+use super::impulse::{Compression, ImpactError, Impulse, Resolution};
 
 /// Relative slip speed below which the tip counts as not slipping during an impact, m/s.
 pub(super) const V_EPS: f64 = 1e-12;
@@ -87,6 +87,7 @@ pub(super) fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termin
             v_n_min: 0.0,
             contact_work: 0.0,
             resolution: Resolution::PoissonDarbouxKeller,
+            compression: Compression::default(),
         });
     }
     let mut compression = true;
@@ -94,6 +95,8 @@ pub(super) fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termin
     // Normal work int v_n dP_n so far, and its target at the end (energetic law).
     let (mut w_n, mut w_n_end) = (0.0_f64, 0.0_f64);
     let mut work = 0.0;
+    // Where compression ended: the normal impulse and work then.
+    let (mut p_c, mut w_c) = (0.0_f64, 0.0_f64);
     // Each phase ends slip or compression or the impact, so a few phases suffice.
     for _ in 0..8 {
         let (dvr, dvn, dpt) = slope(phase);
@@ -125,6 +128,7 @@ pub(super) fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termin
         if step == to_compressed {
             vn = 0.0;
             compression = false;
+            (p_c, w_c) = (pn, w_n);
             let e = match term {
                 Termination::Poisson(e) => {
                     pn_end = (1.0 + e) * pn;
@@ -144,6 +148,12 @@ pub(super) fn shock(qm: &Matrix2<f64>, mu: f64, v_r: f64, v_n: f64, term: Termin
         vr = 0.0;
         phase = start_phase(0.0);
     }
+    if compression {
+        // The phases ran out within compression (never seen): recorded as it is, so
+        // that the ledger's check of the law (`breach`) sees a restitution never made.
+        (p_c, w_c) = (pn, w_n);
+    }
     let p = Vector2::new(pt, pn);
-    Ok(Impulse { p, dv: qm * p, v_n_min, contact_work: work, resolution: Resolution::PoissonDarbouxKeller })
+    let phases = Compression { p_c, w_c, w_r: w_n - w_c };
+    Ok(Impulse { p, dv: qm * p, v_n_min, contact_work: work, resolution: Resolution::PoissonDarbouxKeller, compression: phases })
 }

@@ -109,7 +109,14 @@ impl Plant {
         self.check_projection(lambda, work, drift, drift_energy);
         let energy = crate::ledger::energy_with_kinetic(&self.arm, &trig, &self.y, ke_new);
         self.known = Some(super::Known { x: [self.y[0], self.y[1], self.y[2], self.y[3]], trig, energy });
-        let imp = Impulse { p: lambda, dv: v_new - v, v_n_min: 0.0, contact_work: work, resolution: Resolution::Projection };
+        let imp = Impulse {
+            p: lambda,
+            dv: v_new - v,
+            v_n_min: 0.0,
+            contact_work: work,
+            resolution: Resolution::Projection,
+            compression: Default::default(),
+        };
         Ok((imp, ke_new - ke))
     }
 

@@ -372,8 +372,11 @@ impl Plant {
         }
     }
 
-    /// Counts a law's fallback to the energetic one, and reports an impact whose
-    /// contact work is positive (it created energy: a broken law, never expected).
+    /// Counts a law's fallback to the energetic one, reports an impact whose
+    /// contact work is positive (it created energy: a broken law, never expected),
+    /// and holds the impulse (`before`: the relative velocity before it, m/s) to the
+    /// ledger's checks (issue 67): in the friction cone, and keeping its own law's
+    /// relation and bound ([`impact::breach`]); each failure is a violation.
     pub(crate) fn check_impact(
         &mut self,
         events: &mut Vec<PlantEvent>,
@@ -401,6 +404,13 @@ impl Plant {
         if !impulse_in_cone(imp.p, self.arm.params.mu) {
             self.ledger.violations += 1;
             self.ledger.impulses_outside_cone += 1;
+        }
+        // And it must keep its own law's relation and bound (Newton's `v_n+ = -e
+        // v_n-`, Poisson's `P_n = (1 + e) P_c`, the energetic `W_r = -e^2 W_c`,
+        // friction's work `<= 0` through the process, ...: `impact::breach`).
+        if impact::breach(imp, qm, self.arm.params.mu, self.cfg.e_n, before).is_some() {
+            self.ledger.violations += 1;
+            self.ledger.impulses_off_law += 1;
         }
     }
 

@@ -317,7 +317,7 @@ impl PyPlant {
     /// of float, J (`energy_change_j`, `motors_j`, `damping_j`, `belt_j`, `slip_j`,
     /// `projections_j`, `events_j`: the events' energy changes summed, `residual_j`,
     /// `worst_entry_j`, `worst_ratio`, `largest_event_belt_j`) and int
-    /// (`refinements`, `violations`, `impulses_outside_cone`,
+    /// (`refinements`, `violations`, `impulses_outside_cone`, `impulses_off_law`,
     /// `projections_beyond_drift`; `largest_projection_drift_m_s` is a float, m/s).
     #[getter]
     fn ledger<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
