@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Checks that the two fronts resolve the features of every crate they share alike:
-`cargo build --release -p sil-host` and the Python package's build (`maturin build`,
+`cargo build --release -p sil-host --features full` (what scripts/test.sh and the tests
+build) and the Python package's build (`maturin build`,
 `pip install ./python`: `cargo build -p painleve-py`) then share their artefacts, and the
 second compiles only the Python-only crates (docs/python.md "Install").
 
@@ -14,9 +15,9 @@ import sys
 from collections import defaultdict
 
 
-def features(package: str) -> dict:
+def features(package: str, *extra: str) -> dict:
     out = subprocess.run(
-        ["cargo", "tree", "-p", package, "-e", "normal,build", "-f", "{p}|{f}", "--prefix", "none"],
+        ["cargo", "tree", "-p", package, *extra, "-e", "normal,build", "-f", "{p}|{f}", "--prefix", "none"],
         check=True, capture_output=True, text=True,
     ).stdout
     seen = defaultdict(set)
@@ -28,7 +29,7 @@ def features(package: str) -> dict:
 
 
 def main() -> int:
-    a, b = features("sil-host"), features("painleve-py")
+    a, b = features("sil-host", "--features", "full"), features("painleve-py")
     shared = sorted(set(a) & set(b))
     bad = [(n, sorted(a[n] - b[n]), sorted(b[n] - a[n])) for n in shared if a[n] != b[n]]
     for name, only_a, only_b in bad:

@@ -18,12 +18,17 @@ BOARD = {"board-twin", "board-emulator", "board-link", "rsemu"}
 MCU_TARGET = "thumbv7em-none-eabihf"
 
 
-def deps(package, target=None):
+def deps(package, target=None, features=None):
     """The names of the crates `package` builds with (itself excluded), as `cargo tree`
-    resolves its normal dependencies with its default features (for `target` if given)."""
+    resolves its normal dependencies with its default features, or with `features`
+    ("none" for `--no-default-features`, else a feature list), for `target` if given."""
     cmd = ["cargo", "tree", "-p", package, "-e", "normal", "--prefix", "none", "--format", "{p}"]
     if target:
         cmd += ["--target", target]
+    if features == "none":
+        cmd += ["--no-default-features"]
+    elif features:
+        cmd += ["--features", features]
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         sys.exit(f"cargo tree -p {package} failed:\n{out.stderr}")
@@ -35,11 +40,11 @@ def deps(package, target=None):
 def main():
     broken = 0
 
-    def check(name, packages, forbidden, target=None):
+    def check(name, packages, forbidden, target=None, features=None):
         nonlocal broken
         bad = []
         for p in packages:
-            hit = sorted(deps(p, target) & forbidden)
+            hit = sorted(deps(p, target, features) & forbidden)
             if hit:
                 bad.append(f"{p} builds {', '.join(hit)}")
         print(("ok     " if not bad else "BROKEN ") + name + ("" if not bad else ": " + "; ".join(bad)))
@@ -47,8 +52,8 @@ def main():
 
     # The checks can fail: the command line does build clap and the emulator, and the
     # firmware nalgebra, so an empty or misread graph cannot pass them all.
-    probe = deps("sil-host")
-    if not ({"clap", "rsemu", "board-link"} <= probe and "nalgebra" in deps("firmware", MCU_TARGET)):
+    probe = deps("sil-host", features="full")
+    if not ({"clap", "rsemu", "board-link", "tokio", "arrow-csv"} <= probe and "nalgebra" in deps("firmware", MCU_TARGET)):
         sys.exit("scripts/invariants.py: cargo tree's graph was not read (sil-host without clap or rsemu?)")
     mcu = ["shared", "firmware", "drivers", "arm-app"]
     check("the firmware knows no host types: shared, firmware, drivers, arm-app build none of our host crates "
@@ -61,6 +66,12 @@ def main():
     check("figures knows no command: it builds no front, no board link and no command line",
           ["figures"], {"sil-host", "painleve-py", "board-link", "arm-view", "clap"})
     check("the Python package never depends on the command line", ["painleve-py"], {"sil-host"})
+    # The lean build (sil-host/Cargo.toml `[features]`): each optional part stays behind its feature.
+    lean = {"rsemu", "board-link", "board-twin", "board-emulator", "tokio", "foxglove", "arm-view", "arrow-array",
+            "arrow-csv", "arrow-cast", "mcap", "zstd-sys", "svg2pdf"}
+    check("the lean command line: sil-host --no-default-features builds no board, async runtime, Arrow, MCAP or PDF "
+          "writer", ["sil-host"], lean, features="none")
+    check("the default command line adds the PDF writer alone", ["sil-host"], lean - {"svg2pdf"})
     print(f"architecture invariants broken: {broken}")
     return 1 if broken else 0
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The Python package's section of scripts/test.sh (docs/python.md "Tests"), runnable alone after
-# `cargo build --release -p sil-host`:
+# `cargo build --release -p sil-host --features full`:
 #   1. the build tools (python/requirements-build.txt: maturin, ziglang, auditwheel) in target/venv-python;
 #   2. scripts/build-wheel.sh: the manylinux2014 abi3 wheel and the sdist in target/wheels, cargo in the
 #      workspace's target dir (sil-host's release artefacts reused);
@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 die() { echo "python-tests: $*" >&2; exit 1; }
 
 sil_host="${PAINLEVE_SIL_HOST:-$PWD/target/release/sil-host}"
-[ -x "$sil_host" ] || die "$sil_host is missing: cargo build --release -p sil-host (or set PAINLEVE_SIL_HOST)"
+[ -x "$sil_host" ] || die "$sil_host is missing: cargo build --release -p sil-host --features full (or set PAINLEVE_SIL_HOST)"
 
 # Debian's python3 has no ensurepip (so no venv) without python3-venv.
 if ! python3 -c "import ensurepip, venv" 2>/dev/null; then

@@ -30,7 +30,7 @@ error: probe-rs is not installed ($probe_rs not found): it flashes $(basename "$
   without a board:
     cargo qemu-arm                                     # the arm image in QEMU (semihosting log)
     cargo build-pil && cargo run --release -p sil-host -- pil   # the PIL image in QEMU, the plant on the PC
-    cargo build-arm && cargo run --release -p sil-host -- run --link emulator   # the flashed bytes, emulated
+    cargo build-arm && cargo run --release -p sil-host --features board -- run --link emulator   # the flashed bytes, emulated
   (docs/board.md "Tools (once)", "Under QEMU")
 MSG
   exit 127

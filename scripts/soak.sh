@@ -32,7 +32,7 @@ echo "== /dev/shm before: $(find /dev/shm -mindepth 1 | wc -l) entries; iceoryx2
 start=$(date +%s)
 status=0
 SOAK_SECONDS="$seconds" SOAK_SEED="$seed" SOAK_OUT="$out" \
-  cargo test --release -p sil-host --test soak -- --nocapture --test-threads 1 || status=$?
+  cargo test --release -p sil-host --features full --test soak -- --nocapture --test-threads 1 || status=$?
 echo "== /dev/shm after: $(find /dev/shm -mindepth 1 | wc -l) entries; iceoryx2 files: $(find /tmp/iceoryx2 -mindepth 1 2>/dev/null | wc -l)"
 echo "== $(($(date +%s) - start)) s of wall time (build included); report: $out/soak/soak-report.json"
 exit "$status"

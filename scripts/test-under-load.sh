@@ -6,7 +6,7 @@
 # "Tests under load".
 #
 #   bash scripts/test-under-load.sh            # 3 runs of scripts/test.sh
-#   RUNS=1 bash scripts/test-under-load.sh -- cargo test --release -p sil-host --test e2e -- monitors::
+#   RUNS=1 bash scripts/test-under-load.sh -- cargo test --release -p sil-host --features full --test e2e -- monitors::
 #
 # Environment: RUNS (3), CPU_WORKERS (2), VM_WORKERS (1), VM_BYTES (1G). Exit: 0 when
 # every run passed, the failing run's status otherwise.

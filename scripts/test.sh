@@ -66,7 +66,7 @@ cargo fmt --all -- --check
 # In the release profile, the one the builds and tests below use: the build scripts'
 # and proc macros' builds (zstd's C sources among them) are then theirs too, and no
 # dev-profile tree is made (0.75 GB, 40 s on 2 cores).
-cargo clippy --release --workspace --all-targets -- -D warnings
+cargo clippy --release --workspace --all-targets --features sil-host/full -- -D warnings
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src
 # The architecture invariants (docs/architecture.md): what each layer may not build.
 python3 scripts/invariants.py
@@ -97,7 +97,7 @@ echo "   when it is done"
 echo "   the same ceiling over random admissible scenarios (the bound holds for every case of its kind, not only"
 echo "   the default scenario): scripts/cycles.py --random, each term of the hybrid law and the PID once at a"
 echo "   random rate, 250 periods each, after the default scenario's runs"
-cargo build --release -p sil-host
+cargo build --release -p sil-host --features full
 cycles_log="$(mktemp)"
 {
   python3 scripts/cycles.py --duration 1 --max-cycles 1900 &&
@@ -141,13 +141,13 @@ fi
 echo "== tests (release: the simulator is numerical); the soak test (tests/soak.rs, about 80 s"
 echo "   of wall time, mostly its injected stalls' waits) beside the others, its output printed at the end"
 status=0
-cargo test --workspace --release --no-run
-soak_exe="$(cargo test --release -p sil-host --test soak --no-run --message-format=json \
+cargo test --workspace --release --features sil-host/full --no-run
+soak_exe="$(cargo test --release -p sil-host --features full --test soak --no-run --message-format=json \
   | python3 -c 'import json, sys; print([m["executable"] for m in map(json.loads, sys.stdin) if m.get("reason") == "compiler-artifact" and m.get("executable") and m["target"]["name"] == "soak"][0])')"
 soaklog="$(mktemp)"
 (cd sil-host && "$soak_exe") >"$soaklog" 2>&1 &
 soak_pid=$!
-cargo test --workspace --release --no-fail-fast 2>&1 | tee "$log" || status=$?
+cargo test --workspace --release --features sil-host/full --no-fail-fast 2>&1 | tee "$log" || status=$?
 soak_status=0
 wait "$soak_pid" || soak_status=$?
 echo "== the soak test (tests/soak.rs), exit $soak_status"

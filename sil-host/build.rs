@@ -1,7 +1,8 @@
 //! Stamps the build with its commit: `SIL_HOST_COMMIT` is `git describe --always
 //! --dirty` of the source tree when it was built (`sil-host --version`, the
 //! report's stamp), or `unknown` when the source is not a git checkout (an
-//! unpacked source archive) or git is missing.
+//! unpacked source archive) or git is missing; and with its optional features,
+//! `SIL_HOST_FEATURES` (`board, live, formats, pdf`, or `none`).
 
 use std::{path::Path, process::Command};
 
@@ -19,6 +20,12 @@ fn watch(path: &Path) {
 fn main() {
     let commit = git(&["describe", "--always", "--dirty"]).unwrap_or_else(|| "unknown".into());
     println!("cargo:rustc-env=SIL_HOST_COMMIT={commit}");
+    // The optional features built (Cargo.toml `[features]`), for `--version`.
+    let built: Vec<&str> = ["board", "live", "formats", "pdf"]
+        .into_iter()
+        .filter(|f| std::env::var_os(format!("CARGO_FEATURE_{}", f.to_uppercase())).is_some())
+        .collect();
+    println!("cargo:rustc-env=SIL_HOST_FEATURES={}", if built.is_empty() { "none".to_string() } else { built.join(", ") });
     println!("cargo:rerun-if-changed=build.rs");
     // A build whose git failed (not on PATH, a lock held by another git) said
     // `unknown`: it is built again when PATH changes or the checkout's own files

@@ -17,6 +17,7 @@
 //!   a 3D panel, plots of `z_t`, `f_n` and the torques, the log).
 
 pub mod geometry;
+#[cfg(feature = "live")]
 pub mod live;
 pub mod log;
 pub mod scene;
@@ -24,6 +25,7 @@ pub mod validate;
 pub mod view;
 
 pub use geometry::ArmGeometry;
+#[cfg(feature = "live")]
 pub use live::{CLOSING_STATUS, Closed, LiveError, LiveServer, LiveTable};
 pub use view::{ArmView, EventLog, LOG_TOPIC, SCENE_TOPIC, TF_TOPIC, VIEW_PERIOD_S};
 

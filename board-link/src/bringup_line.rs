@@ -21,8 +21,9 @@ pub struct Client<S> {
     frames: FrameBuffer,
 }
 
-/// The line rate of the reference board's USART1, baud.
-pub const DEFAULT_BAUD: u32 = 2_000_000;
+/// The line rate of the reference board's USART1, baud: the PIL link's
+/// ([`rig::pil_link::DEFAULT_BAUD`]), the same line.
+pub use rig::pil_link::DEFAULT_BAUD;
 
 impl Client<Box<dyn serialport::SerialPort>> {
     /// Opens the serial device `path` (a USB-serial adapter on the board's

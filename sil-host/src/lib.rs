@@ -12,8 +12,13 @@ pub mod cancel;
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod features;
 pub mod folder_lock;
 pub mod link_spec;
+#[cfg(feature = "live")]
+pub mod live;
+#[cfg(not(feature = "live"))]
+#[path = "live_off.rs"]
 pub mod live;
 pub mod output;
 pub mod streamed_run;
@@ -54,8 +59,14 @@ where
         cli::Command::Zmax(args) => commands::zmax::run(&args),
         cli::Command::Sensitivity(args) => commands::sensitivity::run(&args),
         cli::Command::Pil(args) => commands::pil::run(&args),
+        #[cfg(feature = "board")]
         cli::Command::Board(args) => commands::board::run(&args),
+        #[cfg(feature = "board")]
         cli::Command::BoardTwin(args) => commands::board::twin(&args),
+        #[cfg(not(feature = "board"))]
+        cli::Command::Board(_) => Err(features::missing("board", "`sil-host board`")),
+        #[cfg(not(feature = "board"))]
+        cli::Command::BoardTwin(_) => Err(features::missing("board", "`sil-host board-twin`")),
         cli::Command::Firmware(args) => match commands::firmware::firmware(&args) {
             Ok(code) => return code,
             Err(e) => Err(e),

@@ -6,6 +6,7 @@
 
 use std::path::PathBuf;
 
+#[cfg(feature = "board")]
 use board_link::{EmulatorLink, TwinLink};
 use rig::{
     FirmwareLink,
@@ -62,9 +63,11 @@ pub enum OpenLink {
     InProcess(Box<InProcessLink>),
     /// [`LinkSpec::Iceoryx2`].
     Iceoryx2(Box<IpcLink>),
-    /// [`LinkSpec::Twin`].
+    /// [`LinkSpec::Twin`] (the feature `board`).
+    #[cfg(feature = "board")]
     Twin(Box<TwinLink>),
-    /// [`LinkSpec::Emulator`].
+    /// [`LinkSpec::Emulator`] (the feature `board`).
+    #[cfg(feature = "board")]
     Emulator(Box<EmulatorLink>),
     /// [`LinkSpec::Pil`].
     Pil(Box<PilLink>),
@@ -79,7 +82,9 @@ impl LinkSpec {
     /// input is at fault, such as another user's rig or a firmware that
     /// announces another configuration, else 1); the twin's and the emulated
     /// board's refusals as bad input (exit 2), such as runaway limits turned off
-    /// or a missing image; QEMU that cannot start or a board that does not answer.
+    /// or a missing image; QEMU that cannot start or a board that does not answer;
+    /// the twin and the emulated board in a build without the feature `board`
+    /// ([`crate::features::missing`], exit 2).
     pub fn open(self, setup: &RunSetup) -> Result<OpenLink, CliError> {
         Ok(match self {
             Self::InProcess => OpenLink::InProcess(Box::new(InProcessLink::new(setup).map_err(CliError::from)?)),
@@ -94,10 +99,16 @@ impl LinkSpec {
                 };
                 OpenLink::Iceoryx2(Box::new(IpcLink::connect(setup, &rig, exe.as_deref(), realtime, &monitors).map_err(CliError::from)?))
             }
+            #[cfg(feature = "board")]
             Self::Twin => OpenLink::Twin(Box::new(TwinLink::new(setup).map_err(|e| CliError::bad_input(e.to_string()))?)),
+            #[cfg(feature = "board")]
             Self::Emulator { elf } => {
                 OpenLink::Emulator(Box::new(EmulatorLink::new(setup, &elf).map_err(|e| CliError::bad_input(e.to_string()))?))
             }
+            #[cfg(not(feature = "board"))]
+            Self::Twin => return Err(crate::features::missing("board", "--link twin")),
+            #[cfg(not(feature = "board"))]
+            Self::Emulator { .. } => return Err(crate::features::missing("board", "--link emulator")),
             Self::Pil { options, on_log } => OpenLink::Pil(Box::new(PilLink::start(setup, &options, on_log).map_err(CliError::from)?)),
         })
     }
@@ -109,7 +120,9 @@ impl OpenLink {
         match self {
             Self::InProcess(l) => l.as_mut(),
             Self::Iceoryx2(l) => l.as_mut(),
+            #[cfg(feature = "board")]
             Self::Twin(l) => l.as_mut(),
+            #[cfg(feature = "board")]
             Self::Emulator(l) => l.as_mut(),
             Self::Pil(l) => l.as_mut(),
         }

@@ -23,10 +23,11 @@ use std::{
 use crate::{error::CliError, folder_lock::FolderLock};
 use tables::{
     TableFormat,
-    arrow::StreamedArrowFile,
     csv::{CsvFile, CsvRow},
-    mcap::{McapRows, McapStream, McapView},
+    mcap::McapRows,
 };
+#[cfg(feature = "formats")]
+use tables::{arrow::StreamedArrowFile, mcap::McapStream};
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -122,12 +123,17 @@ impl OutputSet {
     /// Reserves temporary paths for the figure `name` (an `.svg`) and its PDF
     /// (the same name with `.pdf`, at [`crate::plot::print::pdf_path`] of the SVG's
     /// temporary path), both made as [`OutputSet::stage`] makes its file and
-    /// renamed on commit; returns the SVG's.
+    /// renamed on commit; returns the SVG's. Built without the feature `pdf`, the
+    /// SVG's alone (said once on standard error).
     ///
     /// # Errors
     /// As [`OutputSet::stage`].
     pub fn stage_figure(&mut self, name: &str) -> Result<PathBuf, CliError> {
         let svg = self.stage(name)?;
+        if !crate::plot::print::WRITES_PDF {
+            crate::features::note_svg_only();
+            return Ok(svg);
+        }
         let pdf_final = self.dir.join(Path::new(name).with_extension("pdf"));
         let pdf = crate::plot::print::pdf_path(&svg);
         create_new(&pdf)?;
@@ -222,8 +228,14 @@ pub struct StreamedTable<T: CsvRow + McapRows + Copy + 'static> {
 /// The file behind a [`StreamedTable`].
 enum StreamedWriter<T: McapRows + 'static> {
     Csv(CsvFile),
+    #[cfg(feature = "formats")]
     Arrow(Box<StreamedArrowFile<T>>),
+    #[cfg(feature = "formats")]
     Mcap(Box<McapStream<T>>),
+    /// Never made (keeps `T` used in a build without `formats`).
+    #[cfg(not(feature = "formats"))]
+    #[allow(dead_code)]
+    Never(std::marker::PhantomData<T>),
 }
 
 impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
@@ -233,19 +245,27 @@ impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
     ///
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created (or the Arrow schema, the
-    /// MCAP header and channels written).
+    /// MCAP header and channels written); [`CliError::BadInput`] for Arrow or MCAP
+    /// in a build without the feature `formats`.
     pub fn new(
         out: &mut OutputSet,
         stem: &str,
         format: TableFormat,
         flush_every: std::time::Duration,
-        view: Option<Box<dyn McapView<T>>>,
+        view: crate::table_out::View<T>,
     ) -> Result<Self, CliError> {
+        crate::features::require_format(format)?;
         let (path, file) = out.create_streamed(&format.file(stem))?;
+        #[cfg(not(feature = "formats"))]
+        let _ = view;
         let writer = match format {
             TableFormat::Csv => StreamedWriter::Csv(CsvFile::new(path, file, T::HEADER)),
+            #[cfg(feature = "formats")]
             TableFormat::Arrow => StreamedWriter::Arrow(Box::new(StreamedArrowFile::new(path, file)?)),
+            #[cfg(feature = "formats")]
             TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::with_view(path, file, view)?)),
+            #[cfg(not(feature = "formats"))]
+            TableFormat::Arrow | TableFormat::Mcap => unreachable!("refused by require_format"),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }
@@ -262,8 +282,12 @@ impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
         }
         let result = match &mut self.writer {
             StreamedWriter::Csv(csv) => csv.row(row).and_then(|()| if flush { csv.flush() } else { Ok(()) }),
+            #[cfg(feature = "formats")]
             StreamedWriter::Arrow(arrow) => arrow.push(*row, flush),
+            #[cfg(feature = "formats")]
             StreamedWriter::Mcap(mcap) => mcap.push(*row),
+            #[cfg(not(feature = "formats"))]
+            StreamedWriter::Never(_) => Ok(()),
         };
         if let Err(e) = result {
             self.error = Some(e.into());
@@ -280,8 +304,12 @@ impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
         }
         Ok(match self.writer {
             StreamedWriter::Csv(csv) => csv.finish(),
+            #[cfg(feature = "formats")]
             StreamedWriter::Arrow(arrow) => arrow.finish(),
+            #[cfg(feature = "formats")]
             StreamedWriter::Mcap(mcap) => mcap.finish(),
+            #[cfg(not(feature = "formats"))]
+            StreamedWriter::Never(_) => Ok(()),
         }?)
     }
 }

@@ -48,9 +48,12 @@ pub fn run_streamed(
     live: Option<&mut crate::live::LiveRun>,
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
-    let view = arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())));
-    let mut trace =
-        StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1), Some(Box::new(view)))?;
+    #[cfg(feature = "formats")]
+    let view: crate::table_out::View<PeriodRecord> =
+        Some(Box::new(arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())))));
+    #[cfg(not(feature = "formats"))]
+    let view = std::marker::PhantomData;
+    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1), view)?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the
     /// bar, stops on Ctrl-C, keeps the validity.

@@ -2,14 +2,20 @@
 //! (`--format csv|arrow|mcap`): CSV by a writer thread ([`tables::csv::CsvThread`]),
 //! an Arrow IPC file by a writer thread ([`tables::arrow::ArrowThread`]), or, for two
 //! tables at once ([`TablesOut`]), one MCAP file ([`tables::mcap::McapFile`]).
+//! Arrow and MCAP are the feature `formats`'s; without it they are refused
+//! ([`crate::features::require_format`], exit 2).
 
 use crate::{error::CliError, output::OutputSet};
 pub use tables::TableFormat;
 use tables::{
     ColumnRows,
-    arrow::{ArrowFile, ArrowThread},
     csv::{CsvRow, CsvThread},
-    mcap::{FILE_CHUNK_BYTES, McapFile, McapRows, McapTable, McapView},
+    mcap::McapRows,
+};
+#[cfg(feature = "formats")]
+use tables::{
+    arrow::{ArrowFile, ArrowThread},
+    mcap::{FILE_CHUNK_BYTES, McapFile, McapTable, McapView},
 };
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
@@ -19,6 +25,7 @@ pub enum TableOut<T: CsvRow + ColumnRows + Send + 'static> {
     Csv(CsvThread<T>),
     /// An Arrow IPC file, a record batch at a time, batched and written by a
     /// thread of its own while the caller goes on.
+    #[cfg(feature = "formats")]
     Arrow(ArrowThread<T>),
 }
 
@@ -28,11 +35,16 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     /// # Errors
     /// [`CliError::Io`] when the file cannot be created or its header written;
     /// [`CliError::Io`] for [`TableFormat::Mcap`], which holds several tables in
-    /// one file ([`TablesOut`]).
+    /// one file ([`TablesOut`]); [`CliError::BadInput`] for Arrow or MCAP in a
+    /// build without the feature `formats`.
     pub fn create(out: &mut OutputSet, stem: &str, format: TableFormat) -> Result<Self, CliError> {
+        crate::features::require_format(format)?;
         let name = format.file(stem);
         Ok(match format {
             TableFormat::Csv => Self::Csv(CsvThread::spawn(out.create_csv(&name, T::HEADER)?)?),
+            #[cfg(not(feature = "formats"))]
+            TableFormat::Arrow => unreachable!("refused by require_format"),
+            #[cfg(feature = "formats")]
             TableFormat::Arrow => {
                 let (path, file) = out.create_unbuffered(&name)?;
                 Self::Arrow(ArrowThread::spawn(ArrowFile::new(path, file)?)?)
@@ -53,6 +65,7 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     pub fn send(&mut self, rows: Vec<T>) -> Result<Vec<T>, CliError> {
         match self {
             Self::Csv(t) => Ok(t.send(rows)?),
+            #[cfg(feature = "formats")]
             Self::Arrow(a) => Ok(a.send(rows)?),
         }
     }
@@ -64,14 +77,29 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     pub fn finish(self) -> Result<(), CliError> {
         match self {
             Self::Csv(t) => Ok(t.finish()?),
+            #[cfg(feature = "formats")]
             Self::Arrow(a) => Ok(a.finish()?),
         }
     }
 }
 
+/// The view of a table in an MCAP file ([`tables::mcap::McapView`]: channels drawn
+/// from its rows), if any.
+#[cfg(feature = "formats")]
+pub type View<T> = Option<Box<dyn McapView<T>>>;
+
+/// No view: a build without the feature `formats` writes no MCAP file.
+#[cfg(not(feature = "formats"))]
+pub type View<T> = std::marker::PhantomData<T>;
+
 /// The views of two tables in an MCAP file (the arm's frames and scene, the
 /// events' log: `arm_view`), one per table, each optional.
+#[cfg(feature = "formats")]
 pub type Views<A, B> = (Option<Box<dyn McapView<A>>>, Option<Box<dyn McapView<B>>>);
+
+/// No views: a build without the feature `formats` writes no MCAP file.
+#[cfg(not(feature = "formats"))]
+pub type Views<A, B> = std::marker::PhantomData<(A, B)>;
 
 /// Two tables of a command (`simulate`'s `trace` of rows `A` and `events` of
 /// rows `B`): two files (`trace.csv` and `events.csv`, or `.arrow`), or one MCAP
@@ -81,6 +109,7 @@ pub enum TablesOut<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows +
     /// A file per table.
     Two(TableOut<A>, TableOut<B>),
     /// One MCAP file.
+    #[cfg(feature = "formats")]
     Mcap(Box<McapFile>, McapTable, McapTable),
 }
 
@@ -90,9 +119,15 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
     /// of `views` too ([`tables::mcap::McapView`]: the arm in Foxglove's schemas).
     ///
     /// # Errors
-    /// [`CliError::Io`] when a file cannot be created or its header written.
+    /// [`CliError::Io`] when a file cannot be created or its header written;
+    /// [`CliError::BadInput`] for Arrow or MCAP in a build without the feature
+    /// `formats`.
     pub fn create(out: &mut OutputSet, stems: [&str; 2], format: TableFormat, views: Views<A, B>) -> Result<Self, CliError> {
+        crate::features::require_format(format)?;
+        #[cfg(not(feature = "formats"))]
+        let _ = views;
         Ok(match format {
+            #[cfg(feature = "formats")]
             TableFormat::Mcap => {
                 let (path, file) = out.create_unbuffered(&format.file(stems[0]))?;
                 let mut mcap = McapFile::new(path, file, Some(FILE_CHUNK_BYTES))?;
@@ -117,11 +152,13 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
     ///
     /// # Errors
     /// [`CliError::Io`] when writing has failed.
-    pub fn send(&mut self, mut a: Vec<A>, mut b: Vec<B>) -> Result<(Vec<A>, Vec<B>), CliError> {
+    pub fn send(&mut self, a: Vec<A>, b: Vec<B>) -> Result<(Vec<A>, Vec<B>), CliError> {
         match self {
             Self::Two(ta, tb) => Ok((ta.send(a)?, tb.send(b)?)),
+            #[cfg(feature = "formats")]
             Self::Mcap(file, ia, ib) => {
                 file.write_merged((*ia, &a), (*ib, &b))?;
+                let (mut a, mut b) = (a, b);
                 a.clear();
                 b.clear();
                 Ok((a, b))
@@ -139,6 +176,7 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
                 a.finish()?;
                 b.finish()
             }
+            #[cfg(feature = "formats")]
             Self::Mcap(file, _, _) => Ok(file.finish()?),
         }
     }

@@ -14,20 +14,22 @@
 //! through [`Table::of_rows`] ([`rows`], the cells the `csv` crate writes, each
 //! in its declared column). The two give the same table (tested).
 //!
-//! Feature `files` (on by default): the Arrow and MCAP files and the CSV reader.
-//! Without it the crate holds the declarations, the rows-to-columns layer and the
-//! CSV writer (what `rig` and `analyses` need to declare their row types).
+//! Features (none by default; Cargo.toml says each): `arrow` the Arrow IPC writer,
+//! `mcap` the MCAP writer, `read` every reader (CSV, Arrow, MCAP; only the Python
+//! package and the tests read tables). Without them the crate holds the
+//! declarations, the rows-to-columns layer and the CSV writer: what the command
+//! line's main job and the crates that declare row types (`rig`, `analyses`) need.
 //! Errors: [`Error`].
 
 #![warn(missing_docs)]
 
-#[cfg(feature = "files")]
+#[cfg(feature = "arrow")]
 pub mod arrow;
 pub mod csv;
 pub mod declared;
 pub mod error;
 pub mod mcap;
-#[cfg(feature = "files")]
+#[cfg(feature = "read")]
 pub mod read;
 pub mod rows;
 pub mod writer;

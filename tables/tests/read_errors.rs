@@ -1,7 +1,7 @@
 //! The readers' errors (issue 66): a file being read that cannot be read says
 //! "cannot read", never "cannot write", missing or not the table it should be,
 //! for both readers.
-#![cfg(feature = "files")]
+#![cfg(feature = "read")]
 
 #[test]
 fn a_file_that_cannot_be_read_says_so() {

@@ -45,6 +45,8 @@ fn version_names_the_commit_it_was_built_from() {
     assert!(head.status.success(), "the tests run in a git checkout");
     let head = String::from_utf8_lossy(&head.stdout);
     assert!(text.contains(&head[..7]), "{text} does not name HEAD {head}");
+    // The tests build everything (`required-features = ["full"]`): the four optional parts.
+    assert!(text.trim_end().ends_with("; features: board, live, formats, pdf)"), "{text}");
 }
 
 #[test]

@@ -17,6 +17,8 @@ pub mod font;
 pub mod gutter;
 pub mod history;
 pub mod legend;
+#[cfg(feature = "pdf")]
+pub mod pdf;
 pub mod print;
 pub mod symbols;
 pub mod time_panels;

@@ -15,7 +15,7 @@ pub struct BoardArgs {
     #[arg(long, value_name = "PATH")]
     pub port: PathBuf,
     /// The line rate, baud (8N1, no flow control).
-    #[arg(long, default_value_t = board_link::bringup_line::DEFAULT_BAUD, value_name = "BAUD")]
+    #[arg(long, default_value_t = rig::pil_link::DEFAULT_BAUD, value_name = "BAUD")]
     pub baud: u32,
     /// Print one JSON document instead of the human summary.
     #[arg(long, global = true)]

@@ -13,9 +13,11 @@ pub use self::board::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg,
 pub use self::report::{ReportArgs, ReportSize};
 pub use experiments::settings::*;
 
-/// `sil-host --version`: the package version and the commit it was built from
-/// (`build.rs`: `git describe --always --dirty`, or `unknown` outside a git checkout).
-pub const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("SIL_HOST_COMMIT"), ")");
+/// `sil-host --version`: the package version, the commit it was built from
+/// (`build.rs`: `git describe --always --dirty`, or `unknown` outside a git
+/// checkout) and the optional features it was built with (`crate::features`).
+pub const VERSION: &str =
+    concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("SIL_HOST_COMMIT"), "; features: ", env!("SIL_HOST_FEATURES"), ")");
 
 /// Plant simulator and rig for the Painlevé paradox on a two-link arm
 /// (Marchese, Coraggio, Hogan, di Bernardo, ECC 2019).
@@ -24,7 +26,8 @@ pub const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("
 /// and writes its files under `--out DIR` (default `out/`). Every figure is an
 /// SVG and a PDF of the same name, sized for a journal's column (3.5 in) or page
 /// (7 in). Bad input exits with code 2 and writes nothing; a failure while
-/// running exits with 1.
+/// running exits with 1. A part this build lacks (`--version` lists its
+/// features: board, live, formats, pdf) says which feature to build with (exit 2).
 #[derive(Debug, Parser)]
 #[command(name = "sil-host", version = VERSION, about, long_about)]
 pub struct Cli {

@@ -2,6 +2,7 @@
 
 pub mod admissible;
 pub mod bench;
+#[cfg(feature = "board")]
 pub mod board;
 pub mod closed_loop;
 pub mod firmware;

@@ -105,6 +105,7 @@ fn check_image(image: &std::path::Path) -> Result<(), CliError> {
 /// (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     experiments::scenario::refuse_board_overrides(&args.scenario.set, "the PIL board (its own firmware image)")?;
+    crate::features::require_format(args.format)?;
     let scenario = load_scenario(&args.scenario)?;
     crate::commands::warn(experiments::scenario::board_tables_note(&scenario, "the PIL board (its own firmware image)"));
     let setup = experiments::run::setup(scenario)?;

@@ -33,6 +33,14 @@ use rig::{
 /// way (exit 1, everything up to then written); I/O or plotting failures.
 pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError> {
     let (setup, chosen) = prepare(args)?;
+    crate::features::require_format(args.format)?;
+    if matches!(chosen, RunLink::Twin | RunLink::Emulator) {
+        crate::features::require(
+            cfg!(feature = "board"),
+            "board",
+            &format!("--link {}", if chosen == RunLink::Twin { "twin" } else { "emulator" }),
+        )?;
+    }
     let scenario = setup.scenario();
     if !matches!(chosen, RunLink::Twin | RunLink::Emulator) {
         crate::commands::warn(experiments::scenario::board_tables_note(scenario, chosen.without_board()));
@@ -55,7 +63,10 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let spec = match chosen {
         RunLink::InProcess => LinkSpec::InProcess,
         RunLink::Twin => LinkSpec::Twin,
+        #[cfg(feature = "board")]
         RunLink::Emulator => LinkSpec::Emulator { elf: args.elf.clone().unwrap_or_else(board_link::emulator_link::default_image) },
+        #[cfg(not(feature = "board"))]
+        RunLink::Emulator => LinkSpec::Emulator { elf: args.elf.clone().unwrap_or_default() },
         RunLink::Iceoryx2 => LinkSpec::Iceoryx2 { rig: rig.clone(), attach: args.attach.is_some(), realtime: args.realtime, monitors },
     };
     let mut open = spec.open(&setup)?;
@@ -80,6 +91,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
             realtime_setup = l.realtime_setup.clone();
             monitor_counts = (monitors.wait_for > 0).then(|| l.monitor_counts());
         }
+        #[cfg(feature = "board")]
         OpenLink::Twin(t) => {
             for (k, n) in &t.notices {
                 eprintln!("twin: period {k}: {}", board_link::twin_link::describe(n));

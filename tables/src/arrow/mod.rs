@@ -19,16 +19,22 @@
 
 use std::{path::Path, sync::Arc};
 
-use arrow_array::{Array, ArrayRef, BooleanArray, DictionaryArray, Float64Array, Int64Array, RecordBatch, StringArray, types::UInt32Type};
+#[cfg(feature = "read")]
+use arrow_array::{Array, DictionaryArray, RecordBatch, types::UInt32Type};
+use arrow_array::{ArrayRef, BooleanArray, Float64Array, Int64Array, StringArray};
 use arrow_schema::{ArrowError, DataType, Field, Schema};
 
-use crate::{Column, Declaration, Kind, Table, error::Error};
+#[cfg(feature = "read")]
+use crate::Table;
+use crate::{Column, Declaration, Kind, error::Error};
 
+#[cfg(feature = "read")]
 mod read;
-#[cfg(test)]
+#[cfg(all(test, feature = "read"))]
 mod tests;
 mod write;
 
+#[cfg(feature = "read")]
 pub use read::{read_arrow, read_arrow_batch};
 pub use write::{ArrowFile, ArrowThread, StreamedArrowFile};
 
@@ -41,6 +47,7 @@ pub(crate) fn arrow_err(path: &Path) -> impl Fn(ArrowError) -> Error + '_ {
 }
 
 /// The error of an Arrow file being read, as the CLI reports it: the file and what failed.
+#[cfg(feature = "read")]
 pub(crate) fn arrow_read_err(path: &Path) -> impl Fn(ArrowError) -> Error + '_ {
     move |e| Error::Unreadable { path: path.to_path_buf(), source: arrow_io(e) }
 }
@@ -91,6 +98,7 @@ pub fn array_of(c: Column) -> ArrayRef {
 /// # Errors
 /// `(column, Some(row), message)` for a refused null, `(column, None, message)`
 /// for a refused type.
+#[cfg(feature = "read")]
 pub(crate) fn settle(batch: &RecordBatch, strict: bool) -> Result<RecordBatch, (String, Option<usize>, String)> {
     let mut fields = Vec::with_capacity(batch.num_columns());
     let mut arrays = Vec::with_capacity(batch.num_columns());
@@ -133,6 +141,7 @@ pub(crate) fn settle(batch: &RecordBatch, strict: bool) -> Result<RecordBatch, (
 }
 
 /// The error of a column of a type the tables never hold.
+#[cfg(feature = "read")]
 fn bad_type(name: &str, array: &ArrayRef) -> (String, Option<usize>, String) {
     (name.to_string(), None, format!("column `{name}` is {}, not Float64, Int64, Boolean or Utf8", array.data_type()))
 }
@@ -143,6 +152,7 @@ fn bad_type(name: &str, array: &ArrayRef) -> (String, Option<usize>, String) {
 ///
 /// # Errors
 /// The message naming the column of another type or with nulls.
+#[cfg(feature = "read")]
 pub fn table_of(batch: &RecordBatch) -> Result<Table, String> {
     let mut columns = Vec::with_capacity(batch.num_columns());
     for (field, array) in batch.schema().fields().iter().zip(batch.columns()) {
@@ -175,6 +185,7 @@ pub fn table_of(batch: &RecordBatch) -> Result<Table, String> {
 ///
 /// # Errors
 /// The cast's error (more than 2^32 distinct values).
+#[cfg(feature = "read")]
 pub fn coded(text: &StringArray) -> Result<DictionaryArray<UInt32Type>, ArrowError> {
     let dictionary = DataType::Dictionary(Box::new(DataType::UInt32), Box::new(DataType::Utf8));
     let cast = arrow_cast::cast(text, &dictionary)?;

@@ -35,27 +35,27 @@
 //! (the summary and footer written by [`McapFile::finish`] are missing).
 //!
 //! The declarations ([`McapGroup`], [`McapRows`]) are always here; the writer
-//! ([`McapFile`], [`McapStream`]) and the reader ([`read_mcap`]) come with the
-//! feature `files`.
+//! ([`McapFile`], [`McapStream`]) comes with the feature `mcap`, the reader
+//! ([`read_mcap`]) with `read`.
 
 use crate::ColumnRows;
 
-#[cfg(feature = "files")]
+#[cfg(feature = "mcap")]
 mod channel;
-#[cfg(feature = "files")]
+#[cfg(feature = "read")]
 mod read;
-#[cfg(feature = "files")]
+#[cfg(feature = "mcap")]
 mod schema;
-#[cfg(all(test, feature = "files"))]
+#[cfg(all(test, feature = "read"))]
 mod tests;
-#[cfg(feature = "files")]
+#[cfg(feature = "mcap")]
 mod write;
 
-#[cfg(feature = "files")]
+#[cfg(feature = "mcap")]
 pub use channel::{ChannelSpec, McapView, RowEncoder, log_time_ns};
-#[cfg(feature = "files")]
+#[cfg(feature = "read")]
 pub use read::read_mcap;
-#[cfg(feature = "files")]
+#[cfg(feature = "mcap")]
 pub use write::{McapFile, McapStream, McapTable};
 
 /// Rows per chunk of an [`McapStream`] (`run`, `pil`): 100 control periods

@@ -21,6 +21,7 @@
 //! sizes are exact. A figure that cannot be measured here (no image built, no
 //! QEMU) is reported as skipped, with the reason and the command that fixes it.
 
+#[cfg(feature = "board")]
 mod emulated;
 mod mcu;
 mod outputs;
@@ -63,7 +64,16 @@ pub const GROUPS: [(&str, &str); 11] = [
 /// [`CliError::BadInput`] naming an unknown group and listing the known ones.
 fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
     if args.only.is_empty() {
-        return Ok(GROUPS.iter().map(|g| g.0).filter(|g| *g != "cycles" && (*g != "realtime" || args.realtime_s > 0.0)).collect());
+        let built = |g: &&str| needs(g).is_none_or(|(_, on)| on);
+        if !args.json && GROUPS.iter().any(|g| !built(&g.0)) {
+            eprintln!("note: the twin and emulator groups need the `board` feature, which this sil-host was built without");
+        }
+        return Ok(GROUPS
+            .iter()
+            .map(|g| g.0)
+            .filter(|g| *g != "cycles" && (*g != "realtime" || args.realtime_s > 0.0))
+            .filter(built)
+            .collect());
     }
     let mut out = Vec::new();
     for name in &args.only {
@@ -71,6 +81,9 @@ fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
             let known: Vec<_> = GROUPS.iter().map(|g| g.0).collect();
             return Err(CliError::bad_input(format!("--only {name}: unknown figure group (known: {})", known.join(", "))));
         };
+        if let Some((feature, false)) = needs(g) {
+            return Err(crate::features::missing(feature, &format!("bench --only {g}")));
+        }
         if !out.contains(g) {
             out.push(*g);
         }
@@ -79,6 +92,12 @@ fn selected(args: &BenchArgs) -> Result<Vec<&'static str>, CliError> {
         return Err(CliError::bad_input("--only realtime needs --realtime-s S > 0 (the length of the real-time run)"));
     }
     Ok(out)
+}
+
+/// The optional feature group `g` needs (`board`: the twin's and the emulated
+/// board's loops), with whether this build has it.
+fn needs(g: &str) -> Option<(&'static str, bool)> {
+    matches!(g, "twin" | "emulator").then_some(("board", cfg!(feature = "board")))
 }
 
 /// Checks the numbers of `args`.
@@ -148,7 +167,9 @@ pub fn execute(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             "flash" => figures.extend(mcu::flash_figures(&target)),
             "in-process" => figures.push(rig_loop::in_process(args)?),
             "lockstep" => figures.push(rig_loop::lockstep(args)?),
+            #[cfg(feature = "board")]
             "twin" => figures.push(rig_loop::twin(args)?),
+            #[cfg(feature = "board")]
             "emulator" => figures.extend(emulated::figures(args)?),
             "realtime" => figures.push(rig_loop::realtime(args)?),
             "simulate" => figures.extend(outputs::simulate(args)?),

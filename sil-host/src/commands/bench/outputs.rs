@@ -86,14 +86,20 @@ fn traced_figure(args: &BenchArgs, id: &'static str, argv: &[&str], ext: &str, k
         .with_runs(times))
 }
 
-/// `simulate` 300 s with its 1 ms trace as CSV, then as Arrow IPC, then with 1 s
-/// samples, `--repeat` times each into fresh folders: median wall times.
+/// `simulate` 300 s with its 1 ms trace as CSV, then as Arrow IPC (with the feature
+/// `formats`), then with 1 s samples, `--repeat` times each into fresh folders:
+/// median wall times.
 ///
 /// # Errors
 /// The simulation failing (exit 1); a scratch folder that cannot be made.
 pub fn simulate(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
     let traced = traced_figure(args, "simulate_300s", &SIMULATE_ARGS, "csv", "", SIMULATE_TARGET_S)?;
-    let columnar = traced_figure(args, "simulate_300s_arrow", &SIMULATE_ARROW_ARGS, "arrow", " (Arrow IPC)", SIMULATE_ARROW_TARGET_S)?;
+    // The Arrow writer is the feature `formats`'s: without it, the CSV and sparse figures alone.
+    let columnar = if cfg!(feature = "formats") {
+        Some(traced_figure(args, "simulate_300s_arrow", &SIMULATE_ARROW_ARGS, "arrow", " (Arrow IPC)", SIMULATE_ARROW_TARGET_S)?)
+    } else {
+        None
+    };
     let (times, _) = time_simulate(args, &SIMULATE_SPARSE_ARGS, "csv")?;
     let m = median(&times);
     let name = "simulate 300 s from x0a, v_belt -0.5, 1 s samples";
@@ -104,7 +110,7 @@ pub fn simulate(args: &BenchArgs) -> Result<Vec<Figure>, CliError> {
             SCIPY_PEER_S / m
         ))
         .with_runs(times);
-    Ok(vec![traced, columnar, sparse])
+    Ok([Some(traced), columnar, Some(sparse)].into_iter().flatten().collect())
 }
 
 /// The closed-loop hybrid sweep: shard 0 of N, N chosen so that it holds about

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use crate::bench::figure::{Figure, Goal, median};
 use crate::{cli::BenchArgs, error::CliError};
+#[cfg(feature = "board")]
 use board_link::TwinLink;
 use rig::{
     FirmwareLink, RunObserver,
@@ -23,6 +24,7 @@ pub const IN_PROCESS_TARGET: f64 = 1_000_000.0;
 /// Target of lockstep over iceoryx2, periods per wall second (issue 16).
 pub const LOCKSTEP_TARGET: f64 = 350_000.0;
 /// Target of the board twin's closed loop, periods per wall second (issue 23).
+#[cfg(feature = "board")]
 pub const TWIN_TARGET: f64 = 100_000.0;
 
 /// Counts the plant's deadline misses as the run goes.
@@ -93,6 +95,7 @@ pub fn in_process(args: &BenchArgs) -> Result<Figure, CliError> {
 ///
 /// # Errors
 /// A run that fails (exit 1).
+#[cfg(feature = "board")]
 pub fn twin(args: &BenchArgs) -> Result<Figure, CliError> {
     let setup = scenario(args.duration)?;
     let mut rates = Vec::new();

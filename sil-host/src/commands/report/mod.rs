@@ -237,9 +237,9 @@ fn execute(command: Command) -> Result<(Outcome, Option<CliError>), CliError> {
     Ok(match command {
         Command::Modes(a) => typed(commands::modes::execute(&a)?, Outcome::Modes),
         Command::Admissible(a) => typed(commands::admissible::execute(&a)?, Outcome::Admissible),
-        Command::Simulate(a) => typed(commands::simulate::execute(&a)?, Outcome::Simulate),
+        Command::Simulate(a) => typed(commands::simulate::execute(&a)?, |s| Outcome::Simulate(Box::new(s))),
         Command::Sweep(a) => typed(commands::sweep::execute(&a)?, |s| Outcome::Sweep(Box::new(s))),
-        Command::Poincare(a) => typed(commands::poincare::execute(&a)?, Outcome::Poincare),
+        Command::Poincare(a) => typed(commands::poincare::execute(&a)?, |p| Outcome::Poincare(Box::new(p))),
         Command::Zmax(a) => typed(commands::zmax::execute(&a)?, |z| Outcome::Zmax(Box::new(z))),
         Command::Run(a) => typed(commands::run::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),
         Command::Pil(a) => typed(commands::pil::execute(&a)?, |(summary, _)| Outcome::Run(Box::new(summary))),

@@ -17,11 +17,11 @@ pub enum Outcome {
     /// `admissible`.
     Admissible(AdmissibleReport),
     /// `simulate`.
-    Simulate(SimulateSummary),
+    Simulate(Box<SimulateSummary>),
     /// `sweep`.
     Sweep(Box<SweepSummary>),
     /// `poincare`.
-    Poincare(PoincareSummary),
+    Poincare(Box<PoincareSummary>),
     /// `zmax`.
     Zmax(Box<ZmaxSummary>),
     /// `run` and `pil`.

@@ -39,6 +39,7 @@ use print::*;
 /// [`CliError::Io`]/[`CliError::Plot`] when writing fails.
 pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // Validate everything before touching the output folder.
+    crate::features::require_format(args.format)?;
     let prepared = prepare(args)?;
     let (params, sim, initial_condition) = (prepared.params, prepared.sim, prepared.initial_condition.clone());
     let steps = prepared.steps;
@@ -52,11 +53,13 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     // formatted and written by a thread of their own (CsvThread) while the
     // simulation goes on; Arrow rows are batched (ArrowFile); MCAP rows and
     // events go into one file, interleaved by time (McapFile).
-    let geometry = arm_view::ArmGeometry::of(&params);
+    #[cfg(feature = "formats")]
     let views = (
-        Some(Box::new(arm_view::ArmView::new(geometry)) as Box<dyn tables::mcap::McapView<TraceRow>>),
+        Some(Box::new(arm_view::ArmView::new(arm_view::ArmGeometry::of(&params))) as Box<dyn tables::mcap::McapView<TraceRow>>),
         Some(Box::new(arm_view::EventLog::default()) as Box<dyn tables::mcap::McapView<EventRow>>),
     );
+    #[cfg(not(feature = "formats"))]
+    let views = std::marker::PhantomData;
     let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format, views)?;
     let mut curves = TraceCurves::default();
     let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
