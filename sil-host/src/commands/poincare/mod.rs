@@ -77,7 +77,11 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
         "lyapunov.pdf",
         "summary.json",
     ];
-    let files = files.iter().map(|f| out.path(f).display().to_string()).collect();
+    let files = files
+        .iter()
+        .filter(|f| crate::plot::print::WRITES_PDF || !f.ends_with(".pdf"))
+        .map(|f| out.path(f).display().to_string())
+        .collect();
     let summary = summary(args, (cfg, &grid, ic), &results, threads, wall_s, files);
     out.write_json("summary.json", &summary)?;
     let files = out.commit()?;

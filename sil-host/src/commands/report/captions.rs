@@ -61,9 +61,10 @@ impl Figures {
     }
 
     /// The same, each caption ending with a link to the figure's PDF (beside its
-    /// SVG, as every command writes it: `trace.pdf` for `trace.svg`).
+    /// SVG, as every command writes it: `trace.pdf` for `trace.svg`), in a build
+    /// that writes PDFs (the feature `pdf`).
     pub fn with_pdf(mut self) -> Self {
-        self.pdf = true;
+        self.pdf = crate::plot::print::WRITES_PDF;
         self
     }
 

@@ -50,7 +50,9 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
         let path = out.stage_figure(fig.file)?;
         figures::draw(&path, &study, &fig)?;
         names.push(fig.file.to_string());
-        names.push(fig.file.replace(".svg", ".pdf"));
+        if crate::plot::print::WRITES_PDF {
+            names.push(fig.file.replace(".svg", ".pdf"));
+        }
     }
     let summary =
         Summary { study, base_scenario: base, wall_s, threads, files: names.iter().map(|f| out.path(f).display().to_string()).collect() };

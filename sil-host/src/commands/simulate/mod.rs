@@ -147,7 +147,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     let files = tables
         .iter()
         .map(String::as_str)
-        .chain(["trace.svg", "trace.pdf"])
+        .chain(["trace.svg"])
+        .chain(crate::plot::print::WRITES_PDF.then_some("trace.pdf"))
         .chain((!args.no_page).then_some(crate::trace_page::FILE))
         .chain(["summary.json"])
         .map(|f| out.path(f).display().to_string())
