@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Import cycles between the files of each crate (docs/architecture.md, "One concept
 per module"): a file's `use` paths and its inline `crate::`, `super::` and `self::` paths
-(tests and comments left out) make a graph per crate; any cycle is an error. Usage:
+(tests and comments left out; a bare path, which names a child module or another crate,
+is the module tree's own edge) make a graph per crate; any cycle is an error. Usage:
 import_cycles.py SRC_DIR...
 """
 import re, os, sys, glob
@@ -40,7 +41,7 @@ def uses(text):
             return res
         out+=expand(stmt)
     # also inline paths: crate::a::b, super::a::b (any depth of super), self::a::b
-    out+=re.findall(r'\bcrate::([a-z_0-9:]+)', text)
+    out+=['crate::'+p for p in re.findall(r'\bcrate::([a-z_0-9:]+)', text)]
     out+=re.findall(r'(?<![A-Za-z_0-9:])((?:super::)+[a-z_0-9:]+)', text)
     out+=re.findall(r'(?<![A-Za-z_0-9:])(self::[a-z_0-9:]+)', text)
     return out
@@ -50,12 +51,16 @@ for crate_src in sys.argv[1:]:
     graph={}
     for f in files:
         text=open(f).read()
-        # strip test modules
-        text=re.split(r'#\[cfg\(test\)\]\s*mod tests', text)[0]
+        # strip test modules: a declaration (`#[cfg(...test...)] mod tests;`, its file is
+        # itself a test file and imports what it tests) anywhere, and an inline test
+        # module (`mod tests {`) to the end of the file, where it conventionally stands
+        text=re.sub(r'#\[cfg\([^\]]*\btest\b[^\]]*\)\]\s*(?:#\[[^\]]*\]\s*)*mod\s+\w+\s*;', '', text)
+        text=re.split(r'#\[cfg\([^\]]*\btest\b[^\]]*\)\]\s*(?:#\[[^\]]*\]\s*)*mod\s+\w+\s*\{', text)[0]
         text='\n'.join(l for l in text.split('\n') if not l.lstrip().startswith('//'))
         me=modpath(crate_src,f)
         deps=set()
         for u in uses(text):
+            was_crate=u.startswith('crate::')
             u=u.replace('crate::','',1) if u.startswith('crate::') else u
             segs=[x for x in u.split('::') if x]
             if not segs: continue
@@ -64,6 +69,11 @@ for crate_src in sys.argv[1:]:
                 base=me[:]
                 while segs and segs[0]=='super': base=base[:-1]; segs=segs[1:]
                 segs=base+segs
+            elif not was_crate:
+                # A bare path (Rust 2018) names a child module of this one (the module
+                # tree's own edge: a parent re-exporting its children is their facade,
+                # not an import) or another crate: neither is an import within the crate.
+                continue
             t=resolve(crate_src, segs)
             if t and os.path.abspath(t)!=os.path.abspath(f): deps.add(os.path.abspath(t))
         graph[os.path.abspath(f)]=deps

@@ -67,6 +67,8 @@ cargo fmt --all -- --check
 # and proc macros' builds (zstd's C sources among them) are then theirs too, and no
 # dev-profile tree is made (0.75 GB, 40 s on 2 cores).
 cargo clippy --release --workspace --all-targets --features sil-host/full -- -D warnings
+# The lean command line builds too (sil-host/Cargo.toml [features]: no board, live, formats, pdf).
+cargo check --release -p sil-host --no-default-features
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src
 # The architecture invariants (docs/architecture.md): what each layer may not build.
 python3 scripts/invariants.py

@@ -27,7 +27,10 @@ use tables::{
     mcap::McapRows,
 };
 #[cfg(feature = "formats")]
-use tables::{arrow::StreamedArrowFile, mcap::McapStream};
+use tables::{
+    arrow::StreamedArrowFile,
+    mcap::{McapStream, McapView},
+};
 
 /// A set of output files written into one folder, committed together.
 #[derive(Debug)]
@@ -208,6 +211,15 @@ pub fn write_csv<T: serde::Serialize>(out: &mut OutputSet, name: &str, rows: &[T
     csv_w.flush().map_err(io_err(&tmp))
 }
 
+/// The view of a table in an MCAP file ([`tables::mcap::McapView`]: channels drawn
+/// from its rows), if any.
+#[cfg(feature = "formats")]
+pub type View<T> = Option<Box<dyn McapView<T>>>;
+
+/// No view: a build without the feature `formats` writes no MCAP file.
+#[cfg(not(feature = "formats"))]
+pub type View<T> = std::marker::PhantomData<T>;
+
 /// A table written row by row as a run produces it ([`OutputSet::create_streamed`]),
 /// as CSV, as an Arrow IPC file or as MCAP (`--format`). CSV and Arrow are
 /// flushed to the operating system at least every `flush_every` of wall time: a
@@ -252,7 +264,7 @@ impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
         stem: &str,
         format: TableFormat,
         flush_every: std::time::Duration,
-        view: crate::table_out::View<T>,
+        view: View<T>,
     ) -> Result<Self, CliError> {
         crate::features::require_format(format)?;
         let (path, file) = out.create_streamed(&format.file(stem))?;

@@ -49,7 +49,7 @@ pub fn run_streamed(
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
     #[cfg(feature = "formats")]
-    let view: crate::table_out::View<PeriodRecord> =
+    let view: crate::output::View<PeriodRecord> =
         Some(Box::new(arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())))));
     #[cfg(not(feature = "formats"))]
     let view = std::marker::PhantomData;

@@ -5,7 +5,10 @@
 //! Arrow and MCAP are the feature `formats`'s; without it they are refused
 //! ([`crate::features::require_format`], exit 2).
 
-use crate::{error::CliError, output::OutputSet};
+use crate::{
+    error::CliError,
+    output::{OutputSet, View},
+};
 pub use tables::TableFormat;
 use tables::{
     ColumnRows,
@@ -15,7 +18,7 @@ use tables::{
 #[cfg(feature = "formats")]
 use tables::{
     arrow::{ArrowFile, ArrowThread},
-    mcap::{FILE_CHUNK_BYTES, McapFile, McapTable, McapView},
+    mcap::{FILE_CHUNK_BYTES, McapFile, McapTable},
 };
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
@@ -83,23 +86,9 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
     }
 }
 
-/// The view of a table in an MCAP file ([`tables::mcap::McapView`]: channels drawn
-/// from its rows), if any.
-#[cfg(feature = "formats")]
-pub type View<T> = Option<Box<dyn McapView<T>>>;
-
-/// No view: a build without the feature `formats` writes no MCAP file.
-#[cfg(not(feature = "formats"))]
-pub type View<T> = std::marker::PhantomData<T>;
-
 /// The views of two tables in an MCAP file (the arm's frames and scene, the
-/// events' log: `arm_view`), one per table, each optional.
-#[cfg(feature = "formats")]
-pub type Views<A, B> = (Option<Box<dyn McapView<A>>>, Option<Box<dyn McapView<B>>>);
-
-/// No views: a build without the feature `formats` writes no MCAP file.
-#[cfg(not(feature = "formats"))]
-pub type Views<A, B> = std::marker::PhantomData<(A, B)>;
+/// events' log: `arm_view`), one per table, each optional ([`View`]).
+pub type Views<A, B> = (View<A>, View<B>);
 
 /// Two tables of a command (`simulate`'s `trace` of rows `A` and `events` of
 /// rows `B`): two files (`trace.csv` and `events.csv`, or `.arrow`), or one MCAP

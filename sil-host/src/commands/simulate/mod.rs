@@ -59,7 +59,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         Some(Box::new(arm_view::EventLog::default()) as Box<dyn tables::mcap::McapView<EventRow>>),
     );
     #[cfg(not(feature = "formats"))]
-    let views = std::marker::PhantomData;
+    let views = (std::marker::PhantomData, std::marker::PhantomData);
     let mut tables = TablesOut::<TraceRow, EventRow>::create(&mut out, ["trace", "events"], args.format, views)?;
     let mut curves = TraceCurves::default();
     let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
