@@ -47,7 +47,7 @@ pub const DECLARED: &[tables::Declaration] = &[
     tables::Declaration::of::<poincare::summary::SectionRow>(),
     tables::Declaration::of::<poincare::summary::ClassRow>(),
     tables::Declaration::of::<zmax::summary::ZmaxRow>(),
-    tables::Declaration::of::<zmax::summary::TrialRow>(),
+    tables::Declaration::of::<zmax::summary::TrialRow<'static>>(),
     tables::Declaration::of::<analyses::sensitivity::Row>(),
     tables::Declaration::of::<modes::summary::CsvRow>(),
 ];

@@ -112,8 +112,8 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
 }
 
 /// The rows of `trials.csv`: every trial of every search, in order.
-pub fn trial_rows(summary: &ZmaxSummary) -> Vec<TrialRow> {
-    summary.trials.iter().map(TrialRow::from).collect()
+pub fn trial_rows(summary: &ZmaxSummary) -> Vec<TrialRow<'_>> {
+    summary.trials.iter().map(TrialRow).collect()
 }
 
 /// The validity counters summed over every trial of every search.

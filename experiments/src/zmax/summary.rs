@@ -186,105 +186,55 @@ impl ZmaxRow {
     }
 }
 
-/// A flat row of `trials.csv`: one trial, with its validity counters.
-#[derive(Debug, Clone, Serialize)]
-pub struct TrialRow {
-    /// `pid` or `hybrid`.
-    pub controller: ControllerKind,
-    /// Initial condition (`d` or `u`).
-    pub x0: PaperX0,
-    /// `ideal` or `sampled`.
-    pub setting: Setting,
-    /// The target `z_t*`, m.
-    pub target_z_t_m: f64,
-    /// Why the trial ended as it did.
-    pub stop: StopReason,
-    /// The tip slid to the target with no lift-off (the `Z_t,sliding` predicate).
-    pub slides_to_target: bool,
-    /// It also settled within the settle tolerance (the tracking predicate).
-    pub tracked: bool,
-    /// Lift-offs seen: every departure of the tip from the belt up to the trial's
-    /// end (`analyses::lift_offs::of`; the trial stops at the first one).
-    pub lift_offs: u64,
-    /// Impacts without collision seen.
-    pub impacts_without_collision: u64,
-    /// Time of the first lift-off, s.
-    pub first_lift_off_s: Option<f64>,
-    /// Largest `|z_t - z_t*|` over the settle window, m (NaN if the run stopped before it).
-    pub settle_error_m: f64,
-    /// Why the run stopped early, if it did.
-    pub failure: Option<String>,
-    /// Simulated time, s.
-    pub simulated_s: f64,
-    /// Wall-clock time, s.
-    pub wall_s: f64,
-    /// Validity: energy-creating impacts.
-    pub energy_gains: u64,
-    /// Validity: Newton-law fallbacks.
-    pub newton_fallbacks: u64,
-    /// Validity: Poisson-law fallbacks.
-    pub poisson_fallbacks: u64,
-    /// Validity: friction-cone violations.
-    pub cone_violations: u64,
-    /// Validity: Zeno stops.
-    pub zeno_stops: u64,
-    /// Validity: integrator failures.
-    pub integrator_failures: u64,
-    /// Validity: energy-ledger violations (docs/plant.md "The energy ledger").
-    pub ledger_violations: u64,
+/// A row of `trials.csv`: one trial ([`Trial`], borrowed) as flat cells, its case's
+/// three fields and its validity counters inline. A view, not a copy: the `csv` crate
+/// writes no nested struct under a header, and [`Validity`]'s JSON leaves zero
+/// counters out where a table needs every column. Its columns, each with its kind
+/// and its cell, are declared once ([`trial_columns!`]).
+pub struct TrialRow<'a>(pub &'a Trial);
+
+/// Declares `trials.csv`'s columns ([`tables::Declared`]: the CSV reader's types, the
+/// Arrow schema) and writes each row's cells in the same order ([`Serialize`]), from
+/// one list of `name: kind = |trial| cell`.
+macro_rules! trial_columns {
+    ($($name:ident : $kind:ident = |$t:ident| $cell:expr),+ $(,)?) => {
+        tables::declare!(TrialRow<'_> { $($name : $kind),+ });
+        impl Serialize for TrialRow<'_> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                use serde::ser::SerializeStruct;
+                let mut row = s.serialize_struct("TrialRow", <Self as tables::Declared>::NAMES.len())?;
+                $({
+                    let $t: &Trial = self.0;
+                    row.serialize_field(stringify!($name), &$cell)?;
+                })+
+                row.end()
+            }
+        }
+    };
 }
 
-// `trials.csv`: the columns serde writes, declared (CSV reader, Arrow schema).
-tables::declare!(TrialRow {
-    controller: str,
-    x0: str,
-    setting: str,
-    target_z_t_m: f64,
-    stop: str,
-    slides_to_target: bool,
-    tracked: bool,
-    lift_offs: int,
-    impacts_without_collision: int,
-    first_lift_off_s: f64,
-    settle_error_m: f64,
-    failure: str,
-    simulated_s: f64,
-    wall_s: f64,
-    energy_gains: int,
-    newton_fallbacks: int,
-    poisson_fallbacks: int,
-    cone_violations: int,
-    zeno_stops: int,
-    integrator_failures: int,
-    ledger_violations: int,
-});
-
-impl From<&Trial> for TrialRow {
-    fn from(t: &Trial) -> Self {
-        Self {
-            controller: t.combination.controller,
-            x0: t.combination.x0,
-            setting: t.combination.setting,
-            target_z_t_m: t.target_z_t,
-            stop: t.stop,
-            slides_to_target: t.slides_to_target,
-            tracked: t.tracked,
-            lift_offs: t.lift_offs,
-            impacts_without_collision: t.impacts_without_collision,
-            first_lift_off_s: t.first_lift_off_s,
-            settle_error_m: t.settle_error_m,
-            failure: t.failure.clone(),
-            simulated_s: t.simulated_s,
-            wall_s: t.wall_s,
-            energy_gains: t.validity.energy_gains,
-            newton_fallbacks: t.validity.newton_fallbacks,
-            poisson_fallbacks: t.validity.poisson_fallbacks,
-            cone_violations: t.validity.cone_violations,
-            zeno_stops: t.validity.zeno_stops,
-            integrator_failures: t.validity.integrator_failures,
-            ledger_violations: t.validity.ledger_violations,
-        }
-    }
+trial_columns! {
+    controller: str = |t| t.combination.controller,
+    x0: str = |t| t.combination.x0,
+    setting: str = |t| t.combination.setting,
+    target_z_t_m: f64 = |t| t.target_z_t,
+    stop: str = |t| t.stop,
+    slides_to_target: bool = |t| t.slides_to_target,
+    tracked: bool = |t| t.tracked,
+    lift_offs: int = |t| t.lift_offs,
+    impacts_without_collision: int = |t| t.impacts_without_collision,
+    first_lift_off_s: f64 = |t| t.first_lift_off_s,
+    settle_error_m: f64 = |t| t.settle_error_m,
+    failure: str = |t| t.failure,
+    simulated_s: f64 = |t| t.simulated_s,
+    wall_s: f64 = |t| t.wall_s,
+    energy_gains: int = |t| t.validity.energy_gains,
+    newton_fallbacks: int = |t| t.validity.newton_fallbacks,
+    poisson_fallbacks: int = |t| t.validity.poisson_fallbacks,
+    cone_violations: int = |t| t.validity.cone_violations,
+    zeno_stops: int = |t| t.validity.zeno_stops,
+    integrator_failures: int = |t| t.validity.integrator_failures,
+    ledger_violations: int = |t| t.validity.ledger_violations,
 }
 
 /// A limit for tables: `< lo` when the lower end fails, `>= hi` when the upper end
