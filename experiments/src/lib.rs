@@ -45,7 +45,7 @@ pub const DECLARED: &[tables::Declaration] = &[
     tables::Declaration::of::<rig::record::PeriodRecord>(),
     tables::Declaration::of::<analyses::sweep::run::RunRow>(),
     tables::Declaration::of::<poincare::summary::SectionRow>(),
-    tables::Declaration::of::<poincare::summary::ClassRow>(),
+    tables::Declaration::of::<poincare::summary::ClassRow<'static>>(),
     tables::Declaration::of::<zmax::summary::ZmaxRow>(),
     tables::Declaration::of::<zmax::summary::TrialRow<'static>>(),
     tables::Declaration::of::<analyses::sensitivity::Row>(),

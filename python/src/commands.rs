@@ -122,7 +122,7 @@ pub fn poincare<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
         cmd::poincare::analyse_grid(&pool, &cfg, &grid, &c.stop, &|| c.tick())
     })?;
     let section = cmd::poincare::section_rows(&results);
-    let classes: Vec<ClassRow> = results.iter().map(ClassRow::from).collect();
+    let classes: Vec<ClassRow> = results.iter().map(ClassRow).collect();
     let classes_json = to_py(py, &results)?;
     let summary = cmd::poincare::summary(&args, (cfg, &grid, ic), &results, threads, wall_s, Vec::new());
     let failure = cmd::poincare::failure(&summary, &results);

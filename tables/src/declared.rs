@@ -71,6 +71,31 @@ impl Declaration {
     }
 }
 
+/// Declares a table whose row is a view of a library type: `$view` (a tuple struct
+/// holding `&$of`) gets its columns ([`crate::Declared`]) and writes its cells in
+/// the same order (`serde::Serialize`, the path the `csv` crate and
+/// `Table::of_rows` take), each column once as `name: kind = |x| cell` with `x` the
+/// viewed value. For a row whose cells sit in nested values (a case's fields, the
+/// validity counters) that a flat table lists inline: the `csv` crate writes no
+/// nested struct under a header, so the row would otherwise restate the type.
+#[macro_export]
+macro_rules! declare_view {
+    ($view:ident of $of:ty { $($name:ident : $kind:ident = |$x:ident| $cell:expr),+ $(,)? }) => {
+        $crate::declare!($view<'_> { $($name : $kind),+ });
+        impl $crate::__serde::Serialize for $view<'_> {
+            fn serialize<S: $crate::__serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                use $crate::__serde::ser::SerializeStruct;
+                let mut row = s.serialize_struct(stringify!($view), <Self as $crate::Declared>::NAMES.len())?;
+                $({
+                    let $x: &$of = self.0;
+                    row.serialize_field(stringify!($name), &$cell)?;
+                })+
+                row.end()
+            }
+        }
+    };
+}
+
 /// Implements [`Declared`] for a struct from its fields, each with its kind:
 /// `f64`, `str`, `bool`, `int` (see [`Kind`]; an `Option` field is `f64` for a
 /// number, `str` for text). For the row types written through serde (`sweep.csv`,

@@ -35,6 +35,9 @@ pub mod rows;
 pub mod writer;
 
 pub use error::Error;
+/// serde, for [`declare_view!`]'s expansion in the crates that use it.
+#[doc(hidden)]
+pub use serde as __serde;
 use serde::Serialize;
 
 pub use declared::{Declaration, Declared, Kind};

@@ -46,126 +46,40 @@ tables::declare!(SectionRow {
     mode: str,
 });
 
-/// One row of `classes.csv`: a belt speed classified, with its validity counters.
-#[derive(Debug, Clone, Serialize)]
-pub struct ClassRow {
-    /// Belt speed, m/s.
-    pub v_belt: f64,
-    /// `equilibrium`, `settling`, `periodic`, `chaotic`, `aperiodic`, `failed` or `invalid`.
-    pub class: &'static str,
-    /// Period in crossings, when periodic.
-    pub period: Option<usize>,
-    /// Section crossings in the record window.
-    pub n_crossings: usize,
-    /// Distinct section points (greedy clustering at the tolerance).
-    pub distinct_points: usize,
-    /// Largest Lyapunov exponent of the section map, per crossing.
-    pub lyapunov_per_crossing: Option<f64>,
-    /// The same per second, 1/s.
-    pub lyapunov_per_s: Option<f64>,
-    /// Its standard error, per crossing.
-    pub lyapunov_std_error: Option<f64>,
-    /// Crossings averaged in the estimate.
-    pub lyapunov_iterations: Option<usize>,
-    /// Renormalisations whose separation collapsed (floored).
-    pub lyapunov_collapsed: Option<usize>,
-    /// Contact mode at the end of the record.
-    pub final_mode: &'static str,
-    /// `theta1` at the end of the record, rad.
-    pub final_theta1: f64,
-    /// Lift-offs in the record window: every departure of the tip from the belt,
-    /// bounces included ([`analyses::lift_offs::of`]).
-    pub lift_offs: u64,
-    /// Touchdowns in the record window.
-    pub touchdowns: u64,
-    /// The simulation's error (empty when none).
-    pub error: String,
-    /// Wall-clock time of this speed, s.
-    pub wall_s: f64,
-    /// Validity: energy-creating impacts.
-    pub energy_gains: u64,
-    /// Validity: Newton-law fallbacks.
-    pub newton_fallbacks: u64,
-    /// Validity: Poisson-law fallbacks.
-    pub poisson_fallbacks: u64,
-    /// Validity: friction-cone violations.
-    pub cone_violations: u64,
-    /// Validity: Zeno stops.
-    pub zeno_stops: u64,
-    /// Validity: integrator failures.
-    pub integrator_failures: u64,
-    /// Validity: energy-ledger violations (docs/plant.md "The energy ledger").
-    pub ledger_violations: u64,
-    /// The energy the moving belt put in, J.
-    pub belt_j: f64,
-    /// The contact's work in the belt's frame (dissipated), J.
-    pub slip_j: f64,
-    /// What the energy ledger leaves unexplained, J.
-    pub ledger_residual_j: f64,
-}
+/// One row of `classes.csv`: a belt speed classified ([`PointResult`], borrowed), its
+/// Lyapunov estimate, validity counters and ledger inline; an optional count is a
+/// float (NaN when empty). Its columns, each with its kind and its cell, are declared
+/// once ([`tables::declare_view!`]).
+pub struct ClassRow<'a>(pub &'a PointResult);
 
-// `classes.csv`: the columns serde writes, declared; an optional count is a float (NaN when empty).
-tables::declare!(ClassRow {
-    v_belt: f64,
-    class: str,
-    period: f64,
-    n_crossings: int,
-    distinct_points: int,
-    lyapunov_per_crossing: f64,
-    lyapunov_per_s: f64,
-    lyapunov_std_error: f64,
-    lyapunov_iterations: f64,
-    lyapunov_collapsed: f64,
-    final_mode: str,
-    final_theta1: f64,
-    lift_offs: int,
-    touchdowns: int,
-    error: str,
-    wall_s: f64,
-    energy_gains: int,
-    newton_fallbacks: int,
-    poisson_fallbacks: int,
-    cone_violations: int,
-    zeno_stops: int,
-    integrator_failures: int,
-    ledger_violations: int,
-    belt_j: f64,
-    slip_j: f64,
-    ledger_residual_j: f64,
+tables::declare_view!(ClassRow of PointResult {
+    v_belt: f64 = |r| r.v_belt,
+    class: str = |r| r.class.name(),
+    period: f64 = |r| r.period,
+    n_crossings: int = |r| r.n_crossings,
+    distinct_points: int = |r| r.distinct_points,
+    lyapunov_per_crossing: f64 = |r| r.lyapunov.map(|l| l.per_iteration),
+    lyapunov_per_s: f64 = |r| r.lyapunov.map(|l| l.per_second),
+    lyapunov_std_error: f64 = |r| r.lyapunov.map(|l| l.std_error),
+    lyapunov_iterations: f64 = |r| r.lyapunov.map(|l| l.iterations),
+    lyapunov_collapsed: f64 = |r| r.lyapunov.map(|l| l.collapsed),
+    final_mode: str = |r| r.final_mode,
+    final_theta1: f64 = |r| r.final_theta1,
+    lift_offs: int = |r| r.lift_offs,
+    touchdowns: int = |r| r.touchdowns,
+    error: str = |r| r.error.as_deref().unwrap_or_default(),
+    wall_s: f64 = |r| r.wall_s,
+    energy_gains: int = |r| r.validity.energy_gains,
+    newton_fallbacks: int = |r| r.validity.newton_fallbacks,
+    poisson_fallbacks: int = |r| r.validity.poisson_fallbacks,
+    cone_violations: int = |r| r.validity.cone_violations,
+    zeno_stops: int = |r| r.validity.zeno_stops,
+    integrator_failures: int = |r| r.validity.integrator_failures,
+    ledger_violations: int = |r| r.validity.ledger_violations,
+    belt_j: f64 = |r| r.ledger.belt_j,
+    slip_j: f64 = |r| r.ledger.slip_j,
+    ledger_residual_j: f64 = |r| r.ledger.residual_j,
 });
-
-impl From<&PointResult> for ClassRow {
-    fn from(r: &PointResult) -> Self {
-        Self {
-            v_belt: r.v_belt,
-            class: r.class.name(),
-            period: r.period,
-            n_crossings: r.n_crossings,
-            distinct_points: r.distinct_points,
-            lyapunov_per_crossing: r.lyapunov.map(|l| l.per_iteration),
-            lyapunov_per_s: r.lyapunov.map(|l| l.per_second),
-            lyapunov_std_error: r.lyapunov.map(|l| l.std_error),
-            lyapunov_iterations: r.lyapunov.map(|l| l.iterations),
-            lyapunov_collapsed: r.lyapunov.map(|l| l.collapsed),
-            final_mode: r.final_mode,
-            final_theta1: r.final_theta1,
-            lift_offs: r.lift_offs,
-            touchdowns: r.touchdowns,
-            error: r.error.clone().unwrap_or_default(),
-            wall_s: r.wall_s,
-            energy_gains: r.validity.energy_gains,
-            newton_fallbacks: r.validity.newton_fallbacks,
-            poisson_fallbacks: r.validity.poisson_fallbacks,
-            cone_violations: r.validity.cone_violations,
-            zeno_stops: r.validity.zeno_stops,
-            integrator_failures: r.validity.integrator_failures,
-            ledger_violations: r.validity.ledger_violations,
-            belt_j: r.ledger.belt_j,
-            slip_j: r.ledger.slip_j,
-            ledger_residual_j: r.ledger.residual_j,
-        }
-    }
-}
 
 /// Count of grid points per class.
 #[derive(Debug, Clone, Default, Serialize)]

@@ -190,30 +190,10 @@ impl ZmaxRow {
 /// three fields and its validity counters inline. A view, not a copy: the `csv` crate
 /// writes no nested struct under a header, and [`Validity`]'s JSON leaves zero
 /// counters out where a table needs every column. Its columns, each with its kind
-/// and its cell, are declared once ([`trial_columns!`]).
+/// and its cell, are declared once ([`tables::declare_view!`]).
 pub struct TrialRow<'a>(pub &'a Trial);
 
-/// Declares `trials.csv`'s columns ([`tables::Declared`]: the CSV reader's types, the
-/// Arrow schema) and writes each row's cells in the same order ([`Serialize`]), from
-/// one list of `name: kind = |trial| cell`.
-macro_rules! trial_columns {
-    ($($name:ident : $kind:ident = |$t:ident| $cell:expr),+ $(,)?) => {
-        tables::declare!(TrialRow<'_> { $($name : $kind),+ });
-        impl Serialize for TrialRow<'_> {
-            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-                use serde::ser::SerializeStruct;
-                let mut row = s.serialize_struct("TrialRow", <Self as tables::Declared>::NAMES.len())?;
-                $({
-                    let $t: &Trial = self.0;
-                    row.serialize_field(stringify!($name), &$cell)?;
-                })+
-                row.end()
-            }
-        }
-    };
-}
-
-trial_columns! {
+tables::declare_view!(TrialRow of Trial {
     controller: str = |t| t.combination.controller,
     x0: str = |t| t.combination.x0,
     setting: str = |t| t.combination.setting,
@@ -235,7 +215,7 @@ trial_columns! {
     zeno_stops: int = |t| t.validity.zeno_stops,
     integrator_failures: int = |t| t.validity.integrator_failures,
     ledger_violations: int = |t| t.validity.ledger_violations,
-}
+});
 
 /// A limit for tables: `< lo` when the lower end fails, `>= hi` when the upper end
 /// passes, else the value, m to 4 decimals.

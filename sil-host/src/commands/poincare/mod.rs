@@ -53,7 +53,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
 
     let section = section_rows(&results);
     write_csv(&mut out, "section.csv", &section)?;
-    let rows: Vec<ClassRow> = results.iter().map(ClassRow::from).collect();
+    let rows: Vec<ClassRow> = results.iter().map(ClassRow).collect();
     write_csv(&mut out, "classes.csv", &rows)?;
     let dir = out.dir().to_path_buf();
     let json_err = |name: &str| {
