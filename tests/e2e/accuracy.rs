@@ -15,7 +15,7 @@
 //! tolerance alone takes the very same steps, and would measure the run against
 //! itself. The reference is recomputed by the same binary.
 //!
-//! `ACCURACY=record cargo test --release -p sil-host --test e2e -- accuracy::` records the
+//! `ACCURACY=record cargo test --release -p sil-host --features full --test e2e -- accuracy::` records the
 //! contract again: only with a change that is meant to move it, said in the commit.
 
 use std::{collections::BTreeMap, path::Path, process::Command};

@@ -185,7 +185,7 @@ fn a_closed_or_full_standard_output_ends_every_command_without_a_panic() {
 /// [`a_closed_or_full_standard_output_ends_every_command_without_a_panic`] for
 /// the two commands that take minutes (`sensitivity --size quick` about 3 min,
 /// `report` 2 to 3 min, less when it resumes): a closed pipe as JSON, a full
-/// device as text. `cargo test --release -p sil-host --test binary -- --ignored`.
+/// device as text. `cargo test --release -p sil-host --features full --test binary -- --ignored`.
 #[test]
 #[ignore = "takes about 10 minutes"]
 fn a_closed_or_full_standard_output_ends_the_long_commands_without_a_panic() {

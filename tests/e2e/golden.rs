@@ -3,7 +3,7 @@
 //! path) to the ones recorded in `tests/golden/digests.txt`. It guards the
 //! host-side redesign (a refactor): every step keeps these digests.
 //!
-//! `GOLDEN=update cargo test --release -p sil-host --test e2e -- golden::` records them again
+//! `GOLDEN=update cargo test --release -p sil-host --features full --test e2e -- golden::` records them again
 //! (only when an output is meant to change; say which and why in the commit).
 //! On a mismatch the outputs are kept in `target/golden-actual/` for a diff
 //! against the files of the previous binary.
