@@ -30,8 +30,14 @@ pub fn require(on: bool, feature: &str, what: &str) -> Result<(), CliError> {
 pub fn require_format(format: tables::TableFormat) -> Result<(), CliError> {
     match format {
         tables::TableFormat::Csv => Ok(()),
-        other => require(cfg!(feature = "formats"), "formats", &format!("--format {}", other.extension())),
+        _ if cfg!(feature = "formats") => Ok(()),
+        other => Err(format_missing(other)),
     }
+}
+
+/// The error of `--format` `format` (Arrow or MCAP) in a build without `formats`.
+pub fn format_missing(format: tables::TableFormat) -> CliError {
+    missing("formats", &format!("--format {}", format.extension()))
 }
 
 /// Says once per process, on standard error, that figures are written as SVG

@@ -277,7 +277,7 @@ impl<T: CsvRow + McapRows + Copy + 'static> StreamedTable<T> {
             #[cfg(feature = "formats")]
             TableFormat::Mcap => StreamedWriter::Mcap(Box::new(McapStream::with_view(path, file, view)?)),
             #[cfg(not(feature = "formats"))]
-            TableFormat::Arrow | TableFormat::Mcap => unreachable!("refused by require_format"),
+            other @ (TableFormat::Arrow | TableFormat::Mcap) => return Err(crate::features::format_missing(other)),
         };
         Ok(Self { writer, flush_every, last_flush: std::time::Instant::now(), error: None })
     }

@@ -46,7 +46,7 @@ impl<T: CsvRow + ColumnRows + Send + 'static> TableOut<T> {
         Ok(match format {
             TableFormat::Csv => Self::Csv(CsvThread::spawn(out.create_csv(&name, T::HEADER)?)?),
             #[cfg(not(feature = "formats"))]
-            TableFormat::Arrow => unreachable!("refused by require_format"),
+            TableFormat::Arrow => return Err(crate::features::format_missing(format)),
             #[cfg(feature = "formats")]
             TableFormat::Arrow => {
                 let (path, file) = out.create_unbuffered(&name)?;
