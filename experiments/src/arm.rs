@@ -40,15 +40,14 @@ pub fn arm_params(
     Ok(params)
 }
 
-/// Parses `"MIN,MAX"` into a range, naming the flag in the error.
+/// The range `MIN,MAX` of a setting (`--theta1-deg`, `--bracket`), naming the
+/// flag in the error.
 ///
 /// # Errors
 /// [`crate::Error`] (bad input, exit 2) unless it is two finite numbers, the first smaller.
-pub fn parse_range(flag: &str, s: &str) -> Result<(f64, f64), crate::Error> {
-    let bad = || crate::Error::bad_input(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"));
-    let mut it = s.split(',').map(|x| x.trim().parse::<f64>());
-    match (it.next(), it.next(), it.next()) {
-        (Some(Ok(a)), Some(Ok(b)), None) if a.is_finite() && b.is_finite() && a < b => Ok((a, b)),
-        _ => Err(bad()),
+pub fn parse_range(flag: &str, s: &crate::settings::NumberList) -> Result<(f64, f64), crate::Error> {
+    match s.0.as_slice() {
+        [a, b] if a.is_finite() && b.is_finite() && a < b => Ok((*a, *b)),
+        _ => Err(crate::Error::bad_input(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"))),
     }
 }

@@ -1,20 +1,17 @@
-"""Keyword arguments into the tokens of ``sil-host``'s command line.
+"""Keyword arguments into the settings of ``sil-host``'s experiments.
 
-Each public function's keyword ``name`` is the CLI's ``--name`` (``_`` for
-``-``): ``v_belt=-0.4`` is ``--v-belt=-0.4``. The tokens are parsed by the CLI's
-own parser in the compiled module, so the values, defaults and error messages
-are the CLI's. Values:
+Each public function's keyword ``name`` is a field of its experiment's settings
+(the CLI's ``--name``, ``_`` for ``-``). The arguments given are checked against
+the annotations here (:func:`check_types`), then passed as a dict to the
+compiled module, which lays them over the settings' defaults (clap's, the CLI's)
+and builds the typed settings (``python/src/cli.rs``): the values, defaults and
+error messages are the CLI's, and no command-line text is made. Values are
+passed as they are (numbers exactly, sequences as lists, paths as paths); ``set``
+as ``KEY=VALUE`` items (:func:`overrides`).
 
-- ``True`` gives the flag (``strict=True``: ``--strict``), ``False`` nothing;
-- ``None`` gives nothing (the CLI's default, or its absence);
-- numbers are written exactly (``repr`` of a float: the shortest text that
-  reads back to the same double);
-- sequences are comma-joined (``mu=(0.1, 1.0)``: ``--mu=0.1,1.0``;
-  ``ics=["a", "d"]``: ``--ics=a,d``);
-- paths and strings are passed as they are.
-
-An argument equal to its default is left out, so that, as on the command
-line, an option not given never conflicts with another (``x0`` and ``x0_deg``).
+An argument that is ``None`` or equal to its default is left out, so that, as on
+the command line, an option not given never conflicts with another (``x0`` and
+``x0_deg``).
 """
 
 from __future__ import annotations
@@ -35,7 +32,8 @@ Overrides = Union[None, str, Mapping[str, Any], Sequence[str]]
 
 
 def number(v: Any) -> str:
-    """A number as exact text."""
+    """A number as exact text (``repr`` of a float: the shortest text that reads
+    back to the same double), for a TOML value of ``set``."""
     if isinstance(v, bool):
         raise TypeError(f"expected a number, got {v!r}")
     if isinstance(v, numbers.Integral):
@@ -43,21 +41,6 @@ def number(v: Any) -> str:
     if isinstance(v, numbers.Real):
         return repr(float(v))
     raise TypeError(f"expected a number, got {type(v).__name__} {v!r}")
-
-
-def value(v: Any) -> str:
-    """A value as the text of ``--flag=TEXT``."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (numbers.Real,)):
-        return number(v)
-    if isinstance(v, os.PathLike):
-        return str(os.fspath(v))
-    if isinstance(v, str):
-        return v
-    if hasattr(v, "__iter__"):
-        return ",".join(value(x) for x in v)
-    raise TypeError(f"cannot pass {type(v).__name__} {v!r} as an option")
 
 
 def toml_value(v: Any) -> str:
@@ -105,27 +88,24 @@ def _same(a: Any, b: Any) -> bool:
     return False
 
 
-def tokens(fn: Callable[..., Any], given: Mapping[str, Any], skip: Sequence[str] = ()) -> List[str]:
-    """The tokens of the arguments ``given`` to ``fn`` (its locals), less
-    ``skip`` and ``progress``, less those equal to their defaults."""
+def given(fn: Callable[..., Any], args: Mapping[str, Any], skip: Sequence[str] = ()) -> Dict[str, Any]:
+    """The arguments ``args`` to ``fn`` (its locals) the call gives: less ``skip``
+    and ``progress``, less those ``None`` or equal to their defaults; ``set`` as
+    its ``KEY=VALUE`` items, a path as its text."""
     defaults = {
         name: p.default for name, p in inspect.signature(fn).parameters.items() if p.default is not inspect.Parameter.empty
     }
-    out: List[str] = []
-    for name, v in given.items():
+    out: Dict[str, Any] = {}
+    for name, v in args.items():
         if name in skip or name == "progress":
             continue
         if name == "set":
-            out += [f"--set={item}" for item in overrides(v)]
+            if overrides(v):
+                out["set"] = overrides(v)
             continue
         if v is None or (name in defaults and _same(v, defaults[name])):
             continue
-        flag = "--" + name.replace("_", "-")
-        if isinstance(v, bool):
-            if v:
-                out.append(flag)
-            continue
-        out.append(f"{flag}={value(v)}")
+        out[name] = os.fspath(v) if isinstance(v, os.PathLike) else v
     return out
 
 
@@ -285,19 +265,19 @@ def pythonic(message: str) -> str:
     return _FLAG.sub(lambda m: m.group(1).replace("-", "_"), message)
 
 
-def call(name: str, fn: Callable[..., Any], given: Dict[str, Any], progress: Any = None, scenario: Any = None) -> Any:
-    """Calls the compiled ``name`` with the tokens of ``given`` (and the
-    scenario, as ``--scenario``)."""
+def call(name: str, fn: Callable[..., Any], args: Dict[str, Any], progress: Any = None, scenario: Any = None) -> Any:
+    """Calls the compiled ``name`` with the arguments ``args`` gives (:func:`given`)
+    and the scenario's path."""
     native = getattr(_painleve, name)
-    check_types(fn, given)
+    check_types(fn, args)
     with scenario_file(scenario) as path:
-        toks = tokens(fn, given, skip=("scenario",))
+        settings = given(fn, args, skip=("scenario",))
         if path is not None:
-            toks.insert(0, f"--scenario={path}")
+            settings["scenario"] = path
         try:
             if name in ("admissible", "modes"):
-                return native(toks)
-            return native(toks, _progress.resolve(progress))
+                return native(settings)
+            return native(settings, _progress.resolve(progress))
         except _painleve.PainleveError as e:
             # The message in the call's terms (parameters, not flags); the
             # attributes (exit_code, result) kept.

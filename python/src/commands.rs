@@ -1,5 +1,6 @@
 //! The package's functions, one per experiment (and `sil-host` command): each
-//! parses its tokens into the experiment's settings ([`experiments::settings`]),
+//! builds the experiment's settings ([`experiments::settings`]) from the keyword
+//! arguments given (`crate::cli::settings`),
 //! checks them with the experiment's own check (`prepare`/`plan`/`validated`),
 //! runs the experiment's loop ([`experiments`]: one copy, the command line's too)
 //! on a worker thread without the GIL where it is long, and builds the summary
@@ -12,7 +13,7 @@ use pyo3::{prelude::*, types::PyDict};
 use experiments::{self as cmd, Done, Error as CliError, settings::*};
 use rig::FirmwareLink;
 
-use crate::cli::{cli_error, parse};
+use crate::cli::{cli_error, settings};
 use crate::convert::{Outcome, columns_to_py, points_to_py, rows_to_py, to_py};
 use crate::work::{self, Control};
 
@@ -45,10 +46,10 @@ fn pool(py: Python<'_>, threads: usize) -> PyResult<rayon::ThreadPool> {
 
 /// `painleve.simulate`: `sil-host simulate`.
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn simulate<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (given, progress=None))]
+pub fn simulate<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use cmd::simulate::{OpenLoop, summary::TraceRow};
-    let args: SimulateArgs = parse(py, "simulate", &tokens)?;
+    let args: SimulateArgs = settings(py, "simulate", &given)?;
     let prepared = cmd::simulate::prepare(&args).map_err(|e| cli_error(py, &e))?;
     let (params, sim, initial_condition) = (prepared.params, prepared.sim, prepared.initial_condition.clone());
     let (trace, events, failure, wall_s, plant) = work::run(py, progress.as_ref(), "simulate", "samples", |c: &Control| {
@@ -78,9 +79,9 @@ pub fn simulate<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
 
 /// `painleve.admissible`: `sil-host admissible`.
 #[pyfunction]
-#[pyo3(signature = (tokens))]
-pub fn admissible<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
-    let args: AdmissibleArgs = parse(py, "admissible", &tokens)?;
+#[pyo3(signature = (given))]
+pub fn admissible<'py>(py: Python<'py>, given: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    let args: AdmissibleArgs = settings(py, "admissible", &given)?;
     let report = py.detach(|| cmd::admissible::compute(&args)).map_err(|e| cli_error(py, &e))?;
     let document = cmd::admissible::document(&report, &[]).map_err(|e| cli_error(py, &e))?;
     let document = py.import("json")?.call_method1("loads", (document,))?;
@@ -89,9 +90,9 @@ pub fn admissible<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'
 
 /// `painleve.modes`: `sil-host modes`.
 #[pyfunction]
-#[pyo3(signature = (tokens))]
-pub fn modes<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
-    let args: ModesArgs = parse(py, "modes", &tokens)?;
+#[pyo3(signature = (given))]
+pub fn modes<'py>(py: Python<'py>, given: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    let args: ModesArgs = settings(py, "modes", &given)?;
     let map = py.detach(|| cmd::modes::compute(&args)).map_err(|e| cli_error(py, &e))?;
     let rows: Vec<_> = cmd::modes::summary::csv_rows(&map).collect();
     let curves = |lines: &[Vec<(f64, f64)>]| -> PyResult<Bound<'py, PyAny>> {
@@ -108,10 +109,10 @@ pub fn modes<'py>(py: Python<'py>, tokens: Vec<String>) -> PyResult<Bound<'py, P
 
 /// `painleve.poincare`: `sil-host poincare`.
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn poincare<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (given, progress=None))]
+pub fn poincare<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use cmd::poincare::summary::ClassRow;
-    let args: PoincareArgs = parse(py, "poincare", &tokens)?;
+    let args: PoincareArgs = settings(py, "poincare", &given)?;
     let (cfg, grid, ic) = cmd::poincare::validated(&args).map_err(|e| cli_error(py, &e))?;
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = pool(py, threads)?;
@@ -138,14 +139,14 @@ pub fn poincare<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Boun
 
 /// `painleve.sweep`: `sil-host sweep`, in memory (no folder, no journal).
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn sweep<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (given, progress=None))]
+pub fn sweep<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use analyses::sweep::run::RunRow;
     use cmd::sweep::{
         store::{Manifest, missing},
         summary::summary_of,
     };
-    let args: SweepArgs = parse(py, "sweep", &tokens)?;
+    let args: SweepArgs = settings(py, "sweep", &given)?;
     let (spec, shard, threads) = cmd::sweep::plan(&args).map_err(|e| cli_error(py, &e))?;
     if let Some(s) = &spec.scenario {
         warn(py, cmd::scenario::board_tables_note(s, "a sweep (the firmware in-process)"))?;
@@ -183,10 +184,10 @@ pub fn sweep<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'
 
 /// `painleve.zmax`: `sil-host zmax`.
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn zmax<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (given, progress=None))]
+pub fn zmax<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use analyses::zmax::max_trials;
-    let args: ZmaxArgs = parse(py, "zmax", &tokens)?;
+    let args: ZmaxArgs = settings(py, "zmax", &given)?;
     let started = Instant::now();
     let plan = cmd::zmax::plan(&args).map_err(|e| cli_error(py, &e))?;
     warn(py, cmd::scenario::board_tables_note(&plan.base, "zmax (the firmware in-process, or the ideal law)"))?;
@@ -241,12 +242,12 @@ impl rig::RunObserver for Observer<'_> {
 /// `painleve.run`: `sil-host run --in-process` (the firmware step linked in,
 /// lockstep): the SIL run of `rig::in_process`, its trace kept in memory.
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (given, progress=None))]
+pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
     use rig::{in_process::InProcessLink, stats::RunStats, summary::RunSummary};
-    let mut tokens = tokens;
-    tokens.insert(0, "--in-process".into());
-    let args: RunArgs = parse(py, "run", &tokens)?;
+    let given = given.copy()?;
+    given.set_item("in_process", true)?;
+    let args: RunArgs = settings(py, "run", &given)?;
     let (setup, link) = cmd::run::prepare(&args).map_err(|e| cli_error(py, &e))?;
     let scenario = &setup.scenario().clone();
     warn(py, cmd::scenario::board_tables_note(scenario, link.without_board()))?;
@@ -277,9 +278,9 @@ pub fn run<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py
 
 /// `painleve.sensitivity`: `sil-host sensitivity`.
 #[pyfunction]
-#[pyo3(signature = (tokens, progress=None))]
-pub fn sensitivity<'py>(py: Python<'py>, tokens: Vec<String>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
-    let args: SensitivityArgs = parse(py, "sensitivity", &tokens)?;
+#[pyo3(signature = (given, progress=None))]
+pub fn sensitivity<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+    let args: SensitivityArgs = settings(py, "sensitivity", &given)?;
     let (base, threads) = cmd::sensitivity::prepare(&args).map_err(|e| cli_error(py, &e))?;
     warn(py, cmd::scenario::board_tables_note(&base, "the sensitivity study (the firmware in-process)"))?;
     let pool = pool(py, threads)?;

@@ -5,8 +5,9 @@
 //! summaries and tables, the ones the command line `sil-host` uses too) over the
 //! plant (`plant`), the SIL rig (`rig`) and the analyses (`analyses`).
 //!
-//! Each function takes the command's tokens (`["--mu=0.6", ...]`, built by the
-//! Python layer from keyword arguments) and an optional progress object, and
+//! Each function takes the keyword arguments given (a dict `{"mu": 0.6, ...}`,
+//! those the Python layer found not `None` nor equal to their defaults; laid
+//! over the settings' defaults by `cli::settings`) and an optional progress object, and
 //! returns a dict (`convert::Outcome`) the Python layer wraps in
 //! `painleve.Result`. See docs/python.md.
 

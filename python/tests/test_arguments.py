@@ -75,3 +75,27 @@ def test_board_keys_are_refused_or_warned_about_without_a_board():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         painleve.run(duration=0.02, progress=False)  # the default scenario: no warning
+
+
+def test_keywords_reach_the_settings_exactly_without_command_line_text():
+    # A double with no short decimal text arrives bit for bit (no text in between).
+    mu = 0.1 + 0.2
+    r = painleve.simulate(mu=mu, duration=0.01, progress=False)
+    assert r.summary["params"]["mu"] == mu and r.summary["params"]["mu"] != 0.3
+    # The compiled functions take the arguments given as a dict, laid over clap's
+    # defaults: an unknown name, a non-finite number and two names in conflict are
+    # refused with the CLI's exit code for bad input, each named.
+    from painleve import _painleve
+
+    for given, words in [
+        ({"bogus": 1}, ["no parameter `bogus`"]),
+        ({"mu": float("nan")}, ["mu", "finite"]),
+        ({"x0": "d", "x0_deg": [32, 0, 18.27, 0]}, ["x0", "cannot be used with", "x0_deg"]),
+        ({"theta1_deg": "5,x"}, ["theta1_deg", "`5,x`"]),
+    ]:
+        call = _painleve.modes if "theta1_deg" in given else _painleve.simulate
+        with pytest.raises(painleve.PainleveError) as e:
+            call(given) if call is _painleve.modes else call(given, None)
+        assert e.value.exit_code == 2
+        for w in words:
+            assert w in str(e.value), str(e.value)

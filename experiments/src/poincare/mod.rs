@@ -45,8 +45,8 @@ fn grid(min: f64, max: f64, step: f64) -> Vec<f64> {
 pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), CliError> {
     let bad = |m: String| Err(CliError::bad_input(m));
     // One speed `V`, or a range `MIN,MAX`.
-    let (v_min, v_max) = match args.v_belt.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() => (v, v),
+    let (v_min, v_max) = match args.v_belt.0.as_slice() {
+        [v] if v.is_finite() => (*v, *v),
         _ => parse_range("v-belt", &args.v_belt)?,
     };
     if !(args.v_step.is_finite() && args.v_step > 0.0) {
@@ -95,7 +95,7 @@ pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, Initi
         ..SimConfig::default()
     };
     sim.validate()?;
-    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_ref())?;
     let x0 = initial::deg_to_state(given_deg);
     // The initial state must be acceptable to the plant (not below the belt, reachable).
     let plant = Plant::new(params, sim, x0, 0.0, [0.0, 0.0])?;

@@ -35,9 +35,11 @@ impl RunLink {
 /// `sil-host run`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct RunArgs {
     /// The scenario.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub scenario: ScenarioArgs,
     /// Link the firmware step directly into this process (no IPC). Same scenario
     /// and seed give the same trace, bit for bit, as the lockstep iceoryx2 run.
@@ -52,6 +54,7 @@ pub struct RunArgs {
     /// the bytes flashed, on the emulated STM32F405 whose SPI1, ADC1, timers and
     /// pins drive the same device models; docs/board.md "The emulated image").
     #[cfg_attr(feature = "clap", arg(long, value_enum, value_name = "LINK", conflicts_with = "in_process"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::option"))]
     pub link: Option<RunLink>,
     /// With --link emulator: the `arm` ELF to run (default
     /// target/thumbv7em-none-eabihf/mcu/arm, built by `cargo build -p
@@ -89,6 +92,7 @@ pub struct RunArgs {
     /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
     /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub format: tables::TableFormat,
     /// Do not write trace.html (the arm animated beside the trace's plots; docs/rig.md
     /// "The animated page"). Gathering it costs about 0.6 s of CPU per million samples
@@ -97,18 +101,22 @@ pub struct RunArgs {
     pub no_page: bool,
     /// The run shown live in Foxglove.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub live: LiveArgs,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host firmware`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct FirmwareArgs {
     /// The rig to serve (the plant's `--rig` or `--attach` name).
     #[cfg_attr(feature = "clap", arg(long, value_name = "NAME"))]
@@ -118,15 +126,18 @@ pub struct FirmwareArgs {
     pub realtime: bool,
     /// The scenario (the firmware's configuration and the faults on its side).
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub scenario: ScenarioArgs,
 }
 
 /// `sil-host pil`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct PilArgs {
     /// The scenario (as for `run`).
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub scenario: ScenarioArgs,
     /// QEMU mode: the PIL image (ELF); default: `cargo build-pil`'s output,
     /// target/thumbv7em-none-eabihf/qemu/pil.
@@ -141,6 +152,7 @@ pub struct PilArgs {
     /// socket, the board's own driver, one byte per emulator main-loop turn
     /// (about 0.4x real time). The same frames, trace and instruction counts.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = QemuLinkArg::Semihosting, value_name = "LINK", conflicts_with = "serial"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub qemu_link: QemuLinkArg,
     /// Hardware in the loop: the serial device of a board running the PIL image
     /// (e.g. /dev/ttyUSB0), instead of spawning QEMU. It must exist.
@@ -167,6 +179,7 @@ pub struct PilArgs {
     /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
     /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub format: tables::TableFormat,
     /// Do not write trace.html (the arm animated beside the trace's plots; docs/rig.md
     /// "The animated page"). Gathering it costs about 0.6 s of CPU per million samples
@@ -175,12 +188,15 @@ pub struct PilArgs {
     pub no_page: bool,
     /// The run shown live in Foxglove.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub live: LiveArgs,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }
 

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 /// Options shared by every command's output.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct OutputArgs {
     /// Folder for the files the command writes (created if missing).
     #[cfg_attr(feature = "clap", arg(long, default_value = "out", value_name = "DIR"))]
@@ -20,6 +21,7 @@ pub struct OutputArgs {
 /// `pil`, `simulate`; `arm-view::LiveTable`).
 #[derive(Debug, Clone, Copy)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct LiveArgs {
     /// Serve the run live to the Foxglove app over the Foxglove WebSocket
     /// protocol on ADDR (default 127.0.0.1:8765, the app's default; port 0: any
@@ -64,6 +66,7 @@ impl LiveArgs {
 /// `--strict`, on every command that simulates.
 #[derive(Debug, Clone, Copy)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct StrictArgs {
     /// Exit 1 if any result violates the model (an energy-creating impact, a
     /// friction-cone violation, an integrator failure); everything is still written
@@ -75,6 +78,7 @@ pub struct StrictArgs {
 /// The scenario of a run and its command-line overrides.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct ScenarioArgs {
     /// Scenario file (TOML, see scenarios/), `-` for standard input; default: the
     /// embedded default scenario (hybrid from x0d, mu 0.6, v_belt -0.4 m/s, f_n* 10 N,
@@ -83,9 +87,11 @@ pub struct ScenarioArgs {
     pub scenario: Option<PathBuf>,
     /// Override the controller.
     #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::option"))]
     pub controller: Option<firmware::ControllerKind>,
     /// Override the initial condition.
     #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::option"))]
     pub x0: Option<plant::initial::PaperX0>,
     /// Override the tangential target z_t*, m.
     #[cfg_attr(feature = "clap", arg(long))]
@@ -99,6 +105,7 @@ pub struct ScenarioArgs {
     /// Override the impact-without-collision rule (scenario `plant.iwc`):
     /// `restitution` (the tip is thrown off the belt) or `plastic` (left stuck, v_n = 0).
     #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::option"))]
     pub iwc: Option<plant::impact::IwcRule>,
     /// Change one scenario key, e.g. `--set plant.m=0.24 --set controller.pid.kp=[150,0]`
     /// (repeatable). KEY is the scenario file's dotted key path (docs/rig.md), VALUE a
@@ -106,5 +113,6 @@ pub struct ScenarioArgs {
     /// it is read, so a bad key or value is an error naming it (exit 2). A key also
     /// set by a flag here (`--x0` and `plant.x0`, ...) is refused.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
 }

@@ -2,18 +2,21 @@
 //! `admissible`, `modes` and `poincare`.
 
 use super::common::{LiveArgs, OutputArgs, StrictArgs};
+use super::values::NumberList;
 
 /// `sil-host simulate`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct SimulateArgs {
     /// Initial condition: one of the paper's (projected onto the belt).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     /// A tip up to 1 mm inside the belt is projected onto it; deeper is an error.
     #[cfg_attr(feature = "clap", arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true))]
-    pub x0_deg: Option<String>,
+    pub x0_deg: Option<NumberList>,
     /// Friction coefficient mu (>= 0).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6))]
     pub mu: f64,
@@ -22,6 +25,7 @@ pub struct SimulateArgs {
     pub v_belt: f64,
     /// Impact law at touchdown and for impacts without collision.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "newton"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1] (of the velocity for Newton, of the impulse
     /// for Poisson, of the normal work for energetic).
@@ -42,6 +46,7 @@ pub struct SimulateArgs {
     /// (SceneUpdate), /log (Log, the events); log times in ns of simulated time;
     /// docs/rig.md "Outputs", "Foxglove").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "csv"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub format: tables::TableFormat,
     /// Do not write trace.html (the arm animated beside the trace's plots; docs/rig.md
     /// "The animated page"). Gathering it costs about 0.6 s of CPU per million samples
@@ -51,6 +56,7 @@ pub struct SimulateArgs {
     /// The simulation shown live in Foxglove (its samples and events as they are
     /// computed, paced by --live-rate).
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub live: LiveArgs,
     /// Relative tolerance of the integrator.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-9))]
@@ -70,29 +76,35 @@ pub struct SimulateArgs {
     /// at the impact: to compare with one, run with `--iwc plastic` (docs/plant.md
     /// "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
     /// normal force: `leave` (the tip leaves the belt, the flight solution) or
     /// `slide` (it slides on through the indeterminate region). docs/plant.md.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "leave"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host admissible`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct AdmissibleArgs {
     /// Friction coefficient mu (>= 0).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6, allow_hyphen_values = true))]
@@ -102,15 +114,18 @@ pub struct AdmissibleArgs {
     /// the defaults are the paper's. Only these change where p > 0 (m scales p; the rest do not enter it). Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host modes`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct ModesArgs {
     /// Friction coefficient mu (>= 0).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6, allow_hyphen_values = true))]
@@ -120,13 +135,14 @@ pub struct ModesArgs {
     pub v_belt: f64,
     /// Elbow branch for theta2 (the tip is put on the belt on this branch).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "down"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub branch: shared::ElbowBranch,
     /// theta1 range in degrees: MIN,MAX.
     #[cfg_attr(feature = "clap", arg(long, default_value = "-90,90", value_name = "MIN,MAX", allow_hyphen_values = true))]
-    pub theta1_deg: String,
+    pub theta1_deg: NumberList,
     /// theta1_dot range in rad/s: MIN,MAX.
     #[cfg_attr(feature = "clap", arg(long, default_value = "-10,10", value_name = "MIN,MAX", allow_hyphen_values = true))]
-    pub theta1_dot: String,
+    pub theta1_dot: NumberList,
     /// Grid points along each axis.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 400))]
     pub grid: usize,
@@ -138,38 +154,43 @@ pub struct ModesArgs {
     /// and x0d) and is written per point in modes.csv. Default `plus`: the root through
     /// the paper's x0a, which crosses the Painlevé region (paper Fig. 2).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "plus"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub theta2_sign: analyses::modes::Theta2Sign,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }
 
 /// `sil-host poincare`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct PoincareArgs {
     /// Friction coefficient mu (>= 0).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.6))]
     pub mu: f64,
     /// Initial condition: one of the paper's (projected onto the belt).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "a", conflicts_with = "x0_deg"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub x0: plant::initial::PaperX0,
     /// Initial condition in degrees and degrees per second: th1,th1dot,th2,th2dot.
     #[cfg_attr(feature = "clap", arg(long, value_name = "TH1,TH1DOT,TH2,TH2DOT", allow_hyphen_values = true))]
-    pub x0_deg: Option<String>,
+    pub x0_deg: Option<NumberList>,
     /// Belt-speed range, m/s: MIN,MAX (both ends included), or one speed. The default covers
     /// the band where the open loop from x0a keeps bouncing at mu = 0.6 (found
     /// with this command over [-1, -0.1] in steps of 0.02, then 0.002: from about
     /// -0.864 to -0.310 m/s, with steady sliding interleaved between -0.864 and
     /// -0.782), with steady sliding at both ends.
     #[cfg_attr(feature = "clap", arg(long, default_value = "-0.90,-0.30", value_name = "MIN,MAX|V", allow_hyphen_values = true))]
-    pub v_belt: String,
+    pub v_belt: NumberList,
     /// Grid step of v_belt, m/s.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.002))]
     pub v_step: f64,
@@ -207,6 +228,7 @@ pub struct PoincareArgs {
     pub lyap_d0: f64,
     /// Impact law at touchdown and for impacts without collision.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "newton"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub impact_law: plant::impact::ImpactLaw,
     /// Restitution coefficient e_n in [0, 1].
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.2))]
@@ -227,22 +249,27 @@ pub struct PoincareArgs {
     /// at the impact: to compare with one, run with `--iwc plastic` (docs/plant.md
     /// "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "restitution"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub iwc: plant::impact::IwcRule,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
     /// normal force: `leave` (the tip leaves the belt, the flight solution) or
     /// `slide` (it slides on through the indeterminate region). docs/plant.md.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "leave"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub singular: plant::moreau_jean::SingularRule,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Change one of the arm's parameters (paper Table I; SI units, radians), e.g.
     /// `--set plant.m=0.24 --set plant.h=0.35`: KEYS plant.m, plant.l, plant.sigma, plant.k, plant.h, plant.alpha0, plant.g. Repeatable;
     /// the defaults are the paper's. Keys set by a flag of this command
     /// (`plant.mu`: --mu, ...) are refused: a key is set in one place.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }

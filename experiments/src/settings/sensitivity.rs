@@ -7,10 +7,12 @@ use super::common::{OutputArgs, StrictArgs};
 /// `sil-host sensitivity`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct SensitivityArgs {
     /// Size of the study: `quick` (coarse grids, short windows, Z_t,sliding to 4 mm)
     /// or `paper` (experiment 3's grid, 250 s + 50 s, Z_t,sliding to 1 mm).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "quick"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub size: analyses::sensitivity::Size,
     /// Base scenario (the arm's parameters, gains, f_n*, mu, v_belt for Z_t,sliding;
     /// the sampled firmware's settings); default: the embedded default scenario.
@@ -19,14 +21,17 @@ pub struct SensitivityArgs {
     /// Change one key of the base scenario (repeatable; as for `run`). Refused: the
     /// keys the study varies or sets per run.
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Worker threads (default: one per core).
     #[cfg_attr(feature = "clap", arg(long))]
     pub threads: Option<usize>,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }

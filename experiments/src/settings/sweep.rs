@@ -4,20 +4,22 @@
 use std::path::PathBuf;
 
 use super::common::StrictArgs;
+use super::values::NumberList;
 
 /// `sil-host sweep`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct SweepArgs {
     /// Friction coefficients: MIN,MAX (or one value), spaced by --mu-step.
     #[cfg_attr(feature = "clap", arg(long, default_value = "0.1,1", value_name = "MIN,MAX", allow_hyphen_values = true))]
-    pub mu: String,
+    pub mu: NumberList,
     /// Spacing of --mu.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.1))]
     pub mu_step: f64,
     /// Belt speeds, m/s: MIN,MAX (or one value), spaced by --v-belt-step.
     #[cfg_attr(feature = "clap", arg(long, default_value = "-1,-0.1", value_name = "MIN,MAX", allow_hyphen_values = true))]
-    pub v_belt: String,
+    pub v_belt: NumberList,
     /// Spacing of --v-belt, m/s.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.005))]
     pub v_belt_step: f64,
@@ -43,6 +45,7 @@ pub struct SweepArgs {
     /// `hybrid` (experiment 7) or `pid` controller run in-process, sampled as on the
     /// MCU, with the scenario's references (experiment 6's by default).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "none"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub controller: analyses::sweep::SweepController,
     /// Closed loop: the paper's continuous-time controller with exact measurements
     /// instead of the sampled firmware.
@@ -57,6 +60,7 @@ pub struct SweepArgs {
     pub scenario: Option<PathBuf>,
     /// Impact laws, comma-separated (each is a sweep dimension).
     #[cfg_attr(feature = "clap", arg(long, value_enum, value_delimiter = ',', default_value = "newton"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::list"))]
     pub impact_law: Vec<plant::impact::ImpactLaw>,
     /// Restitution coefficients e_n in [0, 1], comma-separated (each is a sweep dimension).
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', default_value = "0.2"))]
@@ -66,11 +70,13 @@ pub struct SweepArgs {
     /// the rule to compare with a Moreau-Jean time-stepper such as Siconos, which
     /// leaves the tip on the belt: docs/plant.md "The impact without collision").
     #[cfg_attr(feature = "clap", arg(long, value_enum, value_delimiter = ',', default_value = "restitution"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::list"))]
     pub iwc: Vec<plant::impact::IwcRule>,
     /// Singular-point rule, where a slide reaches p = 0 and b = 0 with a finite
     /// normal force: `leave` (the tip leaves the belt) or `slide` (it slides on
     /// through the indeterminate region). docs/plant.md "The singular point".
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "leave"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub singular: plant::moreau_jean::SingularRule,
     /// Persistent bouncing is flagged when max theta1_dot over the record window
     /// exceeds this, rad/s. The paper's threshold is 0; an arm at rest shows
@@ -91,6 +97,7 @@ pub struct SweepArgs {
     /// controller.kind, controller.mu_hat, timing.duration_s). Part of the sweep's
     /// identity (sweep.json).
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Compute only shard K of N (0 <= K < N), for a cluster job array; join the
     /// shards' folders with `sil-host merge`. The runs are dealt to the shards so
@@ -107,6 +114,7 @@ pub struct SweepArgs {
     pub threads: Option<usize>,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Folder of the sweep (created if missing; an existing sweep there is resumed).
     #[cfg_attr(feature = "clap", arg(long, default_value = "out/sweep", value_name = "DIR"))]
@@ -119,6 +127,7 @@ pub struct SweepArgs {
 /// `sil-host merge`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct MergeArgs {
     /// The shards' folders.
     #[cfg_attr(feature = "clap", arg(required = true, value_name = "DIR"))]

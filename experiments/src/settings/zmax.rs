@@ -3,16 +3,20 @@
 use std::path::PathBuf;
 
 use super::common::{OutputArgs, StrictArgs};
+use super::values::NumberList;
 
 /// `sil-host zmax`.
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
+#[cfg_attr(feature = "clap", derive(serde::Serialize, serde::Deserialize))]
 pub struct ZmaxArgs {
     /// Controller (ignored with --all).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "hybrid"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub controller: firmware::ControllerKind,
     /// Initial condition (ignored with --all).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "d"))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice"))]
     pub x0: plant::initial::PaperX0,
     /// The paper's ideal controllers (continuous time, exact measurements, no
     /// saturation) instead of the sampled firmware (ignored with --all).
@@ -27,7 +31,7 @@ pub struct ZmaxArgs {
     /// Targets searched, m: LO,HI. Default: from the initial tip position
     /// (z_t* = start) to 1 mm short of the end of the reachable belt.
     #[cfg_attr(feature = "clap", arg(long, value_name = "LO,HI", allow_hyphen_values = true))]
-    pub bracket: Option<String>,
+    pub bracket: Option<NumberList>,
     /// Run length of a trial, s (the move takes the scenario's move_time_s, 2 s).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 10.0))]
     pub duration: f64,
@@ -46,6 +50,7 @@ pub struct ZmaxArgs {
     /// Impact-without-collision rule of the base scenario (`plant.iwc`): `restitution`
     /// or `plastic`; default: the scenario's.
     #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::choice::option"))]
     pub iwc: Option<plant::impact::IwcRule>,
     /// Lift-off criterion, m: 0 counts any departure from the belt (located exactly);
     /// a gap > 0 counts a lift-off only when the tip rises more than this above the
@@ -62,6 +67,7 @@ pub struct ZmaxArgs {
     pub scenario: Option<PathBuf>,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub strict: StrictArgs,
     /// Change one key of the base scenario, e.g. `--set plant.m=0.24
     /// --set controller.hybrid.kp=800 --set controller.hybrid.ki=300` (repeatable;
@@ -70,8 +76,10 @@ pub struct ZmaxArgs {
     /// the paper's per initial condition. Refused: the keys each trial sets
     /// (controller.kind, plant.x0, controller.target_z_t, timing.duration_s).
     #[cfg_attr(feature = "clap", arg(long = "set", value_name = "KEY=VALUE", allow_hyphen_values = true))]
+    #[cfg_attr(feature = "clap", serde(with = "super::values::text"))]
     pub set: Vec<rig::overrides::Override>,
     /// Output options.
     #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
     pub output: OutputArgs,
 }

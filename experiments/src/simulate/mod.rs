@@ -14,7 +14,7 @@ use summary::*;
 ///
 /// # Errors
 /// [`crate::Error::Analysis`] for a malformed `--x0-deg`.
-pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(String, [f64; 4]), CliError> {
+pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&crate::settings::NumberList>) -> Result<(String, [f64; 4]), CliError> {
     Ok(match x0_deg {
         Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
         None => {
@@ -24,16 +24,14 @@ pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&str>) -> Result<(St
     })
 }
 
-/// Parses `--x0-deg th1,th1dot,th2,th2dot`.
+/// The initial condition of `--x0-deg th1,th1dot,th2,th2dot` (degrees, deg/s).
 ///
 /// # Errors
 /// [`crate::Error::Analysis`] unless it is four finite numbers.
-pub fn parse_x0_deg(s: &str) -> Result<[f64; 4], CliError> {
-    let bad = || CliError::bad_input(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"));
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
-    match v.as_slice() {
-        [a, b, c, d] if v.iter().all(|x| x.is_finite()) => Ok([*a, *b, *c, *d]),
-        _ => Err(bad()),
+pub fn parse_x0_deg(s: &crate::settings::NumberList) -> Result<[f64; 4], CliError> {
+    match s.0.as_slice() {
+        [a, b, c, d] if s.0.iter().all(|x| x.is_finite()) => Ok([*a, *b, *c, *d]),
+        _ => Err(CliError::bad_input(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"))),
     }
 }
 
@@ -115,7 +113,7 @@ pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
     };
     sim.validate()?;
     let steps = check_times(args.duration, args.sample_dt)?;
-    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_deref())?;
+    let (name, given_deg) = chosen_initial_condition(args.x0, args.x0_deg.as_ref())?;
     let plant = Plant::new(params, sim, initial::deg_to_state(given_deg), 0.0, [0.0, 0.0])?;
     let initial_condition = InitialCondition::of(name, given_deg, &params, &plant);
     Ok(Prepared { params, sim, steps, initial_condition, plant })

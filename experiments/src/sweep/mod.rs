@@ -41,13 +41,11 @@ const RUN_KEYS: [(&str, &str); 12] = [
     ("timing.duration_s", "--transient and --record"),
 ];
 
-fn parse_axis(flag: &str, s: &str, step: f64) -> Result<Axis, CliError> {
-    let bad = || CliError::bad_input(format!("--{flag} expects MIN,MAX or one value (finite numbers), got `{s}`"));
-    let vals: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
-    let axis = match vals.as_slice() {
+fn parse_axis(flag: &str, s: &crate::settings::NumberList, step: f64) -> Result<Axis, CliError> {
+    let axis = match s.0.as_slice() {
         [a] => Axis { start: *a, stop: *a, step },
         [a, b] => Axis { start: *a, stop: *b, step },
-        _ => return Err(bad()),
+        _ => return Err(CliError::bad_input(format!("--{flag} expects MIN,MAX or one value (finite numbers), got `{s}`"))),
     };
     Ok(axis)
 }

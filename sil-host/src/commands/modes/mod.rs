@@ -77,8 +77,8 @@ mod tests {
             mu: MU,
             v_belt: V,
             branch: shared::ElbowBranch::Down,
-            theta1_deg: "-40,40".into(),
-            theta1_dot: "-10,10".into(),
+            theta1_deg: "-40,40".parse().unwrap(),
+            theta1_dot: "-10,10".parse().unwrap(),
             grid: 60,
             theta2_sign: Theta2Sign::Auto,
             set: vec![],
@@ -96,9 +96,9 @@ mod tests {
             |a| a.v_belt = f64::INFINITY,
             |a| a.grid = 1,
             |a| a.grid = GRID_MAX + 1,
-            |a| a.theta1_deg = "10,-10".into(),
-            |a| a.theta1_dot = "x".into(),
-            |a| a.theta1_dot = "-1e308,1e308".into(),
+            |a| a.theta1_deg = "10,-10".parse().unwrap(),
+            |a| a.theta1_dot = "1,2,3".parse().unwrap(),
+            |a| a.theta1_dot = "-1e308,1e308".parse().unwrap(),
         ];
         for set in cases {
             let mut a = args(&out);
