@@ -105,7 +105,7 @@ pub mod choice {
     use serde::{Deserialize, Deserializer, Serializer, de::Error};
 
     /// The name clap shows for `v`.
-    fn name<T: ValueEnum>(v: &T) -> String {
+    pub(crate) fn name<T: ValueEnum>(v: &T) -> String {
         v.to_possible_value().map(|p| p.get_name().to_string()).unwrap_or_default()
     }
 
@@ -140,7 +140,10 @@ pub mod choice {
 
     /// An optional choice (`None`: not given).
     pub mod option {
-        use super::*;
+        use clap::ValueEnum;
+        use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+        use crate::settings::values::choice::{name, parse};
 
         /// Serializes the choice's name, or none.
         ///
@@ -164,7 +167,10 @@ pub mod choice {
 
     /// A list of choices (a sweep's dimension).
     pub mod list {
-        use super::*;
+        use clap::ValueEnum;
+        use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+        use crate::settings::values::choice::{name, parse};
 
         /// Serializes the choices' names.
         ///
