@@ -143,9 +143,11 @@ fi
 echo "== tests (release: the simulator is numerical); the soak test (tests/soak.rs, about 80 s"
 echo "   of wall time, mostly its injected stalls' waits) beside the others, its output printed at the end"
 status=0
-# The soak binary's path from the same build (a `-p sil-host` build would resolve the
-# features apart and recompile a fifth of the tree).
-soak_exe="$(cargo test --workspace --release --features sil-host/full --no-run --message-format=json-render-diagnostics \
+cargo test --workspace --release --features sil-host/full --no-run
+# The soak binary (`test = false`: named to be built) with the same features as the
+# build above (`--workspace`: a `-p sil-host` build would resolve them apart and
+# recompile a fifth of the tree).
+soak_exe="$(cargo test --workspace --release --features sil-host/full --test soak --no-run --message-format=json-render-diagnostics \
   | python3 -c 'import json, sys; print([m["executable"] for m in map(json.loads, sys.stdin) if m.get("reason") == "compiler-artifact" and m.get("executable") and m["target"]["name"] == "soak"][0])')"
 soaklog="$(mktemp)"
 (cd sil-host && "$soak_exe") >"$soaklog" 2>&1 &

@@ -151,7 +151,7 @@ def _detect(files: Set[str], summary: Any, tables: Optional[Dict[str, Table]] = 
         return "sensitivity"
     if "events.csv" in files or "events.arrow" in files or ("trace.mcap" in files and "events" in (tables or {})):
         return "simulate"
-    if "trace.csv" in files or "trace.mcap" in files:
+    if "trace.csv" in files or "trace.arrow" in files or "trace.mcap" in files:
         return "pil" if isinstance(summary, dict) and summary.get("pil") else "run"
     return "unknown"
 

@@ -90,6 +90,9 @@ def test_a_runs_arrow_file_loads_as_its_csv_trace(tmp_path):
     cli("run", ["--in-process", "--duration", "0.5", "--format", "csv"], tmp_path / "csv")
     cli("run", ["--in-process", "--duration", "0.5", "--format", "arrow"], tmp_path / "arrow")
     a, c = painleve.load(tmp_path / "arrow"), painleve.load(tmp_path / "csv")
+    # Issue 69 (5): the folder is known as a run's, whatever its format.
+    assert a.command == c.command == "run", (a.command, c.command)
+    assert a.validity is not None and a.validity == c.validity and "no simulation" not in str(a)
     assert a.trace.columns == c.trace.columns and a.trace.nrows == c.trace.nrows == 500
     for col in c.trace.columns:
         assert_columns_equal(a.trace[col], c.trace[col], f"trace.{col}")

@@ -34,6 +34,12 @@ def test_the_parameters_are_the_scenarios_and_keywords_override_them(model):
         painleve.Model(x0="d")
     with pytest.raises(painleve.PainleveError):
         painleve.Model(l=-1.0)
+    # Issue 69 (5): alpha0 is in radians; Table I's 13.72 (degrees) and 100 are refused, naming it.
+    for bad in (13.72, 100.0, -4.0):
+        with pytest.raises(painleve.PainleveError) as e:
+            painleve.Model(alpha0=bad)
+        assert e.value.exit_code == 2 and "alpha0" in str(e.value) and "radians" in str(e.value), str(e.value)
+    assert painleve.Model(alpha0=0.2395).params["alpha0"] == 0.2395
 
 
 def test_inverse_kinematics_inverts_the_tip_on_both_branches(model):

@@ -16,8 +16,8 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
-// clap's derives name `::std` (host-only feature).
-#[cfg(feature = "clap")]
+// clap's derives name `::std` (host-only feature); the tests use its strings.
+#[cfg(any(test, feature = "clap"))]
 extern crate std;
 
 pub mod contact;

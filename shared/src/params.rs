@@ -39,6 +39,19 @@ pub enum ParamError {
         /// The bound.
         max: f64,
     },
+    /// An angle (`alpha0`) beyond a half-turn: angles are in radians, and a value
+    /// like paper Table I's 13.72 was most likely meant in degrees (issue 69).
+    #[error(
+        "parameter `{name}` is an angle in radians and must be within [-pi, pi], got {value} (if that was degrees, it is {as_radians} rad)"
+    )]
+    AngleOutOfRange {
+        /// Field name, as in [`Params`].
+        name: &'static str,
+        /// The offending value, rad.
+        value: f64,
+        /// The value read as degrees, in radians (the likely intent).
+        as_radians: f64,
+    },
     /// The belt is out of reach: the base height `H` must be below the arm's reach `2 l`.
     #[error("belt out of reach: H = {h} m must be < 2 l = {reach} m")]
     BeltOutOfReach {
@@ -114,7 +127,8 @@ impl<T: Real> Params<T> {
     }
 
     /// Checks the parameters: all finite; `m`, `l`, `h`, `g` > 0; `mu`, `sigma`,
-    /// `k` >= 0; `mu <= 10`, `|v_belt| <= 5 m/s`; `h < 2 l` (the belt within reach).
+    /// `k` >= 0; `mu <= 10`, `|v_belt| <= 5 m/s`; `|alpha0| <= pi` (radians: Table
+    /// I's 13.72 degrees is 0.2395 rad); `h < 2 l` (the belt within reach).
     ///
     /// # Errors
     /// The first violation found, as a [`ParamError`] naming the field.
@@ -151,6 +165,10 @@ impl<T: Real> Params<T> {
         }
         if self.v_belt.abs() > lit(5.0) {
             return Err(ParamError::TooLarge { name: "|v_belt|", value: to_f64(self.v_belt), max: 5.0 });
+        }
+        if to_f64(self.alpha0).abs() > core::f64::consts::PI {
+            let value = to_f64(self.alpha0);
+            return Err(ParamError::AngleOutOfRange { name: "alpha0", value, as_radians: value * (core::f64::consts::PI / 180.0) });
         }
         let reach = self.l + self.l;
         if self.h >= reach {
@@ -205,6 +223,29 @@ mod tests {
         p.h = 0.5;
         assert!(matches!(p.validate(), Err(ParamError::BeltOutOfReach { .. })));
         assert!(matches!(Params::<f64>::new(-0.1, -0.4), Err(ParamError::Negative { name: "mu", .. })));
+    }
+
+    /// Issue 69 (5): `alpha0` is in radians; Table I's 13.72 given as is (degrees
+    /// meant) is refused with the radians it would be, and so is any angle beyond
+    /// a half-turn either way; a half-turn itself is taken.
+    #[test]
+    fn an_angle_beyond_a_half_turn_is_refused_with_its_radians() {
+        let mut p = Params::<f64>::paper();
+        p.alpha0 = 13.72;
+        let e = p.validate().unwrap_err();
+        assert!(matches!(e, ParamError::AngleOutOfRange { name: "alpha0", .. }));
+        let text = std::string::ToString::to_string(&e);
+        assert!(text.contains("radians") && text.contains("0.2394"), "{text}");
+        for (a, ok) in [
+            (core::f64::consts::PI, true),
+            (-core::f64::consts::PI, true),
+            (core::f64::consts::PI + 1e-9, false),
+            (-100.0, false),
+            (0.0, true),
+        ] {
+            p.alpha0 = a;
+            assert_eq!(p.validate().is_ok(), ok, "alpha0 = {a}");
+        }
     }
 
     #[test]

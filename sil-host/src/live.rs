@@ -39,10 +39,19 @@ fn start(args: &LiveArgs, channels: &[tables::mcap::ChannelSpec], paced_by_clock
     );
     crate::commands::warn(exposure_warning(at));
     if wait > 0.0 {
-        eprintln!("live: waiting up to {wait} s for a viewer");
+        // The signal handler first: a Ctrl-C after the line below is seen.
         let stop = crate::cancel::stop_flag();
+        eprintln!("live: waiting up to {wait} s for a viewer");
         if !server.wait_for_viewer(std::time::Duration::from_secs_f64(wait), std::time::Duration::from_millis(500), &stop) {
-            eprintln!("live: no viewer subscribed within {wait} s; the run starts");
+            // Ctrl-C or SIGTERM while waiting: the run stops after its first
+            // period (the loop sees the same flag after it), so it does not "start" (issue 69).
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                eprintln!(
+                    "live: stopped by a signal while waiting for a viewer (none had subscribed); the run stops after its first period and writes its outputs"
+                );
+            } else {
+                eprintln!("live: no viewer subscribed within {wait} s; the run starts");
+            }
         }
     }
     Ok(Some(server))

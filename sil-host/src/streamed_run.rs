@@ -78,6 +78,12 @@ pub fn run_streamed(
             self.ledger = *ledger;
         }
 
+        fn on_events(&mut self, events: &[plant::PlantEvent]) {
+            if let Some(page) = &mut self.page {
+                events.iter().for_each(|e| page.event(e.into()));
+            }
+        }
+
         fn on_record(&mut self, r: &PeriodRecord) {
             self.trace.push(r);
             self.stats.push(r);

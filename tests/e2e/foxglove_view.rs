@@ -97,18 +97,15 @@ fn a_runs_trace_mcap_shows_the_arm_in_foxglove_schemas() {
 }
 
 /// A simulation's trace.mcap: the open-loop bounce from x0a (the Painlevé
-/// paradox: an impact without collision, then touchdowns); its log holds one line per event of
-/// events.csv, in order, at the events' times.
+/// paradox: an impact without collision, then touchdowns), its default 10 s; its
+/// log holds one line per event of events.csv, in order, at the events' times:
+/// every touchdown among them (issue 69: as many as the page lists).
 #[test]
 fn a_simulations_log_holds_its_events() {
     let dir = tempfile::tempdir().unwrap();
     let (mcap, csv) = (dir.path().join("mcap"), dir.path().join("csv"));
     for (out, format) in [(&mcap, "mcap"), (&csv, "csv")] {
-        let s = sil_host()
-            .args(["simulate", "--x0", "a", "--duration", "0.5", "--format", format, "--json", "--out"])
-            .arg(out)
-            .output()
-            .unwrap();
+        let s = sil_host().args(["simulate", "--x0", "a", "--format", format, "--json", "--out"]).arg(out).output().unwrap();
         assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
     }
     let c = check_file(&mcap.join("trace.mcap"));
@@ -116,10 +113,13 @@ fn a_simulations_log_holds_its_events() {
     let kinds: Vec<&str> = events.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
     assert!(kinds.contains(&"impact_without_collision") && kinds.contains(&"touchdown"), "the bounce: {kinds:?}");
     assert_eq!(c.log.len(), kinds.len());
+    let touchdowns = kinds.iter().filter(|k| **k == "touchdown").count();
+    assert!(touchdowns >= 20, "the whole bounce: {touchdowns} touchdowns");
+    assert_eq!(c.log.iter().filter(|l| l.message.starts_with("touchdown:")).count(), touchdowns, "every touchdown is in /log");
     for (line, kind) in c.log.iter().zip(&kinds) {
         assert!(line.message.starts_with(&format!("{kind}:")), "{} against {kind}", line.message);
     }
-    assert_eq!(c.counts["/tf"], 51, "samples from 0 to 0.5 s, a frame every 10 ms");
+    assert_eq!(c.counts["/tf"], 1001, "samples from 0 to 10 s, a frame every 10 ms");
 }
 
 /// Reads the `ws://` address the run prints on stderr (waiting at most 30 s).
@@ -485,6 +485,37 @@ fn ctrl_c_ends_a_live_run_with_a_stuck_viewer_and_prints_the_summary() {
     assert!(said.iter().any(|l| l.contains("stopped by a signal") && l.contains("1 of 1 viewer(s)")), "{said:#?}");
 }
 
+/// Issue 69 (5): Ctrl-C while the run waits for a viewer (`--live-wait`) says
+/// so, not that the run starts; the run stops after its first period (exit 130,
+/// the summary printed: one period, "interrupted").
+#[test]
+fn ctrl_c_while_waiting_for_a_viewer_says_the_run_stops() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (child, _addr, lines) = live_run(&out, &[]);
+    let pid = child.id() as i32;
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let mut said = Vec::new();
+    while !said.iter().any(|l: &String| l.contains("waiting up to")) {
+        let (_, line) = lines.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("the wait is announced");
+        said.push(line);
+    }
+    let (exited, waiter) = exit_of(child);
+    // SAFETY: kill(2) on our own child's pid (not yet reaped: its waiter holds it).
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    exited.recv_timeout(Duration::from_secs(60)).expect("the run ends on SIGINT");
+    let o = waiter.join().unwrap();
+    while let Ok((_, line)) = lines.recv_timeout(Duration::from_secs(30)) {
+        said.push(line);
+    }
+    assert_eq!(o.status.code(), Some(130), "{said:#?}");
+    assert!(said.iter().any(|l| l.contains("stopped by a signal while waiting for a viewer")), "{said:#?}");
+    assert!(!said.iter().any(|l| l.contains("the run starts")), "{said:#?}");
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the summary is printed");
+    assert_eq!(summary["periods"].as_u64(), Some(1), "the first period alone: {summary}");
+    assert!(summary["error"].as_str().unwrap().contains("interrupted"), "{summary}");
+}
+
 /// Issue 66 (5): an address that is not a loopback one serves the run to the
 /// network: stderr warns of it; a loopback one says nothing of the kind.
 #[test]
@@ -501,4 +532,46 @@ fn a_live_address_off_this_machine_is_warned_of() {
         assert_eq!(err.contains("warning: live: ws://0.0.0.0:") && err.contains("every network interface"), warned, "{addr}: {err}");
         assert_eq!(err.contains("warning"), warned, "{addr}: {err}");
     }
+}
+
+/// Issue 69 (4): which WebSocket subprotocols `--live` accepts, with a plain
+/// client offering each (docs/rig.md "Live", "Which clients connect"): the
+/// Foxglove SDK's `foxglove.sdk.v1` and `foxglove.sdk.v1.1` (the newer preferred
+/// when both are offered, in any order), and a client that offers the published
+/// spec's `foxglove.websocket.v1` beside the SDK's; a client that offers only
+/// `foxglove.websocket.v1` (the ws-protocol spec's, older apps) is refused with
+/// HTTP 400, which the SDK (0.30) does not let a server change.
+#[test]
+fn the_live_server_accepts_the_sdks_subprotocols_and_says_no_to_the_published_ones_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = sil_host()
+        .args(["run", "--in-process", "--duration", "1", "--no-page", "--live", "127.0.0.1:0", "--live-wait", "60", "--out"])
+        .arg(dir.path().join("out"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (addr, _rest) = live_address(child.stderr.take().unwrap());
+    let offer = |protocols: &str| {
+        let mut request = tungstenite::client::IntoClientRequest::into_client_request(addr.as_str()).unwrap();
+        request.headers_mut().insert("Sec-WebSocket-Protocol", protocols.parse().unwrap());
+        tungstenite::connect(request)
+    };
+    for (offered, negotiated) in [
+        ("foxglove.sdk.v1", "foxglove.sdk.v1"),
+        ("foxglove.sdk.v1.1", "foxglove.sdk.v1.1"),
+        ("foxglove.sdk.v1, foxglove.sdk.v1.1", "foxglove.sdk.v1.1"),
+        ("foxglove.websocket.v1, foxglove.sdk.v1", "foxglove.sdk.v1"),
+    ] {
+        let (mut ws, response) = offer(offered).unwrap_or_else(|e| panic!("a client offering {offered} connects: {e}"));
+        assert_eq!(response.headers()["Sec-WebSocket-Protocol"], negotiated, "offered {offered}");
+        let _ = ws.close(None);
+    }
+    match offer("foxglove.websocket.v1") {
+        Err(tungstenite::Error::Http(response)) => assert_eq!(response.status(), 400, "refused with HTTP 400"),
+        Err(e) => panic!("a client offering only foxglove.websocket.v1: {e}"),
+        Ok(_) => panic!("a client offering only foxglove.websocket.v1 connected: docs/rig.md says it does not"),
+    }
+    let _ = child.kill();
+    let _ = child.wait();
 }

@@ -264,3 +264,114 @@ fn a_scenario_name_cannot_break_the_pages_script() {
     assert!(facts.iter().any(|f| f[0] == "scenario" && f[1] == name), "the name reads back: {facts:?}");
     assert_eq!((html.matches("<script").count(), html.matches("</script>").count()), (2, 2));
 }
+
+/// The `(kind, t)` of every row of `events.csv`, times bit for bit.
+fn events_of(csv_path: &Path) -> Vec<(String, f64)> {
+    let mut rdr = csv::Reader::from_path(csv_path).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    let col = |name: &str| headers.iter().position(|c| c == name).unwrap_or_else(|| panic!("no column {name}"));
+    let (ct, ck) = (col("t"), col("kind"));
+    rdr.records().map(|r| r.unwrap()).map(|r| (r[ck].to_string(), r[ct].parse::<f64>().unwrap())).collect()
+}
+
+/// The `(data-kind, data-t)` of every item of the page's event list, from the DOM
+/// its script built.
+fn listed_events(dom: &str) -> Vec<(String, f64)> {
+    let list = &dom[dom.find("<ol id=\"event-list\"").expect("the event list in the DOM")..];
+    let list = &list[..list.find("</ol>").unwrap()];
+    list.split("<li ")
+        .skip(1)
+        .map(|li| {
+            let tag = &li[..li.find('>').unwrap()];
+            let attr = |name: &str| {
+                let at = tag.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("{name} missing: {tag}")) + name.len() + 2;
+                tag[at..at + tag[at..].find('"').unwrap()].to_string()
+            };
+            (attr("data-kind"), attr("data-t").parse::<f64>().unwrap())
+        })
+        .collect()
+}
+
+/// The page's data (`#trace-data`) from the dumped DOM.
+fn page_data(dom: &str) -> serde_json::Value {
+    let start = dom.find("id=\"trace-data\">").unwrap() + "id=\"trace-data\">".len();
+    let end = start + dom[start..].find("</script>").unwrap();
+    serde_json::from_str(&dom[start..end]).unwrap()
+}
+
+/// Pixels of the touchdown colour (#0072b2) within `r` px of `(x, y)`.
+fn ring_pixels(img: &Image, (x, y): (f64, f64), r: f64) -> usize {
+    let like = |[cr, cg, cb]: [u8; 3]| cr <= 20 && (100..=130).contains(&cg) && (165..=200).contains(&cb);
+    let mut n = 0;
+    for py in (y - r).max(0.0) as usize..((y + r) as usize).min(img.h) {
+        for px in (x - r).max(0.0) as usize..((x + r) as usize).min(img.w) {
+            if like(img.rgb[py * img.w + px]) {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Issue 69 (1): the open-loop bounce from x0a (the paper's phenomenon) is in the
+/// page: every event of `events.csv` is in the page's list with its kind and its
+/// time bit for bit (every touchdown among them, counted from the DOM), the frame
+/// after a touchdown names it in its readout and rings the contact, and a frame
+/// with no impact since the previous one has no ring.
+#[test]
+fn the_page_marks_every_event_of_the_bounce() {
+    let Some(chromium) = chromium() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let scratch = dir.path();
+    let sim = scratch.join("x0a");
+    sil_host(&["simulate", "--x0", "a", "--out", sim.to_str().unwrap()]);
+    let events = events_of(&sim.join("events.csv"));
+    let touchdowns: Vec<f64> = events.iter().filter(|(k, _)| k == "touchdown").map(|(_, t)| *t).collect();
+    assert!(touchdowns.len() >= 20, "the bounce has its touchdowns: {}", touchdowns.len());
+    let url = |t: &str| format!("file://{}?t={t}", sim.join("trace.html").canonicalize().unwrap().display());
+
+    let dom = browse(&chromium, scratch, &["--dump-dom".to_string()], &url("1.05"));
+    let listed = listed_events(&dom);
+    assert_eq!(listed.iter().filter(|(k, _)| k == "touchdown").count(), touchdowns.len(), "every touchdown is listed");
+    assert_eq!(listed.len(), events.len(), "every event is listed");
+    // trace.svg marks the same impacts (touchdowns and impacts without collision) and says how many.
+    let impacts = listed.iter().filter(|(k, _)| k == "touchdown" || k == "impact_without_collision").count();
+    let svg = std::fs::read_to_string(sim.join("trace.svg")).unwrap();
+    assert!(svg.contains(&format!("{impacts} impacts between the samples")), "trace.svg counts the page's {impacts} impacts");
+    for ((k, t), (lk, lt)) in events.iter().zip(&listed) {
+        assert!(k == lk && t.to_bits() == lt.to_bits(), "events.csv has {k} at {t} s, the page {lk} at {lt} s");
+    }
+
+    // The first frame at or after the second touchdown: its readout names it.
+    let data = page_data(&dom);
+    let frames: Vec<f64> = data["frames"]["t"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let td = touchdowns[1];
+    let i = frames.iter().position(|&f| f >= td).expect("a frame after the touchdown");
+    let dom = browse(&chromium, scratch, &["--dump-dom".to_string()], &url(&frames[i].to_string()));
+    let readout = &dom[dom.find("<figcaption id=\"readout\"").unwrap()..];
+    let readout = &readout[..readout.find("</figcaption>").unwrap()];
+    assert!(readout.contains("touchdown at"), "the frame after a touchdown names it: {readout}");
+    let (s, base_x, base_y, _) = mapping(&dom);
+    let tip_at = |t: f64| {
+        let (_, z_t, z_n) = trace_at(&sim.join("trace.csv"), t);
+        (base_x + s * z_t, base_y - s * z_n)
+    };
+    let png = scratch.join("impact.png");
+    browse(&chromium, scratch, &[format!("--screenshot={}", png.display())], &url(&frames[i].to_string()));
+    let ring = ring_pixels(&decode(&png), tip_at(frames[i]), 22.0);
+    assert!(ring >= 40, "a ring around the contact in the frame after the touchdown: {ring} px of its colour");
+
+    // A frame in flight with no event since the previous frame: no ring.
+    let h = data["h"].as_f64().unwrap();
+    let quiet = (1..frames.len())
+        .find(|&j| {
+            frames[j] > 0.2
+                && !events.iter().any(|(_, t)| *t > frames[j - 1] - 1e-6 && *t <= frames[j] + 1e-6)
+                && trace_at(&sim.join("trace.csv"), frames[j]).2 > -h + 1e-3
+        })
+        .expect("a frame in flight with no event");
+    let png = scratch.join("quiet.png");
+    browse(&chromium, scratch, &[format!("--screenshot={}", png.display())], &url(&frames[quiet].to_string()));
+    let ring = ring_pixels(&decode(&png), tip_at(frames[quiet]), 22.0);
+    assert!(ring < 5, "no ring without an impact (t = {} s): {ring} px of its colour", frames[quiet]);
+}

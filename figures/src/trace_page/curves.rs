@@ -79,7 +79,8 @@ impl Curves {
         let mut panels = vec![
             json!({ "label": format!("{Z_T} (m)"), "series": tip }),
             json!({ "label": format!("{Z_N} + H (m)"), "series": [series(2, &format!("tip height {Z_N} + H"), colors::BLUE, false, false)] }),
-            json!({ "label": "force (N)", "series": [
+            // The impacts' normal impulses as stems (the page's events), on their own scale.
+            json!({ "label": "force (N)", "impulses": true, "series": [
                 series(3, F_N, colors::GREEN, false, false),
                 series(4, "fₜ", colors::ORANGE, true, false),
             ] }),

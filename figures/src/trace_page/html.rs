@@ -5,6 +5,7 @@ use serde_json::{Value, json};
 
 use super::{
     curves::Curves,
+    events::Events,
     frames::{Frame, Frames},
     info::PageInfo,
     view,
@@ -15,10 +16,10 @@ const STYLE: &str = include_str!("assets/page.css");
 const SCRIPT: &str = include_str!("assets/page.js");
 
 /// The whole page of `info`'s run from its `frames` and `curves`.
-pub(super) fn page(info: PageInfo, frames: Frames, curves: &Curves) -> String {
+pub(super) fn page(info: PageInfo, frames: Frames, curves: &Curves, events: &Events) -> String {
     let samples = frames.samples();
     let (frames, step) = frames.finish();
-    let data = data(&info, &frames, step, samples, curves);
+    let data = data(&info, &frames, step, samples, curves, events);
     let json = script_json(&data);
     fill(SKELETON, &[("TITLE", &escape(&info.title)), ("STYLE", STYLE), ("SCRIPT", SCRIPT), ("DATA", &json)])
 }
@@ -73,7 +74,7 @@ fn script_json(data: &Value) -> String {
 }
 
 /// The page's JSON document (what `assets/page.js` reads).
-fn data(info: &PageInfo, frames: &[Frame], step: f64, samples: u64, curves: &Curves) -> Value {
+fn data(info: &PageInfo, frames: &[Frame], step: f64, samples: u64, curves: &Curves, events: &Events) -> Value {
     let joints: Vec<_> = frames.iter().map(|f| view::joints(info.l, f.theta)).collect();
     let col = |f: &dyn Fn(usize) -> f64| (0..frames.len()).map(|i| f(i) as f32).collect::<Vec<f32>>();
     let f_max = frames.iter().map(|f| f.force[0].hypot(f.force[1])).filter(|f| f.is_finite()).fold(0.0, f64::max);
@@ -110,13 +111,14 @@ fn data(info: &PageInfo, frames: &[Frame], step: f64, samples: u64, curves: &Cur
         },
         "modes": crate::plot::MODE_NAMES,
         "panels": curves.panels(),
-        "notes": notes(frames.len(), step, samples, sample_dt, curves.samples_per_bucket(), n_per_m),
+        "events": events.json(),
+        "notes": notes(frames.len(), step, samples, sample_dt, curves.samples_per_bucket(), n_per_m, events),
         "generator": format!("sil-host {}", env!("CARGO_PKG_VERSION")),
     })
 }
 
 /// What the page says about its decimation, scales and units.
-fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64, n_per_m: f64) -> Vec<String> {
+fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64, n_per_m: f64, events: &Events) -> Vec<String> {
     let ms = |s: f64| format!("{:.3}", s * 1e3).trim_end_matches('0').trim_end_matches('.').to_string();
     let animation = if samples == 0 {
         "Animation: none, the run has no samples (it stopped before its first).".to_string()
@@ -125,8 +127,7 @@ fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64
     } else {
         format!(
             "Animation: a frame every {} ms of simulated time ({frames} frames, {:.0} per simulated second) from {samples} samples \
-             (one every {} ms); events between frames (a short hop, an impact) are in the plots, not always in the animation. \
-             The frame shown is the one nearest the chosen time.",
+             (one every {} ms). The frame shown is the one nearest the chosen time.",
             ms(step),
             1.0 / step,
             ms(sample_dt)
@@ -144,6 +145,7 @@ fn notes(frames: usize, step: f64, samples: u64, sample_dt: f64, per_bucket: u64
     vec![
         animation,
         plots,
+        events.note(),
         format!(
             "Arm view: the two links drawn from θ₁ and θ₂ (from the downward vertical) by the plant's forward kinematics; \
              the base joint (cyan) at the origin, the tip (magenta); the belt's surface at zₙ = −H, its stripes moving at the \
@@ -192,6 +194,7 @@ mod tests {
                 mode: "sliding",
                 z_t_ref: 0.1,
                 u: [0.1, 0.2],
+                safe_state: false,
             });
         }
         page.html()

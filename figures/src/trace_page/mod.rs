@@ -8,7 +8,9 @@
 //! at the tip (its scale stated), a time slider, play and pause, the time and the
 //! contact mode; beside them the plots of `z_t` (and `z_t*`), the tip's height
 //! `z_n + H`, `f_n` and `f_t`, the torques and the contact mode, with a cursor line
-//! at the current time. Long runs are thinned so the page stays small: the
+//! at the current time; every event of the run (an impact, a lift-off, the safe
+//! state) marked at its exact time in the plots, the animation, the readout and
+//! a list ([`events`]). Long runs are thinned so the page stays small: the
 //! animation to a frame every 10 ms of simulated time and at most 5 000 frames
 //! ([`frames`]), the plots to the min and max of buckets finer than a pixel
 //! ([`curves`]); the page says by how much.
@@ -21,12 +23,14 @@
 //! so that a point `(z_t, z_n)` is at `(base_x + s z_t, base_y - s z_n)`.
 
 pub mod curves;
+pub mod events;
 pub mod frames;
 mod html;
 pub mod info;
 pub mod view;
 
 pub use curves::{CurveSample, Curves};
+pub use events::{Events, PageEvent};
 pub use frames::{Frame, Frames};
 pub use info::PageInfo;
 
@@ -52,6 +56,9 @@ pub struct PageSample {
     pub z_t_ref: f64,
     /// Motor torques `[u1, u2]`, N m (NaN in open loop).
     pub u: [f64; 2],
+    /// Whether the firmware is in its safe state (its status word's
+    /// `SAFE_STATE`; false in open loop): its entry is an event of the page.
+    pub safe_state: bool,
 }
 
 impl From<&rig::record::PeriodRecord> for PageSample {
@@ -64,6 +71,7 @@ impl From<&rig::record::PeriodRecord> for PageSample {
             mode: r.mode,
             z_t_ref: r.z_t_ref,
             u: [r.u1_cmd, r.u2_cmd],
+            safe_state: r.status & shared::wire::status::SAFE_STATE != 0,
         }
     }
 }
@@ -78,6 +86,7 @@ impl From<&experiments::simulate::summary::TraceRow> for PageSample {
             mode: r.mode,
             z_t_ref: f64::NAN,
             u: [f64::NAN; 2],
+            safe_state: false,
         }
     }
 }
@@ -90,17 +99,30 @@ pub struct TracePage {
     info: PageInfo,
     frames: Frames,
     curves: Curves,
+    events: Events,
+    safe_state: bool,
 }
 
 impl TracePage {
     /// An empty page for the run `info` describes.
     pub fn new(info: PageInfo) -> Self {
         let curves = Curves::new(info.h, info.closed_loop);
-        Self { info, frames: Frames::default(), curves }
+        Self { info, frames: Frames::default(), curves, events: Events::default(), safe_state: false }
     }
 
-    /// Adds the next sample (in time order).
+    /// Adds the next event (in time order, with the samples: an event at `t`
+    /// before the sample at `t`).
+    pub fn event(&mut self, e: PageEvent) {
+        self.events.push(e);
+    }
+
+    /// Adds the next sample (in time order); the sample where the firmware
+    /// enters its safe state adds that event.
     pub fn push(&mut self, s: &PageSample) {
+        if s.safe_state && !self.safe_state {
+            self.events.push(PageEvent { t: s.t, kind: events::SAFE_STATE, impulse: [0.0; 2] });
+        }
+        self.safe_state = s.safe_state;
         let mode = mode_code(s.mode) as u8;
         self.frames.push(Frame { t: s.t, theta: s.theta, force: s.force, mode, z_t_ref: s.z_t_ref, u: s.u });
         self.curves.push(&CurveSample { t: s.t, z: s.z, force: s.force, mode, z_t_ref: s.z_t_ref, u: s.u });
@@ -108,6 +130,6 @@ impl TracePage {
 
     /// The page's HTML text (the caller writes it as [`FILE`] in its folder).
     pub fn html(self) -> String {
-        html::page(self.info, self.frames, &self.curves)
+        html::page(self.info, self.frames, &self.curves, &self.events)
     }
 }

@@ -34,7 +34,9 @@ const MODEL_KEYS: [&str; 9] = ["mu", "v_belt", "m", "l", "sigma", "k", "h", "alp
 /// base joint's and the elbow's). Every method returns NumPy arrays (`float64`)
 /// or floats.
 ///
-/// Raises `PainleveError` (exit_code 2) for parameters out of range,
+/// Raises `PainleveError` (exit_code 2) for parameters out of range
+/// (`shared::Params::validate`; `alpha0` is in radians, within [-pi, pi]: Table
+/// I's 13.72 degrees is `alpha0=0.2395`),
 /// `TypeError` for an unknown keyword; each method raises `ValueError` naming
 /// the argument and the element for a NaN or infinite angle, rate, torque or
 /// position (`theta[0] = nan`), as the plant refuses such a state (issue 66:

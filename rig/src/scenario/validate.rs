@@ -16,7 +16,8 @@ fn check(ok: bool, key: &str, value: impl std::fmt::Display, expected: &str) -> 
 
 /// Checks the arm's parameters of paper Table I under the key prefix `prefix`
 /// (`plant` or `controller.model`): `m`, `l`, `h`, `g` finite and > 0; `sigma`,
-/// `k` finite and >= 0; `alpha0` finite; `h < 2 l` (the belt within reach); then
+/// `k` finite and >= 0; `alpha0` finite and within [-pi, pi] (radians); `h < 2 l`
+/// (the belt within reach); then
 /// [`Params::validate`].
 ///
 /// # Errors
@@ -29,7 +30,16 @@ pub fn validate_arm(prefix: &str, p: &Params<f64>) -> Result<(), ScenarioError> 
     for (name, v) in [("sigma", p.sigma), ("k", p.k)] {
         check(v.is_finite() && v >= 0.0, &key(name), v, "a finite value >= 0")?;
     }
-    check(p.alpha0.is_finite(), &key("alpha0"), p.alpha0, "a finite angle, rad")?;
+    check(
+        p.alpha0.is_finite() && p.alpha0.abs() <= std::f64::consts::PI,
+        &key("alpha0"),
+        p.alpha0,
+        &format!(
+            "an angle in radians within [-pi, pi] (paper Table I's 13.72 degrees is 0.2395 rad; {} read as degrees is {} rad)",
+            p.alpha0,
+            p.alpha0.to_radians()
+        ),
+    )?;
     check(p.h < 2.0 * p.l, &key("h"), p.h, &format!("a base height below the arm's reach 2 l = {} m", 2.0 * p.l))?;
     p.validate().map_err(|e| ScenarioError::Parse(format!("scenario key `{prefix}`: {e}")))
 }
@@ -136,7 +146,10 @@ impl Scenario {
         let fw: Params<f32> = Params { mu: c.mu_hat, ..model }.cast();
         if let Err(e) = fw.validate() {
             let name = match e {
-                ParamError::NonFinite { name, .. } | ParamError::NotPositive { name, .. } | ParamError::Negative { name, .. } => name,
+                ParamError::NonFinite { name, .. }
+                | ParamError::NotPositive { name, .. }
+                | ParamError::Negative { name, .. }
+                | ParamError::AngleOutOfRange { name, .. } => name,
                 ParamError::TooLarge { name, .. } => name.trim_matches('|'),
                 ParamError::BeltOutOfReach { .. } => "h",
             };

@@ -30,6 +30,39 @@
     $("notes").append(li);
   });
   $("generator").textContent = "Written by " + D.generator + "; every number is in this file (no network).";
+
+  // ---- the events: instants, between the frames and the plots' samples ----
+  const E = D.events;
+  const NE = E.t.length;
+  const EV_COLOR = {
+    touchdown: "#0072b2", lift_off: "#009e73", safe_state: "#d55e00", impact_without_collision: "#cc79a7",
+    p_zero: "#cc79a7", jam: "#cc79a7", singular_point: "#cc79a7", bridge: "#cc79a7",
+  };
+  const evKind = (j) => E.kinds[E.kind[j]];
+  const evColor = (j) => EV_COLOR[evKind(j)] || "#8c8c8c";
+  // An impact: an impulse on the contact (a touchdown, an impact without collision, a jam's).
+  const isImpact = (j) => E.p_n[j] !== 0 || E.p_t[j] !== 0 || evKind(j) === "touchdown";
+  // The index of the first event after time t.
+  function firstAfter(t) {
+    let a = 0, b = NE;
+    while (a < b) {
+      const m = (a + b) >> 1;
+      if (E.t[m] <= t) a = m + 1;
+      else b = m;
+    }
+    return a;
+  }
+  // The events in (ta, tb].
+  function between(ta, tb) {
+    const out = [];
+    for (let j = firstAfter(ta); j < NE && E.t[j] <= tb; j++) out.push(j);
+    return out;
+  }
+  const evText = (j) => {
+    let s = evKind(j) + " at " + E.t[j].toFixed(5) + " s";
+    if (E.p_n[j] !== 0 || E.p_t[j] !== 0) s += " (P\u2099 " + E.p_n[j].toPrecision(3) + ", P\u209c " + E.p_t[j].toPrecision(3) + " N s)";
+    return s;
+  };
   if (N === 0) {
     $("readout").textContent = "The run has no samples: nothing to show.";
     return;
@@ -178,6 +211,19 @@
       }
       disc(c, ox, oy, 5, C.base);
       disc(c, pt, qt, 6, C.tip);
+      // An impact since the previous frame: a ring around the contact, its kinds beside it.
+      const hits = between(i > 0 ? F.t[i - 1] : -Infinity, t).filter(isImpact);
+      if (hits.length) {
+        c.strokeStyle = evColor(hits[0]);
+        c.lineWidth = 3;
+        c.beginPath();
+        c.arc(pt, qt, 15, 0, 2 * Math.PI);
+        c.stroke();
+        c.fillStyle = evColor(hits[0]);
+        c.font = "bold 12px " + FONT;
+        const names = [...new Set(hits.map(evKind))].join(", ");
+        c.fillText((hits.length > 1 ? hits.length + " impacts: " : "impact: ") + names, pt + 19, qt - 12);
+      }
     } else {
       disc(c, ox, oy, 5, C.base);
       c.fillStyle = C.force;
@@ -325,6 +371,38 @@
       c.stroke();
     });
     c.setLineDash([]);
+    // The events in the window: a tick on the time axis each, coloured by kind; on
+    // the impulse panel the normal impulses as stems, on their own scale.
+    const ja = firstAfter(wA - 1e-12), jb = firstAfter(wB);
+    const bottom = b.top + b.h;
+    const byColor = {};
+    for (let j = ja; j < jb; j++) (byColor[evColor(j)] = byColor[evColor(j)] || []).push(j);
+    let pMax = 0;
+    if (p.impulses) for (let j = ja; j < jb; j++) pMax = Math.max(pMax, Math.abs(E.p_n[j]));
+    Object.entries(byColor).forEach(([color, js]) => {
+      c.strokeStyle = color;
+      c.fillStyle = color;
+      c.lineWidth = 1.2;
+      c.beginPath();
+      js.forEach((j) => {
+        const x = xOf(E.t[j]);
+        c.moveTo(x, bottom);
+        c.lineTo(x, bottom - 7);
+        if (pMax > 0 && E.p_n[j] !== 0) {
+          c.moveTo(x, bottom);
+          c.lineTo(x, bottom - 0.85 * b.h * (Math.abs(E.p_n[j]) / pMax));
+        }
+      });
+      c.stroke();
+      if (pMax > 0) js.forEach((j) => E.p_n[j] !== 0 && disc(c, xOf(E.t[j]), bottom - 0.85 * b.h * (Math.abs(E.p_n[j]) / pMax), 2.2, color));
+    });
+    if (pMax > 0) {
+      c.fillStyle = C.text;
+      c.font = "11px " + FONT;
+      c.textAlign = "left";
+      c.textBaseline = "top";
+      c.fillText("stems: impulse |P\u2099| of each impact, tallest " + pMax.toPrecision(3) + " N s", ML + 6, b.top + 4);
+    }
     c.restore();
     c.strokeStyle = C.frame;
     c.lineWidth = 1;
@@ -412,7 +490,11 @@
       ["f\u2099", fmt(F.f_n[index], 2) + " N"],
     ];
     if (D.closed_loop) parts.push(["\u03c4\u2081, \u03c4\u2082", fmt(F.u1[index], 3) + ", " + fmt(F.u2[index], 3) + " N m"]);
-    $("readout").textContent = "Frame " + (index + 1) + " of " + N + ": " + parts.map(([k, v]) => k + " " + v).join(" \u00b7 ");
+    const since = between(index > 0 ? F.t[index - 1] : -Infinity, t);
+    const listed = since.slice(0, 4).map(evText).join("; ") + (since.length > 4 ? "; and " + (since.length - 4) + " more" : "");
+    $("readout").textContent = "Frame " + (index + 1) + " of " + N + ": " + parts.map(([k, v]) => k + " " + v).join(" \u00b7 ") +
+      ". Events since the previous frame: " + (since.length ? listed : "none") + ".";
+    $("readout").dataset.events = String(since.length);
   }
 
   function pause() {
@@ -475,12 +557,40 @@
     },
     time: () => F.t[index],
     frames: N,
+    events: NE,
     tipPixel() {
       const r = arm.getBoundingClientRect();
       const [x, y] = px(F.tip_x[index], F.tip_y[index]);
       return [r.left + window.scrollX + x, r.top + window.scrollY + y];
     },
   };
+  // The list of events, each a link to the first frame at or after it.
+  const counts = {};
+  for (let j = 0; j < NE; j++) counts[evKind(j)] = (counts[evKind(j)] || 0) + 1;
+  $("event-summary").textContent = NE === 0 ? "The run has no events." :
+    NE + " events: " + Object.entries(counts).map(([k, n]) => n + " " + k).join(", ") +
+    (E.left_out ? "; " + E.left_out + " later ones left out (the events table has them all)" : "") +
+    ". Click one to show the frame after it.";
+  const list = document.createDocumentFragment();
+  for (let j = 0; j < NE; j++) {
+    const li = document.createElement("li");
+    li.dataset.kind = evKind(j);
+    li.dataset.t = String(E.t[j]);
+    li.style.borderLeftColor = evColor(j);
+    li.textContent = evText(j);
+    list.append(li);
+  }
+  $("event-list").append(list);
+  $("event-list").addEventListener("click", (e) => {
+    const li = e.target.closest("li");
+    if (!li) return;
+    pause();
+    const te = Number(li.dataset.t);
+    let i = nearest(te);
+    if (F.t[i] < te && i < N - 1) i++;
+    show(i);
+  });
+
   drawStill();
   const q = new URLSearchParams(window.location.search);
   const t0 = q.has("t") ? parseFloat(q.get("t")) : NaN;

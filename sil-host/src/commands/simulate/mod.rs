@@ -69,6 +69,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     curves.push_events(&startup);
     curves.push(&row);
     if let Some(page) = &mut page {
+        startup.iter().for_each(|e| page.event(e.into()));
         page.push(&(&row).into());
     }
     if let Some(live) = live.as_mut() {
@@ -84,6 +85,9 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         .spawn(move || {
             for (rows, events) in chunks {
                 curves.push_events(&events);
+                if let Some(page) = &mut page {
+                    events.iter().for_each(|e| page.event(e.into()));
+                }
                 for row in &rows {
                     curves.push(row);
                     if let Some(page) = &mut page {
