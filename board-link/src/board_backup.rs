@@ -73,7 +73,9 @@ pub fn to_toml(b: &Backup) -> Result<String, BackupError> {
     Ok(format!(
         "# A board's calibration and firmware configuration: `sil-host board backup`.\n\
          # Restore it with `sil-host board restore FILE` (docs/board.md \"Backup and restore\");\n\
-         # the firmware checks every value and takes the file whole or not at all.\n{body}"
+         # the firmware checks every value and takes the file whole or not at all.\n\
+         # Each setting's unit is a comment at the end of its line.\n{}",
+        crate::setting_units::annotate_toml(&body)
     ))
 }
 

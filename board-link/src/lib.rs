@@ -22,6 +22,7 @@ pub mod bringup_procedure;
 pub mod emulator_link;
 pub mod free_arm;
 pub mod random_scenarios;
+pub mod setting_units;
 pub mod twin_link;
 
 pub use emulator_link::EmulatorLink;

@@ -40,8 +40,8 @@ const CRC: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum StepClock {
     /// SysTick at the core clock under an emulator (QEMU's `netduinoplus2`, whose
-    /// DWT cycle counter reads 0): under `-icount shift=0` one tick is one
-    /// retired instruction, not a cycle.
+    /// DWT cycle counter reads 0): under `-icount shift=0` an instruction retires
+    /// per virtual ns, so one 168 MHz tick is 5.95 retired instructions, not cycles.
     EmulatedSysTick,
     /// The DWT cycle counter (`CYCCNT`) on silicon: core clock cycles.
     DwtCycles,

@@ -3,7 +3,9 @@ summary document, its tables, its validity counters and how it ended)."""
 
 from __future__ import annotations
 
-from typing import Any, Dict, Iterator, List, Mapping, Optional, cast
+import os
+from pathlib import Path
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Union, cast
 
 import numpy as np
 
@@ -294,12 +296,50 @@ class Result:
         head = f"painleve.Result {self.command}: {self._state()}" + (f"; failure: {self.failure}" if self.failure else "")
         return "\n\n".join([head] + [str(t) for t in self.tables.values()])
 
+    def page(self) -> Optional[str]:
+        """The run's animated page (``trace.html``: the arm on the belt, the trace's
+        plots, every event marked; docs/rig.md "The animated page") as HTML text,
+        the same text ``sil-host`` writes for the same run: a ``simulate`` or
+        ``run`` result's, or the ``trace.html`` of a loaded folder; ``None`` for
+        the other commands."""
+        page = self.extras.get("page")
+        if page is None and self.path is not None:
+            path = Path(self.path) / "trace.html"
+            if path.is_file():
+                page = path.read_text(encoding="utf-8")
+        return page
+
+    def write_page(self, path: Union[str, "os.PathLike[str]"]) -> Path:
+        """Writes :meth:`page` to ``path`` (a folder: ``trace.html`` in it), the
+        same bytes as the CLI's ``trace.html`` of the same run, and returns the
+        file's path. Opens offline in any browser.
+
+        Raises:
+            ValueError: the result has no page (an analysis, not a run).
+        """
+        page = self.page()
+        if page is None:
+            raise ValueError(f"a {self.command} result has no page: simulate and run results have one")
+        out = Path(path)
+        if out.is_dir():
+            out = out / "trace.html"
+        out.write_bytes(page.encode("utf-8"))
+        return out
+
     def _repr_html_(self) -> str:
-        """The result as HTML for notebooks: the command, its validity, and its tables."""
+        """The result as HTML for notebooks: the command, its validity, the run's
+        animated page in a frame (runs only: :meth:`page`) and the tables."""
         import html
 
         head = html.escape(f"painleve.Result {self.command}: {self._state()}" + (f"; failure: {self.failure}" if self.failure else ""))
-        return f"<p>{head}</p>" + "".join(t._repr_html_() for t in self.tables.values())
+        page = self.page()
+        frame = (
+            f'<iframe srcdoc="{html.escape(page, quote=True)}" sandbox="allow-scripts" '
+            'style="width: 100%; height: 1020px; border: 1px solid #ddd"></iframe>'
+            if page is not None
+            else ""
+        )
+        return f"<p>{head}</p>" + frame + "".join(t._repr_html_() for t in self.tables.values())
 
     def __repr__(self) -> str:
         tables = ", ".join(f"{k}: {t.nrows}x{len(t)}" for k, t in self.tables.items())

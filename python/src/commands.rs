@@ -11,6 +11,7 @@ use std::time::Instant;
 use pyo3::{prelude::*, types::PyDict};
 
 use experiments::{self as cmd, Done, Error as CliError, settings::*};
+use figures::trace_page::{PageInfo, TracePage};
 use rig::FirmwareLink;
 
 use crate::cli::{cli_error, settings};
@@ -66,12 +67,22 @@ pub fn simulate<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Optio
         }
         (trace, events, failure, started.elapsed().as_secs_f64(), open_loop.plant)
     })?;
+    // The page, as `sil-host simulate` writes it (`trace.html`): the same rows and
+    // events into the same builder, so the same bytes.
+    let page = (!args.no_page).then(|| {
+        let impact_law = format!("{:?}", sim.impact_law).to_lowercase();
+        let mut page = TracePage::new(PageInfo::open_loop(&params, &initial_condition.name, &impact_law, sim.e_n));
+        events.iter().for_each(|e| page.event(e.into()));
+        trace.iter().for_each(|r| page.push(&r.into()));
+        page.html()
+    });
     let summary =
         cmd::simulate::summary(&args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, Vec::new(), events.len());
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &summary.validity);
     Outcome::new(py, "simulate", to_py(py, &summary)?)?
         .table("trace", columns_to_py(py, &trace))?
         .table("events", columns_to_py(py, &events))?
+        .extra("page", page.into_pyobject(py)?.into_any())?
         .validity(&summary.validity)?
         .failure(message, code)
         .map(Outcome::done)
@@ -220,6 +231,8 @@ struct Observer<'a> {
     control: &'a Control,
     validity: plant::Validity,
     ledger: plant::Ledger,
+    /// The page of the run, gathered as `sil-host run` gathers it (`None`: no page).
+    page: Option<TracePage>,
 }
 
 impl rig::RunObserver for Observer<'_> {
@@ -237,6 +250,18 @@ impl rig::RunObserver for Observer<'_> {
     fn on_ledger(&mut self, ledger: &plant::Ledger) {
         self.ledger = *ledger;
     }
+
+    fn on_events(&mut self, events: &[plant::PlantEvent]) {
+        if let Some(page) = &mut self.page {
+            events.iter().for_each(|e| page.event(e.into()));
+        }
+    }
+
+    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
+        if let Some(page) = &mut self.page {
+            page.push(&r.into());
+        }
+    }
 }
 
 /// `painleve.run`: `sil-host run --in-process` (the firmware step linked in,
@@ -252,14 +277,17 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
     let scenario = &setup.scenario().clone();
     warn(py, cmd::scenario::board_tables_note(scenario, link.without_board()))?;
     let mut link = InProcessLink::new(&setup).map_err(|e| cli_error(py, &CliError::from(e)))?;
+    // The page, as `sil-host run` gathers it (its records and events as they come).
+    let page = (!args.no_page).then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport())));
     let link_in_loop = &mut link;
     // The run moves to the worker (its plant is `Send`, not `Sync`).
-    let (records, failure, (validity, ledger), wall_s) = work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
+    let (records, failure, (validity, ledger), wall_s, page) = work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
         c.set(0, setup.scenario().timing.periods());
-        let mut observer = Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default() };
+        let mut observer = Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default(), page };
         let started = Instant::now();
         let (records, failure) = rig::run_loop(&setup, link_in_loop, &mut observer);
-        (records, failure, (observer.validity, observer.ledger), started.elapsed().as_secs_f64())
+        let wall_s = started.elapsed().as_secs_f64();
+        (records, failure, (observer.validity, observer.ledger), wall_s, observer.page.map(TracePage::html))
     })?;
     let stats = RunStats::of(&records);
     let summary = RunSummary {
@@ -271,6 +299,7 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
     Outcome::new(py, "run", to_py(py, &summary)?)?
         .table("trace", columns_to_py(py, &records))?
         .extra("scenario", to_py(py, scenario)?)?
+        .extra("page", page.into_pyobject(py)?.into_any())?
         .validity(&validity)?
         .failure(message, code)
         .map(Outcome::done)

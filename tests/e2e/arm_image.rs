@@ -44,7 +44,16 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     assert!(timeout.starts_with("[warn] period 0:") && timeout.contains("did not complete in time"), "{timeout}");
     let safe: Vec<_> = log.iter().filter(|l| l.contains("safe state")).collect();
     assert_eq!(safe.len(), 1, "latched once: {safe:?}");
-    assert!(safe[0].starts_with("[error] period 2: safe state (reason 13"), "{}", safe[0]);
+    assert!(safe[0].starts_with("[error] period 2: safe state, reason 13 (acquisition;"), "{}", safe[0]);
+    // Every ERROR and WARN line is one docs/board.md "Under QEMU" explains, no more.
+    let loud: Vec<_> = log.iter().filter(|l| l.starts_with("[error]") || l.starts_with("[warn]")).collect();
+    assert_eq!(loud.len(), 6, "four errors and two warnings: {loud:#?}");
+    let doc = std::fs::read_to_string(common::workspace().join("docs/board.md")).unwrap();
+    for l in &loud {
+        let words: String = l.split(": ").skip(1).collect::<Vec<_>>().join(": ");
+        let key: String = words.chars().take(40).collect();
+        assert!(doc.contains(&key), "docs/board.md explains `{l}` (looked for `{key}`)");
+    }
     assert!(!text.contains("drivers enabled") && !text.contains("enable button: firmware reset"), "{text}");
     assert!(text.contains("qemu run over: 3000 periods, drivers disabled"), "{text}");
 

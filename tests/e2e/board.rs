@@ -89,7 +89,7 @@ fn configure_sets_the_control_rate_and_a_saved_one_comes_back_after_the_reset(on
         assert_eq!(s["status"]["period_us"], us, "{rate} Hz: {s}");
     }
     let (code, out, err) = board(&t, &["configure", "--set", "timing.rate_hz=4000"]);
-    assert!(code == 0 && out.contains("config.period = 1000 -> 250"), "{out}{err}");
+    assert!(code == 0 && out.contains("config.period = 1000 -> 250 us"), "{out}{err}");
     assert_eq!(board(&t, &["save"]).0, 0);
     let periods = status(&t)["status"]["periods"].as_u64().unwrap();
     writeln!(t.stdin, "reset").unwrap();
@@ -137,6 +137,11 @@ fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchan
     assert!(out.contains("backup: done"), "{out}");
     let a: toml::Table = read("a.toml").parse().unwrap();
     assert_eq!(a["format"].as_integer(), Some(1), "{a}");
+    // Each setting's unit at the end of its line (issue 69).
+    let text = read("a.toml");
+    for line in ["f_n_ref = 10.0  # N", "period = 1000  # us", "belt_metres_per_count = ", "kp = [200.0, 0.0]  # N m/rad"] {
+        assert!(text.lines().any(|l| l.starts_with(line) && l.contains("  # ")), "{line:?} with its unit in:\n{text}");
+    }
     assert_eq!(a["calibration"]["zeros_set"].as_bool(), Some(true), "{a}");
     // The file is the board's own record: what `status` shows.
     let s = status(&t);
@@ -280,7 +285,7 @@ fn a_save_after_a_reset_that_discarded_a_configure_says_nothing_was_saved(on: Bo
     use std::io::Write;
     let mut t = twin(on, &["--flash", "saved"]);
     let (code, out, err) = board(&t, &["configure", "--set", "controller.f_n_ref=7"]);
-    assert!(code == 0 && out.contains("config.f_n_ref = 10.0 -> 7.0"), "{out}{err}");
+    assert!(code == 0 && out.contains("config.f_n_ref = 10.0 -> 7.0 N"), "{out}{err}");
     let periods = status(&t)["status"]["periods"].as_u64().unwrap();
     writeln!(t.stdin, "reset").unwrap();
     t.stdin.flush().unwrap();
@@ -584,14 +589,14 @@ fn the_bring_up_procedure_runs_end_to_end_from_a_new_board_to_an_enabled_one(on:
         assert!(out.contains("step time not measured") && out.contains("stack not measured") && !out.contains(" 0 ticks"), "{out}");
     }
     // Step 8: watch the closed loop: one line per reading (into a pipe; a
-    // terminal's line is rewritten in place), within 100 columns, the joints in
-    // degrees and the load cell in newtons.
+    // terminal's line is rewritten in place), within 80 columns (issue 69), the
+    // joints in degrees and the load cell in newtons.
     let (code, out, err) = board(&t, &["watch", "--count", "3", "--interval-ms", "10"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(out.lines().count(), 3, "{out}");
     for l in out.lines() {
-        assert!(l.starts_with('#') && l.contains("drv on") && l.contains("°") && l.contains(" N |"), "{l}");
-        assert!(!l.contains("nFAULT") && !l.contains("...") && l.chars().count() <= 100, "{} columns: {l}", l.chars().count());
+        assert!(l.starts_with('#') && l.contains("drv on") && l.contains("°") && l.contains(" N  belt"), "{l}");
+        assert!(!l.contains("nFAULT") && !l.contains("...") && l.chars().count() <= 80, "{} columns: {l}", l.chars().count());
     }
     assert_eq!(board(&t, &["disable"]).0, 0);
     belt(&mut t, "down");

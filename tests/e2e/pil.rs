@@ -111,6 +111,13 @@ fn default_scenario_in_pil_gives_the_sil_outcome_within_the_step_budget() {
     assert!(log.iter().any(|l| l.message.starts_with("configured: hybrid")), "{log:?}");
     let end = log.iter().find(|l| l.message.starts_with("end of run")).expect("the image logged its end");
     assert!(end.message.contains(&format!("{} frames", pil.len())), "{}", end.message);
+    // Its worst step in the clock it names (SysTick at 168 MHz under QEMU), the
+    // host's instructions at 168 MHz / 1 GHz of -icount shift=0 per tick (issue 69).
+    let at = end.message.find("worst step ").unwrap() + "worst step ".len();
+    let (ticks, _) = end.message[at..].split_once(' ').unwrap();
+    assert!(end.message.contains("SysTick at 168 MHz under QEMU"), "the log names its ticks: {}", end.message);
+    let instructions = ticks.parse::<f64>().unwrap() * 1e9 / 168e6;
+    assert!((instructions - step.worst).abs() <= 6.0, "{ticks} ticks are {instructions} instructions, the host's worst {}", step.worst);
     // The painted-stack probe: the deepest the stack went, in bytes, of a region
     // that flip-link puts below the statics (most of the 128 KiB).
     let at = end.message.find("stack high-water mark ").expect("the stack's high-water mark is reported") + 22;

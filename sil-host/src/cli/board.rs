@@ -31,7 +31,7 @@ pub enum BoardCommand {
     /// The firmware's state, its raw readings (encoder counts and field strength,
     /// ADC codes, belt count, fault line), its calibration and last telemetry.
     Status,
-    /// The raw readings every --interval-ms on one line of at most 100 columns
+    /// The raw readings every --interval-ms on one line of at most 80 columns
     /// (rewritten in place on a terminal; one line per reading into a pipe or a file;
     /// --json: one document per reading), until Ctrl-C or --count: the period, the
     /// drivers, the joints (degrees once the zeros are set), the load cell (newtons

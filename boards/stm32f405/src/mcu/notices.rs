@@ -76,10 +76,13 @@ pub fn log(n: Notice) {
             flags & frame_flags::BELT_INVALID != 0,
             flags & frame_flags::DRIVER_FAULT != 0
         ),
+        // The reason's own name, interned by defmt (no flash for the text; issue 69:
+        // the line listed every reason, and missed the two newest).
         Notice::SafeState { seq, reason } => defmt::error!(
-            "period {=u32}: safe state (reason {=u8}: 1 deadline misses, 2 bad frames, 3 non-finite, 4 singular, 5 unreachable, 6 peer lost, 7 sensor fault, 8 runaway, 9 overload, 10 miswired, 11 tracking, 12 lift-off, 13 acquisition; firmware::SafeReason): drivers disabled; press the enable button to reset",
+            "period {=u32}: safe state, reason {=u8} ({=istr}; firmware::SafeReason): drivers disabled; press the enable button to reset",
             seq,
-            reason
+            reason,
+            safe_reason_name(reason)
         ),
         Notice::DriversDidNotDisable => defmt::error!("the drivers did not disable"),
         Notice::DriversEnabled { seq } => defmt::info!("period {=u32}: drivers enabled", seq),
@@ -115,5 +118,28 @@ pub fn log(n: Notice) {
             _ => defmt::error!("settings: {=str}", s.describe()),
         },
         Notice::LockedOut(s) => defmt::warn!("enable button ignored: {=str}", s.describe()),
+    }
+}
+
+/// The name of safe-state reason `code` (`firmware::SafeReason`'s discriminants),
+/// as an interned defmt string.
+fn safe_reason_name(code: u8) -> defmt::Str {
+    match code {
+        1 => defmt::intern!("deadline misses"),
+        2 => defmt::intern!("bad frames"),
+        3 => defmt::intern!("non-finite"),
+        4 => defmt::intern!("singular"),
+        5 => defmt::intern!("unreachable"),
+        6 => defmt::intern!("peer lost"),
+        7 => defmt::intern!("sensor fault"),
+        8 => defmt::intern!("runaway"),
+        9 => defmt::intern!("overload"),
+        10 => defmt::intern!("miswired"),
+        11 => defmt::intern!("tracking"),
+        12 => defmt::intern!("lift-off"),
+        13 => defmt::intern!("acquisition"),
+        14 => defmt::intern!("saturated"),
+        15 => defmt::intern!("unstable"),
+        _ => defmt::intern!("unknown"),
     }
 }

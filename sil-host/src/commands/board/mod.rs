@@ -242,7 +242,8 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 } else {
                     outln!("configure: done: {} setting(s) changed, not yet saved (`sil-host board save`):", changed.len());
                     for (k, a, b) in &changed {
-                        outln!("  {k} = {a} -> {b}");
+                        let unit = board_link::setting_units::unit_of(k).map_or(String::new(), |u| format!(" {u}"));
+                        outln!("  {k} = {a} -> {b}{unit}");
                     }
                 }
                 outln!("the board's control tick runs {tick_us} us ({:.0} Hz)", 1e6 / tick_us as f64);

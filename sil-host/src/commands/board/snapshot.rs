@@ -37,8 +37,9 @@ pub(super) fn snapshot<S: std::io::Read + Write>(c: &mut Client<S>) -> Result<Sn
     Ok(Snapshot { status, raw, calibration, telemetry })
 }
 
-/// The widest `watch` line, characters: a reading fits a 100-column terminal.
-pub const WATCH_COLUMNS: usize = 100;
+/// The widest `watch` line, characters: a reading fits an 80-column terminal
+/// (issue 69; a 6-digit period, three-digit angles and two-digit forces take 80).
+pub const WATCH_COLUMNS: usize = 80;
 
 /// One reading of `watch` on one line of at most [`WATCH_COLUMNS`] characters:
 /// `#` and the period, the drivers, the joints (theta1 and the elbow's angle in
@@ -66,11 +67,11 @@ pub(super) fn watch_line(s: &Snapshot) -> String {
         },
     };
     let line = format!(
-        "#{} | drv {} | {joints} | {load} | belt {}{} | {}",
+        "#{} drv {}  {joints}  {load}  belt {}{}  {}",
         st.periods,
         if st.drivers_enabled { "on" } else { "off" },
         r.belt_count,
-        if r.driver_fault { " | nFAULT ASSERTED" } else { "" },
+        if r.driver_fault { "  nFAULT ASSERTED" } else { "" },
         short_status(st.status)
     );
     fit(&line, WATCH_COLUMNS)
