@@ -45,9 +45,22 @@ impl NiceAxis {
         self
     }
 
-    /// The tick step for at most `max_ticks` ticks.
+    /// The tick step for at most `max_ticks` ticks, but at least two inside the
+    /// range (issue 69: a narrow panel whose range straddles a round value, e.g.
+    /// -0.35 to 0.05 with 3 ticks, had the step 0.5 and one label, `0`): the next
+    /// smaller `{1, 2, 5} x 10^k` while fewer than two fall inside, down to
+    /// `min_step`.
     pub fn step(&self, max_ticks: usize) -> f64 {
-        nice_step(self.hi - self.lo, max_ticks.max(2)).max(self.min_step)
+        let mut step = nice_step(self.hi - self.lo, max_ticks.max(2)).max(self.min_step);
+        let inside = |s: f64| (self.hi / s).floor() - (self.lo / s).ceil() + 1.0;
+        while inside(step) < 2.0 {
+            let smaller = smaller_step(step);
+            if smaller < self.min_step || smaller <= 0.0 {
+                break;
+            }
+            step = smaller;
+        }
+        step
     }
 
     /// The ticks for at most `max_ticks` ticks, ascending.
@@ -81,6 +94,19 @@ pub fn nice_step(span: f64, max_ticks: usize) -> f64 {
             }
         }
         p *= 10.0;
+    }
+}
+
+/// The round step below `step` (`{1, 2, 5} x 10^k`): 5 -> 2 -> 1 -> 0.5.
+fn smaller_step(step: f64) -> f64 {
+    let p = 10f64.powi(step.log10().floor() as i32);
+    let m = (step / p).round();
+    if m >= 5.0 {
+        2.0 * p
+    } else if m >= 2.0 {
+        p
+    } else {
+        0.5 * p
     }
 }
 
@@ -230,6 +256,35 @@ mod tests {
             let t = a.ticks(7);
             assert!(!t.is_empty() && t.len() <= 7, "{lo} {hi}: {t:?}");
             assert!(t.iter().all(|v| *v >= r.start - 1e-12 && *v <= r.end + 1e-12));
+        }
+    }
+
+    /// Issue 69 (5): a range that straddles a round value gets two labels or
+    /// more however few ticks are asked for (the sensitivity figure's narrow
+    /// panels, the animation's strip), over random ranges.
+    #[test]
+    fn every_axis_has_at_least_two_labelled_ticks() {
+        let a = NiceAxis::new(-0.35..0.05, 3);
+        let t = a.ticks(3);
+        assert!(t.len() >= 2, "{t:?}");
+        assert_eq!(t.iter().map(|v| a.label(*v)).collect::<Vec<_>>(), ["-0.2", "0.0"]);
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..10_000 {
+            let scale = 10f64.powi((next() * 8.0) as i32 - 4);
+            let lo = (next() - 0.5) * 10.0 * scale;
+            let hi = lo + (0.01 + next()) * scale;
+            let n = 2 + (next() * 8.0) as usize;
+            let a = NiceAxis::new(lo..hi, n);
+            let t = a.ticks(n);
+            assert!(t.len() >= 2, "{lo}..{hi} with {n} ticks: {t:?}");
+            let labels: Vec<String> = t.iter().map(|v| a.label(*v)).collect();
+            assert!(labels.windows(2).all(|w| w[0] != w[1]), "distinct labels for {lo}..{hi}: {labels:?}");
         }
     }
 
