@@ -178,3 +178,25 @@ def test_a_plants_state_is_settable_and_checked_against_the_contact(model):
         plant.reset(t=-1.0)
     plant.reset()
     assert plant.time == 0.0
+
+
+def test_a_shape_error_names_the_argument(model):
+    # Issue 69 (5): the wrong length or shape names the argument and what it got.
+    cases = [
+        (lambda: model.mass_matrix([1.0, 2.0, 3.0]), "theta: expected 2 numbers", "a sequence of 3"),
+        (lambda: model.mass_matrix(np.zeros((2, 2))), "theta: expected 2 numbers", "an array of shape (2, 2)"),
+        (lambda: model.energy(np.zeros(3)), "state: expected 4 numbers", "an array of shape (3,)"),
+        (lambda: model.b([0.3, 0.0, -0.5, 0.0], torques=[1.0]), "torques: expected 2 numbers", "a sequence of 1"),
+        (lambda: painleve.Plant(state=[1.0, 2.0]), "state: expected 4 numbers", "a sequence of 2"),
+    ]
+    for call, head, got in cases:
+        with pytest.raises(ValueError) as e:
+            call()
+        assert str(e.value).startswith(head) and got in str(e.value), str(e.value)
+    with pytest.raises(TypeError, match="theta: expected 2 numbers"):
+        model.tip("ab")
+    with pytest.raises(TypeError, match="theta: expected 2 numbers, got an element"):
+        model.tip(["a", "b"])
+    # The default torques are none: the same b as zero torques given.
+    s = [0.3, 0.0, -0.5, 0.0]
+    assert model.b(s) == model.b(s, torques=[0.0, 0.0]) == model.b(s, np.zeros(2))

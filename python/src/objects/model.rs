@@ -140,7 +140,8 @@ impl PyModel {
     /// Forward kinematics: the tip `[z_t, z_n]` (m, shape `(2,)`) at configuration
     /// `theta = [theta1, theta2]` (rad): `z_t = l (cos theta1 + cos theta2)`,
     /// `z_n = l (sin theta1 + sin theta2)` (docs/model.md; the belt is at `z_n = -h`).
-    fn tip<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn tip<'py>(&self, py: Python<'py>, theta: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let theta = super::numbers::<2>("theta", theta)?;
         Ok(vec_py(py, kinematics::tip_position(self.arm.params.l, &q_of(theta)?)))
     }
 
@@ -151,7 +152,8 @@ impl PyModel {
     /// Raises `ValueError` for a point out of reach (farther than `2 l` or at the
     /// base), a non-finite one, or an unknown branch.
     #[pyo3(signature = (z, branch="down"))]
-    fn inverse_kinematics<'py>(&self, py: Python<'py>, z: [f64; 2], branch: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn inverse_kinematics<'py>(&self, py: Python<'py>, z: &Bound<'_, PyAny>, branch: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let z = super::numbers::<2>("z", z)?;
         let branch = match branch {
             "down" => ElbowBranch::Down,
             "up" => ElbowBranch::Up,
@@ -165,39 +167,45 @@ impl PyModel {
 
     /// The Jacobian `J = d[z_t, z_n]/d[theta1, theta2]` (m/rad, shape `(2, 2)`)
     /// at configuration `theta` (paper eq. 2).
-    fn jacobian<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn jacobian<'py>(&self, py: Python<'py>, theta: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let theta = super::numbers::<2>("theta", theta)?;
         mat_py(py, kinematics::jacobian(self.arm.params.l, &q_of(theta)?))
     }
 
     /// `J_dot q_dot` (m/s^2, shape `(2,)`) at `state`: the tip's acceleration with
     /// no joint acceleration (paper eq. 2's `s`).
-    fn jdot_qdot<'py>(&self, py: Python<'py>, state: [f64; 4]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn jdot_qdot<'py>(&self, py: Python<'py>, state: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let state = super::numbers::<4>("state", state)?;
         let (q, qd) = split(state)?;
         Ok(vec_py(py, kinematics::jdot_qdot(self.arm.params.l, &q, &qd)))
     }
 
     /// The mass matrix `M(theta)` (kg m^2, shape `(2, 2)`), paper eq. 1.
-    fn mass_matrix<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn mass_matrix<'py>(&self, py: Python<'py>, theta: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let theta = super::numbers::<2>("theta", theta)?;
         mat_py(py, self.arm.mass_matrix(&q_of(theta)?))
     }
 
     /// `Q = J M^-1 J^T` (1/kg, shape `(2, 2)`, symmetric positive definite): the
     /// tip's acceleration per newton of tip force (paper eq. 3).
-    fn q_matrix<'py>(&self, py: Python<'py>, theta: [f64; 2]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn q_matrix<'py>(&self, py: Python<'py>, theta: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let theta = super::numbers::<2>("theta", theta)?;
         mat_py(py, self.arm.q_matrix(&q_of(theta)?))
     }
 
     /// The generalised forces of the free arm `w + c` (N m, shape `(2,)`) at
     /// `state`: gravity, the spring and damping (`w`) and the velocity terms (`c`)
     /// of paper eq. 1, `M q_ddot = -(w + c) + J^T f + u`.
-    fn bias<'py>(&self, py: Python<'py>, state: [f64; 4]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn bias<'py>(&self, py: Python<'py>, state: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let state = super::numbers::<4>("state", state)?;
         let (q, qd) = split(state)?;
         Ok(vec_py(py, self.arm.w(&q, &qd) + self.arm.c(&q, &qd)))
     }
 
     /// The generalised torque `u = [u1 - u2, u2]` (N m, shape `(2,)`) of the motor
     /// torques `torques = [u1, u2]` (paper eq. 1).
-    fn generalised_torque<'py>(&self, py: Python<'py>, torques: [f64; 2]) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn generalised_torque<'py>(&self, py: Python<'py>, torques: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let torques = super::numbers::<2>("torques", torques)?;
         Ok(vec_py(py, generalised(torques)?))
     }
 
@@ -205,14 +213,17 @@ impl PyModel {
     /// `direction` (`"positive"`: `z_r_dot > 0`; `"negative"`): `p = Q22 - mu
     /// sign(z_r_dot) Q21` (paper eq. 7). `p < 0` is the Painlevé paradox.
     #[pyo3(signature = (theta, direction="negative"))]
-    fn p(&self, theta: [f64; 2], direction: &str) -> PyResult<f64> {
+    fn p(&self, theta: &Bound<'_, PyAny>, direction: &str) -> PyResult<f64> {
+        let theta = super::numbers::<2>("theta", theta)?;
         Ok(self.arm.p(&q_of(theta)?, self::direction(direction)?))
     }
 
     /// The paper's `b` (m/s^2) at `state` under motor torques `torques = [u1, u2]`
-    /// (N m): the tip's free normal acceleration (paper eq. 6).
-    #[pyo3(signature = (state, torques=[0.0, 0.0]))]
-    fn b(&self, state: [f64; 4], torques: [f64; 2]) -> PyResult<f64> {
+    /// (N m; `None`: none): the tip's free normal acceleration (paper eq. 6).
+    #[pyo3(signature = (state, torques=None))]
+    fn b(&self, state: &Bound<'_, PyAny>, torques: Option<&Bound<'_, PyAny>>) -> PyResult<f64> {
+        let state = super::numbers::<4>("state", state)?;
+        let torques = torques.map(|v| super::numbers::<2>("torques", v)).transpose()?.unwrap_or([0.0; 2]);
         let (q, qd) = split(state)?;
         Ok(self.arm.b(&q, &qd, &generalised(torques)?))
     }
@@ -220,8 +231,9 @@ impl PyModel {
     /// Whether configuration `theta` is in the Painlevé region when sliding in
     /// `direction`: `p < 0` (paper section III).
     #[pyo3(signature = (theta, direction="negative"))]
-    fn painleve(&self, theta: [f64; 2], direction: &str) -> PyResult<bool> {
-        Ok(self.p(theta, direction)? < 0.0)
+    fn painleve(&self, theta: &Bound<'_, PyAny>, direction: &str) -> PyResult<bool> {
+        let theta = super::numbers::<2>("theta", theta)?;
+        Ok(self.arm.p(&q_of(theta)?, self::direction(direction)?) < 0.0)
     }
 
     /// The contact mode (`"flight"`, `"sliding"`, `"sticking"`, `"jam"` or
@@ -231,8 +243,10 @@ impl PyModel {
     /// direction of `z_r_dot = z_t_dot - v_belt`, or sticking when `|z_r_dot|` is
     /// at most `v_stick` (m/s, finite and >= 0) and the sticking force is in the
     /// friction cone.
-    #[pyo3(signature = (state, torques=[0.0, 0.0], v_stick=1e-9))]
-    fn contact_mode(&self, state: [f64; 4], torques: [f64; 2], v_stick: f64) -> PyResult<&'static str> {
+    #[pyo3(signature = (state, torques=None, v_stick=1e-9))]
+    fn contact_mode(&self, state: &Bound<'_, PyAny>, torques: Option<&Bound<'_, PyAny>>, v_stick: f64) -> PyResult<&'static str> {
+        let state = super::numbers::<4>("state", state)?;
+        let torques = torques.map(|v| super::numbers::<2>("torques", v)).transpose()?.unwrap_or([0.0; 2]);
         let (q, qd) = split(state)?;
         let u = generalised(torques)?;
         if !(v_stick.is_finite() && v_stick >= 0.0) {
@@ -246,7 +260,8 @@ impl PyModel {
 
     /// Mechanical energy (J) at `state`: kinetic `1/2 q_dot^T M q_dot` plus
     /// gravity and the spring (docs/plant.md "The energy ledger").
-    fn energy(&self, state: [f64; 4]) -> PyResult<f64> {
+    fn energy(&self, state: &Bound<'_, PyAny>) -> PyResult<f64> {
+        let state = super::numbers::<4>("state", state)?;
         let (q, qd) = split(state)?;
         Ok(self.arm.kinetic_energy(&q, &qd) + self.arm.potential_energy(&q))
     }

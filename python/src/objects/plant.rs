@@ -140,9 +140,10 @@ impl PyPlant {
     fn new(
         py: Python<'_>,
         scenario: Option<&Bound<'_, PyAny>>,
-        state: Option<[f64; 4]>,
+        state: Option<&Bound<'_, PyAny>>,
         params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
+        let state = state.map(|v| super::numbers::<4>("state", v)).transpose()?;
         let given = scenario.is_some_and(|s| !s.is_none());
         let mut s = PyScenario::of(py, scenario)?;
         if !given {
@@ -206,7 +207,8 @@ impl PyPlant {
     /// below the belt (the tip under `z_n = -H`), a non-finite state or a
     /// negative or non-finite `t`.
     #[pyo3(signature = (state=None, t=None))]
-    fn reset(&mut self, py: Python<'_>, state: Option<[f64; 4]>, t: Option<f64>) -> PyResult<()> {
+    fn reset(&mut self, py: Python<'_>, state: Option<&Bound<'_, PyAny>>, t: Option<f64>) -> PyResult<()> {
+        let state = state.map(|v| super::numbers::<4>("state", v)).transpose()?;
         let t0 = t.unwrap_or(0.0);
         if !(t0.is_finite() && t0 >= 0.0) {
             return Err(error(py, format!("t = {t0} s: expected a finite time >= 0"), 2));
@@ -252,7 +254,8 @@ impl PyPlant {
     }
 
     #[setter]
-    fn set_state(&mut self, py: Python<'_>, state: [f64; 4]) -> PyResult<()> {
+    fn set_state(&mut self, py: Python<'_>, state: &Bound<'_, PyAny>) -> PyResult<()> {
+        let state = super::numbers::<4>("state", state)?;
         let now = self.with(Plant::time);
         let plant = self.at(py, state, now)?;
         *self.plant.get_mut().unwrap_or_else(|p| p.into_inner()) = plant;
