@@ -300,7 +300,8 @@ class Result:
         """The run's animated page (``trace.html``: the arm on the belt, the trace's
         plots, every event marked; docs/rig.md "The animated page") as HTML text,
         the same text ``sil-host`` writes for the same run: a ``simulate`` or
-        ``run`` result's, or the ``trace.html`` of a loaded folder; ``None`` for
+        ``run`` result's (a ``run_controller`` result's too, its controller named
+        as the caller's), or the ``trace.html`` of a loaded folder; ``None`` for
         the other commands."""
         page = self.extras.get("page")
         if page is None and self.path is not None:
@@ -319,7 +320,7 @@ class Result:
         """
         page = self.page()
         if page is None:
-            raise ValueError(f"a {self.command} result has no page: simulate and run results have one")
+            raise ValueError(f"a {self.command} result has no page: simulate, run and run_controller results have one")
         out = Path(path)
         if out.is_dir():
             out = out / "trace.html"

@@ -43,3 +43,12 @@ def test_an_analysis_has_no_page():
     with pytest.raises(ValueError, match="no page"):
         r.write_page("anywhere.html")
     assert "<iframe" not in r._repr_html_()
+
+
+def test_a_python_controllers_run_has_its_page(tmp_path):
+    # The paper's PID as a Python function would do; here a constant torque, 0.1 s.
+    r = painleve.run_controller(lambda t, sensed: (0.0, 0.0), duration=0.1)
+    page = r.page()
+    assert page is not None and "painleve.run_controller" in page
+    assert r.write_page(tmp_path / "p.html").read_text(encoding="utf-8") == page
+    assert '"t":[' in page.replace(" ", "")

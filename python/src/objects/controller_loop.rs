@@ -196,11 +196,12 @@ impl FirmwareLink for PythonLink<'_> {
     }
 }
 
-/// Keeps the validity of the run.
-#[derive(Default)]
+/// Keeps the validity of the run, and gathers its page (`trace.html`, as
+/// `painleve.run`'s: its records and events as they come).
 struct Finished {
     validity: plant::Validity,
     ledger: plant::Ledger,
+    page: figures::trace_page::TracePage,
 }
 
 impl rig::RunObserver for Finished {
@@ -210,6 +211,14 @@ impl rig::RunObserver for Finished {
 
     fn on_ledger(&mut self, ledger: &plant::Ledger) {
         self.ledger = *ledger;
+    }
+
+    fn on_events(&mut self, events: &[plant::PlantEvent]) {
+        events.iter().for_each(|e| self.page.event(e.into()));
+    }
+
+    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
+        self.page.push(&r.into());
     }
 }
 
@@ -237,7 +246,15 @@ pub fn run_controller<'py>(
     }
     let setup = RunSetup::new(s.clone()).map_err(|e| error(py, e.to_string(), 2))?;
     let mut link = PythonLink::new(&setup, controller).map_err(|e| error(py, e.to_string(), 2))?;
-    let mut finished = Finished::default();
+    // The page of a closed-loop run, its controller the caller's: the title and
+    // the controller fact say so (the scenario's controller is not the one run).
+    let mut info = figures::trace_page::PageInfo::closed_loop(setup.scenario(), "python");
+    info.title = format!("Python controller (painleve.run_controller), scenario {}: from x0{}", s.name, s.plant.x0);
+    if let Some(fact) = info.facts.iter_mut().find(|(k, _)| k == "controller") {
+        fact.1 = "the caller's Python function (painleve.run_controller); the scenario's references".into();
+    }
+    let page = figures::trace_page::TracePage::new(info);
+    let mut finished = Finished { validity: plant::Validity::default(), ledger: plant::Ledger::default(), page };
     let started = Instant::now();
     let (records, failure) = rig::run_loop(&setup, &mut link, &mut finished);
     let wall_s = started.elapsed().as_secs_f64();
@@ -258,6 +275,7 @@ pub fn run_controller<'py>(
     Outcome::new(py, "run_controller", to_py(py, &summary)?)?
         .table("trace", rows_to_py(py, &records)?)?
         .extra("scenario", to_py(py, &s)?)?
+        .extra("page", finished.page.html().into_pyobject(py)?.into_any())?
         .validity(&validity)?
         .failure(message, code)
         .map(Outcome::done)
