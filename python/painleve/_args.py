@@ -100,8 +100,9 @@ def given(fn: Callable[..., Any], args: Mapping[str, Any], skip: Sequence[str] =
         if name in skip or name == "progress":
             continue
         if name == "set":
-            if overrides(v):
-                out["set"] = overrides(v)
+            items = overrides(v)
+            if items:
+                out["set"] = items
             continue
         if v is None or (name in defaults and _same(v, defaults[name])):
             continue

@@ -375,3 +375,46 @@ fn the_page_marks_every_event_of_the_bounce() {
     let ring = ring_pixels(&decode(&png), tip_at(frames[quiet]), 22.0);
     assert!(ring < 5, "no ring without an impact (t = {} s): {ring} px of its colour", frames[quiet]);
 }
+
+/// Issue 69 (1), over random open-loop runs (not only the x0a bounce): the
+/// page's events are `events.csv`'s, every one, each kind and time bit for bit.
+/// Reads the page's data (no browser): the list the script builds is this data.
+#[test]
+fn every_event_of_random_runs_is_in_the_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut x = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut impacts = 0;
+    for k in 0..8 {
+        let out = dir.path().join(format!("run{k}"));
+        let x0 = ["a", "d", "u"][(next() * 3.0) as usize];
+        let law = ["newton", "poisson", "energetic"][(next() * 3.0) as usize];
+        let (mu, v_belt, e_n) = (0.2 + 0.8 * next(), -1.0 + 0.9 * next(), 0.8 * next());
+        let (mu, v_belt, e_n) = (format!("{mu:.3}"), format!("{v_belt:.3}"), format!("{e_n:.2}"));
+        let args = ["simulate", "--x0", x0, "--mu", &mu, "--v-belt", &v_belt, "--e-n", &e_n, "--impact-law", law, "--duration", "3"];
+        sil_host(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+        let events = events_of(&out.join("events.csv"));
+        let data = page_data(&std::fs::read_to_string(out.join("trace.html")).unwrap());
+        let e = &data["events"];
+        let kinds: Vec<&str> = e["kinds"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+        let listed: Vec<(String, f64)> = e["t"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(e["kind"].as_array().unwrap())
+            .map(|(t, i)| (kinds[i.as_u64().unwrap() as usize].to_string(), t.as_f64().unwrap()))
+            .collect();
+        assert_eq!(listed.len(), events.len(), "{args:?}: every event in the page");
+        for ((a, ta), (b, tb)) in events.iter().zip(&listed) {
+            assert!(a == b && ta.to_bits() == tb.to_bits(), "{args:?}: events.csv {a} at {ta}, the page {b} at {tb}");
+        }
+        assert_eq!(e["left_out"], 0, "{args:?}");
+        impacts += events.iter().filter(|(k, _)| k == "touchdown" || k == "impact_without_collision").count();
+    }
+    assert!(impacts > 0, "the random runs have impacts to mark");
+}
