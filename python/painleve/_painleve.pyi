@@ -29,6 +29,12 @@ class PainleveError(ValueError):
 _Progress = Union[bool, None, Callable[[int, int], Any]]
 _Raw = Dict[str, Any]
 
+class Recording:
+    """A run's rows kept for its MCAP file (``Result.extras["recording"]``)."""
+
+    def write_mcap(self, path: str) -> None:
+        """Writes ``sil-host``'s ``trace.mcap`` of the same run at ``path``; ``OSError`` when it cannot."""
+
 def simulate(given: Dict[str, Any], progress: _Progress = None) -> _Raw: ...
 def admissible(given: Dict[str, Any]) -> _Raw: ...
 def modes(given: Dict[str, Any]) -> _Raw: ...

@@ -327,6 +327,43 @@ class Result:
         out.write_bytes(page.encode("utf-8"))
         return out
 
+    def write_mcap(self, path: Union[str, "os.PathLike[str]"]) -> Path:
+        """Writes the run's MCAP file to ``path`` (a folder: ``trace.mcap`` in it)
+        and returns the file's path: the bytes ``sil-host`` writes as
+        ``trace.mcap`` for the same run with ``--format mcap`` (the tables as
+        protobuf channels, and the arm in Foxglove's schemas: ``/tf``, ``/scene``,
+        ``/log``; docs/rig.md "Foxglove"). Open it in Foxglove, or read it back
+        with :func:`painleve.read_mcap`.
+
+        A ``simulate`` result writes its samples and events; a ``run`` or
+        ``run_controller`` result its period records. A loaded folder copies its
+        ``trace.mcap`` when it has one.
+
+        Raises:
+            ValueError: the result holds no run (an analysis), or is a loaded
+                folder without a ``trace.mcap`` (run the command again with
+                ``format="mcap"``, or call the function again).
+            OSError: the file cannot be written.
+        """
+        out = Path(path)
+        if out.is_dir():
+            out = out / "trace.mcap"
+        recording = self.extras.get("recording")
+        if recording is not None:
+            recording.write_mcap(str(out))
+            return out
+        if self.path is not None:
+            source = Path(self.path) / "trace.mcap"
+            if source.is_file():
+                if source.resolve() != out.resolve():
+                    out.write_bytes(source.read_bytes())
+                return out
+            raise ValueError(
+                f"the folder {self.path} has no trace.mcap and its rows are not kept: "
+                "write it with format='mcap' (sil-host ... --format mcap), or run the function again"
+            )
+        raise ValueError(f"a {self.command} result has no run to write: simulate, run and run_controller results have one")
+
     def _repr_html_(self) -> str:
         """The result as HTML for notebooks: the command, its validity, the run's
         animated page in a frame (runs only: :meth:`page`) and the tables."""

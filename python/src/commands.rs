@@ -16,6 +16,7 @@ use rig::FirmwareLink;
 
 use crate::cli::{cli_error, settings};
 use crate::convert::{Outcome, columns_to_py, points_to_py, rows_to_py, to_py};
+use crate::recording::Recording;
 use crate::work::{self, Control};
 
 /// The CLI's failure after `--strict` ([`Done::strict`]): the message and exit
@@ -53,19 +54,23 @@ pub fn simulate<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Optio
     let args: SimulateArgs = settings(py, "simulate", &given)?;
     let prepared = cmd::simulate::prepare(&args).map_err(|e| cli_error(py, &e))?;
     let (params, sim, initial_condition) = (prepared.params, prepared.sim, prepared.initial_condition.clone());
-    let (trace, events, failure, wall_s, plant) = work::run(py, progress.as_ref(), "simulate", "samples", |c: &Control| {
+    let (trace, events, batches, failure, wall_s, plant) = work::run(py, progress.as_ref(), "simulate", "samples", |c: &Control| {
         let (mut open_loop, row, mut events) = OpenLoop::start(prepared, args.sample_dt);
         c.set(0, open_loop.steps as u64);
         let mut trace: Vec<TraceRow> = Vec::with_capacity(open_loop.steps + 1);
         trace.push(row);
+        // Where the command line's batches to trace.mcap end (the first sample
+        // with the start-up events, then a chunk at a time): Result.write_mcap's bytes.
+        let mut batches = vec![(trace.len(), events.len())];
         let started = Instant::now();
         let mut failure = None;
         // Ctrl-C is seen between the loop's chunks (OpenLoop::CHUNK_S s of samples).
         while !open_loop.finished() && failure.is_none() && !c.stopped() {
             failure = open_loop.advance(open_loop.k + 1, &mut trace, &mut events).err();
+            batches.push((trace.len(), events.len()));
             c.set(open_loop.k as u64, open_loop.steps as u64);
         }
-        (trace, events, failure, started.elapsed().as_secs_f64(), open_loop.plant)
+        (trace, events, batches, failure, started.elapsed().as_secs_f64(), open_loop.plant)
     })?;
     // The page, as `sil-host simulate` writes it (`trace.html`): the same rows and
     // events into the same builder, so the same bytes.
@@ -76,13 +81,17 @@ pub fn simulate<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Optio
         trace.iter().for_each(|r| page.push(&r.into()));
         page.html()
     });
+    let geometry = arm_view::ArmGeometry::of(&params);
     let summary =
         cmd::simulate::summary(&args, (params, sim, initial_condition), &plant, failure.as_ref(), wall_s, Vec::new(), events.len());
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &summary.validity);
+    let (trace_py, events_py) = (columns_to_py(py, &trace), columns_to_py(py, &events));
+    let recording = Recording::open_loop(geometry, trace, events, batches);
     Outcome::new(py, "simulate", to_py(py, &summary)?)?
-        .table("trace", columns_to_py(py, &trace))?
-        .table("events", columns_to_py(py, &events))?
+        .table("trace", trace_py)?
+        .table("events", events_py)?
         .extra("page", page.into_pyobject(py)?.into_any())?
+        .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?
         .validity(&summary.validity)?
         .failure(message, code)
         .map(Outcome::done)
@@ -296,10 +305,13 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
         ..RunSummary::from_stats(scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);
+    let trace_py = columns_to_py(py, &records);
+    let recording = Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(scenario)), records);
     Outcome::new(py, "run", to_py(py, &summary)?)?
-        .table("trace", columns_to_py(py, &records))?
+        .table("trace", trace_py)?
         .extra("scenario", to_py(py, scenario)?)?
         .extra("page", page.into_pyobject(py)?.into_any())?
+        .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?
         .validity(&validity)?
         .failure(message, code)
         .map(Outcome::done)

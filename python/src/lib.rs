@@ -16,6 +16,7 @@ mod commands;
 mod convert;
 mod objects;
 mod read;
+mod recording;
 mod work;
 
 use pyo3::prelude::*;
@@ -82,6 +83,7 @@ fn toml_of(v: &serde_json::Value, at: &str) -> Result<toml::Value, String> {
 fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PainleveError", m.py().get_type::<cli::PainleveError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<recording::Recording>()?;
     m.add_function(wrap_pyfunction!(commands::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(commands::admissible, m)?)?;
     m.add_function(wrap_pyfunction!(commands::modes, m)?)?;

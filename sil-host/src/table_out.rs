@@ -18,7 +18,7 @@ use tables::{
 #[cfg(feature = "formats")]
 use tables::{
     arrow::{ArrowFile, ArrowThread},
-    mcap::{FILE_CHUNK_BYTES, McapFile, McapTable},
+    mcap::McapPair,
 };
 
 /// A table of rows `T` being written into an [`OutputSet`] (under its temporary
@@ -93,13 +93,13 @@ pub type Views<A, B> = (View<A>, View<B>);
 /// Two tables of a command (`simulate`'s `trace` of rows `A` and `events` of
 /// rows `B`): two files (`trace.csv` and `events.csv`, or `.arrow`), or one MCAP
 /// file `trace.mcap` holding both, their messages interleaved in order of time
-/// and written a chunk of [`FILE_CHUNK_BYTES`] at a time.
+/// ([`McapPair`], as `painleve`'s `Result.write_mcap` writes it).
 pub enum TablesOut<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'static> {
     /// A file per table.
     Two(TableOut<A>, TableOut<B>),
     /// One MCAP file.
     #[cfg(feature = "formats")]
-    Mcap(Box<McapFile>, McapTable, McapTable),
+    Mcap(Box<McapPair<A, B>>),
 }
 
 impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'static> TablesOut<A, B> {
@@ -119,9 +119,7 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
             #[cfg(feature = "formats")]
             TableFormat::Mcap => {
                 let (path, file) = out.create_unbuffered(&format.file(stems[0]))?;
-                let mut mcap = McapFile::new(path, file, Some(FILE_CHUNK_BYTES))?;
-                let (a, b) = (mcap.add_table_with_view::<A>(views.0)?, mcap.add_table_with_view::<B>(views.1)?);
-                Self::Mcap(Box::new(mcap), a, b)
+                Self::Mcap(Box::new(McapPair::new(path, file, views)?))
             }
             _ => Self::Two(TableOut::create(out, stems[0], format)?, TableOut::create(out, stems[1], format)?),
         })
@@ -145,8 +143,8 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
         match self {
             Self::Two(ta, tb) => Ok((ta.send(a)?, tb.send(b)?)),
             #[cfg(feature = "formats")]
-            Self::Mcap(file, ia, ib) => {
-                file.write_merged((*ia, &a), (*ib, &b))?;
+            Self::Mcap(pair) => {
+                pair.send(&a, &b)?;
                 let (mut a, mut b) = (a, b);
                 a.clear();
                 b.clear();
@@ -166,7 +164,7 @@ impl<A: CsvRow + McapRows + Send + 'static, B: CsvRow + McapRows + Send + 'stati
                 b.finish()
             }
             #[cfg(feature = "formats")]
-            Self::Mcap(file, _, _) => Ok(file.finish()?),
+            Self::Mcap(pair) => Ok(pair.finish()?),
         }
     }
 }

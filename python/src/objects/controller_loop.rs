@@ -272,10 +272,13 @@ pub fn run_controller<'py>(
         (e.to_string(), code)
     });
     let (message, code) = failed.map_or((None, 0), |(m, c)| (Some(m), c));
+    let trace_py = rows_to_py(py, &records)?;
+    let recording = crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records);
     Outcome::new(py, "run_controller", to_py(py, &summary)?)?
-        .table("trace", rows_to_py(py, &records)?)?
+        .table("trace", trace_py)?
         .extra("scenario", to_py(py, &s)?)?
         .extra("page", finished.page.html().into_pyobject(py)?.into_any())?
+        .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?
         .validity(&validity)?
         .failure(message, code)
         .map(Outcome::done)

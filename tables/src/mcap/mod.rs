@@ -42,6 +42,8 @@ use crate::ColumnRows;
 
 #[cfg(feature = "mcap")]
 mod channel;
+#[cfg(feature = "mcap")]
+mod pair;
 #[cfg(feature = "read")]
 mod read;
 #[cfg(feature = "mcap")]
@@ -53,6 +55,8 @@ mod write;
 
 #[cfg(feature = "mcap")]
 pub use channel::{ChannelSpec, McapView, RowEncoder, log_time_ns};
+#[cfg(feature = "mcap")]
+pub use pair::{McapPair, PairViews};
 #[cfg(feature = "read")]
 pub use read::read_mcap;
 #[cfg(feature = "mcap")]

@@ -1,0 +1,90 @@
+//! What a run's `trace.mcap` is made of, kept with its `Result` so that
+//! `Result.write_mcap(path)` writes the command line's bytes: the typed rows of
+//! the run (a `simulate`'s samples and events with the batches the command line
+//! sends them in, a closed-loop run's period records) and the arm's geometry
+//! for the Foxglove view (`arm_view`).
+
+use std::path::PathBuf;
+
+use arm_view::{ArmGeometry, ArmView, EventLog};
+use experiments::simulate::summary::{EventRow, TraceRow};
+use pyo3::{exceptions::PyOSError, prelude::*};
+use rig::record::PeriodRecord;
+use tables::mcap::{McapPair, McapStream, McapView};
+
+/// The rows of one run, as its `trace.mcap` holds them.
+enum Rows {
+    /// `sil-host simulate`'s two tables: every sample and every event, and
+    /// where each batch the command line writes ends (`(samples, events)`,
+    /// counted from the start): the first sample with the start-up events,
+    /// then one batch per chunk of the open loop.
+    OpenLoop { trace: Vec<TraceRow>, events: Vec<EventRow>, batches: Vec<(usize, usize)> },
+    /// `sil-host run`'s trace: one record per control period.
+    ClosedLoop { records: Vec<PeriodRecord> },
+}
+
+/// A run's rows kept for its MCAP file (`painleve.Result.write_mcap`). Held in
+/// the result's `extras["recording"]`; its memory is the rows' (about 0.1 KB a sample,
+/// 0.2 KB a period), beside the NumPy columns.
+#[pyclass(module = "painleve._painleve", name = "Recording", frozen)]
+pub struct Recording {
+    geometry: ArmGeometry,
+    rows: Rows,
+}
+
+impl Recording {
+    /// An open-loop run (`simulate`): its samples, events and batch ends.
+    pub fn open_loop(geometry: ArmGeometry, trace: Vec<TraceRow>, events: Vec<EventRow>, batches: Vec<(usize, usize)>) -> Self {
+        Self { geometry, rows: Rows::OpenLoop { trace, events, batches } }
+    }
+
+    /// A closed-loop run (`run`, `run_controller`): its period records.
+    pub fn closed_loop(geometry: ArmGeometry, records: Vec<PeriodRecord>) -> Self {
+        Self { geometry, rows: Rows::ClosedLoop { records } }
+    }
+
+    /// Writes the file at `path`, as `sil-host` writes `trace.mcap` for the same run.
+    fn write(&self, path: PathBuf) -> Result<(), tables::Error> {
+        let file = std::fs::File::create(&path).map_err(|source| tables::Error::Io { path: path.clone(), source })?;
+        match &self.rows {
+            Rows::OpenLoop { trace, events, batches } => {
+                let views = (
+                    Some(Box::new(ArmView::new(self.geometry)) as Box<dyn McapView<TraceRow>>),
+                    Some(Box::new(EventLog::default()) as Box<dyn McapView<EventRow>>),
+                );
+                let mut pair = McapPair::<TraceRow, EventRow>::new(path, file, views)?;
+                let mut from = (0, 0);
+                for &(rows, evs) in batches {
+                    pair.send(&trace[from.0..rows], &events[from.1..evs])?;
+                    from = (rows, evs);
+                }
+                pair.finish()
+            }
+            Rows::ClosedLoop { records } => {
+                let view = Some(Box::new(ArmView::new(self.geometry)) as Box<dyn McapView<PeriodRecord>>);
+                let mut stream = McapStream::with_view(path, file, view)?;
+                records.iter().try_for_each(|r| stream.push(*r))?;
+                stream.finish()
+            }
+        }
+    }
+}
+
+#[pymethods]
+impl Recording {
+    /// Writes the run's MCAP file at `path` (a file name), the bytes `sil-host`
+    /// writes as `trace.mcap` for the same run.
+    ///
+    /// Raises:
+    ///     OSError: the file cannot be created or written.
+    fn write_mcap(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| self.write(path)).map_err(|e| PyOSError::new_err(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        match &self.rows {
+            Rows::OpenLoop { trace, events, .. } => format!("Recording(open loop: {} samples, {} events)", trace.len(), events.len()),
+            Rows::ClosedLoop { records } => format!("Recording(closed loop: {} periods)", records.len()),
+        }
+    }
+}
