@@ -48,6 +48,10 @@ pub enum Error {
     /// Part of a sweep or report failed (everything was written, the failures included).
     #[error("{0}")]
     PartFailed(String),
+    /// `sil-host replay`: the firmware answered a recorded frame differently from
+    /// the recording (everything was compared; the first difference named).
+    #[error("{0}")]
+    Diverged(String),
     /// `--strict`: a result violates the model (energy-creating impact, friction-cone
     /// violation, integrator failure); everything was written, the violations listed.
     #[error("results violate the model (--strict): {0}")]

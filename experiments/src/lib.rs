@@ -43,6 +43,7 @@ pub const DECLARED: &[tables::Declaration] = &[
     tables::Declaration::of::<simulate::summary::TraceRow>(),
     tables::Declaration::of::<simulate::summary::EventRow>(),
     tables::Declaration::of::<rig::record::PeriodRecord>(),
+    tables::Declaration::of::<rig::frames::FrameRow>(),
     tables::Declaration::of::<analyses::sweep::run::RunRow>(),
     tables::Declaration::of::<poincare::summary::SectionRow>(),
     tables::Declaration::of::<poincare::summary::ClassRow<'static>>(),

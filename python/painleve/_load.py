@@ -260,6 +260,9 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
             figures.append(str(p))
         elif p.suffix in (".log", ".md", ".txt"):
             extras[p.stem] = p.read_text(encoding="utf-8", errors="replace")
+    # The run's own table first (the default of ``to_pandas()`` and friends):
+    # ``trace`` before ``frames`` (a closed-loop run's wire record), which sorts first by name.
+    tables = dict(sorted(tables.items(), key=lambda kv: kv[0] == "frames"))
     main = "summary"
     if "summary" not in docs:
         main = "admissible" if "admissible" in docs else "report" if "report" in docs else main

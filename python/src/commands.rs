@@ -242,6 +242,8 @@ struct Observer<'a> {
     ledger: plant::Ledger,
     /// The page of the run, gathered as `sil-host run` gathers it (`None`: no page).
     page: Option<TracePage>,
+    /// Every period's frame and answer (`frames.csv` of `sil-host run`).
+    frames: Vec<rig::frames::FrameRow>,
 }
 
 impl rig::RunObserver for Observer<'_> {
@@ -264,6 +266,10 @@ impl rig::RunObserver for Observer<'_> {
         if let Some(page) = &mut self.page {
             events.iter().for_each(|e| page.event(e.into()));
         }
+    }
+
+    fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
+        self.frames.push(rig::frames::FrameRow::of(frame, truth, exchange));
     }
 
     fn on_record(&mut self, r: &rig::record::PeriodRecord) {
@@ -290,14 +296,16 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
     let page = (!args.no_page).then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport())));
     let link_in_loop = &mut link;
     // The run moves to the worker (its plant is `Send`, not `Sync`).
-    let (records, failure, (validity, ledger), wall_s, page) = work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
-        c.set(0, setup.scenario().timing.periods());
-        let mut observer = Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default(), page };
-        let started = Instant::now();
-        let (records, failure) = rig::run_loop(&setup, link_in_loop, &mut observer);
-        let wall_s = started.elapsed().as_secs_f64();
-        (records, failure, (observer.validity, observer.ledger), wall_s, observer.page.map(TracePage::html))
-    })?;
+    let (records, failure, (validity, ledger), wall_s, (page, frames)) =
+        work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
+            c.set(0, setup.scenario().timing.periods());
+            let mut observer =
+                Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default(), page, frames: Vec::new() };
+            let started = Instant::now();
+            let (records, failure) = rig::run_loop(&setup, link_in_loop, &mut observer);
+            let wall_s = started.elapsed().as_secs_f64();
+            (records, failure, (observer.validity, observer.ledger), wall_s, (observer.page.map(TracePage::html), observer.frames))
+        })?;
     let stats = RunStats::of(&records);
     let summary = RunSummary {
         firmware_announcement: link.announcement().cloned(),
@@ -305,10 +313,11 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
         ..RunSummary::from_stats(scenario, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);
-    let trace_py = columns_to_py(py, &records);
-    let recording = Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(scenario)), records);
+    let (trace_py, frames_py) = (columns_to_py(py, &records), columns_to_py(py, &frames));
+    let recording = Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(scenario)), records, frames);
     Outcome::new(py, "run", to_py(py, &summary)?)?
         .table("trace", trace_py)?
+        .table("frames", frames_py)?
         .extra("scenario", to_py(py, scenario)?)?
         .extra("page", page.into_pyobject(py)?.into_any())?
         .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?

@@ -1,7 +1,7 @@
 //! What a run's `trace.mcap` is made of, kept with its `Result` so that
 //! `Result.write_mcap(path)` writes the command line's bytes: the typed rows of
 //! the run (a `simulate`'s samples and events with the batches the command line
-//! sends them in, a closed-loop run's period records) and the arm's geometry
+//! sends them in, a closed-loop run's period records and frames) and the arm's geometry
 //! for the Foxglove view (`arm_view`).
 
 use std::path::PathBuf;
@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use arm_view::{ArmGeometry, ArmView, EventLog};
 use experiments::simulate::summary::{EventRow, TraceRow};
 use pyo3::{exceptions::PyOSError, prelude::*};
-use rig::record::PeriodRecord;
-use tables::mcap::{McapPair, McapStream, McapView};
+use rig::{frames::FrameRow, record::PeriodRecord};
+use tables::mcap::{McapPair, McapPairStream, McapView};
 
 /// The rows of one run, as its `trace.mcap` holds them.
 enum Rows {
@@ -19,8 +19,8 @@ enum Rows {
     /// counted from the start): the first sample with the start-up events,
     /// then one batch per chunk of the open loop.
     OpenLoop { trace: Vec<TraceRow>, events: Vec<EventRow>, batches: Vec<(usize, usize)> },
-    /// `sil-host run`'s trace: one record per control period.
-    ClosedLoop { records: Vec<PeriodRecord> },
+    /// `sil-host run`'s trace and frames: one record, one frame and answer per control period.
+    ClosedLoop { records: Vec<PeriodRecord>, frames: Vec<FrameRow> },
 }
 
 /// A run's rows kept for its MCAP file (`painleve.Result.write_mcap`). Held in
@@ -38,9 +38,9 @@ impl Recording {
         Self { geometry, rows: Rows::OpenLoop { trace, events, batches } }
     }
 
-    /// A closed-loop run (`run`, `run_controller`): its period records.
-    pub fn closed_loop(geometry: ArmGeometry, records: Vec<PeriodRecord>) -> Self {
-        Self { geometry, rows: Rows::ClosedLoop { records } }
+    /// A closed-loop run (`run`, `run_controller`): its period records, its frames and answers.
+    pub fn closed_loop(geometry: ArmGeometry, records: Vec<PeriodRecord>, frames: Vec<FrameRow>) -> Self {
+        Self { geometry, rows: Rows::ClosedLoop { records, frames } }
     }
 
     /// Writes the file at `path`, as `sil-host` writes `trace.mcap` for the same run.
@@ -60,10 +60,18 @@ impl Recording {
                 }
                 pair.finish()
             }
-            Rows::ClosedLoop { records } => {
-                let view = Some(Box::new(ArmView::new(self.geometry)) as Box<dyn McapView<PeriodRecord>>);
-                let mut stream = McapStream::with_view(path, file, view)?;
-                records.iter().try_for_each(|r| stream.push(*r))?;
+            Rows::ClosedLoop { records, frames } => {
+                let views = (Some(Box::new(ArmView::new(self.geometry)) as Box<dyn McapView<PeriodRecord>>), None);
+                let mut stream = McapPairStream::<PeriodRecord, FrameRow>::new(path, file, views)?;
+                // In the command line's order: a period's frame and answer, then its record.
+                for k in 0..records.len().max(frames.len()) {
+                    if let Some(f) = frames.get(k) {
+                        stream.push_b(*f);
+                    }
+                    if let Some(r) = records.get(k) {
+                        stream.push_a(*r)?;
+                    }
+                }
                 stream.finish()
             }
         }
@@ -84,7 +92,7 @@ impl Recording {
     fn __repr__(&self) -> String {
         match &self.rows {
             Rows::OpenLoop { trace, events, .. } => format!("Recording(open loop: {} samples, {} events)", trace.len(), events.len()),
-            Rows::ClosedLoop { records } => format!("Recording(closed loop: {} periods)", records.len()),
+            Rows::ClosedLoop { records, .. } => format!("Recording(closed loop: {} periods)", records.len()),
         }
     }
 }

@@ -113,7 +113,12 @@ def test_every_arrow_file_the_cli_writes_is_read_by_pandas_and_polars(tmp_path):
     cli("simulate", ["--duration", "0.5", "--format", "arrow"], tmp_path / "simulate")
     cli("run", ["--in-process", "--duration", "0.3", "--format", "arrow"], tmp_path / "run")
     files = sorted(tmp_path.glob("*/*.arrow"))
-    assert [f.relative_to(tmp_path).as_posix() for f in files] == ["run/trace.arrow", "simulate/events.arrow", "simulate/trace.arrow"]
+    assert [f.relative_to(tmp_path).as_posix() for f in files] == [
+        "run/frames.arrow",
+        "run/trace.arrow",
+        "simulate/events.arrow",
+        "simulate/trace.arrow",
+    ]
     for f in files:
         table = painleve.read_arrow(f)
         frame, pl = pandas.read_feather(f), polars.read_ipc(f)

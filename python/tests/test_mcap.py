@@ -27,6 +27,8 @@ ARGS = ["--x0", "a", "--v-belt", "-0.5", "--e-n", "0.2", "--duration", "2"]
 
 SIMULATE_TOPICS = {"/state", "/contact", "/events"}
 RUN_TOPICS = {"/state", "/contact", "/torques", "/firmware"}
+# What crossed the wire each period (the `frames` table: frame, arm state, command, telemetry; `sil-host replay`).
+WIRE_TOPICS = {"/wire/frame", "/wire/arm", "/wire/command", "/wire/telemetry"}
 # The arm in Foxglove's own schemas (arm-view: protobuf), beside the tables' channels.
 FOXGLOVE = {"/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate", "/log": "foxglove.Log"}
 
@@ -166,22 +168,24 @@ def test_a_runs_mcap_trace_equals_its_csv(runs):
     csv_dir, mcap_dir = runs
     c = painleve.load(csv_dir)
     messages, summary = by_reader(mcap_dir / "trace.mcap")
-    assert set(messages) == RUN_TOPICS
-    assert c.trace.nrows == 1000
+    assert set(messages) == RUN_TOPICS | WIRE_TOPICS
+    assert c.trace.nrows == c.frames.nrows == 1000
     assert_equals_csv(messages, c.trace, ["/state", "/contact", "/torques", "/firmware"])
+    assert_equals_csv(messages, c.frames, ["/wire/frame", "/wire/arm", "/wire/command", "/wire/telemetry"])
     # A chunk of the table's rows per 100 periods (count-based, so the bytes are the
     # same on every link), each followed by a chunk of the arm's messages of those
     # periods (/tf and /scene, a frame every 10 ms, and /log when a line was written).
-    # (The schemas and channels are in a chunk of their own, before the rows.)
     topics = {c.id: c.topic for c in summary.channels.values()}
     kinds = [sorted(topics[i] for i in c.message_index_offsets) for c in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)]
-    assert kinds[0] == [] and len(kinds) == 21, kinds
-    assert all(k == sorted(RUN_TOPICS) for k in kinds[1::2]), kinds
-    assert all(set(k) >= {"/tf", "/scene"} and set(k) <= set(FOXGLOVE) for k in kinds[2::2]), kinds
+    # (One chunk of schemas and channels per table, trace's then frames', before the rows.)
+    assert kinds[0] == kinds[1] == [] and len(kinds) == 22, kinds
+    assert all(k == sorted(RUN_TOPICS | WIRE_TOPICS) for k in kinds[2::2]), kinds
+    assert all(set(k) >= {"/tf", "/scene"} and set(k) <= set(FOXGLOVE) for k in kinds[3::2]), kinds
     m = painleve.load(mcap_dir)
-    assert m.command == "run" and list(m.tables) == ["trace"]
-    for col in c.trace.columns:
-        assert_columns_equal(m.trace[col], c.trace[col], f"trace.{col}")
+    assert m.command == "run" and list(m.tables) == ["trace", "frames"]
+    for name in ("trace", "frames"):
+        for col in c.tables[name].columns:
+            assert_columns_equal(m.tables[name][col], c.tables[name][col], f"{name}.{col}")
 
 
 def test_a_cut_mcap_file_gives_its_whole_chunks(runs, tmp_path):

@@ -18,6 +18,7 @@ pub mod faults;
 #[cfg(feature = "ipc")]
 pub mod firmware_process;
 pub mod firmware_side;
+pub mod frames;
 pub mod handshake;
 pub mod image_path;
 pub mod in_process;

@@ -184,6 +184,7 @@ impl PeriodLoop {
                 return Err(fail(error));
             }
         };
+        run.on_answer(&frame, &truth, &exchange);
         // When the new command takes effect (s after t_k), if it does this period.
         let (switch, command, telemetry) = match exchange {
             Exchange::Answered { command, telemetry, at_stamp } => {
@@ -323,6 +324,12 @@ pub trait RunObserver {
     /// A frame as it goes on the wire (a recording of what crossed it).
     fn on_frame(&mut self, _frame: &SensorFrame) {}
 
+    /// The firmware's answer to `frame` as the period loop got it (after the
+    /// `drop_command` fault's wrapper: a lost command is [`Exchange::Dropped`]):
+    /// with the frame and the ground truth of the same instant, what a replay
+    /// needs ([`crate::frames::FrameRow`]).
+    fn on_answer(&mut self, _frame: &SensorFrame, _truth: &GroundTruth, _exchange: &Exchange) {}
+
     /// Plant events at their exact times (the start-up events, then those of each
     /// interval): lift-offs between two samples included, which the records cannot show.
     fn on_events(&mut self, _events: &[PlantEvent]) {}
@@ -420,6 +427,10 @@ pub fn run_loop(setup: &RunSetup, link: &mut dyn FirmwareLink, run: &mut dyn Run
     impl RunObserver for Keep<'_> {
         fn on_frame(&mut self, frame: &SensorFrame) {
             self.inner.on_frame(frame);
+        }
+
+        fn on_answer(&mut self, frame: &SensorFrame, truth: &GroundTruth, exchange: &Exchange) {
+            self.inner.on_answer(frame, truth, exchange);
         }
 
         fn on_events(&mut self, events: &[PlantEvent]) {

@@ -21,6 +21,7 @@ pub mod live;
 #[path = "live_off.rs"]
 pub mod live;
 pub mod output;
+pub mod run_tables;
 pub mod streamed_run;
 pub mod sweep;
 pub mod table_out;
@@ -53,6 +54,7 @@ where
         cli::Command::Poincare(args) => commands::poincare::run(&args),
         cli::Command::Run(args) => commands::run::run(&args),
         cli::Command::Bench(args) => commands::bench::run(&args),
+        cli::Command::Replay(args) => commands::replay::run(&args),
         cli::Command::Report(args) => commands::report::run(&args),
         cli::Command::Sweep(args) => commands::sweep::run(&args),
         cli::Command::Merge(args) => commands::sweep::merge::merge(&args),

@@ -1,5 +1,6 @@
 //! A closed-loop run streamed to its output folder, as `run` and `pil` make it:
-//! every period's row to `trace.csv` as it is made, the summary's statistics and
+//! every period's row to `trace.csv` (and its frame and answer to `frames.csv`,
+//! [`RunTables`]) as it is made, the summary's statistics and
 //! the figure's decimated curves, in memory that does not grow with the run.
 
 use std::{
@@ -9,8 +10,9 @@ use std::{
 
 use crate::{
     error::CliError,
-    output::{OutputSet, StreamedTable},
+    output::OutputSet,
     plot,
+    run_tables::RunTables,
     trace_page::{PageInfo, TracePage},
 };
 use plant::Validity;
@@ -53,12 +55,12 @@ pub fn run_streamed(
         Some(Box::new(arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())))));
     #[cfg(not(feature = "formats"))]
     let view = std::marker::PhantomData;
-    let mut trace = StreamedTable::<PeriodRecord>::new(out, "trace", files.format, std::time::Duration::from_millis(1), view)?;
+    let mut trace = RunTables::new(out, files.format, std::time::Duration::from_millis(1), view)?;
     let started = Instant::now();
     /// Streams each record, summarises it, keeps a decimated copy, moves the
     /// bar, stops on Ctrl-C, keeps the validity.
     struct Streaming<'a> {
-        trace: &'a mut StreamedTable<PeriodRecord>,
+        trace: &'a mut RunTables,
         progress: &'a indicatif::ProgressBar,
         every: usize,
         stop: &'a AtomicBool,
@@ -84,8 +86,12 @@ pub fn run_streamed(
             }
         }
 
+        fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
+            self.trace.push_frame(&rig::frames::FrameRow::of(frame, truth, exchange));
+        }
+
         fn on_record(&mut self, r: &PeriodRecord) {
-            self.trace.push(r);
+            self.trace.push_record(r);
             self.stats.push(r);
             self.history.push(&plot::HistorySample {
                 t: r.t,

@@ -33,6 +33,7 @@ mod pil_vs_library;
 mod poincare;
 mod published_ledger;
 mod python_monitor;
+mod replay;
 mod report;
 mod results_page;
 mod run;

@@ -202,6 +202,8 @@ struct Finished {
     validity: plant::Validity,
     ledger: plant::Ledger,
     page: figures::trace_page::TracePage,
+    /// Every period's frame and the controller's answer (`frames`, as `painleve.run`'s).
+    frames: Vec<rig::frames::FrameRow>,
 }
 
 impl rig::RunObserver for Finished {
@@ -215,6 +217,10 @@ impl rig::RunObserver for Finished {
 
     fn on_events(&mut self, events: &[plant::PlantEvent]) {
         events.iter().for_each(|e| self.page.event(e.into()));
+    }
+
+    fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
+        self.frames.push(rig::frames::FrameRow::of(frame, truth, exchange));
     }
 
     fn on_record(&mut self, r: &rig::record::PeriodRecord) {
@@ -254,7 +260,7 @@ pub fn run_controller<'py>(
         fact.1 = "the caller's Python function (painleve.run_controller); the scenario's references".into();
     }
     let page = figures::trace_page::TracePage::new(info);
-    let mut finished = Finished { validity: plant::Validity::default(), ledger: plant::Ledger::default(), page };
+    let mut finished = Finished { validity: plant::Validity::default(), ledger: plant::Ledger::default(), page, frames: Vec::new() };
     let started = Instant::now();
     let (records, failure) = rig::run_loop(&setup, &mut link, &mut finished);
     let wall_s = started.elapsed().as_secs_f64();
@@ -273,9 +279,12 @@ pub fn run_controller<'py>(
     });
     let (message, code) = failed.map_or((None, 0), |(m, c)| (Some(m), c));
     let trace_py = rows_to_py(py, &records)?;
-    let recording = crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records);
+    let frames_py = rows_to_py(py, &finished.frames)?;
+    let recording =
+        crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records, finished.frames);
     Outcome::new(py, "run_controller", to_py(py, &summary)?)?
         .table("trace", trace_py)?
+        .table("frames", frames_py)?
         .extra("scenario", to_py(py, &s)?)?
         .extra("page", finished.page.html().into_pyobject(py)?.into_any())?
         .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?

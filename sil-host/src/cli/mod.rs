@@ -4,12 +4,14 @@
 
 mod bench;
 mod board;
+mod replay;
 mod report;
 
 use clap::{Parser, Subcommand};
 
 pub use self::bench::BenchArgs;
 pub use self::board::{AxisArg, BoardArgs, BoardCommand, BoardTwinArgs, FlashArg, JointArg};
+pub use self::replay::{ReplayArgs, ReplayLink};
 pub use self::report::{ReportArgs, ReportSize};
 pub use experiments::settings::*;
 
@@ -170,6 +172,23 @@ pub enum Command {
     /// closed-loop hybrid sweep (estimated), and optionally real time at 1 kHz
     /// (docs/measurements.md "Speed and scale"); --json for scripts.
     Bench(BenchArgs),
+    /// Replays a recorded run through a firmware build (docs/rig.md "Replay"; copper-rs's
+    /// resim and PX4's replay are the models): every sensor frame the run's firmware
+    /// read, bit for bit (its folder's frames.csv, frames.arrow or trace.mcap), goes to
+    /// the firmware of --link (this build in-process or over iceoryx2, another build's
+    /// firmware process with --attach, the board twin, an `arm` ELF on the emulated
+    /// board, a PIL image in QEMU), configured from the run's own scenario (--set
+    /// changes it), and every answer is compared with the recorded one bit for bit:
+    /// the command's torque codes, status and overrun counter, and the telemetry's
+    /// 32-bit floats (references, estimates, measured forces, torques before
+    /// quantisation). The frames are the recorded ones whatever the firmware answers
+    /// (open loop, as a log replay). Prints "identical over N periods" or the first
+    /// divergence: period, time, signal, both values.
+    ///
+    /// Exit codes: 0 identical; 1 a divergence (or the link failed part way); 2 bad
+    /// input (not a run's folder, no frames recorded, a bad --set, no image).
+    #[command(allow_negative_numbers = true)]
+    Replay(ReplayArgs),
     /// Two-parameter brute-force bifurcation diagram (docs/model.md experiments 3 and 7,
     /// paper Figs. 3 and 9): a grid in (mu, v_belt), and optionally in the impact law
     /// and e_n, from the paper's and random initial conditions; per run a transient,

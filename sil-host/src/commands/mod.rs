@@ -9,6 +9,7 @@ pub mod firmware;
 pub mod modes;
 pub mod pil;
 pub mod poincare;
+pub mod replay;
 pub mod report;
 pub mod run;
 pub mod sensitivity;

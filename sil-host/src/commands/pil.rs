@@ -10,7 +10,7 @@
 //! `trace.svg`, `instructions.svg` (the counts of each step against time, with the
 //! budget) and, under QEMU, `defmt.log`.
 
-use std::io::Write;
+use std::{io::Write, path::PathBuf};
 
 use super::closed_loop::{draw, print_summary};
 use crate::commands::Done;
@@ -56,7 +56,17 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
         }
         return Ok(PilTarget::Serial { path: path.clone(), baud: args.baud });
     }
-    let image = args.image.clone().unwrap_or_else(pil_link::default_image);
+    qemu_target(args.image.clone(), args.qemu.clone(), args.qemu_link.into())
+}
+
+/// The QEMU target of `image` (default: `cargo build-pil`'s output), checked:
+/// `pil`'s and `replay --link pil`'s.
+///
+/// # Errors
+/// [`CliError::BadInput`] (exit 2): no image there, or one that is not a
+/// 32-bit little-endian ARM ELF.
+pub(crate) fn qemu_target(image: Option<PathBuf>, qemu: PathBuf, link: pil_link::QemuLink) -> Result<PilTarget, CliError> {
+    let image = image.unwrap_or_else(pil_link::default_image);
     if !image.is_file() {
         return Err(CliError::bad_input(format!(
             "no PIL image at {}: build it with `{}` (from the workspace root) or pass --image",
@@ -65,7 +75,7 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
         )));
     }
     check_image(&image)?;
-    Ok(PilTarget::Qemu { image, qemu: args.qemu.clone(), link: args.qemu_link.into() })
+    Ok(PilTarget::Qemu { image, qemu, link })
 }
 
 /// Refuses at once an image QEMU's Cortex-M4 cannot run (issue 52, 8: a damaged

@@ -56,7 +56,7 @@ mod write;
 #[cfg(feature = "mcap")]
 pub use channel::{ChannelSpec, McapView, RowEncoder, log_time_ns};
 #[cfg(feature = "mcap")]
-pub use pair::{McapPair, PairViews};
+pub use pair::{McapPair, McapPairStream, PairViews};
 #[cfg(feature = "read")]
 pub use read::read_mcap;
 #[cfg(feature = "mcap")]

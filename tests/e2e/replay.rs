@@ -1,0 +1,250 @@
+//! Issue 69 (3): `sil-host replay` (docs/rig.md "Replay"). A run records every
+//! frame the firmware read and every answer (`frames.csv`, `frames.arrow`, the
+//! `/wire` channels of `trace.mcap`); replayed through today's firmware on every
+//! link (in-process, iceoryx2, the board twin, the `arm` ELF on the emulated
+//! board, the PIL image in QEMU) the goldens' runs answer the same, bit for bit;
+//! a gain changed in its last bit is found at the first period it moves an
+//! answer, which a closed-loop run with that gain finds independently; bad
+//! input is refused with its reason.
+
+use std::{
+    path::{Path, PathBuf},
+    process::{Command, Output},
+};
+
+use crate::common;
+
+/// `sil-host args`, as a process (the iceoryx2 link spawns the firmware from the executable).
+fn sil_host(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sil-host")).args(args).output().unwrap()
+}
+
+/// Records `sil-host run --in-process` (or `pil`) of `args` into `dir`.
+fn record(command: &str, args: &[&str], dir: &Path) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).arg(command).args(args).arg("--out").arg(dir).output().unwrap();
+    assert!(o.status.success(), "{command} {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// `replay dir --json` with `args`: its exit code and document.
+fn replay(dir: &Path, args: &[&str]) -> (i32, serde_json::Value, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).arg("replay").arg(dir).args(args).arg("--json").output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    let doc = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("replay {args:?}: not JSON ({e}): {err}"));
+    (o.status.code().unwrap_or(-1), doc, err)
+}
+
+/// The links and their options: every way the firmware can be fed.
+fn links() -> Vec<(&'static str, Vec<String>)> {
+    let pil = common::qemu_image("pil").display().to_string();
+    let elf = board_link::emulator_link::default_image();
+    assert!(elf.exists(), "{} is missing: {}", elf.display(), board_link::emulator_link::BUILD_HINT);
+    vec![
+        ("in-process", vec![]),
+        ("iceoryx2", vec![]),
+        ("twin", vec![]),
+        ("emulator", vec!["--elf".into(), elf.display().to_string()]),
+        ("pil", vec!["--image".into(), pil]),
+    ]
+}
+
+/// Replays `dir` on every link and asserts "identical over `n` periods".
+fn identical_on_every_link(dir: &Path, n: u64) {
+    for (link, opts) in links() {
+        let mut args = vec!["--link", link];
+        args.extend(opts.iter().map(String::as_str));
+        let (code, doc, err) = replay(dir, &args);
+        assert_eq!(code, 0, "{link}: {doc} {err}");
+        assert_eq!(doc["identical"], true, "{link}: {doc}");
+        assert_eq!((doc["periods_recorded"].as_u64(), doc["periods_replayed"].as_u64()), (Some(n), Some(n)), "{link}: {doc}");
+        assert!(doc["first_divergence"].is_null() && doc["link_error"].is_null(), "{link}: {doc}");
+    }
+}
+
+fn scenario(name: &str) -> String {
+    common::workspace().join("scenarios").join(format!("{name}.toml")).display().to_string()
+}
+
+/// A golden run (10 s, 10 000 periods) of `name`, recorded in `format`, replayed on every link.
+fn golden_run_replays_identically(name: &str, format: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    record("run", &["--in-process", "--scenario", &scenario(name), "--format", format, "--no-page"], &rec);
+    identical_on_every_link(&rec, 10_000);
+}
+
+#[test]
+fn the_hybrid_run_from_x0d_replays_identically_on_every_link() {
+    golden_run_replays_identically("hybrid-x0d", "csv");
+}
+
+#[test]
+fn the_hybrid_run_from_x0u_replays_identically_on_every_link() {
+    golden_run_replays_identically("hybrid-x0u", "arrow");
+}
+
+#[test]
+fn the_pid_run_from_x0d_replays_identically_on_every_link() {
+    golden_run_replays_identically("pid-x0d", "mcap");
+}
+
+#[test]
+fn the_pid_run_from_x0u_replays_identically_on_every_link() {
+    golden_run_replays_identically("pid-x0u", "csv");
+}
+
+/// The PIL golden (`pil-default`): recorded from the image in QEMU, replayed on
+/// every link; and its frames are the in-process run's, byte for byte.
+#[test]
+fn the_pil_run_replays_identically_on_every_link_and_records_the_in_process_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pil, sil) = (dir.path().join("pil"), dir.path().join("sil"));
+    record("pil", &["--image", &common::qemu_image("pil").display().to_string(), "--no-page", "--duration", "3"], &pil);
+    record("run", &["--in-process", "--no-page", "--duration", "3"], &sil);
+    assert_eq!(std::fs::read(pil.join("frames.csv")).unwrap(), std::fs::read(sil.join("frames.csv")).unwrap());
+    identical_on_every_link(&pil, 3_000);
+}
+
+/// The next `f32` above `x`'s: a change in the gain's last bit as the firmware holds it.
+fn next_f32_up(x: f32) -> f32 {
+    f32::from_bits(x.to_bits() + 1)
+}
+
+/// The first period whose answer differs between two recordings (`frames.csv`
+/// of two runs): the period and the first differing column of the answer.
+fn first_answer_difference(a: &Path, b: &Path) -> Option<(u64, String)> {
+    let (ra, rb) = (common::csv_rows(&a.join("frames.csv")), common::csv_rows(&b.join("frames.csv")));
+    let header = &ra[0];
+    let answer_from = header.iter().position(|c| c == "answer").unwrap();
+    for (x, y) in ra.iter().zip(&rb).skip(1) {
+        // The runs are the same until the answers differ; the frames after that may too.
+        assert_eq!(x[..answer_from], y[..answer_from], "the frames differ before any answer did");
+        if let Some(i) = (answer_from..header.len()).find(|&i| x[i] != y[i]) {
+            return Some((x[1].parse().unwrap(), header[i].clone()));
+        }
+    }
+    None
+}
+
+/// A planted change: a gain one bit above the recorded one (as the firmware's
+/// `f32`). The replay names the first period it moves an answer and the first
+/// signal there; a closed-loop run with the same gain (whose frames are the
+/// recording's until its answers differ) finds the same period and signal
+/// independently. Over the paper's gains of both laws, and through the emulated
+/// board's `arm` ELF too.
+#[test]
+fn a_gain_changed_in_its_last_bit_is_found_at_the_first_period_it_moves_an_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, f32); 5] = [
+        ("hybrid-x0d", "controller.hybrid.kp", 900.0),
+        ("hybrid-x0d", "controller.hybrid.kd", 900.0),
+        ("hybrid-x0u", "controller.f_n_ref", 10.0),
+        ("pid-x0d", "controller.pid.kp", 200.0),
+        ("pid-x0u", "controller.pid.kd", 2.0),
+    ];
+    for (i, (name, key, value)) in cases.into_iter().enumerate() {
+        let rec = dir.path().join(format!("rec-{i}"));
+        record("run", &["--in-process", "--scenario", &scenario(name), "--no-page", "--duration", "3"], &rec);
+        let planted = next_f32_up(value);
+        // The PID's gains are arrays (joint 1, joint 2): the first joint's changed.
+        let set = if key.starts_with("controller.pid") { format!("{key}=[{planted}, 0.0]") } else { format!("{key}={planted}") };
+        let changed = dir.path().join(format!("changed-{i}"));
+        record("run", &["--in-process", "--scenario", &scenario(name), "--no-page", "--duration", "3", "--set", &set], &changed);
+        let (period, signal) =
+            first_answer_difference(&rec, &changed).unwrap_or_else(|| panic!("{key}: the change moved no answer in 3 s"));
+        let (code, doc, err) = replay(&rec, &["--set", &set]);
+        assert_eq!(code, 1, "{key}: {doc} {err}");
+        assert_eq!(doc["identical"], false);
+        let d = &doc["first_divergence"];
+        assert_eq!((d["period"].as_u64(), d["signal"].as_str()), (Some(period), Some(signal.as_str())), "{key}: {doc}");
+        assert!(err.contains(&format!("diverged from the recording at period {period}")), "{err}");
+        // The recording itself replays identically: the difference is the gain's.
+        assert_eq!(replay(&rec, &[]).0, 0, "{key}");
+        if i == 0 {
+            let elf = board_link::emulator_link::default_image().display().to_string();
+            let (code, doc, _) = replay(&rec, &["--set", &set, "--link", "emulator", "--elf", &elf]);
+            assert_eq!((code, doc["first_divergence"]["period"].as_u64()), (1, Some(period)), "the ELF: {doc}");
+        }
+    }
+}
+
+/// `--all` compares every period and counts the ones that differ; the human
+/// verdict names the period, the signal and both values.
+#[test]
+fn all_counts_every_divergent_period_and_the_text_names_both_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    record("run", &["--in-process", "--no-page", "--duration", "2"], &rec);
+    let set = "controller.hybrid.kp=1000";
+    let (code, doc, _) = replay(&rec, &["--set", set, "--all"]);
+    assert_eq!(code, 1);
+    let (n, differ) = (doc["periods_replayed"].as_u64().unwrap(), doc["divergent_periods"].as_u64().unwrap());
+    assert!(n == 2000 && differ > 100 && differ <= n, "{doc}");
+    let o = sil_host(&["replay", rec.to_str().unwrap(), "--set", set]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let d = &doc["first_divergence"];
+    assert!(out.contains(&format!("DIVERGED at period {}", d["period"])), "{out}");
+    assert!(out.contains(&format!("recorded {}, replayed {}", d["recorded"].as_str().unwrap(), d["replayed"].as_str().unwrap())), "{out}");
+}
+
+/// The scenario's faults act again where they act on the link: lost commands
+/// (`drop_command`, recorded `dropped`) and a stuck sensor (in the frames)
+/// replay identically in-process and over iceoryx2.
+#[test]
+fn a_run_with_faults_replays_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scenario("default")).unwrap()
+        + "\n[[faults]]\nkind = \"drop_command\"\nat_s = 0.5\nduration_s = 0.004\n\n[[faults]]\nkind = \"stuck_sensor\"\nat_s = 0.8\nduration_s = 0.003\nsignal = \"f_n\"\n";
+    let path = dir.path().join("faults.toml");
+    std::fs::write(&path, text).unwrap();
+    let rec = dir.path().join("rec");
+    record("run", &["--in-process", "--scenario", path.to_str().unwrap(), "--no-page", "--duration", "1.5"], &rec);
+    let rows = common::csv_rows(&rec.join("frames.csv"));
+    let answer = rows[0].iter().position(|c| c == "answer").unwrap();
+    assert_eq!(rows.iter().filter(|r| r[answer] == "dropped").count(), 4, "four lost commands recorded");
+    for link in ["in-process", "iceoryx2"] {
+        let (code, doc, err) = replay(&rec, &["--link", link]);
+        assert_eq!((code, &doc["identical"]), (0, &serde_json::Value::Bool(true)), "{link}: {doc} {err}");
+    }
+}
+
+/// Bad input is refused with its reason (exit 2), before any link starts.
+#[test]
+fn bad_input_is_refused_with_its_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    record("run", &["--in-process", "--no-page", "--duration", "0.2"], &rec);
+    let sim = dir.path().join("sim");
+    record("simulate", &["--duration", "0.1", "--no-page"], &sim);
+    let no_frames = dir.path().join("no-frames");
+    std::fs::create_dir(&no_frames).unwrap();
+    std::fs::copy(rec.join("summary.json"), no_frames.join("summary.json")).unwrap();
+    let cut = dir.path().join("cut");
+    std::fs::create_dir(&cut).unwrap();
+    std::fs::copy(rec.join("summary.json"), cut.join("summary.json")).unwrap();
+    let text = std::fs::read_to_string(rec.join("frames.csv")).unwrap();
+    let without_column: String = text.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n").collect();
+    std::fs::write(cut.join("frames.csv"), without_column).unwrap();
+    let missing: PathBuf = dir.path().join("nowhere");
+    let r = rec.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec![missing.to_str().unwrap()], "no such folder"),
+        (vec![sim.to_str().unwrap()], "no `scenario_used`"),
+        (vec![no_frames.to_str().unwrap()], "no frames recorded"),
+        (vec![cut.to_str().unwrap()], "no column `u2_raw`"),
+        (vec![r, "--elf", "x.elf"], "--elf goes with --link emulator"),
+        (vec![r, "--image", "x.elf"], "--image goes with --link pil"),
+        (vec![r, "--set", "controller.nope=1"], "controller.nope"),
+        (vec![r, "--set", "controller.hybrid.kp=-5"], "controller.hybrid.kp"),
+        (vec![r, "--link", "pil", "--image", missing.to_str().unwrap()], "no PIL image"),
+        (vec![r, "--link", "emulator", "--elf", missing.to_str().unwrap()], "nowhere"),
+    ];
+    for (args, expected) in cases {
+        let mut full = vec!["replay"];
+        full.extend(&args);
+        let o = sil_host(&full);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
