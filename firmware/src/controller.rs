@@ -14,11 +14,12 @@ use shared::{
 use crate::{
     TickClock,
     chatter::ChatterMonitor,
-    config::{Config, ConfigError, ControllerKind},
+    config::{Config, ConfigError},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
+    control_law::{ControlLaw, LawContext, LawInput, PaperLaws},
     decode::{self, EncoderScale, FrameFault, Measurement},
     estimator::{self, AngleTracker},
-    law::{self, HybridInput, HybridState, PidState, TipKinematics},
+    law::{self, TipKinematics},
     liftoff::{LiftOffDetector, LiftOffRule},
     reference::{Quintic, RefPoint},
     runaway::{Runaway, RunawayMonitor, RunawayRule},
@@ -54,9 +55,10 @@ struct Started {
     trig: JointTrig<f32>,
 }
 
-/// The firmware's state across periods. Fixed size, no heap.
+/// The firmware's state across periods, running control law `L` (by default
+/// the paper's two, [`PaperLaws`]). Fixed size, no heap.
 #[derive(Debug, Clone)]
-pub struct Firmware {
+pub struct Firmware<L: ControlLaw = PaperLaws> {
     cfg: Config,
     arm: Arm<f32>,
     /// The arm's constant factors, folded once per configuration (not every step).
@@ -83,8 +85,8 @@ pub struct Firmware {
     tracking_rule: TrackingRule,
     /// The hybrid law's last disturbance bound `D`, m/s^2 ([`crate::tracking`]).
     disturbance: f32,
-    pid: PidState,
-    hybrid: HybridState,
+    /// The control law and its state.
+    law: L,
     last_codes: [i16; 2],
     applied: [f32; 2],
     last_saturated: bool,
@@ -109,19 +111,75 @@ pub struct Firmware {
 }
 
 impl Firmware {
-    /// A firmware instance with configuration `cfg`.
+    /// A firmware instance with configuration `cfg`, running the paper's law
+    /// the configuration's `controller` names ([`PaperLaws`]).
     ///
     /// # Errors
     /// [`ConfigError`] naming the first invalid setting.
     pub fn new(cfg: Config) -> Result<Self, ConfigError> {
+        Self::with_law(cfg)
+    }
+}
+
+// Where the step's code is compiled (issue 70; docs/measurements.md "The step
+// behind a trait"). `Firmware<L>` is generic, so its methods are compiled in the
+// crate that builds the image, where they inline into each other before link-time
+// optimisation. The step as it was before the trait calls two non-generic
+// functions of this crate, the frame's check and the body, which fat LTO then
+// inlines whole (the body with the last-call bonus): the paper's laws keep that
+// shape through `paper_control` and these free functions, which are not generic
+// in the law. With the generic body compiled in the image's crate the step took
+// 8 to 11 % more instructions, and with the frame's check inlined early LTO took
+// the body's call as cold (threshold 45) and left it out of line.
+
+/// Decodes `frame` and checks its sequence against the last one's, `last_seq`
+/// (`None` before the first): the measurement and whether periods were skipped.
+/// Not generic (compiled here, whatever the law): see [`paper_control`].
+fn checked(scale: &EncoderScale, last_seq: Option<u32>, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
+    let m = decode::decode_with(frame, scale)?;
+    match last_seq {
+        Some(last) if frame.seq <= last => Err(FrameFault::Stale),
+        Some(last) => Ok((m, frame.seq > last.wrapping_add(1))),
+        None => Ok((m, false)),
+    }
+}
+
+/// Latches `reason` in `safe` unless a reason is latched already.
+fn enter_safe(safe: &mut Option<SafeReason>, reason: SafeReason) {
+    if safe.is_none() {
+        *safe = Some(reason);
+    }
+}
+
+/// [`Firmware::control`] for the paper's laws ([`PaperLaws`]'s
+/// [`ControlLaw::control`]): one non-generic function of this crate.
+pub(crate) fn paper_control(fw: &mut Firmware<PaperLaws>, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
+    fw.control(seq, m)
+}
+
+impl<L: ControlLaw> Firmware<L> {
+    /// A firmware instance with configuration `cfg` running law `L`: the
+    /// firmware's own checks of `cfg`, then the law's ([`ControlLaw::validate`]).
+    ///
+    /// # Errors
+    /// [`ConfigError`] naming the first invalid setting.
+    pub fn with_law(cfg: Config) -> Result<Self, ConfigError> {
         cfg.validate()?;
+        L::validate(&cfg)?;
         Ok(Self::fresh(cfg))
     }
 
-    /// A fresh state for an already validated configuration.
+    /// A fresh state for an already validated configuration. The tracking
+    /// check's rule is derived from the dynamics the law declares (the hybrid
+    /// gains when it declares none: the check is then off, the rule unused).
     fn fresh(cfg: Config) -> Self {
         let ts = cfg.period.as_secs_f32();
-        Self::fresh_with(cfg, TrackingRule::at_period(ts, cfg.hybrid.kp, cfg.hybrid.kd, cfg.hybrid.ki))
+        let d = L::declares(&cfg).tracking.unwrap_or(crate::control_law::TrackingDynamics {
+            kp: cfg.hybrid.kp,
+            kd: cfg.hybrid.kd,
+            ki: cfg.hybrid.ki,
+        });
+        Self::fresh_with(cfg, TrackingRule::at_period(ts, d.kp, d.kd, d.ki))
     }
 
     /// [`Self::fresh`] with the tracking check's rule already derived for `cfg`
@@ -148,8 +206,7 @@ impl Firmware {
             chatter: ChatterMonitor::default(),
             tracking_rule,
             disturbance: 0.0,
-            pid: PidState::default(),
-            hybrid: HybridState::default(),
+            law: L::fresh(&cfg),
             last_codes: [0, 0],
             applied: [0.0, 0.0],
             last_saturated: false,
@@ -195,9 +252,7 @@ impl Firmware {
     }
 
     fn enter_safe(&mut self, reason: SafeReason) {
-        if self.safe.is_none() {
-            self.safe = Some(reason);
-        }
+        enter_safe(&mut self.safe, reason);
     }
 
     /// Latches the safe state (zero torque) for a reason found outside the step,
@@ -275,7 +330,7 @@ impl Firmware {
                 if gap {
                     flags |= status::SEQUENCE_GAP;
                 }
-                match self.control(frame.seq, &m) {
+                match L::control(self, frame.seq, &m) {
                     Ok((u, f)) => {
                         flags |= f;
                         let (u1, s1) = wire::encode_torque(u[0]);
@@ -331,17 +386,15 @@ impl Firmware {
     /// Decodes the frame and checks its sequence; returns the measurement and
     /// whether periods were skipped.
     fn checked(&self, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
-        let m = decode::decode_with(frame, &self.scale)?;
-        match &self.started {
-            Some(s) if frame.seq <= s.last_seq => Err(FrameFault::Stale),
-            Some(s) => Ok((m, frame.seq > s.last_seq.wrapping_add(1))),
-            None => Ok((m, false)),
-        }
+        checked(&self.scale, self.started.as_ref().map(|s| s.last_seq), frame)
     }
 
     /// Estimation, lift-off detection and the control law for a trusted frame;
-    /// returns the motor torques (N m, saturated) and status bits.
-    fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
+    /// returns the motor torques (N m, saturated) and status bits. Reached
+    /// through [`ControlLaw::control`] (see there why).
+    #[doc(hidden)]
+    #[inline(always)]
+    pub fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
         // Borrowed, not copied: the configuration is most of the firmware's state.
         let cfg = &self.cfg;
         let ts = self.dt;
@@ -469,8 +522,12 @@ impl Firmware {
         }
         let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
         // The PID uses no reference acceleration: not computed under it.
-        let reference: RefPoint = s.quintic.at_with(t_run, cfg.controller == ControllerKind::Hybrid);
-        if cfg.runaway_limits && cfg.controller == ControllerKind::Hybrid {
+        // What the law declares, derived from the configuration where it is used
+        // (the paper's laws: one comparison of `controller`, shared by both uses
+        // and the law's own dispatch).
+        let declares = L::declares(cfg);
+        let reference: RefPoint = s.quintic.at_with(t_run, declares.uses_reference_acceleration);
+        if cfg.runaway_limits && declares.tracking.is_some() {
             match self.tracking.update(&self.tracking_rule, z[0] - reference.pos, lifted, self.disturbance, self.last_saturated) {
                 Some(Expectation::Tracking) => return Err(SafeReason::Tracking),
                 Some(Expectation::Saturated) => return Err(SafeReason::Saturated),
@@ -487,29 +544,28 @@ impl Firmware {
         if reference.moving {
             flags |= status::REFERENCE_MOVING;
         }
-        let u_raw = match cfg.controller {
-            ControllerKind::Pid => law::pid(&self.arm, &cfg.pid, s.branch, &reference, q, qd, &mut self.pid, ts, cfg.torque_limit)?,
-            ControllerKind::Hybrid => {
-                let input = HybridInput { q, qd, f_t: m.f_t, f_n: m.f_n, v_belt: m.v_belt };
-                let (u, signals) = law::hybrid_at(
-                    &self.terms,
-                    p.mu,
-                    &cfg.hybrid,
-                    cfg.friction,
-                    &reference,
-                    f_n_ref,
-                    &input,
-                    &trig,
-                    &kin,
-                    &mut self.hybrid,
-                    ts,
-                    self.mu_gain,
-                    self.last_saturated,
-                )?;
-                self.disturbance = signals.disturbance;
-                u
-            }
+        let ctx = LawContext { cfg, arm: &self.arm, terms: &self.terms, branch: s.branch, mu_gain: self.mu_gain };
+        let input = LawInput {
+            q,
+            qd,
+            trig,
+            kin,
+            reference,
+            f_n_ref,
+            f_t: m.f_t,
+            f_n: m.f_n,
+            v_belt: m.v_belt,
+            dt: ts,
+            saturated: self.last_saturated,
         };
+        let out = self.law.step(&ctx, &input)?;
+        // A law's non-finite torques are its failure, whatever it says (the
+        // paper's laws check their own: `CHECKS_FINITE`, no second check).
+        if !L::CHECKS_FINITE && !crate::finite_both(out.u[0], out.u[1]) {
+            return Err(SafeReason::NonFinite);
+        }
+        self.disturbance = out.disturbance;
+        let u_raw = out.u;
         let (u, sat) = law::saturate(u_raw, cfg.torque_limit);
         if cfg.runaway_limits && self.chatter.update(u, cfg.torque_limit) {
             return Err(SafeReason::Unstable);

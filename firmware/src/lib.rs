@@ -18,6 +18,7 @@ pub mod board;
 pub mod chatter;
 pub mod config;
 pub mod consistency;
+pub mod control_law;
 pub mod controller;
 pub mod decode;
 pub mod estimator;
@@ -35,6 +36,7 @@ mod tests;
 
 pub use board::{Board, Event, Outcome, TickClock};
 pub use config::{Config, ControllerKind};
+pub use control_law::{ControlLaw, Declares, HybridLaw, LawContext, LawInput, LawOutput, PaperLaws, PidLaw, TrackingDynamics};
 pub use controller::{Firmware, SafeReason, Telemetry};
 pub use shared;
 pub use shared::wire::{ActuatorCommand, SensorFrame};

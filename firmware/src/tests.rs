@@ -310,3 +310,99 @@ fn torque_saturation_is_reported_in_the_status_word() {
     assert!(c.u1_code == wire::TORQUE_CODE_MAX || c.u1_code == wire::TORQUE_CODE_MIN);
     assert!(fw.telemetry().u_raw[0].abs() > 5.0, "the law asked for more than the motor gives");
 }
+
+/// Issue 70: the paper's laws as [`crate::ControlLaw`]s. Each alone runs the
+/// step bit for bit as [`crate::PaperLaws`] with the configuration's
+/// `controller` naming it (the whole command and telemetry, every period of
+/// a sliding arm with noisy forces); a law whose torques are not finite is
+/// stopped by the step's own check. (That the tracking check follows what a
+/// law declares needs a plant: the rig's tests, with a law of one's own.)
+mod control_law {
+    use super::*;
+    use crate::{ControlLaw, Declares, HybridLaw, LawContext, LawInput, LawOutput, PaperLaws, PidLaw, law::LawError};
+
+    /// Frames of the arm sliding from `x0d` towards `z_t = 0.1` m, with a wobble in
+    /// the angles and the forces (deterministic), period by period.
+    fn frames(n: u32) -> impl Iterator<Item = SensorFrame> {
+        let q0 = x0d();
+        (0..n).map(move |k| {
+            let t = f64::from(k) * 1e-3;
+            let dq = 0.02 * (t * 3.0).sin();
+            frame(k, [q0[0] + dq, q0[1] + 0.7 * dq], [-6.0 + (t * 40.0).sin(), 10.0 + 0.5 * (t * 17.0).cos()])
+        })
+    }
+
+    /// The commands and telemetry of `n` steps of `fw`.
+    fn run<L: ControlLaw>(fw: &mut Firmware<L>, n: u32) -> Vec<(wire::ActuatorCommand, [u32; 10])> {
+        let clock = SteppingClock { now: Cell::new(0), step: 20 };
+        frames(n)
+            .map(|f| {
+                let c = fw.step(Instant::from_us(f.t_us + 100), &f, &clock);
+                let t = fw.telemetry();
+                let bits =
+                    [t.q[0], t.q[1], t.qd[0], t.qd[1], t.z_t_ref, t.f_n_ref, t.f[0], t.f[1], t.u_raw[0], t.u_raw[1]].map(f32::to_bits);
+                (c, bits)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn each_paper_law_alone_is_paper_laws_bit_for_bit() {
+        for friction in [FrictionCompensation::ModelCommandedNormal, FrictionCompensation::Estimated, FrictionCompensation::Measured] {
+            let cfg = Config { controller: ControllerKind::Hybrid, friction, ..Config::default() };
+            let (a, b) = (
+                run(&mut Firmware::<PaperLaws>::with_law(cfg).unwrap(), 3000),
+                run(&mut Firmware::<HybridLaw>::with_law(cfg).unwrap(), 3000),
+            );
+            assert!(a.iter().any(|(c, _)| c.u1_code != 0), "the law acts");
+            assert_eq!(a, b, "{friction:?}");
+        }
+        let cfg = Config { controller: ControllerKind::Pid, ..Config::default() };
+        assert_eq!(
+            run(&mut Firmware::<PaperLaws>::with_law(cfg).unwrap(), 3000),
+            run(&mut Firmware::<PidLaw>::with_law(cfg).unwrap(), 3000)
+        );
+    }
+
+    /// A law that answers fixed torques `u` (N m) and declares the hybrid law's
+    /// tracking dynamics or none ([`FIXED_U`], set per test under [`FIXED_LOCK`]).
+    #[derive(Debug, Clone, Copy)]
+    struct Fixed {
+        u: [f32; 2],
+    }
+
+    static FIXED_U: std::sync::Mutex<([f32; 2], bool)> = std::sync::Mutex::new(([0.0; 2], false));
+
+    impl ControlLaw for Fixed {
+        fn fresh(_cfg: &Config) -> Self {
+            Self { u: FIXED_U.lock().unwrap().0 }
+        }
+        fn declares(cfg: &Config) -> Declares {
+            let tracking = FIXED_U.lock().unwrap().1.then(|| HybridLaw::declares(cfg).tracking).flatten();
+            Declares { tracking, uses_reference_acceleration: false }
+        }
+        fn step(&mut self, _ctx: &LawContext<'_>, _input: &LawInput) -> Result<LawOutput, LawError> {
+            Ok(LawOutput { u: self.u, disturbance: 0.0 })
+        }
+    }
+
+    /// Runs [`Fixed`] answering `u`, declaring tracking or not; the safe state's reason, if any.
+    fn fixed(u: [f32; 2], tracks: bool, n: u32) -> Option<SafeReason> {
+        let _guard = FIXED_LOCK.lock().unwrap();
+        *FIXED_U.lock().unwrap() = (u, tracks);
+        let mut fw = Firmware::<Fixed>::with_law(Config::default()).unwrap();
+        run(&mut fw, n);
+        fw.safe_state()
+    }
+
+    static FIXED_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    #[test]
+    fn a_law_whose_torques_are_not_finite_is_stopped_by_the_step() {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(fixed([0.1, bad], false, 5), Some(SafeReason::NonFinite), "{bad}");
+            assert_eq!(fixed([bad, 0.0], true, 5), Some(SafeReason::NonFinite), "{bad}");
+        }
+        assert_eq!(fixed([0.1, -0.1], false, 5), None, "finite torques run");
+    }
+}

@@ -11,8 +11,11 @@ import sys
 import threading
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-STEP = "firmware::controller::Firmware::step"
-CALLERS = ("firmware::controller::Firmware::step", "firmware::controller::Firmware::control")
+# The step and its body as the debug info names them: `Firmware<L>` is generic over
+# its control law since issue 70 (`Firmware<L>::step`; before, `Firmware::step`).
+_FIRMWARE = ("firmware::controller::Firmware", "firmware::controller::Firmware<L>", "firmware::controller::Firmware$LT$L$GT$")
+STEP = tuple(f + "::step" for f in _FIRMWARE)
+CALLERS = STEP + tuple(f + "::control" for f in _FIRMWARE)
 
 
 def tool(*names):

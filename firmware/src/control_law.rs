@@ -1,0 +1,276 @@
+//! A control law as the firmware runs it (issue 70): the [`ControlLaw`] trait,
+//! what a law reads each period ([`LawInput`], [`LawContext`]), what it returns
+//! ([`LawOutput`]) and what it declares to the protection ([`Declares`]); the
+//! paper's two laws as its implementations ([`PidLaw`], paper eq. 8;
+//! [`HybridLaw`], eqs. 9 to 11 with every friction term) and [`PaperLaws`], the
+//! two chosen by the configuration's `controller` (the images and the rig as
+//! built today).
+//!
+//! The step ([`crate::Firmware::step`]) owns everything around the law: the
+//! frame's decoding and checks, the estimate, the reference, lift-off
+//! detection, the sensor, runaway and wiring checks, saturation and the
+//! torques' encoding, the chatter check, deadlines and the safe state. Which of
+//! the checks that depend on the law apply is decided by what the law
+//! declares ([`Declares`]), never by its name: the tracking check runs for a
+//! law that declares its tracking dynamics, whichever law it is.
+//!
+//! A law runs in the control handler: it must not allocate, must not panic on
+//! data and must stay within the step's budget (5 % of the period at 168 MHz,
+//! docs/hardware.md "Budgets"). An error ([`LawError`]) latches the safe state
+//! at once; non-finite torques are [`LawError::NonFinite`] (the step checks
+//! them too, whatever the law says).
+
+use nalgebra::Vector2;
+use shared::{Arm, ElbowBranch, kinematics::JointTrig, model::ArmTerms};
+
+use crate::{
+    config::{Config, ConfigError, ControllerKind},
+    law::{self, HybridInput, HybridState, LawError, PidState, TipKinematics},
+    reference::RefPoint,
+};
+
+/// What a law declares to the protection around it, once per configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Declares {
+    /// The tracking dynamics it promises for `e = z_t - z_t*` while sliding,
+    /// `e'' + kd e' + kp e + ki int e = d` (`kp` 1/s², `kd` 1/s, `ki` 1/s³), which
+    /// the tracking check ([`crate::tracking`]) holds it to; `None`: the law
+    /// does not track `z_t` and the check is off.
+    pub tracking: Option<TrackingDynamics>,
+    /// Whether it reads the reference's acceleration (`RefPoint::acc`); the
+    /// step leaves it 0 otherwise (and saves its arithmetic).
+    pub uses_reference_acceleration: bool,
+}
+
+/// The closed-loop tracking error's dynamics a law promises ([`Declares::tracking`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackingDynamics {
+    /// Stiffness, 1/s².
+    pub kp: f32,
+    /// Damping, 1/s.
+    pub kd: f32,
+    /// Integral gain, 1/s³ (0: none).
+    pub ki: f32,
+}
+
+/// What the step hands a law, derived once per configuration: the arm's model
+/// (the firmware's own `f32` parameters, `mu = mu_hat`), its folded factors and
+/// the friction estimate's gain per period.
+#[derive(Debug, Clone, Copy)]
+pub struct LawContext<'a> {
+    /// The whole configuration (gains, references, limits).
+    pub cfg: &'a Config,
+    /// The arm's model.
+    pub arm: &'a Arm<f32>,
+    /// Its constant factors, folded once.
+    pub terms: &'a ArmTerms<f32>,
+    /// The elbow's branch the run started on (the inverse kinematics' side).
+    pub branch: ElbowBranch,
+    /// The friction estimate's filter gain per period (`mu_estimate::gain(dt)`).
+    pub mu_gain: f32,
+}
+
+/// What a law reads each period: the estimate, the reference, the measured
+/// forces, the period. SI units, radians. Held by value (the step builds it in
+/// registers: a reference to the kinematics made the step keep them in memory,
+/// 48 instructions more per step).
+#[derive(Debug, Clone, Copy)]
+pub struct LawInput {
+    /// Estimated `[theta1, theta2]`, rad.
+    pub q: Vector2<f32>,
+    /// Estimated `[theta1_dot, theta2_dot]`, rad/s.
+    pub qd: Vector2<f32>,
+    /// Sines and cosines of `q`.
+    pub trig: JointTrig<f32>,
+    /// The tip's estimated position, velocity and Jacobian at `q`, `qd` (paper eq. 1).
+    pub kin: TipKinematics,
+    /// The tangential reference `z_t*`, its velocity and (if declared) acceleration.
+    pub reference: RefPoint,
+    /// The normal-force reference `f_n*` after its ramp, N.
+    pub f_n_ref: f32,
+    /// Measured tangential force `f_t`, N.
+    pub f_t: f32,
+    /// Measured normal force `f_n`, N.
+    pub f_n: f32,
+    /// Measured belt speed `v_belt`, m/s.
+    pub v_belt: f32,
+    /// The control period, s.
+    pub dt: f32,
+    /// Whether a motor saturated in the previous period (for anti-windup).
+    pub saturated: bool,
+}
+
+/// What a law returns each period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawOutput {
+    /// Motor torques `[u1, u2]`, N m, before saturation (the step saturates at
+    /// `torque_limit` and encodes).
+    pub u: [f32; 2],
+    /// The bound `D` on the tangential acceleration the law cannot see in a
+    /// slide, m/s² ([`crate::tracking`]), for the tracking check; 0 for a law
+    /// that claims none.
+    pub disturbance: f32,
+}
+
+/// A control law the firmware runs: no heap, no panic on data.
+pub trait ControlLaw: Clone + core::fmt::Debug {
+    /// Whether [`ControlLaw::step`] returns [`LawError::NonFinite`] itself for
+    /// torques that are not finite (the paper's laws do); otherwise the step
+    /// checks them after the law.
+    const CHECKS_FINITE: bool = false;
+
+    /// The law's fresh state for configuration `cfg` (integrators at zero):
+    /// at the firmware's start and at every reset.
+    fn fresh(cfg: &Config) -> Self;
+
+    /// What the law declares for `cfg` ([`Declares`]).
+    fn declares(cfg: &Config) -> Declares;
+
+    /// Refuses a configuration the law cannot run, with the setting and the
+    /// reason ([`ConfigError`]); called after the firmware's own checks.
+    ///
+    /// # Errors
+    /// The first setting out of the law's range.
+    fn validate(cfg: &Config) -> Result<(), ConfigError> {
+        let _ = cfg;
+        Ok(())
+    }
+
+    /// The step's body for a trusted frame with this law: by default the
+    /// generic one, compiled where the image is built. The paper's laws
+    /// override it with a function compiled in `firmware`, so their step is
+    /// the code it was before the trait (a generic body compiled in the image's
+    /// crate cost the step 8 to 11 % more instructions at `opt-level = "s"`;
+    /// `crate::controller`'s notes). A law of one's own keeps the default: its
+    /// step's cost is what `scripts/cycles.py` measures for its image.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn control(fw: &mut crate::Firmware<Self>, seq: u32, m: &crate::decode::Measurement) -> Result<([f32; 2], u32), crate::SafeReason> {
+        fw.control(seq, m)
+    }
+
+    /// One period: the motor torques for `input`.
+    ///
+    /// # Errors
+    /// [`LawError`]: the firmware latches its safe state at once.
+    fn step(&mut self, ctx: &LawContext<'_>, input: &LawInput) -> Result<LawOutput, LawError>;
+}
+
+/// The joint-space PID (paper eq. 8, [`law::pid`]): no tracking promise on
+/// `z_t` (it tracks joint angles), no reference acceleration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PidLaw {
+    state: PidState,
+}
+
+impl ControlLaw for PidLaw {
+    const CHECKS_FINITE: bool = true;
+
+    fn fresh(_cfg: &Config) -> Self {
+        Self::default()
+    }
+
+    #[inline(always)]
+    fn declares(_cfg: &Config) -> Declares {
+        Declares { tracking: None, uses_reference_acceleration: false }
+    }
+
+    #[inline(always)]
+    fn step(&mut self, ctx: &LawContext<'_>, input: &LawInput) -> Result<LawOutput, LawError> {
+        let u = law::pid(
+            ctx.arm,
+            &ctx.cfg.pid,
+            ctx.branch,
+            &input.reference,
+            input.q,
+            input.qd,
+            &mut self.state,
+            input.dt,
+            ctx.cfg.torque_limit,
+        )?;
+        Ok(LawOutput { u, disturbance: 0.0 })
+    }
+}
+
+/// The hybrid force/motion law (paper eqs. 9 to 11, [`law::hybrid_at`]) with
+/// the configuration's friction term: it promises `z_t`'s tracking dynamics of
+/// its gains `K'_P`, `K'_D`, `K'_I` and reads the reference's acceleration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct HybridLaw {
+    state: HybridState,
+}
+
+impl ControlLaw for HybridLaw {
+    const CHECKS_FINITE: bool = true;
+
+    fn fresh(_cfg: &Config) -> Self {
+        Self::default()
+    }
+
+    #[inline(always)]
+    fn declares(cfg: &Config) -> Declares {
+        let h = &cfg.hybrid;
+        Declares { tracking: Some(TrackingDynamics { kp: h.kp, kd: h.kd, ki: h.ki }), uses_reference_acceleration: true }
+    }
+
+    #[inline(always)]
+    fn step(&mut self, ctx: &LawContext<'_>, input: &LawInput) -> Result<LawOutput, LawError> {
+        let cfg = ctx.cfg;
+        let measured = HybridInput { q: input.q, qd: input.qd, f_t: input.f_t, f_n: input.f_n, v_belt: input.v_belt };
+        let (u, signals) = law::hybrid_at(
+            ctx.terms,
+            cfg.params.mu,
+            &cfg.hybrid,
+            cfg.friction,
+            &input.reference,
+            input.f_n_ref,
+            &measured,
+            &input.trig,
+            &input.kin,
+            &mut self.state,
+            input.dt,
+            ctx.mu_gain,
+            input.saturated,
+        )?;
+        Ok(LawOutput { u, disturbance: signals.disturbance })
+    }
+}
+
+/// The paper's two laws, the configuration's `controller` choosing
+/// ([`ControllerKind`]): what the `arm` and PIL images, the firmware process
+/// and the in-process rig run. Both states are kept, as before the trait, so
+/// a configuration's law is the same bits whichever way it is built.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PaperLaws {
+    pid: PidLaw,
+    hybrid: HybridLaw,
+}
+
+impl ControlLaw for PaperLaws {
+    const CHECKS_FINITE: bool = true;
+
+    #[inline(always)]
+    fn control(fw: &mut crate::Firmware<Self>, seq: u32, m: &crate::decode::Measurement) -> Result<([f32; 2], u32), crate::SafeReason> {
+        crate::controller::paper_control(fw, seq, m)
+    }
+
+    fn fresh(_cfg: &Config) -> Self {
+        Self::default()
+    }
+
+    #[inline(always)]
+    fn declares(cfg: &Config) -> Declares {
+        match cfg.controller {
+            ControllerKind::Pid => PidLaw::declares(cfg),
+            ControllerKind::Hybrid => HybridLaw::declares(cfg),
+        }
+    }
+
+    #[inline(always)]
+    fn step(&mut self, ctx: &LawContext<'_>, input: &LawInput) -> Result<LawOutput, LawError> {
+        match ctx.cfg.controller {
+            ControllerKind::Pid => self.pid.step(ctx, input),
+            ControllerKind::Hybrid => self.hybrid.step(ctx, input),
+        }
+    }
+}
