@@ -251,7 +251,7 @@ impl ControlLaw for PaperLaws {
 
     #[inline(always)]
     fn control(fw: &mut crate::Firmware<Self>, seq: u32, m: &crate::decode::Measurement) -> Result<([f32; 2], u32), crate::SafeReason> {
-        crate::controller::paper_control(fw, seq, m)
+        paper_control(fw, seq, m)
     }
 
     fn fresh(_cfg: &Config) -> Self {
@@ -273,4 +273,16 @@ impl ControlLaw for PaperLaws {
             ControllerKind::Hybrid => self.hybrid.step(ctx, input),
         }
     }
+}
+
+/// [`crate::Firmware`]'s body for the paper's laws ([`PaperLaws`]'s
+/// [`ControlLaw::control`]): one non-generic function of this crate, which the
+/// image's link-time optimisation inlines whole into the step (`crate::controller`'s
+/// notes on where the step's code is compiled).
+fn paper_control(
+    fw: &mut crate::Firmware<PaperLaws>,
+    seq: u32,
+    m: &crate::decode::Measurement,
+) -> Result<([f32; 2], u32), crate::SafeReason> {
+    fw.control(seq, m)
 }

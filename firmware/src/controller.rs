@@ -127,14 +127,14 @@ impl Firmware {
 // optimisation. The step as it was before the trait calls two non-generic
 // functions of this crate, the frame's check and the body, which fat LTO then
 // inlines whole (the body with the last-call bonus): the paper's laws keep that
-// shape through `paper_control` and these free functions, which are not generic
-// in the law. With the generic body compiled in the image's crate the step took
+// shape through `control_law::paper_control` and these free functions, which
+// are not generic in the law. With the generic body compiled in the image's crate the step took
 // 8 to 11 % more instructions, and with the frame's check inlined early LTO took
 // the body's call as cold (threshold 45) and left it out of line.
 
 /// Decodes `frame` and checks its sequence against the last one's, `last_seq`
 /// (`None` before the first): the measurement and whether periods were skipped.
-/// Not generic (compiled here, whatever the law): see [`paper_control`].
+/// Not generic (compiled here, whatever the law): see the notes above.
 fn checked(scale: &EncoderScale, last_seq: Option<u32>, frame: &SensorFrame) -> Result<(Measurement, bool), FrameFault> {
     let m = decode::decode_with(frame, scale)?;
     match last_seq {
@@ -149,12 +149,6 @@ fn enter_safe(safe: &mut Option<SafeReason>, reason: SafeReason) {
     if safe.is_none() {
         *safe = Some(reason);
     }
-}
-
-/// [`Firmware::control`] for the paper's laws ([`PaperLaws`]'s
-/// [`ControlLaw::control`]): one non-generic function of this crate.
-pub(crate) fn paper_control(fw: &mut Firmware<PaperLaws>, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
-    fw.control(seq, m)
 }
 
 impl<L: ControlLaw> Firmware<L> {
