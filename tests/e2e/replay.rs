@@ -248,3 +248,41 @@ fn bad_input_is_refused_with_its_reason() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// Not only the goldens: runs of random scenarios over the whole envelope the
+/// validator accepts (both laws, every friction term the draw gives, rates 250 Hz
+/// to 10 kHz, random gains, `mu_hat` off by up to 25 %; board-link's
+/// `random_envelope`) replay identically in-process and over iceoryx2, however
+/// each run ended (a safe state included). Not the board links: there the first
+/// draw (hybrid, estimated friction, 924 us, `mu_hat` 9 % low, random gains)
+/// answers differently from period 1 (`u1_raw`; the twin and the ELF alike), a
+/// difference of the board's application the replay found, left open in issue 70's
+/// notes; the goldens' runs replay identically on them.
+#[test]
+fn runs_of_random_scenarios_over_the_envelope_replay_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    for i in 0..6u64 {
+        let kind = if i % 2 == 0 { "hybrid" } else { "pid" };
+        let (scenario, what) = board_link::random_scenarios::random_envelope(6900 + i, kind, 0.4);
+        let file = dir.path().join(format!("s{i}.toml"));
+        std::fs::write(&file, toml::to_string(&scenario).unwrap()).unwrap();
+        let rec = dir.path().join(format!("rec{i}"));
+        // A run may end early (a safe state): its frames up to then are the record.
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+            .args(["run", "--in-process", "--no-page", "--scenario", file.to_str().unwrap(), "--out"])
+            .arg(&rec)
+            .output()
+            .unwrap();
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{what}: {}", String::from_utf8_lossy(&o.stderr));
+        let n = common::csv_rows(&rec.join("frames.csv")).len() as u64 - 1;
+        assert!(n > 0, "{what}: no period recorded");
+        for args in [vec![], vec!["--link", "iceoryx2"]] {
+            let (code, doc, err) = replay(&rec, &args);
+            assert_eq!(
+                (code, &doc["identical"], doc["periods_replayed"].as_u64()),
+                (0, &serde_json::Value::Bool(true), Some(n)),
+                "{what} {args:?}: {doc} {err}"
+            );
+        }
+    }
+}
