@@ -253,11 +253,13 @@ fn bad_input_is_refused_with_its_reason() {
 /// validator accepts (both laws, every friction term the draw gives, rates 250 Hz
 /// to 10 kHz, random gains, `mu_hat` off by up to 25 %; board-link's
 /// `random_envelope`) replay identically in-process and over iceoryx2, however
-/// each run ended (a safe state included). Not the board links: there the first
-/// draw (hybrid, estimated friction, 924 us, `mu_hat` 9 % low, random gains)
-/// answers differently from period 1 (`u1_raw`; the twin and the ELF alike), a
-/// difference of the board's application the replay found, left open in issue 70's
-/// notes; the goldens' runs replay identically on them.
+/// each run ended (a safe state included). Not the board links: with
+/// `controller.friction = estimated` (any rate, 1 kHz too, `mu_hat` right or not)
+/// the twin and the `arm` ELF answer differently from period 1 (`u1_raw`), the same
+/// bits on both; with the commanded friction term they replay identically. A
+/// difference of the board's path the replay found, left open (the estimate is the
+/// one term that reads the measured belt speed's value, which the board's device
+/// models sense themselves); the goldens' runs replay identically on them.
 #[test]
 fn runs_of_random_scenarios_over_the_envelope_replay_identically() {
     let dir = tempfile::tempdir().unwrap();
