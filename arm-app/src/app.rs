@@ -30,7 +30,7 @@ use drivers::{
     load_cell::{Calibration, CalibrationError},
 };
 use firmware::{
-    Config, Event, Firmware, Outcome, SafeReason, TickClock,
+    Config, ControlLaw, Event, Firmware, Outcome, PaperLaws, SafeReason, TickClock,
     board::{self, Board},
     config::ConfigError,
 };
@@ -73,11 +73,11 @@ pub struct ArmCalibration {
 /// # Errors
 /// [`Refusal::ProtectionOff`] when the runaway limits are off (checked first),
 /// [`Refusal::InvalidConfig`] when the configuration is invalid.
-pub fn board_firmware(config: Config) -> Result<Firmware, Refusal> {
+pub fn board_firmware<L: ControlLaw>(config: Config) -> Result<Firmware<L>, Refusal> {
     if !config.runaway_limits {
         return Err(Refusal::ProtectionOff);
     }
-    Firmware::new(config).map_err(|_| Refusal::InvalidConfig)
+    Firmware::with_law(config).map_err(|_| Refusal::InvalidConfig)
 }
 
 /// Whether a stored record's values would be taken: its configuration
@@ -88,7 +88,7 @@ pub fn board_firmware(config: Config) -> Result<Firmware, Refusal> {
 /// # Errors
 /// [`RecordFault::ProtectionOff`] for a configuration with the runaway limits
 /// off, [`RecordFault::Content`] for any other invalid value.
-pub(crate) fn check_stored(s: &Stored) -> Result<Firmware, RecordFault> {
+pub(crate) fn check_stored<L: ControlLaw>(s: &Stored) -> Result<Firmware<L>, RecordFault> {
     let c = s.calibration;
     let fw = board_firmware(s.config)
         .map_err(|r| if r == Refusal::ProtectionOff { RecordFault::ProtectionOff } else { RecordFault::Content })?;
@@ -139,7 +139,7 @@ pub enum StartError {
 }
 
 /// The arm application: the firmware and the board it runs on.
-pub struct ArmApp<H: ArmIo> {
+pub struct ArmApp<H: ArmIo, L: ControlLaw = PaperLaws> {
     pub(crate) hw: Hardware<H>,
     /// The firmware in force is `slots[active]`. The other slot holds, once
     /// [`ArmApp::prepare_reset`] made it between two ticks, a fresh firmware
@@ -147,12 +147,12 @@ pub struct ArmApp<H: ArmIo> {
     /// (`active` flips) instead of `Firmware::reset` rebuilding and copying
     /// the whole state in the control interrupt (issue 56: 2 300 of the
     /// press's period's 7 850 cycles on the `arm` image).
-    slots: [Option<Firmware>; 2],
+    slots: [Option<Firmware<L>>; 2],
     active: usize,
     clock: H::Clock,
 }
 
-impl<H: ArmIo> ArmApp<H> {
+impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
     /// Starts the application on `parts`: loads the settings record from the
     /// flash (`crate::record`; a [`Notice::Settings`] says what was found), and
     /// when there is none or it is refused, falls back to the compiled-in
@@ -170,7 +170,7 @@ impl<H: ArmIo> ArmApp<H> {
     /// limits off).
     pub fn new(mut parts: ArmParts<H>, config: Config, cal: &ArmCalibration, log: &mut impl FnMut(Notice)) -> Result<Self, StartError> {
         let fallback = CalibrationRecord::uncalibrated(cal);
-        let loaded = record::load(&mut parts.flash).and_then(|s| match s.map(|s| check_stored(&s).map(|_| s)) {
+        let loaded = record::load(&mut parts.flash).and_then(|s| match s.map(|s| check_stored::<L>(&s).map(|_| s)) {
             Some(Err(fault)) => Err(fault),
             Some(Ok(s)) => Ok(Some(s)),
             None => Ok(None),
@@ -189,7 +189,7 @@ impl<H: ArmIo> ArmApp<H> {
         if !config.runaway_limits {
             return Err(StartError::ProtectionOff);
         }
-        let firmware = Firmware::new(config).map_err(StartError::Config)?;
+        let firmware = Firmware::<L>::with_law(config).map_err(StartError::Config)?;
         let mut theta1 = As5047p::new(parts.theta1);
         let mut elbow = As5047p::new(parts.elbow);
         for (joint, enc) in [(Joint::Theta1, &mut theta1), (Joint::Elbow, &mut elbow)] {
@@ -255,7 +255,7 @@ impl<H: ArmIo> ArmApp<H> {
 
     /// Puts `fw` in force (a configuration taken): the fresh spare of the
     /// last one, if any, is dropped.
-    pub(crate) fn set_firmware(&mut self, fw: Firmware) {
+    pub(crate) fn set_firmware(&mut self, fw: Firmware<L>) {
         self.active &= 1;
         self.slots[self.active] = Some(fw);
         self.slots[self.active ^ 1] = None;
@@ -275,7 +275,7 @@ impl<H: ArmIo> ArmApp<H> {
         if self.slots[spare].is_none()
             && let Some(fw) = &self.slots[self.active]
         {
-            self.slots[spare] = Firmware::new(*fw.config()).ok();
+            self.slots[spare] = Firmware::with_law(*fw.config()).ok();
         }
     }
 
@@ -368,7 +368,7 @@ impl<H: ArmIo> ArmApp<H> {
     }
 
     /// The firmware (its counters, its estimate).
-    pub fn firmware(&self) -> Option<&Firmware> {
+    pub fn firmware(&self) -> Option<&Firmware<L>> {
         self.slots[self.active & 1].as_ref()
     }
 }
@@ -380,7 +380,7 @@ struct TickBoard<'a, H: ArmIo, L: FnMut(Notice)> {
     log: &'a mut L,
 }
 
-impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
+impl<H: ArmIo, N: FnMut(Notice)> Board for TickBoard<'_, H, N> {
     type Error = core::convert::Infallible;
 
     fn next_event(&mut self) -> Result<Event, Self::Error> {
@@ -399,7 +399,7 @@ impl<H: ArmIo, L: FnMut(Notice)> Board for TickBoard<'_, H, L> {
         self.hw.now
     }
 
-    fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {
+    fn apply<L: ControlLaw>(&mut self, outcome: &Outcome, fw: Option<&Firmware<L>>) -> Result<(), Self::Error> {
         let hw = &mut *self.hw;
         match outcome {
             Outcome::Command(c) => {

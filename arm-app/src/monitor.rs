@@ -16,6 +16,7 @@
 //! | 16 | `command` | `shared::wire::ActuatorCommand` (32 bytes) |
 //! | 48 | `telemetry` | `shared::wire::FirmwareTelemetry` (48 bytes) |
 
+use firmware::ControlLaw;
 use shared::wire::{ActuatorCommand, FirmwareTelemetry};
 
 use crate::{ArmApp, ArmIo};
@@ -47,7 +48,7 @@ pub struct Monitor {
 
 const _: () = assert!(MONITOR_BYTES == 96);
 
-impl<H: ArmIo> ArmApp<H> {
+impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
     /// The monitor block after the last tick (`None` before the first command).
     pub fn monitor(&self) -> Option<Monitor> {
         let command = *self.last_command()?;

@@ -13,6 +13,7 @@
 //! every period of the range). `firmware::Config::validate` holds the same
 //! range (tested below).
 
+use firmware::ControlLaw;
 use shared::time::Period;
 
 use crate::{ArmApp, ArmIo};
@@ -31,7 +32,7 @@ pub fn supported(period: Period) -> bool {
     (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&period.as_us())
 }
 
-impl<H: ArmIo> ArmApp<H> {
+impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
     /// The control period the board's tick runs, as the board last said
     /// ([`ArmApp::retime`]; at start-up the configuration's, which the board
     /// programs its timer from): what `Status` reports.

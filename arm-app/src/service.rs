@@ -4,6 +4,7 @@
 //! (`crate::jog`), one period at a time, the firmware's command set aside.
 
 use drivers::{EncoderCalibration, frame::FrameCalibration, load_cell::Calibration};
+use firmware::ControlLaw;
 
 use crate::{
     ArmApp, ArmIo,
@@ -20,7 +21,7 @@ use crate::{
 /// Counts per turn of the joints' encoders.
 const COUNTS: u16 = 1 << 14;
 
-impl<H: ArmIo> ArmApp<H> {
+impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
     /// Answers one bring-up request (see [`Request`] for each).
     pub fn serve(&mut self, request: Request) -> Reply {
         let hw = &mut self.hw;
@@ -74,8 +75,8 @@ impl<H: ArmIo> ArmApp<H> {
                 }
                 // The configuration as every configuration a board takes, then the
                 // flash record's own check at reset: the calibration against it.
-                let fw = match board_firmware(stored.config) {
-                    Ok(_) => match check_stored(&stored) {
+                let fw = match board_firmware::<L>(stored.config) {
+                    Ok(_) => match check_stored::<L>(&stored) {
                         Ok(fw) => fw,
                         Err(_) => return Reply::Refused(Refusal::OutOfRange),
                     },

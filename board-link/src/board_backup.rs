@@ -187,6 +187,7 @@ pub fn validate(b: &Backup) -> Result<(), String> {
             return Err(format!("backup key `config.{name}` = {value}: out of range ({expected})"));
         }
         Err(firmware::config::ConfigError::Params(e)) => return Err(format!("backup key `config.params`: {e}")),
+        Err(e) => return Err(format!("backup key `config`: {e}")),
     }
     let c = &b.calibration;
     for (i, z) in c.zero_counts.iter().enumerate() {

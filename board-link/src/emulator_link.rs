@@ -110,8 +110,9 @@ impl EmulatorLink {
                 arm_app::rate::RANGE_WORDS
             )));
         }
-        let config = *setup.firmware();
-        let announced = rig::handshake::of_config(&config)?;
+        // The paper's laws: a `[law]` table is refused here, naming the links that run one.
+        let config = setup.firmware_for(&rig::law::LawDescription::paper())?;
+        let announced = rig::handshake::of_config(&config, &firmware::LawSpec::PAPER)?;
         let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
         let flash = FlashModel::brought_up(&s.calibration.arm_calibration(), config)
             .map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;

@@ -51,8 +51,9 @@ impl TwinLink {
         LinkKind::Twin.check(&s.faults)?;
         rig::board_protection::check_protection(setup.firmware(), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
-        let config = *setup.firmware();
-        let announced = rig::handshake::of_config(&config)?;
+        // The paper's laws: a `[law]` table is refused here, naming the links that run one.
+        let config = setup.firmware_for(&rig::law::LawDescription::paper())?;
+        let announced = rig::handshake::of_config(&config, &firmware::LawSpec::PAPER)?;
         let twin = BoardTwin::new(s.board, config, &s.calibration.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)
             .map_err(|e| RunError::Board(e.to_string()))?;
         Ok(Self {

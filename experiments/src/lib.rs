@@ -20,6 +20,7 @@ pub mod arm;
 pub mod counters;
 pub mod done;
 pub mod error;
+pub mod firmware_process;
 pub mod modes;
 pub mod poincare;
 pub mod run;

@@ -1,14 +1,15 @@
 //! The firmware's announcement of its configuration (the SIL rig's handshake
 //! before period 0, docs/rig.md "Handshake"): its [`Config`] in postcard's
-//! encoding inside a fixed-size [`FirmwareAnnouncement`], and the CRC-64 that
-//! names it. The plant decodes it and compares it, field by field, with the
-//! configuration its scenario asks for. No heap: the encoding goes into the
-//! message's own buffer.
+//! encoding inside a fixed-size [`FirmwareAnnouncement`], the CRC-64 that
+//! names it, and its law's declaration ([`LawSpec`], postcard). The plant maps
+//! its scenario's `[law]` table with the declaration, then compares the
+//! configuration, field by field, with the one its scenario asks for. No heap:
+//! the encodings go into the message's own buffers.
 
 use crc::{CRC_64_XZ, Crc};
 use shared::wire::{FirmwareAnnouncement, WIRE_VERSION};
 
-use crate::Config;
+use crate::{Config, LawSpec};
 
 const CRC64: Crc<u64> = Crc::<u64>::new(&CRC_64_XZ);
 
@@ -30,6 +31,9 @@ pub enum AnnounceError {
     /// The configuration does not fit the message (a build error: `Config` grew).
     #[error("the configuration does not fit the announcement's {0} bytes")]
     TooLong(usize),
+    /// The law's declaration does not fit the message (names and units too long).
+    #[error("the law's declaration does not fit the announcement's {0} bytes: shorten its parameters' names and units")]
+    LawTooLong(usize),
 }
 
 /// The CRC-64/XZ of `bytes` (the announcement's `config_hash`).
@@ -37,17 +41,30 @@ pub fn config_hash(bytes: &[u8]) -> u64 {
     CRC64.checksum(bytes)
 }
 
-/// The announcement of `config` at this build's [`WIRE_VERSION`].
+/// The announcement of `config`, run by the law that declares `law`, at this
+/// build's [`WIRE_VERSION`].
 ///
 /// # Errors
-/// [`AnnounceError::TooLong`] if the encoding exceeds the message's buffer
-/// (`shared::wire::ANNOUNCEMENT_CONFIG_BYTES`; a test pins the margin).
-pub fn announce(config: &Config) -> Result<FirmwareAnnouncement, AnnounceError> {
+/// [`AnnounceError::TooLong`] if the configuration's encoding exceeds the
+/// message's buffer (`shared::wire::ANNOUNCEMENT_CONFIG_BYTES`; a test pins the
+/// margin), [`AnnounceError::LawTooLong`] if the law's does
+/// (`shared::wire::ANNOUNCEMENT_LAW_BYTES`).
+pub fn announce(config: &Config, law: &LawSpec) -> Result<FirmwareAnnouncement, AnnounceError> {
     let mut a = FirmwareAnnouncement::default();
     let len = postcard::to_slice(config, &mut a.config).map_err(|_| AnnounceError::TooLong(shared::wire::ANNOUNCEMENT_CONFIG_BYTES))?.len();
     a.config_len = len as u32;
     a.config_hash = config_hash(&a.config[..len]);
+    a.law_len = law.encode(&mut a.law).ok_or(AnnounceError::LawTooLong(shared::wire::ANNOUNCEMENT_LAW_BYTES))?.len() as u32;
     Ok(a)
+}
+
+/// The law's encoded declaration an announcement carries (postcard's
+/// encoding of a [`LawSpec`]; the host decodes it into owned strings).
+///
+/// # Errors
+/// [`AnnounceError::Undecodable`] when its length runs past the buffer.
+pub fn law_bytes(a: &FirmwareAnnouncement) -> Result<&[u8], AnnounceError> {
+    a.law.get(..a.law_len as usize).ok_or(AnnounceError::Undecodable("the law's length beyond the buffer"))
 }
 
 /// The configuration an announcement carries.
@@ -82,7 +99,7 @@ mod tests {
     fn announcement_round_trips_and_fits_with_margin() {
         for controller in [ControllerKind::Pid, ControllerKind::Hybrid] {
             let c = Config { controller, branch: Some(shared::ElbowBranch::Up), ..Config::default() };
-            let a = announce(&c).unwrap();
+            let a = announce(&c, &LawSpec::PAPER).unwrap();
             assert_eq!(configuration(&a).unwrap(), c);
             // Room to grow: a Config twice as long still fits.
             assert!(2 * a.config_len as usize <= a.config.len(), "{} bytes", a.config_len);
@@ -91,8 +108,9 @@ mod tests {
 
     #[test]
     fn a_changed_setting_changes_the_hash_and_a_corrupted_byte_is_refused() {
-        let a = announce(&Config::default()).unwrap();
-        let b = announce(&Config { hybrid: HybridGains { kp: 901.0, ..Config::default().hybrid }, ..Config::default() }).unwrap();
+        let a = announce(&Config::default(), &LawSpec::PAPER).unwrap();
+        let b = announce(&Config { hybrid: HybridGains { kp: 901.0, ..Config::default().hybrid }, ..Config::default() }, &LawSpec::PAPER)
+            .unwrap();
         assert_ne!(a.config_hash, b.config_hash);
         for i in 0..a.config_len as usize {
             let mut bad = a;
@@ -106,7 +124,7 @@ mod tests {
 
     #[test]
     fn another_wire_version_is_refused_first() {
-        let mut a = announce(&Config::default()).unwrap();
+        let mut a = announce(&Config::default(), &LawSpec::PAPER).unwrap();
         a.wire_version = WIRE_VERSION + 1;
         a.config_hash ^= 1;
         assert_eq!(configuration(&a), Err(AnnounceError::WireVersion { firmware: WIRE_VERSION + 1, plant: WIRE_VERSION }));

@@ -15,7 +15,7 @@ use shared::{
     wire::{ActuatorCommand, SensorFrame},
 };
 
-use crate::{Config, Firmware, SafeReason, config::ConfigError};
+use crate::{Config, ControlLaw, Firmware, SafeReason, config::ConfigError};
 
 /// A free-running tick counter the step uses to measure its own execution time
 /// (the DWT cycle counter or SysTick on the MCU, `Instant` on the host, a fake in tests).
@@ -93,11 +93,12 @@ pub trait Board {
     /// [`SensorFrame::t_us`] (the frame's sample time plus whatever delayed the
     /// start).
     fn now(&self) -> Instant;
-    /// Acts on an outcome; `firmware` is the state after it (telemetry).
+    /// Acts on an outcome; `firmware` is the state after it (telemetry), with
+    /// whichever law it runs.
     ///
     /// # Errors
     /// The board's error.
-    fn apply(&mut self, outcome: &Outcome, firmware: Option<&Firmware>) -> Result<(), Self::Error>;
+    fn apply<L: ControlLaw>(&mut self, outcome: &Outcome, firmware: Option<&Firmware<L>>) -> Result<(), Self::Error>;
 }
 
 /// One event: steps, reconfigures, resets or latches the safe state, then has
@@ -108,8 +109,8 @@ pub trait Board {
 ///
 /// # Errors
 /// The board's error from [`Board::apply`].
-pub fn handle<B: Board, C: TickClock>(
-    firmware: &mut Option<Firmware>,
+pub fn handle<L: ControlLaw, B: Board, C: TickClock>(
+    firmware: &mut Option<Firmware<L>>,
     event: Event,
     board: &mut B,
     clock: &C,
@@ -117,7 +118,7 @@ pub fn handle<B: Board, C: TickClock>(
     let outcome = match (event, firmware.as_mut()) {
         (Event::Frame(frame), Some(fw)) => Outcome::Command(fw.step(board.now(), &frame, clock)),
         (Event::Frame(frame), None) => Outcome::NotConfigured { seq: frame.seq },
-        (Event::Configure(cfg), _) => match Firmware::new(cfg) {
+        (Event::Configure(cfg), _) => match Firmware::with_law(cfg) {
             Ok(fw) => {
                 *firmware = Some(fw);
                 Outcome::Configured
@@ -153,7 +154,7 @@ pub fn handle<B: Board, C: TickClock>(
 ///
 /// # Errors
 /// The board's first error.
-pub fn run<B: Board, C: TickClock>(firmware: &mut Option<Firmware>, board: &mut B, clock: &C) -> Result<(), B::Error> {
+pub fn run<L: ControlLaw, B: Board, C: TickClock>(firmware: &mut Option<Firmware<L>>, board: &mut B, clock: &C) -> Result<(), B::Error> {
     loop {
         let event = board.next_event()?;
         if handle(firmware, event, board, clock)? == Outcome::Ended {
@@ -199,7 +200,7 @@ mod tests {
         fn now(&self) -> Instant {
             self.now
         }
-        fn apply(&mut self, outcome: &Outcome, _: Option<&Firmware>) -> Result<(), Self::Error> {
+        fn apply<L: ControlLaw>(&mut self, outcome: &Outcome, _: Option<&Firmware<L>>) -> Result<(), Self::Error> {
             self.outcomes.push(*outcome);
             Ok(())
         }
@@ -224,7 +225,7 @@ mod tests {
             Event::End,
         ];
         let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
-        let mut fw = None;
+        let mut fw: Option<Firmware> = None;
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
         assert_eq!(o.len(), 8);
@@ -274,6 +275,6 @@ mod tests {
     fn a_board_error_stops_the_loop() {
         let mut board =
             Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
-        assert_eq!(run(&mut None, &mut board, &FrozenClock), Err("script exhausted"));
+        assert_eq!(run(&mut None::<Firmware>, &mut board, &FrozenClock), Err("script exhausted"));
     }
 }

@@ -4,6 +4,8 @@
 
 use shared::{ElbowBranch, Params, Period};
 
+use crate::law_spec::{LawName, LawParams};
+
 /// Which control law runs (docs/model.md experiments 5 and 6): the firmware's
 /// configuration, scenario files (`controller.kind = "pid" | "hybrid"`), the
 /// analyses and the command line (`--controller`) all use this one type.
@@ -176,6 +178,11 @@ pub struct Config {
     /// the reference board; 10 to 16, `shared::wire::ENCODER_BITS_RANGE`). The sensor
     /// side must send counts of the same resolution.
     pub encoder_bits: u8,
+    /// The law this configuration is for and its own parameters
+    /// ([`crate::law_spec`]): [`LawParams::PAPER`] for the paper's laws (which
+    /// `controller` chooses); a law of one's own's name and values otherwise
+    /// (checked against what the law declares by `Firmware::with_law`).
+    pub law: LawParams,
 }
 
 /// A detector's confirmation as tuned at 1 kHz: the time it must hold, and the
@@ -269,6 +276,7 @@ impl Config {
             bad_frame_limit: 3,
             branch: None,
             encoder_bits: shared::wire::ENCODER_BITS,
+            law: LawParams::PAPER,
         }
     }
 }
@@ -304,6 +312,30 @@ pub enum ConfigError {
         value: f32,
         /// What is allowed.
         expected: &'static str,
+    },
+    /// The configuration is for another law than the firmware was built with.
+    #[error(
+        "the configuration is for {asked}, this firmware runs {built}: build the law's own firmware, or give the scenario its `[law]` table"
+    )]
+    WrongLaw {
+        /// The law the firmware runs.
+        built: LawName,
+        /// The law the configuration names.
+        asked: LawName,
+    },
+    /// A law's own parameter is out of the range it declares.
+    #[error("law parameter `{name}` = {value} {unit} is out of the law's range [{min}, {max}] {unit}")]
+    LawParam {
+        /// The parameter's declared name.
+        name: &'static str,
+        /// Its declared unit.
+        unit: &'static str,
+        /// The value.
+        value: f32,
+        /// Least value admitted.
+        min: f32,
+        /// Largest value admitted.
+        max: f32,
     },
 }
 

@@ -26,6 +26,7 @@ use shared::{Arm, ElbowBranch, kinematics::JointTrig, model::ArmTerms};
 use crate::{
     config::{Config, ConfigError, ControllerKind},
     law::{self, HybridInput, HybridState, LawError, PidState, TipKinematics},
+    law_spec::LawSpec,
     reference::RefPoint,
 };
 
@@ -68,6 +69,15 @@ pub struct LawContext<'a> {
     pub branch: ElbowBranch,
     /// The friction estimate's filter gain per period (`mu_estimate::gain(dt)`).
     pub mu_gain: f32,
+}
+
+impl LawContext<'_> {
+    /// The law's own parameters (`cfg.law.values`), in the order and units of
+    /// its [`ControlLaw::SPEC`], each within its declared range.
+    #[inline(always)]
+    pub fn params(&self) -> &[f32; crate::law_spec::LAW_PARAMS] {
+        &self.cfg.law.values
+    }
 }
 
 /// What a law reads each period: the estimate, the reference, the measured
@@ -114,6 +124,13 @@ pub struct LawOutput {
 
 /// A control law the firmware runs: no heap, no panic on data.
 pub trait ControlLaw: Clone + core::fmt::Debug {
+    /// What the law declares about its own configuration: its name, source and
+    /// parameters (names, units, ranges, defaults; [`LawSpec`]), which a
+    /// configuration's `law` must match ([`crate::Firmware::with_law`]) and the
+    /// plant maps a scenario's `[law]` table onto. The paper's laws:
+    /// [`LawSpec::PAPER`].
+    const SPEC: LawSpec;
+
     /// Whether [`ControlLaw::step`] returns [`LawError::NonFinite`] itself for
     /// torques that are not finite (the paper's laws do); otherwise the step
     /// checks them after the law.
@@ -164,6 +181,7 @@ pub struct PidLaw {
 }
 
 impl ControlLaw for PidLaw {
+    const SPEC: LawSpec = LawSpec::PAPER;
     const CHECKS_FINITE: bool = true;
 
     fn fresh(_cfg: &Config) -> Self {
@@ -201,6 +219,7 @@ pub struct HybridLaw {
 }
 
 impl ControlLaw for HybridLaw {
+    const SPEC: LawSpec = LawSpec::PAPER;
     const CHECKS_FINITE: bool = true;
 
     fn fresh(_cfg: &Config) -> Self {
@@ -247,6 +266,7 @@ pub struct PaperLaws {
 }
 
 impl ControlLaw for PaperLaws {
+    const SPEC: LawSpec = LawSpec::PAPER;
     const CHECKS_FINITE: bool = true;
 
     #[inline(always)]

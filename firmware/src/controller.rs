@@ -153,12 +153,22 @@ fn enter_safe(safe: &mut Option<SafeReason>, reason: SafeReason) {
 
 impl<L: ControlLaw> Firmware<L> {
     /// A firmware instance with configuration `cfg` running law `L`: the
-    /// firmware's own checks of `cfg`, then the law's ([`ControlLaw::validate`]).
+    /// firmware's own checks of `cfg`, then that `cfg.law` is for `L` with
+    /// every value in the range `L` declares ([`crate::LawSpec::check`]), then
+    /// the law's own ([`ControlLaw::validate`]). A malformed [`ControlLaw::SPEC`]
+    /// does not compile.
     ///
     /// # Errors
     /// [`ConfigError`] naming the first invalid setting.
     pub fn with_law(cfg: Config) -> Result<Self, ConfigError> {
+        const {
+            assert!(
+                L::SPEC.is_valid(),
+                "ControlLaw::SPEC: a name of up to 16 ASCII letters, digits, - or _; at most 8 parameters, each named once, min <= default <= max, finite"
+            )
+        };
         cfg.validate()?;
+        L::SPEC.check(&cfg.law)?;
         L::validate(&cfg)?;
         Ok(Self::fresh(cfg))
     }

@@ -23,6 +23,7 @@ pub mod controller;
 pub mod decode;
 pub mod estimator;
 pub mod law;
+pub mod law_spec;
 pub mod liftoff;
 pub mod mu_estimate;
 pub mod pil;
@@ -38,6 +39,7 @@ pub use board::{Board, Event, Outcome, TickClock};
 pub use config::{Config, ControllerKind};
 pub use control_law::{ControlLaw, Declares, HybridLaw, LawContext, LawInput, LawOutput, PaperLaws, PidLaw, TrackingDynamics};
 pub use controller::{Firmware, SafeReason, Telemetry};
+pub use law_spec::{LawName, LawParams, LawSpec, ParamSpec};
 pub use shared;
 pub use shared::wire::{ActuatorCommand, SensorFrame};
 

@@ -25,11 +25,12 @@ use shared::wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame};
 use crate::Config;
 
 /// Version of this protocol, sent in [`Uplink::Hello`]; the bridge refuses an
-/// image that speaks another.
-pub const PROTOCOL_VERSION: u16 = 5;
+/// image that speaks another. 6: `Config::law` (issue 70).
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Largest encoded frame, bytes (COBS overhead, CRC and the terminator included):
-/// room for the largest message, [`Downlink::Configure`] (about 130 bytes).
+/// room for the largest message, [`Downlink::Configure`] (173 bytes for the
+/// paper's laws, at most 188 with a law's own name and eight values).
 pub const MAX_FRAME: usize = 256;
 
 /// The CRC of the wire: CRC-32/ISCSI (Castagnoli), 1 KiB table in flash.
@@ -310,6 +311,11 @@ mod tests {
     fn the_largest_message_fits() {
         let mut buf = [0u8; MAX_FRAME];
         let n = encode(&Downlink::Configure(Config::default()), &mut buf).unwrap().len();
-        assert!(n < MAX_FRAME / 2 + 40, "{n} bytes");
+        assert_eq!(n, 173);
+        // The longest a law of one's own makes it: a 16-byte name, eight values
+        // of the longest varint-free encoding (f32 is 4 bytes whatever its value).
+        let law = crate::LawParams { name: crate::LawName::new("sixteen_chars_ok").unwrap(), values: [f32::MAX; 8] };
+        let n = encode(&Downlink::Configure(Config { law, ..Config::default() }), &mut buf).unwrap().len();
+        assert!(n <= MAX_FRAME - 64, "{n} bytes: keep a margin for Config to grow");
     }
 }

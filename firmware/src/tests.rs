@@ -374,6 +374,11 @@ mod control_law {
     static FIXED_U: std::sync::Mutex<([f32; 2], bool)> = std::sync::Mutex::new(([0.0; 2], false));
 
     impl ControlLaw for Fixed {
+        const SPEC: crate::LawSpec = crate::LawSpec {
+            name: "fixed",
+            source: "a test",
+            params: &[crate::ParamSpec { name: "gain", unit: "1", min: 0.0, max: 2.0, default: 1.0 }],
+        };
         fn fresh(_cfg: &Config) -> Self {
             Self { u: FIXED_U.lock().unwrap().0 }
         }
@@ -390,9 +395,31 @@ mod control_law {
     fn fixed(u: [f32; 2], tracks: bool, n: u32) -> Option<SafeReason> {
         let _guard = FIXED_LOCK.lock().unwrap();
         *FIXED_U.lock().unwrap() = (u, tracks);
-        let mut fw = Firmware::<Fixed>::with_law(Config::default()).unwrap();
+        let mut fw = Firmware::<Fixed>::with_law(Config { law: Fixed::SPEC.defaults(), ..Config::default() }).unwrap();
         run(&mut fw, n);
         fw.safe_state()
+    }
+
+    #[test]
+    fn a_configuration_for_another_law_or_out_of_the_laws_range_is_refused() {
+        use crate::config::ConfigError;
+        let own = Config { law: Fixed::SPEC.defaults(), ..Config::default() };
+        assert!(matches!(Firmware::<Fixed>::with_law(Config::default()), Err(ConfigError::WrongLaw { .. })));
+        assert!(matches!(Firmware::<PaperLaws>::with_law(own), Err(ConfigError::WrongLaw { .. })));
+        let e = Firmware::new(own).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the configuration is for fixed, this firmware runs the paper's laws: build the law's own firmware, or give the scenario its `[law]` table"
+        );
+        for bad in [-0.1, 2.5, f32::NAN] {
+            let mut cfg = own;
+            cfg.law.values[0] = bad;
+            let e = Firmware::<Fixed>::with_law(cfg).unwrap_err();
+            assert!(matches!(e, ConfigError::LawParam { name: "gain", .. }), "{bad}: {e}");
+        }
+        // The firmware's own checks come first.
+        let bad = Config { f_n_ref: -1.0, ..own };
+        assert!(matches!(Firmware::<Fixed>::with_law(bad), Err(ConfigError::OutOfRange { name: "f_n_ref", .. })));
     }
 
     static FIXED_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());

@@ -217,8 +217,13 @@ fn config() -> impl Strategy<Value = Config> {
         Just(FrictionCompensation::Estimated),
     ];
     let branch = proptest::option::of(prop_oneof![Just(ElbowBranch::Up), Just(ElbowBranch::Down)]);
-    (vec(any_f32(), 30), kind, friction, branch, any_u32(), any::<[u8; 4]>(), any::<[u16; 4]>()).prop_map(
-        |(f, controller, friction, branch, period_us, b, w)| Config {
+    // A law's own name (or none: the paper's laws) and any eight values.
+    let law = ("[a-zA-Z0-9_-]{0,16}", vec(any_f32(), 8)).prop_map(|(name, v)| firmware::LawParams {
+        name: firmware::LawName::new(&name).unwrap_or(firmware::LawName::PAPER),
+        values: [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]],
+    });
+    (vec(any_f32(), 30), kind, friction, branch, any_u32(), any::<[u8; 4]>(), any::<[u16; 4]>(), law).prop_map(
+        |(f, controller, friction, branch, period_us, b, w, law)| Config {
             params: Params { m: f[0], l: f[1], sigma: f[2], k: f[3], h: f[4], alpha0: f[5], g: f[6], mu: f[7], v_belt: f[8] },
             controller,
             period: Period::from_us(period_us.max(1)).unwrap_or(Period::MILLISECOND),
@@ -246,6 +251,7 @@ fn config() -> impl Strategy<Value = Config> {
             bad_frame_limit: w[3],
             branch,
             encoder_bits: b[2],
+            law,
         },
     )
 }

@@ -28,7 +28,7 @@
 use std::time::{Duration, Instant};
 
 use firmware::{
-    Event, Firmware, Outcome, TickClock,
+    Config, ControlLaw, Event, Firmware, Outcome, PaperLaws, TickClock,
     board::{self, Board, FrozenClock},
 };
 use shared::{
@@ -283,7 +283,7 @@ impl Board for IpcBoard<'_> {
         self.now
     }
 
-    fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), RunError> {
+    fn apply<L: ControlLaw>(&mut self, outcome: &Outcome, fw: Option<&Firmware<L>>) -> Result<(), RunError> {
         let transport = |e: super::ipc::IpcError| RunError::Transport(e.to_string());
         let Outcome::Command(command) = outcome else { return Ok(()) };
         if self.ending.is_some() {
@@ -314,6 +314,19 @@ impl Board for IpcBoard<'_> {
 /// [`RunError::Transport`] when iceoryx2 fails or no plant appears within
 /// [`WAIT_FOR_PLANT_S`].
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
+    serve_law::<PaperLaws>(s, rig, realtime)
+}
+
+/// [`serve`] with the control law `L`: the firmware process of a law of one's
+/// own (its crate's `main`, docs/board.md "Your own law"). The scenario's
+/// `[law]` table is bound to what `L` declares ([`crate::law::bind`]); the
+/// handshake announces `L`'s declaration, so the plant checks the same table
+/// against it.
+///
+/// # Errors
+/// As [`serve`]; [`RunError::Law`] when the scenario's `[law]` table does not
+/// fit `L`.
+pub fn serve_law<L: ControlLaw>(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     let spin = Duration::from_secs_f64(s.rig.spin_us * 1e-6);
     // One firmware per rig, whatever the timing: held until this returns.
     let _lock = super::ipc::RigLock::acquire(super::ipc::Role::Firmware, rig)?;
@@ -326,9 +339,9 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
             eprintln!("firmware: real-time set-up: {w}");
         }
     }
-    let config = firmware_config(s);
-    let announcement = firmware::announce::announce(&config).map_err(crate::handshake::HandshakeError::from)?;
-    let mut firmware = Some(Firmware::new(config)?);
+    let config = Config { law: crate::law::bind(s.law.as_ref(), &crate::law::LawDescription::of(&L::SPEC))?, ..firmware_config(s) };
+    let announcement = firmware::announce::announce(&config, &L::SPEC).map_err(crate::handshake::HandshakeError::from)?;
+    let mut firmware = Some(Firmware::<L>::with_law(config)?);
     let mut board = IpcBoard {
         ports: &ports,
         rig,
@@ -350,5 +363,7 @@ pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError
     };
     let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
     board::run(&mut firmware, &mut board, &clock)?;
-    Ok(board.ending.unwrap_or(Ending::EndOfRun { answered: board.answered, overruns: firmware.as_ref().map_or(0, Firmware::overruns) }))
+    Ok(board
+        .ending
+        .unwrap_or(Ending::EndOfRun { answered: board.answered, overruns: firmware.as_ref().map_or(0, Firmware::<L>::overruns) }))
 }

@@ -13,7 +13,7 @@
 use std::convert::Infallible;
 
 use firmware::{
-    Event, Firmware, Outcome, TickClock,
+    ControlLaw, Event, Firmware, Outcome, PaperLaws, TickClock,
     board::{self, Board},
 };
 use shared::{
@@ -23,32 +23,46 @@ use shared::{
 
 use super::{faults::FaultPlan, record::RunError, setup::RunSetup};
 
-/// The firmware and the faults injected on its side.
+/// The firmware running law `L` (the paper's laws by default) and the faults
+/// injected on its side.
 #[derive(Debug, Clone)]
-pub struct FirmwareSide {
+pub struct FirmwareSide<L: ControlLaw = PaperLaws> {
     /// Always `Some` ([`CONFIGURED`]): [`board::handle`] takes the firmware as a
     /// board holds it, none until a configuration arrives.
-    fw: Option<Firmware>,
+    fw: Option<Firmware<L>>,
     faults: FaultPlan,
 }
 
 impl FirmwareSide {
-    /// The firmware a scenario asks for.
+    /// The firmware a scenario asks for, running the paper's laws
+    /// ([`FirmwareSide::for_law`]).
     ///
     /// # Errors
-    /// [`RunError::Firmware`] for an invalid configuration.
+    /// As [`FirmwareSide::for_law`].
     pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
-        let fw = Firmware::new(*setup.firmware())?;
+        Self::for_law(setup)
+    }
+}
+
+impl<L: ControlLaw> FirmwareSide<L> {
+    /// The firmware a scenario asks for running law `L`, its `[law]` table
+    /// bound to what `L` declares ([`RunSetup::firmware_for`]).
+    ///
+    /// # Errors
+    /// [`RunError::Firmware`] for an invalid configuration, [`RunError::Law`]
+    /// for a `[law]` table that does not fit `L`.
+    pub fn for_law(setup: &RunSetup) -> Result<Self, RunError> {
+        let fw = Firmware::<L>::with_law(setup.firmware_for(&crate::law::LawDescription::of(&L::SPEC))?)?;
         Ok(Self { fw: Some(fw), faults: setup.faults().clone() })
     }
 
     /// The firmware.
-    pub fn firmware(&self) -> &Firmware {
+    pub fn firmware(&self) -> &Firmware<L> {
         self.fw.as_ref().unwrap_or_else(|| unreachable!("{CONFIGURED}"))
     }
 
     /// The firmware, mutably (the process loop latches the safe state when its peer dies).
-    pub fn firmware_mut(&mut self) -> &mut Firmware {
+    pub fn firmware_mut(&mut self) -> &mut Firmware<L> {
         self.fw.as_mut().unwrap_or_else(|| unreachable!("{CONFIGURED}"))
     }
 
@@ -90,7 +104,7 @@ impl Board for StepBoard {
         self.now
     }
 
-    fn apply(&mut self, outcome: &Outcome, firmware: Option<&Firmware>) -> Result<(), Infallible> {
+    fn apply<L: ControlLaw>(&mut self, outcome: &Outcome, firmware: Option<&Firmware<L>>) -> Result<(), Infallible> {
         if let (Outcome::Command(command), Some(fw)) = (outcome, firmware) {
             self.answer = Some((*command, fw.telemetry_message(command)));
         }

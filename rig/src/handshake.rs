@@ -6,9 +6,17 @@
 //! under a hybrid plant) is never run against a plant that believes otherwise.
 //! `summary.json` records the firmware's own announcement.
 
-use firmware::{Config, announce::configuration};
+use firmware::{
+    Config, LawSpec,
+    announce::{configuration, law_bytes},
+};
 use serde::Serialize;
 use shared::wire::FirmwareAnnouncement;
+
+use crate::{
+    law::{LawDescription, LawError},
+    setup::RunSetup,
+};
 
 /// The firmware's announcement as the run records it (`firmware_announcement` in
 /// `summary.json`).
@@ -20,6 +28,9 @@ pub struct Announced {
     pub config_hash: String,
     /// The configuration the firmware runs.
     pub config: Config,
+    /// What its law declares (left out for the paper's laws).
+    #[serde(skip_serializing_if = "LawDescription::is_paper")]
+    pub law: LawDescription,
 }
 
 /// Why the plant refuses the firmware at the handshake (exit 2 from `sil-host run`).
@@ -29,6 +40,9 @@ pub enum HandshakeError {
     /// this build cannot decode.
     #[error("handshake: {0}")]
     Announcement(#[from] firmware::announce::AnnounceError),
+    /// The scenario's `[law]` table does not fit the law the firmware declares.
+    #[error("handshake: {0}")]
+    Law(#[from] LawError),
     /// The firmware runs another configuration than the scenario asks for: every
     /// differing setting.
     #[error(
@@ -84,28 +98,55 @@ pub fn differences(firmware: &Config, scenario: &Config) -> Vec<Difference> {
     out
 }
 
-/// Checks the firmware's announcement against the configuration the scenario
-/// asks for.
+/// Checks the firmware's announcement against the configuration run `setup`
+/// asks for: the law's declaration first (the scenario's `[law]` table bound
+/// to it, [`RunSetup::firmware_for`]), then the configuration field by field.
 ///
 /// # Errors
 /// [`HandshakeError::Announcement`] for another wire version or an undecodable
-/// configuration; [`HandshakeError::ConfigMismatch`] naming every differing setting.
-pub fn check(announcement: &FirmwareAnnouncement, scenario: &Config, rig: &str) -> Result<Announced, HandshakeError> {
+/// configuration; [`HandshakeError::Law`] for an undecodable declaration or a
+/// `[law]` table that does not fit it; [`HandshakeError::ConfigMismatch`]
+/// naming every differing setting.
+pub fn check(announcement: &FirmwareAnnouncement, setup: &RunSetup, rig: &str) -> Result<Announced, HandshakeError> {
     let config = configuration(announcement)?;
+    let law = LawDescription::decode(law_bytes(announcement)?)?;
+    let scenario = match setup.firmware_for(&law) {
+        Ok(c) => c,
+        Err(crate::record::RunError::Law(e)) => return Err(e.into()),
+        Err(e) => return Err(LawError::Undecodable(e.to_string()).into()),
+    };
+    check_config(announcement, config, law, &scenario, rig)
+}
+
+/// [`check`] once the scenario's configuration is bound: compares and records.
+fn check_config(
+    a: &FirmwareAnnouncement,
+    config: Config,
+    law: LawDescription,
+    scenario: &Config,
+    rig: &str,
+) -> Result<Announced, HandshakeError> {
     let differences = differences(&config, scenario);
     if !differences.is_empty() {
         return Err(HandshakeError::ConfigMismatch { rig: rig.to_string(), differences });
     }
-    Ok(Announced { wire_version: announcement.wire_version, config_hash: format!("{:016x}", announcement.config_hash), config })
+    Ok(Announced { wire_version: a.wire_version, config_hash: format!("{:016x}", a.config_hash), config, law })
 }
 
-/// The announcement of a firmware linked in (in-process runs): its own configuration.
+/// The announcement of a firmware linked in (in-process runs): its own
+/// configuration, run by the law that declares `law`.
 ///
 /// # Errors
-/// [`HandshakeError::Announcement`] if the configuration does not fit the message (a build error).
-pub fn of_config(config: &Config) -> Result<Announced, HandshakeError> {
-    let a = firmware::announce::announce(config)?;
-    Ok(Announced { wire_version: a.wire_version, config_hash: format!("{:016x}", a.config_hash), config: *config })
+/// [`HandshakeError::Announcement`] if the configuration or the declaration
+/// does not fit the message (a build error).
+pub fn of_config(config: &Config, law: &LawSpec) -> Result<Announced, HandshakeError> {
+    let a = firmware::announce::announce(config, law)?;
+    Ok(Announced {
+        wire_version: a.wire_version,
+        config_hash: format!("{:016x}", a.config_hash),
+        config: *config,
+        law: LawDescription::of(law),
+    })
 }
 
 #[cfg(test)]
@@ -113,9 +154,52 @@ mod tests {
     use super::*;
     use firmware::{
         ControllerKind,
-        announce::{AnnounceError, announce},
+        announce::{AnnounceError, announce as announce_law},
         config::HybridGains,
     };
+
+    fn announce(c: &Config) -> Result<FirmwareAnnouncement, AnnounceError> {
+        announce_law(c, &LawSpec::PAPER)
+    }
+
+    /// [`check`] against a configuration rather than a run's setup.
+    fn check(a: &FirmwareAnnouncement, scenario: &Config, rig: &str) -> Result<Announced, HandshakeError> {
+        let config = configuration(a)?;
+        let law = LawDescription::decode(law_bytes(a)?)?;
+        check_config(a, config, law, scenario, rig)
+    }
+
+    const IMPEDANCE: LawSpec = LawSpec {
+        name: "impedance",
+        source: "Hogan 1985",
+        params: &[firmware::ParamSpec { name: "stiffness", unit: "N/m", min: 0.0, max: 5000.0, default: 2000.0 }],
+    };
+
+    /// A law's firmware announces its declaration; the plant binds the
+    /// scenario's `[law]` table with it and compares; a table that does not fit
+    /// is refused at the handshake with the law's declaration.
+    #[test]
+    fn a_laws_declaration_binds_the_scenarios_table_at_the_handshake() {
+        let mut s = crate::scenario::Scenario::default_scenario();
+        s.law = Some(crate::law::LawTable { name: "impedance".into(), params: [("stiffness".to_string(), 1500.0)].into() });
+        let setup = RunSetup::new(s.clone()).unwrap();
+        let mut fw = *setup.firmware();
+        fw.law.values[0] = 1500.0;
+        let a = announce_law(&fw, &IMPEDANCE).unwrap();
+        let ok = super::check(&a, &setup, "r").unwrap();
+        assert_eq!((ok.config.law.values[0], ok.law.name.as_str()), (1500.0, "impedance"));
+        // Another value on the firmware's side is a difference of `law.values`.
+        let mut other = fw;
+        other.law.values[0] = 1000.0;
+        let e = super::check(&announce_law(&other, &IMPEDANCE).unwrap(), &setup, "r").unwrap_err();
+        assert!(matches!(&e, HandshakeError::ConfigMismatch { differences, .. } if differences[0].field == "law.values"), "{e}");
+        // An undeclared parameter, or the paper's firmware, is refused before any comparison.
+        s.law.as_mut().unwrap().params.insert("damping".into(), 1.0);
+        let e = super::check(&a, &RunSetup::new(s).unwrap(), "r").unwrap_err();
+        assert!(e.to_string().contains("has no parameter `damping`"), "{e}");
+        let e = super::check(&announce(&Config::default()).unwrap(), &setup, "r").unwrap_err();
+        assert!(matches!(e, HandshakeError::Law(LawError::WrongLaw { .. })), "{e}");
+    }
 
     #[test]
     fn the_same_configuration_passes_and_is_recorded() {
@@ -123,7 +207,7 @@ mod tests {
         let a = check(&announce(&c).unwrap(), &c, "r").unwrap();
         assert_eq!(a.config, c);
         assert_eq!(a.config_hash.len(), 16);
-        assert_eq!(a, of_config(&c).unwrap());
+        assert_eq!(a, of_config(&c, &LawSpec::PAPER).unwrap());
     }
 
     #[test]

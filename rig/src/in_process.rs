@@ -3,7 +3,7 @@
 //! frame's: its step takes no simulated time.
 
 use crate::faults::LinkKind;
-use firmware::board::FrozenClock;
+use firmware::{ControlLaw, PaperLaws, board::FrozenClock};
 use shared::wire::{GroundTruth, SensorFrame};
 
 use super::{
@@ -15,28 +15,39 @@ use super::{
     setup::RunSetup,
 };
 
-/// The firmware step called directly.
+/// The firmware step, running law `L` (the paper's laws by default), called directly.
 #[derive(Debug, Clone)]
-pub struct InProcessLink {
-    side: FirmwareSide,
+pub struct InProcessLink<L: ControlLaw = PaperLaws> {
+    side: FirmwareSide<L>,
     announced: crate::handshake::Announced,
 }
 
 impl InProcessLink {
-    /// The link for a scenario.
+    /// The link for a scenario, with the paper's laws ([`InProcessLink::for_law`]).
     ///
     /// # Errors
-    /// [`RunError::Firmware`] for an invalid configuration; [`RunError::Unsupported`]
-    /// when the scenario injects a fault that needs the firmware in its own process.
+    /// As [`InProcessLink::for_law`].
     pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+        Self::for_law(setup)
+    }
+}
+
+impl<L: ControlLaw> InProcessLink<L> {
+    /// The link for a scenario, the firmware running law `L`.
+    ///
+    /// # Errors
+    /// [`RunError::Firmware`] for an invalid configuration; [`RunError::Law`]
+    /// for a `[law]` table that does not fit `L`; [`RunError::Unsupported`]
+    /// when the scenario injects a fault that needs the firmware in its own process.
+    pub fn for_law(setup: &RunSetup) -> Result<Self, RunError> {
         LinkKind::InProcess.check(&setup.scenario().faults)?;
-        let side = FirmwareSide::new(setup)?;
-        let announced = crate::handshake::of_config(side.firmware().config())?;
+        let side = FirmwareSide::<L>::for_law(setup)?;
+        let announced = crate::handshake::of_config(side.firmware().config(), &L::SPEC)?;
         Ok(Self { side, announced })
     }
 }
 
-impl FirmwareLink for InProcessLink {
+impl<L: ControlLaw> FirmwareLink for InProcessLink<L> {
     fn transport(&self) -> &'static str {
         "in-process"
     }
@@ -55,11 +66,17 @@ impl FirmwareLink for InProcessLink {
 /// telling `run` what happens. Returns every period's record, and the error if
 /// the run stopped early.
 pub fn run(s: &Scenario, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
+    run_law::<PaperLaws>(s, run)
+}
+
+/// [`run`] with the control law `L` (a law of one's own, docs/board.md "Your
+/// own law"): the scenario's `[law]` table bound to what `L` declares.
+pub fn run_law<L: ControlLaw>(s: &Scenario, run: &mut dyn RunObserver) -> (Vec<PeriodRecord>, Option<RunError>) {
     let setup = match RunSetup::new(s.clone()) {
         Ok(setup) => setup,
         Err(e) => return (Vec::new(), Some(e)),
     };
-    match InProcessLink::new(&setup) {
+    match InProcessLink::<L>::for_law(&setup) {
         Ok(mut link) => run_loop(&setup, &mut link, run),
         Err(e) => (Vec::new(), Some(e)),
     }

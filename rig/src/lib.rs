@@ -26,6 +26,7 @@ pub mod in_process;
 pub mod ipc;
 #[cfg(feature = "ipc")]
 pub mod ipc_link;
+pub mod law;
 pub mod link;
 pub mod overrides;
 pub mod period_loop;

@@ -157,6 +157,10 @@ pub enum RunError {
     /// an undecodable announcement, or another configuration (docs/rig.md).
     #[error(transparent)]
     Handshake(#[from] crate::handshake::HandshakeError),
+    /// The scenario's `[law]` table does not fit the law the firmware runs
+    /// (another law, an undeclared parameter, a value out of its range).
+    #[error("law: {0}")]
+    Law(#[from] crate::law::LawError),
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),

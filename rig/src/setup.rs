@@ -2,12 +2,17 @@
 //! firmware's configuration, and [`RunSetup`], the run made of them once.
 
 use firmware::{
-    Config,
+    Config, LawName, LawParams,
     config::{HybridGains, PidGains},
 };
 use shared::Params;
 
-use super::{faults::FaultPlan, record::RunError, scenario::Scenario};
+use super::{
+    faults::FaultPlan,
+    law::{LawDescription, bind},
+    record::RunError,
+    scenario::Scenario,
+};
 use plant::{Plant, SimConfig, SimError, initial};
 
 /// The plant's parameters (paper Table I, `mu`, `v_belt`) a scenario asks for:
@@ -30,7 +35,9 @@ pub fn firmware_params(s: &Scenario) -> Params<f64> {
 /// [`firmware_params`] in `f32`, the controller, the period, the references and
 /// the gains (paper eqs. 8 to 11; `K'_I` by [`crate::scenario::ControllerSection::hybrid_ki`]);
 /// the rest the firmware's defaults at the scenario's period ([`Config::default_at`]:
-/// the detectors' confirmations in time, not in periods).
+/// the detectors' confirmations in time, not in periods). A `[law]` table's
+/// name goes into `law.name`; its values need the law's declaration and are
+/// bound by [`RunSetup::firmware_for`] (here they are 0).
 pub fn firmware_config(s: &Scenario) -> Config {
     let c = &s.controller;
     let f = |v: [f64; 2]| v.map(|x| x as f32);
@@ -52,6 +59,10 @@ pub fn firmware_config(s: &Scenario) -> Config {
         // The innovation check's threshold is 3 encoder counts (docs/hardware.md).
         innovation_threshold: base.innovation_threshold * (1u32 << shared::wire::ENCODER_BITS) as f32
             / (1u32 << s.sensors.encoder_bits.min(16)) as f32,
+        law: LawParams {
+            name: s.law.as_ref().and_then(|t| LawName::new(&t.name)).unwrap_or(LawName::PAPER),
+            values: [0.0; firmware::law_spec::LAW_PARAMS],
+        },
         ..base
     }
 }
@@ -121,9 +132,21 @@ impl RunSetup {
         &self.plant
     }
 
-    /// The firmware's configuration (validated).
+    /// The firmware's configuration (validated), a `[law]` table's values not
+    /// yet bound (0: [`RunSetup::firmware_for`] binds them).
     pub fn firmware(&self) -> &Config {
         &self.firmware
+    }
+
+    /// The firmware's configuration for the law `law` declares: the scenario's
+    /// `[law]` table bound to its parameters ([`crate::law::bind`]); for the
+    /// paper's laws and no table, [`RunSetup::firmware`].
+    ///
+    /// # Errors
+    /// [`RunError::Law`] when the table is for another law, names a parameter
+    /// the law does not declare or a value out of its range.
+    pub fn firmware_for(&self, law: &LawDescription) -> Result<Config, RunError> {
+        Ok(Config { law: bind(self.scenario.law.as_ref(), law)?, ..self.firmware })
     }
 
     /// The scenario's faults over its control period.

@@ -25,8 +25,9 @@ pub struct RunSummary {
     pub error: Option<String>,
     /// Scenario name.
     pub scenario: String,
-    /// `hybrid` or `pid`.
-    pub controller: firmware::ControllerKind,
+    /// `hybrid` or `pid`; a law of one's own's name (the scenario's `[law]`
+    /// table, [`crate::scenario::Scenario::controller_name`]).
+    pub controller: String,
     /// `iceoryx2` or `in-process`; `pil-qemu` or `pil-serial` for `sil-host pil`.
     pub transport: &'static str,
     /// `lockstep` or `realtime` (`in-process` runs are lockstep).
@@ -128,7 +129,7 @@ impl RunSummary {
             status: if failure.is_some() { "failed" } else { "ok" },
             error: failure.map(|e| e.to_string()),
             scenario: scenario.name.clone(),
-            controller: scenario.controller.kind,
+            controller: scenario.controller_name().to_string(),
             transport,
             timing,
             rig: None,

@@ -12,7 +12,7 @@
 //! | [`ActuatorCommand`] | `painleve::ActuatorCommand` | 32 B |
 //! | [`GroundTruth`] | `painleve::GroundTruth` | 96 B |
 //! | [`FirmwareTelemetry`] | `painleve::FirmwareTelemetry` | 48 B |
-//! | [`FirmwareAnnouncement`] | `painleve::FirmwareAnnouncement` | 400 B |
+//! | [`FirmwareAnnouncement`] | `painleve::FirmwareAnnouncement` | 920 B |
 //!
 //! [`WIRE_VERSION`] names these layouts: a plant and a firmware built from
 //! different layouts refuse each other at the handshake (docs/rig.md).
@@ -25,10 +25,17 @@ use iceoryx2::prelude::ZeroCopySend;
 /// frame ([`frame_flags::HELLO`]) and the firmware its own in its
 /// [`FirmwareAnnouncement`], and each side refuses a different one. The PIL
 /// serial protocol has its own version (`firmware::pil::PROTOCOL_VERSION`).
-pub const WIRE_VERSION: u32 = 1;
+///
+/// Version 2 (issue 70): the announcement carries the law's declared
+/// configuration ([`FirmwareAnnouncement::law`]).
+pub const WIRE_VERSION: u32 = 2;
 
 /// Bytes a [`FirmwareAnnouncement`] holds for the firmware's encoded configuration.
 pub const ANNOUNCEMENT_CONFIG_BYTES: usize = 384;
+
+/// Bytes a [`FirmwareAnnouncement`] holds for the law's encoded declaration
+/// (`firmware::law_spec::LawSpec`: its name, source and parameters).
+pub const ANNOUNCEMENT_LAW_BYTES: usize = 512;
 
 /// Encoder resolution of the reference board: 14 bit per revolution (docs/hardware.md).
 pub const ENCODER_BITS: u8 = 14;
@@ -228,14 +235,19 @@ pub struct FirmwareTelemetry {
 }
 
 /// The firmware's answer to the handshake frame ([`frame_flags::HELLO`]): its wire
-/// version and its whole configuration as it will run, so the plant can refuse a
-/// firmware configured differently from its scenario before period 0 (SIL rig,
-/// docs/rig.md "Handshake"). Size: 400 bytes.
+/// version, its whole configuration as it will run, and what its control law
+/// declares about its own settings, so the plant can map a scenario's `[law]`
+/// table onto the law's parameters, check their ranges and refuse a firmware
+/// configured differently from its scenario before period 0 (SIL rig,
+/// docs/rig.md "Handshake"). Size: 920 bytes.
 ///
 /// Layout: `wire_version: u32`, `config_len: u32`, `config_hash: u64`,
-/// `config: [u8; 384]`. `config[..config_len]` is the firmware's `Config` in
-/// postcard's encoding (`firmware::announce`); `config_hash` is the CRC-64/XZ of
-/// those bytes, the short name of a configuration in logs and `summary.json`.
+/// `config: [u8; 384]`, `law_len: u32`, `reserved: u32`, `law: [u8; 512]`.
+/// `config[..config_len]` is the firmware's `Config` in postcard's encoding
+/// (`firmware::announce`); `config_hash` is the CRC-64/XZ of those bytes, the
+/// short name of a configuration in logs and `summary.json`;
+/// `law[..law_len]` is the law's `firmware::law_spec::LawSpec` in postcard's
+/// encoding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend), type_name("painleve::FirmwareAnnouncement"))]
 #[repr(C)]
@@ -248,12 +260,26 @@ pub struct FirmwareAnnouncement {
     pub config_hash: u64,
     /// The encoded configuration, zero-padded.
     pub config: [u8; ANNOUNCEMENT_CONFIG_BYTES],
+    /// Bytes of `law` used.
+    pub law_len: u32,
+    /// Zero (keeps `law` 8-byte aligned for C clients).
+    pub reserved: u32,
+    /// The law's encoded declaration, zero-padded.
+    pub law: [u8; ANNOUNCEMENT_LAW_BYTES],
 }
 
 impl Default for FirmwareAnnouncement {
     /// This wire version, an empty configuration.
     fn default() -> Self {
-        Self { wire_version: WIRE_VERSION, config_len: 0, config_hash: 0, config: [0; ANNOUNCEMENT_CONFIG_BYTES] }
+        Self {
+            wire_version: WIRE_VERSION,
+            config_len: 0,
+            config_hash: 0,
+            config: [0; ANNOUNCEMENT_CONFIG_BYTES],
+            law_len: 0,
+            reserved: 0,
+            law: [0; ANNOUNCEMENT_LAW_BYTES],
+        }
     }
 }
 
@@ -372,7 +398,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<ActuatorCommand>(), 32);
         assert_eq!(core::mem::size_of::<GroundTruth>(), 96);
         assert_eq!(core::mem::size_of::<FirmwareTelemetry>(), 48);
-        assert_eq!(core::mem::size_of::<FirmwareAnnouncement>(), 400);
+        assert_eq!(core::mem::size_of::<FirmwareAnnouncement>(), 920);
     }
 
     #[test]

@@ -9,6 +9,12 @@ use crate::overrides::{self, Override};
 pub const DEFAULT_TOML: &str = include_str!("../../../scenarios/default.toml");
 
 impl Scenario {
+    /// The control law a run of this scenario names in its outputs: the
+    /// `[law]` table's name, else `controller.kind` (`hybrid`, `pid`).
+    pub fn controller_name(&self) -> &str {
+        self.law.as_ref().map_or(self.controller.kind.name(), |l| l.name.as_str())
+    }
+
     /// The embedded default scenario.
     pub fn default_scenario() -> Self {
         // The embedded file is checked by a test; a parse failure here is a build defect.

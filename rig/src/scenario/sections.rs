@@ -453,6 +453,10 @@ pub struct Scenario {
     /// board's when absent (not written back then).
     #[serde(default, skip_serializing_if = "is_default")]
     pub calibration: crate::calibration::CalibrationSection,
+    /// A law of one's own (`[law]`: its name and parameters, [`crate::law`]);
+    /// absent for the paper's laws (and then not written back).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law: Option<crate::law::LawTable>,
 }
 
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {

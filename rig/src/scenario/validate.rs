@@ -253,6 +253,25 @@ impl Scenario {
         }
         self.board.check().map_err(ScenarioError::Board)?;
         self.calibration.check(self.timing.period().as_secs_f32()).map_err(ScenarioError::Board)?;
+        // A law of one's own: its name as the firmware holds it, its values
+        // numbers (their ranges are the law's, checked against its declaration
+        // when the firmware announces it: `crate::law::bind`).
+        if let Some(law) = &self.law {
+            if law.name.is_empty() || firmware::LawName::new(&law.name).is_none() {
+                return Err(ScenarioError::OutOfRange {
+                    key: "law.name".into(),
+                    value: format!("{:?}", law.name),
+                    expected: "a law's name: 1 to 16 ASCII letters, digits, `-` or `_`".into(),
+                });
+            }
+            if let Some((k, v)) = law.params.iter().find(|(_, v)| !v.is_finite()) {
+                return Err(ScenarioError::OutOfRange {
+                    key: format!("law.{k}"),
+                    value: v.to_string(),
+                    expected: "a finite number".into(),
+                });
+            }
+        }
         Ok(())
     }
 }

@@ -86,7 +86,7 @@ pub(crate) fn draw(
     let title = format!(
         "{what} run {} (cf. paper Figs. 6 to 8): {} from x0{}, {} = {} m",
         s.name,
-        s.controller.kind,
+        s.controller_name(),
         s.plant.x0,
         plot::symbols::Z_T_REF,
         s.controller.target_z_t

@@ -278,6 +278,6 @@ fn draw_counts(path: &std::path::Path, s: &Scenario, t_end: Option<f64>, counts:
         (CountUnit::Cycles, PilTarget::Qemu { .. }) => "DWT".into(),
     };
     let what = if matches!(target, PilTarget::Serial { .. }) { "HIL" } else { "PIL" };
-    let title = format!("{what} run {}: {} image {unit} per control step ({source})", s.name, s.controller.kind);
+    let title = format!("{what} run {}: {} image {unit} per control step ({source})", s.name, s.controller_name());
     plot::time_panels(path, &title, (0.0, t_end), &panels).map_err(CliError::from)
 }

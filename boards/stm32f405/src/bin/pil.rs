@@ -165,7 +165,7 @@ mod image {
             self.now
         }
 
-        fn apply(&mut self, outcome: &Outcome, fw: Option<&Firmware>) -> Result<(), Self::Error> {
+        fn apply<L: firmware::ControlLaw>(&mut self, outcome: &Outcome, fw: Option<&Firmware<L>>) -> Result<(), Self::Error> {
             match (outcome, fw) {
                 (Outcome::Command(command), Some(fw)) => {
                     let telemetry = fw.telemetry_message(command);
@@ -189,6 +189,12 @@ mod image {
                             defmt::error!("configuration rejected: {=str} = {=f32}", name, value)
                         }
                         ConfigError::Params(_) => defmt::error!("configuration rejected: arm parameters"),
+                        ConfigError::WrongLaw { built, .. } => {
+                            defmt::error!("configuration rejected: for another law than this image's `{=[u8]:a}`", built.as_bytes())
+                        }
+                        ConfigError::LawParam { name, value, .. } => {
+                            defmt::error!("configuration rejected: law parameter {=str} = {=f32}", name, value)
+                        }
                     }
                     self.send(&Uplink::Rejected);
                 }

@@ -181,9 +181,15 @@ pub fn sweep_rank(s: &SweepSummary, file: &str) -> (usize, usize) {
 
 /// A controller as the text names it: `PID`, `hybrid`.
 fn law(kind: firmware::ControllerKind) -> &'static str {
-    match kind {
-        firmware::ControllerKind::Pid => "PID",
-        _ => "hybrid",
+    law_named(kind.name())
+}
+
+/// A run's `controller` as the text names it: `PID`, `hybrid`, or a law of
+/// one's own by its name.
+pub(super) fn law_named(name: &str) -> &str {
+    match name {
+        "pid" => "PID",
+        other => other,
     }
 }
 
@@ -346,7 +352,7 @@ pub fn caption(outcome: Option<&Outcome>, file: &str) -> Caption {
                 "trace" => Caption {
                     what: format!(
                         "The {} law in the loop ({}): z_t and z_t*, f_n, the torques and the contact mode against time",
-                        law(r.controller),
+                        law_named(&r.controller),
                         r.transport
                     ),
                     parameters: scenario_parameters(sc),

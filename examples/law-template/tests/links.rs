@@ -1,0 +1,82 @@
+//! The law of this crate where the paper's laws run (issue 70): in process and
+//! as its own firmware process over iceoryx2 (this crate's `law-firmware`, as
+//! `sil-host run --attach` meets it), the same records bit for bit; the
+//! scenario's `[law]` table checked against the law's declaration on both links.
+
+use std::path::Path;
+
+use law_template::Impedance;
+use rig::{
+    in_process::InProcessLink, ipc::MonitorPolicy, ipc_link::IpcLink, law::LawTable, period_loop::run_loop, record::PeriodRecord,
+    scenario::Scenario, setup::RunSetup,
+};
+
+/// The default scenario (hybrid's settings, x0d, mu 0.6) for `duration_s`
+/// under the impedance law with `params`.
+fn scenario(duration_s: f64, params: &[(&str, f64)]) -> Scenario {
+    let mut s = Scenario::default_scenario();
+    s.timing.duration_s = duration_s;
+    s.law = Some(LawTable { name: "impedance".into(), params: params.iter().map(|(k, v)| ((*k).to_string(), *v)).collect() });
+    s
+}
+
+fn in_process(s: &Scenario) -> Vec<PeriodRecord> {
+    let setup = RunSetup::new(s.clone()).unwrap();
+    let mut link = InProcessLink::<Impedance>::for_law(&setup).unwrap();
+    let (records, error) = run_loop(&setup, &mut link, &mut ());
+    assert!(error.is_none(), "{error:?}");
+    records
+}
+
+/// A rig name of this test process's own.
+fn rig_name(tag: &str) -> String {
+    format!("law-template-{tag}-{}", std::process::id())
+}
+
+fn over_iceoryx2(s: &Scenario, rig: &str) -> Result<Vec<PeriodRecord>, String> {
+    let setup = RunSetup::new(s.clone()).map_err(|e| e.to_string())?;
+    let exe = Path::new(env!("CARGO_BIN_EXE_law-firmware"));
+    let mut link = IpcLink::connect(&setup, rig, Some(exe), false, &MonitorPolicy::default()).map_err(|e| e.to_string())?;
+    let (records, error) = run_loop(&setup, &mut link, &mut ());
+    match error {
+        None => Ok(records),
+        Some(e) => Err(e.to_string()),
+    }
+}
+
+/// Bit for bit: every field of every record, NaN included.
+fn bits(records: &[PeriodRecord]) -> Vec<String> {
+    records.iter().map(|r| format!("{r:?}")).collect()
+}
+
+#[test]
+fn the_law_runs_in_process_and_over_iceoryx2_with_the_same_records() {
+    let s = scenario(2.0, &[("k_t", 2500.0), ("d_n", 50.0)]);
+    let a = in_process(&s);
+    let b = over_iceoryx2(&s, &rig_name("same")).unwrap();
+    assert_eq!(a.len(), 2000);
+    assert_eq!(bits(&a), bits(&b));
+    // The law acts: at the end the tip slides on the belt, presses with about
+    // f_n* = 10 N, and is within friction's offset mu f_n / k_t (2.4 mm) and
+    // a millimetre of z_t*; no safe state.
+    let last = a.last().unwrap();
+    assert_eq!((last.mode, last.status & 0xff), ("sliding", 0), "{last:?}");
+    assert!((last.f_n - 10.0).abs() < 1.0, "{last:?}");
+    assert!((last.z_t - last.z_t_ref).abs() < 2.4e-3 + 1e-3, "{last:?}");
+}
+
+#[test]
+fn a_law_table_that_does_not_fit_is_refused_on_both_links() {
+    let bad = scenario(0.1, &[("k_t", 1e6)]);
+    let setup = RunSetup::new(bad.clone()).unwrap();
+    let e = InProcessLink::<Impedance>::for_law(&setup).unwrap_err().to_string();
+    assert!(e.contains("`k_t` = 1000000 N/m is out of its range [0, 20000] N/m"), "{e}");
+    // The law's process refuses the table itself (bad input, exit 2, its
+    // reason on stderr) before it announces anything.
+    let e = over_iceoryx2(&bad, &rig_name("bad")).unwrap_err();
+    assert!(e.contains("exited (exit status: 2) before announcing"), "{e}");
+    // The paper's firmware is not this law: the in-process link of the
+    // paper's laws refuses the table and says where a law of one's own runs.
+    let e = InProcessLink::new(&RunSetup::new(scenario(0.1, &[])).unwrap()).unwrap_err().to_string();
+    assert!(e.contains("the firmware runs the paper's laws"), "{e}");
+}

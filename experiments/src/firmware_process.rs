@@ -1,0 +1,73 @@
+//! The firmware process of the SIL rig (`sil-host firmware`) for any control
+//! law: [`serve`] the paper's laws or a law of one's own over iceoryx2, and
+//! [`main`], the whole command a law's crate makes its binary of
+//! (`examples/law-template/`, docs/board.md "Your own law"): the same
+//! options, scenario handling and exit codes as `sil-host firmware`.
+
+use firmware::ControlLaw;
+use rig::{
+    firmware_process::{Ending, serve_law},
+    ipc::check_rig_name,
+    record::RunError,
+};
+
+use crate::{Error as CliError, scenario::load_scenario, settings::FirmwareArgs};
+
+/// Serves rig `args.rig` with the firmware running law `L` until the plant
+/// ends the run (exit 0) or dies (3).
+///
+/// # Errors
+/// Bad scenario, rig name, configuration or `[law]` table (exit 2); transport
+/// failures (exit 1).
+pub fn serve<L: ControlLaw>(args: &FirmwareArgs) -> Result<i32, CliError> {
+    let scenario = load_scenario(&args.scenario)?;
+    check_rig_name(&args.rig).map_err(CliError::bad_input)?;
+    match serve_law::<L>(&scenario, &args.rig, args.realtime) {
+        Ok(Ending::EndOfRun { .. }) => Ok(0),
+        Ok(Ending::PeerLost { .. }) => Ok(3),
+        Err(e @ (RunError::Law(_) | RunError::Firmware(_))) => Err(CliError::bad_input(e.to_string())),
+        Err(e) => Err(CliError::from(e)),
+    }
+}
+
+/// The command line of a law's own firmware process: `BIN firmware --rig NAME
+/// [--realtime] [--scenario FILE] [--set KEY=VALUE ...]`, exactly as `sil-host
+/// firmware` takes it (so `rig::ipc_link::IpcLink` can spawn either);
+/// `firmware --help` names the law and its declared parameters. Errors go to
+/// stderr as `error: ...`; the exit code is [`serve`]'s.
+#[cfg(feature = "clap")]
+pub fn main<L: ControlLaw>() -> std::process::ExitCode {
+    use clap::{Args, Command, FromArgMatches};
+    let spec = &L::SPEC;
+    let params: Vec<String> =
+        spec.params.iter().map(|p| format!("  {} = {} {} (range [{}, {}])", p.name, p.default, p.unit, p.min, p.max)).collect();
+    let about = format!(
+        "The SIL rig's firmware process running the control law `{}` ({}), for `sil-host run --attach RIG`.\n\n\
+         The scenario's `[law]` table sets its parameters (defaults shown):\n{}",
+        spec.name,
+        spec.source,
+        if params.is_empty() { "  (none)".to_string() } else { params.join("\n") }
+    );
+    let name = if spec.name.is_empty() { "firmware".to_string() } else { format!("{}-firmware", spec.name) };
+    // clap without its `string` feature names a command by a `&'static str`: once per process.
+    let name: &'static str = Box::leak(name.into_boxed_str());
+    let cmd = Command::new(name)
+        .about(format!("The firmware process of control law `{}` for the SIL rig (`{name} firmware --help`).", spec.name))
+        .subcommand_required(true)
+        .arg_required_else_help(true)
+        .subcommand(FirmwareArgs::augment_args(Command::new("firmware").about(about)));
+    let args = match cmd.try_get_matches().and_then(|m| match m.subcommand() {
+        Some(("firmware", sub)) => FirmwareArgs::from_arg_matches(sub),
+        _ => Err(clap::Error::new(clap::error::ErrorKind::MissingSubcommand)),
+    }) {
+        Ok(a) => a,
+        Err(e) => e.exit(),
+    };
+    match serve::<L>(&args) {
+        Ok(code) => std::process::ExitCode::from(code as u8),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

@@ -1,0 +1,385 @@
+//! A law's own configuration (issue 70): what a [`crate::ControlLaw`] declares
+//! about its settings ([`LawSpec`], one [`ParamSpec`] per parameter: name,
+//! unit, range, default) and the values a configuration carries for it
+//! ([`LawParams`] in [`crate::Config::law`]).
+//!
+//! A configuration names the law it is for ([`LawName`]; empty for the paper's
+//! laws, which the configuration's `controller` chooses), and holds up to
+//! [`LAW_PARAMS`] values in the order of the law's [`LawSpec::params`].
+//! [`crate::Firmware::with_law`] refuses a configuration for another law
+//! ([`ConfigError::WrongLaw`]) and a value out of its declared range
+//! ([`ConfigError::LawParam`]), before the law's own
+//! [`crate::ControlLaw::validate`].
+//!
+//! The spec travels to the plant in postcard's encoding ([`LawSpec::encode`]):
+//! in the SIL rig's handshake (`shared::wire::FirmwareAnnouncement::law`) and,
+//! in an MCU image, as the symbol `PAINLEVE_LAW_SPEC`; the plant maps a
+//! scenario's `[law]` table onto the values by the declared names and checks
+//! the ranges with the same rule ([`LawSpec::check`]).
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::config::ConfigError;
+
+/// Values a configuration holds for a law's own parameters.
+pub const LAW_PARAMS: usize = 8;
+/// Bytes of a law's name (ASCII).
+pub const LAW_NAME_BYTES: usize = 16;
+/// Bytes the encoded [`LawSpec`] may take (the handshake's buffer,
+/// `shared::wire::ANNOUNCEMENT_LAW_BYTES`, and the images' symbol).
+pub const LAW_SPEC_BYTES: usize = shared::wire::ANNOUNCEMENT_LAW_BYTES;
+
+/// A law's name: 1 to [`LAW_NAME_BYTES`] ASCII letters, digits, `-` or `_`;
+/// empty for the paper's laws ([`LawName::PAPER`]). Serialised as a string.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct LawName([u8; LAW_NAME_BYTES]);
+
+impl LawName {
+    /// The paper's laws (the configuration's `controller` chooses PID or hybrid).
+    pub const PAPER: Self = Self([0; LAW_NAME_BYTES]);
+
+    /// `name` as a law's name; `None` if it is longer than [`LAW_NAME_BYTES`] or
+    /// holds another character than an ASCII letter, digit, `-` or `_`.
+    pub const fn new(name: &str) -> Option<Self> {
+        Self::from_bytes(name.as_bytes())
+    }
+
+    /// [`LawName::new`] of bytes.
+    pub const fn from_bytes(b: &[u8]) -> Option<Self> {
+        if b.len() > LAW_NAME_BYTES {
+            return None;
+        }
+        let mut out = [0u8; LAW_NAME_BYTES];
+        let mut i = 0;
+        while i < b.len() {
+            let c = b[i];
+            if !(c.is_ascii_alphanumeric() || c == b'-' || c == b'_') {
+                return None;
+            }
+            out[i] = c;
+            i += 1;
+        }
+        Some(Self(out))
+    }
+
+    /// The name (empty for the paper's laws).
+    pub fn as_str(&self) -> &str {
+        // `new` and `Deserialize` admit ASCII only.
+        core::str::from_utf8(self.as_bytes()).unwrap_or("")
+    }
+
+    /// The name's ASCII bytes (empty for the paper's laws).
+    pub fn as_bytes(&self) -> &[u8] {
+        let len = self.0.iter().position(|&c| c == 0).unwrap_or(LAW_NAME_BYTES);
+        &self.0[..len]
+    }
+
+    /// Whether this is [`LawName::PAPER`].
+    pub fn is_paper(&self) -> bool {
+        self.0[0] == 0
+    }
+}
+
+impl core::fmt::Debug for LawName {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+impl core::fmt::Display for LawName {
+    /// The name, or `the paper's laws` for [`LawName::PAPER`].
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.is_paper() { f.write_str("the paper's laws") } else { f.write_str(self.as_str()) }
+    }
+}
+
+impl Serialize for LawName {
+    /// A string in a human-readable format (JSON, TOML); its bytes otherwise
+    /// (postcard: the same length and bytes as a string, without the MCU
+    /// linking a UTF-8 check).
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        if s.is_human_readable() { s.serialize_str(self.as_str()) } else { s.serialize_bytes(self.as_bytes()) }
+    }
+}
+
+impl<'de> Deserialize<'de> for LawName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = LawName;
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str("a law's name: up to 16 ASCII letters, digits, `-` or `_`")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<LawName, E> {
+                self.visit_bytes(v.as_bytes())
+            }
+            fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<LawName, E> {
+                LawName::from_bytes(v).ok_or_else(|| E::invalid_value(serde::de::Unexpected::Bytes(v), &self))
+            }
+        }
+        if d.is_human_readable() { d.deserialize_str(Visitor) } else { d.deserialize_bytes(Visitor) }
+    }
+}
+
+/// The law a configuration is for and its parameters' values
+/// ([`crate::Config::law`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LawParams {
+    /// The law ([`LawName::PAPER`]: the paper's laws).
+    pub name: LawName,
+    /// Its parameters in the order of its [`LawSpec::params`], in their
+    /// declared units; 0 beyond them.
+    #[serde(with = "values")]
+    pub values: [f32; LAW_PARAMS],
+}
+
+/// `[f32; LAW_PARAMS]` as a tuple, read in a loop: serde's own array impl
+/// unrolls the eight reads (about 600 bytes more flash on the MCU images).
+mod values {
+    use serde::{
+        Deserializer, Serializer,
+        de::{Error, SeqAccess, Visitor},
+        ser::SerializeTuple,
+    };
+
+    use super::LAW_PARAMS;
+
+    pub(super) fn serialize<S: Serializer>(v: &[f32; LAW_PARAMS], s: S) -> Result<S::Ok, S::Error> {
+        let mut t = s.serialize_tuple(LAW_PARAMS)?;
+        for x in v {
+            t.serialize_element(x)?;
+        }
+        t.end()
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[f32; LAW_PARAMS], D::Error> {
+        struct Values;
+        impl<'de> Visitor<'de> for Values {
+            type Value = [f32; LAW_PARAMS];
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str("8 numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut out = [0.0; LAW_PARAMS];
+                for (i, v) in out.iter_mut().enumerate() {
+                    *v = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(i, &self))?;
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_tuple(LAW_PARAMS, Values)
+    }
+}
+
+impl LawParams {
+    /// The paper's laws: no name, no values.
+    pub const PAPER: Self = Self { name: LawName::PAPER, values: [0.0; LAW_PARAMS] };
+}
+
+impl Default for LawParams {
+    /// [`LawParams::PAPER`].
+    fn default() -> Self {
+        Self::PAPER
+    }
+}
+
+/// One parameter a law declares.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ParamSpec {
+    /// Its name in a scenario's `[law]` table (`stiffness`).
+    pub name: &'static str,
+    /// Its unit (`N/m`), for messages and tables.
+    pub unit: &'static str,
+    /// Least value admitted, in `unit`.
+    pub min: f32,
+    /// Largest value admitted, in `unit`.
+    pub max: f32,
+    /// Its value when a scenario leaves it out, in `unit` (within `[min, max]`).
+    pub default: f32,
+}
+
+/// What a law declares about its configuration: its name and parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LawSpec {
+    /// Its name ([`LawName`]'s rule; empty for the paper's laws).
+    pub name: &'static str,
+    /// Where it comes from (a paper, a book), for `summary.json` and messages.
+    pub source: &'static str,
+    /// Its parameters, at most [`LAW_PARAMS`].
+    pub params: &'static [ParamSpec],
+}
+
+impl LawSpec {
+    /// The paper's laws: configured by the rest of [`crate::Config`], no parameters here.
+    pub const PAPER: Self = Self { name: "", source: "Marchese et al., ECC 2019, eqs. 8 to 11", params: &[] };
+
+    /// Whether the spec is well formed: its name a [`LawName`], at most
+    /// [`LAW_PARAMS`] parameters, each with `min <= default <= max` (all finite)
+    /// and a name of its own. `Firmware::with_law` asserts it at compile time.
+    pub const fn is_valid(&self) -> bool {
+        if LawName::new(self.name).is_none() || self.params.len() > LAW_PARAMS {
+            return false;
+        }
+        let mut i = 0;
+        while i < self.params.len() {
+            let p = &self.params[i];
+            if !(p.min.is_finite() && p.max.is_finite() && p.min <= p.default && p.default <= p.max) || p.name.is_empty() {
+                return false;
+            }
+            let mut j = 0;
+            while j < i {
+                if str_eq(self.params[j].name, p.name) {
+                    return false;
+                }
+                j += 1;
+            }
+            i += 1;
+        }
+        true
+    }
+
+    /// The law's name as a configuration holds it.
+    pub const fn law_name(&self) -> LawName {
+        match LawName::new(self.name) {
+            Some(n) => n,
+            None => LawName::PAPER,
+        }
+    }
+
+    /// Its name with every parameter at its default.
+    pub const fn defaults(&self) -> LawParams {
+        let mut values = [0.0; LAW_PARAMS];
+        let mut i = 0;
+        while i < self.params.len() && i < LAW_PARAMS {
+            values[i] = self.params[i].default;
+            i += 1;
+        }
+        LawParams { name: self.law_name(), values }
+    }
+
+    /// Checks that `p` is for this law and every value is in its range.
+    ///
+    /// # Errors
+    /// [`ConfigError::WrongLaw`] for another law's name,
+    /// [`ConfigError::LawParam`] for the first value out of its declared range
+    /// (or not finite), [`ConfigError::OutOfRange`] (`law.values`) for a value
+    /// other than 0 beyond the declared parameters.
+    #[inline(never)]
+    pub fn check(&self, p: &LawParams) -> Result<(), ConfigError> {
+        if p.name != self.law_name() {
+            return Err(ConfigError::WrongLaw { built: self.law_name(), asked: p.name });
+        }
+        for (i, &value) in p.values.iter().enumerate() {
+            match self.params.get(i) {
+                Some(s) if !(value >= s.min && value <= s.max) => {
+                    return Err(ConfigError::LawParam { name: s.name, unit: s.unit, value, min: s.min, max: s.max });
+                }
+                None if value != 0.0 => {
+                    return Err(ConfigError::OutOfRange { name: "law.values", value, expected: "0 beyond the law's declared parameters" });
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// The spec in postcard's encoding into `buf` (what the plant decodes);
+    /// `None` if it does not fit.
+    pub fn encode<'b>(&self, buf: &'b mut [u8]) -> Option<&'b mut [u8]> {
+        postcard::to_slice(self, buf).ok()
+    }
+}
+
+const fn str_eq(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPEC: LawSpec = LawSpec {
+        name: "test-law",
+        source: "a test",
+        params: &[
+            ParamSpec { name: "k", unit: "N/m", min: 0.0, max: 1000.0, default: 400.0 },
+            ParamSpec { name: "d", unit: "N s/m", min: 0.0, max: 100.0, default: 40.0 },
+        ],
+    };
+
+    #[test]
+    fn names_admit_only_short_ascii_words_and_round_trip() {
+        assert_eq!(LawName::new("impedance").unwrap().as_str(), "impedance");
+        assert_eq!(LawName::new("").unwrap(), LawName::PAPER);
+        assert!(LawName::new("a-name_that_is_17").is_none());
+        assert!(LawName::new("sixteen_chars_ok").is_some());
+        for bad in ["with space", "é", "a.b", "a\0"] {
+            assert!(LawName::new(bad).is_none(), "{bad:?}");
+        }
+        let p = SPEC.defaults();
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(json.starts_with(r#"{"name":"test-law","values":[400.0,40.0,0.0"#), "{json}");
+        assert_eq!(serde_json::from_str::<LawParams>(&json).unwrap(), p);
+        let mut buf = [0u8; 64];
+        let bytes = postcard::to_slice(&p, &mut buf).unwrap();
+        assert_eq!(postcard::from_bytes::<LawParams>(bytes).unwrap(), p);
+        assert!(serde_json::from_str::<LawParams>(&json.replace("test-law", "bad name")).is_err());
+    }
+
+    #[test]
+    fn check_refuses_another_law_a_value_out_of_range_and_a_stray_value() {
+        assert!(SPEC.is_valid() && LawSpec::PAPER.is_valid());
+        SPEC.check(&SPEC.defaults()).unwrap();
+        LawSpec::PAPER.check(&LawParams::PAPER).unwrap();
+        assert_eq!(LawSpec::PAPER.check(&SPEC.defaults()), Err(ConfigError::WrongLaw { built: LawName::PAPER, asked: SPEC.law_name() }));
+        assert!(matches!(SPEC.check(&LawParams::PAPER), Err(ConfigError::WrongLaw { .. })));
+        for (i, bad) in [(0, -1.0), (0, 1000.5), (1, f32::NAN), (1, f32::INFINITY)] {
+            let mut p = SPEC.defaults();
+            p.values[i] = bad;
+            let e = SPEC.check(&p).unwrap_err();
+            assert!(matches!(e, ConfigError::LawParam { name, .. } if name == SPEC.params[i].name), "{e}");
+        }
+        let mut p = SPEC.defaults();
+        p.values[5] = 1.0;
+        assert!(matches!(SPEC.check(&p), Err(ConfigError::OutOfRange { name: "law.values", .. })));
+    }
+
+    #[test]
+    fn a_malformed_spec_is_not_valid() {
+        const fn p(name: &'static str, min: f32, max: f32, default: f32) -> ParamSpec {
+            ParamSpec { name, unit: "", min, max, default }
+        }
+        static MIN_ABOVE_MAX: [ParamSpec; 1] = [p("k", 1.0, 0.0, 0.5)];
+        static DEFAULT_OUTSIDE: [ParamSpec; 1] = [p("k", 0.0, 1.0, 2.0)];
+        static UNBOUNDED: [ParamSpec; 1] = [p("k", 0.0, f32::INFINITY, 1.0)];
+        static TWICE: [ParamSpec; 2] = [p("k", 0.0, 1.0, 0.5), p("k", 0.0, 1.0, 0.5)];
+        static UNNAMED: [ParamSpec; 1] = [p("", 0.0, 1.0, 0.5)];
+        static NINE: [ParamSpec; 9] = [
+            p("a", 0.0, 1.0, 0.5),
+            p("b", 0.0, 1.0, 0.5),
+            p("c", 0.0, 1.0, 0.5),
+            p("d", 0.0, 1.0, 0.5),
+            p("e", 0.0, 1.0, 0.5),
+            p("f", 0.0, 1.0, 0.5),
+            p("g", 0.0, 1.0, 0.5),
+            p("h", 0.0, 1.0, 0.5),
+            p("i", 0.0, 1.0, 0.5),
+        ];
+        for params in [&MIN_ABOVE_MAX[..], &DEFAULT_OUTSIDE, &UNBOUNDED, &TWICE, &UNNAMED, &NINE] {
+            assert!(!LawSpec { params, ..SPEC }.is_valid(), "{params:?}");
+        }
+        assert!(LawSpec { params: &NINE[..8], ..SPEC }.is_valid());
+        assert!(!LawSpec { name: "no spaces", ..SPEC }.is_valid());
+    }
+}
