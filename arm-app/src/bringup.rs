@@ -18,12 +18,13 @@ use crate::{
     telemetry::ArmTelemetry,
 };
 
-/// The protocol's version, told in [`Reply::Hello`] (7: the control rate set
+/// The protocol's version, told in [`Reply::Hello`] (8: the configuration's
+/// `law`, a law of one's own's parameters; 7: the control rate set
 /// by `Configure` and `Restore` within `crate::rate`'s range, the tick's period
 /// in [`Status::period_us`], a jog's length bounded in time; 6:
 /// `Refusal::ProtectionOff` and `Refusal::NothingToSave`,
 /// `RecordFault::ProtectionOff`; the configuration's runaway limits always on).
-pub const BRINGUP_PROTOCOL: u16 = 7;
+pub const BRINGUP_PROTOCOL: u16 = 8;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).

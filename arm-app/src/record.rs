@@ -23,8 +23,9 @@ use firmware::{Config, pil};
 use serde::{Deserialize, Serialize};
 
 /// The record's format version: a record of another version is refused as
-/// corrupt (re-run the bring-up's calibration and save).
-pub const RECORD_VERSION: u16 = 3;
+/// corrupt (re-run the bring-up's calibration and save). 4: the
+/// configuration's `law` (issue 70).
+pub const RECORD_VERSION: u16 = 4;
 
 /// The record's magic.
 pub const MAGIC: [u8; 4] = *b"PLVS";

@@ -182,6 +182,9 @@ pub struct Config {
     /// ([`crate::law_spec`]): [`LawParams::PAPER`] for the paper's laws (which
     /// `controller` chooses); a law of one's own's name and values otherwise
     /// (checked against what the law declares by `Firmware::with_law`).
+    /// Absent from a JSON document (a board backup of before issue 70): the
+    /// paper's laws.
+    #[serde(default)]
     pub law: LawParams,
 }
 

@@ -288,6 +288,102 @@ impl LawSpec {
     pub fn encode<'b>(&self, buf: &'b mut [u8]) -> Option<&'b mut [u8]> {
         postcard::to_slice(self, buf).ok()
     }
+
+    /// Bytes of [`LawSpec::encode`]'s output, as a constant (the length of an
+    /// image's `PAINLEVE_LAW_SPEC`, [`crate::law_spec_symbol`]).
+    pub const fn encoded_len(&self) -> usize {
+        let mut n = str_len(self.name) + str_len(self.source) + varint_len(self.params.len());
+        let mut i = 0;
+        while i < self.params.len() {
+            n += str_len(self.params[i].name) + str_len(self.params[i].unit) + 12;
+            i += 1;
+        }
+        n
+    }
+
+    /// [`LawSpec::encode`]'s bytes computed at compile time (postcard's format:
+    /// a string as its varint length and bytes, a slice as its varint length
+    /// and elements, an `f32` as 4 little-endian bytes), `N` =
+    /// [`LawSpec::encoded_len`] (a different `N` does not compile where it is
+    /// a constant). A test holds them equal to postcard's.
+    pub const fn encoded<const N: usize>(&self) -> [u8; N] {
+        let mut out = [0u8; N];
+        let mut at = put_str(&mut out, 0, self.name);
+        at = put_str(&mut out, at, self.source);
+        at = put_varint(&mut out, at, self.params.len());
+        let mut i = 0;
+        while i < self.params.len() {
+            let p = &self.params[i];
+            at = put_str(&mut out, at, p.name);
+            at = put_str(&mut out, at, p.unit);
+            at = put_f32(&mut out, at, p.min);
+            at = put_f32(&mut out, at, p.max);
+            at = put_f32(&mut out, at, p.default);
+            i += 1;
+        }
+        assert!(at == N, "LawSpec::encoded: N must be encoded_len()");
+        out
+    }
+}
+
+const fn varint_len(mut x: usize) -> usize {
+    let mut n = 1;
+    while x >= 0x80 {
+        x >>= 7;
+        n += 1;
+    }
+    n
+}
+
+const fn str_len(s: &str) -> usize {
+    varint_len(s.len()) + s.len()
+}
+
+const fn put_varint(out: &mut [u8], mut at: usize, mut x: usize) -> usize {
+    while x >= 0x80 {
+        out[at] = (x as u8 & 0x7f) | 0x80;
+        x >>= 7;
+        at += 1;
+    }
+    out[at] = x as u8;
+    at + 1
+}
+
+const fn put_str(out: &mut [u8], at: usize, s: &str) -> usize {
+    let mut at = put_varint(out, at, s.len());
+    let b = s.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        out[at] = b[i];
+        at += 1;
+        i += 1;
+    }
+    at
+}
+
+const fn put_f32(out: &mut [u8], at: usize, x: f32) -> usize {
+    let b = x.to_bits().to_le_bytes();
+    out[at] = b[0];
+    out[at + 1] = b[1];
+    out[at + 2] = b[2];
+    out[at + 3] = b[3];
+    at + 4
+}
+
+/// Defines `PAINLEVE_LAW_SPEC`, the symbol an MCU image carries its law's
+/// declaration in ([`LawSpec::encoded`]), for the host to read from the ELF
+/// (`rig::law::LawDescription::from_elf`) and bind a scenario's `[law]` table
+/// with before it configures the image. The image must reference it (the
+/// linker drops unreferenced data): the images' entry points pass it to
+/// `core::hint::black_box`.
+#[macro_export]
+macro_rules! law_spec_symbol {
+    ($law:ty) => {
+        /// The law's declaration in postcard's encoding (`firmware::law_spec`).
+        #[unsafe(no_mangle)]
+        #[used]
+        pub static PAINLEVE_LAW_SPEC: [u8; <$law as $crate::ControlLaw>::SPEC.encoded_len()] = <$law as $crate::ControlLaw>::SPEC.encoded();
+    };
 }
 
 const fn str_eq(a: &str, b: &str) -> bool {
@@ -353,6 +449,24 @@ mod tests {
         let mut p = SPEC.defaults();
         p.values[5] = 1.0;
         assert!(matches!(SPEC.check(&p), Err(ConfigError::OutOfRange { name: "law.values", .. })));
+    }
+
+    #[test]
+    fn the_compile_time_encoding_is_postcards() {
+        const N: usize = SPEC.encoded_len();
+        const BYTES: [u8; N] = SPEC.encoded();
+        let mut buf = [0u8; 512];
+        assert_eq!(&BYTES[..], &*SPEC.encode(&mut buf).unwrap());
+        const P: usize = LawSpec::PAPER.encoded_len();
+        assert_eq!(&LawSpec::PAPER.encoded::<P>()[..], &*LawSpec::PAPER.encode(&mut buf).unwrap());
+        // A long name (two-byte varint length) too.
+        const LONG: LawSpec = LawSpec {
+            source: "a source of more than one hundred and twenty-eight bytes, so that its length takes two bytes of varint in postcard's format",
+            ..SPEC
+        };
+        const L: usize = LONG.encoded_len();
+        assert!(LONG.source.len() >= 128);
+        assert_eq!(&LONG.encoded::<L>()[..], &*LONG.encode(&mut buf).unwrap());
     }
 
     #[test]

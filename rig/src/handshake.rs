@@ -140,13 +140,18 @@ fn check_config(
 /// [`HandshakeError::Announcement`] if the configuration or the declaration
 /// does not fit the message (a build error).
 pub fn of_config(config: &Config, law: &LawSpec) -> Result<Announced, HandshakeError> {
-    let a = firmware::announce::announce(config, law)?;
-    Ok(Announced {
-        wire_version: a.wire_version,
-        config_hash: format!("{:016x}", a.config_hash),
-        config: *config,
-        law: LawDescription::of(law),
-    })
+    firmware::announce::announce(config, law)?;
+    of_described(config, LawDescription::of(law))
+}
+
+/// [`of_config`] for a law known by its declaration (an MCU image's,
+/// [`LawDescription::from_elf`]).
+///
+/// # Errors
+/// As [`of_config`] (for the configuration).
+pub fn of_described(config: &Config, law: LawDescription) -> Result<Announced, HandshakeError> {
+    let a = firmware::announce::announce(config, &LawSpec::PAPER)?;
+    Ok(Announced { wire_version: a.wire_version, config_hash: format!("{:016x}", a.config_hash), config: *config, law })
 }
 
 #[cfg(test)]

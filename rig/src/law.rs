@@ -147,6 +147,31 @@ impl LawDescription {
         }
     }
 
+    /// The declaration an MCU image carries in its symbol `PAINLEVE_LAW_SPEC`
+    /// (`firmware::law_spec_symbol!`, in postcard's encoding); `None` for an
+    /// image without it (one built before issue 70, which runs the paper's laws).
+    ///
+    /// # Errors
+    /// [`LawError::Undecodable`] for a file that cannot be read or is not an
+    /// ELF, a symbol outside its section's data, or bytes that do not decode.
+    pub fn from_elf(path: &std::path::Path) -> Result<Option<Self>, LawError> {
+        use object::{Object, ObjectSection, ObjectSymbol};
+        let bad = |what: String| LawError::Undecodable(format!("{}: {what}", path.display()));
+        let data = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+        let file = object::File::parse(&*data).map_err(|e| bad(format!("not an ELF image ({e})")))?;
+        let Some(symbol) = file.symbols().find(|s| s.name() == Ok("PAINLEVE_LAW_SPEC")) else { return Ok(None) };
+        let section = symbol
+            .section_index()
+            .and_then(|i| file.section_by_index(i).ok())
+            .ok_or_else(|| bad("PAINLEVE_LAW_SPEC is in no section".into()))?;
+        let bytes = section
+            .data_range(symbol.address(), symbol.size())
+            .ok()
+            .flatten()
+            .ok_or_else(|| bad("PAINLEVE_LAW_SPEC is outside its section's data".into()))?;
+        Self::decode(bytes).map(Some).map_err(|e| bad(e.to_string()))
+    }
+
     /// The declared parameters as a message lists them: `stiffness (N/m, [0, 5000])`.
     pub fn listed(&self) -> String {
         if self.params.is_empty() {

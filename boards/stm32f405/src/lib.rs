@@ -24,4 +24,6 @@ pub mod pins;
 pub mod timing;
 
 #[cfg(target_os = "none")]
+pub mod images;
+#[cfg(target_os = "none")]
 pub mod mcu;

@@ -21,6 +21,7 @@ use super::{
 };
 use crate::{
     faults::FaultPlan,
+    law::LawDescription,
     link::{Exchange, FirmwareLink},
     record::RunError,
     setup::RunSetup,
@@ -79,6 +80,15 @@ impl PilLink {
         check_faults(setup.scenario(), &opts.target)?;
         let boot = seconds("boot timeout", opts.boot_timeout_s)?;
         let answer_timeout = seconds("answer timeout", opts.answer_timeout_s)?;
+        // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`), to bind the
+        // scenario's `[law]` table with: checked before QEMU starts. A board
+        // behind a serial port runs the paper's laws' image here.
+        let law = match &opts.target {
+            // A missing image is QEMU's start to report (its own message).
+            PilTarget::Qemu { image, .. } if image.is_file() => LawDescription::from_elf(image)?.unwrap_or_else(LawDescription::paper),
+            PilTarget::Qemu { .. } | PilTarget::Serial { .. } => LawDescription::paper(),
+        };
+        setup.firmware_for(&law)?;
         let log = Arc::new(Mutex::new(Vec::new()));
         let (pipe, qemu) = match &opts.target {
             PilTarget::Qemu { image, qemu, link } => {
@@ -95,7 +105,7 @@ impl PilLink {
             log,
             counts: PilCounts { keep_ticks: opts.keep_ticks, ..PilCounts::default() },
         };
-        link.handshake(setup.firmware(), boot)?;
+        link.handshake(&setup.firmware_for(&law)?, boot)?;
         Ok(link)
     }
 
