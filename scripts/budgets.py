@@ -29,7 +29,9 @@ CEILINGS = {
     # The PIL image: 32 KiB was issue 16's target (30 756 B then). Issue 66's protection
     # (the tracking bound derived from the law's poles, the chatter check, the wiring
     # check's net-torque rule) brought it from 32 696 B to 33 092 B: 33 KiB.
-    "mcu/pil": 33 * 1024,
+    # Issue 70 (a law's own configuration on the wire and its check, the image's body
+    # generic over the law, `PAINLEVE_LAW_SPEC`): 36 504 B: 37 KiB.
+    "mcu/pil": 37 * 1024,
     # The arm image carries the bring-up protocol since issue 23 (the requests'
     # and replies' serde, the configuration sent over the line, the settings
     # record in flash): 32 152 B before, 52 612 B (mcu) / 52 768 B (qemu) after.
@@ -41,24 +43,31 @@ CEILINGS = {
     # faults; the notices queued for the idle loop): 62 096 B (mcu) at 029680a's
     # successor 76099ca, 62 788 B (mcu) / 64 672 B (qemu) after; the qemu image is
     # 864 B from the 64 KiB budget: the next feature there needs a cut first.
-    "mcu/arm": 63 * 1024,  # 62 788 B measured
-    "qemu/arm": FLASH_BUDGET,  # 64 672 B measured
+    # Issue 70 (a law's own configuration in every configuration: `Config::law`, its
+    # decoding, the check against the law's declaration; the images' bodies generic
+    # over the law): 64 712 B (mcu) / 64 980 B (qemu), 556 B from the budget.
+    "mcu/arm": FLASH_BUDGET,  # 64 712 B measured
+    "qemu/arm": FLASH_BUDGET,  # 64 980 B measured
     # Issue 41 (the hybrid law's friction estimate): 31 960 B (qemu), 30 804 B (mcu);
     # the QEMU image now has the PIL image's 32 KiB target too.
     # Issue 52's wiring checks (1.6 KiB in the step): 33 540 B (qemu); the flashed PIL
     # image (mcu) keeps the 32 KiB target at 32 492 B.
-    "qemu/pil": 34 * 1024,  # 33 540 B measured
+    # Issue 70: 37 592 B.
+    "qemu/pil": 38 * 1024,  # 37 592 B measured
     "release/pil": FLASH_BUDGET,  # 43 468 B measured
 }
 FLASH_SECTIONS = (".vector_table", ".text", ".rodata", ".data", ".defmt")
 RAM_SECTIONS = (".data", ".bss", ".uninit")
 ALLOC_SYMBOLS = ("__rust_alloc", "__rdl_alloc", "__rg_alloc", "malloc")
 TARGET = "target/thumbv7em-none-eabihf"
+# The images of examples/law-template (a law of one's own, issue 70): held to the
+# 64 KiB budget, as any law's images are (no ceiling of their own).
+LAW_IMAGES = ("law-arm", "law-pil")
 BUILD = {
-    "mcu": "cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin {bin}",
-    "qemu": "cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf"
+    "mcu": "cargo build -p {package} --profile mcu --target thumbv7em-none-eabihf --bin {bin}",
+    "qemu": "cargo build -p {package} --profile qemu --target thumbv7em-none-eabihf"
     " --no-default-features --features qemu --bin {bin}",
-    "release": "cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin {bin}",
+    "release": "cargo build --release -p {package} --target thumbv7em-none-eabihf --bin {bin}",
 }
 
 
@@ -158,12 +167,13 @@ def main():
             # The arm image is flashed with --profile mcu (`cargo arm`); since the
             # bring-up protocol (issue 23) its plain --release build (no LTO) no
             # longer fits the 64 KiB of memory.x, and the linker refuses it.
-            for b in ("arm", "pil") if profile != "release" else ("pil",):
+            for b in ("arm", "pil", *LAW_IMAGES) if profile != "release" else ("pil",):
                 p = os.path.normpath(os.path.join(root, profile, b))
                 if os.path.isfile(p):
                     paths.append(p)
                 else:
-                    missing[f"{profile}/{b}"] = BUILD[profile].format(bin=b)
+                    package = "law-template" if b in LAW_IMAGES else "board-stm32f405"
+                    missing[f"{profile}/{b}"] = BUILD[profile].format(package=package, bin=b)
     reports = []
     for p in paths:
         try:

@@ -151,8 +151,16 @@ def main():
     ap.add_argument(
         "--controller",
         default="all",
-        choices=["hybrid", *HYBRID_VARIANTS, "pid", "both", "all"],
-        help="the controllers and friction terms to measure (with --random: the terms the cases take in turn)",
+        choices=["hybrid", *HYBRID_VARIANTS, "pid", "both", "all", "law"],
+        help="the controllers and friction terms to measure (with --random: the terms the cases take in turn); "
+        "`law`: the --scenario's own `[law]`, on a law's PIL image (--image; docs/board.md \"Your own law\")",
+    )
+    ap.add_argument(
+        "--scenario",
+        default=None,
+        metavar="FILE.toml",
+        help="the scenario every run starts from (default: sil-host's embedded default); a law of one's own's "
+        "`[law]` table goes here",
     )
     ap.add_argument(
         "--duration",
@@ -185,6 +193,8 @@ def main():
     ap.add_argument("--profile", action="store_true", help="add the worst step's breakdown by function")
     ap.add_argument("--max-cycles", type=float, default=None, help="exit 1 when a worst step's cycles_max exceeds this")
     args = ap.parse_args()
+    if args.controller == "law" and not args.scenario:
+        ap.error("--controller law measures the --scenario's own [law]: give --scenario FILE.toml")
     if args.duration <= 0 or args.duration > 60:
         ap.error("--duration must be in (0, 60] s")
     if args.jobs < 1:

@@ -83,10 +83,13 @@ cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-e
 echo "== board images (profile mcu: RTT, for a board; profile qemu: semihosting; plain --release: pil only,"
 echo "   the arm image is flashed with profile mcu and its no-LTO build exceeds memory.x's 64 KiB)"
 echo "   and their budgets (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap) and"
-echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 33 KiB; docs/board.md \"Budgets\")"
+echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 37 KiB; docs/board.md \"Budgets\"); the same"
+echo "   images of examples/law-template's law (law-arm, law-pil: a law of one's own, issue 70) within the budget"
 cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
 cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
 cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pil
+cargo build -p law-template --profile mcu --target thumbv7em-none-eabihf --bin law-arm --bin law-pil
+cargo build -p law-template --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin law-arm --bin law-pil
 python3 scripts/budgets.py --all
 
 echo "== the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
@@ -98,12 +101,15 @@ echo "   \"Trust IV\"); run beside the Python package's install (pip waits on th
 echo "   when it is done"
 echo "   the same ceiling over random admissible scenarios (the bound holds for every case of its kind, not only"
 echo "   the default scenario): scripts/cycles.py --random, each term of the hybrid law and the PID once at a"
-echo "   random rate, 250 periods each, after the default scenario's runs"
+echo "   random rate, 250 periods each, after the default scenario's runs; then the template's impedance law on"
+echo "   its own PIL image (a law of one's own is held to the same ceiling, issue 70)"
 cargo build --release -p sil-host --features full
 cycles_log="$(mktemp)"
 {
   python3 scripts/cycles.py --duration 1 --max-cycles 1900 &&
-    python3 scripts/cycles.py --random 6 --seed 1 --duration 0.25 --max-cycles 1900
+    python3 scripts/cycles.py --random 6 --seed 1 --duration 0.25 --max-cycles 1900 &&
+    python3 scripts/cycles.py --controller law --scenario examples/law-template/impedance.toml \
+      --image target/thumbv7em-none-eabihf/qemu/law-pil --duration 1 --max-cycles 1900
 } >"$cycles_log" 2>&1 &
 cycles_pid=$!
 

@@ -24,6 +24,7 @@ pub mod free_arm;
 pub mod random_scenarios;
 pub mod setting_units;
 pub mod twin_link;
+pub mod wiring_faults;
 
 pub use emulator_link::EmulatorLink;
 pub use twin_link::TwinLink;

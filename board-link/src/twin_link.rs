@@ -15,6 +15,7 @@
 
 use arm_app::{AcquisitionFault, Notice};
 use board_twin::{ArmState, BoardTwin, BusFaults};
+use firmware::{ControlLaw, PaperLaws};
 use shared::wire::{ActuatorCommand, GroundTruth, SensorFrame};
 
 use rig::{
@@ -24,9 +25,10 @@ use rig::{
     setup::RunSetup,
 };
 
-/// The board twin behind the rig's link.
-pub struct TwinLink {
-    twin: BoardTwin,
+/// The board twin, running control law `L` (the paper's laws by default),
+/// behind the rig's link.
+pub struct TwinLink<L: ControlLaw = PaperLaws> {
+    twin: BoardTwin<L>,
     plan: FaultPlan,
     v_belt: f64,
     period_us: u64,
@@ -38,6 +40,17 @@ pub struct TwinLink {
 }
 
 impl TwinLink {
+    /// [`TwinLink::for_law`] with the paper's laws (what `sil-host run --link
+    /// twin` runs).
+    ///
+    /// # Errors
+    /// As [`TwinLink::for_law`].
+    pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+        Self::for_law(setup)
+    }
+}
+
+impl<L: ControlLaw> TwinLink<L> {
     /// The twin of `setup`: its scenario's `[board]` and `[calibration]`, its
     /// firmware configuration, its sensors' seed and load-cell noise.
     ///
@@ -46,15 +59,16 @@ impl TwinLink {
     /// without them); [`RunError::Unsupported`] for a fault the twin cannot inject;
     /// [`RunError::Board`] when the board, the calibration or the configuration
     /// is refused.
-    pub fn new(setup: &RunSetup) -> Result<Self, RunError> {
+    pub fn for_law(setup: &RunSetup) -> Result<Self, RunError> {
         let s = setup.scenario();
         LinkKind::Twin.check(&s.faults)?;
         rig::board_protection::check_protection(setup.firmware(), "controller.runaway_limits").map_err(RunError::NotOnABoard)?;
         s.calibration.check(s.timing.period().as_secs_f32()).map_err(RunError::Board)?;
-        // The paper's laws: a `[law]` table is refused here, naming the links that run one.
-        let config = setup.firmware_for(&rig::law::LawDescription::paper())?;
-        let announced = rig::handshake::of_config(&config, &firmware::LawSpec::PAPER)?;
-        let twin = BoardTwin::new(s.board, config, &s.calibration.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)
+        // The scenario's `[law]` table bound to what `L` declares (the paper's
+        // laws: none).
+        let config = setup.firmware_for(&rig::law::LawDescription::of(&L::SPEC))?;
+        let announced = rig::handshake::of_config(&config, &L::SPEC)?;
+        let twin = BoardTwin::<L>::for_law(s.board, config, &s.calibration.arm_calibration(), s.sensors.seed, s.sensors.load_noise_n)
             .map_err(|e| RunError::Board(e.to_string()))?;
         Ok(Self {
             twin,
@@ -69,12 +83,12 @@ impl TwinLink {
     }
 
     /// The twin itself.
-    pub fn twin(&self) -> &BoardTwin {
+    pub fn twin(&self) -> &BoardTwin<L> {
         &self.twin
     }
 }
 
-impl FirmwareLink for TwinLink {
+impl<L: ControlLaw> FirmwareLink for TwinLink<L> {
     fn transport(&self) -> &'static str {
         "twin"
     }

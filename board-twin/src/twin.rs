@@ -21,6 +21,7 @@ use crate::{
 use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, IntervalClock, Notice, StartError, Watchdog, button_periods, record::RecordFault};
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
+use firmware::{ControlLaw, PaperLaws};
 
 /// The watchdog: counts its feeds on the bench's side (a tick that did not
 /// feed it is a hung step).
@@ -92,9 +93,11 @@ pub enum TwinError {
     Start(StartError),
 }
 
-/// The reference board, simulated at the bus level, running the arm application.
-pub struct BoardTwin {
-    app: ArmApp<TwinIo>,
+/// The reference board, simulated at the bus level, running the arm
+/// application with control law `L` (the paper's laws by default; a law of
+/// one's own: [`BoardTwin::for_law`]).
+pub struct BoardTwin<L: ControlLaw = PaperLaws> {
+    app: ArmApp<TwinIo, L>,
     physics: BoardPhysics,
     feeds: std::rc::Rc<std::cell::Cell<u64>>,
     notices: Vec<Notice>,
@@ -102,6 +105,31 @@ pub struct BoardTwin {
 }
 
 impl BoardTwin {
+    /// [`BoardTwin::for_law`] with the paper's laws.
+    ///
+    /// # Errors
+    /// As [`BoardTwin::for_law`].
+    pub fn new(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
+        Self::for_law(board, config, cal, seed, load_noise_n)
+    }
+
+    /// [`BoardTwin::with_flash_for_law`] with the paper's laws.
+    ///
+    /// # Errors
+    /// As [`BoardTwin::for_law`].
+    pub fn with_flash(
+        board: BoardDescription,
+        flash: FlashModel,
+        config: Config,
+        cal: &ArmCalibration,
+        seed: u64,
+        load_noise_n: f64,
+    ) -> Result<Self, TwinError> {
+        Self::with_flash_for_law(board, flash, config, cal, seed, load_noise_n)
+    }
+}
+
+impl<L: ControlLaw> BoardTwin<L> {
     /// A powered board that was brought up: its flash holds the settings record
     /// of the firmware's `config` and calibration `cal` (directions checked),
     /// which the application loads at power-up; load-cell noise of
@@ -113,9 +141,9 @@ impl BoardTwin {
     /// [`TwinError`]: a bad description, a record that cannot be written, a
     /// motor stage that does not disable, an application that refuses the
     /// configuration or calibration.
-    pub fn new(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
+    pub fn for_law(board: BoardDescription, config: Config, cal: &ArmCalibration, seed: u64, load_noise_n: f64) -> Result<Self, TwinError> {
         let flash = FlashModel::brought_up(cal, config).map_err(TwinError::Flash)?;
-        Self::with_flash(board, flash, config, cal, seed, load_noise_n)
+        Self::with_flash_for_law(board, flash, config, cal, seed, load_noise_n)
     }
 
     /// A powered board whose settings sector is `flash` (erased: a board fresh
@@ -125,7 +153,7 @@ impl BoardTwin {
     ///
     /// # Errors
     /// As [`BoardTwin::new`].
-    pub fn with_flash(
+    pub fn with_flash_for_law(
         board: BoardDescription,
         flash: FlashModel,
         config: Config,
@@ -153,7 +181,7 @@ impl BoardTwin {
             flash,
         };
         let mut notices = Vec::new();
-        let app = ArmApp::new(parts, config, cal, &mut |n| notices.push(n)).map_err(TwinError::Start)?;
+        let app = ArmApp::<TwinIo, L>::new(parts, config, cal, &mut |n| notices.push(n)).map_err(TwinError::Start)?;
         Ok(Self { app, physics, feeds, notices, ticks: 0 })
     }
 
@@ -230,7 +258,7 @@ impl BoardTwin {
     }
 
     /// The application (its firmware's counters and estimate).
-    pub fn app(&self) -> &ArmApp<TwinIo> {
+    pub fn app(&self) -> &ArmApp<TwinIo, L> {
         &self.app
     }
 

@@ -36,6 +36,8 @@ def draw_case(seed, i, term, periods):
     whatever `--random N` and `--case` select."""
     r = random.Random(f"scripts/cycles.py {seed} {i}")
     kind, _, friction = term.partition("-")
+    # `law`: the scenario's own `[law]` (a law of one's own, issue 70): no
+    # controller flag, the same draw of the plant, the references and the rate.
     if kind == "hybrid" and not friction:
         friction = "commanded"
     us = round(PERIOD_US[0] * (PERIOD_US[1] / PERIOD_US[0]) ** r.random())
@@ -55,14 +57,17 @@ def draw_case(seed, i, term, periods):
     ]
     if friction:
         sets.insert(0, f"controller.friction={friction}")
-    argv = ["--controller", kind]
+    argv = [] if kind == "law" else ["--controller", kind]
     for kv in sets:
         argv += ["--set", kv]
     return {"name": f"case {i} ({term}, {us} us)", "index": i, "term": term, "period_us": us, "sets": sets, "argv": argv, "random": True}
 
 
 def named_case(term, duration):
-    """The default scenario under `term`, `duration` s."""
+    """The default scenario (or --scenario's) under `term`, `duration` s; `law`:
+    the scenario's own `[law]`."""
     kind, _, friction = term.partition("-")
+    if kind == "law":
+        return {"name": term, "argv": ["--duration", str(duration)]}
     argv = ["--controller", kind] + (["--set", f"controller.friction={friction}"] if friction else [])
     return {"name": term, "argv": argv + ["--duration", str(duration)]}

@@ -115,7 +115,8 @@ def run_traced(args, case, log_path):
     reader = threading.Thread(target=read)
     reader.start()
     out = os.path.join(os.path.dirname(log_path), "out")
-    cmd = [args.sil_host, "pil", "--image", args.image, "--qemu", wrapper, "--quiet", *case["argv"]]
+    scenario = ["--scenario", args.scenario] if args.scenario else []
+    cmd = [args.sil_host, "pil", "--image", args.image, "--qemu", wrapper, "--quiet", *scenario, *case["argv"]]
     cmd += ["--answer-timeout", "60", "--out", out]
     done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     reader.join()

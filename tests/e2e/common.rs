@@ -103,3 +103,41 @@ pub const LONG_ARM: [&str; 6] =
     ["plant.m=0.5", "plant.l=0.5", "plant.sigma=0.02", "plant.k=1.3", "plant.h=0.9166666666666666", "plant.alpha0=0.2"];
 /// The start of both arms at rest with the tip on the belt (the same `h / l`), deg and deg/s.
 pub const OTHER_ARM_X0: &str = "--x0-deg=27.696865482139,0,18.573779305261,0";
+
+/// Builds the MCU images of `examples/law-template` (a law of one's own, issue
+/// 70) in the workspace's target folder, once per test binary (a no-op when
+/// fresh): `law-pil` for QEMU (profile `qemu`), `law-arm` as flashed (profile
+/// `mcu`, what the emulated board runs); their paths.
+pub fn law_images() -> (PathBuf, PathBuf) {
+    static BUILT: OnceLock<()> = OnceLock::new();
+    let (root, target_dir) = (workspace(), target_dir());
+    BUILT.get_or_init(|| {
+        for (profile, features, bin) in
+            [("qemu", ["--no-default-features", "--features", "qemu"], "law-pil"), ("mcu", ["--features", "rtt", "--quiet"], "law-arm")]
+        {
+            let build = Command::new(env!("CARGO"))
+                .args(["build", "-p", "law-template", "--profile", profile, "--target", "thumbv7em-none-eabihf", "--bin", bin])
+                .args(features)
+                .env("CARGO_TARGET_DIR", &target_dir)
+                .current_dir(&root)
+                .output()
+                .unwrap();
+            assert!(build.status.success(), "building {bin} failed:\n{}", String::from_utf8_lossy(&build.stderr));
+        }
+    });
+    let images = target_dir.join("thumbv7em-none-eabihf");
+    (images.join("qemu/law-pil"), images.join("mcu/law-arm"))
+}
+
+/// The template's firmware process (`law-firmware`, a host binary), built with
+/// the workspace's tests (`cargo test --workspace` builds the template's
+/// binaries for its own tests).
+pub fn law_firmware() -> PathBuf {
+    let exe = target_dir().join("release/law-firmware");
+    assert!(
+        exe.is_file(),
+        "{} is missing: cargo test --workspace --release builds it (or cargo build --release -p law-template)",
+        exe.display()
+    );
+    exe
+}

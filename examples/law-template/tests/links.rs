@@ -80,3 +80,50 @@ fn a_law_table_that_does_not_fit_is_refused_on_both_links() {
     let e = InProcessLink::new(&RunSetup::new(scenario(0.1, &[])).unwrap()).unwrap_err().to_string();
     assert!(e.contains("the firmware runs the paper's laws"), "{e}");
 }
+
+/// A law that misbehaves on purpose: the impedance law until `t = 0.5 s`,
+/// then torques that are not finite (NaN on motor 2).
+#[derive(Debug, Clone, Copy, Default)]
+struct Misbehaving {
+    law: Impedance,
+    periods: u32,
+}
+
+impl firmware::ControlLaw for Misbehaving {
+    const SPEC: firmware::LawSpec = firmware::LawSpec { name: "misbehaving", ..Impedance::SPEC };
+
+    fn fresh(cfg: &firmware::Config) -> Self {
+        Self { law: Impedance::fresh(cfg), periods: 0 }
+    }
+
+    fn declares(cfg: &firmware::Config) -> firmware::Declares {
+        Impedance::declares(cfg)
+    }
+
+    fn step(&mut self, ctx: &firmware::LawContext<'_>, input: &firmware::LawInput) -> Result<firmware::LawOutput, firmware::law::LawError> {
+        self.periods += 1;
+        let mut out = self.law.step(ctx, input)?;
+        if self.periods > 500 {
+            out.u[1] = f32::NAN;
+        }
+        Ok(out)
+    }
+}
+
+#[test]
+fn a_law_that_answers_nan_is_stopped_in_the_safe_state_at_zero_torque() {
+    let mut s = scenario(1.0, &[]);
+    s.law.as_mut().unwrap().name = "misbehaving".into();
+    let setup = RunSetup::new(s).unwrap();
+    let mut link = InProcessLink::<Misbehaving>::for_law(&setup).unwrap();
+    let (records, error) = run_loop(&setup, &mut link, &mut ());
+    match error {
+        Some(rig::record::RunError::SafeState { k, reason: firmware::SafeReason::NonFinite, .. }) => assert_eq!(k, 500, "the first NaN"),
+        other => panic!("{other:?}"),
+    }
+    // Its period's command is the safe state's: zero torque, the safe-state bit set.
+    let last = records.last().unwrap();
+    assert_eq!((last.u1_cmd, last.u2_cmd), (0.0, 0.0), "{last:?}");
+    assert!(records[..500].iter().all(|r| r.status & shared::wire::status::SAFE_STATE == 0), "healthy before");
+    assert_ne!(last.status & shared::wire::status::SAFE_STATE, 0, "{last:?}");
+}

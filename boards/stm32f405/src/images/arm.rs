@@ -30,10 +30,6 @@
 
 use core::cell::RefCell;
 
-use arm_app::{
-    ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, StartError,
-    bringup::{Reply, Request},
-};
 use crate::{
     calibration,
     clock_tree::ClockOutcome,
@@ -52,6 +48,10 @@ use crate::{
     },
     pins,
     timing::{TIM2_CLOCK_HZ, TickTimer},
+};
+use arm_app::{
+    ArmApp, ArmCalibration, ArmIo, ArmParts, Notice, StartError,
+    bringup::{Reply, Request},
 };
 use cortex_m::interrupt::Mutex;
 use drivers::motor::{Motor, MotorStage};
@@ -357,11 +357,7 @@ pub unsafe fn run<L: ControlLaw>(arm: &'static AppCell<L>, slot: *mut AppSlot<L>
     // record's, else the compiled-in fallback's): TIM2's reload from it.
     let period = app.config().period;
     let tick = match TickTimer::for_period(timer_hz, period) {
-        Ok(t)
-            if period.as_us() >= crate::timing::MIN_PERIOD_US && period.as_us() <= crate::timing::MAX_PERIOD_US =>
-        {
-            t
-        }
+        Ok(t) if period.as_us() >= crate::timing::MIN_PERIOD_US && period.as_us() <= crate::timing::MAX_PERIOD_US => t,
         Ok(_) => {
             defmt::error!("control rate: {=u64} us is outside the image's 100 to 4000 us (250 Hz to 10 kHz)", period.as_us());
             exit::exit(2);

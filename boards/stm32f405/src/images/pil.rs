@@ -173,7 +173,7 @@ impl Board for PilBoard {
                     let pid = matches!(cfg.controller, firmware::ControllerKind::Pid);
                     defmt::info!("configured: {=str} controller, period {=u64} us", if pid { "pid" } else { "hybrid" }, cfg.period.as_us());
                 } else {
-                    defmt::info!("configured: law `{=[u8]:a}`, period {=u64} us", cfg.law.name.as_bytes(), cfg.period.as_us());
+                    defmt::info!("configured: law {=[u8]:a}, period {=u64} us", cfg.law.name.as_bytes(), cfg.period.as_us());
                 }
                 self.fig = Figures::default();
                 self.send(&Uplink::Configured);
@@ -185,7 +185,7 @@ impl Board for PilBoard {
                     }
                     ConfigError::Params(_) => defmt::error!("configuration rejected: arm parameters"),
                     ConfigError::WrongLaw { built, .. } => {
-                        defmt::error!("configuration rejected: for another law than this image's `{=[u8]:a}`", built.as_bytes())
+                        defmt::error!("configuration rejected: for another law than this image's {=[u8]:a}", built.as_bytes())
                     }
                     ConfigError::LawParam { name, value, .. } => {
                         defmt::error!("configuration rejected: law parameter {=str} = {=f32}", name, value)

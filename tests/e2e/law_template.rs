@@ -1,0 +1,126 @@
+//! End-to-end: a law of one's own (`examples/law-template`, the impedance law;
+//! issue 70) where the paper's laws run, through `sil-host`'s own commands:
+//! its firmware process over iceoryx2 (`run --attach`), its PIL image in QEMU
+//! (`pil --image`) with the same trace and frames bit for bit, and its `arm`
+//! image on the emulated board answering every recorded frame identically
+//! (`replay --link emulator --elf`); the scenario's `[law]` table checked
+//! against the law's declaration on each link.
+
+use std::{
+    path::Path,
+    process::{Child, Command, Stdio},
+};
+
+use crate::common;
+
+const SCENARIO: &str = "examples/law-template/impedance.toml";
+
+/// The template's firmware process serving rig `rig` with `args` after the scenario.
+fn law_firmware(rig: &str, args: &[&str]) -> Child {
+    Command::new(common::law_firmware())
+        .args(["firmware", "--rig", rig, "--scenario"])
+        .arg(common::workspace().join(SCENARIO))
+        .args(args)
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+fn text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn the_impedance_law_runs_over_iceoryx2_in_pil_and_on_the_emulated_board_bit_for_bit() {
+    let (pil, arm) = common::law_images();
+    let scenario = common::workspace().join(SCENARIO);
+    let scenario = scenario.to_str().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (ipc, qemu) = (dir.path().join("ipc"), dir.path().join("pil"));
+    let rig = format!("e2e-law-{}", std::process::id());
+    let mut fw = law_firmware(&rig, &["--set", "timing.duration_s=2"]);
+    let code =
+        common::run(&["run", "--attach", &rig, "--scenario", scenario, "--duration", "2", "--no-page", "--out", ipc.to_str().unwrap()]);
+    assert!(fw.wait().unwrap().success());
+    assert_eq!(code, 0);
+    let code = common::run(&[
+        "pil",
+        "--image",
+        pil.to_str().unwrap(),
+        "--scenario",
+        scenario,
+        "--duration",
+        "2",
+        "--no-page",
+        "--out",
+        qemu.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    for table in ["trace.csv", "frames.csv"] {
+        assert!(text(&ipc.join(table)) == text(&qemu.join(table)), "{table}: iceoryx2 and PIL differ");
+    }
+    // The runs name the law; the firmware announced its declaration and the
+    // values the scenario's `[law]` table gave (in its declared order).
+    let s = common::summary_of(&ipc);
+    assert_eq!(s["controller"], "impedance");
+    let a = &s["firmware_announcement"];
+    assert_eq!(a["law"]["name"], "impedance");
+    assert_eq!(a["config"]["law"]["values"], serde_json::json!([2000.0, 90.0, 1000.0, 60.0, 0.0, 0.0, 0.0, 0.0]));
+    assert_eq!(common::summary_of(&qemu)["controller"], "impedance");
+    // The PIL image says which law it was configured for, and its stack stays small.
+    let log = text(&qemu.join("defmt.log"));
+    assert!(log.contains("configured: law b\"impedance\", period 1000 us"), "{log}");
+    let end = log.lines().find(|l| l.contains("stack high-water mark")).unwrap();
+    assert!(common::numbers_after(end, "stack high-water mark")[0] < 16 * 1024, "{end}");
+    // The `arm` image on the emulated board and the PIL image answer every
+    // recorded frame of the iceoryx2 run bit for bit.
+    for link in [["--link", "emulator", "--elf", arm.to_str().unwrap()], ["--link", "pil", "--image", pil.to_str().unwrap()]] {
+        let mut args = vec!["replay", ipc.to_str().unwrap()];
+        args.extend(link);
+        assert_eq!(common::run(&args), 0, "{link:?}");
+    }
+}
+
+#[test]
+fn a_scenario_for_another_law_is_refused_on_every_link() {
+    let (pil, arm) = common::law_images();
+    let law = common::workspace().join(SCENARIO);
+    let law = law.to_str().unwrap();
+    let default = common::workspace().join("scenarios/default.toml");
+    let default = default.to_str().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = |tag: &str| dir.path().join(tag).to_str().unwrap().to_string();
+    // The paper's laws' firmware (in process, the board twin, the `arm` image,
+    // the PIL image) refuses the impedance law's scenario: bad input.
+    for (tag, args) in [
+        ("in-process", vec!["run", "--in-process"]),
+        ("twin", vec!["run", "--link", "twin"]),
+        ("emulator", vec!["run", "--link", "emulator"]),
+        ("pil", vec!["pil"]),
+    ] {
+        let o = out(tag);
+        let mut full = args.clone();
+        full.extend(["--scenario", law, "--duration", "0.1", "--out", o.as_str()]);
+        assert_eq!(common::run(&full), 2, "{tag}");
+    }
+    // The law's images refuse the paper's scenario.
+    let o = out("law-pil");
+    assert_ne!(common::run(&["pil", "--image", pil.to_str().unwrap(), "--scenario", default, "--duration", "0.1", "--out", &o]), 0);
+    let o = out("law-arm");
+    assert_ne!(
+        common::run(&[
+            "run",
+            "--link",
+            "emulator",
+            "--elf",
+            arm.to_str().unwrap(),
+            "--scenario",
+            default,
+            "--duration",
+            "0.1",
+            "--out",
+            &o
+        ]),
+        0
+    );
+}
