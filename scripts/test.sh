@@ -69,7 +69,7 @@ cargo fmt --all -- --check
 cargo clippy --release --workspace --all-targets --features sil-host/full -- -D warnings
 # The lean command line builds too (sil-host/Cargo.toml [features]: no board, live, formats, pdf).
 cargo check --release -p sil-host --no-default-features
-python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src
+python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src examples/law-template/src
 # The architecture invariants (docs/architecture.md): what each layer may not build.
 python3 scripts/invariants.py
 # The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
@@ -104,6 +104,10 @@ echo "   the default scenario): scripts/cycles.py --random, each term of the hyb
 echo "   random rate, 250 periods each, after the default scenario's runs; then the template's impedance law on"
 echo "   its own PIL image (a law of one's own is held to the same ceiling, issue 70)"
 cargo build --release -p sil-host --features full
+# The template's firmware process (a law of one's own, issue 70), which the Python tests
+# run against its Python prototype: built with the workspace's features, as the tests
+# below build it (so that build reuses it).
+cargo build --release --workspace --features sil-host/full --bin law-firmware
 cycles_log="$(mktemp)"
 {
   python3 scripts/cycles.py --duration 1 --max-cycles 1900 &&

@@ -4,7 +4,7 @@
 
 use shared::{ElbowBranch, Params, Period};
 
-use crate::law_spec::{LawName, LawParams};
+use crate::law_params::{LawName, LawParams};
 
 /// Which control law runs (docs/model.md experiments 5 and 6): the firmware's
 /// configuration, scenario files (`controller.kind = "pid" | "hybrid"`), the

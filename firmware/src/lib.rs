@@ -23,6 +23,7 @@ pub mod controller;
 pub mod decode;
 pub mod estimator;
 pub mod law;
+pub mod law_params;
 pub mod law_spec;
 pub mod liftoff;
 pub mod mu_estimate;

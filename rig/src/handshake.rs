@@ -13,10 +13,7 @@ use firmware::{
 use serde::Serialize;
 use shared::wire::FirmwareAnnouncement;
 
-use crate::{
-    law::{LawDescription, LawError},
-    setup::RunSetup,
-};
+use crate::law::{LawDescription, LawError, LawTable, bind};
 
 /// The firmware's announcement as the run records it (`firmware_announcement` in
 /// `summary.json`).
@@ -98,24 +95,26 @@ pub fn differences(firmware: &Config, scenario: &Config) -> Vec<Difference> {
     out
 }
 
-/// Checks the firmware's announcement against the configuration run `setup`
-/// asks for: the law's declaration first (the scenario's `[law]` table bound
-/// to it, [`RunSetup::firmware_for`]), then the configuration field by field.
+/// Checks the firmware's announcement against the configuration a scenario
+/// asks for: `scenario` (`crate::setup::RunSetup::firmware`) with its `[law]`
+/// table `law` bound to the law's announced declaration first
+/// ([`crate::law::bind`]), then field by field.
 ///
 /// # Errors
 /// [`HandshakeError::Announcement`] for another wire version or an undecodable
 /// configuration; [`HandshakeError::Law`] for an undecodable declaration or a
 /// `[law]` table that does not fit it; [`HandshakeError::ConfigMismatch`]
 /// naming every differing setting.
-pub fn check(announcement: &FirmwareAnnouncement, setup: &RunSetup, rig: &str) -> Result<Announced, HandshakeError> {
+pub fn check(
+    announcement: &FirmwareAnnouncement,
+    scenario: &Config,
+    law: Option<&LawTable>,
+    rig: &str,
+) -> Result<Announced, HandshakeError> {
     let config = configuration(announcement)?;
-    let law = LawDescription::decode(law_bytes(announcement)?)?;
-    let scenario = match setup.firmware_for(&law) {
-        Ok(c) => c,
-        Err(crate::record::RunError::Law(e)) => return Err(e.into()),
-        Err(e) => return Err(LawError::Undecodable(e.to_string()).into()),
-    };
-    check_config(announcement, config, law, &scenario, rig)
+    let declared = LawDescription::decode(law_bytes(announcement)?)?;
+    let scenario = Config { law: bind(law, &declared)?, ..*scenario };
+    check_config(announcement, config, declared, &scenario, rig)
 }
 
 /// [`check`] once the scenario's configuration is bound: compares and records.
@@ -187,22 +186,22 @@ mod tests {
     fn a_laws_declaration_binds_the_scenarios_table_at_the_handshake() {
         let mut s = crate::scenario::Scenario::default_scenario();
         s.law = Some(crate::law::LawTable { name: "impedance".into(), params: [("stiffness".to_string(), 1500.0)].into() });
-        let setup = RunSetup::new(s.clone()).unwrap();
+        let setup = crate::setup::RunSetup::new(s.clone()).unwrap();
         let mut fw = *setup.firmware();
         fw.law.values[0] = 1500.0;
         let a = announce_law(&fw, &IMPEDANCE).unwrap();
-        let ok = super::check(&a, &setup, "r").unwrap();
+        let ok = super::check(&a, setup.firmware(), setup.scenario().law.as_ref(), "r").unwrap();
         assert_eq!((ok.config.law.values[0], ok.law.name.as_str()), (1500.0, "impedance"));
         // Another value on the firmware's side is a difference of `law.values`.
         let mut other = fw;
         other.law.values[0] = 1000.0;
-        let e = super::check(&announce_law(&other, &IMPEDANCE).unwrap(), &setup, "r").unwrap_err();
+        let e = super::check(&announce_law(&other, &IMPEDANCE).unwrap(), setup.firmware(), setup.scenario().law.as_ref(), "r").unwrap_err();
         assert!(matches!(&e, HandshakeError::ConfigMismatch { differences, .. } if differences[0].field == "law.values"), "{e}");
         // An undeclared parameter, or the paper's firmware, is refused before any comparison.
         s.law.as_mut().unwrap().params.insert("damping".into(), 1.0);
-        let e = super::check(&a, &RunSetup::new(s).unwrap(), "r").unwrap_err();
+        let e = super::check(&a, setup.firmware(), s.law.as_ref(), "r").unwrap_err();
         assert!(e.to_string().contains("has no parameter `damping`"), "{e}");
-        let e = super::check(&announce(&Config::default()).unwrap(), &setup, "r").unwrap_err();
+        let e = super::check(&announce(&Config::default()).unwrap(), setup.firmware(), setup.scenario().law.as_ref(), "r").unwrap_err();
         assert!(matches!(e, HandshakeError::Law(LawError::WrongLaw { .. })), "{e}");
     }
 

@@ -170,7 +170,7 @@ impl IpcLink {
                 asked = Some(Instant::now());
             }
             if let Some(a) = self.ports.announcements.try_next().map_err(transport)? {
-                return Ok(handshake::check(&a, setup, &self.rig)?);
+                return Ok(handshake::check(&a, setup.firmware(), setup.scenario().law.as_ref(), &self.rig)?);
             }
             if let Some(what) = self.firmware_gone() {
                 return Err(RunError::Transport(format!("the firmware process {what} before announcing its configuration")));

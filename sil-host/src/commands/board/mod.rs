@@ -205,6 +205,15 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         }
         BoardCommand::Configure { scenario } => {
             let s = load_scenario(scenario)?;
+            // A law of one's own's values need its declaration (the image's
+            // ELF), which the bring-up line does not carry: refused rather than
+            // sent unbound (0). Its image runs the law's declared defaults.
+            if let Some(law) = &s.law {
+                return Err(CliError::bad_input(format!(
+                    "configure: the scenario's [law] table (law `{}`) cannot be sent over the bring-up line yet;                      the image runs the law's declared defaults (docs/board.md \"Your own law\")",
+                    law.name
+                )));
+            }
             let config = firmware_config(&s);
             // A board never runs without its runaway limits: refused here, naming
             // the key, before the firmware refuses it too.

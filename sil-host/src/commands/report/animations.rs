@@ -47,7 +47,7 @@ pub(super) fn animate(root: &Path, results: &mut [Vec<StepResult>]) {
                 s.scenario_used.plant.params(),
                 format!(
                     "The {} law from x0{}, μ = {}: the tip slides to zₜ* = {} m",
-                    super::captions::law_named(&s.controller),
+                    law_named(&s.controller),
                     s.scenario_used.plant.x0.letter(),
                     s.scenario_used.plant.mu,
                     s.scenario_used.controller.target_z_t
@@ -132,7 +132,7 @@ pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Option<(String, 
                 format!(
                     "Scenario {}: the {} law (the firmware sampled at {} Hz) from x0{}, mu = {}, v_belt = {} m/s, a {} s move to z_t* = {} m; {timing}",
                     sc.name,
-                    super::captions::law_named(&r.controller),
+                    law_named(&r.controller),
                     given(sc.timing.rate_hz),
                     sc.plant.x0.letter(),
                     given(sc.plant.mu),
@@ -145,4 +145,13 @@ pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Option<(String, 
         _ => return None,
     };
     Some((what, parameters))
+}
+
+/// A run's `controller` as the text names it: `PID`, `hybrid`, or a law of
+/// one's own by its name (the captions' too).
+pub(super) fn law_named(name: &str) -> &str {
+    match name {
+        "pid" => "PID",
+        other => other,
+    }
 }

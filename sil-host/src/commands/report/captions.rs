@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use analyses::sweep::{SweepController, SweepSpec};
 use rig::scenario::Scenario;
 
+use super::animations::law_named;
 use super::format::{given, located};
 use super::outcome::Outcome;
 use crate::commands::sweep::outputs::SweepSummary;
@@ -182,15 +183,6 @@ pub fn sweep_rank(s: &SweepSummary, file: &str) -> (usize, usize) {
 /// A controller as the text names it: `PID`, `hybrid`.
 fn law(kind: firmware::ControllerKind) -> &'static str {
     law_named(kind.name())
-}
-
-/// A run's `controller` as the text names it: `PID`, `hybrid`, or a law of
-/// one's own by its name.
-pub(super) fn law_named(name: &str) -> &str {
-    match name {
-        "pid" => "PID",
-        other => other,
-    }
 }
 
 /// An impact law as the text names it: `Newton`, `Poisson`, `energetic`.
