@@ -46,13 +46,14 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::AnalysisError;
+use firmware::{ControlLaw, PaperLaws};
 use plant::Plant;
 use plant::initial::{PaperX0, deg_to_state};
 use rig::Scenario;
 
 pub use bisection::{Bisection, bisect_largest, max_evaluations, max_trials};
 pub use combination::{Combination, Criteria, Setting, check_x0, paper_hybrid_ki};
-pub use trial::{StopReason, TraceRow, Trial, ideal_setup, sampled_scenario, trial};
+pub use trial::{StopReason, TraceRow, Trial, ideal_setup, sampled_scenario, trial, trial_law};
 
 use trial::sim_config;
 
@@ -142,6 +143,24 @@ pub fn search_until(
     tol: f64,
     c: &Criteria,
     stop: &AtomicBool,
+    on_trial: impl FnMut(&Trial),
+) -> Result<Search, AnalysisError> {
+    search_law::<PaperLaws>(base, combo, bracket, tol, c, stop, on_trial)
+}
+
+/// [`search_until`] with the firmware running law `L` (a law of one's own, its
+/// `[law]` table in `base`; the sampled setting only: [`trial::trial_law`]):
+/// `Z_t,sliding` and the tracking limit of any law (issue 70).
+///
+/// # Errors
+/// As [`search_until`].
+pub fn search_law<L: ControlLaw>(
+    base: &Scenario,
+    combo: Combination,
+    bracket: (f64, f64),
+    tol: f64,
+    c: &Criteria,
+    stop: &AtomicBool,
     mut on_trial: impl FnMut(&Trial),
 ) -> Result<Search, AnalysisError> {
     let (lo, hi) = bracket;
@@ -169,7 +188,7 @@ pub fn search_until(
                 trials.len()
             )));
         }
-        let (t, rows) = trial(base, combo, target, c)?;
+        let (t, rows) = trial::trial_law::<L>(base, combo, target, c)?;
         on_trial(&t);
         trials.push(t.clone());
         traces.push(rows);

@@ -11,6 +11,7 @@ use crate::{
     error::AnalysisError,
     ideal::{self, IdealSetup},
 };
+use firmware::{ControlLaw, PaperLaws};
 use plant::initial::deg_to_state;
 use plant::{EventKind, PlantEvent, SimConfig, Validity};
 use rig::{RunObserver, Scenario, in_process};
@@ -176,10 +177,32 @@ fn settle_error(rows: &[TraceRow], target: f64, c: &Criteria) -> f64 {
 /// # Errors
 /// [`AnalysisError`] for bad input (a target out of reach, an invalid scenario).
 pub fn trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
+    trial_law::<PaperLaws>(base, combo, target, c)
+}
+
+/// [`trial`] with the firmware running law `L` in the sampled setting (a law
+/// of one's own, its `[law]` table in `base`; issue 70). The ideal setting is
+/// the paper's laws' continuous-time form: refused for any other law.
+///
+/// # Errors
+/// As [`trial`]; [`AnalysisError::BadInput`] for the ideal setting with a law
+/// of one's own.
+pub fn trial_law<L: ControlLaw>(
+    base: &Scenario,
+    combo: Combination,
+    target: f64,
+    c: &Criteria,
+) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
     let started = Instant::now();
     let (mut trial, rows) = match combo.setting {
+        Setting::Ideal if !L::SPEC.name.is_empty() => {
+            return Err(AnalysisError::BadInput(format!(
+                "the ideal setting is the paper's laws in continuous time; law `{}` runs in the sampled setting only",
+                L::SPEC.name
+            )));
+        }
         Setting::Ideal => ideal_trial(base, combo, target, c)?,
-        Setting::Sampled => sampled_trial(base, combo, target, c)?,
+        Setting::Sampled => sampled_trial::<L>(base, combo, target, c)?,
     };
     trial.settle_error_m = settle_error(&rows, target, c);
     let stayed_on = if c.lift_off_gap_m > 0.0 {
@@ -295,7 +318,12 @@ pub fn sampled_scenario(base: &Scenario, combo: Combination, target: f64, c: &Cr
     Ok(s)
 }
 
-fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
+fn sampled_trial<L: ControlLaw>(
+    base: &Scenario,
+    combo: Combination,
+    target: f64,
+    c: &Criteria,
+) -> Result<(Trial, Vec<TraceRow>), AnalysisError> {
     let s = sampled_scenario(base, combo, target, c)?;
     let mut t = empty_trial(combo, target);
     /// Counts the impacts without collision, notes the first lift-off or impact
@@ -329,7 +357,7 @@ fn sampled_trial(base: &Scenario, combo: Combination, target: f64, c: &Criteria)
         }
     }
     let mut seen = LiftOffs(&mut t, false, c.lift_off_gap_m == 0.0);
-    let (records, failure) = in_process::run(&s, &mut seen);
+    let (records, failure) = in_process::run_law::<L>(&s, &mut seen);
     let lifted = seen.1;
     let h = s.plant.params().h;
     let rows: Vec<TraceRow> = records

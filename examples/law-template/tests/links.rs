@@ -127,3 +127,24 @@ fn a_law_that_answers_nan_is_stopped_in_the_safe_state_at_zero_torque() {
     assert!(records[..500].iter().all(|r| r.status & shared::wire::status::SAFE_STATE == 0), "healthy before");
     assert_ne!(last.status & shared::wire::status::SAFE_STATE, 0, "{last:?}");
 }
+
+/// docs/results.md "A law of one's own": the impedance law's `Z_t,sliding` from
+/// x0d is 0.1487 m (examples/paper_cases.rs, bisection to 1 mm): a trial 3 mm
+/// below it slides to its target, one 3 mm above lifts off.
+#[test]
+fn the_impedance_law_slides_below_its_z_t_sliding_and_lifts_off_above() {
+    use analyses::zmax::{Combination, Criteria, Setting, StopReason, trial_law};
+    let mut base =
+        Scenario::from_toml(&std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/hybrid-x0d.toml")).unwrap())
+            .unwrap();
+    base.law = Some(LawTable { name: "impedance".into(), params: Default::default() });
+    let combo = Combination { controller: firmware::ControllerKind::Hybrid, x0: plant::initial::PaperX0::D, setting: Setting::Sampled };
+    let c = Criteria::default();
+    let (below, _) = trial_law::<Impedance>(&base, combo, 0.1457, &c).unwrap();
+    assert!(below.slides_to_target && below.lift_offs == 0, "{:?}", below.stop);
+    let (above, _) = trial_law::<Impedance>(&base, combo, 0.1517, &c).unwrap();
+    assert_eq!(above.stop, StopReason::LiftOff);
+    // The ideal setting is the paper's laws' continuous time: refused for this law.
+    let ideal = Combination { setting: Setting::Ideal, ..combo };
+    assert!(trial_law::<Impedance>(&base, ideal, 0.1, &c).unwrap_err().to_string().contains("sampled setting only"));
+}
