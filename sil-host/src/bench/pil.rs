@@ -22,8 +22,11 @@ impl RunObserver for Discard {}
 /// One PIL run of the default scenario with one controller.
 #[derive(Debug, Clone)]
 pub struct PilRun {
-    /// The controller the image ran.
+    /// The controller the image ran (with a law of one's own: `law`).
     pub controller: ControllerKind,
+    /// The law of one's own the image runs (its `PAINLEVE_LAW_SPEC`, issue 70);
+    /// `None` for the paper's laws.
+    pub law: Option<String>,
     /// Control steps, instructions (median, p99, worst).
     pub step: Spread,
     /// Frames (decode + step), instructions.
@@ -41,7 +44,8 @@ pub type PilRuns = Result<Vec<PilRun>, String>;
 
 /// Runs the PIL `image` (ELF) in QEMU (the executable `qemu`): `repeat` (at most 3)
 /// runs of the hybrid controller, then one of PID, each `pil_s` (s) of the default
-/// scenario. No image or no QEMU: `Err` with the reason and the fix (the figures
+/// scenario; for an image of a law of one's own (its `PAINLEVE_LAW_SPEC`), `repeat`
+/// runs of that law at its declared defaults instead. No image or no QEMU: `Err` with the reason and the fix (the figures
 /// are skipped).
 ///
 /// # Errors
@@ -52,11 +56,21 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
         return Ok(Err(format!("no PIL image at {}: build it with `{}`", image.display(), pil_link::BUILD_HINT)));
     }
     let mut runs = Vec::new();
-    let kinds = std::iter::repeat_n(ControllerKind::Hybrid, repeat.min(3)).chain([ControllerKind::Pid]);
+    // A law of one's own (the image's declaration): its runs, the default
+    // scenario under its declared defaults, in place of the hybrid and PID runs.
+    let law = match rig::law::LawDescription::from_elf(image) {
+        Ok(d) => d.filter(|d| !d.is_paper()).map(|d| d.name),
+        Err(e) => return Ok(Err(e.to_string())),
+    };
+    let kinds: Vec<ControllerKind> = match law {
+        Some(_) => vec![ControllerKind::Hybrid; repeat.clamp(1, 3)],
+        None => std::iter::repeat_n(ControllerKind::Hybrid, repeat.min(3)).chain([ControllerKind::Pid]).collect(),
+    };
     for kind in kinds {
         let mut s = Scenario::default_scenario();
         s.controller.kind = kind;
         s.timing.duration_s = pil_s;
+        s.law = law.as_ref().map(|name| rig::law::LawTable { name: name.clone(), params: Default::default() });
         s.validate()?;
         let setup = rig::RunSetup::new(s).map_err(CliError::from)?;
         let opts =
@@ -78,6 +92,7 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
         let per_tick = link.counts.counts_per_tick();
         runs.push(PilRun {
             controller: kind,
+            law: law.clone(),
             step: link.counts.step.spread(per_tick),
             frame: link.counts.frame.spread(per_tick),
             periods,

@@ -42,6 +42,22 @@ pub fn pil_runs(args: &BenchArgs, target: &Path) -> Result<PilRuns, CliError> {
 pub fn step_figures(runs: &PilRuns) -> Vec<Figure> {
     let name = |k: &str| format!("worst {k} control step, PIL (QEMU -icount)");
     let mut out = Vec::new();
+    // An image of a law of one's own: its one figure, held to the same target.
+    if let Ok(r) = runs
+        && let Some(run) = r.iter().find(|r| r.law.is_some())
+    {
+        let law = run.law.as_deref().unwrap_or_default();
+        let worst = r.iter().map(|r| r.step.worst).fold(0.0, f64::max);
+        out.push(
+            Figure::measured("control_step_law", "step", name(&format!("law `{law}`")), worst, "instructions", STEP_INSTRUCTIONS_TARGET, Goal::AtMost)
+                .note(format!(
+                    "median {:.0}, p99 {:.0}; frame (decode + step) median {:.0}, worst {:.0}; {} periods; the image's own law (PAINLEVE_LAW_SPEC) at its declared defaults",
+                    run.step.median, run.step.p99, run.frame.median, run.frame.worst, run.periods
+                ))
+                .note(format!("fits 5 % of the period up to {:.0} Hz if an instruction took one cycle", highest_rate(worst))),
+        );
+        return out;
+    }
     for (id, kind, label) in [("control_step_hybrid", ControllerKind::Hybrid, "hybrid"), ("control_step_pid", ControllerKind::Pid, "PID")] {
         let run = match runs {
             Ok(r) => r.iter().find(|r| r.controller == kind),
@@ -119,13 +135,34 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
         Ok(e) => e,
         Err(e) => return skip(format!("cannot find this executable: {e}")),
     };
-    let out = std::process::Command::new("python3")
-        .arg(&script)
-        .args(["--duration", "1", "--json", "--image"])
-        .arg(image(args, target))
-        .arg("--sil-host")
-        .arg(exe)
-        .output();
+    // An image of a law of one's own: `--controller law` on the default scenario
+    // with the law's `[law]` table (its declared defaults), one figure.
+    let img = image(args, target);
+    let law = rig::law::LawDescription::from_elf(&img).ok().flatten().filter(|d| !d.is_paper());
+    let scenario_file = match &law {
+        Some(d) => {
+            let text = format!("{}\n[law]\nname = \"{}\"\n", rig::scenario::DEFAULT_TOML, d.name);
+            let file = std::env::temp_dir().join(format!("painleve-bench-law-{}.toml", std::process::id()));
+            if let Err(e) = std::fs::write(&file, text) {
+                return skip(format!("cannot write {}: {e}", file.display()));
+            }
+            Some(file)
+        }
+        None => None,
+    };
+    let mut cmd = std::process::Command::new("python3");
+    cmd.arg(&script).args(["--duration", "1", "--json", "--image"]).arg(&img).arg("--sil-host").arg(exe);
+    if let Some(file) = &scenario_file {
+        cmd.args(["--controller", "law", "--scenario"]).arg(file);
+    }
+    let out = cmd.output();
+    if let Some(file) = &scenario_file {
+        let _ = std::fs::remove_file(file);
+    }
+    let steps: Vec<(&str, &str, String)> = match &law {
+        Some(d) => vec![("max_rate_law", "law", format!("law `{}`", d.name))],
+        None => STEPS.into_iter().map(|(id, key, label)| (id, key, label.to_string())).collect(),
+    };
     let out = match out {
         Ok(o) if o.status.success() => o,
         Ok(o) => return skip(format!("scripts/cycles.py failed: {}", String::from_utf8_lossy(&o.stderr).trim())),
@@ -136,7 +173,8 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
         Err(e) => return skip(format!("scripts/cycles.py printed no JSON: {e}")),
     };
     let mut figures = Vec::new();
-    for (id, key, label) in STEPS {
+    for (id, key, label) in steps {
+        let label = label.as_str();
         let r = &v[key];
         let (Some(rate), Some(hi), Some(lo), Some(instr)) = (
             r["max_rate_hz"].as_f64(),
