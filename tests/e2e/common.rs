@@ -141,3 +141,20 @@ pub fn law_firmware() -> PathBuf {
     );
     exe
 }
+
+/// Builds `examples/law-template`'s `panicking_arm` (the `arm` image of a law that
+/// panics at period 500, profile `mcu`), once per test binary; its path.
+pub fn panicking_law_image() -> PathBuf {
+    static BUILT: OnceLock<()> = OnceLock::new();
+    let (root, target_dir) = (workspace(), target_dir());
+    BUILT.get_or_init(|| {
+        let build = Command::new(env!("CARGO"))
+            .args(["build", "-p", "law-template", "--profile", "mcu", "--target", "thumbv7em-none-eabihf", "--example", "panicking_arm"])
+            .env("CARGO_TARGET_DIR", &target_dir)
+            .current_dir(&root)
+            .output()
+            .unwrap();
+        assert!(build.status.success(), "building panicking_arm failed:\n{}", String::from_utf8_lossy(&build.stderr));
+    });
+    target_dir.join("thumbv7em-none-eabihf/mcu/examples/panicking_arm")
+}

@@ -124,3 +124,28 @@ fn a_scenario_for_another_law_is_refused_on_every_link() {
         0
     );
 }
+
+/// A law that panics on purpose (`examples/law-template/examples/panicking_arm.rs`:
+/// the impedance law until period 500, then `panic!` in the control interrupt) on
+/// the emulated board: the image's panic handler disables the motor drivers at
+/// once (the enable line, PB14, low), the image stops ticking and the run stops
+/// there with the reason; the torques it applied until then are the law's.
+#[test]
+fn a_law_that_panics_on_the_board_leaves_the_drivers_disabled() {
+    use board_link::emulator_link::EmulatorLink;
+    use rig::{law::LawTable, period_loop::run_loop, scenario::Scenario, setup::RunSetup};
+    let image = common::panicking_law_image();
+    let mut s = Scenario::default_scenario();
+    s.timing.duration_s = 1.0;
+    s.law = Some(LawTable { name: "panicking".into(), params: Default::default() });
+    let setup = RunSetup::new(s).unwrap();
+    let mut link = EmulatorLink::new(&setup, &image).unwrap();
+    let gpiob_odr = |link: &EmulatorLink| board_emulator::checks::peek(link.board().machine(), 0x4002_0414);
+    let (records, e) = run_loop(&setup, &mut link, &mut ());
+    let e = e.expect("the run stops").to_string();
+    assert!(e.contains("ran 0 ticks in one period"), "{e}");
+    assert_eq!(records.len(), 500, "the law's 500 periods, then none");
+    assert!(records.iter().all(|r| r.status & shared::wire::status::SAFE_STATE == 0), "no safe state before the panic");
+    assert!(records[499].u1_applied != 0.0, "the law drove the arm until then");
+    assert_eq!(gpiob_odr(&link) & (1 << 14), 0, "the drivers' enable line (PB14) is low after the panic");
+}

@@ -36,7 +36,8 @@ unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     exit(101)
 }
 
-/// The images' panic handler (in place of `panic-probe`'s `print-defmt`, which
+/// The images' panic handler: the motor drivers disabled at once (the enable
+/// line low), then (in place of `panic-probe`'s `print-defmt`, which
 /// formats the message with `core::fmt`: with its float formatting about 16 KiB
 /// of flash, docs/measurements.md "Speed and scale"). Logs once, as defmt's
 /// `error`, `panicked at FILE:LINE:COLUMN` and the message when it is a literal
@@ -49,6 +50,11 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     use core::sync::atomic::{AtomicBool, Ordering};
     static PANICKED: AtomicBool = AtomicBool::new(false);
     cortex_m::interrupt::disable();
+    // The drivers off first (PB14 low through BSRR: one register write, no
+    // state read): a panic (a law's of one's own among them, issue 70) stops the
+    // torques at once, not at the watchdog's reset 5 periods later. Harmless in
+    // the PIL image, which drives no motor.
+    crate::mcu::gpio::write(&crate::pins::DRIVER_ENABLE, false);
     // A panic while logging one (the log transport itself) must not recurse.
     if !PANICKED.swap(true, Ordering::Relaxed) {
         let msg = info.message().as_str().unwrap_or("<formatted>");
