@@ -203,7 +203,7 @@ pub fn bind(table: Option<&LawTable>, law: &LawDescription) -> Result<LawParams,
     };
     if !same {
         let hint = if law.is_paper() {
-            ": run the law's own firmware (its process with `--attach`, its `arm` image with `--link emulator --elf`, its PIL image with `pil --image`; docs/board.md \"Your own law\")"
+            ": run the law's own firmware: its firmware process attached over iceoryx2, its `arm` image on the emulated board or a board, its PIL image (docs/board.md \"Your own law\")"
         } else {
             ": give the scenario the law's `[law]` table, or run the paper's laws' firmware"
         };
