@@ -148,3 +148,48 @@ fn the_impedance_law_slides_below_its_z_t_sliding_and_lifts_off_above() {
     let ideal = Combination { setting: Setting::Ideal, ..combo };
     assert!(trial_law::<Impedance>(&base, ideal, 0.1, &c).unwrap_err().to_string().contains("sampled setting only"));
 }
+
+/// The impedance law, declaring the hybrid law's tracking dynamics (`K'_P`,
+/// `K'_D`, `K'_I` of the configuration) it does not have.
+#[derive(Debug, Clone, Copy, Default)]
+struct Pretender(Impedance);
+
+impl firmware::ControlLaw for Pretender {
+    const SPEC: firmware::LawSpec = firmware::LawSpec { name: "pretender", ..Impedance::SPEC };
+
+    fn fresh(cfg: &firmware::Config) -> Self {
+        Self(Impedance::fresh(cfg))
+    }
+
+    fn declares(cfg: &firmware::Config) -> firmware::Declares {
+        firmware::HybridLaw::declares(cfg)
+    }
+
+    fn step(&mut self, ctx: &firmware::LawContext<'_>, input: &firmware::LawInput) -> Result<firmware::LawOutput, firmware::law::LawError> {
+        self.0.step(ctx, input)
+    }
+}
+
+/// The tracking check follows what a law declares, not its name: the same
+/// torques run clean when the law promises nothing, and are stopped by the
+/// tracking check when it promises the hybrid law's dynamics.
+#[test]
+fn the_tracking_check_holds_a_law_to_what_it_declares() {
+    // A soft spring along the belt: a steady error mu f_n / k_t of about 12 mm,
+    // past the check's 5 mm margin (firmware::tracking::TRACKING_M).
+    let s = scenario(3.0, &[("k_t", 500.0), ("d_t", 45.0)]);
+    let records = in_process(&s);
+    assert_eq!(records.len(), 3000, "promising nothing, it runs to the end");
+    let mut p = s.clone();
+    p.law.as_mut().unwrap().name = "pretender".into();
+    let setup = RunSetup::new(p).unwrap();
+    let mut link = InProcessLink::<Pretender>::for_law(&setup).unwrap();
+    let (pretended, error) = run_loop(&setup, &mut link, &mut ());
+    match error {
+        Some(rig::record::RunError::SafeState { reason: firmware::SafeReason::Tracking, k, .. }) => {
+            // The same torques up to the trip: the check changed nothing before it.
+            assert_eq!(bits(&pretended[..k]), bits(&records[..k]));
+        }
+        other => panic!("{other:?}"),
+    }
+}
