@@ -110,15 +110,12 @@ impl EmulatorLink {
                 arm_app::rate::RANGE_WORDS
             )));
         }
+        let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
         // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`; none: the
         // paper's laws), binds the scenario's `[law]` table.
-        let law = match image.is_file() {
-            true => rig::law::LawDescription::from_elf(image)?.unwrap_or_else(rig::law::LawDescription::paper),
-            false => rig::law::LawDescription::paper(),
-        };
+        let law = rig::law::LawDescription::from_elf(image)?.unwrap_or_else(rig::law::LawDescription::paper);
         let config = setup.firmware_for(&law)?;
         let announced = rig::handshake::of_described(&config, law)?;
-        let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
         let flash = FlashModel::brought_up(&s.calibration.arm_calibration(), config)
             .map_err(|e| RunError::Board(format!("the settings record: {}", e.describe())))?;
         let sector = flash.bytes().borrow().clone();

@@ -43,6 +43,9 @@ const UNITS: &[(&str, &str)] = &[
     ("config.deadline_miss_limit", "periods"),
     ("config.bad_frame_limit", "periods"),
     ("config.encoder_bits", "bits per revolution"),
+    // A law of one's own's parameters, each in the unit its declaration gives
+    // (`firmware::LawSpec`; issue 70).
+    ("config.law.values", "the law's declared units"),
     ("calibration.zero_counts", "encoder counts"),
     ("calibration.load_zero_counts", "ADC counts"),
     ("calibration.load_newtons_per_count", "N per ADC count"),
