@@ -164,9 +164,10 @@ pub enum RunError {
     /// The scenario needs something this transport cannot do.
     #[error("{0}")]
     Unsupported(String),
-    /// The board twin refused its board description or calibration, or its
-    /// application did not start.
-    #[error("board twin: {0}")]
+    /// The board (the twin or the emulated board) refused its description,
+    /// calibration or image, its application did not start, or its image
+    /// stopped ticking.
+    #[error("board: {0}")]
     Board(String),
     /// The scenario asks a board (`--link twin`, `--link emulator`) for what a
     /// board never runs: the message names the key (`controller.runaway_limits =
