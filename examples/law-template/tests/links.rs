@@ -72,9 +72,10 @@ fn a_law_table_that_does_not_fit_is_refused_on_both_links() {
     let e = InProcessLink::<Impedance>::for_law(&setup).unwrap_err().to_string();
     assert!(e.contains("`k_t` = 1000000 N/m is out of its range [0, 20000] N/m"), "{e}");
     // The law's process refuses the table itself (bad input, exit 2, its
-    // reason on stderr) before it announces anything.
+    // reason on stderr) before it announces anything (before it connects, on a
+    // loaded machine, or after: either way before the handshake).
     let e = over_iceoryx2(&bad, &rig_name("bad")).unwrap_err();
-    assert!(e.contains("exited (exit status: 2) before announcing"), "{e}");
+    assert!(e.contains("the firmware process exited (exit status: 2) before"), "{e}");
     // The paper's firmware is not this law: the in-process link of the
     // paper's laws refuses the table and says where a law of one's own runs.
     let e = InProcessLink::new(&RunSetup::new(scenario(0.1, &[])).unwrap()).unwrap_err().to_string();
