@@ -311,7 +311,11 @@ fn the_board_links_measure_the_belt_themselves() {
             assert_eq!(code, 0);
         } else {
             assert_eq!(code, 1);
-            assert_eq!((doc["first_divergence"]["period"].as_u64(), doc["first_divergence"]["signal"].as_str()), (Some(1), Some("u1_raw")), "{doc}");
+            assert_eq!(
+                (doc["first_divergence"]["period"].as_u64(), doc["first_divergence"]["signal"].as_str()),
+                (Some(1), Some("u1_raw")),
+                "{doc}"
+            );
             // The same run over the wire links replays identically.
             assert_eq!(replay(&rec, &["--link", "iceoryx2"]).0, 0);
         }
