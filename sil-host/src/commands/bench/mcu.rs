@@ -128,17 +128,21 @@ const STEPS: [(&str, &str, &str); 6] = [
 pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/cycles.py");
     let name = |k: &str| format!("highest control rate, worst {k} step within 5 % (cycle estimate)");
+    // An image of a law of one's own: `--controller law` on the default scenario
+    // with the law's `[law]` table (its declared defaults), one figure.
+    let img = image(args, target);
+    let law = rig::law::LawDescription::from_elf(&img).ok().flatten().filter(|d| !d.is_paper());
+    let steps: Vec<(&str, &str, String)> = match &law {
+        Some(d) => vec![("max_rate_law", "law", format!("law `{}`", d.name))],
+        None => STEPS.into_iter().map(|(id, key, label)| (id, key, label.to_string())).collect(),
+    };
     let skip = |why: String| -> Vec<Figure> {
-        STEPS.into_iter().map(|(id, _, k)| Figure::skipped(id, "cycles", name(k), "Hz", RATE_AIM_HZ, Goal::AtLeast, why.clone())).collect()
+        steps.iter().map(|(id, _, k)| Figure::skipped(id, "cycles", name(k), "Hz", RATE_AIM_HZ, Goal::AtLeast, why.clone())).collect()
     };
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => return skip(format!("cannot find this executable: {e}")),
     };
-    // An image of a law of one's own: `--controller law` on the default scenario
-    // with the law's `[law]` table (its declared defaults), one figure.
-    let img = image(args, target);
-    let law = rig::law::LawDescription::from_elf(&img).ok().flatten().filter(|d| !d.is_paper());
     let scenario_file = match &law {
         Some(d) => {
             let text = format!("{}\n[law]\nname = \"{}\"\n", rig::scenario::DEFAULT_TOML, d.name);
@@ -159,10 +163,6 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
     if let Some(file) = &scenario_file {
         let _ = std::fs::remove_file(file);
     }
-    let steps: Vec<(&str, &str, String)> = match &law {
-        Some(d) => vec![("max_rate_law", "law", format!("law `{}`", d.name))],
-        None => STEPS.into_iter().map(|(id, key, label)| (id, key, label.to_string())).collect(),
-    };
     let out = match out {
         Ok(o) if o.status.success() => o,
         Ok(o) => return skip(format!("scripts/cycles.py failed: {}", String::from_utf8_lossy(&o.stderr).trim())),
@@ -173,8 +173,8 @@ pub fn cycle_figures(args: &BenchArgs, target: &Path) -> Vec<Figure> {
         Err(e) => return skip(format!("scripts/cycles.py printed no JSON: {e}")),
     };
     let mut figures = Vec::new();
-    for (id, key, label) in steps {
-        let label = label.as_str();
+    for (id, key, label) in &steps {
+        let (id, key, label) = (*id, *key, label.as_str());
         let r = &v[key];
         let (Some(rate), Some(hi), Some(lo), Some(instr)) = (
             r["max_rate_hz"].as_f64(),
