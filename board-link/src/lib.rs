@@ -9,6 +9,7 @@
 //! | [`bringup_line`] | the bring-up protocol over a serial line: the host's client and the twin's server |
 //! | [`bringup_procedure`] | the bring-up steps `sil-host board` runs, each refusal and failed check in words |
 //! | [`board_backup`] | a board's configuration and calibration as a TOML file (`board backup`, `board restore`) |
+//! | [`fmea`] | the FMEA's fault classes and its promise, measured on the twin under any law |
 //! | [`random_scenarios`] | random admissible scenarios, reproducible: the wiring faults' and the control handler's samples |
 //!
 //! Kept out of `rig` so that what only simulates (the analyses, the
@@ -20,6 +21,7 @@ pub mod board_backup;
 pub mod bringup_line;
 pub mod bringup_procedure;
 pub mod emulator_link;
+pub mod fmea;
 pub mod free_arm;
 pub mod random_scenarios;
 pub mod setting_units;

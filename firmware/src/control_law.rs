@@ -38,6 +38,21 @@ pub struct Declares {
     /// the tracking check ([`crate::tracking`]) holds it to; `None`: the law
     /// does not track `z_t` and the check is off.
     pub tracking: Option<TrackingDynamics>,
+    /// Whether it holds the tip on the belt, pressing with a force of its own
+    /// (`false`: it may lift off by design, as the paper's PID from `x0u`). For
+    /// a law that promises no [`Declares::tracking`], the lift-off the firmware
+    /// declares (its own detector and confirmation, [`crate::liftoff`]) is then
+    /// a stop at once, [`crate::SafeReason::LiftOff`]: without a tracking
+    /// promise it is the first sign of a tip whipped off the belt by a reversed
+    /// or dead motor, which the wiring check (its observer's 40 Hz bandwidth)
+    /// sees 10 to 20 ms later, past 30 mm where the law holds 1 to 2 N m against
+    /// the arm (issue 70; the FMEA over the envelope under the template's
+    /// impedance law, `examples/law-template/tests/protection.rs`). A law
+    /// beyond its `Z_t,sliding` (the paradox's bounce) is stopped by it too, as
+    /// the hybrid law is on a board. With [`Declares::tracking`] the tracking
+    /// check holds the promise instead (lift-off for 10 ms, the error's bound:
+    /// [`crate::tracking`]).
+    pub on_belt: bool,
     /// Whether it reads the reference's acceleration (`RefPoint::acc`); the
     /// step leaves it 0 otherwise (and saves its arithmetic).
     pub uses_reference_acceleration: bool,
@@ -190,7 +205,7 @@ impl ControlLaw for PidLaw {
 
     #[inline(always)]
     fn declares(_cfg: &Config) -> Declares {
-        Declares { tracking: None, uses_reference_acceleration: false }
+        Declares { tracking: None, on_belt: false, uses_reference_acceleration: false }
     }
 
     #[inline(always)]
@@ -229,7 +244,7 @@ impl ControlLaw for HybridLaw {
     #[inline(always)]
     fn declares(cfg: &Config) -> Declares {
         let h = &cfg.hybrid;
-        Declares { tracking: Some(TrackingDynamics { kp: h.kp, kd: h.kd, ki: h.ki }), uses_reference_acceleration: true }
+        Declares { tracking: Some(TrackingDynamics { kp: h.kp, kd: h.kd, ki: h.ki }), on_belt: true, uses_reference_acceleration: true }
     }
 
     #[inline(always)]

@@ -539,6 +539,10 @@ impl<L: ControlLaw> Firmware<L> {
                 Some(Expectation::LiftOff) => return Err(SafeReason::LiftOff),
                 None => {}
             }
+        } else if cfg.runaway_limits && declares.on_belt && lifted {
+            // A law that holds the tip on the belt and promises no tracking
+            // dynamics: the lift-off the firmware declares breaks its promise.
+            return Err(SafeReason::LiftOff);
         }
         let f_n_ref = s.force_ramp.pos_at(t_run);
         let mut flags = m.flags;

@@ -384,7 +384,7 @@ mod control_law {
         }
         fn declares(cfg: &Config) -> Declares {
             let tracking = FIXED_U.lock().unwrap().1.then(|| HybridLaw::declares(cfg).tracking).flatten();
-            Declares { tracking, uses_reference_acceleration: false }
+            Declares { tracking, on_belt: tracking.is_some(), uses_reference_acceleration: false }
         }
         fn step(&mut self, _ctx: &LawContext<'_>, _input: &LawInput) -> Result<LawOutput, LawError> {
             Ok(LawOutput { u: self.u, disturbance: 0.0 })

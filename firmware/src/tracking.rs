@@ -50,6 +50,12 @@
 //! reversed motor drives the law into its limit within a few periods, its error
 //! running away at 0.1 m/s or more: that stays [`Expectation::Tracking`]).
 //!
+//! A law of one's own that promises no tracking dynamics but holds the tip on
+//! the belt ([`crate::Declares::on_belt`]) is stopped at the firmware's first
+//! declared lift-off instead (`crate::controller`): without the error's bound
+//! the lift-off is its only expectation, and a reversed motor's 10 ms more
+//! would carry its tip past 30 mm.
+//!
 //! The PID (paper eq. 8) lifts off by design from `x0u` (its healthy tip moves
 //! 212 mm in the first 0.1 s): there is no such bound for it, and its wiring
 //! faults are the wiring check's ([`crate::wiring`]).

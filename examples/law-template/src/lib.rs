@@ -61,7 +61,7 @@ impl ControlLaw for Impedance {
     }
 
     fn declares(_cfg: &Config) -> Declares {
-        Declares { tracking: None, uses_reference_acceleration: false }
+        Declares { tracking: None, on_belt: true, uses_reference_acceleration: false }
     }
 
     fn step(&mut self, ctx: &LawContext<'_>, input: &LawInput) -> Result<LawOutput, LawError> {

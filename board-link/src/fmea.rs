@@ -1,0 +1,296 @@
+//! The FMEA (issue 66, docs/hardware.md "FMEA") for any control law: its fault
+//! classes, its promise, and the measurement of one class over healthy runs
+//! on the board twin. The board's tests hold the paper's laws to it
+//! (`board-link/tests/board/fmea.rs`); a law of one's own is held to the same
+//! (`examples/law-template/tests/protection.rs`, docs/board.md "Your own law").
+//!
+//! **The promise, per run:** the safe state within [`WITHIN_S`] of the fault
+//! and before the tip strays [`STRAY_M`] from the healthy run at the same
+//! period, or a fault that never moves the tip [`STRAY_M`]. Both halves end in
+//! the same measurable property, the stray under [`STRAY_M`]; the first is
+//! what the detectors are for, and [`Row`] counts how many runs each half
+//! keeps.
+//!
+//! **The stray** ([`measure`]) is the tip's largest distance from the healthy
+//! run (same scenario, same period), from the fault's onset up to the safe
+//! state, and only while the healthy arm is on the belt: where the healthy arm
+//! itself lifts off (the PID from `x0u`, the paper's failure, flies up to
+//! 0.12 m above the belt within 10 ms), there is no controlled path left to
+//! stray from. The healthy runs are those that end without a stop (a stopped
+//! healthy run has no path to compare; [`false_alarm`] says whether its stop
+//! was one).
+
+use board_twin::BoardDescription;
+use firmware::ControlLaw;
+use rig::{
+    faults::Fault,
+    record::{PeriodRecord, RunError},
+    scenario::Scenario,
+};
+use shared::wire::status;
+
+use crate::twin_link::TwinLink;
+
+/// When every fault of a scenario entry starts, s: after the force ramp, in the move.
+pub const AT_S: f64 = 0.4;
+/// Each run's length, s.
+pub const DURATION_S: f64 = 1.0;
+/// The promise: the safe state within this long of the fault, s.
+pub const WITHIN_S: f64 = 0.1;
+/// The promise: before the tip strays this far, m.
+pub const STRAY_M: f64 = 0.030;
+
+/// A fault class: its name, and the change of the board's truth (present
+/// from the start) or a scenario fault entry (from [`AT_S`]).
+pub enum Class {
+    /// No fault: the same scenario with another seed of the sensors' noise,
+    /// the healthy arm's own spread (the floor under every row).
+    Reseed(&'static str),
+    /// A change of the board's truth, from the start.
+    Board(&'static str, fn(&mut BoardDescription)),
+    /// A scenario fault entry (its TOML fields but `at_s` and `duration_s`), from [`AT_S`] for 5 s.
+    Entry(&'static str, &'static str),
+}
+
+impl Class {
+    /// The class's name, as the FMEA's table (docs/hardware.md) gives it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Reseed(n) | Self::Board(n, _) | Self::Entry(n, _) => n,
+        }
+    }
+
+    /// `s` with the fault, and its onset, s.
+    ///
+    /// # Panics
+    /// For an entry that is not a scenario fault (a defect of [`classes`]: its test parses each).
+    pub fn inject(&self, s: &Scenario) -> (Scenario, f64) {
+        let mut f = s.clone();
+        match self {
+            Self::Reseed(_) => {
+                f.sensors.seed += 7919;
+                (f, 0.0)
+            }
+            Self::Board(_, change) => {
+                change(&mut f.board);
+                (f, 0.0)
+            }
+            Self::Entry(_, entry) => {
+                let fault: Fault = toml::from_str(&format!("{entry}\nat_s = {AT_S}\nduration_s = 5.0\n"))
+                    .unwrap_or_else(|e| panic!("FMEA class {}: {e}", self.name()));
+                f.faults.push(fault);
+                (f, AT_S)
+            }
+        }
+    }
+}
+
+/// One encoder count short of 10 degrees, counts of 16 384 per turn.
+const TEN_DEG: f64 = 455.0;
+/// Three degrees, counts.
+const THREE_DEG: f64 = 137.0;
+
+fn shift(zero: &mut f64, by: f64) {
+    *zero = (*zero + by).rem_euclid(16384.0);
+}
+
+/// The FMEA's fault classes (docs/hardware.md "FMEA"), in its table's order.
+pub fn classes() -> Vec<Class> {
+    use Class::{Board, Entry};
+    vec![
+        Class::Reseed("no fault (another noise seed)"),
+        Board("motor 1 reversed", |b| b.motor1.reversed = true),
+        Board("motor 2 reversed", |b| b.motor2.reversed = true),
+        Board("motor 1 weak (30 %)", |b| b.motor1.full_scale_nm *= 0.3),
+        Board("motor 1 weak (70 %)", |b| b.motor1.full_scale_nm *= 0.7),
+        Board("motor 2 weak (30 %)", |b| b.motor2.full_scale_nm *= 0.3),
+        Board("motor 2 weak (70 %)", |b| b.motor2.full_scale_nm *= 0.7),
+        Board("motor 1 dead", |b| b.motor1.full_scale_nm *= 1e-3),
+        Board("motor 2 dead", |b| b.motor2.full_scale_nm *= 1e-3),
+        Entry("motor drivers' fault line", "kind = \"driver_fault\""),
+        Board("theta1 encoder reversed", |b| b.theta1_encoder.reversed = true),
+        Board("elbow encoder reversed", |b| b.elbow_encoder.reversed = true),
+        Board("encoders swapped", |b| b.encoders_swapped = true),
+        Board("theta1 encoder offset +10 deg", |b| shift(&mut b.theta1_encoder.zero_count, TEN_DEG)),
+        Board("theta1 encoder offset -10 deg", |b| shift(&mut b.theta1_encoder.zero_count, -TEN_DEG)),
+        Board("theta1 encoder offset +3 deg", |b| shift(&mut b.theta1_encoder.zero_count, THREE_DEG)),
+        Board("elbow encoder offset +10 deg", |b| shift(&mut b.elbow_encoder.zero_count, TEN_DEG)),
+        Board("elbow encoder offset -10 deg", |b| shift(&mut b.elbow_encoder.zero_count, -TEN_DEG)),
+        Board("elbow encoder offset +3 deg", |b| shift(&mut b.elbow_encoder.zero_count, THREE_DEG)),
+        Entry("theta1 encoder stuck", "kind = \"stuck_sensor\"\nsignal = \"theta1\""),
+        Entry("elbow encoder stuck", "kind = \"stuck_sensor\"\nsignal = \"elbow\""),
+        Entry("theta1 encoder drops out (SPI)", "kind = \"spi_error\"\nsignal = \"theta1\""),
+        Entry("elbow encoder drops out (magnet)", "kind = \"magnet_lost\"\nsignal = \"elbow\""),
+        Entry("theta1 encoder drops out (parity)", "kind = \"parity_error\"\nsignal = \"theta1\""),
+        Board("load cell normal axis reversed", |b| b.load_cell.counts_per_newton[1] *= -1.0),
+        Board("load cell tangential axis reversed", |b| b.load_cell.counts_per_newton[0] *= -1.0),
+        Board("load cell reversed", |b| b.load_cell.counts_per_newton = b.load_cell.counts_per_newton.map(|c| -c)),
+        Board("load cell normal gain x0.5", |b| b.load_cell.counts_per_newton[1] *= 0.5),
+        Board("load cell normal gain x2", |b| b.load_cell.counts_per_newton[1] *= 2.0),
+        Board("load cell tangential gain x0.5", |b| b.load_cell.counts_per_newton[0] *= 0.5),
+        Board("load cell tangential gain x2", |b| b.load_cell.counts_per_newton[0] *= 2.0),
+        Board("load cell normal axis dead", |b| b.load_cell.counts_per_newton[1] *= 1e-3),
+        Board("load cell tangential axis dead", |b| b.load_cell.counts_per_newton[0] *= 1e-3),
+        Entry("load cell normal axis stuck", "kind = \"stuck_sensor\"\nsignal = \"f_n\""),
+        Entry("load cell tangential axis stuck", "kind = \"stuck_sensor\"\nsignal = \"f_t\""),
+        Entry("load cell conversion missing", "kind = \"missing_conversion\""),
+        Entry("belt speed sensor stuck", "kind = \"stuck_sensor\"\nsignal = \"belt\""),
+        Entry("DMA transfer error", "kind = \"dma_transfer_error\""),
+        Entry("DMA FIFO error", "kind = \"dma_fifo_error\""),
+        Entry("DMA direct mode error", "kind = \"dma_direct_mode_error\""),
+        Entry("DMA late transfer", "kind = \"dma_late_transfer\""),
+        Entry("encoder chip select stuck", "kind = \"stuck_chip_select\"\nsignal = \"theta1\""),
+    ]
+}
+
+/// `s` on the board twin running law `L`: every period's record, and the error if the run stopped.
+///
+/// # Panics
+/// For a scenario the rig refuses or the twin cannot run (the FMEA's scenarios are admissible).
+pub fn twin_run<L: ControlLaw>(s: &Scenario) -> (Vec<PeriodRecord>, Option<RunError>) {
+    let setup = rig::RunSetup::new(s.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut link = TwinLink::<L>::for_law(&setup).unwrap_or_else(|e| panic!("{e}"));
+    rig::run_loop(&setup, &mut link, &mut ())
+}
+
+/// A healthy run: its scenario, what it is (a line for messages), its records.
+pub struct Healthy {
+    /// The scenario, without a fault.
+    pub scenario: Scenario,
+    /// What it is, for messages.
+    pub what: String,
+    /// Its records on the twin, the run ended without a stop.
+    pub records: Vec<PeriodRecord>,
+}
+
+/// Whether a healthy run's stop was a false alarm: the scenario run in process
+/// by law `L` with the protection off (`controller.runaway_limits = false`:
+/// the runaway, wiring, tracking and chatter checks) neither lifts off nor
+/// saturates a motor (issue 66's criterion: a stop where the unprotected arm
+/// lifts off or saturates is the law's own failure, which the protection is
+/// right to stop). Returns `(lifts, saturates)`: a false alarm when both are false.
+pub fn unprotected<L: ControlLaw>(s: &Scenario) -> (bool, bool) {
+    let mut off = s.clone();
+    off.controller.runaway_limits = false;
+    let (free, _) = rig::in_process::run_law::<L>(&off, &mut ());
+    let lifts = free.iter().any(|p| p.lift_off_true);
+    let saturates = free.iter().any(|p| p.status & (status::SATURATED_U1 | status::SATURATED_U2) != 0);
+    (lifts, saturates)
+}
+
+/// One faulty run of law `L` against its healthy run: the safe state's time
+/// after the onset (s), and the stray (m).
+///
+/// # Panics
+/// When the faulty run ends by anything but the safe state or its end.
+pub fn measure<L: ControlLaw>(class: &Class, h: &Healthy) -> (Option<f64>, f64) {
+    let (f, onset) = class.inject(&h.scenario);
+    let (r, e) = twin_run::<L>(&f);
+    let stop = match &e {
+        Some(RunError::SafeState { t, .. }) => Some(t - onset),
+        Some(other) => panic!("{}: {} ({}): {other}", class.name(), h.what, h.scenario.sensors.seed),
+        None => None,
+    };
+    let on_belt = h.records.iter().position(|p| p.lift_off_true).unwrap_or(h.records.len());
+    let stray = r
+        .iter()
+        .zip(&h.records[..on_belt])
+        .filter(|(_, b)| b.t >= onset)
+        .map(|(a, b)| (a.z_t - b.z_t).hypot(a.z_n - b.z_n))
+        .fold(0.0, f64::max);
+    (stop, stray)
+}
+
+/// What one class did over the healthy runs of one law.
+#[derive(Default, Debug)]
+pub struct Row {
+    /// Healthy runs the class was injected into.
+    pub runs: usize,
+    /// Stopped within [`WITHIN_S`] and under [`STRAY_M`].
+    pub caught: usize,
+    /// Stopped later, or never, and never strayed [`STRAY_M`].
+    pub harmless: usize,
+    /// Stopped at all.
+    pub stopped: usize,
+    /// The latest stop after the onset, s.
+    pub worst_stop_s: f64,
+    /// The largest stray, m.
+    pub worst_stray_m: f64,
+    /// The runs that broke the promise (strayed [`STRAY_M`] before the safe state), each in words.
+    pub broken: Vec<String>,
+}
+
+/// Class `class` injected into every healthy run of law `L`.
+pub fn row<L: ControlLaw>(class: &Class, healthy: &[Healthy]) -> Row {
+    let mut row = Row { runs: healthy.len(), ..Row::default() };
+    for h in healthy {
+        let (stop, stray) = measure::<L>(class, h);
+        row.worst_stray_m = row.worst_stray_m.max(stray);
+        if let Some(t) = stop {
+            row.stopped += 1;
+            row.worst_stop_s = row.worst_stop_s.max(t);
+        }
+        if stray >= STRAY_M {
+            let sat = h.records.iter().filter(|p| p.status & (status::SATURATED_U1 | status::SATURATED_U2) != 0).count();
+            row.broken.push(format!(
+                "{} (seed {}): stop {stop:?} s, stray {:.1} mm; healthy saturated {:.0} % of periods",
+                h.what,
+                h.scenario.sensors.seed,
+                stray * 1e3,
+                100.0 * sat as f64 / h.records.len() as f64
+            ));
+        } else if stop.is_some_and(|t| t <= WITHIN_S) {
+            row.caught += 1;
+        } else {
+            row.harmless += 1;
+        }
+    }
+    row
+}
+
+/// Every class of `classes` over `healthy` under law `L`, on up to `threads`
+/// threads: one [`Row`] per class, in order.
+pub fn rows<L: ControlLaw>(classes: &[Class], healthy: &[Healthy], threads: usize) -> Vec<Row> {
+    std::thread::scope(|scope| {
+        let chunks: Vec<_> = classes.chunks(classes.len().div_ceil(threads.max(1)).max(1)).collect();
+        let handles: Vec<_> =
+            chunks.into_iter().map(|chunk| scope.spawn(|| chunk.iter().map(|c| row::<L>(c, healthy)).collect::<Vec<_>>())).collect();
+        handles.into_iter().flat_map(|h| h.join().expect("an FMEA thread panicked")).collect()
+    })
+}
+
+/// A row as the FMEA's table prints it (`--nocapture`).
+pub fn line(law: &str, class: &Class, row: &Row) -> String {
+    format!(
+        "{law:9} | {:36} | {:3} runs | caught (0.1 s, 30 mm) {:3} | stray under 30 mm, stopped later or never {:3} | stopped {:3} | worst stop {:5.0} ms | worst stray {:5.1} mm",
+        class.name(),
+        row.runs,
+        row.caught,
+        row.harmless,
+        row.stopped,
+        row.worst_stop_s * 1e3,
+        row.worst_stray_m * 1e3
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_entry_class_is_a_scenario_fault_and_the_names_are_distinct() {
+        let s = rig::scenario::Scenario::from_toml_with(rig::scenario::DEFAULT_TOML, &[]).unwrap();
+        let classes = classes();
+        for c in &classes {
+            let (f, onset) = c.inject(&s);
+            match c {
+                Class::Entry(..) => assert_eq!((f.faults.len(), onset), (s.faults.len() + 1, AT_S), "{}", c.name()),
+                _ => assert_eq!(f.faults.len(), s.faults.len(), "{}", c.name()),
+            }
+        }
+        let mut names: Vec<_> = classes.iter().map(Class::name).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), classes.len());
+    }
+}
