@@ -18,13 +18,14 @@ use crate::{
     telemetry::ArmTelemetry,
 };
 
-/// The protocol's version, told in [`Reply::Hello`] (8: the configuration's
+/// The protocol's version, told in [`Reply::Hello`] (9: [`Status::law_digest`];
+/// 8: the configuration's
 /// `law`, a law of one's own's parameters; 7: the control rate set
 /// by `Configure` and `Restore` within `crate::rate`'s range, the tick's period
 /// in [`Status::period_us`], a jog's length bounded in time; 6:
 /// `Refusal::ProtectionOff` and `Refusal::NothingToSave`,
 /// `RecordFault::ProtectionOff`; the configuration's runaway limits always on).
-pub const BRINGUP_PROTOCOL: u16 = 8;
+pub const BRINGUP_PROTOCOL: u16 = 9;
 
 /// The torque limit after a calibration, until the operator lifts it
 /// ([`Request::LiftTorqueLimit`]): 1 N m, a fifth of full scale (410 codes).
@@ -113,6 +114,12 @@ pub struct Status {
     /// The control period the board's tick runs, us (TIM2's reload on the
     /// image, from the configuration in force: `crate::rate`).
     pub period_us: u32,
+    /// The digest of the image's control law's declaration
+    /// (`firmware::LawSpec::digest`, a compile-time constant): the host
+    /// binds a scenario's `[law]` table to the declaration it reads from the
+    /// ELF that was flashed, and refuses one whose digest is not this
+    /// (`sil-host board configure --elf`).
+    pub law_digest: u32,
 }
 
 /// Raw readings, the drivers disabled or not (`sil-host board watch`).

@@ -28,7 +28,7 @@ impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
         let busy = hw.motors.is_enabled() || hw.jog.is_some() || hw.enable_requested || hw.reset_pending;
         match request {
             Request::Hello => Reply::Hello { protocol: BRINGUP_PROTOCOL },
-            Request::Status => Reply::Status(status(hw)),
+            Request::Status => Reply::Status(status(hw, const { L::SPEC.digest() })),
             Request::Raw => {
                 // The field strength needs DIAAGC: two more frames per encoder.
                 let agc = [hw.theta1.diagnostics().ok().map(|d| d.agc), hw.elbow.diagnostics().ok().map(|d| d.agc)];
@@ -160,7 +160,7 @@ impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
     }
 }
 
-fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
+fn status<H: ArmIo>(hw: &Hardware<H>, law_digest: u32) -> Status {
     let activity = if hw.jog.is_some() {
         Activity::Jogging
     } else if hw.motors.is_enabled() {
@@ -181,6 +181,7 @@ fn status<H: ArmIo>(hw: &Hardware<H>) -> Status {
         missing: hw.cal.missing(),
         last_enable: hw.last_enable,
         period_us: hw.period_us as u32,
+        law_digest,
     }
 }
 

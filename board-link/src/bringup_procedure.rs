@@ -168,6 +168,41 @@ pub fn hello<S: Read + Write>(c: &mut Client<S>) -> Result<(), StepError> {
     }
 }
 
+/// The control law a board's image runs, to bind a scenario's `[law]` table
+/// to (`sil-host board configure`): the declaration in `elf`, the image that
+/// was flashed (`PAINLEVE_LAW_SPEC`), or without one the paper's laws', held
+/// to the digest the board reports (`Status::law_digest`, its law's
+/// `firmware::LawSpec::digest`).
+///
+/// # Errors
+/// A message naming what to do when the ELF cannot be read, or when the
+/// declaration is not the one the board runs (another law, another build of
+/// it, or a law of one's own without `elf`).
+pub fn board_law(status: &Status, elf: Option<&std::path::Path>) -> Result<rig::law::LawDescription, String> {
+    let law = match elf {
+        Some(path) => rig::law::LawDescription::from_elf(path).map_err(|e| e.to_string())?.unwrap_or_else(rig::law::LawDescription::paper),
+        None => rig::law::LawDescription::paper(),
+    };
+    if law.digest() == status.law_digest {
+        return Ok(law);
+    }
+    Err(match elf {
+        None => format!(
+            "the board runs a law of one's own (its declaration's digest {:08x}), not the paper's laws: give the image that \
+             was flashed, --elf PATH, whose declaration binds the scenario's [law] table",
+            status.law_digest
+        ),
+        Some(path) => format!(
+            "{}: its law ({}, digest {:08x}) is not the one the board runs (digest {:08x}): give the ELF that was flashed, \
+             or flash this one",
+            path.display(),
+            if law.is_paper() { "the paper's laws".to_string() } else { format!("`{}`", law.name) },
+            law.digest(),
+            status.law_digest
+        ),
+    })
+}
+
 /// The board's calibration and configuration in force, as a backup
 /// (`GetCalibration`, `GetConfig`; `sil-host board backup`).
 ///

@@ -15,7 +15,10 @@
 //! in the SIL rig's handshake (`shared::wire::FirmwareAnnouncement::law`) and,
 //! in an MCU image, as the symbol `PAINLEVE_LAW_SPEC`; the plant maps a
 //! scenario's `[law]` table onto the values by the declared names and checks
-//! the ranges with the same rule ([`LawSpec::check`]).
+//! the ranges with the same rule ([`LawSpec::check`]). A board's image tells
+//! its bring-up line and its PIL line only the encoding's digest
+//! ([`LawSpec::digest`], 4 bytes of flash): the host reads the declaration
+//! from the ELF that was flashed and holds it to the board's digest.
 
 use serde::Serialize;
 
@@ -132,6 +135,31 @@ impl LawSpec {
         postcard::to_slice(self, buf).ok()
     }
 
+    /// The 32-bit FNV-1a digest of [`LawSpec::encode`]'s output, computed at
+    /// compile time where it is a constant ([`digest_of`] of the same bytes):
+    /// what an image tells its bring-up line (`arm_app::bringup::Status::law_digest`)
+    /// and its PIL line (`crate::pil::Uplink::Hello`), so that the host can
+    /// check that the declaration it read from an ELF is the one the board
+    /// runs. Any change of a name, unit, range or default changes it (an
+    /// accident of equal digests between two laws would need 2^32 of them).
+    pub const fn digest(&self) -> u32 {
+        let mut h = FNV_OFFSET;
+        h = digest_str(h, self.name);
+        h = digest_str(h, self.source);
+        h = digest_varint(h, self.params.len());
+        let mut i = 0;
+        while i < self.params.len() {
+            let p = &self.params[i];
+            h = digest_str(h, p.name);
+            h = digest_str(h, p.unit);
+            h = digest_bytes(h, &p.min.to_le_bytes());
+            h = digest_bytes(h, &p.max.to_le_bytes());
+            h = digest_bytes(h, &p.default.to_le_bytes());
+            i += 1;
+        }
+        h
+    }
+
     /// Bytes of [`LawSpec::encode`]'s output, as a constant (the length of an
     /// image's `PAINLEVE_LAW_SPEC`, [`crate::law_spec_symbol`]).
     pub const fn encoded_len(&self) -> usize {
@@ -167,6 +195,36 @@ impl LawSpec {
         assert!(at == N, "LawSpec::encoded: N must be encoded_len()");
         out
     }
+}
+
+const FNV_OFFSET: u32 = 0x811c_9dc5;
+const FNV_PRIME: u32 = 0x0100_0193;
+
+/// The 32-bit FNV-1a digest of `bytes`: [`LawSpec::digest`] of the spec they
+/// encode (the host's side, from a declaration's bytes).
+pub const fn digest_of(bytes: &[u8]) -> u32 {
+    digest_bytes(FNV_OFFSET, bytes)
+}
+
+const fn digest_bytes(mut h: u32, bytes: &[u8]) -> u32 {
+    let mut i = 0;
+    while i < bytes.len() {
+        h = (h ^ bytes[i] as u32).wrapping_mul(FNV_PRIME);
+        i += 1;
+    }
+    h
+}
+
+const fn digest_varint(mut h: u32, mut x: usize) -> u32 {
+    while x >= 0x80 {
+        h = (h ^ ((x as u8 & 0x7f) | 0x80) as u32).wrapping_mul(FNV_PRIME);
+        x >>= 7;
+    }
+    (h ^ x as u32).wrapping_mul(FNV_PRIME)
+}
+
+const fn digest_str(h: u32, s: &str) -> u32 {
+    digest_bytes(digest_varint(h, s.len()), s.as_bytes())
 }
 
 const fn varint_len(mut x: usize) -> usize {
@@ -292,6 +350,37 @@ mod tests {
         let mut p = SPEC.defaults();
         p.values[5] = 1.0;
         assert!(matches!(SPEC.check(&p), Err(ConfigError::OutOfRange { name: "law.values", .. })));
+    }
+
+    /// The digest computed from the spec at compile time is the digest of its
+    /// encoding's bytes (what the host computes from an ELF's declaration), and
+    /// any change of a name, unit, range or default moves it.
+    #[test]
+    fn the_digest_is_the_encodings_and_moves_with_any_change() {
+        const D: u32 = SPEC.digest();
+        let mut buf = [0u8; LAW_SPEC_BYTES];
+        assert_eq!(D, digest_of(SPEC.encode(&mut buf).unwrap()));
+        assert_eq!(LawSpec::PAPER.digest(), digest_of(LawSpec::PAPER.encode(&mut buf).unwrap()));
+        let p = SPEC.params;
+        let leak = |v: Vec<ParamSpec>| -> &'static [ParamSpec] { v.leak() };
+        let (one, swapped) = (leak(vec![p[0]]), leak(vec![p[1], p[0]]));
+        let (unit, max, default) = (
+            leak(vec![ParamSpec { unit: "N/mm", ..p[0] }, p[1]]),
+            leak(vec![ParamSpec { max: 1000.5, ..p[0] }, p[1]]),
+            leak(vec![p[0], ParamSpec { default: 41.0, ..p[1] }]),
+        );
+        let changed = [
+            LawSpec { name: "test-lax", ..SPEC },
+            LawSpec { source: "a tesT", ..SPEC },
+            LawSpec { params: one, ..SPEC },
+            LawSpec { params: swapped, ..SPEC },
+            LawSpec { params: unit, ..SPEC },
+            LawSpec { params: max, ..SPEC },
+            LawSpec { params: default, ..SPEC },
+        ];
+        for c in changed {
+            assert_ne!(c.digest(), D, "{c:?}");
+        }
     }
 
     #[test]

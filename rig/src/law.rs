@@ -128,6 +128,16 @@ impl LawDescription {
         Self::of(&LawSpec::PAPER)
     }
 
+    /// The digest of this declaration's encoding (`firmware::LawSpec::digest`
+    /// of the law it describes): what a board's image reports
+    /// (`arm_app::bringup::Status::law_digest`, the PIL line's Hello), to hold
+    /// an ELF's declaration to the image the board runs.
+    pub fn digest(&self) -> u32 {
+        // The layout `decode` reads: postcard of the same fields in the same order.
+        let mut buf = [0u8; firmware::law_spec::LAW_SPEC_BYTES];
+        postcard::to_slice(self, &mut buf).map_or(0, |b| firmware::law_spec::digest_of(b))
+    }
+
     /// Whether this is the paper's laws' declaration (no name).
     pub fn is_paper(&self) -> bool {
         self.name.is_empty()
@@ -255,6 +265,20 @@ mod tests {
 
     fn table(name: &str, params: &[(&str, f64)]) -> LawTable {
         LawTable { name: name.into(), params: params.iter().map(|(k, v)| ((*k).to_string(), *v)).collect() }
+    }
+
+    /// A declaration's digest, taken from its decoded form on the host, is the
+    /// one the image computes at compile time from the law linked in.
+    #[test]
+    fn a_descriptions_digest_is_the_laws() {
+        let spec = LawSpec {
+            name: "damped",
+            source: "a test",
+            params: &[firmware::ParamSpec { name: "k", unit: "N/m", min: 0.0, max: 10.0, default: 1.0 }],
+        };
+        assert_eq!(LawDescription::of(&spec).digest(), spec.digest());
+        assert_eq!(LawDescription::paper().digest(), LawSpec::PAPER.digest());
+        assert_ne!(LawDescription::of(&spec).digest(), LawDescription::paper().digest());
     }
 
     #[test]

@@ -89,11 +89,19 @@ pub enum BoardCommand {
     /// back and printed; a rate outside is refused, exit 2, nothing sent. The
     /// runaway limits must be on (`controller.runaway_limits = false` is refused,
     /// exit 2: a board never runs without them). Echoes each setting it changed
-    /// (`KEY = OLD -> NEW`); unsaved until `save`.
+    /// (`KEY = OLD -> NEW`); unsaved until `save`. A law of one's own
+    /// (docs/board.md "Your own law"): give the image that was flashed with
+    /// `--elf`; the scenario's `[law]` table is bound to the law it declares,
+    /// which must be the law the board reports (its declaration's digest),
+    /// else exit 2, nothing sent.
     Configure {
         /// The scenario.
         #[command(flatten)]
         scenario: ScenarioArgs,
+        /// The ELF flashed on the board, for its law's declaration
+        /// (`PAINLEVE_LAW_SPEC`); the paper's laws without it.
+        #[arg(long, value_name = "ELF")]
+        elf: Option<std::path::PathBuf>,
     },
     /// Saves the calibration and configuration in force to flash (version and
     /// CRC-32C); they are loaded at every reset. Until saved the drivers stay

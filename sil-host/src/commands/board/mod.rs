@@ -203,18 +203,16 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 }
             });
         }
-        BoardCommand::Configure { scenario } => {
+        BoardCommand::Configure { scenario, elf } => {
             let s = load_scenario(scenario)?;
-            // A law of one's own's values need its declaration (the image's
-            // ELF), which the bring-up line does not carry: refused rather than
-            // sent unbound (0). Its image runs the law's declared defaults.
-            if let Some(law) = &s.law {
-                return Err(CliError::bad_input(format!(
-                    "configure: the scenario's [law] table (law `{}`) cannot be sent over the bring-up line yet;                      the image runs the law's declared defaults (docs/board.md \"Your own law\")",
-                    law.name
-                )));
-            }
-            let config = firmware_config(&s);
+            // The law the board's image runs: the flashed ELF's declaration (the
+            // paper's laws without one) held to the digest the board reports; the
+            // scenario's `[law]` table bound to it, or refused with the
+            // declaration in the message, before anything is sent.
+            let board_status = bp::status(&mut c).map_err(step)?;
+            let law = bp::board_law(&board_status, elf.as_deref()).map_err(|e| CliError::bad_input(format!("configure: {e}")))?;
+            let bound = rig::law::bind(s.law.as_ref(), &law).map_err(|e| CliError::bad_input(format!("configure: {e}")))?;
+            let config = firmware::Config { law: bound, ..firmware_config(&s) };
             // A board never runs without its runaway limits: refused here, naming
             // the key, before the firmware refuses it too.
             bp::check_protection(&config, "controller.runaway_limits").map_err(CliError::bad_input)?;
