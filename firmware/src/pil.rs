@@ -25,8 +25,9 @@ use shared::wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame};
 use crate::Config;
 
 /// Version of this protocol, sent in [`Uplink::Hello`]; the bridge refuses an
-/// image that speaks another. 6: `Config::law` (issue 70).
-pub const PROTOCOL_VERSION: u16 = 6;
+/// image that speaks another. 7: [`Uplink::Hello`]'s `law_digest`; 6:
+/// `Config::law` (issue 70).
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Largest encoded frame, bytes (COBS overhead, CRC and the terminator included):
 /// room for the largest message, [`Downlink::Configure`] (173 bytes for the
@@ -83,6 +84,10 @@ pub enum Uplink {
         ticks_per_second: u32,
         /// What that counter counts: emulated instructions or silicon cycles.
         clock: StepClock,
+        /// The digest of the image's control law's declaration
+        /// (`crate::LawSpec::digest`): the bridge holds the declaration it
+        /// read from the image's ELF to it, before it configures the image.
+        law_digest: u32,
     },
     /// The configuration is accepted; frames may come.
     Configured,

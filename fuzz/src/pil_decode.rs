@@ -288,7 +288,8 @@ fn uplink() -> impl Strategy<Value = Uplink> {
         u_raw: [f[8], f[9]],
     });
     prop_oneof![
-        1 => (any::<u16>(), any_u32(), clock).prop_map(|(protocol, ticks_per_second, clock)| Uplink::Hello { protocol, ticks_per_second, clock }),
+        1 => (any::<u16>(), any_u32(), clock, any_u32())
+            .prop_map(|(protocol, ticks_per_second, clock, law_digest)| Uplink::Hello { protocol, ticks_per_second, clock, law_digest }),
         1 => Just(Uplink::Configured),
         1 => Just(Uplink::Rejected),
         4 => (command, telemetry, any_u32()).prop_map(|(command, telemetry, frame_ticks)| Uplink::Answer { command, telemetry, frame_ticks }),

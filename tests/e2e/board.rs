@@ -231,7 +231,7 @@ fn a_backup_restores_to_the_same_settings_and_a_bad_file_leaves_the_board_unchan
             "another protocol",
             edit(&|x| x["protocol"] = toml::Value::Integer(5)),
             2,
-            "made with bring-up protocol 5, this sil-host speaks protocol 8",
+            "made with bring-up protocol 5, this sil-host speaks protocol 9",
         ),
     ];
     for (what, text, want, says) in cases {

@@ -140,7 +140,10 @@ pub struct PilArgs {
     #[cfg_attr(feature = "clap", serde(flatten))]
     pub scenario: ScenarioArgs,
     /// QEMU mode: the PIL image (ELF); default: `cargo build-pil`'s output,
-    /// target/thumbv7em-none-eabihf/qemu/pil.
+    /// target/thumbv7em-none-eabihf/qemu/pil. With --serial: the ELF flashed on
+    /// the board, for its control law's declaration (a law of one's own: the
+    /// scenario's `[law]` table binds to it, and the image's Hello must carry
+    /// its digest); without it, the paper's laws.
     #[cfg_attr(feature = "clap", arg(long, value_name = "ELF"))]
     pub image: Option<PathBuf>,
     /// QEMU mode: the QEMU executable.
@@ -156,7 +159,7 @@ pub struct PilArgs {
     pub qemu_link: QemuLinkArg,
     /// Hardware in the loop: the serial device of a board running the PIL image
     /// (e.g. /dev/ttyUSB0), instead of spawning QEMU. It must exist.
-    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH", conflicts_with_all = ["image", "qemu"]))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH", conflicts_with = "qemu"))]
     pub serial: Option<PathBuf>,
     /// With --serial: the line rate, baud (8N1, no flow control), 9600 to 12000000;
     /// the reference board's USART1 runs at 2 Mbaud.

@@ -22,7 +22,7 @@ impl PilFigures {
         let budget = step_budget(rate_hz);
         let (image, shift, serial_port, baud) = match target {
             PilTarget::Qemu { image, .. } => (Some(image.display().to_string()), Some(ICOUNT_SHIFT), None, None),
-            PilTarget::Serial { path, baud } => (None, None, Some(path.display().to_string()), Some(*baud)),
+            PilTarget::Serial { path, baud, .. } => (None, None, Some(path.display().to_string()), Some(*baud)),
         };
         Self {
             transport: target.transport(),

@@ -80,13 +80,15 @@ impl PilLink {
         check_faults(setup.scenario(), &opts.target)?;
         let boot = seconds("boot timeout", opts.boot_timeout_s)?;
         let answer_timeout = seconds("answer timeout", opts.answer_timeout_s)?;
-        // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`), to bind the
-        // scenario's `[law]` table with: checked before QEMU starts. A board
-        // behind a serial port runs the paper's laws' image here.
+        // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`; a board's:
+        // the one flashed, if given), to bind the scenario's `[law]` table with:
+        // checked before QEMU starts, and held to the image's own digest in its
+        // Hello before the configuration goes.
         let law = match &opts.target {
             // A missing image is QEMU's start to report (its own message).
             PilTarget::Qemu { image, .. } if image.is_file() => LawDescription::from_elf(image)?.unwrap_or_else(LawDescription::paper),
-            PilTarget::Qemu { .. } | PilTarget::Serial { .. } => LawDescription::paper(),
+            PilTarget::Serial { elf: Some(elf), .. } => LawDescription::from_elf(elf)?.unwrap_or_else(LawDescription::paper),
+            PilTarget::Qemu { .. } | PilTarget::Serial { elf: None, .. } => LawDescription::paper(),
         };
         setup.firmware_for(&law)?;
         let log = Arc::new(Mutex::new(Vec::new()));
@@ -95,7 +97,7 @@ impl PilLink {
                 let (q, pipe) = Qemu::spawn(image, qemu, *link, boot, &log, on_log)?;
                 (pipe, Some(q))
             }
-            PilTarget::Serial { path, baud } => (Pipe::open_serial(path, *baud)?, None),
+            PilTarget::Serial { path, baud, .. } => (Pipe::open_serial(path, *baud)?, None),
         };
         let mut link = Self {
             pipe: FramedPipe::new(pipe),
@@ -105,12 +107,12 @@ impl PilLink {
             log,
             counts: PilCounts { keep_ticks: opts.keep_ticks, ..PilCounts::default() },
         };
-        link.handshake(&setup.firmware_for(&law)?, boot)?;
+        link.handshake(&setup.firmware_for(&law)?, law.digest(), boot)?;
         Ok(link)
     }
 
     /// Hello, the version check and the configuration (the same over either pipe).
-    fn handshake(&mut self, config: &firmware::Config, boot: Duration) -> Result<(), RunError> {
+    fn handshake(&mut self, config: &firmware::Config, law_digest: u32, boot: Duration) -> Result<(), RunError> {
         let deadline = Instant::now() + boot;
         // A lone terminator ends whatever partial frame a previous bridge left
         // in the image's buffer (the image ignores an empty frame).
@@ -132,12 +134,19 @@ impl PilLink {
                 ask_at = now + HELLO_EVERY;
             }
             match self.recv_before(ask_at.min(deadline))? {
-                Received::Msg(Uplink::Hello { protocol, ticks_per_second, clock }) => {
+                Received::Msg(Uplink::Hello { protocol, ticks_per_second, clock, law_digest: runs }) => {
                     if protocol != pil::PROTOCOL_VERSION {
                         return Err(RunError::Transport(format!(
                             "the image speaks PIL protocol {protocol}, this sil-host {}: rebuild {}",
                             pil::PROTOCOL_VERSION,
                             if self.qemu.is_some() { "the image" } else { "and flash the image" }
+                        )));
+                    }
+                    if runs != law_digest {
+                        return Err(RunError::Transport(format!(
+                            "the image runs another control law than the one {} declares (digest {runs:08x}, not {law_digest:08x}): {}",
+                            if self.qemu.is_some() { "its ELF" } else { "the ELF given (--image) or, without one, the paper's laws" },
+                            if self.qemu.is_some() { "rebuild the image" } else { "give the ELF that was flashed, or flash this one" }
                         )));
                     }
                     self.counts.ticks_per_second = ticks_per_second;

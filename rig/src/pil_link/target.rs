@@ -50,6 +50,11 @@ pub enum PilTarget {
         path: PathBuf,
         /// Line rate, baud (8N1, no flow control); see [`BAUD_RANGE`].
         baud: u32,
+        /// The ELF flashed on the board, for its law's declaration
+        /// (`PAINLEVE_LAW_SPEC`): what the scenario's `[law]` table binds to,
+        /// held to the digest the image says in its Hello. `None`: the paper's
+        /// laws.
+        elf: Option<PathBuf>,
     },
 }
 
@@ -89,9 +94,10 @@ impl PilOptions {
         Self::for_target(PilTarget::Qemu { image: image.into(), qemu: "qemu-system-arm".into(), link: QemuLink::Semihosting })
     }
 
-    /// The serial device `path` at `baud`, with 20 s / 5 s timeouts.
+    /// The serial device `path` at `baud`, a board running the paper's laws'
+    /// PIL image, with 20 s / 5 s timeouts.
     pub fn serial(path: impl Into<PathBuf>, baud: u32) -> Self {
-        Self::for_target(PilTarget::Serial { path: path.into(), baud })
+        Self::for_target(PilTarget::Serial { path: path.into(), baud, elf: None })
     }
 
     /// `target` with 20 s / 5 s timeouts.

@@ -125,6 +125,8 @@ enum Then {
 #[derive(Debug, Clone, Copy)]
 struct Script {
     protocol: u16,
+    /// The digest its Hello says its law's declaration has (`LawSpec::digest`).
+    law_digest: u32,
     /// Before its first Hello, it sends what a previous run can leave on the
     /// line: an Answer, a Garbled and a broken frame.
     leftovers: bool,
@@ -178,7 +180,12 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
                         }
                         send(
                             &mut master,
-                            &Uplink::Hello { protocol: script.protocol, ticks_per_second: 168_000_000, clock: StepClock::DwtCycles },
+                            &Uplink::Hello {
+                                protocol: script.protocol,
+                                ticks_per_second: 168_000_000,
+                                clock: StepClock::DwtCycles,
+                                law_digest: script.law_digest,
+                            },
                         );
                         if script.garbled_after_hello && seen.hellos == 1 {
                             send(&mut master, &Uplink::Garbled);
@@ -235,8 +242,14 @@ fn board_link(setup: &crate::setup::RunSetup, script: Script, answer_timeout_s: 
 #[test]
 fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftovers() {
     let setup = crate::setup::RunSetup::new(short(0.3)).unwrap();
-    let script =
-        Script { protocol: pil::PROTOCOL_VERSION, leftovers: true, garbled_after_hello: false, answer: usize::MAX, then: Then::Silent };
+    let script = Script {
+        protocol: pil::PROTOCOL_VERSION,
+        law_digest: PAPER,
+        leftovers: true,
+        garbled_after_hello: false,
+        answer: usize::MAX,
+        then: Then::Silent,
+    };
     let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
@@ -258,8 +271,14 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
 #[test]
 fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_goes_on() {
     let setup = crate::setup::RunSetup::new(short(0.2)).unwrap();
-    let script =
-        Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: true, answer: usize::MAX, then: Then::Silent };
+    let script = Script {
+        protocol: pil::PROTOCOL_VERSION,
+        law_digest: PAPER,
+        leftovers: false,
+        garbled_after_hello: true,
+        answer: usize::MAX,
+        then: Then::Silent,
+    };
     let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     // The board answers both configurations; the second `Configured` comes
@@ -274,7 +293,14 @@ fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_g
 #[test]
 fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
-    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::Silent };
+    let script = Script {
+        protocol: pil::PROTOCOL_VERSION,
+        law_digest: PAPER,
+        leftovers: false,
+        garbled_after_hello: false,
+        answer: 50,
+        then: Then::Silent,
+    };
     let (link, _board) = board_link(&setup, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
@@ -296,7 +322,14 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
 #[test]
 fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
-    let script = Script { protocol: pil::PROTOCOL_VERSION, leftovers: false, garbled_after_hello: false, answer: 50, then: Then::HangUp };
+    let script = Script {
+        protocol: pil::PROTOCOL_VERSION,
+        law_digest: PAPER,
+        leftovers: false,
+        garbled_after_hello: false,
+        answer: 50,
+        then: Then::HangUp,
+    };
     // An answer timeout of 60 s: noticed in under half of it is noticed by the
     // hang-up, not by the timeout, however loaded the machine is.
     let (link, _board) = board_link(&setup, script, 60.0);
@@ -315,10 +348,34 @@ fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     assert!((50..=51).contains(&records.len()));
 }
 
+/// The paper's laws' declaration's digest: what their PIL image says in its Hello.
+const PAPER: u32 = firmware::LawSpec::PAPER.digest();
+
+/// Issue 70: a board whose image runs another control law than the one the
+/// bridge binds the scenario to (the flashed ELF's, or the paper's laws without
+/// one) is refused after its Hello, before any configuration goes, naming what
+/// to give.
+#[test]
+fn a_board_running_another_law_than_the_elf_given_is_refused_before_its_configuration() {
+    let setup = crate::setup::RunSetup::new(short(0.1)).unwrap();
+    let script = Script {
+        protocol: pil::PROTOCOL_VERSION,
+        law_digest: PAPER ^ 1,
+        leftovers: false,
+        garbled_after_hello: false,
+        answer: 0,
+        then: Then::Silent,
+    };
+    let (link, board) = board_link(&setup, script, 5.0);
+    let err = link.unwrap_err().to_string();
+    assert!(err.contains("another control law") && err.contains("give the ELF that was flashed"), "{err}");
+    assert_eq!(board.join().unwrap().configures, 0, "nothing configured");
+}
+
 #[test]
 fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let setup = crate::setup::RunSetup::new(short(0.1)).unwrap();
-    let script = Script { protocol: 1, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
+    let script = Script { protocol: 1, law_digest: PAPER, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
     let err = board_link(&setup, script, 5.0).0.unwrap_err().to_string();
     assert!(err.contains("speaks PIL protocol 1") && err.contains("flash"), "{err}");
 

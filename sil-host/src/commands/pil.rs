@@ -54,7 +54,13 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
                 pil_link::DEFAULT_BAUD
             )));
         }
-        return Ok(PilTarget::Serial { path: path.clone(), baud: args.baud });
+        if let Some(elf) = args.image.as_ref().filter(|e| !e.is_file()) {
+            return Err(CliError::bad_input(format!(
+                "--image {}: no such file (with --serial: the ELF flashed on the board)",
+                elf.display()
+            )));
+        }
+        return Ok(PilTarget::Serial { path: path.clone(), baud: args.baud, elf: args.image.clone() });
     }
     qemu_target(args.image.clone(), args.qemu.clone(), args.qemu_link.into())
 }

@@ -310,7 +310,12 @@ pub fn run<L: ControlLaw>() -> ! {
     // SAFETY: interrupts are masked (PRIMASK) and no handler is needed: the
     // enabled line only wakes the core from WFI.
     unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USART1) };
-    let hello = Uplink::Hello { protocol: pil::PROTOCOL_VERSION, ticks_per_second: clock.ticks_per_second(), clock: clock.kind() };
+    let hello = Uplink::Hello {
+        protocol: pil::PROTOCOL_VERSION,
+        ticks_per_second: clock.ticks_per_second(),
+        clock: clock.kind(),
+        law_digest: const { L::SPEC.digest() },
+    };
     let link = Link::choose();
     let mut board =
         PilBoard { link, clock, rx: FrameBuffer::default(), hello, frame_mark: 0, now: Instant::from_us(0), fig: Figures::default() };
