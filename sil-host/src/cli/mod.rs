@@ -134,7 +134,9 @@ pub enum Command {
     ///   its USART1 (2 Mbaud, --baud) wired to the serial device PATH (a USB-serial
     ///   adapter), raw 8N1, no flow control. Step counts are what the image reports
     ///   (DWT cycles on silicon); its defmt log goes over RTT to a debug probe (probe-rs),
-    ///   not over this link; the kill_firmware fault is not available.
+    ///   not over this link; the kill_firmware fault is not available. A law of one's own's
+    ///   image: give the ELF that was flashed (--image), whose declaration binds the
+    ///   scenario's [law] table and whose digest the image's Hello must carry.
     ///
     /// The worst and median step are reported against the budget, 5 % of the control
     /// period at 168 MHz (8400 at 1 kHz). Writes trace.csv, summary.json, trace.svg,
