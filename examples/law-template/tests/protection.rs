@@ -10,8 +10,15 @@
 //!   then stay within 30 mm of the healthy path over the whole run, stopped
 //!   by the firmware's own sensor checks at any period or not at all.
 //! - No false alarm: the healthy runs end without a safe state.
+//! - Over the whole envelope the firmware accepts and the law's parameter
+//!   ranges, every fault class of the FMEA (docs/hardware.md) keeps its
+//!   promise, and no healthy arm is stopped where, unprotected, it neither
+//!   lifts off nor saturates (the second test; `board_link::fmea`).
 //!
-//! `PAINLEVE_WIRING_SCENARIOS` sets how many scenarios (default 200, as for the paper's laws).
+//! `PAINLEVE_WIRING_SCENARIOS` sets how many scenarios the first test takes
+//! (default 200, as for the paper's laws), `PAINLEVE_FMEA_SCENARIOS` the
+//! second's healthy runs (default 200). Copy this file with the crate: it is
+//! the gate a law of one's own passes before it runs on a board.
 
 use board_link::{random_scenarios::random_admissible, twin_link::TwinLink, wiring_faults::WIRING_FAULTS};
 use law_template::Impedance;
