@@ -1,6 +1,7 @@
 //! Every cargo alias of `.cargo/config.toml` (issue 44: `cargo qemu-arm` did not
 //! parse, and nothing ran it): each one that needs no board is run as a user runs
-//! it, `cargo ALIAS`, and must succeed; the two that flash a board (`arm`, `pil`)
+//! it, `cargo ALIAS`, and must succeed; the four that flash a board (`arm`, `pil`,
+//! and the template's law's `law-arm`, `law-pil`)
 //! are run with probe-rs missing and must stop with the runner's advice (how to
 //! install probe-rs, what runs without a board), exit 127, not cargo's "could not
 //! execute process". An alias this test does not know fails it: add its check.
@@ -16,7 +17,7 @@ use crate::common;
 use std::process::{Command, Output};
 
 /// The aliases this test runs, and how.
-const KNOWN: [&str; 5] = ["arm", "pil", "qemu-arm", "build-arm", "build-pil"];
+const KNOWN: [&str; 7] = ["arm", "pil", "law-arm", "law-pil", "qemu-arm", "build-arm", "build-pil"];
 
 /// `cargo ALIAS` from the workspace's `docs/` folder (an alias must not depend
 /// on the folder it is typed in), the builds in `target/` ([`common::target_dir`]).
@@ -77,7 +78,7 @@ fn every_alias_runs_and_the_board_ones_say_how_to_get_probe_rs() {
     assert_eq!(log.last().unwrap().0.as_deref(), Some("2.999000"), "{all}");
 
     // The board aliases without probe-rs: the runner's advice, not cargo's error.
-    for alias in ["arm", "pil"] {
+    for alias in ["arm", "pil", "law-arm", "law-pil"] {
         let o = cargo(alias);
         let err = text(&o);
         assert_eq!(o.status.code(), Some(127), "cargo {alias}: {err}");

@@ -9,25 +9,11 @@
 
 use std::{
     io::{BufRead, BufReader},
-    process::{Child, Command, Stdio},
+    process::{Command, Stdio},
 };
 
 /// A board twin serving on a pseudo-terminal; killed when dropped.
-struct Twin {
-    child: Child,
-    /// The twin's standard input: `weight normal N` hangs a weight on the load cell.
-    stdin: std::process::ChildStdin,
-    port: String,
-    /// The arm's pose as the jig would hold it, degrees, `THETA1,ELBOW`.
-    pose: String,
-}
-
-impl Drop for Twin {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+type Twin = crate::common::BoardTwin;
 
 /// Which board serves: the twin's application, or the emulated `arm` ELF.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -409,28 +395,13 @@ fn every_friction_term_is_accepted_by_configure(on: Board) {
 }
 
 fn twin(on: Board, extra: &[&str]) -> Twin {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host"))
-        .args(["board-twin", "--pty", "--json", "--serve-for", "600"])
-        .args(if on == Board::Emulated { &["--emulated"][..] } else { &[][..] })
-        .args(extra)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let stdin = child.stdin.take().unwrap();
-    // The first line comes once the port is open (after the arm has settled).
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line:?}"));
-    let pose = v["pose_deg"].as_array().unwrap().iter().map(|d| d.as_f64().unwrap().to_string()).collect::<Vec<_>>().join(",");
-    Twin { child, stdin, port: v["port"].as_str().unwrap().to_string(), pose }
+    let emulated: &[&str] = if on == Board::Emulated { &["--emulated"] } else { &[] };
+    Twin::spawn(&[emulated, extra].concat())
 }
 
 /// Runs `sil-host board --port PORT ARGS`: exit code, stdout, stderr.
 fn board(t: &Twin, args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).args(["board", "--port", &t.port]).args(args).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    t.board(args)
 }
 
 /// Hangs a weight on the load cell (`normal 4.905`) or takes it off (`off`),

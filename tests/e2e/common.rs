@@ -2,8 +2,9 @@
 //! the command line in-process and reading what it writes.
 
 use std::{
+    io::{BufRead, BufReader},
     path::{Path, PathBuf},
-    process::Command,
+    process::{Child, ChildStdin, Command, Stdio},
     sync::OnceLock,
 };
 
@@ -157,4 +158,52 @@ pub fn panicking_law_image() -> PathBuf {
         assert!(build.status.success(), "building panicking_arm failed:\n{}", String::from_utf8_lossy(&build.stderr));
     });
     target_dir.join("thumbv7em-none-eabihf/mcu/examples/panicking_arm")
+}
+
+/// A board serving the bring-up protocol on a pseudo-terminal (`sil-host
+/// board-twin --pty`: the twin, or with `--emulated [--elf ELF]` an image on
+/// the emulated board); killed when dropped.
+pub struct BoardTwin {
+    /// Its process.
+    pub child: Child,
+    /// The twin's standard input: `weight normal N` hangs a weight on the load cell.
+    pub stdin: ChildStdin,
+    /// The pseudo-terminal's path.
+    pub port: String,
+    /// The arm's pose as the jig would hold it, degrees, `THETA1,ELBOW`.
+    pub pose: String,
+}
+
+impl BoardTwin {
+    /// `sil-host board-twin --pty --json --serve-for 600 ARGS`, once its port is
+    /// open (its first line, after the arm has settled).
+    pub fn spawn(args: &[&str]) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+            .args(["board-twin", "--pty", "--json", "--serve-for", "600"])
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap();
+        let stdin = child.stdin.take().unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line:?}"));
+        let pose = v["pose_deg"].as_array().unwrap().iter().map(|d| d.as_f64().unwrap().to_string()).collect::<Vec<_>>().join(",");
+        Self { child, stdin, port: v["port"].as_str().unwrap().to_string(), pose }
+    }
+
+    /// Runs `sil-host board --port PORT ARGS` against it: exit code, stdout, stderr.
+    pub fn board(&self, args: &[&str]) -> (i32, String, String) {
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).args(["board", "--port", &self.port]).args(args).output().unwrap();
+        (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    }
+}
+
+impl Drop for BoardTwin {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
 }

@@ -150,30 +150,6 @@ fn a_law_that_panics_on_the_board_leaves_the_drivers_disabled() {
     assert_eq!(gpiob_odr(&link) & (1 << 14), 0, "the drivers' enable line (PB14) is low after the panic");
 }
 
-/// `sil-host board-twin --pty --emulated --elf ELF`: the emulated board running
-/// `elf` behind a pseudo-terminal; the child and its port.
-fn emulated_board(elf: &Path) -> (Child, String) {
-    use std::io::BufRead;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host"))
-        .args(["board-twin", "--pty", "--json", "--serve-for", "600", "--emulated", "--elf"])
-        .arg(elf)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line:?}"));
-    (child, v["port"].as_str().unwrap().to_string())
-}
-
-/// Runs `sil-host board --port PORT ARGS`: exit code, stdout, stderr.
-fn board(port: &str, args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_sil-host")).args(["board", "--port", port]).args(args).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
-}
-
 /// Issue 70: `board configure --elf` binds the scenario's `[law]` table to
 /// the law the flashed ELF declares, held to the digest the board's image
 /// reports in its status: a law of one's own is configured on a board as on
@@ -193,10 +169,10 @@ fn board_configure_binds_a_law_table_to_the_law_the_board_runs() {
     };
     let own = scenario("[law]\nname = \"impedance\"\nk_t = 1500.0\nd_n = 45.0");
     let (arm, paper_elf) = (arm.to_str().unwrap().to_string(), paper.to_str().unwrap().to_string());
-    let (mut child, port) = emulated_board(Path::new(&arm));
-    let (code, out, err) = board(&port, &["configure", "--scenario", &own, "--elf", &arm]);
+    let t = common::BoardTwin::spawn(&["--emulated", "--elf", &arm]);
+    let (code, out, err) = t.board(&["configure", "--scenario", &own, "--elf", &arm]);
     assert_eq!(code, 0, "{out}{err}");
-    let (code, out, err) = board(&port, &["--json", "backup", dir.path().join("b.toml").to_str().unwrap()]);
+    let (code, out, err) = t.board(&["--json", "backup", dir.path().join("b.toml").to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let law = &v["backup"]["config"]["law"];
@@ -217,21 +193,18 @@ fn board_configure_binds_a_law_table_to_the_law_the_board_runs() {
         if let Some(elf) = elf {
             args.extend(["--elf", elf.as_str()]);
         }
-        let (code, _, err) = board(&port, &args);
+        let (code, _, err) = t.board(&args);
         assert_eq!(code, 2, "{table} {elf:?}: {err}");
         assert!(err.contains(says) && err.contains("configure"), "{table} {elf:?}: {err}");
     }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    drop(t);
     // The paper's image runs the paper's laws: a `[law]` table is refused, the
     // law's ELF too.
-    let (mut child, port) = emulated_board(&paper);
-    let (code, _, err) = board(&port, &["configure", "--scenario", &own]);
+    let t = common::BoardTwin::spawn(&["--emulated", "--elf", &paper_elf]);
+    let (code, _, err) = t.board(&["configure", "--scenario", &own]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("impedance") && err.contains("paper"), "{err}");
-    let (code, _, err) = board(&port, &["configure", "--scenario", &own, "--elf", &arm]);
+    let (code, _, err) = t.board(&["configure", "--scenario", &own, "--elf", &arm]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("not the one the board runs"), "{err}");
-    child.kill().unwrap();
-    child.wait().unwrap();
 }

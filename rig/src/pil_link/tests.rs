@@ -137,6 +137,14 @@ struct Script {
     then: Then,
 }
 
+impl Script {
+    /// A board of this protocol running the paper's laws, that answers
+    /// `answer` frames and then does `then`, with nothing else on the line.
+    fn paper(answer: usize, then: Then) -> Self {
+        Self { protocol: pil::PROTOCOL_VERSION, law_digest: PAPER, leftovers: false, garbled_after_hello: false, answer, then }
+    }
+}
+
 /// What the fake board saw.
 #[derive(Debug, Default)]
 struct Seen {
@@ -242,14 +250,7 @@ fn board_link(setup: &crate::setup::RunSetup, script: Script, answer_timeout_s: 
 #[test]
 fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftovers() {
     let setup = crate::setup::RunSetup::new(short(0.3)).unwrap();
-    let script = Script {
-        protocol: pil::PROTOCOL_VERSION,
-        law_digest: PAPER,
-        leftovers: true,
-        garbled_after_hello: false,
-        answer: usize::MAX,
-        then: Then::Silent,
-    };
+    let script = Script { leftovers: true, ..Script::paper(usize::MAX, Then::Silent) };
     let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     assert_eq!(link.transport(), "pil-serial");
@@ -271,14 +272,7 @@ fn a_board_behind_a_serial_port_closes_the_loop_through_a_previous_runs_leftover
 #[test]
 fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_goes_on() {
     let setup = crate::setup::RunSetup::new(short(0.2)).unwrap();
-    let script = Script {
-        protocol: pil::PROTOCOL_VERSION,
-        law_digest: PAPER,
-        leftovers: false,
-        garbled_after_hello: true,
-        answer: usize::MAX,
-        then: Then::Silent,
-    };
+    let script = Script { garbled_after_hello: true, ..Script::paper(usize::MAX, Then::Silent) };
     let (link, board) = board_link(&setup, script, 5.0);
     let mut link = link.unwrap();
     // The board answers both configurations; the second `Configured` comes
@@ -293,14 +287,7 @@ fn a_garbled_answer_during_the_handshake_resends_the_configuration_and_the_run_g
 #[test]
 fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
     let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
-    let script = Script {
-        protocol: pil::PROTOCOL_VERSION,
-        law_digest: PAPER,
-        leftovers: false,
-        garbled_after_hello: false,
-        answer: 50,
-        then: Then::Silent,
-    };
+    let script = Script::paper(50, Then::Silent);
     let (link, _board) = board_link(&setup, script, 0.3);
     let mut link = link.unwrap();
     let started = Instant::now();
@@ -322,14 +309,7 @@ fn a_board_that_stops_answering_ends_the_run_after_the_answer_timeout() {
 #[test]
 fn a_serial_port_that_hangs_up_ends_the_run_with_a_clear_error() {
     let setup = crate::setup::RunSetup::new(short(1.0)).unwrap();
-    let script = Script {
-        protocol: pil::PROTOCOL_VERSION,
-        law_digest: PAPER,
-        leftovers: false,
-        garbled_after_hello: false,
-        answer: 50,
-        then: Then::HangUp,
-    };
+    let script = Script::paper(50, Then::HangUp);
     // An answer timeout of 60 s: noticed in under half of it is noticed by the
     // hang-up, not by the timeout, however loaded the machine is.
     let (link, _board) = board_link(&setup, script, 60.0);
@@ -358,14 +338,7 @@ const PAPER: u32 = firmware::LawSpec::PAPER.digest();
 #[test]
 fn a_board_running_another_law_than_the_elf_given_is_refused_before_its_configuration() {
     let setup = crate::setup::RunSetup::new(short(0.1)).unwrap();
-    let script = Script {
-        protocol: pil::PROTOCOL_VERSION,
-        law_digest: PAPER ^ 1,
-        leftovers: false,
-        garbled_after_hello: false,
-        answer: 0,
-        then: Then::Silent,
-    };
+    let script = Script { law_digest: PAPER ^ 1, ..Script::paper(0, Then::Silent) };
     let (link, board) = board_link(&setup, script, 5.0);
     let err = link.unwrap_err().to_string();
     assert!(err.contains("another control law") && err.contains("give the ELF that was flashed"), "{err}");
@@ -375,7 +348,7 @@ fn a_board_running_another_law_than_the_elf_given_is_refused_before_its_configur
 #[test]
 fn a_board_of_another_protocol_or_no_board_is_refused_with_a_clear_error() {
     let setup = crate::setup::RunSetup::new(short(0.1)).unwrap();
-    let script = Script { protocol: 1, law_digest: PAPER, leftovers: false, garbled_after_hello: false, answer: 0, then: Then::Silent };
+    let script = Script { protocol: 1, ..Script::paper(0, Then::Silent) };
     let err = board_link(&setup, script, 5.0).0.unwrap_err().to_string();
     assert!(err.contains("speaks PIL protocol 1") && err.contains("flash"), "{err}");
 
