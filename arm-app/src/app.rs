@@ -412,6 +412,7 @@ impl<H: ArmIo, N: FnMut(Notice)> Board for TickBoard<'_, H, N> {
                     return Ok(());
                 }
                 if c.status & status::SAFE_STATE != 0 {
+                    let were_enabled = hw.motors.is_enabled();
                     if hw.motors.disable().is_err() {
                         (self.log)(Notice::DriversDidNotDisable);
                     }
@@ -419,8 +420,15 @@ impl<H: ArmIo, N: FnMut(Notice)> Board for TickBoard<'_, H, N> {
                         hw.last_enable = EnableOutcome::SafeState { seq: c.seq, status: c.status };
                     }
                     if !hw.safe_logged {
-                        let reason = SafeReason::from_status(c.status).map_or(0, |r| r as u8);
-                        (self.log)(Notice::SafeState { seq: c.seq, reason });
+                        let reason = SafeReason::from_status(c.status);
+                        // A check of what the motors do, tripped while the drivers
+                        // were never on (before the enable button): the motors did
+                        // nothing because they were off, not because of a fault.
+                        // Not logged (issue 80: a spurious `Miswired` line at every
+                        // start); the enable button resets the firmware.
+                        if were_enabled || !reason.is_some_and(SafeReason::needs_the_motors) {
+                            (self.log)(Notice::SafeState { seq: c.seq, reason: reason.map_or(0, |r| r as u8) });
+                        }
                         hw.safe_logged = true;
                     }
                 } else if core::mem::take(&mut hw.enable_requested) {

@@ -102,6 +102,16 @@ pub fn delay_within(rate_hz: f64) -> f64 {
     0.0002_f64.min(0.5 / rate_hz)
 }
 
+/// A command delay `timing.delta_s` drawn uniform over what the validator
+/// accepts with the protection on at a period of `ts` seconds (issue 80):
+/// `[0, min(0.95 ts, MAX_PROTECTED_DELAY_S)]`, s
+/// (`rig::scenario::TimingSection::MAX_PROTECTED_DELAY_S`, 0.4 ms), from
+/// source `seed`.
+pub fn accepted_delay(seed: u64, ts: f64) -> f64 {
+    let top = (0.95 * ts).min(rig::scenario::TimingSection::MAX_PROTECTED_DELAY_S);
+    top * Uniform::new(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0xd1b5_4a32_d192_ed03).draw()
+}
+
 /// A period of the image's range drawn log-uniform in `lo..=hi` us (each
 /// decade as likely).
 pub fn log_uniform_period_us(r: &mut Uniform, lo: u64, hi: u64) -> u64 {

@@ -362,8 +362,8 @@ impl Config {
         check(
             "f_n_ref",
             self.f_n_ref,
-            (0.0..=shared::wire::LOAD_FULL_SCALE_N).contains(&self.f_n_ref),
-            "[0, 25] N (the load cell's range)",
+            (0.0..=crate::runaway::MAX_F_N_REF).contains(&self.f_n_ref),
+            "[0, 20] N (2 N below the press check at 22 N, of the load cell's 25 N range)",
         )?;
         check("force_ramp_s", self.force_ramp_s, self.force_ramp_s >= 0.0, ">= 0")?;
         for (name, v) in [("pid.kp", self.pid.kp), ("pid.ki", self.pid.ki), ("pid.kd", self.pid.kd)] {

@@ -17,8 +17,74 @@
 //! A law runs in the control handler: it must not allocate, must not panic on
 //! data and must stay within the step's budget (5 % of the period at 168 MHz,
 //! docs/hardware.md "Budgets"). An error ([`LawError`]) latches the safe state
-//! at once; non-finite torques are [`LawError::NonFinite`] (the step checks
-//! them too, whatever the law says).
+//! at once; non-finite torques or a non-finite disturbance bound are
+//! [`crate::SafeReason::NonFinite`] at that period, checked by the step after
+//! every law, whatever the law returns or declares.
+//!
+//! **The boundary is sealed** (issue 80): a law supplies [`ControlLaw::step`]
+//! and its declarations, never the protected body around it. The one hook
+//! that chooses where that body is compiled ([`ControlLaw::control`]) takes a
+//! parameter of a type private to this crate ([`Sealed`], as the standard
+//! library seals `Error::type_id`), so no crate outside `firmware` can
+//! override it or call it, and [`crate::Firmware`]'s body is private to the
+//! crate. Overriding it does not compile:
+//!
+//! ```compile_fail,E0603
+//! use firmware::{config::Config, ControlLaw, Declares, LawContext, LawInput, LawOutput, LawSpec};
+//! use firmware::{decode::Measurement, law::LawError, Firmware, SafeReason};
+//!
+//! #[derive(Debug, Clone)]
+//! struct Escape;
+//!
+//! impl ControlLaw for Escape {
+//!     const SPEC: LawSpec = LawSpec::PAPER;
+//!     fn fresh(_: &Config) -> Self { Escape }
+//!     fn declares(_: &Config) -> Declares { Declares { tracking: None, on_belt: false, uses_reference_acceleration: false } }
+//!     fn step(&mut self, _: &LawContext<'_>, _: &LawInput) -> Result<LawOutput, LawError> {
+//!         Ok(LawOutput { u: [2.0, 2.0], disturbance: 0.0 })
+//!     }
+//!     // The protected body replaced by a law's own: the hook's last parameter is
+//!     // of a type no crate outside `firmware` can name (error E0603: private).
+//!     fn control(
+//!         _: &mut Firmware<Self>,
+//!         _: u32,
+//!         _: &Measurement,
+//!         _: firmware::control_law::Sealed,
+//!     ) -> Result<([f32; 2], u32), SafeReason> {
+//!         Ok(([2.0, 2.0], 0))
+//!     }
+//! }
+//! ```
+//!
+//! nor does calling the body directly:
+//!
+//! ```compile_fail,E0624
+//! use firmware::{decode::Measurement, Firmware};
+//! fn skip(fw: &mut Firmware, m: &Measurement) {
+//!     let _ = fw.control(1, m);
+//! }
+//! ```
+//!
+//! while the same law without the override is an ordinary law:
+//!
+//! ```
+//! use firmware::{config::Config, ControlLaw, Declares, LawContext, LawInput, LawOutput, LawSpec};
+//! use firmware::law::LawError;
+//!
+//! #[derive(Debug, Clone)]
+//! struct Escape;
+//!
+//! impl ControlLaw for Escape {
+//!     const SPEC: LawSpec = LawSpec::PAPER;
+//!     fn fresh(_: &Config) -> Self { Escape }
+//!     fn declares(_: &Config) -> Declares { Declares { tracking: None, on_belt: false, uses_reference_acceleration: false } }
+//!     fn step(&mut self, _: &LawContext<'_>, _: &LawInput) -> Result<LawOutput, LawError> {
+//!         Ok(LawOutput { u: [2.0, 2.0], disturbance: 0.0 })
+//!     }
+//! }
+//! let fw = firmware::Firmware::<Escape>::with_law(Config::default()).unwrap();
+//! assert!(fw.safe_state().is_none());
+//! ```
 
 use nalgebra::Vector2;
 use shared::{Arm, ElbowBranch, kinematics::JointTrig, model::ArmTerms};
@@ -29,6 +95,17 @@ use crate::{
     law_spec::LawSpec,
     reference::RefPoint,
 };
+
+mod seal {
+    /// The seal of [`super::ControlLaw::control`]: public, so it may appear in
+    /// a public trait's signature, but in a private module, so no crate outside
+    /// `firmware` can name it (the standard library's `Error::type_id` is sealed
+    /// the same way). Constructed only by the step.
+    #[derive(Debug, Clone, Copy)]
+    pub struct Sealed(pub(crate) ());
+}
+
+pub(crate) use seal::Sealed;
 
 /// What a law declares to the protection around it, once per configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -146,11 +223,6 @@ pub trait ControlLaw: Clone + core::fmt::Debug {
     /// [`LawSpec::PAPER`].
     const SPEC: LawSpec;
 
-    /// Whether [`ControlLaw::step`] returns [`LawError::NonFinite`] itself for
-    /// torques that are not finite (the paper's laws do); otherwise the step
-    /// checks them after the law.
-    const CHECKS_FINITE: bool = false;
-
     /// The law's fresh state for configuration `cfg` (integrators at zero):
     /// at the firmware's start and at every reset.
     fn fresh(cfg: &Config) -> Self;
@@ -175,9 +247,18 @@ pub trait ControlLaw: Clone + core::fmt::Debug {
     /// crate cost the step 8 to 11 % more instructions at `opt-level = "s"`;
     /// `crate::controller`'s notes). A law of one's own keeps the default: its
     /// step's cost is what `scripts/cycles.py` measures for its image.
+    ///
+    /// Sealed: its last parameter, [`Sealed`], is a type no crate outside
+    /// `firmware` can name, so no other crate can override or call it (the
+    /// module's notes; issue 80).
     #[doc(hidden)]
     #[inline(always)]
-    fn control(fw: &mut crate::Firmware<Self>, seq: u32, m: &crate::decode::Measurement) -> Result<([f32; 2], u32), crate::SafeReason> {
+    fn control(
+        fw: &mut crate::Firmware<Self>,
+        seq: u32,
+        m: &crate::decode::Measurement,
+        _: Sealed,
+    ) -> Result<([f32; 2], u32), crate::SafeReason> {
         fw.control(seq, m)
     }
 
@@ -197,7 +278,6 @@ pub struct PidLaw {
 
 impl ControlLaw for PidLaw {
     const SPEC: LawSpec = LawSpec::PAPER;
-    const CHECKS_FINITE: bool = true;
 
     fn fresh(_cfg: &Config) -> Self {
         Self::default()
@@ -235,7 +315,6 @@ pub struct HybridLaw {
 
 impl ControlLaw for HybridLaw {
     const SPEC: LawSpec = LawSpec::PAPER;
-    const CHECKS_FINITE: bool = true;
 
     fn fresh(_cfg: &Config) -> Self {
         Self::default()
@@ -282,10 +361,14 @@ pub struct PaperLaws {
 
 impl ControlLaw for PaperLaws {
     const SPEC: LawSpec = LawSpec::PAPER;
-    const CHECKS_FINITE: bool = true;
 
     #[inline(always)]
-    fn control(fw: &mut crate::Firmware<Self>, seq: u32, m: &crate::decode::Measurement) -> Result<([f32; 2], u32), crate::SafeReason> {
+    fn control(
+        fw: &mut crate::Firmware<Self>,
+        seq: u32,
+        m: &crate::decode::Measurement,
+        _: Sealed,
+    ) -> Result<([f32; 2], u32), crate::SafeReason> {
         paper_control(fw, seq, m)
     }
 

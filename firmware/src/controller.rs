@@ -334,7 +334,7 @@ impl<L: ControlLaw> Firmware<L> {
                 if gap {
                     flags |= status::SEQUENCE_GAP;
                 }
-                match L::control(self, frame.seq, &m) {
+                match L::control(self, frame.seq, &m, crate::control_law::Sealed(())) {
                     Ok((u, f)) => {
                         flags |= f;
                         let (u1, s1) = wire::encode_torque(u[0]);
@@ -395,10 +395,10 @@ impl<L: ControlLaw> Firmware<L> {
 
     /// Estimation, lift-off detection and the control law for a trusted frame;
     /// returns the motor torques (N m, saturated) and status bits. Reached
-    /// through [`ControlLaw::control`] (see there why).
-    #[doc(hidden)]
+    /// through [`ControlLaw::control`] (see there why); private to the crate,
+    /// so no law can skip it (issue 80).
     #[inline(always)]
-    pub fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
+    pub(crate) fn control(&mut self, seq: u32, m: &Measurement) -> Result<([f32; 2], u32), SafeReason> {
         // Borrowed, not copied: the configuration is most of the firmware's state.
         let cfg = &self.cfg;
         let ts = self.dt;
@@ -504,7 +504,7 @@ impl<L: ControlLaw> Firmware<L> {
             return Err(SafeReason::SensorFault);
         }
         if cfg.runaway_limits {
-            match self.runaway.update(&self.runaway_rule, [qd[0], qd[1]], load_saturated) {
+            match self.runaway.update(&self.runaway_rule, [qd[0], qd[1]], load_saturated, m.f_n) {
                 Some(Runaway::Speed) => return Err(SafeReason::Runaway),
                 Some(Runaway::Overload) => return Err(SafeReason::Overload),
                 None => {}
@@ -567,9 +567,10 @@ impl<L: ControlLaw> Firmware<L> {
             saturated: self.last_saturated,
         };
         let out = self.law.step(&ctx, &input)?;
-        // A law's non-finite torques are its failure, whatever it says (the
-        // paper's laws check their own: `CHECKS_FINITE`, no second check).
-        if !L::CHECKS_FINITE && !crate::finite_both(out.u[0], out.u[1]) {
+        // A law's non-finite torques or disturbance bound are its failure,
+        // whatever it returns or declares (issue 80: the paper's laws check
+        // their own too; a NaN bound would blind the tracking check).
+        if !crate::finite_all3(out.u[0], out.u[1], out.disturbance) {
             return Err(SafeReason::NonFinite);
         }
         self.disturbance = out.disturbance;

@@ -369,9 +369,10 @@ mod control_law {
     #[derive(Debug, Clone, Copy)]
     struct Fixed {
         u: [f32; 2],
+        disturbance: f32,
     }
 
-    static FIXED_U: std::sync::Mutex<([f32; 2], bool)> = std::sync::Mutex::new(([0.0; 2], false));
+    static FIXED_U: std::sync::Mutex<([f32; 2], bool, f32)> = std::sync::Mutex::new(([0.0; 2], false, 0.0));
 
     impl ControlLaw for Fixed {
         const SPEC: crate::LawSpec = crate::LawSpec {
@@ -380,21 +381,27 @@ mod control_law {
             params: &[crate::ParamSpec { name: "gain", unit: "1", min: 0.0, max: 2.0, default: 1.0 }],
         };
         fn fresh(_cfg: &Config) -> Self {
-            Self { u: FIXED_U.lock().unwrap().0 }
+            let fixed = *FIXED_U.lock().unwrap();
+            Self { u: fixed.0, disturbance: fixed.2 }
         }
         fn declares(cfg: &Config) -> Declares {
             let tracking = FIXED_U.lock().unwrap().1.then(|| HybridLaw::declares(cfg).tracking).flatten();
             Declares { tracking, on_belt: tracking.is_some(), uses_reference_acceleration: false }
         }
         fn step(&mut self, _ctx: &LawContext<'_>, _input: &LawInput) -> Result<LawOutput, LawError> {
-            Ok(LawOutput { u: self.u, disturbance: 0.0 })
+            Ok(LawOutput { u: self.u, disturbance: self.disturbance })
         }
     }
 
     /// Runs [`Fixed`] answering `u`, declaring tracking or not; the safe state's reason, if any.
     fn fixed(u: [f32; 2], tracks: bool, n: u32) -> Option<SafeReason> {
+        fixed_with(u, 0.0, tracks, n)
+    }
+
+    /// [`fixed`] with the disturbance bound `disturbance` (m/s^2).
+    fn fixed_with(u: [f32; 2], disturbance: f32, tracks: bool, n: u32) -> Option<SafeReason> {
         let _guard = FIXED_LOCK.lock().unwrap();
-        *FIXED_U.lock().unwrap() = (u, tracks);
+        *FIXED_U.lock().unwrap() = (u, tracks, disturbance);
         let mut fw = Firmware::<Fixed>::with_law(Config { law: Fixed::SPEC.defaults(), ..Config::default() }).unwrap();
         run(&mut fw, n);
         fw.safe_state()
@@ -424,12 +431,19 @@ mod control_law {
 
     static FIXED_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+    /// Whatever a law declares (tracking or not), a non-finite torque or
+    /// disturbance bound stops it at the first period it returns one (issue 80:
+    /// a law could once declare it checked its own and run at zero torque).
     #[test]
     fn a_law_whose_torques_are_not_finite_is_stopped_by_the_step() {
         for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
-            assert_eq!(fixed([0.1, bad], false, 5), Some(SafeReason::NonFinite), "{bad}");
-            assert_eq!(fixed([bad, 0.0], true, 5), Some(SafeReason::NonFinite), "{bad}");
+            for tracks in [false, true] {
+                assert_eq!(fixed([0.1, bad], tracks, 1), Some(SafeReason::NonFinite), "{bad}, tracks {tracks}");
+                assert_eq!(fixed([bad, 0.0], tracks, 1), Some(SafeReason::NonFinite), "{bad}, tracks {tracks}");
+                assert_eq!(fixed_with([0.1, 0.0], bad, tracks, 1), Some(SafeReason::NonFinite), "disturbance {bad}, tracks {tracks}");
+            }
         }
         assert_eq!(fixed([0.1, -0.1], false, 5), None, "finite torques run");
+        assert_eq!(fixed_with([0.1, -0.1], 3.0, true, 5), None, "a finite bound runs");
     }
 }

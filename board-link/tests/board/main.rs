@@ -14,6 +14,7 @@ mod emulator_bound;
 mod emulator_faults;
 mod envelope;
 mod fmea;
+mod press;
 mod rate;
 mod reset;
 mod twin;

@@ -89,6 +89,14 @@ impl SafeReason {
         }
     }
 
+    /// Whether the check that latched it judges what the motors do (their
+    /// torque against the joints' motion, the tip's tracking or contact, the
+    /// command's chatter): with the drivers off it trips on a healthy arm, and
+    /// a board logs it only once the drivers were on (`arm_app`, issue 80).
+    pub fn needs_the_motors(self) -> bool {
+        matches!(self, Self::Miswired | Self::Tracking | Self::LiftOff | Self::Saturated | Self::Unstable)
+    }
+
     /// The reason in a few words, for the operator (no `core::fmt` on the image).
     pub fn describe(self) -> &'static str {
         match self {

@@ -306,6 +306,21 @@ impl TimingSection {
     /// The lowest and highest control rates, Hz (docs/hardware.md "Timing").
     pub const RATE_RANGE_HZ: (f64, f64) = (250.0, 10_000.0);
 
+    /// The longest command delay `delta_s` the firmware's protection takes, s,
+    /// with `controller.runaway_limits` on (issue 80). The firmware's observers
+    /// predict each interval with the torque it commanded held over all of it;
+    /// a command that acts `delta` after the sample leaves the previous one on
+    /// for that share of the interval, a model error its wiring and tracking
+    /// checks cannot tell from a fault once it is large. Measured over the
+    /// envelope (`board-link/tests/board/envelope.rs`: 2 000 runs at 250 Hz
+    /// to 10 kHz, the delay at this bound or drawn up to it): no false alarm at
+    /// 0.4 ms; the first, at 0.5 ms (a hybrid run at 338 Hz, `Tracking`), and
+    /// from 1.1 ms at 250 to 640 Hz (`Miswired` within 5 periods of the
+    /// start). The reference board's command leaves 15 to 20 us after its
+    /// sample. With the protection off (the studies' runs) any delay within
+    /// the period is taken.
+    pub const MAX_PROTECTED_DELAY_S: f64 = 0.4e-3;
+
     /// The control period both sides of the wire use: `rate_hz` rounded once to
     /// whole microseconds ([`Period::from_rate_hz`]; 6 kHz runs at 167 us). A
     /// rate outside [`Self::RATE_RANGE_HZ`], which [`Scenario::validate`]

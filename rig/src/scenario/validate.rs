@@ -104,10 +104,10 @@ impl Scenario {
             "a value in (0, 1e5] s",
         )?;
         check(
-            finite(c.f_n_ref) && (0.0..=25.0).contains(&c.f_n_ref),
+            finite(c.f_n_ref) && (0.0..=f64::from(firmware::runaway::MAX_F_N_REF)).contains(&c.f_n_ref),
             "controller.f_n_ref",
             c.f_n_ref,
-            "a value in [0, 25] N (the load cell's range)",
+            "a value in [0, 20] N (2 N below the firmware's press check at 22 N, of the load cell's 25 N range)",
         )?;
         check(finite(c.mu_hat) && (0.0..=10.0).contains(&c.mu_hat), "controller.mu_hat", c.mu_hat, "a value in [0, 10]")?;
         if let Some(limit) = c.torque_limit_nm {
@@ -178,6 +178,12 @@ impl Scenario {
             "timing.delta_s",
             t.delta_s,
             "a value in [0, one period)",
+        )?;
+        check(
+            !self.controller.runaway_limits || t.delta_s <= TimingSection::MAX_PROTECTED_DELAY_S,
+            "timing.delta_s",
+            t.delta_s,
+            "at most 0.4 ms with controller.runaway_limits on: the firmware's wiring and tracking checks model the command as acting at its sample, and a longer delay stops healthy arms (docs/rig.md \"Timing\"); turn the limits off to study longer delays",
         )?;
         check(
             finite(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5,
