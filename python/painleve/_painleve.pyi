@@ -33,7 +33,10 @@ class Recording:
     """A run's rows kept for its MCAP file (``Result.extras["recording"]``)."""
 
     def write_mcap(self, path: str) -> None:
-        """Writes ``sil-host``'s ``trace.mcap`` of the same run at ``path``; ``OSError`` when it cannot."""
+        """Writes ``sil-host``'s ``trace.mcap`` of the same run at ``path`` (whole or not at all, a link there replaced, not followed); ``OSError`` when it cannot."""
+
+def write_file(path: str, data: bytes) -> None:
+    """Writes ``data`` as the file ``path`` as the CLI writes its files: a temporary file in the same folder renamed to ``path`` (a link there replaced, its target left as it was); ``OSError`` naming the file when it cannot."""
 
 def simulate(given: Dict[str, Any], progress: _Progress = None) -> _Raw: ...
 def admissible(given: Dict[str, Any]) -> _Raw: ...

@@ -9,7 +9,7 @@ from typing import Any, Dict, Iterator, List, Mapping, Optional, Union, cast
 
 import numpy as np
 
-from ._painleve import PainleveError
+from ._painleve import PainleveError, write_file
 
 __all__ = ["Table", "Result", "PainleveWarning", "describe_violations"]
 
@@ -315,8 +315,16 @@ class Result:
         same bytes as the CLI's ``trace.html`` of the same run, and returns the
         file's path. Opens offline in any browser.
 
+        Written as the CLI writes its files: whole or not at all (a temporary
+        file in the same folder, renamed to ``path``), and never through a link:
+        a symbolic link at ``path`` is replaced by the file, its target left as
+        it was (docs/python.md "Files written").
+
         Raises:
             ValueError: the result has no page (an analysis, not a run).
+            OSError: the file cannot be written (``FileNotFoundError`` for a
+                missing folder, ``PermissionError``, ...), the message naming
+                it; ``path`` is then left as it was.
         """
         page = self.page()
         if page is None:
@@ -324,7 +332,7 @@ class Result:
         out = Path(path)
         if out.is_dir():
             out = out / "trace.html"
-        out.write_bytes(page.encode("utf-8"))
+        write_file(os.fspath(out), page.encode("utf-8"))
         return out
 
     def write_mcap(self, path: Union[str, "os.PathLike[str]"]) -> Path:
@@ -337,13 +345,21 @@ class Result:
 
         A ``simulate`` result writes its samples and events; a ``run`` or
         ``run_controller`` result its period records. A loaded folder copies its
-        ``trace.mcap`` when it has one.
+        ``trace.mcap`` when it has one (nothing is written when ``path`` is that
+        file itself).
+
+        Written as the CLI writes its files: whole or not at all (a temporary
+        file in the same folder, renamed to ``path``), and never through a link:
+        a symbolic link at ``path`` is replaced by the file, its target left as
+        it was (docs/python.md "Files written").
 
         Raises:
             ValueError: the result holds no run (an analysis), or is a loaded
                 folder without a ``trace.mcap`` (run the command again with
                 ``format="mcap"``, or call the function again).
-            OSError: the file cannot be written.
+            OSError: the file cannot be written (``FileNotFoundError`` for a
+                missing folder, ``PermissionError``, ...), the message naming
+                it; ``path`` is then left as it was.
         """
         out = Path(path)
         if out.is_dir():
@@ -355,8 +371,10 @@ class Result:
         if self.path is not None:
             source = Path(self.path) / "trace.mcap"
             if source.is_file():
-                if source.resolve() != out.resolve():
-                    out.write_bytes(source.read_bytes())
+                # The same file is not copied onto itself; a link at ``out`` (even
+                # one to ``source``) is not followed: it is replaced by a copy.
+                if source.resolve() != out.parent.resolve() / out.name:
+                    write_file(os.fspath(out), source.read_bytes())
                 return out
             raise ValueError(
                 f"the folder {self.path} has no trace.mcap and its rows are not kept: "

@@ -84,6 +84,7 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PainleveError", m.py().get_type::<cli::PainleveError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<recording::Recording>()?;
+    m.add_function(wrap_pyfunction!(recording::write_file, m)?)?;
     m.add_function(wrap_pyfunction!(commands::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(commands::admissible, m)?)?;
     m.add_function(wrap_pyfunction!(commands::modes, m)?)?;

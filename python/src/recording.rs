@@ -43,9 +43,16 @@ impl Recording {
         Self { geometry, rows: Rows::ClosedLoop { records, frames } }
     }
 
-    /// Writes the file at `path`, as `sil-host` writes `trace.mcap` for the same run.
-    fn write(&self, path: PathBuf) -> Result<(), tables::Error> {
-        let file = std::fs::File::create(&path).map_err(|source| tables::Error::Io { path: path.clone(), source })?;
+    /// Writes the file at `path`, as `sil-host` writes `trace.mcap` for the same run,
+    /// whole or not at all and never through a link ([`rig::private_files::write_replacing`]).
+    fn write(&self, path: PathBuf) -> PyResult<()> {
+        rig::private_files::write_replacing(&path, |_, file| {
+            self.write_to(path.clone(), file).map_err(|e| PyOSError::new_err(e.to_string()))
+        })
+    }
+
+    /// Writes the file's bytes into `file` (`path` names it in error messages).
+    fn write_to(&self, path: PathBuf, file: std::fs::File) -> Result<(), tables::Error> {
         match &self.rows {
             Rows::OpenLoop { trace, events, batches } => {
                 let views = (
@@ -83,10 +90,15 @@ impl Recording {
     /// Writes the run's MCAP file at `path` (a file name), the bytes `sil-host`
     /// writes as `trace.mcap` for the same run.
     ///
+    /// Written whole or not at all, never through a link: a temporary file in
+    /// the same folder renamed to `path`, which replaces a link there, not its
+    /// target ([`rig::private_files::write_replacing`], docs/python.md).
+    ///
     /// Raises:
-    ///     OSError: the file cannot be created or written.
+    ///     OSError: the file cannot be created or written (its subclass by the
+    ///         OS's error where the error is the OS's: `FileNotFoundError`, ...).
     fn write_mcap(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        py.detach(|| self.write(path)).map_err(|e| PyOSError::new_err(e.to_string()))
+        py.detach(|| self.write(path))
     }
 
     fn __repr__(&self) -> String {
@@ -95,4 +107,24 @@ impl Recording {
             Rows::ClosedLoop { records, .. } => format!("Recording(closed loop: {} periods)", records.len()),
         }
     }
+}
+
+/// Writes `data` as the file `path`, whole or not at all and never through a
+/// link, as `sil-host` writes its outputs ([`rig::private_files::write_replacing`]:
+/// a temporary file in the same folder, renamed to `path`; a link at `path` is
+/// replaced, its target left as it was): `Result.write_page`, and `write_mcap`
+/// of a loaded folder. The GIL is released while it writes.
+///
+/// # Errors
+/// `OSError` (its subclass by the OS's error: `FileNotFoundError`,
+/// `PermissionError`, `IsADirectoryError`, ...) naming `path`.
+#[pyfunction]
+pub fn write_file(py: Python<'_>, path: PathBuf, data: &[u8]) -> PyResult<()> {
+    py.detach(|| {
+        rig::private_files::write_replacing(&path, |_, mut file| {
+            use std::io::Write;
+            file.write_all(data).map_err(|e| std::io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display())))
+        })
+    })
+    .map_err(PyErr::from)
 }

@@ -264,41 +264,76 @@ def test_a_file_cut_at_any_byte_reads_as_its_whole_records(runs, tmp_path):
     assert painleve.read_mcap(cut_file)["trace"].nrows == full.nrows, "every chunk whole: every row"
 
 
+# Trace rows per chunk of a streamed run (tables::mcap::STREAM_CHUNK_ROWS): a
+# chunk goes out, both tables' waiting rows in it, when the trace has this many.
+STREAM_CHUNK_ROWS = 100
+
+
 def test_a_killed_run_keeps_the_chunks_it_wrote(runs, tmp_path):
-    # SIGKILL part way: trace.mcap.partial holds whole chunks of the run's rows,
-    # the same as a full run's first rows (lockstep: the same rows every time).
+    # Issue 80, 9. SIGKILL part way: trace.mcap.partial holds whole chunks, and
+    # nothing here depends on when the kill lands (a loaded machine writes fewer
+    # chunks by then) nor on how the trace's and the frames' rows share the bytes.
+    # What the file guarantees: it reads back; the reader gets every whole chunk
+    # (as many messages as the mcap package's linear reader finds before the
+    # cut); each table's rows are a prefix of a full run's rows, the same values
+    # (lockstep: the same rows every time); the trace's rows are whole chunks.
     csv_dir, _ = runs
     out = tmp_path / "killed"
     argv = [str(sil_host()), "run", "--in-process", "--duration", "600", "--format", "mcap", "--out", str(out), "--json"]
     p = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     partial = out / "trace.mcap.partial"
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (not partial.exists() or partial.stat().st_size < 200_000):
-        time.sleep(0.05)
-    os.kill(p.pid, signal.SIGKILL)
-    p.wait()
-    assert partial.stat().st_size >= 200_000, "the run wrote chunks while it went"
-    t = painleve.read_mcap(partial)["trace"]
-    assert t.nrows > 1000 and t.nrows % 100 == 0
-    full = painleve.load(csv_dir).trace  # 1 s: the first 1000 periods
-    for col in full.columns:
-        assert_columns_equal(t[col][:1000], full[col], f"trace.{col}")
+
+    def trace_rows():
+        """The trace rows the file holds now, 0 before it is made and before its
+        first chunk of rows is whole."""
+        try:
+            return painleve.read_mcap(partial)["trace"].nrows
+        except (FileNotFoundError, painleve.PainleveError, KeyError):
+            return 0
+
+    # Killed once it holds a chunk of rows (within milliseconds; the deadline only
+    # stops a broken run from hanging the suite).
+    deadline = time.monotonic() + 120
+    try:
+        while p.poll() is None and time.monotonic() < deadline and trace_rows() == 0:
+            time.sleep(0.01)
+    finally:
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait()
+    assert p.returncode == -signal.SIGKILL, f"the run ended by itself ({p.returncode}) before it was killed"
+    tables = painleve.read_mcap(partial)
+    t, frames = tables["trace"], tables["frames"]
+    assert t.nrows >= STREAM_CHUNK_ROWS, "at least one chunk"
+    assert t.nrows % STREAM_CHUNK_ROWS == 0, f"{t.nrows} trace rows: whole chunks only"
+    # A full run at least as long as what the killed one wrote (1 s: 1000 periods).
+    periods = max(t.nrows, frames.nrows)
+    if periods > 1000:
+        csv_dir = tmp_path / "full"
+        cli("run", ["--in-process", "--duration", str(periods // 1000 + 1), "--format", "csv"], csv_dir)
+    full = painleve.load(csv_dir)
+    for name, got in (("trace", t), ("frames", frames)):
+        whole = full.tables[name]
+        assert 0 < got.nrows <= whole.nrows, (name, got.nrows, whole.nrows)
+        assert got.columns == whole.columns, name
+        for col in whole.columns:
+            assert_columns_equal(got[col], whole[col][: got.nrows], f"{name}.{col}: the killed run's rows are the full run's first rows")
     # What else reads it (docs/rig.md "MCAP traces"; issue 66): the mcap package's
-    # linear reader in file order gives every row's message, then EndOfFile at the
-    # cut; with its default log_time_order=True it sorts the whole file first and so
-    # gives nothing before EndOfFile; the seeking reader refuses the file.
+    # linear reader in file order gives every message of the whole chunks, then
+    # EndOfFile at the cut; with its default log_time_order=True it sorts the whole
+    # file first and so gives nothing before EndOfFile; the seeking reader refuses the file.
     from mcap.exceptions import EndOfFile
 
     def linear(**kw):
-        n = 0
+        n = {"/state": 0, "/wire/frame": 0}
         with open(partial, "rb") as f:
             with pytest.raises(EndOfFile):
                 for _, channel, _ in mcap_reader.NonSeekingReader(f).iter_messages(**kw):
-                    n += channel.topic == "/state"
+                    if channel.topic in n:
+                        n[channel.topic] += 1
         return n
 
-    assert linear(log_time_order=False) == t.nrows
-    assert linear() == 0
+    assert linear(log_time_order=False) == {"/state": t.nrows, "/wire/frame": frames.nrows}, "every whole chunk read"
+    assert linear() == {"/state": 0, "/wire/frame": 0}
     seeking = 0
     try:
         with open(partial, "rb") as f:

@@ -16,7 +16,10 @@
 //!   of ours; files that are written then renamed (`NAME.partial`) are made new
 //!   (`O_CREAT | O_EXCL | O_NOFOLLOW`) after removing what a killed run left at
 //!   that name: a link itself (never what it points to), or a regular file of
-//!   ours. Anything else at the name is refused.
+//!   ours. Anything else at the name is refused. A single file written whole
+//!   or not at all by a writer without a folder lock ([`write_replacing`]: the
+//!   Python package's `Result.write_page`, `write_mcap`) gets a temporary name of
+//!   its own, made new, and renamed into place as the command line's outputs are.
 
 use std::{
     ffi::OsStr,
@@ -172,6 +175,52 @@ pub fn write_new(path: &Path, bytes: &[u8]) -> io::Result<()> {
     create_new(path)?.write_all(bytes)
 }
 
+/// Writes the file `path` whole or not at all, never through a link, as
+/// `sil-host` writes its outputs (`sil-host/src/output.rs`): `write` fills a new
+/// file under a temporary name in `path`'s folder, which is then renamed to `path`.
+///
+/// - The temporary file (`.NAME.XXXXXX.partial`, `XXXXXX` random) is made with
+///   `O_CREAT | O_EXCL` by [`tempfile`]: no link, planted or left, satisfies it, and
+///   two writers of the same `path` (threads, processes) never share one. Its mode
+///   is 0666 less the umask, as [`File::create`]'s.
+/// - The rename replaces what is at `path`: a previous file, or a link (the link
+///   itself, never its target, which is left as it was). A reader of `path` sees
+///   the old file or the whole new one, never part of it.
+/// - When `write` fails, or the rename does (a folder at `path`), the temporary
+///   file is removed and `path` is left as it was. A process killed outright
+///   while writing leaves its `.NAME.XXXXXX.partial` (never a partial `path`).
+///
+/// `write` gets the temporary file's path (for its error messages) and the file,
+/// which it closes (drops) when done; nothing is flushed to the disk (`fsync`),
+/// as for the command line's outputs.
+///
+/// # Errors
+/// `write`'s error, or an [`io::Error`] (into `E`) whose message names `path`: the
+/// temporary file cannot be made (no such folder, no permission, `path` without a
+/// file name) or renamed to `path` (a folder there).
+pub fn write_replacing<E: From<io::Error>>(path: &Path, write: impl FnOnce(&Path, File) -> Result<(), E>) -> Result<(), E> {
+    let named = |e: io::Error| io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()));
+    let name = path.file_name().ok_or_else(|| named(io::Error::new(io::ErrorKind::InvalidInput, "not a file name")))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".");
+    let (file, tmp) = tempfile::Builder::new()
+        .prefix(&prefix)
+        .suffix(".partial")
+        .permissions(std::fs::Permissions::from_mode(0o666))
+        .tempfile_in(dir)
+        .map_err(named)?
+        .into_parts();
+    // On an error below, `tmp` is dropped: the temporary file is removed.
+    write(&tmp, file)?;
+    tmp.persist(path).map_err(|e| named(e.error))?;
+    Ok(())
+}
+
 /// Removes a link or a regular file of ours at `path`; nothing there is fine.
 fn clear_stale(path: &Path) -> io::Result<()> {
     let m = match std::fs::symlink_metadata(path) {
@@ -246,6 +295,50 @@ mod tests {
         let folder = dir.path().join("x.partial");
         std::fs::create_dir(&folder).unwrap();
         assert_eq!(create_new(&folder).unwrap_err().kind(), io::ErrorKind::AlreadyExists);
+    }
+
+    /// Issue 80, 8: a single file written through a link planted at its name
+    /// (`painleve`'s `Result.write_page`), and half-written on a failure.
+    #[test]
+    fn a_replaced_file_is_never_written_through_a_link_nor_left_half_written() {
+        use std::io::Write;
+        let dir = tempfile::tempdir().unwrap();
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, "theirs").unwrap();
+        let out = dir.path().join("trace.html");
+        symlink(&victim, &out).unwrap();
+        write_replacing::<io::Error>(&out, |_, mut f| f.write_all(b"ours")).unwrap();
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "theirs");
+        assert!(std::fs::symlink_metadata(&out).unwrap().is_file(), "the link is replaced by a file");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "ours");
+        // A dangling link: nothing made at its target.
+        let absent = dir.path().join("absent");
+        std::fs::remove_file(&out).unwrap();
+        symlink(&absent, &out).unwrap();
+        write_replacing::<io::Error>(&out, |_, mut f| f.write_all(b"again")).unwrap();
+        assert!(!absent.exists());
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "again");
+        // A write that fails half way: the previous file stays, no temporary file is left.
+        let e = write_replacing(&out, |tmp, mut f| {
+            f.write_all(b"half")?;
+            assert!(tmp.file_name().unwrap().to_str().unwrap().starts_with(".trace.html."), "{}", tmp.display());
+            Err(io::Error::other("failed"))
+        })
+        .unwrap_err();
+        assert_eq!(e.to_string(), "failed");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "again");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        // A folder at the name, or a missing folder: an error naming the path, nothing left.
+        let folder = dir.path().join("folder");
+        std::fs::create_dir(&folder).unwrap();
+        let e = write_replacing::<io::Error>(&folder, |_, mut f| f.write_all(b"x")).unwrap_err().to_string();
+        assert!(e.contains("cannot write") && e.contains("folder"), "{e}");
+        let missing = dir.path().join("no/such/file");
+        let e = write_replacing::<io::Error>(&missing, |_, _| Ok(())).unwrap_err().to_string();
+        assert!(e.contains("no/such/file"), "{e}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+        assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
     }
 
     #[test]
