@@ -22,22 +22,37 @@ pub const CHATTER_FRACTION: f32 = 0.5;
 pub struct ChatterMonitor {
     /// The last period's saturated command `[u1, u2]`, N m.
     last: [f32; 2],
+    /// The last period's change of the command `[u1, u2]`, N m.
+    last_change: [f32; 2],
     /// Consecutive reversals per motor.
     run: [u16; 2],
 }
 
 impl ChatterMonitor {
     /// Folds in one period's saturated command `u` (N m) under the torque
-    /// limit `limit` (N m); true once a motor reversed by more than
-    /// [`CHATTER_FRACTION`] of the limit for [`CHATTER_PERIODS`] periods in a
-    /// row. Non-finite commands never count (the law's own check latches them).
+    /// limit `limit` (N m); true once a motor's command swung by more than
+    /// [`CHATTER_FRACTION`] of the limit, reversing its sign or the direction
+    /// of its last change, for [`CHATTER_PERIODS`] periods in a row. The
+    /// second kind (issue 80) is a command that chatters without crossing
+    /// zero: a law holding the tip on the belt against the paradox swings its
+    /// base motor between +5 and +1.7 N m every period as the contact
+    /// chatters, which the wiring check saw as a joint moving against its
+    /// torque (`Miswired`, 25 of 203 stopped draws of the template's law over
+    /// the envelope). Non-finite commands never count (the step stops them).
     #[inline(always)]
     pub fn update(&mut self, u: [f32; 2], limit: f32) -> bool {
         let step = CHATTER_FRACTION * limit;
-        let reversed = |now: f32, before: f32| now * before < 0.0 && (now - before).abs() > step;
+        let change = [u[0] - self.last[0], u[1] - self.last[1]];
+        let reversed = |now: f32, before: f32, change: f32, last_change: f32| {
+            (now * before < 0.0 || change * last_change < 0.0) && change.abs() > step
+        };
         let count = |n: u16, r: bool| if r { n.saturating_add(1) } else { 0 };
-        self.run = [count(self.run[0], reversed(u[0], self.last[0])), count(self.run[1], reversed(u[1], self.last[1]))];
+        self.run = [
+            count(self.run[0], reversed(u[0], self.last[0], change[0], self.last_change[0])),
+            count(self.run[1], reversed(u[1], self.last[1], change[1], self.last_change[1])),
+        ];
         self.last = u;
+        self.last_change = change;
         self.run[0] >= CHATTER_PERIODS || self.run[1] >= CHATTER_PERIODS
     }
 }
@@ -69,6 +84,25 @@ mod tests {
                 _ => 3.0,
             };
             assert!(!m.update([u, 0.0], 5.0), "{k}");
+        }
+        // A command that swings by more than half the limit without crossing
+        // zero, its change reversing each period, trips at the fourth swing
+        // that reverses the one before (the template's law against the
+        // chattering contact: from 0, up to 5, then 1.7, 5, 1.8, 5).
+        let mut m = ChatterMonitor::default();
+        let seq = [5.0, 1.7, 5.0, 1.8];
+        for (k, u) in seq.into_iter().enumerate() {
+            assert!(!m.update([u, 2.0], 5.0), "{k}: {u}");
+        }
+        assert!(m.update([5.0, 2.0], 5.0), "the fourth reversal of the change trips");
+        // Swings of 2.4 N m, or a monotone ramp of large steps, never do.
+        let mut m = ChatterMonitor::default();
+        for k in 0..100 {
+            assert!(!m.update([if k % 2 == 0 { 4.9 } else { 2.5 }, 0.0], 5.0), "{k}");
+        }
+        let mut m = ChatterMonitor::default();
+        for k in 0..4 {
+            assert!(!m.update([-5.0 + 3.0 * k as f32, 0.0], 5.0), "{k}");
         }
         // NaN never counts.
         let mut m = ChatterMonitor::default();
