@@ -824,7 +824,7 @@ fn a_killed_firmware_ends_a_faulted_run_and_leaves_nothing() {
     let base = scenario(6.0, seed, Vec::new());
     let mut faults = schedule(&base, seed, 12, 5.0);
     let kill_k = 5000;
-    faults.push(Fault { kind: FaultKind::KillFirmware, at_s: 5.0, duration_s: 0.0, delay_s: 0.0, signal: None });
+    faults.push(Fault::new(FaultKind::KillFirmware, 5.0, 0.0));
     let s = scenario(6.0, seed, faults.clone());
     let path = write_scenario(&s, &dir);
     let ts = s.timing.period().as_secs_f64();
@@ -849,7 +849,7 @@ fn a_killed_firmware_ends_a_faulted_run_and_leaves_nothing() {
 #[test]
 fn the_count_checks_catch_each_disagreement() {
     let ts = 1e-3;
-    let f = |kind, at_s: f64, duration_s: f64, delay_s| Fault { kind, at_s, duration_s, delay_s, signal: None };
+    let f = |kind, at_s: f64, duration_s: f64, delay_s| Fault { delay_s, ..Fault::new(kind, at_s, duration_s) };
     let faults = [
         f(FaultKind::DropCommand, 0.002, 0.002, 0.0),
         f(FaultKind::LateCommand, 0.006, 0.001, 0.0015),

@@ -23,13 +23,13 @@
 use board_twin::BoardDescription;
 use firmware::ControlLaw;
 use rig::{
-    faults::Fault,
+    faults::{Fault, FaultKind},
     record::{PeriodRecord, RunError},
     scenario::Scenario,
 };
 use shared::wire::status;
 
-use crate::twin_link::TwinLink;
+use crate::{random_scenarios::Uniform, twin_link::TwinLink};
 
 /// When every fault of a scenario entry starts, s: after the force ramp, in the move.
 pub const AT_S: f64 = 0.4;
@@ -41,7 +41,8 @@ pub const WITHIN_S: f64 = 0.1;
 pub const STRAY_M: f64 = 0.030;
 
 /// A fault class: its name, and the change of the board's truth (present
-/// from the start) or a scenario fault entry (from [`AT_S`]).
+/// from the start) or a scenario fault entry (from [`AT_S`], or drawn per
+/// run), or either from an onset drawn per run ([`Class::MidRun`]).
 pub enum Class {
     /// No fault: the same scenario with another seed of the sensors' noise,
     /// the healthy arm's own spread (the floor under every row).
@@ -50,21 +51,42 @@ pub enum Class {
     Board(&'static str, fn(&mut BoardDescription)),
     /// A scenario fault entry (its TOML fields but `at_s` and `duration_s`), from [`AT_S`] for 5 s.
     Entry(&'static str, &'static str),
+    /// A scenario fault entry drawn per run (its TOML fields but `at_s` and
+    /// `duration_s`, from the run's draws: [`Class::inject`]), from the onset
+    /// given (s) for 5 s (a spike: its periods).
+    Drawn(&'static str, f64, fn(&mut Uniform) -> String),
+    /// The class (a [`Class::Board`], [`Class::Entry`] or [`Class::Drawn`]) from
+    /// an onset drawn uniformly over the run's periods but the first (seeded per
+    /// run: [`Class::inject`]): a board's change as a `board` fault entry. Its
+    /// name is the class's with ", mid-run".
+    MidRun(String, Box<Class>),
 }
 
 impl Class {
     /// The class's name, as the FMEA's table (docs/hardware.md) gives it.
-    pub fn name(&self) -> &'static str {
+    pub fn name(&self) -> &str {
         match self {
-            Self::Reseed(n) | Self::Board(n, _) | Self::Entry(n, _) => n,
+            Self::Reseed(n) | Self::Board(n, _) | Self::Entry(n, _) | Self::Drawn(n, ..) => n,
+            Self::MidRun(n, _) => n,
         }
     }
 
-    /// `s` with the fault, and its onset, s.
+    /// The class from an onset drawn uniformly in the run.
+    pub fn mid_run(self) -> Self {
+        Self::MidRun(format!("{}, mid-run", self.name()), Box::new(self))
+    }
+
+    /// `s` with the fault, and its onset, s. A class's draws (a spike's
+    /// counts and periods, a drift's rate, a mid-run onset) come from a source
+    /// seeded by the class's name and the scenario's noise seed: the same run
+    /// draws the same fault, every time.
     ///
     /// # Panics
-    /// For an entry that is not a scenario fault (a defect of [`classes`]: its test parses each).
+    /// For an entry that is not a scenario fault, or a [`Class::MidRun`] of a
+    /// [`Class::Reseed`] or of itself (defects of [`classes`]: its test injects each).
     pub fn inject(&self, s: &Scenario) -> (Scenario, f64) {
+        let name = self.name().bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        let mut draws = Uniform::new(name ^ s.sensors.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         let mut f = s.clone();
         match self {
             Self::Reseed(_) => {
@@ -76,13 +98,57 @@ impl Class {
                 (f, 0.0)
             }
             Self::Entry(_, entry) => {
-                let fault: Fault = toml::from_str(&format!("{entry}\nat_s = {AT_S}\nduration_s = 5.0\n"))
-                    .unwrap_or_else(|e| panic!("FMEA class {}: {e}", self.name()));
-                f.faults.push(fault);
+                f.faults.push(self.entry(entry, AT_S));
                 (f, AT_S)
+            }
+            Self::Drawn(_, at, draw) => {
+                f.faults.push(self.entry(&draw(&mut draws), *at));
+                (f, *at)
+            }
+            Self::MidRun(_, class) => {
+                let periods = s.timing.periods();
+                let k = 1 + ((draws.draw() * (periods - 1) as f64) as u64).min(periods.saturating_sub(2));
+                let at = s.timing.period().sample(k).as_secs_f64();
+                let fault = match class.as_ref() {
+                    Self::Board(_, change) => {
+                        let mut board = s.board;
+                        change(&mut board);
+                        Fault { board: Some(board), ..Fault::new(FaultKind::Board, at, 5.0) }
+                    }
+                    Self::Entry(_, entry) => self.entry(entry, at),
+                    Self::Drawn(_, _, draw) => self.entry(&draw(&mut draws), at),
+                    Self::Reseed(_) | Self::MidRun(..) => panic!("FMEA class {}: no onset to draw", self.name()),
+                };
+                f.faults.push(fault);
+                (f, at)
             }
         }
     }
+
+    /// The scenario fault entry `entry` (its TOML fields but `at_s` and `duration_s`) from `at` s for 5 s (a spike: its periods).
+    fn entry(&self, entry: &str, at: f64) -> Fault {
+        let mut fault: Fault =
+            toml::from_str(&format!("at_s = {at}\n{entry}\n")).unwrap_or_else(|e| panic!("FMEA class {}: {e}", self.name()));
+        if fault.kind != FaultKind::EncoderSpike {
+            fault.duration_s = 5.0;
+        }
+        fault
+    }
+}
+
+/// A spike of 1 to 100 counts, either sign, for 1 to 5 periods, on `signal`: its entry's fields.
+fn spike(signal: &str, r: &mut Uniform) -> String {
+    let counts = 1 + (r.draw() * 100.0).min(99.0) as i32;
+    let sign = if r.draw() < 0.5 { -1 } else { 1 };
+    let periods = 1 + (r.draw() * 5.0).min(4.0) as u32;
+    format!("kind = \"encoder_spike\"\nsignal = \"{signal}\"\ncounts = {}\nperiods = {periods}", sign * counts)
+}
+
+/// An offset drifting at 0.05 to 0.5 N/s, either sign, on `signal`: its entry's fields.
+fn drift(signal: &str, r: &mut Uniform) -> String {
+    let rate = 0.05 + 0.45 * r.draw();
+    let sign = if r.draw() < 0.5 { -1.0 } else { 1.0 };
+    format!("kind = \"load_cell_drift\"\nsignal = \"{signal}\"\nrate_n_per_s = {}", sign * rate)
 }
 
 /// One encoder count short of 10 degrees, counts of 16 384 per turn.
@@ -94,10 +160,19 @@ fn shift(zero: &mut f64, by: f64) {
     *zero = (*zero + by).rem_euclid(16384.0);
 }
 
-/// The FMEA's fault classes (docs/hardware.md "FMEA"), in its table's order.
+/// The FMEA's fault classes (docs/hardware.md "FMEA"), in its table's order:
+/// issue 66's, the faults of a real arm (issue 80: spikes, drifts, the belt
+/// sensor's gain and sign), then every one of them (but no fault) from an
+/// onset drawn in the run ([`Class::MidRun`]).
 pub fn classes() -> Vec<Class> {
-    use Class::{Board, Entry};
-    vec![
+    let mid = fixed_onsets().into_iter().skip(1).map(Class::mid_run);
+    fixed_onsets().into_iter().chain(mid).collect()
+}
+
+/// The classes from the start, [`AT_S`] or their own onset (no fault first).
+fn fixed_onsets() -> Vec<Class> {
+    use Class::{Board, Drawn, Entry};
+    let old = vec![
         Class::Reseed("no fault (another noise seed)"),
         Board("motor 1 reversed", |b| b.motor1.reversed = true),
         Board("motor 2 reversed", |b| b.motor2.reversed = true),
@@ -140,7 +215,18 @@ pub fn classes() -> Vec<Class> {
         Entry("DMA direct mode error", "kind = \"dma_direct_mode_error\""),
         Entry("DMA late transfer", "kind = \"dma_late_transfer\""),
         Entry("encoder chip select stuck", "kind = \"stuck_chip_select\"\nsignal = \"theta1\""),
-    ]
+    ];
+    // Issue 80: the faults a real arm has, and every class from mid-run.
+    let more = vec![
+        Drawn("theta1 encoder spikes", AT_S, |r| spike("theta1", r)),
+        Drawn("elbow encoder spikes", AT_S, |r| spike("elbow", r)),
+        Drawn("load cell tangential offset drifts", AT_S, |r| drift("f_t", r)),
+        Drawn("load cell normal offset drifts", AT_S, |r| drift("f_n", r)),
+        Drawn("belt sensor gain x0.5", 0.0, |_| "kind = \"belt_gain\"\ngain = 0.5".into()),
+        Drawn("belt sensor gain x2", 0.0, |_| "kind = \"belt_gain\"\ngain = 2.0".into()),
+        Drawn("belt sensor reversed", 0.0, |_| "kind = \"belt_gain\"\ngain = -1.0".into()),
+    ];
+    old.into_iter().chain(more).collect()
 }
 
 /// `s` on the board twin running law `L`: every period's record, and the error if the run stopped.
@@ -285,9 +371,49 @@ mod tests {
             let (f, onset) = c.inject(&s);
             match c {
                 Class::Entry(..) => assert_eq!((f.faults.len(), onset), (s.faults.len() + 1, AT_S), "{}", c.name()),
+                Class::Drawn(_, at, _) => assert_eq!((f.faults.len(), onset), (s.faults.len() + 1, *at), "{}", c.name()),
+                Class::MidRun(..) => {
+                    assert_eq!(f.faults.len(), s.faults.len() + 1, "{}", c.name());
+                    let ts = s.timing.period().as_secs_f64();
+                    assert!(onset >= ts && onset < s.timing.duration_s, "{}: onset {onset}", c.name());
+                    assert_eq!(f.faults.last().unwrap().periods(s.timing.period()).start, (onset / ts).round() as u64);
+                    assert_eq!(format!("{:?}", c.inject(&s).0), format!("{f:?}"), "{}: the same draws every time", c.name());
+                }
                 _ => assert_eq!(f.faults.len(), s.faults.len(), "{}", c.name()),
             }
+            f.validate().unwrap_or_else(|e| panic!("{}: {e}", c.name()));
         }
+        // Every class but no fault has its mid-run variant, after the others.
+        assert_eq!(classes.len(), 2 * 48 + 1);
+        for (a, b) in classes[1..49].iter().zip(&classes[49..]) {
+            assert_eq!(format!("{}, mid-run", a.name()), b.name());
+        }
+        // The onsets drawn over many runs span the run, uniformly (a tenth per
+        // tenth within 3 standard deviations of 2 000 draws: 200 +- 40).
+        let mut tenths = [0usize; 10];
+        for seed in 0..2000 {
+            let mut s = s.clone();
+            s.timing.duration_s = 1.0;
+            s.sensors.seed = seed;
+            let (_, onset) = classes[60].inject(&s);
+            tenths[((onset * 10.0) as usize).min(9)] += 1;
+        }
+        assert!(tenths.iter().all(|&n| (160..=240).contains(&n)), "{tenths:?}");
+        // The draws of the spikes and drifts span their ranges.
+        let (mut counts, mut periods, mut rates) = (Vec::new(), Vec::new(), Vec::new());
+        for seed in 0..500 {
+            let mut s = s.clone();
+            s.sensors.seed = seed;
+            let spike = *classes[42].inject(&s).0.faults.last().unwrap();
+            counts.push(spike.counts.unwrap());
+            periods.push(spike.spike_periods.unwrap());
+            rates.push(classes[45].inject(&s).0.faults.last().unwrap().rate_n_per_s.unwrap());
+        }
+        assert_eq!((counts.iter().min(), counts.iter().max()), (Some(&-100), Some(&100)));
+        assert!(!counts.contains(&0));
+        assert_eq!((periods.iter().min(), periods.iter().max()), (Some(&1), Some(&5)));
+        assert!(rates.iter().all(|r| (0.05..=0.5).contains(&r.abs())));
+        assert!(rates.iter().any(|r| *r < -0.45) && rates.iter().any(|r| *r > 0.45));
         let mut names: Vec<_> = classes.iter().map(Class::name).collect();
         names.sort_unstable();
         names.dedup();

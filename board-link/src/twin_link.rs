@@ -145,9 +145,17 @@ pub fn answer(frame: &SensorFrame, app_command: &ActuatorCommand, telemetry: sha
 /// acquisition fault (`dma_transfer_error` TEIF, `dma_fifo_error` FEIF,
 /// `dma_direct_mode_error` DMEIF, `dma_late_transfer` the deadline's
 /// `Timeout`; two at once: the last listed in the scenario), a stuck chip
-/// select the encoder's `chip_select_stuck`.
+/// select the encoder's `chip_select_stuck`. The sensors' faults the devices
+/// make (`encoder_spike`, `load_cell_drift`, `belt_gain`) and the board's truth
+/// (`board`) are the plan's, as the wire-level sensor model takes them.
 pub fn bus_faults(plan: &FaultPlan, k: u64) -> BusFaults {
-    let mut b = BusFaults::default();
+    let mut b = BusFaults {
+        encoder_spike: [plan.spike_counts(Signal::Theta1, k), plan.spike_counts(Signal::Elbow, k)],
+        load_offsets_n: plan.load_offsets_n(k),
+        belt_gain: plan.belt_gain(k),
+        board: plan.board(k),
+        ..BusFaults::default()
+    };
     for (kind, signal) in plan.board_faults(k) {
         let encoder = match signal {
             Some(Signal::Theta1) => Some(0),

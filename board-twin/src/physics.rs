@@ -29,8 +29,9 @@ pub struct ArmState {
     pub belt_travel_m: f64,
 }
 
-/// Faults on the bus this tick (docs/hardware.md "Faults").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Faults on the bus this tick (docs/hardware.md "Faults"), and the sensors'
+/// and the board's faults the devices make (docs/rig.md "Faults").
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BusFaults {
     /// Each encoder's bus and magnet, `[theta1, elbow]`.
     pub encoders: [EncoderFaults; 2],
@@ -47,6 +48,19 @@ pub struct BusFaults {
     /// image's DMA: docs/board.md "The encoders by DMA"); no frame reaches the
     /// encoders.
     pub acquisition: Option<arm_app::AcquisitionFault>,
+    /// How far each encoder's chip reads off `[theta1, elbow]` (by chip select), counts
+    /// (a spike: EMI, a bad sample).
+    pub encoder_spike: [i32; 2],
+    /// The load cell's offsets `[f_t, f_n]`, N, added to the force its front end
+    /// senses (an amplifier's drift); `None`: none.
+    pub load_offsets_n: Option<[f64; 2]>,
+    /// The belt encoder's gain on the travel from this tick (its count carries
+    /// on from where it was, `gain` counts per count of travel); `None`: the
+    /// counter reads the belt's travel.
+    pub belt_gain: Option<f64>,
+    /// The board's truth this tick when a fault changed it (a motor or an
+    /// encoder rewired, weakened or slipped mid-run); `None`: the description's.
+    pub board: Option<BoardDescription>,
 }
 
 /// The board's devices as the arm drives them: the shared bench, the board's
@@ -59,6 +73,14 @@ pub struct BoardPhysics {
     noise: Option<Normal<f64>>,
     /// The amplifiers' last counts (a stuck channel keeps its own).
     last_adc: [u16; 2],
+    /// The board's truth at the last tick (the description, or a fault's).
+    now: BoardDescription,
+    /// The belt's travel at the last tick, whole counts (unwrapped).
+    belt_travel_counts: f64,
+    /// The belt counter's count, unwrapped (fractional under a gain).
+    belt_read: f64,
+    /// How far a gain left the count from the travel, counts (0: none did).
+    belt_offset: f64,
 }
 
 impl BoardPhysics {
@@ -74,7 +96,17 @@ impl BoardPhysics {
         let bench: Shared = std::sync::Arc::new(std::sync::Mutex::new(Bench::default()));
         crate::bench::lock(&bench).adc_counts = Some([0; 2]);
         let noise = (load_noise_n > 0.0).then(|| Normal::new(0.0, load_noise_n).ok()).flatten();
-        Ok(Self { bench, board, rng: ChaCha8Rng::seed_from_u64(seed), noise, last_adc: [0; 2] })
+        Ok(Self {
+            bench,
+            board,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            noise,
+            last_adc: [0; 2],
+            now: board,
+            belt_travel_counts: 0.0,
+            belt_read: 0.0,
+            belt_offset: 0.0,
+        })
     }
 
     /// The bench the device models hold.
@@ -89,38 +121,64 @@ impl BoardPhysics {
 
     /// Sets what the devices sense from `arm` and `faults` (with load-cell noise
     /// when `noisy`): the magnets' chip counts, the ADC's conversions, the belt's
-    /// count (held while stuck), the fault line.
+    /// count (held while stuck, scaled by a gain), the fault line; the board's
+    /// truth is `faults.board` when a fault changed it, the description's otherwise.
     pub fn sense(&mut self, arm: &ArmState, faults: &BusFaults, noisy: bool) {
         let (n_t, n_n) = match (noisy, self.noise) {
             (true, Some(n)) => (n.sample(&mut self.rng), n.sample(&mut self.rng)),
             _ => (0.0, 0.0),
         };
+        self.now = faults.board.unwrap_or(self.board);
         let mut b = crate::bench::lock(&self.bench);
-        let d = &self.board;
+        let d = &self.now;
         let counts = [magnet_counts(arm.x[0], &d.theta1_encoder), magnet_counts(arm.x[2] - arm.x[0], &d.elbow_encoder)];
         b.magnet_counts = if d.encoders_swapped { [counts[1], counts[0]] } else { counts };
+        for (chip, spike) in b.magnet_counts.iter_mut().zip(faults.encoder_spike) {
+            if spike != 0 {
+                *chip += f64::from(spike);
+            }
+        }
         b.encoder_faults = faults.encoders;
         let lc = &d.load_cell;
+        let f = faults.load_offsets_n.map_or(arm.f, |o| [arm.f[0] + o[0], arm.f[1] + o[1]]);
         let fresh = [
-            adc_count(lc.zero_counts[0], lc.counts_per_newton[0], arm.f[0] + n_t),
-            adc_count(lc.zero_counts[1], lc.counts_per_newton[1], arm.f[1] + n_n),
+            adc_count(lc.zero_counts[0], lc.counts_per_newton[0], f[0] + n_t),
+            adc_count(lc.zero_counts[1], lc.counts_per_newton[1], f[1] + n_n),
         ];
         let held = self.last_adc;
         let counts = [0, 1].map(|i| if faults.adc_stuck[i] { held[i] } else { fresh[i] });
         self.last_adc = counts;
         b.adc_counts = (!faults.missing_conversion).then_some(counts);
+        let travel_counts = (arm.belt_travel_m * d.belt_counts_per_metre).floor();
         if !faults.belt_stuck {
-            b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
+            match faults.belt_gain {
+                Some(gain) => {
+                    self.belt_read += gain * (travel_counts - self.belt_travel_counts);
+                    self.belt_offset = self.belt_read - travel_counts;
+                    b.belt_count = belt_count(self.belt_read, 1.0);
+                }
+                // The travel, and where a gain left the count.
+                None if self.belt_offset != 0.0 => {
+                    self.belt_read = travel_counts + self.belt_offset;
+                    b.belt_count = belt_count(self.belt_read, 1.0);
+                }
+                None => {
+                    self.belt_read = travel_counts;
+                    b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
+                }
+            }
         }
+        self.belt_travel_counts = travel_counts;
         b.driver_fault = faults.driver_fault;
         b.acquisition = faults.acquisition;
     }
 
     /// The joint torques `[u1, u2]` (N m) the drivers make from the outputs on
-    /// the bench now, with full-scale duty `max_duty` counts (the twin's
-    /// description; an emulated TIM3's ARR + 1).
+    /// the bench now, through the motors of the last [`BoardPhysics::sense`]'s
+    /// board, with full-scale duty `max_duty` counts (the twin's description; an
+    /// emulated TIM3's ARR + 1).
     pub fn torques(&self, max_duty: u16) -> [f64; 2] {
-        joint_torques(&self.bench, &BoardDescription { pwm_max_duty: max_duty, ..self.board })
+        joint_torques(&self.bench, &BoardDescription { pwm_max_duty: max_duty, ..self.now })
     }
 
     /// Holds the enable button down (`true`) or lets it go.
@@ -134,4 +192,49 @@ fn magnet_counts(angle: f64, mounting: &EncoderMounting) -> f64 {
     let counts = angle / std::f64::consts::TAU * ENCODER_COUNTS;
     let signed = if mounting.reversed { -counts } else { counts };
     signed + mounting.zero_count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The belt's counter under a gain: from the onset it counts `gain` times the
+    /// travel, carrying on from its count; after, the travel again, from where
+    /// the gain left it. No gain: the travel's count, as ever.
+    #[test]
+    fn a_belt_gain_scales_the_counts_from_its_onset_and_the_counter_carries_on() {
+        let mut p = BoardPhysics::new(BoardDescription::default(), 1, 0.0).unwrap();
+        let mut counts = Vec::new();
+        for k in 0..8u32 {
+            let arm = ArmState { x: [0.0; 4], f: [0.0; 2], belt_travel_m: -4e-4 * f64::from(k) };
+            let belt_gain = (2..5).contains(&k).then_some(-0.5);
+            p.sense(&arm, &BusFaults { belt_gain, ..BusFaults::default() }, false);
+            counts.push(i32::from(crate::bench::lock(p.bench()).belt_count as i16));
+        }
+        assert_eq!(counts, [0, -400, -200, 0, 200, -200, -600, -1000]);
+    }
+
+    /// A spike adds its counts to the chip's magnet; a drift its newtons to the
+    /// force; a board fault's truth replaces the description's for the tick.
+    #[test]
+    fn spikes_offsets_and_a_board_fault_act_on_the_devices() {
+        let mut p = BoardPhysics::new(BoardDescription::default(), 1, 0.0).unwrap();
+        let arm = ArmState { x: [0.5, 0.0, 0.2, 0.0], f: [1.0, 5.0], belt_travel_m: 0.0 };
+        p.sense(&arm, &BusFaults::default(), false);
+        let (magnets, adc) = {
+            let b = crate::bench::lock(p.bench());
+            (b.magnet_counts, b.adc_counts.unwrap())
+        };
+        let faults = BusFaults { encoder_spike: [0, -7], load_offsets_n: Some([0.0, 25.0 / 2048.0 * 3.0]), ..BusFaults::default() };
+        p.sense(&arm, &faults, false);
+        let b = crate::bench::lock(p.bench());
+        assert_eq!(b.magnet_counts, [magnets[0], magnets[1] - 7.0]);
+        assert_eq!(b.adc_counts.unwrap(), [adc[0], adc[1] + 3]);
+        drop(b);
+        let mut reversed = BoardDescription::default();
+        reversed.theta1_encoder.reversed = true;
+        p.sense(&arm, &BusFaults { board: Some(reversed), ..BusFaults::default() }, false);
+        assert_eq!(crate::bench::lock(p.bench()).magnet_counts[0], -magnets[0]);
+        assert_eq!(p.board(), &BoardDescription::default(), "the description stays");
+    }
 }

@@ -216,7 +216,7 @@ fn the_scenario_properties_catch_out_of_bounds_scenarios_and_placeless_errors() 
     assert!(e.contains("breaks documented bounds"), "{e}");
     let mut unused_nan = ok.clone();
     unused_nan.faults =
-        vec![rig::faults::Fault { kind: rig::faults::FaultKind::DropCommand, at_s: 1.0, duration_s: 0.0, delay_s: f64::NAN, signal: None }];
+        vec![rig::faults::Fault { delay_s: f64::NAN, ..rig::faults::Fault::new(rig::faults::FaultKind::DropCommand, 1.0, 0.0) }];
     let e = check_accepted(&unused_nan).unwrap_err();
     assert!(e.contains("delay_s"), "{e}");
     let mut blank = ok;

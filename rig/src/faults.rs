@@ -8,6 +8,7 @@
 
 use std::ops::Range;
 
+use board_description::BoardDescription;
 use serde::{Deserialize, Serialize};
 use shared::time::{Duration, Period};
 
@@ -84,6 +85,30 @@ pub enum FaultKind {
     /// (theta1: PA4, elbow: PB0) reads low after its release (GPIO IDR). Both
     /// readings of the period invalid.
     StuckChipSelect,
+    /// Sensor: the encoder (`signal` theta1 or elbow) reads `counts` (signed,
+    /// 1 to 100 in magnitude, counts of the encoder's resolution: 16 384 a turn
+    /// on the reference board) off for `periods` (1 to 5) periods from `at_s`,
+    /// then right again (a glitch: EMI on the SPI lines, a chip's bad sample).
+    /// The window is those periods (`duration_s` is refused).
+    EncoderSpike,
+    /// Sensor: the load cell's axis (`signal` f_t or f_n) reads an offset growing
+    /// at `rate_n_per_s` (N/s, signed, 0.05 to 0.5 in magnitude) from `at_s`,
+    /// `rate (t_k - at_s)` at sample time `t_k`, gone after the window (an
+    /// amplifier's offset drifting with temperature).
+    LoadCellDrift,
+    /// Sensor: the belt encoder counts `gain` (finite, 0.01 to 100 in
+    /// magnitude, negative: the other way) times the belt's travel from `at_s`
+    /// (a slipping or wrongly geared wheel, its A and B lines swapped); the
+    /// count carries on from where it was, so the belt speed the firmware reads
+    /// is `gain` times the true one. After the window it counts the travel
+    /// again, from where the gain left it.
+    BeltGain,
+    /// Board (twin and emulated): from `at_s`, the board's physical truth is
+    /// `board` (a whole `[board]` table: its fields left out take the
+    /// reference board's values), instead of the scenario's `[board]`: a motor
+    /// or an encoder rewired, weakened or slipped mid-run. The firmware's
+    /// calibration stays what it was.
+    Board,
 }
 
 impl FaultKind {
@@ -124,6 +149,21 @@ pub struct Fault {
     /// Sensor faults: which sensor.
     #[serde(default)]
     pub signal: Option<Signal>,
+    /// `encoder_spike`: how far off the encoder reads, counts (signed, 1 to 100 in magnitude).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<i32>,
+    /// `encoder_spike`: for how many periods (1 to 5); the scenario's key is `periods`.
+    #[serde(default, rename = "periods", skip_serializing_if = "Option::is_none")]
+    pub spike_periods: Option<u32>,
+    /// `load_cell_drift`: the offset's rate, N/s (signed, 0.05 to 0.5 in magnitude).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate_n_per_s: Option<f64>,
+    /// `belt_gain`: the belt encoder's gain on the travel (0.01 to 100 in magnitude, signed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain: Option<f64>,
+    /// `board`: the board's truth in the window (a whole `[board]` table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<BoardDescription>,
 }
 
 impl Fault {
@@ -134,11 +174,99 @@ impl Fault {
     /// holds at least one sample time, a fault at `at_s = 3.0005` with `Ts = 1 ms`
     /// acts from period 3001 whatever its kind, and one at an exact sample time acts
     /// from that sample. The one rounding rule of every fault (docs/rig.md "Faults").
+    ///
+    /// An `encoder_spike`'s window is its `periods` periods from the first.
     pub fn periods(&self, period: Period) -> Range<u64> {
         let ts = period.as_us();
         let at = (self.at_s * 1e6).round().max(0.0) as u64;
         let len = ((self.duration_s * 1e6).round().max(0.0) as u64).max(ts);
-        at.div_ceil(ts)..(at + len).div_ceil(ts)
+        let first = at.div_ceil(ts);
+        match (self.kind, self.spike_periods) {
+            (FaultKind::EncoderSpike, Some(n)) => first..first + u64::from(n),
+            _ => first..(at + len).div_ceil(ts),
+        }
+    }
+
+    /// A fault of `kind` over `[at_s, at_s + duration_s)`, every other field
+    /// left out (its TOML's defaults): add them with struct update syntax.
+    pub fn new(kind: FaultKind, at_s: f64, duration_s: f64) -> Self {
+        Self {
+            kind,
+            at_s,
+            duration_s,
+            delay_s: 0.0,
+            signal: None,
+            counts: None,
+            spike_periods: None,
+            rate_n_per_s: None,
+            gain: None,
+            board: None,
+        }
+    }
+
+    /// Checks the fields only some kinds take (`counts`, `periods`,
+    /// `rate_n_per_s`, `gain`, `board`): each present exactly for its kind, in its range.
+    fn check_kind_fields(&self) -> Result<(), String> {
+        use FaultKind::{BeltGain, Board, EncoderSpike, LoadCellDrift};
+        let given = [
+            ("counts", self.counts.is_some(), EncoderSpike),
+            ("periods", self.spike_periods.is_some(), EncoderSpike),
+            ("rate_n_per_s", self.rate_n_per_s.is_some(), LoadCellDrift),
+            ("gain", self.gain.is_some(), BeltGain),
+            ("board", self.board.is_some(), Board),
+        ];
+        for (key, present, kind) in given {
+            if present && self.kind != kind {
+                return Err(format!("`{key}` is a key of {} faults only", serde_kind(kind)));
+            }
+            if !present && self.kind == kind {
+                return Err(format!("a {} fault needs `{key}`", serde_kind(kind)));
+            }
+        }
+        match self.kind {
+            EncoderSpike => {
+                if !matches!(self.signal, Some(Signal::Theta1 | Signal::Elbow)) {
+                    return Err("an encoder_spike needs `signal` theta1 or elbow".into());
+                }
+                let c = self.counts.unwrap_or(0);
+                if !(1..=100).contains(&c.unsigned_abs()) {
+                    return Err(format!("counts = {c}: 1 to 100 encoder counts, either sign"));
+                }
+                let n = self.spike_periods.unwrap_or(0);
+                if !(1..=5).contains(&n) {
+                    return Err(format!("periods = {n}: a spike of 1 to 5 periods"));
+                }
+                if self.duration_s != 0.0 {
+                    return Err(format!("duration_s = {}: an encoder_spike lasts its `periods`; leave duration_s out", self.duration_s));
+                }
+            }
+            LoadCellDrift => {
+                if !matches!(self.signal, Some(Signal::FT | Signal::FN)) {
+                    return Err("a load_cell_drift needs `signal` f_t or f_n".into());
+                }
+                let r = self.rate_n_per_s.unwrap_or(0.0);
+                if !(r.is_finite() && (0.05..=0.5).contains(&r.abs())) {
+                    return Err(format!("rate_n_per_s = {r}: 0.05 to 0.5 N/s, either sign"));
+                }
+            }
+            BeltGain => {
+                if self.signal.is_some_and(|s| s != Signal::Belt) {
+                    return Err("a belt_gain acts on the belt encoder: `signal` belt or none".into());
+                }
+                let g = self.gain.unwrap_or(0.0);
+                if !(g.is_finite() && (0.01..=100.0).contains(&g.abs())) {
+                    return Err(format!("gain = {g}: 0.01 to 100 in magnitude, negative for the other way"));
+                }
+            }
+            Board => {
+                if self.signal.is_some() {
+                    return Err("a board fault takes no `signal` (its `board` table says what changes)".into());
+                }
+                self.board.as_ref().map_or(Ok(()), BoardDescription::check).map_err(|e| format!("the fault's {e}"))?;
+            }
+            _ => {}
+        }
+        Ok(())
     }
 
     /// Checks the fault's fields; returns what is wrong.
@@ -180,8 +308,13 @@ impl Fault {
         if self.kind == FaultKind::Stall && !(self.duration_s > 0.0 && self.duration_s <= 60.0) {
             return Err(format!("duration_s = {}: a stall of (0, 60] s of wall time", self.duration_s));
         }
-        Ok(())
+        self.check_kind_fields()
     }
+}
+
+/// `kind` as a scenario spells it (`encoder_spike`).
+fn serde_kind(kind: FaultKind) -> String {
+    serde_json::to_value(kind).ok().and_then(|v| v.as_str().map(str::to_owned)).unwrap_or_else(|| format!("{kind:?}"))
 }
 
 /// The faults of a run, each compiled once into the periods it acts in
@@ -189,12 +322,49 @@ impl Fault {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FaultPlan {
     faults: Vec<(Fault, Range<u64>)>,
+    /// The control period, us.
+    period_us: u64,
 }
 
 impl FaultPlan {
     /// The plan of `faults` at control period `period`.
     pub fn new(faults: &[Fault], period: Period) -> Self {
-        Self { faults: faults.iter().map(|f| (*f, f.periods(period))).collect() }
+        Self { faults: faults.iter().map(|f| (*f, f.periods(period))).collect(), period_us: period.as_us() }
+    }
+
+    /// How far the encoder `signal` (theta1 or elbow) reads off in period `k`
+    /// by the `encoder_spike` faults acting in it, counts (their sum).
+    pub fn spike_counts(&self, signal: Signal, k: u64) -> i32 {
+        self.active(FaultKind::EncoderSpike, k).filter(|f| f.signal == Some(signal)).filter_map(|f| f.counts).sum()
+    }
+
+    /// The load cell's offsets `[f_t, f_n]` in period `k` by the
+    /// `load_cell_drift` faults acting in it, N: `rate_n_per_s (t_k - at_s)`,
+    /// `t_k` the period's sample time and `at_s` rounded to the microsecond as
+    /// [`Fault::periods`] rounds it; `None` when no drift acts (the readings
+    /// then are the model's own, untouched).
+    pub fn load_offsets_n(&self, k: u64) -> Option<[f64; 2]> {
+        let t_us = k * self.period_us;
+        let mut offsets = None;
+        for f in self.active(FaultKind::LoadCellDrift, k) {
+            let at_us = (f.at_s * 1e6).round().max(0.0) as u64;
+            let o: &mut [f64; 2] = offsets.get_or_insert([0.0; 2]);
+            let axis = usize::from(f.signal == Some(Signal::FN));
+            o[axis] += f.rate_n_per_s.unwrap_or(0.0) * (t_us.saturating_sub(at_us) as f64 * 1e-6);
+        }
+        offsets
+    }
+
+    /// The belt encoder's gain on the travel in period `k` (`belt_gain`: the
+    /// product of those acting in it), `None` when none acts.
+    pub fn belt_gain(&self, k: u64) -> Option<f64> {
+        self.active(FaultKind::BeltGain, k).filter_map(|f| f.gain).reduce(|a, b| a * b)
+    }
+
+    /// The board's truth in period `k` by a `board` fault acting in it (the
+    /// last listed of those), `None` when none acts (the scenario's `[board]`).
+    pub fn board(&self, k: u64) -> Option<BoardDescription> {
+        self.active(FaultKind::Board, k).filter_map(|f| f.board).last()
     }
 
     /// Faults of `kind` acting in period `k`.
@@ -272,7 +442,8 @@ impl LinkKind {
         match self {
             Self::Ipc => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, Stall, KillFirmware],
             Self::PilQemu => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, KillFirmware],
-            Self::InProcess | Self::PilSerial => &EVERYWHERE,
+            Self::InProcess => &[LateCommand, DropCommand, StuckSensor, NanSensor, OutOfRange, EncoderSpike, LoadCellDrift, BeltGain],
+            Self::PilSerial => &EVERYWHERE,
             // The twin makes its readings on the bus: the plant side's frame
             // faults (nan_sensor, out_of_range) do not reach it; a late step needs
             // a clock, which the twin's steps do not take.
@@ -289,6 +460,10 @@ impl LinkKind {
                 DmaDirectModeError,
                 DmaLateTransfer,
                 StuckChipSelect,
+                EncoderSpike,
+                LoadCellDrift,
+                BeltGain,
+                Board,
             ],
         }
     }
@@ -315,6 +490,14 @@ impl LinkKind {
                  to test a lost board, cut its power or unplug it during a run"
                     .into()
             }
+            (FaultKind::Board, link) => format!(
+                "fault board changes the board's physical truth, which only a board has: run on the board twin (`run --link twin`) \
+                 or the emulated board (`run --link emulator`), not the {link:?} link"
+            ),
+            (kind @ (FaultKind::EncoderSpike | FaultKind::LoadCellDrift | FaultKind::BeltGain), link) => format!(
+                "fault {kind:?} is made by the rig's sensor model or the board's devices: run in process (`run --in-process`), \
+                 on the board twin (`run --link twin`) or the emulated board (`run --link emulator`), not the {link:?} link"
+            ),
             (kind, link) if kind.is_bus_fault() => {
                 format!(
                     "fault {kind:?} acts on the board's bus and devices: run on the board twin (`run --link twin`) or the emulated board \
@@ -490,7 +673,7 @@ pub fn random_schedule(spec: &RandomSchedule) -> Result<Vec<Fault>, String> {
         let start = first + i * slot + rng.random_range(0..=slot - spec.span_periods(kind) - 2);
         let signal = matches!(kind, FaultKind::StuckSensor | FaultKind::NanSensor | FaultKind::OutOfRange)
             .then(|| SIGNALS[rng.random_range(0..SIGNALS.len())]);
-        faults.push(Fault { kind, at_s: start as f64 * ts, duration_s: duration_s.unwrap_or(f64::from(periods) * ts), delay_s, signal });
+        faults.push(Fault { delay_s, signal, ..Fault::new(kind, start as f64 * ts, duration_s.unwrap_or(f64::from(periods) * ts)) });
     }
     Ok(faults)
 }

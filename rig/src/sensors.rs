@@ -16,6 +16,11 @@ pub trait SensorModel {
     /// theta2, theta2_dot]` (rad, rad/s), tip force `f = [f_t, f_n]` (N), belt
     /// speed `v_belt` (m/s).
     fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame;
+
+    /// The joint encoders' resolution, bits a turn (their counts wrap at `2^bits`).
+    fn encoder_bits(&self) -> u8 {
+        wire::ENCODER_BITS
+    }
 }
 
 /// The sensor models of one run (docs/hardware.md "Sensors").
@@ -31,7 +36,11 @@ pub struct Sensors {
 /// smoltcp's `FaultInjector` wraps a device): the inner model makes the frame,
 /// then this period's faults corrupt it. A stuck sensor repeats its previous
 /// count, a NaN one sends count 0 with its invalid bit in `flags`, an
-/// out-of-range one sends a count outside its range. The inner model runs the
+/// out-of-range one sends a count outside its range, a spiking encoder its
+/// count plus the spike's (wrapped at the encoder's `2^bits`). A drifting load
+/// cell and a belt encoder's gain act on what the inner model senses (the
+/// force plus the offset, the belt speed times the gain), so that the
+/// quantisation is the sensor's own, as on the board. The inner model runs the
 /// same with or without faults (its noise stream is drawn identically), so a
 /// fault changes nothing else.
 #[derive(Debug, Clone)]
@@ -55,8 +64,15 @@ impl<S: SensorModel> SensorFaults<S> {
 
 impl<S: SensorModel> SensorModel for SensorFaults<S> {
     fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
+        let k = u64::from(seq);
+        let f = self.plan.load_offsets_n(k).map_or(f, |o| [f[0] + o[0], f[1] + o[1]]);
+        let v_belt = self.plan.belt_gain(k).map_or(v_belt, |g| g * v_belt);
         let mut frame = self.inner.frame(seq, t_us, x, f, v_belt);
-        for (kind, signal) in self.plan.sensor_faults(u64::from(seq)) {
+        let wrap = 1i64 << self.inner.encoder_bits();
+        let spike = |count: u16, signal| (i64::from(count) + i64::from(self.plan.spike_counts(signal, k))).rem_euclid(wrap) as u16;
+        frame.theta1_count = spike(frame.theta1_count, Signal::Theta1);
+        frame.elbow_count = spike(frame.elbow_count, Signal::Elbow);
+        for (kind, signal) in self.plan.sensor_faults(k) {
             let last = &self.last;
             match (kind, signal) {
                 (FaultKind::StuckSensor, Signal::Theta1) => frame.theta1_count = last.theta1_count,
@@ -103,6 +119,10 @@ impl Sensors {
 }
 
 impl SensorModel for Sensors {
+    fn encoder_bits(&self) -> u8 {
+        self.encoder_bits
+    }
+
     /// Quantised encoders and load cell with seeded noise, the belt encoder in
     /// mm/s. A non-finite reading is sent as count 0 with its invalid bit set in `flags`.
     fn frame(&mut self, seq: u32, t_us: u64, x: &[f64; 4], f: [f64; 2], v_belt: f64) -> SensorFrame {
@@ -188,7 +208,7 @@ mod tests {
             .map(|k| bare.frame(k, u64::from(k) * 1000, &[x[0] + 1e-3 * f64::from(k), 0.0, x[2], 0.0], [0.0, 10.0], -0.4))
             .collect();
         assert_eq!(frames(&[]), plain);
-        let stuck = Fault { kind: FaultKind::StuckSensor, at_s: 0.005, duration_s: 0.003, delay_s: 0.0, signal: Some(Signal::Theta1) };
+        let stuck = Fault { signal: Some(Signal::Theta1), ..Fault::new(FaultKind::StuckSensor, 0.005, 0.003) };
         let got = frames(&[stuck]);
         for k in 0..10 {
             let faulted = (5..8).contains(&k);
@@ -196,9 +216,37 @@ mod tests {
             assert_eq!(got[k].theta1_count, want_theta1, "period {k}");
             assert_eq!((got[k].f_n_code, got[k].elbow_count), (plain[k].f_n_code, plain[k].elbow_count), "period {k}");
         }
-        let nan = Fault { kind: FaultKind::NanSensor, at_s: 0.002, duration_s: 0.0, delay_s: 0.0, signal: Some(Signal::FN) };
+        let nan = Fault { signal: Some(Signal::FN), ..Fault::new(FaultKind::NanSensor, 0.002, 0.0) };
         let got = frames(&[nan]);
         assert_eq!(got[2].flags & frame_flags::F_N_INVALID, frame_flags::F_N_INVALID);
         assert_eq!(got[3], plain[3]);
+        // A spike: the count off by `counts` (wrapped at 2^14) for `periods` periods.
+        let spike = Fault {
+            signal: Some(Signal::Elbow),
+            counts: Some(-100),
+            spike_periods: Some(2),
+            ..Fault::new(FaultKind::EncoderSpike, 0.003, 0.0)
+        };
+        let got = frames(&[spike]);
+        for k in 0..10 {
+            let off = if (3..5).contains(&k) { -100 } else { 0 };
+            assert_eq!(i64::from(got[k].elbow_count), (i64::from(plain[k].elbow_count) + off).rem_euclid(16384), "period {k}");
+            assert_eq!(got[k].theta1_count, plain[k].theta1_count);
+        }
+        // A drift of 0.5 N/s on f_n from 2 ms: 0.5 mN at period 3, 3.5 mN at 9 (the code's lsb is 12.2 mN, noise 20 mN).
+        let drift = Fault { signal: Some(Signal::FN), rate_n_per_s: Some(0.5), ..Fault::new(FaultKind::LoadCellDrift, 0.002, 1.0) };
+        let plan = FaultPlan::new(&[drift], shared::Period::MILLISECOND);
+        assert_eq!(plan.load_offsets_n(1), None);
+        assert_eq!(plan.load_offsets_n(2), Some([0.0, 0.0]));
+        assert!((plan.load_offsets_n(9).unwrap()[1] - 0.0035).abs() < 1e-12);
+        let got = frames(&[Fault { rate_n_per_s: Some(-0.5), ..drift }]);
+        assert_eq!(got[..2], plain[..2]);
+        // A belt gain: the speed read times the gain (-0.4 m/s: -400 mm/s).
+        for (gain, want) in [(0.5, -200), (2.0, -800), (-1.0, 400)] {
+            let f = Fault { gain: Some(gain), ..Fault::new(FaultKind::BeltGain, 0.004, 0.002) };
+            let got = frames(&[f]);
+            let belt: Vec<i16> = got.iter().map(|f| f.belt_count).collect();
+            assert_eq!(belt, [-400, -400, -400, -400, want, want, -400, -400, -400, -400], "gain {gain}");
+        }
     }
 }

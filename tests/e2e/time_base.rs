@@ -25,11 +25,8 @@ fn scenario(rate_hz: f64) -> (Scenario, Period) {
     s.faults = (-2i32..=2)
         .enumerate()
         .map(|(i, j)| Fault {
-            kind: FaultKind::LateCommand,
-            at_s: (20 + 4 * i) as f64 * p,
-            duration_s: 0.0,
             delay_s: (period.as_us() as i64 + i64::from(j)) as f64 * 1e-6,
-            signal: None,
+            ..Fault::new(FaultKind::LateCommand, (20 + 4 * i) as f64 * p, 0.0)
         })
         .collect();
     s.validate().unwrap();

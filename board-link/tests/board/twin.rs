@@ -361,3 +361,75 @@ fn the_wiring_checks_never_trip_on_1000_random_healthy_scenarios() {
     println!("hybrid law: largest |z_t - z_t*| {:.2} mm (bound 5 mm)", largest_error * 1e3);
     assert!(largest_error < 0.001, "{largest_error}: a tenth of firmware::tracking::TRACKING_M or the bound's margin is gone");
 }
+
+#[test]
+fn the_sensors_faults_reach_the_firmware_the_same_on_the_twin_as_in_process_bit_for_bit() {
+    // A spike on each encoder, a drift on each load-cell axis, the belt
+    // encoder's gain and sign: the wire-level sensor model makes them on the
+    // frame, the twin's devices on the bus; with one duty count per code the
+    // two runs are the same, record for record, and so is the outcome.
+    let text = with_duration(&paper("default"), 2.0);
+    let mut moved = 0;
+    for fault in [
+        "kind = \"encoder_spike\"\nsignal = \"theta1\"\ncounts = 37\nperiods = 3",
+        "kind = \"encoder_spike\"\nsignal = \"elbow\"\ncounts = -100\nperiods = 1",
+        "kind = \"load_cell_drift\"\nsignal = \"f_t\"\nrate_n_per_s = 0.5\nduration_s = 0.8",
+        "kind = \"load_cell_drift\"\nsignal = \"f_n\"\nrate_n_per_s = -0.3\nduration_s = 0.8",
+        "kind = \"belt_gain\"\ngain = 0.5\nduration_s = 0.8",
+        "kind = \"belt_gain\"\ngain = 2.0\nduration_s = 0.8",
+        "kind = \"belt_gain\"\ngain = -1.0\nduration_s = 0.8",
+    ] {
+        let mut s = scenario(&format!("{text}\n[[faults]]\n{fault}\nat_s = 1.0\n"));
+        let (wire, wire_err) = wire_run(&s);
+        s.board = BoardDescription { pwm_max_duty: 2048, ..BoardDescription::default() };
+        let (records, err, _) = twin_run(&s);
+        assert_eq!(format!("{err:?}"), format!("{wire_err:?}"), "{fault}");
+        assert_eq!(records.len(), wire.len(), "{fault}");
+        for (k, (a, b)) in records.iter().zip(&wire).enumerate() {
+            assert_eq!(format!("{a:?}"), format!("{b:?}"), "{fault}: period {k}");
+        }
+        // The fault is there: the run differs from the healthy one.
+        let (healthy, _) = wire_run(&scenario(&text));
+        let differs = wire.iter().zip(&healthy).any(|(a, b)| format!("{a:?}") != format!("{b:?}"));
+        println!("{fault}: {}", if differs { "moved the run" } else { "no change" });
+        moved += usize::from(differs);
+    }
+    // The belt's speed x0.5 or x2 leaves this run as it was: the law reads the
+    // slip's sign, and the belt stays faster than the tip (its frames are
+    // checked in `rig::sensors` and `board_twin::physics`).
+    assert_eq!(moved, 5, "every other fault changed its run");
+}
+
+#[test]
+fn a_board_fault_is_the_board_changed_from_its_onset() {
+    // From period 0, a `board` fault is the scenario's `[board]` changed, bit
+    // for bit; from 1 s, the run is the healthy one up to then, and the
+    // reversed motor is stopped within 0.1 s after.
+    let text = with_duration(&paper("default"), 2.0);
+    let reversed =
+        |at_s: f64| format!("[[faults]]\nkind = \"board\"\nat_s = {at_s}\nduration_s = 5.0\n[faults.board.motor1]\nreversed = true\n");
+    let mut board = scenario(&text);
+    board.board.motor1.reversed = true;
+    let (a, a_err, _) = twin_run(&board);
+    let (b, b_err, _) = twin_run(&scenario(&format!("{text}\n{}\n", reversed(0.0))));
+    assert_eq!(format!("{a_err:?}"), format!("{b_err:?}"));
+    assert!(matches!(a_err, Some(RunError::SafeState { .. })), "{a_err:?}");
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    let (healthy, _, _) = twin_run(&scenario(&text));
+    let (mid, err, link) = twin_run(&scenario(&format!("{text}\n{}\n", reversed(1.0))));
+    assert_eq!(format!("{:?}", &mid[..1000]), format!("{:?}", &healthy[..1000]), "the same run before the onset");
+    match err {
+        Some(RunError::SafeState { k, .. }) => assert!((1000..1100).contains(&k), "stopped at {k}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(!link.twin().drivers_enabled());
+    // The wire-level rig has no board to change: refused, with the links that have one.
+    match wire_run(&scenario(&format!("{text}\n{}\n", reversed(1.0)))) {
+        (records, Some(e @ RunError::Unsupported(_))) => {
+            assert!(records.is_empty());
+            assert!(e.to_string().contains("fault board changes the board's physical truth"), "{e}");
+            assert!(e.to_string().contains("--link twin"), "{e}");
+        }
+        other => panic!("{:?}", other.1),
+    }
+}
