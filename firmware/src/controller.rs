@@ -577,7 +577,9 @@ impl<L: ControlLaw> Firmware<L> {
         let u_raw = out.u;
         let (u, sat) = law::saturate(u_raw, cfg.torque_limit);
         if cfg.runaway_limits && self.chatter.update(u, cfg.torque_limit) {
-            return Err(SafeReason::Unstable);
+            // A command that chatters while a joint already moves against its
+            // motor is a miswired arm, not the law's own failure (issue 80).
+            return Err(if self.wiring.suspects() { SafeReason::Miswired } else { SafeReason::Unstable });
         }
         if sat[0] {
             flags |= status::SATURATED_U1;

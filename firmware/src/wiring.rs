@@ -155,6 +155,14 @@ impl WiringMonitor {
         self.missed
     }
 
+    /// Whether the rule holds at the last period for either motor, its
+    /// confirmation not reached yet: the evidence of a miswired motor when
+    /// another check trips first (issue 80: the chatter check named reversed
+    /// motors and encoders `Unstable`, the law's own failure).
+    pub fn suspects(&self) -> bool {
+        self.run[0] > 0 || self.run[1] > 0
+    }
+
     /// Folds in one period with `m`, the arm's `m l^2` (kg m^2). Returns the
     /// motor (0: `u1`, 1: `u2`) found miswired once the rule held for its
     /// confirmation. Non-finite inputs are no evidence (the other checks see them).

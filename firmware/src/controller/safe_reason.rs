@@ -117,7 +117,7 @@ impl SafeReason {
                 "the tip strayed past its derived bound (the error a quarter's error in mu_hat leaves, plus 5 mm), or away from it faster than that error can grow, under the force law for 3 ms (a motor or sensor wired wrong)"
             }
             Self::Unstable => {
-                "the control law is unstable at this rate: its command chattered, or the force law's tip left its reference or the belt with its gains outside their envelope (raise the rate or lower the gains)"
+                "the control law is unstable at this rate: its command chattered, or the force law's tip left its reference or the belt with its gains outside their envelope (raise the rate or lower the gains; with gains inside it, check the motors' wiring: a reversed motor can chatter first)"
             }
             Self::Saturated => {
                 "the tip strayed past its derived bound under the force law while the law had saturated a motor: the motors cannot hold the arm on its reference (the law's limit, not a wiring fault)"
