@@ -13,7 +13,6 @@ use rand_distr::{Distribution, Normal};
 use crate::{
     adc::adc_count,
     bench::{Bench, EncoderFaults, Shared},
-    counter::belt_count,
     description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
     motor_stage::joint_torques,
 };
@@ -110,7 +109,7 @@ impl BoardPhysics {
         self.last_adc = counts;
         b.adc_counts = (!faults.missing_conversion).then_some(counts);
         if !faults.belt_stuck {
-            b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
+            b.belt_count = drivers::belt::count_at(arm.belt_travel_m, d.belt_counts_per_metre);
         }
         b.driver_fault = faults.driver_fault;
         b.acquisition = faults.acquisition;
