@@ -1,7 +1,8 @@
 //! The belt encoder's quadrature into TIM4's inputs (PB6 = A = TI1, PB7 = B =
 //! TI2): each period, the edges that move TIM4's count from where the last
 //! period left it to the count the belt's travel gives
-//! (`board_twin::counter::belt_count`), in quadrature order for the direction
+//! (`drivers::belt::count_at`, the belt sensor's one model: docs/hardware.md
+//! "The belt sensor's model"), in quadrature order for the direction
 //! (RM0090 18.3.12, encoder mode 3: an edge of A counts up when A differs from B
 //! after it, an edge of B when they are equal), spaced so that TIM4's input
 //! filter (ICxF = 0b0011: 8 samples at 84 MHz, 95 ns) takes each.

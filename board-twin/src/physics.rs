@@ -13,7 +13,6 @@ use rand_distr::{Distribution, Normal};
 use crate::{
     adc::adc_count,
     bench::{Bench, EncoderFaults, Shared},
-    counter::belt_count,
     description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
     motor_stage::joint_torques,
 };
@@ -75,12 +74,9 @@ pub struct BoardPhysics {
     last_adc: [u16; 2],
     /// The board's truth at the last tick (the description, or a fault's).
     now: BoardDescription,
-    /// The belt's travel at the last tick, whole counts (unwrapped).
-    belt_travel_counts: f64,
-    /// The belt counter's count, unwrapped (fractional under a gain).
-    belt_read: f64,
-    /// How far a gain left the count from the travel, counts (0: none did).
-    belt_offset: f64,
+    /// The travel the belt counter reads under a gain fault (the one model,
+    /// `drivers::belt::GainedTravel`).
+    belt_gained: drivers::belt::GainedTravel,
 }
 
 impl BoardPhysics {
@@ -103,9 +99,7 @@ impl BoardPhysics {
             noise,
             last_adc: [0; 2],
             now: board,
-            belt_travel_counts: 0.0,
-            belt_read: 0.0,
-            belt_offset: 0.0,
+            belt_gained: drivers::belt::GainedTravel::default(),
         })
     }
 
@@ -149,26 +143,10 @@ impl BoardPhysics {
         let counts = [0, 1].map(|i| if faults.adc_stuck[i] { held[i] } else { fresh[i] });
         self.last_adc = counts;
         b.adc_counts = (!faults.missing_conversion).then_some(counts);
-        let travel_counts = (arm.belt_travel_m * d.belt_counts_per_metre).floor();
         if !faults.belt_stuck {
-            match faults.belt_gain {
-                Some(gain) => {
-                    self.belt_read += gain * (travel_counts - self.belt_travel_counts);
-                    self.belt_offset = self.belt_read - travel_counts;
-                    b.belt_count = belt_count(self.belt_read, 1.0);
-                }
-                // The travel, and where a gain left the count.
-                None if self.belt_offset != 0.0 => {
-                    self.belt_read = travel_counts + self.belt_offset;
-                    b.belt_count = belt_count(self.belt_read, 1.0);
-                }
-                None => {
-                    self.belt_read = travel_counts;
-                    b.belt_count = belt_count(arm.belt_travel_m, d.belt_counts_per_metre);
-                }
-            }
+            let read = self.belt_gained.read(arm.belt_travel_m, faults.belt_gain);
+            b.belt_count = drivers::belt::count_at(read, d.belt_counts_per_metre);
         }
-        self.belt_travel_counts = travel_counts;
         b.driver_fault = faults.driver_fault;
         b.acquisition = faults.acquisition;
     }

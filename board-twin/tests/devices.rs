@@ -9,7 +9,7 @@ use board_twin::{
     adc::adc_count,
     as5047p::As5047pModel,
     bench::{Bench, Shared, lock},
-    counter::{CounterModel, belt_count},
+    counter::CounterModel,
     motor_stage::{PinModel, PwmModel, Wire, joint_torques},
 };
 use drivers::{
@@ -95,9 +95,9 @@ fn the_adc_saturates_at_its_rails_and_the_counter_wraps_at_16_bits() {
     assert_eq!(adc_count(2048.0, 81.92, 25.0), 4095, "+25 N is 2048 counts above mid-scale: the rail");
     assert_eq!(adc_count(2048.0, 81.92, -30.0), 0);
     assert_eq!(adc_count(2048.0, 81.92, f64::NAN), 0);
-    assert_eq!(belt_count(0.0, 1e6), 0);
-    assert_eq!(belt_count(-1e-6, 1e6), 0xFFFF, "one count back from 0 wraps");
-    assert_eq!(belt_count(0.065536, 1e6), 0, "2^16 counts is a full wrap");
+    assert_eq!(drivers::belt::count_at(0.0, 1e6), 0);
+    assert_eq!(drivers::belt::count_at(-1e-6, 1e6), 0xFFFF, "one count back from 0 wraps");
+    assert_eq!(drivers::belt::count_at(0.065536, 1e6), 0, "2^16 counts is a full wrap");
     // The driver's speed across the wrap: 400 counts in one 1 ms period is 400 mm/s.
     let b = bench();
     lock(&b).belt_count = 0xFF00;

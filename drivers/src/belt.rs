@@ -5,6 +5,14 @@
 //!
 //! embedded-hal 1.0 has no encoder-counter trait, so the board implements
 //! [`QuadratureCounter`] on its timer.
+//!
+//! The belt sensor's one model on every link (docs/hardware.md "The belt
+//! sensor's model"): the counter's value at a period's sample is [`count_at`]
+//! the belt's travel since period 0, and the speed in the frame is
+//! [`BeltEncoder::speed_mm_s`] of it. The board twin and the emulated board set
+//! their counter with [`count_at`] and the `arm` application's [`BeltEncoder`]
+//! reads it; the wire-level links' sensor model (`rig::sensors`) runs the same
+//! pair as [`SampledBelt`].
 
 use core::fmt;
 
@@ -76,8 +84,124 @@ pub fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
     }
 }
 
+/// The counter's value CNT after `travel_m` metres of belt (m, signed) from
+/// where it read 0, at `counts_per_metre` (counts/m, negative when the encoder
+/// counts against the belt's positive direction): the whole counts passed (an
+/// encoder counts edges, so the count is the travel truncated toward minus
+/// infinity), wrapped to the counter's 16 bits (RM0090 "Encoder interface mode",
+/// auto-reload 0xFFFF). A non-finite product reads 0. The reference board has
+/// 1e6 counts/m (docs/hardware.md "The belt sensor's model").
+///
+/// The one rule of the board twin's and the emulated board's TIM4 and of the
+/// wire-level sensor model ([`SampledBelt`]).
+pub fn count_at(travel_m: f64, counts_per_metre: f64) -> u16 {
+    let counts = libm::floor(travel_m * counts_per_metre);
+    if !counts.is_finite() {
+        return 0;
+    }
+    // The Euclidean remainder of a whole number, exact: in [0, 65536).
+    let r = libm::fmod(counts, 65536.0);
+    (if r < 0.0 { r + 65536.0 } else { r }) as u16
+}
+
+/// A [`QuadratureCounter`] whose value is set from outside: the wire-level
+/// sensor model's counter ([`SampledBelt`]), a scripted counter in tests.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SetCounter(pub u16);
+
+impl QuadratureCounter for SetCounter {
+    fn count(&mut self) -> u16 {
+        self.0
+    }
+}
+
+/// The belt sensor sampled once per control period from the belt's travel: the
+/// counter at [`count_at`] the travel, read by a [`BeltEncoder`] (its
+/// differencing over the period, wrap and rounding). The counter reads 0 at
+/// travel 0 when the model is made, so the first sample at travel 0 (period 0,
+/// `t = 0`) reads 0 mm/s: there is no earlier count to difference; from then
+/// on the speed carries the encoder's quantisation (one count of change over a
+/// period, 1 mm/s at 1 kHz and 10 mm/s at 10 kHz on the reference board, and
+/// the count's +-1 jitter from where each sample falls between two counts).
+/// The wire-level links' belt reading (`rig::sensors::Sensors`), the same
+/// numbers as the board links' timer and `arm` application make
+/// (docs/hardware.md "The belt sensor's model").
+#[derive(Debug, Clone)]
+pub struct SampledBelt {
+    counts_per_metre: f64,
+    encoder: BeltEncoder<SetCounter>,
+}
+
+impl SampledBelt {
+    /// The belt sensor of a board with `counts_per_metre` (counts/m, the
+    /// board's truth: `board_description::BoardDescription::belt_counts_per_metre`)
+    /// read by firmware calibrated to `metres_per_count` (m per count) at control
+    /// period `period_s` (s). The reference board: 1e6 and 1e-6.
+    ///
+    /// # Errors
+    /// [`BeltError::InvalidScale`] when `counts_per_metre` is NaN, infinite or
+    /// zero, or [`scale`] refuses `metres_per_count` and `period_s`.
+    pub fn new(counts_per_metre: f64, metres_per_count: f32, period_s: f32) -> Result<Self, BeltError> {
+        if !(counts_per_metre.is_finite() && counts_per_metre != 0.0) {
+            return Err(BeltError::InvalidScale);
+        }
+        Ok(Self { counts_per_metre, encoder: BeltEncoder::new(SetCounter(0), metres_per_count, period_s)? })
+    }
+
+    /// The speed (mm/s) the firmware reads at the sample where the belt has
+    /// travelled `travel_m` (m) since period 0 (`v_belt t_k` for a belt at
+    /// constant speed): [`BeltEncoder::speed_mm_s`] of the counter at
+    /// [`count_at`] `travel_m`. Call once per period, in order.
+    ///
+    /// # Errors
+    /// [`BeltError::OutOfRange`] beyond +-[`MAX_SPEED_MM_S`] (the frame then
+    /// carries the belt as invalid, as [`crate::frame::assemble`] does on a board).
+    pub fn speed_mm_s(&mut self, travel_m: f64) -> Result<i16, BeltError> {
+        self.encoder.counter.0 = count_at(travel_m, self.counts_per_metre);
+        self.encoder.speed_mm_s()
+    }
+
+    /// The counter's value at the last sample.
+    pub fn last_count(&self) -> u16 {
+        self.encoder.last_count()
+    }
+}
+
+/// The travel a belt counter reads under a gain fault (issue 80's FMEA: a
+/// slipping wheel, a wrong gear ratio, a channel reversed), m: the belt's
+/// travel, except that while a gain acts each period's increment is scaled by
+/// it, and after it the counter carries on from where the gain left it. The
+/// one model of the twin's counter and the SIL rig's sensor model, so both read
+/// the same counts ([`count_at`] of [`GainedTravel::read`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GainedTravel {
+    read_m: f64,
+    last_m: f64,
+    offset_m: f64,
+}
+
+impl GainedTravel {
+    /// The travel the counter reads at a sample where the belt has travelled
+    /// `travel_m` (m) since period 0, a gain `gain` acting over the period
+    /// since the last sample (`None`: none). Call once per period, in order.
+    pub fn read(&mut self, travel_m: f64, gain: Option<f64>) -> f64 {
+        let read = match gain {
+            Some(g) => {
+                let read = self.read_m + g * (travel_m - self.last_m);
+                self.offset_m = read - travel_m;
+                read
+            }
+            None if self.offset_m != 0.0 => travel_m + self.offset_m,
+            None => travel_m,
+        };
+        self.read_m = read;
+        self.last_m = travel_m;
+        read
+    }
+}
+
 /// The belt's speed from a quadrature counter read once per control period.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct BeltEncoder<C> {
     counter: C,
     last: u16,
@@ -214,7 +338,85 @@ mod tests {
         assert_eq!(new(0.99e-4, 1e-3), Ok(()));
     }
 
+    /// The counter truncates the travel toward minus infinity and wraps at 16
+    /// bits both ways; a reversed encoder counts down.
+    #[test]
+    fn the_count_is_the_whole_counts_passed_wrapped_to_16_bits() {
+        assert_eq!(count_at(0.0, 1e6), 0);
+        assert_eq!(count_at(0.999_999e-6, 1e6), 0);
+        assert_eq!(count_at(1e-6, 1e6), 1);
+        // Just below 0 is the count below 0: 0xFFFF.
+        assert_eq!(count_at(-1e-12, 1e6), 0xFFFF);
+        assert_eq!(count_at(-1.5e-6, 1e6), 0xFFFE);
+        assert_eq!(count_at(0.065_536, 1e6), 0);
+        assert_eq!(count_at(0.065_537, 1e6), 1);
+        assert_eq!(count_at(-0.065_536, 1e6), 0);
+        assert_eq!(count_at(2.5e-6, -1e6), 0xFFFD);
+        assert_eq!(count_at(f64::NAN, 1e6), 0);
+        assert_eq!(count_at(1.0, f64::INFINITY), 0);
+        // Far beyond 2^63 counts the wrap is still exact (the f64's own value mod 2^16).
+        assert_eq!(count_at(1e30, 1.0), (1e30f64.rem_euclid(65536.0)) as u16);
+    }
+
+    /// The sampled belt: 0 at the first sample (travel 0), then the counts of
+    /// each period at the firmware's scale, the sign the belt's, +-1 count where
+    /// the samples fall between counts, right across the counter's wrap.
+    #[test]
+    fn the_sampled_belt_starts_at_0_and_quantises_at_the_rates_scale() {
+        // 1 kHz, the reference board: 1 mm/s per count.
+        let mut b = SampledBelt::new(1e6, 1e-6, 1e-3).unwrap();
+        assert_eq!(b.speed_mm_s(0.0), Ok(0));
+        assert_eq!(b.speed_mm_s(-0.4e-3), Ok(-400));
+        assert_eq!(b.speed_mm_s(-0.8e-3), Ok(-400));
+        assert_eq!(b.last_count(), 0u16.wrapping_sub(800));
+        // A travel that falls a hair below a count boundary: one count short, then one over.
+        assert_eq!(b.speed_mm_s(-1.2e-3 - 1e-12), Ok(-401));
+        assert_eq!(b.speed_mm_s(-1.6e-3), Ok(-399));
+        // 10 kHz: 10 mm/s per count; 0.403 m/s reads 400 or 410, averaging 403.
+        let mut b = SampledBelt::new(1e6, 1e-6, 1e-4).unwrap();
+        assert_eq!(b.speed_mm_s(0.0), Ok(0));
+        let speeds: Vec<i16> = (1..=1000).map(|k| b.speed_mm_s(0.403 * f64::from(k) * 1e-4).unwrap()).collect();
+        assert!(speeds.iter().all(|&v| v == 400 || v == 410), "{speeds:?}");
+        // The counts telescope: the mean is the travel's, to one count over the whole run.
+        let sum: i32 = speeds.iter().map(|&v| i32::from(v)).sum();
+        assert!((403_000 - 10..=403_000).contains(&sum), "{sum}");
+        // The first sample is 0 whatever the speed: no earlier count.
+        let mut b = SampledBelt::new(1e6, 1e-6, 1e-3).unwrap();
+        assert_eq!(b.speed_mm_s(0.0), Ok(0));
+        assert_eq!(b.speed_mm_s(1e-3), Ok(1000));
+        // Across the 16-bit wrap, both ways: 1000 counts a period (2^20 counts per
+        // metre, travels of whole counts, exact in binary) pass 65 536 counts in 66.
+        for sign in [1.0, -1.0] {
+            let mut b = SampledBelt::new(1_048_576.0, 1e-6, 1e-3).unwrap();
+            for k in 0..=80u32 {
+                let want = if k == 0 { 0 } else { 1000 * sign as i16 };
+                assert_eq!(b.speed_mm_s(sign * f64::from(1000 * k) / 1_048_576.0), Ok(want), "period {k}");
+            }
+            assert_eq!(b.last_count(), (sign * 80_000.0f64).rem_euclid(65536.0) as u16);
+        }
+        // A reversed encoder (negative counts per metre) with a calibration that knows it.
+        let mut b = SampledBelt::new(-1e6, -1e-6, 1e-3).unwrap();
+        assert_eq!((b.speed_mm_s(0.0), b.speed_mm_s(-0.25e-3)), (Ok(0), Ok(-250)));
+        // Beyond 5 m/s: out of range, the counter consumed.
+        let mut b = SampledBelt::new(1e6, 1e-6, 1e-3).unwrap();
+        assert_eq!(b.speed_mm_s(0.0), Ok(0));
+        assert_eq!(b.speed_mm_s(6e-3), Err(BeltError::OutOfRange { delta_counts: 6000 }));
+        assert_eq!(b.speed_mm_s(7e-3), Ok(1000));
+        for bad in [0.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(SampledBelt::new(bad, 1e-6, 1e-3).map(|_| ()), Err(BeltError::InvalidScale));
+        }
+        assert_eq!(SampledBelt::new(1e6, 1e-6, 0.0).map(|_| ()), Err(BeltError::InvalidScale));
+    }
+
     proptest! {
+        /// The counter's wrap by `fmod` is the Euclidean remainder (the rule
+        /// the twin used: `rem_euclid`), bit for bit.
+        #[test]
+        fn the_count_is_the_euclidean_remainder(travel in -1e3f64..1e3, cpm in prop_oneof![-1e9f64..-1.0, 1.0f64..1e9]) {
+            let counts = (travel * cpm).floor();
+            prop_assert_eq!(count_at(travel, cpm), counts.rem_euclid(65536.0) as u16);
+        }
+
         #[test]
         fn any_delta_within_range_round_trips(start in any::<u16>(), delta in -5000i16..=5000, hz in 250u32..=10_000) {
             let period = 1.0 / hz as f32;

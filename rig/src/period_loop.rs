@@ -79,7 +79,7 @@ impl PeriodLoop {
         let period = s.timing.period();
         Self {
             sensors: SensorFaults::new(
-                Sensors::new(s.sensors.seed, s.sensors.load_noise_n).with_encoder_bits(s.sensors.encoder_bits),
+                Sensors::new(s.sensors.seed, s.sensors.load_noise_n, period).with_encoder_bits(s.sensors.encoder_bits),
                 setup.faults().clone(),
             ),
             period,
@@ -145,7 +145,9 @@ impl PeriodLoop {
             Some(s) => (s.x, s.tip, s.mode),
             None => (plant.state(), [plant.tip()[0], plant.tip()[1]], plant.mode()),
         };
-        let frame = self.sensors.frame(k as u32, t_us, &x, self.f_now, self.v_belt);
+        // The belt's travel at the sample, as the board links' counter sees it
+        // (`v_belt t_k`, the ground truth's `t`): docs/hardware.md "The belt sensor's model".
+        let frame = self.sensors.frame(k as u32, t_us, &x, self.f_now, self.v_belt * t_k);
         run.on_frame(&frame);
         let truth = GroundTruth {
             t: t_k,

@@ -253,12 +253,8 @@ fn bad_input_is_refused_with_its_reason() {
 /// validator accepts (both laws, every friction term the draw gives, rates 250 Hz
 /// to 10 kHz, random gains, `mu_hat` off by up to 25 %; board-link's
 /// `random_envelope`) replay identically in-process and over iceoryx2, however
-/// each run ended (a safe state included). Not the board links: with
-/// `controller.friction = estimated` (any rate, 1 kHz too, `mu_hat` right or not)
-/// the twin and the `arm` ELF answer differently from period 1 (`u1_raw`), the same
-/// bits on both; with the commanded friction term they replay identically: the
-/// board measures the belt with its own encoder, not the frame's `belt_count`
-/// (`the_board_links_measure_the_belt_themselves` below).
+/// each run ended (a safe state included). The board links with them:
+/// `a_run_recorded_on_any_link_replays_identically_on_every_other` below.
 #[test]
 fn runs_of_random_scenarios_over_the_envelope_replay_identically() {
     let dir = tempfile::tempdir().unwrap();
@@ -288,36 +284,128 @@ fn runs_of_random_scenarios_over_the_envelope_replay_identically() {
     }
 }
 
-/// Why the board links' replay of a run with the estimated friction term
-/// differs (issue 69's finding, explained in issue 70): the board measures the
-/// belt speed with its own quadrature encoder (the twin's and the emulated
-/// board's device models: counts differenced over a period, `drivers::belt`),
-/// not from the recorded frame's `belt_count`, and the estimated term is the
-/// one that reads the measured belt speed's value (the slip speed `z_t_dot -
-/// v_belt` its estimate reads). With the belt stopped both read 0 and the twin
-/// replays the run identically; with it moving (the default -0.4 m/s) the
-/// answers differ from period 1 on, `u1_raw` first. The commanded term reads
-/// only the slip's sign: identical (the goldens' runs).
+/// The links in a run (`sil-host run --link`) and their options.
+fn run_links() -> Vec<(&'static str, Vec<String>)> {
+    let elf = board_link::emulator_link::default_image();
+    assert!(elf.exists(), "{} is missing: {}", elf.display(), board_link::emulator_link::BUILD_HINT);
+    vec![("in-process", vec![]), ("twin", vec![]), ("emulator", vec!["--elf".into(), elf.display().to_string()])]
+}
+
+/// Issue 80 (3): one belt measurement on every link. The board links read the
+/// belt with their quadrature counter (the twin's and the emulated TIM4's, set
+/// by `drivers::belt::count_at` from the belt's travel `v_belt t_k`) and the
+/// `arm` application's driver; the wire-level links' sensor model runs the same
+/// pair (`drivers::belt::SampledBelt`), so the frame's `belt_count` is the
+/// board's reading: 0 in period 0, then the counts of each period with their
+/// jitter. Random scenarios over the envelope (`random_envelope`: both x0,
+/// rates 250 Hz to 10 kHz, random gains, `v_belt` -1 to -0.1 m/s), one per
+/// friction term of the hybrid law and one PID, recorded on the in-process
+/// link, the board twin and the `arm` ELF on the emulated board, each replay
+/// identically on every other link, iceoryx2 included (its frames are the
+/// in-process link's). Before the one model, every `estimated` run diverged
+/// on the board links from period 1 on (`u1_raw`).
 #[test]
-fn the_board_links_measure_the_belt_themselves() {
+fn a_run_recorded_on_any_link_replays_identically_on_every_other() {
     let dir = tempfile::tempdir().unwrap();
-    for (v_belt, identical) in [("0", true), ("-0.4", false)] {
-        let rec = dir.path().join(format!("v{v_belt}"));
-        let v = format!("plant.v_belt={v_belt}");
-        record("run", &["--in-process", "--no-page", "--duration", "0.3", "--set", "controller.friction=estimated", "--set", &v], &rec);
-        let (code, doc, err) = replay(&rec, &["--link", "twin"]);
-        assert_eq!(doc["identical"], serde_json::Value::Bool(identical), "v_belt {v_belt}: {doc} {err}");
-        if identical {
-            assert_eq!(code, 0);
-        } else {
-            assert_eq!(code, 1);
-            assert_eq!(
-                (doc["first_divergence"]["period"].as_u64(), doc["first_divergence"]["signal"].as_str()),
-                (Some(1), Some("u1_raw")),
-                "{doc}"
-            );
-            // The same run over the wire links replays identically.
-            assert_eq!(replay(&rec, &["--link", "iceoryx2"]).0, 0);
+    let frictions = board_link::random_scenarios::FRICTIONS;
+    let replay_links = ["in-process", "iceoryx2", "twin", "emulator"];
+    let elf = board_link::emulator_link::default_image().display().to_string();
+    for i in 0..=frictions.len() {
+        let kind = if i < frictions.len() { "hybrid" } else { "pid" };
+        let (mut scenario, mut what) = board_link::random_scenarios::random_envelope(8000 + i as u64, kind, 0.3);
+        if let Some(&f) = frictions.get(i) {
+            scenario.controller.friction = f;
+            what += &format!(" (run with {})", board_link::random_scenarios::friction_name(f));
         }
+        let file = dir.path().join(format!("s{i}.toml"));
+        std::fs::write(&file, toml::to_string(&scenario).unwrap()).unwrap();
+        for (from, opts) in run_links() {
+            let rec = dir.path().join(format!("rec{i}-{from}"));
+            // A run may end early (a safe state): its frames up to then are the record.
+            let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+                .args(["run", "--link", from, "--no-page", "--scenario", file.to_str().unwrap()])
+                .args(&opts)
+                .arg("--out")
+                .arg(&rec)
+                .output()
+                .unwrap();
+            assert!(matches!(o.status.code(), Some(0 | 1)), "{what} on {from}: {}", String::from_utf8_lossy(&o.stderr));
+            let n = common::csv_rows(&rec.join("frames.csv")).len() as u64 - 1;
+            assert!(n > 0, "{what} on {from}: no period recorded");
+            for to in replay_links.into_iter().filter(|&to| to != from) {
+                let mut args = vec!["--link", to];
+                if to == "emulator" {
+                    args.extend(["--elf", elf.as_str()]);
+                }
+                let (code, doc, err) = replay(&rec, &args);
+                assert_eq!(
+                    (code, &doc["identical"], doc["periods_replayed"].as_u64()),
+                    (0, &serde_json::Value::Bool(true), Some(n)),
+                    "{what}: recorded on {from}, replayed on {to}: {doc} {err}"
+                );
+            }
+        }
+    }
+}
+
+/// The issue's own commands: a run on the twin with the estimated friction
+/// term replays identically in-process; and the default scenario's run
+/// in-process replays identically on the twin under every friction term, the
+/// belt moving or stopped.
+#[test]
+fn a_twin_run_with_the_estimated_friction_term_replays_identically_in_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let twin = dir.path().join("twin");
+    record("run", &["--link", "twin", "--no-page", "--set", "controller.friction=estimated"], &twin);
+    let (code, doc, err) = replay(&twin, &["--link", "in-process"]);
+    assert_eq!(
+        (code, &doc["identical"], doc["periods_replayed"].as_u64()),
+        (0, &serde_json::Value::Bool(true), Some(10_000)),
+        "{doc} {err}"
+    );
+    for friction in board_link::random_scenarios::FRICTIONS {
+        for v_belt in ["0", "-0.4"] {
+            let name = board_link::random_scenarios::friction_name(friction);
+            let rec = dir.path().join(format!("{name}{v_belt}"));
+            let (f, v) = (format!("controller.friction={name}"), format!("plant.v_belt={v_belt}"));
+            // A run may end early (the measured term's safe state): its frames up to then are the record.
+            let o = sil_host(&[
+                "run",
+                "--in-process",
+                "--no-page",
+                "--duration",
+                "0.3",
+                "--set",
+                &f,
+                "--set",
+                &v,
+                "--out",
+                rec.to_str().unwrap(),
+            ]);
+            assert!(matches!(o.status.code(), Some(0 | 1)), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+            let (code, doc, err) = replay(&rec, &["--link", "twin"]);
+            assert_eq!((code, &doc["identical"]), (0, &serde_json::Value::Bool(true)), "{name}, v_belt {v_belt}: {doc} {err}");
+        }
+    }
+}
+
+/// The frame's belt reading is the belt encoder's (docs/hardware.md "The belt
+/// sensor's model"): 0 in period 0 (no earlier count), then `v_belt` to one
+/// count of the rate's scale (1 mm/s at 1 kHz, 10 mm/s at 10 kHz) with the
+/// count's jitter, not the exact speed's mm/s in every period.
+#[test]
+fn the_recorded_belt_is_the_encoders_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    for (rate, lsb) in [("1000", 1i64), ("10000", 10)] {
+        let rec = dir.path().join(format!("r{rate}"));
+        let set = format!("timing.rate_hz={rate}");
+        // The command's delay within the shortest period (0.1 ms).
+        record("run", &["--in-process", "--no-page", "--duration", "0.3", "--set", &set, "--set", "timing.delta_s=0.00005"], &rec);
+        let rows = common::csv_rows(&rec.join("frames.csv"));
+        let col = rows[0].iter().position(|c| c == "belt_count").unwrap();
+        let belt: Vec<i64> = rows[1..].iter().map(|r| r[col].parse().unwrap()).collect();
+        assert_eq!(belt[0], 0, "{rate} Hz");
+        assert!(belt[1..].iter().all(|v| v % lsb == 0 && (-400 - lsb..=-400 + lsb).contains(v)), "{rate} Hz: {belt:?}");
+        assert!(belt[1..].iter().any(|&v| v != -400), "{rate} Hz: the count's jitter: {belt:?}");
     }
 }

@@ -1,7 +1,9 @@
 //! `painleve.Firmware`: the firmware's control step (`firmware::Firmware`, through
 //! `rig::firmware_side::FirmwareSide::answer`, the path `rig::InProcessLink` takes)
 //! on the wire types: a frame in SI units is encoded as the rig's sensor model
-//! encodes it (`rig::sensors::Sensors`, no noise), the command that answers it is
+//! encodes it (`rig::sensors::Sensors`, no noise), its belt speed as stated
+//! (`rig::sensors::with_stated_belt_speed`: mm/s, not through the belt encoder's
+//! model, which needs the periods before), the command that answers it is
 //! decoded to SI (`shared::wire::decode_torque`).
 
 use std::sync::Mutex;
@@ -16,7 +18,7 @@ use pyo3::{
 use rig::{
     Scenario,
     firmware_side::FirmwareSide,
-    sensors::{SensorModel, Sensors},
+    sensors::{SensorModel, Sensors, with_stated_belt_speed},
 };
 use shared::wire::{self, ActuatorCommand, FirmwareTelemetry, SensorFrame};
 
@@ -183,7 +185,7 @@ impl PyFirmware {
 
     /// Answers one frame: a `Sensed` (its raw frame as it crossed the wire) or a
     /// dict with `theta1`, `theta2` (rad), `f_t`, `f_n` (N), and optionally
-    /// `v_belt` (m/s; the scenario's) and `k` (the period index; the next one).
+    /// `v_belt` (m/s; the scenario's; sent as stated, to 1 mm/s) and `k` (the period index; the next one).
     /// Returns the `Command`.
     ///
     /// Raises `KeyError` for a missing key, `TypeError` for a value that is
@@ -203,8 +205,9 @@ impl PyFirmware {
                 Some(k) => k.extract::<u32>().map_err(|_| error(py, format!("frame[\"k\"] = {k}: expected a period index >= 0"), 2))?,
                 None => self.k,
             };
-            let mut sensors = Sensors::new(0, 0.0).with_encoder_bits(self.scenario.sensors.encoder_bits);
-            sensors.frame(k, period.sample(u64::from(k)).as_us(), &[theta1, 0.0, theta2, 0.0], f, v_belt)
+            let mut sensors = Sensors::new(0, 0.0, period).with_encoder_bits(self.scenario.sensors.encoder_bits);
+            let frame = sensors.frame(k, period.sample(u64::from(k)).as_us(), &[theta1, 0.0, theta2, 0.0], f, 0.0);
+            with_stated_belt_speed(frame, v_belt)
         } else {
             return Err(PyTypeError::new_err(format!("frame: expected a painleve.Sensed or a dict, got {}", frame.get_type().name()?)));
         };
