@@ -316,12 +316,30 @@ mod tests {
         assert!((plan.load_offsets_n(9).unwrap()[1] - 0.0035).abs() < 1e-12);
         let got = frames(&[Fault { rate_n_per_s: Some(-0.5), ..drift }]);
         assert_eq!(got[..2], plain[..2]);
-        // A belt gain: the speed read times the gain (-0.4 m/s: -400 mm/s).
-        for (gain, want) in [(0.5, -200), (2.0, -800), (-1.0, 400)] {
-            let f = Fault { gain: Some(gain), ..Fault::new(FaultKind::BeltGain, 0.004, 0.002) };
-            let got = frames(&[f]);
-            let belt: Vec<i16> = got.iter().map(|f| f.belt_count).collect();
-            assert_eq!(belt, [-400, -400, -400, -400, want, want, -400, -400, -400, -400], "gain {gain}");
+        // A belt gain: the speed read times the gain over its periods (-0.4 m/s:
+        // -400 mm/s, one count of the encoder's jitter either way), the
+        // counter carrying on from where it left it after.
+        let travel = |k: u32| -0.4 * f64::from(k) * 1e-3;
+        let belt_frames = |faults: &[Fault]| -> Vec<i16> {
+            let mut s =
+                SensorFaults::new(Sensors::new(3, 0.02, shared::Period::MILLISECOND), FaultPlan::new(faults, shared::Period::MILLISECOND));
+            (0..10u32).map(|k| s.frame(k, u64::from(k) * 1000, &[x[0], 0.0, x[2], 0.0], [0.0, 10.0], travel(k)).belt_count).collect()
+        };
+        let plain = belt_frames(&[]);
+        assert_eq!(plain[0], 0, "no earlier count at period 0");
+        assert!(plain[1..].iter().all(|b| (b + 400).abs() <= 1), "{plain:?}");
+        for gain in [0.5, 2.0, -1.0] {
+            let got = belt_frames(&[Fault { gain: Some(gain), ..Fault::new(FaultKind::BeltGain, 0.004, 0.002) }]);
+            for k in 0..10 {
+                let want = if (4..6).contains(&k) {
+                    gain * -400.0
+                } else if k == 0 {
+                    0.0
+                } else {
+                    -400.0
+                };
+                assert!((f64::from(got[k]) - want).abs() <= 1.0, "gain {gain}, period {k}: {got:?}");
+            }
         }
     }
 }

@@ -150,12 +150,23 @@ fn a_sample_of_the_fmea_on_the_flashed_image_is_the_twins_run_bit_for_bit() {
         let laws = ["hybrid", "pid"].map(|kind| {
             let (classes, image) = (&classes, &image);
             scope.spawn(move || {
-                let healthy = (0..200u64)
+                let healthy: Vec<_> = (0..400u64)
                     .map(|i| random_envelope(20_000 + i, kind, DURATION_S))
                     .filter(|(s, _)| twin_run::<PaperLaws>(s).1.is_none())
-                    .take(classes.len());
+                    .take(classes.len() + 20)
+                    .collect();
+                // The emulated belt encoder makes at most 1 066 quadrature edges a
+                // tick (board-emulator's TIM4 model): a belt read at twice its speed
+                // takes a belt within 0.4 m/s (the counted mode's), the next such
+                // healthy scenario.
+                let fits = |class: &Class, s: &rig::scenario::Scenario| !class.name().contains("gain x2") || s.plant.v_belt.abs() <= 0.4;
                 let mut periods = Vec::new();
-                for (class, (mut s, what)) in classes.iter().zip(healthy) {
+                for (i, class) in classes.iter().enumerate() {
+                    let (mut s, what) = healthy[i..]
+                        .iter()
+                        .find(|(s, _)| fits(class, s))
+                        .cloned()
+                        .unwrap_or_else(|| panic!("{}: no scenario fits", class.name()));
                     s.timing.duration_s = image_sample_s(class);
                     let (f, _) = class.inject(&s);
                     periods.push(f.timing.period().as_us());
