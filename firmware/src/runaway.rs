@@ -134,12 +134,11 @@ impl RunawayMonitor {
 mod tests {
     use super::*;
 
-    #[test]
     /// The press count at every duty of pressing (issue 80): held, it trips at
     /// the tenth pressed period; interrupted by chatter, once the pressed
     /// periods exceed ten plus a quarter of the others, whatever the pattern
     /// (every duty from 1 in 1 to 1 in 10, every phase); pressing in one period
-    /// in five or fewer never trips it; nor does a healthy force of 20 N with a
+    /// in five or fewer never trips it; nor does a healthy force of 21.9 N with a
     /// full-scale impact every 20 periods; a reading of -22.5 N (the axis
     /// reversed) counts as pressing.
     #[test]
