@@ -323,6 +323,27 @@ fn a_run_on_a_board_refuses_the_runaway_limits_off_naming_the_key() {
     }
 }
 
+/// Issue 80: a healthy start on the twin logs no safe state. Before the enable
+/// button the drivers are off, the motors do nothing, and the wiring check
+/// tripped on it (`Miswired`, "a joint accelerated against its motor's
+/// torque") at every start: a board logs a motor check's stop only once its
+/// drivers were on (`SafeReason::needs_the_motors`).
+#[test]
+fn a_healthy_start_on_the_twin_logs_no_safe_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+        .args(["run", "--link", "twin", "--duration", "0.05", "--no-page", "--out"])
+        .arg(dir.path().join("run"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{err}");
+    let log = format!("{out}{err}");
+    assert!(log.contains("enable button: firmware reset") && log.contains("drivers enabled"), "{log}");
+    assert!(!log.contains("safe state"), "{log}");
+}
+
 /// Issue 66: the encoders' acquisition faults from a scenario read on standard
 /// input (`run --link twin|emulator --scenario -`): each is named in the log of
 /// the period it starts (the twin's; the emulated image's lines stay in its
