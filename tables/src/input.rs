@@ -57,10 +57,12 @@ pub const ELF_IMAGE: Bound =
 pub const SCENARIO: Bound =
     Bound { what: "scenario", bytes: 4 * MIB, why: "a scenario is a few KiB of TOML (scenarios/*.toml: about 4 KiB)" };
 
-/// A run's `summary.json` (`replay` reads its scenario as run): 16 MiB. A
-/// summary is a few KiB: the scenario and the run's figures.
+/// A command's `summary.json` and its other JSON documents (`replay` reads a
+/// run's scenario as run; the Python package's `load` every document of a
+/// folder): 64 MiB. A run's summary is a few KiB; a sweep's or a report's
+/// document lists its cases, some MiB at most.
 pub const SUMMARY: Bound =
-    Bound { what: "summary", bytes: 16 * MIB, why: "a run's summary.json is a few KiB (the scenario as run and its figures)" };
+    Bound { what: "summary", bytes: 64 * MIB, why: "a run's summary.json is a few KiB, a sweep's or a report's document some MiB at most" };
 
 /// A recording's frames table (`frames.csv`, `frames.arrow`, `trace.mcap`;
 /// `replay`): 4 GiB, read whole into memory as rows. A row of `frames.csv` is
@@ -95,6 +97,12 @@ pub const BACKUP: Bound =
 /// and a command line (Linux caps a command line's arguments at 2 MiB).
 pub const LOCK_OWNER: Bound =
     Bound { what: "lock owner file", bytes: 4 * MIB, why: "a pid and a command line (Linux caps the arguments at 2 MiB)" };
+
+/// A text file of a command's folder read whole as text (the Python
+/// package's `load`: `defmt.log`, `report.md`): 1 GiB. A PIL run's defmt
+/// log is a line per logged event, a few MiB for an hour.
+pub const LOG: Bound =
+    Bound { what: "log", bytes: GIB, why: "a command's logs and notes are MiB (a PIL run's defmt.log: a line per logged event)" };
 
 /// A small system file read for a stamp (`/proc/cpuinfo`,
 /// `/proc/sys/kernel/hostname`): 1 MiB. Their length reads 0, so only

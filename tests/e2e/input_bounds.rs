@@ -61,13 +61,8 @@ impl Bad {
 /// watchdog: its exit code, stderr, and how long it took.
 fn sil_host_in(args: &[&str], stdin: Stdio) -> (i32, String, Duration) {
     let started = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sil-host"))
-        .args(args)
-        .stdin(stdin)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child =
+        Command::new(env!("CARGO_BIN_EXE_sil-host")).args(args).stdin(stdin).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     loop {
         if let Some(status) = child.try_wait().unwrap() {
             let elapsed = started.elapsed();
@@ -164,10 +159,8 @@ fn elf_images_scenarios_and_backups_that_are_not_bounded_files_exit_2_at_once() 
     }
     assert!(!out.path().join("out").exists(), "nothing written");
     // Standard input is bounded as a file is: `cat /dev/zero | run --scenario -`.
-    let (code, err, _) = sil_host_in(
-        &["run", "--in-process", "--scenario", "-", "--out", o],
-        Stdio::from(std::fs::File::open("/dev/zero").unwrap()),
-    );
+    let (code, err, _) =
+        sil_host_in(&["run", "--in-process", "--scenario", "-", "--out", o], Stdio::from(std::fs::File::open("/dev/zero").unwrap()));
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("standard input: it is longer than 4194304 bytes as read") && err.contains("4 MiB"), "{err}");
 }
@@ -202,7 +195,7 @@ fn summaries_recordings_and_sweep_files_that_are_not_bounded_files_exit_2_at_onc
     let (code, err, _) = sil_host(&["sweep", "--mu", "0.6", "--v-belt=-0.4", "--transient", "1", "--record", "1", "--out", s]);
     assert_eq!(code, 0, "{err}");
     for (i, (path, words)) in bad.each().into_iter().enumerate() {
-        for (name, what, bound) in [("summary.json", "summary", "16 MiB"), ("frames.csv", "recording", "4 GiB")] {
+        for (name, what, bound) in [("summary.json", "summary", "64 MiB"), ("frames.csv", "recording", "4 GiB")] {
             let folder = dir.path().join(format!("{name}-{i}"));
             copy_run(&rec, &folder);
             replace(&folder, name, path);
