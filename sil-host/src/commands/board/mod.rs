@@ -92,9 +92,6 @@ impl bp::Operator for Terminal {
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
-    // A reader that goes away (`board status | head -1`) or a full disk ends
-    // the command as every command (crate::stdout): quietly, exit 141, or with a
-    // message, exit 1; `watch` stops at the first failed line.
     // The input files first (issue 80): a scenario, an ELF or a backup that is
     // not a regular file within its bound, or an ELF that declares no law, is
     // refused (exit 2) before the port opens.
@@ -110,6 +107,9 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
         BoardCommand::Restore { file } => backup_read = Some(board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?),
         _ => {}
     }
+    // A reader that goes away (`board status | head -1`) or a full disk ends
+    // the command as every command (crate::stdout): quietly, exit 141, or with a
+    // message, exit 1; `watch` stops at the first failed line.
     let mut c = Client::open(&args.port, args.baud).map_err(CliError::bad_input)?;
     bp::hello(&mut c).map_err(step)?;
     let json = args.json;
@@ -224,7 +224,7 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
                 None => load_scenario(scenario)?,
             };
             // The law the board's image runs: the flashed ELF's declaration (the
-            // paper's laws without one) held to the digest the board reports; the
+            // paper's laws without --elf; an ELF without one refused) held to the digest the board reports; the
             // scenario's `[law]` table bound to it, or refused with the
             // declaration in the message, before anything is sent.
             let board_status = bp::status(&mut c).map_err(step)?;
