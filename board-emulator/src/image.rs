@@ -17,12 +17,13 @@ pub const FLASH_BYTES: u32 = 1 << 20;
 /// Why an image was not taken.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ImageError {
-    /// The file could not be read.
-    #[error("cannot read the image {path}: {message}")]
+    /// The file could not be read: missing, not a regular file, or over its
+    /// bound (`tables::input::ELF_IMAGE`).
+    #[error("{message}")]
     Read {
         /// The file.
         path: PathBuf,
-        /// The system's reason.
+        /// What is wrong, naming the file (and the bound).
         message: String,
     },
     /// Not a 32-bit little-endian ARM ELF, or a broken one.
@@ -76,7 +77,8 @@ impl ArmImage {
     /// [`ImageError`]: unreadable, not an ARM ELF, a segment outside the image's
     /// flash, a missing symbol.
     pub fn load(path: &Path) -> Result<Self, ImageError> {
-        let bytes = std::fs::read(path).map_err(|e| ImageError::Read { path: path.into(), message: e.to_string() })?;
+        let bytes = tables::input::read(path, tables::input::ELF_IMAGE)
+            .map_err(|e| ImageError::Read { path: path.into(), message: e.to_string() })?;
         Self::parse(path, &bytes)
     }
 

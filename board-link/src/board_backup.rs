@@ -130,9 +130,11 @@ pub fn parse(text: &str) -> Result<Backup, BackupError> {
 /// Reads the backup file at `path`.
 ///
 /// # Errors
-/// [`BackupError::Io`] naming the path, or [`parse`]'s, with the path.
+/// [`BackupError::Io`] naming the path (a file that cannot be read, is not a
+/// regular file or is over `tables::input::BACKUP`'s bound, 1 MiB), or
+/// [`parse`]'s, with the path.
 pub fn read(path: &Path) -> Result<Backup, BackupError> {
-    let text = std::fs::read_to_string(path).map_err(|e| BackupError::Io(format!("cannot read the backup {}: {e}", path.display())))?;
+    let text = tables::input::read_to_string(path, tables::input::BACKUP).map_err(|e| BackupError::Io(e.to_string()))?;
     parse(&text).map_err(|e| BackupError::Parse(format!("{}: {e}", path.display())))
 }
 

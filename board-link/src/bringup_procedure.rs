@@ -170,7 +170,8 @@ pub fn hello<S: Read + Write>(c: &mut Client<S>) -> Result<(), StepError> {
 
 /// The control law a board's image runs, to bind a scenario's `[law]` table
 /// to (`sil-host board configure`): the declaration in `elf`, the image that
-/// was flashed (`PAINLEVE_LAW_SPEC`), or without one the paper's laws', held
+/// was flashed (`PAINLEVE_LAW_SPEC`; an ELF that declares none is refused), or
+/// without `elf` the paper's laws', held
 /// to the digest the board reports (`Status::law_digest`, its law's
 /// `firmware::LawSpec::digest`).
 ///
@@ -180,7 +181,7 @@ pub fn hello<S: Read + Write>(c: &mut Client<S>) -> Result<(), StepError> {
 /// it, or a law of one's own without `elf`).
 pub fn board_law(status: &Status, elf: Option<&std::path::Path>) -> Result<rig::law::LawDescription, String> {
     let law = match elf {
-        Some(path) => rig::law::LawDescription::from_elf(path).map_err(|e| e.to_string())?.unwrap_or_else(rig::law::LawDescription::paper),
+        Some(path) => rig::law::LawDescription::declared_by(path).map_err(|e| e.to_string())?,
         None => rig::law::LawDescription::paper(),
     };
     if law.digest() == status.law_digest {

@@ -111,9 +111,9 @@ impl EmulatorLink {
             )));
         }
         let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
-        // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`; none: the
-        // paper's laws), binds the scenario's `[law]` table.
-        let law = rig::law::LawDescription::from_elf(image)?.unwrap_or_else(rig::law::LawDescription::paper);
+        // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`; an image
+        // without it is refused), binds the scenario's `[law]` table.
+        let law = rig::law::LawDescription::declared_by(image)?;
         let config = setup.firmware_for(&law)?;
         let announced = rig::handshake::of_described(&config, law)?;
         let flash = FlashModel::brought_up(&s.calibration.arm_calibration(), config)

@@ -80,8 +80,18 @@ impl From<tables::Error> for Error {
     fn from(e: tables::Error) -> Self {
         match e {
             tables::Error::Io { path, source } => Self::Io { path, source },
+            tables::Error::Input(e) => e.into(),
             other => Self::Table(other),
         }
+    }
+}
+
+/// An input file that is not a regular file within its bound
+/// ([`tables::input`]: a FIFO, a device, a directory, a file over its bound):
+/// bad input (exit 2), its message naming the file, what it is and the bound.
+impl From<tables::input::InputError> for Error {
+    fn from(e: tables::input::InputError) -> Self {
+        Self::BadInput(e.to_string())
     }
 }
 

@@ -12,15 +12,16 @@ use rig::{
 /// default) with the `--set` overrides applied to its TOML document.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] (an unreadable file) or [`crate::Error::Analysis`] naming
-/// the key (exit 2).
+/// [`crate::Error::BadInput`] for a file that cannot be read, is not a regular
+/// file or is over [`tables::input::SCENARIO`]'s bound (standard input too);
+/// [`crate::Error::Analysis`] naming the key (exit 2).
 pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result<Scenario, CliError> {
     let text = match path {
-        Some(path) if path.as_os_str() == "-" => std::io::read_to_string(std::io::stdin())
-            .map_err(|e| CliError::bad_input(format!("cannot read the scenario from stdin: {e}")))?,
-        Some(path) => {
-            std::fs::read_to_string(path).map_err(|e| CliError::bad_input(format!("cannot read scenario {}: {e}", path.display())))?
+        // Standard input, bounded as a file is (`cat /dev/zero | ... --scenario -`).
+        Some(path) if path.as_os_str() == "-" => {
+            tables::input::read_stream_to_string(std::io::stdin(), std::path::Path::new("standard input"), tables::input::SCENARIO)?
         }
+        Some(path) => tables::input::read_to_string(path, tables::input::SCENARIO)?,
         None => return Ok(Scenario::from_toml_with(rig::scenario::DEFAULT_TOML, set)?),
     };
     Ok(Scenario::from_toml_with(&text, set)?)

@@ -16,6 +16,7 @@ import numpy as np
 from ._painleve import read_arrow as _read_arrow
 from ._painleve import read_csv as _read_csv
 from ._painleve import read_mcap as _read_mcap
+from ._painleve import read_text as _read_text
 from ._result import Result, Table, describe_violations
 
 __all__ = ["load", "read_arrow", "read_csv", "read_mcap"]
@@ -229,7 +230,8 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
         ValueError: the folder holds only a killed run's partial files (the
             message names them).
         PainleveError: a table cannot be read (:func:`read_csv`,
-            :func:`read_arrow`; the message names the file).
+            :func:`read_arrow`; the message names the file), or a JSON
+            document or a log is over its bound (64 MiB, 1 GiB; issue 80).
         ValueError: a JSON file does not parse (the message names it).
     """
     root = Path(path)
@@ -253,13 +255,14 @@ def load(path: Union[str, "os.PathLike[str]"]) -> Result:
             tables.update(read_mcap(p))
         elif p.suffix == ".json":
             try:
-                docs[p.stem] = json.loads(p.read_text(encoding="utf-8"))
+                # Bounded (issue 80): a regular file of at most 64 MiB.
+                docs[p.stem] = json.loads(_read_text(os.fspath(p), "document"))
             except json.JSONDecodeError as e:
                 raise ValueError(f"{p}: not JSON: {e}") from e
         elif p.suffix == ".svg":
             figures.append(str(p))
         elif p.suffix in (".log", ".md", ".txt"):
-            extras[p.stem] = p.read_text(encoding="utf-8", errors="replace")
+            extras[p.stem] = _read_text(os.fspath(p), "log")
     # The run's own table first (the default of ``to_pandas()`` and friends):
     # ``trace`` before ``frames`` (a closed-loop run's wire record), which sorts first by name.
     tables = dict(sorted(tables.items(), key=lambda kv: kv[0] == "frames"))

@@ -56,6 +56,9 @@ def read_arrow(path: str) -> Dict[str, Any]:
     """An Arrow IPC file (or one cut before its footer, or a stream) as ``{column: array}``, each column of the file's type (text as in :func:`read_csv`)."""
 def read_mcap(path: str) -> List[Tuple[str, Dict[str, Any]]]:
     """The tables of an MCAP file the CLI wrote as ``[(name, {column: array})]``, columns as in :func:`read_csv`; a cut file gives its whole chunks."""
+def read_text(path: str, kind: str) -> str:
+    """A file of a command's folder as text, a regular file within the bound of ``kind`` (``"document"``, a JSON
+    document: 64 MiB; ``"log"``: 1 GiB, bytes not UTF-8 replaced); else ``PainleveError`` naming the bound."""
 def read_csv(path: str) -> Dict[str, Any]:
     """A CSV table as ``{column: array}`` in the file's order, of its declaration's types (a table the CLI
     writes; else arrow-csv's inferred types): float64, int64 or bool arrays of shape ``(nrows,)``, a text

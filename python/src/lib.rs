@@ -97,6 +97,7 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read::read_csv, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_mcap, m)?)?;
     m.add_function(wrap_pyfunction!(read::declared_tables, m)?)?;
+    m.add_function(wrap_pyfunction!(read::read_text, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_choices, m)?)?;
     m.add_function(wrap_pyfunction!(default_scenario_toml, m)?)?;

@@ -89,6 +89,26 @@ pub fn read_mcap<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<(String, B
         .collect()
 }
 
+/// `read_text(path, kind)`: the text of a file of a command's folder, read as
+/// `tables::input` reads every input: a regular file only, within the bound of
+/// `kind`: `"document"` (a JSON document such as `summary.json`:
+/// `tables::input::SUMMARY`, 64 MiB) or `"log"` (`defmt.log`, `report.md`:
+/// `tables::input::LOG`, 1 GiB; bytes that are not UTF-8 replaced by U+FFFD).
+///
+/// # Errors
+/// `PainleveError` (exit code 2) naming the file, what it is and the bound: a
+/// FIFO, a device, a directory, a file over its bound, one that cannot be
+/// read; a `document` that is not UTF-8; an unknown `kind`.
+#[pyfunction]
+pub fn read_text(py: Python<'_>, path: PathBuf, kind: &str) -> PyResult<String> {
+    match kind {
+        "document" => py.detach(|| tables::input::read_to_string(&path, tables::input::SUMMARY)),
+        "log" => py.detach(|| tables::input::read(&path, tables::input::LOG).map(|b| String::from_utf8_lossy(&b).into_owned())),
+        _ => return Err(error(py, format!("read_text: kind `{kind}` is none of document, log"), 2)),
+    }
+    .map_err(|e| error(py, e.to_string(), 2))
+}
+
 /// `declared_tables()`: the declarations of the tables the project writes as CSV
 /// ([`experiments::DECLARED`]), each a pair `(names, kinds)`: its column names in
 /// order and their kinds (`f64`, `int`, `bool`, `str`), what [`read_csv`]

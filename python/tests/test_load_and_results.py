@@ -80,6 +80,20 @@ def test_load_rejects_a_missing_folder(tmp_path):
         painleve.load(tmp_path / "nothing")
 
 
+def test_load_and_scenario_load_refuse_unbounded_files(tmp_path):
+    # Issue 80: a summary.json of 10 GB (sparse) is refused naming its bound,
+    # not read until memory runs out; a scenario that is a device likewise.
+    out = tmp_path / "huge"
+    out.mkdir()
+    with open(out / "summary.json", "wb") as f:
+        f.truncate(10_000_000_000)
+    with pytest.raises(painleve.PainleveError, match=r"summary\.json: it is 10000000000 bytes.*at most 64 MiB"):
+        painleve.load(out)
+    with pytest.raises(painleve.PainleveError, match=r"it is a character device, not a regular file.*at most 4 MiB") as e:
+        painleve.Scenario.load("/dev/zero")
+    assert e.value.exit_code == 2
+
+
 def test_load_of_a_killed_runs_folder_says_so(tmp_path):
     # Issue 52, 8: a killed run's folder (its streamed trace as
     # `trace.csv.partial`, no summary) loaded as an empty result, silently.

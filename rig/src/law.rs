@@ -101,6 +101,18 @@ pub enum LawError {
     /// The announced declaration does not decode (another build's layout).
     #[error("the firmware's law declaration cannot be decoded ({0}): rebuild both sides from the same sources")]
     Undecodable(String),
+    /// The image's file cannot be read: missing, not a regular file, or over
+    /// its bound (`tables::input::ELF_IMAGE`); the message names the file and the bound.
+    #[error("{0}")]
+    Unreadable(String),
+    /// The image declares no law (no `PAINLEVE_LAW_SPEC`) where a scenario's law
+    /// is bound to it: an image of these sources always declares its law, the
+    /// paper's included, so this one is not one of them (issue 80).
+    #[error(
+        "{0}: the image declares no law (no PAINLEVE_LAW_SPEC symbol): it is not an image of these sources, whose images all \
+         declare theirs (the paper's laws too); build it with `cargo arm`/`cargo pil` (docs/board.md \"Your own law\")"
+    )]
+    NoDeclaration(String),
 }
 
 impl LawDescription {
@@ -159,15 +171,18 @@ impl LawDescription {
 
     /// The declaration an MCU image carries in its symbol `PAINLEVE_LAW_SPEC`
     /// (`firmware::law_spec_symbol!`, in postcard's encoding); `None` for an
-    /// image without it (one built before issue 70, which runs the paper's laws).
+    /// image without it. The file is read within `tables::input::ELF_IMAGE`'s
+    /// bound, a regular file only.
     ///
     /// # Errors
-    /// [`LawError::Undecodable`] for a file that cannot be read or is not an
-    /// ELF, a symbol outside its section's data, or bytes that do not decode.
+    /// [`LawError::Unreadable`] for a file that cannot be read, is not a
+    /// regular file or is over its bound; [`LawError::Undecodable`] for one
+    /// that is not an ELF, a symbol outside its section's data, or bytes that
+    /// do not decode.
     pub fn from_elf(path: &std::path::Path) -> Result<Option<Self>, LawError> {
         use object::{Object, ObjectSection, ObjectSymbol};
         let bad = |what: String| LawError::Undecodable(format!("{}: {what}", path.display()));
-        let data = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+        let data = tables::input::read(path, tables::input::ELF_IMAGE).map_err(|e| LawError::Unreadable(e.to_string()))?;
         let file = object::File::parse(&*data).map_err(|e| bad(format!("not an ELF image ({e})")))?;
         let Some(symbol) = file.symbols().find(|s| s.name() == Ok("PAINLEVE_LAW_SPEC")) else { return Ok(None) };
         let section = symbol
@@ -180,6 +195,19 @@ impl LawDescription {
             .flatten()
             .ok_or_else(|| bad("PAINLEVE_LAW_SPEC is outside its section's data".into()))?;
         Self::decode(bytes).map(Some).map_err(|e| bad(e.to_string()))
+    }
+
+    /// The law the image at `path` declares, where a scenario's `[law]` table
+    /// is bound to it (`board configure --elf`, `pil --image`, the emulated
+    /// board's `--elf`): every image of these sources declares its law, the
+    /// paper's laws included, so an image without a declaration is refused
+    /// rather than taken for the paper's.
+    ///
+    /// # Errors
+    /// As [`LawDescription::from_elf`]; [`LawError::NoDeclaration`] for an
+    /// image without `PAINLEVE_LAW_SPEC`.
+    pub fn declared_by(path: &std::path::Path) -> Result<Self, LawError> {
+        Self::from_elf(path)?.ok_or_else(|| LawError::NoDeclaration(path.display().to_string()))
     }
 
     /// The declared parameters as a message lists them: `stiffness (N/m, [0, 5000])`.

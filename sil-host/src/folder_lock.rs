@@ -79,7 +79,7 @@ impl FolderLock {
                 Some(handle)
             }
             Err(std::fs::TryLockError::WouldBlock) => {
-                let owner = std::fs::read_to_string(canonical.join(OWNER_FILE))
+                let owner = tables::input::read_to_string(&canonical.join(OWNER_FILE), tables::input::LOCK_OWNER)
                     .ok()
                     .map(|s| s.trim().to_string())
                     .filter(|s| !s.is_empty())

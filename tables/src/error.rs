@@ -36,6 +36,10 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// An input file that is not a regular file within its bound
+    /// ([`crate::input`]: a FIFO, a device, a directory, a file too large).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
 }
 
 impl Error {

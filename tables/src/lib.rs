@@ -19,7 +19,8 @@
 //! package and the tests read tables). Without them the crate holds the
 //! declarations, the rows-to-columns layer and the CSV writer: what the command
 //! line's main job and the crates that declare row types (`rig`, `analyses`) need.
-//! Errors: [`Error`].
+//! Every input file the host tools read is opened and read within a stated
+//! size bound, a regular file only ([`input`], issue 80). Errors: [`Error`].
 
 #![warn(missing_docs)]
 
@@ -28,6 +29,7 @@ pub mod arrow;
 pub mod csv;
 pub mod declared;
 pub mod error;
+pub mod input;
 pub mod mcap;
 #[cfg(feature = "read")]
 pub mod read;

@@ -25,6 +25,7 @@ mod foxglove_view;
 mod friction_loop;
 mod friction_unknown;
 mod golden;
+mod input_bounds;
 mod law_template;
 mod model_f32_f64;
 mod monitors;

@@ -39,13 +39,15 @@ pub struct Manifest {
 ///
 /// # Errors
 /// [`crate::Error::Analysis`] when it cannot be read, is not a manifest of this
-/// version, holds an invalid spec or names an impossible shard.
+/// version, holds an invalid spec or names an impossible shard;
+/// [`crate::Error::BadInput`] for one that is not a regular file or is over
+/// [`tables::input::SWEEP_MANIFEST`]'s bound.
 pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
     let path = dir.join(MANIFEST);
-    let text = match std::fs::read_to_string(&path) {
+    let text = match tables::input::read_to_string(&path, tables::input::SWEEP_MANIFEST) {
         Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(CliError::bad_input(format!("cannot read {}: {e}", path.display()))),
+        Err(e) if e.is_not_found() => return Ok(None),
+        Err(e) => return Err(e.into()),
     };
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
         CliError::bad_input(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
@@ -138,13 +140,16 @@ pub struct JournalContents {
 ///
 /// # Errors
 /// [`crate::Error::Analysis`] for a row that does not parse or does not belong, or a
-/// repeated index with different results; [`CliError::Io`].
+/// repeated index with different results; [`crate::Error::BadInput`] for a
+/// journal that is not a regular file or is over
+/// [`tables::input::SWEEP_JOURNAL`]'s bound; [`CliError::Io`].
 pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliError> {
     let path = dir.join(JOURNAL);
-    let mut bytes = match std::fs::read(&path) {
+    let mut bytes = match tables::input::read(&path, tables::input::SWEEP_JOURNAL) {
         Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(JournalContents::default()),
-        Err(e) => return Err(CliError::Io { path, source: e }),
+        Err(e) if e.is_not_found() => return Ok(JournalContents::default()),
+        Err(tables::input::InputError::Unreadable { source, .. }) => return Err(CliError::Io { path, source }),
+        Err(e) => return Err(e.into()),
     };
     let mut out = JournalContents::default();
     if !bytes.is_empty() && bytes.last() != Some(&b'\n') {

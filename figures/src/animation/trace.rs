@@ -123,7 +123,7 @@ pub fn read(trace_csv: &Path, events_csv: Option<&Path>) -> Result<ArmTrace, Err
 /// then those of the optional ones it has).
 struct Table {
     path: std::path::PathBuf,
-    reader: std::cell::RefCell<csv::Reader<std::fs::File>>,
+    reader: std::cell::RefCell<csv::Reader<tables::input::BoundedReader<std::fs::File>>>,
     columns: Vec<usize>,
     names: Vec<String>,
 }
@@ -134,7 +134,12 @@ impl Table {
             csv::ErrorKind::Io(source) => Error::Io { path: path.to_path_buf(), source },
             other => Error::bad_input(format!("{}: {other:?}", path.display())),
         };
-        let mut reader = csv::Reader::from_path(path).map_err(io)?;
+        // A regular file within the tables' bound (tables::input, issue 80).
+        let file = tables::input::reader(path, tables::input::TABLE).map_err(|e| match e {
+            tables::input::InputError::Unreadable { source, .. } => Error::Io { path: path.to_path_buf(), source },
+            other => Error::bad_input(other.to_string()),
+        })?;
+        let mut reader = csv::Reader::from_reader(file);
         let header = reader.headers().map_err(io)?.clone();
         let find = |name: &str| header.iter().position(|h| h == name);
         let mut columns = Vec::new();

@@ -67,7 +67,7 @@ pub fn finish(root: DrawingArea<SVGBackend<'_>, Shift>, path: &Path, width: Prin
     let (w, h) = root.dim_in_pixel();
     root.present().map_err(|e| e.to_string())?;
     drop(root);
-    let svg = std::fs::read_to_string(path).map_err(|e| format!("reading back {}: {e}", path.display()))?;
+    let svg = tables::input::read_to_string(path, tables::input::FIGURE).map_err(|e| format!("reading back: {e}"))?;
     let svg = with_print_size(&svg, (w, h), width)?;
     std::fs::write(path, &svg).map_err(|e| format!("writing {}: {e}", path.display()))?;
     #[cfg(feature = "pdf")]

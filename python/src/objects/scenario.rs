@@ -176,10 +176,12 @@ impl PyScenario {
         Scenario::from_toml(text).map(|inner| Self { inner }).map_err(|e| scenario_error(py, &e))
     }
 
-    /// A scenario from a TOML file.
+    /// A scenario from a TOML file: a regular file of at most 4 MiB
+    /// (`tables::input::SCENARIO`), else `PainleveError` (exit code 2) naming
+    /// the file and the bound.
     #[staticmethod]
     fn load(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path).map_err(|e| error(py, format!("cannot read {}: {e}", path.display()), 2))?;
+        let text = tables::input::read_to_string(&path, tables::input::SCENARIO).map_err(|e| error(py, e.to_string(), 2))?;
         Self::from_toml(py, &text)
     }
 

@@ -49,10 +49,11 @@ fn lock_name(role: Role, rig: &str) -> String {
     format!("painleve-rig-{rig}.{}.lock", role_name(role))
 }
 
-/// The pid written in an open lock file, if any.
+/// The pid written in an open lock file, if any (read within
+/// `tables::input::LOCK_OWNER`'s bound).
 fn read_pid(file: &mut File) -> Option<i64> {
     let mut text = String::new();
-    file.rewind().and_then(|()| file.read_to_string(&mut text)).ok()?;
+    file.rewind().and_then(|()| Read::take(&mut *file, tables::input::LOCK_OWNER.bytes).read_to_string(&mut text)).ok()?;
     text.trim().parse().ok()
 }
 

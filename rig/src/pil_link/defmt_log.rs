@@ -41,7 +41,7 @@ pub type LogSink = Box<dyn Fn(&LogLine) + Send>;
 /// [`RunError::Transport`] when the image cannot be read, is not a defmt image,
 /// or has no defmt table.
 pub(super) fn table_of(image: &Path) -> Result<defmt_decoder::Table, RunError> {
-    let elf = std::fs::read(image).map_err(|e| RunError::Transport(format!("cannot read the PIL image {}: {e}", image.display())))?;
+    let elf = tables::input::read(image, tables::input::ELF_IMAGE).map_err(|e| RunError::Transport(e.to_string()))?;
     defmt_decoder::Table::parse(&elf)
         .map_err(|e| RunError::Transport(format!("{}: not a defmt image: {e}", image.display())))?
         .ok_or_else(|| RunError::Transport(format!("{}: no defmt table (is it the `pil` image?)", image.display())))

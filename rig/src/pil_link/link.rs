@@ -86,8 +86,8 @@ impl PilLink {
         // Hello before the configuration goes.
         let law = match &opts.target {
             // A missing image is QEMU's start to report (its own message).
-            PilTarget::Qemu { image, .. } if image.is_file() => LawDescription::from_elf(image)?.unwrap_or_else(LawDescription::paper),
-            PilTarget::Serial { elf: Some(elf), .. } => LawDescription::from_elf(elf)?.unwrap_or_else(LawDescription::paper),
+            PilTarget::Qemu { image, .. } if image.is_file() => LawDescription::declared_by(image)?,
+            PilTarget::Serial { elf: Some(elf), .. } => LawDescription::declared_by(elf)?,
             PilTarget::Qemu { .. } | PilTarget::Serial { elf: None, .. } => LawDescription::paper(),
         };
         setup.firmware_for(&law)?;

@@ -12,7 +12,7 @@ use std::path::Path;
 /// The file cannot be read or is not an ELF file.
 pub fn image_size(path: &Path) -> Result<(u64, u64), String> {
     use object::{Object, ObjectSection};
-    let data = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let data = tables::input::read(path, tables::input::ELF_IMAGE).map_err(|e| e.to_string())?;
     let elf = object::File::parse(&*data).map_err(|e| format!("{}: not an ELF image: {e}", path.display()))?;
     let size = |names: &[&str]| -> u64 { elf.sections().filter(|s| s.name().is_ok_and(|n| names.contains(&n))).map(|s| s.size()).sum() };
     Ok((size(&[".vector_table", ".text", ".rodata", ".data"]), size(&[".data", ".bss", ".uninit"])))

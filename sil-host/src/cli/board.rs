@@ -99,7 +99,8 @@ pub enum BoardCommand {
         #[command(flatten)]
         scenario: ScenarioArgs,
         /// The ELF flashed on the board, for its law's declaration
-        /// (`PAINLEVE_LAW_SPEC`); the paper's laws without it.
+        /// (`PAINLEVE_LAW_SPEC`; an ELF without one is refused); the paper's
+        /// laws without --elf. A regular file of at most 64 MiB.
         #[arg(long, value_name = "ELF")]
         elf: Option<std::path::PathBuf>,
     },

@@ -54,7 +54,8 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
                 pil_link::DEFAULT_BAUD
             )));
         }
-        if let Some(elf) = args.image.as_ref().filter(|e| !e.is_file()) {
+        // Not there at all; one that is not a regular file is refused as it is read.
+        if let Some(elf) = args.image.as_ref().filter(|e| !e.exists()) {
             return Err(CliError::bad_input(format!(
                 "--image {}: no such file (with --serial: the ELF flashed on the board)",
                 elf.display()
@@ -73,7 +74,9 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
 /// 32-bit little-endian ARM ELF.
 pub(crate) fn qemu_target(image: Option<PathBuf>, qemu: PathBuf, link: pil_link::QemuLink) -> Result<PilTarget, CliError> {
     let image = image.unwrap_or_else(pil_link::default_image);
-    if !image.is_file() {
+    // Not there at all; a FIFO, a device, a directory or a file over
+    // `tables::input::ELF_IMAGE`'s bound is refused by `check_image`, naming it.
+    if !image.exists() {
         return Err(CliError::bad_input(format!(
             "no PIL image at {}: build it with `{}` (from the workspace root) or pass --image",
             image.display(),
@@ -86,10 +89,11 @@ pub(crate) fn qemu_target(image: Option<PathBuf>, qemu: PathBuf, link: pil_link:
 
 /// Refuses at once an image QEMU's Cortex-M4 cannot run (issue 52, 8: a damaged
 /// file exited 1 and one of another machine waited 20 s for a boot that never
-/// came): it must read as an ELF whose header says 32-bit little-endian ARM.
+/// came): it must be a regular file within `tables::input::ELF_IMAGE`'s bound
+/// (issue 80) and read as an ELF whose header says 32-bit little-endian ARM.
 ///
 /// # Errors
-/// [`CliError::BadInput`] (exit 2) naming the file and what is wrong.
+/// [`CliError::BadInput`] (exit 2) naming the file and what is wrong (and the bound).
 fn check_image(image: &std::path::Path) -> Result<(), CliError> {
     use object::Object;
     let bad = |why: String| {
@@ -99,7 +103,7 @@ fn check_image(image: &std::path::Path) -> Result<(), CliError> {
             pil_link::BUILD_HINT
         ))
     };
-    let bytes = std::fs::read(image).map_err(|e| bad(format!("cannot read it ({e})")))?;
+    let bytes = tables::input::read(image, tables::input::ELF_IMAGE)?;
     let elf = object::File::parse(&*bytes).map_err(|e| bad(format!("not an ELF image ({e})")))?;
     if elf.architecture() != object::Architecture::Arm || !elf.is_little_endian() || elf.is_64() {
         return Err(bad(format!(

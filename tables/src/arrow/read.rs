@@ -30,7 +30,7 @@ use crate::{Table, error::Error};
 pub fn read_arrow_batch(path: &Path) -> Result<RecordBatch, Error> {
     let bad = |msg: String| Error::unreadable(path, msg);
     let io = |e: std::io::Error| Error::Unreadable { path: path.to_path_buf(), source: e };
-    let mut file = File::open(path).map_err(io)?;
+    let mut file = crate::input::open(path, crate::input::TABLE)?;
     // The file format starts with the magic `ARROW1` and two bytes of padding; the
     // stream format with a message.
     let mut magic = [0u8; 6];
@@ -41,7 +41,7 @@ pub fn read_arrow_batch(path: &Path) -> Result<RecordBatch, Error> {
         Some(reader) => (reader.schema(), Box::new(reader)),
         None => {
             // A stream, or a file cut off before its footer: the stream after its head.
-            let mut file = File::open(path).map_err(io)?;
+            let mut file = crate::input::open(path, crate::input::TABLE)?;
             let start = if is_file { stream_start(&mut file).map_err(io)? } else { 0 };
             file.seek(SeekFrom::Start(start)).map_err(io)?;
             let reader = StreamReader::try_new_buffered(file, None).map_err(arrow_read_err(path))?;

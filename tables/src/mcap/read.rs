@@ -37,7 +37,7 @@ use crate::{Column, Kind, Table, error::Error};
 /// order).
 pub fn read_mcap(path: &Path) -> Result<Vec<(String, Table)>, Error> {
     let bad = |what: String| Error::unreadable(path, what);
-    let bytes = std::fs::read(path).map_err(|source| Error::Unreadable { path: path.to_path_buf(), source })?;
+    let bytes = crate::input::read(path, crate::input::TABLE)?;
     let summary = mcap::Summary::read(&bytes).ok().flatten();
     let specs = specs(&bytes, summary.as_ref()).map_err(&bad)?;
     // Each table topic's declared kinds, by column name.

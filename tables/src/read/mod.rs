@@ -27,7 +27,6 @@
 //! file is a table without columns.
 
 use std::{
-    fs::File,
     io::{Read, Seek, SeekFrom},
     path::Path,
     sync::Arc,
@@ -55,7 +54,7 @@ use crate::{
 pub fn read_csv(path: &Path, declared: &[Declaration]) -> Result<RecordBatch, Error> {
     let fail = |line: Option<u64>, message: String| Error::Read { path: path.to_path_buf(), line, message };
     let os = |e: std::io::Error| fail(None, e.to_string());
-    let mut file = File::open(path).map_err(os)?;
+    let mut file = crate::input::open(path, crate::input::TABLE)?;
     if file.metadata().map_err(os)?.len() == 0 {
         return Ok(RecordBatch::new_empty(Arc::new(Schema::empty())));
     }
@@ -63,7 +62,7 @@ pub fn read_csv(path: &Path, declared: &[Declaration]) -> Result<RecordBatch, Er
     file.seek(SeekFrom::End(-1)).and_then(|_| file.read_exact(&mut last)).map_err(os)?;
     if last[0] != b'\n' {
         // The line of the cut row, for the message.
-        let lines = std::fs::read(path).map_err(os)?.iter().filter(|&&b| b == b'\n').count();
+        let lines = crate::input::read(path, crate::input::TABLE)?.iter().filter(|&&b| b == b'\n').count();
         return Err(fail(Some(lines as u64 + 1), "the file ends inside a row (a file cut off while it was written?)".into()));
     }
     let format = Format::default().with_header(true);

@@ -92,6 +92,21 @@ impl bp::Operator for Terminal {
 /// board that does not answer; [`CliError::Board`] (exit 1) for a refusal or a
 /// failed check.
 pub fn run(args: &BoardArgs) -> Result<(), CliError> {
+    // The input files first (issue 80): a scenario, an ELF or a backup that is
+    // not a regular file within its bound, or an ELF that declares no law, is
+    // refused (exit 2) before the port opens.
+    let mut scenario_read = None;
+    let mut backup_read = None;
+    match &args.command {
+        BoardCommand::Configure { scenario, elf } => {
+            if let Some(elf) = elf {
+                rig::law::LawDescription::declared_by(elf).map_err(|e| CliError::bad_input(format!("configure: {e}")))?;
+            }
+            scenario_read = Some(load_scenario(scenario)?);
+        }
+        BoardCommand::Restore { file } => backup_read = Some(board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?),
+        _ => {}
+    }
     // A reader that goes away (`board status | head -1`) or a full disk ends
     // the command as every command (crate::stdout): quietly, exit 141, or with a
     // message, exit 1; `watch` stops at the first failed line.
@@ -204,9 +219,12 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             });
         }
         BoardCommand::Configure { scenario, elf } => {
-            let s = load_scenario(scenario)?;
+            let s = match scenario_read {
+                Some(s) => s,
+                None => load_scenario(scenario)?,
+            };
             // The law the board's image runs: the flashed ELF's declaration (the
-            // paper's laws without one) held to the digest the board reports; the
+            // paper's laws without --elf; an ELF without one refused) held to the digest the board reports; the
             // scenario's `[law]` table bound to it, or refused with the
             // declaration in the message, before anything is sent.
             let board_status = bp::status(&mut c).map_err(step)?;
@@ -284,7 +302,10 @@ pub fn run(args: &BoardArgs) -> Result<(), CliError> {
             });
         }
         BoardCommand::Restore { file } => {
-            let b = board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?;
+            let b = match backup_read {
+                Some(b) => b,
+                None => board_backup::read(file).map_err(|e| CliError::bad_input(e.to_string()))?,
+            };
             // The firmware's own rules, named by key, before anything is sent.
             board_backup::validate(&b).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
             let st = bp::restore(&mut c, &b).map_err(step)?;

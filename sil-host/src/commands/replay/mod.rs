@@ -80,8 +80,10 @@ pub struct ReplaySummary {
 /// Replays `args.dir` over `args.link`; prints nothing.
 ///
 /// # Errors
-/// Bad input (exit 2): not a run's folder, no frames, a bad `--set`, an option
-/// of another link, a missing image; the link's refusals to start. The replay's
+/// Bad input (exit 2): not a run's folder, no frames, a file that is not a
+/// regular file within its bound, a recording cut off or of another scenario
+/// than the one replayed (naming the setting), a bad `--set`, an option of
+/// another link, a missing image; the link's refusals to start. The replay's
 /// verdict is the returned [`Done`]'s failure: [`CliError::Diverged`] (exit 1)
 /// at a divergence, the link's error when it failed part way.
 pub fn execute(args: &ReplayArgs) -> Result<Done<ReplaySummary>, CliError> {
@@ -89,6 +91,9 @@ pub fn execute(args: &ReplayArgs) -> Result<Done<ReplaySummary>, CliError> {
     let rec = recording::read(&args.dir)?;
     let scenario = rec.scenario.with_overrides(&args.set)?;
     let setup = experiments::run::setup(scenario)?;
+    // Frames of another rate, length or start than the scenario's would
+    // replay as a divergence of the firmware: refused, naming the setting.
+    recording::check_scenario(&rec, &setup)?;
     let spec = match args.link {
         ReplayLink::InProcess => LinkSpec::InProcess,
         ReplayLink::Iceoryx2 => {

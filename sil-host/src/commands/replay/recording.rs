@@ -2,6 +2,14 @@
 //! `summary.json`'s `scenario_used`) and every period's frame and answer (its
 //! `frames.csv`, `frames.arrow`, or the `frames` table of its `trace.mcap`),
 //! each [`FrameRow`] bit for bit as the run wrote it.
+//!
+//! Every file is read as a regular file within its bound (`tables::input`:
+//! [`tables::input::SUMMARY`], [`tables::input::RECORDING`]), and a recording
+//! is held to its summary and to the scenario the replay runs (issue 80): a
+//! frames table with no rows, fewer or more rows than the summary's `periods`,
+//! a last row cut mid-line, or frames of another rate, length or initial state
+//! than the scenario's is bad input (exit 2) saying so, never "identical" nor a
+//! firmware divergence.
 
 use std::path::{Path, PathBuf};
 
@@ -30,17 +38,24 @@ pub struct Recording {
 /// # Errors
 /// [`CliError::BadInput`] (exit 2): `dir` is not a run's folder (no
 /// `summary.json`, or one without the scenario), it holds no frames (a run of a
-/// `sil-host` before replay), or a frames file is not the table (a column
-/// missing or of another kind, a value out of its wire type's range, an answer
-/// not named); the readers' own errors for a file that does not parse.
+/// `sil-host` before replay), a file is not a regular file within its bound,
+/// a frames file is not the table (a column missing or of another kind, a
+/// value out of its wire type's range, an answer not named), holds no row, or
+/// holds another number of rows than the summary's `periods` (cut off, or
+/// another run's); the readers' own errors for a file that does not parse.
 pub fn read(dir: &Path) -> Result<Recording, CliError> {
     let bad = |what: String| CliError::bad_input(format!("{}: {what}", dir.display()));
     if !dir.is_dir() {
         return Err(bad("no such folder (give the --out folder of a `sil-host run` or `pil`)".into()));
     }
     let summary_path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&summary_path)
-        .map_err(|e| bad(format!("cannot read summary.json ({e}): not the folder of a `sil-host run` or `pil`")))?;
+    let text = match tables::input::read_to_string(&summary_path, tables::input::SUMMARY) {
+        Ok(text) => text,
+        Err(e) if e.is_not_found() => {
+            return Err(bad("no summary.json: not the folder of a `sil-host run` or `pil`".into()));
+        }
+        Err(e) => return Err(e.into()),
+    };
     let summary: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(format!("summary.json is not JSON ({e})")))?;
     let used = summary
         .get("scenario_used")
@@ -48,26 +63,98 @@ pub fn read(dir: &Path) -> Result<Recording, CliError> {
     let scenario: Scenario = serde_json::from_value(used.clone())
         .map_err(|e| bad(format!("summary.json's `scenario_used` is not a scenario this sil-host reads ({e})")))?;
     let (source, rows) = frames_of(dir)?;
+    let named = |what: String| CliError::bad_input(format!("{}: {what}", source.display()));
+    if rows.is_empty() {
+        return Err(named(
+            "no frames: a header only (the run wrote none, or the file was cut off); nothing to replay, which is not \"identical\"".into(),
+        ));
+    }
+    // The run's own count: a table cut off (a disk full, a copy stopped) or
+    // another run's frames beside this summary.
+    if let Some(periods) = summary.get("periods").and_then(serde_json::Value::as_u64)
+        && periods != rows.len() as u64
+    {
+        return Err(named(format!(
+            "{} rows, but the run's summary.json says it ran {periods} periods: {}",
+            rows.len(),
+            if (rows.len() as u64) < periods {
+                "the recording is cut off (truncated)"
+            } else {
+                "the frames are not this run's (another recording beside its summary)"
+            }
+        )));
+    }
     Ok(Recording { scenario, source, rows })
+}
+
+/// Holds a recording's frames to `scenario`, the one the replay configures
+/// the firmware from (the recorded one after `--set`): the frames' spacing is
+/// its control period (`timing.rate_hz`), there are no more of them than it
+/// runs (`timing.duration_s`), and the first frame's state is its plant's
+/// initial state (`plant.x0`).
+///
+/// # Errors
+/// [`CliError::BadInput`] (exit 2) naming the setting that differs: the
+/// recording is of another scenario, which would replay as a divergence of
+/// the firmware.
+pub fn check_scenario(rec: &Recording, setup: &rig::setup::RunSetup) -> Result<(), CliError> {
+    let s = setup.scenario();
+    let mismatch = |what: String| {
+        CliError::bad_input(format!(
+            "{}: the recording is not of the scenario the replay runs (`{}`, summary.json's `scenario_used` after any --set): {what}",
+            rec.source.display(),
+            s.name
+        ))
+    };
+    let period_us = s.timing.period().as_us();
+    if let Some(w) = rec.rows.windows(2).find(|w| w[1].t_us - w[0].t_us != period_us as i64) {
+        let step = w[1].t_us - w[0].t_us;
+        return Err(mismatch(format!(
+            "timing.rate_hz: its frames are {step} us apart (period {} to {}), the scenario's control period is {period_us} us \
+             (timing.rate_hz = {})",
+            w[0].seq, w[1].seq, s.timing.rate_hz
+        )));
+    }
+    let periods = s.timing.periods();
+    if rec.rows.len() as u64 > periods {
+        return Err(mismatch(format!(
+            "timing.duration_s: it holds {} periods, the scenario runs {periods} (timing.duration_s = {})",
+            rec.rows.len(),
+            s.timing.duration_s
+        )));
+    }
+    let first = &rec.rows[0];
+    let recorded = [first.theta1, first.theta1_dot, first.theta2, first.theta2_dot];
+    let initial = setup.plant().state();
+    if first.seq == 0 && recorded != initial {
+        return Err(mismatch(format!(
+            "plant.x0: its first frame's state (theta1, theta1_dot, theta2, theta2_dot) is {recorded:?}, the scenario's initial \
+             state (plant.x0 = \"{}\") is {initial:?}",
+            s.plant.x0.letter()
+        )));
+    }
+    Ok(())
 }
 
 /// The frames of `dir`: `frames.csv` (every build), `frames.arrow` or
 /// `trace.mcap`'s `frames` table (a build with the table readers, `full`).
 fn frames_of(dir: &Path) -> Result<(PathBuf, Vec<FrameRow>), CliError> {
     let named = |path: &Path, what: String| CliError::bad_input(format!("{}: {what}", path.display()));
+    // `exists`, not `is_file`: a FIFO or a device in a file's place is refused
+    // by the reader, naming the bound, rather than passed over.
     let csv = dir.join("frames.csv");
-    if csv.is_file() {
-        return Ok((csv.clone(), read_csv(&csv).map_err(|what| named(&csv, what))?));
+    if csv.exists() {
+        return Ok((csv.clone(), read_csv(&csv)?));
     }
     let arrow = dir.join("frames.arrow");
     let mcap = dir.join("trace.mcap");
     #[cfg(feature = "full")]
     {
-        if arrow.is_file() {
+        if arrow.exists() {
             let t = tables::arrow::read_arrow(&arrow)?;
             return Ok((arrow.clone(), rows_of(&t).map_err(|what| named(&arrow, what))?));
         }
-        if mcap.is_file() {
+        if mcap.exists() {
             return match tables::mcap::read_mcap(&mcap)?.into_iter().find(|(name, _)| name == "frames") {
                 Some((_, t)) => Ok((mcap.clone(), rows_of(&t).map_err(|what| named(&mcap, what))?)),
                 None => {
@@ -77,7 +164,7 @@ fn frames_of(dir: &Path) -> Result<(PathBuf, Vec<FrameRow>), CliError> {
         }
     }
     #[cfg(not(feature = "full"))]
-    if arrow.is_file() || mcap.is_file() {
+    if arrow.exists() || mcap.exists() {
         return Err(crate::features::missing("full", "replaying frames.arrow or trace.mcap (the table readers)"));
     }
     Err(CliError::bad_input(format!(
@@ -122,16 +209,29 @@ struct CsvFrame {
 }
 
 /// The rows of `frames.csv` at `path` (the `csv` crate; Rust's float parsing
-/// reads the shortest text back to its bits). The header must be the table's.
-fn read_csv(path: &Path) -> Result<Vec<FrameRow>, String> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| e.to_string())?;
-    let header: Vec<String> = reader.headers().map_err(|e| e.to_string())?.iter().map(String::from).collect();
+/// reads the shortest text back to its bits), read within
+/// [`tables::input::RECORDING`]'s bound. The header must be the table's, and
+/// the file must end with a whole row: a last row cut mid-line (a run killed
+/// while writing, a copy stopped) would read as a row of cut numbers.
+fn read_csv(path: &Path) -> Result<Vec<FrameRow>, CliError> {
+    use std::io::{Read, Seek, SeekFrom};
+    let named = |what: String| CliError::bad_input(format!("{}: {what}", path.display()));
+    let bound = tables::input::RECORDING;
+    let mut file = tables::input::open(path, bound)?;
+    let io = |e: std::io::Error| CliError::from(tables::input::into_input_error(e, path, bound));
+    let mut last = [0u8];
+    if file.seek(SeekFrom::End(-1)).and_then(|_| file.read_exact(&mut last)).is_ok() && last[0] != b'\n' {
+        return Err(named("its last row is cut mid-line (no newline at its end): the recording is truncated".into()));
+    }
+    file.rewind().map_err(io)?;
+    let mut reader = csv::Reader::from_reader(tables::input::BoundedReader::new(file, path, bound));
+    let header: Vec<String> = reader.headers().map_err(|e| named(e.to_string()))?.iter().map(String::from).collect();
     if header != FrameRow::NAMES {
         let missing: Vec<&str> = FrameRow::NAMES.iter().copied().filter(|n| !header.iter().any(|h| h == n)).collect();
-        return Err(match missing.first() {
+        return Err(named(match missing.first() {
             Some(name) => format!("no column `{name}`"),
             None => format!("its columns are not the frames table's ({})", FrameRow::NAMES.join(",")),
-        });
+        }));
     }
     reader
         .deserialize::<CsvFrame>()
@@ -177,7 +277,8 @@ fn read_csv(path: &Path) -> Result<Vec<FrameRow>, String> {
                 u2_raw: r.u2_raw,
             })
         })
-        .collect()
+        .collect::<Result<_, String>>()
+        .map_err(named)
 }
 
 /// The column `name` of `t`.

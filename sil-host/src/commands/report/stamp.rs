@@ -25,7 +25,8 @@ impl Stamp {
     /// The stamp of now, here.
     pub fn now() -> Self {
         let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
-        let read = |p: &str| std::fs::read_to_string(p).ok().map(|s| s.trim().to_string());
+        let read =
+            |p: &str| tables::input::read_to_string(std::path::Path::new(p), tables::input::SYSTEM_FILE).ok().map(|s| s.trim().to_string());
         let cpu = read("/proc/cpuinfo")
             .and_then(|c| {
                 c.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, m)| m.trim().to_string())
