@@ -31,9 +31,9 @@ pub struct ChatterMonitor {
 impl ChatterMonitor {
     /// Folds in one period's saturated command `u` (N m) under the torque
     /// limit `limit` (N m); true once a motor's command swung by more than
-    /// [`CHATTER_FRACTION`] of the limit, reversing its sign or the direction
-    /// of its last change, for [`CHATTER_PERIODS`] periods in a row. The
-    /// second kind (issue 80) is a command that chatters without crossing
+    /// [`CHATTER_FRACTION`] of the limit, reversing the direction of its last
+    /// change, for [`CHATTER_PERIODS`] periods in a row: a command reversing
+    /// its sign so, and (issue 80) one that chatters without crossing
     /// zero: a law holding the tip on the belt against the paradox swings its
     /// base motor between +5 and +1.7 N m every period as the contact
     /// chatters, which the wiring check saw as a joint moving against its
@@ -43,14 +43,13 @@ impl ChatterMonitor {
     pub fn update(&mut self, u: [f32; 2], limit: f32) -> bool {
         let step = CHATTER_FRACTION * limit;
         let change = [u[0] - self.last[0], u[1] - self.last[1]];
-        let reversed = |now: f32, before: f32, change: f32, last_change: f32| {
-            (now * before < 0.0 || change * last_change < 0.0) && change.abs() > step
-        };
+        // A reversal of the change by more than `step`: a command that crosses
+        // zero by that much reverses its change too (from rest, the first swing
+        // counts as a sign reversal did), so one comparison a motor serves both.
+        let reversed = |change: f32, last_change: f32| change * last_change < 0.0 && change.abs() > step;
         let count = |n: u16, r: bool| if r { n.saturating_add(1) } else { 0 };
-        self.run = [
-            count(self.run[0], reversed(u[0], self.last[0], change[0], self.last_change[0])),
-            count(self.run[1], reversed(u[1], self.last[1], change[1], self.last_change[1])),
-        ];
+        self.run =
+            [count(self.run[0], reversed(change[0], self.last_change[0])), count(self.run[1], reversed(change[1], self.last_change[1]))];
         self.last = u;
         self.last_change = change;
         self.run[0] >= CHATTER_PERIODS || self.run[1] >= CHATTER_PERIODS

@@ -68,7 +68,9 @@ impl Knobs {
     /// `base` with these knobs: the plant's impact law, `e_n` and IWC rule, the
     /// controller's friction term, move time, `mu_hat` and torque limit, the rate
     /// (the delay from sampling to the command, `delta_s`, kept the same fraction of
-    /// the period unless `delay_s` sets it), the encoders and the load-cell noise.
+    /// the period unless `delay_s` sets it; beyond 0.4 ms the run is without the
+    /// firmware's protection, `controller.runaway_limits = false`, which the
+    /// validator asks there), the encoders and the load-cell noise.
     pub fn scenario(&self, base: &Scenario) -> Scenario {
         let mut s = base.clone();
         s.plant.impact_law = self.impact_law;
@@ -79,6 +81,12 @@ impl Knobs {
         s.controller.move_time_s = self.move_time_s;
         s.controller.mu_hat = base.plant.mu * (1.0 + self.mu_hat_mismatch);
         s.timing.delta_s = self.delay_s.unwrap_or(base.timing.delta_s * base.timing.rate_hz / self.rate_hz);
+        // A delay beyond what the firmware's protection takes (issue 80,
+        // `TimingSection::MAX_PROTECTED_DELAY_S`) is studied without it: the
+        // study varies the model, and the protection would stop healthy arms there.
+        if s.timing.delta_s > rig::scenario::TimingSection::MAX_PROTECTED_DELAY_S {
+            s.controller.runaway_limits = false;
+        }
         if let Some(limit) = self.torque_limit_nm {
             s.controller.torque_limit_nm = Some(limit);
         }
