@@ -265,7 +265,7 @@ mod tests {
         assert!(e.contains("`calibration.belt_metres_per_count` = 0"), "{e}");
         // Issue 52: what the scenario path refused, a backup took.
         let e = refused(&|b| b.config.f_n_ref = 100.0);
-        assert!(e.contains("`config.f_n_ref` = 100") && e.contains("[0, 25] N"), "{e}");
+        assert!(e.contains("`config.f_n_ref` = 100") && e.contains("[0, 20] N"), "{e}");
         let e = refused(&|b| b.calibration.load_newtons_per_count[0] = 1e-45);
         assert!(e.contains("`calibration.load_newtons_per_count[0]` = 1e-45") && e.contains("factor 4"), "{e}");
         let e = refused(&|b| b.calibration.load_newtons_per_count[1] = -0.012);

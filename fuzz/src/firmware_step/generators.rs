@@ -25,7 +25,7 @@ fn knobs() -> impl Strategy<Value = Knobs> {
         (option::of(limit), option::of(10u8..=16), option::of(branch), option::of(friction), option::of(-0.99f32..0.99)),
         (
             option::of(0.001f32..20.0),
-            option::of(0.0f32..=25.0),
+            option::of(0.0f32..=firmware::runaway::MAX_F_N_REF),
             option::of(0.0f32..2.0),
             option::of(0.0f32..50.0),
             option::of(0.01f32..0.99),

@@ -49,7 +49,7 @@ pub fn violations(s: &Scenario) -> Vec<String> {
     let c = &s.controller;
     need(fin(c.target_z_t) && c.target_z_t.abs() < 2.0 * p.l, "controller.target_z_t: |z_t*| < 2 l");
     need(fin(c.move_time_s) && c.move_time_s > 0.0 && c.move_time_s <= 1e5, "controller.move_time_s in (0, 1e5]");
-    need(within(c.f_n_ref, 0.0, 25.0), "controller.f_n_ref in [0, 25]");
+    need(within(c.f_n_ref, 0.0, 20.0), "controller.f_n_ref in [0, 20]");
     need(within(c.mu_hat, 0.0, 10.0), "controller.mu_hat in [0, 10]");
     // The firmware's f32 (docs/rig.md): at most 3.4e38, positive values not rounding to 0.
     let f32_fin = |x: f64| (x as f32).is_finite();
@@ -89,6 +89,7 @@ pub fn violations(s: &Scenario) -> Vec<String> {
     // One period: the rate's, rounded to whole microseconds (shared::time).
     let period_s = (1e6 / t.rate_hz).round() / 1e6;
     need(fin(t.delta_s) && t.delta_s >= 0.0 && t.delta_s < period_s, "timing.delta_s in [0, one period)");
+    need(!s.controller.runaway_limits || t.delta_s <= 0.4e-3, "timing.delta_s at most 0.4 ms with the protection on");
     need(fin(t.duration_s) && t.duration_s > 0.0 && t.duration_s <= 1e5, "timing.duration_s in (0, 1e5]");
     need(within(s.sensors.load_noise_n, 0.0, 25.0), "sensors.load_noise_n in [0, 25]");
     need((10..=16).contains(&s.sensors.encoder_bits), "sensors.encoder_bits 10 to 16");
