@@ -353,6 +353,27 @@ pub fn rows<L: ControlLaw>(classes: &[&Class], healthy: &[Healthy], threads: usi
     })
 }
 
+/// The classes of `all` whose name contains `only`, under law `L`: issue 66's
+/// ([`ISSUE_66_CLASSES`]) over every run of `healthy`, issue 80's over its
+/// first `n_new` (CI's time); each class with its [`Row`], in order.
+pub fn rows_split<'a, L: ControlLaw>(
+    all: &'a [Class],
+    only: &str,
+    healthy: &[Healthy],
+    n_new: usize,
+    threads: usize,
+) -> Vec<(&'a Class, Row)> {
+    let (old, new): (Vec<_>, Vec<_>) =
+        all.iter().enumerate().filter(|(_, c)| c.name().contains(only)).partition(|(i, _)| *i < ISSUE_66_CLASSES);
+    let (old, new): (Vec<&Class>, Vec<&Class>) = (old.into_iter().map(|(_, c)| c).collect(), new.into_iter().map(|(_, c)| c).collect());
+    let n_new = n_new.min(healthy.len());
+    old.iter()
+        .copied()
+        .zip(rows::<L>(&old, healthy, threads))
+        .chain(new.iter().copied().zip(rows::<L>(&new, &healthy[..n_new], threads)))
+        .collect()
+}
+
 /// A row as the FMEA's table prints it (`--nocapture`).
 pub fn line(law: &str, class: &Class, row: &Row) -> String {
     format!(

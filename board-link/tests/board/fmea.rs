@@ -29,7 +29,7 @@
 //! `--nocapture` prints the table's measured columns.
 
 use board_link::{
-    fmea::{Class, DURATION_S, Healthy, classes, line, rows, twin_run},
+    fmea::{Class, DURATION_S, Healthy, classes, line, rows_split, twin_run},
     random_scenarios::random_envelope,
 };
 use firmware::PaperLaws;
@@ -80,10 +80,6 @@ fn every_fault_class_is_stopped_within_100_ms_and_30_mm_or_never_moves_the_tip_3
     let n_new: usize = std::env::var("PAINLEVE_FMEA_NEW_SCENARIOS").ok().and_then(|v| v.parse().ok()).unwrap_or(50).min(n);
     let only = std::env::var("PAINLEVE_FMEA_CLASS").unwrap_or_default();
     let all = classes();
-    let keep = |c: &Class| c.name().contains(only.as_str());
-    // Issue 66's classes over `n` healthy runs, issue 80's over the first `n_new` (CI's time).
-    let (old, new): (Vec<_>, Vec<_>) =
-        all.iter().enumerate().filter(|(_, c)| keep(c)).partition(|(i, _)| *i < board_link::fmea::ISSUE_66_CLASSES);
     let threads = std::thread::available_parallelism().map_or(2, |p| p.get()).min(4);
     let mut broken = Vec::new();
     for kind in ["hybrid", "pid"] {
@@ -96,13 +92,8 @@ fn every_fault_class_is_stopped_within_100_ms_and_30_mm_or_never_moves_the_tip_3
             .take(n)
             .collect();
         assert_eq!(healthy.len(), n, "{kind}: too few healthy runs of the envelope");
-        let old: Vec<&Class> = old.iter().map(|(_, c)| *c).collect();
-        let new: Vec<&Class> = new.iter().map(|(_, c)| *c).collect();
-        let measured = rows::<PaperLaws>(&old, &healthy, threads)
-            .into_iter()
-            .zip(&old)
-            .chain(rows::<PaperLaws>(&new, &healthy[..n_new], threads).into_iter().zip(&new));
-        for (row, class) in measured {
+        let measured = rows_split::<PaperLaws>(&all, &only, &healthy, n_new, threads);
+        for (class, row) in measured {
             println!("{}", line(kind, class, &row));
             let allowed = OPEN.iter().find(|(k, c, _)| *k == kind && *c == class.name()).map_or(0, |o| o.2);
             if row.broken.len() > allowed {

@@ -130,7 +130,7 @@ fn random_impedance(i: u64) -> (LawTable, String) {
 /// thrown off the belt 13 to 26 ms late. `--nocapture` prints the table.
 #[test]
 fn over_the_envelope_no_healthy_arm_is_stopped_falsely_and_every_fmea_class_keeps_its_promise() {
-    use board_link::fmea::{DURATION_S, Healthy, classes, line, rows, twin_run, unprotected};
+    use board_link::fmea::{DURATION_S, Healthy, classes, line, twin_run, unprotected};
     let n: usize = std::env::var("PAINLEVE_FMEA_SCENARIOS").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
     let (mut stopped, mut false_alarms) = (0usize, Vec::new());
     let healthy: Vec<Healthy> = (0..20 * n as u64)
@@ -164,18 +164,9 @@ fn over_the_envelope_no_healthy_arm_is_stopped_falsely_and_every_fmea_class_keep
     // `PAINLEVE_FMEA_NEW_SCENARIOS` (50 by default: CI's time; `board_link::fmea::ISSUE_66_CLASSES`).
     let n_new: usize = std::env::var("PAINLEVE_FMEA_NEW_SCENARIOS").ok().and_then(|v| v.parse().ok()).unwrap_or(50).min(n);
     let all = classes();
-    let (old, new): (Vec<(usize, &_)>, Vec<_>) = all
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.name().contains(only.as_str()))
-        .partition(|(i, _)| *i < board_link::fmea::ISSUE_66_CLASSES);
-    let (old, new): (Vec<_>, Vec<_>) = (old.into_iter().map(|(_, c)| c).collect(), new.into_iter().map(|(_, c)| c).collect());
-    let measured = rows::<Impedance>(&old, &healthy, threads)
-        .into_iter()
-        .zip(&old)
-        .chain(rows::<Impedance>(&new, &healthy[..n_new], threads).into_iter().zip(&new));
+    let measured = board_link::fmea::rows_split::<Impedance>(&all, &only, &healthy, n_new, threads);
     let mut broken = Vec::new();
-    for (row, class) in measured {
+    for (class, row) in measured {
         println!("{}", line("impedance", class, &row));
         let allowed = OPEN.iter().find(|(c, _)| *c == class.name()).map_or(0, |o| o.1);
         if row.broken.len() > allowed {
