@@ -272,27 +272,41 @@ pub fn unprotected<L: ControlLaw>(s: &Scenario) -> (bool, bool) {
     (lifts, saturates)
 }
 
-/// One faulty run of law `L` against its healthy run: the safe state's time
-/// after the onset (s), and the stray (m).
+/// One faulty run of law `L` against its healthy run (see [`measure`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    /// The fault's onset, s from the run's start.
+    pub onset_s: f64,
+    /// The safe state's time after the onset (s) and its reason, if the run stopped.
+    pub stop: Option<(f64, firmware::SafeReason)>,
+    /// The stray, m.
+    pub stray_m: f64,
+    /// When the stray first reached [`STRAY_M`], s after the onset.
+    pub beyond_at_s: Option<f64>,
+}
+
+/// One faulty run of law `L` against its healthy run: when and why it
+/// stopped, and the stray (m).
 ///
 /// # Panics
 /// When the faulty run ends by anything but the safe state or its end.
-pub fn measure<L: ControlLaw>(class: &Class, h: &Healthy) -> (Option<f64>, f64) {
+pub fn measure<L: ControlLaw>(class: &Class, h: &Healthy) -> Measured {
     let (f, onset) = class.inject(&h.scenario);
     let (r, e) = twin_run::<L>(&f);
     let stop = match &e {
-        Some(RunError::SafeState { t, .. }) => Some(t - onset),
+        Some(RunError::SafeState { t, reason, .. }) => Some((t - onset, *reason)),
         Some(other) => panic!("{}: {} ({}): {other}", class.name(), h.what, h.scenario.sensors.seed),
         None => None,
     };
     let on_belt = h.records.iter().position(|p| p.lift_off_true).unwrap_or(h.records.len());
-    let stray = r
-        .iter()
-        .zip(&h.records[..on_belt])
-        .filter(|(_, b)| b.t >= onset)
-        .map(|(a, b)| (a.z_t - b.z_t).hypot(a.z_n - b.z_n))
-        .fold(0.0, f64::max);
-    (stop, stray)
+    let (mut stray_m, mut beyond_at_s) = (0.0f64, None);
+    for (a, b) in r.iter().zip(&h.records[..on_belt]).filter(|(_, b)| b.t >= onset) {
+        stray_m = stray_m.max((a.z_t - b.z_t).hypot(a.z_n - b.z_n));
+        if stray_m >= STRAY_M && beyond_at_s.is_none() {
+            beyond_at_s = Some(b.t - onset);
+        }
+    }
+    Measured { onset_s: onset, stop, stray_m, beyond_at_s }
 }
 
 /// What one class did over the healthy runs of one law.
@@ -318,7 +332,8 @@ pub struct Row {
 pub fn row<L: ControlLaw>(class: &Class, healthy: &[Healthy]) -> Row {
     let mut row = Row { runs: healthy.len(), ..Row::default() };
     for h in healthy {
-        let (stop, stray) = measure::<L>(class, h);
+        let m = measure::<L>(class, h);
+        let (stop, stray) = (m.stop.map(|s| s.0), m.stray_m);
         row.worst_stray_m = row.worst_stray_m.max(stray);
         if let Some(t) = stop {
             row.stopped += 1;
@@ -326,10 +341,13 @@ pub fn row<L: ControlLaw>(class: &Class, healthy: &[Healthy]) -> Row {
         }
         if stray >= STRAY_M {
             let sat = h.records.iter().filter(|p| p.status & (status::SATURATED_U1 | status::SATURATED_U2) != 0).count();
+            let stopped = m.stop.map_or("never stopped".into(), |(t, r)| format!("stopped {:.0} ms after it ({r:?})", t * 1e3));
             row.broken.push(format!(
-                "{} (seed {}): stop {stop:?} s, stray {:.1} mm; healthy saturated {:.0} % of periods",
+                "{} (seed {}): onset {:.3} s, 30 mm at {:.0} ms, {stopped}, stray {:.1} mm; healthy saturated {:.0} % of periods",
                 h.what,
                 h.scenario.sensors.seed,
+                m.onset_s,
+                m.beyond_at_s.unwrap_or(f64::NAN) * 1e3,
                 stray * 1e3,
                 100.0 * sat as f64 / h.records.len() as f64
             ));

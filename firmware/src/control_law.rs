@@ -127,7 +127,7 @@ pub struct Declares {
     /// impedance law, `examples/law-template/tests/protection.rs`). A law
     /// beyond its `Z_t,sliding` (the paradox's bounce) is stopped by it too, as
     /// the hybrid law is on a board. With [`Declares::tracking`] the tracking
-    /// check holds the promise instead (lift-off for 10 ms, the error's bound:
+    /// check holds the promise instead (lift-off for 2 ms, the error's bound:
     /// [`crate::tracking`]).
     pub on_belt: bool,
     /// Whether it reads the reference's acceleration (`RefPoint::acc`); the

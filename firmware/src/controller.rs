@@ -13,6 +13,7 @@ use shared::{
 
 use crate::{
     TickClock,
+    belt_check::BeltMonitor,
     chatter::ChatterMonitor,
     config::{Config, ConfigError},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
@@ -70,6 +71,8 @@ pub struct Firmware<L: ControlLaw = PaperLaws> {
     consistency: ConsistencyMonitor,
     innovation: InnovationMonitor,
     friction_sign: FrictionSignMonitor,
+    /// The belt speed reading's plausibility ([`crate::belt_check`]).
+    belt: BeltMonitor,
     /// The friction sign check's confirmation at this rate, periods.
     friction_confirm: u16,
     runaway: RunawayMonitor,
@@ -201,6 +204,7 @@ impl<L: ControlLaw> Firmware<L> {
             consistency: ConsistencyMonitor::default(),
             innovation: InnovationMonitor::default(),
             friction_sign: FrictionSignMonitor::default(),
+            belt: BeltMonitor::default(),
             friction_confirm: FrictionSignMonitor::confirm_periods(cfg.period.as_secs_f32()),
             runaway: RunawayMonitor::default(),
             runaway_rule: RunawayRule::at_period(cfg.period.as_secs_f32()),
@@ -490,7 +494,12 @@ impl<L: ControlLaw> Firmware<L> {
         let load_saturated = m.f_n.abs() >= full_scale || m.f_t.abs() >= full_scale;
         // Friction against the slip: the slip is the observer's, whose prediction
         // is wrong at full scale (as after an impact): it is then no evidence.
-        let inconsistent = self.consistency.update(&consistency_rule, m.f_n, measured_height)
+        // The belt's reading against the last ([`crate::belt_check`]): from the run's
+        // third period (its first reads 0; the reference's time below, the same subtraction).
+        let k_run = seq.wrapping_sub(s.seq0);
+        let belt_jumped = self.belt.update(m.v_belt) & (k_run >= 2);
+        let inconsistent = belt_jumped
+            | self.consistency.update(&consistency_rule, m.f_n, measured_height)
             | self.friction_sign.update(
                 cfg.sensor_contact_force,
                 m.f_t,
@@ -500,6 +509,7 @@ impl<L: ControlLaw> Firmware<L> {
                 self.friction_confirm,
             );
         let unexplained = self.innovation.update(&innovation_rule, innovation, lifted, load_saturated);
+
         if inconsistent || unexplained {
             return Err(SafeReason::SensorFault);
         }
@@ -524,7 +534,7 @@ impl<L: ControlLaw> Firmware<L> {
                 return Err(SafeReason::Miswired);
             }
         }
-        let t_run = seq.wrapping_sub(s.seq0) as f32 * ts;
+        let t_run = k_run as f32 * ts;
         // The PID uses no reference acceleration: not computed under it.
         // What the law declares, derived from the configuration where it is used
         // (the paper's laws: one comparison of `controller`, shared by both uses

@@ -14,6 +14,7 @@
 extern crate std;
 
 pub mod announce;
+pub mod belt_check;
 pub mod board;
 pub mod chatter;
 pub mod config;
