@@ -167,6 +167,7 @@ cargo test --workspace --release --features sil-host/full --no-fail-fast 2>&1 | 
 soak_status=0
 wait "$soak_pid" || soak_status=$?
 echo "== [at ${SECONDS} s] the soak test (tests/soak.rs), exit $soak_status"
+echo "     Running tests/soak.rs (beside the others)" >>"$log"
 cat "$soaklog" | tee -a "$log"
 rm -f "$soaklog"
 [ "$soak_status" -ne 0 ] && status="$soak_status"
@@ -175,7 +176,7 @@ awk -v py="$pylog" '/^test result:/ || (FILENAME == py && /(passed|failed)/ && /
        for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^(failed|error)/) f += $i } }
      END { printf "tests: %d passed, %d failed\n", p, f }' "$log" "$pylog"
 # Where the tests' time went (CI's 20-minute budget): the slowest test binaries, by cargo's own timing.
-awk '/^ *Running / { bin = $2 } /^test result:/ { for (i = 1; i <= NF; i++) if ($i == "in") print $(i+1), bin }' "$log" \
+awk '/^ *Running / { bin = $2 } /^ *Doc-tests / { bin = "doc-tests of " $2 } /^test result:/ { for (i = 1; i <= NF; i++) if ($i == "in") print $(i+1), bin }' "$log" \
   | sort -rn | head -n 8 | awk 'BEGIN { print "slowest test binaries:" } { print "  " $0 }'
 echo "the whole script: ${SECONDS} s"
 [ "$status" -ne 0 ] && exit "$status"

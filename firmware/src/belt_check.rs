@@ -23,11 +23,18 @@
 //!
 //! **The first readings.** The speed is counts per period: the run's first
 //! frame has no period before it and reads 0, and the second's change from it
-//! is the belt's start, not a jump: the step folds in every reading, and counts
-//! a jump from the run's third period on.
+//! is the belt's start, not a jump; the second may read part of a period too (a
+//! counter read as the belt's edges arrive: the emulated board's TIM4 reads
+//! half the first period's counts at 8.7 kHz, then the full count). The step
+//! folds in every reading, and counts a jump from the run's fourth period on
+//! ([`FIRST_PERIOD`]).
 
 /// The largest change of the belt's speed reading between two periods, m/s (module docs).
 pub const JUMP_MPS: f32 = 0.04;
+
+/// The run's first period (counted from 0) whose jump counts (module docs: the
+/// first reads 0, the second may read part of a period).
+pub const FIRST_PERIOD: u32 = 3;
 
 /// The check's state across periods: the last reading (NaN before the first).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,8 +55,8 @@ impl BeltMonitor {
     /// frame's count); returns whether it jumped from the last reading by more
     /// than [`JUMP_MPS`] (never for the first reading; a non-finite reading
     /// never jumps, and the frame's decoding makes none). The step folds in
-    /// every trusted frame's reading and ignores the answer for the run's first
-    /// two (module docs: the first reads 0).
+    /// every trusted frame's reading and ignores the answer before the run's
+    /// [`FIRST_PERIOD`] (module docs).
     #[inline(always)]
     pub fn update(&mut self, v_belt: f32) -> bool {
         // One comparison, false against the first reading's NaN.

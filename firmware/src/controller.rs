@@ -13,7 +13,7 @@ use shared::{
 
 use crate::{
     TickClock,
-    belt_check::BeltMonitor,
+    belt_check::{self, BeltMonitor},
     chatter::ChatterMonitor,
     config::{Config, ConfigError},
     consistency::{ConsistencyMonitor, ConsistencyRule, FrictionSignMonitor, InnovationMonitor, InnovationRule},
@@ -495,9 +495,10 @@ impl<L: ControlLaw> Firmware<L> {
         // Friction against the slip: the slip is the observer's, whose prediction
         // is wrong at full scale (as after an impact): it is then no evidence.
         // The belt's reading against the last ([`crate::belt_check`]): from the run's
-        // third period (its first reads 0; the reference's time below, the same subtraction).
+        // fourth period (its first reads 0, its second may read part of a period; the
+        // reference's time below, the same subtraction).
         let k_run = seq.wrapping_sub(s.seq0);
-        let belt_jumped = self.belt.update(m.v_belt) & (k_run >= 2);
+        let belt_jumped = self.belt.update(m.v_belt) & (k_run >= belt_check::FIRST_PERIOD);
         let inconsistent = belt_jumped
             | self.consistency.update(&consistency_rule, m.f_n, measured_height)
             | self.friction_sign.update(

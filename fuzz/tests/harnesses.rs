@@ -73,10 +73,10 @@ fn firmware_cases_reach_every_status_bit_and_safe_reason() {
         firmware_step::check_covering(&c, &mut cov).unwrap();
     }
     assert!(cov.bits.iter().all(|&n| n > 0), "{cov:?}");
-    // Every reason of the step but `LiftOff` (12): it needs 10 ms of lift-off under the
-    // hybrid law with no other check tripping first, which a random script does not
-    // hold; the twin's wiring tests reach it (a reversed load cell stops on it at
-    // period 10, board-link/tests/board/twin.rs) and firmware::tracking's unit tests pin
+    // Every reason of the step but `LiftOff` (12): it needs lift-off declared for 2 ms
+    // (firmware::tracking::LIFT_OFF_S) under the hybrid law with no other check tripping
+    // first, which a random script does not hold; the twin's wiring tests reach it (a
+    // reversed load cell, board-link/tests/board/twin.rs) and firmware::tracking's unit tests pin
     // its rule. The tracking check's trips are `Tracking` (11) with the gains inside
     // their envelope at the script's rate and `Unstable` (15) outside it (issue 66:
     // the paper's gains from 1.1 ms on), which most of the scripts' random periods are:
@@ -87,9 +87,18 @@ fn firmware_cases_reach_every_status_bit_and_safe_reason() {
     assert!(cov.torque > cov.steps / 20, "{cov:?}");
 }
 
-/// A frame of the arm near the belt (x0d), trusted by the default configuration.
+/// A frame of the arm near the belt (x0d), trusted by the default configuration,
+/// pressing with 10 N (with no force read, the hybrid law's lift-off check stops it
+/// after 2 ms: `firmware::tracking::LIFT_OFF_S`).
 fn good_frame(seq: u32) -> SensorFrame {
-    SensorFrame { t_us: u64::from(seq) * 1000, seq, theta1_count: 15_860, elbow_count: 15_290, ..SensorFrame::default() }
+    SensorFrame {
+        t_us: u64::from(seq) * 1000,
+        seq,
+        theta1_count: 15_860,
+        elbow_count: 15_290,
+        f_n_code: shared::wire::encode_force(10.0),
+        ..SensorFrame::default()
+    }
 }
 
 /// Each property of `firmware-step` fails on a command that breaks it.

@@ -38,7 +38,7 @@ pub enum SafeReason {
     /// Under the hybrid law the tip strayed more than 5 mm from `z_t*` for 3 ms
     /// ([`crate::tracking`]).
     Tracking = 11,
-    /// Under the hybrid law lift-off stayed declared for 10 ms ([`crate::tracking`]).
+    /// Under the hybrid law lift-off stayed declared for 2 ms ([`crate::tracking::LIFT_OFF_S`]).
     LiftOff = 12,
     /// The board's acquisition of the encoders failed (issue 56: a DMA2
     /// transfer, FIFO or direct-mode error, frames not done by their deadline, a

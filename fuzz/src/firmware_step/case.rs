@@ -10,7 +10,8 @@ pub const MAX_OPS: usize = 48;
 #[derive(Debug, Clone)]
 pub enum Counts {
     /// The arm near the belt: the tip moves by `dz_t * 10 um` along it, sits
-    /// `dz_n * 20 um` above it, presses with `10 + f_n * 0.05` N; belt `-0.4 + belt` m/s.
+    /// `dz_n * 20 um` above it, presses with `10 + f_n * 0.05` N; the belt at -0.4 m/s plus `belt / 8` mm/s
+    /// (its changes within the belt check's 40 mm/s a period).
     Plausible {
         /// Tangential move, 10 um.
         dz_t: i8,

@@ -74,7 +74,8 @@ impl FrameMaker {
                     wire::encode_angle_bits(q[1] - q[0], bits),
                     wire::encode_force(f_t_n),
                     wire::encode_force(f_n_n),
-                    -400 + i16::from(belt),
+                    // Within the belt check's 40 mm/s a period (`firmware::belt_check`): +-15 mm/s.
+                    -400 + i16::from(belt) / 8,
                 )
             }
             Counts::InRange { theta1, elbow, f_t, f_n, belt } => {
