@@ -510,7 +510,6 @@ impl<L: ControlLaw> Firmware<L> {
                 self.friction_confirm,
             );
         let unexplained = self.innovation.update(&innovation_rule, innovation, lifted, load_saturated);
-
         if inconsistent || unexplained {
             return Err(SafeReason::SensorFault);
         }
