@@ -114,50 +114,76 @@ fn a_located_passage_through_the_singular_point_stays_p_zero() {
     assert_eq!((c.p_zero, c.impacts_without_collision, c.singular_points, c.bridges), (1, 1, 0, 0));
 }
 
-/// Issue 67: the simultaneous crossing of `p = 0` and `b = 0` gives the same
-/// crossing whichever root the locator meets first. The controlled corner with
-/// `b` reaching 0 a little before `p` (`lead` 1e-9 and 1e-8 of `Q_22`), with `p`
-/// first (`lead` below 0) and with both together: each is the passage through the
-/// singular point, `p_zero` then the impact without collision whose edge impulse
-/// stops the slip, the same impulse to 1e-5 of it (the crossing 1e-8 of `Q_22` earlier
-/// moves it by 2.4e-6). (What follows depends on the
-/// law, which here holds `b` at its `lead` after the impulse too.) A lift-off well
-/// before `p = 0` (`lead` 1e-3: the force falls to 0 over the slide) stays a
-/// lift-off with the slip kept.
+/// The first events of `plant` under `ctrl`, advanced in 1 ms intervals (`None` if
+/// an interval fails or none comes within 1 s).
+fn first_events(plant: &mut Plant, ctrl: &ThroughTheCorner) -> Option<Vec<crate::PlantEvent>> {
+    for k in 0..1000 {
+        let events = plant.advance(ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).ok()?.events;
+        if !events.is_empty() {
+            return Some(events);
+        }
+    }
+    None
+}
+
+/// How a crossing of the controlled corner with its roots `lead` of `Q_22` apart
+/// went, checked against the slide's limit (issue 81). The law holds `f_n = f_star (1 -
+/// lead Q_22 / p)`: the order of its approach is 0 and its limit `f_star`, so the slide
+/// is held at its force down to `p / Q_22 = |lead|`, where the force reaches 0 (`lead >
+/// 0`: a lift-off with the slip kept) or grows without bound (`lead < 0`: the jam). Down
+/// to [`crate::segment::HELD_P`] (1e-9) the two are the singular point: arrested by
+/// the impact without collision at `p = 0`. The arrest's and the jam's impulses are both
+/// the edge impulse at `p = 0`: returned for comparison.
+fn check_crossing(events: &[crate::PlantEvent], counters: &crate::Counters, lead: f64, what: &str) -> Option<[f64; 2]> {
+    let kinds: Vec<EventKind> = events.iter().take(2).map(|e| e.kind).collect();
+    let counts = (counters.corners_arrested, counters.corners_lifted_off, counters.corners_jammed);
+    if lead.abs() <= 1e-10 {
+        assert_eq!(kinds, [EventKind::PZero, EventKind::ImpactWithoutCollision], "{what}");
+        assert_eq!(counts, (1, 0, 0), "{what}");
+        let iwc = &events[1];
+        assert!(iwc.v_r_after.abs() < 1e-12 && iwc.v_r_before.abs() > 0.01, "{what}: the slip stopped: {iwc:?}");
+        Some(iwc.impulse)
+    } else if lead > 0.0 {
+        assert_eq!(kinds[0], EventKind::LiftOff, "{what}");
+        assert_eq!(counts, (0, u64::from(lead < 1e-6), 0), "{what}");
+        let e = &events[0];
+        assert!(e.v_r_after == e.v_r_before && e.v_r_after.abs() > 0.01, "{what}: the slip kept: {e:?}");
+        None
+    } else {
+        assert_eq!(kinds[0], EventKind::Jam, "{what}");
+        assert_eq!(counts, (0, 0, 1), "{what}");
+        let jam = &events[0];
+        assert!(jam.v_r_after.abs() < 1e-9 && jam.v_r_before.abs() > 0.01, "{what}: the slip stopped: {jam:?}");
+        Some(jam.impulse)
+    }
+}
+
+/// Issue 81: the crossing of `p = 0` and `b = 0` is decided by the slide's own limit,
+/// not by which root the locator meets first, nor by a band on `p`. The controlled
+/// corner with `b` reaching 0 before `p` (`lead` above 0), after it, and with both
+/// together ([`check_crossing`]): held to 1e-10 of `Q_22`, the impact without collision
+/// that stops the slip; the force reaching 0 at 1e-8 of `Q_22` or before, a lift-off with
+/// the slip kept (all three references of issue 81 keep it); growing without bound from
+/// 1e-8, the jam, its tangential impulse the same edge impulse, to `1e-6 + 1e4 |lead|` of
+/// it (a crossing `lead Q_22` earlier is a slightly different state). A lift-off well before `p = 0` (`lead` 1e-3) is an ordinary one.
 #[test]
-fn the_simultaneous_crossing_is_the_same_whichever_root_is_located_first() {
+fn the_crossing_follows_the_slides_limit_whichever_root_is_located_first() {
     let run = |lead: f64| {
         let (mut plant, mut ctrl) = corner_case(SingularRule::Leave, crate::config::BRIDGE_STEP);
         ctrl.lead = lead;
-        for k in 0..1000 {
-            let events = plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).unwrap().events;
-            if !events.is_empty() {
-                return events;
+        let events = first_events(&mut plant, &ctrl).unwrap_or_else(|| panic!("lead {lead}: no event"));
+        check_crossing(&events, plant.counters(), lead, &format!("lead {lead}"))
+    };
+    let reference = run(0.0).unwrap();
+    assert!(reference[1] > 0.0);
+    for lead in [1e-10, -1e-10, 1e-8, 1e-7, 1e-3, -1e-8, -1e-7] {
+        if let Some(impulse) = run(lead) {
+            for i in 0..2 {
+                let tol = 1e-6 + 1e4 * lead.abs();
+                assert!((impulse[i] - reference[i]).abs() < tol * reference[1], "lead {lead}: {impulse:?} against {reference:?}");
             }
         }
-        panic!("lead {lead}: no event");
-    };
-    let reference = run(0.0);
-    for lead in [0.0, 1e-8, 1e-9, -1e-9, -1e-8] {
-        let events = run(lead);
-        let kinds: Vec<EventKind> = events.iter().take(2).map(|e| e.kind).collect();
-        assert_eq!(kinds, [EventKind::PZero, EventKind::ImpactWithoutCollision], "lead {lead}");
-        let iwc = &events[1];
-        assert!(iwc.v_r_after.abs() < 1e-12 && iwc.v_r_before.abs() > 0.01, "lead {lead}: the slip stopped: {iwc:?}");
-        let scale = reference[1].impulse[1];
-        assert!(scale > 0.0);
-        for i in 0..2 {
-            assert!(
-                (iwc.impulse[i] - reference[1].impulse[i]).abs() < 1e-5 * scale,
-                "lead {lead}: {:?} against {:?}",
-                iwc.impulse,
-                reference[1].impulse
-            );
-        }
     }
-    let events = run(1e-3);
-    assert_eq!(events[0].kind, EventKind::LiftOff);
-    assert!(events[0].v_r_after == events[0].v_r_before && events[0].v_r_after.abs() > 0.01, "{:?}", events[0]);
 }
 
 /// The controlled corner on any arm: `params` sliding elbow down towards the first
@@ -190,15 +216,16 @@ fn corner_case_of(params: Params<f64>, lead: f64) -> Option<(Plant, ThroughTheCo
     (plant.mode() == shared::ContactMode::Sliding).then_some((plant, ctrl))
 }
 
-/// Issue 67: the crossing's rule over random arms. On each arm with a `p = 0` point
-/// on its belt (masses, lengths, springs, damping, `mu` and `v_belt` drawn over the
-/// envelope), the controlled corner with `b` reaching 0 a little before `p`, with
-/// `p` first and with both together gives the same passage: `p_zero` then the impact
-/// without collision that stops the slip, the same impulse to `1e-6 + 1e4 |lead|` of
-/// it (a crossing `lead Q_22` earlier is a slightly different state: 2e-5 at 1e-8 on
-/// the steepest arm drawn; the impulse is continuous in the lead).
+/// Issue 81: the crossing's rule over random arms. On each arm with a `p = 0` point on
+/// its belt (masses, lengths, springs, damping, `mu` and `v_belt` drawn over the
+/// envelope), the controlled corner held to its point, with `b` reaching 0 a little
+/// before `p` and with `p` first ([`check_crossing`]): arrested where held to 1e-10 of
+/// `Q_22`, the same impulse to `1e-6 + 1e4 |lead|` of it (a crossing `lead Q_22` earlier
+/// is a slightly different state: 2e-5 at 1e-8 on the steepest arm drawn; the impulse is
+/// continuous in the lead); a lift-off with the slip kept, or the jam with that impulse,
+/// from 1e-8.
 #[test]
-fn the_simultaneous_crossing_is_the_same_whichever_root_is_located_first_over_random_arms() {
+fn the_crossing_follows_the_slides_limit_over_random_arms() {
     let mut seed = 0x5851_f42d_4c95_7f2du64;
     let mut uniform = |lo: f64, hi: f64| {
         seed ^= seed << 13;
@@ -220,35 +247,28 @@ fn the_simultaneous_crossing_is_the_same_whichever_root_is_located_first_over_ra
             v_belt: -uniform(0.1, 1.0),
             ..Params::paper()
         };
-        let first_events = |lead: f64| -> Option<Vec<crate::PlantEvent>> {
+        let run = |lead: f64| -> Option<(Vec<crate::PlantEvent>, crate::Counters)> {
             let (mut plant, ctrl) = corner_case_of(params, lead)?;
-            for k in 0..1000 {
-                let events = plant.advance(&ctrl, (k + 1) as f64 * 1e-3 - plant.time(), &mut NoObserver).ok()?.events;
-                if !events.is_empty() {
-                    return Some(events);
-                }
-            }
-            None
+            let events = first_events(&mut plant, &ctrl)?;
+            Some((events, *plant.counters()))
         };
-        let Some(reference) = first_events(0.0) else { continue };
-        if reference.first().map(|e| e.kind) != Some(EventKind::PZero) {
+        let Some((events, counters)) = run(0.0) else { continue };
+        if events.first().map(|e| e.kind) != Some(EventKind::PZero) {
             // The slide met another event first (the law cannot hold it): not a corner.
             continue;
         }
         tested += 1;
-        for lead in [0.0, 1e-8, 1e-9, -1e-9, -1e-8] {
-            let events = first_events(lead).unwrap_or_else(|| panic!("{params:?}, lead {lead}: no event"));
-            let kinds: Vec<EventKind> = events.iter().take(2).map(|e| e.kind).collect();
-            assert_eq!(kinds, [EventKind::PZero, EventKind::ImpactWithoutCollision], "{params:?}, lead {lead}");
-            let (iwc, r) = (&events[1], &reference[1]);
-            assert!(iwc.v_r_after.abs() < 1e-12 && iwc.v_r_before.abs() > 0.01, "{params:?}, lead {lead}: {iwc:?}");
-            for i in 0..2 {
-                assert!(
-                    (iwc.impulse[i] - r.impulse[i]).abs() < (1e-6 + 1e4 * lead.abs()) * r.impulse[1],
-                    "{params:?}, lead {lead}: {:?} against {:?}",
-                    iwc.impulse,
-                    r.impulse
-                );
+        let reference = check_crossing(&events, &counters, 0.0, &format!("{params:?}")).unwrap();
+        for lead in [1e-10, -1e-10, 1e-8, -1e-8] {
+            let what = format!("{params:?}, lead {lead}");
+            let (events, counters) = run(lead).unwrap_or_else(|| panic!("{what}: no event"));
+            if let Some(impulse) = check_crossing(&events, &counters, lead, &what) {
+                for i in 0..2 {
+                    assert!(
+                        (impulse[i] - reference[i]).abs() < (1e-6 + 1e4 * lead.abs()) * reference[1],
+                        "{what}: {impulse:?} against {reference:?}"
+                    );
+                }
             }
         }
     }
@@ -292,6 +312,46 @@ fn issue53s_arm_meets_the_singular_point_the_same_way_on_both_sides_of_the_cross
             assert!(events[1].v_r_before > 0.3 && events[1].v_r_after.abs() < 1e-12, "mu {mu}: {:?}", events[1]);
         }
     }
+}
+
+/// Issue 81: issue 53's slide is attracted into the singular point. Its approach's
+/// order `k = beta / |A|` exceeds 1, and the limit `f_inf = -alpha / (beta - |A|)` it
+/// predicts at the crossing is the force the integrated slide tends to: `f_n = -b/p`
+/// 1 ms, 0.1 ms and 10 us before the crossing departs from it less and less (like
+/// `tau^(k - 1)`), to within 1 % at 10 us.
+#[test]
+fn issue53s_slide_tends_to_the_limit_its_approach_predicts() {
+    let mut params = Params::<f64>::paper();
+    (params.m, params.l, params.sigma, params.k, params.h, params.alpha0) = (0.15, 0.23, 0.008, 1.0, 0.40, 0.20);
+    (params.mu, params.v_belt) = (0.43, -0.5);
+    let cfg =
+        SimConfig { impact_law: crate::impact::ImpactLaw::Newton, e_n: 0.2, iwc: crate::impact::IwcRule::Plastic, ..SimConfig::default() };
+    let x0 = crate::initial::deg_to_state([34.53531701873741, 0.0, 23.744016380660902, 0.0]);
+    let start = Plant::new(params, cfg, x0, 0.0, [0.0, 0.0]).unwrap();
+    let hold = crate::Hold([0.0, 0.0]);
+    let mut first = start.clone();
+    let mut t_star = f64::NAN;
+    for k in 0..20 {
+        let r = first.advance(&hold, (k + 1) as f64 * 1e-3 - first.time(), &mut NoObserver).unwrap();
+        if let Some(e) = r.events.iter().find(|e| e.kind == EventKind::PZero) {
+            t_star = e.t;
+            break;
+        }
+    }
+    assert!(t_star.is_finite(), "no crossing");
+    let mut departures = Vec::new();
+    for tau in [1e-3, 1e-4, 1e-5] {
+        let mut plant = start.clone();
+        plant.advance(&hold, t_star - tau, &mut NoObserver).unwrap();
+        let a = plant.approach(&hold).unwrap();
+        let x = plant.state();
+        let td = plant.arm().tip_dynamics(&Vector2::new(x[0], x[2]), &Vector2::new(x[1], x[3]), &Vector2::zeros());
+        let f_n = -td.b() / td.p(params.mu, SlipDirection::Positive);
+        println!("tau {tau:e}: k {:.4}, f_inf {:.5} N, f_n {f_n:.5} N", a.order(), a.limit_force());
+        assert!(a.order() > 1.0 && a.limit_force() > 0.0, "tau {tau}: {a:?}");
+        departures.push((f_n - a.limit_force()).abs() / a.limit_force());
+    }
+    assert!(departures[0] > departures[1] && departures[1] > departures[2] && departures[2] < 0.01, "{departures:?}");
 }
 
 /// The rule decides the indeterminate region: `leave` takes the flight solution

@@ -124,6 +124,18 @@ pub struct Counters {
     /// collapsed before `f_n` reached `jam_load m g` (the slide already jamming:
     /// `p > 0`, `b < 0`, `f_n >= 10 m g`).
     pub jams_at_collapse: u64,
+    /// Crossings of the singular point's neighbourhood decided by the slide's own
+    /// limit (docs/plant.md "The singular point"; [`crate::segment::Crossing`]): a
+    /// located `p = 0`, or a located lift-off with `p / Q_22` within 1e-6 of 0,
+    /// resolved as [`Crossing::Arrested`](crate::segment::Crossing::Arrested) (the impact
+    /// without collision at `p = 0`; also in [`Counters::p_zero`]).
+    pub corners_arrested: u64,
+    /// Such crossings resolved as a lift-off with the slip kept (the force reached 0
+    /// before `p`; also in [`Counters::lift_offs`]).
+    pub corners_lifted_off: u64,
+    /// Such crossings resolved as the dynamic jam (the force grew without bound; also
+    /// in [`Counters::jams`]).
+    pub corners_jammed: u64,
     /// Singular points: slides that reached `p = 0, b = 0` with a finite normal
     /// force where the event-driven step collapsed ([`EventKind::SingularPoint`]),
     /// each crossed by a bridge (also counted in [`Counters::bridges`]).

@@ -71,9 +71,9 @@ pub struct Plant {
     /// touchdown (docs/plant.md "The singular point").
     departing: bool,
     /// The current slide's normal force on its approach to `p = 0`, N
-    /// ([`crate::segment::EventLocator::trend_f_n`]), kept from one solve to the
+    /// ([`crate::segment::EventLocator::trend`]), kept from one solve to the
     /// next while the slide goes on (an interval's end can fall in the approach).
-    slide_trend: Option<f64>,
+    slide_trend: Option<crate::segment::Trend>,
     /// The energy and the sines and cosines at one arm state, for where that state
     /// is met again ([`Known`]).
     known: Option<Known>,
@@ -164,7 +164,7 @@ pub struct Checkpoint {
     end_point: Option<Box<EndPoint>>,
     ledger: Ledger,
     departing: bool,
-    slide_trend: Option<f64>,
+    slide_trend: Option<crate::segment::Trend>,
 }
 
 /// The model at the end of an interval, under the held torque `u` (N m) of that
@@ -452,7 +452,13 @@ impl Plant {
             (counters, end_point.map(|e| *e), ledger, departing, slide_trend);
     }
 
-    fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
+    /// The current slide's approach to the singular point under `ctrl` (`None` outside a slide).
+    #[cfg(test)]
+    pub(crate) fn approach<C: Controller + ?Sized>(&self, ctrl: &C) -> Option<crate::segment::Approach> {
+        self.segment(ctrl).approach(self.t, &self.y)
+    }
+
+    pub(crate) fn segment<'a, C: Controller + ?Sized>(&'a self, ctrl: &'a C) -> Segment<'a, C> {
         Segment::new(&self.arm, self.phase, ctrl, self.cone_relaxed, &self.cfg, &self.evals, &self.trig)
     }
 }

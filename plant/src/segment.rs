@@ -17,9 +17,11 @@ use shared::{
 pub use crate::phase::Phase;
 use crate::{controller::Controller, dop853::OdeSystem, trig::TrigCache};
 
+mod approach;
 mod locate;
 
-pub use locate::{EventLocator, ROOT_TOLERANCE, TREND_P, illinois_root};
+pub use approach::{Approach, Crossing, HELD_P};
+pub use locate::{EventLocator, ROOT_TOLERANCE, TREND_P, Trend, illinois_root};
 
 /// Components of the plant's integrated state.
 pub const STATE_LEN: usize = 10;
@@ -330,7 +332,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
 
     /// Whether a slide at `(t, y)` is running into the dynamic jam: `p > 0`, `b < 0`
     /// and a normal reaction of at least [`JAM_ONSET_LOAD`] times `m g`: the slide's
-    /// trend `trend_f_n` (N, [`EventLocator::trend_f_n`]) where known, else `f_n =
+    /// trend `trend_f_n` (N, [`EventLocator::trend`]) where known, else `f_n =
     /// -b/p` at the point. Where the step size collapses there before `f_n` reaches
     /// `jam_load m g`, the plant resolves the jam from the last accepted point
     /// (docs/plant.md "The jam corner").

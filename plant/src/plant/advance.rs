@@ -221,13 +221,21 @@ impl Plant {
             self.counters.segments += 1;
             match hit {
                 Some(Boundary::Singular) if self.cfg.singular == SingularRule::Leave && self.at_singular_point(ctrl) => {
-                    // The slide has reached p = 0 with its force finite, the located
-                    // passage's case (issue 67: one rule at the singular point,
-                    // however it is reached): the impact without collision at
-                    // p = 0 stops the slip, and the mode is chosen from rest.
-                    // Counted as a singular point too.
-                    self.counters.singular_points += 1;
-                    self.cross(ctrl, Boundary::PZero, &mut events)?;
+                    // The step collapsed at the point itself: the crossing decided by the
+                    // slide's limit as a located one is (issue 81): arrested (the impact
+                    // without collision at p = 0, then the mode chosen from rest; counted
+                    // as a singular point too), the jam, or a force that falls to 0,
+                    // crossed by a bridge (whose `leave` takes the flight).
+                    let crossing = self.segment(ctrl).approach(self.t, &self.y).map(|a| a.crossing(self.slide_trend, false));
+                    match crossing.map_or(Boundary::PZero, |c| self.decided(c)) {
+                        Boundary::LiftOff => self.bridge(ctrl, Boundary::Singular, t_end, obs, &mut events)?,
+                        b => {
+                            if b == Boundary::PZero {
+                                self.counters.singular_points += 1;
+                            }
+                            self.cross(ctrl, b, &mut events)?;
+                        }
+                    }
                     handled += 1;
                 }
                 Some(b @ (Boundary::Singular | Boundary::Collapse)) => {
@@ -268,21 +276,46 @@ impl Plant {
         Ok(events)
     }
 
-    /// The located event `b` as the crossing it is: a slide's lift-off (`b = 0`)
-    /// located with `p / Q_22` within [`SIMULTANEOUS_P`] of 0 is the passage through
-    /// the singular point `p = b = 0`, the same crossing as a located `p = 0`
-    /// ([`Boundary::PZero`]): the two roots fall within the resolution at which
-    /// `f_n = -b/p` is the integration's residue, not the slide's force (issue 67:
-    /// on issue 53's arm they coincide to 2e-10 s, `p / Q_22` 1e-10 to 4e-8 at the
-    /// lift-off, and which one the locator met first decided between a lift-off
-    /// with the slip kept and the impact without collision). Any other event is
-    /// itself.
-    fn at_simultaneous_crossing<C: Controller + ?Sized>(&self, ctrl: &C, b: Boundary) -> Boundary {
-        if b != Boundary::LiftOff || !matches!(self.phase, Phase::Sliding(_)) {
+    /// The located event `b` as the crossing it is (issue 81; docs/plant.md "The
+    /// singular point"): a slide's located `p = 0`, or its located lift-off (`b = 0`)
+    /// with `p / Q_22` within [`SIMULTANEOUS_P`] of 0 (below it `f_n = -b/p` is the
+    /// integration's residue, not the slide's force, so the located root alone cannot
+    /// say which came first: issue 53's arm has its two roots 2e-10 s apart), is decided
+    /// by the slide's own limit ([`segment::Approach::crossing`]): arrested at `p = 0`
+    /// ([`Boundary::PZero`]) where the slide is attracted into the point with a finite
+    /// force, a lift-off where the force reaches 0 first, the jam ([`Boundary::Jam`])
+    /// where it grows without bound. Each use is counted. A `p = 0` located at a
+    /// segment's start with `p` well below 0 (a state in the Painlevé region, x0a) and
+    /// any other event is itself.
+    fn at_simultaneous_crossing<C: Controller + ?Sized>(&mut self, ctrl: &C, b: Boundary) -> Boundary {
+        if !matches!(b, Boundary::LiftOff | Boundary::PZero) || !matches!(self.phase, Phase::Sliding(_)) {
             return b;
         }
-        let c = self.segment(ctrl).components(self.t, &self.y);
-        if c[1].1 <= SIMULTANEOUS_P { Boundary::PZero } else { b }
+        let seg = self.segment(ctrl);
+        let c = seg.components(self.t, &self.y);
+        if c[1].1.abs() > SIMULTANEOUS_P {
+            return b;
+        }
+        let Some(approach) = seg.approach(self.t, &self.y) else { return b };
+        self.decided(approach.crossing(self.slide_trend, b == Boundary::LiftOff))
+    }
+
+    /// The boundary a crossing decided by the slide's limit is crossed as, counted.
+    fn decided(&mut self, crossing: segment::Crossing) -> Boundary {
+        match crossing {
+            segment::Crossing::Arrested => {
+                self.counters.corners_arrested += 1;
+                Boundary::PZero
+            }
+            segment::Crossing::LiftOff => {
+                self.counters.corners_lifted_off += 1;
+                Boundary::LiftOff
+            }
+            segment::Crossing::Jam => {
+                self.counters.corners_jammed += 1;
+                Boundary::Jam
+            }
+        }
     }
 
     /// Whether the slide is at the singular point itself: `-b/g` within

@@ -94,7 +94,7 @@ impl Plant {
         let mode = self.mode();
         let seg = self.segment(ctrl);
         let mut locator = EventLocator::new(&seg, g0);
-        locator.trend_f_n = self.slide_trend;
+        locator.trend = self.slide_trend;
         // The start's energy, when the projection (or the last solve) left it.
         if let Some(k) = self.known() {
             locator.e_prev = k.energy;
@@ -134,7 +134,7 @@ impl Plant {
             obs.on_step(step, locator.hit, mode);
             control
         });
-        let (rejected, worst, trend) = (locator.rejected, locator.worst, locator.trend_f_n);
+        let (rejected, worst, trend) = (locator.rejected, locator.worst, locator.trend);
         let (locator_end, last) = ((locator.g_prev, locator.hit), locator.last);
         // The last accepted point's energy and sines and cosines, for its projection.
         if let Some((_, y)) = last
@@ -157,10 +157,10 @@ impl Plant {
                     && y1.iter().all(|v| v.is_finite()) =>
             {
                 let seg = self.segment(ctrl);
-                let boundary = if seg.jamming(t1, &y1, trend) {
+                let boundary = if seg.jamming(t1, &y1, trend.map(|t| t.f_n)) {
                     self.counters.jams_at_collapse += 1;
                     Boundary::Jam
-                } else if seg.near_singular(t1, &y1, trend) {
+                } else if seg.near_singular(t1, &y1, trend.map(|t| t.f_n)) {
                     Boundary::Singular
                 } else {
                     Boundary::Collapse

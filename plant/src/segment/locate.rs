@@ -49,10 +49,19 @@ pub struct EventLocator<'s, 'a, C: ?Sized> {
     pub worst: (f64, f64),
     /// Steps rejected by the checks above.
     pub rejected: u64,
-    /// While sliding: the normal force (N) at the last accepted point whose
-    /// `p / Q_22` is at least [`TREND_P`]: the slide's force on its approach to
-    /// `p = 0`, before the integration's residue of `b` dominates `-b/p`.
-    pub trend_f_n: Option<f64>,
+    /// While sliding: the slide's force on its approach to `p = 0` ([`Trend`]).
+    pub trend: Option<Trend>,
+}
+
+/// A slide's force on its approach to `p = 0`: the normal force at the last accepted
+/// point whose `p / Q_22` is at least [`TREND_P`], before the integration's residue of
+/// `b` dominates `-b/p`, and that point's `p / Q_22`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Trend {
+    /// The normal force `f_n = -b/p`, N.
+    pub f_n: f64,
+    /// `p / Q_22` there (dimensionless, at least [`TREND_P`]).
+    pub p: f64,
 }
 
 /// Event-function magnitude that counts as on the boundary (rounding after a
@@ -68,7 +77,7 @@ const ON_BOUNDARY: f64 = 1e-9;
 pub const ROOT_TOLERANCE: f64 = 1e-6;
 
 /// The `p / Q_22` down to which a slide's normal force shows its trend
-/// ([`EventLocator::trend_f_n`]): below it the integration's residue in `b` (about
+/// ([`EventLocator::trend`]): below it the integration's residue in `b` (about
 /// 1e-9 m/s^2) can dominate `f_n = -b/p` (issue 53: 1.4e3 N at `p / Q_22 = 6.5e-13`
 /// where the slide's force tends to 4.2 N).
 pub const TREND_P: f64 = 1e-6;
@@ -77,7 +86,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
     /// A locator for a solve of `segment` starting where the event function is `g0`.
     pub fn new(segment: &'s Segment<'a, C>, g0: f64) -> Self {
         let trig_last = JointTrig { s1: f64::NAN, c1: f64::NAN, s2: f64::NAN, c2: f64::NAN };
-        Self { segment, g_prev: g0, hit: None, last: None, e_prev: f64::NAN, trig_last, worst: (0.0, 0.0), rejected: 0, trend_f_n: None }
+        Self { segment, g_prev: g0, hit: None, last: None, e_prev: f64::NAN, trig_last, worst: (0.0, 0.0), rejected: 0, trend: None }
     }
 
     /// Checks one accepted step for a crossing and locates it; stops the solve at an
@@ -124,7 +133,7 @@ impl<'s, 'a, C: Controller + ?Sized> EventLocator<'s, 'a, C> {
         }
         self.note_balance(residual.abs(), residual.abs() / tol);
         if sliding && components[1].1 >= TREND_P {
-            self.trend_f_n = Some(f_n);
+            self.trend = Some(Trend { f_n, p: components[1].1 });
         }
         (self.last, self.g_prev, self.e_prev, self.trig_last) = (Some((t_curr, y_curr)), g_curr, e_curr, trig_curr);
         Control::Continue
