@@ -160,6 +160,23 @@ pub struct Ledger {
     /// more than the constraint drift they remove allows (`drift . Q_c^-1 drift /
     /// 2`, docs/plant.md "The energy ledger"), each also a violation (issue 67).
     pub projections_beyond_drift: u64,
+    /// Impacts without collision where none is due (issue 81): an impulse at a tip
+    /// with no approach velocity (not a projection, not the jam's tangential
+    /// impact) where sliding on in the slip's direction was consistent, `p(s) / Q_22`
+    /// above the crossing's resolution (1e-6, docs/plant.md "The singular point"), each
+    /// also a violation.
+    pub impulses_undue: u64,
+    /// Velocity projections whose impulse pulls the tip onto the belt (`P_n < 0`
+    /// beyond rounding: the tip had drifted off it) or lies outside the friction
+    /// cone (`|P_t| > mu P_n`: a stuck tip's slip drift removed with more friction
+    /// than the cone gives), issue 81: integration drift removed by an impulse no
+    /// contact could give, counted, not a violation (their energy is
+    /// [`Ledger::projections_unphysical_j`], their largest drift in
+    /// [`Ledger::largest_projection_drift_m_s`]).
+    pub projections_unphysical: u64,
+    /// The energy those projections changed, J (the sum of `|dE|` in the belt's
+    /// frame, each at most its drift's `drift . Q_c^-1 drift / 2`).
+    pub projections_unphysical_j: f64,
     /// The largest constraint drift a velocity projection removed (the tip's
     /// normal velocity, and its slip when sticking, in the belt's frame), m/s.
     pub largest_projection_drift_m_s: f64,
@@ -181,7 +198,8 @@ impl std::fmt::Display for Ledger {
     /// One line: `E(t) - E(0) = -0.0123 J: motors 0 J, damping -48.3 J, belt
     /// 402 J, slip -354 J, projections 1.8e-7 J; residual 4.2e-9 J (worst entry
     /// 3.1e-11 J, 0.09 of its tolerance); largest belt input in one event 0.107 J;
-    /// 267 steps refined`, then `; N VIOLATIONS` where there are.
+    /// 267 steps refined`, then `; N projections pulling or outside the cone (E J)` and
+    /// `; N VIOLATIONS` where there are.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
@@ -199,6 +217,13 @@ impl std::fmt::Display for Ledger {
             self.largest_event_belt_j,
             self.refinements
         )?;
+        if self.projections_unphysical > 0 {
+            write!(
+                f,
+                "; {} projections pulling or outside the cone ({:.2e} J)",
+                self.projections_unphysical, self.projections_unphysical_j
+            )?;
+        }
         if self.violations > 0 {
             write!(f, "; {} VIOLATIONS", self.violations)?;
         }

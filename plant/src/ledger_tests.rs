@@ -275,3 +275,66 @@ fn a_planted_projection_beyond_its_drift_fails_the_ledger() {
     assert_eq!(check(braking), (1, 1, 2e-4), "a projection that brakes the slip too");
     assert_eq!(check(-right), (2, 2, 2e-4), "a pull, creating energy");
 }
+
+/// Issue 81: the ledger fails an impulse where none is due. The impact without
+/// collision of each IWC rule and impact law, planted on `x0d`'s tip sliding where
+/// sliding is consistent (`p(s) > 0`), is a violation counted in `impulses_undue`;
+/// the same impulses where they are due, `x0a`'s tip in the Painlevé region (`p(s) < 0`),
+/// pass that check.
+#[test]
+fn a_planted_impact_without_collision_where_none_is_due_fails_the_ledger() {
+    use crate::impact::{ImpactLaw, IwcRule};
+    let v_r = 0.3;
+    let before = nalgebra::Vector2::new(v_r, 0.0);
+    for (name, deg, due) in [("x0d", X0D.deg, false), ("x0a", X0A.deg, true)] {
+        let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(deg), 0.0, [0.0, 0.0]).unwrap();
+        let x = plant.state();
+        let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+        let mu = plant.arm().params.mu;
+        let p = shared::slip::p_of(&qm, mu, shared::SlipDirection::Positive) / qm[(1, 1)];
+        assert_eq!(p < 0.0, due, "{name}: p(+)/Q_22 {p}");
+        let mut checked = 0;
+        for law in ImpactLaw::ALL {
+            for rule in [IwcRule::Plastic, IwcRule::Restitution] {
+                let Ok(imp) = crate::impact::without_collision(&qm, mu, v_r, law, 0.5, rule) else { continue };
+                let before_count = plant.ledger().impulses_undue;
+                plant.check_impact(&mut Vec::new(), &imp, &qm, 0.0, before);
+                let undue = plant.ledger().impulses_undue - before_count;
+                assert_eq!(undue, u64::from(!due), "{name}, {law}, {rule:?}: {imp:?}");
+                checked += 1;
+            }
+        }
+        assert!(checked >= 4, "{name}: {checked} impulses");
+    }
+}
+
+/// Issue 81: a velocity projection whose impulse no contact could give, a pull onto
+/// the belt (the tip's drift off it removed) or friction beyond the cone, is counted in
+/// `projections_unphysical` with the energy it changed; a push within the cone is not.
+/// Neither is a violation while within its drift's allowance (the test above).
+#[test]
+fn a_projection_that_pulls_or_leaves_the_cone_is_counted_with_its_energy() {
+    let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
+    let x = plant.state();
+    let qm = plant.arm().q_matrix(&nalgebra::Vector2::new(x[0], x[2]));
+    let mu = plant.arm().params.mu;
+    let mut check = |v_n: f64, tangential: f64| {
+        let v_rel = nalgebra::Vector2::new(0.3, v_n);
+        let drift = nalgebra::Vector2::new(0.0, v_n);
+        let allowed = 0.5 * v_n * v_n / qm[(1, 1)];
+        let p = nalgebra::Vector2::new(tangential * (v_n / qm[(1, 1)]).abs(), -v_n / qm[(1, 1)]);
+        let work = p.dot(&(v_rel + 0.5 * qm * p));
+        plant.check_projection(p, work, drift, allowed);
+        let l = plant.ledger();
+        (l.projections_unphysical, l.projections_unphysical_j, work.abs())
+    };
+    let (n, e, _) = check(-2e-4, 0.0);
+    assert_eq!((n, e), (0, 0.0), "a push that removes the drift into the belt");
+    let (n, e, w) = check(2e-4, 0.0);
+    assert_eq!((n, e), (1, w), "a pull that removes the drift off the belt");
+    assert!(w > 0.0);
+    let (n, e, _) = check(-2e-4, 0.5 * mu);
+    assert_eq!((n, e), (1, w), "friction at half the cone: within it");
+    let (n, e, w3) = check(-2e-4, 1.5 * mu);
+    assert_eq!((n, e), (2, w + w3), "friction at 1.5 times the cone");
+}

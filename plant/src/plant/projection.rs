@@ -133,9 +133,19 @@ impl Plant {
     /// [`Ledger::largest_projection_drift_m_s`](crate::Ledger::largest_projection_drift_m_s).
     /// The allowance is rounding: `1e-6` of `drift_energy`, and `|p|` times 1e-14
     /// (1 + `|drift|`) m/s, the rounding of the velocities the work is taken from.
+    /// A projection that pulls the tip (`P_n < 0`) or lies outside the friction cone
+    /// is counted in [`Ledger::projections_unphysical`](crate::Ledger::projections_unphysical)
+    /// with its energy (issue 81).
     pub(crate) fn check_projection(&mut self, p: Vector2<f64>, work: f64, drift: Vector2<f64>, drift_energy: f64) {
+        let mu = self.arm.params.mu;
         let l = &mut self.ledger;
         l.largest_projection_drift_m_s = l.largest_projection_drift_m_s.max(drift.norm());
+        // A pull, or friction beyond the cone (issue 81), to 1e-9 of the impulse's size.
+        let round = 1e-9 * p.norm();
+        if p[1] < -round || p[0].abs() > mu * p[1].max(0.0) + round {
+            l.projections_unphysical += 1;
+            l.projections_unphysical_j += work.abs();
+        }
         let slack = 1e-6 * drift_energy + 1e-14 * p.norm() * (1.0 + drift.norm());
         let beyond = work > slack || -work > drift_energy + slack || work.is_nan();
         if beyond {

@@ -412,6 +412,19 @@ impl Plant {
             self.ledger.violations += 1;
             self.ledger.impulses_off_law += 1;
         }
+        // And it must be due (issue 81): an impulse at a tip with no approach velocity
+        // (an impact without collision) only where sliding on in the slip's direction is
+        // inconsistent, `p(s) <= 0`, the Painlevé region, or at the singular point, to the
+        // crossing's resolution. The jam's tangential impact (`p > 0`, the force grown
+        // without bound) and a projection are due elsewhere.
+        let no_approach = before[1].abs() <= self.cfg.zeno_velocity;
+        if no_approach && !matches!(imp.resolution, Resolution::Projection | Resolution::TangentialImpact) {
+            let p = shared::slip::p_of(qm, self.arm.params.mu, SlipDirection::of(before[0]));
+            if p > super::advance::SIMULTANEOUS_P * qm[(1, 1)] {
+                self.ledger.violations += 1;
+                self.ledger.impulses_undue += 1;
+            }
+        }
     }
 
     fn make_event(&self, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) -> PlantEvent {

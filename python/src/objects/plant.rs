@@ -321,7 +321,9 @@ impl PyPlant {
     /// `projections_j`, `events_j`: the events' energy changes summed, `residual_j`,
     /// `worst_entry_j`, `worst_ratio`, `largest_event_belt_j`) and int
     /// (`refinements`, `violations`, `impulses_outside_cone`, `impulses_off_law`,
-    /// `projections_beyond_drift`; `largest_projection_drift_m_s` is a float, m/s).
+    /// `projections_beyond_drift`, `impulses_undue`, `projections_unphysical`, whose
+    /// energy `projections_unphysical_j` is in J; `largest_projection_drift_m_s` is a
+    /// float, m/s).
     #[getter]
     fn ledger<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.with(|p| p.ledger()))
