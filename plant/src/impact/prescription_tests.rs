@@ -106,3 +106,35 @@ fn each_broken_relation_is_named() {
     assert_eq!(breach(&stop, &qm, mu, e, v), None);
     assert_eq!(breach(&stop, &qm, mu, e, Vector2::new(0.31, 0.0)), Some(Breach::SlipLeft));
 }
+
+/// Issue 81: the Darboux-Keller relations are held against a compression recomputed
+/// from the velocity before the impact ([`super::compression_of`]), not only against
+/// the impulse's own record. A Poisson impulse and its record made to agree with each
+/// other, both 1 % off (`P_c` and the normal impulse `(1 + e) P_c` scaled together),
+/// and an energetic one whose record's `W_c` and restitution work are 1 % off together,
+/// keep their law's relation with their record and fail as `Compression`; the laws'
+/// own impulses pass (over random tips, the property test above).
+#[test]
+fn a_record_that_agrees_with_a_wrong_impulse_fails_against_the_recomputed_compression() {
+    use crate::impact::Compression;
+    let qm = spd(1.0, 0.4, 0.8);
+    let (mu, e) = (0.5, 0.5);
+    let before = Vector2::new(0.3, -0.4);
+    let poisson = touchdown(&qm, mu, 0.3, -0.4, ImpactLaw::Poisson, e).unwrap();
+    assert_eq!(poisson.resolution, Resolution::PoissonDarbouxKeller);
+    let (p_c, w_c) = super::compression_of(&qm, mu, before).unwrap();
+    assert!((p_c - poisson.compression.p_c).abs() < 1e-12 && (w_c - poisson.compression.w_c).abs() < 1e-12, "{p_c} {w_c} {poisson:?}");
+    assert_eq!(breach(&poisson, &qm, mu, e, before), None);
+    let k = 1.01;
+    let c = Compression { p_c: k * poisson.compression.p_c, ..poisson.compression };
+    let mut wrong = scaled(&poisson, &qm, 1.0);
+    wrong.p[1] = (1.0 + e) * c.p_c;
+    wrong.dv = qm * wrong.p;
+    wrong.compression = c;
+    assert_eq!(breach(&wrong, &qm, mu, e, before), Some(Breach::Compression));
+    let energetic = touchdown(&qm, mu, 0.3, -0.4, ImpactLaw::Energetic, e).unwrap();
+    assert_eq!(breach(&energetic, &qm, mu, e, before), None);
+    let c = energetic.compression;
+    let wrong = Impulse { compression: Compression { w_c: k * c.w_c, w_r: k * c.w_r, ..c }, ..energetic };
+    assert_eq!(breach(&wrong, &qm, mu, e, before), Some(Breach::Compression));
+}
