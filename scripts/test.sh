@@ -61,6 +61,20 @@ if [ -z "${PAINLEVE_PYTHON:-}" ]; then
   export PAINLEVE_PYTHON="$PWD/$venv/bin/python"
 fi
 
+# The Python package's build tools and test packages (pyarrow, polars, MuJoCo, Jupyter's:
+# about 200 MB), downloaded now beside the lints and builds rather than in the Python section
+# below, where pip waited on the network (127 s of that section on a fresh machine under
+# load, 2026-11-28). scripts/build-wheel.sh and scripts/python-tests.sh then install from
+# target/pip-wheels (PIP_FIND_LINKS) and from the index for anything it lacks; a failed
+# download only costs that time back.
+pip_wheels="$PWD/target/pip-wheels"
+pip_download=(python3 -m pip)
+[ -x target/venv-monitor/bin/pip ] && pip_download=(target/venv-monitor/bin/pip)
+mkdir -p "$pip_wheels"
+"${pip_download[@]}" download --quiet --disable-pip-version-check --only-binary :all: -d "$pip_wheels" \
+  -r python/requirements-build.txt -r python/requirements-test.txt >"$pip_wheels.log" 2>&1 &
+pip_download_pid=$!
+
 echo "== [at ${SECONDS} s] format, lints (rustfmt.toml; clippy, warnings are errors), no import cycle between files, the architecture invariants, no large tracked file"
 cargo fmt --all -- --check
 # In the release profile, the one the builds and tests below use: the build scripts'
@@ -105,23 +119,32 @@ echo "   the default scenario): scripts/cycles.py --random, each term of the hyb
 echo "   random rate, 250 periods each, after the default scenario's runs; then the template's impedance law on"
 echo "   its own PIL image (a law of one's own is held to the same ceiling, issue 70)"
 cargo build --release -p sil-host --features full
+# The three traced runs at once (each spreads its cases over the cores; together they pack
+# the cores better than one after the other, beside the builds and the Python section
+# below): cycles.py's QEMU runs were the longest job of this part (482 s against the
+# Python section's 350 s on a fresh clone of this 2-core machine, 2026-11-28).
+cycles_dir="$(mktemp -d)"
+python3 scripts/cycles.py --duration 1 --max-cycles 1930 >"$cycles_dir/default" 2>&1 &
+cycles_pids=($!)
+python3 scripts/cycles.py --random 6 --seed 1 --duration 0.25 --max-cycles 1930 >"$cycles_dir/random" 2>&1 &
+cycles_pids+=($!)
+python3 scripts/cycles.py --controller law --scenario examples/law-template/impedance.toml \
+  --image target/thumbv7em-none-eabihf/qemu/law-pil --duration 1 --max-cycles 1930 >"$cycles_dir/law" 2>&1 &
+cycles_pids+=($!)
 # The template's firmware process (a law of one's own, issue 70), which the Python tests
 # run against its Python prototype: built with the workspace's features, as the tests
 # below build it (so that build reuses it).
 cargo build --release --workspace --features sil-host/full --bin law-firmware
-cycles_log="$(mktemp)"
-{
-  python3 scripts/cycles.py --duration 1 --max-cycles 1930 &&
-    python3 scripts/cycles.py --random 6 --seed 1 --duration 0.25 --max-cycles 1930 &&
-    python3 scripts/cycles.py --controller law --scenario examples/law-template/impedance.toml \
-      --image target/thumbv7em-none-eabihf/qemu/law-pil --duration 1 --max-cycles 1930
-} >"$cycles_log" 2>&1 &
-cycles_pid=$!
 
 echo "== [at ${SECONDS} s] the Python package (python/, docs/python.md): scripts/python-tests.sh builds the manylinux2014 abi3"
 echo "   wheel and the sdist (scripts/build-wheel.sh: maturin with zig's linker, the workspace's target dir),"
 echo "   installs the wheel into a fresh target/venv-wheel without Rust on PATH (timed) and runs pytest there"
 echo "   against target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
+if wait "$pip_download_pid"; then
+  export PIP_FIND_LINKS="$pip_wheels"
+else
+  echo "the Python packages' download failed ($pip_wheels.log): the Python section installs them from the index"
+fi
 pystarted=$SECONDS
 log="$(mktemp)"
 pylog="$(mktemp)"
@@ -130,10 +153,12 @@ pystatus=0
 bash scripts/python-tests.sh 2>&1 | tee "$pylog" || pystatus=$?
 echo "python package: $((SECONDS - pystarted)) s (wheel, install and tests)"
 cycles_status=0
-wait "$cycles_pid" || cycles_status=$?
+for pid in "${cycles_pids[@]}"; do
+  wait "$pid" || cycles_status=$?
+done
 echo "== [at ${SECONDS} s] the control step's cycle estimate (scripts/cycles.py), exit $cycles_status"
-cat "$cycles_log"
-rm -f "$cycles_log"
+cat "$cycles_dir/default" "$cycles_dir/random" "$cycles_dir/law"
+rm -rf "$cycles_dir"
 [ "$cycles_status" -ne 0 ] && exit "$cycles_status"
 
 echo "== [at ${SECONDS} s] Siconos 4.4 as an independent implementation (tests/siconos/check.py, about 30 s; tests/siconos/README.md):"
