@@ -40,7 +40,10 @@ if [ ! -x "$tools/bin/pip" ] || ! "$tools/bin/pip" --version >/dev/null 2>&1; th
   python3 -c "import ensurepip, venv" 2>/dev/null || die "python3 with venv is missing: apt-get install -y python3-venv"
   rm -rf "$tools" && python3 -m venv "$tools" || die "could not make a virtual environment at $tools"
 fi
+# From scripts/test.sh's downloaded wheels when it set PIP_NO_INDEX, and from the index
+# again if one was missing there.
 "$tools/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-build.txt \
+  || { [ -n "${PIP_NO_INDEX:-}" ] && env -u PIP_NO_INDEX "$tools/bin/pip" install --quiet --disable-pip-version-check -r python/requirements-build.txt; } \
   || die "pip could not install python/requirements-build.txt into $tools"
 tools="$(cd "$tools" && pwd)"
 for exe in maturin auditwheel python; do

@@ -43,10 +43,18 @@ done
 run() { env PATH="$clean_path" PAINLEVE_WHEEL_VENV="$venv" "$@"; }
 pip_quiet=(--quiet --disable-pip-version-check --only-binary :all:)
 t0="$(date +%s.%N)"
-run "$venv/bin/pip" install "${pip_quiet[@]}" -c python/requirements-test.txt "$wheel" \
+# From scripts/test.sh's downloaded wheels when it set PIP_NO_INDEX (PIP_FIND_LINKS), else
+# from the index; from the index again if a package was missing there.
+pip_install() {
+  run "$venv/bin/pip" install "${pip_quiet[@]}" "$@" && return 0
+  [ -n "${PIP_NO_INDEX:-}" ] || return 1
+  echo "python-tests: not all in $PIP_FIND_LINKS: from the index" >&2
+  run env -u PIP_NO_INDEX "$venv/bin/pip" install "${pip_quiet[@]}" "$@"
+}
+pip_install -c python/requirements-test.txt "$wheel" \
   || die "pip could not install $wheel into $venv"
 t1="$(date +%s.%N)"
-run "$venv/bin/pip" install "${pip_quiet[@]}" -r python/requirements-test.txt \
+pip_install -r python/requirements-test.txt \
   || die "pip could not install python/requirements-test.txt into $venv"
 t2="$(date +%s.%N)"
 awk -v a="$t0" -v b="$t1" -v c="$t2" -v w="$(basename "$wheel")" 'BEGIN {

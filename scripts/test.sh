@@ -65,8 +65,8 @@ fi
 # about 200 MB), downloaded now beside the lints and builds rather than in the Python section
 # below, where pip waited on the network (127 s of that section on a fresh machine under
 # load, 2026-11-28). scripts/build-wheel.sh and scripts/python-tests.sh then install from
-# target/pip-wheels (PIP_FIND_LINKS) and from the index for anything it lacks; a failed
-# download only costs that time back.
+# target/pip-wheels only (PIP_FIND_LINKS, PIP_NO_INDEX), and from the index again if a
+# package is missing there; a failed download only costs that time back.
 pip_wheels="$PWD/target/pip-wheels"
 pip_download=(python3 -m pip)
 [ -x target/venv-monitor/bin/pip ] && pip_download=(target/venv-monitor/bin/pip)
@@ -141,7 +141,9 @@ echo "   wheel and the sdist (scripts/build-wheel.sh: maturin with zig's linker,
 echo "   installs the wheel into a fresh target/venv-wheel without Rust on PATH (timed) and runs pytest there"
 echo "   against target/release/sil-host (python/tests, examples/python/paper.ipynb executed by nbclient)"
 if wait "$pip_download_pid"; then
-  export PIP_FIND_LINKS="$pip_wheels"
+  # Only from there (pip would otherwise ask the index again for each pinned version);
+  # the scripts fall back to the index if a package is missing.
+  export PIP_FIND_LINKS="$pip_wheels" PIP_NO_INDEX=1
 else
   echo "the Python packages' download failed ($pip_wheels.log): the Python section installs them from the index"
 fi

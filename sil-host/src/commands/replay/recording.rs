@@ -139,7 +139,6 @@ pub fn check_scenario(rec: &Recording, setup: &rig::setup::RunSetup) -> Result<(
 /// The frames of `dir`: `frames.csv` (every build), `frames.arrow` or
 /// `trace.mcap`'s `frames` table (a build with the table readers, `full`).
 fn frames_of(dir: &Path) -> Result<(PathBuf, Vec<FrameRow>), CliError> {
-    let named = |path: &Path, what: String| CliError::bad_input(format!("{}: {what}", path.display()));
     // `exists`, not `is_file`: a FIFO or a device in a file's place is refused
     // by the reader, naming the bound, rather than passed over.
     let csv = dir.join("frames.csv");
@@ -150,6 +149,7 @@ fn frames_of(dir: &Path) -> Result<(PathBuf, Vec<FrameRow>), CliError> {
     let mcap = dir.join("trace.mcap");
     #[cfg(feature = "full")]
     {
+        let named = |path: &Path, what: String| CliError::bad_input(format!("{}: {what}", path.display()));
         if arrow.exists() {
             let t = tables::arrow::read_arrow(&arrow)?;
             return Ok((arrow.clone(), rows_of(&t).map_err(|what| named(&arrow, what))?));
