@@ -153,6 +153,8 @@ pylog="$(mktemp)"
 trap 'rm -f "$log" "$pylog"' EXIT
 pystatus=0
 bash scripts/python-tests.sh 2>&1 | tee "$pylog" || pystatus=$?
+# The downloaded wheels were the Python section's; nothing below installs from them.
+unset PIP_FIND_LINKS PIP_NO_INDEX
 echo "python package: $((SECONDS - pystarted)) s (wheel, install and tests)"
 cycles_status=0
 for pid in "${cycles_pids[@]}"; do
