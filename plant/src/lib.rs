@@ -67,6 +67,8 @@ mod plant;
 #[cfg(test)]
 mod corner_tests;
 #[cfg(test)]
+mod corner_reference_tests;
+#[cfg(test)]
 mod ledger_tests;
 
 pub use bounds::{MAX_ANGLE, MAX_RATE, PROJECTION_TOLERANCE};

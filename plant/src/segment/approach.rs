@@ -20,8 +20,8 @@
 //!   reaches 0 before `p` does: a **lift-off**, the slip kept.
 //! - `k < 1`: the `tau^(k-1)` term grows without bound unless `C = 0`: the force reaches 0
 //!   first (`C > 0`: a lift-off, the slip kept) or grows without bound (`C < 0`: the
-//!   dynamic **jam**, the tangential impact), and which root the slide meets first says
-//!   which. `C = 0` is a slide held at a finite force (a law that regulates `f_n`, as the
+//!   dynamic **jam**, the tangential impact), and the side of `f_inf` the force is on as
+//!   the slide approaches says which (`f_n - f_inf` keeps its sign). `C = 0` is a slide held at a finite force (a law that regulates `f_n`, as the
 //!   paper's hybrid law does in continuous time): attracted, as above. The slide's force
 //!   on its approach (the trend, [`super::TREND_P`]) tells `C = 0` from the rest: it equals
 //!   `f_inf` down to [`HELD_P`].
@@ -91,9 +91,9 @@ impl Approach {
     ///
     /// - order `k > 1`: arrested where the limit `f_inf` is positive, else a lift-off;
     /// - `k < 1`: arrested where the force stays at its limit down to [`HELD_P`]; else a
-    ///   lift-off where the located root is `b = 0` or the force falls below its limit on
-    ///   the approach, the jam where it rises above it (or, with no trend, `p = 0` came
-    ///   first);
+    ///   lift-off where the force falls below its limit on the approach, the jam where it
+    ///   rises above it, whichever root was located; with no trend, the located root
+    ///   (`b = 0` a lift-off, `p = 0` the jam);
     /// - `p` not falling (a tangent approach) or a model that is not finite: the located
     ///   root (a lift-off, or the impact without collision at `p = 0`).
     pub fn crossing(&self, trend: Option<Trend>, located_lift_off: bool) -> Crossing {
@@ -106,9 +106,14 @@ impl Approach {
         }
         match trend {
             Some(tr) if f_inf > 0.0 && departure_scale(tr, f_inf, k) <= HELD_P => Crossing::Arrested,
-            _ if located_lift_off => Crossing::LiftOff,
+            // The force departs from its limit monotonically (`C tau^(k - 1)`): the side it
+            // was on during the approach is the side it leaves by, whichever root the
+            // locator met (a `b = 0` located with the force rising is `b = -f_n p` at a
+            // `p` within the locator's tolerance).
             Some(tr) if tr.f_n < f_inf => Crossing::LiftOff,
-            _ => Crossing::Jam,
+            Some(_) => Crossing::Jam,
+            None if located_lift_off => Crossing::LiftOff,
+            None => Crossing::Jam,
         }
     }
 }
