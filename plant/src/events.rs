@@ -46,6 +46,12 @@ pub enum EventKind {
     /// impulse and energy change, so that the table books every impulse (issue 67).
     /// The Zeno rule's projection is booked on its `zeno_ended` row.
     VelocityProjection,
+    /// One step of a bridge's Moreau-Jean time-stepping whose contact impulse is an
+    /// impulse, not a force: at least [`crate::BRIDGE_IMPULSE_LOAD`] times `m g`
+    /// over the step (an impact, the slip stopped at the singular point), booked as
+    /// acting at the step's start with its impulse and kinetic energy change, so that the
+    /// table books it (issue 81; the trace shows no force for that step).
+    BridgeImpulse,
     /// An impact created energy at the contact (positive contact work; reported, not corrected).
     EnergyGain,
     /// At rest on the belt with no consistent contact force (see the crate docs).
@@ -68,6 +74,7 @@ impl EventKind {
             Self::StickToSlip => "stick_to_slip",
             Self::ZenoEnded => "zeno_ended",
             Self::VelocityProjection => "velocity_projection",
+            Self::BridgeImpulse => "bridge_impulse",
             Self::EnergyGain => "energy_gain",
             Self::ConeViolation => "cone_violation",
         }

@@ -65,9 +65,9 @@ mod phase;
 mod plant;
 
 #[cfg(test)]
-mod corner_tests;
-#[cfg(test)]
 mod corner_reference_tests;
+#[cfg(test)]
+mod corner_tests;
 #[cfg(test)]
 mod ledger_tests;
 
@@ -79,6 +79,7 @@ pub use events::{Counters, EventKind, PlantEvent, StepReport};
 pub use ledger::Ledger;
 pub use observer::{NoObserver, Observer};
 pub use phase::Phase;
+pub use plant::bridge::BRIDGE_IMPULSE_LOAD;
 pub use plant::{Checkpoint, Plant, Sample, SampleGrid};
 pub use validity::Validity;
 

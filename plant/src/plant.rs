@@ -77,6 +77,25 @@ pub struct Plant {
     /// The energy and the sines and cosines at one arm state, for where that state
     /// is met again ([`Known`]).
     known: Option<Known>,
+    /// A velocity projection at an event too small for a row of its own (at most
+    /// [`crate::segment::ROOT_TOLERANCE`] of relative velocity), waiting to be booked on
+    /// the next row at its instant, or as its own row (issue 81).
+    pending_projection: Option<PendingProjection>,
+}
+
+/// A velocity projection's impulse waiting for its row ([`Plant::pending_projection`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PendingProjection {
+    /// Its instant, s.
+    pub t: f64,
+    /// The tip's relative velocity before it, m/s.
+    pub before: Vector2<f64>,
+    /// The impulse `[P_t, P_n]`, N s.
+    pub p: Vector2<f64>,
+    /// Its kinetic energy change, J.
+    pub de: f64,
+    /// Its contact work, J.
+    pub contact_work: f64,
 }
 
 /// The arm's energy and the sines and cosines of its angles at one state `x`,
@@ -233,6 +252,7 @@ impl Plant {
             departing: false,
             slide_trend: None,
             known: None,
+            pending_projection: None,
         };
         plant.e0 = plant.energy();
         let z = plant.tip();
@@ -246,6 +266,7 @@ impl Plant {
             let ctrl = Hold(u0);
             let mut events = Vec::new();
             plant.touch(&ctrl, &mut events, true)?;
+            plant.flush_projection(&mut events);
             plant.startup_events = events;
         }
         Ok(plant)

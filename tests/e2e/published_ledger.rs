@@ -17,6 +17,13 @@
 //! Before issue 67 an IWC at `p = 0` left its impulse out of the table (0.032 J each, 26
 //! times in 300 s on issue 53's arm): such an interval misses by 60 times its
 //! allowance, and the test removes one impulse row to show that the check sees it.
+//!
+//! Issue 81: under every option. Under `--singular slide` a bridge's step whose
+//! contact impulse is an impulse (the slip stopped at the crossing, 0.03 to 0.17 J)
+//! was in no row; it is now a `bridge_impulse` row, and the test runs the reproducers
+//! under both singular rules and the random arms under each combination of the rule,
+//! the impact law (`newton`, `poisson`, `energetic`) and the IWC rule, and removes a
+//! `bridge_impulse` row to show that the check sees it too.
 
 use std::path::Path;
 
@@ -29,10 +36,10 @@ const ISSUE53: ([&str; 6], &str) = (
 );
 
 /// One published run: its trace's rows (`t`, the power of the smooth works, `E`)
-/// and its events (`t`, `energy_change` of a row with an impulse).
+/// and its events (`t`, `energy_change` of a row with an impulse, the row's kind).
 struct Published {
     rows: Vec<(f64, f64, f64)>,
-    impulses: Vec<(f64, f64)>,
+    impulses: Vec<(f64, f64, String)>,
     events_j: f64,
 }
 
@@ -56,12 +63,12 @@ fn read(dir: &Path, sigma: f64) -> Published {
     let eh = &events[0];
     let ecol = |name: &str| eh.iter().position(|h| h == name).unwrap();
     let (et, kind, de, res) = (ecol("t"), ecol("kind"), ecol("energy_change"), ecol("resolution"));
-    let impulses: Vec<(f64, f64)> = events[1..]
+    let impulses: Vec<(f64, f64, String)> = events[1..]
         .iter()
         .filter(|r| !r[res].is_empty() && r[kind] != "energy_gain")
-        .map(|r| (r[et].parse().unwrap(), r[de].parse().unwrap()))
+        .map(|r| (r[et].parse().unwrap(), r[de].parse().unwrap(), r[kind].clone()))
         .collect();
-    let events_j = impulses.iter().map(|(_, de)| de).sum();
+    let events_j = impulses.iter().map(|(_, de, _)| de).sum();
     Published { rows, impulses, events_j }
 }
 
@@ -115,8 +122,9 @@ fn simulate(dir: &Path, name: &str, args: &[&str]) -> std::path::PathBuf {
 
 /// Checks one published run: every interval closes, the rows' impulses sum to the
 /// summary's `events_j`, and the ledger has no violation. Returns how many
-/// impulses and the worst interval's fraction of its allowance.
-fn check(dir: &Path, name: &str, sigma: f64) -> (usize, f64) {
+/// impulses, how many of them `bridge_impulse` rows, and the worst interval's fraction
+/// of its allowance.
+fn check(dir: &Path, name: &str, sigma: f64) -> (usize, usize, f64) {
     let p = read(dir, sigma);
     let s = summary_of(dir);
     let l = &s["ledger"];
@@ -129,7 +137,7 @@ fn check(dir: &Path, name: &str, sigma: f64) -> (usize, f64) {
     assert_eq!(l["violations"], 0, "{name}: {l}");
     let (wrong, worst) = unclosed(&p);
     assert!(wrong.is_empty(), "{name}: {} intervals do not close, the first {:?}", wrong.len(), &wrong[..wrong.len().min(3)]);
-    (p.impulses.len(), worst)
+    (p.impulses.len(), p.impulses.iter().filter(|i| i.2 == "bridge_impulse").count(), worst)
 }
 
 /// A random arm of the envelope (xorshift, fixed seed): `--set` assignments, `x0`
@@ -162,41 +170,63 @@ fn the_ledger_rebuilt_from_the_published_tables_closes_on_the_reproducers_and_ra
     let mut issue53: Vec<&str> = ISSUE53.0.iter().flat_map(|s| ["--set", s]).collect();
     issue53.extend([x0.as_str(), "--v-belt=-0.5"]);
     let mut cases: Vec<(String, Vec<String>, f64)> = Vec::new();
-    for (mu, iwc) in [("0.422", "plastic"), ("0.430", "plastic"), ("0.431", "plastic"), ("0.6", "restitution")] {
-        let mut a: Vec<String> = issue53.iter().map(|s| s.to_string()).collect();
-        a.extend(["--mu", mu, "--iwc", iwc].map(String::from));
-        cases.push((format!("issue 53, mu {mu}, --iwc {iwc}"), a, 0.008));
+    for singular in ["leave", "slide"] {
+        for (mu, iwc) in [("0.422", "plastic"), ("0.430", "plastic"), ("0.431", "plastic"), ("0.6", "restitution")] {
+            let mut a: Vec<String> = issue53.iter().map(|s| s.to_string()).collect();
+            a.extend(["--mu", mu, "--iwc", iwc, "--singular", singular].map(String::from));
+            cases.push((format!("issue 53, mu {mu}, --iwc {iwc} --singular {singular}"), a, 0.008));
+        }
     }
     for (x0, v) in [("a", "-0.5"), ("d", "-0.4"), ("u", "-0.4")] {
         cases.push((format!("x0{x0}"), ["--x0", x0, "--v-belt", v].map(String::from).to_vec(), 0.005));
     }
+    // Each combination of the singular rule, the impact law and the IWC rule twice.
     let mut seed = 0x2545_f491_4f6c_dd1du64;
-    for i in 0..12 {
+    for i in 0..24 {
         let (sets, x0, mu, v_belt, sigma) = random_arm(&mut seed);
+        let (singular, law, iwc) = (["leave", "slide"][i % 2], ["newton", "poisson", "energetic"][(i / 2) % 3], ["restitution", "plastic"][(i / 6) % 2]);
         let mut a: Vec<String> = sets.iter().flat_map(|s| ["--set".to_string(), s.clone()]).collect();
         a.extend([format!("--x0-deg={x0}"), "--mu".into(), mu.to_string(), format!("--v-belt={v_belt}")]);
-        if i % 2 == 1 {
-            a.extend(["--iwc".into(), "plastic".into()]);
-        }
-        cases.push((format!("random arm {i}"), a, sigma));
+        a.extend(["--singular", singular, "--impact-law", law, "--iwc", iwc].map(String::from));
+        cases.push((format!("random arm {i} (--singular {singular} --impact-law {law} --iwc {iwc})"), a, sigma));
     }
-    let mut total = 0;
+    let (mut total, mut bridged) = (0, 0);
+    let mut slide_case = None;
     for (i, (name, args, sigma)) in cases.iter().enumerate() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = simulate(dir.path(), &format!("case{i}"), &args);
-        let (impulses, worst) = check(&out, name, *sigma);
-        println!("{name}: {impulses} impulses, the worst interval at {worst:.3} of its allowance");
+        let (impulses, bridge_rows, worst) = check(&out, name, *sigma);
+        println!("{name}: {impulses} impulses ({bridge_rows} bridge_impulse), the worst interval at {worst:.3} of its allowance");
         total += impulses;
+        bridged += bridge_rows;
+        if bridge_rows > 0 && slide_case.is_none() {
+            slide_case = Some((out, *sigma));
+        }
     }
     assert!(total > 300, "{total} impulses in all");
+    assert!(bridged >= 20, "{bridged} bridge_impulse rows in all: the slide runs no longer cross bridges");
 
     // The check can fail: the published tables of issue 53's bouncing with one
     // impulse row removed (as before issue 67, an IWC without its impulse).
     let out = dir.path().join("case0");
     let mut p = read(&out, 0.008);
-    let (i, &(t, de)) = p.impulses.iter().enumerate().find(|(_, (t, de))| *t > 0.5 && de.abs() > 1e-3).expect("an impulse of 1 mJ or more");
+    let (i, &(t, de, _)) =
+        p.impulses.iter().enumerate().find(|(_, (t, de, _))| *t > 0.5 && de.abs() > 1e-3).expect("an impulse of 1 mJ or more");
     p.impulses.remove(i);
     let (wrong, _) = unclosed(&p);
     assert_eq!(wrong.len(), 1, "removing the {de} J impulse at {t} s: {wrong:?}");
     assert!(wrong[0].0 <= t && t - wrong[0].0 < 1.1e-3, "{wrong:?}");
+    // And a bridge's booked impulse removed (as before issue 81 under `slide`).
+    let (out, sigma) = slide_case.expect("a run with a bridge_impulse row");
+    let mut p = read(&out, sigma);
+    let (i, &(t, de, _)) = p
+        .impulses
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.2 == "bridge_impulse")
+        .max_by(|a, b| a.1.1.abs().total_cmp(&b.1.1.abs()))
+        .unwrap();
+    p.impulses.remove(i);
+    let (wrong, _) = unclosed(&p);
+    assert!(!wrong.is_empty() && wrong[0].0 <= t && t - wrong[0].0 < 1.1e-4, "removing the {de} J bridge impulse at {t} s: {wrong:?}");
 }

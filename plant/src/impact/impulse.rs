@@ -37,6 +37,10 @@ pub enum Resolution {
     /// ([`at_p_zero`](super::at_p_zero)): the edge impulse that stops the slip with
     /// `v_n` unchanged, the limit of both IWC rules there.
     IwcAtPZero,
+    /// A bridge step's Moreau-Jean contact impulse, booked as an impulse
+    /// ([`crate::EventKind::BridgeImpulse`]): the solution of the step's one-contact
+    /// problem ([`crate::moreau_jean::contact_impulse`]), in the cone by construction.
+    BridgeStep,
 }
 
 impl Resolution {

@@ -268,6 +268,7 @@ impl Plant {
                 }
             }
         }
+        self.flush_projection(&mut events);
         // The state after an impact at the very end of the interval belongs to no step.
         obs.on_advanced(self.t, &self.y);
         for e in &events {

@@ -51,9 +51,25 @@ pub(crate) struct Stretch {
     pub states: Vec<OdeState>,
     /// The contact solution of the last step.
     pub last: ContactSolution,
-    /// Each step's contact mode and mean contact force `P / h` (`[f_t, f_n]`, N).
+    /// Each step's contact mode and mean contact force `P / h` (`[f_t, f_n]`, N; 0 for
+    /// a step whose impulse is booked).
     pub forces: Vec<(ContactMode, [f64; 2])>,
+    /// Each step's booked impulse: `P` (N s) and the joint velocity change it makes,
+    /// `M^-1 J^T P` (rad/s), where `|P|` is at least [`BRIDGE_IMPULSE_LOAD`] `m g h`.
+    pub kicks: Vec<Option<(Vector2<f64>, Vector2<f64>)>>,
 }
+
+/// The load, in units of `m g`, above which a bridge step's contact impulse `P` is
+/// booked as an impulse (a `bridge_impulse` row acting at the step's start) rather than
+/// shown as the force `P / h` over the step: the jam's onset load
+/// ([`crate::segment::JAM_ONSET_LOAD`], 10), beyond which the plant no longer takes a
+/// contact force for a normal reaction. An impact or the slip stopped at the singular
+/// point gives `P` of order 1e-2 N s at the bridge's 10 us step (a thousand times the
+/// load); a slide through the indeterminate region at a few newtons stays a force. A
+/// booked impulse is in the events table, so a ledger rebuilt from the published tables
+/// closes across it (issue 81: under `--singular slide` the crossing's impulse,
+/// 0.03 to 0.17 J, was in no row).
+pub const BRIDGE_IMPULSE_LOAD: f64 = crate::segment::JAM_ONSET_LOAD;
 
 impl Plant {
     /// Crosses a collapsed step by a bridge from the current (last accepted)
@@ -92,10 +108,21 @@ impl Plant {
         obs.on_segment_start(t0, &y0, mode);
         obs.on_attempt();
         let (l, grid) = (self.arm.params.l, self.sampling);
+        let mut kicks = Vec::new();
         for (k, pair) in stretch.states.windows(2).enumerate() {
             let t_prev = t0 + k as f64 * stretch.h;
             let t_curr = if k + 2 == stretch.states.len() { t0 + length } else { t_prev + stretch.h };
-            let mut step = LinearStep::new(t_prev, t_curr, pair[0], pair[1]);
+            // A booked impulse acts at the step's start: the step runs from the kicked state.
+            let start = match stretch.kicks[k] {
+                Some((p, dv)) => {
+                    let mut kicked = pair[0];
+                    (kicked[1], kicked[3]) = (kicked[1] + dv[0], kicked[3] + dv[1]);
+                    kicks.push(self.bridge_impulse_row(t_prev, &pair[0], &kicked, p, stretch.forces[k].0));
+                    kicked
+                }
+                None => pair[0],
+            };
+            let mut step = LinearStep::new(t_prev, t_curr, start, pair[1]);
             // The samples `advance_sampling` asks for, linear between the step's ends.
             if let Some(g) = grid {
                 let (step_mode, f) = stretch.forces[k];
@@ -141,6 +168,10 @@ impl Plant {
                 resolution: None,
             });
         }
+        for row in kicks {
+            self.ledger.events_j += row.energy_change;
+            events.push(row);
+        }
         self.time_stepping = false;
         self.resume(ctrl, stretch.last, events)?;
         if first {
@@ -149,6 +180,34 @@ impl Plant {
             (e.mode_after, e.v_n_after, e.v_r_after) = (self.mode(), after[1], after[0]);
         }
         Ok(())
+    }
+
+    /// The `bridge_impulse` row of a bridge step's booked impulse `p` (N s) at `t` (s),
+    /// from the step's start `before` to the kicked state `after`: the tip's relative
+    /// velocities, the kinetic energy change and the contact work `P . (v- + v+) / 2`
+    /// in the belt's frame (J).
+    fn bridge_impulse_row(&self, t: f64, before: &OdeState, after: &OdeState, p: Vector2<f64>, mode_after: ContactMode) -> PlantEvent {
+        let params = self.arm.params;
+        let rel = |y: &OdeState| {
+            let q = Vector2::new(y[0], y[2]);
+            let v = shared::kinematics::jacobian(params.l, &q) * Vector2::new(y[1], y[3]);
+            Vector2::new(v[0] - params.v_belt, v[1])
+        };
+        let energy = |y: &OdeState| crate::ledger::energy(&self.arm, &self.trig.get(&Vector2::new(y[0], y[2])), y);
+        let (b, a) = (rel(before), rel(after));
+        PlantEvent {
+            t,
+            kind: EventKind::BridgeImpulse,
+            mode_after,
+            v_n_before: b[1],
+            v_n_after: a[1],
+            v_r_before: b[0],
+            v_r_after: a[0],
+            impulse: [p[0], p[1]],
+            energy_change: energy(after) - energy(before),
+            contact_work: p.dot(&((b + a) * 0.5)),
+            resolution: Some(crate::impact::Resolution::BridgeStep),
+        }
     }
 
     /// The contact mode after a bridge whose last step took `last`: a slide the
@@ -249,6 +308,7 @@ impl Plant {
         let mut phase = self.phase;
         let mut last = ContactSolution::Inactive;
         let mut forces = Vec::with_capacity(n);
+        let mut kicks = Vec::with_capacity(n);
         for k in 0..n {
             let t = t0 + k as f64 * h;
             let (q, qd) = (Vector2::new(y[0], y[2]), Vector2::new(y[1], y[3]));
@@ -275,7 +335,10 @@ impl Plant {
                 ContactSolution::Sliding(dir) => Phase::Sliding(dir),
             };
             last = solution;
-            forces.push((phase_mode(phase), [impulse[0] / h, impulse[1] / h]));
+            let kick = (impulse.norm() >= BRIDGE_IMPULSE_LOAD * params.m * params.g * h)
+                .then(|| (impulse, td.m_inv * (td.jac.transpose() * impulse)));
+            forces.push((phase_mode(phase), if kick.is_some() { [0.0, 0.0] } else { [impulse[0] / h, impulse[1] / h] }));
+            kicks.push(kick);
             let v_mid = (qd + v_new) * 0.5;
             let q_new = q + v_mid * h;
             // The ledger's works of the step's forces over its displacement `h v_mid`:
@@ -302,7 +365,7 @@ impl Plant {
             }
             states.push(y);
         }
-        Ok(Stretch { h, states, last, forces })
+        Ok(Stretch { h, states, last, forces, kicks })
     }
 }
 

@@ -10,7 +10,7 @@ use shared::{
     contact::{classify_slipping, sliding_force, sticking_is_consistent},
 };
 
-use super::Plant;
+use super::{PendingProjection, Plant};
 use crate::{
     controller::Controller,
     error::SimError,
@@ -450,13 +450,55 @@ impl Plant {
     /// than a located event leaves ([`segment::ROOT_TOLERANCE`], 1e-6 m/s: the
     /// residue of a slip stop or of an impulse at `p` near 0), so that every
     /// impulse the ledger books at an event beyond that is in the table (issue 67).
+    ///
+    /// A smaller projection with an impulse is booked too (issue 81): on the next row
+    /// pushed at the same instant that has no impulse of its own (a `slip_to_stick`,
+    /// a `lift_off`), which then carries it with resolution `projection`, or else as
+    /// its own `velocity_projection` row ([`Plant::flush_projection`]).
     fn project_at_event(&mut self, sticking: bool, events: &mut Vec<PlantEvent>) -> Result<(), SimError> {
         let before = self.rel_velocity();
         let (imp, de) = self.project_contact_velocity(sticking)?;
         if (self.rel_velocity() - before).norm() > segment::ROOT_TOLERANCE {
+            self.flush_projection(events);
             self.push_event(events, EventKind::VelocityProjection, before, Some(&imp), de);
+        } else if imp.p != Vector2::zeros() || de != 0.0 {
+            if self.pending_projection.is_some_and(|p| p.t != self.t) {
+                self.flush_projection(events);
+            }
+            let pending = self.pending_projection.get_or_insert(PendingProjection {
+                t: self.t,
+                before,
+                p: Vector2::zeros(),
+                de: 0.0,
+                contact_work: 0.0,
+            });
+            pending.p += imp.p;
+            pending.de += de;
+            pending.contact_work += imp.contact_work;
         }
         Ok(())
+    }
+
+    /// Books a pending projection ([`Plant::project_at_event`]) as its own
+    /// `velocity_projection` row at its instant.
+    pub(crate) fn flush_projection(&mut self, events: &mut Vec<PlantEvent>) {
+        if let Some(p) = self.pending_projection.take() {
+            self.ledger.events_j += p.de;
+            let after = self.rel_velocity();
+            events.push(PlantEvent {
+                t: p.t,
+                kind: EventKind::VelocityProjection,
+                mode_after: self.mode(),
+                v_n_before: p.before[1],
+                v_n_after: after[1],
+                v_r_before: p.before[0],
+                v_r_after: after[0],
+                impulse: [p.p[0], p.p[1]],
+                energy_change: p.de,
+                contact_work: p.contact_work,
+                resolution: Some(Resolution::Projection),
+            });
+        }
     }
 
     /// Pushes an event row; one with an impulse adds its kinetic energy change to
@@ -464,6 +506,21 @@ impl Plant {
     /// of the table's `energy_change` (issue 67; an `energy_gain` row, which
     /// repeats the impulse of the row before it, is pushed apart).
     fn push_event(&mut self, events: &mut Vec<PlantEvent>, kind: EventKind, before: Vector2<f64>, imp: Option<&Impulse>, de: f64) {
+        // A pending projection at this instant rides on a row with no impulse of its own
+        // (an `energy_gain` or `cone_violation` row is a report, not a booking).
+        let carries = imp.is_none() && !matches!(kind, EventKind::EnergyGain | EventKind::ConeViolation);
+        match self.pending_projection {
+            Some(p) if carries && p.t == self.t => {
+                self.pending_projection = None;
+                self.ledger.events_j += p.de;
+                let mut row = self.make_event(kind, before, None, p.de);
+                (row.impulse, row.contact_work, row.resolution) = ([p.p[0], p.p[1]], p.contact_work, Some(Resolution::Projection));
+                events.push(row);
+                return;
+            }
+            Some(_) => self.flush_projection(events),
+            None => {}
+        }
         if imp.is_some() {
             self.ledger.events_j += de;
         }
