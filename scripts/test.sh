@@ -165,7 +165,7 @@ cat "$cycles_dir/default" "$cycles_dir/random" "$cycles_dir/law"
 rm -rf "$cycles_dir"
 [ "$cycles_status" -ne 0 ] && exit "$cycles_status"
 
-echo "== [at ${SECONDS} s] Siconos 4.4 as an independent implementation (tests/siconos/check.py, about 30 s; tests/siconos/README.md):"
+echo "== [at ${SECONDS} s] Siconos 4.4 as an independent implementation (tests/siconos/check.py, about 70 s; tests/siconos/README.md):"
 echo "   sil-host simulate --iwc plastic against the arm built in Debian's python3-siconos (system /usr/bin/python3):"
 echo "   from x0a mu 0.365 slides and 0.366 bounces in both; at mu 0.6 the bounce's lift-offs per 50 s and largest"
 echo "   gap within Siconos' own step-size convergence (h 1e-4 against 2e-5 s); x0d's final z_t. Skipped without"

@@ -170,7 +170,9 @@ pub struct Ledger {
     /// beyond rounding: the tip had drifted off it) or lies outside the friction
     /// cone (`|P_t| > mu P_n`: a stuck tip's slip drift removed with more friction
     /// than the cone gives), issue 81: integration drift removed by an impulse no
-    /// contact could give, counted, not a violation (their energy is
+    /// contact could give, counted, and a violation only where the drift removed exceeds
+    /// twice the Zeno rule's `zeno_velocity` (2e-4 m/s; the Zeno ends leave up to 0.1
+    /// mm/s) (their energy is
     /// [`Ledger::projections_unphysical_j`], their largest drift in
     /// [`Ledger::largest_projection_drift_m_s`]).
     pub projections_unphysical: u64,

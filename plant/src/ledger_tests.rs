@@ -311,7 +311,9 @@ fn a_planted_impact_without_collision_where_none_is_due_fails_the_ledger() {
 /// Issue 81: a velocity projection whose impulse no contact could give, a pull onto
 /// the belt (the tip's drift off it removed) or friction beyond the cone, is counted in
 /// `projections_unphysical` with the energy it changed; a push within the cone is not.
-/// Neither is a violation while within its drift's allowance (the test above).
+/// Such a projection is a violation where its drift exceeds twice the Zeno rule's
+/// `zeno_velocity` (2e-4 m/s), else only counted (the violations counted here are
+/// those, apart from the drift allowance's `projections_beyond_drift`).
 #[test]
 fn a_projection_that_pulls_or_leaves_the_cone_is_counted_with_its_energy() {
     let mut plant = Plant::new(Params::paper(), SimConfig::default(), deg_to_state(X0D.deg), 0.0, [0.0, 0.0]).unwrap();
@@ -326,15 +328,19 @@ fn a_projection_that_pulls_or_leaves_the_cone_is_counted_with_its_energy() {
         let work = p.dot(&(v_rel + 0.5 * qm * p));
         plant.check_projection(p, work, drift, allowed);
         let l = plant.ledger();
-        (l.projections_unphysical, l.projections_unphysical_j, work.abs())
+        (l.projections_unphysical, l.projections_unphysical_j, work.abs(), l.violations - l.projections_beyond_drift)
     };
-    let (n, e, _) = check(-2e-4, 0.0);
-    assert_eq!((n, e), (0, 0.0), "a push that removes the drift into the belt");
-    let (n, e, w) = check(2e-4, 0.0);
-    assert_eq!((n, e), (1, w), "a pull that removes the drift off the belt");
+    let (n, e, _, v) = check(-2e-4, 0.0);
+    assert_eq!((n, e, v), (0, 0.0, 0), "a push that removes the drift into the belt");
+    let (n, e, w, v) = check(5e-5, 0.0);
+    assert_eq!((n, e, v), (1, w, 0), "a pull that removes a drift off the belt within the Zeno rule's 1e-4 m/s");
     assert!(w > 0.0);
-    let (n, e, _) = check(-2e-4, 0.5 * mu);
-    assert_eq!((n, e), (1, w), "friction at half the cone: within it");
-    let (n, e, w3) = check(-2e-4, 1.5 * mu);
-    assert_eq!((n, e), (2, w + w3), "friction at 1.5 times the cone");
+    let (n, e, w2, v) = check(3e-4, 0.0);
+    assert_eq!((n, e, v), (2, w + w2, 1), "a pull of 3e-4 m/s: a violation");
+    let (n, e, _, v) = check(-3e-4, 0.5 * mu);
+    assert_eq!((n, e, v), (2, w + w2, 1), "friction at half the cone: within it");
+    let (n, e, w3, v) = check(-1e-4, 1.5 * mu);
+    assert_eq!((n, e, v), (3, w + w2 + w3, 1), "friction at 1.5 times the cone, 1e-4 m/s of drift: counted");
+    let (n, e, w4, v) = check(-3e-4, 1.5 * mu);
+    assert_eq!((n, e, v), (4, w + w2 + w3 + w4, 2), "friction at 1.5 times the cone, 3e-4 m/s of drift: a violation");
 }

@@ -24,6 +24,7 @@ use serde_json::{Value, json};
 
 use crate::common;
 mod compare;
+mod path;
 
 use compare::{Comparison, Table, breaches, kinds_before, quantum_breaches};
 

@@ -54,8 +54,8 @@ fn the_loop_and_simulate_figures_are_measured_against_their_targets() {
     let (code, out, err) = bench(&["--only", "in-process,simulate", "--repeat", "2", "--duration", "0.5", "--json"]);
     assert_eq!(code, 0, "{err}");
     let f = figures(&out);
-    assert_eq!(f.len(), 4);
-    let (loop_, sim, arrow, sparse) = (&f[0], &f[1], &f[2], &f[3]);
+    assert_eq!(f.len(), 5);
+    let (loop_, sim, arrow, sparse, ratio) = (&f[0], &f[1], &f[2], &f[3], &f[4]);
     assert_eq!(
         (loop_["id"].as_str(), loop_["unit"].as_str(), loop_["goal"].as_str()),
         (Some("in_process"), Some("periods/s"), Some("at_least"))
@@ -81,6 +81,14 @@ fn the_loop_and_simulate_figures_are_measured_against_their_targets() {
         (Some("simulate_300s_sparse"), Some("s"), Some(0.02))
     );
     assert!(sparse["value"].as_f64().unwrap() > 0.0);
+    // Issue 81: the 1 s samples' cost over the 1 ms trace's, the two medians' ratio.
+    assert_eq!(
+        (ratio["id"].as_str(), ratio["unit"].as_str(), ratio["target"].as_f64()),
+        (Some("simulate_300s_sparse_ratio"), Some("ratio"), Some(0.25))
+    );
+    let r = ratio["value"].as_f64().unwrap();
+    assert_eq!(r.to_bits(), (sparse["value"].as_f64().unwrap() / sim["value"].as_f64().unwrap()).to_bits(), "{r}");
+    assert_eq!(ratio["status"], if r <= 0.25 { "met" } else { "not_met" });
 }
 
 /// `scripts/budgets.py`'s flash figure of one image.

@@ -184,7 +184,8 @@ fn the_ledger_rebuilt_from_the_published_tables_closes_on_the_reproducers_and_ra
     let mut seed = 0x2545_f491_4f6c_dd1du64;
     for i in 0..24 {
         let (sets, x0, mu, v_belt, sigma) = random_arm(&mut seed);
-        let (singular, law, iwc) = (["leave", "slide"][i % 2], ["newton", "poisson", "energetic"][(i / 2) % 3], ["restitution", "plastic"][(i / 6) % 2]);
+        let (singular, law, iwc) =
+            (["leave", "slide"][i % 2], ["newton", "poisson", "energetic"][(i / 2) % 3], ["restitution", "plastic"][(i / 6) % 2]);
         let mut a: Vec<String> = sets.iter().flat_map(|s| ["--set".to_string(), s.clone()]).collect();
         a.extend([format!("--x0-deg={x0}"), "--mu".into(), mu.to_string(), format!("--v-belt={v_belt}")]);
         a.extend(["--singular", singular, "--impact-law", law, "--iwc", iwc].map(String::from));
@@ -219,13 +220,8 @@ fn the_ledger_rebuilt_from_the_published_tables_closes_on_the_reproducers_and_ra
     // And a bridge's booked impulse removed (as before issue 81 under `slide`).
     let (out, sigma) = slide_case.expect("a run with a bridge_impulse row");
     let mut p = read(&out, sigma);
-    let (i, &(t, de, _)) = p
-        .impulses
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.2 == "bridge_impulse")
-        .max_by(|a, b| a.1.1.abs().total_cmp(&b.1.1.abs()))
-        .unwrap();
+    let (i, &(t, de, _)) =
+        p.impulses.iter().enumerate().filter(|(_, r)| r.2 == "bridge_impulse").max_by(|a, b| a.1.1.abs().total_cmp(&b.1.1.abs())).unwrap();
     p.impulses.remove(i);
     let (wrong, _) = unclosed(&p);
     assert!(!wrong.is_empty() && wrong[0].0 <= t && t - wrong[0].0 < 1.1e-4, "removing the {de} J bridge impulse at {t} s: {wrong:?}");

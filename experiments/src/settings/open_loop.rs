@@ -64,9 +64,11 @@ pub struct SimulateArgs {
     /// Absolute tolerance of the integrator.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1e-11))]
     pub atol: f64,
-    /// Largest integrator step, s (default: none; the tolerances and the samples set
-    /// the steps). A cap gives a reference whose steps differ from the samples' (the
-    /// accuracy contract, docs/architecture.md).
+    /// Largest integrator step, s. `simulate`'s default is the arm's own cap (2 ms for
+    /// the paper's arm, scaled by its fastest rate), whatever the sampling; a value here
+    /// replaces it: larger (1e3: no cap, the tolerances alone set the steps, and `rtol`
+    /// moves the path) or smaller (the accuracy contract's references; docs/architecture.md
+    /// "The contract on the path"). Elsewhere the default is no cap.
     #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub max_step: Option<f64>,
     /// Impact-without-collision rule: `restitution` (the law's restitution throws the

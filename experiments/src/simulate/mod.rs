@@ -177,9 +177,10 @@ pub struct OpenLoop {
     /// The sampling period, s.
     pub sample_dt: f64,
     /// The largest integrator step, s, whatever the sampling period (issue 53: the
-    /// path must not depend on it): [`plant::time_scale::dense_max_step`] of the
-    /// arm, 0.12 rad of its fastest mode (2.0 ms for the paper's arm, 0.22 ms for
-    /// issue 67's short arm; docs/architecture.md "The accuracy contract").
+    /// path must not depend on it): the configuration's `max_step` where given,
+    /// else [`plant::time_scale::dense_max_step`] of the arm, 0.12 rad of its
+    /// fastest mode (2.0 ms for the paper's arm, 0.22 ms for issue 67's short arm;
+    /// docs/architecture.md "The accuracy contract").
     pub max_step: f64,
 }
 
@@ -191,7 +192,10 @@ impl OpenLoop {
         let Prepared { plant, steps, .. } = prepared;
         let row = trace_row(&plant, plant.contact_force([0.0, 0.0]));
         let events = plant.startup_events().iter().map(EventRow::from).collect();
-        let max_step = plant::time_scale::dense_max_step(&plant.arm().params);
+        // An explicit `max_step` (`--max-step`, `plant.max_step`) is the cap, larger or
+        // smaller than the arm's (issue 81: a run without the cap, its steps set by the
+        // tolerances alone, for the path's contract).
+        let max_step = plant.config().max_step.unwrap_or_else(|| plant::time_scale::dense_max_step(&plant.arm().params));
         (Self { plant, k: 0, steps, sample_dt, max_step }, row, events)
     }
 

@@ -186,6 +186,7 @@ fn show(v: f64, unit: &str) -> String {
         "bytes" => format!("{:.1} KiB", v / 1024.0),
         "s" if v < 10.0 => format!("{v:.3} s"),
         "s" => format!("{v:.0} s"),
+        "ratio" => format!("{v:.2}"),
         _ => {
             let digits = format!("{:.0}", v.abs());
             let mut grouped = String::new();
