@@ -153,6 +153,11 @@ struct Measured {
     events: Option<(Table, Table)>,
     /// The predictability horizon, s: the two references' departure (see `compare`).
     predictable_s: f64,
+    /// The path horizon against the reference and the two references' against each
+    /// other, s (issue 81, [`path`]: the events and the angles at the whole seconds, the
+    /// same whatever the sampling; infinite where they never part).
+    path_horizon_s: f64,
+    path_predictable_s: f64,
 }
 
 fn measure(case: &Case, dir: &Path) -> Measured {
@@ -167,7 +172,9 @@ fn measure(case: &Case, dir: &Path) -> Measured {
     let references = Comparison::of(&reference, &read_table(&reference_2_dir.join("trace.csv")).expect("second reference trace.csv"));
     let predictable_s = if references.departed.is_some() { references.horizon_s } else { f64::INFINITY };
     let events = read_table(&default_dir.join("events.csv")).zip(read_table(&reference_dir.join("events.csv")));
-    Measured { trace, events, predictable_s }
+    let (run, reference, reference_2) = (path::read(&default_dir), path::read(&reference_dir), path::read(&reference_2_dir));
+    let (path_horizon_s, path_predictable_s) = (path::horizon(&run, &reference).0, path::horizon(&reference, &reference_2).0);
+    Measured { trace, events, predictable_s, path_horizon_s, path_predictable_s }
 }
 
 /// The case as recorded: the horizon, the envelopes, the events' kinds before it.
@@ -179,6 +186,8 @@ fn record_case(m: &Measured) -> Value {
         "predictable_s": if m.predictable_s.is_finite() { json!(m.predictable_s) } else { Value::Null },
         "trace": envelope_json(&m.trace.envelope(h)),
         "trace_absolute": envelope_json(&m.trace.absolute_envelope(h)),
+        "path_horizon_s": finite_or_null(m.path_horizon_s),
+        "path_predictable_s": finite_or_null(m.path_predictable_s),
     });
     if let Some((events, reference)) = &m.events {
         v["events"] = envelope_json(&Comparison::of(events, reference).envelope(h));
@@ -187,9 +196,25 @@ fn record_case(m: &Measured) -> Value {
     v
 }
 
+fn finite_or_null(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
 /// Where the case breaks its recorded contract: on the recorded horizon, cut at
-/// today's predictability horizon (the references' departure) when that is earlier.
+/// today's predictability horizon (the references' departure) when that is earlier;
+/// and on the path (issue 81): the run follows its reference's path (the events'
+/// kinds and times to 1 us, the angles at the whole seconds to a thousandth of a count)
+/// at least as far as recorded, or as far as today's two references agree.
 fn check_case(name: &str, m: &Measured, recorded: &Value) -> Vec<String> {
+    let mut path_wrong = Vec::new();
+    let recorded_path = recorded["path_horizon_s"].as_f64().unwrap_or(f64::INFINITY);
+    let owed = recorded_path.min(m.path_predictable_s);
+    if m.path_horizon_s < owed - 1e-9 {
+        path_wrong.push(format!(
+            "{name}: the path leaves its reference at {} s, before the recorded {recorded_path} s and the references' {} s",
+            m.path_horizon_s, m.path_predictable_s
+        ));
+    }
     let h = recorded["horizon_s"].as_f64().expect("horizon_s");
     let judged = m.predictable_s.min(h);
     // The checkpoints at or before the judged span.
@@ -224,6 +249,7 @@ fn check_case(name: &str, m: &Measured, recorded: &Value) -> Vec<String> {
             wrong.push(format!("{name}: the reference's events before {judged} s are not the recorded ones"));
         }
     }
+    wrong.extend(path_wrong);
     wrong
 }
 
@@ -335,7 +361,7 @@ fn every_case_stays_as_close_to_its_reference_as_recorded_and_the_paper_results_
     if std::env::var("ACCURACY").as_deref() == Ok("record") {
         let cases: serde_json::Map<String, Value> = measured.iter().map(|(n, m)| (n.to_string(), record_case(m))).collect();
         let contract = json!({
-            "rule": "(a) every step passes the integrator's error test at the run's tolerances and no step is forced past a discontinuity of the right-hand side (the hold's switch, an event); (b) per case and column, up to each of 20 checkpoints over [0, horizon_s] cut at the references' predictability horizon, the scaled error |x - x_ref| / (1e-11 + 1e-9 |x_ref|) stays below max(2 x recorded, 1000) and, for a column a sensor measures, the error stays below a thousandth of that sensor's quantum (theta1, theta2: 2 pi / 2^14 rad; f_t, f_n: 25/2048 N; trace_absolute records it); (c) the events' kinds before horizon_s equal the reference's and the recorded ones, and the paper-level results equal (Table II to 5 decimals, Z_t,sliding within 0.1 mm with the same outcome, the sweep's outcomes and critical mu)",
+            "rule": "(a) every step passes the integrator's error test at the run's tolerances and no step is forced past a discontinuity of the right-hand side (the hold's switch, an event); (b) per case and column, up to each of 20 checkpoints over [0, horizon_s] cut at the references' predictability horizon, the scaled error |x - x_ref| / (1e-11 + 1e-9 |x_ref|) stays below max(2 x recorded, 1000) and, for a column a sensor measures, the error stays below a thousandth of that sensor's quantum (theta1, theta2: 2 pi / 2^14 rad; f_t, f_n: 25/2048 N; trace_absolute records it); (c) the events' kinds before horizon_s equal the reference's and the recorded ones, and the paper-level results equal (Table II to 5 decimals, Z_t,sliding within 0.1 mm with the same outcome, the sweep's outcomes and critical mu); (d) the path (issue 81: the events' kinds and times to 1 us, the angles at the whole seconds to 1e-3 of an encoder count, whatever the sampling) follows the reference's at least to min(path_horizon_s, today's path_predictable_s)",
             "reference": {"rtol": REFERENCE_TOL.0, "atol": REFERENCE_TOL.1, "max_step": REFERENCE_TOL.2},
             "second_reference": {"rtol": REFERENCE_2_TOL.0, "atol": REFERENCE_2_TOL.1, "max_step": REFERENCE_2_TOL.2},
             "cases": cases,
@@ -381,5 +407,8 @@ fn a_run_1e_7_off_breaks_the_contract() {
     let m = measure(&loose, &dir);
     let wrong = check_case(loose.name, &m, &recorded["cases"][loose.name]);
     assert!(!wrong.is_empty(), "a model 1e-7 off kept the contract (outputs in {})", dir.display());
+    // The path's check sees it too (issue 81): its touchdowns move by more than 1 us
+    // before the recorded path horizon.
+    assert!(wrong.iter().any(|w| w.contains("the path leaves its reference")), "{wrong:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }

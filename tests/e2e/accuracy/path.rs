@@ -30,15 +30,28 @@ pub struct PathOf {
     seconds: Vec<(i64, [f64; 2])>,
 }
 
-/// Reads a `simulate` folder's `events.csv` and its trace's whole-second rows.
+/// Reads a folder's `events.csv` and its trace's whole-second rows; a folder with no
+/// events table (`run`'s) has the changes of its trace's `mode` column for events (at the
+/// loop's 1 ms samples, the same in a run and its reference until they part).
 pub fn read(dir: &Path) -> PathOf {
-    let events = common::csv_rows(&dir.join("events.csv"));
-    let (t, kind) = (col(&events[0], "t"), col(&events[0], "kind"));
     let trace = common::csv_rows(&dir.join("trace.csv"));
     let (tt, a1, a2) = (col(&trace[0], "t"), col(&trace[0], "theta1"), col(&trace[0], "theta2"));
     let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().unwrap();
+    let events = if dir.join("events.csv").is_file() {
+        let events = common::csv_rows(&dir.join("events.csv"));
+        let (t, kind) = (col(&events[0], "t"), col(&events[0], "kind"));
+        events[1..].iter().map(|r| (num(r, t), r[kind].clone())).collect()
+    } else {
+        let mode = col(&trace[0], "mode");
+        trace[2..]
+            .iter()
+            .zip(&trace[1..])
+            .filter(|(r, before)| r[mode] != before[mode])
+            .map(|(r, _)| (num(r, tt), format!("mode {}", r[mode])))
+            .collect()
+    };
     PathOf {
-        events: events[1..].iter().map(|r| (num(r, t), r[kind].clone())).collect(),
+        events,
         seconds: trace[1..]
             .iter()
             .filter(|r| (num(r, tt) - num(r, tt).round()).abs() < 1e-9 && num(r, tt) >= 1.0)
