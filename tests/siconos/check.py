@@ -413,6 +413,16 @@ def classify(d, sil_host):
     return "slides" if stays else "neither"
 
 
+def count_tolerance(coarse, fine, h_coarse, h_fine, edge=0):
+    """A lift-off count's tolerance from Siconos' runs at two steps: the step term and
+    the count's limit (`convergence_tolerance`), the sampling spread of the fine run's
+    count (sqrt(parts) x the standard deviation of its per-part counts) and the total,
+    step term + twice the spread + `edge` (lift-offs the window's edges may move)."""
+    tol, limit = convergence_tolerance(coarse["lift_offs"], fine["lift_offs"], h_coarse, h_fine)
+    spread = math.sqrt(len(fine["parts"])) * statistics.stdev(fine["parts"])
+    return tol, limit, spread, tol + 2.0 * spread + edge
+
+
 def convergence_tolerance(coarse, fine, h_coarse=H_COARSE, h_fine=H_FINE):
     """The step-size tolerance for a statistic X from Siconos at two steps (units of X).
 
@@ -601,9 +611,7 @@ def run_checks(exe, work, jobs, started, record=None, mass_factor=1.0):
           f"{fmt(c['touchdowns'])}; h {hf:g} {fmt(f['touchdowns'])}")
     print(f"x0a, mu 0.6, the impact without collision at t = 0, Siconos' first-step impulse (P_t, P_n): "
           f"h {hc:g} ({c['p0'][0]:.4f}, {c['p0'][1]:.4f}) N s; h {hf:g} ({f['p0'][0]:.4f}, {f['p0'][1]:.4f}) N s")
-    tol, limit = convergence_tolerance(c["lift_offs"], f["lift_offs"])
-    spread = math.sqrt(len(f["parts"])) * statistics.stdev(f["parts"])  # sampling spread of the 50 s count
-    tol_n = tol + 2.0 * spread
+    tol, limit, spread, tol_n = count_tolerance(c, f, hc, hf)
     dev = abs(s["lift_offs"] - f["lift_offs"])
     rows.append((f"x0a, mu = 0.6: lift-offs in t in ({BOUNCE_WINDOW[0]:g}, {BOUNCE_WINDOW[1]:g}] s", c["lift_offs"],
                  f["lift_offs"], f"{limit:.1f}", s["lift_offs"], f"{tol_n:.1f}",
@@ -649,9 +657,7 @@ def run_checks(exe, work, jobs, started, record=None, mass_factor=1.0):
     # 5. The locked bounce at v_belt -0.4: lift-offs in 30 s.
     lc, lf = LOCKED_H
     s, c, f = sil["locked"], sic[("locked", lc)], sic[("locked", lf)]
-    tol, limit = convergence_tolerance(c["lift_offs"], f["lift_offs"], lc, lf)
-    spread = math.sqrt(len(f["parts"])) * statistics.stdev(f["parts"])
-    tol_n = tol + 2.0 * spread + EDGE_COUNT
+    tol, limit, spread, tol_n = count_tolerance(c, f, lc, lf, EDGE_COUNT)
     dev = abs(s["lift_offs"] - f["lift_offs"])
     w = f"t in ({LOCKED_WINDOW[0]:g}, {LOCKED_WINDOW[1]:g}] s"
     rows.append((f"x0a, mu = 0.6, v_belt = {LOCKED_V_BELT:g} m/s (locked): lift-offs in {w} (Siconos at h = "
