@@ -285,6 +285,11 @@ def sweep(
     ics: Union[str, Sequence[str]] = ("a", "d"),
     random_ics: int = 0,
     seed: int = 1,
+    seeds: int = 1,
+    jitter_mu: float = 0.0,
+    jitter_start: float = 0.0,
+    jitter_f_n_ref: float = 0.0,
+    jitter_delay: float = 0.0,
     transient: float = 250.0,
     record: float = 50.0,
     controller: SweepController = "none",
@@ -313,7 +318,18 @@ def sweep(
         mu: ``(min, max)`` or one value, spaced by ``mu_step``.
         v_belt: ``(min, max)`` or one value, m/s, spaced by ``v_belt_step``.
         ics: the paper's initial conditions (``"a"``, ``"d"``, ``"u"``), or ``"none"``.
-        random_ics, seed: random initial conditions in contact, and their seed.
+        random_ics, seed: random initial conditions in contact, and their seed
+            (also the seed of the jitter's draws).
+        seeds: runs per grid point (``sil-host sweep --seeds``): seed 0 the
+            nominal run, seeds 1.. the sensor noise's next seeds and the
+            jitter's draws; each cell then a fraction with its Wilson 95 %
+            interval (the ``cells`` table). The open loop and ``ideal=True``
+            have no noise: there ``seeds > 1`` needs ``jitter_mu`` or
+            ``jitter_start``.
+        jitter_mu, jitter_start, jitter_f_n_ref, jitter_delay: half-widths of
+            the uniform jitter of seeds 1.. of ``mu``, the start's ``z_t`` (m),
+            ``f_n*`` (N, sampled closed loop) and the command delay (s, sampled
+            closed loop).
         transient, record: the windows, s.
         controller: ``"none"`` (open loop), ``"hybrid"`` or ``"pid"`` (the
             firmware in-process, sampled), with ``ideal=True`` the paper's
@@ -339,7 +355,14 @@ def sweep(
         loop), ``lift_offs_transient``, ``rhs_evaluations``, the validity
         counters ``energy_gains``, ``newton_fallbacks``, ``poisson_fallbacks``,
         ``cone_violations``, ``zeno_stops``, ``jams``, ``integrator_failures``,
-        and ``error``.
+        and ``error``; and the table ``cells`` (one row per grid point and
+        initial condition over its seeds, ``cells.csv``'s rows when ``seeds >
+        1``): ``runs``, the counts ``lift_off``, ``safe_state``, ``contact``,
+        ``other``, each fraction with its Wilson 95 % interval
+        (``lift_off_fraction``, ``lift_off_lo``, ``lift_off_hi``, ...),
+        ``undecided`` (an interval holds one half) and ``boundary`` (the seeds
+        disagree). ``summary["samples"]`` says what each cell is drawn from,
+        ``summary["ensemble"]`` (``seeds > 1``) the fractions per ``mu``.
 
     Raises:
         PainleveError: bad input, with the CLI's message (``exit_code`` 2).
@@ -364,6 +387,11 @@ def zmax(
     lift_off_gap: float = 0.0,
     scenario: Scenario = None,
     set: _args.Overrides = None,
+    seeds: int = 1,
+    jitter_mu: float = 0.0,
+    jitter_start: float = 0.0,
+    jitter_f_n_ref: float = 0.0,
+    jitter_delay: float = 0.0,
     strict: bool = False,
     progress: Progress = True,
 ) -> Result:
@@ -378,6 +406,10 @@ def zmax(
         duration: trial length, s; reach_tol, settle_tol: m; settle_window: s.
         iwc: the base scenario's IWC rule; lift_off_gap: lift-off criterion, m.
         scenario: base scenario (path or dict); set: its overrides.
+        seeds: one bisection per sensor-noise seed for the sampled cases
+            (``sil-host zmax --seeds``); jitter_f_n_ref (N), jitter_delay (s):
+            the uniform jitter of seeds 1.. (jitter_mu and jitter_start are
+            refused: they are for sweeps).
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: ``results``,
@@ -398,6 +430,12 @@ def zmax(
         ``lift_offs``, ``impacts_without_collision``, ``first_lift_off_s``,
         ``settle_error_m``, ``failure``, ``simulated_s``, ``wall_s`` and the
         validity counters.
+
+        ``zmax_seeds`` (``seeds > 1``: each sampled case's search per seed):
+        ``controller``, ``x0``, ``setting``, ``seed``, ``outcome``,
+        ``z_t_sliding_m``, ``error_at_limit_m``, ``first_failing_m``,
+        ``stop_failing``, ``z_t_tracking_m``, ``trials``; their spread
+        (median, quartiles, range) in ``summary["distributions"]``.
 
         ``extras["limit_traces"]``: ``{case: Table}``, the run at the limit
         (``t`` s, ``z_t``, ``z_t_ref`` m, ``f_n`` N, torques N m, ``mode``).
@@ -466,12 +504,15 @@ def sensitivity(
     scenario: Scenario = None,
     set: _args.Overrides = None,
     threads: Optional[int] = None,
+    seeds: int = 1,
     strict: bool = False,
     progress: Progress = True,
 ) -> Result:
     """The headline results under each open modelling and firmware choice, one at
     a time: ``sil-host sensitivity`` (``size="quick"``: about a minute on 2
-    cores; ``"paper"``: hours).
+    cores; ``"paper"``: hours). ``seeds``: runs per belt speed of the hybrid
+    closed loop's sweeps (sensor-noise seeds; its results then fractions with
+    Wilson 95 % intervals).
 
     Returns:
         :class:`Result` with ``summary`` (``summary.json``: ``study`` with

@@ -193,10 +193,14 @@ pub fn sweep<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<B
     let manifest = Manifest { spec, shard };
     let n_missing = missing(&manifest, &rows).len();
     let results = analyses::sweep::summary::results(&manifest.spec, &rows, n_missing);
-    let summary = summary_of(&manifest, results, n_missing, Some(timing), 0, false, Vec::new());
+    // The cells over their seeds (always: one seed gives fractions of 0 or 1 out of 1).
+    let cells = analyses::sweep::cells::of(&manifest.spec, &rows);
+    let several = (manifest.spec.seeds > 1).then_some(cells.as_slice());
+    let summary = summary_of(&manifest, results, n_missing, Some(timing), 0, false, Vec::new(), several);
     let (message, code) = failure_of(None, args.strict.strict, &summary.results.validity);
     Outcome::new(py, "sweep", to_py(py, &summary)?)?
         .table("sweep", rows_to_py(py, &rows)?)?
+        .table("cells", rows_to_py(py, &cells)?)?
         .validity(&summary.results.validity)?
         .failure(message, code)
         .map(Outcome::done)
@@ -206,12 +210,11 @@ pub fn sweep<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<B
 #[pyfunction]
 #[pyo3(signature = (given, progress=None))]
 pub fn zmax<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
-    use analyses::zmax::max_trials;
     let args: ZmaxArgs = settings(py, "zmax", &given)?;
     let started = Instant::now();
     let plan = cmd::zmax::plan(&args).map_err(|e| cli_error(py, &e))?;
     warn(py, cmd::scenario::board_tables_note(&plan.base, "zmax (the firmware in-process, or the ideal law)"))?;
-    let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
+    let total = plan.max_trials(args.tol);
     let searches = work::run(py, progress.as_ref(), "zmax", "trials", |c: &Control| {
         c.set(0, total);
         cmd::zmax::run_searches(&plan, args.tol, &c.stop, &|n| {
@@ -219,15 +222,17 @@ pub fn zmax<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bo
         })
     })?;
     let searches = searches.map_err(|e| cli_error(py, &CliError::from(e)))?;
+    let n_nominal = plan.jobs.len();
     let summary = cmd::zmax::summary(&args, plan, &searches, started.elapsed().as_secs_f64());
     let traces = PyDict::new(py);
-    for s in &searches {
+    for s in searches.iter().take(n_nominal) {
         traces.set_item(s.combination.stem(), rows_to_py(py, &s.limit_trace)?)?;
     }
     let (message, code) = failure_of(None, args.strict.strict, &summary.validity);
     Outcome::new(py, "zmax", to_py(py, &summary)?)?
         .table("zmax", rows_to_py(py, &summary.results)?)?
         .table("trials", rows_to_py(py, &cmd::zmax::trial_rows(&summary))?)?
+        .table("zmax_seeds", rows_to_py(py, &summary.seeds)?)?
         .extra("limit_traces", traces.into_any())?
         .validity(&summary.validity)?
         .failure(message, code)
@@ -334,10 +339,10 @@ pub fn sensitivity<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Op
     let (base, threads) = cmd::sensitivity::prepare(&args).map_err(|e| cli_error(py, &e))?;
     warn(py, cmd::scenario::board_tables_note(&base, "the sensitivity study (the firmware in-process)"))?;
     let pool = pool(py, threads)?;
-    let size = args.size;
+    let (size, seeds) = (args.size, args.seeds);
     let (study, wall_s) = work::run(py, progress.as_ref(), "sensitivity", "jobs", |c: &Control| {
         let started = Instant::now();
-        let study = pool.install(|| analyses::sensitivity::run(&base, size, &c.stop, &|done, total| c.set(done, total)));
+        let study = pool.install(|| analyses::sensitivity::run(&base, size, seeds, &c.stop, &|done, total| c.set(done, total)));
         (study, started.elapsed().as_secs_f64())
     })?;
     let study = study.map_err(|e| cli_error(py, &CliError::from(e)))?;

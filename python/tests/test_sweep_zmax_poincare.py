@@ -110,3 +110,39 @@ def test_bad_input_raises_the_cli_message(command, kwargs, argv, monkeypatch):
 
     monkeypatch.chdir(REPO)
     assert_raises_like_cli(lambda: getattr(painleve, command)(progress=False, **kwargs), command, argv)
+
+
+def test_seeded_sweep_equals_the_cli(out):
+    """``seeds=`` (issue 82): the cells over the sensor-noise seeds, each fraction
+    with its Wilson interval, equal to the CLI's ``cells.csv``; seed 0 is the
+    sweep of one seed."""
+    kwargs = {"mu": (0.9, 0.95), "mu_step": 0.05, "v_belt": -0.5, "ics": "d", "controller": "hybrid", "transient": 3.0, "record": 2.0}
+    argv = ["--mu", "0.9,0.95", "--mu-step", "0.05", "--v-belt", "-0.5", "--ics", "d", "--controller", "hybrid", "--transient", "3", "--record", "2"]
+    mine = painleve.sweep(progress=False, seeds=4, **kwargs)
+    cli("sweep", [*argv, "--seeds", "4"], out)
+    theirs = painleve.load(out)
+    assert_tables_equal(mine["sweep"], theirs["sweep"])
+    assert_tables_equal(mine["cells"], theirs["cells"])
+    assert_docs_equal(mine.summary, theirs.summary)
+    cells = mine["cells"]
+    assert list(cells["runs"]) == [4, 4]
+    for i in range(cells.nrows):
+        k, n = cells["lift_off"][i], cells["runs"][i]
+        assert cells["lift_off_lo"][i] <= k / n <= cells["lift_off_hi"][i]
+    one = painleve.sweep(progress=False, **kwargs)
+    assert one.summary["samples"]["seeds"] == 1 and "one sample" in one.summary["samples"]["note"]
+    seed0 = [i for i in range(mine["sweep"].nrows) if mine["sweep"]["seed"][i] == 0]
+    assert [float(mine["sweep"]["theta1_dot_max"][i]) for i in seed0] == [float(x) for x in one["sweep"]["theta1_dot_max"]]
+
+
+def test_seeded_zmax_equals_the_cli(out):
+    kwargs = {"controller": "hybrid", "x0": "d", "tol": 0.01, "duration": 4.0}
+    argv = ["--controller", "hybrid", "--x0", "d", "--tol", "0.01", "--duration", "4", "--seeds", "3"]
+    mine = painleve.zmax(progress=False, seeds=3, **kwargs)
+    cli("zmax", argv, out)
+    theirs = painleve.load(out)
+    assert_tables_equal(mine["zmax_seeds"], theirs["zmax_seeds"])
+    assert_docs_equal(mine.summary, theirs.summary)
+    assert list(mine["zmax_seeds"]["seed"]) == [0, 1, 2]
+    (d,) = mine.summary["distributions"]
+    assert d["seeds"] == 3 and d["z_t_sliding"]["min_m"] <= d["z_t_sliding"]["median_m"] <= d["z_t_sliding"]["max_m"]

@@ -19,6 +19,7 @@ mod bounds;
 mod closed_loop;
 mod closed_loop_friction;
 mod common;
+mod ensemble;
 mod figure_check;
 mod figures;
 mod foxglove_view;

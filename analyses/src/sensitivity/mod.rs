@@ -58,13 +58,25 @@ enum Job {
 
 /// Runs the study from `base` (the sampled setting's scenario and the arm's
 /// parameters: the embedded default unless the caller gives another) at `size`,
-/// in parallel on the current rayon pool; `progress(done, total)` after each job;
-/// `stop` ends it early (an [`AnalysisError::Interrupted`]).
+/// the closed-loop sweeps over `seeds` sensor-noise seeds per belt speed
+/// ([`crate::sweep::ensemble`]; the open loop and the `Z_t,sliding` searches run
+/// once), in parallel on the current rayon pool; `progress(done, total)` after
+/// each job; `stop` ends it early (an [`AnalysisError::Interrupted`]).
 ///
 /// # Errors
-/// [`AnalysisError`] for a base scenario the study cannot use, or when stopped.
-pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Study, AnalysisError> {
+/// [`AnalysisError`] for a base scenario the study cannot use, `seeds` outside
+/// `1..=MAX_SEEDS`, or when stopped.
+pub fn run(
+    base: &Scenario,
+    size: Size,
+    seeds: usize,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Study, AnalysisError> {
     base.validate()?;
+    if !(1..=crate::sweep::ensemble::MAX_SEEDS).contains(&seeds) {
+        return Err(AnalysisError::BadInput(format!("--seeds must be in 1..={}, got {seeds}", crate::sweep::ensemble::MAX_SEEDS)));
+    }
     let grids = size.grids();
     let choices = choices(base);
     for c in &choices {
@@ -83,7 +95,7 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
             });
             open_of[i] = Some(at);
         }
-        let spec = closed_spec(base, &grids, &c.knobs);
+        let spec = SweepSpec { seeds, ..closed_spec(base, &grids, &c.knobs) };
         let at = specs.iter().position(|s| *s == spec).unwrap_or_else(|| {
             specs.push(spec);
             specs.len() - 1
@@ -159,7 +171,7 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
         .map(|(i, choice)| {
             let gap = choice.knobs.lift_off_gap_m;
             let open_loop = open_of[i].map(|s| open_results(&specs[s], &rows[s], gap));
-            let closed_loop = closed_of[i].map(|s| closed_results(&rows[s], gap));
+            let closed_loop = closed_of[i].map(|s| closed_results(&rows[s], gap, seeds));
             // In Combination::all()'s order, as combinations() gives them.
             let zmax = search_of[i].iter().filter_map(|&w| found[w].clone()).collect();
             ChoiceResult { choice, open_loop, zmax, closed_loop }
@@ -173,7 +185,7 @@ pub fn run(base: &Scenario, size: Size, stop: &AtomicBool, progress: &(dyn Fn(u6
     for z in found.iter().flatten() {
         validity.add(&z.validity);
     }
-    Ok(Study { size, grids, defaults: Knobs::default(), results, validity })
+    Ok(Study { size, grids, defaults: Knobs::default(), results, validity, seeds })
 }
 
 /// The `Z_t,sliding` cases a choice enters.

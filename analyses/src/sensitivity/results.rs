@@ -74,6 +74,14 @@ pub struct Zmax {
 /// speeds ended ([`crate::sweep::run::Outcome`]'s closed-loop classes).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClosedLoop {
+    /// Runs per belt speed (the sensor-noise seeds, `--seeds`); the counts below
+    /// are of runs, one per speed and seed.
+    pub seeds: usize,
+    /// The runs that lift off above the lift-off criterion, as a fraction of the
+    /// runs with a result, with its Wilson 95 % interval.
+    pub lift_off: crate::sweep::Proportion,
+    /// The runs that latched the safe state, likewise.
+    pub safe_state: crate::sweep::Proportion,
     /// Whether the tip lifts off above the lift-off criterion at any belt speed.
     pub bounces: bool,
     /// Belt speeds where the tip lifts off in the record window, above the
@@ -141,6 +149,11 @@ impl ClosedLoop {
     /// `not reached k`, `failed k`, each when not 0, then `of n`; `contact, all n`
     /// when every run stayed on the belt at its target.
     pub fn text(&self) -> String {
+        if self.seeds > 1 {
+            // Over the seeds: the fractions with their intervals.
+            let p = |x: &crate::sweep::Proportion| format!("{}/{} [{:.2}, {:.2}]", x.k, x.n, x.lo, x.hi);
+            return format!("lift-off {}, safe state {} ({} seeds)", p(&self.lift_off), p(&self.safe_state), self.seeds);
+        }
         let mut parts = Vec::new();
         if self.lift_off_points > 0 {
             let h = self.highest_lift_off_m.map_or(String::new(), |h| format!(" (up to {} mm)", (h * 1e5).round() / 1e2));
@@ -183,6 +196,9 @@ pub struct Study {
     pub results: Vec<ChoiceResult>,
     /// Validity summed over everything simulated.
     pub validity: Validity,
+    /// Runs per belt speed of the closed-loop sweeps (`--seeds`; the open loop
+    /// and the `Z_t,sliding` searches run once).
+    pub seeds: usize,
 }
 
 /// A flat row of the study's table (`sensitivity.csv`).
@@ -238,6 +254,11 @@ impl Study {
                 push("hybrid_closed_loop_lift_off_speeds".into(), cl.lift_off_points.to_string());
                 push("hybrid_closed_loop_safe_state_speeds".into(), cl.safe_state_points.to_string());
                 push("hybrid_closed_loop_not_reached_speeds".into(), cl.target_not_reached_points.to_string());
+                if cl.seeds > 1 {
+                    push("hybrid_closed_loop_lift_off_fraction".into(), format!("{}", cl.lift_off.fraction));
+                    push("hybrid_closed_loop_lift_off_lo".into(), format!("{}", cl.lift_off.lo));
+                    push("hybrid_closed_loop_lift_off_hi".into(), format!("{}", cl.lift_off.hi));
+                }
             }
         }
         rows
@@ -276,14 +297,18 @@ pub(super) fn open_results(spec: &SweepSpec, rows: &[RunRow], gap: f64) -> OpenL
 }
 
 /// The hybrid closed loop's headline from its runs `rows`, with lift-off gap `gap` (m).
-pub(super) fn closed_results(rows: &[RunRow], gap: f64) -> ClosedLoop {
+pub(super) fn closed_results(rows: &[RunRow], gap: f64, seeds: usize) -> ClosedLoop {
     let mut validity = Validity::default();
     for r in rows {
         validity.add(&r.validity());
     }
     let lifted: Vec<&RunRow> = rows.iter().filter(|r| bounces(r, gap)).collect();
     let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
+    let with_result = rows.iter().filter(|r| r.outcome != Outcome::Invalid).count();
     ClosedLoop {
+        seeds,
+        lift_off: crate::sweep::Proportion::of(lifted.len(), with_result),
+        safe_state: crate::sweep::Proportion::of(count(Outcome::SafeState), with_result),
         bounces: !lifted.is_empty(),
         lift_off_points: lifted.len(),
         highest_lift_off_m: lifted.iter().map(|r| r.tip_height_max).filter(|h| h.is_finite()).reduce(f64::max),

@@ -15,6 +15,8 @@
 //! The sweep's folder (journal, resume, merge) and its figures are the command
 //! line's (`sil-host`'s `sweep` module).
 
+pub mod cells;
+pub mod ensemble;
 pub mod extrema;
 mod outcome;
 pub mod run;
@@ -33,6 +35,7 @@ use plant::initial::{self, PaperX0};
 use plant::moreau_jean::SingularRule;
 use rig::scenario::Scenario;
 
+pub use ensemble::{Draw, Jitter, Proportion};
 pub use shard::{Assignment, Shard};
 
 /// Version of the `sweep.json` layout; a folder of another version is not resumed.
@@ -41,8 +44,9 @@ pub use shard::{Assignment, Shard};
 /// `target_not_reached`) and the `target_error_m` column. Version 4: the `jams`
 /// column (issue 24's dynamic jams, resolved by a tangential impact). Version 5:
 /// the `bouncing` column named for what it is (`theta1_dot_over_threshold`) and
-/// the energy ledger's columns (issue 53).
-pub const FORMAT: u32 = 5;
+/// the energy ledger's columns (issue 53). Version 6: the `seed` column and the
+/// spec's `seeds` and `jitter` (issue 82's ensembles).
+pub const FORMAT: u32 = 6;
 
 /// An evenly spaced axis `start, start + step, ..., stop` (both ends included).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -196,6 +200,14 @@ pub struct SweepSpec {
     /// written only when it is not the default, `leave`).
     #[serde(default, skip_serializing_if = "is_leave")]
     pub singular: SingularRule,
+    /// Runs per grid point and initial condition ([`ensemble`]): seed 0 the
+    /// nominal run, seeds `1..` the sensor noise's next seeds and the [`Jitter`]'s
+    /// draws (written only when not 1).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub seeds: usize,
+    /// The bounds of what seeds `1..` jitter (written only when one is set).
+    #[serde(default, skip_serializing_if = "Jitter::is_none")]
+    pub jitter: Jitter,
 }
 
 /// One initial condition of a sweep.
@@ -213,11 +225,13 @@ pub struct InitialCondition {
     pub height_above_belt: f64,
 }
 
-/// One run: a grid point and an initial condition.
+/// One run: a grid point, an initial condition and a seed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunKey {
     /// Index in the sweep's order (0-based).
     pub index: usize,
+    /// The seed's number (`0..seeds`; [`ensemble::Draw`]).
+    pub seed: usize,
     /// Impact-without-collision rule.
     pub iwc: IwcRule,
     /// Impact law.
@@ -265,6 +279,8 @@ impl SweepSpec {
             params: Params::paper(),
             mu_hat_factor: 1.0,
             singular: SingularRule::Leave,
+            seeds: 1,
+            jitter: Jitter::default(),
         }
     }
 
@@ -301,9 +317,20 @@ impl SweepSpec {
         self.paper_ics.len() + self.random_ics
     }
 
-    /// Number of runs: IWC rules x laws x `e_n` x `mu` x `v_belt` x initial conditions.
+    /// Number of runs: seeds x IWC rules x laws x `e_n` x `mu` x `v_belt` x initial conditions.
     pub fn n_runs(&self) -> usize {
+        self.seeds * self.runs_per_seed()
+    }
+
+    /// Runs of one seed: IWC rules x laws x `e_n` x `mu` x `v_belt` x initial
+    /// conditions (the grid's cells).
+    pub fn runs_per_seed(&self) -> usize {
         self.iwc_rules.len() * self.impact_laws.len() * self.e_n.len() * self.mu.len() * self.v_belt.len() * self.n_ics()
+    }
+
+    /// What seed `k` changes ([`ensemble::Draw::of`] from the spec's `seed` and `jitter`).
+    pub fn draw(&self, k: usize) -> Draw {
+        Draw::of(self.seed, &self.jitter, k)
     }
 
     /// Simulated time of one run, s.
@@ -312,13 +339,17 @@ impl SweepSpec {
     }
 
     /// Run `index` (`< n_runs`): the initial condition varies fastest, then `v_belt`,
-    /// `mu`, `e_n`, the impact law, and the IWC rule slowest (so a sweep with one
-    /// rule numbers its runs as before the rule was a dimension).
+    /// `mu`, `e_n`, the impact law, the IWC rule, and the seed slowest (so a sweep
+    /// with one rule numbers its runs as before the rule was a dimension, and seed
+    /// 0's runs are numbered as a sweep of one seed).
     pub fn run_at(&self, index: usize) -> RunKey {
         let (n_ic, n_v, n_mu, n_e) = (self.n_ics(), self.v_belt.len(), self.mu.len(), self.e_n.len());
         let n_law = self.impact_laws.len();
-        let i_ic = index % n_ic;
-        let r = index / n_ic;
+        let per_seed = self.runs_per_seed();
+        let seed = index / per_seed;
+        let index_in_seed = index % per_seed;
+        let i_ic = index_in_seed % n_ic;
+        let r = index_in_seed / n_ic;
         let i_v = r % n_v;
         let r = r / n_v;
         let i_mu = r % n_mu;
@@ -329,6 +360,7 @@ impl SweepSpec {
         let i_iwc = r / n_law;
         RunKey {
             index,
+            seed,
             iwc: self.iwc_rules[i_iwc],
             impact_law: self.impact_laws[i_law],
             e_n: self.e_n[i_e],
@@ -393,6 +425,56 @@ impl SweepSpec {
         if self.ideal && self.controller == SweepController::None {
             return Err("--ideal needs --controller hybrid or pid".into());
         }
+        if !(1..=ensemble::MAX_SEEDS).contains(&self.seeds) {
+            return Err(format!("--seeds must be in 1..={}, got {}", ensemble::MAX_SEEDS, self.seeds));
+        }
+        self.jitter.check()?;
+        let deterministic = self.controller == SweepController::None || self.ideal;
+        if deterministic && (self.jitter.f_n_ref_n > 0.0 || self.jitter.delay_s > 0.0) {
+            return Err(
+                "--jitter-f-n-ref and --jitter-delay are for the sampled closed loop (--controller hybrid or pid, without --ideal)".into(),
+            );
+        }
+        if deterministic && self.seeds > 1 && self.jitter.mu == 0.0 && self.jitter.start_m == 0.0 {
+            return Err(format!(
+                "--seeds {}: the {} has no noise, so its seeds differ only by their jitter: give --jitter-mu and/or --jitter-start \
+                 (the resolution within which an outcome on a boundary shows, e.g. --jitter-mu 0.001 --jitter-start 1e-4)",
+                self.seeds,
+                if self.ideal { "ideal closed loop" } else { "open loop" }
+            ));
+        }
+        if self.mu.start - self.jitter.mu < 0.0 {
+            return Err(format!("--jitter-mu {} would take mu {} below 0", self.jitter.mu, self.mu.start));
+        }
+        if self.jitter.start_m > 0.0 {
+            for ic in self.initial_conditions() {
+                let tip = shared::kinematics::tip_position(self.params.l, &Vector2::new(ic.x0[0], ic.x0[2]));
+                for sign in [-1.0, 1.0] {
+                    let z = Vector2::new(tip[0] + sign * self.jitter.start_m, -self.params.h);
+                    if inverse_kinematics(self.params.l, &z, ic.branch).is_err() {
+                        return Err(format!(
+                            "--jitter-start {} m moves {}'s tip out of the arm's reach (z_t {:.4} m)",
+                            self.jitter.start_m, ic.name, z[0]
+                        ));
+                    }
+                }
+            }
+        }
+        if let (Some(s), false) = (&self.scenario, self.jitter.f_n_ref_n == 0.0 && self.jitter.delay_s == 0.0) {
+            // The runs' scenarios at the jitter's extremes (the runaway limits off, as the runs have them).
+            for sign in [-1.0, 1.0] {
+                let mut t = s.clone();
+                t.controller.runaway_limits = false;
+                t.controller.f_n_ref += sign * self.jitter.f_n_ref_n;
+                t.timing.delta_s += sign * self.jitter.delay_s;
+                t.validate().map_err(|e| {
+                    format!(
+                        "--jitter-f-n-ref {} N / --jitter-delay {} s take the scenario out of its range: {e}",
+                        self.jitter.f_n_ref_n, self.jitter.delay_s
+                    )
+                })?;
+            }
+        }
         if self.n_runs() > 50_000_000 {
             return Err(format!("{} runs: at most 5e7", self.n_runs()));
         }
@@ -406,6 +488,14 @@ fn unit() -> f64 {
 
 fn is_unit(x: &f64) -> bool {
     *x == 1.0
+}
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(x: &usize) -> bool {
+    *x == 1
 }
 
 fn is_leave(x: &SingularRule) -> bool {

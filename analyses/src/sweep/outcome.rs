@@ -125,6 +125,10 @@ pub struct RunRow {
     pub v_belt: f64,
     /// Initial condition.
     pub ic: String,
+    /// The seed's number (`0..seeds`; [`super::ensemble::Draw`]): 0 is the
+    /// nominal run, the only one of a sweep of one seed.
+    #[serde(default)]
+    pub seed: usize,
     /// [`Outcome`] name.
     pub outcome: Outcome,
     /// The paper's open-loop indicator over its threshold, `theta1_dot_max >
@@ -196,6 +200,7 @@ tables::declare!(RunRow {
     mu: f64,
     v_belt: f64,
     ic: str,
+    seed: int,
     outcome: str,
     theta1_dot_over_threshold: bool,
     theta1_dot_max: f64,

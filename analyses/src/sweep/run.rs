@@ -46,7 +46,10 @@ fn lift_offs(c: &Counters) -> u64 {
 /// Simulates run `key` from initial condition `ic`. Returns `None` when `stop` was
 /// set before the run finished (nothing is recorded for it).
 pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &AtomicBool) -> Option<RunRow> {
-    let params = Params::<f64> { mu: key.mu, v_belt: key.v_belt, ..spec.params };
+    let draw = spec.draw(key.seed);
+    let jittered = jittered_start(spec, ic, draw.d_start_m);
+    let ic = &jittered;
+    let params = Params::<f64> { mu: key.mu + draw.d_mu, v_belt: key.v_belt, ..spec.params };
     let sim = SimConfig {
         rtol: spec.rtol,
         atol: spec.atol,
@@ -64,6 +67,7 @@ pub fn simulate(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition, stop: &At
         mu: key.mu,
         v_belt: key.v_belt,
         ic: ic.name.clone(),
+        seed: key.seed,
         outcome: Outcome::Failed,
         theta1_dot_over_threshold: false,
         theta1_dot_max: f64::NAN,
@@ -243,6 +247,33 @@ fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetu
     }
 }
 
+/// Initial condition `ic` with its tip moved by `d_z_t` m along the belt: the
+/// arm placed on the belt at `z_t + d_z_t` by inverse kinematics at the same
+/// elbow branch, at rest (the sweep's initial conditions are at rest); `ic`
+/// itself for `d_z_t = 0` (and, unchanged, if the moved tip is out of reach,
+/// which [`SweepSpec::validate`]'s bound on the jitter rules out).
+pub fn jittered_start(spec: &SweepSpec, ic: &InitialCondition, d_z_t: f64) -> InitialCondition {
+    if d_z_t == 0.0 {
+        return ic.clone();
+    }
+    let l = spec.params.l;
+    let tip = shared::kinematics::tip_position(l, &nalgebra::Vector2::new(ic.x0[0], ic.x0[2]));
+    let target = nalgebra::Vector2::new(tip[0] + d_z_t, -spec.params.h);
+    match shared::kinematics::inverse_kinematics(l, &target, ic.branch) {
+        Ok(q) => InitialCondition { x0: [q[0], 0.0, q[1], 0.0], height_above_belt: 0.0, ..ic.clone() },
+        Err(_) => ic.clone(),
+    }
+}
+
+/// Applies seed `draw` to a closed-loop scenario: the sensor-noise seed moved by
+/// its offset, `f_n*` and the command delay by theirs (`mu` and the start are
+/// the run's, set by [`closed_loop_scenario`] and [`jittered_start`]).
+pub fn apply_draw(s: &mut Scenario, draw: &super::Draw) {
+    s.sensors.seed = s.sensors.seed.wrapping_add(draw.noise_seed_offset);
+    s.controller.f_n_ref += draw.d_f_n_ref_n;
+    s.timing.delta_s += draw.d_delay_s;
+}
+
 /// The scenario of a closed-loop run: the spec's, with the run's plant (its
 /// `mu`, `v_belt`, impact law, `e_n`, IWC rule, tolerances), the controller asked for, the
 /// firmware's friction estimate `mu_hat = mu` (the paper's controller knows `mu`),
@@ -250,10 +281,14 @@ fn ideal_setup(s: &Scenario, ic: &InitialCondition, sim: SimConfig) -> IdealSetu
 /// paper's `K'_I`: 0 from an elbow-up initial condition, 650 otherwise (the
 /// paper's gains from `x0u` and `x0d`, docs/model.md experiment 6). The arm's
 /// parameters (paper Table I) are the scenario's, which the sweep's spec
-/// records in [`SweepSpec::params`].
+/// records in [`SweepSpec::params`]. The run's seed ([`RunKey::seed`]) adds its
+/// draw: `mu` (and `mu_hat` with it), the noise seed, `f_n*`, the delay ([`apply_draw`]).
 pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialCondition) -> Option<Scenario> {
     let mut s = spec.scenario.clone()?;
-    s.plant.mu = key.mu;
+    let draw = spec.draw(key.seed);
+    let mu = key.mu + draw.d_mu;
+    apply_draw(&mut s, &draw);
+    s.plant.mu = mu;
     s.plant.v_belt = key.v_belt;
     s.plant.impact_law = key.impact_law;
     s.plant.e_n = key.e_n;
@@ -261,7 +296,7 @@ pub fn closed_loop_scenario(spec: &SweepSpec, key: &RunKey, ic: &InitialConditio
     s.plant.rtol = spec.rtol;
     s.plant.atol = spec.atol;
     s.controller.kind = spec.controller.kind()?;
-    s.controller.mu_hat = key.mu * spec.mu_hat_factor;
+    s.controller.mu_hat = mu * spec.mu_hat_factor;
     if s.controller.hybrid.ki.is_none() {
         let x0 = if ic.branch == shared::ElbowBranch::Up { plant::initial::PaperX0::U } else { plant::initial::PaperX0::D };
         s.controller.hybrid.ki = Some(rig::scenario::paper_hybrid_ki(x0));

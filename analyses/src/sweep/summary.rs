@@ -10,6 +10,11 @@
 //! also flags an arm that moves on the belt without leaving it (in closed loop the
 //! controller's answers to sensor noise keep `theta1_dot` near 1e-2 rad/s); those
 //! points are counted separately (`indicator_points`).
+//!
+//! With several seeds per grid point (`--seeds N`, [`super::ensemble`]) a point
+//! counts as bouncing when more than half of its seeds with a valid result do
+//! (and as flagged by the indicator likewise); the fractions and their intervals
+//! are the cells' ([`super::cells`]).
 
 use std::{collections::BTreeMap, io::Write};
 
@@ -158,15 +163,29 @@ pub fn results(spec: &SweepSpec, rows: &[RunRow], missing: usize) -> Results {
             });
         }
     }
-    // flags[case][ic][i_mu][i_v]: Some((persistent bouncing, indicator)) when there is
-    // a valid result (an invalid run counts as no result).
+    // counts[case][ic][i_mu][i_v]: (valid runs, persistent bouncing, indicator) over
+    // the seeds; a grid point's flags are Some((more than half its seeds bounce,
+    // more than half flag the indicator)) when it has a valid result (an invalid
+    // run counts as no result). With one seed, its run's flags.
     let n_cases = spec.iwc_rules.len() * spec.impact_laws.len() * spec.e_n.len();
-    let mut flags = vec![vec![vec![vec![None::<Flags>; vs.len()]; mus.len()]; ics.len()]; n_cases];
+    let mut counts = vec![vec![vec![vec![(0usize, 0usize, 0usize); vs.len()]; mus.len()]; ics.len()]; n_cases];
     for r in rows.iter().filter(|r| r.outcome != Outcome::Invalid) {
         let key = spec.run_at(r.index);
-        let case = r.index / (ics.len() * vs.len() * mus.len());
-        flags[case][key.i_ic][key.i_mu][key.i_v] = Some((r.outcome.is_bouncing(), r.theta1_dot_over_threshold));
+        let case = (r.index % spec.runs_per_seed()) / (ics.len() * vs.len() * mus.len());
+        let c = &mut counts[case][key.i_ic][key.i_mu][key.i_v];
+        *c = (c.0 + 1, c.1 + usize::from(r.outcome.is_bouncing()), c.2 + usize::from(r.theta1_dot_over_threshold));
     }
+    let flags: Vec<Vec<Vec<Vec<Option<Flags>>>>> = counts
+        .iter()
+        .map(|per_ic| {
+            per_ic
+                .iter()
+                .map(|grid| {
+                    grid.iter().map(|row| row.iter().map(|&(n, b, i)| (n > 0).then_some((2 * b > n, 2 * i > n))).collect()).collect()
+                })
+                .collect()
+        })
+        .collect();
     let mut cases = Vec::new();
     for (case, per_ic) in flags.iter().enumerate() {
         let first = spec.run_at(case * ics.len() * vs.len() * mus.len());
@@ -324,6 +343,7 @@ mod tests {
             mu: 0.6,
             v_belt: spec.v_belt.value(index),
             ic: "x0a".into(),
+            seed: 0,
             outcome,
             theta1_dot_over_threshold: true,
             theta1_dot_max: 1.0,
@@ -355,7 +375,7 @@ mod tests {
         // The rows fill their declared columns (the fields serde writes are the declaration's).
         let t = tables::Table::of_rows(&rows).unwrap();
         assert_eq!(t.columns.len(), <RunRow as tables::Declared>::NAMES.len());
-        assert!(matches!(&t.columns[7].1, tables::Column::Str(v) if v[1] == "invalid"), "{:?}", t.columns[7]);
+        assert!(matches!(&t.columns[8].1, tables::Column::Str(v) if v[1] == "invalid"), "{:?}", t.columns[7]);
         let r = results(&spec, &rows, 0);
         assert_eq!(r.invalid.len(), 1);
         assert_eq!((r.invalid[0].index, r.invalid[0].violations.as_str()), (1, "1 friction-cone violation"));

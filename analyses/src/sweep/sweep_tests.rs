@@ -110,9 +110,10 @@ proptest! {
         prop_assert_eq!(Shard { k: 0, n, assignment: Assignment::Modulo }.owner(&s, i), i % n);
     }
 
-    /// Run indices and grid points correspond one to one.
+    /// Run indices and grid points correspond one to one, for every seed; seed
+    /// 0's runs are numbered as the same sweep's with one seed.
     #[test]
-    fn run_index_decodes_every_point_once(n_mu in 1usize..5, n_v in 1usize..7, n_e in 1usize..3, ics in 1usize..4) {
+    fn run_index_decodes_every_point_once(n_mu in 1usize..5, n_v in 1usize..7, n_e in 1usize..3, ics in 1usize..4, seeds in 1usize..4) {
         let s = SweepSpec {
             mu: Axis { start: 0.1, stop: 0.1 * n_mu as f64, step: 0.1 },
             v_belt: Axis { start: -1.0, stop: -1.0 + 0.1 * (n_v - 1) as f64, step: 0.1 },
@@ -121,13 +122,23 @@ proptest! {
             iwc_rules: IwcRule::ALL.to_vec(),
             paper_ics: vec![],
             random_ics: ics,
+            seeds,
+            jitter: crate::sweep::Jitter { mu: 1e-3, ..Default::default() },
             ..SweepSpec::paper()
         };
+        let one = SweepSpec { seeds: 1, ..s.clone() };
         let mut seen = std::collections::HashSet::new();
         for i in 0..s.n_runs() {
             let k = s.run_at(i);
-            prop_assert!(seen.insert((k.iwc, k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
+            prop_assert!(seen.insert((k.seed, k.iwc, k.impact_law.name(), k.e_n.to_bits(), k.i_mu, k.i_v, k.i_ic)));
+            if k.seed == 0 {
+                prop_assert_eq!(k, one.run_at(i));
+            }
         }
-        prop_assert_eq!(seen.len(), 2 * 2 * n_e * n_mu * n_v * ics);
+        prop_assert_eq!(seen.len(), seeds * 2 * 2 * n_e * n_mu * n_v * ics);
+        // Every shard of a balanced deal gets each seed's share to one run.
+        let shard = Shard::parse("1/3").unwrap();
+        let per_seed: Vec<usize> = (0..seeds).map(|q| shard.indices(&s).iter().filter(|&&i| s.run_at(i).seed == q).count()).collect();
+        prop_assert!(per_seed.iter().max().unwrap() - per_seed.iter().min().unwrap() <= 1, "{:?}", per_seed);
     }
 }

@@ -8,6 +8,7 @@
 
 mod closed_loop;
 mod common;
+mod ensemble;
 mod open_loop;
 mod sensitivity;
 mod sweep;
@@ -16,6 +17,7 @@ mod zmax;
 
 pub use self::closed_loop::{FirmwareArgs, PilArgs, QemuLinkArg, RunArgs, RunLink};
 pub use self::common::{LiveArgs, OutputArgs, ScenarioArgs, StrictArgs};
+pub use self::ensemble::EnsembleArgs;
 pub use self::open_loop::{AdmissibleArgs, ModesArgs, PoincareArgs, SimulateArgs};
 pub use self::sensitivity::SensitivityArgs;
 pub use self::sweep::{MergeArgs, SweepArgs};

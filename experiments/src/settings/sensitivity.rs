@@ -26,6 +26,12 @@ pub struct SensitivityArgs {
     /// Worker threads (default: one per core).
     #[cfg_attr(feature = "clap", arg(long))]
     pub threads: Option<usize>,
+    /// Runs per belt speed of the hybrid closed loop's sweeps: sensor-noise
+    /// seeds, its rows then fractions with Wilson 95 % intervals (1: one sample).
+    /// The open loop and the Z_t,sliding searches run once (`zmax --seeds` gives
+    /// Z_t,sliding's spread).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 1, value_name = "N"))]
+    pub seeds: usize,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     #[cfg_attr(feature = "clap", serde(flatten))]

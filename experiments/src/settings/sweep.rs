@@ -32,9 +32,13 @@ pub struct SweepArgs {
     /// ones at every grid point.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 0, value_name = "N"))]
     pub random_ics: usize,
-    /// Seed of the random initial conditions.
+    /// Seed of the random initial conditions (and of the --jitter-* draws).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 1))]
     pub seed: u64,
+    /// Runs per grid point: the seeds and their jitter.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
+    pub ensemble: super::EnsembleArgs,
     /// Transient before the record window, s.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = 250.0))]
     pub transient: f64,

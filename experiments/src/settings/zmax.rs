@@ -65,6 +65,11 @@ pub struct ZmaxArgs {
     /// plant settings from it. Default: the embedded default scenario.
     #[cfg_attr(feature = "clap", arg(long, value_name = "FILE.toml"))]
     pub scenario: Option<PathBuf>,
+    /// The sampled searches over sensor-noise seeds (each seed its own bisection):
+    /// `Z_t,sliding` as a distribution. --jitter-mu and --jitter-start are for sweeps.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    #[cfg_attr(feature = "clap", serde(flatten))]
+    pub ensemble: super::EnsembleArgs,
     /// Exit status on model violations.
     #[cfg_attr(feature = "clap", command(flatten))]
     #[cfg_attr(feature = "clap", serde(flatten))]

@@ -113,6 +113,8 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         params,
         mu_hat_factor: 1.0,
         singular: args.singular,
+        seeds: args.ensemble.seeds,
+        jitter: args.ensemble.jitter(),
     };
     spec.validate().map_err(CliError::bad_input)?;
     Ok(spec)

@@ -222,6 +222,15 @@ pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
 /// # Errors
 /// [`CliError::Io`].
 pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), CliError> {
+    write_table(path, rows)
+}
+
+/// Writes `rows` as CSV (serde's columns, a header line) to `path`, through a
+/// temporary file renamed over it.
+///
+/// # Errors
+/// [`CliError::Io`].
+pub fn write_table<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), CliError> {
     let tmp = path.with_file_name(format!(".{}.partial", path.file_name().and_then(|n| n.to_str()).unwrap_or("rows.csv")));
     {
         // Made new, never through a link left at its name (rig::private_files).

@@ -3,7 +3,11 @@
 //! invocation's timing.
 
 use super::store::Manifest;
-use analyses::sweep::{InitialCondition, Shard, SweepSpec, summary::Results};
+use analyses::sweep::{
+    Draw, InitialCondition, Shard, SweepController, SweepSpec,
+    cells::{self, CellRow, MuFractions},
+    summary::Results,
+};
 use serde::Serialize;
 
 /// The paper's experiment 3: 10 x 181 grid points, two initial conditions, 300 s each.
@@ -68,14 +72,81 @@ pub struct SweepSummary {
     pub projection_note: &'static str,
     /// Where `theta1_dot_max` and `z_n_max` come from.
     pub maxima_note: &'static str,
+    /// What each cell's result is drawn from: one sample, or the seeds' fractions.
+    pub samples: Samples,
     /// Critical `mu`, bands and outcome counts.
     pub results: Results,
+    /// With several seeds per cell: the fractions per `mu` and the undecided cells
+    /// (every cell is in `cells.csv`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<EnsembleResults>,
     /// This invocation's timing (`None` for a merge).
     pub timing: Option<Timing>,
     /// Runs whose row was already in the journal when this invocation started.
     pub resumed_runs: usize,
     /// Files written.
     pub files: Vec<String>,
+}
+
+/// What each cell's result is drawn from (`summary.json`'s `samples`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Samples {
+    /// Runs per cell.
+    pub seeds: usize,
+    /// The jitter of seeds 1.. in words (`none`).
+    pub jitter: String,
+    /// What that means for reading the results.
+    pub note: String,
+    /// What each seed changed (seed 0: nothing).
+    pub draws: Vec<Draw>,
+}
+
+impl Samples {
+    /// The samples of `spec`.
+    pub fn of(spec: &SweepSpec) -> Self {
+        let sampled = spec.controller != SweepController::None && !spec.ideal;
+        let noise = spec.scenario.as_ref().map_or(0, |s| s.sensors.seed);
+        let note = match (spec.seeds, sampled) {
+            (1, true) => format!(
+                "one sample per cell: the sampled loop is a random process (its sensor noise, seed {noise}, decides the outcome                  where the loop saturates; docs/results.md); --seeds N gives each cell's fraction with its Wilson 95 % interval"
+            ),
+            (1, false) => "one run per cell: this loop has no noise; --seeds N with --jitter-mu or --jitter-start marks the cells                            whose outcome changes within that resolution"
+                .into(),
+            (n, true) => format!(
+                "{n} runs per cell: sensor-noise seeds {noise} to {} and the jitter above; each cell's fractions with their Wilson                  95 % intervals in cells.csv; a grid point counts as bouncing in the bands when more than half its seeds do",
+                noise.wrapping_add(n as u64 - 1)
+            ),
+            (n, false) => format!(
+                "{n} runs per cell, differing by the jitter above only (this loop has no noise); a cell whose runs disagree sits                  on a boundary within that resolution (cells.csv `boundary`); a grid point counts as bouncing in the bands when                  more than half its runs do"
+            ),
+        };
+        Self { seeds: spec.seeds, jitter: spec.jitter.describe(), note, draws: (0..spec.seeds).map(|k| spec.draw(k)).collect() }
+    }
+}
+
+/// `summary.json`'s `ensemble`: the cells over their seeds.
+#[derive(Debug, Clone, Serialize)]
+pub struct EnsembleResults {
+    /// Per `mu` (all its cells pooled): the fractions that lift off, stop safe, keep contact.
+    pub per_mu: Vec<MuFractions>,
+    /// Cells whose lift-off interval holds one half.
+    pub undecided: Vec<CellRow>,
+    /// Cells whose seeds disagree.
+    pub boundary_cells: usize,
+    /// Cells.
+    pub cells: usize,
+}
+
+impl EnsembleResults {
+    /// The ensemble results of `cells`.
+    pub fn of(cells: &[CellRow]) -> Self {
+        Self {
+            per_mu: cells::per_mu(cells),
+            undecided: cells.iter().filter(|c| c.undecided).cloned().collect(),
+            boundary_cells: cells.iter().filter(|c| c.boundary).count(),
+            cells: cells.len(),
+        }
+    }
 }
 
 /// How the initial conditions are treated (in `summary.json`).
@@ -100,7 +171,8 @@ pub fn cpu_seconds() -> f64 {
 
 /// `summary.json` of the sweep `m` from its `results` (with `missing` runs not
 /// in its folder), this invocation's `timing` (`None` for a merge), the runs
-/// `resumed` from the journal, whether it was `interrupted`, and the `files` written.
+/// `resumed` from the journal, whether it was `interrupted`, the `files`
+/// written and, with several seeds, its `cells`.
 pub fn summary_of(
     m: &Manifest,
     results: Results,
@@ -109,6 +181,7 @@ pub fn summary_of(
     resumed: usize,
     interrupted: bool,
     files: Vec<String>,
+    cells: Option<&[CellRow]>,
 ) -> SweepSummary {
     SweepSummary {
         status: if interrupted {
@@ -123,7 +196,9 @@ pub fn summary_of(
         initial_conditions: m.spec.initial_conditions(),
         projection_note: PROJECTION_NOTE,
         maxima_note: MAXIMA_NOTE,
+        samples: Samples::of(&m.spec),
         results,
+        ensemble: cells.map(EnsembleResults::of),
         timing,
         resumed_runs: resumed,
         files,

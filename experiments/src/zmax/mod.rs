@@ -71,8 +71,34 @@ pub struct Plan {
     pub base: Scenario,
     /// The trial's criteria.
     pub criteria: Criteria,
-    /// The searches: each case with its bracket of targets, m.
+    /// The searches: each case with its bracket of targets, m (seed 0, the nominal ones).
     pub jobs: Vec<(Combination, (f64, f64))>,
+    /// With `--seeds N`: the sampled cases' searches at seeds `1..N`, each as the
+    /// index of its case in `jobs` and its seed ([`analyses::sweep::Draw`]).
+    pub seeded: Vec<(usize, usize)>,
+    /// Seeds per sampled case (1: the nominal search only).
+    pub seeds: usize,
+    /// The jitter of seeds `1..` (`f_n*` and the delay only).
+    pub jitter: analyses::sweep::Jitter,
+}
+
+impl Plan {
+    /// Every search to run: the nominal ones (`jobs`), then the seeded ones, each
+    /// with its scenario (seed `k`'s noise seed, `f_n*` and delay), case and bracket.
+    pub fn searches(&self) -> Vec<(Scenario, Combination, (f64, f64))> {
+        let nominal = self.jobs.iter().map(|&(c, b)| (self.base.clone(), c, b));
+        let seeded = self.seeded.iter().map(|&(j, k)| {
+            let mut s = self.base.clone();
+            analyses::sweep::run::apply_draw(&mut s, &analyses::sweep::Draw::of(self.base.sensors.seed, &self.jitter, k));
+            (s, self.jobs[j].0, self.jobs[j].1)
+        });
+        nominal.chain(seeded).collect()
+    }
+
+    /// The most trials the searches can take (the progress bar's length).
+    pub fn max_trials(&self, tol: f64) -> u64 {
+        self.searches().iter().map(|(_, _, b)| u64::from(max_trials(b.0, b.1, tol))).sum()
+    }
 }
 
 /// Checks `sil-host zmax`'s options and every case's set-up (the sampled
@@ -98,6 +124,31 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
     for c in &combos {
         analyses::zmax::check_x0(c.x0)?;
     }
+    let e = &args.ensemble;
+    if !(1..=analyses::sweep::ensemble::MAX_SEEDS).contains(&e.seeds) {
+        return Err(CliError::bad_input(format!("--seeds must be in 1..={}, got {}", analyses::sweep::ensemble::MAX_SEEDS, e.seeds)));
+    }
+    let jitter = e.jitter();
+    jitter.check().map_err(CliError::bad_input)?;
+    if jitter.mu > 0.0 || jitter.start_m > 0.0 {
+        return Err(CliError::bad_input(
+            "zmax: --jitter-mu and --jitter-start are for sweeps; its seeds move the sensor noise, --jitter-f-n-ref and --jitter-delay",
+        ));
+    }
+    if e.seeds > 1 && combos.iter().all(|c| c.setting == Setting::Ideal) {
+        return Err(CliError::bad_input("--seeds: the ideal setting has no noise (exact measurements); seeds are for the sampled one"));
+    }
+    for sign in [-1.0, 1.0] {
+        let mut t = base.clone();
+        t.controller.f_n_ref += sign * jitter.f_n_ref_n;
+        t.timing.delta_s += sign * jitter.delay_s;
+        t.validate().map_err(|err| {
+            CliError::bad_input(format!(
+                "--jitter-f-n-ref {} N / --jitter-delay {} s take the scenario out of its range: {err}",
+                jitter.f_n_ref_n, jitter.delay_s
+            ))
+        })?;
+    }
     let mut jobs = Vec::new();
     for combo in combos {
         let bracket = match &args.bracket {
@@ -108,7 +159,10 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
         analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::from)?;
         jobs.push((combo, bracket));
     }
-    Ok(Plan { base, criteria, jobs })
+    let seeded = (1..e.seeds)
+        .flat_map(|k| jobs.iter().enumerate().filter(|(_, (c, _))| c.setting == Setting::Sampled).map(move |(j, _)| (j, k)))
+        .collect();
+    Ok(Plan { base, criteria, jobs, seeded, seeds: e.seeds, jitter })
 }
 
 /// The rows of `trials.csv`: every trial of every search, in order.
@@ -136,7 +190,18 @@ const TRIAL_KEYS: [(&str, &str); 4] = [
 /// `summary.json` (with `zmax.csv`'s rows) of the `searches` of `plan`, which
 /// took `wall_s` s.
 pub fn summary(args: &ZmaxArgs, plan: Plan, searches: &[Search], wall_s: f64) -> ZmaxSummary {
+    let n = plan.jobs.len().min(searches.len());
+    let (nominal, seeded) = searches.split_at(n);
+    let seed_rows: Vec<SeedRow> = nominal
+        .iter()
+        .filter(|s| plan.seeds > 1 && s.combination.setting == Setting::Sampled)
+        .map(|s| SeedRow::of(0, s))
+        .chain(plan.seeded.iter().zip(seeded).map(|(&(_, k), s)| SeedRow::of(k, s)))
+        .collect();
+    let distributions = ZmaxDistribution::of_rows(&seed_rows, plan.seeds);
+    let samples = samples_note(&plan);
     let Plan { base, criteria, .. } = plan;
+    let searches = nominal;
     let rows: Vec<ZmaxRow> = searches
         .iter()
         .map(|s| ZmaxRow::of(s, p_zero_end(&base, s.combination.x0, s.bracket), theta1_fold(s.combination.x0, s.bracket)))
@@ -156,13 +221,40 @@ pub fn summary(args: &ZmaxArgs, plan: Plan, searches: &[Search], wall_s: f64) ->
             hybrid_ki_x0d: base.controller.hybrid_ki(PaperX0::D),
             hybrid_ki_x0u: base.controller.hybrid_ki(PaperX0::U),
         },
+        validity: {
+            let mut v = trials_validity(searches);
+            v.add(&trials_validity(seeded));
+            v
+        },
         base_scenario: base,
-        validity: trials_validity(searches),
+        samples,
+        seeds: seed_rows,
+        distributions,
         wall_s,
     }
 }
 
-/// Runs every search of `plan` in parallel (rayon's global pool), calling
+/// What the sampled searches' results are drawn from (`summary.json`'s `samples`).
+fn samples_note(plan: &Plan) -> String {
+    let noise = plan.base.sensors.seed;
+    if plan.seeds == 1 {
+        format!(
+            "one sample: the sampled searches run at sensor-noise seed {noise} (a sampled trial near its limit may lift off at one seed \
+             and not at another); --seeds N bisects once per seed and gives Z_t,sliding's median and spread"
+        )
+    } else {
+        format!(
+            "{} seeds per sampled case: sensor-noise seeds {noise} to {} (jitter: {}), one bisection per seed; `results` holds seed 0's, \
+             `distributions` the spread over the seeds; the ideal cases have no noise (one search)",
+            plan.seeds,
+            noise.wrapping_add(plan.seeds as u64 - 1),
+            plan.jitter.describe()
+        )
+    }
+}
+
+/// Runs every search of `plan` ([`Plan::searches`]: the nominal ones in `jobs`'
+/// order, then the seeded ones) in parallel (rayon's global pool), calling
 /// `progress` with the number of trials done (a search that ends early, a
 /// bracket end deciding, reports the trials it did not need); a search stopped by
 /// `stop` ends with [`analyses::AnalysisError::Interrupted`].
@@ -175,10 +267,11 @@ pub fn run_searches(
     stop: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Search>, analyses::AnalysisError> {
-    plan.jobs
+    plan.searches()
         .par_iter()
-        .map(|&(combo, bracket)| {
-            let s = search_until(&plan.base, combo, bracket, tol, &plan.criteria, stop, |_| progress(1));
+        .map(|(base, combo, bracket)| {
+            let (combo, bracket) = (*combo, *bracket);
+            let s = search_until(base, combo, bracket, tol, &plan.criteria, stop, |_| progress(1));
             if let Ok(s) = &s {
                 progress(u64::from(max_trials(bracket.0, bracket.1, tol)).saturating_sub(s.trials.len() as u64));
             }

@@ -132,8 +132,195 @@ pub struct ZmaxSummary {
     /// The gains of every trial (paper eqs. 8 to 11), `K'_I` resolved per
     /// initial condition.
     pub gains: ZmaxGains,
+    /// What the sampled results are drawn from: one noise seed, or several.
+    pub samples: String,
+    /// With `--seeds N`: every sampled case's search per seed (`zmax_seeds.csv`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub seeds: Vec<SeedRow>,
+    /// With `--seeds N`: `Z_t,sliding` and the tracking limit of each sampled case
+    /// over its seeds.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub distributions: Vec<ZmaxDistribution>,
     /// Wall-clock time of the whole command, s.
     pub wall_s: f64,
+}
+
+/// One row of `zmax_seeds.csv`: a sampled case's search at one seed.
+#[derive(Debug, Clone, Serialize)]
+pub struct SeedRow {
+    /// `pid` or `hybrid`.
+    pub controller: ControllerKind,
+    /// `d` or `u`.
+    pub x0: PaperX0,
+    /// `sampled`.
+    pub setting: Setting,
+    /// The seed (`0..N`; 0 is `results`' search).
+    pub seed: usize,
+    /// The lift-off bisection: `found`, `lower_fails` or `upper_reached`.
+    pub outcome: &'static str,
+    /// `Z_t,sliding` at this seed, m (empty when the lower end fails).
+    pub z_t_sliding_m: Option<f64>,
+    /// `max |z_t - z_t*|` over the settle window of this seed's trial at its
+    /// `Z_t,sliding`, m (the noise moves it even where the limit stays).
+    pub error_at_limit_m: Option<f64>,
+    /// Smallest target found that the tip does not slide to, m.
+    pub first_failing_m: Option<f64>,
+    /// That trial's stop reason.
+    pub stop_failing: Option<StopReason>,
+    /// The tracking limit at this seed, m.
+    pub z_t_tracking_m: Option<f64>,
+    /// Trials run.
+    pub trials: u32,
+}
+
+// `zmax_seeds.csv`: the columns serde writes, declared (CSV reader, Arrow schema, Python).
+tables::declare!(SeedRow {
+    controller: str,
+    x0: str,
+    setting: str,
+    seed: int,
+    outcome: str,
+    z_t_sliding_m: f64,
+    error_at_limit_m: f64,
+    first_failing_m: f64,
+    stop_failing: str,
+    z_t_tracking_m: f64,
+    trials: int,
+});
+
+impl SeedRow {
+    /// The row of search `s` at seed `seed`.
+    pub fn of(seed: usize, s: &Search) -> Self {
+        let c = s.combination;
+        Self {
+            controller: c.controller,
+            x0: c.x0,
+            setting: c.setting,
+            seed,
+            outcome: s.bisection.outcome_name(),
+            z_t_sliding_m: s.z_t_sliding,
+            error_at_limit_m: s.z_t_sliding.and_then(|z| s.trial_at(z)).map(|t| t.settle_error_m),
+            first_failing_m: match s.bisection {
+                Bisection::Found { hi, .. } => Some(hi),
+                _ => None,
+            },
+            stop_failing: s.failing_trial(&s.bisection).map(|t| t.stop),
+            z_t_tracking_m: s.z_t_tracking,
+            trials: s.trials.len() as u32,
+        }
+    }
+}
+
+/// Quantiles of a limit over the seeds, m: the values ordered with "none" (the
+/// lower end of the bracket already fails) below every target; a quantile that
+/// lands on "none" is `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Spread {
+    /// Smallest.
+    pub min_m: Option<f64>,
+    /// Lower quartile.
+    pub q1_m: Option<f64>,
+    /// Median.
+    pub median_m: Option<f64>,
+    /// Upper quartile.
+    pub q3_m: Option<f64>,
+    /// Largest.
+    pub max_m: Option<f64>,
+    /// Seeds with no limit (the lower end fails).
+    pub none: usize,
+}
+
+impl Spread {
+    /// The spread of `values` (one per seed; non-empty), quantiles by the nearest
+    /// rank on the sorted values (`rank = ceil(q n)`, the median of an even count the
+    /// lower middle one, a value some seed gave).
+    pub fn of(values: &[Option<f64>]) -> Self {
+        let mut v: Vec<Option<f64>> = values.to_vec();
+        v.sort_by(|a, b| match (a, b) {
+            (None, None) => std::cmp::Ordering::Equal,
+            (None, Some(_)) => std::cmp::Ordering::Less,
+            (Some(_), None) => std::cmp::Ordering::Greater,
+            (Some(x), Some(y)) => x.total_cmp(y),
+        });
+        let n = v.len();
+        let at = |q: f64| if n == 0 { None } else { v[((q * n as f64).ceil() as usize).clamp(1, n) - 1] };
+        Self {
+            min_m: at(0.0),
+            q1_m: at(0.25),
+            median_m: at(0.5),
+            q3_m: at(0.75),
+            max_m: at(1.0),
+            none: v.iter().filter(|x| x.is_none()).count(),
+        }
+    }
+
+    /// `median [q1, q3], min..max` in mm-resolved metres, e.g. `0.1523 [0.1490, 0.1531], 0.1402..0.1540 m`.
+    pub fn describe(&self) -> String {
+        let t = |x: Option<f64>| x.map_or("none".to_string(), |v| format!("{v:.4}"));
+        format!("{} [{}, {}], {}..{} m", t(self.median_m), t(self.q1_m), t(self.q3_m), t(self.min_m), t(self.max_m))
+    }
+}
+
+/// A sampled case's limits over its seeds (`summary.json`'s `distributions`).
+#[derive(Debug, Clone, Serialize)]
+pub struct ZmaxDistribution {
+    /// `pid` or `hybrid`.
+    pub controller: ControllerKind,
+    /// `d` or `u`.
+    pub x0: PaperX0,
+    /// `sampled`.
+    pub setting: Setting,
+    /// Seeds.
+    pub seeds: usize,
+    /// `Z_t,sliding` over the seeds.
+    pub z_t_sliding: Spread,
+    /// The tracking limit over the seeds.
+    pub z_t_tracking: Spread,
+}
+
+impl ZmaxDistribution {
+    /// One per sampled case of `rows` (in their order of first appearance) when
+    /// `seeds > 1`; none otherwise.
+    pub fn of_rows(rows: &[SeedRow], seeds: usize) -> Vec<Self> {
+        if seeds <= 1 {
+            return Vec::new();
+        }
+        let mut out: Vec<Self> = Vec::new();
+        for r in rows {
+            if out.iter().any(|d| (d.controller, d.x0) == (r.controller, r.x0)) {
+                continue;
+            }
+            let of: Vec<&SeedRow> = rows.iter().filter(|x| (x.controller, x.x0) == (r.controller, r.x0)).collect();
+            let sliding: Vec<Option<f64>> = of.iter().map(|x| x.z_t_sliding_m).collect();
+            let tracking: Vec<Option<f64>> = of.iter().map(|x| x.z_t_tracking_m).collect();
+            out.push(Self {
+                controller: r.controller,
+                x0: r.x0,
+                setting: r.setting,
+                seeds: of.len(),
+                z_t_sliding: Spread::of(&sliding),
+                z_t_tracking: Spread::of(&tracking),
+            });
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod spread_tests {
+    use super::Spread;
+
+    /// Nearest-rank quantiles: of 1..=8 the median is 4, the quartiles 2 and 6;
+    /// "none" sorts below every value.
+    #[test]
+    fn nearest_rank_quantiles() {
+        let v: Vec<Option<f64>> = (1..=8).map(|i| Some(f64::from(i))).collect();
+        let s = Spread::of(&v);
+        assert_eq!((s.min_m, s.q1_m, s.median_m, s.q3_m, s.max_m, s.none), (Some(1.0), Some(2.0), Some(4.0), Some(6.0), Some(8.0), 0));
+        let s = Spread::of(&[Some(0.2), None, None, Some(0.1)]);
+        assert_eq!((s.min_m, s.median_m, s.max_m, s.none), (None, None, Some(0.2), 2));
+        assert_eq!(Spread::of(&[Some(0.3)]).median_m, Some(0.3));
+    }
 }
 
 /// What a trial is and what counts as sliding (in `summary.json`).

@@ -29,6 +29,13 @@ pub struct ReportArgs {
     /// `figures/` beside it; other files in that `figures/` are removed.
     #[arg(long, value_name = "FILE.md")]
     pub results: Option<PathBuf>,
+    /// Runs per cell of the sampled closed loop's experiments (the hybrid sweep and
+    /// its saturation edge, the sampled Z_t,sliding, the sensitivity study's
+    /// closed-loop rows): sensor-noise seeds, each result then a fraction with its
+    /// Wilson 95 % interval (the sampled loop is a random process where it
+    /// saturates). 1: one sample, as a single run of each command gives.
+    #[arg(long, default_value_t = 16, value_name = "N")]
+    pub seeds: usize,
     /// Exit status on model violations in any experiment.
     #[command(flatten)]
     pub strict: StrictArgs,

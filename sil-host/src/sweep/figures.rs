@@ -1,6 +1,9 @@
 //! The sweep's figures (plotters, SVG), one pair per impact law and `e_n`:
 //! - `map_<law>_e<e_n>.svg`: the `(v_belt, mu)` plane, one panel per initial
 //!   condition, each grid cell coloured by the run's outcome (paper Figs. 3 and 9);
+//!   with several seeds per cell (`--seeds N`), shaded by the fraction of its
+//!   seeds that lift off, a ring on each undecided cell (a Wilson 95 %
+//!   interval holds one half; [`draw_probability_map`]);
 //! - `slices_<law>_e<e_n>.svg`: per `mu`, the indicator `max theta1_dot` over the
 //!   record window against `v_belt`, one curve per initial condition, with the
 //!   threshold.
@@ -23,6 +26,7 @@ use crate::{
 };
 use analyses::sweep::{
     SweepSpec,
+    cells::CellRow,
     run::{Outcome, RunRow},
 };
 
@@ -112,6 +116,78 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
     plot::finish(root, path, print).map_err(|e| err(&e).into())
 }
 
+/// The shade of a lift-off fraction `p` in [0, 1]: the contact tint at 0, the
+/// bouncing red at 1, linear in between (NaN: the failed grey).
+pub fn fraction_color(p: f64) -> RGBColor {
+    if !p.is_finite() {
+        return colors::LIGHT_GREY;
+    }
+    let (a, b) = (outcome_color(Outcome::Contact), colors::RED);
+    let mix = |x: u8, y: u8| (f64::from(x) + (f64::from(y) - f64::from(x)) * p.clamp(0.0, 1.0)).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Draws the lift-off probability map of the case `(law, e_n)` from its `cells`
+/// (each grid point and initial condition over its seeds) into `path`: each cell
+/// shaded by the fraction of its seeds that lift off ([`fraction_color`]; "lift
+/// off" is the open loop's persistent bouncing or the closed loop's lift-off), a
+/// black ring on each undecided cell (the Wilson 95 % interval of its lift-off
+/// or its contact fraction holds one half: its seeds do not decide it).
+///
+/// # Errors
+/// [`CliError::Plot`].
+pub fn draw_probability_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, cells: &[&CellRow]) -> Result<(), CliError> {
+    let err = plot_err(path);
+    let ics = spec.initial_conditions();
+    let cols = ics.len().min(3);
+    let grid_rows = ics.len().div_ceil(cols);
+    let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
+    let undecided = cells.iter().filter(|c| c.undecided).count();
+    let mut entries: Vec<(String, Swatch)> =
+        [0.0, 0.25, 0.5, 0.75, 1.0].iter().map(|&p| (format!("{:.0} % lift off", p * 100.0), Swatch::Box(fraction_color(p)))).collect();
+    entries.push((
+        format!("undecided: a 95 % interval holds 1/2 ({undecided} cell{})", if undecided == 1 { "" } else { "s" }),
+        Swatch::Ring(BLACK),
+    ));
+    let legend = Legend::new(entries);
+    let title = format!(
+        "Lift-off fraction over {} seeds per cell, ({BELT_SPEED}, {MU}){}, {} ({law}, {E_N} = {e_n})",
+        spec.seeds,
+        paper_figure(spec),
+        controller_label(spec)
+    );
+    let panel_h = if cols == 3 { 360 } else { 420 };
+    let (root, panels_area) = plot::titled_canvas(path, print, &title, Some(&legend), panel_h * grid_rows as u32).map_err(|e| err(&e))?;
+    let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
+    let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
+    let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
+    let y_range = (mus[0] - dmu)..(mus[mus.len() - 1] + dmu);
+    for (i, area) in panels_area.split_evenly((grid_rows, cols)).iter().enumerate().take(ics.len()) {
+        let ic = &ics[i];
+        let caption = format!("from {} (elbow {})", ic.name, ic.branch.name());
+        let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(MU, "-"));
+        let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: &x_desc, y_desc: &y_desc };
+        let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
+        let mut of_ic: Vec<&&CellRow> = cells.iter().filter(|c| c.ic == ic.name).collect();
+        of_ic.sort_by(|a, b| a.mu.total_cmp(&b.mu).then(a.v_belt.total_cmp(&b.v_belt)));
+        let (v_last, mu_last) = (vs[vs.len() - 1], mus[mus.len() - 1]);
+        // As the outcome map: each cell reaching a quarter of a cell into its
+        // right and upper neighbours, drawn after it (no hairline seams).
+        let rects = of_ic.iter().map(|c| {
+            let right = if c.v_belt < v_last { 0.5 * dv } else { 0.0 };
+            let up = if c.mu < mu_last { 0.5 * dmu } else { 0.0 };
+            Rectangle::new(
+                [(c.v_belt - dv, c.mu - dmu), (c.v_belt + dv + right, c.mu + dmu + up)],
+                fraction_color(c.lift_off_fraction).filled(),
+            )
+        });
+        chart.draw_series(rects).map_err(|e| err(&e))?;
+        let rings = of_ic.iter().filter(|c| c.undecided).map(|c| Circle::new((c.v_belt, c.mu), 4, BLACK.stroke_width(2)));
+        chart.draw_series(rings).map_err(|e| err(&e))?;
+    }
+    plot::finish(root, path, print).map_err(|e| err(&e).into())
+}
+
 fn half_step(a: &analyses::sweep::Axis) -> f64 {
     if a.len() > 1 { 0.5 * a.step } else { 0.05_f64.max(a.start.abs() * 0.05) }
 }
@@ -195,7 +271,14 @@ pub fn draw_slices(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&
                 .map(|r| (r.v_belt, log(r.theta1_dot_max)))
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1))).map_err(|e| err(&e))?;
+            // The curve through the nominal runs (seed 0); a marker for every seed.
+            let mut nominal: Vec<(f64, f64)> = at_mu
+                .iter()
+                .filter(|r| r.ic == ic.name && r.seed == 0 && r.theta1_dot_max.is_finite())
+                .map(|r| (r.v_belt, log(r.theta1_dot_max)))
+                .collect();
+            nominal.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart.draw_series(LineSeries::new(nominal.iter().copied(), color.stroke_width(1))).map_err(|e| err(&e))?;
             match i % 3 {
                 0 => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 5, color.stroke_width(2)))),
                 1 => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 2, color.filled()))),

@@ -112,6 +112,37 @@ pub(crate) fn validity_cell(v: &plant::Validity) -> String {
     if why.is_empty() { line } else { format!("{line}; {}", why.join("; ")) }
 }
 
+/// The sweep's cells over their seeds: per `mu`, the fractions of all its runs
+/// that lift off, stop in a safe state, keep contact, with their Wilson 95 %
+/// intervals, and the cells the seeds leave undecided.
+pub(crate) fn ensemble(md: &mut String, s: &SweepSummary, e: &crate::commands::sweep::EnsembleResults) {
+    let mu_step = s.spec.mu.step;
+    let _ = writeln!(
+        md,
+        "Over the seeds ({} per cell; jitter: {}): the runs at each `mu` (every belt speed and seed) that lift off, stop in a safe \
+         state or keep contact, as fractions with their Wilson 95 % intervals; a cell is undecided when the interval of its lift-off or \
+         its contact fraction holds one half:\n",
+        s.samples.seeds, s.samples.jitter
+    );
+    let _ =
+        writeln!(md, "| mu | lift off | safe state | contact | undecided cells | cells whose seeds disagree |\n|---|---|---|---|---|---|");
+    for m in &e.per_mu {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} of {} | {} of {} |",
+            on_grid(m.mu, mu_step),
+            m.lift_off.describe(),
+            m.safe_state.describe(),
+            m.contact.describe(),
+            m.undecided_cells,
+            m.cells,
+            m.boundary_cells,
+            m.cells
+        );
+    }
+    md.push('\n');
+}
+
 pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
     let r = &s.results;
     let outcomes: Vec<String> = r.outcomes.iter().map(|(k, v)| format!("{k} {v}")).collect();
@@ -125,8 +156,12 @@ pub(crate) fn sweep(md: &mut String, s: &SweepSummary) {
             ("dynamic jams (tangential impacts)", r.jams.to_string()),
             ("indicator threshold (rad/s)", given(r.threshold)),
             ("rtol, atol", format!("{}, {}", given(s.spec.rtol), given(s.spec.atol))),
+            ("runs per cell", s.samples.note.clone()),
         ],
     );
+    if let Some(e) = &s.ensemble {
+        ensemble(md, s, e);
+    }
     if !r.invalid.is_empty() {
         let _ = writeln!(md, "Runs that violate the model (outcome `invalid`, left out of the bands below):\n");
         let _ = writeln!(
@@ -267,6 +302,36 @@ pub(crate) fn zmax(md: &mut String, z: &ZmaxSummary) {
         given(z.criteria.duration_s),
         z.paper
     );
+    let _ = writeln!(md, "Samples: {}.\n", z.samples);
+    if !z.distributions.is_empty() {
+        let _ = writeln!(
+            md,
+            "Over the seeds (the sampled cases; one bisection per seed; \"none\": the bracket's lower end already fails):\n\n\
+             | controller | x0 | seeds | Z_t,sliding median (m) | quartiles (m) | range (m) | seeds with none | tracking limit median (m) | range (m) |\n\
+             |---|---|---|---|---|---|---|---|---|"
+        );
+        let m = |x: Option<f64>| x.map_or("none".to_string(), |v| located(v, tol));
+        for d in &z.distributions {
+            let (a, b) = (&d.z_t_sliding, &d.z_t_tracking);
+            let _ = writeln!(
+                md,
+                "| {} | x0{} | {} | {} | {} to {} | {} to {} | {} | {} | {} to {} |",
+                d.controller,
+                d.x0,
+                d.seeds,
+                m(a.median_m),
+                m(a.q1_m),
+                m(a.q3_m),
+                m(a.min_m),
+                m(a.max_m),
+                a.none,
+                m(b.median_m),
+                m(b.min_m),
+                m(b.max_m)
+            );
+        }
+        md.push('\n');
+    }
     let _ = writeln!(md, "Validity over every trial: {}.\n", validity_cell(&z.validity));
 }
 

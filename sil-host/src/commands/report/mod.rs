@@ -63,6 +63,7 @@ struct StepJson<'a> {
 #[derive(Debug, Serialize)]
 struct ReportIndex<'a> {
     size: &'static str,
+    seeds: usize,
     stamp: &'a Stamp,
     wall_s: f64,
     failed: usize,
@@ -80,7 +81,10 @@ struct ReportIndex<'a> {
 pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     let scenarios = scenario_dir()
         .ok_or_else(|| CliError::bad_input("cannot find the scenarios/ folder: run `sil-host report` from the repository root"))?;
-    let sections = sections::sections(args.size, &scenarios);
+    if !(1..=analyses::sweep::ensemble::MAX_SEEDS).contains(&args.seeds) {
+        return Err(CliError::bad_input(format!("--seeds must be in 1..={}, got {}", analyses::sweep::ensemble::MAX_SEEDS, args.seeds)));
+    }
+    let sections = sections::sections(args.size, &scenarios, args.seeds);
     let mut out = OutputSet::new(&args.output.out)?;
     let n: usize = sections.iter().map(|s| s.steps.len()).sum();
     let progress = progress_bar(n as u64, "report", "experiments", args.output.json);
@@ -115,7 +119,8 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
     };
     let stamp = Stamp::now();
     let page = page::Page { out: out.dir(), figure_prefix: "", data: true };
-    let (report_md, _) = page::render(&sections, &results, size, wall_s, &stamp, page);
+    let options = format!("--size {size} --seeds {}", args.seeds);
+    let (report_md, _) = page::render(&sections, &results, &options, wall_s, &stamp, page);
     out.write_bytes("report.md", report_md.as_bytes())?;
     let steps = results
         .iter()
@@ -130,7 +135,7 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
             result: r.outcome.as_ref().map_or(serde_json::Value::Null, |o| o.document(&r.files)),
         })
         .collect();
-    let index = ReportIndex { size, stamp: &stamp, wall_s, failed, steps };
+    let index = ReportIndex { size, seeds: args.seeds, stamp: &stamp, wall_s, failed, steps };
     let json = out.write_json("report.json", &index)?;
     let dir = out.dir().to_path_buf();
     out.commit()?;
@@ -143,7 +148,7 @@ pub fn run(args: &ReportArgs) -> Result<(), CliError> {
         )));
     }
     if let Some(path) = &args.results {
-        results_page::write(path, &dir, &sections, &results, size, wall_s, &stamp)?;
+        results_page::write(path, &dir, &sections, &results, &options, wall_s, &stamp)?;
     }
     if args.output.json {
         outln!("{json}");

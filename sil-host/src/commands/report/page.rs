@@ -39,7 +39,7 @@ pub struct Page<'a> {
 pub fn render(
     sections: &[Section],
     results: &[Vec<StepResult>],
-    size: &str,
+    options: &str,
     wall_s: f64,
     stamp: &Stamp,
     page: Page,
@@ -58,7 +58,7 @@ pub fn render(
     };
     let _ = writeln!(
         md,
-        "Every experiment of docs/model.md from our own simulation (`sil-host report --size {size}`, {} s of wall time), \
+        "Every experiment of docs/model.md from our own simulation (`sil-host report {options}`, {} s of wall time), \
          made {}. Each section gives the command that made it (`<id>` in the first column below); {where_}. \
          Figures are numbered in the page's order, each with a caption below it: what it shows, its parameters, and \
          the paper's counterpart. Numbers print to their resolution (docs/analyses.md \"The report's numbers\").\n",

@@ -47,9 +47,20 @@ pub fn scenario_dir() -> Option<PathBuf> {
     [PathBuf::from("scenarios"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios")].into_iter().find(|p| p.is_dir())
 }
 
-/// The experiments, at the size asked for.
-pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
+/// `--seeds N` for the sampled loop's commands (nothing for one seed, the commands' default).
+fn seeds_args(seeds: usize) -> Vec<String> {
+    if seeds > 1 { vec!["--seeds".into(), seeds.to_string()] } else { Vec::new() }
+}
+
+/// `args` then `extra`.
+fn with(args: &[&str], extra: &[String]) -> Vec<String> {
+    args.iter().map(|s| (*s).to_string()).chain(extra.iter().cloned()).collect()
+}
+
+/// The experiments, at the size asked for, the sampled loop's over `seeds` sensor-noise seeds.
+pub fn sections(size: ReportSize, scenarios: &Path, seeds: usize) -> Vec<Section> {
     let quick = size == ReportSize::Quick;
+    let seeded = seeds_args(seeds);
     let mut v = vec![
         Section {
             title: "Contact modes on the belt",
@@ -94,13 +105,28 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
                 vec!["sweep", "--controller", "hybrid", "--ics", "d"]
             };
             vec![
-                step_of("sweep-hybrid", "the sampled firmware (1 kHz, docs/hardware.md's sensors, saturated torques)", &args),
+                Step {
+                    args: with(&args, &seeded),
+                    ..step_of("sweep-hybrid", "the sampled firmware (1 kHz, docs/hardware.md's sensors, saturated torques)", &args)
+                },
                 step_of(
                     "sweep-hybrid-ideal",
                     "the paper's ideal law (continuous time, exact measurements, no saturation)",
                     &[&args[..], &["--ideal"]].concat(),
                 ),
             ]
+        },
+    });
+    v.push(Section {
+        title: "Fig. 9 at the saturation edge: the sampled loop over its sensor noise",
+        source: "issue 82: the sampled hybrid loop from x0d at mu 0.86 to 0.9, where holding f_n* takes the base motor to its 5 N m limit; \
+                 each cell over the sensor noise's seeds, as a fraction with its Wilson 95 % interval",
+        appendix: false,
+        steps: {
+            let grid: Vec<&str> = if quick { vec!["--v-belt-step", "0.05", "--transient", "20", "--record", "10"] } else { vec![] };
+            let args =
+                [&["sweep", "--controller", "hybrid", "--ics", "d", "--mu", "0.86,0.9", "--mu-step", "0.01"][..], &grid[..]].concat();
+            vec![Step { args: with(&args, &seeded), ..step("sweep-hybrid-edge", &args) }]
         },
     });
     v.push(Section {
@@ -120,13 +146,16 @@ pub fn sections(size: ReportSize, scenarios: &Path) -> Vec<Section> {
         title: "Z_t,sliding: how far each controller drives the tip with no lift-off",
         source: "docs/model.md experiments 5 and 6 (the paper's continuous-time setting, --ideal, and our sampled firmware)",
         appendix: false,
-        steps: vec![step("zmax", &["zmax", "--all"])],
+        steps: vec![Step { args: with(&["zmax", "--all"], &seeded), ..step("zmax", &["zmax", "--all"]) }],
     });
     v.push(Section {
         title: "Sensitivity to the choices the paper leaves open",
         source: "docs/model.md \"What the paper leaves open\": the headline results under each open choice, one at a time from the defaults (sil-host sensitivity)",
         appendix: false,
-        steps: vec![step("sensitivity", &["sensitivity", "--size", if quick { "quick" } else { "paper" }])],
+        steps: {
+            let args = ["sensitivity", "--size", if quick { "quick" } else { "paper" }];
+            vec![Step { args: with(&args, &seeded), ..step("sensitivity", &args) }]
+        },
     });
     v.push(Section {
         title: "PID and hybrid force/motion control in the SIL loop",

@@ -35,7 +35,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
     let progress = progress_bar(1, "sensitivity", "jobs", args.output.json);
     let started = Instant::now();
     let study = pool.install(|| {
-        sensitivity::run(&base, args.size, &stop, &|done, total| {
+        sensitivity::run(&base, args.size, args.seeds, &stop, &|done, total| {
             progress.set_length(total);
             progress.set_position(done);
         })

@@ -32,6 +32,13 @@ pub(crate) fn finish(
         by_case.entry((r.impact_law.clone(), r.e_n.to_bits())).or_default().push(r);
     }
     let mut files = vec![dir.join("sweep.csv")];
+    // Several seeds per cell: the cells' fractions (cells.csv) and the maps shaded by them.
+    let cells = (m.spec.seeds > 1).then(|| analyses::sweep::cells::of(&m.spec, &rows));
+    if let Some(cells) = &cells {
+        let tmp = out.stage("cells.csv")?;
+        store::write_table(&tmp, cells)?;
+        files.push(dir.join("cells.csv"));
+    }
     for law in &m.spec.impact_laws {
         for &e_n in &m.spec.e_n {
             let empty = Vec::new();
@@ -39,7 +46,14 @@ pub(crate) fn finish(
             let suffix = figures::case_suffix(law.name(), e_n);
             let map = format!("map_{suffix}.svg");
             let slices = format!("slices_{suffix}.svg");
-            figures::draw_map(&out.stage_figure(&map)?, &m.spec, law.name(), e_n, case_rows)?;
+            match &cells {
+                Some(cells) => {
+                    let of_case: Vec<&analyses::sweep::cells::CellRow> =
+                        cells.iter().filter(|c| c.impact_law == law.name() && c.e_n.to_bits() == e_n.to_bits()).collect();
+                    figures::draw_probability_map(&out.stage_figure(&map)?, &m.spec, law.name(), e_n, &of_case)?;
+                }
+                None => figures::draw_map(&out.stage_figure(&map)?, &m.spec, law.name(), e_n, case_rows)?,
+            }
             figures::draw_slices(&out.stage_figure(&slices)?, &m.spec, law.name(), e_n, case_rows)?;
             for figure in [map, slices] {
                 files.push(dir.join(&figure));
@@ -51,7 +65,7 @@ pub(crate) fn finish(
     }
     files.push(dir.join("summary.json"));
     let files = files.iter().map(|p| p.display().to_string()).collect();
-    let summary = summary_of(m, results, missing, timing, resumed, interrupted, files);
+    let summary = summary_of(m, results, missing, timing, resumed, interrupted, files, cells.as_deref());
     out.write_json("summary.json", &summary)?;
     out.commit()?;
     Ok(summary)
@@ -98,7 +112,36 @@ pub(crate) fn report(s: &SweepSummary, json: bool) {
             if ic.height_above_belt <= 1e-12 { ": projected onto it" } else { "" }
         );
     }
+    let _ = writeln!(
+        o,
+        "samples: {}{}",
+        s.samples.note,
+        if s.samples.seeds > 1 { format!(" (jitter: {})", s.samples.jitter) } else { String::new() }
+    );
     summary::print_table(&mut o, &s.results);
+    if let Some(e) = &s.ensemble {
+        let _ = writeln!(o, "\nover the seeds, per mu (every cell pooled; fraction [Wilson 95 % interval]):");
+        let _ = writeln!(o, "  {:>6}  {:<26} {:<26} {:<26} {}", "mu", "lift off", "safe state", "contact", "undecided / boundary cells");
+        for m in &e.per_mu {
+            let _ = writeln!(
+                o,
+                "  {:>6}  {:<26} {:<26} {:<26} {} / {} of {}",
+                m.mu,
+                m.lift_off.describe(),
+                m.safe_state.describe(),
+                m.contact.describe(),
+                m.undecided_cells,
+                m.boundary_cells,
+                m.cells
+            );
+        }
+        let _ = writeln!(
+            o,
+            "undecided cells (the lift-off or the contact interval holds 1/2): {} of {}; every cell in cells.csv",
+            e.undecided.len(),
+            e.cells
+        );
+    }
     if let Some(t) = &s.timing
         && t.runs_computed > 0
     {

@@ -17,7 +17,6 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar, write_csv},
 };
-use analyses::zmax::max_trials;
 
 pub mod figures;
 mod print;
@@ -34,7 +33,7 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     // Check every set-up before the output folder is touched.
     let plan = plan(args)?;
     crate::commands::warn(experiments::scenario::board_tables_note(&plan.base, "zmax (the firmware in-process, or the ideal law)"));
-    let total: u64 = plan.jobs.iter().map(|(_, b)| u64::from(max_trials(b.0, b.1, args.tol))).sum();
+    let total = plan.max_trials(args.tol);
     let progress = progress_bar(total, "Z_t,sliding", "trials", args.output.json);
     // Every search runs to its end (a signal ends the process, cancel.rs).
     let never = std::sync::atomic::AtomicBool::new(false);
@@ -43,10 +42,15 @@ pub fn execute(args: &ZmaxArgs) -> Result<Done<ZmaxSummary>, CliError> {
     let searches = searches?;
 
     let mut out = OutputSet::new(&args.output.out)?;
+    let n_nominal = plan.jobs.len();
     let summary = summary(args, plan, &searches, f64::NAN);
     write_csv(&mut out, "zmax.csv", &summary.results)?;
     write_csv(&mut out, "trials.csv", &trial_rows(&summary))?;
-    for s in &searches {
+    if !summary.seeds.is_empty() {
+        write_csv(&mut out, "zmax_seeds.csv", &summary.seeds)?;
+    }
+    // The figures of the nominal searches (seed 0); the seeds' are in zmax_seeds.csv.
+    for s in searches.iter().take(n_nominal) {
         let path = out.stage_figure(&format!("zmax-{}.svg", s.combination.stem()))?;
         draw(&path, s)?;
     }

@@ -77,6 +77,20 @@ pub(crate) fn print_table(s: &ZmaxSummary, written: &[std::path::PathBuf]) {
         o,
         "error: max |z_t - z_t*| over the settle window at Z_t,sliding; stop above: why the first target above the limit failed"
     );
+    let _ = writeln!(o, "samples: {}", s.samples);
+    for d in &s.distributions {
+        let _ = writeln!(
+            o,
+            "  {} x0{} {} over {} seeds: Z_t,sliding median [quartiles], range {}{}; tracking {}",
+            d.controller,
+            d.x0,
+            d.setting,
+            d.seeds,
+            d.z_t_sliding.describe(),
+            if d.z_t_sliding.none > 0 { format!(" ({} seeds with none)", d.z_t_sliding.none) } else { String::new() },
+            d.z_t_tracking.describe()
+        );
+    }
     let _ = writeln!(
         o,
         "p = 0 at: end of the admissible range on the branch (paper Table II); theta1 max at: the fold of theta1 along the belt, which the PID (on theta1 alone) cannot pass"
