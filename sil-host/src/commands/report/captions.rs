@@ -441,6 +441,15 @@ pub fn sweep_caption(s: &SweepSummary, file: &str, with_controller: bool) -> Cap
     );
     let fig = if spec.controller == SweepController::None { "Fig. 3" } else { "Fig. 9" };
     match kind {
+        "map" if spec.seeds > 1 => Caption {
+            what: format!(
+                "The fraction of each cell's {} seeds that lift off over (v_belt, mu), one panel per initial condition; a ring marks a cell \
+                 whose Wilson 95 % interval of its lift-off or its contact fraction holds one half",
+                spec.seeds
+            ),
+            parameters: parameters.clone(),
+            paper: Some(fig.into()),
+        },
         "map" => Caption {
             what: "The outcome of each run over (v_belt, mu), one panel per initial condition".into(),
             parameters: parameters.clone(),

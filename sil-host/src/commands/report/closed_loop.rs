@@ -28,7 +28,7 @@ At 10 kHz (`--set timing.rate_hz=10000 --set timing.delta_s=0.00005`) the satura
 at t = 0.268 s), which is why that run never reaches its target. \
 At `mu = 0.9` the loop sits on that limit's edge: holding `f_n* = 10 N` there takes `u1` to 4.998 N m, one code of the torque \
 command below the limit (`v_belt = -0.5`, t = 0.25 s), so the load cell's noise decides each run: there the sampled loop is a random \
-process, and a map drawn from one noise seed shows one sample of it. The tables below give each `mu`'s fractions over the seeds, and \
+process, and a map drawn from one noise seed shows one sample of it. The tables above give each `mu`'s fractions over the seeds, and \
 the section \"Fig. 9 at the saturation edge\" those from `mu` 0.86 to 0.9. \
 The sensitivity study's torque-limit rows show the same mechanism at `mu = 0.6`; `tests/e2e/closed_loop_friction.rs` checks it.";
 
