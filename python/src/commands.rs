@@ -196,7 +196,7 @@ pub fn sweep<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<B
     // The cells over their seeds (always: one seed gives fractions of 0 or 1 out of 1).
     let cells = analyses::sweep::cells::of(&manifest.spec, &rows);
     let several = (manifest.spec.seeds > 1).then_some(cells.as_slice());
-    let summary = summary_of(&manifest, results, n_missing, Some(timing), 0, false, Vec::new(), several);
+    let summary = summary_of(&manifest, results, n_missing, Some(timing), 0, false, Vec::new()).with_cells(several);
     let (message, code) = failure_of(None, args.strict.strict, &summary.results.validity);
     Outcome::new(py, "sweep", to_py(py, &summary)?)?
         .table("sweep", rows_to_py(py, &rows)?)?

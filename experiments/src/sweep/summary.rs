@@ -88,6 +88,14 @@ pub struct SweepSummary {
     pub files: Vec<String>,
 }
 
+impl SweepSummary {
+    /// The summary with the ensemble results of `cells` (a sweep of several seeds;
+    /// `None` leaves it without).
+    pub fn with_cells(self, cells: Option<&[CellRow]>) -> Self {
+        Self { ensemble: cells.map(EnsembleResults::of), ..self }
+    }
+}
+
 /// What each cell's result is drawn from (`summary.json`'s `samples`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Samples {
@@ -171,8 +179,8 @@ pub fn cpu_seconds() -> f64 {
 
 /// `summary.json` of the sweep `m` from its `results` (with `missing` runs not
 /// in its folder), this invocation's `timing` (`None` for a merge), the runs
-/// `resumed` from the journal, whether it was `interrupted`, the `files`
-/// written and, with several seeds, its `cells`.
+/// `resumed` from the journal, whether it was `interrupted`, and the `files`
+/// written; [`SweepSummary::with_cells`] adds a sweep's cells over several seeds.
 pub fn summary_of(
     m: &Manifest,
     results: Results,
@@ -181,7 +189,6 @@ pub fn summary_of(
     resumed: usize,
     interrupted: bool,
     files: Vec<String>,
-    cells: Option<&[CellRow]>,
 ) -> SweepSummary {
     SweepSummary {
         status: if interrupted {
@@ -198,7 +205,7 @@ pub fn summary_of(
         maxima_note: MAXIMA_NOTE,
         samples: Samples::of(&m.spec),
         results,
-        ensemble: cells.map(EnsembleResults::of),
+        ensemble: None,
         timing,
         resumed_runs: resumed,
         files,

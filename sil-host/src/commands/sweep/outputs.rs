@@ -65,7 +65,7 @@ pub(crate) fn finish(
     }
     files.push(dir.join("summary.json"));
     let files = files.iter().map(|p| p.display().to_string()).collect();
-    let summary = summary_of(m, results, missing, timing, resumed, interrupted, files, cells.as_deref());
+    let summary = summary_of(m, results, missing, timing, resumed, interrupted, files).with_cells(cells.as_deref());
     out.write_json("summary.json", &summary)?;
     out.commit()?;
     Ok(summary)
@@ -121,7 +121,7 @@ pub(crate) fn report(s: &SweepSummary, json: bool) {
     summary::print_table(&mut o, &s.results);
     if let Some(e) = &s.ensemble {
         let _ = writeln!(o, "\nover the seeds, per mu (every cell pooled; fraction [Wilson 95 % interval]):");
-        let _ = writeln!(o, "  {:>6}  {:<26} {:<26} {:<26} {}", "mu", "lift off", "safe state", "contact", "undecided / boundary cells");
+        let _ = writeln!(o, "  {:>6}  {:<26} {:<26} {:<26} undecided / boundary cells", "mu", "lift off", "safe state", "contact");
         for m in &e.per_mu {
             let _ = writeln!(
                 o,
