@@ -116,16 +116,18 @@ impl Samples {
         let noise = spec.scenario.as_ref().map_or(0, |s| s.sensors.seed);
         let note = match (spec.seeds, sampled) {
             (1, true) => format!(
-                "one sample per cell: the sampled loop is a random process (its sensor noise, seed {noise}, decides the outcome                  where the loop saturates; docs/results.md); --seeds N gives each cell's fraction with its Wilson 95 % interval"
+                "one sample per cell: the sampled loop is a random process (its sensor noise, seed {noise}, decides the outcome where the loop saturates; docs/results.md); --seeds N gives each cell's fraction with its Wilson 95 % interval"
             ),
-            (1, false) => "one run per cell: this loop has no noise; --seeds N with --jitter-mu or --jitter-start marks the cells                            whose outcome changes within that resolution"
+            (1, false) => "one run per cell: this loop has no noise; --seeds N with --jitter-mu or --jitter-start marks the cells whose outcome changes within that resolution"
                 .into(),
             (n, true) => format!(
-                "{n} runs per cell: sensor-noise seeds {noise} to {} and the jitter above; each cell's fractions with their Wilson                  95 % intervals in cells.csv; a grid point counts as bouncing in the bands when more than half its seeds do",
-                noise.wrapping_add(n as u64 - 1)
+                "{n} runs per cell: sensor-noise seeds {noise} to {} (jitter: {}); each cell's fractions with their Wilson 95 % intervals in cells.csv; a grid point counts as bouncing in the bands when more than half its seeds do",
+                noise.wrapping_add(n as u64 - 1),
+                spec.jitter.describe()
             ),
             (n, false) => format!(
-                "{n} runs per cell, differing by the jitter above only (this loop has no noise); a cell whose runs disagree sits                  on a boundary within that resolution (cells.csv `boundary`); a grid point counts as bouncing in the bands when                  more than half its runs do"
+                "{n} runs per cell, differing by their jitter ({}) only (this loop has no noise); a cell whose runs disagree sits on a boundary within that resolution (cells.csv `boundary`); a grid point counts as bouncing in the bands when more than half its runs do",
+                spec.jitter.describe()
             ),
         };
         Self { seeds: spec.seeds, jitter: spec.jitter.describe(), note, draws: (0..spec.seeds).map(|k| spec.draw(k)).collect() }
