@@ -143,8 +143,21 @@ pub fn draw_probability_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, 
     let grid_rows = ics.len().div_ceil(cols);
     let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
     let undecided = cells.iter().filter(|c| c.undecided).count();
+    // The legend's shades are fractions that occur (a legend entry must be in the
+    // figure): all of them up to five, else five spread by rank, ends included.
+    let mut present: Vec<f64> = cells.iter().map(|c| c.lift_off_fraction).filter(|p| p.is_finite()).collect();
+    present.sort_by(f64::total_cmp);
+    present.dedup();
+    let shown: Vec<f64> = if present.len() <= 5 {
+        present
+    } else {
+        let n = present.len() - 1;
+        let mut v: Vec<f64> = (0..5).map(|i| present[(i * n).div_ceil(4)]).collect();
+        v.dedup();
+        v
+    };
     let mut entries: Vec<(String, Swatch)> =
-        [0.0, 0.25, 0.5, 0.75, 1.0].iter().map(|&p| (format!("{:.0} % lift off", p * 100.0), Swatch::Box(fraction_color(p)))).collect();
+        shown.iter().map(|&p| (format!("{:.0} % lift off", p * 100.0), Swatch::Box(fraction_color(p)))).collect();
     entries.push((
         format!("undecided: a 95 % interval holds 1/2 ({undecided} cell{})", if undecided == 1 { "" } else { "s" }),
         Swatch::Ring(BLACK),
