@@ -95,11 +95,15 @@ pub fn scale(metres_per_count: f32, period_s: f32) -> Result<f32, BeltError> {
 /// The one rule of the board twin's and the emulated board's TIM4 and of the
 /// wire-level sensor model ([`SampledBelt`]).
 pub fn count_at(travel_m: f64, counts_per_metre: f64) -> u16 {
-    let counts = libm::floor(travel_m * counts_per_metre);
+    let counts = shared::rounding::floor(travel_m * counts_per_metre);
     if !counts.is_finite() {
         return 0;
     }
-    // The Euclidean remainder of a whole number, exact: in [0, 65536).
+    // The Euclidean remainder of a whole number, exact: in [0, 65536). Below 2^52 in
+    // magnitude the whole number is an `i64` (the same remainder, without libm's fmod).
+    if counts.abs() < 4_503_599_627_370_496.0 {
+        return (counts as i64).rem_euclid(65536) as u16;
+    }
     let r = libm::fmod(counts, 65536.0);
     (if r < 0.0 { r + 65536.0 } else { r }) as u16
 }
@@ -356,6 +360,34 @@ mod tests {
         assert_eq!(count_at(1.0, f64::INFINITY), 0);
         // Far beyond 2^63 counts the wrap is still exact (the f64's own value mod 2^16).
         assert_eq!(count_at(1e30, 1.0), (1e30f64.rem_euclid(65536.0)) as u16);
+    }
+
+    /// The count below 2^52 counts (the integer remainder) is libm's `fmod` form's,
+    /// over travels from a micrometre to beyond 2^52 counts, both signs and both
+    /// directions of counting, and at the edges of 2^52.
+    #[test]
+    fn the_integer_remainder_is_the_fmod_form() {
+        let fmod_form = |travel_m: f64, cpm: f64| -> u16 {
+            let counts = libm::floor(travel_m * cpm);
+            if !counts.is_finite() {
+                return 0;
+            }
+            let r = libm::fmod(counts, 65536.0);
+            (if r < 0.0 { r + 65536.0 } else { r }) as u16
+        };
+        let mut travel = 1e-6;
+        while travel < 1e12 {
+            for t in [travel, -travel, travel * 1.000_123_7, -travel * 0.999_71] {
+                for cpm in [1e6, -1e6, 4096.0, 1.0] {
+                    assert_eq!(count_at(t, cpm), fmod_form(t, cpm), "travel {t:e} m at {cpm} counts/m");
+                }
+            }
+            travel *= 1.618;
+        }
+        let whole = 4_503_599_627_370_496.0f64;
+        for c in [whole, whole.next_down(), whole.next_up(), -whole, -whole.next_down(), -whole.next_up(), whole + 65536.0] {
+            assert_eq!(count_at(c, 1.0), fmod_form(c, 1.0), "{c:e} counts");
+        }
     }
 
     /// The sampled belt: 0 at the first sample (travel 0), then the counts of

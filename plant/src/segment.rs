@@ -230,6 +230,18 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         self.point_of(y, ev, xi_dot)
     }
 
+    /// [`Segment::point`]'s vector field alone, written into `dydt` (not counted):
+    /// the same expressions, so the same bits, without the rest of the [`Point`]
+    /// (the tip dynamics' 18 values and the force, built and copied out at every
+    /// stage, and the products only they need, such as `Q`'s first row while
+    /// sliding): what the integrator's stages ask for.
+    #[inline(never)]
+    pub fn dydt_uncounted(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
+        let mut xi_dot = [0.0; 2];
+        let ev = self.evaluate(t, y, &mut xi_dot);
+        *dydt = self.point_of(y, ev, xi_dot).dydt;
+    }
+
     /// [`Segment::point`] with `trig`, the sines and cosines of `y`'s angles (as
     /// [`Segment::evaluate_trig`]); counted in `evals`.
     #[inline]
@@ -438,7 +450,8 @@ impl<C: Controller + ?Sized> OdeSystem<STATE_LEN> for Segment<'_, C> {
 
     #[inline]
     fn rhs(&self, t: f64, y: &OdeState, dydt: &mut OdeState) {
-        *dydt = self.point(t, y).dydt;
+        self.count_evaluation();
+        self.dydt_uncounted(t, y, dydt);
     }
 
     /// Also keeps the nearest boundary at the step's end for [`Segment::nearest_boundary`].

@@ -24,6 +24,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+pub mod rounding;
 pub mod slip;
 pub mod sqrt;
 pub mod time;

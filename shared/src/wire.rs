@@ -293,14 +293,14 @@ pub fn encode_angle(angle: f64) -> u16 {
 pub fn encode_angle_bits(angle: f64, bits: u8) -> u16 {
     let counts = 1u32 << bits.clamp(ENCODER_BITS_RANGE.0, ENCODER_BITS_RANGE.1);
     let turns = angle / core::f64::consts::TAU;
-    let frac = turns - libm::floor(turns);
-    let count = libm::round(frac * counts as f64) as u32 % counts;
+    let frac = turns - crate::rounding::floor(turns);
+    let count = crate::rounding::round(frac * counts as f64) as u32 % counts;
     count as u16
 }
 
 /// Encodes a force (N) as a 12-bit load-cell code; saturates at the ends of the range.
 pub fn encode_force(force: f64) -> i16 {
-    let code = libm::round(force / (LOAD_FULL_SCALE_N as f64) * 2048.0);
+    let code = crate::rounding::round(force / (LOAD_FULL_SCALE_N as f64) * 2048.0);
     if !code.is_finite() {
         return 0;
     }

@@ -56,6 +56,21 @@ impl<S: OdeSystem<N> + ?Sized, const N: usize> StepView<'_, S, N> {
     ///
     /// The first call for a step evaluates its three extra stages.
     pub fn interpolate(&mut self, t: f64) -> State<N> {
+        self.interpolate_first(t, N)
+    }
+
+    /// [`StepView::interpolate`] in the components `f` reads alone
+    /// ([`OdeSystem::READ_LEN`]; the same bits there), the others left at 0: for a
+    /// function of the state that reads no other, such as the plant's event function
+    /// in a root search, whose iterates need no quadratures (the energy ledger's four
+    /// works, 4 of the plant's 10 components).
+    pub fn interpolate_read(&mut self, t: f64) -> State<N> {
+        self.interpolate_first(t, S::READ_LEN.min(N))
+    }
+
+    /// The dense output at `t` in the first `n` components, the others 0.
+    #[inline(always)]
+    fn interpolate_first(&mut self, t: f64, n: usize) -> State<N> {
         if self.cont.is_none() {
             self.cont = Some(dense_coefficients(self.sys, self.t_prev, self.h, self.y_prev, self.y_curr, self.k, self.k_end));
         }
@@ -63,7 +78,7 @@ impl<S: OdeSystem<N> + ?Sized, const N: usize> StepView<'_, S, N> {
         let s = (t - self.t_prev) / self.h;
         let s1 = 1.0 - s;
         let mut y = [0.0; N];
-        for i in 0..N {
+        for i in 0..n {
             let conpar = c[4][i] + s * (c[5][i] + s1 * (c[6][i] + s * c[7][i]));
             y[i] = c[0][i] + s * (c[1][i] + s1 * (c[2][i] + s * (c[3][i] + s1 * conpar)));
         }

@@ -152,16 +152,23 @@ fn locate_root<'a, C: Controller + ?Sized>(
     a: (f64, f64),
     b: (f64, f64, OdeState),
 ) -> (f64, OdeState) {
-    illinois_root(
+    let t_end = b.0;
+    // The iterates in the components the event function reads (it reads no
+    // quadrature); strictly inside the step, so never its end, whose event
+    // components `nearest_boundary` may take from the end's evaluation.
+    let (t, y) = illinois_root(
         a,
         b,
         |t| {
-            let y = step.interpolate(t);
+            let y = step.interpolate_read(t);
             (seg.nearest_boundary(t, &y).1, y)
         },
         |g| g > 0.0,
         false,
-    )
+    );
+    // The root's state in every component: the dense output there (the step's end
+    // as given when the search never moved it).
+    if t.to_bits() == t_end.to_bits() { (t, y) } else { (t, step.interpolate(t)) }
 }
 
 /// Illinois regula falsi with a bisection safeguard: the crossing of `g` in
