@@ -142,7 +142,7 @@ SIZES = {
                           + settings(H_COARSE, integrators=("implicitfast",), timeconsts=(None, 0.002), zetas=(ZETA_E,))
                           + [dataclasses.replace(RECOMMENDED, h=H_FINE), dataclasses.replace(PYRAMIDAL, h=H_FINE),
                              dataclasses.replace(RECOMMENDED, h=H_FINE, timeconst=None)]),
-             "drops": [(t, z) for t in TIMECONSTS for z in ZETAS], "time": True,
+             "drops": [(t, z) for t in TIMECONSTS for z in ZETAS], "time": True, "e_ns": (0.15, 0.25, 0.3),
              "words": "at h 1e-4 s every cone, time constant and damping ratio with the Euler integrator, and "
                       f"implicitfast at 2h and 0.002 s with the damping ratio {ZETA_E:g}; at h 1e-5 s, Euler, the "
                       f"damping ratio {ZETA_E:g}: both cones at 0.002 s, the elliptic at 2h"},
@@ -266,6 +266,15 @@ def measure(exe: str, size: str, jobs: int, work: str) -> dict:
                              threads=jobs)
         for x0 in x0s:
             out["rigid_full"][Cell(x0, mu, v)] = got[x0]
+
+    # The rigid model's bounces at other restitutions: how much of the bounce is e_n's.
+    out["rigid_e"] = {}
+    for c in cells:
+        if spec.get("e_ns") and rigid_class(out["rigid"][c]) == "bounces":
+            for e in spec["e_ns"]:
+                got = sil_host.sweep(exe, [c.x0], c.mu, c.v_belt, t0, t1 - t0,
+                                     os.path.join(work, f"sweep-e{e}-{c.x0}-{c.mu}-{c.v_belt}"), threads=jobs, e_n=e)
+                out["rigid_e"][(c, e)] = got[c.x0]
 
     # MuJoCo: each setting's cells in one rollout batch.
     for s in spec["settings"]:
@@ -444,6 +453,22 @@ def cell_map(r: dict, columns) -> list:
     return lines
 
 
+def restitution_table(r: dict) -> list:
+    """sil-host's bounces at other e_n beside MuJoCo's recommended setting's."""
+    e_ns = sorted({e for _, e in r.get("rigid_e", {})} | {E_N})
+    if len(e_ns) < 2:
+        return []
+    lines = ["| cell (x0, mu/v_belt) | " + " | ".join(f"sil-host e_n {e:g}" for e in e_ns)
+             + f" | MuJoCo {RECOMMENDED.cone} {RECOMMENDED.solref()} h {RECOMMENDED.h:g} |",
+             "|---|" + "---|" * (len(e_ns) + 1)]
+    for c in r["rigid"]:
+        if (c, e_ns[0]) in r["rigid_e"] or (c, e_ns[-1]) in r["rigid_e"]:
+            row = [said_rigid(r["rigid"][c] if e == E_N else r["rigid_e"][(c, e)]) for e in e_ns]
+            mj = r["mj"].get((RECOMMENDED, c))
+            lines.append(f"| {c.short()} | " + " | ".join(row) + f" | {said(mj) if mj else ''} |")
+    return lines
+
+
 def drops_table(r: dict) -> list:
     lines = ["| solref | forces on the arm | " + " | ".join(f"{s:g} m/s" for s in DROP_SPEEDS) + " |",
              "|---|---|" + "---|" * len(DROP_SPEEDS)]
@@ -472,6 +497,11 @@ def tables(r: dict) -> list:
                   f"within the bounds. MuJoCo's columns over ({t0:g}, {t1:g}] s, blank where the setting did not run "
                   "the cell:", ""]
     lines += cell_map(r, columns)
+    more = restitution_table(r)
+    if more:
+        lines += ["", f"The bounces at other restitutions: sil-host with Newton e_n other than {E_N:g} over the same "
+                      "window, beside MuJoCo's recommended setting (S slides; B n/g: n lift-offs, largest gap g cm):", ""]
+        lines += more
     lines += ["", f"The tip dropped on the belt (frictionless, the belt at rest, where x0d puts the tip, h = "
                   f"{H_COARSE:g} s, the elliptic and pyramidal cones alike without friction; each the mean of drops "
                   "that begin a fraction of a step apart, their range in brackets): the effective restitution e "

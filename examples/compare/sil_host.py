@@ -72,8 +72,8 @@ def digest(folder: str, summary: dict, window, high: float, belt_height: float) 
 
 
 def sweep(exe: str, x0s, mu: float, v_belt: float, transient: float, record: float, folder: str,
-          threads: int = 1) -> dict:
-    """Runs `sil-host sweep` open loop (u = 0, Newton e_n 0.2, the impact without collision
+          threads: int = 1, e_n: float = 0.2) -> dict:
+    """Runs `sil-host sweep` open loop (u = 0, Newton's `e_n`, the impact without collision
     throwing the tip off: sil-host's defaults) at one `mu` and `v_belt` (m/s) from the paper's
     initial conditions `x0s` (`a`, `d`), `transient` s, then the record window of `record` s, into
     `folder`. Returns, by x0, runs.csv's record-window measurements: `lift_offs` (the tip leaving
@@ -81,7 +81,7 @@ def sweep(exe: str, x0s, mu: float, v_belt: float, transient: float, record: flo
     and `outcome` (the sweep's class: bouncing, contact, oscillating). Raises SilHostError on
     failure."""
     cmd = [exe, "sweep", "--mu", repr(mu), f"--v-belt={v_belt!r}", "--ics", ",".join(x0s),
-           "--transient", repr(transient), "--record", repr(record), "--threads", str(threads),
+           "--transient", repr(transient), "--record", repr(record), "--e-n", repr(e_n), "--threads", str(threads),
            "--out", folder, "--json"]
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
