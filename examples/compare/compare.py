@@ -97,6 +97,10 @@ def settings(h: float, cones=CONES, integrators=INTEGRATORS, timeconsts=TIMECONS
 
 RECOMMENDED = Setting("elliptic", "Euler", 0.002, ZETA_E, H_COARSE)  # this arm's setting (the record's finding)
 PYRAMIDAL = dataclasses.replace(RECOMMENDED, cone="pyramidal")  # the same contact in MuJoCo's default cone
+# The recommendation's neighbourhood: the time constants 1 and 2 ms, which the record finds the two best
+# settings (0.001 s agrees in one cell more; its bounce's lift-offs sit at the 15 % bound, so that the
+# test's reference is 0.002 s).
+BAND = [dataclasses.replace(RECOMMENDED, timeconst=0.001), RECOMMENDED]
 DEFAULT = Setting("pyramidal", "Euler", 0.02, 1.0, H_COARSE)  # MuJoCo's defaults
 
 
@@ -316,6 +320,8 @@ def measure(exe: str, size: str, jobs: int, work: str) -> dict:
         out["times"]["load"] = os.getloadavg()[0]
     out["times"]["total"] = time.perf_counter() - started
     out["versions"] = {"mujoco": mujoco.__version__, "python": platform.python_version()}
+    out["commit"] = commit()
+    out["stamp"] = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     return out
 
 
@@ -365,17 +371,22 @@ def evaluate(r: dict) -> list:
                                f"{c.short()} {said(r['mj'][(s, c)])}" for c in on)
                            + (f"; not: {'; '.join(f'{c.short()}: {w}' for c, w in bad)}" if bad else "")))
     coarse = [s for s in ran if s.h == H_COARSE]
-    if len(coarse) > 2 and RECOMMENDED in ran:
+    if len(coarse) > len(BAND) and all(b in ran for b in BAND):
         # Not the raw count: a contact that never bounces agrees wherever sil-host slides.
+        names = " and ".join(b.solref() for b in BAND)
         for key, what in (("same_class", "sil-host's outcome (slides or bounces)"),
                           ("bounces_within", "sil-host's bounce within the bounds")):
             scores = {s: tally(r, s)[key] for s in coarse}
-            best = max(scores.values())
-            others = max(v for s, v in scores.items() if s != RECOMMENDED)
-            checks.append((scores[RECOMMENDED] == best,
-                           f"MuJoCo {RECOMMENDED.label()} gives {what} in as many cells as any setting at h "
-                           f"{H_COARSE:g} s: {scores[RECOMMENDED]} of {tally(r, RECOMMENDED)['cells']} (the best of the "
-                           f"other {len(coarse) - 1}: {others})"))
+            others = {s: v for s, v in scores.items() if s not in BAND}
+            best = max(others.values())
+            tied = [s.label() for s, v in others.items() if v == best]
+            of = tally(r, RECOMMENDED)["cells" if key == "same_class" else "rigid_bounces"]
+            checks.append((min(scores[b] for b in BAND) > best,
+                           f"MuJoCo's elliptic cone with solref {names} (Euler, h {H_COARSE:g} s) give {what} in more "
+                           f"cells than any other setting at h {H_COARSE:g} s: "
+                           + ", ".join(f"{scores[b]}" for b in BAND) + f" of {of} (the best of the other "
+                           f"{len(others)}: {best}, {tied[0]}" + (f" and {len(tied) - 1} more" if len(tied) > 1 else "")
+                           + ")"))
     if PYRAMIDAL in ran:
         t = tally(r, PYRAMIDAL)
         checks.append((t["agree"] < t["cells"],
@@ -424,7 +435,7 @@ def settings_table(r: dict) -> list:
         t = tally(r, s)
         slides = t["cells"] - t["rigid_bounces"]
         where = ", ".join(c.short() for c, _ in t["where"][:6]) + (" ..." if len(t["where"]) > 6 else "")
-        mark = "**" if dataclasses.replace(s, h=H_COARSE) == RECOMMENDED else ""
+        mark = "**" if dataclasses.replace(s, h=H_COARSE) in BAND else ""
         lines.append(f"| {mark}{s.cone}{mark} | {s.integrator} | {s.solref()} | {s.h:g} | {t['agree']}/{t['cells']} "
                      f"({t['agree'] / t['cells']:.0%}) | {mark}{t['same_class']}/{t['cells']} "
                      f"({t['same_class'] / t['cells']:.0%}){mark} | {slides - t['false_bounces']}/{slides} | "
@@ -489,7 +500,7 @@ def tables(r: dict) -> list:
     t0, t1 = r["spec"]["window"]
     lines = settings_table(r)
     columns = [(f"MuJoCo {s.cone} {s.solref()} h {s.h:g}", s) for s in
-               (RECOMMENDED, dataclasses.replace(RECOMMENDED, h=H_FINE), PYRAMIDAL, DEFAULT,
+               (RECOMMENDED, dataclasses.replace(RECOMMENDED, h=H_FINE), BAND[0], PYRAMIDAL, DEFAULT,
                 dataclasses.replace(RECOMMENDED, timeconst=None), dataclasses.replace(RECOMMENDED, zeta=1.0))
                if any(k[0] == s for k in r["mj"])]
     lines += ["", f"Cell by cell (x0, mu/v_belt m/s): S slides; B n/g bounces, n lift-offs (sil-host; MuJoCo: flights "
@@ -536,13 +547,17 @@ def report(r: dict, checks: list) -> None:
     print(notes(r))
 
 
+def commit() -> str:
+    """The work tree's commit, short."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                          cwd=here).stdout.strip() or "?"
+
+
 def write_record(path: str, r: dict, checks: list) -> None:
     """The comparison as Markdown (the body of docs/results.md's "Against MuJoCo", which `sil-host
     report` includes from examples/compare/results.md)."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=here).stdout.strip() or "?"
-    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    stamp = r.get("stamp") or time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     spec, v = r["spec"], r["versions"]
     t0, t1 = spec["window"]
     passed = sum(ok for ok, _ in checks)
@@ -570,8 +585,9 @@ def write_record(path: str, r: dict, checks: list) -> None:
         f"({FULL_S - 50:g}, {FULL_S:g}] s of a {FULL_S:g} s run (experiment 3's window). A bounce: {BOUNCES_MIN} "
         f"flights or more higher than {HIGH * 1e3:g} mm in the window; slides: none. A cell agrees when MuJoCo "
         f"slides where sil-host slides, or bounces where it bounces with its lift-offs within {LIFT_TOL:.0%} of "
-        f"sil-host's and its largest gap within {GAP_TOL:.0%}. Measured {stamp}, sil-host at commit `{commit}`; "
-        f"{passed} of {len(checks)} checks passed.",
+        f"sil-host's and its largest gap within {GAP_TOL:.0%}. Measured {stamp}, sil-host at commit `{r.get('commit') or commit()}`; "
+        + (f"checked by compare.py at `{commit()}` (`--load`); " if r.get("commit") not in (None, commit()) else "")
+        + f"{passed} of {len(checks)} checks passed.",
         "",
     ]
     lines += tables(r)
@@ -635,7 +651,7 @@ def run(argv=None):
         import pickle
 
         with open(args.load, "rb") as f:
-            r = pickle.load(f)
+            r = rebind(pickle.load(f))
         return finish(r, args)
     exe = os.path.abspath(args.sil_host)
     if not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
@@ -663,6 +679,19 @@ def run(argv=None):
         with open(args.save, "wb") as f:
             pickle.dump(r, f)
     return finish(r, args)
+
+
+def rebind(x):
+    """`x` (a pickled measure() result) with its Settings and Cells made this module's (a result
+    pickled by the script names `__main__`'s classes, one pickled by an importer `compare`'s)."""
+    name = type(x).__name__
+    if dataclasses.is_dataclass(x) and name in ("Setting", "Cell"):
+        return (Setting if name == "Setting" else Cell)(**dataclasses.asdict(x))
+    if isinstance(x, dict):
+        return {rebind(k): rebind(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return type(x)(rebind(v) for v in x)
+    return x
 
 
 def finish(r: dict, args):
