@@ -132,8 +132,8 @@ REFERENCE = [Cell("a", 0.35, -0.5), Cell("a", 0.4, -0.5), Cell("a", 0.6, -0.5), 
 # The sizes. Each MuJoCo setting runs on `cells` (at h 1e-5, `fine_cells`) for window[1] s and is
 # read over `window` (t0, t1]; sil-host's outcomes over the same window, and over the last 50 s of a
 # FULL_S run to check that the window's outcome is the long run's. The record's window (20, 40] s:
-# the rigid model's transient bounces at v_belt -1 to -0.8 m/s end by 11 s, and a MuJoCo bounce's
-# largest gap needs a window of 20 s to come within 10 % of a long run's. implicitfast runs at the
+# the rigid model's transient bounces at the fastest belts have ended (checked), and a MuJoCo bounce's
+# largest gap, a maximum over an irregular bounce, needs a window with many flights (about 115). implicitfast runs at the
 # stiffest time constants with the damping ratio for e_n (Euler and implicitfast differ here mainly in the
 # belt servo's damping, which Euler treats explicitly); the step 1e-5 s at the recommended setting,
 # its pyramidal twin and the elliptic cone at 2h.
