@@ -15,8 +15,9 @@ The model, in MuJoCo's frame (x along the belt = z_t, z up = z_n, y out of the p
   servo (gain BELT_KV); its top face at z = -H - TIP_RADIUS, so that the sphere touches it when
   the tip (its centre) is at z_n = -H: the gap z_n + H is MuJoCo's contact distance;
 - the contact: condim 3 (normal and tangential friction in the plane), friction mu on both geoms,
-  the pyramidal cone, MuJoCo's soft contact with the contact's solref and solimp (CONTACTS);
-- Euler integration at the time step h.
+  the contact setting's friction cone (pyramidal or elliptic) and MuJoCo's soft contact with its
+  solref and solimp (`Contact`);
+- the contact setting's integrator (Euler or implicitfast) at the time step h.
 
 Functions: `build` (an MjModel), `initial_state` (MuJoCo's full physical state from docs/model.md's
 x), `joint_of` (the arm's q, q_dot from MuJoCo's qpos, qvel), `roll` (a batch of runs with
@@ -38,34 +39,40 @@ BELT_HALF_LENGTH = 400.0  # m: the belt moves 150 m in 300 s at 0.5 m/s
 BELT_HALF_THICKNESS = 0.01  # m
 BELT_MASS = 1000.0  # kg: the arm's impulses barely move it (a 0.2 N s impact: 0.2 mm/s)
 BELT_KV = 1e6  # N s/m, the belt's velocity servo: a 1 ms time constant, kv h / m = 0.1 at h 1e-4 (explicit: < 2)
-CHUNK_STEPS = 100_000  # steps per rollout call: the trajectory of a chunk is kept, then digested
+CHUNK_STEPS = 100_000  # steps per rollout call at most: the trajectory of a chunk is kept, then digested
+CHUNK_RUN_STEPS = 2_000_000  # runs x steps per call at most (7 doubles a state: 112 MB of trajectory)
+DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)  # MuJoCo's default impedance
 
 
 @dataclass(frozen=True)
 class Contact:
     """A MuJoCo soft-contact setting: solref (time constant s, damping ratio) and solimp
-    (d_min, d_max, width m, midpoint, power), as MJCF's geom attributes take them."""
+    (d_min, d_max, width m, midpoint, power), as MJCF's geom attributes take them, the friction
+    cone (`pyramidal`, MuJoCo's default, or `elliptic`) and the integrator (`Euler`, MuJoCo's
+    default, or `implicitfast`), as MJCF's option takes them."""
 
     name: str
     solref: tuple
     solimp: tuple
+    cone: str = "pyramidal"
+    integrator: str = "Euler"
 
     def describe(self) -> str:
         """The setting as MJCF writes it."""
-        return (f"solref {' '.join(f'{v:g}' for v in self.solref)}, "
+        return (f"cone {self.cone}, {self.integrator}, solref {' '.join(f'{v:g}' for v in self.solref)}, "
                 f"solimp {' '.join(f'{v:g}' for v in self.solimp[:3])}")
+
+
+def damping_ratio(e: float) -> float:
+    """The damping ratio zeta of a linear spring and damper whose rebound has restitution `e`
+    (0 < e < 1): a contact that lasts half a damped period leaves with e = exp(-zeta pi /
+    sqrt(1 - zeta^2)), so zeta = -ln e / sqrt(pi^2 + ln^2 e) (e 0.2: 0.456)."""
+    return -math.log(e) / math.hypot(math.pi, math.log(e))
 
 
 def default_contact() -> Contact:
     """MuJoCo's default soft contact: solref 0.02 1, solimp 0.9 0.95 0.001 0.5 2."""
-    return Contact("default", (0.02, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0))
-
-
-def stiffest_contact(h: float) -> Contact:
-    """The stiffest contact that stays stable at step h: the time constant at MuJoCo's floor
-    of two steps (solref 2h 1, critically damped) and an impedance near 1 reached within 0.1 mm
-    of penetration (solimp 0.99 0.999 1e-4)."""
-    return Contact("stiffest", (2.0 * h, 1.0), (0.99, 0.999, 1e-4, 0.5, 2.0))
+    return Contact("default", (0.02, 1.0), DEFAULT_SOLIMP)
 
 
 def mjcf(params: dict, mu: float, h: float, contact: Contact, condim: int = 3) -> str:
@@ -83,7 +90,7 @@ def mjcf(params: dict, mu: float, h: float, contact: Contact, condim: int = 3) -
     return f"""
 <mujoco model="painleve-arm">
   <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>
-  <option timestep="{h!r}" integrator="Euler" cone="pyramidal" gravity="0 0 {-params['g']!r}"/>
+  <option timestep="{h!r}" integrator="{contact.integrator}" cone="{contact.cone}" gravity="0 0 {-params['g']!r}"/>
   <worldbody>
     <body name="link1" pos="0 0 0">
       <joint name="shoulder" type="hinge" axis="0 -1 0" damping="{sigma!r}"/>
@@ -170,7 +177,8 @@ class Digest:
 def roll(models, states, duration: float, h: float, windows, v_belts, params: dict, high: float,
          nthread: int = 2):
     """Runs each model from its initial state for `duration` s at step `h`, all in one
-    mujoco.rollout batch on `nthread` threads, CHUNK_STEPS steps a call, and digests each run over
+    mujoco.rollout batch on `nthread` threads, CHUNK_STEPS steps a call (fewer for a large batch:
+    CHUNK_RUN_STEPS runs x steps at most), and digests each run over
     its window (t0, t1] s (`windows`, one per run) without keeping the trajectory. `v_belts` (m/s):
     the belt servos' set-points (the control). `params`: Table I (l and H give the gap); `high`
     (m): the height that counts a flight in `Digest.high_flights`. Between chunks the full
@@ -191,7 +199,7 @@ def roll(models, states, duration: float, h: float, windows, v_belts, params: di
     wall0 = time.perf_counter()
     with rollout.Rollout(nthread=max(1, nthread)) as pool:
         while done < total:
-            steps = min(CHUNK_STEPS, total - done)
+            steps = min(max(1000, min(CHUNK_STEPS, CHUNK_RUN_STEPS // n)), total - done)
             traj, _ = pool.rollout(models, datas, state, control, nstep=steps)
             t = traj[:, :, 0]
             th1, th2 = traj[:, :, 1], traj[:, :, 1] + traj[:, :, 2]

@@ -1,4 +1,5 @@
-"""sil-host's side of the comparison: `sil-host simulate` run and read (examples/compare/README.md).
+"""sil-host's side of the comparison: `sil-host simulate` and `sil-host sweep`, run and read
+(examples/compare/README.md).
 
 sil-host is the rigid model: the tip on the belt or off it, Coulomb friction, Newton's
 restitution at touchdown (e_n, default 0.2) and the impact without collision where the contact
@@ -68,3 +69,29 @@ def digest(folder: str, summary: dict, window, high: float, belt_height: float) 
             "final_z_t": float(summary["final_tip"][0]), "final_mode": summary["final_mode"],
             "start_deg": (used[0], used[2]), "wall_s": float(summary["wall_s"]),
             "process_wall_s": float(summary["process_wall_s"])}
+
+
+def sweep(exe: str, x0s, mu: float, v_belt: float, transient: float, record: float, folder: str,
+          threads: int = 1, e_n: float = 0.2) -> dict:
+    """Runs `sil-host sweep` open loop (u = 0, Newton's `e_n`, the impact without collision
+    throwing the tip off: sil-host's defaults) at one `mu` and `v_belt` (m/s) from the paper's
+    initial conditions `x0s` (`a`, `d`), `transient` s, then the record window of `record` s, into
+    `folder`. Returns, by x0, runs.csv's record-window measurements: `lift_offs` (the tip leaving
+    the belt, at the events' exact times), `max_gap` (the highest tip position above the belt, m)
+    and `outcome` (the sweep's class: bouncing, contact, oscillating). Raises SilHostError on
+    failure."""
+    cmd = [exe, "sweep", "--mu", repr(mu), f"--v-belt={v_belt!r}", "--ics", ",".join(x0s),
+           "--transient", repr(transient), "--record", repr(record), "--e-n", repr(e_n), "--threads", str(threads),
+           "--out", folder, "--json"]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SilHostError(f"{' '.join(cmd)} exited {done.returncode}:\n{done.stderr}")
+    out = {}
+    with open(os.path.join(folder, "runs.csv")) as f:
+        for row in csv.DictReader(f):
+            if row.get("error"):
+                raise SilHostError(f"{' '.join(cmd)}: run {row['index']} failed: {row['error']}")
+            out[row["ic"].removeprefix("x0")] = {"lift_offs": int(row["lift_offs"]),
+                                                  "max_gap": float(row["tip_height_max"]),
+                                                  "outcome": row["outcome"]}
+    return out
