@@ -64,32 +64,31 @@ pub fn case_suffix(law: &str, e_n: f64) -> String {
 /// Colours of the initial conditions' curves.
 const IC_COLORS: [RGBColor; 6] = [colors::BLUE, colors::ORANGE, colors::GREEN, colors::RED, colors::PURPLE, colors::GREY];
 
-/// Draws the outcome map of the case `(law, e_n)` from its `rows` into `path`.
+/// One cell of a map: a grid point of one initial condition, its fill, and
+/// whether it is ringed.
+struct MapCell<'a> {
+    ic: &'a str,
+    mu: f64,
+    v_belt: f64,
+    fill: RGBColor,
+    ring: bool,
+}
+
+/// Draws a (`v_belt`, `mu`) map into `path`: one panel per initial condition of
+/// `spec`, each cell of `cells` filled with its colour, a black ring on the
+/// ringed ones, under `title` and `legend`.
 ///
 /// # Errors
 /// [`CliError::Plot`].
-pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&RunRow]) -> Result<(), CliError> {
+fn draw_cells(path: &Path, spec: &SweepSpec, title: &str, legend: &Legend, cells: &[MapCell]) -> Result<(), CliError> {
     let err = plot_err(path);
     let ics = spec.initial_conditions();
     let cols = ics.len().min(3);
     let grid_rows = ics.len().div_ceil(cols);
     // One column for one panel, the page's width for two or three.
     let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
-    // The legend: one coloured box, name and count per outcome that occurs in this
-    // case (in the order of the outcomes the sweep can give), packed in rows across
-    // the width (measured with the figures' font).
-    let outcomes: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
-    let legend = Legend::new(
-        outcomes
-            .iter()
-            .map(|&o| (o, rows.iter().filter(|r| r.outcome == o).count()))
-            .filter(|&(_, n)| n > 0)
-            .map(|(o, n)| (format!("{} ({n} run{})", outcome_words(o), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
-            .collect(),
-    );
-    let title = format!("Outcome over ({BELT_SPEED}, {MU}){}, {} ({law}, {E_N} = {e_n})", paper_figure(spec), controller_label(spec));
     let panel_h = if cols == 3 { 360 } else { 420 };
-    let (root, panels_area) = plot::titled_canvas(path, print, &title, Some(&legend), panel_h * grid_rows as u32).map_err(|e| err(&e))?;
+    let (root, panels_area) = plot::titled_canvas(path, print, title, Some(legend), panel_h * grid_rows as u32).map_err(|e| err(&e))?;
     let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
     let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
     let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
@@ -103,17 +102,44 @@ pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&Run
         // Row by row from the lowest mu, each cell reaching a quarter of a cell into
         // its right and upper neighbours, which are drawn after it and cover that:
         // cells that only touch leave hairline seams in PDF viewers' anti-aliasing.
-        let mut of_ic: Vec<&&RunRow> = rows.iter().filter(|r| r.ic == ic.name).collect();
+        let mut of_ic: Vec<&MapCell> = cells.iter().filter(|c| c.ic == ic.name).collect();
         of_ic.sort_by(|a, b| a.mu.total_cmp(&b.mu).then(a.v_belt.total_cmp(&b.v_belt)));
         let (v_last, mu_last) = (vs[vs.len() - 1], mus[mus.len() - 1]);
-        let cells = of_ic.iter().map(|r| {
-            let right = if r.v_belt < v_last { 0.5 * dv } else { 0.0 };
-            let up = if r.mu < mu_last { 0.5 * dmu } else { 0.0 };
-            Rectangle::new([(r.v_belt - dv, r.mu - dmu), (r.v_belt + dv + right, r.mu + dmu + up)], outcome_color(r.outcome).filled())
+        let rects = of_ic.iter().map(|c| {
+            let right = if c.v_belt < v_last { 0.5 * dv } else { 0.0 };
+            let up = if c.mu < mu_last { 0.5 * dmu } else { 0.0 };
+            Rectangle::new([(c.v_belt - dv, c.mu - dmu), (c.v_belt + dv + right, c.mu + dmu + up)], c.fill.filled())
         });
-        chart.draw_series(cells).map_err(|e| err(&e))?;
+        chart.draw_series(rects).map_err(|e| err(&e))?;
+        if of_ic.iter().any(|c| c.ring) {
+            let rings = of_ic.iter().filter(|c| c.ring).map(|c| Circle::new((c.v_belt, c.mu), 4, BLACK.stroke_width(2)));
+            chart.draw_series(rings).map_err(|e| err(&e))?;
+        }
     }
     plot::finish(root, path, print).map_err(|e| err(&e).into())
+}
+
+/// Draws the outcome map of the case `(law, e_n)` from its `rows` into `path`.
+///
+/// # Errors
+/// [`CliError::Plot`].
+pub fn draw_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, rows: &[&RunRow]) -> Result<(), CliError> {
+    // The legend: one coloured box, name and count per outcome that occurs in this
+    // case (in the order of the outcomes the sweep can give), packed in rows across
+    // the width (measured with the figures' font).
+    let outcomes: &[Outcome] = if spec.scenario.is_some() { &Outcome::CLOSED_LOOP } else { &Outcome::OPEN_LOOP };
+    let legend = Legend::new(
+        outcomes
+            .iter()
+            .map(|&o| (o, rows.iter().filter(|r| r.outcome == o).count()))
+            .filter(|&(_, n)| n > 0)
+            .map(|(o, n)| (format!("{} ({n} run{})", outcome_words(o), if n == 1 { "" } else { "s" }), Swatch::Box(outcome_color(o))))
+            .collect(),
+    );
+    let title = format!("Outcome over ({BELT_SPEED}, {MU}){}, {} ({law}, {E_N} = {e_n})", paper_figure(spec), controller_label(spec));
+    let cells: Vec<MapCell> =
+        rows.iter().map(|r| MapCell { ic: &r.ic, mu: r.mu, v_belt: r.v_belt, fill: outcome_color(r.outcome), ring: false }).collect();
+    draw_cells(path, spec, &title, &legend, &cells)
 }
 
 /// The shade of a lift-off fraction `p` in [0, 1]: the contact tint at 0, the
@@ -137,11 +163,6 @@ pub fn fraction_color(p: f64) -> RGBColor {
 /// # Errors
 /// [`CliError::Plot`].
 pub fn draw_probability_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, cells: &[&CellRow]) -> Result<(), CliError> {
-    let err = plot_err(path);
-    let ics = spec.initial_conditions();
-    let cols = ics.len().min(3);
-    let grid_rows = ics.len().div_ceil(cols);
-    let print = if cols == 1 { PrintWidth::OneColumn } else { PrintWidth::TwoColumn };
     let undecided = cells.iter().filter(|c| c.undecided).count();
     // The legend's shades are fractions that occur (a legend entry must be in the
     // figure): all of them up to five, else five spread by rank, ends included.
@@ -169,36 +190,11 @@ pub fn draw_probability_map(path: &Path, spec: &SweepSpec, law: &str, e_n: f64, 
         paper_figure(spec),
         controller_label(spec)
     );
-    let panel_h = if cols == 3 { 360 } else { 420 };
-    let (root, panels_area) = plot::titled_canvas(path, print, &title, Some(&legend), panel_h * grid_rows as u32).map_err(|e| err(&e))?;
-    let (dv, dmu) = (half_step(&spec.v_belt), half_step(&spec.mu));
-    let (vs, mus) = (spec.v_belt.values(), spec.mu.values());
-    let x_range = (vs[0] - dv)..(vs[vs.len() - 1] + dv);
-    let y_range = (mus[0] - dmu)..(mus[mus.len() - 1] + dmu);
-    for (i, area) in panels_area.split_evenly((grid_rows, cols)).iter().enumerate().take(ics.len()) {
-        let ic = &ics[i];
-        let caption = format!("from {} (elbow {})", ic.name, ic.branch.name());
-        let (x_desc, y_desc) = (axis(BELT_SPEED, "m/s"), axis(MU, "-"));
-        let axes = plot::Axes { caption: Some(&caption), x: x_range.clone(), y: y_range.clone(), x_desc: &x_desc, y_desc: &y_desc };
-        let mut chart = plot::xy_chart(area, &axes).map_err(|e| err(&e))?;
-        let mut of_ic: Vec<&&CellRow> = cells.iter().filter(|c| c.ic == ic.name).collect();
-        of_ic.sort_by(|a, b| a.mu.total_cmp(&b.mu).then(a.v_belt.total_cmp(&b.v_belt)));
-        let (v_last, mu_last) = (vs[vs.len() - 1], mus[mus.len() - 1]);
-        // As the outcome map: each cell reaching a quarter of a cell into its
-        // right and upper neighbours, drawn after it (no hairline seams).
-        let rects = of_ic.iter().map(|c| {
-            let right = if c.v_belt < v_last { 0.5 * dv } else { 0.0 };
-            let up = if c.mu < mu_last { 0.5 * dmu } else { 0.0 };
-            Rectangle::new(
-                [(c.v_belt - dv, c.mu - dmu), (c.v_belt + dv + right, c.mu + dmu + up)],
-                fraction_color(c.lift_off_fraction).filled(),
-            )
-        });
-        chart.draw_series(rects).map_err(|e| err(&e))?;
-        let rings = of_ic.iter().filter(|c| c.undecided).map(|c| Circle::new((c.v_belt, c.mu), 4, BLACK.stroke_width(2)));
-        chart.draw_series(rings).map_err(|e| err(&e))?;
-    }
-    plot::finish(root, path, print).map_err(|e| err(&e).into())
+    let map_cells: Vec<MapCell> = cells
+        .iter()
+        .map(|c| MapCell { ic: &c.ic, mu: c.mu, v_belt: c.v_belt, fill: fraction_color(c.lift_off_fraction), ring: c.undecided })
+        .collect();
+    draw_cells(path, spec, &title, &legend, &map_cells)
 }
 
 fn half_step(a: &analyses::sweep::Axis) -> f64 {
