@@ -26,7 +26,6 @@
 use drivers::{
     As5047p, BeltEncoder, LoadCell,
     belt::BeltError,
-    frame::FrameCalibration,
     load_cell::{Calibration, CalibrationError},
 };
 use firmware::{
@@ -41,6 +40,7 @@ use shared::{
 
 use crate::{
     bringup::{CalibrationRecord, EnableOutcome, REDUCED_TORQUE_CODES, RawReadings, Refusal},
+    calibration::ArmCalibration,
     hardware::{CODES_FULL_SCALE, Hardware},
     io::Motors,
     io::{ArmIo, IntervalClock, Watchdog},
@@ -50,18 +50,6 @@ use crate::{
     step_stats::{StepStats, WindowSummary},
     telemetry::ArmTelemetry,
 };
-
-/// The arm's calibration: what turns raw readings into the wire's units
-/// (docs/board.md "Calibration").
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ArmCalibration {
-    /// The encoders' zeros and directions.
-    pub encoders: FrameCalibration,
-    /// The load cell's front end (zero counts, N per count, per axis).
-    pub load_cell: Calibration,
-    /// Belt travel per quadrature count, m (negative flips the direction).
-    pub belt_metres_per_count: f32,
-}
 
 /// The firmware of configuration `config` as a board runs it: the
 /// configuration valid (`firmware::Config::validate`) and the runaway limits on

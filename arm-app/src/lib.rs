@@ -25,6 +25,7 @@
 
 pub mod app;
 pub mod bringup;
+pub mod calibration;
 pub mod hardware;
 pub mod io;
 mod jog;
@@ -37,7 +38,8 @@ mod service;
 pub mod step_stats;
 pub mod telemetry;
 
-pub use app::{ArmApp, ArmCalibration, ArmParts, StartError};
+pub use app::{ArmApp, ArmParts, StartError};
+pub use calibration::ArmCalibration;
 pub use hardware::{BUTTON_PRESS_S, CODES_FULL_SCALE, button_periods};
 pub use io::{ArmIo, Blocking, EncoderAcquisition, IntervalClock, Motors, Watchdog};
 pub use joint::{AcquisitionFault, EncoderFault, Joint};

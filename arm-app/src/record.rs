@@ -113,7 +113,7 @@ pub struct CalibrationRecord {
 impl CalibrationRecord {
     /// The record of calibration `cal` with no bring-up step done: what a board
     /// runs with before its bring-up (the compiled-in defaults).
-    pub fn uncalibrated(cal: &crate::ArmCalibration) -> Self {
+    pub fn uncalibrated(cal: &crate::calibration::ArmCalibration) -> Self {
         Self {
             zero_counts: [cal.encoders.theta1.zero_count, cal.encoders.elbow.zero_count],
             reversed: [cal.encoders.theta1.reversed, cal.encoders.elbow.reversed],
@@ -130,7 +130,7 @@ impl CalibrationRecord {
     /// The record of calibration `cal` with every bring-up step done and both
     /// spans measured: a board brought up before (the twin's `--flash saved`,
     /// tests).
-    pub fn brought_up(cal: &crate::ArmCalibration) -> Self {
+    pub fn brought_up(cal: &crate::calibration::ArmCalibration) -> Self {
         Self { zeros_set: true, directions_checked: true, tared: true, span: [SpanStep::Measured; 2], ..Self::uncalibrated(cal) }
     }
 
@@ -150,9 +150,9 @@ impl CalibrationRecord {
     }
 
     /// The calibration this record holds.
-    pub fn arm_calibration(&self) -> crate::ArmCalibration {
+    pub fn arm_calibration(&self) -> crate::calibration::ArmCalibration {
         use drivers::{EncoderCalibration, frame::FrameCalibration, load_cell::Calibration};
-        crate::ArmCalibration {
+        crate::calibration::ArmCalibration {
             encoders: FrameCalibration {
                 theta1: EncoderCalibration { zero_count: self.zero_counts[0], reversed: self.reversed[0] },
                 elbow: EncoderCalibration { zero_count: self.zero_counts[1], reversed: self.reversed[1] },

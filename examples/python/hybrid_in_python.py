@@ -31,7 +31,7 @@ this port):
 - joint velocities from an alpha-beta tracker per angle at 40 Hz (both poles at
   `exp(-w Ts)`, `w = 2 pi 40` rad/s) whose prediction is driven by the model's joint
   acceleration `M^-1 (u - (w + c) + J^T f)` under the last applied torque and the
-  measured tip force (firmware/src/estimator.rs, controller.rs). `Sensed.theta1_dot`
+  measured tip force (firmware/src/estimator.rs, controller/step.rs). `Sensed.theta1_dot`
   is the same tracker without that prediction: `--observer sensed` uses it instead,
   to show what the model-driven prediction is worth.
 

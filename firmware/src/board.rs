@@ -15,16 +15,7 @@ use shared::{
     wire::{ActuatorCommand, SensorFrame},
 };
 
-use crate::{Config, ControlLaw, Firmware, SafeReason, config::ConfigError};
-
-/// A free-running tick counter the step uses to measure its own execution time
-/// (the DWT cycle counter or SysTick on the MCU, `Instant` on the host, a fake in tests).
-pub trait TickClock {
-    /// Current tick count (wraps; differences are taken with `wrapping_sub`).
-    fn ticks(&self) -> u32;
-    /// Ticks per second.
-    fn ticks_per_second(&self) -> u32;
-}
+use crate::{Config, ControlLaw, Firmware, SafeReason, config::ConfigError, tick_clock::TickClock};
 
 /// What happened at a board: the input of [`handle`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -225,7 +216,7 @@ mod tests {
             Event::End,
         ];
         let mut board = Script { events: events.into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
-        let mut fw: Option<Firmware> = None;
+        let mut fw: Option<Firmware<crate::PaperLaws>> = None;
         run(&mut fw, &mut board, &FrozenClock).unwrap();
         let o = &board.outcomes;
         assert_eq!(o.len(), 8);
@@ -275,6 +266,6 @@ mod tests {
     fn a_board_error_stops_the_loop() {
         let mut board =
             Script { events: vec![Event::Configure(Config::default())].into_iter(), outcomes: Vec::new(), now: Instant::from_us(0) };
-        assert_eq!(run(&mut None::<Firmware>, &mut board, &FrozenClock), Err("script exhausted"));
+        assert_eq!(run(&mut None::<Firmware<crate::PaperLaws>>, &mut board, &FrozenClock), Err("script exhausted"));
     }
 }

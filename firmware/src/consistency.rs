@@ -72,7 +72,7 @@ impl ConsistencyMonitor {
         let pressing_off_the_belt = f_n > rule.contact_force && height.abs() > rule.height_tolerance;
         let inside_the_belt = height < -rule.height_tolerance;
         let pulling = f_n < -rule.contact_force;
-        let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !crate::finite_both(f_n, height);
+        let inconsistent = pressing_off_the_belt || inside_the_belt || pulling || !crate::finite::finite_both(f_n, height);
         self.inconsistent = if inconsistent { self.inconsistent.saturating_add(1) } else { 0 };
         self.pulling = if pulling { self.pulling.saturating_add(1) } else { 0 };
         self.inconsistent >= rule.confirm || self.pulling >= PULLING_CONFIRM.min(rule.confirm)

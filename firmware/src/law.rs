@@ -103,7 +103,7 @@ pub fn pid(
         gains.kp[i] * e[i] + gains.ki[i] * state.integral[i] + gains.kd[i] * ed[i]
     };
     let u = [joint(0), joint(1)];
-    if crate::finite_both(u[0], u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
+    if crate::finite::finite_both(u[0], u[1]) { Ok(u) } else { Err(LawError::NonFinite) }
 }
 
 /// The PID's reference joint angles `q* = [theta1*, theta2*]` (rad) and their
@@ -403,7 +403,7 @@ pub fn hybrid_at(
     let u_gen =
         wc + Vector2::new(terms.m11 * x0 + m12 * x1 - (j11 * f_t_hat + j21 * a_f), m12 * x0 + terms.m22 * x1 - (j12 * f_t_hat + j22 * a_f));
     let motor = [u_gen[0] + u_gen[1], u_gen[1]];
-    if !crate::finite_all3(motor[0], motor[1], a_f) {
+    if !crate::finite::finite_all3(motor[0], motor[1], a_f) {
         return Err(LawError::NonFinite);
     }
     Ok((motor, HybridSignals { a_v, a_f, f_t_hat, mu_used, u_gen: [u_gen[0], u_gen[1]], disturbance }))
@@ -478,7 +478,7 @@ mod tests {
         let s_vec = jdot_qdot(p.l, &q, &qd);
         let u_gen = wc + m * j_inv * (Vector2::new(a_v, 0.0) - s_vec) + jac.transpose() * Vector2::new(-f_t_hat, -a_f);
         let motor = [u_gen[0] + u_gen[1], u_gen[1]];
-        if !(crate::finite(motor[0]) && crate::finite(motor[1]) && crate::finite(a_f)) {
+        if !(crate::finite::finite(motor[0]) && crate::finite::finite(motor[1]) && crate::finite::finite(a_f)) {
             return Err(LawError::NonFinite);
         }
         // The disturbance bound from Q itself (paper eq. 3), in f64: det Q / |p_u|.

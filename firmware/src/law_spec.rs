@@ -271,22 +271,6 @@ const fn put_f32(out: &mut [u8], at: usize, x: f32) -> usize {
     at + 4
 }
 
-/// Defines `PAINLEVE_LAW_SPEC`, the symbol an MCU image carries its law's
-/// declaration in ([`LawSpec::encoded`]), for the host to read from the ELF
-/// (`rig::law::LawDescription::from_elf`) and bind a scenario's `[law]` table
-/// with before it configures the image. The image must reference it (the
-/// linker drops unreferenced data): the images' entry points pass it to
-/// `core::hint::black_box`.
-#[macro_export]
-macro_rules! law_spec_symbol {
-    ($law:ty) => {
-        /// The law's declaration in postcard's encoding (`firmware::law_spec`).
-        #[unsafe(no_mangle)]
-        #[used]
-        pub static PAINLEVE_LAW_SPEC: [u8; <$law as $crate::ControlLaw>::SPEC.encoded_len()] = <$law as $crate::ControlLaw>::SPEC.encoded();
-    };
-}
-
 const fn str_eq(a: &str, b: &str) -> bool {
     let (a, b) = (a.as_bytes(), b.as_bytes());
     if a.len() != b.len() {

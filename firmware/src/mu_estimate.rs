@@ -102,7 +102,7 @@ impl MuEstimate {
         // finite terms never overflow: `|ratio| <= MAX / f_n`, so the sum is at most
         // `f_n + MAX / f_n`, below `MAX + 2` on `(0.5, MAX]`). The same verdict for
         // every input (tests `a_non_finite_force_*`, `the_sums_check_*`).
-        let finite = crate::finite(sample.f_n + ratio);
+        let finite = crate::finite::finite(sample.f_n + ratio);
         if !(trusted && finite && alpha > 0.0) {
             return false;
         }
@@ -245,7 +245,7 @@ mod tests {
         let two_checks = |e: &mut MuEstimate, x: &FrictionSample| {
             let s = if x.v_r < 0.0 { -1.0 } else { 1.0 };
             let ratio = -s * x.f_t / x.f_n;
-            if !(crate::finite(x.f_n) && crate::finite(ratio)) {
+            if !(crate::finite::finite(x.f_n) && crate::finite::finite(ratio)) {
                 // Refused either way: only the slip direction moves.
                 e.last_slip = if x.v_r.abs() >= V_R_MIN { s } else { 0.0 };
                 return false;

@@ -163,7 +163,7 @@ proptest! {
         let clock = SteppingClock { now: Cell::new(0), step: 50 };
         let mut seq = 0u32;
         let mut misses = 0u32;
-        let mut step = |late: bool, fw: &mut Firmware| {
+        let mut step = |late: bool, fw: &mut Firmware<crate::PaperLaws>| {
             let c = fw.step(Instant::from_us(seq as u64 * 1000 + if late { 990 } else { 100 }), &frame(seq, q, [-1.0, 2.0]), &clock);
             seq += 1;
             c

@@ -187,7 +187,7 @@ impl WiringMonitor {
         // Selects, not conditional stores: the filtered values stay in registers for
         // the rule below (the same bits: a non-finite `d` leaves the value as it was).
         let smoothing = rule.smoothing;
-        let filter = |m: f32, d: f32| if crate::finite(d) { m + smoothing * (d - m) } else { m };
+        let filter = |m: f32, d: f32| if crate::finite::finite(d) { m + smoothing * (d - m) } else { m };
         let missed = [filter(self.missed[0], du[0]), filter(self.missed[1], du[1])];
         self.missed = missed;
         let net = [filter(self.net[0], input.net[0]), filter(self.net[1], input.net[1])];
@@ -278,7 +278,7 @@ mod tests {
         let d1 = off * a[0] + m22 * a[1];
         let du = [d0 + d1, d1];
         let filter = |m: &mut f32, d: f32| {
-            if crate::finite(d) {
+            if crate::finite::finite(d) {
                 *m += rule.smoothing * (d - *m);
             }
         };

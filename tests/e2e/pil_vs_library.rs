@@ -23,7 +23,7 @@ type Pair = (u32, [i16; 2], [i16; 2], u32, u32);
 /// A link that forwards to the image and steps the host library beside it.
 struct Compare {
     image: PilLink,
-    host: Firmware,
+    host: Firmware<firmware::PaperLaws>,
     pairs: Vec<Pair>,
 }
 

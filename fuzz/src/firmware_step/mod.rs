@@ -14,7 +14,7 @@
 //! the firmware as a sensor's invalid flag, which the cases set.
 //!
 //! The property ([`check`]) runs the firmware beside a small model of its frame
-//! checks, deadline monitor and safe state (`firmware/src/controller.rs`) and asserts
+//! checks, deadline monitor and safe state (`firmware/src/controller/step.rs`) and asserts
 //! for every command: no panic; it echoes the frame's `seq`; torque codes within the
 //! 12-bit range `[-2048, 2047]` and, decoded, finite and within the configured
 //! `torque_limit` (plus half a code); only defined status bits; `BAD_FRAME`,

@@ -1,5 +1,5 @@
 //! The model of the firmware's frame checks, deadline monitor and safe state
-//! (`firmware/src/controller.rs`), and the check of one command against it.
+//! (`firmware/src/controller/step.rs`), and the check of one command against it.
 
 use firmware::{Config, SafeReason};
 use shared::wire::{self, ActuatorCommand, SensorFrame, status};

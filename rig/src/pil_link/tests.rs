@@ -164,7 +164,7 @@ fn fake_board(mut master: File, script: Script) -> JoinHandle<Seen> {
     std::thread::spawn(move || {
         let clock = Counting(Cell::new(0));
         let mut rx = FrameBuffer::default();
-        let mut fw: Option<Firmware> = None;
+        let mut fw: Option<Firmware<firmware::PaperLaws>> = None;
         let mut seen = Seen::default();
         let mut buf = [0u8; 512];
         loop {
