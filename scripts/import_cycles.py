@@ -151,6 +151,7 @@ class Crate:
         self.items = {f: set(m.group(2) for m in ITEM.finditer(c)) | set(MACRO_RULES.findall(c)) for f, c in self.files.items()}
         self.uses = {f: self._uses(c) for f, c in self.files.items()}
         self.spans = {f: self.inline_mods(c) for f, c in self.files.items()}
+        self.via_root = []  # (file, path): imports through the crate root's re-exports
         self.path_mods = {f: {name: os.path.abspath(os.path.join(os.path.dirname(f), p)) for p, name in PATH_ATTR.findall(c)}
                           for f, c in self.files.items()}
 
@@ -302,13 +303,40 @@ class Crate:
                     segs = segs[:-1]
                 if segs[0] not in ('crate', '$crate', 'self', 'super'):
                     continue
-                r = self.resolve(f, self.unwind(f, segs, self.depth(f, pos)))
+                segs = self.unwind(f, segs, self.depth(f, pos))
+                if self.through_root(f, segs):
+                    self.via_root.append((f, p))
+                r = self.resolve(f, segs)
                 if r is None:
                     unresolved.append((f, p))
                 elif r != 'extern' and r[1] != f:
                     deps.add(r[1])
             edges[f] = deps
         return edges, unresolved
+
+    def through_root(self, f, segs):
+        """Whether a path written in `f` reaches its item through a name the crate
+        root imports (`crate::Name`, or `super::Name` up to the root, with `pub use
+        module::Name` or `pub use other_crate::Name` there) rather than from the module
+        that defines it: inside a crate, a file imports from the defining module."""
+        # (`$crate::` paths are a macro's, which must name public paths: not counted.)
+        head = segs[0] if segs else ''
+        if head == 'crate':
+            at, rest = self.root, segs[1:]
+        elif head == 'super':
+            at, rest = f, segs
+            while rest and rest[0] == 'super':
+                at, rest = self.parent(at), rest[1:]
+                if at is None:
+                    return False
+        else:
+            return False
+        if at != self.root or not rest or f == self.root:
+            return False
+        name = rest[0]
+        if self.child(self.root, name) or name in self.items[self.root] or name in self.exported_macros:
+            return False
+        return any(alias == name or (alias is None and path.endswith('*')) for path, alias, _ in self.uses[self.root])
 
 
 def cycles_of(edges):
@@ -370,7 +398,7 @@ def loop_in(comp, edges):
 def main(argv):
     verbose = '--verbose' in argv
     srcs = [a for a in argv if a != '--verbose']
-    n_cycles = n_unresolved = n_paths = 0
+    n_cycles = n_unresolved = n_paths = n_via_root = 0
     for src in srcs:
         crate = Crate(src)
         if crate.root is None:
@@ -387,12 +415,15 @@ def main(argv):
         for f, p in unresolved:
             n_unresolved += 1
             print(f'UNRESOLVED in {src}: {rel(f)}: {p}')
+        for f, p in crate.via_root:
+            n_via_root += 1
+            print(f'THROUGH THE ROOT in {src}: {rel(f)}: {p}')
         if verbose:
             for f in sorted(edges):
                 for t in sorted(edges[f]):
                     print(f'  {rel(f)} -> {rel(t)}')
-    print(f'import cycles between files: {n_cycles}; unresolved paths: {n_unresolved} ({n_paths} arrows between files read)')
-    return 1 if n_cycles or n_unresolved else 0
+    print(f'import cycles between files: {n_cycles}; unresolved paths: {n_unresolved}; imports through a crate root: {n_via_root} ({n_paths} arrows between files read)')
+    return 1 if n_cycles or n_unresolved or n_via_root else 0
 
 
 if __name__ == '__main__':

@@ -226,7 +226,7 @@ impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
             enable_requested: false,
             last_enable: EnableOutcome::NotAsked,
             period_us: config.period.as_us(),
-            button_press_periods: crate::button_periods(config.period.as_us()),
+            button_press_periods: crate::hardware::button_periods(config.period.as_us()),
             time_offset_us: 0,
             seq: 0,
             tick_mark,

@@ -19,7 +19,7 @@
 use firmware::ControlLaw;
 use shared::wire::{ActuatorCommand, FirmwareTelemetry};
 
-use crate::{ArmApp, ArmIo};
+use crate::{app::ArmApp, io::ArmIo};
 
 /// `b"PLVM"` as a little-endian word.
 pub const MONITOR_MAGIC: u32 = u32::from_le_bytes(*b"PLVM");

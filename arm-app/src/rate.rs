@@ -16,7 +16,7 @@
 use firmware::ControlLaw;
 use shared::time::Period;
 
-use crate::{ArmApp, ArmIo};
+use crate::{app::ArmApp, io::ArmIo};
 
 /// The shortest control period the image runs, us (10 kHz: the acquisition's
 /// deadline, 40 us, and the control handler must fit in it).
@@ -64,7 +64,7 @@ impl<H: ArmIo, L: ControlLaw> ArmApp<H, L> {
         let t = seq.wrapping_mul(hw.period_us).wrapping_add(hw.time_offset_us);
         hw.time_offset_us = t.wrapping_sub(seq.wrapping_mul(now.as_us()));
         hw.period_us = now.as_us();
-        hw.button_press_periods = crate::button_periods(hw.period_us);
+        hw.button_press_periods = crate::hardware::button_periods(hw.period_us);
         Some(now)
     }
 }
@@ -93,9 +93,9 @@ mod tests {
         // thousandth of a period `periods_of` rounds off) and (n - 1) Ts < 20 ms,
         // for every whole microsecond of the range.
         for us in 100..=4000u64 {
-            let n = u64::from(crate::button_periods(us));
+            let n = u64::from(crate::hardware::button_periods(us));
             assert!(1000 * n * us + us >= 20_000_000 && (n - 1) * us < 20_000, "{us} us: {n} periods");
         }
-        assert_eq!([100, 1000, 4000].map(crate::button_periods), [200, 20, 5]);
+        assert_eq!([100, 1000, 4000].map(crate::hardware::button_periods), [200, 20, 5]);
     }
 }

@@ -7,13 +7,14 @@ use drivers::{EncoderCalibration, frame::FrameCalibration, load_cell::Calibratio
 use firmware::ControlLaw;
 
 use crate::{
-    ArmApp, ArmIo,
+    app::ArmApp,
     app::{board_firmware, check_stored},
     bringup::{
         Activity, BRINGUP_PROTOCOL, CalibrationRecord, EnableOutcome, JogFault, JogOutcome, MAX_JOG_CODES, MAX_JOG_PERIODS, MAX_JOG_US,
         MIN_SPAN_COUNTS, Missing, REDUCED_TORQUE_CODES, Refusal, Reply, Request, SpanStep, Status,
     },
     hardware::{CODES_FULL_SCALE, Hardware, Jog},
+    io::ArmIo,
     joint::Joint,
     record::{self, Settings, Stored},
 };

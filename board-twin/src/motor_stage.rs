@@ -14,7 +14,8 @@ use embedded_hal::{
     pwm::{ErrorKind, ErrorType as PwmErrorType, SetDutyCycle},
 };
 
-use crate::{bench::Shared, description::BoardDescription};
+use crate::bench::Shared;
+use board_description::BoardDescription;
 
 /// A duty above the channel's full scale (the PWM refuses it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -144,7 +145,7 @@ pub fn joint_torques(bench: &Shared, board: &BoardDescription) -> [f64; 2] {
         return [0.0; 2];
     }
     let max = f64::from(board.pwm_max_duty);
-    let one = |i: usize, m: &crate::description::MotorWiring| {
+    let one = |i: usize, m: &board_description::MotorWiring| {
         let fraction = (f64::from(b.outputs.duty[i]) / max).min(1.0);
         if fraction == 0.0 {
             // Zero duty is zero torque whichever way the direction pin points.

@@ -13,9 +13,9 @@ use rand_distr::{Distribution, Normal};
 use crate::{
     adc::adc_count,
     bench::{Bench, EncoderFaults, Shared},
-    description::{BoardDescription, ENCODER_COUNTS, EncoderMounting},
     motor_stage::joint_torques,
 };
+use board_description::{BoardDescription, ENCODER_COUNTS, EncoderMounting};
 
 /// What the arm is doing at a tick, as the board's devices sense it.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -13,12 +13,12 @@ use crate::{
     adc::AdcModel,
     as5047p::As5047pModel,
     counter::CounterModel,
-    description::BoardDescription,
     flash::FlashModel,
     motor_stage::{PinModel, PwmModel, Wire},
     physics::BoardPhysics,
 };
 use arm_app::{ArmApp, ArmCalibration, ArmIo, ArmParts, IntervalClock, Notice, StartError, Watchdog, button_periods, record::RecordFault};
+use board_description::BoardDescription;
 use drivers::{Motor, MotorStage};
 use firmware::{Config, TickClock, pil::StepClock};
 use firmware::{ControlLaw, PaperLaws};

@@ -9,7 +9,7 @@
 use crc::{CRC_64_XZ, Crc};
 use shared::wire::{FirmwareAnnouncement, WIRE_VERSION};
 
-use crate::{Config, LawSpec};
+use crate::{config::Config, law_spec::LawSpec};
 
 const CRC64: Crc<u64> = Crc::<u64>::new(&CRC_64_XZ);
 

@@ -15,7 +15,9 @@ use shared::{
     wire::{ActuatorCommand, SensorFrame},
 };
 
-use crate::{Config, ControlLaw, Firmware, SafeReason, config::ConfigError, tick_clock::TickClock};
+use crate::{
+    config::Config, config::ConfigError, control_law::ControlLaw, controller::Firmware, controller::SafeReason, tick_clock::TickClock,
+};
 
 /// What happened at a board: the input of [`handle`].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,7 +6,7 @@
 //! two chosen by the configuration's `controller` (the images and the rig as
 //! built today).
 //!
-//! The step ([`crate::Firmware::step`]) owns everything around the law: the
+//! The step ([`crate::controller::Firmware::step`]) owns everything around the law: the
 //! frame's decoding and checks, the estimate, the reference, lift-off
 //! detection, the sensor, runaway and wiring checks, saturation and the
 //! torques' encoding, the chatter check, deadlines and the safe state. Which of
@@ -18,7 +18,7 @@
 //! data and must stay within the step's budget (5 % of the period at 168 MHz,
 //! docs/hardware.md "Budgets"). An error ([`LawError`]) latches the safe state
 //! at once; non-finite torques or a non-finite disturbance bound are
-//! [`crate::SafeReason::NonFinite`] at that period, checked by the step after
+//! [`crate::controller::SafeReason::NonFinite`] at that period, checked by the step after
 //! every law, whatever the law returns or declares.
 //!
 //! **The boundary is sealed** (issue 80): a law supplies [`ControlLaw::step`]
@@ -26,7 +26,7 @@
 //! that chooses where that body is compiled ([`ControlLaw::control`]) takes a
 //! parameter of a type private to this crate ([`Sealed`], as the standard
 //! library seals `Error::type_id`), so no crate outside `firmware` can
-//! override it or call it, and [`crate::Firmware`]'s body is private to the
+//! override it or call it, and [`crate::controller::Firmware`]'s body is private to the
 //! crate. Overriding it does not compile:
 //!
 //! ```compile_fail,E0603
@@ -119,7 +119,7 @@ pub struct Declares {
     /// (`false`: it may lift off by design, as the paper's PID from `x0u`). For
     /// a law that promises no [`Declares::tracking`], the lift-off the firmware
     /// declares (its own detector and confirmation, [`crate::liftoff`]) is then
-    /// a stop at once, [`crate::SafeReason::LiftOff`]: without a tracking
+    /// a stop at once, [`crate::controller::SafeReason::LiftOff`]: without a tracking
     /// promise it is the first sign of a tip whipped off the belt by a reversed
     /// or dead motor, which the wiring check (its observer's 40 Hz bandwidth)
     /// sees 10 to 20 ms later, past 30 mm where the law holds 1 to 2 N m against
@@ -218,7 +218,7 @@ pub struct LawOutput {
 pub trait ControlLaw: Clone + core::fmt::Debug {
     /// What the law declares about its own configuration: its name, source and
     /// parameters (names, units, ranges, defaults; [`LawSpec`]), which a
-    /// configuration's `law` must match ([`crate::Firmware::with_law`]) and the
+    /// configuration's `law` must match ([`crate::controller::Firmware::with_law`]) and the
     /// plant maps a scenario's `[law]` table onto. The paper's laws:
     /// [`LawSpec::PAPER`].
     const SPEC: LawSpec;
@@ -254,11 +254,11 @@ pub trait ControlLaw: Clone + core::fmt::Debug {
     #[doc(hidden)]
     #[inline(always)]
     fn control(
-        fw: &mut crate::Firmware<Self>,
+        fw: &mut crate::controller::Firmware<Self>,
         seq: u32,
         m: &crate::decode::Measurement,
         _: Sealed,
-    ) -> Result<([f32; 2], u32), crate::SafeReason> {
+    ) -> Result<([f32; 2], u32), crate::controller::SafeReason> {
         fw.control(seq, m)
     }
 

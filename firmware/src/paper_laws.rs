@@ -106,11 +106,11 @@ impl ControlLaw for PaperLaws {
 
     #[inline(always)]
     fn control(
-        fw: &mut crate::Firmware<Self>,
+        fw: &mut crate::controller::Firmware<Self>,
         seq: u32,
         m: &crate::decode::Measurement,
         _: Sealed,
-    ) -> Result<([f32; 2], u32), crate::SafeReason> {
+    ) -> Result<([f32; 2], u32), crate::controller::SafeReason> {
         paper_control(fw, seq, m)
     }
 
@@ -135,14 +135,14 @@ impl ControlLaw for PaperLaws {
     }
 }
 
-/// [`crate::Firmware`]'s body for the paper's laws ([`PaperLaws`]'s
+/// [`crate::controller::Firmware`]'s body for the paper's laws ([`PaperLaws`]'s
 /// [`ControlLaw::control`]): one non-generic function of this crate, which the
 /// image's link-time optimisation inlines whole into the step (`crate::controller`'s
 /// notes on where the step's code is compiled).
 fn paper_control(
-    fw: &mut crate::Firmware<PaperLaws>,
+    fw: &mut crate::controller::Firmware<PaperLaws>,
     seq: u32,
     m: &crate::decode::Measurement,
-) -> Result<([f32; 2], u32), crate::SafeReason> {
+) -> Result<([f32; 2], u32), crate::controller::SafeReason> {
     fw.control(seq, m)
 }

@@ -22,7 +22,7 @@ use crc::{CRC_32_ISCSI, Crc};
 use serde::{Deserialize, Serialize};
 use shared::wire::{ActuatorCommand, FirmwareTelemetry, SensorFrame};
 
-use crate::Config;
+use crate::config::Config;
 
 /// Version of this protocol, sent in [`Uplink::Hello`]; the bridge refuses an
 /// image that speaks another. 7: [`Uplink::Hello`]'s `law_digest`; 6:

@@ -42,7 +42,7 @@ pub trait Observer {
 
     /// The sample asked for by [`Observer::next_sample`], read from a step of the
     /// current attempt (kept only if the attempt is).
-    fn on_sample(&mut self, _sample: &crate::Sample) {}
+    fn on_sample(&mut self, _sample: &crate::plant::Sample) {}
 
     /// The plant keeps the current attempt; the segment ended in state `y_end`.
     fn on_kept(&mut self, _y_end: &OdeState, _mode: ContactMode) {}

@@ -72,9 +72,9 @@ pub struct Segment<'a, C: ?Sized> {
     pub cone_relaxed: bool,
     /// Baumgarte stabilisation rate of the contact constraint, rad/s (0: none).
     pub baumgarte: f64,
-    /// The jam threshold on `f_n / (m g)` ([`crate::SimConfig::jam_load`]).
+    /// The jam threshold on `f_n / (m g)` ([`crate::config::SimConfig::jam_load`]).
     pub jam_load: f64,
-    /// The integrator's tolerances ([`crate::SimConfig::rtol`], [`crate::SimConfig::atol`]): the ledger's scale.
+    /// The integrator's tolerances ([`crate::config::SimConfig::rtol`], [`crate::config::SimConfig::atol`]): the ledger's scale.
     pub rtol: f64,
     /// See [`Segment::rtol`].
     pub atol: f64,
@@ -120,7 +120,7 @@ impl<'a, C: Controller + ?Sized> Segment<'a, C> {
         phase: Phase,
         ctrl: &'a C,
         cone_relaxed: bool,
-        cfg: &crate::SimConfig,
+        cfg: &crate::config::SimConfig,
         evals: &'a Cell<u64>,
         trig: &'a TrigCache,
     ) -> Self {

@@ -15,7 +15,7 @@ use std::fmt;
 
 use serde::ser::{self, Impossible, Serialize, SerializeStruct, Serializer};
 
-use crate::{Column, Declaration, Kind, Table};
+use crate::{Column, Table, declared::Declaration, declared::Kind};
 
 /// One cell, as the `csv` crate would write it.
 #[derive(Debug, Clone, PartialEq)]

@@ -36,7 +36,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
-use crate::AnalysisError;
+use crate::error::AnalysisError;
 use crate::sweep::{
     Axis, SweepController, SweepSpec,
     run::{self, RunRow},

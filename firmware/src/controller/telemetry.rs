@@ -30,7 +30,7 @@ pub struct Telemetry {
     pub u_raw: [f32; 2],
 }
 
-impl<L: crate::ControlLaw> Firmware<L> {
+impl<L: crate::control_law::ControlLaw> Firmware<L> {
     /// The telemetry message of the last step, answering `command` (SIL rig).
     pub fn telemetry_message(&self, command: &ActuatorCommand) -> wire::FirmwareTelemetry {
         let t = &self.telemetry;

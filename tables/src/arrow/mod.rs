@@ -26,7 +26,7 @@ use arrow_schema::{ArrowError, DataType, Field, Schema};
 
 #[cfg(feature = "read")]
 use crate::Table;
-use crate::{Column, Declaration, Kind, error::Error};
+use crate::{Column, declared::Declaration, declared::Kind, error::Error};
 
 #[cfg(feature = "read")]
 mod read;

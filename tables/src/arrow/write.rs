@@ -10,7 +10,8 @@ use arrow_schema::Schema;
 
 use super::{BATCH_ROWS, array_of, arrow_err, schema};
 use crate::{
-    ColumnRows, Declaration,
+    ColumnRows,
+    declared::Declaration,
     error::Error,
     writer::{RowSink, WriterThread},
 };

@@ -16,7 +16,7 @@ use mcap::{
 };
 
 use super::schema::proto_type;
-use crate::{Column, Kind, Table, error::Error};
+use crate::{Column, Table, declared::Kind, error::Error};
 
 /// Reads the tables of the MCAP file at `path` that this module wrote: per
 /// metadata record `painleve.table.<name>`, the [`Table`] of its columns (in

@@ -11,7 +11,7 @@ use prost_types::{
 };
 
 use super::McapGroup;
-use crate::Kind;
+use crate::declared::Kind;
 
 /// What a column holds and in which unit, for the fields' comments
 /// (the CLI's tables' columns; another gets its name).

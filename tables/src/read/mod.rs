@@ -3,7 +3,7 @@
 //!
 //! The project wrote every file it reads, so it knows each column's type: the
 //! file's header is matched against the declarations of the tables the project
-//! writes ([`crate::Declaration`], given by the caller: `experiments::DECLARED`),
+//! writes ([`crate::declared::Declaration`], given by the caller: `experiments::DECLARED`),
 //! and the file is read with that declaration's schema
 //! (`arrow_csv::ReaderBuilder::new(schema).with_header(true)`). An empty cell is
 //! NaN in a float column and `""` in a text column; in an integer or flag column
@@ -37,8 +37,9 @@ use arrow_csv::{ReaderBuilder, reader::Format};
 use arrow_schema::{ArrowError, DataType, Field, Schema};
 
 use crate::{
-    Declaration, Table,
+    Table,
     arrow::{BATCH_ROWS, data_type, settle, table_of},
+    declared::Declaration,
     error::Error,
 };
 
