@@ -24,7 +24,7 @@ pub const PLANT_FLAGS: [(&str, &str); 9] = [
 /// given (its default is a value too).
 ///
 /// # Errors
-/// [`crate::Error`] (exit 2): a scenario error naming the key, or a parameter
+/// [`crate::error::Error`] (exit 2): a scenario error naming the key, or a parameter
 /// error for a bad `mu` or `v_belt`.
 pub fn arm_params(
     set: &[rig::overrides::Override],
@@ -32,7 +32,7 @@ pub fn arm_params(
     arm: &[&str],
     mu: f64,
     v_belt: f64,
-) -> Result<shared::Params<f64>, crate::Error> {
+) -> Result<shared::Params<f64>, crate::error::Error> {
     use rig::{overrides, scenario::ScenarioError};
     overrides::check_keys(set, &PLANT_FLAGS).map_err(ScenarioError::from)?;
     let params = rig::arm::arm_params(set, &rig::arm::arm_keys(arm), command, mu, v_belt)?;
@@ -44,10 +44,10 @@ pub fn arm_params(
 /// flag in the error.
 ///
 /// # Errors
-/// [`crate::Error`] (bad input, exit 2) unless it is two finite numbers, the first smaller.
-pub fn parse_range(flag: &str, s: &crate::settings::NumberList) -> Result<(f64, f64), crate::Error> {
+/// [`crate::error::Error`] (bad input, exit 2) unless it is two finite numbers, the first smaller.
+pub fn parse_range(flag: &str, s: &crate::settings::NumberList) -> Result<(f64, f64), crate::error::Error> {
     match s.0.as_slice() {
         [a, b] if a.is_finite() && b.is_finite() && a < b => Ok((*a, *b)),
-        _ => Err(crate::Error::bad_input(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"))),
+        _ => Err(crate::error::Error::bad_input(format!("--{flag} expects MIN,MAX with MIN < MAX (finite numbers), got `{s}`"))),
     }
 }

@@ -12,7 +12,7 @@ pub struct Done<T> {
     /// The files written, in the order the command lists them.
     pub files: Vec<std::path::PathBuf>,
     /// Why the command stopped early or part of it failed; `None` when it finished.
-    pub failure: Option<crate::Error>,
+    pub failure: Option<crate::error::Error>,
 }
 
 impl<T> Done<T> {
@@ -22,11 +22,11 @@ impl<T> Done<T> {
     }
 
     /// With `strict`, a command that finished but whose results have violations
-    /// (`validity`, summed over its runs) fails with [`crate::Error::Invalid`]
+    /// (`validity`, summed over its runs) fails with [`crate::error::Error::Invalid`]
     /// (exit 1); an earlier failure is kept.
     pub fn strict(mut self, strict: bool, validity: &plant::Validity) -> Self {
         if strict && self.failure.is_none() && !validity.is_valid() {
-            self.failure = Some(crate::Error::Invalid(validity.describe_violations()));
+            self.failure = Some(crate::error::Error::Invalid(validity.describe_violations()));
         }
         self
     }
@@ -35,7 +35,7 @@ impl<T> Done<T> {
     ///
     /// # Errors
     /// The failure.
-    pub fn into_result(self) -> Result<(), crate::Error> {
+    pub fn into_result(self) -> Result<(), crate::error::Error> {
         self.failure.map_or(Ok(()), Err)
     }
 }
@@ -55,7 +55,7 @@ mod strict_tests {
         assert!(e.to_string().contains("2 friction-cone violations"), "{e}");
         assert!(Done::ok((), vec![]).strict(false, &cone).into_result().is_ok());
         assert!(Done::ok((), vec![]).strict(true, &rules).into_result().is_ok(), "fallbacks and Zeno stops are not violations");
-        let earlier = Done { result: (), files: vec![], failure: Some(crate::Error::bad_input("x")) };
+        let earlier = Done { result: (), files: vec![], failure: Some(crate::error::Error::bad_input("x")) };
         assert_eq!(earlier.strict(true, &cone).into_result().unwrap_err().exit_code(), 2);
     }
 }

@@ -11,7 +11,7 @@ use rig::{
     record::RunError,
 };
 
-use crate::{Error as CliError, scenario::load_scenario, settings::FirmwareArgs};
+use crate::{error::Error, scenario::load_scenario, settings::FirmwareArgs};
 
 /// Serves rig `args.rig` with the firmware running law `L` until the plant
 /// ends the run (exit 0) or dies (3).
@@ -19,14 +19,14 @@ use crate::{Error as CliError, scenario::load_scenario, settings::FirmwareArgs};
 /// # Errors
 /// Bad scenario, rig name, configuration or `[law]` table (exit 2); transport
 /// failures (exit 1).
-pub fn serve<L: ControlLaw>(args: &FirmwareArgs) -> Result<i32, CliError> {
+pub fn serve<L: ControlLaw>(args: &FirmwareArgs) -> Result<i32, Error> {
     let scenario = load_scenario(&args.scenario)?;
-    check_rig_name(&args.rig).map_err(CliError::bad_input)?;
+    check_rig_name(&args.rig).map_err(Error::bad_input)?;
     match serve_law::<L>(&scenario, &args.rig, args.realtime) {
         Ok(Ending::EndOfRun { .. }) => Ok(0),
         Ok(Ending::PeerLost { .. }) => Ok(3),
-        Err(e @ (RunError::Law(_) | RunError::Firmware(_))) => Err(CliError::bad_input(e.to_string())),
-        Err(e) => Err(CliError::from(e)),
+        Err(e @ (RunError::Law(_) | RunError::Firmware(_))) => Err(Error::bad_input(e.to_string())),
+        Err(e) => Err(Error::from(e)),
     }
 }
 

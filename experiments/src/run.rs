@@ -3,7 +3,7 @@
 //! itself is the rig's ([`rig::run_loop`]).
 
 use crate::{
-    Error as CliError,
+    error::Error,
     scenario::load_scenario,
     settings::{RunArgs, RunLink},
 };
@@ -19,10 +19,10 @@ use rig::setup::RunSetup;
 /// # Errors
 /// Bad plant parameters or initial conditions, or a firmware configuration the
 /// firmware refuses (exit 2).
-pub fn setup(scenario: Scenario) -> Result<RunSetup, CliError> {
+pub fn setup(scenario: Scenario) -> Result<RunSetup, Error> {
     RunSetup::new(scenario).map_err(|e| match e {
-        RunError::Firmware(e) => CliError::bad_input(format!("firmware configuration: {e}")),
-        e => CliError::from(e),
+        RunError::Firmware(e) => Error::bad_input(format!("firmware configuration: {e}")),
+        e => Error::from(e),
     })
 }
 
@@ -33,7 +33,7 @@ pub fn setup(scenario: Scenario) -> Result<RunSetup, CliError> {
 ///
 /// # Errors
 /// Bad scenario, overrides or options (exit 2).
-pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), CliError> {
+pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), Error> {
     let setup = setup(load_scenario(&args.scenario)?)?;
     let scenario = setup.scenario();
     let chosen = if args.in_process { RunLink::InProcess } else { args.link.unwrap_or(RunLink::Iceoryx2) };
@@ -47,7 +47,7 @@ pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), CliError> {
         crate::scenario::refuse_board_overrides(&args.scenario.set, chosen.without_board())?;
     }
     if args.elf.is_some() && chosen != RunLink::Emulator {
-        return Err(CliError::bad_input("--elf names the image for --link emulator only"));
+        return Err(Error::bad_input("--elf names the image for --link emulator only"));
     }
     if chosen != RunLink::Iceoryx2 {
         let what = match chosen {
@@ -62,11 +62,11 @@ pub fn prepare(args: &RunArgs) -> Result<(RunSetup, RunLink), CliError> {
             (args.monitors > 0, "--monitors"),
         ] {
             if given {
-                return Err(CliError::bad_input(format!("{flag} needs the firmware process over iceoryx2: not with {what}")));
+                return Err(Error::bad_input(format!("{flag} needs the firmware process over iceoryx2: not with {what}")));
             }
         }
     }
-    kind.check(&scenario.faults).map_err(|e| CliError::bad_input(e.to_string()))?;
+    kind.check(&scenario.faults).map_err(|e| Error::bad_input(e.to_string()))?;
     Ok((setup, chosen))
 }
 

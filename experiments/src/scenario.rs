@@ -2,7 +2,7 @@
 //! standard input, or the embedded default) with `--set` overrides, then the
 //! flags of [`ScenarioArgs`]; a key is set in one place only.
 
-use crate::{Error as CliError, settings::ScenarioArgs};
+use crate::{error::Error, settings::ScenarioArgs};
 use rig::{
     overrides::{self, Override},
     scenario::Scenario,
@@ -12,10 +12,10 @@ use rig::{
 /// default) with the `--set` overrides applied to its TOML document.
 ///
 /// # Errors
-/// [`crate::Error::BadInput`] for a file that cannot be read, is not a regular
+/// [`crate::error::Error::BadInput`] for a file that cannot be read, is not a regular
 /// file or is over [`tables::input::SCENARIO`]'s bound (standard input too);
-/// [`crate::Error::Analysis`] naming the key (exit 2).
-pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result<Scenario, CliError> {
+/// [`crate::error::Error::Analysis`] naming the key (exit 2).
+pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result<Scenario, Error> {
     let text = match path {
         // Standard input, bounded as a file is (`cat /dev/zero | ... --scenario -`).
         Some(path) if path.as_os_str() == "-" => {
@@ -37,8 +37,8 @@ pub fn read_scenario(path: Option<&std::path::Path>, set: &[Override]) -> Result
 /// a key is set in one place.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] (exit 2) naming the key.
-pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
+/// [`crate::error::Error::Analysis`] (exit 2) naming the key.
+pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, Error> {
     let flags = [
         ("controller.kind", "--controller", args.controller.is_some()),
         ("plant.x0", "--x0", args.x0.is_some()),
@@ -67,10 +67,10 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Scenario, CliError> {
 /// given): the value as the scenario file writes it.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] (exit 2) if the value has no TOML form (none known).
-fn flag_override<T: serde::Serialize>(key: &str, value: Option<T>) -> Result<Option<Override>, CliError> {
+/// [`crate::error::Error::Analysis`] (exit 2) if the value has no TOML form (none known).
+fn flag_override<T: serde::Serialize>(key: &str, value: Option<T>) -> Result<Option<Override>, Error> {
     let Some(value) = value else { return Ok(None) };
-    let value = toml::Value::try_from(value).map_err(|e| CliError::bad_input(format!("{key}: {e}")))?;
+    let value = toml::Value::try_from(value).map_err(|e| Error::bad_input(format!("{key}: {e}")))?;
     let text = value.to_string();
     Ok(Some(Override { key: key.into(), value, text }))
 }
@@ -86,10 +86,10 @@ pub const BOARD_TABLES: [&str; 2] = ["board", "calibration"];
 /// a board (`the in-process link`, `a sweep`).
 ///
 /// # Errors
-/// [`CliError`] (bad input, exit 2) naming the first such key.
-pub fn refuse_board_overrides(set: &[Override], on: &str) -> Result<(), CliError> {
+/// [`Error`] (bad input, exit 2) naming the first such key.
+pub fn refuse_board_overrides(set: &[Override], on: &str) -> Result<(), Error> {
     match set.iter().find(|o| BOARD_TABLES.iter().any(|t| o.key.split('.').next() == Some(t))) {
-        Some(o) => Err(CliError::bad_input(format!(
+        Some(o) => Err(Error::bad_input(format!(
             "--set {}: `{}` describes a board and does nothing on {on}: only the runs of `sil-host run` \
              on the twin or emulator link have a board",
             o.key, o.key

@@ -5,7 +5,7 @@
 use analyses::sensitivity::Study;
 use serde::Serialize;
 
-use crate::{Error as CliError, settings::SensitivityArgs};
+use crate::{error::Error, settings::SensitivityArgs};
 
 /// The keys the study varies or sets per run: `--set` of one of them is refused.
 const STUDY_KEYS: [(&str, &str); 13] = [
@@ -44,14 +44,14 @@ pub struct Summary {
 /// per core by default).
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2).
-pub fn prepare(args: &SensitivityArgs) -> Result<(rig::scenario::Scenario, usize), CliError> {
+/// [`crate::error::Error::Analysis`] or [`crate::error::Error::Analysis`] (exit 2).
+pub fn prepare(args: &SensitivityArgs) -> Result<(rig::scenario::Scenario, usize), Error> {
     rig::overrides::check_keys(&args.set, &STUDY_KEYS).map_err(rig::scenario::ScenarioError::from)?;
     crate::scenario::refuse_board_overrides(&args.set, "the sensitivity study (the firmware in-process)")?;
     let base = crate::scenario::read_scenario(args.scenario.as_deref(), &args.set)?;
     base.validate()?;
     if args.threads == Some(0) {
-        return Err(CliError::bad_input("--threads must be >= 1"));
+        return Err(Error::bad_input("--threads must be >= 1"));
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     Ok((base, threads))

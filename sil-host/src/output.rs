@@ -124,7 +124,7 @@ impl OutputSet {
     }
 
     /// Reserves temporary paths for the figure `name` (an `.svg`) and its PDF
-    /// (the same name with `.pdf`, at [`crate::plot::print::pdf_path`] of the SVG's
+    /// (the same name with `.pdf`, at [`figures::plot::print::pdf_path`] of the SVG's
     /// temporary path), both made as [`OutputSet::stage`] makes its file and
     /// renamed on commit; returns the SVG's. Built without the feature `pdf`, the
     /// SVG's alone (said once on standard error).
@@ -133,12 +133,12 @@ impl OutputSet {
     /// As [`OutputSet::stage`].
     pub fn stage_figure(&mut self, name: &str) -> Result<PathBuf, CliError> {
         let svg = self.stage(name)?;
-        if !crate::plot::print::WRITES_PDF {
+        if !figures::plot::print::WRITES_PDF {
             crate::features::note_svg_only();
             return Ok(svg);
         }
         let pdf_final = self.dir.join(Path::new(name).with_extension("pdf"));
-        let pdf = crate::plot::print::pdf_path(&svg);
+        let pdf = figures::plot::print::pdf_path(&svg);
         create_new(&pdf)?;
         self.pending.push((pdf, pdf_final));
         Ok(svg)
@@ -367,7 +367,7 @@ mod tests {
         set.write_bytes("summary.json", b"{}").unwrap();
         let svg = set.stage_figure("trace.svg").unwrap();
         std::fs::write(&svg, "<svg/>").unwrap();
-        std::fs::write(crate::plot::print::pdf_path(&svg), "%PDF").unwrap();
+        std::fs::write(figures::plot::print::pdf_path(&svg), "%PDF").unwrap();
         let files = set.commit().unwrap();
         assert_eq!(files.len(), 5, "{files:?}");
         assert_eq!(std::fs::read_to_string(&victim).unwrap(), "theirs", "nothing written through a link");

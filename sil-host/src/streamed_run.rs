@@ -8,13 +8,9 @@ use std::{
     time::Instant,
 };
 
-use crate::{
-    error::CliError,
-    output::OutputSet,
-    plot,
-    run_tables::RunTables,
-    trace_page::{PageInfo, TracePage},
-};
+use crate::{error::CliError, output::OutputSet, run_tables::RunTables};
+use figures::plot;
+use figures::trace_page::{PageInfo, TracePage};
 use plant::Validity;
 use rig::{
     FirmwareLink, RunObserver,
@@ -34,7 +30,7 @@ use rig::{
 /// Ctrl-C or SIGTERM stops the run. Returns those, why the run stopped early if
 /// it did, the loop's wall-clock time (s) and the plant's validity counters; the
 /// progress bar is cleared. With `files.page` every record also goes to the run's page
-/// (`trace.html`, [`crate::trace_page`]: fixed memory too, returned to be written), and to `live`
+/// (`trace.html`, [`figures::trace_page`]: fixed memory too, returned to be written), and to `live`
 /// (`--live`: the Foxglove WebSocket server, paced) when there is one. An MCAP
 /// trace carries the arm's view ([`arm_view::ArmView`]).
 ///

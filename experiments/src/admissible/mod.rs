@@ -2,7 +2,7 @@
 //! experiment 2, paper Table II), computed by [`analyses::admissible`]: the
 //! settings' check, the computation and `admissible.json`'s document.
 
-use crate::{Error as CliError, settings::AdmissibleArgs};
+use crate::{error::Error, settings::AdmissibleArgs};
 use analyses::admissible::{AdmissibleReport, compute_for};
 
 pub mod summary;
@@ -12,8 +12,8 @@ use summary::json_report;
 /// `sil-host admissible` writes), without writing anything.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2) for a bad `mu` or `--set`.
-pub fn compute(args: &AdmissibleArgs) -> Result<AdmissibleReport, CliError> {
+/// [`crate::error::Error::Analysis`] or [`crate::error::Error::Analysis`] (exit 2) for a bad `mu` or `--set`.
+pub fn compute(args: &AdmissibleArgs) -> Result<AdmissibleReport, Error> {
     let params = crate::arm::arm_params(&args.set, "admissible", &["l", "h"], args.mu, shared::Params::<f64>::paper().v_belt)?;
     Ok(compute_for(params, analyses::admissible::SCAN_STEPS)?)
 }
@@ -21,8 +21,8 @@ pub fn compute(args: &AdmissibleArgs) -> Result<AdmissibleReport, CliError> {
 /// `admissible.json` (also what `--json` prints), listing `files`.
 ///
 /// # Errors
-/// [`CliError::Io`] when it cannot be serialised.
-pub fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, CliError> {
+/// [`Error::Io`] when it cannot be serialised.
+pub fn document(report: &AdmissibleReport, files: &[String]) -> Result<String, Error> {
     serde_json::to_string_pretty(&json_report(report, files))
-        .map_err(|e| CliError::Io { path: "admissible.json".into(), source: std::io::Error::other(e) })
+        .map_err(|e| Error::Io { path: "admissible.json".into(), source: std::io::Error::other(e) })
 }

@@ -2,7 +2,7 @@
 //! (docs/model.md experiment 1, paper Fig. 2), computed by [`analyses::modes`]:
 //! the settings' check and the computation, `modes.csv`'s rows and the JSON summary.
 
-use crate::{Error as CliError, arm::parse_range, settings::ModesArgs};
+use crate::{arm::parse_range, error::Error, settings::ModesArgs};
 use analyses::modes::*;
 
 pub mod summary;
@@ -11,9 +11,9 @@ pub mod summary;
 /// without writing anything.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] / [`crate::Error::Analysis`] (exit 2) for bad ranges, `mu`
-/// or `v_belt`, [`CliError::Analysis`] (exit 2) for a bad grid size.
-pub fn compute(args: &ModesArgs) -> Result<ModeMap, CliError> {
+/// [`crate::error::Error::Analysis`] / [`crate::error::Error::Analysis`] (exit 2) for bad ranges, `mu`
+/// or `v_belt`, [`Error::Analysis`] (exit 2) for a bad grid size.
+pub fn compute(args: &ModesArgs) -> Result<ModeMap, Error> {
     let t1 = parse_range("theta1-deg", &args.theta1_deg)?;
     let t1d = parse_range("theta1-dot", &args.theta1_dot)?;
     let params = crate::arm::arm_params(&args.set, "modes", &[], args.mu, args.v_belt)?;

@@ -1,7 +1,7 @@
 //! The outputs of `sil-host modes` other than the figure: `modes.csv`, the JSON document and the human summary.
 
 use super::branch_label;
-use crate::Error as CliError;
+use crate::error::Error;
 use analyses::modes::*;
 use nalgebra::Vector2;
 use serde::Serialize;
@@ -60,14 +60,14 @@ pub fn finite(x: f64) -> Option<f64> {
 /// point are empty.
 ///
 /// # Errors
-/// [`CliError::Io`] when writing fails.
-pub fn write_csv<W: Write>(map: &ModeMap, w: W, path: &Path) -> Result<(), CliError> {
-    let ioe = |e: csv::Error| CliError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
+/// [`Error::Io`] when writing fails.
+pub fn write_csv<W: Write>(map: &ModeMap, w: W, path: &Path) -> Result<(), Error> {
+    let ioe = |e: csv::Error| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
     let mut wr = csv::Writer::from_writer(w);
     for row in csv_rows(map) {
         wr.serialize(row).map_err(ioe)?;
     }
-    wr.flush().map_err(|source| CliError::Io { path: path.to_path_buf(), source })
+    wr.flush().map_err(|source| Error::Io { path: path.to_path_buf(), source })
 }
 
 /// The rows of `modes.csv`, one per grid point, `theta1` outer, `theta1_dot` inner.

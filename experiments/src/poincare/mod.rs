@@ -9,8 +9,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::{
-    Error as CliError,
     arm::parse_range,
+    error::Error,
     settings::PoincareArgs,
     simulate::{chosen_initial_condition, summary::InitialCondition},
 };
@@ -40,10 +40,10 @@ fn grid(min: f64, max: f64, step: f64) -> Vec<f64> {
 /// belt-speed grid (m/s) and the initial condition as given and used.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]
+/// [`crate::error::Error::Analysis`]/[`crate::error::Error::Analysis`]/[`crate::error::Error::Analysis`]/[`crate::error::Error::Analysis`]
 /// (exit 2) for bad options or initial conditions.
-pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), CliError> {
-    let bad = |m: String| Err(CliError::bad_input(m));
+pub fn validated(args: &PoincareArgs) -> Result<(PoincareConfig, Vec<f64>, InitialCondition), Error> {
+    let bad = |m: String| Err(Error::bad_input(m));
     // One speed `V`, or a range `MIN,MAX`.
     let (v_min, v_max) = match args.v_belt.0.as_slice() {
         [v] if v.is_finite() => (*v, *v),
@@ -142,9 +142,9 @@ pub fn section_rows(results: &[PointResult]) -> Vec<SectionRow> {
 
 /// The command's failure when some belt speed failed (class `failed`): exit 1
 /// after writing everything.
-pub fn failure(summary: &Summary, results: &[PointResult]) -> Option<CliError> {
+pub fn failure(summary: &Summary, results: &[PointResult]) -> Option<Error> {
     results.iter().find(|r| r.class == Class::Failed).map(|r| {
-        CliError::PartFailed(format!(
+        Error::PartFailed(format!(
             "{} belt speed(s) failed (written with class `failed`), the first at v_belt = {} m/s: {}",
             summary.counts.failed,
             r.v_belt,

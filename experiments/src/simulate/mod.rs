@@ -2,7 +2,7 @@
 //! 3): the settings' check and the plant at `t = 0` ([`prepare`]), the sampling
 //! loop both fronts run ([`OpenLoop`]), the trace and events rows and the summary.
 
-use crate::{Error as CliError, settings::SimulateArgs};
+use crate::{error::Error, settings::SimulateArgs};
 use plant::initial::{self, PaperX0};
 use plant::{Plant, SimConfig, SimError};
 
@@ -13,8 +13,8 @@ use summary::*;
 /// `[theta1, theta1_dot, theta2, theta2_dot]` in degrees and degrees per second.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] for a malformed `--x0-deg`.
-pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&crate::settings::NumberList>) -> Result<(String, [f64; 4]), CliError> {
+/// [`crate::error::Error::Analysis`] for a malformed `--x0-deg`.
+pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&crate::settings::NumberList>) -> Result<(String, [f64; 4]), Error> {
     Ok(match x0_deg {
         Some(s) => ("custom".to_string(), parse_x0_deg(s)?),
         None => {
@@ -27,11 +27,11 @@ pub fn chosen_initial_condition(x0: PaperX0, x0_deg: Option<&crate::settings::Nu
 /// The initial condition of `--x0-deg th1,th1dot,th2,th2dot` (degrees, deg/s).
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] unless it is four finite numbers.
-pub fn parse_x0_deg(s: &crate::settings::NumberList) -> Result<[f64; 4], CliError> {
+/// [`crate::error::Error::Analysis`] unless it is four finite numbers.
+pub fn parse_x0_deg(s: &crate::settings::NumberList) -> Result<[f64; 4], Error> {
     match s.0.as_slice() {
         [a, b, c, d] if s.0.iter().all(|x| x.is_finite()) => Ok([*a, *b, *c, *d]),
-        _ => Err(CliError::bad_input(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"))),
+        _ => Err(Error::bad_input(format!("--x0-deg expects four finite numbers th1,th1dot,th2,th2dot (degrees, deg/s), got `{s}`"))),
     }
 }
 
@@ -39,17 +39,17 @@ pub fn parse_x0_deg(s: &crate::settings::NumberList) -> Result<[f64; 4], CliErro
 /// number of samples after the first, `round(duration / sample_dt)` (at least 1).
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] naming the option.
-pub fn check_times(duration: f64, sample_dt: f64) -> Result<usize, CliError> {
+/// [`crate::error::Error::Analysis`] naming the option.
+pub fn check_times(duration: f64, sample_dt: f64) -> Result<usize, Error> {
     if !(duration.is_finite() && duration > 0.0 && duration <= 1e6) {
-        return Err(CliError::bad_input(format!("--duration must be in (0, 1e6] s, got {duration}")));
+        return Err(Error::bad_input(format!("--duration must be in (0, 1e6] s, got {duration}")));
     }
     if !(sample_dt.is_finite() && sample_dt > 0.0 && sample_dt <= duration) {
-        return Err(CliError::bad_input(format!("--sample-dt must be in (0, duration] s, got {sample_dt}")));
+        return Err(Error::bad_input(format!("--sample-dt must be in (0, duration] s, got {sample_dt}")));
     }
     let n = (duration / sample_dt).round();
     if n > 5e7 {
-        return Err(CliError::bad_input(format!("--duration / --sample-dt gives {n} trace rows (at most 5e7); raise --sample-dt")));
+        return Err(Error::bad_input(format!("--duration / --sample-dt gives {n} trace rows (at most 5e7); raise --sample-dt")));
     }
     Ok((n as usize).max(1))
 }
@@ -97,9 +97,9 @@ pub struct Prepared {
 /// Checks `sil-host simulate`'s options and sets the plant up at `t = 0`.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]/[`crate::Error::Analysis`]
+/// [`crate::error::Error::Analysis`]
 /// (exit 2) for bad options or initial conditions.
-pub fn prepare(args: &SimulateArgs) -> Result<Prepared, CliError> {
+pub fn prepare(args: &SimulateArgs) -> Result<Prepared, Error> {
     let params = crate::arm::arm_params(&args.set, "simulate", &[], args.mu, args.v_belt)?;
     let sim = SimConfig {
         rtol: args.rtol,

@@ -14,7 +14,7 @@ use std::{
 
 use rayon::prelude::*;
 
-use crate::{Error as CliError, settings::SweepArgs};
+use crate::{error::Error, settings::SweepArgs};
 use analyses::sweep::{
     Axis, Shard, SweepController, SweepSpec,
     run::{self, RunRow},
@@ -41,20 +41,20 @@ const RUN_KEYS: [(&str, &str); 12] = [
     ("timing.duration_s", "--transient and --record"),
 ];
 
-fn parse_axis(flag: &str, s: &crate::settings::NumberList, step: f64) -> Result<Axis, CliError> {
+fn parse_axis(flag: &str, s: &crate::settings::NumberList, step: f64) -> Result<Axis, Error> {
     let axis = match s.0.as_slice() {
         [a] => Axis { start: *a, stop: *a, step },
         [a, b] => Axis { start: *a, stop: *b, step },
-        _ => return Err(CliError::bad_input(format!("--{flag} expects MIN,MAX or one value (finite numbers), got `{s}`"))),
+        _ => return Err(Error::bad_input(format!("--{flag} expects MIN,MAX or one value (finite numbers), got `{s}`"))),
     };
     Ok(axis)
 }
 
-fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, CliError> {
+fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, Error> {
     let mut out = Vec::new();
     for item in list.iter().map(|s| s.trim()).filter(|s| !matches!(*s, "none" | "")) {
-        let x = PaperX0::parse(item)
-            .ok_or_else(|| CliError::bad_input(format!("--ics: unknown initial condition `{item}` (a, d, u or none)")))?;
+        let x =
+            PaperX0::parse(item).ok_or_else(|| Error::bad_input(format!("--ics: unknown initial condition `{item}` (a, d, u or none)")))?;
         if !out.contains(&x) {
             out.push(x);
         }
@@ -65,14 +65,14 @@ fn paper_ics(list: &[String]) -> Result<Vec<PaperX0>, CliError> {
 /// The spec of `sil-host sweep`'s arguments.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2).
-pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
+/// [`crate::error::Error::Analysis`] or [`crate::error::Error::Analysis`] (exit 2).
+pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, Error> {
     use rig::{overrides, scenario::ScenarioError};
     overrides::check_keys(&args.set, &RUN_KEYS).map_err(ScenarioError::from)?;
     let (scenario, params) = match args.controller {
         SweepController::None => {
             if args.scenario.is_some() {
-                return Err(CliError::bad_input("--scenario is for closed-loop sweeps (--controller hybrid or pid)"));
+                return Err(Error::bad_input("--scenario is for closed-loop sweeps (--controller hybrid or pid)"));
             }
             let p = shared::Params::<f64>::paper();
             (None, crate::arm::arm_params(&args.set, "sweep (open loop)", &[], p.mu, p.v_belt)?)
@@ -116,7 +116,7 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
         seeds: args.ensemble.seeds,
         jitter: args.ensemble.jitter(),
     };
-    spec.validate().map_err(CliError::bad_input)?;
+    spec.validate().map_err(Error::bad_input)?;
     Ok(spec)
 }
 
@@ -125,15 +125,15 @@ pub fn spec_of(args: &SweepArgs) -> Result<SweepSpec, CliError> {
 /// (`--threads`, one per core by default).
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] or [`crate::Error::Analysis`] (exit 2).
-pub fn plan(args: &SweepArgs) -> Result<(SweepSpec, Shard, usize), CliError> {
+/// [`crate::error::Error::Analysis`] or [`crate::error::Error::Analysis`] (exit 2).
+pub fn plan(args: &SweepArgs) -> Result<(SweepSpec, Shard, usize), Error> {
     let spec = spec_of(args)?;
     let shard = match &args.shard {
-        Some(s) => Shard::parse(s).map_err(CliError::bad_input)?,
+        Some(s) => Shard::parse(s).map_err(Error::bad_input)?,
         None => Shard::ALL,
     };
     if args.threads == Some(0) {
-        return Err(CliError::bad_input("--threads must be >= 1"));
+        return Err(Error::bad_input("--threads must be >= 1"));
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     Ok((spec, shard, threads))
@@ -163,10 +163,10 @@ pub fn run_all(
     todo: &[usize],
     threads: usize,
     stop: &AtomicBool,
-    sink: &(dyn Fn(RunRow) -> Result<(), CliError> + Sync),
-) -> Result<(usize, Timing), CliError> {
+    sink: &(dyn Fn(RunRow) -> Result<(), Error> + Sync),
+) -> Result<(usize, Timing), Error> {
     let ics = spec.initial_conditions();
-    let failure: Mutex<Option<CliError>> = Mutex::new(None);
+    let failure: Mutex<Option<Error>> = Mutex::new(None);
     let done = AtomicU64::new(0);
     let started = Instant::now();
     let cpu_start = cpu_seconds();

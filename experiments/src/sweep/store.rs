@@ -17,7 +17,7 @@ use std::{
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Error as CliError, error::io_err};
+use crate::{error::Error, error::io_err};
 use analyses::sweep::{Shard, SweepSpec, run::RunRow};
 
 /// File name of the manifest.
@@ -38,11 +38,11 @@ pub struct Manifest {
 /// Reads `dir/sweep.json`, if there is one.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] when it cannot be read, is not a manifest of this
+/// [`crate::error::Error::Analysis`] when it cannot be read, is not a manifest of this
 /// version, holds an invalid spec or names an impossible shard;
-/// [`crate::Error::BadInput`] for one that is not a regular file or is over
+/// [`crate::error::Error::BadInput`] for one that is not a regular file or is over
 /// [`tables::input::SWEEP_MANIFEST`]'s bound.
-pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
+pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, Error> {
     let path = dir.join(MANIFEST);
     let text = match tables::input::read_to_string(&path, tables::input::SWEEP_MANIFEST) {
         Ok(t) => t,
@@ -50,11 +50,11 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
         Err(e) => return Err(e.into()),
     };
     let m: Manifest = serde_json::from_str(&text).map_err(|e| {
-        CliError::bad_input(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
+        Error::bad_input(format!("{} is not a sweep manifest of this version (format {}): {e}", path.display(), analyses::sweep::FORMAT))
     })?;
-    m.spec.validate().map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    m.spec.validate().map_err(|e| Error::bad_input(format!("{}: {e}", path.display())))?;
     if m.shard.n == 0 || m.shard.k >= m.shard.n {
-        return Err(CliError::bad_input(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
+        return Err(Error::bad_input(format!("{}: shard {}/{} is not one of 0/1 .. (N-1)/N", path.display(), m.shard.k, m.shard.n)));
     }
     Ok(Some(m))
 }
@@ -62,12 +62,12 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, CliError> {
 /// Writes `dir/sweep.json` (through a temporary file and a rename).
 ///
 /// # Errors
-/// [`CliError::Io`].
-pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), CliError> {
+/// [`Error::Io`].
+pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), Error> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     let path = dir.join(MANIFEST);
     let tmp = dir.join(format!(".{MANIFEST}.partial"));
-    let json = serde_json::to_string_pretty(m).map_err(|e| CliError::Io { path: path.clone(), source: e.into() })?;
+    let json = serde_json::to_string_pretty(m).map_err(|e| Error::Io { path: path.clone(), source: e.into() })?;
     // Made new, never through a link left at its name (rig::private_files).
     rig::private_files::write_new(&tmp, json.as_bytes()).map_err(io_err(&tmp))?;
     std::fs::rename(&tmp, &path).map_err(io_err(&path))
@@ -104,19 +104,19 @@ pub fn differences(a: &Manifest, b: &Manifest) -> Vec<String> {
 /// the manifest already there is the same.
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] when the folder holds another sweep (naming the
-/// differing settings); [`CliError::Io`].
-pub fn open(dir: &Path, m: &Manifest) -> Result<(), CliError> {
+/// [`crate::error::Error::Analysis`] when the folder holds another sweep (naming the
+/// differing settings); [`Error::Io`].
+pub fn open(dir: &Path, m: &Manifest) -> Result<(), Error> {
     match read_manifest(dir)? {
         Some(existing) if existing == *m => Ok(()),
-        Some(existing) => Err(CliError::bad_input(format!(
+        Some(existing) => Err(Error::bad_input(format!(
             "{} holds a different sweep; resuming needs the same arguments (use another --out, or delete the folder). Differences (folder vs now): {}",
             dir.display(),
             differences(&existing, m).join("; ")
         ))),
         None => {
             if dir.join(JOURNAL).exists() {
-                return Err(CliError::bad_input(format!("{} has a {JOURNAL} but no {MANIFEST}: not a sweep folder", dir.display())));
+                return Err(Error::bad_input(format!("{} has a {JOURNAL} but no {MANIFEST}: not a sweep folder", dir.display())));
             }
             write_manifest(dir, m)
         }
@@ -139,16 +139,16 @@ pub struct JournalContents {
 /// its parameters those of that index).
 ///
 /// # Errors
-/// [`crate::Error::Analysis`] for a row that does not parse or does not belong, or a
-/// repeated index with different results; [`crate::Error::BadInput`] for a
+/// [`crate::error::Error::Analysis`] for a row that does not parse or does not belong, or a
+/// repeated index with different results; [`crate::error::Error::BadInput`] for a
 /// journal that is not a regular file or is over
-/// [`tables::input::SWEEP_JOURNAL`]'s bound; [`CliError::Io`].
-pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliError> {
+/// [`tables::input::SWEEP_JOURNAL`]'s bound; [`Error::Io`].
+pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, Error> {
     let path = dir.join(JOURNAL);
     let mut bytes = match tables::input::read(&path, tables::input::SWEEP_JOURNAL) {
         Ok(b) => b,
         Err(e) if e.is_not_found() => return Ok(JournalContents::default()),
-        Err(tables::input::InputError::Unreadable { source, .. }) => return Err(CliError::Io { path, source }),
+        Err(tables::input::InputError::Unreadable { source, .. }) => return Err(Error::Io { path, source }),
         Err(e) => return Err(e.into()),
     };
     let mut out = JournalContents::default();
@@ -162,7 +162,7 @@ pub fn read_journal(dir: &Path, m: &Manifest) -> Result<JournalContents, CliErro
     let mut seen: BTreeMap<usize, usize> = BTreeMap::new();
     let mut reader = csv::ReaderBuilder::new().from_reader(bytes.as_slice());
     for (line, rec) in reader.deserialize::<RunRow>().enumerate() {
-        let bad = |what: String| CliError::bad_input(format!("{} row {}: {what}", path.display(), line + 1));
+        let bad = |what: String| Error::bad_input(format!("{} row {}: {what}", path.display(), line + 1));
         let row = rec.map_err(|e| bad(format!("does not parse: {e}")))?;
         if row.index >= n_runs || !m.shard.owns(&m.spec, row.index) {
             return Err(bad(format!("run {} is not part of this sweep (shard {}/{}, {n_runs} runs)", row.index, m.shard.k, m.shard.n)));
@@ -220,8 +220,8 @@ pub fn same_row(a: &RunRow, b: &RunRow) -> bool {
 /// Writes `rows` as a CSV file at `path` (through a temporary file and a rename).
 ///
 /// # Errors
-/// [`CliError::Io`].
-pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), CliError> {
+/// [`Error::Io`].
+pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), Error> {
     write_table(path, rows)
 }
 
@@ -229,14 +229,14 @@ pub fn write_rows(path: &Path, rows: &[RunRow]) -> Result<(), CliError> {
 /// temporary file renamed over it.
 ///
 /// # Errors
-/// [`CliError::Io`].
-pub fn write_table<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), CliError> {
+/// [`Error::Io`].
+pub fn write_table<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), Error> {
     let tmp = path.with_file_name(format!(".{}.partial", path.file_name().and_then(|n| n.to_str()).unwrap_or("rows.csv")));
     {
         // Made new, never through a link left at its name (rig::private_files).
         let mut w = csv::Writer::from_writer(rig::private_files::create_new(&tmp).map_err(io_err(&tmp))?);
         for r in rows {
-            w.serialize(r).map_err(|e| CliError::Io { path: tmp.clone(), source: e.into() })?;
+            w.serialize(r).map_err(|e| Error::Io { path: tmp.clone(), source: e.into() })?;
         }
         w.flush().map_err(io_err(&tmp))?;
     }
@@ -255,8 +255,8 @@ impl Journal {
     /// new file.
     ///
     /// # Errors
-    /// [`CliError::Io`].
-    pub fn open(dir: &Path, existing: &[RunRow], rewrite: bool) -> Result<Self, CliError> {
+    /// [`Error::Io`].
+    pub fn open(dir: &Path, existing: &[RunRow], rewrite: bool) -> Result<Self, Error> {
         let path = dir.join(JOURNAL);
         if rewrite {
             write_rows(&path, existing)?;
@@ -276,10 +276,10 @@ impl Journal {
     /// Appends `row` and flushes it to the file.
     ///
     /// # Errors
-    /// [`CliError::Io`].
-    pub fn append(&self, row: &RunRow) -> Result<(), CliError> {
+    /// [`Error::Io`].
+    pub fn append(&self, row: &RunRow) -> Result<(), Error> {
         let mut w = self.writer.lock().unwrap_or_else(|p| p.into_inner());
-        w.serialize(row).map_err(|e| CliError::Io { path: self.path.clone(), source: e.into() })?;
+        w.serialize(row).map_err(|e| Error::Io { path: self.path.clone(), source: e.into() })?;
         // Flushes the csv buffer into the (unbuffered) file: one write per row.
         w.flush().map_err(io_err(&self.path))
     }

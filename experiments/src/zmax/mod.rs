@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
 
-use crate::{Error as CliError, settings::ZmaxArgs};
+use crate::{error::Error, settings::ZmaxArgs};
 use analyses::admissible::{p_on_belt, positive_intervals};
 use analyses::zmax::{Combination, Criteria, Search, Setting, default_bracket, max_trials, sampled_scenario, search_until};
 use plant::initial::PaperX0;
@@ -28,7 +28,7 @@ fn combinations(args: &ZmaxArgs) -> Vec<Combination> {
 
 /// The base scenario (`--scenario` or the embedded default) with the `--set`
 /// overrides and `--iwc` (a key is set in one place: `--set plant.iwc` with `--iwc` is refused).
-fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, CliError> {
+fn base_scenario(args: &ZmaxArgs) -> Result<Scenario, Error> {
     rig::overrides::check_keys(&args.set, &TRIAL_KEYS).map_err(rig::scenario::ScenarioError::from)?;
     if args.iwc.is_some() {
         rig::overrides::check_keys(&args.set, &[("plant.iwc", "--iwc")]).map_err(rig::scenario::ScenarioError::from)?;
@@ -106,7 +106,7 @@ impl Plan {
 ///
 /// # Errors
 /// Bad input (exit 2).
-pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
+pub fn plan(args: &ZmaxArgs) -> Result<Plan, Error> {
     let base = base_scenario(args)?;
     let criteria = Criteria {
         duration_s: args.duration,
@@ -118,7 +118,7 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
     };
     criteria.validate()?;
     if !(args.tol.is_finite() && args.tol > 0.0) {
-        return Err(CliError::bad_input(format!("--tol {} m must be finite and > 0", args.tol)));
+        return Err(Error::bad_input(format!("--tol {} m must be finite and > 0", args.tol)));
     }
     let combos = combinations(args);
     for c in &combos {
@@ -126,24 +126,24 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
     }
     let e = &args.ensemble;
     if !(1..=analyses::sweep::ensemble::MAX_SEEDS).contains(&e.seeds) {
-        return Err(CliError::bad_input(format!("--seeds must be in 1..={}, got {}", analyses::sweep::ensemble::MAX_SEEDS, e.seeds)));
+        return Err(Error::bad_input(format!("--seeds must be in 1..={}, got {}", analyses::sweep::ensemble::MAX_SEEDS, e.seeds)));
     }
     let jitter = e.jitter();
-    jitter.check().map_err(CliError::bad_input)?;
+    jitter.check().map_err(Error::bad_input)?;
     if jitter.mu > 0.0 || jitter.start_m > 0.0 {
-        return Err(CliError::bad_input(
+        return Err(Error::bad_input(
             "zmax: --jitter-mu and --jitter-start are for sweeps; its seeds move the sensor noise, --jitter-f-n-ref and --jitter-delay",
         ));
     }
     if e.seeds > 1 && combos.iter().all(|c| c.setting == Setting::Ideal) {
-        return Err(CliError::bad_input("--seeds: the ideal setting has no noise (exact measurements); seeds are for the sampled one"));
+        return Err(Error::bad_input("--seeds: the ideal setting has no noise (exact measurements); seeds are for the sampled one"));
     }
     for sign in [-1.0, 1.0] {
         let mut t = base.clone();
         t.controller.f_n_ref += sign * jitter.f_n_ref_n;
         t.timing.delta_s += sign * jitter.delay_s;
         t.validate().map_err(|err| {
-            CliError::bad_input(format!(
+            Error::bad_input(format!(
                 "--jitter-f-n-ref {} N / --jitter-delay {} s take the scenario out of its range: {err}",
                 jitter.f_n_ref_n, jitter.delay_s
             ))
@@ -156,7 +156,7 @@ pub fn plan(args: &ZmaxArgs) -> Result<Plan, CliError> {
             None => default_bracket(&base, combo.x0)?,
         };
         sampled_scenario(&base, combo, bracket.1, &criteria)?;
-        analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(CliError::from)?;
+        analyses::ideal::build(&analyses::zmax::ideal_setup(&base, combo, bracket.1, &criteria)).map_err(Error::from)?;
         jobs.push((combo, bracket));
     }
     let seeded = (1..e.seeds)

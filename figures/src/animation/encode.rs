@@ -8,7 +8,7 @@ use std::{borrow::Cow, collections::HashMap, fs::File, io::BufWriter, path::Path
 
 use plotters::style::RGBColor;
 
-use crate::Error;
+use crate::error::Error;
 
 /// The palette's index for "unchanged" (transparent) pixels.
 const TRANSPARENT: u8 = 255;

@@ -23,7 +23,7 @@ pub use frame::{Look, Strip};
 pub use scene::{Arm, Scene};
 pub use trace::ArmTrace;
 
-use crate::Error;
+use crate::error::Error;
 
 /// An animation of a stretch of a run.
 #[derive(Debug, Clone, PartialEq)]

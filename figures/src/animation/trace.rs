@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::Error;
+use crate::error::Error;
 
 /// An impact of the plant (`events.csv`, a `touchdown` or an
 /// `impact_without_collision`): when, and the impulse on the tip.

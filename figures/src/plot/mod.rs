@@ -31,7 +31,7 @@ pub use history::{HistoryEnvelope, HistorySample, MODE_NAMES, history_panels, mo
 pub use print::{PrintWidth, finish};
 pub use time_panels::{Panel, Series, decimate, time_panels};
 
-use crate::Error;
+use crate::error::Error;
 use axis::NiceAxis;
 use chart::{Frame, frame_chart};
 use font::FAMILY;

@@ -17,7 +17,7 @@ use super::{
     print::{PrintWidth, finish},
     svg_canvas,
 };
-use crate::Error;
+use crate::error::Error;
 
 /// One curve of a panel.
 pub struct Series<'a> {

@@ -4,7 +4,8 @@
 
 use std::{io::Write, path::PathBuf};
 
-use crate::{error::CliError, plot};
+use crate::error::CliError;
+use figures::plot;
 use rig::{scenario::Scenario, summary::Percentiles, summary::RunSummary};
 
 pub(crate) fn print_summary(summary: &RunSummary, scenario: &Scenario, written: &[PathBuf]) {

@@ -20,9 +20,9 @@ use crate::{
     error::CliError,
     link_spec::{LinkSpec, OpenLink},
     output::{OutputSet, progress_bar},
-    plot::{self, Panel, Series, colors},
 };
 use experiments::scenario::load_scenario;
+use figures::plot::{self, Panel, Series, colors};
 use rig::{
     FirmwareLink,
     pil_link::{self, BAUD_RANGE, ICOUNT_SHIFT, LogLine, PilCounts, PilOptions, PilTarget},
@@ -170,7 +170,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, if log.is_some() { "PIL" } else { "HIL" }, scenario, &history, stats.last_t())?;
     if let Some(page) = page {
-        out.write_bytes(crate::trace_page::FILE, page.html().as_bytes())?;
+        out.write_bytes(figures::trace_page::FILE, page.html().as_bytes())?;
     }
     let svg = out.stage_figure("instructions.svg")?;
     draw_counts(&svg, scenario, stats.last_t(), &counts, &target)?;

@@ -4,7 +4,7 @@
 //! arrow`, an Arrow IPC file; `trace.mcap` with `--format mcap`), `summary.json`,
 //! `trace.svg` (tip position against its reference, normal force, torques and
 //! contact mode against time) and `trace.html` (the arm animated on the belt
-//! beside the trace's plots, one self-contained page: [`crate::trace_page`]). A
+//! beside the trace's plots, one self-contained page: [`figures::trace_page`]). A
 //! run that stops part way (the firmware in its safe state or lost, a plant
 //! failure, Ctrl-C) still writes every period up to then and exits with code 1. The trace is streamed to `trace.csv.partial` while
 //! the run goes (flushed every millisecond of wall time) and renamed at the end,
@@ -104,7 +104,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let svg = out.stage_figure("trace.svg")?;
     draw(&svg, "SIL", scenario, &history, stats.last_t())?;
     if let Some(page) = page {
-        out.write_bytes(crate::trace_page::FILE, page.html().as_bytes())?;
+        out.write_bytes(figures::trace_page::FILE, page.html().as_bytes())?;
     }
     let summary = RunSummary {
         rig: (chosen == RunLink::Iceoryx2).then(|| rig.clone()),

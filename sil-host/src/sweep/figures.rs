@@ -15,19 +15,17 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::{
-    error::CliError,
-    plot::{
-        self, PrintWidth, colors,
-        legend::{Legend, Swatch},
-        plot_err,
-        symbols::{BELT_SPEED, E_N, MU, THETA1_DOT, axis},
-    },
-};
+use crate::error::CliError;
 use analyses::sweep::{
     SweepSpec,
     cells::CellRow,
     run::{Outcome, RunRow},
+};
+use figures::plot::{
+    self, PrintWidth, colors,
+    legend::{Legend, Swatch},
+    plot_err,
+    symbols::{BELT_SPEED, E_N, MU, THETA1_DOT, axis},
 };
 
 /// Colour of an outcome on the map. The outcomes a reader looks for (bouncing,

@@ -2,7 +2,9 @@
 
 use super::summary::fmt_intervals;
 use crate::error::CliError;
-use crate::plot::{
+use analyses::admissible::{AdmissibleReport, p_on_belt};
+use analyses::paper;
+use figures::plot::{
     PrintWidth,
     axis::NiceAxis,
     chart::{Frame, frame_chart},
@@ -10,8 +12,6 @@ use crate::plot::{
     font::{FAMILY, TEXT_PX, TITLE_PX},
     symbols::{MU, Z_T, axis},
 };
-use analyses::admissible::{AdmissibleReport, p_on_belt};
-use analyses::paper;
 use plotters::prelude::*;
 use shared::{Arm, ElbowBranch, SlipDirection};
 
@@ -58,9 +58,9 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     let (x0, x1) = (-r.reach * 1.03, r.reach * 1.03);
 
     let print = PrintWidth::TwoColumn;
-    let canvas = crate::plot::svg_canvas(path, print, 760).map_err(&perr)?;
+    let canvas = figures::plot::svg_canvas(path, print, 760).map_err(&perr)?;
     let (top, root) = canvas.split_vertically(44);
-    crate::plot::draw_title(
+    figures::plot::draw_title(
         &top,
         &format!("Admissible configurations on the belt (paper Table II): p({Z_T}) for ż_r > 0, {MU} = {}", r.params.mu),
         TITLE_PX,
@@ -126,5 +126,5 @@ pub fn draw_figure(r: &AdmissibleReport, path: &std::path::Path) -> Result<(), C
     for (i, note) in notes.iter().enumerate() {
         note_area.draw_text(note, &(FAMILY, TEXT_PX).into_font().color(&grey), (16, 4 + 26 * i as i32)).map_err(|e| perr(e.to_string()))?;
     }
-    crate::plot::finish(canvas, path, print).map_err(perr)
+    figures::plot::finish(canvas, path, print).map_err(perr)
 }

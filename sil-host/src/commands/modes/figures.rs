@@ -1,17 +1,15 @@
 //! The figure of `sil-host modes`: the mode map with the curves `b = 0`, `p = 0` and `z_r_dot = 0` (`modes.svg`).
 
-use crate::{
-    error::CliError,
-    plot::{
-        PrintWidth,
-        axis::NiceAxis,
-        chart::{Frame, frame_chart},
-        font::{DESC_PX, FAMILY, TEXT_PX, TITLE_PX},
-        symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, THETA2, THETA2_DOT, Z_N, Z_N_DOT, Z_R_DOT, axis},
-    },
-};
+use crate::error::CliError;
 use analyses::modes::*;
 use experiments::modes::branch_label;
+use figures::plot::{
+    PrintWidth,
+    axis::NiceAxis,
+    chart::{Frame, frame_chart},
+    font::{DESC_PX, FAMILY, TEXT_PX, TITLE_PX},
+    symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, THETA2, THETA2_DOT, Z_N, Z_N_DOT, Z_R_DOT, axis},
+};
 use plotters::prelude::*;
 use shared::ContactMode;
 use std::path::Path;
@@ -23,9 +21,9 @@ pub(crate) fn color(mode: PointMode) -> RGBColor {
     match mode {
         PointMode::Contact(ContactMode::Sliding) => RGBColor(153, 216, 199),
         PointMode::Contact(ContactMode::Flight) => RGBColor(187, 225, 246),
-        PointMode::Contact(ContactMode::Indeterminate) => crate::plot::colors::ORANGE,
-        PointMode::Contact(ContactMode::Inconsistent) => crate::plot::colors::RED,
-        PointMode::Contact(ContactMode::Sticking) => crate::plot::colors::YELLOW,
+        PointMode::Contact(ContactMode::Indeterminate) => figures::plot::colors::ORANGE,
+        PointMode::Contact(ContactMode::Inconsistent) => figures::plot::colors::RED,
+        PointMode::Contact(ContactMode::Sticking) => figures::plot::colors::YELLOW,
         PointMode::Unreachable => RGBColor(228, 228, 228),
         PointMode::Singular => RGBColor(60, 60, 60),
     }
@@ -80,13 +78,13 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
     };
 
     let print = PrintWidth::TwoColumn;
-    let canvas = crate::plot::svg_canvas(path, print, 700).map_err(|e| perr(e.to_string()))?;
+    let canvas = figures::plot::svg_canvas(path, print, 700).map_err(|e| perr(e.to_string()))?;
     let title =
         format!("Contact modes on the belt (paper Fig. 2): {MU} = {}, {BELT_SPEED} {} m/s, u = 0", map.params.mu, map.params.v_belt);
     let (top, root) = canvas.split_vertically(66);
-    crate::plot::draw_title(&top, &title, TITLE_PX, 8).map_err(|e| perr(e.to_string()))?;
-    let branch = crate::plot::symbols::prose(&branch_label(map));
-    crate::plot::draw_title(&top, &branch, TEXT_PX, 38).map_err(|e| perr(e.to_string()))?;
+    figures::plot::draw_title(&top, &title, TITLE_PX, 8).map_err(|e| perr(e.to_string()))?;
+    let branch = figures::plot::symbols::prose(&branch_label(map));
+    figures::plot::draw_title(&top, &branch, TEXT_PX, 38).map_err(|e| perr(e.to_string()))?;
     let (left, right) = root.split_horizontally(640);
     let (x_desc, y_desc) = (axis(THETA1, "deg"), axis(THETA1_DOT, "rad/s"));
     let frame = Frame { x_desc: &x_desc, y_desc: &y_desc, x_tick_labels: true, caption: None, margin_top: 8, y_area: None };
@@ -195,5 +193,5 @@ pub fn draw_figure(map: &ModeMap, path: &Path) -> Result<(), CliError> {
         right.draw_text(&t, &f, (10, y)).map_err(e)?;
         y += 23;
     }
-    crate::plot::finish(canvas, path, print).map_err(perr)
+    figures::plot::finish(canvas, path, print).map_err(perr)
 }

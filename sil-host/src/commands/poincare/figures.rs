@@ -1,15 +1,13 @@
 //! The figures of `sil-host poincare`: the bifurcation diagram (`bifurcation.svg`) and the Lyapunov exponents (`lyapunov.svg`).
 
-use crate::{
-    error::CliError,
-    plot::{
-        self, PrintWidth, colors,
-        legend::{Legend, Swatch},
-        plot_err,
-        symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, axis},
-    },
-};
+use crate::error::CliError;
 use analyses::poincare::{PoincareConfig, PointResult, classify::Class};
+use figures::plot::{
+    self, PrintWidth, colors,
+    legend::{Legend, Swatch},
+    plot_err,
+    symbols::{BELT_SPEED, MU, THETA1, THETA1_DOT, axis},
+};
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -79,7 +79,7 @@ pub fn execute(args: &PoincareArgs) -> Result<Done<Summary>, CliError> {
     ];
     let files = files
         .iter()
-        .filter(|f| crate::plot::print::WRITES_PDF || !f.ends_with(".pdf"))
+        .filter(|f| ::figures::plot::print::WRITES_PDF || !f.ends_with(".pdf"))
         .map(|f| out.path(f).display().to_string())
         .collect();
     let summary = summary(args, (cfg, &grid, ic), &results, threads, wall_s, files);

@@ -9,8 +9,8 @@ use super::{
     format::given,
     outcome::{Outcome, StepResult},
 };
-use crate::animation::{self, Animation, Arm, Look, Strip};
 use crate::error::CliError;
+use figures::animation::{self, Animation, Arm, Look, Strip};
 
 /// The file each animated step gets, in its folder.
 pub const FILE: &str = "animation.gif";
@@ -87,7 +87,7 @@ pub fn write(id: &str, dir: &Path, arm: Arm, title: String) -> Result<Option<ani
 /// controller, and the time scale (the stretch of the run, the slow-down, the
 /// frames); `None` for a step that is not animated (`super::captions` words it).
 pub(super) fn caption(outcome: Option<&Outcome>, file: &str) -> Option<(String, String)> {
-    use crate::animation::frame::{FORCE_PX_PER_N, IMPULSE_PX_PER_NS, PATH_S};
+    use figures::animation::frame::{FORCE_PX_PER_N, IMPULSE_PX_PER_NS, PATH_S};
     let id = file.split('/').next().unwrap_or(file);
     let (Some((t0, t1, slow_down, strip)), Some(outcome)) = (plan(id), outcome) else {
         return None;

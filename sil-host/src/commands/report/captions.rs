@@ -27,7 +27,7 @@ pub struct Caption {
 impl Caption {
     /// The caption's text: what, parameters, the paper's counterpart, with the
     /// paper's symbols for the code names (`theta1_dot` as θ̇₁, `mu` as μ:
-    /// [`crate::plot::symbols::prose`], the table the figures are labelled with).
+    /// [`figures::plot::symbols::prose`], the table the figures are labelled with).
     pub fn text(&self) -> String {
         let mut t = format!("{}.", self.what);
         if !self.parameters.is_empty() {
@@ -39,7 +39,7 @@ impl Caption {
             }
             None => t.push_str(" No counterpart in the paper."),
         }
-        crate::plot::symbols::prose(&t)
+        figures::plot::symbols::prose(&t)
     }
 }
 
@@ -65,7 +65,7 @@ impl Figures {
     /// SVG, as every command writes it: `trace.pdf` for `trace.svg`), in a build
     /// that writes PDFs (the feature `pdf`).
     pub fn with_pdf(mut self) -> Self {
-        self.pdf = crate::plot::print::WRITES_PDF;
+        self.pdf = figures::plot::print::WRITES_PDF;
         self
     }
 
@@ -134,7 +134,7 @@ fn axis_text(name: &str, axis: &analyses::sweep::Axis, unit: &str) -> String {
 /// Alt text: the caption's first clause, in symbols, without the characters
 /// Markdown reads in `[...]`.
 fn alt(what: &str) -> String {
-    crate::plot::symbols::prose(what.split([':', ';']).next().unwrap_or(what).replace(['[', ']', '|', '`'], "").trim())
+    figures::plot::symbols::prose(what.split([':', ';']).next().unwrap_or(what).replace(['[', ']', '|', '`'], "").trim())
 }
 
 /// The figures of one experiment in the order the page shows them: the order of its

@@ -9,7 +9,7 @@ use plotters::{coord::Shift, prelude::*};
 
 use super::layout::{Mark, dodge};
 use crate::error::CliError;
-use crate::plot::{
+use figures::plot::{
     self, PrintWidth,
     axis::{CategoryAxis, NiceAxis},
     chart::{Frame, TickLabels, frame_chart, y_label_area},
@@ -28,7 +28,7 @@ pub type SeriesOf = (String, fn(&ChoiceResult, usize) -> Option<f64>, usize);
 pub struct Figure {
     /// File name.
     pub file: &'static str,
-    /// Title (in the symbols of [`crate::plot::symbols`]).
+    /// Title (in the symbols of [`figures::plot::symbols`]).
     pub title: fn() -> String,
     /// The value axis's description with units.
     pub value_desc: fn() -> String,

@@ -50,7 +50,7 @@ pub fn execute(args: &SensitivityArgs) -> Result<Done<Summary>, CliError> {
         let path = out.stage_figure(fig.file)?;
         figures::draw(&path, &study, &fig)?;
         names.push(fig.file.to_string());
-        if crate::plot::print::WRITES_PDF {
+        if ::figures::plot::print::WRITES_PDF {
             names.push(fig.file.replace(".svg", ".pdf"));
         }
     }

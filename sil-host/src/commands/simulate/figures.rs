@@ -2,11 +2,9 @@
 //! from a decimated copy kept in fixed memory while the trace is streamed.
 
 use super::summary::{EventRow, TraceRow};
-use crate::plot::symbols::{BELT_SPEED, F_N, MU, Z_N, Z_T, axis};
-use crate::{
-    error::CliError,
-    plot::{self, Panel, Series, colors},
-};
+use crate::error::CliError;
+use figures::plot::symbols::{BELT_SPEED, F_N, MU, Z_N, Z_T, axis};
+use figures::plot::{self, Panel, Series, colors};
 use rig::envelope::Envelope;
 use shared::Params;
 

@@ -3,7 +3,7 @@
 //! Writes under `--out`: `trace.csv` (one row per `--sample-dt`), `events.csv`
 //! (every event at its located time), `trace.svg` (`z_t`, `z_n`, `f_n` and the
 //! contact mode against time), `trace.html` (the arm animated on the belt beside
-//! the trace's plots: [`crate::trace_page`]) and `summary.json`; with `--format arrow` the two
+//! the trace's plots: [`::figures::trace_page`]) and `summary.json`; with `--format arrow` the two
 //! tables are `trace.arrow` and `events.arrow` (Arrow IPC, the same columns), with
 //! `--format mcap` both are in `trace.mcap` (channels `/state`, `/contact`,
 //! `/events`; [`tables::mcap`]). If the simulation fails part
@@ -18,8 +18,8 @@ use crate::{
     error::CliError,
     output::{OutputSet, progress_bar},
     table_out::TablesOut,
-    trace_page::{PageInfo, TracePage},
 };
+use ::figures::trace_page::{PageInfo, TracePage};
 use plant::SimError;
 
 pub mod figures;
@@ -144,7 +144,7 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
     written?;
     drawn?;
     if let Some(html) = html {
-        out.write_bytes(crate::trace_page::FILE, html.as_bytes())?;
+        out.write_bytes(::figures::trace_page::FILE, html.as_bytes())?;
     }
 
     let tables = TablesOut::<TraceRow, EventRow>::files(["trace", "events"], args.format);
@@ -152,8 +152,8 @@ pub fn execute(args: &SimulateArgs) -> Result<Done<Summary>, CliError> {
         .iter()
         .map(String::as_str)
         .chain(["trace.svg"])
-        .chain(crate::plot::print::WRITES_PDF.then_some("trace.pdf"))
-        .chain((!args.no_page).then_some(crate::trace_page::FILE))
+        .chain(::figures::plot::print::WRITES_PDF.then_some("trace.pdf"))
+        .chain((!args.no_page).then_some(::figures::trace_page::FILE))
         .chain(["summary.json"])
         .map(|f| out.path(f).display().to_string())
         .collect();

@@ -57,7 +57,7 @@ pub(crate) fn finish(
             figures::draw_slices(&out.stage_figure(&slices)?, &m.spec, law.name(), e_n, case_rows)?;
             for figure in [map, slices] {
                 files.push(dir.join(&figure));
-                if crate::plot::print::WRITES_PDF {
+                if ::figures::plot::print::WRITES_PDF {
                     files.push(dir.join(figure.replace(".svg", ".pdf")));
                 }
             }

@@ -1,8 +1,9 @@
 //! The figures of `sil-host zmax`: the run at the limit of each case.
 
-use crate::plot::symbols::{Z_T_REF, Z_T_SLIDING};
-use crate::{error::CliError, plot};
+use crate::error::CliError;
 use analyses::zmax::{Bisection, Search};
+use figures::plot;
+use figures::plot::symbols::{Z_T_REF, Z_T_SLIDING};
 
 pub(crate) fn draw(path: &std::path::Path, s: &Search) -> Result<(), CliError> {
     let rows = &s.limit_trace;
