@@ -7,7 +7,8 @@ one defect the gate must name, and one clean crate it must pass.
 - a cycle through a `mod.rs` facade, a glob re-export and an alias;
 - a `super::` path out of an inline module that does resolve (no false alarm), and one
   that names nothing (unresolved);
-- the same crate as the first, untied (the type in a third file): no cycle.
+- an import through the crate root's re-export (`crate::Thing` for `thing::Thing`);
+- the same crate as the first, untied (the type in a third file, named there): clean.
 
 Usage: import_cycles_test.py (exit 0 when every case gives the expected verdict).
 """
@@ -35,12 +36,17 @@ CASES = {
         'p.rs': 'pub const N: usize = 3;\nmod helper {\n    use super::N;\n    pub fn k() -> usize { N }\n}\n'
                 'pub fn bad() { let _ = super::nothing::here(); }\n',
     }, ['UNRESOLVED', 'super::nothing::here'], 1),
+    'through_the_root': ({
+        'lib.rs': 'pub mod a;\npub mod thing;\npub use thing::Thing;\n',
+        'a.rs': 'pub fn f(_: crate::Thing) {}\n',
+        'thing.rs': 'pub struct Thing;\n',
+    }, ['THROUGH THE ROOT', 'a.rs: crate::Thing', 'imports through a crate root: 1'], 1),
     'untied': ({
         'lib.rs': 'pub mod a;\npub mod b;\npub mod thing;\npub use thing::Thing;\n',
-        'a.rs': 'pub struct A;\npub fn f(_: crate::Thing) {}\n',
+        'a.rs': 'pub struct A;\npub fn f(_: crate::thing::Thing) {}\n',
         'b.rs': 'use crate::a::A;\npub fn h(_: A) {}\n',
         'thing.rs': 'pub struct Thing;\n',
-    }, ['import cycles between files: 0; unresolved paths: 0'], 0),
+    }, ['import cycles between files: 0; unresolved paths: 0; imports through a crate root: 0'], 0),
 }
 
 
