@@ -65,6 +65,8 @@ def main():
           "neither the board twin nor the emulator", ["rig", "analyses", "experiments", "figures", "painleve-py"], BOARD)
     check("figures knows no command: it builds no front, no board link and no command line",
           ["figures"], {"sil-host", "painleve-py", "board-link", "arm-view", "clap"})
+    check("figures sits below experiments: it draws rows whoever made them, and builds neither the experiments "
+          "nor the analyses", ["figures"], {"experiments", "analyses"})
     check("the Python package never depends on the command line", ["painleve-py"], {"sil-host"})
     # The lean build (sil-host/Cargo.toml `[features]`): each optional part stays behind its feature.
     lean = {"rsemu", "board-link", "board-twin", "board-emulator", "tokio", "foxglove", "arm-view", "arrow-array",

@@ -156,6 +156,18 @@ fn run_is_bad_input(e: &rig::record::RunError) -> bool {
     )
 }
 
+/// A figure's error ([`figures::Error`]) as the fronts' ([`Error`]), its message kept:
+/// `Io` and `Plot` as theirs, bad input as theirs (exit 2).
+impl From<figures::Error> for Error {
+    fn from(e: figures::Error) -> Self {
+        match e {
+            figures::Error::Io { path, source } => Self::Io { path, source },
+            figures::Error::Plot { path, message } => Self::Plot { path, message },
+            figures::Error::BadInput(message) => Self::bad_input(message),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -37,15 +37,3 @@ impl Error {
         Self::BadInput(message.into())
     }
 }
-
-/// A figure's error as the fronts' ([`experiments::Error`]), its message kept:
-/// `Io` and `Plot` as theirs, bad input as theirs (exit 2).
-impl From<Error> for experiments::Error {
-    fn from(e: Error) -> Self {
-        match e {
-            Error::Io { path, source } => Self::Io { path, source },
-            Error::Plot { path, message } => Self::Plot { path, message },
-            Error::BadInput(message) => Self::bad_input(message),
-        }
-    }
-}

@@ -268,6 +268,29 @@ pub struct Summary {
     pub events: usize,
 }
 
+/// An event row as the trace page takes it.
+impl From<&EventRow> for figures::trace_page::PageEvent {
+    fn from(e: &EventRow) -> Self {
+        Self { t: e.t, kind: e.kind, impulse: [e.impulse_t, e.impulse_n] }
+    }
+}
+
+/// A trace row as the trace page takes it (open loop: no reference, torques or safe state).
+impl From<&TraceRow> for figures::trace_page::PageSample {
+    fn from(r: &TraceRow) -> Self {
+        Self {
+            t: r.t,
+            theta: [r.theta1, r.theta2],
+            z: [r.z_t, r.z_n],
+            force: [r.f_t, r.f_n],
+            mode: r.mode,
+            z_t_ref: f64::NAN,
+            u: [f64::NAN; 2],
+            safe_state: false,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

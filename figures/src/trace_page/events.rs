@@ -29,12 +29,6 @@ pub struct PageEvent {
     pub impulse: [f64; 2],
 }
 
-impl From<&experiments::simulate::summary::EventRow> for PageEvent {
-    fn from(e: &experiments::simulate::summary::EventRow) -> Self {
-        Self { t: e.t, kind: e.kind, impulse: [e.impulse_t, e.impulse_n] }
-    }
-}
-
 impl From<&plant::PlantEvent> for PageEvent {
     fn from(e: &plant::PlantEvent) -> Self {
         Self { t: e.t, kind: e.kind.name(), impulse: e.impulse }

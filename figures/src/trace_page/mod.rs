@@ -76,21 +76,6 @@ impl From<&rig::record::PeriodRecord> for PageSample {
     }
 }
 
-impl From<&experiments::simulate::summary::TraceRow> for PageSample {
-    fn from(r: &experiments::simulate::summary::TraceRow) -> Self {
-        Self {
-            t: r.t,
-            theta: [r.theta1, r.theta2],
-            z: [r.z_t, r.z_n],
-            force: [r.f_t, r.f_n],
-            mode: r.mode,
-            z_t_ref: f64::NAN,
-            u: [f64::NAN; 2],
-            safe_state: false,
-        }
-    }
-}
-
 /// A page being gathered while a run goes, in memory that does not grow with
 /// the run (at most [`frames::MAX_FRAMES`] frames and [`curves::CURVE_BUCKETS`]
 /// buckets per curve).
