@@ -24,6 +24,7 @@ pub mod firmware_process;
 pub mod modes;
 pub mod poincare;
 pub mod run;
+pub mod run_observer;
 pub mod scenario;
 pub mod sensitivity;
 pub mod settings;

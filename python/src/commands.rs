@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use pyo3::{prelude::*, types::PyDict};
 
+use experiments::run_observer::{Gather, KeepFrames, RunSink};
 use experiments::{self as cmd, Done, Error as CliError, settings::*};
 use figures::trace_page::{PageInfo, TracePage};
 use rig::FirmwareLink;
@@ -239,48 +240,25 @@ pub fn zmax<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bo
         .map(Outcome::done)
 }
 
-/// Keeps the records of a closed-loop run (`rig::run_loop` hands them back),
-/// reports its progress, stops on Ctrl-C, keeps the validity.
-struct Observer<'a> {
+/// Keeps the frames of a closed-loop run (`rig::run_loop` hands the records
+/// back), reports its progress, stops on Ctrl-C; the validity, ledger and page
+/// are [`Gather`]'s, as `sil-host run`'s.
+struct Progress<'a> {
     control: &'a Control,
-    validity: plant::Validity,
-    ledger: plant::Ledger,
-    /// The page of the run, gathered as `sil-host run` gathers it (`None`: no page).
-    page: Option<TracePage>,
     /// Every period's frame and answer (`frames.csv` of `sil-host run`).
-    frames: Vec<rig::frames::FrameRow>,
+    frames: KeepFrames,
 }
 
-impl rig::RunObserver for Observer<'_> {
-    fn on_period(&mut self, k: usize, n: usize) -> bool {
+impl RunSink for Progress<'_> {
+    fn period(&mut self, k: usize, n: usize) -> bool {
         if k.is_multiple_of(100) || k == n {
             self.control.set(k as u64, n as u64);
         }
         !self.control.stopped()
     }
 
-    fn on_finished(&mut self, validity: &plant::Validity) {
-        self.validity = *validity;
-    }
-
-    fn on_ledger(&mut self, ledger: &plant::Ledger) {
-        self.ledger = *ledger;
-    }
-
-    fn on_events(&mut self, events: &[plant::PlantEvent]) {
-        if let Some(page) = &mut self.page {
-            events.iter().for_each(|e| page.event(e.into()));
-        }
-    }
-
-    fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
-        self.frames.push(rig::frames::FrameRow::of(frame, truth, exchange));
-    }
-
-    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
-        if let Some(page) = &mut self.page {
-            page.push(&r.into());
-        }
+    fn answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
+        self.frames.answer(frame, truth, exchange);
     }
 }
 
@@ -304,12 +282,11 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
     let (records, failure, (validity, ledger), wall_s, (page, frames)) =
         work::run(py, progress.as_ref(), "run", "periods", move |c: &Control| {
             c.set(0, setup.scenario().timing.periods());
-            let mut observer =
-                Observer { control: c, validity: plant::Validity::default(), ledger: plant::Ledger::default(), page, frames: Vec::new() };
+            let mut observer = Gather::new(Progress { control: c, frames: KeepFrames::default() }, page);
             let started = Instant::now();
             let (records, failure) = rig::run_loop(&setup, link_in_loop, &mut observer);
             let wall_s = started.elapsed().as_secs_f64();
-            (records, failure, (observer.validity, observer.ledger), wall_s, (observer.page.map(TracePage::html), observer.frames))
+            (records, failure, (observer.validity, observer.ledger), wall_s, (observer.page.map(TracePage::html), observer.sink.frames.0))
         })?;
     let stats = RunStats::of(&records);
     let summary = RunSummary {

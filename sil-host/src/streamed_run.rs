@@ -9,11 +9,12 @@ use std::{
 };
 
 use crate::{error::CliError, output::OutputSet, run_tables::RunTables};
+use experiments::run_observer::{Gather, RunSink};
 use figures::plot;
 use figures::trace_page::{PageInfo, TracePage};
 use plant::Validity;
 use rig::{
-    FirmwareLink, RunObserver,
+    FirmwareLink,
     record::{PeriodRecord, RunError},
     setup::RunSetup,
     stats::RunStats,
@@ -53,8 +54,9 @@ pub fn run_streamed(
     let view = std::marker::PhantomData;
     let mut trace = RunTables::new(out, files.format, std::time::Duration::from_millis(1), view)?;
     let started = Instant::now();
-    /// Streams each record, summarises it, keeps a decimated copy, moves the
-    /// bar, stops on Ctrl-C, keeps the validity.
+    /// Streams each record and answer, summarises the records, keeps a
+    /// decimated copy, moves the bar, stops on Ctrl-C; the validity, ledger and
+    /// page are [`Gather`]'s.
     struct Streaming<'a> {
         trace: &'a mut RunTables,
         progress: &'a indicatif::ProgressBar,
@@ -62,31 +64,14 @@ pub fn run_streamed(
         stop: &'a AtomicBool,
         stats: RunStats,
         history: plot::HistoryEnvelope,
-        validity: Validity,
-        ledger: plant::Ledger,
-        page: Option<TracePage>,
         live: Option<&'a mut crate::live::LiveRun>,
     }
-    impl RunObserver for Streaming<'_> {
-        fn on_finished(&mut self, validity: &Validity) {
-            self.validity = *validity;
-        }
-
-        fn on_ledger(&mut self, ledger: &plant::Ledger) {
-            self.ledger = *ledger;
-        }
-
-        fn on_events(&mut self, events: &[plant::PlantEvent]) {
-            if let Some(page) = &mut self.page {
-                events.iter().for_each(|e| page.event(e.into()));
-            }
-        }
-
-        fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
+    impl RunSink for Streaming<'_> {
+        fn answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
             self.trace.push_frame(&rig::frames::FrameRow::of(frame, truth, exchange));
         }
 
-        fn on_record(&mut self, r: &PeriodRecord) {
+        fn record(&mut self, r: &PeriodRecord) {
             self.trace.push_record(r);
             self.stats.push(r);
             self.history.push(&plot::HistorySample {
@@ -97,35 +82,32 @@ pub fn run_streamed(
                 u: [r.u1_cmd, r.u2_cmd],
                 mode: r.mode,
             });
-            if let Some(page) = &mut self.page {
-                page.push(&r.into());
-            }
             if let Some(live) = self.live.as_deref_mut() {
                 live.push(r);
             }
         }
 
-        fn on_period(&mut self, k: usize, _n: usize) -> bool {
+        fn period(&mut self, k: usize, _n: usize) -> bool {
             if k.is_multiple_of(self.every) {
                 self.progress.set_position(k as u64);
             }
             !self.stop.load(Ordering::Relaxed)
         }
     }
-    let mut observer = Streaming {
-        trace: &mut trace,
-        progress,
-        every,
-        stop: &stop,
-        stats: RunStats::default(),
-        history: plot::HistoryEnvelope::default(),
-        validity: Validity::default(),
-        ledger: plant::Ledger::default(),
-        page: files.page.then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport()))),
-        live,
-    };
+    let mut observer = Gather::new(
+        Streaming {
+            trace: &mut trace,
+            progress,
+            every,
+            stop: &stop,
+            stats: RunStats::default(),
+            history: plot::HistoryEnvelope::default(),
+            live,
+        },
+        files.page.then(|| TracePage::new(PageInfo::closed_loop(setup.scenario(), link.transport()))),
+    );
     let (_, failure) = stream_loop(setup, link, &mut observer);
-    let Streaming { stats, history, validity, ledger, page, .. } = observer;
+    let Gather { sink: Streaming { stats, history, .. }, validity, ledger, page } = observer;
     let wall_s = started.elapsed().as_secs_f64();
     progress.finish_and_clear();
     trace.finish()?;

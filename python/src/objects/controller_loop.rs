@@ -16,6 +16,7 @@
 
 use std::time::Instant;
 
+use experiments::run_observer::{Gather, KeepFrames};
 use firmware::estimator::AngleTracker;
 use pyo3::{
     exceptions::{PyTypeError, PyValueError},
@@ -196,38 +197,6 @@ impl FirmwareLink for PythonLink<'_> {
     }
 }
 
-/// Keeps the validity of the run, and gathers its page (`trace.html`, as
-/// `painleve.run`'s: its records and events as they come).
-struct Finished {
-    validity: plant::Validity,
-    ledger: plant::Ledger,
-    page: figures::trace_page::TracePage,
-    /// Every period's frame and the controller's answer (`frames`, as `painleve.run`'s).
-    frames: Vec<rig::frames::FrameRow>,
-}
-
-impl rig::RunObserver for Finished {
-    fn on_finished(&mut self, validity: &plant::Validity) {
-        self.validity = *validity;
-    }
-
-    fn on_ledger(&mut self, ledger: &plant::Ledger) {
-        self.ledger = *ledger;
-    }
-
-    fn on_events(&mut self, events: &[plant::PlantEvent]) {
-        events.iter().for_each(|e| self.page.event(e.into()));
-    }
-
-    fn on_answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
-        self.frames.push(rig::frames::FrameRow::of(frame, truth, exchange));
-    }
-
-    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
-        self.page.push(&r.into());
-    }
-}
-
 /// `painleve.run_controller`: the closed loop of `scenario` with `controller`
 /// in place of the firmware; the raw result dict of `painleve.run`'s shape.
 #[pyfunction]
@@ -260,7 +229,8 @@ pub fn run_controller<'py>(
         fact.1 = "the caller's Python function (painleve.run_controller); the scenario's references".into();
     }
     let page = figures::trace_page::TracePage::new(info);
-    let mut finished = Finished { validity: plant::Validity::default(), ledger: plant::Ledger::default(), page, frames: Vec::new() };
+    // The validity, ledger and page as `painleve.run` gathers them, every frame kept.
+    let mut finished = Gather::new(KeepFrames::default(), Some(page));
     let started = Instant::now();
     let (records, failure) = rig::run_loop(&setup, &mut link, &mut finished);
     let wall_s = started.elapsed().as_secs_f64();
@@ -279,14 +249,14 @@ pub fn run_controller<'py>(
     });
     let (message, code) = failed.map_or((None, 0), |(m, c)| (Some(m), c));
     let trace_py = rows_to_py(py, &records)?;
-    let frames_py = rows_to_py(py, &finished.frames)?;
+    let frames_py = rows_to_py(py, &finished.sink.0)?;
     let recording =
-        crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records, finished.frames);
+        crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records, finished.sink.0);
     Outcome::new(py, "run_controller", to_py(py, &summary)?)?
         .table("trace", trace_py)?
         .table("frames", frames_py)?
         .extra("scenario", to_py(py, &s)?)?
-        .extra("page", finished.page.html().into_pyobject(py)?.into_any())?
+        .extra("page", finished.page.map(figures::trace_page::TracePage::html).unwrap_or_default().into_pyobject(py)?.into_any())?
         .extra("recording", Py::new(py, recording)?.into_any().into_bound(py))?
         .validity(&validity)?
         .failure(message, code)

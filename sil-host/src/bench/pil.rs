@@ -8,16 +8,11 @@ use std::{path::Path, time::Instant};
 use crate::error::CliError;
 use firmware::ControllerKind;
 use rig::{
-    RunObserver,
     pil_link::{self, CORE_HZ, PilLink, PilOptions, PilTarget, QemuLink},
     scenario::Scenario,
     stream_loop,
     summary::Spread,
 };
-
-/// Keeps nothing: the bench wants the link's counts and the loop's speed.
-struct Discard;
-impl RunObserver for Discard {}
 
 /// One PIL run of the default scenario with one controller.
 #[derive(Debug, Clone)]
@@ -84,7 +79,7 @@ pub fn pil_runs(image: &Path, qemu: &Path, repeat: usize, pil_s: f64) -> Result<
         };
         let boot_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let (periods, e) = stream_loop(&setup, &mut link, &mut Discard);
+        let (periods, e) = stream_loop(&setup, &mut link, &mut ());
         let rate = periods as f64 / t.elapsed().as_secs_f64();
         if let Some(e) = e {
             return Err(CliError::from(e));

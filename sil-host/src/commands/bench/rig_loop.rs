@@ -2,6 +2,7 @@
 //! iceoryx2 (the firmware in its own process, spawned before the clock starts) and,
 //! when asked, in real time at 1 kHz. Runs keep no records ([`stream_loop`], as `run`).
 
+use experiments::run_observer::{Gather, RunSink};
 use std::time::Instant;
 
 use crate::bench::figure::{Figure, Goal, median};
@@ -9,7 +10,7 @@ use crate::{cli::BenchArgs, error::CliError};
 #[cfg(feature = "board")]
 use board_link::TwinLink;
 use rig::{
-    FirmwareLink, RunObserver,
+    FirmwareLink,
     in_process::InProcessLink,
     ipc::{MonitorPolicy, default_rig_name},
     ipc_link::{IpcLink, LinkTimings},
@@ -31,8 +32,8 @@ pub const TWIN_TARGET: f64 = 100_000.0;
 #[derive(Default)]
 struct Misses(usize);
 
-impl RunObserver for Misses {
-    fn on_record(&mut self, r: &rig::record::PeriodRecord) {
+impl RunSink for Misses {
+    fn record(&mut self, r: &rig::record::PeriodRecord) {
         self.0 += usize::from(r.deadline_miss);
     }
 }
@@ -40,13 +41,13 @@ impl RunObserver for Misses {
 /// Runs `setup` over `link`: periods run, periods per wall second and deadline
 /// misses, or the run's error.
 fn timed(setup: &RunSetup, link: &mut dyn FirmwareLink) -> Result<(usize, f64, usize), CliError> {
-    let mut misses = Misses::default();
+    let mut misses = Gather::new(Misses::default(), None);
     let t = Instant::now();
     let (periods, e) = stream_loop(setup, link, &mut misses);
     let rate = periods as f64 / t.elapsed().as_secs_f64();
     match e {
         Some(e) => Err(CliError::from(e)),
-        None => Ok((periods, rate, misses.0)),
+        None => Ok((periods, rate, misses.sink.0)),
     }
 }
 
