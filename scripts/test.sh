@@ -91,6 +91,7 @@ python3 scripts/invariants.py
 python3 scripts/front_features.py
 # No tracked file over 1 MiB outside an explicit list (a committed wheel or archive).
 python3 scripts/tracked_sizes.py
+python3 scripts/source_lines.py
 
 echo "== [at ${SECONDS} s] no_std build of shared, firmware and drivers for thumbv7em-none-eabihf"
 cargo build --release -p shared -p firmware -p drivers --target thumbv7em-none-eabihf

@@ -27,6 +27,7 @@ use crate::{
 
 mod advance;
 pub(crate) mod bridge;
+mod impulses;
 mod integrate;
 mod projection;
 mod transitions;
