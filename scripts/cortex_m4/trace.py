@@ -13,7 +13,16 @@ import threading
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # The step and its body as the debug info names them: `Firmware<L>` is generic over
 # its control law since issue 70 (`Firmware<L>::step`; before, `Firmware::step`).
-_FIRMWARE = ("firmware::controller::Firmware", "firmware::controller::Firmware<L>", "firmware::controller::Firmware$LT$L$GT$")
+# Since issue 83 the step and the body are methods of an impl in `controller/step.rs`,
+# which the names carry (`firmware::controller::step::<impl ...Firmware<L>>::step`, or
+# mangled `..._$LT$impl$u20$firmware..controller..Firmware$LT$L$GT$$GT$::step`).
+_FIRMWARE = (
+    "firmware::controller::Firmware",
+    "firmware::controller::Firmware<L>",
+    "firmware::controller::Firmware$LT$L$GT$",
+    "firmware::controller::step::<impl firmware::controller::Firmware<L>>",
+    "firmware::controller::step::_$LT$impl$u20$firmware..controller..Firmware$LT$L$GT$$GT$",
+)
 STEP = tuple(f + "::step" for f in _FIRMWARE)
 CALLERS = STEP + tuple(f + "::control" for f in _FIRMWARE)
 
