@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 /// An error that ends a figure: the file, and what failed.
 ///
-/// The fronts' error takes it as its own ([`experiments::Error`]: `Io`, `Plot`,
+/// The fronts' error takes it as its own (`experiments::Error`: `Io`, `Plot`,
 /// and bad input, exit 2), with the same message.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
