@@ -23,6 +23,7 @@ pub mod error;
 pub mod firmware_process;
 pub mod modes;
 pub mod poincare;
+pub mod replay;
 pub mod run;
 pub mod run_observer;
 pub mod scenario;

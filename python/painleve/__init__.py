@@ -16,6 +16,7 @@ line, and returns NumPy arrays:
 - :func:`zmax`: ``Z_t,sliding`` (experiments 5 and 6);
 - :func:`run`: a closed-loop SIL run of a scenario;
 - :func:`sensitivity`: the results under each open modelling choice;
+- :func:`replay`: a recorded run's frames through the firmware, compared bit for bit;
 - :func:`load`: any output folder the CLI writes;
 - the arm's :class:`Model` (kinematics, ``J``, ``M``, ``Q``, ``p``, ``b``);
 - objects to hold and step: :class:`Scenario`, :class:`Plant`,
@@ -36,6 +37,7 @@ from ._api import (
     default_scenario,
     modes,
     poincare,
+    replay,
     run,
     scenario_toml,
     sensitivity,
@@ -69,6 +71,7 @@ __all__ = [
     "read_arrow",
     "read_mcap",
     "read_csv",
+    "replay",
     "run",
     "run_controller",
     "scenario_toml",

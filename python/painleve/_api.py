@@ -10,7 +10,7 @@ import os
 import warnings
 from typing import Any, Callable, Dict, Literal, Mapping, Optional, Sequence, Tuple, Union, cast
 
-from . import _args, _painleve
+from . import _args, _painleve, _progress
 from ._result import PainleveWarning, Result
 
 __all__ = [
@@ -22,6 +22,7 @@ __all__ = [
     "zmax",
     "run",
     "sensitivity",
+    "replay",
     "default_scenario",
     "scenario_toml",
 ]
@@ -496,6 +497,59 @@ def run(
     then, with ``failure`` set and a :class:`PainleveWarning`.
     """
     return _finish(_args.call("run", run, dict(locals()), progress, scenario), strict)
+
+
+def replay(
+    folder: Union[str, "os.PathLike[str]"],
+    *,
+    link: Literal["in-process"] = "in-process",
+    set: _args.Overrides = None,
+    all: bool = False,
+    strict: bool = False,
+    progress: Progress = True,
+) -> Result:
+    """Replays a recorded run through the firmware: ``sil-host replay FOLDER
+    --link in-process``. Every recorded frame goes to the firmware step linked
+    into this process, configured from the run's own scenario (``summary.json``'s
+    ``scenario_used``, after ``set``), and every answer (the command's codes,
+    status and overruns, the telemetry's ten 32-bit floats) is compared with
+    the recorded one bit for bit. The other links (iceoryx2, the board twin, the
+    emulated board, PIL) are ``sil-host replay --link ...``'s.
+
+    Args:
+        folder: the ``--out`` folder of ``sil-host run`` or ``pil`` (its
+            ``summary.json`` and ``frames.csv``, ``frames.arrow`` or
+            ``trace.mcap``).
+        link: ``"in-process"`` (the only link in this process).
+        set: scenario keys changed before the replay, as :func:`run`'s ``set``
+            (``{"controller.hybrid.kp": 2001}``): a changed gain shows where the
+            commands first move.
+        all: compare every period (``divergent_periods`` counts them all)
+            rather than stop at the first divergence.
+        strict: raise :class:`PainleveError` (``exit_code`` 1) at a divergence
+            instead of warning.
+
+    Returns:
+        :class:`Result` whose ``summary`` is ``sil-host replay --json``'s
+        document: ``identical`` (bool), ``periods_recorded``,
+        ``periods_replayed``, ``divergent_periods``, ``first_divergence``
+        (``period``, ``t`` s, ``signal``, ``recorded``, ``replayed``, or
+        ``None``), ``link``, ``signals`` (what is compared), ``wall_s``. A
+        divergence sets ``failure`` (the verdict) and ``exit_code`` 1, with a
+        :class:`PainleveWarning`.
+
+    Raises:
+        PainleveError: ``exit_code`` 2 for a folder that is not a run's, a
+            recording cut off or of another scenario than the one replayed
+            (naming the setting), a bad ``set``, another ``link``.
+    """
+    native = _painleve.replay
+    try:
+        raw = native(os.fspath(folder), _args.overrides(set), bool(all), str(link), _progress.resolve(progress))
+    except _painleve.PainleveError as e:
+        e.args = (_args.pythonic(str(e)),)
+        raise
+    return _finish(raw, strict)
 
 
 def sensitivity(

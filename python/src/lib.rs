@@ -17,6 +17,7 @@ mod convert;
 mod objects;
 mod read;
 mod recording;
+mod replay;
 mod work;
 
 use pyo3::prelude::*;
@@ -93,6 +94,7 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::zmax, m)?)?;
     m.add_function(wrap_pyfunction!(commands::run, m)?)?;
     m.add_function(wrap_pyfunction!(commands::sensitivity, m)?)?;
+    m.add_function(wrap_pyfunction!(replay::replay, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_arrow, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_csv, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_mcap, m)?)?;

@@ -6,80 +6,58 @@ use serde::Serialize;
 
 use plant::SimError;
 
-/// One control period of a run (a row of `trace.csv`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PeriodRecord {
-    /// Sample time `t_k`, s.
-    pub t: f64,
-    /// True state at `t_k` (rad, rad/s).
-    pub theta1: f64,
-    /// `theta1_dot`, rad/s.
-    pub theta1_dot: f64,
-    /// `theta2`, rad.
-    pub theta2: f64,
-    /// `theta2_dot`, rad/s.
-    pub theta2_dot: f64,
-    /// Tip `z_t`, m.
-    pub z_t: f64,
-    /// Tip `z_n`, m.
-    pub z_n: f64,
-    /// Reference `z_t*` (the firmware's), m.
-    pub z_t_ref: f64,
-    /// True tangential contact force at `t_k`, N.
-    pub f_t: f64,
-    /// True normal contact force at `t_k`, N.
-    pub f_n: f64,
-    /// True contact mode at `t_k`.
-    pub mode: &'static str,
-    /// Motor torques that take effect in period `k`, N m (after quantisation; the
-    /// previous command again when this period's was missed).
-    pub u1_cmd: f64,
-    /// Commanded `u2`, N m.
-    pub u2_cmd: f64,
-    /// Torques applied at `t_k` (the previous command), N m.
-    pub u1_applied: f64,
-    /// Applied `u2`, N m.
-    pub u2_applied: f64,
-    /// True lift-off (the tip in flight at `t_k`).
-    pub lift_off_true: bool,
-    /// Lift-off as the firmware reports it.
-    pub lift_off_detected: bool,
-    /// Deadline miss seen by the plant: no command, a lost one, or one that left
-    /// after `t_k + Ts`; the previous command was held.
-    pub deadline_miss: bool,
-    /// Deadline miss counted by the firmware itself (`DEADLINE_MISS` in its status).
-    pub firmware_deadline_miss: bool,
-    /// The firmware's overrun counter, as its command reported it (0 without a command).
-    pub overruns: u32,
-    /// The firmware's status word (0 without a command).
-    pub status: u32,
+tables::table_row! {
+    /// One control period of a run (a row of `trace.csv` of `run` and `pil`: the
+    /// fields in order, the header the `csv` crate derived from them;
+    /// experiments/src/run.rs's test checks the bytes against it).
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+    pub struct PeriodRecord {
+        /// Sample time `t_k`, s.
+        pub t: f64 => f64,
+        /// True state at `t_k` (rad, rad/s).
+        pub theta1: f64 => f64,
+        /// `theta1_dot`, rad/s.
+        pub theta1_dot: f64 => f64,
+        /// `theta2`, rad.
+        pub theta2: f64 => f64,
+        /// `theta2_dot`, rad/s.
+        pub theta2_dot: f64 => f64,
+        /// Tip `z_t`, m.
+        pub z_t: f64 => f64,
+        /// Tip `z_n`, m.
+        pub z_n: f64 => f64,
+        /// Reference `z_t*` (the firmware's), m.
+        pub z_t_ref: f64 => f64,
+        /// True tangential contact force at `t_k`, N.
+        pub f_t: f64 => f64,
+        /// True normal contact force at `t_k`, N.
+        pub f_n: f64 => f64,
+        /// True contact mode at `t_k`.
+        pub mode: &'static str => str,
+        /// Motor torques that take effect in period `k`, N m (after quantisation; the
+        /// previous command again when this period's was missed).
+        pub u1_cmd: f64 => f64,
+        /// Commanded `u2`, N m.
+        pub u2_cmd: f64 => f64,
+        /// Torques applied at `t_k` (the previous command), N m.
+        pub u1_applied: f64 => f64,
+        /// Applied `u2`, N m.
+        pub u2_applied: f64 => f64,
+        /// True lift-off (the tip in flight at `t_k`).
+        pub lift_off_true: bool => bool,
+        /// Lift-off as the firmware reports it.
+        pub lift_off_detected: bool => bool,
+        /// Deadline miss seen by the plant: no command, a lost one, or one that left
+        /// after `t_k + Ts`; the previous command was held.
+        pub deadline_miss: bool => bool,
+        /// Deadline miss counted by the firmware itself (`DEADLINE_MISS` in its status).
+        pub firmware_deadline_miss: bool => bool,
+        /// The firmware's overrun counter, as its command reported it (0 without a command).
+        pub overruns: u32 => int,
+        /// The firmware's status word (0 without a command).
+        pub status: u32 => int,
+    }
 }
-
-// `trace.csv` of `run` and `pil`: [`PeriodRecord`]'s fields in order (the header
-// the `csv` crate derived from them); experiments/src/run.rs's test checks the bytes against it.
-tables::csv_row!(PeriodRecord {
-    t: f64,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    z_t: f64,
-    z_n: f64,
-    z_t_ref: f64,
-    f_t: f64,
-    f_n: f64,
-    mode: str,
-    u1_cmd: f64,
-    u2_cmd: f64,
-    u1_applied: f64,
-    u2_applied: f64,
-    lift_off_true: bool,
-    lift_off_detected: bool,
-    deadline_miss: bool,
-    firmware_deadline_miss: bool,
-    overruns: int,
-    status: int,
-});
 
 // `--format mcap` (trace.mcap): the signal groups of the closed-loop trace, one
 // channel each; docs/rig.md "Outputs" lists them.

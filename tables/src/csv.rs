@@ -134,6 +134,9 @@ fn end_record(buf: &mut Vec<u8>, n_fields: usize) {
 /// fields, each with its kind: `f64`, `str` (a `&str` or `String` field), `bool`,
 /// `int` (an integer that converts to `i64` without loss). The CSV header, the
 /// columns (Arrow, NumPy) and the MCAP groups list the same columns in the same order.
+/// A `str` field is anything that is `AsRef<str>` (a `&'static str`, a `String`,
+/// an enum that names its variants). [`crate::table_row!`] declares the struct
+/// itself with it, each field's kind beside its type.
 #[macro_export]
 macro_rules! csv_row {
     ($ty:ty { $($field:ident : $kind:ident),+ $(,)? }) => {
@@ -155,13 +158,48 @@ macro_rules! csv_row {
         }
     };
     (@column $rows:ident, f64, $f:ident) => { $crate::Column::F64($rows.iter().map(|r| r.$f).collect()) };
-    (@column $rows:ident, str, $f:ident) => { $crate::Column::Str($rows.iter().map(|r| -> String { (&*r.$f).to_string() }).collect()) };
+    (@column $rows:ident, str, $f:ident) => { $crate::Column::Str($rows.iter().map(|r| -> String { AsRef::<str>::as_ref(&r.$f).to_string() }).collect()) };
     (@column $rows:ident, bool, $f:ident) => { $crate::Column::Bool($rows.iter().map(|r| r.$f).collect()) };
     (@column $rows:ident, int, $f:ident) => { $crate::Column::I64($rows.iter().map(|r| i64::from(r.$f)).collect()) };
     (@push $buf:ident, f64, $v:expr) => { $crate::csv::push_f64($buf, $v) };
-    (@push $buf:ident, str, $v:expr) => { $crate::csv::push_str($buf, &$v) };
+    (@push $buf:ident, str, $v:expr) => { $crate::csv::push_str($buf, AsRef::<str>::as_ref(&$v)) };
     (@push $buf:ident, bool, $v:expr) => { $crate::csv::push_bool($buf, $v) };
     (@push $buf:ident, int, $v:expr) => { $crate::csv::push_int($buf, $v) };
+}
+
+/// Declares a long table's row type once: the struct, each field with its
+/// column kind beside its type (`pub t: f64 => f64`), and from that the
+/// declaration, the CSV row and the columns ([`crate::csv_row!`]). The field
+/// order is the column order. Attributes (docs, derives, serde's) go where they
+/// go on a struct:
+///
+/// ```
+/// tables::table_row! {
+///     /// One sample.
+///     #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+///     pub struct Sample {
+///         /// Time, s.
+///         pub t: f64 => f64,
+///         /// A counter.
+///         pub n: u32 => int,
+///     }
+/// }
+/// assert_eq!(<Sample as tables::Declared>::NAMES, ["t", "n"]);
+/// ```
+#[macro_export]
+macro_rules! table_row {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident {
+            $( $(#[$fmeta:meta])* $fvis:vis $field:ident : $ty:ty => $kind:ident ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        $vis struct $name {
+            $( $(#[$fmeta])* $fvis $field : $ty, )+
+        }
+        $crate::csv_row!($name { $($field : $kind),+ });
+    };
 }
 
 /// A CSV file written through a byte buffer of about [`FLUSH_BYTES`]: one

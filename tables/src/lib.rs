@@ -12,7 +12,9 @@
 //! ([`csv_row!`], [`ColumnRows`], no per-cell dispatch); the other row types
 //! derive `serde::Serialize` and declare their columns ([`declare!`]), and go
 //! through [`Table::of_rows`] ([`rows`], the cells the `csv` crate writes, each
-//! in its declared column). The two give the same table (tested).
+//! in its declared column). The two give the same table (tested). The way back,
+//! from any table to rows that derive `serde::Deserialize`, is [`Table::rows_as`]
+//! ([`row_reader`]).
 //!
 //! Features (none by default; Cargo.toml says each): `arrow` the Arrow IPC writer,
 //! `mcap` the MCAP writer, `read` every reader (CSV, Arrow, MCAP; only the Python
@@ -33,6 +35,7 @@ pub mod input;
 pub mod mcap;
 #[cfg(feature = "read")]
 pub mod read;
+pub mod row_reader;
 pub mod rows;
 pub mod writer;
 
@@ -43,6 +46,7 @@ pub use serde as __serde;
 use serde::Serialize;
 
 pub use declared::{Declaration, Declared, Kind};
+pub use row_reader::RowError;
 pub use rows::{ColumnError, TableBuilder};
 
 /// The values of one column: a table's cells of one field, typed.
@@ -112,6 +116,17 @@ impl Table {
     /// ([`ColumnRows`]): the same table as [`Table::of_rows`] (tested).
     pub fn of_columns<T: ColumnRows>(rows: &[T]) -> Self {
         Self { columns: T::NAMES.iter().map(|n| n.to_string()).zip(T::columns(rows)).collect() }
+    }
+
+    /// The rows of this table as `T`, a row type that declares its columns and
+    /// derives `serde::Deserialize` ([`row_reader`]: the way back of
+    /// [`Table::of_rows`] and [`Table::of_columns`]).
+    ///
+    /// # Errors
+    /// [`RowError`] naming the missing or undeclared column, or the row and
+    /// column of a cell the field cannot take.
+    pub fn rows_as<T: serde::de::DeserializeOwned + Declared>(&self) -> Result<Vec<T>, RowError> {
+        row_reader::rows_of(self)
     }
 
     /// The number of rows (0 for a table without columns).

@@ -5,66 +5,72 @@ use plant::{Counters, PlantEvent, SimConfig, Validity};
 use serde::Serialize;
 use shared::Params;
 
-/// One row of `trace.csv`.
-#[derive(Debug, Clone, Serialize)]
-pub struct TraceRow {
-    /// Time, s.
-    pub t: f64,
-    /// `theta1`, rad.
-    pub theta1: f64,
-    /// `theta1_dot`, rad/s.
-    pub theta1_dot: f64,
-    /// `theta2`, rad.
-    pub theta2: f64,
-    /// `theta2_dot`, rad/s.
-    pub theta2_dot: f64,
-    /// Tip tangential position `z_t`, m.
-    pub z_t: f64,
-    /// Tip normal position `z_n`, m.
-    pub z_n: f64,
-    /// `z_t_dot`, m/s.
-    pub z_t_dot: f64,
-    /// `z_n_dot`, m/s.
-    pub z_n_dot: f64,
-    /// Relative tangential velocity `z_r_dot = z_t_dot - v_belt`, m/s.
-    pub z_r_dot: f64,
-    /// Tangential contact force `f_t`, N.
-    pub f_t: f64,
-    /// Normal contact force `f_n`, N.
-    pub f_n: f64,
-    /// Contact mode (`flight`, `sliding`, `sticking`).
-    pub mode: &'static str,
-    /// Mechanical energy (kinetic + gravity + spring), J.
-    pub energy: f64,
+// The CSV columns, in the structs' field order (the header the `csv` crate
+// derived from them): the tests at the end check the bytes against it.
+tables::table_row! {
+    /// One row of `trace.csv`.
+    #[derive(Debug, Clone, Serialize)]
+    pub struct TraceRow {
+        /// Time, s.
+        pub t: f64 => f64,
+        /// `theta1`, rad.
+        pub theta1: f64 => f64,
+        /// `theta1_dot`, rad/s.
+        pub theta1_dot: f64 => f64,
+        /// `theta2`, rad.
+        pub theta2: f64 => f64,
+        /// `theta2_dot`, rad/s.
+        pub theta2_dot: f64 => f64,
+        /// Tip tangential position `z_t`, m.
+        pub z_t: f64 => f64,
+        /// Tip normal position `z_n`, m.
+        pub z_n: f64 => f64,
+        /// `z_t_dot`, m/s.
+        pub z_t_dot: f64 => f64,
+        /// `z_n_dot`, m/s.
+        pub z_n_dot: f64 => f64,
+        /// Relative tangential velocity `z_r_dot = z_t_dot - v_belt`, m/s.
+        pub z_r_dot: f64 => f64,
+        /// Tangential contact force `f_t`, N.
+        pub f_t: f64 => f64,
+        /// Normal contact force `f_n`, N.
+        pub f_n: f64 => f64,
+        /// Contact mode (`flight`, `sliding`, `sticking`).
+        pub mode: &'static str => str,
+        /// Mechanical energy (kinetic + gravity + spring), J.
+        pub energy: f64 => f64,
+    }
 }
 
-/// One row of `events.csv`: a plant event at its located time.
-#[derive(Debug, Clone, Serialize)]
-pub struct EventRow {
-    /// Time of the event, s.
-    pub t: f64,
-    /// The event (`touchdown`, `lift_off`, `p_zero`, `jam`, `slip_to_stick`, ...).
-    pub kind: &'static str,
-    /// Contact mode after it (`flight`, `sliding`, `sticking`).
-    pub mode_after: &'static str,
-    /// Normal velocity of the tip before the event, m/s.
-    pub v_n_before: f64,
-    /// Normal velocity of the tip after the event, m/s.
-    pub v_n_after: f64,
-    /// Relative tangential velocity `z_r_dot` before the event, m/s.
-    pub v_r_before: f64,
-    /// Relative tangential velocity `z_r_dot` after the event, m/s.
-    pub v_r_after: f64,
-    /// Tangential impulse of an impact, N s.
-    pub impulse_t: f64,
-    /// Normal impulse of an impact, N s.
-    pub impulse_n: f64,
-    /// Change of mechanical energy at the event, J.
-    pub energy_change: f64,
-    /// Work of the contact impulse, J.
-    pub contact_work: f64,
-    /// How an impact was resolved (empty when not an impact).
-    pub resolution: String,
+tables::table_row! {
+    /// One row of `events.csv`: a plant event at its located time.
+    #[derive(Debug, Clone, Serialize)]
+    pub struct EventRow {
+        /// Time of the event, s.
+        pub t: f64 => f64,
+        /// The event (`touchdown`, `lift_off`, `p_zero`, `jam`, `slip_to_stick`, ...).
+        pub kind: &'static str => str,
+        /// Contact mode after it (`flight`, `sliding`, `sticking`).
+        pub mode_after: &'static str => str,
+        /// Normal velocity of the tip before the event, m/s.
+        pub v_n_before: f64 => f64,
+        /// Normal velocity of the tip after the event, m/s.
+        pub v_n_after: f64 => f64,
+        /// Relative tangential velocity `z_r_dot` before the event, m/s.
+        pub v_r_before: f64 => f64,
+        /// Relative tangential velocity `z_r_dot` after the event, m/s.
+        pub v_r_after: f64 => f64,
+        /// Tangential impulse of an impact, N s.
+        pub impulse_t: f64 => f64,
+        /// Normal impulse of an impact, N s.
+        pub impulse_n: f64 => f64,
+        /// Change of mechanical energy at the event, J.
+        pub energy_change: f64 => f64,
+        /// Work of the contact impulse, J.
+        pub contact_work: f64 => f64,
+        /// How an impact was resolved (empty when not an impact).
+        pub resolution: String => str,
+    }
 }
 
 impl From<&PlantEvent> for EventRow {
@@ -88,39 +94,6 @@ impl From<&PlantEvent> for EventRow {
         }
     }
 }
-
-// The CSV columns, in the structs' field order (the header the `csv` crate
-// derived from them): the tests at the end check the bytes against it.
-tables::csv_row!(TraceRow {
-    t: f64,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    z_t: f64,
-    z_n: f64,
-    z_t_dot: f64,
-    z_n_dot: f64,
-    z_r_dot: f64,
-    f_t: f64,
-    f_n: f64,
-    mode: str,
-    energy: f64,
-});
-tables::csv_row!(EventRow {
-    t: f64,
-    kind: str,
-    mode_after: str,
-    v_n_before: f64,
-    v_n_after: f64,
-    v_r_before: f64,
-    v_r_after: f64,
-    impulse_t: f64,
-    impulse_n: f64,
-    energy_change: f64,
-    contact_work: f64,
-    resolution: str,
-});
 
 // `--format mcap` (trace.mcap): the signal groups of `trace` and `events`, one
 // channel each; docs/rig.md "Outputs" lists them.

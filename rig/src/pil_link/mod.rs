@@ -56,7 +56,9 @@ pub use link::PilLink;
 pub use pipe::open_port;
 pub use qemu::ICOUNT_SHIFT;
 pub use rate::{PilRate, measure_default_rate, measure_rate};
-pub use target::{BAUD_RANGE, BUILD_HINT, DEFAULT_BAUD, PilOptions, PilTarget, QemuLink, check_faults, default_image};
+pub use target::{
+    BAUD_RANGE, BUILD_HINT, DEFAULT_BAUD, ImageError, PilOptions, PilTarget, QemuLink, check_faults, check_image, default_image,
+};
 
 #[cfg(test)]
 mod tests;

@@ -125,5 +125,39 @@ pub fn default_image() -> PathBuf {
     crate::image_path::beside_this_executable(Path::new("thumbv7em-none-eabihf/qemu/pil"))
 }
 
+/// Why a file cannot be the PIL image ([`check_image`]).
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// Not a regular file within `tables::input::ELF_IMAGE`'s bound.
+    #[error(transparent)]
+    Input(#[from] tables::input::InputError),
+    /// Not an ELF, or one for another machine: what it is.
+    #[error("{0}")]
+    NotArm(String),
+}
+
+/// Refuses at once an image QEMU's Cortex-M4 cannot run (issue 52, 8: a damaged
+/// file exited 1 and one of another machine waited 20 s for a boot that never
+/// came): it must be a regular file within `tables::input::ELF_IMAGE`'s bound
+/// (issue 80) and read as an ELF whose header says 32-bit little-endian ARM.
+///
+/// # Errors
+/// [`ImageError`]: the input error naming the file and the bound, or what the
+/// file is instead.
+pub fn check_image(image: &Path) -> Result<(), ImageError> {
+    use object::Object;
+    let bytes = tables::input::read(image, tables::input::ELF_IMAGE)?;
+    let elf = object::File::parse(&*bytes).map_err(|e| ImageError::NotArm(format!("not an ELF image ({e})")))?;
+    if elf.architecture() != object::Architecture::Arm || !elf.is_little_endian() || elf.is_64() {
+        return Err(ImageError::NotArm(format!(
+            "an ELF for {:?} ({}-bit, {}-endian), not 32-bit little-endian ARM",
+            elf.architecture(),
+            if elf.is_64() { 64 } else { 32 },
+            if elf.is_little_endian() { "little" } else { "big" }
+        )));
+    }
+    Ok(())
+}
+
 /// How to build the image (for error messages).
 pub const BUILD_HINT: &str = "cargo build-pil (= cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin pil)";

@@ -75,7 +75,7 @@ fn target_of(args: &PilArgs) -> Result<PilTarget, CliError> {
 pub(crate) fn qemu_target(image: Option<PathBuf>, qemu: PathBuf, link: pil_link::QemuLink) -> Result<PilTarget, CliError> {
     let image = image.unwrap_or_else(pil_link::default_image);
     // Not there at all; a FIFO, a device, a directory or a file over
-    // `tables::input::ELF_IMAGE`'s bound is refused by `check_image`, naming it.
+    // `tables::input::ELF_IMAGE`'s bound is refused by `pil_link::check_image`, naming it.
     if !image.exists() {
         return Err(CliError::bad_input(format!(
             "no PIL image at {}: build it with `{}` (from the workspace root) or pass --image",
@@ -83,37 +83,15 @@ pub(crate) fn qemu_target(image: Option<PathBuf>, qemu: PathBuf, link: pil_link:
             pil_link::BUILD_HINT
         )));
     }
-    check_image(&image)?;
-    Ok(PilTarget::Qemu { image, qemu, link })
-}
-
-/// Refuses at once an image QEMU's Cortex-M4 cannot run (issue 52, 8: a damaged
-/// file exited 1 and one of another machine waited 20 s for a boot that never
-/// came): it must be a regular file within `tables::input::ELF_IMAGE`'s bound
-/// (issue 80) and read as an ELF whose header says 32-bit little-endian ARM.
-///
-/// # Errors
-/// [`CliError::BadInput`] (exit 2) naming the file and what is wrong (and the bound).
-fn check_image(image: &std::path::Path) -> Result<(), CliError> {
-    use object::Object;
-    let bad = |why: String| {
-        CliError::bad_input(format!(
+    pil_link::check_image(&image).map_err(|e| match e {
+        pil_link::ImageError::Input(e) => CliError::from(e),
+        pil_link::ImageError::NotArm(why) => CliError::bad_input(format!(
             "--image {}: {why}; the PIL image is the `arm` firmware's ELF for the Cortex-M4: build it with `{}`",
             image.display(),
             pil_link::BUILD_HINT
-        ))
-    };
-    let bytes = tables::input::read(image, tables::input::ELF_IMAGE)?;
-    let elf = object::File::parse(&*bytes).map_err(|e| bad(format!("not an ELF image ({e})")))?;
-    if elf.architecture() != object::Architecture::Arm || !elf.is_little_endian() || elf.is_64() {
-        return Err(bad(format!(
-            "an ELF for {:?} ({}-bit, {}-endian), not 32-bit little-endian ARM",
-            elf.architecture(),
-            if elf.is_64() { 64 } else { 32 },
-            if elf.is_little_endian() { "little" } else { "big" }
-        )));
-    }
-    Ok(())
+        )),
+    })?;
+    Ok(PilTarget::Qemu { image, qemu, link })
 }
 
 /// Runs the PIL (or HIL) loop and writes its files; prints nothing.

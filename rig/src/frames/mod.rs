@@ -13,14 +13,25 @@
 //! cycles), so the table is the same bytes over every link, as the trace is.
 //! The 32-bit floats of the telemetry are held as `f64` (exactly) and written
 //! in the shortest text that reads back to the same bits.
+//!
+//! The table is declared once ([`FrameRow`], `tables::table_row!`): the CSV,
+//! Arrow and MCAP writers and the Python columns are derived from it, and so is
+//! the reader ([`read_frames`]: serde's `Deserialize`, through the `csv` crate or
+//! `tables::Table::rows_as`).
 
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 use shared::wire::{ActuatorCommand, FirmwareTelemetry, GroundTruth, SensorFrame};
 
 use crate::link::Exchange;
 
-/// How the firmware's answer to a frame came back ([`Exchange`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+mod read;
+
+pub use read::{FramesError, read_frames};
+
+/// How the firmware's answer to a frame came back ([`Exchange`]); in the table
+/// by its name ([`Answer::name`]), read back from it (an unknown name refused).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Answer {
     /// It answered and the command was applied (or held back as late).
     Answered,
@@ -46,112 +57,98 @@ impl Answer {
     }
 }
 
-/// One period's frame and the firmware's answer to it.
-///
-/// Units: the frame's as on the wire ([`SensorFrame`]: encoder counts of
-/// `2 pi / 2^14`, load-cell codes of `25/2048 N`, belt mm/s); the command's
-/// torque codes of `5/2048 N m`; the telemetry in SI units and radians, as the
-/// firmware's 32-bit floats. Without an answer the command and telemetry
-/// columns are 0.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct FrameRow {
-    /// Sample time `t_k`, s (the ground truth's: `k Ts`, the belt's travel is
-    /// `v_belt t` on the board links).
-    pub t: f64,
-    /// Period index `k` (the frame's `seq`).
-    pub seq: u32,
-    /// The frame's stamp, µs since the start of the run (a `u64` on the wire;
-    /// held as the table's integer, which any run's length fits).
-    pub t_us: i64,
-    /// Base-joint encoder, counts.
-    pub theta1_count: u16,
-    /// Elbow encoder, counts.
-    pub elbow_count: u16,
-    /// Load cell, tangential code.
-    pub f_t_code: i16,
-    /// Load cell, normal code.
-    pub f_n_code: i16,
-    /// Belt speed, mm/s.
-    pub belt_count: i16,
-    /// The frame's flags (`shared::wire::frame_flags`).
-    pub flags: u16,
-    /// True `theta1` at `t_k`, rad (what the board links' encoders sense).
-    pub theta1: f64,
-    /// True `theta1_dot`, rad/s.
-    pub theta1_dot: f64,
-    /// True `theta2`, rad.
-    pub theta2: f64,
-    /// True `theta2_dot`, rad/s.
-    pub theta2_dot: f64,
-    /// True tangential contact force, N (what the board links' load cell senses).
-    pub f_t: f64,
-    /// True normal contact force, N.
-    pub f_n: f64,
-    /// How the answer came back: `answered`, `dropped` or `none` ([`Answer`]).
-    pub answer: &'static str,
-    /// The command's `u1`, torque code.
-    pub u1_code: i16,
-    /// The command's `u2`, torque code.
-    pub u2_code: i16,
-    /// The command's status word (`shared::wire::status`).
-    pub status: u32,
-    /// The command's overrun counter.
-    pub overruns: u32,
-    /// Telemetry: `z_t*`, m.
-    pub z_t_ref: f64,
-    /// Telemetry: `f_n*` after the ramp, N.
-    pub f_n_ref: f64,
-    /// Telemetry: estimated `theta1`, rad.
-    pub q1: f64,
-    /// Telemetry: estimated `theta2`, rad.
-    pub q2: f64,
-    /// Telemetry: estimated `theta1_dot`, rad/s.
-    pub qd1: f64,
-    /// Telemetry: estimated `theta2_dot`, rad/s.
-    pub qd2: f64,
-    /// Telemetry: measured `f_t`, N.
-    pub f_t_meas: f64,
-    /// Telemetry: measured `f_n`, N.
-    pub f_n_meas: f64,
-    /// Telemetry: `u1` before saturation and quantisation, N m.
-    pub u1_raw: f64,
-    /// Telemetry: `u2` before saturation and quantisation, N m.
-    pub u2_raw: f64,
+/// The `str` column's cell ([`tables::csv_row!`]).
+impl AsRef<str> for Answer {
+    fn as_ref(&self) -> &str {
+        self.name()
+    }
 }
 
-// `frames.csv`: [`FrameRow`]'s fields in order.
-tables::csv_row!(FrameRow {
-    t: f64,
-    seq: int,
-    t_us: int,
-    theta1_count: int,
-    elbow_count: int,
-    f_t_code: int,
-    f_n_code: int,
-    belt_count: int,
-    flags: int,
-    theta1: f64,
-    theta1_dot: f64,
-    theta2: f64,
-    theta2_dot: f64,
-    f_t: f64,
-    f_n: f64,
-    answer: str,
-    u1_code: int,
-    u2_code: int,
-    status: int,
-    overruns: int,
-    z_t_ref: f64,
-    f_n_ref: f64,
-    q1: f64,
-    q2: f64,
-    qd1: f64,
-    qd2: f64,
-    f_t_meas: f64,
-    f_n_meas: f64,
-    u1_raw: f64,
-    u2_raw: f64,
-});
+/// A stamp read back from a table: the table's integer, never negative.
+fn stamp<'de, D: Deserializer<'de>>(d: D) -> Result<i64, D::Error> {
+    let v = i64::deserialize(d)?;
+    if v < 0 {
+        return Err(serde::de::Error::custom(format_args!("`t_us` = {v} is outside its wire type's range (a u64 stamp)")));
+    }
+    Ok(v)
+}
+
+tables::table_row! {
+    /// One period's frame and the firmware's answer to it.
+    ///
+    /// Units: the frame's as on the wire ([`SensorFrame`]: encoder counts of
+    /// `2 pi / 2^14`, load-cell codes of `25/2048 N`, belt mm/s); the command's
+    /// torque codes of `5/2048 N m`; the telemetry in SI units and radians, as the
+    /// firmware's 32-bit floats. Without an answer the command and telemetry
+    /// columns are 0.
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    pub struct FrameRow {
+        /// Sample time `t_k`, s (the ground truth's: `k Ts`, the belt's travel is
+        /// `v_belt t` on the board links).
+        pub t: f64 => f64,
+        /// Period index `k` (the frame's `seq`).
+        pub seq: u32 => int,
+        /// The frame's stamp, µs since the start of the run (a `u64` on the wire;
+        /// held as the table's integer, which any run's length fits; a negative
+        /// one is refused on reading).
+        #[serde(deserialize_with = "stamp")]
+        pub t_us: i64 => int,
+        /// Base-joint encoder, counts.
+        pub theta1_count: u16 => int,
+        /// Elbow encoder, counts.
+        pub elbow_count: u16 => int,
+        /// Load cell, tangential code.
+        pub f_t_code: i16 => int,
+        /// Load cell, normal code.
+        pub f_n_code: i16 => int,
+        /// Belt speed, mm/s.
+        pub belt_count: i16 => int,
+        /// The frame's flags (`shared::wire::frame_flags`).
+        pub flags: u16 => int,
+        /// True `theta1` at `t_k`, rad (what the board links' encoders sense).
+        pub theta1: f64 => f64,
+        /// True `theta1_dot`, rad/s.
+        pub theta1_dot: f64 => f64,
+        /// True `theta2`, rad.
+        pub theta2: f64 => f64,
+        /// True `theta2_dot`, rad/s.
+        pub theta2_dot: f64 => f64,
+        /// True tangential contact force, N (what the board links' load cell senses).
+        pub f_t: f64 => f64,
+        /// True normal contact force, N.
+        pub f_n: f64 => f64,
+        /// How the answer came back: `answered`, `dropped` or `none` ([`Answer`]).
+        pub answer: Answer => str,
+        /// The command's `u1`, torque code.
+        pub u1_code: i16 => int,
+        /// The command's `u2`, torque code.
+        pub u2_code: i16 => int,
+        /// The command's status word (`shared::wire::status`).
+        pub status: u32 => int,
+        /// The command's overrun counter.
+        pub overruns: u32 => int,
+        /// Telemetry: `z_t*`, m.
+        pub z_t_ref: f64 => f64,
+        /// Telemetry: `f_n*` after the ramp, N.
+        pub f_n_ref: f64 => f64,
+        /// Telemetry: estimated `theta1`, rad.
+        pub q1: f64 => f64,
+        /// Telemetry: estimated `theta2`, rad.
+        pub q2: f64 => f64,
+        /// Telemetry: estimated `theta1_dot`, rad/s.
+        pub qd1: f64 => f64,
+        /// Telemetry: estimated `theta2_dot`, rad/s.
+        pub qd2: f64 => f64,
+        /// Telemetry: measured `f_t`, N.
+        pub f_t_meas: f64 => f64,
+        /// Telemetry: measured `f_n`, N.
+        pub f_n_meas: f64 => f64,
+        /// Telemetry: `u1` before saturation and quantisation, N m.
+        pub u1_raw: f64 => f64,
+        /// Telemetry: `u2` before saturation and quantisation, N m.
+        pub u2_raw: f64 => f64,
+    }
+}
 
 // `--format mcap` (trace.mcap): the frame, the command and the telemetry, one
 // channel each; docs/rig.md "Outputs" lists them.
@@ -218,7 +215,7 @@ impl FrameRow {
             theta2_dot: truth.x[3],
             f_t: truth.f[0],
             f_n: truth.f[1],
-            answer: answer.name(),
+            answer,
             u1_code: command.u1_code,
             u2_code: command.u2_code,
             status: command.status,
@@ -267,9 +264,8 @@ impl FrameRow {
     /// answered, 1 dropped, 2 none), the command's codes, status and overruns,
     /// then the telemetry's floats (as `f64`, compared by their bits).
     pub fn signals(&self) -> [(&'static str, Signal); 15] {
-        let answer = Answer::of_name(self.answer).map_or(u32::MAX, |a| a as u32);
         [
-            ("answer", Signal::Int(i64::from(answer))),
+            ("answer", Signal::Int(self.answer as i64)),
             ("u1_code", Signal::Int(i64::from(self.u1_code))),
             ("u2_code", Signal::Int(i64::from(self.u2_code))),
             ("status", Signal::Int(i64::from(self.status))),
@@ -325,105 +321,4 @@ impl core::fmt::Display for Signal {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn answered() -> (SensorFrame, Exchange) {
-        let frame = SensorFrame {
-            t_us: 1_234_000,
-            seq: 1234,
-            theta1_count: 16383,
-            elbow_count: 7,
-            f_t_code: -2048,
-            f_n_code: 2047,
-            belt_count: -400,
-            flags: 0x20,
-        };
-        let command = ActuatorCommand {
-            t_sent_us: 1_234_050,
-            seq: 1234,
-            u1_code: -3,
-            u2_code: 2047,
-            status: 0x11,
-            step_ticks: 99,
-            overruns: 2,
-            reserved: 0,
-        };
-        let telemetry = FirmwareTelemetry {
-            seq: 1234,
-            status: 0x11,
-            z_t_ref: 0.1,
-            f_n_ref: -3.5e-8,
-            q: [1.0e-30, -2.0],
-            qd: [f32::MAX, f32::MIN_POSITIVE],
-            f: [0.3, 7.0],
-            u_raw: [f32::from_bits(1), -0.0],
-        };
-        (frame, Exchange::Answered { command, telemetry, at_stamp: false })
-    }
-
-    fn truth() -> GroundTruth {
-        GroundTruth { t: 1.234, seq: 1234, x: [0.1, -2.5, 1e-300, f64::MIN_POSITIVE], f: [-0.0, 9.75], ..GroundTruth::default() }
-    }
-
-    #[test]
-    fn the_frame_comes_back_bit_for_bit() {
-        let (frame, exchange) = answered();
-        let row = FrameRow::of(&frame, &truth(), &exchange);
-        assert_eq!(row.frame(), frame);
-        let t = row.truth();
-        assert_eq!(
-            (t.t.to_bits(), t.seq, t.x.map(f64::to_bits), t.f.map(f64::to_bits)),
-            (truth().t.to_bits(), 1234, truth().x.map(f64::to_bits), truth().f.map(f64::to_bits))
-        );
-        assert_eq!(row.first_difference(&row), None);
-        // Every f32 of the telemetry survives f64 exactly, -0.0 and a subnormal included.
-        assert_eq!((row.u1_raw as f32).to_bits(), 1);
-        assert_eq!((row.u2_raw as f32).to_bits(), (-0.0f32).to_bits());
-    }
-
-    #[test]
-    fn a_difference_in_the_last_bit_of_any_signal_is_found() {
-        let (frame, exchange) = answered();
-        let row = FrameRow::of(&frame, &truth(), &exchange);
-        let names: Vec<_> = row.signals().iter().map(|(n, _)| *n).collect();
-        for (i, name) in names.iter().enumerate() {
-            let mut other = row;
-            match *name {
-                "answer" => other.answer = Answer::Dropped.name(),
-                "u1_code" => other.u1_code ^= 1,
-                "u2_code" => other.u2_code ^= 1,
-                "status" => other.status ^= 1,
-                "overruns" => other.overruns ^= 1,
-                _ => {
-                    let field = match *name {
-                        "z_t_ref" => &mut other.z_t_ref,
-                        "f_n_ref" => &mut other.f_n_ref,
-                        "q1" => &mut other.q1,
-                        "q2" => &mut other.q2,
-                        "qd1" => &mut other.qd1,
-                        "qd2" => &mut other.qd2,
-                        "f_t_meas" => &mut other.f_t_meas,
-                        "f_n_meas" => &mut other.f_n_meas,
-                        "u1_raw" => &mut other.u1_raw,
-                        _ => &mut other.u2_raw,
-                    };
-                    *field = f64::from(f32::from_bits((*field as f32).to_bits() ^ 1));
-                }
-            }
-            let (found, _, _) = row.first_difference(&other).unwrap_or_else(|| panic!("{name}: not found"));
-            assert_eq!(found, names[i]);
-        }
-    }
-
-    #[test]
-    fn no_answer_and_a_lost_one_are_told_apart() {
-        let (frame, exchange) = answered();
-        let Exchange::Answered { command, telemetry, .. } = exchange else { unreachable!() };
-        let dropped = FrameRow::of(&frame, &truth(), &Exchange::Dropped { command, telemetry });
-        let none = FrameRow::of(&frame, &truth(), &Exchange::NoAnswer);
-        assert_eq!(dropped.answer, "dropped");
-        assert_eq!((none.answer, none.u1_code, none.u1_raw), ("none", 0, 0.0));
-        assert_eq!(FrameRow::of(&frame, &truth(), &exchange).first_difference(&dropped).map(|d| d.0), Some("answer"));
-    }
-}
+mod tests;

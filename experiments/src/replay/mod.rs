@@ -1,0 +1,212 @@
+//! A recorded run's frames through a firmware build, every answer compared
+//! with the recorded one bit for bit (docs/rig.md "Replay"): the library under
+//! `sil-host replay` and `painleve.replay`. copper-rs re-simulates a task graph
+//! from its log and PX4 replays a flight log through a new estimator; here the
+//! log is the run's frames table ([`rig::frames::FrameRow`]: the frame the
+//! firmware read, the arm's state the board links' sensors read, the answer),
+//! the firmware is any link of `run` and `pil`, configured from the run's own
+//! scenario ([`Recording`]).
+//!
+//! The replay is open loop: each recorded frame goes out whatever the firmware
+//! answered to the one before, so after a divergence the frames are no longer
+//! what this firmware would have made its plant do; the first divergence is
+//! the finding, the count after it (`all`) a measure of its reach.
+
+mod recording;
+
+pub use recording::Recording;
+
+use rig::{FaultPlan, FirmwareLink, frames::FrameRow, link::DropCommands};
+use serde::Serialize;
+
+use crate::error::Error;
+
+/// The signals compared in every period: the answer's kind, the command's
+/// codes, status and overrun counter, and the telemetry's ten 32-bit floats
+/// ([`FrameRow::signals`]).
+pub const SIGNALS: &str = "the answer, the command's u1_code, u2_code, status and overruns, and the telemetry's z_t_ref, f_n_ref, q1, q2, qd1, qd2, f_t_meas, f_n_meas, u1_raw, u2_raw";
+
+/// Where the replayed firmware first answered differently.
+#[derive(Debug, Clone, Serialize)]
+pub struct Divergence {
+    /// The period `k` (the frame's `seq`).
+    pub period: u32,
+    /// Its sample time, s.
+    pub t: f64,
+    /// The first signal that differs ([`FrameRow::signals`]' names).
+    pub signal: &'static str,
+    /// The recorded value (a float as its 32-bit text and bits).
+    pub recorded: String,
+    /// The replayed value.
+    pub replayed: String,
+}
+
+/// What the comparison found ([`replay`]).
+#[derive(Debug)]
+pub struct Comparison {
+    /// Periods replayed (all of them, unless the link failed, the replay was
+    /// stopped, or it stopped at a divergence without `all`).
+    pub replayed: usize,
+    /// Periods whose answer differs (all of them counted only with `all`).
+    pub divergent: usize,
+    /// The first divergence, if any.
+    pub first: Option<Divergence>,
+    /// Why the link stopped part way (or the replay was interrupted), if it did.
+    pub link_error: Option<Error>,
+}
+
+/// Sends every recorded frame of `rec` to the firmware behind `link`, as the
+/// period loop drives a link (the faults of `plan` that act on the firmware
+/// first, then the exchange through the `drop_command` wrapper), and compares
+/// each answer with the recorded one bit for bit ([`FrameRow::first_difference`]).
+/// Stops at the first divergence unless `all`; calls `progress` with the count
+/// of periods replayed after each, and stops (an interruption, in
+/// [`Comparison::link_error`]) when it returns `false`. Ends the link's run
+/// (`FirmwareLink::finish`) either way.
+pub fn replay(
+    rec: &Recording,
+    link: &mut dyn FirmwareLink,
+    plan: &FaultPlan,
+    all: bool,
+    progress: &mut dyn FnMut(usize) -> bool,
+) -> Comparison {
+    let mut c = Comparison { replayed: 0, divergent: 0, first: None, link_error: None };
+    for row in &rec.rows {
+        if !progress(c.replayed) {
+            c.link_error = Some(Error::interrupted(format!("interrupted after {} periods", c.replayed)));
+            break;
+        }
+        let (frame, truth) = (row.frame(), row.truth());
+        link.before_period(u64::from(row.seq));
+        let mut wire = DropCommands { inner: &mut *link, plan };
+        match wire.exchange(&frame, &truth) {
+            Ok(exchange) => {
+                c.replayed += 1;
+                let got = FrameRow::of(&frame, &truth, &exchange);
+                if let Some((signal, recorded, replayed)) = row.first_difference(&got) {
+                    c.divergent += 1;
+                    c.first.get_or_insert(Divergence {
+                        period: row.seq,
+                        t: row.t,
+                        signal,
+                        recorded: recorded.to_string(),
+                        replayed: replayed.to_string(),
+                    });
+                    if !all {
+                        break;
+                    }
+                }
+            }
+            Err(e) => {
+                c.link_error = Some(Error::from(e));
+                break;
+            }
+        }
+    }
+    link.finish(c.replayed as u32);
+    c
+}
+
+/// A replay's result (`sil-host replay --json`, `painleve.replay`'s dict).
+#[derive(Debug, Clone, Serialize)]
+pub struct ReplaySummary {
+    /// The run's folder.
+    pub folder: String,
+    /// The file the frames came from.
+    pub frames: String,
+    /// The recorded scenario's name.
+    pub scenario: String,
+    /// The `--set`s applied to it, as given.
+    pub overrides: Vec<String>,
+    /// The link the frames went over (`in-process`, `iceoryx2`, `twin`, `emulator`, `pil`).
+    pub link: String,
+    /// Periods recorded.
+    pub periods_recorded: usize,
+    /// Periods replayed (all of them, unless the link failed or the replay stopped at a divergence).
+    pub periods_replayed: usize,
+    /// Whether every replayed answer equals the recorded one, bit for bit, and every period was replayed.
+    pub identical: bool,
+    /// Periods whose answer differs (all of them counted only with `--all`).
+    pub divergent_periods: usize,
+    /// The first divergence, if any.
+    pub first_divergence: Option<Divergence>,
+    /// Why the link stopped part way, if it did.
+    pub link_error: Option<String>,
+    /// What is compared in each period.
+    pub signals: &'static str,
+    /// Wall-clock time of the replay (the link's start included), s.
+    pub wall_s: f64,
+}
+
+impl ReplaySummary {
+    /// The summary of comparison `c` of recording `rec` with `overrides`
+    /// (`KEY=VALUE` as given) over the link named `link`, in `wall_s` seconds;
+    /// and the failure it ends with: the link's error if it stopped part way,
+    /// else [`Error::Diverged`] with [`ReplaySummary::verdict`] at a divergence.
+    pub fn of(rec: &Recording, c: Comparison, overrides: Vec<String>, link: String, wall_s: f64) -> (Self, Option<Error>) {
+        let summary = Self {
+            folder: rec.folder.display().to_string(),
+            frames: rec.source.display().to_string(),
+            scenario: rec.scenario.name.clone(),
+            overrides,
+            link,
+            periods_recorded: rec.rows.len(),
+            periods_replayed: c.replayed,
+            identical: c.first.is_none() && c.link_error.is_none() && c.replayed == rec.rows.len(),
+            divergent_periods: c.divergent,
+            first_divergence: c.first,
+            link_error: c.link_error.as_ref().map(ToString::to_string),
+            signals: SIGNALS,
+            wall_s,
+        };
+        let failure = c.link_error.or_else(|| summary.verdict().map(Error::Diverged));
+        (summary, failure)
+    }
+
+    /// The one-line verdict of a divergence (`None` without one).
+    pub fn verdict(&self) -> Option<String> {
+        let d = self.first_divergence.as_ref()?;
+        let reach = if self.periods_replayed == self.periods_recorded {
+            format!("{} of {} periods differ", self.divergent_periods, self.periods_recorded)
+        } else {
+            "stopped there (--all counts every period that differs)".to_string()
+        };
+        Some(format!(
+            "the replay diverged from the recording at period {} (t = {} s): {} recorded {}, replayed {}; {reach}",
+            d.period, d.t, d.signal, d.recorded, d.replayed
+        ))
+    }
+}
+
+/// The human report (`sil-host replay`'s output): the replay's line, then
+/// "identical" or the first divergence and its reach, and the link's error.
+impl std::fmt::Display for ReplaySummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = self;
+        let set = if s.overrides.is_empty() { String::new() } else { format!(", with --set {}", s.overrides.join(" --set ")) };
+        write!(f, "replay of {} ({}; scenario {}{set}) over the {} link, {:.3} s:", s.folder, s.frames, s.scenario, s.link, s.wall_s)?;
+        if s.identical {
+            return write!(f, "\n  identical over {} periods: every answer bit for bit ({})", s.periods_replayed, s.signals);
+        }
+        if let Some(d) = &s.first_divergence {
+            write!(
+                f,
+                "\n  DIVERGED at period {} (t = {} s): {} recorded {}, replayed {}",
+                d.period, d.t, d.signal, d.recorded, d.replayed
+            )?;
+            let stopped = s.periods_replayed < s.periods_recorded && s.link_error.is_none();
+            write!(
+                f,
+                "\n  {} of {} periods replayed, {} differ{}",
+                s.periods_replayed,
+                s.periods_recorded,
+                s.divergent_periods,
+                if stopped { " (stopped at the first: --all compares every period)" } else { "" }
+            )?;
+        }
+        if let Some(e) = &s.link_error {
+            write!(f, "\n  the link stopped after {} of {} periods: {e}", s.periods_replayed, s.periods_recorded)?;
+        }
+        Ok(())
+    }
+}
