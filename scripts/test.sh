@@ -84,7 +84,13 @@ cargo clippy --release --workspace --all-targets --features sil-host/full -- -D 
 # The lean command line builds too (sil-host/Cargo.toml [features]: no board, live, formats, pdf).
 cargo check --release -p sil-host --no-default-features
 python3 scripts/import_cycles_test.py
-python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src examples/law-template/src
+# A copy of the template made with scripts/new-law.py is found by every gate, and builds.
+python3 scripts/new_law_test.py
+# The laws of one's own (every crate with [package.metadata.painleve.law]; scripts/laws.py):
+# the gates below run on each, found by that key, never by name.
+mapfile -t laws < <(python3 scripts/laws.py)
+[ "${#laws[@]}" -gt 0 ] || { echo "scripts/laws.py found no law crate (examples/law-template has one)" >&2; exit 1; }
+python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src $(python3 scripts/laws.py --field src)
 # The architecture invariants (docs/architecture.md): what each layer may not build.
 python3 scripts/invariants.py
 # The two fronts resolve their shared crates alike, so the Python build reuses sil-host's.
@@ -100,12 +106,15 @@ echo "== [at ${SECONDS} s] board images (profile mcu: RTT, for a board; profile 
 echo "   the arm image is flashed with profile mcu and its no-LTO build exceeds memory.x's 64 KiB)"
 echo "   and their budgets (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap) and"
 echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 37 KiB; docs/board.md \"Budgets\"); the same"
-echo "   images of examples/law-template's law (law-arm, law-pil: a law of one's own, issue 70) within the budget"
+echo "   images of every law of one's own (scripts/laws.py: every crate with [package.metadata.painleve.law], the template's among them, issue 70) within the budget"
 cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
 cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
 cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pil
-cargo build -p law-template --profile mcu --target thumbv7em-none-eabihf --bin law-arm --bin law-pil
-cargo build -p law-template --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin law-arm --bin law-pil
+for law in "${laws[@]}"; do
+  read -r package _ arm pil _ _ <<<"$law"
+  cargo build -p "$package" --profile mcu --target thumbv7em-none-eabihf --bin "$arm" --bin "$pil"
+  cargo build -p "$package" --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin "$arm" --bin "$pil"
+done
 python3 scripts/budgets.py --all
 
 echo "== [at ${SECONDS} s] the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
@@ -130,13 +139,16 @@ python3 scripts/cycles.py --duration 1 --max-cycles 1930 >"$cycles_dir/default" 
 cycles_pids=($!)
 python3 scripts/cycles.py --random 6 --seed 1 --duration 0.25 --max-cycles 1930 >"$cycles_dir/random" 2>&1 &
 cycles_pids+=($!)
-python3 scripts/cycles.py --controller law --scenario examples/law-template/impedance.toml \
-  --image target/thumbv7em-none-eabihf/qemu/law-pil --duration 1 --max-cycles 1930 >"$cycles_dir/law" 2>&1 &
-cycles_pids+=($!)
+for law in "${laws[@]}"; do
+  read -r package _ _ pil _ scenario <<<"$law"
+  python3 scripts/cycles.py --controller law --scenario "$scenario" \
+    --image "target/thumbv7em-none-eabihf/qemu/$pil" --duration 1 --max-cycles 1930 >"$cycles_dir/law-$package" 2>&1 &
+  cycles_pids+=($!)
+done
 # The template's firmware process (a law of one's own, issue 70), which the Python tests
 # run against its Python prototype: built with the workspace's features, as the tests
 # below build it (so that build reuses it).
-cargo build --release --workspace --features sil-host/full --bin law-firmware
+cargo build --release --workspace --features sil-host/full $(python3 scripts/laws.py --field firmware | sed 's/^/--bin /')
 
 echo "== [at ${SECONDS} s] the Python package (python/, docs/python.md): scripts/python-tests.sh builds the manylinux2014 abi3"
 echo "   wheel and the sdist (scripts/build-wheel.sh: maturin with zig's linker, the workspace's target dir),"
@@ -163,7 +175,7 @@ for pid in "${cycles_pids[@]}"; do
   wait "$pid" || cycles_status=$?
 done
 echo "== [at ${SECONDS} s] the control step's cycle estimate (scripts/cycles.py), exit $cycles_status"
-cat "$cycles_dir/default" "$cycles_dir/random" "$cycles_dir/law"
+cat "$cycles_dir/default" "$cycles_dir/random" "$cycles_dir"/law-*
 rm -rf "$cycles_dir"
 [ "$cycles_status" -ne 0 ] && exit "$cycles_status"
 

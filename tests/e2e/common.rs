@@ -5,7 +5,7 @@ use std::{
     io::{BufRead, BufReader},
     path::{Path, PathBuf},
     process::{Child, ChildStdin, Command, Stdio},
-    sync::OnceLock,
+    sync::{Mutex, OnceLock},
 };
 
 /// The workspace root.
@@ -105,19 +105,74 @@ pub const LONG_ARM: [&str; 6] =
 /// The start of both arms at rest with the tip on the belt (the same `h / l`), deg and deg/s.
 pub const OTHER_ARM_X0: &str = "--x0-deg=27.696865482139,0,18.573779305261,0";
 
-/// Builds the MCU images of `examples/law-template` (a law of one's own, issue
-/// 70) in the workspace's target folder, once per test binary (a no-op when
-/// fresh): `law-pil` for QEMU (profile `qemu`), `law-arm` as flashed (profile
-/// `mcu`, what the emulated board runs); their paths.
-pub fn law_images() -> (PathBuf, PathBuf) {
-    static BUILT: OnceLock<()> = OnceLock::new();
+/// A law crate of the workspace: a member whose Cargo.toml has a
+/// `[package.metadata.painleve.law]` table (scripts/laws.py reads the same):
+/// its package, the binaries of its MCU images and firmware process, and the
+/// scenario it runs in (absolute).
+#[derive(Debug, Clone)]
+pub struct Law {
+    /// The package's name.
+    pub package: String,
+    /// The `arm` image's binary (the flashed application).
+    pub arm: String,
+    /// The PIL image's binary.
+    pub pil: String,
+    /// The firmware process's binary (a host binary).
+    pub firmware: String,
+    /// Its scenario.
+    pub scenario: PathBuf,
+}
+
+/// Every law crate of the workspace, found by its `[package.metadata.painleve.law]`
+/// table (`cargo metadata --no-deps`), in member order; at least one (the template's).
+pub fn laws() -> Vec<Law> {
+    static LAWS: OnceLock<Vec<Law>> = OnceLock::new();
+    LAWS.get_or_init(|| {
+        let out = Command::new(env!("CARGO"))
+            .args(["metadata", "--no-deps", "--format-version", "1", "--offline"])
+            .current_dir(workspace())
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "cargo metadata failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        let meta: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let laws: Vec<Law> = meta["packages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|p| p["metadata"]["painleve"]["law"].is_object())
+            .map(|p| {
+                let t = &p["metadata"]["painleve"]["law"];
+                let key = |k: &str| t[k].as_str().unwrap_or_else(|| panic!("{}: law.{k} missing", p["name"])).to_string();
+                let dir = Path::new(p["manifest_path"].as_str().unwrap()).parent().unwrap().to_path_buf();
+                Law {
+                    package: p["name"].as_str().unwrap().to_string(),
+                    scenario: dir.join(key("scenario")),
+                    arm: key("arm"),
+                    pil: key("pil"),
+                    firmware: key("firmware"),
+                }
+            })
+            .collect();
+        assert!(!laws.is_empty(), "no member has [package.metadata.painleve.law]: the template's was removed");
+        laws
+    })
+    .clone()
+}
+
+/// Builds the MCU images of `law` (a law of one's own, issue 70) in the
+/// workspace's target folder, once per law and test binary (a no-op when
+/// fresh): its PIL image for QEMU (profile `qemu`), its `arm` image as flashed
+/// (profile `mcu`, what the emulated board runs); their paths.
+pub fn law_images(law: &Law) -> (PathBuf, PathBuf) {
+    static BUILT: Mutex<Vec<String>> = Mutex::new(Vec::new());
     let (root, target_dir) = (workspace(), target_dir());
-    BUILT.get_or_init(|| {
+    let mut built = BUILT.lock().unwrap_or_else(|p| p.into_inner());
+    if !built.contains(&law.package) {
         for (profile, features, bin) in
-            [("qemu", ["--no-default-features", "--features", "qemu"], "law-pil"), ("mcu", ["--features", "rtt", "--quiet"], "law-arm")]
+            [("qemu", ["--no-default-features", "--features", "qemu"], &law.pil), ("mcu", ["--features", "rtt", "--quiet"], &law.arm)]
         {
             let build = Command::new(env!("CARGO"))
-                .args(["build", "-p", "law-template", "--profile", profile, "--target", "thumbv7em-none-eabihf", "--bin", bin])
+                .args(["build", "-p", &law.package, "--profile", profile, "--target", "thumbv7em-none-eabihf", "--bin", bin])
                 .args(features)
                 .env("CARGO_TARGET_DIR", &target_dir)
                 .current_dir(&root)
@@ -125,32 +180,33 @@ pub fn law_images() -> (PathBuf, PathBuf) {
                 .unwrap();
             assert!(build.status.success(), "building {bin} failed:\n{}", String::from_utf8_lossy(&build.stderr));
         }
-    });
+        built.push(law.package.clone());
+    }
     let images = target_dir.join("thumbv7em-none-eabihf");
-    (images.join("qemu/law-pil"), images.join("mcu/law-arm"))
+    (images.join("qemu").join(&law.pil), images.join("mcu").join(&law.arm))
 }
 
-/// The template's firmware process (`law-firmware`, a host binary), built with
-/// the workspace's tests (`cargo test --workspace` builds the template's
-/// binaries for its own tests).
-pub fn law_firmware() -> PathBuf {
-    let exe = target_dir().join("release/law-firmware");
+/// The firmware process of `law` (a host binary), built with the workspace's
+/// tests (`cargo test --workspace` builds every member's binaries for its own tests).
+pub fn law_firmware(law: &Law) -> PathBuf {
+    let exe = target_dir().join("release").join(&law.firmware);
     assert!(
         exe.is_file(),
-        "{} is missing: cargo test --workspace --release builds it (or cargo build --release -p law-template)",
-        exe.display()
+        "{} is missing: cargo test --workspace --release builds it (or cargo build --release -p {})",
+        exe.display(),
+        law.package
     );
     exe
 }
 
-/// Builds `examples/law-template`'s `panicking_arm` (the `arm` image of a law that
-/// panics at period 500, profile `mcu`), once per test binary; its path.
-pub fn panicking_law_image() -> PathBuf {
+/// Builds `law`'s example `panicking_arm` (the `arm` image of a law that panics
+/// at period 500, profile `mcu`), once per test binary; its path.
+pub fn panicking_law_image(law: &Law) -> PathBuf {
     static BUILT: OnceLock<()> = OnceLock::new();
     let (root, target_dir) = (workspace(), target_dir());
     BUILT.get_or_init(|| {
         let build = Command::new(env!("CARGO"))
-            .args(["build", "-p", "law-template", "--profile", "mcu", "--target", "thumbv7em-none-eabihf", "--example", "panicking_arm"])
+            .args(["build", "-p", &law.package, "--profile", "mcu", "--target", "thumbv7em-none-eabihf", "--example", "panicking_arm"])
             .env("CARGO_TARGET_DIR", &target_dir)
             .current_dir(&root)
             .output()

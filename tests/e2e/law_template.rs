@@ -4,7 +4,9 @@
 //! (`pil --image`) with the same trace and frames bit for bit, and its `arm`
 //! image on the emulated board answering every recorded frame identically
 //! (`replay --link emulator --elf`); the scenario's `[law]` table checked
-//! against the law's declaration on each link.
+//! against the law's declaration on each link. The first test runs on every law
+//! crate the house finds (`common::laws`: a copy made with scripts/new-law.py
+//! too); the others on the template's impedance law.
 
 use std::{
     path::Path,
@@ -13,13 +15,16 @@ use std::{
 
 use crate::common;
 
-const SCENARIO: &str = "examples/law-template/impedance.toml";
+/// The template's law (examples/law-template: the impedance law).
+fn template() -> common::Law {
+    common::laws().into_iter().find(|l| l.package == "law-template").expect("the template is a law crate")
+}
 
-/// The template's firmware process serving rig `rig` with `args` after the scenario.
-fn law_firmware(rig: &str, args: &[&str]) -> Child {
-    Command::new(common::law_firmware())
+/// `law`'s firmware process serving rig `rig` with `args` after its scenario.
+fn law_firmware(law: &common::Law, rig: &str, args: &[&str]) -> Child {
+    Command::new(common::law_firmware(law))
         .args(["firmware", "--rig", rig, "--scenario"])
-        .arg(common::workspace().join(SCENARIO))
+        .arg(&law.scenario)
         .args(args)
         .stdout(Stdio::null())
         .spawn()
@@ -30,62 +35,70 @@ fn text(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// Every law crate (the template's and any copy): its firmware process over
+/// iceoryx2 and its PIL image give the same trace and frames bit for bit, the
+/// runs name the law its firmware announced, and its `arm` image on the
+/// emulated board and its PIL image answer every recorded frame identically.
 #[test]
-fn the_impedance_law_runs_over_iceoryx2_in_pil_and_on_the_emulated_board_bit_for_bit() {
-    let (pil, arm) = common::law_images();
-    let scenario = common::workspace().join(SCENARIO);
-    let scenario = scenario.to_str().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let (ipc, qemu) = (dir.path().join("ipc"), dir.path().join("pil"));
-    let rig = format!("e2e-law-{}", std::process::id());
-    let mut fw = law_firmware(&rig, &["--set", "timing.duration_s=2"]);
-    let code =
-        common::run(&["run", "--attach", &rig, "--scenario", scenario, "--duration", "2", "--no-page", "--out", ipc.to_str().unwrap()]);
-    assert!(fw.wait().unwrap().success());
-    assert_eq!(code, 0);
-    let code = common::run(&[
-        "pil",
-        "--image",
-        pil.to_str().unwrap(),
-        "--scenario",
-        scenario,
-        "--duration",
-        "2",
-        "--no-page",
-        "--out",
-        qemu.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0);
-    for table in ["trace.csv", "frames.csv"] {
-        assert!(text(&ipc.join(table)) == text(&qemu.join(table)), "{table}: iceoryx2 and PIL differ");
-    }
-    // The runs name the law; the firmware announced its declaration and the
-    // values the scenario's `[law]` table gave (in its declared order).
-    let s = common::summary_of(&ipc);
-    assert_eq!(s["controller"], "impedance");
-    let a = &s["firmware_announcement"];
-    assert_eq!(a["law"]["name"], "impedance");
-    assert_eq!(a["config"]["law"]["values"], serde_json::json!([2000.0, 90.0, 1000.0, 60.0, 0.0, 0.0, 0.0, 0.0]));
-    assert_eq!(common::summary_of(&qemu)["controller"], "impedance");
-    // The PIL image says which law it was configured for, and its stack stays small.
-    let log = text(&qemu.join("defmt.log"));
-    assert!(log.contains("configured: law b\"impedance\", period 1000 us"), "{log}");
-    let end = log.lines().find(|l| l.contains("stack high-water mark")).unwrap();
-    assert!(common::numbers_after(end, "stack high-water mark")[0] < 16 * 1024, "{end}");
-    // The `arm` image on the emulated board and the PIL image answer every
-    // recorded frame of the iceoryx2 run bit for bit.
-    for link in [["--link", "emulator", "--elf", arm.to_str().unwrap()], ["--link", "pil", "--image", pil.to_str().unwrap()]] {
-        let mut args = vec!["replay", ipc.to_str().unwrap()];
-        args.extend(link);
-        assert_eq!(common::run(&args), 0, "{link:?}");
+fn every_law_runs_over_iceoryx2_in_pil_and_on_the_emulated_board_bit_for_bit() {
+    for law in common::laws() {
+        let (pil, arm) = common::law_images(&law);
+        let scenario = law.scenario.to_str().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let (ipc, qemu) = (dir.path().join("ipc"), dir.path().join("pil"));
+        let rig = format!("e2e-law-{}", std::process::id());
+        let mut fw = law_firmware(&law, &rig, &["--set", "timing.duration_s=2"]);
+        let code =
+            common::run(&["run", "--attach", &rig, "--scenario", scenario, "--duration", "2", "--no-page", "--out", ipc.to_str().unwrap()]);
+        assert!(fw.wait().unwrap().success(), "{}", law.package);
+        assert_eq!(code, 0, "{}", law.package);
+        let code = common::run(&[
+            "pil",
+            "--image",
+            pil.to_str().unwrap(),
+            "--scenario",
+            scenario,
+            "--duration",
+            "2",
+            "--no-page",
+            "--out",
+            qemu.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{}", law.package);
+        for table in ["trace.csv", "frames.csv"] {
+            assert!(text(&ipc.join(table)) == text(&qemu.join(table)), "{}: {table}: iceoryx2 and PIL differ", law.package);
+        }
+        // The runs name the law the firmware announced.
+        let s = common::summary_of(&ipc);
+        let name = s["firmware_announcement"]["law"]["name"].as_str().unwrap().to_string();
+        assert_eq!(s["controller"], name.as_str());
+        assert_eq!(common::summary_of(&qemu)["controller"], name.as_str());
+        if law.package == "law-template" {
+            // The values the scenario's `[law]` table gave, in the declared order.
+            assert_eq!(name, "impedance");
+            let values = &s["firmware_announcement"]["config"]["law"]["values"];
+            assert_eq!(values, &serde_json::json!([2000.0, 90.0, 1000.0, 60.0, 0.0, 0.0, 0.0, 0.0]));
+        }
+        // The PIL image says which law it was configured for, and its stack stays small.
+        let log = text(&qemu.join("defmt.log"));
+        assert!(log.contains(&format!("configured: law b\"{name}\", period 1000 us")), "{log}");
+        let end = log.lines().find(|l| l.contains("stack high-water mark")).unwrap();
+        assert!(common::numbers_after(end, "stack high-water mark")[0] < 16 * 1024, "{end}");
+        // The `arm` image on the emulated board and the PIL image answer every
+        // recorded frame of the iceoryx2 run bit for bit.
+        for link in [["--link", "emulator", "--elf", arm.to_str().unwrap()], ["--link", "pil", "--image", pil.to_str().unwrap()]] {
+            let mut args = vec!["replay", ipc.to_str().unwrap()];
+            args.extend(link);
+            assert_eq!(common::run(&args), 0, "{}: {link:?}", law.package);
+        }
     }
 }
 
 #[test]
 fn a_scenario_for_another_law_is_refused_on_every_link() {
-    let (pil, arm) = common::law_images();
-    let law = common::workspace().join(SCENARIO);
-    let law = law.to_str().unwrap();
+    let template = template();
+    let (pil, arm) = common::law_images(&template);
+    let law = template.scenario.to_str().unwrap();
     let default = common::workspace().join("scenarios/default.toml");
     let default = default.to_str().unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -134,7 +147,7 @@ fn a_scenario_for_another_law_is_refused_on_every_link() {
 fn a_law_that_panics_on_the_board_leaves_the_drivers_disabled() {
     use board_link::emulator_link::EmulatorLink;
     use rig::{law::LawTable, period_loop::run_loop, scenario::Scenario, setup::RunSetup};
-    let image = common::panicking_law_image();
+    let image = common::panicking_law_image(&template());
     let mut s = Scenario::default_scenario();
     s.timing.duration_s = 1.0;
     s.law = Some(LawTable { name: "panicking".into(), params: Default::default() });
@@ -159,7 +172,7 @@ fn a_law_that_panics_on_the_board_leaves_the_drivers_disabled() {
 /// for a law's image, is refused before anything is sent.
 #[test]
 fn board_configure_binds_a_law_table_to_the_law_the_board_runs() {
-    let (_, arm) = common::law_images();
+    let (_, arm) = common::law_images(&template());
     let paper = board_link::emulator_link::default_image();
     let dir = tempfile::tempdir().unwrap();
     let scenario = |law: &str| {
