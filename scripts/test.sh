@@ -89,7 +89,7 @@ python3 scripts/new_law_test.py
 # The laws of one's own (every crate with [package.metadata.painleve.law]; scripts/laws.py):
 # the gates below run on each, found by that key, never by name.
 mapfile -t laws < <(python3 scripts/laws.py)
-[ "${#laws[@]}" -gt 0 ] || { echo "scripts/laws.py found no law crate (examples/law-template has one)" >&2; exit 1; }
+[ "${#laws[@]}" -gt 0 ] || { echo "scripts/laws.py found no law crate (the template under examples/ has one)" >&2; exit 1; }
 python3 scripts/import_cycles.py shared/src firmware/src drivers/src arm-app/src board-description/src board-twin/src board-emulator/src boards/stm32f405/src plant/src tables/src rig/src board-link/src arm-view/src analyses/src experiments/src figures/src sil-host/src fuzz/src python/src $(python3 scripts/laws.py --field src)
 # The architecture invariants (docs/architecture.md): what each layer may not build.
 python3 scripts/invariants.py
