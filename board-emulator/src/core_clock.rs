@@ -178,6 +178,11 @@ pub struct Core {
     /// run took past its budget, paid at the start of the next (it steps the
     /// core itself, `run.rs`; the counted core's debt is rsemu's own).
     debt: AtomicU64,
+    /// The interrupt lines the machine wires to the core, ascending
+    /// ([`Core::set_wired_irqs`]): the only ones a device can assert, so the
+    /// only ones a sleeping core's wake-up check reads (`run.rs`). Unset: all
+    /// [`IRQS`].
+    wired: std::sync::OnceLock<Vec<u16>>,
 }
 
 /// The core's reset input, watched: forwards the level, notes a rise.
@@ -226,6 +231,7 @@ pub fn bind(b: &mut Bindings, mode: Mode) -> Arc<Mutex<Option<Arc<Core>>>> {
             reset_watch: Mutex::new(None),
             power_on,
             debt: AtomicU64::new(0),
+            wired: std::sync::OnceLock::new(),
         });
         *lock(&s) = Some(Arc::clone(&core));
         Ok(core as Arc<dyn Instance>)
@@ -254,6 +260,22 @@ impl Core {
             *s = self.power_on.clone();
             (s.demcr, s.dwt_ctrl, s.dwt_cyccnt) = (demcr, dwt_ctrl, dwt_cyccnt);
         });
+    }
+
+    /// Sets the interrupt lines wired to the core (the machine description's
+    /// `-> cpu.irqN` wires), once; a later call is ignored. Lines at or above
+    /// [`IRQS`] are dropped.
+    pub fn set_wired_irqs(&self, mut lines: Vec<u16>) {
+        lines.retain(|&l| l < IRQS);
+        lines.sort_unstable();
+        lines.dedup();
+        let _ = self.wired.set(lines);
+    }
+
+    /// The lines the wake-up check reads: the wired ones, or all [`IRQS`].
+    fn wake_lines(&self) -> &[u16] {
+        static ALL: std::sync::LazyLock<Vec<u16>> = std::sync::LazyLock::new(|| (0..IRQS).collect());
+        self.wired.get().map_or(ALL.as_slice(), Vec::as_slice)
     }
 
     /// The mode it runs in.

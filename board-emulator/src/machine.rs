@@ -111,6 +111,18 @@ fn without_unused(text: &str) -> String {
     out
 }
 
+/// The interrupt lines `text` wires to the core (`wire ... -> cpu.irqN`, the
+/// objects left out already gone): the only lines a device of the machine can
+/// assert.
+fn wired_irqs(text: &str) -> Vec<u16> {
+    text.lines()
+        .filter_map(|l| l.split('#').next())
+        .filter(|l| l.trim_start().starts_with("wire "))
+        .filter_map(|l| l.split("-> cpu.irq").nth(1))
+        .filter_map(|rest| rest.trim_start().split(|c: char| !c.is_ascii_digit()).next()?.parse().ok())
+        .collect()
+}
+
 /// The pins device's output lines.
 pub mod out {
     /// The drivers' nFAULT (high: no fault).
@@ -196,6 +208,7 @@ impl BoardMachine {
         let machine = rsemu::machine::build("painleve-f405.machine", &text, &reg, &opts).map_err(e)?;
         let core =
             slot.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone().ok_or_else(|| BuildError("no core was built".into()))?;
+        core.set_wired_irqs(wired_irqs(&text));
         if !stuck_low.wraps_both_ports() {
             return Err(BuildError("GPIOA and GPIOB were not told apart by their MODER reset values (crate::widen::StuckLow)".into()));
         }
@@ -222,5 +235,26 @@ impl BoardMachine {
     /// rsemu's, in words.
     pub fn run_until(&mut self, ns: u64) -> Result<(), String> {
         self.machine.run_until(GlobalTime::from_nanos(ns)).map_err(|e| e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_wired_lines_are_the_descriptions_cpu_irq_wires_without_the_objects_left_out() {
+        let entry = rsemu::machine::catalog::machine("stm32f407").expect("rsemu's stm32f407");
+        let full = wired_irqs(entry.source);
+        let kept = wired_irqs(&(without_unused(entry.source) + BOARD));
+        // USART2 (38), SDIO (49) and the RNG (80) are left out; the board's own SPI1,
+        // ADC, USART1 and DMA2 stream 0 are wired.
+        for line in [38, 49, 80] {
+            assert!(full.contains(&line) && !kept.contains(&line), "{line}: {full:?} {kept:?}");
+        }
+        for line in [35, 18, 37, 56, 28, 30] {
+            assert!(kept.contains(&line), "{line}: {kept:?}");
+        }
+        assert_eq!(wired_irqs("  wire tim2.irq -> cpu.irq28  # TIM2\n# wire x.irq -> cpu.irq3\nmap mem 0 = cpu.irq9"), [28]);
     }
 }

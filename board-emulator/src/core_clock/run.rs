@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering::Relaxed;
 
 use rsemu::{core::sched::TickCursor, cpu::arm::v7m::sys::Exception};
 
-use super::{CONTROL_EXCEPTION, Core, HandlerRun, IRQS, TIM2_IRQ, lock};
+use super::{CONTROL_EXCEPTION, Core, HandlerRun, TIM2_IRQ, lock};
 use crate::{accelerator::FLASH, flash_reads};
 
 impl Core {
@@ -25,8 +25,9 @@ impl Core {
             // As Exec::step's merge_external: an asserted line pends unless
             // active. Only enabled lines can wake the core; a disabled line's
             // pending bit is folded in by the next step, which nothing reads
-            // before (the image reads no NVIC pending bits).
-            for irq in 0..IRQS {
+            // before (the image reads no NVIC pending bits). Only the lines
+            // wired to the core can be asserted ([`Core::set_wired_irqs`]).
+            for &irq in self.wake_lines() {
                 let e = Exception(irq + 16);
                 if s.is_enabled(e) && c.irq_asserted(irq) && !s.is_active(e) {
                     s.set_pending(e, true);
