@@ -3,11 +3,11 @@
 a copy of the template made with the one command is a workspace member that
 scripts/laws.py lists with its renamed binaries and scenario; scripts/budgets.py
 --all holds its images to the budget (asking for their build, by its package,
-while they are not built); the import-cycle gate reads its sources; `cargo
-clippy` lints it, host and MCU builds; nothing of the template's names is left in its
+while they are not built); the import-cycle gate reads its sources; clippy
+lints it (in scripts/test.sh, as it builds), and its host and MCU builds build; nothing of the template's names is left in its
 sources. A bad or taken name is refused (exit 2). The copy (examples/NAME in
 this repository, made and removed here) and Cargo.lock are restored whatever
-happens. Run by scripts/test.sh after its lints (their build is reused)."""
+happens. Run by scripts/test.sh after its test build (which it reuses)."""
 
 import json
 import os
@@ -58,10 +58,14 @@ def main() -> int:
         missing = json.loads(p.stdout)["missing"]
         for key in (f"mcu/{NAME}-arm", f"mcu/{NAME}-pil", f"qemu/{NAME}-arm", f"qemu/{NAME}-pil"):
             assert key in missing and f"-p {NAME} " in missing[key], (key, missing)
-        # It builds: its crate, tests and examples linted as the workspace is (the
-        # rest is fresh from scripts/test.sh's lints, which run before), and its
-        # MCU images checked for the target.
-        run("cargo", "clippy", "--release", "--workspace", "--all-targets", "--features", "sil-host/full", "--", "-D", "warnings")
+        # It builds: its crate, tests and examples linted as the workspace is, and its
+        # MCU images checked for the target. Under scripts/test.sh, which lints as it
+        # builds (RUSTC_WORKSPACE_WRAPPER=scripts/lint-rustc.sh), that is the script's
+        # own test build, the rest of it fresh; run alone, `cargo clippy`.
+        if os.environ.get("RUSTC_WORKSPACE_WRAPPER", "").endswith("lint-rustc.sh"):
+            run("cargo", "test", "--workspace", "--release", "--features", "sil-host/full", "--all-targets", "--no-run")
+        else:
+            run("cargo", "clippy", "--release", "--workspace", "--all-targets", "--features", "sil-host/full", "--", "-D", "warnings")
         run("cargo", "check", "-p", NAME, "--profile", "qemu", "--target", "thumbv7em-none-eabihf", "--no-default-features", "--features", "qemu", "--bin", f"{NAME}-arm", "--bin", f"{NAME}-pil")
         # The import-cycle gate reads its sources.
         out = run(sys.executable, os.path.join(HERE, "import_cycles.py"), law.src).stdout
