@@ -54,7 +54,9 @@ pip_install() {
 pip_install -c python/requirements-test.txt "$wheel" \
   || die "pip could not install $wheel into $venv"
 t1="$(date +%s.%N)"
-pip_install -r python/requirements-test.txt \
+# --no-compile: no bytecode for the tests' packages' many modules the tests never import
+# (Jupyter's, MuJoCo's, polars'), compiled on import instead.
+pip_install --no-compile -r python/requirements-test.txt \
   || die "pip could not install python/requirements-test.txt into $venv"
 t2="$(date +%s.%N)"
 awk -v a="$t0" -v b="$t1" -v c="$t2" -v w="$(basename "$wheel")" 'BEGIN {

@@ -39,23 +39,35 @@ pub fn serve<L: ControlLaw>(args: &FirmwareArgs) -> Result<i32, Error> {
 pub fn main<L: ControlLaw>() -> std::process::ExitCode {
     use clap::{Args, Command, FromArgMatches};
     let spec = &L::SPEC;
-    let params: Vec<String> =
-        spec.params.iter().map(|p| format!("  {} = {} {} (range [{}, {}])", p.name, p.default, p.unit, p.min, p.max)).collect();
-    let about = format!(
-        "The SIL rig's firmware process running the control law `{}` ({}), for `sil-host run --attach RIG`.\n\n\
-         The scenario's `[law]` table sets its parameters (defaults shown):\n{}",
+    let width = spec.params.iter().map(|p| p.name.len()).max().unwrap_or(0);
+    let params: Vec<String> = spec
+        .params
+        .iter()
+        .map(|p| format!("  {:width$}  {}: default {}, from {} to {}", p.name, p.unit, p.default, p.min, p.max))
+        .collect();
+    let params = format!(
+        "The law's parameters, set in the scenario's `[law]` table (`name = \"{}\"`, then `NAME = VALUE`):\n{}",
         spec.name,
-        spec.source,
         if params.is_empty() { "  (none)".to_string() } else { params.join("\n") }
     );
-    let name = if spec.name.is_empty() { "firmware".to_string() } else { format!("{}-firmware", spec.name) };
+    let about = format!(
+        "The SIL rig's firmware process running the control law `{}` ({}), for `sil-host run --attach RIG`.",
+        spec.name, spec.source
+    );
+    // The binary as the user typed it (a law's crate names its own: `law-firmware`).
+    let name = std::env::args_os()
+        .next()
+        .and_then(|a| std::path::Path::new(&a).file_name().map(|f| f.to_string_lossy().into_owned()))
+        .unwrap_or_else(|| format!("{}-firmware", spec.name));
     // clap without its `string` feature names a command by a `&'static str`: once per process.
     let name: &'static str = Box::leak(name.into_boxed_str());
+    // The subcommand's about and the parameters set after `augment_args`, which
+    // would otherwise put `FirmwareArgs`' own doc comment in their place.
     let cmd = Command::new(name)
         .about(format!("The firmware process of control law `{}` for the SIL rig (`{name} firmware --help`).", spec.name))
         .subcommand_required(true)
         .arg_required_else_help(true)
-        .subcommand(FirmwareArgs::augment_args(Command::new("firmware").about(about)));
+        .subcommand(FirmwareArgs::augment_args(Command::new("firmware")).about(about).long_about(None).after_help(params));
     let args = match cmd.try_get_matches().and_then(|m| match m.subcommand() {
         Some(("firmware", sub)) => FirmwareArgs::from_arg_matches(sub),
         _ => Err(clap::Error::new(clap::error::ErrorKind::MissingSubcommand)),

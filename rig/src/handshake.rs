@@ -117,6 +117,31 @@ pub fn check(
     check_config(announcement, config, declared, &scenario, rig)
 }
 
+/// `differences` with a difference of `law.values` (the law's parameter slots) told
+/// per declared parameter of `law`, by name and with its unit: `law.k_t: firmware
+/// 2000 N/m, scenario 8000 N/m`. A difference only in undeclared slots (a build that
+/// fills them) stays as the raw slots.
+fn named_law_values(mut differences: Vec<Difference>, firmware: &Config, scenario: &Config, law: &LawDescription) -> Vec<Difference> {
+    let Some(at) = differences.iter().position(|d| d.field == "law.values") else { return differences };
+    let (a, b) = (&firmware.law.values, &scenario.law.values);
+    let named: Vec<Difference> = law
+        .params
+        .iter()
+        .zip(a.iter().zip(b))
+        .filter(|(_, (x, y))| x.to_bits() != y.to_bits())
+        .map(|(p, (x, y))| Difference {
+            field: format!("law.{}", p.name),
+            firmware: format!("{x} {}", p.unit),
+            scenario: format!("{y} {}", p.unit),
+        })
+        .collect();
+    let undeclared = a.iter().zip(b).skip(law.params.len()).any(|(x, y)| x.to_bits() != y.to_bits());
+    if !named.is_empty() && !undeclared {
+        differences.splice(at..=at, named);
+    }
+    differences
+}
+
 /// [`check`] once the scenario's configuration is bound: compares and records.
 fn check_config(
     a: &FirmwareAnnouncement,
@@ -125,7 +150,7 @@ fn check_config(
     scenario: &Config,
     rig: &str,
 ) -> Result<Announced, HandshakeError> {
-    let differences = differences(&config, scenario);
+    let differences = named_law_values(differences(&config, scenario), &config, scenario, &law);
     if !differences.is_empty() {
         return Err(HandshakeError::ConfigMismatch { rig: rig.to_string(), differences });
     }
@@ -192,11 +217,16 @@ mod tests {
         let a = announce_law(&fw, &IMPEDANCE).unwrap();
         let ok = super::check(&a, setup.firmware(), setup.scenario().law.as_ref(), "r").unwrap();
         assert_eq!((ok.config.law.values[0], ok.law.name.as_str()), (1500.0, "impedance"));
-        // Another value on the firmware's side is a difference of `law.values`.
+        // Another value on the firmware's side is a difference of that parameter,
+        // named with its unit (issue 84: not the raw slots of `law.values`).
         let mut other = fw;
         other.law.values[0] = 1000.0;
         let e = super::check(&announce_law(&other, &IMPEDANCE).unwrap(), setup.firmware(), setup.scenario().law.as_ref(), "r").unwrap_err();
-        assert!(matches!(&e, HandshakeError::ConfigMismatch { differences, .. } if differences[0].field == "law.values"), "{e}");
+        assert!(
+            matches!(&e, HandshakeError::ConfigMismatch { differences, .. } if differences.len() == 1 && differences[0].field == "law.stiffness"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("law.stiffness: firmware 1000 N/m, scenario 1500 N/m"), "{e}");
         // An undeclared parameter, or the paper's firmware, is refused before any comparison.
         s.law.as_mut().unwrap().params.insert("damping".into(), 1.0);
         let e = super::check(&a, setup.firmware(), s.law.as_ref(), "r").unwrap_err();

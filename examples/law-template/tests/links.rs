@@ -194,3 +194,24 @@ fn the_tracking_check_holds_a_law_to_what_it_declares() {
         other => panic!("{other:?}"),
     }
 }
+
+/// `law-firmware firmware --help` names the binary as it was run and lists every
+/// parameter the law declares (`ControlLaw::SPEC`) with its unit, default and
+/// range (issue 84: the subcommand's help had `FirmwareArgs`' own text instead).
+#[test]
+fn the_firmware_help_names_the_binary_and_lists_every_parameter() {
+    use firmware::ControlLaw;
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_law-firmware")).args(["firmware", "--help"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(help.contains("Usage: law-firmware firmware"), "{help}");
+    assert!(help.contains(&format!("control law `{}`", Impedance::SPEC.name)), "{help}");
+    assert!(!Impedance::SPEC.params.is_empty());
+    for p in Impedance::SPEC.params {
+        let line =
+            help.lines().find(|l| l.split_whitespace().next() == Some(p.name)).unwrap_or_else(|| panic!("{} not listed: {help}", p.name));
+        for part in [format!("{}:", p.unit), format!("default {}", p.default), format!("from {} to {}", p.min, p.max)] {
+            assert!(line.contains(&part), "{}: {part:?} not in {line:?}", p.name);
+        }
+    }
+}

@@ -33,16 +33,32 @@ impl PageInfo {
         };
         let p = scenario.plant.params();
         let c = &scenario.controller;
+        let references = format!("zₜ* = {} m over {} s, fₙ* = {} N", c.target_z_t, c.move_time_s, c.f_n_ref);
+        // A law of one's own is named by the scenario's `[law]` table (a run is refused
+        // without it): its name and the parameters the table sets, the rest at the
+        // law's declared defaults (summary.json's `firmware_announcement` has them all).
+        let (name, controller) = match &scenario.law {
+            Some(law) => {
+                let set: Vec<String> = law.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+                let set = if set.is_empty() {
+                    "every parameter at its default".to_string()
+                } else {
+                    format!("{}, the rest at their defaults", set.join(", "))
+                };
+                (law.name.clone(), format!("law `{}` ({set}; {references})", law.name))
+            }
+            None => (c.kind.to_string(), format!("{} ({references})", c.kind)),
+        };
         let mut facts = vec![
             ("scenario".to_string(), scenario.name.clone()),
             ("link".to_string(), link.to_string()),
-            ("controller".to_string(), format!("{} (zₜ* = {} m over {} s, fₙ* = {} N)", c.kind, c.target_z_t, c.move_time_s, c.f_n_ref)),
+            ("controller".to_string(), controller),
             ("initial condition".to_string(), format!("x0{}", scenario.plant.x0)),
             ("control rate".to_string(), format!("{} Hz", scenario.timing.rate_hz)),
         ];
         facts.extend(plant_facts(&p, &format!("{:?}", scenario.plant.impact_law).to_lowercase(), scenario.plant.e_n));
         Self {
-            title: format!("{what} run {}: {} from x0{}", scenario.name, c.kind, scenario.plant.x0),
+            title: format!("{what} run {}: {name} from x0{}", scenario.name, scenario.plant.x0),
             facts,
             l: p.l,
             h: p.h,
@@ -73,4 +89,41 @@ fn plant_facts(p: &Params<f64>, impact_law: &str, e_n: f64) -> Vec<(String, Stri
         ("links".to_string(), format!("l = {} m, base H = {} m above the belt", p.l, p.h)),
         ("impacts".to_string(), format!("{impact_law}, eₙ = {e_n}")),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PageInfo;
+    use rig::{law::LawTable, scenario::Scenario};
+
+    fn controller_fact(info: &PageInfo) -> &str {
+        &info.facts.iter().find(|(k, _)| k == "controller").unwrap().1
+    }
+
+    /// A law of one's own is named in the title and the facts, with the parameters
+    /// its `[law]` table sets, on every link (issue 84: the page said `hybrid`).
+    #[test]
+    fn a_law_of_ones_own_is_named_with_its_parameters_on_every_link() {
+        let mut s = Scenario::default_scenario();
+        s.law = Some(LawTable { name: "impedance".into(), params: [("k_t".to_string(), 2500.0), ("d_n".to_string(), 50.0)].into() });
+        for link in ["in-process", "iceoryx2", "twin", "emulator", "pil-qemu", "pil-serial"] {
+            let info = PageInfo::closed_loop(&s, link);
+            assert!(info.title.ends_with(&format!("run {}: impedance from x0d", s.name)), "{link}: {}", info.title);
+            let fact = controller_fact(&info);
+            assert!(fact.starts_with("law `impedance` (d_n = 50, k_t = 2500, the rest at their defaults; zₜ* = "), "{link}: {fact}");
+        }
+        s.law = Some(LawTable { name: "pd".into(), params: Default::default() });
+        let info = PageInfo::closed_loop(&s, "in-process");
+        assert_eq!(info.title, format!("SIL run {}: pd from x0d", s.name));
+        assert!(controller_fact(&info).starts_with("law `pd` (every parameter at its default; "), "{}", controller_fact(&info));
+    }
+
+    /// The paper's laws keep their title and facts (the golden pages).
+    #[test]
+    fn the_papers_laws_are_named_by_their_kind() {
+        let s = Scenario::default_scenario();
+        let info = PageInfo::closed_loop(&s, "pil-qemu");
+        assert_eq!(info.title, format!("PIL run {}: hybrid from x0d", s.name));
+        assert!(controller_fact(&info).starts_with("hybrid (zₜ* = "), "{}", controller_fact(&info));
+    }
 }
