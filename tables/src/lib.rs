@@ -148,7 +148,7 @@ pub enum TableFormat {
     /// `painleve.load` ([`arrow`]).
     Arrow,
     /// MCAP (`trace.mcap`, one file for all of a command's tables), the bag format
-    /// of ROS 2 and Foxglove: a channel per signal group, JSON messages with JSON
+    /// of ROS 2 and Foxglove: a channel per signal group, protobuf messages with their
     /// schemas, log times in ns of simulated time ([`mcap`]).
     Mcap,
 }

@@ -87,7 +87,7 @@ pub struct RunArgs {
     /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
     /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
-    /// /torques, /firmware of JSON messages with JSON schemas, and the arm in
+    /// /torques, /firmware of protobuf messages with their schemas (FileDescriptorSets), and the arm in
     /// Foxglove's own schemas: /tf (FrameTransforms), /scene (SceneUpdate), /log
     /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
     /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").
@@ -177,7 +177,7 @@ pub struct PilArgs {
     /// killed run keeps its batches; pandas.read_feather, polars.read_ipc,
     /// painleve.load; painleve.load also reads a killed run's, cut before its footer) or
     /// `mcap` (trace.mcap, for Foxglove and ROS 2 tools: channels /state, /contact,
-    /// /torques, /firmware of JSON messages with JSON schemas, and the arm in
+    /// /torques, /firmware of protobuf messages with their schemas (FileDescriptorSets), and the arm in
     /// Foxglove's own schemas: /tf (FrameTransforms), /scene (SceneUpdate), /log
     /// (Log); log times in ns of simulated time; a zstd chunk per 100 periods, so a
     /// killed run keeps its chunks; docs/rig.md "Outputs", "Foxglove").

@@ -41,7 +41,7 @@ pub struct SimulateArgs {
     /// (trace.arrow, events.arrow: Arrow IPC files, typed columns with the floats'
     /// bits, for pandas.read_feather, polars.read_ipc, pyarrow; painleve.load reads
     /// both) or `mcap` (trace.mcap, both tables in one file for Foxglove and ROS 2
-    /// tools: channels /state, /contact, /events of JSON messages with JSON schemas,
+    /// tools: channels /state, /contact, /events of protobuf messages with their schemas (FileDescriptorSets),
     /// and the arm in Foxglove's own schemas: /tf (FrameTransforms), /scene
     /// (SceneUpdate), /log (Log, the events); log times in ns of simulated time;
     /// docs/rig.md "Outputs", "Foxglove").
