@@ -51,12 +51,14 @@ fn main() {
     }
     // And when a tracked file is edited in the working tree (`-dirty` appears or goes
     // without the index moving, issue 68): every tracked file but the prose (`*.md`,
-    // `docs/`), whose edits change no output of the build. Paths are the checkout's,
-    // from its top level.
+    // `docs/`), whose edits change no output of the build, and `Cargo.lock`, cargo's own
+    // (a lock that moves a dependency rebuilds through it; scripts/new_law_test.py adds
+    // a law crate and restores the lock, which rebuilt sil-host and every test binary).
+    // Paths are the checkout's, from its top level.
     if let Some(top) = git(&["rev-parse", "--show-toplevel"])
         && let Some(files) = git(&["-C", &top, "ls-files"])
     {
-        for file in files.lines().filter(|f| !f.ends_with(".md") && !f.starts_with("docs/")) {
+        for file in files.lines().filter(|f| !f.ends_with(".md") && !f.starts_with("docs/") && *f != "Cargo.lock") {
             watch(&Path::new(&top).join(file));
         }
     }
