@@ -77,8 +77,11 @@ def analyse(args, case, tools, syms, disasm):
         print(f"cycles: no {case['name']} step found in the trace ({outcome})", file=sys.stderr)
         sys.exit(2)
     instr = spread([len(e) for e in eps])
-    cmax = spread([step_cycles(e, disasm, "max") for e in eps])
-    cmin = spread([step_cycles(e, disasm, "min") for e in eps])
+    # Most steps retrace an earlier step's path exactly: each distinct path costed once.
+    paths = {tuple(e) for e in eps}
+    by_path = {p: (step_cycles(p, disasm, "max"), step_cycles(p, disasm, "min")) for p in paths}
+    cmax = spread([by_path[tuple(e)][0] for e in eps])
+    cmin = spread([by_path[tuple(e)][1] for e in eps])
     worst = max(eps, key=len)
     report = {
         "steps": len(eps),

@@ -4,6 +4,7 @@ costed from the Cortex-M4 Technical Reference Manual (ARM DDI 0439B, Table 3-1
 the step took, under the two bounds `max` and `min` (scripts/cycles.py's docstring);
 the image's disassembly (llvm-objdump); the worst, median and 99th percentile."""
 
+import functools
 import subprocess
 
 # Cortex-M4 TRM (DDI 0439B) Table 3-1 and Table 7-1: cycles of one instruction
@@ -25,15 +26,19 @@ FP3 = {"vmla", "vmls", "vnmla", "vnmls", "vfma", "vfms", "vfnma", "vfnms"}
 FP14 = {"vdiv", "vsqrt"}
 BRANCHES = {"b", "bl", "blx", "bx", "cbz", "cbnz", "tbb", "tbh"}
 CONDS = ("eq", "ne", "cs", "hs", "cc", "lo", "mi", "pl", "vs", "vc", "hi", "ls", "ge", "lt", "gt", "le", "al")
+KNOWN = ALU1 | ALU2 | LOADS | FP1 | FP3 | FP14 | BRANCHES | {"ldm", "stm", "ldmia", "stmia", "ldmdb", "stmdb", "push", "pop",
+         "ldrd", "strd", "vldr", "vstr", "vldm", "vstm", "vldmia", "vstmia", "vpush", "vpop", "udiv", "sdiv", "wfi", "bkpt", "udf"}
 
 
+# Pure functions of an instruction's text, called once per retired instruction of every
+# step (millions per run): cached, so each distinct mnemonic and operand is parsed once.
+@functools.lru_cache(maxsize=None)
 def base_mnemonic(m):
     """`ldr.w` -> `ldr`, `vmul.f32` -> `vmul`, `movne.w` -> `mov`, `itte` -> `it`, `bne` -> `b`."""
     m = m.split(".")[0]
     if m.startswith("it") and set(m[2:]) <= {"t", "e"}:
         return "it"
-    known = ALU1 | ALU2 | LOADS | FP1 | FP3 | FP14 | BRANCHES | {"ldm", "stm", "ldmia", "stmia", "ldmdb", "stmdb", "push", "pop",
-             "ldrd", "strd", "vldr", "vstr", "vldm", "vstm", "vldmia", "vstmia", "vpush", "vpop", "udiv", "sdiv", "wfi", "bkpt", "udf"}
+    known = KNOWN
     for cand in (m, m[:-1] if m.endswith("s") else None):
         if cand in known:
             return cand
@@ -61,6 +66,7 @@ def register_count(ops):
     return n
 
 
+@functools.lru_cache(maxsize=None)
 def cost(mn, ops, taken, after_memory, bound):
     """Cycles of one instruction: TRM figures; `bound` is "max" or "min" (see the module docs)."""
     b = base_mnemonic(mn)

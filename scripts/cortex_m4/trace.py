@@ -4,6 +4,7 @@ chains (llvm-nm, llvm-addr2line), and the log cut into steps between the two clo
 of `firmware::controller::Firmware::step`."""
 
 import json
+import functools
 import os
 import shutil
 import subprocess
@@ -62,6 +63,7 @@ def symbol_of(syms, pc):
     return "?"
 
 
+@functools.lru_cache(maxsize=None)  # the same few hundred names, asked for tens of thousands of times
 def short(name):
     """A function name without generic arguments and hash (`a::b::<T>::c<U>` -> `a::b::c`)."""
     out, depth = [], 0
