@@ -112,14 +112,19 @@ echo "   the arm image is flashed with profile mcu and its no-LTO build exceeds 
 echo "   and their budgets (docs/hardware.md: flash <= 64 KiB, static RAM <= 16 KiB, no heap) and"
 echo "   flash ceilings (scripts/budgets.py CEILINGS: mcu/pil <= 37 KiB; docs/board.md \"Budgets\"); the same"
 echo "   images of every law of one's own (scripts/laws.py: every crate with [package.metadata.painleve.law], the template's among them, issue 70) within the budget"
-cargo build -p board-stm32f405 --profile mcu --target thumbv7em-none-eabihf --bin arm --bin pil
-cargo build -p board-stm32f405 --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin arm --bin pil
-cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pil
+# One cargo call per profile for the board's images and every law's, so that their fat-LTO
+# links (one core each) run side by side; the flash bytes are those of one call per crate
+# (the same features: each law takes the board's `rtt` or `qemu`).
+image_packages=(-p board-stm32f405)
+image_bins=(--bin arm --bin pil)
 for law in "${laws[@]}"; do
   read -r package _ arm pil _ _ <<<"$law"
-  cargo build -p "$package" --profile mcu --target thumbv7em-none-eabihf --bin "$arm" --bin "$pil"
-  cargo build -p "$package" --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu --bin "$arm" --bin "$pil"
+  image_packages+=(-p "$package")
+  image_bins+=(--bin "$arm" --bin "$pil")
 done
+cargo build "${image_packages[@]}" --profile mcu --target thumbv7em-none-eabihf "${image_bins[@]}"
+cargo build "${image_packages[@]}" --profile qemu --target thumbv7em-none-eabihf --no-default-features --features qemu "${image_bins[@]}"
+cargo build --release -p board-stm32f405 --target thumbv7em-none-eabihf --bin pil
 python3 scripts/budgets.py --all
 
 echo "== [at ${SECONDS} s] the control step's cycle estimate (scripts/cycles.py: QEMU's exec trace, Cortex-M4 TRM timings)"
