@@ -63,4 +63,4 @@ awk -v a="$t0" -v b="$t1" -v c="$t2" -v w="$(basename "$wheel")" 'BEGIN {
   printf "python-tests: %s installed (with NumPy) into a fresh venv without Rust in %.1f s; the tests%s packages %.1f s\n", w, b - a, "\047", c - b }'
 
 # 4. The tests, from that environment: `painleve` is the installed wheel's (python/tests/test_defaults.py).
-run env PAINLEVE_SIL_HOST="$sil_host" "$venv/bin/python" -m pytest python/tests -q -p no:cacheprovider --durations=12
+run env PAINLEVE_SIL_HOST="$sil_host" "$venv/bin/python" -m pytest python/tests -q -p no:cacheprovider -n auto --dist loadfile --durations=12
