@@ -66,7 +66,7 @@ def _finish(raw: Mapping[str, Any], strict: bool) -> Result:
 
 def simulate(
     *,
-    x0: PaperX0 = "a",
+    x0: Optional[PaperX0] = None,
     x0_deg: Optional[Union[str, Sequence[Number]]] = None,
     mu: float = 0.6,
     v_belt: float = -0.4,
@@ -87,7 +87,9 @@ def simulate(
 
     Args:
         x0: the paper's initial condition ``"a"``, ``"d"`` or ``"u"`` (projected
-            onto the belt).
+            onto the belt); ``None``: ``"a"``, the CLI's default. Given with
+            ``x0_deg``, even as ``"a"``, the pair is refused as the CLI refuses
+            ``--x0`` with ``--x0-deg``.
         x0_deg: instead, ``(theta1, theta1_dot, theta2, theta2_dot)`` in degrees
             and deg/s (a tip up to 1 mm inside the belt is projected onto it).
         mu: friction coefficient (>= 0).
@@ -214,7 +216,7 @@ def modes(
 def poincare(
     *,
     mu: float = 0.6,
-    x0: PaperX0 = "a",
+    x0: Optional[PaperX0] = None,
     x0_deg: Optional[Union[str, Sequence[Number]]] = None,
     v_belt: Range = (-0.9, -0.3),
     v_step: float = 0.002,

@@ -10,8 +10,10 @@ passed as they are (numbers exactly, sequences as lists, paths as paths); ``set`
 as ``KEY=VALUE`` items (:func:`overrides`).
 
 An argument that is ``None`` or equal to its default is left out, so that, as on
-the command line, an option not given never conflicts with another (``x0`` and
-``x0_deg``).
+the command line, an option not given never conflicts with another. An argument
+that can conflict (``x0``, with ``x0_deg``) defaults to ``None`` (the CLI's default
+then applies), so that a value given, even the CLI's default, is refused beside the
+other as the command line refuses it (python/tests/test_defaults.py ``CONFLICTING``).
 """
 
 from __future__ import annotations

@@ -77,6 +77,22 @@ def test_board_keys_are_refused_or_warned_about_without_a_board():
         painleve.run(duration=0.02, progress=False)  # the default scenario: no warning
 
 
+@pytest.mark.parametrize("fn", ["simulate", "poincare"])
+def test_an_initial_condition_given_twice_is_refused_as_the_cli_refuses_it(fn):
+    # Issue 84: `x0="a"` (the CLI's default) beside `x0_deg` ran in Python, as if
+    # x0 were not given, where `sil-host simulate --x0 a --x0-deg ...` is refused.
+    with pytest.raises(painleve.PainleveError) as e:
+        getattr(painleve, fn)(x0="a", x0_deg=(32, 0, 18.27, 0), progress=False)
+    assert e.value.exit_code == 2
+    for w in ["x0", "cannot be used with", "x0_deg"]:
+        assert w in str(e.value), str(e.value)
+    # Not given, x0 is the CLI's "a": the same run as x0="a".
+    a = painleve.simulate(duration=0.05, progress=False)
+    b = painleve.simulate(x0="a", duration=0.05, progress=False)
+    assert a.summary["params"] == b.summary["params"]
+    assert (a.trace["theta1"] == b.trace["theta1"]).all()
+
+
 def test_keywords_reach_the_settings_exactly_without_command_line_text():
     # A double with no short decimal text arrives bit for bit (no text in between).
     mu = 0.1 + 0.2

@@ -28,6 +28,9 @@ NOT_IN_PYTHON = {
 }
 # Arguments of the functions that are not flags.
 NOT_FLAGS = {"progress"}
+# Arguments whose default is None here, so that a value given, even the CLI's default, is
+# given as on the command line, where clap refuses it beside the option it conflicts with.
+CONFLICTING = {"x0": "x0_deg"}
 
 FUNCTIONS = ["simulate", "admissible", "modes", "poincare", "sweep", "zmax", "run", "sensitivity"]
 
@@ -58,7 +61,9 @@ def test_arguments_are_the_cli_options_with_its_defaults(name):
         flag = p.name.replace("_", "-")
         assert flag in cli, f"{name}({p.name}=...) is not an option of sil-host {name}"
         defaults = cli[flag]
-        if p.default is None:
+        if p.name in CONFLICTING and CONFLICTING[p.name] in params:
+            assert p.default is None and defaults, f"{name}: {p.name} defaults to None, left to the CLI's {defaults}"
+        elif p.default is None:
             assert defaults == [], f"{name}: {p.name} has no default here but {defaults} in the CLI"
         elif p.default is False:
             assert defaults in ([], ["false"]), f"{name}: {p.name}"
