@@ -397,6 +397,29 @@ class Result:
         )
         return f"<p>{head}</p>" + frame + "".join(t._repr_html_() for t in self.tables.values())
 
+    @property
+    def law(self) -> Optional[str]:
+        """The control law a closed-loop result ran, in words, or ``None`` (an
+        open-loop result): ``"hybrid"`` or ``"pid"`` (the paper's laws, the
+        firmware's ``controller``); ``"law `impedance` (k_t = 2500)"`` for a law
+        of one's own (the scenario's ``[law]`` table and the parameters it sets;
+        the others at the law's defaults, ``summary["firmware_announcement"]``);
+        ``"Python <name>"`` for :func:`painleve.run_controller`'s callable
+        (``"a Python controller"`` for one loaded from a folder). On every link:
+        read from ``summary.json`` (issue 84: views called every law "hybrid")."""
+        s = self.summary if isinstance(self.summary, dict) else {}
+        if s.get("transport") == "python":
+            name = getattr(self, "_python_law", None)
+            return f"Python {name}" if name else "a Python controller"
+        used = s.get("scenario_used")
+        table = used.get("law") if isinstance(used, dict) else None
+        if isinstance(table, dict) and table.get("name"):
+            params = table.get("params") or {}
+            set_ = ", ".join(f"{k} = {_cell(v)}" for k, v in sorted(params.items()))
+            return f"law `{table['name']}` ({set_ or 'every parameter at its default'})"
+        controller = s.get("controller")
+        return controller if isinstance(controller, str) and "firmware_config" in s else None
+
     def __repr__(self) -> str:
         tables = ", ".join(f"{k}: {t.nrows}x{len(t)}" for k, t in self.tables.items())
         state = "valid" if self.valid else f"INVALID ({self.violations})"
@@ -404,4 +427,6 @@ class Result:
             state = "no simulation"
         failed = f", failure: {self.failure!r}" if self.failure else ""
         where = f", from {self.path}" if self.path else ""
-        return f"<painleve.Result {self.command}: tables [{tables}], {state}{failed}{where}>"
+        law = self.law
+        ran = f" ({law})" if law else ""
+        return f"<painleve.Result {self.command}{ran}: tables [{tables}], {state}{failed}{where}>"

@@ -47,9 +47,15 @@ def test_the_python_prototype_is_the_rust_law(example, tmp_path):
         assert done.returncode == 0, done.stderr
     finally:
         assert fw.wait(timeout=60) == 0
-    rust = painleve.load(out).trace
+    loaded = painleve.load(out)
+    rust = loaded.trace
     scenario = painleve.Scenario.load(SCENARIO).set("timing.duration_s", 2.0)
-    py = painleve.run_controller(example.Impedance(scenario), scenario).trace
+    prototype = painleve.run_controller(example.Impedance(scenario), scenario)
+    py = prototype.trace
+    # Each result names the law that ran (issue 84: every law was "hybrid").
+    assert loaded.law.startswith("law `impedance` ("), loaded.law
+    assert "(law `impedance` (" in repr(loaded), repr(loaded)
+    assert prototype.law == "Python Impedance" and "(Python Impedance)" in repr(prototype), repr(prototype)
     z_rust, z_py = np.asarray(rust["z_t"], dtype=float), np.asarray(py["z_t"], dtype=float)
     assert len(z_rust) == len(z_py) == 2000
     assert abs(z_rust[-1] - z_py[-1]) < 1e-5, (z_rust[-1], z_py[-1])

@@ -68,3 +68,19 @@ def test_overrides_as_a_list_equal_a_dict():
 def test_bad_input_raises_the_cli_message(kwargs, argv, monkeypatch):
     monkeypatch.chdir(REPO)
     assert_raises_like_cli(lambda: painleve.run(progress=False, **kwargs), "run", ["--in-process", *argv])
+
+
+def test_a_result_names_the_law_that_ran():
+    # Issue 84: the paper's laws by the firmware's controller, a Python callable by
+    # its name, an open-loop result none (a law of one's own: test_impedance_prototype.py).
+    for controller in ("pid", "hybrid"):
+        r = painleve.run(controller=controller, duration=0.02, progress=False)
+        assert r.law == controller and repr(r).startswith(f"<painleve.Result run ({controller}): "), repr(r)
+
+    def hold_still(t, sensed):
+        return (0.0, 0.0)
+
+    r = painleve.run_controller(hold_still, duration=0.02)
+    assert r.law == "Python test_a_result_names_the_law_that_ran.<locals>.hold_still", r.law
+    s = painleve.simulate(duration=0.01, progress=False)
+    assert s.law is None and repr(s).startswith("<painleve.Result simulate: "), repr(s)
