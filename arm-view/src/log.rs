@@ -23,6 +23,8 @@ pub fn line(t: f64, level: Level, name: &str, message: String) -> Log {
 #[derive(Debug, Clone, Default)]
 pub struct RunLog {
     last: Option<Flags>,
+    /// The control law in words (`rig::scenario::Scenario::law_in_words`), logged at the first period.
+    law: Option<String>,
 }
 
 /// The flags of one period that the log follows.
@@ -35,8 +37,16 @@ struct Flags {
 }
 
 impl RunLog {
+    /// The log of a run of the control law `law` (in words, `rig::scenario::Scenario::law_in_words`:
+    /// `hybrid`, ``law `impedance` (k_t = 2500, the rest at their defaults)``),
+    /// which its first line names (issue 84: a trace must say which law ran).
+    #[must_use]
+    pub fn of_law(law: String) -> Self {
+        Self { last: None, law: Some(law) }
+    }
+
     /// The lines of period `r` against the one before: the first period's
-    /// mode; a mode change (`sliding -> flight` is a true lift-off, `flight ->
+    /// law (when known) and mode; a mode change (`sliding -> flight` is a true lift-off, `flight ->
     /// ...` a touchdown); the firmware's lift-off detection rising or falling;
     /// every deadline miss (the plant's: the previous command held; the
     /// firmware's own: `DEADLINE_MISS`); the firmware's safe state when it
@@ -52,6 +62,9 @@ impl RunLog {
         let t = r.t;
         match self.last {
             None => {
+                if let Some(law) = &self.law {
+                    out.push(line(t, Level::Info, FIRMWARE, format!("control law: {law}")));
+                }
                 out.push(line(t, Level::Info, PLANT, format!("start: contact mode {}, z_t = {:.4} m, z_n = {:.4} m", r.mode, r.z_t, r.z_n)))
             }
             Some(last) => {

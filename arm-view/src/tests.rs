@@ -104,6 +104,37 @@ fn a_runs_view_messages_check_against_foxglove_schemas() {
     assert!(messages[1].starts_with("lift-off (true)") && decoded_logs[1].timestamp.unwrap().nsec() == 40_000_000);
 }
 
+/// Issue 84: a closed-loop run's `/log` names its control law at the first
+/// period, before the start line, as the firmware's line; a view made without
+/// one (`ArmView::new`) logs no law line.
+#[test]
+fn the_log_names_the_law_at_the_first_period() {
+    let lines = |mut view: ArmView| {
+        let mut out = Vec::new();
+        for k in 0..3 {
+            view.messages(&record(k as f64 * 1e-3, 0.3, 1.2, "sliding"), &mut |c, bytes| {
+                if c == 2 {
+                    out.push(Log::decode(bytes).unwrap());
+                }
+            });
+        }
+        out
+    };
+    let law = "law `impedance` (k_t = 2500, the rest at their defaults)";
+    let named = lines(ArmView::of_law(PAPER, law.to_string()));
+    assert_eq!(named.len(), 2, "{named:?}");
+    assert_eq!(named[0].message, format!("control law: {law}"));
+    assert_eq!(
+        (named[0].name.as_str(), named[0].timestamp, named[0].level),
+        ("firmware", named[1].timestamp, 2),
+        "an info line of the firmware's, at the first period"
+    );
+    assert!(named[1].message.starts_with("start: contact mode sliding"), "{named:?}");
+    let unnamed = lines(ArmView::new(PAPER));
+    assert_eq!(unnamed.len(), 1);
+    assert_eq!(unnamed[0].message, named[1].message);
+}
+
 /// A message that breaks the schema is caught: an undeclared field, a wrong
 /// wire type, a cut message (the checker can fail).
 #[test]

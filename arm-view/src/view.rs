@@ -77,6 +77,12 @@ impl ArmView {
         }
     }
 
+    /// As [`ArmView::new`], for a closed-loop run of the control law `law` (in
+    /// words, `rig::scenario::Scenario::law_in_words`), which the `/log` names at its first period.
+    pub fn of_law(geometry: ArmGeometry, law: String) -> Self {
+        Self { log: RunLog::of_law(law), ..Self::new(geometry) }
+    }
+
     /// Whether a row at `t` (s) is drawn: the first, then the first at or past
     /// each multiple of [`VIEW_PERIOD_S`] (within 1 ns, so rows on a 1 ms grid
     /// are drawn every tenth).

@@ -127,6 +127,27 @@ impl ArmImage {
     }
 }
 
+impl ArmImage {
+    /// Which bytes these are: the CRC-32 (CRC-32/ISO-HDLC, zlib's `crc32`) of
+    /// [`ArmImage::flash`], the flash from `FLASH_BASE` to the image's end as it is
+    /// loaded (`0xFF` in gaps). Two files with the same loaded bytes have the same
+    /// value whatever their paths and debug info; the images carry no GNU build id
+    /// (rust-lld adds none for the MCU target).
+    #[must_use]
+    pub fn crc32(&self) -> u32 {
+        crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&self.flash)
+    }
+
+    /// One line naming the image for a run's log: its path (made absolute where
+    /// it can be), its bytes of flash and their [`ArmImage::crc32`], e.g.
+    /// `/w/target/thumbv7em-none-eabihf/mcu/arm (64 748 B of flash, CRC-32 0x1a2b3c4d)`.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        let path = std::path::absolute(&self.path).unwrap_or_else(|_| self.path.clone());
+        format!("{} ({} B of flash, CRC-32 0x{:08x})", path.display(), self.flash.len(), self.crc32())
+    }
+}
+
 /// The load address of the segment whose virtual address is `vaddr` (ELF
 /// program headers: `p_paddr` is the LMA).
 fn load_address(elf: &object::File<'_>, vaddr: u64) -> Option<u64> {
@@ -146,6 +167,19 @@ fn load_address(elf: &object::File<'_>, vaddr: u64) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_images_id_is_zlibs_crc32_of_its_flash_bytes_and_ignores_its_path() {
+        // CRC-32/ISO-HDLC's check value (the CRC RevEng catalogue): "123456789".
+        let image = |path: &str| ArmImage { path: path.into(), flash: b"123456789".to_vec(), monitor: 0, rtt: None, stack: (0, 0) };
+        assert_eq!(image("a/arm").crc32(), 0xCBF4_3926);
+        assert_eq!(image("a/arm").crc32(), image("/elsewhere/copy").crc32());
+        let mut other = image("a/arm");
+        other.flash[0] ^= 1;
+        assert_ne!(other.crc32(), image("a/arm").crc32());
+        let line = image("a/arm").describe();
+        assert!(line.ends_with("a/arm (9 B of flash, CRC-32 0xcbf43926)") && line.starts_with('/'), "{line}");
+    }
 
     #[test]
     fn a_file_that_is_not_an_elf_is_refused_by_name() {

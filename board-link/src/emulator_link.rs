@@ -65,6 +65,9 @@ pub struct EmulatorLink {
     pub rtt: Vec<u8>,
     /// The image's path.
     pub image: PathBuf,
+    /// Which image was loaded: its absolute path, bytes of flash and CRC-32
+    /// (`board_emulator::image::ArmImage::describe`), for the run's log.
+    pub loaded: String,
     /// Every run of TIM2's handler from period 0 on ([`Mode::Counted`]).
     pub handlers: Vec<HandlerRun>,
     /// The handler's runs before period 0 ([`Mode::Counted`]): the boot's tick
@@ -111,6 +114,7 @@ impl EmulatorLink {
             )));
         }
         let arm_image = ArmImage::load(image).map_err(|e| RunError::Board(format!("{e} (build it: {BUILD_HINT})")))?;
+        let loaded = arm_image.describe();
         // The law the image runs, from its ELF (`PAINLEVE_LAW_SPEC`; an image
         // without it is refused), binds the scenario's `[law]` table.
         let law = rig::law::LawDescription::declared_by(image)?;
@@ -132,6 +136,7 @@ impl EmulatorLink {
             last_ticks: None,
             rtt: Vec::new(),
             image: image.into(),
+            loaded,
             handlers: Vec::new(),
             start_handlers: Vec::new(),
         })

@@ -142,8 +142,9 @@ through_analysis!(shared::ParamError, plant::SimError, rig::scenario::ScenarioEr
 /// Whether a run failed on its input rather than while running: the rig is
 /// another's, the firmware process or a service does not fit, the scenario
 /// asks a board for what it never runs, the scenario's `[law]` table does not
-/// fit the firmware's law, or the private folder of the locks is refused
-/// (another user's, a link, open to others) (exit 2).
+/// fit the firmware's law, the private folder of the locks is refused
+/// (another user's, a link, open to others), or the plant refused the firmware
+/// process (exit 2).
 fn run_is_bad_input(e: &rig::record::RunError) -> bool {
     matches!(
         e,
@@ -153,6 +154,7 @@ fn run_is_bad_input(e: &rig::record::RunError) -> bool {
             | rig::record::RunError::IncompatibleService(_)
             | rig::record::RunError::NotOnABoard(_)
             | rig::record::RunError::PrivateFolder(_)
+            | rig::record::RunError::RefusedByPlant { .. }
     )
 }
 

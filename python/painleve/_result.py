@@ -414,9 +414,11 @@ class Result:
         used = s.get("scenario_used")
         table = used.get("law") if isinstance(used, dict) else None
         if isinstance(table, dict) and table.get("name"):
-            params = table.get("params") or {}
-            set_ = ", ".join(f"{k} = {_cell(v)}" for k, v in sorted(params.items()))
-            return f"law `{table['name']}` ({set_ or 'every parameter at its default'})"
+            # The `[law]` table: its name beside the parameters it sets (rig::law::LawTable).
+            params = {k: v for k, v in table.items() if k != "name"}
+            # Each value as Rust's `{}` prints it (shortest, positional): the words of rig::scenario::Scenario::law_in_words.
+            set_ = ", ".join(f"{k} = {np.format_float_positional(float(v), trim='-')}" for k, v in sorted(params.items()))
+            return f"law `{table['name']}` ({set_ + ', the rest at their defaults' if set_ else 'every parameter at its default'})"
         controller = s.get("controller")
         return controller if isinstance(controller, str) and "firmware_config" in s else None
 

@@ -296,7 +296,8 @@ pub fn run<'py>(py: Python<'py>, given: Bound<'py, PyDict>, progress: Option<Bou
     };
     let (message, code) = failure_of(failure.map(CliError::from), args.strict.strict, &validity);
     let (trace_py, frames_py) = (columns_to_py(py, &records), columns_to_py(py, &frames));
-    let recording = Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(scenario)), records, frames);
+    let recording =
+        Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(scenario)), scenario.law_in_words(), records, frames);
     Outcome::new(py, "run", to_py(py, &summary)?)?
         .table("trace", trace_py)?
         .table("frames", frames_py)?

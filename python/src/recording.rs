@@ -29,18 +29,21 @@ enum Rows {
 #[pyclass(module = "painleve._painleve", name = "Recording", frozen)]
 pub struct Recording {
     geometry: ArmGeometry,
+    /// A closed-loop run's control law in words (`rig::scenario::Scenario::law_in_words`), for the `/log`.
+    law: Option<String>,
     rows: Rows,
 }
 
 impl Recording {
     /// An open-loop run (`simulate`): its samples, events and batch ends.
     pub fn open_loop(geometry: ArmGeometry, trace: Vec<TraceRow>, events: Vec<EventRow>, batches: Vec<(usize, usize)>) -> Self {
-        Self { geometry, rows: Rows::OpenLoop { trace, events, batches } }
+        Self { geometry, law: None, rows: Rows::OpenLoop { trace, events, batches } }
     }
 
-    /// A closed-loop run (`run`, `run_controller`): its period records, its frames and answers.
-    pub fn closed_loop(geometry: ArmGeometry, records: Vec<PeriodRecord>, frames: Vec<FrameRow>) -> Self {
-        Self { geometry, rows: Rows::ClosedLoop { records, frames } }
+    /// A closed-loop run (`run`, `run_controller`) of the control law `law` (in
+    /// words, `rig::scenario::Scenario::law_in_words`): its period records, its frames and answers.
+    pub fn closed_loop(geometry: ArmGeometry, law: String, records: Vec<PeriodRecord>, frames: Vec<FrameRow>) -> Self {
+        Self { geometry, law: Some(law), rows: Rows::ClosedLoop { records, frames } }
     }
 
     /// Writes the file at `path`, as `sil-host` writes `trace.mcap` for the same run,
@@ -68,7 +71,11 @@ impl Recording {
                 pair.finish()
             }
             Rows::ClosedLoop { records, frames } => {
-                let views = (Some(Box::new(ArmView::new(self.geometry)) as Box<dyn McapView<PeriodRecord>>), None);
+                let view = match &self.law {
+                    Some(law) => ArmView::of_law(self.geometry, law.clone()),
+                    None => ArmView::new(self.geometry),
+                };
+                let views = (Some(Box::new(view) as Box<dyn McapView<PeriodRecord>>), None);
                 let mut stream = McapPairStream::<PeriodRecord, FrameRow>::new(path, file, views)?;
                 // In the command line's order: a period's frame and answer, then its record.
                 for k in 0..records.len().max(frames.len()) {

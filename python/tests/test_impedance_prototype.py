@@ -43,7 +43,8 @@ def test_the_python_prototype_is_the_rust_law(example, tmp_path):
     fw = subprocess.Popen([law_firmware(), "firmware", "--rig", rig, *args], stdout=subprocess.DEVNULL)
     try:
         out = tmp_path / "rust"
-        done = subprocess.run([str(sil_host()), "run", "--attach", rig, *args, "--no-page", "--out", str(out)], capture_output=True, text=True)
+        run = [str(sil_host()), "run", "--attach", rig, *args, "--no-page", "--format", "mcap", "--out", str(out)]
+        done = subprocess.run(run, capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
     finally:
         assert fw.wait(timeout=60) == 0
@@ -53,7 +54,11 @@ def test_the_python_prototype_is_the_rust_law(example, tmp_path):
     prototype = painleve.run_controller(example.Impedance(scenario), scenario)
     py = prototype.trace
     # Each result names the law that ran (issue 84: every law was "hybrid").
-    assert loaded.law.startswith("law `impedance` ("), loaded.law
+    assert loaded.law == "law `impedance` (d_n = 60, d_t = 90, k_n = 1000, k_t = 2000, the rest at their defaults)", loaded.law
+    # The trace's /log says the same at its first period (the words of rig::scenario::Scenario::law_in_words).
+    from test_mcap import log_lines
+
+    assert log_lines(out / "trace.mcap")[0] == f"control law: {loaded.law}", log_lines(out / "trace.mcap")[:2]
     assert "(law `impedance` (" in repr(loaded), repr(loaded)
     assert prototype.law == "Python Impedance" and "(Python Impedance)" in repr(prototype), repr(prototype)
     z_rust, z_py = np.asarray(rust["z_t"], dtype=float), np.asarray(py["z_t"], dtype=float)

@@ -371,3 +371,27 @@ def test_a_file_that_is_not_mcap_is_an_error_naming_it(tmp_path):
     # A file being read that cannot be: "cannot read", never "cannot write" (issue 66).
     with pytest.raises(painleve.PainleveError, match="^cannot read .*trace.mcap"):
         painleve.read_mcap(bad)
+
+
+def log_lines(path):
+    """The ``/log`` channel's messages (``foxglove.Log``), their text in order."""
+    with open(path, "rb") as f:
+        reader = mcap_reader.make_reader(f, decoder_factories=[mcap_protobuf.DecoderFactory()])
+        return [decoded.message for _, _, _, decoded in reader.iter_decoded_messages(topics=["/log"], log_time_order=False)]
+
+
+def test_the_log_names_the_law_that_ran(tmp_path):
+    # Issue 84: a trace says which law ran, at its first period: the paper's laws
+    # by the firmware's controller, a Python callable by its name (a law of one's
+    # own: test_impedance_prototype.py, through the command line).
+    for controller in ("pid", "hybrid"):
+        r = painleve.run(controller=controller, duration=0.05, progress=False)
+        lines = log_lines(r.write_mcap(tmp_path / f"{controller}.mcap"))
+        assert lines[0] == f"control law: {controller}" and lines[1].startswith("start: contact mode "), lines[:3]
+
+    def my_law(t, sensed):
+        return (0.0, 0.0)
+
+    r = painleve.run_controller(my_law, duration=0.05)
+    lines = log_lines(r.write_mcap(tmp_path / "mine.mcap"))
+    assert lines[0] == f"control law: Python {my_law.__qualname__}", lines[:3]

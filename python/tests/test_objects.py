@@ -282,9 +282,21 @@ def test_controller_errors_propagate_and_bad_returns_name_the_period() -> None:
 
 
 def test_ctrl_c_stops_the_loop() -> None:
+    # Driven by the event, not a race: from period 20 each call waits until the
+    # signal has been raised (a loaded machine once let the whole 60 s run end
+    # before a 10 ms timer fired). The interrupt then comes out of the loop's own
+    # check or out of the wait inside the callable; either way, KeyboardInterrupt.
+    raised = threading.Event()
+
+    def ctrl_c():
+        signal.raise_signal(signal.SIGINT)
+        raised.set()
+
     def slow(t, y):
         if y.k == 20:
-            threading.Timer(0.01, lambda: signal.raise_signal(signal.SIGINT)).start()
+            threading.Timer(0.01, ctrl_c).start()
+        if y.k >= 20:
+            assert raised.wait(30.0), "the timer never fired"
         return 0.0, 0.0
 
     with pytest.raises(KeyboardInterrupt):

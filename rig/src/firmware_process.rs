@@ -137,13 +137,16 @@ struct IpcBoard<'a> {
     announcement: FirmwareAnnouncement,
     /// Periods missed in a stall, to count before the newest frame ([`Event::Missed`]).
     missed: u32,
+    /// A plant's handshake frame was answered: a plant that is then gone before
+    /// its first frame refused this firmware ([`RunError::RefusedByPlant`]).
+    greeted: bool,
 }
 
 impl IpcBoard<'_> {
     /// Answers a handshake frame ([`frame_flags::HELLO`]) with the announcement;
     /// `false` for any other frame. A plant of another wire version is told ours
     /// (it refuses us) and we say so here; we stay for a plant of our own version.
-    fn answer_hello(&self, frame: &SensorFrame) -> Result<bool, RunError> {
+    fn answer_hello(&mut self, frame: &SensorFrame) -> Result<bool, RunError> {
         if frame.flags & frame_flags::HELLO == 0 {
             return Ok(false);
         }
@@ -154,6 +157,7 @@ impl IpcBoard<'_> {
             );
         }
         self.ports.announcement.send(self.announcement).map_err(|e| RunError::Transport(e.to_string()))?;
+        self.greeted = true;
         Ok(true)
     }
 
@@ -179,6 +183,12 @@ impl IpcBoard<'_> {
             return match peer_state(Role::Plant, self.rig) {
                 PeerState::Alive => Ok(None),
                 PeerState::Absent if self.last_seq.is_none() => {
+                    // Greeted, then gone before any frame: that plant refused us
+                    // (issue 84: the process waited out the 120 s, then said "no
+                    // plant connected", which was untrue).
+                    if self.greeted {
+                        return Err(RunError::RefusedByPlant { rig: self.rig.to_string() });
+                    }
                     if self.started.elapsed().as_secs_f64() > WAIT_FOR_PLANT_S {
                         return Err(RunError::Transport(format!("no plant connected to rig `{}` within {WAIT_FOR_PLANT_S} s", self.rig)));
                     }
@@ -312,7 +322,8 @@ impl Board for IpcBoard<'_> {
 /// [`RunError::Firmware`] for a bad configuration, [`RunError::IncompatibleService`]
 /// when a service another process created lacks what the firmware needs,
 /// [`RunError::Transport`] when iceoryx2 fails or no plant appears within
-/// [`WAIT_FOR_PLANT_S`].
+/// [`WAIT_FOR_PLANT_S`]; [`RunError::RefusedByPlant`] when a plant read the
+/// handshake's answer and left before its first frame (it refused this firmware).
 pub fn serve(s: &Scenario, rig: &str, realtime: bool) -> Result<Ending, RunError> {
     serve_law::<PaperLaws>(s, rig, realtime)
 }
@@ -360,6 +371,7 @@ pub fn serve_law<L: ControlLaw>(s: &Scenario, rig: &str, realtime: bool) -> Resu
         ending: None,
         announcement,
         missed: 0,
+        greeted: false,
     };
     let clock = if realtime { ProcessClock::Host(HostClock::default()) } else { ProcessClock::Frozen };
     board::run(&mut firmware, &mut board, &clock)?;

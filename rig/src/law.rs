@@ -30,6 +30,27 @@ pub struct LawTable {
     pub params: BTreeMap<String, f64>,
 }
 
+impl LawTable {
+    /// The parameters the table sets, in words, for a run's views (the trace page,
+    /// the MCAP's `/log`, Python's `Result.law`): `d_n = 50, k_t = 2500, the rest
+    /// at their defaults`, or `every parameter at its default` (by name, in
+    /// their declared units; the defaults are the law's declaration's).
+    #[must_use]
+    pub fn params_in_words(&self) -> String {
+        if self.params.is_empty() {
+            return "every parameter at its default".to_string();
+        }
+        let set: Vec<String> = self.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        format!("{}, the rest at their defaults", set.join(", "))
+    }
+
+    /// The law in words: ``law `impedance` (k_t = 2500, the rest at their defaults)``.
+    #[must_use]
+    pub fn in_words(&self) -> String {
+        format!("law `{}` ({})", self.name, self.params_in_words())
+    }
+}
+
 /// One parameter of a [`LawDescription`] (`firmware::ParamSpec`, owned).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParamDescription {

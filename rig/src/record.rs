@@ -165,6 +165,18 @@ pub enum RunError {
     /// ([`RunError::private_folder`]).
     #[error("{0}")]
     PrivateFolder(String),
+    /// The firmware process's plant took its handshake answer and left before
+    /// its first frame: the plant refused this firmware (another configuration,
+    /// law or wire version; the plant's own message names the difference), and the
+    /// firmware process exits at once rather than waiting for another plant. Bad
+    /// input (exit 2), as the plant's refusal is.
+    #[error(
+        "the plant on rig `{rig}` read this firmware's announcement and left before its first frame: it refused this firmware (the plant's message names what differs); start the firmware with the plant's scenario and flags"
+    )]
+    RefusedByPlant {
+        /// The rig name.
+        rig: String,
+    },
     /// The run was interrupted (SIGINT or SIGTERM).
     #[error("interrupted at period {k}")]
     Interrupted {

@@ -103,7 +103,10 @@ impl LinkSpec {
             Self::Twin => OpenLink::Twin(Box::new(TwinLink::new(setup).map_err(|e| CliError::bad_input(e.to_string()))?)),
             #[cfg(feature = "board")]
             Self::Emulator { elf } => {
-                OpenLink::Emulator(Box::new(EmulatorLink::new(setup, &elf).map_err(|e| CliError::bad_input(e.to_string()))?))
+                let link = EmulatorLink::new(setup, &elf).map_err(|e| CliError::bad_input(e.to_string()))?;
+                // Which bytes run (issue 84: a copied binary silently ran the build tree's image).
+                eprintln!("emulator: loaded {}", link.loaded);
+                OpenLink::Emulator(Box::new(link))
             }
             #[cfg(not(feature = "board"))]
             Self::Twin => return Err(crate::features::missing("board", "--link twin")),

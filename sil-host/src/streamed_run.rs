@@ -48,8 +48,10 @@ pub fn run_streamed(
 ) -> Result<Streamed, CliError> {
     let stop = crate::cancel::stop_flag();
     #[cfg(feature = "formats")]
-    let view: crate::output::View<PeriodRecord> =
-        Some(Box::new(arm_view::ArmView::new(arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())))));
+    let view: crate::output::View<PeriodRecord> = Some(Box::new(arm_view::ArmView::of_law(
+        arm_view::ArmGeometry::of(&rig::setup::plant_params(setup.scenario())),
+        setup.scenario().law_in_words(),
+    )));
     #[cfg(not(feature = "formats"))]
     let view = std::marker::PhantomData;
     let mut trace = RunTables::new(out, files.format, std::time::Duration::from_millis(1), view)?;

@@ -888,3 +888,43 @@ fn a_reader_that_goes_away_or_a_full_disk_ends_board_commands_as_every_command()
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(141), "board-twin | (closed): {err}");
 }
+
+/// Issue 84: `run --link emulator` names the image it loaded, so a copied binary
+/// can never silently run the build tree's: the path given (absolute), its bytes
+/// of flash and their CRC-32, the same for a copy elsewhere (the same bytes) and
+/// another for another image.
+#[test]
+fn the_emulator_link_names_the_image_it_loaded_by_path_and_crc() {
+    let dir = tempfile::tempdir().unwrap();
+    let built = board_link::emulator_link::default_image();
+    let copy = dir.path().join("my-arm.elf");
+    std::fs::copy(&built, &copy).unwrap();
+    let loaded = |elf: &std::path::Path, out: &str, scenario: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sil-host"))
+            .args(["run", "--link", "emulator", "--duration", "0.002", "--no-page"])
+            .args(scenario)
+            .arg("--elf")
+            .arg(elf)
+            .arg("--out")
+            .arg(dir.path().join(out))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{err}");
+        let line = err.lines().find(|l| l.starts_with("emulator: loaded ")).unwrap_or_else(|| panic!("no image named: {err}")).to_string();
+        let crc = line.rsplit_once("CRC-32 0x").map(|(_, c)| c.trim_end_matches(')').to_string()).expect("a CRC-32");
+        (line, crc)
+    };
+    let (line, crc) = loaded(&copy, "copy", &[]);
+    assert!(line.contains(&copy.display().to_string()) && line.contains(" B of flash"), "{line}");
+    let (line_built, crc_built) = loaded(&built, "built", &[]);
+    assert!(line_built.contains(&std::path::absolute(&built).unwrap().display().to_string()), "{line_built}");
+    assert_eq!(crc, crc_built, "the same bytes: {line} / {line_built}");
+    assert_eq!(crc.len(), 8, "{line}");
+    // The template's image (scripts/test.sh builds it beside the board's), with its law's scenario.
+    let law = built.parent().unwrap().join("law-arm");
+    assert!(law.exists(), "{} is missing: cargo law-arm (scripts/test.sh builds it)", law.display());
+    let scenario = format!("{}/../examples/law-template/impedance.toml", env!("CARGO_MANIFEST_DIR"));
+    let (line_law, crc_law) = loaded(&law, "law", &["--scenario", &scenario]);
+    assert_ne!(crc_law, crc, "another image, another CRC: {line_law}");
+}

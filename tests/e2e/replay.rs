@@ -179,6 +179,35 @@ fn all_counts_every_divergent_period_and_the_text_names_both_values() {
     assert_eq!(code, 1);
     let (n, differ) = (doc["periods_replayed"].as_u64().unwrap(), doc["divergent_periods"].as_u64().unwrap());
     assert!(n == 2000 && differ > 100 && differ <= n, "{doc}");
+    // How much, per signal (issue 84): the first divergence's signal first, from its
+    // period; every count within the periods that differ, and together covering them;
+    // a torque code's largest difference also in N m (5 N m over 2048 codes).
+    let per = doc["per_signal"].as_array().expect("per_signal");
+    let first = &doc["first_divergence"];
+    assert_eq!(per[0]["signal"], first["signal"], "{doc}");
+    assert_eq!(per[0]["first_period"], first["period"], "{doc}");
+    let mut covered = 0;
+    for d in per {
+        let (count, largest) = (d["divergent_periods"].as_u64().unwrap(), d["largest_difference"].as_f64().unwrap());
+        assert!(count >= 1 && count <= differ && largest > 0.0, "{d}");
+        assert!(
+            d["first_period"].as_u64() >= first["period"].as_u64() && d["largest_at_period"].as_u64() >= d["first_period"].as_u64(),
+            "{d}"
+        );
+        covered += count;
+        if d["unit"] == "code" {
+            assert_eq!(d["largest_difference_nm"].as_f64().unwrap(), largest * 5.0 / 2048.0, "{d}");
+        } else {
+            assert!(d["largest_difference_nm"].is_null(), "{d}");
+        }
+    }
+    assert!(covered >= differ, "every divergent period has a signal that differs: {covered} < {differ}");
+    let code = per.iter().find(|d| d["unit"] == "code").expect("a gain changes the torque codes");
+    let (codes, nm) = (code["largest_difference"].as_f64().unwrap(), code["largest_difference_nm"].as_f64().unwrap());
+    let o = sil_host(&["replay", rec.to_str().unwrap(), "--set", set, "--all"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains(&format!("{}: from period {}", code["signal"].as_str().unwrap(), code["first_period"])), "{text}");
+    assert!(text.contains(&format!("at most {codes} code ({nm} N m)")), "{text}");
     let o = sil_host(&["replay", rec.to_str().unwrap(), "--set", set]);
     let out = String::from_utf8_lossy(&o.stdout);
     let d = &doc["first_divergence"];

@@ -236,8 +236,10 @@ fn attach_mode_talks_to_a_firmware_started_by_hand() {
 
 /// Issue 15, the handshake: a firmware started by hand with other settings (a
 /// PID law, another gain) is refused before period 0 (exit 2, every differing
-/// setting named with both values, nothing written) and stays up for a plant with
-/// its own settings, which then runs and records the firmware's announcement.
+/// setting named with both values, nothing written). Issue 84: the refused
+/// firmware process says so and exits at once (exit 2; it waited 120 s, then
+/// said "no plant connected"). A firmware with the plant's settings then runs,
+/// and the plant records its announcement.
 #[test]
 fn a_firmware_configured_differently_is_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
@@ -245,7 +247,7 @@ fn a_firmware_configured_differently_is_refused_by_name() {
     let s = scenario(dir.path(), "default.toml", &[], "");
     let s = s.to_str().unwrap();
     let fw_args = ["--controller", "pid", "--set", "controller.hybrid.kp=800"];
-    let mut fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s]).args(fw_args).stderr(Stdio::piped()).spawn().unwrap();
+    let fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s]).args(fw_args).stderr(Stdio::piped()).spawn().unwrap();
     let refused = dir.path().join("refused");
     let o = run(&["--attach", &name, "--scenario", s, "--duration", "0.5"], &refused);
     assert_eq!(o.status.code(), Some(2));
@@ -253,7 +255,17 @@ fn a_firmware_configured_differently_is_refused_by_name() {
     assert!(err.contains(r#"controller: firmware "pid", scenario "hybrid""#), "{err}");
     assert!(err.contains("hybrid.kp: firmware 800.0, scenario 900.0"), "{err}");
     assert!(!refused.exists(), "a refused run writes nothing");
-    // The firmware is still there for a plant that agrees with it.
+    // The firmware notices at its next check on the plant (`rig.peer_check_s`, 0.5 s):
+    // well within the 120 s it waited before.
+    let left = Instant::now();
+    let fw_out = fw.wait_with_output().unwrap();
+    let fw_err = String::from_utf8_lossy(&fw_out.stderr);
+    assert_eq!(fw_out.status.code(), Some(2), "{fw_err}");
+    assert!(fw_err.contains(&format!("the plant on rig `{name}` read this firmware's announcement and left")), "{fw_err}");
+    assert!(fw_err.contains("refused this firmware") && !fw_err.contains("no plant connected"), "{fw_err}");
+    assert!(left.elapsed() < Duration::from_secs(60), "exited at once: {:?}", left.elapsed());
+    // A firmware with the plant's settings.
+    let mut fw = sil_host().args(["firmware", "--rig", &name, "--scenario", s]).args(fw_args).stderr(Stdio::piped()).spawn().unwrap();
     let out = dir.path().join("agreed");
     let o =
         run(&["--attach", &name, "--scenario", s, "--duration", "0.5", "--controller", "pid", "--set", "controller.hybrid.kp=800"], &out);

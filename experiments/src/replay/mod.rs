@@ -16,7 +16,11 @@ mod recording;
 
 pub use recording::Recording;
 
-use rig::{FaultPlan, FirmwareLink, frames::FrameRow, link::DropCommands};
+use rig::{
+    FaultPlan, FirmwareLink,
+    frames::{FrameRow, Signal},
+    link::DropCommands,
+};
 use serde::Serialize;
 
 use crate::error::Error;
@@ -41,6 +45,80 @@ pub struct Divergence {
     pub replayed: String,
 }
 
+/// How much one signal diverged over the periods compared (`replay --json`'s
+/// `per_signal`: issue 84, a replay says how much, not only where).
+#[derive(Debug, Clone, Serialize)]
+pub struct SignalDivergence {
+    /// The signal ([`FrameRow::signals`]' names).
+    pub signal: &'static str,
+    /// Its unit: `code` (the torque codes, their N m in
+    /// [`SignalDivergence::largest_difference_nm`]), `m`, `N`, `rad`, `rad/s`,
+    /// `N m`, `count` (the overrun counter), `bits` (the status word: the
+    /// difference is the bits that differed), `kind` (the answer: 0 answered,
+    /// 1 dropped, 2 none).
+    pub unit: &'static str,
+    /// The first period in which it differs.
+    pub first_period: u32,
+    /// Its sample time, s.
+    pub first_t: f64,
+    /// Periods in which it differs.
+    pub divergent_periods: usize,
+    /// The largest `|replayed - recorded|`, in [`SignalDivergence::unit`] (for
+    /// `bits`, every bit that differed in some period; a NaN on one side is
+    /// infinite).
+    pub largest_difference: f64,
+    /// The period of the largest difference.
+    pub largest_at_period: u32,
+    /// The torque codes' largest difference in N m (`shared::wire::decode_torque`:
+    /// 5 N m full scale, 2048 codes); `None` for the other signals.
+    pub largest_difference_nm: Option<f64>,
+}
+
+/// The unit of each of [`FrameRow::signals`], by name ([`SignalDivergence::unit`]).
+fn unit_of(signal: &str) -> &'static str {
+    match signal {
+        "answer" => "kind",
+        "u1_code" | "u2_code" => "code",
+        "status" => "bits",
+        "overruns" => "count",
+        "z_t_ref" => "m",
+        "f_n_ref" | "f_t_meas" | "f_n_meas" => "N",
+        "q1" | "q2" => "rad",
+        "qd1" | "qd2" => "rad/s",
+        "u1_raw" | "u2_raw" => "N m",
+        _ => "",
+    }
+}
+
+/// The size of a difference between two values of one signal, in its unit.
+fn difference(unit: &str, recorded: Signal, replayed: Signal) -> f64 {
+    match (recorded, replayed) {
+        (Signal::Int(a), Signal::Int(b)) if unit == "bits" => (a ^ b) as f64,
+        (Signal::Int(a), Signal::Int(b)) => (a - b).unsigned_abs() as f64,
+        (Signal::Real(a), Signal::Real(b)) => {
+            let d = (a - b).abs();
+            if d.is_nan() { f64::INFINITY } else { d }
+        }
+        _ => f64::INFINITY,
+    }
+}
+
+impl SignalDivergence {
+    /// Adds period `row`'s difference of this signal.
+    fn add(&mut self, row: &FrameRow, d: f64) {
+        self.divergent_periods += 1;
+        if self.unit == "bits" {
+            self.largest_difference = ((self.largest_difference as i64) | (d as i64)) as f64;
+        } else if d > self.largest_difference {
+            self.largest_difference = d;
+            self.largest_at_period = row.seq;
+        }
+        if self.unit == "code" {
+            self.largest_difference_nm = Some(self.largest_difference * f64::from(shared::wire::decode_torque(1)));
+        }
+    }
+}
+
 /// What the comparison found ([`replay`]).
 #[derive(Debug)]
 pub struct Comparison {
@@ -51,6 +129,10 @@ pub struct Comparison {
     pub divergent: usize,
     /// The first divergence, if any.
     pub first: Option<Divergence>,
+    /// Each signal that differed in some period compared: where first, in how
+    /// many periods, by how much at most (in the order they first differed, a
+    /// period's in [`FrameRow::signals`]' order).
+    pub per_signal: Vec<SignalDivergence>,
     /// Why the link stopped part way (or the replay was interrupted), if it did.
     pub link_error: Option<Error>,
 }
@@ -70,7 +152,7 @@ pub fn replay(
     all: bool,
     progress: &mut dyn FnMut(usize) -> bool,
 ) -> Comparison {
-    let mut c = Comparison { replayed: 0, divergent: 0, first: None, link_error: None };
+    let mut c = Comparison { replayed: 0, divergent: 0, first: None, per_signal: Vec::new(), link_error: None };
     for row in &rec.rows {
         if !progress(c.replayed) {
             c.link_error = Some(Error::interrupted(format!("interrupted after {} periods", c.replayed)));
@@ -85,6 +167,29 @@ pub fn replay(
                 let got = FrameRow::of(&frame, &truth, &exchange);
                 if let Some((signal, recorded, replayed)) = row.first_difference(&got) {
                     c.divergent += 1;
+                    for ((name, a), (_, b)) in row.signals().into_iter().zip(got.signals()) {
+                        if a.same_bits(&b) {
+                            continue;
+                        }
+                        let unit = unit_of(name);
+                        let at = match c.per_signal.iter().position(|d| d.signal == name) {
+                            Some(i) => i,
+                            None => {
+                                c.per_signal.push(SignalDivergence {
+                                    signal: name,
+                                    unit,
+                                    first_period: row.seq,
+                                    first_t: row.t,
+                                    divergent_periods: 0,
+                                    largest_difference: 0.0,
+                                    largest_at_period: row.seq,
+                                    largest_difference_nm: None,
+                                });
+                                c.per_signal.len() - 1
+                            }
+                        };
+                        c.per_signal[at].add(row, difference(unit, a, b));
+                    }
                     c.first.get_or_insert(Divergence {
                         period: row.seq,
                         t: row.t,
@@ -130,6 +235,9 @@ pub struct ReplaySummary {
     pub divergent_periods: usize,
     /// The first divergence, if any.
     pub first_divergence: Option<Divergence>,
+    /// How much each signal diverged ([`SignalDivergence`]; over the first
+    /// divergent period only, unless `--all`).
+    pub per_signal: Vec<SignalDivergence>,
     /// Why the link stopped part way, if it did.
     pub link_error: Option<String>,
     /// What is compared in each period.
@@ -155,6 +263,7 @@ impl ReplaySummary {
             identical: c.first.is_none() && c.link_error.is_none() && c.replayed == rec.rows.len(),
             divergent_periods: c.divergent,
             first_divergence: c.first,
+            per_signal: c.per_signal,
             link_error: c.link_error.as_ref().map(ToString::to_string),
             signals: SIGNALS,
             wall_s,
@@ -203,6 +312,15 @@ impl std::fmt::Display for ReplaySummary {
                 s.divergent_periods,
                 if stopped { " (stopped at the first: --all compares every period)" } else { "" }
             )?;
+            for d in &s.per_signal {
+                let nm = d.largest_difference_nm.map(|v| format!(" ({v} N m)")).unwrap_or_default();
+                let largest = if d.unit == "bits" {
+                    format!("bits 0x{:x} differed", d.largest_difference as i64)
+                } else {
+                    format!("at most {} {}{nm} (period {})", d.largest_difference, d.unit, d.largest_at_period)
+                };
+                write!(f, "\n    {}: from period {}, in {} periods, {largest}", d.signal, d.first_period, d.divergent_periods)?;
+            }
         }
         if let Some(e) = &s.link_error {
             write!(f, "\n  the link stopped after {} of {} periods: {e}", s.periods_replayed, s.periods_recorded)?;

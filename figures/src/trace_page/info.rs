@@ -38,15 +38,7 @@ impl PageInfo {
         // without it): its name and the parameters the table sets, the rest at the
         // law's declared defaults (summary.json's `firmware_announcement` has them all).
         let (name, controller) = match &scenario.law {
-            Some(law) => {
-                let set: Vec<String> = law.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
-                let set = if set.is_empty() {
-                    "every parameter at its default".to_string()
-                } else {
-                    format!("{}, the rest at their defaults", set.join(", "))
-                };
-                (law.name.clone(), format!("law `{}` ({set}; {references})", law.name))
-            }
+            Some(law) => (law.name.clone(), format!("law `{}` ({}; {references})", law.name, law.params_in_words())),
             None => (c.kind.to_string(), format!("{} ({references})", c.kind)),
         };
         let mut facts = vec![

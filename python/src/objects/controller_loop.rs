@@ -213,6 +213,12 @@ pub fn run_controller<'py>(
             controller.get_type().name()?
         )));
     }
+    // The callable's name for the MCAP's `/log` (`Result.law` says the same).
+    let law = controller
+        .getattr("__qualname__")
+        .and_then(|n| n.extract::<String>())
+        .or_else(|_| controller.get_type().name().map(|n| n.to_string()))
+        .map_or_else(|_| "a Python controller".to_string(), |n| format!("Python {n}"));
     let mut s = PyScenario::of(py, scenario.as_ref())?;
     crate::commands::warn(py, experiments::scenario::board_tables_note(&s, "a Python controller (no board)"))?;
     if let Some(d) = duration {
@@ -251,7 +257,7 @@ pub fn run_controller<'py>(
     let trace_py = rows_to_py(py, &records)?;
     let frames_py = rows_to_py(py, &finished.sink.0)?;
     let recording =
-        crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), records, finished.sink.0);
+        crate::recording::Recording::closed_loop(arm_view::ArmGeometry::of(&rig::setup::plant_params(&s)), law, records, finished.sink.0);
     Outcome::new(py, "run_controller", to_py(py, &summary)?)?
         .table("trace", trace_py)?
         .table("frames", frames_py)?

@@ -474,6 +474,18 @@ pub struct Scenario {
     pub law: Option<crate::law::LawTable>,
 }
 
+impl Scenario {
+    /// The control law this scenario runs, in words (issue 84: every view named
+    /// each law "hybrid"): its `[law]` table's (`crate::law::LawTable::in_words`:
+    /// ``law `impedance` (k_t = 2500, the rest at their defaults)``) or the paper's
+    /// law by `controller.kind` (`hybrid`, `pid`). The trace page, the MCAP's
+    /// `/log` and Python's `Result.law` say the same.
+    #[must_use]
+    pub fn law_in_words(&self) -> String {
+        self.law.as_ref().map_or_else(|| self.controller.kind.to_string(), crate::law::LawTable::in_words)
+    }
+}
+
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
