@@ -82,7 +82,7 @@ fn check_file(path: &Path) -> Checked {
 
 /// A closed-loop run's trace.mcap: a frame and a scene every 10 ms of its 1 ms
 /// periods, each valid against Foxglove's schema; the tip of the frames is the
-/// trace's; the log starts with the contact mode.
+/// trace's; the log starts with the control law, then the contact mode.
 #[test]
 fn a_runs_trace_mcap_shows_the_arm_in_foxglove_schemas() {
     let dir = tempfile::tempdir().unwrap();
@@ -93,7 +93,9 @@ fn a_runs_trace_mcap_shows_the_arm_in_foxglove_schemas() {
     assert_eq!(c.counts["/state"], 1000, "{:?}", c.counts);
     assert_eq!((c.counts["/tf"], c.counts["/scene"]), (100, 100), "a frame every 10 ms: {:?}", c.counts);
     assert_eq!(c.compared, 100);
-    assert!(c.log[0].message.starts_with("start: contact mode sliding"), "{:?}", c.log[0].message);
+    // The control law first (issue 84), then the start's contact mode.
+    assert_eq!(c.log[0].message, "control law: hybrid");
+    assert!(c.log[1].message.starts_with("start: contact mode sliding"), "{:?}", c.log[1].message);
 }
 
 /// A simulation's trace.mcap: the open-loop bounce from x0a (the Painlevé
