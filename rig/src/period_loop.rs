@@ -206,28 +206,18 @@ impl PeriodLoop {
         if let Some(t) = telemetry {
             self.z_t_ref = t.z_t_ref as f64;
         }
+        let sample = Sample { t: t_k, x, tip: z, mode, f: self.f_now };
         let record = PeriodRecord {
-            t: t_k,
-            theta1: x[0],
-            theta1_dot: x[1],
-            theta2: x[2],
-            theta2_dot: x[3],
-            z_t: z[0],
-            z_n: z[1],
-            z_t_ref: self.z_t_ref,
-            f_t: self.f_now[0],
-            f_n: self.f_now[1],
-            mode: mode.name(),
             u1_cmd: u_new[0],
             u2_cmd: u_new[1],
             u1_applied: applied[0],
             u2_applied: applied[1],
-            lift_off_true: mode == ContactMode::Flight,
             lift_off_detected: fw_status & status::LIFT_OFF != 0,
             deadline_miss: switch.is_none(),
             firmware_deadline_miss: fw_status & status::DEADLINE_MISS != 0,
             overruns: command.map_or(0, |c| c.overruns),
             status: fw_status,
+            ..PeriodRecord::of_sample(&sample, self.z_t_ref)
         };
         // The first part run ahead is the period's when the switch is at `t_k + delta`.
         let (first_part, before) = match ahead {

@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use plant::SimError;
+use plant::{Sample, SimError};
 
 tables::table_row! {
     /// One control period of a run (a row of `trace.csv` of `run` and `pil`: the
@@ -81,6 +81,40 @@ impl tables::mcap::McapRows for PeriodRecord {
             columns: &["lift_off_detected", "deadline_miss", "firmware_deadline_miss", "overruns", "status"],
         },
     ];
+}
+
+impl PeriodRecord {
+    /// The record of the plant sampled at `t_k` (`s`: the state, tip, contact mode and
+    /// force the sensors read; `s.t` is `t_k`, s) with the firmware's reference `z_t_ref`
+    /// (m): the plant's columns, the ones `simulate`'s `trace.csv` has too, mapped here
+    /// once (`experiments::simulate::summary::TraceRow::of_sample` is the open loop's
+    /// view of the same [`Sample`]). The command's columns are zero, as for a period
+    /// without a command; the period loop sets them with struct update syntax.
+    pub fn of_sample(s: &Sample, z_t_ref: f64) -> Self {
+        Self {
+            t: s.t,
+            theta1: s.x[0],
+            theta1_dot: s.x[1],
+            theta2: s.x[2],
+            theta2_dot: s.x[3],
+            z_t: s.tip[0],
+            z_n: s.tip[1],
+            z_t_ref,
+            f_t: s.f[0],
+            f_n: s.f[1],
+            mode: s.mode.name(),
+            u1_cmd: 0.0,
+            u2_cmd: 0.0,
+            u1_applied: 0.0,
+            u2_applied: 0.0,
+            lift_off_true: s.mode == shared::ContactMode::Flight,
+            lift_off_detected: false,
+            deadline_miss: false,
+            firmware_deadline_miss: false,
+            overruns: 0,
+            status: 0,
+        }
+    }
 }
 
 /// Why a run stopped early.

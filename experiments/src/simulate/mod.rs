@@ -57,25 +57,10 @@ pub fn check_times(duration: f64, sample_dt: f64) -> Result<usize, Error> {
 /// The `trace.csv` row of the plant's current state, with the contact force `f`
 /// (`[f_t, f_n]`, N) of the step that led there.
 pub fn trace_row(plant: &Plant, f: [f64; 2]) -> TraceRow {
-    let x = plant.state();
     let z = plant.tip();
     let v = plant.tip_velocity();
-    TraceRow {
-        t: plant.time(),
-        theta1: x[0],
-        theta1_dot: x[1],
-        theta2: x[2],
-        theta2_dot: x[3],
-        z_t: z[0],
-        z_n: z[1],
-        z_t_dot: v[0],
-        z_n_dot: v[1],
-        z_r_dot: v[0] - plant.arm().params.v_belt,
-        f_t: f[0],
-        f_n: f[1],
-        mode: plant.mode().name(),
-        energy: plant.energy(),
-    }
+    let s = plant::Sample { t: plant.time(), x: plant.state(), tip: [z[0], z[1]], mode: plant.mode(), f };
+    TraceRow::of_sample(&s, [v[0], v[1]], plant.arm().params.v_belt, plant.energy())
 }
 
 /// A simulation checked and set up, before anything is written: what
@@ -132,22 +117,7 @@ pub fn sample_step(plant: &mut Plant, k: usize, sample_dt: f64) -> Result<plant:
 /// The row of `trace.csv` of a [`plant::Sample`] read inside an advance of `plant`.
 pub fn sample_row(plant: &Plant, s: &plant::Sample) -> TraceRow {
     let (energy, v) = plant.energy_and_tip_velocity_of(&s.x);
-    TraceRow {
-        t: s.t,
-        theta1: s.x[0],
-        theta1_dot: s.x[1],
-        theta2: s.x[2],
-        theta2_dot: s.x[3],
-        z_t: s.tip[0],
-        z_n: s.tip[1],
-        z_t_dot: v[0],
-        z_n_dot: v[1],
-        z_r_dot: v[0] - plant.arm().params.v_belt,
-        f_t: s.f[0],
-        f_n: s.f[1],
-        mode: s.mode.name(),
-        energy,
-    }
+    TraceRow::of_sample(s, v, plant.arm().params.v_belt, energy)
 }
 
 /// The open-loop sampling loop, the one both fronts run: the plant advanced with

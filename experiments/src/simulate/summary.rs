@@ -42,6 +42,33 @@ tables::table_row! {
     }
 }
 
+impl TraceRow {
+    /// The row of the plant sampled at `s.t` (s) with the tip's velocity `v`
+    /// (`[z_t_dot, z_n_dot]`, m/s), the belt's speed `v_belt` (m/s) and the mechanical
+    /// energy (J): the columns it shares with the closed loop's `trace.csv`
+    /// (`rig::record::PeriodRecord::of_sample`, the same [`plant::Sample`]) mapped the
+    /// same way, then the open loop's own (velocities, `z_r_dot = z_t_dot - v_belt`,
+    /// energy).
+    pub fn of_sample(s: &plant::Sample, v: [f64; 2], v_belt: f64, energy: f64) -> Self {
+        Self {
+            t: s.t,
+            theta1: s.x[0],
+            theta1_dot: s.x[1],
+            theta2: s.x[2],
+            theta2_dot: s.x[3],
+            z_t: s.tip[0],
+            z_n: s.tip[1],
+            z_t_dot: v[0],
+            z_n_dot: v[1],
+            z_r_dot: v[0] - v_belt,
+            f_t: s.f[0],
+            f_n: s.f[1],
+            mode: s.mode.name(),
+            energy,
+        }
+    }
+}
+
 tables::table_row! {
     /// One row of `events.csv`: a plant event at its located time.
     #[derive(Debug, Clone, Serialize)]
@@ -362,4 +389,38 @@ mod tests {
         check::<EventRow>();
         check::<rig::record::PeriodRecord>();
     }
+
+    proptest! {
+        /// The open loop's `trace.csv` row and the closed loop's are two views of one
+        /// [`plant::Sample`]: every column both tables have (`t`, the angles and rates,
+        /// `z_t`, `z_n`, `f_t`, `f_n`, `mode`) holds the same cell, bit for bit, and
+        /// `lift_off_true` is the flight mode. A mapping that swapped two fields or read
+        /// another would fail here.
+        #[test]
+        fn trace_rows_and_period_records_agree_on_the_columns_they_share(
+            f in proptest::array::uniform12(float()),
+            m in 0..5usize,
+        ) {
+            use shared::ContactMode::*;
+            let mode = [Flight, Sliding, Sticking, Indeterminate, Inconsistent][m];
+            let s = plant::Sample { t: f[0], x: [f[1], f[2], f[3], f[4]], tip: [f[5], f[6]], mode, f: [f[7], f[8]] };
+            let open = tables::Table::of_columns(&[TraceRow::of_sample(&s, [f[9], f[10]], 0.1, f[11])]);
+            let record = rig::record::PeriodRecord::of_sample(&s, 0.1);
+            let closed = tables::Table::of_columns(&[record]);
+            let bits = |c: &tables::Column| match c {
+                tables::Column::F64(v) => format!("{:x?}", v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()),
+                other => format!("{other:?}"),
+            };
+            let mut shared_columns = 0;
+            for (name, column) in &open.columns {
+                if let Some((_, other)) = closed.columns.iter().find(|(n, _)| n == name) {
+                    prop_assert_eq!(bits(column), bits(other), "column {}", name);
+                    shared_columns += 1;
+                }
+            }
+            prop_assert_eq!(shared_columns, 10);
+            prop_assert_eq!(record.lift_off_true, mode == Flight);
+        }
+    }
+
 }
