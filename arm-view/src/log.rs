@@ -45,6 +45,12 @@ impl RunLog {
         Self { last: None, law: Some(law) }
     }
 
+    /// The control law in words, when the log was made for one ([`RunLog::of_law`]).
+    #[must_use]
+    pub fn law(&self) -> Option<&str> {
+        self.law.as_deref()
+    }
+
     /// The lines of period `r` against the one before: the first period's
     /// law (when known) and mode; a mode change (`sliding -> flight` is a true lift-off, `flight ->
     /// ...` a touchdown); the firmware's lift-off detection rising or falling;

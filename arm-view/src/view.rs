@@ -123,6 +123,16 @@ impl McapView<PeriodRecord> for ArmView {
             emit(2, encode(&line, &mut self.buf));
         }
     }
+
+    /// `painleve.run`, `law`: the control law that ran, in words (when known,
+    /// [`ArmView::of_law`]); Foxglove's metadata panel shows it.
+    fn metadata(&self) -> Vec<(String, std::collections::BTreeMap<String, String>)> {
+        self.log
+            .law()
+            .map(|law| ("painleve.run".to_string(), std::collections::BTreeMap::from([("law".to_string(), law.to_string())])))
+            .into_iter()
+            .collect()
+    }
 }
 
 /// `simulate`'s samples: `/tf` and `/scene`.

@@ -80,7 +80,4 @@ def run_controller(
     if duration is not None and (isinstance(duration, bool) or not isinstance(duration, (int, float))):
         raise TypeError(f"duration: expected a number of seconds or None, got {type(duration).__name__}")
     raw = _painleve.run_controller(controller, _args.scenario_object(scenario), None if duration is None else float(duration))
-    result = _finish(raw, strict)
-    # The callable's name for `Result.law` (summary.json says only "python").
-    result._python_law = getattr(controller, "__qualname__", None) or type(controller).__name__
-    return result
+    return _finish(raw, strict)

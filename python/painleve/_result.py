@@ -405,22 +405,12 @@ class Result:
         of one's own (the scenario's ``[law]`` table and the parameters it sets;
         the others at the law's defaults, ``summary["firmware_announcement"]``);
         ``"Python <name>"`` for :func:`painleve.run_controller`'s callable
-        (``"a Python controller"`` for one loaded from a folder). On every link:
-        read from ``summary.json`` (issue 84: views called every law "hybrid")."""
+        (its ``__qualname__``). On every link: ``summary.json``'s ``law``, written by
+        the rig in the words every view uses (issue 84: views called every law
+        "hybrid"); ``None`` for a folder written before that field."""
         s = self.summary if isinstance(self.summary, dict) else {}
-        if s.get("transport") == "python":
-            name = getattr(self, "_python_law", None)
-            return f"Python {name}" if name else "a Python controller"
-        used = s.get("scenario_used")
-        table = used.get("law") if isinstance(used, dict) else None
-        if isinstance(table, dict) and table.get("name"):
-            # The `[law]` table: its name beside the parameters it sets (rig::law::LawTable).
-            params = {k: v for k, v in table.items() if k != "name"}
-            # Each value as Rust's `{}` prints it (shortest, positional): the words of rig::scenario::Scenario::law_in_words.
-            set_ = ", ".join(f"{k} = {np.format_float_positional(float(v), trim='-')}" for k, v in sorted(params.items()))
-            return f"law `{table['name']}` ({set_ + ', the rest at their defaults' if set_ else 'every parameter at its default'})"
-        controller = s.get("controller")
-        return controller if isinstance(controller, str) and "firmware_config" in s else None
+        law = s.get("law")
+        return law if isinstance(law, str) and law else None
 
     def __repr__(self) -> str:
         tables = ", ".join(f"{k}: {t.nrows}x{len(t)}" for k, t in self.tables.items())

@@ -59,6 +59,9 @@ def test_the_python_prototype_is_the_rust_law(example, tmp_path):
     from test_mcap import log_lines
 
     assert log_lines(out / "trace.mcap")[0] == f"control law: {loaded.law}", log_lines(out / "trace.mcap")[:2]
+    from test_mcap import run_metadata
+
+    assert run_metadata(out / "trace.mcap") == {"law": loaded.law}, run_metadata(out / "trace.mcap")
     assert "(law `impedance` (" in repr(loaded), repr(loaded)
     assert prototype.law == "Python Impedance" and "(Python Impedance)" in repr(prototype), repr(prototype)
     z_rust, z_py = np.asarray(rust["z_t"], dtype=float), np.asarray(py["z_t"], dtype=float)

@@ -380,18 +380,37 @@ def log_lines(path):
         return [decoded.message for _, _, _, decoded in reader.iter_decoded_messages(topics=["/log"], log_time_order=False)]
 
 
+def run_metadata(path):
+    """The file's ``painleve.run`` metadata record (``law``), or ``None``."""
+    with open(path, "rb") as f:
+        for record in mcap_reader.make_reader(f).iter_metadata():
+            if record.name == "painleve.run":
+                return dict(record.metadata)
+    return None
+
+
 def test_the_log_names_the_law_that_ran(tmp_path):
     # Issue 84: a trace says which law ran, at its first period: the paper's laws
     # by the firmware's controller, a Python callable by its name (a law of one's
     # own: test_impedance_prototype.py, through the command line).
     for controller in ("pid", "hybrid"):
         r = painleve.run(controller=controller, duration=0.05, progress=False)
-        lines = log_lines(r.write_mcap(tmp_path / f"{controller}.mcap"))
+        path = r.write_mcap(tmp_path / f"{controller}.mcap")
+        lines = log_lines(path)
         assert lines[0] == f"control law: {controller}" and lines[1].startswith("start: contact mode "), lines[:3]
+        # The same words in summary.json (written by the rig) and the file's metadata.
+        assert r.summary["law"] == r.law == controller, (r.summary["law"], r.law)
+        assert run_metadata(path) == {"law": controller}, run_metadata(path)
 
     def my_law(t, sensed):
         return (0.0, 0.0)
 
     r = painleve.run_controller(my_law, duration=0.05)
-    lines = log_lines(r.write_mcap(tmp_path / "mine.mcap"))
+    path = r.write_mcap(tmp_path / "mine.mcap")
+    lines = log_lines(path)
     assert lines[0] == f"control law: Python {my_law.__qualname__}", lines[:3]
+    assert r.summary["law"] == r.law == f"Python {my_law.__qualname__}", r.summary["law"]
+    assert run_metadata(path) == {"law": r.law}, run_metadata(path)
+    # A simulation runs no law: no record, no words.
+    s = painleve.simulate(duration=0.01)
+    assert s.law is None and run_metadata(s.write_mcap(tmp_path / "open.mcap")) is None

@@ -28,6 +28,12 @@ pub struct RunSummary {
     /// `hybrid` or `pid`; a law of one's own's name (the scenario's `[law]`
     /// table, [`crate::scenario::Scenario::controller_name`]).
     pub controller: String,
+    /// The control law that ran, in words, as every view names it (trace.html, the
+    /// MCAP's `/log` and `painleve.run` record, Python's `Result.law`): `hybrid`,
+    /// `pid`, ``law `impedance` (k_t = 2500, the rest at their defaults)``
+    /// ([`crate::scenario::Scenario::law_in_words`]); `Python <name>` for
+    /// `painleve.run_controller`'s callable.
+    pub law: String,
     /// `iceoryx2` or `in-process`; `pil-qemu` or `pil-serial` for `sil-host pil`.
     pub transport: &'static str,
     /// `lockstep` or `realtime` (`in-process` runs are lockstep).
@@ -130,6 +136,7 @@ impl RunSummary {
             error: failure.map(|e| e.to_string()),
             scenario: scenario.name.clone(),
             controller: scenario.controller_name().to_string(),
+            law: scenario.law_in_words(),
             transport,
             timing,
             rig: None,

@@ -96,6 +96,18 @@ fn a_runs_trace_mcap_shows_the_arm_in_foxglove_schemas() {
     // The control law first (issue 84), then the start's contact mode.
     assert_eq!(c.log[0].message, "control law: hybrid");
     assert!(c.log[1].message.starts_with("start: contact mode sliding"), "{:?}", c.log[1].message);
+    // The file's `painleve.run` metadata record and summary.json say the same words.
+    let bytes = std::fs::read(out.join("trace.mcap")).unwrap();
+    let run: Vec<_> = mcap::read::LinearReader::new(&bytes)
+        .unwrap()
+        .filter_map(|r| match r.unwrap() {
+            mcap::records::Record::Metadata(m) if m.name == "painleve.run" => Some(m.metadata),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(run, [BTreeMap::from([("law".to_string(), "hybrid".to_string())])]);
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["law"], "hybrid");
 }
 
 /// A simulation's trace.mcap: the open-loop bounce from x0a (the Painlevé

@@ -422,5 +422,4 @@ mod tests {
             prop_assert_eq!(record.lift_off_true, mode == Flight);
         }
     }
-
 }

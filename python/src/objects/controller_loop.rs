@@ -247,6 +247,7 @@ pub fn run_controller<'py>(
     let stats = RunStats::of(&records);
     let summary = RunSummary {
         ledger: finished.ledger,
+        law: law.clone(),
         ..RunSummary::from_stats(&s, &stats, failure.as_ref(), link.transport(), "lockstep", wall_s, validity)
     };
     let failed = failure.map(|e| {

@@ -42,6 +42,13 @@ pub trait McapView<T>: Send {
     /// (its channel's index in [`McapView::channels`], its bytes). A message's
     /// log time is the row's time.
     fn messages(&mut self, row: &T, emit: &mut dyn FnMut(usize, &[u8]));
+    /// The view's metadata records (MCAP `Metadata`: a name and string pairs), written
+    /// once after the table's own `painleve.table.<name>` record; none by default. The
+    /// arm's view gives `painleve.run` with the control law that ran
+    /// (`arm_view::ArmView::of_law`), which Foxglove shows in its metadata panel.
+    fn metadata(&self) -> Vec<(String, std::collections::BTreeMap<String, String>)> {
+        Vec::new()
+    }
 }
 
 /// The protobuf messages of a table's rows, one per signal group: the channels

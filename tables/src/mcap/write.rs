@@ -132,6 +132,7 @@ impl McapFile {
         let bad = |what: String| Error::Io { path: self.path.clone(), source: std::io::Error::other(what) };
         let encoder = RowEncoder::<T>::new().map_err(bad)?;
         let channels = encoder.channels().iter().map(|c| self.add_channel(c)).collect::<Result<Vec<_>, _>>()?;
+        let view_metadata = view.as_ref().map(|v| v.metadata()).unwrap_or_default();
         // The view's channels before the metadata record, which closes the chunk
         // being built: the schemas and channels of a table share one chunk.
         let view = match view {
@@ -150,6 +151,9 @@ impl McapFile {
         ]);
         let name = format!("painleve.table.{}", T::TABLE);
         self.writer.write_metadata(&Metadata { name, metadata }).map_err(mcap_err(&self.path))?;
+        for (name, metadata) in view_metadata {
+            self.writer.write_metadata(&Metadata { name, metadata }).map_err(mcap_err(&self.path))?;
+        }
         self.tables.push(TableChannels { encoder: Box::new(encoder), channels, rows: 0, view });
         Ok(McapTable(self.tables.len() - 1))
     }
