@@ -26,6 +26,10 @@ use std::{
     time::{Duration, Instant},
 };
 
+mod relay;
+
+pub use relay::PUBLISHED_V1;
+
 use foxglove::{
     Context, RawChannel, Schema, WebSocketServerHandle,
     websocket::{Capability, ChannelView, Client, ServerListener, Status},
@@ -61,6 +65,8 @@ pub struct LiveServer {
     // Kept: the channels belong to it.
     _context: Arc<Context>,
     server: Option<WebSocketServerHandle>,
+    /// The address viewers connect to: the published protocol's name in front of the SDK's.
+    relay: relay::Relay,
     channels: Vec<Arc<RawChannel>>,
     rate: Option<f64>,
     /// The wall clock and the simulated time of the first row.
@@ -148,20 +154,24 @@ impl LiveServer {
                     .map_err(|e| LiveError::Channel { topic: c.topic.clone(), what: e.to_string() })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        // The SDK's server on a loopback port of its own; viewers reach it through the
+        // relay on `addr` (`relay`: `foxglove.websocket.v1` accepted as the SDK's v1).
         let server = context
             .websocket_server()
             .name(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION")))
-            .bind(addr.ip().to_string(), addr.port())
+            .bind(std::net::Ipv4Addr::LOCALHOST.to_string(), 0)
             .capabilities([Capability::Time])
             .listener(Arc::new(Listener(Arc::clone(&counts))))
             .start_blocking()
             .map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
-        Ok(Self { _context: context, server: Some(server), channels: made, rate, origin: None, counts })
+        let upstream = SocketAddr::from((std::net::Ipv4Addr::LOCALHOST, server.port()));
+        let relay = relay::Relay::start(addr, upstream).map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
+        Ok(Self { _context: context, server: Some(server), relay, channels: made, rate, origin: None, counts })
     }
 
     /// The address the server listens on (its port the one bound).
     pub fn addr(&self, asked: SocketAddr) -> SocketAddr {
-        SocketAddr::new(asked.ip(), self.server.as_ref().map_or(asked.port(), WebSocketServerHandle::port))
+        SocketAddr::new(asked.ip(), self.relay.addr().port())
     }
 
     /// How many viewers are connected.
@@ -219,14 +229,22 @@ impl LiveServer {
     /// A second call does nothing.
     pub fn close(&mut self, grace: Duration, stop: &AtomicBool) -> Closed {
         let Some(server) = self.server.take() else { return Closed::default() };
-        let viewers = server.client_count();
         let deadline = Instant::now() + grace;
+        let closed = self.close_server(server, deadline, stop);
+        // The viewers' side of the relay: the close passed on, each viewer given the
+        // rest of the grace to take it; one that stopped reading is cut then.
+        let cut = self.relay.finish(deadline, stop);
+        Closed { viewers: closed.viewers, dropped: closed.dropped.max(cut).min(closed.viewers) }
+    }
+
+    fn close_server(&mut self, server: WebSocketServerHandle, deadline: Instant, stop: &AtomicBool) -> Closed {
+        let viewers = server.client_count();
         if viewers > 0 {
             server.publish_status(Status::info(CLOSING_STATUS));
             // The stop ends each viewer's writer at once, the status queued or
             // not: a moment for the writers of the viewers that read to send it
             // (microseconds; a writer blocked on a full connection never will).
-            std::thread::sleep(STATUS_PAUSE.min(grace));
+            std::thread::sleep(STATUS_PAUSE.min(deadline.saturating_duration_since(Instant::now())));
         }
         let handle = server.stop();
         // The SDK's runtime runs the tasks; this one only keeps the time. Without

@@ -141,17 +141,18 @@ pub struct LiveRun {
 }
 
 impl LiveRun {
-    /// The live view of a run of `plant` (its geometry), if `args` asks for one.
+    /// The live view of a run of `scenario` (the arm's geometry; the control law its
+    /// `/log` names first, as the file's), if `args` asks for one.
     ///
     /// # Errors
     /// [`CliError`] (bad input, exit 2) for a bad rate or an address that cannot be served.
-    pub fn start(args: &LiveArgs, plant: &shared::params::Params<f64>, realtime: bool) -> Result<Option<Self>, CliError> {
+    pub fn start(args: &LiveArgs, scenario: &rig::scenario::Scenario, realtime: bool) -> Result<Option<Self>, CliError> {
         if args.live.is_none() {
             return Ok(None);
         }
         let mut channels = Vec::new();
-        let table = LiveTable::new(Box::new(ArmView::new(ArmGeometry::of(plant))), &mut channels)
-            .map_err(|e| CliError::bad_input(e.to_string()))?;
+        let view = ArmView::of_law(ArmGeometry::of(&rig::setup::plant_params(scenario)), scenario.law_in_words());
+        let table = LiveTable::new(Box::new(view), &mut channels).map_err(|e| CliError::bad_input(e.to_string()))?;
         Ok(start(args, &channels, realtime)?.map(|server| Self { server, table }))
     }
 

@@ -548,15 +548,16 @@ fn a_live_address_off_this_machine_is_warned_of() {
     }
 }
 
-/// Issue 69 (4): which WebSocket subprotocols `--live` accepts, with a plain
-/// client offering each (docs/rig.md "Live", "Which clients connect"): the
+/// Issues 69 (4) and 84: which WebSocket subprotocols `--live` accepts, with a
+/// plain client offering each (docs/rig.md "Live", "Which clients connect"): the
 /// Foxglove SDK's `foxglove.sdk.v1` and `foxglove.sdk.v1.1` (the newer preferred
-/// when both are offered, in any order), and a client that offers the published
-/// spec's `foxglove.websocket.v1` beside the SDK's; a client that offers only
-/// `foxglove.websocket.v1` (the ws-protocol spec's, older apps) is refused with
-/// HTTP 400, which the SDK (0.30) does not let a server change.
+/// when both are offered, in any order), and the published spec's
+/// `foxglove.websocket.v1` alone (`@foxglove/ws-protocol`'s `FoxgloveClient`,
+/// Lichtblick, older apps), answered under that name: such a client is told the
+/// channels, subscribes to `/log` and receives its first line, the control law. A
+/// client offering no Foxglove protocol is refused with HTTP 400.
 #[test]
-fn the_live_server_accepts_the_sdks_subprotocols_and_says_no_to_the_published_ones_alone() {
+fn the_live_server_accepts_the_sdks_subprotocols_and_the_published_one() {
     let dir = tempfile::tempdir().unwrap();
     let mut child = sil_host()
         .args(["run", "--in-process", "--duration", "1", "--no-page", "--live", "127.0.0.1:0", "--live-wait", "60", "--out"])
@@ -581,11 +582,41 @@ fn the_live_server_accepts_the_sdks_subprotocols_and_says_no_to_the_published_on
         assert_eq!(response.headers()["Sec-WebSocket-Protocol"], negotiated, "offered {offered}");
         let _ = ws.close(None);
     }
-    match offer("foxglove.websocket.v1") {
+    match offer("chat") {
         Err(tungstenite::Error::Http(response)) => assert_eq!(response.status(), 400, "refused with HTTP 400"),
-        Err(e) => panic!("a client offering only foxglove.websocket.v1: {e}"),
-        Ok(_) => panic!("a client offering only foxglove.websocket.v1 connected: docs/rig.md says it does not"),
+        Err(e) => panic!("a client offering no Foxglove protocol: {e}"),
+        Ok(_) => panic!("a client offering no Foxglove protocol connected"),
     }
+    // The published protocol alone: the whole exchange a v1 client makes.
+    let (mut ws, response) = offer("foxglove.websocket.v1").expect("a client offering only foxglove.websocket.v1 connects");
+    assert_eq!(response.headers()["Sec-WebSocket-Protocol"], "foxglove.websocket.v1");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let (mut server_info, mut log_channel, mut first_line) = (false, None, None);
+    while first_line.is_none() {
+        assert!(Instant::now() < deadline, "no /log message within 60 s (serverInfo {server_info}, /log channel {log_channel:?})");
+        match ws.read().expect("the server keeps the connection while the run goes") {
+            tungstenite::Message::Text(text) => {
+                let v: serde_json::Value = serde_json::from_str(text.as_str()).unwrap();
+                server_info |= v["op"] == "serverInfo";
+                if v["op"] == "advertise" {
+                    // Inline schemas, as the published spec's advertise has them.
+                    let c = v["channels"].as_array().unwrap().iter().find(|c| c["topic"] == "/log").expect("/log advertised");
+                    assert!(c["schema"].as_str().is_some_and(|s| !s.is_empty()), "{c}");
+                    log_channel = c["id"].as_u64();
+                    let msg = serde_json::json!({ "op": "subscribe", "subscriptions": [{ "id": 7, "channelId": log_channel }] });
+                    ws.send(tungstenite::Message::Text(msg.to_string().into())).unwrap();
+                }
+            }
+            tungstenite::Message::Binary(b) if b.first() == Some(&1) && b.len() > 13 => {
+                assert_eq!(u32::from_le_bytes(b[1..5].try_into().unwrap()), 7, "the subscription's id");
+                first_line = Some(Log::decode(&b[13..]).unwrap().message);
+            }
+            _ => {}
+        }
+    }
+    assert!(server_info, "serverInfo first");
+    assert_eq!(first_line.as_deref(), Some("control law: hybrid"));
+    let _ = ws.close(None);
     let _ = child.kill();
     let _ = child.wait();
 }

@@ -114,7 +114,7 @@ pub fn execute(args: &PilArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let target = target_of(args)?;
     pil_link::check_faults(scenario, &target).map_err(|e| CliError::bad_input(e.to_string()))?;
     // Before anything is written: an address in use is refused with nothing written.
-    let mut live = crate::live::LiveRun::start(&args.live, &rig::setup::plant_params(scenario), false)?;
+    let mut live = crate::live::LiveRun::start(&args.live, scenario, false)?;
     let mut out = OutputSet::new(&args.output.out)?;
 
     let n = scenario.timing.periods();

@@ -73,7 +73,7 @@ pub fn execute(args: &RunArgs) -> Result<Done<(RunSummary, Scenario)>, CliError>
     let link = open.link();
     let transport = link.transport();
     // Before anything is written: an address in use is refused with nothing written.
-    let mut live = crate::live::LiveRun::start(&args.live, &rig::setup::plant_params(scenario), args.realtime)?;
+    let mut live = crate::live::LiveRun::start(&args.live, scenario, args.realtime)?;
     // Only once the firmware is there: a run that cannot start writes nothing.
     let mut out = OutputSet::new(&args.output.out)?;
 
