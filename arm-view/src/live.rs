@@ -305,6 +305,15 @@ impl<T: McapRows + 'static> LiveTable<T> {
         Ok(Self { encoder, view, first, view_first })
     }
 
+    /// `T`'s table alone (no view of its own: the frames of a run): its channels
+    /// appended to `channels`.
+    ///
+    /// # Errors
+    /// As [`LiveTable::new`].
+    pub fn without_view(channels: &mut Vec<ChannelSpec>) -> Result<Self, LiveError> {
+        Self::new(Box::new(NoView), channels)
+    }
+
     /// Waits until `row` is due on `server` and sends its messages: the table's, then the view's.
     pub fn push(&mut self, server: &mut LiveServer, row: &T)
     where
@@ -317,4 +326,15 @@ impl<T: McapRows + 'static> LiveTable<T> {
         self.encoder.encode(&columns, 0, &mut |c, bytes| server.send(first + c, t, bytes));
         self.view.messages(row, &mut |c, bytes| server.send(view_first + c, t, bytes));
     }
+}
+
+/// The view of a table shown alone ([`LiveTable::without_view`]): no channel, no message.
+struct NoView;
+
+impl<T> McapView<T> for NoView {
+    fn channels(&self) -> Vec<ChannelSpec> {
+        Vec::new()
+    }
+
+    fn messages(&mut self, _row: &T, _emit: &mut dyn FnMut(usize, &[u8])) {}
 }

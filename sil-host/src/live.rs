@@ -19,7 +19,7 @@ use experiments::{
     settings::LiveArgs,
     simulate::summary::{EventRow, TraceRow},
 };
-use rig::record::PeriodRecord;
+use rig::{frames::FrameRow, record::PeriodRecord};
 
 use crate::error::CliError;
 
@@ -134,10 +134,12 @@ fn dropped_note(closed: Closed, signalled: bool) -> Option<String> {
     })
 }
 
-/// A closed-loop run shown live: its periods' channels and the arm's.
+/// A closed-loop run shown live: its periods' channels and the arm's, and its
+/// frames' (`/wire/*`), as the file has them.
 pub struct LiveRun {
     server: LiveServer,
     table: LiveTable<PeriodRecord>,
+    frames: LiveTable<FrameRow>,
 }
 
 impl LiveRun {
@@ -152,8 +154,15 @@ impl LiveRun {
         }
         let mut channels = Vec::new();
         let view = ArmView::of_law(ArmGeometry::of(&rig::setup::plant_params(scenario)), scenario.law_in_words());
-        let table = LiveTable::new(Box::new(view), &mut channels).map_err(|e| CliError::bad_input(e.to_string()))?;
-        Ok(start(args, &channels, realtime)?.map(|server| Self { server, table }))
+        let bad = |e: arm_view::LiveError| CliError::bad_input(e.to_string());
+        let table = LiveTable::new(Box::new(view), &mut channels).map_err(bad)?;
+        let frames = LiveTable::without_view(&mut channels).map_err(bad)?;
+        Ok(start(args, &channels, realtime)?.map(|server| Self { server, table, frames }))
+    }
+
+    /// Sends period `k`'s frame and answer (before its record, as the file orders them).
+    pub fn push_frame(&mut self, f: &FrameRow) {
+        self.frames.push(&mut self.server, f);
     }
 
     /// Sends period `r` when it is due.

@@ -70,7 +70,11 @@ pub fn run_streamed(
     }
     impl RunSink for Streaming<'_> {
         fn answer(&mut self, frame: &shared::wire::SensorFrame, truth: &shared::wire::GroundTruth, exchange: &rig::Exchange) {
-            self.trace.push_frame(&rig::frames::FrameRow::of(frame, truth, exchange));
+            let row = rig::frames::FrameRow::of(frame, truth, exchange);
+            self.trace.push_frame(&row);
+            if let Some(live) = self.live.as_deref_mut() {
+                live.push_frame(&row);
+            }
         }
 
         fn record(&mut self, r: &PeriodRecord) {
