@@ -71,6 +71,8 @@ pub struct LiveServer {
     rate: Option<f64>,
     /// The wall clock and the simulated time of the first row.
     origin: Option<(std::time::Instant, f64)>,
+    /// When the server's clock was last sent ([`TIME_EVERY`]).
+    last_time: Option<Instant>,
     /// The viewers' subscriptions and connections so far.
     counts: Arc<Counts>,
 }
@@ -123,19 +125,29 @@ pub struct Closed {
 /// The status message every viewer is sent before the close frame.
 pub const CLOSING_STATUS: &str = "painleve: the run has ended; the server closes";
 
+/// The least wall time between two of the server's clock messages (`Time`): 20 ms.
+/// The SDK sends them on a viewer's control queue, which drops the viewer when full
+/// (its `message_backlog_size`), where data messages only lose the oldest: one a row
+/// (a thousand a simulated second) dropped a viewer that read a message a millisecond
+/// within a second of a run at `--live-rate 4`. 50 a second is more than the app's
+/// clock needs.
+pub const TIME_EVERY: Duration = Duration::from_millis(20);
+
 /// The time between the status message and the stop, within the grace: 50 ms.
 const STATUS_PAUSE: Duration = Duration::from_millis(50);
 
 impl LiveServer {
     /// Starts the server on `addr` (port 0: any free port, [`LiveServer::addr`]
     /// tells which) with `channels`, paced at `rate` (1: real time; `None`: not
-    /// paced, for a run the wall clock already paces).
+    /// paced, for a run the wall clock already paces), with `backlog` messages
+    /// queued per viewer (the SDK's `message_backlog_size`, 1024 by default: a
+    /// viewer further behind loses the oldest data messages).
     ///
     /// # Errors
     /// [`LiveError::Rate`] for a rate that is not positive and finite;
     /// [`LiveError::Start`] when the address cannot be bound;
     /// [`LiveError::Channel`] when a channel cannot be made.
-    pub fn start(addr: SocketAddr, channels: &[ChannelSpec], rate: Option<f64>) -> Result<Self, LiveError> {
+    pub fn start(addr: SocketAddr, channels: &[ChannelSpec], rate: Option<f64>, backlog: usize) -> Result<Self, LiveError> {
         if let Some(rate) = rate
             && !(rate.is_finite() && rate > 0.0)
         {
@@ -161,12 +173,13 @@ impl LiveServer {
             .name(concat!("painleve sil-host ", env!("CARGO_PKG_VERSION")))
             .bind(std::net::Ipv4Addr::LOCALHOST.to_string(), 0)
             .capabilities([Capability::Time])
+            .message_backlog_size(backlog)
             .listener(Arc::new(Listener(Arc::clone(&counts))))
             .start_blocking()
             .map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
         let upstream = SocketAddr::from((std::net::Ipv4Addr::LOCALHOST, server.port()));
         let relay = relay::Relay::start(addr, upstream).map_err(|e| LiveError::Start { addr, what: e.to_string() })?;
-        Ok(Self { _context: context, server: Some(server), relay, channels: made, rate, origin: None, counts })
+        Ok(Self { _context: context, server: Some(server), relay, channels: made, rate, origin: None, last_time: None, counts })
     }
 
     /// The address the server listens on (its port the one bound).
@@ -197,7 +210,8 @@ impl LiveServer {
     }
 
     /// Waits until the row at `t` (s) is due ([`LiveServer`]'s pacing; a time
-    /// already past is not waited for) and sets the server's clock to it.
+    /// already past is not waited for) and sets the server's clock to it (at most
+    /// every [`TIME_EVERY`] of wall time).
     pub fn pace(&mut self, t: f64) {
         let (wall0, t0) = *self.origin.get_or_insert((std::time::Instant::now(), t));
         let due = self.rate.map_or(0.0, |rate| (t - t0) / rate);
@@ -207,7 +221,10 @@ impl LiveServer {
                 std::thread::sleep(Duration::from_secs_f64(due - elapsed));
             }
         }
-        if let Some(s) = &self.server {
+        if let Some(s) = &self.server
+            && self.last_time.is_none_or(|at| at.elapsed() >= TIME_EVERY)
+        {
+            self.last_time = Some(Instant::now());
             s.broadcast_time(log_time_ns(t));
         }
     }

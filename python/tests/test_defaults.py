@@ -24,6 +24,7 @@ NOT_IN_PYTHON = {
     "live": "a live Foxglove view of a CLI run; in Python the results are returned (and Foxglove opens trace.mcap)",
     "live-rate": "the pace of --live",
     "live-wait": "the wait of --live for a viewer",
+    "live-backlog": "the queue of --live per viewer",
     "no-page": "trace.html is a file of the CLI's output folder; results are returned",
 }
 # Arguments of the functions that are not flags.

@@ -27,11 +27,12 @@ use crate::error::CliError;
 /// at the rate (`None` when `paced_by_clock`: a `--realtime` run), says where
 /// on stderr, and waits `--live-wait` for a viewer.
 fn start(args: &LiveArgs, channels: &[tables::mcap::ChannelSpec], paced_by_clock: bool) -> Result<Option<LiveServer>, CliError> {
-    let Some((addr, rate, wait)) = args.checked().map_err(CliError::bad_input)? else { return Ok(None) };
+    let Some((addr, rate, wait, backlog)) = args.checked().map_err(CliError::bad_input)? else { return Ok(None) };
     if paced_by_clock && rate != 1.0 {
         return Err(CliError::bad_input(format!("--live-rate {rate}: a --realtime run is paced by the wall clock (rate 1)")));
     }
-    let server = LiveServer::start(addr, channels, (!paced_by_clock).then_some(rate)).map_err(|e| CliError::bad_input(e.to_string()))?;
+    let server =
+        LiveServer::start(addr, channels, (!paced_by_clock).then_some(rate), backlog).map_err(|e| CliError::bad_input(e.to_string()))?;
     let at: SocketAddr = server.addr(addr);
     eprintln!(
         "live: Foxglove WebSocket server on ws://{at} ({} simulated s per s); in the Foxglove app: Open connection > Foxglove WebSocket, layout docs/foxglove/layout.json",

@@ -277,6 +277,16 @@ fn a_live_address_in_use_is_refused_with_nothing_written() {
     let s = sil_host().args(["run", "--in-process", "--live", "127.0.0.1:0", "--live-rate", "0", "--out"]).arg(&out).output().unwrap();
     assert_eq!(s.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&s.stderr).contains("--live-rate 0"));
+    for backlog in ["15", "1000001"] {
+        let s = sil_host()
+            .args(["run", "--in-process", "--live", "127.0.0.1:0", "--live-backlog", backlog, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(s.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&s.stderr).contains(&format!("--live-backlog {backlog}: expected")), "{s:?}");
+        assert!(!out.exists(), "nothing written");
+    }
 }
 
 /// How long a run may outlive its end because of a viewer (docs/rig.md "Live"):
@@ -459,6 +469,45 @@ fn a_viewer_that_stopped_reading_is_dropped_and_the_run_exits() {
     eprintln!("the reading viewer: {messages} messages, status {}, close {frame:?}", status.is_some());
     let left = drain_to_the_end(&mut stuck);
     eprintln!("the stuck viewer had {left} bytes in flight when its connection ended");
+}
+
+/// Issue 84: a slow viewer (1 ms a message: it falls behind the 11 channels'
+/// messages at once) holds neither the run nor its end: the process exits within
+/// 2 s of the run's end, as with no viewer; the viewer is dropped or takes the close.
+#[test]
+fn a_slow_viewer_does_not_hold_the_run_or_its_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (child, addr, lines) = live_run(&out, &[]);
+    let mut slow = viewer(&addr, None);
+    let reading = std::thread::spawn(move || {
+        let mut messages = 0usize;
+        while slow.read().is_ok() {
+            messages += 1;
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        messages
+    });
+    let started = Instant::now();
+    let (exited, waiter) = exit_of(child);
+    let (mut ended, mut said) = (None, Vec::new());
+    while let Ok((at, line)) = lines.recv_timeout(Duration::from_secs(120)) {
+        if line.contains("the run has ended") {
+            ended = Some(at);
+        }
+        said.push(line);
+    }
+    let ended = ended.unwrap_or_else(|| panic!("no line of the run's end: {said:#?}"));
+    let exited = exited.recv().unwrap();
+    let o = waiter.join().unwrap();
+    assert!(o.status.success(), "{said:#?}");
+    let (run, after) = (ended.duration_since(started), exited.duration_since(ended));
+    eprintln!("a slow viewer: the run took {:.2} s (5 s paced), exited {:.3} s after its end", run.as_secs_f64(), after.as_secs_f64());
+    // 20 s of simulated time at --live-rate 4 is 5 s of wall time; the viewer adds none of it.
+    assert!(run < Duration::from_secs(5) + AFTER_THE_RUN, "the run took {run:?}: {said:#?}");
+    assert!(after < AFTER_THE_RUN, "exited {after:?} after the run's end: {said:#?}");
+    let messages = reading.join().unwrap();
+    assert!(messages > 100, "it received the run: {messages} messages");
 }
 
 /// Issue 66 (4): Ctrl-C (SIGINT) mid-run with a stuck viewer ends the run at

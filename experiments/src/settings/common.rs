@@ -45,21 +45,30 @@ pub struct LiveArgs {
     /// at once. The run starts anyway when no viewer comes.
     #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value_t = 0.0, requires = "live"))]
     pub live_wait: f64,
+    /// With --live: messages queued for each viewer, in [16, 1000000] (the Foxglove
+    /// SDK's backlog): a viewer further behind loses the oldest messages of the
+    /// tables and the arm, never the run's pace; raise it for a slow network.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value_t = 1024, requires = "live"))]
+    pub live_backlog: usize,
 }
 
 impl LiveArgs {
-    /// The live view asked for: its address, rate and wait (s).
+    /// The live view asked for: its address, rate, wait (s) and backlog (messages).
     ///
     /// # Errors
-    /// A message when the rate is not in (0, 1000] or the wait not in [0, 3600].
-    pub fn checked(&self) -> Result<Option<(std::net::SocketAddr, f64, f64)>, String> {
+    /// A message when the rate is not in (0, 1000], the wait not in [0, 3600] or
+    /// the backlog not in [16, 1000000].
+    pub fn checked(&self) -> Result<Option<(std::net::SocketAddr, f64, f64, usize)>, String> {
+        if !(16..=1_000_000).contains(&self.live_backlog) {
+            return Err(format!("--live-backlog {}: expected messages per viewer in [16, 1000000]", self.live_backlog));
+        }
         if !(self.live_rate > 0.0 && self.live_rate <= 1000.0) {
             return Err(format!("--live-rate {}: expected simulated seconds per second in (0, 1000]", self.live_rate));
         }
         if !(0.0..=3600.0).contains(&self.live_wait) {
             return Err(format!("--live-wait {}: expected seconds in [0, 3600]", self.live_wait));
         }
-        Ok(self.live.map(|a| (a, self.live_rate, self.live_wait)))
+        Ok(self.live.map(|a| (a, self.live_rate, self.live_wait, self.live_backlog)))
     }
 }
 
