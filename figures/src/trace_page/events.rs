@@ -93,8 +93,8 @@ impl Events {
         }
         let listed = counts.iter().map(|(k, n)| format!("{n} {k}")).collect::<Vec<_>>().join(", ");
         let base = "Events: each at its exact time, between the frames and the plots' samples: a tick on every plot's \
-                    time axis, the normal impulse Pₙ of an impact as a stem on the force plot (its own scale, stated \
-                    there), a ring around the tip in the frame after an impact, the events since the previous frame in \
+                    time axis, the normal impulse Pₙ of an impact as a stem on the force plot (its own axis, in N s on \
+                    the right), a ring around the tip in the frame after an impact, the events since the previous frame in \
                     the readout, and the list under the plots (a click moves the cursor there).";
         match (self.kept.len(), self.left_out) {
             (0, _) => format!("{base} This run has none."),

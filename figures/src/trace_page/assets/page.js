@@ -258,7 +258,8 @@
   const still = document.createElement("canvas");
   still.width = plots.width;
   still.height = plots.height;
-  const ML = 74, MR = 12, MT = 18, MB = 42, GAP = 24;
+  // MR: room on the right for the impulses' own axis (N s) on the force panel.
+  const ML = 74, MR = 58, MT = 18, MB = 42, GAP = 24;
   const tMin = F.t[0], tMax = Math.max(F.t[N - 1], tMin + 1e-9);
   // The plots' time window: the whole run, or a span around the current time.
   let wA = tMin, wB = tMax;
@@ -404,6 +405,27 @@
       c.fillText("stems: impulse |P\u2099| of each impact, tallest " + pMax.toPrecision(3) + " N s", ML + 6, b.top + 4);
     }
     c.restore();
+    if (pMax > 0) {
+      // The stems' own axis, on the right: |P_n| in N s (a stem of pMax reaches 0.85 of the box).
+      const pOf = (v) => bottom - 0.85 * b.h * (v / pMax);
+      const pst = niceStep(pMax / 0.85 / 3);
+      c.strokeStyle = C.frame;
+      c.fillStyle = C.text;
+      c.font = "11px " + FONT;
+      c.textAlign = "left";
+      c.textBaseline = "middle";
+      for (let k = 0; k * pst <= pMax / 0.85 + 1e-12 * pst; k++) {
+        const y = pOf(k * pst);
+        polyline(c, [[right, y], [right + 4, y]]);
+        c.fillText(tickText(k * pst, pst), right + 6, y);
+      }
+      c.save();
+      c.translate(G.w - 8, b.top + b.h / 2);
+      c.rotate(Math.PI / 2);
+      c.textAlign = "center";
+      c.fillText("|P\u2099| (N s)", 0, 0);
+      c.restore();
+    }
     c.strokeStyle = C.frame;
     c.lineWidth = 1;
     c.strokeRect(ML, b.top, right - ML, b.h);
