@@ -60,6 +60,20 @@ pub enum LiveError {
     Rate(f64),
 }
 
+/// The warning for a server on `at` when `at` is not a loopback address: it
+/// serves the run, unauthenticated, to whoever can reach this machine on that
+/// address (`0.0.0.0`, `::`: every interface). `None` for `127.0.0.0/8` and `::1`.
+pub fn exposure_warning(at: SocketAddr) -> Option<String> {
+    let ip = at.ip();
+    (!ip.is_loopback()).then(|| {
+        let which = if ip.is_unspecified() { "every network interface of this machine" } else { "the network" };
+        format!(
+            "live: ws://{at} serves the run to {which}, without authentication: anyone who can reach this machine there can \
+             watch it; --live 127.0.0.1:PORT keeps it on this machine"
+        )
+    })
+}
+
 /// The Foxglove WebSocket server of a live run, its channels and its pace.
 pub struct LiveServer {
     // Kept: the channels belong to it.
@@ -120,6 +134,28 @@ pub struct Closed {
     /// Of those, the viewers that had not taken the close within the grace time
     /// (or by a stop): their connections were cut.
     pub dropped: usize,
+}
+
+impl Closed {
+    /// What stderr says of a close that dropped viewers after `grace` (`signalled`:
+    /// cut short by Ctrl-C or SIGTERM); `None` when every viewer took it.
+    pub fn note(self, signalled: bool, grace: Duration) -> Option<String> {
+        (self.dropped > 0).then(|| {
+            if signalled {
+                return format!(
+                    "live: the run was stopped by a signal: {} of {} viewer(s) cut without waiting for them to take the close",
+                    self.dropped, self.viewers
+                );
+            }
+            format!(
+                "live: dropped {} of {} viewer(s) that did not take the server's close within {} s of the run's end \
+                 (stopped reading: the connection full); the connection was cut",
+                self.dropped,
+                self.viewers,
+                grace.as_secs_f64()
+            )
+        })
+    }
 }
 
 /// The status message every viewer is sent before the close frame.
@@ -354,4 +390,33 @@ impl<T> McapView<T> for NoView {
     }
 
     fn messages(&mut self, _row: &T, _emit: &mut dyn FnMut(usize, &[u8])) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The note names the dropped viewers, and nothing is said when none was.
+    #[test]
+    fn the_note_says_how_many_viewers_were_dropped() {
+        let grace = Duration::from_secs(1);
+        assert_eq!(Closed { viewers: 2, dropped: 0 }.note(false, grace), None);
+        let note = Closed { viewers: 2, dropped: 1 }.note(false, grace).unwrap();
+        assert!(note.starts_with("live: dropped 1 of 2 viewer(s)") && note.contains("within 1 s"), "{note}");
+        let note = Closed { viewers: 1, dropped: 1 }.note(true, grace).unwrap();
+        assert!(note.contains("stopped by a signal") && note.contains("1 of 1 viewer(s)"), "{note}");
+    }
+
+    /// Only a loopback address is served without a warning.
+    #[test]
+    fn a_non_loopback_address_is_warned_of() {
+        for quiet in ["127.0.0.1:8765", "127.0.0.2:1", "[::1]:8765"] {
+            assert_eq!(exposure_warning(quiet.parse().unwrap()), None, "{quiet}");
+        }
+        let every = exposure_warning("0.0.0.0:8765".parse().unwrap()).unwrap();
+        assert!(every.contains("ws://0.0.0.0:8765") && every.contains("every network interface"), "{every}");
+        assert!(exposure_warning("[::]:1".parse().unwrap()).unwrap().contains("every network interface"));
+        let lan = exposure_warning("192.168.1.5:8765".parse().unwrap()).unwrap();
+        assert!(lan.contains("to the network") && lan.contains("127.0.0.1"), "{lan}");
+    }
 }

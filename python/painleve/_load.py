@@ -136,6 +136,9 @@ _VALIDITY_AT = {
 
 def _detect(files: Set[str], summary: Any, tables: Optional[Dict[str, Table]] = None) -> str:
     """The command that wrote a folder, from its files (and the tables of an MCAP file)."""
+    if isinstance(summary, dict) and "periods_replayed" in summary:
+        # `sil-host replay --out`: the replayed answers (frames) and the comparison.
+        return "replay"
     if "report.json" in files:
         return "report"
     if "admissible.json" in files:

@@ -59,7 +59,7 @@ pub fn replay<'py>(
     let (rec_ref, link_ref, plan_ref) = (&rec, &mut link, &plan);
     let comparison = work::run(py, progress.as_ref(), "replay", "periods", move |c: &Control| {
         let n = rec_ref.rows.len() as u64;
-        experiments::replay::replay(rec_ref, link_ref, plan_ref, all, &mut |done| {
+        experiments::replay::replay(rec_ref, link_ref, plan_ref, all, &mut |_| {}, &mut |done| {
             if done.is_multiple_of(100) {
                 c.set(done as u64, n);
             }

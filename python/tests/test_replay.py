@@ -63,3 +63,20 @@ def test_a_cut_recording_a_missing_folder_and_another_link_are_refused(recording
     with pytest.raises(painleve.PainleveError) as e:
         painleve.replay(recording, link="twin", progress=False)
     assert e.value.exit_code == 2 and "`sil-host replay` replays over the twin link" in str(e.value)
+
+
+@pytest.mark.parametrize("fmt", ["csv", "mcap"])
+def test_a_replays_folder_loads_with_its_answers(recording, tmp_path, fmt):
+    # `replay --out` (issue 84): the replayed answers as a run's frames table, the
+    # comparison as its summary; `load` names the command and reads the frames.
+    out = tmp_path / fmt
+    p = cli("replay", [str(recording), "--link", "in-process", "--set", "controller.hybrid.kp=1000", "--all", "--format", fmt], out, check=False)
+    assert p.returncode == 1, p.stderr
+    r = painleve.load(out)
+    assert r.command == "replay" and r.summary["divergent_periods"] == json.loads(p.stdout)["divergent_periods"]
+    frames, recorded = r.tables["frames"], painleve.load(recording).tables["frames"]
+    assert frames.nrows == recorded.nrows == 2000
+    assert np.array_equal(np.asarray(frames["theta1_count"]), np.asarray(recorded["theta1_count"]))
+    changed = np.asarray(frames["u1_code"]) != np.asarray(recorded["u1_code"])
+    assert 0 < int(changed.sum()) <= r.summary["divergent_periods"]
+

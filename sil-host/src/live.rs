@@ -10,7 +10,7 @@
 //! viewer never holds the process past its run by more than that.
 //!
 //! An address that is not a loopback one (`0.0.0.0`, a LAN address) serves the
-//! run to the network: stderr says so with a warning ([`exposure_warning`]).
+//! run to the network: stderr says so with a warning ([`arm_view::live::exposure_warning`]).
 
 use std::{net::SocketAddr, time::Duration};
 
@@ -38,7 +38,7 @@ fn start(args: &LiveArgs, channels: &[tables::mcap::ChannelSpec], paced_by_clock
         "live: Foxglove WebSocket server on ws://{at} ({} simulated s per s); in the Foxglove app: Open connection > Foxglove WebSocket, layout docs/foxglove/layout.json",
         if paced_by_clock { 1.0 } else { rate }
     );
-    crate::commands::warn(exposure_warning(at));
+    crate::commands::warn(arm_view::live::exposure_warning(at));
     if wait > 0.0 {
         // The signal handler first: a Ctrl-C after the line below is seen.
         let stop = crate::cancel::stop_flag();
@@ -56,20 +56,6 @@ fn start(args: &LiveArgs, channels: &[tables::mcap::ChannelSpec], paced_by_clock
         }
     }
     Ok(Some(server))
-}
-
-/// The warning for a server on `at` when `at` is not a loopback address: it
-/// serves the run, unauthenticated, to whoever can reach this machine on that
-/// address (`0.0.0.0`, `::`: every interface). `None` for `127.0.0.0/8` and `::1`.
-pub fn exposure_warning(at: SocketAddr) -> Option<String> {
-    let ip = at.ip();
-    (!ip.is_loopback()).then(|| {
-        let which = if ip.is_unspecified() { "every network interface of this machine" } else { "the network" };
-        format!(
-            "live: ws://{at} serves the run to {which}, without authentication: anyone who can reach this machine there can \
-             watch it; --live 127.0.0.1:PORT keeps it on this machine"
-        )
-    })
 }
 
 /// How long the viewers get, once a run has ended, to take the server's close
@@ -99,7 +85,7 @@ impl Closing {
     /// stderr how many viewers it dropped, if any.
     pub fn finish(mut self) {
         if let Some(closed) = self.0.take().and_then(|t| t.join().ok())
-            && let Some(note) = dropped_note(closed, crate::cancel::exit_code().is_some())
+            && let Some(note) = closed.note(crate::cancel::exit_code().is_some(), CLOSE_GRACE)
         {
             eprintln!("{note}");
         }
@@ -113,26 +99,6 @@ impl Drop for Closing {
             let _ = t.join();
         }
     }
-}
-
-/// What stderr says of a close that dropped viewers (`signalled`: cut short by
-/// Ctrl-C or SIGTERM); `None` when every viewer took it.
-fn dropped_note(closed: Closed, signalled: bool) -> Option<String> {
-    (closed.dropped > 0).then(|| {
-        if signalled {
-            return format!(
-                "live: the run was stopped by a signal: {} of {} viewer(s) cut without waiting for them to take the close",
-                closed.dropped, closed.viewers
-            );
-        }
-        format!(
-            "live: dropped {} of {} viewer(s) that did not take the server's close within {} s of the run's end \
-             (stopped reading: the connection full); the connection was cut",
-            closed.dropped,
-            closed.viewers,
-            CLOSE_GRACE.as_secs_f64()
-        )
-    })
 }
 
 /// A closed-loop run shown live: its periods' channels and the arm's, and its
@@ -219,33 +185,5 @@ impl LiveSimulation {
     /// The simulation has ended: starts closing the server ([`Closing`]).
     pub fn close(self) -> Closing {
         Closing::start(self.server)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Only a loopback address is served without a warning.
-    #[test]
-    fn a_non_loopback_address_is_warned_of() {
-        for quiet in ["127.0.0.1:8765", "127.0.0.2:1", "[::1]:8765"] {
-            assert_eq!(exposure_warning(quiet.parse().unwrap()), None, "{quiet}");
-        }
-        let every = exposure_warning("0.0.0.0:8765".parse().unwrap()).unwrap();
-        assert!(every.contains("ws://0.0.0.0:8765") && every.contains("every network interface"), "{every}");
-        assert!(exposure_warning("[::]:1".parse().unwrap()).unwrap().contains("every network interface"));
-        let lan = exposure_warning("192.168.1.5:8765".parse().unwrap()).unwrap();
-        assert!(lan.contains("to the network") && lan.contains("127.0.0.1"), "{lan}");
-    }
-
-    /// The note names the dropped viewers, and nothing is said when none was.
-    #[test]
-    fn the_note_says_how_many_viewers_were_dropped() {
-        assert_eq!(dropped_note(Closed { viewers: 2, dropped: 0 }, false), None);
-        let note = dropped_note(Closed { viewers: 2, dropped: 1 }, false).unwrap();
-        assert!(note.starts_with("live: dropped 1 of 2 viewer(s)") && note.contains("within 1 s"), "{note}");
-        let note = dropped_note(Closed { viewers: 1, dropped: 1 }, true).unwrap();
-        assert!(note.contains("stopped by a signal") && note.contains("1 of 1 viewer(s)"), "{note}");
     }
 }

@@ -438,3 +438,40 @@ fn the_recorded_belt_is_the_encoders_reading() {
         assert!(belt[1..].iter().any(|&v| v != -400), "{rate} Hz: the count's jitter: {belt:?}");
     }
 }
+
+/// Issue 84: `replay --out DIR` writes the replayed answers as a run's frames
+/// table (the recorded frames, this build's answers) beside the comparison: every
+/// period replayed is a row, the frames' columns equal the recording's bit for bit,
+/// the answers differ from it in exactly `divergent_periods` rows (with `--all`),
+/// and an identical replay writes the recording's rows again; in MCAP, the
+/// `/wire/*` channels read back as the same table.
+#[test]
+fn out_writes_the_replayed_answers_as_a_frames_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    record("run", &["--in-process", "--no-page", "--duration", "1"], &rec);
+    let (_, recorded) = rig::frames::read_frames(&rec).unwrap();
+    let frame = |r: &rig::frames::FrameRow| format!("{:?}", (r.frame(), r.truth()));
+    for (set, format) in [("controller.hybrid.kp=1000", "csv"), ("controller.hybrid.kp=1000", "mcap"), ("", "csv")] {
+        let out = dir.path().join(format!("out-{format}-{}", set.is_empty()));
+        let mut args = vec!["--all", "--format", format, "--out", out.to_str().unwrap()];
+        if !set.is_empty() {
+            args.extend(["--set", set]);
+        }
+        let (code, doc, err) = replay(&rec, &args);
+        assert_eq!(code, if set.is_empty() { 0 } else { 1 }, "{doc} {err}");
+        let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["divergent_periods"], doc["divergent_periods"]);
+        // The folder is read as a recording's frames are (frames.csv, or trace.mcap's /wire channels).
+        let (_, replayed) = rig::frames::read_frames(&out).unwrap();
+        let n = doc["periods_replayed"].as_u64().unwrap() as usize;
+        assert_eq!((replayed.len(), n), (recorded.len(), 1000), "{format}");
+        let mut differ = 0;
+        for (a, b) in replayed.iter().zip(&recorded) {
+            assert_eq!(frame(a), frame(b), "{format}: period {}", a.seq);
+            differ += usize::from(a.first_difference(b).is_some());
+        }
+        assert_eq!(differ as u64, doc["divergent_periods"].as_u64().unwrap(), "{format} {set}");
+        assert_eq!(differ == 0, set.is_empty(), "{format} {set}: {differ}");
+    }
+}

@@ -141,15 +141,17 @@ pub struct Comparison {
 /// period loop drives a link (the faults of `plan` that act on the firmware
 /// first, then the exchange through the `drop_command` wrapper), and compares
 /// each answer with the recorded one bit for bit ([`FrameRow::first_difference`]).
-/// Stops at the first divergence unless `all`; calls `progress` with the count
-/// of periods replayed after each, and stops (an interruption, in
-/// [`Comparison::link_error`]) when it returns `false`. Ends the link's run
-/// (`FirmwareLink::finish`) either way.
+/// Stops at the first divergence unless `all`; hands each replayed period's row
+/// (the recorded frame with the replayed answer) to `answers`, in order (`sil-host
+/// replay --out`: a run folder of them); calls `progress` with the count of periods
+/// replayed after each, and stops (an interruption, in [`Comparison::link_error`])
+/// when it returns `false`. Ends the link's run (`FirmwareLink::finish`) either way.
 pub fn replay(
     rec: &Recording,
     link: &mut dyn FirmwareLink,
     plan: &FaultPlan,
     all: bool,
+    answers: &mut dyn FnMut(&FrameRow),
     progress: &mut dyn FnMut(usize) -> bool,
 ) -> Comparison {
     let mut c = Comparison { replayed: 0, divergent: 0, first: None, per_signal: Vec::new(), link_error: None };
@@ -165,6 +167,7 @@ pub fn replay(
             Ok(exchange) => {
                 c.replayed += 1;
                 let got = FrameRow::of(&frame, &truth, &exchange);
+                answers(&got);
                 if let Some((signal, recorded, replayed)) = row.first_difference(&got) {
                     c.divergent += 1;
                     for ((name, a), (_, b)) in row.signals().into_iter().zip(got.signals()) {

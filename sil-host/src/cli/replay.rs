@@ -55,6 +55,14 @@ pub struct ReplayArgs {
     /// differ (default: stop at the first).
     #[arg(long)]
     pub all: bool,
+    /// Write the replayed answers as a run's folder DIR: frames.csv (frames.arrow,
+    /// or trace.mcap's /wire channels, by --format: the recorded frames with this
+    /// build's answers) and summary.json (the comparison), for painleve.load and Foxglove.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// With --out: the frames' format, as `run --format` (csv, arrow, mcap).
+    #[arg(long, value_enum, default_value = "csv", requires = "out")]
+    pub format: tables::TableFormat,
     /// Print one JSON document instead of the text.
     #[arg(long)]
     pub json: bool,

@@ -4,7 +4,7 @@
 //! verdict are the library's ([`experiments::replay`]); this command opens the
 //! link, shows progress and prints.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use experiments::replay::{self, Recording, ReplaySummary};
 use rig::{FaultPlan, MonitorPolicy};
@@ -14,8 +14,10 @@ use crate::{
     commands::Done,
     error::CliError,
     link_spec::LinkSpec,
-    output::progress_bar,
+    output::{OutputSet, StreamedTable, progress_bar},
 };
+use rig::frames::FrameRow;
+use tables::TableFormat;
 
 /// Replays `args.dir` over `args.link`; prints nothing.
 ///
@@ -57,9 +59,24 @@ pub fn execute(args: &ReplayArgs) -> Result<Done<ReplaySummary>, CliError> {
     let link = open.link();
     let transport = link.transport().to_string();
     let plan = FaultPlan::new(&setup.scenario().faults, setup.scenario().timing.period());
+    // `--out`: the replayed answers streamed as a run's frames table, the summary beside them.
+    let mut out = args.out.as_deref().map(OutputSet::new).transpose()?;
+    let mut table = out
+        .as_mut()
+        .map(|o| {
+            StreamedTable::<FrameRow>::new(
+                o,
+                if args.format == TableFormat::Mcap { "trace" } else { "frames" },
+                args.format,
+                Duration::from_millis(200),
+                None,
+            )
+        })
+        .transpose()?;
     let bar = progress_bar(rec.rows.len() as u64, "replay", "periods", args.json);
     let stop = crate::cancel::stop_flag();
-    let comparison = replay::replay(&rec, link, &plan, args.all, &mut |replayed| {
+    let mut answers = |r: &FrameRow| table.as_mut().map_or((), |t| t.push(r));
+    let comparison = replay::replay(&rec, link, &plan, args.all, &mut answers, &mut |replayed| {
         if replayed.is_multiple_of(500) {
             bar.set_position(replayed as u64);
         }
@@ -69,7 +86,13 @@ pub fn execute(args: &ReplayArgs) -> Result<Done<ReplaySummary>, CliError> {
     bar.finish_and_clear();
     let overrides = args.set.iter().map(|o| format!("{}={}", o.key, o.text)).collect();
     let (summary, failure) = ReplaySummary::of(&rec, comparison, overrides, transport, started.elapsed().as_secs_f64());
-    Ok(Done { result: summary, files: Vec::new(), failure })
+    let mut files = Vec::new();
+    if let (Some(mut out), Some(table)) = (out, table) {
+        table.finish()?;
+        out.write_json("summary.json", &summary)?;
+        files = out.commit()?;
+    }
+    Ok(Done { result: summary, files, failure })
 }
 
 /// Refuses an option of another link (exit 2) rather than ignoring it.
