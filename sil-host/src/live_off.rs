@@ -37,12 +37,17 @@ impl LiveRun {
     ///
     /// # Errors
     /// [`CliError::BadInput`] (exit 2) with `--live`: the feature `live` is not built.
-    pub fn start(args: &LiveArgs, _plant: &shared::params::Params<f64>, _realtime: bool) -> Result<Option<Self>, CliError> {
+    pub fn start(args: &LiveArgs, _scenario: &rig::scenario::Scenario, _realtime: bool) -> Result<Option<Self>, CliError> {
         refuse(args).map(|()| None)
     }
 
     /// Never called.
     pub fn push(&mut self, _r: &PeriodRecord) {
+        match *self {}
+    }
+
+    /// Never called.
+    pub fn push_frame(&mut self, _f: &rig::frames::FrameRow) {
         match *self {}
     }
 

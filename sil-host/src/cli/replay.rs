@@ -55,9 +55,8 @@ pub struct ReplayArgs {
     /// differ (default: stop at the first).
     #[arg(long)]
     pub all: bool,
-    /// Write the replayed answers as a run's folder DIR: frames.csv (frames.arrow,
-    /// or trace.mcap's /wire channels, by --format: the recorded frames with this
-    /// build's answers) and summary.json (the comparison), for painleve.load and Foxglove.
+    /// Write the replayed answers (the recorded frames, this build's answers) as a run's folder DIR:
+    /// frames.csv, .arrow or trace.mcap's /wire channels (--format), and summary.json (the comparison).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// With --out: the frames' format, as `run --format` (csv, arrow, mcap).

@@ -69,7 +69,7 @@ pub fn execute(args: &ReplayArgs) -> Result<Done<ReplaySummary>, CliError> {
                 if args.format == TableFormat::Mcap { "trace" } else { "frames" },
                 args.format,
                 Duration::from_millis(200),
-                None,
+                Default::default(),
             )
         })
         .transpose()?;
