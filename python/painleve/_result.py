@@ -9,7 +9,7 @@ from typing import Any, Dict, Iterator, List, Mapping, Optional, Union, cast
 
 import numpy as np
 
-from ._painleve import PainleveError, write_file
+from ._painleve import PainleveError, recording_of_run, write_file
 
 __all__ = ["Table", "Result", "PainleveWarning", "describe_violations"]
 
@@ -346,7 +346,8 @@ class Result:
         A ``simulate`` result writes its samples and events; a ``run`` or
         ``run_controller`` result its period records. A loaded folder copies its
         ``trace.mcap`` when it has one (nothing is written when ``path`` is that
-        file itself).
+        file itself); a loaded CSV or Arrow folder of ``run`` or ``pil`` writes it from
+        its tables and summary, the bytes ``--format mcap`` writes for the same run.
 
         Written as the CLI writes its files: whole or not at all (a temporary
         file in the same folder, renamed to ``path``), and never through a link:
@@ -355,8 +356,9 @@ class Result:
 
         Raises:
             ValueError: the result holds no run (an analysis), or is a loaded
-                folder without a ``trace.mcap`` (run the command again with
-                ``format="mcap"``, or call the function again).
+                ``simulate`` folder without a ``trace.mcap`` (run the command again
+                with ``format="mcap"``, or call the function again), or a run's
+                folder whose tables cannot be read (naming the file).
             OSError: the file cannot be written (``FileNotFoundError`` for a
                 missing folder, ``PermissionError``, ...), the message naming
                 it; ``path`` is then left as it was.
@@ -375,6 +377,11 @@ class Result:
                 # one to ``source``) is not followed: it is replaced by a copy.
                 if source.resolve() != out.parent.resolve() / out.name:
                     write_file(os.fspath(out), source.read_bytes())
+                return out
+            if self.command in ("run", "pil"):
+                # A CSV or Arrow folder of a closed-loop run: its tables and summary hold
+                # every row the file needs (the command line's bytes for the same run).
+                recording_of_run(os.fspath(self.path)).write_mcap(os.fspath(out))
                 return out
             raise ValueError(
                 f"the folder {self.path} has no trace.mcap and its rows are not kept: "

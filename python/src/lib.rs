@@ -86,6 +86,7 @@ fn _painleve(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<recording::Recording>()?;
     m.add_function(wrap_pyfunction!(recording::write_file, m)?)?;
+    m.add_function(wrap_pyfunction!(recording::recording_of_run, m)?)?;
     m.add_function(wrap_pyfunction!(commands::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(commands::admissible, m)?)?;
     m.add_function(wrap_pyfunction!(commands::modes, m)?)?;

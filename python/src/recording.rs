@@ -135,3 +135,32 @@ pub fn write_file(py: Python<'_>, path: PathBuf, data: &[u8]) -> PyResult<()> {
     })
     .map_err(PyErr::from)
 }
+
+/// The recording of a closed-loop run's folder (`sil-host run` or `pil` `--out`,
+/// `Result.write_csv`/`write_arrow`): its period records (`trace.csv`,
+/// `trace.arrow`), its frames (`frames.csv`, `frames.arrow`; none in a folder
+/// written before them), the arm's geometry from `summary.json`'s `plant_params` and
+/// its `law`, so that `Result.write_mcap` of a loaded CSV or Arrow folder writes the
+/// bytes the command line's `--format mcap` writes for the same run.
+///
+/// # Errors
+/// `ValueError`: no `summary.json` with `plant_params`, or no trace; a table its
+/// reader refuses (naming the file, the row and the column).
+#[pyfunction]
+pub fn recording_of_run(py: Python<'_>, folder: PathBuf) -> PyResult<Recording> {
+    use pyo3::exceptions::PyValueError;
+    py.detach(|| {
+        let bad = |what: String| PyValueError::new_err(format!("{}: {what}", folder.display()));
+        let text = tables::input::read_to_string(&folder.join("summary.json"), tables::input::SUMMARY).map_err(|e| bad(e.to_string()))?;
+        let summary: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(format!("summary.json: {e}")))?;
+        let params: shared::Params<f64> =
+            serde_json::from_value(summary["plant_params"].clone()).map_err(|e| bad(format!("summary.json's plant_params: {e}")))?;
+        let law = summary["law"].as_str().map(String::from);
+        let records = rig::frames::read_table::<PeriodRecord>(&folder, "trace").map_err(|e| bad(e.to_string()))?;
+        let (_, records) = records.ok_or_else(|| bad("no trace.csv, trace.arrow or trace.mcap".into()))?;
+        let frames =
+            rig::frames::read_table::<FrameRow>(&folder, "frames").map_err(|e| bad(e.to_string()))?.map(|(_, f)| f).unwrap_or_default();
+        let geometry = ArmGeometry::of(&params);
+        Ok(Recording { geometry, law, rows: Rows::ClosedLoop { records, frames } })
+    })
+}

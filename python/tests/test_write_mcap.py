@@ -82,6 +82,17 @@ def test_a_loaded_folder_copies_its_file_or_says_why_not(tmp_path):
         painleve.admissible().write_mcap(tmp_path / "y.mcap")
 
 
+@pytest.mark.parametrize("fmt", ["csv", "arrow"])
+def test_a_loaded_runs_csv_or_arrow_folder_writes_the_clis_mcap(tmp_path, fmt):
+    # Issue 84: a run's tables and summary hold every row the file needs: the same
+    # bytes as `--format mcap` of the same run, the law's /log and metadata included.
+    args = ["--in-process", "--duration", "1.5", "--scenario", "scenarios/pid-x0u.toml", "--no-page"]
+    cli("run", [*args, "--format", fmt], tmp_path / fmt)
+    cli("run", [*args, "--format", "mcap"], tmp_path / "mcap")
+    written = painleve.load(tmp_path / fmt).write_mcap(tmp_path / "from-folder.mcap")
+    assert written.read_bytes() == (tmp_path / "mcap" / "trace.mcap").read_bytes()
+
+
 def test_an_unwritable_path_is_an_os_error(tmp_path):
     r = painleve.simulate(x0="a", duration=0.1, progress=False)
     with pytest.raises(OSError):

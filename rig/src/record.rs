@@ -10,7 +10,7 @@ tables::table_row! {
     /// One control period of a run (a row of `trace.csv` of `run` and `pil`: the
     /// fields in order, the header the `csv` crate derived from them;
     /// experiments/src/run.rs's test checks the bytes against it).
-    #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
     pub struct PeriodRecord {
         /// Sample time `t_k`, s.
         pub t: f64 => f64,
@@ -32,8 +32,9 @@ tables::table_row! {
         pub f_t: f64 => f64,
         /// True normal contact force at `t_k`, N.
         pub f_n: f64 => f64,
-        /// True contact mode at `t_k`.
-        pub mode: &'static str => str,
+        /// True contact mode at `t_k` (read back by its name, [`mode_named`]).
+        #[serde(deserialize_with = "mode_named")]
+        pub mode: ModeName => str,
         /// Motor torques that take effect in period `k`, N m (after quantisation; the
         /// previous command again when this period's was missed).
         pub u1_cmd: f64 => f64,
@@ -81,6 +82,22 @@ impl tables::mcap::McapRows for PeriodRecord {
             columns: &["lift_off_detected", "deadline_miss", "firmware_deadline_miss", "overruns", "status"],
         },
     ];
+}
+
+/// A contact mode's name, `shared::ContactMode::name` (an alias, so that serde's
+/// derive reads it through [`mode_named`] rather than borrowing it from the input).
+pub type ModeName = &'static str;
+
+/// A contact mode's name read back as the name [`shared::ContactMode::name`] gives
+/// (`trace.csv`'s `mode`): an unknown name is an error naming it.
+fn mode_named<'de, D: serde::Deserializer<'de>>(d: D) -> Result<ModeName, D::Error> {
+    use shared::ContactMode::*;
+    let name = <std::borrow::Cow<'de, str> as serde::Deserialize>::deserialize(d)?;
+    [Sliding, Sticking, Flight, Indeterminate, Inconsistent]
+        .iter()
+        .map(|m| m.name())
+        .find(|n| *n == name)
+        .ok_or_else(|| serde::de::Error::custom(format!("`{name}` is not a contact mode")))
 }
 
 impl PeriodRecord {

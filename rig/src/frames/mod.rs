@@ -26,7 +26,7 @@ use crate::link::Exchange;
 
 mod read;
 
-pub use read::{FramesError, read_frames};
+pub use read::{FramesError, read_frames, read_table};
 
 /// How the firmware's answer to a frame came back ([`Exchange`]); in the table
 /// by its name ([`Answer::name`]), read back from it (an unknown name refused).

@@ -65,29 +65,41 @@ impl From<input::InputError> for FramesError {
 /// is not the frames table (naming the row and column); an Arrow or MCAP file in
 /// a build without the feature `read`.
 pub fn read_frames(dir: &Path) -> Result<(PathBuf, Vec<FrameRow>), FramesError> {
-    // `exists`, not `is_file`: a FIFO or a device in a file's place is refused
-    // by the reader, naming the bound, rather than passed over.
-    let csv = dir.join("frames.csv");
-    if csv.exists() {
-        let rows = read_csv(&csv)?;
-        return Ok((csv, rows));
-    }
-    for (name, of_file) in [("frames.arrow", read_arrow as Reader), ("trace.mcap", read_mcap)] {
-        let path = dir.join(name);
-        if path.exists() {
-            let rows = of_file(&path)?;
-            return Ok((path, rows));
-        }
-    }
-    Err(FramesError::NotRecorded { dir: dir.to_path_buf() })
+    read_table(dir, "frames")?.ok_or_else(|| FramesError::NotRecorded { dir: dir.to_path_buf() })
 }
 
-/// A reader of one file's frames.
-type Reader = fn(&Path) -> Result<Vec<FrameRow>, FramesError>;
+/// The rows of table `stem` (`frames`, `trace`) of the run in folder `dir`, as
+/// [`read_frames`] reads the frames: `STEM.csv`, then `STEM.arrow`, then
+/// `trace.mcap`'s table `stem`; `None` when the folder has none of them. Rows of
+/// any table declared once that derives `Deserialize` (`FrameRow`,
+/// `crate::record::PeriodRecord`).
+///
+/// # Errors
+/// As [`read_frames`], but for a folder without the table.
+pub fn read_table<T: serde::de::DeserializeOwned + Declared>(dir: &Path, stem: &str) -> Result<Option<(PathBuf, Vec<T>)>, FramesError> {
+    // `exists`, not `is_file`: a FIFO or a device in a file's place is refused
+    // by the reader, naming the bound, rather than passed over.
+    let csv = dir.join(format!("{stem}.csv"));
+    if csv.exists() {
+        let rows = read_csv(&csv)?;
+        return Ok(Some((csv, rows)));
+    }
+    let arrow = dir.join(format!("{stem}.arrow"));
+    if arrow.exists() {
+        let rows = read_arrow(&arrow)?;
+        return Ok(Some((arrow, rows)));
+    }
+    let mcap = dir.join("trace.mcap");
+    if mcap.exists() {
+        let rows = read_mcap(&mcap, stem)?;
+        return Ok(Some((mcap, rows)));
+    }
+    Ok(None)
+}
 
 /// The rows of `frames.csv` at `path` (the `csv` crate; Rust's float parsing
 /// reads the shortest text back to its bits).
-fn read_csv(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
+fn read_csv<T: serde::de::DeserializeOwned + Declared>(path: &Path) -> Result<Vec<T>, FramesError> {
     use std::io::{Read, Seek, SeekFrom};
     let named = |what: String| FramesError::NotTheTable { path: path.to_path_buf(), what };
     let bound = input::RECORDING;
@@ -99,54 +111,61 @@ fn read_csv(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
     file.rewind().map_err(|e| input::into_input_error(e, path, bound))?;
     let mut reader = csv::Reader::from_reader(input::BoundedReader::new(file, path, bound));
     let header: Vec<String> = reader.headers().map_err(|e| named(e.to_string()))?.iter().map(String::from).collect();
-    if header != FrameRow::NAMES {
-        let missing = FrameRow::NAMES.iter().find(|n| !header.iter().any(|h| h == *n));
+    if header != T::NAMES {
+        let missing = T::NAMES.iter().find(|n| !header.iter().any(|h| h == *n));
         return Err(named(match missing {
             Some(name) => format!("no column `{name}`"),
-            None => format!("its columns are not the frames table's ({})", FrameRow::NAMES.join(",")),
+            None => format!("its columns are not the table's ({})", T::NAMES.join(",")),
         }));
     }
-    reader.deserialize::<FrameRow>().enumerate().map(|(i, r)| r.map_err(|e| named(format!("row {}: {}", i + 1, csv_error(&e))))).collect()
+    reader
+        .deserialize::<T>()
+        .enumerate()
+        .map(|(i, r)| r.map_err(|e| named(format!("row {}: {}", i + 1, csv_error(&e, T::NAMES)))))
+        .collect()
 }
 
 /// The `csv` crate's error without its position (the row is named instead),
 /// with the column it names.
-fn csv_error(e: &csv::Error) -> String {
+fn csv_error(e: &csv::Error, names: &[&str]) -> String {
     match e.kind() {
         csv::ErrorKind::Deserialize { err, .. } => match err.field() {
-            Some(i) => format!("column `{}`: {}", FrameRow::NAMES.get(i as usize).copied().unwrap_or("?"), err.kind()),
+            Some(i) => format!("column `{}`: {}", names.get(i as usize).copied().unwrap_or("?"), err.kind()),
             None => err.kind().to_string(),
         },
         _ => e.to_string(),
     }
 }
 
-/// The rows of `frames.arrow` at `path`.
+/// The rows of the Arrow file at `path`.
 #[cfg(feature = "read")]
-fn read_arrow(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
+fn read_arrow<T: serde::de::DeserializeOwned + Declared>(path: &Path) -> Result<Vec<T>, FramesError> {
     let table = tables::arrow::read_arrow(path)?;
     table.rows_as().map_err(|e| FramesError::NotTheTable { path: path.to_path_buf(), what: e.0 })
 }
 
-/// The rows of `trace.mcap`'s `frames` table at `path`.
+/// The rows of table `stem` of `trace.mcap` at `path`.
 #[cfg(feature = "read")]
-fn read_mcap(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
+fn read_mcap<T: serde::de::DeserializeOwned + Declared>(path: &Path, stem: &str) -> Result<Vec<T>, FramesError> {
     let named = |what: String| FramesError::NotTheTable { path: path.to_path_buf(), what };
-    match tables::mcap::read_mcap(path)?.into_iter().find(|(name, _)| name == "frames") {
+    match tables::mcap::read_mcap(path)?.into_iter().find(|(name, _)| name == stem) {
         Some((_, table)) => table.rows_as().map_err(|e| named(e.0)),
-        None => Err(named("no `frames` table (the /wire channels): written by a sil-host before replay; run it again".into())),
+        None if stem == "frames" => {
+            Err(named("no `frames` table (the /wire channels): written by a sil-host before replay; run it again".into()))
+        }
+        None => Err(named(format!("no `{stem}` table"))),
     }
 }
 
 /// Without the table readers: [`FramesError::NotBuilt`].
 #[cfg(not(feature = "read"))]
-fn read_arrow(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
+fn read_arrow<T>(path: &Path) -> Result<Vec<T>, FramesError> {
     Err(FramesError::NotBuilt { path: path.to_path_buf() })
 }
 
 /// Without the table readers: [`FramesError::NotBuilt`].
 #[cfg(not(feature = "read"))]
-fn read_mcap(path: &Path) -> Result<Vec<FrameRow>, FramesError> {
+fn read_mcap<T>(path: &Path, _stem: &str) -> Result<Vec<T>, FramesError> {
     Err(FramesError::NotBuilt { path: path.to_path_buf() })
 }
 
