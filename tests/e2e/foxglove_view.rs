@@ -392,6 +392,19 @@ fn exit_of(mut child: std::process::Child) -> (std::sync::mpsc::Receiver<Instant
     (rx, waiter)
 }
 
+/// Reads a live run's stderr lines to their end: when the server said the run had
+/// ended ("the run has ended", its viewers told), and every line.
+fn the_runs_end(lines: &std::sync::mpsc::Receiver<(Instant, String)>) -> (Instant, Vec<String>) {
+    let (mut ended, mut said) = (None, Vec::new());
+    while let Ok((at, line)) = lines.recv_timeout(Duration::from_secs(120)) {
+        if line.contains("the run has ended") {
+            ended = Some(at);
+        }
+        said.push(line);
+    }
+    (ended.unwrap_or_else(|| panic!("no line of the run's end: {said:#?}")), said)
+}
+
 /// Reads what is left on a viewer that stopped reading, after the run: the
 /// connection must end (end of stream or reset) rather than stay open.
 fn drain_to_the_end(ws: &mut tungstenite::WebSocket<std::net::TcpStream>) -> usize {
@@ -440,15 +453,7 @@ fn a_viewer_that_stopped_reading_is_dropped_and_the_run_exits() {
     });
     let (exited, waiter) = exit_of(child);
     // The run's end: the server tells its viewers.
-    let mut ended = None;
-    let mut said = Vec::new();
-    while let Ok((at, line)) = lines.recv_timeout(Duration::from_secs(120)) {
-        if line.contains("the run has ended") {
-            ended = Some(at);
-        }
-        said.push(line);
-    }
-    let ended = ended.unwrap_or_else(|| panic!("no line of the run's end: {said:#?}"));
+    let (ended, said) = the_runs_end(&lines);
     let exited = exited.recv().unwrap();
     let o = waiter.join().unwrap();
     let after = exited.duration_since(ended);
@@ -490,14 +495,7 @@ fn a_slow_viewer_does_not_hold_the_run_or_its_end() {
     });
     let started = Instant::now();
     let (exited, waiter) = exit_of(child);
-    let (mut ended, mut said) = (None, Vec::new());
-    while let Ok((at, line)) = lines.recv_timeout(Duration::from_secs(120)) {
-        if line.contains("the run has ended") {
-            ended = Some(at);
-        }
-        said.push(line);
-    }
-    let ended = ended.unwrap_or_else(|| panic!("no line of the run's end: {said:#?}"));
+    let (ended, said) = the_runs_end(&lines);
     let exited = exited.recv().unwrap();
     let o = waiter.join().unwrap();
     assert!(o.status.success(), "{said:#?}");
